@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs the Debian packages oceand needs that are missing.  Idempotent and
+# quick when everything is present (one dpkg-query, no network).
+set -euo pipefail
+pkgs=(gcc make clang pkg-config libclang-rt-14-dev
+      libwebsockets-dev libopenexr-dev libfftw3-dev libzstd-dev libcjson-dev
+      librandom123-dev libcmocka-dev gnuplot-nox
+      chromium nodejs npm)
+missing=()
+for p in "${pkgs[@]}"; do
+    st=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)
+    [[ "$st" == "install ok installed" ]] || missing+=("$p")
+done
+if ((${#missing[@]})); then
+    echo "deps: installing ${missing[*]}" >&2
+    if [[ $(id -u) -ne 0 ]]; then
+        echo "deps: missing packages and not root; run: sudo apt-get install ${missing[*]}" >&2
+        exit 1
+    fi
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+# The browser test's driver comes from npm (pinned in clients/web/package.json).
+if [[ -f clients/web/package.json && ! -d clients/web/node_modules/playwright-core ]]; then
+    (cd clients/web && npm ci --no-audit --no-fund --loglevel=error)
+fi

@@ -1,0 +1,67 @@
+/*
+ * cli.h - shared option handling for the ocean-sim subcommands.
+ *
+ * Every subcommand accepts the common sea-state options (--spectrum, --wind,
+ * ..., --config FILE) plus its own, described by a table of cli_opt.  One
+ * parser handles both, so every option is range-checked the same way and a
+ * bad one is refused with a message naming it.
+ */
+#ifndef OCEAN_CLI_H
+#define OCEAN_CLI_H
+
+#include <stdio.h>
+
+#include "ocean.h"
+
+typedef enum cli_opt_kind {
+    CLI_DOUBLE,   /* double *, checked against [min, max], finite */
+    CLI_INT,      /* int *, checked against [min, max] */
+    CLI_STRING,   /* const char ** */
+    CLI_FLAG      /* int *, set to 1, takes no argument */
+} cli_opt_kind;
+
+typedef struct cli_opt {
+    const char *name;   /* without the leading "--" */
+    cli_opt_kind kind;
+    void *target;
+    double min, max;
+    const char *help;   /* one line; "ARG: text" style */
+} cli_opt;
+
+/* What every subcommand gets from the common options. */
+typedef struct cli_common {
+    ocean_params params;
+    unsigned effects;      /* --effects, default all four */
+    double time;           /* --time T, s */
+    int json;              /* --json */
+    const char *config;    /* --config FILE (applied before other options) */
+} cli_common;
+
+/* Parses argv (argv[0] is the subcommand name).  Common options go to *c,
+ * the subcommand's to its table.  Returns 0 on success, 1 if --help was
+ * printed, 2 on error (message already printed to stderr, naming the
+ * option).  Positional arguments are refused unless npos != NULL, in which
+ * case they are collected into pos[] (at most *npos; *npos gets the count). */
+int cli_parse(int argc, char **argv, const char *usage,
+              const cli_opt *opts, int nopts, cli_common *c,
+              const char **pos, int *npos);
+
+/* Creates an ocean from c->params, printing the reason on failure. */
+ocean *cli_make_ocean(const cli_common *c);
+
+/* Parses "height,displacement,normals,foam" into an OCEAN_FX_* mask. */
+int cli_parse_effects(const char *s, unsigned *out);
+
+/* Monotonic wall clock in milliseconds. */
+double cli_now_ms(void);
+
+/* Subcommands: each returns the process exit status. */
+int cmd_stats(int argc, char **argv);
+int cmd_bake(int argc, char **argv);
+int cmd_sample(int argc, char **argv);
+int cmd_bench(int argc, char **argv);
+int cmd_query(int argc, char **argv);
+int cmd_filter(int argc, char **argv);
+int cmd_mesh(int argc, char **argv);
+
+#endif

@@ -1,0 +1,167 @@
+/*
+ * ocean.h - the FFT ocean: a pure function of (sea state, seed, t).
+ *
+ * A Tessendorf ocean with 1-4 cascades.  Each cascade is a periodic patch
+ * carrying only its own band of wave numbers, so the summed cascades count
+ * every wave once.  The random amplitude of each wave is keyed by its
+ * integer wave vector (seed, patch, mx, mz), not by array index, so the same
+ * sea evaluated at N = 256 and N = 1024 shares every common wave.
+ *
+ * Nothing accumulates across evaluations: ocean_evaluate(t) depends only on
+ * the parameters and t, so any instant can be computed in any order and two
+ * processes agree bit for bit (same build, same thread count).
+ *
+ * Threads: an ocean is used by one thread at a time (it owns scratch
+ * spectra and FFTW plans); FFTW and the spectrum stage use params.threads
+ * worker threads internally.  Frames are independent objects: one ocean can
+ * fill many frames (one per cutoff bucket).
+ */
+#ifndef OCEAN_H
+#define OCEAN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "ocean_result.h"
+#include "spectrum.h"
+
+#define OCEAN_MAX_CASCADES 4
+#define OCEAN_MIN_N 8
+#define OCEAN_MAX_N 2048
+
+/* Effects (channel groups) a caller may ask of a cascade.  Only the inverse
+ * transforms the asked channels need are run. */
+enum ocean_effect {
+    OCEAN_FX_HEIGHT = 1u << 0,       /* eta                              1 FFT */
+    OCEAN_FX_DISPLACEMENT = 1u << 1, /* choppy Dx, Dz (scaled by lambda) 2 FFTs */
+    OCEAN_FX_NORMALS = 1u << 2,      /* slopes d(eta)/dx, d(eta)/dz      2 FFTs */
+    OCEAN_FX_FOAM = 1u << 3,         /* Jacobian -> folding and foam     3 FFTs */
+    OCEAN_FX_ALL = 0xFu
+};
+
+typedef struct ocean_params {
+    ocean_sea_state sea;
+    uint64_t seed;
+    int n;                  /* FFT resolution per cascade: power of two, 8..2048 */
+    int cascades;           /* 1..OCEAN_MAX_CASCADES */
+    double patch_m;         /* size of the largest patch, m (1 m .. 100 km) */
+    double cascade_ratio;   /* L_c = patch_m / ratio^c; > 1.5, non-integer avoids
+                               cascades tiling in step */
+    double k_max;           /* waves with |k| >= k_max are left to the Gerstner
+                               near field; INFINITY keeps the finest cascade's
+                               full square band */
+    int threads;            /* worker threads for FFTW and the spectrum stage */
+    int plan_measure;       /* 0: FFTW_ESTIMATE plans, 1: FFTW_MEASURE */
+} ocean_params;
+
+/* Fills p with the shipped defaults (PM sea, 10 m/s, N = 256, 1 cascade,
+ * 1000 m patch, seed 1). */
+void ocean_params_default(ocean_params *p);
+
+/* Checks every field of p (ranges, NaN/Inf, power-of-two N).  On failure
+ * returns OCEAN_EINVAL and writes a message naming the field and the value
+ * into msg (if msg != NULL). */
+ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msglen);
+
+typedef struct ocean ocean;
+
+/* Builds an ocean: validates p, draws every wave's initial amplitude, and
+ * makes all FFTW plans.  *out is NULL on failure; msg gets the reason. */
+ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t msglen);
+
+/* Frees o and its plans.  Accepts NULL. */
+void ocean_destroy(ocean *o);
+
+/* The parameters o was built with (after defaults were resolved). */
+const ocean_params *ocean_get_params(const ocean *o);
+
+/* Patch size and wave-number band [k_lo, k_hi) of cascade c. */
+void ocean_cascade_band(const ocean *o, int c, double *patch_m, double *k_lo, double *k_hi);
+
+/* What a caller wants evaluated. */
+typedef struct ocean_request {
+    unsigned effects[OCEAN_MAX_CASCADES]; /* OCEAN_FX_* mask per cascade; 0 skips it */
+    double cutoff_k;  /* Butterworth low-pass cutoff, rad/m; INFINITY: unfiltered;
+                         0 filters everything out */
+    int order;        /* Butterworth order n >= 1 (default 6) */
+    int redistribute; /* 1: rescale the passed band so the filtered field keeps
+                         the unfiltered variance (seed 000's energy guard) */
+} ocean_request;
+
+/* An unfiltered request for the given effects on every cascade. */
+void ocean_request_all(ocean_request *r, unsigned effects);
+
+/* One cascade's evaluated fields.  Row-major n x n floats, row = z index,
+ * column = x index; sample (i, j) sits at world (j, i) * patch / n.  Pointers
+ * of channels not evaluated are NULL. */
+typedef struct ocean_field {
+    int n;              /* grid actually evaluated (< params.n when a low
+                           cutoff let a smaller transform serve) */
+    double patch_m;
+    unsigned effects;
+    float *height;
+    float *dx, *dz;             /* choppy displacement, already times lambda */
+    float *slope_x, *slope_z;   /* d(eta)/dx, d(eta)/dz */
+    float *jacobian;            /* folding Jacobian J (< 0: folded) */
+    float *foam;                /* foam coverage 0..1 from J */
+} ocean_field;
+
+typedef struct ocean_frame ocean_frame;
+
+/* Allocates a frame able to hold every channel of every cascade of o. */
+ocean_result ocean_frame_create(const ocean *o, ocean_frame **out);
+void ocean_frame_destroy(ocean_frame *f);
+
+/* Evaluates the sea at time t (seconds, any finite double) into f.
+ * Deterministic: same o parameters, t and r give identical bytes. */
+ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_frame *f);
+
+/* Per-evaluation facts, valid after ocean_evaluate. */
+typedef struct ocean_frame_info {
+    double t;
+    double cutoff_k;
+    double e_error;       /* ||H - H_filtered||_2 / ||H||_2 of the height spectrum */
+    int transforms;       /* 2-D inverse real FFTs this evaluation ran */
+    int cascades;
+} ocean_frame_info;
+
+const ocean_field *ocean_frame_field(const ocean_frame *f, int cascade);
+void ocean_frame_get_info(const ocean_frame *f, ocean_frame_info *out);
+
+/* The summed cascades at a world point, bilinear on each periodic grid.
+ * x and z are doubles and reduced modulo each patch in double, so points
+ * 1e7 m from the origin lose nothing.  Channels not evaluated read as 0
+ * (jacobian as 1). */
+typedef struct ocean_point {
+    double height, dx, dz, slope_x, slope_z, jacobian, foam;
+} ocean_point;
+void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out);
+
+/* Double-precision reference by direct summation of every wave in every
+ * band (O(n^2 * cascades) per call): height, displacement and slopes at
+ * (x, z, t).  For tests and the accuracy report. */
+void ocean_reference_point(const ocean *o, double t, double x, double z, ocean_point *out);
+
+/* Statistics of the discretised spectrum. */
+typedef struct ocean_spectrum_stats {
+    double variance;     /* sum over all bands of E|h(k)|^2, m^2 */
+    double hs;           /* 4 sqrt(variance) */
+    double cascade_variance[OCEAN_MAX_CASCADES];
+    double wp, tp, kp;   /* peak angular frequency, period, wave number */
+    double lambda_dominant; /* 2 pi / kp */
+} ocean_spectrum_stats;
+void ocean_get_spectrum_stats(const ocean *o, ocean_spectrum_stats *out);
+
+/* Cumulative counters since creation. */
+typedef struct ocean_counters {
+    uint64_t evaluations;
+    uint64_t transforms;               /* all 2-D inverse FFTs */
+    uint64_t transforms_by_effect[4];  /* height, displacement, normals, foam */
+} ocean_counters;
+void ocean_get_counters(const ocean *o, ocean_counters *out);
+
+/* Variance the band of o holds after a Butterworth mask (cutoff_k, order);
+ * used for E_error and the energy partition. */
+double ocean_filtered_variance(const ocean *o, double cutoff_k, int order);
+
+#endif
