@@ -36,7 +36,11 @@ enum ocean_effect {
     OCEAN_FX_DISPLACEMENT = 1u << 1, /* choppy Dx, Dz (scaled by lambda) 2 FFTs */
     OCEAN_FX_NORMALS = 1u << 2,      /* slopes d(eta)/dx, d(eta)/dz      2 FFTs */
     OCEAN_FX_FOAM = 1u << 3,         /* Jacobian -> folding and foam     3 FFTs */
-    OCEAN_FX_ALL = 0xFu
+    /* 1u << 4 is the Gerstner near field at the scene/protocol level; the
+     * FFT ocean ignores it. */
+    OCEAN_FX_NEAR_FIELD = 1u << 4,
+    OCEAN_FX_VELOCITY = 1u << 5,     /* orbital velocity (for queries)   3 FFTs */
+    OCEAN_FX_ALL = 0xFu              /* the four visual effects */
 };
 
 typedef struct ocean_params {
@@ -86,6 +90,8 @@ typedef struct ocean_request {
     int order;        /* Butterworth order n >= 1 (default 6) */
     int redistribute; /* 1: rescale the passed band so the filtered field keeps
                          the unfiltered variance (seed 000's energy guard) */
+    double low_boost; /* gain on waves below the cutoff (seed 000's 3 % motion
+                         compensation gives 1.03); 1 or 0 means none */
 } ocean_request;
 
 /* An unfiltered request for the given effects on every cascade. */
@@ -102,9 +108,16 @@ typedef struct ocean_field {
     float *height;
     float *dx, *dz;             /* choppy displacement, already times lambda */
     float *slope_x, *slope_z;   /* d(eta)/dx, d(eta)/dz */
-    float *jacobian;            /* folding Jacobian J (< 0: folded) */
+    float *dxx, *dzz, *dxz;     /* lambda * derivatives of Dx, Dz (foam) */
+    float *jacobian;            /* this cascade's folding Jacobian J (< 0: folded) */
     float *foam;                /* foam coverage 0..1 from J */
+    float *vel_x, *vel_y, *vel_z; /* orbital velocity of the displaced point, m/s */
 } ocean_field;
+
+/* Foam coverage from the Jacobian: 1 where folded, fading to 0 at
+ * J = OCEAN_FOAM_J_CLEAR.  The same mapping serves fields and point samples. */
+#define OCEAN_FOAM_J_CLEAR 0.5
+float ocean_foam_from_jacobian(float j);
 
 typedef struct ocean_frame ocean_frame;
 
@@ -115,6 +128,12 @@ void ocean_frame_destroy(ocean_frame *f);
 /* Evaluates the sea at time t (seconds, any finite double) into f.
  * Deterministic: same o parameters, t and r give identical bytes. */
 ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_frame *f);
+
+/* Runs only the inverse FFTs ocean_evaluate(o, t, r, f) would run (same
+ * sizes, same batches, same plans) on whatever the scratch spectra hold:
+ * the "FFTW alone" baseline the benchmarks put beside a full evaluation.
+ * f's contents are garbage afterwards. */
+ocean_result ocean_transform_only(ocean *o, const ocean_request *r, ocean_frame *f);
 
 /* Per-evaluation facts, valid after ocean_evaluate. */
 typedef struct ocean_frame_info {
@@ -134,13 +153,34 @@ void ocean_frame_get_info(const ocean_frame *f, ocean_frame_info *out);
  * (jacobian as 1). */
 typedef struct ocean_point {
     double height, dx, dz, slope_x, slope_z, jacobian, foam;
+    double vel_x, vel_y, vel_z;
 } ocean_point;
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out);
 
+/* Statistics of an evaluated frame.  Variance adds over cascades (their
+ * bands are disjoint, so cross terms vanish over the plane); the Jacobian
+ * is that of the summed displacement, sampled on the finest cascade's grid
+ * (where the coarser cascades are smooth).  Fields not evaluated give 0
+ * (min_jacobian 1). */
+typedef struct ocean_field_stats {
+    double mean, hs;             /* of the height; hs = 4 std */
+    double min_jacobian, folded_fraction, foam_coverage;
+} ocean_field_stats;
+void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out);
+
 /* Double-precision reference by direct summation of every wave in every
- * band (O(n^2 * cascades) per call): height, displacement and slopes at
- * (x, z, t).  For tests and the accuracy report. */
-void ocean_reference_point(const ocean *o, double t, double x, double z, ocean_point *out);
+ * band (O(n^2 * cascades) per call), amplitudes drawn afresh in double:
+ * height, displacement, slopes, Jacobian, velocity at (x, z, t), with an
+ * optional Butterworth cutoff (INFINITY for none).  For tests and the
+ * accuracy report. */
+void ocean_reference_point(const ocean *o, double t, double x, double z,
+                           double cutoff_k, int order, ocean_point *out);
+
+/* h(k, t) of the wave with integer wave vector (mx, mz) of cascade c, in
+ * double, built from h0(k) and h0(-k) drawn afresh: 0 outside the band.
+ * For any (mx, mz), h(-k, t) = conj(h(k, t)) - the Hermitian symmetry that
+ * makes every field real. */
+void ocean_mode_amplitude(const ocean *o, int c, int mx, int mz, double t, double out[2]);
 
 /* Statistics of the discretised spectrum. */
 typedef struct ocean_spectrum_stats {
@@ -156,7 +196,7 @@ void ocean_get_spectrum_stats(const ocean *o, ocean_spectrum_stats *out);
 typedef struct ocean_counters {
     uint64_t evaluations;
     uint64_t transforms;               /* all 2-D inverse FFTs */
-    uint64_t transforms_by_effect[4];  /* height, displacement, normals, foam */
+    uint64_t transforms_by_effect[5];  /* height, displacement, normals, foam, velocity */
 } ocean_counters;
 void ocean_get_counters(const ocean *o, ocean_counters *out);
 

@@ -18,7 +18,8 @@
 
 #include "ocean_result.h"
 
-#define OCEAN_G 9.80665
+/* g as used by every check value in REFERENCES.md (lambda 100 m -> w 0.78510). */
+#define OCEAN_G 9.81
 
 typedef enum ocean_spectrum_kind {
     OCEAN_SPECTRUM_PHILLIPS = 0,

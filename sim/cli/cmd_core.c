@@ -1,0 +1,203 @@
+/*
+ * cmd_core.c - ocean-sim stats, sample and bench: the FFT core seen from
+ * the command line.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cJSON.h>
+
+#include "cli.h"
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* Prints a cJSON object and frees it. */
+static void print_json(cJSON *o)
+{
+    char *s = cJSON_Print(o);
+    if (s)
+        puts(s);
+    free(s);
+    cJSON_Delete(o);
+}
+
+int cmd_stats(int argc, char **argv)
+{
+    cli_common c;
+    int r = cli_parse(argc, argv, "stats [options] [--json]", NULL, 0, &c, NULL, NULL);
+    if (r)
+        return r == 1 ? 0 : 2;
+    ocean *o = cli_make_ocean(&c);
+    ocean_frame *f = NULL;
+    if (!o || ocean_frame_create(o, &f) != OCEAN_OK) {
+        ocean_destroy(o);
+        return 1;
+    }
+    ocean_request req;
+    ocean_request_all(&req, c.effects | OCEAN_FX_HEIGHT);
+    double t0 = cli_now_ms();
+    ocean_result er = ocean_evaluate(o, c.time, &req, f);
+    double ms = cli_now_ms() - t0;
+    if (er != OCEAN_OK) {
+        fprintf(stderr, "error: evaluation failed: %s\n", ocean_strerror(er));
+        ocean_frame_destroy(f);
+        ocean_destroy(o);
+        return 1;
+    }
+    ocean_spectrum_stats ss;
+    ocean_field_stats fs;
+    ocean_frame_info info;
+    ocean_get_spectrum_stats(o, &ss);
+    ocean_frame_get_field_stats(f, &fs);
+    ocean_frame_get_info(f, &info);
+    const ocean_params *p = &c.params;
+    if (c.json) {
+        cJSON *j = cJSON_CreateObject();
+        cJSON_AddNumberToObject(j, "hs", fs.hs);
+        cJSON_AddNumberToObject(j, "hs_spectrum", ss.hs);
+        cJSON_AddNumberToObject(j, "hs_analytic", ocean_spectrum_hs(&p->sea));
+        cJSON_AddNumberToObject(j, "tp", ss.tp);
+        cJSON_AddNumberToObject(j, "lambda_dominant", ss.lambda_dominant);
+        cJSON_AddNumberToObject(j, "mean", fs.mean);
+        cJSON_AddNumberToObject(j, "min_jacobian", fs.min_jacobian);
+        cJSON_AddNumberToObject(j, "folded_fraction", fs.folded_fraction);
+        cJSON_AddNumberToObject(j, "foam_coverage", fs.foam_coverage);
+        cJSON_AddNumberToObject(j, "transforms", info.transforms);
+        cJSON_AddNumberToObject(j, "ms", ms);
+        cJSON_AddNumberToObject(j, "time", c.time);
+        cJSON_AddNumberToObject(j, "n", p->n);
+        cJSON_AddNumberToObject(j, "cascades", p->cascades);
+        cJSON_AddStringToObject(j, "spectrum", ocean_spectrum_name(p->sea.spectrum));
+        cJSON_AddNumberToObject(j, "wind", p->sea.wind_u10);
+        print_json(j);
+    } else {
+        printf("spectrum %s, wind %.2f m/s, N %d, %d cascade(s), t = %g s\n",
+               ocean_spectrum_name(p->sea.spectrum), p->sea.wind_u10, p->n, p->cascades, c.time);
+        printf("Hs %.4f m (field), %.4f m (discrete spectrum), %.4f m (analytic)\n",
+               fs.hs, ss.hs, ocean_spectrum_hs(&p->sea));
+        printf("Tp %.3f s, dominant wavelength %.2f m, mean %.3g m\n", ss.tp, ss.lambda_dominant, fs.mean);
+        printf("min Jacobian %.4f, folded %.4f %%, foam %.4f %%\n", fs.min_jacobian,
+               100.0 * fs.folded_fraction, 100.0 * fs.foam_coverage);
+        printf("%d transforms in %.2f ms\n", info.transforms, ms);
+    }
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    return 0;
+}
+
+int cmd_sample(int argc, char **argv)
+{
+    cli_common c;
+    double x = 0.0, z = 0.0, t0 = 0.0, dt = 0.1;
+    int count = 100, direct = 0;
+    const cli_opt opts[] = {
+        {"x", CLI_DOUBLE, &x, -1e9, 1e9, "X     world x of the point, m"},
+        {"z", CLI_DOUBLE, &z, -1e9, 1e9, "Z     world z of the point, m"},
+        {"t0", CLI_DOUBLE, &t0, -1e12, 1e12, "T     first time, s"},
+        {"dt", CLI_DOUBLE, &dt, 1e-6, 1e6, "D     time step, s"},
+        {"count", CLI_INT, &count, 1, 1000000, "C     number of samples"},
+        {"direct", CLI_FLAG, &direct, 0, 0, "      sum the waves directly in double instead of FFT fields"},
+    };
+    int r = cli_parse(argc, argv, "sample --x X --z Z --t0 T --dt D --count C [options]",
+                      opts, (int)(sizeof opts / sizeof opts[0]), &c, NULL, NULL);
+    if (r)
+        return r == 1 ? 0 : 2;
+    ocean *o = cli_make_ocean(&c);
+    ocean_frame *f = NULL;
+    if (!o || ocean_frame_create(o, &f) != OCEAN_OK) {
+        ocean_destroy(o);
+        return 1;
+    }
+    /* Only the height is asked: one transform per cascade per sample. */
+    ocean_request req;
+    ocean_request_all(&req, OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT);
+    printf("t,height,dx,dz\n");
+    for (int i = 0; i < count; i++) {
+        double t = t0 + i * dt;
+        ocean_point pt;
+        if (direct) {
+            ocean_reference_point(o, t, x, z, INFINITY, 6, &pt);
+        } else {
+            ocean_evaluate(o, t, &req, f);
+            ocean_frame_sample(f, x, z, &pt);
+        }
+        printf("%.6f,%.6f,%.6f,%.6f\n", t, pt.height, pt.dx, pt.dz);
+    }
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    return 0;
+}
+
+int cmd_bench(int argc, char **argv)
+{
+    cli_common c;
+    int reps = 30;
+    const cli_opt opts[] = {
+        {"reps", CLI_INT, &reps, 3, 100000, "R     evaluations to time (median reported)"},
+    };
+    int r = cli_parse(argc, argv, "bench [options] [--reps R] [--json]", opts, 1, &c, NULL, NULL);
+    if (r)
+        return r == 1 ? 0 : 2;
+    ocean *o = cli_make_ocean(&c);
+    ocean_frame *f = NULL;
+    if (!o || ocean_frame_create(o, &f) != OCEAN_OK) {
+        ocean_destroy(o);
+        return 1;
+    }
+    ocean_request req;
+    ocean_request_all(&req, c.effects);
+    double *full = malloc(sizeof(double) * reps), *fft = malloc(sizeof(double) * reps);
+    if (!full || !fft) {
+        fprintf(stderr, "error: out of memory\n");
+        return 1;
+    }
+    /* Warm up caches and FFTW's thread pool, then interleave the two
+     * measurements so drift in machine load hits both alike. */
+    ocean_evaluate(o, c.time, &req, f);
+    ocean_transform_only(o, &req, f);
+    for (int i = 0; i < reps; i++) {
+        double t0 = cli_now_ms();
+        ocean_evaluate(o, c.time + i * 0.033, &req, f);
+        double t1 = cli_now_ms();
+        ocean_transform_only(o, &req, f);
+        double t2 = cli_now_ms();
+        full[i] = t1 - t0;
+        fft[i] = t2 - t1;
+    }
+    ocean_frame_info info;
+    ocean_frame_get_info(f, &info);
+    double ms = median(full, reps), ms_fft = median(fft, reps);
+    if (c.json) {
+        cJSON *j = cJSON_CreateObject();
+        cJSON_AddNumberToObject(j, "n", c.params.n);
+        cJSON_AddNumberToObject(j, "cascades", c.params.cascades);
+        cJSON_AddNumberToObject(j, "threads", c.params.threads);
+        cJSON_AddNumberToObject(j, "effects", c.effects);
+        cJSON_AddNumberToObject(j, "transforms", info.transforms);
+        cJSON_AddNumberToObject(j, "reps", reps);
+        cJSON_AddNumberToObject(j, "ms", ms);
+        cJSON_AddNumberToObject(j, "ms_fftw", ms_fft);
+        cJSON_AddNumberToObject(j, "ratio", ms / ms_fft);
+        print_json(j);
+    } else {
+        printf("N %d, %d cascade(s), %d thread(s), %d transforms: %.3f ms per evaluation, "
+               "FFTW alone %.3f ms (x%.3f), median of %d\n", c.params.n, c.params.cascades,
+               c.params.threads, info.transforms, ms, ms_fft, ms / ms_fft, reps);
+    }
+    free(full);
+    free(fft);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    return 0;
+}

@@ -1,0 +1,861 @@
+/*
+ * ocean.c - the FFT ocean (see ocean.h for the contract).
+ *
+ * Per cascade we keep, for every mode of the half spectrum (kz rows, kx >= 0
+ * columns, as FFTW's c2r wants it), the two initial amplitudes h0(k) and
+ * conj(h0(-k)), the angular frequency in double and the wave vector.  An
+ * evaluation then runs one pass over the modes (the "spectrum stage") that
+ * writes every asked channel's spectrum, and one batched c2r transform per
+ * cascade.  A low cutoff picks a smaller transform: the modes it keeps are
+ * the same waves, only fewer of them.
+ *
+ * Conventions: eta(x) = sum_k h(k,t) e^{i k.x},
+ *   h(k,t) = h0(k) e^{-i w t} + conj(h0(-k)) e^{+i w t},   E|h0(k)|^2 = P(k),
+ *   P(k) = F(k) dk^2 / 2 so that E[var eta] = sum_k F(k) dk^2 -> m0.
+ * Choppy displacement D = sum i (k/|k|) h e^{ik.x} times lambda, so a
+ * point moves toward the crest as in Gerstner's waves and
+ * J = (1 + Dxx)(1 + Dzz) - Dxz^2 < 1 on crests.  The Nyquist row and column
+ * are zero in every channel (S. G. Johnson 2011), so the band is symmetric.
+ */
+#include "ocean.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <fftw3.h>
+#include <omp.h>
+
+#include "wave_rng.h"
+
+enum {
+    CH_H, CH_DX, CH_DZ, CH_SX, CH_SZ, CH_DXX, CH_DZZ, CH_DXZ, CH_VX, CH_VY, CH_VZ,
+    CH_COUNT
+};
+#define MAX_LEVELS 9 /* n = 8 .. 2048 */
+
+/* One mode of the half spectrum.  h0 values are float (they are data);
+ * omega is double so that omega * t keeps its phase at t = 1e9 s. */
+typedef struct mode {
+    double omega;
+    float h0p_re, h0p_im;   /* h0(k) */
+    float h0m_re, h0m_im;   /* conj(h0(-k)) */
+    float kx, kz, k;
+    float var;              /* E|h(k,t)|^2 = P(k) + P(-k) */
+} mode;
+
+typedef struct cascade {
+    double patch, dk, k_lo, k_hi;
+    mode *modes;            /* n x (n/2 + 1), row = kz index */
+    double variance;
+} cascade;
+
+struct ocean {
+    ocean_params p;
+    int levels;                         /* plans for n = 8 << l, l < levels */
+    cascade cas[OCEAN_MAX_CASCADES];
+    fftwf_complex *spec;                /* CH_COUNT x n x (n/2+1) scratch */
+    fftwf_plan plan[MAX_LEVELS][CH_COUNT]; /* [level][channels - 1] */
+    ocean_counters counters;
+    /* Redistribution scale cache: depends only on (cutoff, order). */
+    double redis_cutoff;
+    int redis_order;
+    double redis_scale;
+    /* E_error cache: depends on (cutoff, order, scale, boost). */
+    double err_cutoff, err_scale, err_boost, err_value;
+    int err_order;
+};
+
+struct ocean_frame {
+    int cascades;
+    int n_max;
+    float *block[OCEAN_MAX_CASCADES];   /* CH_COUNT x n x n, fftwf_malloc */
+    float *derived[OCEAN_MAX_CASCADES]; /* jacobian, foam: 2 x n x n */
+    ocean_field field[OCEAN_MAX_CASCADES];
+    ocean_frame_info info;
+    double patch[OCEAN_MAX_CASCADES];
+};
+
+/* FFTW's planner is process-global state: one lock for every ocean. */
+static pthread_mutex_t planner_lock = PTHREAD_MUTEX_INITIALIZER;
+static pthread_once_t fftw_once = PTHREAD_ONCE_INIT;
+static int fftw_threads_ok;
+
+static void fftw_init_once(void)
+{
+    fftw_threads_ok = fftwf_init_threads();
+}
+
+void ocean_params_default(ocean_params *p)
+{
+    memset(p, 0, sizeof *p);
+    ocean_sea_state_default(&p->sea);
+    p->seed = 1;
+    p->n = 256;
+    p->cascades = 1;
+    p->patch_m = 1000.0;
+    p->cascade_ratio = 4.3;
+    p->k_max = INFINITY;
+    p->threads = 2;
+    p->plan_measure = 0;
+}
+
+ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msglen)
+{
+    if (!p) {
+        if (msg) snprintf(msg, msglen, "parameters are NULL");
+        return OCEAN_EINVAL;
+    }
+    ocean_result r = ocean_sea_state_validate(&p->sea, msg, msglen);
+    if (r != OCEAN_OK)
+        return r;
+    if (p->n < OCEAN_MIN_N || p->n > OCEAN_MAX_N || (p->n & (p->n - 1)) != 0) {
+        if (msg) snprintf(msg, msglen, "n = %d must be a power of two in [%d, %d]",
+                          p->n, OCEAN_MIN_N, OCEAN_MAX_N);
+        return OCEAN_EINVAL;
+    }
+    if (p->cascades < 1 || p->cascades > OCEAN_MAX_CASCADES) {
+        if (msg) snprintf(msg, msglen, "cascades = %d is out of range [1, %d]",
+                          p->cascades, OCEAN_MAX_CASCADES);
+        return OCEAN_EINVAL;
+    }
+    if (!isfinite(p->patch_m) || p->patch_m < 1.0 || p->patch_m > 1e5) {
+        if (msg) snprintf(msg, msglen, "patch = %g m is out of range [1, 100000]", p->patch_m);
+        return OCEAN_EINVAL;
+    }
+    if (!isfinite(p->cascade_ratio) || p->cascade_ratio < 1.5 || p->cascade_ratio > 100.0) {
+        if (msg) snprintf(msg, msglen, "cascade_ratio = %g is out of range [1.5, 100]",
+                          p->cascade_ratio);
+        return OCEAN_EINVAL;
+    }
+    if (isnan(p->k_max) || p->k_max <= 0.0) {
+        if (msg) snprintf(msg, msglen, "k_max = %g must be > 0 (INFINITY for none)", p->k_max);
+        return OCEAN_EINVAL;
+    }
+    if (p->threads < 1 || p->threads > 64) {
+        if (msg) snprintf(msg, msglen, "threads = %d is out of range [1, 64]", p->threads);
+        return OCEAN_EINVAL;
+    }
+    return OCEAN_OK;
+}
+
+const ocean_params *ocean_get_params(const ocean *o)
+{
+    return &o->p;
+}
+
+void ocean_cascade_band(const ocean *o, int c, double *patch_m, double *k_lo, double *k_hi)
+{
+    const cascade *cs = &o->cas[c];
+    if (patch_m) *patch_m = cs->patch;
+    if (k_lo) *k_lo = cs->k_lo;
+    if (k_hi) *k_hi = cs->k_hi;
+}
+
+/* Index of a signed wave number m in an n-point FFT axis. */
+static inline int wrap_index(int m, int n)
+{
+    return m >= 0 ? m : m + n;
+}
+
+static inline int in_band(const cascade *cs, double k)
+{
+    return k >= cs->k_lo && k < cs->k_hi && k > 0.0;
+}
+
+/* Variance per mode P(k) = F(k) dk^2 / 2 (see the file comment). */
+static double mode_p(const ocean_params *p, const cascade *cs, double kx, double kz)
+{
+    return ocean_spectrum_f(&p->sea, kx, kz) * cs->dk * cs->dk * 0.5;
+}
+
+/* h0(k) for the integer wave vector (mx, mz): keyed by (seed, patch, mx, mz). */
+static void draw_h0(const ocean_params *p, const cascade *cs, int mx, int mz, double out[2])
+{
+    double kx = mx * cs->dk, kz = mz * cs->dk;
+    double k = hypot(kx, kz);
+    if (!in_band(cs, k)) {
+        out[0] = out[1] = 0.0;
+        return;
+    }
+    double xi[2];
+    ocean_rng_normal2(p->seed, OCEAN_RNG_FFT, ocean_rng_patch_salt(cs->patch), mx, mz, xi);
+    double a = sqrt(mode_p(p, cs, kx, kz)) * M_SQRT1_2;
+    out[0] = xi[0] * a;
+    out[1] = xi[1] * a;
+}
+
+static ocean_result cascade_init(ocean *o, int c)
+{
+    cascade *cs = &o->cas[c];
+    const ocean_params *p = &o->p;
+    int n = p->n, half = n / 2 + 1;
+    cs->patch = p->patch_m / pow(p->cascade_ratio, c);
+    cs->dk = 2.0 * M_PI / cs->patch;
+    /* Coarser cascades stop at half their Nyquist: at least 4 samples per
+     * wavelength (Crest PR #903); the next cascade takes over from there. */
+    cs->k_lo = c == 0 ? 0.0 : o->cas[c - 1].k_hi;
+    cs->k_hi = c == p->cascades - 1 ? p->k_max : M_PI * n / (2.0 * cs->patch);
+    cs->modes = calloc((size_t)n * half, sizeof(mode));
+    if (!cs->modes)
+        return OCEAN_ENOMEM;
+    double var = 0.0;
+    for (int iz = 0; iz < n; iz++) {
+        int mz = iz < n / 2 ? iz : iz - n;
+        for (int ix = 0; ix < half; ix++) {
+            mode *m = &cs->modes[(size_t)iz * half + ix];
+            int mx = ix;
+            /* Nyquist row and column stay zero. */
+            if (mz == -n / 2 || mx == n / 2)
+                continue;
+            double kx = mx * cs->dk, kz = mz * cs->dk, k = hypot(kx, kz);
+            if (!in_band(cs, k))
+                continue;
+            double hp[2], hm[2];
+            draw_h0(p, cs, mx, mz, hp);
+            draw_h0(p, cs, -mx, -mz, hm);
+            m->omega = ocean_dispersion(k, p->sea.depth_m);
+            m->h0p_re = (float)hp[0];
+            m->h0p_im = (float)hp[1];
+            m->h0m_re = (float)hm[0];
+            m->h0m_im = (float)-hm[1];
+            m->kx = (float)kx;
+            m->kz = (float)kz;
+            m->k = (float)k;
+            double v = mode_p(p, cs, kx, kz) + mode_p(p, cs, -kx, -kz);
+            m->var = (float)v;
+            /* Column 0 holds both k and -k; other columns stand for their mirror too. */
+            var += ix == 0 ? v : 2.0 * v;
+        }
+    }
+    cs->variance = var;
+    return OCEAN_OK;
+}
+
+ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t msglen)
+{
+    *out = NULL;
+    ocean_result r = ocean_params_validate(p, msg, msglen);
+    if (r != OCEAN_OK)
+        return r;
+    pthread_once(&fftw_once, fftw_init_once);
+    ocean *o = calloc(1, sizeof *o);
+    if (!o) {
+        if (msg) snprintf(msg, msglen, "out of memory");
+        return OCEAN_ENOMEM;
+    }
+    o->p = *p;
+    o->redis_cutoff = NAN;
+    o->err_cutoff = NAN;
+    for (int c = 0; c < p->cascades; c++) {
+        r = cascade_init(o, c);
+        if (r != OCEAN_OK) {
+            if (msg) snprintf(msg, msglen, "out of memory for cascade %d", c);
+            ocean_destroy(o);
+            return r;
+        }
+    }
+    int n = p->n;
+    o->spec = fftwf_malloc(sizeof(fftwf_complex) * CH_COUNT * (size_t)n * (n / 2 + 1));
+    float *tmp = fftwf_malloc(sizeof(float) * CH_COUNT * (size_t)n * n);
+    if (!o->spec || !tmp) {
+        fftwf_free(tmp);
+        if (msg) snprintf(msg, msglen, "out of memory for %d-point spectra", n);
+        ocean_destroy(o);
+        return OCEAN_ENOMEM;
+    }
+    /* Plan every (size, batch) once; evaluations only execute. */
+    pthread_mutex_lock(&planner_lock);
+    if (fftw_threads_ok)
+        fftwf_plan_with_nthreads(p->threads);
+    unsigned flags = p->plan_measure ? FFTW_MEASURE : FFTW_ESTIMATE;
+    for (int l = 0; (8 << l) <= n; l++) {
+        int m = 8 << l;
+        o->levels = l + 1;
+        for (int c = 1; c <= CH_COUNT; c++) {
+            int dims[2] = {m, m};
+            o->plan[l][c - 1] = fftwf_plan_many_dft_c2r(
+                2, dims, c, o->spec, NULL, 1, m * (m / 2 + 1), tmp, NULL, 1, m * m, flags);
+            if (!o->plan[l][c - 1]) {
+                pthread_mutex_unlock(&planner_lock);
+                fftwf_free(tmp);
+                if (msg) snprintf(msg, msglen, "FFTW could not plan a %dx%d x%d transform", m, m, c);
+                ocean_destroy(o);
+                return OCEAN_ENOMEM;
+            }
+        }
+    }
+    pthread_mutex_unlock(&planner_lock);
+    fftwf_free(tmp);
+    *out = o;
+    return OCEAN_OK;
+}
+
+void ocean_destroy(ocean *o)
+{
+    if (!o)
+        return;
+    pthread_mutex_lock(&planner_lock);
+    for (int l = 0; l < MAX_LEVELS; l++)
+        for (int c = 0; c < CH_COUNT; c++)
+            if (o->plan[l][c])
+                fftwf_destroy_plan(o->plan[l][c]);
+    pthread_mutex_unlock(&planner_lock);
+    fftwf_free(o->spec);
+    for (int c = 0; c < OCEAN_MAX_CASCADES; c++)
+        free(o->cas[c].modes);
+    free(o);
+}
+
+void ocean_request_all(ocean_request *r, unsigned effects)
+{
+    memset(r, 0, sizeof *r);
+    for (int c = 0; c < OCEAN_MAX_CASCADES; c++)
+        r->effects[c] = effects;
+    r->cutoff_k = INFINITY;
+    r->order = 6;
+    r->low_boost = 1.0;
+}
+
+float ocean_foam_from_jacobian(float j)
+{
+    float f = (float)((OCEAN_FOAM_J_CLEAR - j) / OCEAN_FOAM_J_CLEAR);
+    return f < 0.0f ? 0.0f : (f > 1.0f ? 1.0f : f);
+}
+
+ocean_result ocean_frame_create(const ocean *o, ocean_frame **out)
+{
+    ocean_frame *f = calloc(1, sizeof *f);
+    *out = NULL;
+    if (!f)
+        return OCEAN_ENOMEM;
+    f->cascades = o->p.cascades;
+    f->n_max = o->p.n;
+    for (int c = 0; c < f->cascades; c++) {
+        size_t nn = (size_t)o->p.n * o->p.n;
+        f->block[c] = fftwf_malloc(sizeof(float) * CH_COUNT * nn);
+        f->derived[c] = fftwf_malloc(sizeof(float) * 2 * nn);
+        if (!f->block[c] || !f->derived[c]) {
+            ocean_frame_destroy(f);
+            return OCEAN_ENOMEM;
+        }
+        f->patch[c] = o->cas[c].patch;
+    }
+    *out = f;
+    return OCEAN_OK;
+}
+
+void ocean_frame_destroy(ocean_frame *f)
+{
+    if (!f)
+        return;
+    for (int c = 0; c < OCEAN_MAX_CASCADES; c++) {
+        fftwf_free(f->block[c]);
+        fftwf_free(f->derived[c]);
+    }
+    free(f);
+}
+
+/* Butterworth |H| of order n, stable for any ratio (REFERENCES.md). */
+static inline double butterworth(double k, double kc, int order)
+{
+    if (isinf(kc))
+        return 1.0;
+    if (!(kc > 0.0))
+        return k > 0.0 ? 0.0 : 1.0;
+    if (k <= kc) {
+        double q = pow(k / kc, order);
+        return 1.0 / sqrt(1.0 + q * q);
+    }
+    double q = pow(kc / k, order);
+    return q / sqrt(1.0 + q * q);
+}
+
+/* Wave number above which the filter gain is below 1e-4: those waves are
+ * not transformed at all (1e-4 of a 10 m wave is 1 mm). */
+static double negligible_k(double kc, int order)
+{
+    if (isinf(kc))
+        return INFINITY;
+    if (!(kc > 0.0))
+        return 0.0;
+    return kc * pow(1e4, 1.0 / order);
+}
+
+/* Which channels an effect mask needs, in block order; returns the count. */
+static int channel_list(unsigned effects, int ch[CH_COUNT])
+{
+    int m = 0;
+    if (effects & OCEAN_FX_HEIGHT) ch[m++] = CH_H;
+    if (effects & OCEAN_FX_DISPLACEMENT) { ch[m++] = CH_DX; ch[m++] = CH_DZ; }
+    if (effects & OCEAN_FX_NORMALS) { ch[m++] = CH_SX; ch[m++] = CH_SZ; }
+    if (effects & OCEAN_FX_FOAM) { ch[m++] = CH_DXX; ch[m++] = CH_DZZ; ch[m++] = CH_DXZ; }
+    if (effects & OCEAN_FX_VELOCITY) { ch[m++] = CH_VX; ch[m++] = CH_VY; ch[m++] = CH_VZ; }
+    return m;
+}
+
+/* The gain a wave of wave number k actually gets: waves above kneg are not
+ * transformed at all. */
+static inline double effective_gain(double k, double kc, int order, double kneg)
+{
+    return k < kneg ? butterworth(k, kc, order) : 0.0;
+}
+
+/* Sum over every mode of var * fn(gain), with the half-spectrum weights. */
+static void filter_sums(const ocean *o, double kc, int order, double scale, double boost,
+                        double *total, double *kept, double *err)
+{
+    double kneg = negligible_k(kc, order);
+    int n = o->p.n, half = n / 2 + 1;
+    *total = *kept = *err = 0.0;
+    for (int c = 0; c < o->p.cascades; c++)
+        for (size_t i = 0; i < (size_t)n * half; i++) {
+            const mode *m = &o->cas[c].modes[i];
+            if (m->var == 0.0f)
+                continue;
+            double w = ((i % half) == 0 ? 1.0 : 2.0) * m->var;
+            double g = effective_gain(m->k, kc, order, kneg);
+            double ge = g * scale * (m->k < kc ? boost : 1.0);
+            *total += w;
+            *kept += w * g * g;
+            *err += w * (1.0 - ge) * (1.0 - ge);
+        }
+}
+
+/* Scale on the passed band that restores the unfiltered variance;
+ * depends only on (cutoff, order), so it is cached. */
+static double redistribution_scale(ocean *o, double kc, int order)
+{
+    if (o->redis_order == order && o->redis_cutoff == kc)
+        return o->redis_scale;
+    double total, kept, err;
+    filter_sums(o, kc, order, 1.0, 1.0, &total, &kept, &err);
+    o->redis_cutoff = kc;
+    o->redis_order = order;
+    o->redis_scale = kept > 0.0 ? sqrt(total / kept) : 1.0;
+    return o->redis_scale;
+}
+
+/* E_error = ||H - H_f||_2 / ||H||_2 over the height spectrum, in
+ * expectation (E|h(k,t)|^2 = var(k)), so it does not flicker with t and
+ * counts the waves a smaller transform dropped. */
+static double filter_error(ocean *o, double kc, int order, double scale, double boost)
+{
+    if (isinf(kc) && scale == 1.0 && boost == 1.0)
+        return 0.0;
+    if (o->err_cutoff == kc && o->err_order == order && o->err_scale == scale &&
+        o->err_boost == boost)
+        return o->err_value;
+    double total, kept, err;
+    filter_sums(o, kc, order, scale, boost, &total, &kept, &err);
+    o->err_cutoff = kc;
+    o->err_order = order;
+    o->err_scale = scale;
+    o->err_boost = boost;
+    o->err_value = total > 0.0 ? sqrt(err / total) : 0.0;
+    return o->err_value;
+}
+
+double ocean_filtered_variance(const ocean *o, double cutoff_k, int order)
+{
+    double total, kept, err;
+    filter_sums(o, cutoff_k, order, 1.0, 1.0, &total, &kept, &err);
+    return kept;
+}
+
+/* 2 pi split in two so that the reduction n * 2pi stays exact to ~1e-16
+ * relative even for n ~ 1e9 (Cody-Waite). */
+#define TWO_PI_HI 6.28318530717958623200
+#define TWO_PI_LO 2.44929359829470635445e-16
+
+static inline double reduce_phase(double x)
+{
+    double q = rint(x * (1.0 / (2.0 * M_PI)));
+    return (x - q * TWO_PI_HI) - q * TWO_PI_LO;
+}
+
+typedef struct stage_args {
+    const cascade *cs;
+    int n_full, n;          /* full grid and the grid evaluated */
+    int nch;
+    const int *ch;
+    double t, kc, kneg, scale, boost, lambda;
+    int order;
+    fftwf_complex *spec;
+} stage_args;
+
+/* Writes the spectra of every asked channel for one row of the n-point grid. */
+static void spectrum_row(const stage_args *a, int r)
+{
+    int n = a->n, half = n / 2 + 1, full_half = a->n_full / 2 + 1;
+    size_t plane = (size_t)n * half;
+    int mz = r < n / 2 ? r : r - n;
+    const mode *row = &a->cs->modes[(size_t)wrap_index(mz, a->n_full) * full_half];
+    for (int ix = 0; ix < half; ix++) {
+        size_t idx = (size_t)r * half + ix;
+        const mode *m = &row[ix];
+        float hr = 0.0f, hi = 0.0f, tr = 0.0f, ti = 0.0f;
+        if (mz != -n / 2 && ix != n / 2 && m->var > 0.0f && m->k < a->kneg) {
+            double ph = reduce_phase(m->omega * a->t);
+            float s, c;
+            sincosf((float)ph, &s, &c);
+            /* h = h0p e^{-i ph} + h0m e^{+i ph} */
+            float ur = m->h0p_re * c + m->h0p_im * s, ui = m->h0p_im * c - m->h0p_re * s;
+            float vr = m->h0m_re * c - m->h0m_im * s, vi = m->h0m_im * c + m->h0m_re * s;
+            double g = butterworth(m->k, a->kc, a->order);
+            float gf = (float)(g * a->scale * (m->k < a->kc ? a->boost : 1.0));
+            hr = (ur + vr) * gf;
+            hi = (ui + vi) * gf;
+            /* dh/dt = -i w h0p e^{-i ph} + i w h0m e^{+i ph} */
+            float om = (float)m->omega * gf;
+            tr = om * (ui - vi);
+            ti = om * (vr - ur);
+        }
+        float kx = m->kx, kz = m->kz, kinv = m->k > 0.0f ? 1.0f / m->k : 0.0f;
+        float lam = (float)a->lambda;
+        for (int j = 0; j < a->nch; j++) {
+            float *o = a->spec[(size_t)j * plane + idx];
+            switch (a->ch[j]) {
+            case CH_H: o[0] = hr; o[1] = hi; break;
+            /* i k/|k| h */
+            case CH_DX: o[0] = -lam * kx * kinv * hi; o[1] = lam * kx * kinv * hr; break;
+            case CH_DZ: o[0] = -lam * kz * kinv * hi; o[1] = lam * kz * kinv * hr; break;
+            /* i k h */
+            case CH_SX: o[0] = -kx * hi; o[1] = kx * hr; break;
+            case CH_SZ: o[0] = -kz * hi; o[1] = kz * hr; break;
+            /* i kx * i k/|k| h = -kx k/|k| h */
+            case CH_DXX: o[0] = -lam * kx * kx * kinv * hr; o[1] = -lam * kx * kx * kinv * hi; break;
+            case CH_DZZ: o[0] = -lam * kz * kz * kinv * hr; o[1] = -lam * kz * kz * kinv * hi; break;
+            case CH_DXZ: o[0] = -lam * kx * kz * kinv * hr; o[1] = -lam * kx * kz * kinv * hi; break;
+            case CH_VX: o[0] = -lam * kx * kinv * ti; o[1] = lam * kx * kinv * tr; break;
+            case CH_VY: o[0] = tr; o[1] = ti; break;
+            case CH_VZ: o[0] = -lam * kz * kinv * ti; o[1] = lam * kz * kinv * tr; break;
+            }
+        }
+    }
+}
+
+/* Smallest grid whose band holds every wave below kneg: halving n keeps
+ * |m| <= n/4 - 1, so it is allowed while (n/4 - 1) dk >= kneg. */
+static int pick_size(const cascade *cs, int n_full, double kneg)
+{
+    int n = n_full;
+    while (n > OCEAN_MIN_N && (n / 4 - 1) * cs->dk >= kneg)
+        n /= 2;
+    return n;
+}
+
+static int level_of(int n)
+{
+    int l = 0;
+    while ((8 << l) < n)
+        l++;
+    return l;
+}
+
+static void set_field_pointers(ocean_frame *f, int c, int n, unsigned effects,
+                               const int *ch, int nch)
+{
+    ocean_field *fd = &f->field[c];
+    memset(fd, 0, sizeof *fd);
+    fd->n = n;
+    fd->patch_m = f->patch[c];
+    fd->effects = effects;
+    size_t nn = (size_t)n * n;
+    for (int j = 0; j < nch; j++) {
+        float *p = f->block[c] + (size_t)j * nn;
+        switch (ch[j]) {
+        case CH_H: fd->height = p; break;
+        case CH_DX: fd->dx = p; break;
+        case CH_DZ: fd->dz = p; break;
+        case CH_SX: fd->slope_x = p; break;
+        case CH_SZ: fd->slope_z = p; break;
+        case CH_DXX: fd->dxx = p; break;
+        case CH_DZZ: fd->dzz = p; break;
+        case CH_DXZ: fd->dxz = p; break;
+        case CH_VX: fd->vel_x = p; break;
+        case CH_VY: fd->vel_y = p; break;
+        case CH_VZ: fd->vel_z = p; break;
+        }
+    }
+    if (effects & OCEAN_FX_FOAM) {
+        fd->jacobian = f->derived[c];
+        fd->foam = f->derived[c] + nn;
+    }
+}
+
+ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_frame *f)
+{
+    if (!o || !r || !f || f->cascades != o->p.cascades || f->n_max != o->p.n)
+        return OCEAN_EINVAL;
+    if (!isfinite(t) || isnan(r->cutoff_k) || r->cutoff_k < 0.0 || r->order < 1 ||
+        r->order > 64 || !isfinite(r->low_boost) || r->low_boost < 0.0 || r->low_boost > 2.0)
+        return OCEAN_EINVAL;
+    double kc = r->cutoff_k;
+    double kneg = negligible_k(kc, r->order);
+    double scale = r->redistribute && !isinf(kc) ? redistribution_scale(o, kc, r->order) : 1.0;
+    double boost = r->low_boost > 0.0 ? r->low_boost : 1.0;
+    int n_full = o->p.n;
+    int transforms = 0;
+    for (int c = 0; c < o->p.cascades; c++) {
+        const cascade *cs = &o->cas[c];
+        unsigned fx = r->effects[c] & (OCEAN_FX_ALL | OCEAN_FX_VELOCITY);
+        int ch[CH_COUNT];
+        int nch = channel_list(fx, ch);
+        /* A cascade wholly above the cutoff contributes zero fields at the
+         * smallest size: nothing to transform. */
+        int n = cs->k_lo >= kneg ? OCEAN_MIN_N : pick_size(cs, n_full, kneg);
+        set_field_pointers(f, c, n, fx, ch, nch);
+        if (nch == 0)
+            continue;
+        stage_args a = {cs, n_full, n, nch, ch, t, kc, kneg, scale, boost,
+                        o->p.sea.choppiness, r->order, o->spec};
+        if (cs->k_lo >= kneg) {
+            memset(f->block[c], 0, sizeof(float) * nch * (size_t)n * n);
+        } else {
+#pragma omp parallel for num_threads(o->p.threads) schedule(static)
+            for (int row = 0; row < n; row++)
+                spectrum_row(&a, row);
+            fftwf_execute_dft_c2r(o->plan[level_of(n)][nch - 1], o->spec, f->block[c]);
+            transforms += nch;
+            for (int j = 0; j < nch; j++) {
+                int e = ch[j] == CH_H ? 0 : ch[j] <= CH_DZ ? 1 : ch[j] <= CH_SZ ? 2
+                      : ch[j] <= CH_DXZ ? 3 : 4;
+                o->counters.transforms_by_effect[e]++;
+            }
+        }
+        if (fx & OCEAN_FX_FOAM) {
+            ocean_field *fd = &f->field[c];
+            size_t nn = (size_t)n * n;
+            for (size_t i = 0; i < nn; i++) {
+                float j = (1.0f + fd->dxx[i]) * (1.0f + fd->dzz[i]) - fd->dxz[i] * fd->dxz[i];
+                fd->jacobian[i] = j;
+                fd->foam[i] = ocean_foam_from_jacobian(j);
+            }
+        }
+    }
+    f->info.t = t;
+    f->info.cutoff_k = kc;
+    f->info.transforms = transforms;
+    f->info.cascades = o->p.cascades;
+    f->info.e_error = filter_error(o, kc, r->order, scale, boost);
+    o->counters.evaluations++;
+    o->counters.transforms += (uint64_t)transforms;
+    return OCEAN_OK;
+}
+
+ocean_result ocean_transform_only(ocean *o, const ocean_request *r, ocean_frame *f)
+{
+    if (!o || !r || !f || f->cascades != o->p.cascades || isnan(r->cutoff_k) ||
+        r->cutoff_k < 0.0 || r->order < 1 || r->order > 64)
+        return OCEAN_EINVAL;
+    double kneg = negligible_k(r->cutoff_k, r->order);
+    for (int c = 0; c < o->p.cascades; c++) {
+        const cascade *cs = &o->cas[c];
+        int ch[CH_COUNT];
+        int nch = channel_list(r->effects[c] & (OCEAN_FX_ALL | OCEAN_FX_VELOCITY), ch);
+        if (nch == 0 || cs->k_lo >= kneg)
+            continue;
+        int n = pick_size(cs, o->p.n, kneg);
+        fftwf_execute_dft_c2r(o->plan[level_of(n)][nch - 1], o->spec, f->block[c]);
+    }
+    return OCEAN_OK;
+}
+
+const ocean_field *ocean_frame_field(const ocean_frame *f, int cascade)
+{
+    if (!f || cascade < 0 || cascade >= f->cascades)
+        return NULL;
+    return &f->field[cascade];
+}
+
+void ocean_frame_get_info(const ocean_frame *f, ocean_frame_info *out)
+{
+    *out = f->info;
+}
+
+static inline double bilerp(const float *g, int n, int i0, int j0, double fx, double fz)
+{
+    int i1 = (i0 + 1) & (n - 1), j1 = (j0 + 1) & (n - 1);
+    double a = g[(size_t)i0 * n + j0], b = g[(size_t)i0 * n + j1];
+    double c = g[(size_t)i1 * n + j0], d = g[(size_t)i1 * n + j1];
+    return (a * (1.0 - fx) + b * fx) * (1.0 - fz) + (c * (1.0 - fx) + d * fx) * fz;
+}
+
+void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out)
+{
+    memset(out, 0, sizeof *out);
+    double dxx = 0.0, dzz = 0.0, dxz = 0.0;
+    int any_foam = 0;
+    for (int c = 0; c < f->cascades; c++) {
+        const ocean_field *fd = &f->field[c];
+        if (!fd->effects)
+            continue;
+        int n = fd->n;
+        /* Reduce in double first: x = 1e7 m keeps sub-millimetre position. */
+        double u = x / fd->patch_m, v = z / fd->patch_m;
+        u = (u - floor(u)) * n;
+        v = (v - floor(v)) * n;
+        int j0 = (int)u, i0 = (int)v;
+        if (j0 >= n) j0 = n - 1;
+        if (i0 >= n) i0 = n - 1;
+        double fx = u - j0, fz = v - i0;
+        if (fd->height) out->height += bilerp(fd->height, n, i0, j0, fx, fz);
+        if (fd->dx) out->dx += bilerp(fd->dx, n, i0, j0, fx, fz);
+        if (fd->dz) out->dz += bilerp(fd->dz, n, i0, j0, fx, fz);
+        if (fd->slope_x) out->slope_x += bilerp(fd->slope_x, n, i0, j0, fx, fz);
+        if (fd->slope_z) out->slope_z += bilerp(fd->slope_z, n, i0, j0, fx, fz);
+        if (fd->vel_x) out->vel_x += bilerp(fd->vel_x, n, i0, j0, fx, fz);
+        if (fd->vel_y) out->vel_y += bilerp(fd->vel_y, n, i0, j0, fx, fz);
+        if (fd->vel_z) out->vel_z += bilerp(fd->vel_z, n, i0, j0, fx, fz);
+        if (fd->dxx) {
+            any_foam = 1;
+            dxx += bilerp(fd->dxx, n, i0, j0, fx, fz);
+            dzz += bilerp(fd->dzz, n, i0, j0, fx, fz);
+            dxz += bilerp(fd->dxz, n, i0, j0, fx, fz);
+        }
+    }
+    /* J of the summed displacement, not a sum of per-cascade Jacobians. */
+    out->jacobian = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
+    out->foam = any_foam ? ocean_foam_from_jacobian((float)out->jacobian) : 0.0;
+}
+
+void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out)
+{
+    memset(out, 0, sizeof *out);
+    out->min_jacobian = 1.0;
+    double var = 0.0;
+    int finest = -1;
+    for (int c = 0; c < f->cascades; c++) {
+        const ocean_field *fd = &f->field[c];
+        if (fd->dxx)
+            finest = c;
+        if (!fd->height)
+            continue;
+        size_t nn = (size_t)fd->n * fd->n;
+        double s = 0.0, s2 = 0.0;
+        for (size_t i = 0; i < nn; i++) {
+            s += fd->height[i];
+            s2 += (double)fd->height[i] * fd->height[i];
+        }
+        double m = s / nn;
+        out->mean += m;
+        var += s2 / nn - m * m;
+    }
+    out->hs = 4.0 * sqrt(var > 0.0 ? var : 0.0);
+    if (finest < 0)
+        return;
+    const ocean_field *fd = &f->field[finest];
+    int n = fd->n;
+    double h = fd->patch_m / n, folded = 0.0, foam = 0.0;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            double jac;
+            if (f->cascades == 1 || finest == 0) {
+                jac = fd->jacobian[(size_t)i * n + j];
+            } else {
+                ocean_point pt;
+                ocean_frame_sample(f, j * h, i * h, &pt);
+                jac = pt.jacobian;
+            }
+            if (jac < out->min_jacobian)
+                out->min_jacobian = jac;
+            folded += jac < 0.0;
+            foam += ocean_foam_from_jacobian((float)jac);
+        }
+    out->folded_fraction = folded / ((double)n * n);
+    out->foam_coverage = foam / ((double)n * n);
+}
+
+void ocean_reference_point(const ocean *o, double t, double x, double z,
+                           double cutoff_k, int order, ocean_point *out)
+{
+    memset(out, 0, sizeof *out);
+    const ocean_params *p = &o->p;
+    double lam = p->sea.choppiness, dxx = 0.0, dzz = 0.0, dxz = 0.0;
+    int n = p->n;
+    for (int c = 0; c < p->cascades; c++) {
+        const cascade *cs = &o->cas[c];
+        /* Phases of e^{ik.x} reduced with x mod patch: exact for any x. */
+        double xr = x - floor(x / cs->patch) * cs->patch;
+        double zr = z - floor(z / cs->patch) * cs->patch;
+        for (int mz = -n / 2 + 1; mz < n / 2; mz++)
+            for (int mx = -n / 2 + 1; mx < n / 2; mx++) {
+                double kx = mx * cs->dk, kz = mz * cs->dk, k = hypot(kx, kz);
+                if (!in_band(cs, k))
+                    continue;
+                double g = butterworth(k, cutoff_k, order);
+                if (g == 0.0)
+                    continue;
+                double hp[2], hm[2];
+                draw_h0(p, cs, mx, mz, hp);
+                draw_h0(p, cs, -mx, -mz, hm);
+                double w = ocean_dispersion(k, p->sea.depth_m);
+                double ph = reduce_phase(w * t), cp = cos(ph), sp = sin(ph);
+                /* h = hp e^{-i ph} + conj(hm) e^{i ph} */
+                double hr = hp[0] * cp + hp[1] * sp + hm[0] * cp + hm[1] * sp;
+                double hi = hp[1] * cp - hp[0] * sp - hm[1] * cp + hm[0] * sp;
+                /* dh/dt = -i w A + i w B, A = hp e^{-i ph}, B = conj(hm) e^{i ph} */
+                double ar = hp[0] * cp + hp[1] * sp, ai = hp[1] * cp - hp[0] * sp;
+                double br = hm[0] * cp + hm[1] * sp, bi = hm[0] * sp - hm[1] * cp;
+                double tr = w * (ai - bi), ti = w * (br - ar);
+                hr *= g; hi *= g; tr *= g; ti *= g;
+                double ex = reduce_phase(kx * xr + kz * zr), ce = cos(ex), se = sin(ex);
+                /* Re(a e^{i ex}) = ar ce - ai se; Re(i a e^{i ex}) = -ai ce - ar se */
+                double re_h = hr * ce - hi * se, re_ih = -hi * ce - hr * se;
+                double re_t = tr * ce - ti * se, re_it = -ti * ce - tr * se;
+                out->height += re_h;
+                out->dx += lam * kx / k * re_ih;
+                out->dz += lam * kz / k * re_ih;
+                out->slope_x += kx * re_ih;
+                out->slope_z += kz * re_ih;
+                dxx += -lam * kx * kx / k * re_h;
+                dzz += -lam * kz * kz / k * re_h;
+                dxz += -lam * kx * kz / k * re_h;
+                out->vel_y += re_t;
+                out->vel_x += lam * kx / k * re_it;
+                out->vel_z += lam * kz / k * re_it;
+            }
+    }
+    out->jacobian = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
+    out->foam = ocean_foam_from_jacobian((float)out->jacobian);
+}
+
+void ocean_mode_amplitude(const ocean *o, int c, int mx, int mz, double t, double out[2])
+{
+    int n = o->p.n;
+    out[0] = out[1] = 0.0;
+    if (c < 0 || c >= o->p.cascades || mx <= -n / 2 || mx >= n / 2 || mz <= -n / 2 || mz >= n / 2)
+        return;
+    const cascade *cs = &o->cas[c];
+    double hp[2], hm[2];
+    draw_h0(&o->p, cs, mx, mz, hp);
+    draw_h0(&o->p, cs, -mx, -mz, hm);
+    double w = ocean_dispersion(hypot(mx * cs->dk, mz * cs->dk), o->p.sea.depth_m);
+    double ph = reduce_phase(w * t), cp = cos(ph), sp = sin(ph);
+    out[0] = hp[0] * cp + hp[1] * sp + hm[0] * cp + hm[1] * sp;
+    out[1] = hp[1] * cp - hp[0] * sp + hm[0] * sp - hm[1] * cp;
+}
+
+void ocean_get_spectrum_stats(const ocean *o, ocean_spectrum_stats *out)
+{
+    memset(out, 0, sizeof *out);
+    for (int c = 0; c < o->p.cascades; c++) {
+        out->cascade_variance[c] = o->cas[c].variance;
+        out->variance += o->cas[c].variance;
+    }
+    out->hs = 4.0 * sqrt(out->variance);
+    out->wp = ocean_spectrum_peak(&o->p.sea);
+    if (out->wp > 0.0) {
+        out->tp = 2.0 * M_PI / out->wp;
+        out->kp = ocean_wavenumber(out->wp, o->p.sea.depth_m);
+        out->lambda_dominant = 2.0 * M_PI / out->kp;
+    }
+}
+
+void ocean_get_counters(const ocean *o, ocean_counters *out)
+{
+    *out = o->counters;
+}

@@ -1,0 +1,715 @@
+/*
+ * test_ocean.c - the FFT ocean: physics against published relations,
+ * numerics (Hermitian, Parseval, Jacobian, resolution independence,
+ * determinism) and the hard cases, which must stay finite and bounded.
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+#include <fftw3.h>
+
+#include "ocean.h"
+
+static int sanitized(void)
+{
+    return getenv("OCEAN_TEST_SANITIZED") != NULL;
+}
+
+static ocean *make(const ocean_params *p)
+{
+    char msg[256];
+    ocean *o = NULL;
+    ocean_result r = ocean_create(p, &o, msg, sizeof msg);
+    if (r != OCEAN_OK)
+        fail_msg("ocean_create: %s", msg);
+    return o;
+}
+
+static ocean_frame *frame(const ocean *o)
+{
+    ocean_frame *f = NULL;
+    assert_int_equal(ocean_frame_create(o, &f), OCEAN_OK);
+    return f;
+}
+
+static void eval(ocean *o, ocean_frame *f, double t, unsigned fx)
+{
+    ocean_request r;
+    ocean_request_all(&r, fx);
+    assert_int_equal(ocean_evaluate(o, t, &r, f), OCEAN_OK);
+}
+
+/* PM sea with U19.5 = 10 m/s on a patch that resolves the peak finely. */
+static void pm_params(ocean_params *p, int n)
+{
+    ocean_params_default(p);
+    p->sea.spectrum = OCEAN_SPECTRUM_PM;
+    p->sea.wind_u10 = 10.0 / 1.026;
+    p->n = n;
+    p->patch_m = 2000.0;
+}
+
+/* Variance the grid cannot hold: the w^-5 tail above w_max, a g^2/(4 w^4). */
+static double pm_tail(const ocean_params *p)
+{
+    double kmax = M_PI * p->n / p->patch_m;
+    double wmax = ocean_dispersion(kmax, p->sea.depth_m);
+    return 8.1e-3 * OCEAN_G * OCEAN_G / (4.0 * pow(wmax, 4));
+}
+
+static void test_hs_pierson_moskowitz(void **state)
+{
+    (void)state;
+    ocean_params p;
+    pm_params(&p, 512);
+    ocean *o = make(&p);
+    ocean_spectrum_stats ss;
+    ocean_get_spectrum_stats(o, &ss);
+    /* Published: Hs = 0.20925 U19.5^2 / g = 2.133 m.  The discrete
+     * spectrum misses the tail beyond the grid: add it back, then the
+     * quadrature of the grid must agree within 1.5 %. */
+    double hs_pub = 0.20925 * 100.0 / OCEAN_G;
+    double hs_tail = 4.0 * sqrt(ss.variance + pm_tail(&p));
+    if (fabs(hs_tail - hs_pub) > 0.015 * hs_pub)
+        fail_msg("discrete Hs %.4f (+tail %.4f) vs published %.4f", ss.hs, hs_tail, hs_pub);
+    assert_true(fabs(ss.tp - 7.302) < 0.01);
+    /* The realised field: 4 std within 8 % (one random sea). */
+    ocean_frame *f = frame(o);
+    eval(o, f, 0.0, OCEAN_FX_HEIGHT);
+    ocean_field_stats fs;
+    ocean_frame_get_field_stats(f, &fs);
+    if (fabs(fs.hs - ss.hs) > 0.08 * ss.hs)
+        fail_msg("realised Hs %.4f vs spectrum %.4f", fs.hs, ss.hs);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
+static void test_hs_jonswap(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.sea.spectrum = OCEAN_SPECTRUM_JONSWAP;
+    p.sea.wind_u10 = 10.0;
+    p.sea.fetch_m = 1e5;
+    p.n = 512;
+    p.patch_m = 2000.0;
+    ocean *o = make(&p);
+    ocean_spectrum_stats ss;
+    ocean_get_spectrum_stats(o, &ss);
+    double kmax = M_PI * p.n / p.patch_m, wmax = ocean_dispersion(kmax, p.sea.depth_m);
+    double tail = 0.01006 * OCEAN_G * OCEAN_G / (4.0 * pow(wmax, 4));
+    double hs = 4.0 * sqrt(ss.variance + tail);
+    if (fabs(hs - 2.139) > 0.02 * 2.139)
+        fail_msg("JONSWAP discrete Hs %.4f (+tail) vs published 2.139", hs);
+    ocean_destroy(o);
+}
+
+static void test_tma_lowers_hs(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.sea.spectrum = OCEAN_SPECTRUM_TMA;
+    p.sea.fetch_m = 2e4;
+    p.n = 256;
+    p.patch_m = 500.0;
+    /* A circular band, so the grid holds every wave up to w(k_max). */
+    p.k_max = M_PI * p.n / p.patch_m;
+    double prev = 0.0, depths[] = {2.0, 5.0, 20.0, 4000.0};
+    for (size_t i = 0; i < 4; i++) {
+        p.sea.depth_m = depths[i];
+        ocean *o = make(&p);
+        ocean_spectrum_stats ss;
+        ocean_get_spectrum_stats(o, &ss);
+        assert_true(ss.hs > prev);
+        /* The grid follows the TMA spectrum integrated over the same band
+         * (shallow water shortens the waves, so the band ends at a lower w). */
+        double w0 = ocean_dispersion(2.0 * M_PI / p.patch_m, p.sea.depth_m);
+        double w1 = ocean_dispersion(p.k_max, p.sea.depth_m), m0 = 0.0;
+        for (int k = 0; k < 20000; k++) {
+            double w = w0 + (k + 0.5) * (w1 - w0) / 20000;
+            m0 += ocean_spectrum_s(&p.sea, w) * (w1 - w0) / 20000;
+        }
+        double an = 4.0 * sqrt(m0);
+        if (fabs(ss.hs - an) > 0.03 * an)
+            fail_msg("depth %g: grid Hs %.4f vs analytic %.4f", depths[i], ss.hs, an);
+        prev = ss.hs;
+        ocean_destroy(o);
+    }
+}
+
+/* Rice: zero up-crossing period of a Gaussian sea is 2 pi sqrt(m0/m2);
+ * m2 needs the dispersion relation, so a wrong w(k) shows here. */
+static void test_time_series_periods(void **state)
+{
+    (void)state;
+    double depths[] = {4000.0, 3.0};
+    for (size_t d = 0; d < 2; d++) {
+        ocean_params p;
+        ocean_params_default(&p);
+        p.sea.spectrum = d == 0 ? OCEAN_SPECTRUM_PM : OCEAN_SPECTRUM_TMA;
+        p.sea.depth_m = depths[d];
+        p.sea.wind_u10 = 8.0;
+        p.n = 64;
+        p.patch_m = 800.0;
+        p.threads = 1;
+        ocean *o = make(&p);
+        ocean_frame *f = frame(o);
+        double dk = 2.0 * M_PI / p.patch_m, m0 = 0.0, m2 = 0.0;
+        for (int mz = -p.n / 2 + 1; mz < p.n / 2; mz++)
+            for (int mx = -p.n / 2 + 1; mx < p.n / 2; mx++) {
+                double kx = mx * dk, kz = mz * dk;
+                double v = ocean_spectrum_f(&p.sea, kx, kz) * dk * dk;
+                double w = ocean_dispersion(hypot(kx, kz), p.sea.depth_m);
+                m0 += v;
+                m2 += v * w * w;
+            }
+        double tz = 2.0 * M_PI * sqrt(m0 / m2);
+        /* Several points, a long record: count up-crossings. */
+        int crossings = 0;
+        double total_t = 0.0, dt = 0.1;
+        int steps = sanitized() ? 3000 : 8000;
+        double prev[4] = {0};
+        for (int i = 0; i < steps; i++) {
+            eval(o, f, i * dt, OCEAN_FX_HEIGHT);
+            for (int q = 0; q < 4; q++) {
+                ocean_point pt;
+                ocean_frame_sample(f, 100.0 * q + 12.5, 37.5 * q, &pt);
+                if (i > 0 && prev[q] < 0.0 && pt.height >= 0.0)
+                    crossings++;
+                prev[q] = pt.height;
+            }
+        }
+        total_t = 4 * (steps - 1) * dt;
+        double tz_obs = total_t / crossings;
+        if (fabs(tz_obs - tz) > 0.1 * tz)
+            fail_msg("depth %g: observed Tz %.3f s vs Rice %.3f s", depths[d], tz_obs, tz);
+        ocean_frame_destroy(f);
+        ocean_destroy(o);
+    }
+}
+
+/* The full complex spectrum, inverse-transformed with c2c, is real: the
+ * Hermitian construction holds; and its real part is the c2r field. */
+static void test_hermitian_and_parseval(void **state)
+{
+    (void)state;
+    ocean_params p;
+    pm_params(&p, 128);
+    p.patch_m = 600.0;
+    ocean *o = make(&p);
+    int n = p.n;
+    double t = 123.456;
+    fftwf_complex *in = fftwf_malloc(sizeof(fftwf_complex) * n * n);
+    fftwf_complex *out = fftwf_malloc(sizeof(fftwf_complex) * n * n);
+    fftwf_plan plan = fftwf_plan_dft_2d(n, n, in, out, FFTW_BACKWARD, FFTW_ESTIMATE);
+    double spec_var = 0.0;
+    for (int iz = 0; iz < n; iz++)
+        for (int ix = 0; ix < n; ix++) {
+            int mz = iz < n / 2 ? iz : iz - n, mx = ix < n / 2 ? ix : ix - n;
+            double h[2];
+            ocean_mode_amplitude(o, 0, mx, mz, t, h);
+            in[iz * n + ix][0] = (float)h[0];
+            in[iz * n + ix][1] = (float)h[1];
+            spec_var += h[0] * h[0] + h[1] * h[1];
+        }
+    fftwf_execute(plan);
+    double re2 = 0.0, im2 = 0.0;
+    for (int i = 0; i < n * n; i++) {
+        re2 += (double)out[i][0] * out[i][0];
+        im2 += (double)out[i][1] * out[i][1];
+    }
+    if (!(sqrt(im2) <= 1e-6 * sqrt(re2)))
+        fail_msg("imaginary residue %.3g of the real part", sqrt(im2 / re2));
+    ocean_frame *f = frame(o);
+    eval(o, f, t, OCEAN_FX_HEIGHT);
+    const ocean_field *fd = ocean_frame_field(f, 0);
+    double diff = 0.0, var = 0.0, mean = 0.0;
+    for (int i = 0; i < n * n; i++) {
+        diff = fmax(diff, fabs(fd->height[i] - out[i][0]));
+        var += (double)fd->height[i] * fd->height[i];
+        mean += fd->height[i];
+    }
+    mean /= n * n;
+    var = var / (n * n) - mean * mean;
+    assert_true(diff < 1e-5 * sqrt(re2 / (n * n)) * 10);
+    /* Parseval: spatial variance equals the sum of |h(k,t)|^2. */
+    if (fabs(var - spec_var) > 1e-4 * spec_var)
+        fail_msg("Parseval: spatial %.8g vs spectral %.8g", var, spec_var);
+    assert_true(fabs(mean) < 1e-6);
+    fftwf_destroy_plan(plan);
+    fftwf_free(in);
+    fftwf_free(out);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
+static void test_mean_jacobian_is_one(void **state)
+{
+    (void)state;
+    double chop[] = {0.0, 1.0, 2.5, 5.0};
+    ocean_params p;
+    pm_params(&p, 128);
+    p.patch_m = 300.0;
+    p.sea.wind_u10 = 20.0;
+    for (size_t i = 0; i < 4; i++) {
+        p.sea.choppiness = chop[i];
+        ocean *o = make(&p);
+        ocean_frame *f = frame(o);
+        eval(o, f, 7.0, OCEAN_FX_FOAM);
+        const ocean_field *fd = ocean_frame_field(f, 0);
+        double s = 0.0;
+        for (int k = 0; k < p.n * p.n; k++)
+            s += fd->jacobian[k];
+        s /= p.n * p.n;
+        if (fabs(s - 1.0) > 1e-5)
+            fail_msg("choppiness %g: mean J = %.8f", chop[i], s);
+        ocean_field_stats fs;
+        ocean_frame_get_field_stats(f, &fs);
+        if (chop[i] == 0.0)
+            assert_true(fs.min_jacobian == 1.0 && fs.folded_fraction == 0.0);
+        if (chop[i] == 5.0)
+            assert_true(fs.folded_fraction > 0.0); /* storm chop at 5x folds */
+        ocean_frame_destroy(f);
+        ocean_destroy(o);
+    }
+}
+
+static void test_hs_independent_of_n(void **state)
+{
+    (void)state;
+    ocean_params p;
+    pm_params(&p, 256);
+    p.patch_m = 1000.0;
+    double hs[3];
+    int ns[3] = {256, 512, 1024};
+    for (int i = 0; i < 3; i++) {
+        p.n = ns[i];
+        ocean *o = make(&p);
+        ocean_spectrum_stats ss;
+        ocean_get_spectrum_stats(o, &ss);
+        hs[i] = 4.0 * sqrt(ss.variance + pm_tail(&p));
+        ocean_destroy(o);
+    }
+    /* With the tail accounted for, doubling N changes nothing but quadrature. */
+    assert_true(fabs(hs[1] - hs[0]) < 0.005 * hs[0]);
+    assert_true(fabs(hs[2] - hs[0]) < 0.005 * hs[0]);
+}
+
+/* Same waves at any N: with the band limited to N = 64's circle, N = 64
+ * and N = 256 hold exactly the same waves, and the fine grid subsampled
+ * every 4th point equals the coarse grid. */
+static void test_common_waves_across_n(void **state)
+{
+    (void)state;
+    ocean_params p;
+    pm_params(&p, 64);
+    p.patch_m = 400.0;
+    p.k_max = 31.5 * 2.0 * M_PI / p.patch_m;
+    ocean *a = make(&p);
+    p.n = 256;
+    ocean *b = make(&p);
+    ocean_frame *fa = frame(a), *fb = frame(b);
+    unsigned fx = OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT | OCEAN_FX_NORMALS;
+    eval(a, fa, 42.0, fx);
+    eval(b, fb, 42.0, fx);
+    const ocean_field *x = ocean_frame_field(fa, 0), *y = ocean_frame_field(fb, 0);
+    double maxd = 0.0, maxh = 0.0;
+    for (int i = 0; i < 64; i++)
+        for (int j = 0; j < 64; j++) {
+            size_t ia = (size_t)i * 64 + j, ib = (size_t)(4 * i) * 256 + 4 * j;
+            maxd = fmax(maxd, fabs(x->height[ia] - y->height[ib]));
+            maxd = fmax(maxd, fabs(x->dx[ia] - y->dx[ib]));
+            maxd = fmax(maxd, fabs(x->slope_z[ia] - y->slope_z[ib]) * 10.0);
+            maxh = fmax(maxh, fabs(x->height[ia]));
+        }
+    if (!(maxd < 1e-5 * maxh + 1e-6))
+        fail_msg("N=64 vs N=256 differ by %.3g (max height %.3g)", maxd, maxh);
+    /* And amplitudes are keyed by the wave vector: identical in double. */
+    for (int mz = -31; mz < 32; mz += 5)
+        for (int mx = -31; mx < 32; mx += 3) {
+            double ha[2], hb[2];
+            ocean_mode_amplitude(a, 0, mx, mz, 3.0, ha);
+            ocean_mode_amplitude(b, 0, mx, mz, 3.0, hb);
+            assert_true(ha[0] == hb[0] && ha[1] == hb[1]);
+        }
+    ocean_frame_destroy(fa);
+    ocean_frame_destroy(fb);
+    ocean_destroy(a);
+    ocean_destroy(b);
+}
+
+static int fields_equal(const ocean_frame *a, const ocean_frame *b, int cascades)
+{
+    for (int c = 0; c < cascades; c++) {
+        const ocean_field *x = ocean_frame_field(a, c), *y = ocean_frame_field(b, c);
+        size_t nn = (size_t)x->n * x->n * sizeof(float);
+        const float *px[] = {x->height, x->dx, x->dz, x->slope_x, x->slope_z, x->jacobian, x->foam};
+        const float *py[] = {y->height, y->dx, y->dz, y->slope_x, y->slope_z, y->jacobian, y->foam};
+        if (x->n != y->n)
+            return 0;
+        for (int k = 0; k < 7; k++)
+            if ((px[k] == NULL) != (py[k] == NULL) || (px[k] && memcmp(px[k], py[k], nn) != 0))
+                return 0;
+    }
+    return 1;
+}
+
+static void test_determinism(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 128;
+    p.cascades = 3;
+    ocean *a = make(&p), *b = make(&p);
+    ocean_frame *f1 = frame(a), *f2 = frame(a), *f3 = frame(b);
+    eval(a, f1, 5.0, OCEAN_FX_ALL);
+    eval(a, f2, 1.0, OCEAN_FX_ALL);
+    eval(a, f2, 1e6, OCEAN_FX_ALL);
+    eval(a, f2, 5.0, OCEAN_FX_ALL);
+    assert_true(fields_equal(f1, f2, 3));
+    /* A second ocean (another daemon) agrees bit for bit. */
+    eval(b, f3, 5.0, OCEAN_FX_ALL);
+    assert_true(fields_equal(f1, f3, 3));
+    eval(b, f3, 5.000001, OCEAN_FX_ALL);
+    assert_false(fields_equal(f1, f3, 3));
+    ocean_frame_destroy(f1);
+    ocean_frame_destroy(f2);
+    ocean_frame_destroy(f3);
+    ocean_destroy(a);
+    ocean_destroy(b);
+}
+
+/* Huge t: the float field against the double reference. */
+static void test_huge_time_against_reference(void **state)
+{
+    (void)state;
+    ocean_params p;
+    pm_params(&p, 64);
+    p.patch_m = 500.0;
+    p.sea.choppiness = 1.0;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o);
+    ocean_spectrum_stats ss;
+    ocean_get_spectrum_stats(o, &ss);
+    double times[] = {0.0, 1e6, 1e9};
+    for (size_t i = 0; i < 3; i++) {
+        eval(o, f, times[i], OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT);
+        double se = 0.0;
+        int cnt = 0;
+        for (int q = 0; q < 40; q++) {
+            /* Grid points, so bilinear interpolation adds nothing. */
+            double x = (q * 7 % 64) * p.patch_m / 64, z = (q * 13 % 64) * p.patch_m / 64;
+            ocean_point a, b;
+            ocean_frame_sample(f, x, z, &a);
+            ocean_reference_point(o, times[i], x, z, INFINITY, 6, &b);
+            se += (a.height - b.height) * (a.height - b.height) + (a.dx - b.dx) * (a.dx - b.dx);
+            cnt += 2;
+        }
+        double rms = sqrt(se / cnt);
+        if (!(rms < 1e-3 * ss.hs))
+            fail_msg("t = %g: RMS error %.3g m vs Hs %.3g m", times[i], rms, ss.hs);
+    }
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
+static void assert_frame_finite(const ocean_frame *f, int cascades, const char *what)
+{
+    for (int c = 0; c < cascades; c++) {
+        const ocean_field *fd = ocean_frame_field(f, c);
+        const float *ch[] = {fd->height, fd->dx, fd->dz, fd->slope_x, fd->slope_z,
+                             fd->jacobian, fd->foam, fd->vel_x, fd->vel_y, fd->vel_z};
+        for (int k = 0; k < 10; k++) {
+            if (!ch[k])
+                continue;
+            for (size_t i = 0; i < (size_t)fd->n * fd->n; i++)
+                if (!isfinite(ch[k][i]) || fabsf(ch[k][i]) > 1e6f)
+                    fail_msg("%s: cascade %d channel %d sample %zu = %g", what, c, k, i, ch[k][i]);
+        }
+    }
+}
+
+static void run_case(ocean_params *p, double t, const char *what)
+{
+    ocean *o = make(p);
+    ocean_frame *f = frame(o);
+    eval(o, f, t, OCEAN_FX_ALL | OCEAN_FX_VELOCITY);
+    assert_frame_finite(f, p->cascades, what);
+    ocean_spectrum_stats ss;
+    ocean_get_spectrum_stats(o, &ss);
+    if (!isfinite(ss.hs) || ss.hs < 0.0)
+        fail_msg("%s: Hs %g", what, ss.hs);
+    ocean_point pt;
+    ocean_frame_sample(f, 1e7 + 0.25, -3e6, &pt);
+    assert_true(isfinite(pt.height) && isfinite(pt.jacobian));
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
+static void test_hard_cases_finite(void **state)
+{
+    (void)state;
+    ocean_params p;
+    char what[128];
+    double winds[] = {0.0, 0.1, 70.0};
+    for (size_t i = 0; i < 3; i++) {
+        ocean_params_default(&p);
+        p.n = 64;
+        p.sea.wind_u10 = winds[i];
+        for (int sp = 0; sp < OCEAN_SPECTRUM_COUNT_; sp++) {
+            p.sea.spectrum = (ocean_spectrum_kind)sp;
+            snprintf(what, sizeof what, "wind %g %s", winds[i], ocean_spectrum_name(p.sea.spectrum));
+            run_case(&p, 10.0, what);
+        }
+    }
+    double depths[] = {0.05, 1.0, 11000.0};
+    for (size_t i = 0; i < 3; i++) {
+        ocean_params_default(&p);
+        p.n = 64;
+        p.sea.spectrum = OCEAN_SPECTRUM_TMA;
+        p.sea.depth_m = depths[i];
+        snprintf(what, sizeof what, "depth %g", depths[i]);
+        run_case(&p, 1e9, what);
+    }
+    double chops[] = {0.0, 5.0};
+    for (size_t i = 0; i < 2; i++) {
+        ocean_params_default(&p);
+        p.n = 64;
+        p.sea.choppiness = chops[i];
+        p.sea.wind_u10 = 70.0;
+        snprintf(what, sizeof what, "choppiness %g", chops[i]);
+        run_case(&p, 3.0, what);
+    }
+    double patches[] = {1.0, 1e5};
+    for (size_t i = 0; i < 2; i++) {
+        ocean_params_default(&p);
+        p.n = 64;
+        p.patch_m = patches[i];
+        p.cascades = patches[i] > 10 ? 4 : 1;
+        snprintf(what, sizeof what, "patch %g", patches[i]);
+        run_case(&p, 100.0, what);
+    }
+    double fetches[] = {1.0, 1e7};
+    for (size_t i = 0; i < 2; i++) {
+        ocean_params_default(&p);
+        p.n = 32;
+        p.sea.spectrum = OCEAN_SPECTRUM_JONSWAP;
+        p.sea.fetch_m = fetches[i];
+        snprintf(what, sizeof what, "fetch %g", fetches[i]);
+        run_case(&p, 0.0, what);
+    }
+    for (int sd = 0; sd < OCEAN_SPREAD_COUNT_; sd++)
+        for (int ext = 0; ext < 2; ext++) {
+            ocean_params_default(&p);
+            p.n = 32;
+            p.sea.spreading = (ocean_spreading_kind)sd;
+            p.sea.swell = ext ? 10.0 : 0.0;
+            p.sea.wind_u10 = ext ? 100.0 : 0.5;
+            snprintf(what, sizeof what, "spreading %s extreme %d", ocean_spreading_name(p.sea.spreading), ext);
+            run_case(&p, 1.0, what);
+        }
+    int ns[] = {8, 16, 2048};
+    for (size_t i = 0; i < 3; i++) {
+        ocean_params_default(&p);
+        p.n = ns[i];
+        if (ns[i] == 2048 && sanitized())
+            p.n = 1024; /* 11 channels at 2048 under ASan take minutes */
+        snprintf(what, sizeof what, "n %d", p.n);
+        run_case(&p, 1.0, what);
+    }
+}
+
+/* DC and Nyquist: zero in every channel's spectrum, so the field has zero
+ * mean and no checkerboard (alternating-sign) component. */
+static void test_dc_and_nyquist(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 32;
+    p.patch_m = 40.0; /* Nyquist band carries energy here if not zeroed */
+    p.sea.wind_u10 = 30.0;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o);
+    eval(o, f, 2.0, OCEAN_FX_ALL);
+    const ocean_field *fd = ocean_frame_field(f, 0);
+    const float *chs[] = {fd->height, fd->dx, fd->dz, fd->slope_x, fd->slope_z};
+    for (int k = 0; k < 5; k++) {
+        double mean = 0.0, nyq_x = 0.0, nyq_z = 0.0, mag = 0.0;
+        for (int i = 0; i < p.n; i++)
+            for (int j = 0; j < p.n; j++) {
+                double v = chs[k][i * p.n + j];
+                mean += v;
+                nyq_x += (j % 2 ? -v : v);
+                nyq_z += (i % 2 ? -v : v);
+                mag += fabs(v);
+            }
+        assert_true(fabs(mean) < 1e-5 * mag);
+        assert_true(fabs(nyq_x) < 1e-5 * mag);
+        assert_true(fabs(nyq_z) < 1e-5 * mag);
+    }
+    double h[2];
+    ocean_mode_amplitude(o, 0, 0, 0, 1.0, h);
+    assert_true(h[0] == 0.0 && h[1] == 0.0);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
+static void expect_refused(ocean_params *p, const char *field)
+{
+    char msg[256] = "";
+    ocean *o = NULL;
+    assert_int_equal(ocean_create(p, &o, msg, sizeof msg), OCEAN_EINVAL);
+    assert_null(o);
+    if (!strstr(msg, field))
+        fail_msg("message '%s' does not name '%s'", msg, field);
+}
+
+static void test_invalid_parameters(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p); p.n = 100; expect_refused(&p, "n = 100");
+    ocean_params_default(&p); p.n = 4096; expect_refused(&p, "n");
+    ocean_params_default(&p); p.n = 0; expect_refused(&p, "n");
+    ocean_params_default(&p); p.sea.wind_u10 = -1; expect_refused(&p, "wind");
+    ocean_params_default(&p); p.sea.wind_u10 = NAN; expect_refused(&p, "wind");
+    ocean_params_default(&p); p.sea.depth_m = 0; expect_refused(&p, "depth");
+    ocean_params_default(&p); p.patch_m = 0; expect_refused(&p, "patch");
+    ocean_params_default(&p); p.patch_m = INFINITY; expect_refused(&p, "patch");
+    ocean_params_default(&p); p.cascades = 5; expect_refused(&p, "cascades");
+    ocean_params_default(&p); p.sea.choppiness = -0.5; expect_refused(&p, "choppiness");
+    ocean_params_default(&p); p.threads = 0; expect_refused(&p, "threads");
+    ocean_params_default(&p); p.k_max = NAN; expect_refused(&p, "k_max");
+    /* Evaluation refuses non-finite time and nonsense requests. */
+    ocean_params_default(&p);
+    p.n = 16;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_HEIGHT);
+    assert_int_equal(ocean_evaluate(o, NAN, &r, f), OCEAN_EINVAL);
+    assert_int_equal(ocean_evaluate(o, INFINITY, &r, f), OCEAN_EINVAL);
+    r.cutoff_k = -1.0;
+    assert_int_equal(ocean_evaluate(o, 0.0, &r, f), OCEAN_EINVAL);
+    r.cutoff_k = NAN;
+    assert_int_equal(ocean_evaluate(o, 0.0, &r, f), OCEAN_EINVAL);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    ocean_destroy(NULL);
+    ocean_frame_destroy(NULL);
+}
+
+/* Only the asked channels are transformed, and counters say so. */
+static void test_effects_mask_counts_transforms(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 64;
+    p.cascades = 2;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o);
+    struct { unsigned fx; int per_cascade; } cases[] = {
+        {OCEAN_FX_HEIGHT, 1}, {OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT, 3},
+        {OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT | OCEAN_FX_NORMALS, 5},
+        {OCEAN_FX_ALL, 8}, {OCEAN_FX_NORMALS, 2}, {OCEAN_FX_FOAM, 3}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        ocean_counters before, after;
+        ocean_get_counters(o, &before);
+        eval(o, f, 1.0, cases[i].fx);
+        ocean_get_counters(o, &after);
+        ocean_frame_info info;
+        ocean_frame_get_info(f, &info);
+        assert_int_equal(info.transforms, 2 * cases[i].per_cascade);
+        assert_int_equal(after.transforms - before.transforms, 2 * cases[i].per_cascade);
+        const ocean_field *fd = ocean_frame_field(f, 1);
+        assert_true((fd->height != NULL) == !!(cases[i].fx & OCEAN_FX_HEIGHT));
+        assert_true((fd->dx != NULL) == !!(cases[i].fx & OCEAN_FX_DISPLACEMENT));
+        assert_true((fd->slope_x != NULL) == !!(cases[i].fx & OCEAN_FX_NORMALS));
+        assert_true((fd->foam != NULL) == !!(cases[i].fx & OCEAN_FX_FOAM));
+    }
+    /* One cascade only. */
+    ocean_request r;
+    ocean_request_all(&r, 0);
+    r.effects[1] = OCEAN_FX_HEIGHT;
+    assert_int_equal(ocean_evaluate(o, 0.0, &r, f), OCEAN_OK);
+    ocean_frame_info info;
+    ocean_frame_get_info(f, &info);
+    assert_int_equal(info.transforms, 1);
+    assert_int_equal(ocean_frame_field(f, 0)->effects, 0);
+    ocean_counters c;
+    ocean_get_counters(o, &c);
+    /* Height ran in cases 0-3 on both cascades, then once more. */
+    assert_int_equal(c.transforms_by_effect[0], 4 * 2 + 1);
+    assert_int_equal(c.transforms_by_effect[3], 2 * 2 * 3); /* foam: cases 3 and 5 */
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
+/* Cascades split the spectrum: bands are disjoint and contiguous, and the
+ * summed variance matches one fine grid over the same band. */
+static void test_cascade_partition(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 128;
+    p.cascades = 3;
+    ocean *o = make(&p);
+    double prev_hi = 0.0;
+    for (int c = 0; c < 3; c++) {
+        double L, lo, hi;
+        ocean_cascade_band(o, c, &L, &lo, &hi);
+        assert_true(lo == prev_hi);
+        assert_true(hi > lo);
+        prev_hi = hi;
+    }
+    assert_true(isinf(prev_hi));
+    ocean_spectrum_stats ss;
+    ocean_get_spectrum_stats(o, &ss);
+    /* Three cascades of 128 reach much further than one, with nothing
+     * counted twice: their variance is that of the analytic spectrum up
+     * to the finest Nyquist, within quadrature. */
+    double an = ocean_spectrum_hs(&p.sea);
+    if (fabs(ss.hs - an) > 0.03 * an)
+        fail_msg("3 cascades Hs %.4f vs analytic %.4f", ss.hs, an);
+    ocean_frame *f = frame(o);
+    eval(o, f, 3.0, OCEAN_FX_HEIGHT | OCEAN_FX_FOAM);
+    ocean_field_stats fs;
+    ocean_frame_get_field_stats(f, &fs);
+    assert_true(fs.hs > 0.8 * ss.hs && fs.hs < 1.2 * ss.hs);
+    ocean_destroy(o);
+    ocean_frame_destroy(f);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_hs_pierson_moskowitz),
+        cmocka_unit_test(test_hs_jonswap),
+        cmocka_unit_test(test_tma_lowers_hs),
+        cmocka_unit_test(test_time_series_periods),
+        cmocka_unit_test(test_hermitian_and_parseval),
+        cmocka_unit_test(test_mean_jacobian_is_one),
+        cmocka_unit_test(test_hs_independent_of_n),
+        cmocka_unit_test(test_common_waves_across_n),
+        cmocka_unit_test(test_determinism),
+        cmocka_unit_test(test_huge_time_against_reference),
+        cmocka_unit_test(test_hard_cases_finite),
+        cmocka_unit_test(test_dc_and_nyquist),
+        cmocka_unit_test(test_invalid_parameters),
+        cmocka_unit_test(test_effects_mask_counts_transforms),
+        cmocka_unit_test(test_cascade_partition),
+    };
+    return cmocka_run_group_tests_name("ocean", tests, NULL, NULL);
+}

@@ -1,0 +1,264 @@
+/*
+ * test_spectrum.c - spectra, spreading, dispersion and Beaufort against the
+ * published numbers in shared/REFERENCES.md.
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "spectrum.h"
+
+static void assert_close(double got, double want, double rel)
+{
+    if (!(fabs(got - want) <= rel * fabs(want)))
+        fail_msg("got %.8g, want %.8g (rel tol %g)", got, want, rel);
+}
+
+static void test_dispersion_checks(void **state)
+{
+    (void)state;
+    double k = 2.0 * M_PI / 100.0;
+    double w = ocean_dispersion(k, 1e4);
+    assert_close(w, 0.78510, 1e-4);
+    assert_close(2.0 * M_PI / w, 8.003, 2e-4);
+    assert_close(w / k, 12.495, 1e-4);
+    double ws = ocean_dispersion(k, 10.0);
+    assert_close(2.0 * M_PI / ws, 10.724, 2e-4);
+    assert_close(ws / k, 9.325, 2e-4);
+    /* Inverse, and the group-velocity derivative against a finite difference. */
+    assert_close(ocean_wavenumber(w, 1e4), k, 1e-12);
+    assert_close(ocean_wavenumber(ws, 10.0), k, 1e-12);
+    double depths[] = {0.05, 1.0, 10.0, 11000.0};
+    for (size_t i = 0; i < 4; i++) {
+        double h = depths[i], kk = 0.3, e = 1e-6;
+        double fd = (ocean_dispersion(kk + e, h) - ocean_dispersion(kk - e, h)) / (2 * e);
+        assert_close(ocean_dispersion_dk(kk, h), fd, 1e-6);
+    }
+    /* No overflow where cosh(kh) would: kh = 1e7. */
+    double d = ocean_dispersion_dk(1e3, 1e4);
+    assert_true(isfinite(d) && d > 0.0);
+    assert_close(ocean_dispersion_dk(0.0, 10.0), sqrt(OCEAN_G * 10.0), 1e-12);
+}
+
+static void sea_pm(ocean_sea_state *s, double u195)
+{
+    ocean_sea_state_default(s);
+    s->spectrum = OCEAN_SPECTRUM_PM;
+    s->wind_u10 = u195 / 1.026;
+}
+
+static void test_pierson_moskowitz(void **state)
+{
+    (void)state;
+    ocean_sea_state s;
+    sea_pm(&s, 10.0);
+    assert_close(ocean_spectrum_hs(&s), 2.133, 1e-3);
+    assert_close(ocean_spectrum_peak(&s), 0.8605, 2e-4);
+    assert_close(2.0 * M_PI / ocean_spectrum_peak(&s), 7.302, 2e-4);
+    /* Hs scales with U^2. */
+    sea_pm(&s, 20.0);
+    assert_close(ocean_spectrum_hs(&s), 4.0 * 2.133, 1e-3);
+    /* w -> 0 is 0, not inf * 0 = NaN. */
+    assert_true(ocean_spectrum_s(&s, 1e-300) == 0.0);
+    assert_true(ocean_spectrum_s(&s, 0.0) == 0.0);
+}
+
+static void test_jonswap(void **state)
+{
+    (void)state;
+    ocean_sea_state s;
+    ocean_sea_state_default(&s);
+    s.spectrum = OCEAN_SPECTRUM_JONSWAP;
+    s.wind_u10 = 10.0;
+    s.fetch_m = 1e5;
+    assert_close(ocean_spectrum_peak(&s), 1.0082, 2e-4);
+    assert_close(ocean_spectrum_hs(&s), 2.139, 3e-3);
+    /* alpha from the fetch law: S(w) at w >> wp tends to alpha g^2 w^-5. */
+    double w = 30.0;
+    assert_close(ocean_spectrum_s(&s, w) * pow(w, 5) / (OCEAN_G * OCEAN_G), 0.01006, 2e-3);
+    /* Longer fetch, bigger sea. */
+    s.fetch_m = 1e6;
+    assert_true(ocean_spectrum_hs(&s) > 2.139);
+}
+
+static void test_tma(void **state)
+{
+    (void)state;
+    assert_close(ocean_tma_phi(0.5 / sqrt(10.0 / OCEAN_G), 10.0), 0.125, 1e-12);
+    assert_close(ocean_tma_phi(1.5 / sqrt(10.0 / OCEAN_G), 10.0), 0.875, 1e-12);
+    assert_close(ocean_tma_phi(2.5 / sqrt(10.0 / OCEAN_G), 10.0), 1.0, 1e-12);
+    ocean_sea_state s;
+    ocean_sea_state_default(&s);
+    s.spectrum = OCEAN_SPECTRUM_JONSWAP;
+    double deep = ocean_spectrum_hs(&s);
+    s.spectrum = OCEAN_SPECTRUM_TMA;
+    double prev = 0.0, depths[] = {1.0, 3.0, 10.0, 30.0, 1000.0};
+    for (size_t i = 0; i < 5; i++) {
+        s.depth_m = depths[i];
+        double hs = ocean_spectrum_hs(&s);
+        assert_true(hs > prev);
+        assert_true(hs <= deep * (1 + 1e-9));
+        prev = hs;
+    }
+    assert_close(prev, deep, 1e-3); /* deep water: Phi = 1 over the spectrum */
+}
+
+static double integrate_d(const ocean_sea_state *s, double w)
+{
+    const int n = 20000;
+    double sum = 0.0, h = 2.0 * M_PI / n;
+    for (int i = 0; i < n; i++)
+        sum += ocean_spreading_d(s, -M_PI + (i + 0.5) * h, w);
+    return sum * h;
+}
+
+static void test_spreading_integrates_to_one(void **state)
+{
+    (void)state;
+    ocean_sea_state s;
+    ocean_sea_state_default(&s);
+    double wp = ocean_spectrum_peak(&s);
+    double ratios[] = {0.05, 0.3, 0.95, 1.0, 1.3, 1.6, 3.0, 10.0};
+    double swells[] = {0.0, 1.0};
+    double winds[] = {1.0, 10.0, 70.0};
+    for (int k = 0; k < OCEAN_SPREAD_COUNT_; k++)
+        for (size_t a = 0; a < 2; a++)
+            for (size_t b = 0; b < 3; b++) {
+                s.spreading = (ocean_spreading_kind)k;
+                s.swell = swells[a];
+                s.wind_u10 = winds[b];
+                wp = ocean_spectrum_peak(&s);
+                for (size_t i = 0; i < sizeof ratios / sizeof ratios[0]; i++) {
+                    double got = integrate_d(&s, ratios[i] * wp);
+                    if (fabs(got - 1.0) > 2e-3)
+                        fail_msg("%s swell %g wind %g w/wp %g: integral %.6f",
+                                 ocean_spreading_name(s.spreading), s.swell, s.wind_u10,
+                                 ratios[i], got);
+                }
+            }
+}
+
+static void test_cos2s_norm(void **state)
+{
+    (void)state;
+    assert_close(ocean_cos2s_norm(1.0), 0.31831, 1e-5);
+    assert_close(ocean_cos2s_norm(10.0), 0.90328, 1e-5);
+    /* Gamma(2s+1) overflows double at s ~ 85: the log form does not. */
+    double q = ocean_cos2s_norm(1e6);
+    assert_true(isfinite(q) && q > 0.0);
+    assert_close(ocean_cos2s_norm(0.0), 1.0 / (2.0 * M_PI), 1e-12);
+}
+
+static void test_beaufort(void **state)
+{
+    (void)state;
+    double prev = -1.0, u;
+    ocean_sea_state s;
+    ocean_sea_state_default(&s);
+    double prev_hs = -1.0;
+    for (int f = 0; f <= 12; f++) {
+        assert_int_equal(ocean_beaufort_wind(f, &u), OCEAN_OK);
+        assert_true(u > prev);
+        prev = u;
+        s.wind_u10 = u;
+        double hs = ocean_spectrum_hs(&s);
+        assert_true(hs > prev_hs);
+        prev_hs = hs;
+        /* The Met Office table as a monotonic band: force 3..9 seas sit
+         * within a factor 2 of the "probable" height (fully developed PM
+         * exceeds it above force 6, as REFERENCES.md notes). */
+        static const double probable[13] = {0, 0, 0, 0.6, 1.0, 2.0, 3.0, 4.0, 5.5, 7.0, 9.0, 11.5, 14.0};
+        if (f >= 3 && f <= 9)
+            assert_true(hs > 0.5 * probable[f] && hs < 2.0 * probable[f]);
+    }
+    assert_int_equal(ocean_beaufort_wind(13, &u), OCEAN_EINVAL);
+    assert_int_equal(ocean_beaufort_wind(-1, &u), OCEAN_EINVAL);
+}
+
+static void test_extremes_finite(void **state)
+{
+    (void)state;
+    ocean_sea_state s;
+    double winds[] = {0.0, 0.1, 10.0, 70.0, 100.0};
+    double depths[] = {0.05, 1.0, 11000.0};
+    double fetches[] = {1.0, 1e4, 1e7};
+    double ks[] = {0.0, 1e-9, 1e-4, 0.01, 1.0, 100.0, 1e4, 1e7};
+    for (int sp = 0; sp < OCEAN_SPECTRUM_COUNT_; sp++)
+        for (int sd = 0; sd < OCEAN_SPREAD_COUNT_; sd++)
+            for (size_t a = 0; a < 5; a++)
+                for (size_t b = 0; b < 3; b++)
+                    for (size_t c = 0; c < 3; c++) {
+                        ocean_sea_state_default(&s);
+                        s.spectrum = (ocean_spectrum_kind)sp;
+                        s.spreading = (ocean_spreading_kind)sd;
+                        s.wind_u10 = winds[a];
+                        s.depth_m = depths[b];
+                        s.fetch_m = fetches[c];
+                        s.swell = 10.0;
+                        assert_int_equal(ocean_sea_state_validate(&s, NULL, 0), OCEAN_OK);
+                        for (size_t i = 0; i < 8; i++)
+                            for (int d = 0; d < 8; d++) {
+                                double th = d * M_PI / 4;
+                                double f = ocean_spectrum_f(&s, ks[i] * cos(th), ks[i] * sin(th));
+                                if (!isfinite(f) || f < 0.0)
+                                    fail_msg("F not finite: %s/%s wind %g depth %g k %g: %g",
+                                             ocean_spectrum_name(s.spectrum),
+                                             ocean_spreading_name(s.spreading), s.wind_u10,
+                                             s.depth_m, ks[i], f);
+                            }
+                        double hs = ocean_spectrum_hs(&s);
+                        assert_true(isfinite(hs) && hs >= 0.0);
+                    }
+    /* No wind, no sea. */
+    ocean_sea_state_default(&s);
+    s.wind_u10 = 0.0;
+    assert_true(ocean_spectrum_hs(&s) == 0.0);
+    assert_true(ocean_spectrum_f(&s, 0.1, 0.0) == 0.0);
+}
+
+static void test_validate_refuses(void **state)
+{
+    (void)state;
+    ocean_sea_state s;
+    char msg[200];
+    ocean_sea_state_default(&s);
+    s.wind_u10 = NAN;
+    assert_int_equal(ocean_sea_state_validate(&s, msg, sizeof msg), OCEAN_EINVAL);
+    assert_non_null(strstr(msg, "wind"));
+    ocean_sea_state_default(&s);
+    s.depth_m = -1.0;
+    assert_int_equal(ocean_sea_state_validate(&s, msg, sizeof msg), OCEAN_EINVAL);
+    assert_non_null(strstr(msg, "depth"));
+    ocean_sea_state_default(&s);
+    s.fetch_m = INFINITY;
+    assert_int_equal(ocean_sea_state_validate(&s, msg, sizeof msg), OCEAN_EINVAL);
+    assert_non_null(strstr(msg, "fetch"));
+    ocean_sea_state_default(&s);
+    s.spectrum = (ocean_spectrum_kind)42;
+    assert_int_equal(ocean_sea_state_validate(&s, msg, sizeof msg), OCEAN_EINVAL);
+    ocean_spectrum_kind k;
+    assert_int_equal(ocean_spectrum_parse("jonswap", &k), OCEAN_OK);
+    assert_int_equal(k, OCEAN_SPECTRUM_JONSWAP);
+    assert_int_equal(ocean_spectrum_parse("bogus", &k), OCEAN_EINVAL);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_dispersion_checks),
+        cmocka_unit_test(test_pierson_moskowitz),
+        cmocka_unit_test(test_jonswap),
+        cmocka_unit_test(test_tma),
+        cmocka_unit_test(test_spreading_integrates_to_one),
+        cmocka_unit_test(test_cos2s_norm),
+        cmocka_unit_test(test_beaufort),
+        cmocka_unit_test(test_extremes_finite),
+        cmocka_unit_test(test_validate_refuses),
+    };
+    return cmocka_run_group_tests_name("spectrum", tests, NULL, NULL);
+}
