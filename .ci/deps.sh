@@ -4,7 +4,7 @@
 set -euo pipefail
 pkgs=(gcc make clang pkg-config libclang-rt-14-dev
       libwebsockets-dev libopenexr-dev libfftw3-dev libzstd-dev libcjson-dev
-      librandom123-dev libcmocka-dev gnuplot-nox
+      librandom123-dev libcmocka-dev gnuplot-nox openexr
       chromium nodejs npm)
 missing=()
 for p in "${pkgs[@]}"; do

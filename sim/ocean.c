@@ -28,6 +28,7 @@
 #include <fftw3.h>
 #include <omp.h>
 
+#include "filter.h"
 #include "wave_rng.h"
 
 enum {
@@ -50,6 +51,12 @@ typedef struct cascade {
     double patch, dk, k_lo, k_hi;
     mode *modes;            /* n x (n/2 + 1), row = kz index */
     double variance;
+    /* h(k,t) and dh/dt of every mode, unfiltered, at time cache_t for the
+     * modes of grids up to cache_n: several cutoff buckets in one tick pay
+     * for the trigonometry once. */
+    float (*cache)[4];
+    double cache_t, cache_kneg;
+    int cache_n;
 } cascade;
 
 struct ocean {
@@ -199,7 +206,9 @@ static ocean_result cascade_init(ocean *o, int c)
     cs->k_lo = c == 0 ? 0.0 : o->cas[c - 1].k_hi;
     cs->k_hi = c == p->cascades - 1 ? p->k_max : M_PI * n / (2.0 * cs->patch);
     cs->modes = calloc((size_t)n * half, sizeof(mode));
-    if (!cs->modes)
+    cs->cache = malloc(sizeof *cs->cache * (size_t)n * half);
+    cs->cache_n = 0;
+    if (!cs->modes || !cs->cache)
         return OCEAN_ENOMEM;
     double var = 0.0;
     for (int iz = 0; iz < n; iz++) {
@@ -304,8 +313,10 @@ void ocean_destroy(ocean *o)
                 fftwf_destroy_plan(o->plan[l][c]);
     pthread_mutex_unlock(&planner_lock);
     fftwf_free(o->spec);
-    for (int c = 0; c < OCEAN_MAX_CASCADES; c++)
+    for (int c = 0; c < OCEAN_MAX_CASCADES; c++) {
         free(o->cas[c].modes);
+        free(o->cas[c].cache);
+    }
     free(o);
 }
 
@@ -358,30 +369,13 @@ void ocean_frame_destroy(ocean_frame *f)
     free(f);
 }
 
-/* Butterworth |H| of order n, stable for any ratio (REFERENCES.md). */
-static inline double butterworth(double k, double kc, int order)
-{
-    if (isinf(kc))
-        return 1.0;
-    if (!(kc > 0.0))
-        return k > 0.0 ? 0.0 : 1.0;
-    if (k <= kc) {
-        double q = pow(k / kc, order);
-        return 1.0 / sqrt(1.0 + q * q);
-    }
-    double q = pow(kc / k, order);
-    return q / sqrt(1.0 + q * q);
-}
+/* Waves whose filter gain is below 1e-4 are not transformed at all
+ * (1e-4 of a 10 m wave is 1 mm). */
+#define NEGLIGIBLE_GAIN 1e-4
 
-/* Wave number above which the filter gain is below 1e-4: those waves are
- * not transformed at all (1e-4 of a 10 m wave is 1 mm). */
-static double negligible_k(double kc, int order)
+static inline double negligible_k(double kc, int order)
 {
-    if (isinf(kc))
-        return INFINITY;
-    if (!(kc > 0.0))
-        return 0.0;
-    return kc * pow(1e4, 1.0 / order);
+    return ocean_filter_negligible_k(kc, order, NEGLIGIBLE_GAIN);
 }
 
 /* Which channels an effect mask needs, in block order; returns the count. */
@@ -400,7 +394,7 @@ static int channel_list(unsigned effects, int ch[CH_COUNT])
  * transformed at all. */
 static inline double effective_gain(double k, double kc, int order, double kneg)
 {
-    return k < kneg ? butterworth(k, kc, order) : 0.0;
+    return k < kneg ? ocean_filter_gain(k, kc, order) : 0.0;
 }
 
 /* Sum over every mode of var * fn(gain), with the half-spectrum weights. */
@@ -477,7 +471,8 @@ static inline double reduce_phase(double x)
 }
 
 typedef struct stage_args {
-    const cascade *cs;
+    cascade *cs;
+    int cached;             /* 1: read h from cs->cache, 0: compute and store */
     int n_full, n;          /* full grid and the grid evaluated */
     int nch;
     const int *ch;
@@ -498,20 +493,27 @@ static void spectrum_row(const stage_args *a, int r)
         const mode *m = &row[ix];
         float hr = 0.0f, hi = 0.0f, tr = 0.0f, ti = 0.0f;
         if (mz != -n / 2 && ix != n / 2 && m->var > 0.0f && m->k < a->kneg) {
-            double ph = reduce_phase(m->omega * a->t);
-            float s, c;
-            sincosf((float)ph, &s, &c);
-            /* h = h0p e^{-i ph} + h0m e^{+i ph} */
-            float ur = m->h0p_re * c + m->h0p_im * s, ui = m->h0p_im * c - m->h0p_re * s;
-            float vr = m->h0m_re * c - m->h0m_im * s, vi = m->h0m_im * c + m->h0m_re * s;
-            double g = butterworth(m->k, a->kc, a->order);
+            float *h = a->cs->cache[(size_t)wrap_index(mz, a->n_full) * full_half + ix];
+            if (!a->cached) {
+                double ph = reduce_phase(m->omega * a->t);
+                float s, c;
+                sincosf((float)ph, &s, &c);
+                /* u = h0p e^{-i ph}, v = h0m e^{+i ph}, h = u + v */
+                float ur = m->h0p_re * c + m->h0p_im * s, ui = m->h0p_im * c - m->h0p_re * s;
+                float vr = m->h0m_re * c - m->h0m_im * s, vi = m->h0m_im * c + m->h0m_re * s;
+                float om = (float)m->omega;
+                h[0] = ur + vr;
+                h[1] = ui + vi;
+                /* dh/dt = -i w u + i w v */
+                h[2] = om * (ui - vi);
+                h[3] = om * (vr - ur);
+            }
+            double g = ocean_filter_gain(m->k, a->kc, a->order);
             float gf = (float)(g * a->scale * (m->k < a->kc ? a->boost : 1.0));
-            hr = (ur + vr) * gf;
-            hi = (ui + vi) * gf;
-            /* dh/dt = -i w h0p e^{-i ph} + i w h0m e^{+i ph} */
-            float om = (float)m->omega * gf;
-            tr = om * (ui - vi);
-            ti = om * (vr - ur);
+            hr = h[0] * gf;
+            hi = h[1] * gf;
+            tr = h[2] * gf;
+            ti = h[3] * gf;
         }
         float kx = m->kx, kz = m->kz, kinv = m->k > 0.0f ? 1.0f / m->k : 0.0f;
         float lam = (float)a->lambda;
@@ -591,7 +593,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
     if (!o || !r || !f || f->cascades != o->p.cascades || f->n_max != o->p.n)
         return OCEAN_EINVAL;
     if (!isfinite(t) || isnan(r->cutoff_k) || r->cutoff_k < 0.0 || r->order < 1 ||
-        r->order > 64 || !isfinite(r->low_boost) || r->low_boost < 0.0 || r->low_boost > 2.0)
+        r->order > OCEAN_FILTER_MAX_ORDER || !isfinite(r->low_boost) || r->low_boost < 0.0 || r->low_boost > 2.0)
         return OCEAN_EINVAL;
     double kc = r->cutoff_k;
     double kneg = negligible_k(kc, r->order);
@@ -600,7 +602,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
     int n_full = o->p.n;
     int transforms = 0;
     for (int c = 0; c < o->p.cascades; c++) {
-        const cascade *cs = &o->cas[c];
+        cascade *cs = &o->cas[c];
         unsigned fx = r->effects[c] & (OCEAN_FX_ALL | OCEAN_FX_VELOCITY);
         int ch[CH_COUNT];
         int nch = channel_list(fx, ch);
@@ -610,7 +612,9 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
         set_field_pointers(f, c, n, fx, ch, nch);
         if (nch == 0)
             continue;
-        stage_args a = {cs, n_full, n, nch, ch, t, kc, kneg, scale, boost,
+        /* Evaluate the highest cutoff of a tick first: lower ones reuse it. */
+        int cached = cs->cache_n >= n && cs->cache_t == t && cs->cache_kneg >= kneg;
+        stage_args a = {cs, cached, n_full, n, nch, ch, t, kc, kneg, scale, boost,
                         o->p.sea.choppiness, r->order, o->spec};
         if (cs->k_lo >= kneg) {
             memset(f->block[c], 0, sizeof(float) * nch * (size_t)n * n);
@@ -618,6 +622,13 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
 #pragma omp parallel for num_threads(o->p.threads) schedule(static)
             for (int row = 0; row < n; row++)
                 spectrum_row(&a, row);
+            /* The cache now holds every mode below kneg of this n x n grid;
+             * a later request at this t and a cutoff no higher reuses it. */
+            if (!cached) {
+                cs->cache_t = t;
+                cs->cache_n = n;
+                cs->cache_kneg = kneg;
+            }
             fftwf_execute_dft_c2r(o->plan[level_of(n)][nch - 1], o->spec, f->block[c]);
             transforms += nch;
             for (int j = 0; j < nch; j++) {
@@ -649,7 +660,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
 ocean_result ocean_transform_only(ocean *o, const ocean_request *r, ocean_frame *f)
 {
     if (!o || !r || !f || f->cascades != o->p.cascades || isnan(r->cutoff_k) ||
-        r->cutoff_k < 0.0 || r->order < 1 || r->order > 64)
+        r->cutoff_k < 0.0 || r->order < 1 || r->order > OCEAN_FILTER_MAX_ORDER)
         return OCEAN_EINVAL;
     double kneg = negligible_k(r->cutoff_k, r->order);
     for (int c = 0; c < o->p.cascades; c++) {
@@ -684,6 +695,29 @@ static inline double bilerp(const float *g, int n, int i0, int j0, double fx, do
     return (a * (1.0 - fx) + b * fx) * (1.0 - fz) + (c * (1.0 - fx) + d * fx) * fz;
 }
 
+/* Where (x, z) falls on a cascade's periodic grid.  Reduced in double
+ * first: x = 1e7 m keeps sub-millimetre position. */
+typedef struct cell {
+    int i0, j0;
+    double fx, fz;
+} cell;
+
+static inline cell locate(const ocean_field *fd, double x, double z)
+{
+    int n = fd->n;
+    double u = x / fd->patch_m, v = z / fd->patch_m;
+    u = (u - floor(u)) * n;
+    v = (v - floor(v)) * n;
+    cell c = {(int)v, (int)u, 0.0, 0.0};
+    if (c.j0 >= n) c.j0 = n - 1;
+    if (c.i0 >= n) c.i0 = n - 1;
+    c.fx = u - c.j0;
+    c.fz = v - c.i0;
+    return c;
+}
+
+#define SAMPLE(g, c) bilerp((g), fd->n, (c).i0, (c).j0, (c).fx, (c).fz)
+
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out)
 {
     memset(out, 0, sizeof *out);
@@ -693,33 +727,44 @@ void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *o
         const ocean_field *fd = &f->field[c];
         if (!fd->effects)
             continue;
-        int n = fd->n;
-        /* Reduce in double first: x = 1e7 m keeps sub-millimetre position. */
-        double u = x / fd->patch_m, v = z / fd->patch_m;
-        u = (u - floor(u)) * n;
-        v = (v - floor(v)) * n;
-        int j0 = (int)u, i0 = (int)v;
-        if (j0 >= n) j0 = n - 1;
-        if (i0 >= n) i0 = n - 1;
-        double fx = u - j0, fz = v - i0;
-        if (fd->height) out->height += bilerp(fd->height, n, i0, j0, fx, fz);
-        if (fd->dx) out->dx += bilerp(fd->dx, n, i0, j0, fx, fz);
-        if (fd->dz) out->dz += bilerp(fd->dz, n, i0, j0, fx, fz);
-        if (fd->slope_x) out->slope_x += bilerp(fd->slope_x, n, i0, j0, fx, fz);
-        if (fd->slope_z) out->slope_z += bilerp(fd->slope_z, n, i0, j0, fx, fz);
-        if (fd->vel_x) out->vel_x += bilerp(fd->vel_x, n, i0, j0, fx, fz);
-        if (fd->vel_y) out->vel_y += bilerp(fd->vel_y, n, i0, j0, fx, fz);
-        if (fd->vel_z) out->vel_z += bilerp(fd->vel_z, n, i0, j0, fx, fz);
+        cell q = locate(fd, x, z);
+        if (fd->height) out->height += SAMPLE(fd->height, q);
+        if (fd->dx) out->dx += SAMPLE(fd->dx, q);
+        if (fd->dz) out->dz += SAMPLE(fd->dz, q);
+        if (fd->slope_x) out->slope_x += SAMPLE(fd->slope_x, q);
+        if (fd->slope_z) out->slope_z += SAMPLE(fd->slope_z, q);
+        if (fd->vel_x) out->vel_x += SAMPLE(fd->vel_x, q);
+        if (fd->vel_y) out->vel_y += SAMPLE(fd->vel_y, q);
+        if (fd->vel_z) out->vel_z += SAMPLE(fd->vel_z, q);
         if (fd->dxx) {
             any_foam = 1;
-            dxx += bilerp(fd->dxx, n, i0, j0, fx, fz);
-            dzz += bilerp(fd->dzz, n, i0, j0, fx, fz);
-            dxz += bilerp(fd->dxz, n, i0, j0, fx, fz);
+            dxx += SAMPLE(fd->dxx, q);
+            dzz += SAMPLE(fd->dzz, q);
+            dxz += SAMPLE(fd->dxz, q);
         }
     }
     /* J of the summed displacement, not a sum of per-cascade Jacobians. */
     out->jacobian = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
     out->foam = any_foam ? ocean_foam_from_jacobian((float)out->jacobian) : 0.0;
+    out->dxx = dxx;
+    out->dzz = dzz;
+    out->dxz = dxz;
+}
+
+void ocean_frame_sample_displacement(const ocean_frame *f, double x, double z,
+                                     double *dx, double *dz)
+{
+    double sx = 0.0, sz = 0.0;
+    for (int c = 0; c < f->cascades; c++) {
+        const ocean_field *fd = &f->field[c];
+        if (!fd->dx)
+            continue;
+        cell q = locate(fd, x, z);
+        sx += SAMPLE(fd->dx, q);
+        sz += SAMPLE(fd->dz, q);
+    }
+    *dx = sx;
+    *dz = sz;
 }
 
 void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out)
@@ -786,7 +831,7 @@ void ocean_reference_point(const ocean *o, double t, double x, double z,
                 double kx = mx * cs->dk, kz = mz * cs->dk, k = hypot(kx, kz);
                 if (!in_band(cs, k))
                     continue;
-                double g = butterworth(k, cutoff_k, order);
+                double g = ocean_filter_gain(k, cutoff_k, order);
                 if (g == 0.0)
                     continue;
                 double hp[2], hm[2];
@@ -821,6 +866,9 @@ void ocean_reference_point(const ocean *o, double t, double x, double z,
     }
     out->jacobian = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
     out->foam = ocean_foam_from_jacobian((float)out->jacobian);
+    out->dxx = dxx;
+    out->dzz = dzz;
+    out->dxz = dxz;
 }
 
 void ocean_mode_amplitude(const ocean *o, int c, int mx, int mz, double t, double out[2])

@@ -154,6 +154,7 @@ void ocean_frame_get_info(const ocean_frame *f, ocean_frame_info *out);
 typedef struct ocean_point {
     double height, dx, dz, slope_x, slope_z, jacobian, foam;
     double vel_x, vel_y, vel_z;
+    double dxx, dzz, dxz;   /* derivatives of the displacement (foam channel) */
 } ocean_point;
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out);
 
@@ -167,6 +168,12 @@ typedef struct ocean_field_stats {
     double min_jacobian, folded_fraction, foam_coverage;
 } ocean_field_stats;
 void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out);
+
+/* Only the choppy displacement (dx, dz) of the summed cascades at a world
+ * point: the inner step of query inversion, kept lean.  0 where the frame
+ * has no displacement. */
+void ocean_frame_sample_displacement(const ocean_frame *f, double x, double z,
+                                     double *dx, double *dz);
 
 /* Double-precision reference by direct summation of every wave in every
  * band (O(n^2 * cascades) per call), amplitudes drawn afresh in double:

@@ -692,6 +692,75 @@ static void test_cascade_partition(void **state)
     ocean_frame_destroy(f);
 }
 
+/* A low cutoff transforms a smaller grid, E_error grows as the cutoff
+ * falls, cutoff 0 leaves nothing, redistribution keeps the variance, and
+ * the per-tick cache gives the same bytes as a fresh evaluation. */
+static void test_cutoff_evaluation(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 256;
+    p.patch_m = 1000.0;
+    ocean *o = make(&p), *fresh = make(&p);
+    ocean_frame *f = frame(o), *g = frame(fresh);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_HEIGHT | OCEAN_FX_NORMALS);
+    double cutoffs[] = {INFINITY, 1.0, 0.3, 0.1, 0.03, 0.0};
+    double prev_e = -1.0;
+    int prev_n = 1 << 20;
+    for (size_t i = 0; i < 6; i++) {
+        r.cutoff_k = cutoffs[i];
+        assert_int_equal(ocean_evaluate(o, 9.0, &r, f), OCEAN_OK);
+        ocean_frame_info info;
+        ocean_frame_get_info(f, &info);
+        const ocean_field *fd = ocean_frame_field(f, 0);
+        assert_true(info.e_error >= prev_e);
+        assert_true(fd->n <= prev_n);
+        prev_e = info.e_error;
+        prev_n = fd->n;
+        /* The cache (filled by the higher cutoffs of this tick) changes nothing. */
+        assert_int_equal(ocean_evaluate(fresh, 9.0, &r, g), OCEAN_OK);
+        assert_true(fields_equal(f, g, 1));
+        assert_frame_finite(f, 1, "cutoff");
+    }
+    assert_true(prev_e == 1.0);
+    assert_int_equal(prev_n, OCEAN_MIN_N);
+    ocean_frame_info info;
+    ocean_frame_get_info(f, &info);
+    assert_int_equal(info.transforms, 0);
+    /* kc = 0.03 rad/m keeps only long waves: an 8x smaller transform serves. */
+    r.cutoff_k = 0.03;
+    ocean_evaluate(o, 9.0, &r, f);
+    assert_true(ocean_frame_field(f, 0)->n <= p.n / 4);
+    /* Redistribution restores the unfiltered variance in expectation. */
+    ocean_spectrum_stats ss;
+    ocean_get_spectrum_stats(o, &ss);
+    double kept = ocean_filtered_variance(o, 0.1, 6);
+    assert_true(kept < ss.variance && kept > 0.0);
+    r.cutoff_k = 0.1;
+    r.redistribute = 1;
+    ocean_request_all(&r, OCEAN_FX_HEIGHT);
+    r.cutoff_k = 0.1;
+    r.redistribute = 1;
+    double var = 0.0;
+    int samples = 0;
+    for (int k = 0; k < 20; k++) {
+        ocean_evaluate(o, 50.0 * k, &r, f);
+        ocean_field_stats fs;
+        ocean_frame_get_field_stats(f, &fs);
+        var += fs.hs * fs.hs / 16.0;
+        samples++;
+    }
+    var /= samples;
+    if (fabs(var - ss.variance) > 0.15 * ss.variance)
+        fail_msg("redistributed variance %.4f vs unfiltered %.4f (filtered %.4f)", var, ss.variance, kept);
+    ocean_frame_destroy(f);
+    ocean_frame_destroy(g);
+    ocean_destroy(o);
+    ocean_destroy(fresh);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -710,6 +779,7 @@ int main(void)
         cmocka_unit_test(test_invalid_parameters),
         cmocka_unit_test(test_effects_mask_counts_transforms),
         cmocka_unit_test(test_cascade_partition),
+        cmocka_unit_test(test_cutoff_evaluation),
     };
     return cmocka_run_group_tests_name("ocean", tests, NULL, NULL);
 }

@@ -1,0 +1,204 @@
+/*
+ * cmd_query.c - `ocean-sim query`: height, normal, velocity, foam and the
+ * error bound at world points, from the same fields clients receive.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cJSON.h>
+
+#include "cli.h"
+#include "query.h"
+
+/* Parses "x1,z1;x2,z2;..." (or the lines of a file, "x,z" or "x z" each;
+ * '#' starts a comment) into a growing array.  Returns the count or -1
+ * after printing what is wrong and where. */
+static long parse_points(const char *text, const char *origin, int by_line, double **out)
+{
+    size_t cap = 64, n = 0;
+    double *xz = malloc(sizeof(double) * 2 * cap);
+    if (!xz)
+        return -1;
+    const char *p = text;
+    int item = 1;
+    while (*p) {
+        size_t len = strcspn(p, by_line ? "\n" : ";");
+        char buf[256];
+        if (len >= sizeof buf) {
+            fprintf(stderr, "error: %s %s %d is too long\n", origin, by_line ? "line" : "point", item);
+            free(xz);
+            return -1;
+        }
+        memcpy(buf, p, len);
+        buf[len] = '\0';
+        char *hash = strchr(buf, '#');
+        if (hash)
+            *hash = '\0';
+        char *s = buf;
+        while (*s == ' ' || *s == '\t' || *s == '\r')
+            s++;
+        if (*s) {
+            char *end;
+            errno = 0;
+            double x = strtod(s, &end);
+            char *q = end;
+            while (*q == ' ' || *q == '\t')
+                q++;
+            if (*q == ',')
+                q++;
+            double z = strtod(q, &end);
+            while (*end == ' ' || *end == '\t' || *end == '\r')
+                end++;
+            if (end == q || *end != '\0' || errno == ERANGE || !isfinite(x) || !isfinite(z)) {
+                fprintf(stderr, "error: %s %s %d: '%s' is not a finite 'x,z' pair\n", origin,
+                        by_line ? "line" : "point", item, buf);
+                free(xz);
+                return -1;
+            }
+            if (n == cap) {
+                double *g = realloc(xz, sizeof(double) * 4 * cap);
+                if (!g) {
+                    free(xz);
+                    return -1;
+                }
+                xz = g;
+                cap *= 2;
+            }
+            xz[2 * n] = x;
+            xz[2 * n + 1] = z;
+            n++;
+        }
+        p += len;
+        if (*p)
+            p++;
+        item++;
+    }
+    *out = xz;
+    return (long)n;
+}
+
+static char *read_file(const char *path)
+{
+    FILE *fp = strcmp(path, "-") == 0 ? stdin : fopen(path, "rb");
+    if (!fp) {
+        fprintf(stderr, "error: cannot open %s: %s\n", path, strerror(errno));
+        return NULL;
+    }
+    size_t cap = 1 << 16, len = 0;
+    char *buf = malloc(cap);
+    while (buf) {
+        size_t got = fread(buf + len, 1, cap - len - 1, fp);
+        len += got;
+        if (got == 0)
+            break;
+        if (len + 1 == cap) {
+            char *g = realloc(buf, cap * 2);
+            if (!g) {
+                free(buf);
+                buf = NULL;
+                break;
+            }
+            buf = g;
+            cap *= 2;
+        }
+    }
+    if (fp != stdin)
+        fclose(fp);
+    if (buf)
+        buf[len] = '\0';
+    return buf;
+}
+
+int cmd_query(int argc, char **argv)
+{
+    cli_common c;
+    double t = 0.0, cutoff = INFINITY;
+    const char *points = NULL, *file = NULL;
+    const cli_opt opts[] = {
+        {"t", CLI_DOUBLE, &t, -1e12, 1e12, "T     simulation time, s"},
+        {"points", CLI_STRING, &points, 0, 0, "LIST  \"x1,z1;x2,z2;...\" world points, m"},
+        {"points-file", CLI_STRING, &file, 0, 0, "FILE  one 'x,z' per line ('-': stdin)"},
+        {"cutoff", CLI_DOUBLE, &cutoff, 0, 1e6, "K     Butterworth cutoff, rad/m (default none)"},
+    };
+    int r = cli_parse(argc, argv, "query --t T --points \"x,z;...\" | --points-file F [--cutoff K] [--json]",
+                      opts, 4, &c, NULL, NULL);
+    if (r)
+        return r == 1 ? 0 : 2;
+    if (!points == !file) {
+        fprintf(stderr, "error: query needs exactly one of --points or --points-file\n");
+        return 2;
+    }
+    double *xz = NULL;
+    long n;
+    if (points) {
+        n = parse_points(points, "--points", 0, &xz);
+    } else {
+        char *text = read_file(file);
+        if (!text)
+            return 2;
+        n = parse_points(text, file, 1, &xz);
+        free(text);
+    }
+    if (n < 0)
+        return 2;
+    if (n == 0) {
+        fprintf(stderr, "error: no points given\n");
+        free(xz);
+        return 2;
+    }
+    ocean *o = cli_make_ocean(&c);
+    ocean_frame *f = NULL;
+    ocean_query_result *res = malloc(sizeof *res * (size_t)n);
+    if (!o || !res || ocean_frame_create(o, &f) != OCEAN_OK) {
+        ocean_destroy(o);
+        free(res);
+        free(xz);
+        return 1;
+    }
+    ocean_request req;
+    ocean_request_all(&req, OCEAN_QUERY_EFFECTS);
+    req.cutoff_k = cutoff;
+    double t0 = cli_now_ms();
+    ocean_evaluate(o, t, &req, f);
+    double t1 = cli_now_ms();
+    ocean_query_points(f, NULL, NULL, t, xz, (size_t)n, NULL, res, NULL);
+    double t2 = cli_now_ms();
+    if (c.json) {
+        cJSON *j = cJSON_CreateObject(), *arr = cJSON_AddArrayToObject(j, "points");
+        cJSON_AddNumberToObject(j, "t", t);
+        cJSON_AddNumberToObject(j, "cutoff_k", isinf(cutoff) ? -1.0 : cutoff);
+        cJSON_AddNumberToObject(j, "evaluate_ms", t1 - t0);
+        cJSON_AddNumberToObject(j, "query_ms", t2 - t1);
+        for (long i = 0; i < n; i++) {
+            cJSON *p = cJSON_CreateObject();
+            cJSON_AddNumberToObject(p, "x", xz[2 * i]);
+            cJSON_AddNumberToObject(p, "z", xz[2 * i + 1]);
+            cJSON_AddNumberToObject(p, "height", res[i].height);
+            cJSON_AddItemToObject(p, "normal", cJSON_CreateDoubleArray(res[i].normal, 3));
+            cJSON_AddItemToObject(p, "velocity", cJSON_CreateDoubleArray(res[i].velocity, 3));
+            cJSON_AddNumberToObject(p, "foam", res[i].foam);
+            cJSON_AddNumberToObject(p, "error", res[i].error);
+            cJSON_AddBoolToObject(p, "folded", res[i].folded);
+            cJSON_AddItemToArray(arr, p);
+        }
+        char *s = cJSON_Print(j);
+        if (s)
+            puts(s);
+        free(s);
+        cJSON_Delete(j);
+    } else {
+        printf("x,z,height,nx,ny,nz,vx,vy,vz,foam,error,folded\n");
+        for (long i = 0; i < n; i++)
+            printf("%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.4f,%.3g,%d\n", xz[2 * i],
+                   xz[2 * i + 1], res[i].height, res[i].normal[0], res[i].normal[1],
+                   res[i].normal[2], res[i].velocity[0], res[i].velocity[1], res[i].velocity[2],
+                   res[i].foam, res[i].error, res[i].folded);
+    }
+    free(res);
+    free(xz);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    return 0;
+}

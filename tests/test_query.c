@@ -1,0 +1,232 @@
+/*
+ * test_query.c - point queries: inversion against a brute-force dense
+ * search, velocity against the time derivative, camera independence, and
+ * hostile input.
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "query.h"
+
+typedef struct fixture {
+    ocean *o;
+    ocean_frame *f;
+    ocean_params p;
+} fixture;
+
+static int setup(void **state)
+{
+    fixture *x = calloc(1, sizeof *x);
+    ocean_params_default(&x->p);
+    x->p.n = 128;
+    x->p.patch_m = 256.0;
+    x->p.sea.wind_u10 = 12.0;
+    x->p.sea.choppiness = 1.0;
+    char msg[200];
+    if (ocean_create(&x->p, &x->o, msg, sizeof msg) != OCEAN_OK)
+        return -1;
+    ocean_frame_create(x->o, &x->f);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_QUERY_EFFECTS);
+    ocean_evaluate(x->o, 17.0, &r, x->f);
+    *state = x;
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    fixture *x = *state;
+    ocean_frame_destroy(x->f);
+    ocean_destroy(x->o);
+    free(x);
+    return 0;
+}
+
+/* Brute force: scan a dense parameter grid around (x, z) for the point
+ * whose displaced position is closest, then refine the scan twice. */
+static void brute_force(const ocean_frame *f, double x, double z, double *bx, double *bz)
+{
+    double cx = x, cz = z, span = 12.0, best = INFINITY;
+    for (int round = 0; round < 4; round++) {
+        double step = span / 60.0, nx = cx, nz = cz;
+        for (int i = -60; i <= 60; i++)
+            for (int j = -60; j <= 60; j++) {
+                double x0 = cx + j * step, z0 = cz + i * step, dx, dz;
+                ocean_frame_sample_displacement(f, x0, z0, &dx, &dz);
+                double e = hypot(x0 + dx - x, z0 + dz - z);
+                if (e < best) {
+                    best = e;
+                    nx = x0;
+                    nz = z0;
+                }
+            }
+        cx = nx;
+        cz = nz;
+        span = step * 4.0;
+    }
+    *bx = cx;
+    *bz = cz;
+}
+
+static void test_inversion_matches_brute_force(void **state)
+{
+    fixture *x = *state;
+    const int n = 60;
+    double xz[2 * 60];
+    for (int i = 0; i < n; i++) {
+        xz[2 * i] = -500.0 + 37.3 * i;
+        xz[2 * i + 1] = 1e3 + 11.9 * i * i;
+    }
+    ocean_query_result res[60];
+    assert_int_equal(ocean_query_points(x->f, NULL, NULL, 17.0, xz, n, NULL, res, NULL), OCEAN_OK);
+    int checked = 0;
+    for (int i = 0; i < n; i++) {
+        if (res[i].folded)
+            continue;
+        double bx, bz;
+        brute_force(x->f, xz[2 * i], xz[2 * i + 1], &bx, &bz);
+        ocean_point pt;
+        ocean_frame_sample(x->f, bx, bz, &pt);
+        double err = fabs(pt.height - res[i].height);
+        if (err > 1e-3)
+            fail_msg("point %d: query %.6f vs brute force %.6f (residual %.3g, %d it)", i,
+                     res[i].height, pt.height, res[i].residual, res[i].iterations);
+        assert_true(res[i].residual <= 1e-4);
+        assert_true(res[i].error <= 1e-3);
+        assert_true(res[i].normal[1] > 0.0);
+        double nl = sqrt(res[i].normal[0] * res[i].normal[0] + res[i].normal[1] * res[i].normal[1] +
+                         res[i].normal[2] * res[i].normal[2]);
+        assert_true(fabs(nl - 1.0) < 1e-9);
+        checked++;
+    }
+    assert_true(checked > n / 2);
+}
+
+/* Without inversion the height would be read at the wrong place: the
+ * displacement is metres, so the check above is not vacuous. */
+static void test_displacement_is_significant(void **state)
+{
+    fixture *x = *state;
+    double maxd = 0.0;
+    for (int i = 0; i < 100; i++) {
+        double dx, dz;
+        ocean_frame_sample_displacement(x->f, i * 2.7, i * 1.3, &dx, &dz);
+        maxd = fmax(maxd, hypot(dx, dz));
+    }
+    assert_true(maxd > 0.3);
+}
+
+static void test_velocity_is_time_derivative(void **state)
+{
+    fixture *x = *state;
+    ocean_frame *a, *b;
+    ocean_frame_create(x->o, &a);
+    ocean_frame_create(x->o, &b);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_QUERY_EFFECTS);
+    double t = 17.0, h = 1e-3;
+    ocean_evaluate(x->o, t - h, &r, a);
+    ocean_evaluate(x->o, t + h, &r, b);
+    double worst = 0.0, scale = 0.0;
+    for (int i = 0; i < 50; i++) {
+        double px = i * 5.1, pz = i * 3.3;
+        ocean_point p0, pa, pb;
+        ocean_frame_sample(x->f, px, pz, &p0);
+        ocean_frame_sample(a, px, pz, &pa);
+        ocean_frame_sample(b, px, pz, &pb);
+        double fd[3] = {(pb.dx - pa.dx) / (2 * h), (pb.height - pa.height) / (2 * h),
+                        (pb.dz - pa.dz) / (2 * h)};
+        double v[3] = {p0.vel_x, p0.vel_y, p0.vel_z};
+        for (int k = 0; k < 3; k++) {
+            worst = fmax(worst, fabs(fd[k] - v[k]));
+            scale = fmax(scale, fabs(v[k]));
+        }
+    }
+    if (!(worst < 2e-2 * scale))
+        fail_msg("velocity vs finite difference: worst %.4g (scale %.4g)", worst, scale);
+    ocean_frame_destroy(a);
+    ocean_frame_destroy(b);
+}
+
+static void test_deterministic_and_order_free(void **state)
+{
+    fixture *x = *state;
+    double xz[8] = {1.5, 2.5, 1e7 + 3.25, -4e6, -33.0, 71.0, 0.0, 0.0};
+    double rev[8] = {0.0, 0.0, -33.0, 71.0, 1e7 + 3.25, -4e6, 1.5, 2.5};
+    ocean_query_result a[4], b[4], one;
+    ocean_query_points(x->f, NULL, NULL, 17.0, xz, 4, NULL, a, NULL);
+    ocean_query_points(x->f, NULL, NULL, 17.0, rev, 4, NULL, b, NULL);
+    for (int i = 0; i < 4; i++)
+        assert_memory_equal(&a[i], &b[3 - i], sizeof a[i]);
+    ocean_query_points(x->f, NULL, NULL, 17.0, xz + 2, 1, NULL, &one, NULL);
+    assert_memory_equal(&one, &a[1], sizeof one);
+    /* 1e7 m from the origin is the same sea as the wrapped point. */
+    double wrapped[2] = {fmod(1e7 + 3.25, x->p.patch_m), fmod(-4e6, x->p.patch_m) + x->p.patch_m};
+    ocean_query_points(x->f, NULL, NULL, 17.0, wrapped, 1, NULL, &one, NULL);
+    assert_true(fabs(one.height - a[1].height) < 1e-6);
+}
+
+static void test_hostile_points(void **state)
+{
+    fixture *x = *state;
+    double xz[6] = {1.0, 2.0, NAN, 0.0, 3.0, INFINITY};
+    ocean_query_result r[3];
+    size_t bad = 99;
+    assert_int_equal(ocean_query_points(x->f, NULL, NULL, 17.0, xz, 3, NULL, r, &bad), OCEAN_EINVAL);
+    assert_int_equal(bad, 1);
+    assert_true(isinf(r[1].error) && isinf(r[2].error));
+    assert_true(isfinite(r[0].height) && r[0].residual <= 1e-4);
+    assert_int_equal(ocean_query_points(x->f, NULL, NULL, NAN, xz, 1, NULL, r, NULL), OCEAN_EINVAL);
+    assert_int_equal(ocean_query_points(NULL, NULL, NULL, 0.0, xz, 1, NULL, r, NULL), OCEAN_EINVAL);
+}
+
+/* Extreme chop folds the surface: the query says so instead of lying. */
+static void test_reports_folding(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 64;
+    p.patch_m = 100.0;
+    p.sea.wind_u10 = 30.0;
+    p.sea.choppiness = 5.0;
+    ocean *o;
+    ocean_frame *f;
+    char msg[200];
+    assert_int_equal(ocean_create(&p, &o, msg, sizeof msg), OCEAN_OK);
+    ocean_frame_create(o, &f);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_QUERY_EFFECTS);
+    ocean_evaluate(o, 3.0, &r, f);
+    int folded = 0;
+    ocean_query_result q;
+    for (int i = 0; i < 400; i++) {
+        double xz[2] = {i * 0.25, i * 0.17};
+        ocean_query_points(f, NULL, NULL, 3.0, xz, 1, NULL, &q, NULL);
+        assert_true(isfinite(q.height) && isfinite(q.error));
+        folded += q.folded;
+    }
+    assert_true(folded > 0);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_inversion_matches_brute_force),
+        cmocka_unit_test(test_displacement_is_significant),
+        cmocka_unit_test(test_velocity_is_time_derivative),
+        cmocka_unit_test(test_deterministic_and_order_free),
+        cmocka_unit_test(test_hostile_points),
+        cmocka_unit_test(test_reports_folding),
+    };
+    return cmocka_run_group_tests_name("query", tests, setup, teardown);
+}
