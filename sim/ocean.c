@@ -55,7 +55,7 @@ typedef struct cascade {
      * modes of grids up to cache_n: several cutoff buckets in one tick pay
      * for the trigonometry once. */
     float (*cache)[4];
-    double cache_t, cache_kneg;
+    double cache_t;
     int cache_n;
 } cascade;
 
@@ -481,60 +481,153 @@ typedef struct stage_args {
     fftwf_complex *spec;
 } stage_args;
 
-/* Writes the spectra of every asked channel for one row of the n-point grid. */
+/* sin and cos of a phase x (any double): Cody-Waite reduction by pi/2 in
+ * double, then Cephes' float polynomials on [-pi/4, pi/4] (about 1 ulp),
+ * branch-free so the row loop vectorises. */
+#define PIO2_HI 1.57079632679489655800
+#define PIO2_LO 6.12323399573676603587e-17
+
+static inline void phase_sincos(double x, float *s_out, float *c_out)
+{
+    /* 0x1.8p52 forces rounding to an integer for |v| < 2^51. */
+    double q = (x * (2.0 / M_PI) + 6755399441055744.0) - 6755399441055744.0;
+    float r = (float)((x - q * PIO2_HI) - q * PIO2_LO);
+    double q4 = q - 4.0 * floor(q * 0.25);
+    int quad = (int)q4;
+    float r2 = r * r;
+    float sn = r + r * r2 * (-1.6666654611e-1f + r2 * (8.3321608736e-3f + r2 * -1.9515295891e-4f));
+    float cs = 1.0f - 0.5f * r2 + r2 * r2 * (4.166664568298827e-2f + r2 * (-1.388731625493765e-3f +
+                                                                       r2 * 2.443315711809948e-5f));
+    float s1 = (quad & 1) ? cs : sn, c1 = (quad & 1) ? sn : cs;
+    *s_out = (quad & 2) ? -s1 : s1;
+    *c_out = ((quad + 1) & 2) ? -c1 : c1;
+}
+
+/* Butterworth gain without pow(): q = r^order by squaring.  Same
+ * stable split as ocean_filter_gain (REFERENCES.md). */
+static inline float gain_fast(float k, float kc, int order)
+{
+    float r = k <= kc ? k / kc : kc / k, q = 1.0f, b = r;
+    for (int e = order; e; e >>= 1, b *= b)
+        if (e & 1)
+            q *= b;
+    float inv = 1.0f / sqrtf(1.0f + q * q);
+    return k <= kc ? inv : q * inv;
+}
+
+#define ROW_MAX (OCEAN_MAX_N / 2 + 1)
+
+/* Writes the spectra of every asked channel for one row of the n-point
+ * grid, in three passes that each vectorise: h(k,t) for the row (unless
+ * cached), the filter gains, then one simple loop per channel. */
+/* The row passes vectorise 8 wide with AVX2; the default clone keeps the
+ * library runnable on any x86-64 (glibc picks the clone at load time). */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
 static void spectrum_row(const stage_args *a, int r)
 {
     int n = a->n, half = n / 2 + 1, full_half = a->n_full / 2 + 1;
     size_t plane = (size_t)n * half;
     int mz = r < n / 2 ? r : r - n;
-    const mode *row = &a->cs->modes[(size_t)wrap_index(mz, a->n_full) * full_half];
-    for (int ix = 0; ix < half; ix++) {
-        size_t idx = (size_t)r * half + ix;
-        const mode *m = &row[ix];
-        float hr = 0.0f, hi = 0.0f, tr = 0.0f, ti = 0.0f;
-        if (mz != -n / 2 && ix != n / 2 && m->var > 0.0f && m->k < a->kneg) {
-            float *h = a->cs->cache[(size_t)wrap_index(mz, a->n_full) * full_half + ix];
-            if (!a->cached) {
-                double ph = reduce_phase(m->omega * a->t);
-                float s, c;
-                sincosf((float)ph, &s, &c);
-                /* u = h0p e^{-i ph}, v = h0m e^{+i ph}, h = u + v */
-                float ur = m->h0p_re * c + m->h0p_im * s, ui = m->h0p_im * c - m->h0p_re * s;
-                float vr = m->h0m_re * c - m->h0m_im * s, vi = m->h0m_im * c + m->h0m_re * s;
-                float om = (float)m->omega;
-                h[0] = ur + vr;
-                h[1] = ui + vi;
-                /* dh/dt = -i w u + i w v */
-                h[2] = om * (ui - vi);
-                h[3] = om * (vr - ur);
-            }
-            double g = ocean_filter_gain(m->k, a->kc, a->order);
-            float gf = (float)(g * a->scale * (m->k < a->kc ? a->boost : 1.0));
-            hr = h[0] * gf;
-            hi = h[1] * gf;
-            tr = h[2] * gf;
-            ti = h[3] * gf;
+    size_t base = (size_t)wrap_index(mz, a->n_full) * full_half;
+    const mode *row = &a->cs->modes[base];
+    float (*h)[4] = &a->cs->cache[base];
+    if (!a->cached) {
+        /* Out-of-band modes have h0 = 0, so they need no branch. */
+        double t = a->t;
+#pragma omp simd
+        for (int ix = 0; ix < half; ix++) {
+            const mode *m = &row[ix];
+            float s, c;
+            phase_sincos(m->omega * t, &s, &c);
+            /* u = h0p e^{-i ph}, v = h0m e^{+i ph}, h = u + v, dh/dt = -i w u + i w v */
+            float ur = m->h0p_re * c + m->h0p_im * s, ui = m->h0p_im * c - m->h0p_re * s;
+            float vr = m->h0m_re * c - m->h0m_im * s, vi = m->h0m_im * c + m->h0m_re * s;
+            float om = (float)m->omega;
+            h[ix][0] = ur + vr;
+            h[ix][1] = ui + vi;
+            h[ix][2] = om * (ui - vi);
+            h[ix][3] = om * (vr - ur);
         }
-        float kx = m->kx, kz = m->kz, kinv = m->k > 0.0f ? 1.0f / m->k : 0.0f;
-        float lam = (float)a->lambda;
-        for (int j = 0; j < a->nch; j++) {
-            float *o = a->spec[(size_t)j * plane + idx];
-            switch (a->ch[j]) {
-            case CH_H: o[0] = hr; o[1] = hi; break;
-            /* i k/|k| h */
-            case CH_DX: o[0] = -lam * kx * kinv * hi; o[1] = lam * kx * kinv * hr; break;
-            case CH_DZ: o[0] = -lam * kz * kinv * hi; o[1] = lam * kz * kinv * hr; break;
-            /* i k h */
-            case CH_SX: o[0] = -kx * hi; o[1] = kx * hr; break;
-            case CH_SZ: o[0] = -kz * hi; o[1] = kz * hr; break;
-            /* i kx * i k/|k| h = -kx k/|k| h */
-            case CH_DXX: o[0] = -lam * kx * kx * kinv * hr; o[1] = -lam * kx * kx * kinv * hi; break;
-            case CH_DZZ: o[0] = -lam * kz * kz * kinv * hr; o[1] = -lam * kz * kz * kinv * hi; break;
-            case CH_DXZ: o[0] = -lam * kx * kz * kinv * hr; o[1] = -lam * kx * kz * kinv * hi; break;
-            case CH_VX: o[0] = -lam * kx * kinv * ti; o[1] = lam * kx * kinv * tr; break;
-            case CH_VY: o[0] = tr; o[1] = ti; break;
-            case CH_VZ: o[0] = -lam * kz * kinv * ti; o[1] = lam * kz * kinv * tr; break;
+    }
+    float g[ROW_MAX], hr[ROW_MAX], hi[ROW_MAX], tr[ROW_MAX], ti[ROW_MAX];
+    float kx[ROW_MAX], kinv[ROW_MAX];
+    float kc = (float)a->kc, kneg = (float)a->kneg, scale = (float)a->scale, boost = (float)a->boost;
+    int unfiltered = isinf(a->kc) && a->scale == 1.0 && a->boost == 1.0;
+    int nyq_row = mz == -n / 2;
+    for (int ix = 0; ix < half; ix++) {
+        const mode *m = &row[ix];
+        float k = m->k;
+        float gi = unfiltered ? 1.0f : k < kneg ? gain_fast(k, kc, a->order) * scale * (k < kc ? boost : 1.0f) : 0.0f;
+        g[ix] = (nyq_row || ix == n / 2) ? 0.0f : gi;
+        kx[ix] = m->kx;
+        kinv[ix] = k > 0.0f ? 1.0f / k : 0.0f;
+    }
+    for (int ix = 0; ix < half; ix++) {
+        hr[ix] = h[ix][0] * g[ix];
+        hi[ix] = h[ix][1] * g[ix];
+        tr[ix] = h[ix][2] * g[ix];
+        ti[ix] = h[ix][3] * g[ix];
+    }
+    float kz = (float)(mz * a->cs->dk), lam = (float)a->lambda;
+    for (int j = 0; j < a->nch; j++) {
+        float (*o)[2] = &a->spec[(size_t)j * plane + (size_t)r * half];
+        switch (a->ch[j]) {
+        case CH_H:
+            for (int ix = 0; ix < half; ix++) { o[ix][0] = hr[ix]; o[ix][1] = hi[ix]; }
+            break;
+        case CH_DX: /* i k/|k| h */
+            for (int ix = 0; ix < half; ix++) {
+                float f = lam * kx[ix] * kinv[ix];
+                o[ix][0] = -f * hi[ix]; o[ix][1] = f * hr[ix];
             }
+            break;
+        case CH_DZ:
+            for (int ix = 0; ix < half; ix++) {
+                float f = lam * kz * kinv[ix];
+                o[ix][0] = -f * hi[ix]; o[ix][1] = f * hr[ix];
+            }
+            break;
+        case CH_SX: /* i k h */
+            for (int ix = 0; ix < half; ix++) { o[ix][0] = -kx[ix] * hi[ix]; o[ix][1] = kx[ix] * hr[ix]; }
+            break;
+        case CH_SZ:
+            for (int ix = 0; ix < half; ix++) { o[ix][0] = -kz * hi[ix]; o[ix][1] = kz * hr[ix]; }
+            break;
+        case CH_DXX: /* i kx * i k/|k| h = -kx k/|k| h */
+            for (int ix = 0; ix < half; ix++) {
+                float f = -lam * kx[ix] * kx[ix] * kinv[ix];
+                o[ix][0] = f * hr[ix]; o[ix][1] = f * hi[ix];
+            }
+            break;
+        case CH_DZZ:
+            for (int ix = 0; ix < half; ix++) {
+                float f = -lam * kz * kz * kinv[ix];
+                o[ix][0] = f * hr[ix]; o[ix][1] = f * hi[ix];
+            }
+            break;
+        case CH_DXZ:
+            for (int ix = 0; ix < half; ix++) {
+                float f = -lam * kx[ix] * kz * kinv[ix];
+                o[ix][0] = f * hr[ix]; o[ix][1] = f * hi[ix];
+            }
+            break;
+        case CH_VX:
+            for (int ix = 0; ix < half; ix++) {
+                float f = lam * kx[ix] * kinv[ix];
+                o[ix][0] = -f * ti[ix]; o[ix][1] = f * tr[ix];
+            }
+            break;
+        case CH_VY:
+            for (int ix = 0; ix < half; ix++) { o[ix][0] = tr[ix]; o[ix][1] = ti[ix]; }
+            break;
+        case CH_VZ:
+            for (int ix = 0; ix < half; ix++) {
+                float f = lam * kz * kinv[ix];
+                o[ix][0] = -f * ti[ix]; o[ix][1] = f * tr[ix];
+            }
+            break;
         }
     }
 }
@@ -612,8 +705,9 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
         set_field_pointers(f, c, n, fx, ch, nch);
         if (nch == 0)
             continue;
-        /* Evaluate the highest cutoff of a tick first: lower ones reuse it. */
-        int cached = cs->cache_n >= n && cs->cache_t == t && cs->cache_kneg >= kneg;
+        /* The row pass caches every mode of the grid it covers, so any
+         * later request of the same tick on a grid no larger reuses it. */
+        int cached = cs->cache_n >= n && cs->cache_t == t;
         stage_args a = {cs, cached, n_full, n, nch, ch, t, kc, kneg, scale, boost,
                         o->p.sea.choppiness, r->order, o->spec};
         if (cs->k_lo >= kneg) {
@@ -622,12 +716,9 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
 #pragma omp parallel for num_threads(o->p.threads) schedule(static)
             for (int row = 0; row < n; row++)
                 spectrum_row(&a, row);
-            /* The cache now holds every mode below kneg of this n x n grid;
-             * a later request at this t and a cutoff no higher reuses it. */
             if (!cached) {
                 cs->cache_t = t;
                 cs->cache_n = n;
-                cs->cache_kneg = kneg;
             }
             fftwf_execute_dft_c2r(o->plan[level_of(n)][nch - 1], o->spec, f->block[c]);
             transforms += nch;
