@@ -155,17 +155,29 @@ static double u195(const ocean_sea_state *s)
     return PM_U195_PER_U10 * s->wind_u10;
 }
 
-/* JONSWAP fetch laws (Hasselmann et al. 1973), x = g F / U10^2.  We use
- * wp = 22 (g^2 / (U10 F))^(1/3); the other published form differs ~3 %. */
-static double jonswap_alpha(const ocean_sea_state *s)
+/* JONSWAP fetch laws (Hasselmann et al. 1973) in the dimensionless fetch
+ * x = g F / U10^2: alpha = 0.076 x^-0.22, wp = 22 (g / U10) x^(-1/3) (the
+ * form 22 (g^2 / (U10 F))^(1/3); the other published form differs ~3 %).
+ * Growth stops at full development: x is capped where wp reaches the
+ * Pierson-Moskowitz peak 0.877 g / U19.5 = 0.855 g / U10, i.e.
+ * x = (22 / 0.855)^3 ~ 1.7e4 (there alpha = 0.0089, close to PM's 0.0081),
+ * so a 1000 km fetch does not grow a sea bigger than the wind can hold. */
+#define JONSWAP_X_FULL 17036.0
+
+static double jonswap_x(const ocean_sea_state *s)
 {
     double x = OCEAN_G * s->fetch_m / (s->wind_u10 * s->wind_u10);
-    return 0.076 * pow(x, -0.22);
+    return x < JONSWAP_X_FULL ? x : JONSWAP_X_FULL;
+}
+
+static double jonswap_alpha(const ocean_sea_state *s)
+{
+    return 0.076 * pow(jonswap_x(s), -0.22);
 }
 
 static double jonswap_wp(const ocean_sea_state *s)
 {
-    return 22.0 * cbrt(OCEAN_G * OCEAN_G / (s->wind_u10 * s->fetch_m));
+    return 22.0 * OCEAN_G / s->wind_u10 * cbrt(1.0 / jonswap_x(s));
 }
 
 /* Phillips' outer length L = V^2 / g (Tessendorf 2001). */

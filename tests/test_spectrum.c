@@ -81,9 +81,19 @@ static void test_jonswap(void **state)
     /* alpha from the fetch law: S(w) at w >> wp tends to alpha g^2 w^-5. */
     double w = 30.0;
     assert_close(ocean_spectrum_s(&s, w) * pow(w, 5) / (OCEAN_G * OCEAN_G), 0.01006, 2e-3);
-    /* Longer fetch, bigger sea. */
-    s.fetch_m = 1e6;
+    /* Longer fetch, bigger sea - up to full development, never beyond
+     * the fully developed Pierson-Moskowitz sea of the same wind. */
+    s.fetch_m = 1.5e5;
     assert_true(ocean_spectrum_hs(&s) > 2.139);
+    ocean_sea_state pm = s;
+    pm.spectrum = OCEAN_SPECTRUM_PM;
+    s.fetch_m = 1e7;
+    double full = ocean_spectrum_hs(&s);
+    s.fetch_m = 1e6;
+    assert_true(ocean_spectrum_hs(&s) == full);
+    /* gamma = 3.3 keeps its peak enhancement (m0 x 1.525, Hs x 1.235) and
+     * alpha 0.0089 vs 0.0081: the cap stays within 1.3 x PM's Hs. */
+    assert_true(full < 1.3 * ocean_spectrum_hs(&pm));
 }
 
 static void test_tma(void **state)
