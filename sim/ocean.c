@@ -411,7 +411,7 @@ static void filter_sums(const ocean *o, double kc, int order, double scale, doub
                 continue;
             double w = ((i % half) == 0 ? 1.0 : 2.0) * m->var;
             double g = effective_gain(m->k, kc, order, kneg);
-            double ge = g * scale * (m->k < kc ? boost : 1.0);
+            double ge = g * scale * (1.0 + (boost - 1.0) * g * g);
             *total += w;
             *kept += w * g * g;
             *err += w * (1.0 - ge) * (1.0 - ge);
@@ -559,7 +559,13 @@ static void spectrum_row(const stage_args *a, int r)
     for (int ix = 0; ix < half; ix++) {
         const mode *m = &row[ix];
         float k = m->k;
-        float gi = unfiltered ? 1.0f : k < kneg ? gain_fast(k, kc, a->order) * scale * (k < kc ? boost : 1.0f) : 0.0f;
+        float gi = 1.0f;
+        if (!unfiltered) {
+            float gb = k < kneg ? gain_fast(k, kc, a->order) : 0.0f;
+            /* The low boost fades in with the gain (ocean_filter_cutoff_gain):
+             * no step at kc. */
+            gi = gb * scale * (1.0f + (boost - 1.0f) * gb * gb);
+        }
         g[ix] = (nyq_row || ix == n / 2) ? 0.0f : gi;
         kx[ix] = m->kx;
         kinv[ix] = k > 0.0f ? 1.0f / k : 0.0f;

@@ -1,0 +1,711 @@
+/*
+ * gerstner.c - the Gerstner near field (see gerstner.h for the model, the
+ * sampling and the partition with the FFT bands).
+ */
+#include "gerstner.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "wave_rng.h"
+
+#define TWO_PI 6.283185307179586
+/* 2 pi = TWO_PI_HI + TWO_PI_LO to about 1e-32 (Cody-Waite split). */
+#define TWO_PI_HI 6.283185307179586232
+#define TWO_PI_LO 2.4492935982947064e-16
+#define THETA_BINS 1024
+/* Points are evaluated relative to a 256 m cell corner: x - corner is
+ * exact in double, and k.corner is reduced once per cell and wave. */
+#define CELL_M 256.0
+
+struct ocean_gerstner {
+    ocean_gerstner_params p;
+    int count;
+    /* structure of arrays, count entries each */
+    double *kx, *kz, *k, *hx, *hz, *omega, *amp, *phase;
+    int *annulus, *sector;
+};
+
+void ocean_gerstner_params_default(ocean_gerstner_params *p)
+{
+    memset(p, 0, sizeof *p);
+    ocean_sea_state_default(&p->sea);
+    p->seed = 1;
+    p->count = 256;
+    p->annuli = 0;
+    p->k_lo = TWO_PI / 8.0;
+    p->k_hi = TWO_PI / 0.05;
+    p->steepness_max = 1.0;
+}
+
+static ocean_result bad(char *msg, size_t msglen, const char *field, double v)
+{
+    if (msg != NULL && msglen > 0)
+        snprintf(msg, msglen, "gerstner: %s = %g is out of range", field, v);
+    return OCEAN_EINVAL;
+}
+
+ocean_result ocean_gerstner_params_validate(const ocean_gerstner_params *p, char *msg, size_t msglen)
+{
+    if (p == NULL)
+        return OCEAN_EINVAL;
+    ocean_result r = ocean_sea_state_validate(&p->sea, msg, msglen);
+    if (r != OCEAN_OK)
+        return r;
+    if (p->count < 0 || p->count > OCEAN_GERSTNER_MAX_WAVES)
+        return bad(msg, msglen, "count", p->count);
+    if (p->annuli < 0 || (p->count > 0 && p->annuli > p->count))
+        return bad(msg, msglen, "annuli", p->annuli);
+    if (!(p->steepness_max > 0.0 && p->steepness_max <= 1.0))
+        return bad(msg, msglen, "steepness_max", p->steepness_max);
+    if (p->count > 0) {
+        if (!(p->k_lo > 0.0) || !isfinite(p->k_lo))
+            return bad(msg, msglen, "k_lo", p->k_lo);
+        if (!(p->k_hi > p->k_lo) || !(p->k_hi <= 1e5))
+            return bad(msg, msglen, "k_hi", p->k_hi);
+    }
+    return OCEAN_OK;
+}
+
+void ocean_gerstner_destroy(ocean_gerstner *g)
+{
+    if (g == NULL)
+        return;
+    free(g->kx);
+    free(g->annulus);
+    free(g);
+}
+
+static const double gl8_x[4] = {0.1834346424956498, 0.5255324099163290,
+                                0.7966664774136267, 0.9602898564975363};
+static const double gl8_w[4] = {0.3626837833783620, 0.3137066458778873,
+                                0.2223810344533745, 0.1012285362903763};
+
+/* Radial Gauss-Legendre nodes of annulus [ka, kb] in u = ln k; returns
+ * the count.  The area element k dk dtheta = k^2 du dtheta, so the weight
+ * returned already holds k^2 du.  Panels end at the frequencies where the
+ * spectra or spreading functions of spectrum.h are not smooth (w_p for
+ * JONSWAP's sigma and the cos-2s exponents, 0.95 and 1.6 w_p for
+ * Donelan-Banner, w_h = 1 and 2 for TMA), so Gauss-Legendre keeps its
+ * order; elsewhere panels are at most 0.25 wide in ln k. */
+#define MAX_RADIAL 1024
+static int radial_nodes(const ocean_sea_state *sea, double ka, double kb, double *k, double *w)
+{
+    double cuts[8];
+    int nc = 0;
+    cuts[nc++] = log(ka);
+    double wp = ocean_spectrum_peak(sea);
+    double wbreak[5] = {wp, 0.95 * wp, 1.6 * wp, sqrt(OCEAN_G / sea->depth_m),
+                        2.0 * sqrt(OCEAN_G / sea->depth_m)};
+    for (int i = 0; i < 5; i++) {
+        if (!(wbreak[i] > 0.0) || !isfinite(wbreak[i]))
+            continue;
+        double kbk = ocean_wavenumber(wbreak[i], sea->depth_m);
+        if (kbk > ka && kbk < kb)
+            cuts[nc++] = log(kbk);
+    }
+    cuts[nc++] = log(kb);
+    /* sort the (few) interior cuts */
+    for (int i = 1; i < nc - 1; i++)
+        for (int j = i + 1; j < nc - 1; j++)
+            if (cuts[j] < cuts[i]) {
+                double tmp = cuts[i];
+                cuts[i] = cuts[j];
+                cuts[j] = tmp;
+            }
+    int n = 0;
+    for (int c = 0; c + 1 < nc; c++) {
+        double span = cuts[c + 1] - cuts[c];
+        if (!(span > 0.0))
+            continue;
+        int panels = (int)ceil(span / 0.25);
+        if (panels < 1)
+            panels = 1;
+        if (panels > (MAX_RADIAL - n) / 8 / (nc - 1 - c))
+            panels = (MAX_RADIAL - n) / 8 / (nc - 1 - c);
+        double du = span / panels;
+        for (int pi = 0; pi < panels; pi++) {
+            double mid = cuts[c] + (pi + 0.5) * du;
+            for (int q = 0; q < 8; q++, n++) {
+                double u = mid + (q < 4 ? -1.0 : 1.0) * gl8_x[q & 3] * 0.5 * du;
+                k[n] = exp(u);
+                w[n] = k[n] * k[n] * gl8_w[q & 3] * 0.5 * du;
+            }
+        }
+    }
+    return n;
+}
+
+static double radial_sum(const ocean_sea_state *sea, double th, int n, const double *k,
+                         const double *w)
+{
+    double c = cos(th), s = sin(th), acc = 0.0;
+    for (int i = 0; i < n; i++) {
+        double f = ocean_spectrum_f(sea, k[i] * c, k[i] * s);
+        if (f > 0.0 && isfinite(f))
+            acc += f * w[i];
+    }
+    return acc;
+}
+
+/* Direction marginal of annulus [ka, kb] for the sampling: m[j] = the
+ * variance in theta bin j (width 2 pi / THETA_BINS, midpoint rule).  Its
+ * sum is only approximate (spreading functions have kinks and cusps: the
+ * cos-2s cusp behind the wind, Tessendorf's edge at +-90 degrees); the
+ * variance itself comes from annulus_variance. */
+static void annulus_marginal(const ocean_sea_state *sea, int nr, const double *k,
+                             const double *w, double *m)
+{
+    double dth = TWO_PI / THETA_BINS;
+    for (int j = 0; j < THETA_BINS; j++)
+        m[j] = radial_sum(sea, -M_PI + (j + 0.5) * dth, nr, k, w) * dth;
+}
+
+/* The annulus variance int int F k dk dtheta: tanh-sinh (double
+ * exponential) quadrature in theta on the four quarters between the
+ * directions where spreading functions are not smooth (0, +-90, 180
+ * degrees from the wind), which is exact to ~1e-13 despite the cusps;
+ * Gauss-Legendre in ln k. */
+static double annulus_variance(const ocean_sea_state *sea, int nr, const double *k,
+                               const double *w)
+{
+    const double h = 1.0 / 16.0, tmax = 3.5;
+    double wind = sea->wind_dir_deg * (M_PI / 180.0), total = 0.0;
+    for (int q = 0; q < 4; q++) {
+        double a = wind - M_PI + q * (M_PI / 2), half = M_PI / 4, mid = a + half;
+        double acc = 0.0;
+        for (double t = -tmax; t <= tmax + 1e-9; t += h) {
+            double sh = M_PI_2 * sinh(t), ch = cosh(sh);
+            double x = tanh(sh);
+            double wt = M_PI_2 * cosh(t) / (ch * ch);
+            if (wt < 1e-300)
+                continue;
+            acc += wt * radial_sum(sea, mid + half * x, nr, k, w);
+        }
+        total += acc * half * h;
+    }
+    return total;
+}
+
+/* Inverse of the tabulated direction CDF (piecewise linear in theta):
+ * the theta at which the cumulative variance reaches target. */
+static double invert_cdf(const double *cdf, double target)
+{
+    /* cdf[0] = 0 .. cdf[THETA_BINS] = total, non-decreasing */
+    int lo = 0, hi = THETA_BINS;
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (cdf[mid] <= target)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    double w = cdf[lo + 1] - cdf[lo];
+    double frac = w > 0.0 ? (target - cdf[lo]) / w : 0.5;
+    frac = fmin(fmax(frac, 0.0), 1.0);
+    return -M_PI + (lo + frac) * (TWO_PI / THETA_BINS);
+}
+
+ocean_result ocean_gerstner_create(const ocean_gerstner_params *p, ocean_gerstner **out,
+                                   char *msg, size_t msglen)
+{
+    if (out == NULL)
+        return OCEAN_EINVAL;
+    *out = NULL;
+    ocean_result r = ocean_gerstner_params_validate(p, msg, msglen);
+    if (r != OCEAN_OK)
+        return r;
+
+    ocean_gerstner *g = calloc(1, sizeof *g);
+    if (g == NULL)
+        return OCEAN_ENOMEM;
+    g->p = *p;
+    int M = p->count;
+    g->count = M;
+    size_t n = M > 0 ? (size_t)M : 1;
+    g->kx = malloc(8 * n * sizeof(double));
+    g->annulus = malloc(2 * n * sizeof(int));
+    double *m = malloc((2 * THETA_BINS + 1) * sizeof(double));
+    if (g->kx == NULL || g->annulus == NULL || m == NULL) {
+        free(m);
+        ocean_gerstner_destroy(g);
+        return OCEAN_ENOMEM;
+    }
+    g->kz = g->kx + n;
+    g->k = g->kz + n;
+    g->hx = g->k + n;
+    g->hz = g->hx + n;
+    g->omega = g->hz + n;
+    g->amp = g->omega + n;
+    g->phase = g->amp + n;
+    g->sector = g->annulus + n;
+    double *cdf = m + THETA_BINS;
+
+    if (M > 0) {
+        int R = p->annuli;
+        if (R == 0) {
+            R = (int)lround(sqrt((double)M) / 2.0);
+            if (R < 1)
+                R = 1;
+        }
+        g->p.annuli = R;
+        double lspan = log(p->k_hi / p->k_lo);
+        int w = 0;
+        for (int a = 0; a < R; a++) {
+            double ka = a == 0 ? p->k_lo : p->k_lo * exp(lspan * a / R);
+            double kb = a == R - 1 ? p->k_hi : p->k_lo * exp(lspan * (a + 1) / R);
+            int ma = M / R + (a < M % R ? 1 : 0);
+            double rk[MAX_RADIAL], rw[MAX_RADIAL];
+            int nr = radial_nodes(&p->sea, ka, kb, rk, rw);
+            annulus_marginal(&p->sea, nr, rk, rw, m);
+            cdf[0] = 0.0;
+            for (int j = 0; j < THETA_BINS; j++)
+                cdf[j + 1] = cdf[j] + m[j];
+            double v = annulus_variance(&p->sea, nr, rk, rw);
+            double vt = cdf[THETA_BINS];
+            double amp = sqrt(2.0 * v / ma);
+            for (int s = 0; s < ma; s++, w++) {
+                double u[2], ph[2];
+                ocean_rng_uniform2(p->seed, OCEAN_RNG_GERSTNER, 0, a, s, u);
+                ocean_rng_uniform2(p->seed, OCEAN_RNG_GERSTNER, 1, a, s, ph);
+                double k = ka * exp(u[0] * log(kb / ka));
+                if (k >= kb) /* rounding must not leave the half-open cell */
+                    k = nextafter(kb, 0.0);
+                if (k < ka)
+                    k = ka;
+                double th;
+                if (vt > 0.0)
+                    th = invert_cdf(cdf, vt * ((s + u[1]) / ma));
+                else
+                    th = -M_PI + TWO_PI * (s + u[1]) / ma;
+                g->k[w] = k;
+                g->hx[w] = cos(th);
+                g->hz[w] = sin(th);
+                g->kx[w] = k * g->hx[w];
+                g->kz[w] = k * g->hz[w];
+                g->omega[w] = ocean_dispersion(k, p->sea.depth_m);
+                g->amp[w] = amp;
+                g->phase[w] = TWO_PI * ph[0];
+                g->annulus[w] = a;
+                g->sector[w] = s;
+            }
+        }
+    }
+    free(m);
+    *out = g;
+    return OCEAN_OK;
+}
+
+int ocean_gerstner_count(const ocean_gerstner *g)
+{
+    return g ? g->count : 0;
+}
+
+const ocean_gerstner_params *ocean_gerstner_get_params(const ocean_gerstner *g)
+{
+    return &g->p;
+}
+
+ocean_result ocean_gerstner_get_wave(const ocean_gerstner *g, int i, ocean_gerstner_wave *out)
+{
+    if (g == NULL || out == NULL || i < 0 || i >= g->count)
+        return OCEAN_EINVAL;
+    out->kx = g->kx[i];
+    out->kz = g->kz[i];
+    out->k = g->k[i];
+    out->omega = g->omega[i];
+    out->amplitude = g->amp[i];
+    out->phase = g->phase[i];
+    out->annulus = g->annulus[i];
+    out->sector = g->sector[i];
+    return OCEAN_OK;
+}
+
+static double wave_gain(const ocean_filter_cutoff *c, double k)
+{
+    if (c == NULL || isinf(c->k))
+        return 1.0;
+    return ocean_filter_cutoff_gain(c, k);
+}
+
+double ocean_gerstner_variance(const ocean_gerstner *g, const ocean_filter_cutoff *c)
+{
+    double v = 0.0;
+    for (int i = 0; i < g->count; i++) {
+        double a = wave_gain(c, g->k[i]) * g->amp[i];
+        v += 0.5 * a * a;
+    }
+    return v;
+}
+
+void ocean_gerstner_view_default(ocean_gerstner_view *v)
+{
+    memset(v, 0, sizeof *v);
+    v->fade_r0 = INFINITY;
+    v->fade_r1 = INFINITY;
+    v->filter.k = INFINITY;
+    v->filter.hz = NAN;
+    v->filter.low_boost = 1.0;
+    v->filter.order = OCEAN_FILTER_DEFAULT_ORDER;
+}
+
+static int view_ok(const ocean_gerstner_view *v)
+{
+    if (!isfinite(v->camera_x) || !isfinite(v->camera_z))
+        return 0;
+    int nofade = isinf(v->fade_r0) && v->fade_r0 > 0 && isinf(v->fade_r1) && v->fade_r1 > 0;
+    if (!nofade && !(v->fade_r0 >= 0.0 && v->fade_r1 > v->fade_r0 && isfinite(v->fade_r1)))
+        return 0;
+    if (isnan(v->filter.k) || v->filter.k < 0.0)
+        return 0;
+    if (!isinf(v->filter.k)) {
+        if (v->filter.order < 1 || v->filter.order > OCEAN_FILTER_MAX_ORDER)
+            return 0;
+        if (!(v->filter.low_boost >= 0.0 && v->filter.low_boost <= 2.0))
+            return 0;
+    }
+    return 1;
+}
+
+/* Largest |grad f| of the fade: smoothstep over width w peaks at 1.5 / w. */
+static double fade_grad_max(const ocean_gerstner_view *v)
+{
+    return isinf(v->fade_r1) ? 0.0 : 1.5 / (v->fade_r1 - v->fade_r0);
+}
+
+/* Effective amplitudes a_i = g_i A_i and the clamped Q. */
+static void prepare(const ocean_gerstner *g, const ocean_gerstner_view *v, double *a,
+                    double *q_out, double *steep_out)
+{
+    double gf = fade_grad_max(v), bound = 0.0, steep1 = 0.0;
+    for (int i = 0; i < g->count; i++) {
+        a[i] = wave_gain(&v->filter, g->k[i]) * g->amp[i];
+        bound += a[i] * (g->k[i] + gf);
+        steep1 += a[i] * g->k[i];
+    }
+    double q = g->p.sea.choppiness;
+    if (q * bound > g->p.steepness_max)
+        q = g->p.steepness_max / bound;
+    *q_out = q;
+    if (steep_out)
+        *steep_out = q * steep1;
+}
+
+ocean_result ocean_gerstner_effective_q(const ocean_gerstner *g, const ocean_gerstner_view *v,
+                                        double *q, double *steepness)
+{
+    if (g == NULL || v == NULL || q == NULL || !view_ok(v))
+        return OCEAN_EINVAL;
+    double a[OCEAN_GERSTNER_MAX_WAVES];
+    double s;
+    prepare(g, v, a, q, &s);
+    if (steepness)
+        *steepness = s;
+    return OCEAN_OK;
+}
+
+/* (a * b) mod 2 pi, accurate to a few ulp of pi for |a b| up to ~1e15:
+ * the product's rounding error is recovered with fma, and the reduction
+ * uses the two-part 2 pi. */
+static double mulmod_2pi(double a, double b)
+{
+    double p = a * b;
+    double e = fma(a, b, -p);
+    double q = nearbyint(p * (1.0 / TWO_PI_HI));
+    double r = fma(-q, TWO_PI_HI, p);
+    r = fma(-q, TWO_PI_LO, r);
+    return r + e;
+}
+
+static double wrap_2pi(double x)
+{
+    double q = nearbyint(x * (1.0 / TWO_PI_HI));
+    return fma(-q, TWO_PI_HI, x) - q * TWO_PI_LO;
+}
+
+/* sin and cos of many phases at once, vectorisable (libm's sincos is a
+ * call per wave and dominated the evaluation).  Reduction by pi/2 in four
+ * parts, the first three with 27 significant bits so q * P1..P3 are exact
+ * for |q| < 2^26 (|th| < 1e8 rad, far beyond the 2e7 a 256 m cell and
+ * k <= 1e5 rad/m can reach); then fdlibm's kernel polynomials on
+ * [-pi/4, pi/4] (error < 1e-16) and the quadrant's swap/sign. */
+#define PIO2_1 1.570796325802803
+#define PIO2_2 9.920935739593517e-10
+#define PIO2_3 5.721188709663575e-18
+#define PIO2_4 1.6446256936324258e-26
+static void sincos_many(const double *th, double *sn, double *cs, int n)
+{
+#pragma omp simd
+    for (int i = 0; i < n; i++) {
+        /* round to nearest by the 1.5 * 2^52 trick: vectorises without SSE4.1 */
+        double q = (th[i] * M_2_PI + 6755399441055744.0) - 6755399441055744.0;
+        double r = th[i] - q * PIO2_1;
+        r -= q * PIO2_2;
+        r -= q * PIO2_3;
+        r -= q * PIO2_4;
+        double z = r * r;
+        double ps = r + r * z * (-1.66666666666666324348e-01 + z * (8.33333333332248946124e-03 +
+                    z * (-1.98412698298579493134e-04 + z * (2.75573137070700676789e-06 +
+                    z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)))));
+        double pc = 1.0 - 0.5 * z + z * z * (4.16666666666666019037e-02 +
+                    z * (-1.38888888888741095749e-03 + z * (2.48015872894767294178e-05 +
+                    z * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09 +
+                    z * -1.13596475577881948265e-11)))));
+        int qi = (int)q;
+        int swap = qi & 1;
+        double s = swap ? pc : ps, c = swap ? ps : pc;
+        sn[i] = (qi & 2) ? -s : s;
+        cs[i] = ((qi + 1) & 2) ? -c : c;
+    }
+}
+
+/* Fade and its gradient at (x, z). */
+static double fade_at(const ocean_gerstner_view *v, double x, double z, double *fx, double *fz)
+{
+    *fx = *fz = 0.0;
+    if (isinf(v->fade_r1))
+        return 1.0;
+    double ex = x - v->camera_x, ez = z - v->camera_z;
+    double r = hypot(ex, ez);
+    if (r <= v->fade_r0)
+        return 1.0;
+    if (r >= v->fade_r1)
+        return 0.0;
+    double w = v->fade_r1 - v->fade_r0;
+    double s = (v->fade_r1 - r) / w;
+    double dfdr = -6.0 * s * (1.0 - s) / w;
+    *fx = dfdr * ex / r;
+    *fz = dfdr * ez / r;
+    return s * s * (3.0 - 2.0 * s);
+}
+
+/* Everything a (view, t) pair fixes: gains, Q, phi - w t, and the
+ * phases of k . corner for the last few 256 m cells (2 x 2 slots indexed
+ * by the cells' parities, so points around a camera near a cell corner do
+ * not thrash).  The one-shot evaluate keeps it on the stack with one
+ * slot; an ocean_gerstner_frame keeps it on the heap. */
+#define CELL_SLOTS 4
+typedef struct eval_state {
+    const ocean_gerstner *g;
+    ocean_gerstner_view view;
+    double t, q;
+    int slots;
+    double cell_x[CELL_SLOTS], cell_z[CELL_SLOTS];
+    double a[OCEAN_GERSTNER_MAX_WAVES];
+    double tphase[OCEAN_GERSTNER_MAX_WAVES];
+    double *base; /* slots x OCEAN_GERSTNER_MAX_WAVES */
+} eval_state;
+
+/* slots: 1 or CELL_SLOTS, st->base must hold that many arrays. */
+static void state_set(eval_state *st, const ocean_gerstner *g, const ocean_gerstner_view *v,
+                      double t, int slots)
+{
+    st->g = g;
+    st->view = *v;
+    st->t = t;
+    st->slots = slots;
+    for (int i = 0; i < CELL_SLOTS; i++)
+        st->cell_x[i] = st->cell_z[i] = NAN;
+    prepare(g, v, st->a, &st->q, NULL);
+    for (int i = 0; i < g->count; i++)
+        st->tphase[i] = wrap_2pi(g->phase[i] - mulmod_2pi(g->omega[i], t));
+}
+
+static const double *cell_base(eval_state *st, double cx, double cz)
+{
+    int slot = 0;
+    if (st->slots > 1) {
+        long ix = (long)(cx / CELL_M), iz = (long)(cz / CELL_M);
+        slot = (int)((ix & 1) | ((iz & 1) << 1));
+    }
+    double *base = st->base + (size_t)slot * OCEAN_GERSTNER_MAX_WAVES;
+    if (st->cell_x[slot] != cx || st->cell_z[slot] != cz) {
+        const ocean_gerstner *g = st->g;
+        for (int i = 0; i < g->count; i++)
+            base[i] = st->tphase[i] + mulmod_2pi(g->kx[i], cx) + mulmod_2pi(g->kz[i], cz);
+        st->cell_x[slot] = cx;
+        st->cell_z[slot] = cz;
+    }
+    return base;
+}
+
+static int points_ok(const double *x, const double *z, size_t n, const void *out)
+{
+    if (n > 0 && (x == NULL || z == NULL || out == NULL))
+        return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(x[i]) || !isfinite(z[i]) || fabs(x[i]) > 1e12 || fabs(z[i]) > 1e12)
+            return 0;
+    return 1;
+}
+
+static void evaluate_points(eval_state *st, const double *x, const double *z, size_t n,
+                            ocean_gerstner_point *out)
+{
+    const ocean_gerstner *g = st->g;
+    int M = g->count;
+    const double *a = st->a;
+    double q = st->q;
+    for (size_t p = 0; p < n; p++) {
+        ocean_gerstner_point *o = &out[p];
+        double fx, fz;
+        double f = fade_at(&st->view, x[p], z[p], &fx, &fz);
+        memset(o, 0, sizeof *o);
+        o->ny = 1.0;
+        o->jacobian = 1.0;
+        o->fade = f;
+        if (f == 0.0 || M == 0)
+            continue;
+
+        double cx = CELL_M * nearbyint(x[p] / CELL_M), cz = CELL_M * nearbyint(z[p] / CELL_M);
+        const double *base = cell_base(st, cx, cz);
+        double ux = x[p] - cx, uz = z[p] - cz; /* exact */
+
+        /* Phases, then sin/cos of all of them, then the sums (f not yet
+         * applied); each stage is a simple loop the compiler vectorises. */
+        double th[OCEAN_GERSTNER_MAX_WAVES], sn[OCEAN_GERSTNER_MAX_WAVES];
+        double cs[OCEAN_GERSTNER_MAX_WAVES];
+        for (int i = 0; i < M; i++)
+            th[i] = base[i] + g->kx[i] * ux + g->kz[i] * uz;
+        sincos_many(th, sn, cs, M);
+        /* Eleven sums in two interleaved lanes (even/odd waves), which
+         * the compiler packs into one SSE2 register each. */
+        double acc[11][2] = {{0}};
+        int m2 = M & ~1;
+        for (int i = 0; i < m2; i += 2) {
+            for (int l = 0; l < 2; l++) {
+                int j = i + l;
+                double ai = a[j], as = ai * sn[j], qc = q * ai * cs[j], qs = q * ai * sn[j];
+                double w = g->omega[j];
+                acc[0][l] += ai * cs[j];
+                acc[1][l] += as * g->kx[j];
+                acc[2][l] += as * g->kz[j];
+                acc[3][l] += qs * g->hx[j];
+                acc[4][l] += qs * g->hz[j];
+                acc[5][l] += qc * (g->hx[j] * g->kx[j]);
+                acc[6][l] += qc * (g->hx[j] * g->kz[j]);
+                acc[7][l] += qc * (g->hz[j] * g->kz[j]);
+                acc[8][l] += as * w;
+                acc[9][l] += qc * w * g->hx[j];
+                acc[10][l] += qc * w * g->hz[j];
+            }
+        }
+        for (int j = m2; j < M; j++) {
+            double ai = a[j], as = ai * sn[j], qc = q * ai * cs[j], qs = q * ai * sn[j];
+            double w = g->omega[j];
+            acc[0][0] += ai * cs[j];
+            acc[1][0] += as * g->kx[j];
+            acc[2][0] += as * g->kz[j];
+            acc[3][0] += qs * g->hx[j];
+            acc[4][0] += qs * g->hz[j];
+            acc[5][0] += qc * (g->hx[j] * g->kx[j]);
+            acc[6][0] += qc * (g->hx[j] * g->kz[j]);
+            acc[7][0] += qc * (g->hz[j] * g->kz[j]);
+            acc[8][0] += as * w;
+            acc[9][0] += qc * w * g->hx[j];
+            acc[10][0] += qc * w * g->hz[j];
+        }
+        /* Signs: eta = sum a cos; grad eta = -sum a k sin; D = -sum Q a h
+         * sin; grad D = -sum Q a h k cos (hx kz = hz kx); dD/dt = +sum Q a
+         * h w cos; d eta/dt = +sum a w sin. */
+        double C = acc[0][0] + acc[0][1];
+        double Sx = -(acc[1][0] + acc[1][1]), Sz = -(acc[2][0] + acc[2][1]);
+        double Dx = -(acc[3][0] + acc[3][1]), Dz = -(acc[4][0] + acc[4][1]);
+        double Dxx = -(acc[5][0] + acc[5][1]), Dxz = -(acc[6][0] + acc[6][1]);
+        double Dzz = -(acc[7][0] + acc[7][1]);
+        double Vy = acc[8][0] + acc[8][1];
+        double Vx = acc[9][0] + acc[9][1], Vz = acc[10][0] + acc[10][1];
+        o->dy = f * C;
+        o->dx = f * Dx;
+        o->dz = f * Dz;
+        o->vx = f * Vx;
+        o->vy = f * Vy;
+        o->vz = f * Vz;
+        double ex = f * Sx + fx * C, ez = f * Sz + fz * C; /* d eta/dx, d eta/dz */
+        double dxx = f * Dxx + fx * Dx, dxz = f * Dxz + fz * Dx; /* dDx/dx, dDx/dz */
+        double dzx = f * Dxz + fx * Dz, dzz = f * Dzz + fz * Dz; /* dDz/dx, dDz/dz */
+        double J = (1.0 + dxx) * (1.0 + dzz) - dxz * dzx;
+        o->jacobian = J;
+        /* N = T_z x T_x with T_x = (1+dxx, ex, dzx), T_z = (dxz, ez, 1+dzz). */
+        double nx = ez * dzx - (1.0 + dzz) * ex;
+        double ny = J;
+        double nz = dxz * ex - ez * (1.0 + dxx);
+        double len = sqrt(nx * nx + ny * ny + nz * nz);
+        if (len > 0.0 && isfinite(len)) {
+            o->nx = nx / len;
+            o->ny = ny / len;
+            o->nz = nz / len;
+        }
+    }
+}
+
+
+ocean_result ocean_gerstner_evaluate(const ocean_gerstner *g, const ocean_gerstner_view *v,
+                                     double t, const double *x, const double *z, size_t n,
+                                     ocean_gerstner_point *out)
+{
+    if (g == NULL || v == NULL || !view_ok(v) || !isfinite(t) || !points_ok(x, z, n, out))
+        return OCEAN_EINVAL;
+    eval_state st;
+    double base[OCEAN_GERSTNER_MAX_WAVES];
+    st.base = base;
+    state_set(&st, g, v, t, 1);
+    evaluate_points(&st, x, z, n, out);
+    return OCEAN_OK;
+}
+
+struct ocean_gerstner_frame {
+    eval_state st;
+    int ready;
+};
+
+ocean_result ocean_gerstner_frame_create(const ocean_gerstner *g, ocean_gerstner_frame **out)
+{
+    if (out == NULL)
+        return OCEAN_EINVAL;
+    *out = NULL;
+    if (g == NULL)
+        return OCEAN_EINVAL;
+    ocean_gerstner_frame *f = calloc(1, sizeof *f);
+    double *base = malloc(sizeof(double) * CELL_SLOTS * OCEAN_GERSTNER_MAX_WAVES);
+    if (f == NULL || base == NULL) {
+        free(f);
+        free(base);
+        return OCEAN_ENOMEM;
+    }
+    f->st.g = g;
+    f->st.base = base;
+    *out = f;
+    return OCEAN_OK;
+}
+
+void ocean_gerstner_frame_destroy(ocean_gerstner_frame *f)
+{
+    if (f == NULL)
+        return;
+    free(f->st.base);
+    free(f);
+}
+
+ocean_result ocean_gerstner_frame_set(ocean_gerstner_frame *f, const ocean_gerstner_view *v,
+                                      double t)
+{
+    if (f == NULL || v == NULL || !view_ok(v) || !isfinite(t))
+        return OCEAN_EINVAL;
+    state_set(&f->st, f->st.g, v, t, CELL_SLOTS);
+    f->ready = 1;
+    return OCEAN_OK;
+}
+
+ocean_result ocean_gerstner_frame_evaluate(ocean_gerstner_frame *f, const double *x,
+                                           const double *z, size_t n, ocean_gerstner_point *out)
+{
+    if (f == NULL || !points_ok(x, z, n, out))
+        return OCEAN_EINVAL;
+    if (!f->ready)
+        return OCEAN_ESTATE;
+    evaluate_points(&f->st, x, z, n, out);
+    return OCEAN_OK;
+}
