@@ -1,0 +1,136 @@
+/*
+ * codec.h - tile codecs: how a grid of floats becomes the payload of a TILE.
+ *
+ * A tile is `planes` row-major float grids of w x h samples (row = z index,
+ * column = x index), stored plane after plane.  Which planes a tile holds is
+ * given by a channel mask (PROTO_CH_*); planes appear in the fixed order
+ * H, DX, DZ, NU, NV, FOAM, J, where the normal (PROTO_CH_NORMAL) is two planes
+ * NU, NV holding the octahedral encoding of the unit normal.
+ *
+ * Codecs (ids are on the wire; see PROTOCOL.md for exact byte layouts):
+ *   f32       raw IEEE binary32, lossless
+ *   f16       IEEE binary16, round to nearest even
+ *   qz        quantised with a step from an accuracy target relative to each
+ *             plane's range, planar spatial prediction, zstd    (the default)
+ *   exr-zip   OpenEXR file in memory, FLOAT channels, ZIP (lossless)
+ *   exr-piz   OpenEXR file in memory, HALF channels, PIZ (lossless on half)
+ *   exr-b44   OpenEXR file in memory, HALF channels, B44 (lossy, fixed rate)
+ *   exr-b44a  as exr-b44, flat 4x4 blocks shrink to 3 bytes
+ * The EXR payloads are complete .exr files any EXR reader opens.
+ *
+ * Decoders treat their input as hostile: every size is checked, nothing is
+ * read past the end, and non-finite decoded values are refused.
+ */
+#ifndef PROTO_CODEC_H
+#define PROTO_CODEC_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "ocean_result.h"
+#include "proto_buf.h"
+
+typedef enum proto_codec {
+    PROTO_CODEC_F32 = 0,
+    PROTO_CODEC_F16 = 1,
+    PROTO_CODEC_QZ = 2,
+    PROTO_CODEC_EXR_ZIP = 3,
+    PROTO_CODEC_EXR_PIZ = 4,
+    PROTO_CODEC_EXR_B44 = 5,
+    PROTO_CODEC_EXR_B44A = 6,
+    PROTO_CODEC_COUNT_
+} proto_codec;
+
+#define PROTO_CODEC_DEFAULT PROTO_CODEC_QZ
+/* Default accuracy target of qz: max abs error / plane range. */
+#define PROTO_ACCURACY_DEFAULT 5e-3
+#define PROTO_ACCURACY_MIN 1e-6
+#define PROTO_ACCURACY_MAX 0.5
+
+/* Channel mask bits of a tile; the order of the bits is the plane order. */
+enum proto_channel {
+    PROTO_CH_HEIGHT = 1u << 0,   /* plane "H":    surface height eta, m */
+    PROTO_CH_DX = 1u << 1,       /* plane "DX":   choppy displacement x, m */
+    PROTO_CH_DZ = 1u << 2,       /* plane "DZ":   choppy displacement z, m */
+    PROTO_CH_NORMAL = 1u << 3,   /* planes "NU","NV": octahedral unit normal */
+    PROTO_CH_FOAM = 1u << 4,     /* plane "FOAM": foam coverage 0..1 */
+    PROTO_CH_JACOBIAN = 1u << 5, /* plane "J":    folding Jacobian */
+    PROTO_CH_ALL = 0x3Fu
+};
+
+#define PROTO_TILE_MAX_SIZE 1024  /* max width and height of a tile */
+#define PROTO_TILE_MAX_PLANES 7
+
+typedef struct proto_codec_params {
+    double accuracy;     /* qz: max abs error relative to each plane's range,
+                            PROTO_ACCURACY_MIN..MAX */
+    int zstd_level;      /* qz: zstd level 1..19 (default 3) */
+    int zip_level;       /* exr-zip: deflate level 1..9 (default 4) */
+} proto_codec_params;
+
+void proto_codec_params_default(proto_codec_params *p);
+
+/* Short stable name ("f32", "f16", "qz", "exr-zip", ...) or "?" if unknown. */
+const char *proto_codec_name(proto_codec c);
+/* Name -> codec; OCEAN_ETYPE for an unknown name. */
+ocean_result proto_codec_parse(const char *name, proto_codec *out);
+/* 1 for codecs whose decoded values equal the input bit for bit. */
+int proto_codec_lossless(proto_codec c);
+
+/* Number of planes a channel mask makes (the normal counts twice); 0 if the
+ * mask is empty or has unknown bits. */
+int proto_tile_planes(unsigned channels);
+/* Name of plane i ("H", "DX", "DZ", "NU", "NV", "FOAM", "J") of a tile with
+ * the given channels, or NULL if i is out of range. */
+const char *proto_tile_plane_name(unsigned channels, int i);
+
+/* A-priori bound on |decoded - input| for one plane whose values lie in
+ * [lo, hi], for codec c with params p.  0 for lossless codecs.  For exr-b44/
+ * b44a the bound is loose (B44 can lose up to half of a block's
+ * magnitude when a block straddles zero); proto_tile_encode reports the
+ * achieved error, which is what TILE messages carry. */
+double proto_codec_error_bound(proto_codec c, const proto_codec_params *p, double lo, double hi);
+
+/* Encodes planes (proto_tile_planes(channels) planes of w*h floats, plane
+ * after plane) and appends the payload to out.  Input values must be finite
+ * (OCEAN_EINVAL otherwise); f16 and the half-based EXR codecs refuse values
+ * beyond +-65504 (OCEAN_ECODEC).  If max_err is not NULL it receives the
+ * largest |decoded - input| over all samples: for lossless codecs 0, for f16
+ * and qz the analytic bound, for B44 the measured error (the payload is
+ * decoded once to measure it).  On failure out is unchanged and err (if not
+ * NULL) names the reason. */
+ocean_result proto_tile_encode(proto_codec c, const proto_codec_params *p, int w, int h,
+                               unsigned channels, const float *planes, proto_buf *out,
+                               double *max_err, char *err, size_t errlen);
+
+/* Decodes a payload produced for (c, w, h, channels) into planes (caller's
+ * array of proto_tile_planes(channels) * w * h floats).  Any inconsistency
+ * (size, header, corrupt zstd/EXR data, non-finite value) gives OCEAN_ECODEC
+ * (OCEAN_EINVAL for bad arguments, OCEAN_ETYPE for an unknown codec) and a
+ * message in err; planes may then hold partial data. */
+ocean_result proto_tile_decode(proto_codec c, int w, int h, unsigned channels,
+                               const uint8_t *data, size_t len, float *planes,
+                               char *err, size_t errlen);
+
+/* IEEE binary16 conversions (round to nearest even; overflow gives +-inf,
+ * NaN stays NaN). */
+uint16_t proto_f16_from_f32(float f);
+float proto_f32_from_f16(uint16_t h);
+
+/* Octahedral unit-vector packing with y up: (nx, ny, nz) -> (u, v) in
+ * [-1, 1]^2 and back.  See PROTOCOL.md "Octahedral normals".  The input need
+ * not be normalised; a zero vector encodes as straight up. */
+void proto_normal_oct_encode(float nx, float ny, float nz, float *u, float *v);
+void proto_normal_oct_decode(float u, float v, float *nx, float *ny, float *nz);
+/* Unit normals of a height field from its slopes d(eta)/dx, d(eta)/dz
+ * (n = normalise(-sx, 1, -sz)), packed into the NU, NV planes. */
+void proto_normals_from_slopes(const float *sx, const float *sz, size_t n, float *nu, float *nv);
+
+/* Internal: the OpenEXR codecs (proto_exr.c). */
+ocean_result proto_exr_encode(proto_codec c, const proto_codec_params *p, int w, int h,
+                              unsigned channels, const float *planes, proto_buf *out,
+                              char *err, size_t errlen);
+ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *data,
+                              size_t len, float *planes, char *err, size_t errlen);
+
+#endif

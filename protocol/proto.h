@@ -1,0 +1,341 @@
+/*
+ * proto.h - the oceand wire protocol "ocean.v1": message structs and their
+ * encoders/decoders.  Pure functions over bytes; no sockets, no threads, no
+ * global state.  PROTOCOL.md is the normative description of every byte;
+ * this header is its C binding.
+ *
+ * Decoding: proto_decode() checks the header, then every length, count, enum
+ * and float of the payload before use; it never reads outside [buf, buf+len)
+ * and refuses NaN/Inf wherever a number must be finite.  Failures give a
+ * specific ocean_result and a human message:
+ *   OCEAN_ETRUNC   shorter than the header, or the payload/count says more
+ *                  bytes than there are
+ *   OCEAN_EFORMAT  bad magic, trailing bytes, reserved bits/bytes not zero,
+ *                  bad UTF-8, structural inconsistency
+ *   OCEAN_EVERSION header version is not PROTO_VERSION
+ *   OCEAN_ETYPE    unknown message type or enum value (codec, mesh kind ...)
+ *   OCEAN_ETOOBIG  message, string or count beyond the limits
+ *   OCEAN_EINVAL   NaN/Inf or a value outside its documented range
+ *   OCEAN_ENOMEM   allocation failed
+ * proto_error_reply() builds the ERROR message a server sends back.
+ *
+ * Ownership: a decoded proto_msg owns all of its variable-length data
+ * (tiles, tile payloads, points, indices, positions, samples); call
+ * proto_msg_free() when done.  The input buffer may be released right after
+ * proto_decode() returns.  For encoding the caller fills a proto_msg whose
+ * pointers point at the caller's memory; encoding never takes ownership.
+ */
+#ifndef PROTO_H
+#define PROTO_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "codec.h"
+#include "ocean_result.h"
+#include "proto_buf.h"
+
+#define PROTO_SUBPROTOCOL "ocean.v1"
+#define PROTO_MAGIC 0x574E434Fu   /* bytes "OCNW" */
+#define PROTO_VERSION 1
+#define PROTO_HEADER_SIZE 32
+
+/* Default decoder limits (a server may lower max_message). */
+#define PROTO_MAX_MESSAGE_DEFAULT (64u << 20)
+#define PROTO_MAX_QUERY_POINTS 65536u
+#define PROTO_MAX_FRAME_TILES 4096u
+#define PROTO_MAX_VERTICES (1u << 22)
+#define PROTO_MAX_INDICES (3u << 23)
+#define PROTO_MAX_LEVEL 31
+#define PROTO_MAX_LOD_LEVELS 16
+#define PROTO_MAX_LAYERS 4
+#define PROTO_MAX_FRAME_RATE 240.0f
+
+/* Maximum string lengths in bytes (UTF-8, no terminator on the wire). */
+#define PROTO_VERSION_STR_MAX 63
+#define PROTO_TOKEN_MAX 255
+#define PROTO_ERROR_MSG_MAX 1023
+#define PROTO_BYE_MSG_MAX 255
+
+typedef enum proto_type {
+    PROTO_HELLO = 1,
+    PROTO_SUBSCRIBE = 2,
+    PROTO_CAMERA = 3,
+    PROTO_FRAME = 4,
+    PROTO_TILE = 5,
+    PROTO_MESH_TOPOLOGY = 6,
+    PROTO_MESH_VERTICES = 7,
+    PROTO_QUERY = 8,
+    PROTO_QUERY_RESULT = 9,
+    PROTO_SEA_STATE = 10,
+    PROTO_ERROR = 11,
+    PROTO_BYE = 12,
+    PROTO_TYPE_END_
+} proto_type;
+
+enum proto_effect {
+    PROTO_FX_HEIGHT = 1,
+    PROTO_FX_DISPLACEMENT = 2,
+    PROTO_FX_NORMALS = 4,
+    PROTO_FX_FOAM = 8,
+    PROTO_FX_NEAR_FIELD = 16,
+    PROTO_FX_ALL = 31
+};
+
+typedef enum proto_mesh_kind {
+    PROTO_MESH_CONCENTRIC = 0,
+    PROTO_MESH_CHUNKED = 1,
+    PROTO_MESH_PROJECTED = 2,
+    PROTO_MESH_NONE = 3,
+    PROTO_MESH_KIND_COUNT_
+} proto_mesh_kind;
+
+typedef enum proto_cutoff_policy {
+    PROTO_CUTOFF_NONE = 0,
+    PROTO_CUTOFF_SEED = 1,
+    PROTO_CUTOFF_ANTIALIAS = 2,
+    PROTO_CUTOFF_POLICY_COUNT_
+} proto_cutoff_policy;
+
+typedef enum proto_mode {
+    PROTO_MODE_LIVE = 0,
+    PROTO_MODE_REPLAY = 1,
+    PROTO_MODE_COUNT_
+} proto_mode;
+
+typedef enum proto_sea_op {
+    PROTO_SEA_ANNOUNCE = 0,  /* server -> client: the state in force from effective_time */
+    PROTO_SEA_SET = 1,       /* client -> server: admin request, needs the token */
+    PROTO_SEA_OP_COUNT_
+} proto_sea_op;
+
+typedef enum proto_bye_reason {
+    PROTO_BYE_NORMAL = 0,
+    PROTO_BYE_SHUTDOWN = 1,
+    PROTO_BYE_SLOW_CONSUMER = 2,
+    PROTO_BYE_PROTOCOL_ERROR = 3,
+    PROTO_BYE_AUTH = 4,
+    PROTO_BYE_SERVER_FULL = 5,
+    PROTO_BYE_IDLE = 6,
+    PROTO_BYE_REASON_COUNT_
+} proto_bye_reason;
+
+#define PROTO_NO_CAMERA 0xFFFFFFFFu
+
+/* The fixed header of every message (32 bytes on the wire). */
+typedef struct proto_header {
+    uint16_t version;   /* PROTO_VERSION */
+    uint16_t type;      /* proto_type */
+    uint32_t flags;     /* 0 in version 1 */
+    uint32_t length;    /* payload bytes after the header */
+    uint32_t seq;       /* sender's message counter, +1 per message, wraps */
+    double sim_time;    /* sender's simulation time, s (finite) */
+} proto_header;
+
+/* Sea state as carried by HELLO and SEA_STATE.  Enum values as in
+ * sim/spectrum.h (spectrum 0..3, spreading 0..3). */
+typedef struct proto_sea {
+    uint8_t spectrum;
+    uint8_t spreading;
+    uint64_t seed;
+    double wind_u10, wind_dir_deg, fetch_m, depth_m, swell, phillips_a, small_wave_m, choppiness;
+    double hs, tp;      /* informational: significant height, peak period (0 unknown) */
+} proto_sea;
+
+typedef struct proto_hello {
+    uint32_t codecs;          /* bit c set: codec c supported */
+    uint8_t mesh_kinds;       /* bit k set: proto_mesh_kind k supported */
+    uint8_t effects;          /* PROTO_FX_* the server can compute */
+    uint8_t cutoff_policies;  /* bit p set: policy p supported */
+    uint8_t modes;            /* bit m set: proto_mode m supported */
+    uint32_t max_message;     /* largest client message accepted, bytes */
+    uint32_t max_query_points;
+    uint16_t max_tile_size;
+    uint8_t max_lod_levels;
+    uint8_t max_layers;
+    float tick_rate_hz;
+    float max_frame_rate_hz;
+    uint32_t client_id;
+    proto_sea sea;
+    char server_version[PROTO_VERSION_STR_MAX + 1];
+} proto_hello;
+
+typedef struct proto_subscribe {
+    uint8_t effects;          /* PROTO_FX_* mask, non-zero */
+    uint8_t mesh_kind;        /* proto_mesh_kind */
+    uint8_t codec;            /* proto_codec */
+    uint8_t cutoff_policy;    /* proto_cutoff_policy */
+    uint8_t mode;             /* proto_mode */
+    uint8_t layers;           /* cascades wanted, 1..PROTO_MAX_LAYERS */
+    uint8_t lod_levels;       /* tile LOD levels, 1..PROTO_MAX_LOD_LEVELS */
+    uint16_t tile_size;       /* samples per tile side, 2..PROTO_TILE_MAX_SIZE */
+    float frame_rate_hz;      /* (0, PROTO_MAX_FRAME_RATE] */
+    float accuracy;           /* qz accuracy target, PROTO_ACCURACY_MIN..MAX */
+    float base_spacing_m;     /* level-0 sample spacing; 0 = server default */
+    float view_range_m;       /* radius served; 0 = server default */
+} proto_subscribe;
+
+typedef struct proto_camera {
+    double pos[3];            /* world x, y (up), z, m */
+    float vel[3];             /* m/s */
+    float yaw_deg, pitch_deg, roll_deg;  /* see PROTOCOL.md "Camera orientation" */
+    float fov_y_deg;          /* (0, 180) */
+    uint16_t viewport_w, viewport_h;     /* 1..16384 */
+    double render_time;       /* replay mode: sim time to render; live: 0 */
+} proto_camera;
+
+typedef struct proto_tile {
+    uint8_t level;            /* 0..PROTO_MAX_LEVEL, spacing doubles per level */
+    uint8_t codec;            /* proto_codec */
+    uint16_t channels;        /* PROTO_CH_* mask */
+    uint16_t width, height;   /* samples, 1..PROTO_TILE_MAX_SIZE */
+    int32_t ix, iz;           /* tile index in its level's world grid */
+    double origin_x, origin_z;/* world position of sample (0, 0), m */
+    double spacing;           /* m between samples, > 0 */
+    float error_bound;        /* max |decoded - simulated| over all samples, >= 0 */
+    uint32_t payload_len;
+    const uint8_t *payload;   /* codec bytes (see codec.h) */
+} proto_tile;
+
+typedef struct proto_mesh_vertices {
+    uint32_t mesh_id;
+    uint32_t vertex_count;
+    double origin[3];         /* world position the vertices are relative to */
+    const float *positions;   /* 3 * vertex_count floats x, y, z */
+} proto_mesh_vertices;
+
+typedef struct proto_frame {
+    double cutoff_k;          /* Butterworth cutoff used, rad/m; +inf: unfiltered */
+    double e_error;           /* spectral energy error of the cutoff, 0..1 */
+    double origin[3];         /* world origin of the frame */
+    uint32_t camera_seq;      /* seq of the CAMERA this answers, or PROTO_NO_CAMERA */
+    uint32_t tick;            /* server tick counter (wraps) */
+    uint16_t tile_count;
+    const proto_tile *tiles;
+    uint8_t has_mesh;
+    proto_mesh_vertices mesh; /* valid when has_mesh */
+} proto_frame;
+
+typedef struct proto_mesh_topology {
+    uint32_t mesh_id;
+    uint8_t mesh_kind;        /* concentric, chunked or projected */
+    uint8_t lod_levels;       /* 1..PROTO_MAX_LOD_LEVELS */
+    uint32_t vertex_count;
+    uint32_t index_count;     /* multiple of 3 */
+    const uint32_t *indices;  /* triangles, counter-clockwise seen from above */
+    const float *morph;       /* per vertex 0..1 */
+    const uint8_t *level;     /* per vertex < lod_levels */
+} proto_mesh_topology;
+
+typedef struct proto_query {
+    uint32_t query_id;
+    uint32_t count;           /* 1..limit */
+    uint8_t at_time;          /* 0: latest tick, 1: at t */
+    double t;
+    const double *points;     /* 2 * count doubles: x, z */
+} proto_query;
+
+/* One answered point of a QUERY (9 floats on the wire). */
+typedef struct proto_query_sample {
+    float height;
+    float normal[3];
+    float velocity[3];
+    float foam;
+    float error_bound;
+} proto_query_sample;
+
+typedef struct proto_query_result {
+    uint32_t query_id;
+    uint32_t count;
+    double t;                 /* sim time evaluated */
+    const proto_query_sample *samples;
+} proto_query_result;
+
+typedef struct proto_sea_state {
+    uint8_t op;               /* proto_sea_op */
+    double effective_time;    /* sim time the state takes effect */
+    proto_sea sea;
+    char token[PROTO_TOKEN_MAX + 1];  /* SET: admin token; ANNOUNCE: empty */
+} proto_sea_state;
+
+typedef struct proto_error {
+    uint16_t code;            /* ocean_result, non-zero */
+    uint16_t offending_type;  /* type of the refused message, 0 if unknown */
+    uint32_t offending_seq;   /* its seq, 0 if unknown */
+    char message[PROTO_ERROR_MSG_MAX + 1];
+} proto_error;
+
+typedef struct proto_bye {
+    uint16_t reason;          /* proto_bye_reason */
+    char message[PROTO_BYE_MSG_MAX + 1];
+} proto_bye;
+
+typedef struct proto_msg {
+    proto_header hdr;         /* hdr.type selects the union member */
+    union {
+        proto_hello hello;
+        proto_subscribe subscribe;
+        proto_camera camera;
+        proto_frame frame;
+        proto_tile tile;
+        proto_mesh_topology topology;
+        proto_mesh_vertices vertices;
+        proto_query query;
+        proto_query_result result;
+        proto_sea_state sea_state;
+        proto_error error;
+        proto_bye bye;
+    } u;
+    void *owned_;             /* decoder's allocations; see proto_msg_free */
+} proto_msg;
+
+typedef struct proto_limits {
+    uint32_t max_message;     /* total bytes incl. header */
+    uint32_t max_query_points;
+    uint32_t max_frame_tiles;
+    uint32_t max_vertices;
+    uint32_t max_indices;
+} proto_limits;
+
+void proto_limits_default(proto_limits *l);
+
+/* Zeroes m and sets hdr.version and hdr.type. */
+void proto_msg_init(proto_msg *m, proto_type type);
+
+/* Frees what proto_decode allocated into m and zeroes m.  Accepts NULL and
+ * messages that own nothing (e.g. ones filled by hand for encoding). */
+void proto_msg_free(proto_msg *m);
+
+/* Name of a message type ("HELLO", ...), "?" if unknown. */
+const char *proto_type_name(unsigned type);
+
+/* Reads and checks only the 32-byte header (magic, version, type, flags,
+ * reserved, sim_time, and length against len and limits).  Useful to reject
+ * early or to learn the type/seq of a message that fails to decode. */
+ocean_result proto_header_decode(const void *buf, size_t len, const proto_limits *lim,
+                                 proto_header *out, char *err, size_t errlen);
+
+/* Decodes one complete message (one WebSocket binary message) with the
+ * default limits.  On success *msg owns its data (proto_msg_free).  On
+ * failure *msg is zeroed except that msg->hdr holds whatever of the header
+ * could be read, and err gets a message naming the field. */
+ocean_result proto_decode(const void *buf, size_t len, proto_msg *msg, char *err, size_t errlen);
+/* As proto_decode with explicit limits (NULL: defaults). */
+ocean_result proto_decode_limited(const void *buf, size_t len, const proto_limits *lim,
+                                  proto_msg *msg, char *err, size_t errlen);
+
+/* Validates msg exactly as the decoder would and appends its encoding to
+ * out.  On failure out is unchanged. */
+ocean_result proto_encode(proto_buf *out, const proto_msg *msg, char *err, size_t errlen);
+
+/* Builds the ERROR reply for a message that failed with `code`/`why`:
+ * the offending type and seq are taken from the bad message's header when
+ * its first 32 bytes are readable (0 otherwise).  seq and sim_time are the
+ * reply's own header fields.  The message text is truncated to fit. */
+ocean_result proto_error_reply(proto_buf *out, const void *bad, size_t badlen, ocean_result code,
+                               const char *why, uint32_t seq, double sim_time);
+
+/* Size in bytes of the encoded TILE body (without header) for t. */
+size_t proto_tile_body_size(const proto_tile *t);
+
+#endif

@@ -1,0 +1,353 @@
+/*
+ * proto_exr.c - OpenEXR tile codecs, entirely in memory through OpenEXRCore's
+ * custom write and read functions (no temporary files).
+ *
+ * A tile becomes a single-part scanline EXR whose data window is
+ * (0,0)-(w-1,h-1), one channel per plane named H, DX, DZ, NU, NV, FOAM, J,
+ * row y = grid row (z index).  exr-zip stores FLOAT channels (lossless);
+ * exr-piz, exr-b44 and exr-b44a store HALF channels.  Channels are flagged
+ * pLinear = 0 so B44 quantises the half values themselves rather than a
+ * perceptual transform of them.
+ */
+#include "codec.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <openexr.h>
+
+/* OpenEXRCore reports details through a callback that has no user pointer
+ * of ours during context creation, so keep the last message per thread. */
+static _Thread_local char exr_last_msg[200];
+
+static void exr_on_error(exr_const_context_t ctxt, exr_result_t code, const char *msg)
+{
+    (void)ctxt;
+    snprintf(exr_last_msg, sizeof exr_last_msg, "%s: %s", exr_get_error_code_as_string(code),
+             msg ? msg : "");
+}
+
+static void seterr(char *err, size_t errlen, const char *fmt, ...)
+{
+    if (!err || !errlen)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
+}
+
+typedef struct wstream {
+    proto_buf *out;
+    size_t start;   /* offset of the file's first byte in out */
+    int failed;
+} wstream;
+
+static int64_t exr_write_mem(exr_const_context_t ctxt, void *ud, const void *buf, uint64_t sz,
+                             uint64_t off, exr_stream_error_func_ptr_t error_cb)
+{
+    (void)ctxt;
+    (void)error_cb;
+    wstream *s = ud;
+    if (off > ((uint64_t)1 << 40) || sz > ((uint64_t)1 << 40)) {
+        s->failed = 1;
+        return -1;
+    }
+    size_t end = s->start + (size_t)off + (size_t)sz;
+    if (end > s->out->len) {
+        uint8_t *p;
+        if (proto_buf_grow(s->out, end - s->out->len, &p) != OCEAN_OK) {
+            s->failed = 1;
+            return -1;
+        }
+    }
+    memcpy(proto_buf_data(s->out) + s->start + off, buf, (size_t)sz);
+    return (int64_t)sz;
+}
+
+typedef struct rstream {
+    const uint8_t *p;
+    size_t n;
+} rstream;
+
+static int64_t exr_read_mem(exr_const_context_t ctxt, void *ud, void *buf, uint64_t sz,
+                            uint64_t off, exr_stream_error_func_ptr_t error_cb)
+{
+    (void)ctxt;
+    (void)error_cb;
+    const rstream *s = ud;
+    if (off > s->n)
+        return -1;
+    uint64_t avail = s->n - off;
+    if (sz > avail)
+        sz = avail;
+    if (sz)
+        memcpy(buf, s->p + off, (size_t)sz);
+    return (int64_t)sz;
+}
+
+static int64_t exr_size_mem(exr_const_context_t ctxt, void *ud)
+{
+    (void)ctxt;
+    return (int64_t)((const rstream *)ud)->n;
+}
+
+static int plane_index(unsigned channels, const char *name)
+{
+    for (int i = 0; i < PROTO_TILE_MAX_PLANES; i++) {
+        const char *nm = proto_tile_plane_name(channels, i);
+        if (!nm)
+            break;
+        if (strcmp(nm, name) == 0)
+            return i;
+    }
+    return -1;
+}
+
+ocean_result proto_exr_encode(proto_codec c, const proto_codec_params *p, int w, int h,
+                              unsigned channels, const float *planes, proto_buf *out,
+                              char *err, size_t errlen)
+{
+    exr_compression_t comp;
+    int half = 1;
+    switch (c) {
+    case PROTO_CODEC_EXR_ZIP: comp = EXR_COMPRESSION_ZIP; half = 0; break;
+    case PROTO_CODEC_EXR_PIZ: comp = EXR_COMPRESSION_PIZ; break;
+    case PROTO_CODEC_EXR_B44: comp = EXR_COMPRESSION_B44; break;
+    case PROTO_CODEC_EXR_B44A: comp = EXR_COMPRESSION_B44A; break;
+    default:
+        seterr(err, errlen, "codec %d is not an EXR codec", (int)c);
+        return OCEAN_ETYPE;
+    }
+    int np = proto_tile_planes(channels);
+    size_t n = (size_t)w * h, total = n * (size_t)np;
+    uint16_t *hbuf = NULL;
+    if (half) {
+        for (size_t i = 0; i < total; i++)
+            if (fabsf(planes[i]) > 65504.0f) {
+                seterr(err, errlen, "value %g beyond the half-float range", (double)planes[i]);
+                return OCEAN_ECODEC;
+            }
+        hbuf = malloc(total * sizeof *hbuf);
+        if (!hbuf)
+            return OCEAN_ENOMEM;
+        for (size_t i = 0; i < total; i++)
+            hbuf[i] = proto_f16_from_f32(planes[i]);
+    }
+    int bpe = half ? 2 : 4;
+    const uint8_t *src = half ? (const uint8_t *)hbuf : (const uint8_t *)planes;
+
+    wstream ws = {out, out->len, 0};
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = exr_on_error;
+    init.user_data = &ws;
+    init.write_fn = exr_write_mem;
+    if (p && p->zip_level >= 1 && p->zip_level <= 9)
+        init.zip_level = p->zip_level;
+    exr_context_t ctx = NULL;
+    exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    int have_enc = 0;
+    const char *stage = "start_write";
+    exr_result_t rv = exr_start_write(&ctx, "tile.exr", EXR_WRITE_FILE_DIRECTLY, &init);
+    int part = 0;
+    if (rv == EXR_ERR_SUCCESS) {
+        stage = "add_part";
+        rv = exr_add_part(ctx, "ocean", EXR_STORAGE_SCANLINE, &part);
+    }
+    if (rv == EXR_ERR_SUCCESS) {
+        stage = "required_attr";
+        rv = exr_initialize_required_attr_simple(ctx, part, w, h, comp);
+    }
+    for (int i = 0; i < np && rv == EXR_ERR_SUCCESS; i++) {
+        stage = "add_channel";
+        rv = exr_add_channel(ctx, part, proto_tile_plane_name(channels, i),
+                             half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    }
+    if (rv == EXR_ERR_SUCCESS) {
+        stage = "write_header";
+        rv = exr_write_header(ctx);
+    }
+    int32_t lpc = 1;
+    if (rv == EXR_ERR_SUCCESS) {
+        stage = "scanlines_per_chunk";
+        rv = exr_get_scanlines_per_chunk(ctx, part, &lpc);
+    }
+    for (int y = 0; y < h && rv == EXR_ERR_SUCCESS; y += lpc) {
+        exr_chunk_info_t ci;
+        stage = "chunk_info";
+        rv = exr_write_scanline_chunk_info(ctx, part, y, &ci);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        stage = "encoding_init";
+        rv = have_enc ? exr_encoding_update(ctx, part, &ci, &enc) : exr_encoding_initialize(ctx, part, &ci, &enc);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        for (int k = 0; k < enc.channel_count; k++) {
+            exr_coding_channel_info_t *ch = &enc.channels[k];
+            int pi = plane_index(channels, ch->channel_name);
+            if (pi < 0) {
+                rv = EXR_ERR_INVALID_ARGUMENT;
+                break;
+            }
+            ch->encode_from_ptr = src + ((size_t)pi * n + (size_t)(ci.start_y) * w) * bpe;
+            ch->user_pixel_stride = bpe;
+            ch->user_line_stride = w * bpe;
+            ch->user_bytes_per_element = (int16_t)bpe;
+            ch->user_data_type = half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+        }
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        if (!have_enc) {
+            have_enc = 1;
+            stage = "choose_routines";
+            rv = exr_encoding_choose_default_routines(ctx, part, &enc);
+            if (rv != EXR_ERR_SUCCESS)
+                break;
+        }
+        stage = "encoding_run";
+        rv = exr_encoding_run(ctx, part, &enc);
+    }
+    if (have_enc)
+        exr_encoding_destroy(ctx, &enc);
+    exr_result_t frv = ctx ? exr_finish(&ctx) : EXR_ERR_SUCCESS;
+    if (rv == EXR_ERR_SUCCESS && frv != EXR_ERR_SUCCESS) {
+        rv = frv;
+        stage = "finish";
+    }
+    free(hbuf);
+    if (rv != EXR_ERR_SUCCESS || ws.failed) {
+        proto_buf_truncate(out, ws.start);
+        if (ws.failed && rv == EXR_ERR_SUCCESS)
+            return OCEAN_ENOMEM;
+        seterr(err, errlen, "OpenEXR %s failed: %s (%s)", stage, exr_get_error_code_as_string(rv), exr_last_msg);
+        return rv == EXR_ERR_OUT_OF_MEMORY ? OCEAN_ENOMEM : OCEAN_ECODEC;
+    }
+    return OCEAN_OK;
+}
+
+ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *data, size_t len,
+                              float *planes, char *err, size_t errlen)
+{
+    int np = proto_tile_planes(channels);
+    size_t n = (size_t)w * h;
+    rstream rs = {data, len};
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = exr_on_error;
+    init.user_data = &rs;
+    init.read_fn = exr_read_mem;
+    init.size_fn = exr_size_mem;
+    init.flags = EXR_CONTEXT_FLAG_SILENT_HEADER_PARSE;
+    init.max_image_width = PROTO_TILE_MAX_SIZE;
+    init.max_image_height = PROTO_TILE_MAX_SIZE;
+    init.max_tile_width = PROTO_TILE_MAX_SIZE;
+    init.max_tile_height = PROTO_TILE_MAX_SIZE;
+    exr_context_t ctx = NULL;
+    exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+    int have_dec = 0;
+    ocean_result res = OCEAN_ECODEC;
+    exr_result_t rv = EXR_ERR_SUCCESS;
+    const char *stage = "start_read";
+    exr_last_msg[0] = 0;
+    if (len < 8) {
+        seterr(err, errlen, "EXR payload of %zu bytes is too short", len);
+        return OCEAN_ECODEC;
+    }
+    rv = exr_start_read(&ctx, "tile.exr", &init);
+    if (rv != EXR_ERR_SUCCESS)
+        goto fail;
+    int count = 0;
+    exr_storage_t st;
+    exr_attr_box2i_t dw;
+    const exr_attr_chlist_t *cl = NULL;
+    stage = "header";
+    if ((rv = exr_get_count(ctx, &count)) != EXR_ERR_SUCCESS || (rv = exr_get_storage(ctx, 0, &st)) ||
+        (rv = exr_get_data_window(ctx, 0, &dw)) || (rv = exr_get_channels(ctx, 0, &cl)))
+        goto fail;
+    if (count != 1 || st != EXR_STORAGE_SCANLINE) {
+        seterr(err, errlen, "EXR tile must be one scanline part (has %d parts, storage %d)", count, (int)st);
+        goto out;
+    }
+    if ((int64_t)dw.max.x - dw.min.x + 1 != w || (int64_t)dw.max.y - dw.min.y + 1 != h) {
+        seterr(err, errlen, "EXR data window %dx%d, tile is %dx%d", dw.max.x - dw.min.x + 1,
+               dw.max.y - dw.min.y + 1, w, h);
+        goto out;
+    }
+    if (!cl || cl->num_channels != np) {
+        seterr(err, errlen, "EXR has %d channels, tile needs %d", cl ? cl->num_channels : 0, np);
+        goto out;
+    }
+    for (int k = 0; k < cl->num_channels; k++) {
+        const exr_attr_chlist_entry_t *e = &cl->entries[k];
+        if (plane_index(channels, e->name.str) < 0 || e->x_sampling != 1 || e->y_sampling != 1 ||
+            (e->pixel_type != EXR_PIXEL_HALF && e->pixel_type != EXR_PIXEL_FLOAT)) {
+            seterr(err, errlen, "EXR channel '%s' unexpected (name, sampling or type)", e->name.str);
+            goto out;
+        }
+    }
+    int32_t lpc = 1;
+    stage = "scanlines_per_chunk";
+    if ((rv = exr_get_scanlines_per_chunk(ctx, 0, &lpc)) != EXR_ERR_SUCCESS)
+        goto fail;
+    if (lpc < 1) {
+        seterr(err, errlen, "EXR scanlines per chunk %d", lpc);
+        goto out;
+    }
+    for (int64_t y = dw.min.y; y <= dw.max.y; y += lpc) {
+        exr_chunk_info_t ci;
+        stage = "chunk_info";
+        if ((rv = exr_read_scanline_chunk_info(ctx, 0, (int)y, &ci)) != EXR_ERR_SUCCESS)
+            goto fail;
+        int64_t row = (int64_t)ci.start_y - dw.min.y;
+        if (row < 0 || row + ci.height > h) {
+            seterr(err, errlen, "EXR chunk rows %d..%d outside the tile", ci.start_y, ci.start_y + ci.height);
+            goto out;
+        }
+        stage = "decoding_init";
+        rv = have_dec ? exr_decoding_update(ctx, 0, &ci, &dec) : exr_decoding_initialize(ctx, 0, &ci, &dec);
+        if (rv != EXR_ERR_SUCCESS)
+            goto fail;
+        for (int k = 0; k < dec.channel_count; k++) {
+            exr_coding_channel_info_t *ch = &dec.channels[k];
+            int pi = plane_index(channels, ch->channel_name);
+            if (pi < 0 || ch->width != w) {
+                seterr(err, errlen, "EXR chunk channel layout unexpected");
+                goto out;
+            }
+            ch->decode_to_ptr = (uint8_t *)(planes + (size_t)pi * n + (size_t)row * w);
+            ch->user_pixel_stride = 4;
+            ch->user_line_stride = w * 4;
+            ch->user_bytes_per_element = 4;
+            ch->user_data_type = EXR_PIXEL_FLOAT;
+        }
+        if (!have_dec) {
+            have_dec = 1;
+            stage = "choose_routines";
+            if ((rv = exr_decoding_choose_default_routines(ctx, 0, &dec)) != EXR_ERR_SUCCESS)
+                goto fail;
+        }
+        stage = "decoding_run";
+        if ((rv = exr_decoding_run(ctx, 0, &dec)) != EXR_ERR_SUCCESS)
+            goto fail;
+    }
+    for (size_t i = 0; i < n * (size_t)np; i++)
+        if (!isfinite(planes[i])) {
+            seterr(err, errlen, "EXR holds a non-finite value at sample %zu", i);
+            goto out;
+        }
+    res = OCEAN_OK;
+    goto out;
+fail:
+    /* OpenEXRCore 3.1 reports corrupt compressed chunks as
+     * EXR_ERR_OUT_OF_MEMORY ("unable to decompress"), so every failure
+     * while reading is a codec failure of the payload. */
+    seterr(err, errlen, "OpenEXR %s failed: %s %s", stage, exr_get_error_code_as_string(rv), exr_last_msg);
+out:
+    if (have_dec)
+        exr_decoding_destroy(ctx, &dec);
+    if (ctx)
+        exr_finish(&ctx);
+    return res;
+}

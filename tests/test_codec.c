@@ -1,0 +1,450 @@
+/*
+ * test_codec.c - tile codecs: half-float conversion, octahedral normals,
+ * every codec's round trip within its stated bound on synthetic and real
+ * ocean tiles, the default codec's size/PSNR target, EXR payloads read back
+ * by OpenEXRCore's own file reader, and hostile payloads refused cleanly.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <openexr.h>
+
+#include "bench/tile_source.h"
+#include "codec.h"
+
+static int sanitized(void) { return getenv("OCEAN_TEST_SANITIZED") != NULL; }
+
+/* A synthetic sea-like field: a sum of sines with incommensurate wave numbers. */
+static void synth(float *p, int w, int h, unsigned channels, double scale)
+{
+    int np = proto_tile_planes(channels);
+    for (int c = 0; c < np; c++)
+        for (int i = 0; i < h; i++)
+            for (int j = 0; j < w; j++) {
+                double x = j * 1.7, z = i * 1.3;
+                double v = scale * (sin(0.11 * x + 0.07 * z + c) + 0.4 * sin(0.37 * x - 0.21 * z + 2 * c) +
+                                    0.1 * sin(1.9 * x + 1.3 * z));
+                p[(size_t)c * w * h + (size_t)i * w + j] = (float)v;
+            }
+}
+
+static void test_f16_values(void **state)
+{
+    (void)state;
+    assert_int_equal(proto_f16_from_f32(1.0f), 0x3c00);
+    assert_int_equal(proto_f16_from_f32(-2.0f), 0xc000);
+    assert_int_equal(proto_f16_from_f32(65504.0f), 0x7bff);
+    assert_int_equal(proto_f16_from_f32(65519.0f), 0x7bff);
+    assert_int_equal(proto_f16_from_f32(65520.0f), 0x7c00);  /* tie rounds to even = inf */
+    assert_int_equal(proto_f16_from_f32(0x1p-24f), 0x0001);
+    assert_int_equal(proto_f16_from_f32(0x1p-25f), 0x0000);  /* tie to even */
+    assert_int_equal(proto_f16_from_f32(0x1.8p-24f), 0x0002); /* 1.5 ulp -> 2 */
+    assert_int_equal(proto_f16_from_f32(0x1p-14f), 0x0400);
+    assert_int_equal(proto_f16_from_f32(1.0f + 0x1p-11f), 0x3c00); /* tie to even */
+    assert_int_equal(proto_f16_from_f32(1.0f + 0x1.8p-11f), 0x3c01);
+    assert_int_equal(proto_f16_from_f32(INFINITY), 0x7c00);
+    assert_true((proto_f16_from_f32(NAN) & 0x7c00) == 0x7c00 && (proto_f16_from_f32(NAN) & 0x3ff));
+    /* every finite half survives half -> float -> half */
+    for (uint32_t hv = 0; hv < 0x10000; hv++) {
+        if ((hv & 0x7c00) == 0x7c00)
+            continue;
+        float f = proto_f32_from_f16((uint16_t)hv);
+        assert_int_equal(proto_f16_from_f32(f), hv);
+    }
+    assert_true(proto_f32_from_f16(0x3555) > 0.333f && proto_f32_from_f16(0x3555) < 0.3334f);
+}
+
+static void test_octahedral(void **state)
+{
+    (void)state;
+    srand(7);
+    double worst = 0;
+    for (int k = 0; k < 20000; k++) {
+        float v[3];
+        double l2;
+        do {
+            for (int i = 0; i < 3; i++)
+                v[i] = 2.0f * rand() / (float)RAND_MAX - 1.0f;
+            l2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+        } while (l2 < 1e-4 || l2 > 1);
+        float u, w, n[3];
+        proto_normal_oct_encode(v[0], v[1], v[2], &u, &w);
+        assert_true(fabsf(u) <= 1.0f && fabsf(w) <= 1.0f);
+        proto_normal_oct_decode(u, w, &n[0], &n[1], &n[2]);
+        double l = sqrt(l2), d = 0;
+        for (int i = 0; i < 3; i++)
+            d = fmax(d, fabs(n[i] - v[i] / l));
+        worst = fmax(worst, d);
+    }
+    assert_true(worst < 1e-5);
+    float u, w, n[3];
+    proto_normal_oct_encode(0, 1, 0, &u, &w); /* straight up -> centre */
+    assert_true(u == 0 && w == 0);
+    proto_normal_oct_encode(0, -1, 0, &u, &w); /* straight down -> corner */
+    assert_true(fabsf(u) == 1 && fabsf(w) == 1);
+    proto_normal_oct_decode(u, w, &n[0], &n[1], &n[2]);
+    assert_true(n[1] < -0.999f);
+    /* slopes helper: slope (0.5, -0.25) -> normal (-0.5, 1, 0.25) / |.| */
+    float sx = 0.5f, sz = -0.25f;
+    proto_normals_from_slopes(&sx, &sz, 1, &u, &w);
+    proto_normal_oct_decode(u, w, &n[0], &n[1], &n[2]);
+    double l = sqrt(0.25 + 1 + 0.0625);
+    assert_true(fabs(n[0] + 0.5 / l) < 1e-6 && fabs(n[1] - 1 / l) < 1e-6 && fabs(n[2] - 0.25 / l) < 1e-6);
+}
+
+static void test_names(void **state)
+{
+    (void)state;
+    for (int c = 0; c < PROTO_CODEC_COUNT_; c++) {
+        proto_codec back;
+        assert_int_equal(proto_codec_parse(proto_codec_name((proto_codec)c), &back), OCEAN_OK);
+        assert_int_equal(back, c);
+    }
+    proto_codec x;
+    assert_int_equal(proto_codec_parse("jpeg", &x), OCEAN_ETYPE);
+    assert_int_equal(proto_tile_planes(PROTO_CH_ALL), 7);
+    assert_int_equal(proto_tile_planes(PROTO_CH_NORMAL), 2);
+    assert_int_equal(proto_tile_planes(0), 0);
+    assert_int_equal(proto_tile_planes(0x40), 0);
+    assert_string_equal(proto_tile_plane_name(PROTO_CH_HEIGHT | PROTO_CH_NORMAL | PROTO_CH_FOAM, 2), "NV");
+    assert_string_equal(proto_tile_plane_name(PROTO_CH_ALL, 6), "J");
+    assert_null(proto_tile_plane_name(PROTO_CH_HEIGHT, 1));
+}
+
+/* Round trip of one tile with codec c; checks the reported error, the
+ * a-priori bound per plane and returns the payload size. */
+static size_t roundtrip(proto_codec c, const proto_codec_params *p, int w, int h, unsigned ch, const float *src)
+{
+    int np = proto_tile_planes(ch);
+    size_t n = (size_t)w * h;
+    float *back = malloc(n * np * sizeof *back);
+    proto_buf b;
+    proto_buf_init(&b, 16);
+    char err[256] = "";
+    double merr = -1;
+    ocean_result r = proto_tile_encode(c, p, w, h, ch, src, &b, &merr, err, sizeof err);
+    if (r != OCEAN_OK)
+        fail_msg("%s encode %dx%d: %s", proto_codec_name(c), w, h, err);
+    r = proto_tile_decode(c, w, h, ch, proto_buf_data(&b), proto_buf_len(&b), back, err, sizeof err);
+    if (r != OCEAN_OK)
+        fail_msg("%s decode %dx%d: %s", proto_codec_name(c), w, h, err);
+    double measured = 0;
+    for (int k = 0; k < np; k++) {
+        const float *s = src + k * n, *d = back + k * n;
+        float lo = s[0], hi = s[0];
+        double e = 0;
+        for (size_t i = 0; i < n; i++) {
+            lo = fminf(lo, s[i]);
+            hi = fmaxf(hi, s[i]);
+            e = fmax(e, fabs((double)d[i] - s[i]));
+        }
+        double bound = proto_codec_error_bound(c, p, lo, hi);
+        if (e > bound)
+            fail_msg("%s plane %d: error %g above bound %g", proto_codec_name(c), k, e, bound);
+        measured = fmax(measured, e);
+    }
+    if (proto_codec_lossless(c))
+        assert_true(measured == 0.0);
+    if (fabs(measured - merr) > 1e-12)
+        fail_msg("%s: reported error %g, measured %g", proto_codec_name(c), merr, measured);
+    size_t len = proto_buf_len(&b);
+    proto_buf_free(&b);
+    free(back);
+    return len;
+}
+
+static void test_roundtrip_synthetic(void **state)
+{
+    (void)state;
+    proto_codec_params p;
+    proto_codec_params_default(&p);
+    const int sizes[][2] = {{1, 1}, {2, 3}, {5, 4}, {17, 9}, {64, 64}, {33, 65}};
+    const unsigned chans[] = {PROTO_CH_HEIGHT, PROTO_CH_ALL, PROTO_CH_NORMAL | PROTO_CH_FOAM};
+    float *buf = malloc(7 * 65 * 65 * sizeof *buf);
+    for (int c = 0; c < PROTO_CODEC_COUNT_; c++)
+        for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++)
+            for (size_t k = 0; k < 3; k++) {
+                synth(buf, sizes[s][0], sizes[s][1], chans[k], 3.0);
+                assert_true(roundtrip((proto_codec)c, &p, sizes[s][0], sizes[s][1], chans[k], buf) > 0);
+            }
+    /* constant planes, a plane of zeros, tiny and large magnitudes */
+    for (int c = 0; c < PROTO_CODEC_COUNT_; c++) {
+        for (int i = 0; i < 64; i++)
+            buf[i] = 1.25f;
+        roundtrip((proto_codec)c, &p, 8, 8, PROTO_CH_HEIGHT, buf);
+        memset(buf, 0, 64 * sizeof *buf);
+        roundtrip((proto_codec)c, &p, 8, 8, PROTO_CH_HEIGHT, buf);
+        synth(buf, 8, 8, PROTO_CH_HEIGHT, 1e-6);
+        roundtrip((proto_codec)c, &p, 8, 8, PROTO_CH_HEIGHT, buf);
+        synth(buf, 8, 8, PROTO_CH_HEIGHT, 3e4);
+        roundtrip((proto_codec)c, &p, 8, 8, PROTO_CH_HEIGHT, buf);
+    }
+    free(buf);
+}
+
+static void test_qz_accuracy(void **state)
+{
+    (void)state;
+    float *buf = malloc(48 * 40 * sizeof *buf), *back = malloc(48 * 40 * sizeof *back);
+    synth(buf, 48, 40, PROTO_CH_HEIGHT, 2.0);
+    float lo = buf[0], hi = buf[0];
+    for (int i = 0; i < 48 * 40; i++)
+        lo = fminf(lo, buf[i]), hi = fmaxf(hi, buf[i]);
+    size_t prev = 0;
+    const double accs[] = {0.5, 0.1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6};
+    for (size_t a = 0; a < sizeof accs / sizeof accs[0]; a++) {
+        proto_codec_params p;
+        proto_codec_params_default(&p);
+        p.accuracy = accs[a];
+        proto_buf b;
+        proto_buf_init(&b, 0);
+        double merr;
+        assert_int_equal(proto_tile_encode(PROTO_CODEC_QZ, &p, 48, 40, PROTO_CH_HEIGHT, buf, &b, &merr, NULL, 0), OCEAN_OK);
+        assert_int_equal(proto_tile_decode(PROTO_CODEC_QZ, 48, 40, PROTO_CH_HEIGHT, proto_buf_data(&b), b.len, back, NULL, 0), OCEAN_OK);
+        double e = 0;
+        for (int i = 0; i < 48 * 40; i++)
+            e = fmax(e, fabs((double)back[i] - buf[i]));
+        /* the accuracy target: max error <= accuracy * range (+ float rounding) */
+        assert_true(e <= accs[a] * (hi - lo) * (1 + 1e-6) + 4 * 0x1p-24);
+        assert_true(e == merr);
+        assert_true(b.len >= prev); /* finer accuracy never gets smaller */
+        prev = b.len;
+        proto_buf_free(&b);
+    }
+    /* accuracy outside its range is refused */
+    proto_codec_params p;
+    proto_codec_params_default(&p);
+    p.accuracy = 1e-9;
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    char err[128];
+    assert_int_equal(proto_tile_encode(PROTO_CODEC_QZ, &p, 48, 40, PROTO_CH_HEIGHT, buf, &b, NULL, err, sizeof err), OCEAN_EINVAL);
+    assert_int_equal(b.len, 0);
+    free(buf);
+    free(back);
+}
+
+/* The default codec on real ocean tiles: <= 1/8 of f32 bytes, height PSNR
+ * (peak = tile range) >= 50 dB for every tile; every codec within bound. */
+static void test_real_ocean(void **state)
+{
+    (void)state;
+    const struct { double u10, patch; } seas[] = {{5, 256}, {10, 1000}, {25, 2000}};
+    const int T = 64, per = sanitized() ? 2 : 6;
+    size_t m = (size_t)T * T;
+    float *tile = malloc(7 * m * sizeof *tile), *back = malloc(m * sizeof *back);
+    double total = 0;
+    int count = 0;
+    proto_codec_params p;
+    proto_codec_params_default(&p);
+    for (int s = 0; s < 3; s++) {
+        tile_source src;
+        assert_int_equal(tile_source_open(&src, seas[s].u10, 256, seas[s].patch, 500.0), 0);
+        for (int t = 0; t < per; t++) {
+            tile_source_cut(&src, t * 29, t * 71, T, T, tile);
+            proto_buf b;
+            proto_buf_init(&b, 0);
+            char err[256];
+            assert_int_equal(proto_tile_encode(PROTO_CODEC_DEFAULT, &p, T, T, PROTO_CH_HEIGHT, tile, &b, NULL, err, sizeof err), OCEAN_OK);
+            assert_int_equal(proto_tile_decode(PROTO_CODEC_DEFAULT, T, T, PROTO_CH_HEIGHT, proto_buf_data(&b), b.len, back, err, sizeof err), OCEAN_OK);
+            float lo = tile[0], hi = tile[0];
+            double sq = 0;
+            for (size_t k = 0; k < m; k++) {
+                lo = fminf(lo, tile[k]);
+                hi = fmaxf(hi, tile[k]);
+                sq += ((double)back[k] - tile[k]) * ((double)back[k] - tile[k]);
+            }
+            double psnr = 20 * log10((hi - lo) / sqrt(sq / m));
+            if (psnr < 50.0)
+                fail_msg("sea %d tile %d: PSNR %.2f dB < 50", s, t, psnr);
+            total += (double)b.len;
+            count++;
+            proto_buf_free(&b);
+            if (t == 0)
+                for (int c = 0; c < PROTO_CODEC_COUNT_; c++)
+                    roundtrip((proto_codec)c, &p, T, T, PROTO_CH_ALL, tile);
+        }
+        tile_source_close(&src);
+    }
+    double ratio = total / count / (4.0 * m);
+    print_message("default codec: %.0f bytes per 64x64 height tile = 1/%.2f of f32\n", total / count, 1 / ratio);
+    assert_true(ratio <= 1.0 / 8.0);
+    free(tile);
+    free(back);
+}
+
+/* Writes the EXR payload to a file and opens it with OpenEXRCore's own file
+ * reader: proves the payload is a standalone .exr with the documented
+ * channels, size and compression. */
+static void test_exr_file(void **state)
+{
+    (void)state;
+    const proto_codec cs[] = {PROTO_CODEC_EXR_ZIP, PROTO_CODEC_EXR_PIZ, PROTO_CODEC_EXR_B44, PROTO_CODEC_EXR_B44A};
+    const exr_compression_t ct[] = {EXR_COMPRESSION_ZIP, EXR_COMPRESSION_PIZ, EXR_COMPRESSION_B44, EXR_COMPRESSION_B44A};
+    const int W = 40, H = 24;
+    unsigned ch = PROTO_CH_HEIGHT | PROTO_CH_NORMAL | PROTO_CH_JACOBIAN;
+    float *src = malloc(4 * W * H * sizeof *src), *back = malloc(4 * W * H * sizeof *back);
+    synth(src, W, H, ch, 1.5);
+    for (int k = 0; k < 4; k++) {
+        proto_buf b;
+        proto_buf_init(&b, 0);
+        double merr;
+        assert_int_equal(proto_tile_encode(cs[k], NULL, W, H, ch, src, &b, &merr, NULL, 0), OCEAN_OK);
+        assert_int_equal(proto_ld32(proto_buf_data(&b)), 20000630u); /* EXR magic 76 2f 31 01 */
+        char path[] = "/tmp/test_codec_XXXXXX";
+        int fd = mkstemp(path);
+        assert_true(fd >= 0);
+        assert_int_equal(write(fd, proto_buf_data(&b), b.len), (ssize_t)b.len);
+        close(fd);
+        exr_context_t ctx;
+        exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+        assert_int_equal(exr_start_read(&ctx, path, &init), EXR_ERR_SUCCESS);
+        exr_compression_t comp;
+        assert_int_equal(exr_get_compression(ctx, 0, &comp), EXR_ERR_SUCCESS);
+        assert_int_equal(comp, ct[k]);
+        exr_attr_box2i_t dw;
+        assert_int_equal(exr_get_data_window(ctx, 0, &dw), EXR_ERR_SUCCESS);
+        assert_int_equal(dw.max.x - dw.min.x + 1, W);
+        assert_int_equal(dw.max.y - dw.min.y + 1, H);
+        const exr_attr_chlist_t *cl;
+        assert_int_equal(exr_get_channels(ctx, 0, &cl), EXR_ERR_SUCCESS);
+        assert_int_equal(cl->num_channels, 4);
+        const char *names[4] = {"H", "J", "NU", "NV"}; /* EXR sorts channel names */
+        for (int i = 0; i < 4; i++) {
+            assert_string_equal(cl->entries[i].name.str, names[i]);
+            assert_int_equal(cl->entries[i].pixel_type, k == 0 ? EXR_PIXEL_FLOAT : EXR_PIXEL_HALF);
+        }
+        exr_finish(&ctx);
+        unlink(path);
+        /* and the in-memory reader gives the values back within the bound */
+        assert_int_equal(proto_tile_decode(cs[k], W, H, ch, proto_buf_data(&b), b.len, back, NULL, 0), OCEAN_OK);
+        for (int pl = 0; pl < 4; pl++) {
+            float lo = INFINITY, hi = -INFINITY;
+            for (int i = 0; i < W * H; i++)
+                lo = fminf(lo, src[pl * W * H + i]), hi = fmaxf(hi, src[pl * W * H + i]);
+            double bound = proto_codec_error_bound(cs[k], NULL, lo, hi);
+            for (int i = 0; i < W * H; i++)
+                assert_true(fabs((double)back[pl * W * H + i] - src[pl * W * H + i]) <= fmin(bound, merr));
+        }
+        /* the same file with the wrong expectation is refused */
+        char err[256];
+        assert_int_equal(proto_tile_decode(cs[k], W + 1, H, ch, proto_buf_data(&b), b.len, back, err, sizeof err), OCEAN_ECODEC);
+        assert_int_equal(proto_tile_decode(cs[k], W, H, PROTO_CH_HEIGHT, proto_buf_data(&b), b.len, back, err, sizeof err), OCEAN_ECODEC);
+        proto_buf_free(&b);
+    }
+    free(src);
+    free(back);
+}
+
+static void test_encode_refusals(void **state)
+{
+    (void)state;
+    float v[16];
+    synth(v, 4, 4, PROTO_CH_HEIGHT, 1);
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    char err[256];
+    assert_int_equal(proto_tile_encode((proto_codec)99, NULL, 4, 4, PROTO_CH_HEIGHT, v, &b, NULL, err, sizeof err), OCEAN_ETYPE);
+    assert_int_equal(proto_tile_encode(PROTO_CODEC_F32, NULL, 0, 4, PROTO_CH_HEIGHT, v, &b, NULL, err, sizeof err), OCEAN_EINVAL);
+    assert_int_equal(proto_tile_encode(PROTO_CODEC_F32, NULL, 4, 4, 0, v, &b, NULL, err, sizeof err), OCEAN_EINVAL);
+    assert_int_equal(proto_tile_encode(PROTO_CODEC_F32, NULL, 4, 4, 0x80, v, &b, NULL, err, sizeof err), OCEAN_EINVAL);
+    assert_int_equal(proto_tile_encode(PROTO_CODEC_F32, NULL, 4, 4, PROTO_CH_HEIGHT, NULL, &b, NULL, err, sizeof err), OCEAN_EINVAL);
+    for (int c = 0; c < PROTO_CODEC_COUNT_; c++) {
+        v[5] = NAN;
+        assert_int_equal(proto_tile_encode((proto_codec)c, NULL, 4, 4, PROTO_CH_HEIGHT, v, &b, NULL, err, sizeof err), OCEAN_EINVAL);
+        assert_non_null(strstr(err, "non-finite"));
+        v[5] = INFINITY;
+        assert_int_equal(proto_tile_encode((proto_codec)c, NULL, 4, 4, PROTO_CH_HEIGHT, v, &b, NULL, err, sizeof err), OCEAN_EINVAL);
+        v[5] = 1e5f;
+        ocean_result r = proto_tile_encode((proto_codec)c, NULL, 4, 4, PROTO_CH_HEIGHT, v, &b, NULL, err, sizeof err);
+        int half = c == PROTO_CODEC_F16 || c == PROTO_CODEC_EXR_PIZ || c == PROTO_CODEC_EXR_B44 || c == PROTO_CODEC_EXR_B44A;
+        assert_int_equal(r, half ? OCEAN_ECODEC : OCEAN_OK);
+        v[5] = 0.5f;
+        proto_buf_reset(&b);
+    }
+    assert_int_equal(b.len, 0);
+    proto_buf_free(&b);
+}
+
+/* Hostile payloads: every truncation and many corruptions of a valid
+ * payload decode to OK or OCEAN_ECODEC, never read out of bounds (ASan). */
+static void test_decode_hostile(void **state)
+{
+    (void)state;
+    const int W = 16, H = 12;
+    unsigned ch = PROTO_CH_HEIGHT | PROTO_CH_DX;
+    float src[2 * 16 * 12], back[2 * 16 * 12];
+    synth(src, W, H, ch, 2);
+    srand(11);
+    for (int c = 0; c < PROTO_CODEC_COUNT_; c++) {
+        proto_buf b;
+        proto_buf_init(&b, 0);
+        assert_int_equal(proto_tile_encode((proto_codec)c, NULL, W, H, ch, src, &b, NULL, NULL, 0), OCEAN_OK);
+        size_t n = b.len;
+        uint8_t *copy = malloc(n);
+        char err[256];
+        size_t stride = (c >= PROTO_CODEC_EXR_ZIP && sanitized()) ? 7 : 1;
+        for (size_t cut = 0; cut < n; cut += stride) {
+            memcpy(copy, proto_buf_data(&b), cut);
+            uint8_t *exact = malloc(cut ? cut : 1); /* exact-size buffer so ASan sees any overread */
+            memcpy(exact, copy, cut);
+            ocean_result r = proto_tile_decode((proto_codec)c, W, H, ch, exact, cut, back, err, sizeof err);
+            free(exact);
+            if (r != OCEAN_ECODEC)
+                fail_msg("%s truncated to %zu/%zu gave %d", proto_codec_name((proto_codec)c), cut, n, r);
+        }
+        int flips = sanitized() ? 60 : 400;
+        for (int k = 0; k < flips; k++) {
+            memcpy(copy, proto_buf_data(&b), n);
+            int nf = 1 + rand() % 4;
+            for (int f = 0; f < nf; f++)
+                copy[rand() % n] ^= (uint8_t)(1 + rand() % 255);
+            ocean_result r = proto_tile_decode((proto_codec)c, W, H, ch, copy, n, back, err, sizeof err);
+            if (r != OCEAN_OK && r != OCEAN_ECODEC)
+                fail_msg("%s corrupted: %d %s", proto_codec_name((proto_codec)c), r, err);
+            if (r == OCEAN_OK)
+                for (int i = 0; i < 2 * W * H; i++)
+                    assert_true(isfinite(back[i]));
+        }
+        /* one byte too many */
+        uint8_t *longer = malloc(n + 1);
+        memcpy(longer, proto_buf_data(&b), n);
+        longer[n] = 0;
+        ocean_result r = proto_tile_decode((proto_codec)c, W, H, ch, longer, n + 1, back, err, sizeof err);
+        if (c <= PROTO_CODEC_QZ)
+            assert_int_equal(r, OCEAN_ECODEC);
+        free(longer);
+        free(copy);
+        proto_buf_free(&b);
+    }
+    /* f32 payload holding NaN is refused */
+    uint8_t raw[8];
+    proto_stf32(raw, 1.0f);
+    proto_stf32(raw + 4, NAN);
+    assert_int_equal(proto_tile_decode(PROTO_CODEC_F32, 2, 1, PROTO_CH_HEIGHT, raw, 8, back, NULL, 0), OCEAN_ECODEC);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_f16_values),
+        cmocka_unit_test(test_octahedral),
+        cmocka_unit_test(test_names),
+        cmocka_unit_test(test_roundtrip_synthetic),
+        cmocka_unit_test(test_qz_accuracy),
+        cmocka_unit_test(test_real_ocean),
+        cmocka_unit_test(test_exr_file),
+        cmocka_unit_test(test_encode_refusals),
+        cmocka_unit_test(test_decode_hostile),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,859 @@
+/*
+ * test_proto.c - the ocean.v1 messages: round trip of every type, every
+ * test vector in tests/vectors/ (bytes <-> decoded text), and each kind of
+ * bad input (truncated, oversized, wrong version, wrong type, bad enum,
+ * NaN, lying lengths) giving its specified ocean_result.
+ *
+ * `test_proto --write-vectors DIR` (re)creates the vectors: NAME.bin is one
+ * message, NAME.txt its decoded form (or "error = CODE" for the bad ones),
+ * in the text format of dump() below, which tests/vectors/README.md
+ * describes for implementers in other languages.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <dirent.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "proto.h"
+
+/* ---- canonical text dump of a decoded message ---------------------------- */
+
+typedef struct sbuf {
+    char *s;
+    size_t n, cap;
+} sbuf;
+
+static void out(sbuf *b, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char tmp[512];
+    int k = vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    if (b->n + (size_t)k + 1 > b->cap) {
+        b->cap = (b->cap + (size_t)k + 1) * 2;
+        b->s = realloc(b->s, b->cap);
+    }
+    memcpy(b->s + b->n, tmp, (size_t)k + 1);
+    b->n += (size_t)k;
+}
+
+static void dump_sea(sbuf *b, const char *p, const proto_sea *s)
+{
+    out(b, "%s.spectrum = %u\n%s.spreading = %u\n%s.seed = %llu\n", p, s->spectrum, p, s->spreading, p,
+        (unsigned long long)s->seed);
+    out(b, "%s.wind_u10 = %.17g\n%s.wind_dir_deg = %.17g\n%s.fetch_m = %.17g\n%s.depth_m = %.17g\n", p, s->wind_u10, p,
+        s->wind_dir_deg, p, s->fetch_m, p, s->depth_m);
+    out(b, "%s.swell = %.17g\n%s.phillips_a = %.17g\n%s.small_wave_m = %.17g\n%s.choppiness = %.17g\n", p, s->swell, p,
+        s->phillips_a, p, s->small_wave_m, p, s->choppiness);
+    out(b, "%s.hs = %.17g\n%s.tp = %.17g\n", p, s->hs, p, s->tp);
+}
+
+static void dump_tile(sbuf *b, const char *p, const proto_tile *t)
+{
+    out(b, "%s.level = %u\n%s.codec = %u\n%s.channels = %u\n%s.width = %u\n%s.height = %u\n", p, t->level, p, t->codec,
+        p, t->channels, p, t->width, p, t->height);
+    out(b, "%s.ix = %d\n%s.iz = %d\n%s.origin_x = %.17g\n%s.origin_z = %.17g\n%s.spacing = %.17g\n", p, t->ix, p, t->iz,
+        p, t->origin_x, p, t->origin_z, p, t->spacing);
+    out(b, "%s.error_bound = %.9g\n%s.payload_len = %u\n%s.payload =", p, (double)t->error_bound, p, t->payload_len, p);
+    for (uint32_t i = 0; i < t->payload_len; i++)
+        out(b, " %02x", t->payload[i]);
+    out(b, "\n");
+}
+
+static void dump_verts(sbuf *b, const char *p, const proto_mesh_vertices *v)
+{
+    out(b, "%s.mesh_id = %u\n%s.vertex_count = %u\n%s.origin = %.17g %.17g %.17g\n%s.positions =", p, v->mesh_id, p,
+        v->vertex_count, p, v->origin[0], v->origin[1], v->origin[2], p);
+    for (size_t i = 0; i < 3 * (size_t)v->vertex_count; i++)
+        out(b, " %.9g", (double)v->positions[i]);
+    out(b, "\n");
+}
+
+static char *dump(const proto_msg *m)
+{
+    sbuf b = {0};
+    out(&b, "type = %s\nversion = %u\nflags = %u\nseq = %u\nsim_time = %.17g\n", proto_type_name(m->hdr.type),
+        m->hdr.version, m->hdr.flags, m->hdr.seq, m->hdr.sim_time);
+    switch (m->hdr.type) {
+    case PROTO_HELLO: {
+        const proto_hello *h = &m->u.hello;
+        out(&b, "codecs = %u\nmesh_kinds = %u\neffects = %u\ncutoff_policies = %u\nmodes = %u\n", h->codecs,
+            h->mesh_kinds, h->effects, h->cutoff_policies, h->modes);
+        out(&b, "max_message = %u\nmax_query_points = %u\nmax_tile_size = %u\nmax_lod_levels = %u\nmax_layers = %u\n",
+            h->max_message, h->max_query_points, h->max_tile_size, h->max_lod_levels, h->max_layers);
+        out(&b, "tick_rate_hz = %.9g\nmax_frame_rate_hz = %.9g\nclient_id = %u\n", (double)h->tick_rate_hz,
+            (double)h->max_frame_rate_hz, h->client_id);
+        dump_sea(&b, "sea", &h->sea);
+        out(&b, "server_version = %s\n", h->server_version);
+        break;
+    }
+    case PROTO_SUBSCRIBE: {
+        const proto_subscribe *s = &m->u.subscribe;
+        out(&b, "effects = %u\nmesh_kind = %u\ncodec = %u\ncutoff_policy = %u\nmode = %u\nlayers = %u\nlod_levels = %u\n",
+            s->effects, s->mesh_kind, s->codec, s->cutoff_policy, s->mode, s->layers, s->lod_levels);
+        out(&b, "tile_size = %u\nframe_rate_hz = %.9g\naccuracy = %.9g\nbase_spacing_m = %.9g\nview_range_m = %.9g\n",
+            s->tile_size, (double)s->frame_rate_hz, (double)s->accuracy, (double)s->base_spacing_m,
+            (double)s->view_range_m);
+        break;
+    }
+    case PROTO_CAMERA: {
+        const proto_camera *k = &m->u.camera;
+        out(&b, "pos = %.17g %.17g %.17g\nvel = %.9g %.9g %.9g\n", k->pos[0], k->pos[1], k->pos[2], (double)k->vel[0],
+            (double)k->vel[1], (double)k->vel[2]);
+        out(&b, "yaw_deg = %.9g\npitch_deg = %.9g\nroll_deg = %.9g\nfov_y_deg = %.9g\n", (double)k->yaw_deg,
+            (double)k->pitch_deg, (double)k->roll_deg, (double)k->fov_y_deg);
+        out(&b, "viewport = %u %u\nrender_time = %.17g\n", k->viewport_w, k->viewport_h, k->render_time);
+        break;
+    }
+    case PROTO_FRAME: {
+        const proto_frame *f = &m->u.frame;
+        out(&b, "cutoff_k = %.17g\ne_error = %.17g\norigin = %.17g %.17g %.17g\ncamera_seq = %u\ntick = %u\n",
+            f->cutoff_k, f->e_error, f->origin[0], f->origin[1], f->origin[2], f->camera_seq, f->tick);
+        out(&b, "tile_count = %u\nhas_mesh = %u\n", f->tile_count, f->has_mesh);
+        for (unsigned i = 0; i < f->tile_count; i++) {
+            char p[32];
+            snprintf(p, sizeof p, "tile[%u]", i);
+            dump_tile(&b, p, &f->tiles[i]);
+        }
+        if (f->has_mesh)
+            dump_verts(&b, "mesh", &f->mesh);
+        break;
+    }
+    case PROTO_TILE:
+        dump_tile(&b, "tile", &m->u.tile);
+        break;
+    case PROTO_MESH_TOPOLOGY: {
+        const proto_mesh_topology *t = &m->u.topology;
+        out(&b, "mesh_id = %u\nmesh_kind = %u\nlod_levels = %u\nvertex_count = %u\nindex_count = %u\nindices =",
+            t->mesh_id, t->mesh_kind, t->lod_levels, t->vertex_count, t->index_count);
+        for (uint32_t i = 0; i < t->index_count; i++)
+            out(&b, " %u", t->indices[i]);
+        out(&b, "\nmorph =");
+        for (uint32_t i = 0; i < t->vertex_count; i++)
+            out(&b, " %.9g", (double)t->morph[i]);
+        out(&b, "\nlevel =");
+        for (uint32_t i = 0; i < t->vertex_count; i++)
+            out(&b, " %u", t->level[i]);
+        out(&b, "\n");
+        break;
+    }
+    case PROTO_MESH_VERTICES:
+        dump_verts(&b, "mesh", &m->u.vertices);
+        break;
+    case PROTO_QUERY: {
+        const proto_query *q = &m->u.query;
+        out(&b, "query_id = %u\ncount = %u\nat_time = %u\nt = %.17g\npoints =", q->query_id, q->count, q->at_time, q->t);
+        for (size_t i = 0; i < 2 * (size_t)q->count; i++)
+            out(&b, " %.17g", q->points[i]);
+        out(&b, "\n");
+        break;
+    }
+    case PROTO_QUERY_RESULT: {
+        const proto_query_result *r = &m->u.result;
+        out(&b, "query_id = %u\ncount = %u\nt = %.17g\n", r->query_id, r->count, r->t);
+        for (uint32_t i = 0; i < r->count; i++) {
+            const proto_query_sample *s = &r->samples[i];
+            out(&b, "sample[%u] = %.9g | %.9g %.9g %.9g | %.9g %.9g %.9g | %.9g | %.9g\n", i, (double)s->height,
+                (double)s->normal[0], (double)s->normal[1], (double)s->normal[2], (double)s->velocity[0],
+                (double)s->velocity[1], (double)s->velocity[2], (double)s->foam, (double)s->error_bound);
+        }
+        break;
+    }
+    case PROTO_SEA_STATE: {
+        const proto_sea_state *s = &m->u.sea_state;
+        out(&b, "op = %u\neffective_time = %.17g\n", s->op, s->effective_time);
+        dump_sea(&b, "sea", &s->sea);
+        out(&b, "token = %s\n", s->token);
+        break;
+    }
+    case PROTO_ERROR:
+        out(&b, "code = %u\noffending_type = %u\noffending_seq = %u\nmessage = %s\n", m->u.error.code,
+            m->u.error.offending_type, m->u.error.offending_seq, m->u.error.message);
+        break;
+    case PROTO_BYE:
+        out(&b, "reason = %u\nmessage = %s\n", m->u.bye.reason, m->u.bye.message);
+        break;
+    }
+    return b.s;
+}
+
+/* ---- sample messages -------------------------------------------------------- */
+
+static const uint8_t tile_payload[] = {0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0x00, 0xc0,
+                                       0x00, 0x00, 0x40, 0x40, 0x00, 0x00, 0x80, 0x3e}; /* f32 1,-2,3,0.25 */
+static const proto_tile sample_tiles[2] = {
+    {0, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, -3, 7, -384.0, 896.0, 2.0, 0.0f, 16, tile_payload},
+    {2, PROTO_CODEC_F16, PROTO_CH_HEIGHT, 2, 1, 0, 0, 1e6 + 0.5, -2.5e6, 8.0, 0.00048828125f, 4, tile_payload},
+};
+static const float sample_pos[9] = {0, 0.5f, 0, 10, -0.25f, 0, 0, 0.125f, 10};
+static const uint32_t sample_idx[3] = {0, 2, 1};
+static const float sample_morph[3] = {0, 0.5f, 1};
+static const uint8_t sample_level[3] = {0, 1, 1};
+static const double sample_points[6] = {0, 0, 1234567.875, -42.5, -1e9, 3.25};
+static const proto_query_sample sample_samples[2] = {
+    {0.75f, {0.1f, 0.99f, 0.0f}, {0.5f, 0.25f, -0.125f}, 0.0f, 0.001f},
+    {-1.5f, {0.0f, 1.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, 0.875f, 0.0625f},
+};
+
+static void sample_sea(proto_sea *s)
+{
+    s->spectrum = 2;
+    s->spreading = 1;
+    s->seed = 0x0123456789abcdefull;
+    s->wind_u10 = 12.5;
+    s->wind_dir_deg = 30;
+    s->fetch_m = 1e5;
+    s->depth_m = 4000;
+    s->swell = 0.25;
+    s->phillips_a = 8.1e-3;
+    s->small_wave_m = 0.01;
+    s->choppiness = 1.2;
+    s->hs = 2.75;
+    s->tp = 8.5;
+}
+
+/* Fills m with the sample message of `type`. */
+static void sample(proto_msg *m, proto_type type)
+{
+    proto_msg_init(m, type);
+    m->hdr.seq = 1000u + type;
+    m->hdr.sim_time = 12345.678;
+    switch (type) {
+    case PROTO_HELLO: {
+        proto_hello *h = &m->u.hello;
+        h->codecs = 0x7f;
+        h->mesh_kinds = 0xf;
+        h->effects = 31;
+        h->cutoff_policies = 7;
+        h->modes = 3;
+        h->max_message = 1 << 20;
+        h->max_query_points = 10000;
+        h->max_tile_size = 256;
+        h->max_lod_levels = 8;
+        h->max_layers = 4;
+        h->tick_rate_hz = 30;
+        h->max_frame_rate_hz = 60;
+        h->client_id = 42;
+        sample_sea(&h->sea);
+        strcpy(h->server_version, "oceand 0.1.0 \xc3\xa9t\xc3\xa9");
+        break;
+    }
+    case PROTO_SUBSCRIBE:
+        m->u.subscribe = (proto_subscribe){PROTO_FX_HEIGHT | PROTO_FX_NORMALS, PROTO_MESH_CONCENTRIC, PROTO_CODEC_QZ,
+                                           PROTO_CUTOFF_ANTIALIAS, PROTO_MODE_LIVE, 2, 5, 64, 30.0f, 0.005f, 0.0f, 5000.0f};
+        break;
+    case PROTO_CAMERA:
+        m->u.camera = (proto_camera){{1e7 + 0.125, 150.0, -2.5e6}, {250.0f, 0.0f, -3.5f}, 45.0f, -10.0f, 5.0f, 60.0f,
+                                     1920, 1080, 0.0};
+        break;
+    case PROTO_FRAME:
+        m->u.frame = (proto_frame){0.5, 0.03125, {1e7, 0.0, -2.5e6}, 77, 9001, 2, sample_tiles, 1,
+                                   {3, 3, {1e7, 0.0, -2.5e6}, sample_pos}};
+        break;
+    case PROTO_TILE:
+        m->u.tile = sample_tiles[0];
+        break;
+    case PROTO_MESH_TOPOLOGY:
+        m->u.topology = (proto_mesh_topology){3, PROTO_MESH_CONCENTRIC, 2, 3, 3, sample_idx, sample_morph, sample_level};
+        break;
+    case PROTO_MESH_VERTICES:
+        m->u.vertices = (proto_mesh_vertices){3, 3, {-5.5, 0.0, 1e6}, sample_pos};
+        break;
+    case PROTO_QUERY:
+        m->u.query = (proto_query){7, 3, 1, 600.25, sample_points};
+        break;
+    case PROTO_QUERY_RESULT:
+        m->u.result = (proto_query_result){7, 2, 600.25, sample_samples};
+        break;
+    case PROTO_SEA_STATE:
+        m->u.sea_state.op = PROTO_SEA_SET;
+        m->u.sea_state.effective_time = 13000.0;
+        sample_sea(&m->u.sea_state.sea);
+        strcpy(m->u.sea_state.token, "s3cret-admin-token");
+        break;
+    case PROTO_ERROR:
+        m->u.error.code = OCEAN_ETYPE;
+        m->u.error.offending_type = 77;
+        m->u.error.offending_seq = 5;
+        strcpy(m->u.error.message, "message type 77 unknown (valid 1..12)");
+        break;
+    case PROTO_BYE:
+        m->u.bye.reason = PROTO_BYE_SHUTDOWN;
+        strcpy(m->u.bye.message, "server shutting down");
+        break;
+    default:
+        break;
+    }
+}
+
+static uint8_t *encode_sample(proto_type type, size_t *len)
+{
+    proto_msg m;
+    sample(&m, type);
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    char err[256];
+    if (proto_encode(&b, &m, err, sizeof err) != OCEAN_OK)
+        fail_msg("encode %s: %s", proto_type_name(type), err);
+    *len = b.len;
+    uint8_t *copy = malloc(b.len);
+    memcpy(copy, proto_buf_data(&b), b.len);
+    proto_buf_free(&b);
+    return copy;
+}
+
+/* Decodes an exact-size copy (so ASan catches any overread). */
+static ocean_result decode_exact(const uint8_t *p, size_t n, proto_msg *m, char *err, size_t errlen)
+{
+    uint8_t *c = malloc(n ? n : 1);
+    if (n)
+        memcpy(c, p, n);
+    ocean_result r = proto_decode(c, n, m, err, errlen);
+    free(c);
+    return r;
+}
+
+/* ---- tests ---------------------------------------------------------------- */
+
+static void test_roundtrip_all(void **state)
+{
+    (void)state;
+    for (int t = 1; t < PROTO_TYPE_END_; t++) {
+        proto_msg m, d;
+        sample(&m, (proto_type)t);
+        size_t n;
+        uint8_t *bytes = encode_sample((proto_type)t, &n);
+        char err[256];
+        ocean_result r = decode_exact(bytes, n, &d, err, sizeof err);
+        if (r != OCEAN_OK)
+            fail_msg("decode %s: %s", proto_type_name(t), err);
+        char *a = dump(&m), *b = dump(&d);
+        assert_string_equal(a, b);
+        /* re-encoding the decoded message gives the same bytes */
+        proto_buf pb;
+        proto_buf_init(&pb, 16);
+        assert_int_equal(proto_encode(&pb, &d, err, sizeof err), OCEAN_OK);
+        assert_int_equal(pb.len, n);
+        assert_memory_equal(proto_buf_data(&pb), bytes, n);
+        /* arrays are 4/8-byte aligned within the message (JS typed arrays) */
+        if (t == PROTO_QUERY)
+            assert_int_equal((PROTO_HEADER_SIZE + 24) % 8, 0);
+        proto_buf_free(&pb);
+        proto_msg_free(&d);
+        free(a);
+        free(b);
+        free(bytes);
+    }
+}
+
+static void test_header_errors(void **state)
+{
+    (void)state;
+    size_t n;
+    uint8_t *good = encode_sample(PROTO_CAMERA, &n);
+    uint8_t *m = malloc(n + 8);
+    proto_msg d;
+    char err[256];
+#define EXPECT(code) do { ocean_result r_ = decode_exact(m, len, &d, err, sizeof err); \
+        if (r_ != (code)) fail_msg("line %d: got %d (%s), want %d", __LINE__, r_, err, (code)); \
+        assert_true(strlen(err) > 0); } while (0)
+    size_t len;
+    /* truncated: every length short of the full message */
+    for (len = 0; len < n; len++) {
+        memcpy(m, good, len);
+        ocean_result r = decode_exact(m, len, &d, err, sizeof err);
+        assert_int_equal(r, OCEAN_ETRUNC);
+    }
+    len = n;
+    memcpy(m, good, n);
+    m[0] = 'X';
+    EXPECT(OCEAN_EFORMAT);                          /* magic */
+    memcpy(m, good, n);
+    proto_st16(m + 4, 2);
+    EXPECT(OCEAN_EVERSION);                         /* wrong version */
+    assert_non_null(strstr(err, "version 2"));
+    memcpy(m, good, n);
+    proto_st16(m + 6, 0);
+    EXPECT(OCEAN_ETYPE);                            /* type 0 */
+    proto_st16(m + 6, 13);
+    EXPECT(OCEAN_ETYPE);                            /* unknown type */
+    assert_int_equal(d.hdr.type, 13);               /* header kept for the ERROR reply */
+    memcpy(m, good, n);
+    proto_st32(m + 8, 1);
+    EXPECT(OCEAN_EFORMAT);                          /* flags */
+    memcpy(m, good, n);
+    proto_st32(m + 20, 1);
+    EXPECT(OCEAN_EFORMAT);                          /* reserved */
+    memcpy(m, good, n);
+    proto_stf64(m + 24, NAN);
+    EXPECT(OCEAN_EINVAL);                           /* NaN sim_time */
+    proto_stf64(m + 24, -INFINITY);
+    EXPECT(OCEAN_EINVAL);
+    memcpy(m, good, n);
+    proto_st32(m + 12, proto_ld32(good + 12) + 1);
+    EXPECT(OCEAN_ETRUNC);                           /* length says more than there is */
+    proto_st32(m + 12, proto_ld32(good + 12) - 1);
+    EXPECT(OCEAN_EFORMAT);                          /* length says less: trailing byte */
+    memcpy(m, good, n);
+    m[n] = 0;
+    len = n + 1;
+    EXPECT(OCEAN_EFORMAT);                          /* extra byte after the message */
+    len = n;
+    proto_st32(m + 12, 0xFFFFFFF0u);
+    EXPECT(OCEAN_ETOOBIG);                          /* oversized */
+    /* a lower limit */
+    proto_limits lim;
+    proto_limits_default(&lim);
+    lim.max_message = (uint32_t)n - 1;
+    memcpy(m, good, n);
+    assert_int_equal(proto_decode_limited(m, n, &lim, &d, err, sizeof err), OCEAN_ETOOBIG);
+#undef EXPECT
+    free(m);
+    free(good);
+}
+
+/* Mutates one field of an encoded sample and expects `code`. */
+static void expect_field(proto_type t, size_t off, int width, uint64_t value, ocean_result code)
+{
+    size_t n;
+    uint8_t *m = encode_sample(t, &n);
+    assert_true(off + (size_t)width <= n);
+    if (width == 1)
+        m[off] = (uint8_t)value;
+    else if (width == 2)
+        proto_st16(m + off, (uint16_t)value);
+    else if (width == 4)
+        proto_st32(m + off, (uint32_t)value);
+    else
+        proto_st64(m + off, value);
+    proto_msg d;
+    char err[256] = "";
+    ocean_result r = decode_exact(m, n, &d, err, sizeof err);
+    if (r != code)
+        fail_msg("%s offset %zu = 0x%llx: got %d (%s), want %d", proto_type_name(t), off,
+                 (unsigned long long)value, r, err, code);
+    assert_true(r == OCEAN_OK || strlen(err) > 0);
+    proto_msg_free(&d);
+    free(m);
+}
+
+static uint64_t f64bits(double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, 8);
+    return u;
+}
+
+static uint32_t f32bits(float v)
+{
+    uint32_t u;
+    memcpy(&u, &v, 4);
+    return u;
+}
+
+#define P(x) (PROTO_HEADER_SIZE + (x))
+
+static void test_payload_errors(void **state)
+{
+    (void)state;
+    /* bad enums -> ETYPE */
+    expect_field(PROTO_SUBSCRIBE, P(0), 1, 0x20, OCEAN_ETYPE);   /* effects unknown bit */
+    expect_field(PROTO_SUBSCRIBE, P(1), 1, 4, OCEAN_ETYPE);      /* mesh kind */
+    expect_field(PROTO_SUBSCRIBE, P(2), 1, PROTO_CODEC_COUNT_, OCEAN_ETYPE);
+    expect_field(PROTO_SUBSCRIBE, P(3), 1, 3, OCEAN_ETYPE);      /* cutoff policy */
+    expect_field(PROTO_SUBSCRIBE, P(4), 1, 2, OCEAN_ETYPE);      /* mode */
+    expect_field(PROTO_TILE, P(1), 1, 200, OCEAN_ETYPE);         /* tile codec */
+    expect_field(PROTO_TILE, P(2), 2, 0x40, OCEAN_ETYPE);        /* tile channels */
+    expect_field(PROTO_MESH_TOPOLOGY, P(4), 1, 3, OCEAN_ETYPE);  /* kind none */
+    expect_field(PROTO_QUERY, P(8), 1, 2, OCEAN_ETYPE);          /* at_time */
+    expect_field(PROTO_SEA_STATE, P(0), 1, 2, OCEAN_ETYPE);      /* op */
+    expect_field(PROTO_SEA_STATE, P(16), 1, 4, OCEAN_ETYPE);     /* spectrum */
+    expect_field(PROTO_BYE, P(0), 2, 7, OCEAN_ETYPE);            /* reason */
+    expect_field(PROTO_HELLO, P(0), 4, 0x80, OCEAN_ETYPE);       /* codec mask */
+    /* NaN / Inf -> EINVAL */
+    expect_field(PROTO_CAMERA, P(0), 8, f64bits(NAN), OCEAN_EINVAL);
+    expect_field(PROTO_CAMERA, P(8), 8, f64bits(INFINITY), OCEAN_EINVAL);
+    expect_field(PROTO_CAMERA, P(24), 4, f32bits(NAN), OCEAN_EINVAL);
+    expect_field(PROTO_CAMERA, P(48), 4, f32bits(0.0f), OCEAN_EINVAL);   /* fov 0 */
+    expect_field(PROTO_CAMERA, P(52), 2, 0, OCEAN_EINVAL);               /* viewport 0 */
+    expect_field(PROTO_CAMERA, P(56), 8, f64bits(NAN), OCEAN_EINVAL);
+    expect_field(PROTO_SUBSCRIBE, P(12), 4, f32bits(NAN), OCEAN_EINVAL);
+    expect_field(PROTO_SUBSCRIBE, P(12), 4, f32bits(0.0f), OCEAN_EINVAL);
+    expect_field(PROTO_SUBSCRIBE, P(16), 4, f32bits(INFINITY), OCEAN_EINVAL);
+    expect_field(PROTO_SUBSCRIBE, P(16), 4, f32bits(1e-9f), OCEAN_EINVAL);
+    expect_field(PROTO_SUBSCRIBE, P(8), 2, 1, OCEAN_EINVAL);            /* tile size 1 */
+    expect_field(PROTO_SUBSCRIBE, P(0), 1, 0, OCEAN_EINVAL);            /* no effects */
+    expect_field(PROTO_FRAME, P(0), 8, f64bits(NAN), OCEAN_EINVAL);
+    expect_field(PROTO_FRAME, P(0), 8, f64bits(INFINITY), OCEAN_OK);    /* unfiltered */
+    expect_field(PROTO_FRAME, P(0), 8, f64bits(-1.0), OCEAN_EINVAL);
+    expect_field(PROTO_FRAME, P(8), 8, f64bits(2.0), OCEAN_EINVAL);     /* e_error > 1 */
+    expect_field(PROTO_TILE, P(16), 8, f64bits(NAN), OCEAN_EINVAL);
+    expect_field(PROTO_TILE, P(32), 8, f64bits(0.0), OCEAN_EINVAL);     /* spacing 0 */
+    expect_field(PROTO_TILE, P(48), 4, f32bits(NAN), OCEAN_OK);         /* payload bytes are opaque here */
+    expect_field(PROTO_MESH_VERTICES, P(32), 4, f32bits(NAN), OCEAN_EINVAL);
+    expect_field(PROTO_QUERY, P(24), 8, f64bits(NAN), OCEAN_EINVAL);
+    expect_field(PROTO_QUERY, P(16), 8, f64bits(INFINITY), OCEAN_EINVAL);
+    expect_field(PROTO_QUERY_RESULT, P(16), 4, f32bits(NAN), OCEAN_EINVAL);
+    expect_field(PROTO_SEA_STATE, P(32), 8, f64bits(NAN), OCEAN_EINVAL); /* wind */
+    expect_field(PROTO_SEA_STATE, P(32), 8, f64bits(200.0), OCEAN_EINVAL);
+    expect_field(PROTO_SEA_STATE, P(8), 8, f64bits(NAN), OCEAN_EINVAL);  /* effective time */
+    expect_field(PROTO_MESH_TOPOLOGY, P(16), 4, 3, OCEAN_EINVAL);       /* index >= vertex_count */
+    expect_field(PROTO_MESH_TOPOLOGY, P(28), 4, f32bits(1.5f), OCEAN_EINVAL); /* morph */
+    expect_field(PROTO_MESH_TOPOLOGY, P(40), 1, 2, OCEAN_EINVAL);       /* level >= lod_levels */
+    expect_field(PROTO_ERROR, P(0), 2, 0, OCEAN_EINVAL);                /* code 0 */
+    /* lying counts and lengths -> ETRUNC; limits -> ETOOBIG */
+    expect_field(PROTO_QUERY, P(4), 4, 4, OCEAN_ETRUNC);
+    expect_field(PROTO_QUERY, P(4), 4, 2, OCEAN_EFORMAT);               /* fewer: trailing point */
+    expect_field(PROTO_QUERY, P(4), 4, PROTO_MAX_QUERY_POINTS + 1, OCEAN_ETOOBIG);
+    expect_field(PROTO_QUERY, P(4), 4, 0, OCEAN_EFORMAT);               /* 0 points but bytes follow */
+    expect_field(PROTO_QUERY_RESULT, P(4), 4, 3, OCEAN_ETRUNC);
+    expect_field(PROTO_MESH_VERTICES, P(4), 4, 4, OCEAN_ETRUNC);
+    expect_field(PROTO_MESH_VERTICES, P(4), 4, 0xFFFFFFFFu, OCEAN_ETOOBIG);
+    expect_field(PROTO_MESH_TOPOLOGY, P(12), 4, 6, OCEAN_ETRUNC);
+    expect_field(PROTO_MESH_TOPOLOGY, P(12), 4, 0xFFFFFFFFu, OCEAN_ETOOBIG);
+    expect_field(PROTO_TILE, P(44), 4, 17, OCEAN_ETRUNC);               /* payload_len lies */
+    expect_field(PROTO_TILE, P(44), 4, 0xFFFFFFFFu, OCEAN_ETRUNC);
+    expect_field(PROTO_TILE, P(4), 2, 3, OCEAN_EFORMAT);                /* f32 size mismatch */
+    expect_field(PROTO_FRAME, P(48), 2, 3, OCEAN_ETRUNC);               /* tile_count lies */
+    expect_field(PROTO_FRAME, P(48), 2, 5000, OCEAN_ETOOBIG);
+    expect_field(PROTO_FRAME, P(50), 1, 2, OCEAN_EFORMAT);              /* has_mesh */
+    expect_field(PROTO_FRAME, P(56), 4, 1000, OCEAN_ETRUNC);            /* record length lies */
+    expect_field(PROTO_FRAME, P(56), 4, 63, OCEAN_ETRUNC);              /* record shorter than its tile */
+    expect_field(PROTO_FRAME, P(60), 4, 1, OCEAN_EFORMAT);              /* record reserved */
+    expect_field(PROTO_HELLO, P(128), 2, 64, OCEAN_ETOOBIG);            /* string too long */
+    expect_field(PROTO_HELLO, P(128), 2, 40, OCEAN_ETRUNC);             /* string longer than message */
+    expect_field(PROTO_HELLO, P(130), 1, 0xff, OCEAN_EFORMAT);          /* bad UTF-8 */
+    expect_field(PROTO_BYE, P(4), 2, 300, OCEAN_ETOOBIG);
+    expect_field(PROTO_BYE, P(6), 1, 0, OCEAN_EFORMAT);                 /* NUL in string */
+    /* reserved bytes -> EFORMAT */
+    expect_field(PROTO_SUBSCRIBE, P(7), 1, 1, OCEAN_EFORMAT);
+    expect_field(PROTO_QUERY, P(9), 1, 1, OCEAN_EFORMAT);
+    expect_field(PROTO_SEA_STATE, P(18), 1, 1, OCEAN_EFORMAT);
+    expect_field(PROTO_MESH_TOPOLOGY, P(6), 2, 1, OCEAN_EFORMAT);
+    /* sea state announce with a token */
+    proto_msg m;
+    sample(&m, PROTO_SEA_STATE);
+    m.u.sea_state.op = PROTO_SEA_ANNOUNCE;
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    char err[256];
+    assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_EFORMAT);
+    m.u.sea_state.token[0] = 0;
+    assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_OK);
+    proto_buf_free(&b);
+}
+
+static void test_truncate_every_type(void **state)
+{
+    (void)state;
+    /* Every message cut anywhere, with the header's length fixed up to
+     * match (a "consistent" truncation), fails cleanly and never overreads. */
+    for (int t = 1; t < PROTO_TYPE_END_; t++) {
+        size_t n;
+        uint8_t *m = encode_sample((proto_type)t, &n);
+        for (size_t cut = PROTO_HEADER_SIZE; cut < n; cut++) {
+            uint8_t *c = malloc(cut);
+            memcpy(c, m, cut);
+            proto_st32(c + 12, (uint32_t)(cut - PROTO_HEADER_SIZE));
+            proto_msg d;
+            char err[256];
+            ocean_result r = proto_decode(c, cut, &d, err, sizeof err);
+            if (r == OCEAN_OK)
+                fail_msg("%s cut to %zu decoded", proto_type_name(t), cut);
+            assert_true(r == OCEAN_ETRUNC || r == OCEAN_EFORMAT || r == OCEAN_EINVAL || r == OCEAN_ETYPE);
+            free(c);
+        }
+        free(m);
+    }
+}
+
+static void test_encode_refuses(void **state)
+{
+    (void)state;
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    char err[256];
+    proto_msg m;
+    sample(&m, PROTO_CAMERA);
+    m.u.camera.pos[0] = NAN;
+    assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_EINVAL);
+    assert_int_equal(b.len, 0);
+    sample(&m, PROTO_SUBSCRIBE);
+    m.u.subscribe.codec = 99;
+    assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_ETYPE);
+    sample(&m, PROTO_BYE);
+    memset(m.u.bye.message, 'a', sizeof m.u.bye.message); /* unterminated */
+    assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_ETOOBIG);
+    sample(&m, PROTO_HELLO);
+    m.hdr.version = 2;
+    assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_EVERSION);
+    sample(&m, PROTO_HELLO);
+    m.hdr.type = 99;
+    assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_ETYPE);
+    assert_int_equal(b.len, 0);
+    /* a large query at the 10000-point scale encodes and decodes */
+    double *pts = malloc(2 * 10000 * sizeof *pts);
+    for (int i = 0; i < 20000; i++)
+        pts[i] = i * 0.5 - 3000;
+    proto_msg_init(&m, PROTO_QUERY);
+    m.u.query = (proto_query){1, 10000, 0, 0.0, pts};
+    assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_OK);
+    proto_msg d;
+    assert_int_equal(proto_decode(proto_buf_data(&b), b.len, &d, err, sizeof err), OCEAN_OK);
+    assert_int_equal(d.u.query.count, 10000);
+    assert_memory_equal(d.u.query.points, pts, 2 * 10000 * sizeof *pts);
+    proto_msg_free(&d);
+    proto_msg_free(NULL);
+    free(pts);
+    proto_buf_free(&b);
+}
+
+static void test_error_reply(void **state)
+{
+    (void)state;
+    size_t n;
+    uint8_t *bad = encode_sample(PROTO_CAMERA, &n);
+    proto_st16(bad + 4, 9);
+    proto_msg d;
+    char err[256];
+    ocean_result r = proto_decode(bad, n, &d, err, sizeof err);
+    assert_int_equal(r, OCEAN_EVERSION);
+    proto_buf b;
+    proto_buf_init(&b, 16);
+    assert_int_equal(proto_error_reply(&b, bad, n, r, err, 55, 99.5), OCEAN_OK);
+    assert_int_equal(b.head, 16);
+    proto_msg e;
+    assert_int_equal(proto_decode(proto_buf_data(&b), b.len, &e, err, sizeof err), OCEAN_OK);
+    assert_int_equal(e.hdr.type, PROTO_ERROR);
+    assert_int_equal(e.hdr.seq, 55);
+    assert_true(e.hdr.sim_time == 99.5);
+    assert_int_equal(e.u.error.code, OCEAN_EVERSION);
+    assert_int_equal(e.u.error.offending_type, PROTO_CAMERA);
+    assert_int_equal(e.u.error.offending_seq, 1000 + PROTO_CAMERA);
+    assert_non_null(strstr(e.u.error.message, "version 9"));
+    /* garbage input, hostile text: still a valid ERROR */
+    proto_buf_reset(&b);
+    assert_int_equal(proto_error_reply(&b, "xy", 2, OCEAN_ETRUNC, "bad \xff\x01 text", 1, NAN), OCEAN_OK);
+    assert_int_equal(proto_decode(proto_buf_data(&b), b.len, &e, err, sizeof err), OCEAN_OK);
+    assert_int_equal(e.u.error.offending_type, 0);
+    assert_string_equal(e.u.error.message, "bad ?? text");
+    char longmsg[3000];
+    memset(longmsg, 'x', sizeof longmsg - 1);
+    longmsg[sizeof longmsg - 1] = 0;
+    proto_buf_reset(&b);
+    assert_int_equal(proto_error_reply(&b, NULL, 0, OCEAN_EINVAL, longmsg, 1, 0), OCEAN_OK);
+    assert_int_equal(proto_decode(proto_buf_data(&b), b.len, &e, err, sizeof err), OCEAN_OK);
+    assert_int_equal(strlen(e.u.error.message), PROTO_ERROR_MSG_MAX);
+    proto_buf_free(&b);
+    free(bad);
+}
+
+/* ---- test vectors ----------------------------------------------------------- */
+
+typedef struct bad_vector {
+    const char *name;
+    proto_type base;
+    size_t off;
+    int width;
+    uint64_t value;
+    ocean_result code;
+    long cut; /* >= 0: truncate the message to this many bytes */
+} bad_vector;
+
+static const bad_vector bad_vectors[] = {
+    {"bad_truncated_header", PROTO_BYE, 0, 0, 0, OCEAN_ETRUNC, 20},
+    {"bad_truncated_payload", PROTO_CAMERA, 0, 0, 0, OCEAN_ETRUNC, 60},
+    {"bad_magic", PROTO_BYE, 0, 1, 'X', OCEAN_EFORMAT, -1},
+    {"bad_version", PROTO_BYE, 4, 2, 2, OCEAN_EVERSION, -1},
+    {"bad_type", PROTO_BYE, 6, 2, 99, OCEAN_ETYPE, -1},
+    {"bad_oversized", PROTO_BYE, 12, 4, 0x7FFFFFFF, OCEAN_ETOOBIG, -1},
+    {"bad_length_lies", PROTO_BYE, 12, 4, 200, OCEAN_ETRUNC, -1},
+    {"bad_nan_sim_time", PROTO_BYE, 24, 8, 0x7FF8000000000000ull, OCEAN_EINVAL, -1},
+    {"bad_enum_codec", PROTO_SUBSCRIBE, P(2), 1, 50, OCEAN_ETYPE, -1},
+    {"bad_nan_camera", PROTO_CAMERA, P(16), 8, 0x7FF8000000000000ull, OCEAN_EINVAL, -1},
+    {"bad_query_count_lies", PROTO_QUERY, P(4), 4, 1000, OCEAN_ETRUNC, -1},
+    {"bad_frame_record_lies", PROTO_FRAME, P(56), 4, 4096, OCEAN_ETRUNC, -1},
+};
+
+static const char *code_name(ocean_result r)
+{
+    static const char *n[] = {"OCEAN_OK", "OCEAN_EINVAL", "OCEAN_ENOMEM", "OCEAN_EIO", "OCEAN_EFORMAT",
+                              "OCEAN_EVERSION", "OCEAN_ETYPE", "OCEAN_ETRUNC", "OCEAN_ETOOBIG",
+                              "OCEAN_EUNSUPPORTED", "OCEAN_EAUTH", "OCEAN_ERATE", "OCEAN_ESTATE",
+                              "OCEAN_ECODEC", "OCEAN_ENOTFOUND", "OCEAN_EDIVERGED"};
+    return (unsigned)r < sizeof n / sizeof n[0] ? n[r] : "?";
+}
+
+static int write_file(const char *path, const void *p, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        return -1;
+    size_t w = fwrite(p, 1, n, f);
+    return fclose(f) == 0 && w == n ? 0 : -1;
+}
+
+static uint8_t *read_file(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    long sz = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    uint8_t *p = malloc((size_t)sz + 1);
+    *n = fread(p, 1, (size_t)sz, f);
+    p[*n] = 0;
+    fclose(f);
+    return p;
+}
+
+static const char *type_file(proto_type t)
+{
+    static char buf[64];
+    snprintf(buf, sizeof buf, "%s", proto_type_name(t));
+    for (char *c = buf; *c; c++)
+        *c = (char)(*c >= 'A' && *c <= 'Z' ? *c + 32 : *c);
+    return buf;
+}
+
+static int write_vectors(const char *dir)
+{
+    char path[512];
+    for (int t = 1; t < PROTO_TYPE_END_; t++) {
+        proto_msg m;
+        sample(&m, (proto_type)t);
+        proto_buf b;
+        proto_buf_init(&b, 0);
+        if (proto_encode(&b, &m, NULL, 0) != OCEAN_OK)
+            return 1;
+        snprintf(path, sizeof path, "%s/%s.bin", dir, type_file((proto_type)t));
+        if (write_file(path, proto_buf_data(&b), b.len))
+            return 1;
+        proto_msg d;
+        proto_decode(proto_buf_data(&b), b.len, &d, NULL, 0);
+        char *txt = dump(&d);
+        snprintf(path, sizeof path, "%s/%s.txt", dir, type_file((proto_type)t));
+        if (write_file(path, txt, strlen(txt)))
+            return 1;
+        free(txt);
+        proto_msg_free(&d);
+        proto_buf_free(&b);
+    }
+    for (size_t k = 0; k < sizeof bad_vectors / sizeof bad_vectors[0]; k++) {
+        const bad_vector *v = &bad_vectors[k];
+        proto_msg m;
+        sample(&m, v->base);
+        proto_buf b;
+        proto_buf_init(&b, 0);
+        proto_encode(&b, &m, NULL, 0);
+        uint8_t *p = proto_buf_data(&b);
+        size_t n = v->cut >= 0 ? (size_t)v->cut : b.len;
+        if (v->width == 1) p[v->off] = (uint8_t)v->value;
+        else if (v->width == 2) proto_st16(p + v->off, (uint16_t)v->value);
+        else if (v->width == 4) proto_st32(p + v->off, (uint32_t)v->value);
+        else if (v->width == 8) proto_st64(p + v->off, v->value);
+        proto_msg d;
+        char err[256];
+        ocean_result r = proto_decode(p, n, &d, err, sizeof err);
+        if (r != v->code) {
+            fprintf(stderr, "%s: got %d (%s)\n", v->name, r, err);
+            return 1;
+        }
+        snprintf(path, sizeof path, "%s/%s.bin", dir, v->name);
+        if (write_file(path, p, n))
+            return 1;
+        char txt[128];
+        snprintf(txt, sizeof txt, "error = %s (%d)\n", code_name(v->code), v->code);
+        snprintf(path, sizeof path, "%s/%s.txt", dir, v->name);
+        if (write_file(path, txt, strlen(txt)))
+            return 1;
+        proto_buf_free(&b);
+    }
+    return 0;
+}
+
+static const char *vector_dir(void)
+{
+    const char *d = getenv("OCEAN_VECTORS");
+    return d ? d : "tests/vectors";
+}
+
+static void test_vectors(void **state)
+{
+    (void)state;
+    DIR *dir = opendir(vector_dir());
+    if (!dir)
+        fail_msg("cannot open %s (run from the repository root)", vector_dir());
+    int good = 0, bad = 0;
+    struct dirent *e;
+    while ((e = readdir(dir))) {
+        size_t l = strlen(e->d_name);
+        if (l < 5 || strcmp(e->d_name + l - 4, ".bin"))
+            continue;
+        char path[600], tpath[600];
+        snprintf(path, sizeof path, "%s/%s", vector_dir(), e->d_name);
+        snprintf(tpath, sizeof tpath, "%s/%.*s.txt", vector_dir(), (int)(l - 4), e->d_name);
+        size_t n, tn;
+        uint8_t *bin = read_file(path, &n);
+        char *want = (char *)read_file(tpath, &tn);
+        if (!bin || !want)
+            fail_msg("vector %s lacks its expectation %s", path, tpath);
+        proto_msg d;
+        char err[256];
+        ocean_result r = decode_exact(bin, n, &d, err, sizeof err);
+        if (strncmp(want, "error = ", 8) == 0) {
+            char got[128];
+            snprintf(got, sizeof got, "error = %s (%d)\n", code_name(r), r);
+            if (strcmp(got, want))
+                fail_msg("%s: decoded to %s, expected %s", e->d_name, got, want);
+            bad++;
+        } else {
+            if (r != OCEAN_OK)
+                fail_msg("%s: %s", e->d_name, err);
+            char *txt = dump(&d);
+            if (strcmp(txt, want))
+                fail_msg("%s: decoded text differs from %s:\n%s", e->d_name, tpath, txt);
+            /* and the encoder reproduces the vector byte for byte */
+            proto_buf b;
+            proto_buf_init(&b, 0);
+            assert_int_equal(proto_encode(&b, &d, err, sizeof err), OCEAN_OK);
+            assert_int_equal(b.len, n);
+            assert_memory_equal(proto_buf_data(&b), bin, n);
+            proto_buf_free(&b);
+            free(txt);
+            proto_msg_free(&d);
+            good++;
+        }
+        free(bin);
+        free(want);
+    }
+    closedir(dir);
+    print_message("%d message vectors, %d error vectors\n", good, bad);
+    assert_int_equal(good, PROTO_TYPE_END_ - 1);
+    assert_int_equal(bad, (int)(sizeof bad_vectors / sizeof bad_vectors[0]));
+}
+
+int main(int argc, char **argv)
+{
+    if (argc == 3 && strcmp(argv[1], "--write-vectors") == 0)
+        return write_vectors(argv[2]);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_roundtrip_all),
+        cmocka_unit_test(test_header_errors),
+        cmocka_unit_test(test_payload_errors),
+        cmocka_unit_test(test_truncate_every_type),
+        cmocka_unit_test(test_encode_refuses),
+        cmocka_unit_test(test_error_reply),
+        cmocka_unit_test(test_vectors),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
