@@ -1,0 +1,187 @@
+/*
+ * mesh_concentric.c - seed 001's concentric LOD mesh (see mesh.h).
+ *
+ * The plan (near spacing, zone radii, levels) depends only on the camera's
+ * height octave, field of view and viewport, so the topology is a function
+ * of the plan alone and the mesh translates rigidly with the camera in
+ * steps of the level-2 cell (the "snapping"): levels 0-2 land on a
+ * world-fixed lattice, coarser rings slide by under half a cell, and a
+ * client re-uses its index buffer until the plan changes.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mesh.h"
+#include "mesh_internal.h"
+
+typedef struct plan {
+    double s0;                         /* level-0 spacing, m (power of two) */
+    double rho;                        /* spacing budget: dx(D) = D / rho */
+    int levels;
+    int32_t units[MESH_MAX_LEVELS];    /* cell side per level, in s0 */
+    double radius[MESH_MAX_LEVELS];    /* outer zone radius, m */
+    double blend[MESH_MAX_LEVELS];
+    double range;
+} plan;
+
+static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
+{
+    memset(p, 0, sizeof *p);
+    double f = mesh_camera_px_per_rad(cam);
+    p->rho = cfg->roughness * f / cfg->error_px;
+    if (p->rho < 4)
+        p->rho = 4; /* below this the zones collapse into one another */
+    double h = cam->pos[1] > 0 ? cam->pos[1] : 0;
+    double want = h / p->rho;
+    if (cfg->lambda_dominant_m > 0 && want > cfg->k_lambda * cfg->lambda_dominant_m)
+        want = cfg->k_lambda * cfg->lambda_dominant_m;
+    if (want < cfg->min_spacing_m)
+        want = cfg->min_spacing_m;
+    /* a power of two keeps the lattice still while the camera climbs
+     * within an octave */
+    p->s0 = ldexp(1.0, (int)floor(log2(want)));
+    if (p->s0 < cfg->min_spacing_m)
+        p->s0 *= 2;
+    /* keep lattice coordinates well inside int32 */
+    while (cfg->range_m / p->s0 > (double)(1 << 28))
+        p->s0 *= 2;
+    p->range = cfg->range_m;
+    /* R_L - b_L = rho * s_(L+1): the morph toward the coarser level starts
+     * exactly where the coarser spacing meets the error budget */
+    double r0 = 2 * p->rho * p->s0 / (1 - cfg->blend_frac);
+    int L = 0;
+    for (;;) {
+        p->units[L] = L == 0 ? 1 : L == 1 ? 2 : L == 2 ? 8 : p->units[L - 1] * 2;
+        p->radius[L] = L == 0 ? r0 : L == 1 ? 4 * r0 : 2 * p->radius[L - 1];
+        p->blend[L] = cfg->blend_frac * p->radius[L];
+        /* the next level would start beyond the range: this is the last */
+        if (p->radius[L] + p->blend[L] >= p->range || L == MESH_MAX_LEVELS - 1)
+            break;
+        L++;
+    }
+    p->levels = L + 1;
+}
+
+static uint64_t plan_key(const mesh_config *cfg, const plan *p)
+{
+    uint64_t h = mesh_hash(0, "concentric", 10);
+    h = mesh_hash(h, &p->s0, sizeof p->s0);
+    h = mesh_hash(h, &p->rho, sizeof p->rho);
+    h = mesh_hash(h, &p->levels, sizeof p->levels);
+    h = mesh_hash(h, &cfg->range_m, sizeof cfg->range_m);
+    h = mesh_hash(h, &cfg->blend_frac, sizeof cfg->blend_frac);
+    return h;
+}
+
+/* Horizontal distance from the origin to the cell, m. */
+static double cell_dmin(int64_t x, int64_t z, int64_t s, double unit)
+{
+    double dx = x > 0 ? (double)x : (x + s < 0 ? (double)-(x + s) : 0);
+    double dz = z > 0 ? (double)z : (z + s < 0 ? (double)-(z + s) : 0);
+    return hypot(dx, dz) * unit;
+}
+
+static ocean_result add_cell(mesh_bb *bb, const plan *p, int32_t x, int32_t z, int L)
+{
+    if (L > 0 && cell_dmin(x, z, p->units[L], p->s0) < p->radius[L - 1] + p->blend[L - 1]) {
+        int32_t c = p->units[L - 1], n = p->units[L] / c;
+        for (int32_t j = 0; j < n; j++)
+            for (int32_t i = 0; i < n; i++) {
+                ocean_result r = add_cell(bb, p, x + i * c, z + j * c, L - 1);
+                if (r != OCEAN_OK)
+                    return r;
+            }
+        return OCEAN_OK;
+    }
+    return mesh_bb_add_leaf(bb, x, z, p->units[L], L);
+}
+
+static void fill_info(mesh *m, const plan *p)
+{
+    mesh_info *in = &m->info;
+    double build_ms = in->build_ms;
+    memset(in, 0, sizeof *in);
+    in->build_ms = build_ms;
+    in->near_spacing_m = p->s0;
+    in->rho_err = p->rho;
+    in->levels = p->levels;
+    for (int L = 0; L < p->levels; L++) {
+        in->level_spacing_m[L] = p->units[L] * p->s0;
+        in->zone_radius_m[L] = p->radius[L];
+        in->blend_m[L] = p->blend[L];
+    }
+    /* seed 000: rho(d) = rho_max e^(-alpha d) + rho_min through the
+     * tessellation factors 8 / 4 / 1 (x b = 1 / (8 s0)) at d = 0, R0, 4 R0:
+     * rho_min = 0.7 b solves rho(4 R0) = b (see mesh.h) */
+    double b = 1 / (8 * p->s0), m0 = 0.7;
+    in->rho_min = m0 * b;
+    in->rho_max = (8 - m0) * b;
+    in->alpha = log((8 - m0) / (4 - m0)) / p->radius[0];
+}
+
+static void update_morph(mesh *m, const plan *p, const mesh_camera *cam)
+{
+    for (uint32_t v = 0; v < m->nv; v++) {
+        int L = m->level[v];
+        float w = 0;
+        if (L + 1 < p->levels && p->blend[L] > 0) {
+            double x = m->origin[0] + m->base[3 * v] - cam->pos[0];
+            double z = m->origin[2] + m->base[3 * v + 2] - cam->pos[2];
+            double d = hypot(x, z);
+            w = (float)mesh_smoothstep((d - (p->radius[L] - p->blend[L])) / (2 * p->blend[L]));
+        } else if (L + 1 < p->levels) {
+            double x = m->origin[0] + m->base[3 * v] - cam->pos[0];
+            double z = m->origin[2] + m->base[3 * v + 2] - cam->pos[2];
+            w = hypot(x, z) >= p->radius[L] ? 1.0f : 0.0f;
+        }
+        m->morph[v] = w;
+    }
+}
+
+ocean_result mesh_build_concentric(mesh *m, const mesh_camera *cam)
+{
+    plan p;
+    make_plan(&m->cfg, cam, &p);
+    uint64_t key = plan_key(&m->cfg, &p);
+    /* snap: the origin moves in whole level-2 cells (all finer lattices
+     * nest in it); sub-cell camera moves change nothing but morph weights */
+    int snapL = p.levels > 2 ? 2 : p.levels - 1;
+    double g = p.units[snapL] * p.s0;
+    double ox = round(cam->pos[0] / g) * g, oz = round(cam->pos[2] / g) * g;
+    int rebuilt = 0;
+    if (!(m->built && m->key == key)) {
+        int Ltop = p.levels - 1;
+        int64_t S = p.units[Ltop];
+        int64_t K = (int64_t)ceil(p.range / (S * p.s0));
+        mesh_bb bb;
+        memset(&bb, 0, sizeof bb);
+        ocean_result r = OCEAN_OK;
+        for (int64_t j = -K; j < K && r == OCEAN_OK; j++)
+            for (int64_t i = -K; i < K && r == OCEAN_OK; i++) {
+                if (cell_dmin(i * S, j * S, S, p.s0) > p.range)
+                    continue;
+                r = add_cell(&bb, &p, (int32_t)(i * S), (int32_t)(j * S), Ltop);
+            }
+        if (r == OCEAN_OK)
+            r = mesh_bb_triangulate(&bb);
+        if (r == OCEAN_OK)
+            r = mesh_adopt(m, &bb, p.s0);
+        mesh_bb_free(&bb);
+        if (r != OCEAN_OK)
+            return r;
+        m->key = key;
+        m->levels = p.levels;
+        for (int L = 0; L < p.levels; L++)
+            m->lvl_units[L] = p.units[L];
+        rebuilt = 1;
+    }
+    m->origin[0] = ox;
+    m->origin[1] = 0;
+    m->origin[2] = oz;
+    fill_info(m, &p);
+    m->info.rebuilt = rebuilt;
+    memcpy(m->pos, m->base, (size_t)m->nv * 3 * sizeof *m->pos);
+    update_morph(m, &p, cam);
+    return OCEAN_OK;
+}
