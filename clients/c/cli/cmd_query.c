@@ -1,0 +1,255 @@
+/*
+ * cmd_query.c - `ocean-client query` (points -> height, normal, velocity,
+ * foam, error bound) and `ocean-client sea` (show or, with the admin token,
+ * set the sea state).
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cJSON.h>
+
+#include "occli.h"
+
+/* Parses "x1,z1;x2,z2;..." into a new array of 2n doubles. */
+static int parse_points(const char *s, double **out, size_t *n)
+{
+    size_t cap = 16, cnt = 0;
+    double *v = malloc(cap * 2 * sizeof *v);
+    if (!v)
+        return -1;
+    const char *p = s;
+    while (*p) {
+        double xz[2];
+        for (int k = 0; k < 2; k++) {
+            while (*p == ' ')
+                p++;
+            char *end;
+            errno = 0;
+            xz[k] = strtod(p, &end);
+            if (end == p || errno == ERANGE || !isfinite(xz[k]))
+                goto bad;
+            p = end;
+            while (*p == ' ')
+                p++;
+            if (k == 0) {
+                if (*p != ',')
+                    goto bad;
+                p++;
+            }
+        }
+        if (*p == ';')
+            p++;
+        else if (*p)
+            goto bad;
+        if (cnt == cap) {
+            cap *= 2;
+            double *nv = realloc(v, cap * 2 * sizeof *nv);
+            if (!nv)
+                goto bad;
+            v = nv;
+        }
+        v[2 * cnt] = xz[0];
+        v[2 * cnt + 1] = xz[1];
+        cnt++;
+    }
+    if (!cnt)
+        goto bad;
+    *out = v;
+    *n = cnt;
+    return 0;
+bad:
+    free(v);
+    return -1;
+}
+
+int cmd_query(int argc, char **argv)
+{
+    const char *points = NULL;
+    double t = NAN;
+    int json = 0, timeout_ms = 5000;
+    const occli_opt opts[] = {
+        {"points", OCCLI_STRING, &points, 0, 0, "\"X1,Z1;X2,Z2;...\"  world points (required)"},
+        {"t", OCCLI_DOUBLE, &t, -1e15, 1e15, "T  sim time to evaluate (default: the latest tick)"},
+        {"json", OCCLI_FLAG, &json, 0, 0, "print a JSON object"},
+        {"timeout", OCCLI_INT, &timeout_ms, 1, 3600000, "MS  connect / answer timeout (5000)"},
+    };
+    const char *pos[1];
+    int np = 0;
+    int pr = occli_parse(argc, argv,
+                         "usage: ocean-client query URL --points \"x1,z1;x2,z2\" [--t T] [--json]\n"
+                         "Asks the server for height, normal, velocity, foam and an error bound at each point.",
+                         opts, (int)(sizeof opts / sizeof opts[0]), pos, 1, &np);
+    if (pr)
+        return pr == 1 ? 0 : 2;
+    if (np != 1) {
+        fprintf(stderr, "ocean-client query: needs the server URL (see --help)\n");
+        return 2;
+    }
+    if (!points) {
+        fprintf(stderr, "ocean-client query: option '--points' is required\n");
+        return 2;
+    }
+    double *xz;
+    size_t n;
+    if (parse_points(points, &xz, &n) != 0) {
+        fprintf(stderr, "ocean-client query: option '--points': '%s' is not \"x1,z1;x2,z2;...\" of finite numbers\n",
+                points);
+        return 2;
+    }
+    oc_client *c = occli_connect("query", pos[0], NULL, timeout_ms);
+    if (!c) {
+        free(xz);
+        return 1;
+    }
+    oc_query_result q;
+    ocean_result r = oc_client_query(c, xz, n, !isnan(t), isnan(t) ? 0 : t, timeout_ms, &q);
+    if (r != OCEAN_OK) {
+        char err[512];
+        oc_client_last_error(c, err, sizeof err);
+        fprintf(stderr, "ocean-client query: %s\n", err[0] ? err : ocean_strerror(r));
+        oc_client_destroy(c);
+        free(xz);
+        return 1;
+    }
+    if (json) {
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddNumberToObject(o, "t", q.t);
+        cJSON *arr = cJSON_AddArrayToObject(o, "points");
+        for (uint32_t i = 0; i < q.count && i < n; i++) {
+            const proto_query_sample *sm = &q.samples[i];
+            cJSON *p = cJSON_CreateObject();
+            cJSON_AddNumberToObject(p, "x", xz[2 * i]);
+            cJSON_AddNumberToObject(p, "z", xz[2 * i + 1]);
+            cJSON_AddNumberToObject(p, "height", sm->height);
+            double nv[3] = {sm->normal[0], sm->normal[1], sm->normal[2]};
+            double vv[3] = {sm->velocity[0], sm->velocity[1], sm->velocity[2]};
+            cJSON_AddItemToObject(p, "normal", cJSON_CreateDoubleArray(nv, 3));
+            cJSON_AddItemToObject(p, "velocity", cJSON_CreateDoubleArray(vv, 3));
+            cJSON_AddNumberToObject(p, "foam", sm->foam);
+            cJSON_AddNumberToObject(p, "error_bound", sm->error_bound);
+            cJSON_AddItemToArray(arr, p);
+        }
+        char *txt = cJSON_Print(o);
+        printf("%s\n", txt);
+        free(txt);
+        cJSON_Delete(o);
+    } else {
+        printf("# t = %.9g s\n%12s %12s %10s %26s %26s %6s %10s\n", q.t, "x", "z", "height", "normal",
+               "velocity", "foam", "error");
+        for (uint32_t i = 0; i < q.count && i < n; i++) {
+            const proto_query_sample *sm = &q.samples[i];
+            printf("%12.4f %12.4f %10.5f  (%7.4f,%7.4f,%7.4f)  (%7.3f,%7.3f,%7.3f) %6.3f %10.3g\n", xz[2 * i],
+                   xz[2 * i + 1], sm->height, sm->normal[0], sm->normal[1], sm->normal[2], sm->velocity[0],
+                   sm->velocity[1], sm->velocity[2], sm->foam, sm->error_bound);
+        }
+    }
+    oc_query_result_free(&q);
+    oc_client_destroy(c);
+    free(xz);
+    return 0;
+}
+
+static cJSON *sea_json(const proto_sea *s, double eff)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "effective_time", eff);
+    cJSON_AddNumberToObject(o, "spectrum", s->spectrum);
+    cJSON_AddNumberToObject(o, "spreading", s->spreading);
+    cJSON_AddNumberToObject(o, "seed", (double)s->seed);
+    cJSON_AddNumberToObject(o, "wind_u10", s->wind_u10);
+    cJSON_AddNumberToObject(o, "wind_dir_deg", s->wind_dir_deg);
+    cJSON_AddNumberToObject(o, "fetch_m", s->fetch_m);
+    cJSON_AddNumberToObject(o, "depth_m", s->depth_m);
+    cJSON_AddNumberToObject(o, "swell", s->swell);
+    cJSON_AddNumberToObject(o, "phillips_a", s->phillips_a);
+    cJSON_AddNumberToObject(o, "small_wave_m", s->small_wave_m);
+    cJSON_AddNumberToObject(o, "choppiness", s->choppiness);
+    cJSON_AddNumberToObject(o, "hs", s->hs);
+    cJSON_AddNumberToObject(o, "tp", s->tp);
+    return o;
+}
+
+int cmd_sea(int argc, char **argv)
+{
+    int set = 0, timeout_ms = 5000;
+    const char *token = NULL;
+    double wind = NAN, dir = NAN, fetch = NAN, depth = NAN, swell = NAN, chop = NAN, pa = NAN, small = NAN;
+    double at = NAN, seed = NAN;
+    int spectrum = -1, spreading = -1;
+    const occli_opt opts[] = {
+        {"set", OCCLI_FLAG, &set, 0, 0, "send SEA_STATE SET (needs --token)"},
+        {"token", OCCLI_STRING, &token, 0, 0, "TOKEN  the admin token from the server's config"},
+        {"at", OCCLI_DOUBLE, &at, -1e15, 1e15, "T  sim time the change takes effect (default: now)"},
+        {"wind", OCCLI_DOUBLE, &wind, 0, 100, "U  wind speed at 10 m, m/s"},
+        {"wind-dir", OCCLI_DOUBLE, &dir, -360, 360, "DEG  wind direction"},
+        {"fetch", OCCLI_DOUBLE, &fetch, 1, 1e8, "M  fetch"},
+        {"depth", OCCLI_DOUBLE, &depth, 0.01, 1e5, "M  water depth"},
+        {"swell", OCCLI_DOUBLE, &swell, 0, 1, "S  swell"},
+        {"choppiness", OCCLI_DOUBLE, &chop, 0, 10, "L  choppiness"},
+        {"phillips-a", OCCLI_DOUBLE, &pa, 0, 1e6, "A  Phillips constant"},
+        {"small-wave", OCCLI_DOUBLE, &small, 0, 100, "M  small-wave suppression length"},
+        {"spectrum", OCCLI_INT, &spectrum, 0, 3, "N  spectrum id (sim/spectrum.h)"},
+        {"spreading", OCCLI_INT, &spreading, 0, 3, "N  spreading id"},
+        {"seed", OCCLI_DOUBLE, &seed, 0, 9007199254740992.0, "N  random seed"},
+        {"timeout", OCCLI_INT, &timeout_ms, 1, 3600000, "MS  connect / answer timeout (5000)"},
+    };
+    const char *pos[1];
+    int np = 0;
+    int pr = occli_parse(argc, argv,
+                         "usage: ocean-client sea URL [--set --token T [--at T] [--wind U] ...]\n"
+                         "Prints the sea state in force (JSON).  With --set, changes the given fields and asks\n"
+                         "the server to apply them for every client at sim time --at.",
+                         opts, (int)(sizeof opts / sizeof opts[0]), pos, 1, &np);
+    if (pr)
+        return pr == 1 ? 0 : 2;
+    if (np != 1) {
+        fprintf(stderr, "ocean-client sea: needs the server URL (see --help)\n");
+        return 2;
+    }
+    if (set && !token) {
+        fprintf(stderr, "ocean-client sea: option '--set' needs '--token'\n");
+        return 2;
+    }
+    oc_client *c = occli_connect("sea", pos[0], NULL, timeout_ms);
+    if (!c)
+        return 1;
+    proto_sea sea;
+    double eff = 0;
+    oc_client_sea_state(c, &sea, &eff);
+    int rc = 0;
+    if (set) {
+        if (!isnan(wind)) sea.wind_u10 = wind;
+        if (!isnan(dir)) sea.wind_dir_deg = dir;
+        if (!isnan(fetch)) sea.fetch_m = fetch;
+        if (!isnan(depth)) sea.depth_m = depth;
+        if (!isnan(swell)) sea.swell = swell;
+        if (!isnan(chop)) sea.choppiness = chop;
+        if (!isnan(pa)) sea.phillips_a = pa;
+        if (!isnan(small)) sea.small_wave_m = small;
+        if (spectrum >= 0) sea.spectrum = (uint8_t)spectrum;
+        if (spreading >= 0) sea.spreading = (uint8_t)spreading;
+        if (!isnan(seed)) sea.seed = (uint64_t)seed;
+        sea.hs = 0;
+        sea.tp = 0;
+        /* default "now": the state's current effective time; the server
+         * applies a time already past at its next tick */
+        double when = isnan(at) ? eff : at;
+        ocean_result r = oc_client_sea_state_set(c, &sea, when, token, timeout_ms);
+        if (r != OCEAN_OK) {
+            char err[512];
+            oc_client_last_error(c, err, sizeof err);
+            fprintf(stderr, "ocean-client sea: %s\n", err[0] ? err : ocean_strerror(r));
+            rc = 1;
+        }
+        oc_client_sea_state(c, &sea, &eff);
+    }
+    cJSON *o = sea_json(&sea, eff);
+    char *txt = cJSON_Print(o);
+    printf("%s\n", txt);
+    free(txt);
+    cJSON_Delete(o);
+    oc_client_destroy(c);
+    return rc;
+}

@@ -1,0 +1,295 @@
+/*
+ * cmd_record.c - `ocean-client record` (fly a camera path in live mode and
+ * save every message that came back) and `ocean-client replay` (the same
+ * path in replay mode, where each CAMERA names the sim time to render, so
+ * the saved FRAMEs must be identical on every run; --check compares).
+ * Saved files are frame stores (clients/c/oc_store.h).
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "oc_path.h"
+#include "oc_store.h"
+#include "occli.h"
+
+typedef struct rec_ctx {
+    oc_store_writer *w;
+    double t0;
+    int write_failed;
+    uint64_t frames;          /* FRAMEs received */
+    uint32_t last_answered;   /* camera_seq of the last FRAME */
+    int have_answer;
+    uint64_t bytes;
+} rec_ctx;
+
+static void on_msg(void *user, oc_client *c, const uint8_t *raw, size_t len, const proto_msg *m,
+                   ocean_result res)
+{
+    (void)c;
+    (void)res;
+    rec_ctx *r = user;
+    r->bytes += len;
+    if (len >= PROTO_HEADER_SIZE && oc_store_writer_append(r->w, occli_mono() - r->t0, raw, len) != OCEAN_OK)
+        r->write_failed = 1;
+    if (m && m->hdr.type == PROTO_FRAME) {
+        r->frames++;
+        if (m->u.frame.camera_seq != PROTO_NO_CAMERA) {
+            r->last_answered = m->u.frame.camera_seq;
+            r->have_answer = 1;
+        }
+    }
+}
+
+static void on_frame_drop(void *user, oc_client *c, const oc_frame *f)
+{
+    (void)user;
+    (void)c;
+    (void)f;   /* stored by on_msg; nothing else to do */
+}
+
+static int finish_store(const char *cmd, rec_ctx *r, const char *out)
+{
+    ocean_result cr = oc_store_writer_close(r->w);
+    r->w = NULL;
+    if (cr != OCEAN_OK || r->write_failed) {
+        fprintf(stderr, "ocean-client %s: writing %s failed\n", cmd, out);
+        return 1;
+    }
+    return 0;
+}
+
+int cmd_record(int argc, char **argv)
+{
+    const char *path = NULL, *out = NULL;
+    double tail = 1.0, speed = 1.0;
+    occli_sub s;
+    occli_sub_default(&s);
+    const occli_opt opts[] = {
+        {"path", OCCLI_STRING, &path, 0, 0, "FILE  camera path (oceand camera path v1 CSV; - for stdin)"},
+        {"out", OCCLI_STRING, &out, 0, 0, "FRAMES  frame store to write"},
+        {"tail", OCCLI_DOUBLE, &tail, 0, 3600, "S  keep receiving after the last report (1)"},
+        {"speed", OCCLI_DOUBLE, &speed, 0.01, 100, "X  fly the path X times faster than its t column (1)"},
+        OCCLI_SUB_OPTS(&s),
+    };
+    const char *pos[1];
+    int np = 0;
+    int pr = occli_parse(argc, argv,
+                         "usage: ocean-client record URL --path PATH.csv --out FRAMES [options]\n"
+                         "Flies the camera path in live mode (report i is sent at (t_i - t_0) / speed seconds)\n"
+                         "and saves every message received to the frame store FRAMES.",
+                         opts, (int)(sizeof opts / sizeof opts[0]), pos, 1, &np);
+    if (pr)
+        return pr == 1 ? 0 : 2;
+    if (np != 1 || !path || !out) {
+        fprintf(stderr, "ocean-client record: needs URL, --path and --out (see --help)\n");
+        return 2;
+    }
+    proto_subscribe sub;
+    proto_camera cam;
+    if (occli_sub_build("record", &s, &sub, &cam))
+        return 2;
+    char err[512];
+    oc_path *p;
+    if (oc_path_load(path, &p, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "ocean-client record: %s\n", err);
+        return 2;
+    }
+    rec_ctx r;
+    memset(&r, 0, sizeof r);
+    if (oc_store_writer_open(out, &r.w, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "ocean-client record: %s\n", err);
+        oc_path_destroy(p);
+        return 1;
+    }
+    r.t0 = occli_mono();
+    oc_options o;
+    oc_options_default(&o);
+    o.cb.user = &r;
+    o.cb.on_message = on_msg;
+    o.cb.on_frame = on_frame_drop;
+    o.decode_tiles = 0;
+    oc_client *c = occli_connect("record", pos[0], &o, s.timeout_ms);
+    if (!c) {
+        oc_store_writer_close(r.w);
+        oc_path_destroy(p);
+        return 1;
+    }
+    sub.mode = PROTO_MODE_LIVE;
+    int rc = 0;
+    if (oc_client_subscribe(c, &sub) != OCEAN_OK)
+        rc = 1;
+    double start = occli_mono();
+    for (size_t i = 0; i < p->count && !rc && !occli_stop; i++) {
+        double due = start + (p->pts[i].t - p->pts[0].t) / speed;
+        while (!occli_stop) {
+            double now = occli_mono();
+            if (now >= due)
+                break;
+            oc_service(c, (int)fmax(1, fmin(50, (due - now) * 1e3)));
+        }
+        oc_path_camera(&p->pts[i], &cam);
+        cam.render_time = 0;
+        if (oc_client_send_camera(c, &cam, NULL) != OCEAN_OK)
+            rc = 1;
+        if (oc_client_state(c) == OC_CLOSED)
+            rc = 1;
+    }
+    double end = occli_mono() + tail;
+    while (!rc && !occli_stop && occli_mono() < end && oc_client_state(c) != OC_CLOSED)
+        oc_service(c, 50);
+    if (oc_client_state(c) == OC_CLOSED) {
+        oc_client_last_error(c, err, sizeof err);
+        fprintf(stderr, "ocean-client record: connection lost: %s\n", err);
+        rc = 1;
+    }
+    oc_client_destroy(c);
+    rc |= finish_store("record", &r, out);
+    fprintf(stderr, "ocean-client record: %zu camera reports over %.2f s, %llu frames, %llu bytes -> %s\n",
+            p->count, occli_mono() - start, (unsigned long long)r.frames, (unsigned long long)r.bytes, out);
+    if (!rc && r.frames == 0) {
+        fprintf(stderr, "ocean-client record: no frame received\n");
+        rc = 1;
+    }
+    oc_path_destroy(p);
+    return rc;
+}
+
+int cmd_replay(int argc, char **argv)
+{
+    const char *out = NULL, *check = NULL;
+    int window = 4;
+    occli_sub s;
+    occli_sub_default(&s);
+    const occli_opt opts[] = {
+        {"out", OCCLI_STRING, &out, 0, 0, "FRAMES  frame store to write (a temporary file if only --check)"},
+        {"check", OCCLI_STRING, &check, 0, 0, "FRAMES  compare with an earlier run byte for byte; exit 1 on any difference"},
+        {"window", OCCLI_INT, &window, 1, 256, "N  CAMERA reports in flight (4)"},
+        OCCLI_SUB_OPTS(&s),
+    };
+    const char *pos[2];
+    int np = 0;
+    int pr = occli_parse(argc, argv,
+                         "usage: ocean-client replay URL PATH.csv --out FRAMES [--check FRAMES] [options]\n"
+                         "Subscribes in replay mode and sends each camera report with its t as the sim time to\n"
+                         "render; saves every message received.  --check compares the FRAME, MESH_TOPOLOGY and\n"
+                         "QUERY_RESULT messages with an earlier store byte for byte (header seq excepted).",
+                         opts, (int)(sizeof opts / sizeof opts[0]), pos, 2, &np);
+    if (pr)
+        return pr == 1 ? 0 : 2;
+    if (np != 2 || (!out && !check)) {
+        fprintf(stderr, "ocean-client replay: needs URL, PATH.csv and --out (see --help)\n");
+        return 2;
+    }
+    proto_subscribe sub;
+    proto_camera cam;
+    if (occli_sub_build("replay", &s, &sub, &cam))
+        return 2;
+    char err[512];
+    oc_path *p;
+    if (oc_path_load(pos[1], &p, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "ocean-client replay: %s\n", err);
+        return 2;
+    }
+    char tmp[64] = "";
+    if (!out) {
+        snprintf(tmp, sizeof tmp, "/tmp/ocean-replay.XXXXXX");
+        int fd = mkstemp(tmp);
+        if (fd < 0) {
+            fprintf(stderr, "ocean-client replay: cannot make a temporary file: %s\n", strerror(errno));
+            oc_path_destroy(p);
+            return 1;
+        }
+        close(fd);
+        out = tmp;
+    }
+    rec_ctx r;
+    memset(&r, 0, sizeof r);
+    if (oc_store_writer_open(out, &r.w, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "ocean-client replay: %s\n", err);
+        oc_path_destroy(p);
+        return 1;
+    }
+    r.t0 = occli_mono();
+    oc_options o;
+    oc_options_default(&o);
+    o.cb.user = &r;
+    o.cb.on_message = on_msg;
+    o.cb.on_frame = on_frame_drop;
+    o.decode_tiles = 0;
+    oc_client *c = occli_connect("replay", pos[0], &o, s.timeout_ms);
+    int rc = 0;
+    if (!c)
+        rc = 1;
+    sub.mode = PROTO_MODE_REPLAY;
+    if (!rc && oc_client_subscribe(c, &sub) != OCEAN_OK)
+        rc = 1;
+    uint32_t *seqs = calloc(p->count, sizeof *seqs);
+    if (!seqs)
+        rc = 1;
+    size_t sent = 0, answered = 0;
+    double start = occli_mono(), last_progress = start;
+    while (!rc && !occli_stop && answered < p->count) {
+        while (sent < p->count && sent - answered < (size_t)window) {
+            oc_path_camera(&p->pts[sent], &cam);
+            if (oc_client_send_camera(c, &cam, &seqs[sent]) != OCEAN_OK) {
+                rc = 1;
+                break;
+            }
+            sent++;
+        }
+        oc_service(c, 50);
+        /* a FRAME answering camera k answers every earlier one too */
+        if (r.have_answer) {
+            while (answered < sent && (int32_t)(r.last_answered - seqs[answered]) >= 0) {
+                answered++;
+                last_progress = occli_mono();
+            }
+        }
+        if (oc_client_state(c) == OC_CLOSED) {
+            oc_client_last_error(c, err, sizeof err);
+            fprintf(stderr, "ocean-client replay: connection lost: %s\n", err);
+            rc = 1;
+        } else if (occli_mono() - last_progress > s.timeout_ms * 1e-3) {
+            fprintf(stderr, "ocean-client replay: no FRAME for camera report %zu (t = %.9g) within %d ms\n",
+                    answered, p->pts[answered].t, s.timeout_ms);
+            rc = 1;
+        }
+    }
+    free(seqs);
+    if (c) {
+        oc_client_stats st;
+        oc_client_get_stats(c, &st);
+        if (st.errors_rx) {
+            oc_client_last_error(c, err, sizeof err);
+            fprintf(stderr, "ocean-client replay: the server sent %llu ERROR(s), last: %s\n",
+                    (unsigned long long)st.errors_rx, err);
+            rc = 1;
+        }
+        oc_client_destroy(c);
+    }
+    rc |= finish_store("replay", &r, out);
+    fprintf(stderr, "ocean-client replay: %zu/%zu camera reports answered in %.2f s, %llu frames, %llu bytes -> %s\n",
+            answered, p->count, occli_mono() - start, (unsigned long long)r.frames, (unsigned long long)r.bytes,
+            tmp[0] ? "(temporary)" : out);
+    oc_path_destroy(p);
+    if (!rc && check) {
+        oc_store_diff d;
+        ocean_result cr = oc_store_compare(check, out, 0, &d, err, sizeof err);
+        if (cr != OCEAN_OK) {
+            fprintf(stderr, "ocean-client replay: --check: %s\n", err);
+            rc = 1;
+        } else if (!d.identical) {
+            fprintf(stderr, "ocean-client replay: --check: DIFFERENT from %s: %s\n", check, d.what);
+            rc = 1;
+        } else {
+            fprintf(stderr, "ocean-client replay: --check: identical to %s (%llu messages compared)\n", check,
+                    (unsigned long long)d.compared);
+        }
+    }
+    if (tmp[0])
+        unlink(tmp);
+    return rc;
+}

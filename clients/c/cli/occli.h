@@ -1,0 +1,114 @@
+/*
+ * occli.h - shared pieces of the ocean-client subcommands: a table-driven
+ * option parser that refuses unknown or malformed options by name, the
+ * subscription options every streaming command shares, and small helpers
+ * (percentiles, clocks).
+ */
+#ifndef OCCLI_H
+#define OCCLI_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <signal.h>
+#include <stdio.h>
+
+#include "oceanclient.h"
+
+typedef enum occli_kind {
+    OCCLI_DOUBLE,   /* double *, finite, in [min, max] */
+    OCCLI_INT,      /* int *, in [min, max] */
+    OCCLI_STRING,   /* const char ** */
+    OCCLI_FLAG      /* int *, set to 1 */
+} occli_kind;
+
+typedef struct occli_opt {
+    const char *name;   /* without "--" */
+    occli_kind kind;
+    void *target;
+    double min, max;
+    const char *help;   /* "ARG  text" */
+} occli_opt;
+
+/* Subscription and camera options shared by watch/record/replay/export/load. */
+typedef struct occli_sub {
+    const char *codec;     /* --codec NAME */
+    const char *effects;   /* --effects LIST */
+    const char *mesh;      /* --mesh KIND */
+    const char *policy;    /* --cutoff-policy NAME */
+    double rate;           /* --rate HZ */
+    double accuracy;       /* --accuracy A */
+    int tile_size;         /* --tile-size N */
+    int levels;            /* --levels N */
+    int layers;            /* --layers N */
+    double spacing;        /* --spacing M */
+    double range;          /* --range M */
+    const char *pos;       /* --pos x,y,z */
+    const char *vel;       /* --vel vx,vy,vz */
+    double yaw, pitch, fov;
+    int timeout_ms;        /* --timeout MS (connect and replies) */
+} occli_sub;
+
+#define OCCLI_SUB_OPTS(s)                                                                                   \
+    {"codec", OCCLI_STRING, &(s)->codec, 0, 0, "NAME  tile codec: f32 f16 qz exr-zip exr-piz exr-b44 exr-b44a (qz)"}, \
+    {"effects", OCCLI_STRING, &(s)->effects, 0, 0, "LIST  height,displacement,normals,foam,near (height,displacement,normals)"}, \
+    {"mesh", OCCLI_STRING, &(s)->mesh, 0, 0, "KIND  concentric chunked projected none (concentric)"},            \
+    {"cutoff-policy", OCCLI_STRING, &(s)->policy, 0, 0, "NAME  none seed antialias (seed)"},                     \
+    {"rate", OCCLI_DOUBLE, &(s)->rate, 0.1, 240, "HZ  frame rate asked of the server (30)"},                   \
+    {"accuracy", OCCLI_DOUBLE, &(s)->accuracy, 1e-6, 0.5, "A  qz accuracy target (0.001)"},                    \
+    {"tile-size", OCCLI_INT, &(s)->tile_size, 2, 1024, "N  samples per tile side (64)"},                       \
+    {"levels", OCCLI_INT, &(s)->levels, 1, 16, "N  tile LOD levels (4)"},                                       \
+    {"layers", OCCLI_INT, &(s)->layers, 1, 4, "N  cascades wanted (1)"},                                        \
+    {"spacing", OCCLI_DOUBLE, &(s)->spacing, 0, 1e6, "M  level-0 sample spacing, 0 = server default"},         \
+    {"range", OCCLI_DOUBLE, &(s)->range, 0, 1e7, "M  view range, 0 = server default"},                         \
+    {"pos", OCCLI_STRING, &(s)->pos, 0, 0, "X,Y,Z  camera position (0,20,0)"},                                 \
+    {"vel", OCCLI_STRING, &(s)->vel, 0, 0, "VX,VY,VZ  camera velocity (0,0,0)"},                               \
+    {"yaw", OCCLI_DOUBLE, &(s)->yaw, -3600, 3600, "DEG  camera yaw (0)"},                                      \
+    {"pitch", OCCLI_DOUBLE, &(s)->pitch, -90, 90, "DEG  camera pitch (0)"},                                    \
+    {"fov", OCCLI_DOUBLE, &(s)->fov, 0.01, 179.9, "DEG  vertical field of view (60)"},                         \
+    {"timeout", OCCLI_INT, &(s)->timeout_ms, 1, 3600000, "MS  connect / reply timeout (5000)"}
+
+void occli_sub_default(occli_sub *s);
+/* Builds SUBSCRIBE and CAMERA from the options; prints the reason and
+ * returns 2 on a bad value. */
+int occli_sub_build(const char *cmd, const occli_sub *s, proto_subscribe *sub, proto_camera *cam);
+
+/* Parses argv[1..] (argv[0] is the subcommand).  Positional arguments are
+ * collected into pos[0..*npos) (at most max_pos).  Returns 0 ok, 1 help
+ * printed, 2 error printed (naming the option). */
+int occli_parse(int argc, char **argv, const char *usage, const occli_opt *opts, int nopts,
+                const char **pos, int max_pos, int *npos);
+
+/* Parses "a,b,c" into n doubles; 0 on success. */
+int occli_parse_vec(const char *s, double *out, int n);
+
+/* Connects with the standard options; prints the reason and returns NULL on
+ * failure. */
+oc_client *occli_connect(const char *cmd, const char *url, const oc_options *base, int timeout_ms);
+
+double occli_mono(void);       /* monotonic seconds */
+double occli_wall(void);       /* realtime seconds */
+void occli_sleep(double s);
+
+/* p-th percentile (0..100) of v[0..n) (sorts v in place); NAN if n == 0. */
+double occli_percentile(double *v, size_t n, double p);
+
+/* A growable array of doubles. */
+typedef struct occli_vec {
+    double *v;
+    size_t n, cap;
+} occli_vec;
+int occli_vec_push(occli_vec *a, double x);
+void occli_vec_free(occli_vec *a);
+
+/* Set by SIGINT/SIGTERM; streaming commands stop early and still report. */
+extern volatile sig_atomic_t occli_stop;
+
+int cmd_watch(int argc, char **argv);
+int cmd_query(int argc, char **argv);
+int cmd_record(int argc, char **argv);
+int cmd_replay(int argc, char **argv);
+int cmd_export(int argc, char **argv);
+int cmd_load(int argc, char **argv);
+int cmd_sea(int argc, char **argv);
+
+#endif

@@ -1,0 +1,1732 @@
+/*
+ * oceanclient.c - the client library: libwebsockets connections, message
+ * assembly, decoding into oc_frame, request/answer matching (queries, sea
+ * state) and the caller-driven or threaded service loop.
+ *
+ * Locking: each oc_loop has one mutex `mu` guarding the loop's client list
+ * and every field of its clients marked [mu] below.  The lws callback runs
+ * on the servicing thread; it decodes without the lock (the rx buffer is
+ * touched only by that thread), takes the lock to update state, and calls
+ * user callbacks after releasing it.  `busy` counts callbacks in flight on
+ * a client so that destroy waits for them.
+ */
+#include "oceanclient.h"
+
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <libwebsockets.h>
+
+#define CAM_RING 256
+#define CLOSE_GRACE_MS 300
+
+static void seterr(char *err, size_t errlen, const char *fmt, ...)
+{
+    if (!err || !errlen)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
+}
+
+static double wall_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static double mono_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ================================================================== URL */
+
+ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen)
+{
+    if (!url || !out) {
+        seterr(err, errlen, "no URL given");
+        return OCEAN_EINVAL;
+    }
+    memset(out, 0, sizeof *out);
+    for (const unsigned char *p = (const unsigned char *)url; *p; p++)
+        if (*p <= 0x20 || *p == 0x7f) {
+            seterr(err, errlen, "URL \"%.100s\": contains a space or control character", url);
+            return OCEAN_EINVAL;
+        }
+    const char *rest;
+    if (!strncasecmp(url, "ws://", 5)) {
+        rest = url + 5;
+        out->port = 80;
+    } else if (!strncasecmp(url, "wss://", 6)) {
+        rest = url + 6;
+        out->tls = 1;
+        out->port = 443;
+    } else {
+        seterr(err, errlen, "URL \"%.100s\": scheme must be ws:// or wss://", url);
+        return OCEAN_EINVAL;
+    }
+    if (strchr(url, '#')) {
+        seterr(err, errlen, "URL \"%.100s\": fragments (#) are not allowed", url);
+        return OCEAN_EINVAL;
+    }
+    const char *slash = strchr(rest, '/');
+    const char *auth_end = slash ? slash : rest + strlen(rest);
+    const char *q = memchr(rest, '?', (size_t)(auth_end - rest));
+    if (q)
+        auth_end = q;
+    if (memchr(rest, '@', (size_t)(auth_end - rest))) {
+        seterr(err, errlen, "URL \"%.100s\": user information (user@) is not supported", url);
+        return OCEAN_EINVAL;
+    }
+    const char *host = rest, *host_end, *port_s = NULL;
+    if (*host == '[') {
+        const char *rb = memchr(host, ']', (size_t)(auth_end - host));
+        if (!rb) {
+            seterr(err, errlen, "URL \"%.100s\": IPv6 address lacks its closing ']'", url);
+            return OCEAN_EINVAL;
+        }
+        host++;
+        host_end = rb;
+        if (rb + 1 < auth_end) {
+            if (rb[1] != ':') {
+                seterr(err, errlen, "URL \"%.100s\": unexpected text after ']'", url);
+                return OCEAN_EINVAL;
+            }
+            port_s = rb + 2;
+        }
+    } else {
+        const char *colon = memchr(host, ':', (size_t)(auth_end - host));
+        host_end = colon ? colon : auth_end;
+        if (colon)
+            port_s = colon + 1;
+    }
+    size_t hl = (size_t)(host_end - host);
+    if (hl == 0) {
+        seterr(err, errlen, "URL \"%.100s\": empty host", url);
+        return OCEAN_EINVAL;
+    }
+    if (hl > OC_HOST_MAX) {
+        seterr(err, errlen, "URL \"%.100s\": host longer than %d bytes", url, OC_HOST_MAX);
+        return OCEAN_EINVAL;
+    }
+    memcpy(out->host, host, hl);
+    out->host[hl] = 0;
+    if (port_s) {
+        size_t pl = (size_t)(auth_end - port_s);
+        long v = 0;
+        if (pl == 0 || pl > 5) {
+            seterr(err, errlen, "URL \"%.100s\": port must be a number 1..65535", url);
+            return OCEAN_EINVAL;
+        }
+        for (size_t i = 0; i < pl; i++) {
+            if (port_s[i] < '0' || port_s[i] > '9') {
+                seterr(err, errlen, "URL \"%.100s\": port must be a number 1..65535", url);
+                return OCEAN_EINVAL;
+            }
+            v = v * 10 + (port_s[i] - '0');
+        }
+        if (v < 1 || v > 65535) {
+            seterr(err, errlen, "URL \"%.100s\": port %ld outside 1..65535", url, v);
+            return OCEAN_EINVAL;
+        }
+        out->port = (int)v;
+    }
+    const char *path = auth_end;
+    if (!*path)
+        path = "/";
+    size_t plen = strlen(path);
+    if (plen > OC_PATH_MAX) {
+        seterr(err, errlen, "URL \"%.100s\": path longer than %d bytes", url, OC_PATH_MAX);
+        return OCEAN_EINVAL;
+    }
+    if (*path == '?') {
+        out->path[0] = '/';
+        if (plen + 1 > OC_PATH_MAX) {
+            seterr(err, errlen, "URL \"%.100s\": path longer than %d bytes", url, OC_PATH_MAX);
+            return OCEAN_EINVAL;
+        }
+        memcpy(out->path + 1, path, plen + 1);
+    } else {
+        memcpy(out->path, path, plen + 1);
+    }
+    return OCEAN_OK;
+}
+
+/* ============================================================ structures */
+
+typedef struct txmsg {
+    struct txmsg *next;
+    proto_buf buf;           /* with LWS_PRE headroom */
+} txmsg;
+
+typedef struct pending_query {
+    struct pending_query *next;
+    uint32_t id, seq;
+    oc_query_fn fn;
+    void *user;
+    int blocking, done;
+    ocean_result res;
+    oc_query_result result;
+} pending_query;
+
+typedef struct topo_ref {
+    oc_topology pub;
+    atomic_int refs;
+    proto_msg msg;
+} topo_ref;
+
+typedef struct frame_priv {
+    oc_frame pub;
+    proto_msg msg;
+    uint8_t *raw;
+    topo_ref *topo;
+} frame_priv;
+
+struct oc_loop {
+    struct lws_context *ctx;
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    oc_client *clients;           /* [mu] */
+    uint64_t events;              /* [mu] bumped on receipt / state change */
+    pthread_t thread;
+    int thread_running;           /* [mu] */
+    atomic_int stop;
+    lws_sorted_usec_list_t sul;   /* servicing thread only */
+    int sul_fired;                /* servicing thread only */
+    int destroying;
+};
+
+struct oc_client {
+    oc_loop *loop;
+    int own_loop;
+    oc_client *next;              /* [mu] loop's list */
+    struct lws *wsi;              /* [mu] NULL once closed */
+    oc_url url;
+    oc_options opt;               /* url pointer cleared */
+    char origin[256];
+    oc_state state;               /* [mu] */
+    int busy;                     /* [mu] user callbacks in flight */
+    int connect_pending;          /* [mu] connect not yet issued */
+    int close_req;                /* [mu] destroy asked the link to close */
+    int kill_req;                 /* [mu] destroy gave up on a clean close */
+    int want_write;               /* [mu] */
+    /* rx assembly: servicing thread only */
+    uint8_t *rx;
+    size_t rx_len, rx_cap;
+    int rx_skip;
+    /* tx */
+    txmsg *tx_head, *tx_tail;     /* [mu] */
+    uint32_t seq;                 /* [mu] */
+    double last_sim;              /* [mu] sim time of the latest message */
+    double last_frame_sim;        /* [mu] of the latest FRAME (sent in our headers) */
+    proto_hello hello;            /* [mu] */
+    int have_hello;               /* [mu] */
+    proto_sea sea;                /* [mu] */
+    double sea_time;              /* [mu] */
+    float frame_rate;             /* [mu] of the last SUBSCRIBE */
+    /* frames [mu] */
+    frame_priv **fq;
+    int fq_len, fq_head, fq_cap;
+    topo_ref *topo;
+    uint64_t frame_index;
+    uint32_t last_tick;
+    int have_tick;
+    double min_offset;
+    int have_offset;
+    struct { uint32_t seq; double wall; } cams[CAM_RING];
+    unsigned cam_pos;
+    /* requests [mu] */
+    pending_query *queries;
+    uint32_t next_query_id;
+    int sea_wait;                 /* 1 waiting for ANNOUNCE/ERROR */
+    uint32_t sea_seq;
+    ocean_result sea_res;
+    int sea_done;
+    /* errors [mu] */
+    ocean_result last_err;
+    char last_err_msg[PROTO_ERROR_MSG_MAX + 64];
+    int bye_reason;
+    int closed_notified;
+    oc_client_stats st;           /* [mu] */
+};
+
+/* ============================================================== helpers */
+
+static void topo_unref(topo_ref *t)
+{
+    if (t && atomic_fetch_sub(&t->refs, 1) == 1) {
+        proto_msg_free(&t->msg);
+        free(t);
+    }
+}
+
+void oc_frame_free(oc_frame *f)
+{
+    if (!f)
+        return;
+    frame_priv *p = (frame_priv *)f;
+    if (p->pub.tiles) {
+        for (unsigned i = 0; p->pub.info.tiles && i < p->pub.info.tile_count; i++)
+            free(p->pub.tiles[i].data);
+        free(p->pub.tiles);
+    }
+    proto_msg_free(&p->msg);
+    free(p->raw);
+    topo_unref(p->topo);
+    free(p);
+}
+
+void oc_query_result_free(oc_query_result *r)
+{
+    if (!r)
+        return;
+    free(r->samples);
+    memset(r, 0, sizeof *r);
+}
+
+static void set_local_error(oc_client *c, ocean_result r, const char *fmt, ...)
+{
+    c->last_err = r;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(c->last_err_msg, sizeof c->last_err_msg, fmt, ap);
+    va_end(ap);
+}
+
+/* Encodes m with the client's next seq and queues it.  Caller holds mu. */
+static ocean_result queue_msg_locked(oc_client *c, proto_msg *m, uint32_t *seq_out, char *err,
+                                     size_t errlen)
+{
+    if (c->state != OC_READY || !c->wsi || c->close_req) {
+        seterr(err, errlen, "not connected");
+        return OCEAN_ESTATE;
+    }
+    txmsg *t = calloc(1, sizeof *t);
+    if (!t)
+        return OCEAN_ENOMEM;
+    proto_buf_init(&t->buf, LWS_PRE);
+    m->hdr.seq = c->seq;
+    /* PROTOCOL.md: a client's header carries the sim time of the last
+     * frame it received, 0 before any */
+    m->hdr.sim_time = isfinite(c->last_frame_sim) ? c->last_frame_sim : 0.0;
+    ocean_result r = proto_encode(&t->buf, m, err, errlen);
+    if (r != OCEAN_OK) {
+        proto_buf_free(&t->buf);
+        free(t);
+        return r;
+    }
+    if (seq_out)
+        *seq_out = c->seq;
+    c->seq++;
+    if (c->tx_tail)
+        c->tx_tail->next = t;
+    else
+        c->tx_head = t;
+    c->tx_tail = t;
+    c->want_write = 1;
+    c->st.messages_tx++;
+    c->st.bytes_tx += proto_buf_len(&t->buf);
+    return OCEAN_OK;
+}
+
+static void wake(oc_loop *l)
+{
+    lws_cancel_service(l->ctx);
+}
+
+/* ===================================================== receive handling */
+
+/* Deferred user notifications collected under the lock. */
+typedef struct notify {
+    const proto_msg *msg;
+    int call_error, call_sea, call_close, call_frame;
+    frame_priv *frame;
+    pending_query *q;              /* async query to answer */
+    int close_reason;
+    char close_msg[PROTO_BYE_MSG_MAX + 64];
+} notify;
+
+static void fail_pending_locked(oc_client *c, pending_query **async_list)
+{
+    pending_query **pp = &c->queries;
+    while (*pp) {
+        pending_query *q = *pp;
+        if (q->blocking) {
+            q->done = 1;
+            q->res = OCEAN_EIO;
+            pp = &q->next;
+        } else {
+            *pp = q->next;
+            q->res = OCEAN_EIO;
+            q->next = *async_list;
+            *async_list = q;
+        }
+    }
+    if (c->sea_wait && !c->sea_done) {
+        c->sea_done = 1;
+        c->sea_res = OCEAN_EIO;
+    }
+}
+
+static void run_async_failures(oc_client *c, pending_query *list)
+{
+    while (list) {
+        pending_query *n = list->next;
+        if (list->fn)
+            list->fn(list->user, c, list->res, NULL);
+        free(list);
+        list = n;
+    }
+}
+
+/* Marks the client closed; caller holds mu.  Returns 1 if on_close should be
+ * called (first time). */
+static int mark_closed_locked(oc_client *c, int reason, const char *msg, pending_query **async)
+{
+    c->state = OC_CLOSED;
+    c->wsi = NULL;
+    fail_pending_locked(c, async);
+    c->loop->events++;
+    pthread_cond_broadcast(&c->loop->cv);
+    if (msg && c->last_err == OCEAN_OK)
+        set_local_error(c, OCEAN_EIO, "%s", msg);
+    if (c->bye_reason < 0 || reason >= 0)
+        c->bye_reason = reason;
+    if (c->closed_notified)
+        return 0;
+    c->closed_notified = 1;
+    return 1;
+}
+
+static frame_priv *build_frame(oc_client *c, proto_msg *m, uint8_t *raw, size_t len, double now)
+{
+    frame_priv *f = calloc(1, sizeof *f);
+    if (!f)
+        return NULL;
+    f->msg = *m;
+    memset(m, 0, sizeof *m);
+    f->raw = raw;
+    f->pub.hdr = f->msg.hdr;
+    f->pub.info = f->msg.u.frame;
+    f->pub.raw = raw;
+    f->pub.raw_len = len;
+    f->pub.recv_wall = now;
+    f->pub.camera_rtt_ms = -1;
+    unsigned n = f->pub.info.tile_count;
+    if (n && f->pub.info.tiles) {
+        f->pub.tiles = calloc(n, sizeof *f->pub.tiles);
+        if (!f->pub.tiles) {
+            f->raw = NULL;
+            oc_frame_free(&f->pub);
+            return NULL;
+        }
+        for (unsigned i = 0; i < n; i++) {
+            oc_tile *t = &f->pub.tiles[i];
+            t->info = f->pub.info.tiles[i];
+            t->planes = proto_tile_planes(t->info.channels);
+            t->decode_result = OCEAN_OK;
+            if (!c->opt.decode_tiles)
+                continue;
+            size_t cnt = (size_t)t->planes * t->info.width * t->info.height;
+            t->data = malloc(cnt * sizeof(float));
+            if (!t->data) {
+                t->decode_result = OCEAN_ENOMEM;
+                continue;
+            }
+            ocean_result r = proto_tile_decode((proto_codec)t->info.codec, t->info.width,
+                                               t->info.height, t->info.channels, t->info.payload,
+                                               t->info.payload_len, t->data, NULL, 0);
+            if (r != OCEAN_OK) {
+                free(t->data);
+                t->data = NULL;
+                t->decode_result = r;
+            }
+        }
+    }
+    return f;
+}
+
+/* Header-only FRAME: proto_header_decode checks the 32-byte header, then
+ * the fixed fields are read at PROTOCOL.md's offsets (FRAME section) and
+ * range-checked; the records are not parsed. */
+static ocean_result peek_frame(const uint8_t *raw, size_t len, const proto_limits *lim, proto_msg *m,
+                               char *err, size_t errlen)
+{
+    memset(m, 0, sizeof *m);
+    ocean_result r = proto_header_decode(raw, len, lim, &m->hdr, err, errlen);
+    if (r != OCEAN_OK)
+        return r;
+    if (m->hdr.type != PROTO_FRAME)
+        return OCEAN_ETYPE;
+    if (len < PROTO_HEADER_SIZE + 56) {
+        snprintf(err, errlen, "FRAME shorter than its 56 fixed bytes");
+        return OCEAN_ETRUNC;
+    }
+    const uint8_t *p = raw + PROTO_HEADER_SIZE;
+    proto_frame *f = &m->u.frame;
+    f->cutoff_k = proto_ldf64(p);
+    f->e_error = proto_ldf64(p + 8);
+    for (int i = 0; i < 3; i++)
+        f->origin[i] = proto_ldf64(p + 16 + 8 * i);
+    f->camera_seq = proto_ld32(p + 40);
+    f->tick = proto_ld32(p + 44);
+    f->tile_count = proto_ld16(p + 48);
+    f->has_mesh = p[50];
+    if (isnan(f->cutoff_k) || f->cutoff_k < 0 || !(f->e_error >= 0 && f->e_error <= 1) || f->has_mesh > 1 ||
+        f->tile_count > lim->max_frame_tiles) {
+        snprintf(err, errlen, "FRAME fixed fields out of range");
+        return OCEAN_EINVAL;
+    }
+    return OCEAN_OK;
+}
+
+static void handle_message(oc_client *c, uint8_t *raw, size_t len)
+{
+    oc_loop *l = c->loop;
+    double now = wall_now();
+    proto_limits lim;
+    proto_limits_default(&lim);
+    lim.max_message = c->opt.max_message;
+    proto_msg m;
+    char err[256];
+    ocean_result res;
+    int peeked = 0;
+    if (c->opt.header_only && len >= 8 && proto_ld16(raw + 6) == PROTO_FRAME) {
+        res = peek_frame(raw, len, &lim, &m, err, sizeof err);
+        peeked = 1;
+    } else {
+        res = proto_decode_limited(raw, len, &lim, &m, err, sizeof err);
+    }
+
+    pthread_mutex_lock(&l->mu);
+    c->busy++;
+    pthread_mutex_unlock(&l->mu);
+    if (c->opt.cb.on_message)
+        c->opt.cb.on_message(c->opt.cb.user, c, raw, len, res == OCEAN_OK ? &m : NULL, res);
+
+    notify nt;
+    memset(&nt, 0, sizeof nt);
+    pending_query *async_fail = NULL;
+    frame_priv *fr = NULL;
+    int raw_taken = 0;
+
+    unsigned type = res == OCEAN_OK ? m.hdr.type : 0;
+    double sim_time = m.hdr.sim_time;
+    if (type == PROTO_FRAME) {
+        fr = build_frame(c, &m, raw, len, now);   /* moves m into the frame */
+        if (fr)
+            raw_taken = 1;
+    }
+
+    pthread_mutex_lock(&l->mu);
+    c->st.messages_rx++;
+    c->st.bytes_rx += len;
+    l->events++;
+    if (res != OCEAN_OK) {
+        c->st.decode_errors++;
+        set_local_error(c, res, "undecodable message from server: %s", err);
+    } else {
+        double off = now - sim_time;
+        if (!c->have_offset || off < c->min_offset) {
+            c->min_offset = off;
+            c->have_offset = 1;
+        }
+        c->last_sim = sim_time;
+        switch (type) {
+        case PROTO_HELLO:
+            c->hello = m.u.hello;
+            c->have_hello = 1;
+            c->sea = m.u.hello.sea;
+            c->sea_time = m.hdr.sim_time;
+            if (c->state == OC_CONNECTING)
+                c->state = OC_READY;
+            break;
+        case PROTO_FRAME:
+            if (!fr) {
+                c->st.decode_errors++;
+                break;
+            }
+            c->last_frame_sim = sim_time;
+            fr->pub.index = c->frame_index++;
+            fr->pub.latency_ms = 1e3 * (now - fr->pub.hdr.sim_time - c->min_offset);
+            for (unsigned i = 0; fr->pub.tiles && i < fr->pub.info.tile_count; i++)
+                if (fr->pub.tiles[i].decode_result != OCEAN_OK)
+                    c->st.decode_errors++;
+            if (fr->pub.info.camera_seq != PROTO_NO_CAMERA)
+                for (int i = 0; i < CAM_RING; i++)
+                    if (c->cams[i].wall > 0 && c->cams[i].seq == fr->pub.info.camera_seq) {
+                        fr->pub.camera_rtt_ms = 1e3 * (now - c->cams[i].wall);
+                        break;
+                    }
+            if (c->have_tick && c->have_hello && c->frame_rate > 0) {
+                uint32_t d = fr->pub.info.tick - c->last_tick;
+                double step = c->hello.tick_rate_hz / c->frame_rate;
+                if (step < 1)
+                    step = 1;
+                step = floor(step + 0.5);
+                double missed = floor((double)d / step + 0.5) - 1;
+                if (missed > 0 && d < (1u << 30))
+                    c->st.frames_gap += (uint64_t)missed;
+            }
+            c->last_tick = fr->pub.info.tick;
+            c->have_tick = 1;
+            c->st.frames_rx++;
+            if (!peeked && fr->pub.info.has_mesh && c->topo &&
+                c->topo->pub.mesh_id == fr->pub.info.mesh.mesh_id) {
+                fr->topo = c->topo;
+                atomic_fetch_add(&c->topo->refs, 1);
+                fr->pub.topology = &c->topo->pub;
+            }
+            if (c->opt.cb.on_frame) {
+                nt.call_frame = 1;
+                nt.frame = fr;
+            } else {
+                if (c->fq_len == c->fq_cap) {
+                    frame_priv *old = c->fq[c->fq_head];
+                    c->fq_head = (c->fq_head + 1) % c->fq_cap;
+                    c->fq_len--;
+                    c->st.frames_dropped++;
+                    oc_frame_free(&old->pub);
+                }
+                c->fq[(c->fq_head + c->fq_len) % c->fq_cap] = fr;
+                c->fq_len++;
+            }
+            break;
+        case PROTO_MESH_TOPOLOGY: {
+            topo_ref *t = calloc(1, sizeof *t);
+            if (!t) {
+                c->st.decode_errors++;
+                break;
+            }
+            atomic_init(&t->refs, 1);
+            t->msg = m;
+            memset(&m, 0, sizeof m);
+            const proto_mesh_topology *pt = &t->msg.u.topology;
+            t->pub.mesh_id = pt->mesh_id;
+            t->pub.mesh_kind = pt->mesh_kind;
+            t->pub.lod_levels = pt->lod_levels;
+            t->pub.vertex_count = pt->vertex_count;
+            t->pub.index_count = pt->index_count;
+            t->pub.indices = pt->indices;
+            t->pub.morph = pt->morph;
+            t->pub.level = pt->level;
+            topo_unref(c->topo);
+            c->topo = t;
+            break;
+        }
+        case PROTO_QUERY_RESULT: {
+            const proto_query_result *qr = &m.u.result;
+            for (pending_query **pp = &c->queries; *pp; pp = &(*pp)->next) {
+                pending_query *q = *pp;
+                if (q->id != qr->query_id || q->done)
+                    continue;
+                q->result.query_id = qr->query_id;
+                q->result.t = qr->t;
+                q->result.count = qr->count;
+                q->result.samples = malloc(sizeof *qr->samples * (qr->count ? qr->count : 1));
+                if (!q->result.samples) {
+                    q->res = OCEAN_ENOMEM;
+                    q->result.count = 0;
+                } else {
+                    memcpy(q->result.samples, qr->samples, sizeof *qr->samples * qr->count);
+                    q->res = OCEAN_OK;
+                }
+                q->done = 1;
+                if (!q->blocking) {
+                    *pp = q->next;
+                    nt.q = q;
+                }
+                break;
+            }
+            break;
+        }
+        case PROTO_SEA_STATE:
+            if (m.u.sea_state.op == PROTO_SEA_ANNOUNCE) {
+                c->sea = m.u.sea_state.sea;
+                c->sea_time = m.u.sea_state.effective_time;
+                if (c->sea_wait && !c->sea_done) {
+                    c->sea_done = 1;
+                    c->sea_res = OCEAN_OK;
+                }
+                nt.call_sea = 1;
+            }
+            break;
+        case PROTO_ERROR: {
+            const proto_error *e = &m.u.error;
+            c->st.errors_rx++;
+            c->last_err = e->code < OCEAN_RESULT_COUNT_ && e->code ? (ocean_result)e->code : OCEAN_EINVAL;
+            snprintf(c->last_err_msg, sizeof c->last_err_msg, "server ERROR %u (%s) about %s seq %u: %s",
+                     e->code, ocean_strerror((ocean_result)e->code), proto_type_name(e->offending_type),
+                     e->offending_seq, e->message);
+            if (e->offending_type == PROTO_QUERY) {
+                for (pending_query **pp = &c->queries; *pp; pp = &(*pp)->next) {
+                    pending_query *q = *pp;
+                    if (q->seq != e->offending_seq || q->done)
+                        continue;
+                    q->done = 1;
+                    q->res = c->last_err;
+                    if (!q->blocking) {
+                        *pp = q->next;
+                        nt.q = q;
+                    }
+                    break;
+                }
+            }
+            if (e->offending_type == PROTO_SEA_STATE && c->sea_wait && !c->sea_done &&
+                e->offending_seq == c->sea_seq) {
+                c->sea_done = 1;
+                c->sea_res = c->last_err;
+            }
+            nt.call_error = 1;
+            break;
+        }
+        case PROTO_BYE:
+            c->bye_reason = m.u.bye.reason;
+            snprintf(nt.close_msg, sizeof nt.close_msg, "%s", m.u.bye.message);
+            set_local_error(c, OCEAN_EIO, "server said BYE (reason %u): %s", m.u.bye.reason,
+                            m.u.bye.message);
+            break;
+        default:
+            break;
+        }
+    }
+    pthread_cond_broadcast(&l->cv);
+    pthread_mutex_unlock(&l->mu);
+
+    if (res == OCEAN_OK) {
+        if (nt.call_error && c->opt.cb.on_error)
+            c->opt.cb.on_error(c->opt.cb.user, c, &m.u.error);
+        if (nt.call_sea && c->opt.cb.on_sea_state)
+            c->opt.cb.on_sea_state(c->opt.cb.user, c, &m.u.sea_state);
+    }
+    if (nt.call_frame) {
+        c->opt.cb.on_frame(c->opt.cb.user, c, &nt.frame->pub);
+        oc_frame_free(&nt.frame->pub);
+    }
+    if (nt.q) {
+        if (nt.q->fn)
+            nt.q->fn(nt.q->user, c, nt.q->res, nt.q->res == OCEAN_OK ? &nt.q->result : NULL);
+        oc_query_result_free(&nt.q->result);
+        free(nt.q);
+    }
+    run_async_failures(c, async_fail);
+    proto_msg_free(&m);
+    if (!raw_taken)
+        free(raw);
+
+    pthread_mutex_lock(&l->mu);
+    c->busy--;
+    pthread_cond_broadcast(&l->cv);
+    pthread_mutex_unlock(&l->mu);
+}
+
+static void notify_closed(oc_client *c, int reason, const char *msg)
+{
+    oc_loop *l = c->loop;
+    pending_query *async = NULL;
+    pthread_mutex_lock(&l->mu);
+    int call = mark_closed_locked(c, reason, msg, &async);
+    int r = c->bye_reason;
+    c->busy++;
+    pthread_mutex_unlock(&l->mu);
+    run_async_failures(c, async);
+    if (call && c->opt.cb.on_close)
+        c->opt.cb.on_close(c->opt.cb.user, c, r, msg ? msg : "");
+    pthread_mutex_lock(&l->mu);
+    c->busy--;
+    pthread_cond_broadcast(&l->cv);
+    pthread_mutex_unlock(&l->mu);
+}
+
+/* ===================================================== lws callback */
+
+/* Issues the connects oc_client_create queued; servicing thread only,
+ * called without mu (lws may call back synchronously). */
+static void do_connects(oc_loop *l)
+{
+    for (;;) {
+        oc_client *c = NULL;
+        pthread_mutex_lock(&l->mu);
+        for (oc_client *k = l->clients; k; k = k->next)
+            if (k->connect_pending) {
+                c = k;
+                break;
+            }
+        if (c) {
+            c->connect_pending = 0;
+            c->busy++;
+        }
+        pthread_mutex_unlock(&l->mu);
+        if (!c)
+            return;
+        struct lws_client_connect_info ci;
+        memset(&ci, 0, sizeof ci);
+        ci.context = l->ctx;
+        ci.address = c->url.host;
+        ci.port = c->url.port;
+        ci.ssl_connection = c->url.tls ? LCCSCF_USE_SSL : 0;
+        ci.path = c->url.path;
+        ci.host = c->url.host;
+        ci.origin = c->opt.origin;
+        ci.protocol = PROTO_SUBPROTOCOL;
+        ci.ietf_version_or_minus_one = -1;
+        ci.userdata = c;
+        ci.local_protocol_name = PROTO_SUBPROTOCOL;
+        struct lws *w = lws_client_connect_via_info(&ci);
+        pthread_mutex_lock(&l->mu);
+        if (w && c->state != OC_CLOSED && !c->wsi)
+            c->wsi = w;
+        int failed = !w && c->state != OC_CLOSED;
+        c->busy--;
+        pthread_cond_broadcast(&l->cv);
+        pthread_mutex_unlock(&l->mu);
+        if (failed) {
+            char msg[300];
+            snprintf(msg, sizeof msg, "cannot connect to %s:%d (libwebsockets refused)", c->url.host,
+                     c->url.port);
+            notify_closed(c, -1, msg);
+        }
+    }
+}
+
+static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in, size_t len)
+{
+    oc_client *c = (oc_client *)user;
+    struct lws_context *ctx = lws_get_context(wsi);
+    oc_loop *l = ctx ? lws_context_user(ctx) : NULL;
+
+    switch (reason) {
+    case LWS_CALLBACK_EVENT_WAIT_CANCELLED:
+        if (!l || l->destroying)
+            break;
+        do_connects(l);
+        pthread_mutex_lock(&l->mu);
+        for (oc_client *k = l->clients; k; k = k->next) {
+            if (!k->wsi)
+                continue;
+            if (k->kill_req)
+                lws_set_timeout(k->wsi, PENDING_TIMEOUT_CLOSE_SEND, LWS_TO_KILL_ASYNC);
+            else if (k->want_write || k->close_req)
+                lws_callback_on_writable(k->wsi);
+        }
+        pthread_mutex_unlock(&l->mu);
+        break;
+
+    case LWS_CALLBACK_CLIENT_ESTABLISHED:
+        if (!c)
+            break;
+        pthread_mutex_lock(&l->mu);
+        l->events++;
+        c->wsi = wsi;
+        if (c->want_write || c->close_req)
+            lws_callback_on_writable(wsi);
+        pthread_cond_broadcast(&l->cv);
+        pthread_mutex_unlock(&l->mu);
+        break;
+
+    case LWS_CALLBACK_CLIENT_CONNECTION_ERROR: {
+        if (!c)
+            break;
+        char msg[300];
+        snprintf(msg, sizeof msg, "connection to %s:%d failed: %s", c->url.host, c->url.port,
+                 in ? (const char *)in : "unknown reason");
+        notify_closed(c, -1, msg);
+        break;
+    }
+
+    case LWS_CALLBACK_WS_PEER_INITIATED_CLOSE:
+        if (c && len >= 2) {
+            const uint8_t *p = in;
+            unsigned code = (unsigned)p[0] << 8 | p[1];
+            pthread_mutex_lock(&l->mu);
+            if (c->last_err == OCEAN_OK)
+                set_local_error(c, OCEAN_EIO, "server closed the connection (code %u: %.*s)", code,
+                                (int)(len - 2 > 200 ? 200 : len - 2), (const char *)p + 2);
+            pthread_mutex_unlock(&l->mu);
+        }
+        break;
+
+    case LWS_CALLBACK_CLIENT_CLOSED:
+        if (c)
+            notify_closed(c, -1, "connection closed");
+        break;
+
+    case LWS_CALLBACK_CLIENT_RECEIVE: {
+        if (!c)
+            break;
+        int first = lws_is_first_fragment(wsi);
+        int final = lws_is_final_fragment(wsi) && lws_remaining_packet_payload(wsi) == 0;
+        if (first && c->rx_len == 0)
+            c->rx_skip = 0;
+        if (!c->rx_skip && first && c->rx_len == 0) {
+            /* size the buffer once for the whole WebSocket frame (the
+             * daemon sends each message as one), instead of doubling */
+            size_t want = len + lws_remaining_packet_payload(wsi);
+            if (want > c->rx_cap && want <= c->opt.max_message) {
+                free(c->rx);
+                c->rx = malloc(want);
+                c->rx_cap = c->rx ? want : 0;
+            }
+        }
+        if (!c->rx_skip) {
+            if (c->rx_len + len > c->opt.max_message) {
+                c->rx_skip = 1;
+                c->rx_len = 0;
+                pthread_mutex_lock(&l->mu);
+                c->st.decode_errors++;
+                set_local_error(c, OCEAN_ETOOBIG, "server message longer than max_message %u",
+                                c->opt.max_message);
+                pthread_mutex_unlock(&l->mu);
+            } else {
+                if (c->rx_len + len > c->rx_cap) {
+                    size_t nc = c->rx_cap ? c->rx_cap : 65536;
+                    while (nc < c->rx_len + len)
+                        nc *= 2;
+                    uint8_t *nb = realloc(c->rx, nc);
+                    if (!nb) {
+                        c->rx_skip = 1;
+                        c->rx_len = 0;
+                        break;
+                    }
+                    c->rx = nb;
+                    c->rx_cap = nc;
+                }
+                memcpy(c->rx + c->rx_len, in, len);
+                c->rx_len += len;
+            }
+        }
+        if (final) {
+            if (!c->rx_skip && c->rx_len) {
+                uint8_t *msg = c->rx;
+                size_t mlen = c->rx_len;
+                /* hand the buffer over; a fresh one is grown on demand */
+                c->rx = NULL;
+                c->rx_cap = 0;
+                c->rx_len = 0;
+                handle_message(c, msg, mlen);
+            }
+            c->rx_len = 0;
+            c->rx_skip = 0;
+        }
+        break;
+    }
+
+    case LWS_CALLBACK_CLIENT_WRITEABLE: {
+        if (!c)
+            break;
+        pthread_mutex_lock(&l->mu);
+        txmsg *t = c->tx_head;
+        if (t) {
+            c->tx_head = t->next;
+            if (!c->tx_head)
+                c->tx_tail = NULL;
+        }
+        int more = c->tx_head != NULL;
+        c->want_write = more;
+        int closing = c->close_req && !more && !t;
+        pthread_mutex_unlock(&l->mu);
+        if (closing) {
+            lws_close_reason(wsi, LWS_CLOSE_STATUS_NORMAL, (unsigned char *)"bye", 3);
+            return -1;
+        }
+        if (t) {
+            size_t n = proto_buf_len(&t->buf);
+            int w = lws_write(wsi, proto_buf_data(&t->buf), n, LWS_WRITE_BINARY);
+            proto_buf_free(&t->buf);
+            free(t);
+            if (w < (int)n)
+                return -1;
+            pthread_mutex_lock(&l->mu);
+            int again = c->tx_head != NULL || c->close_req;
+            pthread_mutex_unlock(&l->mu);
+            if (again)
+                lws_callback_on_writable(wsi);
+        }
+        break;
+    }
+
+    default:
+        break;
+    }
+    return 0;
+}
+
+static const struct lws_protocols oc_protocols[] = {
+    {PROTO_SUBPROTOCOL, lws_cb, 0, 65536, 0, NULL, 0},
+    {NULL, NULL, 0, 0, 0, NULL, 0}
+};
+
+/* ================================================================= loop */
+
+ocean_result oc_loop_create(oc_loop **out, char *err, size_t errlen)
+{
+    if (!out)
+        return OCEAN_EINVAL;
+    *out = NULL;
+    oc_loop *l = calloc(1, sizeof *l);
+    if (!l)
+        return OCEAN_ENOMEM;
+    pthread_mutex_init(&l->mu, NULL);
+    pthread_condattr_t ca;
+    pthread_condattr_init(&ca);
+    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+    pthread_cond_init(&l->cv, &ca);
+    pthread_condattr_destroy(&ca);
+    atomic_init(&l->stop, 0);
+
+    /* lws logging is process-wide: keep it to errors unless asked. */
+    if (!getenv("OC_LWS_LOG"))
+        lws_set_log_level(LLL_ERR, NULL);
+    struct lws_context_creation_info info;
+    memset(&info, 0, sizeof info);
+    info.port = CONTEXT_PORT_NO_LISTEN;
+    info.protocols = oc_protocols;
+    info.gid = -1;
+    info.uid = -1;
+    info.user = l;
+    info.fd_limit_per_thread = 0;
+    info.options = LWS_SERVER_OPTION_DO_SSL_GLOBAL_INIT;
+    l->ctx = lws_create_context(&info);
+    if (!l->ctx) {
+        seterr(err, errlen, "libwebsockets could not create a client context");
+        pthread_mutex_destroy(&l->mu);
+        pthread_cond_destroy(&l->cv);
+        free(l);
+        return OCEAN_EIO;
+    }
+    *out = l;
+    return OCEAN_OK;
+}
+
+static void free_client_mem(oc_client *c);
+
+void oc_loop_destroy(oc_loop *l)
+{
+    if (!l)
+        return;
+    oc_loop_stop(l);
+    l->destroying = 1;
+    lws_context_destroy(l->ctx);   /* closes any remaining connection */
+    oc_client *c = l->clients;
+    while (c) {
+        oc_client *n = c->next;
+        free_client_mem(c);
+        c = n;
+    }
+    pthread_mutex_destroy(&l->mu);
+    pthread_cond_destroy(&l->cv);
+    free(l);
+}
+
+static void sul_cb(lws_sorted_usec_list_t *sul)
+{
+    oc_loop *l = lws_container_of(sul, oc_loop, sul);
+    l->sul_fired = 1;
+    /* lws runs ripe timers before it computes its poll timeout: without
+     * this wake-up, a timer that ripens just as lws_service starts would
+     * leave poll() waiting for lws's next internal timer (up to 30 s). */
+    lws_cancel_service(l->ctx);
+}
+
+static ocean_result service_locked_check(oc_loop *l)
+{
+    pthread_mutex_lock(&l->mu);
+    int thr = l->thread_running;
+    pthread_mutex_unlock(&l->mu);
+    return thr ? OCEAN_ESTATE : OCEAN_OK;
+}
+
+ocean_result oc_loop_service(oc_loop *l, int timeout_ms)
+{
+    if (!l)
+        return OCEAN_EINVAL;
+    if (service_locked_check(l) != OCEAN_OK)
+        return OCEAN_ESTATE;
+    pthread_mutex_lock(&l->mu);
+    uint64_t ev0 = l->events;
+    pthread_mutex_unlock(&l->mu);
+    if (timeout_ms <= 0) {
+        lws_service(l->ctx, -1);
+        return OCEAN_OK;
+    }
+    double deadline = mono_now() + timeout_ms * 1e-3;
+    l->sul_fired = 0;
+    lws_sul_schedule(l->ctx, 0, &l->sul, sul_cb, (lws_usec_t)timeout_ms * 1000);
+    for (;;) {
+        if (mono_now() >= deadline || lws_service(l->ctx, 0) < 0)
+            break;
+        pthread_mutex_lock(&l->mu);
+        int changed = l->events != ev0;
+        pthread_mutex_unlock(&l->mu);
+        if (changed || l->sul_fired || mono_now() >= deadline)
+            break;
+    }
+    lws_sul_cancel(&l->sul);
+    return OCEAN_OK;
+}
+
+static void *loop_thread(void *arg)
+{
+    oc_loop *l = arg;
+    while (!atomic_load(&l->stop))
+        if (lws_service(l->ctx, 0) < 0)
+            break;
+    return NULL;
+}
+
+ocean_result oc_loop_start(oc_loop *l)
+{
+    if (!l)
+        return OCEAN_EINVAL;
+    pthread_mutex_lock(&l->mu);
+    if (l->thread_running) {
+        pthread_mutex_unlock(&l->mu);
+        return OCEAN_OK;
+    }
+    atomic_store(&l->stop, 0);
+    if (pthread_create(&l->thread, NULL, loop_thread, l) != 0) {
+        pthread_mutex_unlock(&l->mu);
+        return OCEAN_ENOMEM;
+    }
+    l->thread_running = 1;
+    pthread_mutex_unlock(&l->mu);
+    return OCEAN_OK;
+}
+
+void oc_loop_stop(oc_loop *l)
+{
+    if (!l)
+        return;
+    pthread_mutex_lock(&l->mu);
+    int running = l->thread_running;
+    pthread_mutex_unlock(&l->mu);
+    if (!running)
+        return;
+    atomic_store(&l->stop, 1);
+    lws_cancel_service(l->ctx);
+    pthread_join(l->thread, NULL);
+    pthread_mutex_lock(&l->mu);
+    l->thread_running = 0;
+    pthread_mutex_unlock(&l->mu);
+}
+
+/* Waits on the loop: services it (caller-driven) or sleeps on the condition
+ * variable (threaded) until pred(c) holds or the deadline passes.  Returns 1
+ * if pred held.  Called without mu. */
+typedef int (*pred_fn)(oc_client *c, void *arg);
+
+static int wait_until(oc_client *c, int timeout_ms, pred_fn pred, void *arg)
+{
+    oc_loop *l = c->loop;
+    double deadline = timeout_ms < 0 ? INFINITY : mono_now() + timeout_ms * 1e-3;
+    for (;;) {
+        pthread_mutex_lock(&l->mu);
+        int ok = pred(c, arg);
+        int thr = l->thread_running;
+        if (ok) {
+            pthread_mutex_unlock(&l->mu);
+            return 1;
+        }
+        double now = mono_now();
+        if (now >= deadline) {
+            pthread_mutex_unlock(&l->mu);
+            return 0;
+        }
+        if (thr) {
+            struct timespec ts;
+            double until = isinf(deadline) ? now + 1.0 : deadline;
+            if (until > now + 1.0)
+                until = now + 1.0;
+            ts.tv_sec = (time_t)until;
+            ts.tv_nsec = (long)((until - (double)ts.tv_sec) * 1e9);
+            pthread_cond_timedwait(&l->cv, &l->mu, &ts);
+            pthread_mutex_unlock(&l->mu);
+        } else {
+            pthread_mutex_unlock(&l->mu);
+            double left = isinf(deadline) ? 1000.0 : (deadline - now) * 1e3;
+            int ms = left > 1000 ? 1000 : (int)ceil(left);
+            oc_loop_service(l, ms < 1 ? 1 : ms);
+        }
+    }
+}
+
+/* ============================================================== clients */
+
+void oc_options_default(oc_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->frame_queue = 4;
+    o->decode_tiles = 1;
+    o->max_message = PROTO_MAX_MESSAGE_DEFAULT;
+}
+
+static void free_client_mem(oc_client *c)
+{
+    txmsg *t = c->tx_head;
+    while (t) {
+        txmsg *n = t->next;
+        proto_buf_free(&t->buf);
+        free(t);
+        t = n;
+    }
+    for (int i = 0; i < c->fq_len; i++)
+        oc_frame_free(&c->fq[(c->fq_head + i) % c->fq_cap]->pub);
+    free(c->fq);
+    pending_query *q = c->queries;
+    while (q) {
+        pending_query *n = q->next;
+        oc_query_result_free(&q->result);
+        free(q);
+        q = n;
+    }
+    topo_unref(c->topo);
+    free(c->rx);
+    free(c);
+}
+
+ocean_result oc_client_create(const oc_options *o, oc_client **out, char *err, size_t errlen)
+{
+    if (!out || !o) {
+        seterr(err, errlen, "no options");
+        return OCEAN_EINVAL;
+    }
+    *out = NULL;
+    oc_url url;
+    ocean_result r = oc_url_parse(o->url, &url, err, errlen);
+    if (r != OCEAN_OK)
+        return r;
+    if (o->frame_queue < 1 || o->frame_queue > 1024) {
+        seterr(err, errlen, "frame_queue %d outside 1..1024", o->frame_queue);
+        return OCEAN_EINVAL;
+    }
+    if (o->max_message < PROTO_HEADER_SIZE) {
+        seterr(err, errlen, "max_message %u below the %d-byte header", o->max_message, PROTO_HEADER_SIZE);
+        return OCEAN_EINVAL;
+    }
+    if (o->origin && strlen(o->origin) >= 256) {
+        seterr(err, errlen, "origin longer than 255 bytes");
+        return OCEAN_EINVAL;
+    }
+    oc_client *c = calloc(1, sizeof *c);
+    if (!c)
+        return OCEAN_ENOMEM;
+    c->fq_cap = o->frame_queue;
+    c->fq = calloc((size_t)c->fq_cap, sizeof *c->fq);
+    if (!c->fq) {
+        free(c);
+        return OCEAN_ENOMEM;
+    }
+    c->url = url;
+    c->opt = *o;
+    c->opt.url = NULL;
+    if (o->origin) {
+        snprintf(c->origin, sizeof c->origin, "%s", o->origin);
+        c->opt.origin = c->origin;
+    }
+    c->bye_reason = -1;
+    c->next_query_id = 1;
+    c->frame_rate = 30.0f;
+    if (o->loop) {
+        c->loop = o->loop;
+    } else {
+        r = oc_loop_create(&c->loop, err, errlen);
+        if (r != OCEAN_OK) {
+            free(c->fq);
+            free(c);
+            return r;
+        }
+        c->own_loop = 1;
+    }
+    oc_loop *l = c->loop;
+
+    /* lws is not thread-safe: the connect is issued by the servicing thread
+     * (see do_connects), woken through lws_cancel_service. */
+    pthread_mutex_lock(&l->mu);
+    c->state = OC_CONNECTING;
+    c->connect_pending = 1;
+    c->next = l->clients;
+    l->clients = c;
+    pthread_mutex_unlock(&l->mu);
+    wake(l);
+    *out = c;
+    return OCEAN_OK;
+}
+
+static int pred_ready(oc_client *c, void *arg)
+{
+    (void)arg;
+    return c->state != OC_CONNECTING;
+}
+
+ocean_result oc_client_connect_wait(oc_client *c, int timeout_ms)
+{
+    if (!c)
+        return OCEAN_EINVAL;
+    wait_until(c, timeout_ms, pred_ready, NULL);
+    pthread_mutex_lock(&c->loop->mu);
+    oc_state s = c->state;
+    if (s == OC_CONNECTING && c->last_err == OCEAN_OK)
+        set_local_error(c, OCEAN_ESTATE, "no HELLO from %s:%d within %d ms", c->url.host, c->url.port,
+                        timeout_ms);
+    pthread_mutex_unlock(&c->loop->mu);
+    return s == OC_READY ? OCEAN_OK : s == OC_CLOSED ? OCEAN_EIO : OCEAN_ESTATE;
+}
+
+ocean_result oc_connect(const oc_options *o, int timeout_ms, oc_client **out, char *err, size_t errlen)
+{
+    if (!out)
+        return OCEAN_EINVAL;
+    *out = NULL;
+    oc_client *c;
+    ocean_result r = oc_client_create(o, &c, err, errlen);
+    if (r != OCEAN_OK)
+        return r;
+    r = oc_client_connect_wait(c, timeout_ms);
+    if (r != OCEAN_OK) {
+        oc_client_last_error(c, err, errlen);
+        if (err && errlen && !err[0])
+            seterr(err, errlen, "connect to %s:%d failed", c->url.host, c->url.port);
+        oc_client_destroy(c);
+        return r;
+    }
+    *out = c;
+    return OCEAN_OK;
+}
+
+static int pred_closed_idle(oc_client *c, void *arg)
+{
+    (void)arg;
+    return c->wsi == NULL && c->busy == 0;
+}
+
+void oc_client_destroy(oc_client *c)
+{
+    if (!c)
+        return;
+    oc_loop *l = c->loop;
+    pthread_mutex_lock(&l->mu);
+    if (c->wsi != NULL && c->state == OC_READY) {
+        proto_msg m;
+        proto_msg_init(&m, PROTO_BYE);
+        m.u.bye.reason = PROTO_BYE_NORMAL;
+        snprintf(m.u.bye.message, sizeof m.u.bye.message, "client closing");
+        queue_msg_locked(c, &m, NULL, NULL, 0);
+    }
+    /* The writeable callback sends what is queued (the BYE), then closes. */
+    c->connect_pending = 0;
+    c->close_req = 1;
+    pthread_mutex_unlock(&l->mu);
+    wake(l);
+    if (!wait_until(c, CLOSE_GRACE_MS, pred_closed_idle, NULL)) {
+        /* The peer did not complete the close in time: cut the socket. */
+        pthread_mutex_lock(&l->mu);
+        c->kill_req = 1;
+        pthread_mutex_unlock(&l->mu);
+        wake(l);
+        wait_until(c, 2000, pred_closed_idle, NULL);
+    }
+    if (c->own_loop) {
+        /* Destroying the context closes what is left (callbacks still see c). */
+        oc_loop_destroy(l);   /* also frees c, which is on its list */
+        return;
+    }
+    pthread_mutex_lock(&l->mu);
+    for (oc_client **pp = &l->clients; *pp; pp = &(*pp)->next)
+        if (*pp == c) {
+            *pp = c->next;
+            break;
+        }
+    int orphan = c->wsi != NULL;
+    pthread_mutex_unlock(&l->mu);
+    if (orphan) {
+        /* Still not closed after the kill timeout: leave it to the loop's
+         * destruction rather than free memory lws still points to. */
+        pthread_mutex_lock(&l->mu);
+        c->next = l->clients;
+        l->clients = c;
+        pthread_mutex_unlock(&l->mu);
+        return;
+    }
+    free_client_mem(c);
+}
+
+oc_state oc_client_state(const oc_client *c)
+{
+    if (!c)
+        return OC_CLOSED;
+    pthread_mutex_lock(&c->loop->mu);
+    oc_state s = c->state;
+    pthread_mutex_unlock(&c->loop->mu);
+    return s;
+}
+
+oc_loop *oc_client_loop(const oc_client *c) { return c ? c->loop : NULL; }
+
+ocean_result oc_service(oc_client *c, int timeout_ms)
+{
+    if (!c)
+        return OCEAN_EINVAL;
+    return oc_loop_service(c->loop, timeout_ms);
+}
+
+ocean_result oc_client_hello(const oc_client *c, proto_hello *out)
+{
+    if (!c || !out)
+        return OCEAN_EINVAL;
+    pthread_mutex_lock(&c->loop->mu);
+    int have = c->have_hello;
+    if (have)
+        *out = c->hello;
+    pthread_mutex_unlock(&c->loop->mu);
+    return have ? OCEAN_OK : OCEAN_ESTATE;
+}
+
+double oc_client_sim_time(const oc_client *c)
+{
+    if (!c)
+        return NAN;
+    pthread_mutex_lock(&c->loop->mu);
+    double t = c->have_hello ? c->last_sim : NAN;
+    pthread_mutex_unlock(&c->loop->mu);
+    return t;
+}
+
+ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen)
+{
+    if (!c)
+        return OCEAN_EINVAL;
+    pthread_mutex_lock(&c->loop->mu);
+    ocean_result r = c->last_err;
+    if (buf && buflen)
+        snprintf(buf, buflen, "%s", c->last_err_msg);
+    pthread_mutex_unlock(&c->loop->mu);
+    return r;
+}
+
+void oc_subscribe_default(proto_subscribe *s)
+{
+    memset(s, 0, sizeof *s);
+    s->effects = PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT | PROTO_FX_NORMALS;
+    s->mesh_kind = PROTO_MESH_CONCENTRIC;
+    s->codec = PROTO_CODEC_QZ;
+    s->cutoff_policy = PROTO_CUTOFF_SEED;
+    s->mode = PROTO_MODE_LIVE;
+    s->layers = 1;
+    s->lod_levels = 4;
+    s->tile_size = 64;
+    s->frame_rate_hz = 30.0f;
+    s->accuracy = (float)PROTO_ACCURACY_DEFAULT;
+    s->base_spacing_m = 0;
+    s->view_range_m = 0;
+}
+
+void oc_camera_default(proto_camera *cam)
+{
+    memset(cam, 0, sizeof *cam);
+    cam->pos[1] = 20.0;
+    cam->fov_y_deg = 60.0f;
+    cam->viewport_w = 1920;
+    cam->viewport_h = 1080;
+}
+
+static ocean_result send_msg(oc_client *c, proto_msg *m, uint32_t *seq_out)
+{
+    if (!c)
+        return OCEAN_EINVAL;
+    char err[256] = "";
+    pthread_mutex_lock(&c->loop->mu);
+    ocean_result r = queue_msg_locked(c, m, seq_out, err, sizeof err);
+    if (r != OCEAN_OK)
+        set_local_error(c, r, "cannot send %s: %s", proto_type_name(m->hdr.type),
+                        err[0] ? err : ocean_strerror(r));
+    pthread_mutex_unlock(&c->loop->mu);
+    if (r == OCEAN_OK)
+        wake(c->loop);
+    return r;
+}
+
+ocean_result oc_client_subscribe(oc_client *c, const proto_subscribe *s)
+{
+    if (!c || !s)
+        return OCEAN_EINVAL;
+    proto_msg m;
+    proto_msg_init(&m, PROTO_SUBSCRIBE);
+    m.u.subscribe = *s;
+    ocean_result r = send_msg(c, &m, NULL);
+    if (r == OCEAN_OK) {
+        pthread_mutex_lock(&c->loop->mu);
+        c->frame_rate = s->frame_rate_hz;
+        pthread_mutex_unlock(&c->loop->mu);
+    }
+    return r;
+}
+
+ocean_result oc_client_send_camera(oc_client *c, const proto_camera *cam, uint32_t *seq_out)
+{
+    if (!c || !cam)
+        return OCEAN_EINVAL;
+    proto_msg m;
+    proto_msg_init(&m, PROTO_CAMERA);
+    m.u.camera = *cam;
+    uint32_t seq;
+    char err[256] = "";
+    pthread_mutex_lock(&c->loop->mu);
+    ocean_result r = queue_msg_locked(c, &m, &seq, err, sizeof err);
+    if (r == OCEAN_OK) {
+        c->cams[c->cam_pos % CAM_RING].seq = seq;
+        c->cams[c->cam_pos % CAM_RING].wall = wall_now();
+        c->cam_pos++;
+    } else {
+        set_local_error(c, r, "cannot send CAMERA: %s", err[0] ? err : ocean_strerror(r));
+    }
+    pthread_mutex_unlock(&c->loop->mu);
+    if (r == OCEAN_OK) {
+        wake(c->loop);
+        if (seq_out)
+            *seq_out = seq;
+    }
+    return r;
+}
+
+static int pred_frame(oc_client *c, void *arg)
+{
+    (void)arg;
+    return c->fq_len > 0 || c->state == OC_CLOSED;
+}
+
+ocean_result oc_client_next_frame(oc_client *c, int timeout_ms, oc_frame **out)
+{
+    if (!c || !out)
+        return OCEAN_EINVAL;
+    *out = NULL;
+    if (timeout_ms != 0)
+        wait_until(c, timeout_ms, pred_frame, NULL);
+    else if (service_locked_check(c->loop) == OCEAN_OK)
+        oc_loop_service(c->loop, 0);
+    pthread_mutex_lock(&c->loop->mu);
+    ocean_result r;
+    if (c->fq_len > 0) {
+        frame_priv *f = c->fq[c->fq_head];
+        c->fq_head = (c->fq_head + 1) % c->fq_cap;
+        c->fq_len--;
+        *out = &f->pub;
+        r = OCEAN_OK;
+    } else {
+        r = c->state == OC_CLOSED ? OCEAN_EIO : OCEAN_ESTATE;
+    }
+    pthread_mutex_unlock(&c->loop->mu);
+    return r;
+}
+
+const oc_topology *oc_client_topology(oc_client *c)
+{
+    if (!c)
+        return NULL;
+    pthread_mutex_lock(&c->loop->mu);
+    const oc_topology *t = c->topo ? &c->topo->pub : NULL;
+    pthread_mutex_unlock(&c->loop->mu);
+    return t;
+}
+
+/* ============================================================= queries */
+
+static ocean_result query_send(oc_client *c, const double *xz, size_t n, int at_time, double t,
+                               pending_query *q)
+{
+    if (!xz || n == 0 || n > PROTO_MAX_QUERY_POINTS) {
+        pthread_mutex_lock(&c->loop->mu);
+        set_local_error(c, OCEAN_EINVAL, "query needs 1..%u points, got %zu", PROTO_MAX_QUERY_POINTS, n);
+        pthread_mutex_unlock(&c->loop->mu);
+        return OCEAN_EINVAL;
+    }
+    for (size_t i = 0; i < 2 * n; i++)
+        if (!isfinite(xz[i])) {
+            pthread_mutex_lock(&c->loop->mu);
+            set_local_error(c, OCEAN_EINVAL, "query point %zu is not finite", i / 2);
+            pthread_mutex_unlock(&c->loop->mu);
+            return OCEAN_EINVAL;
+        }
+    if (at_time && !isfinite(t))
+        return OCEAN_EINVAL;
+    proto_msg m;
+    proto_msg_init(&m, PROTO_QUERY);
+    m.u.query.count = (uint32_t)n;
+    m.u.query.at_time = at_time ? 1 : 0;
+    m.u.query.t = at_time ? t : 0.0;
+    m.u.query.points = xz;
+    char err[256] = "";
+    pthread_mutex_lock(&c->loop->mu);
+    ocean_result r = OCEAN_OK;
+    if (c->have_hello && c->hello.max_query_points && n > c->hello.max_query_points) {
+        set_local_error(c, OCEAN_EINVAL, "query of %zu points above the server's limit %u", n,
+                        c->hello.max_query_points);
+        r = OCEAN_EINVAL;
+    }
+    if (r == OCEAN_OK) {
+        q->id = c->next_query_id++;
+        m.u.query.query_id = q->id;
+        r = queue_msg_locked(c, &m, &q->seq, err, sizeof err);
+        if (r == OCEAN_OK) {
+            q->next = c->queries;
+            c->queries = q;
+        } else {
+            set_local_error(c, r, "cannot send QUERY: %s", err[0] ? err : ocean_strerror(r));
+        }
+    }
+    pthread_mutex_unlock(&c->loop->mu);
+    if (r == OCEAN_OK)
+        wake(c->loop);
+    return r;
+}
+
+ocean_result oc_client_query_async(oc_client *c, const double *xz, size_t n, int at_time, double t,
+                                   oc_query_fn fn, void *user, uint32_t *query_id)
+{
+    if (!c)
+        return OCEAN_EINVAL;
+    pending_query *q = calloc(1, sizeof *q);
+    if (!q)
+        return OCEAN_ENOMEM;
+    q->fn = fn;
+    q->user = user;
+    ocean_result r = query_send(c, xz, n, at_time, t, q);
+    if (r != OCEAN_OK) {
+        free(q);
+        return r;
+    }
+    if (query_id)
+        *query_id = q->id;
+    return OCEAN_OK;
+}
+
+static int pred_query(oc_client *c, void *arg)
+{
+    (void)c;
+    return ((pending_query *)arg)->done;
+}
+
+ocean_result oc_client_query(oc_client *c, const double *xz, size_t n, int at_time, double t,
+                             int timeout_ms, oc_query_result *out)
+{
+    if (!c || !out)
+        return OCEAN_EINVAL;
+    memset(out, 0, sizeof *out);
+    pending_query *q = calloc(1, sizeof *q);
+    if (!q)
+        return OCEAN_ENOMEM;
+    q->blocking = 1;
+    ocean_result r = query_send(c, xz, n, at_time, t, q);
+    if (r != OCEAN_OK) {
+        free(q);
+        return r;
+    }
+    wait_until(c, timeout_ms, pred_query, q);
+    pthread_mutex_lock(&c->loop->mu);
+    for (pending_query **pp = &c->queries; *pp; pp = &(*pp)->next)
+        if (*pp == q) {
+            *pp = q->next;
+            break;
+        }
+    if (!q->done) {
+        r = OCEAN_ESTATE;
+        set_local_error(c, r, "no QUERY_RESULT for query %u within %d ms", q->id, timeout_ms);
+    } else {
+        r = q->res;
+    }
+    pthread_mutex_unlock(&c->loop->mu);
+    if (r == OCEAN_OK)
+        *out = q->result;
+    else
+        oc_query_result_free(&q->result);
+    free(q);
+    return r;
+}
+
+/* =========================================================== sea state */
+
+ocean_result oc_client_sea_state(const oc_client *c, proto_sea *out, double *effective_time)
+{
+    if (!c || !out)
+        return OCEAN_EINVAL;
+    pthread_mutex_lock(&c->loop->mu);
+    int have = c->have_hello;
+    if (have) {
+        *out = c->sea;
+        if (effective_time)
+            *effective_time = c->sea_time;
+    }
+    pthread_mutex_unlock(&c->loop->mu);
+    return have ? OCEAN_OK : OCEAN_ESTATE;
+}
+
+static int pred_sea(oc_client *c, void *arg)
+{
+    (void)arg;
+    return c->sea_done;
+}
+
+ocean_result oc_client_sea_state_set(oc_client *c, const proto_sea *sea, double effective_time,
+                                     const char *token, int timeout_ms)
+{
+    if (!c || !sea || !token)
+        return OCEAN_EINVAL;
+    if (strlen(token) > PROTO_TOKEN_MAX)
+        return OCEAN_EINVAL;
+    proto_msg m;
+    proto_msg_init(&m, PROTO_SEA_STATE);
+    m.u.sea_state.op = PROTO_SEA_SET;
+    m.u.sea_state.effective_time = effective_time;
+    m.u.sea_state.sea = *sea;
+    snprintf(m.u.sea_state.token, sizeof m.u.sea_state.token, "%s", token);
+    char err[256] = "";
+    pthread_mutex_lock(&c->loop->mu);
+    if (c->sea_wait) {
+        pthread_mutex_unlock(&c->loop->mu);
+        return OCEAN_ESTATE;   /* one SET at a time per client */
+    }
+    ocean_result r = queue_msg_locked(c, &m, &c->sea_seq, err, sizeof err);
+    if (r == OCEAN_OK) {
+        c->sea_wait = 1;
+        c->sea_done = 0;
+    } else {
+        set_local_error(c, r, "cannot send SEA_STATE: %s", err[0] ? err : ocean_strerror(r));
+    }
+    pthread_mutex_unlock(&c->loop->mu);
+    memset(&m, 0, sizeof m);   /* the token does not linger on the stack copy */
+    if (r != OCEAN_OK)
+        return r;
+    wake(c->loop);
+    wait_until(c, timeout_ms, pred_sea, NULL);
+    pthread_mutex_lock(&c->loop->mu);
+    if (c->sea_done) {
+        r = c->sea_res;
+    } else {
+        r = OCEAN_ESTATE;
+        set_local_error(c, r, "no answer to SEA_STATE within %d ms", timeout_ms);
+    }
+    c->sea_wait = 0;
+    c->sea_done = 0;
+    pthread_mutex_unlock(&c->loop->mu);
+    return r;
+}
+
+void oc_client_get_stats(const oc_client *c, oc_client_stats *out)
+{
+    if (!c || !out)
+        return;
+    pthread_mutex_lock(&c->loop->mu);
+    *out = c->st;
+    pthread_mutex_unlock(&c->loop->mu);
+}

@@ -1,0 +1,335 @@
+/*
+ * oceanclient.h - the C client library of oceand ("ocean.v1" over WebSocket).
+ *
+ * What a simulator links to see the shared sea: connect to a daemon, read its
+ * HELLO, subscribe, report the camera, receive FRAMEs with their tiles
+ * already decoded to float planes and their mesh vertices, ask point
+ * queries, read and (with the admin token) set the sea state.  The wire
+ * format is protocol/ (proto.h, codec.h); this library only moves and
+ * decodes messages.  Built on libwebsockets (client side).  No globals.
+ *
+ * Objects
+ *   oc_loop    one libwebsockets context and its event loop.  Many clients
+ *              may share one loop (the load generator runs hundreds of
+ *              connections on one); a client created without a loop owns a
+ *              private one.
+ *   oc_client  one connection.
+ *   oc_frame   one decoded FRAME, owned by whoever took it (oc_frame_free).
+ *
+ * Threading contract
+ *   Every oc_ function is safe to call from any thread: each loop has a
+ *   mutex that guards the state of the loop and of all its clients, and
+ *   sending only queues bytes and wakes the loop (lws_cancel_service).
+ *   Exactly one thread services a loop at a time, in one of two ways:
+ *    - caller-driven (default): the application calls oc_loop_service() or
+ *      oc_service() regularly (e.g. once per simulation step).  Blocking
+ *      calls (oc_client_connect_wait, oc_client_query, oc_client_next_frame
+ *      with a timeout, oc_client_sea_state_set) service the loop themselves
+ *      while they wait, so a single-threaded program needs nothing else.
+ *      Do not call them from two threads at once on a caller-driven loop.
+ *    - threaded: oc_loop_start() runs the service loop on a thread of the
+ *      library until oc_loop_stop() / oc_loop_destroy().  Blocking calls
+ *      then wait on a condition variable instead of servicing.
+ *   Callbacks (oc_callbacks) always run on the servicing thread, with the
+ *   loop's mutex NOT held: they may call any oc_ function except the
+ *   blocking ones, oc_loop_service/oc_service and *_destroy.
+ *
+ * Frames
+ *   Received FRAMEs go to the on_frame callback if one is set, else into a
+ *   per-client queue of options.frame_queue frames (default 4) taken with
+ *   oc_client_next_frame().  When the queue is full the OLDEST frame is
+ *   dropped (latest wins, as the daemon does) and counted in
+ *   oc_client_stats.frames_dropped.
+ *
+ * Latency
+ *   FRAME carries the sim time of its tick in the message header, but no
+ *   server wall clock.  The library estimates tick-to-receipt latency as
+ *     (recv_wall - sim_time) - min over this connection's received messages
+ *     of (recv_wall - sim_time)
+ *   i.e. it assumes the live sim clock runs at wall-clock rate and takes the
+ *   fastest message seen (HELLO included) as zero delay, so it under-reads
+ *   by the smallest one-way delay (microseconds on loopback).  In replay
+ *   mode that estimate is meaningless; use camera_rtt_ms instead (time from
+ *   sending the CAMERA a FRAME answers to receiving the FRAME).
+ *
+ * Errors: every fallible call returns an ocean_result (sim/ocean_result.h)
+ * and, where it takes err/errlen, writes a human message naming the cause.
+ * ERROR messages from the server are kept (oc_client_last_error) and given
+ * to on_error; a blocking request the server refuses returns the ERROR's
+ * code.
+ */
+#ifndef OCEANCLIENT_H
+#define OCEANCLIENT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "ocean_result.h"
+#include "proto.h"
+
+#define OC_VERSION "0.1.0"
+
+/* ------------------------------------------------------------------ URLs */
+
+#define OC_HOST_MAX 255
+#define OC_PATH_MAX 1023
+
+typedef struct oc_url {
+    int tls;                      /* 1 for wss:// (needs an lws built with TLS) */
+    char host[OC_HOST_MAX + 1];   /* name or address; IPv6 without brackets */
+    int port;                     /* 1..65535; default 80 (ws) / 443 (wss) */
+    char path[OC_PATH_MAX + 1];   /* starts with '/'; default "/" */
+} oc_url;
+
+/* Parses "ws://host[:port][/path]" (also "wss://", "[v6addr]" hosts).
+ * OCEAN_EINVAL with a message naming the problem for anything else: another
+ * scheme, empty host, port outside 1..65535 or not a number, user-info,
+ * fragments, control characters, over-long host or path. */
+ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen);
+
+/* ------------------------------------------------------------------ loop */
+
+typedef struct oc_loop oc_loop;
+
+/* Makes a loop (one lws context, client side only).  *out NULL on failure. */
+ocean_result oc_loop_create(oc_loop **out, char *err, size_t errlen);
+/* Stops the thread if running, closes every client still on the loop
+ * (they must be destroyed by their owners before this call or are freed
+ * here), frees the loop.  Accepts NULL. */
+void oc_loop_destroy(oc_loop *l);
+/* Services the loop for up to timeout_ms (0: only what is ready now).
+ * Returns early once at least one message was received or a connection
+ * changed state.  OCEAN_ESTATE if the loop runs its own thread. */
+ocean_result oc_loop_service(oc_loop *l, int timeout_ms);
+/* Runs the service loop on a library thread (see threading contract). */
+ocean_result oc_loop_start(oc_loop *l);
+/* Stops and joins that thread; no-op if not running. */
+void oc_loop_stop(oc_loop *l);
+
+/* ---------------------------------------------------------------- frames */
+
+/* One decoded tile of a FRAME. */
+typedef struct oc_tile {
+    proto_tile info;   /* level, codec, channels, size, origin, spacing,
+                          error_bound; info.payload: the encoded bytes,
+                          owned by the frame */
+    int planes;        /* proto_tile_planes(info.channels) */
+    float *data;       /* planes * width * height floats, plane after plane in
+                          codec.h order (H, DX, DZ, NU, NV, FOAM, J); row-major,
+                          row = z; NULL if the client was made with
+                          decode_tiles = 0 or decoding failed (decode_result) */
+    ocean_result decode_result;
+} oc_tile;
+
+/* A mesh topology (MESH_TOPOLOGY), shared by reference between the frames
+ * that use it. */
+typedef struct oc_topology {
+    uint32_t mesh_id;
+    uint8_t mesh_kind;          /* proto_mesh_kind */
+    uint8_t lod_levels;
+    uint32_t vertex_count;
+    uint32_t index_count;
+    const uint32_t *indices;    /* index_count, triangles CCW from above */
+    const float *morph;         /* vertex_count */
+    const uint8_t *level;       /* vertex_count */
+} oc_topology;
+
+typedef struct oc_frame {
+    proto_header hdr;           /* hdr.sim_time: the tick's sim time */
+    proto_frame info;           /* cutoff_k, e_error, origin, camera_seq, tick,
+                                   tile_count, has_mesh, mesh (vertex positions,
+                                   relative to info.mesh.origin); info.tiles[i]
+                                   equals tiles[i].info */
+    oc_tile *tiles;             /* info.tile_count tiles */
+    const oc_topology *topology;/* latest topology with info.mesh.mesh_id, or
+                                   NULL (no mesh, or topology not received) */
+    const uint8_t *raw;         /* the complete wire message */
+    size_t raw_len;
+    double recv_wall;           /* CLOCK_REALTIME seconds at full receipt */
+    double latency_ms;          /* tick-to-receipt estimate (see top) */
+    double camera_rtt_ms;       /* CAMERA sent -> this FRAME; -1 if unknown */
+    uint64_t index;             /* 0, 1, 2 ... frames received by this client */
+} oc_frame;
+
+/* Frees a frame taken from oc_client_next_frame.  Accepts NULL. */
+void oc_frame_free(oc_frame *f);
+
+/* --------------------------------------------------------------- clients */
+
+typedef struct oc_client oc_client;
+
+typedef struct oc_callbacks {
+    void *user;
+    /* A decoded FRAME, borrowed for the duration of the call.  When set,
+     * frames are not queued. */
+    void (*on_frame)(void *user, oc_client *c, const oc_frame *f);
+    /* Every message received, before any other processing: the raw bytes
+     * (one complete wire message) and its decoded form (NULL if it failed
+     * to decode; then res is the reason; with header_only a FRAME has only
+     * its header and fixed fields).  For recorders and tools. */
+    void (*on_message)(void *user, oc_client *c, const uint8_t *raw, size_t len,
+                       const proto_msg *msg, ocean_result res);
+    /* An ERROR message from the server. */
+    void (*on_error)(void *user, oc_client *c, const proto_error *e);
+    /* A SEA_STATE announcement. */
+    void (*on_sea_state)(void *user, oc_client *c, const proto_sea_state *s);
+    /* The connection ended: after BYE (reason, message from it), a close
+     * frame, or a failed connect (reason -1, message says why). */
+    void (*on_close)(void *user, oc_client *c, int bye_reason, const char *message);
+} oc_callbacks;
+
+typedef struct oc_options {
+    const char *url;          /* ws://host:port/ (required) */
+    oc_loop *loop;            /* shared loop, or NULL for a private one */
+    oc_callbacks cb;
+    int frame_queue;          /* queued frames when on_frame is NULL (4), 1..1024 */
+    int decode_tiles;         /* 1: decode tile payloads to floats (default) */
+    int header_only;          /* 1: FRAMEs are checked (header, length) and
+                                 only their fixed fields read (oc_frame.info:
+                                 cutoff_k, e_error, origin, camera_seq, tick,
+                                 tile_count, has_mesh; tiles NULL, info.tiles
+                                 NULL, no mesh data): for load generators,
+                                 whose own CPU must not limit the test.
+                                 Other messages are decoded fully. (0) */
+    uint32_t max_message;     /* largest message accepted, bytes
+                                 (PROTO_MAX_MESSAGE_DEFAULT) */
+    const char *origin;       /* Origin header, NULL: none */
+} oc_options;
+
+/* Defaults as noted above; url NULL. */
+void oc_options_default(oc_options *o);
+
+typedef enum oc_state {
+    OC_CONNECTING = 0,  /* TCP/WebSocket handshake or waiting for HELLO */
+    OC_READY = 1,       /* HELLO received */
+    OC_CLOSED = 2       /* closed or failed; see oc_client_last_error */
+} oc_state;
+
+/* Starts connecting (non-blocking): parses the URL, makes the private loop
+ * if needed and queues the connect, which the servicing thread issues
+ * (lws_client_connect_via_info, subprotocol PROTO_SUBPROTOCOL) on its next
+ * pass; progress happens while the loop is serviced, and a refused or
+ * failed connect shows as OC_CLOSED with the reason in
+ * oc_client_last_error.  OCEAN_EINVAL for a bad URL or options. */
+ocean_result oc_client_create(const oc_options *o, oc_client **out, char *err, size_t errlen);
+
+/* Closes the connection (sends BYE NORMAL and a close frame when it can
+ * within a short grace period) and frees the client.  Frames already taken
+ * stay valid.  Accepts NULL. */
+void oc_client_destroy(oc_client *c);
+
+/* oc_client_create + oc_client_connect_wait; on failure *out is NULL and err
+ * says why. */
+ocean_result oc_connect(const oc_options *o, int timeout_ms, oc_client **out, char *err,
+                        size_t errlen);
+
+/* Waits until HELLO arrived (OCEAN_OK), the connection failed (OCEAN_EIO)
+ * or timeout_ms passed (OCEAN_ESTATE). */
+ocean_result oc_client_connect_wait(oc_client *c, int timeout_ms);
+
+oc_state oc_client_state(const oc_client *c);
+oc_loop *oc_client_loop(const oc_client *c);
+/* oc_loop_service on the client's loop. */
+ocean_result oc_service(oc_client *c, int timeout_ms);
+
+/* The HELLO (OCEAN_ESTATE before it arrived). */
+ocean_result oc_client_hello(const oc_client *c, proto_hello *out);
+
+/* The sim time of the latest message received (HELLO's at first): the
+ * server's clock as last seen, for queries "now" at an explicit time.
+ * NAN before HELLO. */
+double oc_client_sim_time(const oc_client *c);
+
+/* Text of the last ERROR received or the last local failure ("" if none)
+ * and its code (OCEAN_OK if none). */
+ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen);
+
+/* A SUBSCRIBE with the library's defaults: height+displacement+normals,
+ * concentric mesh, codec qz at accuracy 1e-3, seed cutoff policy, live,
+ * 1 layer, 4 LOD levels, 64-sample tiles, 30 Hz, server default spacing and
+ * range. */
+void oc_subscribe_default(proto_subscribe *s);
+
+/* Sends SUBSCRIBE (validated by the encoder first).  May be sent again to
+ * change the subscription.  OCEAN_ESTATE before READY. */
+ocean_result oc_client_subscribe(oc_client *c, const proto_subscribe *s);
+
+/* A level camera at (0, 20, 0), 60 degree fov, 1920x1080, at rest. */
+void oc_camera_default(proto_camera *cam);
+
+/* Sends CAMERA.  In replay mode cam->render_time names the sim time to
+ * render.  *seq_out (may be NULL) gets the message's seq, which the
+ * answering FRAME carries as info.camera_seq. */
+ocean_result oc_client_send_camera(oc_client *c, const proto_camera *cam, uint32_t *seq_out);
+
+/* Takes the oldest queued frame, waiting up to timeout_ms (0: no wait,
+ * -1: forever).  OCEAN_OK and *out, or OCEAN_ESTATE on timeout (*out NULL)
+ * or OCEAN_EIO once the connection is closed and the queue empty. */
+ocean_result oc_client_next_frame(oc_client *c, int timeout_ms, oc_frame **out);
+
+/* Latest topology received (borrowed; valid until the client is destroyed
+ * or a new topology with the same id replaces it - frames keep theirs). */
+const oc_topology *oc_client_topology(oc_client *c);
+
+/* ---------------------------------------------------------------- queries */
+
+typedef struct oc_query_result {
+    uint32_t query_id;
+    double t;                      /* sim time evaluated */
+    uint32_t count;
+    proto_query_sample *samples;   /* count, owned: oc_query_result_free */
+} oc_query_result;
+
+void oc_query_result_free(oc_query_result *r);   /* accepts NULL; zeroes r */
+
+/* Callback of an asynchronous query: res is OCEAN_OK and r the answer
+ * (borrowed), or the ERROR's code (r NULL), or OCEAN_EIO if the connection
+ * closed first. */
+typedef void (*oc_query_fn)(void *user, oc_client *c, ocean_result res,
+                            const oc_query_result *r);
+
+/* Sends QUERY for n points xz[2i], xz[2i+1] (world x, z in double).
+ * at_time 0: the latest tick (t ignored); 1: at sim time t.  The answer
+ * goes to fn (on the servicing thread).  *query_id (may be NULL) gets the
+ * id.  OCEAN_EINVAL for n = 0, n above the server's limit or non-finite
+ * input. */
+ocean_result oc_client_query_async(oc_client *c, const double *xz, size_t n, int at_time,
+                                   double t, oc_query_fn fn, void *user, uint32_t *query_id);
+
+/* Blocking query: as above, waiting up to timeout_ms for the answer.
+ * OCEAN_OK and *out filled (free with oc_query_result_free), the server's
+ * ERROR code, OCEAN_EIO if the connection closed, OCEAN_ESTATE on
+ * timeout. */
+ocean_result oc_client_query(oc_client *c, const double *xz, size_t n, int at_time, double t,
+                             int timeout_ms, oc_query_result *out);
+
+/* -------------------------------------------------------------- sea state */
+
+/* The sea state in force as last announced (HELLO or SEA_STATE ANNOUNCE),
+ * with its effective time.  OCEAN_ESTATE before HELLO. */
+ocean_result oc_client_sea_state(const oc_client *c, proto_sea *out, double *effective_time);
+
+/* Sends SEA_STATE SET with the admin token and waits up to timeout_ms for
+ * the server's ANNOUNCE (OCEAN_OK) or ERROR about it (its code, e.g.
+ * OCEAN_EAUTH; text via oc_client_last_error).  OCEAN_ESTATE on timeout. */
+ocean_result oc_client_sea_state_set(oc_client *c, const proto_sea *sea, double effective_time,
+                                     const char *token, int timeout_ms);
+
+/* ------------------------------------------------------------------ stats */
+
+typedef struct oc_client_stats {
+    uint64_t messages_rx, bytes_rx;     /* every message received */
+    uint64_t messages_tx, bytes_tx;
+    uint64_t frames_rx;                 /* FRAMEs received */
+    uint64_t frames_dropped;            /* dropped from a full queue */
+    uint64_t frames_gap;                /* frames the server skipped for us
+                                           (latest wins): from gaps in
+                                           info.tick beyond the expected step
+                                           round(tick_rate / frame_rate) */
+    uint64_t decode_errors;             /* messages or tiles that failed */
+    uint64_t errors_rx;                 /* ERROR messages */
+} oc_client_stats;
+
+void oc_client_get_stats(const oc_client *c, oc_client_stats *out);
+
+#endif

@@ -1,0 +1,171 @@
+/*
+ * codec.js - tile payload decoders for the browser: f32, f16 and qz
+ * (quantised + planar prediction + zstd), plus octahedral normals.
+ * Mirrors protocol/codec.c (byte layouts in PROTOCOL.md).  The EXR codecs
+ * are not decoded here; the viewer never subscribes with them.
+ *
+ * qz needs zstd: we vendor fzstd (MIT, ~24 KB, pure JS, no run-time fetch)
+ * in vendor/fzstd.js because qz is the daemon's default and several times
+ * smaller on the wire than f16 (the point of the codec: a remote viewer on
+ * a real link), and a decoder that understands it keeps the viewer honest
+ * against the default subscription.
+ *
+ * Decoders treat input as hostile, as the C ones do: sizes, headers and the
+ * zstd frame are checked and non-finite results are refused; any failure
+ * throws a ProtoError with code ECODEC.
+ */
+import { decompress } from './vendor/fzstd.js';
+import { CODEC, CODEC_NAMES, ProtoError, R, tilePlanes } from './protocol.js';
+
+const QZ_FORMAT = 1;
+const QZ_HEAD = 4;            /* planes u8, format u8, reserved u16 */
+const QZ_PLANE_HEAD = 24;     /* base f32, step f32, nbytes u8, predictor u8, reserved u16, coef i16[6] */
+const QZ_PRED_PLANAR = 1;
+const QZ_PRED_LS6 = 2;
+const QZ_NCOEF = 6;
+const QZ_Q_LIMIT = 2 ** 30;   /* keeps every predictor sum far below 2^53: exact in doubles */
+
+function bad(msg) { throw new ProtoError(R.ECODEC, msg); }
+
+/* binary16 -> float32 table (65536 entries, built once). */
+const F16 = (() => {
+    const t = new Float32Array(65536);
+    for (let h = 0; h < 65536; h++) {
+        const s = h & 0x8000 ? -1 : 1, e = (h >> 10) & 0x1f, m = h & 0x3ff;
+        if (e === 0) t[h] = s * m * 2 ** -24;
+        else if (e === 31) t[h] = m ? NaN : s * Infinity;
+        else t[h] = s * (1 + m / 1024) * 2 ** (e - 15);
+    }
+    return t;
+})();
+
+export function f32FromF16(h) { return F16[h & 0xffff]; }
+
+/* Decodes a tile payload for (codec, w, h, channels) into a new
+ * Float32Array of planes * w * h samples, plane after plane (row = z).
+ * Returns {planes, data}. */
+export function decodeTile(codec, w, h, channels, payload) {
+    const np = tilePlanes(channels);
+    if (!np) bad(`bad channel mask 0x${channels.toString(16)}`);
+    if (!(w >= 1 && h >= 1 && w <= 1024 && h <= 1024)) bad(`tile size ${w}x${h} outside 1..1024`);
+    const n = w * h, total = n * np;
+    const out = new Float32Array(total);
+    const dv = new DataView(payload.buffer, payload.byteOffset, payload.byteLength);
+    switch (codec) {
+    case CODEC.F32:
+        if (payload.byteLength !== total * 4) bad(`f32 payload is ${payload.byteLength} bytes, ${w}x${h} x ${np} planes needs ${total * 4}`);
+        for (let i = 0; i < total; i++) {
+            const f = dv.getFloat32(4 * i, true);
+            if (!Number.isFinite(f)) bad(`f32 payload holds a non-finite value at sample ${i}`);
+            out[i] = f;
+        }
+        break;
+    case CODEC.F16:
+        if (payload.byteLength !== total * 2) bad(`f16 payload is ${payload.byteLength} bytes, ${w}x${h} x ${np} planes needs ${total * 2}`);
+        for (let i = 0; i < total; i++) {
+            const f = F16[payload[2 * i] | (payload[2 * i + 1] << 8)];
+            if (!Number.isFinite(f)) bad(`f16 payload holds a non-finite value at sample ${i}`);
+            out[i] = f;
+        }
+        break;
+    case CODEC.QZ:
+        qzDecode(w, h, np, payload, dv, out);
+        break;
+    default:
+        throw new ProtoError(R.EUNSUPPORTED, `codec ${CODEC_NAMES[codec] || codec} is not decoded by the web viewer`);
+    }
+    return { planes: np, data: out };
+}
+
+/* Scratch reused across calls (decoding is single-threaded per worker). */
+let qScratch = new Float64Array(0);
+let rScratch = new Int32Array(0);
+
+function qzDecode(w, h, np, data, dv, out) {
+    const len = data.byteLength;
+    const headlen = QZ_HEAD + QZ_PLANE_HEAD * np + 4;
+    if (len < headlen) bad(`qz payload of ${len} bytes shorter than its ${headlen}-byte header`);
+    if (data[0] !== np) bad(`qz header says ${data[0]} planes, tile has ${np}`);
+    if (data[1] !== QZ_FORMAT || dv.getUint16(2, true) !== 0)
+        bad(`qz format ${data[1]} / reserved ${dv.getUint16(2, true)} not supported`);
+    const n = w * h;
+    const base = [], step = [], nb = [], pred = [], coefs = [];
+    let want = 0;
+    for (let c = 0; c < np; c++) {
+        const o = QZ_HEAD + QZ_PLANE_HEAD * c;
+        const b = dv.getFloat32(o, true), s = dv.getFloat32(o + 4, true), k = data[o + 8], p = data[o + 9];
+        const coef = new Float64Array(QZ_NCOEF);
+        let nonzero = false;
+        for (let i = 0; i < QZ_NCOEF; i++) {
+            coef[i] = dv.getInt16(o + 12 + 2 * i, true);
+            if (coef[i] !== 0) nonzero = true;
+        }
+        if (!Number.isFinite(b) || !Number.isFinite(s) || !(s > 0) || k > 4 || dv.getUint16(o + 10, true) !== 0 ||
+            (p !== QZ_PRED_PLANAR && p !== QZ_PRED_LS6) || (p === QZ_PRED_PLANAR && nonzero))
+            bad(`qz plane ${c} header invalid (base ${b}, step ${s}, bytes ${k}, predictor ${p})`);
+        base.push(b); step.push(s); nb.push(k); pred.push(p); coefs.push(coef);
+        want += k * n;
+    }
+    const rawlen = dv.getUint32(headlen - 4, true);
+    if (rawlen !== want) bad(`qz residual length ${rawlen}, header implies ${want}`);
+    const zsrc = data.subarray(headlen);
+    /* fzstd validates the frame and block structure and allocates exactly
+     * the content size; we insist on exactly `want` bytes of output (a
+     * frame that says otherwise, or extra frames, change the length). */
+    let raw;
+    try { raw = decompress(zsrc); } catch (e) { bad(`qz: zstd: ${e.message || e}`); }
+    if (raw.length !== want) bad(`qz: zstd frame content size ${raw.length} does not match ${want}`);
+    if (qScratch.length < n) { qScratch = new Float64Array(n); rScratch = new Int32Array(n); }
+    const q = qScratch, res = rScratch;
+    let off = 0;
+    for (let c = 0; c < np; c++) {
+        const k = nb[c], bs = base[c], st = step[c], ls6 = pred[c] === QZ_PRED_LS6;
+        const [c0, c1, c2, c3, c4, c5] = coefs[c];
+        const dst = c * n;
+        /* residuals: k little-endian byte planes, zigzag-decoded */
+        if (k === 0) res.fill(0, 0, n);
+        else if (k === 1) for (let i = 0; i < n; i++) { const z = raw[off + i]; res[i] = (z >>> 1) ^ -(z & 1); }
+        else if (k === 2) for (let i = 0; i < n; i++) { const z = raw[off + i] | (raw[off + n + i] << 8); res[i] = (z >>> 1) ^ -(z & 1); }
+        else if (k === 3) for (let i = 0; i < n; i++) { const z = raw[off + i] | (raw[off + n + i] << 8) | (raw[off + 2 * n + i] << 16); res[i] = (z >>> 1) ^ -(z & 1); }
+        else for (let i = 0; i < n; i++) { const z = (raw[off + i] | (raw[off + n + i] << 8) | (raw[off + 2 * n + i] << 16) | (raw[off + 3 * n + i] << 24)) >>> 0; res[i] = (z >>> 1) ^ -(z & 1); }
+        off += k * n;
+        /* prediction, in the order the encoder used (row by row) */
+        let lo = 0, hi = 0;
+        for (let i = 0; i < h; i++) {
+            const row = i * w;
+            for (let j = 0; j < w; j++) {
+                const idx = row + j;
+                let p;
+                if (i === 0) p = j === 0 ? 0 : q[idx - 1];
+                else if (j === 0) p = q[idx - w];
+                else if (ls6 && i >= 2 && j >= 2 && j + 1 < w)
+                    p = Math.floor((c0 * q[idx - 1] + c1 * q[idx - w] + c2 * q[idx - w - 1] + c3 * q[idx - w + 1] +
+                                    c4 * q[idx - 2] + c5 * q[idx - 2 * w] + 2048) / 4096);
+                else p = q[idx - 1] + q[idx - w] - q[idx - w - 1];
+                const v = p + res[idx];
+                if (v > QZ_Q_LIMIT || v < -QZ_Q_LIMIT) bad(`qz plane ${c}: level ${v} out of range at (${i},${j})`);
+                q[idx] = v;
+                if (v < lo) lo = v; else if (v > hi) hi = v;
+            }
+        }
+        /* values: base + q * step; finite unless the plane's extremes overflow */
+        if (!Number.isFinite(Math.fround(bs + lo * st)) || !Number.isFinite(Math.fround(bs + hi * st)))
+            bad(`qz plane ${c}: non-finite values (base ${bs}, step ${st}, levels ${lo}..${hi})`);
+        for (let i = 0; i < n; i++) out[dst + i] = bs + q[i] * st;   /* Float32Array store rounds as (float) */
+    }
+}
+
+/* Octahedral unit normal (y up) -> [nx, ny, nz], as proto_normal_oct_decode. */
+export function octDecode(u, v, out = [0, 0, 0]) {
+    let x = u, z = v;
+    const y = 1 - Math.abs(u) - Math.abs(v);
+    if (y < 0) {
+        const ox = (1 - Math.abs(z)) * (x >= 0 ? 1 : -1);
+        const oz = (1 - Math.abs(x)) * (z >= 0 ? 1 : -1);
+        x = ox; z = oz;
+    }
+    const l = Math.hypot(x, y, z);
+    if (!(l > 0)) { out[0] = 0; out[1] = 1; out[2] = 0; return out; }
+    out[0] = x / l; out[1] = y / l; out[2] = z / l;
+    return out;
+}

@@ -1,0 +1,312 @@
+/*
+ * main.js - the viewer page: starts the network worker, feeds the renderer,
+ * runs the fly camera, sends CAMERA reports at the subscription's rate and
+ * keeps the overlay (fps, sim time, cutoff, bytes/s, latency).
+ *
+ * URL parameters (all optional):
+ *   ws=URL          WebSocket endpoint (default: same host/port as the page)
+ *   codec=qz|f16|f32   tile codec to ask for (default qz, the daemon's default)
+ *   policy=antialias|seed|none   cutoff policy (default antialias)
+ *   rate=HZ tile=N levels=N layers=N accuracy=A range=M spacing=M
+ *   x= y= z= yaw= pitch= fov= speed=   initial camera
+ *   vx= vy= vz=     constant camera velocity (m/s), for demos and tests
+ *   debug=1         tint the sea by tile level
+ *   overlay=0       hide the overlay
+ *
+ * window.oceanStats exposes live counters (the browser test reads them).
+ */
+import { Renderer, normalize3 } from './render.js';
+import { FlyCamera } from './camera.js';
+import { CODEC, CUTOFF } from './protocol.js';
+
+const qs = new URLSearchParams(location.search);
+const num = (k, d) => (qs.has(k) && Number.isFinite(Number(qs.get(k))) ? Number(qs.get(k)) : d);
+
+const stats = {
+    state: 'starting', url: '', clientId: null, serverVersion: '', codec: '', cutoffPolicy: '',
+    framesReceived: 0, framesRendered: 0, framesWithMesh: 0, topologies: 0, tilesDecoded: 0, levels: 0,
+    bytes: 0, bytesPerSec: 0, latencyMs: null, latencyP50: null, latencyP99: null, simTime: 0, tick: 0,
+    cutoffK: null, eError: null, fps: 0, decodeErrors: 0, serverErrors: 0, skipped: 0, lastError: '',
+    vertexCount: 0, indexCount: 0, decodeMs: 0, bye: null, errors: [],
+};
+window.oceanStats = stats;
+
+const canvas = document.getElementById('view');
+const overlay = document.getElementById('overlay');
+const statusEl = document.getElementById('status');
+if (qs.get('overlay') === '0') document.getElementById('hud').style.display = 'none';
+
+let renderer;
+try {
+    renderer = new Renderer(canvas, { antialias: qs.get('aa') !== '0', scale: num('scale', 0) });
+} catch (e) {
+    stats.state = 'no-webgl';
+    stats.lastError = String(e.message || e);
+    statusEl.textContent = `Cannot render: ${stats.lastError}`;
+    throw e;
+}
+/* a GPU reset loses every buffer and texture: rebuild by reloading */
+canvas.addEventListener('webglcontextlost', (e) => { e.preventDefault(); stats.state = 'webgl-context-lost'; });
+canvas.addEventListener('webglcontextrestored', () => location.reload());
+renderer.debug = qs.get('debug') === '1';
+renderer.drawSea = qs.get('sea') !== '0';   /* sea=0: sky and far sea only (the test's blank-scene control) */
+
+const cam = new FlyCamera({
+    x: num('x', 0), y: num('y', 25), z: num('z', 0), yaw: num('yaw', 30), pitch: num('pitch', -10),
+    fov: num('fov', 60), speed: num('speed', 15), vx: num('vx', 0), vy: num('vy', 0), vz: num('vz', 0),
+});
+cam.attach(canvas);
+
+const codecByName = { qz: CODEC.QZ, f16: CODEC.F16, f32: CODEC.F32 };
+const policyByName = { none: CUTOFF.NONE, seed: CUTOFF.SEED, antialias: CUTOFF.ANTIALIAS };
+const want = {
+    codec: codecByName[qs.get('codec')] ?? CODEC.QZ,
+    cutoffPolicy: policyByName[qs.get('policy')] ?? CUTOFF.ANTIALIAS,
+    /* software GL draws a few frames per second: do not make the daemon
+     * send (and the worker decode) 30 */
+    frameRateHz: num('rate', renderer.software ? 10 : 30),
+    tileSize: num('tile', undefined),
+    lodLevels: num('levels', undefined),
+    layers: num('layers', undefined),
+    accuracy: num('accuracy', 1e-3),
+    viewRangeM: num('range', 0),
+    baseSpacingM: num('spacing', 0),
+};
+/* Unless the URL fixes it, the level-0 tile spacing follows the camera's
+ * altitude (about 1/28 of the height, a power of two in [0.25, 64] m): low
+ * over the water the viewer asks for fine detail, high up for coarse tiles
+ * that cover more sea for the same bytes.  Re-subscribes on a change held
+ * for a second (a change of at least 2x, so no flapping). */
+const autoSpacing = !qs.has('spacing');
+const spacingFor = (h) => 2 ** Math.max(-2, Math.min(6, Math.round(Math.log2(Math.max(h, 1) / 28))));
+if (autoSpacing) want.baseSpacingM = spacingFor(num('y', 25));
+let spacingWish = want.baseSpacingM, spacingSince = 0;
+function adaptSpacing(now) {
+    if (!autoSpacing || !sub) return;
+    const s = spacingFor(cam.pos[1]);
+    if (s === sub.baseSpacingM) { spacingWish = s; return; }
+    if (s !== spacingWish) { spacingWish = s; spacingSince = now; return; }
+    if (now - spacingSince > 1000) {
+        worker.postMessage({ cmd: 'subscribe', sub: { baseSpacingM: s } });
+        spacingSince = now + 1e9;   /* until the worker confirms */
+    }
+}
+Object.keys(want).forEach((k) => want[k] === undefined && delete want[k]);
+
+const wsUrl = qs.get('ws') || `${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/`;
+stats.url = wsUrl;
+const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+worker.onerror = (e) => { stats.lastError = `worker: ${e.message}`; stats.state = 'worker-error'; };
+
+let sub = null;
+let lastFrameSim = 0, lastFrameWall = 0, haveFrame = false;
+let pendingFrame = null;
+const latencies = [];
+let sendTimer = null;
+
+function pushError(msg) {
+    stats.lastError = msg;
+    stats.errors.push(msg);
+    if (stats.errors.length > 20) stats.errors.shift();
+}
+
+worker.onmessage = (ev) => {
+    const m = ev.data;
+    switch (m.kind) {
+    case 'status':
+        stats.state = m.state;
+        if (m.state === 'closed') {
+            stats.closeCode = m.code;
+            stats.closeReason = m.reason;
+            stats.disconnects = (stats.disconnects || 0) + 1;
+            if (m.retryMs != null) stats.state = `closed, retrying in ${(m.retryMs / 1000).toFixed(1)} s`;
+            if (sendTimer) { clearInterval(sendTimer); sendTimer = null; }
+            sub = null;
+        }
+        break;
+    case 'hello': {
+        stats.clientId = m.hello.clientId;
+        stats.serverVersion = m.hello.serverVersion;
+        stats.hello = { tickRateHz: m.hello.tickRateHz, codecs: m.hello.codecs, sea: m.hello.sea };
+        const d = m.hello.sea.windDirDeg * Math.PI / 180;
+        renderer.wind = [Math.cos(d), Math.sin(d)];
+        if (m.hello.sea.hs > 0) renderer.hs = m.hello.sea.hs;
+        /* sun low over the downwind side: glitter on the waves' faces */
+        renderer.sunDir = normalize3([Math.cos(d + 0.5), 0.32, Math.sin(d + 0.5)]);
+        lastFrameSim = m.simTime;
+        break;
+    }
+    case 'subscribed':
+        sub = m.sub;
+        stats.state = 'subscribed';
+        stats.codec = m.codecName;
+        stats.cutoffPolicy = Object.keys(policyByName).find((k) => policyByName[k] === sub.cutoffPolicy);
+        stats.subscription = sub;
+        startCameraReports();
+        startQueries();
+        stats.lastError = '';
+        break;
+    case 'topology':
+        renderer.setTopology(m);
+        stats.topologies++;
+        stats.vertexCount = m.vertexCount;
+        stats.indexCount = m.indices.length;
+        break;
+    case 'vertices':
+        renderer.setVertices(m);
+        break;
+    case 'frame':
+        stats.framesReceived++;
+        pendingFrame = m;       /* latest wins: uploaded on the next animation frame */
+        break;
+    case 'error':
+        if (m.source === 'server') stats.serverErrors++;
+        else stats.decodeErrors++;
+        pushError(`${m.source}: ${m.message}`);
+        break;
+    case 'bye':
+        stats.bye = `${m.reason}${m.message ? `: ${m.message}` : ''}`;
+        pushError(`server said bye (${stats.bye})`);
+        break;
+    case 'capture':
+        window.oceanCapture = new Uint8Array(m.bytes);
+        break;
+    case 'result': {
+        const r = m.result;
+        stats.queryResults = (stats.queryResults || 0) + 1;
+        if (r.samples && r.samples.length) {
+            const q = r.samples[0];
+            stats.seaBelow = { t: r.t, height: q.height, foam: q.foam, errorBound: q.errorBound };
+            /* keep the eye above the waves (the answer is up to 0.5 s old: margin) */
+            cam.floorY = Math.max(0.5, q.height + 0.8);
+        }
+        break;
+    }
+    case 'sea': {
+        const d = m.sea.windDirDeg * Math.PI / 180;
+        renderer.wind = [Math.cos(d), Math.sin(d)];
+        if (m.sea.hs > 0) renderer.hs = m.sea.hs;
+        break;
+    }
+    default:
+        break;
+    }
+};
+
+/* Twice a second, ask the daemon for the sea under the camera (QUERY):
+ * the overlay shows the height above the waves. */
+let queryId = 0, queryTimer = null;
+function startQueries() {
+    if (queryTimer) clearInterval(queryTimer);
+    queryTimer = setInterval(() => {
+        if (!sub) return;
+        worker.postMessage({ cmd: 'query', id: ++queryId, points: [cam.pos[0], cam.pos[2]] });
+    }, 500);
+}
+
+function startCameraReports() {
+    if (sendTimer) clearInterval(sendTimer);
+    const hz = Math.max(1, Math.min(sub ? sub.frameRateHz : 30, 30));
+    const sendNow = () => worker.postMessage({ cmd: 'camera', cam: cam.report(canvas.width || 1280, canvas.height || 720) });
+    sendNow();
+    sendTimer = setInterval(sendNow, 1000 / hz);
+}
+
+function applyFrame(m) {
+    if (m.mesh) {
+        if (renderer.setVertices(m.mesh)) stats.framesWithMesh++;
+        let lo = Infinity, hi = -Infinity;
+        const p = m.mesh.positions;
+        for (let i = 1; i < p.length; i += 3) { if (p[i] < lo) lo = p[i]; if (p[i] > hi) hi = p[i]; }
+        stats.meshY = [lo, hi];
+    }
+    renderer.setLevels(m.levels);
+    lastFrameSim = m.simTime;
+    lastFrameWall = performance.now();
+    haveFrame = true;
+    stats.simTime = m.simTime;
+    stats.tick = m.tick;
+    stats.origin = m.origin;
+    stats.cutoffK = m.cutoffK;
+    stats.eError = m.eError;
+    stats.bytes = m.stats.bytes;
+    stats.bytesPerSec = m.bytesPerSec;
+    stats.tilesDecoded = m.stats.tiles;
+    stats.skipped = m.stats.skipped;
+    stats.decodeMs = m.stats.decodeMs;
+    stats.decodeWorkers = m.decodeWorkers;
+    stats.levels = m.levels.length;
+    if (m.codecs) stats.codec = m.codecs;
+    stats.tileCount = m.tileCount;
+    stats.levelInfo = m.levels.map((L) => ({ level: L.level, spacing: L.spacing, w: L.width, h: L.height, tiles: L.tiles, err: L.errorBound, foamMax: L.foamMax, foamMean: L.foamMean }));
+    if (m.latencyMs != null) {
+        stats.latencyMs = m.latencyMs;
+        latencies.push(m.latencyMs);
+        if (latencies.length > 300) latencies.shift();
+        const s = latencies.slice().sort((a, b) => a - b);
+        stats.latencyP50 = s[Math.floor(0.5 * (s.length - 1))];
+        stats.latencyP99 = s[Math.floor(0.99 * (s.length - 1))];
+    }
+}
+
+function fmtBytes(b) {
+    if (b >= 1e6) return `${(b / 1e6).toFixed(2)} MB`;
+    if (b >= 1e3) return `${(b / 1e3).toFixed(1)} kB`;
+    return `${b.toFixed(0)} B`;
+}
+function fmtCutoff(k) {
+    if (k == null) return '–';
+    if (!Number.isFinite(k)) return '∞ (unfiltered)';
+    return `${k.toFixed(3)} rad/m (λ ${(2 * Math.PI / k).toFixed(2)} m)`;
+}
+
+function updateOverlay() {
+    const v = cam.measuredVel, sp = Math.hypot(v[0], v[1], v[2]);
+    const lines = [
+        `<b>oceand viewer</b> ${stats.serverVersion ? `· server ${esc(stats.serverVersion)}` : ''} · client ${stats.clientId ?? '–'} · ${esc(stats.state)}`,
+        `fps ${stats.fps.toFixed(1)} · frames ${stats.framesReceived} (skipped ${stats.skipped}) · decode ${stats.decodeMs.toFixed(1)} ms (${stats.decodeWorkers ?? 0} workers)`,
+        `sim time ${stats.simTime.toFixed(2)} s · tick ${stats.tick}`,
+        `cutoff ${fmtCutoff(stats.cutoffK)} · E_error ${stats.eError == null ? '–' : (100 * stats.eError).toFixed(2) + ' %'} · ${esc(stats.cutoffPolicy || '')}`,
+        `${fmtBytes(stats.bytesPerSec)}/s · total ${fmtBytes(stats.bytes)} · codec ${esc(stats.codec || '–')} · tiles ${stats.tileCount ?? 0} in ${stats.levels} levels`,
+        `latency ${stats.latencyMs == null ? '–' : stats.latencyMs.toFixed(1) + ' ms'} (p50 ${stats.latencyP50 == null ? '–' : stats.latencyP50.toFixed(1)}, p99 ${stats.latencyP99 == null ? '–' : stats.latencyP99.toFixed(1)})`,
+        `camera (${cam.pos[0].toFixed(1)}, ${cam.pos[1].toFixed(1)}, ${cam.pos[2].toFixed(1)}) yaw ${cam.yawDeg.toFixed(0)}° pitch ${cam.pitchDeg.toFixed(0)}° · ${sp.toFixed(1)} m/s · speed ${cam.speed.toFixed(1)} m/s`,
+        `mesh ${stats.vertexCount} vertices${stats.seaBelow ? ` · sea below ${stats.seaBelow.height.toFixed(2)} m (camera ${(cam.pos[1] - stats.seaBelow.height).toFixed(1)} m above it)` : ''}`,
+    ];
+    if (stats.lastError) lines.push(`<span class="err">${esc(stats.lastError)}</span>`);
+    overlay.innerHTML = lines.join('<br>');
+    statusEl.textContent = stats.state.startsWith('closed') ? `Disconnected from ${stats.url} (${stats.state})`
+        : haveFrame ? '' : `Connecting to ${stats.url} …`;
+}
+
+function esc(s) { return String(s).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c])); }
+
+let lastT = performance.now(), fpsT = lastT, fpsN = 0, overlayT = 0;
+function tick(now) {
+    const dt = Math.min(0.5, (now - lastT) / 1000);   /* real-time motion even at a few fps; no leap after a hidden tab */
+    lastT = now;
+    cam.update(dt);
+    stats.camera = cam.pos.slice();
+    stats.cameraVel = cam.measuredVel.slice();
+    adaptSpacing(now);
+    if (pendingFrame) { applyFrame(pendingFrame); pendingFrame = null; }
+    const simNow = haveFrame ? lastFrameSim + Math.min(0.5, (now - lastFrameWall) / 1000) : lastFrameSim;
+    try {
+        if (renderer.draw({ pos: cam.pos, basis: cam.basis, fovYDeg: cam.fovYDeg }, simNow)) stats.framesRendered++;
+    } catch (e) {
+        pushError(`render: ${e.message || e}`);
+    }
+    fpsN++;
+    if (now - fpsT >= 500) { stats.fps = fpsN * 1000 / (now - fpsT); fpsN = 0; fpsT = now; }
+    if (now - overlayT > 250) { updateOverlay(); overlayT = now; }
+    requestAnimationFrame(tick);
+}
+requestAnimationFrame(tick);
+
+worker.postMessage({ cmd: 'connect', url: wsUrl, sub: want });
+window.addEventListener('beforeunload', () => worker.postMessage({ cmd: 'close' }));
+/* a hidden tab draws nothing: the worker stops decoding until it is back */
+document.addEventListener('visibilitychange', () => worker.postMessage({ cmd: 'pause', paused: document.hidden }));
+document.getElementById('help-toggle').addEventListener('click', () => document.getElementById('help').classList.toggle('hidden'));
+
+/* for debugging from the console and for tests */
+window.oceanViewer = { renderer, camera: cam, worker };

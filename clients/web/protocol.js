@@ -1,0 +1,675 @@
+/*
+ * protocol.js - the ocean.v1 wire protocol in JavaScript: message decoder
+ * and the encoders a viewer needs (SUBSCRIBE, CAMERA, QUERY, BYE).
+ *
+ * Mirrors protocol/proto.c (the C binding of protocol/PROTOCOL.md): every
+ * message is a 32-byte little-endian header followed by a typed payload.
+ * The decoder treats input as hostile, exactly like the C one: it checks
+ * the magic, version, type, reserved bytes, every length and count, enum
+ * values, and refuses NaN/Inf where a number must be finite.  Failures
+ * throw a ProtoError whose `code` is the ocean_result value the C decoder
+ * returns for the same bytes and whose message names the field.
+ *
+ * Pure functions over bytes: no sockets, no DOM, so it runs in a Worker and
+ * under node for tests.
+ */
+
+export const SUBPROTOCOL = 'ocean.v1';
+export const MAGIC = 0x574e434f; /* "OCNW" */
+export const VERSION = 1;
+export const HEADER_SIZE = 32;
+
+export const T = Object.freeze({
+    HELLO: 1, SUBSCRIBE: 2, CAMERA: 3, FRAME: 4, TILE: 5, MESH_TOPOLOGY: 6,
+    MESH_VERTICES: 7, QUERY: 8, QUERY_RESULT: 9, SEA_STATE: 10, ERROR: 11, BYE: 12,
+});
+const TYPE_END = 13;
+export const TYPE_NAMES = ['?', 'HELLO', 'SUBSCRIBE', 'CAMERA', 'FRAME', 'TILE', 'MESH_TOPOLOGY',
+    'MESH_VERTICES', 'QUERY', 'QUERY_RESULT', 'SEA_STATE', 'ERROR', 'BYE'];
+
+export const FX = Object.freeze({ HEIGHT: 1, DISPLACEMENT: 2, NORMALS: 4, FOAM: 8, NEAR_FIELD: 16, ALL: 31 });
+export const MESH = Object.freeze({ CONCENTRIC: 0, CHUNKED: 1, PROJECTED: 2, NONE: 3 });
+export const MESH_KIND_COUNT = 4;
+export const CUTOFF = Object.freeze({ NONE: 0, SEED: 1, ANTIALIAS: 2 });
+export const CUTOFF_POLICY_COUNT = 3;
+export const MODE = Object.freeze({ LIVE: 0, REPLAY: 1 });
+export const MODE_COUNT = 2;
+export const CODEC = Object.freeze({ F32: 0, F16: 1, QZ: 2, EXR_ZIP: 3, EXR_PIZ: 4, EXR_B44: 5, EXR_B44A: 6 });
+export const CODEC_COUNT = 7;
+export const CODEC_NAMES = ['f32', 'f16', 'qz', 'exr-zip', 'exr-piz', 'exr-b44', 'exr-b44a'];
+export const CH = Object.freeze({ HEIGHT: 1, DX: 2, DZ: 4, NORMAL: 8, FOAM: 16, JACOBIAN: 32, ALL: 0x3f });
+export const BYE_REASONS = ['normal', 'shutdown', 'slow consumer', 'protocol error', 'auth', 'server full', 'idle'];
+export const NO_CAMERA = 0xffffffff;
+
+/* ocean_result codes (sim/ocean_result.h). */
+export const R = Object.freeze({
+    OK: 0, EINVAL: 1, ENOMEM: 2, EIO: 3, EFORMAT: 4, EVERSION: 5, ETYPE: 6, ETRUNC: 7,
+    ETOOBIG: 8, EUNSUPPORTED: 9, EAUTH: 10, ERATE: 11, ESTATE: 12, ECODEC: 13, ENOTFOUND: 14,
+    EDIVERGED: 15,
+});
+export const RESULT_NAMES = ['ok', 'invalid argument', 'out of memory', 'i/o error', 'malformed input',
+    'unsupported version', 'unknown type', 'truncated input', 'too big', 'unsupported', 'not authorised',
+    'rate limited', 'wrong state', 'codec error', 'not found', 'diverged'];
+
+export const LIMITS = Object.freeze({
+    maxMessage: 64 << 20,
+    maxQueryPoints: 65536,
+    maxFrameTiles: 4096,
+    maxVertices: 1 << 22,
+    maxIndices: 3 * (1 << 23),
+    maxLevel: 31,
+    maxLodLevels: 16,
+    maxLayers: 4,
+    maxFrameRate: 240,
+    tileMaxSize: 1024,
+    accuracyMin: 1e-6,
+    accuracyMax: 0.5,
+});
+
+const SEA_SIZE = 96, SUBSCRIBE_SIZE = 28, CAMERA_SIZE = 64, TILE_FIXED = 48, FRAME_FIXED = 56;
+const RECORD_HEAD = 8, TOPO_FIXED = 16, VERTS_FIXED = 32, QUERY_FIXED = 24, RESULT_FIXED = 16;
+const SAMPLE_SIZE = 36, SEASTATE_FIXED = 16 + SEA_SIZE, ERROR_FIXED = 8, BYE_FIXED = 4;
+const MAX_WORLD = 1e10, MAX_LOCAL = 1e7;
+
+export class ProtoError extends Error {
+    constructor(code, message) {
+        super(message);
+        this.name = 'ProtoError';
+        this.code = code;
+    }
+}
+
+function fail(code, msg) { throw new ProtoError(code, msg); }
+
+function f32(x) { return Math.fround(x); }
+
+function chkRange(what, v, lo, hi) {
+    if (!Number.isFinite(v)) fail(R.EINVAL, `${what} is ${v}; must be finite`);
+    if (v < lo || v > hi) fail(R.EINVAL, `${what} = ${v} outside [${lo}, ${hi}]`);
+}
+function chkMask(what, v, allowed) {
+    if ((v & ~allowed) >>> 0) fail(R.ETYPE, `${what} 0x${v.toString(16)} has unknown bits`);
+}
+function chkEnum(what, v, count) {
+    if (v >= count) fail(R.ETYPE, `${what} ${v} unknown (valid 0..${count - 1})`);
+}
+
+/* Number of float planes a channel mask makes (the normal counts twice); 0
+ * for an empty mask or unknown bits. */
+export function tilePlanes(channels) {
+    if (channels === 0 || (channels & ~CH.ALL)) return 0;
+    let n = 0;
+    for (let b = 0; b < 6; b++) if (channels & (1 << b)) n += b === 3 ? 2 : 1;
+    return n;
+}
+
+/* Plane names of a tile in wire order (H DX DZ NU NV FOAM J, present ones). */
+export function tilePlaneNames(channels) {
+    const names = ['H', 'DX', 'DZ', 'NU', 'NV', 'FOAM', 'J'], bit = [0, 1, 2, 3, 3, 4, 5];
+    const out = [];
+    for (let s = 0; s < 7; s++) if (channels & (1 << bit[s])) out.push(names[s]);
+    return out;
+}
+
+/* ---- reader ----------------------------------------------------------- */
+
+const utf8 = new TextDecoder('utf-8', { fatal: true });
+const utf8enc = new TextEncoder();
+
+class Reader {
+    constructor(u8, what) {
+        this.u8 = u8;
+        this.dv = new DataView(u8.buffer, u8.byteOffset, u8.byteLength);
+        this.off = HEADER_SIZE;
+        this.end = u8.byteLength;
+        this.what = what;
+    }
+    need(k, field) {
+        if (this.end - this.off < k)
+            fail(R.ETRUNC, `${this.what}: ${field} needs ${k} bytes at offset ${this.off}, only ${this.end - this.off} left`);
+    }
+    zero(at, n, field) {
+        for (let i = 0; i < n; i++)
+            if (this.u8[at + i] !== 0)
+                fail(R.EFORMAT, `${this.what}: reserved ${field} byte at offset ${at + i} is 0x${this.u8[at + i].toString(16)}, must be 0`);
+    }
+    u8at(o) { return this.u8[o]; }
+    u16(o) { return this.dv.getUint16(o, true); }
+    u32(o) { return this.dv.getUint32(o, true); }
+    i32(o) { return this.dv.getInt32(o, true); }
+    u64(o) { return this.dv.getBigUint64(o, true); }
+    f32(o) { return this.dv.getFloat32(o, true); }
+    f64(o) { return this.dv.getFloat64(o, true); }
+    str(max, field) {
+        this.need(2, field);
+        const n = this.u16(this.off);
+        if (n > max) fail(R.ETOOBIG, `${this.what}: ${field} of ${n} bytes longer than ${max}`);
+        this.off += 2;
+        this.need(n, field);
+        const bytes = this.u8.subarray(this.off, this.off + n);
+        let s;
+        try { s = utf8.decode(bytes); } catch { fail(R.EFORMAT, `${this.what}: ${field} is not valid UTF-8 (or holds NUL)`); }
+        if (s.includes('\0')) fail(R.EFORMAT, `${this.what}: ${field} is not valid UTF-8 (or holds NUL)`);
+        this.off += n;
+        return s;
+    }
+    finish() {
+        if (this.off !== this.end)
+            fail(R.EFORMAT, `${this.what}: ${this.end - this.off} unexpected bytes after the last field (offset ${this.off})`);
+    }
+    /* Little-endian float32 array copied out (the source may be unaligned). */
+    floats(count, field) {
+        this.need(count * 4, field);
+        const out = new Float32Array(count);
+        const o = this.u8.byteOffset + this.off;
+        if ((o & 3) === 0 && littleEndianHost) out.set(new Float32Array(this.u8.buffer, o, count));
+        else for (let i = 0; i < count; i++) out[i] = this.dv.getFloat32(this.off + 4 * i, true);
+        this.off += count * 4;
+        return out;
+    }
+}
+
+const littleEndianHost = new Uint8Array(new Uint32Array([1]).buffer)[0] === 1;
+
+/* ---- header ----------------------------------------------------------- */
+
+/* Reads and checks the 32-byte header of a complete message.  Returns
+ * {version, type, flags, length, seq, simTime}. */
+export function decodeHeader(u8, limits = LIMITS) {
+    if (!(u8 instanceof Uint8Array)) u8 = new Uint8Array(u8);
+    const len = u8.byteLength;
+    if (len < HEADER_SIZE) fail(R.ETRUNC, `message of ${len} bytes is shorter than the ${HEADER_SIZE}-byte header`);
+    const dv = new DataView(u8.buffer, u8.byteOffset, len);
+    const magic = dv.getUint32(0, true);
+    if (magic !== MAGIC) fail(R.EFORMAT, `bad magic 0x${magic.toString(16).padStart(8, '0')} (expected "OCNW")`);
+    const h = {
+        version: dv.getUint16(4, true),
+        type: dv.getUint16(6, true),
+        flags: dv.getUint32(8, true),
+        length: dv.getUint32(12, true),
+        seq: dv.getUint32(16, true),
+        simTime: dv.getFloat64(24, true),
+    };
+    if (h.version !== VERSION)
+        fail(R.EVERSION, `protocol version ${h.version} not supported (this side speaks ${VERSION}, subprotocol ${SUBPROTOCOL})`);
+    if (h.type < 1 || h.type >= TYPE_END) fail(R.ETYPE, `message type ${h.type} unknown (valid 1..${TYPE_END - 1})`);
+    const name = TYPE_NAMES[h.type];
+    if (h.flags !== 0 || dv.getUint32(20, true) !== 0)
+        fail(R.EFORMAT, `${name} header: flags / reserved must be 0 in version 1`);
+    if (!Number.isFinite(h.simTime)) fail(R.EINVAL, `${name} header: sim_time is ${h.simTime}; must be finite`);
+    if (h.length + HEADER_SIZE > limits.maxMessage)
+        fail(R.ETOOBIG, `${name} of ${h.length + HEADER_SIZE} bytes exceeds the ${limits.maxMessage}-byte message limit`);
+    if (h.length + HEADER_SIZE > len)
+        fail(R.ETRUNC, `${name} header declares ${h.length} payload bytes, only ${len - HEADER_SIZE} present`);
+    if (h.length + HEADER_SIZE < len)
+        fail(R.EFORMAT, `${name}: ${len - HEADER_SIZE - h.length} bytes after the declared ${h.length}-byte payload`);
+    return h;
+}
+
+/* ---- payload decoders ------------------------------------------------- */
+
+function dSea(r) {
+    r.need(SEA_SIZE, 'sea state');
+    r.zero(r.off + 2, 6, 'sea');
+    const o = r.off;
+    const s = {
+        spectrum: r.u8at(o), spreading: r.u8at(o + 1), seed: r.u64(o + 8),
+        windU10: r.f64(o + 16), windDirDeg: r.f64(o + 24), fetchM: r.f64(o + 32), depthM: r.f64(o + 40),
+        swell: r.f64(o + 48), phillipsA: r.f64(o + 56), smallWaveM: r.f64(o + 64), choppiness: r.f64(o + 72),
+        hs: r.f64(o + 80), tp: r.f64(o + 88),
+    };
+    r.off += SEA_SIZE;
+    return s;
+}
+
+function vSea(s) {
+    chkEnum('sea.spectrum', s.spectrum, 4);
+    chkEnum('sea.spreading', s.spreading, 4);
+    chkRange('sea.wind_u10', s.windU10, 0, 100);
+    chkRange('sea.wind_dir_deg', s.windDirDeg, -360, 360);
+    chkRange('sea.fetch_m', s.fetchM, 1, 1e7);
+    chkRange('sea.depth_m', s.depthM, 0.01, 12000);
+    chkRange('sea.swell', s.swell, 0, 1000);
+    chkRange('sea.phillips_a', s.phillipsA, 0, 1e6);
+    chkRange('sea.small_wave_m', s.smallWaveM, 0, 1e4);
+    chkRange('sea.choppiness', s.choppiness, 0, 10);
+    chkRange('sea.hs', s.hs, 0, 1000);
+    chkRange('sea.tp', s.tp, 0, 1e4);
+}
+
+function dHello(r) {
+    r.need(32, 'fixed fields');
+    const o = r.off;
+    const h = {
+        codecs: r.u32(o), meshKinds: r.u8at(o + 4), effects: r.u8at(o + 5), cutoffPolicies: r.u8at(o + 6),
+        modes: r.u8at(o + 7), maxMessage: r.u32(o + 8), maxQueryPoints: r.u32(o + 12),
+        maxTileSize: r.u16(o + 16), maxLodLevels: r.u8at(o + 18), maxLayers: r.u8at(o + 19),
+        tickRateHz: r.f32(o + 20), maxFrameRateHz: r.f32(o + 24), clientId: r.u32(o + 28),
+    };
+    r.off += 32;
+    h.sea = dSea(r);
+    h.serverVersion = r.str(63, 'server_version');
+    r.finish();
+    chkMask('hello.codecs', h.codecs, (1 << CODEC_COUNT) - 1);
+    chkMask('hello.mesh_kinds', h.meshKinds, (1 << MESH_KIND_COUNT) - 1);
+    chkMask('hello.effects', h.effects, FX.ALL);
+    chkMask('hello.cutoff_policies', h.cutoffPolicies, (1 << CUTOFF_POLICY_COUNT) - 1);
+    chkMask('hello.modes', h.modes, (1 << MODE_COUNT) - 1);
+    if (!h.codecs || !h.modes) fail(R.EINVAL, 'hello announces no codec or no mode');
+    if (h.maxMessage < HEADER_SIZE) fail(R.EINVAL, `hello.max_message ${h.maxMessage} below the header size`);
+    chkRange('hello.max_tile_size', h.maxTileSize, 2, LIMITS.tileMaxSize);
+    chkRange('hello.max_lod_levels', h.maxLodLevels, 1, LIMITS.maxLodLevels);
+    chkRange('hello.max_layers', h.maxLayers, 1, LIMITS.maxLayers);
+    chkRange('hello.tick_rate_hz', h.tickRateHz, 1e-3, 1000);
+    chkRange('hello.max_frame_rate_hz', h.maxFrameRateHz, 1e-3, LIMITS.maxFrameRate);
+    vSea(h.sea);
+    return h;
+}
+
+function dSubscribe(r) {
+    r.need(SUBSCRIBE_SIZE, 'fixed fields');
+    const o = r.off;
+    r.zero(o + 7, 1, 'subscribe');
+    r.zero(o + 10, 2, 'subscribe');
+    const s = {
+        effects: r.u8at(o), meshKind: r.u8at(o + 1), codec: r.u8at(o + 2), cutoffPolicy: r.u8at(o + 3),
+        mode: r.u8at(o + 4), layers: r.u8at(o + 5), lodLevels: r.u8at(o + 6), tileSize: r.u16(o + 8),
+        frameRateHz: r.f32(o + 12), accuracy: r.f32(o + 16), baseSpacingM: r.f32(o + 20), viewRangeM: r.f32(o + 24),
+    };
+    r.off += SUBSCRIBE_SIZE;
+    r.finish();
+    vSubscribe(s);
+    return s;
+}
+
+function vSubscribe(s) {
+    chkMask('subscribe.effects', s.effects, FX.ALL);
+    if (!s.effects) fail(R.EINVAL, 'subscribe.effects is empty');
+    chkEnum('subscribe.mesh_kind', s.meshKind, MESH_KIND_COUNT);
+    chkEnum('subscribe.codec', s.codec, CODEC_COUNT);
+    chkEnum('subscribe.cutoff_policy', s.cutoffPolicy, CUTOFF_POLICY_COUNT);
+    chkEnum('subscribe.mode', s.mode, MODE_COUNT);
+    chkRange('subscribe.layers', s.layers, 1, LIMITS.maxLayers);
+    chkRange('subscribe.lod_levels', s.lodLevels, 1, LIMITS.maxLodLevels);
+    chkRange('subscribe.tile_size', s.tileSize, 2, LIMITS.tileMaxSize);
+    chkRange('subscribe.frame_rate_hz', s.frameRateHz, 0, LIMITS.maxFrameRate);
+    if (!(s.frameRateHz > 0)) fail(R.EINVAL, 'subscribe.frame_rate_hz must be > 0');
+    chkRange('subscribe.accuracy', s.accuracy, f32(LIMITS.accuracyMin), LIMITS.accuracyMax);
+    if (s.baseSpacingM !== 0) chkRange('subscribe.base_spacing_m', s.baseSpacingM, 1e-3, 1e4);
+    if (s.viewRangeM !== 0) chkRange('subscribe.view_range_m', s.viewRangeM, 1, 1e7);
+}
+
+function dCamera(r) {
+    r.need(CAMERA_SIZE, 'fixed fields');
+    const o = r.off;
+    const k = {
+        pos: [r.f64(o), r.f64(o + 8), r.f64(o + 16)],
+        vel: [r.f32(o + 24), r.f32(o + 28), r.f32(o + 32)],
+        yawDeg: r.f32(o + 36), pitchDeg: r.f32(o + 40), rollDeg: r.f32(o + 44), fovYDeg: r.f32(o + 48),
+        viewportW: r.u16(o + 52), viewportH: r.u16(o + 54), renderTime: r.f64(o + 56),
+    };
+    r.off += CAMERA_SIZE;
+    r.finish();
+    vCamera(k);
+    return k;
+}
+
+function vCamera(k) {
+    chkRange('camera.pos.x', k.pos[0], -MAX_WORLD, MAX_WORLD);
+    chkRange('camera.pos.y', k.pos[1], -MAX_LOCAL, MAX_LOCAL);
+    chkRange('camera.pos.z', k.pos[2], -MAX_WORLD, MAX_WORLD);
+    for (let i = 0; i < 3; i++) chkRange('camera.velocity', k.vel[i], -1e5, 1e5);
+    chkRange('camera.yaw_deg', k.yawDeg, -360, 360);
+    chkRange('camera.pitch_deg', k.pitchDeg, -90, 90);
+    chkRange('camera.roll_deg', k.rollDeg, -180, 180);
+    chkRange('camera.fov_y_deg', k.fovYDeg, 0, 180);
+    if (k.fovYDeg <= 0 || k.fovYDeg >= 180) fail(R.EINVAL, `camera.fov_y_deg = ${k.fovYDeg} outside (0, 180)`);
+    chkRange('camera.viewport_w', k.viewportW, 1, 16384);
+    chkRange('camera.viewport_h', k.viewportH, 1, 16384);
+    chkRange('camera.render_time', k.renderTime, -1e15, 1e15);
+}
+
+/* TILE body; r.end must be the body's end.  The payload is a view into the
+ * message (no copy). */
+function dTile(r) {
+    r.need(TILE_FIXED, 'tile fixed fields');
+    const o = r.off;
+    const t = {
+        level: r.u8at(o), codec: r.u8at(o + 1), channels: r.u16(o + 2), width: r.u16(o + 4), height: r.u16(o + 6),
+        ix: r.i32(o + 8), iz: r.i32(o + 12), originX: r.f64(o + 16), originZ: r.f64(o + 24), spacing: r.f64(o + 32),
+        errorBound: r.f32(o + 40), payloadLen: r.u32(o + 44), payload: null,
+    };
+    r.off += TILE_FIXED;
+    r.need(t.payloadLen, 'tile payload');
+    t.payload = r.u8.subarray(r.off, r.off + t.payloadLen);
+    r.off += t.payloadLen;
+    r.finish();
+    vTile(t);
+    return t;
+}
+
+function vTile(t) {
+    chkRange('tile.level', t.level, 0, LIMITS.maxLevel);
+    chkEnum('tile.codec', t.codec, CODEC_COUNT);
+    chkMask('tile.channels', t.channels, CH.ALL);
+    if (!t.channels) fail(R.EINVAL, 'tile.channels is empty');
+    chkRange('tile.width', t.width, 1, LIMITS.tileMaxSize);
+    chkRange('tile.height', t.height, 1, LIMITS.tileMaxSize);
+    chkRange('tile.origin_x', t.originX, -MAX_WORLD, MAX_WORLD);
+    chkRange('tile.origin_z', t.originZ, -MAX_WORLD, MAX_WORLD);
+    chkRange('tile.spacing', t.spacing, 0, 1e6);
+    if (!(t.spacing > 0)) fail(R.EINVAL, 'tile.spacing must be > 0');
+    chkRange('tile.error_bound', t.errorBound, 0, 1e30);
+    if (t.codec === CODEC.F32 || t.codec === CODEC.F16) {
+        const want = tilePlanes(t.channels) * t.width * t.height * (t.codec === CODEC.F32 ? 4 : 2);
+        if (want !== t.payloadLen)
+            fail(R.EFORMAT, `tile ${CODEC_NAMES[t.codec]} payload is ${t.payloadLen} bytes, ${t.width}x${t.height} with ${tilePlanes(t.channels)} planes needs ${want}`);
+    } else if (t.payloadLen === 0) {
+        fail(R.EFORMAT, 'tile payload is empty');
+    }
+}
+
+function dVertices(r, limits) {
+    r.need(VERTS_FIXED, 'mesh vertices fixed fields');
+    const o = r.off;
+    const v = { meshId: r.u32(o), vertexCount: r.u32(o + 4), origin: [r.f64(o + 8), r.f64(o + 16), r.f64(o + 24)] };
+    r.off += VERTS_FIXED;
+    if (v.vertexCount > limits.maxVertices)
+        fail(R.ETOOBIG, `${r.what}: vertex_count ${v.vertexCount} above the limit ${limits.maxVertices}`);
+    v.positions = r.floats(3 * v.vertexCount, 'positions');
+    r.finish();
+    vVertices(v);
+    return v;
+}
+
+function vVertices(v) {
+    if (v.vertexCount === 0) fail(R.EINVAL, 'mesh vertex_count is 0');
+    for (let i = 0; i < 3; i++) chkRange('mesh.origin', v.origin[i], -MAX_WORLD, MAX_WORLD);
+    const p = v.positions;
+    for (let i = 0; i < p.length; i++) {
+        const x = p[i];
+        if (!(x >= -MAX_LOCAL && x <= MAX_LOCAL))
+            fail(R.EINVAL, `mesh position component ${i} is ${x} (finite, |v| <= 1e7 required)`);
+    }
+}
+
+function dRecord(r, isMesh, limits) {
+    r.need(RECORD_HEAD, 'record header');
+    const blen = r.u32(r.off);
+    r.zero(r.off + 4, 4, 'record header');
+    r.off += RECORD_HEAD;
+    r.need(blen, isMesh ? 'mesh record' : 'tile record');
+    const pad = (8 - (blen & 7)) & 7;
+    const bodyEnd = r.off + blen;
+    const outer = r.end;
+    r.end = bodyEnd;
+    const body = isMesh ? dVertices(r, limits) : dTile(r);
+    r.end = outer;
+    if (r.end - bodyEnd < pad) fail(R.ETRUNC, `${r.what}: record padding of ${pad} bytes missing at offset ${bodyEnd}`);
+    r.zero(bodyEnd, pad, 'record padding');
+    r.off = bodyEnd + pad;
+    return body;
+}
+
+function dFrame(r, limits) {
+    r.need(FRAME_FIXED, 'fixed fields');
+    const o = r.off;
+    const f = {
+        cutoffK: r.f64(o), eError: r.f64(o + 8), origin: [r.f64(o + 16), r.f64(o + 24), r.f64(o + 32)],
+        cameraSeq: r.u32(o + 40), tick: r.u32(o + 44), tileCount: r.u16(o + 48), hasMesh: r.u8at(o + 50),
+        tiles: [], mesh: null,
+    };
+    r.zero(o + 51, 5, 'frame');
+    r.off += FRAME_FIXED;
+    if (f.tileCount > limits.maxFrameTiles)
+        fail(R.ETOOBIG, `FRAME: tile_count ${f.tileCount} above the limit ${limits.maxFrameTiles}`);
+    if (f.hasMesh > 1) fail(R.EFORMAT, `FRAME: has_mesh is ${f.hasMesh} (0 or 1)`);
+    if (f.tileCount * (RECORD_HEAD + TILE_FIXED) > r.end - r.off)
+        fail(R.ETRUNC, `FRAME: ${f.tileCount} tiles cannot fit in the ${r.end - r.off} bytes left`);
+    for (let i = 0; i < f.tileCount; i++) f.tiles.push(dRecord(r, false, limits));
+    if (f.hasMesh) f.mesh = dRecord(r, true, limits);
+    r.finish();
+    if (Number.isNaN(f.cutoffK) || f.cutoffK < 0) fail(R.EINVAL, `frame.cutoff_k = ${f.cutoffK}; must be >= 0 (or +inf)`);
+    chkRange('frame.e_error', f.eError, 0, 1);
+    for (let i = 0; i < 3; i++) chkRange('frame.origin', f.origin[i], -MAX_WORLD, MAX_WORLD);
+    return f;
+}
+
+function dTopology(r, limits) {
+    r.need(TOPO_FIXED, 'fixed fields');
+    const o = r.off;
+    const t = { meshId: r.u32(o), meshKind: r.u8at(o + 4), lodLevels: r.u8at(o + 5), vertexCount: r.u32(o + 8), indexCount: r.u32(o + 12) };
+    r.zero(o + 6, 2, 'mesh_topology');
+    r.off += TOPO_FIXED;
+    if (t.vertexCount > limits.maxVertices || t.indexCount > limits.maxIndices)
+        fail(R.ETOOBIG, `MESH_TOPOLOGY: ${t.vertexCount} vertices / ${t.indexCount} indices above the limits ${limits.maxVertices} / ${limits.maxIndices}`);
+    r.need(4 * t.indexCount + 5 * t.vertexCount, 'indices, morph and level arrays');
+    const ic = t.indexCount, vc = t.vertexCount;
+    const idx = new Uint32Array(ic);
+    const base = r.u8.byteOffset + r.off;
+    if ((base & 3) === 0 && littleEndianHost) idx.set(new Uint32Array(r.u8.buffer, base, ic));
+    else for (let i = 0; i < ic; i++) idx[i] = r.u32(r.off + 4 * i);
+    r.off += 4 * ic;
+    t.indices = idx;
+    t.morph = r.floats(vc, 'morph');
+    t.level = r.u8.slice(r.off, r.off + vc);
+    r.off += vc;
+    r.finish();
+    if (t.meshKind >= MESH.NONE) fail(R.ETYPE, `mesh_topology.mesh_kind ${t.meshKind} unknown (0..2)`);
+    chkRange('mesh_topology.lod_levels', t.lodLevels, 1, LIMITS.maxLodLevels);
+    if (vc === 0 || ic === 0) fail(R.EINVAL, `mesh_topology has ${vc} vertices and ${ic} indices`);
+    if (ic % 3) fail(R.EFORMAT, `mesh_topology.index_count ${ic} is not a multiple of 3`);
+    for (let i = 0; i < ic; i++)
+        if (idx[i] >= vc) fail(R.EINVAL, `mesh_topology index ${i} = ${idx[i]} >= vertex_count ${vc}`);
+    for (let i = 0; i < vc; i++) {
+        if (!(t.morph[i] >= 0 && t.morph[i] <= 1)) fail(R.EINVAL, `mesh_topology morph[${i}] = ${t.morph[i]} outside [0, 1]`);
+        if (t.level[i] >= t.lodLevels) fail(R.EINVAL, `mesh_topology level[${i}] = ${t.level[i]} >= lod_levels ${t.lodLevels}`);
+    }
+    return t;
+}
+
+function dQuery(r, limits) {
+    r.need(QUERY_FIXED, 'fixed fields');
+    const o = r.off;
+    const q = { queryId: r.u32(o), count: r.u32(o + 4), atTime: r.u8at(o + 8), t: r.f64(o + 16) };
+    r.zero(o + 9, 7, 'query');
+    r.off += QUERY_FIXED;
+    if (q.count > limits.maxQueryPoints) fail(R.ETOOBIG, `QUERY: count ${q.count} above the limit ${limits.maxQueryPoints}`);
+    r.need(16 * q.count, 'points');
+    q.points = new Float64Array(2 * q.count);
+    for (let i = 0; i < 2 * q.count; i++) q.points[i] = r.f64(r.off + 8 * i);
+    r.off += 16 * q.count;
+    r.finish();
+    if (q.count === 0) fail(R.EINVAL, 'query.count is 0');
+    chkEnum('query.at_time', q.atTime, 2);
+    chkRange('query.t', q.t, -1e15, 1e15);
+    for (let i = 0; i < q.points.length; i++)
+        if (!(Math.abs(q.points[i]) <= MAX_WORLD)) fail(R.EINVAL, `query point ${i >> 1} ${(i & 1) ? 'z' : 'x'} = ${q.points[i]} (finite, |v| <= 1e10 required)`);
+    return q;
+}
+
+function dResult(r, limits) {
+    r.need(RESULT_FIXED, 'fixed fields');
+    const o = r.off;
+    const q = { queryId: r.u32(o), count: r.u32(o + 4), t: r.f64(o + 8), samples: [] };
+    r.off += RESULT_FIXED;
+    if (q.count > limits.maxQueryPoints) fail(R.ETOOBIG, `QUERY_RESULT: count ${q.count} above the limit ${limits.maxQueryPoints}`);
+    r.need(SAMPLE_SIZE * q.count, 'samples');
+    for (let i = 0; i < q.count; i++) {
+        const b = r.off + SAMPLE_SIZE * i;
+        q.samples.push({
+            height: r.f32(b), normal: [r.f32(b + 4), r.f32(b + 8), r.f32(b + 12)],
+            velocity: [r.f32(b + 16), r.f32(b + 20), r.f32(b + 24)], foam: r.f32(b + 28), errorBound: r.f32(b + 32),
+        });
+    }
+    r.off += SAMPLE_SIZE * q.count;
+    r.finish();
+    if (q.count === 0) fail(R.EINVAL, 'query_result.count is 0');
+    chkRange('query_result.t', q.t, -1e15, 1e15);
+    q.samples.forEach((s, i) => {
+        const v = [s.height, ...s.normal, ...s.velocity, s.foam, s.errorBound];
+        v.forEach((x, k) => { if (!Number.isFinite(x)) fail(R.EINVAL, `query_result sample ${i} field ${k} is not finite`); });
+        if (s.foam < 0 || s.foam > 1 || s.errorBound < 0) fail(R.EINVAL, `query_result sample ${i}: foam / error_bound out of range`);
+    });
+    return q;
+}
+
+function dSeaState(r) {
+    r.need(16, 'fixed fields');
+    const s = { op: r.u8at(r.off) };
+    r.zero(r.off + 1, 7, 'sea_state');
+    s.effectiveTime = r.f64(r.off + 8);
+    r.off += 16;
+    s.sea = dSea(r);
+    s.token = r.str(255, 'token');
+    r.finish();
+    chkEnum('sea_state.op', s.op, 2);
+    chkRange('sea_state.effective_time', s.effectiveTime, -1e15, 1e15);
+    vSea(s.sea);
+    if (s.op === 0 && s.token) fail(R.EFORMAT, 'sea_state announce must not carry a token');
+    return s;
+}
+
+function dError(r) {
+    r.need(ERROR_FIXED, 'fixed fields');
+    const o = r.off;
+    const e = { code: r.u16(o), offendingType: r.u16(o + 2), offendingSeq: r.u32(o + 4) };
+    r.off += ERROR_FIXED;
+    e.message = r.str(1023, 'message');
+    r.finish();
+    if (e.code === 0) fail(R.EINVAL, 'error.code is 0 (OCEAN_OK is not an error)');
+    return e;
+}
+
+function dBye(r) {
+    r.need(BYE_FIXED, 'fixed fields');
+    const b = { reason: r.u16(r.off) };
+    r.zero(r.off + 2, 2, 'bye');
+    r.off += BYE_FIXED;
+    b.message = r.str(255, 'message');
+    r.finish();
+    chkEnum('bye.reason', b.reason, BYE_REASONS.length);
+    return b;
+}
+
+/* Decodes one complete message (one WebSocket binary message: ArrayBuffer
+ * or Uint8Array).  Returns {hdr, type, name, body}.  Tile payloads are views
+ * into the input (keep it alive while decoding them); everything else is
+ * copied.  Throws ProtoError. */
+export function decode(buf, limits = LIMITS) {
+    const u8 = buf instanceof Uint8Array ? buf : new Uint8Array(buf);
+    const hdr = decodeHeader(u8, limits);
+    const r = new Reader(u8.subarray(0, HEADER_SIZE + hdr.length), TYPE_NAMES[hdr.type]);
+    let body;
+    switch (hdr.type) {
+    case T.HELLO: body = dHello(r); break;
+    case T.SUBSCRIBE: body = dSubscribe(r); break;
+    case T.CAMERA: body = dCamera(r); break;
+    case T.FRAME: body = dFrame(r, limits); break;
+    case T.TILE: body = dTile(r); break;
+    case T.MESH_TOPOLOGY: body = dTopology(r, limits); break;
+    case T.MESH_VERTICES: body = dVertices(r, limits); break;
+    case T.QUERY: body = dQuery(r, limits); break;
+    case T.QUERY_RESULT: body = dResult(r, limits); break;
+    case T.SEA_STATE: body = dSeaState(r); break;
+    case T.ERROR: body = dError(r); break;
+    case T.BYE: body = dBye(r); break;
+    default: fail(R.ETYPE, `message type ${hdr.type} unknown`);
+    }
+    return { hdr, type: hdr.type, name: TYPE_NAMES[hdr.type], body };
+}
+
+/* ---- encoders --------------------------------------------------------- */
+
+class Writer {
+    constructor(type, payloadLen, seq, simTime) {
+        this.buf = new ArrayBuffer(HEADER_SIZE + payloadLen);
+        this.dv = new DataView(this.buf);
+        this.u8 = new Uint8Array(this.buf);
+        const dv = this.dv;
+        dv.setUint32(0, MAGIC, true);
+        dv.setUint16(4, VERSION, true);
+        dv.setUint16(6, type, true);
+        dv.setUint32(8, 0, true);
+        dv.setUint32(12, payloadLen, true);
+        dv.setUint32(16, seq >>> 0, true);
+        dv.setUint32(20, 0, true);
+        dv.setFloat64(24, Number.isFinite(simTime) ? simTime : 0, true);
+    }
+}
+const P = HEADER_SIZE;
+
+/* sub: {effects, meshKind, codec, cutoffPolicy, mode, layers, lodLevels,
+ * tileSize, frameRateHz, accuracy, baseSpacingM, viewRangeM}.  Validated as
+ * the server will; returns an ArrayBuffer. */
+export function encodeSubscribe(sub, seq, simTime = 0) {
+    const s = {
+        baseSpacingM: 0, viewRangeM: 0, accuracy: 1e-3, mode: MODE.LIVE, ...sub,
+    };
+    for (const k of ['frameRateHz', 'accuracy', 'baseSpacingM', 'viewRangeM']) s[k] = f32(s[k]);
+    vSubscribe(s);
+    const w = new Writer(T.SUBSCRIBE, SUBSCRIBE_SIZE, seq, simTime);
+    const u = w.u8, dv = w.dv;
+    u[P] = s.effects; u[P + 1] = s.meshKind; u[P + 2] = s.codec; u[P + 3] = s.cutoffPolicy;
+    u[P + 4] = s.mode; u[P + 5] = s.layers; u[P + 6] = s.lodLevels;
+    dv.setUint16(P + 8, s.tileSize, true);
+    dv.setFloat32(P + 12, s.frameRateHz, true);
+    dv.setFloat32(P + 16, s.accuracy, true);
+    dv.setFloat32(P + 20, s.baseSpacingM, true);
+    dv.setFloat32(P + 24, s.viewRangeM, true);
+    return w.buf;
+}
+
+/* cam: {pos:[x,y,z] doubles, vel:[3], yawDeg, pitchDeg, rollDeg, fovYDeg,
+ * viewportW, viewportH, renderTime}. */
+export function encodeCamera(cam, seq, simTime = 0) {
+    const k = {
+        pos: cam.pos, vel: cam.vel.map(f32), yawDeg: f32(cam.yawDeg), pitchDeg: f32(cam.pitchDeg),
+        rollDeg: f32(cam.rollDeg || 0), fovYDeg: f32(cam.fovYDeg), viewportW: cam.viewportW,
+        viewportH: cam.viewportH, renderTime: cam.renderTime || 0,
+    };
+    vCamera(k);
+    const w = new Writer(T.CAMERA, CAMERA_SIZE, seq, simTime);
+    const dv = w.dv;
+    for (let i = 0; i < 3; i++) {
+        dv.setFloat64(P + 8 * i, k.pos[i], true);
+        dv.setFloat32(P + 24 + 4 * i, k.vel[i], true);
+    }
+    dv.setFloat32(P + 36, k.yawDeg, true);
+    dv.setFloat32(P + 40, k.pitchDeg, true);
+    dv.setFloat32(P + 44, k.rollDeg, true);
+    dv.setFloat32(P + 48, k.fovYDeg, true);
+    dv.setUint16(P + 52, k.viewportW, true);
+    dv.setUint16(P + 54, k.viewportH, true);
+    dv.setFloat64(P + 56, k.renderTime, true);
+    return w.buf;
+}
+
+/* points: flat [x0, z0, x1, z1, ...]; t: sim time or null for the latest tick. */
+export function encodeQuery(queryId, points, t, seq, simTime = 0) {
+    const count = points.length >> 1;
+    if (count === 0 || points.length & 1) fail(R.EINVAL, 'query needs a non-empty list of x, z pairs');
+    if (count > LIMITS.maxQueryPoints) fail(R.ETOOBIG, `query.count ${count} above the limit`);
+    const w = new Writer(T.QUERY, QUERY_FIXED + 16 * count, seq, simTime);
+    const dv = w.dv;
+    dv.setUint32(P, queryId >>> 0, true);
+    dv.setUint32(P + 4, count, true);
+    w.u8[P + 8] = t == null ? 0 : 1;
+    dv.setFloat64(P + 16, t == null ? 0 : t, true);
+    for (let i = 0; i < 2 * count; i++) {
+        if (!(Math.abs(points[i]) <= MAX_WORLD)) fail(R.EINVAL, `query point ${i >> 1} is not finite or absurd`);
+        dv.setFloat64(P + QUERY_FIXED + 8 * i, points[i], true);
+    }
+    return w.buf;
+}
+
+export function encodeBye(reason, message, seq, simTime = 0) {
+    const bytes = utf8enc.encode(message || '');
+    if (bytes.length > 255) fail(R.ETOOBIG, 'bye.message longer than 255 bytes');
+    chkEnum('bye.reason', reason, BYE_REASONS.length);
+    const w = new Writer(T.BYE, BYE_FIXED + 2 + bytes.length, seq, simTime);
+    w.dv.setUint16(P, reason, true);
+    w.dv.setUint16(P + 4, bytes.length, true);
+    w.u8.set(bytes, P + 6);
+    return w.buf;
+}

@@ -1,0 +1,702 @@
+/*
+ * render.js - WebGL2 renderer of the streamed sea.
+ *
+ * Geometry: the daemon's concentric LOD mesh (indices once per topology,
+ * positions every frame, relative to the frame origin in double).  Each
+ * vertex is displaced by the streamed tiles: every tile level is packed by
+ * the worker into one layer of two RGBA16F texture arrays, disp = (H, DX,
+ * DZ, FOAM) and nrm = (normal xyz, coverage).  Levels are blended fine to
+ * coarse, each weighted by how well it covers the point (ramp at its edges)
+ * and by a footprint test (a level finer than the mesh spacing in the vertex
+ * shader, or than the pixel footprint in the fragment shader, fades out), so
+ * neither vertices nor normals alias and level borders do not show.
+ *
+ * Precision: all positions are made relative to the eye on the CPU in
+ * double (frame origin, tile origins, camera), so the GPU only sees small
+ * float offsets however far from the world origin the camera flies.
+ *
+ * Shading (seed 001's list): procedural sky (gradient, sun disc and halo,
+ * drifting clouds) used as the reflection environment, Phong sun specular
+ * (roughened with distance), Schlick Fresnel, animated foam from the
+ * streamed FOAM plane, cloud shadows, subsurface tint on crests, haze.
+ * The sky pass also draws the flat sea beyond the mesh's range with the
+ * same functions, so the mesh's edge is invisible.
+ */
+
+export const MAX_LEVELS = 16;
+
+const CLOUD_TEX = 512;          /* cloud texture size, texels */
+const CLOUD_UV = 32;            /* noise lattice units the cloud texture spans (it tiles) */
+const CLOUD_SCALE = 1 / 2500;   /* noise units per metre: cloud period CLOUD_UV / CLOUD_SCALE = 80 km */
+const GRAIN_SCALE = 0.35;       /* foam grain: noise units per metre */
+const SKY_CUBE = 128;           /* sky cube-map face size */
+
+const COMMON = `#version 300 es
+precision highp float;
+precision highp int;
+precision highp sampler2DArray;
+#define MAXL ${MAX_LEVELS}
+uniform vec3 u_sunDir;
+uniform vec3 u_sunColor;
+uniform float u_time;
+uniform vec2 u_cloudOff;    /* cloud texture offset of the eye (world, wind drift), texture units */
+uniform vec2 u_grainOff;    /* foam grain texture offset of the eye, texture units */
+uniform float u_eyeY;
+uniform vec2 u_wind;        /* unit wind direction (x, z) */
+uniform sampler2D u_cloudTex;
+uniform samplerCube u_skyCube;
+uniform float u_skyScale;   /* the cube map stores radiance / u_skyScale */
+
+const float CLOUD_ALT = 2000.0;
+const float CLOUD_K = ${CLOUD_SCALE / CLOUD_UV};
+const float GRAIN_K = ${GRAIN_SCALE / CLOUD_UV};
+/* cloud cover 0..1 at world xz given relative to the eye */
+float clouds(vec2 relXZ) {
+    float c = texture(u_cloudTex, relXZ * CLOUD_K + u_cloudOff).r;
+    return smoothstep(0.48, 0.75, c);
+}
+vec3 skyBase(vec3 d) {
+    float y = max(d.y, 0.0);
+    vec3 zenith = vec3(0.09, 0.25, 0.60);
+    vec3 horizon = vec3(0.55, 0.68, 0.82);
+    vec3 c = mix(horizon, zenith, pow(y, 0.45));
+    float sd = max(dot(d, u_sunDir), 0.0);
+    c += u_sunColor * (0.25 * pow(sd, 8.0) + 0.45 * pow(sd, 64.0));
+    return c;
+}
+/* full sky (gradient, halo, clouds) in direction d; used to fill the cube map */
+vec3 skyFull(vec3 d) {
+    vec3 c = skyBase(d);
+    if (d.y > 0.01) {
+        float t = (CLOUD_ALT - u_eyeY) / d.y;
+        if (t > 0.0) {
+            float cl = clouds(d.xz * t);
+            float lit = 0.78 + 0.3 * pow(max(dot(d, u_sunDir), 0.0), 4.0);
+            float fade = smoothstep(0.01, 0.2, d.y);
+            c = mix(c, vec3(0.92, 0.93, 0.95) * lit, cl * fade * 0.85);
+        }
+    }
+    return c;
+}
+/* the sky as the sea reflects it: the cube map, upper hemisphere */
+vec3 skyEnv(vec3 d) {
+    return texture(u_skyCube, vec3(d.x, abs(d.y), d.z)).rgb * u_skyScale;
+}
+vec3 sunDisc(vec3 d) {
+    float sd = dot(d, u_sunDir);
+    return u_sunColor * 40.0 * smoothstep(0.99985, 0.99995, sd);
+}
+const vec3 WATER_DEEP = vec3(0.004, 0.028, 0.058);
+const vec3 WATER_SCATTER = vec3(0.02, 0.21, 0.22);
+/* shading of the sea surface seen along view dir V (from eye), normal N */
+vec3 seaColor(vec3 V, vec3 N, float crest, float foam, float shadow, float roughness) {
+    vec3 toEye = -V;
+    float ndv = max(dot(N, toEye), 0.0);
+    float F = 0.02 + 0.98 * pow(1.0 - ndv, 5.0);
+    vec3 R = reflect(V, N);
+    vec3 refl = skyEnv(R);
+    float sunUp = clamp(u_sunDir.y * 2.0, 0.05, 1.0);
+    vec3 water = WATER_DEEP * sunUp;
+    /* light scattered in wave crests, strongest looking toward the sun */
+    float sss = pow(max(dot(V, u_sunDir) * 0.5 + 0.5, 0.0), 3.0) * clamp(crest, 0.0, 1.0);
+    water += WATER_SCATTER * sss * sunUp * 0.6;
+    water += WATER_SCATTER * 0.06 * max(dot(N, u_sunDir), 0.0);
+    vec3 col = mix(water, refl, F);
+    /* Phong sun glint; the exponent drops with roughness (distance, coarse
+     * normals) so far glitter widens instead of aliasing */
+    float shin = mix(1200.0, 80.0, clamp(roughness, 0.0, 1.0));
+    float spec = pow(max(dot(R, u_sunDir), 0.0), shin) * (shin + 2.0) / 8.0;
+    col += u_sunColor * spec * F * 2.5 * shadow * step(0.0, u_sunDir.y);
+    /* foam: diffuse white lit by sun and sky */
+    vec3 foamCol = vec3(0.90, 0.94, 0.96) * (0.35 + 0.65 * max(dot(N, u_sunDir), 0.0) * shadow) * sunUp
+                 + skyBase(vec3(0.0, 1.0, 0.0)) * 0.25;
+    col = mix(col, foamCol, clamp(foam, 0.0, 1.0));
+    return col * mix(0.62, 1.0, shadow);
+}
+vec3 haze(vec3 col, vec3 V, float dist) {
+    float f = 1.0 - exp(-dist / 42000.0);
+    vec3 hc = skyBase(normalize(vec3(V.x, 0.03, V.z)));
+    return mix(col, hc, clamp(f, 0.0, 1.0));
+}
+vec3 tonemap(vec3 c) {
+    c *= 0.85;
+    vec3 x = (c * (2.51 * c + 0.03)) / (c * (2.43 * c + 0.59) + 0.14);   /* ACES fit (Narkowicz) */
+    return pow(clamp(x, 0.0, 1.0), vec3(1.0 / 2.2));
+}
+float cloudShadow(vec3 rel) {
+    return 1.0 - 0.5 * clouds(rel.xz + u_sunDir.xz / max(u_sunDir.y, 0.05) * (CLOUD_ALT - rel.y));
+}
+`;
+
+const FULL_VS = `#version 300 es
+out vec2 v_ndc;
+void main() {
+    vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2)) * 2.0 - 1.0;
+    v_ndc = p;
+    gl_Position = vec4(p, 0.999999, 1.0);
+}`;
+
+/* fills one face of the sky cube map */
+const SKYGEN_FS = `${COMMON}
+out vec4 o_color;
+uniform int u_face;
+uniform float u_size;
+void main() {
+    float sc = 2.0 * gl_FragCoord.x / u_size - 1.0, tc = 2.0 * gl_FragCoord.y / u_size - 1.0;
+    vec3 d;
+    if (u_face == 0) d = vec3(1.0, -tc, -sc);
+    else if (u_face == 1) d = vec3(-1.0, -tc, sc);
+    else if (u_face == 2) d = vec3(sc, 1.0, tc);
+    else if (u_face == 3) d = vec3(sc, -1.0, -tc);
+    else if (u_face == 4) d = vec3(sc, -tc, 1.0);
+    else d = vec3(-sc, -tc, -1.0);
+    d = normalize(d);
+    d.y = abs(d.y);
+    o_color = vec4(skyFull(d) / u_skyScale, 1.0);
+}`;
+
+const SKY_FS = `${COMMON}
+in vec2 v_ndc;
+out vec4 o_color;
+uniform vec3 u_right, u_up, u_fwd;
+uniform vec2 u_tanHalf;     /* tan(fov/2) * aspect, tan(fov/2) */
+void main() {
+    vec3 V = normalize(u_fwd + v_ndc.x * u_tanHalf.x * u_right + v_ndc.y * u_tanHalf.y * u_up);
+    vec3 col;
+    if (V.y >= 0.0) {
+        col = skyEnv(V) + sunDisc(V);
+    } else {
+        /* the sea beyond the mesh: flat water seen at this distance */
+        float dist = max(u_eyeY, 0.1) / max(-V.y, 1e-5);
+        vec3 hit = V * dist;
+        col = seaColor(V, vec3(0.0, 1.0, 0.0), 0.0, 0.0, cloudShadow(hit), 1.0);
+        col = haze(col, V, dist);
+    }
+    o_color = vec4(tonemap(col), 1.0);
+}`;
+
+const SEA_SAMPLING = `
+uniform sampler2DArray u_disp;
+uniform sampler2DArray u_nrm;
+uniform int u_nLevels;
+uniform vec4 u_lvlA[MAXL];    /* origin x, z (eye-relative), spacing, layer */
+uniform vec4 u_lvlB[MAXL];    /* samples w, h, edge ramp in samples, has data */
+uniform vec2 u_texSize;       /* array texture size in texels */
+
+/* weight of level L at eye-relative xz: 1 inside, ramping to 0 at its edge */
+float levelCover(int L, vec2 xz, out vec3 uvw) {
+    vec4 A = u_lvlA[L], B = u_lvlB[L];
+    vec2 a = (xz - A.xy) / A.z;                 /* sample coordinates */
+    vec2 e2 = min(a, B.xy - 1.0 - a);
+    float e = min(e2.x, e2.y);
+    uvw = vec3((a + 0.5) / u_texSize, A.w);
+    return B.w * clamp(e / B.z, 0.0, 1.0);
+}
+`;
+
+const SEA_VS = `${COMMON}
+${SEA_SAMPLING}
+in vec3 a_pos;
+in float a_morph;
+in float a_spacing;
+in float a_level;
+uniform vec3 u_meshOff;      /* mesh origin - eye */
+uniform mat4 u_viewProj;
+uniform float u_applyTiles;  /* 1: positions are flat, displace them here; 0: the server displaced them */
+out vec3 v_rel;              /* displaced position relative to the eye */
+out vec2 v_base;             /* undisplaced xz relative to the eye */
+out float v_crest;
+out float v_foam;
+out float v_level;
+void main() {
+    vec3 p = u_meshOff + a_pos;
+    vec4 acc = vec4(0.0);
+    float rem = 1.0;
+    /* geomorph: a vertex about to become the next ring's samples as if it
+     * were already twice as coarse */
+    float sv = max(a_spacing * (1.0 + a_morph), 1e-3);
+    for (int L = 0; L < MAXL; L++) {
+        if (L >= u_nLevels || rem < 0.002) break;
+        vec3 uvw;
+        float w = levelCover(L, p.xz, uvw);
+        float foot = clamp(log2(u_lvlA[L].z / sv) + 1.0, 0.0, 1.0);
+        if (L == u_nLevels - 1) foot = 1.0;     /* coarsest level: keep the swell */
+        w *= foot;
+        if (w <= 0.0) continue;
+        vec4 d = textureLod(u_disp, uvw, 0.0);
+        float cov = textureLod(u_nrm, uvw, 0.0).w;
+        w *= cov;
+        acc += rem * w * d;
+        rem *= 1.0 - w;
+    }
+    if (u_applyTiles > 0.5) {
+        v_rel = p + vec3(acc.y, acc.x, acc.z);
+        v_base = p.xz;
+        v_crest = acc.x;
+    } else {
+        /* displaced by the server (FFT height and chop, Gerstner near
+         * field): keep the positions, and find the undisplaced point the
+         * tiles are indexed by with one fixed-point step x0 = x - D(x) */
+        v_rel = p;
+        v_base = p.xz - acc.yz;
+        v_crest = p.y;
+    }
+    v_foam = acc.w;
+    v_level = a_level;
+    gl_Position = u_viewProj * vec4(v_rel, 1.0);
+}`;
+
+const SEA_FS = `${COMMON}
+${SEA_SAMPLING}
+in vec3 v_rel;
+in vec2 v_base;
+in float v_crest;
+in float v_foam;
+in float v_level;
+out vec4 o_color;
+uniform float u_pixAngle;    /* radians per pixel */
+uniform float u_debug;
+uniform float u_hs;          /* significant wave height, m (for crest scaling) */
+void main() {
+    vec3 V = normalize(v_rel);
+    float dist = length(v_rel);
+    /* pixel footprint on the sea, stretched at grazing angles */
+    float foot = dist * u_pixAngle / max(abs(V.y), 0.08);
+    vec4 nacc = vec4(0.0);
+    float facc = 0.0;
+    float rem = 1.0;
+    float lvlSeen = 0.0;
+    for (int L = 0; L < MAXL; L++) {
+        if (L >= u_nLevels || rem < 0.002) break;
+        vec3 uvw;
+        float w = levelCover(L, v_base, uvw);
+        float f = clamp(1.0 - log2(foot / u_lvlA[L].z), 0.0, 1.0);
+        if (L == u_nLevels - 1) f = 1.0;
+        w *= f;
+        if (w <= 0.0) continue;
+        vec4 n = texture(u_nrm, uvw);
+        float fo = texture(u_disp, uvw).w;
+        w *= n.w;
+        nacc += rem * w * vec4(n.xyz, 1.0);
+        facc += rem * w * fo;
+        lvlSeen += rem * w * float(L);
+        rem *= 1.0 - w;
+    }
+    vec3 N = normalize(nacc.xyz + rem * vec3(0.0, 1.0, 0.0));
+    /* detail lost to the footprint shows up as roughness */
+    float rough = clamp(lvlSeen * 0.12 + rem * 0.8 + dist / 20000.0, 0.0, 1.0);
+    /* animated foam: the streamed coverage broken up by drifting noise */
+    float grain = texture(u_cloudTex, v_base * GRAIN_K + u_grainOff).r;
+    grain = clamp((grain - 0.25) * 2.0, 0.0, 1.0);
+    float cover = clamp(facc, 0.0, 1.0);
+    /* streamed coverage, broken up by drifting grain near the camera and
+     * averaged (not lost) far away where the grain would alias */
+    float near = 1.0 - smoothstep(300.0, 3000.0, dist);
+    float foam = mix(cover, smoothstep(0.08, 0.5, cover * (0.4 + 1.2 * grain)), near);
+    float shadow = cloudShadow(v_rel);
+    float crest = v_crest / max(u_hs * 0.5, 0.2);
+    vec3 col = seaColor(V, N, crest, foam, shadow, rough);
+    col = haze(col, V, dist);
+    if (u_debug > 0.5) {
+        vec3 tint = 0.5 + 0.5 * cos(6.2831 * (lvlSeen * 0.17 + vec3(0.0, 0.33, 0.67)));
+        col = mix(col, tint, 0.5);
+    }
+    o_color = vec4(tonemap(col), 1.0);
+}`;
+
+function compile(gl, type, src) {
+    const s = gl.createShader(type);
+    gl.shaderSource(s, src);
+    gl.compileShader(s);
+    if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) {
+        const log = gl.getShaderInfoLog(s);
+        const lines = src.split('\n').map((l, i) => `${i + 1}: ${l}`).join('\n');
+        throw new Error(`shader compile failed: ${log}\n${lines.slice(0, 200)}`);
+    }
+    return s;
+}
+
+function program(gl, vs, fs, attribs) {
+    const p = gl.createProgram();
+    gl.attachShader(p, compile(gl, gl.VERTEX_SHADER, vs));
+    gl.attachShader(p, compile(gl, gl.FRAGMENT_SHADER, fs));
+    (attribs || []).forEach((name, i) => gl.bindAttribLocation(p, i, name));
+    gl.linkProgram(p);
+    if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(`program link failed: ${gl.getProgramInfoLog(p)}`);
+    const u = {};
+    const n = gl.getProgramParameter(p, gl.ACTIVE_UNIFORMS);
+    for (let i = 0; i < n; i++) {
+        const info = gl.getActiveUniform(p, i);
+        const name = info.name.replace(/\[0\]$/, '');
+        u[name] = gl.getUniformLocation(p, info.name);
+    }
+    return { p, u };
+}
+
+function perspective(fovY, aspect, near, far) {
+    const f = 1 / Math.tan(fovY / 2), nf = 1 / (near - far);
+    return new Float32Array([f / aspect, 0, 0, 0, 0, f, 0, 0, 0, 0, (far + near) * nf, -1, 0, 0, 2 * far * near * nf, 0]);
+}
+
+function mul4(a, b) {
+    const o = new Float32Array(16);
+    for (let c = 0; c < 4; c++)
+        for (let r = 0; r < 4; r++) {
+            let s = 0;
+            for (let k = 0; k < 4; k++) s += a[k * 4 + r] * b[c * 4 + k];
+            o[c * 4 + r] = s;
+        }
+    return o;
+}
+
+export class Renderer {
+    constructor(canvas, opts = {}) {
+        const gl = canvas.getContext('webgl2', { antialias: opts.antialias ?? true, preserveDrawingBuffer: false, powerPreference: 'high-performance' });
+        if (!gl) throw new Error('WebGL2 is not available in this browser');
+        this.gl = gl;
+        this.canvas = canvas;
+        this.sky = program(gl, FULL_VS, SKY_FS);
+        this.skygen = program(gl, FULL_VS, SKYGEN_FS);
+        this.sea = program(gl, SEA_VS, SEA_FS, ['a_pos', 'a_morph', 'a_spacing', 'a_level']);
+        const info = gl.getExtension('WEBGL_debug_renderer_info');
+        this.rendererName = String(info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER));
+        this.software = /swiftshader|llvmpipe|software|softpipe/i.test(this.rendererName);
+        /* software GL (no GPU): render fewer pixels so the viewer stays usable */
+        this.scale = opts.scale > 0 ? opts.scale : this.software ? 0.5 : 1;
+        this.cloudTex = makeCloudTexture(gl);
+        this.initSkyCube();
+        this.vao = gl.createVertexArray();
+        this.emptyVao = gl.createVertexArray();
+        this.posBuf = gl.createBuffer();
+        this.morphBuf = gl.createBuffer();
+        this.spacingBuf = gl.createBuffer();
+        this.levelBuf = gl.createBuffer();
+        this.idxBuf = gl.createBuffer();
+        this.indexCount = 0;
+        this.vertexCount = 0;
+        this.topology = null;
+        this.mesh = null;          /* {origin[3], meshId} of the positions in posBuf */
+        this.needSpacing = false;
+        this.levels = [];          /* per layer: {originX, originZ, spacing, width, height} */
+        this.texW = 0; this.texH = 0; this.texL = 0;
+        this.dispTex = gl.createTexture();
+        this.nrmTex = gl.createTexture();
+        this.allocTextures(2, 2, 1);
+        this.sunDir = normalize3([0.55, 0.35, 0.45]);
+        this.sunColor = [1.0, 0.92, 0.80];
+        this.wind = [1, 0];
+        this.hs = 2;
+        this.debug = false;
+        this.applyTiles = 1;
+    }
+
+    allocTextures(w, h, l) {
+        const gl = this.gl;
+        for (const t of [this.dispTex, this.nrmTex]) {
+            gl.bindTexture(gl.TEXTURE_2D_ARRAY, t);
+            gl.texImage3D(gl.TEXTURE_2D_ARRAY, 0, gl.RGBA16F, w, h, l, 0, gl.RGBA, gl.FLOAT, null);
+            gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MIN_FILTER, gl.LINEAR);
+            gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+            gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+            gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+        }
+        this.texW = w; this.texH = h; this.texL = l;
+    }
+
+    /* MESH_TOPOLOGY: indices, morph and level arrays. */
+    setTopology(t) {
+        const gl = this.gl;
+        gl.bindVertexArray(this.vao);
+        gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.idxBuf);
+        gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, t.indices, gl.STATIC_DRAW);
+        gl.bindBuffer(gl.ARRAY_BUFFER, this.posBuf);
+        gl.bufferData(gl.ARRAY_BUFFER, t.vertexCount * 12, gl.DYNAMIC_DRAW);
+        gl.enableVertexAttribArray(0);
+        gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+        gl.bindBuffer(gl.ARRAY_BUFFER, this.morphBuf);
+        gl.bufferData(gl.ARRAY_BUFFER, t.morph, gl.STATIC_DRAW);
+        gl.enableVertexAttribArray(1);
+        gl.vertexAttribPointer(1, 1, gl.FLOAT, false, 0, 0);
+        gl.bindBuffer(gl.ARRAY_BUFFER, this.spacingBuf);
+        gl.bufferData(gl.ARRAY_BUFFER, t.vertexCount * 4, gl.STATIC_DRAW);
+        gl.enableVertexAttribArray(2);
+        gl.vertexAttribPointer(2, 1, gl.FLOAT, false, 0, 0);
+        gl.bindBuffer(gl.ARRAY_BUFFER, this.levelBuf);
+        gl.bufferData(gl.ARRAY_BUFFER, t.level, gl.STATIC_DRAW);
+        gl.enableVertexAttribArray(3);
+        gl.vertexAttribPointer(3, 1, gl.UNSIGNED_BYTE, false, 0, 0);
+        gl.bindVertexArray(null);
+        this.topology = { meshId: t.meshId, vertexCount: t.vertexCount, indices: t.indices };
+        this.indexCount = t.indices.length;
+        this.vertexCount = t.vertexCount;
+        this.mesh = null;
+        this.needSpacing = true;
+    }
+
+    /* MESH_VERTICES (inside a FRAME or alone).  Ignored until the matching
+     * topology arrived. */
+    setVertices(v) {
+        const t = this.topology;
+        if (!t || v.meshId !== t.meshId || v.positions.length !== 3 * t.vertexCount) return false;
+        const gl = this.gl;
+        gl.bindBuffer(gl.ARRAY_BUFFER, this.posBuf);
+        gl.bufferSubData(gl.ARRAY_BUFFER, 0, v.positions);
+        if (this.needSpacing) {
+            /* per-vertex mesh spacing (longest incident edge in xz): the
+             * vertex shader's anti-aliasing footprint.  The topology is
+             * fixed while the mesh slides, so this runs once per topology. */
+            const sp = new Float32Array(t.vertexCount);
+            const p = v.positions, ix = t.indices;
+            for (let i = 0; i < ix.length; i += 3) {
+                for (let e = 0; e < 3; e++) {
+                    const a = ix[i + e], b = ix[i + (e + 1) % 3];
+                    const d = Math.hypot(p[3 * a] - p[3 * b], p[3 * a + 2] - p[3 * b + 2]);
+                    if (d > sp[a]) sp[a] = d;
+                    if (d > sp[b]) sp[b] = d;
+                }
+            }
+            gl.bindBuffer(gl.ARRAY_BUFFER, this.spacingBuf);
+            gl.bufferData(gl.ARRAY_BUFFER, sp, gl.STATIC_DRAW);
+            this.needSpacing = false;
+        }
+        /* oceand sends displaced positions (height, choppy x/z, near
+         * field); a flat mesh (all y = 0) is displaced here from the tiles */
+        let displaced = false;
+        for (let i = 1; i < v.positions.length; i += 3) if (v.positions[i] !== 0) { displaced = true; break; }
+        this.meshDisplaced = displaced;
+        this.mesh = { meshId: v.meshId, origin: v.origin.slice() };
+        return true;
+    }
+
+    /* Tile levels of one frame, as assembled by the worker. */
+    setLevels(levels) {
+        const gl = this.gl;
+        const n = Math.min(levels.length, MAX_LEVELS);
+        let w = this.texW, h = this.texH, l = this.texL;
+        const needW = Math.max(2, ...levels.slice(0, n).map((x) => x.width));
+        const needH = Math.max(2, ...levels.slice(0, n).map((x) => x.height));
+        if (needW > w || needH > h || n > l) {
+            this.allocTextures(Math.max(w, needW), Math.max(h, needH), Math.max(l, n, 1));
+        }
+        gl.pixelStorei(gl.UNPACK_ALIGNMENT, 4);
+        for (let i = 0; i < n; i++) {
+            const L = levels[i];
+            gl.bindTexture(gl.TEXTURE_2D_ARRAY, this.dispTex);
+            gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, i, L.width, L.height, 1, gl.RGBA, gl.FLOAT, L.disp);
+            gl.bindTexture(gl.TEXTURE_2D_ARRAY, this.nrmTex);
+            gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, i, L.width, L.height, 1, gl.RGBA, gl.FLOAT, L.nrm);
+        }
+        this.levels = levels.slice(0, n).map((L) => ({
+            originX: L.originX, originZ: L.originZ, spacing: L.spacing, width: L.width, height: L.height,
+        }));
+    }
+
+    initSkyCube() {
+        const gl = this.gl;
+        /* HDR cube map where float rendering is available, else RGBA8 holding radiance / 2 */
+        const half = !!gl.getExtension('EXT_color_buffer_float');
+        this.skyScale = half ? 1 : 2;
+        this.skyCube = gl.createTexture();
+        gl.bindTexture(gl.TEXTURE_CUBE_MAP, this.skyCube);
+        gl.texStorage2D(gl.TEXTURE_CUBE_MAP, 1, half ? gl.RGBA16F : gl.RGBA8, SKY_CUBE, SKY_CUBE);
+        gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_MIN_FILTER, gl.LINEAR);
+        gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+        gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+        gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+        this.skyFbo = gl.createFramebuffer();
+        this.skyStamp = -1e9;
+        this.skyFace = 0;
+        this.skyReady = false;
+    }
+
+    /* Sets the uniforms every pass shares. */
+    common(u, eye, time) {
+        const gl = this.gl;
+        gl.uniform3fv(u.u_sunDir, this.sunDir);
+        gl.uniform3fv(u.u_sunColor, this.sunColor);
+        gl.uniform1f(u.u_time, time % 100000);
+        /* texture offsets of the eye, reduced in double so float precision
+         * holds however far from the origin (clouds drift with the wind) */
+        const drift = 0.004 * time;
+        const cu = CLOUD_SCALE / CLOUD_UV, gu = GRAIN_SCALE / CLOUD_UV;
+        gl.uniform2f(u.u_cloudOff, frac(eye[0] * cu + this.wind[0] * drift / CLOUD_UV), frac(eye[2] * cu + this.wind[1] * drift / CLOUD_UV));
+        gl.uniform2f(u.u_grainOff, frac(eye[0] * gu + this.wind[0] * 0.6 * time / CLOUD_UV), frac(eye[2] * gu + this.wind[1] * 0.6 * time / CLOUD_UV));
+        gl.uniform1f(u.u_eyeY, eye[1]);
+        gl.uniform2fv(u.u_wind, this.wind);
+        gl.uniform1f(u.u_skyScale, this.skyScale);
+        gl.activeTexture(gl.TEXTURE2);
+        gl.bindTexture(gl.TEXTURE_2D, this.cloudTex);
+        gl.uniform1i(u.u_cloudTex, 2);
+        gl.activeTexture(gl.TEXTURE3);
+        gl.bindTexture(gl.TEXTURE_CUBE_MAP, this.skyCube);
+        gl.uniform1i(u.u_skyCube, 3);
+    }
+
+    /* Re-renders the sky cube map: all faces at first, then one face per
+     * frame every so often (clouds drift slowly; the sun does not move). */
+    updateSkyCube(eye, time) {
+        const gl = this.gl;
+        const now = performance.now();
+        const faces = !this.skyReady ? [0, 1, 2, 3, 4, 5] : now - this.skyStamp > 250 ? [this.skyFace] : [];
+        if (!faces.length) return;
+        gl.bindFramebuffer(gl.FRAMEBUFFER, this.skyFbo);
+        gl.viewport(0, 0, SKY_CUBE, SKY_CUBE);
+        gl.disable(gl.DEPTH_TEST);
+        gl.useProgram(this.skygen.p);
+        gl.activeTexture(gl.TEXTURE3);
+        gl.bindTexture(gl.TEXTURE_CUBE_MAP, null);   /* not sampled while rendered to */
+        const u = this.skygen.u;
+        gl.uniform3fv(u.u_sunDir, this.sunDir);
+        gl.uniform3fv(u.u_sunColor, this.sunColor);
+        const drift = 0.004 * time, cu = CLOUD_SCALE / CLOUD_UV;
+        gl.uniform2f(u.u_cloudOff, frac(eye[0] * cu + this.wind[0] * drift / CLOUD_UV), frac(eye[2] * cu + this.wind[1] * drift / CLOUD_UV));
+        gl.uniform1f(u.u_eyeY, eye[1]);
+        gl.uniform1f(u.u_skyScale, this.skyScale);
+        gl.uniform1f(u.u_size, SKY_CUBE);
+        gl.activeTexture(gl.TEXTURE2);
+        gl.bindTexture(gl.TEXTURE_2D, this.cloudTex);
+        gl.uniform1i(u.u_cloudTex, 2);
+        gl.bindVertexArray(this.emptyVao);
+        for (const f of faces) {
+            gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_CUBE_MAP_POSITIVE_X + f, this.skyCube, 0);
+            gl.uniform1i(u.u_face, f);
+            gl.drawArrays(gl.TRIANGLES, 0, 3);
+        }
+        gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+        this.skyFace = (this.skyFace + 1) % 6;
+        this.skyStamp = now;
+        this.skyReady = true;
+    }
+
+    resize() {
+        const dpr = Math.min(window.devicePixelRatio || 1, 2) * this.scale;
+        const c = this.canvas;
+        const w = Math.max(1, Math.round(c.clientWidth * dpr)), h = Math.max(1, Math.round(c.clientHeight * dpr));
+        if (c.width !== w || c.height !== h) { c.width = w; c.height = h; }
+        return [w, h];
+    }
+
+    /* cam: {pos[3] (world, double), basis {fwd, right, up}, fovYDeg}; time: sim time estimate. */
+    draw(cam, time) {
+        const gl = this.gl;
+        this.updateSkyCube(cam.pos, time);
+        const [W, H] = this.resize();
+        gl.viewport(0, 0, W, H);
+        const aspect = W / H;
+        const fov = cam.fovYDeg * Math.PI / 180;
+        const tanH = Math.tan(fov / 2);
+        const { fwd, right, up } = cam.basis;
+        const eye = cam.pos;
+        const common = (u) => this.common(u, eye, time);
+
+        /* sky and far sea */
+        gl.disable(gl.DEPTH_TEST);
+        gl.depthMask(false);
+        gl.useProgram(this.sky.p);
+        common(this.sky.u);
+        gl.uniform3fv(this.sky.u.u_right, right);
+        gl.uniform3fv(this.sky.u.u_up, up);
+        gl.uniform3fv(this.sky.u.u_fwd, fwd);
+        gl.uniform2f(this.sky.u.u_tanHalf, tanH * aspect, tanH);
+        gl.bindVertexArray(this.emptyVao);
+        gl.drawArrays(gl.TRIANGLES, 0, 3);
+
+        if (!this.mesh || !this.indexCount || this.drawSea === false) return false;
+
+        /* the sea mesh */
+        const near = Math.max(0.05, Math.min(1.0, Math.abs(eye[1]) * 0.05));
+        const far = 400000;
+        const proj = perspective(fov, aspect, near, far);
+        const view = new Float32Array([
+            right[0], up[0], -fwd[0], 0,
+            right[1], up[1], -fwd[1], 0,
+            right[2], up[2], -fwd[2], 0,
+            0, 0, 0, 1,
+        ]);
+        const vp = mul4(proj, view);
+        gl.enable(gl.DEPTH_TEST);
+        gl.depthFunc(gl.LEQUAL);
+        gl.depthMask(true);
+        gl.clear(gl.DEPTH_BUFFER_BIT);
+        gl.disable(gl.CULL_FACE);   /* waves fold; draw both faces */
+        const s = this.sea;
+        gl.useProgram(s.p);
+        common(s.u);
+        gl.uniformMatrix4fv(s.u.u_viewProj, false, vp);
+        const mo = this.mesh.origin;
+        gl.uniform3f(s.u.u_meshOff, mo[0] - eye[0], mo[1] - eye[1], mo[2] - eye[2]);
+        gl.uniform1f(s.u.u_pixAngle, 2 * tanH / H);
+        gl.uniform1f(s.u.u_debug, this.debug ? 1 : 0);
+        gl.uniform1f(s.u.u_hs, this.hs);
+        gl.uniform1f(s.u.u_applyTiles, this.meshDisplaced ? 0 : this.applyTiles);
+        const nl = this.levels.length;
+        const A = new Float32Array(4 * MAX_LEVELS), B = new Float32Array(4 * MAX_LEVELS);
+        for (let i = 0; i < nl; i++) {
+            const L = this.levels[i];
+            A.set([L.originX - eye[0], L.originZ - eye[2], L.spacing, i], 4 * i);
+            B.set([L.width, L.height, Math.max(2, 0.12 * Math.min(L.width, L.height)), 1], 4 * i);
+        }
+        gl.uniform1i(s.u.u_nLevels, nl);
+        gl.uniform4fv(s.u.u_lvlA, A);
+        gl.uniform4fv(s.u.u_lvlB, B);
+        gl.uniform2f(s.u.u_texSize, this.texW, this.texH);
+        gl.activeTexture(gl.TEXTURE0);
+        gl.bindTexture(gl.TEXTURE_2D_ARRAY, this.dispTex);
+        gl.uniform1i(s.u.u_disp, 0);
+        gl.activeTexture(gl.TEXTURE1);
+        gl.bindTexture(gl.TEXTURE_2D_ARRAY, this.nrmTex);
+        gl.uniform1i(s.u.u_nrm, 1);
+        gl.bindVertexArray(this.vao);
+        gl.drawElements(gl.TRIANGLES, this.indexCount, gl.UNSIGNED_INT, 0);
+        gl.bindVertexArray(null);
+        return true;
+    }
+}
+
+function frac(a) { return a - Math.floor(a); }
+
+/* Tileable value-noise fbm (period CLOUD_UV lattice units at the base
+ * octave) in an R8 texture with mipmaps: clouds, their shadows and the
+ * foam grain all read it, instead of evaluating noise per pixel. */
+function makeCloudTexture(gl) {
+    const N = CLOUD_TEX, P = CLOUD_UV;
+    const hash = (x, y, o) => {
+        let h = (x * 374761393 + y * 668265263 + o * 2147483647) | 0;
+        h = Math.imul(h ^ (h >>> 13), 1274126177);
+        return ((h ^ (h >>> 16)) >>> 0) / 4294967296;
+    };
+    const img = new Uint8Array(N * N);
+    const octaves = 5;
+    for (let y = 0; y < N; y++) {
+        for (let x = 0; x < N; x++) {
+            let s = 0, a = 0.5, norm = 0;
+            for (let o = 0; o < octaves; o++) {
+                const per = P << o;                  /* lattice period at this octave */
+                const fx = x / N * per, fy = y / N * per;
+                const ix = Math.floor(fx), iy = Math.floor(fy);
+                const tx = fx - ix, ty = fy - iy;
+                const ux = tx * tx * (3 - 2 * tx), uy = ty * ty * (3 - 2 * ty);
+                const x0 = ix % per, y0 = iy % per, x1 = (ix + 1) % per, y1 = (iy + 1) % per;
+                const v = (hash(x0, y0, o) * (1 - ux) + hash(x1, y0, o) * ux) * (1 - uy) +
+                          (hash(x0, y1, o) * (1 - ux) + hash(x1, y1, o) * ux) * uy;
+                s += a * v; norm += a; a *= 0.5;
+            }
+            img[y * N + x] = Math.round(255 * s / norm);
+        }
+    }
+    const t = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.R8, N, N, 0, gl.RED, gl.UNSIGNED_BYTE, img);
+    gl.pixelStorei(gl.UNPACK_ALIGNMENT, 4);
+    gl.generateMipmap(gl.TEXTURE_2D);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR_MIPMAP_LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.REPEAT);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.REPEAT);
+    return t;
+}
+export function normalize3(v) {
+    const l = Math.hypot(v[0], v[1], v[2]) || 1;
+    return [v[0] / l, v[1] / l, v[2] / l];
+}

@@ -1,0 +1,405 @@
+/*
+ * worker.js - the viewer's network side, run as a module Worker so that
+ * decoding never stalls rendering.  It owns the WebSocket (subprotocol
+ * ocean.v1), answers HELLO with SUBSCRIBE, turns the page's camera reports
+ * into CAMERA messages, decodes every message (protocol.js) and every tile
+ * (codec.js), assembles each tile level into one texture-ready grid, and
+ * posts the results to the page with their buffers transferred.
+ *
+ * Latest wins, as on the server: FRAMEs that arrive while one is being
+ * decoded are coalesced and only the newest is decoded (counted in
+ * `skipped`).  Latency is measured here, on one clock: the time from
+ * sending CAMERA seq s to receiving the first FRAME that answers s.
+ *
+ * Tiles are decoded by a pool of decoder workers (decoder.js), whole
+ * levels at a time, so decoding uses the cores a machine has.
+ *
+ * Page -> worker: {cmd:'connect', url, sub}, {cmd:'camera', cam},
+ *                 {cmd:'subscribe', sub} (change), {cmd:'query', id, points},
+ *                 {cmd:'pause', paused}, {cmd:'capture'} (next FRAME's raw
+ *                 bytes, for debugging), {cmd:'close'}.
+ * Worker -> page: {kind:'status'|'hello'|'subscribed'|'topology'|'vertices'|
+ *                 'frame'|'error'|'bye'|'sea'|'result'|'capture', ...}.
+ */
+import {
+    CODEC, CODEC_NAMES, CUTOFF, FX, MESH, SUBPROTOCOL, T, BYE_REASONS, RESULT_NAMES,
+    decode, decodeHeader, encodeCamera, encodeSubscribe, encodeQuery, encodeBye, ProtoError, tilePlanes,
+} from './protocol.js';
+import { assembleLevel, groupByLevel } from './assemble.js';
+
+let ws = null;
+let seq = 0;
+let hello = null;
+let subscription = null;
+let wantSub = null;
+let lastSimTime = 0;
+let pendingFrame = null;     /* newest undecoded FRAME bytes */
+let frameScheduled = false;
+const sentAt = new Map();    /* CAMERA seq -> performance.now() at send */
+let answeredSeq = -1;
+let lastLatency = null;      /* newest camera -> frame round trip, ms (consumed by the next posted frame) */
+
+const stats = {
+    messages: 0, frames: 0, framesDecoded: 0, skipped: 0, bytes: 0, tiles: 0, topologies: 0,
+    decodeErrors: 0, serverErrors: 0, camerasSent: 0, decodeMs: 0, lastError: '',
+};
+const byteWindow = [];       /* [time, bytes] over the last second */
+
+function post(msg, transfer) { self.postMessage(msg, transfer || []); }
+
+function nextSeq() { seq = (seq + 1) >>> 0; return seq; }
+
+function send(buf) {
+    if (ws && ws.readyState === 1) ws.send(buf);
+}
+
+function bytesPerSecond(now) {
+    while (byteWindow.length && now - byteWindow[0][0] > 1000) byteWindow.shift();
+    let s = 0;
+    for (const [, b] of byteWindow) s += b;
+    const span = byteWindow.length ? Math.max(250, now - byteWindow[0][0]) : 1000;
+    return s * 1000 / span;
+}
+
+/* Chooses the subscription from what the page asked and what HELLO offers. */
+function chooseSubscription(h, want) {
+    const codecOrder = want.codec != null ? [want.codec, CODEC.QZ, CODEC.F16, CODEC.F32] : [CODEC.QZ, CODEC.F16, CODEC.F32];
+    const codec = codecOrder.find((c) => c <= CODEC.QZ && (h.codecs & (1 << c)));
+    if (codec === undefined) throw new ProtoError(9, `server offers no codec this viewer decodes (codecs 0x${h.codecs.toString(16)})`);
+    let policy = want.cutoffPolicy ?? CUTOFF.ANTIALIAS;
+    if (!(h.cutoffPolicies & (1 << policy))) policy = [CUTOFF.ANTIALIAS, CUTOFF.SEED, CUTOFF.NONE].find((p) => h.cutoffPolicies & (1 << p)) ?? 0;
+    const meshKind = (h.meshKinds & (1 << MESH.CONCENTRIC)) ? MESH.CONCENTRIC : MESH.NONE;
+    const effects = (want.effects ?? FX.ALL) & (h.effects || FX.ALL);
+    return {
+        effects: effects || FX.HEIGHT,
+        meshKind,
+        codec,
+        cutoffPolicy: policy,
+        mode: 0,
+        layers: Math.max(1, Math.min(want.layers ?? h.maxLayers, h.maxLayers)),
+        lodLevels: Math.max(1, Math.min(want.lodLevels ?? 8, h.maxLodLevels)),
+        tileSize: Math.max(2, Math.min(want.tileSize ?? 64, h.maxTileSize)),
+        frameRateHz: Math.min(want.frameRateHz ?? 30, h.maxFrameRateHz),
+        accuracy: want.accuracy ?? 1e-3,
+        baseSpacingM: want.baseSpacingM ?? 0,
+        viewRangeM: want.viewRangeM ?? 0,
+    };
+}
+
+let wsUrl = '';
+let closing = false;         /* the page asked to close: do not reconnect */
+let retryMs = 500;
+let paused = false;
+let captureNext = false;          /* page hidden: frames are counted, not decoded */
+
+/* Opens the socket; after a loss it reconnects with backoff (0.5 s doubling
+ * to 10 s) and the new HELLO re-subscribes, so a restarted daemon or a
+ * dropped link heals without a reload. */
+function connect(url, want) {
+    wsUrl = url;
+    if (want) wantSub = want;
+    post({ kind: 'status', state: 'connecting', url });
+    try {
+        ws = new WebSocket(url, SUBPROTOCOL);
+    } catch (e) {
+        post({ kind: 'status', state: 'failed', reason: String(e.message || e) });
+        return;
+    }
+    ws.binaryType = 'arraybuffer';
+    ws.onopen = () => { retryMs = 500; post({ kind: 'status', state: 'open', protocol: ws.protocol }); };
+    ws.onclose = (ev) => {
+        subscription = null;
+        hello = null;
+        post({ kind: 'status', state: 'closed', code: ev.code, reason: ev.reason, retryMs: closing ? null : retryMs });
+        if (!closing) {
+            setTimeout(() => connect(wsUrl, null), retryMs);
+            retryMs = Math.min(retryMs * 2, 10000);
+        }
+    };
+    ws.onerror = () => post({ kind: 'status', state: 'error' });
+    ws.onmessage = (ev) => onMessage(ev.data);
+}
+
+function noteError(e, what) {
+    stats.decodeErrors++;
+    stats.lastError = `${what}: ${e.message || e}`;
+    post({ kind: 'error', source: 'client', message: stats.lastError, code: e.code ?? 0 });
+}
+
+function onMessage(data) {
+    const now = performance.now();
+    if (typeof data === 'string') {
+        noteError(new Error('text message on a binary protocol'), 'message');
+        return;
+    }
+    stats.messages++;
+    stats.bytes += data.byteLength;
+    byteWindow.push([now, data.byteLength]);
+    let hdr;
+    try {
+        hdr = decodeHeader(new Uint8Array(data));
+    } catch (e) {
+        noteError(e, 'header');
+        return;
+    }
+    lastSimTime = hdr.simTime;
+    if (hdr.type === T.FRAME) {
+        stats.frames++;
+        if (pendingFrame) stats.skipped++;
+        /* latency is taken at arrival, before any decoding queue */
+        let latencyMs = null;
+        if (hdr.length >= 56) {
+            const s = new DataView(data).getUint32(32 + 40, true);
+            if (s !== 0xffffffff && s !== answeredSeq && sentAt.has(s)) {
+                latencyMs = now - sentAt.get(s);
+                answeredSeq = s;
+                for (const k of sentAt.keys()) if (((s - k) >>> 0) < 0x80000000) sentAt.delete(k); else break;
+            }
+        }
+        if (latencyMs != null) lastLatency = latencyMs;
+        if (captureNext) { captureNext = false; post({ kind: 'capture', bytes: data.slice(0) }); }
+        if (paused) return;
+        pendingFrame = data;
+        schedule();
+        return;
+    }
+    let msg;
+    try {
+        msg = decode(data);
+    } catch (e) {
+        noteError(e, hdr ? `decoding ${hdr.type}` : 'decode');
+        return;
+    }
+    switch (msg.type) {
+    case T.HELLO: {
+        hello = msg.body;
+        const h = { ...hello, sea: { ...hello.sea, seed: hello.sea.seed.toString() } };
+        post({ kind: 'hello', hello: h, simTime: hdr.simTime });
+        try {
+            subscription = chooseSubscription(hello, wantSub || {});
+            send(encodeSubscribe(subscription, nextSeq(), lastSimTime));
+            post({ kind: 'subscribed', sub: subscription, codecName: CODEC_NAMES[subscription.codec] });
+        } catch (e) {
+            noteError(e, 'subscribe');
+        }
+        break;
+    }
+    case T.MESH_TOPOLOGY: {
+        stats.topologies++;
+        const t = msg.body;
+        post({ kind: 'topology', meshId: t.meshId, meshKind: t.meshKind, lodLevels: t.lodLevels,
+            vertexCount: t.vertexCount, indices: t.indices, morph: t.morph, level: t.level },
+        [t.indices.buffer, t.morph.buffer, t.level.buffer]);
+        break;
+    }
+    case T.MESH_VERTICES: {
+        const v = msg.body;
+        post({ kind: 'vertices', meshId: v.meshId, origin: v.origin, positions: v.positions, simTime: hdr.simTime },
+            [v.positions.buffer]);
+        break;
+    }
+    case T.TILE:
+        /* Standalone tiles are not part of a live subscription's stream. */
+        break;
+    case T.SEA_STATE: {
+        const s = msg.body;
+        post({ kind: 'sea', effectiveTime: s.effectiveTime, sea: { ...s.sea, seed: s.sea.seed.toString() } });
+        break;
+    }
+    case T.QUERY_RESULT:
+        post({ kind: 'result', result: msg.body });
+        break;
+    case T.ERROR: {
+        stats.serverErrors++;
+        const e = msg.body;
+        stats.lastError = `server: ${RESULT_NAMES[e.code] || e.code}: ${e.message}`;
+        post({ kind: 'error', source: 'server', code: e.code, message: e.message, offendingType: e.offendingType });
+        break;
+    }
+    case T.BYE:
+        post({ kind: 'bye', reason: BYE_REASONS[msg.body.reason] || String(msg.body.reason), message: msg.body.message });
+        break;
+    default:
+        break;
+    }
+}
+
+/* ---- decode pool -------------------------------------------------------- */
+
+/* Tile decoding is the expensive part (qz: zstd + prediction), so levels
+ * are spread over a pool of decoder workers, balanced by sample count.
+ * One frame is in flight at a time; newer frames coalesce meanwhile. */
+const POOL_SIZE = Math.max(1, Math.min(4, ((self.navigator && self.navigator.hardwareConcurrency) || 2) - 1));
+let pool = null;             /* Worker[]; [] = decode here (no pool) */
+let inflight = null;         /* {id, meta, remaining, levels, t0} */
+let jobId = 0;
+
+function getPool() {
+    if (pool) return pool;
+    pool = [];
+    try {
+        for (let i = 0; i < POOL_SIZE; i++) {
+            const w = new Worker(new URL('./decoder.js', import.meta.url), { type: 'module' });
+            w.onmessage = onPoolResult;
+            w.onerror = (e) => {
+                /* a broken pool must not stall the stream: decode here from now on */
+                noteError(new Error(e.message || 'decoder worker failed'), 'decode pool');
+                for (const x of pool) x.terminate();
+                pool = [];
+                inflight = null;
+                schedule();
+            };
+            pool.push(w);
+        }
+    } catch (e) {
+        for (const x of pool) x.terminate();
+        pool = [];
+    }
+    return pool;
+}
+
+function schedule() {
+    if (!frameScheduled && pendingFrame) {
+        frameScheduled = true;
+        setTimeout(processFrame, 0);
+    }
+}
+
+function processFrame() {
+    frameScheduled = false;
+    if (inflight) return;                   /* resumed when the pool answers */
+    const data = pendingFrame;
+    pendingFrame = null;
+    if (!data) return;
+    const t0 = performance.now();
+    let msg;
+    try {
+        msg = decode(data);
+    } catch (e) {
+        noteError(e, 'FRAME');
+        return;
+    }
+    const f = msg.body;
+    const meta = {
+        simTime: msg.hdr.simTime, tick: f.tick, cutoffK: f.cutoffK, eError: f.eError, origin: f.origin,
+        cameraSeq: f.cameraSeq, tileCount: f.tileCount, bytes: data.byteLength,
+        codecs: [...new Set(f.tiles.map((t) => CODEC_NAMES[t.codec]))].join('+'),
+        mesh: f.mesh ? { meshId: f.mesh.meshId, origin: f.mesh.origin, positions: f.mesh.positions } : null,
+    };
+    const groups = groupByLevel(f.tiles);
+    const p = getPool();
+    if (!p.length) {
+        const levels = [];
+        for (const [L, tiles] of groups) {
+            const rec = assembleLevel(L, tiles, noteError);
+            if (rec) levels.push(rec);
+        }
+        finishFrame({ meta, levels, t0 });
+        return;
+    }
+    const buckets = p.map(() => ({ levels: [], load: 0, transfer: [] }));
+    for (const [L, tiles] of groups) {
+        let load = 0;
+        for (const t of tiles) load += t.width * t.height * tilePlanes(t.channels);
+        const b = buckets.reduce((m, x) => (x.load < m.load ? x : m), buckets[0]);
+        const copies = tiles.map((t) => ({ ...t, payload: t.payload.slice() }));
+        for (const c of copies) b.transfer.push(c.payload.buffer);
+        b.levels.push({ level: L, tiles: copies });
+        b.load += load;
+    }
+    const busy = buckets.map((b, i) => [b, i]).filter(([b]) => b.levels.length);
+    inflight = { id: ++jobId, meta, remaining: busy.length, levels: [], t0 };
+    if (!busy.length) {
+        const job = inflight;
+        inflight = null;
+        finishFrame(job);
+        return;
+    }
+    for (const [b, i] of busy) p[i].postMessage({ id: inflight.id, levels: b.levels }, b.transfer);
+}
+
+function onPoolResult(ev) {
+    const r = ev.data;
+    if (!inflight || r.id !== inflight.id) return;
+    inflight.levels.push(...r.levels);
+    for (const e of r.errors) noteError(new ProtoError(13, e), 'decode');
+    if (--inflight.remaining > 0) return;
+    const job = inflight;
+    inflight = null;
+    job.levels.sort((a, b) => a.level - b.level);
+    finishFrame(job);
+    schedule();
+}
+
+function finishFrame(job) {
+    const { meta, levels, t0 } = job;
+    const now = performance.now();
+    stats.tiles += levels.reduce((n, L) => n + L.tiles, 0);
+    stats.decodeMs = now - t0;
+    stats.framesDecoded++;
+    const latencyMs = lastLatency;
+    lastLatency = null;
+    const transfer = [];
+    for (const L of levels) transfer.push(L.disp.buffer, L.nrm.buffer);
+    const out = {
+        kind: 'frame', ...meta, mesh: meta.mesh, levels, latencyMs, bytesPerSec: bytesPerSecond(now),
+        decodeWorkers: pool ? pool.length : 0, stats: { ...stats },
+    };
+    if (meta.mesh) transfer.push(meta.mesh.positions.buffer);
+    post(out, transfer);
+}
+
+self.onmessage = (ev) => {
+    const m = ev.data;
+    switch (m.cmd) {
+    case 'connect':
+        connect(m.url, m.sub || {});
+        break;
+    case 'camera': {
+        if (!subscription) return;
+        const s = nextSeq();
+        try {
+            send(encodeCamera(m.cam, s, lastSimTime));
+        } catch (e) {
+            noteError(e, 'camera');
+            return;
+        }
+        stats.camerasSent++;
+        sentAt.set(s, performance.now());
+        if (sentAt.size > 1000) sentAt.delete(sentAt.keys().next().value);
+        break;
+    }
+    case 'subscribe':
+        /* change of subscription (e.g. base spacing after a climb) */
+        wantSub = { ...(wantSub || {}), ...m.sub };
+        if (hello && ws && ws.readyState === 1) {
+            try {
+                subscription = chooseSubscription(hello, wantSub);
+                send(encodeSubscribe(subscription, nextSeq(), lastSimTime));
+                post({ kind: 'subscribed', sub: subscription, codecName: CODEC_NAMES[subscription.codec] });
+            } catch (e) {
+                noteError(e, 'subscribe');
+            }
+        }
+        break;
+    case 'query':
+        try { send(encodeQuery(m.id, m.points, m.t ?? null, nextSeq(), lastSimTime)); } catch (e) { noteError(e, 'query'); }
+        break;
+    case 'capture':
+        /* debugging aid: the next FRAME's raw bytes go to the page */
+        captureNext = true;
+        break;
+    case 'pause':
+        paused = !!m.paused;
+        break;
+    case 'close':
+        closing = true;
+        if (ws) {
+            try { send(encodeBye(0, 'viewer closed', nextSeq(), lastSimTime)); } catch { /* closing anyway */ }
+            ws.close(1000, 'bye');
+        }
+        break;
+    default:
+        break;
+    }
+};

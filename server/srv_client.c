@@ -1,0 +1,608 @@
+/*
+ * srv_client.c - per-client state, the hub, the message queues between the
+ * simulation and service threads, and the handling of every client message.
+ *
+ * Every client message is checked in full before it changes anything: a
+ * refused message gets an ERROR naming the field and leaves the client's
+ * subscription, camera and queues exactly as they were.
+ */
+#include "srv_client.h"
+
+#include <libwebsockets.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "srv_record.h"
+
+#define SERVER_VERSION "oceand 0.1"
+
+double srv_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void srv_sea_from_params(const ocean_params *p, proto_sea *o)
+{
+    memset(o, 0, sizeof *o);
+    o->spectrum = (uint8_t)p->sea.spectrum;
+    o->spreading = (uint8_t)p->sea.spreading;
+    o->seed = p->seed;
+    o->wind_u10 = p->sea.wind_u10;
+    o->wind_dir_deg = p->sea.wind_dir_deg;
+    o->fetch_m = p->sea.fetch_m;
+    o->depth_m = p->sea.depth_m;
+    o->swell = p->sea.swell;
+    o->phillips_a = p->sea.phillips_a;
+    o->small_wave_m = p->sea.small_wave_m;
+    o->choppiness = p->sea.choppiness;
+    double hs = ocean_spectrum_hs(&p->sea);
+    double wp = ocean_spectrum_peak(&p->sea);
+    o->hs = isfinite(hs) && hs >= 0 && hs <= 1000 ? hs : 0;
+    o->tp = wp > 0 && 2 * M_PI / wp <= 1e4 ? 2 * M_PI / wp : 0;
+}
+
+void srv_params_from_sea(const proto_sea *s, const ocean_params *base, ocean_params *o)
+{
+    *o = *base;
+    o->sea.spectrum = (ocean_spectrum_kind)s->spectrum;
+    o->sea.spreading = (ocean_spreading_kind)s->spreading;
+    o->seed = s->seed;
+    o->sea.wind_u10 = s->wind_u10;
+    o->sea.wind_dir_deg = s->wind_dir_deg;
+    o->sea.fetch_m = s->fetch_m;
+    o->sea.depth_m = s->depth_m;
+    o->sea.swell = s->swell;
+    o->sea.phillips_a = s->phillips_a;
+    o->sea.small_wave_m = s->small_wave_m;
+    o->sea.choppiness = s->choppiness;
+}
+
+void srv_mesh_camera(const proto_camera *pc, mesh_camera *c)
+{
+    mesh_camera_default(c);
+    for (int i = 0; i < 3; i++) c->pos[i] = pc->pos[i];
+    c->yaw_deg = pc->yaw_deg;
+    c->pitch_deg = pc->pitch_deg;
+    c->roll_deg = pc->roll_deg;
+    c->fov_y_deg = pc->fov_y_deg;
+    c->viewport_w = pc->viewport_w;
+    c->viewport_h = pc->viewport_h;
+}
+
+/* ---- hub ------------------------------------------------------------------ */
+
+ocean_result srv_hub_init(srv_hub *h, const srv_settings *s)
+{
+    memset(h, 0, sizeof *h);
+    if (pthread_mutex_init(&h->lock, NULL)) return OCEAN_ENOMEM;
+    pthread_condattr_t ca;
+    pthread_condattr_init(&ca);
+    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+    int e = pthread_cond_init(&h->wake, &ca);
+    pthread_condattr_destroy(&ca);
+    if (e) {
+        pthread_mutex_destroy(&h->lock);
+        return OCEAN_ENOMEM;
+    }
+    h->settings = *s;
+    h->tick_rate = s->srv.tick_rate;
+    h->next_id = 1;
+    h->wall0 = srv_now();
+    srv_sea_from_params(&s->params, &h->sea_now);
+    return OCEAN_OK;
+}
+
+void srv_hub_fini(srv_hub *h)
+{
+    /* Clients still listed (the service thread was torn down) go now. */
+    while (h->clients) {
+        srv_client *c = h->clients;
+        h->clients = c->next;
+        c->closed = 1;
+        srv_client_unref(c);
+    }
+    pthread_cond_destroy(&h->wake);
+    pthread_mutex_destroy(&h->lock);
+}
+
+double srv_hub_sim_time(const srv_hub *h) { return srv_now() - h->wall0; }
+
+void srv_hub_wake_net(srv_hub *h)
+{
+    if (h->wake_net) h->wake_net(h->wake_ctx);
+}
+
+/* ---- messages ------------------------------------------------------------- */
+
+srv_msg *srv_msg_new(void)
+{
+    srv_msg *m = calloc(1, sizeof *m);
+    if (m) proto_buf_init(&m->buf, LWS_PRE);
+    return m;
+}
+
+void srv_msg_free(srv_msg *m)
+{
+    if (!m) return;
+    proto_buf_free(&m->buf);
+    free(m);
+}
+
+static void free_list(srv_msg *m)
+{
+    while (m) {
+        srv_msg *n = m->next;
+        srv_msg_free(m);
+        m = n;
+    }
+}
+
+/* ---- clients -------------------------------------------------------------- */
+
+ocean_result srv_client_create(srv_hub *h, struct lws *wsi, srv_client **out)
+{
+    srv_client *c = calloc(1, sizeof *c);
+    if (!c) return OCEAN_ENOMEM;
+    if (pthread_mutex_init(&c->out_lock, NULL)) {
+        free(c);
+        return OCEAN_ENOMEM;
+    }
+    atomic_init(&c->refs, 1);
+    atomic_init(&c->want_write, 0);
+    c->wsi = wsi;
+    c->hub = h;
+    c->bucket_t = c->last_progress = srv_now();
+    ocean_filter_smoother_init(&c->sim.smoother);
+    pthread_mutex_lock(&h->lock);
+    c->id = h->next_id++;
+    if (h->next_id == 0) h->next_id = 1;
+    c->bucket = h->settings.srv.msg_burst;
+    c->next = h->clients;
+    h->clients = c;
+    h->n_clients++;
+    pthread_mutex_unlock(&h->lock);
+    atomic_fetch_add(&h->stats.connections_total, 1);
+    *out = c;
+    return OCEAN_OK;
+}
+
+void srv_client_ref(srv_client *c) { atomic_fetch_add(&c->refs, 1); }
+
+static void free_requests(srv_client *c)
+{
+    while (c->queries) {
+        srv_query *q = c->queries;
+        c->queries = q->next;
+        free(q->points);
+        free(q);
+    }
+    c->n_queries = 0;
+    while (c->replay) {
+        srv_replay_cam *r = c->replay;
+        c->replay = r->next;
+        free(r);
+    }
+    c->replay_tail = NULL;
+    c->n_replay = 0;
+}
+
+void srv_client_unref(srv_client *c)
+{
+    if (!c || atomic_fetch_sub(&c->refs, 1) != 1) return;
+    free_requests(c);
+    free_list(c->ctrl);
+    srv_msg_free(c->slot_topo);
+    srv_msg_free(c->slot_frame);
+    mesh_destroy(c->sim.mesh);
+    srv_record_close(c->rec);
+    free(c->rx);
+    pthread_mutex_destroy(&c->out_lock);
+    free(c);
+}
+
+void srv_client_remove(srv_client *c)
+{
+    srv_hub *h = c->hub;
+    pthread_mutex_lock(&h->lock);
+    for (srv_client **p = &h->clients; *p; p = &(*p)->next) {
+        if (*p == c) {
+            *p = c->next;
+            h->n_clients--;
+            if (c->subscribed) h->n_subscribed--;
+            break;
+        }
+    }
+    c->closed = 1;
+    c->wsi = NULL;
+    free_requests(c);
+    pthread_mutex_unlock(&h->lock);
+    srv_record_close(c->rec);
+    c->rec = NULL;
+    srv_client_unref(c);
+}
+
+static size_t msg_bytes(const srv_msg *m) { return m ? proto_buf_len(&m->buf) : 0; }
+
+void srv_client_queue(srv_client *c, srv_msg *m)
+{
+    m->next = NULL;
+    pthread_mutex_lock(&c->out_lock);
+    if (c->ctrl_tail) c->ctrl_tail->next = m;
+    else c->ctrl = m;
+    c->ctrl_tail = m;
+    c->queued_bytes += msg_bytes(m);
+    pthread_mutex_unlock(&c->out_lock);
+    atomic_store(&c->want_write, 1);
+}
+
+void srv_client_publish(srv_client *c, srv_msg *topo, srv_msg *frame)
+{
+    srv_msg *drop_f = NULL, *drop_t = NULL;
+    pthread_mutex_lock(&c->out_lock);
+    if (c->slot_frame) {
+        drop_f = c->slot_frame;
+        c->queued_bytes -= msg_bytes(drop_f);
+    }
+    if (topo) {
+        if (c->slot_topo) {
+            drop_t = c->slot_topo;
+            c->queued_bytes -= msg_bytes(drop_t);
+        }
+        c->slot_topo = topo;
+        c->queued_bytes += msg_bytes(topo);
+    }
+    c->slot_frame = frame;
+    c->queued_bytes += msg_bytes(frame);
+    pthread_mutex_unlock(&c->out_lock);
+    atomic_store(&c->want_write, 1);
+    if (drop_f) atomic_fetch_add(&c->hub->stats.frames_skipped, 1);
+    srv_msg_free(drop_f);
+    srv_msg_free(drop_t);
+}
+
+srv_msg *srv_client_take(srv_client *c)
+{
+    srv_msg *m = NULL;
+    pthread_mutex_lock(&c->out_lock);
+    if (c->ctrl) {
+        m = c->ctrl;
+        c->ctrl = m->next;
+        if (!c->ctrl) c->ctrl_tail = NULL;
+    } else if (c->slot_topo) {
+        m = c->slot_topo;
+        c->slot_topo = NULL;
+    } else if (c->slot_frame) {
+        m = c->slot_frame;
+        c->slot_frame = NULL;
+    }
+    if (m) c->queued_bytes -= msg_bytes(m);
+    pthread_mutex_unlock(&c->out_lock);
+    if (m) m->next = NULL;
+    return m;
+}
+
+uint64_t srv_client_queued(srv_client *c)
+{
+    pthread_mutex_lock(&c->out_lock);
+    uint64_t q = c->queued_bytes;
+    pthread_mutex_unlock(&c->out_lock);
+    return q;
+}
+
+/* ---- replies ---------------------------------------------------------------- */
+
+static int verbose(srv_client *c)
+{
+    pthread_mutex_lock(&c->hub->lock);
+    int v = c->hub->settings.srv.verbose;
+    pthread_mutex_unlock(&c->hub->lock);
+    return v;
+}
+
+void srv_client_send_error(srv_client *c, const void *bad, size_t badlen, ocean_result code,
+                           const char *why)
+{
+    srv_msg *m = srv_msg_new();
+    if (!m) return;
+    if (proto_error_reply(&m->buf, bad, badlen, code, why, 0, srv_hub_sim_time(c->hub)) != OCEAN_OK) {
+        srv_msg_free(m);
+        return;
+    }
+    if (verbose(c)) fprintf(stderr, "oceand: client %u: ERROR %s: %s\n", c->id, ocean_strerror(code), why);
+    atomic_fetch_add(&c->hub->stats.errors_sent, 1);
+    srv_client_queue(c, m);
+}
+
+void srv_client_send_bye(srv_client *c, int reason, const char *why)
+{
+    srv_msg *m = srv_msg_new();
+    if (!m) return;
+    proto_msg b;
+    proto_msg_init(&b, PROTO_BYE);
+    b.hdr.sim_time = srv_hub_sim_time(c->hub);
+    b.u.bye.reason = (uint16_t)reason;
+    snprintf(b.u.bye.message, sizeof b.u.bye.message, "%s", why);
+    if (proto_encode(&m->buf, &b, NULL, 0) != OCEAN_OK) {
+        srv_msg_free(m);
+        return;
+    }
+    m->close_after = 1;
+    srv_client_queue(c, m);
+}
+
+void srv_client_send_hello(srv_client *c)
+{
+    srv_hub *h = c->hub;
+    proto_msg m;
+    proto_msg_init(&m, PROTO_HELLO);
+    proto_hello *o = &m.u.hello;
+    pthread_mutex_lock(&h->lock);
+    const srv_settings *s = &h->settings;
+    o->codecs = s->srv.codecs;
+    o->mesh_kinds = 0xF;
+    o->effects = (uint8_t)(s->effects & PROTO_FX_ALL);
+    o->cutoff_policies = 7;
+    o->modes = 3;
+    o->max_message = (uint32_t)s->srv.max_message;
+    o->max_query_points = (uint32_t)s->srv.max_query_points;
+    o->max_tile_size = (uint16_t)s->srv.max_tile_size;
+    o->max_lod_levels = (uint8_t)s->srv.max_lod_levels;
+    o->max_layers = (uint8_t)s->params.cascades;
+    o->tick_rate_hz = (float)s->srv.tick_rate;
+    o->max_frame_rate_hz = (float)s->srv.max_frame_rate;
+    o->sea = h->sea_now;
+    pthread_mutex_unlock(&h->lock);
+    o->client_id = c->id;
+    snprintf(o->server_version, sizeof o->server_version, "%s", SERVER_VERSION);
+    m.hdr.sim_time = srv_hub_sim_time(h);
+    srv_msg *q = srv_msg_new();
+    if (!q) return;
+    char err[256];
+    if (proto_encode(&q->buf, &m, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "oceand: cannot encode HELLO: %s\n", err);
+        srv_msg_free(q);
+        return;
+    }
+    srv_client_queue(c, q);
+}
+
+/* ---- incoming ------------------------------------------------------------- */
+
+/* Checks a SUBSCRIBE against this server; fills *eff with the effects that
+ * will be served.  OCEAN_OK or an error with why. */
+static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub, char *why,
+                                    size_t n)
+{
+    if (!(s->srv.codecs & (1u << sub->codec))) {
+        snprintf(why, n, "subscribe.codec %s is disabled on this server (server.codecs)",
+                 proto_codec_name((proto_codec)sub->codec));
+        return OCEAN_EUNSUPPORTED;
+    }
+    unsigned eff = sub->effects & s->effects;
+    if (!eff) {
+        snprintf(why, n, "subscribe.effects 0x%x: none of them is computed in this scene "
+                 "(HELLO effects 0x%x)", sub->effects, s->effects & PROTO_FX_ALL);
+        return OCEAN_EUNSUPPORTED;
+    }
+    if (sub->tile_size > s->srv.max_tile_size) {
+        snprintf(why, n, "subscribe.tile_size %u above the server's %d (server.max_tile_size)",
+                 sub->tile_size, s->srv.max_tile_size);
+        return OCEAN_ETOOBIG;
+    }
+    if (sub->lod_levels > s->srv.max_lod_levels) {
+        snprintf(why, n, "subscribe.lod_levels %u above the server's %d (server.max_lod_levels)",
+                 sub->lod_levels, s->srv.max_lod_levels);
+        return OCEAN_ETOOBIG;
+    }
+    if (sub->frame_rate_hz > s->srv.max_frame_rate) {
+        snprintf(why, n, "subscribe.frame_rate_hz %g above the server's %g (server.max_frame_rate)",
+                 (double)sub->frame_rate_hz, s->srv.max_frame_rate);
+        return OCEAN_EINVAL;
+    }
+    double spacing = sub->base_spacing_m > 0 ? sub->base_spacing_m : s->srv.base_spacing;
+    double top = spacing * ldexp(1.0, sub->lod_levels - 1) * sub->tile_size;
+    if (top > 1e7) {
+        snprintf(why, n, "subscribe: the coarsest tile would span %g m (base spacing %g m, "
+                 "%u levels, %u samples); keep it under 10 000 km", top, spacing, sub->lod_levels,
+                 sub->tile_size);
+        return OCEAN_EINVAL;
+    }
+    sub->effects = (uint8_t)eff;
+    if (sub->layers > s->params.cascades) sub->layers = (uint8_t)s->params.cascades;
+    return OCEAN_OK;
+}
+
+static int rate_ok(srv_client *c, double rate, double burst)
+{
+    double now = srv_now();
+    c->bucket += (now - c->bucket_t) * rate;
+    c->bucket_t = now;
+    if (c->bucket > burst) c->bucket = burst;
+    if (c->bucket < 1.0) return 0;
+    c->bucket -= 1.0;
+    return 1;
+}
+
+void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
+{
+    srv_hub *h = c->hub;
+    atomic_fetch_add(&h->stats.messages_received, 1);
+    pthread_mutex_lock(&h->lock);
+    srv_config cfg = h->settings.srv;
+    pthread_mutex_unlock(&h->lock);
+    char why[512];
+    if (!rate_ok(c, cfg.msg_rate, cfg.msg_burst)) {
+        snprintf(why, sizeof why, "message refused: more than %g messages/s (burst %d) "
+                 "(server.msg_rate)", cfg.msg_rate, cfg.msg_burst);
+        srv_client_send_error(c, buf, len, OCEAN_ERATE, why);
+        return;
+    }
+    proto_limits lim;
+    proto_limits_default(&lim);
+    lim.max_message = (uint32_t)cfg.max_message;
+    lim.max_query_points = (uint32_t)cfg.max_query_points;
+    proto_msg m;
+    char err[400];
+    ocean_result r = proto_decode_limited(buf, len, &lim, &m, err, sizeof err);
+    if (r != OCEAN_OK) {
+        snprintf(why, sizeof why, "%s", err[0] ? err : ocean_strerror(r));
+        srv_client_send_error(c, buf, len, r, why);
+        return;
+    }
+    switch (m.hdr.type) {
+    case PROTO_SUBSCRIBE: {
+        proto_subscribe sub = m.u.subscribe;
+        pthread_mutex_lock(&h->lock);
+        r = check_subscribe(&h->settings, &sub, why, sizeof why);
+        if (r == OCEAN_OK) {
+            if (!c->subscribed) h->n_subscribed++;
+            if (sub.mode != PROTO_MODE_REPLAY) free_requests(c); /* drop replay backlog */
+            c->subscribed = 1;
+            c->sub = sub;
+            c->sub_gen++;
+            pthread_cond_signal(&h->wake);
+        }
+        pthread_mutex_unlock(&h->lock);
+        if (r != OCEAN_OK) srv_client_send_error(c, buf, len, r, why);
+        break;
+    }
+    case PROTO_CAMERA: {
+        const proto_camera *k = &m.u.camera;
+        mesh_camera mc;
+        srv_mesh_camera(k, &mc);
+        char msg[256];
+        if (mesh_camera_validate(&mc, msg, sizeof msg) != OCEAN_OK) {
+            snprintf(why, sizeof why, "camera refused: %s", msg);
+            srv_client_send_error(c, buf, len, OCEAN_EINVAL, why);
+            break;
+        }
+        double t_rec = srv_hub_sim_time(h);
+        pthread_mutex_lock(&h->lock);
+        r = OCEAN_OK;
+        if (!c->subscribed) {
+            r = OCEAN_ESTATE;
+            snprintf(why, sizeof why, "CAMERA before SUBSCRIBE: subscribe first");
+        } else if (c->sub.mode == PROTO_MODE_REPLAY) {
+            if (c->n_replay >= cfg.replay_queue) {
+                r = OCEAN_ERATE;
+                snprintf(why, sizeof why, "replay queue full: %d cameras wait for frames "
+                         "(server.replay_queue); wait for FRAMEs before sending more", c->n_replay);
+            } else {
+                srv_replay_cam *rc = calloc(1, sizeof *rc);
+                if (!rc) {
+                    r = OCEAN_ENOMEM;
+                    snprintf(why, sizeof why, "out of memory");
+                } else {
+                    rc->cam = *k;
+                    rc->seq = m.hdr.seq;
+                    if (c->replay_tail) c->replay_tail->next = rc;
+                    else c->replay = rc;
+                    c->replay_tail = rc;
+                    c->n_replay++;
+                    t_rec = k->render_time;
+                    pthread_cond_signal(&h->wake);
+                }
+            }
+        } else {
+            c->cam = *k;
+            c->cam_seq = m.hdr.seq;
+            c->has_camera = 1;
+        }
+        pthread_mutex_unlock(&h->lock);
+        if (r != OCEAN_OK) srv_client_send_error(c, buf, len, r, why);
+        else if (c->rec && srv_record_camera(c->rec, t_rec, k) != OCEAN_OK)
+            fprintf(stderr, "oceand: client %u: recording stopped after a write error\n", c->id);
+        break;
+    }
+    case PROTO_QUERY: {
+        const proto_query *q = &m.u.query;
+        srv_query *sq = calloc(1, sizeof *sq);
+        double *pts = sq ? malloc(2 * sizeof(double) * q->count) : NULL;
+        if (!pts) {
+            free(sq);
+            srv_client_send_error(c, buf, len, OCEAN_ENOMEM, "out of memory for the query");
+            break;
+        }
+        memcpy(pts, q->points, 2 * sizeof(double) * q->count);
+        sq->query_id = q->query_id;
+        sq->seq = m.hdr.seq;
+        sq->at_time = q->at_time;
+        sq->t = q->t;
+        sq->count = q->count;
+        sq->points = pts;
+        pthread_mutex_lock(&h->lock);
+        if (c->n_queries >= cfg.max_pending_queries) {
+            r = OCEAN_ERATE;
+            snprintf(why, sizeof why, "%d queries already wait for answers "
+                     "(server.max_pending_queries)", c->n_queries);
+        } else {
+            srv_query **p = &c->queries;
+            while (*p) p = &(*p)->next;
+            *p = sq;
+            c->n_queries++;
+            sq = NULL;
+            pthread_cond_signal(&h->wake);
+        }
+        pthread_mutex_unlock(&h->lock);
+        if (sq) {
+            free(sq->points);
+            free(sq);
+            srv_client_send_error(c, buf, len, r, why);
+        }
+        break;
+    }
+    case PROTO_SEA_STATE: {
+        const proto_sea_state *s = &m.u.sea_state;
+        if (s->op != PROTO_SEA_SET) {
+            srv_client_send_error(c, buf, len, OCEAN_EINVAL,
+                                  "SEA_STATE announce is server-to-client; send op = set");
+            break;
+        }
+        if (!cfg.admin_token[0]) {
+            srv_client_send_error(c, buf, len, OCEAN_EAUTH, "runtime sea-state changes are "
+                                  "disabled on this server (server.admin_token is empty)");
+            break;
+        }
+        /* Compare in constant time. */
+        size_t a = strlen(cfg.admin_token), b = strlen(s->token);
+        unsigned diff = (unsigned)(a ^ b);
+        for (size_t i = 0; i < a; i++) diff |= (unsigned)(cfg.admin_token[i] ^ s->token[i < b ? i : 0]);
+        if (diff) {
+            srv_client_send_error(c, buf, len, OCEAN_EAUTH, "SEA_STATE set refused: wrong admin token");
+            break;
+        }
+        pthread_mutex_lock(&h->lock);
+        ocean_params np;
+        srv_params_from_sea(&s->sea, &h->settings.params, &np);
+        char msg[256];
+        r = ocean_params_validate(&np, msg, sizeof msg);
+        if (r == OCEAN_OK) {
+            h->sea_req.pending = 1;
+            h->sea_req.params = np;
+            h->sea_req.effective_time = s->effective_time;
+            pthread_cond_signal(&h->wake);
+        }
+        pthread_mutex_unlock(&h->lock);
+        if (r != OCEAN_OK) {
+            snprintf(why, sizeof why, "SEA_STATE set refused: %s", msg);
+            srv_client_send_error(c, buf, len, r, why);
+        }
+        break;
+    }
+    case PROTO_BYE:
+        c->closing = 2; /* close without a reply */
+        atomic_store(&c->want_write, 1);
+        break;
+    default:
+        snprintf(why, sizeof why, "%s is a server-to-client message; clients send SUBSCRIBE, "
+                 "CAMERA, QUERY, SEA_STATE or BYE", proto_type_name(m.hdr.type));
+        srv_client_send_error(c, buf, len, OCEAN_ETYPE, why);
+        break;
+    }
+    proto_msg_free(&m);
+}

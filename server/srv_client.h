@@ -1,0 +1,200 @@
+/*
+ * srv_client.h - per-client state, the hub that lists the clients, and the
+ * hand-over of bytes between the simulation thread and the libwebsockets
+ * service thread.
+ *
+ * Threads and locks:
+ *   svc  the libwebsockets service thread: owns every connection, receives
+ *        and decodes client messages, sends queued bytes.
+ *   sim  the simulation thread: evaluates the ocean, builds frames.
+ *   main the thread that started the daemon (signals, reload).
+ * Every shared member below is tagged [owner / guard].  hub.lock guards the
+ * client list and each client's "requests" (subscription, camera, queued
+ * queries and replay cameras); client.out_lock guards the client's outgoing
+ * bytes (control queue and the latest-frame slot).  Lock order: hub.lock
+ * before out_lock; nothing else is held while taking either.
+ *
+ * Lifetime: a client is reference counted.  The hub list holds one
+ * reference from LWS_CALLBACK_ESTABLISHED until LWS_CALLBACK_CLOSED; the
+ * simulation thread holds one while it builds a frame, so a client that
+ * disconnects mid-frame is freed when the frame is done, never under it.
+ */
+#ifndef SRV_CLIENT_H
+#define SRV_CLIENT_H
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "filter.h"
+#include "mesh.h"
+#include "proto.h"
+#include "srv_config.h"
+#include "srv_stats.h"
+
+struct lws;
+struct srv_record;
+
+/* One queued outgoing message: bytes with LWS_PRE headroom. */
+typedef struct srv_msg {
+    struct srv_msg *next;
+    proto_buf buf;
+    double tick_wall;   /* monotonic time of the tick that made it (0: none) */
+    int is_frame;       /* counts as a frame for statistics */
+    int close_after;    /* close the connection once this is sent (BYE) */
+} srv_msg;
+
+/* A pending QUERY, decoded. */
+typedef struct srv_query {
+    struct srv_query *next;
+    uint32_t query_id, seq;
+    int at_time;
+    double t;
+    uint32_t count;
+    double *points;     /* 2 * count */
+} srv_query;
+
+/* A replay-mode CAMERA waiting for its frame. */
+typedef struct srv_replay_cam {
+    struct srv_replay_cam *next;
+    proto_camera cam;
+    uint32_t seq;
+} srv_replay_cam;
+
+/* What the simulation thread keeps per client between ticks [sim only]. */
+typedef struct srv_client_sim {
+    uint64_t sub_gen;            /* subscription generation last applied */
+    proto_subscribe sub;
+    mesh *mesh;
+    mesh_config mesh_cfg;
+    uint64_t topo_key;
+    uint32_t mesh_id;
+    int topo_valid;
+    ocean_filter_smoother smoother;
+    double last_t;               /* sim time of the last frame (smoother dt) */
+    double next_frame_t;         /* live: when the next frame is due */
+    int primed;
+    double cutoff_k;             /* smoothed cutoff of the last frame */
+} srv_client_sim;
+
+typedef struct srv_client {
+    atomic_int refs;
+    uint32_t id;                          /* [const] */
+    struct lws *wsi;                      /* [svc] NULL once closed */
+    struct srv_hub *hub;                  /* [const] */
+
+    /* ---- requests: [svc writes / hub.lock] ---- */
+    int subscribed;
+    uint64_t sub_gen;                     /* bumps on every SUBSCRIBE */
+    proto_subscribe sub;
+    int has_camera;
+    proto_camera cam;
+    uint32_t cam_seq;
+    srv_query *queries;                   /* FIFO */
+    int n_queries;
+    srv_replay_cam *replay, *replay_tail; /* FIFO */
+    int n_replay;
+    int closed;                           /* connection gone; sim skips it */
+    struct srv_client *next;              /* hub list */
+
+    /* ---- outgoing: [sim + svc / out_lock] ---- */
+    pthread_mutex_t out_lock;
+    srv_msg *ctrl, *ctrl_tail;            /* FIFO: HELLO, ERROR, results, replay frames */
+    srv_msg *slot_topo;                   /* latest-wins frame slot: optional */
+    srv_msg *slot_frame;                  /*   MESH_TOPOLOGY, then FRAME */
+    uint64_t queued_bytes;                /* ctrl + slot */
+    atomic_int want_write;                /* svc should ask for WRITEABLE */
+
+    /* ---- service thread only [svc] ---- */
+    uint8_t *rx;                          /* message being reassembled */
+    size_t rx_len, rx_cap;
+    int rx_discard;                       /* dropping an oversized message */
+    size_t rx_discarded;
+    double bucket;                        /* message-rate tokens */
+    double bucket_t;                      /* monotonic time of last refill */
+    uint32_t tx_seq;                      /* header seq of the next message */
+    uint64_t inflight;                    /* bytes lws still holds of the last write */
+    double over_soft_since;               /* monotonic; 0: under the soft limit */
+    double last_progress;                 /* monotonic time of the last completed send */
+    int closing;                          /* BYE queued; close when sent */
+    struct srv_record *rec;
+
+    /* ---- simulation thread only ---- */
+    srv_client_sim sim;                   /* [sim] */
+} srv_client;
+
+/* A pending sea-state change. */
+typedef struct srv_sea_request {
+    int pending;
+    ocean_params params;
+    double effective_time;
+} srv_sea_request;
+
+/* The shared heart of the daemon. */
+typedef struct srv_hub {
+    pthread_mutex_t lock;
+    pthread_cond_t wake;                  /* sim waits here while idle */
+    srv_client *clients;                  /* [hub.lock] */
+    int n_clients;                        /* [hub.lock] connections */
+    int n_subscribed;                     /* [hub.lock] */
+    uint32_t next_id;                     /* [hub.lock] */
+    srv_settings settings;                /* [hub.lock] in force; copy before use */
+    uint64_t settings_gen;                /* [hub.lock] bumps on reload */
+    srv_sea_request sea_req;              /* [hub.lock] from an admin or a reload */
+    proto_sea sea_now;                    /* [hub.lock] current sea for HELLO */
+    double sea_effective;                 /* [hub.lock] */
+    int stopping;                         /* [hub.lock] */
+    void (*wake_net)(void *ctx);          /* [const] wakes the service thread */
+    void *wake_ctx;
+    double wall0;                         /* [const] monotonic time of sim t = 0 */
+    double tick_rate;                     /* [hub.lock] */
+    srv_stats stats;                      /* atomics */
+} srv_hub;
+
+/* Monotonic seconds. */
+double srv_now(void);
+
+ocean_result srv_hub_init(srv_hub *h, const srv_settings *s);
+void srv_hub_fini(srv_hub *h);
+/* The shared simulation clock (s): seconds since start, any thread. */
+double srv_hub_sim_time(const srv_hub *h);
+/* Wakes the service thread (lws_cancel_service). */
+void srv_hub_wake_net(srv_hub *h);
+
+/* Creates a client (refs = 1, the list's), adds it to the hub. */
+ocean_result srv_client_create(srv_hub *h, struct lws *wsi, srv_client **out);
+void srv_client_ref(srv_client *c);
+/* Drops one reference; the last frees the client.  Accepts NULL. */
+void srv_client_unref(srv_client *c);
+/* Removes c from the hub list and drops the list's reference [svc]. */
+void srv_client_remove(srv_client *c);
+
+/* Queues a finished message (takes ownership of m) [any thread]. */
+void srv_client_queue(srv_client *c, srv_msg *m);
+/* Puts a frame (and optionally a topology message to send first) into the
+ * latest-wins slot, freeing an unsent older frame (counted as skipped).
+ * An unsent older topology is kept when topo is NULL [sim]. */
+void srv_client_publish(srv_client *c, srv_msg *topo, srv_msg *frame);
+/* Takes the next message to send (control first), or NULL [svc]. */
+srv_msg *srv_client_take(srv_client *c);
+uint64_t srv_client_queued(srv_client *c);
+
+srv_msg *srv_msg_new(void);
+void srv_msg_free(srv_msg *m);
+
+/* Builds and queues messages the service thread sends [svc]. */
+void srv_client_send_error(srv_client *c, const void *bad, size_t badlen, ocean_result code,
+                           const char *why);
+void srv_client_send_bye(srv_client *c, int reason, const char *why);
+void srv_client_send_hello(srv_client *c);
+
+/* Handles one complete binary message from the client [svc]. */
+void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len);
+
+/* Conversions shared by the daemon's modules. */
+void srv_sea_from_params(const ocean_params *p, proto_sea *out);
+void srv_params_from_sea(const proto_sea *s, const ocean_params *base, ocean_params *out);
+void srv_mesh_camera(const proto_camera *pc, mesh_camera *out);
+
+#endif

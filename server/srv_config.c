@@ -1,0 +1,229 @@
+/*
+ * srv_config.c - the server.* table and the daemon's configuration loader.
+ *
+ * Defaults are chosen so the default subscription of a viewer stays under
+ * 4 MB/s at 30 Hz (tiles 2 x 2 per level, qz codec, a 4-pixel mesh) and so
+ * the daemon is safe on a public interface only when told to be (loopback
+ * bind, admin disabled without a token).
+ */
+#include "srv_config.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "codec.h"
+
+#define SRV(f) offsetof(srv_config, f)
+
+static const conf_name codec_names[] = {
+    {"f32", 1u << PROTO_CODEC_F32},         {"f16", 1u << PROTO_CODEC_F16},
+    {"qz", 1u << PROTO_CODEC_QZ},           {"exr-zip", 1u << PROTO_CODEC_EXR_ZIP},
+    {"exr-piz", 1u << PROTO_CODEC_EXR_PIZ}, {"exr-b44", 1u << PROTO_CODEC_EXR_B44},
+    {"exr-b44a", 1u << PROTO_CODEC_EXR_B44A}, {NULL, 0}};
+
+static const conf_entry srv_entries[] = {
+    {.name = "server.port", .type = CONF_INT, .offset = SRV(port), .min = 0, .max = 65535,
+     .def = "8740",
+     .help = "TCP port of the WebSocket endpoint and the HTTP pages (viewer, /metrics, "
+             "/status); 0 picks a free port and logs it."},
+    {.name = "server.bind", .type = CONF_STRING, .offset = SRV(bind), .size = SRV_BIND_MAX,
+     .def = "127.0.0.1",
+     .help = "Address to listen on; an empty string listens on every interface."},
+    {.name = "server.max_clients", .type = CONF_INT, .offset = SRV(max_clients), .min = 1,
+     .max = 100000, .def = "1024",
+     .help = "Connections served at once; one more is told BYE server-full and closed."},
+    {.name = "server.max_message", .type = CONF_INT, .offset = SRV(max_message), .min = 256,
+     .max = 64 << 20, .def = "1048576", .unit = "bytes",
+     .help = "Largest message a client may send; a longer one is discarded with an ERROR "
+             "(1 MiB holds a QUERY of 65 536 points)."},
+    {.name = "server.msg_rate", .type = CONF_DOUBLE, .offset = SRV(msg_rate), .min = 0.1,
+     .max = 1e5, .def = "200", .unit = "messages/s",
+     .help = "Sustained messages per second a client may send (token bucket); excess "
+             "messages are refused with an ERROR."},
+    {.name = "server.msg_burst", .type = CONF_INT, .offset = SRV(msg_burst), .min = 1,
+     .max = 100000, .def = "400", .unit = "messages",
+     .help = "Depth of the message-rate bucket: how many messages may arrive at once."},
+    {.name = "server.output_soft", .type = CONF_U64, .offset = SRV(output_soft), .min = 1024,
+     .max = 1e12, .def = "8388608", .unit = "bytes",
+     .help = "Soft output limit (redis' client-output-buffer-limit): a client whose queued "
+             "bytes stay above this for server.output_soft_seconds is disconnected. Frames "
+             "never queue (latest wins); replies and replay frames do."},
+    {.name = "server.output_soft_seconds", .type = CONF_DOUBLE, .offset = SRV(output_soft_seconds),
+     .min = 0, .max = 3600, .def = "10", .unit = "s",
+     .help = "How long a client may stay above the soft output limit."},
+    {.name = "server.output_hard", .type = CONF_U64, .offset = SRV(output_hard), .min = 1024,
+     .max = 1e12, .def = "33554432", .unit = "bytes",
+     .help = "Hard output limit: a client with more bytes queued is disconnected at once "
+             "(BYE slow-consumer)."},
+    {.name = "server.admin_token", .type = CONF_STRING, .offset = SRV(admin_token),
+     .size = SRV_TOKEN_MAX, .def = "",
+     .help = "Secret a SEA_STATE set message must carry; empty disables runtime sea-state "
+             "changes."},
+    {.name = "server.web_root", .type = CONF_STRING, .offset = SRV(web_root), .size = SRV_PATH_MAX,
+     .def = "clients/web",
+     .help = "Directory served over HTTP at / (the browser viewer); relative to the working "
+             "directory."},
+    {.name = "server.tick_rate", .type = CONF_DOUBLE, .offset = SRV(tick_rate), .min = 1,
+     .max = 240, .def = "30", .unit = "Hz",
+     .help = "Simulation ticks per second; one shared clock advances by 1/tick_rate per tick. "
+             "A client's frame rate is met on the nearest tick."},
+    {.name = "server.workers", .type = CONF_INT, .offset = SRV(workers), .min = 1, .max = 64,
+     .def = "2",
+     .help = "Threads that encode tiles and build meshes each tick (besides FFTW's "
+             "ocean.threads)."},
+    {.name = "server.scene", .type = CONF_STRING, .offset = SRV(scene), .size = SRV_PATH_MAX,
+     .def = "ship-bridge",
+     .help = "Scene to serve: a name looked up as server.scene_dir/NAME.conf, or a path "
+             "ending in .conf; empty serves the sea above with every effect."},
+    {.name = "server.scene_dir", .type = CONF_STRING, .offset = SRV(scene_dir),
+     .size = SRV_PATH_MAX, .def = "config/scenes",
+     .help = "Directory of scene files."},
+    {.name = "server.codecs", .type = CONF_FLAGS, .offset = SRV(codecs), .min = 1,
+     .names = codec_names, .def = "all",
+     .help = "Tile codecs clients may choose (announced in HELLO); qz is the compact default."},
+    {.name = "server.max_frame_rate", .type = CONF_DOUBLE, .offset = SRV(max_frame_rate),
+     .min = 0.1, .max = 240, .def = "60", .unit = "Hz",
+     .help = "Highest frame rate a client may subscribe to."},
+    {.name = "server.max_tile_size", .type = CONF_INT, .offset = SRV(max_tile_size), .min = 2,
+     .max = 1024, .def = "128", .unit = "samples",
+     .help = "Largest tile side a client may ask for."},
+    {.name = "server.max_lod_levels", .type = CONF_INT, .offset = SRV(max_lod_levels), .min = 1,
+     .max = 16, .def = "8",
+     .help = "Most tile LOD levels a client may ask for (each doubles the spacing)."},
+    {.name = "server.tiles_per_side", .type = CONF_INT, .offset = SRV(tiles_per_side), .min = 1,
+     .max = 8, .def = "2",
+     .help = "Tiles per level around each camera, n x n, world aligned so the camera sits in "
+             "the middle half of the block."},
+    {.name = "server.base_spacing", .type = CONF_DOUBLE, .offset = SRV(base_spacing),
+     .min = 0.001, .max = 10000, .def = "2", .unit = "m",
+     .help = "Level-0 tile sample spacing for clients that leave it to the server."},
+    {.name = "server.view_range", .type = CONF_DOUBLE, .offset = SRV(view_range), .min = 10,
+     .max = 1e6, .def = "10000", .unit = "m",
+     .help = "Mesh radius for clients that leave it to the server."},
+    {.name = "server.mesh_error_px", .type = CONF_DOUBLE, .offset = SRV(mesh_error_px),
+     .min = 0.1, .max = 64, .def = "16", .unit = "px",
+     .help = "Screen-space error budget of the concentric mesh; larger means fewer vertices "
+             "(16 px keeps a 20 m camera at 1080p near 5 800 vertices, 70 KB a frame; 4 px "
+             "gives 73 000). Clients render fine detail from the tiles."},
+    {.name = "server.max_query_points", .type = CONF_INT, .offset = SRV(max_query_points),
+     .min = 1, .max = 65536, .def = "65536",
+     .help = "Most points one QUERY may carry."},
+    {.name = "server.max_pending_queries", .type = CONF_INT, .offset = SRV(max_pending_queries),
+     .min = 1, .max = 1024, .def = "16",
+     .help = "Queries a client may have unanswered; more are refused with an ERROR."},
+    {.name = "server.replay_queue", .type = CONF_INT, .offset = SRV(replay_queue), .min = 1,
+     .max = 100000, .def = "256",
+     .help = "Replay-mode CAMERA reports a client may have waiting for their frames."},
+    {.name = "server.near_field_waves", .type = CONF_INT, .offset = SRV(near_field_waves),
+     .min = 0, .max = 1024, .def = "64",
+     .help = "Gerstner waves of the near field (scenes with near-field), shorter than the "
+             "finest cascade."},
+    {.name = "server.near_field_radius", .type = CONF_DOUBLE, .offset = SRV(near_field_radius),
+     .min = 1, .max = 10000, .def = "60", .unit = "m",
+     .help = "The near field fades from full strength at half this radius to nothing at it, "
+             "around each camera."},
+    {.name = "server.near_field_min_wavelength", .type = CONF_DOUBLE,
+     .offset = SRV(near_field_min_wavelength), .min = 0.001, .max = 100, .def = "0.1",
+     .unit = "m", .help = "Shortest near-field wavelength."},
+    {.name = "server.record", .type = CONF_BOOL, .offset = SRV(record), .def = "off",
+     .help = "Record every client's camera path (server/RECORDING.md); a client may also ask "
+             "with ?record=1 in its WebSocket URL."},
+    {.name = "server.record_dir", .type = CONF_STRING, .offset = SRV(record_dir),
+     .size = SRV_PATH_MAX, .def = "recordings",
+     .help = "Directory of camera-path recordings (created if missing)."},
+    {.name = "server.verbose", .type = CONF_BOOL, .offset = SRV(verbose), .def = "off",
+     .help = "Log every connection and refused message to stderr."},
+};
+
+static const conf_table srv_table = {
+    .name = "server",
+    .title = "daemon (server.*)",
+    .entries = srv_entries,
+    .count = sizeof srv_entries / sizeof srv_entries[0],
+    .target_size = sizeof(srv_config),
+};
+
+const conf_table *srv_config_table(void) { return &srv_table; }
+
+static void set_err(char *err, size_t errlen, const char *fmt, const char *a, const char *b)
+{
+    if (err && errlen) snprintf(err, errlen, fmt, a, b);
+}
+
+ocean_result srv_settings_default(srv_settings *s, char *err, size_t errlen)
+{
+    return srv_settings_load(NULL, NULL, 0, s, err, errlen);
+}
+
+/* server.scene -> a file path. */
+static void scene_path(const srv_config *c, char *out, size_t len)
+{
+    size_t n = strlen(c->scene);
+    if (strchr(c->scene, '/') || (n > 5 && strcmp(c->scene + n - 5, ".conf") == 0))
+        snprintf(out, len, "%.*s", SRV_PATH_MAX, c->scene);
+    else
+        snprintf(out, len, "%s/%s.conf", c->scene_dir, c->scene);
+}
+
+ocean_result srv_settings_load(const char *path, const char *const *sets, int nsets,
+                               srv_settings *out, char *err, size_t errlen)
+{
+    srv_settings *tmp = calloc(1, sizeof *tmp);
+    if (!tmp) return OCEAN_ENOMEM;
+    ocean_params_default(&tmp->params);
+    const conf_table *tables[] = {ocean_conf_table(), &srv_table};
+    void *targets[] = {&tmp->params, &tmp->srv};
+    conf_set set = {tables, targets, 2};
+    ocean_result r = path ? conf_load_file(path, &set, NULL, err, errlen)
+                          : conf_defaults(&set, err, errlen);
+    for (int i = 0; r == OCEAN_OK && i < nsets; i++)
+        r = conf_apply(sets[i], &set, err, errlen);
+    if (r == OCEAN_OK && tmp->srv.scene[0]) {
+        char sp[2 * SRV_PATH_MAX + 16];
+        scene_path(&tmp->srv, sp, sizeof sp);
+        r = ocean_conf_scene_load(sp, &tmp->params, &tmp->scene, err, errlen);
+        if (r == OCEAN_OK) {
+            tmp->params = tmp->scene.params;
+            tmp->effects = tmp->scene.effects;
+        }
+        /* --set wins over the scene for sea.* and ocean.* too. */
+        for (int i = 0; r == OCEAN_OK && i < nsets; i++)
+            r = conf_apply(sets[i], &set, err, errlen);
+    } else if (r == OCEAN_OK) {
+        tmp->effects = OCEAN_SCENE_FX_ALL;
+        tmp->scene.params = tmp->params;
+        tmp->scene.effects = tmp->effects;
+    }
+    /* The near field takes over where the FFT stops: with ocean.k_max = inf
+     * the finest cascade would keep its whole square band and the Gerstner
+     * set could not start above it without a gap or an overlap, so the band
+     * is cut at the finest grid's Nyquist circle, pi n / L_finest. */
+    if (r == OCEAN_OK && (tmp->effects & OCEAN_FX_NEAR_FIELD) && tmp->srv.near_field_waves > 0 &&
+        !isfinite(tmp->params.k_max)) {
+        double lf = tmp->params.patch_m / pow(tmp->params.cascade_ratio, tmp->params.cascades - 1);
+        tmp->params.k_max = M_PI * tmp->params.n / lf;
+    }
+    if (r == OCEAN_OK) {
+        char msg[256];
+        r = ocean_params_validate(&tmp->params, msg, sizeof msg);
+        if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", path ? path : "(defaults)", msg);
+    }
+    if (r == OCEAN_OK) {
+        snprintf(tmp->path, sizeof tmp->path, "%s", path ? path : "");
+        *out = *tmp;
+    }
+    free(tmp);
+    return r;
+}
+
+ocean_result srv_config_dump(FILE *f)
+{
+    srv_config c;
+    const conf_table *tables[] = {&srv_table};
+    void *targets[] = {&c};
+    conf_set set = {tables, targets, 1};
+    if (conf_defaults(&set, NULL, 0) != OCEAN_OK) return OCEAN_EINVAL;
+    return conf_dump(f, &set, CONF_DUMP_HELP);
+}

@@ -1,0 +1,90 @@
+/*
+ * srv_config.h - the daemon's own settings (server.* keys) and the loader
+ * that reads config/oceand.conf through one conf_set: the simulation's
+ * ocean table (sea.*, ocean.*) beside the server table, then the scene file
+ * named by server.scene on top.
+ *
+ * A loaded configuration is a plain value (srv_settings): the daemon keeps
+ * the one in force and swaps it whole on SIGHUP, so a bad reload changes
+ * nothing.
+ */
+#ifndef SRV_CONFIG_H
+#define SRV_CONFIG_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "conf.h"
+#include "ocean_conf.h"
+
+#define SRV_PATH_MAX 512
+#define SRV_TOKEN_MAX 256
+#define SRV_BIND_MAX 64
+
+typedef struct srv_config {
+    /* network */
+    int port;                    /* TCP port; 0 picks a free one */
+    char bind[SRV_BIND_MAX];     /* interface address, "" = all */
+    int max_clients;
+    int max_message;             /* largest client message, bytes */
+    double msg_rate;             /* client messages per second (token bucket) */
+    int msg_burst;               /* bucket depth */
+    uint64_t output_soft;        /* bytes queued for a client: soft limit */
+    double output_soft_seconds;  /* ... tolerated this long */
+    uint64_t output_hard;        /* bytes queued: disconnect at once */
+    char admin_token[SRV_TOKEN_MAX]; /* "" disables SEA_STATE set */
+    char web_root[SRV_PATH_MAX];
+    /* simulation */
+    double tick_rate;            /* Hz */
+    int workers;                 /* threads building frames */
+    char scene[SRV_PATH_MAX];    /* scene name (in scene_dir) or path; "" none */
+    char scene_dir[SRV_PATH_MAX];
+    /* subscriptions */
+    unsigned codecs;             /* bit c: codec c allowed */
+    double max_frame_rate;       /* Hz */
+    int max_tile_size;
+    int max_lod_levels;
+    int tiles_per_side;          /* tiles per level around the camera (n x n) */
+    double base_spacing;         /* level-0 sample spacing when a client gives 0, m */
+    double view_range;           /* mesh range when a client gives 0, m */
+    double mesh_error_px;        /* concentric mesh screen error budget */
+    int max_query_points;
+    int max_pending_queries;     /* per client */
+    int replay_queue;            /* pending replay cameras per client */
+    /* near field */
+    int near_field_waves;
+    double near_field_radius;    /* fade to 0 at this radius, m */
+    double near_field_min_wavelength; /* m */
+    /* recording */
+    int record;                  /* record every client */
+    char record_dir[SRV_PATH_MAX];
+    int verbose;
+} srv_config;
+
+/* The server.* table (target: srv_config).  Static, never NULL. */
+const conf_table *srv_config_table(void);
+
+/* Everything a configuration file determines. */
+typedef struct srv_settings {
+    srv_config srv;
+    ocean_params params;        /* daemon file + scene */
+    ocean_scene scene;          /* scene.name "" when no scene is configured */
+    unsigned effects;           /* effects the daemon may compute (scene's, or all) */
+    char path[SRV_PATH_MAX];    /* file it came from ("" for built-in defaults) */
+} srv_settings;
+
+/* Built-in defaults (every table's defaults, no scene, all effects). */
+ocean_result srv_settings_default(srv_settings *s, char *err, size_t errlen);
+
+/* Loads path (NULL: defaults only), applies the `nsets` "key=value"
+ * overrides in sets[], then the scene file server.scene names (a bare name
+ * is looked up as scene_dir/NAME.conf), and validates.  On failure *out is
+ * unchanged and err holds "file:line: message: 'text'". */
+ocean_result srv_settings_load(const char *path, const char *const *sets, int nsets,
+                               srv_settings *out, char *err, size_t errlen);
+
+/* Prints the server table with its help as a commented config section. */
+ocean_result srv_config_dump(FILE *f);
+
+#endif

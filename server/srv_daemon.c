@@ -1,0 +1,95 @@
+/*
+ * srv_daemon.c - start, reload and stop of the daemon's threads.
+ */
+#include "srv_daemon.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "srv_net.h"
+#include "srv_sim.h"
+
+struct srv_daemon {
+    srv_hub hub;
+    srv_sim *sim;
+    srv_net *net;
+};
+
+ocean_result srv_daemon_start(const srv_settings *s, srv_daemon **out, char *msg, size_t msglen)
+{
+    *out = NULL;
+    srv_daemon *d = calloc(1, sizeof *d);
+    if (!d) return OCEAN_ENOMEM;
+    ocean_result r = srv_hub_init(&d->hub, s);
+    if (r != OCEAN_OK) {
+        free(d);
+        return r;
+    }
+    r = srv_sim_create(&d->hub, &d->sim, msg, msglen);
+    if (r == OCEAN_OK) r = srv_net_create(&d->hub, &d->net, msg, msglen);
+    if (r == OCEAN_OK) r = srv_sim_start(d->sim);
+    if (r == OCEAN_OK) r = srv_net_start(d->net);
+    if (r != OCEAN_OK) {
+        srv_sim_destroy(d->sim);
+        srv_net_destroy(d->net);
+        srv_hub_fini(&d->hub);
+        free(d);
+        return r;
+    }
+    *out = d;
+    return OCEAN_OK;
+}
+
+int srv_daemon_port(const srv_daemon *d) { return srv_net_port(d->net); }
+srv_hub *srv_daemon_hub(srv_daemon *d) { return &d->hub; }
+
+ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, size_t msglen)
+{
+    srv_hub *h = &d->hub;
+    msg[0] = 0;
+    pthread_mutex_lock(&h->lock);
+    const srv_config *o = &h->settings.srv;
+    const char *restart[4];
+    int nr = 0;
+    if (o->port != s->srv.port) restart[nr++] = "server.port";
+    if (strcmp(o->bind, s->srv.bind)) restart[nr++] = "server.bind";
+    if (strcmp(o->web_root, s->srv.web_root)) restart[nr++] = "server.web_root";
+    if (o->workers != s->srv.workers) restart[nr++] = "server.workers";
+    srv_settings keep = h->settings;
+    h->settings = *s;
+    /* keys that need a restart keep their running values */
+    h->settings.srv.port = keep.srv.port;
+    snprintf(h->settings.srv.bind, sizeof h->settings.srv.bind, "%s", keep.srv.bind);
+    snprintf(h->settings.srv.web_root, sizeof h->settings.srv.web_root, "%s", keep.srv.web_root);
+    h->settings.srv.workers = keep.srv.workers;
+    /* effects and near field are fixed by the running ocean's scene */
+    h->settings.effects = keep.effects;
+    h->settings.params = keep.params;
+    if (memcmp(&keep.params, &s->params, sizeof s->params) != 0) {
+        h->sea_req.pending = 1;
+        h->sea_req.params = s->params;
+        h->sea_req.effective_time = 0; /* now */
+    }
+    h->settings_gen++;
+    pthread_cond_signal(&h->wake);
+    pthread_mutex_unlock(&h->lock);
+    atomic_fetch_add(&h->stats.reloads, 1);
+    if (nr) {
+        size_t off = (size_t)snprintf(msg, msglen, "restart needed for:");
+        for (int i = 0; i < nr && off < msglen; i++)
+            off += (size_t)snprintf(msg + off, msglen - off, " %s", restart[i]);
+    }
+    return OCEAN_OK;
+}
+
+void srv_daemon_stop(srv_daemon *d)
+{
+    if (!d) return;
+    srv_net_stop(d->net, 2.0);
+    srv_sim_stop(d->sim);
+    srv_net_destroy(d->net);
+    srv_sim_destroy(d->sim);
+    srv_hub_fini(&d->hub);
+    free(d);
+}

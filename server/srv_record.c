@@ -1,0 +1,82 @@
+/*
+ * srv_record.c - camera-path recordings (format: server/RECORDING.md).
+ */
+#include "srv_record.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+struct srv_record {
+    FILE *f;
+    double last_flush;
+    int failed;
+};
+
+static double mono(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *scene,
+                             const char *mode, srv_record **out, char *path, size_t pathlen,
+                             char *msg, size_t msglen)
+{
+    *out = NULL;
+    if (mkdir(dir, 0755) != 0 && errno != EEXIST) {
+        snprintf(msg, msglen, "cannot create recording directory %s: %s", dir, strerror(errno));
+        return OCEAN_EIO;
+    }
+    char name[1024];
+    snprintf(name, sizeof name, "%s/client-%u-%lld.csv", dir, client_id, (long long)time(NULL));
+    srv_record *r = calloc(1, sizeof *r);
+    if (!r) return OCEAN_ENOMEM;
+    r->f = fopen(name, "w");
+    if (!r->f) {
+        snprintf(msg, msglen, "cannot open %s: %s", name, strerror(errno));
+        free(r);
+        return OCEAN_EIO;
+    }
+    fprintf(r->f, "# oceand camera path v1\n# client %u scene %s mode %s\n"
+                  "t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h\n",
+            client_id, scene && *scene ? scene : "-", mode);
+    r->last_flush = mono();
+    if (path && pathlen) snprintf(path, pathlen, "%s", name);
+    *out = r;
+    return OCEAN_OK;
+}
+
+int srv_record_format(FILE *f, double t, const proto_camera *c)
+{
+    return fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%u,%u\n", t,
+                   c->pos[0], c->pos[1], c->pos[2], (double)c->vel[0], (double)c->vel[1],
+                   (double)c->vel[2], (double)c->yaw_deg, (double)c->pitch_deg,
+                   (double)c->roll_deg, (double)c->fov_y_deg, c->viewport_w, c->viewport_h);
+}
+
+ocean_result srv_record_camera(srv_record *r, double t, const proto_camera *cam)
+{
+    if (!r || r->failed) return OCEAN_OK;
+    int bad = srv_record_format(r->f, t, cam) < 0;
+    double now = mono();
+    if (!bad && now - r->last_flush >= 1.0) {
+        bad = fflush(r->f) != 0;
+        r->last_flush = now;
+    }
+    if (bad) {
+        r->failed = 1;
+        return OCEAN_EIO;
+    }
+    return OCEAN_OK;
+}
+
+void srv_record_close(srv_record *r)
+{
+    if (!r) return;
+    if (r->f) fclose(r->f);
+    free(r);
+}

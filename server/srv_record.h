@@ -1,0 +1,32 @@
+/*
+ * srv_record.h - opt-in recording of a client's camera path in the text
+ * format of server/RECORDING.md (CSV, one line per CAMERA report), which
+ * `ocean-client replay` reads back.
+ */
+#ifndef SRV_RECORD_H
+#define SRV_RECORD_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "ocean_result.h"
+#include "proto.h"
+
+typedef struct srv_record srv_record;
+
+/* Opens dir/client-<id>-<unix time>.csv (creating dir) and writes the
+ * header.  *out is NULL on failure (OCEAN_EIO, OCEAN_ENOMEM); msg says why.
+ * path (if not NULL) receives the file name. */
+ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *scene,
+                             const char *mode, srv_record **out, char *path, size_t pathlen,
+                             char *msg, size_t msglen);
+/* Appends one report at sim time t.  Buffered; flushed at most once a
+ * second.  After a write error the recording stops and OCEAN_EIO is
+ * returned (once). */
+ocean_result srv_record_camera(srv_record *r, double t, const proto_camera *cam);
+/* Writes one report line to f in the recording format (shared with tests). */
+int srv_record_format(FILE *f, double t, const proto_camera *cam);
+/* Flushes and closes.  Accepts NULL. */
+void srv_record_close(srv_record *r);
+
+#endif

@@ -1,0 +1,1037 @@
+/*
+ * srv_sim.c - the simulation thread (see srv_sim.h).
+ *
+ * A batch is a set of frame jobs (client, time, camera).  Running a batch:
+ *   1. evaluate each distinct (time, group) once, serially (the ocean is
+ *      single-threaded; FFTW uses ocean.threads inside);
+ *   2. look every job's tiles up in the tile cache and encode the missing
+ *      ones in parallel (server.workers threads);
+ *   3. per client, in parallel: mesh build + displacement + FRAME encoding;
+ *   4. hand the bytes to the clients and wake the service thread.
+ */
+#include "srv_sim.h"
+
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "gerstner.h"
+#include "query.h"
+#include "srv_tiles.h"
+
+#define EVAL_MAX 8
+#define MAX_TILES_PER_JOB (PROTO_MAX_LOD_LEVELS * 64)
+
+typedef struct group {
+    int32_t bucket;   /* -1: unfiltered query group */
+    int32_t layers;
+    float boost;
+} group;
+
+typedef struct eval_entry {
+    int used;
+    double t;
+    group g;
+    unsigned effects;
+    ocean_frame *f;
+    ocean_frame_info info;
+    uint64_t last_use;
+} eval_entry;
+
+typedef struct job {
+    srv_client *c;
+    double t;
+    proto_camera cam;
+    uint32_t cam_seq;
+    int replay;
+    uint32_t tick;
+    group g;
+    double cutoff_k;
+    ocean_filter_cutoff cut;
+    unsigned need;          /* ocean effects needed */
+    eval_entry *ev;
+    srv_tile **tiles;
+    int ntiles;
+    srv_msg *topo, *frame;
+    int sub_changed;
+    int leader;             /* live: index of the job whose mesh this one shares */
+    int mesh_ok;
+    mesh_view mv;           /* the displaced mesh (valid when mesh_ok) */
+} job;
+
+struct srv_sim {
+    srv_hub *hub;
+    pthread_t thread;
+    int running;
+    int stop;                   /* [hub.lock] */
+    /* everything below: [sim] */
+    srv_settings set;           /* copy of the hub's settings */
+    uint64_t set_gen;
+    ocean *oc;
+    ocean_gerstner *g;
+    ocean_filter_config fcfg;
+    ocean_filter_buckets buckets;
+    double lambda_dom;
+    ocean *next_oc;             /* pending sea change */
+    ocean_gerstner *next_g;
+    ocean_params next_params;
+    double next_eff;
+    eval_entry ev[EVAL_MAX];
+    uint64_t use;
+    srv_tile_cache *tiles;
+    uint64_t gen;
+    uint64_t tick_no;
+    double camera_hint[5];
+};
+
+/* ---- ocean construction ----------------------------------------------------- */
+
+static ocean_result make_ocean(const srv_settings *s, const ocean_params *p, ocean **oc,
+                               ocean_gerstner **g, char *msg, size_t msglen)
+{
+    *oc = NULL;
+    *g = NULL;
+    ocean_result r = ocean_create(p, oc, msg, msglen);
+    if (r != OCEAN_OK) return r;
+    if ((s->effects & OCEAN_FX_NEAR_FIELD) && s->srv.near_field_waves > 0) {
+        double patch, klo, khi;
+        ocean_cascade_band(*oc, p->cascades - 1, &patch, &klo, &khi);
+        ocean_gerstner_params gp;
+        ocean_gerstner_params_default(&gp);
+        gp.sea = p->sea;
+        gp.seed = p->seed;
+        gp.count = s->srv.near_field_waves;
+        gp.k_lo = khi;
+        gp.k_hi = 2 * M_PI / s->srv.near_field_min_wavelength;
+        if (isfinite(gp.k_lo) && gp.k_hi > gp.k_lo * 1.01) {
+            r = ocean_gerstner_create(&gp, g, msg, msglen);
+            if (r != OCEAN_OK) {
+                ocean_destroy(*oc);
+                *oc = NULL;
+                return r;
+            }
+        }
+    }
+    return OCEAN_OK;
+}
+
+static void eval_clear(srv_sim *s)
+{
+    for (int i = 0; i < EVAL_MAX; i++) {
+        ocean_frame_destroy(s->ev[i].f);
+        memset(&s->ev[i], 0, sizeof s->ev[i]);
+    }
+}
+
+static void adopt_sea(srv_sim *s, const ocean_params *p)
+{
+    s->set.params = *p;
+    ocean_filter_config_default(&s->fcfg, &p->sea);
+    double lam = 0;
+    if (mesh_lambda_dominant(&p->sea, &lam) != OCEAN_OK) lam = 0;
+    s->lambda_dom = lam;
+}
+
+ocean_result srv_sim_create(srv_hub *h, srv_sim **out, char *msg, size_t msglen)
+{
+    srv_sim *s = calloc(1, sizeof *s);
+    if (!s) return OCEAN_ENOMEM;
+    s->hub = h;
+    pthread_mutex_lock(&h->lock);
+    s->set = h->settings;
+    s->set_gen = h->settings_gen;
+    pthread_mutex_unlock(&h->lock);
+    ocean_result r = make_ocean(&s->set, &s->set.params, &s->oc, &s->g, msg, msglen);
+    if (r == OCEAN_OK) r = srv_tiles_create(&s->tiles);
+    if (r != OCEAN_OK) {
+        srv_sim_destroy(s);
+        return r;
+    }
+    adopt_sea(s, &s->set.params);
+    ocean_filter_buckets_default(&s->buckets);
+    double v[5] = {0, 20, 0, 0, 0};
+    if (s->set.scene.camera_hint[0]) ocean_conf_camera_hint_parse(s->set.scene.camera_hint, v);
+    memcpy(s->camera_hint, v, sizeof v);
+    *out = s;
+    return OCEAN_OK;
+}
+
+void srv_sim_destroy(srv_sim *s)
+{
+    if (!s) return;
+    srv_sim_stop(s);
+    eval_clear(s);
+    srv_tiles_destroy(s->tiles);
+    ocean_gerstner_destroy(s->g);
+    ocean_destroy(s->oc);
+    ocean_gerstner_destroy(s->next_g);
+    ocean_destroy(s->next_oc);
+    free(s);
+}
+
+/* ---- evaluation cache ------------------------------------------------------- */
+
+static int group_eq(const group *a, const group *b)
+{
+    return a->bucket == b->bucket && a->layers == b->layers && a->boost == b->boost;
+}
+
+static double group_cutoff(const srv_sim *s, const group *g)
+{
+    if (g->bucket < 0) return INFINITY;
+    double k = INFINITY;
+    ocean_filter_bucket_cutoff(&s->buckets, g->bucket, &k);
+    return k;
+}
+
+/* Returns an entry holding an evaluation at (t, g) with at least `effects`. */
+static eval_entry *evaluate(srv_sim *s, double t, const group *g, unsigned effects)
+{
+    eval_entry *hit = NULL, *victim = NULL;
+    for (int i = 0; i < EVAL_MAX; i++) {
+        eval_entry *e = &s->ev[i];
+        if (e->used && e->t == t && group_eq(&e->g, g)) { hit = e; break; }
+    }
+    if (hit && (hit->effects & effects) == effects) {
+        hit->last_use = ++s->use;
+        return hit;
+    }
+    if (hit) {
+        effects |= hit->effects;
+        victim = hit;
+    } else {
+        for (int i = 0; i < EVAL_MAX; i++) {
+            eval_entry *e = &s->ev[i];
+            if (!victim || !e->used || (victim->used && e->last_use < victim->last_use)) victim = e;
+            if (!e->used) break;
+        }
+    }
+    if (!victim->f && ocean_frame_create(s->oc, &victim->f) != OCEAN_OK) return NULL;
+    ocean_request rq;
+    memset(&rq, 0, sizeof rq);
+    int cascades = ocean_get_params(s->oc)->cascades;
+    for (int c = 0; c < cascades && c < g->layers; c++) rq.effects[c] = effects & ~OCEAN_FX_NEAR_FIELD;
+    rq.cutoff_k = group_cutoff(s, g);
+    rq.order = s->fcfg.order;
+    rq.redistribute = 0;
+    rq.low_boost = g->boost;
+    victim->used = 0;
+    if (ocean_evaluate(s->oc, t, &rq, victim->f) != OCEAN_OK) return NULL;
+    victim->used = 1;
+    victim->t = t;
+    victim->g = *g;
+    victim->effects = effects;
+    victim->last_use = ++s->use;
+    ocean_frame_get_info(victim->f, &victim->info);
+    srv_stats *st = &s->hub->stats;
+    atomic_fetch_add(&st->evaluations, 1);
+    return victim;
+}
+
+static void publish_counters(srv_sim *s)
+{
+    ocean_counters oc;
+    ocean_get_counters(s->oc, &oc);
+    /* Counters restart with each new ocean; keep the totals monotone. */
+    static __thread uint64_t base[SRV_FX_CHANNELS + 1], last[SRV_FX_CHANNELS + 1];
+    static __thread const ocean *seen;
+    if (seen != s->oc) {
+        for (int i = 0; i <= SRV_FX_CHANNELS; i++) base[i] += last[i];
+        memset(last, 0, sizeof last);
+        seen = s->oc;
+    }
+    srv_stats *st = &s->hub->stats;
+    for (int i = 0; i < SRV_FX_CHANNELS; i++) {
+        last[i] = oc.transforms_by_effect[i];
+        atomic_store(&st->transforms_by_effect[i], base[i] + last[i]);
+    }
+    last[SRV_FX_CHANNELS] = oc.transforms;
+    atomic_store(&st->transforms, base[SRV_FX_CHANNELS] + oc.transforms);
+}
+
+/* ---- per-client pieces ------------------------------------------------------ */
+
+static void default_camera(const srv_sim *s, proto_camera *c)
+{
+    memset(c, 0, sizeof *c);
+    c->pos[0] = s->camera_hint[0];
+    c->pos[1] = s->camera_hint[1];
+    c->pos[2] = s->camera_hint[2];
+    c->yaw_deg = (float)s->camera_hint[3];
+    c->pitch_deg = (float)s->camera_hint[4];
+    c->fov_y_deg = 60;
+    c->viewport_w = 1280;
+    c->viewport_h = 720;
+}
+
+static double base_spacing(const srv_sim *s, const proto_subscribe *sub)
+{
+    return sub->base_spacing_m > 0 ? sub->base_spacing_m : s->set.srv.base_spacing;
+}
+
+/* Chooses the client's cutoff for this frame and its evaluation group. */
+static void choose_cutoff(srv_sim *s, srv_client *c, job *j)
+{
+    const proto_subscribe *sub = &c->sim.sub;
+    ocean_filter_client cl;
+    cl.speed_mps = sqrt((double)j->cam.vel[0] * j->cam.vel[0] + (double)j->cam.vel[1] * j->cam.vel[1] +
+                        (double)j->cam.vel[2] * j->cam.vel[2]);
+    cl.fps = sub->frame_rate_hz;
+    cl.spacing_m = base_spacing(s, sub);
+    ocean_filter_cutoff cut;
+    if (ocean_filter_cutoff_compute(&s->fcfg, (ocean_filter_policy)sub->cutoff_policy, &cl, &cut) !=
+        OCEAN_OK) {
+        cut.k = INFINITY;
+        cut.low_boost = 1;
+        cut.order = s->fcfg.order;
+    }
+    double dt = c->sim.primed ? j->t - c->sim.last_t : 0;
+    if (!(dt >= 0) || !isfinite(dt)) dt = 0; /* replay may jump back: no smoothing step */
+    double k = cut.k;
+    if (ocean_filter_smoother_update(&c->sim.smoother, cut.k, dt, &k) != OCEAN_OK) k = cut.k;
+    c->sim.primed = 1;
+    c->sim.last_t = j->t;
+    c->sim.cutoff_k = k;
+    int b = 0;
+    if (ocean_filter_bucket_of(&s->buckets, k, &b) != OCEAN_OK) b = ocean_filter_bucket_count(&s->buckets) - 1;
+    j->g.bucket = b;
+    j->g.layers = sub->layers;
+    j->g.boost = (float)(cut.low_boost > 0 ? cut.low_boost : 1.0);
+    j->cutoff_k = group_cutoff(s, &j->g);
+    j->cut = cut;
+    j->cut.k = j->cutoff_k;
+    j->cut.low_boost = j->g.boost;
+    j->need = sub->effects & OCEAN_FX_ALL;
+    if (sub->mesh_kind != PROTO_MESH_NONE)
+        j->need |= OCEAN_FX_HEIGHT | (sub->effects & OCEAN_FX_DISPLACEMENT);
+    if (!(j->need & OCEAN_FX_ALL)) j->need |= OCEAN_FX_HEIGHT;
+}
+
+/* Rebuilds the client's mesh object after a new subscription. */
+static void apply_subscription(srv_sim *s, srv_client *c)
+{
+    srv_client_sim *cs = &c->sim;
+    mesh_destroy(cs->mesh);
+    cs->mesh = NULL;
+    cs->topo_valid = 0;
+    cs->primed = 0;
+    cs->next_frame_t = -INFINITY;
+    ocean_filter_smoother_init(&cs->smoother);
+    if (cs->sub.mesh_kind == PROTO_MESH_NONE) return;
+    mesh_config mc;
+    mesh_config_default(&mc);
+    mc.kind = (mesh_kind)cs->sub.mesh_kind;
+    mc.range_m = cs->sub.view_range_m > 0 ? cs->sub.view_range_m : s->set.srv.view_range;
+    if (mc.range_m < 10) mc.range_m = 10;
+    if (mc.range_m > 1e6) mc.range_m = 1e6;
+    mc.error_px = s->set.srv.mesh_error_px;
+    mc.lambda_dominant_m = s->lambda_dom;
+    char msg[256];
+    ocean_result r = mesh_config_validate(&mc, msg, sizeof msg);
+    if (r == OCEAN_OK) r = mesh_create(&mc, &cs->mesh);
+    if (r != OCEAN_OK) {
+        char why[400];
+        snprintf(why, sizeof why, "mesh %s unavailable, frames come without a mesh: %s",
+                 mesh_kind_name(mc.kind), r == OCEAN_EINVAL ? msg : ocean_strerror(r));
+        srv_client_send_error(c, NULL, 0, r, why);
+        cs->mesh = NULL;
+    }
+    cs->mesh_cfg = mc;
+}
+
+typedef struct sampler_ctx {
+    const ocean_frame *f;
+    const ocean_gerstner *g;
+    ocean_gerstner_view view;
+    double t;
+    int disp;
+} sampler_ctx;
+
+static void sample_disp(void *ctx, double x, double z, double out[3])
+{
+    const sampler_ctx *sc = ctx;
+    ocean_point p;
+    ocean_frame_sample(sc->f, x, z, &p);
+    out[0] = sc->disp ? p.dx : 0;
+    out[1] = p.height;
+    out[2] = sc->disp ? p.dz : 0;
+    if (sc->g) {
+        double dx = x - sc->view.camera_x, dz = z - sc->view.camera_z;
+        if (dx * dx + dz * dz < sc->view.fade_r1 * sc->view.fade_r1) {
+            ocean_gerstner_point gp;
+            if (ocean_gerstner_evaluate(sc->g, &sc->view, sc->t, &x, &z, 1, &gp) == OCEAN_OK) {
+                if (sc->disp) {
+                    out[0] += gp.dx;
+                    out[2] += gp.dz;
+                }
+                out[1] += gp.dy;
+            }
+        }
+    }
+}
+
+static srv_msg *encode_msg(const proto_msg *m)
+{
+    srv_msg *q = srv_msg_new();
+    if (!q) return NULL;
+    char err[256];
+    if (proto_encode(&q->buf, m, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "oceand: cannot encode %s: %s\n", proto_type_name(m->hdr.type), err);
+        srv_msg_free(q);
+        return NULL;
+    }
+    return q;
+}
+
+/* Builds and displaces the client's mesh for job j [worker thread; the
+ * client's sim state is only touched by the one worker that owns it]. */
+static void mesh_stage(srv_sim *s, job *j)
+{
+    srv_client *c = j->c;
+    srv_client_sim *cs = &c->sim;
+    j->mesh_ok = 0;
+    if (!cs->mesh) return;
+    mesh_camera mc;
+    srv_mesh_camera(&j->cam, &mc);
+    ocean_result r = mesh_build(cs->mesh, &mc);
+    if (r == OCEAN_OK) {
+        sampler_ctx sc;
+        memset(&sc, 0, sizeof sc);
+        sc.f = j->ev->f;
+        sc.t = j->t;
+        sc.disp = (cs->sub.effects & OCEAN_FX_DISPLACEMENT) != 0;
+        if (s->g && (cs->sub.effects & OCEAN_FX_NEAR_FIELD)) {
+            sc.g = s->g;
+            sc.view.camera_x = j->cam.pos[0];
+            sc.view.camera_z = j->cam.pos[2];
+            sc.view.fade_r1 = s->set.srv.near_field_radius;
+            sc.view.fade_r0 = 0.5 * sc.view.fade_r1;
+            sc.view.filter = j->cut;
+        }
+        r = mesh_displace(cs->mesh, sample_disp, &sc);
+    }
+    if (r == OCEAN_OK) {
+        mesh_get_view(cs->mesh, &j->mv);
+        if (j->mv.levels > PROTO_MAX_LOD_LEVELS || j->mv.vertex_count == 0) r = OCEAN_ETOOBIG;
+    }
+    if (r != OCEAN_OK) {
+        char why[256];
+        snprintf(why, sizeof why, "mesh build failed (%s); frames come without a mesh until "
+                 "the next SUBSCRIBE", ocean_strerror(r));
+        srv_client_send_error(c, NULL, 0, r, why);
+        mesh_destroy(cs->mesh);
+        cs->mesh = NULL;
+        return;
+    }
+    j->mesh_ok = 1;
+}
+
+/* Encodes the FRAME (and a MESH_TOPOLOGY when the client has not seen this
+ * topology) of job j, with the mesh of job src (j itself, or a job with the
+ * same camera, time and cutoff whose mesh is identical). */
+static void frame_stage(srv_sim *s, job *j, const job *src)
+{
+    (void)s;
+    srv_client *c = j->c;
+    srv_client_sim *cs = &c->sim;
+    proto_msg m;
+    proto_msg_init(&m, PROTO_FRAME);
+    m.hdr.sim_time = j->t;
+    proto_frame *fr = &m.u.frame;
+    fr->cutoff_k = j->cutoff_k;
+    fr->e_error = j->ev->info.e_error;
+    if (!(fr->e_error >= 0)) fr->e_error = 0;
+    if (fr->e_error > 1) fr->e_error = 1;
+    fr->camera_seq = j->cam_seq;
+    fr->tick = j->tick;
+    fr->origin[0] = j->cam.pos[0];
+    fr->origin[2] = j->cam.pos[2];
+    proto_tile pt[MAX_TILES_PER_JOB];
+    int nt = 0;
+    for (int i = 0; i < j->ntiles; i++)
+        if (j->tiles[i] && j->tiles[i]->result == OCEAN_OK) srv_tile_to_proto(j->tiles[i], &pt[nt++]);
+    fr->tile_count = (uint16_t)nt;
+    fr->tiles = pt;
+    if (src->mesh_ok && cs->sub.mesh_kind != PROTO_MESH_NONE) {
+        const mesh_view *v = &src->mv;
+        if (!cs->topo_valid || v->topology_key != cs->topo_key) {
+            cs->mesh_id++;
+            cs->topo_key = v->topology_key;
+            cs->topo_valid = 1;
+            proto_msg tm;
+            proto_msg_init(&tm, PROTO_MESH_TOPOLOGY);
+            tm.hdr.sim_time = j->t;
+            tm.u.topology.mesh_id = cs->mesh_id;
+            tm.u.topology.mesh_kind = (uint8_t)v->kind;
+            tm.u.topology.lod_levels = (uint8_t)(v->levels < 1 ? 1 : v->levels);
+            tm.u.topology.vertex_count = v->vertex_count;
+            tm.u.topology.index_count = v->index_count;
+            tm.u.topology.indices = v->indices;
+            tm.u.topology.morph = v->morph;
+            tm.u.topology.level = v->level;
+            j->topo = encode_msg(&tm);
+        }
+        fr->has_mesh = 1;
+        fr->mesh.mesh_id = cs->mesh_id;
+        fr->mesh.vertex_count = v->vertex_count;
+        memcpy(fr->mesh.origin, v->origin, sizeof v->origin);
+        fr->mesh.positions = v->positions;
+        memcpy(fr->origin, v->origin, sizeof v->origin);
+    }
+    j->frame = encode_msg(&m);
+}
+
+/* Two live jobs whose meshes are bit for bit the same. */
+static int same_mesh(const job *a, const job *b)
+{
+    const srv_client_sim *x = &a->c->sim, *y = &b->c->sim;
+    if (!x->mesh || !y->mesh || a->t != b->t || !group_eq(&a->g, &b->g)) return 0;
+    const unsigned fx = OCEAN_FX_DISPLACEMENT | OCEAN_FX_NEAR_FIELD;
+    if ((x->sub.effects & fx) != (y->sub.effects & fx)) return 0;
+    const mesh_config *p = &x->mesh_cfg, *q = &y->mesh_cfg;
+    if (p->kind != q->kind || p->range_m != q->range_m || p->error_px != q->error_px ||
+        p->lambda_dominant_m != q->lambda_dominant_m)
+        return 0;
+    const proto_camera *k = &a->cam, *l = &b->cam;
+    return k->pos[0] == l->pos[0] && k->pos[1] == l->pos[1] && k->pos[2] == l->pos[2] &&
+           k->yaw_deg == l->yaw_deg && k->pitch_deg == l->pitch_deg && k->roll_deg == l->roll_deg &&
+           k->fov_y_deg == l->fov_y_deg && k->viewport_w == l->viewport_w &&
+           k->viewport_h == l->viewport_h && a->cut.order == b->cut.order;
+}
+
+/* ---- batches ----------------------------------------------------------------- */
+
+static int cmp_job(const void *a, const void *b)
+{
+    const job *x = a, *y = b;
+    if (x->c != y->c) return x->c->id < y->c->id ? -1 : 1;
+    return 0;
+}
+
+static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
+{
+    if (n <= 0) return;
+    srv_stats *st = &s->hub->stats;
+    const srv_config *cfg = &s->set.srv;
+    s->gen++;
+    static int prof = -1;
+    if (prof < 0) prof = getenv("OCEAND_PROFILE") != NULL;
+    double p0 = srv_now();
+    /* 1. evaluations */
+    for (int i = 0; i < n; i++) {
+        unsigned need = jobs[i].need;
+        for (int k = i + 1; k < n; k++)
+            if (jobs[k].t == jobs[i].t && group_eq(&jobs[k].g, &jobs[i].g)) need |= jobs[k].need;
+        jobs[i].ev = NULL;
+        jobs[i].need = need;
+    }
+    for (int i = 0; i < n; i++) {
+        jobs[i].ev = evaluate(s, jobs[i].t, &jobs[i].g, jobs[i].need);
+        /* jobs sharing (t, group) reuse the entry; EVAL_MAX bounds a batch */
+    }
+    double p1 = srv_now();
+    /* 2. tiles */
+    srv_tile **missing = malloc(sizeof(srv_tile *) * (size_t)n * MAX_TILES_PER_JOB);
+    int nmiss = 0;
+    for (int i = 0; i < n && missing; i++) {
+        job *j = &jobs[i];
+        const proto_subscribe *sub = &j->c->sim.sub;
+        j->ntiles = 0;
+        j->tiles = NULL;
+        if (!j->ev) continue;
+        unsigned ch = srv_tiles_channels(sub->effects);
+        int per = cfg->tiles_per_side;
+        int levels = sub->lod_levels;
+        if (!ch || levels * per * per > MAX_TILES_PER_JOB) continue;
+        j->tiles = calloc((size_t)levels * per * per, sizeof(srv_tile *));
+        if (!j->tiles) continue;
+        double base = base_spacing(s, sub);
+        for (int L = 0; L < levels; L++) {
+            double sp = base * ldexp(1.0, L);
+            double w = sp * sub->tile_size;
+            int32_t x0 = srv_tiles_first(j->cam.pos[0], w, per);
+            int32_t z0 = srv_tiles_first(j->cam.pos[2], w, per);
+            for (int a = 0; a < per; a++)
+                for (int b = 0; b < per; b++) {
+                    srv_tile_key k;
+                    srv_tile_key_init(&k);
+                    k.t = j->t;
+                    k.spacing = sp;
+                    k.bucket = j->g.bucket;
+                    k.boost = j->g.boost;
+                    k.accuracy = sub->accuracy;
+                    k.ix = x0 + b;
+                    k.iz = z0 + a;
+                    k.channels = (uint16_t)ch;
+                    k.size = sub->tile_size;
+                    k.level = (uint8_t)L;
+                    k.codec = sub->codec;
+                    k.layers = (uint8_t)j->g.layers;
+                    int fresh = 0;
+                    srv_tile *t = srv_tiles_get(s->tiles, &k, s->gen, &fresh);
+                    if (!t) continue;
+                    if (fresh) {
+                        missing[nmiss++] = t;
+                        t->ready = 0;
+                        /* remember which frame to sample: stash in payload_len's place */
+                    }
+                    if (fresh) atomic_fetch_add(&st->tile_cache_misses, 1);
+                    else atomic_fetch_add(&st->tile_cache_hits, 1);
+                    j->tiles[j->ntiles++] = t;
+                }
+        }
+    }
+    /* Each missing tile samples the evaluation of the first job that asked for
+     * it; find it by key (t, group). */
+    if (missing && nmiss) {
+        const ocean_frame **src = malloc(sizeof(*src) * (size_t)nmiss);
+        if (src) {
+            for (int m = 0; m < nmiss; m++) {
+                src[m] = NULL;
+                for (int e = 0; e < EVAL_MAX; e++) {
+                    eval_entry *ev = &s->ev[e];
+                    if (ev->used && ev->t == missing[m]->key.t && ev->g.bucket == missing[m]->key.bucket &&
+                        ev->g.layers == missing[m]->key.layers && ev->g.boost == missing[m]->key.boost) {
+                        src[m] = ev->f;
+                        break;
+                    }
+                }
+            }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
+            for (int m = 0; m < nmiss; m++) {
+                if (src[m]) srv_tile_build(missing[m], src[m]);
+                else {
+                    missing[m]->ready = 1;
+                    missing[m]->result = OCEAN_ESTATE;
+                }
+            }
+            free(src);
+            atomic_fetch_add(&st->tiles_encoded, (uint64_t)nmiss);
+        }
+    }
+    free(missing);
+    double p2 = srv_now();
+    /* 3. meshes and frames.  Live jobs with identical cameras, time and
+     * cutoff share one mesh build (co-located viewers); replay jobs of one
+     * client run in order on one worker. */
+    qsort(jobs, (size_t)n, sizeof *jobs, cmp_job);
+    int *runs = malloc(sizeof(int) * (size_t)(n + 1));
+    int *leaders = malloc(sizeof(int) * (size_t)(n + 1));
+    int nruns = 0, nlead = 0;
+    if (runs && leaders) {
+        for (int i = 0; i < n; i++) {
+            jobs[i].leader = i;
+            if (!jobs[i].ev) continue;
+            if (jobs[i].replay) {
+                if (i == 0 || jobs[i].c != jobs[i - 1].c || !jobs[i - 1].replay) runs[nruns++] = i;
+                continue;
+            }
+            for (int k = 0; k < nlead; k++)
+                if (same_mesh(&jobs[leaders[k]], &jobs[i])) {
+                    jobs[i].leader = leaders[k];
+                    break;
+                }
+            if (jobs[i].leader == i) leaders[nlead++] = i;
+        }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
+        for (int k = 0; k < nlead; k++) mesh_stage(s, &jobs[leaders[k]]);
+#pragma omp parallel for schedule(dynamic, 4) num_threads(cfg->workers)
+        for (int i = 0; i < n; i++)
+            if (jobs[i].ev && !jobs[i].replay) frame_stage(s, &jobs[i], &jobs[jobs[i].leader]);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
+        for (int r = 0; r < nruns; r++)
+            for (int i = runs[r]; i < n && jobs[i].c == jobs[runs[r]].c && jobs[i].replay; i++) {
+                if (!jobs[i].ev) continue;
+                mesh_stage(s, &jobs[i]);
+                frame_stage(s, &jobs[i], &jobs[i]);
+            }
+    }
+    free(runs);
+    free(leaders);
+    double p3 = srv_now();
+    if (prof)
+        fprintf(stderr, "batch %d jobs: eval %.2f ms, tiles %.2f ms (%d new), frames %.2f ms\n", n,
+                (p1 - p0) * 1e3, (p2 - p1) * 1e3, nmiss, (p3 - p2) * 1e3);
+    /* 4. hand over */
+    for (int i = 0; i < n; i++) {
+        job *j = &jobs[i];
+        free(j->tiles);
+        j->tiles = NULL;
+        if (!j->frame) {
+            srv_msg_free(j->topo);
+            continue;
+        }
+        j->frame->is_frame = 1;
+        j->frame->tick_wall = tick_wall;
+        if (j->topo) j->topo->tick_wall = tick_wall;
+        atomic_fetch_add(&st->frames_built, 1);
+        if (j->replay) {
+            if (j->topo) srv_client_queue(j->c, j->topo);
+            srv_client_queue(j->c, j->frame);
+        } else {
+            srv_client_publish(j->c, j->topo, j->frame);
+        }
+        j->topo = j->frame = NULL;
+    }
+    srv_hub_wake_net(s->hub);
+}
+
+/* ---- queries ------------------------------------------------------------------ */
+
+static void answer_query(srv_sim *s, srv_client *c, srv_query *q, double t_now)
+{
+    double t = q->at_time ? q->t : t_now;
+    group g = {-1, ocean_get_params(s->oc)->cascades, 1.0f};
+    eval_entry *e = evaluate(s, t, &g, OCEAN_QUERY_EFFECTS);
+    ocean_query_result *res = e ? calloc(q->count, sizeof *res) : NULL;
+    proto_query_sample *smp = res ? calloc(q->count, sizeof *smp) : NULL;
+    if (!smp) {
+        free(res);
+        srv_client_send_error(c, NULL, 0, OCEAN_ENOMEM, "query could not be answered: out of memory");
+        return;
+    }
+    ocean_query_options opt;
+    ocean_query_options_default(&opt);
+    size_t bad = 0;
+    ocean_result r = ocean_query_points(e->f, s->g, NULL, t, q->points, q->count, &opt, res, &bad);
+    if (r != OCEAN_OK) {
+        char why[200];
+        snprintf(why, sizeof why, "query %u: point %zu refused (%s)", q->query_id, bad, ocean_strerror(r));
+        srv_client_send_error(c, NULL, 0, r, why);
+    } else {
+        for (uint32_t i = 0; i < q->count; i++) {
+            const ocean_query_result *a = &res[i];
+            proto_query_sample *o = &smp[i];
+            o->height = (float)a->height;
+            for (int k = 0; k < 3; k++) {
+                o->normal[k] = (float)a->normal[k];
+                o->velocity[k] = (float)a->velocity[k];
+            }
+            o->foam = (float)(a->foam < 0 ? 0 : a->foam > 1 ? 1 : a->foam);
+            o->error_bound = (float)(a->error >= 0 && isfinite(a->error) ? a->error : 0);
+        }
+        proto_msg m;
+        proto_msg_init(&m, PROTO_QUERY_RESULT);
+        m.hdr.sim_time = t;
+        m.u.result.query_id = q->query_id;
+        m.u.result.count = q->count;
+        m.u.result.t = t;
+        m.u.result.samples = smp;
+        srv_msg *out = encode_msg(&m);
+        if (out) srv_client_queue(c, out);
+        atomic_fetch_add(&s->hub->stats.queries, 1);
+        atomic_fetch_add(&s->hub->stats.query_points, q->count);
+    }
+    free(res);
+    free(smp);
+}
+
+/* ---- sea changes ------------------------------------------------------------ */
+
+static void announce_sea(srv_sim *s, const ocean_params *p, double eff)
+{
+    proto_msg m;
+    proto_msg_init(&m, PROTO_SEA_STATE);
+    m.hdr.sim_time = srv_hub_sim_time(s->hub);
+    m.u.sea_state.op = PROTO_SEA_ANNOUNCE;
+    m.u.sea_state.effective_time = eff;
+    srv_sea_from_params(p, &m.u.sea_state.sea);
+    srv_hub *h = s->hub;
+    pthread_mutex_lock(&h->lock);
+    for (srv_client *c = h->clients; c; c = c->next) {
+        if (c->closed) continue;
+        srv_msg *q = encode_msg(&m);
+        if (q) srv_client_queue(c, q);
+    }
+    pthread_mutex_unlock(&h->lock);
+    srv_hub_wake_net(h);
+}
+
+static void schedule_sea(srv_sim *s, const ocean_params *p, double eff)
+{
+    char msg[256];
+    ocean *oc;
+    ocean_gerstner *g;
+    if (make_ocean(&s->set, p, &oc, &g, msg, sizeof msg) != OCEAN_OK) {
+        fprintf(stderr, "oceand: sea-state change refused: %s\n", msg);
+        return;
+    }
+    ocean_gerstner_destroy(s->next_g);
+    ocean_destroy(s->next_oc);
+    s->next_oc = oc;
+    s->next_g = g;
+    s->next_params = *p;
+    s->next_eff = eff;
+    announce_sea(s, p, eff);
+}
+
+static void maybe_swap_sea(srv_sim *s, double t)
+{
+    if (!s->next_oc || t < s->next_eff) return;
+    eval_clear(s);
+    srv_tiles_clear(s->tiles);
+    ocean_gerstner_destroy(s->g);
+    ocean_destroy(s->oc);
+    s->oc = s->next_oc;
+    s->g = s->next_g;
+    s->next_oc = NULL;
+    s->next_g = NULL;
+    adopt_sea(s, &s->next_params);
+    srv_hub *h = s->hub;
+    proto_sea ps;
+    srv_sea_from_params(&s->next_params, &ps);
+    pthread_mutex_lock(&h->lock);
+    h->settings.params = s->next_params;
+    h->sea_now = ps;
+    h->sea_effective = s->next_eff;
+    /* Meshes follow the new dominant wavelength. */
+    for (srv_client *c = h->clients; c; c = c->next) c->sim.sub_gen = 0;
+    pthread_mutex_unlock(&h->lock);
+    atomic_fetch_add(&h->stats.sea_changes, 1);
+}
+
+/* ---- the loop ------------------------------------------------------------------ */
+
+static void ts_from(double secs, struct timespec *ts)
+{
+    ts->tv_sec = (time_t)floor(secs);
+    ts->tv_nsec = (long)((secs - floor(secs)) * 1e9);
+    if (ts->tv_nsec >= 1000000000L) { ts->tv_sec++; ts->tv_nsec -= 1000000000L; }
+}
+
+typedef struct work {
+    srv_client **cl;     /* referenced clients */
+    int ncl, capcl;
+    job *jobs;
+    int njobs, capjobs;
+    srv_query **q;       /* taken queries, parallel to qc */
+    srv_client **qc;
+    int nq, capq, capqc;
+} work;
+
+static int grow(void **p, int *cap, int need, size_t el)
+{
+    if (need <= *cap) return 1;
+    int nc = *cap ? *cap * 2 : 64;
+    while (nc < need) nc *= 2;
+    void *np = realloc(*p, (size_t)nc * el);
+    if (!np) return 0;
+    *p = np;
+    *cap = nc;
+    return 1;
+}
+
+static void *sim_main(void *arg)
+{
+    srv_sim *s = arg;
+    srv_hub *h = s->hub;
+    work w = {0};
+    double next_tick_wall = 0;
+    for (;;) {
+        pthread_mutex_lock(&h->lock);
+        int live_due = 0;
+        for (;;) {
+            if (s->stop) break;
+            double now = srv_now();
+            int pending = h->sea_req.pending || h->settings_gen != s->set_gen;
+            for (srv_client *c = h->clients; c && !pending; c = c->next)
+                if (!c->closed && (c->queries || c->replay)) pending = 1;
+            if (h->n_subscribed > 0 && now >= next_tick_wall) live_due = 1;
+            if (live_due || pending || (s->next_oc && h->n_subscribed == 0 &&
+                                        now - h->wall0 >= s->next_eff)) break;
+            struct timespec ts;
+            double until = h->n_subscribed > 0 ? next_tick_wall : now + 1.0;
+            if (s->next_oc && h->wall0 + s->next_eff < until) until = h->wall0 + s->next_eff;
+            if (h->n_subscribed == 0) atomic_fetch_add(&h->stats.idle_ticks, 1);
+            ts_from(until, &ts);
+            pthread_cond_timedwait(&h->wake, &h->lock, &ts);
+        }
+        if (s->stop) {
+            pthread_mutex_unlock(&h->lock);
+            break;
+        }
+        double t0 = srv_now();
+        double rate = s->set.srv.tick_rate;
+        /* settings */
+        int reload = 0;
+        if (h->settings_gen != s->set_gen) {
+            ocean_params keep = s->set.params;
+            s->set = h->settings;
+            s->set.params = keep;
+            s->set_gen = h->settings_gen;
+            rate = s->set.srv.tick_rate;
+            reload = 1;
+        }
+        (void)reload;
+        srv_sea_request req = h->sea_req;
+        h->sea_req.pending = 0;
+        /* snapshot */
+        w.ncl = w.njobs = w.nq = 0;
+        uint64_t tick_no = (uint64_t)floor((t0 - h->wall0) * rate);
+        double t = (double)tick_no / rate;
+        double tick_wall = h->wall0 + t;
+        for (srv_client *c = h->clients; c; c = c->next) {
+            if (c->closed) continue;
+            while (c->queries) {
+                if (!grow((void **)&w.q, &w.capq, w.nq + 1, sizeof *w.q) ||
+                    !grow((void **)&w.qc, &w.capqc, w.nq + 1, sizeof *w.qc)) break;
+                srv_query *q = c->queries;
+                c->queries = q->next;
+                c->n_queries--;
+                srv_client_ref(c);
+                w.q[w.nq] = q;
+                w.qc[w.nq++] = c;
+            }
+            if (!c->subscribed) continue;
+            if (!grow((void **)&w.cl, &w.capcl, w.ncl + 1, sizeof *w.cl)) break;
+            srv_client_ref(c);
+            w.cl[w.ncl++] = c;
+            int changed = 0;
+            if (c->sim.sub_gen != c->sub_gen) {
+                c->sim.sub = c->sub;
+                c->sim.sub_gen = c->sub_gen;
+                changed = 1;
+            }
+            if (c->sub.mode == PROTO_MODE_REPLAY) {
+                while (c->replay && w.njobs < 4096) {
+                    if (!grow((void **)&w.jobs, &w.capjobs, w.njobs + 1, sizeof *w.jobs)) break;
+                    srv_replay_cam *rc = c->replay;
+                    c->replay = rc->next;
+                    if (!c->replay) c->replay_tail = NULL;
+                    c->n_replay--;
+                    job *j = &w.jobs[w.njobs++];
+                    memset(j, 0, sizeof *j);
+                    j->c = c;
+                    j->t = rc->cam.render_time;
+                    j->cam = rc->cam;
+                    j->cam_seq = rc->seq;
+                    j->replay = 1;
+                    j->sub_changed = changed;
+                    changed = 0;
+                    free(rc);
+                }
+                if (changed) {
+                    /* still rebuild the mesh on the sim side */
+                    if (grow((void **)&w.jobs, &w.capjobs, w.njobs + 1, sizeof *w.jobs)) {
+                        job *j = &w.jobs[w.njobs++];
+                        memset(j, 0, sizeof *j);
+                        j->c = c;
+                        j->sub_changed = 1;
+                        j->replay = -1; /* no frame */
+                    }
+                }
+            } else if (live_due) {
+                if (!grow((void **)&w.jobs, &w.capjobs, w.njobs + 1, sizeof *w.jobs)) break;
+                job *j = &w.jobs[w.njobs++];
+                memset(j, 0, sizeof *j);
+                j->c = c;
+                j->t = t;
+                j->tick = (uint32_t)tick_no;
+                j->sub_changed = changed;
+                if (c->has_camera) {
+                    j->cam = c->cam;
+                    j->cam_seq = c->cam_seq;
+                } else {
+                    j->cam_seq = PROTO_NO_CAMERA;
+                    j->replay = -2; /* camera filled below */
+                }
+            }
+        }
+        pthread_mutex_unlock(&h->lock);
+
+        if (req.pending) {
+            double now_t = srv_hub_sim_time(h);
+            schedule_sea(s, &req.params, req.effective_time > now_t ? req.effective_time : now_t);
+        } else if (reload && memcmp(&h->settings.params, &s->set.params, sizeof s->set.params) != 0) {
+            /* the reloaded file changed the sea: a new ocean from the next tick */
+            pthread_mutex_lock(&h->lock);
+            ocean_params np = h->settings.params;
+            pthread_mutex_unlock(&h->lock);
+            schedule_sea(s, &np, srv_hub_sim_time(h));
+        }
+        maybe_swap_sea(s, live_due ? t : srv_hub_sim_time(h));
+
+        /* filter jobs: apply subscriptions, cutoffs; drop due-checks */
+        int n = 0;
+        for (int i = 0; i < w.njobs; i++) {
+            job j = w.jobs[i];
+            srv_client *c = j.c;
+            if (j.sub_changed || c->sim.sub_gen == 0) apply_subscription(s, c);
+            if (j.replay == -1) continue;
+            if (j.replay != 1) {
+                /* live: the client's frame rate on the nearest tick */
+                double period = 1.0 / c->sim.sub.frame_rate_hz;
+                if (t + 0.5 / rate < c->sim.next_frame_t) continue;
+                c->sim.next_frame_t = fmax(c->sim.next_frame_t + period, t + period - 0.5 / rate);
+                if (j.replay == -2) default_camera(s, &j.cam);
+                j.replay = 0;
+            } else {
+                j.tick = (uint32_t)(int64_t)llround(j.t * rate);
+            }
+            choose_cutoff(s, c, &j);
+            w.jobs[n++] = j;
+        }
+        /* batches of at most EVAL_MAX / 2 distinct evaluations */
+        int start = 0;
+        while (start < n) {
+            int end = start, distinct = 0;
+            while (end < n) {
+                int seen = 0;
+                for (int k = start; k < end && !seen; k++)
+                    seen = w.jobs[k].t == w.jobs[end].t && group_eq(&w.jobs[k].g, &w.jobs[end].g);
+                if (!seen && distinct >= EVAL_MAX / 2) break;
+                distinct += !seen;
+                end++;
+            }
+            run_batch(s, w.jobs + start, end - start, tick_wall);
+            start = end;
+        }
+        /* queries */
+        for (int i = 0; i < w.nq; i++) {
+            answer_query(s, w.qc[i], w.q[i], t);
+            free(w.q[i]->points);
+            free(w.q[i]);
+            srv_client_unref(w.qc[i]);
+        }
+        if (w.nq) srv_hub_wake_net(h);
+        for (int i = 0; i < w.ncl; i++) srv_client_unref(w.cl[i]);
+        if (live_due) {
+            srv_tiles_sweep(s->tiles, s->gen > 1 ? s->gen - 1 : 0);
+            next_tick_wall = h->wall0 + (double)(tick_no + 1) / rate;
+            double dt = srv_now() - t0;
+            atomic_fetch_add(&h->stats.ticks, 1);
+            atomic_fetch_add(&h->stats.tick_ns_total, (uint64_t)(dt * 1e9));
+            atomic_store(&h->stats.tick_ns_last, (uint64_t)(dt * 1e9));
+        }
+        publish_counters(s);
+    }
+    free(w.cl);
+    free(w.jobs);
+    free(w.q);
+    free(w.qc);
+    return NULL;
+}
+
+ocean_result srv_sim_start(srv_sim *s)
+{
+    if (s->running) return OCEAN_ESTATE;
+    s->stop = 0;
+    if (pthread_create(&s->thread, NULL, sim_main, s) != 0) return OCEAN_ENOMEM;
+    s->running = 1;
+    return OCEAN_OK;
+}
+
+void srv_sim_stop(srv_sim *s)
+{
+    if (!s || !s->running) return;
+    pthread_mutex_lock(&s->hub->lock);
+    s->stop = 1;
+    pthread_cond_broadcast(&s->hub->wake);
+    pthread_mutex_unlock(&s->hub->lock);
+    pthread_join(s->thread, NULL);
+    s->running = 0;
+}

@@ -1,0 +1,163 @@
+/*
+ * srv_stats.c - rendering the daemon's counters as Prometheus text and as
+ * the /status JSON document.
+ */
+#include "srv_stats.h"
+
+#include <cJSON.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static double bucket_edge(int i) { return 1e-4 * pow(1.3, i + 1); }
+
+void srv_stats_latency(srv_stats *s, double seconds)
+{
+    int i = 0;
+    while (i < SRV_LAT_BUCKETS - 1 && seconds > bucket_edge(i)) i++;
+    atomic_fetch_add(&s->lat_hist[i], 1);
+}
+
+double srv_stats_latency_quantile(const srv_stats *s, double q)
+{
+    uint64_t n = 0, acc = 0;
+    for (int i = 0; i < SRV_LAT_BUCKETS; i++) n += atomic_load(&s->lat_hist[i]);
+    if (!n) return 0;
+    uint64_t want = (uint64_t)ceil(q * (double)n);
+    if (want < 1) want = 1;
+    for (int i = 0; i < SRV_LAT_BUCKETS; i++) {
+        acc += atomic_load(&s->lat_hist[i]);
+        if (acc >= want) return bucket_edge(i);
+    }
+    return bucket_edge(SRV_LAT_BUCKETS - 1);
+}
+
+typedef struct sb {
+    char *p;
+    size_t len, cap, head;
+    int oom;
+} sb;
+
+static void sb_printf(sb *b, const char *fmt, ...)
+{
+    if (b->oom) return;
+    for (;;) {
+        va_list ap;
+        va_start(ap, fmt);
+        size_t room = b->cap - b->head - b->len;
+        int n = vsnprintf(b->p + b->head + b->len, room, fmt, ap);
+        va_end(ap);
+        if (n < 0) { b->oom = 1; return; }
+        if ((size_t)n < room) { b->len += (size_t)n; return; }
+        size_t ncap = (b->cap * 2) + (size_t)n;
+        char *np = realloc(b->p, ncap);
+        if (!np) { b->oom = 1; return; }
+        b->p = np;
+        b->cap = ncap;
+    }
+}
+
+#define LD(x) ((unsigned long long)atomic_load(&s->x))
+
+static void metric(sb *b, const char *name, const char *type, const char *help, double v)
+{
+    sb_printf(b, "# HELP %s %s\n# TYPE %s %s\n%s %.17g\n", name, help, name, type, name, v);
+}
+
+char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t headroom, size_t *len)
+{
+    sb b = {malloc(headroom + 4096), 0, headroom + 4096, headroom, 0};
+    if (!b.p) return NULL;
+    metric(&b, "oceand_clients", "gauge", "Connected clients.", v->clients);
+    metric(&b, "oceand_clients_subscribed", "gauge", "Clients with a subscription.", v->subscribed);
+    metric(&b, "oceand_sim_time_seconds", "gauge", "The shared simulation clock.", v->sim_time);
+    metric(&b, "oceand_ticks_total", "counter", "Simulation ticks run.", (double)LD(ticks));
+    metric(&b, "oceand_idle_ticks_total", "counter", "Ticks skipped with nobody subscribed.",
+           (double)LD(idle_ticks));
+    metric(&b, "oceand_tick_seconds_total", "counter", "Time spent in ticks.",
+           (double)LD(tick_ns_total) * 1e-9);
+    metric(&b, "oceand_tick_seconds_last", "gauge", "Duration of the last tick.",
+           (double)LD(tick_ns_last) * 1e-9);
+    metric(&b, "oceand_evaluations_total", "counter", "Ocean evaluations (one per cutoff bucket "
+           "and time).", (double)LD(evaluations));
+    sb_printf(&b, "# HELP oceand_transforms_total Inverse 2-D FFTs run, per channel group.\n"
+                  "# TYPE oceand_transforms_total counter\n");
+    static const char *const ch[SRV_FX_CHANNELS] = {"height", "displacement", "normals", "foam",
+                                                    "velocity"};
+    for (int i = 0; i < SRV_FX_CHANNELS; i++)
+        sb_printf(&b, "oceand_transforms_total{channel=\"%s\"} %llu\n", ch[i], LD(transforms_by_effect[i]));
+    metric(&b, "oceand_frames_built_total", "counter", "Frames built for clients.", (double)LD(frames_built));
+    metric(&b, "oceand_frames_sent_total", "counter", "Frames written to sockets.", (double)LD(frames_sent));
+    metric(&b, "oceand_frames_skipped_total", "counter", "Frames replaced before a slow client "
+           "could take them (latest wins).", (double)LD(frames_skipped));
+    metric(&b, "oceand_bytes_sent_total", "counter", "WebSocket payload bytes written.", (double)LD(bytes_sent));
+    metric(&b, "oceand_messages_received_total", "counter", "Client messages received.",
+           (double)LD(messages_received));
+    metric(&b, "oceand_tiles_encoded_total", "counter", "Tiles encoded.", (double)LD(tiles_encoded));
+    metric(&b, "oceand_tile_cache_hits_total", "counter", "Tile requests served from the cache.",
+           (double)LD(tile_cache_hits));
+    metric(&b, "oceand_tile_cache_misses_total", "counter", "Tile requests that had to be encoded.",
+           (double)LD(tile_cache_misses));
+    metric(&b, "oceand_queries_total", "counter", "QUERY messages answered.", (double)LD(queries));
+    metric(&b, "oceand_query_points_total", "counter", "Points answered.", (double)LD(query_points));
+    metric(&b, "oceand_errors_sent_total", "counter", "ERROR replies sent.", (double)LD(errors_sent));
+    metric(&b, "oceand_connections_total", "counter", "Connections accepted.", (double)LD(connections_total));
+    metric(&b, "oceand_disconnects_slow_total", "counter", "Clients dropped for the output limit.",
+           (double)LD(disconnects_slow));
+    metric(&b, "oceand_refused_full_total", "counter", "Connections refused at max_clients.",
+           (double)LD(refused_full));
+    metric(&b, "oceand_sea_changes_total", "counter", "Sea-state changes applied.", (double)LD(sea_changes));
+    metric(&b, "oceand_reloads_total", "counter", "Configuration reloads (SIGHUP).", (double)LD(reloads));
+    metric(&b, "oceand_tick_to_send_p50_seconds", "gauge", "Median time from a tick to the "
+           "write of its frame.", srv_stats_latency_quantile(s, 0.5));
+    metric(&b, "oceand_tick_to_send_p99_seconds", "gauge", "99th percentile of the same.",
+           srv_stats_latency_quantile(s, 0.99));
+    if (b.oom) { free(b.p); return NULL; }
+    *len = b.len;
+    return b.p;
+}
+
+char *srv_stats_json(const srv_stats *s, const srv_stats_view *v, size_t headroom, size_t *len)
+{
+    cJSON *o = cJSON_CreateObject();
+    if (!o) return NULL;
+    cJSON_AddStringToObject(o, "server", "oceand");
+    cJSON_AddStringToObject(o, "version", v->version ? v->version : "");
+    cJSON_AddStringToObject(o, "scene", v->scene ? v->scene : "");
+    cJSON_AddNumberToObject(o, "port", v->port);
+    cJSON_AddNumberToObject(o, "clients", v->clients);
+    cJSON_AddNumberToObject(o, "subscribed", v->subscribed);
+    cJSON_AddNumberToObject(o, "sim_time", v->sim_time);
+    cJSON_AddNumberToObject(o, "tick_rate_hz", v->tick_rate);
+    cJSON_AddNumberToObject(o, "wind_u10", v->wind);
+    cJSON_AddNumberToObject(o, "ticks", (double)LD(ticks));
+    cJSON_AddNumberToObject(o, "idle_ticks", (double)LD(idle_ticks));
+    uint64_t busy = LD(ticks) - LD(idle_ticks);
+    cJSON_AddNumberToObject(o, "tick_ms_mean", busy ? (double)LD(tick_ns_total) * 1e-6 / (double)busy : 0);
+    cJSON_AddNumberToObject(o, "evaluations", (double)LD(evaluations));
+    cJSON_AddNumberToObject(o, "transforms", (double)LD(transforms));
+    cJSON_AddNumberToObject(o, "frames_built", (double)LD(frames_built));
+    cJSON_AddNumberToObject(o, "frames_sent", (double)LD(frames_sent));
+    cJSON_AddNumberToObject(o, "frames_skipped", (double)LD(frames_skipped));
+    cJSON_AddNumberToObject(o, "bytes_sent", (double)LD(bytes_sent));
+    cJSON_AddNumberToObject(o, "tile_cache_hits", (double)LD(tile_cache_hits));
+    cJSON_AddNumberToObject(o, "tile_cache_misses", (double)LD(tile_cache_misses));
+    cJSON_AddNumberToObject(o, "queries", (double)LD(queries));
+    cJSON_AddNumberToObject(o, "errors_sent", (double)LD(errors_sent));
+    cJSON_AddNumberToObject(o, "disconnects_slow", (double)LD(disconnects_slow));
+    cJSON_AddNumberToObject(o, "tick_to_send_p50_ms", 1e3 * srv_stats_latency_quantile(s, 0.5));
+    cJSON_AddNumberToObject(o, "tick_to_send_p99_ms", 1e3 * srv_stats_latency_quantile(s, 0.99));
+    char *txt = cJSON_PrintUnformatted(o);
+    cJSON_Delete(o);
+    if (!txt) return NULL;
+    size_t n = strlen(txt);
+    char *out = malloc(headroom + n + 1);
+    if (out) {
+        memcpy(out + headroom, txt, n + 1);
+        *len = n;
+    }
+    cJSON_free(txt);
+    return out;
+}

@@ -1,0 +1,52 @@
+/*
+ * srv_stats.h - the daemon's counters, read by /metrics and /status.
+ *
+ * Plain atomics: any thread adds, the service thread reads.  A tick-to-send
+ * latency histogram (log buckets) gives p50/p99 without storing samples.
+ */
+#ifndef SRV_STATS_H
+#define SRV_STATS_H
+
+#include <stdatomic.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define SRV_LAT_BUCKETS 40   /* 0.1 ms * 1.3^i */
+#define SRV_FX_CHANNELS 5     /* height, displacement, normals, foam, velocity */
+
+typedef struct srv_stats {
+    atomic_uint_fast64_t ticks, idle_ticks, tick_ns_total, tick_ns_last;
+    atomic_uint_fast64_t evaluations, transforms;
+    atomic_uint_fast64_t transforms_by_effect[SRV_FX_CHANNELS];
+    atomic_uint_fast64_t frames_built, frames_sent, frames_skipped;
+    atomic_uint_fast64_t bytes_sent, messages_sent, messages_received;
+    atomic_uint_fast64_t tiles_encoded, tile_cache_hits, tile_cache_misses;
+    atomic_uint_fast64_t queries, query_points, errors_sent;
+    atomic_uint_fast64_t connections_total, disconnects_slow, refused_full;
+    atomic_uint_fast64_t sea_changes, reloads;
+    atomic_uint_fast64_t lat_hist[SRV_LAT_BUCKETS];
+} srv_stats;
+
+/* Records one tick-to-send latency in seconds. */
+void srv_stats_latency(srv_stats *s, double seconds);
+/* Quantile q (0..1) of the recorded latencies, seconds (upper bucket edge); 0 if none. */
+double srv_stats_latency_quantile(const srv_stats *s, double q);
+
+/* Facts that are not counters, for the renderers. */
+typedef struct srv_stats_view {
+    int clients, subscribed;
+    double sim_time, tick_rate;
+    const char *scene;
+    const char *version;
+    int port;
+    double wind, hs;
+} srv_stats_view;
+
+/* Prometheus text exposition (version 0.0.4) into a malloc'ed string with
+ * `headroom` spare bytes in front (for LWS_PRE); *len gets the text length.
+ * NULL on OOM. */
+char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t headroom, size_t *len);
+/* The same as a JSON object (cJSON). */
+char *srv_stats_json(const srv_stats *s, const srv_stats_view *v, size_t headroom, size_t *len);
+
+#endif

@@ -1,0 +1,199 @@
+/*
+ * srv_tiles.c - tile sampling, encoding and the tile cache (a chained hash
+ * table swept once a tick).
+ */
+#include "srv_tiles.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NBUCKETS 4096
+
+struct srv_tile_cache {
+    srv_tile *b[NBUCKETS];
+    size_t count;
+};
+
+ocean_result srv_tiles_create(srv_tile_cache **out)
+{
+    *out = calloc(1, sizeof **out);
+    return *out ? OCEAN_OK : OCEAN_ENOMEM;
+}
+
+static void tile_free(srv_tile *t)
+{
+    free(t->payload);
+    free(t);
+}
+
+void srv_tiles_clear(srv_tile_cache *c)
+{
+    for (int i = 0; i < NBUCKETS; i++) {
+        while (c->b[i]) {
+            srv_tile *t = c->b[i];
+            c->b[i] = t->next;
+            tile_free(t);
+        }
+    }
+    c->count = 0;
+}
+
+void srv_tiles_destroy(srv_tile_cache *c)
+{
+    if (!c) return;
+    srv_tiles_clear(c);
+    free(c);
+}
+
+void srv_tile_key_init(srv_tile_key *k) { memset(k, 0, sizeof *k); }
+
+static uint64_t key_hash(const srv_tile_key *k)
+{
+    const unsigned char *p = (const unsigned char *)k;
+    uint64_t h = 1469598103934665603ull;
+    for (size_t i = 0; i < sizeof *k; i++) {
+        h ^= p[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+srv_tile *srv_tiles_get(srv_tile_cache *c, const srv_tile_key *k, uint64_t gen, int *fresh)
+{
+    uint64_t h = key_hash(k);
+    srv_tile **slot = &c->b[h % NBUCKETS];
+    for (srv_tile *t = *slot; t; t = t->next) {
+        if (t->hash == h && memcmp(&t->key, k, sizeof *k) == 0) {
+            t->last_use = gen;
+            *fresh = 0;
+            return t;
+        }
+    }
+    srv_tile *t = calloc(1, sizeof *t);
+    if (!t) return NULL;
+    t->key = *k;
+    t->hash = h;
+    t->last_use = gen;
+    t->next = *slot;
+    *slot = t;
+    c->count++;
+    *fresh = 1;
+    return t;
+}
+
+void srv_tiles_sweep(srv_tile_cache *c, uint64_t keep_from)
+{
+    for (int i = 0; i < NBUCKETS; i++) {
+        srv_tile **p = &c->b[i];
+        while (*p) {
+            srv_tile *t = *p;
+            if (t->last_use < keep_from) {
+                *p = t->next;
+                tile_free(t);
+                c->count--;
+            } else {
+                p = &t->next;
+            }
+        }
+    }
+}
+
+size_t srv_tiles_count(const srv_tile_cache *c) { return c->count; }
+
+unsigned srv_tiles_channels(unsigned effects)
+{
+    unsigned ch = 0;
+    if (effects & PROTO_FX_HEIGHT) ch |= PROTO_CH_HEIGHT;
+    if (effects & PROTO_FX_DISPLACEMENT) ch |= PROTO_CH_DX | PROTO_CH_DZ;
+    if (effects & PROTO_FX_NORMALS) ch |= PROTO_CH_NORMAL;
+    if (effects & PROTO_FX_FOAM) ch |= PROTO_CH_FOAM;
+    return ch;
+}
+
+int32_t srv_tiles_first(double x, double w, int n)
+{
+    double f = floor(x / w - (n - 1) / 2.0);
+    if (f < -2e9) f = -2e9;
+    if (f > 2e9) f = 2e9;
+    return (int32_t)f;
+}
+
+void srv_tile_build(srv_tile *t, const ocean_frame *f)
+{
+    const srv_tile_key *k = &t->key;
+    int n = k->size;
+    size_t ns = (size_t)n * n;
+    int planes = proto_tile_planes(k->channels);
+    float *buf = malloc(sizeof(float) * ns * ((size_t)planes + 2));
+    t->ready = 1;
+    if (!buf) {
+        t->result = OCEAN_ENOMEM;
+        return;
+    }
+    float *sx = buf + ns * (size_t)planes, *sz = sx + ns;
+    double x0 = (double)k->ix * n * k->spacing, z0 = (double)k->iz * n * k->spacing;
+    float *out[PROTO_TILE_MAX_PLANES] = {0};
+    int pi = 0;
+    float *ph = NULL, *pdx = NULL, *pdz = NULL, *pnu = NULL, *pnv = NULL, *pfoam = NULL, *pj = NULL;
+    if (k->channels & PROTO_CH_HEIGHT) ph = out[pi] = buf + ns * (size_t)pi, pi++;
+    if (k->channels & PROTO_CH_DX) pdx = out[pi] = buf + ns * (size_t)pi, pi++;
+    if (k->channels & PROTO_CH_DZ) pdz = out[pi] = buf + ns * (size_t)pi, pi++;
+    if (k->channels & PROTO_CH_NORMAL) {
+        pnu = buf + ns * (size_t)pi++;
+        pnv = buf + ns * (size_t)pi++;
+    }
+    if (k->channels & PROTO_CH_FOAM) pfoam = buf + ns * (size_t)pi++;
+    if (k->channels & PROTO_CH_JACOBIAN) pj = buf + ns * (size_t)pi++;
+    for (int i = 0; i < n; i++) {
+        double z = z0 + i * k->spacing;
+        for (int j = 0; j < n; j++) {
+            ocean_point p;
+            ocean_frame_sample(f, x0 + j * k->spacing, z, &p);
+            size_t s = (size_t)i * n + j;
+            if (ph) ph[s] = (float)p.height;
+            if (pdx) pdx[s] = (float)p.dx;
+            if (pdz) pdz[s] = (float)p.dz;
+            sx[s] = (float)p.slope_x;
+            sz[s] = (float)p.slope_z;
+            if (pfoam) pfoam[s] = (float)p.foam;
+            if (pj) pj[s] = (float)p.jacobian;
+        }
+    }
+    if (pnu) proto_normals_from_slopes(sx, sz, ns, pnu, pnv);
+    proto_codec_params cp;
+    proto_codec_params_default(&cp);
+    cp.accuracy = k->accuracy;
+    proto_buf pb;
+    proto_buf_init(&pb, 0);
+    double max_err = 0;
+    t->result = proto_tile_encode((proto_codec)k->codec, &cp, n, n, k->channels, buf, &pb,
+                                  &max_err, NULL, 0);
+    free(buf);
+    if (t->result == OCEAN_OK && pb.len > UINT32_MAX) t->result = OCEAN_ETOOBIG;
+    if (t->result != OCEAN_OK) {
+        proto_buf_free(&pb);
+        return;
+    }
+    /* Keep just the bytes (proto_buf with headroom 0 starts at mem). */
+    t->payload = pb.mem;
+    t->payload_len = (uint32_t)pb.len;
+    t->error_bound = isfinite(max_err) && max_err >= 0 ? (float)max_err : 0.0f;
+}
+
+void srv_tile_to_proto(const srv_tile *t, proto_tile *o)
+{
+    memset(o, 0, sizeof *o);
+    o->level = t->key.level;
+    o->codec = t->key.codec;
+    o->channels = t->key.channels;
+    o->width = o->height = t->key.size;
+    o->ix = t->key.ix;
+    o->iz = t->key.iz;
+    o->origin_x = (double)t->key.ix * t->key.size * t->key.spacing;
+    o->origin_z = (double)t->key.iz * t->key.size * t->key.spacing;
+    o->spacing = t->key.spacing;
+    o->error_bound = t->error_bound;
+    o->payload_len = t->payload_len;
+    o->payload = t->payload;
+}

@@ -1,0 +1,375 @@
+/*
+ * gen_vectors.c - the C side of the web viewer's protocol cross-check.
+ *
+ * The browser viewer carries its own JavaScript decoder (clients/web/
+ * protocol.js, codec.js).  This helper ties it to the C implementation in
+ * protocol/: tests/test_browser.sh builds it against the current
+ * libocean_proto.a on every run, so the two can never drift apart silently.
+ *
+ *   gen_vectors gen DIR     writes messages encoded by proto_encode (HELLO,
+ *                           FRAME with qz/f16/f32 tiles and a mesh,
+ *                           MESH_TOPOLOGY, QUERY_RESULT, SEA_STATE, ERROR,
+ *                           BYE) as DIR/NAME.bin, and DIR/expected.json with
+ *                           what the C decoders make of them (tile samples
+ *                           as decoded by proto_tile_decode).
+ *   gen_vectors decode FILE...   decodes each file with proto_decode and
+ *                           prints one JSON line per file: the result code,
+ *                           and for SUBSCRIBE/CAMERA/QUERY/BYE the fields.
+ *
+ * Build: cc -std=c11 -Isim -Iprotocol tests/browser/gen_vectors.c
+ *        BUILD/libocean_proto.a BUILD/libocean_sim.a -lzstd -lOpenEXRCore-3_1 -lm
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "codec.h"
+#include "proto.h"
+
+static int write_msg(const char *dir, const char *name, proto_msg *m)
+{
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    char err[256];
+    if (proto_encode(&b, m, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "encode %s: %s\n", name, err);
+        return -1;
+    }
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s.bin", dir, name);
+    FILE *f = fopen(path, "wb");
+    if (!f || fwrite(proto_buf_data(&b), 1, proto_buf_len(&b), f) != proto_buf_len(&b)) {
+        fprintf(stderr, "cannot write %s\n", path);
+        if (f) fclose(f);
+        return -1;
+    }
+    fclose(f);
+    proto_buf_free(&b);
+    return 0;
+}
+
+static void print_floats(FILE *o, const float *v, size_t n)
+{
+    fputc('[', o);
+    for (size_t i = 0; i < n; i++)
+        fprintf(o, "%s%.9g", i ? "," : "", (double)v[i]);
+    fputc(']', o);
+}
+
+/* A smooth but irregular test field so prediction and quantisation both
+ * have work to do. */
+static float field(int plane, int i, int j)
+{
+    double x = j * 0.37, z = i * 0.29;
+    switch (plane) {
+    case 0: return (float)(1.7 * sin(x + 0.3 * z) + 0.4 * cos(2.1 * z - 0.7 * x));
+    case 1: return (float)(0.6 * cos(x - z));
+    case 2: return (float)(-0.5 * sin(0.8 * x + 1.3 * z));
+    case 5: return (float)fmax(0.0, sin(x * 1.9) * cos(z * 1.1));
+    default: return 0.0f;
+    }
+}
+
+static int gen(const char *dir)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/expected.json", dir);
+    FILE *o = fopen(path, "w");
+    if (!o)
+        return 1;
+    fprintf(o, "{\n");
+
+    /* HELLO */
+    proto_msg m;
+    proto_msg_init(&m, PROTO_HELLO);
+    m.hdr.seq = 1;
+    m.hdr.sim_time = 12.5;
+    proto_hello *h = &m.u.hello;
+    h->codecs = 0x7f;
+    h->mesh_kinds = 0x7;
+    h->effects = PROTO_FX_ALL;
+    h->cutoff_policies = 0x7;
+    h->modes = 0x3;
+    h->max_message = 1u << 20;
+    h->max_query_points = 4096;
+    h->max_tile_size = 256;
+    h->max_lod_levels = 8;
+    h->max_layers = 4;
+    h->tick_rate_hz = 30.0f;
+    h->max_frame_rate_hz = 60.0f;
+    h->client_id = 77;
+    h->sea.spectrum = 2;
+    h->sea.spreading = 1;
+    h->sea.seed = 0x0123456789abcdefULL;
+    h->sea.wind_u10 = 12.3;
+    h->sea.wind_dir_deg = 35;
+    h->sea.fetch_m = 1e5;
+    h->sea.depth_m = 4000;
+    h->sea.swell = 0.5;
+    h->sea.phillips_a = 0.00405;
+    h->sea.small_wave_m = 0.01;
+    h->sea.choppiness = 1.2;
+    h->sea.hs = 3.1;
+    h->sea.tp = 8.2;
+    snprintf(h->server_version, sizeof h->server_version, "oceand 0.1 \xc3\xa9t\xc3\xa9");
+    if (write_msg(dir, "hello", &m))
+        return 1;
+    const proto_sea sea = h->sea;
+    fprintf(o, "\"hello\": {\"codecs\":127,\"clientId\":77,\"seed\":\"%llu\",\"windU10\":12.3,\"tp\":8.2,"
+               "\"tickRateHz\":30,\"serverVersion\":\"%s\",\"simTime\":12.5,\"seq\":1},\n",
+            (unsigned long long)sea.seed, h->server_version);
+
+    /* FRAME: three tiles (qz, f16, f32), different shapes/channels, and a mesh */
+    enum { NT = 3 };
+    const proto_codec codecs[NT] = {PROTO_CODEC_QZ, PROTO_CODEC_F16, PROTO_CODEC_F32};
+    const unsigned chans[NT] = {PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM,
+                                PROTO_CH_HEIGHT | PROTO_CH_NORMAL, PROTO_CH_HEIGHT | PROTO_CH_FOAM};
+    const int ws[NT] = {17, 8, 5}, hs[NT] = {13, 8, 3};
+    proto_tile tiles[NT];
+    proto_buf pay[NT];
+    float *dec[NT];
+    for (int t = 0; t < NT; t++) {
+        int np = proto_tile_planes(chans[t]), w = ws[t], hh = hs[t];
+        size_t n = (size_t)w * hh;
+        float *pl = calloc(n * np, sizeof *pl);
+        int k = 0;
+        static const int slot_bit[7] = {0, 1, 2, 3, 3, 4, 5};
+        for (int s = 0; s < 7; s++) {
+            if (!(chans[t] & (1u << slot_bit[s])))
+                continue;
+            for (int i = 0; i < hh; i++)
+                for (int j = 0; j < w; j++) {
+                    float v = field(s, i, j);
+                    if (s == 3 || s == 4) {
+                        float u, vv;
+                        proto_normal_oct_encode(-0.3f * field(0, i, j), 1.0f, 0.2f * field(1, i, j), &u, &vv);
+                        v = s == 3 ? u : vv;
+                    }
+                    pl[(size_t)k * n + (size_t)i * w + j] = v;
+                }
+            k++;
+        }
+        proto_codec_params p;
+        proto_codec_params_default(&p);
+        p.accuracy = 1e-3;
+        proto_buf_init(&pay[t], 0);
+        double merr;
+        char err[256];
+        if (proto_tile_encode(codecs[t], &p, w, hh, chans[t], pl, &pay[t], &merr, err, sizeof err) != OCEAN_OK) {
+            fprintf(stderr, "tile encode: %s\n", err);
+            return 1;
+        }
+        dec[t] = calloc(n * np, sizeof(float));
+        if (proto_tile_decode(codecs[t], w, hh, chans[t], proto_buf_data(&pay[t]), proto_buf_len(&pay[t]), dec[t],
+                              err, sizeof err) != OCEAN_OK) {
+            fprintf(stderr, "tile decode: %s\n", err);
+            return 1;
+        }
+        memset(&tiles[t], 0, sizeof tiles[t]);
+        tiles[t].level = (uint8_t)t;
+        tiles[t].codec = (uint8_t)codecs[t];
+        tiles[t].channels = (uint16_t)chans[t];
+        tiles[t].width = (uint16_t)w;
+        tiles[t].height = (uint16_t)hh;
+        tiles[t].ix = -3 + t;
+        tiles[t].iz = 2 - t;
+        tiles[t].spacing = 0.5 * (1 << t);
+        tiles[t].origin_x = tiles[t].ix * w * tiles[t].spacing + 1e6;
+        tiles[t].origin_z = tiles[t].iz * hh * tiles[t].spacing;
+        tiles[t].error_bound = (float)merr;
+        tiles[t].payload_len = (uint32_t)proto_buf_len(&pay[t]);
+        tiles[t].payload = proto_buf_data(&pay[t]);
+        free(pl);
+    }
+    float pos[3 * 4] = {0, 0.25f, 0, 1, 0, 0, 0, 0, 1, 1.5f, -0.125f, 1.5f};
+    proto_msg_init(&m, PROTO_FRAME);
+    m.hdr.seq = 2;
+    m.hdr.sim_time = 1234567.0625;
+    proto_frame *f = &m.u.frame;
+    f->cutoff_k = INFINITY;
+    f->e_error = 0.0123;
+    f->origin[0] = 1000000.5;
+    f->origin[1] = 0;
+    f->origin[2] = -250.25;
+    f->camera_seq = 41;
+    f->tick = 9001;
+    f->tile_count = NT;
+    f->tiles = tiles;
+    f->has_mesh = 1;
+    f->mesh.mesh_id = 5;
+    f->mesh.vertex_count = 4;
+    f->mesh.origin[0] = 1000000.5;
+    f->mesh.origin[1] = 0;
+    f->mesh.origin[2] = -250.25;
+    f->mesh.positions = pos;
+    if (write_msg(dir, "frame", &m))
+        return 1;
+    fprintf(o, "\"frame\": {\"cutoffK\":\"inf\",\"eError\":0.0123,\"cameraSeq\":41,\"tick\":9001,\"simTime\":1234567.0625,"
+               "\"meshId\":5,\"positions\":");
+    print_floats(o, pos, 12);
+    fprintf(o, ",\"tiles\":[");
+    for (int t = 0; t < NT; t++) {
+        size_t n = (size_t)ws[t] * hs[t] * proto_tile_planes(chans[t]);
+        fprintf(o, "%s{\"codec\":%d,\"channels\":%u,\"width\":%d,\"height\":%d,\"ix\":%d,\"iz\":%d,"
+                   "\"originX\":%.17g,\"originZ\":%.17g,\"spacing\":%.17g,\"errorBound\":%.9g,\"payloadLen\":%u,\"decoded\":",
+                t ? "," : "", codecs[t], chans[t], ws[t], hs[t], tiles[t].ix, tiles[t].iz, tiles[t].origin_x,
+                tiles[t].origin_z, tiles[t].spacing, (double)tiles[t].error_bound, tiles[t].payload_len);
+        print_floats(o, dec[t], n);
+        fputc('}', o);
+    }
+    fprintf(o, "]},\n");
+
+    /* MESH_TOPOLOGY */
+    uint32_t idx[6] = {0, 2, 1, 1, 2, 3};
+    float morph[4] = {0, 0.25f, 0.5f, 1};
+    uint8_t lev[4] = {0, 0, 1, 1};
+    proto_msg_init(&m, PROTO_MESH_TOPOLOGY);
+    m.hdr.seq = 3;
+    m.u.topology.mesh_id = 5;
+    m.u.topology.mesh_kind = PROTO_MESH_CONCENTRIC;
+    m.u.topology.lod_levels = 2;
+    m.u.topology.vertex_count = 4;
+    m.u.topology.index_count = 6;
+    m.u.topology.indices = idx;
+    m.u.topology.morph = morph;
+    m.u.topology.level = lev;
+    if (write_msg(dir, "topology", &m))
+        return 1;
+    fprintf(o, "\"topology\": {\"meshId\":5,\"indices\":[0,2,1,1,2,3],\"morph\":[0,0.25,0.5,1],\"level\":[0,0,1,1]},\n");
+
+    /* QUERY_RESULT */
+    proto_query_sample qs[2] = {{0.5f, {0, 1, 0}, {0.1f, 0.2f, 0.3f}, 0.25f, 0.001f},
+                                {-1.25f, {0.6f, 0.8f, 0}, {0, 0, 0}, 0, 0}};
+    proto_msg_init(&m, PROTO_QUERY_RESULT);
+    m.u.result.query_id = 9;
+    m.u.result.count = 2;
+    m.u.result.t = 99.5;
+    m.u.result.samples = qs;
+    if (write_msg(dir, "result", &m))
+        return 1;
+    fprintf(o, "\"result\": {\"queryId\":9,\"count\":2,\"t\":99.5,\"height1\":-1.25,\"foam0\":0.25},\n");
+
+    /* SEA_STATE announce */
+    proto_msg_init(&m, PROTO_SEA_STATE);
+    m.u.sea_state.op = PROTO_SEA_ANNOUNCE;
+    m.u.sea_state.effective_time = 60;
+    m.u.sea_state.sea = sea;
+    if (write_msg(dir, "sea", &m))
+        return 1;
+    fprintf(o, "\"sea\": {\"effectiveTime\":60,\"windDirDeg\":35},\n");
+
+    /* ERROR and BYE */
+    proto_buf eb;
+    proto_buf_init(&eb, 0);
+    uint8_t bad[32] = {0x4f, 0x43, 0x4e, 0x57, 1, 0, 3, 0};
+    bad[16] = 42;
+    proto_error_reply(&eb, bad, sizeof bad, OCEAN_EINVAL, "camera.fov_y_deg = 0 outside (0, 180)", 4, 2.5);
+    snprintf(path, sizeof path, "%s/error.bin", dir);
+    FILE *ef = fopen(path, "wb");
+    fwrite(proto_buf_data(&eb), 1, proto_buf_len(&eb), ef);
+    fclose(ef);
+    proto_buf_free(&eb);
+    fprintf(o, "\"error\": {\"code\":1,\"offendingType\":3,\"offendingSeq\":42,\"message\":\"camera.fov_y_deg = 0 outside (0, 180)\"},\n");
+    proto_msg_init(&m, PROTO_BYE);
+    m.u.bye.reason = PROTO_BYE_SLOW_CONSUMER;
+    snprintf(m.u.bye.message, sizeof m.u.bye.message, "output buffer over 64 MB");
+    if (write_msg(dir, "bye", &m))
+        return 1;
+    fprintf(o, "\"bye\": {\"reason\":2,\"message\":\"output buffer over 64 MB\"}\n}\n");
+    fclose(o);
+    for (int t = 0; t < NT; t++) {
+        proto_buf_free(&pay[t]);
+        free(dec[t]);
+    }
+    return 0;
+}
+
+static void json_str(const char *s)
+{
+    putchar('"');
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\') printf("\\%c", c);
+        else if (c < 0x20) printf("\\u%04x", c);
+        else putchar(c);
+    }
+    putchar('"');
+}
+
+static int decode_files(int n, char **files)
+{
+    for (int i = 0; i < n; i++) {
+        FILE *f = fopen(files[i], "rb");
+        if (!f) {
+            printf("{\"file\":\"%s\",\"code\":-1}\n", files[i]);
+            continue;
+        }
+        fseek(f, 0, SEEK_END);
+        long len = ftell(f);
+        fseek(f, 0, SEEK_SET);
+        uint8_t *buf = malloc(len > 0 ? (size_t)len : 1);
+        size_t got = fread(buf, 1, (size_t)len, f);
+        fclose(f);
+        proto_msg m;
+        char err[512];
+        ocean_result r = proto_decode(buf, got, &m, err, sizeof err);
+        printf("{\"file\":\"%s\",\"code\":%d", files[i], (int)r);
+        if (r != OCEAN_OK) {
+            printf(",\"err\":");
+            json_str(err);
+        } else {
+            printf(",\"type\":%u,\"seq\":%u,\"simTime\":%.17g", m.hdr.type, m.hdr.seq, m.hdr.sim_time);
+            switch (m.hdr.type) {
+            case PROTO_SUBSCRIBE: {
+                proto_subscribe *s = &m.u.subscribe;
+                printf(",\"effects\":%u,\"meshKind\":%u,\"codec\":%u,\"cutoffPolicy\":%u,\"mode\":%u,\"layers\":%u,"
+                       "\"lodLevels\":%u,\"tileSize\":%u,\"frameRateHz\":%.9g,\"accuracy\":%.9g,\"baseSpacingM\":%.9g,"
+                       "\"viewRangeM\":%.9g",
+                       s->effects, s->mesh_kind, s->codec, s->cutoff_policy, s->mode, s->layers, s->lod_levels,
+                       s->tile_size, (double)s->frame_rate_hz, (double)s->accuracy, (double)s->base_spacing_m,
+                       (double)s->view_range_m);
+                break;
+            }
+            case PROTO_CAMERA: {
+                proto_camera *k = &m.u.camera;
+                printf(",\"pos\":[%.17g,%.17g,%.17g],\"vel\":[%.9g,%.9g,%.9g],\"yawDeg\":%.9g,\"pitchDeg\":%.9g,"
+                       "\"rollDeg\":%.9g,\"fovYDeg\":%.9g,\"viewportW\":%u,\"viewportH\":%u,\"renderTime\":%.17g",
+                       k->pos[0], k->pos[1], k->pos[2], (double)k->vel[0], (double)k->vel[1], (double)k->vel[2],
+                       (double)k->yaw_deg, (double)k->pitch_deg, (double)k->roll_deg, (double)k->fov_y_deg,
+                       k->viewport_w, k->viewport_h, k->render_time);
+                break;
+            }
+            case PROTO_QUERY: {
+                proto_query *q = &m.u.query;
+                printf(",\"queryId\":%u,\"count\":%u,\"atTime\":%u,\"t\":%.17g,\"points\":[", q->query_id, q->count,
+                       q->at_time, q->t);
+                for (uint32_t k = 0; k < 2 * q->count; k++)
+                    printf("%s%.17g", k ? "," : "", q->points[k]);
+                printf("]");
+                break;
+            }
+            case PROTO_BYE:
+                printf(",\"reason\":%u,\"message\":", m.u.bye.reason);
+                json_str(m.u.bye.message);
+                break;
+            default:
+                break;
+            }
+            proto_msg_free(&m);
+        }
+        printf("}\n");
+        free(buf);
+    }
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc >= 3 && strcmp(argv[1], "gen") == 0)
+        return gen(argv[2]);
+    if (argc >= 2 && strcmp(argv[1], "decode") == 0)
+        return decode_files(argc - 2, argv + 2);
+    fprintf(stderr, "usage: gen_vectors gen DIR | decode FILE...\n");
+    return 2;
+}

@@ -1,0 +1,377 @@
+/*
+ * protocol.test.mjs - cross-checks the web viewer's JavaScript protocol and
+ * codec code (clients/web/protocol.js, codec.js) against the C
+ * implementation in protocol/, through tests/browser/gen_vectors.c:
+ *
+ *  - messages encoded in C decode in JS to the same fields, and tiles
+ *    (qz, f16, f32) decode to the same float32 samples, bit for bit;
+ *  - messages encoded in JS (SUBSCRIBE, CAMERA, QUERY, BYE) decode in C to
+ *    the same fields;
+ *  - hostile input: thousands of truncated and byte-flipped variants of the
+ *    vectors are decoded by both; both must accept or refuse each one alike
+ *    and, when refusing, report the same ocean_result code;
+ *  - corrupt qz payloads are refused with ECODEC, never decoded to junk;
+ *  - the protocol's own vectors (tests/vectors, PROTO_VECTORS) decode to
+ *    their stated fields, bad ones get their stated code, and the messages
+ *    the viewer sends re-encode to identical bytes.
+ *
+ * Run by tests/test_browser.sh with VECTOR_DIR (output of `gen_vectors gen`)
+ * and GEN_VECTORS (the helper binary) set.  node --test.
+ */
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { readFileSync, writeFileSync, mkdtempSync, rmSync, readdirSync } from 'node:fs';
+import { execFileSync } from 'node:child_process';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+
+import {
+    decode, encodeSubscribe, encodeCamera, encodeQuery, encodeBye, ProtoError, R, T, CODEC, FX, tilePlanes,
+} from '../../clients/web/protocol.js';
+import { decodeTile, octDecode, f32FromF16 } from '../../clients/web/codec.js';
+
+const dir = process.env.VECTOR_DIR;
+const gen = process.env.GEN_VECTORS;
+if (!dir || !gen) throw new Error('VECTOR_DIR and GEN_VECTORS must be set (see tests/test_browser.sh)');
+const expected = JSON.parse(readFileSync(join(dir, 'expected.json'), 'utf8'));
+const vec = (name) => new Uint8Array(readFileSync(join(dir, `${name}.bin`)));
+
+/* Runs the C decoder over a list of byte arrays; returns its JSON lines. */
+function cDecode(buffers) {
+    const tmp = mkdtempSync(join(tmpdir(), 'ocean-vec-'));
+    try {
+        const files = buffers.map((b, i) => {
+            const f = join(tmp, `m${i}.bin`);
+            writeFileSync(f, b);
+            return f;
+        });
+        const out = [];
+        /* keep argv modest */
+        for (let i = 0; i < files.length; i += 500) {
+            const text = execFileSync(gen, ['decode', ...files.slice(i, i + 500)], { encoding: 'utf8', maxBuffer: 64 << 20 });
+            out.push(...text.trim().split('\n').map((l) => JSON.parse(l)));
+        }
+        return out;
+    } finally {
+        rmSync(tmp, { recursive: true, force: true });
+    }
+}
+
+function jsCode(bytes) {
+    try {
+        decode(bytes);
+        return 0;
+    } catch (e) {
+        if (!(e instanceof ProtoError)) throw e;   /* anything else is a bug */
+        return e.code;
+    }
+}
+
+test('HELLO from C decodes with every field', () => {
+    const m = decode(vec('hello'));
+    const e = expected.hello;
+    assert.equal(m.type, T.HELLO);
+    assert.equal(m.hdr.seq, e.seq);
+    assert.equal(m.hdr.simTime, e.simTime);
+    assert.equal(m.body.codecs, e.codecs);
+    assert.equal(m.body.clientId, e.clientId);
+    assert.equal(m.body.sea.seed.toString(), e.seed);
+    assert.equal(m.body.sea.windU10, e.windU10);
+    assert.equal(m.body.sea.tp, e.tp);
+    assert.equal(m.body.tickRateHz, e.tickRateHz);
+    assert.equal(m.body.serverVersion, e.serverVersion);
+});
+
+test('FRAME from C: header, mesh and tiles decode; tile samples equal the C decoder bit for bit', () => {
+    const m = decode(vec('frame'));
+    const e = expected.frame;
+    const f = m.body;
+    assert.equal(m.type, T.FRAME);
+    assert.equal(f.cutoffK, Infinity);
+    assert.equal(f.eError, e.eError);
+    assert.equal(f.cameraSeq, e.cameraSeq);
+    assert.equal(f.tick, e.tick);
+    assert.equal(m.hdr.simTime, e.simTime);
+    assert.equal(f.mesh.meshId, e.meshId);
+    assert.deepEqual(Array.from(f.mesh.positions), e.positions);
+    assert.equal(f.tiles.length, e.tiles.length);
+    const seen = new Set();
+    f.tiles.forEach((t, i) => {
+        const x = e.tiles[i];
+        for (const k of ['codec', 'channels', 'width', 'height', 'ix', 'iz', 'originX', 'originZ', 'spacing', 'payloadLen'])
+            assert.equal(t[k], x[k], `tile ${i} ${k}`);
+        assert.equal(t.errorBound, Math.fround(x.errorBound));
+        const d = decodeTile(t.codec, t.width, t.height, t.channels, t.payload);
+        assert.equal(d.planes, tilePlanes(t.channels));
+        assert.equal(d.data.length, x.decoded.length);
+        for (let k = 0; k < d.data.length; k++)
+            assert.equal(d.data[k], Math.fround(x.decoded[k]), `tile ${i} sample ${k}`);
+        seen.add(t.codec);
+    });
+    assert.deepEqual([...seen].sort(), [CODEC.F32, CODEC.F16, CODEC.QZ].sort());
+    /* the qz tile must exercise the LS6 predictor (2) as well as planar (1) */
+    const qz = f.tiles.find((t) => t.codec === CODEC.QZ);
+    const preds = new Set();
+    for (let c = 0; c < qz.payload[0]; c++) preds.add(qz.payload[4 + 24 * c + 9]);
+    assert.ok(preds.has(2), `qz predictors used: ${[...preds]}`);
+});
+
+test('MESH_TOPOLOGY, QUERY_RESULT, SEA_STATE, ERROR, BYE from C decode', () => {
+    const t = decode(vec('topology')).body;
+    assert.equal(t.meshId, expected.topology.meshId);
+    assert.deepEqual(Array.from(t.indices), expected.topology.indices);
+    assert.deepEqual(Array.from(t.morph), expected.topology.morph);
+    assert.deepEqual(Array.from(t.level), expected.topology.level);
+    const r = decode(vec('result')).body;
+    assert.equal(r.queryId, expected.result.queryId);
+    assert.equal(r.t, expected.result.t);
+    assert.equal(r.samples[1].height, expected.result.height1);
+    assert.equal(r.samples[0].foam, expected.result.foam0);
+    const s = decode(vec('sea')).body;
+    assert.equal(s.effectiveTime, expected.sea.effectiveTime);
+    assert.equal(s.sea.windDirDeg, expected.sea.windDirDeg);
+    const er = decode(vec('error')).body;
+    assert.deepEqual({ code: er.code, offendingType: er.offendingType, offendingSeq: er.offendingSeq, message: er.message }, expected.error);
+    const b = decode(vec('bye')).body;
+    assert.deepEqual({ reason: b.reason, message: b.message }, expected.bye);
+});
+
+test('SUBSCRIBE, CAMERA, QUERY, BYE encoded in JS decode in C to the same fields', () => {
+    const sub = {
+        effects: FX.ALL, meshKind: 0, codec: CODEC.QZ, cutoffPolicy: 2, mode: 0, layers: 3, lodLevels: 6,
+        tileSize: 64, frameRateHz: 30, accuracy: 1e-3, baseSpacingM: 0.5, viewRangeM: 20000,
+    };
+    const cam = {
+        pos: [1234567.890625, 31.5, -98765.4321], vel: [250, -1.5, 3.25], yawDeg: -123.4, pitchDeg: -12.5,
+        rollDeg: 3, fovYDeg: 55, viewportW: 1920, viewportH: 1080, renderTime: 0,
+    };
+    const pts = [1e6 + 0.125, -3.5, 42, 1e9];
+    const [cs, cc, cq, cb] = cDecode([
+        new Uint8Array(encodeSubscribe(sub, 7, 1.5)), new Uint8Array(encodeCamera(cam, 8, 2.5)),
+        new Uint8Array(encodeQuery(99, pts, 12.75, 9, 3.5)), new Uint8Array(encodeBye(0, 'viewer closed ✓', 10, 4.5)),
+    ]);
+    assert.equal(cs.code, 0, cs.err);
+    assert.equal(cs.type, T.SUBSCRIBE);
+    assert.equal(cs.seq, 7);
+    assert.equal(cs.simTime, 1.5);
+    for (const k of ['effects', 'meshKind', 'codec', 'cutoffPolicy', 'mode', 'layers', 'lodLevels', 'tileSize'])
+        assert.equal(cs[k], sub[k], k);
+    for (const k of ['frameRateHz', 'accuracy', 'baseSpacingM', 'viewRangeM'])
+        assert.equal(Math.fround(cs[k]), Math.fround(sub[k]), k);   /* C prints 9 digits: exact for float32 */
+    assert.equal(cc.code, 0, cc.err);
+    assert.deepEqual(cc.pos, cam.pos);
+    assert.deepEqual(cc.vel.map(Math.fround), cam.vel.map(Math.fround));
+    for (const k of ['yawDeg', 'pitchDeg', 'rollDeg', 'fovYDeg']) assert.equal(Math.fround(cc[k]), Math.fround(cam[k]), k);
+    assert.equal(cc.viewportW, 1920);
+    assert.equal(cc.viewportH, 1080);
+    assert.equal(cq.code, 0, cq.err);
+    assert.equal(cq.queryId, 99);
+    assert.equal(cq.atTime, 1);
+    assert.equal(cq.t, 12.75);
+    assert.deepEqual(cq.points, pts);
+    assert.equal(cb.code, 0, cb.err);
+    assert.equal(cb.message, 'viewer closed ✓');
+});
+
+test('JS encoders refuse what the C decoder would refuse', () => {
+    const base = { effects: FX.ALL, meshKind: 0, codec: CODEC.QZ, cutoffPolicy: 2, mode: 0, layers: 1, lodLevels: 4, tileSize: 64, frameRateHz: 30 };
+    assert.throws(() => encodeSubscribe({ ...base, effects: 0 }, 1), (e) => e.code === R.EINVAL);
+    assert.throws(() => encodeSubscribe({ ...base, codec: 9 }, 1), (e) => e.code === R.ETYPE);
+    assert.throws(() => encodeSubscribe({ ...base, frameRateHz: NaN }, 1), (e) => e.code === R.EINVAL);
+    const cam = { pos: [0, 10, 0], vel: [0, 0, 0], yawDeg: 0, pitchDeg: 0, fovYDeg: 60, viewportW: 10, viewportH: 10 };
+    assert.throws(() => encodeCamera({ ...cam, pos: [NaN, 0, 0] }, 1), (e) => e.code === R.EINVAL);
+    assert.throws(() => encodeCamera({ ...cam, fovYDeg: 180 }, 1), (e) => e.code === R.EINVAL);
+    assert.throws(() => encodeCamera({ ...cam, pitchDeg: 95 }, 1), (e) => e.code === R.EINVAL);
+    assert.throws(() => encodeQuery(1, [], null, 1), (e) => e.code === R.EINVAL);
+});
+
+/* Deterministic PRNG for the mutation test. */
+function rng(seed) {
+    let s = seed >>> 0;
+    return () => { s = (s * 1664525 + 1013904223) >>> 0; return s / 4294967296; };
+}
+
+test('hostile input: truncated and corrupted messages get the same verdict and code in JS and C', () => {
+    const names = ['hello', 'frame', 'topology', 'result', 'sea', 'error', 'bye'];
+    const variants = [];
+    const rand = rng(20240611);
+    const setU32 = (b, o, v) => new DataView(b.buffer).setUint32(o, v >>> 0, true);
+    for (const n of names) {
+        const v = vec(n);
+        /* truncations (keeping the header's length honest or not) */
+        for (let len = 0; len < v.length; len += Math.max(1, Math.floor(v.length / 60))) variants.push(v.slice(0, len));
+        for (let len = 33; len < v.length; len += Math.max(1, Math.floor(v.length / 40))) {
+            const b = v.slice(0, len);
+            setU32(b, 12, len - 32);    /* header agrees; the payload itself is short */
+            variants.push(b);
+        }
+        /* one trailing byte, header adjusted and not */
+        const longer = new Uint8Array(v.length + 1);
+        longer.set(v);
+        variants.push(longer.slice());
+        setU32(longer, 12, v.length + 1 - 32);
+        variants.push(longer);
+        /* every header byte flipped */
+        for (let i = 0; i < 32; i++) {
+            const b = v.slice();
+            b[i] ^= 0xff;
+            variants.push(b);
+        }
+        /* random byte overwrites in the payload */
+        for (let k = 0; k < 250; k++) {
+            const b = v.slice();
+            const i = 32 + Math.floor(rand() * (v.length - 32));
+            const choices = [0, 0xff, 0x7f, 0x80, b[i] ^ (1 << Math.floor(rand() * 8)), Math.floor(rand() * 256)];
+            b[i] = choices[Math.floor(rand() * choices.length)];
+            variants.push(b);
+        }
+    }
+    /* NaN / Inf in doubles that must be finite (FRAME e_error, header sim_time) */
+    const fr = vec('frame');
+    for (const [off, val] of [[24, NaN], [24, Infinity], [32 + 8, NaN], [32 + 0, NaN], [32 + 0, -1], [32 + 16, Infinity]]) {
+        const b = fr.slice();
+        new DataView(b.buffer).setFloat64(off, val, true);
+        variants.push(b);
+    }
+    const c = cDecode(variants);
+    assert.equal(c.length, variants.length);
+    let refused = 0;
+    const mismatches = [];
+    variants.forEach((b, i) => {
+        const j = jsCode(b);
+        if (j !== 0) refused++;
+        if (j !== c[i].code && process.env.DUMP_MISMATCH) writeFileSync(join(process.env.DUMP_MISMATCH, `v${i}.bin`), b);
+        if (j !== c[i].code) mismatches.push(`variant ${i} (${b.length} bytes): JS ${j}, C ${c[i].code} ${c[i].err || ''}`);
+    });
+    assert.deepEqual(mismatches.slice(0, 10), [], `${mismatches.length} of ${variants.length} verdicts differ`);
+    assert.ok(refused > variants.length / 3, `only ${refused} of ${variants.length} variants were refused`);
+});
+
+test('corrupt qz payloads are refused with ECODEC, never decoded to junk', () => {
+    const t = decode(vec('frame')).body.tiles.find((x) => x.codec === CODEC.QZ);
+    const ok = decodeTile(t.codec, t.width, t.height, t.channels, t.payload);
+    assert.ok(ok.data.every(Number.isFinite));
+    const rand = rng(7);
+    let refused = 0, accepted = 0;
+    for (let k = 0; k < 400; k++) {
+        const p = t.payload.slice();
+        const i = Math.floor(rand() * p.length);
+        p[i] ^= 1 + Math.floor(rand() * 255);
+        try {
+            const d = decodeTile(t.codec, t.width, t.height, t.channels, p);
+            assert.ok(d.data.every(Number.isFinite));   /* a flip in a residual may decode to other finite values */
+            accepted++;
+        } catch (e) {
+            assert.ok(e instanceof ProtoError, `non-protocol exception: ${e}`);
+            assert.equal(e.code, R.ECODEC);
+            refused++;
+        }
+    }
+    assert.ok(refused > 100, `only ${refused} of 400 corruptions refused`);
+    /* structural cases */
+    assert.throws(() => decodeTile(CODEC.QZ, t.width, t.height, t.channels, t.payload.subarray(0, 10)), (e) => e.code === R.ECODEC);
+    assert.throws(() => decodeTile(CODEC.QZ, t.width + 1, t.height, t.channels, t.payload), (e) => e.code === R.ECODEC);
+    assert.throws(() => decodeTile(CODEC.QZ, t.width, t.height, 1, t.payload), (e) => e.code === R.ECODEC);
+    assert.throws(() => decodeTile(CODEC.F16, 2, 2, 1, new Uint8Array([0, 0x7c, 0, 0, 0, 0, 0, 0])), (e) => e.code === R.ECODEC);
+    assert.throws(() => decodeTile(CODEC.F32, 2, 2, 1, new Uint8Array(15)), (e) => e.code === R.ECODEC);
+    assert.throws(() => decodeTile(CODEC.EXR_ZIP, 2, 2, 1, new Uint8Array(16)), (e) => e.code === R.EUNSUPPORTED);
+    void accepted;
+});
+
+test('half floats and octahedral normals', () => {
+    assert.equal(f32FromF16(0x3c00), 1);
+    assert.equal(f32FromF16(0xc000), -2);
+    assert.equal(f32FromF16(0x7bff), 65504);
+    assert.equal(f32FromF16(0x0001), 2 ** -24);
+    assert.equal(f32FromF16(0x7c00), Infinity);
+    assert.ok(Number.isNaN(f32FromF16(0x7e00)));
+    assert.deepEqual(octDecode(0, 0), [0, 1, 0]);
+    assert.deepEqual(octDecode(1, 0), [1, 0, 0]);
+    assert.deepEqual(octDecode(0, -1), [0, 0, -1]);
+    const n = octDecode(0.9, 0.8);                 /* lower hemisphere fold */
+    assert.ok(n[1] < 0);
+    assert.ok(Math.abs(Math.hypot(...n) - 1) < 1e-12);
+});
+
+/* ---- the protocol's own vectors (tests/vectors, PROTOCOL.md "Test vectors") ---- */
+
+const snake = (k) => k.replace(/[A-Z]/g, (c) => `_${c.toLowerCase()}`).replace(/u_10$/, 'u10');
+
+/* A decoded message as `field = value` strings, named as the .txt files
+ * name them. */
+function flatten(m) {
+    /* the vectors name a stand-alone MESH_VERTICES' fields mesh.*, a TILE's tile.* */
+    if (m.type === T.MESH_VERTICES) m = { ...m, body: { mesh: m.body } };
+    if (m.type === T.TILE) m = { ...m, body: { tile: m.body } };
+    const flat = { type: m.name, version: String(m.hdr.version), flags: String(m.hdr.flags), seq: String(m.hdr.seq), sim_time: String(m.hdr.simTime) };
+    const val = (k, v) => {
+        if (v instanceof Uint8Array && k === 'payload') return Array.from(v, (b) => b.toString(16).padStart(2, '0')).join(' ');
+        if (ArrayBuffer.isView(v) || Array.isArray(v)) return Array.from(v).join(' ');
+        return String(v);
+    };
+    const walk = (o, prefix) => {
+        for (const [k, v] of Object.entries(o)) {
+            if (k === 'tiles') { v.forEach((t, i) => walk(t, `${prefix}tile[${i}].`)); continue; }
+            if (k === 'samples') {
+                v.forEach((s, i) => { flat[`${prefix}sample[${i}]`] = `${s.height} | ${s.normal.join(' ')} | ${s.velocity.join(' ')} | ${s.foam} | ${s.errorBound}`; });
+                continue;
+            }
+            if (v && typeof v === 'object' && !ArrayBuffer.isView(v) && !Array.isArray(v)) { walk(v, `${prefix}${snake(k)}.`); continue; }
+            flat[prefix + snake(k)] = val(k, v);
+        }
+        if ('viewportW' in o) flat[`${prefix}viewport`] = `${o.viewportW} ${o.viewportH}`;
+    };
+    walk(m.body, '');
+    return flat;
+}
+
+function sameValue(want, got) {
+    if (want === got) return true;
+    const a = want.split(/\s+/), b = got.split(/\s+/);
+    if (a.length !== b.length) return false;
+    return a.every((x, i) => {
+        if (x === b[i]) return true;
+        const p = Number(x), q = Number(b[i]);
+        if (Number.isNaN(p) || Number.isNaN(q)) return false;
+        return Math.abs(p - q) <= 1e-8 * Math.max(1, Math.abs(p));   /* %.9g prints float32 to 9 digits */
+    });
+}
+
+test('the protocol vectors in tests/vectors decode to their stated fields; bad ones get their stated code', (t) => {
+    const vdir = process.env.PROTO_VECTORS;
+    if (!vdir) { t.skip('PROTO_VECTORS not set'); return; }
+    const names = readdirSync(vdir).filter((f) => f.endsWith('.bin')).map((f) => f.slice(0, -4));
+    assert.ok(names.length >= 10, `only ${names.length} vectors in ${vdir}`);
+    let good = 0, bad = 0;
+    for (const n of names) {
+        const bytes = new Uint8Array(readFileSync(join(vdir, `${n}.bin`)));
+        const lines = readFileSync(join(vdir, `${n}.txt`), 'utf8').split('\n').filter((l) => l.includes(' = '));
+        const want = Object.fromEntries(lines.map((l) => [l.slice(0, l.indexOf(' = ')), l.slice(l.indexOf(' = ') + 3)]));
+        if (n.startsWith('bad_')) {
+            const code = Number(/\((\d+)\)/.exec(want.error)[1]);
+            assert.equal(jsCode(bytes), code, `${n}: expected ${want.error}`);
+            bad++;
+            continue;
+        }
+        const m = decode(bytes);
+        const flat = flatten(m);
+        let compared = 0;
+        for (const [k, v] of Object.entries(want)) {
+            if (!(k in flat)) continue;
+            assert.ok(sameValue(v, flat[k]), `${n}: ${k} = ${flat[k]}, vector says ${v}`);
+            compared++;
+        }
+        assert.ok(compared >= 0.8 * Object.keys(want).length,
+            `${n}: only ${compared} of ${Object.keys(want).length} fields compared (missing: ${Object.keys(want).filter((k) => !(k in flat)).join(', ')})`);
+        /* what the viewer encodes must re-encode to the identical bytes */
+        let again = null;
+        const b = m.body, seq = m.hdr.seq, st = m.hdr.simTime;
+        if (m.type === T.SUBSCRIBE) again = encodeSubscribe(b, seq, st);
+        if (m.type === T.CAMERA) again = encodeCamera(b, seq, st);
+        if (m.type === T.QUERY) again = encodeQuery(b.queryId, Array.from(b.points), b.atTime ? b.t : null, seq, st);
+        if (m.type === T.BYE) again = encodeBye(b.reason, b.message, seq, st);
+        if (again) assert.deepEqual(new Uint8Array(again), bytes, `${n}: re-encoding differs`);
+        good++;
+    }
+    assert.ok(good >= 8 && bad >= 5, `${good} good and ${bad} bad vectors checked`);
+});

@@ -1,0 +1,280 @@
+/*
+ * viewer.test.mjs - the web viewer in a real browser: headless Chromium
+ * (Debian's /usr/bin/chromium, software GL) driven by playwright-core loads
+ * the page from a running oceand and checks that
+ *   - the page and its modules load, with no page errors;
+ *   - the viewer gets HELLO, a mesh topology and frames, decodes every tile
+ *     without error, and measures a latency;
+ *   - the canvas is not blank: the screenshot (decoded here from PNG) has
+ *     pixel variance above a threshold, and the sea half of it has the fine
+ *     structure of waves (not the smooth gradient of an empty scene);
+ *   - the sea moves: two screenshots a moment apart differ;
+ *   - the overlay shows fps, sim time, cutoff, bytes/s and latency;
+ *   - W flies the camera along its forward vector, the reported velocity
+ *     follows, and the daemon's frames follow the camera;
+ *   - two pages at once are two viewers of one ocean: both get frames,
+ *     with distinct client ids, the same sea state and one sim clock;
+ *   - a control view without the sea mesh has far less structure than the
+ *     real one (so the pixel checks can fail), and uses f16 tiles;
+ *   - no request leaves the daemon's origin.
+ * Screenshots are kept in ARTIFACT_DIR (viewer.png, viewer-2.png,
+ * viewer-control.png).
+ *
+ * Env: OCEAN_URL (http://127.0.0.1:PORT/), ARTIFACT_DIR, CHROMIUM
+ * (default /usr/bin/chromium), VIEWER_TIMEOUT_S (default 60).
+ * Prints "N passed, N failed" and exits non-zero on any failure.
+ */
+import { createRequire } from 'node:module';
+import { mkdirSync, writeFileSync, mkdtempSync, rmSync } from 'node:fs';
+import { inflateSync } from 'node:zlib';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+const webDir = fileURLToPath(new URL('../../clients/web/', import.meta.url));
+const require = createRequire(join(webDir, 'package.json'));
+const { chromium } = require('playwright-core');
+
+const base = process.env.OCEAN_URL || 'http://127.0.0.1:8080/';
+const artifacts = process.env.ARTIFACT_DIR || 'build/test-artifacts';
+const timeoutMs = 1000 * Number(process.env.VIEWER_TIMEOUT_S || 60);
+const exe = process.env.CHROMIUM || '/usr/bin/chromium';
+mkdirSync(artifacts, { recursive: true });
+
+let passed = 0, failed = 0;
+function check(name, ok, detail = '') {
+    if (ok) { passed++; console.log(`ok - ${name}${detail ? ` (${detail})` : ''}`); }
+    else { failed++; console.log(`not ok - ${name}${detail ? ` (${detail})` : ''}`); }
+    return ok;
+}
+
+/* Minimal PNG decoder (8-bit RGB/RGBA, non-interlaced: what Chromium
+ * writes) so the pixel checks read the real screenshot. */
+function decodePng(buf) {
+    const sig = [137, 80, 78, 71, 13, 10, 26, 10];
+    if (!sig.every((b, i) => buf[i] === b)) throw new Error('not a PNG');
+    let off = 8, w = 0, h = 0, depth = 0, ctype = 0, interlace = 0;
+    const idat = [];
+    while (off < buf.length) {
+        const len = buf.readUInt32BE(off), type = buf.toString('latin1', off + 4, off + 8);
+        const data = buf.subarray(off + 8, off + 8 + len);
+        if (type === 'IHDR') { w = data.readUInt32BE(0); h = data.readUInt32BE(4); depth = data[8]; ctype = data[9]; interlace = data[12]; }
+        else if (type === 'IDAT') idat.push(data);
+        else if (type === 'IEND') break;
+        off += 12 + len;
+    }
+    if (depth !== 8 || (ctype !== 2 && ctype !== 6) || interlace) throw new Error(`unsupported PNG (depth ${depth}, type ${ctype})`);
+    const bpp = ctype === 6 ? 4 : 3, stride = w * bpp;
+    const raw = inflateSync(Buffer.concat(idat));
+    const px = new Uint8Array(w * h * 4);
+    let prev = new Uint8Array(stride), cur = new Uint8Array(stride);
+    for (let y = 0; y < h; y++) {
+        const f = raw[y * (stride + 1)], line = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
+        for (let i = 0; i < stride; i++) {
+            const a = i >= bpp ? cur[i - bpp] : 0, b = prev[i], c = i >= bpp ? prev[i - bpp] : 0;
+            let v = line[i];
+            if (f === 1) v += a;
+            else if (f === 2) v += b;
+            else if (f === 3) v += (a + b) >> 1;
+            else if (f === 4) { const p = a + b - c, pa = Math.abs(p - a), pb = Math.abs(p - b), pc = Math.abs(p - c); v += pa <= pb && pa <= pc ? a : pb <= pc ? b : c; }
+            cur[i] = v & 255;
+        }
+        for (let x = 0; x < w; x++) {
+            const o = (y * w + x) * 4;
+            px[o] = cur[x * bpp]; px[o + 1] = cur[x * bpp + 1]; px[o + 2] = cur[x * bpp + 2]; px[o + 3] = bpp === 4 ? cur[x * bpp + 3] : 255;
+        }
+        [prev, cur] = [cur, prev];
+    }
+    return { w, h, px };
+}
+
+function lum(img, x, y) { const o = (y * img.w + x) * 4; return 0.2126 * img.px[o] + 0.7152 * img.px[o + 1] + 0.0722 * img.px[o + 2]; }
+
+/* variance of luminance over rows [y0, y1) */
+function variance(img, y0 = 0, y1 = img.h) {
+    let s = 0, s2 = 0, n = 0;
+    for (let y = y0; y < y1; y++) for (let x = 0; x < img.w; x++) { const l = lum(img, x, y); s += l; s2 += l * l; n++; }
+    const m = s / n;
+    return s2 / n - m * m;
+}
+/* mean |difference| of pixels `stride` apart along a row: the structure
+ * waves give; a flat sea varies almost only from row to row */
+function detail(img, y0, y1, stride = 4) {
+    let s = 0, n = 0;
+    for (let y = y0; y < y1; y++) for (let x = stride; x < img.w; x++) { s += Math.abs(lum(img, x, y) - lum(img, x - stride, y)); n++; }
+    return s / n;
+}
+function meanColor(img, y0, y1) {
+    const c = [0, 0, 0];
+    let n = 0;
+    for (let y = y0; y < y1; y++) for (let x = 0; x < img.w; x++) { const o = (y * img.w + x) * 4; c[0] += img.px[o]; c[1] += img.px[o + 1]; c[2] += img.px[o + 2]; n++; }
+    return c.map((v) => v / n);
+}
+function meanAbsDiff(a, b, y0, y1) {
+    let s = 0, n = 0;
+    for (let y = y0; y < y1; y++) for (let x = 0; x < a.w; x++) { s += Math.abs(lum(a, x, y) - lum(b, x, y)); n++; }
+    return s / n;
+}
+
+async function waitFor(page, pred, arg, ms) {
+    try {
+        await page.waitForFunction(pred, arg, { timeout: ms, polling: 200 });
+        return true;
+    } catch {
+        return false;
+    }
+}
+
+const stats = (page) => page.evaluate(() => JSON.parse(JSON.stringify(window.oceanStats || null)));
+
+const userDataDir = mkdtempSync(join(tmpdir(), 'ocean-chromium-'));
+let context;
+try {
+    context = await chromium.launchPersistentContext(userDataDir, {
+        executablePath: exe,
+        headless: true,
+        viewport: { width: 960, height: 540 },
+        args: ['--headless=new', '--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+            '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run',
+            '--disable-quic', '--disable-background-timer-throttling', '--disable-renderer-backgrounding',
+            '--disable-backgrounding-occluded-windows'],
+        timeout: 60000,
+    });
+    /* nothing but the daemon may be contacted */
+    const foreign = [];
+    const origin = new URL(base).host;
+    await context.route('**/*', (route) => {
+        const u = new URL(route.request().url());
+        if (u.host !== origin && u.protocol !== 'data:' && u.protocol !== 'blob:') { foreign.push(u.href); return route.abort(); }
+        return route.continue();
+    });
+
+    const url = `${base}?x=0&y=14&z=0&yaw=30&pitch=-12`;
+    const page = context.pages()[0] || await context.newPage();
+    const pageErrors = [], consoleErrors = [], badResponses = [];
+    page.on('pageerror', (e) => pageErrors.push(String(e)));
+    page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+    page.on('response', (r) => { if (r.status() >= 400) badResponses.push(`${r.status()} ${r.url()}`); });
+    const resp = await page.goto(url, { waitUntil: 'load', timeout: 30000 });
+    check('page loads from the daemon', resp && resp.status() === 200, `HTTP ${resp && resp.status()}`);
+    const ctype = resp ? (resp.headers()['content-type'] || '') : '';
+    check('page is served as HTML', /text\/html/.test(ctype), ctype);
+
+    const gotFrames = await waitFor(page, () => window.oceanStats && window.oceanStats.framesReceived >= 8 && window.oceanStats.framesRendered >= 4, null, timeoutMs);
+    let s = await stats(page);
+    check('frames arrive and are rendered', gotFrames,
+        s ? `state ${s.state}, received ${s.framesReceived}, rendered ${s.framesRendered}, topologies ${s.topologies}, error "${s.lastError}"` : 'no oceanStats');
+    check('module scripts load (no 4xx/5xx)', badResponses.length === 0, badResponses.join(', '));
+    check('no page errors', pageErrors.length === 0, pageErrors.slice(0, 3).join(' | '));
+    if (s) {
+        check('HELLO received (client id, server version)', s.clientId != null && !!s.serverVersion, `client ${s.clientId}, ${s.serverVersion}`);
+        check('mesh topology received', s.topologies >= 1 && s.vertexCount > 0, `${s.vertexCount} vertices, ${s.indexCount} indices`);
+        check('frames carry the mesh', s.framesWithMesh >= 1, `${s.framesWithMesh}`);
+        check('tiles decoded, none refused', s.tilesDecoded > 0 && s.decodeErrors === 0, `${s.tilesDecoded} tiles, codec ${s.codec}, ${s.decodeErrors} errors: ${s.errors.join(' | ')}`);
+        check('no ERROR from the server', s.serverErrors === 0, s.errors.join(' | '));
+        check('latency measured', s.latencyMs != null && s.latencyMs >= 0 && s.latencyMs < 5000, `${s.latencyMs} ms`);
+        check('sim time advances', s.simTime > 0 || s.tick > 0, `t ${s.simTime}, tick ${s.tick}`);
+    }
+    /* let the page settle, then read the pixels */
+    await page.waitForTimeout(1500);
+    const png1 = await page.screenshot({ type: 'png' });
+    writeFileSync(join(artifacts, 'viewer.png'), png1);
+    const img1 = decodePng(png1);
+    const v = variance(img1);
+    check('canvas not blank (pixel variance)', v > 60, `variance ${v.toFixed(1)}`);
+    const horizon = Math.floor(img1.h * 0.45);
+    const sea0 = Math.floor(img1.h * 0.62);
+    const skyC = meanColor(img1, Math.floor(img1.h * 0.12), Math.floor(img1.h * 0.3));
+    const seaC = meanColor(img1, sea0, img1.h);
+    check('sky is above the sea: brighter and blue', lum({ w: 1, h: 1, px: [...skyC, 255] }, 0, 0) > lum({ w: 1, h: 1, px: [...seaC, 255] }, 0, 0) && skyC[2] > skyC[0],
+        `sky rgb ${skyC.map((x) => x.toFixed(0))}, sea rgb ${seaC.map((x) => x.toFixed(0))}`);
+    const det = detail(img1, sea0, img1.h);
+    void horizon;
+    await page.waitForTimeout(1200);
+    const png2 = await page.screenshot({ type: 'png' });
+    const img2 = decodePng(png2);
+    const moved = meanAbsDiff(img1, img2, sea0, img1.h);
+    check('the sea moves between screenshots', moved > 0.5, `mean |diff| ${moved.toFixed(2)}`);
+    const hud = await page.evaluate(() => document.getElementById('overlay').textContent);
+    check('overlay shows fps, sim time, cutoff, bytes/s, latency',
+        /fps \d/.test(hud) && /sim time [\d.]+ s/.test(hud) && /cutoff /.test(hud) && /B\/s/.test(hud) && /latency [\d.]+ ms/.test(hud), hud.slice(0, 300));
+
+    /* fly-camera controls: hold W, the camera moves along its forward
+     * vector, and the daemon's frames follow it (frame origin) */
+    await page.click('#view', { position: { x: 700, y: 400 } });
+    const c0 = (await stats(page)).camera, o0 = (await stats(page)).origin;
+    const speed0 = await page.evaluate(() => window.oceanViewer.camera.speed);
+    await page.keyboard.press('Equal');          /* '+' doubles the speed, twice */
+    await page.keyboard.press('Equal');
+    const speed1 = await page.evaluate(() => window.oceanViewer.camera.speed);
+    check('+ raises the flying speed', speed1 === 4 * speed0, `${speed0} -> ${speed1} m/s`);
+    await page.keyboard.down('KeyW');
+    /* fly until 40 m covered (a few seconds; longer on a starved machine) */
+    await waitFor(page, (c) => { const p = window.oceanStats.camera; return Math.hypot(p[0] - c[0], p[2] - c[2]) > 40; }, c0, timeoutMs);
+    const vWhileFlying = (await stats(page)).cameraVel;
+    await page.keyboard.up('KeyW');
+    const c1 = (await stats(page)).camera;
+    const d = [c1[0] - c0[0], c1[1] - c0[1], c1[2] - c0[2]], dl = Math.hypot(...d);
+    const fwd = [Math.cos(-12 * Math.PI / 180) * Math.cos(30 * Math.PI / 180), Math.sin(-12 * Math.PI / 180), Math.cos(-12 * Math.PI / 180) * Math.sin(30 * Math.PI / 180)];
+    /* the camera stops 0.5 m above mean sea level, so compare directions in x-z */
+    const cosang = (d[0] * fwd[0] + d[2] * fwd[2]) / (Math.hypot(d[0], d[2]) * Math.hypot(fwd[0], fwd[2]) || 1);
+    check('W flies the camera forward', Math.hypot(d[0], d[2]) > 40 && cosang > 0.99, `moved ${dl.toFixed(1)} m, cos to forward ${cosang.toFixed(3)}`);
+    check('the camera reports its velocity', Math.hypot(...vWhileFlying) > 5, `${vWhileFlying.map((v) => v.toFixed(1))} m/s`);
+    /* the origin moves on the mesh's lattice (steps of several metres), so
+     * "follows" means: it moved, and now lies nearer the camera than before */
+    const follows = await waitFor(page, ([c, o0]) => {
+        const o = window.oceanStats.origin;
+        return o && (o[0] !== o0[0] || o[2] !== o0[2]) && Math.hypot(o[0] - c[0], o[2] - c[2]) < Math.hypot(o0[0] - c[0], o0[2] - c[2]);
+    }, [c1, o0], timeoutMs);
+    const o1 = (await stats(page)).origin;
+    check('frames follow the camera (frame origin)', follows,
+        `origin ${o0.map((v) => v.toFixed(1))} -> ${o1.map((v) => v.toFixed(1))}, camera ${c1.map((v) => v.toFixed(1))}`);
+
+    /* two viewers of one ocean */
+    const page2 = await context.newPage();
+    const page2Errors = [];
+    page2.on('pageerror', (e) => page2Errors.push(String(e)));
+    await page2.goto(`${base}?x=40&y=30&z=-25&yaw=-60&pitch=-15`, { waitUntil: 'load', timeout: 30000 });
+    const before = (await stats(page)).framesReceived;
+    const both = await waitFor(page2, () => window.oceanStats && window.oceanStats.framesReceived >= 5 && window.oceanStats.framesRendered >= 2, null, timeoutMs);
+    const s1 = await stats(page), s2 = await stats(page2);
+    check('second page gets frames', both, `received ${s2.framesReceived}, state ${s2.state}, error "${s2.lastError}"`);
+    check('first page keeps getting frames meanwhile', s1.framesReceived > before, `${before} -> ${s1.framesReceived}`);
+    check('two pages are two clients', s1.clientId != null && s2.clientId != null && s1.clientId !== s2.clientId, `${s1.clientId} / ${s2.clientId}`);
+    const sea1 = s1.hello && s1.hello.sea, sea2 = s2.hello && s2.hello.sea;
+    check('one ocean: same sea state and seed for both', !!sea1 && JSON.stringify(sea1) === JSON.stringify(sea2),
+        sea1 ? `seed ${sea1.seed}, wind ${sea1.windU10} m/s` : 'no HELLO');
+    /* one clock: both pages show times of the same server clock (each lags
+     * by its own frame latency, seconds at most under software GL) */
+    check('one ocean: both on one sim clock', Math.abs(s1.simTime - s2.simTime) < 10, `${s1.simTime.toFixed(2)} / ${s2.simTime.toFixed(2)}`);
+    check('second page: no errors', page2Errors.length === 0 && s2.decodeErrors === 0 && s2.serverErrors === 0, [...page2Errors, ...s2.errors].join(' | '));
+    await page2.waitForTimeout(800);
+    writeFileSync(join(artifacts, 'viewer-2.png'), await page2.screenshot({ type: 'png' }));
+
+    /* control: the same view without the sea mesh (sky and flat far sea
+     * only) must have far less structure than the real view */
+    await page2.goto(`${url}&sea=0&codec=f16`, { waitUntil: 'load', timeout: 30000 });
+    await waitFor(page2, () => window.oceanStats && window.oceanStats.tilesDecoded > 0, null, timeoutMs);
+    const sC = await stats(page2);
+    check('the f16 codec works end to end too', sC.codec === 'f16' && sC.tilesDecoded > 0 && sC.decodeErrors === 0,
+        `codec ${sC.codec}, ${sC.tilesDecoded} tiles, ${sC.decodeErrors} errors`);
+    await page2.waitForTimeout(1500);
+    const pngC = await page2.screenshot({ type: 'png' });
+    writeFileSync(join(artifacts, 'viewer-control.png'), pngC);
+    const detC = detail(decodePng(pngC), sea0, img1.h);
+    check('the sea has wave detail (vs. a view without the mesh)', det > 1.0 && det > 2.5 * detC,
+        `structure ${det.toFixed(2)} with the mesh, ${detC.toFixed(2)} without`);
+    check('no request left the daemon', foreign.length === 0, foreign.slice(0, 3).join(', '));
+    if (consoleErrors.length) console.log(`# console errors: ${consoleErrors.slice(0, 5).join(' | ')}`);
+    const fin = await stats(page);
+    console.log(`# page 1: ${fin.framesReceived} frames, ${fin.framesRendered} rendered, ${fin.fps.toFixed(1)} fps, ` +
+        `${(fin.bytesPerSec / 1e6).toFixed(2)} MB/s, latency p50 ${fin.latencyP50?.toFixed(1)} ms, codec ${fin.codec}, ` +
+        `${fin.levels} levels, decode ${fin.decodeMs.toFixed(1)} ms`);
+} catch (e) {
+    check('browser session', false, String(e && e.stack || e));
+} finally {
+    if (context) await context.close().catch(() => {});
+    rmSync(userDataDir, { recursive: true, force: true });
+}
+console.log(`${passed} passed, ${failed} failed`);
+process.exit(failed === 0 && passed > 0 ? 0 : 1);

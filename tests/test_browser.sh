@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# test_browser.sh - the web viewer (clients/web/) end to end.
+#
+#  1. Protocol cross-check: builds tests/browser/gen_vectors.c against the
+#     current $BUILD/libocean_proto.a and runs tests/browser/protocol.test.mjs
+#     (node --test): the viewer's JavaScript decoder/encoders and tile codecs
+#     against the C ones, byte for byte, including hostile input, plus the
+#     protocol's own vectors in tests/vectors/.
+#  2. Real browser: starts $BUILD/oceand on a free loopback port with
+#     config/oceand.conf and runs tests/browser/viewer.test.mjs: headless
+#     Chromium (/usr/bin/chromium, software GL) driven by playwright-core
+#     loads the page from the daemon, checks frames, pixels, overlay and two
+#     viewers at once.  Screenshots: $BUILD/test-artifacts/viewer*.png.
+# The daemon is stopped on exit, whatever happens (trap).
+#   usage: BUILD=build bash tests/test_browser.sh
+set -uo pipefail
+cd "$(dirname "$0")/.."
+BUILD=${BUILD:-build}
+ART="$BUILD/test-artifacts"
+WORK="$BUILD/browser-test"
+mkdir -p "$ART" "$WORK"
+daemon_pid=""
+cleanup() {
+    if [[ -n "$daemon_pid" ]] && kill -0 "$daemon_pid" 2>/dev/null; then
+        kill -TERM "$daemon_pid" 2>/dev/null
+        for _ in $(seq 50); do kill -0 "$daemon_pid" 2>/dev/null || break; sleep 0.1; done
+        kill -KILL "$daemon_pid" 2>/dev/null
+        wait "$daemon_pid" 2>/dev/null
+    fi
+}
+trap cleanup EXIT INT TERM
+
+die() { echo "test_browser: $*" >&2; exit 1; }
+
+command -v node >/dev/null || die "node not found (apt-get install nodejs; .ci/deps.sh does it)"
+[[ -x "${CHROMIUM:-/usr/bin/chromium}" ]] || die "${CHROMIUM:-/usr/bin/chromium} not found (apt-get install chromium)"
+if [[ ! -d clients/web/node_modules/playwright-core ]]; then
+    echo "test_browser: installing the test's npm dev dependencies (npm ci in clients/web)"
+    (cd clients/web && npm ci --no-audit --no-fund --loglevel=error) || die "npm ci failed"
+fi
+[[ -x "$BUILD/oceand" ]] || die "$BUILD/oceand not built"
+[[ -f "$BUILD/libocean_proto.a" && -f "$BUILD/libocean_sim.a" ]] || die "$BUILD/libocean_proto.a / libocean_sim.a not built"
+
+status=0
+
+# ---- 1. protocol cross-check --------------------------------------------
+echo "== protocol: JavaScript decoder vs C (protocol/) =="
+${CC:-cc} -std=c11 -O1 -Wall -Wextra -Werror -Isim -Iprotocol tests/browser/gen_vectors.c \
+    "$BUILD/libocean_proto.a" "$BUILD/libocean_sim.a" -lzstd -lOpenEXRCore-3_1 -lm \
+    -o "$WORK/gen_vectors" || die "cannot build gen_vectors"
+rm -rf "$WORK/vectors" && mkdir -p "$WORK/vectors"
+"$WORK/gen_vectors" gen "$WORK/vectors" || die "gen_vectors gen failed"
+if ! VECTOR_DIR="$WORK/vectors" GEN_VECTORS="$WORK/gen_vectors" PROTO_VECTORS=tests/vectors \
+        node --test --test-reporter=tap tests/browser/protocol.test.mjs; then
+    echo "test_browser: protocol cross-check FAILED"
+    status=1
+fi
+
+# ---- 2. the page in a real browser, served by the daemon -----------------
+echo "== viewer: headless Chromium against oceand =="
+log="$WORK/oceand.log"
+"$BUILD/oceand" --config config/oceand.conf --bind 127.0.0.1 --port 0 >"$log" 2>&1 &
+daemon_pid=$!
+url=""
+for _ in $(seq 100); do
+    url=$(grep -o 'listening on http://[^ ]*' "$log" 2>/dev/null | head -1 | sed 's/^listening on //')
+    [[ -n "$url" ]] && break
+    kill -0 "$daemon_pid" 2>/dev/null || break
+    sleep 0.1
+done
+if [[ -z "$url" ]]; then
+    echo "test_browser: oceand did not start:"; cat "$log"
+    exit 1
+fi
+echo "oceand at $url (pid $daemon_pid)"
+if ! OCEAN_URL="$url" ARTIFACT_DIR="$ART" VIEWER_TIMEOUT_S="${VIEWER_TIMEOUT_S:-90}" \
+        timeout 300 node tests/browser/viewer.test.mjs; then
+    echo "test_browser: viewer test FAILED (daemon log follows)"
+    tail -30 "$log"
+    status=1
+fi
+kill -0 "$daemon_pid" 2>/dev/null || { echo "test_browser: oceand died during the test"; tail -30 "$log"; status=1; }
+exit $status

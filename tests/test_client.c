@@ -1,0 +1,1353 @@
+/*
+ * test_client.c - the C client library (clients/c/): URL parsing, camera
+ * path files, the frame-store format and its byte-for-byte comparison, and
+ * the library's network side against a small in-process fake server built
+ * on libwebsockets (HELLO, FRAMEs with real tile codecs and a mesh, QUERY,
+ * SEA_STATE with a token, ERROR, replay-mode CAMERAs).  When build/oceand
+ * exists, one live round trip against the real daemon on a free loopback
+ * port as well.
+ */
+#include <math.h>
+#include <pthread.h>
+#include <setjmp.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <netinet/in.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+#include <libwebsockets.h>
+
+#include "oc_path.h"
+#include "oc_store.h"
+#include "oceanclient.h"
+#include "proto.h"
+
+/* ================================================================ URLs */
+
+static void url_good(void **state)
+{
+    (void)state;
+    oc_url u;
+    char err[256];
+    assert_int_equal(oc_url_parse("ws://localhost:8080/", &u, err, sizeof err), OCEAN_OK);
+    assert_string_equal(u.host, "localhost");
+    assert_int_equal(u.port, 8080);
+    assert_string_equal(u.path, "/");
+    assert_int_equal(u.tls, 0);
+
+    assert_int_equal(oc_url_parse("ws://127.0.0.1", &u, err, sizeof err), OCEAN_OK);
+    assert_string_equal(u.host, "127.0.0.1");
+    assert_int_equal(u.port, 80);
+    assert_string_equal(u.path, "/");
+
+    assert_int_equal(oc_url_parse("WSS://example.org/ocean?x=1", &u, err, sizeof err), OCEAN_OK);
+    assert_int_equal(u.tls, 1);
+    assert_int_equal(u.port, 443);
+    assert_string_equal(u.path, "/ocean?x=1");
+
+    assert_int_equal(oc_url_parse("ws://[::1]:9001/a/b", &u, err, sizeof err), OCEAN_OK);
+    assert_string_equal(u.host, "::1");
+    assert_int_equal(u.port, 9001);
+    assert_string_equal(u.path, "/a/b");
+
+    assert_int_equal(oc_url_parse("ws://h:65535?q", &u, err, sizeof err), OCEAN_OK);
+    assert_int_equal(u.port, 65535);
+    assert_string_equal(u.path, "/?q");
+}
+
+static void url_bad(void **state)
+{
+    (void)state;
+    struct {
+        const char *url, *needle;
+    } bad[] = {
+        {"http://h:1/", "scheme"},   {"h:1", "scheme"},          {"ws://", "empty host"},
+        {"ws://:80/", "empty host"}, {"ws://h:0/", "outside"},   {"ws://h:65536/", "outside"},
+        {"ws://h:8x/", "number"},    {"ws://h:/", "number"},     {"ws://u@h/", "user"},
+        {"ws://h/a b", "space"},     {"ws://h/#f", "fragment"},  {"ws://[::1/", "']'"},
+        {"ws://h:123456/", "number"}, {"ws://[::1]x/", "after"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        oc_url u;
+        char err[256] = "";
+        ocean_result r = oc_url_parse(bad[i].url, &u, err, sizeof err);
+        if (r != OCEAN_EINVAL || !strstr(err, bad[i].needle)) {
+            print_error("url \"%s\": result %d, message \"%s\" (wanted \"%s\")\n", bad[i].url, r, err,
+                        bad[i].needle);
+            fail();
+        }
+    }
+    char longhost[400] = "ws://";
+    memset(longhost + 5, 'a', 300);
+    longhost[305] = 0;
+    oc_url u;
+    char err[256];
+    assert_int_equal(oc_url_parse(longhost, &u, err, sizeof err), OCEAN_EINVAL);
+    assert_non_null(strstr(err, "host longer"));
+    assert_int_equal(oc_url_parse(NULL, &u, err, sizeof err), OCEAN_EINVAL);
+}
+
+/* ================================================================ paths */
+
+static void path_good(void **state)
+{
+    (void)state;
+    const char *text = "# a comment\n"
+                       "\n"
+                       " t, x ,y,z,vx,vy,vz,yaw,pitch,roll,fov \r\n"
+                       "0,1,2,3,4,5,6,7,8,9,60\n"
+                       "# mid comment\n"
+                       "0.5, -1e3 ,30,1.25e2,0,0,0,-90,-10,0,45.5\r\n"
+                       "0.5,0,0,0,0,0,0,0,0,0,1";   /* equal t allowed, no final newline */
+    oc_path *p = NULL;
+    char err[256] = "";
+    assert_int_equal(oc_path_parse(text, strlen(text), "mem", &p, err, sizeof err), OCEAN_OK);
+    assert_non_null(p);
+    assert_int_equal(p->count, 3);
+    assert_true(p->pts[0].t == 0 && p->pts[0].pos[0] == 1 && p->pts[0].pos[2] == 3 && p->pts[0].fov_deg == 60);
+    assert_true(p->pts[0].vel[1] == 5 && p->pts[0].yaw_deg == 7 && p->pts[0].roll_deg == 9);
+    assert_true(p->pts[1].pos[0] == -1000 && p->pts[1].pos[2] == 125 && p->pts[1].pitch_deg == -10);
+    assert_true(p->pts[1].fov_deg == 45.5);
+    assert_true(p->pts[0].viewport_w == 1280 && p->pts[0].viewport_h == 720);
+
+    /* write -> parse is lossless */
+    char *buf = NULL;
+    size_t blen = 0;
+    FILE *f = open_memstream(&buf, &blen);
+    assert_int_equal(oc_path_write(p, f), OCEAN_OK);
+    fclose(f);
+    oc_path *q = NULL;
+    assert_int_equal(oc_path_parse(buf, blen, "again", &q, err, sizeof err), OCEAN_OK);
+    assert_int_equal(q->count, p->count);
+    assert_memory_equal(q->pts, p->pts, p->count * sizeof *p->pts);
+
+    /* the daemon's recording format, as server/RECORDING.md shows it */
+    const char *rec = "# oceand camera path v1\n# client 7 scene ship-bridge mode live\n"
+                      "t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h\n"
+                      "12.033333333333333,0,25,0,8,0,0,0,-5,0,60,1280,720\n"
+                      "12.066666666666666,0.266667,25,0,8,0,0,0,-5,0,60,640,480\n";
+    oc_path *r = NULL;
+    assert_int_equal(oc_path_parse(rec, strlen(rec), "rec", &r, err, sizeof err), OCEAN_OK);
+    assert_int_equal(r->count, 2);
+    assert_true(r->pts[0].t == 12.033333333333333 && r->pts[1].pos[0] == 0.266667);
+    proto_camera cam;
+    oc_path_camera(&r->pts[1], &cam);
+    assert_true(cam.pos[0] == 0.266667 && cam.render_time == 12.066666666666666 && cam.viewport_w == 640);
+    assert_true(cam.viewport_h == 480 && cam.vel[0] == 8.0f && cam.pitch_deg == -5.0f);
+    oc_path_destroy(r);
+    oc_path_camera(&p->pts[1], &cam);
+    assert_true(cam.pos[0] == -1000 && cam.render_time == 0.5 && cam.viewport_w == 1280);
+    assert_true(cam.fov_y_deg == 45.5f);
+    free(buf);
+    oc_path_destroy(q);
+    oc_path_destroy(p);
+    oc_path_destroy(NULL);
+}
+
+static void path_bad(void **state)
+{
+    (void)state;
+    const char *H = "t,x,y,z,vx,vy,vz,yaw,pitch,roll,fov\n";
+    struct {
+        const char *body, *needle;
+        int with_header;
+    } bad[] = {
+        {"", "no header", 0},
+        {"t,x,y,z\n0,0,0,0\n", "p:1: expected the header", 0},
+        {"# c\nx,t,y,z,vx,vy,vz,yaw,pitch,roll,fov\n", "p:2: expected the header", 0},
+        {"", "no camera reports", 1},
+        {"0,0,0,0,0,0,0,0,0,0\n", "p:2: expected 11 fields as the header says, got 10", 1},
+        {"0,0,0,0,0,0,0,0,0,0,60,1\n", "p:2: expected 11 fields as the header says, got more than 11", 1},
+        {"0,0,0,0,0,0,0,0,0,0,60\n# x\n1,0,abc,0,0,0,0,0,0,0,60\n", "p:4: field y \"abc\" is not a number", 1},
+        {"0,0,,0,0,0,0,0,0,0,60\n", "p:2: field y is empty", 1},
+        {"0,0,0,0,0,0,0,0,0,0,nan\n", "p:2: field fov_y_deg is not a finite", 1},
+        {"0,0,0,0,0,0,0,0,0,0,180\n", "p:2: field fov_y_deg outside", 1},
+        {"0,0,0,0,0,0,0,0,0,0,0\n", "p:2: field fov_y_deg outside", 1},
+        {"0,2e9,0,0,0,0,0,0,0,0,60\n", "p:2: field x beyond", 1},
+        {"0,0,2e6,0,0,0,0,0,0,0,60\n", "p:2: field y beyond", 1},
+        {"0,0,0,0,0,0,0,0,0,0,60\n1,0,0,0,0,0,0,0,0,0,60\n0.5,0,0,0,0,0,0,0,0,0,60\n", "p:4: t 0.5 goes back", 1},
+        {"0,0,0,0,0,0,0,0,0,0,60\n1,0,0,0,0,0,0,0,0,0,inf\n", "p:3: field fov_y_deg is not a finite", 1},
+        {"1e999,0,0,0,0,0,0,0,0,0,60\n", "p:2: field t \"1e999\" is not a number", 1},
+        {"# oceand camera path v2\n" "t,x,y,z,vx,vy,vz,yaw,pitch,roll,fov\n0,0,0,0,0,0,0,0,0,0,60\n", "p:1: camera path format version 2", 0},
+        {"t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w\n", "p:1: expected the header", 0},
+        {"t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h\n0,0,0,0,0,0,0,0,0,0,60,0,720\n", "p:2: field viewport_w must be an integer", 0},
+        {"t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h\n0,0,0,0,0,0,0,0,0,0,60,1.5,720\n", "p:2: field viewport_w must be an integer", 0},
+        {"t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h\n0,0,0,0,0,0,0,0,0,0,60,640\n", "p:2: expected 13 fields", 0},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char text[512];
+        snprintf(text, sizeof text, "%s%s", bad[i].with_header ? H : "", bad[i].body);
+        oc_path *p = (oc_path *)1;
+        char err[256] = "";
+        ocean_result r = oc_path_parse(text, strlen(text), "p", &p, err, sizeof err);
+        if (r == OCEAN_OK || p != NULL || !strstr(err, bad[i].needle)) {
+            print_error("case %zu: result %d, message \"%s\" (wanted \"%s\")\n", i, r, err, bad[i].needle);
+            fail();
+        }
+    }
+    /* the offending text is quoted */
+    const char *t2 = "t,x,y,z,vx,vy,vz,yaw,pitch,roll,fov\n0,0,0,0,0,0,0,0,0,0,999\n";
+    oc_path *p;
+    char err[256];
+    assert_int_not_equal(oc_path_parse(t2, strlen(t2), "f.csv", &p, err, sizeof err), OCEAN_OK);
+    assert_non_null(strstr(err, "\"0,0,0,0,0,0,0,0,0,0,999\""));
+    /* a missing file is reported with its name */
+    assert_int_equal(oc_path_load("/nonexistent/x.csv", &p, err, sizeof err), OCEAN_ENOTFOUND);
+    assert_non_null(strstr(err, "/nonexistent/x.csv"));
+}
+
+/* ========================================================= frame stores */
+
+static char tmpdir[256];
+
+static void make_tmpdir(void)
+{
+    if (tmpdir[0])
+        return;
+    snprintf(tmpdir, sizeof tmpdir, "/tmp/oc_test_client.XXXXXX");
+    assert_non_null(mkdtemp(tmpdir));
+}
+
+static void tmp_path(char *out, size_t n, const char *name)
+{
+    make_tmpdir();
+    snprintf(out, n, "%s/%s", tmpdir, name);
+}
+
+/* Encodes a FRAME with one f32 tile whose samples depend on k. */
+static void make_frame(proto_buf *b, uint32_t seq, double t, float k)
+{
+    float planes[16];
+    for (int i = 0; i < 16; i++)
+        planes[i] = k + 0.25f * (float)i;
+    proto_buf pay;
+    proto_buf_init(&pay, 0);
+    assert_int_equal(proto_tile_encode(PROTO_CODEC_F32, NULL, 4, 4, PROTO_CH_HEIGHT, planes, &pay, NULL,
+                                       NULL, 0),
+                     OCEAN_OK);
+    proto_tile tile = {0};
+    tile.codec = PROTO_CODEC_F32;
+    tile.channels = PROTO_CH_HEIGHT;
+    tile.width = tile.height = 4;
+    tile.spacing = 1.0;
+    tile.payload = proto_buf_data(&pay);
+    tile.payload_len = (uint32_t)proto_buf_len(&pay);
+    proto_msg m;
+    proto_msg_init(&m, PROTO_FRAME);
+    m.hdr.seq = seq;
+    m.hdr.sim_time = t;
+    m.u.frame.cutoff_k = 1.5;
+    m.u.frame.camera_seq = PROTO_NO_CAMERA;
+    m.u.frame.tick = (uint32_t)(t * 10);
+    m.u.frame.tile_count = 1;
+    m.u.frame.tiles = &tile;
+    char err[256];
+    assert_int_equal(proto_encode(b, &m, err, sizeof err), OCEAN_OK);
+    proto_buf_free(&pay);
+}
+
+static void make_hello(proto_buf *b, uint32_t client_id)
+{
+    proto_msg m;
+    proto_msg_init(&m, PROTO_HELLO);
+    m.u.hello.client_id = client_id;
+    m.u.hello.codecs = 1;
+    m.u.hello.mesh_kinds = 1;
+    m.u.hello.effects = 1;
+    m.u.hello.cutoff_policies = 1;
+    m.u.hello.modes = 3;
+    m.u.hello.max_message = 1 << 20;
+    m.u.hello.max_query_points = 100;
+    m.u.hello.max_tile_size = 256;
+    m.u.hello.max_lod_levels = 4;
+    m.u.hello.max_layers = 1;
+    m.u.hello.tick_rate_hz = 30;
+    m.u.hello.max_frame_rate_hz = 60;
+    m.u.hello.sea.depth_m = 1000;
+    m.u.hello.sea.wind_u10 = 10;
+    m.u.hello.sea.fetch_m = 1e5;
+    m.u.hello.sea.choppiness = 1;
+    m.u.hello.sea.phillips_a = 1;
+    snprintf(m.u.hello.server_version, sizeof m.u.hello.server_version, "fake");
+    char err[256];
+    ocean_result r = proto_encode(b, &m, err, sizeof err);
+    if (r != OCEAN_OK)
+        print_error("hello: %s\n", err);
+    assert_int_equal(r, OCEAN_OK);
+}
+
+/* Writes a store: a HELLO with client id `hello_id`, then n frames; frame
+ * `bad_frame` (if >= 0) gets a different value; seq numbers offset by
+ * seq0 (must not matter). */
+static void write_store(const char *path, uint32_t hello_id, int n, int bad_frame, uint32_t seq0)
+{
+    oc_store_writer *w;
+    char err[256];
+    assert_int_equal(oc_store_writer_open(path, &w, err, sizeof err), OCEAN_OK);
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    make_hello(&b, hello_id);
+    assert_int_equal(oc_store_writer_append(w, 0.0, proto_buf_data(&b), proto_buf_len(&b)), OCEAN_OK);
+    for (int i = 0; i < n; i++) {
+        proto_buf_reset(&b);
+        make_frame(&b, seq0 + (uint32_t)i, 0.1 * i, i == bad_frame ? 99.0f : (float)i);
+        assert_int_equal(oc_store_writer_append(w, 0.01 * i + (double)hello_id, proto_buf_data(&b),
+                                                proto_buf_len(&b)),
+                         OCEAN_OK);
+    }
+    assert_int_equal(oc_store_writer_count(w), (uint64_t)n + 1);
+    assert_int_equal(oc_store_writer_close(w), OCEAN_OK);
+    proto_buf_free(&b);
+}
+
+static void store_round_trip(void **state)
+{
+    (void)state;
+    char path[300];
+    tmp_path(path, sizeof path, "rt.frames");
+    oc_store_writer *w;
+    char err[256];
+    assert_int_equal(oc_store_writer_open(path, &w, err, sizeof err), OCEAN_OK);
+    proto_buf b[3];
+    for (int i = 0; i < 3; i++) {
+        proto_buf_init(&b[i], 0);
+        make_frame(&b[i], (uint32_t)i, 1.0 + i, (float)i);
+        assert_int_equal(oc_store_writer_append(w, 0.5 * i, proto_buf_data(&b[i]), proto_buf_len(&b[i])), OCEAN_OK);
+    }
+    uint8_t tiny[8] = {0};
+    assert_int_equal(oc_store_writer_append(w, 0, tiny, sizeof tiny), OCEAN_EINVAL);
+    assert_int_equal(oc_store_writer_close(w), OCEAN_OK);
+
+    oc_store_reader *r;
+    assert_int_equal(oc_store_reader_open(path, &r, err, sizeof err), OCEAN_OK);
+    for (int i = 0; i < 3; i++) {
+        const uint8_t *m;
+        size_t len;
+        double t;
+        assert_int_equal(oc_store_reader_next(r, &m, &len, &t, err, sizeof err), OCEAN_OK);
+        assert_int_equal(len, proto_buf_len(&b[i]));
+        assert_memory_equal(m, proto_buf_data(&b[i]), len);
+        assert_true(t == 0.5 * i);
+        proto_msg dm;
+        assert_int_equal(proto_decode(m, len, &dm, err, sizeof err), OCEAN_OK);
+        assert_int_equal(dm.hdr.type, PROTO_FRAME);
+        assert_true(dm.hdr.sim_time == 1.0 + i);
+        proto_msg_free(&dm);
+    }
+    const uint8_t *m;
+    size_t len;
+    assert_int_equal(oc_store_reader_next(r, &m, &len, NULL, err, sizeof err), OCEAN_ENOTFOUND);
+    oc_store_reader_close(r);
+
+    /* truncation inside the last record is reported with its index */
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    assert_int_equal(truncate(path, st.st_size - 3), 0);
+    assert_int_equal(oc_store_reader_open(path, &r, err, sizeof err), OCEAN_OK);
+    for (int i = 0; i < 2; i++)
+        assert_int_equal(oc_store_reader_next(r, &m, &len, NULL, err, sizeof err), OCEAN_OK);
+    assert_int_equal(oc_store_reader_next(r, &m, &len, NULL, err, sizeof err), OCEAN_ETRUNC);
+    assert_non_null(strstr(err, "record 2"));
+    oc_store_reader_close(r);
+
+    /* not a store; wrong version */
+    FILE *f = fopen(path, "wb");
+    fputs("hello, world, this is text", f);
+    fclose(f);
+    assert_int_equal(oc_store_reader_open(path, &r, err, sizeof err), OCEAN_EFORMAT);
+    f = fopen(path, "wb");
+    fwrite("OCFRAMES\x02\0\0\0\0\0\0\0", 1, 16, f);
+    fclose(f);
+    assert_int_equal(oc_store_reader_open(path, &r, err, sizeof err), OCEAN_EVERSION);
+    for (int i = 0; i < 3; i++)
+        proto_buf_free(&b[i]);
+}
+
+static void store_compare(void **state)
+{
+    (void)state;
+    char a[300], b[300], c[300], d[300];
+    tmp_path(a, sizeof a, "a.frames");
+    tmp_path(b, sizeof b, "b.frames");
+    tmp_path(c, sizeof c, "c.frames");
+    tmp_path(d, sizeof d, "d.frames");
+    /* a and b differ only in HELLO client id, receive times and seq: identical */
+    write_store(a, 1, 5, -1, 0);
+    write_store(b, 2, 5, -1, 1000);
+    write_store(c, 1, 5, 3, 0);    /* frame 3 differs */
+    write_store(d, 1, 4, -1, 0);   /* one frame fewer */
+    oc_store_diff diff;
+    char err[256];
+    assert_int_equal(oc_store_compare(a, b, 0, &diff, err, sizeof err), OCEAN_OK);
+    assert_int_equal(diff.identical, 1);
+    assert_int_equal(diff.compared, 5);
+    assert_int_equal(diff.first_index, -1);
+
+    assert_int_equal(oc_store_compare(a, c, 0, &diff, err, sizeof err), OCEAN_OK);
+    assert_int_equal(diff.identical, 0);
+    assert_int_equal(diff.first_index, 3);
+    assert_true(diff.first_offset > 32 + 56);
+    assert_non_null(strstr(diff.what, "FRAME tile or mesh records"));
+
+    assert_int_equal(oc_store_compare(a, d, 0, &diff, err, sizeof err), OCEAN_OK);
+    assert_int_equal(diff.identical, 0);
+    assert_int_equal(diff.count_a, 5);
+    assert_int_equal(diff.count_b, 4);
+
+    /* comparing HELLOs too sees the client id */
+    assert_int_equal(oc_store_compare(a, b, OC_STORE_TYPE_BIT(PROTO_HELLO), &diff, err, sizeof err), OCEAN_OK);
+    assert_int_equal(diff.identical, 0);
+    assert_int_equal(diff.first_index, 0);
+
+    /* a missing file is an error, not a verdict */
+    assert_int_equal(oc_store_compare(a, "/nonexistent.frames", 0, &diff, err, sizeof err), OCEAN_ENOTFOUND);
+}
+
+/* ====================================================== the fake server */
+
+typedef struct fake_conn {
+    struct fake_conn *next;
+    struct lws *wsi;
+    proto_buf out[64];
+    int out_head, out_len;
+    uint32_t seq;
+    int subscribed, replay, sent_topology;
+    uint32_t tick;
+    uint8_t *rx;
+    size_t rx_len;
+} fake_conn;
+
+typedef struct fake_server {
+    struct lws_context *ctx;
+    pthread_t thread;
+    volatile int stop;
+    int port;
+    fake_conn *conns;     /* service thread only */
+    lws_sorted_usec_list_t sul;
+    double t;             /* live sim time */
+    int frames_per_tick;
+    proto_sea sea;
+    int connections_seen;
+} fake_server;
+
+static void fake_queue(fake_conn *fc, proto_msg *m)
+{
+    if (fc->out_len == 64)
+        return;
+    proto_buf *b = &fc->out[(fc->out_head + fc->out_len) % 64];
+    proto_buf_init(b, LWS_PRE);
+    m->hdr.seq = fc->seq++;
+    char err[256];
+    if (proto_encode(b, m, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "fake server encode: %s\n", err);
+        proto_buf_free(b);
+        return;
+    }
+    fc->out_len++;
+    lws_callback_on_writable(fc->wsi);
+}
+
+/* Queues arbitrary bytes as one message (for hostile-server tests). */
+static void fake_queue_raw(fake_conn *fc, const void *bytes, size_t len)
+{
+    if (fc->out_len == 64)
+        return;
+    proto_buf *b = &fc->out[(fc->out_head + fc->out_len) % 64];
+    proto_buf_init(b, LWS_PRE);
+    if (proto_buf_append(b, bytes, len) != OCEAN_OK) {
+        proto_buf_free(b);
+        return;
+    }
+    fc->out_len++;
+    lws_callback_on_writable(fc->wsi);
+}
+
+/* A frame at time t: a 16x16 qz tile and an 8x8 f32 tile with height
+ * sin(x + t), and a 4-vertex mesh (topology sent first). */
+static void fake_frame(fake_server *s, fake_conn *fc, double t, uint32_t camera_seq)
+{
+    if (!fc->sent_topology) {
+        static const uint32_t idx[6] = {0, 1, 2, 2, 1, 3};
+        static const float morph[4] = {0, 0, 0.5f, 1};
+        static const uint8_t lev[4] = {0, 0, 0, 0};
+        proto_msg m;
+        proto_msg_init(&m, PROTO_MESH_TOPOLOGY);
+        m.hdr.sim_time = t;
+        m.u.topology.mesh_id = 7;
+        m.u.topology.mesh_kind = PROTO_MESH_CONCENTRIC;
+        m.u.topology.lod_levels = 1;
+        m.u.topology.vertex_count = 4;
+        m.u.topology.index_count = 6;
+        m.u.topology.indices = idx;
+        m.u.topology.morph = morph;
+        m.u.topology.level = lev;
+        fake_queue(fc, &m);
+        fc->sent_topology = 1;
+    }
+    float h16[16 * 16], h8[8 * 8];
+    for (int i = 0; i < 16 * 16; i++)
+        h16[i] = (float)sin(0.3 * (i % 16) + t);
+    for (int i = 0; i < 8 * 8; i++)
+        h8[i] = (float)sin(0.5 * (i % 8) + t);
+    proto_buf p16, p8;
+    proto_buf_init(&p16, 0);
+    proto_buf_init(&p8, 0);
+    proto_codec_params cp;
+    proto_codec_params_default(&cp);
+    double e16 = 0;
+    proto_tile_encode(PROTO_CODEC_QZ, &cp, 16, 16, PROTO_CH_HEIGHT, h16, &p16, &e16, NULL, 0);
+    proto_tile_encode(PROTO_CODEC_F32, &cp, 8, 8, PROTO_CH_HEIGHT, h8, &p8, NULL, NULL, 0);
+    proto_tile tiles[2];
+    memset(tiles, 0, sizeof tiles);
+    tiles[0].codec = PROTO_CODEC_QZ;
+    tiles[0].channels = PROTO_CH_HEIGHT;
+    tiles[0].width = tiles[0].height = 16;
+    tiles[0].spacing = 2;
+    tiles[0].error_bound = (float)e16;
+    tiles[0].payload = proto_buf_data(&p16);
+    tiles[0].payload_len = (uint32_t)proto_buf_len(&p16);
+    tiles[1].codec = PROTO_CODEC_F32;
+    tiles[1].channels = PROTO_CH_HEIGHT;
+    tiles[1].level = 1;
+    tiles[1].width = tiles[1].height = 8;
+    tiles[1].spacing = 4;
+    tiles[1].payload = proto_buf_data(&p8);
+    tiles[1].payload_len = (uint32_t)proto_buf_len(&p8);
+    float pos[12] = {0, (float)t, 0, 1, 0, 0, 0, 0, 1, 1, 0, 1};
+    proto_msg m;
+    proto_msg_init(&m, PROTO_FRAME);
+    m.hdr.sim_time = t;
+    m.u.frame.cutoff_k = INFINITY;
+    m.u.frame.e_error = 0.01;
+    m.u.frame.camera_seq = camera_seq;
+    m.u.frame.tick = fc->tick++;
+    m.u.frame.tile_count = 2;
+    m.u.frame.tiles = tiles;
+    m.u.frame.has_mesh = 1;
+    m.u.frame.mesh.mesh_id = 7;
+    m.u.frame.mesh.vertex_count = 4;
+    m.u.frame.mesh.positions = pos;
+    fake_queue(fc, &m);
+    proto_buf_free(&p16);
+    proto_buf_free(&p8);
+    (void)s;
+}
+
+static void fake_error(fake_conn *fc, const proto_header *h, ocean_result code, const char *text)
+{
+    proto_msg m;
+    proto_msg_init(&m, PROTO_ERROR);
+    m.u.error.code = (uint16_t)code;
+    m.u.error.offending_type = h->type;
+    m.u.error.offending_seq = h->seq;
+    snprintf(m.u.error.message, sizeof m.u.error.message, "%s", text);
+    fake_queue(fc, &m);
+}
+
+static void fake_handle(fake_server *s, fake_conn *fc, const uint8_t *buf, size_t len)
+{
+    proto_msg m;
+    char err[256];
+    if (proto_decode(buf, len, &m, err, sizeof err) != OCEAN_OK) {
+        fake_error(fc, &m.hdr, OCEAN_EFORMAT, err);
+        return;
+    }
+    switch (m.hdr.type) {
+    case PROTO_SUBSCRIBE:
+        fc->subscribed = 1;
+        fc->replay = m.u.subscribe.mode == PROTO_MODE_REPLAY;
+        break;
+    case PROTO_CAMERA:
+        if (fc->replay)
+            fake_frame(s, fc, m.u.camera.render_time, m.hdr.seq);
+        break;
+    case PROTO_QUERY: {
+        if (m.u.query.points[0] == 666) {
+            /* hostile: a message with a bad magic, then one lying about its
+             * length, then a valid answer */
+            uint8_t junk[64];
+            memset(junk, 0xAB, sizeof junk);
+            fake_queue_raw(fc, junk, sizeof junk);
+            proto_msg e;
+            proto_msg_init(&e, PROTO_BYE);
+            proto_buf eb;
+            proto_buf_init(&eb, 0);
+            if (proto_encode(&eb, &e, err, sizeof err) == OCEAN_OK) {
+                proto_st32(proto_buf_data(&eb) + 12, 1000);   /* length lies */
+                fake_queue_raw(fc, proto_buf_data(&eb), proto_buf_len(&eb));
+            }
+            proto_buf_free(&eb);
+        }
+        if (m.u.query.count > 100) {
+            fake_error(fc, &m.hdr, OCEAN_ETOOBIG, "too many points");
+            break;
+        }
+        proto_query_sample smp[100];
+        memset(smp, 0, sizeof smp);
+        for (uint32_t i = 0; i < m.u.query.count; i++) {
+            smp[i].height = (float)(m.u.query.points[2 * i] + 0.5 * m.u.query.points[2 * i + 1]);
+            smp[i].normal[1] = 1;
+            smp[i].error_bound = 0.001f;
+        }
+        proto_msg r;
+        proto_msg_init(&r, PROTO_QUERY_RESULT);
+        r.hdr.sim_time = s->t;
+        r.u.result.query_id = m.u.query.query_id;
+        r.u.result.count = m.u.query.count;
+        r.u.result.t = m.u.query.at_time ? m.u.query.t : s->t;
+        r.u.result.samples = smp;
+        fake_queue(fc, &r);
+        break;
+    }
+    case PROTO_SEA_STATE:
+        if (strcmp(m.u.sea_state.token, "secret") != 0) {
+            fake_error(fc, &m.hdr, OCEAN_EAUTH, "bad admin token");
+            break;
+        }
+        s->sea = m.u.sea_state.sea;
+        for (fake_conn *k = s->conns; k; k = k->next) {
+            proto_msg a;
+            proto_msg_init(&a, PROTO_SEA_STATE);
+            a.u.sea_state.op = PROTO_SEA_ANNOUNCE;
+            a.u.sea_state.effective_time = m.u.sea_state.effective_time;
+            a.u.sea_state.sea = s->sea;
+            fake_queue(k, &a);
+        }
+        break;
+    default:
+        break;
+    }
+    proto_msg_free(&m);
+}
+
+static void fake_tick(lws_sorted_usec_list_t *sul)
+{
+    fake_server *s = lws_container_of(sul, fake_server, sul);
+    s->t += 0.02;
+    for (fake_conn *k = s->conns; k; k = k->next)
+        if (k->subscribed && !k->replay)
+            fake_frame(s, k, s->t, PROTO_NO_CAMERA);
+    lws_sul_schedule(s->ctx, 0, &s->sul, fake_tick, 20 * LWS_US_PER_MS);
+}
+
+static int fake_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in, size_t len)
+{
+    struct lws_context *ctx = lws_get_context(wsi);
+    fake_server *s = ctx ? lws_context_user(ctx) : NULL;
+    fake_conn *fc = user;
+    switch (reason) {
+    case LWS_CALLBACK_ESTABLISHED: {
+        memset(fc, 0, sizeof *fc);
+        fc->wsi = wsi;
+        fc->next = s->conns;
+        s->conns = fc;
+        s->connections_seen++;
+        proto_msg m;
+        proto_msg_init(&m, PROTO_HELLO);
+        m.hdr.sim_time = s->t;
+        m.u.hello.codecs = (1u << PROTO_CODEC_COUNT_) - 1;
+        m.u.hello.mesh_kinds = 1;
+        m.u.hello.effects = PROTO_FX_ALL;
+        m.u.hello.cutoff_policies = 7;
+        m.u.hello.modes = 3;
+        m.u.hello.max_message = 1 << 20;
+        m.u.hello.max_query_points = 100;
+        m.u.hello.max_tile_size = 256;
+        m.u.hello.max_lod_levels = 8;
+        m.u.hello.max_layers = 1;
+        m.u.hello.tick_rate_hz = 50;
+        m.u.hello.max_frame_rate_hz = 60;
+        m.u.hello.client_id = (uint32_t)s->connections_seen;
+        m.u.hello.sea = s->sea;
+        snprintf(m.u.hello.server_version, sizeof m.u.hello.server_version, "fake-1");
+        fake_queue(fc, &m);
+        break;
+    }
+    case LWS_CALLBACK_RECEIVE: {
+        uint8_t *nb = realloc(fc->rx, fc->rx_len + len);
+        if (!nb)
+            return -1;
+        fc->rx = nb;
+        memcpy(fc->rx + fc->rx_len, in, len);
+        fc->rx_len += len;
+        if (lws_is_final_fragment(wsi) && !lws_remaining_packet_payload(wsi)) {
+            fake_handle(s, fc, fc->rx, fc->rx_len);
+            fc->rx_len = 0;
+        }
+        break;
+    }
+    case LWS_CALLBACK_SERVER_WRITEABLE:
+        if (fc->out_len) {
+            proto_buf *b = &fc->out[fc->out_head];
+            int n = lws_write(wsi, proto_buf_data(b), proto_buf_len(b), LWS_WRITE_BINARY);
+            proto_buf_free(b);
+            fc->out_head = (fc->out_head + 1) % 64;
+            fc->out_len--;
+            if (n < 0)
+                return -1;
+            if (fc->out_len)
+                lws_callback_on_writable(wsi);
+        }
+        break;
+    case LWS_CALLBACK_CLOSED:
+        for (fake_conn **pp = &s->conns; *pp; pp = &(*pp)->next)
+            if (*pp == fc) {
+                *pp = fc->next;
+                break;
+            }
+        while (fc->out_len) {
+            proto_buf_free(&fc->out[fc->out_head]);
+            fc->out_head = (fc->out_head + 1) % 64;
+            fc->out_len--;
+        }
+        free(fc->rx);
+        fc->rx = NULL;
+        break;
+    default:
+        break;
+    }
+    return 0;
+}
+
+static const struct lws_protocols fake_protocols[] = {
+    {"http-only", lws_callback_http_dummy, 0, 0, 0, NULL, 0},
+    {PROTO_SUBPROTOCOL, fake_cb, sizeof(fake_conn), 65536, 0, NULL, 0},
+    {NULL, NULL, 0, 0, 0, NULL, 0}
+};
+
+static void *fake_thread(void *arg)
+{
+    fake_server *s = arg;
+    while (!s->stop)
+        lws_service(s->ctx, 0);
+    return NULL;
+}
+
+static void fake_stop_cb(lws_sorted_usec_list_t *sul) { (void)sul; }
+
+static fake_server *fake_start(void)
+{
+    fake_server *s = calloc(1, sizeof *s);
+    assert_non_null(s);
+    s->sea.depth_m = 1000;
+    s->sea.wind_u10 = 10;
+    s->sea.fetch_m = 1e5;
+    s->sea.phillips_a = 1;
+    s->sea.choppiness = 1;
+    s->sea.seed = 1;
+    s->t = 100.0;
+    struct lws_context_creation_info info;
+    memset(&info, 0, sizeof info);
+    info.port = 0;
+    info.iface = "127.0.0.1";
+    info.protocols = fake_protocols;
+    info.gid = -1;
+    info.uid = -1;
+    info.user = s;
+    lws_set_log_level(LLL_ERR, NULL);
+    s->ctx = lws_create_context(&info);
+    assert_non_null(s->ctx);
+    s->port = lws_get_vhost_listen_port(lws_get_vhost_by_name(s->ctx, "default"));
+    assert_true(s->port > 0);
+    lws_sul_schedule(s->ctx, 0, &s->sul, fake_tick, 20 * LWS_US_PER_MS);
+    assert_int_equal(pthread_create(&s->thread, NULL, fake_thread, s), 0);
+    return s;
+}
+
+static void fake_stop(fake_server *s)
+{
+    s->stop = 1;
+    lws_sorted_usec_list_t wake;
+    memset(&wake, 0, sizeof wake);
+    (void)fake_stop_cb;
+    lws_cancel_service(s->ctx);
+    pthread_join(s->thread, NULL);
+    lws_context_destroy(s->ctx);
+    free(s);
+}
+
+static void fake_url(fake_server *s, char *out, size_t n) { snprintf(out, n, "ws://127.0.0.1:%d/", s->port); }
+
+/* ============================================================ net tests */
+
+static void connect_refused(void **state)
+{
+    (void)state;
+    /* a port nobody listens on: bind, learn, close */
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in a = {0};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    assert_int_equal(bind(fd, (struct sockaddr *)&a, sizeof a), 0);
+    socklen_t al = sizeof a;
+    getsockname(fd, (struct sockaddr *)&a, &al);
+    int port = ntohs(a.sin_port);
+    close(fd);
+    char url[64];
+    snprintf(url, sizeof url, "ws://127.0.0.1:%d/", port);
+    oc_options o;
+    oc_options_default(&o);
+    o.url = url;
+    oc_client *c = (oc_client *)1;
+    char err[256] = "";
+    ocean_result r = oc_connect(&o, 3000, &c, err, sizeof err);
+    assert_int_equal(r, OCEAN_EIO);
+    assert_null(c);
+    assert_true(strlen(err) > 0);
+
+    o.url = "http://x/";
+    assert_int_equal(oc_connect(&o, 100, &c, err, sizeof err), OCEAN_EINVAL);
+    assert_non_null(strstr(err, "scheme"));
+}
+
+static void live_frames_and_queries(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    char url[64];
+    fake_url(s, url, sizeof url);
+    oc_options o;
+    oc_options_default(&o);
+    o.url = url;
+    oc_client *c = NULL;
+    char err[256] = "";
+    ocean_result r = oc_connect(&o, 5000, &c, err, sizeof err);
+    if (r != OCEAN_OK)
+        print_error("connect: %s\n", err);
+    assert_int_equal(r, OCEAN_OK);
+    assert_int_equal(oc_client_state(c), OC_READY);
+    proto_hello h;
+    assert_int_equal(oc_client_hello(c, &h), OCEAN_OK);
+    assert_string_equal(h.server_version, "fake-1");
+    assert_true(h.tick_rate_hz == 50);
+
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    sub.frame_rate_hz = 50;
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
+
+    for (int i = 0; i < 5; i++) {
+        oc_frame *f = NULL;
+        r = oc_client_next_frame(c, 3000, &f);
+        if (r != OCEAN_OK) {
+            oc_client_last_error(c, err, sizeof err);
+            oc_client_stats st;
+            oc_client_get_stats(c, &st);
+            print_error("next_frame: %s: %s (rx %llu frames %llu dec err %llu)\n", ocean_strerror(r), err,
+                        (unsigned long long)st.messages_rx, (unsigned long long)st.frames_rx,
+                        (unsigned long long)st.decode_errors);
+        }
+        assert_int_equal(r, OCEAN_OK);
+        assert_non_null(f);
+        assert_int_equal(f->info.tile_count, 2);
+        assert_non_null(f->tiles[0].data);
+        assert_non_null(f->tiles[1].data);
+        double t = f->hdr.sim_time;
+        /* f32 tile is exact, qz within its bound */
+        for (int k = 0; k < 64; k++)
+            assert_true(f->tiles[1].data[k] == (float)sin(0.5 * (k % 8) + t));
+        for (int k = 0; k < 256; k++)
+            assert_true(fabs(f->tiles[0].data[k] - (float)sin(0.3 * (k % 16) + t)) <=
+                        f->tiles[0].info.error_bound * 1.0001 + 1e-6);
+        assert_int_equal(f->info.has_mesh, 1);
+        assert_non_null(f->topology);
+        assert_int_equal(f->topology->index_count, 6);
+        assert_true(f->info.mesh.positions[1] == (float)t);
+        assert_true(f->raw_len > 32);
+        assert_true(f->latency_ms >= 0 && f->latency_ms < 5000);
+        oc_frame_free(f);
+    }
+
+    double xz[6] = {1, 2, 3, 4, -5, 10};
+    oc_query_result q;
+    r = oc_client_query(c, xz, 3, 1, 123.5, 3000, &q);
+    assert_int_equal(r, OCEAN_OK);
+    assert_int_equal(q.count, 3);
+    assert_true(q.t == 123.5);
+    assert_true(q.samples[0].height == 2.0f && q.samples[1].height == 5.0f && q.samples[2].height == 0.0f);
+    oc_query_result_free(&q);
+
+    /* the server refuses 101 points: its ERROR code comes back */
+    double many[2 * 101];
+    for (int i = 0; i < 202; i++)
+        many[i] = i;
+    r = oc_client_query(c, many, 101, 0, 0, 3000, &q);
+    assert_int_equal(r, OCEAN_EINVAL);   /* refused locally: HELLO says 100 */
+    assert_int_equal(oc_client_query(c, xz, 0, 0, 0, 100, &q), OCEAN_EINVAL);
+    xz[1] = NAN;
+    assert_int_equal(oc_client_query(c, xz, 3, 0, 0, 100, &q), OCEAN_EINVAL);
+
+    /* sea state: wrong token -> EAUTH with the server's text; right -> announced */
+    proto_sea sea;
+    double et;
+    assert_int_equal(oc_client_sea_state(c, &sea, &et), OCEAN_OK);
+    assert_true(sea.wind_u10 == 10);
+    sea.wind_u10 = 17;
+    assert_int_equal(oc_client_sea_state_set(c, &sea, 200.0, "wrong", 3000), OCEAN_EAUTH);
+    char msg[512];
+    assert_int_equal(oc_client_last_error(c, msg, sizeof msg), OCEAN_EAUTH);
+    assert_non_null(strstr(msg, "bad admin token"));
+    assert_int_equal(oc_client_sea_state_set(c, &sea, 200.0, "secret", 3000), OCEAN_OK);
+    assert_int_equal(oc_client_sea_state(c, &sea, &et), OCEAN_OK);
+    assert_true(sea.wind_u10 == 17 && et == 200.0);
+
+    oc_client_stats st;
+    oc_client_get_stats(c, &st);
+    assert_true(st.frames_rx >= 5);
+    assert_int_equal(st.errors_rx, 1);
+    assert_int_equal(st.decode_errors, 0);
+    oc_client_destroy(c);
+    fake_stop(s);
+}
+
+typedef struct async_ctx {
+    int answered;
+    ocean_result res;
+    float h0;
+    int frames;
+} async_ctx;
+
+static void on_answer(void *user, oc_client *c, ocean_result res, const oc_query_result *r)
+{
+    (void)c;
+    async_ctx *a = user;
+    a->res = res;
+    if (r && r->count)
+        a->h0 = r->samples[0].height;
+    __atomic_store_n(&a->answered, 1, __ATOMIC_SEQ_CST);
+}
+
+static void on_frame_cb(void *user, oc_client *c, const oc_frame *f)
+{
+    (void)c;
+    (void)f;
+    async_ctx *a = user;
+    __atomic_add_fetch(&a->frames, 1, __ATOMIC_SEQ_CST);
+}
+
+/* A shared loop on a library thread with several clients, callbacks, and
+ * an async query. */
+static void threaded_shared_loop(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    char url[64];
+    fake_url(s, url, sizeof url);
+    oc_loop *l;
+    char err[256];
+    assert_int_equal(oc_loop_create(&l, err, sizeof err), OCEAN_OK);
+    assert_int_equal(oc_loop_start(l), OCEAN_OK);
+    assert_int_equal(oc_loop_service(l, 10), OCEAN_ESTATE);
+    enum { N = 4 };
+    oc_client *cs[N];
+    async_ctx ac[N];
+    memset(ac, 0, sizeof ac);
+    for (int i = 0; i < N; i++) {
+        oc_options o;
+        oc_options_default(&o);
+        o.url = url;
+        o.loop = l;
+        o.decode_tiles = 0;
+        o.cb.user = &ac[i];
+        o.cb.on_frame = on_frame_cb;
+        assert_int_equal(oc_connect(&o, 5000, &cs[i], err, sizeof err), OCEAN_OK);
+        proto_subscribe sub;
+        oc_subscribe_default(&sub);
+        assert_int_equal(oc_client_subscribe(cs[i], &sub), OCEAN_OK);
+    }
+    double xz[2] = {4, 2};
+    for (int i = 0; i < N; i++)
+        assert_int_equal(oc_client_query_async(cs[i], xz, 1, 0, 0, on_answer, &ac[i], NULL), OCEAN_OK);
+    struct timespec ts = {0, 20 * 1000 * 1000};
+    for (int w = 0; w < 250; w++) {
+        int done = 1;
+        for (int i = 0; i < N; i++)
+            if (!__atomic_load_n(&ac[i].answered, __ATOMIC_SEQ_CST) || __atomic_load_n(&ac[i].frames, __ATOMIC_SEQ_CST) < 3)
+                done = 0;
+        if (done)
+            break;
+        nanosleep(&ts, NULL);
+    }
+    for (int i = 0; i < N; i++) {
+        assert_int_equal(ac[i].answered, 1);
+        assert_int_equal(ac[i].res, OCEAN_OK);
+        assert_true(ac[i].h0 == 5.0f);
+        assert_true(ac[i].frames >= 3);
+    }
+    /* destroy one, the others keep receiving */
+    oc_client_destroy(cs[0]);
+    int before = __atomic_load_n(&ac[1].frames, __ATOMIC_SEQ_CST);
+    for (int w = 0; w < 100 && __atomic_load_n(&ac[1].frames, __ATOMIC_SEQ_CST) < before + 3; w++)
+        nanosleep(&ts, NULL);
+    assert_true(__atomic_load_n(&ac[1].frames, __ATOMIC_SEQ_CST) >= before + 3);
+    for (int i = 1; i < N; i++)
+        oc_client_destroy(cs[i]);
+    oc_loop_destroy(l);
+    fake_stop(s);
+}
+
+/* Replay mode: each CAMERA gets the frame for its render time, twice the
+ * same bytes. */
+static void replay_same_bytes(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    char url[64];
+    fake_url(s, url, sizeof url);
+    uint8_t *runs[2][3];
+    size_t lens[2][3];
+    for (int run = 0; run < 2; run++) {
+        oc_options o;
+        oc_options_default(&o);
+        o.url = url;
+        oc_client *c;
+        char err[256];
+        assert_int_equal(oc_connect(&o, 5000, &c, err, sizeof err), OCEAN_OK);
+        proto_subscribe sub;
+        oc_subscribe_default(&sub);
+        sub.mode = PROTO_MODE_REPLAY;
+        assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+        for (int k = 0; k < 3; k++) {
+            proto_camera cam;
+            oc_camera_default(&cam);
+            cam.render_time = 10.0 + k;
+            uint32_t seq;
+            assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+            oc_frame *f;
+            assert_int_equal(oc_client_next_frame(c, 3000, &f), OCEAN_OK);
+            assert_int_equal(f->info.camera_seq, seq);
+            assert_true(f->hdr.sim_time == 10.0 + k);
+            assert_true(f->camera_rtt_ms >= 0);
+            runs[run][k] = malloc(f->raw_len);
+            memcpy(runs[run][k], f->raw, f->raw_len);
+            lens[run][k] = f->raw_len;
+            oc_frame_free(f);
+        }
+        oc_client_destroy(c);
+    }
+    for (int k = 0; k < 3; k++) {
+        assert_int_equal(lens[0][k], lens[1][k]);
+        /* everything but the tick counter, which this fake keeps per connection
+         * and the header seq, which may differ */
+        assert_memory_equal(runs[0][k] + 32, runs[1][k] + 32, lens[0][k] - 32);
+        free(runs[0][k]);
+        free(runs[1][k]);
+    }
+    fake_stop(s);
+}
+
+/* Undecodable and oversized messages from the server are counted and
+ * skipped; the connection and the requests in flight carry on. */
+static void hostile_server_messages(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    char url[64];
+    fake_url(s, url, sizeof url);
+    oc_options o;
+    oc_options_default(&o);
+    o.url = url;
+    o.max_message = 300;    /* the fake's FRAMEs (> 400 bytes) are refused */
+    oc_client *c;
+    char err[256];
+    assert_int_equal(oc_connect(&o, 5000, &c, err, sizeof err), OCEAN_OK);
+    double xz[2] = {666, 1};
+    oc_query_result q;
+    assert_int_equal(oc_client_query(c, xz, 1, 0, 0, 3000, &q), OCEAN_OK);
+    assert_true(q.samples[0].height == 666.5f);
+    oc_query_result_free(&q);
+    oc_client_stats st;
+    oc_client_get_stats(c, &st);
+    assert_int_equal(st.decode_errors, 2);
+    char msg[512];
+    oc_client_last_error(c, msg, sizeof msg);
+    assert_non_null(strstr(msg, "undecodable"));
+    /* frames over max_message are dropped whole, the stream goes on */
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    oc_frame *f = NULL;
+    assert_int_equal(oc_client_next_frame(c, 300, &f), OCEAN_ESTATE);
+    oc_client_get_stats(c, &st);
+    assert_true(st.decode_errors > 2);
+    assert_int_equal(st.frames_rx, 0);
+    assert_int_equal(oc_client_last_error(c, msg, sizeof msg), OCEAN_ETOOBIG);
+    xz[0] = 2;
+    assert_int_equal(oc_client_query(c, xz, 1, 0, 0, 3000, &q), OCEAN_OK);
+    assert_true(q.samples[0].height == 2.5f);
+    oc_query_result_free(&q);
+    assert_int_equal(oc_client_state(c), OC_READY);
+    oc_client_destroy(c);
+    fake_stop(s);
+}
+
+/* header_only: FRAMEs carry their fixed fields and raw bytes, no tiles. */
+static void header_only_frames(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    char url[64];
+    fake_url(s, url, sizeof url);
+    oc_options o;
+    oc_options_default(&o);
+    o.url = url;
+    o.header_only = 1;
+    oc_client *c;
+    char err[256];
+    assert_int_equal(oc_connect(&o, 5000, &c, err, sizeof err), OCEAN_OK);
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    sub.mode = PROTO_MODE_REPLAY;
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.render_time = 42.25;
+    uint32_t seq;
+    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+    oc_frame *f;
+    assert_int_equal(oc_client_next_frame(c, 3000, &f), OCEAN_OK);
+    assert_true(f->hdr.sim_time == 42.25);
+    assert_int_equal(f->info.camera_seq, seq);
+    assert_int_equal(f->info.tile_count, 2);
+    assert_int_equal(f->info.has_mesh, 1);
+    assert_true(isinf(f->info.cutoff_k) && f->info.e_error == 0.01);
+    assert_null(f->tiles);
+    assert_null(f->info.tiles);
+    assert_null(f->topology);
+    assert_true(f->raw_len > 32 + 56);
+    /* the raw bytes are the full message: a full decode of them agrees */
+    proto_msg m;
+    assert_int_equal(proto_decode(f->raw, f->raw_len, &m, err, sizeof err), OCEAN_OK);
+    assert_int_equal(m.u.frame.tick, f->info.tick);
+    assert_int_equal(m.u.frame.tile_count, 2);
+    proto_msg_free(&m);
+    oc_frame_free(f);
+    oc_client_stats st;
+    oc_client_get_stats(c, &st);
+    assert_int_equal(st.decode_errors, 0);
+    oc_client_destroy(c);
+    fake_stop(s);
+}
+
+/* oc_loop_service(timeout) returns within its timeout when nothing
+ * happens, also while connections are idle (a timer ripening just as lws
+ * starts a service pass once left poll() asleep for 30 s). */
+static void service_timeout_is_bounded(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    char url[64];
+    fake_url(s, url, sizeof url);
+    oc_loop *l;
+    char err[256];
+    assert_int_equal(oc_loop_create(&l, err, sizeof err), OCEAN_OK);
+    oc_options o;
+    oc_options_default(&o);
+    o.url = url;
+    o.loop = l;
+    oc_client *c[3];
+    for (int i = 0; i < 3; i++)
+        assert_int_equal(oc_connect(&o, 5000, &c[i], err, sizeof err), OCEAN_OK);
+    double worst = 0;
+    for (int i = 0; i < 300; i++) {
+        struct timespec a, b;
+        clock_gettime(CLOCK_MONOTONIC, &a);
+        assert_int_equal(oc_loop_service(l, 1 + i % 7), OCEAN_OK);
+        clock_gettime(CLOCK_MONOTONIC, &b);
+        double ms = (b.tv_sec - a.tv_sec) * 1e3 + (b.tv_nsec - a.tv_nsec) * 1e-6;
+        if (ms > worst)
+            worst = ms;
+    }
+    /* generous for a loaded machine; the failure was 30 000 ms */
+    if (worst > 1000) {
+        print_error("oc_loop_service(<= 7 ms) took %.1f ms\n", worst);
+        fail();
+    }
+    for (int i = 0; i < 3; i++)
+        oc_client_destroy(c[i]);
+    oc_loop_destroy(l);
+    fake_stop(s);
+}
+
+/* Many connect/disconnect cycles on one shared, caller-driven loop. */
+static void connect_cycles(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    char url[64];
+    fake_url(s, url, sizeof url);
+    oc_loop *l;
+    char err[256];
+    assert_int_equal(oc_loop_create(&l, err, sizeof err), OCEAN_OK);
+    int n = getenv("OCEAN_TEST_SANITIZED") ? 10 : 30;
+    for (int i = 0; i < n; i++) {
+        oc_options o;
+        oc_options_default(&o);
+        o.url = url;
+        o.loop = l;
+        oc_client *c;
+        assert_int_equal(oc_connect(&o, 5000, &c, err, sizeof err), OCEAN_OK);
+        if (i % 2) {
+            proto_subscribe sub;
+            oc_subscribe_default(&sub);
+            oc_client_subscribe(c, &sub);
+            oc_frame *f;
+            assert_int_equal(oc_client_next_frame(c, 3000, &f), OCEAN_OK);
+            oc_frame_free(f);
+        }
+        oc_client_destroy(c);
+    }
+    oc_loop_destroy(l);
+    fake_stop(s);
+}
+
+/* ====================================================== the real daemon */
+
+static int free_port(void)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in a = {0};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (bind(fd, (struct sockaddr *)&a, sizeof a) != 0) {
+        close(fd);
+        return -1;
+    }
+    socklen_t al = sizeof a;
+    getsockname(fd, (struct sockaddr *)&a, &al);
+    close(fd);
+    return ntohs(a.sin_port);
+}
+
+static void daemon_round_trip(void **state)
+{
+    (void)state;
+    const char *bin = getenv("OCEAND_BIN");
+    char path[512];
+    if (!bin) {
+        const char *build = getenv("BUILD");
+        snprintf(path, sizeof path, "%s/oceand", build ? build : "build");
+        bin = path;
+    }
+    if (access(bin, X_OK) != 0 || access("config/oceand.conf", R_OK) != 0) {
+        print_message("(%s not built: live daemon round trip skipped)\n", bin);
+        skip();
+    }
+    int port = free_port();
+    assert_true(port > 0);
+    char ports[16];
+    snprintf(ports, sizeof ports, "%d", port);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        freopen("/dev/null", "w", stdout);
+        execl(bin, bin, "--config", "config/oceand.conf", "--port", ports, (char *)NULL);
+        _exit(127);
+    }
+    char url[64];
+    snprintf(url, sizeof url, "ws://127.0.0.1:%d/", port);
+    oc_options o;
+    oc_options_default(&o);
+    o.url = url;
+    oc_client *c = NULL;
+    char err[256] = "";
+    ocean_result r = OCEAN_EIO;
+    for (int i = 0; i < 100 && r != OCEAN_OK; i++) {
+        r = oc_connect(&o, 2000, &c, err, sizeof err);
+        if (r != OCEAN_OK) {
+            struct timespec ts = {0, 50 * 1000 * 1000};
+            nanosleep(&ts, NULL);
+        }
+    }
+    if (r != OCEAN_OK) {
+        kill(pid, SIGTERM);
+        waitpid(pid, NULL, 0);
+        print_error("could not connect to %s: %s\n", bin, err);
+        fail();
+    }
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
+    int frames = 0;
+    for (int i = 0; i < 3; i++) {
+        oc_frame *f = NULL;
+        r = oc_client_next_frame(c, 5000, &f);
+        if (r != OCEAN_OK) {
+            oc_client_last_error(c, err, sizeof err);
+            print_error("no frame from the daemon: %s (%s)\n", ocean_strerror(r), err);
+            break;
+        }
+        assert_true(f->info.tile_count > 0);
+        for (unsigned k = 0; k < f->info.tile_count; k++)
+            assert_int_equal(f->tiles[k].decode_result, OCEAN_OK);
+        frames++;
+        oc_frame_free(f);
+    }
+    double xz[4] = {0, 0, 10.5, -3};
+    oc_query_result q = {0};
+    ocean_result qr = oc_client_query(c, xz, 2, 0, 0, 5000, &q);
+    if (qr != OCEAN_OK) {
+        oc_client_last_error(c, err, sizeof err);
+        print_error("query: %s (%s)\n", ocean_strerror(qr), err);
+    }
+    if (qr == OCEAN_OK)
+        assert_true(isfinite(q.samples[0].height) && fabsf(q.samples[0].height) < 100);
+    oc_query_result_free(&q);
+    oc_client_destroy(c);
+    kill(pid, SIGTERM);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    assert_int_equal(frames, 3);
+    assert_int_equal(qr, OCEAN_OK);
+}
+
+static int cleanup(void **state)
+{
+    (void)state;
+    if (tmpdir[0]) {
+        char cmd[300];
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
+        if (system(cmd) != 0)
+            return 0;
+    }
+    return 0;
+}
+
+int main(void)
+{
+    signal(SIGPIPE, SIG_IGN);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(url_good),
+        cmocka_unit_test(url_bad),
+        cmocka_unit_test(path_good),
+        cmocka_unit_test(path_bad),
+        cmocka_unit_test(store_round_trip),
+        cmocka_unit_test(store_compare),
+        cmocka_unit_test(connect_refused),
+        cmocka_unit_test(live_frames_and_queries),
+        cmocka_unit_test(threaded_shared_loop),
+        cmocka_unit_test(replay_same_bytes),
+        cmocka_unit_test(connect_cycles),
+        cmocka_unit_test(service_timeout_is_bounded),
+        cmocka_unit_test(header_only_frames),
+        cmocka_unit_test(hostile_server_messages),
+        cmocka_unit_test(daemon_round_trip),
+    };
+    return cmocka_run_group_tests(tests, NULL, cleanup);
+}

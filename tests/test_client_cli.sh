@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# test_client_cli.sh - ocean-client and the ship example against a real
+# oceand on a free loopback port: watch --json, bad options refused by
+# name, record, replay twice with --check (identical) and once changed
+# (refused), export (files any EXR reader opens), load, query, ship.
+set -u
+BUILD=${BUILD:-build}
+OC=$BUILD/ocean-client
+OD=$BUILD/oceand
+SHIP=$BUILD/examples/ship
+for b in "$OC" "$OD" "$SHIP"; do
+    [[ -x $b ]] || { echo "missing $b"; exit 1; }
+done
+tmp=$(mktemp -d /tmp/oc-cli.XXXXXX)
+port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
+URL=ws://127.0.0.1:$port/
+"$OD" --config config/oceand.conf --port "$port" >"$tmp/oceand.log" 2>&1 &
+pid=$!
+cleanup() { kill "$pid" 2>/dev/null; wait "$pid" 2>/dev/null; rm -rf "$tmp"; }
+trap cleanup EXIT
+fail() { echo "FAIL: $*"; echo "--- oceand log:"; tail -20 "$tmp/oceand.log"; exit 1; }
+json() { python3 -c "import json,sys; d=json.load(open('$1')); sys.exit(0 if ($2) else 1)" || fail "$1: $2: $(cat "$1")"; }
+
+for i in $(seq 50); do
+    "$OC" watch "$URL" --frames 1 --seconds 2 --mesh none >/dev/null 2>&1 && break
+    sleep 0.1
+done
+
+echo "== watch --json ($SECONDS s)"
+"$OC" watch "$URL" --seconds 2 --json --mesh none >"$tmp/watch.json" || fail "watch exited $?"
+json "$tmp/watch.json" "d['frames'] > 0 and d['bytes'] > 0 and d['latency_p50_ms'] is not None and d['latency_p99_ms'] >= d['latency_p50_ms'] and d['decode_errors'] == 0"
+
+echo "== bad options are refused by name ($SECONDS s)"
+"$OC" watch "$URL" --bogus 2>"$tmp/err" && fail "--bogus accepted"
+grep -q -- "--bogus" "$tmp/err" || fail "message does not name --bogus: $(cat "$tmp/err")"
+"$OC" watch "$URL" --seconds abc 2>"$tmp/err"; [[ $? -eq 2 ]] || fail "--seconds abc: wrong exit"
+grep -q -- "--seconds" "$tmp/err" || fail "message does not name --seconds"
+"$OC" query "$URL" --points "1,2;x" 2>"$tmp/err" && fail "bad --points accepted"
+grep -q -- "--points" "$tmp/err" || fail "message does not name --points"
+"$OC" frobnicate 2>/dev/null; [[ $? -eq 2 ]] || fail "unknown command accepted"
+for c in watch query record replay export load sea; do
+    "$OC" $c --help >/dev/null || fail "$c --help"
+done
+printf 't,x,y,z\n0,1,2,3\n' >"$tmp/bad.csv"
+"$OC" replay "$URL" "$tmp/bad.csv" --out "$tmp/x.frames" 2>"$tmp/err" && fail "bad path accepted"
+grep -q "bad.csv:1:" "$tmp/err" || fail "path error lacks file:line: $(cat "$tmp/err")"
+
+echo "== replay twice, --check ($SECONDS s)"
+head -n 33 clients/paths/jet.csv >"$tmp/jet.csv"   # 30 reports, 1 s of the pass
+"$OC" replay "$URL" "$tmp/jet.csv" --out "$tmp/r1.frames" --mesh none 2>"$tmp/r1.log" || fail "replay 1: $(cat "$tmp/r1.log")"
+"$OC" replay "$URL" "$tmp/jet.csv" --out "$tmp/r2.frames" --check "$tmp/r1.frames" --mesh none 2>"$tmp/r2.log" ||
+    fail "replay 2 differs: $(cat "$tmp/r2.log")"
+grep -q "identical" "$tmp/r2.log" || fail "no verdict: $(cat "$tmp/r2.log")"
+"$OC" replay "$URL" "$tmp/jet.csv" --out "$tmp/r3.frames" --check "$tmp/r1.frames" --mesh none --accuracy 0.01 2>"$tmp/r3.log" &&
+    fail "a different subscription passed --check"
+grep -q "DIFFERENT" "$tmp/r3.log" || fail "no difference reported: $(cat "$tmp/r3.log")"
+
+echo "== record ($SECONDS s)"
+head -n 23 clients/paths/ship.csv >"$tmp/ship.csv"   # 2 s of the ship path
+"$OC" record "$URL" --path "$tmp/ship.csv" --out "$tmp/rec.frames" --tail 0.3 --mesh none 2>"$tmp/rec.log" ||
+    fail "record: $(cat "$tmp/rec.log")"
+grep -qE " [1-9][0-9]* frames" "$tmp/rec.log" || fail "record got no frames: $(cat "$tmp/rec.log")"
+head -n 8 clients/paths/helicopter.csv | "$OC" record "$URL" --path - --out "$tmp/rec2.frames" --tail 0.2 --mesh none 2>"$tmp/rec2.log" ||
+    fail "record from stdin: $(cat "$tmp/rec2.log")"
+grep -q "5 camera reports" "$tmp/rec2.log" || fail "record from stdin: $(cat "$tmp/rec2.log")"
+
+echo "== export ($SECONDS s)"
+"$OC" export "$URL" --out "$tmp/exr" --mesh none --codec qz 2>"$tmp/exp.log" || fail "export: $(cat "$tmp/exp.log")"
+n=$(ls "$tmp/exr"/*.exr | wc -l)
+[[ $n -gt 0 ]] || fail "no EXR files"
+first=$(ls "$tmp/exr"/*.exr | head -1)
+if command -v exrinfo >/dev/null; then
+    exrinfo "$first" | grep -q "'H'" || fail "exrinfo cannot read $first"
+fi
+[[ $(wc -l <"$tmp/exr/tiles.csv") -eq $((n + 1)) ]] || fail "tiles.csv does not list every file"
+
+echo "== load ($SECONDS s)"
+"$OC" load "$URL" --clients 4 --seconds 2 --rate 10 --mesh none --ramp 0.2 --json >"$tmp/load.json" || fail "load exited $?"
+json "$tmp/load.json" "d['connected'] == 4 and d['frames_per_viewer_min'] > 0 and d['latency_p99_ms'] is not None and d['bytes_per_viewer_per_s'] > 0"
+
+echo "== query ($SECONDS s)"
+"$OC" query "$URL" --points "0,0;10.5,-3" --json >"$tmp/q.json" 2>"$tmp/q.err" || fail "query: $(cat "$tmp/q.err")"
+json "$tmp/q.json" "len(d['points']) == 2 and all(abs(p['height']) < 50 and abs(p['normal'][1]) > 0.5 for p in d['points'])"
+
+echo "== sea ($SECONDS s)"
+"$OC" sea "$URL" >"$tmp/sea.json" || fail "sea exited $?"
+json "$tmp/sea.json" "d['wind_u10'] >= 0 and d['depth_m'] > 0 and d['tp'] >= 0"
+"$OC" sea "$URL" --set --token not-the-token --wind 3 >/dev/null 2>"$tmp/sea.err" && fail "sea --set with a wrong token succeeded"
+grep -q "SEA_STATE" "$tmp/sea.err" || fail "no server ERROR shown: $(cat "$tmp/sea.err")"
+"$OC" sea "$URL" --set 2>"$tmp/sea.err"; [[ $? -eq 2 ]] || fail "--set without --token accepted"
+
+echo "== ship against the daemon ($SECONDS s)"
+"$SHIP" "$URL" --seconds 5 --dt 0.1 --quiet >"$tmp/ship.out" 2>&1 || fail "ship: $(cat "$tmp/ship.out")"
+grep -q "heave spectrum peak" "$tmp/ship.out" || fail "ship printed no summary"
+
+kill -TERM "$pid"
+wait "$pid"
+rc=$?
+[[ $rc -eq 0 ]] || fail "oceand exited $rc after SIGTERM"
+echo "all ocean-client checks passed"
