@@ -4,13 +4,16 @@
 set -euo pipefail
 pkgs=(gcc make clang pkg-config libclang-rt-14-dev
       libwebsockets-dev libopenexr-dev libfftw3-dev libzstd-dev libcjson-dev
-      librandom123-dev libcmocka-dev gnuplot-nox openexr
-      chromium nodejs npm)
+      librandom123-dev libcmocka-dev gnuplot-nox openexr chromium)
 missing=()
 for p in "${pkgs[@]}"; do
     st=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)
     [[ "$st" == "install ok installed" ]] || missing+=("$p")
 done
+# Node.js may come from elsewhere than Debian (an image's own node and npm
+# conflict with Debian's npm package): only install it when absent.
+command -v node >/dev/null 2>&1 || missing+=(nodejs)
+command -v npm >/dev/null 2>&1 || missing+=(npm)
 if ((${#missing[@]})); then
     echo "deps: installing ${missing[*]}" >&2
     if [[ $(id -u) -ne 0 ]]; then

@@ -17,16 +17,6 @@
 
 static const char *const plane_names[PROTO_TILE_MAX_PLANES] = {"H", "DX", "DZ", "NU", "NV", "FOAM", "J"};
 
-static void seterr(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (!err || !errlen)
-        return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
-
 void proto_codec_params_default(proto_codec_params *p)
 {
     p->accuracy = PROTO_ACCURACY_DEFAULT;
@@ -225,20 +215,20 @@ static ocean_result check_args(proto_codec c, int w, int h, unsigned channels, c
                                int *np, size_t *nsamp, char *err, size_t errlen)
 {
     if ((unsigned)c >= PROTO_CODEC_COUNT_) {
-        seterr(err, errlen, "unknown codec %d", (int)c);
+        ocean_seterr(err, errlen, "unknown codec %d", (int)c);
         return OCEAN_ETYPE;
     }
     if (w < 1 || h < 1 || w > PROTO_TILE_MAX_SIZE || h > PROTO_TILE_MAX_SIZE) {
-        seterr(err, errlen, "tile size %dx%d outside 1..%d", w, h, PROTO_TILE_MAX_SIZE);
+        ocean_seterr(err, errlen, "tile size %dx%d outside 1..%d", w, h, PROTO_TILE_MAX_SIZE);
         return OCEAN_EINVAL;
     }
     int n = proto_tile_planes(channels);
     if (n == 0) {
-        seterr(err, errlen, "bad channel mask 0x%x", channels);
+        ocean_seterr(err, errlen, "bad channel mask 0x%x", channels);
         return OCEAN_EINVAL;
     }
     if (!planes) {
-        seterr(err, errlen, "no sample array");
+        ocean_seterr(err, errlen, "no sample array");
         return OCEAN_EINVAL;
     }
     *np = n;
@@ -262,7 +252,7 @@ static ocean_result f16_encode(const float *src, size_t n, proto_buf *out, doubl
 {
     for (size_t i = 0; i < n; i++)
         if (fabsf(src[i]) > 65504.0f) {
-            seterr(err, errlen, "value %g beyond the half-float range", (double)src[i]);
+            ocean_seterr(err, errlen, "value %g beyond the half-float range", (double)src[i]);
             return OCEAN_ECODEC;
         }
     uint8_t *p;
@@ -416,7 +406,7 @@ static ocean_result qz_encode(const proto_codec_params *p, int w, int h, int np,
 {
     double acc = p->accuracy;
     if (!(acc >= PROTO_ACCURACY_MIN && acc <= PROTO_ACCURACY_MAX)) {
-        seterr(err, errlen, "qz accuracy %g outside %g..%g", acc, PROTO_ACCURACY_MIN, PROTO_ACCURACY_MAX);
+        ocean_seterr(err, errlen, "qz accuracy %g outside %g..%g", acc, PROTO_ACCURACY_MIN, PROTO_ACCURACY_MAX);
         return OCEAN_EINVAL;
     }
     int level = p->zstd_level;
@@ -502,7 +492,7 @@ static ocean_result qz_encode(const proto_codec_params *p, int w, int h, int np,
     size_t zn = qz_zstd(dst + headlen, bound, raw, rawlen, level);
     if (ZSTD_isError(zn)) {
         proto_buf_truncate(out, start);
-        seterr(err, errlen, "zstd: %s", ZSTD_getErrorName(zn));
+        ocean_seterr(err, errlen, "zstd: %s", ZSTD_getErrorName(zn));
         res = OCEAN_ECODEC;
         goto done;
     }
@@ -522,15 +512,15 @@ static ocean_result qz_decode(int w, int h, int np, const uint8_t *data, size_t 
 {
     size_t headlen = QZ_HEAD + QZ_PLANE_HEAD * (size_t)np + 4;
     if (len < headlen) {
-        seterr(err, errlen, "qz payload of %zu bytes shorter than its %zu-byte header", len, headlen);
+        ocean_seterr(err, errlen, "qz payload of %zu bytes shorter than its %zu-byte header", len, headlen);
         return OCEAN_ECODEC;
     }
     if (data[0] != np) {
-        seterr(err, errlen, "qz header says %u planes, tile has %d", data[0], np);
+        ocean_seterr(err, errlen, "qz header says %u planes, tile has %d", data[0], np);
         return OCEAN_ECODEC;
     }
     if (data[1] != QZ_FORMAT || proto_ld16(data + 2) != 0) {
-        seterr(err, errlen, "qz format %u / reserved %u not supported", data[1], proto_ld16(data + 2));
+        ocean_seterr(err, errlen, "qz format %u / reserved %u not supported", data[1], proto_ld16(data + 2));
         return OCEAN_ECODEC;
     }
     size_t n = (size_t)w * h, want = 0;
@@ -551,7 +541,7 @@ static ocean_result qz_decode(int w, int h, int np, const uint8_t *data, size_t 
         }
         if (!isfinite(base[c]) || !isfinite(s) || !(s > 0.0f) || nb[c] > 4 || proto_ld16(ph + 10) != 0 ||
             (pred[c] != QZ_PRED_PLANAR && pred[c] != QZ_PRED_LS6) || (pred[c] == QZ_PRED_PLANAR && coef_nonzero)) {
-            seterr(err, errlen, "qz plane %d header invalid (base %g, step %g, bytes %d, predictor %d)", c,
+            ocean_seterr(err, errlen, "qz plane %d header invalid (base %g, step %g, bytes %d, predictor %d)", c,
                    (double)base[c], (double)s, nb[c], pred[c]);
             return OCEAN_ECODEC;
         }
@@ -560,19 +550,19 @@ static ocean_result qz_decode(int w, int h, int np, const uint8_t *data, size_t 
     }
     uint32_t rawlen = proto_ld32(data + headlen - 4);
     if (rawlen != want) {
-        seterr(err, errlen, "qz residual length %u, header implies %zu", rawlen, want);
+        ocean_seterr(err, errlen, "qz residual length %u, header implies %zu", rawlen, want);
         return OCEAN_ECODEC;
     }
     const uint8_t *zsrc = data + headlen;
     size_t zlen = len - headlen;
     size_t fsz = ZSTD_findFrameCompressedSize(zsrc, zlen);
     if (ZSTD_isError(fsz) || fsz != zlen) {
-        seterr(err, errlen, "qz: zstd frame malformed or followed by junk");
+        ocean_seterr(err, errlen, "qz: zstd frame malformed or followed by junk");
         return OCEAN_ECODEC;
     }
     unsigned long long csz = ZSTD_getFrameContentSize(zsrc, zlen);
     if (csz != rawlen) {
-        seterr(err, errlen, "qz: zstd frame content size does not match %u", rawlen);
+        ocean_seterr(err, errlen, "qz: zstd frame content size does not match %u", rawlen);
         return OCEAN_ECODEC;
     }
     uint8_t *raw = malloc(want ? want : 1);
@@ -584,7 +574,7 @@ static ocean_result qz_decode(int w, int h, int np, const uint8_t *data, size_t 
     }
     size_t got = ZSTD_decompress(raw, want, zsrc, zlen);
     if (ZSTD_isError(got) || got != want) {
-        seterr(err, errlen, "qz: zstd: %s", ZSTD_isError(got) ? ZSTD_getErrorName(got) : "short output");
+        ocean_seterr(err, errlen, "qz: zstd: %s", ZSTD_isError(got) ? ZSTD_getErrorName(got) : "short output");
         res = OCEAN_ECODEC;
         goto done;
     }
@@ -599,14 +589,14 @@ static ocean_result qz_decode(int w, int h, int np, const uint8_t *data, size_t 
                     zz |= (uint32_t)raw[off + (size_t)b * n + k] << (8 * b);
                 int64_t v = qz_predict(q, w, i, j, pred[c], coef[c]) + unzigzag(zz);
                 if (v > QZ_Q_LIMIT || v < -QZ_Q_LIMIT) {
-                    seterr(err, errlen, "qz plane %d: level %lld out of range at (%d,%d)", c, (long long)v, i, j);
+                    ocean_seterr(err, errlen, "qz plane %d: level %lld out of range at (%d,%d)", c, (long long)v, i, j);
                     res = OCEAN_ECODEC;
                     goto done;
                 }
                 q[k] = v;
                 float f = (float)((double)base[c] + (double)v * step[c]);
                 if (!isfinite(f)) {
-                    seterr(err, errlen, "qz plane %d: non-finite value at (%d,%d)", c, i, j);
+                    ocean_seterr(err, errlen, "qz plane %d: non-finite value at (%d,%d)", c, i, j);
                     res = OCEAN_ECODEC;
                     goto done;
                 }
@@ -632,7 +622,7 @@ ocean_result proto_tile_encode(proto_codec c, const proto_codec_params *p, int w
     if (r != OCEAN_OK)
         return r;
     if (!out) {
-        seterr(err, errlen, "no output buffer");
+        ocean_seterr(err, errlen, "no output buffer");
         return OCEAN_EINVAL;
     }
     proto_codec_params defp;
@@ -643,7 +633,7 @@ ocean_result proto_tile_encode(proto_codec c, const proto_codec_params *p, int w
     size_t total = n * (size_t)np;
     for (size_t i = 0; i < total; i++)
         if (!isfinite(planes[i])) {
-            seterr(err, errlen, "non-finite sample in plane %s at index %zu",
+            ocean_seterr(err, errlen, "non-finite sample in plane %s at index %zu",
                    proto_tile_plane_name(channels, (int)(i / n)), i % n);
             return OCEAN_EINVAL;
         }
@@ -698,7 +688,7 @@ ocean_result proto_tile_decode(proto_codec c, int w, int h, unsigned channels,
     if (r != OCEAN_OK)
         return r;
     if (!data && len) {
-        seterr(err, errlen, "no payload");
+        ocean_seterr(err, errlen, "no payload");
         return OCEAN_EINVAL;
     }
     size_t total = n * (size_t)np;
@@ -707,14 +697,14 @@ ocean_result proto_tile_decode(proto_codec c, int w, int h, unsigned channels,
     case PROTO_CODEC_F16: {
         size_t es = c == PROTO_CODEC_F32 ? 4 : 2;
         if (len != total * es) {
-            seterr(err, errlen, "%s payload is %zu bytes, %dx%d x %d planes needs %zu",
+            ocean_seterr(err, errlen, "%s payload is %zu bytes, %dx%d x %d planes needs %zu",
                    proto_codec_name(c), len, w, h, np, total * es);
             return OCEAN_ECODEC;
         }
         for (size_t i = 0; i < total; i++) {
             float f = es == 4 ? proto_ldf32(data + 4 * i) : proto_f32_from_f16(proto_ld16(data + 2 * i));
             if (!isfinite(f)) {
-                seterr(err, errlen, "%s payload holds a non-finite value at sample %zu", proto_codec_name(c), i);
+                ocean_seterr(err, errlen, "%s payload holds a non-finite value at sample %zu", proto_codec_name(c), i);
                 return OCEAN_ECODEC;
             }
             planes[i] = f;

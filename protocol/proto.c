@@ -36,16 +36,6 @@
 #define MAX_WORLD 1e10
 #define MAX_LOCAL 1e7
 
-static void seterr(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (!err || !errlen)
-        return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
-
 static const char *const type_names[PROTO_TYPE_END_] = {
     "?", "HELLO", "SUBSCRIBE", "CAMERA", "FRAME", "TILE", "MESH_TOPOLOGY", "MESH_VERTICES",
     "QUERY", "QUERY_RESULT", "SEA_STATE", "ERROR", "BYE"};
@@ -87,7 +77,7 @@ typedef struct ctx {
     const proto_limits *lim;
 } ctx;
 
-#define FAIL(c, code, ...) do { seterr((c)->err, (c)->errlen, __VA_ARGS__); return (code); } while (0)
+#define FAIL(c, code, ...) do { ocean_seterr((c)->err, (c)->errlen, __VA_ARGS__); return (code); } while (0)
 #define TRY(x) do { ocean_result r_ = (x); if (r_ != OCEAN_OK) return r_; } while (0)
 
 static ocean_result chk_range(ctx *c, const char *what, double v, double lo, double hi)
@@ -423,11 +413,11 @@ ocean_result proto_header_decode(const void *buf, size_t len, const proto_limits
     memset(out, 0, sizeof *out);
     const uint8_t *p = buf;
     if (!buf || len < PROTO_HEADER_SIZE) {
-        seterr(err, errlen, "message of %zu bytes is shorter than the %d-byte header", len, PROTO_HEADER_SIZE);
+        ocean_seterr(err, errlen, "message of %zu bytes is shorter than the %d-byte header", len, PROTO_HEADER_SIZE);
         return OCEAN_ETRUNC;
     }
     if (proto_ld32(p) != PROTO_MAGIC) {
-        seterr(err, errlen, "bad magic 0x%08x (expected \"OCNW\")", proto_ld32(p));
+        ocean_seterr(err, errlen, "bad magic 0x%08x (expected \"OCNW\")", proto_ld32(p));
         return OCEAN_EFORMAT;
     }
     out->version = proto_ld16(p + 4);
@@ -437,35 +427,35 @@ ocean_result proto_header_decode(const void *buf, size_t len, const proto_limits
     out->seq = proto_ld32(p + 16);
     out->sim_time = proto_ldf64(p + 24);
     if (out->version != PROTO_VERSION) {
-        seterr(err, errlen, "protocol version %u not supported (this side speaks %d, subprotocol %s)",
+        ocean_seterr(err, errlen, "protocol version %u not supported (this side speaks %d, subprotocol %s)",
                out->version, PROTO_VERSION, PROTO_SUBPROTOCOL);
         return OCEAN_EVERSION;
     }
     if (out->type < 1 || out->type >= PROTO_TYPE_END_) {
-        seterr(err, errlen, "message type %u unknown (valid 1..%d)", out->type, PROTO_TYPE_END_ - 1);
+        ocean_seterr(err, errlen, "message type %u unknown (valid 1..%d)", out->type, PROTO_TYPE_END_ - 1);
         return OCEAN_ETYPE;
     }
     if (out->flags != 0 || proto_ld32(p + 20) != 0) {
-        seterr(err, errlen, "%s header: flags 0x%x / reserved 0x%x must be 0 in version 1",
+        ocean_seterr(err, errlen, "%s header: flags 0x%x / reserved 0x%x must be 0 in version 1",
                proto_type_name(out->type), out->flags, proto_ld32(p + 20));
         return OCEAN_EFORMAT;
     }
     if (!isfinite(out->sim_time)) {
-        seterr(err, errlen, "%s header: sim_time is %g; must be finite", proto_type_name(out->type), out->sim_time);
+        ocean_seterr(err, errlen, "%s header: sim_time is %g; must be finite", proto_type_name(out->type), out->sim_time);
         return OCEAN_EINVAL;
     }
     if ((uint64_t)out->length + PROTO_HEADER_SIZE > lim->max_message) {
-        seterr(err, errlen, "%s of %llu bytes exceeds the %u-byte message limit", proto_type_name(out->type),
+        ocean_seterr(err, errlen, "%s of %llu bytes exceeds the %u-byte message limit", proto_type_name(out->type),
                (unsigned long long)out->length + PROTO_HEADER_SIZE, lim->max_message);
         return OCEAN_ETOOBIG;
     }
     if ((uint64_t)out->length + PROTO_HEADER_SIZE > len) {
-        seterr(err, errlen, "%s header declares %u payload bytes, only %zu present", proto_type_name(out->type),
+        ocean_seterr(err, errlen, "%s header declares %u payload bytes, only %zu present", proto_type_name(out->type),
                out->length, len - PROTO_HEADER_SIZE);
         return OCEAN_ETRUNC;
     }
     if ((uint64_t)out->length + PROTO_HEADER_SIZE < len) {
-        seterr(err, errlen, "%s: %zu bytes after the declared %u-byte payload", proto_type_name(out->type),
+        ocean_seterr(err, errlen, "%s: %zu bytes after the declared %u-byte payload", proto_type_name(out->type),
                len - PROTO_HEADER_SIZE - out->length, out->length);
         return OCEAN_EFORMAT;
     }
@@ -890,7 +880,7 @@ ocean_result proto_decode_limited(const void *buf, size_t len, const proto_limit
     case PROTO_QUERY: case PROTO_QUERY_RESULT:
         r.arena = malloc(r.arena_len);
         if (!r.arena) {
-            seterr(err, errlen, "out of memory decoding %s of %zu bytes", r.what, len);
+            ocean_seterr(err, errlen, "out of memory decoding %s of %zu bytes", r.what, len);
             return OCEAN_ENOMEM;
         }
         break;

@@ -30,16 +30,6 @@ static void exr_on_error(exr_const_context_t ctxt, exr_result_t code, const char
              msg ? msg : "");
 }
 
-static void seterr(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (!err || !errlen)
-        return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
-
 typedef struct wstream {
     proto_buf *out;
     size_t start;   /* offset of the file's first byte in out */
@@ -119,7 +109,7 @@ ocean_result proto_exr_encode(proto_codec c, const proto_codec_params *p, int w,
     case PROTO_CODEC_EXR_B44: comp = EXR_COMPRESSION_B44; break;
     case PROTO_CODEC_EXR_B44A: comp = EXR_COMPRESSION_B44A; break;
     default:
-        seterr(err, errlen, "codec %d is not an EXR codec", (int)c);
+        ocean_seterr(err, errlen, "codec %d is not an EXR codec", (int)c);
         return OCEAN_ETYPE;
     }
     int np = proto_tile_planes(channels);
@@ -128,7 +118,7 @@ ocean_result proto_exr_encode(proto_codec c, const proto_codec_params *p, int w,
     if (half) {
         for (size_t i = 0; i < total; i++)
             if (fabsf(planes[i]) > 65504.0f) {
-                seterr(err, errlen, "value %g beyond the half-float range", (double)planes[i]);
+                ocean_seterr(err, errlen, "value %g beyond the half-float range", (double)planes[i]);
                 return OCEAN_ECODEC;
             }
         hbuf = malloc(total * sizeof *hbuf);
@@ -222,7 +212,7 @@ ocean_result proto_exr_encode(proto_codec c, const proto_codec_params *p, int w,
         proto_buf_truncate(out, ws.start);
         if (ws.failed && rv == EXR_ERR_SUCCESS)
             return OCEAN_ENOMEM;
-        seterr(err, errlen, "OpenEXR %s failed: %s (%s)", stage, exr_get_error_code_as_string(rv), exr_last_msg);
+        ocean_seterr(err, errlen, "OpenEXR %s failed: %s (%s)", stage, exr_get_error_code_as_string(rv), exr_last_msg);
         return rv == EXR_ERR_OUT_OF_MEMORY ? OCEAN_ENOMEM : OCEAN_ECODEC;
     }
     return OCEAN_OK;
@@ -252,7 +242,7 @@ ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *da
     const char *stage = "start_read";
     exr_last_msg[0] = 0;
     if (len < 8) {
-        seterr(err, errlen, "EXR payload of %zu bytes is too short", len);
+        ocean_seterr(err, errlen, "EXR payload of %zu bytes is too short", len);
         return OCEAN_ECODEC;
     }
     rv = exr_start_read(&ctx, "tile.exr", &init);
@@ -267,23 +257,23 @@ ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *da
         (rv = exr_get_data_window(ctx, 0, &dw)) || (rv = exr_get_channels(ctx, 0, &cl)))
         goto fail;
     if (count != 1 || st != EXR_STORAGE_SCANLINE) {
-        seterr(err, errlen, "EXR tile must be one scanline part (has %d parts, storage %d)", count, (int)st);
+        ocean_seterr(err, errlen, "EXR tile must be one scanline part (has %d parts, storage %d)", count, (int)st);
         goto out;
     }
     if ((int64_t)dw.max.x - dw.min.x + 1 != w || (int64_t)dw.max.y - dw.min.y + 1 != h) {
-        seterr(err, errlen, "EXR data window %dx%d, tile is %dx%d", dw.max.x - dw.min.x + 1,
+        ocean_seterr(err, errlen, "EXR data window %dx%d, tile is %dx%d", dw.max.x - dw.min.x + 1,
                dw.max.y - dw.min.y + 1, w, h);
         goto out;
     }
     if (!cl || cl->num_channels != np) {
-        seterr(err, errlen, "EXR has %d channels, tile needs %d", cl ? cl->num_channels : 0, np);
+        ocean_seterr(err, errlen, "EXR has %d channels, tile needs %d", cl ? cl->num_channels : 0, np);
         goto out;
     }
     for (int k = 0; k < cl->num_channels; k++) {
         const exr_attr_chlist_entry_t *e = &cl->entries[k];
         if (plane_index(channels, e->name.str) < 0 || e->x_sampling != 1 || e->y_sampling != 1 ||
             (e->pixel_type != EXR_PIXEL_HALF && e->pixel_type != EXR_PIXEL_FLOAT)) {
-            seterr(err, errlen, "EXR channel '%s' unexpected (name, sampling or type)", e->name.str);
+            ocean_seterr(err, errlen, "EXR channel '%s' unexpected (name, sampling or type)", e->name.str);
             goto out;
         }
     }
@@ -292,7 +282,7 @@ ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *da
     if ((rv = exr_get_scanlines_per_chunk(ctx, 0, &lpc)) != EXR_ERR_SUCCESS)
         goto fail;
     if (lpc < 1) {
-        seterr(err, errlen, "EXR scanlines per chunk %d", lpc);
+        ocean_seterr(err, errlen, "EXR scanlines per chunk %d", lpc);
         goto out;
     }
     for (int64_t y = dw.min.y; y <= dw.max.y; y += lpc) {
@@ -302,7 +292,7 @@ ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *da
             goto fail;
         int64_t row = (int64_t)ci.start_y - dw.min.y;
         if (row < 0 || row + ci.height > h) {
-            seterr(err, errlen, "EXR chunk rows %d..%d outside the tile", ci.start_y, ci.start_y + ci.height);
+            ocean_seterr(err, errlen, "EXR chunk rows %d..%d outside the tile", ci.start_y, ci.start_y + ci.height);
             goto out;
         }
         stage = "decoding_init";
@@ -313,7 +303,7 @@ ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *da
             exr_coding_channel_info_t *ch = &dec.channels[k];
             int pi = plane_index(channels, ch->channel_name);
             if (pi < 0 || ch->width != w) {
-                seterr(err, errlen, "EXR chunk channel layout unexpected");
+                ocean_seterr(err, errlen, "EXR chunk channel layout unexpected");
                 goto out;
             }
             ch->decode_to_ptr = (uint8_t *)(planes + (size_t)pi * n + (size_t)row * w);
@@ -334,7 +324,7 @@ ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *da
     }
     for (size_t i = 0; i < n * (size_t)np; i++)
         if (!isfinite(planes[i])) {
-            seterr(err, errlen, "EXR holds a non-finite value at sample %zu", i);
+            ocean_seterr(err, errlen, "EXR holds a non-finite value at sample %zu", i);
             goto out;
         }
     res = OCEAN_OK;
@@ -343,7 +333,7 @@ fail:
     /* OpenEXRCore 3.1 reports corrupt compressed chunks as
      * EXR_ERR_OUT_OF_MEMORY ("unable to decompress"), so every failure
      * while reading is a codec failure of the payload. */
-    seterr(err, errlen, "OpenEXR %s failed: %s %s", stage, exr_get_error_code_as_string(rv), exr_last_msg);
+    ocean_seterr(err, errlen, "OpenEXR %s failed: %s %s", stage, exr_get_error_code_as_string(rv), exr_last_msg);
 out:
     if (have_dec)
         exr_decoding_destroy(ctx, &dec);

@@ -3,6 +3,9 @@
  */
 #include "ocean_result.h"
 
+#include <stdarg.h>
+#include <stdio.h>
+
 const char *ocean_strerror(ocean_result r)
 {
     switch (r) {
@@ -25,4 +28,14 @@ const char *ocean_strerror(ocean_result r)
     case OCEAN_RESULT_COUNT_: break;
     }
     return "unknown error";
+}
+
+void ocean_seterr(char *err, size_t errlen, const char *fmt, ...)
+{
+    if (!err || !errlen)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
 }

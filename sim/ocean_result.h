@@ -13,6 +13,8 @@
 #ifndef OCEAN_RESULT_H
 #define OCEAN_RESULT_H
 
+#include <stddef.h>
+
 typedef enum ocean_result {
     OCEAN_OK = 0,
     OCEAN_EINVAL = 1,      /* an argument is out of range, NaN/Inf or absurd */
@@ -36,5 +38,11 @@ typedef enum ocean_result {
 /* Returns a static, human-readable description of r; never NULL (unknown
  * codes give "unknown error"). */
 const char *ocean_strerror(ocean_result r);
+
+/* printf into a caller's error buffer; does nothing when err is NULL or
+ * errlen is 0, so every "char *err, size_t errlen" API can make the
+ * buffer optional.  The text is always NUL-terminated (cut if too long). */
+void ocean_seterr(char *err, size_t errlen, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
 
 #endif

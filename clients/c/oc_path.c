@@ -9,16 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void seterr(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (!err || !errlen)
-        return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
-
 static const char *const FIELD[13] = {"t",       "x",         "y",        "z",         "vx",
                                       "vy",      "vz",        "yaw_deg",  "pitch_deg", "roll_deg",
                                       "fov_y_deg", "viewport_w", "viewport_h"};
@@ -141,12 +131,12 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
             pos++;
         lineno++;
         if (ll >= sizeof line) {
-            seterr(err, errlen, "%s:%u: line longer than %zu bytes", name, lineno, sizeof line - 1);
+            ocean_seterr(err, errlen, "%s:%u: line longer than %zu bytes", name, lineno, sizeof line - 1);
             res = OCEAN_EFORMAT;
             break;
         }
         if (memchr(text + start, 0, ll)) {
-            seterr(err, errlen, "%s:%u: NUL byte in line", name, lineno);
+            ocean_seterr(err, errlen, "%s:%u: NUL byte in line", name, lineno);
             res = OCEAN_EFORMAT;
             break;
         }
@@ -156,7 +146,7 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
         if (*s == '#') {
             unsigned v;
             if (sscanf(s, "# oceand camera path v%u", &v) == 1 && v != 1) {
-                seterr(err, errlen, "%s:%u: camera path format version %u; this reader knows v1",
+                ocean_seterr(err, errlen, "%s:%u: camera path format version %u; this reader knows v1",
                        name, lineno, v);
                 res = OCEAN_EVERSION;
                 break;
@@ -174,7 +164,7 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
             hdr[k] = 0;
             ncol = header_columns(hdr);
             if (!ncol) {
-                seterr(err, errlen, "%s:%u: expected the header \"%s\" (or its first 11 columns), got \"%s\"",
+                ocean_seterr(err, errlen, "%s:%u: expected the header \"%s\" (or its first 11 columns), got \"%s\"",
                        name, lineno, OC_PATH_HEADER, s);
                 res = OCEAN_EFORMAT;
                 break;
@@ -198,7 +188,7 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
                 break;
             }
             if (!*f) {
-                seterr(err, errlen, "%s:%u: field %s is empty in \"%s\"", name, lineno, FIELD[nf], orig);
+                ocean_seterr(err, errlen, "%s:%u: field %s is empty in \"%s\"", name, lineno, FIELD[nf], orig);
                 res = OCEAN_EFORMAT;
                 break;
             }
@@ -206,7 +196,7 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
             char *end;
             v[nf] = strtod(f, &end);
             if (*end || errno == ERANGE) {
-                seterr(err, errlen, "%s:%u: field %s \"%s\" is not a number in \"%s\"", name, lineno,
+                ocean_seterr(err, errlen, "%s:%u: field %s \"%s\" is not a number in \"%s\"", name, lineno,
                        FIELD[nf], f, orig);
                 res = OCEAN_EFORMAT;
                 break;
@@ -219,7 +209,7 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
         if (res != OCEAN_OK)
             break;
         if (bad || nf != ncol) {
-            seterr(err, errlen, "%s:%u: expected %d fields as the header says, got %s%d in \"%s\"", name,
+            ocean_seterr(err, errlen, "%s:%u: expected %d fields as the header says, got %s%d in \"%s\"", name,
                    lineno, ncol, bad ? "more than " : "", bad ? ncol : nf, orig);
             res = OCEAN_EFORMAT;
             break;
@@ -228,7 +218,7 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
         if (ncol == 13) {
             for (int k = 11; k < 13; k++)
                 if (!(v[k] >= 1 && v[k] <= 16384 && v[k] == floor(v[k]))) {
-                    seterr(err, errlen, "%s:%u: field %s must be an integer 1..16384 in \"%s\"", name,
+                    ocean_seterr(err, errlen, "%s:%u: field %s must be an integer 1..16384 in \"%s\"", name,
                            lineno, FIELD[k], orig);
                     res = OCEAN_EINVAL;
                     break;
@@ -242,18 +232,18 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
         int fi;
         const char *why = check_point(&q, &fi);
         if (why) {
-            seterr(err, errlen, "%s:%u: field %s %s in \"%s\"", name, lineno, FIELD[fi], why, orig);
+            ocean_seterr(err, errlen, "%s:%u: field %s %s in \"%s\"", name, lineno, FIELD[fi], why, orig);
             res = OCEAN_EINVAL;
             break;
         }
         if (p->count && q.t < p->pts[p->count - 1].t) {
-            seterr(err, errlen, "%s:%u: t %.17g goes back in time (previous line has %.17g) in \"%s\"",
+            ocean_seterr(err, errlen, "%s:%u: t %.17g goes back in time (previous line has %.17g) in \"%s\"",
                    name, lineno, q.t, p->pts[p->count - 1].t, orig);
             res = OCEAN_EINVAL;
             break;
         }
         if (p->count >= OC_PATH_MAX_POINTS) {
-            seterr(err, errlen, "%s:%u: more than %u points", name, lineno, OC_PATH_MAX_POINTS);
+            ocean_seterr(err, errlen, "%s:%u: more than %u points", name, lineno, OC_PATH_MAX_POINTS);
             res = OCEAN_ETOOBIG;
             break;
         }
@@ -262,7 +252,7 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
             oc_path_point *np = realloc(p->pts, nc * sizeof *np);
             if (!np) {
                 res = OCEAN_ENOMEM;
-                seterr(err, errlen, "%s:%u: out of memory", name, lineno);
+                ocean_seterr(err, errlen, "%s:%u: out of memory", name, lineno);
                 break;
             }
             p->pts = np;
@@ -271,11 +261,11 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
         p->pts[p->count++] = q;
     }
     if (res == OCEAN_OK && !have_header) {
-        seterr(err, errlen, "%s: no header line \"%s\" (empty file?)", name, OC_PATH_HEADER);
+        ocean_seterr(err, errlen, "%s: no header line \"%s\" (empty file?)", name, OC_PATH_HEADER);
         res = OCEAN_EFORMAT;
     }
     if (res == OCEAN_OK && p->count == 0) {
-        seterr(err, errlen, "%s: no camera reports after the header", name);
+        ocean_seterr(err, errlen, "%s: no camera reports after the header", name);
         res = OCEAN_EFORMAT;
     }
     if (res != OCEAN_OK) {
@@ -294,7 +284,7 @@ ocean_result oc_path_load(const char *file, oc_path **out, char *err, size_t err
     int is_stdin = strcmp(file, "-") == 0;
     FILE *f = is_stdin ? stdin : fopen(file, "rb");
     if (!f) {
-        seterr(err, errlen, "%s: cannot open: %s", file, strerror(errno));
+        ocean_seterr(err, errlen, "%s: cannot open: %s", file, strerror(errno));
         return errno == ENOENT ? OCEAN_ENOTFOUND : OCEAN_EIO;
     }
     size_t cap = 65536, len = 0;
@@ -305,7 +295,7 @@ ocean_result oc_path_load(const char *file, oc_path **out, char *err, size_t err
     while (r == OCEAN_OK) {
         if (len == cap) {
             if (cap > ((size_t)1 << 31)) {
-                seterr(err, errlen, "%s: larger than 2 GiB", file);
+                ocean_seterr(err, errlen, "%s: larger than 2 GiB", file);
                 r = OCEAN_ETOOBIG;
                 break;
             }
@@ -321,7 +311,7 @@ ocean_result oc_path_load(const char *file, oc_path **out, char *err, size_t err
         len += n;
         if (n == 0) {
             if (ferror(f)) {
-                seterr(err, errlen, "%s: read error: %s", file, strerror(errno));
+                ocean_seterr(err, errlen, "%s: read error: %s", file, strerror(errno));
                 r = OCEAN_EIO;
             }
             break;
@@ -332,7 +322,7 @@ ocean_result oc_path_load(const char *file, oc_path **out, char *err, size_t err
     if (r == OCEAN_OK)
         r = oc_path_parse(buf, len, is_stdin ? "<stdin>" : file, out, err, errlen);
     else if (r == OCEAN_ENOMEM)
-        seterr(err, errlen, "%s: out of memory", file);
+        ocean_seterr(err, errlen, "%s: out of memory", file);
     free(buf);
     return r;
 }

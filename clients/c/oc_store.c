@@ -11,16 +11,6 @@
 
 #include "proto.h"
 
-static void seterr(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (!err || !errlen)
-        return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
-
 struct oc_store_writer {
     FILE *f;
     int failed;
@@ -37,7 +27,7 @@ ocean_result oc_store_writer_open(const char *path, oc_store_writer **out, char 
         return OCEAN_ENOMEM;
     w->f = fopen(path, "wb");
     if (!w->f) {
-        seterr(err, errlen, "%s: cannot create: %s", path, strerror(errno));
+        ocean_seterr(err, errlen, "%s: cannot create: %s", path, strerror(errno));
         free(w);
         return OCEAN_EIO;
     }
@@ -46,7 +36,7 @@ ocean_result oc_store_writer_open(const char *path, oc_store_writer **out, char 
     proto_st32(h + 8, OC_STORE_VERSION);
     proto_st32(h + 12, 0);
     if (fwrite(h, 1, sizeof h, w->f) != sizeof h) {
-        seterr(err, errlen, "%s: write failed: %s", path, strerror(errno));
+        ocean_seterr(err, errlen, "%s: write failed: %s", path, strerror(errno));
         fclose(w->f);
         free(w);
         return OCEAN_EIO;
@@ -102,24 +92,24 @@ ocean_result oc_store_reader_open(const char *path, oc_store_reader **out, char 
     *out = NULL;
     FILE *f = fopen(path, "rb");
     if (!f) {
-        seterr(err, errlen, "%s: cannot open: %s", path, strerror(errno));
+        ocean_seterr(err, errlen, "%s: cannot open: %s", path, strerror(errno));
         return errno == ENOENT ? OCEAN_ENOTFOUND : OCEAN_EIO;
     }
     uint8_t h[OC_STORE_HEADER];
     size_t n = fread(h, 1, sizeof h, f);
     if (n != sizeof h || memcmp(h, OC_STORE_MAGIC, 8) != 0) {
-        seterr(err, errlen, "%s: not a frame store (no \"%s\" header)", path, OC_STORE_MAGIC);
+        ocean_seterr(err, errlen, "%s: not a frame store (no \"%s\" header)", path, OC_STORE_MAGIC);
         fclose(f);
         return OCEAN_EFORMAT;
     }
     if (proto_ld32(h + 8) != OC_STORE_VERSION) {
-        seterr(err, errlen, "%s: frame store version %u, this build reads %u", path, proto_ld32(h + 8),
+        ocean_seterr(err, errlen, "%s: frame store version %u, this build reads %u", path, proto_ld32(h + 8),
                OC_STORE_VERSION);
         fclose(f);
         return OCEAN_EVERSION;
     }
     if (proto_ld32(h + 12) != 0) {
-        seterr(err, errlen, "%s: reserved header field is not zero", path);
+        ocean_seterr(err, errlen, "%s: reserved header field is not zero", path);
         fclose(f);
         return OCEAN_EFORMAT;
     }
@@ -148,13 +138,13 @@ ocean_result oc_store_reader_next(oc_store_reader *r, const uint8_t **msg, size_
     if (n == 0 && feof(r->f))
         return OCEAN_ENOTFOUND;
     if (n != sizeof h) {
-        seterr(err, errlen, "%s: record %llu at offset %llu: truncated record header", r->path,
+        ocean_seterr(err, errlen, "%s: record %llu at offset %llu: truncated record header", r->path,
                (unsigned long long)r->index, (unsigned long long)r->offset);
         return OCEAN_ETRUNC;
     }
     uint32_t l = proto_ld32(h);
     if (proto_ld32(h + 4) != 0 || l < PROTO_HEADER_SIZE || l > OC_STORE_MAX_MESSAGE) {
-        seterr(err, errlen, "%s: record %llu at offset %llu: bad length %u or reserved field", r->path,
+        ocean_seterr(err, errlen, "%s: record %llu at offset %llu: bad length %u or reserved field", r->path,
                (unsigned long long)r->index, (unsigned long long)r->offset, l);
         return OCEAN_EFORMAT;
     }
@@ -166,7 +156,7 @@ ocean_result oc_store_reader_next(oc_store_reader *r, const uint8_t **msg, size_
         r->cap = l;
     }
     if (fread(r->buf, 1, l, r->f) != l) {
-        seterr(err, errlen, "%s: record %llu at offset %llu: message cut short (%u bytes announced)",
+        ocean_seterr(err, errlen, "%s: record %llu at offset %llu: message cut short (%u bytes announced)",
                r->path, (unsigned long long)r->index, (unsigned long long)r->offset, l);
         return OCEAN_ETRUNC;
     }

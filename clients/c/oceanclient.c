@@ -27,16 +27,6 @@
 #define CAM_RING 256
 #define CLOSE_GRACE_MS 300
 
-static void seterr(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (!err || !errlen)
-        return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
-
 static double wall_now(void)
 {
     struct timespec ts;
@@ -56,13 +46,13 @@ static double mono_now(void)
 ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen)
 {
     if (!url || !out) {
-        seterr(err, errlen, "no URL given");
+        ocean_seterr(err, errlen, "no URL given");
         return OCEAN_EINVAL;
     }
     memset(out, 0, sizeof *out);
     for (const unsigned char *p = (const unsigned char *)url; *p; p++)
         if (*p <= 0x20 || *p == 0x7f) {
-            seterr(err, errlen, "URL \"%.100s\": contains a space or control character", url);
+            ocean_seterr(err, errlen, "URL \"%.100s\": contains a space or control character", url);
             return OCEAN_EINVAL;
         }
     const char *rest;
@@ -74,11 +64,11 @@ ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen
         out->tls = 1;
         out->port = 443;
     } else {
-        seterr(err, errlen, "URL \"%.100s\": scheme must be ws:// or wss://", url);
+        ocean_seterr(err, errlen, "URL \"%.100s\": scheme must be ws:// or wss://", url);
         return OCEAN_EINVAL;
     }
     if (strchr(url, '#')) {
-        seterr(err, errlen, "URL \"%.100s\": fragments (#) are not allowed", url);
+        ocean_seterr(err, errlen, "URL \"%.100s\": fragments (#) are not allowed", url);
         return OCEAN_EINVAL;
     }
     const char *slash = strchr(rest, '/');
@@ -87,21 +77,21 @@ ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen
     if (q)
         auth_end = q;
     if (memchr(rest, '@', (size_t)(auth_end - rest))) {
-        seterr(err, errlen, "URL \"%.100s\": user information (user@) is not supported", url);
+        ocean_seterr(err, errlen, "URL \"%.100s\": user information (user@) is not supported", url);
         return OCEAN_EINVAL;
     }
     const char *host = rest, *host_end, *port_s = NULL;
     if (*host == '[') {
         const char *rb = memchr(host, ']', (size_t)(auth_end - host));
         if (!rb) {
-            seterr(err, errlen, "URL \"%.100s\": IPv6 address lacks its closing ']'", url);
+            ocean_seterr(err, errlen, "URL \"%.100s\": IPv6 address lacks its closing ']'", url);
             return OCEAN_EINVAL;
         }
         host++;
         host_end = rb;
         if (rb + 1 < auth_end) {
             if (rb[1] != ':') {
-                seterr(err, errlen, "URL \"%.100s\": unexpected text after ']'", url);
+                ocean_seterr(err, errlen, "URL \"%.100s\": unexpected text after ']'", url);
                 return OCEAN_EINVAL;
             }
             port_s = rb + 2;
@@ -114,11 +104,11 @@ ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen
     }
     size_t hl = (size_t)(host_end - host);
     if (hl == 0) {
-        seterr(err, errlen, "URL \"%.100s\": empty host", url);
+        ocean_seterr(err, errlen, "URL \"%.100s\": empty host", url);
         return OCEAN_EINVAL;
     }
     if (hl > OC_HOST_MAX) {
-        seterr(err, errlen, "URL \"%.100s\": host longer than %d bytes", url, OC_HOST_MAX);
+        ocean_seterr(err, errlen, "URL \"%.100s\": host longer than %d bytes", url, OC_HOST_MAX);
         return OCEAN_EINVAL;
     }
     memcpy(out->host, host, hl);
@@ -127,18 +117,18 @@ ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen
         size_t pl = (size_t)(auth_end - port_s);
         long v = 0;
         if (pl == 0 || pl > 5) {
-            seterr(err, errlen, "URL \"%.100s\": port must be a number 1..65535", url);
+            ocean_seterr(err, errlen, "URL \"%.100s\": port must be a number 1..65535", url);
             return OCEAN_EINVAL;
         }
         for (size_t i = 0; i < pl; i++) {
             if (port_s[i] < '0' || port_s[i] > '9') {
-                seterr(err, errlen, "URL \"%.100s\": port must be a number 1..65535", url);
+                ocean_seterr(err, errlen, "URL \"%.100s\": port must be a number 1..65535", url);
                 return OCEAN_EINVAL;
             }
             v = v * 10 + (port_s[i] - '0');
         }
         if (v < 1 || v > 65535) {
-            seterr(err, errlen, "URL \"%.100s\": port %ld outside 1..65535", url, v);
+            ocean_seterr(err, errlen, "URL \"%.100s\": port %ld outside 1..65535", url, v);
             return OCEAN_EINVAL;
         }
         out->port = (int)v;
@@ -148,13 +138,13 @@ ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen
         path = "/";
     size_t plen = strlen(path);
     if (plen > OC_PATH_MAX) {
-        seterr(err, errlen, "URL \"%.100s\": path longer than %d bytes", url, OC_PATH_MAX);
+        ocean_seterr(err, errlen, "URL \"%.100s\": path longer than %d bytes", url, OC_PATH_MAX);
         return OCEAN_EINVAL;
     }
     if (*path == '?') {
         out->path[0] = '/';
         if (plen + 1 > OC_PATH_MAX) {
-            seterr(err, errlen, "URL \"%.100s\": path longer than %d bytes", url, OC_PATH_MAX);
+            ocean_seterr(err, errlen, "URL \"%.100s\": path longer than %d bytes", url, OC_PATH_MAX);
             return OCEAN_EINVAL;
         }
         memcpy(out->path + 1, path, plen + 1);
@@ -310,7 +300,7 @@ static ocean_result queue_msg_locked(oc_client *c, proto_msg *m, uint32_t *seq_o
                                      size_t errlen)
 {
     if (c->state != OC_READY || !c->wsi || c->close_req) {
-        seterr(err, errlen, "not connected");
+        ocean_seterr(err, errlen, "not connected");
         return OCEAN_ESTATE;
     }
     txmsg *t = calloc(1, sizeof *t);
@@ -1000,7 +990,7 @@ ocean_result oc_loop_create(oc_loop **out, char *err, size_t errlen)
     info.options = LWS_SERVER_OPTION_DO_SSL_GLOBAL_INIT;
     l->ctx = lws_create_context(&info);
     if (!l->ctx) {
-        seterr(err, errlen, "libwebsockets could not create a client context");
+        ocean_seterr(err, errlen, "libwebsockets could not create a client context");
         pthread_mutex_destroy(&l->mu);
         pthread_cond_destroy(&l->cv);
         free(l);
@@ -1199,7 +1189,7 @@ static void free_client_mem(oc_client *c)
 ocean_result oc_client_create(const oc_options *o, oc_client **out, char *err, size_t errlen)
 {
     if (!out || !o) {
-        seterr(err, errlen, "no options");
+        ocean_seterr(err, errlen, "no options");
         return OCEAN_EINVAL;
     }
     *out = NULL;
@@ -1208,15 +1198,15 @@ ocean_result oc_client_create(const oc_options *o, oc_client **out, char *err, s
     if (r != OCEAN_OK)
         return r;
     if (o->frame_queue < 1 || o->frame_queue > 1024) {
-        seterr(err, errlen, "frame_queue %d outside 1..1024", o->frame_queue);
+        ocean_seterr(err, errlen, "frame_queue %d outside 1..1024", o->frame_queue);
         return OCEAN_EINVAL;
     }
     if (o->max_message < PROTO_HEADER_SIZE) {
-        seterr(err, errlen, "max_message %u below the %d-byte header", o->max_message, PROTO_HEADER_SIZE);
+        ocean_seterr(err, errlen, "max_message %u below the %d-byte header", o->max_message, PROTO_HEADER_SIZE);
         return OCEAN_EINVAL;
     }
     if (o->origin && strlen(o->origin) >= 256) {
-        seterr(err, errlen, "origin longer than 255 bytes");
+        ocean_seterr(err, errlen, "origin longer than 255 bytes");
         return OCEAN_EINVAL;
     }
     oc_client *c = calloc(1, sizeof *c);
@@ -1297,7 +1287,7 @@ ocean_result oc_connect(const oc_options *o, int timeout_ms, oc_client **out, ch
     if (r != OCEAN_OK) {
         oc_client_last_error(c, err, errlen);
         if (err && errlen && !err[0])
-            seterr(err, errlen, "connect to %s:%d failed", c->url.host, c->url.port);
+            ocean_seterr(err, errlen, "connect to %s:%d failed", c->url.host, c->url.port);
         oc_client_destroy(c);
         return r;
     }
@@ -1421,11 +1411,11 @@ void oc_subscribe_default(proto_subscribe *s)
     s->effects = PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT | PROTO_FX_NORMALS;
     s->mesh_kind = PROTO_MESH_CONCENTRIC;
     s->codec = PROTO_CODEC_QZ;
-    s->cutoff_policy = PROTO_CUTOFF_SEED;
+    s->cutoff_policy = PROTO_CUTOFF_ANTIALIAS;
     s->mode = PROTO_MODE_LIVE;
     s->layers = 1;
     s->lod_levels = 4;
-    s->tile_size = 64;
+    s->tile_size = 32;
     s->frame_rate_hz = 30.0f;
     s->accuracy = (float)PROTO_ACCURACY_DEFAULT;
     s->base_spacing_m = 0;

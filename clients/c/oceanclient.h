@@ -245,9 +245,10 @@ double oc_client_sim_time(const oc_client *c);
 ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen);
 
 /* A SUBSCRIBE with the library's defaults: height+displacement+normals,
- * concentric mesh, codec qz at accuracy 1e-3, seed cutoff policy, live,
- * 1 layer, 4 LOD levels, 64-sample tiles, 30 Hz, server default spacing and
- * range. */
+ * concentric mesh, codec qz at PROTO_ACCURACY_DEFAULT, antialias cutoff
+ * policy (the cutoff falls as the camera speeds up, so nothing aliases),
+ * live, 1 layer, 4 LOD levels, 32-sample tiles (the default subscription
+ * stays under 4 MB/s at 30 Hz), server default spacing and range. */
 void oc_subscribe_default(proto_subscribe *s);
 
 /* Sends SUBSCRIBE (validated by the encoder first).  May be sent again to

@@ -210,10 +210,10 @@ void occli_sub_default(occli_sub *s)
     s->codec = "qz";
     s->effects = "height,displacement,normals";
     s->mesh = "concentric";
-    s->policy = "seed";
+    s->policy = "antialias";
     s->rate = 30;
     s->accuracy = PROTO_ACCURACY_DEFAULT;
-    s->tile_size = 64;
+    s->tile_size = 32;
     s->levels = 4;
     s->layers = 1;
     s->pos = "0,20,0";
