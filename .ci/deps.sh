@@ -24,7 +24,8 @@ if ((${#missing[@]})); then
     apt-get update -qq
     apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
-# The browser test's driver comes from npm (pinned in clients/web/package.json).
-if [[ -f clients/web/package.json && ! -d clients/web/node_modules/playwright-core ]]; then
-    (cd clients/web && npm ci --no-audit --no-fund --loglevel=error)
+# The browser test's driver comes from npm (pinned in tests/browser/package.json;
+# kept out of clients/web/ so the daemon never serves node_modules).
+if [[ -f tests/browser/package.json && ! -d tests/browser/node_modules/playwright-core ]]; then
+    (cd tests/browser && npm ci --no-audit --no-fund --loglevel=error)
 fi

@@ -34,9 +34,9 @@ die() { echo "test_browser: $*" >&2; exit 1; }
 
 command -v node >/dev/null || die "node not found (apt-get install nodejs; .ci/deps.sh does it)"
 [[ -x "${CHROMIUM:-/usr/bin/chromium}" ]] || die "${CHROMIUM:-/usr/bin/chromium} not found (apt-get install chromium)"
-if [[ ! -d clients/web/node_modules/playwright-core ]]; then
-    echo "test_browser: installing the test's npm dev dependencies (npm ci in clients/web)"
-    (cd clients/web && npm ci --no-audit --no-fund --loglevel=error) || die "npm ci failed"
+if [[ ! -d tests/browser/node_modules/playwright-core ]]; then
+    echo "test_browser: installing the test's npm dev dependencies (npm ci in tests/browser)"
+    (cd tests/browser && npm ci --no-audit --no-fund --loglevel=error) || die "npm ci failed"
 fi
 [[ -x "$BUILD/oceand" ]] || die "$BUILD/oceand not built"
 [[ -f "$BUILD/libocean_proto.a" && -f "$BUILD/libocean_sim.a" ]] || die "$BUILD/libocean_proto.a / libocean_sim.a not built"

@@ -31,8 +31,7 @@ import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-const webDir = fileURLToPath(new URL('../../clients/web/', import.meta.url));
-const require = createRequire(join(webDir, 'package.json'));
+const require = createRequire(new URL('./package.json', import.meta.url));
 const { chromium } = require('playwright-core');
 
 const base = process.env.OCEAN_URL || 'http://127.0.0.1:8080/';
