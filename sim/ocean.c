@@ -37,24 +37,24 @@ enum {
 };
 #define MAX_LEVELS 9 /* n = 8 .. 2048 */
 
-/* One mode of the half spectrum.  h0 values are float (they are data);
- * omega is double so that omega * t keeps its phase at t = 1e9 s. */
-typedef struct mode {
-    double omega;
-    float h0p_re, h0p_im;   /* h0(k) */
-    float h0m_re, h0m_im;   /* conj(h0(-k)) */
-    float kx, kz, k;
-    float var;              /* E|h(k,t)|^2 = P(k) + P(-k) */
-} mode;
+/* The modes of the half spectrum, n x (n/2 + 1), row = kz index, as
+ * structure-of-arrays so the per-row passes vectorise.  h0 values are
+ * float (they are data); omega is double so that omega * t keeps its
+ * phase at t = 1e9 s.  Out-of-band modes are all zero. */
+enum { H0P_RE, H0P_IM, H0M_RE, H0M_IM };  /* h0(k), conj(h0(-k)) */
+enum { C_HR, C_HI, C_TR, C_TI };          /* h(k,t), dh/dt */
 
 typedef struct cascade {
     double patch, dk, k_lo, k_hi;
-    mode *modes;            /* n x (n/2 + 1), row = kz index */
+    double *omega;
+    float *h0[4];
+    float *kx, *k;
+    float *var;             /* E|h(k,t)|^2 = P(k) + P(-k) */
     double variance;
     /* h(k,t) and dh/dt of every mode, unfiltered, at time cache_t for the
      * modes of grids up to cache_n: several cutoff buckets in one tick pay
      * for the trigonometry once. */
-    float (*cache)[4];
+    float *cache[4];
     double cache_t;
     int cache_n;
 } cascade;
@@ -205,16 +205,23 @@ static ocean_result cascade_init(ocean *o, int c)
      * wavelength (Crest PR #903); the next cascade takes over from there. */
     cs->k_lo = c == 0 ? 0.0 : o->cas[c - 1].k_hi;
     cs->k_hi = c == p->cascades - 1 ? p->k_max : M_PI * n / (2.0 * cs->patch);
-    cs->modes = calloc((size_t)n * half, sizeof(mode));
-    cs->cache = malloc(sizeof *cs->cache * (size_t)n * half);
+    size_t nm = (size_t)n * half;
+    int ok = (cs->omega = calloc(nm, sizeof(double))) != NULL;
+    for (int j = 0; j < 4; j++) {
+        ok &= (cs->h0[j] = calloc(nm, sizeof(float))) != NULL;
+        ok &= (cs->cache[j] = malloc(nm * sizeof(float))) != NULL;
+    }
+    ok &= (cs->kx = calloc(nm, sizeof(float))) != NULL;
+    ok &= (cs->k = calloc(nm, sizeof(float))) != NULL;
+    ok &= (cs->var = calloc(nm, sizeof(float))) != NULL;
     cs->cache_n = 0;
-    if (!cs->modes || !cs->cache)
+    if (!ok)
         return OCEAN_ENOMEM;
     double var = 0.0;
     for (int iz = 0; iz < n; iz++) {
         int mz = iz < n / 2 ? iz : iz - n;
         for (int ix = 0; ix < half; ix++) {
-            mode *m = &cs->modes[(size_t)iz * half + ix];
+            size_t i = (size_t)iz * half + ix;
             int mx = ix;
             /* Nyquist row and column stay zero. */
             if (mz == -n / 2 || mx == n / 2)
@@ -225,16 +232,15 @@ static ocean_result cascade_init(ocean *o, int c)
             double hp[2], hm[2];
             draw_h0(p, cs, mx, mz, hp);
             draw_h0(p, cs, -mx, -mz, hm);
-            m->omega = ocean_dispersion(k, p->sea.depth_m);
-            m->h0p_re = (float)hp[0];
-            m->h0p_im = (float)hp[1];
-            m->h0m_re = (float)hm[0];
-            m->h0m_im = (float)-hm[1];
-            m->kx = (float)kx;
-            m->kz = (float)kz;
-            m->k = (float)k;
+            cs->omega[i] = ocean_dispersion(k, p->sea.depth_m);
+            cs->h0[H0P_RE][i] = (float)hp[0];
+            cs->h0[H0P_IM][i] = (float)hp[1];
+            cs->h0[H0M_RE][i] = (float)hm[0];
+            cs->h0[H0M_IM][i] = (float)-hm[1];
+            cs->kx[i] = (float)kx;
+            cs->k[i] = (float)k;
             double v = mode_p(p, cs, kx, kz) + mode_p(p, cs, -kx, -kz);
-            m->var = (float)v;
+            cs->var[i] = (float)v;
             /* Column 0 holds both k and -k; other columns stand for their mirror too. */
             var += ix == 0 ? v : 2.0 * v;
         }
@@ -314,8 +320,15 @@ void ocean_destroy(ocean *o)
     pthread_mutex_unlock(&planner_lock);
     fftwf_free(o->spec);
     for (int c = 0; c < OCEAN_MAX_CASCADES; c++) {
-        free(o->cas[c].modes);
-        free(o->cas[c].cache);
+        cascade *cs = &o->cas[c];
+        free(cs->omega);
+        for (int j = 0; j < 4; j++) {
+            free(cs->h0[j]);
+            free(cs->cache[j]);
+        }
+        free(cs->kx);
+        free(cs->k);
+        free(cs->var);
     }
     free(o);
 }
@@ -406,11 +419,11 @@ static void filter_sums(const ocean *o, double kc, int order, double scale, doub
     *total = *kept = *err = 0.0;
     for (int c = 0; c < o->p.cascades; c++)
         for (size_t i = 0; i < (size_t)n * half; i++) {
-            const mode *m = &o->cas[c].modes[i];
-            if (m->var == 0.0f)
+            const cascade *cs = &o->cas[c];
+            if (cs->var[i] == 0.0f)
                 continue;
-            double w = ((i % half) == 0 ? 1.0 : 2.0) * m->var;
-            double g = effective_gain(m->k, kc, order, kneg);
+            double w = ((i % half) == 0 ? 1.0 : 2.0) * cs->var[i];
+            double g = effective_gain(cs->k[i], kc, order, kneg);
             double ge = g * scale * (1.0 + (boost - 1.0) * g * g);
             *total += w;
             *kept += w * g * g;
@@ -481,26 +494,33 @@ typedef struct stage_args {
     fftwf_complex *spec;
 } stage_args;
 
-/* sin and cos of a phase x (any double): Cody-Waite reduction by pi/2 in
- * double, then Cephes' float polynomials on [-pi/4, pi/4] (about 1 ulp),
- * branch-free so the row loop vectorises. */
-#define PIO2_HI 1.57079632679489655800
-#define PIO2_LO 6.12323399573676603587e-17
+/* sin and cos of a phase x (any double), branch-free so the row loop
+ * vectorises: reduction to [-pi, pi] in double (Cody-Waite, the integer
+ * found with the 1.5 * 2^52 rounding trick, valid while |x| < 2^51), a
+ * reflection onto [-pi/2, pi/2] in float, then Taylor polynomials of
+ * degree 11 and 12, whose truncation error there (6e-8, 6e-9) is below
+ * float's rounding. */
+#define ROUND_MAGIC 6755399441055744.0
+#define PI_F 3.14159265358979f
+#define PIO2_F 1.57079632679490f
 
 static inline void phase_sincos(double x, float *s_out, float *c_out)
 {
-    /* 0x1.8p52 forces rounding to an integer for |v| < 2^51. */
-    double q = (x * (2.0 / M_PI) + 6755399441055744.0) - 6755399441055744.0;
-    float r = (float)((x - q * PIO2_HI) - q * PIO2_LO);
-    double q4 = q - 4.0 * floor(q * 0.25);
-    int quad = (int)q4;
-    float r2 = r * r;
-    float sn = r + r * r2 * (-1.6666654611e-1f + r2 * (8.3321608736e-3f + r2 * -1.9515295891e-4f));
-    float cs = 1.0f - 0.5f * r2 + r2 * r2 * (4.166664568298827e-2f + r2 * (-1.388731625493765e-3f +
-                                                                       r2 * 2.443315711809948e-5f));
-    float s1 = (quad & 1) ? cs : sn, c1 = (quad & 1) ? sn : cs;
-    *s_out = (quad & 2) ? -s1 : s1;
-    *c_out = ((quad + 1) & 2) ? -c1 : c1;
+    double q = (x * (1.0 / (2.0 * M_PI)) + ROUND_MAGIC) - ROUND_MAGIC;
+    float r = (float)((x - q * TWO_PI_HI) - q * TWO_PI_LO);
+    /* sin(pi - |r|) = sin |r|, cos(pi - |r|) = -cos |r|: arithmetic, not
+     * branches, so it stays one vector instruction stream. */
+    float a = fabsf(r);
+    float over = (float)(a > PIO2_F);
+    float rr = copysignf(a + over * (PI_F - 2.0f * a), r);
+    float csign = 1.0f - 2.0f * over;
+    float r2 = rr * rr;
+    float sn = rr * (1.0f + r2 * (-1.0f / 6 + r2 * (1.0f / 120 + r2 * (-1.0f / 5040 +
+               r2 * (1.0f / 362880 + r2 * (-1.0f / 39916800))))));
+    float cs = 1.0f + r2 * (-0.5f + r2 * (1.0f / 24 + r2 * (-1.0f / 720 + r2 * (1.0f / 40320 +
+               r2 * (-1.0f / 3628800 + r2 * (1.0f / 479001600))))));
+    *s_out = sn;
+    *c_out = csign * cs;
 }
 
 /* Butterworth gain without pow(): q = r^order by squaring.  Same
@@ -531,50 +551,55 @@ static void spectrum_row(const stage_args *a, int r)
     size_t plane = (size_t)n * half;
     int mz = r < n / 2 ? r : r - n;
     size_t base = (size_t)wrap_index(mz, a->n_full) * full_half;
-    const mode *row = &a->cs->modes[base];
-    float (*h)[4] = &a->cs->cache[base];
+    const cascade *cs = a->cs;
+    const double *om = cs->omega + base;
+    const float *pr = cs->h0[H0P_RE] + base, *pi = cs->h0[H0P_IM] + base;
+    const float *mr = cs->h0[H0M_RE] + base, *mi = cs->h0[H0M_IM] + base;
+    float *c_hr = cs->cache[C_HR] + base, *c_hi = cs->cache[C_HI] + base;
+    float *c_tr = cs->cache[C_TR] + base, *c_ti = cs->cache[C_TI] + base;
     if (!a->cached) {
         /* Out-of-band modes have h0 = 0, so they need no branch. */
         double t = a->t;
 #pragma omp simd
         for (int ix = 0; ix < half; ix++) {
-            const mode *m = &row[ix];
             float s, c;
-            phase_sincos(m->omega * t, &s, &c);
+            phase_sincos(om[ix] * t, &s, &c);
             /* u = h0p e^{-i ph}, v = h0m e^{+i ph}, h = u + v, dh/dt = -i w u + i w v */
-            float ur = m->h0p_re * c + m->h0p_im * s, ui = m->h0p_im * c - m->h0p_re * s;
-            float vr = m->h0m_re * c - m->h0m_im * s, vi = m->h0m_im * c + m->h0m_re * s;
-            float om = (float)m->omega;
-            h[ix][0] = ur + vr;
-            h[ix][1] = ui + vi;
-            h[ix][2] = om * (ui - vi);
-            h[ix][3] = om * (vr - ur);
+            float ur = pr[ix] * c + pi[ix] * s, ui = pi[ix] * c - pr[ix] * s;
+            float vr = mr[ix] * c - mi[ix] * s, vi = mi[ix] * c + mr[ix] * s;
+            float w = (float)om[ix];
+            c_hr[ix] = ur + vr;
+            c_hi[ix] = ui + vi;
+            c_tr[ix] = w * (ui - vi);
+            c_ti[ix] = w * (vr - ur);
         }
     }
-    float g[ROW_MAX], hr[ROW_MAX], hi[ROW_MAX], tr[ROW_MAX], ti[ROW_MAX];
-    float kx[ROW_MAX], kinv[ROW_MAX];
+    float g[ROW_MAX], hr[ROW_MAX], hi[ROW_MAX], tr[ROW_MAX], ti[ROW_MAX], kinv[ROW_MAX];
+    const float *kx = cs->kx + base, *kk = cs->k + base;
     float kc = (float)a->kc, kneg = (float)a->kneg, scale = (float)a->scale, boost = (float)a->boost;
-    int unfiltered = isinf(a->kc) && a->scale == 1.0 && a->boost == 1.0;
-    int nyq_row = mz == -n / 2;
-    for (int ix = 0; ix < half; ix++) {
-        const mode *m = &row[ix];
-        float k = m->k;
-        float gi = 1.0f;
-        if (!unfiltered) {
-            float gb = k < kneg ? gain_fast(k, kc, a->order) : 0.0f;
+    if (isinf(a->kc) && a->scale == 1.0 && a->boost == 1.0) {
+        for (int ix = 0; ix < half; ix++)
+            g[ix] = 1.0f;
+    } else {
+        for (int ix = 0; ix < half; ix++) {
+            float k = kk[ix], gb = k < kneg ? gain_fast(k, kc, a->order) : 0.0f;
             /* The low boost fades in with the gain (ocean_filter_cutoff_gain):
              * no step at kc. */
-            gi = gb * scale * (1.0f + (boost - 1.0f) * gb * gb);
+            g[ix] = gb * scale * (1.0f + (boost - 1.0f) * gb * gb);
         }
-        g[ix] = (nyq_row || ix == n / 2) ? 0.0f : gi;
-        kx[ix] = m->kx;
-        kinv[ix] = k > 0.0f ? 1.0f / k : 0.0f;
     }
+    /* Nyquist row and column are zero in every channel. */
+    if (mz == -n / 2)
+        for (int ix = 0; ix < half; ix++)
+            g[ix] = 0.0f;
+    g[n / 2] = 0.0f;
+    for (int ix = 0; ix < half; ix++)
+        kinv[ix] = kk[ix] > 0.0f ? 1.0f / kk[ix] : 0.0f;
     for (int ix = 0; ix < half; ix++) {
-        hr[ix] = h[ix][0] * g[ix];
-        hi[ix] = h[ix][1] * g[ix];
-        tr[ix] = h[ix][2] * g[ix];
-        ti[ix] = h[ix][3] * g[ix];
+        hr[ix] = c_hr[ix] * g[ix];
+        hi[ix] = c_hi[ix] * g[ix];
+        tr[ix] = c_tr[ix] * g[ix];
+        ti[ix] = c_ti[ix] * g[ix];
     }
     float kz = (float)(mz * a->cs->dk), lam = (float)a->lambda;
     for (int j = 0; j < a->nch; j++) {
@@ -736,8 +761,9 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
         }
         if (fx & OCEAN_FX_FOAM) {
             ocean_field *fd = &f->field[c];
-            size_t nn = (size_t)n * n;
-            for (size_t i = 0; i < nn; i++) {
+            long nn = (long)n * n;
+#pragma omp parallel for num_threads(o->p.threads) schedule(static)
+            for (long i = 0; i < nn; i++) {
                 float j = (1.0f + fd->dxx[i]) * (1.0f + fd->dzz[i]) - fd->dxz[i] * fd->dxz[i];
                 fd->jacobian[i] = j;
                 fd->foam[i] = ocean_foam_from_jacobian(j);
