@@ -59,6 +59,30 @@ typedef struct cascade {
     int cache_n;
 } cascade;
 
+#define FILTER_MEMO 16
+typedef struct filter_memo {
+    int used, order;
+    double kc, scale, boost, value;
+} filter_memo;
+
+/* Index of (kc, order, scale, boost) in a memo table, or -1. */
+static int memo_find(const filter_memo *m, double kc, int order, double scale, double boost)
+{
+    for (int i = 0; i < FILTER_MEMO; i++)
+        if (m[i].used && m[i].kc == kc && m[i].order == order && m[i].scale == scale &&
+            m[i].boost == boost)
+            return i;
+    return -1;
+}
+
+/* Stores a value, replacing the oldest entry (round robin). */
+static void memo_put(filter_memo *m, int *next, double kc, int order, double scale,
+                     double boost, double value)
+{
+    m[*next] = (filter_memo){1, order, kc, scale, boost, value};
+    *next = (*next + 1) % FILTER_MEMO;
+}
+
 struct ocean {
     ocean_params p;
     int levels;                         /* plans for n = 8 << l, l < levels */
@@ -66,13 +90,12 @@ struct ocean {
     fftwf_complex *spec;                /* CH_COUNT x n x (n/2+1) scratch */
     fftwf_plan plan[MAX_LEVELS][CH_COUNT]; /* [level][channels - 1] */
     ocean_counters counters;
-    /* Redistribution scale cache: depends only on (cutoff, order). */
-    double redis_cutoff;
-    int redis_order;
-    double redis_scale;
-    /* E_error cache: depends on (cutoff, order, scale, boost). */
-    double err_cutoff, err_scale, err_boost, err_value;
-    int err_order;
+    double k_top;                       /* largest |k| any band holds */
+    /* Per-filter sums over every mode cost O(n^2); a tick serving several
+     * cutoff buckets asks for the same few again and again.  Redistribution
+     * scales are keyed by (cutoff, order), E_error by all four. */
+    filter_memo redis_memo[FILTER_MEMO], err_memo[FILTER_MEMO];
+    int redis_next, err_next;
 };
 
 struct ocean_frame {
@@ -262,8 +285,6 @@ ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t 
         return OCEAN_ENOMEM;
     }
     o->p = *p;
-    o->redis_cutoff = NAN;
-    o->err_cutoff = NAN;
     for (int c = 0; c < p->cascades; c++) {
         r = cascade_init(o, c);
         if (r != OCEAN_OK) {
@@ -273,6 +294,11 @@ ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t 
         }
     }
     int n = p->n;
+    {
+        const cascade *fin = &o->cas[p->cascades - 1];
+        double corner = M_SQRT2 * (n / 2 - 1) * fin->dk;
+        o->k_top = fin->k_hi < corner ? fin->k_hi : corner;
+    }
     o->spec = fftwf_malloc(sizeof(fftwf_complex) * CH_COUNT * (size_t)n * (n / 2 + 1));
     float *tmp = fftwf_malloc(sizeof(float) * CH_COUNT * (size_t)n * n);
     if (!o->spec || !tmp) {
@@ -382,9 +408,14 @@ void ocean_frame_destroy(ocean_frame *f)
     free(f);
 }
 
-/* Waves whose filter gain is below 1e-4 are not transformed at all
- * (1e-4 of a 10 m wave is 1 mm). */
-#define NEGLIGIBLE_GAIN 1e-4
+/* Waves the filter keeps at under 1/64 of their amplitude are not
+ * transformed at all, so a cutoff kc needs a grid holding only 2 kc
+ * (order 6): that is what lets a low cutoff run a smaller transform.  The
+ * dropped waves count fully in E_error. */
+#define NEGLIGIBLE_GAIN (1.0 / 64.0)
+/* A filter whose gain over the whole band stays above 1 - 1e-6 changes
+ * no float: the evaluation is the unfiltered one. */
+#define NOOP_LOSS 1e-6
 
 static inline double negligible_k(double kc, int order)
 {
@@ -432,17 +463,17 @@ static void filter_sums(const ocean *o, double kc, int order, double scale, doub
 }
 
 /* Scale on the passed band that restores the unfiltered variance;
- * depends only on (cutoff, order), so it is cached. */
+ * depends only on (cutoff, order). */
 static double redistribution_scale(ocean *o, double kc, int order)
 {
-    if (o->redis_order == order && o->redis_cutoff == kc)
-        return o->redis_scale;
+    int i = memo_find(o->redis_memo, kc, order, 1.0, 1.0);
+    if (i >= 0)
+        return o->redis_memo[i].value;
     double total, kept, err;
     filter_sums(o, kc, order, 1.0, 1.0, &total, &kept, &err);
-    o->redis_cutoff = kc;
-    o->redis_order = order;
-    o->redis_scale = kept > 0.0 ? sqrt(total / kept) : 1.0;
-    return o->redis_scale;
+    double v = kept > 0.0 ? sqrt(total / kept) : 1.0;
+    memo_put(o->redis_memo, &o->redis_next, kc, order, 1.0, 1.0, v);
+    return v;
 }
 
 /* E_error = ||H - H_f||_2 / ||H||_2 over the height spectrum, in
@@ -452,17 +483,14 @@ static double filter_error(ocean *o, double kc, int order, double scale, double 
 {
     if (isinf(kc) && scale == 1.0 && boost == 1.0)
         return 0.0;
-    if (o->err_cutoff == kc && o->err_order == order && o->err_scale == scale &&
-        o->err_boost == boost)
-        return o->err_value;
+    int i = memo_find(o->err_memo, kc, order, scale, boost);
+    if (i >= 0)
+        return o->err_memo[i].value;
     double total, kept, err;
     filter_sums(o, kc, order, scale, boost, &total, &kept, &err);
-    o->err_cutoff = kc;
-    o->err_order = order;
-    o->err_scale = scale;
-    o->err_boost = boost;
-    o->err_value = total > 0.0 ? sqrt(err / total) : 0.0;
-    return o->err_value;
+    double v = total > 0.0 ? sqrt(err / total) : 0.0;
+    memo_put(o->err_memo, &o->err_next, kc, order, scale, boost, v);
+    return v;
 }
 
 double ocean_filtered_variance(const ocean *o, double cutoff_k, int order)
@@ -712,6 +740,15 @@ static void set_field_pointers(ocean_frame *f, int c, int n, unsigned effects,
     }
 }
 
+double ocean_effective_cutoff(const ocean *o, double cutoff_k, int order)
+{
+    if (isnan(cutoff_k) || cutoff_k < 0.0 || order < 1 || order > OCEAN_FILTER_MAX_ORDER)
+        return NAN;
+    if (isinf(cutoff_k) || ocean_filter_gain(o->k_top, cutoff_k, order) >= 1.0 - NOOP_LOSS)
+        return INFINITY;
+    return cutoff_k;
+}
+
 ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_frame *f)
 {
     if (!o || !r || !f || f->cascades != o->p.cascades || f->n_max != o->p.n)
@@ -719,7 +756,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
     if (!isfinite(t) || isnan(r->cutoff_k) || r->cutoff_k < 0.0 || r->order < 1 ||
         r->order > OCEAN_FILTER_MAX_ORDER || !isfinite(r->low_boost) || r->low_boost < 0.0 || r->low_boost > 2.0)
         return OCEAN_EINVAL;
-    double kc = r->cutoff_k;
+    double kc = ocean_effective_cutoff(o, r->cutoff_k, r->order);
     double kneg = negligible_k(kc, r->order);
     double scale = r->redistribute && !isinf(kc) ? redistribution_scale(o, kc, r->order) : 1.0;
     double boost = r->low_boost > 0.0 ? r->low_boost : 1.0;
@@ -785,7 +822,7 @@ ocean_result ocean_transform_only(ocean *o, const ocean_request *r, ocean_frame 
     if (!o || !r || !f || f->cascades != o->p.cascades || isnan(r->cutoff_k) ||
         r->cutoff_k < 0.0 || r->order < 1 || r->order > OCEAN_FILTER_MAX_ORDER)
         return OCEAN_EINVAL;
-    double kneg = negligible_k(r->cutoff_k, r->order);
+    double kneg = negligible_k(ocean_effective_cutoff(o, r->cutoff_k, r->order), r->order);
     for (int c = 0; c < o->p.cascades; c++) {
         const cascade *cs = &o->cas[c];
         int ch[CH_COUNT];

@@ -125,6 +125,12 @@ typedef struct ocean_frame ocean_frame;
 ocean_result ocean_frame_create(const ocean *o, ocean_frame **out);
 void ocean_frame_destroy(ocean_frame *f);
 
+/* The cutoff an evaluation really applies: INFINITY when the filter's
+ * gain stays above 1 - 1e-6 over every wave o holds (the evaluation is
+ * then byte-identical to the unfiltered one, so callers can share it),
+ * else cutoff_k.  NaN for an invalid cutoff or order. */
+double ocean_effective_cutoff(const ocean *o, double cutoff_k, int order);
+
 /* Evaluates the sea at time t (seconds, any finite double) into f.
  * Deterministic: same o parameters, t and r give identical bytes. */
 ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_frame *f);

@@ -729,6 +729,21 @@ static void test_cutoff_evaluation(void **state)
     ocean_frame_info info;
     ocean_frame_get_info(f, &info);
     assert_int_equal(info.transforms, 0);
+    /* A cutoff far above the band filters nothing: the evaluation is the
+     * unfiltered one, byte for byte, and says so. */
+    assert_true(isinf(ocean_effective_cutoff(o, 1e3, 6)));
+    assert_true(ocean_effective_cutoff(o, 0.5, 6) == 0.5);
+    assert_true(isnan(ocean_effective_cutoff(o, -1.0, 6)));
+    r.cutoff_k = 1e3;
+    ocean_evaluate(o, 9.0, &r, f);
+    r.cutoff_k = INFINITY;
+    ocean_evaluate(fresh, 9.0, &r, g);
+    assert_true(fields_equal(f, g, 1));
+    {
+        ocean_frame_info fi;
+        ocean_frame_get_info(f, &fi);
+        assert_true(isinf(fi.cutoff_k) && fi.e_error == 0.0);
+    }
     /* kc = 0.03 rad/m keeps only long waves: an 8x smaller transform serves. */
     r.cutoff_k = 0.03;
     ocean_evaluate(o, 9.0, &r, f);

@@ -1,0 +1,279 @@
+/*
+ * bench_filter.c - what filtering and queries cost (issue 3's benchmarks):
+ *   1. evaluation time at a camera speed's cutoff over the unfiltered time,
+ *      with E_error beside it, for the seed policy and the antialias policy;
+ *   2. one tick serving 8 distinct cutoff buckets over one tick serving one;
+ *   3. query throughput (points per second on one core, with inversion) and
+ *      the error against a brute-force inversion.
+ * Markdown to stdout, CSV to tests/bench/out/filter.csv.  Medians of
+ * repeated runs; ratios from the same run, the two sides interleaved.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "filter.h"
+#include "query.h"
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
+}
+
+static int cmp_d(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_d);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static int quick(void)
+{
+    const char *q = getenv("BENCH_QUICK");
+    return q && *q && strcmp(q, "0") != 0;
+}
+
+/* Median ms of one evaluation per request set (one "tick"); each tick uses
+ * a new t so nothing is cached across ticks. */
+static double tick_ms(ocean *o, ocean_frame **f, const ocean_request *r, int nreq, int reps, double t0)
+{
+    double *ms = malloc(sizeof(double) * reps);
+    for (int i = 0; i < reps; i++) {
+        double t = t0 + i * 0.0333;
+        double a = now_ms();
+        for (int k = 0; k < nreq; k++)
+            ocean_evaluate(o, t, &r[k], f[k]);
+        ms[i] = now_ms() - a;
+    }
+    double m = median(ms, reps);
+    free(ms);
+    return m;
+}
+
+int main(void)
+{
+    int reps = quick() ? 15 : 60;
+    ocean_params p;
+    ocean_params_default(&p);
+    char msg[256];
+    ocean *o = NULL;
+    if (ocean_create(&p, &o, msg, sizeof msg) != OCEAN_OK) {
+        fprintf(stderr, "bench_filter: %s\n", msg);
+        return 1;
+    }
+    ocean_frame *f[8];
+    for (int k = 0; k < 8; k++)
+        ocean_frame_create(o, &f[k]);
+    FILE *csv = fopen("tests/bench/out/filter.csv", "w");
+    if (csv)
+        fprintf(csv, "section,setting,value,unit\n");
+    unsigned fx = OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT | OCEAN_FX_NORMALS;
+    ocean_filter_config fc;
+    ocean_filter_config_default(&fc, &p.sea);
+
+    /* 1. A fast camera's cutoff against the unfiltered evaluation. */
+    printf("## Filtering: cost of a fast camera's cutoff\n\n");
+    printf("Default sea (N = %d, %d cascade, %.0f m patch), effects height+displacement+normals, "
+           "%d threads; the client at 50 m/s, 30 fps, 2 m mesh spacing. Ratio = filtered / "
+           "unfiltered evaluation time, medians of %d, interleaved.\n\n",
+           p.n, p.cascades, p.patch_m, p.threads, reps);
+    printf("| policy | cutoff k (rad/m) | grid evaluated | E_error | ms | unfiltered ms | ratio |\n");
+    printf("|---|---:|---:|---:|---:|---:|---:|\n");
+    ocean_filter_policy pols[2] = {OCEAN_FILTER_SEED, OCEAN_FILTER_ANTIALIAS};
+    for (int pi = 0; pi < 2; pi++) {
+        ocean_filter_client cl = {50.0, 30.0, 2.0};
+        ocean_filter_cutoff cut;
+        ocean_filter_cutoff_compute(&fc, pols[pi], &cl, &cut);
+        ocean_request rf, ru;
+        ocean_request_all(&rf, fx);
+        ocean_request_all(&ru, fx);
+        rf.cutoff_k = cut.k;
+        rf.low_boost = cut.low_boost;
+        double *a = malloc(sizeof(double) * reps), *b = malloc(sizeof(double) * reps);
+        for (int i = 0; i < reps; i++) {
+            double t = 100.0 + i * 0.0333;
+            double t0 = now_ms();
+            ocean_evaluate(o, t, &rf, f[0]);
+            double t1 = now_ms();
+            ocean_evaluate(o, t + 1e-3, &ru, f[1]);
+            a[i] = t1 - t0;
+            b[i] = now_ms() - t1;
+        }
+        ocean_evaluate(o, 1.0, &rf, f[0]);
+        ocean_frame_info info;
+        ocean_frame_get_info(f[0], &info);
+        double ma = median(a, reps), mb = median(b, reps);
+        printf("| %s | %.3f | %d | %.4f | %.3f | %.3f | %.3f |\n", ocean_filter_policy_name(pols[pi]),
+               cut.k, ocean_frame_field(f[0], 0)->n, info.e_error, ma, mb, ma / mb);
+        if (csv) {
+            fprintf(csv, "cutoff_50mps,%s_ratio,%.4f,x\n", ocean_filter_policy_name(pols[pi]), ma / mb);
+            fprintf(csv, "cutoff_50mps,%s_e_error,%.5f,1\n", ocean_filter_policy_name(pols[pi]), info.e_error);
+        }
+        free(a);
+        free(b);
+    }
+    printf("\nSeed 000 claims 16.3 / 25.6 = 0.64 (target <= 0.5). Its policy raises the cutoff "
+           "with speed, so at 50 m/s it filters nothing this grid holds and saves nothing; the "
+           "antialias policy lowers it and a smaller transform serves.\n\n");
+
+    /* 2. Eight buckets in one tick against one.  As the server does: a
+     * bucket whose filter changes nothing over this ocean's band shares the
+     * unfiltered evaluation; the highest cutoff runs first and the rest
+     * reuse the tick's spectrum cache. */
+    ocean_filter_buckets bk;
+    ocean_filter_buckets_default(&bk);
+    printf("## Cutoff buckets: one tick serving 8 against one\n\n");
+    printf("Target <= 1.5. Baseline: one client, unfiltered. A bucket that filters nothing the "
+           "ocean holds shares the unfiltered evaluation, as in the daemon. Medians of %d ticks.\n\n", reps);
+    printf("| client mix | distinct evaluations | cutoffs (rad/m) | grids | 1 bucket ms | 8 buckets ms | ratio |\n");
+    printf("|---|---:|---|---|---:|---:|---:|\n");
+    const char *mixes[2] = {"8 speeds 0-300 m/s (antialias, 30 fps, 0.5 m spacing)",
+                            "8 octave buckets from the grid's Nyquist down"};
+    for (int mix = 0; mix < 2; mix++) {
+        ocean_request req[8];
+        int nreq = 0;
+        double knyq = M_PI * p.n / p.patch_m;
+        for (int k = 0; k < 8; k++) {
+            double kc;
+            if (mix == 0) {
+                double speeds[8] = {0.0, 10.0, 25.0, 50.0, 100.0, 150.0, 220.0, 300.0};
+                ocean_filter_client cl = {speeds[k], 30.0, 0.5};
+                ocean_filter_cutoff cut;
+                ocean_filter_cutoff_compute(&fc, OCEAN_FILTER_ANTIALIAS, &cl, &cut);
+                kc = cut.k;
+            } else {
+                kc = knyq / ldexp(1.0, k);
+            }
+            int b;
+            ocean_filter_bucket_of(&bk, kc, &b);
+            ocean_filter_bucket_cutoff(&bk, b, &kc);
+            kc = ocean_effective_cutoff(o, kc, fc.order);
+            int dup = 0;
+            for (int j = 0; j < nreq; j++)
+                dup |= req[j].cutoff_k == kc || (isinf(kc) && isinf(req[j].cutoff_k));
+            if (dup)
+                continue;
+            ocean_request_all(&req[nreq], fx);
+            req[nreq++].cutoff_k = kc;
+        }
+        /* Highest cutoff first. */
+        for (int a = 0; a < nreq; a++)
+            for (int b = a + 1; b < nreq; b++)
+                if (req[b].cutoff_k > req[a].cutoff_k) {
+                    ocean_request tmp = req[a];
+                    req[a] = req[b];
+                    req[b] = tmp;
+                }
+        ocean_request one;
+        ocean_request_all(&one, fx);
+        double *r8 = malloc(sizeof(double) * reps), *r1 = malloc(sizeof(double) * reps);
+        for (int i = 0; i < reps; i++) {
+            r8[i] = tick_ms(o, f, req, nreq, 1, 200.0 + i);
+            r1[i] = tick_ms(o, f, &one, 1, 1, 500.0 + i);
+        }
+        double m8 = median(r8, reps), m1 = median(r1, reps);
+        printf("| %s | %d | ", mixes[mix], nreq);
+        for (int k = 0; k < nreq; k++)
+            printf("%s%.3g", k ? ", " : "", req[k].cutoff_k);
+        printf(" | ");
+        for (int k = 0; k < nreq; k++) {
+            ocean_evaluate(o, 1.0, &req[k], f[k]);
+            printf("%s%d", k ? ", " : "", ocean_frame_field(f[k], 0)->n);
+        }
+        printf(" | %.3f | %.3f | %.3f |\n", m1, m8, m8 / m1);
+        if (csv)
+            fprintf(csv, "buckets,mix%d_ratio_8_over_1,%.4f,x\n", mix, m8 / m1);
+        free(r8);
+        free(r1);
+    }
+    printf("\n");
+
+    /* 3. Query throughput with inversion, and its error. */
+    ocean_request qr;
+    ocean_request_all(&qr, OCEAN_QUERY_EFFECTS);
+    ocean_evaluate(o, 42.0, &qr, f[0]);
+    int npts = quick() ? 20000 : 100000;
+    double *xz = malloc(sizeof(double) * 2 * npts);
+    ocean_query_result *res = malloc(sizeof *res * npts);
+    for (int i = 0; i < npts; i++) {
+        xz[2 * i] = fmod(i * 7.31, 5000.0) - 2500.0;
+        xz[2 * i + 1] = fmod(i * 3.77, 4000.0) - 2000.0;
+    }
+    int qreps = quick() ? 3 : 7;
+    double *qms = malloc(sizeof(double) * qreps);
+    for (int k = 0; k < qreps; k++) {
+        double a = now_ms();
+        ocean_query_points(f[0], NULL, NULL, 42.0, xz, (size_t)npts, NULL, res, NULL);
+        qms[k] = now_ms() - a;
+    }
+    double qm = median(qms, qreps);
+    /* Error: the residual bound the query reports, and a dense search on
+     * a sample of points (the surface point whose displaced position is
+     * nearest, refined to 1e-5 m). */
+    double max_bound = 0.0, max_err = 0.0;
+    int folded = 0;
+    for (int i = 0; i < npts; i++) {
+        if (res[i].folded) {
+            folded++;
+            continue;
+        }
+        max_bound = fmax(max_bound, res[i].error);
+    }
+    int sample = quick() ? 50 : 200;
+    for (int s = 0; s < sample; s++) {
+        int i = s * (npts / sample);
+        if (res[i].folded)
+            continue;
+        double x = xz[2 * i], z = xz[2 * i + 1], cx = x, cz = z, best = INFINITY, span = 8.0;
+        for (int round = 0; round < 5; round++) {
+            double step = span / 40.0, bx = cx, bz = cz;
+            for (int a = -40; a <= 40; a++)
+                for (int b = -40; b <= 40; b++) {
+                    double x0 = cx + b * step, z0 = cz + a * step, dx, dz;
+                    ocean_frame_sample_displacement(f[0], x0, z0, &dx, &dz);
+                    double e = hypot(x0 + dx - x, z0 + dz - z);
+                    if (e < best) {
+                        best = e;
+                        bx = x0;
+                        bz = z0;
+                    }
+                }
+            cx = bx;
+            cz = bz;
+            span = step * 4.0;
+        }
+        ocean_point pt;
+        ocean_frame_sample(f[0], cx, cz, &pt);
+        max_err = fmax(max_err, fabs(pt.height - res[i].height));
+    }
+    double pps = npts / (qm / 1e3);
+    printf("## Point queries\n\n");
+    printf("%d points per call on one thread, inversion of the choppy displacement "
+           "(choppiness %.1f), median of %d calls. Target >= 1 M points/s/core, error <= 1 mm.\n\n",
+           npts, p.sea.choppiness, qreps);
+    printf("| points/s/core | ms per call | max reported error bound | max error vs brute force "
+           "(%d points) | folded points |\n|---:|---:|---:|---:|---:|\n", sample);
+    printf("| %.3g | %.2f | %.2e m | %.2e m | %d |\n\n", pps, qm, max_bound, max_err, folded);
+    if (csv) {
+        fprintf(csv, "query,points_per_s,%.0f,1/s\n", pps);
+        fprintf(csv, "query,max_error_bound,%.3e,m\n", max_bound);
+        fprintf(csv, "query,max_error_brute_force,%.3e,m\n", max_err);
+        fclose(csv);
+    }
+    free(qms);
+    free(xz);
+    free(res);
+    for (int k = 0; k < 8; k++)
+        ocean_frame_destroy(f[k]);
+    ocean_destroy(o);
+    return 0;
+}
