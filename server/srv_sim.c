@@ -298,16 +298,15 @@ static void choose_cutoff(srv_sim *s, srv_client *c, job *j)
     c->sim.cutoff_k = k;
     int b = 0;
     if (ocean_filter_bucket_of(&s->buckets, k, &b) != OCEAN_OK) b = ocean_filter_bucket_count(&s->buckets) - 1;
-    /* A bucket above every wave the ocean holds filters nothing: it shares
-     * the unfiltered evaluation (and its tiles) instead of repeating it. */
-    double kb = INFINITY;
-    ocean_filter_bucket_cutoff(&s->buckets, b, &kb);
-    if (isinf(ocean_effective_cutoff(s->oc, kb, s->fcfg.order)))
-        ocean_filter_bucket_of(&s->buckets, INFINITY, &b);
     j->g.bucket = b;
     j->g.layers = sub->layers;
     j->g.boost = (float)(cut.low_boost > 0 ? cut.low_boost : 1.0);
+    /* The frame reports the bucket's cutoff; but a bucket above every wave
+     * the ocean holds filters nothing, so its group is the unfiltered one:
+     * it shares that evaluation (and its tiles) instead of repeating it. */
     j->cutoff_k = group_cutoff(s, &j->g);
+    if (isinf(ocean_effective_cutoff(s->oc, j->cutoff_k, s->fcfg.order)))
+        ocean_filter_bucket_of(&s->buckets, INFINITY, &j->g.bucket);
     j->cut = cut;
     j->cut.k = j->cutoff_k;
     j->cut.low_boost = j->g.boost;
