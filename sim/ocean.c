@@ -48,7 +48,7 @@ typedef struct cascade {
     double patch, dk, k_lo, k_hi;
     double *omega;
     float *h0[4];
-    float *kx, *k;
+    float *kx, *k, *kinv;   /* kinv = 1/|k| (0 at k = 0) */
     float *var;             /* E|h(k,t)|^2 = P(k) + P(-k) */
     double variance;
     /* h(k,t) and dh/dt of every mode, unfiltered, at time cache_t for the
@@ -236,6 +236,7 @@ static ocean_result cascade_init(ocean *o, int c)
     }
     ok &= (cs->kx = calloc(nm, sizeof(float))) != NULL;
     ok &= (cs->k = calloc(nm, sizeof(float))) != NULL;
+    ok &= (cs->kinv = calloc(nm, sizeof(float))) != NULL;
     ok &= (cs->var = calloc(nm, sizeof(float))) != NULL;
     cs->cache_n = 0;
     if (!ok)
@@ -262,6 +263,7 @@ static ocean_result cascade_init(ocean *o, int c)
             cs->h0[H0M_IM][i] = (float)-hm[1];
             cs->kx[i] = (float)kx;
             cs->k[i] = (float)k;
+            cs->kinv[i] = (float)(1.0 / k);
             double v = mode_p(p, cs, kx, kz) + mode_p(p, cs, -kx, -kz);
             cs->var[i] = (float)v;
             /* Column 0 holds both k and -k; other columns stand for their mirror too. */
@@ -354,6 +356,7 @@ void ocean_destroy(ocean *o)
         }
         free(cs->kx);
         free(cs->k);
+        free(cs->kinv);
         free(cs->var);
     }
     free(o);
@@ -602,32 +605,36 @@ static void spectrum_row(const stage_args *a, int r)
             c_ti[ix] = w * (vr - ur);
         }
     }
-    float g[ROW_MAX], hr[ROW_MAX], hi[ROW_MAX], tr[ROW_MAX], ti[ROW_MAX], kinv[ROW_MAX];
-    const float *kx = cs->kx + base, *kk = cs->k + base;
-    float kc = (float)a->kc, kneg = (float)a->kneg, scale = (float)a->scale, boost = (float)a->boost;
-    if (isinf(a->kc) && a->scale == 1.0 && a->boost == 1.0) {
-        for (int ix = 0; ix < half; ix++)
-            g[ix] = 1.0f;
-    } else {
+    const float *kx = cs->kx + base, *kinv = cs->kinv + base;
+    const float *hr = c_hr, *hi = c_hi, *tr = c_tr, *ti = c_ti;
+    float g[ROW_MAX], fhr[ROW_MAX], fhi[ROW_MAX], ftr[ROW_MAX], fti[ROW_MAX];
+    /* Unfiltered, the grid is the full one, whose Nyquist row and column
+     * hold no wave: the cached h is the spectrum as it stands.  Otherwise
+     * apply the gains, and zero this grid's own Nyquist row and column. */
+    if (!(isinf(a->kc) && a->scale == 1.0 && a->boost == 1.0 && n == a->n_full)) {
+        const float *kk = cs->k + base;
+        float kc = (float)a->kc, kneg = (float)a->kneg, scale = (float)a->scale;
+        float boost = (float)a->boost;
         for (int ix = 0; ix < half; ix++) {
             float k = kk[ix], gb = k < kneg ? gain_fast(k, kc, a->order) : 0.0f;
             /* The low boost fades in with the gain (ocean_filter_cutoff_gain):
              * no step at kc. */
             g[ix] = gb * scale * (1.0f + (boost - 1.0f) * gb * gb);
         }
-    }
-    /* Nyquist row and column are zero in every channel. */
-    if (mz == -n / 2)
-        for (int ix = 0; ix < half; ix++)
-            g[ix] = 0.0f;
-    g[n / 2] = 0.0f;
-    for (int ix = 0; ix < half; ix++)
-        kinv[ix] = kk[ix] > 0.0f ? 1.0f / kk[ix] : 0.0f;
-    for (int ix = 0; ix < half; ix++) {
-        hr[ix] = c_hr[ix] * g[ix];
-        hi[ix] = c_hi[ix] * g[ix];
-        tr[ix] = c_tr[ix] * g[ix];
-        ti[ix] = c_ti[ix] * g[ix];
+        if (mz == -n / 2)
+            for (int ix = 0; ix < half; ix++)
+                g[ix] = 0.0f;
+        g[n / 2] = 0.0f;
+        for (int ix = 0; ix < half; ix++) {
+            fhr[ix] = c_hr[ix] * g[ix];
+            fhi[ix] = c_hi[ix] * g[ix];
+            ftr[ix] = c_tr[ix] * g[ix];
+            fti[ix] = c_ti[ix] * g[ix];
+        }
+        hr = fhr;
+        hi = fhi;
+        tr = ftr;
+        ti = fti;
     }
     float kz = (float)(mz * a->cs->dk), lam = (float)a->lambda;
     for (int j = 0; j < a->nch; j++) {

@@ -55,6 +55,9 @@ int cli_parse_effects(const char *s, unsigned *out);
 /* Monotonic wall clock in milliseconds. */
 double cli_now_ms(void);
 
+/* Median of v[0..n) (sorts v in place); n >= 1. */
+double cli_median(double *v, int n);
+
 /* Subcommands: each returns the process exit status. */
 int cmd_stats(int argc, char **argv);
 int cmd_bake(int argc, char **argv);

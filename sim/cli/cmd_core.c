@@ -10,18 +10,6 @@
 
 #include "cli.h"
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 /* Prints a cJSON object and frees it. */
 static void print_json(cJSON *o)
 {
@@ -177,7 +165,7 @@ int cmd_bench(int argc, char **argv)
     }
     ocean_frame_info info;
     ocean_frame_get_info(f, &info);
-    double ms = median(full, reps), ms_fft = median(fft, reps);
+    double ms = cli_median(full, reps), ms_fft = cli_median(fft, reps);
     if (c.json) {
         cJSON *j = cJSON_CreateObject();
         cJSON_AddNumberToObject(j, "n", c.params.n);

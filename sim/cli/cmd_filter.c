@@ -13,18 +13,6 @@
 #include "cli.h"
 #include "filter.h"
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 /* A JSON number, or null for NaN/Inf (JSON has neither). */
 static void add_num(cJSON *j, const char *name, double v)
 {
@@ -62,8 +50,8 @@ static ocean_result timed_pair(ocean *o, ocean_frame *f, double t, const ocean_r
         ocean_frame_get_info(f, ib);
     }
     if (r == OCEAN_OK) {
-        *ms_a = median(ta, repeat);
-        *ms_b = median(tb, repeat);
+        *ms_a = cli_median(ta, repeat);
+        *ms_b = cli_median(tb, repeat);
     }
     free(ta);
     return r;

@@ -19,6 +19,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "../lib/bench_util.h"
 #include "tile_source.h"
 #include "codec.h"
 
@@ -29,25 +30,6 @@ typedef struct row {
     proto_codec codec;
     double accuracy;
 } row;
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
-}
-
-static int cmp_d(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_d);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 typedef struct result {
     double bytes, enc_ms, dec_ms, maxabs, rms, psnr_min, psnr_mean;
@@ -70,18 +52,18 @@ static int run(const row *rw, unsigned channels, int planes, float **tiles, int 
     for (int t = 0; t < ntiles; t++) {
         for (int r = 0; r < reps; r++) {
             proto_buf_reset(&b);
-            double t0 = now_ms();
+            double t0 = bench_now_ms();
             if (proto_tile_encode(rw->codec, &prm, TILE, TILE, channels, tiles[t], &b, NULL, err, sizeof err)) {
                 fprintf(stderr, "%s: encode: %s\n", rw->name, err);
                 return -1;
             }
-            double t1 = now_ms();
+            double t1 = bench_now_ms();
             if (proto_tile_decode(rw->codec, TILE, TILE, channels, proto_buf_data(&b), proto_buf_len(&b), back,
                                   err, sizeof err)) {
                 fprintf(stderr, "%s: decode: %s\n", rw->name, err);
                 return -1;
             }
-            double t2 = now_ms();
+            double t2 = bench_now_ms();
             enc[t * reps + r] = t1 - t0;
             dec[t * reps + r] = t2 - t1;
         }
@@ -104,8 +86,8 @@ static int run(const row *rw, unsigned channels, int planes, float **tiles, int 
         psum += isfinite(psnr) ? psnr : 200;
     }
     out->bytes = bytes / ntiles;
-    out->enc_ms = median(enc, ntiles * reps);
-    out->dec_ms = median(dec, ntiles * reps);
+    out->enc_ms = bench_median(enc, ntiles * reps);
+    out->dec_ms = bench_median(dec, ntiles * reps);
     out->maxabs = maxabs;
     out->rms = sqrt(sq / (m * (double)ntiles));
     out->psnr_min = pmin;
@@ -119,7 +101,7 @@ static int run(const row *rw, unsigned channels, int planes, float **tiles, int 
 
 int main(void)
 {
-    int quick = getenv("OCEAN_BENCH_QUICK") != NULL;
+    int quick = bench_quick();
     const row rows[] = {
         {"f32", PROTO_CODEC_F32, 0},
         {"f16", PROTO_CODEC_F16, 0},

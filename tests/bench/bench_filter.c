@@ -14,33 +14,9 @@
 #include <string.h>
 #include <time.h>
 
+#include "../lib/bench_util.h"
 #include "filter.h"
 #include "query.h"
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
-}
-
-static int cmp_d(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_d);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-static int quick(void)
-{
-    const char *q = getenv("BENCH_QUICK");
-    return q && *q && strcmp(q, "0") != 0;
-}
 
 /* Median ms of one evaluation per request set (one "tick"); each tick uses
  * a new t so nothing is cached across ticks. */
@@ -49,19 +25,19 @@ static double tick_ms(ocean *o, ocean_frame **f, const ocean_request *r, int nre
     double *ms = malloc(sizeof(double) * reps);
     for (int i = 0; i < reps; i++) {
         double t = t0 + i * 0.0333;
-        double a = now_ms();
+        double a = bench_now_ms();
         for (int k = 0; k < nreq; k++)
             ocean_evaluate(o, t, &r[k], f[k]);
-        ms[i] = now_ms() - a;
+        ms[i] = bench_now_ms() - a;
     }
-    double m = median(ms, reps);
+    double m = bench_median(ms, reps);
     free(ms);
     return m;
 }
 
 int main(void)
 {
-    int reps = quick() ? 15 : 60;
+    int reps = bench_quick() ? 15 : 60;
     ocean_params p;
     ocean_params_default(&p);
     char msg[256];
@@ -101,17 +77,17 @@ int main(void)
         double *a = malloc(sizeof(double) * reps), *b = malloc(sizeof(double) * reps);
         for (int i = 0; i < reps; i++) {
             double t = 100.0 + i * 0.0333;
-            double t0 = now_ms();
+            double t0 = bench_now_ms();
             ocean_evaluate(o, t, &rf, f[0]);
-            double t1 = now_ms();
+            double t1 = bench_now_ms();
             ocean_evaluate(o, t + 1e-3, &ru, f[1]);
             a[i] = t1 - t0;
-            b[i] = now_ms() - t1;
+            b[i] = bench_now_ms() - t1;
         }
         ocean_evaluate(o, 1.0, &rf, f[0]);
         ocean_frame_info info;
         ocean_frame_get_info(f[0], &info);
-        double ma = median(a, reps), mb = median(b, reps);
+        double ma = bench_median(a, reps), mb = bench_median(b, reps);
         printf("| %s | %.3f | %d | %.4f | %.3f | %.3f | %.3f |\n", ocean_filter_policy_name(pols[pi]),
                cut.k, ocean_frame_field(f[0], 0)->n, info.e_error, ma, mb, ma / mb);
         if (csv) {
@@ -180,7 +156,7 @@ int main(void)
             r8[i] = tick_ms(o, f, req, nreq, 1, 200.0 + i);
             r1[i] = tick_ms(o, f, &one, 1, 1, 500.0 + i);
         }
-        double m8 = median(r8, reps), m1 = median(r1, reps);
+        double m8 = bench_median(r8, reps), m1 = bench_median(r1, reps);
         printf("| %s | %d | ", mixes[mix], nreq);
         for (int k = 0; k < nreq; k++)
             printf("%s%.3g", k ? ", " : "", req[k].cutoff_k);
@@ -201,21 +177,21 @@ int main(void)
     ocean_request qr;
     ocean_request_all(&qr, OCEAN_QUERY_EFFECTS);
     ocean_evaluate(o, 42.0, &qr, f[0]);
-    int npts = quick() ? 20000 : 100000;
+    int npts = bench_quick() ? 20000 : 100000;
     double *xz = malloc(sizeof(double) * 2 * npts);
     ocean_query_result *res = malloc(sizeof *res * npts);
     for (int i = 0; i < npts; i++) {
         xz[2 * i] = fmod(i * 7.31, 5000.0) - 2500.0;
         xz[2 * i + 1] = fmod(i * 3.77, 4000.0) - 2000.0;
     }
-    int qreps = quick() ? 3 : 7;
+    int qreps = bench_quick() ? 3 : 7;
     double *qms = malloc(sizeof(double) * qreps);
     for (int k = 0; k < qreps; k++) {
-        double a = now_ms();
+        double a = bench_now_ms();
         ocean_query_points(f[0], NULL, NULL, 42.0, xz, (size_t)npts, NULL, res, NULL);
-        qms[k] = now_ms() - a;
+        qms[k] = bench_now_ms() - a;
     }
-    double qm = median(qms, qreps);
+    double qm = bench_median(qms, qreps);
     /* Error: the residual bound the query reports, and a dense search on
      * a sample of points (the surface point whose displaced position is
      * nearest, refined to 1e-5 m). */
@@ -228,7 +204,7 @@ int main(void)
         }
         max_bound = fmax(max_bound, res[i].error);
     }
-    int sample = quick() ? 50 : 200;
+    int sample = bench_quick() ? 50 : 200;
     for (int s = 0; s < sample; s++) {
         int i = s * (npts / sample);
         if (res[i].folded)

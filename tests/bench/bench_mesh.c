@@ -27,6 +27,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "../lib/bench_util.h"
 #include "mesh.h"
 #include "spectrum.h"
 #include "wave_rng.h"
@@ -135,18 +136,6 @@ static double uniform_error_px(const mesh_camera *cam, const surface *s, double 
     return worst;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 int main(void)
 {
     const double heights[4] = {2, 20, 200, 2000};
@@ -166,8 +155,12 @@ int main(void)
            "| uniform vertices | ratio | uniform err px | target |\n");
     printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     int all_met = 1;
+    /* Quick mode: the default (concentric) mesh only, fewer repetitions. */
+    const int quick = bench_quick(), reps = quick ? 2 : REPS;
     for (int kind = 0; kind < MESH_KIND_COUNT_; kind++)
         for (int hi = 0; hi < 4; hi++) {
+            if (quick && kind != MESH_CONCENTRIC)
+                continue;
             mesh_config cfg;
             mesh_config_default(&cfg);
             cfg.kind = (mesh_kind)kind;
@@ -181,7 +174,7 @@ int main(void)
             cam.pitch_deg = -15;
             double tb[REPS], tu[REPS];
             mesh *m = NULL;
-            for (int r = 0; r < REPS; r++) {
+            for (int r = 0; r < reps; r++) {
                 mesh_destroy(m);
                 m = NULL;
                 if (mesh_create(&cfg, &m) != OCEAN_OK || mesh_build(m, &cam) != OCEAN_OK) {
@@ -192,7 +185,7 @@ int main(void)
                 mesh_get_info(m, &in);
                 tb[r] = in.build_ms;
             }
-            for (int r = 0; r < REPS; r++) {
+            for (int r = 0; r < reps; r++) {
                 mesh_camera c2 = cam;
                 c2.pos[0] += 0.37 * (r + 1);
                 c2.yaw_deg += r;
@@ -228,7 +221,7 @@ int main(void)
             int met = err <= 1.0 && ratio <= 1.0 / 50;
             if (kind == MESH_CONCENTRIC)
                 all_met &= met;
-            double bms = median(tb, REPS), ums = median(tu, REPS);
+            double bms = bench_median(tb, reps), ums = bench_median(tu, reps);
             printf("| %s | %g | %g | %d | %u | %.2f | %.3f | %.3f | %.3g | %.2e | %.3f | %s |\n",
                    mesh_kind_name(cfg.kind), heights[hi], dx, v.levels, v.vertex_count, bms, ums,
                    err, uni, ratio, uerr, met ? "met" : "missed");
