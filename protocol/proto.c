@@ -694,10 +694,8 @@ static ocean_result d_record(rd *r, int is_mesh, void *dst)
     return OCEAN_OK;
 }
 
-static ocean_result d_frame(rd *r, proto_frame *f)
+void proto_frame_fixed_read(const uint8_t *p, proto_frame *f)
 {
-    TRY(need(r, FRAME_FIXED, "fixed fields"));
-    const uint8_t *p = r->p + r->off;
     f->cutoff_k = proto_ldf64(p);
     f->e_error = proto_ldf64(p + 8);
     for (int i = 0; i < 3; i++)
@@ -706,6 +704,12 @@ static ocean_result d_frame(rd *r, proto_frame *f)
     f->tick = proto_ld32(p + 44);
     f->tile_count = proto_ld16(p + 48);
     f->has_mesh = p[50];
+}
+
+static ocean_result d_frame(rd *r, proto_frame *f)
+{
+    TRY(need(r, FRAME_FIXED, "fixed fields"));
+    proto_frame_fixed_read(r->p + r->off, f);
     TRY(zero_bytes(r, r->off + 51, 5, "frame"));
     r->off += FRAME_FIXED;
     if (f->tile_count > r->c->lim->max_frame_tiles)

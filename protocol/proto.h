@@ -326,6 +326,12 @@ ocean_result proto_decode_limited(const void *buf, size_t len, const proto_limit
 
 /* Validates msg exactly as the decoder would and appends its encoding to
  * out.  On failure out is unchanged. */
+/* Reads the fixed fields of a FRAME body (the first 51 bytes after the
+ * header, PROTOCOL.md) into f without checking them and without touching
+ * tiles or mesh: for readers that only want a frame's facts (a load
+ * generator).  p must hold at least 51 bytes; the caller validates. */
+void proto_frame_fixed_read(const uint8_t *p, proto_frame *f);
+
 ocean_result proto_encode(proto_buf *out, const proto_msg *msg, char *err, size_t errlen);
 
 /* Builds the ERROR reply for a message that failed with `code`/`why`:

@@ -466,14 +466,7 @@ static ocean_result peek_frame(const uint8_t *raw, size_t len, const proto_limit
     }
     const uint8_t *p = raw + PROTO_HEADER_SIZE;
     proto_frame *f = &m->u.frame;
-    f->cutoff_k = proto_ldf64(p);
-    f->e_error = proto_ldf64(p + 8);
-    for (int i = 0; i < 3; i++)
-        f->origin[i] = proto_ldf64(p + 16 + 8 * i);
-    f->camera_seq = proto_ld32(p + 40);
-    f->tick = proto_ld32(p + 44);
-    f->tile_count = proto_ld16(p + 48);
-    f->has_mesh = p[50];
+    proto_frame_fixed_read(p, f);
     if (isnan(f->cutoff_k) || f->cutoff_k < 0 || !(f->e_error >= 0 && f->e_error <= 1) || f->has_mesh > 1 ||
         f->tile_count > lim->max_frame_tiles) {
         snprintf(err, errlen, "FRAME fixed fields out of range");

@@ -288,12 +288,20 @@ int cli_parse(int argc, char **argv, const char *usage,
     return 0;
 }
 
-ocean *cli_make_ocean(const cli_common *c)
+int cli_make_ocean(const cli_common *c, ocean **o, ocean_frame **f)
 {
-    ocean *o = NULL;
     char err[512];
-    ocean_result r = ocean_create(&c->params, &o, err, sizeof err);
-    if (r != OCEAN_OK)
+    *f = NULL;
+    ocean_result r = ocean_create(&c->params, o, err, sizeof err);
+    if (r != OCEAN_OK) {
         fprintf(stderr, "error: cannot create the ocean: %s (%s)\n", err, ocean_strerror(r));
-    return o;
+        return 1;
+    }
+    if ((r = ocean_frame_create(*o, f)) != OCEAN_OK) {
+        fprintf(stderr, "error: cannot allocate the frame: %s\n", ocean_strerror(r));
+        ocean_destroy(*o);
+        *o = NULL;
+        return 1;
+    }
+    return 0;
 }

@@ -46,8 +46,9 @@ int cli_parse(int argc, char **argv, const char *usage,
               const cli_opt *opts, int nopts, cli_common *c,
               const char **pos, int *npos);
 
-/* Creates an ocean from c->params, printing the reason on failure. */
-ocean *cli_make_ocean(const cli_common *c);
+/* Creates an ocean from c->params and a frame for it, printing the reason
+ * on failure.  Returns 0, or 1 with nothing left allocated. */
+int cli_make_ocean(const cli_common *c, ocean **o, ocean_frame **f);
 
 /* Parses "height,displacement,normals,foam" into an OCEAN_FX_* mask. */
 int cli_parse_effects(const char *s, unsigned *out);

@@ -117,12 +117,10 @@ int cmd_bake(int argc, char **argv)
         fprintf(stderr, "error: cannot create %s: %s\n", out, strerror(errno));
         return 1;
     }
-    ocean *o = cli_make_ocean(&c);
-    ocean_frame *f = NULL;
-    if (!o || ocean_frame_create(o, &f) != OCEAN_OK) {
-        ocean_destroy(o);
+    ocean *o;
+    ocean_frame *f;
+    if (cli_make_ocean(&c, &o, &f))
         return 1;
-    }
     /* Bake only what was asked: --effects height,normals skips the rest. */
     unsigned fx = c.effects;
     int n = c.params.n, tty = isatty(STDERR_FILENO), status = 0;

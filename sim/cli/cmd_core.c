@@ -26,12 +26,10 @@ int cmd_stats(int argc, char **argv)
     int r = cli_parse(argc, argv, "stats [options] [--json]", NULL, 0, &c, NULL, NULL);
     if (r)
         return r == 1 ? 0 : 2;
-    ocean *o = cli_make_ocean(&c);
-    ocean_frame *f = NULL;
-    if (!o || ocean_frame_create(o, &f) != OCEAN_OK) {
-        ocean_destroy(o);
+    ocean *o;
+    ocean_frame *f;
+    if (cli_make_ocean(&c, &o, &f))
         return 1;
-    }
     ocean_request req;
     ocean_request_all(&req, c.effects | OCEAN_FX_HEIGHT);
     double t0 = cli_now_ms();
@@ -101,12 +99,10 @@ int cmd_sample(int argc, char **argv)
                       opts, (int)(sizeof opts / sizeof opts[0]), &c, NULL, NULL);
     if (r)
         return r == 1 ? 0 : 2;
-    ocean *o = cli_make_ocean(&c);
-    ocean_frame *f = NULL;
-    if (!o || ocean_frame_create(o, &f) != OCEAN_OK) {
-        ocean_destroy(o);
+    ocean *o;
+    ocean_frame *f;
+    if (cli_make_ocean(&c, &o, &f))
         return 1;
-    }
     /* Only the height is asked: one transform per cascade per sample. */
     ocean_request req;
     ocean_request_all(&req, OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT);
@@ -137,12 +133,10 @@ int cmd_bench(int argc, char **argv)
     int r = cli_parse(argc, argv, "bench [options] [--reps R] [--json]", opts, 1, &c, NULL, NULL);
     if (r)
         return r == 1 ? 0 : 2;
-    ocean *o = cli_make_ocean(&c);
-    ocean_frame *f = NULL;
-    if (!o || ocean_frame_create(o, &f) != OCEAN_OK) {
-        ocean_destroy(o);
+    ocean *o;
+    ocean_frame *f;
+    if (cli_make_ocean(&c, &o, &f))
         return 1;
-    }
     ocean_request req;
     ocean_request_all(&req, c.effects);
     double *full = malloc(sizeof(double) * reps), *fft = malloc(sizeof(double) * reps);

@@ -101,15 +101,10 @@ int cmd_filter(int argc, char **argv)
         return 2;
     }
 
-    ocean *o = cli_make_ocean(&c);
-    ocean_frame *f = NULL;
-    if (!o)
+    ocean *o;
+    ocean_frame *f;
+    if (cli_make_ocean(&c, &o, &f))
         return 1;
-    if (ocean_frame_create(o, &f) != OCEAN_OK) {
-        fprintf(stderr, "error: out of memory\n");
-        ocean_destroy(o);
-        return 1;
-    }
     const ocean_params *p = ocean_get_params(o);
     if (spacing < 0.0) {
         double patch;

@@ -128,16 +128,12 @@ int cmd_mesh(int argc, char **argv)
         return 2;
     }
 
-    ocean *o = cli_make_ocean(&c);
-    ocean_frame *f = NULL;
+    ocean *o;
+    ocean_frame *f;
     mesh *m = NULL;
     int status = 1;
-    if (!o)
+    if (cli_make_ocean(&c, &o, &f))
         return 1;
-    if ((r = ocean_frame_create(o, &f)) != OCEAN_OK) {
-        fprintf(stderr, "error: frame: %s\n", ocean_strerror(r));
-        goto out;
-    }
     ocean_request req;
     ocean_request_all(&req, OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT);
     double t = isfinite(c.time) ? c.time : 0;

@@ -148,12 +148,17 @@ int cmd_query(int argc, char **argv)
         free(xz);
         return 2;
     }
-    ocean *o = cli_make_ocean(&c);
-    ocean_frame *f = NULL;
+    ocean *o;
+    ocean_frame *f;
+    if (cli_make_ocean(&c, &o, &f)) {
+        free(xz);
+        return 1;
+    }
     ocean_query_result *res = malloc(sizeof *res * (size_t)n);
-    if (!o || !res || ocean_frame_create(o, &f) != OCEAN_OK) {
+    if (!res) {
+        fprintf(stderr, "error: out of memory\n");
+        ocean_frame_destroy(f);
         ocean_destroy(o);
-        free(res);
         free(xz);
         return 1;
     }
