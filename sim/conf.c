@@ -13,7 +13,6 @@
 #include <errno.h>
 #include <inttypes.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
@@ -118,14 +117,17 @@ static ocean_result fail(loader *ld, ocean_result code, const char *msg,
     return code;
 }
 
-static void put_msg(char *msg, size_t msglen, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static void put_msg(char *msg, size_t msglen, const char *fmt, ...)
+/* The last step of every fixed-size type: the entry's hook may veto the
+ * parsed value, then (when storing) it is copied into the target field. */
+static ocean_result accept_value(const conf_entry *e, void *target, void *field, void *v,
+                                 size_t size, int store, char *msg, size_t msglen)
 {
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, msglen, fmt, ap);
-    va_end(ap);
+    if (e->hook) {
+        ocean_result r = e->hook(target, e, v, msg, msglen);
+        if (r != OCEAN_OK) return r;
+    }
+    if (store) memcpy(field, v, size);
+    return OCEAN_OK;
 }
 
 /* Shortest of %.15g/%.16g/%.17g that reads back to exactly v. */
@@ -234,11 +236,11 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
     const char *usp = e->unit ? " " : "";
 
     if (quoted && e->type != CONF_STRING) {
-        put_msg(msg, msglen, "%s: quotes are only for string values", e->name);
+        ocean_seterr(msg, msglen, "%s: quotes are only for string values", e->name);
         return OCEAN_EFORMAT;
     }
     if (tlen == 0 && e->type != CONF_STRING) {
-        put_msg(msg, msglen, "%s: missing value", e->name);
+        ocean_seterr(msg, msglen, "%s: missing value", e->name);
         return OCEAN_EFORMAT;
     }
 
@@ -246,28 +248,23 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
     case CONF_INT: {
         const char *p = text + (text[0] == '+' || text[0] == '-');
         if (!(*p >= '0' && *p <= '9')) {
-            put_msg(msg, msglen, "%s: not an integer", e->name);
+            ocean_seterr(msg, msglen, "%s: not an integer", e->name);
             return OCEAN_EFORMAT;
         }
         char *end;
         errno = 0;
         long long v = strtoll(text, &end, 10);
         if (*end) {
-            put_msg(msg, msglen, "%s: %s", e->name,
+            ocean_seterr(msg, msglen, "%s: %s", e->name,
                     end > text ? "trailing text after the integer" : "not an integer");
             return OCEAN_EFORMAT;
         }
         if (errno == ERANGE || (double)v < e->min || (double)v > e->max) {
-            put_msg(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
+            ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
             return OCEAN_EINVAL;
         }
         int iv = (int)v;
-        if (e->hook) {
-            ocean_result r = e->hook(target, e, &iv, msg, msglen);
-            if (r != OCEAN_OK) return r;
-        }
-        if (store) memcpy(field, &iv, sizeof iv);
-        return OCEAN_OK;
+        return accept_value(e, target, field, &iv, sizeof iv, store, msg, msglen);
     }
     case CONF_U64: {
         const char *p = text + (text[0] == '+');
@@ -283,7 +280,7 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
                (base == 16 && ((*q >= 'a' && *q <= 'f') || (*q >= 'A' && *q <= 'F'))))
             q++;
         if (q == p || *q) {
-            put_msg(msg, msglen, "%s: %s", e->name,
+            ocean_seterr(msg, msglen, "%s: %s", e->name,
                     q == p ? "not an unsigned integer" : "trailing text after the integer");
             return OCEAN_EFORMAT;
         }
@@ -292,16 +289,11 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
         bool over = errno == ERANGE || (double)v < e->min ||
                     (e->max < 18446744073709551616.0 && v > (unsigned long long)e->max);
         if (over) {
-            put_msg(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
+            ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
             return OCEAN_EINVAL;
         }
         uint64_t uv = v;
-        if (e->hook) {
-            ocean_result r = e->hook(target, e, &uv, msg, msglen);
-            if (r != OCEAN_OK) return r;
-        }
-        if (store) memcpy(field, &uv, sizeof uv);
-        return OCEAN_OK;
+        return accept_value(e, target, field, &uv, sizeof uv, store, msg, msglen);
     }
     case CONF_DOUBLE: {
         double v;
@@ -316,37 +308,32 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
                     const char *u = text + (text[0] == '+' || text[0] == '-');
                     bool nonfinite = strncasecmp(u, "nan", 3) == 0 || strncasecmp(u, "inf", 3) == 0;
                     if (nonfinite)
-                        put_msg(msg, msglen, "%s: NaN and infinity are not allowed", e->name);
+                        ocean_seterr(msg, msglen, "%s: NaN and infinity are not allowed", e->name);
                     else if ((*text >= '0' && *text <= '9') || *text == '.' ||
                              ((*text == '-' || *text == '+') && text[1] >= '0' && text[1] <= '9'))
-                        put_msg(msg, msglen, "%s: trailing text after the number", e->name);
+                        ocean_seterr(msg, msglen, "%s: trailing text after the number", e->name);
                     else
-                        put_msg(msg, msglen, "%s: not a number", e->name);
+                        ocean_seterr(msg, msglen, "%s: not a number", e->name);
                     return OCEAN_EFORMAT;
                 }
             char *end;
             errno = 0;
             v = strtod(text, &end);
             if (end == text || *end) {
-                put_msg(msg, msglen, "%s: not a number", e->name);
+                ocean_seterr(msg, msglen, "%s: not a number", e->name);
                 return OCEAN_EFORMAT;
             }
             if (!isfinite(v)) {
-                put_msg(msg, msglen, "%s: too large for a double, out of range %s%s%s",
+                ocean_seterr(msg, msglen, "%s: too large for a double, out of range %s%s%s",
                         e->name, range, usp, unit);
                 return OCEAN_EINVAL;
             }
         }
         if (!(v >= e->min && v <= e->max)) {
-            put_msg(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
+            ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
             return OCEAN_EINVAL;
         }
-        if (e->hook) {
-            ocean_result r = e->hook(target, e, &v, msg, msglen);
-            if (r != OCEAN_OK) return r;
-        }
-        if (store) memcpy(field, &v, sizeof v);
-        return OCEAN_OK;
+        return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
     }
     case CONF_BOOL: {
         static const char *const yes[] = {"on", "true", "yes", "1"};
@@ -357,30 +344,20 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
             if (strcasecmp(text, no[i]) == 0) v = 0;
         }
         if (v < 0) {
-            put_msg(msg, msglen, "%s: not a boolean (on/off, true/false, yes/no, 1/0)", e->name);
+            ocean_seterr(msg, msglen, "%s: not a boolean (on/off, true/false, yes/no, 1/0)", e->name);
             return OCEAN_EFORMAT;
         }
-        if (e->hook) {
-            ocean_result r = e->hook(target, e, &v, msg, msglen);
-            if (r != OCEAN_OK) return r;
-        }
-        if (store) memcpy(field, &v, sizeof v);
-        return OCEAN_OK;
+        return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
     }
     case CONF_ENUM: {
         for (const conf_name *n = e->names; n && n->name; n++)
             if (name_match(text, tlen, n->name)) {
                 int v = (int)n->value;
-                if (e->hook) {
-                    ocean_result r = e->hook(target, e, &v, msg, msglen);
-                    if (r != OCEAN_OK) return r;
-                }
-                if (store) memcpy(field, &v, sizeof v);
-                return OCEAN_OK;
+                return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
             }
         char names[MSG_MAX];
         names_list(e, names, sizeof names);
-        put_msg(msg, msglen, "%s: unknown name (one of %s)", e->name, names);
+        ocean_seterr(msg, msglen, "%s: unknown name (one of %s)", e->name, names);
         return OCEAN_EFORMAT;
     }
     case CONF_FLAGS: {
@@ -401,7 +378,7 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
                 *bad = a;
                 *badlen = (size_t)(b - a);
                 if (a == b) {
-                    put_msg(msg, msglen, "%s: empty item in the list", e->name);
+                    ocean_seterr(msg, msglen, "%s: empty item in the list", e->name);
                     return OCEAN_EFORMAT;
                 }
                 const conf_name *hit = NULL;
@@ -410,12 +387,12 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
                 if (!hit) {
                     char names[MSG_MAX];
                     names_list(e, names, sizeof names);
-                    put_msg(msg, msglen, "%s: unknown name in the list (names: %s; or none, all)",
+                    ocean_seterr(msg, msglen, "%s: unknown name in the list (names: %s; or none, all)",
                             e->name, names);
                     return OCEAN_EFORMAT;
                 }
                 if ((v & hit->value) == hit->value) {
-                    put_msg(msg, msglen, "%s: listed twice", e->name);
+                    ocean_seterr(msg, msglen, "%s: listed twice", e->name);
                     return OCEAN_EFORMAT;
                 }
                 v |= hit->value;
@@ -426,19 +403,14 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
             *badlen = tlen;
         }
         if (v == 0 && e->min >= 1) {
-            put_msg(msg, msglen, "%s: at least one name is needed", e->name);
+            ocean_seterr(msg, msglen, "%s: at least one name is needed", e->name);
             return OCEAN_EINVAL;
         }
-        if (e->hook) {
-            ocean_result r = e->hook(target, e, &v, msg, msglen);
-            if (r != OCEAN_OK) return r;
-        }
-        if (store) memcpy(field, &v, sizeof v);
-        return OCEAN_OK;
+        return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
     }
     case CONF_STRING:
         if (tlen + 1 > e->size) {
-            put_msg(msg, msglen, "%s: string too long (%zu bytes, at most %zu)", e->name,
+            ocean_seterr(msg, msglen, "%s: string too long (%zu bytes, at most %zu)", e->name,
                     tlen, e->size - 1);
             return OCEAN_ETOOBIG;
         }
@@ -452,7 +424,7 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
         }
         return OCEAN_OK;
     }
-    put_msg(msg, msglen, "%s: entry has an unknown type %d", e->name, (int)e->type);
+    ocean_seterr(msg, msglen, "%s: entry has an unknown type %d", e->name, (int)e->type);
     return OCEAN_EINVAL;
 }
 
@@ -464,17 +436,17 @@ static ocean_result line_check(loader *ld, const char *s, size_t len)
     const unsigned char *u = (const unsigned char *)s;
     char msg[MSG_MAX];
     if (len > CONF_MAX_LINE) {
-        put_msg(msg, sizeof msg, "line too long (%zu bytes, at most %d)", len, CONF_MAX_LINE);
+        ocean_seterr(msg, sizeof msg, "line too long (%zu bytes, at most %d)", len, CONF_MAX_LINE);
         return fail(ld, OCEAN_ETOOBIG, msg, s, len);
     }
     for (size_t i = 0; i < len;) {
         if ((u[i] < 0x20 && u[i] != '\t') || u[i] == 0x7F) {
-            put_msg(msg, sizeof msg, "control character 0x%02X at column %zu", u[i], i + 1);
+            ocean_seterr(msg, sizeof msg, "control character 0x%02X at column %zu", u[i], i + 1);
             return fail(ld, OCEAN_EFORMAT, msg, s, len);
         }
         size_t q = utf8_seq(u + i, len - i);
         if (q == 0) {
-            put_msg(msg, sizeof msg, "invalid UTF-8 at column %zu", i + 1);
+            ocean_seterr(msg, sizeof msg, "invalid UTF-8 at column %zu", i + 1);
             return fail(ld, OCEAN_EFORMAT, msg, s, len);
         }
         i += q;
@@ -572,22 +544,22 @@ static ocean_result line_parse(loader *ld, char *s, bool *empty)
                 }
             }
         if (best && bestd <= 2)
-            put_msg(msg, sizeof msg, "unknown key (did you mean '%s'?)", best);
+            ocean_seterr(msg, sizeof msg, "unknown key (did you mean '%s'?)", best);
         else
-            put_msg(msg, sizeof msg, "unknown key");
+            ocean_seterr(msg, sizeof msg, "unknown key");
         return fail(ld, OCEAN_EFORMAT, msg, key, klen);
     }
     const conf_table *tab = ld->set->tables[t];
     size_t idx = ld->base[t] + (size_t)(e - tab->entries);
     if (ld->seen && ld->seen[idx]) {
-        put_msg(msg, sizeof msg, "duplicate key (first set on line %d)", ld->seen[idx]);
+        ocean_seterr(msg, sizeof msg, "duplicate key (first set on line %d)", ld->seen[idx]);
         return fail(ld, OCEAN_EFORMAT, msg, key, klen);
     }
     if (ld->seen && e->group > 0)
         for (size_t j = 0; j < tab->count; j++) {
             const conf_entry *o = &tab->entries[j];
             if (o != e && o->group == e->group && ld->seen[ld->base[t] + j]) {
-                put_msg(msg, sizeof msg, "%s conflicts with %s on line %d; give one of them",
+                ocean_seterr(msg, sizeof msg, "%s conflicts with %s on line %d; give one of them",
                         e->name, o->name, ld->seen[ld->base[t] + j]);
                 return fail(ld, OCEAN_EINVAL, msg, key, klen);
             }
@@ -705,7 +677,7 @@ ocean_result conf_load_string(const char *name, const char *text, size_t len,
         goto out;
     }
     if (len > CONF_MAX_FILE) {
-        put_msg(msg, sizeof msg, "file too large (%zu bytes, at most %u)", len, CONF_MAX_FILE);
+        ocean_seterr(msg, sizeof msg, "file too large (%zu bytes, at most %u)", len, CONF_MAX_FILE);
         r = fail(&ld, OCEAN_ETOOBIG, msg, "", 0);
         goto out;
     }
@@ -833,7 +805,7 @@ ocean_result conf_set_check(const conf_set *set, char *err, size_t errlen)
             else if (e->type == CONF_INT && (e->min < -2147483648.0 || e->max > 2147483647.0)) why = "int range beyond int";
             else if ((e->flags & CONF_F_REQUIRED) && e->def) why = "required key with a default";
             if (why) {
-                put_msg(msg, sizeof msg, "table %s: %s", tab->name, why);
+                ocean_seterr(msg, sizeof msg, "table %s: %s", tab->name, why);
                 r = fail(&ld, OCEAN_EINVAL, msg, e->name ? e->name : "", e->name ? strlen(e->name) : 0);
             }
         }
