@@ -57,6 +57,7 @@ typedef struct cascade {
     float *cache[4];
     double cache_t;
     int cache_n;
+    int cache_dt;           /* 1: dh/dt is cached too (a velocity request) */
 } cascade;
 
 #define FILTER_MEMO 16
@@ -83,6 +84,19 @@ static void memo_put(filter_memo *m, int *next, double kc, int order, double sca
     *next = (*next + 1) % FILTER_MEMO;
 }
 
+/* The filter gains of one cutoff bucket on one cascade's n-point grid,
+ * (n/2 + 1) per row, including the grid's zeroed Nyquist row and column.
+ * A bucket keeps its cutoff for many ticks, so its gains are computed
+ * once instead of per tick (a division and a square root per mode). */
+#define GAIN_PLANES 12
+typedef struct gain_plane {
+    int cascade, n, order;
+    double kc, scale, boost;
+    uint64_t used;          /* LRU stamp; 0: empty */
+    size_t cap;             /* floats allocated */
+    float *g;
+} gain_plane;
+
 struct ocean {
     ocean_params p;
     int levels;                         /* plans for n = 8 << l, l < levels */
@@ -96,6 +110,8 @@ struct ocean {
      * scales are keyed by (cutoff, order), E_error by all four. */
     filter_memo redis_memo[FILTER_MEMO], err_memo[FILTER_MEMO];
     int redis_next, err_next;
+    gain_plane gains[GAIN_PLANES];
+    uint64_t gain_clock;
 };
 
 struct ocean_frame {
@@ -130,6 +146,7 @@ void ocean_params_default(ocean_params *p)
     p->k_max = INFINITY;
     p->threads = 2;
     p->plan_measure = 0;
+    p->drop_gain = OCEAN_DROP_GAIN_DEFAULT;
 }
 
 ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msglen)
@@ -162,6 +179,10 @@ ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msgl
     }
     if (isnan(p->k_max) || p->k_max <= 0.0) {
         if (msg) snprintf(msg, msglen, "k_max = %g must be > 0 (INFINITY for none)", p->k_max);
+        return OCEAN_EINVAL;
+    }
+    if (!(p->drop_gain > 0.0 && p->drop_gain <= M_SQRT1_2 + 1e-12)) {
+        if (msg) snprintf(msg, msglen, "drop_gain = %g is out of range (0, 0.7071]", p->drop_gain);
         return OCEAN_EINVAL;
     }
     if (p->threads < 1 || p->threads > 64) {
@@ -359,6 +380,8 @@ void ocean_destroy(ocean *o)
         free(cs->kinv);
         free(cs->var);
     }
+    for (int i = 0; i < GAIN_PLANES; i++)
+        free(o->gains[i].g);
     free(o);
 }
 
@@ -372,10 +395,16 @@ void ocean_request_all(ocean_request *r, unsigned effects)
     r->low_boost = 1.0;
 }
 
+/* Float arithmetic only, so the field pass below vectorises. */
+static inline float foam_from_jacobian(float j)
+{
+    float f = 1.0f - j * (float)(1.0 / OCEAN_FOAM_J_CLEAR);
+    return f < 0.0f ? 0.0f : (f > 1.0f ? 1.0f : f);
+}
+
 float ocean_foam_from_jacobian(float j)
 {
-    float f = (float)((OCEAN_FOAM_J_CLEAR - j) / OCEAN_FOAM_J_CLEAR);
-    return f < 0.0f ? 0.0f : (f > 1.0f ? 1.0f : f);
+    return foam_from_jacobian(j);
 }
 
 ocean_result ocean_frame_create(const ocean *o, ocean_frame **out)
@@ -411,18 +440,18 @@ void ocean_frame_destroy(ocean_frame *f)
     free(f);
 }
 
-/* Waves the filter keeps at under 1/64 of their amplitude are not
- * transformed at all, so a cutoff kc needs a grid holding only 2 kc
- * (order 6): that is what lets a low cutoff run a smaller transform.  The
- * dropped waves count fully in E_error. */
-#define NEGLIGIBLE_GAIN (1.0 / 64.0)
 /* A filter whose gain over the whole band stays above 1 - 1e-6 changes
  * no float: the evaluation is the unfiltered one. */
 #define NOOP_LOSS 1e-6
 
-static inline double negligible_k(double kc, int order)
+/* Waves the filter keeps at under drop_gain of their amplitude are not
+ * transformed at all, so a cutoff kc needs a grid holding only
+ * 1.096 kc (order 6, the default 1/2): that is what lets a low cutoff run
+ * a smaller transform, as seed 000 intends.  The dropped waves count fully
+ * in E_error, so the price is always reported. */
+static inline double negligible_k(const ocean *o, double kc, int order)
 {
-    return ocean_filter_negligible_k(kc, order, NEGLIGIBLE_GAIN);
+    return ocean_filter_negligible_k(kc, order, o->p.drop_gain);
 }
 
 /* Which channels an effect mask needs, in block order; returns the count. */
@@ -448,7 +477,7 @@ static inline double effective_gain(double k, double kc, int order, double kneg)
 static void filter_sums(const ocean *o, double kc, int order, double scale, double boost,
                         double *total, double *kept, double *err)
 {
-    double kneg = negligible_k(kc, order);
+    double kneg = negligible_k(o, kc, order);
     int n = o->p.n, half = n / 2 + 1;
     *total = *kept = *err = 0.0;
     for (int c = 0; c < o->p.cascades; c++)
@@ -517,12 +546,15 @@ static inline double reduce_phase(double x)
 typedef struct stage_args {
     cascade *cs;
     int cached;             /* 1: read h from cs->cache, 0: compute and store */
+    int need_dt;            /* dh/dt asked for (velocity channels) */
     int n_full, n;          /* full grid and the grid evaluated */
     int nch;
     const int *ch;
     double t, kc, kneg, scale, boost, lambda;
     int order;
     fftwf_complex *spec;
+    float *gain;            /* gain plane of this bucket, or NULL (compute) */
+    int gain_ready;         /* 1: gain holds the gains, 0: fill it */
 } stage_args;
 
 /* sin and cos of a phase x (any double), branch-free so the row loop
@@ -566,6 +598,34 @@ static inline float gain_fast(float k, float kc, int order)
     return k <= kc ? inv : q * inv;
 }
 
+/* h(k,t) (and, with_dt, dh/dt) of one row into the cache.  Inlined with
+ * a literal with_dt, so each variant is one branch-free vector loop.
+ * Out-of-band modes have h0 = 0, so they need no branch either. */
+static inline __attribute__((always_inline)) void
+row_evolve(const cascade *cs, size_t base, int half, double t, const int with_dt)
+{
+    const double *om = cs->omega + base;
+    const float *pr = cs->h0[H0P_RE] + base, *pi = cs->h0[H0P_IM] + base;
+    const float *mr = cs->h0[H0M_RE] + base, *mi = cs->h0[H0M_IM] + base;
+    float *c_hr = cs->cache[C_HR] + base, *c_hi = cs->cache[C_HI] + base;
+    float *c_tr = cs->cache[C_TR] + base, *c_ti = cs->cache[C_TI] + base;
+#pragma omp simd
+    for (int ix = 0; ix < half; ix++) {
+        float s, c;
+        phase_sincos(om[ix] * t, &s, &c);
+        /* u = h0p e^{-i ph}, v = h0m e^{+i ph}, h = u + v, dh/dt = -i w u + i w v */
+        float ur = pr[ix] * c + pi[ix] * s, ui = pi[ix] * c - pr[ix] * s;
+        float vr = mr[ix] * c - mi[ix] * s, vi = mi[ix] * c + mr[ix] * s;
+        c_hr[ix] = ur + vr;
+        c_hi[ix] = ui + vi;
+        if (with_dt) {
+            float w = (float)om[ix];
+            c_tr[ix] = w * (ui - vi);
+            c_ti[ix] = w * (vr - ur);
+        }
+    }
+}
+
 #define ROW_MAX (OCEAN_MAX_N / 2 + 1)
 
 /* Writes the spectra of every asked channel for one row of the n-point
@@ -583,27 +643,13 @@ static void spectrum_row(const stage_args *a, int r)
     int mz = r < n / 2 ? r : r - n;
     size_t base = (size_t)wrap_index(mz, a->n_full) * full_half;
     const cascade *cs = a->cs;
-    const double *om = cs->omega + base;
-    const float *pr = cs->h0[H0P_RE] + base, *pi = cs->h0[H0P_IM] + base;
-    const float *mr = cs->h0[H0M_RE] + base, *mi = cs->h0[H0M_IM] + base;
     float *c_hr = cs->cache[C_HR] + base, *c_hi = cs->cache[C_HI] + base;
     float *c_tr = cs->cache[C_TR] + base, *c_ti = cs->cache[C_TI] + base;
     if (!a->cached) {
-        /* Out-of-band modes have h0 = 0, so they need no branch. */
-        double t = a->t;
-#pragma omp simd
-        for (int ix = 0; ix < half; ix++) {
-            float s, c;
-            phase_sincos(om[ix] * t, &s, &c);
-            /* u = h0p e^{-i ph}, v = h0m e^{+i ph}, h = u + v, dh/dt = -i w u + i w v */
-            float ur = pr[ix] * c + pi[ix] * s, ui = pi[ix] * c - pr[ix] * s;
-            float vr = mr[ix] * c - mi[ix] * s, vi = mi[ix] * c + mr[ix] * s;
-            float w = (float)om[ix];
-            c_hr[ix] = ur + vr;
-            c_hi[ix] = ui + vi;
-            c_tr[ix] = w * (ui - vi);
-            c_ti[ix] = w * (vr - ur);
-        }
+        if (a->need_dt)
+            row_evolve(cs, base, half, a->t, 1);
+        else
+            row_evolve(cs, base, half, a->t, 0);
     }
     const float *kx = cs->kx + base, *kinv = cs->kinv + base;
     const float *hr = c_hr, *hi = c_hi, *tr = c_tr, *ti = c_ti;
@@ -612,25 +658,32 @@ static void spectrum_row(const stage_args *a, int r)
      * hold no wave: the cached h is the spectrum as it stands.  Otherwise
      * apply the gains, and zero this grid's own Nyquist row and column. */
     if (!(isinf(a->kc) && a->scale == 1.0 && a->boost == 1.0 && n == a->n_full)) {
-        const float *kk = cs->k + base;
-        float kc = (float)a->kc, kneg = (float)a->kneg, scale = (float)a->scale;
-        float boost = (float)a->boost;
-        for (int ix = 0; ix < half; ix++) {
-            float k = kk[ix], gb = k < kneg ? gain_fast(k, kc, a->order) : 0.0f;
-            /* The low boost fades in with the gain (ocean_filter_cutoff_gain):
-             * no step at kc. */
-            g[ix] = gb * scale * (1.0f + (boost - 1.0f) * gb * gb);
+        float *gr = a->gain ? a->gain + (size_t)r * half : g;
+        if (!a->gain_ready) {
+            const float *kk = cs->k + base;
+            float kc = (float)a->kc, kneg = (float)a->kneg, scale = (float)a->scale;
+            float boost = (float)a->boost;
+            for (int ix = 0; ix < half; ix++) {
+                float k = kk[ix], gb = k < kneg ? gain_fast(k, kc, a->order) : 0.0f;
+                /* The low boost fades in with the gain (ocean_filter_cutoff_gain):
+                 * no step at kc. */
+                gr[ix] = gb * scale * (1.0f + (boost - 1.0f) * gb * gb);
+            }
+            if (mz == -n / 2)
+                for (int ix = 0; ix < half; ix++)
+                    gr[ix] = 0.0f;
+            gr[n / 2] = 0.0f;
         }
-        if (mz == -n / 2)
-            for (int ix = 0; ix < half; ix++)
-                g[ix] = 0.0f;
-        g[n / 2] = 0.0f;
+        const float *restrict gv = gr;
         for (int ix = 0; ix < half; ix++) {
-            fhr[ix] = c_hr[ix] * g[ix];
-            fhi[ix] = c_hi[ix] * g[ix];
-            ftr[ix] = c_tr[ix] * g[ix];
-            fti[ix] = c_ti[ix] * g[ix];
+            fhr[ix] = c_hr[ix] * gv[ix];
+            fhi[ix] = c_hi[ix] * gv[ix];
         }
+        if (a->need_dt)
+            for (int ix = 0; ix < half; ix++) {
+                ftr[ix] = c_tr[ix] * gv[ix];
+                fti[ix] = c_ti[ix] * gv[ix];
+            }
         hr = fhr;
         hi = fhi;
         tr = ftr;
@@ -698,6 +751,22 @@ static void spectrum_row(const stage_args *a, int r)
     }
 }
 
+/* Jacobian J = (1 + Dxx)(1 + Dzz) - Dxz^2 and foam for rows [r0, r1) of an
+ * n-point field; cloned for AVX2 like spectrum_row. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+static void jacobian_rows(ocean_field *fd, long i0, long i1)
+{
+    const float *restrict xx = fd->dxx, *restrict zz = fd->dzz, *restrict xz = fd->dxz;
+    float *restrict jac = fd->jacobian, *restrict foam = fd->foam;
+    for (long i = i0; i < i1; i++) {
+        float j = (1.0f + xx[i]) * (1.0f + zz[i]) - xz[i] * xz[i];
+        jac[i] = j;
+        foam[i] = foam_from_jacobian(j);
+    }
+}
+
 /* Smallest grid whose band holds every wave below kneg: halving n keeps
  * |m| <= n/4 - 1, so it is allowed while (n/4 - 1) dk >= kneg. */
 static int pick_size(const cascade *cs, int n_full, double kneg)
@@ -747,6 +816,41 @@ static void set_field_pointers(ocean_frame *f, int c, int n, unsigned effects,
     }
 }
 
+/* The gain plane of (cascade, n, filter), found or claimed (least recently
+ * used).  *ready says whether it already holds the gains.  NULL when
+ * memory runs out: the rows then compute their gains as they go, so an
+ * allocation failure costs time, never a wrong field. */
+static float *gain_plane_get(ocean *o, int c, int n, double kc, int order, double scale,
+                             double boost, int *ready)
+{
+    gain_plane *victim = &o->gains[0];
+    uint64_t now = ++o->gain_clock;
+    for (int i = 0; i < GAIN_PLANES; i++) {
+        gain_plane *gp = &o->gains[i];
+        if (gp->used && gp->cascade == c && gp->n == n && gp->kc == kc && gp->order == order &&
+            gp->scale == scale && gp->boost == boost) {
+            gp->used = now;
+            *ready = 1;
+            return gp->g;
+        }
+        if (gp->used < victim->used)
+            victim = gp;
+    }
+    size_t need = (size_t)n * (n / 2 + 1);
+    if (victim->cap < need) {
+        float *g = realloc(victim->g, sizeof(float) * need);
+        if (!g) {
+            *ready = 0;
+            return NULL;
+        }
+        victim->g = g;
+        victim->cap = need;
+    }
+    *victim = (gain_plane){c, n, order, kc, scale, boost, now, victim->cap, victim->g};
+    *ready = 0;
+    return victim->g;
+}
+
 double ocean_effective_cutoff(const ocean *o, double cutoff_k, int order)
 {
     if (isnan(cutoff_k) || cutoff_k < 0.0 || order < 1 || order > OCEAN_FILTER_MAX_ORDER)
@@ -764,7 +868,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
         r->order > OCEAN_FILTER_MAX_ORDER || !isfinite(r->low_boost) || r->low_boost < 0.0 || r->low_boost > 2.0)
         return OCEAN_EINVAL;
     double kc = ocean_effective_cutoff(o, r->cutoff_k, r->order);
-    double kneg = negligible_k(kc, r->order);
+    double kneg = negligible_k(o, kc, r->order);
     double scale = r->redistribute && !isinf(kc) ? redistribution_scale(o, kc, r->order) : 1.0;
     double boost = r->low_boost > 0.0 ? r->low_boost : 1.0;
     int n_full = o->p.n;
@@ -782,18 +886,24 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
             continue;
         /* The row pass caches every mode of the grid it covers, so any
          * later request of the same tick on a grid no larger reuses it. */
-        int cached = cs->cache_n >= n && cs->cache_t == t;
-        stage_args a = {cs, cached, n_full, n, nch, ch, t, kc, kneg, scale, boost,
-                        o->p.sea.choppiness, r->order, o->spec};
+        int need_dt = (fx & OCEAN_FX_VELOCITY) != 0;
+        int cached = cs->cache_n >= n && cs->cache_t == t && (cs->cache_dt || !need_dt);
+        stage_args a = {cs, cached, need_dt, n_full, n, nch, ch, t, kc, kneg, scale, boost,
+                        o->p.sea.choppiness, r->order, o->spec, NULL, 0};
         if (cs->k_lo >= kneg) {
             memset(f->block[c], 0, sizeof(float) * nch * (size_t)n * n);
         } else {
+            /* Claimed here, where every row fills it, never on the path
+             * above: a claimed plane is trusted from then on. */
+            if (!(isinf(kc) && scale == 1.0 && boost == 1.0 && n == n_full))
+                a.gain = gain_plane_get(o, c, n, kc, r->order, scale, boost, &a.gain_ready);
 #pragma omp parallel for num_threads(o->p.threads) schedule(static)
             for (int row = 0; row < n; row++)
                 spectrum_row(&a, row);
             if (!cached) {
                 cs->cache_t = t;
                 cs->cache_n = n;
+                cs->cache_dt = need_dt;
             }
             fftwf_execute_dft_c2r(o->plan[level_of(n)][nch - 1], o->spec, f->block[c]);
             transforms += nch;
@@ -805,13 +915,10 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
         }
         if (fx & OCEAN_FX_FOAM) {
             ocean_field *fd = &f->field[c];
-            long nn = (long)n * n;
+            long nn = (long)n * n, step = (long)n * 8;
 #pragma omp parallel for num_threads(o->p.threads) schedule(static)
-            for (long i = 0; i < nn; i++) {
-                float j = (1.0f + fd->dxx[i]) * (1.0f + fd->dzz[i]) - fd->dxz[i] * fd->dxz[i];
-                fd->jacobian[i] = j;
-                fd->foam[i] = ocean_foam_from_jacobian(j);
-            }
+            for (long i = 0; i < nn; i += step)
+                jacobian_rows(fd, i, i + step < nn ? i + step : nn);
         }
     }
     f->info.t = t;
@@ -829,7 +936,7 @@ ocean_result ocean_transform_only(ocean *o, const ocean_request *r, ocean_frame 
     if (!o || !r || !f || f->cascades != o->p.cascades || isnan(r->cutoff_k) ||
         r->cutoff_k < 0.0 || r->order < 1 || r->order > OCEAN_FILTER_MAX_ORDER)
         return OCEAN_EINVAL;
-    double kneg = negligible_k(ocean_effective_cutoff(o, r->cutoff_k, r->order), r->order);
+    double kneg = negligible_k(o, ocean_effective_cutoff(o, r->cutoff_k, r->order), r->order);
     for (int c = 0; c < o->p.cascades; c++) {
         const cascade *cs = &o->cas[c];
         int ch[CH_COUNT];

@@ -176,6 +176,12 @@ static const conf_entry ocean_entries[] = {
     {.name = "ocean.threads", .type = CONF_INT, .offset = PAR(threads), .min = 1, .max = 64,
      .def = "2",
      .help = "Worker threads for FFTW and the spectrum stage."},
+    {.name = "ocean.drop_gain", .type = CONF_DOUBLE, .offset = PAR(drop_gain), .min = 1e-6,
+     .max = 0.70710678118654757, .def = "0.5",
+     .help = "A filtered evaluation leaves out every wave whose low-pass gain is below this, "
+             "so a low cutoff runs on a smaller FFT grid; 0.7071 drops the whole band above "
+             "the cutoff, 0.0156 keeps the filter's tail to 1/64. The dropped waves count in "
+             "e_error."},
     {.name = "ocean.plan", .type = CONF_ENUM, .offset = PAR(plan_measure), .def = "estimate",
      .names = plan_names,
      .help = "FFTW planning: estimate starts at once; measure times candidate plans at start-up "

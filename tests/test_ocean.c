@@ -776,6 +776,82 @@ static void test_cutoff_evaluation(void **state)
     ocean_destroy(fresh);
 }
 
+/* ocean.drop_gain: a larger drop gain runs a low cutoff on a smaller
+ * grid and reports the waves it left out in E_error. */
+static void test_drop_gain(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 256;
+    int n_at[2];
+    double e_at[2];
+    const double drops[2] = {1.0 / 64.0, 0.5};
+    for (int d = 0; d < 2; d++) {
+        p.drop_gain = drops[d];
+        ocean *o = make(&p);
+        ocean_frame *f = frame(o);
+        ocean_request r;
+        ocean_request_all(&r, OCEAN_FX_HEIGHT | OCEAN_FX_NORMALS);
+        r.cutoff_k = 0.08; /* Nyquist 0.80 rad/m */
+        assert_int_equal(ocean_evaluate(o, 3.0, &r, f), OCEAN_OK);
+        ocean_frame_info info;
+        ocean_frame_get_info(f, &info);
+        n_at[d] = ocean_frame_field(f, 0)->n;
+        e_at[d] = info.e_error;
+        assert_frame_finite(f, 1, "drop gain");
+        ocean_frame_destroy(f);
+        ocean_destroy(o);
+    }
+    /* 1/64 keeps the tail to 2 kc = 0.16 rad/m: a 64 grid (it holds
+     * 31 dk = 0.195); 1/2 keeps 1.1 kc = 0.088 rad/m: a 32 grid (15 dk =
+     * 0.094). */
+    assert_int_equal(n_at[0], 64);
+    assert_int_equal(n_at[1], 32);
+    /* The dropped band [1.1 kc, 2 kc] holds the spectral peak here (k_p
+     * = 0.075 rad/m), so it costs visibly, but it is reported. */
+    if (!(e_at[1] > e_at[0] && e_at[1] - e_at[0] < 0.1))
+        fail_msg("E_error %.5f (drop 1/64) vs %.5f (drop 1/2)", e_at[0], e_at[1]);
+    ocean_params_default(&p); p.drop_gain = 0.0; expect_refused(&p, "drop_gain");
+    ocean_params_default(&p); p.drop_gain = 0.8; expect_refused(&p, "drop_gain");
+    ocean_params_default(&p); p.drop_gain = NAN; expect_refused(&p, "drop_gain");
+}
+
+/* Each cutoff bucket's gains are computed once and kept: after more
+ * buckets than are kept, in any order, every evaluation still equals a
+ * fresh ocean's, byte for byte. */
+static void test_gain_planes_reused_exactly(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 64;
+    p.cascades = 2;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL);
+    enum { K = 20 };
+    for (int pass = 0; pass < 3; pass++)
+        for (int i = 0; i < K; i++) {
+            int j = pass == 1 ? K - 1 - i : (i * 7) % K;
+            r.cutoff_k = 0.02 * pow(1.25, j);
+            r.redistribute = j % 3 == 0;
+            r.low_boost = j % 4 == 0 ? 1.03 : 1.0;
+            double t = 5.0 + pass + 0.01 * i;
+            assert_int_equal(ocean_evaluate(o, t, &r, f), OCEAN_OK);
+            ocean *fresh = make(&p);
+            ocean_frame *g = frame(fresh);
+            assert_int_equal(ocean_evaluate(fresh, t, &r, g), OCEAN_OK);
+            if (!fields_equal(f, g, 2))
+                fail_msg("pass %d cutoff %.4f differs from a fresh ocean", pass, r.cutoff_k);
+            ocean_frame_destroy(g);
+            ocean_destroy(fresh);
+        }
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -795,6 +871,8 @@ int main(void)
         cmocka_unit_test(test_effects_mask_counts_transforms),
         cmocka_unit_test(test_cascade_partition),
         cmocka_unit_test(test_cutoff_evaluation),
+        cmocka_unit_test(test_drop_gain),
+        cmocka_unit_test(test_gain_planes_reused_exactly),
     };
     return cmocka_run_group_tests_name("ocean", tests, NULL, NULL);
 }
