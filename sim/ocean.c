@@ -97,6 +97,10 @@ typedef struct gain_plane {
     float *g;
 } gain_plane;
 
+/* Grids below this run on one thread: waking the pool for a 32 x 32
+ * transform costs more than it saves (a low cutoff bucket's grid). */
+#define PARALLEL_MIN_N 64
+
 struct ocean {
     ocean_params p;
     int levels;                         /* plans for n = 8 << l, l < levels */
@@ -332,12 +336,12 @@ ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t 
     }
     /* Plan every (size, batch) once; evaluations only execute. */
     pthread_mutex_lock(&planner_lock);
-    if (fftw_threads_ok)
-        fftwf_plan_with_nthreads(p->threads);
     unsigned flags = p->plan_measure ? FFTW_MEASURE : FFTW_ESTIMATE;
     for (int l = 0; (8 << l) <= n; l++) {
         int m = 8 << l;
         o->levels = l + 1;
+        if (fftw_threads_ok)
+            fftwf_plan_with_nthreads(m >= PARALLEL_MIN_N ? p->threads : 1);
         for (int c = 1; c <= CH_COUNT; c++) {
             int dims[2] = {m, m};
             o->plan[l][c - 1] = fftwf_plan_many_dft_c2r(
@@ -393,6 +397,7 @@ void ocean_request_all(ocean_request *r, unsigned effects)
     r->cutoff_k = INFINITY;
     r->order = 6;
     r->low_boost = 1.0;
+    r->foam_map = 1;
 }
 
 /* Float arithmetic only, so the field pass below vectorises. */
@@ -786,7 +791,7 @@ static int level_of(int n)
 }
 
 static void set_field_pointers(ocean_frame *f, int c, int n, unsigned effects,
-                               const int *ch, int nch)
+                               const int *ch, int nch, int foam_map)
 {
     ocean_field *fd = &f->field[c];
     memset(fd, 0, sizeof *fd);
@@ -810,7 +815,7 @@ static void set_field_pointers(ocean_frame *f, int c, int n, unsigned effects,
         case CH_VZ: fd->vel_z = p; break;
         }
     }
-    if (effects & OCEAN_FX_FOAM) {
+    if ((effects & OCEAN_FX_FOAM) && foam_map) {
         fd->jacobian = f->derived[c];
         fd->foam = f->derived[c] + nn;
     }
@@ -881,7 +886,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
         /* A cascade wholly above the cutoff contributes zero fields at the
          * smallest size: nothing to transform. */
         int n = cs->k_lo >= kneg ? OCEAN_MIN_N : pick_size(cs, n_full, kneg);
-        set_field_pointers(f, c, n, fx, ch, nch);
+        set_field_pointers(f, c, n, fx, ch, nch, r->foam_map);
         if (nch == 0)
             continue;
         /* The row pass caches every mode of the grid it covers, so any
@@ -897,7 +902,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
              * above: a claimed plane is trusted from then on. */
             if (!(isinf(kc) && scale == 1.0 && boost == 1.0 && n == n_full))
                 a.gain = gain_plane_get(o, c, n, kc, r->order, scale, boost, &a.gain_ready);
-#pragma omp parallel for num_threads(o->p.threads) schedule(static)
+#pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
             for (int row = 0; row < n; row++)
                 spectrum_row(&a, row);
             if (!cached) {
@@ -913,10 +918,10 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
                 o->counters.transforms_by_effect[e]++;
             }
         }
-        if (fx & OCEAN_FX_FOAM) {
+        if ((fx & OCEAN_FX_FOAM) && r->foam_map) {
             ocean_field *fd = &f->field[c];
             long nn = (long)n * n, step = (long)n * 8;
-#pragma omp parallel for num_threads(o->p.threads) schedule(static)
+#pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
             for (long i = 0; i < nn; i += step)
                 jacobian_rows(fd, i, i + step < nn ? i + step : nn);
         }
@@ -1072,7 +1077,7 @@ void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out)
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++) {
             double jac;
-            if (f->cascades == 1 || finest == 0) {
+            if ((f->cascades == 1 || finest == 0) && fd->jacobian) {
                 jac = fd->jacobian[(size_t)i * n + j];
             } else {
                 ocean_point pt;

@@ -101,9 +101,15 @@ typedef struct ocean_request {
                          the unfiltered variance (seed 000's energy guard) */
     double low_boost; /* gain on waves below the cutoff (seed 000's 3 % motion
                          compensation gives 1.03); 1 or 0 means none */
+    int foam_map;     /* 1: also fill each foam cascade's jacobian and foam
+                         planes (baking, field statistics).  Point samples,
+                         queries and tiles form J from Dxx, Dzz, Dxz at the
+                         point and need no map, so the daemon leaves it 0
+                         and skips a full pass over the field. */
 } ocean_request;
 
-/* An unfiltered request for the given effects on every cascade. */
+/* An unfiltered request for the given effects on every cascade, with the
+ * foam map (foam_map = 1). */
 void ocean_request_all(ocean_request *r, unsigned effects);
 
 /* One cascade's evaluated fields.  Row-major n x n floats, row = z index,
@@ -118,8 +124,9 @@ typedef struct ocean_field {
     float *dx, *dz;             /* choppy displacement, already times lambda */
     float *slope_x, *slope_z;   /* d(eta)/dx, d(eta)/dz */
     float *dxx, *dzz, *dxz;     /* lambda * derivatives of Dx, Dz (foam) */
-    float *jacobian;            /* this cascade's folding Jacobian J (< 0: folded) */
-    float *foam;                /* foam coverage 0..1 from J */
+    float *jacobian;            /* this cascade's folding Jacobian J (< 0: folded);
+                                   NULL unless the request asked for foam_map */
+    float *foam;                /* foam coverage 0..1 from J; likewise */
     float *vel_x, *vel_y, *vel_z; /* orbital velocity of the displaced point, m/s */
 } ocean_field;
 

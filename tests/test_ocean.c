@@ -817,6 +817,49 @@ static void test_drop_gain(void **state)
     ocean_params_default(&p); p.drop_gain = NAN; expect_refused(&p, "drop_gain");
 }
 
+/* Without foam_map the evaluation skips the J/foam planes, and a point
+ * sample still gives the map's J at every grid node. */
+static void test_foam_map_on_request(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 64;
+    p.sea.choppiness = 2.5;
+    ocean *o = make(&p);
+    ocean_frame *with = frame(o), *without = frame(o);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL);
+    assert_int_equal(r.foam_map, 1);
+    assert_int_equal(ocean_evaluate(o, 7.0, &r, with), OCEAN_OK);
+    r.foam_map = 0;
+    assert_int_equal(ocean_evaluate(o, 7.0, &r, without), OCEAN_OK);
+    const ocean_field *a = ocean_frame_field(with, 0), *b = ocean_frame_field(without, 0);
+    assert_non_null(a->jacobian);
+    assert_non_null(a->foam);
+    assert_null(b->jacobian);
+    assert_null(b->foam);
+    assert_non_null(b->dxx);
+    double h = a->patch_m / a->n, jmin = 1.0;
+    for (int i = 0; i < a->n; i += 3)
+        for (int j = 0; j < a->n; j += 5) {
+            ocean_point pt;
+            ocean_frame_sample(without, j * h, i * h, &pt);
+            float want = a->jacobian[(size_t)i * a->n + j];
+            if (fabs(pt.jacobian - want) > 1e-5 * (1.0 + fabs(want)))
+                fail_msg("J at (%d, %d): sample %.7f, map %.7f", i, j, pt.jacobian, (double)want);
+            jmin = fmin(jmin, want);
+        }
+    assert_true(jmin < 1.0); /* the choppy sea has compression to compare */
+    ocean_field_stats sa, sb;
+    ocean_frame_get_field_stats(with, &sa);
+    ocean_frame_get_field_stats(without, &sb);
+    assert_true(fabs(sa.min_jacobian - sb.min_jacobian) < 1e-5);
+    ocean_frame_destroy(with);
+    ocean_frame_destroy(without);
+    ocean_destroy(o);
+}
+
 /* Each cutoff bucket's gains are computed once and kept: after more
  * buckets than are kept, in any order, every evaluation still equals a
  * fresh ocean's, byte for byte. */
@@ -872,6 +915,7 @@ int main(void)
         cmocka_unit_test(test_cascade_partition),
         cmocka_unit_test(test_cutoff_evaluation),
         cmocka_unit_test(test_drop_gain),
+        cmocka_unit_test(test_foam_map_on_request),
         cmocka_unit_test(test_gain_planes_reused_exactly),
     };
     return cmocka_run_group_tests_name("ocean", tests, NULL, NULL);

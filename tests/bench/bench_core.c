@@ -23,22 +23,69 @@
 #include <time.h>
 
 #include "../lib/bench_util.h"
+#include <fftw3.h>
+
 #include "ocean.h"
 
 typedef struct fxset {
     const char *name;
     unsigned fx;
+    int foam_map;
 } fxset;
+
+/* The classic trick the issue asks to measure: two real channels packed
+ * into one complex field, z = a + i b, cost one c2c transform instead of
+ * two c2r.  FFTW alone, same sizes, same threads, interleaved: 8 c2r
+ * against 4 c2c.  Returns c2c / c2r. */
+static double packing_ratio(int n, int threads, int reps, double *ms_c2r, double *ms_c2c)
+{
+    int h = n / 2 + 1, dims[2] = {n, n};
+    fftwf_complex *in = fftwf_malloc(sizeof(fftwf_complex) * 8 * (size_t)n * h);
+    float *out = fftwf_malloc(sizeof(float) * 8 * (size_t)n * n);
+    fftwf_complex *cin = fftwf_malloc(sizeof(fftwf_complex) * 4 * (size_t)n * n);
+    fftwf_complex *cout = fftwf_malloc(sizeof(fftwf_complex) * 4 * (size_t)n * n);
+    double r = NAN;
+    if (in && out && cin && cout) {
+        fftwf_plan_with_nthreads(threads);
+        fftwf_plan pr = fftwf_plan_many_dft_c2r(2, dims, 8, in, NULL, 1, n * h, out, NULL, 1, n * n,
+                                                FFTW_ESTIMATE);
+        fftwf_plan pc = fftwf_plan_many_dft(2, dims, 4, cin, NULL, 1, n * n, cout, NULL, 1, n * n,
+                                            FFTW_BACKWARD, FFTW_ESTIMATE);
+        memset(in, 0, sizeof(fftwf_complex) * 8 * (size_t)n * h);
+        memset(cin, 0, sizeof(fftwf_complex) * 4 * (size_t)n * n);
+        double *a = malloc(sizeof(double) * reps * 2), *b = a + reps;
+        for (int i = 0; i < reps; i++) {
+            double t0 = bench_now_ms();
+            fftwf_execute(pr);
+            double t1 = bench_now_ms();
+            fftwf_execute(pc);
+            a[i] = t1 - t0;
+            b[i] = bench_now_ms() - t1;
+        }
+        *ms_c2r = bench_median(a, reps);
+        *ms_c2c = bench_median(b, reps);
+        r = *ms_c2c / *ms_c2r;
+        free(a);
+        fftwf_destroy_plan(pr);
+        fftwf_destroy_plan(pc);
+    }
+    fftwf_free(in);
+    fftwf_free(out);
+    fftwf_free(cin);
+    fftwf_free(cout);
+    return r;
+}
 
 int main(void)
 {
     int quick = bench_quick();
     const int sizes[] = {256, 512, 1024};
     const fxset sets[] = {
-        {"height", OCEAN_FX_HEIGHT},
-        {"+displacement", OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT},
-        {"+normals", OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT | OCEAN_FX_NORMALS},
-        {"+foam", OCEAN_FX_ALL},
+        {"height", OCEAN_FX_HEIGHT, 0},
+        {"+displacement", OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT, 0},
+        {"+normals", OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT | OCEAN_FX_NORMALS, 0},
+        {"+foam", OCEAN_FX_ALL, 0},
+        {"+foam +map", OCEAN_FX_ALL, 1},
     };
     FILE *csv = fopen("tests/bench/out/core.csv", "w");
     if (csv)
@@ -50,7 +97,7 @@ int main(void)
            "per-repetition ratios.\n\n");
     printf("| N | effects | transforms | 1 thread ms | FFTW ms | ratio | 2 threads ms | FFTW ms | ratio |\n");
     printf("|---:|---|---:|---:|---:|---:|---:|---:|---:|\n");
-    double target_ratio = NAN;
+    double target_ratio = NAN, map_ratio = NAN;
     int failed = 0;
     for (size_t si = 0; si < sizeof sizes / sizeof sizes[0]; si++) {
         int n = sizes[si];
@@ -74,6 +121,7 @@ int main(void)
                 }
                 ocean_request r;
                 ocean_request_all(&r, sets[e].fx);
+                r.foam_map = sets[e].foam_map;
                 /* Enough repetitions for a stable median, bounded in time. */
                 int reps = quick ? 5 : (n >= 1024 ? 15 : n >= 512 ? 31 : 61);
                 double *a = malloc(sizeof(double) * reps * 3), *b = a + reps, *q = b + reps;
@@ -110,7 +158,7 @@ int main(void)
                     fprintf(csv, "%d,%s,%d,%d,%d,%.4f,%.4f,%.4f\n", n, sets[e].name, th, transforms, reps,
                             ms[th - 1], fw[th - 1], ra[th - 1]);
                 if (n == 512 && sets[e].fx == OCEAN_FX_ALL && th == 2)
-                    target_ratio = ra[1];
+                    *(sets[e].foam_map ? &map_ratio : &target_ratio) = ra[1];
                 free(a);
                 ocean_frame_destroy(f);
                 ocean_destroy(o);
@@ -122,8 +170,25 @@ int main(void)
     }
     if (csv)
         fclose(csv);
-    printf("\nTarget (issue 2): full evaluation (+foam) at N = 512 on 2 threads within 1.15x of FFTW alone: "
-           "measured %.3fx - %s.\n\n", target_ratio,
-           isnan(target_ratio) ? "NOT MEASURED" : target_ratio <= 1.15 ? "met" : "NOT met");
+    printf("\n`+foam` is the full evaluation as the daemon runs it: all 8 transforms, with J and "
+           "foam formed from Dxx, Dzz, Dxz wherever a point is sampled. `+foam +map` also fills "
+           "the whole-field J and foam planes (request foam_map: baking, statistics), one more "
+           "pass over 5 floats per point.\n\n");
+    printf("Target (issue 2): full evaluation at N = 512 on 2 threads within 1.15x of FFTW alone: "
+           "measured %.3fx - %s; with the whole-field foam map %.3fx.\n\n", target_ratio,
+           isnan(target_ratio) ? "NOT MEASURED" : target_ratio <= 1.15 ? "met" : "NOT met", map_ratio);
+
+    /* Packing two real channels into one complex transform. */
+    printf("#### Packing two real channels into one complex transform (FFTW alone)\n\n");
+    printf("| N | threads | 8 c2r ms | 4 c2c ms (packed pairs) | c2c / c2r |\n|---:|---:|---:|---:|---:|\n");
+    for (int n = 256; n <= 512; n *= 2)
+        for (int th = 1; th <= 2; th++) {
+            double a = NAN, b = NAN;
+            double q = packing_ratio(n, th, quick ? 5 : 31, &a, &b);
+            printf("| %d | %d | %.3f | %.3f | %.2f |\n", n, th, a, b, q);
+        }
+    printf("\nFFTW's real-input transforms already exploit the Hermitian half spectrum, so a packed "
+           "pair costs as much as the two real transforms or more, before the unpacking pass: "
+           "oceand keeps batched c2r plans.\n\n");
     return failed;
 }

@@ -112,7 +112,7 @@ int main(void)
     printf("|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     const double patches[] = {1000.0, 250.0, 100.0, 50.0};
     const double drops[] = {OCEAN_DROP_GAIN_DEFAULT, 1.0 / 64.0};
-    double seed_best = NAN, seed_best_patch = NAN;
+    char met_at[128] = "", missed_at[128] = "";
     for (size_t pi = 0; pi < sizeof patches / sizeof patches[0]; pi++)
         for (size_t di = 0; di < sizeof drops / sizeof drops[0]; di++) {
             ocean_params q = p;
@@ -153,9 +153,11 @@ int main(void)
                    ma, mb, ma / mb);
             if (csv)
                 fprintf(csv, "seed_grid,patch%.0f_drop%.4g_ratio,%.4f,x\n", q.patch_m, q.drop_gain, ma / mb);
-            if (di == 0 && !(ma / mb >= seed_best)) {
-                seed_best = ma / mb;
-                seed_best_patch = q.patch_m;
+            if (di == 0) {
+                char *list = ma / mb <= 0.5 ? met_at : missed_at;
+                size_t used = strlen(list);
+                snprintf(list + used, sizeof met_at - used, "%s%.0f m (%.3f)", used ? ", " : "",
+                         q.patch_m, ma / mb);
             }
             free(a);
             free(b);
@@ -163,10 +165,10 @@ int main(void)
             ocean_frame_destroy(fq[1]);
             ocean_destroy(oq);
         }
-    printf("\nSeed policy at 50 m/s on the seed's grid, shipped drop gain: best ratio %.3f "
-           "(patch %.0f m) - target <= 0.5 %s where the cutoff lies inside the band; it cannot "
-           "save anything on a patch whose Nyquist is below the cutoff.\n\n",
-           seed_best, seed_best_patch, seed_best <= 0.5 ? "met" : "NOT met");
+    printf("\nSeed policy at 50 m/s on the seed's grid, shipped drop gain: target <= 0.5 met "
+           "at %s; not met at %s. A cutoff saves time only where 1.1 kc lies under half the "
+           "grid's Nyquist, so the transform can halve.\n\n",
+           met_at[0] ? met_at : "no patch", missed_at[0] ? missed_at : "no patch");
 
     /* 2. Eight buckets in one tick against one.  As the server does: a
      * bucket whose filter changes nothing over this ocean's band shares the
@@ -181,6 +183,8 @@ int main(void)
     printf("|---|---:|---|---|---:|---:|---:|\n");
     const char *mixes[2] = {"8 speeds 0-300 m/s (antialias, 30 fps, 0.5 m spacing)",
                             "8 octave buckets from the grid's Nyquist down"};
+    double ratio_mix[2] = {NAN, NAN};
+    int distinct[2] = {0, 0};
     for (int mix = 0; mix < 2; mix++) {
         ocean_request req[8];
         int nreq = 0;
@@ -235,10 +239,15 @@ int main(void)
         printf(" | %.3f | %.3f | %.3f |\n", m1, m8, m8 / m1);
         if (csv)
             fprintf(csv, "buckets,mix%d_ratio_8_over_1,%.4f,x\n", mix, m8 / m1);
+        ratio_mix[mix] = m8 / m1;
+        distinct[mix] = nreq;
         free(r8);
         free(r1);
     }
-    printf("\n");
+    printf("\nEight distinct octave-spaced buckets: %.3fx - target <= 1.5 %s. The speed mix "
+           "quantises to %d distinct cutoffs, most within an octave of the grid's Nyquist, where "
+           "each distinct filter needs its own full-size transform: %.3fx.\n\n",
+           ratio_mix[1], ratio_mix[1] <= 1.5 ? "met" : "NOT met", distinct[0], ratio_mix[0]);
 
     /* 3. Query throughput with inversion, and its error. */
     ocean_request qr;
