@@ -1,0 +1,59 @@
+/*
+ * load_run.h - the two receive paths of `ocean-client load` and the result
+ * they both fill, so one report prints either.
+ *
+ *  - load_direct_run: the default.  Viewers are spread over worker threads,
+ *    each with its own epoll loop; every connection is a plain socket with
+ *    an RFC 6455 client reader that takes whole frames in bulk.  Why not the
+ *    client library: libwebsockets 4.1.6's client parser handles a frame's
+ *    payload one byte at a time (about 6 ns a byte, measured with perf on
+ *    this machine), which at 256 viewers x 3.8 MB/s is several cores - the
+ *    generator, not the daemon, would be measured.  Every FRAME's header and
+ *    fixed fields are checked; every verify_every-th FRAME of each viewer
+ *    (staggered between viewers) is decoded in full, tiles included.
+ *  - load_library_run: every viewer is an oc_client on one oc_loop, as a
+ *    simulator would connect (--library); header-only unless --decode.
+ *
+ * Latency samples are kept raw (receipt wall time - FRAME sim_time) and
+ * merged over every thread before percentiles are taken.
+ */
+#ifndef LOAD_RUN_H
+#define LOAD_RUN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "occli.h"
+#include "proto.h"
+
+typedef struct load_cfg {
+    const char *url;
+    int nclients;
+    int threads;          /* direct path: worker threads (1..64) */
+    int verify_every;     /* direct path: decode every Nth frame in full (1: all) */
+    int decode;           /* library path: decode every tile */
+    double seconds, ramp, warmup, spread, speed;
+    int timeout_ms;
+    proto_subscribe sub;
+    proto_camera cam0;
+} load_cfg;
+
+typedef struct load_result {
+    int created, ready;
+    double wall;                  /* measured seconds */
+    double cpu;                   /* process CPU seconds over the window */
+    uint64_t frames, bytes, skipped, dropped, errors, decode_errors, verified;
+    uint64_t fmin, fmax;          /* frames of the least / most served viewer */
+    int closed;
+    occli_vec delay;              /* raw recv_wall - sim_time, s, in the window */
+    double min_delay;             /* smallest such value over the whole run */
+    double min_any;               /* same over every message, HELLO included
+                                     (direct path; NAN if unknown) */
+} load_result;
+
+/* Both return 0 when the run took place (the result says how well), 1 on a
+ * setup failure (message printed). */
+int load_direct_run(const load_cfg *cfg, load_result *out);
+int load_library_run(const load_cfg *cfg, load_result *out);
+
+#endif
