@@ -130,7 +130,57 @@ void srv_msg_free(srv_msg *m)
 {
     if (!m) return;
     proto_buf_free(&m->buf);
+    if (m->blob && atomic_fetch_sub(&m->blob->refs, 1) == 1) {
+        proto_buf_free(&m->blob->buf);
+        free(m->blob);
+    }
     free(m);
+}
+
+ocean_result srv_msg_make_shared(srv_msg *m)
+{
+    if (m->blob) return OCEAN_OK;
+    srv_blob *b = malloc(sizeof *b);
+    if (!b) return OCEAN_ENOMEM;
+    atomic_init(&b->refs, 1);
+    b->buf = m->buf;
+    proto_buf_init(&m->buf, LWS_PRE);
+    m->blob = b;
+    return OCEAN_OK;
+}
+
+srv_msg *srv_msg_share(const srv_msg *m)
+{
+    if (!m->blob) return NULL;
+    srv_msg *q = srv_msg_new();
+    if (!q) return NULL;
+    atomic_fetch_add(&m->blob->refs, 1);
+    q->blob = m->blob;
+    q->camera_seq = m->camera_seq;
+    q->mesh_id = m->mesh_id;
+    q->mesh_id_at = m->mesh_id_at;
+    q->tick_wall = m->tick_wall;
+    q->is_frame = m->is_frame;
+    q->close_after = m->close_after;
+    return q;
+}
+
+size_t srv_msg_len(const srv_msg *m)
+{
+    if (!m) return 0;
+    return proto_buf_len(m->blob ? &m->blob->buf : &m->buf);
+}
+
+uint8_t *srv_msg_wire(srv_msg *m, size_t *len)
+{
+    proto_buf *b = m->blob ? &m->blob->buf : &m->buf;
+    uint8_t *d = proto_buf_data(b);
+    *len = proto_buf_len(b);
+    if (m->blob && m->is_frame && *len >= PROTO_HEADER_SIZE + 48) {
+        proto_st32(d + PROTO_HEADER_SIZE + 40, m->camera_seq);   /* FRAME camera_seq */
+        if (m->mesh_id_at && (size_t)m->mesh_id_at + 4 <= *len) proto_st32(d + m->mesh_id_at, m->mesh_id);
+    }
+    return d;
 }
 
 static void free_list(srv_msg *m)
@@ -226,7 +276,7 @@ void srv_client_remove(srv_client *c)
     srv_client_unref(c);
 }
 
-static size_t msg_bytes(const srv_msg *m) { return m ? proto_buf_len(&m->buf) : 0; }
+static size_t msg_bytes(const srv_msg *m) { return srv_msg_len(m); }
 
 void srv_client_queue(srv_client *c, srv_msg *m)
 {

@@ -36,10 +36,27 @@
 struct lws;
 struct srv_record;
 
-/* One queued outgoing message: bytes with LWS_PRE headroom. */
+/* Encoded bytes that several queued messages share: one FRAME encoding for
+ * every viewer whose frame differs only in its per-client fields (co-located
+ * viewers).  Immutable once shared, except that the service thread - the
+ * only thread that sends - writes the per-client fields of the message it is
+ * about to send just before lws_write (which hands every byte to the kernel
+ * or copies what it could not send before returning). */
+typedef struct srv_blob {
+    atomic_int refs;
+    proto_buf buf;      /* LWS_PRE headroom */
+} srv_blob;
+
+/* One queued outgoing message: its own bytes (buf, with LWS_PRE headroom)
+ * or a reference to shared ones (blob) with the per-client FRAME fields to
+ * write into them when sending. */
 typedef struct srv_msg {
     struct srv_msg *next;
     proto_buf buf;
+    srv_blob *blob;     /* shared bytes, or NULL: buf */
+    uint32_t camera_seq;/* blob FRAMEs: this client's camera_seq ... */
+    uint32_t mesh_id;   /*   ... and mesh id, */
+    uint32_t mesh_id_at;/*   at this byte offset (0: no mesh) */
     double tick_wall;   /* monotonic time of the tick that made it (0: none) */
     int is_frame;       /* counts as a frame for statistics */
     int close_after;    /* close the connection once this is sent (BYE) */
@@ -182,6 +199,17 @@ uint64_t srv_client_queued(srv_client *c);
 
 srv_msg *srv_msg_new(void);
 void srv_msg_free(srv_msg *m);
+/* Moves m's own bytes into a new blob of one reference (m then refers to
+ * it).  OCEAN_ENOMEM leaves m as it was. */
+ocean_result srv_msg_make_shared(srv_msg *m);
+/* A new message referring to m's blob (one more reference), with m's
+ * per-client fields and flags.  NULL on OOM or if m has no blob. */
+srv_msg *srv_msg_share(const srv_msg *m);
+/* The message's wire bytes, per-client FRAME fields written in for a blob
+ * [service thread only: the bytes may be shared]. */
+uint8_t *srv_msg_wire(srv_msg *m, size_t *len);
+/* Length of the wire bytes. */
+size_t srv_msg_len(const srv_msg *m);
 
 /* Builds and queues messages the service thread sends [svc]. */
 void srv_client_send_error(srv_client *c, const void *bad, size_t badlen, ocean_result code,

@@ -201,8 +201,8 @@ static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now
     c->inflight = 0;
     srv_msg *m = srv_client_take(c);
     if (!m) return;
-    uint8_t *data = proto_buf_data(&m->buf);
-    size_t len = proto_buf_len(&m->buf);
+    size_t len;
+    uint8_t *data = srv_msg_wire(m, &len);
     if (len >= PROTO_HEADER_SIZE) proto_st32(data + 16, c->tx_seq++);
     int w = lws_write(wsi, data, len, LWS_WRITE_BINARY);
     double now = srv_now();

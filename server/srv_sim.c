@@ -61,6 +61,9 @@ typedef struct job {
     int leader;             /* live: index of the job whose mesh this one shares */
     int mesh_ok;
     mesh_view mv;           /* the displaced mesh (valid when mesh_ok) */
+    int fshare;             /* live: index of the job whose FRAME bytes this one shares */
+    int has_mesh;           /* the FRAME carries a mesh */
+    int no_share;           /* its FRAME bytes cannot be shared */
 } job;
 
 struct srv_sim {
@@ -435,14 +438,43 @@ static void mesh_stage(srv_sim *s, job *j)
     j->mesh_ok = 1;
 }
 
+/* The client's side of a frame with the mesh of job src: a new
+ * MESH_TOPOLOGY (j->topo) when the client has not seen this topology.
+ * Returns 1 if the frame carries a mesh [worker thread owning the client]. */
+static int topo_stage(job *j, const job *src)
+{
+    srv_client_sim *cs = &j->c->sim;
+    if (!src->mesh_ok || cs->sub.mesh_kind == PROTO_MESH_NONE) return 0;
+    const mesh_view *v = &src->mv;
+    if (!cs->topo_valid || v->topology_key != cs->topo_key) {
+        cs->mesh_id++;
+        cs->topo_key = v->topology_key;
+        cs->topo_valid = 1;
+        proto_msg tm;
+        proto_msg_init(&tm, PROTO_MESH_TOPOLOGY);
+        tm.hdr.sim_time = j->t;
+        tm.u.topology.mesh_id = cs->mesh_id;
+        tm.u.topology.mesh_kind = (uint8_t)v->kind;
+        tm.u.topology.lod_levels = (uint8_t)(v->levels < 1 ? 1 : v->levels);
+        tm.u.topology.vertex_count = v->vertex_count;
+        tm.u.topology.index_count = v->index_count;
+        tm.u.topology.indices = v->indices;
+        tm.u.topology.morph = v->morph;
+        tm.u.topology.level = v->level;
+        j->topo = encode_msg(&tm);
+    }
+    return 1;
+}
+
 /* Encodes the FRAME (and a MESH_TOPOLOGY when the client has not seen this
  * topology) of job j, with the mesh of job src (j itself, or a job with the
- * same camera, time and cutoff whose mesh is identical). */
-static void frame_stage(srv_sim *s, job *j, const job *src)
+ * same camera, time and cutoff whose mesh is identical).  With shared set
+ * the bytes go into a blob that other jobs' frames may refer to
+ * (share_stage). */
+static void frame_stage(srv_sim *s, job *j, const job *src, int shared)
 {
     (void)s;
-    srv_client *c = j->c;
-    srv_client_sim *cs = &c->sim;
+    srv_client_sim *cs = &j->c->sim;
     proto_msg m;
     proto_msg_init(&m, PROTO_FRAME);
     m.hdr.sim_time = j->t;
@@ -461,25 +493,9 @@ static void frame_stage(srv_sim *s, job *j, const job *src)
         if (j->tiles[i] && j->tiles[i]->result == OCEAN_OK) srv_tile_to_proto(j->tiles[i], &pt[nt++]);
     fr->tile_count = (uint16_t)nt;
     fr->tiles = pt;
-    if (src->mesh_ok && cs->sub.mesh_kind != PROTO_MESH_NONE) {
+    j->has_mesh = topo_stage(j, src);
+    if (j->has_mesh) {
         const mesh_view *v = &src->mv;
-        if (!cs->topo_valid || v->topology_key != cs->topo_key) {
-            cs->mesh_id++;
-            cs->topo_key = v->topology_key;
-            cs->topo_valid = 1;
-            proto_msg tm;
-            proto_msg_init(&tm, PROTO_MESH_TOPOLOGY);
-            tm.hdr.sim_time = j->t;
-            tm.u.topology.mesh_id = cs->mesh_id;
-            tm.u.topology.mesh_kind = (uint8_t)v->kind;
-            tm.u.topology.lod_levels = (uint8_t)(v->levels < 1 ? 1 : v->levels);
-            tm.u.topology.vertex_count = v->vertex_count;
-            tm.u.topology.index_count = v->index_count;
-            tm.u.topology.indices = v->indices;
-            tm.u.topology.morph = v->morph;
-            tm.u.topology.level = v->level;
-            j->topo = encode_msg(&tm);
-        }
         fr->has_mesh = 1;
         fr->mesh.mesh_id = cs->mesh_id;
         fr->mesh.vertex_count = v->vertex_count;
@@ -488,6 +504,62 @@ static void frame_stage(srv_sim *s, job *j, const job *src)
         memcpy(fr->origin, v->origin, sizeof v->origin);
     }
     j->frame = encode_msg(&m);
+    if (!shared || !j->frame || srv_msg_make_shared(j->frame) != OCEAN_OK) return;
+    srv_msg *q = j->frame;
+    q->camera_seq = j->cam_seq;
+    if (j->has_mesh) {
+        /* The mesh record is the last one: 8-byte record head, then mesh_id,
+         * vertex_count, origin, positions, padded to 8 (PROTOCOL.md). */
+        size_t len = proto_buf_len(&q->blob->buf), blen = 32 + 12 * (size_t)fr->mesh.vertex_count;
+        size_t pad = (8u - (blen & 7u)) & 7u;
+        const uint8_t *d = proto_buf_data(&q->blob->buf);
+        size_t at = len >= blen + pad ? len - pad - blen : 0;
+        if (at > PROTO_HEADER_SIZE && at <= UINT32_MAX && proto_ld32(d + at) == cs->mesh_id &&
+            proto_ld32(d + at + 4) == fr->mesh.vertex_count) {
+            q->mesh_id = cs->mesh_id;
+            q->mesh_id_at = (uint32_t)at;
+        } else {
+            j->no_share = 1;   /* layout not as expected: nobody borrows these bytes */
+        }
+    }
+}
+
+/* Job j's FRAME as a reference to the bytes of job lead's, whose frame is
+ * identical but for camera_seq and mesh_id (frames_equal); src is the job
+ * whose mesh both carry.  Falls back to encoding its own.  Runs after
+ * frame_stage(lead) [worker thread owning j's client]. */
+static void share_stage(srv_sim *s, job *j, const job *lead, const job *src)
+{
+    if (lead->frame && lead->frame->blob && !lead->no_share) {
+        j->has_mesh = topo_stage(j, src);
+        if (j->has_mesh == lead->has_mesh) {
+            j->frame = srv_msg_share(lead->frame);
+            if (j->frame) {
+                j->frame->camera_seq = j->cam_seq;
+                j->frame->mesh_id = j->c->sim.mesh_id;
+                atomic_fetch_add(&s->hub->stats.frames_shared, 1);
+                return;
+            }
+        }
+        /* topology bookkeeping is done; encode our own */
+        srv_msg_free(j->topo);
+        j->topo = NULL;
+        j->c->sim.topo_valid = 0;
+    }
+    frame_stage(s, j, src, 0);
+}
+
+/* Two live jobs whose FRAMEs are byte for byte the same except camera_seq,
+ * mesh_id (per client) and the header's seq (stamped when sent): same time,
+ * evaluation, cutoff, tick, origin, tile entries, and the same mesh build
+ * or none at all. */
+static int frames_equal(const job *a, const job *b, int a_mesh, int b_mesh)
+{
+    if (a->t != b->t || a->ev != b->ev || a->cutoff_k != b->cutoff_k || a->tick != b->tick ||
+        a->cam.pos[0] != b->cam.pos[0] || a->cam.pos[2] != b->cam.pos[2] || a->ntiles != b->ntiles ||
+        a_mesh != b_mesh || (a_mesh && a->leader != b->leader))
+        return 0;
+    return a->ntiles == 0 || memcmp(a->tiles, b->tiles, sizeof *a->tiles * (size_t)a->ntiles) == 0;
 }
 
 /* Two live jobs whose meshes are bit for bit the same. */
@@ -644,15 +716,42 @@ static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
         }
 #pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
         for (int k = 0; k < nlead; k++) mesh_stage(s, &jobs[leaders[k]]);
-#pragma omp parallel for schedule(dynamic, 4) num_threads(cfg->workers)
+        /* Live jobs whose FRAMEs would be identical but for the per-client
+         * fields share one encoding: it is built once (frame leaders), the
+         * others refer to its bytes. */
+        int *fl = malloc(sizeof(int) * (size_t)(n + 1));
+        int nfl = 0;
+        for (int i = 0; i < n; i++) {
+            job *j = &jobs[i];
+            j->fshare = i;
+            j->no_share = 0;
+            if (!j->ev || j->replay || !fl) continue;
+            int jm = jobs[j->leader].mesh_ok && j->c->sim.sub.mesh_kind != PROTO_MESH_NONE;
+            for (int k = 0; k < nfl; k++) {
+                const job *o = &jobs[fl[k]];
+                int om = jobs[o->leader].mesh_ok && o->c->sim.sub.mesh_kind != PROTO_MESH_NONE;
+                if (frames_equal(o, j, om, jm)) {
+                    j->fshare = fl[k];
+                    break;
+                }
+            }
+            if (j->fshare == i) fl[nfl++] = i;
+        }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
         for (int i = 0; i < n; i++)
-            if (jobs[i].ev && !jobs[i].replay) frame_stage(s, &jobs[i], &jobs[jobs[i].leader]);
+            if (jobs[i].ev && !jobs[i].replay && jobs[i].fshare == i)
+                frame_stage(s, &jobs[i], &jobs[jobs[i].leader], fl != NULL);
+#pragma omp parallel for schedule(dynamic, 8) num_threads(cfg->workers)
+        for (int i = 0; i < n; i++)
+            if (jobs[i].ev && !jobs[i].replay && jobs[i].fshare != i)
+                share_stage(s, &jobs[i], &jobs[jobs[i].fshare], &jobs[jobs[i].leader]);
+        free(fl);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
         for (int r = 0; r < nruns; r++)
             for (int i = runs[r]; i < n && jobs[i].c == jobs[runs[r]].c && jobs[i].replay; i++) {
                 if (!jobs[i].ev) continue;
                 mesh_stage(s, &jobs[i]);
-                frame_stage(s, &jobs[i], &jobs[i]);
+                frame_stage(s, &jobs[i], &jobs[i], 0);
             }
     }
     free(runs);

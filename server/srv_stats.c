@@ -89,6 +89,8 @@ char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t h
     for (int i = 0; i < SRV_FX_CHANNELS; i++)
         sb_printf(&b, "oceand_transforms_total{channel=\"%s\"} %llu\n", ch[i], LD(transforms_by_effect[i]));
     metric(&b, "oceand_frames_built_total", "counter", "Frames built for clients.", (double)LD(frames_built));
+    metric(&b, "oceand_frames_shared_total", "counter", "Frames that reused another client's encoding "
+           "(identical but for camera_seq and mesh_id).", (double)LD(frames_shared));
     metric(&b, "oceand_frames_sent_total", "counter", "Frames written to sockets.", (double)LD(frames_sent));
     metric(&b, "oceand_frames_skipped_total", "counter", "Frames replaced before a slow client "
            "could take them (latest wins).", (double)LD(frames_skipped));
@@ -139,6 +141,7 @@ char *srv_stats_json(const srv_stats *s, const srv_stats_view *v, size_t headroo
     cJSON_AddNumberToObject(o, "evaluations", (double)LD(evaluations));
     cJSON_AddNumberToObject(o, "transforms", (double)LD(transforms));
     cJSON_AddNumberToObject(o, "frames_built", (double)LD(frames_built));
+    cJSON_AddNumberToObject(o, "frames_shared", (double)LD(frames_shared));
     cJSON_AddNumberToObject(o, "frames_sent", (double)LD(frames_sent));
     cJSON_AddNumberToObject(o, "frames_skipped", (double)LD(frames_skipped));
     cJSON_AddNumberToObject(o, "bytes_sent", (double)LD(bytes_sent));

@@ -440,7 +440,9 @@ static void queries_agree_with_sim(void **state)
 }
 
 /* Two viewers with identical cameras receive identical tile bytes, encoded
- * once (cache hits). */
+ * once (cache hits); their FRAMEs share one encoding, yet each carries its
+ * own camera_seq and a mesh_id naming the topology that client received,
+ * and the rest of the bytes are the same. */
 static void identical_cameras_share_tiles(void **state)
 {
     (void)state;
@@ -453,11 +455,18 @@ static void identical_cameras_share_tiles(void **state)
     cam.pos[0] = 5000;
     cam.pos[2] = 77;
     uint32_t sa, sb;
+    /* a has seen a topology before (its mesh ids run ahead of b's) and its
+     * camera seq differs from b's */
+    assert_int_equal(oc_client_subscribe(a, &s), OCEAN_OK);
+    assert_int_equal(oc_client_send_camera(a, &cam, &sa), OCEAN_OK);
+    oc_frame_free(next_frame(a, 5000));
     assert_int_equal(oc_client_subscribe(a, &s), OCEAN_OK);
     assert_int_equal(oc_client_subscribe(b, &s), OCEAN_OK);
     assert_int_equal(oc_client_send_camera(a, &cam, &sa), OCEAN_OK);
     assert_int_equal(oc_client_send_camera(b, &cam, &sb), OCEAN_OK);
+    assert_int_not_equal(sa, sb);
     uint64_t hits0 = stat_of(&h->stats.tile_cache_hits);
+    uint64_t shared0 = stat_of(&h->stats.frames_shared);
     oc_frame *fa[32] = {0};
     int na = 0, matched = 0;
     double end = now_s() + 5;
@@ -476,6 +485,30 @@ static void identical_cameras_share_tiles(void **state)
                     assert_memory_equal(fa[i]->tiles[t].info.payload, f->tiles[t].info.payload,
                                         f->tiles[t].info.payload_len);
                 }
+                assert_int_equal(fa[i]->info.has_mesh, f->info.has_mesh);
+                if (f->info.has_mesh) {
+                    assert_int_not_equal(fa[i]->info.mesh.mesh_id, f->info.mesh.mesh_id);
+                    assert_non_null(f->topology);
+                    assert_non_null(fa[i]->topology);
+                    assert_int_equal(f->topology->mesh_id, f->info.mesh.mesh_id);
+                    assert_int_equal(fa[i]->topology->mesh_id, fa[i]->info.mesh.mesh_id);
+                    assert_int_equal(fa[i]->info.mesh.vertex_count, f->info.mesh.vertex_count);
+                    assert_memory_equal(fa[i]->info.mesh.positions, f->info.mesh.positions,
+                                        12 * (size_t)f->info.mesh.vertex_count);
+                }
+                /* byte for byte the same but the header's seq and camera_seq */
+                assert_int_equal(fa[i]->raw_len, f->raw_len);
+                assert_memory_equal(fa[i]->raw, f->raw, 16);
+                assert_memory_equal(fa[i]->raw + 20, f->raw + 20, PROTO_HEADER_SIZE + 40 - 20);
+                size_t mid = f->raw_len - (size_t)((32 + 12 * (size_t)f->info.mesh.vertex_count + 7) / 8 * 8);
+                if (f->info.has_mesh && fa[i]->info.mesh.mesh_id != f->info.mesh.mesh_id) {
+                    assert_memory_equal(fa[i]->raw + PROTO_HEADER_SIZE + 44, f->raw + PROTO_HEADER_SIZE + 44,
+                                        mid - PROTO_HEADER_SIZE - 44);
+                    assert_memory_equal(fa[i]->raw + mid + 4, f->raw + mid + 4, f->raw_len - mid - 4);
+                } else {
+                    assert_memory_equal(fa[i]->raw + PROTO_HEADER_SIZE + 44, f->raw + PROTO_HEADER_SIZE + 44,
+                                        f->raw_len - PROTO_HEADER_SIZE - 44);
+                }
                 matched++;
             }
             oc_frame_free(f);
@@ -484,6 +517,7 @@ static void identical_cameras_share_tiles(void **state)
     for (int i = 0; i < na; i++) oc_frame_free(fa[i]);
     assert_true(matched >= 3);
     assert_true(stat_of(&h->stats.tile_cache_hits) > hits0);
+    assert_true(stat_of(&h->stats.frames_shared) > shared0);
     oc_client_destroy(a);
     oc_client_destroy(b);
 }
