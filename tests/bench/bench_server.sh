@@ -4,9 +4,10 @@
 # Starts BUILD/oceand on config/oceand.conf (a free loopback port), then for
 # N = 1, 16, 64, 256 viewers runs `ocean-client load` at 30 Hz for SECONDS
 # (default 20) and reports frames per viewer, tick-to-receipt latency p50/p99,
-# frames skipped, the daemon's CPU (utime+stime over the run, in cores) and
-# bytes per viewer per second.  Markdown table on stdout, CSV in
-# tests/bench/out/server.csv.  Target: 256 viewers at 30 Hz with p99 <= 50 ms
+# frames skipped, the daemon's CPU (utime+stime over the run, in cores),
+# bytes per viewer per second and the load generator's own CPU over its
+# measured window (cores; a generator near a full core measures itself).
+# Markdown table on stdout, CSV in tests/bench/out/server.csv.  Target: 256 viewers at 30 Hz with p99 <= 50 ms
 # on 2 cores, and the default subscription under 4 MB/s per viewer.
 #
 #   usage: tests/bench/bench_server.sh [BUILD] [SECONDS] [extra load options...]
@@ -31,9 +32,9 @@ done
 [[ -n "$port" ]] || { echo "oceand did not start:"; cat "$log"; exit 1; }
 tck=$(getconf CLK_TCK)
 cpu() { awk '{print $14 + $15}' "/proc/$pid/stat"; }
-echo "viewers,seconds,frames_per_viewer,frames_expected,latency_p50_ms,latency_p99_ms,frames_skipped_per_viewer,daemon_cpu_cores,bytes_per_viewer_per_s,disconnects,errors" >"$csv"
-echo "| viewers | frames/viewer (expected) | p50 ms | p99 ms | skipped/viewer | daemon CPU (cores) | MB/s per viewer |"
-echo "|---:|---:|---:|---:|---:|---:|---:|"
+echo "viewers,seconds,frames_per_viewer,frames_expected,latency_p50_ms,latency_p99_ms,frames_skipped_per_viewer,daemon_cpu_cores,bytes_per_viewer_per_s,disconnects,errors,generator_cpu_cores,decode_errors" >"$csv"
+echo "| viewers | frames/viewer (expected) | p50 ms | p99 ms | skipped/viewer | daemon CPU (cores) | MB/s per viewer | generator CPU (cores) |"
+echo "|---:|---:|---:|---:|---:|---:|---:|---:|"
 for n in 1 16 64 256; do
     ramp=$(awk -v n="$n" 'BEGIN {print (n > 64) ? 3 : 1}')
     c0=$(cpu); t0=$(date +%s.%N)
@@ -46,17 +47,20 @@ import json, sys
 try:
     j = json.loads(sys.argv[1])
 except Exception:
-    print("nan,nan,nan,nan,nan,nan,nan,nan"); sys.exit()
+    print("nan,nan,nan,nan,nan,nan,nan,nan,nan,nan"); sys.exit()
 g = lambda k: j.get(k, float("nan"))
-print("%.1f,%.1f,%.2f,%.2f,%.1f,%.0f,%d,%d" % (g("frames_per_viewer"), g("frames_expected_per_viewer"),
+cc = g("client_cpu_cores")
+if cc != cc and g("seconds") > 0:
+    cc = g("client_cpu_s") / g("seconds")
+print("%.1f,%.1f,%.2f,%.2f,%.1f,%.0f,%d,%d,%.2f,%d" % (g("frames_per_viewer"), g("frames_expected_per_viewer"),
       g("latency_p50_ms"), g("latency_p99_ms"), g("frames_skipped_per_viewer"),
-      g("bytes_per_viewer_per_s"), g("disconnects"), g("errors")))
+      g("bytes_per_viewer_per_s"), g("disconnects"), g("errors"), cc, g("decode_errors")))
 PY
 )
-    IFS=, read -r fpv fexp p50 p99 skip bps disc err <<<"$row"
-    echo "$n,$secs,$fpv,$fexp,$p50,$p99,$skip,$cores,$bps,$disc,$err" >>"$csv"
+    IFS=, read -r fpv fexp p50 p99 skip bps disc err gcpu derr <<<"$row"
+    echo "$n,$secs,$fpv,$fexp,$p50,$p99,$skip,$cores,$bps,$disc,$err,$gcpu,$derr" >>"$csv"
     mbs=$(awk -v b="$bps" 'BEGIN {printf "%.2f", b / 1e6}')
-    echo "| $n | $fpv ($fexp) | $p50 | $p99 | $skip | $cores | $mbs |"
+    echo "| $n | $fpv ($fexp) | $p50 | $p99 | $skip | $cores | $mbs | $gcpu |"
 done
 echo
 echo "oceand on $(nproc) cores, config/oceand.conf (scene $(grep -o 'scene [a-z-]*' "$log" | head -1 | cut -d' ' -f2)), ocean-client load defaults ${extra[*]}; CSV: $csv"
