@@ -363,7 +363,8 @@ static void sample_disp(void *ctx, double x, double z, double out[3])
 {
     const sampler_ctx *sc = ctx;
     ocean_point p;
-    ocean_frame_sample(sc->f, x, z, &p);
+    ocean_frame_sample_some(sc->f, x, z, OCEAN_SAMPLE_HEIGHT | (sc->disp ? OCEAN_SAMPLE_DISPLACEMENT : 0),
+                            &p);
     out[0] = sc->disp ? p.dx : 0;
     out[1] = p.height;
     out[2] = sc->disp ? p.dz : 0;

@@ -145,11 +145,14 @@ void srv_tile_build(srv_tile *t, const ocean_frame *f)
     }
     if (k->channels & PROTO_CH_FOAM) pfoam = buf + ns * (size_t)pi++;
     if (k->channels & PROTO_CH_JACOBIAN) pj = buf + ns * (size_t)pi++;
+    /* Only the channel groups this tile carries are interpolated. */
+    unsigned want = (ph ? OCEAN_SAMPLE_HEIGHT : 0) | (pdx || pdz ? OCEAN_SAMPLE_DISPLACEMENT : 0) |
+                    (pnu ? OCEAN_SAMPLE_SLOPE : 0) | (pfoam || pj ? OCEAN_SAMPLE_FOAM : 0);
     for (int i = 0; i < n; i++) {
         double z = z0 + i * k->spacing;
         for (int j = 0; j < n; j++) {
             ocean_point p;
-            ocean_frame_sample(f, x0 + j * k->spacing, z, &p);
+            ocean_frame_sample_some(f, x0 + j * k->spacing, z, want, &p);
             size_t s = (size_t)i * n + j;
             if (ph) ph[s] = (float)p.height;
             if (pdx) pdx[s] = (float)p.dx;

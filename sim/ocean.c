@@ -997,25 +997,35 @@ static inline cell locate(const ocean_field *fd, double x, double z)
 
 #define SAMPLE(g, c) bilerp((g), fd->n, (c).i0, (c).j0, (c).fx, (c).fz)
 
-void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out)
+void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned want,
+                             ocean_point *out)
 {
     memset(out, 0, sizeof *out);
     double dxx = 0.0, dzz = 0.0, dxz = 0.0;
     int any_foam = 0;
+    const float *const none = NULL;
     for (int c = 0; c < f->cascades; c++) {
         const ocean_field *fd = &f->field[c];
         if (!fd->effects)
             continue;
         cell q = locate(fd, x, z);
-        if (fd->height) out->height += SAMPLE(fd->height, q);
-        if (fd->dx) out->dx += SAMPLE(fd->dx, q);
-        if (fd->dz) out->dz += SAMPLE(fd->dz, q);
-        if (fd->slope_x) out->slope_x += SAMPLE(fd->slope_x, q);
-        if (fd->slope_z) out->slope_z += SAMPLE(fd->slope_z, q);
-        if (fd->vel_x) out->vel_x += SAMPLE(fd->vel_x, q);
-        if (fd->vel_y) out->vel_y += SAMPLE(fd->vel_y, q);
-        if (fd->vel_z) out->vel_z += SAMPLE(fd->vel_z, q);
-        if (fd->dxx) {
+        /* A group not wanted reads as a channel not evaluated. */
+        const float *h = want & OCEAN_SAMPLE_HEIGHT ? fd->height : none;
+        const float *ddx = want & OCEAN_SAMPLE_DISPLACEMENT ? fd->dx : none;
+        const float *ddz = want & OCEAN_SAMPLE_DISPLACEMENT ? fd->dz : none;
+        const float *sx = want & OCEAN_SAMPLE_SLOPE ? fd->slope_x : none;
+        const float *sz = want & OCEAN_SAMPLE_SLOPE ? fd->slope_z : none;
+        const float *fxx = want & OCEAN_SAMPLE_FOAM ? fd->dxx : none;
+        int vel = (want & OCEAN_SAMPLE_VELOCITY) != 0;
+        if (h) out->height += SAMPLE(h, q);
+        if (ddx) out->dx += SAMPLE(ddx, q);
+        if (ddz) out->dz += SAMPLE(ddz, q);
+        if (sx) out->slope_x += SAMPLE(sx, q);
+        if (sz) out->slope_z += SAMPLE(sz, q);
+        if (vel && fd->vel_x) out->vel_x += SAMPLE(fd->vel_x, q);
+        if (vel && fd->vel_y) out->vel_y += SAMPLE(fd->vel_y, q);
+        if (vel && fd->vel_z) out->vel_z += SAMPLE(fd->vel_z, q);
+        if (fxx) {
             any_foam = 1;
             dxx += SAMPLE(fd->dxx, q);
             dzz += SAMPLE(fd->dzz, q);
@@ -1028,6 +1038,11 @@ void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *o
     out->dxx = dxx;
     out->dzz = dzz;
     out->dxz = dxz;
+}
+
+void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out)
+{
+    ocean_frame_sample_some(f, x, z, OCEAN_SAMPLE_ALL, out);
 }
 
 void ocean_frame_sample_displacement(const ocean_frame *f, double x, double z,

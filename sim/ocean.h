@@ -180,6 +180,24 @@ typedef struct ocean_point {
 } ocean_point;
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out);
 
+/* What ocean_frame_sample_some fills; the rest of the point reads as in a
+ * frame without those channels (0, jacobian 1). */
+enum {
+    OCEAN_SAMPLE_HEIGHT = 1u << 0,
+    OCEAN_SAMPLE_DISPLACEMENT = 1u << 1,  /* dx, dz */
+    OCEAN_SAMPLE_SLOPE = 1u << 2,         /* slope_x, slope_z */
+    OCEAN_SAMPLE_FOAM = 1u << 3,          /* dxx, dzz, dxz, jacobian, foam */
+    OCEAN_SAMPLE_VELOCITY = 1u << 4,
+    OCEAN_SAMPLE_ALL = (1u << 5) - 1
+};
+
+/* ocean_frame_sample restricted to the groups in `want`: a mesh vertex
+ * needs height and displacement, a height+normal tile height and slopes,
+ * so neither pays for the 8 to 11 channels a full sample interpolates.
+ * Each field it fills is bit-identical to ocean_frame_sample's. */
+void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned want,
+                             ocean_point *out);
+
 /* Statistics of an evaluated frame.  Variance adds over cascades (their
  * bands are disjoint, so cross terms vanish over the plane); the Jacobian
  * is that of the summed displacement, sampled on the finest cascade's grid

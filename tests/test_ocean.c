@@ -860,6 +860,48 @@ static void test_foam_map_on_request(void **state)
     ocean_destroy(o);
 }
 
+/* ocean_frame_sample_some fills exactly the groups asked, each equal to
+ * the full sample bit for bit, and leaves the rest as "not evaluated". */
+static void test_sample_some_matches_full(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 64;
+    p.cascades = 2;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL | OCEAN_FX_VELOCITY);
+    assert_int_equal(ocean_evaluate(o, 11.0, &r, f), OCEAN_OK);
+    for (unsigned want = 0; want <= OCEAN_SAMPLE_ALL; want++)
+        for (int k = 0; k < 25; k++) {
+            double x = -3e4 + 2417.3 * k, z = 1e7 - 977.1 * k;
+            ocean_point all, some;
+            ocean_frame_sample(f, x, z, &all);
+            ocean_frame_sample_some(f, x, z, want, &some);
+#define SAME(field, bit, idle) \
+    if ((want & (bit)) ? some.field != all.field : some.field != (idle)) \
+        fail_msg("want 0x%x, " #field ": %.9g vs full %.9g", want, some.field, all.field)
+            SAME(height, OCEAN_SAMPLE_HEIGHT, 0.0);
+            SAME(dx, OCEAN_SAMPLE_DISPLACEMENT, 0.0);
+            SAME(dz, OCEAN_SAMPLE_DISPLACEMENT, 0.0);
+            SAME(slope_x, OCEAN_SAMPLE_SLOPE, 0.0);
+            SAME(slope_z, OCEAN_SAMPLE_SLOPE, 0.0);
+            SAME(dxx, OCEAN_SAMPLE_FOAM, 0.0);
+            SAME(jacobian, OCEAN_SAMPLE_FOAM, 1.0);
+            SAME(foam, OCEAN_SAMPLE_FOAM, 0.0);
+            SAME(vel_y, OCEAN_SAMPLE_VELOCITY, 0.0);
+            SAME(vel_x, OCEAN_SAMPLE_VELOCITY, 0.0);
+#undef SAME
+        }
+    ocean_point pt;
+    ocean_frame_sample(f, 5.0, 7.0, &pt);
+    assert_true(pt.height != 0.0 && pt.vel_y != 0.0 && pt.dxx != 0.0); /* nothing trivially 0 */
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
 /* Each cutoff bucket's gains are computed once and kept: after more
  * buckets than are kept, in any order, every evaluation still equals a
  * fresh ocean's, byte for byte. */
@@ -916,6 +958,7 @@ int main(void)
         cmocka_unit_test(test_cutoff_evaluation),
         cmocka_unit_test(test_drop_gain),
         cmocka_unit_test(test_foam_map_on_request),
+        cmocka_unit_test(test_sample_some_matches_full),
         cmocka_unit_test(test_gain_planes_reused_exactly),
     };
     return cmocka_run_group_tests_name("ocean", tests, NULL, NULL);
