@@ -981,12 +981,21 @@ typedef struct cell {
     double fx, fz;
 } cell;
 
+/* floor() for |u| < 2^62 without a libm call (the baseline x86-64 target
+ * has no rounding instruction); the same value as floor(u). */
+static inline double floor_fast(double u)
+{
+    double t = (double)(long long)u;
+    return t > u ? t - 1.0 : t;
+}
+
 static inline cell locate(const ocean_field *fd, double x, double z)
 {
     int n = fd->n;
     double u = x / fd->patch_m, v = z / fd->patch_m;
-    u = (u - floor(u)) * n;
-    v = (v - floor(v)) * n;
+    /* Any real world position is far inside floor_fast's range. */
+    u = (u - (fabs(u) < 4e18 ? floor_fast(u) : floor(u))) * n;
+    v = (v - (fabs(v) < 4e18 ? floor_fast(v) : floor(v))) * n;
     cell c = {(int)v, (int)u, 0.0, 0.0};
     if (c.j0 >= n) c.j0 = n - 1;
     if (c.i0 >= n) c.i0 = n - 1;
@@ -1000,7 +1009,7 @@ static inline cell locate(const ocean_field *fd, double x, double z)
 void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned want,
                              ocean_point *out)
 {
-    memset(out, 0, sizeof *out);
+    *out = (ocean_point){0};
     double dxx = 0.0, dzz = 0.0, dxz = 0.0;
     int any_foam = 0;
     const float *const none = NULL;
