@@ -706,6 +706,38 @@ void proto_frame_fixed_read(const uint8_t *p, proto_frame *f)
     f->has_mesh = p[50];
 }
 
+ocean_result proto_frame_client_fields(const uint8_t *msg, size_t len, size_t *camera_seq_at,
+                                       size_t *mesh_id_at)
+{
+    if (!msg || len < PROTO_HEADER_SIZE + FRAME_FIXED || proto_ld32(msg) != PROTO_MAGIC ||
+        proto_ld16(msg + 6) != PROTO_FRAME || proto_ld32(msg + 12) != len - PROTO_HEADER_SIZE)
+        return OCEAN_EFORMAT;
+    const uint8_t *f = msg + PROTO_HEADER_SIZE;
+    unsigned tiles = proto_ld16(f + 48), has_mesh = f[50];
+    size_t off = PROTO_HEADER_SIZE + FRAME_FIXED;
+    /* Records as e_record lays them out: u32 length, u32 0, body, pad to 8. */
+    for (unsigned i = 0; i < tiles + (has_mesh == 1); i++) {
+        if (len - off < RECORD_HEAD)
+            return OCEAN_EFORMAT;
+        size_t blen = proto_ld32(msg + off), pad = (8u - (blen & 7u)) & 7u;
+        if (i == tiles) {
+            if (blen < VERTS_FIXED || len - off - RECORD_HEAD != blen + pad)
+                return OCEAN_EFORMAT;
+            *camera_seq_at = PROTO_HEADER_SIZE + 40;
+            *mesh_id_at = off + RECORD_HEAD;
+            return OCEAN_OK;
+        }
+        if (len - off - RECORD_HEAD < blen + pad)
+            return OCEAN_EFORMAT;
+        off += RECORD_HEAD + blen + pad;
+    }
+    if (has_mesh || off != len)
+        return OCEAN_EFORMAT;
+    *camera_seq_at = PROTO_HEADER_SIZE + 40;
+    *mesh_id_at = 0;
+    return OCEAN_OK;
+}
+
 static ocean_result d_frame(rd *r, proto_frame *f)
 {
     TRY(need(r, FRAME_FIXED, "fixed fields"));

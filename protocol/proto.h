@@ -324,14 +324,24 @@ ocean_result proto_decode(const void *buf, size_t len, proto_msg *msg, char *err
 ocean_result proto_decode_limited(const void *buf, size_t len, const proto_limits *lim,
                                   proto_msg *msg, char *err, size_t errlen);
 
-/* Validates msg exactly as the decoder would and appends its encoding to
- * out.  On failure out is unchanged. */
 /* Reads the fixed fields of a FRAME body (the first 51 bytes after the
  * header, PROTOCOL.md) into f without checking them and without touching
  * tiles or mesh: for readers that only want a frame's facts (a load
  * generator).  p must hold at least 51 bytes; the caller validates. */
 void proto_frame_fixed_read(const uint8_t *p, proto_frame *f);
 
+/* Where the per-viewer fields of an encoded FRAME sit, so one encoding can
+ * serve several viewers whose frames differ only there (the sender
+ * rewrites them per send): *camera_seq_at gets the byte offset of
+ * camera_seq from the start of msg, *mesh_id_at that of the mesh record's
+ * mesh_id (0 when the frame carries no mesh).  msg/len is one whole
+ * message as proto_encode wrote it; OCEAN_EFORMAT when it is not a FRAME
+ * whose records fit in len (nothing is written then). */
+ocean_result proto_frame_client_fields(const uint8_t *msg, size_t len, size_t *camera_seq_at,
+                                       size_t *mesh_id_at);
+
+/* Validates msg exactly as the decoder would and appends its encoding to
+ * out.  On failure out is unchanged. */
 ocean_result proto_encode(proto_buf *out, const proto_msg *msg, char *err, size_t errlen);
 
 /* Builds the ERROR reply for a message that failed with `code`/`why`:

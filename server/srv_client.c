@@ -176,8 +176,8 @@ uint8_t *srv_msg_wire(srv_msg *m, size_t *len)
     proto_buf *b = m->blob ? &m->blob->buf : &m->buf;
     uint8_t *d = proto_buf_data(b);
     *len = proto_buf_len(b);
-    if (m->blob && m->is_frame && *len >= PROTO_HEADER_SIZE + 48) {
-        proto_st32(d + PROTO_HEADER_SIZE + 40, m->camera_seq);   /* FRAME camera_seq */
+    if (m->blob && m->is_frame && *len >= SRV_FRAME_CAMERA_SEQ_AT + 4) {
+        proto_st32(d + SRV_FRAME_CAMERA_SEQ_AT, m->camera_seq);
         if (m->mesh_id_at && (size_t)m->mesh_id_at + 4 <= *len) proto_st32(d + m->mesh_id_at, m->mesh_id);
     }
     return d;

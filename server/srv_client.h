@@ -47,6 +47,10 @@ typedef struct srv_blob {
     proto_buf buf;      /* LWS_PRE headroom */
 } srv_blob;
 
+/* Offset of camera_seq in an encoded FRAME, as proto_frame_client_fields
+ * reports it (checked for every shared frame before it is shared). */
+#define SRV_FRAME_CAMERA_SEQ_AT (PROTO_HEADER_SIZE + 40)
+
 /* One queued outgoing message: its own bytes (buf, with LWS_PRE headroom)
  * or a reference to shared ones (blob) with the per-client FRAME fields to
  * write into them when sending. */

@@ -507,21 +507,17 @@ static void frame_stage(srv_sim *s, job *j, const job *src, int shared)
     j->frame = encode_msg(&m);
     if (!shared || !j->frame || srv_msg_make_shared(j->frame) != OCEAN_OK) return;
     srv_msg *q = j->frame;
+    size_t cam_at, mesh_at;
+    if (proto_frame_client_fields(proto_buf_data(&q->blob->buf), proto_buf_len(&q->blob->buf), &cam_at,
+                                  &mesh_at) != OCEAN_OK || cam_at != SRV_FRAME_CAMERA_SEQ_AT ||
+        (j->has_mesh && (mesh_at == 0 || mesh_at > UINT32_MAX))) {
+        j->no_share = 1;   /* not laid out as expected: nobody borrows these bytes */
+        return;
+    }
     q->camera_seq = j->cam_seq;
     if (j->has_mesh) {
-        /* The mesh record is the last one: 8-byte record head, then mesh_id,
-         * vertex_count, origin, positions, padded to 8 (PROTOCOL.md). */
-        size_t len = proto_buf_len(&q->blob->buf), blen = 32 + 12 * (size_t)fr->mesh.vertex_count;
-        size_t pad = (8u - (blen & 7u)) & 7u;
-        const uint8_t *d = proto_buf_data(&q->blob->buf);
-        size_t at = len >= blen + pad ? len - pad - blen : 0;
-        if (at > PROTO_HEADER_SIZE && at <= UINT32_MAX && proto_ld32(d + at) == cs->mesh_id &&
-            proto_ld32(d + at + 4) == fr->mesh.vertex_count) {
-            q->mesh_id = cs->mesh_id;
-            q->mesh_id_at = (uint32_t)at;
-        } else {
-            j->no_share = 1;   /* layout not as expected: nobody borrows these bytes */
-        }
+        q->mesh_id = cs->mesh_id;
+        q->mesh_id_at = (uint32_t)mesh_at;
     }
 }
 

@@ -354,6 +354,54 @@ static void test_roundtrip_all(void **state)
     }
 }
 
+/* proto_frame_client_fields finds camera_seq and the mesh's mesh_id in an
+ * encoded FRAME: rewriting them there decodes as a frame carrying the new
+ * values and nothing else changed; anything not a whole FRAME is refused. */
+static void test_frame_client_fields(void **state)
+{
+    (void)state;
+    for (int with_mesh = 0; with_mesh <= 1; with_mesh++) {
+        proto_msg m, d;
+        sample(&m, PROTO_FRAME);
+        m.u.frame.has_mesh = (uint8_t)with_mesh;
+        proto_buf pb;
+        proto_buf_init(&pb, 0);
+        char err[256];
+        assert_int_equal(proto_encode(&pb, &m, err, sizeof err), OCEAN_OK);
+        uint8_t *b = proto_buf_data(&pb);
+        size_t cam_at = 0, mesh_at = 99;
+        assert_int_equal(proto_frame_client_fields(b, pb.len, &cam_at, &mesh_at), OCEAN_OK);
+        assert_int_equal(proto_ld32(b + cam_at), m.u.frame.camera_seq);
+        if (with_mesh) {
+            assert_int_equal(proto_ld32(b + mesh_at), m.u.frame.mesh.mesh_id);
+            proto_st32(b + mesh_at, 0xABCD1234u);
+        } else {
+            assert_int_equal(mesh_at, 0);
+        }
+        proto_st32(b + cam_at, 4242u);
+        assert_int_equal(decode_exact(b, pb.len, &d, err, sizeof err), OCEAN_OK);
+        assert_int_equal(d.u.frame.camera_seq, 4242u);
+        if (with_mesh)
+            assert_int_equal(d.u.frame.mesh.mesh_id, 0xABCD1234u);
+        assert_int_equal(d.u.frame.tick, m.u.frame.tick);
+        assert_int_equal(d.u.frame.tile_count, m.u.frame.tile_count);
+        proto_msg_free(&d);
+        /* Every truncation is refused, and so is another message type. */
+        for (size_t cut = 0; cut < pb.len; cut += 7) {
+            size_t a = 1, z = 1;
+            if (proto_frame_client_fields(b, cut, &a, &z) == OCEAN_OK)
+                fail_msg("a FRAME cut to %zu of %zu bytes was accepted", cut, pb.len);
+            assert_true(a == 1 && z == 1);
+        }
+        proto_buf_free(&pb);
+    }
+    size_t n, a, z;
+    uint8_t *cam = encode_sample(PROTO_CAMERA, &n);
+    assert_int_equal(proto_frame_client_fields(cam, n, &a, &z), OCEAN_EFORMAT);
+    free(cam);
+    assert_int_equal(proto_frame_client_fields(NULL, 100, &a, &z), OCEAN_EFORMAT);
+}
+
 static void test_header_errors(void **state)
 {
     (void)state;
@@ -849,6 +897,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_roundtrip_all),
         cmocka_unit_test(test_header_errors),
+        cmocka_unit_test(test_frame_client_fields),
         cmocka_unit_test(test_payload_errors),
         cmocka_unit_test(test_truncate_every_type),
         cmocka_unit_test(test_encode_refuses),
