@@ -225,10 +225,13 @@ static void free_arrays(mesh *m)
     free(m->level);
     free(m->lat);
     free(m->idx);
+    free(m->corner);
     m->base = m->pos = m->morph = NULL;
     m->level = NULL;
     m->lat = NULL;
     m->idx = NULL;
+    m->corner = NULL;
+    m->corner_ok = 0;
 }
 
 void mesh_destroy(mesh *m)
@@ -236,6 +239,7 @@ void mesh_destroy(mesh *m)
     if (!m)
         return;
     free_arrays(m);
+    free(m->raw);
     free(m);
 }
 
@@ -577,17 +581,105 @@ static int32_t floor_to(int32_t v, int32_t s)
     return q * s;
 }
 
+/* The coarse-lattice corners of every vertex that can morph: p00, p11 and
+ * the third corner of its cell's triangle (the (0,0)-(1,1) diagonal, as
+ * the triangulator splits it), as vertex indices.  Those corners are
+ * almost always vertices themselves, so a displacement samples each point
+ * once instead of up to four times per morphing vertex. */
+static ocean_result morph_corners(mesh *m)
+{
+    if (m->corner_ok)
+        return OCEAN_OK;
+    size_t cap = 16;
+    while (cap < 2 * (size_t)m->nv)
+        cap <<= 1;
+    uint64_t *keys = malloc(cap * sizeof *keys);
+    uint32_t *vals = malloc(cap * sizeof *vals);
+    uint32_t *corner = realloc(m->corner, 3 * (size_t)(m->nv ? m->nv : 1) * sizeof *corner);
+    if (corner)
+        m->corner = corner;
+    if (!keys || !vals || !corner) {
+        free(keys);
+        free(vals);
+        return OCEAN_ENOMEM;
+    }
+    for (size_t i = 0; i < cap; i++)
+        vals[i] = NO_VERTEX;
+    for (uint32_t v = 0; v < m->nv; v++) {
+        uint64_t k = lat_key(m->lat[2 * v], m->lat[2 * v + 1]);
+        size_t s = slot_of(k, cap);
+        while (vals[s] != NO_VERTEX)
+            s = (s + 1) & (cap - 1);
+        keys[s] = k;
+        vals[s] = v;
+    }
+    for (uint32_t v = 0; v < m->nv; v++) {
+        uint32_t *c = corner + 3 * (size_t)v;
+        c[0] = c[1] = c[2] = NO_VERTEX;
+        int L = m->level[v];
+        if (L + 1 >= m->levels)
+            continue;
+        int32_t S = m->lvl_units[L + 1];
+        int32_t i = m->lat[2 * v], j = m->lat[2 * v + 1];
+        int32_t i0 = floor_to(i, S), j0 = floor_to(j, S);
+        int32_t pts[3][2] = {{i0, j0}, {i0 + S, j0 + S},
+                             {i - i0 >= j - j0 ? i0 + S : i0, i - i0 >= j - j0 ? j0 : j0 + S}};
+        for (int q = 0; q < 3; q++) {
+            uint64_t k = lat_key(pts[q][0], pts[q][1]);
+            for (size_t s = slot_of(k, cap); vals[s] != NO_VERTEX; s = (s + 1) & (cap - 1))
+                if (keys[s] == k) {
+                    c[q] = vals[s];
+                    break;
+                }
+        }
+    }
+    free(keys);
+    free(vals);
+    m->corner_ok = 1;
+    return OCEAN_OK;
+}
+
+/* D at corner q of vertex v: the corner vertex's own sample, or sampled
+ * here where the corner is no vertex of the mesh. */
+static const double *corner_disp(const mesh *m, uint32_t v, int q, int32_t ci, int32_t cj,
+                                 mesh_sampler_fn fn, void *ctx, double tmp[3])
+{
+    uint32_t c = m->corner[3 * (size_t)v + q];
+    if (c != NO_VERTEX)
+        return m->raw + 3 * (size_t)c;
+    fn(ctx, m->origin[0] + ci * m->unit_m, m->origin[2] + cj * m->unit_m, tmp);
+    return tmp;
+}
+
 ocean_result mesh_displace(mesh *m, mesh_sampler_fn fn, void *ctx)
 {
     if (!m || !fn)
         return OCEAN_EINVAL;
     if (!m->built)
         return OCEAN_ESTATE;
+    if (m->raw_cap < 3 * (size_t)m->nv) {
+        double *raw = realloc(m->raw, 3 * (size_t)m->nv * sizeof *raw);
+        if (!raw)
+            return OCEAN_ENOMEM;
+        m->raw = raw;
+        m->raw_cap = 3 * (size_t)m->nv;
+    }
+    if (m->lat) {
+        ocean_result r = morph_corners(m);
+        if (r != OCEAN_OK)
+            return r;
+    }
     const double ox = m->origin[0], oz = m->origin[2];
     for (uint32_t v = 0; v < m->nv; v++) {
         const float *b = m->base + 3 * v;
-        double d[3] = {0, 0, 0};
+        double *d = m->raw + 3 * (size_t)v;
+        d[0] = d[1] = d[2] = 0;
         fn(ctx, ox + b[0], oz + b[2], d);
+    }
+    for (uint32_t v = 0; v < m->nv; v++) {
+        const float *b = m->base + 3 * v;
+        const double *raw = m->raw + 3 * (size_t)v;
+        double d[3] = {raw[0], raw[1], raw[2]};
         double w = m->morph[v];
         int L = m->level[v];
         if (w > 0 && m->lat && L + 1 < m->levels) {
@@ -598,19 +690,12 @@ ocean_result mesh_displace(mesh *m, mesh_sampler_fn fn, void *ctx)
             int32_t i0 = floor_to(i, S), j0 = floor_to(j, S);
             double fx = (double)(i - i0) / S, fz = (double)(j - j0) / S;
             if (fx > 0 || fz > 0) {
-                double u = m->unit_m, p00[3], p11[3], pm[3];
-                fn(ctx, ox + i0 * u, oz + j0 * u, p00);
-                fn(ctx, ox + (i0 + S) * u, oz + (j0 + S) * u, p11);
-                double a, c;
-                if (fx >= fz) {
-                    fn(ctx, ox + (i0 + S) * u, oz + j0 * u, pm);
-                    a = fx;
-                    c = fz;
-                } else {
-                    fn(ctx, ox + i0 * u, oz + (j0 + S) * u, pm);
-                    a = fz;
-                    c = fx;
-                }
+                double t00[3] = {0}, t11[3] = {0}, tm[3] = {0};
+                const double *p00 = corner_disp(m, v, 0, i0, j0, fn, ctx, t00);
+                const double *p11 = corner_disp(m, v, 1, i0 + S, j0 + S, fn, ctx, t11);
+                const double *pm = fx >= fz ? corner_disp(m, v, 2, i0 + S, j0, fn, ctx, tm)
+                                            : corner_disp(m, v, 2, i0, j0 + S, fn, ctx, tm);
+                double a = fx >= fz ? fx : fz, c = fx >= fz ? fz : fx;
                 /* P = p00 + a (pm - p00) + c (p11 - pm) */
                 for (int k = 0; k < 3; k++) {
                     double coarse = p00[k] + a * (pm[k] - p00[k]) + c * (p11[k] - pm[k]);

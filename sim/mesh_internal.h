@@ -49,6 +49,14 @@ struct mesh {
     int levels;
     int32_t lvl_units[MESH_MAX_LEVELS];/* cell side of each level, units */
     mesh_info info;
+    /* Displacement scratch: each vertex's own sample, and the vertices at
+     * the three coarse corners a morphing vertex interpolates (3 per
+     * vertex, UINT32_MAX where a corner is no vertex), rebuilt lazily
+     * after every topology change (corner_ok = 0). */
+    double *raw;
+    size_t raw_cap;
+    uint32_t *corner;
+    int corner_ok;
 };
 
 void mesh_bb_free(mesh_bb *bb);

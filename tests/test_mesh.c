@@ -550,6 +550,18 @@ static void sampler_waves(void *ctx, double x, double z, double d[3])
     d[2] = -0.12 * sin(0.05 * px + 0.02 * pz);
 }
 
+typedef struct counting {
+    const double *ref;
+    long calls;
+} counting;
+
+static void sampler_counted(void *ctx, double x, double z, double d[3])
+{
+    counting *c = ctx;
+    c->calls++;
+    sampler_plane((void *)c->ref, x, z, d);
+}
+
 static void test_displace_and_morph(void **state)
 {
     (void)state;
@@ -598,6 +610,16 @@ static void test_displace_and_morph(void **state)
     double err = -1;
     assert_int_equal(mesh_error_px(m, &cam, sampler_plane, ref, &err), OCEAN_OK);
     assert_true(err >= 0 && err < 0.05);
+    /* A morphing vertex's coarse corners are vertices already sampled:
+     * one sample per vertex (plus the rare corner that is no vertex), not
+     * up to four, and the same again once the corners are known. */
+    counting cnt = {ref, 0};
+    assert_int_equal(mesh_displace(m, sampler_counted, &cnt), OCEAN_OK);
+    long first = cnt.calls;
+    cnt.calls = 0;
+    assert_int_equal(mesh_displace(m, sampler_counted, &cnt), OCEAN_OK);
+    if (!(first >= (long)v.vertex_count && first <= (long)(1.02 * v.vertex_count) && cnt.calls == first))
+        fail_msg("samples per displacement %ld then %ld for %u vertices", first, cnt.calls, v.vertex_count);
     /* a fully morphed vertex sits on the coarser level's surface; an
      * unmorphed one on the true surface */
     assert_int_equal(mesh_displace(m, sampler_waves, ref), OCEAN_OK);
