@@ -128,12 +128,12 @@ static void update_morph(mesh *m, const plan *p, const mesh_camera *cam)
         if (L + 1 < p->levels && p->blend[L] > 0) {
             double x = m->origin[0] + m->base[3 * v] - cam->pos[0];
             double z = m->origin[2] + m->base[3 * v + 2] - cam->pos[2];
-            double d = hypot(x, z);
+            double d = sqrt(x * x + z * z); /* per vertex per frame: no hypot call */
             w = (float)mesh_smoothstep((d - (p->radius[L] - p->blend[L])) / (2 * p->blend[L]));
         } else if (L + 1 < p->levels) {
             double x = m->origin[0] + m->base[3 * v] - cam->pos[0];
             double z = m->origin[2] + m->base[3 * v + 2] - cam->pos[2];
-            w = hypot(x, z) >= p->radius[L] ? 1.0f : 0.0f;
+            w = x * x + z * z >= p->radius[L] * p->radius[L] ? 1.0f : 0.0f;
         }
         m->morph[v] = w;
     }
