@@ -89,8 +89,9 @@ $(BUILD)/ocean-sim: $(call obj,$(SIMCLI_SRC)) $(ALL_LIBS)
 	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -o $@
 $(BUILD)/oceand: $(call obj,server/main.c) $(ALL_LIBS)
 	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -o $@
+# ocean-client's load generator frames WebSocket with libwslay (load_direct.c).
 $(BUILD)/ocean-client: $(call obj,$(CLIENTCLI_SRC)) $(ALL_LIBS)
-	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -o $@
+	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -lwslay -o $@
 $(BUILD)/examples/%: $(BUILD)/obj/clients/examples/%.o $(ALL_LIBS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -o $@
