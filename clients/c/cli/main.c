@@ -110,8 +110,10 @@ static void print_usage(FILE *f, const char *usage, const occli_opt *opts, int n
     for (int i = 0; i < nopts; i++) {
         const char *h = opts[i].help;
         const char *sp = strstr(h, "  ");
+        /* A flag takes no argument, so its help has no "ARG  " prefix to
+         * strip (its continuation lines are indented with spaces). */
         if (opts[i].kind == OCCLI_FLAG || !sp)
-            fprintf(f, "  --%-18s %s\n", opts[i].name, sp ? sp + 2 : h);
+            fprintf(f, "  --%-18s %s\n", opts[i].name, h);
         else {
             char arg[64];
             snprintf(arg, sizeof arg, "%s %.*s", opts[i].name, (int)(sp - h), h);
