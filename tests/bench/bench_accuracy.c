@@ -1747,7 +1747,7 @@ int main(void)
         char verdict[2048];
         size_t vl = 0;
         vl += (size_t)snprintf(verdict + vl, sizeof verdict - vl,
-                               "**Shipped default (%s, %.2f ms per client frame, height %.3g %%Hs, normals %.3g deg) "
+                               "**Shipped default (%s, %.2f ms tick + client frame, height %.3g %%Hs, normals %.3g deg) "
                                "on the Pareto front:** height %s, normals %s.", def->label, row_time(def),
                                def->m.h_rms_pct, def->m.n_rms_deg, def->front_h ? "yes" : "NO",
                                def->front_n ? "yes" : "NO");
