@@ -966,14 +966,6 @@ void ocean_frame_get_info(const ocean_frame *f, ocean_frame_info *out)
     *out = f->info;
 }
 
-static inline double bilerp(const float *g, int n, int i0, int j0, double fx, double fz)
-{
-    int i1 = (i0 + 1) & (n - 1), j1 = (j0 + 1) & (n - 1);
-    double a = g[(size_t)i0 * n + j0], b = g[(size_t)i0 * n + j1];
-    double c = g[(size_t)i1 * n + j0], d = g[(size_t)i1 * n + j1];
-    return (a * (1.0 - fx) + b * fx) * (1.0 - fz) + (c * (1.0 - fx) + d * fx) * fz;
-}
-
 /* Where (x, z) falls on a cascade's periodic grid.  Reduced in double
  * first: x = 1e7 m keeps sub-millimetre position. */
 typedef struct cell {
@@ -1004,43 +996,74 @@ static inline cell locate(const ocean_field *fd, double x, double z)
     return c;
 }
 
-#define SAMPLE(g, c) bilerp((g), fd->n, (c).i0, (c).j0, (c).fx, (c).fz)
+/* The four corners of a cell, located once per cascade and shared by every
+ * channel read there; bilinear in double, (a (1-fx) + b fx)(1-fz) + (c (1-fx) + d fx) fz. */
+typedef struct corners {
+    size_t o00, o01, o10, o11;
+    double fx, fz;
+} corners;
 
+static inline corners corners_of(const ocean_field *fd, double x, double z)
+{
+    cell q = locate(fd, x, z);
+    int n = fd->n, i1 = (q.i0 + 1) & (n - 1), j1 = (q.j0 + 1) & (n - 1);
+    size_t r0 = (size_t)q.i0 * n, r1 = (size_t)i1 * n;
+    return (corners){r0 + q.j0, r0 + j1, r1 + q.j0, r1 + j1, q.fx, q.fz};
+}
+
+static inline double corners_read(const float *g, const corners *k)
+{
+    double a = g[k->o00], b = g[k->o01], c = g[k->o10], d = g[k->o11];
+    return (a * (1.0 - k->fx) + b * k->fx) * (1.0 - k->fz) + (c * (1.0 - k->fx) + d * k->fx) * k->fz;
+}
+
+/* Sums go to locals and reach *out once at the end: stores through out
+ * (doubles) could alias the field descriptors' doubles, and the compiler
+ * would reload every descriptor after every store.  This is the daemon's
+ * per-vertex hot path (one call per mesh vertex per client frame). */
 void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned want,
                              ocean_point *out)
 {
-    *out = (ocean_point){0};
+    double h = 0, dx = 0, dz = 0, sx = 0, sz = 0, vx = 0, vy = 0, vz = 0;
     double dxx = 0.0, dzz = 0.0, dxz = 0.0;
     int any_foam = 0;
-    const float *const none = NULL;
     for (int c = 0; c < f->cascades; c++) {
         const ocean_field *fd = &f->field[c];
         if (!fd->effects)
             continue;
-        cell q = locate(fd, x, z);
+        const corners k = corners_of(fd, x, z);
         /* A group not wanted reads as a channel not evaluated. */
-        const float *h = want & OCEAN_SAMPLE_HEIGHT ? fd->height : none;
-        const float *ddx = want & OCEAN_SAMPLE_DISPLACEMENT ? fd->dx : none;
-        const float *ddz = want & OCEAN_SAMPLE_DISPLACEMENT ? fd->dz : none;
-        const float *sx = want & OCEAN_SAMPLE_SLOPE ? fd->slope_x : none;
-        const float *sz = want & OCEAN_SAMPLE_SLOPE ? fd->slope_z : none;
-        const float *fxx = want & OCEAN_SAMPLE_FOAM ? fd->dxx : none;
-        int vel = (want & OCEAN_SAMPLE_VELOCITY) != 0;
-        if (h) out->height += SAMPLE(h, q);
-        if (ddx) out->dx += SAMPLE(ddx, q);
-        if (ddz) out->dz += SAMPLE(ddz, q);
-        if (sx) out->slope_x += SAMPLE(sx, q);
-        if (sz) out->slope_z += SAMPLE(sz, q);
-        if (vel && fd->vel_x) out->vel_x += SAMPLE(fd->vel_x, q);
-        if (vel && fd->vel_y) out->vel_y += SAMPLE(fd->vel_y, q);
-        if (vel && fd->vel_z) out->vel_z += SAMPLE(fd->vel_z, q);
-        if (fxx) {
+        if ((want & OCEAN_SAMPLE_HEIGHT) && fd->height)
+            h += corners_read(fd->height, &k);
+        if (want & OCEAN_SAMPLE_DISPLACEMENT) {
+            if (fd->dx) dx += corners_read(fd->dx, &k);
+            if (fd->dz) dz += corners_read(fd->dz, &k);
+        }
+        if (want & OCEAN_SAMPLE_SLOPE) {
+            if (fd->slope_x) sx += corners_read(fd->slope_x, &k);
+            if (fd->slope_z) sz += corners_read(fd->slope_z, &k);
+        }
+        if (want & OCEAN_SAMPLE_VELOCITY) {
+            if (fd->vel_x) vx += corners_read(fd->vel_x, &k);
+            if (fd->vel_y) vy += corners_read(fd->vel_y, &k);
+            if (fd->vel_z) vz += corners_read(fd->vel_z, &k);
+        }
+        if ((want & OCEAN_SAMPLE_FOAM) && fd->dxx) {
             any_foam = 1;
-            dxx += SAMPLE(fd->dxx, q);
-            dzz += SAMPLE(fd->dzz, q);
-            dxz += SAMPLE(fd->dxz, q);
+            dxx += corners_read(fd->dxx, &k);
+            dzz += corners_read(fd->dzz, &k);
+            dxz += corners_read(fd->dxz, &k);
         }
     }
+    *out = (ocean_point){0};
+    out->height = h;
+    out->dx = dx;
+    out->dz = dz;
+    out->slope_x = sx;
+    out->slope_z = sz;
+    out->vel_x = vx;
+    out->vel_y = vy;
+    out->vel_z = vz;
     /* J of the summed displacement, not a sum of per-cascade Jacobians. */
     out->jacobian = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
     out->foam = any_foam ? ocean_foam_from_jacobian((float)out->jacobian) : 0.0;
@@ -1062,9 +1085,9 @@ void ocean_frame_sample_displacement(const ocean_frame *f, double x, double z,
         const ocean_field *fd = &f->field[c];
         if (!fd->dx)
             continue;
-        cell q = locate(fd, x, z);
-        sx += SAMPLE(fd->dx, q);
-        sz += SAMPLE(fd->dz, q);
+        const corners k = corners_of(fd, x, z);
+        sx += corners_read(fd->dx, &k);
+        sz += corners_read(fd->dz, &k);
     }
     *dx = sx;
     *dz = sz;
