@@ -48,7 +48,8 @@ typedef struct cascade {
     double patch, dk, k_lo, k_hi;
     double *omega;
     float *h0[4];
-    float *kx, *k, *kinv;   /* kinv = 1/|k| (0 at k = 0) */
+    float *kx;              /* kx of a column (ix dk): one row serves every row */
+    float *k, *kinv;        /* kinv = 1/|k| (0 at k = 0) */
     float *var;             /* E|h(k,t)|^2 = P(k) + P(-k) */
     double variance;
     /* h(k,t) and dh/dt of every mode, unfiltered, at time cache_t for the
@@ -259,13 +260,15 @@ static ocean_result cascade_init(ocean *o, int c)
         ok &= (cs->h0[j] = calloc(nm, sizeof(float))) != NULL;
         ok &= (cs->cache[j] = malloc(nm * sizeof(float))) != NULL;
     }
-    ok &= (cs->kx = calloc(nm, sizeof(float))) != NULL;
+    ok &= (cs->kx = calloc((size_t)half, sizeof(float))) != NULL;
     ok &= (cs->k = calloc(nm, sizeof(float))) != NULL;
     ok &= (cs->kinv = calloc(nm, sizeof(float))) != NULL;
     ok &= (cs->var = calloc(nm, sizeof(float))) != NULL;
     cs->cache_n = 0;
     if (!ok)
         return OCEAN_ENOMEM;
+    for (int ix = 0; ix < half; ix++)
+        cs->kx[ix] = (float)(ix * cs->dk);
     double var = 0.0;
     for (int iz = 0; iz < n; iz++) {
         int mz = iz < n / 2 ? iz : iz - n;
@@ -286,7 +289,6 @@ static ocean_result cascade_init(ocean *o, int c)
             cs->h0[H0P_IM][i] = (float)hp[1];
             cs->h0[H0M_RE][i] = (float)hm[0];
             cs->h0[H0M_IM][i] = (float)-hm[1];
-            cs->kx[i] = (float)kx;
             cs->k[i] = (float)k;
             cs->kinv[i] = (float)(1.0 / k);
             double v = mode_p(p, cs, kx, kz) + mode_p(p, cs, -kx, -kz);
@@ -656,7 +658,7 @@ static void spectrum_row(const stage_args *a, int r)
         else
             row_evolve(cs, base, half, a->t, 0);
     }
-    const float *kx = cs->kx + base, *kinv = cs->kinv + base;
+    const float *kx = cs->kx, *kinv = cs->kinv + base;
     const float *hr = c_hr, *hi = c_hi, *tr = c_tr, *ti = c_ti;
     float g[ROW_MAX], fhr[ROW_MAX], fhi[ROW_MAX], ftr[ROW_MAX], fti[ROW_MAX];
     /* Unfiltered, the grid is the full one, whose Nyquist row and column
