@@ -11,6 +11,7 @@
  */
 #include <errno.h>
 #include <getopt.h>
+#include <malloc.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -53,6 +54,17 @@ int main(int argc, char **argv)
         setenv("OMP_WAIT_POLICY", "passive", 1);
         execv("/proc/self/exe", argv);
     }
+    /* Every tick builds and frees FRAME encodings of 100-200 KB, and
+     * libwebsockets copies each partial write's remainder into a fresh
+     * buffer.  With glibc's defaults such blocks come from new mmaps or are
+     * handed back by heap trimming as soon as they are freed, so each tick
+     * faulted and zeroed its pages again: 15 % of the daemon's CPU at 256
+     * viewers, and a p99 30-55 ms instead of ~21 ms (tests/bench/REPORT.md).
+     * Freed memory stays mapped instead: blocks under 16 MiB come from the
+     * heap, which is trimmed only past 256 MiB free.  MALLOC_MMAP_THRESHOLD_
+     * and MALLOC_TRIM_THRESHOLD_ in the environment still decide. */
+    if (!getenv("MALLOC_MMAP_THRESHOLD_")) mallopt(M_MMAP_THRESHOLD, 16 << 20);
+    if (!getenv("MALLOC_TRIM_THRESHOLD_")) mallopt(M_TRIM_THRESHOLD, 256 << 20);
     const char *config = NULL;
     const char *sets[MAX_SETS];
     char setbuf[3][600];
