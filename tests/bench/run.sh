@@ -48,7 +48,11 @@ CCV=$(${CC:-gcc} --version 2>/dev/null | head -n1)
 FFTWV=$(dpkg-query -W -f='${Version}' libfftw3-dev 2>/dev/null || echo '?')
 DATE=$(date -u '+%Y-%m-%d %H:%M UTC')
 REV=$(git rev-parse --short HEAD 2>/dev/null || echo 'no git')
-if [ -n "$(git status --porcelain 2>/dev/null | head -n1)" ]; then REV="$REV (with uncommitted changes)"; fi
+# the report's own outputs (REPORT.md, out/, README-section.md) do not count
+if [ -n "$(git status --porcelain -- . ':!tests/bench/out' ':!tests/bench/REPORT.md' \
+           ':!tests/bench/README-section.md' ':!README.md' 2>/dev/null | head -n1)" ]; then
+    REV="$REV (with uncommitted changes)"
+fi
 LOAD=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null)
 MACHINE="$NPROC x $CPU, $MEM"
 
