@@ -138,6 +138,7 @@ typedef struct srv_client {
     uint64_t inflight;                    /* bytes lws still holds of the last write */
     double over_soft_since;               /* monotonic; 0: under the soft limit */
     double last_progress;                 /* monotonic time of the last completed send */
+    double pending_since;                 /* monotonic time output began waiting; 0: none */
     int closing;                          /* BYE queued; close when sent */
     struct srv_record *rec;
 

@@ -169,8 +169,15 @@ static void on_wake(srv_net *n)
         } else {
             c->over_soft_since = 0;
         }
-        /* A reader that takes nothing at all for the soft period is gone. */
-        if (c->inflight && now - c->last_progress > fmax(cfg.output_soft_seconds, 1.0)) {
+        /* A reader that takes nothing at all for the soft period is gone:
+         * output has waited that long with no send completed.  lws holding
+         * the rest of a write is one sign; a message waiting for a socket
+         * that never turns writable is the other, since the kernel may have
+         * taken the last FRAME whole (lws sends it in one piece). */
+        int pending = q > 0;
+        if (!pending) c->pending_since = 0;
+        else if (c->pending_since == 0) c->pending_since = now;
+        if (pending && now - fmax(c->pending_since, c->last_progress) > fmax(cfg.output_soft_seconds, 1.0)) {
             atomic_fetch_add(&h->stats.disconnects_slow, 1);
             kill_client(c, "slow consumer: no bytes read for server.output_soft_seconds");
             continue;
