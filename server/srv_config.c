@@ -52,7 +52,9 @@ static const conf_entry srv_entries[] = {
              "never queue (latest wins); replies and replay frames do."},
     {.name = "server.output_soft_seconds", .type = CONF_DOUBLE, .offset = SRV(output_soft_seconds),
      .min = 0, .max = 3600, .def = "10", .unit = "s",
-     .help = "How long a client may stay above the soft output limit."},
+     .help = "How long a client may stay above the soft output limit, and how long "
+             "output may wait with no send completed (a reader that takes nothing; at "
+             "least 1 s)."},
     {.name = "server.output_hard", .type = CONF_U64, .offset = SRV(output_hard), .min = 1024,
      .max = 1e12, .def = "33554432", .unit = "bytes",
      .help = "Hard output limit: a client with more bytes queued is disconnected at once "
