@@ -1057,21 +1057,11 @@ void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned 
             dxz += corners_read(fd->dxz, &k);
         }
     }
-    *out = (ocean_point){0};
-    out->height = h;
-    out->dx = dx;
-    out->dz = dz;
-    out->slope_x = sx;
-    out->slope_z = sz;
-    out->vel_x = vx;
-    out->vel_y = vy;
-    out->vel_z = vz;
     /* J of the summed displacement, not a sum of per-cascade Jacobians. */
-    out->jacobian = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
-    out->foam = any_foam ? ocean_foam_from_jacobian((float)out->jacobian) : 0.0;
-    out->dxx = dxx;
-    out->dzz = dzz;
-    out->dxz = dxz;
+    double jac = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
+    *out = (ocean_point){.height = h, .dx = dx, .dz = dz, .slope_x = sx, .slope_z = sz,
+                         .jacobian = jac, .foam = any_foam ? ocean_foam_from_jacobian((float)jac) : 0.0,
+                         .vel_x = vx, .vel_y = vy, .vel_z = vz, .dxx = dxx, .dzz = dzz, .dxz = dxz};
 }
 
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out)
