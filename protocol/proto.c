@@ -194,6 +194,7 @@ static ocean_result v_subscribe(ctx *c, const proto_subscribe *s)
     TRY(chk_enum(c, "subscribe.mode", s->mode, PROTO_MODE_COUNT_));
     TRY(chk_range(c, "subscribe.layers", s->layers, 1, PROTO_MAX_LAYERS));
     TRY(chk_range(c, "subscribe.lod_levels", s->lod_levels, 1, PROTO_MAX_LOD_LEVELS));
+    TRY(chk_enum(c, "subscribe.layout", s->layout, PROTO_LAYOUT_COUNT_));
     TRY(chk_range(c, "subscribe.tile_size", s->tile_size, 2, PROTO_TILE_MAX_SIZE));
     TRY(chk_range(c, "subscribe.frame_rate_hz", s->frame_rate_hz, 0, PROTO_MAX_FRAME_RATE));
     if (s->frame_rate_hz <= 0.0f)
@@ -271,6 +272,71 @@ static ocean_result v_vertices(ctx *c, const proto_mesh_vertices *v)
     return OCEAN_OK;
 }
 
+static ocean_result v_cascades(ctx *c, const proto_cascade_block *b)
+{
+    TRY(chk_range(c, "frame.cascades.cascade_count", b->cascade_count, 1, PROTO_MAX_LAYERS));
+    TRY(chk_range(c, "frame.cascades.order", b->order, 1, 64));
+    if (!(b->spacing_per_m > 0.0f) || !isfinite(b->spacing_per_m))
+        FAIL(c, OCEAN_EINVAL, "frame.cascades.spacing_per_m = %g; must be finite and > 0",
+             (double)b->spacing_per_m);
+    for (int i = 0; i < 3; i++)
+        TRY(chk_range(c, "frame.cascades.camera", b->camera[i], -MAX_WORLD, MAX_WORLD));
+    TRY(chk_range(c, "frame.cascades.min_spacing_m", b->min_spacing_m, 0, 1e6));
+    TRY(chk_range(c, "frame.cascades.e_total", b->e_total, 0, 1));
+    TRY(chk_range(c, "frame.cascades.tail_mss_x", b->tail_mss[0], 0, 1e3));
+    TRY(chk_range(c, "frame.cascades.tail_mss_z", b->tail_mss[1], 0, 1e3));
+    TRY(chk_range(c, "frame.cascades.tail_mss_xz", b->tail_mss[2], -1e3, 1e3));
+    for (unsigned k = 0; k < b->cascade_count; k++) {
+        const proto_cascade_entry *e = &b->cascade[k];
+        TRY(chk_range(c, "frame.cascades.patch_m", e->patch_m, 1e-3, 1e7));
+        if (e->n < 8 || e->n > 2048 || (e->n & (e->n - 1)))
+            FAIL(c, OCEAN_EINVAL, "frame.cascades[%u].n = %u; must be a power of two in 8..2048", k, e->n);
+        TRY(chk_range(c, "frame.cascades.mips", e->mips, 1, PROTO_MAX_MIPS));
+        if (e->fades > 1)
+            FAIL(c, OCEAN_EFORMAT, "frame.cascades[%u].fades is %u (0 or 1)", k, e->fades);
+        if ((e->n >> (e->mips - 1)) < 1)
+            FAIL(c, OCEAN_EINVAL, "frame.cascades[%u]: %u mips of a %u grid", k, e->mips, e->n);
+        for (int m = 0; m < PROTO_MIP_ENTRIES; m++) {
+            const proto_mip_entry *q = &b->cascade[k].mip[m];
+            if (m > e->mips) {
+                if (q->kc != 0.0f || q->mss_x != 0.0f || q->mss_z != 0.0f || q->mss_xz != 0.0f)
+                    FAIL(c, OCEAN_EFORMAT, "frame.cascades[%u].mip[%d] beyond mips %u must be 0", k, m, e->mips);
+                continue;
+            }
+            if (m == e->mips ? q->kc != 0.0f : !(q->kc > 0.0f))
+                FAIL(c, OCEAN_EINVAL, "frame.cascades[%u].mip[%d].kc = %g (mips %u)", k, m, (double)q->kc,
+                     e->mips);
+            if (!(q->mss_x >= 0.0f && q->mss_x <= 1e3f) || !(q->mss_z >= 0.0f && q->mss_z <= 1e3f) ||
+                !(q->mss_xz >= -1e3f && q->mss_xz <= 1e3f))
+                FAIL(c, OCEAN_EINVAL, "frame.cascades[%u].mip[%d] slope moments %g %g %g out of range", k, m,
+                     (double)q->mss_x, (double)q->mss_z, (double)q->mss_xz);
+        }
+    }
+    for (unsigned k = b->cascade_count; k < PROTO_MAX_LAYERS; k++) {
+        static const proto_cascade_entry zero;
+        if (memcmp(&b->cascade[k], &zero, sizeof zero) != 0)
+            FAIL(c, OCEAN_EINVAL, "frame.cascades[%u] beyond cascade_count %u is not empty", k, b->cascade_count);
+    }
+    return OCEAN_OK;
+}
+
+/* A pre-encoded tile record: its own framing (length, tag, padding) and a
+ * tag that fits the frame's layout.  Its TILE body was validated when
+ * proto_tile_record_encode made it. */
+static ocean_result v_record_bytes(ctx *c, const proto_bytes *rec, const proto_frame *f)
+{
+    if (!rec->p || rec->len < RECORD_HEAD + TILE_FIXED || (rec->len & 7u))
+        FAIL(c, OCEAN_EINVAL, "frame tile record of %zu bytes is not a record", rec->len);
+    size_t blen = proto_ld32(rec->p);
+    uint32_t tag = proto_ld32(rec->p + 4);
+    if (RECORD_HEAD + blen + ((8u - (blen & 7u)) & 7u) != rec->len)
+        FAIL(c, OCEAN_EINVAL, "frame tile record length %zu does not match its %zu bytes", blen, rec->len);
+    if (f->layout == PROTO_LAYOUT_CASCADE ? tag >= f->cascades.cascade_count : tag != 0)
+        FAIL(c, OCEAN_EINVAL, "frame tile record tag %u (layout %u, %u cascades)", tag, f->layout,
+             f->cascades.cascade_count);
+    return OCEAN_OK;
+}
+
 static ocean_result v_frame(ctx *c, const proto_frame *f)
 {
     if (isnan(f->cutoff_k) || f->cutoff_k < 0)
@@ -280,14 +346,30 @@ static ocean_result v_frame(ctx *c, const proto_frame *f)
         TRY(chk_range(c, "frame.origin", f->origin[i], -MAX_WORLD, MAX_WORLD));
     if (f->tile_count > c->lim->max_frame_tiles)
         FAIL(c, OCEAN_ETOOBIG, "frame.tile_count %u above the limit %u", f->tile_count, c->lim->max_frame_tiles);
-    if (f->tile_count && !f->tiles)
+    if (f->tile_count && !f->tiles && !f->tile_records)
         FAIL(c, OCEAN_EINVAL, "frame has tile_count %u but no tiles", f->tile_count);
-    for (unsigned i = 0; i < f->tile_count; i++)
-        TRY(v_tile(c, &f->tiles[i]));
+    TRY(chk_enum(c, "frame.layout", f->layout, PROTO_LAYOUT_COUNT_));
+    if (f->layout == PROTO_LAYOUT_CASCADE)
+        TRY(v_cascades(c, &f->cascades));
+    if (f->tile_records) {
+        for (unsigned i = 0; i < f->tile_count; i++)
+            TRY(v_record_bytes(c, &f->tile_records[i], f));
+    } else {
+        for (unsigned i = 0; i < f->tile_count; i++) {
+            TRY(v_tile(c, &f->tiles[i]));
+            if (f->layout == PROTO_LAYOUT_CASCADE ? f->tiles[i].cascade >= f->cascades.cascade_count
+                                                  : f->tiles[i].cascade != 0)
+                FAIL(c, OCEAN_EINVAL, "frame tile %u: cascade %u (layout %u, %u cascades)", i,
+                     f->tiles[i].cascade, f->layout, f->cascades.cascade_count);
+        }
+    }
     if (f->has_mesh > 1)
         FAIL(c, OCEAN_EFORMAT, "frame.has_mesh is %u (0 or 1)", f->has_mesh);
-    if (f->has_mesh)
+    if (f->has_mesh && f->layout == PROTO_LAYOUT_WORLD)
         TRY(v_vertices(c, &f->mesh));
+    if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
+        for (int i = 0; i < 3; i++)
+            TRY(chk_range(c, "frame.placement.origin", f->placement.origin[i], -MAX_WORLD, MAX_WORLD));
     return OCEAN_OK;
 }
 
@@ -313,6 +395,22 @@ static ocean_result v_topology(ctx *c, const proto_mesh_topology *t)
             FAIL(c, OCEAN_EINVAL, "mesh_topology morph[%u] = %g outside [0, 1]", i, (double)t->morph[i]);
         if (t->level[i] >= t->lod_levels)
             FAIL(c, OCEAN_EINVAL, "mesh_topology level[%u] = %u >= lod_levels %u", i, t->level[i], t->lod_levels);
+    }
+    if (t->flags & ~PROTO_TOPO_FLAT)
+        FAIL(c, OCEAN_EFORMAT, "mesh_topology.flags 0x%x has unknown bits", t->flags);
+    if (t->flags & PROTO_TOPO_FLAT) {
+        if (!t->flat || !t->zones)
+            FAIL(c, OCEAN_EINVAL, "mesh_topology FLAT arrays missing");
+        for (size_t i = 0; i < 2 * (size_t)t->vertex_count; i++)
+            if (!(fabsf(t->flat[i]) <= (float)MAX_LOCAL))
+                FAIL(c, OCEAN_EINVAL, "mesh_topology flat[%zu] = %g (finite, |.| <= 1e7)", i, (double)t->flat[i]);
+        for (unsigned L = 0; L < t->lod_levels; L++) {
+            const float *z = t->zones + 4 * L;
+            if (!(z[0] > 0.0f && z[0] <= 1e7f) || !(z[1] >= 0.0f && z[1] <= 1e8f) ||
+                !(z[2] >= 0.0f && z[2] <= 1e8f) || z[3] != 0.0f)
+                FAIL(c, OCEAN_EINVAL, "mesh_topology zone %u = (%g, %g, %g, %g) out of range", L, (double)z[0],
+                     (double)z[1], (double)z[2], (double)z[3]);
+        }
     }
     return OCEAN_OK;
 }
@@ -571,7 +669,6 @@ static ocean_result d_subscribe(rd *r, proto_subscribe *s)
 {
     TRY(need(r, SUBSCRIBE_SIZE, "fixed fields"));
     const uint8_t *p = r->p + r->off;
-    TRY(zero_bytes(r, r->off + 7, 1, "subscribe"));
     TRY(zero_bytes(r, r->off + 10, 2, "subscribe"));
     s->effects = p[0];
     s->mesh_kind = p[1];
@@ -580,6 +677,7 @@ static ocean_result d_subscribe(rd *r, proto_subscribe *s)
     s->mode = p[4];
     s->layers = p[5];
     s->lod_levels = p[6];
+    s->layout = p[7];
     s->tile_size = proto_ld16(p + 8);
     s->frame_rate_hz = proto_ldf32(p + 12);
     s->accuracy = proto_ldf32(p + 16);
@@ -670,20 +768,39 @@ static ocean_result d_vertices(rd *r, proto_mesh_vertices *v)
     return rd_end(r);
 }
 
-/* Reads one FRAME record (u32 length, u32 reserved, body, zero padding to a
- * multiple of 8) and parses the body with fn. */
-static ocean_result d_record(rd *r, int is_mesh, void *dst)
+/* A layout-1 mesh record: the placement. */
+static ocean_result d_placement(rd *r, proto_mesh_placement *pl)
+{
+    TRY(need(r, PROTO_MESH_PLACEMENT_SIZE, "mesh placement"));
+    const uint8_t *p = r->p + r->off;
+    pl->mesh_id = proto_ld32(p);
+    TRY(zero_bytes(r, r->off + 4, 4, "mesh placement"));
+    for (int i = 0; i < 3; i++)
+        pl->origin[i] = proto_ldf64(p + 8 + 8 * i);
+    r->off += PROTO_MESH_PLACEMENT_SIZE;
+    return rd_end(r);
+}
+
+enum { REC_TILE, REC_VERTICES, REC_PLACEMENT };
+
+/* Reads one FRAME record (u32 length, u32 tag, body, zero padding to a
+ * multiple of 8) and parses the body as `kind`.  Tags above max_tag are
+ * refused; *tag gets the tag. */
+static ocean_result d_record(rd *r, int kind, void *dst, uint32_t max_tag, uint32_t *tag)
 {
     TRY(need(r, RECORD_HEAD, "record header"));
     uint32_t blen = proto_ld32(r->p + r->off);
-    TRY(zero_bytes(r, r->off + 4, 4, "record header"));
+    *tag = proto_ld32(r->p + r->off + 4);
+    if (*tag > max_tag)
+        FAIL(r->c, OCEAN_EFORMAT, "%s: record tag %u at offset %zu above %u", r->what, *tag, r->off + 4, max_tag);
     r->off += RECORD_HEAD;
-    TRY(need(r, blen, is_mesh ? "mesh record" : "tile record"));
+    TRY(need(r, blen, kind == REC_TILE ? "tile record" : "mesh record"));
     size_t pad = (8u - (blen & 7u)) & 7u;
     size_t body_end = r->off + blen;
     size_t outer_end = r->end;
     r->end = body_end;
-    ocean_result res = is_mesh ? d_vertices(r, dst) : d_tile(r, dst);
+    ocean_result res = kind == REC_VERTICES ? d_vertices(r, dst)
+                     : kind == REC_PLACEMENT ? d_placement(r, dst) : d_tile(r, dst);
     r->end = outer_end;
     if (res != OCEAN_OK)
         return res;
@@ -704,6 +821,74 @@ void proto_frame_fixed_read(const uint8_t *p, proto_frame *f)
     f->tick = proto_ld32(p + 44);
     f->tile_count = proto_ld16(p + 48);
     f->has_mesh = p[50];
+    f->layout = p[51];
+}
+
+/* Bytes of the cascade block of a FRAME whose block starts at p with
+ * `avail` bytes (0 when it cannot be a block). */
+static size_t cascade_block_size(const uint8_t *p, size_t avail)
+{
+    if (avail < PROTO_CASCADE_BLOCK_FIXED || p[0] < 1 || p[0] > PROTO_MAX_LAYERS)
+        return 0;
+    size_t n = PROTO_CASCADE_BLOCK_FIXED + (size_t)p[0] * PROTO_CASCADE_ENTRY_SIZE;
+    return n <= avail ? n : 0;
+}
+
+static void cascade_block_read(const uint8_t *p, proto_cascade_block *b)
+{
+    memset(b, 0, sizeof *b);
+    b->cascade_count = p[0];
+    b->order = p[1];
+    b->spacing_per_m = proto_ldf32(p + 4);
+    for (int i = 0; i < 3; i++)
+        b->camera[i] = proto_ldf64(p + 8 + 8 * i);
+    b->min_spacing_m = proto_ldf32(p + 32);
+    b->e_total = proto_ldf32(p + 36);
+    for (int i = 0; i < 3; i++)
+        b->tail_mss[i] = proto_ldf32(p + 40 + 4 * i);
+    for (unsigned k = 0; k < b->cascade_count && k < PROTO_MAX_LAYERS; k++) {
+        const uint8_t *q = p + PROTO_CASCADE_BLOCK_FIXED + (size_t)k * PROTO_CASCADE_ENTRY_SIZE;
+        proto_cascade_entry *e = &b->cascade[k];
+        e->patch_m = proto_ldf64(q);
+        e->n = proto_ld16(q + 8);
+        e->mips = q[10];
+        e->fades = q[11];
+        for (int m = 0; m < PROTO_MIP_ENTRIES; m++) {
+            const uint8_t *w = q + 16 + 16 * m;
+            e->mip[m].kc = proto_ldf32(w);
+            e->mip[m].mss_x = proto_ldf32(w + 4);
+            e->mip[m].mss_z = proto_ldf32(w + 8);
+            e->mip[m].mss_xz = proto_ldf32(w + 12);
+        }
+    }
+}
+
+static void cascade_block_write(uint8_t *p, const proto_cascade_block *b)
+{
+    p[0] = b->cascade_count;
+    p[1] = b->order;
+    proto_stf32(p + 4, b->spacing_per_m);
+    for (int i = 0; i < 3; i++)
+        proto_stf64(p + 8 + 8 * i, b->camera[i]);
+    proto_stf32(p + 32, b->min_spacing_m);
+    proto_stf32(p + 36, b->e_total);
+    for (int i = 0; i < 3; i++)
+        proto_stf32(p + 40 + 4 * i, b->tail_mss[i]);
+    for (unsigned k = 0; k < b->cascade_count; k++) {
+        uint8_t *q = p + PROTO_CASCADE_BLOCK_FIXED + (size_t)k * PROTO_CASCADE_ENTRY_SIZE;
+        const proto_cascade_entry *e = &b->cascade[k];
+        proto_stf64(q, e->patch_m);
+        proto_st16(q + 8, e->n);
+        q[10] = e->mips;
+        q[11] = e->fades;
+        for (int m = 0; m < PROTO_MIP_ENTRIES; m++) {
+            uint8_t *w = q + 16 + 16 * m;
+            proto_stf32(w, e->mip[m].kc);
+            proto_stf32(w + 4, e->mip[m].mss_x);
+            proto_stf32(w + 8, e->mip[m].mss_z);
+            proto_stf32(w + 12, e->mip[m].mss_xz);
+        }
+    }
 }
 
 ocean_result proto_frame_client_fields(const uint8_t *msg, size_t len, size_t *camera_seq_at,
@@ -713,15 +898,24 @@ ocean_result proto_frame_client_fields(const uint8_t *msg, size_t len, size_t *c
         proto_ld16(msg + 6) != PROTO_FRAME || proto_ld32(msg + 12) != len - PROTO_HEADER_SIZE)
         return OCEAN_EFORMAT;
     const uint8_t *f = msg + PROTO_HEADER_SIZE;
-    unsigned tiles = proto_ld16(f + 48), has_mesh = f[50];
+    unsigned tiles = proto_ld16(f + 48), has_mesh = f[50], layout = f[51];
     size_t off = PROTO_HEADER_SIZE + FRAME_FIXED;
-    /* Records as e_record lays them out: u32 length, u32 0, body, pad to 8. */
+    if (layout > PROTO_LAYOUT_CASCADE)
+        return OCEAN_EFORMAT;
+    if (layout == PROTO_LAYOUT_CASCADE) {
+        size_t bs = cascade_block_size(msg + off, len - off);
+        if (!bs)
+            return OCEAN_EFORMAT;
+        off += bs;
+    }
+    size_t mesh_min = layout == PROTO_LAYOUT_CASCADE ? PROTO_MESH_PLACEMENT_SIZE : VERTS_FIXED;
+    /* Records as e_record lays them out: u32 length, u32 tag, body, pad to 8. */
     for (unsigned i = 0; i < tiles + (has_mesh == 1); i++) {
         if (len - off < RECORD_HEAD)
             return OCEAN_EFORMAT;
         size_t blen = proto_ld32(msg + off), pad = (8u - (blen & 7u)) & 7u;
         if (i == tiles) {
-            if (blen < VERTS_FIXED || len - off - RECORD_HEAD != blen + pad)
+            if (blen < mesh_min || len - off - RECORD_HEAD != blen + pad)
                 return OCEAN_EFORMAT;
             *camera_seq_at = PROTO_HEADER_SIZE + 40;
             *mesh_id_at = off + RECORD_HEAD;
@@ -742,8 +936,26 @@ static ocean_result d_frame(rd *r, proto_frame *f)
 {
     TRY(need(r, FRAME_FIXED, "fixed fields"));
     proto_frame_fixed_read(r->p + r->off, f);
-    TRY(zero_bytes(r, r->off + 51, 5, "frame"));
+    TRY(zero_bytes(r, r->off + 52, 4, "frame"));
     r->off += FRAME_FIXED;
+    if (f->layout > PROTO_LAYOUT_CASCADE)
+        FAIL(r->c, OCEAN_ETYPE, "FRAME: layout %u unknown (0..1)", f->layout);
+    uint32_t max_tag = 0;
+    if (f->layout == PROTO_LAYOUT_CASCADE) {
+        TRY(need(r, PROTO_CASCADE_BLOCK_FIXED, "cascade block"));
+        unsigned cc = r->p[r->off];
+        if (cc < 1 || cc > PROTO_MAX_LAYERS)
+            FAIL(r->c, OCEAN_EINVAL, "FRAME: cascade_count %u outside 1..%d", cc, PROTO_MAX_LAYERS);
+        TRY(need(r, PROTO_CASCADE_BLOCK_FIXED + (size_t)cc * PROTO_CASCADE_ENTRY_SIZE, "cascade entries"));
+        TRY(zero_bytes(r, r->off + 2, 2, "cascade block"));
+        TRY(zero_bytes(r, r->off + 52, 4, "cascade block"));
+        for (unsigned k = 0; k < cc; k++)
+            TRY(zero_bytes(r, r->off + PROTO_CASCADE_BLOCK_FIXED + (size_t)k * PROTO_CASCADE_ENTRY_SIZE + 12, 4,
+                           "cascade entry"));
+        cascade_block_read(r->p + r->off, &f->cascades);
+        r->off += PROTO_CASCADE_BLOCK_FIXED + (size_t)cc * PROTO_CASCADE_ENTRY_SIZE;
+        max_tag = cc - 1;
+    }
     if (f->tile_count > r->c->lim->max_frame_tiles)
         FAIL(r->c, OCEAN_ETOOBIG, "FRAME: tile_count %u above the limit %u", f->tile_count, r->c->lim->max_frame_tiles);
     if (f->has_mesh > 1)
@@ -759,10 +971,14 @@ static ocean_result d_frame(rd *r, proto_frame *f)
         memset(tiles, 0, f->tile_count * sizeof *tiles);
     }
     f->tiles = tiles;
-    for (unsigned i = 0; i < f->tile_count; i++)
-        TRY(d_record(r, 0, &tiles[i]));
+    uint32_t tag;
+    for (unsigned i = 0; i < f->tile_count; i++) {
+        TRY(d_record(r, REC_TILE, &tiles[i], max_tag, &tag));
+        tiles[i].cascade = (uint8_t)tag;
+    }
     if (f->has_mesh)
-        TRY(d_record(r, 1, &f->mesh));
+        TRY(d_record(r, f->layout == PROTO_LAYOUT_CASCADE ? REC_PLACEMENT : REC_VERTICES,
+                     f->layout == PROTO_LAYOUT_CASCADE ? (void *)&f->placement : (void *)&f->mesh, 0, &tag));
     return rd_end(r);
 }
 
@@ -773,7 +989,9 @@ static ocean_result d_topology(rd *r, proto_mesh_topology *t)
     t->mesh_id = proto_ld32(p);
     t->mesh_kind = p[4];
     t->lod_levels = p[5];
-    TRY(zero_bytes(r, r->off + 6, 2, "mesh_topology"));
+    t->flags = proto_ld16(p + 6);
+    if (t->flags & ~PROTO_TOPO_FLAT)
+        FAIL(r->c, OCEAN_EFORMAT, "MESH_TOPOLOGY: flags 0x%x has unknown bits", t->flags);
     t->vertex_count = proto_ld32(p + 8);
     t->index_count = proto_ld32(p + 12);
     r->off += TOPO_FIXED;
@@ -799,6 +1017,20 @@ static ocean_result d_topology(rd *r, proto_mesh_topology *t)
     t->indices = idx;
     t->morph = morph;
     t->level = lev;
+    if (t->flags & PROTO_TOPO_FLAT) {
+        size_t pad = (4u - (r->off & 3u)) & 3u;
+        TRY(need(r, pad, "flat padding"));
+        TRY(zero_bytes(r, r->off, pad, "flat padding"));
+        r->off += pad;
+        if (t->lod_levels < 1 || t->lod_levels > PROTO_MAX_LOD_LEVELS)
+            FAIL(r->c, OCEAN_EINVAL, "MESH_TOPOLOGY: lod_levels %u outside 1..%d", t->lod_levels,
+                 PROTO_MAX_LOD_LEVELS);
+        float *flat, *zones;
+        TRY(d_floats(r, 2 * (size_t)t->vertex_count, &flat, "flat positions"));
+        TRY(d_floats(r, 4 * (size_t)t->lod_levels, &zones, "zones"));
+        t->flat = flat;
+        t->zones = zones;
+    }
     return rd_end(r);
 }
 
@@ -1015,12 +1247,24 @@ static ocean_result e_vertices(proto_buf *b, const proto_mesh_vertices *v)
     return OCEAN_OK;
 }
 
-static ocean_result e_record(proto_buf *b, int is_mesh, const void *body)
+static ocean_result e_placement(proto_buf *b, const proto_mesh_placement *pl)
+{
+    uint8_t *p;
+    TRY(put(b, PROTO_MESH_PLACEMENT_SIZE, &p));
+    proto_st32(p, pl->mesh_id);
+    for (int i = 0; i < 3; i++)
+        proto_stf64(p + 8 + 8 * i, pl->origin[i]);
+    return OCEAN_OK;
+}
+
+static ocean_result e_record(proto_buf *b, int kind, const void *body, uint32_t tag)
 {
     uint8_t *p;
     size_t at = b->len;
     TRY(put(b, RECORD_HEAD, &p));
-    TRY(is_mesh ? e_vertices(b, body) : e_tile(b, body));
+    proto_st32(p + 4, tag);
+    TRY(kind == REC_VERTICES ? e_vertices(b, body) : kind == REC_PLACEMENT ? e_placement(b, body)
+                                                                         : e_tile(b, body));
     size_t blen = b->len - at - RECORD_HEAD;
     if (blen > UINT32_MAX)
         return OCEAN_ETOOBIG;
@@ -1062,6 +1306,7 @@ static ocean_result e_payload(proto_buf *b, const proto_msg *m)
         p[4] = s->mode;
         p[5] = s->layers;
         p[6] = s->lod_levels;
+        p[7] = s->layout;
         proto_st16(p + 8, s->tile_size);
         proto_stf32(p + 12, s->frame_rate_hz);
         proto_stf32(p + 16, s->accuracy);
@@ -1096,10 +1341,24 @@ static ocean_result e_payload(proto_buf *b, const proto_msg *m)
         proto_st32(p + 44, f->tick);
         proto_st16(p + 48, f->tile_count);
         p[50] = f->has_mesh;
-        for (unsigned i = 0; i < f->tile_count; i++)
-            TRY(e_record(b, 0, &f->tiles[i]));
-        if (f->has_mesh)
-            TRY(e_record(b, 1, &f->mesh));
+        p[51] = f->layout;
+        if (f->layout == PROTO_LAYOUT_CASCADE) {
+            TRY(put(b, PROTO_CASCADE_BLOCK_FIXED +
+                           (size_t)f->cascades.cascade_count * PROTO_CASCADE_ENTRY_SIZE, &p));
+            cascade_block_write(p, &f->cascades);
+        }
+        for (unsigned i = 0; i < f->tile_count; i++) {
+            if (f->tile_records) {
+                TRY(put(b, f->tile_records[i].len, &p));
+                memcpy(p, f->tile_records[i].p, f->tile_records[i].len);
+            } else {
+                TRY(e_record(b, REC_TILE, &f->tiles[i], f->tiles[i].cascade));
+            }
+        }
+        if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
+            TRY(e_record(b, REC_PLACEMENT, &f->placement, 0));
+        else if (f->has_mesh)
+            TRY(e_record(b, REC_VERTICES, &f->mesh, 0));
         return OCEAN_OK;
     }
     case PROTO_TILE:
@@ -1107,10 +1366,12 @@ static ocean_result e_payload(proto_buf *b, const proto_msg *m)
     case PROTO_MESH_TOPOLOGY: {
         const proto_mesh_topology *t = &m->u.topology;
         size_t ic = t->index_count, vc = t->vertex_count;
+        size_t at = b->len;
         TRY(put(b, TOPO_FIXED + 4 * ic + 5 * vc, &p));
         proto_st32(p, t->mesh_id);
         p[4] = t->mesh_kind;
         p[5] = t->lod_levels;
+        proto_st16(p + 6, t->flags);
         proto_st32(p + 8, t->vertex_count);
         proto_st32(p + 12, t->index_count);
         uint8_t *q = p + TOPO_FIXED;
@@ -1120,6 +1381,19 @@ static ocean_result e_payload(proto_buf *b, const proto_msg *m)
         for (size_t i = 0; i < vc; i++)
             proto_stf32(q + 4 * i, t->morph[i]);
         memcpy(q + 4 * vc, t->level, vc);
+        if (t->flags & PROTO_TOPO_FLAT) {
+            /* flat floats 4-aligned from the message start (the header
+             * is 32 bytes, so from the payload start too) */
+            size_t pad = (4u - ((b->len - at) & 3u)) & 3u;
+            TRY(put(b, pad + 8 * vc + 16 * (size_t)t->lod_levels, &p));
+            memset(p, 0, pad);
+            p += pad;
+            for (size_t i = 0; i < 2 * vc; i++)
+                proto_stf32(p + 4 * i, t->flat[i]);
+            p += 8 * vc;
+            for (size_t i = 0; i < 4 * (size_t)t->lod_levels; i++)
+                proto_stf32(p + 4 * i, t->zones[i]);
+        }
         return OCEAN_OK;
     }
     case PROTO_MESH_VERTICES:
@@ -1240,4 +1514,28 @@ ocean_result proto_error_reply(proto_buf *out, const void *bad, size_t badlen, o
     }
     m.u.error.message[n] = 0;
     return proto_encode(out, &m, NULL, 0);
+}
+
+ocean_result proto_tile_record_encode(proto_buf *out, const proto_tile *t, uint32_t tag, char *err,
+                                      size_t errlen)
+{
+    if (err && errlen)
+        err[0] = 0;
+    proto_limits lim;
+    proto_limits_default(&lim);
+    ctx c = {err, errlen, &lim};
+    if (!out || !t) {
+        ocean_seterr(err, errlen, "tile record: NULL argument");
+        return OCEAN_EINVAL;
+    }
+    TRY(v_tile(&c, t));
+    if (tag >= PROTO_MAX_LAYERS) {
+        ocean_seterr(err, errlen, "tile record: tag %u is not a cascade index (0..%d)", tag, PROTO_MAX_LAYERS - 1);
+        return OCEAN_EINVAL;
+    }
+    size_t at = out->len;
+    ocean_result r = e_record(out, REC_TILE, t, tag);
+    if (r != OCEAN_OK)
+        out->len = at;
+    return r;
 }

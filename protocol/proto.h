@@ -103,6 +103,22 @@ typedef enum proto_mode {
     PROTO_MODE_COUNT_
 } proto_mode;
 
+/* What travels per camera (SUBSCRIBE.layout; PROTOCOL.md "Layouts"). */
+typedef enum proto_layout {
+    PROTO_LAYOUT_WORLD = 0,    /* per-camera summed world tiles, mesh displaced by the server */
+    PROTO_LAYOUT_CASCADE = 1,  /* shared per-cascade mip tiles, the client displaces */
+    PROTO_LAYOUT_COUNT_
+} proto_layout;
+
+/* Cascade layout limits: mips per cascade and mip-table entries (mips + 1). */
+#define PROTO_MAX_MIPS 12
+#define PROTO_MIP_ENTRIES 13
+#define PROTO_CASCADE_BLOCK_FIXED 56
+#define PROTO_CASCADE_ENTRY_SIZE 224
+#define PROTO_MESH_PLACEMENT_SIZE 32
+/* MESH_TOPOLOGY.flags bit: flat positions and level zones follow. */
+#define PROTO_TOPO_FLAT 1u
+
 typedef enum proto_sea_op {
     PROTO_SEA_ANNOUNCE = 0,  /* server -> client: the state in force from effective_time */
     PROTO_SEA_SET = 1,       /* client -> server: admin request, needs the token */
@@ -173,6 +189,7 @@ typedef struct proto_subscribe {
     float accuracy;           /* qz accuracy target, PROTO_ACCURACY_MIN..MAX */
     float base_spacing_m;     /* level-0 sample spacing; 0 = server default */
     float view_range_m;       /* radius served; 0 = server default */
+    uint8_t layout;           /* proto_layout */
 } proto_subscribe;
 
 typedef struct proto_camera {
@@ -195,7 +212,50 @@ typedef struct proto_tile {
     float error_bound;        /* max |decoded - simulated| over all samples, >= 0 */
     uint32_t payload_len;
     const uint8_t *payload;   /* codec bytes (see codec.h) */
+    uint8_t cascade;          /* not in the TILE body: a layout-1 FRAME record's
+                                 tag (the cascade index); 0 otherwise */
 } proto_tile;
+
+/* One entry of a cascade's mip table (layout 1). */
+typedef struct proto_mip_entry {
+    float kc;                 /* mip's Butterworth cutoff, rad/m (+inf: none);
+                                 entry `mips`: 0 */
+    float mss_x, mss_z, mss_xz; /* slope moments of the cascade's waves the mip
+                                   does not hold */
+} proto_mip_entry;
+
+typedef struct proto_cascade_entry {
+    double patch_m;
+    uint16_t n;               /* grid of mip 0, power of two */
+    uint8_t mips;             /* 1..PROTO_MAX_MIPS mips that hold waves */
+    uint8_t fades;            /* 1: fades out of geometry beyond its last mip */
+    proto_mip_entry mip[PROTO_MIP_ENTRIES]; /* entries 0..mips; the rest 0 */
+} proto_cascade_entry;
+
+/* The cascade block of a layout-1 FRAME (PROTOCOL.md "Cascade block"). */
+typedef struct proto_cascade_block {
+    uint8_t cascade_count;    /* 1..PROTO_MAX_LAYERS */
+    uint8_t order;            /* Butterworth order of the mips, 1..64 */
+    float spacing_per_m;      /* q: spacing wanted per metre of distance, > 0 */
+    double camera[3];         /* camera position the frame was made for */
+    float min_spacing_m;      /* >= 0 */
+    float e_total;            /* [0, 1] */
+    float tail_mss[3];        /* x, z, xz moments no cascade holds, >= 0 (xz any sign) */
+    proto_cascade_entry cascade[PROTO_MAX_LAYERS];
+} proto_cascade_block;
+
+/* Where a layout-1 FRAME places the flat mesh. */
+typedef struct proto_mesh_placement {
+    uint32_t mesh_id;
+    double origin[3];
+} proto_mesh_placement;
+
+/* A pre-encoded FRAME record (proto_tile_record_encode), for servers that
+ * encode a tile once and copy it into many FRAMEs. */
+typedef struct proto_bytes {
+    const uint8_t *p;
+    size_t len;
+} proto_bytes;
 
 typedef struct proto_mesh_vertices {
     uint32_t mesh_id;
@@ -213,7 +273,12 @@ typedef struct proto_frame {
     uint16_t tile_count;
     const proto_tile *tiles;
     uint8_t has_mesh;
-    proto_mesh_vertices mesh; /* valid when has_mesh */
+    proto_mesh_vertices mesh; /* layout 0, valid when has_mesh */
+    uint8_t layout;           /* proto_layout */
+    const proto_bytes *tile_records; /* encoding only: when non-NULL, tile_count
+                                        pre-encoded records used instead of tiles */
+    proto_mesh_placement placement; /* layout 1, valid when has_mesh */
+    proto_cascade_block cascades;   /* layout 1 */
 } proto_frame;
 
 typedef struct proto_mesh_topology {
@@ -225,6 +290,10 @@ typedef struct proto_mesh_topology {
     const uint32_t *indices;  /* triangles, counter-clockwise seen from above */
     const float *morph;       /* per vertex 0..1 */
     const uint8_t *level;     /* per vertex < lod_levels */
+    uint16_t flags;           /* PROTO_TOPO_FLAT */
+    const float *flat;        /* FLAT: 2 * vertex_count floats x, z */
+    const float *zones;       /* FLAT: 4 * lod_levels floats: lattice spacing,
+                                 zone radius, blend half-width, 0 */
 } proto_mesh_topology;
 
 typedef struct proto_query {
@@ -350,6 +419,14 @@ ocean_result proto_encode(proto_buf *out, const proto_msg *msg, char *err, size_
  * reply's own header fields.  The message text is truncated to fit. */
 ocean_result proto_error_reply(proto_buf *out, const void *bad, size_t badlen, ocean_result code,
                                const char *why, uint32_t seq, double sim_time);
+
+/* Appends to out one FRAME record (u32 length, u32 tag, TILE body, zero
+ * padding to 8) holding t, after validating t as the encoder would: the
+ * bytes a server encodes once and copies into many FRAMEs through
+ * proto_frame.tile_records.  tag is the cascade index of a layout-1 tile
+ * (0..PROTO_MAX_LAYERS-1); 0 for layout 0.  On failure out is unchanged. */
+ocean_result proto_tile_record_encode(proto_buf *out, const proto_tile *t, uint32_t tag, char *err,
+                                      size_t errlen);
 
 /* Size in bytes of the encoded TILE body (without header) for t. */
 size_t proto_tile_body_size(const proto_tile *t);

@@ -102,6 +102,7 @@ static char *dump(const proto_msg *m)
         out(&b, "tile_size = %u\nframe_rate_hz = %.9g\naccuracy = %.9g\nbase_spacing_m = %.9g\nview_range_m = %.9g\n",
             s->tile_size, (double)s->frame_rate_hz, (double)s->accuracy, (double)s->base_spacing_m,
             (double)s->view_range_m);
+        out(&b, "layout = %u\n", s->layout);
         break;
     }
     case PROTO_CAMERA: {
@@ -117,13 +118,35 @@ static char *dump(const proto_msg *m)
         const proto_frame *f = &m->u.frame;
         out(&b, "cutoff_k = %.17g\ne_error = %.17g\norigin = %.17g %.17g %.17g\ncamera_seq = %u\ntick = %u\n",
             f->cutoff_k, f->e_error, f->origin[0], f->origin[1], f->origin[2], f->camera_seq, f->tick);
-        out(&b, "tile_count = %u\nhas_mesh = %u\n", f->tile_count, f->has_mesh);
+        out(&b, "tile_count = %u\nhas_mesh = %u\nlayout = %u\n", f->tile_count, f->has_mesh, f->layout);
+        if (f->layout == PROTO_LAYOUT_CASCADE) {
+            const proto_cascade_block *k = &f->cascades;
+            out(&b, "cascades.cascade_count = %u\ncascades.order = %u\ncascades.spacing_per_m = %.9g\n",
+                k->cascade_count, k->order, (double)k->spacing_per_m);
+            out(&b, "cascades.camera = %.17g %.17g %.17g\ncascades.min_spacing_m = %.9g\ncascades.e_total = %.9g\n",
+                k->camera[0], k->camera[1], k->camera[2], (double)k->min_spacing_m, (double)k->e_total);
+            out(&b, "cascades.tail_mss = %.9g %.9g %.9g\n", (double)k->tail_mss[0], (double)k->tail_mss[1],
+                (double)k->tail_mss[2]);
+            for (unsigned c = 0; c < k->cascade_count; c++) {
+                const proto_cascade_entry *e = &k->cascade[c];
+                out(&b, "cascade[%u].patch_m = %.17g\ncascade[%u].n = %u\ncascade[%u].mips = %u\ncascade[%u].fades = %u\n",
+                    c, e->patch_m, c, e->n, c, e->mips, c, e->fades);
+                for (int q = 0; q <= e->mips; q++)
+                    out(&b, "cascade[%u].mip[%d] = %.9g %.9g %.9g %.9g\n", c, q, (double)e->mip[q].kc,
+                        (double)e->mip[q].mss_x, (double)e->mip[q].mss_z, (double)e->mip[q].mss_xz);
+            }
+        }
         for (unsigned i = 0; i < f->tile_count; i++) {
             char p[32];
             snprintf(p, sizeof p, "tile[%u]", i);
             dump_tile(&b, p, &f->tiles[i]);
+            if (f->layout == PROTO_LAYOUT_CASCADE)
+                out(&b, "%s.cascade = %u\n", p, f->tiles[i].cascade);
         }
-        if (f->has_mesh)
+        if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
+            out(&b, "placement.mesh_id = %u\nplacement.origin = %.17g %.17g %.17g\n", f->placement.mesh_id,
+                f->placement.origin[0], f->placement.origin[1], f->placement.origin[2]);
+        else if (f->has_mesh)
             dump_verts(&b, "mesh", &f->mesh);
         break;
     }
@@ -142,7 +165,16 @@ static char *dump(const proto_msg *m)
         out(&b, "\nlevel =");
         for (uint32_t i = 0; i < t->vertex_count; i++)
             out(&b, " %u", t->level[i]);
-        out(&b, "\n");
+        out(&b, "\nflags = %u\n", t->flags);
+        if (t->flags & PROTO_TOPO_FLAT) {
+            out(&b, "flat =");
+            for (uint32_t i = 0; i < 2 * t->vertex_count; i++)
+                out(&b, " %.9g", (double)t->flat[i]);
+            out(&b, "\nzones =");
+            for (uint32_t i = 0; i < 4u * t->lod_levels; i++)
+                out(&b, " %.9g", (double)t->zones[i]);
+            out(&b, "\n");
+        }
         break;
     }
     case PROTO_MESH_VERTICES:
@@ -190,9 +222,16 @@ static char *dump(const proto_msg *m)
 static const uint8_t tile_payload[] = {0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0x00, 0xc0,
                                        0x00, 0x00, 0x40, 0x40, 0x00, 0x00, 0x80, 0x3e}; /* f32 1,-2,3,0.25 */
 static const proto_tile sample_tiles[2] = {
-    {0, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, -3, 7, -384.0, 896.0, 2.0, 0.0f, 16, tile_payload},
-    {2, PROTO_CODEC_F16, PROTO_CH_HEIGHT, 2, 1, 0, 0, 1e6 + 0.5, -2.5e6, 8.0, 0.00048828125f, 4, tile_payload},
+    {0, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, -3, 7, -384.0, 896.0, 2.0, 0.0f, 16, tile_payload, 0},
+    {2, PROTO_CODEC_F16, PROTO_CH_HEIGHT, 2, 1, 0, 0, 1e6 + 0.5, -2.5e6, 8.0, 0.00048828125f, 4, tile_payload, 0},
 };
+/* Layout-1 tiles: mip 1 of cascade 0 and mip 0 of cascade 1 (cascade-local origins). */
+static const proto_tile cascade_tiles[2] = {
+    {1, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, 3, 1, 46.875, 15.625, 7.8125, 0.0f, 16, tile_payload, 0},
+    {0, PROTO_CODEC_F16, PROTO_CH_HEIGHT, 2, 1, 0, 5, 0.0, 9.09375, 0.9093750, 0.00048828125f, 4, tile_payload, 1},
+};
+static const float sample_flat[6] = {-1, 0, 1, 0, 0, 1.5f};
+static const float sample_zones[8] = {1, 30, 4.5f, 0, 2, 120, 18, 0};
 static const float sample_pos[9] = {0, 0.5f, 0, 10, -0.25f, 0, 0, 0.125f, 10};
 static const uint32_t sample_idx[3] = {0, 2, 1};
 static const float sample_morph[3] = {0, 0.5f, 1};
@@ -248,7 +287,8 @@ static void sample(proto_msg *m, proto_type type)
     }
     case PROTO_SUBSCRIBE:
         m->u.subscribe = (proto_subscribe){PROTO_FX_HEIGHT | PROTO_FX_NORMALS, PROTO_MESH_CONCENTRIC, PROTO_CODEC_QZ,
-                                           PROTO_CUTOFF_ANTIALIAS, PROTO_MODE_LIVE, 2, 5, 64, 30.0f, 0.005f, 0.0f, 5000.0f};
+                                           PROTO_CUTOFF_ANTIALIAS, PROTO_MODE_LIVE, 2, 5, 64, 30.0f, 0.005f, 0.0f, 5000.0f,
+                                           PROTO_LAYOUT_WORLD};
         break;
     case PROTO_CAMERA:
         m->u.camera = (proto_camera){{1e7 + 0.125, 150.0, -2.5e6}, {250.0f, 0.0f, -3.5f}, 45.0f, -10.0f, 5.0f, 60.0f,
@@ -256,13 +296,15 @@ static void sample(proto_msg *m, proto_type type)
         break;
     case PROTO_FRAME:
         m->u.frame = (proto_frame){0.5, 0.03125, {1e7, 0.0, -2.5e6}, 77, 9001, 2, sample_tiles, 1,
-                                   {3, 3, {1e7, 0.0, -2.5e6}, sample_pos}};
+                                   {3, 3, {1e7, 0.0, -2.5e6}, sample_pos}, PROTO_LAYOUT_WORLD, NULL, {0, {0, 0, 0}},
+                                   {0}};
         break;
     case PROTO_TILE:
         m->u.tile = sample_tiles[0];
         break;
     case PROTO_MESH_TOPOLOGY:
-        m->u.topology = (proto_mesh_topology){3, PROTO_MESH_CONCENTRIC, 2, 3, 3, sample_idx, sample_morph, sample_level};
+        m->u.topology = (proto_mesh_topology){3, PROTO_MESH_CONCENTRIC, 2, 3, 3, sample_idx, sample_morph, sample_level,
+                                              0, NULL, NULL};
         break;
     case PROTO_MESH_VERTICES:
         m->u.vertices = (proto_mesh_vertices){3, 3, {-5.5, 0.0, 1e6}, sample_pos};
@@ -293,6 +335,80 @@ static void sample(proto_msg *m, proto_type type)
         break;
     }
 }
+
+/* The layout-1 variants, named as their vectors. */
+static void sample_cascade_block(proto_cascade_block *b)
+{
+    memset(b, 0, sizeof *b);
+    b->cascade_count = 2;
+    b->order = 6;
+    b->spacing_per_m = 0.046875f;
+    b->camera[0] = 1e7 + 0.125;
+    b->camera[1] = 25.0;
+    b->camera[2] = -2.5e6;
+    b->min_spacing_m = 0.0f;
+    b->e_total = 0.0078125f;
+    b->tail_mss[0] = 0.0125f;
+    b->tail_mss[1] = 0.00625f;
+    b->tail_mss[2] = -0.0009765625f;
+    proto_cascade_entry *e = &b->cascade[0];
+    e->patch_m = 1000;
+    e->n = 256;
+    e->mips = 2;
+    e->fades = 0;
+    e->mip[0] = (proto_mip_entry){INFINITY, 0.00390625f, 0.001953125f, 0.0f};
+    e->mip[1] = (proto_mip_entry){0.36f, 0.0078125f, 0.00390625f, 0.0001220703125f};
+    e->mip[2] = (proto_mip_entry){0.0f, 0.03125f, 0.015625f, 0.000244140625f};
+    e = &b->cascade[1];
+    e->patch_m = 232.8;
+    e->n = 256;
+    e->mips = 1;
+    e->fades = 1;
+    e->mip[0] = (proto_mip_entry){INFINITY, 0.0f, 0.0f, 0.0f};
+    e->mip[1] = (proto_mip_entry){0.0f, 0.015625f, 0.0078125f, -0.000244140625f};
+}
+
+static int sample_named(proto_msg *m, const char *name)
+{
+    if (!strcmp(name, "frame_cascade")) {
+        sample(m, PROTO_FRAME);
+        proto_frame *f = &m->u.frame;
+        f->layout = PROTO_LAYOUT_CASCADE;
+        f->tiles = cascade_tiles;
+        sample_cascade_block(&f->cascades);
+        f->placement.mesh_id = 3;
+        f->placement.origin[0] = 1e7;
+        f->placement.origin[2] = -2.5e6 - 8;
+        return 0;
+    }
+    if (!strcmp(name, "mesh_topology_flat")) {
+        sample(m, PROTO_MESH_TOPOLOGY);
+        m->u.topology.flags = PROTO_TOPO_FLAT;
+        m->u.topology.flat = sample_flat;
+        m->u.topology.zones = sample_zones;
+        return 0;
+    }
+    if (!strcmp(name, "subscribe_cascade")) {
+        sample(m, PROTO_SUBSCRIBE);
+        m->u.subscribe.layout = PROTO_LAYOUT_CASCADE;
+        m->u.subscribe.layers = 3;
+        return 0;
+    }
+    for (int t = 1; t < PROTO_TYPE_END_; t++) {
+        char buf[64];
+        snprintf(buf, sizeof buf, "%s", proto_type_name((proto_type)t));
+        for (char *c = buf; *c; c++)
+            *c = (char)(*c >= 'A' && *c <= 'Z' ? *c + 32 : *c);
+        if (!strcmp(name, buf)) {
+            sample(m, (proto_type)t);
+            return 0;
+        }
+    }
+    return -1;
+}
+
+static const char *const extra_vectors[] = {"frame_cascade", "mesh_topology_flat", "subscribe_cascade"};
+#define N_EXTRA ((int)(sizeof extra_vectors / sizeof extra_vectors[0]))
 
 static uint8_t *encode_sample(proto_type type, size_t *len)
 {
@@ -582,10 +698,10 @@ static void test_payload_errors(void **state)
     expect_field(PROTO_BYE, P(4), 2, 300, OCEAN_ETOOBIG);
     expect_field(PROTO_BYE, P(6), 1, 0, OCEAN_EFORMAT);                 /* NUL in string */
     /* reserved bytes -> EFORMAT */
-    expect_field(PROTO_SUBSCRIBE, P(7), 1, 1, OCEAN_EFORMAT);
+    expect_field(PROTO_SUBSCRIBE, P(7), 1, 2, OCEAN_ETYPE);      /* layout */
     expect_field(PROTO_QUERY, P(9), 1, 1, OCEAN_EFORMAT);
     expect_field(PROTO_SEA_STATE, P(18), 1, 1, OCEAN_EFORMAT);
-    expect_field(PROTO_MESH_TOPOLOGY, P(6), 2, 1, OCEAN_EFORMAT);
+    expect_field(PROTO_MESH_TOPOLOGY, P(6), 2, 2, OCEAN_EFORMAT);
     /* sea state announce with a token */
     proto_msg m;
     sample(&m, PROTO_SEA_STATE);
@@ -708,7 +824,7 @@ static void test_error_reply(void **state)
 
 typedef struct bad_vector {
     const char *name;
-    proto_type base;
+    const char *base;
     size_t off;
     int width;
     uint64_t value;
@@ -717,18 +833,24 @@ typedef struct bad_vector {
 } bad_vector;
 
 static const bad_vector bad_vectors[] = {
-    {"bad_truncated_header", PROTO_BYE, 0, 0, 0, OCEAN_ETRUNC, 20},
-    {"bad_truncated_payload", PROTO_CAMERA, 0, 0, 0, OCEAN_ETRUNC, 60},
-    {"bad_magic", PROTO_BYE, 0, 1, 'X', OCEAN_EFORMAT, -1},
-    {"bad_version", PROTO_BYE, 4, 2, 2, OCEAN_EVERSION, -1},
-    {"bad_type", PROTO_BYE, 6, 2, 99, OCEAN_ETYPE, -1},
-    {"bad_oversized", PROTO_BYE, 12, 4, 0x7FFFFFFF, OCEAN_ETOOBIG, -1},
-    {"bad_length_lies", PROTO_BYE, 12, 4, 200, OCEAN_ETRUNC, -1},
-    {"bad_nan_sim_time", PROTO_BYE, 24, 8, 0x7FF8000000000000ull, OCEAN_EINVAL, -1},
-    {"bad_enum_codec", PROTO_SUBSCRIBE, P(2), 1, 50, OCEAN_ETYPE, -1},
-    {"bad_nan_camera", PROTO_CAMERA, P(16), 8, 0x7FF8000000000000ull, OCEAN_EINVAL, -1},
-    {"bad_query_count_lies", PROTO_QUERY, P(4), 4, 1000, OCEAN_ETRUNC, -1},
-    {"bad_frame_record_lies", PROTO_FRAME, P(56), 4, 4096, OCEAN_ETRUNC, -1},
+    {"bad_truncated_header", "bye", 0, 0, 0, OCEAN_ETRUNC, 20},
+    {"bad_truncated_payload", "camera", 0, 0, 0, OCEAN_ETRUNC, 60},
+    {"bad_magic", "bye", 0, 1, 'X', OCEAN_EFORMAT, -1},
+    {"bad_version", "bye", 4, 2, 2, OCEAN_EVERSION, -1},
+    {"bad_type", "bye", 6, 2, 99, OCEAN_ETYPE, -1},
+    {"bad_oversized", "bye", 12, 4, 0x7FFFFFFF, OCEAN_ETOOBIG, -1},
+    {"bad_length_lies", "bye", 12, 4, 200, OCEAN_ETRUNC, -1},
+    {"bad_nan_sim_time", "bye", 24, 8, 0x7FF8000000000000ull, OCEAN_EINVAL, -1},
+    {"bad_enum_codec", "subscribe", P(2), 1, 50, OCEAN_ETYPE, -1},
+    {"bad_nan_camera", "camera", P(16), 8, 0x7FF8000000000000ull, OCEAN_EINVAL, -1},
+    {"bad_query_count_lies", "query", P(4), 4, 1000, OCEAN_ETRUNC, -1},
+    {"bad_frame_record_lies", "frame", P(56), 4, 4096, OCEAN_ETRUNC, -1},
+    {"bad_frame_layout", "frame", P(51), 1, 7, OCEAN_ETYPE, -1},
+    {"bad_cascade_tag", "frame_cascade", P(56 + 56 + 2 * 224 + 4), 4, 2, OCEAN_EFORMAT, -1},
+    {"bad_cascade_nan_spacing", "frame_cascade", P(56 + 4), 4, 0x7FC00000u, OCEAN_EINVAL, -1},
+    {"bad_cascade_count", "frame_cascade", P(56), 1, 5, OCEAN_EINVAL, -1},
+    {"bad_topology_flags", "mesh_topology_flat", P(6), 2, 2, OCEAN_EFORMAT, -1},
+    {"bad_subscribe_layout", "subscribe", P(7), 1, 2, OCEAN_ETYPE, -1},
 };
 
 static const char *code_name(ocean_result r)
@@ -776,20 +898,26 @@ static const char *type_file(proto_type t)
 static int write_vectors(const char *dir)
 {
     char path[512];
-    for (int t = 1; t < PROTO_TYPE_END_; t++) {
+    for (int t = 1; t < PROTO_TYPE_END_ + N_EXTRA; t++) {
+        const char *name = t < PROTO_TYPE_END_ ? type_file((proto_type)t) : extra_vectors[t - PROTO_TYPE_END_];
+        char nm[64];
+        snprintf(nm, sizeof nm, "%s", name);
         proto_msg m;
-        sample(&m, (proto_type)t);
+        sample_named(&m, nm);
         proto_buf b;
         proto_buf_init(&b, 0);
-        if (proto_encode(&b, &m, NULL, 0) != OCEAN_OK)
+        char err[256];
+        if (proto_encode(&b, &m, err, sizeof err) != OCEAN_OK) {
+            fprintf(stderr, "%s: %s\n", nm, err);
             return 1;
-        snprintf(path, sizeof path, "%s/%s.bin", dir, type_file((proto_type)t));
+        }
+        snprintf(path, sizeof path, "%s/%s.bin", dir, nm);
         if (write_file(path, proto_buf_data(&b), b.len))
             return 1;
         proto_msg d;
         proto_decode(proto_buf_data(&b), b.len, &d, NULL, 0);
         char *txt = dump(&d);
-        snprintf(path, sizeof path, "%s/%s.txt", dir, type_file((proto_type)t));
+        snprintf(path, sizeof path, "%s/%s.txt", dir, nm);
         if (write_file(path, txt, strlen(txt)))
             return 1;
         free(txt);
@@ -799,7 +927,7 @@ static int write_vectors(const char *dir)
     for (size_t k = 0; k < sizeof bad_vectors / sizeof bad_vectors[0]; k++) {
         const bad_vector *v = &bad_vectors[k];
         proto_msg m;
-        sample(&m, v->base);
+        sample_named(&m, v->base);
         proto_buf b;
         proto_buf_init(&b, 0);
         proto_encode(&b, &m, NULL, 0);
@@ -886,8 +1014,84 @@ static void test_vectors(void **state)
     }
     closedir(dir);
     print_message("%d message vectors, %d error vectors\n", good, bad);
-    assert_int_equal(good, PROTO_TYPE_END_ - 1);
+    assert_int_equal(good, PROTO_TYPE_END_ - 1 + N_EXTRA);
     assert_int_equal(bad, (int)(sizeof bad_vectors / sizeof bad_vectors[0]));
+}
+
+/* Layout 1: pre-encoded tile records give the same bytes as tiles, the
+ * per-client fields are found behind the cascade block, and the decoder
+ * refuses what the validator refuses. */
+static void test_cascade_layout(void **state)
+{
+    (void)state;
+    proto_msg m;
+    assert_int_equal(sample_named(&m, "frame_cascade"), 0);
+    proto_buf a, recs, b;
+    proto_buf_init(&a, 0);
+    proto_buf_init(&recs, 0);
+    proto_buf_init(&b, 0);
+    char err[256];
+    assert_int_equal(proto_encode(&a, &m, err, sizeof err), OCEAN_OK);
+    size_t at[2];
+    for (int i = 0; i < 2; i++) {
+        at[i] = recs.len;
+        assert_int_equal(proto_tile_record_encode(&recs, &cascade_tiles[i], cascade_tiles[i].cascade, err,
+                                                  sizeof err), OCEAN_OK);
+    }
+    proto_bytes rb[2] = {{proto_buf_data(&recs) + at[0], at[1] - at[0]},
+                         {proto_buf_data(&recs) + at[1], recs.len - at[1]}};
+    m.u.frame.tiles = NULL;
+    m.u.frame.tile_records = rb;
+    assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_OK);
+    assert_int_equal(a.len, b.len);
+    assert_memory_equal(proto_buf_data(&a), proto_buf_data(&b), a.len);
+    /* a record whose tag names a cascade the frame does not have */
+    proto_buf bad;
+    proto_buf_init(&bad, 0);
+    assert_int_equal(proto_tile_record_encode(&bad, &cascade_tiles[1], 2, err, sizeof err), OCEAN_OK);
+    proto_bytes bb[2] = {rb[0], {proto_buf_data(&bad), bad.len}};
+    m.u.frame.tile_records = bb;
+    m.u.frame.cascades.cascade_count = 2;
+    proto_buf c;
+    proto_buf_init(&c, 0);
+    assert_int_equal(proto_encode(&c, &m, err, sizeof err), OCEAN_EINVAL);
+    assert_int_equal(c.len, 0);
+    assert_int_equal(proto_tile_record_encode(&bad, &cascade_tiles[1], PROTO_MAX_LAYERS, err, sizeof err),
+                     OCEAN_EINVAL);
+    /* per-client fields */
+    size_t cam_at = 0, mesh_at = 0;
+    assert_int_equal(proto_frame_client_fields(proto_buf_data(&a), a.len, &cam_at, &mesh_at), OCEAN_OK);
+    assert_int_equal(cam_at, PROTO_HEADER_SIZE + 40);
+    assert_int_equal(proto_ld32(proto_buf_data(&a) + mesh_at), 3);
+    assert_int_equal(mesh_at, a.len - PROTO_MESH_PLACEMENT_SIZE);
+    /* decode: tags become tile cascades, the block and placement survive */
+    proto_msg d;
+    assert_int_equal(proto_decode(proto_buf_data(&a), a.len, &d, err, sizeof err), OCEAN_OK);
+    assert_int_equal(d.u.frame.layout, PROTO_LAYOUT_CASCADE);
+    assert_int_equal(d.u.frame.tiles[1].cascade, 1);
+    assert_int_equal(d.u.frame.cascades.cascade[0].mips, 2);
+    assert_true(isinf(d.u.frame.cascades.cascade[0].mip[0].kc));
+    assert_true(d.u.frame.placement.origin[2] == -2.5e6 - 8);
+    proto_msg_free(&d);
+    /* validator: mip entries beyond `mips` must be zero, kc of the last entry 0 */
+    sample_named(&m, "frame_cascade");
+    m.u.frame.cascades.cascade[1].mip[3].mss_x = 1e-3f;
+    proto_buf_init(&c, 0);
+    assert_int_equal(proto_encode(&c, &m, err, sizeof err), OCEAN_EFORMAT);
+    sample_named(&m, "frame_cascade");
+    m.u.frame.cascades.cascade[0].mip[2].kc = 1.0f;
+    assert_int_equal(proto_encode(&c, &m, err, sizeof err), OCEAN_EINVAL);
+    sample_named(&m, "mesh_topology_flat");
+    float zones[8];
+    memcpy(zones, sample_zones, sizeof zones);
+    zones[4] = 0.0f; /* lattice spacing must be > 0 */
+    m.u.topology.zones = zones;
+    assert_int_equal(proto_encode(&c, &m, err, sizeof err), OCEAN_EINVAL);
+    proto_buf_free(&a);
+    proto_buf_free(&b);
+    proto_buf_free(&recs);
+    proto_buf_free(&bad);
+    proto_buf_free(&c);
 }
 
 int main(int argc, char **argv)
@@ -898,6 +1102,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_roundtrip_all),
         cmocka_unit_test(test_header_errors),
         cmocka_unit_test(test_frame_client_fields),
+        cmocka_unit_test(test_cascade_layout),
         cmocka_unit_test(test_payload_errors),
         cmocka_unit_test(test_truncate_every_type),
         cmocka_unit_test(test_encode_refuses),
