@@ -22,6 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gerstner.h"
 #include "mesh.h"
 
 #define MAX_MIPS PROTO_MAX_MIPS
@@ -55,6 +56,8 @@ typedef struct tables {
     proto_mip_entry entry[OCEAN_MAX_CASCADES][PROTO_MIP_ENTRIES];
     double var_removed[OCEAN_MAX_CASCADES][PROTO_MIP_ENTRIES];
     double total_var;      /* all cascades, m^2 */
+    const ocean_gerstner *g;
+    double near_mss[3];    /* the Gerstner near field's slope moments */
 } tables;
 
 struct srv_cascade {
@@ -173,9 +176,22 @@ uint32_t srv_cascade_max_tiles(const ocean_params *p, int layers, int tile_size)
 
 /* ---- tables -------------------------------------------------------------- */
 
-static ocean_result tables_make(tables *tb, const ocean *oc, int order)
+static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstner *g, int order)
 {
     memset(tb, 0, sizeof *tb);
+    tb->g = g;
+    /* A Gerstner wave A cos(k.x - w t + phi) has mean-square slopes
+     * A^2 kx^2 / 2, A^2 kz^2 / 2 and cross moment A^2 kx kz / 2.  The near
+     * field is not in cascade tiles: its slopes travel as unresolved
+     * roughness. */
+    for (int i = 0; g && i < ocean_gerstner_count(g); i++) {
+        ocean_gerstner_wave w;
+        if (ocean_gerstner_get_wave(g, i, &w) != OCEAN_OK) continue;
+        double a2 = 0.5 * w.amplitude * w.amplitude;
+        tb->near_mss[0] += a2 * w.kx * w.kx;
+        tb->near_mss[1] += a2 * w.kz * w.kz;
+        tb->near_mss[2] += a2 * w.kx * w.kz;
+    }
     const ocean_params *p = ocean_get_params(oc);
     tb->oc = oc;
     tb->order = order;
@@ -225,15 +241,32 @@ static void span(double x, double half, double w, int ntile, int32_t *first, int
     *count = (int32_t)cnt;
 }
 
+/* The plan for spacing factor q; returns the tile samples it carries. */
+static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q, plan *pl);
+
+/* A job's plan at the server's quality target (server.px_per_sample),
+ * coarsened (q raised by steps of 2^(1/4)) until the frame carries at most
+ * server.frame_samples tile samples: a large viewport or a low camera gets
+ * a little less geometry and a little more unresolved roughness, never more
+ * bytes than the budget. */
 static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
 {
-    const proto_subscribe *sub = &j->c->sim.sub;
-    memset(pl, 0, sizeof *pl);
     mesh_camera mc;
     srv_mesh_camera(&j->cam, &mc);
     double ppr = mesh_camera_px_per_rad(&mc);
+    double q = cfg->px_per_sample / (ppr > 0 ? ppr : 1.0);
+    for (int it = 0; it < 64; it++, q *= 1.189207115002721) /* 2^(1/4) */
+        if (plan_at(tb, cfg, j, q, pl) <= cfg->frame_samples)
+            break;
+}
+
+static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q, plan *pl)
+{
+    const proto_subscribe *sub = &j->c->sim.sub;
+    memset(pl, 0, sizeof *pl);
+    double samples = 0;
     pl->layers = sub->layers < tb->cascades ? sub->layers : tb->cascades;
-    pl->q = cfg->px_per_sample / (ppr > 0 ? ppr : 1.0);
+    pl->q = q;
     /* The velocity policy's cutoff as a floor on the spacing read: a mip
      * whose cutoff lies above it is not needed (kc of mip m is pi / (2 sigma_m)). */
     double pol = isfinite(j->policy_k) && j->policy_k > 0 ? M_PI / (2.0 * j->policy_k) : 0.0;
@@ -265,9 +298,11 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
             span(j->cam.pos[2], half, w, ntile, &g->z0, &g->nz);
             pl->need[c][m] = 1;
             pl->tiles += g->nx * g->nz;
+            samples += (double)g->nx * g->nz * t * t;
         }
     }
     pl->ok = 1;
+    return samples;
 }
 
 /* ---- tiles ------------------------------------------------------------------ */
@@ -556,6 +591,8 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
         e->fades = c > 0;
         for (int q = 0; q <= tb->mips[c]; q++) e->mip[q] = tb->entry[c][q];
     }
+    if (sub->effects & PROTO_FX_NEAR_FIELD)
+        for (int i = 0; i < 3; i++) b->tail_mss[i] += (float)tb->near_mss[i];
     /* cascades the subscription leaves out: their slopes only shade */
     for (int c = pl->layers; c < tb->cascades; c++) {
         const proto_mip_entry *all = &tb->entry[c][tb->mips[c]];
@@ -631,18 +668,18 @@ static ocean_result eval_mips(srv_cascade *k, ocean *oc, const tables *tb, doubl
     return OCEAN_OK;
 }
 
-void srv_cascade_run(srv_cascade *k, ocean *oc, int order, const srv_config *cfg, srv_stats *st,
-                     srv_cascade_job *jobs, int n, uint64_t gen)
+void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int order, const srv_config *cfg,
+                     srv_stats *st, srv_cascade_job *jobs, int n, uint64_t gen)
 {
     if (n <= 0) return;
-    if (!k->tab_valid || k->tab.oc != oc || k->tab.order != order) {
+    if (!k->tab_valid || k->tab.oc != oc || k->tab.g != g || k->tab.order != order) {
         /* a new ocean: its frames have other grids, its tiles other bytes */
         for (int m = 0; m < MAX_MIPS; m++) {
             ocean_frame_destroy(k->mipf[m]);
             k->mipf[m] = NULL;
         }
         tiles_clear(k);
-        if (tables_make(&k->tab, oc, order) != OCEAN_OK) {
+        if (tables_make(&k->tab, oc, g, order) != OCEAN_OK) {
             k->tab_valid = 0;
             for (int i = 0; i < n; i++)
                 srv_client_send_error(jobs[i].c, NULL, 0, OCEAN_ESTATE, "cascade tables unavailable");

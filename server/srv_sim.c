@@ -351,7 +351,7 @@ static void run_cascade(srv_sim *s, srv_cascade_job *cj, int n, double tick_wall
     srv_stats *st = &s->hub->stats;
     s->gen++;
     double p0 = srv_now();
-    srv_cascade_run(s->casc, s->oc, s->fcfg.order, &s->set.srv, st, cj, n, s->gen);
+    srv_cascade_run(s->casc, s->oc, s->g, s->fcfg.order, &s->set.srv, st, cj, n, s->gen);
     static int prof = -1;
     if (prof < 0) prof = getenv("OCEAND_PROFILE") != NULL;
     if (prof) fprintf(stderr, "cascade batch %d jobs: %.2f ms\n", n, (srv_now() - p0) * 1e3);

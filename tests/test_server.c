@@ -438,6 +438,14 @@ static void cascade_tiles_are_the_mips(void **state)
     oc_frame_free(f);
     ocean_frame_destroy(lf);
     ocean_destroy(o);
+    /* what layout 1 cannot serve is refused before any work, naming why */
+    char e[512] = "";
+    proto_subscribe bad = s;
+    bad.mesh_kind = PROTO_MESH_PROJECTED;
+    assert_int_equal(oc_client_subscribe(c, &bad), OCEAN_OK);
+    for (int i = 0; i < 100 && oc_client_last_error(c, e, sizeof e) != OCEAN_EUNSUPPORTED; i++) oc_service(c, 20);
+    assert_int_equal(oc_client_last_error(c, e, sizeof e), OCEAN_EUNSUPPORTED);
+    assert_non_null(strstr(e, "layout"));
     oc_client_destroy(c);
 }
 
@@ -448,6 +456,13 @@ static void cascade_tiles_are_the_mips(void **state)
 static void cascade_tiles_shared_across_cameras(void **state)
 {
     (void)state;
+    /* a pyramid of 2-sample tiles cannot fit a frame at N = 256: such a
+     * subscription is refused (srv_client.c) before any work */
+    ocean_params big = settings.params;
+    big.n = 256;
+    big.cascades = 3;
+    assert_true(srv_cascade_max_tiles(&big, 3, 2) > PROTO_MAX_FRAME_TILES);
+    assert_int_equal(srv_cascade_max_tiles(&big, 3, 32), 3 * (64 + 16 + 4 + 1 + 1 + 1));
     srv_hub *h = srv_daemon_hub(daemon_);
     enum { NV = 8 };
     oc_client *v[NV];
