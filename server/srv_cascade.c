@@ -491,7 +491,7 @@ static void mesh_part(srv_cascade_job *j, plan *pl)
     if (!cs->mesh || cs->sub.mesh_kind == PROTO_MESH_NONE) return;
     mesh_camera mc;
     srv_mesh_camera(&j->cam, &mc);
-    ocean_result r = mesh_build(cs->mesh, &mc);
+    ocean_result r = mesh_place(cs->mesh, &mc);
     if (r == OCEAN_OK) {
         mesh_get_view(cs->mesh, &pl->mv);
         mesh_get_info(cs->mesh, &pl->mi);
