@@ -60,9 +60,22 @@ typedef struct tables {
     double near_mss[3];    /* the Gerstner near field's slope moments */
 } tables;
 
+/* Encoded bytes per tile sample of a (codec, accuracy, channels, side),
+ * learnt from the tiles encoded so far: what the byte budget plans with. */
+#define RATES 16
+typedef struct rate {
+    int used;
+    uint8_t codec;
+    uint16_t channels, size;
+    float accuracy;
+    double bytes_per_sample;
+} rate;
+
 struct srv_cascade {
     tables tab;
     int tab_valid;
+    rate rates[RATES];
+    int rate_next;
     ocean_frame *mipf[MAX_MIPS];  /* mip level m of every cascade, this batch */
     ctile *b[NBUCKETS];
     size_t count;
@@ -241,26 +254,64 @@ static void span(double x, double half, double w, int ntile, int32_t *first, int
     *count = (int32_t)cnt;
 }
 
-/* The plan for spacing factor q; returns the tile samples it carries. */
-static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q, plan *pl);
+static rate *rate_find(srv_cascade *k, unsigned codec, float accuracy, unsigned channels, unsigned size)
+{
+    for (int i = 0; i < RATES; i++) {
+        rate *r = &k->rates[i];
+        if (r->used && r->codec == codec && r->accuracy == accuracy && r->channels == channels && r->size == size)
+            return r;
+    }
+    return NULL;
+}
+
+/* Estimated encoded bytes of one tile of side T; before any such tile was
+ * encoded, the codec's design point of 1/8 of f32. */
+static double tile_bytes(srv_cascade *k, const proto_subscribe *sub, unsigned channels, int T)
+{
+    const rate *r = rate_find(k, sub->codec, sub->accuracy, channels, (unsigned)T);
+    double per = r ? r->bytes_per_sample : proto_tile_planes(channels) * 4.0 / 8.0;
+    return per * T * T + 64; /* record and TILE headers */
+}
+
+/* Learns from encoded tiles (an exponential average per kind). */
+static void rate_learn(srv_cascade *k, const ctile *t)
+{
+    if (t->result != OCEAN_OK || !t->rec_len) return;
+    rate *r = rate_find(k, t->key.codec, t->key.accuracy, t->key.channels, t->key.size);
+    if (!r) {
+        r = &k->rates[k->rate_next];
+        k->rate_next = (k->rate_next + 1) % RATES;
+        *r = (rate){1, t->key.codec, t->key.channels, t->key.size, t->key.accuracy, 0};
+        r->bytes_per_sample = (double)t->rec_len / ((double)t->key.size * t->key.size);
+        return;
+    }
+    r->bytes_per_sample += 0.05 * ((double)t->rec_len / ((double)t->key.size * t->key.size) - r->bytes_per_sample);
+}
+
+/* The plan for spacing factor q; returns the estimated bytes of its tiles. */
+static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q,
+                      plan *pl);
 
 /* A job's plan at the server's quality target (server.px_per_sample),
- * coarsened (q raised by steps of 2^(1/4)) until the frame carries at most
- * server.frame_samples tile samples: a large viewport or a low camera gets
- * a little less geometry and a little more unresolved roughness, never more
- * bytes than the budget. */
-static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
+ * coarsened (q raised by steps of 2^(1/4)) until the frame's tiles fit the
+ * viewer's byte budget (server.viewer_bytes_per_s over its frame rate): a
+ * large viewport or a low camera gets a little less geometry and a little
+ * more unresolved roughness, never more bytes than the budget. */
+static void plan_job(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
 {
     mesh_camera mc;
     srv_mesh_camera(&j->cam, &mc);
     double ppr = mesh_camera_px_per_rad(&mc);
     double q = cfg->px_per_sample / (ppr > 0 ? ppr : 1.0);
+    double rate_hz = j->c->sim.sub.frame_rate_hz > 0 ? j->c->sim.sub.frame_rate_hz : 30.0;
+    double budget = cfg->viewer_bytes_per_s / rate_hz;
     for (int it = 0; it < 64; it++, q *= 1.189207115002721) /* 2^(1/4) */
-        if (plan_at(tb, cfg, j, q, pl) <= cfg->frame_samples)
+        if (plan_at(k, tb, cfg, j, q, pl) <= budget)
             break;
 }
 
-static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q, plan *pl)
+static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q,
+                      plan *pl)
 {
     const proto_subscribe *sub = &j->c->sim.sub;
     memset(pl, 0, sizeof *pl);
@@ -298,7 +349,7 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
             span(j->cam.pos[2], half, w, ntile, &g->z0, &g->nz);
             pl->need[c][m] = 1;
             pl->tiles += g->nx * g->nz;
-            samples += (double)g->nx * g->nz * t * t;
+            samples += (double)g->nx * g->nz * tile_bytes(k, sub, pl->channels, t);
         }
     }
     pl->ok = 1;
@@ -692,7 +743,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
     if (!pl) return;
     /* 1. plans and meshes */
     for (int i = 0; i < n; i++) {
-        plan_job(tb, cfg, &jobs[i], &pl[i]);
+        plan_job(k, tb, cfg, &jobs[i], &pl[i]);
         pl[i].share_with = i;
         if (pl[i].tiles > (int)PROTO_MAX_FRAME_TILES) {
             char why[200];
@@ -777,6 +828,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
 #pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
         for (size_t q = 0; q < nmiss; q++)
             tile_build(missing[q], k->mipf[missing[q]->key.mip], tb);
+        for (size_t q = 0; q < nmiss; q++) rate_learn(k, missing[q]);
         atomic_fetch_add(&st->tiles_encoded, (uint64_t)nmiss);
     }
     free(missing);
