@@ -305,16 +305,31 @@ static void plan_job(srv_cascade *k, const tables *tb, const srv_config *cfg, co
     double q = cfg->px_per_sample / (ppr > 0 ? ppr : 1.0);
     double rate_hz = j->c->sim.sub.frame_rate_hz > 0 ? j->c->sim.sub.frame_rate_hz : 30.0;
     double budget = cfg->viewer_bytes_per_s / rate_hz;
-    for (int it = 0; it < 64; it++, q *= 1.189207115002721) /* 2^(1/4) */
-        if (plan_at(k, tb, cfg, j, q, pl) <= budget)
+    if (plan_at(k, tb, cfg, j, q, pl) <= budget)
+        return;
+    /* octaves first, then quarter octaves back down to the finest that fits */
+    double hi = q;
+    for (int it = 0; it < 40; it++) {
+        hi *= 2;
+        if (plan_at(k, tb, cfg, j, hi, pl) <= budget)
             break;
+    }
+    for (int it = 0; it < 3; it++) {
+        double t = hi / 1.189207115002721; /* 2^(1/4) */
+        if (t <= q || plan_at(k, tb, cfg, j, t, pl) > budget)
+            break;
+        hi = t;
+    }
+    plan_at(k, tb, cfg, j, hi, pl);
 }
 
 static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q,
                       plan *pl)
 {
     const proto_subscribe *sub = &j->c->sim.sub;
-    memset(pl, 0, sizeof *pl);
+    /* only the fields a plan computes: the mesh parts stay */
+    memset(pl->need, 0, sizeof pl->need);
+    pl->tiles = 0;
     double samples = 0;
     pl->layers = sub->layers < tb->cascades ? sub->layers : tb->cascades;
     pl->q = q;
