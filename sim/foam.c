@@ -6,6 +6,8 @@
 
 #include <math.h>
 
+#include "ocean.h"
+
 #define W_MAX 0.95
 
 double ocean_foam_coverage_target(double u10)
@@ -103,4 +105,21 @@ double ocean_whitecap_coverage(const float *foam, size_t n)
         m++;
     }
     return m ? s / (double)m : 0.0;
+}
+
+ocean_result ocean_whitecap_coverage_frame(const ocean_frame *f, double x0, double z0,
+                                           double size_m, int n, double *out)
+{
+    if (!f || !out || !isfinite(x0) || !isfinite(z0) || !isfinite(size_m) || !(size_m > 0.0) ||
+        n < 1 || n > 4096)
+        return OCEAN_EINVAL;
+    double h = size_m / n, s = 0.0;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            ocean_point p;
+            ocean_frame_sample_some(f, x0 + j * h, z0 + i * h, OCEAN_SAMPLE_FOAM, &p);
+            s += p.foam;
+        }
+    *out = s / ((double)n * n);
+    return OCEAN_OK;
 }

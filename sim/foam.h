@@ -111,4 +111,15 @@ static inline double ocean_foam_value(const ocean_foam_map *m, double beta)
  * clamped to [0, 1]; NaN samples are skipped; 0 for n = 0 or all NaN. */
 double ocean_whitecap_coverage(const float *foam, size_t n);
 
+/* Whitecap coverage of an evaluated frame over the square [x0, x0 + size)
+ * x [z0, z0 + size) (world metres), as tiles of spacing size / n carry it:
+ * the mean foam of n x n point samples (ocean_frame_sample_some), n in
+ * 1..4096.  Use a square of at least the largest patch for the sea's
+ * coverage (smaller squares see a few wave groups only).  OCEAN_EINVAL
+ * for NULL, non-finite or non-positive size, non-finite corner, n out of
+ * range; 0 for a frame without foam channels. */
+struct ocean_frame;
+ocean_result ocean_whitecap_coverage_frame(const struct ocean_frame *f, double x0, double z0,
+                                           double size_m, int n, double *out);
+
 #endif

@@ -528,16 +528,19 @@ static double foam_sigma_sum(const ocean *o, double kc, int order, double scale,
         if (cs->k_lo >= kneg)
             continue;
         double h = cs->patch / pick_size(cs, n, kneg);
+        /* A per column and per row: |mx|, |mz| < n/2. */
+        double a[OCEAN_MAX_N / 2];
+        for (int m = 0; m < n / 2; m++)
+            a[m] = (2.0 + cos(m * cs->dk * h)) / 3.0;
         for (size_t i = 0; i < (size_t)n * half; i++) {
             if (cs->var[i] == 0.0f)
                 continue;
-            int ix = (int)(i % half), iz = (int)(i / half), mz = iz < n / 2 ? iz : iz - n;
+            int ix = (int)(i % half), iz = (int)(i / half), mz = iz < n / 2 ? iz : n - iz;
             double w = (ix == 0 ? 1.0 : 2.0) * cs->var[i];
             double g = isinf(kc) ? 1.0 : effective_gain(cs->k[i], kc, order, kneg);
             double ge = g * scale * (1.0 + (boost - 1.0) * g * g);
             double k = cs->k[i];
-            double ax = (2.0 + cos(ix * cs->dk * h)) / 3.0, az = (2.0 + cos(mz * cs->dk * h)) / 3.0;
-            s += w * k * k * ge * ge * ax * az;
+            s += w * k * k * ge * ge * a[ix < n / 2 ? ix : n / 2 - 1] * a[mz < n / 2 ? mz : n / 2 - 1];
         }
     }
     return sqrt(s);
@@ -1152,6 +1155,14 @@ void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned 
                                                              foam_beta(dxx, dzz, f->foam_inv_lambda))
                                           : 0.0,
                          .vel_x = vx, .vel_y = vy, .vel_z = vz, .dxx = dxx, .dzz = dzz, .dxz = dxz};
+}
+
+double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz)
+{
+    int any = 0;
+    for (int c = 0; c < f->cascades; c++)
+        any |= f->field[c].dxx != NULL;
+    return any ? ocean_foam_value(&f->foam_map, foam_beta(dxx, dzz, f->foam_inv_lambda)) : 0.0;
 }
 
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out)

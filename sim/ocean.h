@@ -200,6 +200,14 @@ typedef struct ocean_point {
 } ocean_point;
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out);
 
+/* Whitecap foam (foam.h) of a point whose summed displacement derivatives
+ * are dxx = lambda Dxx and dzz = lambda Dzz (ocean_point's fields, plus the
+ * share of any waves the caller adds, e.g. the near field's), with this
+ * frame's whitecap ramp: ocean_frame_sample's .foam is
+ * ocean_frame_foam(f, p.dxx, p.dzz).  0 for a frame evaluated without
+ * foam channels. */
+double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz);
+
 /* What ocean_frame_sample_some fills; the rest of the point reads as in a
  * frame without those channels (0, jacobian 1). */
 enum {

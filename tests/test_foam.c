@@ -104,6 +104,48 @@ static void ramp_mean_and_solve(void **state)
     assert_true(ocean_whitecap_coverage(tile, 0) == 0.0);
 }
 
+static void frame_coverage_hostile(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.threads = 1;
+    p.n = 16;
+    ocean *o = NULL;
+    assert_int_equal(ocean_create(&p, &o, NULL, 0), OCEAN_OK);
+    ocean_frame *f;
+    assert_int_equal(ocean_frame_create(o, &f), OCEAN_OK);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_HEIGHT);
+    assert_int_equal(ocean_evaluate(o, 1.0, &r, f), OCEAN_OK);
+    double c = -1.0;
+    /* No foam channels: coverage 0, foam 0. */
+    assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, 0.0, 100.0, 8, &c), OCEAN_OK);
+    assert_true(c == 0.0);
+    assert_true(ocean_frame_foam(f, -1.0, -1.0) == 0.0);
+    assert_int_equal(ocean_whitecap_coverage_frame(NULL, 0.0, 0.0, 100.0, 8, &c), OCEAN_EINVAL);
+    assert_int_equal(ocean_whitecap_coverage_frame(f, NAN, 0.0, 100.0, 8, &c), OCEAN_EINVAL);
+    assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, INFINITY, 100.0, 8, &c), OCEAN_EINVAL);
+    assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, 0.0, 0.0, 8, &c), OCEAN_EINVAL);
+    assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, 0.0, NAN, 8, &c), OCEAN_EINVAL);
+    assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, 0.0, 100.0, 0, &c), OCEAN_EINVAL);
+    assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, 0.0, 100.0, 4097, &c), OCEAN_EINVAL);
+    assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, 0.0, 100.0, 8, NULL), OCEAN_EINVAL);
+    /* Everything filtered: the foam is the uniform target. */
+    p.sea.wind_u10 = 15.0;
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    assert_int_equal(ocean_create(&p, &o, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_frame_create(o, &f), OCEAN_OK);
+    ocean_request_all(&r, OCEAN_FX_FOAM);
+    r.cutoff_k = 0.0;
+    assert_int_equal(ocean_evaluate(o, 1.0, &r, f), OCEAN_OK);
+    assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, 0.0, 100.0, 8, &c), OCEAN_OK);
+    assert_true(fabs(c - ocean_foam_coverage_target(15.0)) < 1e-12);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
 static ocean *scene_ocean(const char *name, double u10)
 {
     ocean_params base;
@@ -162,10 +204,16 @@ static void coverage_against_monahan(void **state)
                             ocean_frame_sample_some(f, 311.37 + h * b, -52.71 + h * a,
                                                     OCEAN_SAMPLE_FOAM, &pt);
                             foam[a * T + b] = (float)pt.foam;
+                            if (b == a)
+                                assert_true(ocean_frame_foam(f, pt.dxx, pt.dzz) == pt.foam);
                             /* Longuet-Higgins' criterion alone: a_z < -g/2. */
                             ones += -(pt.dxx + pt.dzz) / p->sea.choppiness > 0.5;
                         }
-                    tile += 0.5 * ocean_whitecap_coverage(foam, T * T);
+                    double cov = ocean_whitecap_coverage(foam, T * T), cf;
+                    assert_int_equal(ocean_whitecap_coverage_frame(f, 311.37, -52.71, p->patch_m, T, &cf),
+                                     OCEAN_OK);
+                    assert_true(fabs(cf - cov) < 1e-6);
+                    tile += 0.5 * cov;
                     active += 0.5 * (double)ones / (T * T);
                 }
                 double w = monahan(winds[i]);
@@ -222,6 +270,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(monahan_and_target),
         cmocka_unit_test(ramp_mean_and_solve),
+        cmocka_unit_test(frame_coverage_hostile),
         cmocka_unit_test(coverage_against_monahan),
         cmocka_unit_test(beta_is_downward_acceleration),
     };

@@ -112,6 +112,28 @@ static void cox_munk_default(void **state)
                       s.total.mss_x, s.total.mss_z, 3.16e-3 * ocean_slope_u125(winds[i]),
                       0.003 + 1.92e-3 * ocean_slope_u125(winds[i]));
         assert_rel(s.mss_total, cm, 0.30);
+        /* Delivered = resolved (geometry) + carried (shading) for every
+         * camera: the antialias policy's cutoffs for level-0 spacings of
+         * height / 28 (clients/web/main.js) at heights 2 m .. 10 km, speeds
+         * 0 .. 300 m/s, 30 fps, and the 8 coarser levels (spacing x 2^l). */
+        ocean_slope_table *t;
+        assert_int_equal(ocean_slope_table_create(o, NULL, &t, NULL, 0), OCEAN_OK);
+        ocean_filter_config fc;
+        ocean_filter_config_default(&fc, &p.sea);
+        const double heights[] = {2.0, 25.0, 300.0, 1500.0, 10000.0};
+        const double speeds[] = {0.0, 15.0, 250.0, 300.0};
+        for (int h = 0; h < 5; h++)
+            for (int v = 0; v < 4; v++)
+                for (int l = 0; l < 8; l++) {
+                    ocean_filter_client cl = {speeds[v], 30.0, heights[h] / 28.0 * (1 << l)};
+                    ocean_filter_cutoff cut;
+                    assert_int_equal(ocean_filter_cutoff_compute(&fc, OCEAN_FILTER_ANTIALIAS, &cl, &cut),
+                                     OCEAN_OK);
+                    ocean_slope_stats d;
+                    assert_int_equal(ocean_slope_table_get(t, cut.k, 6, &d), OCEAN_OK);
+                    assert_rel(d.mss_resolved + d.mss_carried, cm, 0.30);
+                }
+        ocean_slope_table_destroy(t);
         /* Wind toward +x: more slope along the wind than across it. */
         assert_true(s.total.mss_x > s.total.mss_z);
         assert_true(fabs(s.total.mss_xz) < 1e-3 * s.mss_total);
