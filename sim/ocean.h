@@ -233,7 +233,13 @@ void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned 
  * (min_jacobian 1). */
 typedef struct ocean_field_stats {
     double mean, hs;             /* of the height; hs = 4 std */
-    double min_jacobian, folded_fraction, foam_coverage;
+    double min_jacobian, folded_fraction;
+    double foam_coverage;        /* mean foam over the finest cascade's grid
+                                    nodes: a small patch, read without the
+                                    damping of interpolation, so it runs
+                                    ~1.1-1.5x the sea's coverage; for the
+                                    coverage tiles carry use
+                                    ocean_whitecap_coverage_frame (foam.h) */
 } ocean_field_stats;
 void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out);
 
