@@ -104,7 +104,7 @@ static inline double ocean_foam_value(const ocean_foam_map *m, double beta)
     if (m->b <= m->a)
         return beta >= m->b ? 1.0 : 0.0;
     double f = (beta - m->a) / (m->b - m->a);
-    return f < 0.0 ? 0.0 : (f > 1.0 ? 1.0 : f);
+    return !(f > 0.0) ? 0.0 : (f > 1.0 ? 1.0 : f); /* NaN beta: no foam */
 }
 
 /* Whitecap coverage of n foam samples (a tile, a field): their mean, each

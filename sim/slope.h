@@ -51,6 +51,11 @@
  * (kx^2, kz^2, kx kz, 1).  Slopes are those of the linear height field
  * (the Gerstner/choppy horizontal displacement is not folded in).
  *
+ * The near field's "resolved" share assumes its waves are in the level's
+ * geometry at gain H; the daemon fades them out beyond the camera's fade
+ * radius, so a level lying outside it should count near_resolved as
+ * carried too (the caller knows the fade, this module does not).
+ *
  * Cost: ocean_slope_table_create precomputes everything that does not
  * depend on the cutoff (~10-60 ms: one spectrum evaluation per FFT mode and
  * a tail quadrature); ocean_slope_table_get is memoised per (kc, order)

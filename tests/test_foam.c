@@ -91,6 +91,8 @@ static void ramp_mean_and_solve(void **state)
     ocean_foam_map m;
     assert_int_equal(ocean_foam_map_solve(0.0, 0.03, &m), OCEAN_OK);
     assert_true(ocean_foam_value(&m, 0.0) == 0.03 && ocean_foam_value(&m, 5.0) == 0.03);
+    assert_int_equal(ocean_foam_map_solve(0.1, 0.02, &m), OCEAN_OK);
+    assert_true(ocean_foam_value(&m, NAN) == 0.0);
     assert_int_equal(ocean_foam_map_solve(0.1, 0.0, &m), OCEAN_OK);
     assert_true(ocean_foam_value(&m, 10.0) == 0.0);
     assert_int_equal(ocean_foam_map_solve(NAN, 0.1, &m), OCEAN_EINVAL);
