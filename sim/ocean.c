@@ -29,6 +29,7 @@
 #include <omp.h>
 
 #include "filter.h"
+#include "foam.h"
 #include "wave_rng.h"
 
 enum {
@@ -115,6 +116,9 @@ struct ocean {
      * scales are keyed by (cutoff, order), E_error by all four. */
     filter_memo redis_memo[FILTER_MEMO], err_memo[FILTER_MEMO];
     int redis_next, err_next;
+    /* std of the breaking index beta per filter (foam.h), same keys */
+    filter_memo foam_memo[FILTER_MEMO];
+    int foam_next;
     gain_plane gains[GAIN_PLANES];
     uint64_t gain_clock;
 };
@@ -127,6 +131,10 @@ struct ocean_frame {
     ocean_field field[OCEAN_MAX_CASCADES];
     ocean_frame_info info;
     double patch[OCEAN_MAX_CASCADES];
+    /* The whitecap ramp of this evaluation (foam.h) and 1/lambda, which
+     * turns the foam channels' lambda (Dxx + Dzz) into beta = -a_z/g. */
+    ocean_foam_map foam_map;
+    double foam_inv_lambda;
 };
 
 /* FFTW's planner is process-global state: one lock for every ocean. */
@@ -501,6 +509,68 @@ static void filter_sums(const ocean *o, double kc, int order, double scale, doub
         }
 }
 
+static int pick_size(const cascade *cs, int n_full, double kneg);
+
+/* Std of the breaking index beta = sum k eta_k (foam.h) as a point sample
+ * reads it: over the modes an evaluation with this filter transforms,
+ * sum var k^2 ge^2 A(kx h) A(kz h), where A(th) = (2 + cos th) / 3 is the
+ * mean power a wave keeps through bilinear interpolation on a grid of
+ * spacing h at a uniformly random point (E|(1-u) + u e^{i th}|^2 over u).
+ * Without A the finest cascade's near-Nyquist waves, which bilinear
+ * reading damps, would count fully and tiles would show ~half the
+ * intended coverage at light winds. */
+static double foam_sigma_sum(const ocean *o, double kc, int order, double scale, double boost)
+{
+    double kneg = negligible_k(o, kc, order), s = 0.0;
+    int n = o->p.n, half = n / 2 + 1;
+    for (int c = 0; c < o->p.cascades; c++) {
+        const cascade *cs = &o->cas[c];
+        if (cs->k_lo >= kneg)
+            continue;
+        double h = cs->patch / pick_size(cs, n, kneg);
+        /* A per column and per row: |mx|, |mz| < n/2. */
+        double a[OCEAN_MAX_N / 2];
+        for (int m = 0; m < n / 2; m++)
+            a[m] = (2.0 + cos(m * cs->dk * h)) / 3.0;
+        for (size_t i = 0; i < (size_t)n * half; i++) {
+            if (cs->var[i] == 0.0f)
+                continue;
+            int ix = (int)(i % half), iz = (int)(i / half), mz = iz < n / 2 ? iz : n - iz;
+            double w = (ix == 0 ? 1.0 : 2.0) * cs->var[i];
+            double g = isinf(kc) ? 1.0 : effective_gain(cs->k[i], kc, order, kneg);
+            double ge = g * scale * (1.0 + (boost - 1.0) * g * g);
+            double k = cs->k[i];
+            s += w * k * k * ge * ge * a[ix < n / 2 ? ix : n / 2 - 1] * a[mz < n / 2 ? mz : n / 2 - 1];
+        }
+    }
+    return sqrt(s);
+}
+
+static double foam_sigma(ocean *o, double kc, int order, double scale, double boost)
+{
+    int i = memo_find(o->foam_memo, kc, order, scale, boost);
+    if (i >= 0)
+        return o->foam_memo[i].value;
+    double v = foam_sigma_sum(o, kc, order, scale, boost);
+    memo_put(o->foam_memo, &o->foam_next, kc, order, scale, boost, v);
+    return v;
+}
+
+/* The whitecap ramp for a field of breaking-index std sigma (foam.h). */
+static ocean_foam_map foam_map_for(const ocean *o, double sigma)
+{
+    ocean_foam_map m;
+    if (ocean_foam_map_solve(sigma, ocean_foam_coverage_target(o->p.sea.wind_u10), &m) != OCEAN_OK)
+        m = (ocean_foam_map){INFINITY, INFINITY, -1.0};
+    return m;
+}
+
+/* Beta from the summed foam channels lambda Dxx, lambda Dzz. */
+static inline double foam_beta(double dxx, double dzz, double inv_lambda)
+{
+    return -(dxx + dzz) * inv_lambda;
+}
+
 /* Scale on the passed band that restores the unfiltered variance;
  * depends only on (cutoff, order). */
 static double redistribution_scale(ocean *o, double kc, int order)
@@ -816,14 +886,24 @@ static void spectrum_row(const stage_args *a, int r)
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-static void jacobian_rows(ocean_field *fd, long i0, long i1)
+static void jacobian_rows(ocean_field *fd, long i0, long i1, const ocean_foam_map *m,
+                          double inv_lambda)
 {
     const float *restrict xx = fd->dxx, *restrict zz = fd->dzz, *restrict xz = fd->dxz;
     float *restrict jac = fd->jacobian, *restrict foam = fd->foam;
+    for (long i = i0; i < i1; i++)
+        jac[i] = (1.0f + xx[i]) * (1.0f + zz[i]) - xz[i] * xz[i];
+    /* foam = clamp((beta - a) / (b - a)) as ocean_foam_value, in float so
+     * the pass vectorises; a constant field, or a step, otherwise. */
+    if (m->uniform >= 0.0 || !(m->b > m->a)) {
+        for (long i = i0; i < i1; i++)
+            foam[i] = (float)ocean_foam_value(m, foam_beta(xx[i], zz[i], inv_lambda));
+        return;
+    }
+    float s = (float)(-inv_lambda / (m->b - m->a)), off = (float)(-m->a / (m->b - m->a));
     for (long i = i0; i < i1; i++) {
-        float j = (1.0f + xx[i]) * (1.0f + zz[i]) - xz[i] * xz[i];
-        jac[i] = j;
-        foam[i] = foam_from_jacobian(j);
+        float f = (xx[i] + zz[i]) * s + off;
+        foam[i] = f < 0.0f ? 0.0f : (f > 1.0f ? 1.0f : f);
     }
 }
 
@@ -940,6 +1020,15 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
     double boost = r->low_boost > 0.0 ? r->low_boost : 1.0;
     int n_full = o->p.n;
     int transforms = 0;
+    /* The whitecap ramp depends on the filter, not on t: memoised. */
+    int any_foam = 0;
+    for (int c = 0; c < o->p.cascades; c++)
+        any_foam |= (r->effects[c] & OCEAN_FX_FOAM) != 0;
+    double lam = o->p.sea.choppiness;
+    f->foam_inv_lambda = lam > 0.0 ? 1.0 / lam : 0.0;
+    f->info.foam_sigma = any_foam ? foam_sigma(o, kc, r->order, scale, boost) : 0.0;
+    f->info.whitecap_target = ocean_foam_coverage_target(o->p.sea.wind_u10);
+    f->foam_map = foam_map_for(o, f->info.foam_sigma);
     for (int c = 0; c < o->p.cascades; c++) {
         cascade *cs = &o->cas[c];
         double kc = kc_all, kneg = kneg_all;
@@ -990,7 +1079,8 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
             long nn = (long)n * n, step = (long)n * 8;
 #pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
             for (long i = 0; i < nn; i += step)
-                jacobian_rows(fd, i, i + step < nn ? i + step : nn);
+                jacobian_rows(fd, i, i + step < nn ? i + step : nn, &f->foam_map,
+                              f->foam_inv_lambda);
         }
     }
     f->info.t = t;
@@ -1125,8 +1215,19 @@ void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned 
     /* J of the summed displacement, not a sum of per-cascade Jacobians. */
     double jac = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
     *out = (ocean_point){.height = h, .dx = dx, .dz = dz, .slope_x = sx, .slope_z = sz,
-                         .jacobian = jac, .foam = any_foam ? ocean_foam_from_jacobian((float)jac) : 0.0,
+                         .jacobian = jac,
+                         .foam = any_foam ? ocean_foam_value(&f->foam_map,
+                                                             foam_beta(dxx, dzz, f->foam_inv_lambda))
+                                          : 0.0,
                          .vel_x = vx, .vel_y = vy, .vel_z = vz, .dxx = dxx, .dzz = dzz, .dxz = dxz};
+}
+
+double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz)
+{
+    int any = 0;
+    for (int c = 0; c < f->cascades; c++)
+        any |= f->field[c].dxx != NULL;
+    return any ? ocean_foam_value(&f->foam_map, foam_beta(dxx, dzz, f->foam_inv_lambda)) : 0.0;
 }
 
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out)
@@ -1180,18 +1281,20 @@ void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out)
     double h = fd->patch_m / n, folded = 0.0, foam = 0.0;
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++) {
-            double jac;
+            double jac, fm;
             if ((f->cascades == 1 || finest == 0) && fd->jacobian) {
                 jac = fd->jacobian[(size_t)i * n + j];
+                fm = fd->foam[(size_t)i * n + j];
             } else {
                 ocean_point pt;
-                ocean_frame_sample(f, j * h, i * h, &pt);
+                ocean_frame_sample_some(f, j * h, i * h, OCEAN_SAMPLE_FOAM, &pt);
                 jac = pt.jacobian;
+                fm = pt.foam;
             }
             if (jac < out->min_jacobian)
                 out->min_jacobian = jac;
             folded += jac < 0.0;
-            foam += ocean_foam_from_jacobian((float)jac);
+            foam += fm;
         }
     out->folded_fraction = folded / ((double)n * n);
     out->foam_coverage = foam / ((double)n * n);
@@ -1248,7 +1351,12 @@ void ocean_reference_point(const ocean *o, double t, double x, double z,
             }
     }
     out->jacobian = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
-    out->foam = ocean_foam_from_jacobian((float)out->jacobian);
+    {
+        /* The same whitecap ramp as an evaluation with this filter. */
+        double kc = ocean_effective_cutoff(o, cutoff_k, order);
+        ocean_foam_map m = foam_map_for(o, isnan(kc) ? 0.0 : foam_sigma_sum(o, kc, order, 1.0, 1.0));
+        out->foam = ocean_foam_value(&m, foam_beta(dxx, dzz, lam > 0.0 ? 1.0 / lam : 0.0));
+    }
     out->dxx = dxx;
     out->dzz = dzz;
     out->dxz = dxz;
