@@ -254,6 +254,14 @@ static void span(double x, double half, double w, int ntile, int32_t *first, int
     *count = (int32_t)cnt;
 }
 
+/* Channels of cascade c's tiles: foam travels with cascade 0 alone (the
+ * whole sea's whitecaps placed by its breaking index; PROTOCOL.md), so no
+ * two cascades count the coverage twice. */
+static unsigned chan_of(const plan *pl, int c)
+{
+    return c == 0 ? pl->channels : pl->channels & ~(unsigned)PROTO_CH_FOAM;
+}
+
 static rate *rate_find(srv_cascade *k, unsigned codec, float accuracy, unsigned channels, unsigned size)
 {
     for (int i = 0; i < RATES; i++) {
@@ -341,6 +349,7 @@ static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, c
     double range_m = sub->view_range_m > 0 ? sub->view_range_m : cfg->view_range;
     double cy = fmax(fabs(j->cam.pos[1]), 1.0);
     for (int c = 0; c < pl->layers; c++) {
+        if (!chan_of(pl, c)) continue;
         double sigma = tb->patch[c] / tb->n;
         int fades = c > 0;
         for (int m = 0; m < tb->mips[c]; m++) {
@@ -364,7 +373,7 @@ static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, c
             span(j->cam.pos[2], half, w, ntile, &g->z0, &g->nz);
             pl->need[c][m] = 1;
             pl->tiles += g->nx * g->nz;
-            samples += (double)g->nx * g->nz * tile_bytes(k, sub, pl->channels, t);
+            samples += (double)g->nx * g->nz * tile_bytes(k, sub, chan_of(pl, c), t);
         }
     }
     pl->ok = 1;
@@ -802,7 +811,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
                             key.accuracy = sub->accuracy;
                             key.ix = (g->x0 + b) % ntile;
                             key.iz = (g->z0 + a) % ntile;
-                            key.channels = (uint16_t)p->channels;
+                            key.channels = (uint16_t)chan_of(p, c);
                             key.size = (uint16_t)T;
                             key.cascade = (uint8_t)c;
                             key.mip = (uint8_t)m;
@@ -823,7 +832,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
                                     cap_missing = nc;
                                 }
                                 missing[nmiss++] = tl;
-                                need_fx[c][m] |= ocean_fx_of(p->channels);
+                                need_fx[c][m] |= ocean_fx_of(chan_of(p, c));
                                 atomic_fetch_add(&st->tile_cache_misses, 1);
                             } else {
                                 atomic_fetch_add(&st->tile_cache_hits, 1);

@@ -62,7 +62,7 @@ typedef struct cascade {
     int cache_dt;           /* 1: dh/dt is cached too (a velocity request) */
 } cascade;
 
-#define FILTER_MEMO 16
+#define FILTER_MEMO 32
 typedef struct filter_memo {
     int used, order;
     double kc, scale, boost, value;
@@ -519,11 +519,13 @@ static int pick_size(const cascade *cs, int n_full, double kneg);
  * Without A the finest cascade's near-Nyquist waves, which bilinear
  * reading damps, would count fully and tiles would show ~half the
  * intended coverage at light winds. */
-static double foam_sigma_sum(const ocean *o, double kc, int order, double scale, double boost)
+static double foam_sigma_sum_of(const ocean *o, int only, double kc, int order, double scale, double boost)
 {
     double kneg = negligible_k(o, kc, order), s = 0.0;
     int n = o->p.n, half = n / 2 + 1;
     for (int c = 0; c < o->p.cascades; c++) {
+        if (only >= 0 && c != only)
+            continue;
         const cascade *cs = &o->cas[c];
         if (cs->k_lo >= kneg)
             continue;
@@ -546,6 +548,11 @@ static double foam_sigma_sum(const ocean *o, double kc, int order, double scale,
     return sqrt(s);
 }
 
+static double foam_sigma_sum(const ocean *o, double kc, int order, double scale, double boost)
+{
+    return foam_sigma_sum_of(o, -1, kc, order, scale, boost);
+}
+
 static double foam_sigma(ocean *o, double kc, int order, double scale, double boost)
 {
     int i = memo_find(o->foam_memo, kc, order, scale, boost);
@@ -553,6 +560,20 @@ static double foam_sigma(ocean *o, double kc, int order, double scale, double bo
         return o->foam_memo[i].value;
     double v = foam_sigma_sum(o, kc, order, scale, boost);
     memo_put(o->foam_memo, &o->foam_next, kc, order, scale, boost, v);
+    return v;
+}
+
+/* sigma_beta of cascade c alone at cutoff kc, memoised beside the
+ * whole-sea entries (a negative scale marks the cascade: real scales are
+ * positive). */
+static double foam_sigma_cascade(ocean *o, int c, double kc, int order)
+{
+    double tag = -1.0 - c;
+    int i = memo_find(o->foam_memo, kc, order, tag, 1.0);
+    if (i >= 0)
+        return o->foam_memo[i].value;
+    double v = foam_sigma_sum_of(o, c, kc, order, 1.0, 1.0);
+    memo_put(o->foam_memo, &o->foam_next, kc, order, tag, 1.0, v);
     return v;
 }
 
@@ -1026,7 +1047,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
         any_foam |= (r->effects[c] & OCEAN_FX_FOAM) != 0;
     double lam = o->p.sea.choppiness;
     f->foam_inv_lambda = lam > 0.0 ? 1.0 / lam : 0.0;
-    f->info.foam_sigma = any_foam ? foam_sigma(o, kc, r->order, scale, boost) : 0.0;
+    f->info.foam_sigma = any_foam ? foam_sigma(o, kc_all, r->order, scale, boost) : 0.0;
     f->info.whitecap_target = ocean_foam_coverage_target(o->p.sea.wind_u10);
     f->foam_map = foam_map_for(o, f->info.foam_sigma);
     for (int c = 0; c < o->p.cascades; c++) {
@@ -1074,12 +1095,19 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
                 o->counters.transforms_by_effect[e]++;
             }
         }
+        /* Per-cascade mips (the cascade tile layout): each cascade's foam
+         * is placed by its own breaking index at its own cutoff, with the
+         * whole sea's coverage W (foam.h); the daemon asks foam of one
+         * cascade only, so W is not counted twice. */
+        ocean_foam_map cmap = f->foam_map;
+        if (r->per_cascade && (fx & OCEAN_FX_FOAM))
+            cmap = foam_map_for(o, foam_sigma_cascade(o, c, kc, r->order));
         if ((fx & OCEAN_FX_FOAM) && r->foam_map) {
             ocean_field *fd = &f->field[c];
             long nn = (long)n * n, step = (long)n * 8;
 #pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
             for (long i = 0; i < nn; i += step)
-                jacobian_rows(fd, i, i + step < nn ? i + step : nn, &f->foam_map,
+                jacobian_rows(fd, i, i + step < nn ? i + step : nn, &cmap,
                               f->foam_inv_lambda);
         }
     }
