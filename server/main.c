@@ -76,29 +76,38 @@ static const od_opt od_opts[] = {
 };
 #define N_OD_OPTS (int)(sizeof od_opts / sizeof od_opts[0])
 
-/* The value of a config key in the default settings, for --help. */
-static void key_default(const srv_settings *d, const char *key, char *buf, size_t len)
+/* The built-in server.* settings (with an installed oceand's data
+ * directory), without loading a scene, so --help works in any directory. */
+static srv_config *help_defaults(conf_set *set, const conf_table **t, void **tg)
 {
-    if (!d)
-        snprintf(buf, len, "?");
-    else if (!strcmp(key, "server.port"))
-        snprintf(buf, len, "%d", d->srv.port);
-    else if (!strcmp(key, "server.bind"))
-        snprintf(buf, len, "%s", d->srv.bind[0] ? d->srv.bind : "\"\" (all)");
-    else if (!strcmp(key, "server.scene"))
-        snprintf(buf, len, "%s", d->srv.scene[0] ? d->srv.scene : "\"\" (none)");
-    else
-        snprintf(buf, len, "see --dump-config");
+    srv_config *c = calloc(1, sizeof *c);
+    if (!c) return NULL;
+    t[0] = srv_config_table();
+    tg[0] = c;
+    *set = (conf_set){t, tg, 1};
+    char err[512];
+    ocean_result r = conf_defaults(set, err, sizeof err);
+    for (int i = 0; r == OCEAN_OK && i < N_DATADIR_SETS; i++) r = conf_apply(datadir_sets[i], set, err, sizeof err);
+    if (r != OCEAN_OK) {
+        free(c);
+        return NULL;
+    }
+    return c;
+}
+
+/* The default of a config key as the config file would spell it. */
+static void key_default(const conf_set *set, const srv_config *d, const char *key, char *buf, size_t len)
+{
+    const conf_entry *e = d ? conf_find(set, key, NULL) : NULL;
+    if (!e || conf_format(e, d, buf, len) < 0) snprintf(buf, len, "?");
 }
 
 static void usage(FILE *f)
 {
-    srv_settings *d = calloc(1, sizeof *d);
-    char err[512];
-    if (d && srv_settings_load(NULL, datadir_sets, N_DATADIR_SETS, d, err, sizeof err) != OCEAN_OK) {
-        free(d);
-        d = NULL;
-    }
+    conf_set set;
+    const conf_table *t[1];
+    void *tg[1];
+    srv_config *d = help_defaults(&set, t, tg);
     fprintf(f,
             "usage: oceand [options]\n"
             "\n"
@@ -117,14 +126,14 @@ static void usage(FILE *f)
         }
         if (o->kind == OD_KEY) {
             char v[SRV_PATH_MAX + 16];
-            key_default(d, o->key, v, sizeof v);
+            key_default(&set, d, o->key, v, sizeof v);
             fprintf(f, " (%s; default %s)", o->key, v);
         }
         fputc('\n', f);
     }
     if (d)
         fprintf(f,
-                "\nBuilt-in defaults: web viewer %s, scenes %s.\n", d->srv.web_root, d->srv.scene_dir);
+                "\nBuilt-in defaults: web viewer %s, scenes %s.\n", d->web_root, d->scene_dir);
     fprintf(f,
             "\n"
             "Signals: SIGHUP reloads the config; SIGTERM/SIGINT close every client with\n"
