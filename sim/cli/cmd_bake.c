@@ -101,11 +101,11 @@ int cmd_bake(int argc, char **argv)
     double fps = 30.0;
     const char *out = NULL;
     const cli_opt opts[] = {
-        {"frames", CLI_INT, &frames, 1, 1000000, "N     frames to bake"},
-        {"fps", CLI_DOUBLE, &fps, 1e-3, 1000, "F     frames per second of the sequence"},
-        {"out", CLI_STRING, &out, 0, 0, "DIR   output directory (created if missing)"},
+        {"frames", CLI_INT, &frames, 1, 1000000, "N     frames to bake", NULL},
+        {"fps", CLI_DOUBLE, &fps, 1e-3, 1000, "F     frames per second of the sequence", NULL},
+        {"out", CLI_STRING, &out, 0, 0, "DIR   output directory (created if missing; required)", NULL},
     };
-    int r = cli_parse(argc, argv, "bake --frames N --fps F --out DIR [options]", opts, 3, &c,
+    int r = cli_parse(argc, argv, "bake --out DIR [--frames N] [--fps F] [options]", opts, 3, &c,
                       NULL, NULL);
     if (r)
         return r == 1 ? 0 : 2;
