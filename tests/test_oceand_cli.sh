@@ -4,7 +4,9 @@
 #    message naming it, instead of a false "listening";
 #  - a busy port fails naming the way out (--port, make run ARGS);
 #  - --help shows the defaults the daemon really starts with: each equals
-#    the value --dump-config gives for the key.
+#    the value --dump-config gives for the key;
+#  - /status carries the scene's camera hint (the browser viewer opens
+#    there), as config/scenes/flight.conf writes it.
 set -u
 BUILD=${BUILD:-build}
 OD=$BUILD/oceand
@@ -49,4 +51,20 @@ while read -r key val; do
     n=$((n + 1))
 done < <(sed -n 's/.*(\(server\.[a-z_]*\); default \(.*\))$/\1 \2/p' "$tmp/help")
 [[ $n -ge 3 ]] || fail "--help shows $n defaults: $(cat "$tmp/help")"
+echo "== /status carries the scene camera hint ($SECONDS s)"
+"$OD" --config config/oceand.conf --scene flight --port 0 >"$tmp/d.log" 2>&1 &
+dpid=$!
+for _ in $(seq 200); do grep -q "listening on" "$tmp/d.log" && break; sleep 0.05; done
+port=$(sed -n 's|^oceand: listening on http://[0-9.]*:\([0-9]*\)/.*|\1|p' "$tmp/d.log")
+[[ -n $port ]] || { kill "$dpid"; fail "daemon with --scene flight: $(cat "$tmp/d.log")"; }
+curl -sf "http://127.0.0.1:$port/status" -o "$tmp/status.json" || { kill "$dpid"; fail "GET /status"; }
+kill -TERM "$dpid"; wait "$dpid"
+hint=$(sed -n 's/^scene.camera_hint *= *\([^ #]*\).*/\1/p' config/scenes/flight.conf)
+python3 - "$tmp/status.json" "$hint" <<'PY' || fail "/status camera_hint: $(cat "$tmp/status.json") vs flight.conf '$hint'"
+import json, sys
+h = json.load(open(sys.argv[1]))["camera_hint"]
+want = [float(v) for v in sys.argv[2].split(",")] + [0.0] * 2
+got = [h["x"], h["y"], h["z"], h["yaw"], h["pitch"]]
+sys.exit(0 if all(abs(a - b) < 1e-9 for a, b in zip(got, want[:5])) else 1)
+PY
 echo "ok ($SECONDS s)"
