@@ -157,8 +157,9 @@ static cJSON *sea_json(const proto_sea *s, double eff)
     cJSON *o = cJSON_CreateObject();
     cJSON_AddNumberToObject(o, "effective_time", eff);
     /* Names, as --spectrum and --spreading take them. */
-    const char *sn = ocean_spectrum_name((ocean_spectrum_kind)s->spectrum);
-    const char *pn = ocean_spreading_name((ocean_spreading_kind)s->spreading);
+    /* An id this build does not know (a newer server) stays a number. */
+    const char *sn = s->spectrum < OCEAN_SPECTRUM_COUNT_ ? ocean_spectrum_name((ocean_spectrum_kind)s->spectrum) : NULL;
+    const char *pn = s->spreading < OCEAN_SPREAD_COUNT_ ? ocean_spreading_name((ocean_spreading_kind)s->spreading) : NULL;
     if (sn)
         cJSON_AddStringToObject(o, "spectrum", sn);
     else
