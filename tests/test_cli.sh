@@ -110,7 +110,7 @@ for cmd in stats bake sample bench query filter mesh; do
     n=0
     while IFS= read -r line; do
         name=$(sed -n 's/^  --\([a-z0-9-]*\) .*/\1/p' <<<"$line")
-        [[ -n $name ]] || continue
+        [[ -n $name && $name != help && $name != show-options ]] || continue
         grep -q -- "^--$name=" "$tmp/show.txt" || fail "$cmd: --$name in --help but not in --show-options"
         def=$(sed -n 's/.* (default \(.*\))$/\1/p' <<<"$line")
         [[ -n $def ]] || continue

@@ -361,6 +361,8 @@ int cli_parse(int argc, char **argv, const char *usage,
     if (show) {
         for (int t = 0; t < 2; t++)
             for (int k = 0; k < ns[t]; k++) {
+                if (tabs[t][k].target == (void *)&show || tabs[t][k].target == (void *)&help)
+                    continue;
                 char v[512];
                 format_value(&tabs[t][k], v, sizeof v);
                 printf("--%s=%s\n", tabs[t][k].name, v);
