@@ -24,6 +24,7 @@
 
 #include "gerstner.h"
 #include "mesh.h"
+#include "slope.h"
 
 #define MAX_MIPS PROTO_MAX_MIPS
 #define NBUCKETS 4096
@@ -58,6 +59,7 @@ typedef struct tables {
     double total_var;      /* all cascades, m^2 */
     const ocean_gerstner *g;
     double near_mss[3];    /* the Gerstner near field's slope moments */
+    double tail_mss[3];    /* the short-wave tail beyond the shortest simulated wave */
 } tables;
 
 /* Encoded bytes per tile sample of a (codec, accuracy, channels, side),
@@ -210,6 +212,18 @@ static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstne
     tb->order = order;
     tb->cascades = p->cascades;
     tb->n = p->n;
+    /* The waves shorter than any the simulation holds (the sea state's
+     * spectrum to 10 cm, then Elfouhaily et al. 1997's B_h to 1 mm;
+     * slope.h): no tile ever carries them, shading always does. */
+    ocean_slope_table *st = NULL;
+    ocean_slope_stats ss;
+    if (ocean_slope_table_create(oc, g, &st, NULL, 0) == OCEAN_OK &&
+        ocean_slope_table_get(st, INFINITY, order, &ss) == OCEAN_OK) {
+        tb->tail_mss[0] = ss.tail.mss_x;
+        tb->tail_mss[1] = ss.tail.mss_z;
+        tb->tail_mss[2] = ss.tail.mss_xz;
+    }
+    ocean_slope_table_destroy(st);
     for (int c = 0; c < p->cascades; c++) {
         double klo, khi;
         ocean_cascade_band(oc, c, &tb->patch[c], &klo, &khi);
@@ -666,8 +680,10 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
         e->fades = c > 0;
         for (int q = 0; q <= tb->mips[c]; q++) e->mip[q] = tb->entry[c][q];
     }
-    if (sub->effects & PROTO_FX_NEAR_FIELD)
-        for (int i = 0; i < 3; i++) b->tail_mss[i] += (float)tb->near_mss[i];
+    for (int i = 0; i < 3; i++) {
+        b->tail_mss[i] = (float)tb->tail_mss[i];
+        if (sub->effects & PROTO_FX_NEAR_FIELD) b->tail_mss[i] += (float)tb->near_mss[i];
+    }
     /* cascades the subscription leaves out: their slopes only shade */
     for (int c = pl->layers; c < tb->cascades; c++) {
         const proto_mip_entry *all = &tb->entry[c][tb->mips[c]];
