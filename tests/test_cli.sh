@@ -39,6 +39,15 @@ expect_refused "--bogus" stats --bogus 1
 expect_refused "--effects" stats --effects height,sparkle
 expect_refused "--depth" stats --depth 0
 expect_refused "unknown command" nonsense
+# One time limit (sim/ocean_time.h): 2^27 s is served, the next second is
+# refused with a message naming OCEAN_TIME_MAX, in every subcommand that
+# takes a time, and a sample series may not run past it.
+"$sim" stats --n 16 --time 134217728 >/dev/null || fail "stats at the time limit"
+expect_refused "OCEAN_TIME_MAX" stats --n 16 --time 134217729
+expect_refused "OCEAN_TIME_MAX" stats --n 16 --time -1e16
+expect_refused "OCEAN_TIME_MAX" query --n 16 --t 1e13 --points "0,0"
+expect_refused "OCEAN_TIME_MAX" sample --n 16 --t0 134217729 --count 1
+expect_refused "OCEAN_TIME_MAX" sample --n 16 --t0 134217728 --dt 1 --count 2
 "$sim" stats --help | grep -q -- "--spreading" || fail "stats --help"
 
 # Beaufort sets the wind: force 8 makes a bigger sea than force 4.

@@ -85,6 +85,12 @@ static int parse_number(const char *opt, const char *val, double lo, double hi, 
         fprintf(stderr, "error: --%s: '%s' must be finite\n", opt, val);
         return -1;
     }
+    if (hi == OCEAN_TIME_MAX && !ocean_time_ok(v)) {
+        char m[256];
+        ocean_time_check(v, opt, m, sizeof m);
+        fprintf(stderr, "error: --%s\n", m);
+        return -1;
+    }
     if (v < lo || v > hi) {
         fprintf(stderr, "error: --%s: %s is out of range [%g, %g]\n", opt, val, lo, hi);
         return -1;
@@ -156,7 +162,7 @@ int cli_parse(int argc, char **argv, const char *usage,
         {"cascade-ratio", CLI_DOUBLE, &raw.ratio, 1.5, 100, "R     patch ratio between cascades (default 4.3)"},
         {"choppiness", CLI_DOUBLE, &raw.choppiness, 0, 10, "L     choppy displacement scale (default 1)"},
         {"seed", CLI_DOUBLE, &raw.seed, 0, 9007199254740992.0, "S     random seed (default 1)"},
-        {"time", CLI_DOUBLE, &raw.time, -1e12, 1e12, "T     simulation time, s (default 0)"},
+        {"time", CLI_DOUBLE, &raw.time, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s (default 0)"},
         {"effects", CLI_STRING, &raw.effects, 0, 0, "LIST  height,displacement,normals,foam (default all)"},
         {"threads", CLI_INT, &raw.threads, 1, 64, "T     worker threads (default 2)"},
         {"plan", CLI_STRING, &raw.plan, 0, 0, "MODE  FFTW planning: estimate (bit-reproducible) | measure"},

@@ -90,7 +90,7 @@ int cmd_sample(int argc, char **argv)
     const cli_opt opts[] = {
         {"x", CLI_DOUBLE, &x, -1e9, 1e9, "X     world x of the point, m"},
         {"z", CLI_DOUBLE, &z, -1e9, 1e9, "Z     world z of the point, m"},
-        {"t0", CLI_DOUBLE, &t0, -1e12, 1e12, "T     first time, s"},
+        {"t0", CLI_DOUBLE, &t0, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     first time, s"},
         {"dt", CLI_DOUBLE, &dt, 1e-6, 1e6, "D     time step, s"},
         {"count", CLI_INT, &count, 1, 1000000, "C     number of samples"},
         {"direct", CLI_FLAG, &direct, 0, 0, "      sum the waves directly in double instead of FFT fields"},
@@ -99,6 +99,12 @@ int cmd_sample(int argc, char **argv)
                       opts, (int)(sizeof opts / sizeof opts[0]), &c, NULL, NULL);
     if (r)
         return r == 1 ? 0 : 2;
+    char tmsg[256];
+    if (ocean_time_check(t0 + (count - 1) * dt, "last sample time t0 + (count - 1) dt", tmsg,
+                         sizeof tmsg) != OCEAN_OK) {
+        fprintf(stderr, "error: %s\n", tmsg);
+        return 2;
+    }
     ocean *o;
     ocean_frame *f;
     if (cli_make_ocean(&c, &o, &f))

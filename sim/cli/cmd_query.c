@@ -117,7 +117,7 @@ int cmd_query(int argc, char **argv)
     double t = 0.0, cutoff = INFINITY;
     const char *points = NULL, *file = NULL;
     const cli_opt opts[] = {
-        {"t", CLI_DOUBLE, &t, -1e12, 1e12, "T     simulation time, s"},
+        {"t", CLI_DOUBLE, &t, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s"},
         {"points", CLI_STRING, &points, 0, 0, "LIST  \"x1,z1;x2,z2;...\" world points, m"},
         {"points-file", CLI_STRING, &file, 0, 0, "FILE  one 'x,z' per line ('-': stdin)"},
         {"cutoff", CLI_DOUBLE, &cutoff, 0, 1e6, "K     Butterworth cutoff, rad/m (default none)"},
