@@ -65,8 +65,15 @@ ocean_result ocean_gerstner_params_validate(const ocean_gerstner_params *p, char
         if (!(p->k_lo > 0.0) || !isfinite(p->k_lo))
             return bad(msg, msglen, "k_lo", p->k_lo);
         /* no wave faster than OCEAN_OMEGA_MAX: the time limit's phase bound */
-        if (!(p->k_hi > p->k_lo) || !(ocean_dispersion(p->k_hi, p->sea.depth_m) <= OCEAN_OMEGA_MAX))
+        if (!(p->k_hi > p->k_lo))
             return bad(msg, msglen, "k_hi", p->k_hi);
+        if (!(ocean_dispersion(p->k_hi, p->sea.depth_m) <= OCEAN_OMEGA_MAX)) {
+            if (msg != NULL && msglen > 0)
+                snprintf(msg, msglen, "gerstner: k_hi = %g rad/m (%.3g m waves) is faster than "
+                         "OCEAN_OMEGA_MAX = %g rad/s, the frequency the time limit is built on",
+                         p->k_hi, 2.0 * M_PI / p->k_hi, OCEAN_OMEGA_MAX);
+            return OCEAN_EINVAL;
+        }
     }
     return OCEAN_OK;
 }

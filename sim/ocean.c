@@ -29,6 +29,7 @@
 #include <omp.h>
 
 #include "filter.h"
+#include "ocean_plan.h"
 #include "ocean_time.h"
 #include "wave_rng.h"
 
@@ -213,6 +214,16 @@ ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msgl
                           ocean_wavenumber(OCEAN_OMEGA_MAX, p->sea.depth_m));
         return OCEAN_EINVAL;
     }
+    /* The scene plan's refusals (ocean_plan.h): peak beyond the patch,
+     * Hs beyond the breaking height. */
+    ocean_plan plan;
+    ocean_plan_init(&plan);
+    ocean_plan_params(p, &plan);
+    for (int i = 0; i < plan.count; i++)
+        if (plan.item[i].level == OCEAN_PLAN_REFUSE) {
+            if (msg) snprintf(msg, msglen, "%s", plan.item[i].text);
+            return OCEAN_EINVAL;
+        }
     return OCEAN_OK;
 }
 

@@ -15,6 +15,7 @@
 #include <time.h>
 
 #include "ocean_conf.h"
+#include "ocean_plan.h"
 
 double cli_now_ms(void)
 {
@@ -303,6 +304,12 @@ int cli_make_ocean(const cli_common *c, ocean **o, ocean_frame **f)
         fprintf(stderr, "error: cannot create the ocean: %s (%s)\n", err, ocean_strerror(r));
         return 1;
     }
+    /* The scene plan's warnings (its refusals stopped ocean_create). */
+    ocean_plan plan;
+    ocean_plan_init(&plan);
+    ocean_plan_params(&c->params, &plan);
+    ocean_plan_ocean(*o, NULL, &plan);
+    ocean_plan_print(&plan, stderr, "ocean-sim: scene plan");
     if ((r = ocean_frame_create(*o, f)) != OCEAN_OK) {
         fprintf(stderr, "error: cannot allocate the frame: %s\n", ocean_strerror(r));
         ocean_destroy(*o);
