@@ -367,6 +367,7 @@ static void test_time_limit(void **state)
                 if (r != OCEAN_OK)
                     fail_msg("%s = %.17g refused: %s", names[w], vals[v], err);
                 assert_true(*time_field(&d, w) == vals[v]);
+                proto_msg_free(&d);
             } else {
                 assert_int_equal(r, OCEAN_EINVAL);
                 if (!strstr(err, names[w]) || !strstr(err, "OCEAN_TIME_MAX"))
