@@ -30,6 +30,8 @@
 
 #include "filter.h"
 #include "foam.h"
+#include "ocean_plan.h"
+#include "ocean_time.h"
 #include "wave_rng.h"
 
 enum {
@@ -40,14 +42,15 @@ enum {
 
 /* The modes of the half spectrum, n x (n/2 + 1), row = kz index, as
  * structure-of-arrays so the per-row passes vectorise.  h0 values are
- * float (they are data); omega is double so that omega * t keeps its
- * phase at t = 1e9 s.  Out-of-band modes are all zero. */
+ * float (they are data); the frequency is kept as w / 2 pi in double-double
+ * (turns_hi + turns_lo) so the row loop reduces w t to its phase exactly
+ * (ocean_time.h).  Out-of-band modes are all zero. */
 enum { H0P_RE, H0P_IM, H0M_RE, H0M_IM };  /* h0(k), conj(h0(-k)) */
 enum { C_HR, C_HI, C_TR, C_TI };          /* h(k,t), dh/dt */
 
 typedef struct cascade {
     double patch, dk, k_lo, k_hi;
-    double *omega;
+    double *turns_hi, *turns_lo; /* w / 2 pi = hi + lo, turns per second */
     float *h0[4];
     float *kx;              /* kx of a column (ix dk): one row serves every row */
     float *k, *kinv;        /* kinv = 1/|k| (0 at k = 0) */
@@ -202,6 +205,33 @@ ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msgl
         if (msg) snprintf(msg, msglen, "threads = %d is out of range [1, 64]", p->threads);
         return OCEAN_EINVAL;
     }
+    /* The one time limit (ocean_time.h) holds for waves up to
+     * OCEAN_OMEGA_MAX: the shortest wave held is the finest cascade's band
+     * corner, or k_max below it. */
+    double fine = p->patch_m / pow(p->cascade_ratio, p->cascades - 1);
+    double k_top = fmin(M_SQRT2 * (p->n / 2 - 1) * 2.0 * M_PI / fine, p->k_max);
+    double w_top = ocean_dispersion(k_top, p->sea.depth_m);
+    if (w_top > OCEAN_OMEGA_MAX) {
+        if (msg) snprintf(msg, msglen,
+                          "the shortest wave held, %.3g m (k = %.4g rad/m, w = %.4g rad/s, finest "
+                          "patch %g m at n = %d), is beyond w = %g rad/s (OCEAN_OMEGA_MAX, the "
+                          "%.3g m wave the time limit is built on): use k_max <= %.4g rad/m, a "
+                          "smaller n or a larger finest patch",
+                          2.0 * M_PI / k_top, k_top, w_top, fine, p->n, OCEAN_OMEGA_MAX,
+                          2.0 * M_PI / ocean_wavenumber(OCEAN_OMEGA_MAX, p->sea.depth_m),
+                          ocean_wavenumber(OCEAN_OMEGA_MAX, p->sea.depth_m));
+        return OCEAN_EINVAL;
+    }
+    /* The scene plan's refusals (ocean_plan.h): peak beyond the patch,
+     * Hs beyond the breaking height. */
+    ocean_plan plan;
+    ocean_plan_init(&plan);
+    ocean_plan_params(p, &plan);
+    for (int i = 0; i < plan.count; i++)
+        if (plan.item[i].level == OCEAN_PLAN_REFUSE) {
+            if (msg) snprintf(msg, msglen, "%s", plan.item[i].text);
+            return OCEAN_EINVAL;
+        }
     return OCEAN_OK;
 }
 
@@ -263,7 +293,8 @@ static ocean_result cascade_init(ocean *o, int c)
     cs->k_lo = c == 0 ? 0.0 : o->cas[c - 1].k_hi;
     cs->k_hi = c == p->cascades - 1 ? p->k_max : M_PI * n / (2.0 * cs->patch);
     size_t nm = (size_t)n * half;
-    int ok = (cs->omega = calloc(nm, sizeof(double))) != NULL;
+    int ok = (cs->turns_hi = calloc(nm, sizeof(double))) != NULL;
+    ok &= (cs->turns_lo = calloc(nm, sizeof(double))) != NULL;
     for (int j = 0; j < 4; j++) {
         ok &= (cs->h0[j] = calloc(nm, sizeof(float))) != NULL;
         ok &= (cs->cache[j] = malloc(nm * sizeof(float))) != NULL;
@@ -292,7 +323,8 @@ static ocean_result cascade_init(ocean *o, int c)
             double hp[2], hm[2];
             draw_h0(p, cs, mx, mz, hp);
             draw_h0(p, cs, -mx, -mz, hm);
-            cs->omega[i] = ocean_dispersion(k, p->sea.depth_m);
+            ocean_turns_of(ocean_dispersion(k, p->sea.depth_m), &cs->turns_hi[i],
+                           &cs->turns_lo[i]);
             cs->h0[H0P_RE][i] = (float)hp[0];
             cs->h0[H0P_IM][i] = (float)hp[1];
             cs->h0[H0M_RE][i] = (float)hm[0];
@@ -384,7 +416,8 @@ void ocean_destroy(ocean *o)
     fftwf_free(o->spec);
     for (int c = 0; c < OCEAN_MAX_CASCADES; c++) {
         cascade *cs = &o->cas[c];
-        free(cs->omega);
+        free(cs->turns_hi);
+        free(cs->turns_lo);
         for (int j = 0; j < 4; j++) {
             free(cs->h0[j]);
             free(cs->cache[j]);
@@ -683,15 +716,13 @@ double ocean_filtered_variance(const ocean *o, double cutoff_k, int order)
     return kept;
 }
 
-/* 2 pi split in two so that the reduction n * 2pi stays exact to ~1e-16
- * relative even for n ~ 1e9 (Cody-Waite). */
-#define TWO_PI_HI 6.28318530717958623200
-#define TWO_PI_LO 2.44929359829470635445e-16
-
+/* x mod 2 pi in [-pi, pi], exact to a few ulp of pi (ocean_time.h); for
+ * the spatial phases k.x of the reference sums (x already reduced modulo
+ * the patch).  Time phases go through ocean_phase(w, t), which keeps the
+ * product w t exact too. */
 static inline double reduce_phase(double x)
 {
-    double q = rint(x * (1.0 / (2.0 * M_PI)));
-    return (x - q * TWO_PI_HI) - q * TWO_PI_LO;
+    return ocean_phase(x, 1.0);
 }
 
 typedef struct stage_args {
@@ -708,20 +739,18 @@ typedef struct stage_args {
     int gain_ready;         /* 1: gain holds the gains, 0: fill it */
 } stage_args;
 
-/* sin and cos of a phase x (any double), branch-free so the row loop
- * vectorises: reduction to [-pi, pi] in double (Cody-Waite, the integer
- * found with the 1.5 * 2^52 rounding trick, valid while |x| < 2^51), a
+/* sin and cos of a phase x already reduced to [-pi, pi] (exactly, in
+ * double: ocean_phase_turns), branch-free so the row loop vectorises: a
  * reflection onto [-pi/2, pi/2] in float, then Taylor polynomials of
  * degree 11 and 12, whose truncation error there (6e-8, 6e-9) is below
- * float's rounding. */
-#define ROUND_MAGIC 6755399441055744.0
+ * float's rounding.  Rounding x to float costs at most 1.2e-7 rad, the
+ * same at every t. */
 #define PI_F 3.14159265358979f
 #define PIO2_F 1.57079632679490f
 
 static inline void phase_sincos(double x, float *s_out, float *c_out)
 {
-    double q = (x * (1.0 / (2.0 * M_PI)) + ROUND_MAGIC) - ROUND_MAGIC;
-    float r = (float)((x - q * TWO_PI_HI) - q * TWO_PI_LO);
+    float r = (float)x;
     /* sin(pi - |r|) = sin |r|, cos(pi - |r|) = -cos |r|: arithmetic, not
      * branches, so it stays one vector instruction stream. */
     float a = fabsf(r);
@@ -755,7 +784,9 @@ static inline float gain_fast(float k, float kc, int order)
 static inline __attribute__((always_inline)) void
 row_evolve(const cascade *cs, size_t base, int half, double t, const int with_dt)
 {
-    const double *om = cs->omega + base;
+    const double *fh = cs->turns_hi + base, *fl = cs->turns_lo + base;
+    double th, tl;
+    ocean_split(t, &th, &tl);
     const float *pr = cs->h0[H0P_RE] + base, *pi = cs->h0[H0P_IM] + base;
     const float *mr = cs->h0[H0M_RE] + base, *mi = cs->h0[H0M_IM] + base;
     float *c_hr = cs->cache[C_HR] + base, *c_hi = cs->cache[C_HI] + base;
@@ -763,14 +794,14 @@ row_evolve(const cascade *cs, size_t base, int half, double t, const int with_dt
 #pragma omp simd
     for (int ix = 0; ix < half; ix++) {
         float s, c;
-        phase_sincos(om[ix] * t, &s, &c);
+        phase_sincos(ocean_phase_turns(fh[ix], fl[ix], t, th, tl), &s, &c);
         /* u = h0p e^{-i ph}, v = h0m e^{+i ph}, h = u + v, dh/dt = -i w u + i w v */
         float ur = pr[ix] * c + pi[ix] * s, ui = pi[ix] * c - pr[ix] * s;
         float vr = mr[ix] * c - mi[ix] * s, vi = mi[ix] * c + mr[ix] * s;
         c_hr[ix] = ur + vr;
         c_hi[ix] = ui + vi;
         if (with_dt) {
-            float w = (float)om[ix];
+            float w = (float)(fh[ix] * OCEAN_TWO_PI_C1);
             c_tr[ix] = w * (ui - vi);
             c_ti[ix] = w * (vr - ur);
         }
@@ -1025,7 +1056,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
 {
     if (!o || !r || !f || f->cascades != o->p.cascades || f->n_max != o->p.n)
         return OCEAN_EINVAL;
-    if (!isfinite(t) || isnan(r->cutoff_k) || r->cutoff_k < 0.0 || r->order < 1 ||
+    if (!ocean_time_ok(t) || isnan(r->cutoff_k) || r->cutoff_k < 0.0 || r->order < 1 ||
         r->order > OCEAN_FILTER_MAX_ORDER || !isfinite(r->low_boost) || r->low_boost < 0.0 || r->low_boost > 2.0)
         return OCEAN_EINVAL;
     if (r->per_cascade) {
@@ -1352,7 +1383,7 @@ void ocean_reference_point(const ocean *o, double t, double x, double z,
                 draw_h0(p, cs, mx, mz, hp);
                 draw_h0(p, cs, -mx, -mz, hm);
                 double w = ocean_dispersion(k, p->sea.depth_m);
-                double ph = reduce_phase(w * t), cp = cos(ph), sp = sin(ph);
+                double ph = ocean_phase(w, t), cp = cos(ph), sp = sin(ph);
                 /* h = hp e^{-i ph} + conj(hm) e^{i ph} */
                 double hr = hp[0] * cp + hp[1] * sp + hm[0] * cp + hm[1] * sp;
                 double hi = hp[1] * cp - hp[0] * sp - hm[1] * cp + hm[0] * sp;
@@ -1401,7 +1432,7 @@ void ocean_mode_amplitude(const ocean *o, int c, int mx, int mz, double t, doubl
     draw_h0(&o->p, cs, mx, mz, hp);
     draw_h0(&o->p, cs, -mx, -mz, hm);
     double w = ocean_dispersion(hypot(mx * cs->dk, mz * cs->dk), o->p.sea.depth_m);
-    double ph = reduce_phase(w * t), cp = cos(ph), sp = sin(ph);
+    double ph = ocean_phase(w, t), cp = cos(ph), sp = sin(ph);
     out[0] = hp[0] * cp + hp[1] * sp + hm[0] * cp + hm[1] * sp;
     out[1] = hp[1] * cp - hp[0] * sp + hm[0] * sp - hm[1] * cp;
 }

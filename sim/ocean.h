@@ -23,6 +23,7 @@
 #include <stdint.h>
 
 #include "ocean_result.h"
+#include "ocean_time.h"
 #include "spectrum.h"
 
 #define OCEAN_MAX_CASCADES 4
@@ -71,7 +72,9 @@ typedef struct ocean_params {
  * 1000 m patch, seed 1). */
 void ocean_params_default(ocean_params *p);
 
-/* Checks every field of p (ranges, NaN/Inf, power-of-two N).  On failure
+/* Checks every field of p (ranges, NaN/Inf, power-of-two N, and that no
+ * wave held is faster than OCEAN_OMEGA_MAX, the frequency the time limit
+ * is built on).  On failure
  * returns OCEAN_EINVAL and writes a message naming the field and the value
  * into msg (if msg != NULL). */
 ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msglen);
@@ -169,8 +172,10 @@ void ocean_frame_destroy(ocean_frame *f);
  * else cutoff_k.  NaN for an invalid cutoff or order. */
 double ocean_effective_cutoff(const ocean *o, double cutoff_k, int order);
 
-/* Evaluates the sea at time t (seconds, any finite double) into f.
- * Deterministic: same o parameters, t and r give identical bytes. */
+/* Evaluates the sea at time t (seconds, |t| <= OCEAN_TIME_MAX; beyond it,
+ * or NaN/Inf, OCEAN_EINVAL: see ocean_time.h) into f.  Every wave's phase
+ * w t is reduced exactly (ocean_phase).  Deterministic: same o
+ * parameters, t and r give identical bytes. */
 ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_frame *f);
 
 /* Runs only the inverse FFTs ocean_evaluate(o, t, r, f) would run (same

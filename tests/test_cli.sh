@@ -39,6 +39,22 @@ expect_refused "--bogus" stats --bogus 1
 expect_refused "--effects" stats --effects height,sparkle
 expect_refused "--depth" stats --depth 0
 expect_refused "unknown command" nonsense
+# One time limit (sim/ocean_time.h): 2^27 s is served, the next second is
+# refused with a message naming OCEAN_TIME_MAX, in every subcommand that
+# takes a time, and a sample series may not run past it.
+"$sim" stats --n 16 --time 134217728 >/dev/null || fail "stats at the time limit"
+expect_refused "OCEAN_TIME_MAX" stats --n 16 --time 134217729
+expect_refused "OCEAN_TIME_MAX" stats --n 16 --time -1e16
+expect_refused "OCEAN_TIME_MAX" query --n 16 --t 1e13 --points "0,0"
+expect_refused "OCEAN_TIME_MAX" sample --n 16 --t0 134217729 --count 1
+expect_refused "OCEAN_TIME_MAX" sample --n 16 --t0 134217728 --dt 1 --count 2
+# The scene plan (sim/ocean_plan.h): a peak beyond the patch and a sea
+# beyond its breaking height are refused with the numbers, a sea whose
+# largest waves would break is run with a warning on stderr.
+expect_refused "dominant wavelength 8708 m" stats --n 16 --wind 100
+expect_refused "breaking height 0.0078 m" stats --n 16 --spectrum tma --depth 0.01
+"$sim" stats --n 64 --spectrum tma --depth 2 >/dev/null 2>"$tmp/err" || fail "tma at 2 m refused"
+grep -q "scene plan: warning (breaking)" "$tmp/err" || fail "no breaking warning: $(cat "$tmp/err")"
 "$sim" stats --help | grep -q -- "--spreading" || fail "stats --help"
 
 # Beaufort sets the wind: force 8 makes a bigger sea than force 4.

@@ -40,6 +40,9 @@ grep -q -- "--bogus" "$tmp/err" || fail "message does not name --bogus: $(cat "$
 grep -q -- "--seconds" "$tmp/err" || fail "message does not name --seconds"
 "$OC" query "$URL" --points "1,2;x" 2>"$tmp/err" && fail "bad --points accepted"
 grep -q -- "--points" "$tmp/err" || fail "message does not name --points"
+# one time limit (sim/ocean_time.h): beyond 2^27 s refused, naming it
+"$OC" query "$URL" --points "1,2" --t 134217729 2>"$tmp/err"; [[ $? -eq 2 ]] || fail "--t beyond the time limit accepted"
+grep -q -- "OCEAN_TIME_MAX" "$tmp/err" || fail "message does not name OCEAN_TIME_MAX: $(cat "$tmp/err")"
 "$OC" frobnicate 2>/dev/null; [[ $? -eq 2 ]] || fail "unknown command accepted"
 for c in watch query record replay export load sea; do
     "$OC" $c --help >/dev/null || fail "$c --help"

@@ -16,6 +16,7 @@
 #include <time.h>
 
 #include "ocean_conf.h"
+#include "ocean_plan.h"
 
 double cli_now_ms(void)
 {
@@ -76,6 +77,12 @@ static int parse_number(const char *opt, const char *val, double lo, double hi, 
     }
     if (!isfinite(v)) {
         fprintf(stderr, "error: --%s: '%s' must be finite\n", opt, val);
+        return -1;
+    }
+    if (hi == OCEAN_TIME_MAX && !ocean_time_ok(v)) {
+        char m[256];
+        ocean_time_check(v, opt, m, sizeof m);
+        fprintf(stderr, "error: --%s\n", m);
         return -1;
     }
     if (v < lo || v > hi) {
@@ -265,7 +272,7 @@ int cli_parse(int argc, char **argv, const char *usage,
         {"cascade-ratio", CLI_DOUBLE, &p->cascade_ratio, 1.5, 100, "R     patch ratio between cascades", NULL},
         {"choppiness", CLI_DOUBLE, &p->sea.choppiness, 0, 10, "L     choppy displacement scale", NULL},
         {"seed", CLI_U64, &p->seed, 0, 9007199254740992.0, "S     random seed", NULL},
-        {"time", CLI_DOUBLE, &c->time, -1e12, 1e12, "T     simulation time, s", NULL},
+        {"time", CLI_DOUBLE, &c->time, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s", NULL},
         {"effects", CLI_EFFECTS, &c->effects, 0, 0, "LIST  height,displacement,normals,foam,velocity,near-field or all", NULL},
         {"threads", CLI_INT, &p->threads, 1, 64, "T     worker threads", NULL},
         {"plan", CLI_CHOICE, &p->plan_measure, 0, 0, "MODE  FFTW planning (estimate is bit-reproducible)", plans},
@@ -386,6 +393,12 @@ int cli_make_ocean(const cli_common *c, ocean **o, ocean_frame **f)
         fprintf(stderr, "error: cannot create the ocean: %s (%s)\n", err, ocean_strerror(r));
         return 1;
     }
+    /* The scene plan's warnings (its refusals stopped ocean_create). */
+    ocean_plan plan;
+    ocean_plan_init(&plan);
+    ocean_plan_params(&c->params, &plan);
+    ocean_plan_ocean(*o, NULL, &plan);
+    ocean_plan_print(&plan, stderr, "ocean-sim: scene plan");
     if ((r = ocean_frame_create(*o, f)) != OCEAN_OK) {
         fprintf(stderr, "error: cannot allocate the frame: %s\n", ocean_strerror(r));
         ocean_destroy(*o);

@@ -90,7 +90,7 @@ int cmd_sample(int argc, char **argv)
     const cli_opt opts[] = {
         {"x", CLI_DOUBLE, &x, -1e9, 1e9, "X     world x of the point, m (required)", NULL},
         {"z", CLI_DOUBLE, &z, -1e9, 1e9, "Z     world z of the point, m (required)", NULL},
-        {"t0", CLI_DOUBLE, &t0, -1e12, 1e12, "T     first time, s", NULL},
+        {"t0", CLI_DOUBLE, &t0, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     first time, s", NULL},
         {"dt", CLI_DOUBLE, &dt, 1e-6, 1e6, "D     time step, s", NULL},
         {"count", CLI_INT, &count, 1, 1000000, "C     number of samples", NULL},
         {"direct", CLI_FLAG, &direct, 0, 0, "      sum the waves directly in double instead of FFT fields", NULL},
@@ -101,6 +101,12 @@ int cmd_sample(int argc, char **argv)
         return r == 1 ? 0 : 2;
     if (isnan(x) || isnan(z)) {
         fprintf(stderr, "error: sample needs the point: --%s is missing (see sample --help)\n", isnan(x) ? "x" : "z");
+        return 2;
+    }
+    char tmsg[256];
+    if (ocean_time_check(t0 + (count - 1) * dt, "last sample time t0 + (count - 1) dt", tmsg,
+                         sizeof tmsg) != OCEAN_OK) {
+        fprintf(stderr, "error: %s\n", tmsg);
         return 2;
     }
     ocean *o;

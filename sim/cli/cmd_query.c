@@ -117,7 +117,7 @@ int cmd_query(int argc, char **argv)
     double t = 0.0, cutoff = INFINITY;   /* INFINITY: outside --cutoff's range, "not given" */
     const char *points = NULL, *file = NULL;
     const cli_opt opts[] = {
-        {"t", CLI_DOUBLE, &t, -1e12, 1e12, "T     simulation time, s", NULL},
+        {"t", CLI_DOUBLE, &t, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s", NULL},
         {"points", CLI_STRING, &points, 0, 0, "LIST  \"x1,z1;x2,z2;...\" world points, m", NULL},
         {"points-file", CLI_STRING, &file, 0, 0, "FILE  one 'x,z' per line ('-': stdin)", NULL},
         {"cutoff", CLI_DOUBLE, &cutoff, 0, 1e6, "K     Butterworth cutoff, rad/m (not given: unfiltered)", NULL},

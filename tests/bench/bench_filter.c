@@ -120,6 +120,12 @@ int main(void)
             q.n = 1024;
             q.patch_m = patches[pi];
             q.drop_gain = drops[di];
+            /* A patch shorter than the sea's peak is refused by the scene
+             * plan (sim/ocean_plan.h): a row that says so, not an abort. */
+            if (ocean_params_validate(&q, msg, sizeof msg) != OCEAN_OK) {
+                printf("| %.0f | refused: %s |||||||\n", patches[pi], msg);
+                continue;
+            }
             ocean *oq = NULL;
             ocean_frame *fq[2] = {NULL, NULL};
             if (ocean_create(&q, &oq, msg, sizeof msg) != OCEAN_OK ||

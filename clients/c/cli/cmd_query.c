@@ -12,6 +12,7 @@
 
 #include "occli.h"
 #include "spectrum.h"
+#include "ocean_time.h"
 
 /* Parses "x1,z1;x2,z2;..." into a new array of 2n doubles. */
 static int parse_points(const char *s, double **out, size_t *n)
@@ -72,7 +73,7 @@ int cmd_query(int argc, char **argv)
     int json = 0, timeout_ms = 5000;
     const occli_opt opts[] = {
         {"points", OCCLI_STRING, &points, 0, 0, "\"X1,Z1;X2,Z2;...\"  world points (required)", NULL},
-        {"t", OCCLI_DOUBLE, &t, -1e15, 1e15, "T  sim time to evaluate (default: the latest tick)", NULL},
+        {"t", OCCLI_DOUBLE, &t, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T  sim time to evaluate (default: the latest tick)", NULL},
         {"json", OCCLI_FLAG, &json, 0, 0, "print a JSON object", NULL},
         {"timeout", OCCLI_INT, &timeout_ms, 1, 3600000, "MS  connect / answer timeout", NULL},
     };
@@ -199,7 +200,7 @@ int cmd_sea(int argc, char **argv)
     const occli_opt opts[] = {
         {"set", OCCLI_FLAG, &set, 0, 0, "send SEA_STATE SET (needs --token)", NULL},
         {"token", OCCLI_STRING, &token, 0, 0, "TOKEN  the admin token from the server's config", NULL},
-        {"at", OCCLI_DOUBLE, &at, -1e15, 1e15, "T  sim time the change takes effect (not given: now)", NULL},
+        {"at", OCCLI_DOUBLE, &at, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T  sim time the change takes effect (not given: now)", NULL},
         {"wind", OCCLI_DOUBLE, &wind, 0, 100, "U  wind speed at 10 m, m/s", NULL},
         {"wind-dir", OCCLI_DOUBLE, &dir, -360, 360, "DEG  wind direction", NULL},
         {"fetch", OCCLI_DOUBLE, &fetch, 1, 1e8, "M  fetch", NULL},

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "occli.h"
+#include "ocean_time.h"
 
 volatile sig_atomic_t occli_stop;
 
@@ -255,6 +256,12 @@ int occli_parse(int argc, char **argv, const char *usage, const occli_opt *opts,
         double v = strtod(val, &end);
         if (end == val || *end || errno == ERANGE || !isfinite(v)) {
             fprintf(stderr, "ocean-client %s: option '--%s': '%s' is not a number\n", cmd, o->name, val);
+            return 2;
+        }
+        if (o->max == OCEAN_TIME_MAX && !ocean_time_ok(v)) {
+            char m[256];
+            ocean_time_check(v, o->name, m, sizeof m);
+            fprintf(stderr, "ocean-client %s: option '--%s': %s\n", cmd, o->name, m);
             return 2;
         }
         if (v < o->min || v > o->max) {
