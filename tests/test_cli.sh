@@ -47,7 +47,7 @@ expect_refused "OCEAN_TIME_MAX" stats --n 16 --time 134217729
 expect_refused "OCEAN_TIME_MAX" stats --n 16 --time -1e16
 expect_refused "OCEAN_TIME_MAX" query --n 16 --t 1e13 --points "0,0"
 expect_refused "OCEAN_TIME_MAX" sample --n 16 --t0 134217729 --count 1
-expect_refused "OCEAN_TIME_MAX" sample --n 16 --t0 134217728 --dt 1 --count 2
+expect_refused "OCEAN_TIME_MAX" sample --n 16 --x 0 --z 0 --t0 134217728 --dt 1 --count 2
 # The scene plan (sim/ocean_plan.h): a peak beyond the patch and a sea
 # beyond its breaking height are refused with the numbers, a sea whose
 # largest waves would break is run with a warning on stderr.
