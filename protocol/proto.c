@@ -1359,10 +1359,16 @@ static ocean_result e_payload(proto_buf *b, const proto_msg *m)
                            (size_t)f->cascades.cascade_count * PROTO_CASCADE_ENTRY_SIZE, &p));
             cascade_block_write(p, &f->cascades);
         }
+        if (f->tile_records) {
+            /* one allocation for the whole frame: the records are most of it */
+            size_t total = RECORD_HEAD + VERTS_FIXED;
+            for (unsigned i = 0; i < f->tile_count; i++)
+                total += f->tile_records[i].len;
+            TRY(proto_buf_reserve(b, total));
+        }
         for (unsigned i = 0; i < f->tile_count; i++) {
             if (f->tile_records) {
-                TRY(put(b, f->tile_records[i].len, &p));
-                memcpy(p, f->tile_records[i].p, f->tile_records[i].len);
+                TRY(proto_buf_append(b, f->tile_records[i].p, f->tile_records[i].len));
             } else {
                 TRY(e_record(b, REC_TILE, &f->tiles[i], f->tiles[i].cascade));
             }
