@@ -252,9 +252,9 @@ static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstne
 
 /* Tile index range [first, first + count) of the tiles of side w (m) that
  * meet [x - half, x + half], wrapped to a period of ntile tiles. */
-static void span(double x, double half, double w, int ntile, int32_t *first, int32_t *count)
+static void span(double lo, double hi, double w, int ntile, int32_t *first, int32_t *count)
 {
-    double a = floor((x - half) / w), b = floor((x + half) / w);
+    double a = floor(lo / w), b = floor(hi / w);
     double cnt = b - a + 1;
     if (!(cnt < ntile)) {
         *first = 0;
@@ -308,6 +308,41 @@ static void rate_learn(srv_cascade *k, const ctile *t)
         return;
     }
     r->bytes_per_sample += 0.05 * ((double)t->rec_len / ((double)t->key.size * t->key.size) - r->bytes_per_sample);
+}
+
+/* The bounding box [x0, x1] x [z0, z1] of the sea a camera may draw from
+ * this frame's tiles within distance R (PROTOCOL.md "Where each mip is
+ * read"): the disc's sector around the view direction, widened by
+ * SECTOR_MARGIN on each side for the turn the camera may make before the
+ * next frame, plus the disc of radius max(|y|, 1) under the camera (the
+ * nadir a camera looking down sees), all grown by `grow` (the reading
+ * stencil). */
+#define SECTOR_MARGIN_DEG 30.0
+static void view_box(const srv_cascade_job *j, double R, double grow, double box[4])
+{
+    const proto_camera *cam = &j->cam;
+    double cx = cam->pos[0], cz = cam->pos[2];
+    double r0 = fmin(R, fmax(fabs(cam->pos[1]), 1.0));
+    double x0 = cx - r0, x1 = cx + r0, z0 = cz - r0, z1 = cz + r0;
+    double vfov = cam->fov_y_deg * M_PI / 180.0;
+    double aspect = cam->viewport_h ? (double)cam->viewport_w / cam->viewport_h : 1.0;
+    double half = atan(tan(0.5 * vfov) * aspect) + SECTOR_MARGIN_DEG * M_PI / 180.0;
+    if (!(half < M_PI)) {
+        x0 = cx - R, x1 = cx + R, z0 = cz - R, z1 = cz + R;
+    } else {
+        double yaw = cam->yaw_deg * M_PI / 180.0;
+        /* the arc's ends and the compass points the arc passes */
+        double a[6] = {yaw - half, yaw + half, 0, 0.5 * M_PI, M_PI, 1.5 * M_PI};
+        for (int i = 0; i < 6; i++) {
+            if (i >= 2) {
+                double d = remainder(a[i] - yaw, 2 * M_PI);
+                if (fabs(d) > half) continue;
+            }
+            double px = cx + R * cos(a[i]), pz = cz + R * sin(a[i]);
+            x0 = fmin(x0, px), x1 = fmax(x1, px), z0 = fmin(z0, pz), z1 = fmax(z1, pz);
+        }
+    }
+    box[0] = x0 - grow, box[1] = x1 + grow, box[2] = z0 - grow, box[3] = z1 + grow;
 }
 
 /* The plan for spacing factor q; returns the estimated bytes of its tiles. */
@@ -367,7 +402,7 @@ static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, c
         double sigma = tb->patch[c] / tb->n;
         int fades = c > 0;
         for (int m = 0; m < tb->mips[c]; m++) {
-            int np = tb->n >> m, t = sub->tile_size < np ? sub->tile_size : np, ntile = np / t;
+            int np = tb->n >> m, t = cfg->cascade_tile < np ? cfg->cascade_tile : np, ntile = np / t;
             double sp = sigma * ldexp(1.0, m), lim = 2.0 * sp;
             int last = m == tb->mips[c] - 1;
             double R;
@@ -381,10 +416,11 @@ static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, c
                     continue;
                 R = fmin(sqrt(r2), range_m);
             }
-            double half = R + 2.0 * sp, w = t * sp;
+            double box[4], w = t * sp;
+            view_box(j, R, 2.0 * sp, box);
             range *g = &pl->r[c][m];
-            span(j->cam.pos[0], half, w, ntile, &g->x0, &g->nx);
-            span(j->cam.pos[2], half, w, ntile, &g->z0, &g->nz);
+            span(box[0], box[1], w, ntile, &g->x0, &g->nx);
+            span(box[2], box[3], w, ntile, &g->z0, &g->nz);
             pl->need[c][m] = 1;
             pl->tiles += g->nx * g->nz;
             samples += (double)g->nx * g->nz * tile_bytes(k, sub, chan_of(pl, c), t);
@@ -817,7 +853,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
             for (int c = 0; c < p->layers; c++)
                 for (int m = 0; m < tb->mips[c]; m++) {
                     if (!p->need[c][m]) continue;
-                    int np = tb->n >> m, T = sub->tile_size < np ? sub->tile_size : np, ntile = np / T;
+                    int np = tb->n >> m, T = cfg->cascade_tile < np ? cfg->cascade_tile : np, ntile = np / T;
                     const range *g = &p->r[c][m];
                     for (int a = 0; a < g->nz; a++)
                         for (int b = 0; b < g->nx; b++) {

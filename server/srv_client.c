@@ -469,10 +469,10 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
                      "needs layout 0", mesh_kind_name((mesh_kind)sub->mesh_kind));
             return OCEAN_EUNSUPPORTED;
         }
-        uint32_t most = srv_cascade_max_tiles(&s->params, sub->layers, sub->tile_size);
+        uint32_t most = srv_cascade_max_tiles(&s->params, sub->layers, s->srv.cascade_tile);
         if (most > PROTO_MAX_FRAME_TILES) {
-            snprintf(why, n, "subscribe.tile_size %u: a frame of layout 1 could need %u tiles, above the "
-                     "protocol's %u; ask for larger tiles", sub->tile_size, most, PROTO_MAX_FRAME_TILES);
+            snprintf(why, n, "layout 1: a frame could need %u tiles of server.cascade_tile %d samples, above "
+                     "the protocol's %u", most, s->srv.cascade_tile, PROTO_MAX_FRAME_TILES);
             return OCEAN_ETOOBIG;
         }
     }

@@ -9,6 +9,7 @@
 #include "srv_config.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -22,6 +23,20 @@ static const conf_name codec_names[] = {
     {"qz", 1u << PROTO_CODEC_QZ},           {"exr-zip", 1u << PROTO_CODEC_EXR_ZIP},
     {"exr-piz", 1u << PROTO_CODEC_EXR_PIZ}, {"exr-b44", 1u << PROTO_CODEC_EXR_B44},
     {"exr-b44a", 1u << PROTO_CODEC_EXR_B44A}, {NULL, 0}};
+
+
+/* A tile side that halves with the mips: a power of two. */
+static ocean_result tile_pow2_hook(void *target, const conf_entry *e, const void *value, char *msg,
+                                   size_t msglen)
+{
+    (void)target;
+    int n = *(const int *)value;
+    if (n <= 0 || (n & (n - 1)) != 0) {
+        snprintf(msg, msglen, "%s: must be a power of two (8, 16, ..., 256)", e->name);
+        return OCEAN_EINVAL;
+    }
+    return OCEAN_OK;
+}
 
 static const conf_entry srv_entries[] = {
     {.name = "server.port", .type = CONF_INT, .offset = SRV(port), .min = 0, .max = 65535,
@@ -115,6 +130,11 @@ static const conf_entry srv_entries[] = {
              "its distance from the camera.  Finer detail travels as unresolved slope "
              "variance for shading, so this trades bytes per viewer (about 1/q^2) against "
              "how much of the sea the geometry carries."},
+    {.name = "server.cascade_tile", .type = CONF_INT, .offset = SRV(cascade_tile), .min = 8, .max = 256,
+     .def = "32", .hook = tile_pow2_hook,
+     .help = "Cascade tile layout: side of every tile, in samples (a mip smaller than this is one "
+             "tile).  One size for every viewer, so every viewer shares every tile; smaller "
+             "tiles fit a camera's footprint closer, larger ones compress a little better."},
     {.name = "server.viewer_bytes_per_s", .type = CONF_DOUBLE, .offset = SRV(viewer_bytes_per_s),
      .min = 1e4, .max = 1e10, .def = "3.8e6", .unit = "B/s",
      .help = "Cascade tile layout: tile bytes one viewer may receive per second (its frame "
