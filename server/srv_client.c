@@ -530,15 +530,15 @@ static int rate_ok(srv_client *c, double rate, double burst)
  * answered at most once a second: a reply per refused message would let a
  * client make the daemon queue as fast as it can send.  The ERROR says how
  * many went unanswered since the last one.  Returns 1 if one may go now. */
-static int one_per_window(srv_client *c)
+static int one_per_window(srv_client *c, double *last)
 {
     double now = srv_now();
-    if (c->rate_err_t > 0 && now - c->rate_err_t < 1.0) {
+    if (*last > 0 && now - *last < 1.0) {
         c->rate_refused++;
         atomic_fetch_add(&c->hub->stats.refused_silent, 1);
         return 0;
     }
-    c->rate_err_t = now;
+    *last = now;
     return 1;
 }
 
@@ -547,7 +547,7 @@ static int admit(srv_client *c, const srv_config *cfg, const uint8_t *buf, size_
     if (rate_ok(c, cfg->msg_rate, cfg->msg_burst)) return 1;
     atomic_fetch_add(&c->hub->stats.refused_rate, 1);
     uint64_t before = c->rate_refused;
-    if (one_per_window(c)) {
+    if (one_per_window(c, &c->rate_err_t)) {
         char why[300];
         snprintf(why, sizeof why, "message refused: more than %g messages/s (burst %d) "
                  "(server.msg_rate); %llu more refused without a reply since the last such ERROR",
@@ -566,7 +566,7 @@ void srv_client_handle_text(srv_client *c)
     srv_config cfg = h->settings.srv;
     pthread_mutex_unlock(&h->lock);
     if (!admit(c, &cfg, NULL, 0)) return;
-    if (one_per_window(c))
+    if (one_per_window(c, &c->text_err_t))
         srv_client_send_error(c, NULL, 0, OCEAN_EFORMAT,
                               "text messages are not part of ocean.v1: send binary WebSocket "
                               "messages (one such ERROR a second at most)");
@@ -587,7 +587,7 @@ void srv_mesh_config(const srv_settings *s, const proto_subscribe *sub, double l
 
 /* Refuses a camera whose mesh the server would not build (estimated above
  * server.max_mesh_vertices): priced from the plan, before any work. */
-static ocean_result check_mesh(const srv_settings *s, const proto_subscribe *sub,
+static ocean_result check_mesh(srv_hub *h, const srv_settings *s, const proto_subscribe *sub,
                                const proto_camera *k, char *why, size_t n)
 {
     if (sub->mesh_kind == PROTO_MESH_NONE) return OCEAN_OK;
@@ -600,6 +600,7 @@ static ocean_result check_mesh(const srv_settings *s, const proto_subscribe *sub
     double est = 0;
     if (mesh_estimate_vertices(&mc, &cam, &est) != OCEAN_OK) return OCEAN_OK; /* sim reports it */
     if (est > s->srv.max_mesh_vertices) {
+        atomic_fetch_add(&h->stats.refused_mesh, 1);
         snprintf(why, n, "camera refused: its %s mesh is estimated at %.4g vertices, above the "
                  "server's limit of %d (server.max_mesh_vertices); widen the fov, lower the "
                  "viewport or the view range, or subscribe without a mesh",
@@ -663,7 +664,7 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         if (!c->subscribed) {
             r = OCEAN_ESTATE;
             snprintf(why, sizeof why, "CAMERA before SUBSCRIBE: subscribe first");
-        } else if ((r = check_mesh(&h->settings, &c->sub, k, why, sizeof why)) != OCEAN_OK) {
+        } else if ((r = check_mesh(h, &h->settings, &c->sub, k, why, sizeof why)) != OCEAN_OK) {
             /* refused before anything is built */
         } else if (c->sub.mode == PROTO_MODE_REPLAY) {
             if (c->n_replay >= cfg.replay_queue) {
@@ -756,11 +757,9 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         if (now < c->admin_until || now < h->admin_global_until) {
             double until = fmax(c->admin_until, h->admin_global_until);
             atomic_fetch_add(&h->stats.admin_locked, 1);
-            if (one_per_window(c)) {
-                snprintf(why, sizeof why, "SEA_STATE set refused: admin token locked out for "
-                         "%.1f s more after wrong tokens (server.admin_lockout)", until - now);
-                srv_client_send_error(c, buf, len, OCEAN_ERATE, why);
-            }
+            snprintf(why, sizeof why, "SEA_STATE set refused: admin token locked out for "
+                     "%.1f s more after wrong tokens (server.admin_lockout)", until - now);
+            srv_client_send_error(c, buf, len, OCEAN_ERATE, why);
             break;
         }
         /* Compare in constant time. */

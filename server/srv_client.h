@@ -141,7 +141,8 @@ typedef struct srv_client {
     size_t rx_discarded;
     double bucket;                        /* message-rate tokens */
     double bucket_t;                      /* monotonic time of last refill */
-    double rate_err_t;                    /* last ERATE / text-frame ERROR sent; one per second */
+    double rate_err_t;                    /* last ERATE ERROR sent; one per second */
+    double text_err_t;                    /* last text-frame ERROR sent; one per second */
     uint64_t rate_refused;                /* messages refused since that ERROR */
     double rx_started;                    /* monotonic time the unfinished message began */
     size_t rx_held;                       /* rx_cap counted in the hub's partial total */
