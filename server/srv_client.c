@@ -585,31 +585,6 @@ void srv_mesh_config(const srv_settings *s, const proto_subscribe *sub, double l
     mc->lambda_dominant_m = lambda_dominant;
 }
 
-/* Refuses a camera whose mesh the server would not build (estimated above
- * server.max_mesh_vertices): priced from the plan, before any work. */
-static ocean_result check_mesh(srv_hub *h, const srv_settings *s, const proto_subscribe *sub,
-                               const proto_camera *k, char *why, size_t n)
-{
-    if (sub->mesh_kind == PROTO_MESH_NONE) return OCEAN_OK;
-    double lam = 0;
-    if (mesh_lambda_dominant(&s->params.sea, &lam) != OCEAN_OK) lam = 0;
-    mesh_config mc;
-    srv_mesh_config(s, sub, lam, &mc);
-    mesh_camera cam;
-    srv_mesh_camera(k, &cam);
-    double est = 0;
-    if (mesh_estimate_vertices(&mc, &cam, &est) != OCEAN_OK) return OCEAN_OK; /* sim reports it */
-    if (est > s->srv.max_mesh_vertices) {
-        atomic_fetch_add(&h->stats.refused_mesh, 1);
-        snprintf(why, n, "camera refused: its %s mesh is estimated at %.4g vertices, above the "
-                 "server's limit of %d (server.max_mesh_vertices); widen the fov, lower the "
-                 "viewport or the view range, or subscribe without a mesh",
-                 mesh_kind_name(mc.kind), est, s->srv.max_mesh_vertices);
-        return OCEAN_ETOOBIG;
-    }
-    return OCEAN_OK;
-}
-
 void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
 {
     srv_hub *h = c->hub;
@@ -664,8 +639,6 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         if (!c->subscribed) {
             r = OCEAN_ESTATE;
             snprintf(why, sizeof why, "CAMERA before SUBSCRIBE: subscribe first");
-        } else if ((r = check_mesh(h, &h->settings, &c->sub, k, why, sizeof why)) != OCEAN_OK) {
-            /* refused before anything is built */
         } else if (c->sub.mode == PROTO_MODE_REPLAY) {
             if (c->n_replay >= cfg.replay_queue) {
                 r = OCEAN_ERATE;

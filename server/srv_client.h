@@ -97,6 +97,7 @@ typedef struct srv_client_sim {
     double next_frame_t;         /* live: when the next frame is due */
     int primed;
     double cutoff_k;             /* smoothed cutoff of the last frame */
+    int mesh_over;               /* the camera's mesh is over server.max_mesh_vertices */
 } srv_client_sim;
 
 typedef struct srv_client {

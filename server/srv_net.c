@@ -122,8 +122,11 @@ static void trk_feed(ws_track *t, uint8_t *b, size_t n)
             int masked = (b[i] & 0x80) != 0;
             unsigned l7 = b[i] & 0x7f;
             i++;
-            if (!masked) {
-                /* RFC 6455 5.1: the server MUST close the connection. */
+            /* RFC 6455 5.1: the server MUST close the connection on an
+             * unmasked frame; 5.5.1: a close body is empty or starts with a
+             * two-byte code, so one byte is malformed (lws answers that with
+             * an empty close) */
+            if (!masked || (t->opcode == 8 && l7 == 1)) {
                 if (hdr0_at >= 0) b[hdr0_at] |= 0x40; /* lws: 1002 "rsv bits" */
                 else atomic_store(&t->bad, 1);
                 t->owner = NULL;                   /* the connection is over */

@@ -411,23 +411,26 @@ static void mesh_stage(srv_sim *s, job *j)
     if (!cs->mesh) return;
     mesh_camera mc;
     srv_mesh_camera(&j->cam, &mc);
-    /* priced before it is built: a mesh over the server's limit is never
-     * made (CAMERA refuses it up front; this catches the default camera
-     * and subscriptions changed under an adopted camera) */
+    /* Priced before it is built: a camera the protocol allows may ask for
+     * a mesh no server should build (a 1-degree 1080p camera: 10^7
+     * vertices).  Its frames come without a mesh, with one ERROR naming
+     * the limit, until a camera asks for less. */
     double est = 0;
     if (mesh_estimate_vertices(&cs->mesh_cfg, &mc, &est) == OCEAN_OK &&
         est > s->set.srv.max_mesh_vertices) {
-        char why[300];
-        snprintf(why, sizeof why, "mesh %s estimated at %.4g vertices for this camera, above the "
-                 "server's limit of %d (server.max_mesh_vertices); frames come without a mesh "
-                 "until the next SUBSCRIBE", mesh_kind_name(cs->mesh_cfg.kind), est,
-                 s->set.srv.max_mesh_vertices);
-        atomic_fetch_add(&s->hub->stats.refused_mesh, 1);
-        srv_client_send_error(c, NULL, 0, OCEAN_ETOOBIG, why);
-        mesh_destroy(cs->mesh);
-        cs->mesh = NULL;
+        if (!cs->mesh_over) {
+            char why[320];
+            snprintf(why, sizeof why, "camera %u: its %s mesh is estimated at %.4g vertices, above "
+                     "the server's limit of %d (server.max_mesh_vertices); frames come without a "
+                     "mesh until a camera asks for less (wider fov, smaller viewport or range)",
+                     j->cam_seq, mesh_kind_name(cs->mesh_cfg.kind), est, s->set.srv.max_mesh_vertices);
+            atomic_fetch_add(&s->hub->stats.refused_mesh, 1);
+            srv_client_send_error(c, NULL, 0, OCEAN_ETOOBIG, why);
+            cs->mesh_over = 1;
+        }
         return;
     }
+    cs->mesh_over = 0;
     double m0 = srv_now();
     ocean_result r = mesh_build(cs->mesh, &mc);
     if (r == OCEAN_OK) {
