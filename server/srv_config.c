@@ -63,6 +63,11 @@ static const conf_entry srv_entries[] = {
      .size = SRV_TOKEN_MAX, .def = "",
      .help = "Secret a SEA_STATE set message must carry; empty disables runtime sea-state "
              "changes."},
+    {.name = "server.read_rate", .type = CONF_DOUBLE, .offset = SRV(read_rate), .min = 65536,
+     .max = 1e12, .def = "8388608", .unit = "bytes/s",
+     .help = "Bytes per second the daemon reads from one client (token bucket, one "
+             "server.max_message deep): a client sending faster is paused, not dropped, so "
+             "decoding its messages cannot starve the other connections."},
     {.name = "server.partial_seconds", .type = CONF_DOUBLE, .offset = SRV(partial_seconds),
      .min = 0.1, .max = 3600, .def = "5", .unit = "s",
      .help = "A message a client has begun (fragmented or not yet all arrived) must be "
@@ -142,8 +147,9 @@ static const conf_entry srv_entries[] = {
              "together (taken in turn); a large query is answered over several ticks."},
     {.name = "server.max_mesh_vertices", .type = CONF_INT, .offset = SRV(max_mesh_vertices),
      .min = 1000, .max = 1 << 30, .def = "262144",
-     .help = "Largest mesh the server builds for one camera; a CAMERA whose mesh is "
-             "estimated above it is refused (ERROR ETOOBIG) before anything is built."},
+     .help = "Largest mesh the server builds for one camera, priced from the camera before "
+             "anything is built; above it the client's frames come without a mesh, with one "
+             "ERROR ETOOBIG naming this limit and the estimate."},
     {.name = "server.max_sample_rate", .type = CONF_DOUBLE, .offset = SRV(max_sample_rate),
      .min = 1000, .max = 1e12, .def = "8e6", .unit = "samples/s",
      .help = "Tile samples per second one subscription may ask for (tiles per level x "

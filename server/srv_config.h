@@ -34,6 +34,7 @@ typedef struct srv_config {
     double output_soft_seconds;  /* ... tolerated this long */
     uint64_t output_hard;        /* bytes queued: disconnect at once */
     char admin_token[SRV_TOKEN_MAX]; /* "" disables SEA_STATE set */
+    double read_rate;            /* bytes/s the service thread reads from one client */
     double partial_seconds;      /* an unfinished message must complete within this */
     uint64_t partial_total;      /* bytes of unfinished messages held, all clients */
     double admin_lockout;        /* s a connection waits after wrong admin tokens */

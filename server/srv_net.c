@@ -436,6 +436,18 @@ static void kill_client(srv_client *c, const char *why)
     kill_client_code(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, why);
 }
 
+/* The client's read budget after refilling to now (server.read_rate, one
+ * max_message plus one read buffer deep) [svc]. */
+static double rx_budget(srv_client *c, const srv_config *cfg, double now)
+{
+    double depth = (double)cfg->max_message + 65536;
+    if (c->rx_tokens_t == 0) c->rx_tokens = depth;
+    else c->rx_tokens += (now - c->rx_tokens_t) * cfg->read_rate;
+    if (c->rx_tokens > depth) c->rx_tokens = depth;
+    c->rx_tokens_t = now;
+    return c->rx_tokens;
+}
+
 /* Releases what c's unfinished message holds [svc]. */
 static void rx_release(srv_hub *h, srv_client *c)
 {
@@ -474,7 +486,12 @@ static void on_wake(srv_net *n)
             kill_client(c, "output over server.output_hard: replies queued faster than read");
             continue;
         }
-        if (c->rx_started > 0 && now - c->rx_started > cfg.partial_seconds) {
+        if (c->rx_paused && rx_budget(c, &cfg, now) > 0) {
+            c->rx_paused = 0;
+            lws_rx_flow_control(c->wsi, 1);
+        }
+        /* (not while we hold its reading back ourselves) */
+        if (c->rx_started > 0 && now - c->rx_started > cfg.partial_seconds && !c->rx_paused) {
             atomic_fetch_add(&h->stats.disconnects_partial, 1);
             kill_client(c, "message unfinished for server.partial_seconds");
             continue;
@@ -657,9 +674,20 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
             return -1;
         }
         pthread_mutex_lock(&h->lock);
-        size_t maxm = (size_t)h->settings.srv.max_message;
-        uint64_t total = h->settings.srv.partial_total;
+        srv_config cfg = h->settings.srv;
         pthread_mutex_unlock(&h->lock);
+        size_t maxm = (size_t)cfg.max_message;
+        uint64_t total = cfg.partial_total;
+        /* Fair reading: a client that sends faster than server.read_rate
+         * is paused (lws stops reading its socket; TCP pushes back) until
+         * its budget refills, so the decoding of one client's flood of
+         * large messages cannot hold the service thread from the others. */
+        rx_budget(c, &cfg, srv_now());
+        c->rx_tokens -= (double)len;
+        if (c->rx_tokens < 0 && !c->rx_paused) {
+            c->rx_paused = 1;
+            lws_rx_flow_control(wsi, 0);
+        }
         if (lws_is_first_fragment(wsi)) {
             c->rx_len = 0;
             c->rx_discard = 0;

@@ -810,10 +810,19 @@ static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
 
 /* ---- queries (answered in slices by srv_work.c) ---------------------------------- */
 
-static const ocean_frame *query_eval(void *ctx, double t)
+static const ocean_frame *query_eval(void *ctx, double t, int cached_only)
 {
     srv_sim *s = ctx;
     group g = {-1, ocean_get_params(s->oc)->cascades, 1.0f};
+    if (cached_only) {
+        for (int i = 0; i < EVAL_MAX; i++) {
+            eval_entry *e = &s->ev[i];
+            if (e->used && e->t == t && group_eq(&e->g, &g) &&
+                (e->effects & OCEAN_QUERY_EFFECTS) == OCEAN_QUERY_EFFECTS)
+                return e->f;
+        }
+        return NULL;
+    }
     eval_entry *e = evaluate(s, t, &g, OCEAN_QUERY_EFFECTS);
     return e ? e->f : NULL;
 }

@@ -139,12 +139,24 @@ void srv_work_queries(srv_work *w, srv_hub *h, srv_work_eval_fn eval, void *ctx,
         srv_query *q = it->q;
         ocean_result r = OCEAN_OK;
         size_t bad = 0;
+        /* A query at a time no evaluation holds costs an ocean evaluation
+         * first: at most one such per turn, and only as a turn's first
+         * slice, so a turn stays near its budget. */
+        if (slices > 0 && !eval(ctx, it->t, 1)) {
+            /* first in the next turn (at the back it could wait forever) */
+            it->next = w->head;
+            w->head = it;
+            if (!w->tail) w->tail = it;
+            break;
+        }
         if (!it->res) it->res = calloc(q->count ? q->count : 1, sizeof *it->res);
-        const ocean_frame *f = it->res ? eval(ctx, it->t) : NULL;
+        const ocean_frame *f = it->res ? eval(ctx, it->t, 0) : NULL;
         if (!f) r = OCEAN_ENOMEM;
-        /* a slice fills what is left of the budget at the measured cost */
+        /* slices of a quarter of the budget at the measured cost, so a
+         * misjudged cost per point overruns by a quarter budget, not four */
+        now = srv_now();
         double left = budget_s - (now - t0);
-        double want = left / w->sec_per_point;
+        double want = fmin(left, 0.25 * budget_s) / w->sec_per_point;
         uint32_t k = want < 16 ? 16 : want > 8192 ? 8192 : (uint32_t)want;
         if (k > q->count - it->done) k = q->count - it->done;
         double p0 = srv_now();
@@ -182,4 +194,5 @@ void srv_work_queries(srv_work *w, srv_hub *h, srv_work_eval_fn eval, void *ctx,
         w->tail = it;
     }
     if (slices) srv_hub_wake_net(h);
+
 }

@@ -38,8 +38,9 @@ void srv_work_take(srv_work *w, srv_client *c, double t_now);
 int srv_work_busy(const srv_work *w);
 
 /* An evaluation of the ocean at time t holding OCEAN_QUERY_EFFECTS,
- * unfiltered; NULL on failure.  Valid until the next call. */
-typedef const ocean_frame *(*srv_work_eval_fn)(void *ctx, double t);
+ * unfiltered; NULL on failure, or with cached_only when none is at hand
+ * (evaluating would cost an FFT pass).  Valid until the next call. */
+typedef const ocean_frame *(*srv_work_eval_fn)(void *ctx, double t, int cached_only);
 
 /* Runs query slices for about budget_s seconds (at least one slice),
  * answering queries that complete and refusing those with a bad point.
