@@ -183,10 +183,18 @@ static void trk_feed(ws_track *t, uint8_t *b, size_t n)
     }
 }
 
+typedef ssize_t (*recv_fn)(int, void *, size_t, int);
+typedef int (*accept_fn)(int, struct sockaddr *, socklen_t *);
+static _Atomic(recv_fn) real_recv;
+static _Atomic(accept_fn) real_accept;
+
 ssize_t recv(int fd, void *buf, size_t len, int flags)
 {
-    static ssize_t (*real)(int, void *, size_t, int);
-    if (!real) real = (ssize_t(*)(int, void *, size_t, int))dlsym(RTLD_NEXT, "recv");
+    recv_fn real = atomic_load(&real_recv);
+    if (!real) {
+        real = (recv_fn)dlsym(RTLD_NEXT, "recv");
+        atomic_store(&real_recv, real);
+    }
     ssize_t r = real(fd, buf, len, flags);
     ws_track *t;
     if (r > 0 && !(flags & MSG_PEEK) && (t = trk_of(fd)) && t->owner) trk_feed(t, buf, (size_t)r);
@@ -225,8 +233,11 @@ static void accept_note(const char *why)
 
 int accept(int fd, struct sockaddr *addr, socklen_t *alen)
 {
-    static int (*real)(int, struct sockaddr *, socklen_t *);
-    if (!real) real = (int (*)(int, struct sockaddr *, socklen_t *))dlsym(RTLD_NEXT, "accept");
+    accept_fn real = atomic_load(&real_accept);
+    if (!real) {
+        real = (accept_fn)dlsym(RTLD_NEXT, "accept");
+        atomic_store(&real_accept, real);
+    }
     int r = real(fd, addr, alen);
     if (r < 0 && (errno == EMFILE || errno == ENFILE) && spare_fd >= 0) {
         close(spare_fd);
@@ -670,7 +681,7 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         ws_track *t = trk_of(lws_get_socket_fd(wsi));
         if (t && t->owner == wsi && atomic_load(&t->bad)) {
             atomic_fetch_add(&h->stats.disconnects_protocol, 1);
-            lws_close_reason(wsi, LWS_CLOSE_STATUS_PROTOCOL_ERR, (unsigned char *)"unmasked frame", 14);
+            lws_close_reason(wsi, LWS_CLOSE_STATUS_PROTOCOL_ERR, (unsigned char *)"protocol error (RFC 6455)", 25);
             return -1;
         }
         pthread_mutex_lock(&h->lock);
@@ -744,9 +755,15 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         c->rx_len = 0;
         c->rx_discard = 0;
         if (atomic_exchange(&c->want_write, 0) || c->closing) lws_callback_on_writable(wsi);
-        /* only an unfinished message holds a big buffer: nothing larger
-         * than a typical message is kept between messages */
-        if (c->rx_cap > 65536) rx_release(h, c);
+        /* Between messages only a small buffer is kept, and it does not
+         * count as unfinished: server.partial_total bounds what clients
+         * hold mid-message, not what they once sent. */
+        if (c->rx_cap > 4096) {
+            rx_release(h, c);
+        } else {
+            h->partial_held -= c->rx_held;
+            c->rx_held = 0;
+        }
         break;
     }
     case LWS_CALLBACK_SERVER_WRITEABLE: {
@@ -907,6 +924,7 @@ void srv_net_destroy(srv_net *n)
     if (!n) return;
     srv_net_stop(n, 0);
     n->hub->wake_net = NULL;
+    if (accept_refused_ctr == &n->hub->stats.accept_refused) accept_refused_ctr = NULL;
     if (n->ctx) {
         lws_sul_cancel(&n->sweep);
         lws_context_destroy(n->ctx);
