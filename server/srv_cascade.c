@@ -610,12 +610,29 @@ static double nadir_error(const tables *tb, const plan *pl, const proto_camera *
 
 /* The client's mesh for job j and, when its plan changed, the FLAT
  * MESH_TOPOLOGY to send first. */
-static void mesh_part(srv_cascade_job *j, plan *pl)
+static void mesh_part(const srv_config *cfg, srv_stats *st, srv_cascade_job *j, plan *pl)
 {
     srv_client_sim *cs = &j->c->sim;
     if (!cs->mesh || cs->sub.mesh_kind == PROTO_MESH_NONE) return;
     mesh_camera mc;
     srv_mesh_camera(&j->cam, &mc);
+    /* Priced before it is placed, as for layout 0: a camera the protocol
+     * allows may ask for a topology no server should build. */
+    double est = 0;
+    if (mesh_estimate_vertices(&cs->mesh_cfg, &mc, &est) == OCEAN_OK && est > cfg->max_mesh_vertices) {
+        if (!cs->mesh_over) {
+            char why[320];
+            snprintf(why, sizeof why, "camera %u: its %s mesh is estimated at %.4g vertices, above the server's "
+                     "limit of %d (server.max_mesh_vertices); frames come without a mesh until a camera asks "
+                     "for less (wider fov, smaller viewport or range)", j->cam_seq,
+                     mesh_kind_name(cs->mesh_cfg.kind), est, cfg->max_mesh_vertices);
+            atomic_fetch_add(&st->refused_mesh, 1);
+            srv_client_send_error(j->c, NULL, 0, OCEAN_ETOOBIG, why);
+            cs->mesh_over = 1;
+        }
+        return;
+    }
+    cs->mesh_over = 0;
     ocean_result r = mesh_place(cs->mesh, &mc);
     if (r == OCEAN_OK) {
         mesh_get_view(cs->mesh, &pl->mv);
@@ -831,7 +848,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
         }
         pl[i].list = calloc((size_t)(pl[i].tiles ? pl[i].tiles : 1), sizeof *pl[i].list);
         if (!pl[i].list) pl[i].ok = 0;
-        mesh_part(&jobs[i], &pl[i]);
+        mesh_part(cfg, st, &jobs[i], &pl[i]);
     }
     /* 2. per distinct time: evaluate, look tiles up, encode the missing */
     int *done = calloc((size_t)n, sizeof *done);

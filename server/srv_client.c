@@ -17,8 +17,14 @@
 #include <time.h>
 
 #include "srv_record.h"
+#include "srv_tiles.h"
 
 #define SERVER_VERSION "oceand 0.1"
+
+/* Admin guessing across all connections: more than this many misses in
+ * ADMIN_WINDOW seconds lock SEA_STATE set for everyone that long. */
+#define ADMIN_GLOBAL_MISSES 20
+#define ADMIN_WINDOW 10
 
 double srv_now(void)
 {
@@ -213,6 +219,7 @@ ocean_result srv_client_create(srv_hub *h, struct lws *wsi, srv_client **out)
     c->id = h->next_id++;
     if (h->next_id == 0) h->next_id = 1;
     c->bucket = h->settings.srv.msg_burst;
+    atomic_init(&c->output_hard, h->settings.srv.output_hard);
     c->next = h->clients;
     h->clients = c;
     h->n_clients++;
@@ -277,17 +284,46 @@ void srv_client_remove(srv_client *c)
     srv_client_unref(c);
 }
 
-static size_t msg_bytes(const srv_msg *m) { return srv_msg_len(m); }
+/* glibc malloc: 16 bytes of header per block, rounded to 16. */
+#define MALLOC_OVERHEAD 16
+
+size_t srv_msg_cost(const srv_msg *m)
+{
+    if (!m) return 0;
+    size_t n = sizeof *m + MALLOC_OVERHEAD;
+    if (m->buf.mem) n += m->buf.head + m->buf.cap + MALLOC_OVERHEAD;
+    if (m->blob) n += sizeof *m->blob + m->blob->buf.head + m->blob->buf.cap + 2 * MALLOC_OVERHEAD;
+    return n;
+}
+
+static size_t msg_bytes(const srv_msg *m) { return srv_msg_cost(m); }
 
 void srv_client_queue(srv_client *c, srv_msg *m)
 {
     m->next = NULL;
+    /* The hard output limit holds when a message is queued, not only when
+     * the service thread next looks: a client that makes the daemon queue
+     * faster than it reads (a flood of refused messages, replay frames it
+     * does not read) is cut off at the limit, and the message that would
+     * pass it is not kept.  A BYE always goes in (it ends the queue). */
+    size_t cost = msg_bytes(m);
+    uint64_t hard = atomic_load(&c->output_hard);
+    int refused = 0;
     pthread_mutex_lock(&c->out_lock);
-    if (c->ctrl_tail) c->ctrl_tail->next = m;
-    else c->ctrl = m;
-    c->ctrl_tail = m;
-    c->queued_bytes += msg_bytes(m);
+    if (hard && !m->close_after && c->queued_bytes + cost > hard) {
+        refused = 1;
+    } else {
+        if (c->ctrl_tail) c->ctrl_tail->next = m;
+        else c->ctrl = m;
+        c->ctrl_tail = m;
+        c->queued_bytes += cost;
+    }
     pthread_mutex_unlock(&c->out_lock);
+    if (refused) {
+        srv_msg_free(m);
+        if (!atomic_exchange(&c->over_hard, 1)) srv_hub_wake_net(c->hub);
+        return;
+    }
     atomic_store(&c->want_write, 1);
 }
 
@@ -475,6 +511,21 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
                      "the protocol's %u", most, s->srv.cascade_tile, PROTO_MAX_FRAME_TILES);
             return OCEAN_ETOOBIG;
         }
+    } else {
+        /* The tile work a per-camera (layout 0) subscription asks for, priced
+         * before any is done: samples per second over every level's tiles
+         * at its frame rate.  Layout 1 tiles are shared; its bytes are held
+         * to server.viewer_bytes_per_s by the planner. */
+        double per = s->srv.tiles_per_side;
+        double rate = per * per * sub->lod_levels * (double)sub->tile_size * sub->tile_size *
+                      sub->frame_rate_hz;
+        if (srv_tiles_channels(eff) && rate > s->srv.max_sample_rate) {
+            snprintf(why, n, "subscribe: %.4g tile samples/s (%d x %d tiles x %u levels x %u^2 "
+                     "samples x %g Hz) above the server's %.4g (server.max_sample_rate)", rate,
+                     s->srv.tiles_per_side, s->srv.tiles_per_side, sub->lod_levels, sub->tile_size,
+                     (double)sub->frame_rate_hz, s->srv.max_sample_rate);
+            return OCEAN_ETOOBIG;
+        }
     }
     sub->effects = (uint8_t)eff;
     if (sub->layers > s->params.cascades) sub->layers = (uint8_t)s->params.cascades;
@@ -492,6 +543,65 @@ static int rate_ok(srv_client *c, double rate, double burst)
     return 1;
 }
 
+/* A refusal a flood would repeat (over the message rate, text frames) is
+ * answered at most once a second: a reply per refused message would let a
+ * client make the daemon queue as fast as it can send.  The ERROR says how
+ * many went unanswered since the last one.  Returns 1 if one may go now. */
+static int one_per_window(srv_client *c, double *last)
+{
+    double now = srv_now();
+    if (*last > 0 && now - *last < 1.0) {
+        c->rate_refused++;
+        atomic_fetch_add(&c->hub->stats.refused_silent, 1);
+        return 0;
+    }
+    *last = now;
+    return 1;
+}
+
+static int admit(srv_client *c, const srv_config *cfg, const uint8_t *buf, size_t len)
+{
+    if (rate_ok(c, cfg->msg_rate, cfg->msg_burst)) return 1;
+    atomic_fetch_add(&c->hub->stats.refused_rate, 1);
+    uint64_t before = c->rate_refused;
+    if (one_per_window(c, &c->rate_err_t)) {
+        char why[300];
+        snprintf(why, sizeof why, "message refused: more than %g messages/s (burst %d) "
+                 "(server.msg_rate); %llu more refused without a reply since the last such ERROR",
+                 cfg->msg_rate, cfg->msg_burst, (unsigned long long)before);
+        c->rate_refused = 0;
+        srv_client_send_error(c, buf, len, OCEAN_ERATE, why);
+    }
+    return 0;
+}
+
+void srv_client_handle_text(srv_client *c)
+{
+    srv_hub *h = c->hub;
+    atomic_fetch_add(&h->stats.messages_received, 1);
+    pthread_mutex_lock(&h->lock);
+    srv_config cfg = h->settings.srv;
+    pthread_mutex_unlock(&h->lock);
+    if (!admit(c, &cfg, NULL, 0)) return;
+    if (one_per_window(c, &c->text_err_t))
+        srv_client_send_error(c, NULL, 0, OCEAN_EFORMAT,
+                              "text messages are not part of ocean.v1: send binary WebSocket "
+                              "messages (one such ERROR a second at most)");
+}
+
+void srv_mesh_config(const srv_settings *s, const proto_subscribe *sub, double lambda_dominant,
+                     mesh_config *mc)
+{
+    /* as the simulation thread's apply_subscription (srv_sim.c) */
+    mesh_config_default(mc);
+    mc->kind = (mesh_kind)sub->mesh_kind;
+    mc->range_m = sub->view_range_m > 0 ? sub->view_range_m : s->srv.view_range;
+    if (mc->range_m < 10) mc->range_m = 10;
+    if (mc->range_m > 1e6) mc->range_m = 1e6;
+    mc->error_px = s->srv.mesh_error_px;
+    mc->lambda_dominant_m = lambda_dominant;
+}
+
 void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
 {
     srv_hub *h = c->hub;
@@ -500,12 +610,7 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
     srv_config cfg = h->settings.srv;
     pthread_mutex_unlock(&h->lock);
     char why[512];
-    if (!rate_ok(c, cfg.msg_rate, cfg.msg_burst)) {
-        snprintf(why, sizeof why, "message refused: more than %g messages/s (burst %d) "
-                 "(server.msg_rate)", cfg.msg_rate, cfg.msg_burst);
-        srv_client_send_error(c, buf, len, OCEAN_ERATE, why);
-        return;
-    }
+    if (!admit(c, &cfg, buf, len)) return;
     proto_limits lim;
     proto_limits_default(&lim);
     lim.max_message = (uint32_t)cfg.max_message;
@@ -579,8 +684,9 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         }
         pthread_mutex_unlock(&h->lock);
         if (r != OCEAN_OK) srv_client_send_error(c, buf, len, r, why);
-        else if (c->rec && srv_record_camera(c->rec, t_rec, k) != OCEAN_OK)
-            fprintf(stderr, "oceand: client %u: recording stopped after a write error\n", c->id);
+        else if (c->rec && (r = srv_record_camera(c->rec, t_rec, k)) != OCEAN_OK)
+            fprintf(stderr, "oceand: client %u: recording stopped %s\n", c->id,
+                    r == OCEAN_ETOOBIG ? "at server.record_max_bytes" : "after a write error");
         break;
     }
     case PROTO_QUERY: {
@@ -600,10 +706,10 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         sq->count = q->count;
         sq->points = pts;
         pthread_mutex_lock(&h->lock);
-        if (c->n_queries >= cfg.max_pending_queries) {
+        if (c->n_queries + c->n_queries_active >= cfg.max_pending_queries) {
             r = OCEAN_ERATE;
             snprintf(why, sizeof why, "%d queries already wait for answers "
-                     "(server.max_pending_queries)", c->n_queries);
+                     "(server.max_pending_queries)", c->n_queries + c->n_queries_active);
         } else {
             srv_query **p = &c->queries;
             while (*p) p = &(*p)->next;
@@ -632,14 +738,45 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
                                   "disabled on this server (server.admin_token is empty)");
             break;
         }
+        /* Guessing is throttled before the compare: after a miss this
+         * connection waits admin_lockout, doubling per further miss (to
+         * 64x); more than ADMIN_GLOBAL_MISSES misses in ADMIN_WINDOW s from
+         * all connections lock everyone out for ADMIN_WINDOW s (a guesser
+         * with many connections).  A locked-out attempt is not compared. */
+        double now = srv_now();
+        if (now < c->admin_until || now < h->admin_global_until) {
+            double until = fmax(c->admin_until, h->admin_global_until);
+            atomic_fetch_add(&h->stats.admin_locked, 1);
+            snprintf(why, sizeof why, "SEA_STATE set refused: admin token locked out for "
+                     "%.1f s more after wrong tokens (server.admin_lockout)", until - now);
+            srv_client_send_error(c, buf, len, OCEAN_ERATE, why);
+            break;
+        }
         /* Compare in constant time. */
         size_t a = strlen(cfg.admin_token), b = strlen(s->token);
         unsigned diff = (unsigned)(a ^ b);
         for (size_t i = 0; i < a; i++) diff |= (unsigned)(cfg.admin_token[i] ^ s->token[i < b ? i : 0]);
         if (diff) {
-            srv_client_send_error(c, buf, len, OCEAN_EAUTH, "SEA_STATE set refused: wrong admin token");
+            atomic_fetch_add(&h->stats.admin_misses, 1);
+            int k = c->admin_misses < 6 ? c->admin_misses : 6;
+            c->admin_misses++;
+            c->admin_until = now + cfg.admin_lockout * (double)(1 << k);
+            if (now - h->admin_window_t > ADMIN_WINDOW) {
+                h->admin_window_t = now;
+                h->admin_window_misses = 0;
+            }
+            if (++h->admin_window_misses > ADMIN_GLOBAL_MISSES) {
+                h->admin_global_until = now + ADMIN_WINDOW;
+                fprintf(stderr, "oceand: more than %d wrong admin tokens in %g s: SEA_STATE set "
+                        "locked for every connection for %g s\n", ADMIN_GLOBAL_MISSES,
+                        (double)ADMIN_WINDOW, (double)ADMIN_WINDOW);
+            }
+            snprintf(why, sizeof why, "SEA_STATE set refused: wrong admin token; next attempt "
+                     "in %.1f s (server.admin_lockout)", c->admin_until - now);
+            srv_client_send_error(c, buf, len, OCEAN_EAUTH, why);
             break;
         }
+        c->admin_misses = 0;
         pthread_mutex_lock(&h->lock);
         ocean_params np;
         srv_params_from_sea(&s->sea, &h->settings.params, &np);

@@ -97,6 +97,7 @@ typedef struct srv_client_sim {
     double next_frame_t;         /* live: when the next frame is due */
     int primed;
     double cutoff_k;             /* smoothed cutoff of the last frame */
+    int mesh_over;               /* the camera's mesh is over server.max_mesh_vertices */
 } srv_client_sim;
 
 typedef struct srv_client {
@@ -114,6 +115,7 @@ typedef struct srv_client {
     uint32_t cam_seq;
     srv_query *queries;                   /* FIFO */
     int n_queries;
+    int n_queries_active;                 /* taken by the simulation thread, unanswered */
     srv_replay_cam *replay, *replay_tail; /* FIFO */
     int n_replay;
     int closed;                           /* connection gone; sim skips it */
@@ -124,8 +126,14 @@ typedef struct srv_client {
     srv_msg *ctrl, *ctrl_tail;            /* FIFO: HELLO, ERROR, results, replay frames */
     srv_msg *slot_topo;                   /* latest-wins frame slot: optional */
     srv_msg *slot_frame;                  /*   MESH_TOPOLOGY, then FRAME */
-    uint64_t queued_bytes;                /* ctrl + slot */
+    uint64_t queued_bytes;                /* ctrl + slot, at allocated size (srv_msg_cost) */
+    atomic_uint_fast64_t output_hard;     /* server.output_hard, as the service thread last saw it */
     atomic_int want_write;                /* svc should ask for WRITEABLE */
+    atomic_int over_hard;                 /* a message was refused: over output_hard */
+
+    /* ---- what the client costs, for /metrics [atomics, any thread] ---- */
+    atomic_uint_fast64_t cpu_ns;          /* simulation-thread time spent on its requests */
+    atomic_uint_fast64_t bytes_out;       /* bytes sent to it */
 
     /* ---- service thread only [svc] ---- */
     uint8_t *rx;                          /* message being reassembled */
@@ -134,6 +142,15 @@ typedef struct srv_client {
     size_t rx_discarded;
     double bucket;                        /* message-rate tokens */
     double bucket_t;                      /* monotonic time of last refill */
+    double rate_err_t;                    /* last ERATE ERROR sent; one per second */
+    double text_err_t;                    /* last text-frame ERROR sent; one per second */
+    uint64_t rate_refused;                /* messages refused since that ERROR */
+    double rx_started;                    /* monotonic time the unfinished message began */
+    double rx_tokens, rx_tokens_t;        /* read budget (server.read_rate), bytes; refill time */
+    int rx_paused;                        /* reading paused until the budget refills */
+    size_t rx_held;                       /* rx_cap counted in the hub's partial total */
+    int admin_misses;                     /* wrong admin tokens in a row */
+    double admin_until;                   /* SEA_STATE set refused until then (monotonic) */
     uint32_t tx_seq;                      /* header seq of the next message */
     uint64_t inflight;                    /* bytes lws still holds of the last write */
     double over_soft_since;               /* monotonic; 0: under the soft limit */
@@ -171,6 +188,12 @@ typedef struct srv_hub {
     void *wake_ctx;
     double wall0;                         /* [const] monotonic time of sim t = 0 */
     double tick_rate;                     /* [hub.lock] */
+    uint64_t partial_held;                /* [svc] bytes of unfinished messages, all clients */
+    double admin_window_t;                /* [svc] start of the global admin-miss window */
+    int admin_window_misses;              /* [svc] misses in that window */
+    double admin_global_until;            /* [svc] every SEA_STATE set refused until then */
+    atomic_uint_fast64_t record_files;    /* recordings opened this run */
+    atomic_uint_fast64_t record_bytes;    /* bytes written to recordings this run */
     srv_stats stats;                      /* atomics */
 } srv_hub;
 
@@ -215,6 +238,11 @@ srv_msg *srv_msg_share(const srv_msg *m);
 uint8_t *srv_msg_wire(srv_msg *m, size_t *len);
 /* Length of the wire bytes. */
 size_t srv_msg_len(const srv_msg *m);
+/* What a queued message holds in memory: its allocations (the message, its
+ * buffer's headroom and capacity, or the shared blob) plus the allocator's
+ * per-block overhead.  The output limits count this, not the wire length:
+ * a 110-byte ERROR holds about 400 bytes. */
+size_t srv_msg_cost(const srv_msg *m);
 
 /* Builds and queues messages the service thread sends [svc]. */
 void srv_client_send_error(srv_client *c, const void *bad, size_t badlen, ocean_result code,
@@ -224,6 +252,14 @@ void srv_client_send_hello(srv_client *c);
 
 /* Handles one complete binary message from the client [svc]. */
 void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len);
+/* Handles one complete text message (not part of ocean.v1): counts against
+ * the message rate like any message, answered by at most one ERROR a
+ * second [svc]. */
+void srv_client_handle_text(srv_client *c);
+
+/* The mesh configuration the simulation thread builds for sub under s. */
+void srv_mesh_config(const srv_settings *s, const proto_subscribe *sub, double lambda_dominant,
+                     mesh_config *out);
 
 /* Conversions shared by the daemon's modules. */
 void srv_sea_from_params(const ocean_params *p, proto_sea *out);

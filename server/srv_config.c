@@ -78,6 +78,25 @@ static const conf_entry srv_entries[] = {
      .size = SRV_TOKEN_MAX, .def = "",
      .help = "Secret a SEA_STATE set message must carry; empty disables runtime sea-state "
              "changes."},
+    {.name = "server.read_rate", .type = CONF_DOUBLE, .offset = SRV(read_rate), .min = 65536,
+     .max = 1e12, .def = "8388608", .unit = "bytes/s",
+     .help = "Bytes per second the daemon reads from one client (token bucket, one "
+             "server.max_message deep): a client sending faster is paused, not dropped, so "
+             "decoding its messages cannot starve the other connections."},
+    {.name = "server.partial_seconds", .type = CONF_DOUBLE, .offset = SRV(partial_seconds),
+     .min = 0.1, .max = 3600, .def = "5", .unit = "s",
+     .help = "A message a client has begun (fragmented or not yet all arrived) must be "
+             "complete within this; a client that holds one longer is disconnected (close "
+             "1008), so half-sent messages cannot pin memory."},
+    {.name = "server.partial_total", .type = CONF_U64, .offset = SRV(partial_total),
+     .min = 65536, .max = 1e12, .def = "67108864", .unit = "bytes",
+     .help = "Bytes of unfinished client messages the daemon holds at once, all clients "
+             "together; the client whose message would pass it is disconnected (close 1008)."},
+    {.name = "server.admin_lockout", .type = CONF_DOUBLE, .offset = SRV(admin_lockout),
+     .min = 0, .max = 3600, .def = "1", .unit = "s",
+     .help = "After a wrong admin token a connection's SEA_STATE sets are refused for this "
+             "long, doubling with each further miss (to 64x); more than 20 misses in 10 s "
+             "from all connections together lock every connection out for 10 s."},
     {.name = "server.web_root", .type = CONF_STRING, .offset = SRV(web_root), .size = SRV_PATH_MAX,
      .def = "clients/web",
      .help = "Directory served over HTTP at / (the browser viewer); relative to the working "
@@ -150,6 +169,23 @@ static const conf_entry srv_entries[] = {
     {.name = "server.replay_queue", .type = CONF_INT, .offset = SRV(replay_queue), .min = 1,
      .max = 100000, .def = "256",
      .help = "Replay-mode CAMERA reports a client may have waiting for their frames."},
+    {.name = "server.replay_per_tick", .type = CONF_INT, .offset = SRV(replay_per_tick),
+     .min = 1, .max = 1024, .def = "2",
+     .help = "Replay frames built per client per tick; the rest of a client's replay queue "
+             "waits for the next ticks, so one replaying client cannot delay everyone's tick."},
+    {.name = "server.query_ms", .type = CONF_DOUBLE, .offset = SRV(query_ms), .min = 0.1,
+     .max = 1000, .def = "4", .unit = "ms",
+     .help = "Time the simulation thread spends on QUERY points per tick, all clients "
+             "together (taken in turn); a large query is answered over several ticks."},
+    {.name = "server.max_mesh_vertices", .type = CONF_INT, .offset = SRV(max_mesh_vertices),
+     .min = 1000, .max = 1 << 30, .def = "262144",
+     .help = "Largest mesh the server builds for one camera, priced from the camera before "
+             "anything is built; above it the client's frames come without a mesh, with one "
+             "ERROR ETOOBIG naming this limit and the estimate."},
+    {.name = "server.max_sample_rate", .type = CONF_DOUBLE, .offset = SRV(max_sample_rate),
+     .min = 1000, .max = 1e12, .def = "8e6", .unit = "samples/s",
+     .help = "Tile samples per second one subscription may ask for (tiles per level x "
+             "levels x tile_size^2 x frame rate); above it SUBSCRIBE is refused (ETOOBIG)."},
     {.name = "server.near_field_waves", .type = CONF_INT, .offset = SRV(near_field_waves),
      .min = 0, .max = 1024, .def = "64",
      .help = "Gerstner waves of the near field (scenes with near-field), shorter than the "
@@ -162,8 +198,18 @@ static const conf_entry srv_entries[] = {
      .offset = SRV(near_field_min_wavelength), .min = 0.001, .max = 100, .def = "0.1",
      .unit = "m", .help = "Shortest near-field wavelength."},
     {.name = "server.record", .type = CONF_BOOL, .offset = SRV(record), .def = "off",
-     .help = "Record every client's camera path (server/RECORDING.md); a client may also ask "
-             "with ?record=1 in its WebSocket URL."},
+     .help = "Record every client's camera path (server/RECORDING.md)."},
+    {.name = "server.record_clients", .type = CONF_BOOL, .offset = SRV(record_clients),
+     .def = "off",
+     .help = "Let a client ask for a recording with ?record=1 in its WebSocket URL; off, the "
+             "request is ignored (logged)."},
+    {.name = "server.record_max_files", .type = CONF_INT, .offset = SRV(record_max_files),
+     .min = 0, .max = 1000000, .def = "100",
+     .help = "Recordings the daemon opens per run; past it connections are not recorded."},
+    {.name = "server.record_max_bytes", .type = CONF_U64, .offset = SRV(record_max_bytes),
+     .min = 0, .max = 1e13, .def = "268435456", .unit = "bytes",
+     .help = "Bytes the daemon writes to recordings per run, all files together; a "
+             "recording that would pass it stops."},
     {.name = "server.record_dir", .type = CONF_STRING, .offset = SRV(record_dir),
      .size = SRV_PATH_MAX, .def = "recordings",
      .help = "Directory of camera-path recordings (created if missing)."},

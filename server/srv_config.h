@@ -34,6 +34,10 @@ typedef struct srv_config {
     double output_soft_seconds;  /* ... tolerated this long */
     uint64_t output_hard;        /* bytes queued: disconnect at once */
     char admin_token[SRV_TOKEN_MAX]; /* "" disables SEA_STATE set */
+    double read_rate;            /* bytes/s the service thread reads from one client */
+    double partial_seconds;      /* an unfinished message must complete within this */
+    uint64_t partial_total;      /* bytes of unfinished messages held, all clients */
+    double admin_lockout;        /* s a connection waits after wrong admin tokens */
     char web_root[SRV_PATH_MAX];
     /* simulation */
     double tick_rate;            /* Hz */
@@ -55,12 +59,19 @@ typedef struct srv_config {
     int max_query_points;
     int max_pending_queries;     /* per client */
     int replay_queue;            /* pending replay cameras per client */
+    int replay_per_tick;         /* replay frames built per client per tick */
+    double query_ms;             /* query work per tick (all clients), ms */
+    int max_mesh_vertices;       /* a mesh estimated above this is refused */
+    double max_sample_rate;      /* tile samples per second one subscription may ask */
     /* near field */
     int near_field_waves;
     double near_field_radius;    /* fade to 0 at this radius, m */
     double near_field_min_wavelength; /* m */
     /* recording */
     int record;                  /* record every client */
+    int record_clients;          /* clients may ask with ?record=1 */
+    int record_max_files;        /* recordings opened per run */
+    uint64_t record_max_bytes;   /* bytes written to recordings per run */
     char record_dir[SRV_PATH_MAX];
     int verbose;
 } srv_config;

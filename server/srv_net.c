@@ -4,15 +4,272 @@
  */
 #include "srv_net.h"
 
+#include <dlfcn.h>
+#include <errno.h>
+#include <fcntl.h>
 #include <libwebsockets.h>
 #include <math.h>
 #include <pthread.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include "srv_record.h"
+
+/* File descriptors kept free of client connections: the HTTP pages, the
+ * handshakes in progress, recordings, FFTW and the log.  max_clients is
+ * clamped to the fd limit minus this; accept refuses above it minus
+ * FD_ACCEPT_SLACK, so the process itself never runs out. */
+#define FD_RESERVE 96
+#define FD_ACCEPT_SLACK 32
+
+/* ---- RFC 6455 guard ------------------------------------------------------------
+ *
+ * libwebsockets 4.1.6 does not check two things a server MUST (RFC 6455
+ * 5.1: a server MUST close the connection upon receiving a frame that is
+ * not masked; 7.4.1 / 7.4.2: close codes outside 1000-1003, 1007-1011 (and
+ * the IANA-registered 1012-1014) and 3000-4999 are a protocol error), and
+ * it offers no hook where the frame header is visible.  So the daemon reads
+ * the frame headers itself on the way in: recv() is interposed (the
+ * executable's definition wins over libc's for libwebsockets' calls) and,
+ * for a socket registered as an ocean.v1 connection, the received bytes go
+ * through a small frame-header parser before libwebsockets sees them.  A
+ * violation is turned into one libwebsockets already answers with close
+ * 1002, in the bytes it is about to parse: an unmasked frame gets its RSV1
+ * bit set ("rsv bits"), an invalid close code becomes 999.  When the byte
+ * to change has already been handed over (a header split across reads) the
+ * connection is flagged and closed with 1002 from the callback.  Sockets
+ * not registered, and every other byte, pass untouched.
+ *
+ * A client that sends frames before the server's 101 (RFC 6455 4.1 forbids
+ * it) may have its first frames parsed before registration; its tracker
+ * then starts mid-stream and may read a violation where there is none:
+ * such a client is closed with 1002, which it earned. */
+
+enum { TRK_HDR0, TRK_HDR1, TRK_LEN, TRK_MASK, TRK_PAYLOAD };
+
+typedef struct ws_track {
+    const void *owner;       /* the wsi that registered this fd; NULL: not tracked */
+    uint8_t state, opcode;
+    uint8_t need, have;      /* extended length / mask bytes */
+    uint64_t len, left;      /* payload length and bytes still to come */
+    uint8_t mask[4];
+    uint8_t ctl[125];        /* a close frame's payload, unmasked */
+    atomic_int bad;          /* 1002 owed (set here, read by the callbacks) */
+} ws_track;
+
+static ws_track *trk;        /* indexed by fd; never freed (one per process) */
+static int trk_n;
+static pthread_mutex_t trk_lock = PTHREAD_MUTEX_INITIALIZER;
+
+static void trk_init(int n)
+{
+    pthread_mutex_lock(&trk_lock);
+    if (!trk && n > 0) {
+        trk = calloc((size_t)n, sizeof *trk);
+        if (trk) trk_n = n;
+    }
+    pthread_mutex_unlock(&trk_lock);
+}
+
+static ws_track *trk_of(int fd) { return trk && fd >= 0 && fd < trk_n ? &trk[fd] : NULL; }
+
+static void trk_register(struct lws *wsi)
+{
+    ws_track *t = trk_of(lws_get_socket_fd(wsi));
+    if (!t) return;
+    memset(t, 0, sizeof *t);
+    t->owner = wsi;
+}
+
+static void trk_forget(struct lws *wsi)
+{
+    ws_track *t = trk_of(lws_get_socket_fd(wsi));
+    if (t && t->owner == wsi) t->owner = NULL;
+}
+
+/* 1 if the close frame payload p[0..n) breaks RFC 6455 7.4. */
+static int close_code_bad(const uint8_t *p, size_t n)
+{
+    if (n == 0) return 0;
+    if (n == 1) return 1;
+    unsigned code = (unsigned)p[0] << 8 | p[1];
+    if (code < 1000 || code >= 5000) return 1;
+    if (code >= 1004 && code <= 1006) return 1;
+    if (code >= 1015 && code < 3000) return 1;
+    return 0;
+}
+
+/* Feeds the bytes of one recv() through the tracker; may rewrite them. */
+static void trk_feed(ws_track *t, uint8_t *b, size_t n)
+{
+    long hdr0_at = -1;                     /* this frame's first byte, if in b */
+    long code_at[2] = {-1, -1};            /* a close frame's code bytes, if in b */
+    for (size_t i = 0; i < n && t->owner;) {
+        switch (t->state) {
+        case TRK_HDR0:
+            t->opcode = b[i] & 0x0f;
+            hdr0_at = (long)i;
+            code_at[0] = code_at[1] = -1;
+            t->state = TRK_HDR1;
+            i++;
+            break;
+        case TRK_HDR1: {
+            int masked = (b[i] & 0x80) != 0;
+            unsigned l7 = b[i] & 0x7f;
+            i++;
+            /* RFC 6455 5.1: the server MUST close the connection on an
+             * unmasked frame; 5.5.1: a close body is empty or starts with a
+             * two-byte code, so one byte is malformed (lws answers that with
+             * an empty close) */
+            if (!masked || (t->opcode == 8 && l7 == 1)) {
+                if (hdr0_at >= 0) b[hdr0_at] |= 0x40; /* lws: 1002 "rsv bits" */
+                else atomic_store(&t->bad, 1);
+                t->owner = NULL;                   /* the connection is over */
+                break;
+            }
+            t->len = l7;
+            t->need = l7 == 126 ? 2 : l7 == 127 ? 8 : 0;
+            t->have = 0;
+            if (t->need) t->len = 0;
+            t->state = t->need ? TRK_LEN : TRK_MASK;
+            break;
+        }
+        case TRK_LEN:
+            t->len = t->len << 8 | b[i++];
+            if (++t->have == t->need) {
+                t->have = 0;
+                t->state = TRK_MASK;
+            }
+            break;
+        case TRK_MASK:
+            t->mask[t->have++] = b[i++];
+            if (t->have == 4) {
+                t->have = 0;
+                t->left = t->len;
+                t->state = t->left ? TRK_PAYLOAD : TRK_HDR0;
+            }
+            break;
+        case TRK_PAYLOAD: {
+            uint64_t take = t->left < n - i ? t->left : n - i;
+            if (t->opcode == 8 && t->len <= sizeof t->ctl) {
+                for (uint64_t k = 0; k < take; k++) {
+                    size_t at = (size_t)(t->len - t->left + k);
+                    t->ctl[at] = b[i + k] ^ t->mask[at & 3];
+                    if (at < 2) code_at[at] = (long)(i + k);
+                }
+            }
+            i += take;
+            t->left -= take;
+            if (t->left == 0) {
+                if (t->opcode == 8 && close_code_bad(t->ctl, (size_t)t->len)) {
+                    if (t->len >= 2 && code_at[0] >= 0 && code_at[1] >= 0) {
+                        /* 999: a code lws refuses with 1002 itself */
+                        b[code_at[0]] = 0x03 ^ t->mask[0];
+                        b[code_at[1]] = 0xe7 ^ t->mask[1];
+                    } else if (t->len >= 2) {
+                        atomic_store(&t->bad, 1);
+                    }
+                }
+                t->state = TRK_HDR0;
+            }
+            break;
+        }
+        }
+    }
+}
+
+typedef ssize_t (*recv_fn)(int, void *, size_t, int);
+typedef int (*accept_fn)(int, struct sockaddr *, socklen_t *);
+static _Atomic(recv_fn) real_recv;
+static _Atomic(accept_fn) real_accept;
+
+ssize_t recv(int fd, void *buf, size_t len, int flags)
+{
+    recv_fn real = atomic_load(&real_recv);
+    if (!real) {
+        real = (recv_fn)dlsym(RTLD_NEXT, "recv");
+        atomic_store(&real_recv, real);
+    }
+    ssize_t r = real(fd, buf, len, flags);
+    ws_track *t;
+    if (r > 0 && !(flags & MSG_PEEK) && (t = trk_of(fd)) && t->owner) trk_feed(t, buf, (size_t)r);
+    return r;
+}
+
+/* ---- accept: never spin on EMFILE --------------------------------------------
+ *
+ * lws 4.1.6 logs and returns on an accept() failure, and the listening
+ * socket, still readable, brings it straight back: one core spinning and a
+ * log line per turn.  accept() is interposed as recv() is: a connection
+ * that would take one of the last FD_ACCEPT_SLACK descriptors is closed at
+ * once, and on EMFILE / ENFILE a spare descriptor is given up to accept the
+ * pending connection and close it (the nginx / libev way), so the backlog
+ * drains instead of spinning; either way lws sees EAGAIN, and the log gets
+ * one line a second with a count. */
+
+static int fd_limit;          /* soft RLIMIT_NOFILE after raising; 0: unknown */
+static int spare_fd = -1;
+static atomic_uint_fast64_t *accept_refused_ctr;
+static double accept_log_t;
+static unsigned accept_log_n;
+
+static void accept_note(const char *why)
+{
+    if (accept_refused_ctr) atomic_fetch_add(accept_refused_ctr, 1);
+    accept_log_n++;
+    double now = srv_now();
+    if (now - accept_log_t >= 1.0) {
+        fprintf(stderr, "oceand: %u connection(s) closed at accept in the last second: %s\n",
+                accept_log_n, why);
+        accept_log_t = now;
+        accept_log_n = 0;
+    }
+}
+
+int accept(int fd, struct sockaddr *addr, socklen_t *alen)
+{
+    accept_fn real = atomic_load(&real_accept);
+    if (!real) {
+        real = (accept_fn)dlsym(RTLD_NEXT, "accept");
+        atomic_store(&real_accept, real);
+    }
+    int r = real(fd, addr, alen);
+    if (r < 0 && (errno == EMFILE || errno == ENFILE) && spare_fd >= 0) {
+        close(spare_fd);
+        int c = real(fd, NULL, NULL);
+        if (c >= 0) close(c);
+        spare_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
+        accept_note("out of file descriptors (EMFILE)");
+        errno = EAGAIN;
+        return -1;
+    }
+    if (r >= 0 && fd_limit > 0 && r >= fd_limit - FD_ACCEPT_SLACK) {
+        close(r);
+        accept_note("file descriptors reserved (server.max_clients is clamped below the fd limit)");
+        errno = EAGAIN;
+        return -1;
+    }
+    return r;
+}
+
+/* Raises the soft fd limit to the hard one; returns the soft limit. */
+static int raise_fd_limit(void)
+{
+    struct rlimit rl;
+    if (getrlimit(RLIMIT_NOFILE, &rl) != 0) return 0;
+    if (rl.rlim_cur < rl.rlim_max) {
+        struct rlimit want = rl;
+        want.rlim_cur = rl.rlim_max;
+        if (setrlimit(RLIMIT_NOFILE, &want) == 0) rl = want;
+    }
+    if (rl.rlim_cur == RLIM_INFINITY || rl.rlim_cur > (1u << 20)) return 1 << 20;
+    return (int)rl.rlim_cur;
+}
 
 struct srv_net {
     srv_hub *hub;
@@ -28,6 +285,8 @@ struct srv_net {
     char web_root[SRV_PATH_MAX];
     struct lws_http_mount m_root, m_metrics, m_status;
     struct lws_protocols protocols[3];
+    lws_sorted_usec_list_t sweep;  /* [svc] limits are checked 4x a second even when idle */
+    int fd_clients;                /* [const] most clients the fd limit allows */
 };
 
 typedef struct ws_pss {
@@ -47,11 +306,25 @@ static void net_wake(void *ctx)
 
 /* ---- HTTP: /metrics and /status ------------------------------------------- */
 
-static void stats_view(srv_net *n, srv_stats_view *v, char *scene, size_t sl)
+/* Fills v; *per gets a malloc'ed per-client array (free it; NULL on OOM). */
+static void stats_view(srv_net *n, srv_stats_view *v, char *scene, size_t sl,
+                       srv_stats_client **per)
 {
     srv_hub *h = n->hub;
     memset(v, 0, sizeof *v);
     pthread_mutex_lock(&h->lock);
+    *per = h->n_clients > 0 ? calloc((size_t)h->n_clients, sizeof **per) : NULL;
+    int k = 0;
+    for (srv_client *c = h->clients; c && *per && k < h->n_clients; c = c->next) {
+        if (c->closed) continue;
+        srv_stats_client *o = &(*per)[k++];
+        o->id = c->id;
+        o->cpu_seconds = 1e-9 * (double)atomic_load(&c->cpu_ns);
+        o->bytes_out = (double)atomic_load(&c->bytes_out);
+        o->queued = (double)srv_client_queued(c);
+    }
+    v->per_client = *per;
+    v->n_per_client = k;
     v->clients = h->n_clients;
     v->subscribed = h->n_subscribed;
     v->tick_rate = h->settings.srv.tick_rate;
@@ -67,18 +340,53 @@ static void stats_view(srv_net *n, srv_stats_view *v, char *scene, size_t sl)
     v->port = n->port;
 }
 
+/* Writes a whole HTTP refusal of a WebSocket upgrade (the caller then
+ * returns nonzero, and lws closes).  426 carries Sec-WebSocket-Version: 13
+ * (RFC 6455 4.4). */
+static int refuse_upgrade(srv_net *n, struct lws *wsi, int status, const char *why)
+{
+    uint8_t buf[LWS_PRE + 600];
+    char *p = (char *)buf + LWS_PRE;
+    int body = (int)strlen(why) + 1;
+    int k = snprintf(p, 600, "HTTP/1.1 %d %s\r\n%sContent-Type: text/plain\r\n"
+                     "Content-Length: %d\r\nConnection: close\r\n\r\n%s\n", status,
+                     status == 426 ? "Upgrade Required" : "Bad Request",
+                     status == 426 ? "Sec-WebSocket-Version: 13\r\n" : "", body, why);
+    if (k > 0 && k < 600) lws_write(wsi, (unsigned char *)p, (size_t)k, LWS_WRITE_HTTP_HEADERS);
+    atomic_fetch_add(&n->hub->stats.refused_upgrade, 1);
+    return 1;
+}
+
+/* The checks of an upgrade libwebsockets leaves to us: version 13 only
+ * (lws 4.1.6 treats any version as 13), ocean.v1 only (an upgrade without
+ * a subprotocol lands on the HTTP protocol and would be held, uncounted). */
+static int filter_upgrade(srv_net *n, struct lws *wsi, int ocean)
+{
+    char ver[16] = "";
+    lws_hdr_copy(wsi, ver, sizeof ver, WSI_TOKEN_VERSION);
+    if (strcmp(ver, "13") != 0)
+        return refuse_upgrade(n, wsi, 426, "only WebSocket version 13 (RFC 6455) is spoken here");
+    if (!ocean)
+        return refuse_upgrade(n, wsi, 400, "WebSocket connections must ask for the ocean.v1 "
+                              "subprotocol (Sec-WebSocket-Protocol: ocean.v1)");
+    return 0;
+}
+
 static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
                    size_t len)
 {
     http_pss *pss = user;
     srv_net *n = lws_context_user(lws_get_context(wsi));
     switch (reason) {
+    case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION:
+        return filter_upgrade(n, wsi, 0);
     case LWS_CALLBACK_HTTP: {
         char uri[128] = "";
         lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI);
         srv_stats_view v;
+        srv_stats_client *per = NULL;
         char scene[OCEAN_SCENE_NAME_MAX];
-        stats_view(n, &v, scene, sizeof scene);
+        stats_view(n, &v, scene, sizeof scene, &per);
         const char *type;
         if (strncmp(uri, "/metrics", 8) == 0) {
             pss->body = srv_stats_prometheus(&n->hub->stats, &v, LWS_PRE, &pss->len);
@@ -87,8 +395,10 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
             pss->body = srv_stats_json(&n->hub->stats, &v, LWS_PRE, &pss->len);
             type = "application/json";
         } else {
+            free(per);
             return lws_callback_http_dummy(wsi, reason, user, in, len);
         }
+        free(per);
         if (!pss->body) {
             lws_return_http_status(wsi, HTTP_STATUS_INTERNAL_SERVER_ERROR, "out of memory");
             return -1;
@@ -124,12 +434,41 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
 
 /* ---- WebSocket: ocean.v1 ----------------------------------------------------- */
 
-static void kill_client(srv_client *c, const char *why)
+static void kill_client_code(srv_client *c, enum lws_close_status code, const char *why)
 {
     if (!c->wsi || c->closing == 3) return;
     c->closing = 3;
-    lws_close_reason(c->wsi, LWS_CLOSE_STATUS_POLICY_VIOLATION, (unsigned char *)why, strlen(why));
+    size_t n = strlen(why);
+    if (n > 123) n = 123; /* a close frame's payload is at most 125 bytes */
+    lws_close_reason(c->wsi, code, (unsigned char *)why, n);
     lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_ASYNC);
+}
+
+static void kill_client(srv_client *c, const char *why)
+{
+    kill_client_code(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, why);
+}
+
+/* The client's read budget after refilling to now (server.read_rate, one
+ * max_message plus one read buffer deep) [svc]. */
+static double rx_budget(srv_client *c, const srv_config *cfg, double now)
+{
+    double depth = (double)cfg->max_message + 65536;
+    if (c->rx_tokens_t == 0) c->rx_tokens = depth;
+    else c->rx_tokens += (now - c->rx_tokens_t) * cfg->read_rate;
+    if (c->rx_tokens > depth) c->rx_tokens = depth;
+    c->rx_tokens_t = now;
+    return c->rx_tokens;
+}
+
+/* Releases what c's unfinished message holds [svc]. */
+static void rx_release(srv_hub *h, srv_client *c)
+{
+    h->partial_held -= c->rx_held;
+    c->rx_held = 0;
+    free(c->rx);
+    c->rx = NULL;
+    c->rx_cap = c->rx_len = 0;
 }
 
 /* Runs on every wake: hands writable requests to lws, enforces limits,
@@ -147,6 +486,29 @@ static void on_wake(srv_net *n)
     }
     for (srv_client *c = h->clients; c; c = c->next) {
         if (!c->wsi || c->closed) continue;
+        atomic_store(&c->output_hard, cfg.output_hard);
+        ws_track *t = trk_of(lws_get_socket_fd(c->wsi));
+        if (t && t->owner == c->wsi && atomic_load(&t->bad)) {
+            atomic_fetch_add(&h->stats.disconnects_protocol, 1);
+            kill_client_code(c, LWS_CLOSE_STATUS_PROTOCOL_ERR, "protocol error (RFC 6455)");
+            continue;
+        }
+        if (atomic_load(&c->over_hard)) {
+            atomic_fetch_add(&h->stats.disconnects_output, 1);
+            atomic_fetch_add(&h->stats.disconnects_slow, 1);
+            kill_client(c, "output over server.output_hard: replies queued faster than read");
+            continue;
+        }
+        if (c->rx_paused && rx_budget(c, &cfg, now) > 0) {
+            c->rx_paused = 0;
+            lws_rx_flow_control(c->wsi, 1);
+        }
+        /* (not while we hold its reading back ourselves) */
+        if (c->rx_started > 0 && now - c->rx_started > cfg.partial_seconds && !c->rx_paused) {
+            atomic_fetch_add(&h->stats.disconnects_partial, 1);
+            kill_client(c, "message unfinished for server.partial_seconds");
+            continue;
+        }
         if (stopping && c->closing != 1 && c->closing != 3 && c->closing != 4) {
             /* queue BYE after whatever is queued; frames stop mattering */
             c->closing = 1;
@@ -221,6 +583,7 @@ static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now
         return;
     }
     c->last_progress = now;
+    atomic_fetch_add(&c->bytes_out, len);
     atomic_fetch_add(&h->stats.bytes_sent, len);
     atomic_fetch_add(&h->stats.messages_sent, 1);
     if (m->is_frame) {
@@ -244,14 +607,26 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
     case LWS_CALLBACK_EVENT_WAIT_CANCELLED:
         if (n) on_wake(n);
         break;
+    case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION:
+        if (filter_upgrade(n, wsi, 1)) return 1;
+        trk_register(wsi);
+        break;
+    case LWS_CALLBACK_WSI_DESTROY:
+        trk_forget(wsi);
+        break;
     case LWS_CALLBACK_ESTABLISHED: {
         srv_client *c;
         if (srv_client_create(h, wsi, &c) != OCEAN_OK) return -1;
         pss->c = c;
         pthread_mutex_lock(&h->lock);
-        int full = h->n_clients > h->settings.srv.max_clients;
+        int maxc = h->settings.srv.max_clients;
+        if (n->fd_clients > 0 && maxc > n->fd_clients) maxc = n->fd_clients;
+        int full = h->n_clients > maxc;
         int stopping = h->stopping;
         int record = h->settings.srv.record;
+        int record_clients = h->settings.srv.record_clients;
+        int record_files = h->settings.srv.record_max_files;
+        uint64_t record_bytes = h->settings.srv.record_max_bytes;
         char dir[SRV_PATH_MAX], scene[OCEAN_SCENE_NAME_MAX];
         snprintf(dir, sizeof dir, "%s", h->settings.srv.record_dir);
         snprintf(scene, sizeof scene, "%s", h->settings.scene.name);
@@ -268,15 +643,34 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         }
         char arg[16];
         if (lws_get_urlarg_by_name(wsi, "record", arg, sizeof arg) &&
-            (strcmp(arg, "record=1") == 0 || strcmp(arg, "1") == 0))
-            record = 1;
+            (strcmp(arg, "record=1") == 0 || strcmp(arg, "1") == 0)) {
+            /* A client's own request writes a file on the server's disk:
+             * only when the operator allows it, and within the quotas. */
+            if (record_clients) record = 1;
+            else if (verbose)
+                fprintf(stderr, "oceand: client %u: ?record=1 ignored (server.record_clients "
+                        "is off)\n", c->id);
+        }
+        if (record && atomic_load(&h->record_files) >= (uint64_t)record_files) {
+            fprintf(stderr, "oceand: client %u: not recording: %d recordings opened this run "
+                    "(server.record_max_files)\n", c->id, record_files);
+            record = 0;
+        }
+        if (record && atomic_load(&h->record_bytes) >= record_bytes) {
+            fprintf(stderr, "oceand: client %u: not recording: server.record_max_bytes "
+                    "written this run\n", c->id);
+            record = 0;
+        }
         if (record) {
             char path[1100], msg[300];
             if (srv_record_open(dir, c->id, scene, "live", &c->rec, path, sizeof path, msg,
-                                sizeof msg) != OCEAN_OK)
+                                sizeof msg) != OCEAN_OK) {
                 fprintf(stderr, "oceand: client %u: not recording: %s\n", c->id, msg);
-            else if (verbose)
-                fprintf(stderr, "oceand: client %u: recording to %s\n", c->id, path);
+            } else {
+                atomic_fetch_add(&h->record_files, 1);
+                srv_record_set_quota(c->rec, &h->record_bytes, record_bytes);
+                if (verbose) fprintf(stderr, "oceand: client %u: recording to %s\n", c->id, path);
+            }
         }
         if (verbose) fprintf(stderr, "oceand: client %u connected\n", c->id);
         srv_client_send_hello(c);
@@ -286,13 +680,32 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
     case LWS_CALLBACK_RECEIVE: {
         srv_client *c = pss->c;
         if (!c || c->closing) break;
+        ws_track *t = trk_of(lws_get_socket_fd(wsi));
+        if (t && t->owner == wsi && atomic_load(&t->bad)) {
+            atomic_fetch_add(&h->stats.disconnects_protocol, 1);
+            lws_close_reason(wsi, LWS_CLOSE_STATUS_PROTOCOL_ERR, (unsigned char *)"protocol error (RFC 6455)", 25);
+            return -1;
+        }
         pthread_mutex_lock(&h->lock);
-        size_t maxm = (size_t)h->settings.srv.max_message;
+        srv_config cfg = h->settings.srv;
         pthread_mutex_unlock(&h->lock);
+        size_t maxm = (size_t)cfg.max_message;
+        uint64_t total = cfg.partial_total;
+        /* Fair reading: a client that sends faster than server.read_rate
+         * is paused (lws stops reading its socket; TCP pushes back) until
+         * its budget refills, so the decoding of one client's flood of
+         * large messages cannot hold the service thread from the others. */
+        rx_budget(c, &cfg, srv_now());
+        c->rx_tokens -= (double)len;
+        if (c->rx_tokens < 0 && !c->rx_paused) {
+            c->rx_paused = 1;
+            lws_rx_flow_control(wsi, 0);
+        }
         if (lws_is_first_fragment(wsi)) {
             c->rx_len = 0;
             c->rx_discard = 0;
             c->rx_discarded = 0;
+            c->rx_started = srv_now();
         }
         if (!c->rx_discard && c->rx_len + len > maxm) {
             c->rx_discard = 1;
@@ -310,18 +723,29 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
             if (c->rx_len + len > c->rx_cap) {
                 size_t nc = c->rx_cap ? c->rx_cap : 4096;
                 while (nc < c->rx_len + len) nc *= 2;
+                if (nc > maxm + 4096) nc = maxm + 4096;
+                /* Unfinished messages of every client together stay under
+                 * server.partial_total: whoever would pass it goes. */
+                if (h->partial_held - c->rx_held + nc > total) {
+                    atomic_fetch_add(&h->stats.disconnects_partial, 1);
+                    rx_release(h, c);
+                    lws_close_reason(wsi, LWS_CLOSE_STATUS_POLICY_VIOLATION,
+                                     (unsigned char *)"unfinished messages over server.partial_total", 45);
+                    return -1;
+                }
                 uint8_t *nb = realloc(c->rx, nc);
                 if (!nb) return -1;
                 c->rx = nb;
-                c->rx_cap = nc;
+                h->partial_held += nc - c->rx_held;
+                c->rx_held = c->rx_cap = nc;
             }
             memcpy(c->rx + c->rx_len, in, len);
             c->rx_len += len;
         }
         if (!lws_is_final_fragment(wsi) || lws_remaining_packet_payload(wsi)) break;
+        c->rx_started = 0;
         if (!lws_frame_is_binary(wsi)) {
-            srv_client_send_error(c, NULL, 0, OCEAN_EFORMAT,
-                                  "text messages are not part of ocean.v1: send binary WebSocket messages");
+            srv_client_handle_text(c);
         } else if (c->rx_discard) {
             char why[200];
             snprintf(why, sizeof why, "message of %zu bytes or more exceeds server.max_message (%zu bytes)",
@@ -333,11 +757,14 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         c->rx_len = 0;
         c->rx_discard = 0;
         if (atomic_exchange(&c->want_write, 0) || c->closing) lws_callback_on_writable(wsi);
-        /* a big reassembly buffer is not kept for the connection's life */
-        if (c->rx_cap > (1u << 20)) {
-            free(c->rx);
-            c->rx = NULL;
-            c->rx_cap = 0;
+        /* Between messages only a small buffer is kept, and it does not
+         * count as unfinished: server.partial_total bounds what clients
+         * hold mid-message, not what they once sent. */
+        if (c->rx_cap > 4096) {
+            rx_release(h, c);
+        } else {
+            h->partial_held -= c->rx_held;
+            c->rx_held = 0;
         }
         break;
     }
@@ -350,8 +777,10 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         break;
     }
     case LWS_CALLBACK_CLOSED: {
+        trk_forget(wsi);
         srv_client *c = pss->c;
         if (!c) break;
+        rx_release(h, c);
         pthread_mutex_lock(&h->lock);
         int verbose = h->settings.srv.verbose;
         pthread_mutex_unlock(&h->lock);
@@ -378,6 +807,23 @@ ocean_result srv_net_create(srv_hub *h, srv_net **out, char *msg, size_t msglen)
     pthread_mutex_unlock(&h->lock);
     snprintf(n->web_root, sizeof n->web_root, "%s", cfg.web_root);
     lws_set_log_level(cfg.verbose ? (LLL_ERR | LLL_WARN | LLL_NOTICE) : LLL_ERR, NULL);
+
+    /* Every client is a descriptor: take the hard limit, and serve no more
+     * clients than it allows (lws sizes its tables from the soft limit at
+     * context creation, so this comes first). */
+    int lim = raise_fd_limit();
+    if (lim > 0) {
+        fd_limit = lim;
+        n->fd_clients = lim - FD_RESERVE > 1 ? lim - FD_RESERVE : 1;
+        if (cfg.max_clients > n->fd_clients)
+            fprintf(stderr, "oceand: server.max_clients %d is above what the file descriptor "
+                    "limit allows (RLIMIT_NOFILE %d, %d kept for the daemon): serving at most %d "
+                    "clients; raise the limit (ulimit -n, LimitNOFILE=) to serve more\n",
+                    cfg.max_clients, lim, FD_RESERVE, n->fd_clients);
+        trk_init(lim);
+    }
+    if (spare_fd < 0) spare_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
+    accept_refused_ctr = &h->stats.accept_refused;
 
     n->protocols[0] = (struct lws_protocols){"http", cb_http, sizeof(http_pss), 0, 0, NULL, 0};
     /* tx_packet_size: a FRAME goes to send() whole.  Left at 0, lws caps
@@ -407,7 +853,9 @@ ocean_result srv_net_create(srv_hub *h, srv_net **out, char *msg, size_t msglen)
     info.mounts = &n->m_root;
     info.user = n;
     info.count_threads = 1;
-    info.options = LWS_SERVER_OPTION_DISABLE_IPV6;
+    /* VALIDATE_UTF8: invalid UTF-8 in a text frame closes with 1007
+     * (RFC 6455 8.1) */
+    info.options = LWS_SERVER_OPTION_DISABLE_IPV6 | LWS_SERVER_OPTION_VALIDATE_UTF8;
     info.ka_time = 0;
     n->ctx = lws_create_context(&info);
     if (!n->ctx) {
@@ -426,10 +874,20 @@ ocean_result srv_net_create(srv_hub *h, srv_net **out, char *msg, size_t msglen)
 
 int srv_net_port(const srv_net *n) { return n->port; }
 
+/* Limits with a deadline (unfinished messages, output waiting) are checked
+ * four times a second even when nothing wakes the service thread. */
+static void sweep_cb(lws_sorted_usec_list_t *sul)
+{
+    srv_net *n = (srv_net *)((char *)sul - offsetof(srv_net, sweep));
+    on_wake(n);
+    lws_sul_schedule(n->ctx, 0, &n->sweep, sweep_cb, 250 * LWS_US_PER_MS);
+}
+
 static void *net_main(void *arg)
 {
     srv_net *n = arg;
     srv_hub *h = n->hub;
+    lws_sul_schedule(n->ctx, 0, &n->sweep, sweep_cb, 250 * LWS_US_PER_MS);
     for (;;) {
         if (lws_service(n->ctx, 0) < 0) break;
         if (n->stop_phase) {
@@ -468,6 +926,10 @@ void srv_net_destroy(srv_net *n)
     if (!n) return;
     srv_net_stop(n, 0);
     n->hub->wake_net = NULL;
-    if (n->ctx) lws_context_destroy(n->ctx);
+    if (accept_refused_ctr == &n->hub->stats.accept_refused) accept_refused_ctr = NULL;
+    if (n->ctx) {
+        lws_sul_cancel(&n->sweep);
+        lws_context_destroy(n->ctx);
+    }
     free(n);
 }

@@ -4,6 +4,7 @@
 #include "srv_record.h"
 
 #include <errno.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -13,7 +14,13 @@ struct srv_record {
     FILE *f;
     double last_flush;
     int failed;
+    atomic_uint_fast64_t *used;   /* bytes written by every recording of the run */
+    uint64_t quota;
 };
+
+/* Longest report line srv_record_format writes: 4 %.17g (24 chars each),
+ * 7 %.9g (16), 2 %u (5), 12 commas and a newline. */
+#define LINE_MAX_BYTES 320
 
 static double mono(void)
 {
@@ -58,10 +65,24 @@ int srv_record_format(FILE *f, double t, const proto_camera *c)
                    (double)c->roll_deg, (double)c->fov_y_deg, c->viewport_w, c->viewport_h);
 }
 
+void srv_record_set_quota(srv_record *r, atomic_uint_fast64_t *used, uint64_t quota)
+{
+    if (!r) return;
+    r->used = used;
+    r->quota = quota;
+}
+
 ocean_result srv_record_camera(srv_record *r, double t, const proto_camera *cam)
 {
     if (!r || r->failed) return OCEAN_OK;
-    int bad = srv_record_format(r->f, t, cam) < 0;
+    if (r->used && atomic_load(r->used) + LINE_MAX_BYTES > r->quota) {
+        r->failed = 1;
+        fflush(r->f);
+        return OCEAN_ETOOBIG;
+    }
+    int n = srv_record_format(r->f, t, cam);
+    int bad = n < 0;
+    if (!bad && r->used) atomic_fetch_add(r->used, (uint64_t)n);
     double now = mono();
     if (!bad && now - r->last_flush >= 1.0) {
         bad = fflush(r->f) != 0;

@@ -6,6 +6,7 @@
 #ifndef SRV_RECORD_H
 #define SRV_RECORD_H
 
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 
@@ -20,9 +21,12 @@ typedef struct srv_record srv_record;
 ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *scene,
                              const char *mode, srv_record **out, char *path, size_t pathlen,
                              char *msg, size_t msglen);
+/* Counts what r writes into *used, shared by every recording of a run; a
+ * report that could take *used past quota stops the recording instead. */
+void srv_record_set_quota(srv_record *r, atomic_uint_fast64_t *used, uint64_t quota);
 /* Appends one report at sim time t.  Buffered; flushed at most once a
  * second.  After a write error the recording stops and OCEAN_EIO is
- * returned (once). */
+ * returned (once); at the quota, OCEAN_ETOOBIG (once). */
 ocean_result srv_record_camera(srv_record *r, double t, const proto_camera *cam);
 /* Writes one report line to f in the recording format (shared with tests). */
 int srv_record_format(FILE *f, double t, const proto_camera *cam);

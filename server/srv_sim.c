@@ -24,6 +24,7 @@
 #include "query.h"
 #include "srv_cascade.h"
 #include "srv_tiles.h"
+#include "srv_work.h"
 
 #define EVAL_MAX 8
 #define MAX_TILES_PER_JOB (PROTO_MAX_LOD_LEVELS * 64)
@@ -92,6 +93,8 @@ struct srv_sim {
     uint64_t gen;
     uint64_t tick_no;
     double camera_hint[5];
+    srv_work *work;             /* queries in slices (srv_work.c) */
+    double work_due;            /* monotonic: background work's next turn */
 };
 
 /* ---- ocean construction ----------------------------------------------------- */
@@ -163,6 +166,7 @@ ocean_result srv_sim_create(srv_hub *h, srv_sim **out, char *msg, size_t msglen)
     ocean_result r = make_ocean(&s->set, &s->set.params, &s->oc, &s->g, msg, msglen);
     if (r == OCEAN_OK) r = srv_tiles_create(&s->tiles);
     if (r == OCEAN_OK) r = srv_cascade_create(&s->casc);
+    if (r == OCEAN_OK) r = srv_work_create(&s->work);
     if (r != OCEAN_OK) {
         srv_sim_destroy(s);
         return r;
@@ -180,6 +184,7 @@ void srv_sim_destroy(srv_sim *s)
 {
     if (!s) return;
     srv_sim_stop(s);
+    srv_work_destroy(s->work);
     eval_clear(s);
     srv_tiles_destroy(s->tiles);
     srv_cascade_destroy(s->casc);
@@ -474,6 +479,27 @@ static void mesh_stage(srv_sim *s, job *j)
     if (!cs->mesh) return;
     mesh_camera mc;
     srv_mesh_camera(&j->cam, &mc);
+    /* Priced before it is built: a camera the protocol allows may ask for
+     * a mesh no server should build (a 1-degree 1080p camera: 10^7
+     * vertices).  Its frames come without a mesh, with one ERROR naming
+     * the limit, until a camera asks for less. */
+    double est = 0;
+    if (mesh_estimate_vertices(&cs->mesh_cfg, &mc, &est) == OCEAN_OK &&
+        est > s->set.srv.max_mesh_vertices) {
+        if (!cs->mesh_over) {
+            char why[320];
+            snprintf(why, sizeof why, "camera %u: its %s mesh is estimated at %.4g vertices, above "
+                     "the server's limit of %d (server.max_mesh_vertices); frames come without a "
+                     "mesh until a camera asks for less (wider fov, smaller viewport or range)",
+                     j->cam_seq, mesh_kind_name(cs->mesh_cfg.kind), est, s->set.srv.max_mesh_vertices);
+            atomic_fetch_add(&s->hub->stats.refused_mesh, 1);
+            srv_client_send_error(c, NULL, 0, OCEAN_ETOOBIG, why);
+            cs->mesh_over = 1;
+        }
+        return;
+    }
+    cs->mesh_over = 0;
+    double m0 = srv_now();
     ocean_result r = mesh_build(cs->mesh, &mc);
     if (r == OCEAN_OK) {
         sampler_ctx sc;
@@ -491,6 +517,7 @@ static void mesh_stage(srv_sim *s, job *j)
         }
         r = mesh_displace(cs->mesh, sample_disp, &sc);
     }
+    atomic_fetch_add(&c->cpu_ns, (uint64_t)((srv_now() - m0) * 1e9));
     if (r == OCEAN_OK) {
         mesh_get_view(cs->mesh, &j->mv);
         if (j->mv.levels > PROTO_MAX_LOD_LEVELS || j->mv.vertex_count == 0) r = OCEAN_ETOOBIG;
@@ -849,54 +876,23 @@ static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
     srv_hub_wake_net(s->hub);
 }
 
-/* ---- queries ------------------------------------------------------------------ */
+/* ---- queries (answered in slices by srv_work.c) ---------------------------------- */
 
-static void answer_query(srv_sim *s, srv_client *c, srv_query *q, double t_now)
+static const ocean_frame *query_eval(void *ctx, double t, int cached_only)
 {
-    double t = q->at_time ? q->t : t_now;
+    srv_sim *s = ctx;
     group g = {-1, ocean_get_params(s->oc)->cascades, 1.0f};
-    eval_entry *e = evaluate(s, t, &g, OCEAN_QUERY_EFFECTS);
-    ocean_query_result *res = e ? calloc(q->count, sizeof *res) : NULL;
-    proto_query_sample *smp = res ? calloc(q->count, sizeof *smp) : NULL;
-    if (!smp) {
-        free(res);
-        srv_client_send_error(c, NULL, 0, OCEAN_ENOMEM, "query could not be answered: out of memory");
-        return;
-    }
-    ocean_query_options opt;
-    ocean_query_options_default(&opt);
-    size_t bad = 0;
-    ocean_result r = ocean_query_points(e->f, s->g, NULL, t, q->points, q->count, &opt, res, &bad);
-    if (r != OCEAN_OK) {
-        char why[200];
-        snprintf(why, sizeof why, "query %u: point %zu refused (%s)", q->query_id, bad, ocean_strerror(r));
-        srv_client_send_error(c, NULL, 0, r, why);
-    } else {
-        for (uint32_t i = 0; i < q->count; i++) {
-            const ocean_query_result *a = &res[i];
-            proto_query_sample *o = &smp[i];
-            o->height = (float)a->height;
-            for (int k = 0; k < 3; k++) {
-                o->normal[k] = (float)a->normal[k];
-                o->velocity[k] = (float)a->velocity[k];
-            }
-            o->foam = (float)(a->foam < 0 ? 0 : a->foam > 1 ? 1 : a->foam);
-            o->error_bound = (float)(a->error >= 0 && isfinite(a->error) ? a->error : 0);
+    if (cached_only) {
+        for (int i = 0; i < EVAL_MAX; i++) {
+            eval_entry *e = &s->ev[i];
+            if (e->used && e->t == t && group_eq(&e->g, &g) &&
+                (e->effects & OCEAN_QUERY_EFFECTS) == OCEAN_QUERY_EFFECTS)
+                return e->f;
         }
-        proto_msg m;
-        proto_msg_init(&m, PROTO_QUERY_RESULT);
-        m.hdr.sim_time = t;
-        m.u.result.query_id = q->query_id;
-        m.u.result.count = q->count;
-        m.u.result.t = t;
-        m.u.result.samples = smp;
-        srv_msg *out = encode_msg(&m);
-        if (out) srv_client_queue(c, out);
-        atomic_fetch_add(&s->hub->stats.queries, 1);
-        atomic_fetch_add(&s->hub->stats.query_points, q->count);
+        return NULL;
     }
-    free(res);
-    free(smp);
+    eval_entry *e = evaluate(s, t, &g, OCEAN_QUERY_EFFECTS);
+    return e ? e->f : NULL;
 }
 
 /* ---- sea changes ------------------------------------------------------------ */
@@ -980,9 +976,6 @@ typedef struct work {
     int njobs, capjobs;
     srv_cascade_job *cjobs;   /* layout 1 */
     int ncjobs, capcjobs;
-    srv_query **q;       /* taken queries, parallel to qc */
-    srv_client **qc;
-    int nq, capq, capqc;
 } work;
 
 static int grow(void **p, int *cap, int need, size_t el)
@@ -1010,13 +1003,18 @@ static void *sim_main(void *arg)
             if (s->stop) break;
             double now = srv_now();
             int pending = h->sea_req.pending || h->settings_gen != s->set_gen;
-            for (srv_client *c = h->clients; c && !pending; c = c->next)
-                if (!c->closed && (c->queries || c->replay)) pending = 1;
+            /* queries and replay frames run in bounded slices, at most one
+             * turn per tick period (srv_work.c, server.replay_per_tick) */
+            int bg = srv_work_busy(s->work);
+            for (srv_client *c = h->clients; c && !bg; c = c->next)
+                if (!c->closed && (c->queries || c->replay)) bg = 1;
+            if (bg && now >= s->work_due) pending = 1;
             if (h->n_subscribed > 0 && now >= next_tick_wall) live_due = 1;
             if (live_due || pending || (s->next_oc && h->n_subscribed == 0 &&
                                         now - h->wall0 >= s->next_eff)) break;
             struct timespec ts;
             double until = h->n_subscribed > 0 ? next_tick_wall : now + 1.0;
+            if (bg && s->work_due < until) until = s->work_due;
             if (s->next_oc && h->wall0 + s->next_eff < until) until = h->wall0 + s->next_eff;
             if (h->n_subscribed == 0) atomic_fetch_add(&h->stats.idle_ticks, 1);
             ts_from(until, &ts);
@@ -1042,22 +1040,13 @@ static void *sim_main(void *arg)
         srv_sea_request req = h->sea_req;
         h->sea_req.pending = 0;
         /* snapshot */
-        w.ncl = w.njobs = w.nq = 0;
+        w.ncl = w.njobs = 0;
         uint64_t tick_no = (uint64_t)floor((t0 - h->wall0) * rate);
         double t = (double)tick_no / rate;
         double tick_wall = h->wall0 + t;
         for (srv_client *c = h->clients; c; c = c->next) {
             if (c->closed) continue;
-            while (c->queries) {
-                if (!grow((void **)&w.q, &w.capq, w.nq + 1, sizeof *w.q) ||
-                    !grow((void **)&w.qc, &w.capqc, w.nq + 1, sizeof *w.qc)) break;
-                srv_query *q = c->queries;
-                c->queries = q->next;
-                c->n_queries--;
-                srv_client_ref(c);
-                w.q[w.nq] = q;
-                w.qc[w.nq++] = c;
-            }
+            srv_work_take(s->work, c, t);
             if (!c->subscribed) continue;
             if (!grow((void **)&w.cl, &w.capcl, w.ncl + 1, sizeof *w.cl)) break;
             srv_client_ref(c);
@@ -1069,7 +1058,8 @@ static void *sim_main(void *arg)
                 changed = 1;
             }
             if (c->sub.mode == PROTO_MODE_REPLAY) {
-                while (c->replay && w.njobs < 4096) {
+                int taken = 0;
+                while (c->replay && w.njobs < 4096 && taken++ < s->set.srv.replay_per_tick) {
                     if (!grow((void **)&w.jobs, &w.capjobs, w.njobs + 1, sizeof *w.jobs)) break;
                     srv_replay_cam *rc = c->replay;
                     c->replay = rc->next;
@@ -1178,14 +1168,10 @@ static void *sim_main(void *arg)
             run_batch(s, w.jobs + start, end - start, tick_wall);
             start = end;
         }
-        /* queries */
-        for (int i = 0; i < w.nq; i++) {
-            answer_query(s, w.qc[i], w.q[i], t);
-            free(w.q[i]->points);
-            free(w.q[i]);
-            srv_client_unref(w.qc[i]);
-        }
-        if (w.nq) srv_hub_wake_net(h);
+        /* queries: a bounded slice of work per tick */
+        if (srv_work_busy(s->work))
+            srv_work_queries(s->work, h, query_eval, s, s->g, 1e-3 * s->set.srv.query_ms);
+        s->work_due = t0 + 1.0 / rate;
         for (int i = 0; i < w.ncl; i++) srv_client_unref(w.cl[i]);
         if (live_due) {
             srv_tiles_sweep(s->tiles, s->gen > 1 ? s->gen - 1 : 0);
@@ -1201,8 +1187,6 @@ static void *sim_main(void *arg)
     free(w.cl);
     free(w.jobs);
     free(w.cjobs);
-    free(w.q);
-    free(w.qc);
     return NULL;
 }
 

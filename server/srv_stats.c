@@ -112,6 +112,46 @@ char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t h
            (double)LD(refused_full));
     metric(&b, "oceand_sea_changes_total", "counter", "Sea-state changes applied.", (double)LD(sea_changes));
     metric(&b, "oceand_reloads_total", "counter", "Configuration reloads (SIGHUP).", (double)LD(reloads));
+    metric(&b, "oceand_refused_rate_total", "counter", "Messages refused over server.msg_rate "
+           "(text frames included).", (double)LD(refused_rate));
+    metric(&b, "oceand_refused_silent_total", "counter", "Refusals not answered: one ERROR a "
+           "second at most per client.", (double)LD(refused_silent));
+    metric(&b, "oceand_refused_mesh_total", "counter", "Meshes refused above "
+           "server.max_mesh_vertices (estimated before building).", (double)LD(refused_mesh));
+    metric(&b, "oceand_refused_upgrade_total", "counter", "WebSocket upgrades refused (no "
+           "ocean.v1 subprotocol, version other than 13).", (double)LD(refused_upgrade));
+    metric(&b, "oceand_refused_accept_total", "counter", "Connections closed at accept: file "
+           "descriptors reserved.", (double)LD(accept_refused));
+    metric(&b, "oceand_disconnects_partial_total", "counter", "Clients dropped for an unfinished "
+           "message (server.partial_seconds, server.partial_total).", (double)LD(disconnects_partial));
+    metric(&b, "oceand_disconnects_output_total", "counter", "Clients dropped when a reply "
+           "would pass server.output_hard as it was queued.", (double)LD(disconnects_output));
+    metric(&b, "oceand_disconnects_protocol_total", "counter", "Clients closed for breaking "
+           "RFC 6455 (unmasked frame, bad close code).", (double)LD(disconnects_protocol));
+    metric(&b, "oceand_admin_misses_total", "counter", "Wrong admin tokens.", (double)LD(admin_misses));
+    metric(&b, "oceand_admin_locked_total", "counter", "SEA_STATE sets refused in an admin "
+           "lockout.", (double)LD(admin_locked));
+    metric(&b, "oceand_query_slices_total", "counter", "Slices of QUERY work run (a query "
+           "larger than a tick's budget takes several).", (double)LD(query_slices));
+    if (v->n_per_client > 0) {
+        sb_printf(&b, "# HELP oceand_client_cpu_seconds_total Simulation-thread time spent on "
+                      "one client's queries, replay frames and meshes.\n"
+                      "# TYPE oceand_client_cpu_seconds_total counter\n");
+        for (int i = 0; i < v->n_per_client; i++)
+            sb_printf(&b, "oceand_client_cpu_seconds_total{client=\"%u\"} %.9g\n",
+                      v->per_client[i].id, v->per_client[i].cpu_seconds);
+        sb_printf(&b, "# HELP oceand_client_bytes_sent_total Bytes sent to one client.\n"
+                      "# TYPE oceand_client_bytes_sent_total counter\n");
+        for (int i = 0; i < v->n_per_client; i++)
+            sb_printf(&b, "oceand_client_bytes_sent_total{client=\"%u\"} %.17g\n",
+                      v->per_client[i].id, v->per_client[i].bytes_out);
+        sb_printf(&b, "# HELP oceand_client_queued_bytes Bytes queued for one client "
+                      "(allocated size; server.output_hard bounds it).\n"
+                      "# TYPE oceand_client_queued_bytes gauge\n");
+        for (int i = 0; i < v->n_per_client; i++)
+            sb_printf(&b, "oceand_client_queued_bytes{client=\"%u\"} %.17g\n",
+                      v->per_client[i].id, v->per_client[i].queued);
+    }
     metric(&b, "oceand_tick_to_send_p50_seconds", "gauge", "Median time from a tick to the "
            "write of its frame.", srv_stats_latency_quantile(s, 0.5));
     metric(&b, "oceand_tick_to_send_p99_seconds", "gauge", "99th percentile of the same.",
@@ -150,8 +190,11 @@ char *srv_stats_json(const srv_stats *s, const srv_stats_view *v, size_t headroo
     }
     cJSON_AddNumberToObject(o, "ticks", (double)LD(ticks));
     cJSON_AddNumberToObject(o, "idle_ticks", (double)LD(idle_ticks));
-    uint64_t busy = LD(ticks) - LD(idle_ticks);
-    cJSON_AddNumberToObject(o, "tick_ms_mean", busy ? (double)LD(tick_ns_total) * 1e-6 / (double)busy : 0);
+    /* ticks counts only ticks that ran (tick_ns_total is theirs); idle
+     * ticks are counted apart and may outnumber them, so no subtraction:
+     * ticks - idle_ticks wrapped (unsigned) to a mean of 7.6e-18 ms. */
+    uint64_t ran = LD(ticks);
+    cJSON_AddNumberToObject(o, "tick_ms_mean", ran ? (double)LD(tick_ns_total) * 1e-6 / (double)ran : 0);
     cJSON_AddNumberToObject(o, "evaluations", (double)LD(evaluations));
     cJSON_AddNumberToObject(o, "transforms", (double)LD(transforms));
     cJSON_AddNumberToObject(o, "frames_built", (double)LD(frames_built));

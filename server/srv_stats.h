@@ -24,6 +24,10 @@ typedef struct srv_stats {
     atomic_uint_fast64_t queries, query_points, errors_sent;
     atomic_uint_fast64_t connections_total, disconnects_slow, refused_full;
     atomic_uint_fast64_t sea_changes, reloads;
+    /* issue 15: what was refused to keep one client from hurting the others */
+    atomic_uint_fast64_t refused_rate, refused_silent, refused_mesh, refused_upgrade;
+    atomic_uint_fast64_t disconnects_partial, disconnects_output, disconnects_protocol;
+    atomic_uint_fast64_t admin_misses, admin_locked, accept_refused, query_slices;
     atomic_uint_fast64_t lat_hist[SRV_LAT_BUCKETS];
 } srv_stats;
 
@@ -32,8 +36,18 @@ void srv_stats_latency(srv_stats *s, double seconds);
 /* Quantile q (0..1) of the recorded latencies, seconds (upper bucket edge); 0 if none. */
 double srv_stats_latency_quantile(const srv_stats *s, double q);
 
+/* One client's share, for /metrics. */
+typedef struct srv_stats_client {
+    uint32_t id;
+    double cpu_seconds;          /* simulation-thread time on its requests */
+    double bytes_out;            /* bytes sent to it */
+    double queued;               /* bytes queued for it (allocated size) */
+} srv_stats_client;
+
 /* Facts that are not counters, for the renderers. */
 typedef struct srv_stats_view {
+    const srv_stats_client *per_client;  /* n_per_client entries (may be 0) */
+    int n_per_client;
     int clients, subscribed;
     double sim_time, tick_rate;
     const char *scene;

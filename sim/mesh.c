@@ -78,7 +78,7 @@ ocean_result mesh_camera_validate(const mesh_camera *c, char *msg, size_t msglen
     if (!c)
         FAIL("camera: NULL");
     for (int i = 0; i < 3; i++) {
-        double lim = i == 1 ? 1e6 : 1e9;
+        double lim = i == 1 ? 1e7 : 1e10;
         if (!isfinite(c->pos[i]) || fabs(c->pos[i]) > lim)
             FAIL("camera position[%d]: %g is not finite or beyond %g m", i, c->pos[i], lim);
     }
@@ -88,8 +88,11 @@ ocean_result mesh_camera_validate(const mesh_camera *c, char *msg, size_t msglen
         FAIL("camera pitch: %g outside [-90, 90] degrees", c->pitch_deg);
     if (!isfinite(c->roll_deg) || fabs(c->roll_deg) > 1e6)
         FAIL("camera roll: %g is not a finite angle", c->roll_deg);
-    if (!isfinite(c->fov_y_deg) || c->fov_y_deg < 0.01 || c->fov_y_deg > 170)
-        FAIL("camera fov: %g outside [0.01, 170] degrees", c->fov_y_deg);
+    /* the protocol's range (PROTOCOL.md, CAMERA): what it allows, the mesh
+     * code must take; a narrow fov makes a fine mesh, which
+     * mesh_estimate_vertices prices before anything is built */
+    if (!isfinite(c->fov_y_deg) || !(c->fov_y_deg > 0) || !(c->fov_y_deg < 180))
+        FAIL("camera fov: %g outside (0, 180) degrees", c->fov_y_deg);
     if (c->viewport_w < 1 || c->viewport_w > 65536 || c->viewport_h < 1 || c->viewport_h > 65536)
         FAIL("camera viewport: %dx%d outside 1..65536", c->viewport_w, c->viewport_h);
     return OCEAN_OK;
@@ -241,6 +244,24 @@ void mesh_destroy(mesh *m)
     free_arrays(m);
     free(m->raw);
     free(m);
+}
+
+ocean_result mesh_estimate_vertices(const mesh_config *cfg, const mesh_camera *cam, double *out)
+{
+    if (!cfg || !out || mesh_config_validate(cfg, NULL, 0) != OCEAN_OK ||
+        mesh_camera_validate(cam, NULL, 0) != OCEAN_OK)
+        return OCEAN_EINVAL;
+    switch (cfg->kind) {
+    case MESH_CONCENTRIC: *out = mesh_estimate_concentric(cfg, cam); break;
+    case MESH_CHUNKED: {
+        double q = cfg->chunk_quads + 1.0;
+        *out = (double)cfg->chunk_tiles * cfg->chunk_tiles * q * q;
+        break;
+    }
+    case MESH_PROJECTED: *out = (double)cfg->grid_w * cfg->grid_h; break;
+    default: return OCEAN_EINVAL;
+    }
+    return OCEAN_OK;
 }
 
 ocean_result mesh_build(mesh *m, const mesh_camera *cam)

@@ -71,14 +71,14 @@ ocean_result mesh_kind_parse(const char *name, mesh_kind *out);
 typedef struct mesh_camera {
     double pos[3];        /* world x, y (height above mean sea level), z */
     double yaw_deg, pitch_deg, roll_deg;
-    double fov_y_deg;     /* vertical field of view, (0.01, 170] */
+    double fov_y_deg;     /* vertical field of view, (0, 180) */
     int viewport_w, viewport_h;
 } mesh_camera;
 
 /* Camera at (0, 20, 0), level, 60 degree fov, 1920x1080. */
 void mesh_camera_default(mesh_camera *c);
-/* Finite position (|x|,|z| <= 1e9, |y| <= 1e6), angles finite, fov and
- * viewport in range.  Message names the field. */
+/* Finite position (|x|,|z| <= 1e10, |y| <= 1e7), angles finite, fov in
+ * (0, 180) and viewport in range: the ranges ocean.v1 allows.  Message names the field. */
 ocean_result mesh_camera_validate(const mesh_camera *c, char *msg, size_t msglen);
 /* Pixels per radian at the screen centre: (h/2) / tan(fov/2). */
 double mesh_camera_px_per_rad(const mesh_camera *c);
@@ -126,6 +126,13 @@ typedef struct mesh mesh;
 /* Validates cfg and makes an empty mesh.  *out is NULL on failure. */
 ocean_result mesh_create(const mesh_config *cfg, mesh **out);
 void mesh_destroy(mesh *m);   /* accepts NULL */
+
+/* An upper estimate of the vertex count mesh_build would make for cfg and
+ * cam, computed from the plan alone (no allocation, microseconds), so a
+ * server can refuse a mesh before building it: concentric meshes grow as
+ * (px per radian / error_px)^2, a 1-degree 1080p camera asks for ~10^7.
+ * OCEAN_EINVAL for an invalid config or camera. */
+ocean_result mesh_estimate_vertices(const mesh_config *cfg, const mesh_camera *cam, double *out);
 
 /* Builds (or updates) the mesh for a camera.  When the topology the camera
  * calls for equals the current one (same key), only the origin, morph

@@ -78,6 +78,8 @@ double mesh_smoothstep(double t);
 double mesh_now_ms(void);
 
 ocean_result mesh_build_concentric(mesh *m, const mesh_camera *cam);
+/* Upper estimate of the concentric mesh's vertex count, without building. */
+double mesh_estimate_concentric(const mesh_config *cfg, const mesh_camera *cam);
 ocean_result mesh_build_chunked(mesh *m, const mesh_camera *cam);
 ocean_result mesh_build_projected(mesh *m, const mesh_camera *cam);
 

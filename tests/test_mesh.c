@@ -1054,6 +1054,60 @@ static void test_obj_output(void **state)
     mesh_destroy(m);
 }
 
+/* mesh_estimate_vertices (issue 15, the mesh bomb): the estimate must bound
+ * the count the build really makes (a server refuses on it before any
+ * allocation) without overstating it by more than 2x (or ordinary cameras
+ * would be refused), for concentric meshes over heights, fovs and ranges;
+ * and the 1-degree 1080p camera at 25 m of the report must price in the
+ * millions (it built 21 M vertices), for an estimate alone. */
+static void test_estimate_vertices(void **state)
+{
+    (void)state;
+    const double hs[] = {2, 25, 300}, fovs[] = {20, 60, 120, 175}, ranges[] = {200, 2000};
+    for (size_t a = 0; a < 3; a++)
+        for (size_t b = 0; b < 4; b++)
+            for (size_t r = 0; r < 2; r++) {
+                mesh_config c;
+                mesh_config_default(&c);
+                c.range_m = ranges[r];
+                c.error_px = 16;
+                mesh_camera cam = cam_at(0, hs[a], 0);
+                cam.fov_y_deg = fovs[b];
+                double est = 0;
+                assert_int_equal(mesh_estimate_vertices(&c, &cam, &est), OCEAN_OK);
+                mesh *m = NULL;
+                assert_int_equal(mesh_create(&c, &m), OCEAN_OK);
+                assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
+                mesh_view v;
+                mesh_get_view(m, &v);
+
+                if (!(est >= v.vertex_count && est <= 2.0 * v.vertex_count + 128))
+                    fail_msg("h %g fov %g range %g: estimate %g for %u built", hs[a], fovs[b],
+                             ranges[r], est, v.vertex_count);
+                mesh_destroy(m);
+            }
+    mesh_config c;
+    mesh_config_default(&c);
+    c.range_m = 10000;
+    c.error_px = 16;
+    mesh_camera bomb = cam_at(0, 25, 0);
+    bomb.fov_y_deg = 1;
+    double est = 0;
+    assert_int_equal(mesh_estimate_vertices(&c, &bomb, &est), OCEAN_OK);
+    assert_true(est > 1e6);
+    /* the protocol's extremes are valid cameras (PROTOCOL.md, CAMERA) */
+    bomb.fov_y_deg = 0.005f;
+    assert_int_equal(mesh_estimate_vertices(&c, &bomb, &est), OCEAN_OK);
+    assert_true(est > 1e9);
+    mesh_camera far = cam_at(5e9, 5e6, -5e9);
+    far.fov_y_deg = 175;
+    assert_int_equal(mesh_camera_validate(&far, NULL, 0), OCEAN_OK);
+    assert_int_equal(mesh_estimate_vertices(&c, &far, &est), OCEAN_OK);
+    far.fov_y_deg = 180;
+    assert_int_equal(mesh_estimate_vertices(&c, &far, &est), OCEAN_EINVAL);
+    assert_int_equal(mesh_estimate_vertices(NULL, &far, &est), OCEAN_EINVAL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1070,6 +1124,7 @@ int main(void)
         cmocka_unit_test(test_topology_key),
         cmocka_unit_test(test_hostile_camera_keeps_mesh),
         cmocka_unit_test(test_chunked),
+        cmocka_unit_test(test_estimate_vertices),
         cmocka_unit_test(test_projected),
         cmocka_unit_test(test_obj_output),
     };

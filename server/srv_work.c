@@ -1,0 +1,198 @@
+/*
+ * srv_work.c - query work in bounded slices (see srv_work.h).
+ */
+#include "srv_work.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "query.h"
+
+typedef struct item {
+    struct item *next;
+    srv_client *c;              /* one reference held */
+    srv_query *q;
+    double t;                   /* time the query is answered at */
+    ocean_query_result *res;    /* q->count, filled slice by slice */
+    uint32_t done;
+} item;
+
+struct srv_work {
+    item *head, *tail;          /* the rotation: one query per client */
+    double sec_per_point;       /* measured cost of a point (EWMA) */
+};
+
+ocean_result srv_work_create(srv_work **out)
+{
+    srv_work *w = calloc(1, sizeof *w);
+    if (!w) return OCEAN_ENOMEM;
+    w->sec_per_point = 20e-6; /* until measured: 65 532 points took 1.2-1.9 s (issue 15) */
+    *out = w;
+    return OCEAN_OK;
+}
+
+/* Ends an item: the client's active count drops (under hub.lock). */
+static void finish(srv_hub *h, item *it)
+{
+    pthread_mutex_lock(&h->lock);
+    if (it->c->n_queries_active > 0) it->c->n_queries_active--;
+    pthread_mutex_unlock(&h->lock);
+    srv_client_unref(it->c);
+    free(it->q->points);
+    free(it->q);
+    free(it->res);
+    free(it);
+}
+
+void srv_work_destroy(srv_work *w)
+{
+    if (!w) return;
+    while (w->head) {
+        item *it = w->head;
+        w->head = it->next;
+        srv_client_unref(it->c);
+        free(it->q->points);
+        free(it->q);
+        free(it->res);
+        free(it);
+    }
+    free(w);
+}
+
+int srv_work_busy(const srv_work *w) { return w->head != NULL; }
+
+void srv_work_take(srv_work *w, srv_client *c, double t_now)
+{
+    if (!c->queries || c->n_queries_active > 0) return;
+    item *it = calloc(1, sizeof *it);
+    if (!it) return; /* stays pending; taken on a later tick */
+    srv_query *q = c->queries;
+    c->queries = q->next;
+    c->n_queries--;
+    c->n_queries_active++;
+    q->next = NULL;
+    srv_client_ref(c);
+    it->c = c;
+    it->q = q;
+    it->t = q->at_time ? q->t : t_now;
+    if (w->tail) w->tail->next = it;
+    else w->head = it;
+    w->tail = it;
+}
+
+static void answer(srv_hub *h, item *it)
+{
+    srv_query *q = it->q;
+    proto_query_sample *smp = calloc(q->count ? q->count : 1, sizeof *smp);
+    if (!smp) {
+        srv_client_send_error(it->c, NULL, 0, OCEAN_ENOMEM, "query could not be answered: out of memory");
+        return;
+    }
+    for (uint32_t i = 0; i < q->count; i++) {
+        const ocean_query_result *a = &it->res[i];
+        proto_query_sample *o = &smp[i];
+        o->height = (float)a->height;
+        for (int k = 0; k < 3; k++) {
+            o->normal[k] = (float)a->normal[k];
+            o->velocity[k] = (float)a->velocity[k];
+        }
+        o->foam = (float)(a->foam < 0 ? 0 : a->foam > 1 ? 1 : a->foam);
+        o->error_bound = (float)(a->error >= 0 && isfinite(a->error) ? a->error : 0);
+    }
+    proto_msg m;
+    proto_msg_init(&m, PROTO_QUERY_RESULT);
+    m.hdr.sim_time = it->t;
+    m.u.result.query_id = q->query_id;
+    m.u.result.count = q->count;
+    m.u.result.t = it->t;
+    m.u.result.samples = smp;
+    srv_msg *out = srv_msg_new();
+    char err[256];
+    if (out && proto_encode(&out->buf, &m, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "oceand: cannot encode QUERY_RESULT: %s\n", err);
+        srv_msg_free(out);
+        out = NULL;
+    }
+    if (out) srv_client_queue(it->c, out);
+    atomic_fetch_add(&h->stats.queries, 1);
+    atomic_fetch_add(&h->stats.query_points, q->count);
+    free(smp);
+}
+
+void srv_work_queries(srv_work *w, srv_hub *h, srv_work_eval_fn eval, void *ctx,
+                      const ocean_gerstner *g, double budget_s)
+{
+    double t0 = srv_now(), now = t0;
+    int slices = 0;
+    while (w->head && (slices == 0 || now - t0 < budget_s)) {
+        item *it = w->head;
+        w->head = it->next;
+        if (!w->head) w->tail = NULL;
+        it->next = NULL;
+        if (it->c->closed) {
+            finish(h, it);
+            continue;
+        }
+        double s0 = now;
+        srv_query *q = it->q;
+        ocean_result r = OCEAN_OK;
+        size_t bad = 0;
+        /* A query at a time no evaluation holds costs an ocean evaluation
+         * first: at most one such per turn, and only as a turn's first
+         * slice, so a turn stays near its budget. */
+        if (slices > 0 && !eval(ctx, it->t, 1)) {
+            /* first in the next turn (at the back it could wait forever) */
+            it->next = w->head;
+            w->head = it;
+            if (!w->tail) w->tail = it;
+            break;
+        }
+        if (!it->res) it->res = calloc(q->count ? q->count : 1, sizeof *it->res);
+        const ocean_frame *f = it->res ? eval(ctx, it->t, 0) : NULL;
+        if (!f) r = OCEAN_ENOMEM;
+        /* slices of a quarter of the budget at the measured cost, so a
+         * misjudged cost per point overruns by a quarter budget, not four */
+        now = srv_now();
+        double left = budget_s - (now - t0);
+        double want = fmin(left, 0.25 * budget_s) / w->sec_per_point;
+        uint32_t k = want < 16 ? 16 : want > 8192 ? 8192 : (uint32_t)want;
+        if (k > q->count - it->done) k = q->count - it->done;
+        double p0 = srv_now();
+        ocean_query_options opt;
+        ocean_query_options_default(&opt);
+        if (r == OCEAN_OK && k > 0)
+            r = ocean_query_points(f, g, NULL, it->t, q->points + 2 * (size_t)it->done, k, &opt,
+                                   it->res + it->done, &bad);
+        now = srv_now();
+        if (r == OCEAN_OK && k >= 16)
+            w->sec_per_point = 0.7 * w->sec_per_point + 0.3 * (now - p0) / k;
+        atomic_fetch_add(&it->c->cpu_ns, (uint64_t)((now - s0) * 1e9));
+        atomic_fetch_add(&h->stats.query_slices, 1);
+        slices++;
+        if (r != OCEAN_OK) {
+            char why[200];
+            if (r == OCEAN_ENOMEM)
+                snprintf(why, sizeof why, "query %u could not be answered: out of memory", q->query_id);
+            else
+                snprintf(why, sizeof why, "query %u: point %zu refused (%s)", q->query_id,
+                         (size_t)it->done + bad, ocean_strerror(r));
+            srv_client_send_error(it->c, NULL, 0, r, why);
+            finish(h, it);
+            continue;
+        }
+        it->done += k;
+        if (it->done >= q->count) {
+            answer(h, it);
+            finish(h, it);
+            continue;
+        }
+        /* not done: back of the rotation, the next client's turn */
+        if (w->tail) w->tail->next = it;
+        else w->head = it;
+        w->tail = it;
+    }
+    if (slices) srv_hub_wake_net(h);
+
+}
