@@ -318,36 +318,48 @@ static void rate_learn(srv_cascade *k, const ctile *t)
  * nadir a camera looking down sees), all grown by `grow` (the reading
  * stencil). */
 #define SECTOR_MARGIN_DEG 30.0
-static void view_box(const srv_cascade_job *j, double R, double grow, double box[4])
+typedef struct sector {
+    double ext[4];  /* min and max of cos, min and max of sin over the sector's directions */
+} sector;
+
+static void sector_of(const proto_camera *cam, sector *sc)
 {
-    const proto_camera *cam = &j->cam;
-    double cx = cam->pos[0], cz = cam->pos[2];
-    double r0 = fmin(R, fmax(fabs(cam->pos[1]), 1.0));
-    double x0 = cx - r0, x1 = cx + r0, z0 = cz - r0, z1 = cz + r0;
     double vfov = cam->fov_y_deg * M_PI / 180.0;
     double aspect = cam->viewport_h ? (double)cam->viewport_w / cam->viewport_h : 1.0;
     double half = atan(tan(0.5 * vfov) * aspect) + SECTOR_MARGIN_DEG * M_PI / 180.0;
     if (!(half < M_PI)) {
-        x0 = cx - R, x1 = cx + R, z0 = cz - R, z1 = cz + R;
-    } else {
-        double yaw = cam->yaw_deg * M_PI / 180.0;
-        /* the arc's ends and the compass points the arc passes */
-        double a[6] = {yaw - half, yaw + half, 0, 0.5 * M_PI, M_PI, 1.5 * M_PI};
-        for (int i = 0; i < 6; i++) {
-            if (i >= 2) {
-                double d = remainder(a[i] - yaw, 2 * M_PI);
-                if (fabs(d) > half) continue;
-            }
-            double px = cx + R * cos(a[i]), pz = cz + R * sin(a[i]);
-            x0 = fmin(x0, px), x1 = fmax(x1, px), z0 = fmin(z0, pz), z1 = fmax(z1, pz);
-        }
+        *sc = (sector){{-1, 1, -1, 1}};
+        return;
     }
-    box[0] = x0 - grow, box[1] = x1 + grow, box[2] = z0 - grow, box[3] = z1 + grow;
+    double yaw = cam->yaw_deg * M_PI / 180.0;
+    /* the arc's ends and the compass points the arc passes */
+    double a[6] = {yaw - half, yaw + half, 0, 0.5 * M_PI, M_PI, 1.5 * M_PI};
+    *sc = (sector){{INFINITY, -INFINITY, INFINITY, -INFINITY}};
+    for (int i = 0; i < 6; i++) {
+        if (i >= 2 && fabs(remainder(a[i] - yaw, 2 * M_PI)) > half) continue;
+        double c = cos(a[i]), s = sin(a[i]);
+        sc->ext[0] = fmin(sc->ext[0], c), sc->ext[1] = fmax(sc->ext[1], c);
+        sc->ext[2] = fmin(sc->ext[2], s), sc->ext[3] = fmax(sc->ext[3], s);
+    }
+    /* the apex itself */
+    sc->ext[0] = fmin(sc->ext[0], 0), sc->ext[1] = fmax(sc->ext[1], 0);
+    sc->ext[2] = fmin(sc->ext[2], 0), sc->ext[3] = fmax(sc->ext[3], 0);
+}
+
+static void view_box(const srv_cascade_job *j, const sector *sc, double R, double grow, double box[4])
+{
+    const proto_camera *cam = &j->cam;
+    double cx = cam->pos[0], cz = cam->pos[2];
+    double r0 = fmin(R, fmax(fabs(cam->pos[1]), 1.0));
+    box[0] = fmin(cx - r0, cx + R * sc->ext[0]) - grow;
+    box[1] = fmax(cx + r0, cx + R * sc->ext[1]) + grow;
+    box[2] = fmin(cz - r0, cz + R * sc->ext[2]) - grow;
+    box[3] = fmax(cz + r0, cz + R * sc->ext[3]) + grow;
 }
 
 /* The plan for spacing factor q; returns the estimated bytes of its tiles. */
-static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q,
-                      plan *pl);
+static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
+                      const sector *sc, double q, plan *pl);
 
 /* A job's plan at the server's quality target (server.px_per_sample),
  * coarsened (q raised by steps of 2^(1/4)) until the frame's tiles fit the
@@ -362,26 +374,28 @@ static void plan_job(srv_cascade *k, const tables *tb, const srv_config *cfg, co
     double q = cfg->px_per_sample / (ppr > 0 ? ppr : 1.0);
     double rate_hz = j->c->sim.sub.frame_rate_hz > 0 ? j->c->sim.sub.frame_rate_hz : 30.0;
     double budget = cfg->viewer_bytes_per_s / rate_hz;
-    if (plan_at(k, tb, cfg, j, q, pl) <= budget)
+    sector sc;
+    sector_of(&j->cam, &sc);
+    if (plan_at(k, tb, cfg, j, &sc, q, pl) <= budget)
         return;
     /* octaves first, then quarter octaves back down to the finest that fits */
     double hi = q;
     for (int it = 0; it < 40; it++) {
         hi *= 2;
-        if (plan_at(k, tb, cfg, j, hi, pl) <= budget)
+        if (plan_at(k, tb, cfg, j, &sc, hi, pl) <= budget)
             break;
     }
     for (int it = 0; it < 3; it++) {
         double t = hi / 1.189207115002721; /* 2^(1/4) */
-        if (t <= q || plan_at(k, tb, cfg, j, t, pl) > budget)
+        if (t <= q || plan_at(k, tb, cfg, j, &sc, t, pl) > budget)
             break;
         hi = t;
     }
-    plan_at(k, tb, cfg, j, hi, pl);
+    plan_at(k, tb, cfg, j, &sc, hi, pl);
 }
 
-static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q,
-                      plan *pl)
+static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
+                      const sector *sc, double q, plan *pl)
 {
     const proto_subscribe *sub = &j->c->sim.sub;
     /* only the fields a plan computes: the mesh parts stay */
@@ -417,7 +431,7 @@ static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, c
                 R = fmin(sqrt(r2), range_m);
             }
             double box[4], w = t * sp;
-            view_box(j, R, 2.0 * sp, box);
+            view_box(j, sc, R, 2.0 * sp, box);
             range *g = &pl->r[c][m];
             span(box[0], box[1], w, ntile, &g->x0, &g->nx);
             span(box[2], box[3], w, ntile, &g->z0, &g->nz);
