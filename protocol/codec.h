@@ -103,6 +103,20 @@ ocean_result proto_tile_encode(proto_codec c, const proto_codec_params *p, int w
                                unsigned channels, const float *planes, proto_buf *out,
                                double *max_err, char *err, size_t errlen);
 
+/* Per-worker encoder state: the zstd compression context and the scratch
+ * planes qz needs, kept between tiles instead of made and freed per call.
+ * Not thread-safe: one per encoding thread, created and destroyed by the
+ * caller (protocol/ owns no threads).  destroy accepts NULL. */
+typedef struct proto_codec_ctx proto_codec_ctx;
+ocean_result proto_codec_ctx_create(proto_codec_ctx **out);
+void proto_codec_ctx_destroy(proto_codec_ctx *ctx);
+
+/* proto_tile_encode with a context: same payload bytes, same errors; ctx
+ * may be NULL (a temporary context is then made for this call). */
+ocean_result proto_tile_encode_ctx(proto_codec_ctx *ctx, proto_codec c, const proto_codec_params *p,
+                                   int w, int h, unsigned channels, const float *planes,
+                                   proto_buf *out, double *max_err, char *err, size_t errlen);
+
 /* Decodes a payload produced for (c, w, h, channels) into planes (caller's
  * array of proto_tile_planes(channels) * w * h floats).  Any inconsistency
  * (size, header, corrupt zstd/EXR data, non-finite value) gives OCEAN_ECODEC

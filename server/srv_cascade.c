@@ -25,6 +25,7 @@
 #include "gerstner.h"
 #include "mesh.h"
 #include "slope.h"
+#include "srv_tiles.h"
 
 #define MAX_MIPS PROTO_MAX_MIPS
 #define NBUCKETS 4096
@@ -539,7 +540,8 @@ static void tile_build(ctile *t, const ocean_frame *f, const tables *tb)
     proto_buf pb;
     proto_buf_init(&pb, 0);
     double max_err = 0;
-    t->result = proto_tile_encode((proto_codec)k->codec, &cp, T, T, k->channels, buf, &pb, &max_err, NULL, 0);
+    t->result = proto_tile_encode_ctx(srv_tiles_codec_ctx(), (proto_codec)k->codec, &cp, T, T, k->channels, buf,
+                                      &pb, &max_err, NULL, 0);
     free(buf);
     if (t->result == OCEAN_OK && pb.len > UINT32_MAX) t->result = OCEAN_ETOOBIG;
     if (t->result != OCEAN_OK) {

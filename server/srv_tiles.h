@@ -75,6 +75,12 @@ int32_t srv_tiles_first(double x, double w, int n);
  * t->payload; sets ready, result, error_bound.  Thread safe for distinct t. */
 void srv_tile_build(srv_tile *t, const ocean_frame *f);
 
+/* The calling thread's codec context (zstd context and scratch), made on
+ * its first tile and freed when the thread exits; NULL if it cannot be made
+ * (the codec then makes one per call).  For every tile encoder of the
+ * daemon's worker threads. */
+proto_codec_ctx *srv_tiles_codec_ctx(void);
+
 /* Fills a proto_tile (for a FRAME) from a built entry. */
 void srv_tile_to_proto(const srv_tile *t, proto_tile *out);
 

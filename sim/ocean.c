@@ -19,6 +19,7 @@
  */
 #include "ocean.h"
 
+#include <errno.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -161,7 +162,7 @@ void ocean_params_default(ocean_params *p)
     p->cascade_ratio = 4.3;
     p->k_max = INFINITY;
     p->threads = 2;
-    p->plan_measure = 0;
+    p->plan_measure = OCEAN_PLAN_ESTIMATE;
     p->drop_gain = OCEAN_DROP_GAIN_DEFAULT;
 }
 
@@ -232,6 +233,19 @@ ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msgl
             if (msg) snprintf(msg, msglen, "%s", plan.item[i].text);
             return OCEAN_EINVAL;
         }
+    if (p->plan_measure < OCEAN_PLAN_ESTIMATE || p->plan_measure > OCEAN_PLAN_WISDOM) {
+        if (msg) snprintf(msg, msglen, "plan = %d is not estimate, measure or wisdom", p->plan_measure);
+        return OCEAN_EINVAL;
+    }
+    if (memchr(p->wisdom, '\0', sizeof p->wisdom) == NULL) {
+        if (msg) snprintf(msg, msglen, "wisdom: path not terminated within %d bytes", OCEAN_WISDOM_PATH_MAX);
+        return OCEAN_EINVAL;
+    }
+    if (p->plan_measure == OCEAN_PLAN_WISDOM && p->wisdom[0] == '\0') {
+        if (msg) snprintf(msg, msglen, "plan = wisdom needs a wisdom file (ocean.wisdom = PATH; "
+                          "`ocean-sim wisdom --out PATH` writes one)");
+        return OCEAN_EINVAL;
+    }
     return OCEAN_OK;
 }
 
@@ -341,6 +355,55 @@ static ocean_result cascade_init(ocean *o, int c)
     return OCEAN_OK;
 }
 
+/* Replaces the process's wisdom by the file's (caller holds planner_lock).
+ * Forgetting first keeps plans a MEASURE ocean of this process timed from
+ * standing in for the file's, which other replicas do not have. */
+static ocean_result wisdom_import(const char *path, char *msg, size_t msglen)
+{
+    FILE *fp = fopen(path, "r");
+    if (!fp) {
+        if (msg) snprintf(msg, msglen, "wisdom file '%s': %s (`ocean-sim wisdom --out %s` writes one)",
+                          path, strerror(errno), path);
+        return OCEAN_EIO;
+    }
+    fftwf_forget_wisdom();
+    int ok = fftwf_import_wisdom_from_file(fp);
+    fclose(fp);
+    if (!ok) {
+        fftwf_forget_wisdom();
+        if (msg) snprintf(msg, msglen, "wisdom file '%s' is not FFTW single-precision wisdom "
+                          "(corrupt, or written by another FFTW build): regenerate it with "
+                          "`ocean-sim wisdom --out %s`", path, path);
+        return OCEAN_EFORMAT;
+    }
+    return OCEAN_OK;
+}
+
+ocean_result ocean_wisdom_export(const char *path, char *msg, size_t msglen)
+{
+    if (!path || !*path) {
+        if (msg) snprintf(msg, msglen, "wisdom: no output file");
+        return OCEAN_EINVAL;
+    }
+    pthread_once(&fftw_once, fftw_init_once);
+    pthread_mutex_lock(&planner_lock);
+    FILE *fp = fopen(path, "w");
+    int err = fp ? 0 : errno;
+    if (fp) {
+        fftwf_export_wisdom_to_file(fp);
+        if (ferror(fp))
+            err = EIO;
+        if (fclose(fp) != 0 && !err)
+            err = errno;
+    }
+    pthread_mutex_unlock(&planner_lock);
+    if (err) {
+        if (msg) snprintf(msg, msglen, "wisdom file '%s': %s", path, strerror(err));
+        return OCEAN_EIO;
+    }
+    return OCEAN_OK;
+}
+
 ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t msglen)
 {
     *out = NULL;
@@ -378,12 +441,30 @@ ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t 
     }
     /* Plan every (size, batch) once; evaluations only execute. */
     pthread_mutex_lock(&planner_lock);
-    unsigned flags = p->plan_measure ? FFTW_MEASURE : FFTW_ESTIMATE;
+    unsigned flags = FFTW_ESTIMATE;
+    if (p->plan_measure == OCEAN_PLAN_ESTIMATE) {
+        /* An ESTIMATE planner still takes wisdom of a higher patience, so
+         * wisdom left by a MEASURE or WISDOM ocean of this process would
+         * make its plans differ from another process's. */
+        fftwf_forget_wisdom();
+    } else if (p->plan_measure == OCEAN_PLAN_MEASURE) {
+        flags = FFTW_MEASURE;
+    } else {
+        r = wisdom_import(p->wisdom, msg, msglen);
+        if (r != OCEAN_OK) {
+            pthread_mutex_unlock(&planner_lock);
+            fftwf_free(tmp);
+            ocean_destroy(o);
+            return r;
+        }
+        flags = FFTW_MEASURE | FFTW_WISDOM_ONLY;
+    }
     for (int l = 0; (8 << l) <= n; l++) {
         int m = 8 << l;
         o->levels = l + 1;
+        int nthr = m >= PARALLEL_MIN_N ? p->threads : 1;
         if (fftw_threads_ok)
-            fftwf_plan_with_nthreads(m >= PARALLEL_MIN_N ? p->threads : 1);
+            fftwf_plan_with_nthreads(nthr);
         for (int c = 1; c <= CH_COUNT; c++) {
             int dims[2] = {m, m};
             o->plan[l][c - 1] = fftwf_plan_many_dft_c2r(
@@ -391,6 +472,14 @@ ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t 
             if (!o->plan[l][c - 1]) {
                 pthread_mutex_unlock(&planner_lock);
                 fftwf_free(tmp);
+                if (flags & FFTW_WISDOM_ONLY) {
+                    if (msg) snprintf(msg, msglen, "wisdom file '%s' has no plan for a %dx%d x%d "
+                                      "transform on %d thread%s (made for another N or "
+                                      "ocean.threads?): regenerate it with `ocean-sim wisdom`",
+                                      p->wisdom, m, m, c, nthr, nthr == 1 ? "" : "s");
+                    ocean_destroy(o);
+                    return OCEAN_EUNSUPPORTED;
+                }
                 if (msg) snprintf(msg, msglen, "FFTW could not plan a %dx%d x%d transform", m, m, c);
                 ocean_destroy(o);
                 return OCEAN_ENOMEM;

@@ -44,6 +44,23 @@ enum ocean_effect {
     OCEAN_FX_ALL = 0xFu              /* the four visual effects */
 };
 
+/* How ocean_create plans its transforms.  FFTW_MEASURE picks algorithms by
+ * timing them, so two processes planning for themselves may choose
+ * different plans and disagree in the last bits; wisdom fixes the choice:
+ * every replica that imports the same wisdom file runs the same plans.
+ *   ESTIMATE  heuristic plans: instant, and the same in every process
+ *   MEASURE   timed plans: fastest, but only bit-identical within a process
+ *   WISDOM    the timed plans recorded in params.wisdom (FFTW_WISDOM_ONLY:
+ *             a transform the file lacks is an error, never re-timed);
+ *             `ocean-sim wisdom --out FILE` writes such a file */
+typedef enum ocean_plan_mode {
+    OCEAN_PLAN_ESTIMATE = 0,
+    OCEAN_PLAN_MEASURE = 1,
+    OCEAN_PLAN_WISDOM = 2
+} ocean_plan_mode;
+
+#define OCEAN_WISDOM_PATH_MAX 512
+
 typedef struct ocean_params {
     ocean_sea_state sea;
     uint64_t seed;
@@ -56,7 +73,10 @@ typedef struct ocean_params {
                                near field; INFINITY keeps the finest cascade's
                                full square band */
     int threads;            /* worker threads for FFTW and the spectrum stage */
-    int plan_measure;       /* 0: FFTW_ESTIMATE plans, 1: FFTW_MEASURE */
+    int plan_measure;       /* how FFTW plans: an ocean_plan_mode (the name
+                               predates the third mode) */
+    char wisdom[OCEAN_WISDOM_PATH_MAX]; /* OCEAN_PLAN_WISDOM: FFTW wisdom file
+                               every replica imports; "" otherwise */
     double drop_gain;       /* filtered evaluations leave out every wave whose
                                Butterworth gain is below this, so a low cutoff
                                runs on a smaller grid; (0, 1/sqrt 2]: 1/sqrt 2
@@ -82,8 +102,21 @@ ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msgl
 typedef struct ocean ocean;
 
 /* Builds an ocean: validates p, draws every wave's initial amplitude, and
- * makes all FFTW plans.  *out is NULL on failure; msg gets the reason. */
+ * makes all FFTW plans.  *out is NULL on failure; msg gets the reason.
+ * With OCEAN_PLAN_WISDOM a missing or unreadable wisdom file is OCEAN_EIO,
+ * a corrupt one OCEAN_EFORMAT, one that lacks a transform this ocean needs
+ * (another N or thread count) OCEAN_EUNSUPPORTED, each with a message
+ * naming the file.  FFTW's wisdom is process-global: ESTIMATE
+ * oceans forget it before planning (so they stay the same as in any other
+ * process), WISDOM oceans replace it by their file's, MEASURE oceans add
+ * to it. */
 ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t msglen);
+
+/* Writes the FFTW wisdom this process has accumulated (every plan made by
+ * OCEAN_PLAN_MEASURE oceans since the last ESTIMATE or WISDOM one) to path,
+ * for replicas to import with OCEAN_PLAN_WISDOM.  OCEAN_EIO and a message
+ * naming the file if it cannot be written. */
+ocean_result ocean_wisdom_export(const char *path, char *msg, size_t msglen);
 
 /* Frees o and its plans.  Accepts NULL. */
 void ocean_destroy(ocean *o);

@@ -41,7 +41,10 @@ static const conf_name spreading_names[] = {
     {"donelan-banner", OCEAN_SPREAD_DONELAN_BANNER},
     {NULL, 0}};
 
-static const conf_name plan_names[] = {{"estimate", 0}, {"measure", 1}, {NULL, 0}};
+static const conf_name plan_names[] = {{"estimate", OCEAN_PLAN_ESTIMATE},
+                                       {"measure", OCEAN_PLAN_MEASURE},
+                                       {"wisdom", OCEAN_PLAN_WISDOM},
+                                       {NULL, 0}};
 
 static const conf_name effect_names[] = {
     {"height", OCEAN_FX_HEIGHT},
@@ -184,8 +187,16 @@ static const conf_entry ocean_entries[] = {
              "e_error."},
     {.name = "ocean.plan", .type = CONF_ENUM, .offset = PAR(plan_measure), .def = "estimate",
      .names = plan_names,
-     .help = "FFTW planning: estimate starts at once; measure times candidate plans at start-up "
-             "(seconds) for faster transforms."},
+     .help = "FFTW planning: estimate starts at once and every process plans alike; measure "
+             "times candidate plans at start-up (seconds to minutes) for faster transforms, but "
+             "two daemons may then pick different plans and differ in the last bits; wisdom "
+             "runs the timed plans recorded in ocean.wisdom, so every replica sharing that file "
+             "agrees bit for bit (a transform the file lacks is an error)."},
+    {.name = "ocean.wisdom", .type = CONF_STRING, .offset = PAR(wisdom),
+     .size = OCEAN_WISDOM_PATH_MAX, .def = "",
+     .help = "FFTW wisdom file for ocean.plan = wisdom, written by `ocean-sim wisdom --out FILE` "
+             "for the same N, ocean.threads, FFTW build and CPU; replicas that must agree bit "
+             "for bit share one file."},
 };
 
 static const conf_table ocean_table = {

@@ -433,6 +433,67 @@ static void test_decode_hostile(void **state)
     assert_int_equal(proto_tile_decode(PROTO_CODEC_F32, 2, 1, PROTO_CH_HEIGHT, raw, 8, back, NULL, 0), OCEAN_ECODEC);
 }
 
+/* One proto_codec_ctx reused across tiles of every shape, plane count,
+ * zstd level and accuracy writes exactly the bytes a fresh context-free
+ * encode writes (nothing of a tile or a level leaks into the next), and
+ * each payload decodes within the accuracy bound (the encoder's residual
+ * loops agree with the decoder's predictor, qz_predict). */
+static void test_codec_ctx_reuse(void **state)
+{
+    (void)state;
+    proto_codec_ctx *ctx = NULL;
+    assert_int_equal(proto_codec_ctx_create(&ctx), OCEAN_OK);
+    proto_codec_ctx_destroy(NULL);
+    const struct { int w, h; unsigned ch; int level; double acc; } cases[] = {
+        {64, 64, PROTO_CH_HEIGHT, 3, 5e-3}, {17, 5, PROTO_CH_ALL, 19, 1e-3}, {128, 96, PROTO_CH_HEIGHT, 1, 1e-6},
+        {3, 3, PROTO_CH_DX | PROTO_CH_DZ, 3, 0.5}, {4, 9, PROTO_CH_HEIGHT, 3, 1e-2}, {64, 64, PROTO_CH_ALL, 3, 5e-3},
+        {1, 40, PROTO_CH_HEIGHT, 7, 1e-4}, {40, 1, PROTO_CH_FOAM, 3, 1e-4}, {64, 64, PROTO_CH_HEIGHT, 3, 5e-3},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        int w = cases[k].w, h = cases[k].h, np = proto_tile_planes(cases[k].ch);
+        size_t n = (size_t)w * h * np;
+        float *src = malloc(n * sizeof *src), *back = malloc(n * sizeof *back);
+        synth(src, w, h, cases[k].ch, 1.0 + (double)k);
+        proto_codec_params p;
+        proto_codec_params_default(&p);
+        p.zstd_level = cases[k].level;
+        p.accuracy = cases[k].acc;
+        proto_buf a, b;
+        proto_buf_init(&a, 0);
+        proto_buf_init(&b, 0);
+        double ea, eb;
+        assert_int_equal(proto_tile_encode_ctx(ctx, PROTO_CODEC_QZ, &p, w, h, cases[k].ch, src, &a, &ea, NULL, 0),
+                         OCEAN_OK);
+        assert_int_equal(proto_tile_encode(PROTO_CODEC_QZ, &p, w, h, cases[k].ch, src, &b, &eb, NULL, 0), OCEAN_OK);
+        assert_int_equal(a.len, b.len);
+        assert_memory_equal(proto_buf_data(&a), proto_buf_data(&b), a.len);
+        assert_true(ea == eb);
+        assert_int_equal(proto_tile_decode(PROTO_CODEC_QZ, w, h, cases[k].ch, proto_buf_data(&a), a.len, back, NULL, 0),
+                         OCEAN_OK);
+        for (int c = 0; c < np; c++) {
+            const float *s = src + (size_t)c * w * h, *d = back + (size_t)c * w * h;
+            float lo = s[0], hi = s[0];
+            double e = 0;
+            for (int i = 0; i < w * h; i++) {
+                lo = fminf(lo, s[i]);
+                hi = fmaxf(hi, s[i]);
+                e = fmax(e, fabs((double)d[i] - s[i]));
+            }
+            assert_true(e <= cases[k].acc * (hi - lo) * (1 + 1e-6) + 4 * 0x1p-24 * fmax(fabs(lo), fabs(hi)));
+        }
+        /* Non-qz codecs take the context too and ignore it. */
+        proto_buf_reset(&a);
+        assert_int_equal(proto_tile_encode_ctx(ctx, PROTO_CODEC_F16, &p, w, h, cases[k].ch, src, &a, NULL, NULL, 0),
+                         OCEAN_OK);
+        assert_int_equal(a.len, n * 2);
+        proto_buf_free(&a);
+        proto_buf_free(&b);
+        free(src);
+        free(back);
+    }
+    proto_codec_ctx_destroy(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -441,6 +502,7 @@ int main(void)
         cmocka_unit_test(test_names),
         cmocka_unit_test(test_roundtrip_synthetic),
         cmocka_unit_test(test_qz_accuracy),
+        cmocka_unit_test(test_codec_ctx_reuse),
         cmocka_unit_test(test_real_ocean),
         cmocka_unit_test(test_exr_file),
         cmocka_unit_test(test_encode_refusals),

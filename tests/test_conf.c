@@ -133,6 +133,7 @@ static void test_defaults_match_ocean_params_default(void **state)
     assert_true(got.k_max == want.k_max);
     assert_int_equal(got.threads, want.threads);
     assert_int_equal(got.plan_measure, want.plan_measure);
+    assert_string_equal(got.wisdom, want.wisdom);
     /* And nothing else differs (ocean_params has no padding to hide in). */
     assert_memory_equal(&got, &want, sizeof got);
     assert_int_equal(ocean_params_validate(&got, err, sizeof err), OCEAN_OK);
@@ -401,7 +402,7 @@ static void test_ocean_errors(void **state)
         {"ocean.cascade_ratio = 1.4\n", "ocean.cascade_ratio: out of range [1.5, 100]"},
         {"ocean.threads = 0\n", "ocean.threads: out of range [1, 64]"},
         {"ocean.k_max = 0\n", "ocean.k_max: out of range"},
-        {"ocean.plan = patient\n", "ocean.plan: unknown name (one of estimate, measure): 'patient'"},
+        {"ocean.plan = patient\n", "ocean.plan: unknown name (one of estimate, measure, wisdom): 'patient'"},
         {"sea.spectrum = jonswap\nsea.spreading = cosine\n", "in.conf:2: sea.spreading: unknown name"},
         {"sea.beaufort = 3\nsea.wind = 4\n", "in.conf:2: sea.wind conflicts with sea.beaufort on line 1"},
         {"sea.wind = 3\nsea.beaufort = 4\n", "in.conf:2: sea.beaufort conflicts with sea.wind on line 1"},
@@ -713,7 +714,7 @@ static void test_dump(void **state)
     assert_non_null(strstr(out, "\nsea.spectrum = pierson-moskowitz\n")); /* canonical name */
     assert_non_null(strstr(out, "\n# sea.beaufort =\n"));
     assert_non_null(strstr(out, "# Unit: m/s. Range: [0, 100]. Default: 10.\n"));
-    assert_non_null(strstr(out, "# One of: estimate, measure. Default: estimate.\n"));
+    assert_non_null(strstr(out, "# One of: estimate, measure, wisdom. Default: estimate.\n"));
     for (char *l = out; *l; l = strchr(l, '\n') + 1) { /* comments wrap */
         char *nl = strchr(l, '\n');
         assert_non_null(nl);

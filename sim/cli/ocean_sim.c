@@ -19,6 +19,7 @@ static const struct {
     {"query", cmd_query, "height, normal, velocity, foam at world points"},
     {"filter", cmd_filter, "cutoff a camera speed gets under a policy, and its cost"},
     {"mesh", cmd_mesh, "build a LOD mesh for a camera, write OBJ"},
+    {"wisdom", cmd_wisdom, "time FFTW plans once, write wisdom replicas share"},
 };
 
 static void usage(FILE *to)

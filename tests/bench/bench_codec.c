@@ -9,6 +9,12 @@
  * "PSNR >= 50 dB" must hold for every tile).  A second table does the same
  * for all seven planes of a full tile (H DX DZ NU NV FOAM J).
  *
+ * A third table (issue 14) puts the qz encoder before proto_codec_ctx (a
+ * frozen copy, qz_before.h: a new ZSTD_CCtx and scratch per call, the
+ * double least-squares fit) beside today's, context-free and with one
+ * context reused, interleaved tile by tile in one run, and counts the
+ * payloads that are byte-identical to the old encoder's.
+ *
  * Prints markdown tables to stdout and writes tests/bench/out/codec.csv.
  * OCEAN_BENCH_QUICK=1 shrinks the run.
  */
@@ -22,6 +28,7 @@
 #include "../lib/bench_util.h"
 #include "tile_source.h"
 #include "codec.h"
+#include "qz_before.h"
 
 #define TILE 64
 
@@ -99,6 +106,103 @@ static int run(const row *rw, unsigned channels, int planes, float **tiles, int 
     return 0;
 }
 
+
+/* The old entry point: the dispatch's finite check, then the frozen
+ * encoder, so both sides pay for the same validation. */
+static ocean_result encode_before(const proto_codec_params *p, int w, int h, unsigned ch, const float *planes,
+                                  proto_buf *out)
+{
+    int np = proto_tile_planes(ch);
+    size_t total = (size_t)w * h * np;
+    for (size_t i = 0; i < total; i++)
+        if (!isfinite(planes[i]))
+            return OCEAN_EINVAL;
+    return qzb_encode(p, w, h, np, planes, out, NULL, NULL, 0);
+}
+
+/* Before/after of the qz encoder on the same tiles, interleaved. */
+static int before_after(unsigned ch, int np, float **tiles, int ntiles, int reps, FILE *csv, const char *kind)
+{
+    proto_codec_params prm;
+    proto_codec_params_default(&prm);
+    proto_codec_ctx *ctx = NULL;
+    if (proto_codec_ctx_create(&ctx) != OCEAN_OK)
+        return -1;
+    size_t m = (size_t)TILE * TILE;
+    int nt = ntiles * reps;
+    double *ms[3];
+    for (int k = 0; k < 3; k++)
+        ms[k] = malloc(sizeof(double) * nt);
+    proto_buf b[3];
+    for (int k = 0; k < 3; k++)
+        proto_buf_init(&b[k], 0);
+    float *back = malloc(m * np * sizeof *back);
+    double bytes[3] = {0, 0, 0}, pmin = INFINITY;
+    int same = 0;
+    char err[256];
+    for (int t = 0; t < ntiles; t++) {
+        for (int r = 0; r < reps; r++)
+            for (int k0 = 0; k0 < 3; k0++) {
+                int k = (k0 + r + t) % 3; /* rotate who goes first */
+                proto_buf_reset(&b[k]);
+                double t0 = bench_now_ms();
+                ocean_result res = k == 0 ? encode_before(&prm, TILE, TILE, ch, tiles[t], &b[k])
+                                 : k == 1 ? proto_tile_encode(PROTO_CODEC_QZ, &prm, TILE, TILE, ch, tiles[t], &b[k],
+                                                              NULL, err, sizeof err)
+                                          : proto_tile_encode_ctx(ctx, PROTO_CODEC_QZ, &prm, TILE, TILE, ch, tiles[t],
+                                                                  &b[k], NULL, err, sizeof err);
+                ms[k][t * reps + r] = bench_now_ms() - t0;
+                if (res != OCEAN_OK) {
+                    fprintf(stderr, "qz before/after: encoder %d failed\n", k);
+                    return -1;
+                }
+            }
+        for (int k = 0; k < 3; k++)
+            bytes[k] += (double)proto_buf_len(&b[k]);
+        if (proto_buf_len(&b[0]) == proto_buf_len(&b[2]) && proto_buf_len(&b[1]) == proto_buf_len(&b[2]) &&
+            memcmp(proto_buf_data(&b[0]), proto_buf_data(&b[2]), proto_buf_len(&b[2])) == 0 &&
+            memcmp(proto_buf_data(&b[1]), proto_buf_data(&b[2]), proto_buf_len(&b[2])) == 0)
+            same++;
+        if (proto_tile_decode(PROTO_CODEC_QZ, TILE, TILE, ch, proto_buf_data(&b[2]), proto_buf_len(&b[2]), back,
+                              err, sizeof err)) {
+            fprintf(stderr, "qz before/after: decode: %s\n", err);
+            return -1;
+        }
+        const float *h = tiles[t];
+        float lo = h[0], hi = h[0];
+        double sq = 0;
+        for (size_t k = 0; k < m; k++) {
+            lo = fminf(lo, h[k]);
+            hi = fmaxf(hi, h[k]);
+            double d = (double)back[k] - (double)h[k];
+            sq += d * d;
+        }
+        double rms = sqrt(sq / m);
+        pmin = fmin(pmin, rms > 0 ? 20 * log10(((double)hi - lo) / rms) : INFINITY);
+    }
+    const char *names[3] = {"before (63a4af9: new ZSTD_CCtx per call)", "after, context-free proto_tile_encode",
+                            "after, one proto_codec_ctx reused"};
+    double raw = 4.0 * m * np, med[3];
+    for (int k = 0; k < 3; k++) {
+        med[k] = bench_median(ms[k], nt);
+        double mbs = raw / 1e6 / (med[k] / 1e3);
+        printf("| %s | %.0f | 1/%.1f | %.1f | %.4f | %.1f | %.2f |\n", names[k], bytes[k] / ntiles,
+               raw * ntiles / bytes[k], pmin, med[k], mbs, med[0] / med[k]);
+        if (csv)
+            fprintf(csv, "%s,qz-before-after:%d,%.1f,%.4f,%.4f,,,,%.2f,\n", kind, k, bytes[k] / ntiles,
+                    bytes[k] / ntiles / raw, med[k], pmin);
+    }
+    printf("\n%d of %d tiles: the three payloads are byte-identical (the format and the bytes are unchanged).\n\n",
+           same, ntiles);
+    for (int k = 0; k < 3; k++) {
+        free(ms[k]);
+        proto_buf_free(&b[k]);
+    }
+    free(back);
+    proto_codec_ctx_destroy(ctx);
+    return 0;
+}
+
 int main(void)
 {
     int quick = bench_quick();
@@ -164,6 +268,18 @@ int main(void)
                 fprintf(csv, "%s,%s,%.1f,%.4f,%.4f,%.4f,%.6g,%.6g,%.2f,%.2f\n", kinds[kind], rows[r].name, res.bytes,
                         res.bytes / raw, res.enc_ms, res.dec_ms, res.maxabs, res.rms, res.psnr_min, res.psnr_mean);
         }
+    }
+    for (int kind = 0; kind < 2; kind++) {
+        unsigned ch = kind ? PROTO_CH_ALL : PROTO_CH_HEIGHT;
+        int np = kind ? planes_all : 1;
+        printf("\n### qz encoder before and after per-worker contexts (issue 14), %dx%d %s tiles, accuracy 5e-3\n\n",
+               TILE, TILE, kind ? "seven-plane" : "height-only");
+        printf("Interleaved tile by tile in this run; MB/s = raw f32 bytes encoded per second (median time "
+               "per tile); H PSNR is the worst tile's.\n\n");
+        printf("| encoder | bytes/tile | vs f32 | H PSNR worst (dB) | encode ms | encode MB/s | speed-up |\n");
+        printf("|---|---:|---:|---:|---:|---:|---:|\n");
+        if (before_after(ch, np, kind ? full : height, ntiles, reps * 3, csv, kinds[kind]))
+            return 1;
     }
     if (csv)
         fclose(csv);
