@@ -1,0 +1,113 @@
+/*
+ * bench_near.c - what the Gerstner near field costs per point (issue 13
+ * item 4), three ways the daemon can ask for it:
+ *
+ *   one-shot   ocean_gerstner_evaluate for one point per call: what the
+ *              daemon's mesh sampler did per vertex until issue 13 (every
+ *              call redoes the per-wave gains, Q and phases at t)
+ *   frame      ocean_gerstner_frame_set once, then
+ *              ocean_gerstner_frame_evaluate for one point per call: the
+ *              mesh sampler now
+ *   grid       ocean_gerstner_frame_sample_grid over a 64 x 64 tile: the
+ *              near field in level-0 tiles
+ *
+ * for the daemon's 64 waves and for 256 and 1024, with the antialias
+ * filter's per-wave gains on (the mesh path's view) and a 60 m fade whose
+ * points all lie inside it.  Median over repetitions, ns per point; the
+ * speed-up columns are one-shot / frame and one-shot / grid, measured in
+ * the same run.  Writes tests/bench/out/near.csv beside the table.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "../lib/bench_util.h"
+#include "gerstner.h"
+
+#define PTS 4096
+#define SIDE 64
+
+static double per_point_ns(double ms, int n)
+{
+    return ms * 1e6 / n;
+}
+
+int main(void)
+{
+    int quick = bench_quick();
+    int reps = quick ? 3 : 9;
+    const int counts[] = {64, 256, 1024};
+    FILE *csv = fopen("tests/bench/out/near.csv", "w");
+    if (csv)
+        fprintf(csv, "waves,oneshot_ns,frame_ns,grid_ns,frame_speedup,grid_speedup\n");
+    printf("Near field per point (ns, median of %d), 60 m fade, antialias filter on\n\n", reps);
+    printf("| waves | one-shot per vertex (before) | frame per vertex (mesh now) | grid 64x64 (tiles) | frame speed-up | grid speed-up |\n");
+    printf("|---:|---:|---:|---:|---:|---:|\n");
+    static double xs[PTS], zs[PTS];
+    static ocean_gerstner_point out[PTS];
+    static float planes[5][SIDE * SIDE];
+    for (int i = 0; i < PTS; i++) {
+        /* a mesh-like spiral of vertices inside the fade's full-strength disc */
+        double r = 29.0 * sqrt((i + 0.5) / PTS), a = i * 2.399963;
+        xs[i] = 1000.0 + r * cos(a);
+        zs[i] = -500.0 + r * sin(a);
+    }
+    for (unsigned c = 0; c < sizeof counts / sizeof counts[0]; c++) {
+        ocean_gerstner_params p;
+        ocean_gerstner_params_default(&p);
+        p.count = counts[c];
+        p.k_lo = 2 * M_PI / 0.42;
+        p.k_hi = 2 * M_PI / 0.1;
+        ocean_gerstner *g = NULL;
+        char msg[200];
+        if (ocean_gerstner_create(&p, &g, msg, sizeof msg) != OCEAN_OK) {
+            fprintf(stderr, "bench_near: %s\n", msg);
+            return 1;
+        }
+        ocean_gerstner_view v;
+        ocean_gerstner_view_default(&v);
+        v.camera_x = 1000.0;
+        v.camera_z = -500.0;
+        v.fade_r0 = 30.0;
+        v.fade_r1 = 60.0;
+        v.filter = (ocean_filter_cutoff){.k = 40.0, .hz = NAN, .low_boost = 1.0, .order = 6};
+        ocean_gerstner_frame *fr = NULL;
+        ocean_gerstner_frame_create(g, &fr);
+        int n1 = quick ? PTS / 8 : PTS;
+        double a[16], b[16], gt[16];
+        double sink = 0.0;
+        for (int r = 0; r < reps; r++) {
+            double t = 100.0 + r * 0.033;
+            double t0 = bench_now_ms();
+            for (int i = 0; i < n1; i++)
+                ocean_gerstner_evaluate(g, &v, t, &xs[i], &zs[i], 1, &out[i]);
+            double t1 = bench_now_ms();
+            ocean_gerstner_frame_set(fr, &v, t);
+            for (int i = 0; i < n1; i++)
+                ocean_gerstner_frame_evaluate(fr, &xs[i], &zs[i], 1, &out[i]);
+            double t2 = bench_now_ms();
+            ocean_gerstner_grid gr = {.x0 = 990.0, .z0 = -510.0, .spacing = 20.0 / SIDE, .w = SIDE,
+                                      .h = SIDE, .stride = SIDE, .height = planes[0], .dx = planes[1],
+                                      .dz = planes[2], .slope_x = planes[3], .slope_z = planes[4]};
+            ocean_gerstner_frame_sample_grid(fr, &gr);
+            double t3 = bench_now_ms();
+            a[r] = per_point_ns(t1 - t0, n1);
+            b[r] = per_point_ns(t2 - t1, n1);
+            gt[r] = per_point_ns(t3 - t2, SIDE * SIDE);
+            sink += out[n1 / 2].dy + planes[0][SIDE];
+        }
+        double ma = bench_median(a, reps), mb = bench_median(b, reps), mg = bench_median(gt, reps);
+        printf("| %d | %.0f | %.0f | %.0f | %.1fx | %.1fx |\n", counts[c], ma, mb, mg, ma / mb, ma / mg);
+        if (csv)
+            fprintf(csv, "%d,%.1f,%.1f,%.1f,%.2f,%.2f\n", counts[c], ma, mb, mg, ma / mb, ma / mg);
+        if (!isfinite(sink))
+            fprintf(stderr, "bench_near: non-finite output\n");
+        ocean_gerstner_frame_destroy(fr);
+        ocean_gerstner_destroy(g);
+    }
+    printf("\nThe daemon's mesh sampler uses the frame path (one ocean_gerstner_frame per mesh);\n"
+           "level-0 tiles can take the grid path.\n");
+    if (csv)
+        fclose(csv);
+    return 0;
+}
