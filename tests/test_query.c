@@ -58,9 +58,11 @@ static void brute_force(const ocean_frame *f, double x, double z, double *bx, do
         double step = span / 60.0, nx = cx, nz = cz;
         for (int i = -60; i <= 60; i++)
             for (int j = -60; j <= 60; j++) {
-                double x0 = cx + j * step, z0 = cz + i * step, dx, dz;
-                ocean_frame_sample_displacement(f, x0, z0, &dx, &dz);
-                double e = hypot(x0 + dx - x, z0 + dz - z);
+                double x0 = cx + j * step, z0 = cz + i * step;
+                ocean_point pt;
+                /* the reading queries use */
+                ocean_frame_sample_accurate(f, x0, z0, OCEAN_SAMPLE_DISPLACEMENT, &pt, NULL);
+                double e = hypot(x0 + pt.dx - x, z0 + pt.dz - z);
                 if (e < best) {
                     best = e;
                     nx = x0;
@@ -93,13 +95,15 @@ static void test_inversion_matches_brute_force(void **state)
         double bx, bz;
         brute_force(x->f, xz[2 * i], xz[2 * i + 1], &bx, &bz);
         ocean_point pt;
-        ocean_frame_sample(x->f, bx, bz, &pt);
+        ocean_frame_sample_accurate(x->f, bx, bz, OCEAN_SAMPLE_HEIGHT, &pt, NULL);
         double err = fabs(pt.height - res[i].height);
         if (err > 1e-3)
             fail_msg("point %d: query %.6f vs brute force %.6f (residual %.3g, %d it)", i,
                      res[i].height, pt.height, res[i].residual, res[i].iterations);
-        assert_true(res[i].residual <= 1e-4);
-        assert_true(res[i].error <= 1e-3);
+        assert_true(res[i].residual <= 1e-5);
+        /* the bound now covers the reading against the waves themselves:
+         * this 2 m grid holds waves up to its Nyquist rate (millimetres) */
+        assert_true(res[i].error <= 2e-2);
         assert_true(res[i].normal[1] > 0.0);
         double nl = sqrt(res[i].normal[0] * res[i].normal[0] + res[i].normal[1] * res[i].normal[1] +
                          res[i].normal[2] * res[i].normal[2]);
@@ -210,7 +214,8 @@ static void test_reports_folding(void **state)
     for (int i = 0; i < 400; i++) {
         double xz[2] = {i * 0.25, i * 0.17};
         ocean_query_points(f, NULL, NULL, 3.0, xz, 1, NULL, &q, NULL);
-        assert_true(isfinite(q.height) && isfinite(q.error));
+        /* no bound holds where the answer itself sits on a fold (J <= 0) */
+        assert_true(isfinite(q.height) && (isfinite(q.error) || q.folded));
         folded += q.folded;
     }
     assert_true(folded > 0);
