@@ -23,6 +23,8 @@ typedef struct plan {
     double radius[MESH_MAX_LEVELS];    /* outer zone radius, m */
     double blend[MESH_MAX_LEVELS];
     double range;
+    double slack;                      /* farthest the camera gets from the snapped
+                                          origin, m: half a snapping cell's diagonal */
 } plan;
 
 static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
@@ -61,6 +63,8 @@ static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
         L++;
     }
     p->levels = L + 1;
+    int snapL = p->levels > 2 ? 2 : p->levels - 1;
+    p->slack = 0.5 * M_SQRT2 * p->units[snapL] * p->s0;
 }
 
 static uint64_t plan_key(const mesh_config *cfg, const plan *p)
@@ -71,6 +75,7 @@ static uint64_t plan_key(const mesh_config *cfg, const plan *p)
     h = mesh_hash(h, &p->levels, sizeof p->levels);
     h = mesh_hash(h, &cfg->range_m, sizeof cfg->range_m);
     h = mesh_hash(h, &cfg->blend_frac, sizeof cfg->blend_frac);
+    h = mesh_hash(h, &p->slack, sizeof p->slack);
     return h;
 }
 
@@ -82,9 +87,16 @@ static double cell_dmin(int64_t x, int64_t z, int64_t s, double unit)
     return hypot(dx, dz) * unit;
 }
 
+/* A cell is split while any of it lies within R + blend of level L - 1 of
+ * the camera.  Cells are placed around the snapped origin, which the
+ * camera leaves by up to p->slack, so the test adds that: otherwise, with
+ * zones not much wider than a snapping cell (a coarse budget clamps rho),
+ * finer vertices on a coarser cell's edge sit inside the morph zone and
+ * stop short of the coarse edge (morph weight 0 or 0.5 where it must be
+ * 1), and the levels disagree along their border. */
 static ocean_result add_cell(mesh_bb *bb, const plan *p, int32_t x, int32_t z, int L)
 {
-    if (L > 0 && cell_dmin(x, z, p->units[L], p->s0) < p->radius[L - 1] + p->blend[L - 1]) {
+    if (L > 0 && cell_dmin(x, z, p->units[L], p->s0) < p->radius[L - 1] + p->blend[L - 1] + p->slack) {
         int32_t c = p->units[L - 1], n = p->units[L] / c;
         for (int32_t j = 0; j < n; j++)
             for (int32_t i = 0; i < n; i++) {

@@ -1054,6 +1054,51 @@ static void test_obj_output(void **state)
     mesh_destroy(m);
 }
 
+/* A vertex of level L on the edge of a coarser cell (it shares a triangle
+ * with a vertex of a coarser level) must sit on that cell's coarse edge:
+ * morph weight 1, or the two levels disagree there and the surface pops
+ * or cracks.  Over error budgets (the daemon's 16 px included: there rho
+ * is clamped and the zones are barely wider than the snapping offset)
+ * and camera positions anywhere in a snapping cell. */
+static void test_concentric_boundary_fully_morphed(void **state)
+{
+    (void)state;
+    const double budgets[] = {1, 2, 4, 8, 16, 32};
+    const double heights[] = {2, 25, 300};
+    int checked = 0;
+    for (int b = 0; b < 6; b++)
+        for (int hi = 0; hi < 3; hi++)
+            for (int k = 0; k < (sanitized() ? 3 : 9); k++) {
+                if (budgets[b] < 4 && heights[hi] < 25 && sanitized())
+                    continue;
+                mesh *m = make(MESH_CONCENTRIC, sanitized() ? 2000 : 5000, budgets[b]);
+                /* offsets spread over a level-2 cell (8 level-0 spacings) */
+                mesh_camera cam = cam_at(1000.0 + 3.7 * k * k, heights[hi], -200.0 + 5.3 * k);
+                assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
+                mesh_view v;
+                mesh_get_view(m, &v);
+                for (uint32_t t = 0; t < v.index_count; t += 3) {
+                    const uint32_t *tri = v.indices + t;
+                    int lmax = 0;
+                    for (int q = 0; q < 3; q++)
+                        lmax = v.level[tri[q]] > lmax ? v.level[tri[q]] : lmax;
+                    for (int q = 0; q < 3; q++) {
+                        uint32_t i = tri[q];
+                        if (v.level[i] < lmax) {
+                            checked++;
+                            if (v.morph[i] != 1.0f)
+                                fail_msg("budget %g px, height %g m, camera %d: level-%d vertex at "
+                                         "(%.2f, %.2f) on a level-%d cell has morph %g", budgets[b],
+                                         heights[hi], k, v.level[i], v.base[3 * i] + v.origin[0],
+                                         v.base[3 * i + 2] + v.origin[2], lmax, v.morph[i]);
+                        }
+                    }
+                }
+                mesh_destroy(m);
+            }
+    assert_true(checked > 1000);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1066,6 +1111,7 @@ int main(void)
         cmocka_unit_test(test_concentric_density_follows_rho),
         cmocka_unit_test(test_concentric_snapping),
         cmocka_unit_test(test_displace_and_morph),
+        cmocka_unit_test(test_concentric_boundary_fully_morphed),
         cmocka_unit_test(test_far_from_origin_precision),
         cmocka_unit_test(test_topology_key),
         cmocka_unit_test(test_hostile_camera_keeps_mesh),
