@@ -25,7 +25,13 @@ typedef struct plan {
     double range;
     double slack;                      /* farthest the camera gets from the snapped
                                           origin, m: half a snapping cell's diagonal */
+    int sky_levels;                    /* levels past the last one that make the
+                                          far skirt (0: none) */
+    double sky;                        /* radius the skirt reaches, m */
 } plan;
+
+/* Earth's mean radius, m (IUGG). */
+#define EARTH_R 6371008.8
 
 static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
 {
@@ -65,6 +71,30 @@ static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
     p->levels = L + 1;
     int snapL = p->levels > 2 ? 2 : p->levels - 1;
     p->slack = 0.5 * M_SQRT2 * p->units[snapL] * p->s0;
+    /* The far skirt: the sea's mean level from the mesh's edge out to the
+     * horizon of a camera at the top of its height octave (so it changes
+     * with the plan, not every frame), sqrt(2 R h + h^2), in rings of
+     * doubling radius and cell size as the levels themselves, so the
+     * triangulator stitches it like any coarser level. */
+    double hoct = ldexp(1.0, (int)ceil(log2(h > 1 ? h : 1)));
+    double sky = sqrt(2 * EARTH_R * hoct + hoct * hoct);
+    if (sky > 1e6)
+        sky = 1e6;
+    if (!cfg->far_skirt)
+        sky = 0;
+    p->sky = sky;
+    p->sky_levels = 0;
+    while (p->radius[L + p->sky_levels] < sky && L + p->sky_levels + 1 < MESH_MAX_LEVELS) {
+        int q = L + p->sky_levels + 1;
+        if (p->units[q - 1] > (1 << 28))
+            break;
+        p->units[q] = p->units[q - 1] * 2;
+        p->radius[q] = 2 * p->radius[q - 1];
+        p->blend[q] = 0;
+        p->sky_levels++;
+    }
+    if (p->sky_levels == 0)
+        p->sky = p->range;
 }
 
 static uint64_t plan_key(const mesh_config *cfg, const plan *p)
@@ -76,6 +106,8 @@ static uint64_t plan_key(const mesh_config *cfg, const plan *p)
     h = mesh_hash(h, &cfg->range_m, sizeof cfg->range_m);
     h = mesh_hash(h, &cfg->blend_frac, sizeof cfg->blend_frac);
     h = mesh_hash(h, &p->slack, sizeof p->slack);
+    h = mesh_hash(h, &p->sky, sizeof p->sky);
+    h = mesh_hash(h, &p->sky_levels, sizeof p->sky_levels);
     return h;
 }
 
@@ -134,7 +166,10 @@ static void fill_info(mesh *m, const plan *p)
 
 static void update_morph(mesh *m, const plan *p, const mesh_camera *cam)
 {
-    for (uint32_t v = 0; v < m->nv; v++) {
+    uint32_t real = m->nv - m->skirt_count;
+    for (uint32_t v = real; v < m->nv; v++)
+        m->morph[v] = 1.0f;
+    for (uint32_t v = 0; v < real; v++) {
         int L = m->level[v];
         float w = 0;
         if (L + 1 < p->levels && p->blend[L] > 0) {
@@ -151,6 +186,44 @@ static void update_morph(mesh *m, const plan *p, const mesh_camera *cam)
     }
 }
 
+/* Moves the vertices only skirt cells touch (level > Ltop) to the end,
+ * relabelled Ltop (the skirt is no LOD level of its own); *nsky gets
+ * their count. */
+static ocean_result skirt_last(mesh_bb *bb, int Ltop, uint32_t *nsky)
+{
+    uint32_t nv = bb->nv, *map = malloc((nv ? nv : 1) * sizeof *map);
+    int32_t *lat = malloc((size_t)(nv ? nv : 1) * 2 * sizeof *lat);
+    uint8_t *lvl = malloc(nv ? nv : 1);
+    if (!map || !lat || !lvl) {
+        free(map);
+        free(lat);
+        free(lvl);
+        return OCEAN_ENOMEM;
+    }
+    uint32_t k = 0, n = 0;
+    for (int pass = 0; pass < 2; pass++)
+        for (uint32_t v = 0; v < nv; v++) {
+            int sky = bb->lvl[v] > Ltop;
+            if (sky != pass)
+                continue;
+            map[v] = k;
+            lat[2 * k] = bb->lat[2 * v];
+            lat[2 * k + 1] = bb->lat[2 * v + 1];
+            lvl[k] = sky ? (uint8_t)Ltop : bb->lvl[v];
+            n += sky;
+            k++;
+        }
+    for (size_t i = 0; i < bb->ni; i++)
+        bb->idx[i] = map[bb->idx[i]];
+    memcpy(bb->lat, lat, (size_t)nv * 2 * sizeof *lat);
+    memcpy(bb->lvl, lvl, nv);
+    free(map);
+    free(lat);
+    free(lvl);
+    *nsky = n;
+    return OCEAN_OK;
+}
+
 ocean_result mesh_build_concentric(mesh *m, const mesh_camera *cam)
 {
     plan p;
@@ -163,25 +236,30 @@ ocean_result mesh_build_concentric(mesh *m, const mesh_camera *cam)
     double ox = round(cam->pos[0] / g) * g, oz = round(cam->pos[2] / g) * g;
     int rebuilt = 0;
     if (!(m->built && m->key == key)) {
-        int Ltop = p.levels - 1;
-        int64_t S = p.units[Ltop];
-        int64_t K = (int64_t)ceil(p.range / (S * p.s0));
+        int Ltop = p.levels - 1, Lsky = Ltop + p.sky_levels;
+        int64_t S = p.units[Lsky];
+        double reach = p.sky_levels ? p.sky : p.range;
+        int64_t K = (int64_t)ceil(reach / (S * p.s0));
         mesh_bb bb;
         memset(&bb, 0, sizeof bb);
         ocean_result r = OCEAN_OK;
         for (int64_t j = -K; j < K && r == OCEAN_OK; j++)
             for (int64_t i = -K; i < K && r == OCEAN_OK; i++) {
-                if (cell_dmin(i * S, j * S, S, p.s0) > p.range)
+                if (cell_dmin(i * S, j * S, S, p.s0) > reach)
                     continue;
-                r = add_cell(&bb, &p, (int32_t)(i * S), (int32_t)(j * S), Ltop);
+                r = add_cell(&bb, &p, (int32_t)(i * S), (int32_t)(j * S), Lsky);
             }
         if (r == OCEAN_OK)
             r = mesh_bb_triangulate(&bb);
+        uint32_t nsky = 0;
+        if (r == OCEAN_OK && p.sky_levels)
+            r = skirt_last(&bb, Ltop, &nsky);
         if (r == OCEAN_OK)
             r = mesh_adopt(m, &bb, p.s0);
         mesh_bb_free(&bb);
         if (r != OCEAN_OK)
             return r;
+        m->skirt_count = nsky;
         m->key = key;
         m->levels = p.levels;
         for (int L = 0; L < p.levels; L++)

@@ -565,7 +565,13 @@ static void sampler_counted(void *ctx, double x, double z, double d[3])
 static void test_displace_and_morph(void **state)
 {
     (void)state;
-    mesh *m = make(MESH_CONCENTRIC, 2000, 4);
+    mesh_config mcfg;
+    mesh_config_default(&mcfg);
+    mcfg.range_m = 2000;
+    mcfg.error_px = 4;
+    mcfg.far_skirt = 0; /* every vertex sampled (the skirt has its own test) */
+    mesh *m = NULL;
+    assert_int_equal(mesh_create(&mcfg, &m), OCEAN_OK);
     mesh_camera cam = cam_at(40.5, 10, 20.25);
     assert_int_equal(mesh_displace(m, sampler_plane, NULL), OCEAN_ESTATE);
     assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
@@ -582,7 +588,9 @@ static void test_displace_and_morph(void **state)
         float w = v.morph[i];
         assert_true(w >= 0 && w <= 1);
         if (L + 1 >= v.levels) {
-            assert_true(w == 0);
+            /* the last level does not morph; the far skirt beyond the
+             * range is flat with weight 1 */
+            assert_true(w == 0 || (w == 1 && d > 2000.0));
             continue;
         }
         double r = in.zone_radius_m[L], b = in.blend_m[L];
@@ -1099,6 +1107,51 @@ static void test_concentric_boundary_fully_morphed(void **state)
     assert_true(checked > 1000);
 }
 
+/* From 1500 m (the flight scene's camera) the horizon is 138 km away
+ * (sqrt(2 R h), R = 6371 km) and the 10 km mesh edge would show: the far
+ * skirt carries the surface out past it, still one watertight disc with
+ * no T-junction, flat and fully morphed beyond the range. */
+static void test_concentric_far_skirt(void **state)
+{
+    (void)state;
+    const double hs[] = {300, 1500, 10000};
+    for (int i = 0; i < 3; i++) {
+        mesh *m = make(MESH_CONCENTRIC, 10000, 4);
+        mesh_camera cam = cam_at(123.4, hs[i], -56.7);
+        assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
+        mesh_view v;
+        mesh_get_view(m, &v);
+        double minr;
+        long nb = check_topology(&v, v.origin[0], v.origin[2], &minr);
+        assert_true(nb > 0);
+        check_no_tjunction(&v, 1.0);
+        double horizon = sqrt(2 * 6371008.8 * hs[i]);
+        if (!(minr >= horizon))
+            fail_msg("camera at %g m: mesh edge at %.0f m, horizon %.0f m", hs[i], minr, horizon);
+        assert_true(v.levels <= 16);
+        double ref[2] = {0, 0};
+        assert_int_equal(mesh_displace(m, sampler_waves, ref), OCEAN_OK);
+        mesh_get_view(m, &v);
+        int far = 0;
+        for (uint32_t k = 0; k < v.vertex_count; k++) {
+            double r = hypot(v.base[3 * k], v.base[3 * k + 2]);
+            /* the last level's cells reach past the range (up to its zone
+             * radius, < 3 x the range); beyond that only the skirt */
+            if (r > 3 * 10000) {
+                far++;
+                assert_true(v.morph[k] == 1.0f && v.positions[3 * k + 1] == 0.0f);
+            }
+        }
+        assert_true(far > 0);
+        mesh_destroy(m);
+    }
+    mesh_config c;
+    mesh_config_default(&c);
+    c.far_skirt = 2;
+    mesh *bad = NULL;
+    assert_int_equal(mesh_create(&c, &bad), OCEAN_EINVAL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1112,6 +1165,7 @@ int main(void)
         cmocka_unit_test(test_concentric_snapping),
         cmocka_unit_test(test_displace_and_morph),
         cmocka_unit_test(test_concentric_boundary_fully_morphed),
+        cmocka_unit_test(test_concentric_far_skirt),
         cmocka_unit_test(test_far_from_origin_precision),
         cmocka_unit_test(test_topology_key),
         cmocka_unit_test(test_hostile_camera_keeps_mesh),
