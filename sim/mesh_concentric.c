@@ -25,8 +25,7 @@ typedef struct plan {
     double range;
     double slack;                      /* farthest the camera gets from the snapped
                                           origin, m: half a snapping cell's diagonal */
-    int sky_levels;                    /* levels past the last one that make the
-                                          far skirt (0: none) */
+    int has_sky;                    /* 1: a far skirt from the range to sky */
     double sky;                        /* radius the skirt reaches, m */
 } plan;
 
@@ -74,8 +73,7 @@ static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
     /* The far skirt: the sea's mean level from the mesh's edge out to the
      * horizon of a camera at the top of its height octave (so it changes
      * with the plan, not every frame), sqrt(2 R h + h^2), in rings of
-     * doubling radius and cell size as the levels themselves, so the
-     * triangulator stitches it like any coarser level. */
+     * coarser levels, so the triangulator stitches it like any other. */
     double hoct = ldexp(1.0, (int)ceil(log2(h > 1 ? h : 1)));
     double sky = sqrt(2 * EARTH_R * hoct + hoct * hoct);
     if (sky > 1e6)
@@ -83,17 +81,8 @@ static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
     if (!cfg->far_skirt)
         sky = 0;
     p->sky = sky;
-    p->sky_levels = 0;
-    while (p->radius[L + p->sky_levels] < sky && L + p->sky_levels + 1 < MESH_MAX_LEVELS) {
-        int q = L + p->sky_levels + 1;
-        if (p->units[q - 1] > (1 << 28))
-            break;
-        p->units[q] = p->units[q - 1] * 2;
-        p->radius[q] = 2 * p->radius[q - 1];
-        p->blend[q] = 0;
-        p->sky_levels++;
-    }
-    if (p->sky_levels == 0)
+    p->has_sky = sky > p->range;
+    if (p->has_sky == 0)
         p->sky = p->range;
 }
 
@@ -107,7 +96,7 @@ static uint64_t plan_key(const mesh_config *cfg, const plan *p)
     h = mesh_hash(h, &cfg->blend_frac, sizeof cfg->blend_frac);
     h = mesh_hash(h, &p->slack, sizeof p->slack);
     h = mesh_hash(h, &p->sky, sizeof p->sky);
-    h = mesh_hash(h, &p->sky_levels, sizeof p->sky_levels);
+    h = mesh_hash(h, &p->has_sky, sizeof p->has_sky);
     return h;
 }
 
@@ -139,6 +128,29 @@ static ocean_result add_cell(mesh_bb *bb, const plan *p, int32_t x, int32_t z, i
         return OCEAN_OK;
     }
     return mesh_bb_add_leaf(bb, x, z, p->units[L], L);
+}
+
+/* The far skirt as a quadtree: a cell wholly beyond the range is one flat
+ * skirt leaf (level levels, relabelled later), one beyond the horizon is
+ * dropped, one across the range is halved down to the last level's cell,
+ * which goes to add_cell as the mesh's own.  Cells so double in size with
+ * every step away from the range: a few cells per doubling of distance
+ * around the whole circle, whatever the horizon. */
+static ocean_result add_sky(mesh_bb *bb, const plan *p, int32_t x, int32_t z, int32_t size)
+{
+    double d = cell_dmin(x, z, size, p->s0);
+    if (d > p->sky)
+        return OCEAN_OK;
+    if (d > p->range)
+        return mesh_bb_add_leaf(bb, x, z, size, p->levels);
+    int Ltop = p->levels - 1;
+    if (size <= p->units[Ltop])
+        return add_cell(bb, p, x, z, Ltop);
+    int32_t h = size / 2;
+    ocean_result r = OCEAN_OK;
+    for (int k = 0; k < 4 && r == OCEAN_OK; k++)
+        r = add_sky(bb, p, x + (k & 1) * h, z + (k >> 1) * h, h);
+    return r;
 }
 
 static void fill_info(mesh *m, const plan *p)
@@ -236,23 +248,32 @@ ocean_result mesh_build_concentric(mesh *m, const mesh_camera *cam)
     double ox = round(cam->pos[0] / g) * g, oz = round(cam->pos[2] / g) * g;
     int rebuilt = 0;
     if (!(m->built && m->key == key)) {
-        int Ltop = p.levels - 1, Lsky = Ltop + p.sky_levels;
-        int64_t S = p.units[Lsky];
-        double reach = p.sky_levels ? p.sky : p.range;
-        int64_t K = (int64_t)ceil(reach / (S * p.s0));
+        int Ltop = p.levels - 1;
+        int64_t S = p.units[Ltop];
+        int64_t K = (int64_t)ceil(p.range / (S * p.s0));
         mesh_bb bb;
         memset(&bb, 0, sizeof bb);
         ocean_result r = OCEAN_OK;
-        for (int64_t j = -K; j < K && r == OCEAN_OK; j++)
-            for (int64_t i = -K; i < K && r == OCEAN_OK; i++) {
-                if (cell_dmin(i * S, j * S, S, p.s0) > reach)
-                    continue;
-                r = add_cell(&bb, &p, (int32_t)(i * S), (int32_t)(j * S), Lsky);
-            }
+        if (p.has_sky) {
+            /* four quadtree roots around the origin reaching the horizon */
+            int64_t U = S;
+            while ((double)U * p.s0 < p.sky && U < ((int64_t)1 << 29))
+                U *= 2;
+            for (int k = 0; k < 4 && r == OCEAN_OK; k++)
+                r = add_sky(&bb, &p, (int32_t)((k & 1) ? 0 : -U), (int32_t)((k >> 1) ? 0 : -U),
+                            (int32_t)U);
+        } else {
+            for (int64_t j = -K; j < K && r == OCEAN_OK; j++)
+                for (int64_t i = -K; i < K && r == OCEAN_OK; i++) {
+                    if (cell_dmin(i * S, j * S, S, p.s0) > p.range)
+                        continue;
+                    r = add_cell(&bb, &p, (int32_t)(i * S), (int32_t)(j * S), Ltop);
+                }
+        }
         if (r == OCEAN_OK)
             r = mesh_bb_triangulate(&bb);
         uint32_t nsky = 0;
-        if (r == OCEAN_OK && p.sky_levels)
+        if (r == OCEAN_OK && p.has_sky)
             r = skirt_last(&bb, Ltop, &nsky);
         if (r == OCEAN_OK)
             r = mesh_adopt(m, &bb, p.s0);
