@@ -16,6 +16,12 @@
  * points all lie inside it.  Median over repetitions, ns per point; the
  * speed-up columns are one-shot / frame and one-shot / grid, measured in
  * the same run.  Writes tests/bench/out/near.csv beside the table.
+ *
+ * Then queries in the storm scene (config/scenes/storm.conf over
+ * config/oceand.conf, with the daemon's 64-wave near field): the cost of
+ * one field reading (bilinear, accurate) and of one query (inversion
+ * included), and the height error of each reading at 200 points against
+ * the direct sum of every FFT mode in double (ocean_reference_point).
  */
 #include <math.h>
 #include <stdio.h>
@@ -23,6 +29,9 @@
 
 #include "../lib/bench_util.h"
 #include "gerstner.h"
+#include "ocean.h"
+#include "ocean_conf.h"
+#include "query.h"
 
 #define PTS 4096
 #define SIDE 64
@@ -30,6 +39,103 @@
 static double per_point_ns(double ms, int n)
 {
     return ms * 1e6 / n;
+}
+
+static int storm_queries(int quick)
+{
+    ocean_params base;
+    ocean_scene sc;
+    char err[300];
+    if (ocean_conf_load("config/oceand.conf", &base, err, sizeof err) != OCEAN_OK ||
+        ocean_conf_scene_load("config/scenes/storm.conf", &base, &sc, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "bench_near: %s\n", err);
+        return 1;
+    }
+    ocean_params p = sc.params;
+    p.k_max = M_PI * p.n / (p.patch_m / pow(p.cascade_ratio, p.cascades - 1));
+    p.threads = 1;
+    ocean *o = NULL;
+    ocean_frame *f = NULL;
+    ocean_gerstner *g = NULL;
+    if (ocean_create(&p, &o, err, sizeof err) != OCEAN_OK || ocean_frame_create(o, &f) != OCEAN_OK) {
+        fprintf(stderr, "bench_near: %s\n", err);
+        return 1;
+    }
+    double t = 137.25, klo, khi;
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_QUERY_EFFECTS);
+    r.foam_map = 0;
+    ocean_evaluate(o, t, &r, f);
+    ocean_cascade_band(o, p.cascades - 1, NULL, &klo, &khi);
+    ocean_gerstner_params gp;
+    ocean_gerstner_params_default(&gp);
+    gp.sea = p.sea;
+    gp.seed = p.seed;
+    gp.count = 64;
+    gp.k_lo = khi;
+    gp.k_hi = 2 * M_PI / 0.1;
+    if (ocean_gerstner_create(&gp, &g, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "bench_near: %s\n", err);
+        return 1;
+    }
+    enum { NQ = 2000 };
+    static double xz[2 * NQ];
+    static ocean_query_result res[NQ];
+    uint64_t st = 99;
+    for (int i = 0; i < 2 * NQ; i++) {
+        st = st * 6364136223846793005ULL + 1442695040888963407ULL;
+        xz[i] = ((double)(st >> 11) * 0x1p-53 - 0.5) * 4000.0;
+    }
+    int reps = quick ? 3 : 7;
+    double tb[8], ta[8], tq[8], sink = 0;
+    for (int k = 0; k < reps; k++) {
+        ocean_point pt;
+        double t0 = bench_now_ms();
+        for (int i = 0; i < NQ; i++) {
+            ocean_frame_sample(f, xz[2 * i], xz[2 * i + 1], &pt);
+            sink += pt.height;
+        }
+        double t1 = bench_now_ms();
+        for (int i = 0; i < NQ; i++) {
+            ocean_frame_sample_accurate(f, xz[2 * i], xz[2 * i + 1], OCEAN_SAMPLE_ALL, &pt, NULL);
+            sink += pt.height;
+        }
+        double t2 = bench_now_ms();
+        ocean_query_points(f, g, NULL, t, xz, NQ, NULL, res, NULL);
+        double t3 = bench_now_ms();
+        tb[k] = (t1 - t0) * 1e6 / NQ;
+        ta[k] = (t2 - t1) * 1e6 / NQ;
+        tq[k] = (t3 - t2) * 1e6 / NQ;
+    }
+    int ne = quick ? 40 : 200;
+    double sb = 0, sa = 0, mb = 0, ma = 0;
+    for (int i = 0; i < ne; i++) {
+        ocean_point ref, b, a;
+        ocean_reference_point(o, t, xz[2 * i], xz[2 * i + 1], INFINITY, 6, &ref);
+        ocean_frame_sample(f, xz[2 * i], xz[2 * i + 1], &b);
+        ocean_frame_sample_accurate(f, xz[2 * i], xz[2 * i + 1], OCEAN_SAMPLE_HEIGHT, &a, NULL);
+        double eb = fabs(b.height - ref.height), ea = fabs(a.height - ref.height);
+        sb += eb * eb;
+        sa += ea * ea;
+        mb = fmax(mb, eb);
+        ma = fmax(ma, ea);
+    }
+    printf("\nStorm scene (N = %d, %d cascades, choppiness %.1f, 64-wave near field): field reading\n"
+           "per point and height error against the direct sum of every mode (%d points)\n\n",
+           p.n, p.cascades, p.sea.choppiness, ne);
+    printf("| reading | ns per point | height error RMS (mm) | worst (mm) |\n|---|---:|---:|---:|\n");
+    printf("| bilinear (ocean_frame_sample) | %.0f | %.2f | %.2f |\n", bench_median(tb, reps),
+           1e3 * sqrt(sb / ne), 1e3 * mb);
+    printf("| accurate (ocean_frame_sample_accurate) | %.0f | %.3f | %.3f |\n", bench_median(ta, reps),
+           1e3 * sqrt(sa / ne), 1e3 * ma);
+    printf("\nOne query (ocean_query_points: Newton on FFT + near field, accurate reading, bound): "
+           "%.1f us per point.\n", bench_median(tq, reps) / 1e3);
+    if (!isfinite(sink))
+        fprintf(stderr, "bench_near: non-finite output\n");
+    ocean_gerstner_destroy(g);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    return 0;
 }
 
 int main(void)
@@ -109,5 +215,5 @@ int main(void)
            "level-0 tiles can take the grid path.\n");
     if (csv)
         fclose(csv);
-    return 0;
+    return storm_queries(quick);
 }
