@@ -16,6 +16,9 @@
  *    near spacing is unchanged: a client gets indices once, then positions.
  *    Cells bordering a finer level are fanned from their centre through
  *    every finer vertex on their edges, so no vertex lies inside an edge.
+ *    Beyond the range a flat far skirt (mesh_config.far_skirt) reaches the
+ *    camera's horizon, so no mesh edge shows from high up; its vertices
+ *    come last, carry the last level and morph 1, and are never sampled.
  *  - MESH_CHUNKED (seed 004): a grid of square tiles (default 6x6 of
  *    128 m, 32x32 quads) snapped to the tile size, up to 4 levels by
  *    distance, neighbours at most one level apart, edges stitched.

@@ -25,7 +25,7 @@ typedef struct plan {
     double range;
     double slack;                      /* farthest the camera gets from the snapped
                                           origin, m: half a snapping cell's diagonal */
-    int has_sky;                    /* 1: a far skirt from the range to sky */
+    int has_sky;                       /* 1: a far skirt from the range to sky */
     double sky;                        /* radius the skirt reaches, m */
 } plan;
 
@@ -72,8 +72,9 @@ static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
     p->slack = 0.5 * M_SQRT2 * p->units[snapL] * p->s0;
     /* The far skirt: the sea's mean level from the mesh's edge out to the
      * horizon of a camera at the top of its height octave (so it changes
-     * with the plan, not every frame), sqrt(2 R h + h^2), in rings of
-     * coarser levels, so the triangulator stitches it like any other. */
+     * with the plan, not every frame), sqrt(2 R h + h^2), as a quadtree
+     * of flat cells (add_sky) that the triangulator stitches to the mesh
+     * like any coarser level. */
     double hoct = ldexp(1.0, (int)ceil(log2(h > 1 ? h : 1)));
     double sky = sqrt(2 * EARTH_R * hoct + hoct * hoct);
     if (sky > 1e6)
