@@ -371,13 +371,13 @@ static void sample_disp(void *ctx, double x, double z, double out[3])
     if (sc->gf) {
         double dx = x - sc->view.camera_x, dz = z - sc->view.camera_z;
         if (dx * dx + dz * dz < sc->view.fade_r1 * sc->view.fade_r1) {
-            ocean_gerstner_point gp;
-            if (ocean_gerstner_frame_evaluate(sc->gf, &x, &z, 1, &gp) == OCEAN_OK) {
+            double gd[3];
+            if (ocean_gerstner_frame_displacement(sc->gf, &x, &z, 1, gd) == OCEAN_OK) {
                 if (sc->disp) {
-                    out[0] += gp.dx;
-                    out[2] += gp.dz;
+                    out[0] += gd[0];
+                    out[2] += gd[2];
                 }
-                out[1] += gp.dy;
+                out[1] += gd[1];
             }
         }
     }

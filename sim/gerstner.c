@@ -716,6 +716,57 @@ ocean_result ocean_gerstner_frame_evaluate(ocean_gerstner_frame *f, const double
     return OCEAN_OK;
 }
 
+ocean_result ocean_gerstner_frame_displacement(ocean_gerstner_frame *f, const double *x,
+                                               const double *z, size_t n, double *out)
+{
+    if (f == NULL || !points_ok(x, z, n, out))
+        return OCEAN_EINVAL;
+    if (!f->ready)
+        return OCEAN_ESTATE;
+    eval_state *st = &f->st;
+    const ocean_gerstner *g = st->g;
+    int M = g->count;
+    const double *a = st->a;
+    double q = st->q;
+    for (size_t p = 0; p < n; p++) {
+        double fx, fz;
+        double fv = fade_at(&st->view, x[p], z[p], &fx, &fz);
+        out[3 * p] = out[3 * p + 1] = out[3 * p + 2] = 0.0;
+        if (fv == 0.0 || M == 0)
+            continue;
+        double cx = CELL_M * nearbyint(x[p] / CELL_M), cz = CELL_M * nearbyint(z[p] / CELL_M);
+        const double *base = cell_base(st, cx, cz);
+        double ux = x[p] - cx, uz = z[p] - cz;
+        double th[OCEAN_GERSTNER_MAX_WAVES], sn[OCEAN_GERSTNER_MAX_WAVES];
+        double cs[OCEAN_GERSTNER_MAX_WAVES];
+        for (int i = 0; i < M; i++)
+            th[i] = base[i] + g->kx[i] * ux + g->kz[i] * uz;
+        sincos_many(th, sn, cs, M);
+        /* the same two interleaved lanes as evaluate_points, so the sums
+         * round alike */
+        double acc[3][2] = {{0}};
+        int m2 = M & ~1;
+        for (int i = 0; i < m2; i += 2)
+            for (int l = 0; l < 2; l++) {
+                int j = i + l;
+                double ai = a[j], qs = q * ai * sn[j];
+                acc[0][l] += ai * cs[j];
+                acc[1][l] += qs * g->hx[j];
+                acc[2][l] += qs * g->hz[j];
+            }
+        for (int j = m2; j < M; j++) {
+            double ai = a[j], qs = q * ai * sn[j];
+            acc[0][0] += ai * cs[j];
+            acc[1][0] += qs * g->hx[j];
+            acc[2][0] += qs * g->hz[j];
+        }
+        out[3 * p] = fv * -(acc[1][0] + acc[1][1]);
+        out[3 * p + 1] = fv * (acc[0][0] + acc[0][1]);
+        out[3 * p + 2] = fv * -(acc[2][0] + acc[2][1]);
+    }
+    return OCEAN_OK;
+}
+
 /* ---- grids -------------------------------------------------------------- */
 
 static int grid_ok(const ocean_gerstner_grid *g)

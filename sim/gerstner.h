@@ -161,6 +161,13 @@ ocean_result ocean_gerstner_frame_set(ocean_gerstner_frame *f, const ocean_gerst
 ocean_result ocean_gerstner_frame_evaluate(ocean_gerstner_frame *f, const double *x,
                                            const double *z, size_t n, ocean_gerstner_point *out);
 
+/* Only the displacement (dx, dy, dz) of n points into out[3 i .. 3 i + 2],
+ * the same values ocean_gerstner_frame_evaluate gives (bit for bit), for
+ * a mesh vertex that needs no normal, velocity or Jacobian: three sums
+ * instead of eleven.  Errors as ocean_gerstner_frame_evaluate. */
+ocean_result ocean_gerstner_frame_displacement(ocean_gerstner_frame *f, const double *x,
+                                               const double *z, size_t n, double *out);
+
 /* A regular grid of samples (a level-0 tile, say): sample (i, j) (row i
  * along z, column j along x) sits at world (x0 + j spacing, z0 + i spacing)
  * and goes to plane[i * stride + j].  Planes left NULL are not computed. */

@@ -582,6 +582,8 @@ static void frame_matches_one_shot(void **state)
     ocean_gerstner_point a, b;
     double x = x0, z = z0;
     assert_int_equal(ocean_gerstner_frame_evaluate(fr, &x, &z, 1, &a), OCEAN_ESTATE);
+    double dd[3];
+    assert_int_equal(ocean_gerstner_frame_displacement(fr, &x, &z, 1, dd), OCEAN_ESTATE);
     v.camera_x = x0;
     v.camera_z = z0;
     v.fade_r0 = 20.0;
@@ -598,6 +600,9 @@ static void frame_matches_one_shot(void **state)
             assert_int_equal(ocean_gerstner_frame_evaluate(fr, &x, &z, 1, &a), OCEAN_OK);
             assert_int_equal(ocean_gerstner_evaluate(g, &v, t, &x, &z, 1, &b), OCEAN_OK);
             assert_memory_equal(&a, &b, sizeof a);
+            double d[3];
+            assert_int_equal(ocean_gerstner_frame_displacement(fr, &x, &z, 1, d), OCEAN_OK);
+            assert_true(d[0] == a.dx && d[1] == a.dy && d[2] == a.dz);
         }
     }
     ocean_gerstner_view bad = v;
