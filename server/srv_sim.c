@@ -12,6 +12,7 @@
 #include "srv_sim.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
@@ -426,9 +427,8 @@ static void apply_subscription(srv_sim *s, srv_client *c)
 
 typedef struct sampler_ctx {
     const ocean_frame *f;
-    const ocean_gerstner *g;
+    ocean_gerstner_frame *gf;   /* near field prepared once per mesh, or NULL */
     ocean_gerstner_view view;
-    double t;
     int disp;
 } sampler_ctx;
 
@@ -441,16 +441,16 @@ static void sample_disp(void *ctx, double x, double z, double out[3])
     out[0] = sc->disp ? p.dx : 0;
     out[1] = p.height;
     out[2] = sc->disp ? p.dz : 0;
-    if (sc->g) {
+    if (sc->gf) {
         double dx = x - sc->view.camera_x, dz = z - sc->view.camera_z;
         if (dx * dx + dz * dz < sc->view.fade_r1 * sc->view.fade_r1) {
-            ocean_gerstner_point gp;
-            if (ocean_gerstner_evaluate(sc->g, &sc->view, sc->t, &x, &z, 1, &gp) == OCEAN_OK) {
+            double gd[3];
+            if (ocean_gerstner_frame_displacement(sc->gf, &x, &z, 1, gd) == OCEAN_OK) {
                 if (sc->disp) {
-                    out[0] += gp.dx;
-                    out[2] += gp.dz;
+                    out[0] += gd[0];
+                    out[2] += gd[2];
                 }
-                out[1] += gp.dy;
+                out[1] += gd[1];
             }
         }
     }
@@ -505,17 +505,23 @@ static void mesh_stage(srv_sim *s, job *j)
         sampler_ctx sc;
         memset(&sc, 0, sizeof sc);
         sc.f = j->ev->f;
-        sc.t = j->t;
         sc.disp = (cs->sub.effects & OCEAN_FX_DISPLACEMENT) != 0;
         if (s->g && (cs->sub.effects & OCEAN_FX_NEAR_FIELD)) {
-            sc.g = s->g;
             sc.view.camera_x = j->cam.pos[0];
             sc.view.camera_z = j->cam.pos[2];
             sc.view.fade_r1 = s->set.srv.near_field_radius;
             sc.view.fade_r0 = 0.5 * sc.view.fade_r1;
             sc.view.filter = j->cut;
+            /* The per-wave work (gains, Q, phases at t) once per mesh, not
+             * once per vertex; without memory the mesh goes without it. */
+            if (ocean_gerstner_frame_create(s->g, &sc.gf) == OCEAN_OK &&
+                ocean_gerstner_frame_set(sc.gf, &sc.view, j->t) != OCEAN_OK) {
+                ocean_gerstner_frame_destroy(sc.gf);
+                sc.gf = NULL;
+            }
         }
         r = mesh_displace(cs->mesh, sample_disp, &sc);
+        ocean_gerstner_frame_destroy(sc.gf);
     }
     atomic_fetch_add(&c->cpu_ns, (uint64_t)((srv_now() - m0) * 1e9));
     if (r == OCEAN_OK) {

@@ -3,6 +3,7 @@
  */
 #include "srv_work.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -99,7 +100,9 @@ static void answer(srv_hub *h, item *it)
             o->velocity[k] = (float)a->velocity[k];
         }
         o->foam = (float)(a->foam < 0 ? 0 : a->foam > 1 ? 1 : a->foam);
-        o->error_bound = (float)(a->error >= 0 && isfinite(a->error) ? a->error : 0);
+        /* no bound (a fold: J <= 0) is sent as the largest float, never
+         * as 0, which would claim an exact answer */
+        o->error_bound = a->error >= 0 && a->error < FLT_MAX ? (float)a->error : FLT_MAX;
     }
     proto_msg m;
     proto_msg_init(&m, PROTO_QUERY_RESULT);

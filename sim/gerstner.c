@@ -637,6 +637,12 @@ static void evaluate_points(eval_state *st, const double *x, const double *z, si
         double dzx = f * Dxz + fx * Dz, dzz = f * Dzz + fz * Dz; /* dDz/dx, dDz/dz */
         double J = (1.0 + dxx) * (1.0 + dzz) - dxz * dzx;
         o->jacobian = J;
+        o->slope_x = ex;
+        o->slope_z = ez;
+        o->dxx = dxx;
+        o->dxz = dxz;
+        o->dzx = dzx;
+        o->dzz = dzz;
         /* N = T_z x T_x with T_x = (1+dxx, ex, dzx), T_z = (dxz, ez, 1+dzz). */
         double nx = ez * dzx - (1.0 + dzz) * ex;
         double ny = J;
@@ -716,5 +722,207 @@ ocean_result ocean_gerstner_frame_evaluate(ocean_gerstner_frame *f, const double
     if (!f->ready)
         return OCEAN_ESTATE;
     evaluate_points(&f->st, x, z, n, out);
+    return OCEAN_OK;
+}
+
+ocean_result ocean_gerstner_frame_displacement(ocean_gerstner_frame *f, const double *x,
+                                               const double *z, size_t n, double *out)
+{
+    if (f == NULL || !points_ok(x, z, n, out))
+        return OCEAN_EINVAL;
+    if (!f->ready)
+        return OCEAN_ESTATE;
+    eval_state *st = &f->st;
+    const ocean_gerstner *g = st->g;
+    int M = g->count;
+    const double *a = st->a;
+    double q = st->q;
+    for (size_t p = 0; p < n; p++) {
+        double fx, fz;
+        double fv = fade_at(&st->view, x[p], z[p], &fx, &fz);
+        out[3 * p] = out[3 * p + 1] = out[3 * p + 2] = 0.0;
+        if (fv == 0.0 || M == 0)
+            continue;
+        double cx = CELL_M * nearbyint(x[p] / CELL_M), cz = CELL_M * nearbyint(z[p] / CELL_M);
+        const double *base = cell_base(st, cx, cz);
+        double ux = x[p] - cx, uz = z[p] - cz;
+        double th[OCEAN_GERSTNER_MAX_WAVES], sn[OCEAN_GERSTNER_MAX_WAVES];
+        double cs[OCEAN_GERSTNER_MAX_WAVES];
+        for (int i = 0; i < M; i++)
+            th[i] = base[i] + g->kx[i] * ux + g->kz[i] * uz;
+        sincos_many(th, sn, cs, M);
+        /* the same two interleaved lanes as evaluate_points, so the sums
+         * round alike */
+        double acc[3][2] = {{0}};
+        int m2 = M & ~1;
+        for (int i = 0; i < m2; i += 2)
+            for (int l = 0; l < 2; l++) {
+                int j = i + l;
+                double ai = a[j], qs = q * ai * sn[j];
+                acc[0][l] += ai * cs[j];
+                acc[1][l] += qs * g->hx[j];
+                acc[2][l] += qs * g->hz[j];
+            }
+        for (int j = m2; j < M; j++) {
+            double ai = a[j], qs = q * ai * sn[j];
+            acc[0][0] += ai * cs[j];
+            acc[1][0] += qs * g->hx[j];
+            acc[2][0] += qs * g->hz[j];
+        }
+        out[3 * p] = fv * -(acc[1][0] + acc[1][1]);
+        out[3 * p + 1] = fv * (acc[0][0] + acc[0][1]);
+        out[3 * p + 2] = fv * -(acc[2][0] + acc[2][1]);
+    }
+    return OCEAN_OK;
+}
+
+/* ---- grids -------------------------------------------------------------- */
+
+static int grid_ok(const ocean_gerstner_grid *g)
+{
+    if (g == NULL || !isfinite(g->x0) || !isfinite(g->z0) || fabs(g->x0) > 1e12 ||
+        fabs(g->z0) > 1e12 || !(g->spacing > 0.0) || !isfinite(g->spacing))
+        return 0;
+    if (g->w < 1 || g->h < 1 || g->w > OCEAN_GERSTNER_GRID_MAX || g->h > OCEAN_GERSTNER_GRID_MAX ||
+        g->stride < (size_t)g->w)
+        return 0;
+    /* the far corner must stay in range too */
+    double span = g->spacing * (g->w > g->h ? g->w : g->h);
+    return isfinite(span) && fabs(g->x0) + span <= 1e12 && fabs(g->z0) + span <= 1e12;
+}
+
+static void grid_store(float *plane, size_t at, double v, int acc)
+{
+    if (plane == NULL)
+        return;
+    plane[at] = acc ? (float)(plane[at] + v) : (float)v;
+}
+
+ocean_result ocean_gerstner_frame_sample_grid(ocean_gerstner_frame *f,
+                                              const ocean_gerstner_grid *g)
+{
+    if (f == NULL || !grid_ok(g))
+        return OCEAN_EINVAL;
+    if (!f->ready)
+        return OCEAN_ESTATE;
+    const eval_state *st = &f->st;
+    const ocean_gerstner *gs = st->g;
+    int w = g->w, h = g->h;
+    /* Waves the filter silenced cost nothing: keep the others, packed. */
+    int M = 0;
+    for (int i = 0; i < gs->count; i++)
+        M += st->a[i] != 0.0;
+    if (M == 0) {
+        if (!g->accumulate)
+            for (int i = 0; i < h; i++)
+                for (int j = 0; j < w; j++) {
+                    size_t at = (size_t)i * g->stride + j;
+                    grid_store(g->height, at, 0, 0); grid_store(g->dx, at, 0, 0);
+                    grid_store(g->dz, at, 0, 0); grid_store(g->slope_x, at, 0, 0);
+                    grid_store(g->slope_z, at, 0, 0); grid_store(g->dxx, at, 0, 0);
+                    grid_store(g->dzz, at, 0, 0); grid_store(g->dxz, at, 0, 0);
+                }
+        return OCEAN_OK;
+    }
+    /* coefficient planes (8), row factor (2), column factors (2 w) */
+    size_t mm = (size_t)M;
+    double *buf = malloc(sizeof(double) * mm * (8 + 2 + 2 * (size_t)w + 3));
+    if (buf == NULL)
+        return OCEAN_ENOMEM;
+    double *ca = buf, *cdx = ca + mm, *cdz = cdx + mm, *csx = cdz + mm, *csz = csx + mm;
+    double *cxx = csz + mm, *cxz = cxx + mm, *czz = cxz + mm;
+    double *rc = czz + mm, *rs = rc + mm, *colc = rs + mm, *cols = colc + mm * w;
+    double *th = cols + mm * w, *kx = th + mm, *kz = kx + mm;
+    double q = st->q;
+    int m = 0;
+    for (int i = 0; i < gs->count; i++) {
+        double a = st->a[i];
+        if (a == 0.0)
+            continue;
+        ca[m] = a;
+        cdx[m] = -q * a * gs->hx[i];
+        cdz[m] = -q * a * gs->hz[i];
+        csx[m] = -a * gs->kx[i];
+        csz[m] = -a * gs->kz[i];
+        cxx[m] = -q * a * gs->hx[i] * gs->kx[i];
+        cxz[m] = -q * a * gs->hx[i] * gs->kz[i];
+        czz[m] = -q * a * gs->hz[i] * gs->kz[i];
+        kx[m] = gs->kx[i];
+        kz[m] = gs->kz[i];
+        /* phase at sample (0, 0), reduced exactly as the one-point path */
+        th[m] = wrap_2pi(st->tphase[i] + mulmod_2pi(gs->kx[i], g->x0) +
+                         mulmod_2pi(gs->kz[i], g->z0));
+        m++;
+    }
+    double *row0 = malloc(sizeof(double) * mm);
+    if (row0 == NULL) {
+        free(buf);
+        return OCEAN_ENOMEM;
+    }
+    memcpy(row0, th, sizeof(double) * mm);
+    /* column factors e^{i kx j s}, each from its own reduced phase (no
+     * recurrence, so no error growth along the row) */
+    for (int j = 0; j < w; j++) {
+        double js = j * g->spacing;
+        for (int i = 0; i < M; i++)
+            th[i] = mulmod_2pi(kx[i], js);
+        sincos_many(th, cols + mm * j, colc + mm * j, M);
+    }
+    int fade = !isinf(st->view.fade_r1);
+    for (int r = 0; r < h; r++) {
+        double z = g->z0 + r * g->spacing, rsp = r * g->spacing;
+        /* skip a row wholly outside the fade */
+        if (fade && fabs(z - st->view.camera_z) >= st->view.fade_r1) {
+            if (!g->accumulate)
+                for (int j = 0; j < w; j++) {
+                    size_t at = (size_t)r * g->stride + j;
+                    grid_store(g->height, at, 0, 0); grid_store(g->dx, at, 0, 0);
+                    grid_store(g->dz, at, 0, 0); grid_store(g->slope_x, at, 0, 0);
+                    grid_store(g->slope_z, at, 0, 0); grid_store(g->dxx, at, 0, 0);
+                    grid_store(g->dzz, at, 0, 0); grid_store(g->dxz, at, 0, 0);
+                }
+            continue;
+        }
+        for (int i = 0; i < M; i++)
+            th[i] = row0[i] + mulmod_2pi(kz[i], rsp);
+        sincos_many(th, rs, rc, M);
+        for (int j = 0; j < w; j++) {
+            double x = g->x0 + j * g->spacing;
+            double fx = 0.0, fz = 0.0, fv = 1.0;
+            if (fade)
+                fv = fade_at(&st->view, x, z, &fx, &fz);
+            size_t at = (size_t)r * g->stride + j;
+            double C = 0, Dx = 0, Dz = 0, Sx = 0, Sz = 0, Dxx = 0, Dxz = 0, Dzz = 0;
+            if (fv != 0.0) {
+                const double *cc = colc + mm * j, *cs = cols + mm * j;
+#pragma omp simd reduction(+ : C, Dx, Dz, Sx, Sz, Dxx, Dxz, Dzz)
+                for (int i = 0; i < M; i++) {
+                    double c = rc[i] * cc[i] - rs[i] * cs[i];
+                    double s = rs[i] * cc[i] + rc[i] * cs[i];
+                    C += ca[i] * c;
+                    Dx += cdx[i] * s;
+                    Dz += cdz[i] * s;
+                    Sx += csx[i] * s;
+                    Sz += csz[i] * s;
+                    Dxx += cxx[i] * c;
+                    Dxz += cxz[i] * c;
+                    Dzz += czz[i] * c;
+                }
+            }
+            int acc = g->accumulate;
+            if (fv == 0.0 && acc)
+                continue;
+            grid_store(g->height, at, fv * C, acc);
+            grid_store(g->dx, at, fv * Dx, acc);
+            grid_store(g->dz, at, fv * Dz, acc);
+            grid_store(g->slope_x, at, fv * Sx + fx * C, acc);
+            grid_store(g->slope_z, at, fv * Sz + fz * C, acc);
+            grid_store(g->dxx, at, fv * Dxx + fx * Dx, acc);
+            grid_store(g->dzz, at, fv * Dzz + fz * Dz, acc);
+            grid_store(g->dxz, at, fv * Dxz + 0.5 * (fz * Dx + fx * Dz), acc);
+        }
+    }
+    free(row0);
+    free(buf);
     return OCEAN_OK;
 }

@@ -129,6 +129,10 @@ typedef struct ocean_gerstner_point {
     double vx, vy, vz;    /* d(displacement)/dt at fixed x0, m/s */
     double jacobian;      /* det of d(x + dx, z + dz)/d(x, z); >= 0 */
     double fade;          /* f(x0) in [0, 1] */
+    double slope_x, slope_z;      /* d(dy)/dx, d(dy)/dz at fixed t (fade included) */
+    double dxx, dxz, dzx, dzz;    /* d(dx)/dx, d(dx)/dz, d(dz)/dx, d(dz)/dz: the
+                                     displacement's Jacobian matrix minus I, which
+                                     query inversion (Newton) adds to the FFT's */
 } ocean_gerstner_point;
 
 /* Evaluates n points (x[i], z[i]) at time t (|t| <= OCEAN_TIME_MAX, else OCEAN_EINVAL) into
@@ -156,5 +160,41 @@ ocean_result ocean_gerstner_frame_set(ocean_gerstner_frame *f, const ocean_gerst
                                       double t);
 ocean_result ocean_gerstner_frame_evaluate(ocean_gerstner_frame *f, const double *x,
                                            const double *z, size_t n, ocean_gerstner_point *out);
+
+/* Only the displacement (dx, dy, dz) of n points into out[3 i .. 3 i + 2],
+ * the same values ocean_gerstner_frame_evaluate gives (bit for bit), for
+ * a mesh vertex that needs no normal, velocity or Jacobian: three sums
+ * instead of eleven.  Errors as ocean_gerstner_frame_evaluate. */
+ocean_result ocean_gerstner_frame_displacement(ocean_gerstner_frame *f, const double *x,
+                                               const double *z, size_t n, double *out);
+
+/* A regular grid of samples (a level-0 tile, say): sample (i, j) (row i
+ * along z, column j along x) sits at world (x0 + j spacing, z0 + i spacing)
+ * and goes to plane[i * stride + j].  Planes left NULL are not computed. */
+#define OCEAN_GERSTNER_GRID_MAX 4096
+typedef struct ocean_gerstner_grid {
+    double x0, z0;        /* world position of sample (0, 0), |.| <= 1e12 */
+    double spacing;       /* m, > 0 and finite */
+    int w, h;             /* samples along x and z, 1..OCEAN_GERSTNER_GRID_MAX */
+    size_t stride;        /* floats from one row to the next, >= w */
+    int accumulate;       /* 1: add to what the planes hold (FFT tiles), 0: store */
+    float *height;        /* dy */
+    float *dx, *dz;       /* horizontal displacement */
+    float *slope_x, *slope_z; /* d(dy)/dx, d(dy)/dz */
+    float *dxx, *dzz, *dxz;   /* displacement derivatives as the FFT's foam
+                                 channel holds them (dxz: the mean of d(dx)/dz
+                                 and d(dz)/dx, equal without a fade) */
+} ocean_gerstner_grid;
+
+/* The near field of frame f (its view and t, see ocean_gerstner_frame_set)
+ * on grid g.  Same sums as ocean_gerstner_frame_evaluate (agreement to
+ * ~1e-12 of sum |a|, float storage aside) at a fraction of the cost: the
+ * phase of wave i at sample (i, j) factors into e^{i k.x0 + ...} times a
+ * row factor times a column factor, so each sample costs one complex
+ * product per wave instead of a sin and a cos.  Points where the fade is
+ * 0 are left untouched (accumulate) or zero.  OCEAN_EINVAL for a bad
+ * grid, OCEAN_ESTATE before ocean_gerstner_frame_set, OCEAN_ENOMEM. */
+ocean_result ocean_gerstner_frame_sample_grid(ocean_gerstner_frame *f,
+                                              const ocean_gerstner_grid *g);
 
 #endif

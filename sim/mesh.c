@@ -143,6 +143,7 @@ void mesh_config_default(mesh_config *c)
     c->k_lambda = 0.1;
     c->min_spacing_m = 0.02;
     c->blend_frac = 0.2;
+    c->far_skirt = 1;
     c->chunk_tiles = 6;
     c->chunk_tile_m = 128;
     c->chunk_quads = 32;
@@ -174,6 +175,8 @@ ocean_result mesh_config_validate(const mesh_config *c, char *msg, size_t msglen
         FAIL("mesh min_spacing: %g outside [0.005, 1000] m", c->min_spacing_m);
     if (!isfinite(c->blend_frac) || c->blend_frac < 0 || c->blend_frac > 0.45)
         FAIL("mesh blend_frac: %g outside [0, 0.45]", c->blend_frac);
+    if (c->far_skirt != 0 && c->far_skirt != 1)
+        FAIL("mesh far_skirt: %d is neither 0 nor 1", c->far_skirt);
     if (c->chunk_tiles < 1 || c->chunk_tiles > 64)
         FAIL("mesh chunk_tiles: %d outside 1..64", c->chunk_tiles);
     if (!isfinite(c->chunk_tile_m) || c->chunk_tile_m < 1 || c->chunk_tile_m > 1e5)
@@ -566,6 +569,7 @@ ocean_result mesh_install(mesh *m, uint32_t nv, uint32_t ni, float *base, uint32
     m->level = level;
     m->idx = idx;
     m->nv = nv;
+    m->skirt_count = 0;
     m->ni = ni;
     return OCEAN_OK;
 }
@@ -597,6 +601,7 @@ ocean_result mesh_adopt(mesh *m, mesh_bb *bb, double unit_m)
         return r;
     }
     memcpy(m->level, bb->lvl, nv);
+    m->skirt_count = 0;
     m->lat = lat;
     m->unit_m = unit_m;
     return OCEAN_OK;
@@ -701,11 +706,15 @@ ocean_result mesh_displace(mesh *m, mesh_sampler_fn fn, void *ctx)
             return r;
     }
     const double ox = m->origin[0], oz = m->origin[2];
+    /* the far skirt stays flat: it only carries the sea's mean level
+     * from the mesh's edge to the horizon */
+    uint32_t sampled = m->nv - m->skirt_count;
     for (uint32_t v = 0; v < m->nv; v++) {
         const float *b = m->base + 3 * v;
         double *d = m->raw + 3 * (size_t)v;
         d[0] = d[1] = d[2] = 0;
-        fn(ctx, ox + b[0], oz + b[2], d);
+        if (v < sampled)
+            fn(ctx, ox + b[0], oz + b[2], d);
     }
     for (uint32_t v = 0; v < m->nv; v++) {
         const float *b = m->base + 3 * v;
@@ -770,6 +779,10 @@ ocean_result mesh_error_px(const mesh *m, const mesh_camera *cam, mesh_sampler_f
     for (long ti = 0; ti < ntri; ti++) {
         const uint32_t t = (uint32_t)(3 * ti);
         const uint32_t *tri = m->idx + t;
+        /* the far skirt is flat on purpose: not a sampling error */
+        uint32_t real = m->nv - m->skirt_count;
+        if (tri[0] >= real || tri[1] >= real || tri[2] >= real)
+            continue;
         for (int s = 0; s < 4; s++) {
             double mp[3] = {m->origin[0], m->origin[1], m->origin[2]};
             double bp[3] = {m->origin[0], m->origin[1], m->origin[2]};

@@ -16,6 +16,9 @@
  *    near spacing is unchanged: a client gets indices once, then positions.
  *    Cells bordering a finer level are fanned from their centre through
  *    every finer vertex on their edges, so no vertex lies inside an edge.
+ *    Beyond the range a flat far skirt (mesh_config.far_skirt) reaches the
+ *    camera's horizon, so no mesh edge shows from high up; its vertices
+ *    come last, carry the last level and morph 1, and are never sampled.
  *  - MESH_CHUNKED (seed 004): a grid of square tiles (default 6x6 of
  *    128 m, 32x32 quads) snapped to the tile size, up to 4 levels by
  *    distance, neighbours at most one level apart, edges stitched.
@@ -102,6 +105,11 @@ typedef struct mesh_config {
     double k_lambda;         /* near spacing <= k * lambda_dominant, 0.1 .. 0.5 */
     double min_spacing_m;    /* finest near spacing (the sea's finest detail) */
     double blend_frac;       /* morph zone half-width / zone radius, 0..0.45 (0.2) */
+    int far_skirt;           /* 1 (default): rings of flat triangles (morph 1, never
+                                sampled, the sea's mean level) from the range out to
+                                the horizon of the camera's height octave,
+                                sqrt(2 R h + h^2), so no mesh edge shows from high up;
+                                0: the mesh stops at the range */
     /* chunked */
     int chunk_tiles;         /* tiles per side, 1..64 (6) */
     double chunk_tile_m;     /* tile size, m (128) */

@@ -23,7 +23,14 @@ typedef struct plan {
     double radius[MESH_MAX_LEVELS];    /* outer zone radius, m */
     double blend[MESH_MAX_LEVELS];
     double range;
+    double slack;                      /* farthest the camera gets from the snapped
+                                          origin, m: half a snapping cell's diagonal */
+    int has_sky;                       /* 1: a far skirt from the range to sky */
+    double sky;                        /* radius the skirt reaches, m */
 } plan;
+
+/* Earth's mean radius, m (IUGG). */
+#define EARTH_R 6371008.8
 
 static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
 {
@@ -61,6 +68,23 @@ static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
         L++;
     }
     p->levels = L + 1;
+    int snapL = p->levels > 2 ? 2 : p->levels - 1;
+    p->slack = 0.5 * M_SQRT2 * p->units[snapL] * p->s0;
+    /* The far skirt: the sea's mean level from the mesh's edge out to the
+     * horizon of a camera at the top of its height octave (so it changes
+     * with the plan, not every frame), sqrt(2 R h + h^2), as a quadtree
+     * of flat cells (add_sky) that the triangulator stitches to the mesh
+     * like any coarser level. */
+    double hoct = ldexp(1.0, (int)ceil(log2(h > 1 ? h : 1)));
+    double sky = sqrt(2 * EARTH_R * hoct + hoct * hoct);
+    if (sky > 1e6)
+        sky = 1e6;
+    if (!cfg->far_skirt)
+        sky = 0;
+    p->sky = sky;
+    p->has_sky = sky > p->range;
+    if (p->has_sky == 0)
+        p->sky = p->range;
 }
 
 static uint64_t plan_key(const mesh_config *cfg, const plan *p)
@@ -71,6 +95,9 @@ static uint64_t plan_key(const mesh_config *cfg, const plan *p)
     h = mesh_hash(h, &p->levels, sizeof p->levels);
     h = mesh_hash(h, &cfg->range_m, sizeof cfg->range_m);
     h = mesh_hash(h, &cfg->blend_frac, sizeof cfg->blend_frac);
+    h = mesh_hash(h, &p->slack, sizeof p->slack);
+    h = mesh_hash(h, &p->sky, sizeof p->sky);
+    h = mesh_hash(h, &p->has_sky, sizeof p->has_sky);
     return h;
 }
 
@@ -82,9 +109,16 @@ static double cell_dmin(int64_t x, int64_t z, int64_t s, double unit)
     return hypot(dx, dz) * unit;
 }
 
+/* A cell is split while any of it lies within R + blend of level L - 1 of
+ * the camera.  Cells are placed around the snapped origin, which the
+ * camera leaves by up to p->slack, so the test adds that: otherwise, with
+ * zones not much wider than a snapping cell (a coarse budget clamps rho),
+ * finer vertices on a coarser cell's edge sit inside the morph zone and
+ * stop short of the coarse edge (morph weight 0 or 0.5 where it must be
+ * 1), and the levels disagree along their border. */
 static ocean_result add_cell(mesh_bb *bb, const plan *p, int32_t x, int32_t z, int L)
 {
-    if (L > 0 && cell_dmin(x, z, p->units[L], p->s0) < p->radius[L - 1] + p->blend[L - 1]) {
+    if (L > 0 && cell_dmin(x, z, p->units[L], p->s0) < p->radius[L - 1] + p->blend[L - 1] + p->slack) {
         int32_t c = p->units[L - 1], n = p->units[L] / c;
         for (int32_t j = 0; j < n; j++)
             for (int32_t i = 0; i < n; i++) {
@@ -95,6 +129,29 @@ static ocean_result add_cell(mesh_bb *bb, const plan *p, int32_t x, int32_t z, i
         return OCEAN_OK;
     }
     return mesh_bb_add_leaf(bb, x, z, p->units[L], L);
+}
+
+/* The far skirt as a quadtree: a cell wholly beyond the range is one flat
+ * skirt leaf (level levels, relabelled later), one beyond the horizon is
+ * dropped, one across the range is halved down to the last level's cell,
+ * which goes to add_cell as the mesh's own.  Cells so double in size with
+ * every step away from the range: a few cells per doubling of distance
+ * around the whole circle, whatever the horizon. */
+static ocean_result add_sky(mesh_bb *bb, const plan *p, int32_t x, int32_t z, int32_t size)
+{
+    double d = cell_dmin(x, z, size, p->s0);
+    if (d > p->sky)
+        return OCEAN_OK;
+    if (d > p->range)
+        return mesh_bb_add_leaf(bb, x, z, size, p->levels);
+    int Ltop = p->levels - 1;
+    if (size <= p->units[Ltop])
+        return add_cell(bb, p, x, z, Ltop);
+    int32_t h = size / 2;
+    ocean_result r = OCEAN_OK;
+    for (int k = 0; k < 4 && r == OCEAN_OK; k++)
+        r = add_sky(bb, p, x + (k & 1) * h, z + (k >> 1) * h, h);
+    return r;
 }
 
 static void fill_info(mesh *m, const plan *p)
@@ -122,7 +179,10 @@ static void fill_info(mesh *m, const plan *p)
 
 static void update_morph(mesh *m, const plan *p, const mesh_camera *cam)
 {
-    for (uint32_t v = 0; v < m->nv; v++) {
+    uint32_t real = m->nv - m->skirt_count;
+    for (uint32_t v = real; v < m->nv; v++)
+        m->morph[v] = 1.0f;
+    for (uint32_t v = 0; v < real; v++) {
         int L = m->level[v];
         float w = 0;
         if (L + 1 < p->levels && p->blend[L] > 0) {
@@ -160,7 +220,51 @@ double mesh_estimate_concentric(const mesh_config *cfg, const mesh_camera *cam)
         }
         inner = fmax(inner, outer);
     }
+    /* the far skirt: cells that double away from the range, about a ring of
+     * the last level's cells per octave out to the horizon */
+    if (p.has_sky) {
+        double s = p.units[p.levels - 1] * p.s0;
+        n += 2.0 * M_PI * p.range / s * fmax(1.0, log2(p.sky / p.range));
+    }
     return 1.6 * n + 64;
+}
+
+/* Moves the vertices only skirt cells touch (level > Ltop) to the end,
+ * relabelled Ltop (the skirt is no LOD level of its own); *nsky gets
+ * their count. */
+static ocean_result skirt_last(mesh_bb *bb, int Ltop, uint32_t *nsky)
+{
+    uint32_t nv = bb->nv, *map = malloc((nv ? nv : 1) * sizeof *map);
+    int32_t *lat = malloc((size_t)(nv ? nv : 1) * 2 * sizeof *lat);
+    uint8_t *lvl = malloc(nv ? nv : 1);
+    if (!map || !lat || !lvl) {
+        free(map);
+        free(lat);
+        free(lvl);
+        return OCEAN_ENOMEM;
+    }
+    uint32_t k = 0, n = 0;
+    for (int pass = 0; pass < 2; pass++)
+        for (uint32_t v = 0; v < nv; v++) {
+            int sky = bb->lvl[v] > Ltop;
+            if (sky != pass)
+                continue;
+            map[v] = k;
+            lat[2 * k] = bb->lat[2 * v];
+            lat[2 * k + 1] = bb->lat[2 * v + 1];
+            lvl[k] = sky ? (uint8_t)Ltop : bb->lvl[v];
+            n += sky;
+            k++;
+        }
+    for (size_t i = 0; i < bb->ni; i++)
+        bb->idx[i] = map[bb->idx[i]];
+    memcpy(bb->lat, lat, (size_t)nv * 2 * sizeof *lat);
+    memcpy(bb->lvl, lvl, nv);
+    free(map);
+    free(lat);
+    free(lvl);
+    *nsky = n;
+    return OCEAN_OK;
 }
 
 ocean_result mesh_build_concentric(mesh *m, const mesh_camera *cam)
@@ -181,19 +285,33 @@ ocean_result mesh_build_concentric(mesh *m, const mesh_camera *cam)
         mesh_bb bb;
         memset(&bb, 0, sizeof bb);
         ocean_result r = OCEAN_OK;
-        for (int64_t j = -K; j < K && r == OCEAN_OK; j++)
-            for (int64_t i = -K; i < K && r == OCEAN_OK; i++) {
-                if (cell_dmin(i * S, j * S, S, p.s0) > p.range)
-                    continue;
-                r = add_cell(&bb, &p, (int32_t)(i * S), (int32_t)(j * S), Ltop);
-            }
+        if (p.has_sky) {
+            /* four quadtree roots around the origin reaching the horizon */
+            int64_t U = S;
+            while ((double)U * p.s0 < p.sky && U < ((int64_t)1 << 29))
+                U *= 2;
+            for (int k = 0; k < 4 && r == OCEAN_OK; k++)
+                r = add_sky(&bb, &p, (int32_t)((k & 1) ? 0 : -U), (int32_t)((k >> 1) ? 0 : -U),
+                            (int32_t)U);
+        } else {
+            for (int64_t j = -K; j < K && r == OCEAN_OK; j++)
+                for (int64_t i = -K; i < K && r == OCEAN_OK; i++) {
+                    if (cell_dmin(i * S, j * S, S, p.s0) > p.range)
+                        continue;
+                    r = add_cell(&bb, &p, (int32_t)(i * S), (int32_t)(j * S), Ltop);
+                }
+        }
         if (r == OCEAN_OK)
             r = mesh_bb_triangulate(&bb);
+        uint32_t nsky = 0;
+        if (r == OCEAN_OK && p.has_sky)
+            r = skirt_last(&bb, Ltop, &nsky);
         if (r == OCEAN_OK)
             r = mesh_adopt(m, &bb, p.s0);
         mesh_bb_free(&bb);
         if (r != OCEAN_OK)
             return r;
+        m->skirt_count = nsky;
         m->key = key;
         m->levels = p.levels;
         for (int L = 0; L < p.levels; L++)

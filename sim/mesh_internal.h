@@ -49,6 +49,9 @@ struct mesh {
     int levels;
     int32_t lvl_units[MESH_MAX_LEVELS];/* cell side of each level, units */
     int place_only;                    /* mesh_place: skip per-vertex positions and morph */
+    uint32_t skirt_count;              /* the last skirt_count vertices are the flat
+                                          far skirt (concentric): never sampled,
+                                          morph 1; 0 for other meshes */
     mesh_info info;
     /* Displacement scratch: each vertex's own sample, and the vertices at
      * the three coarse corners a morphing vertex interpolates (3 per

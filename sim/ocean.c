@@ -1399,6 +1399,263 @@ void ocean_frame_sample_displacement(const ocean_frame *f, double x, double z,
     *dz = sz;
 }
 
+/* ---- accurate reading ------------------------------------------------------
+ *
+ * Bilinear reading of a grid that holds waves up to half its Nyquist rate
+ * (coarse cascades) or up to it (the finest) leaves centimetres between
+ * grid points: the error is ~ (k h)^2 / 8 of each wave's amplitude, and
+ * the coarse cascades put metres of amplitude near k h = pi / 2.  The FFT
+ * already gives each field's exact first derivatives at the grid points
+ * (slopes for the height, the foam channel's Dxx, Dxz, Dzz for the
+ * displacement), so the height and the displacement are read by Hermite
+ * interpolation: value and first derivatives at every node, tensor product
+ * of the 1-D Hermite interpolant on the 4 nodes -1..2 (degree 7),
+ * H_k = (1 - 2 l_k'(x_k)(t - x_k)) l_k^2, K_k = (t - x_k) l_k^2 with l_k
+ * the Lagrange basis (Hildebrand, Introduction to Numerical Analysis,
+ * 1974, sec. 8.2).  Its 1-D error on a wave of k h = 1, pi/2, pi is 7e-6,
+ * 2.5e-4, 4e-2 of the amplitude, against 0.12, 0.29, 1 for bilinear (six
+ * nodes would give 2e-8, 5e-6, 9e-3, but cost four times as much for a
+ * third less error on the storm scene).  The tensor product needs the cross
+ * derivative f_xz at the nodes, which no channel holds: the mean of the
+ * differences of f_x along z and of f_z along x, sixth-order central on
+ * the coarse cascades (k h <= pi / 2), a 21-point least-squares stencil on
+ * the finest, whose diagonal waves reach k h = 2.2 where the sixth-order
+ * difference is 30 % off (cdiff_wide).  Channels without derivatives
+ * (slopes, velocity, Dxx...) are read by 4 x 4 cubic Lagrange.
+ *
+ * Measured on the storm scene (Beaufort 10, 3 cascades of N = 256, the
+ * finest to its Nyquist rate) against the direct sum of every mode in
+ * double: height 0.07 mm RMS, 0.24 mm worst; bilinear 6 cm, 18 cm (3.3 us
+ * against 0.35 us per reading, bench_near).
+ *
+ * Error bound: per wave, the interpolation error divided by the response
+ * of the fourth difference (2 sin(k h / 2))^4 grows with k h, so over a
+ * band that stops at k h = pi / 2 (coarse cascades) or pi (the finest) it
+ * is at most its value there; the fourth differences of the nodes around
+ * the point, along x and along z, measure the local amplitude of exactly
+ * the waves that matter (hermite_read). */
+
+#define ACC_REACH 11                  /* nodes -11 .. 12 around the cell */
+#define ACC_SPAN (2 * ACC_REACH + 2)
+#define ACC_MAXN 4
+
+typedef struct stencil {
+    size_t row[ACC_SPAN];             /* offsets of rows i0 - 11 .. i0 + 12 */
+    int col[ACC_SPAN];                /* columns j0 - 11 .. j0 + 12 */
+    int nodes, first;                 /* Hermite nodes first .. first + nodes - 1 */
+    double hu[ACC_MAXN], ku[ACC_MAXN];/* Hermite value and slope bases along x */
+    double hv[ACC_MAXN], kv[ACC_MAXN];/* and along z */
+    double lu[4], lv[4];              /* cubic Lagrange, nodes -1..2 */
+    double h;                         /* grid spacing, m */
+} stencil;
+
+static void lagrange4(double t, double w[4])
+{
+    w[0] = -t * (t - 1.0) * (t - 2.0) / 6.0;
+    w[1] = (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0;
+    w[2] = -(t + 1.0) * t * (t - 2.0) / 2.0;
+    w[3] = (t + 1.0) * t * (t - 1.0) / 6.0;
+}
+
+/* Hermite bases on nodes first .. first + n - 1 at t:
+ * H_k = (1 - 2 l_k'(x_k)(t - x_k)) l_k^2, K_k = (t - x_k) l_k^2. */
+static void hermite_basis(double t, int n, int first, double *hv, double *kv)
+{
+    for (int k = 0; k < n; k++) {
+        double xk = first + k, l = 1.0, lp = 0.0;
+        for (int m = 0; m < n; m++) {
+            if (m == k)
+                continue;
+            double xm = first + m;
+            l *= (t - xm) / (xk - xm);
+            lp += 1.0 / (xk - xm);
+        }
+        double d = t - xk, l2 = l * l;
+        hv[k] = (1.0 - 2.0 * lp * d) * l2;
+        kv[k] = d * l2;
+    }
+}
+
+static stencil stencil_of(const ocean_field *fd, double x, double z, int nodes)
+{
+    cell q = locate(fd, x, z);
+    int n = fd->n, m = n - 1;
+    stencil s;
+    for (int k = 0; k < ACC_SPAN; k++) {
+        s.row[k] = (size_t)((q.i0 + k - ACC_REACH + 4 * n) & m) * n;
+        s.col[k] = (q.j0 + k - ACC_REACH + 4 * n) & m;
+    }
+    s.nodes = nodes;
+    s.first = 1 - nodes / 2;
+    hermite_basis(q.fx, nodes, s.first, s.hu, s.ku);
+    hermite_basis(q.fz, nodes, s.first, s.hv, s.kv);
+    lagrange4(q.fx, s.lu);
+    lagrange4(q.fz, s.lv);
+    s.h = fd->patch_m / n;
+    return s;
+}
+
+/* Node (r, c) relative to the cell's corner, r and c in -11..12. */
+static inline double node(const float *g, const stencil *s, int r, int c)
+{
+    return g[s->row[r + ACC_REACH] + s->col[c + ACC_REACH]];
+}
+
+static double lagrange_read(const float *g, const stencil *s)
+{
+    double acc = 0.0;
+    for (int r = 0; r < 4; r++) {
+        double rowv = 0.0;
+        for (int c = 0; c < 4; c++)
+            rowv += s->lu[c] * node(g, s, r - 1, c - 1);
+        acc += s->lv[r] * rowv;
+    }
+    return acc;
+}
+
+/* h times the derivative of plane d along x (dir 0) or z (dir 1) at node
+ * (r, c): sixth-order central difference. */
+static inline double cdiff6(const float *d, const stencil *s, int r, int c, int dir)
+{
+    int dr = dir, dc = 1 - dir;
+    double d1 = node(d, s, r + dr, c + dc) - node(d, s, r - dr, c - dc);
+    double d2 = node(d, s, r + 2 * dr, c + 2 * dc) - node(d, s, r - 2 * dr, c - 2 * dc);
+    double d3 = node(d, s, r + 3 * dr, c + 3 * dc) - node(d, s, r - 3 * dr, c - 3 * dc);
+    return (45.0 * d1 - 9.0 * d2 + d3) / 60.0;
+}
+
+/* Fourth difference of plane g along x (dir 0) or z (dir 1) at node
+ * (r, c): a high-pass whose response to a wave of k h = th is
+ * (2 sin(th / 2))^4, 16 at the grid's Nyquist rate. */
+static inline double diff4(const float *g, const stencil *s, int r, int c, int dir)
+{
+    int dr = dir, dc = 1 - dir;
+    return node(g, s, r - 2 * dr, c - 2 * dc) - 4.0 * node(g, s, r - dr, c - dc) +
+           6.0 * node(g, s, r, c) - 4.0 * node(g, s, r + dr, c + dc) +
+           node(g, s, r + 2 * dr, c + 2 * dc);
+}
+
+/* h times the derivative of plane d along x (dir 0) or z (dir 1) at node
+ * (r, c) for a grid whose waves reach its Nyquist rate: 21 points,
+ * weights fitted by least squares to the exact derivative (relative error
+ * of the modified wave number) over k h in (0, 2.3], which holds the whole
+ * band |k| h <= pi in the diagonal directions, where a cross derivative
+ * matters; relative error <= 3.2e-4 there (the sixth-order difference is
+ * 30 % off at k h = 2.2). */
+static const double wide_w[10] = {
+    0.96149997793578101, -0.42688812746433052, 0.23261704731444471, -0.13048081462293556,
+    0.070745166958478364, -0.035655135414171368, 0.016085410075560996, -0.0061669823723281957,
+    0.0018241301461298877, -0.00031443106493215573};
+
+static inline double cdiff_wide(const float *d, const stencil *s, int r, int c, int dir)
+{
+    int dr = dir, dc = 1 - dir;
+    double acc = 0.0;
+    for (int m = 1; m <= 10; m++)
+        acc += wide_w[m - 1] * (node(d, s, r + m * dr, c + m * dc) - node(d, s, r - m * dr, c - m * dc));
+    return acc;
+}
+
+/* Hermite reading of value plane g with derivative planes gx (d/dx) and
+ * gz (d/dz); *bound (unless NULL) receives its error bound (see the
+ * section comment). */
+static double hermite_read(const float *g, const float *gx, const float *gz, const stencil *s,
+                           int finest, double *bound)
+{
+    double h = s->h, acc = 0.0, big = 0.0, hx = 0.0, hz = 0.0;
+    for (int b = 0; b < s->nodes; b++) {          /* row node r (z) */
+        for (int a = 0; a < s->nodes; a++) {      /* column node c (x) */
+            int r = b + s->first, c = a + s->first;
+            double fv = node(g, s, r, c), fx = node(gx, s, r, c) * h, fz = node(gz, s, r, c) * h;
+            /* h^2 f_xz: mean of the two differences */
+            double fxz = finest ? 0.5 * (cdiff_wide(gx, s, r, c, 1) + cdiff_wide(gz, s, r, c, 0)) * h
+                                : 0.5 * (cdiff6(gx, s, r, c, 1) + cdiff6(gz, s, r, c, 0)) * h;
+            acc += fv * s->hu[a] * s->hv[b] + fx * s->ku[a] * s->hv[b] +
+                   fz * s->hu[a] * s->kv[b] + fxz * s->ku[a] * s->kv[b];
+            if (!bound)
+                continue;
+            double d4x = fabs(diff4(g, s, r, c, 0)), d4z = fabs(diff4(g, s, r, c, 1));
+            if (fabs(fv) > big) big = fabs(fv);
+            if (d4x > hx) hx = d4x;
+            if (d4z > hz) hz = d4z;
+        }
+    }
+    /* Per wave, the 1-D error over the fourth difference's response peaks
+     * at the band's top: 6.3e-5 at k h = pi / 2 (coarse cascades' edge),
+     * 2.7e-3 at pi (the finest; 1.3e-3 at k h = 2.8, and the waves beyond
+     * carry little: 1.5e-3 is taken, which the factor 2 below still lifts
+     * above the value at pi).  Along each axis the error is at most that ratio times the
+     * high-passed field, whose local envelope the nodes sample; a factor 2
+     * covers the envelope between nodes; float storage adds 2^-22 of the
+     * nodes' magnitude. */
+    double ratio = finest ? 1.5e-3 : 6.3e-5;
+    if (bound)
+        *bound = 2.0 * ratio * (hx + hz) + big * 0x1p-22;
+    return acc;
+}
+
+void ocean_frame_sample_accurate(const ocean_frame *f, double x, double z, unsigned want,
+                                 ocean_point *out, ocean_point *err)
+{
+    enum { H, DX, DZ, SX, SZ, VX, VY, VZ, DXX, DZZ, DXZ, NV };
+    double v[NV] = {0}, e[3] = {0};
+    int any_foam = 0, blind[3] = {0};
+    for (int c = 0; c < f->cascades; c++) {
+        const ocean_field *fd = &f->field[c];
+        if (!fd->effects)
+            continue;
+        int finest = c == f->cascades - 1;
+        const stencil s = stencil_of(fd, x, z, 4);
+        double b = 0.0, *bp = err ? &b : NULL;
+        if ((want & OCEAN_SAMPLE_HEIGHT) && fd->height) {
+            if (fd->slope_x) {
+                v[H] += hermite_read(fd->height, fd->slope_x, fd->slope_z, &s, finest, bp);
+                e[0] += b;
+            } else {
+                v[H] += lagrange_read(fd->height, &s);
+                blind[0] = 1;
+            }
+        }
+        if ((want & OCEAN_SAMPLE_DISPLACEMENT) && fd->dx) {
+            if (fd->dxx) {
+                v[DX] += hermite_read(fd->dx, fd->dxx, fd->dxz, &s, finest, bp);
+                e[1] += b;
+                v[DZ] += hermite_read(fd->dz, fd->dxz, fd->dzz, &s, finest, bp);
+                e[2] += b;
+            } else {
+                v[DX] += lagrange_read(fd->dx, &s);
+                v[DZ] += lagrange_read(fd->dz, &s);
+                blind[1] = blind[2] = 1;
+            }
+        }
+        if (want & OCEAN_SAMPLE_SLOPE) {
+            if (fd->slope_x) v[SX] += lagrange_read(fd->slope_x, &s);
+            if (fd->slope_z) v[SZ] += lagrange_read(fd->slope_z, &s);
+        }
+        if (want & OCEAN_SAMPLE_VELOCITY) {
+            if (fd->vel_x) v[VX] += lagrange_read(fd->vel_x, &s);
+            if (fd->vel_y) v[VY] += lagrange_read(fd->vel_y, &s);
+            if (fd->vel_z) v[VZ] += lagrange_read(fd->vel_z, &s);
+        }
+        if ((want & OCEAN_SAMPLE_FOAM) && fd->dxx) {
+            any_foam = 1;
+            v[DXX] += lagrange_read(fd->dxx, &s);
+            v[DZZ] += lagrange_read(fd->dzz, &s);
+            v[DXZ] += lagrange_read(fd->dxz, &s);
+        }
+    }
+    double jac = (1.0 + v[DXX]) * (1.0 + v[DZZ]) - v[DXZ] * v[DXZ];
+    *out = (ocean_point){.height = v[H], .dx = v[DX], .dz = v[DZ], .slope_x = v[SX],
+                         .slope_z = v[SZ], .jacobian = jac,
+                         .foam = any_foam ? ocean_foam_from_jacobian((float)jac) : 0.0,
+                         .vel_x = v[VX], .vel_y = v[VY], .vel_z = v[VZ], .dxx = v[DXX],
+                         .dzz = v[DZZ], .dxz = v[DXZ]};
+    if (err)
+        *err = (ocean_point){.height = blind[0] ? INFINITY : e[0],
+                             .dx = blind[1] ? INFINITY : e[1],
+                             .dz = blind[2] ? INFINITY : e[2]};
+}
+
 void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out)
 {
     memset(out, 0, sizeof *out);

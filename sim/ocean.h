@@ -270,6 +270,21 @@ enum {
 void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned want,
                              ocean_point *out);
 
+/* The summed cascades at a world point read to within about a millimetre
+ * of the waves themselves (ocean_frame_sample's bilinear reading leaves
+ * centimetres between grid points): height and displacement by Hermite
+ * interpolation on 4 x 4 nodes with the frame's own spectral derivatives
+ * (slopes; Dxx, Dxz, Dzz), the other channels by 4 x 4 cubic Lagrange.
+ * Needs OCEAN_FX_NORMALS for an accurate height and OCEAN_FX_FOAM for an
+ * accurate displacement (without them those are read by Lagrange alone).
+ * If err is not NULL, err->height, err->dx and err->dz receive a bound on
+ * each one's interpolation error against the frame's own waves (see the
+ * comment in ocean.c; INFINITY where a needed derivative channel is
+ * missing); its other fields are 0.  About ten times the cost of the
+ * bilinear reading (bench_near): meant for queries, not mesh vertices. */
+void ocean_frame_sample_accurate(const ocean_frame *f, double x, double z, unsigned want,
+                                 ocean_point *out, ocean_point *err);
+
 /* Statistics of an evaluated frame.  Variance adds over cascades (their
  * bands are disjoint, so cross terms vanish over the plane); the Jacobian
  * is that of the summed displacement, sampled on the finest cascade's grid

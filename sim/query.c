@@ -3,11 +3,20 @@
  *
  * The surface is the image of the parameter plane under
  *   x0 -> x0 + D(x0)   (D: FFT displacement + Gerstner near field).
- * To answer "what is at world (x, z)" we solve x0 + D(x0) = x.  Newton with
- * the displacement's own derivatives (the foam channel's Dxx, Dzz, Dxz)
- * converges quadratically wherever J > 0; without them, or where J is near
- * 0, a fixed-point step x0 <- x - D(x0) is used, which converges while the
- * map is a contraction (no folding).  The residual left is the error bound.
+ * To answer "what is at world (x, z)" we solve x0 + D(x0) = x by Newton's
+ * method with the Jacobian of the total displacement (the FFT's Dxx, Dxz,
+ * Dzz plus the near field's own derivatives), damped by halving the step
+ * while the residual does not shrink, and a fixed-point step x0 <- x -
+ * D(x0) where the Jacobian is (near) singular.  Where the surface folds
+ * several x0 map to x; the one reached is returned and flagged.
+ *
+ * The FFT fields are read with ocean_frame_sample_accurate (Hermite on the
+ * spectral derivatives, about a millimetre from the waves themselves in a
+ * Beaufort 10 sea), not bilinearly, and the near field is summed exactly
+ * (an ocean_gerstner_frame prepared once per call).  The error bound is
+ * against the exact sum of the same waves: the reading's own bound on the
+ * height, plus the world slope times what is left horizontally (the
+ * residual and the reading's bound on the displacement).
  */
 #include "query.h"
 #include "ocean_time.h"
@@ -17,85 +26,134 @@
 
 void ocean_query_options_default(ocean_query_options *o)
 {
-    o->max_iterations = 12;
-    o->tolerance = 1e-4;
+    o->max_iterations = 24;
+    o->tolerance = 1e-5;
+    o->bilinear = 0;
+}
+
+typedef struct ctx {
+    const ocean_frame *f;
+    ocean_gerstner_frame *gf;   /* NULL: no near field */
+    int bilinear;
+} ctx;
+
+static void read_fields(const ctx *c, double x0, double z0, unsigned want, ocean_point *pt,
+                        ocean_point *err)
+{
+    if (c->bilinear) {
+        ocean_frame_sample_some(c->f, x0, z0, want, pt);
+        if (err)
+            *err = (ocean_point){.height = INFINITY, .dx = INFINITY, .dz = INFINITY};
+    } else {
+        ocean_frame_sample_accurate(c->f, x0, z0, want, pt, err);
+    }
 }
 
 typedef struct disp {
-    double dx, dz;              /* total horizontal displacement */
-    double jxx, jzz, jxz, jzx;  /* d(x0 + D)/d(x0): Jacobian matrix */
-    int have_j;
+    double dx, dz;               /* total horizontal displacement */
+    double jxx, jxz, jzx, jzz;   /* d(x0 + D)/d(x0): jxz = d(x + Dx)/dz */
 } disp;
 
-/* Displacement and its Jacobian at parameter point (x0, z0). */
-static void displacement_at(const ocean_frame *f, const ocean_gerstner *g,
-                            const ocean_gerstner_view *v, double t, double x0, double z0,
-                            int with_j, disp *d, ocean_point *pt, ocean_gerstner_point *gp)
+static void displacement_at(const ctx *c, double x0, double z0, disp *d)
 {
-    memset(d, 0, sizeof *d);
-    if (with_j) {
-        ocean_frame_sample(f, x0, z0, pt);
-        d->dx = pt->dx;
-        d->dz = pt->dz;
-        d->jxx = 1.0 + pt->dxx;
-        d->jzz = 1.0 + pt->dzz;
-        d->jxz = d->jzx = pt->dxz;
-        d->have_j = pt->dxx != 0.0 || pt->dzz != 0.0 || pt->dxz != 0.0;
-    } else {
-        ocean_frame_sample_displacement(f, x0, z0, &d->dx, &d->dz);
-    }
-    if (g) {
-        ocean_gerstner_evaluate(g, v, t, &x0, &z0, 1, gp);
-        d->dx += gp->dx;
-        d->dz += gp->dz;
-    } else {
-        memset(gp, 0, sizeof *gp);
-        gp->jacobian = 1.0;
+    ocean_point pt;
+    read_fields(c, x0, z0, OCEAN_SAMPLE_DISPLACEMENT | OCEAN_SAMPLE_FOAM, &pt, NULL);
+    d->dx = pt.dx;
+    d->dz = pt.dz;
+    d->jxx = 1.0 + pt.dxx;
+    d->jzz = 1.0 + pt.dzz;
+    d->jxz = d->jzx = pt.dxz;
+    if (c->gf) {
+        ocean_gerstner_point gp;
+        if (ocean_gerstner_frame_evaluate(c->gf, &x0, &z0, 1, &gp) == OCEAN_OK) {
+            d->dx += gp.dx;
+            d->dz += gp.dz;
+            d->jxx += gp.dxx;
+            d->jxz += gp.dxz;
+            d->jzx += gp.dzx;
+            d->jzz += gp.dzz;
+        }
     }
 }
 
-static void answer_one(const ocean_frame *f, const ocean_gerstner *g,
-                       const ocean_gerstner_view *v, double t, double x, double z,
-                       const ocean_query_options *opt, int have_derivs,
-                       ocean_query_result *out)
+static void answer_one(const ctx *c, double x, double z, const ocean_query_options *opt,
+                       int have_derivs, ocean_query_result *out)
 {
-    double x0 = x, z0 = z, res = INFINITY;
+    double x0 = x, z0 = z;
     int it = 0;
     disp d;
-    ocean_point pt;
-    ocean_gerstner_point gp;
-    for (; it < opt->max_iterations; it++) {
-        displacement_at(f, g, v, t, x0, z0, have_derivs, &d, &pt, &gp);
-        double ex = x0 + d.dx - x, ez = z0 + d.dz - z;
-        res = hypot(ex, ez);
-        if (res <= opt->tolerance)
-            break;
+    displacement_at(c, x0, z0, &d);
+    double ex = x0 + d.dx - x, ez = z0 + d.dz - z, res = hypot(ex, ez);
+    /* the smallest J the iteration met: a path from x through J <= 0 means
+     * the surface folds between x and the answer */
+    double jmin = d.jxx * d.jzz - d.jxz * d.jzx;
+    for (; it < opt->max_iterations && res > opt->tolerance; it++) {
         double det = d.jxx * d.jzz - d.jxz * d.jzx;
-        if (d.have_j && !g && det > 0.05) {
-            /* Newton: solve J * step = e. */
-            x0 -= (d.jzz * ex - d.jxz * ez) / det;
-            z0 -= (d.jxx * ez - d.jzx * ex) / det;
+        if (det < jmin)
+            jmin = det;
+        double sx, sz;
+        if (have_derivs && fabs(det) > 1e-3) {
+            /* Newton: solve J step = e */
+            sx = (d.jzz * ex - d.jxz * ez) / det;
+            sz = (d.jxx * ez - d.jzx * ex) / det;
         } else {
-            x0 = x - d.dx;
-            z0 = z - d.dz;
+            sx = ex;
+            sz = ez;
         }
+        /* Halve the step until the residual shrinks (at most 8 times: far
+         * from the root a full Newton step can overshoot a crest). */
+        double nx0 = x0, nz0 = z0, nres = INFINITY, nex = ex, nez = ez;
+        disp nd = d;
+        for (int k = 0; k < 8; k++) {
+            nx0 = x0 - sx;
+            nz0 = z0 - sz;
+            displacement_at(c, nx0, nz0, &nd);
+            nex = nx0 + nd.dx - x;
+            nez = nz0 + nd.dz - z;
+            nres = hypot(nex, nez);
+            if (nres < res)
+                break;
+            sx *= 0.5;
+            sz *= 0.5;
+        }
+        if (!(nres < res)) {
+            /* no descent along this direction: a fixed-point step instead */
+            nx0 = x - d.dx;
+            nz0 = z - d.dz;
+            displacement_at(c, nx0, nz0, &nd);
+            nex = nx0 + nd.dx - x;
+            nez = nz0 + nd.dz - z;
+            nres = hypot(nex, nez);
+            if (!(nres < res)) {
+                it++;
+                break;
+            }
+        }
+        x0 = nx0;
+        z0 = nz0;
+        d = nd;
+        ex = nex;
+        ez = nez;
+        res = nres;
     }
     /* Everything at the final parameter point. */
-    ocean_frame_sample(f, x0, z0, &pt);
-    if (g)
-        ocean_gerstner_evaluate(g, v, t, &x0, &z0, 1, &gp);
-    double ex = x0 + pt.dx + (g ? gp.dx : 0.0) - x, ez = z0 + pt.dz + (g ? gp.dz : 0.0) - z;
+    ocean_point pt, err;
+    read_fields(c, x0, z0, OCEAN_SAMPLE_ALL, &pt, &err);
+    ocean_gerstner_point gp;
+    memset(&gp, 0, sizeof gp);
+    if (c->gf)
+        ocean_gerstner_frame_evaluate(c->gf, &x0, &z0, 1, &gp);
+    ex = x0 + pt.dx + gp.dx - x;
+    ez = z0 + pt.dz + gp.dz - z;
     res = hypot(ex, ez);
 
-    /* Tangents of the displaced surface along x0 and z0 (FFT part), plus
-     * the near field's slope; normal = t_z x t_x, y up. */
-    double sx = pt.slope_x, sz = pt.slope_z;
-    if (g && gp.ny > 0.0) {
-        sx += -gp.nx / gp.ny;
-        sz += -gp.nz / gp.ny;
-    }
-    double txx = 1.0 + pt.dxx, txy = sx, txz = pt.dxz;
-    double tzx = pt.dxz, tzy = sz, tzz = 1.0 + pt.dzz;
+    /* Tangents of the displaced surface along x0 and z0, both fields;
+     * normal = t_z x t_x, y up. */
+    double sx = pt.slope_x + gp.slope_x, sz = pt.slope_z + gp.slope_z;
+    double dxx = pt.dxx + gp.dxx, dzz = pt.dzz + gp.dzz;
+    double dxz = pt.dxz + gp.dxz, dzx = pt.dxz + gp.dzx; /* dDx/dz, dDz/dx */
+    double txx = 1.0 + dxx, txy = sx, txz = dzx;
+    double tzx = dxz, tzy = sz, tzz = 1.0 + dzz;
     double nx = tzy * txz - tzz * txy;
     double ny = tzz * txx - tzx * txz;
     double nz = tzx * txy - tzy * txx;
@@ -110,19 +168,27 @@ static void answer_one(const ocean_frame *f, const ocean_gerstner *g,
     out->normal[0] = nx / len;
     out->normal[1] = ny / len;
     out->normal[2] = nz / len;
-    out->height = pt.height + (g ? gp.dy : 0.0);
-    out->velocity[0] = pt.vel_x + (g ? gp.vx : 0.0);
-    out->velocity[1] = pt.vel_y + (g ? gp.vy : 0.0);
-    out->velocity[2] = pt.vel_z + (g ? gp.vz : 0.0);
-    /* The near field's folding adds to the FFT's to first order. */
-    double jac = pt.jacobian + (g ? gp.jacobian - 1.0 : 0.0);
+    out->height = pt.height + gp.dy;
+    out->velocity[0] = pt.vel_x + gp.vx;
+    out->velocity[1] = pt.vel_y + gp.vy;
+    out->velocity[2] = pt.vel_z + gp.vz;
+    double jac = txx * tzz - tzx * txz;
     out->foam = ocean_foam_from_jacobian((float)jac);
-    if (!have_derivs && !g)
+    if (!have_derivs)
         out->foam = 0.0;
-    out->folded = jac <= 0.0;
+    out->folded = jac <= 0.0 || jmin <= 0.0;
     out->residual = res;
-    /* A horizontal miss of res moves the height by at most |slope| res. */
-    out->error = hypot(sx, sz) * res;
+    /* A horizontal miss m in the world moves the parameter point by J^-1 m
+     * and the height by grad(eta) J^-1 m: the world slope g = grad(eta)
+     * J^-1 times the miss, which is the residual plus what the reading of
+     * D may be off by.  Where J is singular (a fold) no bound holds. */
+    double gx = INFINITY, gz = INFINITY;
+    if (jac > 0.0) {
+        gx = (sx * tzz - sz * txz) / jac;
+        gz = (sz * txx - sx * tzx) / jac;
+    }
+    double miss = res + hypot(err.dx, err.dz);
+    out->error = err.height + (miss > 0.0 ? hypot(gx, gz) * miss : 0.0);
     out->iterations = it;
 }
 
@@ -145,6 +211,16 @@ ocean_result ocean_query_points(const ocean_frame *f, const ocean_gerstner *g,
         ocean_gerstner_view_default(&defview);
         v = &defview;
     }
+    ctx c = {f, NULL, opt->bilinear != 0};
+    if (g) {
+        ocean_result gr = ocean_gerstner_frame_create(g, &c.gf);
+        if (gr == OCEAN_OK)
+            gr = ocean_gerstner_frame_set(c.gf, v, t);
+        if (gr != OCEAN_OK) {
+            ocean_gerstner_frame_destroy(c.gf);
+            return gr;
+        }
+    }
     int have_derivs = 0;
     ocean_frame_info info;
     ocean_frame_get_info(f, &info);
@@ -164,7 +240,8 @@ ocean_result ocean_query_points(const ocean_frame *f, const ocean_gerstner *g,
             r = OCEAN_EINVAL;
             continue;
         }
-        answer_one(f, g, v, t, x, z, opt, have_derivs, &out[i]);
+        answer_one(&c, x, z, opt, have_derivs, &out[i]);
     }
+    ocean_gerstner_frame_destroy(c.gf);
     return r;
 }

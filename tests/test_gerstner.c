@@ -587,6 +587,8 @@ static void frame_matches_one_shot(void **state)
     ocean_gerstner_point a, b;
     double x = x0, z = z0;
     assert_int_equal(ocean_gerstner_frame_evaluate(fr, &x, &z, 1, &a), OCEAN_ESTATE);
+    double dd[3];
+    assert_int_equal(ocean_gerstner_frame_displacement(fr, &x, &z, 1, dd), OCEAN_ESTATE);
     v.camera_x = x0;
     v.camera_z = z0;
     v.fade_r0 = 20.0;
@@ -603,6 +605,9 @@ static void frame_matches_one_shot(void **state)
             assert_int_equal(ocean_gerstner_frame_evaluate(fr, &x, &z, 1, &a), OCEAN_OK);
             assert_int_equal(ocean_gerstner_evaluate(g, &v, t, &x, &z, 1, &b), OCEAN_OK);
             assert_memory_equal(&a, &b, sizeof a);
+            double d[3];
+            assert_int_equal(ocean_gerstner_frame_displacement(fr, &x, &z, 1, d), OCEAN_OK);
+            assert_true(d[0] == a.dx && d[1] == a.dy && d[2] == a.dz);
         }
     }
     ocean_gerstner_view bad = v;
@@ -712,6 +717,118 @@ static void hostile_parameters(void **state)
     ocean_gerstner_destroy(g);
 }
 
+/* The grid sampler against the direct sum: heights against the long
+ * double reference above (no fade, no filter), every plane against the
+ * one-point evaluator with a fade and a filter, stored and accumulated. */
+static void grid_matches_direct_sum(void **state)
+{
+    (void)state;
+    ocean_gerstner_params p;
+    ocean_gerstner_params_default(&p);
+    p.count = 128;
+    p.sea.choppiness = 1.5;
+    ocean_gerstner *g = make(&p);
+    double sa = sum_amp(g, NULL, NULL);
+    ocean_gerstner_frame *fr = NULL;
+    assert_int_equal(ocean_gerstner_frame_create(g, &fr), OCEAN_OK);
+    enum { W = 37, H = 29, STRIDE = 40 };
+    float pl[8][H * STRIDE];
+    ocean_gerstner_grid gr = {.x0 = 1e6 + 0.37, .z0 = -2e5 - 3.1, .spacing = 0.23, .w = W, .h = H,
+                              .stride = STRIDE, .accumulate = 0, .height = pl[0], .dx = pl[1],
+                              .dz = pl[2], .slope_x = pl[3], .slope_z = pl[4], .dxx = pl[5],
+                              .dzz = pl[6], .dxz = pl[7]};
+    assert_int_equal(ocean_gerstner_frame_sample_grid(fr, &gr), OCEAN_ESTATE);
+    ocean_gerstner_view v;
+    ocean_gerstner_view_default(&v);
+    double t = 1e5 + 0.125;
+    assert_int_equal(ocean_gerstner_frame_set(fr, &v, t), OCEAN_OK);
+    assert_int_equal(ocean_gerstner_frame_sample_grid(fr, &gr), OCEAN_OK);
+    for (int i = 0; i < H; i += 3)
+        for (int j = 0; j < W; j += 2) {
+            double x = gr.x0 + j * gr.spacing, z = gr.z0 + i * gr.spacing;
+            assert_close(pl[0][i * STRIDE + j], reference_height(g, t, x, z), 1e-6 * sa + 1e-9);
+        }
+    /* fade and filter, accumulating onto a constant 1 */
+    v.camera_x = gr.x0 + 4.0;
+    v.camera_z = gr.z0 + 3.0;
+    v.fade_r0 = 1.0;
+    v.fade_r1 = 3.5;
+    v.filter = (ocean_filter_cutoff){.k = 30.0, .hz = NAN, .low_boost = 1.0, .order = 4};
+    assert_int_equal(ocean_gerstner_frame_set(fr, &v, t), OCEAN_OK);
+    for (int c = 0; c < 8; c++)
+        for (int q = 0; q < H * STRIDE; q++)
+            pl[c][q] = 1.0f;
+    gr.accumulate = 1;
+    assert_int_equal(ocean_gerstner_frame_sample_grid(fr, &gr), OCEAN_OK);
+    int inside = 0, outside = 0;
+    for (int i = 0; i < H; i++)
+        for (int j = 0; j < W; j++) {
+            double x = gr.x0 + j * gr.spacing, z = gr.z0 + i * gr.spacing;
+            ocean_gerstner_point o;
+            assert_int_equal(ocean_gerstner_frame_evaluate(fr, &x, &z, 1, &o), OCEAN_OK);
+            double want[8] = {o.dy, o.dx, o.dz, o.slope_x, o.slope_z, o.dxx, o.dzz,
+                              0.5 * (o.dxz + o.dzx)};
+            double scale[8] = {1, 1, 1, 100, 100, 100, 100, 100};
+            for (int c = 0; c < 8; c++)
+                assert_close(pl[c][i * STRIDE + j], 1.0 + want[c], 2e-7 * (1 + scale[c] * sa));
+            if (o.fade == 0.0)
+                outside++;
+            else if (o.fade == 1.0)
+                inside++;
+        }
+    assert_true(inside > 10 && outside > 100);
+    ocean_gerstner_grid bad = gr;
+    bad.stride = W - 1;
+    assert_int_equal(ocean_gerstner_frame_sample_grid(fr, &bad), OCEAN_EINVAL);
+    bad = gr;
+    bad.spacing = NAN;
+    assert_int_equal(ocean_gerstner_frame_sample_grid(fr, &bad), OCEAN_EINVAL);
+    bad = gr;
+    bad.w = 0;
+    assert_int_equal(ocean_gerstner_frame_sample_grid(fr, &bad), OCEAN_EINVAL);
+    assert_int_equal(ocean_gerstner_frame_sample_grid(fr, NULL), OCEAN_EINVAL);
+    ocean_gerstner_frame_destroy(fr);
+    ocean_gerstner_destroy(g);
+}
+
+/* The displacement derivatives and slopes a point carries (query
+ * inversion's Newton step uses them) against central differences, with
+ * the fade's own gradient inside the fade ring. */
+static void derivatives_match_finite_differences(void **state)
+{
+    (void)state;
+    ocean_gerstner_params p;
+    ocean_gerstner_params_default(&p);
+    p.count = 64;
+    p.sea.choppiness = 1.0;
+    ocean_gerstner *g = make(&p);
+    double sak = 0;
+    sum_amp(g, &sak, NULL);
+    ocean_gerstner_view v;
+    ocean_gerstner_view_default(&v);
+    v.fade_r0 = 2.0;
+    v.fade_r1 = 6.0;
+    const double h = 1e-5;
+    for (int i = 0; i < 40; i++) {
+        double x = 0.17 * i - 3.0, z = 0.11 * i - 1.0;
+        ocean_gerstner_point o, xp, xm, zp, zm;
+        eval1(g, &v, 7.5, x, z, &o);
+        eval1(g, &v, 7.5, x + h, z, &xp);
+        eval1(g, &v, 7.5, x - h, z, &xm);
+        eval1(g, &v, 7.5, x, z + h, &zp);
+        eval1(g, &v, 7.5, x, z - h, &zm);
+        double tol = 1e-5 * (sak + 1.0);
+        assert_close(o.dxx, (xp.dx - xm.dx) / (2 * h), tol);
+        assert_close(o.dxz, (zp.dx - zm.dx) / (2 * h), tol);
+        assert_close(o.dzx, (xp.dz - xm.dz) / (2 * h), tol);
+        assert_close(o.dzz, (zp.dz - zm.dz) / (2 * h), tol);
+        assert_close(o.slope_x, (xp.dy - xm.dy) / (2 * h), tol);
+        assert_close(o.slope_z, (zp.dy - zm.dy) / (2 * h), tol);
+        assert_close(o.jacobian, (1 + o.dxx) * (1 + o.dzz) - o.dxz * o.dzx, 1e-12);
+    }
+    ocean_gerstner_destroy(g);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -725,6 +842,8 @@ int main(void)
         cmocka_unit_test(deterministic_and_order_free),
         cmocka_unit_test(frame_matches_one_shot),
         cmocka_unit_test(hostile_parameters),
+        cmocka_unit_test(grid_matches_direct_sum),
+        cmocka_unit_test(derivatives_match_finite_differences),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

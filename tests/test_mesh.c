@@ -565,7 +565,13 @@ static void sampler_counted(void *ctx, double x, double z, double d[3])
 static void test_displace_and_morph(void **state)
 {
     (void)state;
-    mesh *m = make(MESH_CONCENTRIC, 2000, 4);
+    mesh_config mcfg;
+    mesh_config_default(&mcfg);
+    mcfg.range_m = 2000;
+    mcfg.error_px = 4;
+    mcfg.far_skirt = 0; /* every vertex sampled (the skirt has its own test) */
+    mesh *m = NULL;
+    assert_int_equal(mesh_create(&mcfg, &m), OCEAN_OK);
     mesh_camera cam = cam_at(40.5, 10, 20.25);
     assert_int_equal(mesh_displace(m, sampler_plane, NULL), OCEAN_ESTATE);
     assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
@@ -582,7 +588,9 @@ static void test_displace_and_morph(void **state)
         float w = v.morph[i];
         assert_true(w >= 0 && w <= 1);
         if (L + 1 >= v.levels) {
-            assert_true(w == 0);
+            /* the last level does not morph; the far skirt beyond the
+             * range is flat with weight 1 */
+            assert_true(w == 0 || (w == 1 && d > 2000.0));
             continue;
         }
         double r = in.zone_radius_m[L], b = in.blend_m[L];
@@ -1108,6 +1116,96 @@ static void test_estimate_vertices(void **state)
     assert_int_equal(mesh_estimate_vertices(NULL, &far, &est), OCEAN_EINVAL);
 }
 
+/* A vertex of level L on the edge of a coarser cell (it shares a triangle
+ * with a vertex of a coarser level) must sit on that cell's coarse edge:
+ * morph weight 1, or the two levels disagree there and the surface pops
+ * or cracks.  Over error budgets (the daemon's 16 px included: there rho
+ * is clamped and the zones are barely wider than the snapping offset)
+ * and camera positions anywhere in a snapping cell. */
+static void test_concentric_boundary_fully_morphed(void **state)
+{
+    (void)state;
+    const double budgets[] = {1, 2, 4, 8, 16, 32};
+    const double heights[] = {2, 25, 300};
+    int checked = 0;
+    for (int b = 0; b < 6; b++)
+        for (int hi = 0; hi < 3; hi++)
+            for (int k = 0; k < (sanitized() ? 3 : 9); k++) {
+                if (budgets[b] < 4 && heights[hi] < 25 && sanitized())
+                    continue;
+                mesh *m = make(MESH_CONCENTRIC, sanitized() ? 2000 : 5000, budgets[b]);
+                /* offsets spread over a level-2 cell (8 level-0 spacings) */
+                mesh_camera cam = cam_at(1000.0 + 3.7 * k * k, heights[hi], -200.0 + 5.3 * k);
+                assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
+                mesh_view v;
+                mesh_get_view(m, &v);
+                for (uint32_t t = 0; t < v.index_count; t += 3) {
+                    const uint32_t *tri = v.indices + t;
+                    int lmax = 0;
+                    for (int q = 0; q < 3; q++)
+                        lmax = v.level[tri[q]] > lmax ? v.level[tri[q]] : lmax;
+                    for (int q = 0; q < 3; q++) {
+                        uint32_t i = tri[q];
+                        if (v.level[i] < lmax) {
+                            checked++;
+                            if (v.morph[i] != 1.0f)
+                                fail_msg("budget %g px, height %g m, camera %d: level-%d vertex at "
+                                         "(%.2f, %.2f) on a level-%d cell has morph %g", budgets[b],
+                                         heights[hi], k, v.level[i], v.base[3 * i] + v.origin[0],
+                                         v.base[3 * i + 2] + v.origin[2], lmax, v.morph[i]);
+                        }
+                    }
+                }
+                mesh_destroy(m);
+            }
+    assert_true(checked > 1000);
+}
+
+/* From 1500 m (the flight scene's camera) the horizon is 138 km away
+ * (sqrt(2 R h), R = 6371 km) and the 10 km mesh edge would show: the far
+ * skirt carries the surface out past it, still one watertight disc with
+ * no T-junction, flat and fully morphed beyond the range. */
+static void test_concentric_far_skirt(void **state)
+{
+    (void)state;
+    const double hs[] = {300, 1500, 10000};
+    for (int i = 0; i < 3; i++) {
+        mesh *m = make(MESH_CONCENTRIC, 10000, 4);
+        mesh_camera cam = cam_at(123.4, hs[i], -56.7);
+        assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
+        mesh_view v;
+        mesh_get_view(m, &v);
+        double minr;
+        long nb = check_topology(&v, v.origin[0], v.origin[2], &minr);
+        assert_true(nb > 0);
+        check_no_tjunction(&v, 1.0);
+        double horizon = sqrt(2 * 6371008.8 * hs[i]);
+        if (!(minr >= horizon))
+            fail_msg("camera at %g m: mesh edge at %.0f m, horizon %.0f m", hs[i], minr, horizon);
+        assert_true(v.levels <= 16);
+        double ref[2] = {0, 0};
+        assert_int_equal(mesh_displace(m, sampler_waves, ref), OCEAN_OK);
+        mesh_get_view(m, &v);
+        int far = 0;
+        for (uint32_t k = 0; k < v.vertex_count; k++) {
+            double r = hypot(v.base[3 * k], v.base[3 * k + 2]);
+            /* the last level's cells reach past the range (up to its zone
+             * radius, < 3 x the range); beyond that only the skirt */
+            if (r > 3 * 10000) {
+                far++;
+                assert_true(v.morph[k] == 1.0f && v.positions[3 * k + 1] == 0.0f);
+            }
+        }
+        assert_true(far > 0);
+        mesh_destroy(m);
+    }
+    mesh_config c;
+    mesh_config_default(&c);
+    c.far_skirt = 2;
+    mesh *bad = NULL;
+    assert_int_equal(mesh_create(&c, &bad), OCEAN_EINVAL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1120,6 +1218,8 @@ int main(void)
         cmocka_unit_test(test_concentric_density_follows_rho),
         cmocka_unit_test(test_concentric_snapping),
         cmocka_unit_test(test_displace_and_morph),
+        cmocka_unit_test(test_concentric_boundary_fully_morphed),
+        cmocka_unit_test(test_concentric_far_skirt),
         cmocka_unit_test(test_far_from_origin_precision),
         cmocka_unit_test(test_topology_key),
         cmocka_unit_test(test_hostile_camera_keeps_mesh),

@@ -13,6 +13,7 @@
 
 #include <cmocka.h>
 
+#include "ocean_conf.h"
 #include "query.h"
 
 typedef struct fixture {
@@ -58,9 +59,11 @@ static void brute_force(const ocean_frame *f, double x, double z, double *bx, do
         double step = span / 60.0, nx = cx, nz = cz;
         for (int i = -60; i <= 60; i++)
             for (int j = -60; j <= 60; j++) {
-                double x0 = cx + j * step, z0 = cz + i * step, dx, dz;
-                ocean_frame_sample_displacement(f, x0, z0, &dx, &dz);
-                double e = hypot(x0 + dx - x, z0 + dz - z);
+                double x0 = cx + j * step, z0 = cz + i * step;
+                ocean_point pt;
+                /* the reading queries use */
+                ocean_frame_sample_accurate(f, x0, z0, OCEAN_SAMPLE_DISPLACEMENT, &pt, NULL);
+                double e = hypot(x0 + pt.dx - x, z0 + pt.dz - z);
                 if (e < best) {
                     best = e;
                     nx = x0;
@@ -93,13 +96,15 @@ static void test_inversion_matches_brute_force(void **state)
         double bx, bz;
         brute_force(x->f, xz[2 * i], xz[2 * i + 1], &bx, &bz);
         ocean_point pt;
-        ocean_frame_sample(x->f, bx, bz, &pt);
+        ocean_frame_sample_accurate(x->f, bx, bz, OCEAN_SAMPLE_HEIGHT, &pt, NULL);
         double err = fabs(pt.height - res[i].height);
         if (err > 1e-3)
             fail_msg("point %d: query %.6f vs brute force %.6f (residual %.3g, %d it)", i,
                      res[i].height, pt.height, res[i].residual, res[i].iterations);
-        assert_true(res[i].residual <= 1e-4);
-        assert_true(res[i].error <= 1e-3);
+        assert_true(res[i].residual <= 1e-5);
+        /* the bound now covers the reading against the waves themselves:
+         * this 2 m grid holds waves up to its Nyquist rate (millimetres) */
+        assert_true(res[i].error <= 2e-2);
         assert_true(res[i].normal[1] > 0.0);
         double nl = sqrt(res[i].normal[0] * res[i].normal[0] + res[i].normal[1] * res[i].normal[1] +
                          res[i].normal[2] * res[i].normal[2]);
@@ -210,12 +215,171 @@ static void test_reports_folding(void **state)
     for (int i = 0; i < 400; i++) {
         double xz[2] = {i * 2.5, i * 1.7}; /* across the patch */
         ocean_query_points(f, NULL, NULL, 3.0, xz, 1, NULL, &q, NULL);
-        assert_true(isfinite(q.height) && isfinite(q.error));
+        /* no bound holds where the answer itself sits on a fold (J <= 0) */
+        assert_true(isfinite(q.height) && (isfinite(q.error) || q.folded));
         folded += q.folded;
     }
     assert_true(folded > 0);
     ocean_frame_destroy(f);
     ocean_destroy(o);
+}
+
+/* ---- the storm scene (issue 13 item 4) ------------------------------------- */
+
+/* config/scenes/storm.conf over config/oceand.conf, with the near field
+ * the daemon builds for it (server/srv_sim.c make_ocean, srv_config.c:
+ * the FFT stops at the finest grid's Nyquist circle, 64 Gerstner waves
+ * from there to 0.1 m). */
+typedef struct storm {
+    ocean *o;
+    ocean_frame *f;
+    ocean_gerstner *g;
+    double t;
+} storm;
+
+static void storm_make(storm *s)
+{
+    ocean_params base;
+    ocean_scene sc;
+    char err[300];
+    if (ocean_conf_load("config/oceand.conf", &base, err, sizeof err) != OCEAN_OK ||
+        ocean_conf_scene_load("config/scenes/storm.conf", &base, &sc, err, sizeof err) != OCEAN_OK)
+        fail_msg("storm scene: %s", err);
+    ocean_params p = sc.params;
+    double lf = p.patch_m / pow(p.cascade_ratio, p.cascades - 1);
+    p.k_max = M_PI * p.n / lf;
+    assert_true(p.sea.choppiness > 2.0 && p.cascades == 3);
+    assert_int_equal(ocean_create(&p, &s->o, err, sizeof err), OCEAN_OK);
+    assert_int_equal(ocean_frame_create(s->o, &s->f), OCEAN_OK);
+    s->t = 137.25;
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_QUERY_EFFECTS);
+    r.foam_map = 0;
+    assert_int_equal(ocean_evaluate(s->o, s->t, &r, s->f), OCEAN_OK);
+    double klo, khi;
+    ocean_cascade_band(s->o, p.cascades - 1, NULL, &klo, &khi);
+    ocean_gerstner_params gp;
+    ocean_gerstner_params_default(&gp);
+    gp.sea = p.sea;
+    gp.seed = p.seed;
+    gp.count = 64;
+    gp.k_lo = khi;
+    gp.k_hi = 2 * M_PI / 0.1;
+    assert_int_equal(ocean_gerstner_create(&gp, &s->g, err, sizeof err), OCEAN_OK);
+}
+
+static void storm_free(storm *s)
+{
+    ocean_gerstner_destroy(s->g);
+    ocean_frame_destroy(s->f);
+    ocean_destroy(s->o);
+}
+
+static double urand(uint64_t *st)
+{
+    *st = *st * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (double)(*st >> 11) * 0x1p-53;
+}
+
+/* Newton with the near field in the Jacobian converges in the storm:
+ * before issue 13 it was switched off whenever a near field existed and
+ * 17 % of 4000 points ended above 1e-4 m (worst 0.67 m). */
+static void test_storm_inversion_converges(void **state)
+{
+    (void)state;
+    storm s;
+    storm_make(&s);
+    enum { N = 4000 };
+    double *xz = malloc(sizeof(double) * 2 * N);
+    ocean_query_result *res = malloc(sizeof *res * N);
+    assert_non_null(xz);
+    assert_non_null(res);
+    uint64_t st = 7;
+    for (int i = 0; i < N; i++) {
+        xz[2 * i] = (urand(&st) - 0.5) * 4000.0;
+        xz[2 * i + 1] = (urand(&st) - 0.5) * 4000.0;
+    }
+    assert_int_equal(ocean_query_points(s.f, s.g, NULL, s.t, xz, N, NULL, res, NULL), OCEAN_OK);
+    int over = 0, folded = 0;
+    double worst = 0.0;
+    for (int i = 0; i < N; i++) {
+        over += !(res[i].residual <= 1e-3);
+        folded += res[i].folded;
+        worst = fmax(worst, res[i].residual);
+    }
+    print_message("storm: %d of %d points with residual > 1 mm (worst %.3g m), %d folded\n", over, N,
+                  worst, folded);
+    assert_true(over <= N / 1000);
+    free(xz);
+    free(res);
+    storm_free(&s);
+}
+
+/* The exact answer: x0 with x0 + D(x0) = x for the exact sum of the same
+ * waves (ocean_reference_point, every FFT mode in double, plus the near
+ * field summed exactly), by Newton on the exact Jacobian. */
+static int exact_answer(const storm *s, double x, double z, double *height)
+{
+    double x0 = x, z0 = z;
+    ocean_gerstner_view v;
+    ocean_gerstner_view_default(&v);
+    for (int it = 0; it < 40; it++) {
+        ocean_point r;
+        ocean_gerstner_point gp;
+        ocean_reference_point(s->o, s->t, x0, z0, INFINITY, 6, &r);
+        ocean_gerstner_evaluate(s->g, &v, s->t, &x0, &z0, 1, &gp);
+        double ex = x0 + r.dx + gp.dx - x, ez = z0 + r.dz + gp.dz - z;
+        if (hypot(ex, ez) < 1e-9) {
+            *height = r.height + gp.dy;
+            return 1;
+        }
+        double jxx = 1 + r.dxx + gp.dxx, jzz = 1 + r.dzz + gp.dzz;
+        double jxz = r.dxz + gp.dxz, jzx = r.dxz + gp.dzx, det = jxx * jzz - jxz * jzx;
+        if (!(det > 0.05))
+            return 0; /* near a fold: no unique answer to compare with */
+        x0 -= (jzz * ex - jxz * ez) / det;
+        z0 -= (jxx * ez - jzx * ex) / det;
+    }
+    return 0;
+}
+
+/* Heights against the exact waves: within 1 mm (bilinear reading left
+ * 6 cm RMS, 18 cm worst, here), and the reported bound holds
+ * at every point without being absurdly loose. */
+static void test_storm_heights_match_exact_waves(void **state)
+{
+    (void)state;
+    storm s;
+    storm_make(&s);
+    int n = getenv("OCEAN_TEST_SANITIZED") ? 12 : 48, checked = 0;
+    uint64_t st = 11;
+    double worst = 0.0, sum_ratio = 0.0, se = 0.0;
+    for (int i = 0; i < n; i++) {
+        double xz[2] = {(urand(&st) - 0.5) * 4000.0, (urand(&st) - 0.5) * 4000.0}, exact;
+        ocean_query_result q;
+        assert_int_equal(ocean_query_points(s.f, s.g, NULL, s.t, xz, 1, NULL, &q, NULL), OCEAN_OK);
+        if (q.folded || !exact_answer(&s, xz[0], xz[1], &exact))
+            continue;
+        double err = fabs(q.height - exact);
+        if (!(err <= q.error))
+            fail_msg("point %d (%.2f, %.2f): error %.3g m above the reported bound %.3g m", i, xz[0],
+                     xz[1], err, q.error);
+        worst = fmax(worst, err);
+        se += err * err;
+        sum_ratio += q.error;
+        checked++;
+    }
+    assert_true(checked >= n * 3 / 4);
+    double rms = sqrt(se / checked), mean_bound = sum_ratio / checked;
+    print_message("storm: %d points, error RMS %.3g m, worst %.3g m, mean bound %.3g m\n", checked, rms,
+                  worst, mean_bound);
+    /* within a millimetre of the waves everywhere (0.06 mm RMS, 0.19 mm
+     * worst when written) */
+    assert_true(rms <= 0.2e-3 && worst <= 1e-3);
+    /* not absurdly loose: a bound of the order of a millimetre, within ten
+     * times the worst error (1.3 mm when written) */
+    assert_true(mean_bound <= 2e-3 && mean_bound <= 10.0 * worst);
+    storm_free(&s);
 }
 
 int main(void)
@@ -227,6 +391,8 @@ int main(void)
         cmocka_unit_test(test_deterministic_and_order_free),
         cmocka_unit_test(test_hostile_points),
         cmocka_unit_test(test_reports_folding),
+        cmocka_unit_test(test_storm_inversion_converges),
+        cmocka_unit_test(test_storm_heights_match_exact_waves),
     };
     return cmocka_run_group_tests_name("query", tests, setup, teardown);
 }

@@ -307,6 +307,10 @@ ocean_result oc_ship_run_offline(const oc_ship_params *p, ocean *o, double t0, d
     ocean_request_all(&req, OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT);
     ocean_query_options qo;
     ocean_query_options_default(&qo);
+    /* The hull has always floated on the bilinear reading (which smooths
+     * the shortest waves of this coarse grid); the heave tests are
+     * calibrated on it (test_ship). */
+    qo.bilinear = 1;
     out->dt = dt;
     for (size_t i = 0; r == OCEAN_OK && i <= steps; i++) {
         oc_ship_state st = s->st;
