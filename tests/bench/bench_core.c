@@ -342,8 +342,8 @@ int main(int argc, char **argv)
                     best = c / a;
                 fflush(stdout);
             }
-    printf("\nBest packed cost with MEASURE plans, split included: %.2fx of the real batch (worst case "
-           "of the table: see the rows). Packing also needs the spectrum stage to write whole complex "
+    printf("\nBest packed cost with MEASURE plans, split included: %.2fx of the real batch (its best row; "
+           "the others are above). Packing also needs the spectrum stage to write whole complex "
            "spectra z(k) and z(-k) instead of half spectra, and a pair of channels shares one "
            "transform, so a request for an odd number of channels pays for an idle half. oceand keeps "
            "batched c2r plans%s.\n\n", best,
