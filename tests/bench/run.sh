@@ -92,7 +92,7 @@ missing() {  # name title
 # Known benchmarks first, in report order; then any other program in
 # $BUILD/bench so a new benchmark is never left out.
 declare -A KNOWN_TITLE=(
-    [bench_core]="FFT core against FFTW alone (issue 2)"
+    [bench_core]="FFT core against FFTW alone, plans and contention (issues 2, 14)"
     [bench_accuracy]="Accuracy against cost (issue 8)"
     [bench_codec]="Tile codecs (issue 5)"
     [bench_mesh]="LOD meshes (issue 4)"
