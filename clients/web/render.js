@@ -970,53 +970,69 @@ export class Renderer {
         const eye = cam.pos;
         const common = (u) => this.common(u, eye, time);
 
-        /* sky and far sea (layout 1: shaded from the cascades like the mesh) */
         const cascaded = this.layout === 1 && !!this.block && this.cas.length > 0;
-        const sky = cascaded ? this.sky1 : this.sky;
-        gl.disable(gl.DEPTH_TEST);
-        gl.depthMask(false);
-        gl.useProgram(sky.p);
-        common(sky.u);
-        if (cascaded) {
-            this.cascadeUniforms(sky.u, eye);
-            gl.uniform1f(sky.u.u_pixAngle, 2 * tanH / H);
-        }
-        gl.uniform3fv(sky.u.u_right, right);
-        gl.uniform3fv(sky.u.u_up, up);
-        gl.uniform3fv(sky.u.u_fwd, fwd);
-        gl.uniform2f(sky.u.u_tanHalf, tanH * aspect, tanH);
-        gl.bindVertexArray(this.emptyVao);
-        gl.drawArrays(gl.TRIANGLES, 0, 3);
+        const skyPass = (sky, depthTested) => {
+            if (depthTested) {
+                /* only where the mesh left the far plane: the far sea and
+                 * the sky are not shaded twice */
+                gl.enable(gl.DEPTH_TEST);
+                gl.depthFunc(gl.LEQUAL);
+            } else {
+                gl.disable(gl.DEPTH_TEST);
+            }
+            gl.depthMask(false);
+            gl.useProgram(sky.p);
+            common(sky.u);
+            if (sky === this.sky1) {
+                this.cascadeUniforms(sky.u, eye);
+                gl.uniform1f(sky.u.u_pixAngle, 2 * tanH / H);
+            }
+            gl.uniform3fv(sky.u.u_right, right);
+            gl.uniform3fv(sky.u.u_up, up);
+            gl.uniform3fv(sky.u.u_fwd, fwd);
+            gl.uniform2f(sky.u.u_tanHalf, tanH * aspect, tanH);
+            gl.bindVertexArray(this.emptyVao);
+            gl.drawArrays(gl.TRIANGLES, 0, 3);
+        };
 
         if (this.layout === 1) {
-            const t1 = this.topology1, pl = this.placement;
-            if (!cascaded || !t1 || !pl || pl.meshId !== t1.meshId || this.drawSea === false) return false;
-            const near = Math.max(0.05, Math.min(1.0, Math.abs(eye[1]) * 0.05));
-            const vp = mul4(perspective(fov, aspect, near, 400000), new Float32Array([
-                right[0], up[0], -fwd[0], 0, right[1], up[1], -fwd[1], 0, right[2], up[2], -fwd[2], 0, 0, 0, 0, 1,
-            ]));
-            gl.enable(gl.DEPTH_TEST);
-            gl.depthFunc(gl.LEQUAL);
+            /* layout 1: the mesh first, then sky and far sea (shaded from
+             * the cascades like the mesh) where the mesh did not draw */
             gl.depthMask(true);
+            gl.clearDepth(1);
             gl.clear(gl.DEPTH_BUFFER_BIT);
-            gl.disable(gl.CULL_FACE);
-            const s1 = this.sea1;
-            gl.useProgram(s1.p);
-            common(s1.u);
-            this.cascadeUniforms(s1.u, eye);
-            gl.uniformMatrix4fv(s1.u.u_viewProj, false, vp);
-            /* placement origin relative to the eye, in double */
-            gl.uniform3f(s1.u.u_meshOff, pl.origin[0] - eye[0], pl.origin[1] - eye[1], pl.origin[2] - eye[2]);
-            gl.uniform4fv(s1.u.u_zone, t1.zones);
-            gl.uniform1i(s1.u.u_lodLevels, t1.lodLevels);
-            gl.uniform1f(s1.u.u_pixAngle, 2 * tanH / H);
-            gl.uniform1f(s1.u.u_debug, this.debug ? 1 : 0);
-            gl.uniform1f(s1.u.u_hs, this.hs);
-            gl.bindVertexArray(this.vao1);
-            gl.drawElements(gl.TRIANGLES, this.indexCount1, gl.UNSIGNED_INT, 0);
-            gl.bindVertexArray(null);
-            return true;
+            const t1 = this.topology1, pl = this.placement;
+            const ok = cascaded && t1 && pl && pl.meshId === t1.meshId && this.drawSea !== false;
+            if (ok) {
+                const near = Math.max(0.05, Math.min(1.0, Math.abs(eye[1]) * 0.05));
+                const vp = mul4(perspective(fov, aspect, near, 400000), new Float32Array([
+                    right[0], up[0], -fwd[0], 0, right[1], up[1], -fwd[1], 0, right[2], up[2], -fwd[2], 0, 0, 0, 0, 1,
+                ]));
+                gl.enable(gl.DEPTH_TEST);
+                gl.depthFunc(gl.LEQUAL);
+                gl.disable(gl.CULL_FACE);
+                const s1 = this.sea1;
+                gl.useProgram(s1.p);
+                common(s1.u);
+                this.cascadeUniforms(s1.u, eye);
+                gl.uniformMatrix4fv(s1.u.u_viewProj, false, vp);
+                /* placement origin relative to the eye, in double */
+                gl.uniform3f(s1.u.u_meshOff, pl.origin[0] - eye[0], pl.origin[1] - eye[1], pl.origin[2] - eye[2]);
+                gl.uniform4fv(s1.u.u_zone, t1.zones);
+                gl.uniform1i(s1.u.u_lodLevels, t1.lodLevels);
+                gl.uniform1f(s1.u.u_pixAngle, 2 * tanH / H);
+                gl.uniform1f(s1.u.u_debug, this.debug ? 1 : 0);
+                gl.uniform1f(s1.u.u_hs, this.hs);
+                gl.bindVertexArray(this.vao1);
+                gl.drawElements(gl.TRIANGLES, this.indexCount1, gl.UNSIGNED_INT, 0);
+                gl.bindVertexArray(null);
+            }
+            skyPass(cascaded ? this.sky1 : this.sky, true);
+            return !!ok;
         }
+
+        /* sky and far sea */
+        skyPass(this.sky, false);
         if (!this.mesh || !this.indexCount || this.drawSea === false) return false;
 
         /* the sea mesh */

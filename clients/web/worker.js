@@ -324,7 +324,7 @@ function processFrame() {
         b.load += load;
     }
     const busy = buckets.map((b, i) => [b, i]).filter(([b]) => b.levels.length);
-    inflight = { id: ++jobId, meta, remaining: busy.length, levels: [], t0 };
+    inflight = { id: ++jobId, meta, remaining: busy.length, levels: [], blocks: [], t0 };
     if (!busy.length) {
         const job = inflight;
         inflight = null;
