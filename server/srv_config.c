@@ -109,6 +109,12 @@ static const conf_entry srv_entries[] = {
      .help = "Screen-space error budget of the concentric mesh; larger means fewer vertices "
              "(16 px keeps a 20 m camera at 1080p near 5 800 vertices, 70 KB a frame; 4 px "
              "gives 73 000). Clients render fine detail from the tiles."},
+    {.name = "server.px_per_sample", .type = CONF_DOUBLE, .offset = SRV(px_per_sample),
+     .min = 0.5, .max = 1024, .def = "24", .unit = "px",
+     .help = "Cascade tile layout: how many pixels one tile sample may span on screen at "
+             "its distance from the camera.  Finer detail travels as unresolved slope "
+             "variance for shading, so this trades bytes per viewer (about 1/q^2) against "
+             "how much of the sea the geometry carries."},
     {.name = "server.max_query_points", .type = CONF_INT, .offset = SRV(max_query_points),
      .min = 1, .max = 65536, .def = "65536",
      .help = "Most points one QUERY may carry."},
