@@ -138,7 +138,7 @@ worker.onmessage = (ev) => {
     case 'hello': {
         stats.clientId = m.hello.clientId;
         stats.serverVersion = m.hello.serverVersion;
-        stats.hello = { tickRateHz: m.hello.tickRateHz, codecs: m.hello.codecs, sea: m.hello.sea };
+        stats.hello = { tickRateHz: m.hello.tickRateHz, codecs: m.hello.codecs, sea: m.hello.sea, maxLayers: m.hello.maxLayers, effects: m.hello.effects };
         const d = m.hello.sea.windDirDeg * Math.PI / 180;
         renderer.wind = [Math.cos(d), Math.sin(d)];
         if (m.hello.sea.hs > 0) renderer.hs = m.hello.sea.hs;
@@ -223,7 +223,9 @@ function startCameraReports() {
      * the server's pixel footprint is the one on screen */
     const sendNow = () => {
         const [w, h] = renderer.resize();
-        worker.postMessage({ cmd: 'camera', cam: cam.report(w, h) });
+        const rep = cam.report(w, h);
+        stats.cameraSent = { viewport: [rep.viewportW, rep.viewportH], fovYDeg: rep.fovYDeg };
+        worker.postMessage({ cmd: 'camera', cam: rep });
     };
     sendNow();
     sendTimer = setInterval(sendNow, 1000 / hz);
@@ -238,8 +240,14 @@ function applyFrame(m) {
             stats.placement = m.placement.origin.slice();
         }
         stats.layout = 1;
+        const hr = b.cascade.map(() => [Infinity, -Infinity]);
+        for (const x of m.blocks) {
+            const r = hr[x.cascade];
+            if (!r) continue;
+            for (let k = 1; k < x.disp.length; k += 4) { const v = x.disp[k]; if (v < r[0]) r[0] = v; if (v > r[1]) r[1] = v; }
+        }
         stats.cascades = b.cascade.map((e, c) => ({
-            patch: e.patchM, n: e.n, mips: e.mips, fades: e.fades,
+            patch: e.patchM, n: e.n, mips: e.mips, fades: e.fades, heightRange: hr[c],
             tiles: m.blocks.filter((x) => x.cascade === c).length,
             mipsSent: [...new Set(m.blocks.filter((x) => x.cascade === c).map((x) => x.mip))].sort((a, z) => a - z),
         }));
