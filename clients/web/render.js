@@ -1,26 +1,34 @@
 /*
- * render.js - WebGL2 renderer of the streamed sea.
+ * render.js - WebGL2 renderer of the streamed sea, for both layouts
+ * (PROTOCOL.md "Layouts").
  *
- * Geometry: the daemon's concentric LOD mesh (indices once per topology,
- * positions every frame, relative to the frame origin in double).  Each
- * vertex is displaced by the streamed tiles: every tile level is packed by
- * the worker into one layer of two RGBA16F texture arrays, disp = (H, DX,
- * DZ, FOAM) and nrm = (normal xyz, coverage).  Levels are blended fine to
- * coarse, each weighted by how well it covers the point (ramp at its edges)
- * and by a footprint test (a level finer than the mesh spacing in the vertex
- * shader, or than the pixel footprint in the fragment shader, fades out), so
- * neither vertices nor normals alias and level borders do not show.
+ * Layout 1 (cascade tiles, the default): each cascade's mips live in two
+ * mipmapped periodic textures (disp = DX, H, DZ, FOAM; slope = ∂η/∂x, ∂η/∂z);
+ * the daemon's flat concentric mesh is placed per FRAME, morphed and
+ * displaced in the vertex shader by the sum of the cascades read per "Where
+ * each mip is read" (see CASCADE_GLSL, SEA1_VS); the fragment shader shades
+ * from the summed slopes at the pixel's spacing and the unresolved slope
+ * moments as a Beckmann lobe (SEA_SHADE_GLSL, Bruneton, Neyret & Holzschuch
+ * 2010); the sky pass shades the sea beyond the mesh from the same cascades
+ * with the same functions, only where the mesh did not draw.
+ *
+ * Layout 0 (world tiles): the daemon's concentric LOD mesh (indices once
+ * per topology, positions every frame, relative to the frame origin in
+ * double), displaced by the server; every tile level is packed by the
+ * worker into one layer of two RGBA16F texture arrays, disp = (H, DX, DZ,
+ * FOAM) and nrm = (normal xyz, coverage), blended fine to coarse with an
+ * edge ramp and a footprint test so neither vertices nor normals alias.
  *
  * Precision: all positions are made relative to the eye on the CPU in
- * double (frame origin, tile origins, camera), so the GPU only sees small
- * float offsets however far from the world origin the camera flies.
+ * double (placement and frame origins, tile origins, the eye modulo each
+ * cascade's patch), so the GPU only sees small float offsets however far
+ * from the world origin the camera flies.
  *
- * Shading (seed 001's list): procedural sky (gradient, sun disc and halo,
- * drifting clouds) used as the reflection environment, Phong sun specular
- * (roughened with distance), Schlick Fresnel, animated foam from the
- * streamed FOAM plane, cloud shadows, subsurface tint on crests, haze.
- * The sky pass also draws the flat sea beyond the mesh's range with the
- * same functions, so the mesh's edge is invisible.
+ * Shading around the sea (seed 001's list): procedural sky (gradient, sun
+ * disc and halo, drifting clouds) in a mipmapped cube map used as the
+ * reflection environment, foam from the streamed FOAM plane broken up by
+ * drifting grain near the eye, cloud shadows, subsurface tint on crests,
+ * haze.
  */
 
 export const MAX_LEVELS = 16;

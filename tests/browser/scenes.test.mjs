@@ -12,7 +12,8 @@
  * normal) and asserts that the sun glitter of the real rendering is
  * spread by roughness: many times the bright area and a wider spread than
  * the mirror's (Bruneton, Neyret & Holzschuch 2010: the unresolved slopes
- * widen the glitter lobe; without them a far sea reflects a sharp sun).
+ * widen the glitter lobe; without them a far sea reflects a sharp sun),
+ * and that it agrees with the glitter of the same sea seen from 25 m.
  * SHOTS_OUT (optional): a directory the screenshots are copied to
  * (tests/bench/out for the benchmark report).
  *
@@ -154,6 +155,16 @@ try {
         }
         summary.push(line);
         console.log(`# ${JSON.stringify(line)}`);
+    }
+    /* the same sea from 25 m and from 1500 m: what geometry does not carry
+     * is carried as slope variance, so the total slope distribution - and
+     * with it the sun glitter's angular size on screen - does not depend
+     * on the height (the point of Bruneton et al. 2010) */
+    const g25 = summary.find((l) => l.height === 25), g1500 = summary.find((l) => l.height === 1500);
+    if (g25 && g1500) {
+        const ra = g1500.glitterArea / Math.max(g25.glitterArea, 1e-9), rs = g1500.glitterSpread / Math.max(g25.glitterSpread, 1e-9);
+        check('glitter from 1500 m agrees with the same sea from 25 m', ra > 0.5 && ra < 2 && rs > 0.67 && rs < 1.5,
+            `bright area ${(100 * g1500.glitterArea).toFixed(2)} % vs ${(100 * g25.glitterArea).toFixed(2)} %, spread ${g1500.glitterSpread.toFixed(1)} vs ${g25.glitterSpread.toFixed(1)} px`);
     }
     check('no page errors', pageErrors.length === 0, pageErrors.slice(0, 3).join(' | '));
     appendFileSync(join(artifacts, 'scenes.jsonl'), summary.map((l) => JSON.stringify(l)).join('\n') + '\n');
