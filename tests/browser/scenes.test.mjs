@@ -44,9 +44,9 @@ function check(name, ok, detail = '') {
     else { failed++; console.log(`not ok - ${scene}: ${name}${detail ? ` (${detail})` : ''}`); }
     return ok;
 }
-function save(name, png) {
+function save(name, png, report = true) {
     writeFileSync(join(artifacts, name), png);
-    if (shotsOut) writeFileSync(join(shotsOut, name), png);
+    if (shotsOut && report) writeFileSync(join(shotsOut, name), png);
 }
 async function waitFor(page, pred, arg, ms) {
     try { await page.waitForFunction(pred, arg, { timeout: ms, polling: 200 }); return true; } catch { return false; }
@@ -125,7 +125,7 @@ try {
             await page.waitForTimeout(1500);   /* drawSea = false renders without counting */
             const pngB = await page.screenshot({ type: 'png' });
             await page.evaluate(() => { window.oceanViewer.renderer.drawSea = true; });
-            save(`scene-${scene}-1500m-farsea.png`, pngB);
+            save(`scene-${scene}-1500m-farsea.png`, pngB, false);
             const A = decodePng(pngA), B = decodePng(pngB);
             let worst = 0, worstRow = -1;
             for (let y = 0; y < A.h; y++) {
