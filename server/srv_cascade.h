@@ -58,11 +58,14 @@ uint32_t srv_cascade_max_tiles(const ocean_params *p, int layers, int tile_size)
  * the jobs need at their times, encodes missing tiles (cache generation
  * gen; entries unused for a generation are dropped by the caller's sweep
  * through srv_cascade_sweep), assembles each frame.  Jobs of identical
- * cameras share one encoding.  order is the Butterworth order of the mips.
+ * cameras share one encoding.  order is the Butterworth order of the mips;
+ * g (may be NULL) the Gerstner near field, whose slopes are carried as
+ * unresolved moments.
  * Errors go to the client as ERROR messages;
  * a job whose frame could not be built has frame NULL. */
-void srv_cascade_run(srv_cascade *k, ocean *oc, int order, const srv_config *cfg, srv_stats *st,
-                     srv_cascade_job *jobs, int n, uint64_t gen);
+struct ocean_gerstner;
+void srv_cascade_run(srv_cascade *k, ocean *oc, const struct ocean_gerstner *g, int order,
+                     const srv_config *cfg, srv_stats *st, srv_cascade_job *jobs, int n, uint64_t gen);
 
 /* Drops cached tiles last used before generation keep_from. */
 void srv_cascade_sweep(srv_cascade *k, uint64_t keep_from);

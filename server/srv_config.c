@@ -115,6 +115,12 @@ static const conf_entry srv_entries[] = {
              "its distance from the camera.  Finer detail travels as unresolved slope "
              "variance for shading, so this trades bytes per viewer (about 1/q^2) against "
              "how much of the sea the geometry carries."},
+    {.name = "server.viewer_bytes_per_s", .type = CONF_DOUBLE, .offset = SRV(viewer_bytes_per_s),
+     .min = 1e4, .max = 1e10, .def = "3.8e6", .unit = "B/s",
+     .help = "Cascade tile layout: tile bytes one viewer may receive per second (its frame "
+             "budget is this over its frame rate).  A camera whose footprint needs more (a "
+             "large viewport, a camera near the water) reads coarser mips until it fits; the "
+             "server learns each codec's bytes per sample from the tiles it encodes."},
     {.name = "server.max_query_points", .type = CONF_INT, .offset = SRV(max_query_points),
      .min = 1, .max = 65536, .def = "65536",
      .help = "Most points one QUERY may carry."},

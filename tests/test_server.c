@@ -360,6 +360,11 @@ static void cascade_tiles_are_the_mips(void **state)
     assert_int_equal(b->cascade_count, 2);
     assert_true(b->camera[0] == cam.pos[0] && b->camera[1] == cam.pos[1] && b->camera[2] == cam.pos[2]);
     assert_true(b->spacing_per_m > 0);
+    /* the short-wave tail (and the near field: the test config has one)
+     * always travels as roughness; with normals nothing is lost (e_total 0) */
+    assert_true(b->tail_mss[0] > 0 && b->tail_mss[1] > 0);
+    assert_true(b->e_total == 0.0f);
+    assert_true(f->info.e_error >= 0 && f->info.e_error <= 1);
     ocean *o = local_ocean();
     ocean_frame *lf;
     assert_int_equal(ocean_frame_create(o, &lf), OCEAN_OK);
@@ -400,6 +405,8 @@ static void cascade_tiles_are_the_mips(void **state)
             int k = tl->info.cascade;
             assert_true(k < 2);
             assert_int_equal(tl->decode_result, OCEAN_OK);
+            /* foam travels with cascade 0 alone */
+            assert_int_equal((tl->info.channels & PROTO_CH_FOAM) != 0, k == 0);
             const ocean_field *fd = ocean_frame_field(lf, k);
             int np = settings.params.n >> m, T = np < 32 ? np : 32;
             assert_int_equal(tl->info.width, T);
@@ -438,6 +445,27 @@ static void cascade_tiles_are_the_mips(void **state)
     oc_frame_free(f);
     ocean_frame_destroy(lf);
     ocean_destroy(o);
+    /* what layout 1 cannot serve is refused before any work, naming why */
+    /* geometry only (no normals): what the tiles miss is lost (e_total = e_error) */
+    proto_subscribe geo = s;
+    geo.effects = PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT;
+    assert_int_equal(oc_client_subscribe(c, &geo), OCEAN_OK);
+    cam.pos[1] = 400; /* high enough that the tiles miss some of the sea */
+    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+    f = frame_for(c, seq, 5000);
+    assert_non_null(f);
+    assert_true(f->info.e_error > 0);
+    assert_true(fabs(f->info.cascades.e_total - f->info.e_error) <= 1e-6);
+    for (int t = 0; t < f->info.tile_count; t++)
+        assert_int_equal(f->tiles[t].info.channels, PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ);
+    oc_frame_free(f);
+    char e[512] = "";
+    proto_subscribe bad = s;
+    bad.mesh_kind = PROTO_MESH_PROJECTED;
+    assert_int_equal(oc_client_subscribe(c, &bad), OCEAN_OK);
+    for (int i = 0; i < 100 && oc_client_last_error(c, e, sizeof e) != OCEAN_EUNSUPPORTED; i++) oc_service(c, 20);
+    assert_int_equal(oc_client_last_error(c, e, sizeof e), OCEAN_EUNSUPPORTED);
+    assert_non_null(strstr(e, "layout"));
     oc_client_destroy(c);
 }
 
@@ -448,6 +476,13 @@ static void cascade_tiles_are_the_mips(void **state)
 static void cascade_tiles_shared_across_cameras(void **state)
 {
     (void)state;
+    /* a pyramid of 2-sample tiles cannot fit a frame at N = 256: such a
+     * subscription is refused (srv_client.c) before any work */
+    ocean_params big = settings.params;
+    big.n = 256;
+    big.cascades = 3;
+    assert_true(srv_cascade_max_tiles(&big, 3, 2) > PROTO_MAX_FRAME_TILES);
+    assert_int_equal(srv_cascade_max_tiles(&big, 3, 32), 3 * (64 + 16 + 4 + 1 + 1 + 1));
     srv_hub *h = srv_daemon_hub(daemon_);
     enum { NV = 8 };
     oc_client *v[NV];
@@ -472,6 +507,10 @@ static void cascade_tiles_shared_across_cameras(void **state)
     }
     uint64_t e0 = stat_of(&h->stats.tiles_encoded), t0 = stat_of(&h->stats.ticks);
     uint64_t hit0 = stat_of(&h->stats.tile_cache_hits);
+    /* a few ticks pass with every camera live */
+    for (double until = now_s() + 10; now_s() < until && stat_of(&h->stats.ticks) < t0 + 3;) usleep(10000);
+    uint64_t e1 = stat_of(&h->stats.tiles_encoded), t1 = stat_of(&h->stats.ticks);
+    for (int i = 0; i < NV; i++) drain_frames(v[i]);
     /* two viewers' frames of one tick */
     enum { KEEP = 16 };
     oc_frame *fa[KEEP] = {0}, *fb[KEEP] = {0}, *a = NULL, *bb = NULL;
@@ -496,7 +535,6 @@ static void cascade_tiles_shared_across_cameras(void **state)
         oc_frame_free(fb[i]);
     }
     assert_non_null(a);
-    uint64_t e1 = stat_of(&h->stats.tiles_encoded), t1 = stat_of(&h->stats.ticks);
     uint32_t pyramid = srv_cascade_max_tiles(&settings.params, 2, 32);
     assert_true(t1 > t0);
     /* cameras far apart still reuse each other's encoded tiles */
