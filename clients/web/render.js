@@ -338,6 +338,7 @@ uniform vec3 u_blk;              /* q = spacing_per_m, min_spacing_m, max(|cy|, 
 uniform vec2 u_blkCam;           /* the block's camera xz relative to the eye */
 uniform vec3 u_tailMss;          /* moments no cascade holds */
 uniform float u_roughScale;      /* 1; 0 draws the unresolved moments as a mirror (test control) */
+uniform float u_foamScale;       /* 1; 0 draws no foam (test control) */
 uniform sampler2D u_cd0, u_cd1, u_cd2, u_cd3;   /* disp per cascade */
 
 /* s(x, z): the spacing wanted at eye-relative rel */
@@ -398,7 +399,7 @@ void seaSample(vec2 rel, float s, out vec2 slope, out vec3 mss, out float foam) 
     vec4 d;
 #define CAS_S(C, TD, TS) if (u_nCas > C) { lam = casLod(C, s, w); slope += w * casRead(TS, C, rel, lam).xy; d = casRead(TD, C, rel, lam); keep *= 1.0 - clamp(w * d.w, 0.0, 1.0); mss += casMss(C, log2(s / u_cas[C].y)); }
     CAS_S(0, u_cd0, u_cs0) CAS_S(1, u_cd1, u_cs1) CAS_S(2, u_cd2, u_cs2) CAS_S(3, u_cd3, u_cs3)
-    foam = 1.0 - keep;
+    foam = (1.0 - keep) * u_foamScale;
     mss *= u_roughScale;
 }
 `;
@@ -411,6 +412,16 @@ void seaSample(vec2 rel, float s, out vec2 slope, out vec3 mss, out float foam) 
  * sun's glitter and the sky reflection keep their average from any
  * distance, spread by roughness instead of aliasing or turning to a mirror. */
 const SEA_SHADE_GLSL = `
+/* Foam near the eye: the carried coverage c drawn as patches by
+ * thresholding drifting grain at its (1 - c) level, so the drawn fraction
+ * stays c (the whitecap coverage the tiles carry); far away the coverage is
+ * drawn as it is, where grain would alias. */
+float foamBreakUp(float c, vec2 rel, float dist) {
+    float grain = texture(u_cloudTex, rel * GRAIN_K + u_grainOff).r;
+    grain = clamp((grain - 0.25) * 2.0, 0.0, 1.0);
+    float patches = c <= 0.0 ? 0.0 : smoothstep(1.0 - c - 0.12, 1.0 - c + 0.12, grain);
+    return mix(c, patches, 1.0 - smoothstep(300.0, 3000.0, dist));
+}
 const float SUN_E = 6.0;          /* sun irradiance relative to the sky radiance scale */
 const float SUN_MSS = 1e-5;       /* the sun's own angular radius (~4.7 mrad) as slope variance */
 float lambdaSmith(float c, float s2) {
@@ -530,10 +541,7 @@ void main() {
     float s = max(wantSpacing(v_base), foot);
     vec2 slope; vec3 mss; float foam;
     seaSample(v_base, s, slope, mss, foam);
-    float grain = texture(u_cloudTex, v_base * GRAIN_K + u_grainOff).r;
-    grain = clamp((grain - 0.25) * 2.0, 0.0, 1.0);
-    float near = 1.0 - smoothstep(300.0, 3000.0, dist);
-    foam = mix(foam, smoothstep(0.08, 0.5, foam * (0.4 + 1.2 * grain)), near);
+    foam = foamBreakUp(foam, v_base, dist);
     float shadow = cloudShadow(v_rel);
     vec3 col = seaShade(V, slope, mss, foam, v_crest / max(u_hs * 0.5, 0.2), shadow);
     col = haze(col, V, dist);
@@ -566,7 +574,7 @@ void main() {
         float foot = dist * u_pixAngle / sqrt(max(-V.y, 0.02));
         vec2 slope = vec2(0.0); vec3 mss = vec3(0.02, 0.02, 0.0); float foam = 0.0;
         if (u_nCas > 0) seaSample(hit.xz, max(wantSpacing(hit.xz), foot), slope, mss, foam);
-        col = seaShade(V, slope, mss, foam, 0.0, cloudShadow(hit));
+        col = seaShade(V, slope, mss, foamBreakUp(foam, hit.xz, dist), 0.0, cloudShadow(hit));
         col = haze(col, V, dist);
     }
     o_color = vec4(tonemap(col), 1.0);
@@ -669,6 +677,7 @@ export class Renderer {
         this.block = null;         /* the newest FRAME's cascade block */
         this.placement = null;     /* {meshId, origin} of the newest FRAME */
         this.roughScale = 1;       /* 0: unresolved slopes ignored (a mirror; the test's control) */
+        this.foamScale = 1;        /* 0: no foam (the test's glitter comparison) */
         this.dummyTex = gl.createTexture();
         gl.bindTexture(gl.TEXTURE_2D, this.dummyTex);
         gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA8, 1, 1, 0, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
@@ -746,6 +755,7 @@ export class Renderer {
         gl.uniform2f(u.u_blkCam, b.camera[0] - eye[0], b.camera[2] - eye[2]);
         gl.uniform3fv(u.u_tailMss, b.tailMss);
         gl.uniform1f(u.u_roughScale, this.roughScale);
+        gl.uniform1f(u.u_foamScale, this.foamScale);
         for (let c = 0; c < MAX_CASCADES; c++) {
             gl.activeTexture(gl.TEXTURE4 + c);
             gl.bindTexture(gl.TEXTURE_2D, c < nc ? this.cas[c].disp : this.dummyTex);
@@ -788,7 +798,9 @@ export class Renderer {
             gl.bindVertexArray(null);
             const zones = new Float32Array(4 * MAX_LEVELS);
             zones.set(t.zones.subarray(0, 4 * Math.min(t.lodLevels, MAX_LEVELS)));
-            this.topology1 = { meshId: t.meshId, vertexCount: t.vertexCount, lodLevels: Math.min(t.lodLevels, MAX_LEVELS), zones };
+            let extent = 0;
+            for (let i = 0; i < t.flat.length; i++) extent = Math.max(extent, Math.abs(t.flat[i]));
+            this.topology1 = { meshId: t.meshId, vertexCount: t.vertexCount, lodLevels: Math.min(t.lodLevels, MAX_LEVELS), zones, extent };
             this.indexCount1 = t.indices.length;
             return;
         }

@@ -107,7 +107,21 @@ try {
             `sea luma variance ${varSea.toFixed(1)}, errors ${s.errors.join(' | ')}`);
         const casInfo = (s.cascades || []).map((c) => `${c.patch.toFixed(0)} m: mips ${c.mipsSent.join(',') || '-'} (${c.tiles} tiles)`).join('; ');
         const line = { scene, height: v.h, spacingPerM: s.block.spacingPerM, eTotal: s.block.eTotal, tailMss: s.block.tailMss,
-            bytesPerSec: Math.round(s.bytesPerSec), tiles: s.tileCount, cascades: casInfo, glitterArea: g.area, glitterSpread: g.spread, seaLuma: g.lumMean };
+            bytesPerSec: Math.round(s.bytesPerSec), tiles: s.tileCount, cascades: casInfo, foamMean: s.foamMean, glitterArea: g.area, glitterSpread: g.spread, seaLuma: g.lumMean };
+        /* the glitter alone (foam off), for comparing heights: whitecaps
+         * drawn as patches near the eye and as a mean far away hide
+         * different parts of it */
+        if (v.h === 25 || v.h === 1500) {
+            const r2 = (await stats(page)).framesRendered;
+            await page.evaluate(() => { window.oceanViewer.renderer.foamScale = 0; });
+            await waitFor(page, (r) => window.oceanStats.framesRendered >= r + 2, r2, timeoutMs);
+            const pngF = await page.screenshot({ type: 'png' });
+            await page.evaluate(() => { window.oceanViewer.renderer.foamScale = 1; });
+            save(`scene-${scene}-${v.h}m-nofoam.png`, pngF, false);
+            const gf = glitter(decodePng(pngF), sea0, img.h, 235);
+            line.glitterAreaNoFoam = gf.area;
+            line.glitterSpreadNoFoam = gf.spread;
+        }
         if (v.h === 1500) {
             /* one frame held (the worker paused) for the controls */
             await page.evaluate(() => window.oceanViewer.worker.postMessage({ cmd: 'pause', paused: true }));
@@ -127,15 +141,25 @@ try {
             await page.evaluate(() => { window.oceanViewer.renderer.drawSea = true; });
             save(`scene-${scene}-1500m-farsea.png`, pngB, false);
             const A = decodePng(pngA), B = decodePng(pngB);
+            /* rows where the mesh ends: its flat extent E (half-side of the
+             * outer square ring) seen from height h, between E (straight
+             * ahead, less the placement's snap) and E·sqrt(2) (its corners) */
+            const E = await page.evaluate(() => window.oceanViewer.renderer.topology1.extent);
+            const rowAt = (d) => {
+                const a = Math.atan2(v.h, d) - (-v.pitch) * Math.PI / 180;
+                return Math.round(A.h / 2 + Math.tan(a) / Math.tan(FOV * Math.PI / 360) * A.h / 2);
+            };
+            const yTop = Math.max(0, rowAt(E * 1.5) - 6), yBot = Math.min(A.h, rowAt(E * 0.9) + 6);
             let worst = 0, worstRow = -1;
-            for (let y = 0; y < A.h; y++) {
+            for (let y = yTop; y < yBot; y++) {
                 let d = 0;
                 for (let x = 0; x < A.w; x++) d += Math.abs(lum(A, x, y) - lum(B, x, y));
                 if (d / A.w > worst) { worst = d / A.w; worstRow = y; }
             }
             line.meshVsFarSea = worst;
-            check('1500 m: no visible mesh edge (mesh vs far-sea pass, worst row)', worst < 1.0,
-                `mean |luma difference| ${worst.toFixed(3)} at row ${worstRow}`);
+            line.meshEndRows = [yTop, yBot];
+            check('1500 m: no visible mesh edge (mesh vs far-sea pass where the mesh ends)', yBot > yTop && worst < 1.0,
+                `mesh half-side ${E.toFixed(0)} m ends on rows ${yTop}..${yBot}; worst row mean |luma difference| ${worst.toFixed(3)} at row ${worstRow}`);
             /* control: the same frame with the unresolved slopes ignored */
             await page.evaluate(() => { window.oceanViewer.renderer.roughScale = 0; });
             await frames(2);
@@ -162,9 +186,10 @@ try {
      * on the height (the point of Bruneton et al. 2010) */
     const g25 = summary.find((l) => l.height === 25), g1500 = summary.find((l) => l.height === 1500);
     if (g25 && g1500) {
-        const ra = g1500.glitterArea / Math.max(g25.glitterArea, 1e-9), rs = g1500.glitterSpread / Math.max(g25.glitterSpread, 1e-9);
-        check('glitter from 1500 m agrees with the same sea from 25 m', ra > 0.5 && ra < 2 && rs > 0.67 && rs < 1.5,
-            `bright area ${(100 * g1500.glitterArea).toFixed(2)} % vs ${(100 * g25.glitterArea).toFixed(2)} %, spread ${g1500.glitterSpread.toFixed(1)} vs ${g25.glitterSpread.toFixed(1)} px`);
+        const a15 = g1500.glitterAreaNoFoam, a25 = g25.glitterAreaNoFoam, s15 = g1500.glitterSpreadNoFoam, s25 = g25.glitterSpreadNoFoam;
+        const ra = a15 / Math.max(a25, 1e-9), rs = s15 / Math.max(s25, 1e-9);
+        check('glitter from 1500 m agrees with the same sea from 25 m (foam off)', ra > 0.5 && ra < 2 && rs > 0.67 && rs < 1.5,
+            `bright area ${(100 * a15).toFixed(2)} % vs ${(100 * a25).toFixed(2)} %, spread ${s15.toFixed(1)} vs ${s25.toFixed(1)} px`);
     }
     check('no page errors', pageErrors.length === 0, pageErrors.slice(0, 3).join(' | '));
     appendFileSync(join(artifacts, 'scenes.jsonl'), summary.map((l) => JSON.stringify(l)).join('\n') + '\n');
