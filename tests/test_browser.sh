@@ -64,6 +64,7 @@ fi
 # ---- 2. the page in a real browser, served by the daemon -----------------
 echo "== viewer: headless Chromium against oceand =="
 log="$WORK/oceand.log"
+: >"$log"   # emptied here, not by the child's redirection: the URL grep below must not read a previous run's log
 "$BUILD/oceand" --config config/oceand.conf --bind 127.0.0.1 --port 0 >"$log" 2>&1 &
 daemon_pid=$!
 url=""
@@ -96,6 +97,7 @@ rm -f "$ART/scenes.jsonl"
 for scene in ship-bridge storm flight; do
     echo "== viewer: layout 1 screenshots, scene $scene =="
     log="$WORK/oceand-$scene.log"
+    : >"$log"
     "$BUILD/oceand" --config config/oceand.conf --bind 127.0.0.1 --port 0 --scene "$scene" >"$log" 2>&1 &
     daemon_pid=$!
     url=""
