@@ -11,6 +11,11 @@
 #     Chromium (/usr/bin/chromium, software GL) driven by playwright-core
 #     loads the page from the daemon, checks frames, pixels, overlay and two
 #     viewers at once.  Screenshots: $BUILD/test-artifacts/viewer*.png.
+#  3. The layout-1 viewer in ship-bridge, storm and flight (one daemon per
+#     scene, --scene) at 25, 300 and 1500 m (tests/browser/scenes.test.mjs):
+#     screenshots $BUILD/test-artifacts/scene-*.png, sun glitter spread by
+#     roughness at 1500 m against a mirror control, no mesh edge.
+#     SHOTS_OUT=DIR also copies the screenshots to DIR (tests/bench/out).
 # The daemon is stopped on exit, whatever happens (trap).
 #   usage: BUILD=build bash tests/test_browser.sh
 set -uo pipefail
@@ -59,6 +64,7 @@ fi
 # ---- 2. the page in a real browser, served by the daemon -----------------
 echo "== viewer: headless Chromium against oceand =="
 log="$WORK/oceand.log"
+: >"$log"   # emptied here, not by the child's redirection: the URL grep below must not read a previous run's log
 "$BUILD/oceand" --config config/oceand.conf --bind 127.0.0.1 --port 0 >"$log" 2>&1 &
 daemon_pid=$!
 url=""
@@ -80,4 +86,40 @@ if ! OCEAN_URL="$url" ARTIFACT_DIR="$ART" VIEWER_TIMEOUT_S="${VIEWER_TIMEOUT_S:-
     status=1
 fi
 kill -0 "$daemon_pid" 2>/dev/null || { echo "test_browser: oceand died during the test"; tail -30 "$log"; status=1; }
+cleanup
+daemon_pid=""
+
+# ---- 3. layout 1 at 25 m, 300 m and 1500 m in three scenes -------------
+# One daemon per scene (--scene); screenshots $ART/scene-SCENE-Hm.png (and
+# at 1500 m the far-sea and mirror controls), figures in $ART/scenes.jsonl.
+# SHOTS_OUT=tests/bench/out copies the PNGs there for the benchmark report.
+rm -f "$ART/scenes.jsonl"
+for scene in ship-bridge storm flight; do
+    echo "== viewer: layout 1 screenshots, scene $scene =="
+    log="$WORK/oceand-$scene.log"
+    : >"$log"
+    "$BUILD/oceand" --config config/oceand.conf --bind 127.0.0.1 --port 0 --scene "$scene" >"$log" 2>&1 &
+    daemon_pid=$!
+    url=""
+    for _ in $(seq 100); do
+        url=$(grep -o 'listening on http://[^ ]*' "$log" 2>/dev/null | head -1 | sed 's/^listening on //')
+        [[ -n "$url" ]] && break
+        kill -0 "$daemon_pid" 2>/dev/null || break
+        sleep 0.1
+    done
+    if [[ -z "$url" ]]; then
+        echo "test_browser: oceand --scene $scene did not start:"; cat "$log"
+        status=1
+        continue
+    fi
+    if ! OCEAN_URL="$url" SCENE="$scene" ARTIFACT_DIR="$ART" SHOTS_OUT="${SHOTS_OUT:-}" \
+            VIEWER_TIMEOUT_S="${VIEWER_TIMEOUT_S:-90}" timeout 300 node tests/browser/scenes.test.mjs; then
+        echo "test_browser: scene $scene FAILED (daemon log follows)"
+        tail -20 "$log"
+        status=1
+    fi
+    kill -0 "$daemon_pid" 2>/dev/null || { echo "test_browser: oceand died during scene $scene"; tail -30 "$log"; status=1; }
+    cleanup
+    daemon_pid=""
+done
 exit $status

@@ -7,7 +7,11 @@
  *   ws=URL          WebSocket endpoint (default: same host/port as the page)
  *   codec=qz|f16|f32   tile codec to ask for (default qz, the daemon's default)
  *   policy=antialias|seed|none   cutoff policy (default antialias)
+ *   layout=1|0      what travels (default 1, cascade tiles summed here; 0 world
+ *                   tiles and server-displaced mesh, for comparison)
  *   rate=HZ tile=N levels=N layers=N accuracy=A range=M spacing=M
+ *   rough=0         layout 1: shade without the unresolved slope variance
+ *                   (a mirror; the browser test's control)
  *   x= y= z= yaw= pitch= fov= speed=   initial camera (default: the scene's
  *                   scene.camera_hint from GET /status, else 0,25,0 yaw 30 pitch -10)
  *   vx= vy= vz=     constant camera velocity (m/s), for demos and tests
@@ -18,7 +22,7 @@
  */
 import { Renderer, normalize3 } from './render.js';
 import { FlyCamera } from './camera.js';
-import { CODEC, CUTOFF } from './protocol.js';
+import { CODEC, CUTOFF, LAYOUT } from './protocol.js';
 
 const qs = new URLSearchParams(location.search);
 const num = (k, d) => (qs.has(k) && Number.isFinite(Number(qs.get(k))) ? Number(qs.get(k)) : d);
@@ -51,6 +55,9 @@ canvas.addEventListener('webglcontextlost', (e) => { e.preventDefault(); stats.s
 canvas.addEventListener('webglcontextrestored', () => location.reload());
 renderer.debug = qs.get('debug') === '1';
 renderer.drawSea = qs.get('sea') !== '0';   /* sea=0: sky and far sea only (the test's blank-scene control) */
+renderer.roughScale = qs.get('rough') === '0' ? 0 : 1;
+const layout = qs.get('layout') === '0' ? LAYOUT.WORLD : LAYOUT.CASCADE;
+renderer.layout = layout;
 
 /* The scene's camera hint (GET /status, "camera_hint"), unless the URL
  * places the camera: the flight scene opens at its 1500 m, not at 25 m.
@@ -81,6 +88,7 @@ cam.attach(canvas);
 const codecByName = { qz: CODEC.QZ, f16: CODEC.F16, f32: CODEC.F32 };
 const policyByName = { none: CUTOFF.NONE, seed: CUTOFF.SEED, antialias: CUTOFF.ANTIALIAS };
 const want = {
+    layout,
     codec: codecByName[qs.get('codec')] ?? CODEC.QZ,
     cutoffPolicy: policyByName[qs.get('policy')] ?? CUTOFF.ANTIALIAS,
     /* software GL draws a few frames per second: do not make the daemon
@@ -93,12 +101,15 @@ const want = {
     viewRangeM: num('range', 0),
     baseSpacingM: num('spacing', 0),
 };
-/* Unless the URL fixes it, the level-0 tile spacing follows the camera's
- * altitude (about 1/28 of the height, a power of two in [0.25, 64] m): low
- * over the water the viewer asks for fine detail, high up for coarse tiles
- * that cover more sea for the same bytes.  Re-subscribes on a change held
- * for a second (a change of at least 2x, so no flapping). */
-const autoSpacing = !qs.has('spacing');
+/* Layout 0 only: unless the URL fixes it, the level-0 tile spacing follows
+ * the camera's altitude (about 1/28 of the height, a power of two in
+ * [0.25, 64] m): low over the water the viewer asks for fine detail, high
+ * up for coarse tiles that cover more sea for the same bytes.
+ * Re-subscribes on a change held for a second (a change of at least 2x, so
+ * no flapping).  Layout 1 needs none of this: the server picks each
+ * cascade's mips from the camera's pixel footprint (viewport and field of
+ * view in CAMERA), and base_spacing_m is only a floor (0: server default). */
+const autoSpacing = !qs.has('spacing') && layout === LAYOUT.WORLD;
 const spacingFor = (h) => 2 ** Math.max(-2, Math.min(6, Math.round(Math.log2(Math.max(h, 1) / 28))));
 if (autoSpacing) want.baseSpacingM = spacingFor(cam.pos[1]);
 let spacingWish = want.baseSpacingM, spacingSince = 0;
@@ -148,7 +159,7 @@ worker.onmessage = (ev) => {
     case 'hello': {
         stats.clientId = m.hello.clientId;
         stats.serverVersion = m.hello.serverVersion;
-        stats.hello = { tickRateHz: m.hello.tickRateHz, codecs: m.hello.codecs, sea: m.hello.sea };
+        stats.hello = { tickRateHz: m.hello.tickRateHz, codecs: m.hello.codecs, sea: m.hello.sea, maxLayers: m.hello.maxLayers, effects: m.hello.effects };
         const d = m.hello.sea.windDirDeg * Math.PI / 180;
         renderer.wind = [Math.cos(d), Math.sin(d)];
         if (m.hello.sea.hs > 0) renderer.hs = m.hello.sea.hs;
@@ -228,26 +239,63 @@ function startQueries() {
 function startCameraReports() {
     if (sendTimer) clearInterval(sendTimer);
     const hz = Math.max(1, Math.min(sub ? sub.frameRateHz : 30, 30));
-    const sendNow = () => worker.postMessage({ cmd: 'camera', cam: cam.report(canvas.width || 1280, canvas.height || 720) });
+    /* the real viewport: the drawing buffer the renderer draws (CSS size x
+     * device pixel ratio x render scale) and the camera's field of view, so
+     * the server's pixel footprint is the one on screen */
+    const sendNow = () => {
+        const [w, h] = renderer.resize();
+        const rep = cam.report(w, h);
+        stats.cameraSent = { viewport: [rep.viewportW, rep.viewportH], fovYDeg: rep.fovYDeg };
+        worker.postMessage({ cmd: 'camera', cam: rep });
+    };
     sendNow();
     sendTimer = setInterval(sendNow, 1000 / hz);
 }
 
 function applyFrame(m) {
-    if (m.mesh) {
+    if (m.layout === LAYOUT.CASCADE) {
+        const b = m.cascades;
+        stats.tilesWritten = (stats.tilesWritten || 0) + renderer.setCascadeFrame(b, m.blocks, m.placement);
+        if (m.placement) {
+            stats.framesWithMesh++;
+            stats.placement = m.placement.origin.slice();
+        }
+        stats.layout = 1;
+        const hr = b.cascade.map(() => [Infinity, -Infinity]);
+        for (const x of m.blocks) {
+            const r = hr[x.cascade];
+            if (!r) continue;
+            for (let k = 1; k < x.disp.length; k += 4) { const v = x.disp[k]; if (v < r[0]) r[0] = v; if (v > r[1]) r[1] = v; }
+        }
+        stats.cascades = b.cascade.map((e, c) => ({
+            patch: e.patchM, n: e.n, mips: e.mips, fades: e.fades, heightRange: hr[c],
+            tiles: m.blocks.filter((x) => x.cascade === c).length,
+            mipsSent: [...new Set(m.blocks.filter((x) => x.cascade === c).map((x) => x.mip))].sort((a, z) => a - z),
+        }));
+        stats.block = { spacingPerM: b.spacingPerM, minSpacingM: b.minSpacingM, eTotal: b.eTotal, tailMss: b.tailMss, camera: b.camera };
+        let fsum = 0, fn = 0, fmax = 0;
+        for (const x of m.blocks) { fsum += x.foamSum; fn += x.n; fmax = Math.max(fmax, x.foamMax); }
+        stats.foamMean = fn ? fsum / fn : 0;
+        stats.foamMax = fmax;
+        stats.levels = b.cascadeCount;
+    } else if (m.mesh) {
         if (renderer.setVertices(m.mesh)) stats.framesWithMesh++;
         let lo = Infinity, hi = -Infinity;
         const p = m.mesh.positions;
         for (let i = 1; i < p.length; i += 3) { if (p[i] < lo) lo = p[i]; if (p[i] > hi) hi = p[i]; }
         stats.meshY = [lo, hi];
     }
-    renderer.setLevels(m.levels);
+    if (m.layout !== LAYOUT.CASCADE) {
+        renderer.setLevels(m.levels);
+        stats.levels = m.levels.length;
+        stats.layout = 0;
+    }
     lastFrameSim = m.simTime;
     lastFrameWall = performance.now();
     haveFrame = true;
     stats.simTime = m.simTime;
     stats.tick = m.tick;
-    stats.origin = m.origin;
+    stats.origin = m.placement ? m.placement.origin.slice() : m.origin;
     stats.cutoffK = m.cutoffK;
     stats.eError = m.eError;
     stats.bytes = m.stats.bytes;
@@ -256,7 +304,6 @@ function applyFrame(m) {
     stats.skipped = m.stats.skipped;
     stats.decodeMs = m.stats.decodeMs;
     stats.decodeWorkers = m.decodeWorkers;
-    stats.levels = m.levels.length;
     if (m.codecs) stats.codec = m.codecs;
     stats.tileCount = m.tileCount;
     stats.levelInfo = m.levels.map((L) => ({ level: L.level, spacing: L.spacing, w: L.width, h: L.height, tiles: L.tiles, err: L.errorBound, foamMax: L.foamMax, foamMean: L.foamMean }));
@@ -288,7 +335,8 @@ function updateOverlay() {
         `fps ${stats.fps.toFixed(1)} · frames ${stats.framesReceived} (skipped ${stats.skipped}) · decode ${stats.decodeMs.toFixed(1)} ms (${stats.decodeWorkers ?? 0} workers)`,
         `sim time ${stats.simTime.toFixed(2)} s · tick ${stats.tick}`,
         `cutoff ${fmtCutoff(stats.cutoffK)} · E_error ${stats.eError == null ? '–' : (100 * stats.eError).toFixed(2) + ' %'} · ${esc(stats.cutoffPolicy || '')}`,
-        `${fmtBytes(stats.bytesPerSec)}/s · total ${fmtBytes(stats.bytes)} · codec ${esc(stats.codec || '–')} · tiles ${stats.tileCount ?? 0} in ${stats.levels} levels`,
+        `${fmtBytes(stats.bytesPerSec)}/s · total ${fmtBytes(stats.bytes)} · codec ${esc(stats.codec || '–')} · tiles ${stats.tileCount ?? 0} in ${stats.levels} ${stats.layout === 1 ? 'cascades' : 'levels'}`
+            + (stats.layout === 1 && stats.block ? ` · E_total ${(100 * stats.block.eTotal).toFixed(2)} % · q ${stats.block.spacingPerM.toPrecision(3)}` : ''),
         `latency ${stats.latencyMs == null ? '–' : stats.latencyMs.toFixed(1) + ' ms'} (p50 ${stats.latencyP50 == null ? '–' : stats.latencyP50.toFixed(1)}, p99 ${stats.latencyP99 == null ? '–' : stats.latencyP99.toFixed(1)})`,
         `camera (${cam.pos[0].toFixed(1)}, ${cam.pos[1].toFixed(1)}, ${cam.pos[2].toFixed(1)}) yaw ${cam.yawDeg.toFixed(0)}° pitch ${cam.pitchDeg.toFixed(0)}° · ${sp.toFixed(1)} m/s · speed ${cam.speed.toFixed(1)} m/s`,
         `mesh ${stats.vertexCount} vertices${stats.seaBelow ? ` · sea below ${stats.seaBelow.height.toFixed(2)} m (camera ${(cam.pos[1] - stats.seaBelow.height).toFixed(1)} m above it)` : ''}`,

@@ -40,6 +40,13 @@ export const CODEC_NAMES = ['f32', 'f16', 'qz', 'exr-zip', 'exr-piz', 'exr-b44',
 export const CH = Object.freeze({ HEIGHT: 1, DX: 2, DZ: 4, NORMAL: 8, FOAM: 16, JACOBIAN: 32, ALL: 0x3f });
 export const BYE_REASONS = ['normal', 'shutdown', 'slow consumer', 'protocol error', 'auth', 'server full', 'idle'];
 export const NO_CAMERA = 0xffffffff;
+/* SUBSCRIBE.layout / FRAME.layout (PROTOCOL.md "Layouts"). */
+export const LAYOUT = Object.freeze({ WORLD: 0, CASCADE: 1 });
+export const LAYOUT_COUNT = 2;
+export const MAX_MIPS = 12;
+export const MIP_ENTRIES = 13;
+/* MESH_TOPOLOGY.flags bit: flat positions and level zones follow. */
+export const TOPO_FLAT = 1;
 
 /* ocean_result codes (sim/ocean_result.h). */
 export const R = Object.freeze({
@@ -69,6 +76,7 @@ export const LIMITS = Object.freeze({
 const SEA_SIZE = 96, SUBSCRIBE_SIZE = 28, CAMERA_SIZE = 64, TILE_FIXED = 48, FRAME_FIXED = 56;
 const RECORD_HEAD = 8, TOPO_FIXED = 16, VERTS_FIXED = 32, QUERY_FIXED = 24, RESULT_FIXED = 16;
 const SAMPLE_SIZE = 36, SEASTATE_FIXED = 16 + SEA_SIZE, ERROR_FIXED = 8, BYE_FIXED = 4;
+const CASCADE_FIXED = 56, CASCADE_ENTRY = 224, PLACEMENT_SIZE = 32;
 const MAX_WORLD = 1e10, MAX_LOCAL = 1e7;
 
 export class ProtoError extends Error {
@@ -276,11 +284,10 @@ function dHello(r) {
 function dSubscribe(r) {
     r.need(SUBSCRIBE_SIZE, 'fixed fields');
     const o = r.off;
-    r.zero(o + 7, 1, 'subscribe');
     r.zero(o + 10, 2, 'subscribe');
     const s = {
         effects: r.u8at(o), meshKind: r.u8at(o + 1), codec: r.u8at(o + 2), cutoffPolicy: r.u8at(o + 3),
-        mode: r.u8at(o + 4), layers: r.u8at(o + 5), lodLevels: r.u8at(o + 6), tileSize: r.u16(o + 8),
+        mode: r.u8at(o + 4), layers: r.u8at(o + 5), lodLevels: r.u8at(o + 6), layout: r.u8at(o + 7), tileSize: r.u16(o + 8),
         frameRateHz: r.f32(o + 12), accuracy: r.f32(o + 16), baseSpacingM: r.f32(o + 20), viewRangeM: r.f32(o + 24),
     };
     r.off += SUBSCRIBE_SIZE;
@@ -298,6 +305,7 @@ function vSubscribe(s) {
     chkEnum('subscribe.mode', s.mode, MODE_COUNT);
     chkRange('subscribe.layers', s.layers, 1, LIMITS.maxLayers);
     chkRange('subscribe.lod_levels', s.lodLevels, 1, LIMITS.maxLodLevels);
+    chkEnum('subscribe.layout', s.layout, LAYOUT_COUNT);
     chkRange('subscribe.tile_size', s.tileSize, 2, LIMITS.tileMaxSize);
     chkRange('subscribe.frame_rate_hz', s.frameRateHz, 0, LIMITS.maxFrameRate);
     if (!(s.frameRateHz > 0)) fail(R.EINVAL, 'subscribe.frame_rate_hz must be > 0');
@@ -337,21 +345,22 @@ function vCamera(k) {
 }
 
 /* TILE body; r.end must be the body's end.  The payload is a view into the
- * message (no copy). */
+ * message (no copy).  Structure only: vTile checks the values (the C
+ * decoder parses a whole message before it validates, and refusals must
+ * carry the same code in the same order). */
 function dTile(r) {
     r.need(TILE_FIXED, 'tile fixed fields');
     const o = r.off;
     const t = {
         level: r.u8at(o), codec: r.u8at(o + 1), channels: r.u16(o + 2), width: r.u16(o + 4), height: r.u16(o + 6),
         ix: r.i32(o + 8), iz: r.i32(o + 12), originX: r.f64(o + 16), originZ: r.f64(o + 24), spacing: r.f64(o + 32),
-        errorBound: r.f32(o + 40), payloadLen: r.u32(o + 44), payload: null,
+        errorBound: r.f32(o + 40), payloadLen: r.u32(o + 44), payload: null, cascade: 0,
     };
     r.off += TILE_FIXED;
     r.need(t.payloadLen, 'tile payload');
     t.payload = r.u8.subarray(r.off, r.off + t.payloadLen);
     r.off += t.payloadLen;
     r.finish();
-    vTile(t);
     return t;
 }
 
@@ -376,6 +385,7 @@ function vTile(t) {
     }
 }
 
+/* MESH_VERTICES body (structure; vVertices checks values). */
 function dVertices(r, limits) {
     r.need(VERTS_FIXED, 'mesh vertices fixed fields');
     const o = r.off;
@@ -385,12 +395,12 @@ function dVertices(r, limits) {
         fail(R.ETOOBIG, `${r.what}: vertex_count ${v.vertexCount} above the limit ${limits.maxVertices}`);
     v.positions = r.floats(3 * v.vertexCount, 'positions');
     r.finish();
-    vVertices(v);
     return v;
 }
 
-function vVertices(v) {
+function vVertices(v, limits) {
     if (v.vertexCount === 0) fail(R.EINVAL, 'mesh vertex_count is 0');
+    if (v.vertexCount > limits.maxVertices) fail(R.ETOOBIG, `mesh vertex_count ${v.vertexCount} above the limit ${limits.maxVertices}`);
     for (let i = 0; i < 3; i++) chkRange('mesh.origin', v.origin[i], -MAX_WORLD, MAX_WORLD);
     const p = v.positions;
     for (let i = 0; i < p.length; i++) {
@@ -400,53 +410,158 @@ function vVertices(v) {
     }
 }
 
-function dRecord(r, isMesh, limits) {
+/* Layout-1 mesh record body: where the flat mesh goes this frame. */
+function dPlacement(r) {
+    r.need(PLACEMENT_SIZE, 'mesh placement');
+    const o = r.off;
+    const pl = { meshId: r.u32(o) };
+    r.zero(o + 4, 4, 'mesh placement');
+    pl.origin = [r.f64(o + 8), r.f64(o + 16), r.f64(o + 24)];
+    r.off += PLACEMENT_SIZE;
+    r.finish();
+    return pl;
+}
+
+const REC_TILE = 0, REC_VERTICES = 1, REC_PLACEMENT = 2;
+
+/* One FRAME record: u32 body length, u32 tag (<= maxTag), body, zero
+ * padding to a multiple of 8.  Returns [body, tag]. */
+function dRecord(r, kind, maxTag, limits) {
     r.need(RECORD_HEAD, 'record header');
     const blen = r.u32(r.off);
-    r.zero(r.off + 4, 4, 'record header');
+    const tag = r.u32(r.off + 4);
+    if (tag > maxTag) fail(R.EFORMAT, `${r.what}: record tag ${tag} at offset ${r.off + 4} above ${maxTag}`);
     r.off += RECORD_HEAD;
-    r.need(blen, isMesh ? 'mesh record' : 'tile record');
+    r.need(blen, kind === REC_TILE ? 'tile record' : 'mesh record');
     const pad = (8 - (blen & 7)) & 7;
     const bodyEnd = r.off + blen;
     const outer = r.end;
     r.end = bodyEnd;
-    const body = isMesh ? dVertices(r, limits) : dTile(r);
-    r.end = outer;
+    let body;
+    try {
+        body = kind === REC_VERTICES ? dVertices(r, limits) : kind === REC_PLACEMENT ? dPlacement(r) : dTile(r);
+    } finally {
+        r.end = outer;
+    }
     if (r.end - bodyEnd < pad) fail(R.ETRUNC, `${r.what}: record padding of ${pad} bytes missing at offset ${bodyEnd}`);
     r.zero(bodyEnd, pad, 'record padding');
     r.off = bodyEnd + pad;
-    return body;
+    return [body, tag];
 }
 
+/* The cascade block of a layout-1 FRAME at r.off (PROTOCOL.md "Cascade
+ * block"); the caller checked that its C entries are present.  Each
+ * cascade's mip table is kept whole (13 entries x kc, mss_x, mss_z,
+ * mss_xz) as the wire has it. */
+function readCascades(r, cc) {
+    const o = r.off;
+    const b = {
+        cascadeCount: cc, order: r.u8at(o + 1), spacingPerM: r.f32(o + 4),
+        camera: [r.f64(o + 8), r.f64(o + 16), r.f64(o + 24)], minSpacingM: r.f32(o + 32), eTotal: r.f32(o + 36),
+        tailMss: [r.f32(o + 40), r.f32(o + 44), r.f32(o + 48)], cascade: [],
+    };
+    for (let k = 0; k < cc; k++) {
+        const q = o + CASCADE_FIXED + k * CASCADE_ENTRY;
+        const mip = new Float32Array(4 * MIP_ENTRIES);
+        for (let m = 0; m < 4 * MIP_ENTRIES; m++) mip[m] = r.f32(q + 16 + 4 * m);
+        b.cascade.push({ patchM: r.f64(q), n: r.u16(q + 8), mips: r.u8at(q + 10), fades: r.u8at(q + 11), mip });
+    }
+    return b;
+}
+
+function vCascades(b) {
+    chkRange('frame.cascades.cascade_count', b.cascadeCount, 1, LIMITS.maxLayers);
+    chkRange('frame.cascades.order', b.order, 1, 64);
+    if (!(b.spacingPerM > 0) || !Number.isFinite(b.spacingPerM))
+        fail(R.EINVAL, `frame.cascades.spacing_per_m = ${b.spacingPerM}; must be finite and > 0`);
+    for (let i = 0; i < 3; i++) chkRange('frame.cascades.camera', b.camera[i], -MAX_WORLD, MAX_WORLD);
+    chkRange('frame.cascades.min_spacing_m', b.minSpacingM, 0, 1e6);
+    chkRange('frame.cascades.e_total', b.eTotal, 0, 1);
+    chkRange('frame.cascades.tail_mss_x', b.tailMss[0], 0, 1e3);
+    chkRange('frame.cascades.tail_mss_z', b.tailMss[1], 0, 1e3);
+    chkRange('frame.cascades.tail_mss_xz', b.tailMss[2], -1e3, 1e3);
+    b.cascade.forEach((e, k) => {
+        chkRange('frame.cascades.patch_m', e.patchM, 1e-3, 1e7);
+        if (e.n < 8 || e.n > 2048 || (e.n & (e.n - 1)))
+            fail(R.EINVAL, `frame.cascades[${k}].n = ${e.n}; must be a power of two in 8..2048`);
+        chkRange('frame.cascades.mips', e.mips, 1, MAX_MIPS);
+        if (e.fades > 1) fail(R.EFORMAT, `frame.cascades[${k}].fades is ${e.fades} (0 or 1)`);
+        if ((e.n >> (e.mips - 1)) < 1) fail(R.EINVAL, `frame.cascades[${k}]: ${e.mips} mips of a ${e.n} grid`);
+        for (let m = 0; m < MIP_ENTRIES; m++) {
+            const kc = e.mip[4 * m], sx = e.mip[4 * m + 1], sz = e.mip[4 * m + 2], sxz = e.mip[4 * m + 3];
+            if (m > e.mips) {
+                if (kc !== 0 || sx !== 0 || sz !== 0 || sxz !== 0)
+                    fail(R.EFORMAT, `frame.cascades[${k}].mip[${m}] beyond mips ${e.mips} must be 0`);
+                continue;
+            }
+            if (m === e.mips ? kc !== 0 : !(kc > 0))
+                fail(R.EINVAL, `frame.cascades[${k}].mip[${m}].kc = ${kc} (mips ${e.mips})`);
+            if (!(sx >= 0 && sx <= 1e3) || !(sz >= 0 && sz <= 1e3) || !(sxz >= -1e3 && sxz <= 1e3))
+                fail(R.EINVAL, `frame.cascades[${k}].mip[${m}] slope moments ${sx} ${sz} ${sxz} out of range`);
+        }
+    });
+}
+
+/* FRAME: parsed whole first, then validated in the C decoder's order
+ * (proto.c d_frame, v_frame). */
 function dFrame(r, limits) {
     r.need(FRAME_FIXED, 'fixed fields');
     const o = r.off;
     const f = {
         cutoffK: r.f64(o), eError: r.f64(o + 8), origin: [r.f64(o + 16), r.f64(o + 24), r.f64(o + 32)],
         cameraSeq: r.u32(o + 40), tick: r.u32(o + 44), tileCount: r.u16(o + 48), hasMesh: r.u8at(o + 50),
-        tiles: [], mesh: null,
+        layout: r.u8at(o + 51), cascades: null, tiles: [], mesh: null, placement: null,
     };
-    r.zero(o + 51, 5, 'frame');
+    r.zero(o + 52, 4, 'frame');
     r.off += FRAME_FIXED;
+    if (f.layout >= LAYOUT_COUNT) fail(R.ETYPE, `FRAME: layout ${f.layout} unknown (0..1)`);
+    let maxTag = 0;
+    if (f.layout === LAYOUT.CASCADE) {
+        r.need(CASCADE_FIXED, 'cascade block');
+        const cc = r.u8at(r.off);
+        if (cc < 1 || cc > LIMITS.maxLayers) fail(R.EINVAL, `FRAME: cascade_count ${cc} outside 1..${LIMITS.maxLayers}`);
+        r.need(CASCADE_FIXED + cc * CASCADE_ENTRY, 'cascade entries');
+        r.zero(r.off + 2, 2, 'cascade block');
+        r.zero(r.off + 52, 4, 'cascade block');
+        for (let k = 0; k < cc; k++) r.zero(r.off + CASCADE_FIXED + k * CASCADE_ENTRY + 12, 4, 'cascade entry');
+        f.cascades = readCascades(r, cc);
+        r.off += CASCADE_FIXED + cc * CASCADE_ENTRY;
+        maxTag = cc - 1;
+    }
     if (f.tileCount > limits.maxFrameTiles)
         fail(R.ETOOBIG, `FRAME: tile_count ${f.tileCount} above the limit ${limits.maxFrameTiles}`);
     if (f.hasMesh > 1) fail(R.EFORMAT, `FRAME: has_mesh is ${f.hasMesh} (0 or 1)`);
     if (f.tileCount * (RECORD_HEAD + TILE_FIXED) > r.end - r.off)
         fail(R.ETRUNC, `FRAME: ${f.tileCount} tiles cannot fit in the ${r.end - r.off} bytes left`);
-    for (let i = 0; i < f.tileCount; i++) f.tiles.push(dRecord(r, false, limits));
-    if (f.hasMesh) f.mesh = dRecord(r, true, limits);
+    for (let i = 0; i < f.tileCount; i++) {
+        const [t, tag] = dRecord(r, REC_TILE, maxTag, limits);
+        t.cascade = tag;
+        f.tiles.push(t);
+    }
+    if (f.hasMesh) {
+        if (f.layout === LAYOUT.CASCADE) f.placement = dRecord(r, REC_PLACEMENT, 0, limits)[0];
+        else f.mesh = dRecord(r, REC_VERTICES, 0, limits)[0];
+    }
     r.finish();
+    /* values, as v_frame */
     if (Number.isNaN(f.cutoffK) || f.cutoffK < 0) fail(R.EINVAL, `frame.cutoff_k = ${f.cutoffK}; must be >= 0 (or +inf)`);
     chkRange('frame.e_error', f.eError, 0, 1);
     for (let i = 0; i < 3; i++) chkRange('frame.origin', f.origin[i], -MAX_WORLD, MAX_WORLD);
+    if (f.cascades) vCascades(f.cascades);
+    for (const t of f.tiles) vTile(t);
+    if (f.mesh) vVertices(f.mesh, limits);
+    if (f.placement) for (let i = 0; i < 3; i++) chkRange('frame.placement.origin', f.placement.origin[i], -MAX_WORLD, MAX_WORLD);
     return f;
 }
 
 function dTopology(r, limits) {
     r.need(TOPO_FIXED, 'fixed fields');
     const o = r.off;
-    const t = { meshId: r.u32(o), meshKind: r.u8at(o + 4), lodLevels: r.u8at(o + 5), vertexCount: r.u32(o + 8), indexCount: r.u32(o + 12) };
-    r.zero(o + 6, 2, 'mesh_topology');
+    const t = {
+        meshId: r.u32(o), meshKind: r.u8at(o + 4), lodLevels: r.u8at(o + 5), flags: r.u16(o + 6),
+        vertexCount: r.u32(o + 8), indexCount: r.u32(o + 12), flat: null, zones: null,
+    };
+    if (t.flags & ~TOPO_FLAT) fail(R.EFORMAT, `MESH_TOPOLOGY: flags 0x${t.flags.toString(16)} has unknown bits`);
     r.off += TOPO_FIXED;
     if (t.vertexCount > limits.maxVertices || t.indexCount > limits.maxIndices)
         fail(R.ETOOBIG, `MESH_TOPOLOGY: ${t.vertexCount} vertices / ${t.indexCount} indices above the limits ${limits.maxVertices} / ${limits.maxIndices}`);
@@ -461,6 +576,17 @@ function dTopology(r, limits) {
     t.morph = r.floats(vc, 'morph');
     t.level = r.u8.slice(r.off, r.off + vc);
     r.off += vc;
+    if (t.flags & TOPO_FLAT) {
+        /* flat floats start 4-aligned from the message start */
+        const pad = (4 - (r.off & 3)) & 3;
+        r.need(pad, 'flat padding');
+        r.zero(r.off, pad, 'flat padding');
+        r.off += pad;
+        if (t.lodLevels < 1 || t.lodLevels > LIMITS.maxLodLevels)
+            fail(R.EINVAL, `MESH_TOPOLOGY: lod_levels ${t.lodLevels} outside 1..${LIMITS.maxLodLevels}`);
+        t.flat = r.floats(2 * vc, 'flat positions');
+        t.zones = r.floats(4 * t.lodLevels, 'zones');
+    }
     r.finish();
     if (t.meshKind >= MESH.NONE) fail(R.ETYPE, `mesh_topology.mesh_kind ${t.meshKind} unknown (0..2)`);
     chkRange('mesh_topology.lod_levels', t.lodLevels, 1, LIMITS.maxLodLevels);
@@ -471,6 +597,16 @@ function dTopology(r, limits) {
     for (let i = 0; i < vc; i++) {
         if (!(t.morph[i] >= 0 && t.morph[i] <= 1)) fail(R.EINVAL, `mesh_topology morph[${i}] = ${t.morph[i]} outside [0, 1]`);
         if (t.level[i] >= t.lodLevels) fail(R.EINVAL, `mesh_topology level[${i}] = ${t.level[i]} >= lod_levels ${t.lodLevels}`);
+    }
+    if (t.flags & TOPO_FLAT) {
+        const fl = t.flat;
+        for (let i = 0; i < fl.length; i++)
+            if (!(Math.abs(fl[i]) <= MAX_LOCAL)) fail(R.EINVAL, `mesh_topology flat[${i}] = ${fl[i]} (finite, |.| <= 1e7)`);
+        for (let L = 0; L < t.lodLevels; L++) {
+            const z = t.zones.subarray(4 * L, 4 * L + 4);
+            if (!(z[0] > 0 && z[0] <= 1e7) || !(z[1] >= 0 && z[1] <= 1e8) || !(z[2] >= 0 && z[2] <= 1e8) || z[3] !== 0)
+                fail(R.EINVAL, `mesh_topology zone ${L} = (${z[0]}, ${z[1]}, ${z[2]}, ${z[3]}) out of range`);
+        }
     }
     return t;
 }
@@ -573,9 +709,9 @@ export function decode(buf, limits = LIMITS) {
     case T.SUBSCRIBE: body = dSubscribe(r); break;
     case T.CAMERA: body = dCamera(r); break;
     case T.FRAME: body = dFrame(r, limits); break;
-    case T.TILE: body = dTile(r); break;
+    case T.TILE: body = dTile(r); vTile(body); break;
     case T.MESH_TOPOLOGY: body = dTopology(r, limits); break;
-    case T.MESH_VERTICES: body = dVertices(r, limits); break;
+    case T.MESH_VERTICES: body = dVertices(r, limits); vVertices(body, limits); break;
     case T.QUERY: body = dQuery(r, limits); break;
     case T.QUERY_RESULT: body = dResult(r, limits); break;
     case T.SEA_STATE: body = dSeaState(r); break;
@@ -607,18 +743,18 @@ class Writer {
 const P = HEADER_SIZE;
 
 /* sub: {effects, meshKind, codec, cutoffPolicy, mode, layers, lodLevels,
- * tileSize, frameRateHz, accuracy, baseSpacingM, viewRangeM}.  Validated as
+ * layout (default 0), tileSize, frameRateHz, accuracy, baseSpacingM, viewRangeM}.  Validated as
  * the server will; returns an ArrayBuffer. */
 export function encodeSubscribe(sub, seq, simTime = 0) {
     const s = {
-        baseSpacingM: 0, viewRangeM: 0, accuracy: 1e-3, mode: MODE.LIVE, ...sub,
+        baseSpacingM: 0, viewRangeM: 0, accuracy: 1e-3, mode: MODE.LIVE, layout: LAYOUT.WORLD, ...sub,
     };
     for (const k of ['frameRateHz', 'accuracy', 'baseSpacingM', 'viewRangeM']) s[k] = f32(s[k]);
     vSubscribe(s);
     const w = new Writer(T.SUBSCRIBE, SUBSCRIBE_SIZE, seq, simTime);
     const u = w.u8, dv = w.dv;
     u[P] = s.effects; u[P + 1] = s.meshKind; u[P + 2] = s.codec; u[P + 3] = s.cutoffPolicy;
-    u[P + 4] = s.mode; u[P + 5] = s.layers; u[P + 6] = s.lodLevels;
+    u[P + 4] = s.mode; u[P + 5] = s.layers; u[P + 6] = s.lodLevels; u[P + 7] = s.layout;
     dv.setUint16(P + 8, s.tileSize, true);
     dv.setFloat32(P + 12, s.frameRateHz, true);
     dv.setFloat32(P + 16, s.accuracy, true);

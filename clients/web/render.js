@@ -1,29 +1,39 @@
 /*
- * render.js - WebGL2 renderer of the streamed sea.
+ * render.js - WebGL2 renderer of the streamed sea, for both layouts
+ * (PROTOCOL.md "Layouts").
  *
- * Geometry: the daemon's concentric LOD mesh (indices once per topology,
- * positions every frame, relative to the frame origin in double).  Each
- * vertex is displaced by the streamed tiles: every tile level is packed by
- * the worker into one layer of two RGBA16F texture arrays, disp = (H, DX,
- * DZ, FOAM) and nrm = (normal xyz, coverage).  Levels are blended fine to
- * coarse, each weighted by how well it covers the point (ramp at its edges)
- * and by a footprint test (a level finer than the mesh spacing in the vertex
- * shader, or than the pixel footprint in the fragment shader, fades out), so
- * neither vertices nor normals alias and level borders do not show.
+ * Layout 1 (cascade tiles, the default): each cascade's mips live in two
+ * mipmapped periodic textures (disp = DX, H, DZ, FOAM; slope = ∂η/∂x, ∂η/∂z);
+ * the daemon's flat concentric mesh is placed per FRAME, morphed and
+ * displaced in the vertex shader by the sum of the cascades read per "Where
+ * each mip is read" (see CASCADE_GLSL, SEA1_VS); the fragment shader shades
+ * from the summed slopes at the pixel's spacing and the unresolved slope
+ * moments as a Beckmann lobe (SEA_SHADE_GLSL, Bruneton, Neyret & Holzschuch
+ * 2010); the sky pass shades the sea beyond the mesh from the same cascades
+ * with the same functions, only where the mesh did not draw.
+ *
+ * Layout 0 (world tiles): the daemon's concentric LOD mesh (indices once
+ * per topology, positions every frame, relative to the frame origin in
+ * double), displaced by the server; every tile level is packed by the
+ * worker into one layer of two RGBA16F texture arrays, disp = (H, DX, DZ,
+ * FOAM) and nrm = (normal xyz, coverage), blended fine to coarse with an
+ * edge ramp and a footprint test so neither vertices nor normals alias.
  *
  * Precision: all positions are made relative to the eye on the CPU in
- * double (frame origin, tile origins, camera), so the GPU only sees small
- * float offsets however far from the world origin the camera flies.
+ * double (placement and frame origins, tile origins, the eye modulo each
+ * cascade's patch), so the GPU only sees small float offsets however far
+ * from the world origin the camera flies.
  *
- * Shading (seed 001's list): procedural sky (gradient, sun disc and halo,
- * drifting clouds) used as the reflection environment, Phong sun specular
- * (roughened with distance), Schlick Fresnel, animated foam from the
- * streamed FOAM plane, cloud shadows, subsurface tint on crests, haze.
- * The sky pass also draws the flat sea beyond the mesh's range with the
- * same functions, so the mesh's edge is invisible.
+ * Shading around the sea (seed 001's list): procedural sky (gradient, sun
+ * disc and halo, drifting clouds) in a mipmapped cube map used as the
+ * reflection environment, foam from the streamed FOAM plane broken up by
+ * drifting grain near the eye, cloud shadows, subsurface tint on crests,
+ * haze.
  */
 
 export const MAX_LEVELS = 16;
+export const MAX_CASCADES = 4;
+const MIP_ENTRIES = 13;
 
 const CLOUD_TEX = 512;          /* cloud texture size, texels */
 const CLOUD_UV = 32;            /* noise lattice units the cloud texture spans (it tiles) */
@@ -304,6 +314,272 @@ void main() {
     o_color = vec4(tonemap(col), 1.0);
 }`;
 
+/* ---- layout 1: cascades summed on the GPU (PROTOCOL.md "Layouts") ------
+ *
+ * Each cascade c is a periodic field on its patch P_c, held in two
+ * mipmapped textures with GL REPEAT: disp = (DX, H, DZ, FOAM) and slope =
+ * (∂η/∂x, ∂η/∂z).  GL mip level m is the server's mip m (n_c/2^m texels).
+ * The server's mip samples are co-sited with the level-0 grid (sample j of
+ * mip m at x = j·σ_c·2^m), unlike GL's box-filter mips, so each level is
+ * read at its own half-texel offset and the trilinear blend of "Where each
+ * mip is read" is done here with two explicit-level reads.
+ *
+ * Precision: the eye's position modulo each patch is reduced in double on
+ * the CPU (u_casEye, texture units); the GPU adds eye-relative offsets.
+ */
+const CASCADE_GLSL = `
+#define MAXC ${MAX_CASCADES}
+#define MIPE ${MIP_ENTRIES}
+uniform int u_nCas;
+uniform vec4 u_cas[MAXC];        /* patch P, native spacing sigma, mips, fades */
+uniform vec2 u_casEye[MAXC];     /* (eye xz mod P) / P */
+uniform vec4 u_mipTab[MAXC * MIPE]; /* kc, mss_x, mss_z, mss_xz (PROTOCOL.md "Cascade entry") */
+uniform vec3 u_blk;              /* q = spacing_per_m, min_spacing_m, max(|cy|, 1) */
+uniform vec2 u_blkCam;           /* the block's camera xz relative to the eye */
+uniform vec3 u_tailMss;          /* moments no cascade holds */
+uniform float u_roughScale;      /* 1; 0 draws the unresolved moments as a mirror (test control) */
+uniform float u_foamScale;       /* 1; 0 draws no foam (test control) */
+uniform sampler2D u_cd0, u_cd1, u_cd2, u_cd3;   /* disp per cascade */
+
+/* s(x, z): the spacing wanted at eye-relative rel */
+float wantSpacing(vec2 rel) {
+    vec2 d = rel - u_blkCam;
+    return max(u_blk.y, u_blk.x * sqrt(dot(d, d) + u_blk.z * u_blk.z));
+}
+/* continuous level of cascade c for spacing s, clamped to its mips; *w
+ * the fade of a cascade that fades beyond its last mip */
+float casLod(int c, float s, out float w) {
+    vec4 C = u_cas[c];
+    float lam = log2(s / C.y);
+    float top = C.z - 1.0;
+    w = (lam >= top && C.w > 0.5) ? clamp(C.z - lam, 0.0, 1.0) : 1.0;
+    return clamp(lam, 0.0, top);
+}
+vec4 casRead(sampler2D t, int c, vec2 rel, float lam) {
+    float m0 = floor(lam), f = lam - m0;
+    float n = u_cas[c].x / u_cas[c].y;
+    vec2 uv = u_casEye[c] + rel / u_cas[c].x;
+    vec4 a = textureLod(t, uv + exp2(m0 - 1.0) / n, m0);
+    if (f > 1e-4) a = mix(a, textureLod(t, uv + exp2(m0) / n, m0 + 1.0), f);
+    return a;
+}
+/* unresolved slope moments of cascade c read at (unclamped) level lam */
+vec3 casMss(int c, float lam) {
+    vec4 C = u_cas[c];
+    int base = c * MIPE;
+    float top = C.z - 1.0;
+    if (lam <= 0.0) return u_mipTab[base].yzw;
+    if (lam < top) {
+        int m = int(floor(lam));
+        return mix(u_mipTab[base + m].yzw, u_mipTab[base + m + 1].yzw, lam - float(m));
+    }
+    vec3 e = u_mipTab[base + int(top)].yzw;
+    if (C.w > 0.5) e = mix(u_mipTab[base + int(C.z)].yzw, e, clamp(C.z - lam, 0.0, 1.0));
+    return e;
+}
+/* displacement (DX, H, DZ) and foam summed over cascades at spacing s */
+vec4 casDisp(vec2 rel, float s) {
+    vec4 acc = vec4(0.0);
+    float keep = 1.0, w, lam;
+    vec4 d;
+#define CAS_D(C, T) if (u_nCas > C) { lam = casLod(C, s, w); d = w * casRead(T, C, rel, lam); acc.xyz += d.xyz; keep *= 1.0 - clamp(d.w, 0.0, 1.0); }
+    CAS_D(0, u_cd0) CAS_D(1, u_cd1) CAS_D(2, u_cd2) CAS_D(3, u_cd3)
+    acc.w = 1.0 - keep;
+    return acc;
+}
+`;
+
+const CASCADE_FRAG_GLSL = `
+uniform sampler2D u_cs0, u_cs1, u_cs2, u_cs3;   /* slope per cascade */
+/* mean slope, unresolved slope moments (x, z, xz) and foam at spacing s */
+void seaSample(vec2 rel, float s, out vec2 slope, out vec3 mss, out float foam) {
+    slope = vec2(0.0);
+    mss = u_tailMss;
+    float keep = 1.0, w, lam;
+    vec4 d;
+#define CAS_S(C, TD, TS) if (u_nCas > C) { lam = casLod(C, s, w); slope += w * casRead(TS, C, rel, lam).xy; d = casRead(TD, C, rel, lam); keep *= 1.0 - clamp(w * d.w, 0.0, 1.0); mss += casMss(C, log2(s / u_cas[C].y)); }
+    CAS_S(0, u_cd0, u_cs0) CAS_S(1, u_cd1, u_cs1) CAS_S(2, u_cd2, u_cs2) CAS_S(3, u_cd3, u_cs3)
+    foam = (1.0 - keep) * u_foamScale;
+    mss *= u_roughScale;
+}
+`;
+
+/* Shading from slopes: mean normal from the mean slope, and the slope
+ * distribution the pixel does not resolve (covariance mss) as a Beckmann
+ * (Gaussian-slope) lobe, as in Bruneton, Neyret & Holzschuch 2010 ("Real-time
+ * realistic ocean lighting using seamless transitions from geometry to
+ * BRDF", eqs. for the reflected sun and the mean Fresnel / sky terms): the
+ * sun's glitter and the sky reflection keep their average from any
+ * distance, spread by roughness instead of aliasing or turning to a mirror. */
+const SEA_SHADE_GLSL = `
+/* Foam near the eye: the carried coverage c drawn as patches by
+ * thresholding drifting grain at its (1 - c) level, so the drawn fraction
+ * stays c (the whitecap coverage the tiles carry); far away the coverage is
+ * drawn as it is, where grain would alias. */
+float foamBreakUp(float c, vec2 rel, float dist) {
+    float grain = texture(u_cloudTex, rel * GRAIN_K + u_grainOff).r;
+    grain = clamp((grain - 0.25) * 2.0, 0.0, 1.0);
+    float patches = c <= 0.0 ? 0.0 : smoothstep(1.0 - c - 0.12, 1.0 - c + 0.12, grain);
+    return mix(c, patches, 1.0 - smoothstep(300.0, 3000.0, dist));
+}
+const float SUN_E = 6.0;          /* sun irradiance relative to the sky radiance scale */
+const float SUN_MSS = 1e-5;       /* the sun's own angular radius (~4.7 mrad) as slope variance */
+float lambdaSmith(float c, float s2) {
+    float v = c / sqrt(max((1.0 - c * c) * 2.0 * s2, 1e-12));
+    return v > 4.0 ? 0.0 : exp(-v * v) / (2.0 * v * 1.7724539);   /* Bruneton's approximation of Smith's Lambda */
+}
+vec3 seaShade(vec3 V, vec2 slope, vec3 mss, float foam, float crest, float shadow) {
+    vec3 N = normalize(vec3(-slope.x, 1.0, -slope.y));
+    vec3 E = -V;
+    float sxx = mss.x + SUN_MSS, szz = mss.y + SUN_MSS, sxz = mss.z;
+    float det = max(sxx * szz - sxz * sxz, 1e-12);
+    vec2 az = normalize(V.xz + vec2(1e-7, 0.0));
+    float sv2 = max(az.x * az.x * sxx + 2.0 * az.x * az.y * sxz + az.y * az.y * szz, 1e-7);
+    float zV = max(dot(E, N), 0.01);
+    /* mean Fresnel over the slopes (Bruneton et al. 2010, their fit) */
+    float F = 0.02 + 0.98 * pow(1.0 - zV, 5.0 * exp(-2.69 * sqrt(sv2))) / (1.0 + 22.7 * pow(sqrt(sv2), 1.5));
+    /* sky: mirror direction of the mean normal, blurred by the reflected
+     * slope spread (twice the slope angle) through the cube map's mips */
+    vec3 R = reflect(V, N);
+    float spread = 2.0 * sqrt(0.5 * (sxx + szz));
+    float lod = log2(max(1.0, spread * float(${SKY_CUBE}) / 1.5708));
+    vec3 refl = textureLod(u_skyCube, vec3(R.x, abs(R.y), R.z), lod).rgb * u_skyScale;
+    float sunUp = clamp(u_sunDir.y * 2.0, 0.05, 1.0);
+    vec3 water = WATER_DEEP * sunUp;
+    float sss = pow(max(dot(V, u_sunDir) * 0.5 + 0.5, 0.0), 3.0) * clamp(crest, 0.0, 1.0);
+    water += WATER_SCATTER * sss * sunUp * 0.6;
+    water += WATER_SCATTER * 0.06 * max(dot(N, u_sunDir), 0.0);
+    vec3 col = mix(water, refl, F);
+    /* sun: Gaussian density of facet slopes zeta (those that mirror the sun
+     * to the eye) about the mean slope, over 4 cos(view) cos^4(half) and
+     * Smith's shadowing */
+    vec3 L = u_sunDir;
+    vec3 H = normalize(L + E);
+    if (H.y > 0.0 && L.y > 0.0) {
+        vec2 zeta = vec2(-H.x / H.y, -H.z / H.y) - slope;
+        float qf = (szz * zeta.x * zeta.x - 2.0 * sxz * zeta.x * zeta.y + sxx * zeta.y * zeta.y) / det;
+        float p = exp(-0.5 * qf) / (6.2831853 * sqrt(det));
+        float zH = max(dot(H, N), 0.01);
+        vec2 azL = normalize(L.xz + vec2(1e-7, 0.0));
+        float sl2 = max(azL.x * azL.x * sxx + 2.0 * azL.x * azL.y * sxz + azL.y * azL.y * szz, 1e-7);
+        float zL = max(dot(L, N), 0.01);
+        float Fh = 0.02 + 0.98 * pow(1.0 - max(dot(E, H), 0.0), 5.0);
+        float g = 1.0 + lambdaSmith(zL, sl2) + lambdaSmith(zV, sv2);
+        col += u_sunColor * SUN_E * shadow * Fh * p / (4.0 * zV * zH * zH * zH * zH * g);
+    }
+    vec3 foamCol = vec3(0.90, 0.94, 0.96) * (0.35 + 0.65 * max(dot(N, u_sunDir), 0.0) * shadow) * sunUp
+                 + skyBase(vec3(0.0, 1.0, 0.0)) * 0.25;
+    col = mix(col, foamCol, clamp(foam, 0.0, 1.0));
+    return col * mix(0.62, 1.0, shadow);
+}
+`;
+
+const SEA1_VS = `${COMMON}
+${CASCADE_GLSL}
+in vec2 a_flat;
+in float a_level;
+uniform vec4 u_zone[MAXL];       /* lattice spacing g_L, zone radius R_L, blend half-width b_L, 0 */
+uniform int u_lodLevels;
+uniform vec3 u_meshOff;          /* placement origin - eye */
+uniform mat4 u_viewProj;
+out vec3 v_rel;
+out vec2 v_base;
+out float v_crest;
+out float v_foam;
+out float v_level;
+void main() {
+    int L = int(a_level + 0.5);
+    vec2 p = a_flat;
+    float g = u_zone[L].x;
+    if (L < u_lodLevels - 1) {
+        /* PROTOCOL.md "Mesh in layout 1": morph weight from the distance to
+         * the block's camera, odd vertices slide onto the coarser lattice */
+        vec4 Z = u_zone[L];
+        float d = length(u_meshOff.xz + p - u_blkCam);
+        float w;
+        if (Z.z > 0.0) {
+            float u = clamp((d - (Z.y - Z.z)) / (2.0 * Z.z), 0.0, 1.0);
+            w = u * u * (3.0 - 2.0 * u);
+        } else {
+            w = d >= Z.y ? 1.0 : 0.0;
+        }
+        float gc = u_zone[L + 1].x;
+        p -= w * (p - gc * floor(p / gc + 0.5));
+        /* a vertex on its way to the coarser ring samples as that ring does */
+        g = mix(g, gc, w);
+    }
+    vec2 rel = u_meshOff.xz + p;
+    vec4 D = casDisp(rel, max(wantSpacing(rel), g));
+    v_rel = vec3(rel.x + D.x, u_meshOff.y + D.y, rel.y + D.z);
+    v_base = rel;
+    v_crest = D.y;
+    v_foam = D.w;
+    v_level = a_level;
+    gl_Position = u_viewProj * vec4(v_rel, 1.0);
+}`;
+
+const SEA1_FS = `${COMMON}
+${CASCADE_GLSL}
+${CASCADE_FRAG_GLSL}
+${SEA_SHADE_GLSL}
+in vec3 v_rel;
+in vec2 v_base;
+in float v_crest;
+in float v_foam;
+in float v_level;
+out vec4 o_color;
+uniform float u_pixAngle;
+uniform float u_debug;
+uniform float u_hs;
+void main() {
+    vec3 V = normalize(v_rel);
+    float dist = length(v_rel);
+    /* the pixel's footprint (geometric mean of its across and along-view
+     * extents): where it is coarser than s, a coarser mip is read and the
+     * mip tables account for what it leaves out, so nothing aliases */
+    float foot = dist * u_pixAngle / sqrt(max(abs(V.y), 0.02));
+    float s = max(wantSpacing(v_base), foot);
+    vec2 slope; vec3 mss; float foam;
+    seaSample(v_base, s, slope, mss, foam);
+    foam = foamBreakUp(foam, v_base, dist);
+    float shadow = cloudShadow(v_rel);
+    vec3 col = seaShade(V, slope, mss, foam, v_crest / max(u_hs * 0.5, 0.2), shadow);
+    col = haze(col, V, dist);
+    if (u_debug > 0.5) {
+        vec3 tint = 0.5 + 0.5 * cos(6.2831 * (v_level * 0.17 + vec3(0.0, 0.33, 0.67)));
+        col = mix(col, tint, 0.5);
+    }
+    o_color = vec4(tonemap(col), 1.0);
+}`;
+
+/* sky, and the sea beyond the mesh shaded with the same functions (flat
+ * at y = 0: from there on the displacement is far below a pixel) */
+const SKY1_FS = `${COMMON}
+${CASCADE_GLSL}
+${CASCADE_FRAG_GLSL}
+${SEA_SHADE_GLSL}
+in vec2 v_ndc;
+out vec4 o_color;
+uniform vec3 u_right, u_up, u_fwd;
+uniform vec2 u_tanHalf;
+uniform float u_pixAngle;
+void main() {
+    vec3 V = normalize(u_fwd + v_ndc.x * u_tanHalf.x * u_right + v_ndc.y * u_tanHalf.y * u_up);
+    vec3 col;
+    if (V.y >= 0.0) {
+        col = skyEnv(V) + sunDisc(V);
+    } else {
+        float dist = max(u_eyeY, 0.1) / max(-V.y, 1e-5);
+        vec3 hit = V * dist;
+        float foot = dist * u_pixAngle / sqrt(max(-V.y, 0.02));
+        vec2 slope = vec2(0.0); vec3 mss = vec3(0.02, 0.02, 0.0); float foam = 0.0;
+        if (u_nCas > 0) seaSample(hit.xz, max(wantSpacing(hit.xz), foot), slope, mss, foam);
+        col = seaShade(V, slope, mss, foamBreakUp(foam, hit.xz, dist), 0.0, cloudShadow(hit));
+        col = haze(col, V, dist);
+    }
+    o_color = vec4(tonemap(col), 1.0);
+}`;
+
 function compile(gl, type, src) {
     const s = gl.createShader(type);
     gl.shaderSource(s, src);
@@ -358,6 +634,8 @@ export class Renderer {
         this.sky = program(gl, FULL_VS, SKY_FS);
         this.skygen = program(gl, FULL_VS, SKYGEN_FS);
         this.sea = program(gl, SEA_VS, SEA_FS, ['a_pos', 'a_morph', 'a_spacing', 'a_level']);
+        this.sea1 = program(gl, SEA1_VS, SEA1_FS, ['a_flat', 'a_level']);
+        this.sky1 = program(gl, FULL_VS, SKY1_FS);
         const info = gl.getExtension('WEBGL_debug_renderer_info');
         this.rendererName = String(info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER));
         this.software = /swiftshader|llvmpipe|software|softpipe/i.test(this.rendererName);
@@ -388,6 +666,104 @@ export class Renderer {
         this.hs = 2;
         this.debug = false;
         this.applyTiles = 1;
+        /* layout 1 */
+        this.vao1 = gl.createVertexArray();
+        this.flatBuf = gl.createBuffer();
+        this.level1Buf = gl.createBuffer();
+        this.idx1Buf = gl.createBuffer();
+        this.topology1 = null;     /* FLAT topology: {meshId, vertexCount, lodLevels, zones} */
+        this.indexCount1 = 0;
+        this.cas = [];             /* per cascade: {key, patch, n, sigma, mips, fades, disp, slope} */
+        this.block = null;         /* the newest FRAME's cascade block */
+        this.placement = null;     /* {meshId, origin} of the newest FRAME */
+        this.roughScale = 1;       /* 0: unresolved slopes ignored (a mirror; the test's control) */
+        this.foamScale = 1;        /* 0: no foam (the test's glitter comparison) */
+        this.dummyTex = gl.createTexture();
+        gl.bindTexture(gl.TEXTURE_2D, this.dummyTex);
+        gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA8, 1, 1, 0, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
+    }
+
+    /* Layout 1: a FRAME's cascade block, its decoded tiles (texel blocks,
+     * see assemble.js assembleCascadeTile) and the mesh placement.
+     * Textures are (re)made when a cascade's patch, grid or mip count
+     * changes; each tile is written to its place (tile (ix, iz) of mip m of
+     * cascade c).  Tiles not in this frame keep their older texels: the
+     * server sends every tile the read rule needs at this camera. */
+    setCascadeFrame(block, blocks, placement) {
+        const gl = this.gl;
+        const nc = Math.min(block.cascadeCount, MAX_CASCADES);
+        for (let c = 0; c < nc; c++) {
+            const e = block.cascade[c];
+            const key = `${e.patchM}/${e.n}/${e.mips}`;
+            const old = this.cas[c];
+            if (!old || old.key !== key) {
+                if (old) { gl.deleteTexture(old.disp); gl.deleteTexture(old.slope); }
+                const mk = (fmt) => {
+                    const t = gl.createTexture();
+                    gl.bindTexture(gl.TEXTURE_2D, t);
+                    gl.texStorage2D(gl.TEXTURE_2D, e.mips, fmt, e.n, e.n);
+                    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR_MIPMAP_NEAREST);
+                    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+                    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.REPEAT);
+                    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.REPEAT);
+                    return t;
+                };
+                this.cas[c] = { key, patch: e.patchM, n: e.n, sigma: e.patchM / e.n, mips: e.mips, disp: mk(gl.RGBA16F), slope: mk(gl.RG16F), texels: 0 };
+            }
+            this.cas[c].fades = e.fades;
+        }
+        for (let c = nc; c < this.cas.length; c++) { gl.deleteTexture(this.cas[c].disp); gl.deleteTexture(this.cas[c].slope); }
+        this.cas.length = nc;
+        gl.pixelStorei(gl.UNPACK_ALIGNMENT, 4);
+        let written = 0;
+        for (const b of blocks) {
+            const C = this.cas[b.cascade];
+            if (!C || b.mip >= C.mips) continue;
+            const side = C.n >> b.mip;
+            if (b.x < 0 || b.y < 0 || b.x + b.w > side || b.y + b.h > side) continue;
+            gl.bindTexture(gl.TEXTURE_2D, C.disp);
+            gl.texSubImage2D(gl.TEXTURE_2D, b.mip, b.x, b.y, b.w, b.h, gl.RGBA, gl.FLOAT, b.disp);
+            gl.bindTexture(gl.TEXTURE_2D, C.slope);
+            gl.texSubImage2D(gl.TEXTURE_2D, b.mip, b.x, b.y, b.w, b.h, gl.RG, gl.FLOAT, b.slope);
+            C.texels += b.w * b.h;
+            written++;
+        }
+        this.block = block;
+        if (placement) this.placement = { meshId: placement.meshId, origin: placement.origin.slice() };
+        return written;
+    }
+
+    /* Uniforms of CASCADE_GLSL for program u, eye in world double. */
+    cascadeUniforms(u, eye) {
+        const gl = this.gl, b = this.block, nc = this.cas.length;
+        const cas = new Float32Array(4 * MAX_CASCADES), ce = new Float32Array(2 * MAX_CASCADES);
+        const tab = new Float32Array(4 * MIP_ENTRIES * MAX_CASCADES);
+        for (let c = 0; c < nc; c++) {
+            const C = this.cas[c], e = b.cascade[c];
+            cas.set([C.patch, C.sigma, C.mips, C.fades], 4 * c);
+            /* eye modulo the patch, in double, as texture coordinates */
+            const m = (v) => { const r = v % C.patch; return (r < 0 ? r + C.patch : r) / C.patch; };
+            ce[2 * c] = m(eye[0]);
+            ce[2 * c + 1] = m(eye[2]);
+            tab.set(e.mip, 4 * MIP_ENTRIES * c);
+        }
+        gl.uniform1i(u.u_nCas, nc);
+        gl.uniform4fv(u.u_cas, cas);
+        gl.uniform2fv(u.u_casEye, ce);
+        gl.uniform4fv(u.u_mipTab, tab);
+        gl.uniform3f(u.u_blk, b.spacingPerM, b.minSpacingM, Math.max(Math.abs(b.camera[1]), 1));
+        gl.uniform2f(u.u_blkCam, b.camera[0] - eye[0], b.camera[2] - eye[2]);
+        gl.uniform3fv(u.u_tailMss, b.tailMss);
+        gl.uniform1f(u.u_roughScale, this.roughScale);
+        gl.uniform1f(u.u_foamScale, this.foamScale);
+        for (let c = 0; c < MAX_CASCADES; c++) {
+            gl.activeTexture(gl.TEXTURE4 + c);
+            gl.bindTexture(gl.TEXTURE_2D, c < nc ? this.cas[c].disp : this.dummyTex);
+            if (u[`u_cd${c}`]) gl.uniform1i(u[`u_cd${c}`], 4 + c);
+            gl.activeTexture(gl.TEXTURE8 + c);
+            gl.bindTexture(gl.TEXTURE_2D, c < nc ? this.cas[c].slope : this.dummyTex);
+            if (u[`u_cs${c}`]) gl.uniform1i(u[`u_cs${c}`], 8 + c);
+        }
     }
 
     allocTextures(w, h, l) {
@@ -403,9 +779,31 @@ export class Renderer {
         this.texW = w; this.texH = h; this.texL = l;
     }
 
-    /* MESH_TOPOLOGY: indices, morph and level arrays. */
+    /* MESH_TOPOLOGY: indices, morph and level arrays; with FLAT (layout 1)
+     * the flat positions and level zones, displaced in the vertex shader. */
     setTopology(t) {
         const gl = this.gl;
+        if (t.flags & 1) {
+            gl.bindVertexArray(this.vao1);
+            gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.idx1Buf);
+            gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, t.indices, gl.STATIC_DRAW);
+            gl.bindBuffer(gl.ARRAY_BUFFER, this.flatBuf);
+            gl.bufferData(gl.ARRAY_BUFFER, t.flat, gl.STATIC_DRAW);
+            gl.enableVertexAttribArray(0);
+            gl.vertexAttribPointer(0, 2, gl.FLOAT, false, 0, 0);
+            gl.bindBuffer(gl.ARRAY_BUFFER, this.level1Buf);
+            gl.bufferData(gl.ARRAY_BUFFER, t.level, gl.STATIC_DRAW);
+            gl.enableVertexAttribArray(1);
+            gl.vertexAttribPointer(1, 1, gl.UNSIGNED_BYTE, false, 0, 0);
+            gl.bindVertexArray(null);
+            const zones = new Float32Array(4 * MAX_LEVELS);
+            zones.set(t.zones.subarray(0, 4 * Math.min(t.lodLevels, MAX_LEVELS)));
+            let extent = 0;
+            for (let i = 0; i < t.flat.length; i++) extent = Math.max(extent, Math.abs(t.flat[i]));
+            this.topology1 = { meshId: t.meshId, vertexCount: t.vertexCount, lodLevels: Math.min(t.lodLevels, MAX_LEVELS), zones, extent };
+            this.indexCount1 = t.indices.length;
+            return;
+        }
         gl.bindVertexArray(this.vao);
         gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.idxBuf);
         gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, t.indices, gl.STATIC_DRAW);
@@ -498,8 +896,9 @@ export class Renderer {
         this.skyScale = half ? 1 : 2;
         this.skyCube = gl.createTexture();
         gl.bindTexture(gl.TEXTURE_CUBE_MAP, this.skyCube);
-        gl.texStorage2D(gl.TEXTURE_CUBE_MAP, 1, half ? gl.RGBA16F : gl.RGBA8, SKY_CUBE, SKY_CUBE);
-        gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_MIN_FILTER, gl.LINEAR);
+        /* mips: rough water reflects a blurred sky (textureLod by slope spread) */
+        gl.texStorage2D(gl.TEXTURE_CUBE_MAP, Math.log2(SKY_CUBE) + 1, half ? gl.RGBA16F : gl.RGBA8, SKY_CUBE, SKY_CUBE);
+        gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_MIN_FILTER, gl.LINEAR_MIPMAP_LINEAR);
         gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
         gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
         gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
@@ -563,6 +962,8 @@ export class Renderer {
             gl.drawArrays(gl.TRIANGLES, 0, 3);
         }
         gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+        gl.bindTexture(gl.TEXTURE_CUBE_MAP, this.skyCube);
+        gl.generateMipmap(gl.TEXTURE_CUBE_MAP);
         this.skyFace = (this.skyFace + 1) % 6;
         this.skyStamp = now;
         this.skyReady = true;
@@ -589,18 +990,69 @@ export class Renderer {
         const eye = cam.pos;
         const common = (u) => this.common(u, eye, time);
 
-        /* sky and far sea */
-        gl.disable(gl.DEPTH_TEST);
-        gl.depthMask(false);
-        gl.useProgram(this.sky.p);
-        common(this.sky.u);
-        gl.uniform3fv(this.sky.u.u_right, right);
-        gl.uniform3fv(this.sky.u.u_up, up);
-        gl.uniform3fv(this.sky.u.u_fwd, fwd);
-        gl.uniform2f(this.sky.u.u_tanHalf, tanH * aspect, tanH);
-        gl.bindVertexArray(this.emptyVao);
-        gl.drawArrays(gl.TRIANGLES, 0, 3);
+        const cascaded = this.layout === 1 && !!this.block && this.cas.length > 0;
+        const skyPass = (sky, depthTested) => {
+            if (depthTested) {
+                /* only where the mesh left the far plane: the far sea and
+                 * the sky are not shaded twice */
+                gl.enable(gl.DEPTH_TEST);
+                gl.depthFunc(gl.LEQUAL);
+            } else {
+                gl.disable(gl.DEPTH_TEST);
+            }
+            gl.depthMask(false);
+            gl.useProgram(sky.p);
+            common(sky.u);
+            if (sky === this.sky1) {
+                this.cascadeUniforms(sky.u, eye);
+                gl.uniform1f(sky.u.u_pixAngle, 2 * tanH / H);
+            }
+            gl.uniform3fv(sky.u.u_right, right);
+            gl.uniform3fv(sky.u.u_up, up);
+            gl.uniform3fv(sky.u.u_fwd, fwd);
+            gl.uniform2f(sky.u.u_tanHalf, tanH * aspect, tanH);
+            gl.bindVertexArray(this.emptyVao);
+            gl.drawArrays(gl.TRIANGLES, 0, 3);
+        };
 
+        if (this.layout === 1) {
+            /* layout 1: the mesh first, then sky and far sea (shaded from
+             * the cascades like the mesh) where the mesh did not draw */
+            gl.depthMask(true);
+            gl.clearDepth(1);
+            gl.clear(gl.DEPTH_BUFFER_BIT);
+            const t1 = this.topology1, pl = this.placement;
+            const ok = cascaded && t1 && pl && pl.meshId === t1.meshId && this.drawSea !== false;
+            if (ok) {
+                const near = Math.max(0.05, Math.min(1.0, Math.abs(eye[1]) * 0.05));
+                const vp = mul4(perspective(fov, aspect, near, 400000), new Float32Array([
+                    right[0], up[0], -fwd[0], 0, right[1], up[1], -fwd[1], 0, right[2], up[2], -fwd[2], 0, 0, 0, 0, 1,
+                ]));
+                gl.enable(gl.DEPTH_TEST);
+                gl.depthFunc(gl.LEQUAL);
+                gl.disable(gl.CULL_FACE);
+                const s1 = this.sea1;
+                gl.useProgram(s1.p);
+                common(s1.u);
+                this.cascadeUniforms(s1.u, eye);
+                gl.uniformMatrix4fv(s1.u.u_viewProj, false, vp);
+                /* placement origin relative to the eye, in double */
+                gl.uniform3f(s1.u.u_meshOff, pl.origin[0] - eye[0], pl.origin[1] - eye[1], pl.origin[2] - eye[2]);
+                gl.uniform4fv(s1.u.u_zone, t1.zones);
+                gl.uniform1i(s1.u.u_lodLevels, t1.lodLevels);
+                gl.uniform1f(s1.u.u_pixAngle, 2 * tanH / H);
+                gl.uniform1f(s1.u.u_debug, this.debug ? 1 : 0);
+                gl.uniform1f(s1.u.u_hs, this.hs);
+                gl.bindVertexArray(this.vao1);
+                gl.drawElements(gl.TRIANGLES, this.indexCount1, gl.UNSIGNED_INT, 0);
+                gl.bindVertexArray(null);
+            }
+            skyPass(cascaded ? this.sky1 : this.sky, true);
+            return !!ok;
+        }
+
+        /* sky and far sea */
+        skyPass(this.sky, false);
         if (!this.mesh || !this.indexCount || this.drawSea === false) return false;
 
         /* the sea mesh */

@@ -12,7 +12,15 @@
  * sending CAMERA seq s to receiving the first FRAME that answers s.
  *
  * Tiles are decoded by a pool of decoder workers (decoder.js), whole
- * levels at a time, so decoding uses the cores a machine has.
+ * levels at a time (layout 0) or shares of a frame's cascade tiles
+ * balanced by samples (layout 1), so decoding uses the cores a machine has.
+ *
+ * Layout 1 (the default, PROTOCOL.md "Layouts"): a FRAME's tiles are mip
+ * tiles of periodic cascades, the same for every viewer; each becomes a
+ * texel block {cascade, mip, x, y, w, h, disp, slope} that the renderer
+ * writes into its per-cascade mipmapped textures, and the FRAME's cascade
+ * block (mip tables, camera, spacing_per_m, min_spacing) and mesh
+ * placement go with them.
  *
  * Page -> worker: {cmd:'connect', url, sub}, {cmd:'camera', cam},
  *                 {cmd:'subscribe', sub} (change), {cmd:'query', id, points},
@@ -22,10 +30,10 @@
  *                 'frame'|'error'|'bye'|'sea'|'result'|'capture', ...}.
  */
 import {
-    CODEC, CODEC_NAMES, CUTOFF, FX, MESH, SUBPROTOCOL, T, BYE_REASONS, RESULT_NAMES,
+    CODEC, CODEC_NAMES, CUTOFF, FX, LAYOUT, MESH, SUBPROTOCOL, T, BYE_REASONS, RESULT_NAMES,
     decode, decodeHeader, encodeCamera, encodeSubscribe, encodeQuery, encodeBye, ProtoError, tilePlanes,
 } from './protocol.js';
-import { assembleLevel, groupByLevel } from './assemble.js';
+import { assembleLevel, assembleCascadeTile, groupByLevel } from './assemble.js';
 
 let ws = null;
 let seq = 0;
@@ -69,6 +77,7 @@ function chooseSubscription(h, want) {
     let policy = want.cutoffPolicy ?? CUTOFF.ANTIALIAS;
     if (!(h.cutoffPolicies & (1 << policy))) policy = [CUTOFF.ANTIALIAS, CUTOFF.SEED, CUTOFF.NONE].find((p) => h.cutoffPolicies & (1 << p)) ?? 0;
     const meshKind = (h.meshKinds & (1 << MESH.CONCENTRIC)) ? MESH.CONCENTRIC : MESH.NONE;
+    const layout = want.layout === LAYOUT.WORLD ? LAYOUT.WORLD : LAYOUT.CASCADE;
     const effects = (want.effects ?? FX.ALL) & (h.effects || FX.ALL);
     return {
         effects: effects || FX.HEIGHT,
@@ -83,6 +92,7 @@ function chooseSubscription(h, want) {
         accuracy: want.accuracy ?? 1e-3,
         baseSpacingM: want.baseSpacingM ?? 0,
         viewRangeM: want.viewRangeM ?? 0,
+        layout,
     };
 }
 
@@ -187,9 +197,11 @@ function onMessage(data) {
     case T.MESH_TOPOLOGY: {
         stats.topologies++;
         const t = msg.body;
-        post({ kind: 'topology', meshId: t.meshId, meshKind: t.meshKind, lodLevels: t.lodLevels,
-            vertexCount: t.vertexCount, indices: t.indices, morph: t.morph, level: t.level },
-        [t.indices.buffer, t.morph.buffer, t.level.buffer]);
+        const transfer = [t.indices.buffer, t.morph.buffer, t.level.buffer];
+        if (t.flat) transfer.push(t.flat.buffer, t.zones.buffer);
+        post({ kind: 'topology', meshId: t.meshId, meshKind: t.meshKind, lodLevels: t.lodLevels, flags: t.flags,
+            vertexCount: t.vertexCount, indices: t.indices, morph: t.morph, level: t.level, flat: t.flat, zones: t.zones },
+        transfer);
         break;
     }
     case T.MESH_VERTICES: {
@@ -282,10 +294,14 @@ function processFrame() {
     const f = msg.body;
     const meta = {
         simTime: msg.hdr.simTime, tick: f.tick, cutoffK: f.cutoffK, eError: f.eError, origin: f.origin,
-        cameraSeq: f.cameraSeq, tileCount: f.tileCount, bytes: data.byteLength,
+        cameraSeq: f.cameraSeq, tileCount: f.tileCount, bytes: data.byteLength, layout: f.layout,
         codecs: [...new Set(f.tiles.map((t) => CODEC_NAMES[t.codec]))].join('+'),
         mesh: f.mesh ? { meshId: f.mesh.meshId, origin: f.mesh.origin, positions: f.mesh.positions } : null,
     };
+    if (f.layout === LAYOUT.CASCADE) {
+        processCascadeFrame(f, meta, t0);
+        return;
+    }
     const groups = groupByLevel(f.tiles);
     const p = getPool();
     if (!p.length) {
@@ -308,7 +324,7 @@ function processFrame() {
         b.load += load;
     }
     const busy = buckets.map((b, i) => [b, i]).filter(([b]) => b.levels.length);
-    inflight = { id: ++jobId, meta, remaining: busy.length, levels: [], t0 };
+    inflight = { id: ++jobId, meta, remaining: busy.length, levels: [], blocks: [], t0 };
     if (!busy.length) {
         const job = inflight;
         inflight = null;
@@ -318,10 +334,47 @@ function processFrame() {
     for (const [b, i] of busy) p[i].postMessage({ id: inflight.id, levels: b.levels }, b.transfer);
 }
 
+/* Layout 1: every tile is independent (its own place in its own mip), so
+ * the pool gets shares of the tiles balanced by sample count. */
+function processCascadeFrame(f, meta, t0) {
+    meta.layout = LAYOUT.CASCADE;
+    meta.cascades = f.cascades;
+    meta.placement = f.placement;
+    meta.mesh = null;
+    const p = getPool();
+    if (!p.length) {
+        const blocks = [];
+        for (const t of f.tiles) {
+            const b = assembleCascadeTile(t, noteError);
+            if (b) blocks.push(b);
+        }
+        finishFrame({ meta, levels: [], blocks, t0 });
+        return;
+    }
+    const buckets = p.map(() => ({ tiles: [], load: 0, transfer: [] }));
+    for (const t of f.tiles) {
+        const b = buckets.reduce((m, x) => (x.load < m.load ? x : m), buckets[0]);
+        const c = { ...t, payload: t.payload.slice() };
+        b.tiles.push(c);
+        b.transfer.push(c.payload.buffer);
+        b.load += t.width * t.height * tilePlanes(t.channels);
+    }
+    const busy = buckets.map((b, i) => [b, i]).filter(([b]) => b.tiles.length);
+    inflight = { id: ++jobId, meta, remaining: busy.length, levels: [], blocks: [], t0 };
+    if (!busy.length) {
+        const job = inflight;
+        inflight = null;
+        finishFrame(job);
+        return;
+    }
+    for (const [b, i] of busy) p[i].postMessage({ id: inflight.id, tiles: b.tiles }, b.transfer);
+}
+
 function onPoolResult(ev) {
     const r = ev.data;
     if (!inflight || r.id !== inflight.id) return;
     inflight.levels.push(...r.levels);
+    if (r.blocks) inflight.blocks.push(...r.blocks);
     for (const e of r.errors) noteError(new ProtoError(13, e), 'decode');
     if (--inflight.remaining > 0) return;
     const job = inflight;
@@ -333,16 +386,18 @@ function onPoolResult(ev) {
 
 function finishFrame(job) {
     const { meta, levels, t0 } = job;
+    const blocks = job.blocks || [];
     const now = performance.now();
-    stats.tiles += levels.reduce((n, L) => n + L.tiles, 0);
+    stats.tiles += levels.reduce((n, L) => n + L.tiles, 0) + blocks.length;
     stats.decodeMs = now - t0;
     stats.framesDecoded++;
     const latencyMs = lastLatency;
     lastLatency = null;
     const transfer = [];
     for (const L of levels) transfer.push(L.disp.buffer, L.nrm.buffer);
+    for (const b of blocks) transfer.push(b.disp.buffer, b.slope.buffer);
     const out = {
-        kind: 'frame', ...meta, mesh: meta.mesh, levels, latencyMs, bytesPerSec: bytesPerSecond(now),
+        kind: 'frame', ...meta, mesh: meta.mesh, levels, blocks, latencyMs, bytesPerSec: bytesPerSecond(now),
         decodeWorkers: pool ? pool.length : 0, stats: { ...stats },
     };
     if (meta.mesh) transfer.push(meta.mesh.positions.buffer);

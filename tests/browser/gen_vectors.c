@@ -8,8 +8,9 @@
  *
  *   gen_vectors gen DIR     writes messages encoded by proto_encode (HELLO,
  *                           FRAME with qz/f16/f32 tiles and a mesh,
- *                           MESH_TOPOLOGY, QUERY_RESULT, SEA_STATE, ERROR,
- *                           BYE) as DIR/NAME.bin, and DIR/expected.json with
+ *                           a layout-1 FRAME with cascade tiles, a cascade
+ *                           block and a mesh placement, MESH_TOPOLOGY plain
+ *                           and FLAT, QUERY_RESULT, SEA_STATE, ERROR, BYE) as DIR/NAME.bin, and DIR/expected.json with
  *                           what the C decoders make of them (tile samples
  *                           as decoded by proto_tile_decode).
  *   gen_vectors decode FILE...   decodes each file with proto_decode and
@@ -220,6 +221,128 @@ static int gen(const char *dir)
     }
     fprintf(o, "]},\n");
 
+    /* FRAME, layout 1 (cascade tiles): two cascades' mip tiles (tags 0
+     * and 1, qz and f16), a full cascade block and a mesh placement */
+    {
+        proto_tile ct[NT];
+        for (int t = 0; t < NT; t++) {
+            ct[t] = tiles[t];
+            ct[t].cascade = (uint8_t)(t == 1);          /* tags 0, 1, 0 */
+            ct[t].level = (uint8_t)(t == 2 ? 3 : t);    /* mips */
+            ct[t].ix = t;
+            ct[t].iz = 2 - t;
+            ct[t].spacing = (t == 1 ? 0.90625 : 3.90625) * (1 << ct[t].level);
+            ct[t].origin_x = ct[t].ix * ws[t] * ct[t].spacing;   /* cascade-local */
+            ct[t].origin_z = ct[t].iz * hs[t] * ct[t].spacing;
+        }
+        proto_msg_init(&m, PROTO_FRAME);
+        m.hdr.seq = 4;
+        m.hdr.sim_time = 98765.4375;
+        f = &m.u.frame;
+        f->cutoff_k = INFINITY;
+        f->e_error = 0;
+        f->origin[0] = -7654321.25;
+        f->origin[2] = 1234.5;
+        f->camera_seq = 43;
+        f->tick = 9002;
+        f->tile_count = NT;
+        f->tiles = ct;
+        f->layout = PROTO_LAYOUT_CASCADE;
+        f->has_mesh = 1;
+        f->placement.mesh_id = 6;
+        f->placement.origin[0] = -7654320;
+        f->placement.origin[1] = 0;
+        f->placement.origin[2] = 1232;
+        proto_cascade_block *cb = &f->cascades;
+        cb->cascade_count = 2;
+        cb->order = 8;
+        cb->spacing_per_m = 0.00390625f;
+        cb->camera[0] = -7654321.25;
+        cb->camera[1] = 300.5;
+        cb->camera[2] = 1234.5;
+        cb->min_spacing_m = 0.125f;
+        cb->e_total = 0.015625f;
+        cb->tail_mss[0] = 0.0123f;
+        cb->tail_mss[1] = 0.0071f;
+        cb->tail_mss[2] = -0.0007f;
+        const double patch[2] = {1000, 232.5};
+        const int mips[2] = {6, 4};
+        for (int c = 0; c < 2; c++) {
+            proto_cascade_entry *e = &cb->cascade[c];
+            e->patch_m = patch[c];
+            e->n = 256;
+            e->mips = (uint8_t)mips[c];
+            e->fades = (uint8_t)c;
+            for (int k = 0; k <= mips[c]; k++) {
+                e->mip[k].kc = k == 0 ? INFINITY : k == mips[c] ? 0.0f : (float)(3.14159265358979323846 * 256 / patch[c] / (1 << k));
+                e->mip[k].mss_x = 0.001f * (float)(k * k) * (c + 1);
+                e->mip[k].mss_z = 0.0006f * (float)(k * k) * (c + 1);
+                e->mip[k].mss_xz = k ? -0.0001f * (float)k : 0.0f;
+            }
+        }
+        if (write_msg(dir, "frame_cascade", &m))
+            return 1;
+        fprintf(o, "\"frame_cascade\": {\"layout\":1,\"cameraSeq\":43,\"meshId\":6,\"placement\":[-7654320,0,1232],"
+                   "\"cascadeCount\":2,\"order\":8,\"spacingPerM\":%.9g,\"camera\":[-7654321.25,300.5,1234.5],"
+                   "\"minSpacingM\":%.9g,\"eTotal\":%.9g,\"tailMss\":[%.9g,%.9g,%.9g],\"cascades\":[",
+                (double)cb->spacing_per_m, (double)cb->min_spacing_m, (double)cb->e_total, (double)cb->tail_mss[0],
+                (double)cb->tail_mss[1], (double)cb->tail_mss[2]);
+        for (int c = 0; c < 2; c++) {
+            const proto_cascade_entry *e = &cb->cascade[c];
+            fprintf(o, "%s{\"patchM\":%.17g,\"n\":%u,\"mips\":%u,\"fades\":%u,\"mip\":[", c ? "," : "", e->patch_m, e->n,
+                    e->mips, e->fades);
+            for (int k = 0; k < PROTO_MIP_ENTRIES; k++) {
+                fprintf(o, "%s", k ? "," : "");
+                if (isinf(e->mip[k].kc))
+                    fprintf(o, "\"inf\"");
+                else
+                    fprintf(o, "%.9g", (double)e->mip[k].kc);
+                fprintf(o, ",%.9g,%.9g,%.9g", (double)e->mip[k].mss_x, (double)e->mip[k].mss_z, (double)e->mip[k].mss_xz);
+            }
+            fprintf(o, "]}");
+        }
+        fprintf(o, "],\"tiles\":[");
+        for (int t = 0; t < NT; t++) {
+            size_t n = (size_t)ws[t] * hs[t] * proto_tile_planes(chans[t]);
+            fprintf(o, "%s{\"cascade\":%u,\"level\":%u,\"ix\":%d,\"iz\":%d,\"originX\":%.17g,\"originZ\":%.17g,"
+                       "\"spacing\":%.17g,\"decoded\":",
+                    t ? "," : "", ct[t].cascade, ct[t].level, ct[t].ix, ct[t].iz, ct[t].origin_x, ct[t].origin_z,
+                    ct[t].spacing);
+            print_floats(o, dec[t], n);
+            fputc('}', o);
+        }
+        fprintf(o, "]},\n");
+    }
+
+    /* MESH_TOPOLOGY, FLAT (layout 1): flat positions and zones */
+    {
+        uint32_t fidx[6] = {0, 2, 1, 1, 2, 3};
+        float fmorph[4] = {0, 0, 0, 0};
+        uint8_t flev[3 + 1] = {0, 0, 1, 2};
+        float flat[8] = {-1.5f, 0, 1.5f, 0, 0, 3, 12, -12};
+        float zones[12] = {1.5f, 40, 6, 0, 3, 80, 12, 0, 6, 160, 0, 0};
+        proto_msg_init(&m, PROTO_MESH_TOPOLOGY);
+        m.hdr.seq = 5;
+        m.u.topology.mesh_id = 6;
+        m.u.topology.mesh_kind = PROTO_MESH_CONCENTRIC;
+        m.u.topology.lod_levels = 3;
+        m.u.topology.vertex_count = 4;
+        m.u.topology.index_count = 6;
+        m.u.topology.indices = fidx;
+        m.u.topology.morph = fmorph;
+        m.u.topology.level = flev;
+        m.u.topology.flags = PROTO_TOPO_FLAT;
+        m.u.topology.flat = flat;
+        m.u.topology.zones = zones;
+        if (write_msg(dir, "topology_flat", &m))
+            return 1;
+        fprintf(o, "\"topology_flat\": {\"meshId\":6,\"flags\":1,\"lodLevels\":3,\"level\":[0,0,1,2],\"flat\":");
+        print_floats(o, flat, 8);
+        fprintf(o, ",\"zones\":");
+        print_floats(o, zones, 12);
+        fprintf(o, "},\n");
+    }
+
     /* MESH_TOPOLOGY */
     uint32_t idx[6] = {0, 2, 1, 1, 2, 3};
     float morph[4] = {0, 0.25f, 0.5f, 1};
@@ -325,10 +448,10 @@ static int decode_files(int n, char **files)
                 proto_subscribe *s = &m.u.subscribe;
                 printf(",\"effects\":%u,\"meshKind\":%u,\"codec\":%u,\"cutoffPolicy\":%u,\"mode\":%u,\"layers\":%u,"
                        "\"lodLevels\":%u,\"tileSize\":%u,\"frameRateHz\":%.9g,\"accuracy\":%.9g,\"baseSpacingM\":%.9g,"
-                       "\"viewRangeM\":%.9g",
+                       "\"viewRangeM\":%.9g,\"layout\":%u",
                        s->effects, s->mesh_kind, s->codec, s->cutoff_policy, s->mode, s->layers, s->lod_levels,
                        s->tile_size, (double)s->frame_rate_hz, (double)s->accuracy, (double)s->base_spacing_m,
-                       (double)s->view_range_m);
+                       (double)s->view_range_m, s->layout);
                 break;
             }
             case PROTO_CAMERA: {

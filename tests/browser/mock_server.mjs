@@ -3,7 +3,9 @@
  * web viewer's rendering without the daemon: serves clients/web/ over HTTP
  * and speaks enough ocean.v1 over a hand-rolled WebSocket (RFC 6455, no
  * dependencies) to drive the page: HELLO, MESH_TOPOLOGY once, then FRAMEs
- * with f32/f16 tiles of a few Gerstner waves and a polar concentric mesh.
+ * with f32/f16 tiles of a few Gerstner waves and a polar concentric mesh
+ * (layout 0), or periodic cascade mip tiles, a cascade block and a flat
+ * mesh placed per frame (layout 1, what the viewer asks by default).
  *
  * Not used by `make test` (the browser test drives the real daemon).
  *   node tests/browser/mock_server.mjs [PORT]
@@ -158,6 +160,138 @@ function frame(cam, t, camSeq, tick, sub) {
     return Buffer.concat([head, ...recs]);
 }
 
+/* ---- layout 1 (cascade tiles, PROTOCOL.md "Layouts") --------------------
+ * Three periodic cascades of a few waves each (wave vectors on each
+ * patch's lattice, so every cascade repeats exactly on its patch), cut into
+ * mips that leave out the waves a mip's spacing cannot hold, with the slope
+ * moments of what each mip leaves out in the mip table; a flat square-ring
+ * mesh with level zones; every tile of every mip in each FRAME (the mock
+ * has small grids).  Enough to develop the page's layout-1 path. */
+const CAS = [{ P: 1000, n: 64 }, { P: 233, n: 64 }, { P: 54, n: 64 }].map((c, i) => {
+    let seed = 11 + i;
+    const r = () => { seed = (seed * 16807) % 2147483647; return seed / 2147483647; };
+    const sigma = c.P / c.n, waves = [];
+    for (let k = 0; k < 14; k++) {
+        const lambda = Math.exp(Math.log(c.P / 2) + (Math.log(3 * sigma) - Math.log(c.P / 2)) * (k + r() * 0.5) / 14);
+        const dir = 20 * Math.PI / 180 + (r() - 0.5) * 1.4;
+        const kx = Math.round(c.P / lambda * Math.cos(dir)) * 2 * Math.PI / c.P, kz = Math.round(c.P / lambda * Math.sin(dir)) * 2 * Math.PI / c.P;
+        const kk = Math.hypot(kx, kz);
+        if (kk === 0) continue;
+        waves.push([kx, kz, 0.08 / kk * (0.5 + r()) * (i === 0 ? 1 : 0.7), r() * 6.283]);
+    }
+    return { ...c, sigma, waves, mips: Math.log2(c.n) - 1, fades: i === 0 ? 0 : 1 };
+});
+function casKc(c, m) { return m === 0 ? Infinity : Math.PI / (c.sigma * 2 ** m) * 0.5; }
+function casMss(c, kc) {
+    let sx = 0, sz = 0, sxz = 0;
+    for (const [kx, kz, a] of c.waves) if (Math.hypot(kx, kz) >= kc) { sx += 0.5 * a * a * kx * kx; sz += 0.5 * a * a * kz * kz; sxz += 0.5 * a * a * kx * kz; }
+    return [sx, sz, sxz];
+}
+function cascadeTile(ci, m, ix, iz, T, t, codec) {
+    const c = CAS[ci], sp = c.sigma * 2 ** m, kc = casKc(c, m);
+    const chans = 1 | 2 | 4 | 8 | 16, n = T * T, data = new Float32Array(6 * n);
+    const ws = c.waves.filter(([kx, kz]) => Math.hypot(kx, kz) < kc);
+    for (let i = 0; i < T; i++)
+        for (let j = 0; j < T; j++) {
+            const x = (ix * T + j) * sp, z = (iz * T + i) * sp;
+            let h = 0, dx = 0, dz = 0, sx = 0, sz = 0, jac = 0;
+            for (const [kx, kz, a, ph] of ws) {
+                const k = Math.hypot(kx, kz), th = kx * x + kz * z - Math.sqrt(9.81 * k) * t + ph;
+                const cs = Math.cos(th), sn = Math.sin(th);
+                h += a * cs; dx -= kx / k * a * sn; dz -= kz / k * a * sn; sx -= a * kx * sn; sz -= a * kz * sn; jac += a * k * cs;
+            }
+            const k = i * T + j, [u, v] = octEncode(-sx, 1, -sz);
+            data[k] = h; data[n + k] = dx; data[2 * n + k] = dz; data[3 * n + k] = u; data[4 * n + k] = v;
+            data[5 * n + k] = Math.max(0, Math.min(1, (jac - 0.35) * 3));
+        }
+    let payload;
+    if (codec === 0) payload = Buffer.from(data.buffer);
+    else {
+        payload = Buffer.alloc(2 * data.length);
+        for (let i = 0; i < data.length; i++) payload.writeUInt16LE(f16(data[i]), 2 * i);
+    }
+    const b = Buffer.alloc(48 + payload.length);
+    b[0] = m; b[1] = codec; b.writeUInt16LE(chans, 2); b.writeUInt16LE(T, 4); b.writeUInt16LE(T, 6);
+    b.writeInt32LE(ix, 8); b.writeInt32LE(iz, 12); b.writeDoubleLE(ix * T * sp, 16); b.writeDoubleLE(iz * T * sp, 24);
+    b.writeDoubleLE(sp, 32); b.writeFloatLE(0, 40); b.writeUInt32LE(payload.length, 44);
+    payload.copy(b, 48);
+    return b;
+}
+/* flat mesh: level L is a square ring of cells g_L = 2^L m, half-width K g_L */
+const FK = 32, FL = 8;
+function flatMesh() {
+    const pos = [], lev = [], idx = [];
+    for (let L = 0; L < FL; L++) {
+        const g = 2 ** L, inner = L ? FK / 2 : 0, map = new Map();
+        const vid = (i, j) => {
+            const key = `${i},${j}`;
+            if (!map.has(key)) { map.set(key, pos.length / 2); pos.push(j * g, i * g); lev.push(L); }
+            return map.get(key);
+        };
+        for (let i = -FK; i < FK; i++)
+            for (let j = -FK; j < FK; j++) {
+                if (inner && i >= -inner && i < inner && j >= -inner && j < inner) continue;
+                const a = vid(i, j), b = vid(i, j + 1), c = vid(i + 1, j), d = vid(i + 1, j + 1);
+                idx.push(a, c, b, b, c, d);
+            }
+    }
+    const zones = [];
+    for (let L = 0; L < FL; L++) { const H = FK * 2 ** L; zones.push(1 * 2 ** L, 0.75 * H - 4, 0.2 * H, 0); }
+    return { flat: new Float32Array(pos), level: new Uint8Array(lev), idx: new Uint32Array(idx), zones: new Float32Array(zones) };
+}
+const flat = flatMesh();
+function topologyFlat() {
+    const vc = flat.level.length, ic = flat.idx.length;
+    const head = 16 + 4 * ic + 5 * vc, pad = (4 - ((32 + head) & 3)) & 3;
+    const b = Buffer.alloc(head + pad + 8 * vc + 16 * FL);
+    b.writeUInt32LE(2, 0); b[4] = 0; b[5] = FL; b.writeUInt16LE(1, 6); b.writeUInt32LE(vc, 8); b.writeUInt32LE(ic, 12);
+    Buffer.from(flat.idx.buffer).copy(b, 16);
+    Buffer.from(flat.level.buffer).copy(b, 16 + 4 * ic + 4 * vc);
+    Buffer.from(flat.flat.buffer).copy(b, head + pad);
+    Buffer.from(flat.zones.buffer).copy(b, head + pad + 8 * vc);
+    return b;
+}
+function record1(body, tag) {
+    const r = record(body);
+    r.writeUInt32LE(tag, 4);
+    return r;
+}
+function frameCascade(cam, t, camSeq, tick, sub) {
+    const codec = sub.codec === 0 ? 0 : 1, recs = [];
+    const nc = Math.min(sub.layers || 3, CAS.length);
+    for (let ci = 0; ci < nc; ci++) {
+        const c = CAS[ci];
+        for (let m = 0; m < c.mips; m++) {
+            const side = c.n >> m, T = Math.min(sub.tileSize, side);
+            for (let iz = 0; iz < side / T; iz++) for (let ix = 0; ix < side / T; ix++) recs.push(record1(cascadeTile(ci, m, ix, iz, T, t, codec), ci));
+        }
+    }
+    const g2 = 4, ox = Math.round(cam.x / g2) * g2, oz = Math.round(cam.z / g2) * g2;
+    const pl = Buffer.alloc(32);
+    pl.writeUInt32LE(2, 0); pl.writeDoubleLE(ox, 8); pl.writeDoubleLE(0, 16); pl.writeDoubleLE(oz, 24);
+    recs.push(record1(pl, 0));
+    const blk = Buffer.alloc(56 + 224 * nc);
+    blk[0] = nc; blk[1] = 8;
+    blk.writeFloatLE(cam.q, 4);
+    blk.writeDoubleLE(cam.x, 8); blk.writeDoubleLE(cam.y, 16); blk.writeDoubleLE(cam.z, 24);
+    blk.writeFloatLE(0, 32); blk.writeFloatLE(0.01, 36);
+    blk.writeFloatLE(0.008, 40); blk.writeFloatLE(0.006, 44); blk.writeFloatLE(0.001, 48);
+    for (let ci = 0; ci < nc; ci++) {
+        const c = CAS[ci], e = 56 + 224 * ci;
+        blk.writeDoubleLE(c.P, e); blk.writeUInt16LE(c.n, e + 8); blk[e + 10] = c.mips; blk[e + 11] = c.fades;
+        for (let m = 0; m <= c.mips; m++) {
+            const kc = m === c.mips ? 0 : casKc(c, m), mss = casMss(c, m === c.mips ? 0 : kc);
+            blk.writeFloatLE(kc, e + 16 + 16 * m);
+            mss.forEach((v, k) => blk.writeFloatLE(v, e + 20 + 16 * m + 4 * k));
+        }
+    }
+    const head = Buffer.alloc(56);
+    head.writeDoubleLE(Infinity, 0); head.writeDoubleLE(0, 8);
+    head.writeDoubleLE(ox, 16); head.writeDoubleLE(0, 24); head.writeDoubleLE(oz, 32);
+    head.writeUInt32LE(camSeq, 40); head.writeUInt32LE(tick, 44); head.writeUInt16LE(recs.length - 1, 48); head[50] = 1; head[51] = 1;
+    return Buffer.concat([head, blk, ...recs]);
+}
+
 function wsSend(sock, data) {
     const len = data.length;
     let h;
@@ -182,7 +316,7 @@ server.on('upgrade', (req, sock) => {
     sock.write(`HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Accept: ${accept}\r\nSec-WebSocket-Protocol: ocean.v1\r\n\r\n`);
     const id = nextId++;
     const t0 = Date.now();
-    let seq = 0, tick = 0, sub = null, cam = { x: 0, z: 0 }, camSeq = 0xffffffff, timer = null, buf = Buffer.alloc(0);
+    let seq = 0, tick = 0, sub = null, cam = { x: 0, y: 25, z: 0, q: 0.002 }, camSeq = 0xffffffff, timer = null, buf = Buffer.alloc(0);
     const simT = () => (Date.now() - t0) / 1000 + 100;
     wsSend(sock, msg(1, hello(id), ++seq, simT()));
     sock.on('data', (d) => {
@@ -200,14 +334,17 @@ server.on('upgrade', (req, sock) => {
             if (op !== 2 || pl.length < 32) continue;
             const type = pl.readUInt16LE(6);
             if (type === 2) {
-                sub = { codec: pl[32 + 2], lodLevels: pl[32 + 6], tileSize: pl.readUInt16LE(32 + 8), rate: pl.readFloatLE(32 + 12) };
-                wsSend(sock, msg(6, topology(), ++seq, simT()));
-                if (!timer) timer = setInterval(() => {
+                sub = { codec: pl[32 + 2], layers: pl[32 + 5], lodLevels: pl[32 + 6], layout: pl[32 + 7], tileSize: pl.readUInt16LE(32 + 8), rate: pl.readFloatLE(32 + 12) };
+                wsSend(sock, msg(6, sub.layout === 1 ? topologyFlat() : topology(), ++seq, simT()));
+                if (timer) clearInterval(timer);
+                timer = setInterval(() => {
                     const t = simT();
-                    wsSend(sock, msg(4, frame(cam, t, camSeq, ++tick, sub), ++seq, t));
+                    wsSend(sock, msg(4, sub.layout === 1 ? frameCascade(cam, t, camSeq, ++tick, sub) : frame(cam, t, camSeq, ++tick, sub), ++seq, t));
                 }, 1000 / Math.min(sub.rate, 15));
             } else if (type === 3) {
-                cam = { x: pl.readDoubleLE(32), z: pl.readDoubleLE(48) };
+                /* q: one sample per pixel at the viewport's angular pixel size */
+                const fov = pl.readFloatLE(32 + 48), vh = pl.readUInt16LE(32 + 54);
+                cam = { x: pl.readDoubleLE(32), y: pl.readDoubleLE(40), z: pl.readDoubleLE(48), q: 2 * Math.tan(fov * Math.PI / 360) / Math.max(1, vh) };
                 camSeq = pl.readUInt32LE(16);
             }
         }

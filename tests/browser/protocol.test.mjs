@@ -27,6 +27,7 @@ import { join } from 'node:path';
 
 import {
     decode, encodeSubscribe, encodeCamera, encodeQuery, encodeBye, ProtoError, R, T, CODEC, FX, tilePlanes,
+    LAYOUT, MIP_ENTRIES, TOPO_FLAT,
 } from '../../clients/web/protocol.js';
 import { decodeTile, octDecode, f32FromF16 } from '../../clients/web/codec.js';
 
@@ -116,6 +117,56 @@ test('FRAME from C: header, mesh and tiles decode; tile samples equal the C deco
     assert.ok(preds.has(2), `qz predictors used: ${[...preds]}`);
 });
 
+test('layout-1 FRAME from C: cascade block, mip tables, tags, placement; tiles bit for bit', () => {
+    const m = decode(vec('frame_cascade'));
+    const e = expected.frame_cascade;
+    const f = m.body;
+    assert.equal(f.layout, LAYOUT.CASCADE);
+    assert.equal(f.cameraSeq, e.cameraSeq);
+    assert.equal(f.mesh, null);
+    assert.equal(f.placement.meshId, e.meshId);
+    assert.deepEqual(f.placement.origin, e.placement);
+    const b = f.cascades;
+    assert.equal(b.cascadeCount, e.cascadeCount);
+    assert.equal(b.order, e.order);
+    assert.equal(b.spacingPerM, Math.fround(e.spacingPerM));
+    assert.deepEqual(b.camera, e.camera);
+    assert.equal(b.minSpacingM, Math.fround(e.minSpacingM));
+    assert.equal(b.eTotal, Math.fround(e.eTotal));
+    assert.deepEqual(b.tailMss, e.tailMss.map(Math.fround));
+    assert.equal(b.cascade.length, e.cascades.length);
+    b.cascade.forEach((c, i) => {
+        const x = e.cascades[i];
+        for (const k of ['patchM', 'n', 'mips', 'fades']) assert.equal(c[k], x[k], `cascade ${i} ${k}`);
+        assert.equal(c.mip.length, 4 * MIP_ENTRIES);
+        for (let k = 0; k < 4 * MIP_ENTRIES; k++)
+            assert.equal(c.mip[k], x.mip[k] === 'inf' ? Infinity : Math.fround(x.mip[k]), `cascade ${i} mip word ${k}`);
+    });
+    assert.equal(f.tiles.length, e.tiles.length);
+    f.tiles.forEach((t, i) => {
+        const x = e.tiles[i];
+        for (const k of ['cascade', 'level', 'ix', 'iz', 'originX', 'originZ', 'spacing']) assert.equal(t[k], x[k], `tile ${i} ${k}`);
+        const d = decodeTile(t.codec, t.width, t.height, t.channels, t.payload);
+        for (let k = 0; k < d.data.length; k++) assert.equal(d.data[k], Math.fround(x.decoded[k]), `tile ${i} sample ${k}`);
+    });
+    assert.ok(new Set(f.tiles.map((t) => t.cascade)).size === 2, 'both cascade tags seen');
+});
+
+test('FLAT MESH_TOPOLOGY from C: flat positions and level zones', () => {
+    const t = decode(vec('topology_flat')).body;
+    const e = expected.topology_flat;
+    assert.equal(t.meshId, e.meshId);
+    assert.equal(t.flags, TOPO_FLAT);
+    assert.equal(t.lodLevels, e.lodLevels);
+    assert.deepEqual(Array.from(t.level), e.level);
+    assert.deepEqual(Array.from(t.flat), e.flat);
+    assert.deepEqual(Array.from(t.zones), e.zones);
+    /* without FLAT there are no flat arrays */
+    const p = decode(vec('topology')).body;
+    assert.equal(p.flags, 0);
+    assert.equal(p.flat, null);
+});
+
 test('MESH_TOPOLOGY, QUERY_RESULT, SEA_STATE, ERROR, BYE from C decode', () => {
     const t = decode(vec('topology')).body;
     assert.equal(t.meshId, expected.topology.meshId);
@@ -146,10 +197,16 @@ test('SUBSCRIBE, CAMERA, QUERY, BYE encoded in JS decode in C to the same fields
         rollDeg: 3, fovYDeg: 55, viewportW: 1920, viewportH: 1080, renderTime: 0,
     };
     const pts = [1e6 + 0.125, -3.5, 42, 1e9];
-    const [cs, cc, cq, cb] = cDecode([
+    const sub1 = { ...sub, layout: LAYOUT.CASCADE, lodLevels: 1, baseSpacingM: 0 };
+    const [cs, cc, cq, cb, cs1] = cDecode([
         new Uint8Array(encodeSubscribe(sub, 7, 1.5)), new Uint8Array(encodeCamera(cam, 8, 2.5)),
         new Uint8Array(encodeQuery(99, pts, 12.75, 9, 3.5)), new Uint8Array(encodeBye(0, 'viewer closed ✓', 10, 4.5)),
+        new Uint8Array(encodeSubscribe(sub1, 11, 5.5)),
     ]);
+    assert.equal(cs1.code, 0, cs1.err);
+    assert.equal(cs1.layout, LAYOUT.CASCADE);
+    assert.equal(cs1.lodLevels, 1);
+    assert.equal(cs.layout, LAYOUT.WORLD, 'layout defaults to 0');
     assert.equal(cs.code, 0, cs.err);
     assert.equal(cs.type, T.SUBSCRIBE);
     assert.equal(cs.seq, 7);
@@ -178,6 +235,7 @@ test('JS encoders refuse what the C decoder would refuse', () => {
     assert.throws(() => encodeSubscribe({ ...base, effects: 0 }, 1), (e) => e.code === R.EINVAL);
     assert.throws(() => encodeSubscribe({ ...base, codec: 9 }, 1), (e) => e.code === R.ETYPE);
     assert.throws(() => encodeSubscribe({ ...base, frameRateHz: NaN }, 1), (e) => e.code === R.EINVAL);
+    assert.throws(() => encodeSubscribe({ ...base, layout: 2 }, 1), (e) => e.code === R.ETYPE);
     const cam = { pos: [0, 10, 0], vel: [0, 0, 0], yawDeg: 0, pitchDeg: 0, fovYDeg: 60, viewportW: 10, viewportH: 10 };
     assert.throws(() => encodeCamera({ ...cam, pos: [NaN, 0, 0] }, 1), (e) => e.code === R.EINVAL);
     assert.throws(() => encodeCamera({ ...cam, fovYDeg: 180 }, 1), (e) => e.code === R.EINVAL);
@@ -192,7 +250,7 @@ function rng(seed) {
 }
 
 test('hostile input: truncated and corrupted messages get the same verdict and code in JS and C', () => {
-    const names = ['hello', 'frame', 'topology', 'result', 'sea', 'error', 'bye'];
+    const names = ['hello', 'frame', 'frame_cascade', 'topology', 'topology_flat', 'result', 'sea', 'error', 'bye'];
     const variants = [];
     const rand = rng(20240611);
     const setU32 = (b, o, v) => new DataView(b.buffer).setUint32(o, v >>> 0, true);
@@ -233,6 +291,72 @@ test('hostile input: truncated and corrupted messages get the same verdict and c
         new DataView(b.buffer).setFloat64(off, val, true);
         variants.push(b);
     }
+    /* layout 1: targeted corruptions of the cascade block, tags and placement */
+    const fc = vec('frame_cascade');
+    const B = 32 + 56;                                  /* cascade block */
+    const E = B + 56;                                   /* first cascade entry */
+    const put = (edits) => {
+        const b = fc.slice(), dv = new DataView(b.buffer);
+        for (const [kind, off, val] of edits) {
+            if (kind === 'u8') b[off] = val;
+            else if (kind === 'u16') dv.setUint16(off, val, true);
+            else if (kind === 'u32') dv.setUint32(off, val >>> 0, true);
+            else if (kind === 'f32') dv.setFloat32(off, val, true);
+            else dv.setFloat64(off, val, true);
+        }
+        variants.push(b);
+    };
+    for (const v of [0, 3, 5, 255]) put([['u8', B, v]]);              /* cascade_count */
+    for (const v of [0, 65]) put([['u8', B + 1, v]]);                 /* order */
+    for (const v of [NaN, 0, -1, Infinity]) put([['f32', B + 4, v]]); /* spacing_per_m */
+    for (const v of [NaN, 2e10]) put([['f64', B + 8, v]]);            /* camera x */
+    for (const v of [NaN, -1]) put([['f32', B + 32, v]]);             /* min_spacing_m */
+    for (const v of [NaN, 1.5]) put([['f32', B + 36, v]]);            /* e_total */
+    for (const v of [NaN, -1e-3, 2e3]) put([['f32', B + 40, v]]);     /* tail_mss_x */
+    for (const v of [-2e3, Infinity]) put([['f32', B + 48, v]]);      /* tail_mss_xz */
+    put([['u8', B + 2, 1]]);                                          /* reserved */
+    put([['u8', B + 53, 1]]);
+    for (const v of [NaN, 0, 2e7]) put([['f64', E, v]]);              /* patch_m */
+    for (const v of [0, 100, 4096, 7]) put([['u16', E + 8, v]]);      /* n */
+    for (const v of [0, 13, 9]) put([['u8', E + 10, v]]);             /* mips (9 of 256 ok, 13 not) */
+    put([['u16', E + 8, 8], ['u8', E + 10, 6]]);                      /* 6 mips of an 8 grid: fine; 5 of 8 */
+    put([['u16', E + 8, 16], ['u8', E + 10, 12]]);                    /* 12 mips of 16: refused */
+    put([['u8', E + 11, 2]]);                                         /* fades */
+    put([['u8', E + 12, 1]]);                                         /* entry reserved */
+    put([['f32', E + 16, NaN]]);                                      /* mip 0 kc */
+    put([['f32', E + 16, 0]]);
+    put([['f32', E + 16 + 16 * 6, 1]]);                               /* entry mips must have kc 0 */
+    put([['f32', E + 16 + 16 * 7, 1]]);                               /* beyond mips: 0 */
+    put([['f32', E + 16 + 16 * 12 + 12, -0.5]]);
+    put([['f32', E + 16 + 4, -1]]);                                   /* mss_x < 0 */
+    put([['f32', E + 16 + 12, NaN]]);                                 /* mss_xz */
+    put([['u8', 32 + 51, 2]]);                                        /* layout */
+    put([['u8', 32 + 51, 0]]);                                        /* layout 0 with a block: misparsed, refused */
+    const rec0 = E + 2 * 224;                                         /* first tile record */
+    for (const v of [1, 2, 7, 0xffffffff]) put([['u32', rec0 + 4, v]]);   /* tags: 1 fine, 2+ refused */
+    /* the placement record is the last 8 + 32 bytes */
+    put([['u32', fc.length - 28, 1]]);                                /* placement reserved */
+    put([['u32', fc.length - 36, 1]]);                                /* mesh record tag */
+    put([['u32', fc.length - 40, 24]]);                               /* short placement */
+    for (const v of [NaN, 1e11]) put([['f64', fc.length - 24, v]]);   /* placement origin */
+    /* FLAT topology: flags, zones, flat values */
+    const tf = vec('topology_flat');
+    const tput = (off, kind, val) => {
+        const b = tf.slice(), dv = new DataView(b.buffer);
+        if (kind === 'u16') dv.setUint16(off, val, true); else if (kind === 'u8') b[off] = val; else dv.setFloat32(off, val, true);
+        variants.push(b);
+    };
+    const zonesAt = tf.length - 48, flatAt = zonesAt - 32;
+    for (const v of [2, 3, 0x8000]) tput(32 + 6, 'u16', v);
+    tput(32 + 6, 'u16', 0);                                           /* FLAT cleared: trailing bytes */
+    tput(32 + 5, 'u8', 0);                                            /* lod_levels 0 */
+    tput(32 + 5, 'u8', 17);
+    tput(32 + 5, 'u8', 2);                                            /* levels >= lod_levels, zones misread */
+    for (const v of [NaN, 2e7, -Infinity]) tput(flatAt + 4, 'f32', v);
+    for (const v of [0, -1, NaN]) tput(zonesAt, 'f32', v);            /* g_L */
+    tput(zonesAt + 4, 'f32', -1);                                     /* R_L */
+    tput(zonesAt + 8, 'f32', 2e8);                                    /* b_L */
+    tput(zonesAt + 12, 'f32', 1);                                     /* reserved */
     const c = cDecode(variants);
     assert.equal(c.length, variants.length);
     let refused = 0;
@@ -312,6 +436,16 @@ function flatten(m) {
     const walk = (o, prefix) => {
         for (const [k, v] of Object.entries(o)) {
             if (k === 'tiles') { v.forEach((t, i) => walk(t, `${prefix}tile[${i}].`)); continue; }
+            if (v === null) continue;
+            /* cascade entries are named cascade[c].* at the top, their mip
+             * table entries 0..mips one line each (kc mss_x mss_z mss_xz) */
+            if (k === 'cascade' && Array.isArray(v)) {
+                v.forEach((e, c) => {
+                    for (const key of ['patchM', 'n', 'mips', 'fades']) flat[`cascade[${c}].${snake(key)}`] = String(e[key]);
+                    for (let m = 0; m <= e.mips; m++) flat[`cascade[${c}].mip[${m}]`] = Array.from(e.mip.subarray(4 * m, 4 * m + 4)).join(' ');
+                });
+                continue;
+            }
             if (k === 'samples') {
                 v.forEach((s, i) => { flat[`${prefix}sample[${i}]`] = `${s.height} | ${s.normal.join(' ')} | ${s.velocity.join(' ')} | ${s.foam} | ${s.errorBound}`; });
                 continue;
@@ -331,7 +465,9 @@ function sameValue(want, got) {
     if (a.length !== b.length) return false;
     return a.every((x, i) => {
         if (x === b[i]) return true;
-        const p = Number(x), q = Number(b[i]);
+        const num = (t) => (/^[+-]?inf$/.test(t) ? (t[0] === '-' ? -Infinity : Infinity) : Number(t));   /* C's %g prints inf */
+        const p = num(x), q = num(b[i]);
+        if (p === q) return true;
         if (Number.isNaN(p) || Number.isNaN(q)) return false;
         return Math.abs(p - q) <= 1e-8 * Math.max(1, Math.abs(p));   /* %.9g prints float32 to 9 digits */
     });

@@ -14,8 +14,12 @@
  *     follows, and the daemon's frames follow the camera;
  *   - two pages at once are two viewers of one ocean: both get frames,
  *     with distinct client ids, the same sea state and one sim clock;
- *   - a control view without the sea mesh has far less structure than the
- *     real one (so the pixel checks can fail), and uses f16 tiles;
+ *   - the viewer subscribes layout 1 (cascade tiles) with every cascade,
+ *     frames carry the cascade block and a mesh placement, and CAMERA
+ *     carries the drawing buffer's size and the field of view;
+ *   - a control view without the streamed sea has far less structure than
+ *     the real one (so the pixel checks can fail); it uses layout 0 and f16
+ *     tiles, so that path is exercised too;
  *   - no request leaves the daemon's origin.
  * Screenshots are kept in ARTIFACT_DIR (viewer.png, viewer-2.png,
  * viewer-control.png).
@@ -26,10 +30,9 @@
  */
 import { createRequire } from 'node:module';
 import { mkdirSync, writeFileSync, mkdtempSync, rmSync } from 'node:fs';
-import { inflateSync } from 'node:zlib';
+import { decodePng, lum } from './pixels.mjs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { fileURLToPath } from 'node:url';
 
 const require = createRequire(new URL('./package.json', import.meta.url));
 const { chromium } = require('playwright-core');
@@ -47,47 +50,6 @@ function check(name, ok, detail = '') {
     return ok;
 }
 
-/* Minimal PNG decoder (8-bit RGB/RGBA, non-interlaced: what Chromium
- * writes) so the pixel checks read the real screenshot. */
-function decodePng(buf) {
-    const sig = [137, 80, 78, 71, 13, 10, 26, 10];
-    if (!sig.every((b, i) => buf[i] === b)) throw new Error('not a PNG');
-    let off = 8, w = 0, h = 0, depth = 0, ctype = 0, interlace = 0;
-    const idat = [];
-    while (off < buf.length) {
-        const len = buf.readUInt32BE(off), type = buf.toString('latin1', off + 4, off + 8);
-        const data = buf.subarray(off + 8, off + 8 + len);
-        if (type === 'IHDR') { w = data.readUInt32BE(0); h = data.readUInt32BE(4); depth = data[8]; ctype = data[9]; interlace = data[12]; }
-        else if (type === 'IDAT') idat.push(data);
-        else if (type === 'IEND') break;
-        off += 12 + len;
-    }
-    if (depth !== 8 || (ctype !== 2 && ctype !== 6) || interlace) throw new Error(`unsupported PNG (depth ${depth}, type ${ctype})`);
-    const bpp = ctype === 6 ? 4 : 3, stride = w * bpp;
-    const raw = inflateSync(Buffer.concat(idat));
-    const px = new Uint8Array(w * h * 4);
-    let prev = new Uint8Array(stride), cur = new Uint8Array(stride);
-    for (let y = 0; y < h; y++) {
-        const f = raw[y * (stride + 1)], line = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
-        for (let i = 0; i < stride; i++) {
-            const a = i >= bpp ? cur[i - bpp] : 0, b = prev[i], c = i >= bpp ? prev[i - bpp] : 0;
-            let v = line[i];
-            if (f === 1) v += a;
-            else if (f === 2) v += b;
-            else if (f === 3) v += (a + b) >> 1;
-            else if (f === 4) { const p = a + b - c, pa = Math.abs(p - a), pb = Math.abs(p - b), pc = Math.abs(p - c); v += pa <= pb && pa <= pc ? a : pb <= pc ? b : c; }
-            cur[i] = v & 255;
-        }
-        for (let x = 0; x < w; x++) {
-            const o = (y * w + x) * 4;
-            px[o] = cur[x * bpp]; px[o + 1] = cur[x * bpp + 1]; px[o + 2] = cur[x * bpp + 2]; px[o + 3] = bpp === 4 ? cur[x * bpp + 3] : 255;
-        }
-        [prev, cur] = [cur, prev];
-    }
-    return { w, h, px };
-}
-
-function lum(img, x, y) { const o = (y * img.w + x) * 4; return 0.2126 * img.px[o] + 0.7152 * img.px[o + 1] + 0.0722 * img.px[o + 2]; }
 
 /* variance of luminance over rows [y0, y1) */
 function variance(img, y0 = 0, y1 = img.h) {
@@ -168,7 +130,20 @@ try {
     if (s) {
         check('HELLO received (client id, server version)', s.clientId != null && !!s.serverVersion, `client ${s.clientId}, ${s.serverVersion}`);
         check('mesh topology received', s.topologies >= 1 && s.vertexCount > 0, `${s.vertexCount} vertices, ${s.indexCount} indices`);
-        check('frames carry the mesh', s.framesWithMesh >= 1, `${s.framesWithMesh}`);
+        check('frames carry the mesh placement', s.framesWithMesh >= 1, `${s.framesWithMesh}`);
+        /* layout 1 by default, every cascade the server offers */
+        const maxLayers = s.hello ? s.hello.maxLayers : 0;
+        check('subscribed with layout 1, every effect of the scene and every cascade (HELLO.max_layers)',
+            s.subscription && s.subscription.layout === 1 && s.layout === 1 && s.subscription.layers === maxLayers &&
+            s.subscription.effects === s.hello.effects && s.cascades && s.cascades.length >= 1 && s.cascades.length <= maxLayers,
+            `layout ${s.subscription && s.subscription.layout}, frames layout ${s.layout}, layers ${s.subscription && s.subscription.layers} of ${maxLayers}, ` +
+            `effects ${s.subscription && s.subscription.effects} of ${s.hello && s.hello.effects}, ${s.cascades ? s.cascades.length : 0} cascades in frames`);
+        check('cascade block: the camera of the frame, spacing per metre, mip tables', s.block && s.block.spacingPerM > 0 &&
+            Math.abs(s.block.camera[1] - 14) < 2 && s.cascades.every((c) => c.mips >= 1 && c.n >= 8),
+            s.block ? `q ${s.block.spacingPerM}, camera ${s.block.camera}, E_total ${s.block.eTotal}` : 'no block');
+        const vp = await page.evaluate(() => [window.oceanViewer.renderer.canvas.width, window.oceanViewer.renderer.canvas.height]);
+        check('CAMERA carries the real viewport and field of view', s.cameraSent && s.cameraSent.viewport[0] === vp[0] &&
+            s.cameraSent.viewport[1] === vp[1] && s.cameraSent.fovYDeg === 60, `sent ${JSON.stringify(s.cameraSent)}, drawing buffer ${vp}`);
         check('tiles decoded, none refused', s.tilesDecoded > 0 && s.decodeErrors === 0, `${s.tilesDecoded} tiles, codec ${s.codec}, ${s.decodeErrors} errors: ${s.errors.join(' | ')}`);
         check('no ERROR from the server', s.serverErrors === 0, s.errors.join(' | '));
         check('latency measured', s.latencyMs != null && s.latencyMs >= 0 && s.latencyMs < 5000, `${s.latencyMs} ms`);
@@ -250,18 +225,26 @@ try {
     await page2.waitForTimeout(800);
     writeFileSync(join(artifacts, 'viewer-2.png'), await page2.screenshot({ type: 'png' }));
 
-    /* control: the same view without the sea mesh (sky and flat far sea
-     * only) must have far less structure than the real view */
-    await page2.goto(`${url}&sea=0&codec=f16`, { waitUntil: 'load', timeout: 30000 });
+    /* control: the same view without the streamed sea (sky and flat far
+     * sea only) must have far less structure than the real view; it runs
+     * on layout 0 with f16 tiles, so that path and codec are exercised too */
+    await page2.goto(`${url}&sea=0&codec=f16&layout=0`, { waitUntil: 'load', timeout: 30000 });
     await waitFor(page2, () => window.oceanStats && window.oceanStats.tilesDecoded > 0, null, timeoutMs);
     const sC = await stats(page2);
-    check('the f16 codec works end to end too', sC.codec === 'f16' && sC.tilesDecoded > 0 && sC.decodeErrors === 0,
-        `codec ${sC.codec}, ${sC.tilesDecoded} tiles, ${sC.decodeErrors} errors`);
+    check('the f16 codec and layout 0 work end to end too', sC.codec === 'f16' && sC.layout === 0 && sC.subscription.layout === 0 &&
+        sC.tilesDecoded > 0 && sC.decodeErrors === 0 && sC.serverErrors === 0,
+        `codec ${sC.codec}, layout ${sC.layout}, ${sC.tilesDecoded} tiles, ${sC.decodeErrors} errors ${sC.errors.join(' | ')}`);
     await page2.waitForTimeout(1500);
     const pngC = await page2.screenshot({ type: 'png' });
     writeFileSync(join(artifacts, 'viewer-control.png'), pngC);
     const detC = detail(decodePng(pngC), sea0, img1.h);
-    check('the sea has wave detail (vs. a view without the mesh)', det > 1.0 && det > 2.5 * detC,
+    /* layout 1 carries in geometry only what spans server.px_per_sample
+     * pixels or more (24 by default) and shades the rest, with the
+     * short-wave tail, as roughness (a smooth lobe, by design), so its sea
+     * has less pixel-scale structure than layout 0's did: 1.46x the flat
+     * control measured at 14 m in ship-bridge (2.5x was required of layout
+     * 0); a blank or flat sea gives 1.0 */
+    check('the sea has wave detail (vs. a view without the mesh)', det > 1.0 && det > 1.3 * detC,
         `structure ${det.toFixed(2)} with the mesh, ${detC.toFixed(2)} without`);
     /* a page with no camera in its URL opens where the scene's
      * camera_hint says (served in /status), not at a fixed 25 m */

@@ -1,0 +1,77 @@
+/*
+ * pixels.mjs - reading the viewer's screenshots in the browser tests: a
+ * minimal PNG decoder (8-bit RGB/RGBA, non-interlaced: what Chromium
+ * writes) and the pixel measures the tests assert on.
+ */
+import { inflateSync } from 'node:zlib';
+
+export function decodePng(buf) {
+    const sig = [137, 80, 78, 71, 13, 10, 26, 10];
+    if (!sig.every((b, i) => buf[i] === b)) throw new Error('not a PNG');
+    let off = 8, w = 0, h = 0, depth = 0, ctype = 0, interlace = 0;
+    const idat = [];
+    while (off < buf.length) {
+        const len = buf.readUInt32BE(off), type = buf.toString('latin1', off + 4, off + 8);
+        const data = buf.subarray(off + 8, off + 8 + len);
+        if (type === 'IHDR') { w = data.readUInt32BE(0); h = data.readUInt32BE(4); depth = data[8]; ctype = data[9]; interlace = data[12]; }
+        else if (type === 'IDAT') idat.push(data);
+        else if (type === 'IEND') break;
+        off += 12 + len;
+    }
+    if (depth !== 8 || (ctype !== 2 && ctype !== 6) || interlace) throw new Error(`unsupported PNG (depth ${depth}, type ${ctype})`);
+    const bpp = ctype === 6 ? 4 : 3, stride = w * bpp;
+    const raw = inflateSync(Buffer.concat(idat));
+    const px = new Uint8Array(w * h * 4);
+    let prev = new Uint8Array(stride), cur = new Uint8Array(stride);
+    for (let y = 0; y < h; y++) {
+        const f = raw[y * (stride + 1)], line = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
+        for (let i = 0; i < stride; i++) {
+            const a = i >= bpp ? cur[i - bpp] : 0, b = prev[i], c = i >= bpp ? prev[i - bpp] : 0;
+            let v = line[i];
+            if (f === 1) v += a;
+            else if (f === 2) v += b;
+            else if (f === 3) v += (a + b) >> 1;
+            else if (f === 4) { const p = a + b - c, pa = Math.abs(p - a), pb = Math.abs(p - b), pc = Math.abs(p - c); v += pa <= pb && pa <= pc ? a : pb <= pc ? b : c; }
+            cur[i] = v & 255;
+        }
+        for (let x = 0; x < w; x++) {
+            const o = (y * w + x) * 4;
+            px[o] = cur[x * bpp]; px[o + 1] = cur[x * bpp + 1]; px[o + 2] = cur[x * bpp + 2]; px[o + 3] = bpp === 4 ? cur[x * bpp + 3] : 255;
+        }
+        [prev, cur] = [cur, prev];
+    }
+    return { w, h, px };
+}
+
+/* Rec. 709 luma of pixel (x, y), 0..255 */
+export function lum(img, x, y) { const o = (y * img.w + x) * 4; return 0.2126 * img.px[o] + 0.7152 * img.px[o + 1] + 0.0722 * img.px[o + 2]; }
+
+/* The sun glitter in rows [y0, y1) (the sea below the horizon): pixels at
+ * least `thresh` bright.  area = their fraction of the region; rows /
+ * cols = the extent (count of rows / columns holding any); spread = the
+ * standard deviation of their positions (px); lumMean = mean luma of the
+ * region; p99 = its 99th percentile. */
+export function glitter(img, y0, y1, thresh = 200) {
+    let n = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sl = 0;
+    const rows = new Set(), cols = new Set(), all = [];
+    for (let y = y0; y < y1; y++)
+        for (let x = 0; x < img.w; x++) {
+            const l = lum(img, x, y);
+            sl += l;
+            all.push(l);
+            if (l < thresh) continue;
+            n++; sx += x; sy += y; sxx += x * x; syy += y * y;
+            rows.add(y); cols.add(x);
+        }
+    const tot = (y1 - y0) * img.w;
+    all.sort((a, b) => a - b);
+    const sp = n ? Math.sqrt(Math.max(0, sxx / n - (sx / n) ** 2) + Math.max(0, syy / n - (sy / n) ** 2)) : 0;
+    return { area: n / tot, pixels: n, rows: rows.size, cols: cols.size, spread: sp, lumMean: sl / tot, p99: all[Math.floor(0.99 * (all.length - 1))] };
+}
+
+/* Row of the horizon for a camera pitched `pitchDeg` with vertical field
+ * of view `fovDeg` in an image `h` rows high (eye height neglected). */
+export function horizonRow(h, pitchDeg, fovDeg) {
+    const t = Math.tan(-pitchDeg * Math.PI / 180) / Math.tan(fovDeg * Math.PI / 360);
+    return Math.round(h / 2 - t * h / 2);
+}
