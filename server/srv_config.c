@@ -144,11 +144,11 @@ static const conf_entry srv_entries[] = {
              "(16 px keeps a 20 m camera at 1080p near 5 800 vertices, 70 KB a frame; 4 px "
              "gives 73 000). Clients render fine detail from the tiles."},
     {.name = "server.px_per_sample", .type = CONF_DOUBLE, .offset = SRV(px_per_sample),
-     .min = 0.5, .max = 1024, .def = "24", .unit = "px",
-     .help = "Cascade tile layout: how many pixels one tile sample may span on screen at "
-             "its distance from the camera.  Finer detail travels as unresolved slope "
-             "variance for shading, so this trades bytes per viewer (about 1/q^2) against "
-             "how much of the sea the geometry carries."},
+     .min = 0.5, .max = 1024, .def = "4", .unit = "px",
+     .help = "Cascade tile layout: the finest detail wanted, as the pixels one tile sample "
+             "spans on screen at its distance from the camera (normals want 1 to 4).  The "
+             "viewer's byte budget (server.viewer_bytes_per_s) coarsens it where it would cost "
+             "more; finer detail travels as unresolved slope variance for shading."},
     {.name = "server.cascade_tile", .type = CONF_INT, .offset = SRV(cascade_tile), .min = 8, .max = 256,
      .def = "32", .hook = tile_pow2_hook,
      .help = "Cascade tile layout: side of every tile, in samples (a mip smaller than this is one "
