@@ -12,15 +12,15 @@
 # what limits the daemon.
 #
 # Every viewer subscribes as the browser viewer does (clients/web/main.js
-# and worker.js chooseSubscription, with its URL defaults): every effect the
-# scene computes (height, displacement, normals, foam, near field), every
-# cascade (layers = the server's maximum), the concentric mesh, qz at
-# accuracy 1e-3, the antialias cutoff policy, 64-sample tiles, min(8,
-# server.max_lod_levels) levels, level-0 spacing 1 m (the viewer's automatic
-# spacing at 25 m), camera at (0, 25, 0), yaw 30, pitch -10, fov 60.  Rows
-# marked "load defaults" keep the load tool's own subscription (1 cascade,
-# height/displacement/normals, no foam, no near field; what this benchmark
-# used before issue 14) for comparison with earlier reports.
+# and worker.js chooseSubscription, with its URL defaults): layout 1
+# (cascade tiles), every effect the scene computes (height, displacement,
+# normals, foam, near field), every cascade (layers = the server's maximum),
+# the concentric mesh, qz at accuracy 1e-3, the antialias cutoff policy,
+# camera at (0, 25, 0), yaw 30, pitch -10, fov 60.  Rows marked "viewer
+# before issue 14" subscribe as the viewer did before: layout 0 (per-camera
+# world tiles and a server-displaced mesh), 64-sample tiles, min(8,
+# server.max_lod_levels) levels, level-0 spacing 1 m - the capacity table
+# before and after the redesign, from one run.
 #
 # Cameras: "shared" puts every viewer at one camera (the daemon encodes a
 # FRAME once and shares it); "S m apart" places them on a grid S metres
@@ -58,25 +58,33 @@ maxlod=$("$build/oceand" --config config/oceand.conf --dump-config 2>/dev/null |
 [[ -n "$maxlod" ]] || maxlod=$(sed -n 's/^server.max_lod_levels = \([0-9]*\).*/\1/p' config/oceand.conf | head -1)
 [[ -n "$maxlod" ]] || maxlod=8
 levels=$(( maxlod < 8 ? maxlod : 8 ))
-browser=(--effects height,displacement,normals,foam,near --layers 4 --mesh concentric --codec qz
-         --accuracy 0.001 --cutoff-policy antialias --tile-size 64 --levels "$levels" --spacing 1
+# The viewer subscribes layout 1 (cascade tiles; spacing 0: the server's
+# footprint rule); the viewer before issue 14 subscribed layout 0 with its
+# automatic 1 m level-0 spacing at 25 m.  Both are run, so the capacity
+# table shows the redesign's effect in one run.
+browser=(--layout 1 --effects height,displacement,normals,foam,near --layers 4 --mesh concentric --codec qz
+         --accuracy 0.001 --cutoff-policy antialias --tile-size 64 --levels "$levels" --spacing 0
          --pos 0,25,0 --yaw 30 --pitch -10 --fov 60)
+before=(--layout 0 --effects height,displacement,normals,foam,near --layers 4 --mesh concentric --codec qz
+        --accuracy 0.001 --cutoff-policy antialias --tile-size 64 --levels "$levels" --spacing 1
+        --pos 0,25,0 --yaw 30 --pitch -10 --fov 60)
 echo "viewers,seconds,frames_per_viewer,frames_expected,latency_p50_ms,latency_p99_ms,frames_skipped_per_viewer,daemon_cpu_cores,bytes_per_viewer_per_s,disconnects,errors,generator_cpu_cores,decode_errors,camera_spread_m,subscription,generator_cpu_cores_proc" >"$csv"
 echo "| subscription | viewers | cameras | frames/viewer (expected) | p50 ms | p99 ms | skipped/viewer | daemon CPU (cores) | MB/s per viewer | generator CPU (cores, measured window / whole run) |"
 echo "|:---|---:|:---|---:|---:|---:|---:|---:|---:|---:|"
 # subscription:viewers:spread_m (0: every viewer at the same camera)
 if [[ -n "$quick" ]]; then
-    runs=(browser:1:0 browser:64:0 browser:64:20 browser:64:2000 defaults:64:0)
+    runs=(browser:1:0 browser:64:0 browser:64:20 browser:64:2000 before:64:20)
 else
-    runs=(browser:1:0 browser:16:0 browser:64:0 browser:256:0 browser:64:20 browser:256:20
-          browser:64:2000 browser:256:2000 defaults:256:0 defaults:64:20 defaults:256:20)
+    runs=(browser:1:0 browser:64:0 browser:256:0 browser:64:20 browser:256:20
+          browser:64:2000 browser:256:2000 before:1:0 before:256:0 before:64:20 before:256:20
+          before:256:2000)
 fi
 for run in "${runs[@]}"; do
     IFS=: read -r sub n spread <<<"$run"
     cams=$(awk -v s="$spread" 'BEGIN {print (s > 0) ? (s >= 1000 ? s / 1000 " km apart" : s " m apart") : "shared"}')
     ramp=$(awk -v n="$n" 'BEGIN {print (n > 64) ? 3 : 1}')
-    if [[ "$sub" == browser ]]; then subopts=("${browser[@]}"); label="browser viewer"
-    else subopts=(); label="load defaults"; fi
+    if [[ "$sub" == browser ]]; then subopts=("${browser[@]}"); label="browser viewer (layout 1)"
+    else subopts=("${before[@]}"); label="viewer before issue 14 (layout 0)"; fi
     c0=$(cpu "$pid"); t0=$(date +%s.%N)
     jf=$(mktemp)
     "$build/ocean-client" load "ws://127.0.0.1:$port/" --clients "$n" --seconds "$secs" \
