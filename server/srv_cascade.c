@@ -358,6 +358,8 @@ static void view_box(const srv_cascade_job *j, const sector *sc, double R, doubl
     box[3] = fmax(cz + r0, cz + R * sc->ext[3]) + grow;
 }
 
+static double nadir_error(const tables *tb, const plan *pl, const proto_camera *cam);
+
 /* The plan for spacing factor q; returns the estimated bytes of its tiles. */
 static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
                       const sector *sc, double q, plan *pl);
@@ -377,22 +379,38 @@ static void plan_job(srv_cascade *k, const tables *tb, const srv_config *cfg, co
     double budget = cfg->viewer_bytes_per_s / rate_hz;
     sector sc;
     sector_of(&j->cam, &sc);
-    if (plan_at(k, tb, cfg, j, &sc, q, pl) <= budget)
-        return;
-    /* octaves first, then quarter octaves back down to the finest that fits */
     double hi = q;
-    for (int it = 0; it < 40; it++) {
-        hi *= 2;
-        if (plan_at(k, tb, cfg, j, &sc, hi, pl) <= budget)
-            break;
+    if (plan_at(k, tb, cfg, j, &sc, q, pl) > budget) {
+        /* octaves first, then quarter octaves back down to the finest that fits */
+        for (int it = 0; it < 40; it++) {
+            hi *= 2;
+            if (plan_at(k, tb, cfg, j, &sc, hi, pl) <= budget)
+                break;
+        }
+        for (int it = 0; it < 3; it++) {
+            double t = hi / 1.189207115002721; /* 2^(1/4) */
+            if (t <= q || plan_at(k, tb, cfg, j, &sc, t, pl) > budget)
+                break;
+            hi = t;
+        }
+        plan_at(k, tb, cfg, j, &sc, hi, pl);
     }
-    for (int it = 0; it < 3; it++) {
-        double t = hi / 1.189207115002721; /* 2^(1/4) */
-        if (t <= q || plan_at(k, tb, cfg, j, &sc, t, pl) > budget)
-            break;
-        hi = t;
+    /* Seed 000's energy guard, E <= 5 %: a subscription without normals
+     * has no shading to carry what the tiles drop (its e_total is its
+     * e_error), so its plan is refined - past server.px_per_sample if
+     * need be - until the tiles carry 95 % of the height variance at the
+     * nadir, spending up to twice the byte budget;
+     * past that the frame reports what is missing in e_total. */
+    if (!(j->c->sim.sub.effects & PROTO_FX_NORMALS)) {
+        while (hi > q / 64 && nadir_error(tb, pl, &j->cam) > SRV_CASCADE_E_GUARD) {
+            double t = hi / 1.189207115002721;
+            if (plan_at(k, tb, cfg, j, &sc, t, pl) > 2.0 * budget) {
+                plan_at(k, tb, cfg, j, &sc, hi, pl);
+                break;
+            }
+            hi = t;
+        }
     }
-    plan_at(k, tb, cfg, j, &sc, hi, pl);
 }
 
 static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j,

@@ -27,6 +27,10 @@
 
 typedef struct srv_cascade srv_cascade;
 
+/* Seed 000's energy guard: at most this fraction of the sea's height
+ * variance may be missing from what a client gets (e_total). */
+#define SRV_CASCADE_E_GUARD 0.05
+
 /* One layout-1 frame to build. */
 typedef struct srv_cascade_job {
     srv_client *c;         /* holds a reference for the batch */
