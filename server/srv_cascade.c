@@ -158,15 +158,6 @@ void srv_cascade_sweep(srv_cascade *k, uint64_t keep_from)
     }
 }
 
-unsigned srv_cascade_channels(unsigned fx)
-{
-    unsigned ch = 0;
-    if (fx & PROTO_FX_HEIGHT) ch |= PROTO_CH_HEIGHT;
-    if (fx & PROTO_FX_DISPLACEMENT) ch |= PROTO_CH_DX | PROTO_CH_DZ;
-    if (fx & PROTO_FX_NORMALS) ch |= PROTO_CH_NORMAL;
-    if (fx & PROTO_FX_FOAM) ch |= PROTO_CH_FOAM;
-    return ch;
-}
 
 static unsigned ocean_fx_of(unsigned ch)
 {
@@ -427,7 +418,7 @@ static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, c
      * whose cutoff lies above it is not needed (kc of mip m is pi / (2 sigma_m)). */
     double pol = isfinite(j->policy_k) && j->policy_k > 0 ? M_PI / (2.0 * j->policy_k) : 0.0;
     pl->min_spacing = fmax(sub->base_spacing_m > 0 ? sub->base_spacing_m : 0.0, pol);
-    pl->channels = srv_cascade_channels(sub->effects);
+    pl->channels = srv_tiles_channels(sub->effects);
     double range_m = sub->view_range_m > 0 ? sub->view_range_m : cfg->view_range;
     double cy = fmax(fabs(j->cam.pos[1]), 1.0);
     for (int c = 0; c < pl->layers; c++) {
@@ -596,18 +587,6 @@ static void tile_build(ctile *t, const ocean_frame *f, const tables *tb)
 
 /* ---- frames ----------------------------------------------------------------- */
 
-static srv_msg *encode(const proto_msg *m)
-{
-    srv_msg *q = srv_msg_new();
-    if (!q) return NULL;
-    char err[256];
-    if (proto_encode(&q->buf, m, err, sizeof err) != OCEAN_OK) {
-        fprintf(stderr, "oceand: cannot encode %s: %s\n", proto_type_name(m->hdr.type), err);
-        srv_msg_free(q);
-        return NULL;
-    }
-    return q;
-}
 
 /* Height variance the tiles do not carry at the camera's nadir, as a
  * fraction of the sea's: each cascade at the level the lod rule reads
@@ -719,7 +698,7 @@ static void mesh_part(const srv_config *cfg, srv_stats *st, srv_cascade_job *j, 
     tm.u.topology.flags = PROTO_TOPO_FLAT;
     tm.u.topology.flat = flat;
     tm.u.topology.zones = zones;
-    j->topo = encode(&tm);
+    j->topo = srv_msg_encode(&tm);
     free(flat);
     if (!j->topo) {
         cs->topo_valid = 0;
@@ -783,7 +762,7 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
         fr->placement.mesh_id = j->c->sim.mesh_id;
         memcpy(fr->placement.origin, pl->mv.origin, sizeof pl->mv.origin);
     }
-    j->frame = encode(&m);
+    j->frame = srv_msg_encode(&m);
     free(recs);
     if (!shared || !j->frame || srv_msg_make_shared(j->frame) != OCEAN_OK) return;
     srv_msg *q = j->frame;

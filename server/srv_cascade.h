@@ -49,9 +49,6 @@ void srv_cascade_destroy(srv_cascade *k);
 /* Forgets everything made from the current ocean (the sea changed). */
 void srv_cascade_reset(srv_cascade *k);
 
-/* The channels a layout-1 subscription's effects put in tiles (PROTO_CH_*)
- * and the ocean effects they need. */
-unsigned srv_cascade_channels(unsigned proto_effects);
 
 /* Tiles a layout-1 subscription with tile side `tile_size` may need in one
  * FRAME at most (every tile of every mip of every cascade): the

@@ -133,6 +133,19 @@ srv_msg *srv_msg_new(void)
     return m;
 }
 
+srv_msg *srv_msg_encode(const proto_msg *m)
+{
+    srv_msg *q = srv_msg_new();
+    if (!q) return NULL;
+    char err[256];
+    if (proto_encode(&q->buf, m, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "oceand: cannot encode %s: %s\n", proto_type_name(m->hdr.type), err);
+        srv_msg_free(q);
+        return NULL;
+    }
+    return q;
+}
+
 void srv_msg_free(srv_msg *m)
 {
     if (!m) return;

@@ -226,6 +226,9 @@ srv_msg *srv_client_take(srv_client *c);
 uint64_t srv_client_queued(srv_client *c);
 
 srv_msg *srv_msg_new(void);
+/* A new message holding m's encoding, or NULL on OOM or a message the
+ * encoder refuses (logged: the daemon built it, so that is a bug). */
+srv_msg *srv_msg_encode(const proto_msg *m);
 void srv_msg_free(srv_msg *m);
 /* Moves m's own bytes into a new blob of one reference (m then refers to
  * it).  OCEAN_ENOMEM leaves m as it was. */

@@ -456,18 +456,6 @@ static void sample_disp(void *ctx, double x, double z, double out[3])
     }
 }
 
-static srv_msg *encode_msg(const proto_msg *m)
-{
-    srv_msg *q = srv_msg_new();
-    if (!q) return NULL;
-    char err[256];
-    if (proto_encode(&q->buf, m, err, sizeof err) != OCEAN_OK) {
-        fprintf(stderr, "oceand: cannot encode %s: %s\n", proto_type_name(m->hdr.type), err);
-        srv_msg_free(q);
-        return NULL;
-    }
-    return q;
-}
 
 /* Builds and displaces the client's mesh for job j [worker thread; the
  * client's sim state is only touched by the one worker that owns it]. */
@@ -563,7 +551,7 @@ static int topo_stage(job *j, const job *src)
         tm.u.topology.indices = v->indices;
         tm.u.topology.morph = v->morph;
         tm.u.topology.level = v->level;
-        j->topo = encode_msg(&tm);
+        j->topo = srv_msg_encode(&tm);
     }
     return 1;
 }
@@ -605,7 +593,7 @@ static void frame_stage(srv_sim *s, job *j, const job *src, int shared)
         fr->mesh.positions = v->positions;
         memcpy(fr->origin, v->origin, sizeof v->origin);
     }
-    j->frame = encode_msg(&m);
+    j->frame = srv_msg_encode(&m);
     if (!shared || !j->frame || srv_msg_make_shared(j->frame) != OCEAN_OK) return;
     srv_msg *q = j->frame;
     size_t cam_at, mesh_at;
@@ -915,7 +903,7 @@ static void announce_sea(srv_sim *s, const ocean_params *p, double eff)
     pthread_mutex_lock(&h->lock);
     for (srv_client *c = h->clients; c; c = c->next) {
         if (c->closed) continue;
-        srv_msg *q = encode_msg(&m);
+        srv_msg *q = srv_msg_encode(&m);
         if (q) srv_client_queue(c, q);
     }
     pthread_mutex_unlock(&h->lock);
