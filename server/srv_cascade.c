@@ -681,29 +681,10 @@ static void mesh_part(const srv_config *cfg, srv_stats *st, srv_cascade_job *j, 
         zones[4 * L + 2] = (float)pl->mi.blend_m[L];
         zones[4 * L + 3] = 0.0f;
     }
-    cs->mesh_id++;
-    cs->topo_key = v->topology_key;
-    cs->topo_valid = 1;
-    proto_msg tm;
-    proto_msg_init(&tm, PROTO_MESH_TOPOLOGY);
-    tm.hdr.sim_time = j->t;
-    tm.u.topology.mesh_id = cs->mesh_id;
-    tm.u.topology.mesh_kind = (uint8_t)v->kind;
-    tm.u.topology.lod_levels = (uint8_t)v->levels;
-    tm.u.topology.vertex_count = v->vertex_count;
-    tm.u.topology.index_count = v->index_count;
-    tm.u.topology.indices = v->indices;
-    tm.u.topology.morph = v->morph;
-    tm.u.topology.level = v->level;
-    tm.u.topology.flags = PROTO_TOPO_FLAT;
-    tm.u.topology.flat = flat;
-    tm.u.topology.zones = zones;
-    j->topo = srv_msg_encode(&tm);
+    j->topo = srv_topology_encode(cs, v, j->t, flat, zones);
     free(flat);
-    if (!j->topo) {
-        cs->topo_valid = 0;
+    if (!j->topo)
         pl->has_mesh = 0;
-    }
 }
 
 static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shared)

@@ -146,6 +146,51 @@ srv_msg *srv_msg_encode(const proto_msg *m)
     return q;
 }
 
+srv_msg *srv_topology_encode(srv_client_sim *cs, const mesh_view *v, double t, const float *flat,
+                             const float *zones)
+{
+    cs->mesh_id++;
+    cs->topo_key = v->topology_key;
+    cs->topo_valid = 1;
+    proto_msg tm;
+    proto_msg_init(&tm, PROTO_MESH_TOPOLOGY);
+    tm.hdr.sim_time = t;
+    tm.u.topology.mesh_id = cs->mesh_id;
+    tm.u.topology.mesh_kind = (uint8_t)v->kind;
+    tm.u.topology.lod_levels = (uint8_t)(v->levels < 1 ? 1 : v->levels);
+    tm.u.topology.vertex_count = v->vertex_count;
+    tm.u.topology.index_count = v->index_count;
+    tm.u.topology.indices = v->indices;
+    tm.u.topology.morph = v->morph;
+    tm.u.topology.level = v->level;
+    if (flat) {
+        tm.u.topology.flags = PROTO_TOPO_FLAT;
+        tm.u.topology.flat = flat;
+        tm.u.topology.zones = zones;
+    }
+    srv_msg *q = srv_msg_encode(&tm);
+    if (!q) cs->topo_valid = 0;
+    return q;
+}
+
+void srv_client_hand_over(srv_client *c, srv_stats *st, srv_msg *topo, srv_msg *frame, int replay, double tick_wall)
+{
+    if (!frame) {
+        srv_msg_free(topo);
+        return;
+    }
+    frame->is_frame = 1;
+    frame->tick_wall = tick_wall;
+    if (topo) topo->tick_wall = tick_wall;
+    atomic_fetch_add(&st->frames_built, 1);
+    if (replay) {
+        if (topo) srv_client_queue(c, topo);
+        srv_client_queue(c, frame);
+    } else {
+        srv_client_publish(c, topo, frame);
+    }
+}
+
 void srv_msg_free(srv_msg *m)
 {
     if (!m) return;

@@ -229,6 +229,17 @@ srv_msg *srv_msg_new(void);
 /* A new message holding m's encoding, or NULL on OOM or a message the
  * encoder refuses (logged: the daemon built it, so that is a bug). */
 srv_msg *srv_msg_encode(const proto_msg *m);
+/* The MESH_TOPOLOGY of mesh view v for a client whose per-client topology
+ * state is cs (a new mesh_id, remembered as the topology the client has;
+ * flat/zones: the FLAT arrays of layout 1, or NULL).  NULL on OOM (the
+ * client is then sent the topology again next time) [sim side]. */
+srv_msg *srv_topology_encode(srv_client_sim *cs, const mesh_view *v, double t, const float *flat,
+                             const float *zones);
+/* Hands a built frame (and the topology to send first, may be NULL) to its
+ * client: queued in order for replay, into the latest-wins slot live.
+ * frame NULL frees topo.  Takes ownership of both [sim side]. */
+void srv_client_hand_over(srv_client *c, srv_stats *st, srv_msg *topo, srv_msg *frame, int replay,
+                          double tick_wall);
 void srv_msg_free(srv_msg *m);
 /* Moves m's own bytes into a new blob of one reference (m then refers to
  * it).  OCEAN_ENOMEM leaves m as it was. */

@@ -373,21 +373,7 @@ static void run_cascade(srv_sim *s, srv_cascade_job *cj, int n, double tick_wall
     if (prof) fprintf(stderr, "cascade batch %d jobs: %.2f ms\n", n, (srv_now() - p0) * 1e3);
     for (int i = 0; i < n; i++) {
         srv_cascade_job *j = &cj[i];
-        if (!j->frame) {
-            srv_msg_free(j->topo);
-            j->topo = NULL;
-            continue;
-        }
-        j->frame->is_frame = 1;
-        j->frame->tick_wall = tick_wall;
-        if (j->topo) j->topo->tick_wall = tick_wall;
-        atomic_fetch_add(&st->frames_built, 1);
-        if (j->replay) {
-            if (j->topo) srv_client_queue(j->c, j->topo);
-            srv_client_queue(j->c, j->frame);
-        } else {
-            srv_client_publish(j->c, j->topo, j->frame);
-        }
+        srv_client_hand_over(j->c, st, j->topo, j->frame, j->replay, tick_wall);
         j->topo = j->frame = NULL;
     }
     srv_hub_wake_net(s->hub);
@@ -536,23 +522,8 @@ static int topo_stage(job *j, const job *src)
     srv_client_sim *cs = &j->c->sim;
     if (!src->mesh_ok || cs->sub.mesh_kind == PROTO_MESH_NONE) return 0;
     const mesh_view *v = &src->mv;
-    if (!cs->topo_valid || v->topology_key != cs->topo_key) {
-        cs->mesh_id++;
-        cs->topo_key = v->topology_key;
-        cs->topo_valid = 1;
-        proto_msg tm;
-        proto_msg_init(&tm, PROTO_MESH_TOPOLOGY);
-        tm.hdr.sim_time = j->t;
-        tm.u.topology.mesh_id = cs->mesh_id;
-        tm.u.topology.mesh_kind = (uint8_t)v->kind;
-        tm.u.topology.lod_levels = (uint8_t)(v->levels < 1 ? 1 : v->levels);
-        tm.u.topology.vertex_count = v->vertex_count;
-        tm.u.topology.index_count = v->index_count;
-        tm.u.topology.indices = v->indices;
-        tm.u.topology.morph = v->morph;
-        tm.u.topology.level = v->level;
-        j->topo = srv_msg_encode(&tm);
-    }
+    if (!cs->topo_valid || v->topology_key != cs->topo_key)
+        j->topo = srv_topology_encode(cs, v, j->t, NULL, NULL);
     return 1;
 }
 
@@ -851,20 +822,7 @@ static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
         job *j = &jobs[i];
         free(j->tiles);
         j->tiles = NULL;
-        if (!j->frame) {
-            srv_msg_free(j->topo);
-            continue;
-        }
-        j->frame->is_frame = 1;
-        j->frame->tick_wall = tick_wall;
-        if (j->topo) j->topo->tick_wall = tick_wall;
-        atomic_fetch_add(&st->frames_built, 1);
-        if (j->replay) {
-            if (j->topo) srv_client_queue(j->c, j->topo);
-            srv_client_queue(j->c, j->frame);
-        } else {
-            srv_client_publish(j->c, j->topo, j->frame);
-        }
+        srv_client_hand_over(j->c, st, j->topo, j->frame, j->replay, tick_wall);
         j->topo = j->frame = NULL;
     }
     srv_hub_wake_net(s->hub);
