@@ -28,23 +28,7 @@
 #include "srv_tiles.h"
 
 #define MAX_MIPS PROTO_MAX_MIPS
-#define NBUCKETS 4096
 
-/* One encoded tile: a ready FRAME record. */
-typedef struct ctile {
-    struct ctile *next;
-    uint64_t hash, last_use;
-    struct ckey {
-        double t;
-        float accuracy;
-        int32_t ix, iz;
-        uint16_t channels, size;
-        uint8_t cascade, mip, codec, pad_;
-    } key;
-    ocean_result result;
-    uint8_t *rec;          /* record bytes: head, TILE body, padding */
-    size_t rec_len;
-} ctile;
 
 /* Time-independent facts of the current ocean (per filter order). */
 typedef struct tables {
@@ -80,8 +64,7 @@ struct srv_cascade {
     rate rates[RATES];
     int rate_next;
     ocean_frame *mipf[MAX_MIPS];  /* mip level m of every cascade, this batch */
-    ctile *b[NBUCKETS];
-    size_t count;
+    srv_tile_cache *cache; /* the encoded records, key layout 1 */
 };
 
 /* A job's plan: which tiles of which mips. */
@@ -97,7 +80,7 @@ typedef struct plan {
     int need[OCEAN_MAX_CASCADES][MAX_MIPS];
     range r[OCEAN_MAX_CASCADES][MAX_MIPS];
     int tiles;
-    ctile **list;          /* the records, in frame order */
+    srv_tile **list;       /* the records, in frame order */
     int has_mesh;
     mesh_view mv;
     mesh_info mi;
@@ -106,27 +89,21 @@ typedef struct plan {
 
 ocean_result srv_cascade_create(srv_cascade **out)
 {
-    *out = calloc(1, sizeof **out);
-    return *out ? OCEAN_OK : OCEAN_ENOMEM;
-}
-
-static void tiles_clear(srv_cascade *k)
-{
-    for (int i = 0; i < NBUCKETS; i++)
-        while (k->b[i]) {
-            ctile *t = k->b[i];
-            k->b[i] = t->next;
-            free(t->rec);
-            free(t);
-        }
-    k->count = 0;
+    srv_cascade *k = calloc(1, sizeof *k);
+    if (!k || srv_tiles_create(&k->cache) != OCEAN_OK) {
+        free(k);
+        *out = NULL;
+        return OCEAN_ENOMEM;
+    }
+    *out = k;
+    return OCEAN_OK;
 }
 
 void srv_cascade_reset(srv_cascade *k)
 {
     if (!k)
         return;
-    tiles_clear(k);
+    srv_tiles_clear(k->cache);
     k->tab_valid = 0;
 }
 
@@ -134,7 +111,7 @@ void srv_cascade_destroy(srv_cascade *k)
 {
     if (!k)
         return;
-    tiles_clear(k);
+    srv_tiles_destroy(k->cache);
     for (int m = 0; m < MAX_MIPS; m++)
         ocean_frame_destroy(k->mipf[m]);
     free(k);
@@ -142,20 +119,7 @@ void srv_cascade_destroy(srv_cascade *k)
 
 void srv_cascade_sweep(srv_cascade *k, uint64_t keep_from)
 {
-    for (int i = 0; i < NBUCKETS; i++) {
-        ctile **p = &k->b[i];
-        while (*p) {
-            ctile *t = *p;
-            if (t->last_use < keep_from) {
-                *p = t->next;
-                free(t->rec);
-                free(t);
-                k->count--;
-            } else {
-                p = &t->next;
-            }
-        }
-    }
+    srv_tiles_sweep(k->cache, keep_from);
 }
 
 
@@ -288,18 +252,18 @@ static double tile_bytes(srv_cascade *k, const proto_subscribe *sub, unsigned ch
 }
 
 /* Learns from encoded tiles (an exponential average per kind). */
-static void rate_learn(srv_cascade *k, const ctile *t)
+static void rate_learn(srv_cascade *k, const srv_tile *t)
 {
-    if (t->result != OCEAN_OK || !t->rec_len) return;
+    if (t->result != OCEAN_OK || !t->payload_len) return;
     rate *r = rate_find(k, t->key.codec, t->key.accuracy, t->key.channels, t->key.size);
     if (!r) {
         r = &k->rates[k->rate_next];
         k->rate_next = (k->rate_next + 1) % RATES;
         *r = (rate){1, t->key.codec, t->key.channels, t->key.size, t->key.accuracy, 0};
-        r->bytes_per_sample = (double)t->rec_len / ((double)t->key.size * t->key.size);
+        r->bytes_per_sample = (double)t->payload_len / ((double)t->key.size * t->key.size);
         return;
     }
-    r->bytes_per_sample += 0.05 * ((double)t->rec_len / ((double)t->key.size * t->key.size) - r->bytes_per_sample);
+    r->bytes_per_sample += 0.05 * ((double)t->payload_len / ((double)t->key.size * t->key.size) - r->bytes_per_sample);
 }
 
 /* The bounding box [x0, x1] x [z0, z1] of the sea a camera may draw from
@@ -456,49 +420,15 @@ static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, c
 
 /* ---- tiles ------------------------------------------------------------------ */
 
-static uint64_t key_hash(const struct ckey *k)
-{
-    const unsigned char *p = (const unsigned char *)k;
-    uint64_t h = 1469598103934665603ull;
-    for (size_t i = 0; i < sizeof *k; i++) {
-        h ^= p[i];
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-
-static ctile *tile_get(srv_cascade *k, const struct ckey *key, uint64_t gen, int *fresh)
-{
-    uint64_t h = key_hash(key);
-    ctile **slot = &k->b[h % NBUCKETS];
-    for (ctile *t = *slot; t; t = t->next)
-        if (t->hash == h && memcmp(&t->key, key, sizeof *key) == 0) {
-            t->last_use = gen;
-            *fresh = 0;
-            return t;
-        }
-    ctile *t = calloc(1, sizeof *t);
-    if (!t)
-        return NULL;
-    t->key = *key;
-    t->hash = h;
-    t->last_use = gen;
-    t->result = OCEAN_ESTATE;
-    t->next = *slot;
-    *slot = t;
-    k->count++;
-    *fresh = 1;
-    return t;
-}
-
 /* Copies tile t's samples from mip m of its cascade (grid points: no
  * interpolation), encodes them and wraps them in a FRAME record.  Thread
  * safe for distinct t. */
-static void tile_build(ctile *t, const ocean_frame *f, const tables *tb)
+static void tile_build(srv_tile *t, const ocean_frame *f, const tables *tb)
 {
-    const struct ckey *k = &t->key;
+    const srv_tile_key *k = &t->key;
+    t->ready = 1;
     const ocean_field *fd = ocean_frame_field(f, k->cascade);
-    int np = tb->n >> k->mip, T = k->size;
+    int np = tb->n >> k->level, T = k->size;
     if (!fd || fd->n < np || fd->n % np) {
         t->result = OCEAN_ESTATE;
         return;
@@ -557,10 +487,10 @@ static void tile_build(ctile *t, const ocean_frame *f, const tables *tb)
         proto_buf_free(&pb);
         return;
     }
-    double sp = tb->patch[k->cascade] / tb->n * ldexp(1.0, k->mip);
+    double sp = tb->patch[k->cascade] / tb->n * ldexp(1.0, k->level);
     proto_tile pt;
     memset(&pt, 0, sizeof pt);
-    pt.level = k->mip;
+    pt.level = k->level;
     pt.codec = k->codec;
     pt.channels = k->channels;
     pt.width = pt.height = (uint16_t)T;
@@ -581,8 +511,13 @@ static void tile_build(ctile *t, const ocean_frame *f, const tables *tb)
         proto_buf_free(&rec);
         return;
     }
-    t->rec = rec.mem;   /* headroom 0: the bytes start at mem */
-    t->rec_len = rec.len;
+    if (rec.len > UINT32_MAX) {
+        proto_buf_free(&rec);
+        t->result = OCEAN_ETOOBIG;
+        return;
+    }
+    t->payload = rec.mem;   /* headroom 0: the bytes start at mem */
+    t->payload_len = (uint32_t)rec.len;
 }
 
 /* ---- frames ----------------------------------------------------------------- */
@@ -694,8 +629,8 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
     if (!recs) return;
     int nt = 0;
     for (int i = 0; i < pl->tiles; i++)
-        if (pl->list[i] && pl->list[i]->result == OCEAN_OK)
-            recs[nt++] = (proto_bytes){pl->list[i]->rec, pl->list[i]->rec_len};
+        if (pl->list[i] && pl->list[i]->result == OCEAN_OK && pl->list[i]->payload)
+            recs[nt++] = (proto_bytes){pl->list[i]->payload, pl->list[i]->payload_len};
     proto_msg m;
     proto_msg_init(&m, PROTO_FRAME);
     m.hdr.sim_time = j->t;
@@ -816,7 +751,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
             ocean_frame_destroy(k->mipf[m]);
             k->mipf[m] = NULL;
         }
-        tiles_clear(k);
+        srv_tiles_clear(k->cache);
         if (tables_make(&k->tab, oc, g, order) != OCEAN_OK) {
             k->tab_valid = 0;
             for (int i = 0; i < n; i++)
@@ -846,7 +781,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
     }
     /* 2. per distinct time: evaluate, look tiles up, encode the missing */
     int *done = calloc((size_t)n, sizeof *done);
-    ctile **missing = NULL;
+    srv_tile **missing = NULL;
     size_t cap_missing = 0;
     for (int i0 = 0; i0 < n && done; i0++) {
         if (done[i0]) continue;
@@ -868,25 +803,26 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
                     const range *g = &p->r[c][m];
                     for (int a = 0; a < g->nz; a++)
                         for (int b = 0; b < g->nx; b++) {
-                            struct ckey key;
-                            memset(&key, 0, sizeof key);
+                            srv_tile_key key;
+                            srv_tile_key_init(&key);
                             key.t = t;
                             key.accuracy = sub->accuracy;
                             key.ix = (g->x0 + b) % ntile;
                             key.iz = (g->z0 + a) % ntile;
                             key.channels = (uint16_t)chan_of(p, c);
                             key.size = (uint16_t)T;
+                            key.layout = PROTO_LAYOUT_CASCADE;
                             key.cascade = (uint8_t)c;
-                            key.mip = (uint8_t)m;
+                            key.level = (uint8_t)m;
                             key.codec = sub->codec;
                             int fresh = 0;
-                            ctile *tl = tile_get(k, &key, gen, &fresh);
+                            srv_tile *tl = srv_tiles_get(k->cache, &key, gen, &fresh);
                             p->list[at++] = tl;
                             if (!tl) continue;
                             if (fresh) {
                                 if (nmiss == cap_missing) {
                                     size_t nc = cap_missing ? 2 * cap_missing : 256;
-                                    ctile **nm = realloc(missing, nc * sizeof *nm);
+                                    srv_tile **nm = realloc(missing, nc * sizeof *nm);
                                     if (!nm) {
                                         tl->result = OCEAN_ENOMEM;
                                         continue;
@@ -914,7 +850,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
         }
 #pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
         for (size_t q = 0; q < nmiss; q++)
-            tile_build(missing[q], k->mipf[missing[q]->key.mip], tb);
+            tile_build(missing[q], k->mipf[missing[q]->key.level], tb);
         for (size_t q = 0; q < nmiss; q++) rate_learn(k, missing[q]);
         atomic_fetch_add(&st->tiles_encoded, (uint64_t)nmiss);
     }

@@ -32,7 +32,10 @@ typedef struct srv_tile_key {
     int32_t ix, iz;
     uint16_t channels; /* PROTO_CH_* */
     uint16_t size;
-    uint8_t level, codec, layers, pad_;
+    uint8_t level, codec, layers;
+    uint8_t layout;    /* PROTO_LAYOUT_*: 1 = a cascade tile (level = mip) */
+    uint8_t cascade;   /* layout 1 */
+    uint8_t pad_[3];
 } srv_tile_key;
 
 typedef struct srv_tile {
@@ -41,7 +44,8 @@ typedef struct srv_tile {
     uint64_t last_use;     /* generation of the last tick that used it */
     int ready;             /* encoded (result == OK) or failed */
     ocean_result result;
-    uint8_t *payload;
+    uint8_t *payload;      /* layout 0: the codec payload; layout 1: the whole
+                              FRAME record (proto_tile_record_encode) */
     uint32_t payload_len;
     float error_bound;
     struct srv_tile *next; /* hash chain */
