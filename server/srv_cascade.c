@@ -473,20 +473,12 @@ static void tile_build(srv_tile *t, const ocean_frame *f, const tables *tb)
         }
     }
     if (pnu) proto_normals_from_slopes(sx, sz, ns, pnu, pnv);
-    proto_codec_params cp;
-    proto_codec_params_default(&cp);
-    cp.accuracy = k->accuracy;
     proto_buf pb;
-    proto_buf_init(&pb, 0);
     double max_err = 0;
-    t->result = proto_tile_encode_ctx(srv_tiles_codec_ctx(), (proto_codec)k->codec, &cp, T, T, k->channels, buf,
-                                      &pb, &max_err, NULL, 0);
+    t->result = srv_tiles_encode(k, T, buf, &pb, &max_err);
     free(buf);
-    if (t->result == OCEAN_OK && pb.len > UINT32_MAX) t->result = OCEAN_ETOOBIG;
-    if (t->result != OCEAN_OK) {
-        proto_buf_free(&pb);
+    if (t->result != OCEAN_OK)
         return;
-    }
     double sp = tb->patch[k->cascade] / tb->n * ldexp(1.0, k->level);
     proto_tile pt;
     memset(&pt, 0, sizeof pt);

@@ -189,24 +189,30 @@ void srv_tile_build(srv_tile *t, const ocean_frame *f)
         }
     }
     if (pnu) proto_normals_from_slopes(sx, sz, ns, pnu, pnv);
-    proto_codec_params cp;
-    proto_codec_params_default(&cp);
-    cp.accuracy = k->accuracy;
     proto_buf pb;
-    proto_buf_init(&pb, 0);
     double max_err = 0;
-    t->result = proto_tile_encode_ctx(srv_tiles_codec_ctx(), (proto_codec)k->codec, &cp, n, n,
-                                      k->channels, buf, &pb, &max_err, NULL, 0);
+    t->result = srv_tiles_encode(k, n, buf, &pb, &max_err);
     free(buf);
-    if (t->result == OCEAN_OK && pb.len > UINT32_MAX) t->result = OCEAN_ETOOBIG;
-    if (t->result != OCEAN_OK) {
-        proto_buf_free(&pb);
+    if (t->result != OCEAN_OK)
         return;
-    }
     /* Keep just the bytes (proto_buf with headroom 0 starts at mem). */
     t->payload = pb.mem;
     t->payload_len = (uint32_t)pb.len;
     t->error_bound = isfinite(max_err) && max_err >= 0 ? (float)max_err : 0.0f;
+}
+
+ocean_result srv_tiles_encode(const srv_tile_key *k, int n, const float *planes, proto_buf *out, double *max_err)
+{
+    proto_codec_params cp;
+    proto_codec_params_default(&cp);
+    cp.accuracy = k->accuracy;
+    proto_buf_init(out, 0);
+    *max_err = 0;
+    ocean_result r = proto_tile_encode_ctx(srv_tiles_codec_ctx(), (proto_codec)k->codec, &cp, n, n, k->channels,
+                                           planes, out, max_err, NULL, 0);
+    if (r == OCEAN_OK && out->len > UINT32_MAX) r = OCEAN_ETOOBIG;
+    if (r != OCEAN_OK) proto_buf_free(out);
+    return r;
 }
 
 void srv_tile_to_proto(const srv_tile *t, proto_tile *o)

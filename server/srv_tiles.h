@@ -85,6 +85,11 @@ void srv_tile_build(srv_tile *t, const ocean_frame *f);
  * daemon's worker threads. */
 proto_codec_ctx *srv_tiles_codec_ctx(void);
 
+/* Encodes the n x n planes of a tile with key k's codec and accuracy on the
+ * calling thread's codec context into *out (headroom 0, initialised here;
+ * freed on failure); *max_err gets the achieved error bound. */
+ocean_result srv_tiles_encode(const srv_tile_key *k, int n, const float *planes, proto_buf *out, double *max_err);
+
 /* Fills a proto_tile (for a FRAME) from a built entry. */
 void srv_tile_to_proto(const srv_tile *t, proto_tile *out);
 
