@@ -7,6 +7,7 @@
  * subscription, camera and queues exactly as they were.
  */
 #include "srv_client.h"
+#include "srv_cascade.h"
 
 #include <libwebsockets.h>
 #include <math.h>
@@ -461,6 +462,19 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
                  "%u levels, %u samples); keep it under 10 000 km", top, spacing, sub->lod_levels,
                  sub->tile_size);
         return OCEAN_EINVAL;
+    }
+    if (sub->layout == PROTO_LAYOUT_CASCADE) {
+        if (sub->mesh_kind != PROTO_MESH_CONCENTRIC && sub->mesh_kind != PROTO_MESH_NONE) {
+            snprintf(why, n, "subscribe.layout 1 (cascade tiles) places a concentric mesh or none; mesh_kind %s "
+                     "needs layout 0", mesh_kind_name((mesh_kind)sub->mesh_kind));
+            return OCEAN_EUNSUPPORTED;
+        }
+        uint32_t most = srv_cascade_max_tiles(&s->params, sub->layers, sub->tile_size);
+        if (most > PROTO_MAX_FRAME_TILES) {
+            snprintf(why, n, "subscribe.tile_size %u: a frame of layout 1 could need %u tiles, above the "
+                     "protocol's %u; ask for larger tiles", sub->tile_size, most, PROTO_MAX_FRAME_TILES);
+            return OCEAN_ETOOBIG;
+        }
     }
     sub->effects = (uint8_t)eff;
     if (sub->layers > s->params.cascades) sub->layers = (uint8_t)s->params.cascades;

@@ -109,6 +109,18 @@ static const conf_entry srv_entries[] = {
      .help = "Screen-space error budget of the concentric mesh; larger means fewer vertices "
              "(16 px keeps a 20 m camera at 1080p near 5 800 vertices, 70 KB a frame; 4 px "
              "gives 73 000). Clients render fine detail from the tiles."},
+    {.name = "server.px_per_sample", .type = CONF_DOUBLE, .offset = SRV(px_per_sample),
+     .min = 0.5, .max = 1024, .def = "24", .unit = "px",
+     .help = "Cascade tile layout: how many pixels one tile sample may span on screen at "
+             "its distance from the camera.  Finer detail travels as unresolved slope "
+             "variance for shading, so this trades bytes per viewer (about 1/q^2) against "
+             "how much of the sea the geometry carries."},
+    {.name = "server.frame_samples", .type = CONF_DOUBLE, .offset = SRV(frame_samples),
+     .min = 1024, .max = 16777216, .def = "40960",
+     .help = "Cascade tile layout: most tile samples one FRAME may carry.  A camera whose "
+             "footprint needs more (a large viewport, a camera near the water) reads coarser "
+             "mips until it fits.  40960 samples of the six planes of every effect are about "
+             "120 KB, 3.6 MB/s at 30 Hz."},
     {.name = "server.max_query_points", .type = CONF_INT, .offset = SRV(max_query_points),
      .min = 1, .max = 65536, .def = "65536",
      .help = "Most points one QUERY may carry."},

@@ -49,6 +49,8 @@ typedef struct srv_config {
     double base_spacing;         /* level-0 sample spacing when a client gives 0, m */
     double view_range;           /* mesh range when a client gives 0, m */
     double mesh_error_px;        /* concentric mesh screen error budget */
+    double px_per_sample;        /* layout 1: on-screen pixels one tile sample may span */
+    double frame_samples;        /* layout 1: most tile samples in one FRAME */
     int max_query_points;
     int max_pending_queries;     /* per client */
     int replay_queue;            /* pending replay cameras per client */

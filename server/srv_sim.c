@@ -21,6 +21,7 @@
 
 #include "gerstner.h"
 #include "query.h"
+#include "srv_cascade.h"
 #include "srv_tiles.h"
 
 #define EVAL_MAX 8
@@ -86,6 +87,7 @@ struct srv_sim {
     eval_entry ev[EVAL_MAX];
     uint64_t use;
     srv_tile_cache *tiles;
+    srv_cascade *casc;          /* layout-1 products shared by every camera */
     uint64_t gen;
     uint64_t tick_no;
     double camera_hint[5];
@@ -150,6 +152,7 @@ ocean_result srv_sim_create(srv_hub *h, srv_sim **out, char *msg, size_t msglen)
     pthread_mutex_unlock(&h->lock);
     ocean_result r = make_ocean(&s->set, &s->set.params, &s->oc, &s->g, msg, msglen);
     if (r == OCEAN_OK) r = srv_tiles_create(&s->tiles);
+    if (r == OCEAN_OK) r = srv_cascade_create(&s->casc);
     if (r != OCEAN_OK) {
         srv_sim_destroy(s);
         return r;
@@ -169,6 +172,7 @@ void srv_sim_destroy(srv_sim *s)
     srv_sim_stop(s);
     eval_clear(s);
     srv_tiles_destroy(s->tiles);
+    srv_cascade_destroy(s->casc);
     ocean_gerstner_destroy(s->g);
     ocean_destroy(s->oc);
     ocean_gerstner_destroy(s->next_g);
@@ -317,6 +321,60 @@ static void choose_cutoff(srv_sim *s, srv_client *c, job *j)
     if (sub->mesh_kind != PROTO_MESH_NONE)
         j->need |= OCEAN_FX_HEIGHT | (sub->effects & OCEAN_FX_DISPLACEMENT);
     if (!(j->need & OCEAN_FX_ALL)) j->need |= OCEAN_FX_HEIGHT;
+}
+
+/* The velocity policy's cutoff for a layout-1 frame.  Tiles of that layout
+ * are world-fixed samples: a sample that does not move does not see the
+ * camera's motion, so the antialias policy's temporal limit
+ * (omega + |v| k < pi fps) does not apply to them and only the level's own
+ * spacing limits what it carries (PROTOCOL.md "Layouts").  The seed policy
+ * (f_c = f_base + beta |v|, as seed 000 writes it) still chooses a cutoff;
+ * what it removes is carried as unresolved slope variance. */
+static double layout1_policy(srv_sim *s, srv_client *c, const proto_camera *cam)
+{
+    const proto_subscribe *sub = &c->sim.sub;
+    if (sub->cutoff_policy != PROTO_CUTOFF_SEED) return INFINITY;
+    ocean_filter_client cl;
+    cl.speed_mps = sqrt((double)cam->vel[0] * cam->vel[0] + (double)cam->vel[1] * cam->vel[1] +
+                        (double)cam->vel[2] * cam->vel[2]);
+    cl.fps = sub->frame_rate_hz;
+    cl.spacing_m = base_spacing(s, sub);
+    ocean_filter_cutoff cut;
+    if (ocean_filter_cutoff_compute(&s->fcfg, OCEAN_FILTER_SEED, &cl, &cut) != OCEAN_OK) return INFINITY;
+    return cut.k > 0 ? cut.k : INFINITY;
+}
+
+/* Builds the layout-1 frames of a batch and hands them to their clients. */
+static void run_cascade(srv_sim *s, srv_cascade_job *cj, int n, double tick_wall)
+{
+    if (n <= 0) return;
+    srv_stats *st = &s->hub->stats;
+    s->gen++;
+    double p0 = srv_now();
+    srv_cascade_run(s->casc, s->oc, s->g, s->fcfg.order, &s->set.srv, st, cj, n, s->gen);
+    static int prof = -1;
+    if (prof < 0) prof = getenv("OCEAND_PROFILE") != NULL;
+    if (prof) fprintf(stderr, "cascade batch %d jobs: %.2f ms\n", n, (srv_now() - p0) * 1e3);
+    for (int i = 0; i < n; i++) {
+        srv_cascade_job *j = &cj[i];
+        if (!j->frame) {
+            srv_msg_free(j->topo);
+            j->topo = NULL;
+            continue;
+        }
+        j->frame->is_frame = 1;
+        j->frame->tick_wall = tick_wall;
+        if (j->topo) j->topo->tick_wall = tick_wall;
+        atomic_fetch_add(&st->frames_built, 1);
+        if (j->replay) {
+            if (j->topo) srv_client_queue(j->c, j->topo);
+            srv_client_queue(j->c, j->frame);
+        } else {
+            srv_client_publish(j->c, j->topo, j->frame);
+        }
+        j->topo = j->frame = NULL;
+    }
+    srv_hub_wake_net(s->hub);
 }
 
 /* Rebuilds the client's mesh object after a new subscription. */
@@ -875,6 +933,7 @@ static void maybe_swap_sea(srv_sim *s, double t)
     if (!s->next_oc || t < s->next_eff) return;
     eval_clear(s);
     srv_tiles_clear(s->tiles);
+    srv_cascade_reset(s->casc);
     ocean_gerstner_destroy(s->g);
     ocean_destroy(s->oc);
     s->oc = s->next_oc;
@@ -909,6 +968,8 @@ typedef struct work {
     int ncl, capcl;
     job *jobs;
     int njobs, capjobs;
+    srv_cascade_job *cjobs;   /* layout 1 */
+    int ncjobs, capcjobs;
     srv_query **q;       /* taken queries, parallel to qc */
     srv_client **qc;
     int nq, capq, capqc;
@@ -1056,8 +1117,10 @@ static void *sim_main(void *arg)
         }
         maybe_swap_sea(s, live_due ? t : srv_hub_sim_time(h));
 
-        /* filter jobs: apply subscriptions, cutoffs; drop due-checks */
+        /* filter jobs: apply subscriptions, cutoffs; drop due-checks;
+         * layout-1 jobs go to the shared cascade products */
         int n = 0;
+        w.ncjobs = 0;
         for (int i = 0; i < w.njobs; i++) {
             job j = w.jobs[i];
             srv_client *c = j.c;
@@ -1073,9 +1136,23 @@ static void *sim_main(void *arg)
             } else {
                 j.tick = (uint32_t)(int64_t)llround(j.t * rate);
             }
+            if (c->sim.sub.layout == PROTO_LAYOUT_CASCADE) {
+                if (!grow((void **)&w.cjobs, &w.capcjobs, w.ncjobs + 1, sizeof *w.cjobs)) continue;
+                srv_cascade_job *q = &w.cjobs[w.ncjobs++];
+                memset(q, 0, sizeof *q);
+                q->c = c;
+                q->t = j.t;
+                q->cam = j.cam;
+                q->cam_seq = j.cam_seq;
+                q->tick = j.tick;
+                q->replay = j.replay == 1;
+                q->policy_k = layout1_policy(s, c, &j.cam);
+                continue;
+            }
             choose_cutoff(s, c, &j);
             w.jobs[n++] = j;
         }
+        run_cascade(s, w.cjobs, w.ncjobs, tick_wall);
         /* batches of at most EVAL_MAX / 2 distinct evaluations */
         int start = 0;
         while (start < n) {
@@ -1102,6 +1179,7 @@ static void *sim_main(void *arg)
         for (int i = 0; i < w.ncl; i++) srv_client_unref(w.cl[i]);
         if (live_due) {
             srv_tiles_sweep(s->tiles, s->gen > 1 ? s->gen - 1 : 0);
+            srv_cascade_sweep(s->casc, s->gen > 1 ? s->gen - 1 : 0);
             next_tick_wall = h->wall0 + (double)(tick_no + 1) / rate;
             double dt = srv_now() - t0;
             atomic_fetch_add(&h->stats.ticks, 1);
@@ -1112,6 +1190,7 @@ static void *sim_main(void *arg)
     }
     free(w.cl);
     free(w.jobs);
+    free(w.cjobs);
     free(w.q);
     free(w.qc);
     return NULL;

@@ -262,6 +262,16 @@ ocean_result mesh_build(mesh *m, const mesh_camera *cam)
     return r;
 }
 
+ocean_result mesh_place(mesh *m, const mesh_camera *cam)
+{
+    if (!m || m->cfg.kind != MESH_CONCENTRIC)
+        return mesh_build(m, cam);
+    m->place_only = 1;
+    ocean_result r = mesh_build(m, cam);
+    m->place_only = 0;
+    return r;
+}
+
 void mesh_get_view(const mesh *m, mesh_view *v)
 {
     memset(v, 0, sizeof *v);

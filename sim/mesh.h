@@ -151,6 +151,12 @@ typedef struct mesh_view {
     uint64_t topology_key;     /* equal keys <=> identical indices and base */
     int levels;                /* number of LOD levels present */
 } mesh_view;
+/* mesh_build for clients that morph and displace the flat mesh themselves
+ * (the cascade tile layout): the topology (rebuilt only when the plan
+ * changes), origin and info, without the per-vertex positions and morph
+ * weights of mesh_build, which are left as they were.  Concentric meshes
+ * only; other kinds are built in full. */
+ocean_result mesh_place(mesh *m, const mesh_camera *cam);
 void mesh_get_view(const mesh *m, mesh_view *out);
 
 /* The plan behind the last build. */

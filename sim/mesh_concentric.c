@@ -181,6 +181,8 @@ ocean_result mesh_build_concentric(mesh *m, const mesh_camera *cam)
     m->origin[2] = oz;
     fill_info(m, &p);
     m->info.rebuilt = rebuilt;
+    if (m->place_only)
+        return OCEAN_OK; /* the client morphs and displaces (mesh_place) */
     memcpy(m->pos, m->base, (size_t)m->nv * 3 * sizeof *m->pos);
     update_morph(m, &p, cam);
     return OCEAN_OK;

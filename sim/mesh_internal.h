@@ -48,6 +48,7 @@ struct mesh {
     uint32_t *idx;
     int levels;
     int32_t lvl_units[MESH_MAX_LEVELS];/* cell side of each level, units */
+    int place_only;                    /* mesh_place: skip per-vertex positions and morph */
     mesh_info info;
     /* Displacement scratch: each vertex's own sample, and the vertices at
      * the three coarse corners a morphing vertex interpolates (3 per

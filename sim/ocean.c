@@ -532,6 +532,59 @@ static double filter_error(ocean *o, double kc, int order, double scale, double 
     return v;
 }
 
+ocean_result ocean_cascade_mips(const ocean *o, int c, int order, int max_mips, int *mips, double *kc)
+{
+    if (!o || c < 0 || c >= o->p.cascades || order < 1 || order > OCEAN_FILTER_MAX_ORDER || max_mips < 1 ||
+        !mips || !kc)
+        return OCEAN_EINVAL;
+    const cascade *cs = &o->cas[c];
+    int m = 0;
+    kc[m++] = INFINITY;
+    for (int n = o->p.n / 2; n >= OCEAN_MIN_N && m < max_mips; n /= 2) {
+        double k = (double)(n / 4) * cs->dk;
+        /* no wave of the band survives: this mip and all coarser are empty */
+        if (cs->k_lo >= negligible_k(o, k, order))
+            break;
+        kc[m++] = k;
+    }
+    *mips = m;
+    return OCEAN_OK;
+}
+
+ocean_result ocean_cascade_moments(const ocean *o, int c, double kc, int order, ocean_moments *out)
+{
+    if (!o || !out || c < 0 || c >= o->p.cascades || isnan(kc) || kc < 0.0 || order < 1 ||
+        order > OCEAN_FILTER_MAX_ORDER)
+        return OCEAN_EINVAL;
+    const cascade *cs = &o->cas[c];
+    double kneg = negligible_k(o, kc, order);
+    int n = o->p.n, half = n / 2 + 1;
+    double vh = 0, sx = 0, sz = 0, sxz = 0, total = 0;
+    for (int row = 0; row < n; row++) {
+        double kz = (row < n / 2 ? row : row - n) * cs->dk;
+        for (int ix = 0; ix < half; ix++) {
+            size_t i = (size_t)row * half + ix;
+            if (cs->var[i] == 0.0f)
+                continue;
+            double w = (ix == 0 ? 1.0 : 2.0) * cs->var[i];
+            double g = isinf(kc) ? 1.0 : effective_gain(cs->k[i], kc, order, kneg);
+            double rem = w * (1.0 - g * g);
+            double kx = cs->kx[ix];
+            total += w;
+            vh += rem;
+            sx += rem * kx * kx;
+            sz += rem * kz * kz;
+            sxz += rem * kx * kz;
+        }
+    }
+    out->var_h = vh;
+    out->mss_x = sx;
+    out->mss_z = sz;
+    out->mss_xz = sxz;
+    out->total_var_h = total;
+    return OCEAN_OK;
+}
+
 double ocean_filtered_variance(const ocean *o, double cutoff_k, int order)
 {
     double total, kept, err;
@@ -874,14 +927,26 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
     if (!isfinite(t) || isnan(r->cutoff_k) || r->cutoff_k < 0.0 || r->order < 1 ||
         r->order > OCEAN_FILTER_MAX_ORDER || !isfinite(r->low_boost) || r->low_boost < 0.0 || r->low_boost > 2.0)
         return OCEAN_EINVAL;
-    double kc = ocean_effective_cutoff(o, r->cutoff_k, r->order);
-    double kneg = negligible_k(o, kc, r->order);
-    double scale = r->redistribute && !isinf(kc) ? redistribution_scale(o, kc, r->order) : 1.0;
+    if (r->per_cascade) {
+        if (r->redistribute || (r->low_boost != 0.0 && r->low_boost != 1.0))
+            return OCEAN_EINVAL;
+        for (int c = 0; c < o->p.cascades; c++)
+            if (isnan(r->cascade_cutoff_k[c]) || r->cascade_cutoff_k[c] < 0.0)
+                return OCEAN_EINVAL;
+    }
+    double kc_all = ocean_effective_cutoff(o, r->cutoff_k, r->order);
+    double kneg_all = negligible_k(o, kc_all, r->order);
+    double scale = r->redistribute && !isinf(kc_all) ? redistribution_scale(o, kc_all, r->order) : 1.0;
     double boost = r->low_boost > 0.0 ? r->low_boost : 1.0;
     int n_full = o->p.n;
     int transforms = 0;
     for (int c = 0; c < o->p.cascades; c++) {
         cascade *cs = &o->cas[c];
+        double kc = kc_all, kneg = kneg_all;
+        if (r->per_cascade) {
+            kc = r->cascade_cutoff_k[c];
+            kneg = negligible_k(o, kc, r->order);
+        }
         unsigned fx = r->effects[c] & (OCEAN_FX_ALL | OCEAN_FX_VELOCITY);
         int ch[CH_COUNT];
         int nch = channel_list(fx, ch);
@@ -929,10 +994,10 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
         }
     }
     f->info.t = t;
-    f->info.cutoff_k = kc;
+    f->info.cutoff_k = r->per_cascade ? NAN : kc_all;
     f->info.transforms = transforms;
     f->info.cascades = o->p.cascades;
-    f->info.e_error = filter_error(o, kc, r->order, scale, boost);
+    f->info.e_error = r->per_cascade ? 0.0 : filter_error(o, kc_all, r->order, scale, boost);
     o->counters.evaluations++;
     o->counters.transforms += (uint64_t)transforms;
     return OCEAN_OK;

@@ -106,6 +106,12 @@ typedef struct ocean_request {
                          queries and tiles form J from Dxx, Dzz, Dxz at the
                          point and need no map, so the daemon leaves it 0
                          and skips a full pass over the field. */
+    int per_cascade;  /* 1: cascade c is filtered at cascade_cutoff_k[c]
+                         instead of cutoff_k (the mips of ocean_cascade_mips:
+                         one frame holds the same mip level of every
+                         cascade); redistribute and low_boost must be off,
+                         and the frame's e_error is then 0 (not computed) */
+    double cascade_cutoff_k[OCEAN_MAX_CASCADES];
 } ocean_request;
 
 /* An unfiltered request for the given effects on every cascade, with the
@@ -246,6 +252,30 @@ typedef struct ocean_counters {
     uint64_t transforms_by_effect[5];  /* height, displacement, normals, foam, velocity */
 } ocean_counters;
 void ocean_get_counters(const ocean *o, ocean_counters *out);
+
+/* The pyramid of band-limited grids ("mips") of cascade c that the
+ * cascade tile layout streams (PROTOCOL.md "Cascade mips"): mip m is the
+ * cascade on a grid of n / 2^m at cutoff kc[m] (kc[0] = INFINITY, the
+ * whole cascade; kc[m] = (n / 2^(m+2)) dk for m >= 1: the Butterworth
+ * cutoff at half the mip's Nyquist, whose gain-1/2 point still lies below
+ * that Nyquist, so an ocean_evaluate at kc[m] runs on exactly n / 2^m).
+ * *mips counts the mips that hold any wave (at most max_mips, grids of at
+ * least OCEAN_MIN_N).  OCEAN_EINVAL for a bad cascade or order. */
+ocean_result ocean_cascade_mips(const ocean *o, int c, int order, int max_mips, int *mips, double *kc);
+
+/* Second moments of the waves of cascade c that a Butterworth mask
+ * (kc, order) does not carry, as ocean_evaluate applies it (waves below
+ * drop_gain left out entirely): each wave weighs E|h|^2 (1 - g^2), so
+ * carried + removed = the cascade's whole energy.  Time-independent
+ * expectations over the random amplitudes.  kc = INFINITY removes nothing,
+ * kc = 0 everything.  The slope moments are what a renderer adds as
+ * unresolved roughness (Bruneton, Neyret & Holzschuch 2010). */
+typedef struct ocean_moments {
+    double var_h;                 /* height variance removed, m^2 */
+    double mss_x, mss_z, mss_xz;  /* E[(d eta/dx)^2], E[(d eta/dz)^2], E[...x ...z] removed */
+    double total_var_h;           /* the cascade's whole height variance, m^2 */
+} ocean_moments;
+ocean_result ocean_cascade_moments(const ocean *o, int c, double kc, int order, ocean_moments *out);
 
 /* Variance the band of o holds after a Butterworth mask (cutoff_k, order);
  * used for E_error and the energy partition. */

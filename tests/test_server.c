@@ -31,6 +31,7 @@
 #include "gerstner.h"
 #include "oceanclient.h"
 #include "query.h"
+#include "srv_cascade.h"
 #include "srv_daemon.h"
 #include "lib/test_ws.h"
 
@@ -306,6 +307,237 @@ static void frames_tiles_and_mesh_decode(void **state)
     ocean_frame_destroy(lf);
     ocean_destroy(o);
     oc_client_destroy(c);
+}
+
+
+/* ---- layout 1: cascade tiles ---------------------------------------------------- */
+
+static void cascade_subscribe(proto_subscribe *s)
+{
+    oc_subscribe_default(s);
+    s->layout = PROTO_LAYOUT_CASCADE;
+    s->effects = PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT | PROTO_FX_NORMALS | PROTO_FX_FOAM;
+    s->layers = 2;
+    s->tile_size = 32;
+    s->mesh_kind = PROTO_MESH_NONE;
+}
+
+/* The first frame answering camera seq `seq` (NULL after ms). */
+static oc_frame *frame_for(oc_client *c, uint32_t seq, int ms)
+{
+    double end = now_s() + ms / 1000.0;
+    while (now_s() < end) {
+        oc_frame *f = NULL;
+        if (oc_client_next_frame(c, 20, &f) != OCEAN_OK) continue;
+        if (f->info.camera_seq == seq) return f;
+        oc_frame_free(f);
+    }
+    return NULL;
+}
+
+/* Layout 1: every tile is a grid point copy of its cascade's mip as the
+ * simulation evaluates it (at the mip's cutoff, on the mip's grid), the
+ * block describes the pyramid, and each mip the lod rule reads around
+ * the camera is there (PROTOCOL.md "Where each mip is read"). */
+static void cascade_tiles_are_the_mips(void **state)
+{
+    (void)state;
+    oc_client *c = connect_client(port, NULL);
+    proto_subscribe s;
+    cascade_subscribe(&s);
+    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.pos[0] = 1234.5;
+    cam.pos[1] = 25;
+    cam.pos[2] = -987.25;
+    uint32_t seq;
+    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+    oc_frame *f = frame_for(c, seq, 5000);
+    assert_non_null(f);
+    assert_int_equal(f->info.layout, PROTO_LAYOUT_CASCADE);
+    const proto_cascade_block *b = &f->info.cascades;
+    assert_int_equal(b->cascade_count, 2);
+    assert_true(b->camera[0] == cam.pos[0] && b->camera[1] == cam.pos[1] && b->camera[2] == cam.pos[2]);
+    assert_true(b->spacing_per_m > 0);
+    ocean *o = local_ocean();
+    ocean_frame *lf;
+    assert_int_equal(ocean_frame_create(o, &lf), OCEAN_OK);
+    int mips[2];
+    double kc[2][PROTO_MAX_MIPS];
+    for (int k = 0; k < 2; k++) {
+        assert_int_equal(ocean_cascade_mips(o, k, b->order, PROTO_MAX_MIPS, &mips[k], kc[k]), OCEAN_OK);
+        assert_int_equal(b->cascade[k].mips, mips[k]);
+        assert_true(b->cascade[k].patch_m > 0 && b->cascade[k].n == settings.params.n);
+        /* the moments grow as mips lose waves; the whole cascade lacks the most */
+        for (int m = 0; m < mips[k]; m++)
+            assert_true(b->cascade[k].mip[m].mss_x + b->cascade[k].mip[m].mss_z <=
+                        b->cascade[k].mip[m + 1].mss_x + b->cascade[k].mip[m + 1].mss_z);
+        assert_true(b->cascade[k].mip[mips[k]].mss_x > 0);
+    }
+    /* which (cascade, mip) pairs the rule reads near the camera */
+    int seen[2][PROTO_MAX_MIPS] = {{0}}, checked = 0;
+    for (int m = 0; m < PROTO_MAX_MIPS; m++) {
+        ocean_request rq;
+        memset(&rq, 0, sizeof rq);
+        int any = 0;
+        for (int k = 0; k < 2; k++) {
+            if (m >= mips[k]) continue;
+            rq.effects[k] = OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT | OCEAN_FX_NORMALS | OCEAN_FX_FOAM;
+            rq.cascade_cutoff_k[k] = kc[k][m];
+            any = 1;
+        }
+        if (!any) break;
+        rq.cutoff_k = INFINITY;
+        rq.order = b->order;
+        rq.low_boost = 1;
+        rq.per_cascade = 1;
+        rq.foam_map = 1;
+        assert_int_equal(ocean_evaluate(o, f->hdr.sim_time, &rq, lf), OCEAN_OK);
+        for (int t = 0; t < f->info.tile_count; t++) {
+            const oc_tile *tl = &f->tiles[t];
+            if (tl->info.level != m) continue;
+            int k = tl->info.cascade;
+            assert_true(k < 2);
+            assert_int_equal(tl->decode_result, OCEAN_OK);
+            const ocean_field *fd = ocean_frame_field(lf, k);
+            int np = settings.params.n >> m, T = np < 32 ? np : 32;
+            assert_int_equal(tl->info.width, T);
+            assert_int_equal(fd->n, np);
+            double sp = b->cascade[k].patch_m / b->cascade[k].n * ldexp(1.0, m);
+            assert_true(tl->info.spacing == sp);
+            assert_true(tl->info.origin_x == tl->info.ix * T * sp && tl->info.origin_z == tl->info.iz * T * sp);
+            assert_true(tl->info.ix >= 0 && tl->info.ix < np / T && tl->info.iz >= 0 && tl->info.iz < np / T);
+            for (int i = 0; i < T; i += 3)
+                for (int j = 0; j < T; j += 5) {
+                    size_t g = (size_t)(tl->info.iz * T + i) * (size_t)np + (size_t)(tl->info.ix * T + j);
+                    assert_true(fabs(tl->data[i * T + j] - fd->height[g]) <= tl->info.error_bound + 1e-5);
+                    checked++;
+                }
+            seen[k][m] = 1;
+        }
+    }
+    assert_true(checked > 100);
+    /* the camera's own tile of every mip the rule reads at its nadir is there */
+    double cy = fmax(fabs(cam.pos[1]), 1.0), s0 = b->spacing_per_m * cy;
+    for (int k = 0; k < 2; k++) {
+        double sigma = b->cascade[k].patch_m / b->cascade[k].n;
+        double lam = log2(s0 / sigma);
+        int m = lam <= 0 ? 0 : (int)floor(lam);
+        if (m > mips[k] - 1) m = mips[k] - 1;
+        assert_true(seen[k][m]);
+        int np = settings.params.n >> m, T = np < 32 ? np : 32;
+        double w = T * sigma * ldexp(1.0, m), P = b->cascade[k].patch_m;
+        int ix = (int)floor(fmod(fmod(cam.pos[0], P) + P, P) / w), iz = (int)floor(fmod(fmod(cam.pos[2], P) + P, P) / w);
+        int found = 0;
+        for (int t = 0; t < f->info.tile_count; t++)
+            found |= f->tiles[t].info.cascade == k && f->tiles[t].info.level == m && f->tiles[t].info.ix == ix &&
+                     f->tiles[t].info.iz == iz;
+        assert_true(found);
+    }
+    oc_frame_free(f);
+    ocean_frame_destroy(lf);
+    ocean_destroy(o);
+    /* what layout 1 cannot serve is refused before any work, naming why */
+    char e[512] = "";
+    proto_subscribe bad = s;
+    bad.mesh_kind = PROTO_MESH_PROJECTED;
+    assert_int_equal(oc_client_subscribe(c, &bad), OCEAN_OK);
+    for (int i = 0; i < 100 && oc_client_last_error(c, e, sizeof e) != OCEAN_EUNSUPPORTED; i++) oc_service(c, 20);
+    assert_int_equal(oc_client_last_error(c, e, sizeof e), OCEAN_EUNSUPPORTED);
+    assert_non_null(strstr(e, "layout"));
+    oc_client_destroy(c);
+}
+
+/* Layout 1 shares work across cameras: viewers 2 km apart get
+ * byte-identical records for the tiles they have in common, and the
+ * tiles the daemon encodes per tick stay bounded by the pyramid however
+ * many cameras there are. */
+static void cascade_tiles_shared_across_cameras(void **state)
+{
+    (void)state;
+    /* a pyramid of 2-sample tiles cannot fit a frame at N = 256: such a
+     * subscription is refused (srv_client.c) before any work */
+    ocean_params big = settings.params;
+    big.n = 256;
+    big.cascades = 3;
+    assert_true(srv_cascade_max_tiles(&big, 3, 2) > PROTO_MAX_FRAME_TILES);
+    assert_int_equal(srv_cascade_max_tiles(&big, 3, 32), 3 * (64 + 16 + 4 + 1 + 1 + 1));
+    srv_hub *h = srv_daemon_hub(daemon_);
+    enum { NV = 8 };
+    oc_client *v[NV];
+    uint32_t seq[NV];
+    proto_subscribe s;
+    cascade_subscribe(&s);
+    for (int i = 0; i < NV; i++) {
+        v[i] = connect_bg(port);
+        assert_int_equal(oc_client_subscribe(v[i], &s), OCEAN_OK);
+        proto_camera cam;
+        oc_camera_default(&cam);
+        cam.pos[0] = 2000.0 * i + 0.5;
+        cam.pos[1] = 25;
+        cam.pos[2] = -1500.0 * i;
+        assert_int_equal(oc_client_send_camera(v[i], &cam, &seq[i]), OCEAN_OK);
+    }
+    /* every viewer has its first frame, then count a few ticks */
+    oc_frame *first[NV];
+    for (int i = 0; i < NV; i++) {
+        first[i] = frame_for(v[i], seq[i], 5000);
+        assert_non_null(first[i]);
+    }
+    uint64_t e0 = stat_of(&h->stats.tiles_encoded), t0 = stat_of(&h->stats.ticks);
+    uint64_t hit0 = stat_of(&h->stats.tile_cache_hits);
+    /* a few ticks pass with every camera live */
+    for (double until = now_s() + 10; now_s() < until && stat_of(&h->stats.ticks) < t0 + 3;) usleep(10000);
+    uint64_t e1 = stat_of(&h->stats.tiles_encoded), t1 = stat_of(&h->stats.ticks);
+    for (int i = 0; i < NV; i++) drain_frames(v[i]);
+    /* two viewers' frames of one tick */
+    enum { KEEP = 16 };
+    oc_frame *fa[KEEP] = {0}, *fb[KEEP] = {0}, *a = NULL, *bb = NULL;
+    int na = 0, nb = 0;
+    double end = now_s() + 5;
+    while (now_s() < end && !a) {
+        oc_frame *f;
+        if (na < KEEP && oc_client_next_frame(v[0], 5, &f) == OCEAN_OK) fa[na++] = f;
+        if (nb < KEEP && oc_client_next_frame(v[3], 5, &f) == OCEAN_OK) fb[nb++] = f;
+        for (int i = 0; i < na && !a; i++)
+            for (int j = 0; j < nb && !a; j++)
+                if (fa[i]->info.tick == fb[j]->info.tick && fa[i]->info.camera_seq == seq[0] &&
+                    fb[j]->info.camera_seq == seq[3]) {
+                    a = fa[i];
+                    bb = fb[j];
+                    fa[i] = fb[j] = NULL;
+                }
+        if (na == KEEP && nb == KEEP && !a) break;
+    }
+    for (int i = 0; i < KEEP; i++) {
+        oc_frame_free(fa[i]);
+        oc_frame_free(fb[i]);
+    }
+    assert_non_null(a);
+    uint32_t pyramid = srv_cascade_max_tiles(&settings.params, 2, 32);
+    assert_true(t1 > t0);
+    /* cameras far apart still reuse each other's encoded tiles */
+    assert_true(stat_of(&h->stats.tile_cache_hits) > hit0);
+    /* at most one pyramid per tick, shared by all NV cameras (+1 tick of slack) */
+    assert_true(e1 - e0 <= (uint64_t)pyramid * (t1 - t0 + 1));
+    assert_int_equal(a->info.tick, bb->info.tick);
+    int common = 0;
+    for (int i = 0; i < a->info.tile_count; i++)
+        for (int j = 0; j < bb->info.tile_count; j++) {
+            const proto_tile *x = &a->tiles[i].info, *y = &bb->tiles[j].info;
+            if (x->cascade != y->cascade || x->level != y->level || x->ix != y->ix || x->iz != y->iz) continue;
+            assert_int_equal(x->payload_len, y->payload_len);
+            assert_memory_equal(x->payload, y->payload, x->payload_len);
+            common++;
+        }
+    assert_true(common > 0);
+    oc_frame_free(a);
+    oc_frame_free(bb);
+    for (int i = 0; i < NV; i++) {
+        oc_frame_free(first[i]);
+        oc_client_destroy(v[i]);
+    }
 }
 
 /* The cutoff follows the reported speed under each policy: it moves to
@@ -1117,6 +1349,8 @@ int main(int argc, char **argv)
     snprintf(exe_dir, sizeof exe_dir, "%s", dirname(dirname(tmp)));
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(frames_tiles_and_mesh_decode),
+        cmocka_unit_test(cascade_tiles_are_the_mips),
+        cmocka_unit_test(cascade_tiles_shared_across_cameras),
         cmocka_unit_test(cutoff_follows_velocity),
         cmocka_unit_test(queries_agree_with_sim),
         cmocka_unit_test(identical_cameras_share_tiles),

@@ -1,0 +1,813 @@
+/*
+ * srv_cascade.c - the cascade tile layout (see srv_cascade.h).
+ *
+ * Per batch:
+ *   1. plan every job: from its camera, the (cascade, mip) pairs it reads
+ *      and the tile index ranges of each (PROTOCOL.md "Where each mip is
+ *      read"; the daemon and every client apply the same rule);
+ *   2. per distinct time: evaluate each needed mip level once (all cascades
+ *      in one ocean_evaluate, each at its own cutoff), then encode the
+ *      tiles no earlier job of this tick asked for, in parallel, straight
+ *      into FRAME records (proto_tile_record_encode);
+ *   3. per job: the cascade block, the records, the mesh placement (and a
+ *      MESH_TOPOLOGY when the client's mesh plan changed); jobs whose
+ *      frames would be byte-identical but for the per-client fields share
+ *      one encoding.
+ */
+#include "srv_cascade.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gerstner.h"
+#include "mesh.h"
+
+#define MAX_MIPS PROTO_MAX_MIPS
+#define NBUCKETS 4096
+
+/* One encoded tile: a ready FRAME record. */
+typedef struct ctile {
+    struct ctile *next;
+    uint64_t hash, last_use;
+    struct ckey {
+        double t;
+        float accuracy;
+        int32_t ix, iz;
+        uint16_t channels, size;
+        uint8_t cascade, mip, codec, pad_;
+    } key;
+    ocean_result result;
+    uint8_t *rec;          /* record bytes: head, TILE body, padding */
+    size_t rec_len;
+} ctile;
+
+/* Time-independent facts of the current ocean (per filter order). */
+typedef struct tables {
+    const ocean *oc;
+    int order;
+    int cascades, n;
+    double patch[OCEAN_MAX_CASCADES];
+    int mips[OCEAN_MAX_CASCADES];
+    double kc[OCEAN_MAX_CASCADES][MAX_MIPS];
+    /* mip table entries: [m] for m < mips = what mip m lacks; [mips] = all */
+    proto_mip_entry entry[OCEAN_MAX_CASCADES][PROTO_MIP_ENTRIES];
+    double var_removed[OCEAN_MAX_CASCADES][PROTO_MIP_ENTRIES];
+    double total_var;      /* all cascades, m^2 */
+    const ocean_gerstner *g;
+    double near_mss[3];    /* the Gerstner near field's slope moments */
+} tables;
+
+struct srv_cascade {
+    tables tab;
+    int tab_valid;
+    ocean_frame *mipf[MAX_MIPS];  /* mip level m of every cascade, this batch */
+    ctile *b[NBUCKETS];
+    size_t count;
+};
+
+/* A job's plan: which tiles of which mips. */
+typedef struct range {
+    int32_t x0, nx, z0, nz;  /* first index and count, wrapping mod ntile */
+} range;
+
+typedef struct plan {
+    int ok;
+    int layers;
+    double q, min_spacing;
+    unsigned channels;
+    int need[OCEAN_MAX_CASCADES][MAX_MIPS];
+    range r[OCEAN_MAX_CASCADES][MAX_MIPS];
+    int tiles;
+    ctile **list;          /* the records, in frame order */
+    int has_mesh;
+    mesh_view mv;
+    mesh_info mi;
+    int share_with;        /* index of the job whose bytes this one shares, or itself */
+} plan;
+
+ocean_result srv_cascade_create(srv_cascade **out)
+{
+    *out = calloc(1, sizeof **out);
+    return *out ? OCEAN_OK : OCEAN_ENOMEM;
+}
+
+static void tiles_clear(srv_cascade *k)
+{
+    for (int i = 0; i < NBUCKETS; i++)
+        while (k->b[i]) {
+            ctile *t = k->b[i];
+            k->b[i] = t->next;
+            free(t->rec);
+            free(t);
+        }
+    k->count = 0;
+}
+
+void srv_cascade_reset(srv_cascade *k)
+{
+    if (!k)
+        return;
+    tiles_clear(k);
+    k->tab_valid = 0;
+}
+
+void srv_cascade_destroy(srv_cascade *k)
+{
+    if (!k)
+        return;
+    tiles_clear(k);
+    for (int m = 0; m < MAX_MIPS; m++)
+        ocean_frame_destroy(k->mipf[m]);
+    free(k);
+}
+
+void srv_cascade_sweep(srv_cascade *k, uint64_t keep_from)
+{
+    for (int i = 0; i < NBUCKETS; i++) {
+        ctile **p = &k->b[i];
+        while (*p) {
+            ctile *t = *p;
+            if (t->last_use < keep_from) {
+                *p = t->next;
+                free(t->rec);
+                free(t);
+                k->count--;
+            } else {
+                p = &t->next;
+            }
+        }
+    }
+}
+
+unsigned srv_cascade_channels(unsigned fx)
+{
+    unsigned ch = 0;
+    if (fx & PROTO_FX_HEIGHT) ch |= PROTO_CH_HEIGHT;
+    if (fx & PROTO_FX_DISPLACEMENT) ch |= PROTO_CH_DX | PROTO_CH_DZ;
+    if (fx & PROTO_FX_NORMALS) ch |= PROTO_CH_NORMAL;
+    if (fx & PROTO_FX_FOAM) ch |= PROTO_CH_FOAM;
+    return ch;
+}
+
+static unsigned ocean_fx_of(unsigned ch)
+{
+    unsigned fx = 0;
+    if (ch & PROTO_CH_HEIGHT) fx |= OCEAN_FX_HEIGHT;
+    if (ch & (PROTO_CH_DX | PROTO_CH_DZ)) fx |= OCEAN_FX_DISPLACEMENT;
+    if (ch & PROTO_CH_NORMAL) fx |= OCEAN_FX_NORMALS;
+    if (ch & PROTO_CH_FOAM) fx |= OCEAN_FX_FOAM;
+    return fx;
+}
+
+uint32_t srv_cascade_max_tiles(const ocean_params *p, int layers, int tile_size)
+{
+    uint64_t total = 0;
+    int cascades = layers < p->cascades ? layers : p->cascades;
+    for (int m = 0; m < MAX_MIPS && (p->n >> m) >= OCEAN_MIN_N; m++) {
+        int np = p->n >> m, t = tile_size < np ? tile_size : np;
+        uint64_t per = (uint64_t)(np / t) * (uint64_t)(np / t);
+        total += per * (uint64_t)cascades;
+    }
+    return total > UINT32_MAX ? UINT32_MAX : (uint32_t)total;
+}
+
+/* ---- tables -------------------------------------------------------------- */
+
+static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstner *g, int order)
+{
+    memset(tb, 0, sizeof *tb);
+    tb->g = g;
+    /* A Gerstner wave A cos(k.x - w t + phi) has mean-square slopes
+     * A^2 kx^2 / 2, A^2 kz^2 / 2 and cross moment A^2 kx kz / 2.  The near
+     * field is not in cascade tiles: its slopes travel as unresolved
+     * roughness. */
+    for (int i = 0; g && i < ocean_gerstner_count(g); i++) {
+        ocean_gerstner_wave w;
+        if (ocean_gerstner_get_wave(g, i, &w) != OCEAN_OK) continue;
+        double a2 = 0.5 * w.amplitude * w.amplitude;
+        tb->near_mss[0] += a2 * w.kx * w.kx;
+        tb->near_mss[1] += a2 * w.kz * w.kz;
+        tb->near_mss[2] += a2 * w.kx * w.kz;
+    }
+    const ocean_params *p = ocean_get_params(oc);
+    tb->oc = oc;
+    tb->order = order;
+    tb->cascades = p->cascades;
+    tb->n = p->n;
+    for (int c = 0; c < p->cascades; c++) {
+        double klo, khi;
+        ocean_cascade_band(oc, c, &tb->patch[c], &klo, &khi);
+        ocean_result r = ocean_cascade_mips(oc, c, order, MAX_MIPS, &tb->mips[c], tb->kc[c]);
+        if (r != OCEAN_OK)
+            return r;
+        for (int m = 0; m <= tb->mips[c]; m++) {
+            ocean_moments mo;
+            r = ocean_cascade_moments(oc, c, m < tb->mips[c] ? tb->kc[c][m] : 0.0, order, &mo);
+            if (r != OCEAN_OK)
+                return r;
+            proto_mip_entry *e = &tb->entry[c][m];
+            e->kc = m < tb->mips[c] ? (float)tb->kc[c][m] : 0.0f;
+            e->mss_x = (float)mo.mss_x;
+            e->mss_z = (float)mo.mss_z;
+            e->mss_xz = (float)mo.mss_xz;
+            tb->var_removed[c][m] = mo.var_h;
+            if (m == tb->mips[c])
+                tb->total_var += mo.total_var_h;
+        }
+    }
+    return OCEAN_OK;
+}
+
+/* ---- planning -------------------------------------------------------------- */
+
+/* Tile index range [first, first + count) of the tiles of side w (m) that
+ * meet [x - half, x + half], wrapped to a period of ntile tiles. */
+static void span(double x, double half, double w, int ntile, int32_t *first, int32_t *count)
+{
+    double a = floor((x - half) / w), b = floor((x + half) / w);
+    double cnt = b - a + 1;
+    if (!(cnt < ntile)) {
+        *first = 0;
+        *count = ntile;
+        return;
+    }
+    double f = fmod(a, (double)ntile);
+    if (f < 0)
+        f += ntile;
+    *first = (int32_t)f;
+    *count = (int32_t)cnt;
+}
+
+/* The plan for spacing factor q; returns the tile samples it carries. */
+static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q, plan *pl);
+
+/* A job's plan at the server's quality target (server.px_per_sample),
+ * coarsened (q raised by steps of 2^(1/4)) until the frame carries at most
+ * server.frame_samples tile samples: a large viewport or a low camera gets
+ * a little less geometry and a little more unresolved roughness, never more
+ * bytes than the budget. */
+static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
+{
+    mesh_camera mc;
+    srv_mesh_camera(&j->cam, &mc);
+    double ppr = mesh_camera_px_per_rad(&mc);
+    double q = cfg->px_per_sample / (ppr > 0 ? ppr : 1.0);
+    for (int it = 0; it < 64; it++, q *= 1.189207115002721) /* 2^(1/4) */
+        if (plan_at(tb, cfg, j, q, pl) <= cfg->frame_samples)
+            break;
+}
+
+static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q, plan *pl)
+{
+    const proto_subscribe *sub = &j->c->sim.sub;
+    memset(pl, 0, sizeof *pl);
+    double samples = 0;
+    pl->layers = sub->layers < tb->cascades ? sub->layers : tb->cascades;
+    pl->q = q;
+    /* The velocity policy's cutoff as a floor on the spacing read: a mip
+     * whose cutoff lies above it is not needed (kc of mip m is pi / (2 sigma_m)). */
+    double pol = isfinite(j->policy_k) && j->policy_k > 0 ? M_PI / (2.0 * j->policy_k) : 0.0;
+    pl->min_spacing = fmax(sub->base_spacing_m > 0 ? sub->base_spacing_m : 0.0, pol);
+    pl->channels = srv_cascade_channels(sub->effects);
+    double range_m = sub->view_range_m > 0 ? sub->view_range_m : cfg->view_range;
+    double cy = fmax(fabs(j->cam.pos[1]), 1.0);
+    for (int c = 0; c < pl->layers; c++) {
+        double sigma = tb->patch[c] / tb->n;
+        int fades = c > 0;
+        for (int m = 0; m < tb->mips[c]; m++) {
+            int np = tb->n >> m, t = sub->tile_size < np ? sub->tile_size : np, ntile = np / t;
+            double sp = sigma * ldexp(1.0, m), lim = 2.0 * sp;
+            int last = m == tb->mips[c] - 1;
+            double R;
+            if (last && !fades) {
+                R = range_m;
+            } else {
+                if (pl->min_spacing >= lim)
+                    continue;
+                double r2 = (lim / pl->q) * (lim / pl->q) - cy * cy;
+                if (!(r2 > 0))
+                    continue;
+                R = fmin(sqrt(r2), range_m);
+            }
+            double half = R + 2.0 * sp, w = t * sp;
+            range *g = &pl->r[c][m];
+            span(j->cam.pos[0], half, w, ntile, &g->x0, &g->nx);
+            span(j->cam.pos[2], half, w, ntile, &g->z0, &g->nz);
+            pl->need[c][m] = 1;
+            pl->tiles += g->nx * g->nz;
+            samples += (double)g->nx * g->nz * t * t;
+        }
+    }
+    pl->ok = 1;
+    return samples;
+}
+
+/* ---- tiles ------------------------------------------------------------------ */
+
+static uint64_t key_hash(const struct ckey *k)
+{
+    const unsigned char *p = (const unsigned char *)k;
+    uint64_t h = 1469598103934665603ull;
+    for (size_t i = 0; i < sizeof *k; i++) {
+        h ^= p[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+static ctile *tile_get(srv_cascade *k, const struct ckey *key, uint64_t gen, int *fresh)
+{
+    uint64_t h = key_hash(key);
+    ctile **slot = &k->b[h % NBUCKETS];
+    for (ctile *t = *slot; t; t = t->next)
+        if (t->hash == h && memcmp(&t->key, key, sizeof *key) == 0) {
+            t->last_use = gen;
+            *fresh = 0;
+            return t;
+        }
+    ctile *t = calloc(1, sizeof *t);
+    if (!t)
+        return NULL;
+    t->key = *key;
+    t->hash = h;
+    t->last_use = gen;
+    t->result = OCEAN_ESTATE;
+    t->next = *slot;
+    *slot = t;
+    k->count++;
+    *fresh = 1;
+    return t;
+}
+
+/* Copies tile t's samples from mip m of its cascade (grid points: no
+ * interpolation), encodes them and wraps them in a FRAME record.  Thread
+ * safe for distinct t. */
+static void tile_build(ctile *t, const ocean_frame *f, const tables *tb)
+{
+    const struct ckey *k = &t->key;
+    const ocean_field *fd = ocean_frame_field(f, k->cascade);
+    int np = tb->n >> k->mip, T = k->size;
+    if (!fd || fd->n < np || fd->n % np) {
+        t->result = OCEAN_ESTATE;
+        return;
+    }
+    int stride = fd->n / np;
+    size_t ns = (size_t)T * T;
+    int planes = proto_tile_planes(k->channels);
+    float *buf = malloc(sizeof(float) * ns * ((size_t)planes + 2));
+    if (!buf) {
+        t->result = OCEAN_ENOMEM;
+        return;
+    }
+    float *sx = buf + ns * (size_t)planes, *sz = sx + ns;
+    float *ph = NULL, *pdx = NULL, *pdz = NULL, *pnu = NULL, *pnv = NULL, *pfoam = NULL;
+    int pi = 0;
+    if (k->channels & PROTO_CH_HEIGHT) ph = buf + ns * (size_t)pi++;
+    if (k->channels & PROTO_CH_DX) pdx = buf + ns * (size_t)pi++;
+    if (k->channels & PROTO_CH_DZ) pdz = buf + ns * (size_t)pi++;
+    if (k->channels & PROTO_CH_NORMAL) {
+        pnu = buf + ns * (size_t)pi++;
+        pnv = buf + ns * (size_t)pi++;
+    }
+    if (k->channels & PROTO_CH_FOAM) pfoam = buf + ns * (size_t)pi++;
+    if ((ph && !fd->height) || ((pdx || pdz) && !fd->dx) || (pnu && !fd->slope_x) ||
+        (pfoam && !fd->foam)) {
+        free(buf);
+        t->result = OCEAN_ESTATE;
+        return;
+    }
+    for (int i = 0; i < T; i++) {
+        size_t row = (size_t)((k->iz * T + i) * stride) * (size_t)fd->n;
+        for (int j = 0; j < T; j++) {
+            size_t g = row + (size_t)((k->ix * T + j) * stride), s = (size_t)i * T + j;
+            if (ph) ph[s] = fd->height[g];
+            if (pdx) pdx[s] = fd->dx[g];
+            if (pdz) pdz[s] = fd->dz[g];
+            if (pnu) {
+                sx[s] = fd->slope_x[g];
+                sz[s] = fd->slope_z[g];
+            }
+            if (pfoam) pfoam[s] = fd->foam[g];
+        }
+    }
+    if (pnu) proto_normals_from_slopes(sx, sz, ns, pnu, pnv);
+    proto_codec_params cp;
+    proto_codec_params_default(&cp);
+    cp.accuracy = k->accuracy;
+    proto_buf pb;
+    proto_buf_init(&pb, 0);
+    double max_err = 0;
+    t->result = proto_tile_encode((proto_codec)k->codec, &cp, T, T, k->channels, buf, &pb, &max_err, NULL, 0);
+    free(buf);
+    if (t->result == OCEAN_OK && pb.len > UINT32_MAX) t->result = OCEAN_ETOOBIG;
+    if (t->result != OCEAN_OK) {
+        proto_buf_free(&pb);
+        return;
+    }
+    double sp = tb->patch[k->cascade] / tb->n * ldexp(1.0, k->mip);
+    proto_tile pt;
+    memset(&pt, 0, sizeof pt);
+    pt.level = k->mip;
+    pt.codec = k->codec;
+    pt.channels = k->channels;
+    pt.width = pt.height = (uint16_t)T;
+    pt.ix = k->ix;
+    pt.iz = k->iz;
+    pt.origin_x = (double)k->ix * T * sp;
+    pt.origin_z = (double)k->iz * T * sp;
+    pt.spacing = sp;
+    pt.error_bound = isfinite(max_err) && max_err >= 0 ? (float)max_err : 0.0f;
+    pt.payload_len = (uint32_t)pb.len;
+    pt.payload = proto_buf_data(&pb);
+    pt.cascade = k->cascade;
+    proto_buf rec;
+    proto_buf_init(&rec, 0);
+    t->result = proto_tile_record_encode(&rec, &pt, k->cascade, NULL, 0);
+    proto_buf_free(&pb);
+    if (t->result != OCEAN_OK) {
+        proto_buf_free(&rec);
+        return;
+    }
+    t->rec = rec.mem;   /* headroom 0: the bytes start at mem */
+    t->rec_len = rec.len;
+}
+
+/* ---- frames ----------------------------------------------------------------- */
+
+static srv_msg *encode(const proto_msg *m)
+{
+    srv_msg *q = srv_msg_new();
+    if (!q) return NULL;
+    char err[256];
+    if (proto_encode(&q->buf, m, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "oceand: cannot encode %s: %s\n", proto_type_name(m->hdr.type), err);
+        srv_msg_free(q);
+        return NULL;
+    }
+    return q;
+}
+
+/* Height variance the tiles do not carry at the camera's nadir, as a
+ * fraction of the sea's: each cascade at the level the lod rule reads
+ * there (PROTOCOL.md), blended between mips as a client blends them. */
+static double nadir_error(const tables *tb, const plan *pl, const proto_camera *cam)
+{
+    if (!(tb->total_var > 0))
+        return 0.0;
+    double s = fmax(pl->min_spacing, pl->q * fmax(fabs(cam->pos[1]), 1.0));
+    double miss = 0.0;
+    for (int c = 0; c < tb->cascades; c++) {
+        int M = tb->mips[c];
+        if (c >= pl->layers) {
+            miss += tb->var_removed[c][M];
+            continue;
+        }
+        double lam = log2(s / (tb->patch[c] / tb->n));
+        double v;
+        if (lam <= 0) {
+            v = tb->var_removed[c][0];
+        } else if (lam < M - 1) {
+            int m = (int)floor(lam);
+            double f = lam - m;
+            v = (1 - f) * tb->var_removed[c][m] + f * tb->var_removed[c][m + 1];
+        } else {
+            double w = c > 0 ? fmin(fmax(M - lam, 0.0), 1.0) : 1.0;
+            v = w * tb->var_removed[c][M - 1] + (1 - w) * tb->var_removed[c][M];
+        }
+        miss += v;
+    }
+    double e = miss / tb->total_var;
+    return e < 0 ? 0 : e > 1 ? 1 : e;
+}
+
+/* The client's mesh for job j and, when its plan changed, the FLAT
+ * MESH_TOPOLOGY to send first. */
+static void mesh_part(srv_cascade_job *j, plan *pl)
+{
+    srv_client_sim *cs = &j->c->sim;
+    if (!cs->mesh || cs->sub.mesh_kind == PROTO_MESH_NONE) return;
+    mesh_camera mc;
+    srv_mesh_camera(&j->cam, &mc);
+    ocean_result r = mesh_place(cs->mesh, &mc);
+    if (r == OCEAN_OK) {
+        mesh_get_view(cs->mesh, &pl->mv);
+        mesh_get_info(cs->mesh, &pl->mi);
+        if (pl->mv.levels < 1 || pl->mv.levels > PROTO_MAX_LOD_LEVELS || pl->mv.vertex_count == 0)
+            r = OCEAN_ETOOBIG;
+    }
+    if (r != OCEAN_OK) {
+        char why[256];
+        snprintf(why, sizeof why, "mesh build failed (%s); frames come without a mesh until the next SUBSCRIBE",
+                 ocean_strerror(r));
+        srv_client_send_error(j->c, NULL, 0, r, why);
+        mesh_destroy(cs->mesh);
+        cs->mesh = NULL;
+        return;
+    }
+    pl->has_mesh = 1;
+    const mesh_view *v = &pl->mv;
+    if (cs->topo_valid && v->topology_key == cs->topo_key) return;
+    float *flat = malloc(sizeof(float) * 2 * (size_t)v->vertex_count);
+    float zones[4 * PROTO_MAX_LOD_LEVELS];
+    if (!flat) {
+        pl->has_mesh = 0;
+        return;
+    }
+    for (uint32_t i = 0; i < v->vertex_count; i++) {
+        flat[2 * i] = v->base[3 * i];
+        flat[2 * i + 1] = v->base[3 * i + 2];
+    }
+    for (int L = 0; L < v->levels; L++) {
+        zones[4 * L] = (float)pl->mi.level_spacing_m[L];
+        zones[4 * L + 1] = (float)pl->mi.zone_radius_m[L];
+        zones[4 * L + 2] = (float)pl->mi.blend_m[L];
+        zones[4 * L + 3] = 0.0f;
+    }
+    cs->mesh_id++;
+    cs->topo_key = v->topology_key;
+    cs->topo_valid = 1;
+    proto_msg tm;
+    proto_msg_init(&tm, PROTO_MESH_TOPOLOGY);
+    tm.hdr.sim_time = j->t;
+    tm.u.topology.mesh_id = cs->mesh_id;
+    tm.u.topology.mesh_kind = (uint8_t)v->kind;
+    tm.u.topology.lod_levels = (uint8_t)v->levels;
+    tm.u.topology.vertex_count = v->vertex_count;
+    tm.u.topology.index_count = v->index_count;
+    tm.u.topology.indices = v->indices;
+    tm.u.topology.morph = v->morph;
+    tm.u.topology.level = v->level;
+    tm.u.topology.flags = PROTO_TOPO_FLAT;
+    tm.u.topology.flat = flat;
+    tm.u.topology.zones = zones;
+    j->topo = encode(&tm);
+    free(flat);
+    if (!j->topo) {
+        cs->topo_valid = 0;
+        pl->has_mesh = 0;
+    }
+}
+
+static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shared)
+{
+    const proto_subscribe *sub = &j->c->sim.sub;
+    proto_bytes *recs = malloc(sizeof *recs * (size_t)(pl->tiles ? pl->tiles : 1));
+    if (!recs) return;
+    int nt = 0;
+    for (int i = 0; i < pl->tiles; i++)
+        if (pl->list[i] && pl->list[i]->result == OCEAN_OK)
+            recs[nt++] = (proto_bytes){pl->list[i]->rec, pl->list[i]->rec_len};
+    proto_msg m;
+    proto_msg_init(&m, PROTO_FRAME);
+    m.hdr.sim_time = j->t;
+    proto_frame *fr = &m.u.frame;
+    fr->cutoff_k = isfinite(j->policy_k) && j->policy_k > 0 ? j->policy_k : INFINITY;
+    fr->e_error = nadir_error(tb, pl, &j->cam);
+    fr->origin[0] = pl->has_mesh ? pl->mv.origin[0] : j->cam.pos[0];
+    fr->origin[2] = pl->has_mesh ? pl->mv.origin[2] : j->cam.pos[2];
+    fr->camera_seq = j->cam_seq;
+    fr->tick = j->tick;
+    fr->tile_count = (uint16_t)nt;
+    fr->tile_records = recs;
+    fr->layout = PROTO_LAYOUT_CASCADE;
+    proto_cascade_block *b = &fr->cascades;
+    b->cascade_count = (uint8_t)pl->layers;
+    b->order = (uint8_t)tb->order;
+    b->spacing_per_m = (float)pl->q;
+    for (int i = 0; i < 3; i++) b->camera[i] = j->cam.pos[i];
+    b->min_spacing_m = (float)pl->min_spacing;
+    /* Without normals the client has nothing to shade what geometry
+     * drops; with them every simulated wave is carried by one or the
+     * other. */
+    b->e_total = (sub->effects & PROTO_FX_NORMALS) ? 0.0f : (float)fr->e_error;
+    for (int c = 0; c < pl->layers; c++) {
+        proto_cascade_entry *e = &b->cascade[c];
+        e->patch_m = tb->patch[c];
+        e->n = (uint16_t)tb->n;
+        e->mips = (uint8_t)tb->mips[c];
+        e->fades = c > 0;
+        for (int q = 0; q <= tb->mips[c]; q++) e->mip[q] = tb->entry[c][q];
+    }
+    if (sub->effects & PROTO_FX_NEAR_FIELD)
+        for (int i = 0; i < 3; i++) b->tail_mss[i] += (float)tb->near_mss[i];
+    /* cascades the subscription leaves out: their slopes only shade */
+    for (int c = pl->layers; c < tb->cascades; c++) {
+        const proto_mip_entry *all = &tb->entry[c][tb->mips[c]];
+        b->tail_mss[0] += all->mss_x;
+        b->tail_mss[1] += all->mss_z;
+        b->tail_mss[2] += all->mss_xz;
+    }
+    if (pl->has_mesh) {
+        fr->has_mesh = 1;
+        fr->placement.mesh_id = j->c->sim.mesh_id;
+        memcpy(fr->placement.origin, pl->mv.origin, sizeof pl->mv.origin);
+    }
+    j->frame = encode(&m);
+    free(recs);
+    if (!shared || !j->frame || srv_msg_make_shared(j->frame) != OCEAN_OK) return;
+    srv_msg *q = j->frame;
+    size_t cam_at, mesh_at;
+    if (proto_frame_client_fields(proto_buf_data(&q->blob->buf), proto_buf_len(&q->blob->buf), &cam_at,
+                                  &mesh_at) != OCEAN_OK || cam_at != SRV_FRAME_CAMERA_SEQ_AT ||
+        (pl->has_mesh && (mesh_at == 0 || mesh_at > UINT32_MAX))) {
+        pl->share_with = -1;   /* not laid out as expected: nobody borrows these bytes */
+        return;
+    }
+    q->camera_seq = j->cam_seq;
+    if (pl->has_mesh) {
+        q->mesh_id = j->c->sim.mesh_id;
+        q->mesh_id_at = (uint32_t)mesh_at;
+    }
+}
+
+/* Two live jobs whose FRAMEs are the same bytes but for camera_seq,
+ * mesh_id and the header seq. */
+static int same_frame(const srv_cascade_job *a, const plan *pa, const srv_cascade_job *b, const plan *pb)
+{
+    const proto_subscribe *x = &a->c->sim.sub, *y = &b->c->sim.sub;
+    if (a->t != b->t || a->tick != b->tick || a->policy_k != b->policy_k || pa->tiles != pb->tiles ||
+        pa->has_mesh != pb->has_mesh || pa->layers != pb->layers || pa->q != pb->q ||
+        pa->min_spacing != pb->min_spacing || x->effects != y->effects || memcmp(a->cam.pos, b->cam.pos, sizeof a->cam.pos))
+        return 0;
+    if (pa->has_mesh && (pa->mv.topology_key != pb->mv.topology_key ||
+                         memcmp(pa->mv.origin, pb->mv.origin, sizeof pa->mv.origin)))
+        return 0;
+    return pa->tiles == 0 || memcmp(pa->list, pb->list, sizeof *pa->list * (size_t)pa->tiles) == 0;
+}
+
+/* Evaluates the mips needed at time t (need_fx[c][m]: ocean effects). */
+static ocean_result eval_mips(srv_cascade *k, ocean *oc, const tables *tb, double t,
+                              unsigned need_fx[OCEAN_MAX_CASCADES][MAX_MIPS], srv_stats *st)
+{
+    for (int m = 0; m < MAX_MIPS; m++) {
+        ocean_request rq;
+        memset(&rq, 0, sizeof rq);
+        int any = 0;
+        for (int c = 0; c < tb->cascades; c++) {
+            rq.effects[c] = need_fx[c][m];
+            rq.cascade_cutoff_k[c] = m < tb->mips[c] ? tb->kc[c][m] : 0.0;
+            if (need_fx[c][m]) any = 1;
+            if (need_fx[c][m] & OCEAN_FX_FOAM) rq.foam_map = 1;
+        }
+        if (!any) continue;
+        if (!k->mipf[m]) {
+            ocean_result r = ocean_frame_create(oc, &k->mipf[m]);
+            if (r != OCEAN_OK) return r;
+        }
+        rq.cutoff_k = INFINITY;
+        rq.order = tb->order;
+        rq.low_boost = 1.0;
+        rq.per_cascade = 1;
+        ocean_result r = ocean_evaluate(oc, t, &rq, k->mipf[m]);
+        if (r != OCEAN_OK) return r;
+        atomic_fetch_add(&st->evaluations, 1);
+    }
+    return OCEAN_OK;
+}
+
+void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int order, const srv_config *cfg,
+                     srv_stats *st, srv_cascade_job *jobs, int n, uint64_t gen)
+{
+    if (n <= 0) return;
+    if (!k->tab_valid || k->tab.oc != oc || k->tab.g != g || k->tab.order != order) {
+        /* a new ocean: its frames have other grids, its tiles other bytes */
+        for (int m = 0; m < MAX_MIPS; m++) {
+            ocean_frame_destroy(k->mipf[m]);
+            k->mipf[m] = NULL;
+        }
+        tiles_clear(k);
+        if (tables_make(&k->tab, oc, g, order) != OCEAN_OK) {
+            k->tab_valid = 0;
+            for (int i = 0; i < n; i++)
+                srv_client_send_error(jobs[i].c, NULL, 0, OCEAN_ESTATE, "cascade tables unavailable");
+            return;
+        }
+        k->tab_valid = 1;
+    }
+    const tables *tb = &k->tab;
+    plan *pl = calloc((size_t)n, sizeof *pl);
+    if (!pl) return;
+    /* 1. plans and meshes */
+    for (int i = 0; i < n; i++) {
+        plan_job(tb, cfg, &jobs[i], &pl[i]);
+        pl[i].share_with = i;
+        if (pl[i].tiles > (int)PROTO_MAX_FRAME_TILES) {
+            char why[200];
+            snprintf(why, sizeof why, "frame would need %d tiles, above the protocol's %u: subscribe a larger "
+                     "tile_size", pl[i].tiles, PROTO_MAX_FRAME_TILES);
+            srv_client_send_error(jobs[i].c, NULL, 0, OCEAN_ETOOBIG, why);
+            pl[i].ok = 0;
+            continue;
+        }
+        pl[i].list = calloc((size_t)(pl[i].tiles ? pl[i].tiles : 1), sizeof *pl[i].list);
+        if (!pl[i].list) pl[i].ok = 0;
+        mesh_part(&jobs[i], &pl[i]);
+    }
+    /* 2. per distinct time: evaluate, look tiles up, encode the missing */
+    int *done = calloc((size_t)n, sizeof *done);
+    ctile **missing = NULL;
+    size_t cap_missing = 0;
+    for (int i0 = 0; i0 < n && done; i0++) {
+        if (done[i0]) continue;
+        double t = jobs[i0].t;
+        unsigned need_fx[OCEAN_MAX_CASCADES][MAX_MIPS];
+        memset(need_fx, 0, sizeof need_fx);
+        size_t nmiss = 0;
+        for (int i = i0; i < n; i++) {
+            if (done[i] || jobs[i].t != t) continue;
+            done[i] = 1;
+            plan *p = &pl[i];
+            if (!p->ok) continue;
+            const proto_subscribe *sub = &jobs[i].c->sim.sub;
+            int at = 0;
+            for (int c = 0; c < p->layers; c++)
+                for (int m = 0; m < tb->mips[c]; m++) {
+                    if (!p->need[c][m]) continue;
+                    int np = tb->n >> m, T = sub->tile_size < np ? sub->tile_size : np, ntile = np / T;
+                    const range *g = &p->r[c][m];
+                    for (int a = 0; a < g->nz; a++)
+                        for (int b = 0; b < g->nx; b++) {
+                            struct ckey key;
+                            memset(&key, 0, sizeof key);
+                            key.t = t;
+                            key.accuracy = sub->accuracy;
+                            key.ix = (g->x0 + b) % ntile;
+                            key.iz = (g->z0 + a) % ntile;
+                            key.channels = (uint16_t)p->channels;
+                            key.size = (uint16_t)T;
+                            key.cascade = (uint8_t)c;
+                            key.mip = (uint8_t)m;
+                            key.codec = sub->codec;
+                            int fresh = 0;
+                            ctile *tl = tile_get(k, &key, gen, &fresh);
+                            p->list[at++] = tl;
+                            if (!tl) continue;
+                            if (fresh) {
+                                if (nmiss == cap_missing) {
+                                    size_t nc = cap_missing ? 2 * cap_missing : 256;
+                                    ctile **nm = realloc(missing, nc * sizeof *nm);
+                                    if (!nm) {
+                                        tl->result = OCEAN_ENOMEM;
+                                        continue;
+                                    }
+                                    missing = nm;
+                                    cap_missing = nc;
+                                }
+                                missing[nmiss++] = tl;
+                                need_fx[c][m] |= ocean_fx_of(p->channels);
+                                atomic_fetch_add(&st->tile_cache_misses, 1);
+                            } else {
+                                atomic_fetch_add(&st->tile_cache_hits, 1);
+                            }
+                        }
+                }
+            p->tiles = at;
+        }
+        if (!nmiss) continue;
+        /* A tile cached under another channel set is a distinct key, so
+         * every missing tile's mip is evaluated with its channels. */
+        ocean_result r = eval_mips(k, oc, tb, t, need_fx, st);
+        if (r != OCEAN_OK) {
+            for (size_t q = 0; q < nmiss; q++) missing[q]->result = r;
+            continue;
+        }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
+        for (size_t q = 0; q < nmiss; q++)
+            tile_build(missing[q], k->mipf[missing[q]->key.mip], tb);
+        atomic_fetch_add(&st->tiles_encoded, (uint64_t)nmiss);
+    }
+    free(missing);
+    free(done);
+    /* 3. frames: live jobs with the same frame share one encoding */
+    for (int i = 0; i < n; i++) {
+        if (!pl[i].ok || jobs[i].replay) continue;
+        for (int l = 0; l < i; l++)
+            if (pl[l].ok && !jobs[l].replay && pl[l].share_with == l &&
+                same_frame(&jobs[l], &pl[l], &jobs[i], &pl[i])) {
+                pl[i].share_with = l;
+                break;
+            }
+    }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
+    for (int i = 0; i < n; i++)
+        if (pl[i].ok && pl[i].share_with == i) frame_build(tb, &jobs[i], &pl[i], !jobs[i].replay);
+    for (int i = 0; i < n; i++) {
+        int l = pl[i].share_with;
+        if (!pl[i].ok || l == i) continue;
+        if (l >= 0 && jobs[l].frame && jobs[l].frame->blob && pl[l].share_with == l) {
+            jobs[i].frame = srv_msg_share(jobs[l].frame);
+            if (jobs[i].frame) {
+                jobs[i].frame->camera_seq = jobs[i].cam_seq;
+                jobs[i].frame->mesh_id = jobs[i].c->sim.mesh_id;
+                atomic_fetch_add(&st->frames_shared, 1);
+                continue;
+            }
+        }
+        frame_build(tb, &jobs[i], &pl[i], 0);
+    }
+    for (int i = 0; i < n; i++) free(pl[i].list);
+    free(pl);
+}

@@ -1,0 +1,73 @@
+/*
+ * srv_cascade.h - the cascade tile layout (PROTOCOL.md "Layouts", layout 1):
+ * what the daemon makes once per tick and every camera shares.
+ *
+ * Each cascade is periodic on its own patch, so its tiles are the same for
+ * every viewer anywhere.  Per tick this module evaluates the mip pyramid of
+ * every cascade some live subscriber needs (one ocean evaluation per mip
+ * level, all cascades at once, each at its own cutoff), cuts the mips into
+ * tiles, encodes each tile once into a ready FRAME record, and then only
+ * assembles per camera: the cascade block (mip tables, camera), the list of
+ * records the camera's footprint needs, and the mesh placement.  A camera
+ * therefore costs a copy of bytes, not a sampling and encoding pass; the
+ * encoding cost is bounded by the union of what all cameras need.
+ *
+ * Threads: used by the simulation thread only; tile encoding runs on
+ * server.workers OpenMP threads inside srv_cascade_run.
+ */
+#ifndef SRV_CASCADE_H
+#define SRV_CASCADE_H
+
+#include <stdint.h>
+
+#include "ocean.h"
+#include "proto.h"
+#include "srv_client.h"
+#include "srv_config.h"
+
+typedef struct srv_cascade srv_cascade;
+
+/* One layout-1 frame to build. */
+typedef struct srv_cascade_job {
+    srv_client *c;         /* holds a reference for the batch */
+    double t;              /* sim time of the frame */
+    proto_camera cam;
+    uint32_t cam_seq;
+    uint32_t tick;
+    int replay;            /* 1: replay frame (queued in order), 0: live */
+    double policy_k;       /* the velocity policy's cutoff, rad/m (INFINITY: none) */
+    srv_msg *topo, *frame; /* out: MESH_TOPOLOGY (when new) and FRAME */
+} srv_cascade_job;
+
+ocean_result srv_cascade_create(srv_cascade **out);
+/* Accepts NULL. */
+void srv_cascade_destroy(srv_cascade *k);
+/* Forgets everything made from the current ocean (the sea changed). */
+void srv_cascade_reset(srv_cascade *k);
+
+/* The channels a layout-1 subscription's effects put in tiles (PROTO_CH_*)
+ * and the ocean effects they need. */
+unsigned srv_cascade_channels(unsigned proto_effects);
+
+/* Tiles a layout-1 subscription with tile side `tile_size` may need in one
+ * FRAME at most (every tile of every mip of every cascade): the
+ * subscription check refuses what would exceed PROTO_MAX_FRAME_TILES. */
+uint32_t srv_cascade_max_tiles(const ocean_params *p, int layers, int tile_size);
+
+/* Builds the FRAMEs (and MESH_TOPOLOGYs) of jobs[0..n): evaluates the mips
+ * the jobs need at their times, encodes missing tiles (cache generation
+ * gen; entries unused for a generation are dropped by the caller's sweep
+ * through srv_cascade_sweep), assembles each frame.  Jobs of identical
+ * cameras share one encoding.  order is the Butterworth order of the mips;
+ * g (may be NULL) the Gerstner near field, whose slopes are carried as
+ * unresolved moments.
+ * Errors go to the client as ERROR messages;
+ * a job whose frame could not be built has frame NULL. */
+struct ocean_gerstner;
+void srv_cascade_run(srv_cascade *k, ocean *oc, const struct ocean_gerstner *g, int order,
+                     const srv_config *cfg, srv_stats *st, srv_cascade_job *jobs, int n, uint64_t gen);
+
+/* Drops cached tiles last used before generation keep_from. */
+void srv_cascade_sweep(srv_cascade *k, uint64_t keep_from);
+
+#endif
