@@ -63,7 +63,7 @@ typedef struct fid_acc {
 
 /* Casts grid x grid*9/16 rays of camera `cam` (position from the frame's
  * block) and reads the frame where they land. */
-static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, fid_acc *A)
+static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, int verbose, fid_acc *A)
 {
     const double *cp = f->info.cascades.camera;
     double yaw = cam->yaw_deg * M_PI / 180, pitch = cam->pitch_deg * M_PI / 180;
@@ -102,6 +102,16 @@ static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, 
             A->foam_half += s.foam >= 0.5;
             A->samples++;
         }
+    if (verbose) {
+        oc_lod L;
+        oc_cascade_lod(&f->info.cascades, cp[0], cp[2], 0, &L);
+        fprintf(stderr, "frame tick %u: %u tiles, q %g, min spacing %g, camera (%g, %g, %g), e_error %g, s %g:",
+                f->info.tick, f->info.tile_count, (double)f->info.cascades.spacing_per_m,
+                (double)f->info.cascades.min_spacing_m, cp[0], cp[1], cp[2], f->info.e_error, L.s);
+        for (int c = 0; c < L.count; c++)
+            fprintf(stderr, " c%d lambda %.2f", c, L.c[c].lambda);
+        fprintf(stderr, "\n");
+    }
     A->e_error += f->info.e_error;
     A->e_total += f->info.cascades.e_total;
     if (f->info.cascades.e_total > A->e_total_max)
@@ -112,7 +122,7 @@ static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, 
 int cmd_fidelity(int argc, char **argv)
 {
     double height = 25, speed = 0, pitch = -45, yaw = 0, fov = 60, spacing = 0, range = 0, settle = 0.3;
-    int frames = 10, json = 0, grid = 64, timeout_ms = 5000, vw = 1920, vh = 1080;
+    int frames = 10, json = 0, verbose = 0, grid = 64, timeout_ms = 5000, vw = 1920, vh = 1080;
     const char *codec = "qz";
     const occli_opt opts[] = {
         {.name = "camera-height", .kind = OCCLI_DOUBLE, .target = &height, .min = 0.1, .max = 1e5,
@@ -123,6 +133,8 @@ int cmd_fidelity(int argc, char **argv)
          .help = "N  frames made for the camera to measure"},
         {.name = "json", .kind = OCCLI_FLAG, .target = &json,
          .help = "print the result as one JSON object (the metric lines go to stderr)"},
+        {.name = "verbose", .kind = OCCLI_FLAG, .target = &verbose,
+         .help = "one line per measured frame on stderr: tiles, q, e_error, the levels at the nadir"},
         {.name = "pitch", .kind = OCCLI_DOUBLE, .target = &pitch, .min = -90, .max = 90,
          .help = "DEG  camera pitch (negative looks down)"},
         {.name = "yaw", .kind = OCCLI_DOUBLE, .target = &yaw, .min = -360, .max = 360,
@@ -270,7 +282,7 @@ int cmd_fidelity(int argc, char **argv)
             oc_frame_free(f);
             continue;
         }
-        measure_frame(f, &cam, grid, &A);
+        measure_frame(f, &cam, grid, verbose, &A);
         oc_frame_free(f);
     }
     oc_client_destroy(c);
