@@ -373,8 +373,46 @@ static inline void keys_weights(double t, double w[4])
     w[3] = 0.5 * (t3 - t2);
 }
 
+/* Lanczos (a = 3) windowed-sinc weights for offsets -2..3, normalised to
+ * sum 1 (Duchon 1979, "Lanczos filtering in one and two dimensions",
+ * J. Appl. Meteor. 18(8) 1016). */
+static inline void lanczos3_weights(double t, double w[6])
+{
+    double sum = 0;
+    for (int k = 0; k < 6; k++) {
+        double x = t - (k - 2);
+        if (fabs(x) < 1e-12) {
+            w[k] = 1;
+        } else {
+            double px = M_PI * x;
+            w[k] = 3.0 * sin(px) * sin(px / 3.0) / (px * px);
+        }
+        sum += w[k];
+    }
+    for (int k = 0; k < 6; k++)
+        w[k] /= sum;
+}
+
+/* Taps of an interpolation: weights for offsets 1 - R .. R; returns R. */
+static inline int taps(oc_interp in, double t, double *w)
+{
+    if (in == OC_INTERP_LANCZOS3) {
+        lanczos3_weights(t, w);
+        return 3;
+    }
+    if (in == OC_INTERP_CUBIC) {
+        keys_weights(t, w);
+        return 2;
+    }
+    w[0] = 1 - t;
+    w[1] = t;
+    return 1;
+}
+
 /* Reads one mip at cascade-local (u, v) in [0, P): acc[] += weight * value.
- * 0, or -1 when its tiles do not cover the point. */
+ * Where the wider kernels reach beyond the frame's tiles (the edge of the
+ * square the spec sends) the next narrower one is used: Lanczos-3, Keys
+ * cubic, bilinear.  0, or -1 when not even the 2 x 2 is covered. */
 static int read_mip(const oc_cascade_view *v, const cv_mip *mp, double u, double w, unsigned want, oc_interp interp,
                     double weight, double *acc, unsigned *chan)
 {
@@ -386,18 +424,17 @@ static int read_mip(const oc_cascade_view *v, const cv_mip *mp, double u, double
     long j0 = (long)fa, i0 = (long)fb;
     int n = mp->n;
     float val[V_COUNT] = {0};   /* values not wanted stay 0 */
-    double sum[V_COUNT] = {0};
-    unsigned ch = *chan;
-    if (interp == OC_INTERP_CUBIC) {
-        double wx[4], wz[4];
-        keys_weights(tx, wx);
-        keys_weights(tz, wz);
+    for (oc_interp in = interp;; in = in == OC_INTERP_LANCZOS3 ? OC_INTERP_CUBIC : OC_INTERP_LINEAR) {
+        double wx[6], wz[6], sum[V_COUNT] = {0};
+        int R = taps(in, tx, wx);
+        taps(in, tz, wz);
+        unsigned ch = *chan;
         int ok = 1;
-        for (int di = 0; di < 4 && ok; di++) {
-            int i = imod(i0 - 1 + di, n);
+        for (int di = 0; di < 2 * R && ok; di++) {
+            int i = imod(i0 + 1 - R + di, n);
             double rowv[V_COUNT] = {0};
-            for (int dj = 0; dj < 4; dj++) {
-                if (fetch(v, mp, i, imod(j0 - 1 + dj, n), want, val, &ch)) {
+            for (int dj = 0; dj < 2 * R; dj++) {
+                if (fetch(v, mp, i, imod(j0 + 1 - R + dj, n), want, val, &ch)) {
                     ok = 0;
                     break;
                 }
@@ -407,30 +444,15 @@ static int read_mip(const oc_cascade_view *v, const cv_mip *mp, double u, double
             for (int k = 0; k < V_COUNT; k++)
                 sum[k] += wz[di] * rowv[k];
         }
-        if (ok)
-            goto done;
-        /* the outer ring lies outside the frame's tiles: bilinear on the inner 2 x 2 */
-        memset(sum, 0, sizeof sum);
-        ch = *chan;
-    }
-    {
-        double wx[2] = {1 - tx, tx}, wz[2] = {1 - tz, tz};
-        for (int di = 0; di < 2; di++) {
-            int i = imod(i0 + di, n);
-            for (int dj = 0; dj < 2; dj++) {
-                if (fetch(v, mp, i, imod(j0 + dj, n), want, val, &ch))
-                    return -1;
-                double ww = wz[di] * wx[dj];
-                for (int k = 0; k < V_COUNT; k++)
-                    sum[k] += ww * val[k];
-            }
+        if (ok) {
+            for (int k = 0; k < V_COUNT; k++)
+                acc[k] += weight * sum[k];
+            *chan = ch;
+            return 0;
         }
+        if (in == OC_INTERP_LINEAR)
+            return -1;
     }
-done:
-    for (int k = 0; k < V_COUNT; k++)
-        acc[k] += weight * sum[k];
-    *chan = ch;
-    return 0;
 }
 
 /* The sum of the cascades at (x, z).  0, or -1 when a mip read is not in
@@ -510,7 +532,7 @@ ocean_result oc_frame_sample_interp(const oc_frame *f, double x, double z, doubl
     if (r != OCEAN_OK)
         return r;
     if (!isfinite(x) || !isfinite(z) || !isfinite(min_spacing) ||
-        (interp != OC_INTERP_CUBIC && interp != OC_INTERP_LINEAR))
+        (interp != OC_INTERP_CUBIC && interp != OC_INTERP_LINEAR && interp != OC_INTERP_LANCZOS3))
         return OCEAN_EINVAL;
     if (sample_core(v, x, z, min_spacing, W_ALL, interp, out)) {
         memset(out, 0, sizeof *out);
@@ -524,7 +546,8 @@ ocean_result oc_frame_sample(const oc_frame *f, double x, double z, double min_s
     return oc_frame_sample_interp(f, x, z, min_spacing, OC_INTERP_CUBIC, out);
 }
 
-ocean_result oc_frame_surface(const oc_frame *f, double x, double z, double min_spacing, oc_sample *out)
+ocean_result oc_frame_surface_interp(const oc_frame *f, double x, double z, double min_spacing, oc_interp interp,
+                                     oc_sample *out)
 {
     if (!out)
         return OCEAN_EINVAL;
@@ -533,7 +556,8 @@ ocean_result oc_frame_surface(const oc_frame *f, double x, double z, double min_
     ocean_result r = frame_view(f, &v);
     if (r != OCEAN_OK)
         return r;
-    if (!isfinite(x) || !isfinite(z) || !isfinite(min_spacing))
+    if (!isfinite(x) || !isfinite(z) || !isfinite(min_spacing) ||
+        (interp != OC_INTERP_CUBIC && interp != OC_INTERP_LINEAR && interp != OC_INTERP_LANCZOS3))
         return OCEAN_EINVAL;
     /* the levels are those of the asked point, held while p moves */
     oc_lod lod;
@@ -543,7 +567,7 @@ ocean_result oc_frame_surface(const oc_frame *f, double x, double z, double min_
     const double tol = 1e-5;
     oc_sample s0, sx, sz;
     for (int it = 0; it < 24; it++) {
-        if (sample_core(v, px, pz, ms, W_D, OC_INTERP_CUBIC, &s0))
+        if (sample_core(v, px, pz, ms, W_D, interp, &s0))
             return OCEAN_ENOTFOUND;
         double rx = px + s0.dx - x, rz = pz + s0.dz - z;
         double res = hypot(rx, rz);
@@ -556,8 +580,7 @@ ocean_result oc_frame_surface(const oc_frame *f, double x, double z, double min_
             break;
         /* Newton on p + D(p) = (x, z) with a finite-difference Jacobian */
         double d = 1e-3 > 0.01 * ms ? 1e-3 : 0.01 * ms;
-        if (sample_core(v, px + d, pz, ms, W_D, OC_INTERP_CUBIC, &sx) ||
-            sample_core(v, px, pz + d, ms, W_D, OC_INTERP_CUBIC, &sz))
+        if (sample_core(v, px + d, pz, ms, W_D, interp, &sx) || sample_core(v, px, pz + d, ms, W_D, interp, &sz))
             return OCEAN_ENOTFOUND;
         double a = 1 + (sx.dx - s0.dx) / d, bq = (sz.dx - s0.dx) / d;
         double c = (sx.dz - s0.dz) / d, e = 1 + (sz.dz - s0.dz) / d;
@@ -571,12 +594,17 @@ ocean_result oc_frame_surface(const oc_frame *f, double x, double z, double min_
             pz -= 0.5 * rz;
         }
     }
-    if (sample_core(v, bx, bz, ms, W_ALL, OC_INTERP_CUBIC, out)) {
+    if (sample_core(v, bx, bz, ms, W_ALL, interp, out)) {
         memset(out, 0, sizeof *out);
         return OCEAN_ENOTFOUND;
     }
     out->residual = best;
     return best <= 1e-4 ? OCEAN_OK : OCEAN_EDIVERGED;
+}
+
+ocean_result oc_frame_surface(const oc_frame *f, double x, double z, double min_spacing, oc_sample *out)
+{
+    return oc_frame_surface_interp(f, x, z, min_spacing, OC_INTERP_CUBIC, out);
 }
 
 /* ============================================================ mesh */
@@ -598,7 +626,8 @@ ocean_result oc_frame_mesh_positions_ex(const oc_frame *f, const oc_topology *t,
 {
     if (missing)
         *missing = 0;
-    if (!f || !t || !xyz || (interp != OC_INTERP_CUBIC && interp != OC_INTERP_LINEAR))
+    if (!f || !t || !xyz ||
+        (interp != OC_INTERP_CUBIC && interp != OC_INTERP_LINEAR && interp != OC_INTERP_LANCZOS3))
         return OCEAN_EINVAL;
     const oc_cascade_view *v;
     ocean_result r = frame_view(f, &v);

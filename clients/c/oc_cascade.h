@@ -25,12 +25,19 @@
  *    so |x| = 1e7 m loses nothing), then a mip's periodic grid.
  *  - within a mip: Keys' cubic convolution (Keys 1981, "Cubic convolution
  *    interpolation for digital image processing", IEEE Trans. ASSP 29(6),
- *    a = -1/2; third-order accurate, where bilinear is second-order: a wave
- *    8 samples long is read to ~0.3 % of its amplitude instead of ~7 %), on
- *    a 4 x 4 neighbourhood; where the outer ring is not in the frame's
- *    tiles (the edge of the square the spec sends) bilinear on the inner
- *    2 x 2.  OC_INTERP_LINEAR asks for bilinear everywhere (what a GPU's
- *    GL_LINEAR + REPEAT does).
+ *    a = -1/2; third-order accurate where bilinear is second-order) on a
+ *    4 x 4 neighbourhood; OC_INTERP_LANCZOS3 (6 x 6 windowed sinc, 2.25x
+ *    the reads) keeps more of the waves near a mip's two-samples-a-
+ *    wavelength limit but ripples in its passband (a wave 18 samples long
+ *    is read ~0.9 % off, against ~0.05 % for Keys: tests/test_oc_cascade.c); OC_INTERP_LINEAR is what a GPU's GL_LINEAR + REPEAT
+ *    does.  Measured on the daemon's ship-bridge frames carrying every wave
+ *    (2000 points within 30 m of a camera 10 m up, against accurate
+ *    queries): height RMS error cubic 6.2 mm (max 2.3 cm), Lanczos-3 4.6 mm
+ *    (1.5 cm), bilinear 2.7 cm (9.9 cm); mean-square slope read between the
+ *    samples, of 0.0278 the tiles hold at their nodes: cubic 0.0274,
+ *    Lanczos-3 0.0288, bilinear 0.0239.  Where a kernel reaches beyond the
+ *    frame's tiles (the edge of the square the spec sends) the next
+ *    narrower one is used, down to bilinear on the inner 2 x 2.
  *  - cascades are summed: height and displacement add; slopes add (each
  *    cascade's normal n is turned into slopes -n_x/n_y, -n_z/n_y with n_y
  *    held >= 0.01 so a folded crest cannot give an infinite slope) and the
@@ -60,8 +67,9 @@ typedef struct oc_cascade_view oc_cascade_view;
 
 /* How a mip is read between its samples. */
 typedef enum oc_interp {
-    OC_INTERP_CUBIC = 0,   /* Keys cubic convolution (default) */
-    OC_INTERP_LINEAR = 1   /* bilinear */
+    OC_INTERP_CUBIC = 0,   /* Keys cubic convolution, 4 x 4 (default) */
+    OC_INTERP_LINEAR = 1,  /* bilinear, 2 x 2 */
+    OC_INTERP_LANCZOS3 = 2 /* Lanczos windowed sinc a = 3, 6 x 6 */
 } oc_interp;
 
 /* Which mips of each cascade a point reads, and with what weight. */
@@ -121,6 +129,8 @@ ocean_result oc_frame_sample_interp(const oc_frame *f, double x, double z, doubl
  * OCEAN_EDIVERGED with the best point found.  Other results as
  * oc_frame_sample. */
 ocean_result oc_frame_surface(const oc_frame *f, double x, double z, double min_spacing, oc_sample *out);
+ocean_result oc_frame_surface_interp(const oc_frame *f, double x, double z, double min_spacing, oc_interp interp,
+                                     oc_sample *out);
 
 /* Geomorph weight of a vertex of level L at horizontal distance d from the
  * frame's camera, given that level's zone (g_L, R_L, b_L, 0) from

@@ -57,13 +57,15 @@ static double monahan_whitecap(double u10)
 
 typedef struct fid_acc {
     double res, res_x, res_z, unres, unres_x, unres_z, foam, foam_half;
+    double claimed_total;   /* sum over samples of the frame's whole-sea moments */
     double e_error, e_total, e_total_max;
     uint64_t samples, above, outside, frames, stale;
 } fid_acc;
 
 /* Casts grid x grid*9/16 rays of camera `cam` (position from the frame's
  * block) and reads the frame where they land. */
-static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, int verbose, fid_acc *A)
+static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, int verbose, oc_interp interp,
+                          fid_acc *A)
 {
     const double *cp = f->info.cascades.camera;
     double yaw = cam->yaw_deg * M_PI / 180, pitch = cam->pitch_deg * M_PI / 180;
@@ -73,6 +75,12 @@ static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, 
     double up[3] = {rt[1] * fw[2] - rt[2] * fw[1], rt[2] * fw[0] - rt[0] * fw[2], rt[0] * fw[1] - rt[1] * fw[0]};
     double ty = tan(cam->fov_y_deg * M_PI / 360);
     double aspect = (double)cam->viewport_w / cam->viewport_h;
+    /* what the frame says the whole sea holds: every cascade's entry
+     * `mips` (its whole moments) plus the tail no cascade holds */
+    const proto_cascade_block *b = &f->info.cascades;
+    double whole = (double)b->tail_mss[0] + b->tail_mss[1];
+    for (int c = 0; c < b->cascade_count; c++)
+        whole += (double)b->cascade[c].mip[b->cascade[c].mips].mss_x + b->cascade[c].mip[b->cascade[c].mips].mss_z;
     int gw = grid, gh = grid * cam->viewport_h / cam->viewport_w;
     if (gh < 2)
         gh = 2;
@@ -90,7 +98,7 @@ static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, 
             double t = -cp[1] / d[1];
             double x = cp[0] + t * d[0], z = cp[2] + t * d[2];
             oc_sample s;
-            if (oc_frame_sample(f, x, z, 0, &s) != OCEAN_OK) {
+            if (oc_frame_sample_interp(f, x, z, 0, interp, &s) != OCEAN_OK) {
                 A->outside++;
                 continue;
             }
@@ -100,6 +108,7 @@ static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, 
             A->unres_z += s.mss[1];
             A->foam += s.foam;
             A->foam_half += s.foam >= 0.5;
+            A->claimed_total += whole;
             A->samples++;
         }
     if (verbose) {
@@ -121,9 +130,10 @@ static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, 
 
 int cmd_fidelity(int argc, char **argv)
 {
-    double height = 25, speed = 0, pitch = -45, yaw = 0, fov = 60, spacing = 0, range = 0, settle = 0.3;
+    double height = 25, speed = 0, pitch = -45, yaw = 0, fov = 60, spacing = 0, range = 0, settle = 0.3,
+           interval = 0;
     int frames = 10, json = 0, verbose = 0, grid = 64, timeout_ms = 5000, vw = 1920, vh = 1080;
-    const char *codec = "qz";
+    const char *codec = "qz", *interp_name = "cubic";
     const occli_opt opts[] = {
         {.name = "camera-height", .kind = OCCLI_DOUBLE, .target = &height, .min = 0.1, .max = 1e5,
          .help = "M  camera height above the mean sea level"},
@@ -151,10 +161,15 @@ int cmd_fidelity(int argc, char **argv)
          .help = "M  finest spacing asked (SUBSCRIBE.base_spacing_m; 0 = server default)"},
         {.name = "range", .kind = OCCLI_DOUBLE, .target = &range, .min = 0, .max = 1e7,
          .help = "M  view range asked (0 = server default)"},
+        {.name = "interp", .kind = OCCLI_STRING, .target = &interp_name,
+         .help = "NAME  reading within a mip: cubic (Keys), linear, lanczos3"},
         {.name = "codec", .kind = OCCLI_STRING, .target = &codec,
          .help = "NAME  tile codec: f32 f16 qz exr-zip exr-piz exr-b44 exr-b44a"},
         {.name = "settle", .kind = OCCLI_DOUBLE, .target = &settle, .min = 0, .max = 60,
          .help = "S  wait after the first frame made for the camera before measuring"},
+        {.name = "interval", .kind = OCCLI_DOUBLE, .target = &interval, .min = 0, .max = 3600,
+         .help = "S  measure one frame per S seconds (0: consecutive frames); a longer span samples more "
+                 "sea\n                       (a moving camera) and more wave periods"},
         {.name = "timeout", .kind = OCCLI_INT, .target = &timeout_ms, .min = 1, .max = 3600000,
          .help = "MS  connect / frame timeout"},
     };
@@ -172,6 +187,17 @@ int cmd_fidelity(int argc, char **argv)
         return pr == 1 ? 0 : 2;
     if (np != 1) {
         fprintf(stderr, "ocean-client fidelity: needs the server URL (see --help)\n");
+        return 2;
+    }
+    oc_interp interp;
+    if (!strcmp(interp_name, "cubic"))
+        interp = OC_INTERP_CUBIC;
+    else if (!strcmp(interp_name, "linear"))
+        interp = OC_INTERP_LINEAR;
+    else if (!strcmp(interp_name, "lanczos3"))
+        interp = OC_INTERP_LANCZOS3;
+    else {
+        fprintf(stderr, "ocean-client fidelity: option '--interp': unknown '%s' (cubic linear lanczos3)\n", interp_name);
         return 2;
     }
     proto_subscribe sub;
@@ -221,7 +247,7 @@ int cmd_fidelity(int argc, char **argv)
     }
     fid_acc A;
     memset(&A, 0, sizeof A);
-    double t0 = occli_mono(), last_cam = t0, settled_at = NAN;
+    double t0 = occli_mono(), last_cam = t0, settled_at = NAN, last_measured = -INFINITY;
     double x0 = cam.pos[0], z0 = cam.pos[2];
     uint64_t layout0 = 0, noview = 0;
     char why[256] = "";
@@ -238,7 +264,7 @@ int cmd_fidelity(int argc, char **argv)
         oc_frame *f = NULL;
         ocean_result r = oc_client_next_frame(c, speed > 0 ? 20 : timeout_ms, &f);
         if (r == OCEAN_ESTATE) {
-            if (speed > 0 && occli_mono() - t0 < timeout_ms * 1e-3 * (1 + A.frames))
+            if (speed > 0 && occli_mono() - t0 < timeout_ms * 1e-3 * (1 + A.frames) + interval * frames)
                 continue;
             snprintf(why, sizeof why, "no frame within %d ms", timeout_ms);
             rc = 1;
@@ -282,7 +308,12 @@ int cmd_fidelity(int argc, char **argv)
             oc_frame_free(f);
             continue;
         }
-        measure_frame(f, &cam, grid, verbose, &A);
+        if (occli_mono() - last_measured < interval) {
+            oc_frame_free(f);
+            continue;
+        }
+        last_measured = occli_mono();
+        measure_frame(f, &cam, grid, verbose, interp, &A);
         oc_frame_free(f);
     }
     oc_client_destroy(c);
@@ -293,6 +324,7 @@ int cmd_fidelity(int argc, char **argv)
     }
     double n = (double)A.samples;
     double res = (A.res_x + A.res_z) / n, unres = (A.unres_x + A.unres_z) / n, total = res + unres;
+    double claimed = A.claimed_total / n, claimed_res = claimed - unres;
     double u10 = sea.wind_u10, cm = cox_munk_mss(u10);
     double foam = A.foam / n, foam_half = A.foam_half / n, W = monahan_whitecap(u10);
     int foam_applies = u10 >= 8 && u10 <= 26;
@@ -306,8 +338,11 @@ int cmd_fidelity(int argc, char **argv)
             height, speed, pitch, (unsigned long long)A.frames, (unsigned long long)A.samples,
             (unsigned long long)A.above, (unsigned long long)A.outside, u10);
     fprintf(lines, "mss_resolved    %.5f  (x %.5f, z %.5f)\n", res, A.res_x / n, A.res_z / n);
+    fprintf(lines, "mss_res_claimed %.5f  (what the mip tables say the mips read hold; the measured value differs "
+            "by the sampling of a finite patch)\n", claimed_res);
     fprintf(lines, "mss_unresolved  %.5f  (x %.5f, z %.5f; mip tables + tail_mss)\n", unres, A.unres_x / n,
             A.unres_z / n);
+    fprintf(lines, "mss_sea_claimed %.5f  (the frame's whole sea: every cascade's moments + tail_mss)\n", claimed);
     fprintf(lines, "mss_total       %.5f  Cox-Munk %.5f (U12.5 %.2f m/s): ratio %.3f %s\n", total, cm,
             u125_from_u10(u10), mss_ratio, mss_ok ? "within 30 %" : "OUTSIDE 30 %");
     fprintf(lines, "foam_mean       %.5f  Monahan-OMuircheartaigh %.5f: ratio %.3f %s%s\n", foam, W, foam_ratio,
@@ -331,7 +366,9 @@ int cmd_fidelity(int argc, char **argv)
         cJSON_AddNumberToObject(o, "mss_resolved", res);
         cJSON_AddNumberToObject(o, "mss_resolved_x", A.res_x / n);
         cJSON_AddNumberToObject(o, "mss_resolved_z", A.res_z / n);
+        cJSON_AddNumberToObject(o, "mss_resolved_claimed", claimed_res);
         cJSON_AddNumberToObject(o, "mss_unresolved", unres);
+        cJSON_AddNumberToObject(o, "mss_sea_claimed", claimed);
         cJSON_AddNumberToObject(o, "mss_total", total);
         cJSON_AddNumberToObject(o, "mss_cox_munk", cm);
         cJSON_AddNumberToObject(o, "mss_ratio", mss_ratio);
