@@ -3,10 +3,17 @@
 #   make          build everything into build/
 #   make test     install missing Debian packages, build, run every test
 #                 (plain build, then again under ASan + UBSan)
-#   make run      install, build, start oceand on config/oceand.conf
+#   make run      install, build, start oceand on config/oceand.conf;
+#                 ARGS="--port 0 --scene storm" passes options to oceand
 #   make bench    run the benchmarks, write tests/bench/REPORT.md
 #   make fuzz     run each libFuzzer target for FUZZ_SECONDS
+#   make install  PREFIX=/usr/local (DESTDIR for staging): programs, the
+#                 client library (static and shared, pkg-config oceanclient),
+#                 headers, config, scenes, the web viewer, a systemd unit
 #   make clean
+#
+# Builds run in parallel (one job per core) unless the command line gives -j,
+# and keep their objects, so a second `make` has nothing to do.
 #
 # Sources are found by directory, so a new module is a new .c file:
 #   sim/*.c -> libocean_sim.a        protocol/*.c -> libocean_proto.a
@@ -19,12 +26,29 @@ CC ?= gcc
 SAN ?= 0
 OPT ?= -O2
 PREFIX ?= /usr/local
+# Where `make install` puts oceand's data and config; the installed oceand is
+# compiled with these as its defaults (build/oceand keeps the source tree's).
+DATADIR ?= $(PREFIX)/share/oceand
+SYSCONFDIR ?= $(PREFIX)/etc/oceand
+UNITDIR ?= $(PREFIX)/lib/systemd/system
+ARGS ?=
+
+# One job per core unless the command line chose (-j N, or -j1 for serial).
+ifeq ($(filter -j%,$(MAKEFLAGS)),)
+MAKEFLAGS += -j$(shell nproc 2>/dev/null || echo 2)
+endif
+# Objects of pattern-built programs would otherwise be intermediate files:
+# deleted after the link, so the next `make` rebuilt and relinked everything.
+.SECONDARY:
 
 CPPFLAGS += -D_GNU_SOURCE -Isim -Iprotocol -Iclients/c -Iserver \
             -I/usr/include/OpenEXR -I/usr/include/cjson
 CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -fopenmp -pthread
-LDLIBS += -lwebsockets -lOpenEXRCore-3_1 -lfftw3f_omp -lfftw3f \
-          -lzstd -lcjson -lm -lpthread
+# What the client library (sim + protocol + clients/c) links against; the
+# .pc file's Libs.private is generated from it, so they cannot disagree.
+LIB_LDLIBS := -lwebsockets -lOpenEXRCore-3_1 -lfftw3f_omp -lfftw3f \
+              -lzstd -lcjson -lm -lpthread
+LDLIBS += $(LIB_LDLIBS)
 ifeq ($(SAN),1)
 CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 LDFLAGS += -fsanitize=address,undefined
@@ -52,6 +76,15 @@ LIB_TEST := $(BUILD)/libocean_testlib.a
 ALL_LIBS := $(if $(CLIENT_SRC),$(LIB_CLIENT)) $(if $(SERVER_SRC),$(LIB_SERVER)) \
             $(if $(PROTO_SRC),$(LIB_PROTO)) $(LIB_SIM)
 
+# The installable client library: sim + protocol + clients/c in one archive
+# and one shared object (built from -fPIC objects of its own).
+OC_VERSION := $(shell sed -n 's/^\#define OC_VERSION "\(.*\)"/\1/p' clients/c/oceanclient.h)
+OC_SOVERSION := $(firstword $(subst ., ,$(OC_VERSION)))
+OCLIB_SRC := $(CLIENT_SRC) $(PROTO_SRC) $(SIM_SRC)
+OCLIB_A := $(BUILD)/liboceanclient.a
+OCLIB_SO := $(BUILD)/liboceanclient.so.$(OC_VERSION)
+pic = $(patsubst %.c,$(BUILD)/pic/%.o,$(1))
+
 PROGS := $(BUILD)/ocean-sim \
          $(if $(SERVER_SRC),$(BUILD)/oceand) \
          $(if $(CLIENTCLI_SRC),$(BUILD)/ocean-client) \
@@ -62,18 +95,32 @@ BENCHES := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 .PHONY: all deps test test-plain test-asan run bench fuzz clean install
 .DEFAULT_GOAL := all
 
-all: $(PROGS) $(TESTS) $(BENCHES)
+all: $(PROGS) $(TESTS) $(BENCHES) $(OCLIB_A) $(OCLIB_SO)
 
 deps:
 	@bash .ci/deps.sh
 
 # The spectrum stage's row passes need -O3's vectoriser (GCC 12's -O2 cost
 # model leaves them scalar); a command-line OPT (the ASan build) still wins.
-$(BUILD)/obj/sim/ocean.o: OPT = -O3
+$(BUILD)/obj/sim/ocean.o $(BUILD)/pic/sim/ocean.o: OPT = -O3
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -MMD -MP -c $< -o $@
+
+$(BUILD)/pic/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -MMD -MP -c $< -o $@
+
+$(OCLIB_A): $(call obj,$(OCLIB_SRC))
+	rm -f $@ && ar rcs $@ $^
+# -z defs: every symbol the library uses is resolved by what it names (the
+# sanitizer runtime is only there in the executable, so not under SAN).
+$(OCLIB_SO): $(call pic,$(OCLIB_SRC))
+	$(CC) -shared -Wl,-soname,liboceanclient.so.$(OC_SOVERSION) $(if $(filter 1,$(SAN)),,-Wl,-z,defs) \
+	    $(CFLAGS) $(LDFLAGS) $^ $(LIB_LDLIBS) -o $@
+	ln -sf $(notdir $@) $(BUILD)/liboceanclient.so.$(OC_SOVERSION)
+	ln -sf $(notdir $@) $(BUILD)/liboceanclient.so
 
 $(LIB_SIM): $(call obj,$(SIM_SRC))
 $(LIB_PROTO): $(call obj,$(PROTO_SRC))
@@ -102,10 +149,13 @@ $(BUILD)/bench/%: $(BUILD)/obj/tests/bench/%.o $(if $(TESTLIB_SRC),$(LIB_TEST)) 
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -o $@
 
+# deps first, then one pass after the other: each pass builds in parallel,
+# the two passes must not run side by side.
 test: deps
-	@$(MAKE) --no-print-directory test-plain test-asan
+	@$(MAKE) --no-print-directory test-plain
+	@$(MAKE) --no-print-directory test-asan
 	@cat $(BUILD)/test-summary build/asan/test-summary | \
-	 awk '{p += $$1; f += $$2} END {printf "%d passed, %d failed\n", p, f; exit (f > 0)}'
+	 awk '{p += $$1; f += $$2; s += $$3} END {printf "%d passed, %d failed, %d skipped\n", p, f, s; exit (f > 0)}'
 
 test-plain: all
 	@bash tests/run.sh $(BUILD) plain
@@ -115,22 +165,44 @@ test-asan:
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	 OCEAN_TEST_SANITIZED=1 bash tests/run.sh build/asan asan
 
-run: deps all
-	./$(BUILD)/oceand --config config/oceand.conf
+run: deps
+	@$(MAKE) --no-print-directory all
+	./$(BUILD)/oceand --config config/oceand.conf $(ARGS)
 
-bench: deps all
+bench: deps
+	@$(MAKE) --no-print-directory all
 	@bash tests/bench/run.sh $(BUILD)
 
 FUZZ_SECONDS ?= 60
 fuzz: deps
 	@bash tests/fuzz/run.sh $(FUZZ_SECONDS)
 
+# The installed oceand is build/oceand relinked with main.c compiled for the
+# prefix: with no --config it serves DATADIR/web and DATADIR/scenes.
+INST_DEFS = -DOCEAND_DATADIR='"$(DATADIR)"' -DOCEAND_SYSCONFDIR='"$(SYSCONFDIR)"'
 install: all
-	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/include/oceand
-	install -m 755 $(PROGS) $(DESTDIR)$(PREFIX)/bin/
-	install -m 644 $(ALL_LIBS) $(DESTDIR)$(PREFIX)/lib/
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/include/oceand \
+	    $(DESTDIR)$(DATADIR)/web $(DESTDIR)$(DATADIR)/scenes $(DESTDIR)$(SYSCONFDIR) $(DESTDIR)$(UNITDIR) \
+	    $(BUILD)/install
+	install -m 755 $(filter-out $(BUILD)/oceand,$(PROGS)) $(DESTDIR)$(PREFIX)/bin/
+	$(CC) $(CPPFLAGS) $(INST_DEFS) $(CFLAGS) -c server/main.c -o $(BUILD)/install/main.o
+	$(CC) $(CFLAGS) $(LDFLAGS) $(BUILD)/install/main.o $(ALL_LIBS) $(LDLIBS) -o $(BUILD)/install/oceand
+	install -m 755 $(BUILD)/install/oceand $(DESTDIR)$(PREFIX)/bin/
+	install -m 644 $(OCLIB_A) $(OCLIB_SO) $(DESTDIR)$(PREFIX)/lib/
+	ln -sf $(notdir $(OCLIB_SO)) $(DESTDIR)$(PREFIX)/lib/liboceanclient.so.$(OC_SOVERSION)
+	ln -sf $(notdir $(OCLIB_SO)) $(DESTDIR)$(PREFIX)/lib/liboceanclient.so
 	install -m 644 sim/*.h protocol/*.h clients/c/*.h $(DESTDIR)$(PREFIX)/include/oceand/
-	sed 's|@PREFIX@|$(PREFIX)|g' clients/c/oceanclient.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/oceanclient.pc
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(OC_VERSION)|g' \
+	    -e 's|@LIBS_PRIVATE@|$(LIB_LDLIBS) -fopenmp|g' \
+	    clients/c/oceanclient.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/oceanclient.pc
+	cp -R clients/web/. $(DESTDIR)$(DATADIR)/web/
+	install -m 644 config/scenes/*.conf $(DESTDIR)$(DATADIR)/scenes/
+	sed -e 's|^server.web_root = .*|server.web_root = $(DATADIR)/web|' \
+	    -e 's|^server.scene_dir = .*|server.scene_dir = $(DATADIR)/scenes|' \
+	    config/oceand.conf > $(BUILD)/install/oceand.conf
+	install -m 644 $(BUILD)/install/oceand.conf $(DESTDIR)$(SYSCONFDIR)/oceand.conf
+	sed -e 's|@BINDIR@|$(PREFIX)/bin|g' -e 's|@SYSCONFDIR@|$(SYSCONFDIR)|g' \
+	    server/oceand.service.in > $(DESTDIR)$(UNITDIR)/oceand.service
 
 clean:
 	rm -rf build

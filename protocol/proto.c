@@ -8,6 +8,7 @@
  * and the tests of one cover the other.
  */
 #include "proto.h"
+#include "ocean_time.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -86,6 +87,15 @@ static ocean_result chk_range(ctx *c, const char *what, double v, double lo, dou
         FAIL(c, OCEAN_EINVAL, "%s is %g; must be finite", what, v);
     if (v < lo || v > hi)
         FAIL(c, OCEAN_EINVAL, "%s = %g outside [%g, %g]", what, v, lo, hi);
+    return OCEAN_OK;
+}
+
+/* Times: the one limit of ocean_time.h (OCEAN_TIME_MAX), named in the message. */
+static ocean_result chk_time(ctx *c, const char *what, double v)
+{
+    char m[256];
+    if (ocean_time_check(v, what, m, sizeof m) != OCEAN_OK)
+        FAIL(c, OCEAN_EINVAL, "%s", m);
     return OCEAN_OK;
 }
 
@@ -222,7 +232,7 @@ static ocean_result v_camera(ctx *c, const proto_camera *k)
         FAIL(c, OCEAN_EINVAL, "camera.fov_y_deg = %g outside (0, 180)", (double)k->fov_y_deg);
     TRY(chk_range(c, "camera.viewport_w", k->viewport_w, 1, 16384));
     TRY(chk_range(c, "camera.viewport_h", k->viewport_h, 1, 16384));
-    return chk_range(c, "camera.render_time", k->render_time, -1e15, 1e15);
+    return chk_time(c, "camera.render_time", k->render_time);
 }
 
 static ocean_result v_tile(ctx *c, const proto_tile *t)
@@ -422,7 +432,7 @@ static ocean_result v_query(ctx *c, const proto_query *q)
     if (q->count > c->lim->max_query_points)
         FAIL(c, OCEAN_ETOOBIG, "query.count %u above the limit %u", q->count, c->lim->max_query_points);
     TRY(chk_enum(c, "query.at_time", q->at_time, 2));
-    TRY(chk_range(c, "query.t", q->t, -1e15, 1e15));
+    TRY(chk_time(c, "query.t", q->t));
     if (!q->points)
         FAIL(c, OCEAN_EINVAL, "query has no points");
     for (size_t i = 0; i < 2 * (size_t)q->count; i++)
@@ -438,7 +448,7 @@ static ocean_result v_result(ctx *c, const proto_query_result *r)
         FAIL(c, OCEAN_EINVAL, "query_result.count is 0");
     if (r->count > c->lim->max_query_points)
         FAIL(c, OCEAN_ETOOBIG, "query_result.count %u above the limit %u", r->count, c->lim->max_query_points);
-    TRY(chk_range(c, "query_result.t", r->t, -1e15, 1e15));
+    TRY(chk_time(c, "query_result.t", r->t));
     if (!r->samples)
         FAIL(c, OCEAN_EINVAL, "query_result has no samples");
     for (uint32_t i = 0; i < r->count; i++) {
@@ -458,7 +468,7 @@ static ocean_result v_result(ctx *c, const proto_query_result *r)
 static ocean_result v_sea_state(ctx *c, const proto_sea_state *s)
 {
     TRY(chk_enum(c, "sea_state.op", s->op, PROTO_SEA_OP_COUNT_));
-    TRY(chk_range(c, "sea_state.effective_time", s->effective_time, -1e15, 1e15));
+    TRY(chk_time(c, "sea_state.effective_time", s->effective_time));
     TRY(v_sea(c, &s->sea));
     TRY(chk_str(c, "sea_state.token", s->token, PROTO_TOKEN_MAX));
     if (s->op == PROTO_SEA_ANNOUNCE && s->token[0])
@@ -538,8 +548,10 @@ ocean_result proto_header_decode(const void *buf, size_t len, const proto_limits
                proto_type_name(out->type), out->flags, proto_ld32(p + 20));
         return OCEAN_EFORMAT;
     }
-    if (!isfinite(out->sim_time)) {
-        ocean_seterr(err, errlen, "%s header: sim_time is %g; must be finite", proto_type_name(out->type), out->sim_time);
+    if (!ocean_time_ok(out->sim_time)) {
+        char m[256];
+        ocean_time_check(out->sim_time, "sim_time", m, sizeof m);
+        ocean_seterr(err, errlen, "%s header: %s", proto_type_name(out->type), m);
         return OCEAN_EINVAL;
     }
     if ((uint64_t)out->length + PROTO_HEADER_SIZE > lim->max_message) {
@@ -1347,10 +1359,16 @@ static ocean_result e_payload(proto_buf *b, const proto_msg *m)
                            (size_t)f->cascades.cascade_count * PROTO_CASCADE_ENTRY_SIZE, &p));
             cascade_block_write(p, &f->cascades);
         }
+        if (f->tile_records) {
+            /* one allocation for the whole frame: the records are most of it */
+            size_t total = RECORD_HEAD + VERTS_FIXED;
+            for (unsigned i = 0; i < f->tile_count; i++)
+                total += f->tile_records[i].len;
+            TRY(proto_buf_reserve(b, total));
+        }
         for (unsigned i = 0; i < f->tile_count; i++) {
             if (f->tile_records) {
-                TRY(put(b, f->tile_records[i].len, &p));
-                memcpy(p, f->tile_records[i].p, f->tile_records[i].len);
+                TRY(proto_buf_append(b, f->tile_records[i].p, f->tile_records[i].len));
             } else {
                 TRY(e_record(b, REC_TILE, &f->tiles[i], f->tiles[i].cascade));
             }
@@ -1465,8 +1483,7 @@ ocean_result proto_encode(proto_buf *out, const proto_msg *msg, char *err, size_
         FAIL(&c, OCEAN_EVERSION, "cannot encode protocol version %u", msg->hdr.version);
     if (msg->hdr.flags != 0)
         FAIL(&c, OCEAN_EFORMAT, "header flags must be 0 in version 1");
-    if (!isfinite(msg->hdr.sim_time))
-        FAIL(&c, OCEAN_EINVAL, "header sim_time is %g; must be finite", msg->hdr.sim_time);
+    TRY(chk_time(&c, "header sim_time", msg->hdr.sim_time));
     TRY(v_msg(&c, msg));
     size_t start = out->len;
     uint8_t *h;
@@ -1497,7 +1514,7 @@ ocean_result proto_error_reply(proto_buf *out, const void *bad, size_t badlen, o
     proto_msg m;
     proto_msg_init(&m, PROTO_ERROR);
     m.hdr.seq = seq;
-    m.hdr.sim_time = isfinite(sim_time) ? sim_time : 0.0;
+    m.hdr.sim_time = ocean_time_ok(sim_time) ? sim_time : 0.0;
     m.u.error.code = (uint16_t)(code == OCEAN_OK ? OCEAN_EINVAL : code);
     const uint8_t *p = bad;
     if (p && badlen >= 8 && proto_ld32(p) == PROTO_MAGIC)

@@ -9,39 +9,184 @@
  * client BYE with a close reason and exit 0.  Signals are taken with
  * sigwait on the main thread, so no handler races the worker threads.
  */
+#include <arpa/inet.h>
 #include <errno.h>
 #include <getopt.h>
 #include <malloc.h>
+#include <net/if.h>
+#include <netinet/in.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include "srv_daemon.h"
 
 #define MAX_SETS 64
 
+/* Where an installed oceand finds its viewer and scenes when no --config
+ * names them: `make install` compiles this file with -DOCEAND_DATADIR=
+ * PREFIX/share/oceand.  build/oceand has none and keeps the config table's
+ * defaults, which are relative to the source tree (what `make run` uses). */
+#ifdef OCEAND_DATADIR
+static const char *const datadir_sets[] = {"server.web_root=" OCEAND_DATADIR "/web",
+                                           "server.scene_dir=" OCEAND_DATADIR "/scenes"};
+#define N_DATADIR_SETS 2
+#else
+static const char *const datadir_sets[] = {NULL};
+#define N_DATADIR_SETS 0
+#endif
+#ifndef OCEAND_SYSCONFDIR
+#define OCEAND_SYSCONFDIR "config"
+#endif
+
+/* The one table of command-line options: getopt's table, the parser's
+ * dispatch and --help are all made from it, and the defaults --help shows
+ * are read from the settings the daemon really starts with, so the help
+ * cannot drift from the code. */
+typedef enum od_kind {
+    OD_CONFIG,   /* --config FILE */
+    OD_KEY,      /* shorthand for --set KEY=VALUE */
+    OD_SET,      /* --set KEY=VALUE */
+    OD_DUMP,     /* --dump-config */
+    OD_HELP      /* --help */
+} od_kind;
+
+typedef struct od_opt {
+    const char *name;   /* long option without "--" */
+    char letter;        /* short option, 0 for none */
+    const char *arg;    /* argument name; NULL for a flag */
+    od_kind kind;
+    const char *key;    /* OD_KEY: the config key it sets */
+    const char *help;
+} od_opt;
+
+static const od_opt od_opts[] = {
+    {"config", 'c', "FILE", OD_CONFIG, NULL,
+     "configuration file (every key documented in " OCEAND_SYSCONFDIR "/oceand.conf);\n"
+     "without it the built-in defaults below"},
+    {"port", 'p', "P", OD_KEY, "server.port", "listen port; 0 picks a free one"},
+    {"bind", 'b', "ADDR", OD_KEY, "server.bind", "listen address; \"\" for all interfaces"},
+    {"scene", 's', "NAME", OD_KEY, "server.scene", "scene name in server.scene_dir, or a .conf path"},
+    {"set", 'S', "KEY=VALUE", OD_SET, NULL, "override any key (repeatable), e.g. --set sea.wind=15"},
+    {"dump-config", 'D', NULL, OD_DUMP, NULL, "print the server.* keys with their help and exit"},
+    {"help", 'h', NULL, OD_HELP, NULL, "this text"},
+};
+#define N_OD_OPTS (int)(sizeof od_opts / sizeof od_opts[0])
+
+/* The built-in server.* settings (with an installed oceand's data
+ * directory), without loading a scene, so --help works in any directory. */
+static srv_config *help_defaults(conf_set *set, const conf_table **t, void **tg)
+{
+    srv_config *c = calloc(1, sizeof *c);
+    if (!c) return NULL;
+    t[0] = srv_config_table();
+    tg[0] = c;
+    *set = (conf_set){t, tg, 1};
+    char err[512];
+    ocean_result r = conf_defaults(set, err, sizeof err);
+    for (int i = 0; r == OCEAN_OK && i < N_DATADIR_SETS; i++) r = conf_apply(datadir_sets[i], set, err, sizeof err);
+    if (r != OCEAN_OK) {
+        free(c);
+        return NULL;
+    }
+    return c;
+}
+
+/* The default of a config key as the config file would spell it. */
+static void key_default(const conf_set *set, const srv_config *d, const char *key, char *buf, size_t len)
+{
+    const conf_entry *e = d ? conf_find(set, key, NULL) : NULL;
+    if (!e || conf_format(e, d, buf, len) < 0) snprintf(buf, len, "?");
+}
+
 static void usage(FILE *f)
 {
+    conf_set set;
+    const conf_table *t[1];
+    void *tg[1];
+    srv_config *d = help_defaults(&set, t, tg);
     fprintf(f,
             "usage: oceand [options]\n"
             "\n"
             "Serves one shared FFT ocean to every client over WebSocket (protocol ocean.v1),\n"
             "the browser viewer at http://HOST:PORT/, /metrics (Prometheus) and /status (JSON).\n"
-            "\n"
-            "  --config FILE     configuration file (default: built-in defaults;\n"
-            "                    see config/oceand.conf, every key documented)\n"
-            "  --port P          listen port (server.port); 0 picks a free one\n"
-            "  --bind ADDR       listen address (server.bind); \"\" for all interfaces\n"
-            "  --scene NAME      scene name in server.scene_dir, or a .conf path\n"
-            "  --set KEY=VALUE   override any key (repeatable), e.g. --set sea.wind=15\n"
-            "  --dump-config     print the server.* keys with their help and exit\n"
-            "  --help            this text\n"
+            "\n");
+    for (int i = 0; i < N_OD_OPTS; i++) {
+        const od_opt *o = &od_opts[i];
+        char left[64];
+        snprintf(left, sizeof left, "--%s%s%s", o->name, o->arg ? " " : "", o->arg ? o->arg : "");
+        fprintf(f, "  %-18s", left);
+        for (const char *h = o->help; *h;) {
+            size_t n = strcspn(h, "\n");
+            fprintf(f, "%s%.*s", h == o->help ? "" : "\n                    ", (int)n, h);
+            h += n + (h[n] == '\n');
+        }
+        if (o->kind == OD_KEY) {
+            char v[SRV_PATH_MAX + 16];
+            key_default(&set, d, o->key, v, sizeof v);
+            fprintf(f, " (%s; default %s)", o->key, v);
+        }
+        fputc('\n', f);
+    }
+    if (d)
+        fprintf(f,
+                "\nBuilt-in defaults: web viewer %s, scenes %s.\n", d->web_root, d->scene_dir);
+    fprintf(f,
             "\n"
             "Signals: SIGHUP reloads the config; SIGTERM/SIGINT close every client with\n"
             "a reason and exit 0.  On start the daemon prints \"oceand: listening on\n"
             "http://ADDR:PORT/\" to stdout.\n");
+    free(d);
+}
+
+/* Binds a throw-away socket where the daemon will listen, so that an address
+ * this host does not have, or a port in use, fails here with a message that
+ * names the way out, instead of libwebsockets logging a bind error and the
+ * daemon running with no socket.  SO_REUSEADDR as libwebsockets sets it, so
+ * a port left in TIME_WAIT by a previous run is not refused.  Returns 0 if
+ * the bind would work. */
+static int probe_listen(const srv_config *c, char *err, size_t errlen)
+{
+    struct sockaddr_in sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sin_family = AF_INET;
+    sa.sin_port = htons((uint16_t)c->port);
+    sa.sin_addr.s_addr = htonl(INADDR_ANY);
+    if (c->bind[0] && inet_pton(AF_INET, c->bind, &sa.sin_addr) != 1) {
+        /* libwebsockets also takes an interface name (e.g. "lo"). */
+        if (if_nametoindex(c->bind) != 0)
+            return 0;
+        snprintf(err, errlen, "server.bind: '%s' is neither an IPv4 address nor a network interface "
+                 "of this host (--bind ADDR, \"\" for all interfaces)", c->bind);
+        return -1;
+    }
+    int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (fd < 0)
+        return 0;   /* cannot tell; libwebsockets will say */
+    int one = 1;
+    setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+    int rc = bind(fd, (struct sockaddr *)&sa, sizeof sa);
+    int e = errno;
+    close(fd);
+    if (rc == 0)
+        return 0;
+    const char *addr = c->bind[0] ? c->bind : "0.0.0.0";
+    if (e == EADDRNOTAVAIL)
+        snprintf(err, errlen, "cannot listen on %s: no interface of this host has that address "
+                 "(server.bind; use --bind with one of this host's addresses, or \"\" for all)", addr);
+    else if (e == EADDRINUSE)
+        snprintf(err, errlen, "cannot listen on %s:%d: the port is in use (another oceand?); choose "
+                 "another with --port N or --port 0 for a free one (make run ARGS=\"--port N\")",
+                 addr, c->port);
+    else if (e == EACCES)
+        snprintf(err, errlen, "cannot listen on %s:%d: %s (ports below 1024 need privileges; "
+                 "--port N)", addr, c->port, strerror(e));
+    else
+        snprintf(err, errlen, "cannot listen on %s:%d: %s", addr, c->port, strerror(e));
+    return -1;
 }
 
 int main(int argc, char **argv)
@@ -66,36 +211,43 @@ int main(int argc, char **argv)
     if (!getenv("MALLOC_MMAP_THRESHOLD_")) mallopt(M_MMAP_THRESHOLD, 16 << 20);
     if (!getenv("MALLOC_TRIM_THRESHOLD_")) mallopt(M_TRIM_THRESHOLD, 256 << 20);
     const char *config = NULL;
-    const char *sets[MAX_SETS];
-    char setbuf[3][600];
-    int nsets = 0, nextra = 0;
-    static const struct option opts[] = {
-        {"config", required_argument, NULL, 'c'}, {"port", required_argument, NULL, 'p'},
-        {"bind", required_argument, NULL, 'b'},   {"scene", required_argument, NULL, 's'},
-        {"set", required_argument, NULL, 'S'},    {"dump-config", no_argument, NULL, 'D'},
-        {"help", no_argument, NULL, 'h'},         {NULL, 0, NULL, 0}};
+    const char *sets[MAX_SETS + N_DATADIR_SETS];
+    char setbuf[MAX_SETS][600];
+    int nsets = 0, nbuf = 0;
+    struct option lo[N_OD_OPTS + 1];
+    char shorts[3 * N_OD_OPTS + 1], *sp = shorts;
+    for (int i = 0; i < N_OD_OPTS; i++) {
+        lo[i] = (struct option){od_opts[i].name, od_opts[i].arg ? required_argument : no_argument, NULL,
+                                256 + i};
+        if (od_opts[i].letter) {
+            *sp++ = od_opts[i].letter;
+            if (od_opts[i].arg) *sp++ = ':';
+        }
+    }
+    *sp = 0;
+    lo[N_OD_OPTS] = (struct option){NULL, 0, NULL, 0};
     int o;
-    while ((o = getopt_long(argc, argv, "c:p:b:s:S:hD", opts, NULL)) != -1) {
-        switch (o) {
-        case 'c': config = optarg; break;
-        case 'p':
-        case 'b':
-        case 's':
-            if (nextra >= 3 || nsets >= MAX_SETS) return 2;
-            snprintf(setbuf[nextra], sizeof setbuf[nextra], "server.%s=%s",
-                     o == 'p' ? "port" : o == 'b' ? "bind" : "scene", optarg);
-            sets[nsets++] = setbuf[nextra++];
+    while ((o = getopt_long(argc, argv, shorts, lo, NULL)) != -1) {
+        const od_opt *op = NULL;
+        for (int i = 0; i < N_OD_OPTS; i++)
+            if (o == 256 + i || (od_opts[i].letter && o == od_opts[i].letter)) op = &od_opts[i];
+        if (!op) {
+            usage(stderr);
+            return 2;
+        }
+        if ((op->kind == OD_KEY || op->kind == OD_SET) && nsets >= MAX_SETS) {
+            fprintf(stderr, "oceand: too many --set options (max %d)\n", MAX_SETS);
+            return 2;
+        }
+        switch (op->kind) {
+        case OD_CONFIG: config = optarg; break;
+        case OD_KEY:
+            snprintf(setbuf[nbuf], sizeof setbuf[nbuf], "%s=%s", op->key, optarg);
+            sets[nsets++] = setbuf[nbuf++];
             break;
-        case 'S':
-            if (nsets >= MAX_SETS) {
-                fprintf(stderr, "oceand: too many --set options (max %d)\n", MAX_SETS);
-                return 2;
-            }
-            sets[nsets++] = optarg;
-            break;
-        case 'D': return srv_config_dump(stdout) == OCEAN_OK ? 0 : 1;
-        case 'h': usage(stdout); return 0;
-        default: usage(stderr); return 2;
+        case OD_SET: sets[nsets++] = optarg; break;
+        case OD_DUMP: return srv_config_dump(stdout) == OCEAN_OK ? 0 : 1;
+        case OD_HELP: usage(stdout); return 0;
         }
     }
     if (optind < argc) {
@@ -103,10 +255,22 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
+    /* Without a config file, an installed oceand's data directory comes
+     * first, so --port/--set still override it. */
+    if (!config && N_DATADIR_SETS) {
+        memmove(sets + N_DATADIR_SETS, sets, (size_t)nsets * sizeof *sets);
+        for (int i = 0; i < N_DATADIR_SETS; i++) sets[i] = datadir_sets[i];
+        nsets += N_DATADIR_SETS;
+    }
     srv_settings *s = calloc(1, sizeof *s);
     if (!s) return 1;
     char err[1024];
     if (srv_settings_load(config, sets, nsets, s, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "oceand: %s\n", err);
+        free(s);
+        return 1;
+    }
+    if (probe_listen(&s->srv, err, sizeof err) != 0) {
         fprintf(stderr, "oceand: %s\n", err);
         free(s);
         return 1;

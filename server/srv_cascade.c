@@ -24,6 +24,7 @@
 
 #include "gerstner.h"
 #include "mesh.h"
+#include "slope.h"
 
 #define MAX_MIPS PROTO_MAX_MIPS
 #define NBUCKETS 4096
@@ -58,11 +59,25 @@ typedef struct tables {
     double total_var;      /* all cascades, m^2 */
     const ocean_gerstner *g;
     double near_mss[3];    /* the Gerstner near field's slope moments */
+    double tail_mss[3];    /* the short-wave tail beyond the shortest simulated wave */
 } tables;
+
+/* Encoded bytes per tile sample of a (codec, accuracy, channels, side),
+ * learnt from the tiles encoded so far: what the byte budget plans with. */
+#define RATES 16
+typedef struct rate {
+    int used;
+    uint8_t codec;
+    uint16_t channels, size;
+    float accuracy;
+    double bytes_per_sample;
+} rate;
 
 struct srv_cascade {
     tables tab;
     int tab_valid;
+    rate rates[RATES];
+    int rate_next;
     ocean_frame *mipf[MAX_MIPS];  /* mip level m of every cascade, this batch */
     ctile *b[NBUCKETS];
     size_t count;
@@ -197,6 +212,18 @@ static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstne
     tb->order = order;
     tb->cascades = p->cascades;
     tb->n = p->n;
+    /* The waves shorter than any the simulation holds (the sea state's
+     * spectrum to 10 cm, then Elfouhaily et al. 1997's B_h to 1 mm;
+     * slope.h): no tile ever carries them, shading always does. */
+    ocean_slope_table *st = NULL;
+    ocean_slope_stats ss;
+    if (ocean_slope_table_create(oc, g, &st, NULL, 0) == OCEAN_OK &&
+        ocean_slope_table_get(st, INFINITY, order, &ss) == OCEAN_OK) {
+        tb->tail_mss[0] = ss.tail.mss_x;
+        tb->tail_mss[1] = ss.tail.mss_z;
+        tb->tail_mss[2] = ss.tail.mss_xz;
+    }
+    ocean_slope_table_destroy(st);
     for (int c = 0; c < p->cascades; c++) {
         double klo, khi;
         ocean_cascade_band(oc, c, &tb->patch[c], &klo, &khi);
@@ -241,29 +268,90 @@ static void span(double x, double half, double w, int ntile, int32_t *first, int
     *count = (int32_t)cnt;
 }
 
-/* The plan for spacing factor q; returns the tile samples it carries. */
-static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q, plan *pl);
+/* Channels of cascade c's tiles: foam travels with cascade 0 alone (the
+ * whole sea's whitecaps placed by its breaking index; PROTOCOL.md), so no
+ * two cascades count the coverage twice. */
+static unsigned chan_of(const plan *pl, int c)
+{
+    return c == 0 ? pl->channels : pl->channels & ~(unsigned)PROTO_CH_FOAM;
+}
+
+static rate *rate_find(srv_cascade *k, unsigned codec, float accuracy, unsigned channels, unsigned size)
+{
+    for (int i = 0; i < RATES; i++) {
+        rate *r = &k->rates[i];
+        if (r->used && r->codec == codec && r->accuracy == accuracy && r->channels == channels && r->size == size)
+            return r;
+    }
+    return NULL;
+}
+
+/* Estimated encoded bytes of one tile of side T; before any such tile was
+ * encoded, the codec's design point of 1/8 of f32. */
+static double tile_bytes(srv_cascade *k, const proto_subscribe *sub, unsigned channels, int T)
+{
+    const rate *r = rate_find(k, sub->codec, sub->accuracy, channels, (unsigned)T);
+    double per = r ? r->bytes_per_sample : proto_tile_planes(channels) * 4.0 / 8.0;
+    return per * T * T + 64; /* record and TILE headers */
+}
+
+/* Learns from encoded tiles (an exponential average per kind). */
+static void rate_learn(srv_cascade *k, const ctile *t)
+{
+    if (t->result != OCEAN_OK || !t->rec_len) return;
+    rate *r = rate_find(k, t->key.codec, t->key.accuracy, t->key.channels, t->key.size);
+    if (!r) {
+        r = &k->rates[k->rate_next];
+        k->rate_next = (k->rate_next + 1) % RATES;
+        *r = (rate){1, t->key.codec, t->key.channels, t->key.size, t->key.accuracy, 0};
+        r->bytes_per_sample = (double)t->rec_len / ((double)t->key.size * t->key.size);
+        return;
+    }
+    r->bytes_per_sample += 0.05 * ((double)t->rec_len / ((double)t->key.size * t->key.size) - r->bytes_per_sample);
+}
+
+/* The plan for spacing factor q; returns the estimated bytes of its tiles. */
+static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q,
+                      plan *pl);
 
 /* A job's plan at the server's quality target (server.px_per_sample),
- * coarsened (q raised by steps of 2^(1/4)) until the frame carries at most
- * server.frame_samples tile samples: a large viewport or a low camera gets
- * a little less geometry and a little more unresolved roughness, never more
- * bytes than the budget. */
-static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
+ * coarsened (q raised by steps of 2^(1/4)) until the frame's tiles fit the
+ * viewer's byte budget (server.viewer_bytes_per_s over its frame rate): a
+ * large viewport or a low camera gets a little less geometry and a little
+ * more unresolved roughness, never more bytes than the budget. */
+static void plan_job(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
 {
     mesh_camera mc;
     srv_mesh_camera(&j->cam, &mc);
     double ppr = mesh_camera_px_per_rad(&mc);
     double q = cfg->px_per_sample / (ppr > 0 ? ppr : 1.0);
-    for (int it = 0; it < 64; it++, q *= 1.189207115002721) /* 2^(1/4) */
-        if (plan_at(tb, cfg, j, q, pl) <= cfg->frame_samples)
+    double rate_hz = j->c->sim.sub.frame_rate_hz > 0 ? j->c->sim.sub.frame_rate_hz : 30.0;
+    double budget = cfg->viewer_bytes_per_s / rate_hz;
+    if (plan_at(k, tb, cfg, j, q, pl) <= budget)
+        return;
+    /* octaves first, then quarter octaves back down to the finest that fits */
+    double hi = q;
+    for (int it = 0; it < 40; it++) {
+        hi *= 2;
+        if (plan_at(k, tb, cfg, j, hi, pl) <= budget)
             break;
+    }
+    for (int it = 0; it < 3; it++) {
+        double t = hi / 1.189207115002721; /* 2^(1/4) */
+        if (t <= q || plan_at(k, tb, cfg, j, t, pl) > budget)
+            break;
+        hi = t;
+    }
+    plan_at(k, tb, cfg, j, hi, pl);
 }
 
-static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q, plan *pl)
+static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j, double q,
+                      plan *pl)
 {
     const proto_subscribe *sub = &j->c->sim.sub;
-    memset(pl, 0, sizeof *pl);
+    /* only the fields a plan computes: the mesh parts stay */
+    memset(pl->need, 0, sizeof pl->need);
+    pl->tiles = 0;
     double samples = 0;
     pl->layers = sub->layers < tb->cascades ? sub->layers : tb->cascades;
     pl->q = q;
@@ -275,6 +363,7 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
     double range_m = sub->view_range_m > 0 ? sub->view_range_m : cfg->view_range;
     double cy = fmax(fabs(j->cam.pos[1]), 1.0);
     for (int c = 0; c < pl->layers; c++) {
+        if (!chan_of(pl, c)) continue;
         double sigma = tb->patch[c] / tb->n;
         int fades = c > 0;
         for (int m = 0; m < tb->mips[c]; m++) {
@@ -298,7 +387,7 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
             span(j->cam.pos[2], half, w, ntile, &g->z0, &g->nz);
             pl->need[c][m] = 1;
             pl->tiles += g->nx * g->nz;
-            samples += (double)g->nx * g->nz * t * t;
+            samples += (double)g->nx * g->nz * tile_bytes(k, sub, chan_of(pl, c), t);
         }
     }
     pl->ok = 1;
@@ -591,8 +680,10 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
         e->fades = c > 0;
         for (int q = 0; q <= tb->mips[c]; q++) e->mip[q] = tb->entry[c][q];
     }
-    if (sub->effects & PROTO_FX_NEAR_FIELD)
-        for (int i = 0; i < 3; i++) b->tail_mss[i] += (float)tb->near_mss[i];
+    for (int i = 0; i < 3; i++) {
+        b->tail_mss[i] = (float)tb->tail_mss[i];
+        if (sub->effects & PROTO_FX_NEAR_FIELD) b->tail_mss[i] += (float)tb->near_mss[i];
+    }
     /* cascades the subscription leaves out: their slopes only shade */
     for (int c = pl->layers; c < tb->cascades; c++) {
         const proto_mip_entry *all = &tb->entry[c][tb->mips[c]];
@@ -692,7 +783,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
     if (!pl) return;
     /* 1. plans and meshes */
     for (int i = 0; i < n; i++) {
-        plan_job(tb, cfg, &jobs[i], &pl[i]);
+        plan_job(k, tb, cfg, &jobs[i], &pl[i]);
         pl[i].share_with = i;
         if (pl[i].tiles > (int)PROTO_MAX_FRAME_TILES) {
             char why[200];
@@ -736,7 +827,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
                             key.accuracy = sub->accuracy;
                             key.ix = (g->x0 + b) % ntile;
                             key.iz = (g->z0 + a) % ntile;
-                            key.channels = (uint16_t)p->channels;
+                            key.channels = (uint16_t)chan_of(p, c);
                             key.size = (uint16_t)T;
                             key.cascade = (uint8_t)c;
                             key.mip = (uint8_t)m;
@@ -757,7 +848,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
                                     cap_missing = nc;
                                 }
                                 missing[nmiss++] = tl;
-                                need_fx[c][m] |= ocean_fx_of(p->channels);
+                                need_fx[c][m] |= ocean_fx_of(chan_of(p, c));
                                 atomic_fetch_add(&st->tile_cache_misses, 1);
                             } else {
                                 atomic_fetch_add(&st->tile_cache_hits, 1);
@@ -777,6 +868,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
 #pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
         for (size_t q = 0; q < nmiss; q++)
             tile_build(missing[q], k->mipf[missing[q]->key.mip], tb);
+        for (size_t q = 0; q < nmiss; q++) rate_learn(k, missing[q]);
         atomic_fetch_add(&st->tiles_encoded, (uint64_t)nmiss);
     }
     free(missing);

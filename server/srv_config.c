@@ -115,12 +115,12 @@ static const conf_entry srv_entries[] = {
              "its distance from the camera.  Finer detail travels as unresolved slope "
              "variance for shading, so this trades bytes per viewer (about 1/q^2) against "
              "how much of the sea the geometry carries."},
-    {.name = "server.frame_samples", .type = CONF_DOUBLE, .offset = SRV(frame_samples),
-     .min = 1024, .max = 16777216, .def = "40960",
-     .help = "Cascade tile layout: most tile samples one FRAME may carry.  A camera whose "
-             "footprint needs more (a large viewport, a camera near the water) reads coarser "
-             "mips until it fits.  40960 samples of the six planes of every effect are about "
-             "120 KB, 3.6 MB/s at 30 Hz."},
+    {.name = "server.viewer_bytes_per_s", .type = CONF_DOUBLE, .offset = SRV(viewer_bytes_per_s),
+     .min = 1e4, .max = 1e10, .def = "3.8e6", .unit = "B/s",
+     .help = "Cascade tile layout: tile bytes one viewer may receive per second (its frame "
+             "budget is this over its frame rate).  A camera whose footprint needs more (a "
+             "large viewport, a camera near the water) reads coarser mips until it fits; the "
+             "server learns each codec's bytes per sample from the tiles it encodes."},
     {.name = "server.max_query_points", .type = CONF_INT, .offset = SRV(max_query_points),
      .min = 1, .max = 65536, .def = "65536",
      .help = "Most points one QUERY may carry."},

@@ -50,7 +50,7 @@ typedef struct srv_config {
     double view_range;           /* mesh range when a client gives 0, m */
     double mesh_error_px;        /* concentric mesh screen error budget */
     double px_per_sample;        /* layout 1: on-screen pixels one tile sample may span */
-    double frame_samples;        /* layout 1: most tile samples in one FRAME */
+    double viewer_bytes_per_s;   /* layout 1: tile bytes a viewer may receive per second */
     int max_query_points;
     int max_pending_queries;     /* per client */
     int replay_queue;            /* pending replay cameras per client */

@@ -58,6 +58,8 @@ static void stats_view(srv_net *n, srv_stats_view *v, char *scene, size_t sl)
     snprintf(scene, sl, "%s", h->settings.scene.name);
     v->wind = h->sea_now.wind_u10;
     v->hs = h->sea_now.hs;
+    v->has_camera_hint = h->settings.scene.camera_hint[0] &&
+                         ocean_conf_camera_hint_parse(h->settings.scene.camera_hint, v->camera_hint) == OCEAN_OK;
     pthread_mutex_unlock(&h->lock);
     v->sim_time = srv_hub_sim_time(h);
     v->scene = scene;

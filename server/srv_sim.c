@@ -20,6 +20,7 @@
 #include <time.h>
 
 #include "gerstner.h"
+#include "ocean_plan.h"
 #include "query.h"
 #include "srv_cascade.h"
 #include "srv_tiles.h"
@@ -102,9 +103,18 @@ static ocean_result make_ocean(const srv_settings *s, const ocean_params *p, oce
     *g = NULL;
     ocean_result r = ocean_create(p, oc, msg, msglen);
     if (r != OCEAN_OK) return r;
+    /* The scene plan's warnings go to the log (its refusals stopped
+     * ocean_create); the near field and spacing are what this daemon serves. */
+    ocean_plan plan;
+    ocean_plan_init(&plan);
+    ocean_plan_params(p, &plan);
+    double patch, klo, khi;
+    ocean_cascade_band(*oc, p->cascades - 1, &patch, &klo, &khi);
+    ocean_plan_serving sv = {(s->effects & OCEAN_FX_NEAR_FIELD) && s->srv.near_field_waves > 0, khi,
+                             2 * M_PI / s->srv.near_field_min_wavelength, s->srv.base_spacing};
+    ocean_plan_ocean(*oc, &sv, &plan);
+    ocean_plan_print(&plan, stderr, "oceand: scene plan");
     if ((s->effects & OCEAN_FX_NEAR_FIELD) && s->srv.near_field_waves > 0) {
-        double patch, klo, khi;
-        ocean_cascade_band(*oc, p->cascades - 1, &patch, &klo, &khi);
         ocean_gerstner_params gp;
         ocean_gerstner_params_default(&gp);
         gp.sea = p->sea;

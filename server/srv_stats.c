@@ -134,6 +134,20 @@ char *srv_stats_json(const srv_stats *s, const srv_stats_view *v, size_t headroo
     cJSON_AddNumberToObject(o, "sim_time", v->sim_time);
     cJSON_AddNumberToObject(o, "tick_rate_hz", v->tick_rate);
     cJSON_AddNumberToObject(o, "wind_u10", v->wind);
+    /* Where the scene suggests a viewer starts (the browser viewer opens
+     * there unless its URL says otherwise); null without a hint. */
+    if (v->has_camera_hint) {
+        cJSON *ch = cJSON_AddObjectToObject(o, "camera_hint");
+        if (ch) {
+            cJSON_AddNumberToObject(ch, "x", v->camera_hint[0]);
+            cJSON_AddNumberToObject(ch, "y", v->camera_hint[1]);
+            cJSON_AddNumberToObject(ch, "z", v->camera_hint[2]);
+            cJSON_AddNumberToObject(ch, "yaw", v->camera_hint[3]);
+            cJSON_AddNumberToObject(ch, "pitch", v->camera_hint[4]);
+        }
+    } else {
+        cJSON_AddNullToObject(o, "camera_hint");
+    }
     cJSON_AddNumberToObject(o, "ticks", (double)LD(ticks));
     cJSON_AddNumberToObject(o, "idle_ticks", (double)LD(idle_ticks));
     uint64_t busy = LD(ticks) - LD(idle_ticks);

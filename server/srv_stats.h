@@ -40,6 +40,8 @@ typedef struct srv_stats_view {
     const char *version;
     int port;
     double wind, hs;
+    int has_camera_hint;         /* the scene's scene.camera_hint, for viewers */
+    double camera_hint[5];       /* x, y, z (m), yaw, pitch (deg) */
 } srv_stats_view;
 
 /* Prometheus text exposition (version 0.0.4) into a malloc'ed string with

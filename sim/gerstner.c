@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ocean_time.h"
 #include "wave_rng.h"
 
 #define TWO_PI 6.283185307179586
@@ -63,8 +64,16 @@ ocean_result ocean_gerstner_params_validate(const ocean_gerstner_params *p, char
     if (p->count > 0) {
         if (!(p->k_lo > 0.0) || !isfinite(p->k_lo))
             return bad(msg, msglen, "k_lo", p->k_lo);
-        if (!(p->k_hi > p->k_lo) || !(p->k_hi <= 1e5))
+        /* no wave faster than OCEAN_OMEGA_MAX: the time limit's phase bound */
+        if (!(p->k_hi > p->k_lo))
             return bad(msg, msglen, "k_hi", p->k_hi);
+        if (!(ocean_dispersion(p->k_hi, p->sea.depth_m) <= OCEAN_OMEGA_MAX)) {
+            if (msg != NULL && msglen > 0)
+                snprintf(msg, msglen, "gerstner: k_hi = %g rad/m (%.3g m waves) is faster than "
+                         "OCEAN_OMEGA_MAX = %g rad/s, the frequency the time limit is built on",
+                         p->k_hi, 2.0 * M_PI / p->k_hi, OCEAN_OMEGA_MAX);
+            return OCEAN_EINVAL;
+        }
     }
     return OCEAN_OK;
 }
@@ -646,7 +655,7 @@ ocean_result ocean_gerstner_evaluate(const ocean_gerstner *g, const ocean_gerstn
                                      double t, const double *x, const double *z, size_t n,
                                      ocean_gerstner_point *out)
 {
-    if (g == NULL || v == NULL || !view_ok(v) || !isfinite(t) || !points_ok(x, z, n, out))
+    if (g == NULL || v == NULL || !view_ok(v) || !ocean_time_ok(t) || !points_ok(x, z, n, out))
         return OCEAN_EINVAL;
     eval_state st;
     double base[OCEAN_GERSTNER_MAX_WAVES];
@@ -692,7 +701,7 @@ void ocean_gerstner_frame_destroy(ocean_gerstner_frame *f)
 ocean_result ocean_gerstner_frame_set(ocean_gerstner_frame *f, const ocean_gerstner_view *v,
                                       double t)
 {
-    if (f == NULL || v == NULL || !view_ok(v) || !isfinite(t))
+    if (f == NULL || v == NULL || !view_ok(v) || !ocean_time_ok(t))
         return OCEAN_EINVAL;
     state_set(&f->st, f->st.g, v, t, CELL_SLOTS);
     f->ready = 1;

@@ -131,7 +131,7 @@ typedef struct ocean_gerstner_point {
     double fade;          /* f(x0) in [0, 1] */
 } ocean_gerstner_point;
 
-/* Evaluates n points (x[i], z[i]) at time t (any finite double) into
+/* Evaluates n points (x[i], z[i]) at time t (|t| <= OCEAN_TIME_MAX, else OCEAN_EINVAL) into
  * out[i].  Results depend only on (set, view, t, point): not on n, the
  * order of the points or the thread.  Points where the fade is 0 cost
  * almost nothing.  OCEAN_EINVAL for NULL arrays with n > 0, non-finite t

@@ -29,6 +29,9 @@
 #include <omp.h>
 
 #include "filter.h"
+#include "foam.h"
+#include "ocean_plan.h"
+#include "ocean_time.h"
 #include "wave_rng.h"
 
 enum {
@@ -39,14 +42,15 @@ enum {
 
 /* The modes of the half spectrum, n x (n/2 + 1), row = kz index, as
  * structure-of-arrays so the per-row passes vectorise.  h0 values are
- * float (they are data); omega is double so that omega * t keeps its
- * phase at t = 1e9 s.  Out-of-band modes are all zero. */
+ * float (they are data); the frequency is kept as w / 2 pi in double-double
+ * (turns_hi + turns_lo) so the row loop reduces w t to its phase exactly
+ * (ocean_time.h).  Out-of-band modes are all zero. */
 enum { H0P_RE, H0P_IM, H0M_RE, H0M_IM };  /* h0(k), conj(h0(-k)) */
 enum { C_HR, C_HI, C_TR, C_TI };          /* h(k,t), dh/dt */
 
 typedef struct cascade {
     double patch, dk, k_lo, k_hi;
-    double *omega;
+    double *turns_hi, *turns_lo; /* w / 2 pi = hi + lo, turns per second */
     float *h0[4];
     float *kx;              /* kx of a column (ix dk): one row serves every row */
     float *k, *kinv;        /* kinv = 1/|k| (0 at k = 0) */
@@ -61,7 +65,7 @@ typedef struct cascade {
     int cache_dt;           /* 1: dh/dt is cached too (a velocity request) */
 } cascade;
 
-#define FILTER_MEMO 16
+#define FILTER_MEMO 32
 typedef struct filter_memo {
     int used, order;
     double kc, scale, boost, value;
@@ -115,6 +119,9 @@ struct ocean {
      * scales are keyed by (cutoff, order), E_error by all four. */
     filter_memo redis_memo[FILTER_MEMO], err_memo[FILTER_MEMO];
     int redis_next, err_next;
+    /* std of the breaking index beta per filter (foam.h), same keys */
+    filter_memo foam_memo[FILTER_MEMO];
+    int foam_next;
     gain_plane gains[GAIN_PLANES];
     uint64_t gain_clock;
 };
@@ -127,6 +134,10 @@ struct ocean_frame {
     ocean_field field[OCEAN_MAX_CASCADES];
     ocean_frame_info info;
     double patch[OCEAN_MAX_CASCADES];
+    /* The whitecap ramp of this evaluation (foam.h) and 1/lambda, which
+     * turns the foam channels' lambda (Dxx + Dzz) into beta = -a_z/g. */
+    ocean_foam_map foam_map;
+    double foam_inv_lambda;
 };
 
 /* FFTW's planner is process-global state: one lock for every ocean. */
@@ -194,6 +205,33 @@ ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msgl
         if (msg) snprintf(msg, msglen, "threads = %d is out of range [1, 64]", p->threads);
         return OCEAN_EINVAL;
     }
+    /* The one time limit (ocean_time.h) holds for waves up to
+     * OCEAN_OMEGA_MAX: the shortest wave held is the finest cascade's band
+     * corner, or k_max below it. */
+    double fine = p->patch_m / pow(p->cascade_ratio, p->cascades - 1);
+    double k_top = fmin(M_SQRT2 * (p->n / 2 - 1) * 2.0 * M_PI / fine, p->k_max);
+    double w_top = ocean_dispersion(k_top, p->sea.depth_m);
+    if (w_top > OCEAN_OMEGA_MAX) {
+        if (msg) snprintf(msg, msglen,
+                          "the shortest wave held, %.3g m (k = %.4g rad/m, w = %.4g rad/s, finest "
+                          "patch %g m at n = %d), is beyond w = %g rad/s (OCEAN_OMEGA_MAX, the "
+                          "%.3g m wave the time limit is built on): use k_max <= %.4g rad/m, a "
+                          "smaller n or a larger finest patch",
+                          2.0 * M_PI / k_top, k_top, w_top, fine, p->n, OCEAN_OMEGA_MAX,
+                          2.0 * M_PI / ocean_wavenumber(OCEAN_OMEGA_MAX, p->sea.depth_m),
+                          ocean_wavenumber(OCEAN_OMEGA_MAX, p->sea.depth_m));
+        return OCEAN_EINVAL;
+    }
+    /* The scene plan's refusals (ocean_plan.h): peak beyond the patch,
+     * Hs beyond the breaking height. */
+    ocean_plan plan;
+    ocean_plan_init(&plan);
+    ocean_plan_params(p, &plan);
+    for (int i = 0; i < plan.count; i++)
+        if (plan.item[i].level == OCEAN_PLAN_REFUSE) {
+            if (msg) snprintf(msg, msglen, "%s", plan.item[i].text);
+            return OCEAN_EINVAL;
+        }
     return OCEAN_OK;
 }
 
@@ -255,7 +293,8 @@ static ocean_result cascade_init(ocean *o, int c)
     cs->k_lo = c == 0 ? 0.0 : o->cas[c - 1].k_hi;
     cs->k_hi = c == p->cascades - 1 ? p->k_max : M_PI * n / (2.0 * cs->patch);
     size_t nm = (size_t)n * half;
-    int ok = (cs->omega = calloc(nm, sizeof(double))) != NULL;
+    int ok = (cs->turns_hi = calloc(nm, sizeof(double))) != NULL;
+    ok &= (cs->turns_lo = calloc(nm, sizeof(double))) != NULL;
     for (int j = 0; j < 4; j++) {
         ok &= (cs->h0[j] = calloc(nm, sizeof(float))) != NULL;
         ok &= (cs->cache[j] = malloc(nm * sizeof(float))) != NULL;
@@ -284,7 +323,8 @@ static ocean_result cascade_init(ocean *o, int c)
             double hp[2], hm[2];
             draw_h0(p, cs, mx, mz, hp);
             draw_h0(p, cs, -mx, -mz, hm);
-            cs->omega[i] = ocean_dispersion(k, p->sea.depth_m);
+            ocean_turns_of(ocean_dispersion(k, p->sea.depth_m), &cs->turns_hi[i],
+                           &cs->turns_lo[i]);
             cs->h0[H0P_RE][i] = (float)hp[0];
             cs->h0[H0P_IM][i] = (float)hp[1];
             cs->h0[H0M_RE][i] = (float)hm[0];
@@ -376,7 +416,8 @@ void ocean_destroy(ocean *o)
     fftwf_free(o->spec);
     for (int c = 0; c < OCEAN_MAX_CASCADES; c++) {
         cascade *cs = &o->cas[c];
-        free(cs->omega);
+        free(cs->turns_hi);
+        free(cs->turns_lo);
         for (int j = 0; j < 4; j++) {
             free(cs->h0[j]);
             free(cs->cache[j]);
@@ -501,6 +542,89 @@ static void filter_sums(const ocean *o, double kc, int order, double scale, doub
         }
 }
 
+static int pick_size(const cascade *cs, int n_full, double kneg);
+
+/* Std of the breaking index beta = sum k eta_k (foam.h) as a point sample
+ * reads it: over the modes an evaluation with this filter transforms,
+ * sum var k^2 ge^2 A(kx h) A(kz h), where A(th) = (2 + cos th) / 3 is the
+ * mean power a wave keeps through bilinear interpolation on a grid of
+ * spacing h at a uniformly random point (E|(1-u) + u e^{i th}|^2 over u).
+ * Without A the finest cascade's near-Nyquist waves, which bilinear
+ * reading damps, would count fully and tiles would show ~half the
+ * intended coverage at light winds. */
+static double foam_sigma_sum_of(const ocean *o, int only, double kc, int order, double scale, double boost)
+{
+    double kneg = negligible_k(o, kc, order), s = 0.0;
+    int n = o->p.n, half = n / 2 + 1;
+    for (int c = 0; c < o->p.cascades; c++) {
+        if (only >= 0 && c != only)
+            continue;
+        const cascade *cs = &o->cas[c];
+        if (cs->k_lo >= kneg)
+            continue;
+        double h = cs->patch / pick_size(cs, n, kneg);
+        /* A per column and per row: |mx|, |mz| < n/2. */
+        double a[OCEAN_MAX_N / 2];
+        for (int m = 0; m < n / 2; m++)
+            a[m] = (2.0 + cos(m * cs->dk * h)) / 3.0;
+        for (size_t i = 0; i < (size_t)n * half; i++) {
+            if (cs->var[i] == 0.0f)
+                continue;
+            int ix = (int)(i % half), iz = (int)(i / half), mz = iz < n / 2 ? iz : n - iz;
+            double w = (ix == 0 ? 1.0 : 2.0) * cs->var[i];
+            double g = isinf(kc) ? 1.0 : effective_gain(cs->k[i], kc, order, kneg);
+            double ge = g * scale * (1.0 + (boost - 1.0) * g * g);
+            double k = cs->k[i];
+            s += w * k * k * ge * ge * a[ix < n / 2 ? ix : n / 2 - 1] * a[mz < n / 2 ? mz : n / 2 - 1];
+        }
+    }
+    return sqrt(s);
+}
+
+static double foam_sigma_sum(const ocean *o, double kc, int order, double scale, double boost)
+{
+    return foam_sigma_sum_of(o, -1, kc, order, scale, boost);
+}
+
+static double foam_sigma(ocean *o, double kc, int order, double scale, double boost)
+{
+    int i = memo_find(o->foam_memo, kc, order, scale, boost);
+    if (i >= 0)
+        return o->foam_memo[i].value;
+    double v = foam_sigma_sum(o, kc, order, scale, boost);
+    memo_put(o->foam_memo, &o->foam_next, kc, order, scale, boost, v);
+    return v;
+}
+
+/* sigma_beta of cascade c alone at cutoff kc, memoised beside the
+ * whole-sea entries (a negative scale marks the cascade: real scales are
+ * positive). */
+static double foam_sigma_cascade(ocean *o, int c, double kc, int order)
+{
+    double tag = -1.0 - c;
+    int i = memo_find(o->foam_memo, kc, order, tag, 1.0);
+    if (i >= 0)
+        return o->foam_memo[i].value;
+    double v = foam_sigma_sum_of(o, c, kc, order, 1.0, 1.0);
+    memo_put(o->foam_memo, &o->foam_next, kc, order, tag, 1.0, v);
+    return v;
+}
+
+/* The whitecap ramp for a field of breaking-index std sigma (foam.h). */
+static ocean_foam_map foam_map_for(const ocean *o, double sigma)
+{
+    ocean_foam_map m;
+    if (ocean_foam_map_solve(sigma, ocean_foam_coverage_target(o->p.sea.wind_u10), &m) != OCEAN_OK)
+        m = (ocean_foam_map){INFINITY, INFINITY, -1.0};
+    return m;
+}
+
+/* Beta from the summed foam channels lambda Dxx, lambda Dzz. */
+static inline double foam_beta(double dxx, double dzz, double inv_lambda)
+{
+    return -(dxx + dzz) * inv_lambda;
+}
+
 /* Scale on the passed band that restores the unfiltered variance;
  * depends only on (cutoff, order). */
 static double redistribution_scale(ocean *o, double kc, int order)
@@ -592,15 +716,13 @@ double ocean_filtered_variance(const ocean *o, double cutoff_k, int order)
     return kept;
 }
 
-/* 2 pi split in two so that the reduction n * 2pi stays exact to ~1e-16
- * relative even for n ~ 1e9 (Cody-Waite). */
-#define TWO_PI_HI 6.28318530717958623200
-#define TWO_PI_LO 2.44929359829470635445e-16
-
+/* x mod 2 pi in [-pi, pi], exact to a few ulp of pi (ocean_time.h); for
+ * the spatial phases k.x of the reference sums (x already reduced modulo
+ * the patch).  Time phases go through ocean_phase(w, t), which keeps the
+ * product w t exact too. */
 static inline double reduce_phase(double x)
 {
-    double q = rint(x * (1.0 / (2.0 * M_PI)));
-    return (x - q * TWO_PI_HI) - q * TWO_PI_LO;
+    return ocean_phase(x, 1.0);
 }
 
 typedef struct stage_args {
@@ -617,20 +739,18 @@ typedef struct stage_args {
     int gain_ready;         /* 1: gain holds the gains, 0: fill it */
 } stage_args;
 
-/* sin and cos of a phase x (any double), branch-free so the row loop
- * vectorises: reduction to [-pi, pi] in double (Cody-Waite, the integer
- * found with the 1.5 * 2^52 rounding trick, valid while |x| < 2^51), a
+/* sin and cos of a phase x already reduced to [-pi, pi] (exactly, in
+ * double: ocean_phase_turns), branch-free so the row loop vectorises: a
  * reflection onto [-pi/2, pi/2] in float, then Taylor polynomials of
  * degree 11 and 12, whose truncation error there (6e-8, 6e-9) is below
- * float's rounding. */
-#define ROUND_MAGIC 6755399441055744.0
+ * float's rounding.  Rounding x to float costs at most 1.2e-7 rad, the
+ * same at every t. */
 #define PI_F 3.14159265358979f
 #define PIO2_F 1.57079632679490f
 
 static inline void phase_sincos(double x, float *s_out, float *c_out)
 {
-    double q = (x * (1.0 / (2.0 * M_PI)) + ROUND_MAGIC) - ROUND_MAGIC;
-    float r = (float)((x - q * TWO_PI_HI) - q * TWO_PI_LO);
+    float r = (float)x;
     /* sin(pi - |r|) = sin |r|, cos(pi - |r|) = -cos |r|: arithmetic, not
      * branches, so it stays one vector instruction stream. */
     float a = fabsf(r);
@@ -664,7 +784,9 @@ static inline float gain_fast(float k, float kc, int order)
 static inline __attribute__((always_inline)) void
 row_evolve(const cascade *cs, size_t base, int half, double t, const int with_dt)
 {
-    const double *om = cs->omega + base;
+    const double *fh = cs->turns_hi + base, *fl = cs->turns_lo + base;
+    double th, tl;
+    ocean_split(t, &th, &tl);
     const float *pr = cs->h0[H0P_RE] + base, *pi = cs->h0[H0P_IM] + base;
     const float *mr = cs->h0[H0M_RE] + base, *mi = cs->h0[H0M_IM] + base;
     float *c_hr = cs->cache[C_HR] + base, *c_hi = cs->cache[C_HI] + base;
@@ -672,14 +794,14 @@ row_evolve(const cascade *cs, size_t base, int half, double t, const int with_dt
 #pragma omp simd
     for (int ix = 0; ix < half; ix++) {
         float s, c;
-        phase_sincos(om[ix] * t, &s, &c);
+        phase_sincos(ocean_phase_turns(fh[ix], fl[ix], t, th, tl), &s, &c);
         /* u = h0p e^{-i ph}, v = h0m e^{+i ph}, h = u + v, dh/dt = -i w u + i w v */
         float ur = pr[ix] * c + pi[ix] * s, ui = pi[ix] * c - pr[ix] * s;
         float vr = mr[ix] * c - mi[ix] * s, vi = mi[ix] * c + mr[ix] * s;
         c_hr[ix] = ur + vr;
         c_hi[ix] = ui + vi;
         if (with_dt) {
-            float w = (float)om[ix];
+            float w = (float)(fh[ix] * OCEAN_TWO_PI_C1);
             c_tr[ix] = w * (ui - vi);
             c_ti[ix] = w * (vr - ur);
         }
@@ -816,14 +938,24 @@ static void spectrum_row(const stage_args *a, int r)
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-static void jacobian_rows(ocean_field *fd, long i0, long i1)
+static void jacobian_rows(ocean_field *fd, long i0, long i1, const ocean_foam_map *m,
+                          double inv_lambda)
 {
     const float *restrict xx = fd->dxx, *restrict zz = fd->dzz, *restrict xz = fd->dxz;
     float *restrict jac = fd->jacobian, *restrict foam = fd->foam;
+    for (long i = i0; i < i1; i++)
+        jac[i] = (1.0f + xx[i]) * (1.0f + zz[i]) - xz[i] * xz[i];
+    /* foam = clamp((beta - a) / (b - a)) as ocean_foam_value, in float so
+     * the pass vectorises; a constant field, or a step, otherwise. */
+    if (m->uniform >= 0.0 || !(m->b > m->a)) {
+        for (long i = i0; i < i1; i++)
+            foam[i] = (float)ocean_foam_value(m, foam_beta(xx[i], zz[i], inv_lambda));
+        return;
+    }
+    float s = (float)(-inv_lambda / (m->b - m->a)), off = (float)(-m->a / (m->b - m->a));
     for (long i = i0; i < i1; i++) {
-        float j = (1.0f + xx[i]) * (1.0f + zz[i]) - xz[i] * xz[i];
-        jac[i] = j;
-        foam[i] = foam_from_jacobian(j);
+        float f = (xx[i] + zz[i]) * s + off;
+        foam[i] = f < 0.0f ? 0.0f : (f > 1.0f ? 1.0f : f);
     }
 }
 
@@ -924,7 +1056,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
 {
     if (!o || !r || !f || f->cascades != o->p.cascades || f->n_max != o->p.n)
         return OCEAN_EINVAL;
-    if (!isfinite(t) || isnan(r->cutoff_k) || r->cutoff_k < 0.0 || r->order < 1 ||
+    if (!ocean_time_ok(t) || isnan(r->cutoff_k) || r->cutoff_k < 0.0 || r->order < 1 ||
         r->order > OCEAN_FILTER_MAX_ORDER || !isfinite(r->low_boost) || r->low_boost < 0.0 || r->low_boost > 2.0)
         return OCEAN_EINVAL;
     if (r->per_cascade) {
@@ -940,6 +1072,15 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
     double boost = r->low_boost > 0.0 ? r->low_boost : 1.0;
     int n_full = o->p.n;
     int transforms = 0;
+    /* The whitecap ramp depends on the filter, not on t: memoised. */
+    int any_foam = 0;
+    for (int c = 0; c < o->p.cascades; c++)
+        any_foam |= (r->effects[c] & OCEAN_FX_FOAM) != 0;
+    double lam = o->p.sea.choppiness;
+    f->foam_inv_lambda = lam > 0.0 ? 1.0 / lam : 0.0;
+    f->info.foam_sigma = any_foam ? foam_sigma(o, kc_all, r->order, scale, boost) : 0.0;
+    f->info.whitecap_target = ocean_foam_coverage_target(o->p.sea.wind_u10);
+    f->foam_map = foam_map_for(o, f->info.foam_sigma);
     for (int c = 0; c < o->p.cascades; c++) {
         cascade *cs = &o->cas[c];
         double kc = kc_all, kneg = kneg_all;
@@ -985,12 +1126,20 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
                 o->counters.transforms_by_effect[e]++;
             }
         }
+        /* Per-cascade mips (the cascade tile layout): each cascade's foam
+         * is placed by its own breaking index at its own cutoff, with the
+         * whole sea's coverage W (foam.h); the daemon asks foam of one
+         * cascade only, so W is not counted twice. */
+        ocean_foam_map cmap = f->foam_map;
+        if (r->per_cascade && (fx & OCEAN_FX_FOAM))
+            cmap = foam_map_for(o, foam_sigma_cascade(o, c, kc, r->order));
         if ((fx & OCEAN_FX_FOAM) && r->foam_map) {
             ocean_field *fd = &f->field[c];
             long nn = (long)n * n, step = (long)n * 8;
 #pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
             for (long i = 0; i < nn; i += step)
-                jacobian_rows(fd, i, i + step < nn ? i + step : nn);
+                jacobian_rows(fd, i, i + step < nn ? i + step : nn, &cmap,
+                              f->foam_inv_lambda);
         }
     }
     f->info.t = t;
@@ -1125,8 +1274,19 @@ void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned 
     /* J of the summed displacement, not a sum of per-cascade Jacobians. */
     double jac = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
     *out = (ocean_point){.height = h, .dx = dx, .dz = dz, .slope_x = sx, .slope_z = sz,
-                         .jacobian = jac, .foam = any_foam ? ocean_foam_from_jacobian((float)jac) : 0.0,
+                         .jacobian = jac,
+                         .foam = any_foam ? ocean_foam_value(&f->foam_map,
+                                                             foam_beta(dxx, dzz, f->foam_inv_lambda))
+                                          : 0.0,
                          .vel_x = vx, .vel_y = vy, .vel_z = vz, .dxx = dxx, .dzz = dzz, .dxz = dxz};
+}
+
+double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz)
+{
+    int any = 0;
+    for (int c = 0; c < f->cascades; c++)
+        any |= f->field[c].dxx != NULL;
+    return any ? ocean_foam_value(&f->foam_map, foam_beta(dxx, dzz, f->foam_inv_lambda)) : 0.0;
 }
 
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out)
@@ -1180,18 +1340,20 @@ void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out)
     double h = fd->patch_m / n, folded = 0.0, foam = 0.0;
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++) {
-            double jac;
+            double jac, fm;
             if ((f->cascades == 1 || finest == 0) && fd->jacobian) {
                 jac = fd->jacobian[(size_t)i * n + j];
+                fm = fd->foam[(size_t)i * n + j];
             } else {
                 ocean_point pt;
-                ocean_frame_sample(f, j * h, i * h, &pt);
+                ocean_frame_sample_some(f, j * h, i * h, OCEAN_SAMPLE_FOAM, &pt);
                 jac = pt.jacobian;
+                fm = pt.foam;
             }
             if (jac < out->min_jacobian)
                 out->min_jacobian = jac;
             folded += jac < 0.0;
-            foam += ocean_foam_from_jacobian((float)jac);
+            foam += fm;
         }
     out->folded_fraction = folded / ((double)n * n);
     out->foam_coverage = foam / ((double)n * n);
@@ -1221,7 +1383,7 @@ void ocean_reference_point(const ocean *o, double t, double x, double z,
                 draw_h0(p, cs, mx, mz, hp);
                 draw_h0(p, cs, -mx, -mz, hm);
                 double w = ocean_dispersion(k, p->sea.depth_m);
-                double ph = reduce_phase(w * t), cp = cos(ph), sp = sin(ph);
+                double ph = ocean_phase(w, t), cp = cos(ph), sp = sin(ph);
                 /* h = hp e^{-i ph} + conj(hm) e^{i ph} */
                 double hr = hp[0] * cp + hp[1] * sp + hm[0] * cp + hm[1] * sp;
                 double hi = hp[1] * cp - hp[0] * sp - hm[1] * cp + hm[0] * sp;
@@ -1248,7 +1410,12 @@ void ocean_reference_point(const ocean *o, double t, double x, double z,
             }
     }
     out->jacobian = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
-    out->foam = ocean_foam_from_jacobian((float)out->jacobian);
+    {
+        /* The same whitecap ramp as an evaluation with this filter. */
+        double kc = ocean_effective_cutoff(o, cutoff_k, order);
+        ocean_foam_map m = foam_map_for(o, isnan(kc) ? 0.0 : foam_sigma_sum(o, kc, order, 1.0, 1.0));
+        out->foam = ocean_foam_value(&m, foam_beta(dxx, dzz, lam > 0.0 ? 1.0 / lam : 0.0));
+    }
     out->dxx = dxx;
     out->dzz = dzz;
     out->dxz = dxz;
@@ -1265,7 +1432,7 @@ void ocean_mode_amplitude(const ocean *o, int c, int mx, int mz, double t, doubl
     draw_h0(&o->p, cs, mx, mz, hp);
     draw_h0(&o->p, cs, -mx, -mz, hm);
     double w = ocean_dispersion(hypot(mx * cs->dk, mz * cs->dk), o->p.sea.depth_m);
-    double ph = reduce_phase(w * t), cp = cos(ph), sp = sin(ph);
+    double ph = ocean_phase(w, t), cp = cos(ph), sp = sin(ph);
     out[0] = hp[0] * cp + hp[1] * sp + hm[0] * cp + hm[1] * sp;
     out[1] = hp[1] * cp - hp[0] * sp + hm[0] * sp - hm[1] * cp;
 }

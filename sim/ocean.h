@@ -23,6 +23,7 @@
 #include <stdint.h>
 
 #include "ocean_result.h"
+#include "ocean_time.h"
 #include "spectrum.h"
 
 #define OCEAN_MAX_CASCADES 4
@@ -71,7 +72,9 @@ typedef struct ocean_params {
  * 1000 m patch, seed 1). */
 void ocean_params_default(ocean_params *p);
 
-/* Checks every field of p (ranges, NaN/Inf, power-of-two N).  On failure
+/* Checks every field of p (ranges, NaN/Inf, power-of-two N, and that no
+ * wave held is faster than OCEAN_OMEGA_MAX, the frequency the time limit
+ * is built on).  On failure
  * returns OCEAN_EINVAL and writes a message naming the field and the value
  * into msg (if msg != NULL). */
 ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msglen);
@@ -132,12 +135,28 @@ typedef struct ocean_field {
     float *dxx, *dzz, *dxz;     /* lambda * derivatives of Dx, Dz (foam) */
     float *jacobian;            /* this cascade's folding Jacobian J (< 0: folded);
                                    NULL unless the request asked for foam_map */
-    float *foam;                /* foam coverage 0..1 from J; likewise */
+    float *foam;                /* whitecap foam 0..1 (foam.h) of this cascade's
+                                   own breaking index; likewise */
     float *vel_x, *vel_y, *vel_z; /* orbital velocity of the displaced point, m/s */
 } ocean_field;
 
-/* Foam coverage from the Jacobian: 1 where folded, fading to 0 at
- * J = OCEAN_FOAM_J_CLEAR.  The same mapping serves fields and point samples. */
+/* Whitecap foam (foam.h): every foam value an evaluated frame gives - the
+ * foam map planes, ocean_frame_sample(_some), the field statistics - is
+ * ocean_foam_value(map, beta) with beta = -(Dxx + Dzz) / lambda, the
+ * linear deep-water downward acceleration over g of the summed cascades
+ * (Longuet-Higgins' breaking index; lambda = sea.choppiness, beta = 0 when
+ * lambda = 0), and the frame's map solved so that the field's expected
+ * mean is ocean_foam_coverage_target(U10) for the band and filter that
+ * evaluation holds.  Nothing accumulates over time.
+ *
+ * WHITECAP COVERAGE of any set of foam samples (a tile, a level, a frame)
+ * is their area mean (ocean_whitecap_coverage): foam is the white fraction
+ * of a sample's area, so the mean is conserved across resolutions and
+ * filter cutoffs.  ocean_field_stats.foam_coverage is that mean over the
+ * finest cascade's grid.
+ *
+ * Legacy mapping, 1 where folded fading to 0 at J = OCEAN_FOAM_J_CLEAR;
+ * no longer used by frames (query.c still uses it). */
 #define OCEAN_FOAM_J_CLEAR 0.5
 float ocean_foam_from_jacobian(float j);
 
@@ -153,8 +172,10 @@ void ocean_frame_destroy(ocean_frame *f);
  * else cutoff_k.  NaN for an invalid cutoff or order. */
 double ocean_effective_cutoff(const ocean *o, double cutoff_k, int order);
 
-/* Evaluates the sea at time t (seconds, any finite double) into f.
- * Deterministic: same o parameters, t and r give identical bytes. */
+/* Evaluates the sea at time t (seconds, |t| <= OCEAN_TIME_MAX; beyond it,
+ * or NaN/Inf, OCEAN_EINVAL: see ocean_time.h) into f.  Every wave's phase
+ * w t is reduced exactly (ocean_phase).  Deterministic: same o
+ * parameters, t and r give identical bytes. */
 ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_frame *f);
 
 /* Runs only the inverse FFTs ocean_evaluate(o, t, r, f) would run (same
@@ -170,6 +191,10 @@ typedef struct ocean_frame_info {
     double e_error;       /* ||H - H_filtered||_2 / ||H||_2 of the height spectrum */
     int transforms;       /* 2-D inverse real FFTs this evaluation ran */
     int cascades;
+    double foam_sigma;    /* std of the breaking index beta over the evaluated
+                             band (0 without foam channels) */
+    double whitecap_target; /* ocean_foam_coverage_target(U10): the expected
+                               mean of this frame's foam */
 } ocean_frame_info;
 
 const ocean_field *ocean_frame_field(const ocean_frame *f, int cascade);
@@ -185,6 +210,14 @@ typedef struct ocean_point {
     double dxx, dzz, dxz;   /* derivatives of the displacement (foam channel) */
 } ocean_point;
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out);
+
+/* Whitecap foam (foam.h) of a point whose summed displacement derivatives
+ * are dxx = lambda Dxx and dzz = lambda Dzz (ocean_point's fields, plus the
+ * share of any waves the caller adds, e.g. the near field's), with this
+ * frame's whitecap ramp: ocean_frame_sample's .foam is
+ * ocean_frame_foam(f, p.dxx, p.dzz).  0 for a frame evaluated without
+ * foam channels. */
+double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz);
 
 /* What ocean_frame_sample_some fills; the rest of the point reads as in a
  * frame without those channels (0, jacobian 1). */
@@ -211,7 +244,13 @@ void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned 
  * (min_jacobian 1). */
 typedef struct ocean_field_stats {
     double mean, hs;             /* of the height; hs = 4 std */
-    double min_jacobian, folded_fraction, foam_coverage;
+    double min_jacobian, folded_fraction;
+    double foam_coverage;        /* mean foam over the finest cascade's grid
+                                    nodes: a small patch, read without the
+                                    damping of interpolation, so it runs
+                                    ~1.1-1.5x the sea's coverage; for the
+                                    coverage tiles carry use
+                                    ocean_whitecap_coverage_frame (foam.h) */
 } ocean_field_stats;
 void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out);
 

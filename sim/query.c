@@ -10,6 +10,7 @@
  * map is a contraction (no folding).  The residual left is the error bound.
  */
 #include "query.h"
+#include "ocean_time.h"
 
 #include <math.h>
 #include <string.h>
@@ -130,7 +131,7 @@ ocean_result ocean_query_points(const ocean_frame *f, const ocean_gerstner *g,
                                 const double *xz, size_t n, const ocean_query_options *opt,
                                 ocean_query_result *out, size_t *bad)
 {
-    if (!f || (n > 0 && (!xz || !out)) || !isfinite(t))
+    if (!f || (n > 0 && (!xz || !out)) || !ocean_time_ok(t))
         return OCEAN_EINVAL;
     ocean_query_options defopt;
     if (!opt) {

@@ -1,21 +1,24 @@
 #!/usr/bin/env bash
 # Runs every test program in BUILD/tests (cmocka) and every tests/test_*.sh
-# script, then prints one closing line "N passed, N failed".
+# script, then prints one closing line "N passed, N failed, N skipped".
 #   usage: tests/run.sh BUILD LABEL
-# A cmocka program contributes its own pass/fail counts; a script or a
-# program that crashes before its summary counts as one failure.
+# A cmocka program contributes its own pass/fail/skip counts (a skipped test
+# is neither a pass nor a failure, but the closing line says how many); a
+# script or a program that crashes before its summary counts as one failure.
 set -u
 build=${1:-build}
 label=${2:-plain}
 passed=0
 failed=0
+skipped=0
 failures=()
 logdir="$build/test-logs"
 mkdir -p "$logdir"
 
-count_cmocka() {  # file -> sets p f
+count_cmocka() {  # file -> sets p f k
     p=$(grep -E '^\[  PASSED  \] [0-9]+ test' "$1" | awk '{s+=$4} END {print s+0}')
     f=$(grep -E '^\[  FAILED  \] [0-9]+ test' "$1" | awk '{s+=$4} END {print s+0}')
+    k=$(grep -E '^\[  SKIPPED \] [0-9]+ test' "$1" | awk '{s+=$4} END {print s+0}')
 }
 
 for t in "$build"/tests/test_*; do
@@ -28,8 +31,8 @@ for t in "$build"/tests/test_*; do
     secs=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN {printf "%.1f", b - a}')
     count_cmocka "$log"
     if [[ $rc -ne 0 && $f -eq 0 ]]; then f=1; fi
-    passed=$((passed + p)); failed=$((failed + f))
-    printf '%-28s %4d passed %3d failed  %6ss  [%s]\n' "$name" "$p" "$f" "$secs" "$label"
+    passed=$((passed + p)); failed=$((failed + f)); skipped=$((skipped + k))
+    printf '%-28s %4d passed %3d failed %3d skipped  %6ss  [%s]\n' "$name" "$p" "$f" "$k" "$secs" "$label"
     if [[ $f -ne 0 ]]; then failures+=("$name"); grep -E 'FAILED|ERROR|error|Assert|runtime error|Sanitizer' "$log" | head -20; fi
 done
 
@@ -45,11 +48,11 @@ if [[ "$label" == plain ]]; then
         rc=$?
         secs=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN {printf "%.1f", b - a}')
         if [[ $rc -eq 0 ]]; then passed=$((passed + 1)); r="1 passed   0"; else failed=$((failed + 1)); r="0 passed   1"; failures+=("$name"); tail -20 "$log"; fi
-        printf '%-28s    %s failed  %6ss  [%s]\n' "$name" "$r" "$secs" "$label"
+        printf '%-28s    %s failed   0 skipped  %6ss  [%s]\n' "$name" "$r" "$secs" "$label"
     done
 fi
 
 if ((${#failures[@]})); then echo "failing: ${failures[*]} (logs in $logdir)"; fi
-echo "$passed $failed" > "$build/test-summary"
-echo "$label: $passed passed, $failed failed"
+echo "$passed $failed $skipped" > "$build/test-summary"
+echo "$label: $passed passed, $failed failed, $skipped skipped"
 [[ $failed -eq 0 && $passed -gt 0 ]]

@@ -39,6 +39,22 @@ expect_refused "--bogus" stats --bogus 1
 expect_refused "--effects" stats --effects height,sparkle
 expect_refused "--depth" stats --depth 0
 expect_refused "unknown command" nonsense
+# One time limit (sim/ocean_time.h): 2^27 s is served, the next second is
+# refused with a message naming OCEAN_TIME_MAX, in every subcommand that
+# takes a time, and a sample series may not run past it.
+"$sim" stats --n 16 --time 134217728 >/dev/null || fail "stats at the time limit"
+expect_refused "OCEAN_TIME_MAX" stats --n 16 --time 134217729
+expect_refused "OCEAN_TIME_MAX" stats --n 16 --time -1e16
+expect_refused "OCEAN_TIME_MAX" query --n 16 --t 1e13 --points "0,0"
+expect_refused "OCEAN_TIME_MAX" sample --n 16 --t0 134217729 --count 1
+expect_refused "OCEAN_TIME_MAX" sample --n 16 --x 0 --z 0 --t0 134217728 --dt 1 --count 2
+# The scene plan (sim/ocean_plan.h): a peak beyond the patch and a sea
+# beyond its breaking height are refused with the numbers, a sea whose
+# largest waves would break is run with a warning on stderr.
+expect_refused "dominant wavelength 8708 m" stats --n 16 --wind 100
+expect_refused "breaking height 0.0078 m" stats --n 16 --spectrum tma --depth 0.01
+"$sim" stats --n 64 --spectrum tma --depth 2 >/dev/null 2>"$tmp/err" || fail "tma at 2 m refused"
+grep -q "scene plan: warning (breaking)" "$tmp/err" || fail "no breaking warning: $(cat "$tmp/err")"
 "$sim" stats --help | grep -q -- "--spreading" || fail "stats --help"
 
 # Beaufort sets the wind: force 8 makes a bigger sea than force 4.
@@ -66,8 +82,85 @@ for f in displacement_c0_0000 displacement_c0_0001 normal_c0_0001 foam_c0_0000; 
     [[ -s "$tmp/bake/$f.exr" ]] || fail "bake did not write $f.exr"
 done
 exrheader "$tmp/bake/displacement_c0_0000.exr" > "$tmp/hdr" || fail "exrheader cannot read the bake"
-grep -q "R, 32-bit floating-point" "$tmp/hdr" && grep -q "zip" "$tmp/hdr" || fail "EXR channels: $(cat "$tmp/hdr")"
-exrheader "$tmp/bake/foam_c0_0000.exr" | grep -q "Y, 32-bit" || fail "foam EXR"
+for ch in displacement.R displacement.G displacement.B; do
+    grep -q "^ *$ch, 32-bit floating-point" "$tmp/hdr" || fail "EXR channel $ch: $(cat "$tmp/hdr")"
+done
+grep -q "zip" "$tmp/hdr" || fail "EXR compression: $(cat "$tmp/hdr")"
+exrheader "$tmp/bake/normal_c0_0001.exr" | grep -q "^ *normal.G, 32-bit" || fail "normal EXR channels"
+exrheader "$tmp/bake/foam_c0_0000.exr" | grep -q "^ *foam.Y, 32-bit" || fail "foam EXR"
+
+# bake: every file's header says what it holds, read back with exrheader.
+# Expected values are the bake's own inputs: the patch of cascade c is
+# --size / --cascade-ratio^c, frame k is at --time + k / --fps.
+"$sim" bake --n 32 --frames 3 --fps 24 --time 100 --cascades 2 --size 800 --cascade-ratio 4 \
+    --spectrum jonswap --wind 14 --direction 30 --fetch 50000 --depth 200 --seed 7 --out "$tmp/bk" > /dev/null
+exrheader "$tmp/bk/displacement_c1_0002.exr" > "$tmp/hdr2" || fail "exrheader on the attribute bake"
+attr() { sed -n "s/^$1 (type [a-z0-9]*): //p" "$tmp/hdr2"; }
+num_is() {  # name expected tolerance
+    python3 -c "import sys; v=float(sys.argv[1]); sys.exit(0 if abs(v-float(sys.argv[2])) <= float(sys.argv[3]) else 1)" \
+        "$(attr "$1" | sed 's/ .*//')" "$2" "$3" || fail "EXR $1 = '$(attr "$1")', want $2: $(cat "$tmp/hdr2")"
+}
+[[ $(attr framesPerSecond) == "24/1 (24)" ]] || fail "framesPerSecond: '$(attr framesPerSecond)'"
+num_is oceand.patchSize 200 1e-9
+# exrheader prints 6 significant digits.
+num_is oceand.time 100.0833333333333 1e-3
+num_is oceand.frame 2 0
+num_is oceand.cascade 1 0
+num_is oceand.gridSize 32 0
+num_is oceand.sampleSpacing 6.25 1e-9
+num_is oceand.windSpeed 14 0
+num_is oceand.windDirection 30 0
+num_is oceand.fetch 50000 0
+num_is oceand.depth 200 0
+[[ $(attr oceand.spectrum) == '"jonswap"' ]] || fail "EXR spectrum: $(attr oceand.spectrum)"
+[[ $(attr oceand.seed) == '"7"' ]] || fail "EXR seed: $(attr oceand.seed)"
+[[ -n $(attr oceand.significantWaveHeight) ]] || fail "EXR has no significant wave height"
+attr oceand.channels | grep -q "displacement.G = height" || fail "EXR channel mapping: $(attr oceand.channels)"
+
+# Help shows the defaults the commands really run with (issue 17 item 5):
+# every "(default X)" of --help equals what --show-options reports with no
+# option given, and every option is listed by both.
+for cmd in stats bake sample bench query filter mesh; do
+    "$sim" $cmd --help > "$tmp/help.txt" || fail "$cmd --help"
+    "$sim" $cmd --show-options > "$tmp/show.txt" || fail "$cmd --show-options"
+    n=0
+    while IFS= read -r line; do
+        name=$(sed -n 's/^  --\([a-z0-9-]*\) .*/\1/p' <<<"$line")
+        [[ -n $name && $name != help && $name != show-options ]] || continue
+        grep -q -- "^--$name=" "$tmp/show.txt" || fail "$cmd: --$name in --help but not in --show-options"
+        def=$(sed -n 's/.* (default \(.*\))$/\1/p' <<<"$line")
+        [[ -n $def ]] || continue
+        real=$(sed -n "s/^--$name=//p" "$tmp/show.txt")
+        [[ "$def" == "$real" ]] || fail "$cmd --help says --$name defaults to '$def', the parser gives '$real'"
+        n=$((n + 1))
+    done < "$tmp/help.txt"
+    [[ $n -ge 10 ]] || fail "$cmd --help shows only $n defaults"
+done
+# No help text states a default of its own beside the generated one.
+for cmd in stats bake sample bench query filter mesh; do
+    "$sim" $cmd --help | grep -E '\(default [^)]*\).*\(default' && fail "$cmd: two defaults on one line"
+done
+
+# Names, not numbers (issue 17 item 6).
+"$sim" stats --spectrum jonswap --show-options | grep -qx -- "--spectrum=jonswap" || fail "--spectrum jonswap"
+expect_refused "--spectrum" stats --spectrum 2
+expect_refused "--spreading" stats --spreading 1
+"$sim" stats --plan measure --show-options | grep -qx -- "--plan=measure" || fail "--plan measure"
+# A config file's sea is what the options start from.
+printf 'sea.spectrum = tma\nsea.wind = 7\n' > "$tmp/sea.conf"
+"$sim" stats --config "$tmp/sea.conf" --show-options > "$tmp/show.txt"
+grep -qx -- "--spectrum=tma" "$tmp/show.txt" && grep -qx -- "--wind=7" "$tmp/show.txt" || fail "config not applied: $(cat "$tmp/show.txt")"
+"$sim" stats --wind 9 --config "$tmp/sea.conf" --show-options | grep -qx -- "--wind=9" || fail "an option before --config lost to the file"
+# sample needs its point; bake's usage agrees with its defaults.
+expect_refused "--x" sample --z 3
+expect_refused "--z" sample --x 3
+"$sim" bake --help | head -1 | grep -q -- "\[--frames N\] \[--fps F\]" || fail "bake usage calls --frames/--fps required"
+"$sim" bake --help | grep -- "--frames" | grep -q "(default 1)" || fail "bake --frames default not documented"
+expect_refused "--out" bake --n 32
+# mesh: the default budget is a viewer's, not a film's (1 px was 1.6 M vertices).
+"$sim" mesh --camera 0,25,0 --json --n 64 > "$tmp/mesh.json"
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if d['vertices'] < 100000 else 1)" "$tmp/mesh.json" ||
+    fail "mesh default makes $(grep vertices "$tmp/mesh.json")"
 "$sim" bake --n 32 --frames 1 --out "$tmp/b2" --effects height > /dev/null
 [[ ! -e "$tmp/b2/normal_c0_0000.exr" ]] || fail "bake wrote normals nobody asked for"
 

@@ -2,7 +2,9 @@
 # test_client_cli.sh - ocean-client and the ship example against a real
 # oceand on a free loopback port: watch --json, bad options refused by
 # name, record, replay twice with --check (identical) and once changed
-# (refused), export (files any EXR reader opens), load, query, ship.
+# (refused), export (files any EXR reader opens), load, query, ship; help
+# defaults equal the parser's, no option silently ignored, progress on a
+# terminal (issue 17 items 5-7).
 set -u
 BUILD=${BUILD:-build}
 OC=$BUILD/ocean-client
@@ -14,7 +16,8 @@ done
 tmp=$(mktemp -d /tmp/oc-cli.XXXXXX)
 port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
 URL=ws://127.0.0.1:$port/
-"$OD" --config config/oceand.conf --port "$port" >"$tmp/oceand.log" 2>&1 &
+TOKEN=test-token-17
+"$OD" --config config/oceand.conf --port "$port" --set server.admin_token=$TOKEN >"$tmp/oceand.log" 2>&1 &
 pid=$!
 cleanup() { kill "$pid" 2>/dev/null; wait "$pid" 2>/dev/null; rm -rf "$tmp"; }
 trap cleanup EXIT
@@ -37,6 +40,9 @@ grep -q -- "--bogus" "$tmp/err" || fail "message does not name --bogus: $(cat "$
 grep -q -- "--seconds" "$tmp/err" || fail "message does not name --seconds"
 "$OC" query "$URL" --points "1,2;x" 2>"$tmp/err" && fail "bad --points accepted"
 grep -q -- "--points" "$tmp/err" || fail "message does not name --points"
+# one time limit (sim/ocean_time.h): beyond 2^27 s refused, naming it
+"$OC" query "$URL" --points "1,2" --t 134217729 2>"$tmp/err"; [[ $? -eq 2 ]] || fail "--t beyond the time limit accepted"
+grep -q -- "OCEAN_TIME_MAX" "$tmp/err" || fail "message does not name OCEAN_TIME_MAX: $(cat "$tmp/err")"
 "$OC" frobnicate 2>/dev/null; [[ $? -eq 2 ]] || fail "unknown command accepted"
 for c in watch query record replay export load sea; do
     "$OC" $c --help >/dev/null || fail "$c --help"
@@ -44,6 +50,44 @@ done
 printf 't,x,y,z\n0,1,2,3\n' >"$tmp/bad.csv"
 "$OC" replay "$URL" "$tmp/bad.csv" --out "$tmp/x.frames" 2>"$tmp/err" && fail "bad path accepted"
 grep -q "bad.csv:1:" "$tmp/err" || fail "path error lacks file:line: $(cat "$tmp/err")"
+
+echo "== --help defaults are what the parser yields ($SECONDS s)"
+for c in watch query record replay export load sea; do
+    "$OC" $c --help >"$tmp/help.txt" || fail "$c --help"
+    "$OC" $c --show-options >"$tmp/show.txt" || fail "$c --show-options"
+    n=0
+    while IFS= read -r line; do
+        name=$(sed -n 's/^  --\([a-z0-9-]*\) .*/\1/p' <<<"$line")
+        [[ -n $name && $name != help && $name != show-options ]] || continue
+        grep -q -- "^--$name=" "$tmp/show.txt" || fail "$c: --$name in --help but not in --show-options"
+        def=$(sed -n 's/.* (default \(.*\))$/\1/p' <<<"$line")
+        [[ -n $def ]] || continue
+        real=$(sed -n "s/^--$name=//p" "$tmp/show.txt")
+        [[ "$def" == "$real" ]] || fail "$c --help says --$name defaults to '$def', the parser gives '$real'"
+        n=$((n + 1))
+    done <"$tmp/help.txt"
+    [[ $n -ge 1 ]] || fail "$c --help shows no default"
+done
+# The subscription defaults are the library's (oc_subscribe_default), the
+# two the old help text had wrong among them.
+"$OC" watch --help | grep -- "--cutoff-policy" | grep -q "(default antialias)" || fail "--cutoff-policy default"
+"$OC" watch --help | grep -- "--tile-size" | grep -q "(default 32)" || fail "--tile-size default"
+
+echo "== nothing is silently ignored ($SECONDS s)"
+"$OC" sea "$URL" --wind 20 >"$tmp/out" 2>"$tmp/err"; rc=$?
+[[ $rc -eq 2 ]] || fail "sea --wind without --set: exit $rc"
+grep -q -- "--wind" "$tmp/err" && grep -q -- "--set" "$tmp/err" || fail "sea --wind without --set: $(cat "$tmp/err")"
+"$OC" sea "$URL" --spectrum 2 2>"$tmp/err"; [[ $? -eq 2 ]] || fail "sea --spectrum 2 (a number) accepted"
+grep -q "jonswap" "$tmp/err" || fail "sea --spectrum: the names are not listed: $(cat "$tmp/err")"
+"$SHIP" "$URL" --wind 30 --seconds 1 >"$tmp/out" 2>"$tmp/err"; rc=$?
+[[ $rc -eq 2 ]] || fail "ship URL --wind: exit $rc"
+grep -q -- "--offline" "$tmp/err" || fail "ship URL --wind does not explain: $(cat "$tmp/err")"
+t0=$SECONDS
+"$OC" replay "$URL" clients/paths/jet.csv --out "$tmp/never.frames" --check "$tmp/missing.frames" 2>"$tmp/err"; rc=$?
+[[ $rc -eq 2 ]] || fail "replay --check missing: exit $rc"
+grep -q -- "--check" "$tmp/err" && grep -q "missing.frames" "$tmp/err" || fail "replay --check missing: $(cat "$tmp/err")"
+grep -q "answered" "$tmp/err" && fail "replay ran before checking --check: $(cat "$tmp/err")"
+[[ ! -e $tmp/never.frames ]] || fail "replay wrote --out before checking --check"
 
 echo "== replay twice, --check ($SECONDS s)"
 head -n 33 clients/paths/jet.csv >"$tmp/jet.csv"   # 30 reports, 1 s of the pass
@@ -63,6 +107,16 @@ grep -qE " [1-9][0-9]* frames" "$tmp/rec.log" || fail "record got no frames: $(c
 head -n 8 clients/paths/helicopter.csv | "$OC" record "$URL" --path - --out "$tmp/rec2.frames" --tail 0.2 --mesh none 2>"$tmp/rec2.log" ||
     fail "record from stdin: $(cat "$tmp/rec2.log")"
 grep -q "5 camera reports" "$tmp/rec2.log" || fail "record from stdin: $(cat "$tmp/rec2.log")"
+
+echo "== progress on a terminal, none in a pipe ($SECONDS s)"
+# script(1) gives the command a pseudo-terminal, as a person at a shell has.
+grep -q $'\r\[' "$tmp/rec.log" && fail "record drew progress into a file"
+script -qec "'$OC' record '$URL' --path '$tmp/ship.csv' --out '$tmp/rec3.frames' --tail 0.3 --mesh none" /dev/null \
+    >"$tmp/tty.log" 2>&1 || fail "record on a terminal: $(cat "$tmp/tty.log")"
+grep -q "\[####.*camera reports" "$tmp/tty.log" || fail "record shows no progress on a terminal: $(cat -v "$tmp/tty.log")"
+script -qec "'$OC' load '$URL' --clients 2 --seconds 1 --rate 10 --mesh none --ramp 0.1" /dev/null \
+    >"$tmp/tty.log" 2>&1 || fail "load on a terminal: $(cat "$tmp/tty.log")"
+grep -q "\[#.*load: 2 viewers" "$tmp/tty.log" || fail "load shows no progress on a terminal: $(cat -v "$tmp/tty.log")"
 
 echo "== export ($SECONDS s)"
 "$OC" export "$URL" --out "$tmp/exr" --mesh none --codec qz 2>"$tmp/exp.log" || fail "export: $(cat "$tmp/exp.log")"
@@ -88,10 +142,23 @@ json "$tmp/sea.json" "d['wind_u10'] >= 0 and d['depth_m'] > 0 and d['tp'] >= 0"
 "$OC" sea "$URL" --set --token not-the-token --wind 3 >/dev/null 2>"$tmp/sea.err" && fail "sea --set with a wrong token succeeded"
 grep -q "SEA_STATE" "$tmp/sea.err" || fail "no server ERROR shown: $(cat "$tmp/sea.err")"
 "$OC" sea "$URL" --set 2>"$tmp/sea.err"; [[ $? -eq 2 ]] || fail "--set without --token accepted"
+# The sea's enums travel as names both ways.
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if d['spectrum'] in ('phillips','pierson-moskowitz','jonswap','tma') and isinstance(d['spreading'], str) else 1)" "$tmp/sea.json" ||
+    fail "sea JSON spectrum/spreading are not names: $(cat "$tmp/sea.json")"
 
 echo "== ship against the daemon ($SECONDS s)"
 "$SHIP" "$URL" --seconds 5 --dt 0.1 --quiet >"$tmp/ship.out" 2>&1 || fail "ship: $(cat "$tmp/ship.out")"
 grep -q "heave spectrum peak" "$tmp/ship.out" || fail "ship printed no summary"
+
+echo "== sea --set by name ($SECONDS s)"
+"$OC" sea "$URL" --set --token $TOKEN --spectrum jonswap --wind 12 >"$tmp/sea2.json" 2>"$tmp/sea.err" ||
+    fail "sea --set --spectrum jonswap: $(cat "$tmp/sea.err")"
+for _ in $(seq 50); do
+    "$OC" sea "$URL" >"$tmp/sea3.json" || fail "sea after set"
+    python3 -c "import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if d['spectrum'] == 'jonswap' and d['wind_u10'] == 12 else 1)" "$tmp/sea3.json" && break
+    sleep 0.1
+done
+json "$tmp/sea3.json" "d['spectrum'] == 'jonswap' and d['wind_u10'] == 12"
 
 kill -TERM "$pid"
 wait "$pid"

@@ -377,12 +377,12 @@ static void phases_accurate_far_out(void **state)
     ocean_gerstner_params p;
     ocean_gerstner_params_default(&p);
     p.count = 256;
-    p.k_hi = 400.0; /* omega up to 63 rad/s: omega t = 6e10 at t = 1e9 */
+    p.k_hi = 400.0; /* omega up to 63 rad/s: omega t = 8.4e9 at the time limit */
     ocean_gerstner *g = make(&p);
     ocean_gerstner_view v;
     ocean_gerstner_view_default(&v);
     double sa = sum_amp(g, NULL, NULL);
-    const double ts[] = {0.0, 1e6, 1e9};
+    const double ts[] = {0.0, 1e6, OCEAN_TIME_MAX};
     const double xs[] = {0.3, 1e7 + 0.37, -3e6 - 11.1};
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++) {
@@ -392,6 +392,11 @@ static void phases_accurate_far_out(void **state)
             /* naive double phases are off by ~1e-5 rad here */
             assert_close(o.dy, ref, 5e-9 * sa);
         }
+    /* beyond the one time limit: refused, not computed */
+    double x = 0.3, z = 0.1, tb = nextafter(OCEAN_TIME_MAX, INFINITY);
+    ocean_gerstner_point o;
+    assert_int_equal(ocean_gerstner_evaluate(g, &v, tb, &x, &z, 1, &o), OCEAN_EINVAL);
+    assert_int_equal(ocean_gerstner_evaluate(g, &v, 1e16, &x, &z, 1, &o), OCEAN_EINVAL);
     ocean_gerstner_destroy(g);
 }
 
@@ -635,6 +640,16 @@ static void hostile_parameters(void **state)
     bad = p;
     bad.k_hi = INFINITY;
     assert_int_equal(ocean_gerstner_create(&bad, &g, msg, sizeof msg), OCEAN_EINVAL);
+    /* no wave faster than OCEAN_OMEGA_MAX = 64 rad/s (k = 417.7 rad/m in deep water):
+     * the time limit's phase bound holds only up to it */
+    bad = p;
+    bad.k_hi = 420.0;
+    assert_int_equal(ocean_gerstner_create(&bad, &g, msg, sizeof msg), OCEAN_EINVAL);
+    assert_non_null(strstr(msg, "k_hi"));
+    bad.k_hi = 417.0;
+    assert_int_equal(ocean_gerstner_create(&bad, &g, msg, sizeof msg), OCEAN_OK);
+    ocean_gerstner_destroy(g);
+    g = (ocean_gerstner *)&p;
     bad = p;
     bad.steepness_max = 1.5;
     assert_int_equal(ocean_gerstner_create(&bad, &g, msg, sizeof msg), OCEAN_EINVAL);
@@ -653,7 +668,7 @@ static void hostile_parameters(void **state)
     ocean_gerstner_view v;
     ocean_gerstner_view_default(&v);
     ocean_gerstner_point o;
-    eval1(g, &v, 1e9, 1e7, -1e7, &o);
+    eval1(g, &v, OCEAN_TIME_MAX, 1e7, -1e7, &o);
     assert_true(o.dy == 0.0 && o.ny == 1.0 && o.jacobian == 1.0);
     assert_true(ocean_gerstner_variance(g, NULL) == 0.0);
     ocean_gerstner_destroy(g);
@@ -691,7 +706,7 @@ static void hostile_parameters(void **state)
     p.sea.depth_m = 0.05;
     p.sea.choppiness = 10.0;
     g = make(&p);
-    eval1(g, &v, 1e9, -1e9, 1e9, &o);
+    eval1(g, &v, OCEAN_TIME_MAX, -1e9, 1e9, &o);
     assert_true(isfinite(o.dy) && isfinite(o.dx) && isfinite(o.vx) && isfinite(o.ny));
     assert_true(o.jacobian >= 0.0);
     ocean_gerstner_destroy(g);

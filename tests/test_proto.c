@@ -22,6 +22,7 @@
 #include <string.h>
 
 #include "proto.h"
+#include "ocean_time.h"
 
 /* ---- canonical text dump of a decoded message ---------------------------- */
 
@@ -438,6 +439,67 @@ static ocean_result decode_exact(const uint8_t *p, size_t n, proto_msg *m, char 
 }
 
 /* ---- tests ---------------------------------------------------------------- */
+
+/* One time limit (sim/ocean_time.h): every time field of the protocol
+ * carries |t| <= OCEAN_TIME_MAX; the decoder and the encoder refuse the
+ * next double with a message naming the field and the limit. */
+static double *time_field(proto_msg *m, int which)
+{
+    switch (which) {
+    case 0: return &m->hdr.sim_time;
+    case 1: return &m->u.camera.render_time;
+    case 2: return &m->u.query.t;
+    case 3: return &m->u.result.t;
+    default: return &m->u.sea_state.effective_time;
+    }
+}
+
+static void test_time_limit(void **state)
+{
+    (void)state;
+    const proto_type types[5] = {PROTO_BYE, PROTO_CAMERA, PROTO_QUERY, PROTO_QUERY_RESULT,
+                                 PROTO_SEA_STATE};
+    const char *names[5] = {"sim_time", "camera.render_time", "query.t", "query_result.t",
+                            "sea_state.effective_time"};
+    for (int w = 0; w < 5; w++) {
+        proto_msg m, d;
+        sample(&m, types[w]);
+        *time_field(&m, w) = 777.25; /* a byte pattern found once in the message */
+        proto_buf b;
+        proto_buf_init(&b, 0);
+        char err[256] = "";
+        assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_OK);
+        uint8_t pat[8];
+        proto_stf64(pat, 777.25);
+        uint8_t *data = proto_buf_data(&b);
+        uint8_t *at = memmem(data, b.len, pat, 8);
+        assert_non_null(at);
+        assert_null(memmem(at + 1, b.len - (size_t)(at + 1 - data), pat, 8));
+        double vals[4] = {OCEAN_TIME_MAX, -OCEAN_TIME_MAX, nextafter(OCEAN_TIME_MAX, INFINITY), -1e16};
+        for (int v = 0; v < 4; v++) {
+            proto_stf64(at, vals[v]);
+            ocean_result r = decode_exact(data, b.len, &d, err, sizeof err);
+            if (v < 2) {
+                if (r != OCEAN_OK)
+                    fail_msg("%s = %.17g refused: %s", names[w], vals[v], err);
+                assert_true(*time_field(&d, w) == vals[v]);
+                proto_msg_free(&d);
+            } else {
+                assert_int_equal(r, OCEAN_EINVAL);
+                if (!strstr(err, names[w]) || !strstr(err, "OCEAN_TIME_MAX"))
+                    fail_msg("%s = %.17g: message '%s' names neither field nor limit", names[w],
+                             vals[v], err);
+            }
+        }
+        proto_buf_free(&b);
+        /* and nothing beyond the limit is encoded */
+        *time_field(&m, w) = nextafter(OCEAN_TIME_MAX, INFINITY);
+        proto_buf_init(&b, 0);
+        assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_EINVAL);
+        assert_non_null(strstr(err, "OCEAN_TIME_MAX"));
+        proto_buf_free(&b);
+    }
+}
 
 static void test_roundtrip_all(void **state)
 {
@@ -1101,6 +1163,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_roundtrip_all),
         cmocka_unit_test(test_header_errors),
+        cmocka_unit_test(test_time_limit),
         cmocka_unit_test(test_frame_client_fields),
         cmocka_unit_test(test_cascade_layout),
         cmocka_unit_test(test_payload_errors),

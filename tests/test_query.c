@@ -193,8 +193,8 @@ static void test_reports_folding(void **state)
     (void)state;
     ocean_params p;
     ocean_params_default(&p);
-    p.n = 64;
-    p.patch_m = 100.0;
+    p.n = 256;
+    p.patch_m = 800.0;  /* holds the 789 m peak of a 30 m/s sea (ocean_plan.h) */
     p.sea.wind_u10 = 30.0;
     p.sea.choppiness = 5.0;
     ocean *o;
@@ -208,7 +208,7 @@ static void test_reports_folding(void **state)
     int folded = 0;
     ocean_query_result q;
     for (int i = 0; i < 400; i++) {
-        double xz[2] = {i * 0.25, i * 0.17};
+        double xz[2] = {i * 2.5, i * 1.7}; /* across the patch */
         ocean_query_points(f, NULL, NULL, 3.0, xz, 1, NULL, &q, NULL);
         assert_true(isfinite(q.height) && isfinite(q.error));
         folded += q.folded;

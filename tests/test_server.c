@@ -366,6 +366,11 @@ static void cascade_tiles_are_the_mips(void **state)
     assert_int_equal(b->cascade_count, 2);
     assert_true(b->camera[0] == cam.pos[0] && b->camera[1] == cam.pos[1] && b->camera[2] == cam.pos[2]);
     assert_true(b->spacing_per_m > 0);
+    /* the short-wave tail (and the near field: the test config has one)
+     * always travels as roughness; with normals nothing is lost (e_total 0) */
+    assert_true(b->tail_mss[0] > 0 && b->tail_mss[1] > 0);
+    assert_true(b->e_total == 0.0f);
+    assert_true(f->info.e_error >= 0 && f->info.e_error <= 1);
     ocean *o = local_ocean();
     ocean_frame *lf;
     assert_int_equal(ocean_frame_create(o, &lf), OCEAN_OK);
@@ -406,6 +411,8 @@ static void cascade_tiles_are_the_mips(void **state)
             int k = tl->info.cascade;
             assert_true(k < 2);
             assert_int_equal(tl->decode_result, OCEAN_OK);
+            /* foam travels with cascade 0 alone */
+            assert_int_equal((tl->info.channels & PROTO_CH_FOAM) != 0, k == 0);
             const ocean_field *fd = ocean_frame_field(lf, k);
             int np = settings.params.n >> m, T = np < 32 ? np : 32;
             assert_int_equal(tl->info.width, T);
@@ -445,6 +452,19 @@ static void cascade_tiles_are_the_mips(void **state)
     ocean_frame_destroy(lf);
     ocean_destroy(o);
     /* what layout 1 cannot serve is refused before any work, naming why */
+    /* geometry only (no normals): what the tiles miss is lost (e_total = e_error) */
+    proto_subscribe geo = s;
+    geo.effects = PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT;
+    assert_int_equal(oc_client_subscribe(c, &geo), OCEAN_OK);
+    cam.pos[1] = 400; /* high enough that the tiles miss some of the sea */
+    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+    f = frame_for(c, seq, 5000);
+    assert_non_null(f);
+    assert_true(f->info.e_error > 0);
+    assert_true(fabs(f->info.cascades.e_total - f->info.e_error) <= 1e-6);
+    for (int t = 0; t < f->info.tile_count; t++)
+        assert_int_equal(f->tiles[t].info.channels, PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ);
+    oc_frame_free(f);
     char e[512] = "";
     proto_subscribe bad = s;
     bad.mesh_kind = PROTO_MESH_PROJECTED;

@@ -1,6 +1,6 @@
 /*
- * test_spectrum.c - spectra, spreading, dispersion and Beaufort against the
- * published numbers in shared/REFERENCES.md.
+ * test_spectrum.c - spectra, spreading, dispersion and Beaufort against
+ * published laws (each test names its source).
  */
 #include <math.h>
 #include <setjmp.h>
@@ -68,6 +68,36 @@ static void test_pierson_moskowitz(void **state)
     assert_true(ocean_spectrum_s(&s, 0.0) == 0.0);
 }
 
+/* The JONSWAP laws of Hasselmann et al. 1973 (Dtsch. Hydrogr. Z. A8(12),
+ * sect. 2.6), in the dimensionless fetch chi = g F / U10^2:
+ *   peak      w_p = 22 (g^2 / (U10 F))^(1/3)      (f_p = 3.5 (g / U10) chi^-0.33)
+ *   Phillips  alpha = 0.076 chi^-0.22
+ *   spectrum  S(w) = alpha g^2 w^-5 exp(-5/4 (w_p / w)^4) gamma^r,
+ *             r = exp(-(w - w_p)^2 / (2 sigma^2 w_p^2)), gamma = 3.3,
+ *             sigma = 0.07 (w <= w_p), 0.09 (w > w_p)
+ *   energy    g^2 m0 / U10^4 = 1.6e-7 chi, i.e. with Hs = 4 sqrt(m0):
+ *             g Hs / U10^2 = 1.6e-3 chi^(1/2)
+ * The spectrum is integrated here by Simpson's rule, independently of
+ * spectrum.c: the check value of the model's Hs. */
+static double jonswap_published_hs(double u10, double fetch)
+{
+    const double g = OCEAN_G;
+    double chi = g * fetch / (u10 * u10);
+    double alpha = 0.076 * pow(chi, -0.22), wp = 22.0 * cbrt(g * g / (u10 * fetch));
+    double a = 0.2 * wp, b = 40.0 * wp;
+    int n = 400000; /* even */
+    double h = (b - a) / n, sum = 0.0;
+    for (int i = 0; i <= n; i++) {
+        double w = a + i * h, sig = w <= wp ? 0.07 : 0.09;
+        double r = exp(-(w - wp) * (w - wp) / (2.0 * sig * sig * wp * wp));
+        double sw = alpha * g * g * pow(w, -5.0) * exp(-1.25 * pow(wp / w, 4.0)) * pow(3.3, r);
+        sum += sw * (i == 0 || i == n ? 1.0 : (i % 2 ? 4.0 : 2.0));
+    }
+    /* beyond b the tail is alpha g^2 w^-5 (gamma^r = 1, exp -> 1 to 1e-6) */
+    double m0 = sum * h / 3.0 + alpha * g * g / (4.0 * pow(b, 4.0));
+    return 4.0 * sqrt(m0);
+}
+
 static void test_jonswap(void **state)
 {
     (void)state;
@@ -76,15 +106,18 @@ static void test_jonswap(void **state)
     s.spectrum = OCEAN_SPECTRUM_JONSWAP;
     s.wind_u10 = 10.0;
     s.fetch_m = 1e5;
-    assert_close(ocean_spectrum_peak(&s), 1.0082, 2e-4);
-    assert_close(ocean_spectrum_hs(&s), 2.139, 3e-3);
-    /* alpha from the fetch law: S(w) at w >> wp tends to alpha g^2 w^-5. */
+    const double g = OCEAN_G, chi = g * s.fetch_m / (s.wind_u10 * s.wind_u10);
+    /* the peak and alpha laws (Hasselmann et al. 1973, above) */
+    assert_close(ocean_spectrum_peak(&s), 22.0 * cbrt(g * g / (s.wind_u10 * s.fetch_m)), 1e-6);
     double w = 30.0;
-    assert_close(ocean_spectrum_s(&s, w) * pow(w, 5) / (OCEAN_G * OCEAN_G), 0.01006, 2e-3);
+    assert_close(ocean_spectrum_s(&s, w) * pow(w, 5) / (g * g), 0.076 * pow(chi, -0.22), 2e-3);
+    /* Hs: the published spectrum integrated independently (2.14 m) */
+    assert_close(ocean_spectrum_hs(&s), jonswap_published_hs(s.wind_u10, s.fetch_m), 2e-3);
     /* Longer fetch, bigger sea - up to full development, never beyond
      * the fully developed Pierson-Moskowitz sea of the same wind. */
+    double hs_1e5 = ocean_spectrum_hs(&s);
     s.fetch_m = 1.5e5;
-    assert_true(ocean_spectrum_hs(&s) > 2.139);
+    assert_true(ocean_spectrum_hs(&s) > hs_1e5);
     ocean_sea_state pm = s;
     pm.spectrum = OCEAN_SPECTRUM_PM;
     s.fetch_m = 1e7;
@@ -94,6 +127,41 @@ static void test_jonswap(void **state)
     /* gamma = 3.3 keeps its peak enhancement (m0 x 1.525, Hs x 1.235) and
      * alpha 0.0089 vs 0.0081: the cap stays within 1.3 x PM's Hs. */
     assert_true(full < 1.3 * ocean_spectrum_hs(&pm));
+}
+
+/* Hs against the JONSWAP energy growth law, g Hs / U10^2 = 1.6e-3 chi^(1/2)
+ * (Hasselmann et al. 1973; chi = g F / U10^2), which gives 1.616 m for
+ * U10 = 10 m/s, F = 100 km.
+ *
+ * KNOWN DISCREPANCY, not a tolerance chosen to pass: the model implements
+ * the same paper's spectral form (peak and alpha laws, gamma = 3.3), and
+ * that form integrates to Hs = 2.14 m here (test_jonswap), 32 % above the
+ * paper's own energy fit (energy 1.75x).  The published parameter fits and
+ * the energy fit are not mutually consistent at this fetch; which one the
+ * model should honour is an open decision (issue 13, item 7 report).  The
+ * bound below (35 %) only holds the model to that documented gap (+21 to
+ * +32 % over these cases), so a change that widens it fails; a tighter
+ * bound needs the model changed, not the test. */
+static void test_jonswap_energy_growth_law(void **state)
+{
+    (void)state;
+    ocean_sea_state s;
+    ocean_sea_state_default(&s);
+    s.spectrum = OCEAN_SPECTRUM_JONSWAP;
+    const double g = OCEAN_G;
+    const double winds[] = {10.0, 10.0, 20.0}, fetches[] = {1e5, 2e4, 1e5};
+    for (int i = 0; i < 3; i++) {
+        s.wind_u10 = winds[i];
+        s.fetch_m = fetches[i];
+        double u2 = winds[i] * winds[i];
+        double law = 1.6e-3 * sqrt(g * fetches[i] / u2) * u2 / g;
+        double hs = ocean_spectrum_hs(&s);
+        print_message("U10 %g m/s, F %g km: Hs %.4f m, JONSWAP energy law %.4f m (%+.1f %%)\n",
+                      winds[i], fetches[i] / 1e3, hs, law, 100.0 * (hs / law - 1.0));
+        if (i == 0)
+            assert_close(law, 1.615, 1e-3); /* the figure issue 13 quotes */
+        assert_close(hs, law, 0.35);
+    }
 }
 
 static void test_tma(void **state)
@@ -263,6 +331,7 @@ int main(void)
         cmocka_unit_test(test_dispersion_checks),
         cmocka_unit_test(test_pierson_moskowitz),
         cmocka_unit_test(test_jonswap),
+        cmocka_unit_test(test_jonswap_energy_growth_law),
         cmocka_unit_test(test_tma),
         cmocka_unit_test(test_spreading_integrates_to_one),
         cmocka_unit_test(test_cos2s_norm),

@@ -465,8 +465,8 @@ static int sample_core(const oc_cascade_view *v, double x, double z, double min_
     lod_core(b, x, z, min_spacing, &lod);
     memset(out, 0, sizeof *out);
     out->s = lod.s;
-    unsigned chan = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM;
-    double clear = 1.0;   /* product of (1 - foam_c) */
+    const unsigned all = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM;
+    unsigned common = all, foam_ch = 0;
     double mss[3] = {b->tail_mss[0], b->tail_mss[1], b->tail_mss[2]};
     for (int c = 0; c < v->count; c++) {
         const cv_cascade *cc = &v->c[c];
@@ -474,10 +474,13 @@ static int sample_core(const oc_cascade_view *v, double x, double z, double min_
         const oc_lod_cascade *L = &lod.c[c];
         double u = wrap(x, cc->patch), w = wrap(z, cc->patch);
         double acc[V_COUNT] = {0};
+        unsigned chan = all;
+        /* PROTOCOL.md: foam is the whole sea's, in cascade 0's tiles alone */
+        unsigned want_c = c == 0 ? want : want & ~(unsigned)W_F;
         for (int k = 0; k < 2; k++) {
             if (L->mip[k] < 0 || !(L->weight[k] > 0))
                 continue;
-            if (read_mip(v, &cc->mip[L->mip[k]], u, w, want, interp, L->weight[k], acc, &chan))
+            if (read_mip(v, &cc->mip[L->mip[k]], u, w, want_c, interp, L->weight[k], acc, &chan))
                 return -1;
             const proto_mip_entry *me = &e->mip[L->mip[k]];
             mss[0] += L->weight[k] * me->mss_x;
@@ -495,10 +498,14 @@ static int sample_core(const oc_cascade_view *v, double x, double z, double min_
         out->dz += acc[V_DZ];
         out->slope_x += acc[V_SX];
         out->slope_z += acc[V_SZ];
-        double fc = acc[V_FOAM];
-        clear *= 1 - (fc < 0 ? 0 : fc > 1 ? 1 : fc);
+        common &= chan | PROTO_CH_FOAM;
+        if (c == 0) {
+            double fc = acc[V_FOAM];
+            out->foam = fc < 0 ? 0 : fc > 1 ? 1 : fc;
+            foam_ch = chan & PROTO_CH_FOAM;
+        }
     }
-    out->foam = 1 - clear;
+    unsigned chan = (common & ~(unsigned)PROTO_CH_FOAM) | foam_ch;
     double nl = sqrt(out->slope_x * out->slope_x + 1 + out->slope_z * out->slope_z);
     out->normal[0] = -out->slope_x / nl;
     out->normal[1] = 1 / nl;

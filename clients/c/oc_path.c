@@ -2,6 +2,7 @@
  * oc_path.c - camera path files (see oc_path.h).
  */
 #include "oc_path.h"
+#include "ocean_time.h"
 
 #include <errno.h>
 #include <math.h>
@@ -68,8 +69,8 @@ static const char *check_point(const oc_path_point *q, int *field)
             return "is not a finite number";
         }
     *field = 0;
-    if (fabs(q->t) > 1e15)
-        return "beyond +-1e15 s";
+    if (!ocean_time_ok(q->t))
+        return "beyond the time limit +-134217728 s (OCEAN_TIME_MAX)";
     *field = 1;
     if (fabs(q->pos[0]) > 1e9)
         return "beyond +-1e9 m";

@@ -1560,7 +1560,7 @@ void oc_subscribe_default(proto_subscribe *s)
     s->lod_levels = 8;
     s->tile_size = 64;
     s->frame_rate_hz = 30.0f;
-    s->accuracy = 1e-3f;
+    s->accuracy = (float)OC_ACCURACY_DEFAULT;
     s->base_spacing_m = 0;
     s->view_range_m = 0;
     s->layout = PROTO_LAYOUT_CASCADE;

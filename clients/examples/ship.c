@@ -7,7 +7,7 @@
  * and printed twice a second, then a summary with the heave spectrum's
  * peak period beside the sea's dominant period.
  *
- *   ship ws://127.0.0.1:8080/ [options]     against a running oceand
+ *   ship ws://127.0.0.1:8740/ [options]     against a running oceand
  *   ship --offline [options]                on a local sim/ ocean, no daemon
  */
 #include <errno.h>
@@ -196,7 +196,7 @@ int main(int argc, char **argv)
     oc_ship_params sp;
     oc_ship_params_default(&sp);
     double seconds = 60, dt = 0.05, every = 0.5, wind = 10, seed = 1;
-    int offline = 0, quiet = 0;
+    int offline = 0, quiet = 0, sea_given = 0;
     const char *url = NULL;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -220,9 +220,9 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--every")) {
             bad = num(a, v, 0.001, 1e5, &every), i++;
         } else if (!strcmp(a, "--wind")) {
-            bad = num(a, v, 0, 60, &wind), i++;
+            bad = num(a, v, 0, 60, &wind), i++, sea_given = 1;
         } else if (!strcmp(a, "--seed")) {
-            bad = num(a, v, 0, 4294967295.0, &seed), i++;
+            bad = num(a, v, 0, 4294967295.0, &seed), i++, sea_given = 1;
         } else if (a[0] == '-') {
             fprintf(stderr, "ship: unknown option '%s' (see --help)\n", a);
             return 2;
@@ -241,6 +241,14 @@ int main(int argc, char **argv)
     }
     if (offline && url) {
         fprintf(stderr, "ship: give either a URL or --offline, not both\n");
+        return 2;
+    }
+    /* Online the sea is the daemon's, shared by every client: a wind or
+     * seed given here would be silently ignored. */
+    if (url && sea_given) {
+        fprintf(stderr, "ship: --wind and --seed choose the sea of --offline only; the daemon's sea is "
+                        "shared by every client (change it with: ocean-client sea %s --set --token T --wind U)\n",
+                url);
         return 2;
     }
     return offline ? run_offline(&sp, seconds, dt, every, wind, seed, quiet)

@@ -8,7 +8,8 @@
  *   codec=qz|f16|f32   tile codec to ask for (default qz, the daemon's default)
  *   policy=antialias|seed|none   cutoff policy (default antialias)
  *   rate=HZ tile=N levels=N layers=N accuracy=A range=M spacing=M
- *   x= y= z= yaw= pitch= fov= speed=   initial camera
+ *   x= y= z= yaw= pitch= fov= speed=   initial camera (default: the scene's
+ *                   scene.camera_hint from GET /status, else 0,25,0 yaw 30 pitch -10)
  *   vx= vy= vz=     constant camera velocity (m/s), for demos and tests
  *   debug=1         tint the sea by tile level
  *   overlay=0       hide the overlay
@@ -51,8 +52,28 @@ canvas.addEventListener('webglcontextrestored', () => location.reload());
 renderer.debug = qs.get('debug') === '1';
 renderer.drawSea = qs.get('sea') !== '0';   /* sea=0: sky and far sea only (the test's blank-scene control) */
 
+/* The scene's camera hint (GET /status, "camera_hint"), unless the URL
+ * places the camera: the flight scene opens at its 1500 m, not at 25 m.
+ * Plain HTTP the daemon already serves; no protocol message involved. */
+async function sceneHint() {
+    if (['x', 'y', 'z', 'yaw', 'pitch'].some((k) => qs.has(k))) return null;
+    try {
+        const ctl = new AbortController();
+        const timer = setTimeout(() => ctl.abort(), 2000);
+        const r = await fetch(new URL('status', location.href), { signal: ctl.signal, cache: 'no-store' });
+        clearTimeout(timer);
+        if (!r.ok) return null;
+        const h = (await r.json()).camera_hint;
+        return h && [h.x, h.y, h.z, h.yaw, h.pitch].every(Number.isFinite) ? h : null;
+    } catch (e) {
+        return null;
+    }
+}
+const hint = await sceneHint();
+stats.cameraHint = hint;
 const cam = new FlyCamera({
-    x: num('x', 0), y: num('y', 25), z: num('z', 0), yaw: num('yaw', 30), pitch: num('pitch', -10),
+    x: num('x', hint ? hint.x : 0), y: num('y', hint ? hint.y : 25), z: num('z', hint ? hint.z : 0),
+    yaw: num('yaw', hint ? hint.yaw : 30), pitch: num('pitch', hint ? hint.pitch : -10),
     fov: num('fov', 60), speed: num('speed', 15), vx: num('vx', 0), vy: num('vy', 0), vz: num('vz', 0),
 });
 cam.attach(canvas);
@@ -79,7 +100,7 @@ const want = {
  * for a second (a change of at least 2x, so no flapping). */
 const autoSpacing = !qs.has('spacing');
 const spacingFor = (h) => 2 ** Math.max(-2, Math.min(6, Math.round(Math.log2(Math.max(h, 1) / 28))));
-if (autoSpacing) want.baseSpacingM = spacingFor(num('y', 25));
+if (autoSpacing) want.baseSpacingM = spacingFor(cam.pos[1]);
 let spacingWish = want.baseSpacingM, spacingSince = 0;
 function adaptSpacing(now) {
     if (!autoSpacing || !sub) return;

@@ -87,6 +87,12 @@ function chkRange(what, v, lo, hi) {
     if (!Number.isFinite(v)) fail(R.EINVAL, `${what} is ${v}; must be finite`);
     if (v < lo || v > hi) fail(R.EINVAL, `${what} = ${v} outside [${lo}, ${hi}]`);
 }
+/* The one time limit (sim/ocean_time.h, PROTOCOL.md "Times"): |t| <= 2^27 s. */
+export const TIME_MAX = 134217728;
+function chkTime(what, v) {
+    if (!(v >= -TIME_MAX && v <= TIME_MAX))
+        fail(R.EINVAL, `${what} = ${v} s is beyond the time limit +-${TIME_MAX} s (OCEAN_TIME_MAX)`);
+}
 function chkMask(what, v, allowed) {
     if ((v & ~allowed) >>> 0) fail(R.ETYPE, `${what} 0x${v.toString(16)} has unknown bits`);
 }
@@ -196,7 +202,8 @@ export function decodeHeader(u8, limits = LIMITS) {
     const name = TYPE_NAMES[h.type];
     if (h.flags !== 0 || dv.getUint32(20, true) !== 0)
         fail(R.EFORMAT, `${name} header: flags / reserved must be 0 in version 1`);
-    if (!Number.isFinite(h.simTime)) fail(R.EINVAL, `${name} header: sim_time is ${h.simTime}; must be finite`);
+    if (!(h.simTime >= -TIME_MAX && h.simTime <= TIME_MAX))
+        fail(R.EINVAL, `${name} header: sim_time = ${h.simTime} s is beyond the time limit +-${TIME_MAX} s (OCEAN_TIME_MAX)`);
     if (h.length + HEADER_SIZE > limits.maxMessage)
         fail(R.ETOOBIG, `${name} of ${h.length + HEADER_SIZE} bytes exceeds the ${limits.maxMessage}-byte message limit`);
     if (h.length + HEADER_SIZE > len)
@@ -326,7 +333,7 @@ function vCamera(k) {
     if (k.fovYDeg <= 0 || k.fovYDeg >= 180) fail(R.EINVAL, `camera.fov_y_deg = ${k.fovYDeg} outside (0, 180)`);
     chkRange('camera.viewport_w', k.viewportW, 1, 16384);
     chkRange('camera.viewport_h', k.viewportH, 1, 16384);
-    chkRange('camera.render_time', k.renderTime, -1e15, 1e15);
+    chkTime('camera.render_time', k.renderTime);
 }
 
 /* TILE body; r.end must be the body's end.  The payload is a view into the
@@ -482,7 +489,7 @@ function dQuery(r, limits) {
     r.finish();
     if (q.count === 0) fail(R.EINVAL, 'query.count is 0');
     chkEnum('query.at_time', q.atTime, 2);
-    chkRange('query.t', q.t, -1e15, 1e15);
+    chkTime('query.t', q.t);
     for (let i = 0; i < q.points.length; i++)
         if (!(Math.abs(q.points[i]) <= MAX_WORLD)) fail(R.EINVAL, `query point ${i >> 1} ${(i & 1) ? 'z' : 'x'} = ${q.points[i]} (finite, |v| <= 1e10 required)`);
     return q;
@@ -505,7 +512,7 @@ function dResult(r, limits) {
     r.off += SAMPLE_SIZE * q.count;
     r.finish();
     if (q.count === 0) fail(R.EINVAL, 'query_result.count is 0');
-    chkRange('query_result.t', q.t, -1e15, 1e15);
+    chkTime('query_result.t', q.t);
     q.samples.forEach((s, i) => {
         const v = [s.height, ...s.normal, ...s.velocity, s.foam, s.errorBound];
         v.forEach((x, k) => { if (!Number.isFinite(x)) fail(R.EINVAL, `query_result sample ${i} field ${k} is not finite`); });
@@ -524,7 +531,7 @@ function dSeaState(r) {
     s.token = r.str(255, 'token');
     r.finish();
     chkEnum('sea_state.op', s.op, 2);
-    chkRange('sea_state.effective_time', s.effectiveTime, -1e15, 1e15);
+    chkTime('sea_state.effective_time', s.effectiveTime);
     vSea(s.sea);
     if (s.op === 0 && s.token) fail(R.EFORMAT, 'sea_state announce must not carry a token');
     return s;

@@ -9,12 +9,14 @@
 #include "cli.h"
 
 #include <errno.h>
+#include <inttypes.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #include "ocean_conf.h"
+#include "ocean_plan.h"
 
 double cli_now_ms(void)
 {
@@ -64,14 +66,6 @@ int cli_parse_effects(const char *s, unsigned *out)
     return 0;
 }
 
-/* Common options write into these, then are copied into params. */
-typedef struct common_raw {
-    const char *spectrum, *spreading, *effects, *plan;
-    double wind, direction, fetch, depth, swell, size, choppiness, time, ratio;
-    double seed;
-    int beaufort, n, cascades, threads;
-} common_raw;
-
 static int parse_number(const char *opt, const char *val, double lo, double hi, double *out)
 {
     char *end;
@@ -85,6 +79,12 @@ static int parse_number(const char *opt, const char *val, double lo, double hi, 
         fprintf(stderr, "error: --%s: '%s' must be finite\n", opt, val);
         return -1;
     }
+    if (hi == OCEAN_TIME_MAX && !ocean_time_ok(v)) {
+        char m[256];
+        ocean_time_check(v, opt, m, sizeof m);
+        fprintf(stderr, "error: --%s\n", m);
+        return -1;
+    }
     if (v < lo || v > hi) {
         fprintf(stderr, "error: --%s: %s is out of range [%g, %g]\n", opt, val, lo, hi);
         return -1;
@@ -93,10 +93,83 @@ static int parse_number(const char *opt, const char *val, double lo, double hi, 
     return 0;
 }
 
-static void print_opts(const cli_opt *opts, int nopts)
+/* An effects mask as --effects spells it. */
+static void format_effects(unsigned mask, char *buf, size_t len)
 {
-    for (int i = 0; i < nopts; i++)
-        fprintf(stdout, "  --%-14s %s\n", opts[i].name, opts[i].help);
+    static const struct { const char *name; unsigned bit; } names[] = {
+        {"height", OCEAN_FX_HEIGHT}, {"displacement", OCEAN_FX_DISPLACEMENT},
+        {"normals", OCEAN_FX_NORMALS}, {"foam", OCEAN_FX_FOAM},
+        {"velocity", OCEAN_FX_VELOCITY}, {"near-field", OCEAN_FX_NEAR_FIELD}};
+    buf[0] = '\0';
+    if (mask == OCEAN_FX_ALL) {
+        snprintf(buf, len, "all");
+        return;
+    }
+    size_t n = 0;
+    for (size_t i = 0; i < sizeof names / sizeof names[0] && n < len; i++)
+        if (mask & names[i].bit)
+            n += (size_t)snprintf(buf + n, len - n, "%s%s", n ? "," : "", names[i].name);
+}
+
+/* The value *o->target holds, as the command line spells it; "" when it
+ * means "not given" (NaN, NULL, outside the option's range). */
+static void format_value(const cli_opt *o, char *buf, size_t len)
+{
+    buf[0] = '\0';
+    switch (o->kind) {
+    case CLI_DOUBLE: {
+        double v = *(const double *)o->target;
+        if (!isnan(v) && v >= o->min && v <= o->max)
+            snprintf(buf, len, "%.15g", v);
+        break;
+    }
+    case CLI_INT: {
+        int v = *(const int *)o->target;
+        if (v >= o->min && v <= o->max)
+            snprintf(buf, len, "%d", v);
+        break;
+    }
+    case CLI_U64:
+        snprintf(buf, len, "%llu", (unsigned long long)*(const uint64_t *)o->target);
+        break;
+    case CLI_STRING: {
+        const char *v = *(const char *const *)o->target;
+        if (v)
+            snprintf(buf, len, "%s", v);
+        break;
+    }
+    case CLI_FLAG:
+        snprintf(buf, len, "%d", *(const int *)o->target);
+        break;
+    case CLI_CHOICE: {
+        int v = *(const int *)o->target, n = 0;
+        while (o->names[n])
+            n++;
+        if (v >= 0 && v < n)
+            snprintf(buf, len, "%s", o->names[v]);
+        break;
+    }
+    case CLI_EFFECTS:
+        format_effects(*(const unsigned *)o->target, buf, len);
+        break;
+    }
+}
+
+static void print_opts(const cli_opt *opts, int nopts, char (*defs)[96])
+{
+    for (int i = 0; i < nopts; i++) {
+        char text[512];
+        snprintf(text, sizeof text, "%s", opts[i].help);
+        if (opts[i].kind == CLI_CHOICE) {
+            size_t n = strlen(text);
+            for (int k = 0; opts[i].names[k] && n < sizeof text; k++)
+                n += (size_t)snprintf(text + n, sizeof text - n, "%s%s", k ? "|" : ": ", opts[i].names[k]);
+        }
+        if (opts[i].kind != CLI_FLAG && defs[i][0])
+            fprintf(stdout, "  --%-14s %s (default %s)\n", opts[i].name, text, defs[i]);
+        else
+            fprintf(stdout, "  --%-14s %s\n", opts[i].name, text);
+    }
 }
 
 static int apply_opt(const cli_opt *o, const char *val)
@@ -109,13 +182,17 @@ static int apply_opt(const cli_opt *o, const char *val)
         *(double *)o->target = v;
         return 0;
     case CLI_INT:
+    case CLI_U64:
         if (parse_number(o->name, val, o->min, o->max, &v))
             return -1;
         if (v != floor(v)) {
             fprintf(stderr, "error: --%s: '%s' must be a whole number\n", o->name, val);
             return -1;
         }
-        *(int *)o->target = (int)v;
+        if (o->kind == CLI_INT)
+            *(int *)o->target = (int)v;
+        else
+            *(uint64_t *)o->target = (uint64_t)v;
         return 0;
     case CLI_STRING:
         *(const char **)o->target = val;
@@ -123,8 +200,38 @@ static int apply_opt(const cli_opt *o, const char *val)
     case CLI_FLAG:
         *(int *)o->target = 1;
         return 0;
+    case CLI_CHOICE:
+        for (int k = 0; o->names[k]; k++)
+            if (strcmp(o->names[k], val) == 0) {
+                *(int *)o->target = k;
+                return 0;
+            }
+        fprintf(stderr, "error: --%s: unknown value '%s' (", o->name, val);
+        for (int k = 0; o->names[k]; k++)
+            fprintf(stderr, "%s%s", k ? ", " : "", o->names[k]);
+        fprintf(stderr, ")\n");
+        return -1;
+    case CLI_EFFECTS:
+        if (cli_parse_effects(val, (unsigned *)o->target)) {
+            fprintf(stderr, "error: --%s: '%s' is not a list of "
+                    "height,displacement,normals,foam,velocity,near-field (or all)\n", o->name, val);
+            return -1;
+        }
+        return 0;
     }
     return -1;
+}
+
+/* Finds the option named by "--name" or "--name=value" in arg. */
+static const cli_opt *find_opt(const char *arg, const cli_opt *const *tabs, const int *ns, int ntabs)
+{
+    const char *eq = strchr(arg + 2, '=');
+    size_t len = eq ? (size_t)(eq - arg - 2) : strlen(arg + 2);
+    for (int t = 0; t < ntabs; t++)
+        for (int k = 0; k < ns[t]; k++)
+            if (strlen(tabs[t][k].name) == len && strncmp(tabs[t][k].name, arg + 2, len) == 0)
+                return &tabs[t][k];
+    return NULL;
 }
 
 int cli_parse(int argc, char **argv, const char *usage,
@@ -132,155 +239,144 @@ int cli_parse(int argc, char **argv, const char *usage,
               const char **pos, int *npos)
 {
     memset(c, 0, sizeof *c);
-    ocean_params_default(&c->params);
+    ocean_params *p = &c->params;
+    ocean_params_default(p);
     c->effects = OCEAN_FX_ALL;
+    c->time = 0.0;
 
-    common_raw raw = {NULL, NULL, NULL, NULL, NAN, NAN, NAN, NAN, NAN, NAN, NAN, 0.0,
-                      NAN, NAN, -1, -1, -1, -1};
+    /* Names of the sea-state enums, as the config file spells them. */
+    const char *spectra[OCEAN_SPECTRUM_COUNT_ + 1] = {NULL};
+    const char *spreads[OCEAN_SPREAD_COUNT_ + 1] = {NULL};
+    for (int k = 0; k < OCEAN_SPECTRUM_COUNT_; k++)
+        spectra[k] = ocean_spectrum_name((ocean_spectrum_kind)k);
+    for (int k = 0; k < OCEAN_SPREAD_COUNT_; k++)
+        spreads[k] = ocean_spreading_name((ocean_spreading_kind)k);
+    static const char *const plans[] = {"estimate", "measure", NULL};
+    int spectrum = (int)p->sea.spectrum, spreading = (int)p->sea.spreading;
+    int beaufort = -1, help = 0, show = 0;
     const char *config = NULL;
-    int help = 0;
+    /* The common options write straight into the parameters, so what
+     * --help shows as a default is what the simulation gets. */
     const cli_opt common[] = {
-        {"spectrum", CLI_STRING, &raw.spectrum, 0, 0,
-         "NAME  phillips|pierson-moskowitz|jonswap|tma (default pierson-moskowitz)"},
-        {"wind", CLI_DOUBLE, &raw.wind, 0, 100, "U10   wind speed at 10 m, m/s (default 10)"},
-        {"direction", CLI_DOUBLE, &raw.direction, -360, 360, "DEG   wind direction from +x toward +z"},
-        {"fetch", CLI_DOUBLE, &raw.fetch, 1, 1e7, "M     fetch for jonswap/tma (default 100000)"},
-        {"depth", CLI_DOUBLE, &raw.depth, 0.01, 12000, "M     water depth (default 4000)"},
-        {"spreading", CLI_STRING, &raw.spreading, 0, 0,
-         "NAME  tessendorf|mitsuyasu|hasselmann|donelan-banner (default mitsuyasu)"},
-        {"swell", CLI_DOUBLE, &raw.swell, 0, 10, "X     swell parameter xi (default 0)"},
-        {"beaufort", CLI_INT, &raw.beaufort, 0, 12, "F     Beaufort force: sets the wind (overrides --wind)"},
-        {"size", CLI_DOUBLE, &raw.size, 1, 1e5, "L     largest patch size, m (default 1000)"},
-        {"n", CLI_INT, &raw.n, OCEAN_MIN_N, OCEAN_MAX_N, "N     FFT resolution, power of two (default 256)"},
-        {"cascades", CLI_INT, &raw.cascades, 1, OCEAN_MAX_CASCADES, "K     cascades 1..4 (default 1)"},
-        {"cascade-ratio", CLI_DOUBLE, &raw.ratio, 1.5, 100, "R     patch ratio between cascades (default 4.3)"},
-        {"choppiness", CLI_DOUBLE, &raw.choppiness, 0, 10, "L     choppy displacement scale (default 1)"},
-        {"seed", CLI_DOUBLE, &raw.seed, 0, 9007199254740992.0, "S     random seed (default 1)"},
-        {"time", CLI_DOUBLE, &raw.time, -1e12, 1e12, "T     simulation time, s (default 0)"},
-        {"effects", CLI_STRING, &raw.effects, 0, 0, "LIST  height,displacement,normals,foam (default all)"},
-        {"threads", CLI_INT, &raw.threads, 1, 64, "T     worker threads (default 2)"},
-        {"plan", CLI_STRING, &raw.plan, 0, 0, "MODE  FFTW planning: estimate (bit-reproducible) | measure"},
-        {"config", CLI_STRING, &config, 0, 0, "FILE  read sea.* and ocean.* keys from a config file first"},
-        {"json", CLI_FLAG, &c->json, 0, 0, "      machine-readable output"},
-        {"help", CLI_FLAG, &help, 0, 0, "      this help"},
+        {"spectrum", CLI_CHOICE, &spectrum, 0, 0, "NAME  wave spectrum", spectra},
+        {"wind", CLI_DOUBLE, &p->sea.wind_u10, 0, 100, "U10   wind speed at 10 m, m/s", NULL},
+        {"direction", CLI_DOUBLE, &p->sea.wind_dir_deg, -360, 360, "DEG   wind direction from +x toward +z", NULL},
+        {"fetch", CLI_DOUBLE, &p->sea.fetch_m, 1, 1e7, "M     fetch for jonswap/tma", NULL},
+        {"depth", CLI_DOUBLE, &p->sea.depth_m, 0.01, 12000, "M     water depth", NULL},
+        {"spreading", CLI_CHOICE, &spreading, 0, 0, "NAME  directional spreading", spreads},
+        {"swell", CLI_DOUBLE, &p->sea.swell, 0, 10, "X     swell parameter xi", NULL},
+        {"beaufort", CLI_INT, &beaufort, 0, 12, "F     Beaufort force: sets the wind (overrides --wind)", NULL},
+        {"size", CLI_DOUBLE, &p->patch_m, 1, 1e5, "L     largest patch size, m", NULL},
+        {"n", CLI_INT, &p->n, OCEAN_MIN_N, OCEAN_MAX_N, "N     FFT resolution, power of two", NULL},
+        {"cascades", CLI_INT, &p->cascades, 1, OCEAN_MAX_CASCADES, "K     cascades", NULL},
+        {"cascade-ratio", CLI_DOUBLE, &p->cascade_ratio, 1.5, 100, "R     patch ratio between cascades", NULL},
+        {"choppiness", CLI_DOUBLE, &p->sea.choppiness, 0, 10, "L     choppy displacement scale", NULL},
+        {"seed", CLI_U64, &p->seed, 0, 9007199254740992.0, "S     random seed", NULL},
+        {"time", CLI_DOUBLE, &c->time, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s", NULL},
+        {"effects", CLI_EFFECTS, &c->effects, 0, 0, "LIST  height,displacement,normals,foam,velocity,near-field or all", NULL},
+        {"threads", CLI_INT, &p->threads, 1, 64, "T     worker threads", NULL},
+        {"plan", CLI_CHOICE, &p->plan_measure, 0, 0, "MODE  FFTW planning (estimate is bit-reproducible)", plans},
+        {"config", CLI_STRING, &config, 0, 0, "FILE  read sea.* and ocean.* keys from a config file first", NULL},
+        {"json", CLI_FLAG, &c->json, 0, 0, "      machine-readable output", NULL},
+        {"show-options", CLI_FLAG, &show, 0, 0, "      print every option's value after parsing, and exit", NULL},
+        {"help", CLI_FLAG, &help, 0, 0, "      this help", NULL},
     };
     int ncommon = (int)(sizeof common / sizeof common[0]);
+    const cli_opt *tabs[2] = {opts, common};
+    int ns[2] = {nopts, ncommon};
+    if (nopts + ncommon > CLI_MAX_OPTS) {
+        fprintf(stderr, "error: internal: %d options (max %d)\n", nopts + ncommon, CLI_MAX_OPTS);
+        return 2;
+    }
+    /* The defaults, before a config file or an option changes them. */
+    char defs[CLI_MAX_OPTS][96];
+    for (int t = 0, d = 0; t < 2; t++)
+        for (int k = 0; k < ns[t]; k++)
+            format_value(&tabs[t][k], defs[d++], sizeof defs[0]);
     int maxpos = npos ? *npos : 0;
     if (npos)
         *npos = 0;
 
-    for (int i = 1; i < argc; i++) {
-        const char *arg = argv[i];
-        if (strncmp(arg, "--", 2) != 0) {
-            if (npos && *npos < maxpos) {
-                pos[(*npos)++] = arg;
-                continue;
-            }
-            fprintf(stderr, "error: unexpected argument '%s' (see %s --help)\n", arg, argv[0]);
-            return 2;
-        }
-        char name[64];
-        const char *eq = strchr(arg + 2, '=');
-        size_t len = eq ? (size_t)(eq - arg - 2) : strlen(arg + 2);
-        if (len >= sizeof name) {
-            fprintf(stderr, "error: unknown option '%s'\n", arg);
-            return 2;
-        }
-        memcpy(name, arg + 2, len);
-        name[len] = '\0';
-        const cli_opt *o = NULL;
-        for (int k = 0; k < nopts && !o; k++)
-            if (strcmp(opts[k].name, name) == 0)
-                o = &opts[k];
-        for (int k = 0; k < ncommon && !o; k++)
-            if (strcmp(common[k].name, name) == 0)
-                o = &common[k];
-        if (!o) {
-            fprintf(stderr, "error: unknown option '--%s' (see %s --help)\n", name, argv[0]);
-            return 2;
-        }
-        const char *val = NULL;
-        if (o->kind == CLI_FLAG) {
-            if (eq) {
-                fprintf(stderr, "error: --%s takes no value\n", name);
+    /* Two passes: the first checks every option and finds --config and
+     * --help, the second applies the options over the config file. */
+    for (int pass = 0; pass < 2; pass++) {
+        if (npos)
+            *npos = 0;
+        for (int i = 1; i < argc; i++) {
+            const char *arg = argv[i];
+            if (strncmp(arg, "--", 2) != 0) {
+                if (npos && *npos < maxpos) {
+                    pos[(*npos)++] = arg;
+                    continue;
+                }
+                fprintf(stderr, "error: unexpected argument '%s' (see %s --help)\n", arg, argv[0]);
                 return 2;
             }
-        } else if (eq) {
-            val = eq + 1;
-        } else if (i + 1 < argc) {
-            val = argv[++i];
-        } else {
-            fprintf(stderr, "error: --%s needs a value\n", name);
-            return 2;
+            const cli_opt *o = find_opt(arg, tabs, ns, 2);
+            if (!o) {
+                const char *eq = strchr(arg + 2, '=');
+                fprintf(stderr, "error: unknown option '--%.*s' (see %s --help)\n",
+                        eq ? (int)(eq - arg - 2) : (int)strlen(arg + 2), arg + 2, argv[0]);
+                return 2;
+            }
+            const char *eq = strchr(arg + 2, '=');
+            const char *val = NULL;
+            if (o->kind == CLI_FLAG) {
+                if (eq) {
+                    fprintf(stderr, "error: --%s takes no value\n", o->name);
+                    return 2;
+                }
+            } else if (eq) {
+                val = eq + 1;
+            } else if (i + 1 < argc) {
+                val = argv[++i];
+            } else {
+                fprintf(stderr, "error: --%s needs a value\n", o->name);
+                return 2;
+            }
+            int first = o->target == (void *)&config || o->target == (void *)&help;
+            if (pass == 0 && first && apply_opt(o, val))
+                return 2;
+            if (pass == 1 && !first && apply_opt(o, val))
+                return 2;
         }
-        if (apply_opt(o, val))
-            return 2;
+        if (pass == 0 && help) {
+            printf("usage: ocean-sim %s\n\n", usage);
+            if (nopts) {
+                printf("options of %s:\n", argv[0]);
+                print_opts(opts, nopts, defs);
+            }
+            printf("sea state and simulation options:\n");
+            print_opts(common, ncommon, defs + nopts);
+            return 1;
+        }
+        if (pass == 0 && config) {
+            char err[512];
+            if (ocean_conf_load(config, p, err, sizeof err) != OCEAN_OK) {
+                fprintf(stderr, "error: %s\n", err);
+                return 2;
+            }
+            c->config = config;
+            spectrum = (int)p->sea.spectrum;
+            spreading = (int)p->sea.spreading;
+        }
     }
-    if (help) {
-        printf("usage: ocean-sim %s\n\n", usage);
-        if (nopts) {
-            printf("options of %s:\n", argv[0]);
-            print_opts(opts, nopts);
-        }
-        printf("sea state and simulation options:\n");
-        print_opts(common, ncommon);
+    p->sea.spectrum = (ocean_spectrum_kind)spectrum;
+    p->sea.spreading = (ocean_spreading_kind)spreading;
+    if (beaufort >= 0)
+        ocean_beaufort_wind(beaufort, &p->sea.wind_u10);
+    if (show) {
+        for (int t = 0; t < 2; t++)
+            for (int k = 0; k < ns[t]; k++) {
+                if (tabs[t][k].target == (void *)&show || tabs[t][k].target == (void *)&help)
+                    continue;
+                char v[512];
+                format_value(&tabs[t][k], v, sizeof v);
+                printf("--%s=%s\n", tabs[t][k].name, v);
+            }
         return 1;
     }
-
-    ocean_params *p = &c->params;
     char err[512];
-    if (config) {
-        if (ocean_conf_load(config, p, err, sizeof err) != OCEAN_OK) {
-            fprintf(stderr, "error: %s\n", err);
-            return 2;
-        }
-        c->config = config;
-    }
-    if (raw.spectrum && ocean_spectrum_parse(raw.spectrum, &p->sea.spectrum) != OCEAN_OK) {
-        fprintf(stderr, "error: --spectrum: unknown spectrum '%s' "
-                "(phillips, pierson-moskowitz, jonswap, tma)\n", raw.spectrum);
-        return 2;
-    }
-    if (raw.spreading && ocean_spreading_parse(raw.spreading, &p->sea.spreading) != OCEAN_OK) {
-        fprintf(stderr, "error: --spreading: unknown spreading '%s' "
-                "(tessendorf, mitsuyasu, hasselmann, donelan-banner)\n", raw.spreading);
-        return 2;
-    }
-    if (raw.plan) {
-        if (strcmp(raw.plan, "estimate") == 0)
-            p->plan_measure = 0;
-        else if (strcmp(raw.plan, "measure") == 0)
-            p->plan_measure = 1;
-        else {
-            fprintf(stderr, "error: --plan: '%s' is not estimate or measure\n", raw.plan);
-            return 2;
-        }
-    }
-    if (raw.effects && cli_parse_effects(raw.effects, &c->effects)) {
-        fprintf(stderr, "error: --effects: '%s' is not a list of "
-                "height,displacement,normals,foam\n", raw.effects);
-        return 2;
-    }
-    if (!isnan(raw.wind)) p->sea.wind_u10 = raw.wind;
-    if (raw.beaufort >= 0) ocean_beaufort_wind(raw.beaufort, &p->sea.wind_u10);
-    if (!isnan(raw.direction)) p->sea.wind_dir_deg = raw.direction;
-    if (!isnan(raw.fetch)) p->sea.fetch_m = raw.fetch;
-    if (!isnan(raw.depth)) p->sea.depth_m = raw.depth;
-    if (!isnan(raw.swell)) p->sea.swell = raw.swell;
-    if (!isnan(raw.choppiness)) p->sea.choppiness = raw.choppiness;
-    if (!isnan(raw.size)) p->patch_m = raw.size;
-    if (!isnan(raw.ratio)) p->cascade_ratio = raw.ratio;
-    if (!isnan(raw.seed)) {
-        if (raw.seed != floor(raw.seed)) {
-            fprintf(stderr, "error: --seed: %g must be a whole number\n", raw.seed);
-            return 2;
-        }
-        p->seed = (uint64_t)raw.seed;
-    }
-    if (raw.n >= 0) p->n = raw.n;
-    if (raw.cascades >= 0) p->cascades = raw.cascades;
-    if (raw.threads >= 0) p->threads = raw.threads;
-    c->time = raw.time;
     if (ocean_params_validate(p, err, sizeof err) != OCEAN_OK) {
         fprintf(stderr, "error: %s\n", err);
         return 2;
@@ -297,6 +393,12 @@ int cli_make_ocean(const cli_common *c, ocean **o, ocean_frame **f)
         fprintf(stderr, "error: cannot create the ocean: %s (%s)\n", err, ocean_strerror(r));
         return 1;
     }
+    /* The scene plan's warnings (its refusals stopped ocean_create). */
+    ocean_plan plan;
+    ocean_plan_init(&plan);
+    ocean_plan_params(&c->params, &plan);
+    ocean_plan_ocean(*o, NULL, &plan);
+    ocean_plan_print(&plan, stderr, "ocean-sim: scene plan");
     if ((r = ocean_frame_create(*o, f)) != OCEAN_OK) {
         fprintf(stderr, "error: cannot allocate the frame: %s\n", ocean_strerror(r));
         ocean_destroy(*o);

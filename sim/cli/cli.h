@@ -17,16 +17,27 @@ typedef enum cli_opt_kind {
     CLI_DOUBLE,   /* double *, checked against [min, max], finite */
     CLI_INT,      /* int *, checked against [min, max] */
     CLI_STRING,   /* const char ** */
-    CLI_FLAG      /* int *, set to 1, takes no argument */
+    CLI_FLAG,     /* int *, set to 1, takes no argument */
+    CLI_U64,      /* uint64_t *, a whole number in [min, max] */
+    CLI_CHOICE,   /* int *, index of the value in names[] */
+    CLI_EFFECTS   /* unsigned *, OCEAN_FX_* mask from a list of names */
 } cli_opt_kind;
 
+/* One option.  Its default is what *target holds before parsing: --help
+ * prints that value, so the help text never states a default of its own
+ * and cannot disagree with the code.  A default outside [min, max] (or
+ * NaN, or NULL) means "not given" and is not shown. */
 typedef struct cli_opt {
     const char *name;   /* without the leading "--" */
     cli_opt_kind kind;
     void *target;
     double min, max;
-    const char *help;   /* one line; "ARG: text" style */
+    const char *help;   /* one line; "ARG   text" style */
+    const char *const *names;   /* CLI_CHOICE: NULL-terminated value names */
 } cli_opt;
+
+/* At most this many options per subcommand (its own and the common ones). */
+#define CLI_MAX_OPTS 64
 
 /* What every subcommand gets from the common options. */
 typedef struct cli_common {
@@ -37,9 +48,10 @@ typedef struct cli_common {
     const char *config;    /* --config FILE (applied before other options) */
 } cli_common;
 
-/* Parses argv (argv[0] is the subcommand name).  Common options go to *c,
- * the subcommand's to its table.  Returns 0 on success, 1 if --help was
- * printed, 2 on error (message already printed to stderr, naming the
+/* Parses argv (argv[0] is the subcommand name).  Common options go to *c
+ * (defaults: ocean_params_default, then --config FILE wherever it stands,
+ * then the other options), the subcommand's to its table.  Returns 0 on
+ * success, 1 if --help or --show-options was printed, 2 on error (message already printed to stderr, naming the
  * option).  Positional arguments are refused unless npos != NULL, in which
  * case they are collected into pos[] (at most *npos; *npos gets the count). */
 int cli_parse(int argc, char **argv, const char *usage,

@@ -1,11 +1,23 @@
 /*
  * cmd_bake.c - `ocean-sim bake`: OpenEXR image sequences of each cascade's
- * displacement (R = Dx, G = height, B = Dz: y-up vector displacement as
- * Blender, Houdini and Nuke expect), unit normals (R, G, B = nx, ny, nz) and
- * foam (Y), written with OpenEXRCore, ZIP-compressed 32-bit float.
+ * displacement, unit normals and foam, written with OpenEXRCore,
+ * ZIP-compressed 32-bit float.
  *
  * Files: DIR/displacement_cC_FFFF.exr, DIR/normal_cC_FFFF.exr,
  *        DIR/foam_cC_FFFF.exr (C = cascade, FFFF = frame).
+ *
+ * Channels are named layers, the "layer.channel" convention of the OpenEXR
+ * multi-view/multi-layer documents that Nuke, Houdini and Blender read as a
+ * layer with red/green/blue:
+ *   displacement.R, .G, .B = Dx, height, Dz  (metres; y-up vector
+ *                                              displacement, R,G,B = x,y,z)
+ *   normal.R, .G, .B       = nx, ny, nz      (unit normal, y up)
+ *   foam.Y                 = foam coverage 0..1
+ * Every file's header says what it holds (so a tool needs no side file):
+ * framesPerSecond (the standard rational), and oceand.* attributes for the
+ * frame, time, cascade, patch size, grid, sample spacing, the sea state
+ * (spectrum, spreading, wind, fetch, depth, swell, choppiness, seed, Hs) and
+ * the channel mapping in words.
  */
 #include <errno.h>
 #include <math.h>
@@ -23,9 +35,64 @@ typedef struct exr_plane {
     const float *data;  /* n x n, row-major */
 } exr_plane;
 
+/* What a baked file's header says about it. */
+typedef struct bake_meta {
+    const ocean_params *params;
+    double fps, time, patch_m, hs;
+    int frame, cascade;
+    const char *channels;   /* the mapping in words */
+} bake_meta;
+
+/* Nearest rational num/den to fps with den <= 1001 (30000/1001 for NTSC). */
+static exr_attr_rational_t fps_rational(double fps)
+{
+    exr_attr_rational_t best = {(int32_t)lround(fps), 1};
+    double err = fabs(fps - best.num);
+    for (uint32_t den = 2; den <= 1001 && err > 1e-9; den++) {
+        double num = round(fps * den);
+        if (num > 2147483647.0)
+            break;
+        double e = fabs(fps - num / den);
+        if (e < err - 1e-12) {
+            err = e;
+            best.num = (int32_t)num;
+            best.denom = den;
+        }
+    }
+    return best;
+}
+
+/* The header attributes of one baked file (before exr_write_header). */
+static exr_result_t write_meta(exr_context_t ctx, int part, int n, const bake_meta *m)
+{
+    const ocean_sea_state *sea = &m->params->sea;
+    char seed[32];
+    snprintf(seed, sizeof seed, "%llu", (unsigned long long)m->params->seed);
+    exr_attr_rational_t fr = fps_rational(m->fps);
+    exr_result_t rv = exr_attr_set_rational(ctx, part, "framesPerSecond", &fr);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_int(ctx, part, "oceand.frame", m->frame);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_double(ctx, part, "oceand.time", m->time);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_int(ctx, part, "oceand.cascade", m->cascade);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_double(ctx, part, "oceand.patchSize", m->patch_m);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_int(ctx, part, "oceand.gridSize", n);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_double(ctx, part, "oceand.sampleSpacing", m->patch_m / n);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_string(ctx, part, "oceand.spectrum", ocean_spectrum_name(sea->spectrum));
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_string(ctx, part, "oceand.spreading", ocean_spreading_name(sea->spreading));
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_double(ctx, part, "oceand.windSpeed", sea->wind_u10);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_double(ctx, part, "oceand.windDirection", sea->wind_dir_deg);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_double(ctx, part, "oceand.fetch", sea->fetch_m);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_double(ctx, part, "oceand.depth", sea->depth_m);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_double(ctx, part, "oceand.swell", sea->swell);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_double(ctx, part, "oceand.choppiness", sea->choppiness);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_string(ctx, part, "oceand.seed", seed);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_double(ctx, part, "oceand.significantWaveHeight", m->hs);
+    if (rv == EXR_ERR_SUCCESS) rv = exr_attr_set_string(ctx, part, "oceand.channels", m->channels);
+    return rv;
+}
+
 /* Writes planes (any order; OpenEXR stores channels sorted by name) as a
  * scanline ZIP file.  Returns 0 or prints the reason and returns -1. */
-static int write_exr(const char *path, int n, const exr_plane *planes, int np)
+static int write_exr(const char *path, int n, const exr_plane *planes, int np, const bake_meta *meta)
 {
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     exr_context_t ctx = NULL;
@@ -35,6 +102,8 @@ static int write_exr(const char *path, int n, const exr_plane *planes, int np)
         rv = exr_add_part(ctx, "ocean", EXR_STORAGE_SCANLINE, &part);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_initialize_required_attr_simple(ctx, part, n, n, EXR_COMPRESSION_ZIP);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = write_meta(ctx, part, n, meta);
     for (int i = 0; i < np && rv == EXR_ERR_SUCCESS; i++)
         rv = exr_add_channel(ctx, part, planes[i].name, EXR_PIXEL_FLOAT,
                              EXR_PERCEPTUALLY_LINEAR, 1, 1);
@@ -101,11 +170,11 @@ int cmd_bake(int argc, char **argv)
     double fps = 30.0;
     const char *out = NULL;
     const cli_opt opts[] = {
-        {"frames", CLI_INT, &frames, 1, 1000000, "N     frames to bake"},
-        {"fps", CLI_DOUBLE, &fps, 1e-3, 1000, "F     frames per second of the sequence"},
-        {"out", CLI_STRING, &out, 0, 0, "DIR   output directory (created if missing)"},
+        {"frames", CLI_INT, &frames, 1, 1000000, "N     frames to bake", NULL},
+        {"fps", CLI_DOUBLE, &fps, 1e-3, 1000, "F     frames per second of the sequence", NULL},
+        {"out", CLI_STRING, &out, 0, 0, "DIR   output directory (created if missing; required)", NULL},
     };
-    int r = cli_parse(argc, argv, "bake --frames N --fps F --out DIR [options]", opts, 3, &c,
+    int r = cli_parse(argc, argv, "bake --out DIR [--frames N] [--fps F] [options]", opts, 3, &c,
                       NULL, NULL);
     if (r)
         return r == 1 ? 0 : 2;
@@ -132,6 +201,7 @@ int cmd_bake(int argc, char **argv)
     }
     ocean_request req;
     ocean_request_all(&req, fx);
+    double hs = ocean_spectrum_hs(&c.params.sea);   /* Hs of the spectrum, m */
     char path[4096];
     for (int i = 0; i < frames && status == 0; i++) {
         double t = c.time + i / fps;
@@ -143,11 +213,16 @@ int cmd_bake(int argc, char **argv)
         for (int cs = 0; cs < c.params.cascades && status == 0; cs++) {
             const ocean_field *fd = ocean_frame_field(f, cs);
             int m = fd->n;
+            bake_meta meta = {.params = &c.params, .fps = fps, .time = t, .patch_m = fd->patch_m,
+                              .hs = hs, .frame = i, .cascade = cs};
             if (fx & (OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT)) {
-                exr_plane p[3] = {{"R", fd->dx ? fd->dx : zero}, {"G", fd->height ? fd->height : zero},
-                                  {"B", fd->dz ? fd->dz : zero}};
+                exr_plane p[3] = {{"displacement.R", fd->dx ? fd->dx : zero},
+                                  {"displacement.G", fd->height ? fd->height : zero},
+                                  {"displacement.B", fd->dz ? fd->dz : zero}};
+                meta.channels = "displacement.R = Dx, displacement.G = height, displacement.B = Dz "
+                                "(metres, y up; R,G,B = x,y,z)";
                 snprintf(path, sizeof path, "%s/displacement_c%d_%04d.exr", out, cs, i);
-                status |= write_exr(path, m, p, 3) ? 1 : 0;
+                status |= write_exr(path, m, p, 3, &meta) ? 1 : 0;
             }
             if (fx & OCEAN_FX_NORMALS) {
                 size_t nn = (size_t)m * m;
@@ -158,14 +233,16 @@ int cmd_bake(int argc, char **argv)
                     nrm[nn + k] = (float)(1.0 / len);
                     nrm[2 * nn + k] = (float)(-sz / len);
                 }
-                exr_plane p[3] = {{"R", nrm}, {"G", nrm + nn}, {"B", nrm + 2 * nn}};
+                exr_plane p[3] = {{"normal.R", nrm}, {"normal.G", nrm + nn}, {"normal.B", nrm + 2 * nn}};
+                meta.channels = "normal.R, normal.G, normal.B = nx, ny, nz (unit normal, y up)";
                 snprintf(path, sizeof path, "%s/normal_c%d_%04d.exr", out, cs, i);
-                status |= write_exr(path, m, p, 3) ? 1 : 0;
+                status |= write_exr(path, m, p, 3, &meta) ? 1 : 0;
             }
             if (fx & OCEAN_FX_FOAM) {
-                exr_plane p[1] = {{"Y", fd->foam}};
+                exr_plane p[1] = {{"foam.Y", fd->foam}};
+                meta.channels = "foam.Y = foam coverage 0..1";
                 snprintf(path, sizeof path, "%s/foam_c%d_%04d.exr", out, cs, i);
-                status |= write_exr(path, m, p, 1) ? 1 : 0;
+                status |= write_exr(path, m, p, 1, &meta) ? 1 : 0;
             }
         }
         if (tty)

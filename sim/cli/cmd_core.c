@@ -85,20 +85,30 @@ int cmd_stats(int argc, char **argv)
 int cmd_sample(int argc, char **argv)
 {
     cli_common c;
-    double x = 0.0, z = 0.0, t0 = 0.0, dt = 0.1;
+    double x = NAN, z = NAN, t0 = 0.0, dt = 0.1;   /* the point has no default */
     int count = 100, direct = 0;
     const cli_opt opts[] = {
-        {"x", CLI_DOUBLE, &x, -1e9, 1e9, "X     world x of the point, m"},
-        {"z", CLI_DOUBLE, &z, -1e9, 1e9, "Z     world z of the point, m"},
-        {"t0", CLI_DOUBLE, &t0, -1e12, 1e12, "T     first time, s"},
-        {"dt", CLI_DOUBLE, &dt, 1e-6, 1e6, "D     time step, s"},
-        {"count", CLI_INT, &count, 1, 1000000, "C     number of samples"},
-        {"direct", CLI_FLAG, &direct, 0, 0, "      sum the waves directly in double instead of FFT fields"},
+        {"x", CLI_DOUBLE, &x, -1e9, 1e9, "X     world x of the point, m (required)", NULL},
+        {"z", CLI_DOUBLE, &z, -1e9, 1e9, "Z     world z of the point, m (required)", NULL},
+        {"t0", CLI_DOUBLE, &t0, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     first time, s", NULL},
+        {"dt", CLI_DOUBLE, &dt, 1e-6, 1e6, "D     time step, s", NULL},
+        {"count", CLI_INT, &count, 1, 1000000, "C     number of samples", NULL},
+        {"direct", CLI_FLAG, &direct, 0, 0, "      sum the waves directly in double instead of FFT fields", NULL},
     };
-    int r = cli_parse(argc, argv, "sample --x X --z Z --t0 T --dt D --count C [options]",
+    int r = cli_parse(argc, argv, "sample --x X --z Z [--t0 T] [--dt D] [--count C] [options]",
                       opts, (int)(sizeof opts / sizeof opts[0]), &c, NULL, NULL);
     if (r)
         return r == 1 ? 0 : 2;
+    if (isnan(x) || isnan(z)) {
+        fprintf(stderr, "error: sample needs the point: --%s is missing (see sample --help)\n", isnan(x) ? "x" : "z");
+        return 2;
+    }
+    char tmsg[256];
+    if (ocean_time_check(t0 + (count - 1) * dt, "last sample time t0 + (count - 1) dt", tmsg,
+                         sizeof tmsg) != OCEAN_OK) {
+        fprintf(stderr, "error: %s\n", tmsg);
+        return 2;
+    }
     ocean *o;
     ocean_frame *f;
     if (cli_make_ocean(&c, &o, &f))
@@ -128,7 +138,7 @@ int cmd_bench(int argc, char **argv)
     cli_common c;
     int reps = 30;
     const cli_opt opts[] = {
-        {"reps", CLI_INT, &reps, 3, 100000, "R     evaluations to time (median reported)"},
+        {"reps", CLI_INT, &reps, 3, 100000, "R     evaluations to time (median reported)", NULL},
     };
     int r = cli_parse(argc, argv, "bench [options] [--reps R] [--json]", opts, 1, &c, NULL, NULL);
     if (r)

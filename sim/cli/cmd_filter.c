@@ -61,24 +61,31 @@ int cmd_filter(int argc, char **argv)
 {
     cli_common c;
     const char *policy_name = "seed";
-    double speed = 0.0, fps = 60.0, spacing = -1.0, f_base = NAN, v_wave = NAN;
+    double speed = 0.0, fps = 60.0, spacing = -1.0, v_wave = NAN;
     int order = OCEAN_FILTER_DEFAULT_ORDER, repeat = 5, redistribute = 0;
+    /* The seed policy's static cutoff as the library sets it (it does not
+     * depend on the sea state; the wave speed does, so it stays "not given"). */
+    ocean_params dp;
+    ocean_params_default(&dp);
+    ocean_filter_config dfc;
+    ocean_filter_config_default(&dfc, &dp.sea);
+    double f_base = dfc.f_base_hz;
     const cli_opt opts[] = {
-        {"policy", CLI_STRING, &policy_name, 0, 0, "P     seed | antialias | none (default seed)"},
-        {"speed", CLI_DOUBLE, &speed, 0.0, 1e7, "V     camera speed |v|, m/s (default 0)"},
-        {"fps", CLI_DOUBLE, &fps, 0.0, 1e4, "F     client frame rate, Hz; 0: no temporal limit (default 60)"},
+        {"policy", CLI_STRING, &policy_name, 0, 0, "P     seed | antialias | none", NULL},
+        {"speed", CLI_DOUBLE, &speed, 0.0, 1e7, "V     camera speed |v|, m/s", NULL},
+        {"fps", CLI_DOUBLE, &fps, 0.0, 1e4, "F     client frame rate, Hz; 0: no temporal limit", NULL},
         {"spacing", CLI_DOUBLE, &spacing, 0.0, 1e6,
          "DX    mesh spacing the client receives, m; 0: no spatial limit "
-         "(default: the finest cascade's grid spacing)"},
-        {"order", CLI_INT, &order, 1, OCEAN_FILTER_MAX_ORDER, "N     Butterworth order (default 6)"},
-        {"f-base", CLI_DOUBLE, &f_base, 0.0, 1e6, "HZ    seed policy: static cutoff frequency (default 3)"},
+         "(not given: the finest cascade's grid spacing)", NULL},
+        {"order", CLI_INT, &order, 1, OCEAN_FILTER_MAX_ORDER, "N     Butterworth order", NULL},
+        {"f-base", CLI_DOUBLE, &f_base, 0.0, 1e6, "HZ    seed policy: static cutoff frequency", NULL},
         {"v-wave", CLI_DOUBLE, &v_wave, 1e-6, 1e6,
-         "C     seed policy: fc -> kc speed, m/s (default: dominant wave's phase speed)"},
-        {"redistribute", CLI_FLAG, &redistribute, 0, 0, "      keep the total variance (seed 000's energy guard)"},
-        {"repeat", CLI_INT, &repeat, 1, 10000, "R     evaluations timed per case, median reported (default 5)"},
+         "C     seed policy: fc -> kc speed, m/s (not given: the dominant wave's phase speed)", NULL},
+        {"redistribute", CLI_FLAG, &redistribute, 0, 0, "      keep the total variance (seed 000's energy guard)", NULL},
+        {"repeat", CLI_INT, &repeat, 1, 10000, "R     evaluations timed per case, median reported", NULL},
     };
     int r = cli_parse(argc, argv,
-                      "filter --policy seed|antialias|none --speed V [--fps F] [--spacing DX] [--json]",
+                      "filter [--policy seed|antialias|none] [--speed V] [--fps F] [--spacing DX] [--json]",
                       opts, (int)(sizeof opts / sizeof opts[0]), &c, NULL, NULL);
     if (r)
         return r == 1 ? 0 : 2;

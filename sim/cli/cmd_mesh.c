@@ -17,6 +17,9 @@
 #include "cli.h"
 #include "mesh.h"
 
+/* oceand's default server.mesh_error_px (server/srv_config.c). */
+#define MESH_CLI_ERROR_PX 16.0
+
 /* The FFT ocean's displacement at a world point; reentrant (read only). */
 static void frame_sampler(void *ctx, double x, double z, double d[3])
 {
@@ -61,21 +64,32 @@ static int parse_viewport(const char *s, int *w, int *h)
 
 int cmd_mesh(int argc, char **argv)
 {
-    const char *kind_s = "concentric", *camera_s = NULL, *viewport_s = NULL, *obj = NULL;
-    double yaw = 0, pitch = -10, roll = 0, fov = 60, range = NAN, err_px = NAN, margin = NAN;
+    /* Defaults from the library's camera and mesh configuration, except the
+     * error budget: the library's 1 px builds 1.6 M vertices over 90 km
+     * (135 MB of OBJ); oceand serves 16 px (server.mesh_error_px), so the
+     * tool shows by default what a viewer of the daemon gets. */
+    mesh_config dcfg;
+    mesh_config_default(&dcfg);
+    mesh_camera dcam;
+    mesh_camera_default(&dcam);
+    char viewport_def[32];
+    snprintf(viewport_def, sizeof viewport_def, "%dx%d", dcam.viewport_w, dcam.viewport_h);
+    const char *kind_s = mesh_kind_name(dcfg.kind), *camera_s = NULL, *viewport_s = viewport_def, *obj = NULL;
+    double yaw = dcam.yaw_deg, pitch = -10, roll = dcam.roll_deg, fov = dcam.fov_y_deg, range = dcfg.range_m;
+    double err_px = MESH_CLI_ERROR_PX, margin = NAN;
     const cli_opt opts[] = {
-        {"kind", CLI_STRING, &kind_s, 0, 0, "K     concentric (default) | chunked | projected"},
-        {"camera", CLI_STRING, &camera_s, 0, 0, "X,Y,Z camera world position, m (Y above the sea)"},
-        {"yaw", CLI_DOUBLE, &yaw, -1e6, 1e6, "D     heading, degrees from +x toward +z (default 0)"},
-        {"pitch", CLI_DOUBLE, &pitch, -90, 90, "D     degrees, positive up (default -10)"},
-        {"roll", CLI_DOUBLE, &roll, -1e6, 1e6, "D     degrees (default 0)"},
-        {"fov", CLI_DOUBLE, &fov, 0.01, 170, "D     vertical field of view, degrees (default 60)"},
-        {"viewport", CLI_STRING, &viewport_s, 0, 0, "WxH   viewport, pixels (default 1920x1080)"},
-        {"range", CLI_DOUBLE, &range, 10, 1e6, "M     radius the mesh covers, m (default 90000)"},
-        {"error-px", CLI_DOUBLE, &err_px, 0.01, 100, "P     concentric error budget, px (default 1)"},
+        {"kind", CLI_STRING, &kind_s, 0, 0, "K     concentric | chunked | projected", NULL},
+        {"camera", CLI_STRING, &camera_s, 0, 0, "X,Y,Z camera world position, m (Y above the sea; required)", NULL},
+        {"yaw", CLI_DOUBLE, &yaw, -1e6, 1e6, "D     heading, degrees from +x toward +z", NULL},
+        {"pitch", CLI_DOUBLE, &pitch, -90, 90, "D     degrees, positive up", NULL},
+        {"roll", CLI_DOUBLE, &roll, -1e6, 1e6, "D     degrees", NULL},
+        {"fov", CLI_DOUBLE, &fov, 0.01, 170, "D     vertical field of view, degrees", NULL},
+        {"viewport", CLI_STRING, &viewport_s, 0, 0, "WxH   viewport, pixels", NULL},
+        {"range", CLI_DOUBLE, &range, 10, 1e6, "M     radius the mesh covers, m", NULL},
+        {"error-px", CLI_DOUBLE, &err_px, 0.01, 100, "P     concentric error budget, px (1 is film quality: ~1.6 M vertices)", NULL},
         {"margin", CLI_DOUBLE, &margin, 0, 1000,
-         "M     projected grid displacement margin, m (default 1.2 Hs (1 + choppiness))"},
-        {"obj", CLI_STRING, &obj, 0, 0, "FILE  write the displaced mesh as Wavefront OBJ"},
+         "M     projected grid displacement margin, m (not given: 1.2 Hs (1 + choppiness))", NULL},
+        {"obj", CLI_STRING, &obj, 0, 0, "FILE  write the displaced mesh as Wavefront OBJ", NULL},
     };
     cli_common c;
     int r = cli_parse(argc, argv,
@@ -101,7 +115,7 @@ int cmd_mesh(int argc, char **argv)
         fprintf(stderr, "error: --camera: '%s' is not three finite numbers X,Y,Z\n", camera_s);
         return 2;
     }
-    if (viewport_s && parse_viewport(viewport_s, &cam.viewport_w, &cam.viewport_h)) {
+    if (parse_viewport(viewport_s, &cam.viewport_w, &cam.viewport_h)) {
         fprintf(stderr, "error: --viewport: '%s' is not WxH in pixels (1..65536)\n", viewport_s);
         return 2;
     }
@@ -116,10 +130,8 @@ int cmd_mesh(int argc, char **argv)
     }
     const ocean_sea_state *sea = &c.params.sea;
     mesh_lambda_dominant(sea, &cfg.lambda_dominant_m);
-    if (!isnan(range))
-        cfg.range_m = range;
-    if (!isnan(err_px))
-        cfg.error_px = err_px;
+    cfg.range_m = range;
+    cfg.error_px = err_px;
     double hs = ocean_spectrum_hs(sea);
     cfg.margin_m = !isnan(margin) ? margin
                                   : fmin(1000, fmax(0.5, 1.2 * hs * (1 + sea->choppiness)));

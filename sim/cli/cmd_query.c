@@ -114,15 +114,15 @@ static char *read_file(const char *path)
 int cmd_query(int argc, char **argv)
 {
     cli_common c;
-    double t = 0.0, cutoff = INFINITY;
+    double t = 0.0, cutoff = INFINITY;   /* INFINITY: outside --cutoff's range, "not given" */
     const char *points = NULL, *file = NULL;
     const cli_opt opts[] = {
-        {"t", CLI_DOUBLE, &t, -1e12, 1e12, "T     simulation time, s"},
-        {"points", CLI_STRING, &points, 0, 0, "LIST  \"x1,z1;x2,z2;...\" world points, m"},
-        {"points-file", CLI_STRING, &file, 0, 0, "FILE  one 'x,z' per line ('-': stdin)"},
-        {"cutoff", CLI_DOUBLE, &cutoff, 0, 1e6, "K     Butterworth cutoff, rad/m (default none)"},
+        {"t", CLI_DOUBLE, &t, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s", NULL},
+        {"points", CLI_STRING, &points, 0, 0, "LIST  \"x1,z1;x2,z2;...\" world points, m", NULL},
+        {"points-file", CLI_STRING, &file, 0, 0, "FILE  one 'x,z' per line ('-': stdin)", NULL},
+        {"cutoff", CLI_DOUBLE, &cutoff, 0, 1e6, "K     Butterworth cutoff, rad/m (not given: unfiltered)", NULL},
     };
-    int r = cli_parse(argc, argv, "query --t T --points \"x,z;...\" | --points-file F [--cutoff K] [--json]",
+    int r = cli_parse(argc, argv, "query [--t T] --points \"x,z;...\" | --points-file F [--cutoff K] [--json]",
                       opts, 4, &c, NULL, NULL);
     if (r)
         return r == 1 ? 0 : 2;

@@ -17,6 +17,7 @@
 #include "../lib/bench_util.h"
 #include "filter.h"
 #include "query.h"
+#include "slope.h"
 
 /* Median ms of one evaluation per request set (one "tick"); each tick uses
  * a new t so nothing is cached across ticks. */
@@ -119,6 +120,12 @@ int main(void)
             q.n = 1024;
             q.patch_m = patches[pi];
             q.drop_gain = drops[di];
+            /* A patch shorter than the sea's peak is refused by the scene
+             * plan (sim/ocean_plan.h): a row that says so, not an abort. */
+            if (ocean_params_validate(&q, msg, sizeof msg) != OCEAN_OK) {
+                printf("| %.0f | refused: %s |||||||\n", patches[pi], msg);
+                continue;
+            }
             ocean *oq = NULL;
             ocean_frame *fq[2] = {NULL, NULL};
             if (ocean_create(&q, &oq, msg, sizeof msg) != OCEAN_OK ||
@@ -319,8 +326,49 @@ int main(void)
         fprintf(csv, "query,points_per_s,%.0f,1/s\n", pps);
         fprintf(csv, "query,max_error_bound,%.3e,m\n", max_bound);
         fprintf(csv, "query,max_error_brute_force,%.3e,m\n", max_err);
-        fclose(csv);
     }
+
+    /* 4. The per-level unresolved slope variance (sim/slope.h): a table per
+     * sea state, then one look-up per level and frame.  3 cascades of 256. */
+    {
+        ocean_params sp = p;
+        sp.cascades = 3;
+        ocean *so = NULL;
+        ocean_slope_table *st = NULL;
+        double c0 = bench_now_ms();
+        int ok = ocean_create(&sp, &so, msg, sizeof msg) == OCEAN_OK;
+        c0 = bench_now_ms();
+        ok = ok && ocean_slope_table_create(so, NULL, &st, msg, sizeof msg) == OCEAN_OK;
+        double create_ms = bench_now_ms() - c0;
+        if (ok) {
+            /* Misses: 400 distinct cutoffs 0.01 .. 20 rad/m; hits: 8 levels
+             * x 4 buckets, 2000 frames. */
+            ocean_slope_stats ss;
+            double a = bench_now_ms();
+            for (int i = 0; i < 400; i++)
+                ocean_slope_table_get(st, 0.01 * pow(2000.0, i / 399.0), 6, &ss);
+            double miss_us = (bench_now_ms() - a) * 1e3 / 400;
+            a = bench_now_ms();
+            for (int fr = 0; fr < 2000; fr++)
+                for (int l = 0; l < 32; l++)
+                    ocean_slope_table_get(st, 0.02 * (1 << (l % 8)) * (1.0 + 0.19 * (l / 8)), 6, &ss);
+            double hit_us = (bench_now_ms() - a) * 1e3 / (2000.0 * 32);
+            printf("## Unresolved slope variance per level (sim/slope.h)\n\n");
+            printf("Table per sea state (3 cascades of %d, no near field), then one look-up per "
+                   "level and bucket; misses sum the modes whose gain is neither 1 nor 0.\n\n", sp.n);
+            printf("| table create | miss (new cutoff) | hit (memoised) |\n|---:|---:|---:|\n");
+            printf("| %.1f ms | %.1f us | %.3f us |\n\n", create_ms, miss_us, hit_us);
+            if (csv) {
+                fprintf(csv, "slope,table_create,%.2f,ms\n", create_ms);
+                fprintf(csv, "slope,get_miss,%.2f,us\n", miss_us);
+                fprintf(csv, "slope,get_hit,%.4f,us\n", hit_us);
+            }
+        }
+        ocean_slope_table_destroy(st);
+        ocean_destroy(so);
+    }
+    if (csv)
+        fclose(csv);
     free(qms);
     free(xz);
     free(res);

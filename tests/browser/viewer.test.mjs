@@ -34,7 +34,7 @@ import { fileURLToPath } from 'node:url';
 const require = createRequire(new URL('./package.json', import.meta.url));
 const { chromium } = require('playwright-core');
 
-const base = process.env.OCEAN_URL || 'http://127.0.0.1:8080/';
+const base = process.env.OCEAN_URL || 'http://127.0.0.1:8740/';
 const artifacts = process.env.ARTIFACT_DIR || 'build/test-artifacts';
 const timeoutMs = 1000 * Number(process.env.VIEWER_TIMEOUT_S || 60);
 const exe = process.env.CHROMIUM || '/usr/bin/chromium';
@@ -263,6 +263,23 @@ try {
     const detC = detail(decodePng(pngC), sea0, img1.h);
     check('the sea has wave detail (vs. a view without the mesh)', det > 1.0 && det > 2.5 * detC,
         `structure ${det.toFixed(2)} with the mesh, ${detC.toFixed(2)} without`);
+    /* a page with no camera in its URL opens where the scene's
+     * camera_hint says (served in /status), not at a fixed 25 m */
+    const status = await (await fetch(new URL('status', base))).json();
+    const h = status.camera_hint;
+    check('/status carries the scene camera hint', !!h && [h.x, h.y, h.z, h.yaw, h.pitch].every(Number.isFinite),
+        JSON.stringify(h));
+    if (h) {
+        await page2.goto(base, { waitUntil: 'load', timeout: 30000 });
+        await waitFor(page2, () => window.oceanViewer && window.oceanStats && window.oceanStats.framesReceived >= 1, null, timeoutMs);
+        const c = await page2.evaluate(() => ({ pos: window.oceanViewer.camera.pos.slice(), yaw: window.oceanViewer.camera.yawDeg,
+            pitch: window.oceanViewer.camera.pitchDeg }));
+        /* the camera may have moved since (its velocity is 0 without vx/vy/vz) */
+        const near = Math.hypot(c.pos[0] - h.x, c.pos[1] - h.y, c.pos[2] - h.z) < 1 && Math.abs(c.yaw - h.yaw) < 1e-6 &&
+            Math.abs(c.pitch - h.pitch) < 1e-6;
+        check('viewer opens at the scene camera hint', near,
+            `camera (${c.pos.map((v) => v.toFixed(1))}) yaw ${c.yaw} pitch ${c.pitch}, hint ${JSON.stringify(h)}`);
+    }
     check('no request left the daemon', foreign.length === 0, foreign.slice(0, 3).join(', '));
     if (consoleErrors.length) console.log(`# console errors: ${consoleErrors.slice(0, 5).join(' | ')}`);
     const fin = await stats(page);

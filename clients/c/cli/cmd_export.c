@@ -48,8 +48,8 @@ int cmd_export(int argc, char **argv)
     occli_sub_default(&s);
     s.codec = "exr-zip";
     const occli_opt opts[] = {
-        {"out", OCCLI_STRING, &out, 0, 0, "DIR  directory for the .exr files and tiles.csv (created)"},
-        {"frames", OCCLI_INT, &nframes, 1, 100000, "N  frames to export (1)"},
+        {"out", OCCLI_STRING, &out, 0, 0, "DIR  directory for the .exr files and tiles.csv (created)", NULL},
+        {"frames", OCCLI_INT, &nframes, 1, 100000, "N  frames to export", NULL},
         OCCLI_SUB_OPTS(&s),
     };
     const char *pos[1];

@@ -14,6 +14,8 @@
  * the sim clock is assumed to run at wall rate (live mode).
  */
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
@@ -203,42 +205,59 @@ int load_library_run(const load_cfg *cfg, load_result *R)
     return rc;
 }
 
+/* Progress of a load run on a terminal: the run itself (load_direct.c,
+ * load_library_run) blocks for ramp + warmup + seconds, so a thread of its
+ * own draws elapsed time against that plan. */
+typedef struct load_progress {
+    atomic_int done;
+    double start, planned;
+    int nclients;
+} load_progress;
+
+static void *load_progress_main(void *arg)
+{
+    load_progress *lp = arg;
+    while (!atomic_load(&lp->done) && !occli_stop) {
+        double el = occli_mono() - lp->start;
+        occli_progress(fmin(el, lp->planned * 0.999), lp->planned, "load: %d viewers, %.1f/%.1f s", lp->nclients,
+                       el, lp->planned);
+        occli_sleep(0.2);
+    }
+    return NULL;
+}
+
 int cmd_load(int argc, char **argv)
 {
     int nclients = 1, json = 0, decode = 0, library = 0, threads = 0, verify_every = 30;
     double seconds = 10, ramp = 1.0, spread = 0, speed = 0, warmup = 0.5;
     occli_sub s;
+    /* the library's defaults, which are the browser viewer's subscription
+     * (clients/web/worker.js): every effect and every cascade (the daemon
+     * clamps both to what the scene has), 64-sample tiles at accuracy 1e-3,
+     * 8 levels, layout 1 */
     occli_sub_default(&s);
-    /* the browser viewer's subscription (clients/web/worker.js): every
-     * effect and every cascade (the daemon clamps both to what the scene
-     * has), 64-sample tiles at accuracy 1e-3, 8 levels, layout 1 */
-    s.effects = "all";
-    s.layers = PROTO_MAX_LAYERS;
-    s.tile_size = 64;
-    s.levels = 8;
-    s.accuracy = 1e-3;
     int layout = PROTO_LAYOUT_CASCADE;
     const occli_opt opts[] = {
         {.name = "layout", .kind = OCCLI_INT, .target = &layout, .min = 0, .max = 1,
          .help = "N  0: world tiles summed per camera, mesh displaced by the server;\n"
                  "                       1: shared cascade tiles (the viewer's and the library's)"},
-        {"clients", OCCLI_INT, &nclients, 1, 10000, "N  viewers (1)"},
-        {"seconds", OCCLI_DOUBLE, &seconds, 0.1, 1e6, "S  measured duration (10)"},
-        {"json", OCCLI_FLAG, &json, 0, 0, "print a JSON summary"},
-        {"ramp", OCCLI_DOUBLE, &ramp, 0, 600, "S  spread the connects over S seconds (1)"},
-        {"warmup", OCCLI_DOUBLE, &warmup, 0, 600, "S  wait after all viewers subscribed before measuring (0.5)"},
-        {"spread", OCCLI_DOUBLE, &spread, 0, 1e6, "M  place viewers on a grid with M metres between them (0: co-located)"},
-        {"speed", OCCLI_DOUBLE, &speed, 0, 1000, "M/S  viewers fly along +x, reporting 10 times a second (0)"},
+        {"clients", OCCLI_INT, &nclients, 1, 10000, "N  viewers", NULL},
+        {"seconds", OCCLI_DOUBLE, &seconds, 0.1, 1e6, "S  measured duration", NULL},
+        {"json", OCCLI_FLAG, &json, 0, 0, "print a JSON summary", NULL},
+        {"ramp", OCCLI_DOUBLE, &ramp, 0, 600, "S  spread the connects over S seconds", NULL},
+        {"warmup", OCCLI_DOUBLE, &warmup, 0, 600, "S  wait after all viewers subscribed before measuring", NULL},
+        {"spread", OCCLI_DOUBLE, &spread, 0, 1e6, "M  place viewers on a grid with M metres between them (0: co-located)", NULL},
+        {"speed", OCCLI_DOUBLE, &speed, 0, 1000, "M/S  viewers fly along +x, reporting 10 times a second", NULL},
         {"threads", OCCLI_INT, &threads, 0, 64, "N  worker threads, each its own event loop (0: one per\n"
-                                                 "                       online CPU, at most 4)"},
+                                                 "                       online CPU, at most 4)", NULL},
         {"verify-every", OCCLI_INT, &verify_every, 1, 1000000,
          "N  decode every Nth frame of each viewer in full, tiles included,\n"
-         "                       staggered between viewers (30; 1: every frame)"},
+         "                       staggered between viewers (1: every frame)", NULL},
         {"decode", OCCLI_FLAG, &decode, 0, 0, "decode every frame in full (--verify-every 1; with --library:\n"
-                                               "                       decode every tile in the library)"},
+                                               "                       decode every tile in the library)", NULL},
         {"library", OCCLI_FLAG, &library, 0, 0, "receive through the C client library, all viewers on one\n"
                                                  "                       oc_loop (one thread; libwebsockets' client parser costs\n"
-                                                 "                       ~6 ns a byte, so this path saturates first)"},
+                                                 "                       ~6 ns a byte, so this path saturates first)", NULL},
         OCCLI_SUB_OPTS(&s),
     };
     const char *pos[1];
@@ -284,7 +303,16 @@ int cmd_load(int argc, char **argv)
         setrlimit(RLIMIT_NOFILE, &rl);
     }
     load_result R;
+    load_progress lp = {.start = occli_mono(), .planned = ramp + warmup + seconds, .nclients = nclients};
+    atomic_init(&lp.done, 0);
+    pthread_t pt;
+    int have_pt = isatty(STDERR_FILENO) && pthread_create(&pt, NULL, load_progress_main, &lp) == 0;
     int rc = library ? load_library_run(&cfg, &R) : load_direct_run(&cfg, &R);
+    if (have_pt) {
+        atomic_store(&lp.done, 1);
+        pthread_join(pt, NULL);
+        occli_progress(lp.planned, lp.planned, "load: %d viewers, %.1f s", nclients, occli_mono() - lp.start);
+    }
     if (rc) {
         occli_vec_free(&R.delay);
         return rc;

@@ -11,6 +11,8 @@
 #include <cJSON.h>
 
 #include "occli.h"
+#include "spectrum.h"
+#include "ocean_time.h"
 
 /* Parses "x1,z1;x2,z2;..." into a new array of 2n doubles. */
 static int parse_points(const char *s, double **out, size_t *n)
@@ -70,10 +72,10 @@ int cmd_query(int argc, char **argv)
     double t = NAN;
     int json = 0, timeout_ms = 5000;
     const occli_opt opts[] = {
-        {"points", OCCLI_STRING, &points, 0, 0, "\"X1,Z1;X2,Z2;...\"  world points (required)"},
-        {"t", OCCLI_DOUBLE, &t, -1e15, 1e15, "T  sim time to evaluate (default: the latest tick)"},
-        {"json", OCCLI_FLAG, &json, 0, 0, "print a JSON object"},
-        {"timeout", OCCLI_INT, &timeout_ms, 1, 3600000, "MS  connect / answer timeout (5000)"},
+        {"points", OCCLI_STRING, &points, 0, 0, "\"X1,Z1;X2,Z2;...\"  world points (required)", NULL},
+        {"t", OCCLI_DOUBLE, &t, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T  sim time to evaluate (default: the latest tick)", NULL},
+        {"json", OCCLI_FLAG, &json, 0, 0, "print a JSON object", NULL},
+        {"timeout", OCCLI_INT, &timeout_ms, 1, 3600000, "MS  connect / answer timeout", NULL},
     };
     const char *pos[1];
     int np = 0;
@@ -155,8 +157,18 @@ static cJSON *sea_json(const proto_sea *s, double eff)
 {
     cJSON *o = cJSON_CreateObject();
     cJSON_AddNumberToObject(o, "effective_time", eff);
-    cJSON_AddNumberToObject(o, "spectrum", s->spectrum);
-    cJSON_AddNumberToObject(o, "spreading", s->spreading);
+    /* Names, as --spectrum and --spreading take them. */
+    /* An id this build does not know (a newer server) stays a number. */
+    const char *sn = s->spectrum < OCEAN_SPECTRUM_COUNT_ ? ocean_spectrum_name((ocean_spectrum_kind)s->spectrum) : NULL;
+    const char *pn = s->spreading < OCEAN_SPREAD_COUNT_ ? ocean_spreading_name((ocean_spreading_kind)s->spreading) : NULL;
+    if (sn)
+        cJSON_AddStringToObject(o, "spectrum", sn);
+    else
+        cJSON_AddNumberToObject(o, "spectrum", s->spectrum);
+    if (pn)
+        cJSON_AddStringToObject(o, "spreading", pn);
+    else
+        cJSON_AddNumberToObject(o, "spreading", s->spreading);
     cJSON_AddNumberToObject(o, "seed", (double)s->seed);
     cJSON_AddNumberToObject(o, "wind_u10", s->wind_u10);
     cJSON_AddNumberToObject(o, "wind_dir_deg", s->wind_dir_deg);
@@ -178,22 +190,29 @@ int cmd_sea(int argc, char **argv)
     double wind = NAN, dir = NAN, fetch = NAN, depth = NAN, swell = NAN, chop = NAN, pa = NAN, small = NAN;
     double at = NAN, seed = NAN;
     int spectrum = -1, spreading = -1;
+    /* Spectrum and spreading by name, in sim/spectrum.h's order (the wire
+     * carries the index). */
+    const char *spectra[OCEAN_SPECTRUM_COUNT_ + 1] = {NULL}, *spreads[OCEAN_SPREAD_COUNT_ + 1] = {NULL};
+    for (int k = 0; k < OCEAN_SPECTRUM_COUNT_; k++)
+        spectra[k] = ocean_spectrum_name((ocean_spectrum_kind)k);
+    for (int k = 0; k < OCEAN_SPREAD_COUNT_; k++)
+        spreads[k] = ocean_spreading_name((ocean_spreading_kind)k);
     const occli_opt opts[] = {
-        {"set", OCCLI_FLAG, &set, 0, 0, "send SEA_STATE SET (needs --token)"},
-        {"token", OCCLI_STRING, &token, 0, 0, "TOKEN  the admin token from the server's config"},
-        {"at", OCCLI_DOUBLE, &at, -1e15, 1e15, "T  sim time the change takes effect (default: now)"},
-        {"wind", OCCLI_DOUBLE, &wind, 0, 100, "U  wind speed at 10 m, m/s"},
-        {"wind-dir", OCCLI_DOUBLE, &dir, -360, 360, "DEG  wind direction"},
-        {"fetch", OCCLI_DOUBLE, &fetch, 1, 1e8, "M  fetch"},
-        {"depth", OCCLI_DOUBLE, &depth, 0.01, 1e5, "M  water depth"},
-        {"swell", OCCLI_DOUBLE, &swell, 0, 1, "S  swell"},
-        {"choppiness", OCCLI_DOUBLE, &chop, 0, 10, "L  choppiness"},
-        {"phillips-a", OCCLI_DOUBLE, &pa, 0, 1e6, "A  Phillips constant"},
-        {"small-wave", OCCLI_DOUBLE, &small, 0, 100, "M  small-wave suppression length"},
-        {"spectrum", OCCLI_INT, &spectrum, 0, 3, "N  spectrum id (sim/spectrum.h)"},
-        {"spreading", OCCLI_INT, &spreading, 0, 3, "N  spreading id"},
-        {"seed", OCCLI_DOUBLE, &seed, 0, 9007199254740992.0, "N  random seed"},
-        {"timeout", OCCLI_INT, &timeout_ms, 1, 3600000, "MS  connect / answer timeout (5000)"},
+        {"set", OCCLI_FLAG, &set, 0, 0, "send SEA_STATE SET (needs --token)", NULL},
+        {"token", OCCLI_STRING, &token, 0, 0, "TOKEN  the admin token from the server's config", NULL},
+        {"at", OCCLI_DOUBLE, &at, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T  sim time the change takes effect (not given: now)", NULL},
+        {"wind", OCCLI_DOUBLE, &wind, 0, 100, "U  wind speed at 10 m, m/s", NULL},
+        {"wind-dir", OCCLI_DOUBLE, &dir, -360, 360, "DEG  wind direction", NULL},
+        {"fetch", OCCLI_DOUBLE, &fetch, 1, 1e8, "M  fetch", NULL},
+        {"depth", OCCLI_DOUBLE, &depth, 0.01, 1e5, "M  water depth", NULL},
+        {"swell", OCCLI_DOUBLE, &swell, 0, 1, "S  swell", NULL},
+        {"choppiness", OCCLI_DOUBLE, &chop, 0, 10, "L  choppiness", NULL},
+        {"phillips-a", OCCLI_DOUBLE, &pa, 0, 1e6, "A  Phillips constant", NULL},
+        {"small-wave", OCCLI_DOUBLE, &small, 0, 100, "M  small-wave suppression length", NULL},
+        {"spectrum", OCCLI_CHOICE, &spectrum, 0, 0, "NAME  spectrum", spectra},
+        {"spreading", OCCLI_CHOICE, &spreading, 0, 0, "NAME  directional spreading", spreads},
+        {"seed", OCCLI_DOUBLE, &seed, 0, 9007199254740992.0, "N  random seed", NULL},
+        {"timeout", OCCLI_INT, &timeout_ms, 1, 3600000, "MS  connect / answer timeout", NULL},
     };
     const char *pos[1];
     int np = 0;
@@ -210,6 +229,23 @@ int cmd_sea(int argc, char **argv)
     }
     if (set && !token) {
         fprintf(stderr, "ocean-client sea: option '--set' needs '--token'\n");
+        return 2;
+    }
+    /* A change asked without --set would be ignored: say so instead. */
+    if (!set) {
+        const char *given = !isnan(wind) ? "wind" : !isnan(dir) ? "wind-dir" : !isnan(fetch) ? "fetch"
+                          : !isnan(depth) ? "depth" : !isnan(swell) ? "swell" : !isnan(chop) ? "choppiness"
+                          : !isnan(pa) ? "phillips-a" : !isnan(small) ? "small-wave" : spectrum >= 0 ? "spectrum"
+                          : spreading >= 0 ? "spreading" : !isnan(seed) ? "seed" : !isnan(at) ? "at"
+                          : token ? "token" : NULL;
+        if (given) {
+            fprintf(stderr, "ocean-client sea: option '--%s' changes the sea state only with '--set' "
+                    "(and '--token'); without --set the command only prints the state in force\n", given);
+            return 2;
+        }
+    }
+    if (!isnan(seed) && seed != floor(seed)) {
+        fprintf(stderr, "ocean-client sea: option '--seed': %.17g is not a whole number\n", seed);
         return 2;
     }
     oc_client *c = occli_connect("sea", pos[0], NULL, timeout_ms);

@@ -68,10 +68,10 @@ int cmd_record(int argc, char **argv)
     occli_sub s;
     occli_sub_default(&s);
     const occli_opt opts[] = {
-        {"path", OCCLI_STRING, &path, 0, 0, "FILE  camera path (oceand camera path v1 CSV; - for stdin)"},
-        {"out", OCCLI_STRING, &out, 0, 0, "FRAMES  frame store to write"},
-        {"tail", OCCLI_DOUBLE, &tail, 0, 3600, "S  keep receiving after the last report (1)"},
-        {"speed", OCCLI_DOUBLE, &speed, 0.01, 100, "X  fly the path X times faster than its t column (1)"},
+        {"path", OCCLI_STRING, &path, 0, 0, "FILE  camera path (oceand camera path v1 CSV; - for stdin)", NULL},
+        {"out", OCCLI_STRING, &out, 0, 0, "FRAMES  frame store to write", NULL},
+        {"tail", OCCLI_DOUBLE, &tail, 0, 3600, "S  keep receiving after the last report", NULL},
+        {"speed", OCCLI_DOUBLE, &speed, 0.01, 100, "X  fly the path X times faster than its t column", NULL},
         OCCLI_SUB_OPTS(&s),
     };
     const char *pos[1];
@@ -136,10 +136,17 @@ int cmd_record(int argc, char **argv)
             rc = 1;
         if (oc_client_state(c) == OC_CLOSED)
             rc = 1;
+        occli_progress((double)(i + 1), (double)p->count + (tail > 0),
+                       "%zu/%zu camera reports, %.1f/%.1f s, %llu frames", i + 1, p->count, occli_mono() - start,
+                       (p->pts[p->count - 1].t - p->pts[0].t) / speed + tail, (unsigned long long)r.frames);
     }
     double end = occli_mono() + tail;
-    while (!rc && !occli_stop && occli_mono() < end && oc_client_state(c) != OC_CLOSED)
+    while (!rc && !occli_stop && occli_mono() < end && oc_client_state(c) != OC_CLOSED) {
         oc_service(c, 50);
+        occli_progress((double)p->count, (double)p->count + 1, "%zu/%zu camera reports, tail %.1f/%.1f s, %llu frames",
+                       p->count, p->count, tail - (end - occli_mono()), tail, (unsigned long long)r.frames);
+    }
+    occli_progress_end();
     if (oc_client_state(c) == OC_CLOSED) {
         oc_client_last_error(c, err, sizeof err);
         fprintf(stderr, "ocean-client record: connection lost: %s\n", err);
@@ -164,9 +171,9 @@ int cmd_replay(int argc, char **argv)
     occli_sub s;
     occli_sub_default(&s);
     const occli_opt opts[] = {
-        {"out", OCCLI_STRING, &out, 0, 0, "FRAMES  frame store to write (a temporary file if only --check)"},
-        {"check", OCCLI_STRING, &check, 0, 0, "FRAMES  compare with an earlier run byte for byte; exit 1 on any difference"},
-        {"window", OCCLI_INT, &window, 1, 256, "N  CAMERA reports in flight (4)"},
+        {"out", OCCLI_STRING, &out, 0, 0, "FRAMES  frame store to write (a temporary file if only --check)", NULL},
+        {"check", OCCLI_STRING, &check, 0, 0, "FRAMES  compare with an earlier run byte for byte; exit 1 on any difference", NULL},
+        {"window", OCCLI_INT, &window, 1, 256, "N  CAMERA reports in flight", NULL},
         OCCLI_SUB_OPTS(&s),
     };
     const char *pos[2];
@@ -188,6 +195,16 @@ int cmd_replay(int argc, char **argv)
     if (occli_sub_build("replay", &s, &sub, &cam))
         return 2;
     char err[512];
+    /* The store to compare with must be readable before a replay that can
+     * take minutes. */
+    if (check) {
+        oc_store_reader *cr;
+        if (oc_store_reader_open(check, &cr, err, sizeof err) != OCEAN_OK) {
+            fprintf(stderr, "ocean-client replay: option '--check': %s\n", err);
+            return 2;
+        }
+        oc_store_reader_close(cr);
+    }
     oc_path *p;
     if (oc_path_load(pos[1], &p, err, sizeof err) != OCEAN_OK) {
         fprintf(stderr, "ocean-client replay: %s\n", err);
@@ -248,6 +265,8 @@ int cmd_replay(int argc, char **argv)
                 last_progress = occli_mono();
             }
         }
+        occli_progress((double)answered, (double)p->count, "%zu/%zu camera reports answered, %llu frames",
+                       answered, p->count, (unsigned long long)r.frames);
         if (oc_client_state(c) == OC_CLOSED) {
             oc_client_last_error(c, err, sizeof err);
             fprintf(stderr, "ocean-client replay: connection lost: %s\n", err);
@@ -258,6 +277,7 @@ int cmd_replay(int argc, char **argv)
             rc = 1;
         }
     }
+    occli_progress_end();
     free(seqs);
     if (c) {
         oc_client_stats st;

@@ -18,9 +18,9 @@ int cmd_watch(int argc, char **argv)
     occli_sub s;
     occli_sub_default(&s);
     const occli_opt opts[] = {
-        {"seconds", OCCLI_DOUBLE, &seconds, 0.001, 1e7, "S  how long to watch (10)"},
-        {"frames", OCCLI_INT, &max_frames, 0, 1e9, "N  stop after N frames (0: no limit)"},
-        {"json", OCCLI_FLAG, &json, 0, 0, "print only a JSON summary at the end"},
+        {"seconds", OCCLI_DOUBLE, &seconds, 0.001, 1e7, "S  how long to watch", NULL},
+        {"frames", OCCLI_INT, &max_frames, 0, 1e9, "N  stop after N frames (0: no limit)", NULL},
+        {"json", OCCLI_FLAG, &json, 0, 0, "print only a JSON summary at the end", NULL},
         OCCLI_SUB_OPTS(&s),
     };
     const char *pos[1];

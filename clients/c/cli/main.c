@@ -5,11 +5,14 @@
  */
 #include <errno.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "occli.h"
+#include "ocean_time.h"
 
 volatile sig_atomic_t occli_stop;
 
@@ -104,22 +107,62 @@ int occli_parse_vec(const char *s, double *out, int n)
     return *p ? -1 : 0;
 }
 
-static void print_usage(FILE *f, const char *usage, const occli_opt *opts, int nopts)
+/* The value *o->target holds, as the command line would spell it; "" for
+ * an option not given and without a default (NaN, NULL, a choice < 0). */
+static void format_value(const occli_opt *o, char *buf, size_t len)
+{
+    buf[0] = 0;
+    switch (o->kind) {
+    case OCCLI_DOUBLE: {
+        double v = *(const double *)o->target;
+        if (!isnan(v))
+            snprintf(buf, len, "%.15g", v);
+        break;
+    }
+    case OCCLI_INT: snprintf(buf, len, "%d", *(const int *)o->target); break;
+    case OCCLI_STRING: {
+        const char *v = *(const char *const *)o->target;
+        if (v)
+            snprintf(buf, len, "%s", v);
+        break;
+    }
+    case OCCLI_FLAG: snprintf(buf, len, "%d", *(const int *)o->target); break;
+    case OCCLI_CHOICE: {
+        int v = *(const int *)o->target;
+        if (v >= 0)
+            snprintf(buf, len, "%s", o->names[v]);
+        break;
+    }
+    }
+}
+
+static void print_usage(FILE *f, const char *usage, const occli_opt *opts, int nopts, char (*defs)[64])
 {
     fprintf(f, "%s\n\nOptions:\n", usage);
     for (int i = 0; i < nopts; i++) {
         const char *h = opts[i].help;
         const char *sp = strstr(h, "  ");
+        char arg[64], text[512];
         /* A flag takes no argument, so its help has no "ARG  " prefix to
          * strip (its continuation lines are indented with spaces). */
-        if (opts[i].kind == OCCLI_FLAG || !sp)
-            fprintf(f, "  --%-18s %s\n", opts[i].name, h);
-        else {
-            char arg[64];
+        if (opts[i].kind == OCCLI_FLAG || !sp) {
+            snprintf(arg, sizeof arg, "%s", opts[i].name);
+            snprintf(text, sizeof text, "%s", h);
+        } else {
             snprintf(arg, sizeof arg, "%s %.*s", opts[i].name, (int)(sp - h), h);
-            fprintf(f, "  --%-18s %s\n", arg, sp + 2);
+            snprintf(text, sizeof text, "%s", sp + 2);
         }
+        if (opts[i].kind == OCCLI_CHOICE) {
+            size_t n = strlen(text);
+            for (int k = 0; opts[i].names[k] && n < sizeof text; k++)
+                n += (size_t)snprintf(text + n, sizeof text - n, "%s%s", k ? " " : ": ", opts[i].names[k]);
+        }
+        if (opts[i].kind != OCCLI_FLAG && defs[i][0])
+            fprintf(f, "  --%-18s %s (default %s)\n", arg, text, defs[i]);
+        else
+            fprintf(f, "  --%-18s %s\n", arg, text);
     }
+    fprintf(f, "  --%-18s %s\n", "show-options", "print every option's value after parsing, and exit");
     fprintf(f, "  --%-18s %s\n", "help", "this text");
 }
 
@@ -127,12 +170,24 @@ int occli_parse(int argc, char **argv, const char *usage, const occli_opt *opts,
                 const char **pos, int max_pos, int *npos)
 {
     const char *cmd = argv[0];
-    int np = 0;
+    int np = 0, show = 0;
+    char defs[OCCLI_MAX_OPTS][64];
+    if (nopts > OCCLI_MAX_OPTS) {
+        fprintf(stderr, "ocean-client %s: internal error: %d options (max %d)\n", cmd, nopts, OCCLI_MAX_OPTS);
+        return 2;
+    }
+    /* The defaults, before any option changes a target. */
+    for (int i = 0; i < nopts; i++)
+        format_value(&opts[i], defs[i], sizeof defs[i]);
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
-            print_usage(stdout, usage, opts, nopts);
+            print_usage(stdout, usage, opts, nopts, defs);
             return 1;
+        }
+        if (strcmp(a, "--show-options") == 0) {
+            show = 1;
+            continue;
         }
         if (strncmp(a, "--", 2) != 0 || a[2] == 0) {
             if (a[0] == '-' && a[1] && strcmp(a, "-") != 0) {
@@ -179,11 +234,34 @@ int occli_parse(int argc, char **argv, const char *usage, const occli_opt *opts,
             *(const char **)o->target = val;
             continue;
         }
+        if (o->kind == OCCLI_CHOICE) {
+            int found = -1;
+            for (int k = 0; o->names[k]; k++)
+                if (!strcmp(o->names[k], val))
+                    found = k;
+            if (found < 0) {
+                char list[256] = "";
+                size_t n = 0;
+                for (int k = 0; o->names[k] && n < sizeof list; k++)
+                    n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", k ? ", " : "", o->names[k]);
+                fprintf(stderr, "ocean-client %s: option '--%s': unknown value '%s' (one of %s)\n", cmd, o->name,
+                        val, list);
+                return 2;
+            }
+            *(int *)o->target = found;
+            continue;
+        }
         char *end;
         errno = 0;
         double v = strtod(val, &end);
         if (end == val || *end || errno == ERANGE || !isfinite(v)) {
             fprintf(stderr, "ocean-client %s: option '--%s': '%s' is not a number\n", cmd, o->name, val);
+            return 2;
+        }
+        if (o->max == OCEAN_TIME_MAX && !ocean_time_ok(v)) {
+            char m[256];
+            ocean_time_check(v, o->name, m, sizeof m);
+            fprintf(stderr, "ocean-client %s: option '--%s': %s\n", cmd, o->name, m);
             return 2;
         }
         if (v < o->min || v > o->max) {
@@ -201,26 +279,97 @@ int occli_parse(int argc, char **argv, const char *usage, const occli_opt *opts,
             *(double *)o->target = v;
         }
     }
+    if (show) {
+        for (int i = 0; i < nopts; i++) {
+            char v[512];
+            format_value(&opts[i], v, sizeof v);
+            printf("--%s=%s\n", opts[i].name, v);
+        }
+        return 1;
+    }
     if (npos)
         *npos = np;
     return 0;
 }
 
+static int progress_open;   /* a progress line is on the terminal */
+
+void occli_progress(double done, double total, const char *fmt, ...)
+{
+    static int tty = -1;
+    static double last;
+    if (tty < 0)
+        tty = isatty(STDERR_FILENO);
+    if (!tty)
+        return;
+    int final = total > 0 && done >= total;
+    double now = occli_mono();
+    if (!final && progress_open && now - last < 0.1)
+        return;
+    last = now;
+    int width = 40, fill = total > 0 ? (int)fmin(width, done * width / total) : 0;
+    char detail[256];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(detail, sizeof detail, fmt, ap);
+    va_end(ap);
+    fprintf(stderr, "\r[%.*s%*s] %s\033[K", fill, "########################################", width - fill, "",
+            detail);
+    progress_open = 1;
+    if (final)
+        occli_progress_end();
+    fflush(stderr);
+}
+
+void occli_progress_end(void)
+{
+    if (progress_open) {
+        fputc('\n', stderr);
+        progress_open = 0;
+    }
+}
+
+/* Names of the subscription enums, in their wire order (protocol/proto.h). */
+static const char *const mesh_names[] = {"concentric", "chunked", "projected", "none"};
+static const char *const policy_names[] = {"none", "seed", "antialias"};
+
 void occli_sub_default(occli_sub *s)
 {
     memset(s, 0, sizeof *s);
-    s->codec = "qz";
-    s->effects = "height,displacement,normals";
-    s->mesh = "concentric";
-    s->policy = "antialias";
-    s->rate = 30;
-    s->accuracy = PROTO_ACCURACY_DEFAULT;
-    s->tile_size = 32;
-    s->levels = 4;
-    s->layers = 1;
-    s->pos = "0,20,0";
-    s->vel = "0,0,0";
-    s->fov = 60;
+    proto_subscribe d;
+    oc_subscribe_default(&d);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    s->codec = proto_codec_name((proto_codec)d.codec);
+    /* The effect names as --effects spells them, in bit order. */
+    static char fx[96];
+    static const struct { unsigned bit; const char *name; } fxn[] = {
+        {PROTO_FX_HEIGHT, "height"}, {PROTO_FX_DISPLACEMENT, "displacement"}, {PROTO_FX_NORMALS, "normals"},
+        {PROTO_FX_FOAM, "foam"}, {PROTO_FX_NEAR_FIELD, "near"}};
+    fx[0] = 0;
+    for (size_t i = 0; i < sizeof fxn / sizeof fxn[0]; i++)
+        if (d.effects & fxn[i].bit)
+            snprintf(fx + strlen(fx), sizeof fx - strlen(fx), "%s%s", fx[0] ? "," : "", fxn[i].name);
+    s->effects = fx;
+    s->mesh = d.mesh_kind < 4 ? mesh_names[d.mesh_kind] : "concentric";
+    s->policy = d.cutoff_policy < 3 ? policy_names[d.cutoff_policy] : "antialias";
+    s->rate = d.frame_rate_hz;
+    /* The wire carries accuracy as float32; the double the library starts
+     * from is the one to show. */
+    s->accuracy = OC_ACCURACY_DEFAULT;
+    s->tile_size = d.tile_size;
+    s->levels = d.lod_levels;
+    s->layers = d.layers;
+    s->spacing = d.base_spacing_m;
+    s->range = d.view_range_m;
+    static char posbuf[96], velbuf[96];
+    snprintf(posbuf, sizeof posbuf, "%g,%g,%g", cam.pos[0], cam.pos[1], cam.pos[2]);
+    snprintf(velbuf, sizeof velbuf, "%g,%g,%g", (double)cam.vel[0], (double)cam.vel[1], (double)cam.vel[2]);
+    s->pos = posbuf;
+    s->vel = velbuf;
+    s->yaw = cam.yaw_deg;
+    s->pitch = cam.pitch_deg;
+    s->fov = cam.fov_y_deg;
     s->timeout_ms = 5000;
 }
 
@@ -259,20 +408,18 @@ int occli_sub_build(const char *cmd, const occli_sub *s, proto_subscribe *sub, p
         return 2;
     }
     sub->effects = (uint8_t)fx;
-    static const char *const meshes[] = {"concentric", "chunked", "projected", "none"};
     int mk = -1;
     for (int i = 0; i < 4; i++)
-        if (!strcmp(s->mesh, meshes[i]))
+        if (!strcmp(s->mesh, mesh_names[i]))
             mk = i;
     if (mk < 0) {
         fprintf(stderr, "ocean-client %s: option '--mesh': unknown mesh kind '%s'\n", cmd, s->mesh);
         return 2;
     }
     sub->mesh_kind = (uint8_t)mk;
-    static const char *const pol[] = {"none", "seed", "antialias"};
     int pk = -1;
     for (int i = 0; i < 3; i++)
-        if (!strcmp(s->policy, pol[i]))
+        if (!strcmp(s->policy, policy_names[i]))
             pk = i;
     if (pk < 0) {
         fprintf(stderr, "ocean-client %s: option '--cutoff-policy': unknown policy '%s'\n", cmd, s->policy);

@@ -18,15 +18,20 @@ typedef enum occli_kind {
     OCCLI_DOUBLE,   /* double *, finite, in [min, max] */
     OCCLI_INT,      /* int *, in [min, max] */
     OCCLI_STRING,   /* const char ** */
-    OCCLI_FLAG      /* int *, set to 1 */
+    OCCLI_FLAG,     /* int *, set to 1 */
+    OCCLI_CHOICE    /* int *, index of the value in names[]; -1 = not given */
 } occli_kind;
 
+/* One option.  Its default is whatever *target holds when occli_parse
+ * starts: --help prints that value (so help cannot disagree with the
+ * code), and the help text itself never states a default. */
 typedef struct occli_opt {
     const char *name;   /* without "--" */
     occli_kind kind;
     void *target;
     double min, max;
     const char *help;   /* "ARG  text" */
+    const char *const *names;   /* OCCLI_CHOICE: NULL-terminated value names */
 } occli_opt;
 
 /* Subscription and camera options shared by watch/record/replay/export/load. */
@@ -49,24 +54,26 @@ typedef struct occli_sub {
 } occli_sub;
 
 #define OCCLI_SUB_OPTS(s)                                                                                   \
-    {"codec", OCCLI_STRING, &(s)->codec, 0, 0, "NAME  tile codec: f32 f16 qz exr-zip exr-piz exr-b44 exr-b44a (qz)"}, \
-    {"effects", OCCLI_STRING, &(s)->effects, 0, 0, "LIST  height,displacement,normals,foam,near (height,displacement,normals)"}, \
-    {"mesh", OCCLI_STRING, &(s)->mesh, 0, 0, "KIND  concentric chunked projected none (concentric)"},            \
-    {"cutoff-policy", OCCLI_STRING, &(s)->policy, 0, 0, "NAME  none seed antialias (seed)"},                     \
-    {"rate", OCCLI_DOUBLE, &(s)->rate, 0.1, 240, "HZ  frame rate asked of the server (30)"},                   \
-    {"accuracy", OCCLI_DOUBLE, &(s)->accuracy, 1e-6, 0.5, "A  qz accuracy target (0.001)"},                    \
-    {"tile-size", OCCLI_INT, &(s)->tile_size, 2, 1024, "N  samples per tile side (64)"},                       \
-    {"levels", OCCLI_INT, &(s)->levels, 1, 16, "N  tile LOD levels (4)"},                                       \
-    {"layers", OCCLI_INT, &(s)->layers, 1, 4, "N  cascades wanted (1)"},                                        \
-    {"spacing", OCCLI_DOUBLE, &(s)->spacing, 0, 1e6, "M  level-0 sample spacing, 0 = server default"},         \
-    {"range", OCCLI_DOUBLE, &(s)->range, 0, 1e7, "M  view range, 0 = server default"},                         \
-    {"pos", OCCLI_STRING, &(s)->pos, 0, 0, "X,Y,Z  camera position (0,20,0)"},                                 \
-    {"vel", OCCLI_STRING, &(s)->vel, 0, 0, "VX,VY,VZ  camera velocity (0,0,0)"},                               \
-    {"yaw", OCCLI_DOUBLE, &(s)->yaw, -3600, 3600, "DEG  camera yaw (0)"},                                      \
-    {"pitch", OCCLI_DOUBLE, &(s)->pitch, -90, 90, "DEG  camera pitch (0)"},                                    \
-    {"fov", OCCLI_DOUBLE, &(s)->fov, 0.01, 179.9, "DEG  vertical field of view (60)"},                         \
-    {"timeout", OCCLI_INT, &(s)->timeout_ms, 1, 3600000, "MS  connect / reply timeout (5000)"}
+    {"codec", OCCLI_STRING, &(s)->codec, 0, 0, "NAME  tile codec: f32 f16 qz exr-zip exr-piz exr-b44 exr-b44a", NULL}, \
+    {"effects", OCCLI_STRING, &(s)->effects, 0, 0, "LIST  height,displacement,normals,foam,near or all", NULL},        \
+    {"mesh", OCCLI_STRING, &(s)->mesh, 0, 0, "KIND  concentric chunked projected none", NULL},                        \
+    {"cutoff-policy", OCCLI_STRING, &(s)->policy, 0, 0, "NAME  none seed antialias", NULL},                          \
+    {"rate", OCCLI_DOUBLE, &(s)->rate, 0.1, 240, "HZ  frame rate asked of the server", NULL},                        \
+    {"accuracy", OCCLI_DOUBLE, &(s)->accuracy, 1e-6, 0.5, "A  qz accuracy target", NULL},                           \
+    {"tile-size", OCCLI_INT, &(s)->tile_size, 2, 1024, "N  samples per tile side", NULL},                            \
+    {"levels", OCCLI_INT, &(s)->levels, 1, 16, "N  tile LOD levels", NULL},                                          \
+    {"layers", OCCLI_INT, &(s)->layers, 1, 4, "N  cascades wanted", NULL},                                           \
+    {"spacing", OCCLI_DOUBLE, &(s)->spacing, 0, 1e6, "M  level-0 sample spacing, 0 = server default", NULL},         \
+    {"range", OCCLI_DOUBLE, &(s)->range, 0, 1e7, "M  view range, 0 = server default", NULL},                         \
+    {"pos", OCCLI_STRING, &(s)->pos, 0, 0, "X,Y,Z  camera position", NULL},                                          \
+    {"vel", OCCLI_STRING, &(s)->vel, 0, 0, "VX,VY,VZ  camera velocity", NULL},                                       \
+    {"yaw", OCCLI_DOUBLE, &(s)->yaw, -3600, 3600, "DEG  camera yaw", NULL},                                          \
+    {"pitch", OCCLI_DOUBLE, &(s)->pitch, -90, 90, "DEG  camera pitch", NULL},                                        \
+    {"fov", OCCLI_DOUBLE, &(s)->fov, 0.01, 179.9, "DEG  vertical field of view", NULL},                              \
+    {"timeout", OCCLI_INT, &(s)->timeout_ms, 1, 3600000, "MS  connect / reply timeout", NULL}
 
+/* Fills s from the library's own defaults (oc_subscribe_default,
+ * oc_camera_default), so the CLI asks for what a library user gets. */
 void occli_sub_default(occli_sub *s);
 /* Builds SUBSCRIBE and CAMERA from the options; prints the reason and
  * returns 2 on a bad value. */
@@ -74,12 +81,24 @@ int occli_sub_build(const char *cmd, const occli_sub *s, proto_subscribe *sub, p
 
 /* Parses argv[1..] (argv[0] is the subcommand).  Positional arguments are
  * collected into pos[0..*npos) (at most max_pos).  Returns 0 ok, 1 help
- * printed, 2 error printed (naming the option). */
+ * (or --show-options) printed, 2 error printed (naming the option).
+ * --help shows each option's default as its target held it on entry;
+ * --show-options prints every option's value after parsing as
+ * --name=value lines, so a script (and the test) sees what the command
+ * would run with.  At most OCCLI_MAX_OPTS options. */
+#define OCCLI_MAX_OPTS 64
 int occli_parse(int argc, char **argv, const char *usage, const occli_opt *opts, int nopts,
                 const char **pos, int max_pos, int *npos);
 
 /* Parses "a,b,c" into n doubles; 0 on success. */
 int occli_parse_vec(const char *s, double *out, int n);
+
+/* Progress on stderr when it is a terminal, drawn as ocean-sim bake draws
+ * it: "\r[#####     ] " and the formatted detail, at most 10 times a second;
+ * a newline once done >= total.  occli_progress_end() ends the line early
+ * (interrupted, failed).  Both do nothing when stderr is not a terminal. */
+void occli_progress(double done, double total, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+void occli_progress_end(void);
 
 /* Connects with the standard options; prints the reason and returns NULL on
  * failure. */

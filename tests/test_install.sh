@@ -1,0 +1,141 @@
+#!/usr/bin/env bash
+# test_install.sh - `make install` into a temporary prefix, used the way a
+# newcomer does (issue 17 items 1-2):
+#  - a program built with `pkg-config --cflags --libs oceanclient` links the
+#    shared library (soname liboceanclient.so.0) and runs; one built with
+#    `--static` links the archive with Libs.private alone and runs;
+#  - the installed oceand, started from another directory with no config,
+#    serves the viewer at / and streams a frame (scenes and web viewer found
+#    under PREFIX/share/oceand); so does the systemd unit's ExecStart, which
+#    reloads on its ExecReload signal and stops on SIGTERM with exit 0;
+#  - DESTDIR stages the same tree with PREFIX compiled in.
+set -u
+BUILD=${BUILD:-build}
+tmp=$(mktemp -d /tmp/oc-install.XXXXXX)
+pids=()
+cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null; wait "$p" 2>/dev/null; done; rm -rf "$tmp"; }
+trap cleanup EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+# A make started from inside `make test` must not inherit its jobserver.
+mk() { env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL make --no-print-directory BUILD="$BUILD" "$@"; }
+
+prefix=$tmp/prefix
+echo "== make install PREFIX=$prefix ($SECONDS s)"
+mk install PREFIX="$prefix" >"$tmp/install.log" 2>&1 || { tail -20 "$tmp/install.log"; fail "make install"; }
+for f in bin/oceand bin/ocean-client bin/ocean-sim lib/liboceanclient.a lib/liboceanclient.so \
+         lib/liboceanclient.so.0 lib/pkgconfig/oceanclient.pc include/oceand/oceanclient.h \
+         share/oceand/web/index.html share/oceand/web/main.js share/oceand/scenes/ship-bridge.conf \
+         share/oceand/scenes/storm.conf etc/oceand/oceand.conf lib/systemd/system/oceand.service; do
+    [[ -e $prefix/$f ]] || fail "not installed: $f"
+done
+soname=$(readelf -d "$prefix/lib/liboceanclient.so" | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p')
+[[ $soname == liboceanclient.so.0 ]] || fail "soname '$soname', want liboceanclient.so.0"
+
+echo "== a program against the installed library, via pkg-config ($SECONDS s)"
+export PKG_CONFIG_PATH=$prefix/lib/pkgconfig
+pkg-config --exists oceanclient || fail "pkg-config does not find oceanclient"
+pkg-config --static --libs oceanclient | grep -q -- -lfftw3f_omp || fail "Libs.private lacks -lfftw3f_omp"
+pkg-config --static --libs oceanclient | grep -q -- -lfftw3f_threads && fail "Libs.private names -lfftw3f_threads"
+mkdir -p "$tmp/app"
+cat >"$tmp/app/app.c" <<'C'
+/* A user's first program: the library's own ocean, and a client handle. */
+#include <stdio.h>
+#include "oceanclient.h"
+#include "ocean.h"
+int main(void)
+{
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 64;
+    char err[256];
+    ocean *o = NULL;
+    if (ocean_create(&p, &o, err, sizeof err) != OCEAN_OK) { fprintf(stderr, "%s\n", err); return 1; }
+    ocean_destroy(o);
+    proto_subscribe s;
+    oc_subscribe_default(&s);
+    printf("oceanclient %s ok tile_size %u\n", OC_VERSION, (unsigned)s.tile_size);
+    return 0;
+}
+C
+# shellcheck disable=SC2046
+cc -o "$tmp/app/app_shared" "$tmp/app/app.c" $(pkg-config --cflags --libs oceanclient) 2>"$tmp/cc.log" ||
+    fail "shared link: $(head -20 "$tmp/cc.log")"
+ldd "$tmp/app/app_shared" | grep -q 'liboceanclient.so.0 =>' || fail "app_shared does not use liboceanclient.so.0"
+LD_LIBRARY_PATH=$prefix/lib "$tmp/app/app_shared" | grep -q "ok" || fail "app_shared does not run"
+# shellcheck disable=SC2046
+cc -o "$tmp/app/app_static" "$tmp/app/app.c" \
+    $(pkg-config --static --cflags --libs oceanclient | sed 's/-loceanclient/-l:liboceanclient.a/') 2>"$tmp/cc.log" ||
+    fail "static link with Libs.private: $(head -20 "$tmp/cc.log")"
+ldd "$tmp/app/app_static" | grep -q liboceanclient && fail "app_static still needs the shared library"
+"$tmp/app/app_static" | grep -q "ok" || fail "app_static does not run"
+# The project's own example, built as a user would.
+# shellcheck disable=SC2046
+cc -o "$tmp/app/ship" clients/examples/ship.c $(pkg-config --cflags --libs oceanclient) -lm 2>"$tmp/cc.log" ||
+    fail "ship.c against the installed library: $(head -20 "$tmp/cc.log")"
+LD_LIBRARY_PATH=$prefix/lib "$tmp/app/ship" --offline --seconds 2 --quiet >"$tmp/ship.out" 2>&1 ||
+    fail "installed ship --offline: $(cat "$tmp/ship.out")"
+
+# start_daemon LOG CMD... : runs CMD from an empty directory, waits for
+# "listening", sets $port.
+start_daemon() {
+    local log=$1; shift
+    mkdir -p "$tmp/elsewhere"
+    (cd "$tmp/elsewhere" && exec "$@") >"$log" 2>&1 &
+    dpid=$!
+    pids+=("$dpid")
+    port=
+    for _ in $(seq 200); do
+        port=$(sed -n 's|^oceand: listening on http://[0-9.]*:\([0-9]*\)/.*|\1|p' "$log")
+        [[ -n $port ]] && return 0
+        kill -0 "$dpid" 2>/dev/null || break
+        sleep 0.05
+    done
+    fail "daemon did not start: $* : $(cat "$log")"
+}
+check_serves() {  # name
+    curl -sf "http://127.0.0.1:$port/" -o "$tmp/index.html" || fail "$1: GET / failed"
+    grep -qi "<html" "$tmp/index.html" || fail "$1: / is not the viewer"
+    curl -sf "http://127.0.0.1:$port/main.js" -o /dev/null || fail "$1: GET /main.js failed"
+    "$prefix/bin/ocean-client" watch "ws://127.0.0.1:$port/" --frames 1 --seconds 20 --mesh none --json \
+        >"$tmp/watch.json" 2>"$tmp/watch.err" || fail "$1: no frame: $(cat "$tmp/watch.err")"
+    python3 -c "import json,sys; d=json.load(open('$tmp/watch.json')); sys.exit(0 if d['frames'] >= 1 and d['decode_errors'] == 0 else 1)" ||
+        fail "$1: watch: $(cat "$tmp/watch.json")"
+}
+stop_daemon() {  # name
+    kill -TERM "$dpid"
+    wait "$dpid"
+    local rc=$?
+    [[ $rc -eq 0 ]] || fail "$1: SIGTERM exit $rc"
+}
+
+echo "== installed oceand, no config, from another directory ($SECONDS s)"
+start_daemon "$tmp/d1.log" "$prefix/bin/oceand" --port 0
+grep -q "scene ship-bridge" "$tmp/d1.log" || fail "default scene not served: $(cat "$tmp/d1.log")"
+check_serves "no config"
+stop_daemon "no config"
+
+echo "== the systemd unit's commands ($SECONDS s)"
+unit=$prefix/lib/systemd/system/oceand.service
+grep -qx 'Type=simple' "$unit" || grep -qx 'Type=notify' "$unit" || fail "unit: no Type=simple/notify"
+grep -qx 'ExecReload=/bin/kill -HUP $MAINPID' "$unit" || fail "unit: ExecReload is not SIGHUP"
+grep -qx 'KillSignal=SIGTERM' "$unit" || fail "unit: stop is not SIGTERM"
+exec_start=$(sed -n 's/^ExecStart=//p' "$unit")
+[[ $exec_start == "$prefix/bin/oceand --config $prefix/etc/oceand/oceand.conf" ]] || fail "ExecStart: $exec_start"
+if command -v systemd-analyze >/dev/null; then
+    systemd-analyze verify "$unit" >"$tmp/verify.log" 2>&1 || fail "systemd-analyze verify: $(cat "$tmp/verify.log")"
+fi
+# shellcheck disable=SC2086
+start_daemon "$tmp/d2.log" $exec_start --port 0 --scene storm
+check_serves "unit ExecStart"
+kill -HUP "$dpid"
+for _ in $(seq 100); do grep -q "configuration reloaded" "$tmp/d2.log" && break; sleep 0.05; done
+grep -q "configuration reloaded" "$tmp/d2.log" || fail "SIGHUP did not reload: $(cat "$tmp/d2.log")"
+stop_daemon "unit"
+
+echo "== DESTDIR staging ($SECONDS s)"
+mk install DESTDIR="$tmp/stage" PREFIX=/opt/oceand >"$tmp/install2.log" 2>&1 || { tail -20 "$tmp/install2.log"; fail "make install DESTDIR"; }
+[[ -x $tmp/stage/opt/oceand/bin/oceand ]] || fail "DESTDIR: no bin/oceand"
+grep -q '^prefix=/opt/oceand$' "$tmp/stage/opt/oceand/lib/pkgconfig/oceanclient.pc" || fail "DESTDIR leaked into the .pc"
+grep -qx 'server.web_root = /opt/oceand/share/oceand/web' "$tmp/stage/opt/oceand/etc/oceand/oceand.conf" || fail "DESTDIR: config web_root"
+"$tmp/stage/opt/oceand/bin/oceand" --help | grep -q "web viewer /opt/oceand/share/oceand/web" || fail "DESTDIR: compiled-in data dir"
+echo "ok ($SECONDS s)"

@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# test_oceand_cli.sh - oceand's command line (issue 17 items 3-5):
+#  - an address this host does not have fails at once, non-zero, with a
+#    message naming it, instead of a false "listening";
+#  - a busy port fails naming the way out (--port, make run ARGS);
+#  - --help shows the defaults the daemon really starts with: each equals
+#    the value --dump-config gives for the key;
+#  - /status carries the scene's camera hint (the browser viewer opens
+#    there), as config/scenes/flight.conf writes it.
+set -u
+BUILD=${BUILD:-build}
+OD=$BUILD/oceand
+tmp=$(mktemp -d /tmp/oc-od.XXXXXX)
+holder=
+cleanup() { [[ -n $holder ]] && kill "$holder" 2>/dev/null; rm -rf "$tmp"; }
+trap cleanup EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+
+echo "== --bind an address not on this host ($SECONDS s)"
+# 192.0.2.1 is TEST-NET-1 (RFC 5737): never assigned to a host.
+timeout 20 "$OD" --config config/oceand.conf --bind 192.0.2.1 --port 0 >"$tmp/out" 2>"$tmp/err"
+rc=$?
+[[ $rc -ne 0 && $rc -ne 124 ]] || fail "--bind 192.0.2.1: exit $rc (124 = kept running): $(cat "$tmp/out" "$tmp/err")"
+grep -q "listening" "$tmp/out" && fail "false 'listening': $(cat "$tmp/out")"
+grep -q "192.0.2.1" "$tmp/err" || fail "message does not name the address: $(cat "$tmp/err")"
+timeout 20 "$OD" --config config/oceand.conf --bind no-such-if0 --port 0 >"$tmp/out" 2>"$tmp/err"
+rc=$?
+[[ $rc -ne 0 && $rc -ne 124 ]] || fail "--bind no-such-if0: exit $rc"
+grep -q "no-such-if0" "$tmp/err" || fail "message does not name the bad bind: $(cat "$tmp/err")"
+
+echo "== a busy port names the way out ($SECONDS s)"
+python3 -c '
+import socket, sys, time
+s = socket.socket(); s.bind(("127.0.0.1", 0)); s.listen()
+print(s.getsockname()[1], flush=True); time.sleep(60)' >"$tmp/port" &
+holder=$!
+for _ in $(seq 100); do [[ -s $tmp/port ]] && break; sleep 0.05; done
+busy=$(cat "$tmp/port")
+timeout 20 "$OD" --config config/oceand.conf --port "$busy" >"$tmp/out" 2>"$tmp/err"
+rc=$?
+[[ $rc -ne 0 && $rc -ne 124 ]] || fail "busy port $busy: exit $rc"
+grep -q -- "--port" "$tmp/err" && grep -q "ARGS=" "$tmp/err" || fail "busy port: no way out named: $(cat "$tmp/err")"
+
+echo "== --help defaults are the real defaults ($SECONDS s)"
+"$OD" --help >"$tmp/help" || fail "--help"
+"$OD" --dump-config >"$tmp/dump" || fail "--dump-config"
+n=0
+while read -r key val; do
+    real=$(sed -n "s/^$key = //p" "$tmp/dump")
+    [[ "$val" == "$real" ]] || fail "--help says $key default '$val', the daemon starts with '$real'"
+    n=$((n + 1))
+done < <(sed -n 's/.*(\(server\.[a-z_]*\); default \(.*\))$/\1 \2/p' "$tmp/help")
+[[ $n -ge 3 ]] || fail "--help shows $n defaults: $(cat "$tmp/help")"
+echo "== /status carries the scene camera hint ($SECONDS s)"
+"$OD" --config config/oceand.conf --scene flight --port 0 >"$tmp/d.log" 2>&1 &
+dpid=$!
+for _ in $(seq 200); do grep -q "listening on" "$tmp/d.log" && break; sleep 0.05; done
+port=$(sed -n 's|^oceand: listening on http://[0-9.]*:\([0-9]*\)/.*|\1|p' "$tmp/d.log")
+[[ -n $port ]] || { kill "$dpid"; fail "daemon with --scene flight: $(cat "$tmp/d.log")"; }
+curl -sf "http://127.0.0.1:$port/status" -o "$tmp/status.json" || { kill "$dpid"; fail "GET /status"; }
+kill -TERM "$dpid"; wait "$dpid"
+hint=$(sed -n 's/^scene.camera_hint *= *\([^ #]*\).*/\1/p' config/scenes/flight.conf)
+python3 - "$tmp/status.json" "$hint" <<'PY' || fail "/status camera_hint: $(cat "$tmp/status.json") vs flight.conf '$hint'"
+import json, sys
+h = json.load(open(sys.argv[1]))["camera_hint"]
+want = [float(v) for v in sys.argv[2].split(",")] + [0.0] * 2
+got = [h["x"], h["y"], h["z"], h["yaw"], h["pitch"]]
+sys.exit(0 if all(abs(a - b) < 1e-9 for a, b in zip(got, want[:5])) else 1)
+PY
+echo "ok ($SECONDS s)"
