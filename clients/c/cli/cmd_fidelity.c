@@ -3,12 +3,17 @@
  * camera is, measured from the frames it receives (issue 13, "Done when").
  *
  * A camera at height H flies along +x at speed V (or holds still), looking
- * down at --pitch, subscribed as the client library does by default (layout
+ * down at --pitch (by default atan(H / range) + fov/4 below the horizon:
+ * from 2 m the view reaches the horizon and sees enough sea for slope and
+ * whitecap statistics, from 10 km half of it still lands within range), subscribed as the client library does by default (layout
  * 1, the browser viewer's subscription).  From each frame made for that
  * camera, a grid of the viewport's pixels is cast onto the mean sea plane
  * (y = 0) and the sea is read where each ray lands, through the spec's lod
  * rule at that point (oc_frame_sample: the pixel footprint decides the
- * mips):
+ * mips).  Means are taken per area of sea in view (each pixel weighted by
+ * the sea area it covers: whitecap coverage and slope statistics are area
+ * statistics, and a pixel-weighted mean from a low camera is a few metres
+ * of sea); per-pixel means are reported beside them:
  *   - resolved mean-square slope: <s_x^2 + s_z^2> of the slopes the tiles'
  *     normals give there (summed over cascades);
  *   - unresolved mean-square slope: <mss_x + mss_z> of the moments the
@@ -55,12 +60,29 @@ static double monahan_whitecap(double u10)
     return 3.84e-6 * pow(u10, 3.41);
 }
 
+/* Sums over the samples, each weighted (w = 1: per pixel; w = the sea
+ * area the pixel covers: per square metre of sea in view). */
+typedef struct fid_sums {
+    double w, res_x, res_z, unres_x, unres_z, foam, foam_half, claimed;
+} fid_sums;
+
 typedef struct fid_acc {
-    double res, res_x, res_z, unres, unres_x, unres_z, foam, foam_half;
-    double claimed_total;   /* sum over samples of the frame's whole-sea moments */
+    fid_sums px, area;
     double e_error, e_total, e_total_max;
     uint64_t samples, above, outside, frames, stale;
 } fid_acc;
+
+static void sums_add(fid_sums *S, double w, const oc_sample *s, double whole)
+{
+    S->w += w;
+    S->res_x += w * s->slope_x * s->slope_x;
+    S->res_z += w * s->slope_z * s->slope_z;
+    S->unres_x += w * s->mss[0];
+    S->unres_z += w * s->mss[1];
+    S->foam += w * s->foam;
+    S->foam_half += w * (s->foam >= 0.5);
+    S->claimed += w * whole;
+}
 
 /* Casts grid x grid*9/16 rays of camera `cam` (position from the frame's
  * block) and reads the frame where they land. */
@@ -102,13 +124,13 @@ static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, 
                 A->outside++;
                 continue;
             }
-            A->res_x += s.slope_x * s.slope_x;
-            A->res_z += s.slope_z * s.slope_z;
-            A->unres_x += s.mss[0];
-            A->unres_z += s.mss[1];
-            A->foam += s.foam;
-            A->foam_half += s.foam >= 0.5;
-            A->claimed_total += whole;
+            /* a pixel at image-plane point d (unnormalised, forward = 1)
+             * spans a solid angle ~ 1/|d|^3 and lands on sea at distance
+             * t|d| with incidence cosine |d_y|/|d|: its sea area is
+             * ~ t^2 / |d_y| = cy^2 / |d_y|^3 */
+            double ay = fabs(d[1]);
+            sums_add(&A->px, 1.0, &s, whole);
+            sums_add(&A->area, 1.0 / (ay * ay * ay), &s, whole);
             A->samples++;
         }
     if (verbose) {
@@ -130,7 +152,7 @@ static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, 
 
 int cmd_fidelity(int argc, char **argv)
 {
-    double height = 25, speed = 0, pitch = -45, yaw = 0, fov = 60, spacing = 0, range = 0, settle = 0.3,
+    double height = 25, speed = 0, pitch = 1000, yaw = 0, fov = 60, spacing = 0, range = 0, settle = 0.3,
            interval = 0;
     int frames = 10, json = 0, verbose = 0, grid = 64, timeout_ms = 5000, vw = 1920, vh = 1080;
     const char *codec = "qz", *interp_name = "cubic";
@@ -145,8 +167,10 @@ int cmd_fidelity(int argc, char **argv)
          .help = "print the result as one JSON object (the metric lines go to stderr)"},
         {.name = "verbose", .kind = OCCLI_FLAG, .target = &verbose,
          .help = "one line per measured frame on stderr: tiles, q, e_error, the levels at the nadir"},
-        {.name = "pitch", .kind = OCCLI_DOUBLE, .target = &pitch, .min = -90, .max = 90,
-         .help = "DEG  camera pitch (negative looks down)"},
+        {.name = "pitch", .kind = OCCLI_DOUBLE, .target = &pitch, .min = -90, .max = 1000,
+         .help = "DEG  camera pitch (negative looks down); 1000 = auto: the view's centre\n"
+                 "                       atan(H / range) + fov/4 below the horizon, so that from any height\n"
+                 "                       half the view or more lands on sea within the range"},
         {.name = "yaw", .kind = OCCLI_DOUBLE, .target = &yaw, .min = -360, .max = 360,
          .help = "DEG  camera heading (0 = +x); the camera flies along it"},
         {.name = "fov", .kind = OCCLI_DOUBLE, .target = &fov, .min = 1, .max = 170,
@@ -217,6 +241,10 @@ int cmd_fidelity(int argc, char **argv)
     if (range > 0 && range < 1) {
         fprintf(stderr, "ocean-client fidelity: option '--range': %g below the protocol's 1 m\n", range);
         return 2;
+    }
+    if (pitch > 90) {
+        double R = range > 0 ? range : 10000;   /* the daemon's shipped server.view_range */
+        pitch = -(atan(height / R) * 180 / M_PI + fov / 4);
     }
     proto_camera cam;
     oc_camera_default(&cam);
@@ -322,32 +350,44 @@ int cmd_fidelity(int argc, char **argv)
                 why[0] ? why : A.frames ? "no ray landed on sea the frames cover" : "no frame measured");
         return 1;
     }
-    double n = (double)A.samples;
-    double res = (A.res_x + A.res_z) / n, unres = (A.unres_x + A.unres_z) / n, total = res + unres;
-    double claimed = A.claimed_total / n, claimed_res = claimed - unres;
+    /* the checked figures are per area of sea in view (coverage and slope
+     * statistics are area statistics); per pixel beside them */
+    const fid_sums *S = &A.area, *P = &A.px;
+    double res = (S->res_x + S->res_z) / S->w, unres = (S->unres_x + S->unres_z) / S->w, total = res + unres;
+    double res_px = (P->res_x + P->res_z) / P->w, total_px = res_px + (P->unres_x + P->unres_z) / P->w;
+    double claimed = S->claimed / S->w, claimed_res = claimed - unres;
     double u10 = sea.wind_u10, cm = cox_munk_mss(u10);
-    double foam = A.foam / n, foam_half = A.foam_half / n, W = monahan_whitecap(u10);
+    double foam = S->foam / S->w, foam_half = S->foam_half / S->w, W = monahan_whitecap(u10);
+    double foam_px = P->foam / P->w;
     int foam_applies = u10 >= 8 && u10 <= 26;
     int foam_offered = (hello.effects & PROTO_FX_FOAM) != 0;
-    double mss_ratio = total / cm, foam_ratio = W > 0 ? foam / W : NAN;
-    int mss_ok = fabs(mss_ratio - 1) <= 0.3;
+    /* slopes: both means must hold (per pixel: what the screen shows, near
+     * detail included; per area: the sea in view); foam: per area (a
+     * coverage is an area fraction; per pixel from a low camera it is a few
+     * square metres of sea, far too few whitecaps to count) */
+    double mss_ratio = total / cm, mss_ratio_px = total_px / cm, foam_ratio = W > 0 ? foam / W : NAN;
+    int mss_ok = fabs(mss_ratio - 1) <= 0.3 && fabs(mss_ratio_px - 1) <= 0.3;
     int foam_ok = !foam_applies || (foam_ratio >= 0.5 && foam_ratio <= 2);
     FILE *lines = json ? stderr : stdout;
     fprintf(lines, "camera: height %g m, speed %g m/s, pitch %g deg; %llu frames, %llu samples (%llu rays above the "
             "horizon, %llu outside the tiles); sea U10 %.2f m/s\n",
             height, speed, pitch, (unsigned long long)A.frames, (unsigned long long)A.samples,
             (unsigned long long)A.above, (unsigned long long)A.outside, u10);
-    fprintf(lines, "mss_resolved    %.5f  (x %.5f, z %.5f)\n", res, A.res_x / n, A.res_z / n);
+    fprintf(lines, "(means per area of sea in view; per pixel in brackets where given)\n");
+    fprintf(lines, "mss_resolved    %.5f  (x %.5f, z %.5f; per pixel %.5f)\n", res, S->res_x / S->w, S->res_z / S->w,
+            res_px);
     fprintf(lines, "mss_res_claimed %.5f  (what the mip tables say the mips read hold; the measured value differs "
             "by the sampling of a finite patch)\n", claimed_res);
-    fprintf(lines, "mss_unresolved  %.5f  (x %.5f, z %.5f; mip tables + tail_mss)\n", unres, A.unres_x / n,
-            A.unres_z / n);
+    fprintf(lines, "mss_unresolved  %.5f  (x %.5f, z %.5f; mip tables + tail_mss)\n", unres, S->unres_x / S->w,
+            S->unres_z / S->w);
     fprintf(lines, "mss_sea_claimed %.5f  (the frame's whole sea: every cascade's moments + tail_mss)\n", claimed);
-    fprintf(lines, "mss_total       %.5f  Cox-Munk %.5f (U12.5 %.2f m/s): ratio %.3f %s\n", total, cm,
-            u125_from_u10(u10), mss_ratio, mss_ok ? "within 30 %" : "OUTSIDE 30 %");
-    fprintf(lines, "foam_mean       %.5f  Monahan-OMuircheartaigh %.5f: ratio %.3f %s%s\n", foam, W, foam_ratio,
+    fprintf(lines, "mss_total       %.5f  Cox-Munk %.5f (U12.5 %.2f m/s): ratio %.3f, per pixel %.5f ratio %.3f: %s\n",
+            total, cm, u125_from_u10(u10), mss_ratio, total_px, mss_ratio_px,
+            mss_ok ? "both within 30 %" : "OUTSIDE 30 %");
+    fprintf(lines, "foam_mean       %.5f  Monahan-OMuircheartaigh %.5f: ratio %.3f %s%s (per pixel %.5f)\n", foam, W,
+            foam_ratio,
             !foam_applies ? "(U10 outside 8..26 m/s: not checked)" : foam_ok ? "within a factor 2" : "OUTSIDE a factor 2",
-            foam_offered ? "" : " [the scene offers no foam]");
+            foam_offered ? "" : " [the scene offers no foam]", foam_px);
     fprintf(lines, "foam_ge_half    %.5f  (fraction of samples with foam >= 0.5)\n", foam_half);
     fprintf(lines, "e_error         %.5f  (mean over frames)\n", A.e_error / A.frames);
     fprintf(lines, "e_total         %.5f  (mean over frames; max %.5f)\n", A.e_total / A.frames, A.e_total_max);
@@ -364,14 +404,19 @@ int cmd_fidelity(int argc, char **argv)
         cJSON_AddNumberToObject(o, "u10", u10);
         cJSON_AddNumberToObject(o, "u12_5", u125_from_u10(u10));
         cJSON_AddNumberToObject(o, "mss_resolved", res);
-        cJSON_AddNumberToObject(o, "mss_resolved_x", A.res_x / n);
-        cJSON_AddNumberToObject(o, "mss_resolved_z", A.res_z / n);
+        cJSON_AddNumberToObject(o, "mss_resolved_x", S->res_x / S->w);
+        cJSON_AddNumberToObject(o, "mss_resolved_z", S->res_z / S->w);
+        cJSON_AddNumberToObject(o, "mss_resolved_per_pixel", res_px);
+        cJSON_AddNumberToObject(o, "mss_total_per_pixel", total_px);
+        cJSON_AddNumberToObject(o, "foam_mean_per_pixel", foam_px);
+        cJSON_AddStringToObject(o, "weighting", "per area of sea in view (per pixel in *_per_pixel)");
         cJSON_AddNumberToObject(o, "mss_resolved_claimed", claimed_res);
         cJSON_AddNumberToObject(o, "mss_unresolved", unres);
         cJSON_AddNumberToObject(o, "mss_sea_claimed", claimed);
         cJSON_AddNumberToObject(o, "mss_total", total);
         cJSON_AddNumberToObject(o, "mss_cox_munk", cm);
         cJSON_AddNumberToObject(o, "mss_ratio", mss_ratio);
+        cJSON_AddNumberToObject(o, "mss_ratio_per_pixel", mss_ratio_px);
         cJSON_AddBoolToObject(o, "mss_within_30pct", mss_ok);
         cJSON_AddNumberToObject(o, "foam_mean", foam);
         cJSON_AddNumberToObject(o, "foam_fraction_ge_half", foam_half);
