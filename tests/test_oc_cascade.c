@@ -800,7 +800,7 @@ static int free_port(void)
  * the camera against QUERY_RESULT at the frame's tick (queries are exact
  * sums of the same waves, within their error_bound).  The daemon runs the
  * ship-bridge scene with one pixel per sample and a frame budget no camera
- * reaches (server.px_per_sample = 1, server.frame_samples = 16e6) and
+ * reaches (server.px_per_sample = 1, server.viewer_bytes_per_s = 1e10) and
  * without the Gerstner near field (which layout 1 carries as roughness,
  * not in tiles), the client asks for f32 tiles and 1 mm spacing: then the
  * frame carries every wave of every cascade near the camera (e_error = 0,
@@ -836,7 +836,7 @@ static void daemon_layout1_heights(void **state)
         if (!freopen("/dev/null", "w", stdout))
             _exit(127);
         execl(bin, bin, "--config", "config/oceand.conf", "--scene", "ship-bridge", "--port", ports, "--set",
-              "server.px_per_sample=1", "--set", "server.frame_samples=16000000", "--set",
+              "server.px_per_sample=1", "--set", "server.viewer_bytes_per_s=1e10", "--set",
               "server.near_field_waves=0", (char *)NULL);
         _exit(127);
     }
