@@ -71,7 +71,7 @@ done
 # The subscription defaults are the library's (oc_subscribe_default), the
 # two the old help text had wrong among them.
 "$OC" watch --help | grep -- "--cutoff-policy" | grep -q "(default antialias)" || fail "--cutoff-policy default"
-"$OC" watch --help | grep -- "--tile-size" | grep -q "(default 32)" || fail "--tile-size default"
+"$OC" watch --help | grep -- "--tile-size" | grep -q "(default 64)" || fail "--tile-size default"
 
 echo "== nothing is silently ignored ($SECONDS s)"
 "$OC" sea "$URL" --wind 20 >"$tmp/out" 2>"$tmp/err"; rc=$?

@@ -155,6 +155,12 @@ static oc_client *connect_bg(int p)
 static void small_subscribe(proto_subscribe *s)
 {
     oc_subscribe_default(s);
+    /* the layout-0 subscription these tests were written for (the library's
+     * default became the viewer's layout-1 subscription) */
+    s->layout = PROTO_LAYOUT_WORLD;
+    s->effects = PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT | PROTO_FX_NORMALS;
+    s->layers = 1;
+    s->accuracy = (float)PROTO_ACCURACY_DEFAULT;
     s->tile_size = 32;
     s->lod_levels = 2;
 }

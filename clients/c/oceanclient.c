@@ -272,6 +272,7 @@ void oc_frame_free(oc_frame *f)
             free(p->pub.tiles[i].data);
         free(p->pub.tiles);
     }
+    oc_cascade_view_free((oc_cascade_view *)p->pub.view);
     proto_msg_free(&p->msg);
     free(p->raw);
     topo_unref(p->topo);
@@ -400,13 +401,16 @@ static int mark_closed_locked(oc_client *c, int reason, const char *msg, pending
     return 1;
 }
 
-static frame_priv *build_frame(oc_client *c, proto_msg *m, uint8_t *raw, size_t len, double now)
+/* Moves decoded FRAME m into a new frame: decodes its tiles when
+ * decode_tiles, then builds the layout-1 view.  A tile or view failure is
+ * recorded in the frame (decode_result, view_result), not fatal.  NULL
+ * only when out of memory (m and raw then still belong to the caller). */
+static frame_priv *build_frame(int decode_tiles, proto_msg *m, uint8_t *raw, size_t len, double now)
 {
     frame_priv *f = calloc(1, sizeof *f);
     if (!f)
         return NULL;
     f->msg = *m;
-    memset(m, 0, sizeof *m);
     f->raw = raw;
     f->pub.hdr = f->msg.hdr;
     f->pub.info = f->msg.u.frame;
@@ -414,12 +418,12 @@ static frame_priv *build_frame(oc_client *c, proto_msg *m, uint8_t *raw, size_t 
     f->pub.raw_len = len;
     f->pub.recv_wall = now;
     f->pub.camera_rtt_ms = -1;
+    f->pub.view_result = OCEAN_ESTATE;
     unsigned n = f->pub.info.tile_count;
     if (n && f->pub.info.tiles) {
         f->pub.tiles = calloc(n, sizeof *f->pub.tiles);
         if (!f->pub.tiles) {
-            f->raw = NULL;
-            oc_frame_free(&f->pub);
+            free(f);
             return NULL;
         }
         for (unsigned i = 0; i < n; i++) {
@@ -427,7 +431,7 @@ static frame_priv *build_frame(oc_client *c, proto_msg *m, uint8_t *raw, size_t 
             t->info = f->pub.info.tiles[i];
             t->planes = proto_tile_planes(t->info.channels);
             t->decode_result = OCEAN_OK;
-            if (!c->opt.decode_tiles)
+            if (!decode_tiles)
                 continue;
             size_t cnt = (size_t)t->planes * t->info.width * t->info.height;
             t->data = malloc(cnt * sizeof(float));
@@ -445,12 +449,152 @@ static frame_priv *build_frame(oc_client *c, proto_msg *m, uint8_t *raw, size_t 
             }
         }
     }
+    memset(m, 0, sizeof *m);
+    snprintf(f->pub.view_error, sizeof f->pub.view_error, "%s",
+             f->pub.info.layout != PROTO_LAYOUT_CASCADE ? "not a layout-1 frame"
+             : !decode_tiles                          ? "tiles not decoded"
+                                                      : "");
+    if (f->pub.info.layout == PROTO_LAYOUT_CASCADE && decode_tiles && f->pub.info.tiles) {
+        const float **data = calloc(n ? n : 1, sizeof *data);
+        oc_cascade_view *v = NULL;
+        if (!data) {
+            f->pub.view_result = OCEAN_ENOMEM;
+        } else {
+            for (unsigned i = 0; i < n; i++)
+                data[i] = f->pub.tiles[i].data;
+            f->pub.view_result = oc_cascade_view_build(&f->pub.info, data, &v, f->pub.view_error,
+                                                       sizeof f->pub.view_error);
+            free(data);
+        }
+        f->pub.view = v;
+    } else if (f->pub.info.layout == PROTO_LAYOUT_CASCADE && decode_tiles && !n) {
+        /* a frame with no tiles still has a (empty) view: every read is
+         * then OCEAN_ENOTFOUND, which says what happened */
+        oc_cascade_view *v = NULL;
+        f->pub.view_result = oc_cascade_view_build(&f->pub.info, NULL, &v, f->pub.view_error,
+                                                   sizeof f->pub.view_error);
+        f->pub.view = v;
+    }
     return f;
 }
 
+ocean_result oc_frame_decode(const uint8_t *msg, size_t len, oc_frame **out, char *err, size_t errlen)
+{
+    if (!out)
+        return OCEAN_EINVAL;
+    *out = NULL;
+    if (!msg) {
+        ocean_seterr(err, errlen, "no message");
+        return OCEAN_EINVAL;
+    }
+    proto_msg m;
+    ocean_result r = proto_decode(msg, len, &m, err, errlen);
+    if (r != OCEAN_OK)
+        return r;
+    if (m.hdr.type != PROTO_FRAME) {
+        ocean_seterr(err, errlen, "%s is not a FRAME", proto_type_name(m.hdr.type));
+        proto_msg_free(&m);
+        return OCEAN_ETYPE;
+    }
+    uint8_t *raw = malloc(len ? len : 1);
+    if (!raw) {
+        proto_msg_free(&m);
+        return OCEAN_ENOMEM;
+    }
+    memcpy(raw, msg, len);
+    frame_priv *f = build_frame(1, &m, raw, len, 0.0);
+    if (!f) {
+        proto_msg_free(&m);
+        free(raw);
+        return OCEAN_ENOMEM;
+    }
+    f->pub.latency_ms = -1;
+    for (unsigned i = 0; f->pub.tiles && i < f->pub.info.tile_count; i++)
+        if (f->pub.tiles[i].decode_result != OCEAN_OK) {
+            r = f->pub.tiles[i].decode_result;
+            ocean_seterr(err, errlen, "tile %u does not decode: %s", i, ocean_strerror(r));
+            oc_frame_free(&f->pub);
+            return r;
+        }
+    if (f->pub.info.layout == PROTO_LAYOUT_CASCADE && f->pub.view_result != OCEAN_OK) {
+        r = f->pub.view_result;
+        ocean_seterr(err, errlen, "layout-1 tiles: %s", f->pub.view_error);
+        oc_frame_free(&f->pub);
+        return r;
+    }
+    *out = &f->pub;
+    return OCEAN_OK;
+}
+
+ocean_result oc_frame_peek(const uint8_t *msg, size_t have, size_t len, proto_frame *f, size_t *records_at,
+                           char *err, size_t errlen)
+{
+    memset(f, 0, sizeof *f);
+    const size_t fixed = PROTO_HEADER_SIZE + 56;
+    if (!msg || have > len || have < fixed) {
+        ocean_seterr(err, errlen, "FRAME shorter than its 56 fixed bytes");
+        return OCEAN_ETRUNC;
+    }
+    const uint8_t *p = msg + PROTO_HEADER_SIZE;
+    proto_frame_fixed_read(p, f);
+    if (isnan(f->cutoff_k) || f->cutoff_k < 0 || !(f->e_error >= 0 && f->e_error <= 1) || f->has_mesh > 1 ||
+        f->tile_count > PROTO_MAX_FRAME_TILES) {
+        ocean_seterr(err, errlen, "FRAME fixed fields out of range");
+        return OCEAN_EINVAL;
+    }
+    if (p[52] | p[53] | p[54] | p[55]) {
+        ocean_seterr(err, errlen, "FRAME reserved bytes not 0");
+        return OCEAN_EFORMAT;
+    }
+    size_t at = fixed;
+    if (f->layout == PROTO_LAYOUT_CASCADE) {
+        if (have < fixed + PROTO_CASCADE_BLOCK_FIXED) {
+            ocean_seterr(err, errlen, "layout-1 FRAME shorter than its cascade block");
+            return OCEAN_ETRUNC;
+        }
+        const uint8_t *b = p + 56;
+        proto_cascade_block *k = &f->cascades;
+        k->cascade_count = b[0];
+        k->order = b[1];
+        k->spacing_per_m = proto_ldf32(b + 4);
+        for (int i = 0; i < 3; i++)
+            k->camera[i] = proto_ldf64(b + 8 + 8 * i);
+        k->min_spacing_m = proto_ldf32(b + 32);
+        k->e_total = proto_ldf32(b + 36);
+        for (int i = 0; i < 3; i++)
+            k->tail_mss[i] = proto_ldf32(b + 40 + 4 * i);
+        int bad = k->cascade_count < 1 || k->cascade_count > PROTO_MAX_LAYERS || k->order < 1 || k->order > 64 ||
+                  !(k->spacing_per_m > 0) || !isfinite(k->spacing_per_m) || !(k->min_spacing_m >= 0) ||
+                  !isfinite(k->min_spacing_m) || !(k->e_total >= 0 && k->e_total <= 1) ||
+                  !(k->tail_mss[0] >= 0) || !(k->tail_mss[1] >= 0) || !isfinite(k->tail_mss[0]) ||
+                  !isfinite(k->tail_mss[1]) || !isfinite(k->tail_mss[2]);
+        for (int i = 0; i < 3; i++)
+            bad |= !isfinite(k->camera[i]);
+        if (bad) {
+            ocean_seterr(err, errlen, "FRAME cascade block out of range");
+            return OCEAN_EINVAL;
+        }
+        at += PROTO_CASCADE_BLOCK_FIXED + (size_t)k->cascade_count * PROTO_CASCADE_ENTRY_SIZE;
+    } else if (f->layout != PROTO_LAYOUT_WORLD) {
+        ocean_seterr(err, errlen, "FRAME layout %u unknown", f->layout);
+        return OCEAN_ETYPE;
+    }
+    /* each tile record is at least its 8-byte head and a TILE's 48 bytes; a
+     * mesh record at least a placement (layout 1) or MESH_VERTICES' 32 */
+    size_t need = at + (size_t)f->tile_count * (8 + 48) + (f->has_mesh ? 8 + 32 : 0);
+    if (len < need) {
+        ocean_seterr(err, errlen, "FRAME of %zu bytes cannot hold its %u tiles%s", len, f->tile_count,
+                     f->has_mesh ? " and mesh" : "");
+        return OCEAN_ETRUNC;
+    }
+    if (records_at)
+        *records_at = at;
+    return OCEAN_OK;
+}
+
 /* Header-only FRAME: proto_header_decode checks the 32-byte header, then
- * the fixed fields are read at PROTOCOL.md's offsets (FRAME section) and
- * range-checked; the records are not parsed. */
+ * oc_frame_peek the fixed fields and a layout-1 cascade block's fixed part;
+ * the records are not parsed. */
 static ocean_result peek_frame(const uint8_t *raw, size_t len, const proto_limits *lim, proto_msg *m,
                                char *err, size_t errlen)
 {
@@ -460,19 +604,12 @@ static ocean_result peek_frame(const uint8_t *raw, size_t len, const proto_limit
         return r;
     if (m->hdr.type != PROTO_FRAME)
         return OCEAN_ETYPE;
-    if (len < PROTO_HEADER_SIZE + 56) {
-        snprintf(err, errlen, "FRAME shorter than its 56 fixed bytes");
-        return OCEAN_ETRUNC;
+    r = oc_frame_peek(raw, len, len, &m->u.frame, NULL, err, errlen);
+    if (r == OCEAN_OK && m->u.frame.tile_count > lim->max_frame_tiles) {
+        snprintf(err, errlen, "FRAME tile_count %u above the limit", m->u.frame.tile_count);
+        r = OCEAN_ETOOBIG;
     }
-    const uint8_t *p = raw + PROTO_HEADER_SIZE;
-    proto_frame *f = &m->u.frame;
-    proto_frame_fixed_read(p, f);
-    if (isnan(f->cutoff_k) || f->cutoff_k < 0 || !(f->e_error >= 0 && f->e_error <= 1) || f->has_mesh > 1 ||
-        f->tile_count > lim->max_frame_tiles) {
-        snprintf(err, errlen, "FRAME fixed fields out of range");
-        return OCEAN_EINVAL;
-    }
-    return OCEAN_OK;
+    return r;
 }
 
 static void handle_message(oc_client *c, uint8_t *raw, size_t len)
@@ -508,7 +645,7 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
     unsigned type = res == OCEAN_OK ? m.hdr.type : 0;
     double sim_time = m.hdr.sim_time;
     if (type == PROTO_FRAME) {
-        fr = build_frame(c, &m, raw, len, now);   /* moves m into the frame */
+        fr = build_frame(c->opt.decode_tiles && !peeked, &m, raw, len, now);   /* moves m into the frame */
         if (fr)
             raw_taken = 1;
     }
@@ -547,6 +684,12 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
             for (unsigned i = 0; fr->pub.tiles && i < fr->pub.info.tile_count; i++)
                 if (fr->pub.tiles[i].decode_result != OCEAN_OK)
                     c->st.decode_errors++;
+            if (!peeked && c->opt.decode_tiles && fr->pub.info.layout == PROTO_LAYOUT_CASCADE &&
+                fr->pub.view_result != OCEAN_OK) {
+                c->st.decode_errors++;
+                set_local_error(c, fr->pub.view_result, "layout-1 FRAME tick %u: %s", fr->pub.info.tick,
+                                fr->pub.view_error);
+            }
             if (fr->pub.info.camera_seq != PROTO_NO_CAMERA)
                 for (int i = 0; i < CAM_RING; i++)
                     if (c->cams[i].wall > 0 && c->cams[i].seq == fr->pub.info.camera_seq) {
@@ -567,7 +710,9 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
             c->have_tick = 1;
             c->st.frames_rx++;
             if (!peeked && fr->pub.info.has_mesh && c->topo &&
-                c->topo->pub.mesh_id == fr->pub.info.mesh.mesh_id) {
+                c->topo->pub.mesh_id == (fr->pub.info.layout == PROTO_LAYOUT_CASCADE
+                                             ? fr->pub.info.placement.mesh_id
+                                             : fr->pub.info.mesh.mesh_id)) {
                 fr->topo = c->topo;
                 atomic_fetch_add(&c->topo->refs, 1);
                 fr->pub.topology = &c->topo->pub;
@@ -605,6 +750,9 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
             t->pub.indices = pt->indices;
             t->pub.morph = pt->morph;
             t->pub.level = pt->level;
+            t->pub.flags = pt->flags;
+            t->pub.flat = pt->flat;
+            t->pub.zones = pt->zones;
             topo_unref(c->topo);
             c->topo = t;
             break;
@@ -1401,18 +1549,21 @@ ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen)
 void oc_subscribe_default(proto_subscribe *s)
 {
     memset(s, 0, sizeof *s);
-    s->effects = PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT | PROTO_FX_NORMALS;
+    /* the browser viewer's subscription (clients/web/worker.js,
+     * chooseSubscription), so the daemon's shared tile encodings serve both */
+    s->effects = PROTO_FX_ALL;
     s->mesh_kind = PROTO_MESH_CONCENTRIC;
     s->codec = PROTO_CODEC_QZ;
     s->cutoff_policy = PROTO_CUTOFF_ANTIALIAS;
     s->mode = PROTO_MODE_LIVE;
-    s->layers = 1;
-    s->lod_levels = 4;
-    s->tile_size = 32;
+    s->layers = PROTO_MAX_LAYERS;
+    s->lod_levels = 8;
+    s->tile_size = 64;
     s->frame_rate_hz = 30.0f;
-    s->accuracy = (float)PROTO_ACCURACY_DEFAULT;
+    s->accuracy = (float)OC_ACCURACY_DEFAULT;
     s->base_spacing_m = 0;
     s->view_range_m = 0;
+    s->layout = PROTO_LAYOUT_CASCADE;
 }
 
 void oc_camera_default(proto_camera *cam)

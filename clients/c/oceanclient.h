@@ -64,6 +64,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "oc_cascade.h"
 #include "ocean_result.h"
 #include "proto.h"
 
@@ -132,14 +133,22 @@ typedef struct oc_topology {
     const uint32_t *indices;    /* index_count, triangles CCW from above */
     const float *morph;         /* vertex_count */
     const uint8_t *level;       /* vertex_count */
+    uint16_t flags;             /* PROTO_TOPO_FLAT: flat and zones are set */
+    const float *flat;          /* FLAT: x, z per vertex relative to the
+                                   placement origin (layout 1) */
+    const float *zones;         /* FLAT: per level g_L, R_L, b_L, 0 */
 } oc_topology;
 
-typedef struct oc_frame {
+struct oc_frame {
     proto_header hdr;           /* hdr.sim_time: the tick's sim time */
     proto_frame info;           /* cutoff_k, e_error, origin, camera_seq, tick,
-                                   tile_count, has_mesh, mesh (vertex positions,
-                                   relative to info.mesh.origin); info.tiles[i]
-                                   equals tiles[i].info */
+                                   tile_count, has_mesh, layout; layout 0: mesh
+                                   (vertex positions, relative to
+                                   info.mesh.origin); layout 1: cascades (the
+                                   cascade block: camera, q, e_total, tail_mss,
+                                   mip tables) and placement; info.tiles[i]
+                                   equals tiles[i].info (tiles[i].info.cascade:
+                                   a layout-1 tile's cascade) */
     oc_tile *tiles;             /* info.tile_count tiles */
     const oc_topology *topology;/* latest topology with info.mesh.mesh_id, or
                                    NULL (no mesh, or topology not received) */
@@ -149,10 +158,44 @@ typedef struct oc_frame {
     double latency_ms;          /* tick-to-receipt estimate (see top) */
     double camera_rtt_ms;       /* CAMERA sent -> this FRAME; -1 if unknown */
     uint64_t index;             /* 0, 1, 2 ... frames received by this client */
-} oc_frame;
+    /* Layout 1: the frame's tiles indexed per cascade and mip, for
+     * oc_frame_sample, oc_frame_surface and oc_frame_mesh_positions
+     * (oc_cascade.h).  NULL for layout 0, header-only or undecoded frames,
+     * or when the tiles do not fit the cascade block (view_result and
+     * view_error say why; counted in oc_client_stats.decode_errors). */
+    const oc_cascade_view *view;
+    ocean_result view_result;
+    char view_error[160];
+};
 
-/* Frees a frame taken from oc_client_next_frame.  Accepts NULL. */
+/* Frees a frame taken from oc_client_next_frame or oc_frame_decode.
+ * Accepts NULL. */
 void oc_frame_free(oc_frame *f);
+
+/* Bytes of a FRAME that oc_frame_peek reads: header, fixed fields and a
+ * layout-1 cascade block's fixed part. */
+#define OC_FRAME_PEEK_BYTES (PROTO_HEADER_SIZE + 56 + PROTO_CASCADE_BLOCK_FIXED)
+
+/* Reads the facts of a FRAME without its records, for readers that keep
+ * only a message's first bytes (load generators): msg holds the first
+ * `have` bytes of a FRAME of `len` bytes whose header the caller checked
+ * (proto_header_decode).  Fills f's fixed fields and, for layout 1, the
+ * fixed part of f->cascades (count, order, q, camera, min_spacing_m,
+ * e_total, tail_mss; not the entries), range-checked; *records_at (may be
+ * NULL) gets the offset of the first record, after the cascade block.
+ * Needs have >= 88 (layout 0) or OC_FRAME_PEEK_BYTES (layout 1): OCEAN_ETRUNC
+ * otherwise, or when len cannot hold tile_count records (and the mesh
+ * record); OCEAN_EINVAL / EFORMAT / ETYPE for bad fields. */
+ocean_result oc_frame_peek(const uint8_t *msg, size_t have, size_t len, proto_frame *f, size_t *records_at,
+                           char *err, size_t errlen);
+
+/* Decodes one complete FRAME message (msg/len, copied) into a frame of its
+ * own, as a client with decode_tiles = 1 would receive it: tiles decoded,
+ * the layout-1 view built.  For tools that read recorded frames and for
+ * tests.  recv_wall 0, latency and camera_rtt -1, topology NULL.  On
+ * failure *out is NULL and err names the cause (a tile that does not
+ * decode, or a layout-1 view that does not build, is an error here). */
+ocean_result oc_frame_decode(const uint8_t *msg, size_t len, oc_frame **out, char *err, size_t errlen);
 
 /* --------------------------------------------------------------- clients */
 
@@ -187,8 +230,10 @@ typedef struct oc_options {
     int header_only;          /* 1: FRAMEs are checked (header, length) and
                                  only their fixed fields read (oc_frame.info:
                                  cutoff_k, e_error, origin, camera_seq, tick,
-                                 tile_count, has_mesh; tiles NULL, info.tiles
-                                 NULL, no mesh data): for load generators,
+                                 tile_count, has_mesh, layout and a layout-1
+                                 cascade block's fixed part (oc_frame_peek);
+                                 tiles NULL, info.tiles NULL, no mesh data,
+                                 no view): for load generators,
                                  whose own CPU must not limit the test.
                                  Other messages are decoded fully. (0) */
     uint32_t max_message;     /* largest message accepted, bytes
@@ -244,11 +289,19 @@ double oc_client_sim_time(const oc_client *c);
  * and its code (OCEAN_OK if none). */
 ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen);
 
-/* A SUBSCRIBE with the library's defaults: height+displacement+normals,
- * concentric mesh, codec qz at PROTO_ACCURACY_DEFAULT, antialias cutoff
- * policy (the cutoff falls as the camera speeds up, so nothing aliases),
- * live, 1 layer, 4 LOD levels, 32-sample tiles (the default subscription
- * stays under 4 MB/s at 30 Hz), server default spacing and range. */
+/* The qz accuracy of oc_subscribe_default (the viewer's), as a double. */
+#define OC_ACCURACY_DEFAULT 1e-3
+
+/* A SUBSCRIBE with the library's defaults, the browser viewer's
+ * (clients/web): layout 1 (shared cascade tiles; the library sums the
+ * cascades and displaces the mesh: oc_frame_sample,
+ * oc_frame_mesh_positions), every effect, every cascade (layers 4; the
+ * server sends those it has), concentric mesh, codec qz at accuracy 1e-3,
+ * 64-sample tiles, antialias cutoff policy, live at 30 Hz, 8 LOD levels
+ * (layout 0 only), server default spacing and range.  Subscribing as the
+ * viewer does lets the daemon serve the library the very tile encodings it
+ * already made for viewers.  Set layout = 0 for server-summed world tiles
+ * and server-displaced mesh vertices. */
 void oc_subscribe_default(proto_subscribe *s);
 
 /* Sends SUBSCRIBE (validated by the encoder first).  May be sent again to

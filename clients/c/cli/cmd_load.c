@@ -28,7 +28,7 @@
 typedef struct viewer {
     oc_client *c;
     struct load_ctx *ctx;
-    uint64_t frames, bytes;
+    uint64_t frames, bytes, frames_layout[2];
     int closed;
     proto_camera cam;
 } viewer;
@@ -51,6 +51,7 @@ static void on_frame(void *user, oc_client *c, const oc_frame *f)
     if (!L->measuring)
         return;
     v->frames++;
+    v->frames_layout[f->info.layout == PROTO_LAYOUT_CASCADE]++;
     v->bytes += f->raw_len;
     occli_vec_push(L->delay, d);
     for (unsigned i = 0; f->tiles && i < f->info.tile_count; i++)
@@ -175,6 +176,8 @@ int load_library_run(const load_cfg *cfg, load_result *R)
         oc_client_stats st;
         oc_client_get_stats(v->c, &st);
         R->frames += v->frames;
+        R->frames_layout[0] += v->frames_layout[0];
+        R->frames_layout[1] += v->frames_layout[1];
         R->bytes += v->bytes;
         R->skipped += st.frames_gap;
         R->dropped += st.frames_dropped;
@@ -228,8 +231,16 @@ int cmd_load(int argc, char **argv)
     int nclients = 1, json = 0, decode = 0, library = 0, threads = 0, verify_every = 30;
     double seconds = 10, ramp = 1.0, spread = 0, speed = 0, warmup = 0.5;
     occli_sub s;
+    /* the library's defaults, which are the browser viewer's subscription
+     * (clients/web/worker.js): every effect and every cascade (the daemon
+     * clamps both to what the scene has), 64-sample tiles at accuracy 1e-3,
+     * 8 levels, layout 1 */
     occli_sub_default(&s);
+    int layout = PROTO_LAYOUT_CASCADE;
     const occli_opt opts[] = {
+        {.name = "layout", .kind = OCCLI_INT, .target = &layout, .min = 0, .max = 1,
+         .help = "N  0: world tiles summed per camera, mesh displaced by the server;\n"
+                 "                       1: shared cascade tiles (the viewer's and the library's)"},
         {"clients", OCCLI_INT, &nclients, 1, 10000, "N  viewers", NULL},
         {"seconds", OCCLI_DOUBLE, &seconds, 0.1, 1e6, "S  measured duration", NULL},
         {"json", OCCLI_FLAG, &json, 0, 0, "print a JSON summary", NULL},
@@ -268,6 +279,7 @@ int cmd_load(int argc, char **argv)
     memset(&cfg, 0, sizeof cfg);
     if (occli_sub_build("load", &s, &cfg.sub, &cfg.cam0))
         return 2;
+    cfg.sub.layout = (uint8_t)layout;
     if (threads == 0) {
         long nc = sysconf(_SC_NPROCESSORS_ONLN);
         threads = nc < 1 ? 1 : nc > 4 ? 4 : (int)nc;
@@ -324,6 +336,14 @@ int cmd_load(int argc, char **argv)
         cJSON_AddNumberToObject(o, "seconds", wall);
         cJSON_AddNumberToObject(o, "rate_hz", s.rate);
         cJSON_AddStringToObject(o, "codec", s.codec);
+        cJSON_AddNumberToObject(o, "layout", layout);
+        cJSON_AddNumberToObject(o, "effects", cfg.sub.effects);
+        cJSON_AddNumberToObject(o, "layers", cfg.sub.layers);
+        cJSON_AddNumberToObject(o, "tile_size", cfg.sub.tile_size);
+        /* what the daemon answered with: a daemon that predates layout 1
+         * sends layout-0 frames whatever was asked */
+        cJSON_AddNumberToObject(o, "frames_layout0", (double)R.frames_layout[0]);
+        cJSON_AddNumberToObject(o, "frames_layout1", (double)R.frames_layout[1]);
         cJSON_AddNumberToObject(o, "frames", (double)R.frames);
         cJSON_AddNumberToObject(o, "frames_per_viewer", fpv);
         cJSON_AddNumberToObject(o, "frames_per_viewer_min", (double)R.fmin);
@@ -366,6 +386,8 @@ int cmd_load(int argc, char **argv)
         free(txt);
         cJSON_Delete(o);
     } else {
+        printf("layout %d (frames: %llu layout 0, %llu layout 1)\n", layout,
+               (unsigned long long)R.frames_layout[0], (unsigned long long)R.frames_layout[1]);
         printf("viewers %d/%d, %.2f s at %.1f Hz: %.1f frames/viewer (min %llu, max %llu, %.1f fps), "
                "latency p50 %.2f ms p99 %.2f ms max %.2f ms, skipped %llu, %.0f B/viewer/s, "
                "disconnects %d, errors %llu, decode errors %llu (%llu frames verified), "

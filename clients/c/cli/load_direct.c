@@ -71,6 +71,7 @@ typedef struct dv {
     uint32_t last_tick;
     int have_tick;
     uint64_t frames, bytes, skipped, errors, decode_errors, verified, nframe;
+    uint64_t frames_layout[2];   /* FRAMEs in the window by layout */
     proto_camera cam;
 } dv;
 
@@ -96,8 +97,6 @@ typedef struct worker {
     double min_delay;           /* over FRAMEs */
     double min_any;             /* over every message, HELLO included */
     uint64_t rng;
-    float *scratch;
-    size_t scratch_n;
     int oom;
 } worker;
 
@@ -225,7 +224,9 @@ static int mb_reserve(dv *v, size_t need)
  * into mb, +0.1 to +0.2; as here, on a par.
  * Control frames stay buffered by wslay, which answers ping and close.
  */
-#define HEAD_KEEP 128
+/* header, FRAME fixed fields and a layout-1 cascade block's fixed part
+ * (OC_FRAME_PEEK_BYTES = 144), rounded up */
+#define HEAD_KEEP 160
 static void ws_frame_start_cb(wslay_event_context_ptr ctx, const struct wslay_event_on_frame_recv_start_arg *arg,
                               void *user)
 {
@@ -377,40 +378,31 @@ static int queue_camera(worker *w, dv *v)
 
 /* ---- messages ------------------------------------------------------------ */
 
-/* Full decode of a FRAME, tiles included; 0 if everything decoded. */
+/* Full decode of a FRAME as the client library receives it
+ * (oc_frame_decode): every record, every tile decoded (the codecs refuse
+ * non-finite values), and for layout 1 every tile placed in its cascade's
+ * mip grid as the spec lays them out (oc_cascade_view_build); then one
+ * point of the sea is read through the lod rule at the frame's camera.
+ * 0 if all of it held. */
 static int verify_frame(worker *w, const uint8_t *p, size_t n)
 {
-    proto_msg m;
+    (void)w;
+    oc_frame *f = NULL;
     char err[256];
-    if (proto_decode(p, n, &m, err, sizeof err) != OCEAN_OK)
+    if (oc_frame_decode(p, n, &f, err, sizeof err) != OCEAN_OK)
         return 1;
     int bad = 0;
-    const proto_frame *f = &m.u.frame;
-    for (unsigned i = 0; i < f->tile_count; i++) {
-        const proto_tile *t = &f->tiles[i];
-        size_t cnt = (size_t)proto_tile_planes(t->channels) * t->width * t->height;
-        if (cnt > w->scratch_n) {
-            float *s = realloc(w->scratch, cnt * sizeof *s);
-            if (!s) {
-                bad++;
-                continue;
-            }
-            w->scratch = s;
-            w->scratch_n = cnt;
-        }
-        if (proto_tile_decode((proto_codec)t->codec, t->width, t->height, t->channels, t->payload,
-                              t->payload_len, w->scratch, NULL, 0) != OCEAN_OK)
-            bad++;
-        else
-            for (size_t k = 0; k < cnt; k++)
-                if (!isfinite(w->scratch[k])) {
-                    bad++;
-                    break;
-                }
-    }
-    if (f->has_mesh && f->mesh.vertex_count && !f->mesh.positions)
+    if (f->info.has_mesh && f->info.layout == PROTO_LAYOUT_WORLD && f->info.mesh.vertex_count &&
+        !f->info.mesh.positions)
         bad++;
-    proto_msg_free(&m);
+    if (f->info.layout == PROTO_LAYOUT_CASCADE && f->info.tile_count) {
+        const double *cam = f->info.cascades.camera;
+        oc_sample s;
+        ocean_result r = oc_frame_sample(f, cam[0], cam[2], 0, &s);
+        if (r != OCEAN_OK || !isfinite(s.height))
+            bad++;
+    }
+    oc_frame_free(f);
     return bad;
 }
 
@@ -435,13 +427,11 @@ static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n
     v->last_sim = h.sim_time;
     int measuring = atomic_load_explicit(&w->S->measuring, memory_order_relaxed);
     if (h.type == PROTO_FRAME) {
-        if (have < PROTO_HEADER_SIZE + 56) {
-            v->decode_errors++;
-            return;
-        }
+        /* fixed fields, and a layout-1 frame's cascade block (its records
+         * start after the block): oc_frame_peek reads both from the kept
+         * head and checks that n can hold the records it announces */
         proto_frame f;
-        proto_frame_fixed_read(p + PROTO_HEADER_SIZE, &f);
-        if (isnan(f.cutoff_k) || f.cutoff_k < 0 || !(f.e_error >= 0 && f.e_error <= 1) || f.has_mesh > 1 ||
+        if (oc_frame_peek(p, have < n ? have : n, n, &f, NULL, err, sizeof err) != OCEAN_OK ||
             f.tile_count > lim.max_frame_tiles) {
             v->decode_errors++;
             return;
@@ -460,6 +450,7 @@ static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n
         if (!measuring)
             return;
         v->frames++;
+        v->frames_layout[f.layout]++;
         v->bytes += n;
         if (occli_vec_push(&w->delay, d))
             w->oom = 1;
@@ -872,6 +863,8 @@ int load_direct_run(const load_cfg *cfg, load_result *R)
         R->errors += v->errors;
         R->decode_errors += v->decode_errors;
         R->verified += v->verified;
+        R->frames_layout[0] += v->frames_layout[0];
+        R->frames_layout[1] += v->frames_layout[1];
         R->closed += v->closed;
         if (v->ready) {
             if (v->frames < R->fmin)
@@ -913,7 +906,6 @@ out:
         if (ws[t].ep > 0)
             close(ws[t].ep);
         occli_vec_free(&ws[t].delay);
-        free(ws[t].scratch);
         free(ws[t].rb);
     }
     free(slots);

@@ -10,8 +10,9 @@
  *    payload one byte at a time (about 6 ns a byte, measured with perf on
  *    this machine), which at 256 viewers x 3.8 MB/s is several cores - the
  *    generator, not the daemon, would be measured.  Every FRAME's header and
- *    fixed fields are checked; every verify_every-th FRAME of each viewer
- *    (staggered between viewers) is decoded in full, tiles included.
+ *    fixed fields (and a layout-1 frame's cascade block) are checked; every
+ *    verify_every-th FRAME of each viewer (staggered between viewers) is
+ *    decoded in full as the client library would, tiles included.
  *  - load_library_run: every viewer is an oc_client on one oc_loop, as a
  *    simulator would connect (--library); header-only unless --decode.
  *
@@ -45,6 +46,7 @@ typedef struct load_result {
     double cpu;                   /* process CPU seconds over the window */
     uint64_t frames, bytes, skipped, dropped, errors, decode_errors, verified;
     uint64_t fmin, fmax;          /* frames of the least / most served viewer */
+    uint64_t frames_layout[2];    /* frames by their layout (0 world, 1 cascade) */
     int closed;
     occli_vec delay;              /* raw recv_wall - sim_time, s, in the window */
     double min_delay;             /* smallest such value over the whole run */

@@ -356,7 +356,7 @@ void occli_sub_default(occli_sub *s)
     s->rate = d.frame_rate_hz;
     /* The wire carries accuracy as float32; the double the library starts
      * from is the one to show. */
-    s->accuracy = PROTO_ACCURACY_DEFAULT;
+    s->accuracy = OC_ACCURACY_DEFAULT;
     s->tile_size = d.tile_size;
     s->levels = d.lod_levels;
     s->layers = d.layers;
@@ -487,6 +487,8 @@ static void usage(FILE *f)
             "  load URL --clients N --seconds S --rate HZ [--json]\n"
             "                                           many viewers from one process\n"
             "  sea URL [--set --token T --wind U ...]   show or set the sea state\n"
+            "  fidelity URL --camera-height H --speed V [--frames N] [--json]\n"
+            "                                           delivered slope variance, foam, e_error, e_total\n"
             "\n"
             "Run 'ocean-client COMMAND --help' for a command's options.\n");
 }
@@ -518,6 +520,7 @@ int main(int argc, char **argv)
     } cmds[] = {
         {"watch", cmd_watch},   {"query", cmd_query}, {"record", cmd_record}, {"replay", cmd_replay},
         {"export", cmd_export}, {"load", cmd_load},   {"sea", cmd_sea},
+        {"fidelity", cmd_fidelity},
     };
     for (size_t i = 0; i < sizeof cmds / sizeof cmds[0]; i++)
         if (!strcmp(c, cmds[i].name))

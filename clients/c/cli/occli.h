@@ -129,5 +129,6 @@ int cmd_replay(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 int cmd_load(int argc, char **argv);
 int cmd_sea(int argc, char **argv);
+int cmd_fidelity(int argc, char **argv);
 
 #endif

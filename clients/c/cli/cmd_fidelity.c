@@ -1,0 +1,445 @@
+/*
+ * cmd_fidelity.c - `ocean-client fidelity`: what the sea delivered to a
+ * camera is, measured from the frames it receives (issue 13, "Done when").
+ *
+ * A camera at height H flies along +x at speed V (or holds still), looking
+ * down at --pitch (by default atan(H / range) + fov/4 below the horizon:
+ * from 2 m the view reaches the horizon and sees enough sea for slope and
+ * whitecap statistics, from 10 km half of it still lands within range), subscribed as the client library does by default (layout
+ * 1, the browser viewer's subscription).  From each frame made for that
+ * camera, a grid of the viewport's pixels is cast onto the mean sea plane
+ * (y = 0) and the sea is read where each ray lands, through the spec's lod
+ * rule at that point (oc_frame_sample: the pixel footprint decides the
+ * mips).  Means are taken per area of sea in view (each pixel weighted by
+ * the sea area it covers: whitecap coverage and slope statistics are area
+ * statistics, and a pixel-weighted mean from a low camera is a few metres
+ * of sea); per-pixel means are reported beside them:
+ *   - resolved mean-square slope: <s_x^2 + s_z^2> of the slopes the tiles'
+ *     normals give there (summed over cascades);
+ *   - unresolved mean-square slope: <mss_x + mss_z> of the moments the
+ *     frame carries for what those mips leave out (mip tables) and what no
+ *     cascade holds (tail_mss);
+ *   - total = resolved + unresolved: the slope variance a renderer that
+ *     shades with both draws.  Compared with Cox & Munk (1954), clean sea:
+ *     sigma^2 = 0.003 + 5.12e-3 U (U in m/s at 12.5 m), U from the scene's
+ *     U10 by the neutral logarithmic profile U(z) = (u_* / kappa) ln(z/z0):
+ *     U12.5 = U10 + (u_* / kappa) ln(12.5/10), kappa = 0.4, u_* = sqrt(C_D) U10
+ *     with Wu's (1982, JGR 87(C12) 9704) C_D = (0.8 + 0.065 U10) 1e-3;
+ *   - foam: the mean foam over the sampled sea (each sample is a coverage
+ *     fraction of the sea it stands for, and a mean of coverages survives
+ *     the mip filtering that a threshold would not) is the whitecap
+ *     coverage compared with Monahan & O'Muircheartaigh (1980),
+ *     W = 3.84e-6 U10^3.41; the fraction of samples with foam >= 0.5 is
+ *     reported beside it;
+ *   - e_error (FRAME) and e_total (cascade block), averaged over frames.
+ * Rays above the horizon, or whose point the frame's tiles do not cover,
+ * are counted and left out.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cJSON.h>
+
+#include "occli.h"
+
+/* Cox & Munk 1954 reference for U10 (see the top). */
+static double u125_from_u10(double u10)
+{
+    double cd = (0.8 + 0.065 * u10) * 1e-3;
+    return u10 + sqrt(cd) * u10 / 0.4 * log(12.5 / 10.0);
+}
+
+static double cox_munk_mss(double u10)
+{
+    return 0.003 + 5.12e-3 * u125_from_u10(u10);
+}
+
+static double monahan_whitecap(double u10)
+{
+    return 3.84e-6 * pow(u10, 3.41);
+}
+
+/* Sums over the samples, each weighted (w = 1: per pixel; w = the sea
+ * area the pixel covers: per square metre of sea in view). */
+typedef struct fid_sums {
+    double w, res_x, res_z, unres_x, unres_z, foam, foam_half, claimed;
+} fid_sums;
+
+typedef struct fid_acc {
+    fid_sums px, area;
+    double e_error, e_total, e_total_max;
+    uint64_t samples, above, outside, frames, stale;
+} fid_acc;
+
+static void sums_add(fid_sums *S, double w, const oc_sample *s, double whole)
+{
+    S->w += w;
+    S->res_x += w * s->slope_x * s->slope_x;
+    S->res_z += w * s->slope_z * s->slope_z;
+    S->unres_x += w * s->mss[0];
+    S->unres_z += w * s->mss[1];
+    S->foam += w * s->foam;
+    S->foam_half += w * (s->foam >= 0.5);
+    S->claimed += w * whole;
+}
+
+/* Casts grid x grid*9/16 rays of camera `cam` (position from the frame's
+ * block) and reads the frame where they land. */
+static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, int verbose, oc_interp interp,
+                          fid_acc *A)
+{
+    const double *cp = f->info.cascades.camera;
+    double yaw = cam->yaw_deg * M_PI / 180, pitch = cam->pitch_deg * M_PI / 180;
+    /* PROTOCOL.md "Camera orientation": forward (cos p cos y, sin p, cos p sin y); no roll */
+    double fw[3] = {cos(pitch) * cos(yaw), sin(pitch), cos(pitch) * sin(yaw)};
+    double rt[3] = {-sin(yaw), 0, cos(yaw)};     /* forward x up, horizontal */
+    double up[3] = {rt[1] * fw[2] - rt[2] * fw[1], rt[2] * fw[0] - rt[0] * fw[2], rt[0] * fw[1] - rt[1] * fw[0]};
+    double ty = tan(cam->fov_y_deg * M_PI / 360);
+    double aspect = (double)cam->viewport_w / cam->viewport_h;
+    /* what the frame says the whole sea holds: every cascade's entry
+     * `mips` (its whole moments) plus the tail no cascade holds */
+    const proto_cascade_block *b = &f->info.cascades;
+    double whole = (double)b->tail_mss[0] + b->tail_mss[1];
+    for (int c = 0; c < b->cascade_count; c++)
+        whole += (double)b->cascade[c].mip[b->cascade[c].mips].mss_x + b->cascade[c].mip[b->cascade[c].mips].mss_z;
+    int gw = grid, gh = grid * cam->viewport_h / cam->viewport_w;
+    if (gh < 2)
+        gh = 2;
+    for (int i = 0; i < gh; i++)
+        for (int j = 0; j < gw; j++) {
+            /* pixel centres in normalised device coordinates */
+            double sx = ((j + 0.5) / gw * 2 - 1) * ty * aspect, sy = (1 - (i + 0.5) / gh * 2) * ty;
+            double d[3];
+            for (int k = 0; k < 3; k++)
+                d[k] = fw[k] + sx * rt[k] + sy * up[k];
+            if (!(d[1] < -1e-9) || cp[1] <= 0) {
+                A->above++;
+                continue;
+            }
+            double t = -cp[1] / d[1];
+            double x = cp[0] + t * d[0], z = cp[2] + t * d[2];
+            oc_sample s;
+            if (oc_frame_sample_interp(f, x, z, 0, interp, &s) != OCEAN_OK) {
+                A->outside++;
+                continue;
+            }
+            /* a pixel at image-plane point d (unnormalised, forward = 1)
+             * spans a solid angle ~ 1/|d|^3 and lands on sea at distance
+             * t|d| with incidence cosine |d_y|/|d|: its sea area is
+             * ~ t^2 / |d_y| = cy^2 / |d_y|^3 */
+            double ay = fabs(d[1]);
+            sums_add(&A->px, 1.0, &s, whole);
+            sums_add(&A->area, 1.0 / (ay * ay * ay), &s, whole);
+            A->samples++;
+        }
+    if (verbose) {
+        oc_lod L;
+        oc_cascade_lod(&f->info.cascades, cp[0], cp[2], 0, &L);
+        fprintf(stderr, "frame tick %u: %u tiles, q %g, min spacing %g, camera (%g, %g, %g), e_error %g, s %g:",
+                f->info.tick, f->info.tile_count, (double)f->info.cascades.spacing_per_m,
+                (double)f->info.cascades.min_spacing_m, cp[0], cp[1], cp[2], f->info.e_error, L.s);
+        for (int c = 0; c < L.count; c++)
+            fprintf(stderr, " c%d lambda %.2f", c, L.c[c].lambda);
+        fprintf(stderr, "\n");
+    }
+    A->e_error += f->info.e_error;
+    A->e_total += f->info.cascades.e_total;
+    if (f->info.cascades.e_total > A->e_total_max)
+        A->e_total_max = f->info.cascades.e_total;
+    A->frames++;
+}
+
+int cmd_fidelity(int argc, char **argv)
+{
+    double height = 25, speed = 0, pitch = 1000, yaw = 0, fov = 60, spacing = 0, range = 0, settle = 0.3,
+           interval = 0;
+    int frames = 10, json = 0, verbose = 0, grid = 64, timeout_ms = 5000, vw = 1920, vh = 1080;
+    const char *codec = "qz", *interp_name = "cubic";
+    const occli_opt opts[] = {
+        {.name = "camera-height", .kind = OCCLI_DOUBLE, .target = &height, .min = 0.1, .max = 1e5,
+         .help = "M  camera height above the mean sea level"},
+        {.name = "speed", .kind = OCCLI_DOUBLE, .target = &speed, .min = 0, .max = 1e4,
+         .help = "M/S  camera speed along its heading (0: hold still)"},
+        {.name = "frames", .kind = OCCLI_INT, .target = &frames, .min = 1, .max = 100000,
+         .help = "N  frames made for the camera to measure"},
+        {.name = "json", .kind = OCCLI_FLAG, .target = &json,
+         .help = "print the result as one JSON object (the metric lines go to stderr)"},
+        {.name = "verbose", .kind = OCCLI_FLAG, .target = &verbose,
+         .help = "one line per measured frame on stderr: tiles, q, e_error, the levels at the nadir"},
+        {.name = "pitch", .kind = OCCLI_DOUBLE, .target = &pitch, .min = -90, .max = 1000,
+         .help = "DEG  camera pitch (negative looks down); 1000 = auto: the view's centre\n"
+                 "                       atan(H / range) + fov/4 below the horizon, so that from any height\n"
+                 "                       half the view or more lands on sea within the range"},
+        {.name = "yaw", .kind = OCCLI_DOUBLE, .target = &yaw, .min = -360, .max = 360,
+         .help = "DEG  camera heading (0 = +x); the camera flies along it"},
+        {.name = "fov", .kind = OCCLI_DOUBLE, .target = &fov, .min = 1, .max = 170,
+         .help = "DEG  vertical field of view"},
+        {.name = "viewport-width", .kind = OCCLI_INT, .target = &vw, .min = 1, .max = 16384,
+         .help = "PX  viewport width"},
+        {.name = "viewport-height", .kind = OCCLI_INT, .target = &vh, .min = 1, .max = 16384,
+         .help = "PX  viewport height"},
+        {.name = "grid", .kind = OCCLI_INT, .target = &grid, .min = 4, .max = 1024,
+         .help = "N  rays across the viewport (N x N*height/width in all)"},
+        {.name = "spacing", .kind = OCCLI_DOUBLE, .target = &spacing, .min = 0, .max = 1e4,
+         .help = "M  finest spacing asked (SUBSCRIBE.base_spacing_m; 0 = server default)"},
+        {.name = "range", .kind = OCCLI_DOUBLE, .target = &range, .min = 0, .max = 1e7,
+         .help = "M  view range asked (0 = server default)"},
+        {.name = "interp", .kind = OCCLI_STRING, .target = &interp_name,
+         .help = "NAME  reading within a mip: cubic (Keys), linear, lanczos3"},
+        {.name = "codec", .kind = OCCLI_STRING, .target = &codec,
+         .help = "NAME  tile codec: f32 f16 qz exr-zip exr-piz exr-b44 exr-b44a"},
+        {.name = "settle", .kind = OCCLI_DOUBLE, .target = &settle, .min = 0, .max = 60,
+         .help = "S  wait after the first frame made for the camera before measuring"},
+        {.name = "interval", .kind = OCCLI_DOUBLE, .target = &interval, .min = 0, .max = 3600,
+         .help = "S  measure one frame per S seconds (0: consecutive frames); a longer span samples more "
+                 "sea\n                       (a moving camera) and more wave periods"},
+        {.name = "timeout", .kind = OCCLI_INT, .target = &timeout_ms, .min = 1, .max = 3600000,
+         .help = "MS  connect / frame timeout"},
+    };
+    const char *pos[1];
+    int np = 0;
+    int pr = occli_parse(argc, argv,
+                         "usage: ocean-client fidelity URL --camera-height H --speed V [--frames N] [--json] [options]\n"
+                         "Flies (or holds) a camera at height H and speed V, subscribed as the client library does\n"
+                         "(layout 1), and measures from the frames it receives what the sea delivers where the\n"
+                         "viewport's pixels land: mean-square slope resolved by the tiles plus the unresolved\n"
+                         "moments the frame carries (against Cox & Munk 1954), foam coverage (against Monahan &\n"
+                         "O'Muircheartaigh 1980), e_error and e_total.",
+                         opts, (int)(sizeof opts / sizeof opts[0]), pos, 1, &np);
+    if (pr)
+        return pr == 1 ? 0 : 2;
+    if (np != 1) {
+        fprintf(stderr, "ocean-client fidelity: needs the server URL (see --help)\n");
+        return 2;
+    }
+    oc_interp interp;
+    if (!strcmp(interp_name, "cubic"))
+        interp = OC_INTERP_CUBIC;
+    else if (!strcmp(interp_name, "linear"))
+        interp = OC_INTERP_LINEAR;
+    else if (!strcmp(interp_name, "lanczos3"))
+        interp = OC_INTERP_LANCZOS3;
+    else {
+        fprintf(stderr, "ocean-client fidelity: option '--interp': unknown '%s' (cubic linear lanczos3)\n", interp_name);
+        return 2;
+    }
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    proto_codec pc;
+    if (proto_codec_parse(codec, &pc) != OCEAN_OK) {
+        fprintf(stderr, "ocean-client fidelity: option '--codec': unknown codec '%s'\n", codec);
+        return 2;
+    }
+    sub.codec = (uint8_t)pc;
+    sub.base_spacing_m = (float)spacing;
+    sub.view_range_m = (float)range;
+    if (spacing > 0 && spacing < 0.001) {
+        fprintf(stderr, "ocean-client fidelity: option '--spacing': %g below the protocol's 0.001 m\n", spacing);
+        return 2;
+    }
+    if (range > 0 && range < 1) {
+        fprintf(stderr, "ocean-client fidelity: option '--range': %g below the protocol's 1 m\n", range);
+        return 2;
+    }
+    if (pitch > 90) {
+        double R = range > 0 ? range : 10000;   /* the daemon's shipped server.view_range */
+        pitch = -(atan(height / R) * 180 / M_PI + fov / 4);
+    }
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.pos[1] = height;
+    cam.yaw_deg = (float)yaw;
+    cam.pitch_deg = (float)pitch;
+    cam.fov_y_deg = (float)fov;
+    cam.viewport_w = (uint16_t)vw;
+    cam.viewport_h = (uint16_t)vh;
+    double hx = cos(yaw * M_PI / 180), hz = sin(yaw * M_PI / 180);
+    cam.vel[0] = (float)(speed * hx);
+    cam.vel[2] = (float)(speed * hz);
+
+    oc_client *c = occli_connect("fidelity", pos[0], NULL, timeout_ms);
+    if (!c)
+        return 1;
+    proto_hello hello;
+    proto_sea sea;
+    oc_client_hello(c, &hello);
+    oc_client_sea_state(c, &sea, NULL);
+    uint32_t first_seq = 0;
+    if (oc_client_subscribe(c, &sub) != OCEAN_OK || oc_client_send_camera(c, &cam, &first_seq) != OCEAN_OK) {
+        char err[512];
+        oc_client_last_error(c, err, sizeof err);
+        fprintf(stderr, "ocean-client fidelity: %s\n", err);
+        oc_client_destroy(c);
+        return 1;
+    }
+    fid_acc A;
+    memset(&A, 0, sizeof A);
+    double t0 = occli_mono(), last_cam = t0, settled_at = NAN, last_measured = -INFINITY;
+    double x0 = cam.pos[0], z0 = cam.pos[2];
+    uint64_t layout0 = 0, noview = 0;
+    char why[256] = "";
+    int rc = 0;
+    while (!occli_stop && A.frames < (uint64_t)frames) {
+        double now = occli_mono();
+        /* the camera reports where it is 30 times a second */
+        if (speed > 0 && now - last_cam >= 1.0 / 30) {
+            cam.pos[0] = x0 + speed * hx * (now - t0);
+            cam.pos[2] = z0 + speed * hz * (now - t0);
+            oc_client_send_camera(c, &cam, NULL);
+            last_cam = now;
+        }
+        oc_frame *f = NULL;
+        ocean_result r = oc_client_next_frame(c, speed > 0 ? 20 : timeout_ms, &f);
+        if (r == OCEAN_ESTATE) {
+            if (speed > 0 && occli_mono() - t0 < timeout_ms * 1e-3 * (1 + A.frames) + interval * frames)
+                continue;
+            snprintf(why, sizeof why, "no frame within %d ms", timeout_ms);
+            rc = 1;
+            break;
+        }
+        if (r != OCEAN_OK) {
+            oc_client_last_error(c, why, sizeof why);
+            rc = 1;
+            break;
+        }
+        /* only frames made for this camera (seq at or after the first CAMERA) */
+        if (f->info.camera_seq == PROTO_NO_CAMERA || (int32_t)(f->info.camera_seq - first_seq) < 0) {
+            A.stale++;
+            oc_frame_free(f);
+            continue;
+        }
+        if (f->info.layout != PROTO_LAYOUT_CASCADE) {
+            layout0++;
+            oc_frame_free(f);
+            if (layout0 >= 5) {
+                snprintf(why, sizeof why, "the daemon sends layout-0 frames (it predates layout 1)");
+                rc = 1;
+                break;
+            }
+            continue;
+        }
+        if (!f->view) {
+            noview++;
+            snprintf(why, sizeof why, "layout-1 frame without a view: %s", f->view_error);
+            oc_frame_free(f);
+            if (noview >= 5) {
+                rc = 1;
+                break;
+            }
+            continue;
+        }
+        if (isnan(settled_at))
+            settled_at = occli_mono();
+        if (occli_mono() - settled_at < settle) {
+            A.stale++;
+            oc_frame_free(f);
+            continue;
+        }
+        if (occli_mono() - last_measured < interval) {
+            oc_frame_free(f);
+            continue;
+        }
+        last_measured = occli_mono();
+        measure_frame(f, &cam, grid, verbose, interp, &A);
+        oc_frame_free(f);
+    }
+    oc_client_destroy(c);
+    if (rc || A.samples == 0) {
+        fprintf(stderr, "ocean-client fidelity: %s\n",
+                why[0] ? why : A.frames ? "no ray landed on sea the frames cover" : "no frame measured");
+        return 1;
+    }
+    /* the checked figures are per area of sea in view (coverage and slope
+     * statistics are area statistics); per pixel beside them */
+    const fid_sums *S = &A.area, *P = &A.px;
+    double res = (S->res_x + S->res_z) / S->w, unres = (S->unres_x + S->unres_z) / S->w, total = res + unres;
+    double res_px = (P->res_x + P->res_z) / P->w, total_px = res_px + (P->unres_x + P->unres_z) / P->w;
+    double claimed = S->claimed / S->w, claimed_res = claimed - unres;
+    double u10 = sea.wind_u10, cm = cox_munk_mss(u10);
+    double foam = S->foam / S->w, foam_half = S->foam_half / S->w, W = monahan_whitecap(u10);
+    double foam_px = P->foam / P->w;
+    int foam_applies = u10 >= 8 && u10 <= 26;
+    int foam_offered = (hello.effects & PROTO_FX_FOAM) != 0;
+    /* slopes: both means must hold (per pixel: what the screen shows, near
+     * detail included; per area: the sea in view); foam: per area (a
+     * coverage is an area fraction; per pixel from a low camera it is a few
+     * square metres of sea, far too few whitecaps to count) */
+    double mss_ratio = total / cm, mss_ratio_px = total_px / cm, foam_ratio = W > 0 ? foam / W : NAN;
+    int mss_ok = fabs(mss_ratio - 1) <= 0.3 && fabs(mss_ratio_px - 1) <= 0.3;
+    int foam_ok = !foam_applies || (foam_ratio >= 0.5 && foam_ratio <= 2);
+    FILE *lines = json ? stderr : stdout;
+    fprintf(lines, "camera: height %g m, speed %g m/s, pitch %g deg; %llu frames, %llu samples (%llu rays above the "
+            "horizon, %llu outside the tiles); sea U10 %.2f m/s\n",
+            height, speed, pitch, (unsigned long long)A.frames, (unsigned long long)A.samples,
+            (unsigned long long)A.above, (unsigned long long)A.outside, u10);
+    fprintf(lines, "(means per area of sea in view; per pixel in brackets where given)\n");
+    fprintf(lines, "mss_resolved    %.5f  (x %.5f, z %.5f; per pixel %.5f)\n", res, S->res_x / S->w, S->res_z / S->w,
+            res_px);
+    fprintf(lines, "mss_res_claimed %.5f  (what the mip tables say the mips read hold; the measured value differs "
+            "by the sampling of a finite patch)\n", claimed_res);
+    fprintf(lines, "mss_unresolved  %.5f  (x %.5f, z %.5f; mip tables + tail_mss)\n", unres, S->unres_x / S->w,
+            S->unres_z / S->w);
+    fprintf(lines, "mss_sea_claimed %.5f  (the frame's whole sea: every cascade's moments + tail_mss)\n", claimed);
+    fprintf(lines, "mss_total       %.5f  Cox-Munk %.5f (U12.5 %.2f m/s): ratio %.3f, per pixel %.5f ratio %.3f: %s\n",
+            total, cm, u125_from_u10(u10), mss_ratio, total_px, mss_ratio_px,
+            mss_ok ? "both within 30 %" : "OUTSIDE 30 %");
+    fprintf(lines, "foam_mean       %.5f  Monahan-OMuircheartaigh %.5f: ratio %.3f %s%s (per pixel %.5f)\n", foam, W,
+            foam_ratio,
+            !foam_applies ? "(U10 outside 8..26 m/s: not checked)" : foam_ok ? "within a factor 2" : "OUTSIDE a factor 2",
+            foam_offered ? "" : " [the scene offers no foam]", foam_px);
+    fprintf(lines, "foam_ge_half    %.5f  (fraction of samples with foam >= 0.5)\n", foam_half);
+    fprintf(lines, "e_error         %.5f  (mean over frames)\n", A.e_error / A.frames);
+    fprintf(lines, "e_total         %.5f  (mean over frames; max %.5f)\n", A.e_total / A.frames, A.e_total_max);
+    if (json) {
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddStringToObject(o, "url", pos[0]);
+        cJSON_AddNumberToObject(o, "camera_height_m", height);
+        cJSON_AddNumberToObject(o, "speed_m_s", speed);
+        cJSON_AddNumberToObject(o, "pitch_deg", pitch);
+        cJSON_AddNumberToObject(o, "frames", (double)A.frames);
+        cJSON_AddNumberToObject(o, "samples", (double)A.samples);
+        cJSON_AddNumberToObject(o, "rays_above_horizon", (double)A.above);
+        cJSON_AddNumberToObject(o, "rays_outside_tiles", (double)A.outside);
+        cJSON_AddNumberToObject(o, "u10", u10);
+        cJSON_AddNumberToObject(o, "u12_5", u125_from_u10(u10));
+        cJSON_AddNumberToObject(o, "mss_resolved", res);
+        cJSON_AddNumberToObject(o, "mss_resolved_x", S->res_x / S->w);
+        cJSON_AddNumberToObject(o, "mss_resolved_z", S->res_z / S->w);
+        cJSON_AddNumberToObject(o, "mss_resolved_per_pixel", res_px);
+        cJSON_AddNumberToObject(o, "mss_total_per_pixel", total_px);
+        cJSON_AddNumberToObject(o, "foam_mean_per_pixel", foam_px);
+        cJSON_AddStringToObject(o, "weighting", "per area of sea in view (per pixel in *_per_pixel)");
+        cJSON_AddNumberToObject(o, "mss_resolved_claimed", claimed_res);
+        cJSON_AddNumberToObject(o, "mss_unresolved", unres);
+        cJSON_AddNumberToObject(o, "mss_sea_claimed", claimed);
+        cJSON_AddNumberToObject(o, "mss_total", total);
+        cJSON_AddNumberToObject(o, "mss_cox_munk", cm);
+        cJSON_AddNumberToObject(o, "mss_ratio", mss_ratio);
+        cJSON_AddNumberToObject(o, "mss_ratio_per_pixel", mss_ratio_px);
+        cJSON_AddBoolToObject(o, "mss_within_30pct", mss_ok);
+        cJSON_AddNumberToObject(o, "foam_mean", foam);
+        cJSON_AddNumberToObject(o, "foam_fraction_ge_half", foam_half);
+        cJSON_AddStringToObject(o, "foam_coverage_is", "foam_mean");
+        cJSON_AddNumberToObject(o, "whitecap_monahan", W);
+        if (isfinite(foam_ratio))
+            cJSON_AddNumberToObject(o, "foam_ratio", foam_ratio);
+        else
+            cJSON_AddNullToObject(o, "foam_ratio");
+        cJSON_AddBoolToObject(o, "foam_checked", foam_applies);
+        cJSON_AddBoolToObject(o, "foam_within_factor_2", foam_ok);
+        cJSON_AddBoolToObject(o, "foam_offered", foam_offered);
+        cJSON_AddNumberToObject(o, "e_error", A.e_error / A.frames);
+        cJSON_AddNumberToObject(o, "e_total", A.e_total / A.frames);
+        cJSON_AddNumberToObject(o, "e_total_max", A.e_total_max);
+        cJSON_AddStringToObject(o, "mss_reference",
+                                "Cox & Munk 1954 clean sea 0.003 + 5.12e-3 U12.5; U12.5 = U10 + u*/0.4 ln(1.25), "
+                                "u* = sqrt((0.8 + 0.065 U10) 1e-3) U10 (Wu 1982)");
+        cJSON_AddStringToObject(o, "foam_reference", "Monahan & O'Muircheartaigh 1980: W = 3.84e-6 U10^3.41");
+        char *txt = cJSON_Print(o);
+        printf("%s\n", txt);
+        free(txt);
+        cJSON_Delete(o);
+    }
+    return 0;
+}

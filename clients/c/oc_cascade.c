@@ -1,0 +1,685 @@
+/*
+ * oc_cascade.c - layout-1 frames on the client: the per-(cascade, mip)
+ * tile index of a frame, the lod rule, the point sampler and the mesh
+ * displacement declared in oc_cascade.h (see there for the reading rules
+ * and their sources).
+ */
+#include "oc_cascade.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "codec.h"
+#include "oceanclient.h"
+
+#define NO_TILE 0xFFFFu
+/* n_y floor when a normal is turned into slopes: |slope| <= ~100 */
+#define NY_MIN 0.01
+
+/* Values a mip read produces, in this order. */
+enum { V_H, V_DX, V_DZ, V_SX, V_SZ, V_FOAM, V_COUNT };
+/* What a read wants (bits). */
+enum { W_H = 1, W_D = 2, W_S = 4, W_F = 8, W_ALL = 15 };
+
+typedef struct cv_tile {
+    const float *data;
+    int w, h;
+    unsigned channels;
+    int off[6];                  /* float offsets of H DX DZ NU NV FOAM; -1 absent */
+} cv_tile;
+
+typedef struct cv_mip {
+    int n;                       /* samples per side */
+    int T;                       /* tile side; 0: no tile of this mip */
+    int tps;                     /* tiles per side */
+    double spacing;
+    uint16_t *grid;              /* tps * tps tile indices (rows = z), NO_TILE */
+} cv_mip;
+
+typedef struct cv_cascade {
+    double patch, sigma;
+    int mips, fades;
+    cv_mip mip[PROTO_MAX_MIPS];
+} cv_cascade;
+
+struct oc_cascade_view {
+    proto_cascade_block block;
+    int count;
+    cv_cascade c[PROTO_MAX_LAYERS];
+    cv_tile *tiles;
+    unsigned ntiles;
+};
+
+/* ============================================================ the view */
+
+void oc_cascade_view_free(oc_cascade_view *v)
+{
+    if (!v)
+        return;
+    for (int c = 0; c < PROTO_MAX_LAYERS; c++)
+        for (int m = 0; m < PROTO_MAX_MIPS; m++)
+            free(v->c[c].mip[m].grid);
+    free(v->tiles);
+    free(v);
+}
+
+static void plane_offsets(unsigned ch, size_t wh, int off[6])
+{
+    /* codec.h plane order H, DX, DZ, NU, NV, FOAM, J; the normal bit is two planes */
+    int k = 0;
+    for (int i = 0; i < 6; i++)
+        off[i] = -1;
+    if (ch & PROTO_CH_HEIGHT)
+        off[0] = (int)(wh * (size_t)k++);
+    if (ch & PROTO_CH_DX)
+        off[1] = (int)(wh * (size_t)k++);
+    if (ch & PROTO_CH_DZ)
+        off[2] = (int)(wh * (size_t)k++);
+    if (ch & PROTO_CH_NORMAL) {
+        off[3] = (int)(wh * (size_t)k++);
+        off[4] = (int)(wh * (size_t)k++);
+    }
+    if (ch & PROTO_CH_FOAM)
+        off[5] = (int)(wh * (size_t)k++);
+}
+
+static int near_eq(double a, double b, double tol)
+{
+    return fabs(a - b) <= tol;
+}
+
+ocean_result oc_cascade_view_build(const proto_frame *info, const float *const *tile_data,
+                                   oc_cascade_view **out, char *err, size_t errlen)
+{
+    *out = NULL;
+    const proto_cascade_block *b = &info->cascades;
+    if (info->layout != PROTO_LAYOUT_CASCADE || b->cascade_count < 1 || b->cascade_count > PROTO_MAX_LAYERS) {
+        ocean_seterr(err, errlen, "not a layout-1 frame");
+        return OCEAN_ESTATE;
+    }
+    oc_cascade_view *v = calloc(1, sizeof *v);
+    if (!v)
+        return OCEAN_ENOMEM;
+    v->block = *b;
+    v->count = b->cascade_count;
+    for (int c = 0; c < v->count; c++) {
+        const proto_cascade_entry *e = &b->cascade[c];
+        cv_cascade *cc = &v->c[c];
+        /* the decoder checked patch > 0, n a power of two 8..2048, mips
+         * 1..12 with n >> (mips - 1) >= 1 */
+        cc->patch = e->patch_m;
+        cc->sigma = e->patch_m / e->n;
+        cc->mips = e->mips;
+        cc->fades = e->fades;
+        for (int m = 0; m < cc->mips; m++) {
+            cc->mip[m].n = e->n >> m;
+            cc->mip[m].spacing = cc->sigma * ldexp(1.0, m);
+        }
+    }
+    ocean_result r = OCEAN_OK;
+    unsigned n = info->tile_count;
+    if (n) {
+        v->tiles = calloc(n, sizeof *v->tiles);
+        if (!v->tiles) {
+            oc_cascade_view_free(v);
+            return OCEAN_ENOMEM;
+        }
+    }
+    v->ntiles = n;
+    /* pass 1: each tile names a mip that exists at its spacing; T per mip */
+    for (unsigned i = 0; i < n && r == OCEAN_OK; i++) {
+        const proto_tile *t = &info->tiles[i];
+        if (!tile_data || !tile_data[i]) {
+            ocean_seterr(err, errlen, "tile %u is not decoded", i);
+            r = OCEAN_ESTATE;
+            break;
+        }
+        if (t->cascade >= v->count || t->level >= v->c[t->cascade].mips) {
+            ocean_seterr(err, errlen, "tile %u: cascade %u mip %u is not in the cascade block", i, t->cascade,
+                         t->level);
+            r = OCEAN_EFORMAT;
+            break;
+        }
+        cv_mip *mp = &v->c[t->cascade].mip[t->level];
+        if (!near_eq(t->spacing, mp->spacing, 1e-9 * mp->spacing)) {
+            ocean_seterr(err, errlen, "tile %u: spacing %.9g, mip %u of cascade %u has %.9g", i, t->spacing,
+                         t->level, t->cascade, mp->spacing);
+            r = OCEAN_EFORMAT;
+            break;
+        }
+        int side = t->width > t->height ? t->width : t->height;
+        if (side > mp->T)
+            mp->T = side;
+    }
+    for (int c = 0; c < v->count && r == OCEAN_OK; c++)
+        for (int m = 0; m < v->c[c].mips; m++) {
+            cv_mip *mp = &v->c[c].mip[m];
+            if (!mp->T)
+                continue;
+            /* T = min(tile_size, n') with tile_size >= 2 */
+            if (mp->T > mp->n || mp->T < (mp->n < 2 ? mp->n : 2)) {
+                ocean_seterr(err, errlen, "cascade %d mip %d: tiles of %d samples on a grid of %d", c, m, mp->T,
+                             mp->n);
+                r = OCEAN_EFORMAT;
+                break;
+            }
+            mp->tps = (mp->n + mp->T - 1) / mp->T;
+            mp->grid = malloc((size_t)mp->tps * mp->tps * sizeof *mp->grid);
+            if (!mp->grid) {
+                r = OCEAN_ENOMEM;
+                break;
+            }
+            memset(mp->grid, 0xFF, (size_t)mp->tps * mp->tps * sizeof *mp->grid);
+        }
+    /* pass 2: placement per the spec, no tile twice */
+    for (unsigned i = 0; i < n && r == OCEAN_OK; i++) {
+        const proto_tile *t = &info->tiles[i];
+        cv_mip *mp = &v->c[t->cascade].mip[t->level];
+        int T = mp->T;
+        if (t->ix < 0 || t->iz < 0 || t->ix >= mp->tps || t->iz >= mp->tps) {
+            ocean_seterr(err, errlen, "tile %u: index (%d, %d) outside the %d x %d tiles of cascade %u mip %u", i,
+                         t->ix, t->iz, mp->tps, mp->tps, t->cascade, t->level);
+            r = OCEAN_EFORMAT;
+            break;
+        }
+        int ww = mp->n - t->ix * T < T ? mp->n - t->ix * T : T;
+        int hh = mp->n - t->iz * T < T ? mp->n - t->iz * T : T;
+        if (t->width != ww || t->height != hh) {
+            ocean_seterr(err, errlen, "tile %u: %u x %u samples where cascade %u mip %u has %d x %d", i, t->width,
+                         t->height, t->cascade, t->level, ww, hh);
+            r = OCEAN_EFORMAT;
+            break;
+        }
+        double ox = (double)t->ix * T * mp->spacing, oz = (double)t->iz * T * mp->spacing;
+        if (!near_eq(t->origin_x, ox, 1e-6 * mp->spacing) || !near_eq(t->origin_z, oz, 1e-6 * mp->spacing)) {
+            ocean_seterr(err, errlen, "tile %u: origin (%.9g, %.9g), tile (%d, %d) of cascade %u mip %u is at "
+                         "(%.9g, %.9g)", i, t->origin_x, t->origin_z, t->ix, t->iz, t->cascade, t->level, ox, oz);
+            r = OCEAN_EFORMAT;
+            break;
+        }
+        uint16_t *g = &mp->grid[(size_t)t->iz * mp->tps + t->ix];
+        if (*g != NO_TILE) {
+            ocean_seterr(err, errlen, "tile %u: tile (%d, %d) of cascade %u mip %u sent twice (also tile %u)", i,
+                         t->ix, t->iz, t->cascade, t->level, *g);
+            r = OCEAN_EFORMAT;
+            break;
+        }
+        *g = (uint16_t)i;
+        cv_tile *ct = &v->tiles[i];
+        ct->data = tile_data[i];
+        ct->w = t->width;
+        ct->h = t->height;
+        ct->channels = t->channels;
+        plane_offsets(t->channels, (size_t)t->width * t->height, ct->off);
+    }
+    if (r != OCEAN_OK) {
+        oc_cascade_view_free(v);
+        return r;
+    }
+    *out = v;
+    return OCEAN_OK;
+}
+
+/* ============================================================ lod rule */
+
+static int block_ok(const proto_cascade_block *b)
+{
+    if (!b || b->cascade_count < 1 || b->cascade_count > PROTO_MAX_LAYERS || !(b->spacing_per_m > 0) ||
+        !isfinite(b->spacing_per_m) || !(b->min_spacing_m >= 0) || !isfinite(b->min_spacing_m))
+        return 0;
+    for (int i = 0; i < 3; i++)
+        if (!isfinite(b->camera[i]))
+            return 0;
+    for (int c = 0; c < b->cascade_count; c++) {
+        const proto_cascade_entry *e = &b->cascade[c];
+        if (!(e->patch_m > 0) || !isfinite(e->patch_m) || e->n < 1 || e->mips < 1 || e->mips > PROTO_MAX_MIPS)
+            return 0;
+    }
+    return 1;
+}
+
+/* The rule itself, on a block already checked. */
+static void lod_core(const proto_cascade_block *b, double x, double z, double min_spacing, oc_lod *out)
+{
+    double dx = x - b->camera[0], dz = z - b->camera[2];
+    double h = fabs(b->camera[1]);
+    if (h < 1)
+        h = 1;
+    double s = b->spacing_per_m * sqrt(dx * dx + dz * dz + h * h);
+    if (s < b->min_spacing_m)
+        s = b->min_spacing_m;
+    if (s < min_spacing)
+        s = min_spacing;
+    out->s = s;
+    out->count = b->cascade_count;
+    for (int c = 0; c < b->cascade_count; c++) {
+        const proto_cascade_entry *e = &b->cascade[c];
+        oc_lod_cascade *L = &out->c[c];
+        int M = e->mips;
+        double lam = log2(s / (e->patch_m / e->n));
+        L->lambda = lam;
+        L->fade = 1;
+        L->mip[1] = -1;
+        L->weight[1] = 0;
+        if (lam <= 0) {
+            L->mip[0] = 0;
+            L->weight[0] = 1;
+        } else if (lam < M - 1) {
+            int m0 = (int)floor(lam);
+            double f = lam - m0;
+            L->mip[0] = m0;
+            L->weight[0] = 1 - f;
+            L->mip[1] = m0 + 1;
+            L->weight[1] = f;
+        } else {
+            L->mip[0] = M - 1;
+            if (e->fades) {
+                double w = M - lam;
+                L->fade = w < 0 ? 0 : w > 1 ? 1 : w;
+            }
+            L->weight[0] = L->fade;
+        }
+    }
+}
+
+ocean_result oc_cascade_lod(const proto_cascade_block *b, double x, double z, double min_spacing, oc_lod *out)
+{
+    if (!out || !block_ok(b) || !isfinite(x) || !isfinite(z) || !isfinite(min_spacing))
+        return OCEAN_EINVAL;
+    lod_core(b, x, z, min_spacing, out);
+    return OCEAN_OK;
+}
+
+/* ============================================================ reading */
+
+/* x mod P in [0, P): fmod is exact in IEEE arithmetic, so a world position
+ * of 1e7 m reduces without losing its sub-millimetre part. */
+static double wrap(double x, double P)
+{
+    double u = fmod(x, P);
+    if (u < 0) {
+        u += P;
+        if (u >= P)     /* -tiny + P rounds to P */
+            u = 0;
+    }
+    return u;
+}
+
+/* Slopes from an octahedral normal (PROTOCOL.md "Octahedral normals"). */
+static void oct_slopes(float u, float v, float *sx, float *sz)
+{
+    double x = u, z = v, y = 1.0 - fabs(x) - fabs(z);
+    if (y < 0) {
+        double ox = x;
+        x = (1.0 - fabs(z)) * (ox >= 0 ? 1 : -1);
+        z = (1.0 - fabs(ox)) * (z >= 0 ? 1 : -1);
+    }
+    double len = sqrt(x * x + y * y + z * z);
+    if (!(len > 0)) {
+        *sx = *sz = 0;
+        return;
+    }
+    if (y < NY_MIN * len)
+        y = NY_MIN * len;
+    *sx = (float)(-x / y);
+    *sz = (float)(-z / y);
+}
+
+/* Sample (i, j) (row z, column x; already in [0, n)) of a mip: 0, or -1
+ * when the frame has no tile there. */
+static inline int fetch(const oc_cascade_view *v, const cv_mip *mp, int i, int j, unsigned want, float *val,
+                        unsigned *chan)
+{
+    int ti = i / mp->T, tj = j / mp->T;
+    uint16_t idx = mp->grid[(size_t)ti * mp->tps + tj];
+    if (idx == NO_TILE)
+        return -1;
+    const cv_tile *t = &v->tiles[idx];
+    size_t k = (size_t)(i - ti * mp->T) * t->w + (size_t)(j - tj * mp->T);
+    const float *d = t->data;
+    if (want & W_H)
+        val[V_H] = t->off[0] >= 0 ? d[t->off[0] + k] : 0.0f;
+    if (want & W_D) {
+        val[V_DX] = t->off[1] >= 0 ? d[t->off[1] + k] : 0.0f;
+        val[V_DZ] = t->off[2] >= 0 ? d[t->off[2] + k] : 0.0f;
+    }
+    if (want & W_S) {
+        if (t->off[3] >= 0)
+            oct_slopes(d[t->off[3] + k], d[t->off[4] + k], &val[V_SX], &val[V_SZ]);
+        else
+            val[V_SX] = val[V_SZ] = 0.0f;
+    }
+    if (want & W_F)
+        val[V_FOAM] = t->off[5] >= 0 ? d[t->off[5] + k] : 0.0f;
+    *chan &= t->channels;
+    return 0;
+}
+
+static inline int imod(long a, int n)
+{
+    long r = a % n;
+    return (int)(r < 0 ? r + n : r);
+}
+
+/* Keys (1981) cubic convolution weights, a = -1/2, for offsets -1..2. */
+static inline void keys_weights(double t, double w[4])
+{
+    double t2 = t * t, t3 = t2 * t;
+    w[0] = 0.5 * (-t3 + 2 * t2 - t);
+    w[1] = 0.5 * (3 * t3 - 5 * t2 + 2);
+    w[2] = 0.5 * (-3 * t3 + 4 * t2 + t);
+    w[3] = 0.5 * (t3 - t2);
+}
+
+/* Lanczos (a = 3) windowed-sinc weights for offsets -2..3, normalised to
+ * sum 1 (Duchon 1979, "Lanczos filtering in one and two dimensions",
+ * J. Appl. Meteor. 18(8) 1016). */
+static inline void lanczos3_weights(double t, double w[6])
+{
+    double sum = 0;
+    for (int k = 0; k < 6; k++) {
+        double x = t - (k - 2);
+        if (fabs(x) < 1e-12) {
+            w[k] = 1;
+        } else {
+            double px = M_PI * x;
+            w[k] = 3.0 * sin(px) * sin(px / 3.0) / (px * px);
+        }
+        sum += w[k];
+    }
+    for (int k = 0; k < 6; k++)
+        w[k] /= sum;
+}
+
+/* Taps of an interpolation: weights for offsets 1 - R .. R; returns R. */
+static inline int taps(oc_interp in, double t, double *w)
+{
+    if (in == OC_INTERP_LANCZOS3) {
+        lanczos3_weights(t, w);
+        return 3;
+    }
+    if (in == OC_INTERP_CUBIC) {
+        keys_weights(t, w);
+        return 2;
+    }
+    w[0] = 1 - t;
+    w[1] = t;
+    return 1;
+}
+
+/* Reads one mip at cascade-local (u, v) in [0, P): acc[] += weight * value.
+ * Where the wider kernels reach beyond the frame's tiles (the edge of the
+ * square the spec sends) the next narrower one is used: Lanczos-3, Keys
+ * cubic, bilinear.  0, or -1 when not even the 2 x 2 is covered. */
+static int read_mip(const oc_cascade_view *v, const cv_mip *mp, double u, double w, unsigned want, oc_interp interp,
+                    double weight, double *acc, unsigned *chan)
+{
+    if (!mp->T)
+        return -1;
+    double a = u / mp->spacing, b = w / mp->spacing;
+    double fa = floor(a), fb = floor(b);
+    double tx = a - fa, tz = b - fb;
+    long j0 = (long)fa, i0 = (long)fb;
+    int n = mp->n;
+    float val[V_COUNT] = {0};   /* values not wanted stay 0 */
+    for (oc_interp in = interp;; in = in == OC_INTERP_LANCZOS3 ? OC_INTERP_CUBIC : OC_INTERP_LINEAR) {
+        double wx[6], wz[6], sum[V_COUNT] = {0};
+        int R = taps(in, tx, wx);
+        taps(in, tz, wz);
+        unsigned ch = *chan;
+        int ok = 1;
+        for (int di = 0; di < 2 * R && ok; di++) {
+            int i = imod(i0 + 1 - R + di, n);
+            double rowv[V_COUNT] = {0};
+            for (int dj = 0; dj < 2 * R; dj++) {
+                if (fetch(v, mp, i, imod(j0 + 1 - R + dj, n), want, val, &ch)) {
+                    ok = 0;
+                    break;
+                }
+                for (int k = 0; k < V_COUNT; k++)
+                    rowv[k] += wx[dj] * val[k];
+            }
+            for (int k = 0; k < V_COUNT; k++)
+                sum[k] += wz[di] * rowv[k];
+        }
+        if (ok) {
+            for (int k = 0; k < V_COUNT; k++)
+                acc[k] += weight * sum[k];
+            *chan = ch;
+            return 0;
+        }
+        if (in == OC_INTERP_LINEAR)
+            return -1;
+    }
+}
+
+/* The sum of the cascades at (x, z).  0, or -1 when a mip read is not in
+ * the frame's tiles. */
+static int sample_core(const oc_cascade_view *v, double x, double z, double min_spacing, unsigned want,
+                       oc_interp interp, oc_sample *out)
+{
+    const proto_cascade_block *b = &v->block;
+    oc_lod lod;
+    lod_core(b, x, z, min_spacing, &lod);
+    memset(out, 0, sizeof *out);
+    out->s = lod.s;
+    const unsigned all = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM;
+    unsigned common = all, foam_ch = 0;
+    double mss[3] = {b->tail_mss[0], b->tail_mss[1], b->tail_mss[2]};
+    for (int c = 0; c < v->count; c++) {
+        const cv_cascade *cc = &v->c[c];
+        const proto_cascade_entry *e = &b->cascade[c];
+        const oc_lod_cascade *L = &lod.c[c];
+        double u = wrap(x, cc->patch), w = wrap(z, cc->patch);
+        double acc[V_COUNT] = {0};
+        unsigned chan = all;
+        /* PROTOCOL.md: foam is the whole sea's, in cascade 0's tiles alone */
+        unsigned want_c = c == 0 ? want : want & ~(unsigned)W_F;
+        for (int k = 0; k < 2; k++) {
+            if (L->mip[k] < 0 || !(L->weight[k] > 0))
+                continue;
+            if (read_mip(v, &cc->mip[L->mip[k]], u, w, want_c, interp, L->weight[k], acc, &chan))
+                return -1;
+            const proto_mip_entry *me = &e->mip[L->mip[k]];
+            mss[0] += L->weight[k] * me->mss_x;
+            mss[1] += L->weight[k] * me->mss_z;
+            mss[2] += L->weight[k] * me->mss_xz;
+        }
+        if (L->fade < 1) {
+            const proto_mip_entry *me = &e->mip[cc->mips];
+            mss[0] += (1 - L->fade) * me->mss_x;
+            mss[1] += (1 - L->fade) * me->mss_z;
+            mss[2] += (1 - L->fade) * me->mss_xz;
+        }
+        out->height += acc[V_H];
+        out->dx += acc[V_DX];
+        out->dz += acc[V_DZ];
+        out->slope_x += acc[V_SX];
+        out->slope_z += acc[V_SZ];
+        common &= chan | PROTO_CH_FOAM;
+        if (c == 0) {
+            double fc = acc[V_FOAM];
+            out->foam = fc < 0 ? 0 : fc > 1 ? 1 : fc;
+            foam_ch = chan & PROTO_CH_FOAM;
+        }
+    }
+    unsigned chan = (common & ~(unsigned)PROTO_CH_FOAM) | foam_ch;
+    double nl = sqrt(out->slope_x * out->slope_x + 1 + out->slope_z * out->slope_z);
+    out->normal[0] = -out->slope_x / nl;
+    out->normal[1] = 1 / nl;
+    out->normal[2] = -out->slope_z / nl;
+    for (int i = 0; i < 3; i++)
+        out->mss[i] = mss[i];
+    unsigned asked = ((want & W_H) ? PROTO_CH_HEIGHT : 0) | ((want & W_D) ? PROTO_CH_DX | PROTO_CH_DZ : 0) |
+                     ((want & W_S) ? PROTO_CH_NORMAL : 0) | ((want & W_F) ? PROTO_CH_FOAM : 0);
+    out->channels = chan & asked;
+    return 0;
+}
+
+static ocean_result frame_view(const oc_frame *f, const oc_cascade_view **v)
+{
+    if (!f)
+        return OCEAN_EINVAL;
+    if (!f->view)
+        return OCEAN_ESTATE;
+    *v = f->view;
+    return OCEAN_OK;
+}
+
+ocean_result oc_frame_sample_interp(const oc_frame *f, double x, double z, double min_spacing, oc_interp interp,
+                                    oc_sample *out)
+{
+    if (!out)
+        return OCEAN_EINVAL;
+    memset(out, 0, sizeof *out);
+    const oc_cascade_view *v;
+    ocean_result r = frame_view(f, &v);
+    if (r != OCEAN_OK)
+        return r;
+    if (!isfinite(x) || !isfinite(z) || !isfinite(min_spacing) ||
+        (interp != OC_INTERP_CUBIC && interp != OC_INTERP_LINEAR && interp != OC_INTERP_LANCZOS3))
+        return OCEAN_EINVAL;
+    if (sample_core(v, x, z, min_spacing, W_ALL, interp, out)) {
+        memset(out, 0, sizeof *out);
+        return OCEAN_ENOTFOUND;
+    }
+    return OCEAN_OK;
+}
+
+ocean_result oc_frame_sample(const oc_frame *f, double x, double z, double min_spacing, oc_sample *out)
+{
+    return oc_frame_sample_interp(f, x, z, min_spacing, OC_INTERP_CUBIC, out);
+}
+
+ocean_result oc_frame_surface_interp(const oc_frame *f, double x, double z, double min_spacing, oc_interp interp,
+                                     oc_sample *out)
+{
+    if (!out)
+        return OCEAN_EINVAL;
+    memset(out, 0, sizeof *out);
+    const oc_cascade_view *v;
+    ocean_result r = frame_view(f, &v);
+    if (r != OCEAN_OK)
+        return r;
+    if (!isfinite(x) || !isfinite(z) || !isfinite(min_spacing) ||
+        (interp != OC_INTERP_CUBIC && interp != OC_INTERP_LINEAR && interp != OC_INTERP_LANCZOS3))
+        return OCEAN_EINVAL;
+    /* the levels are those of the asked point, held while p moves */
+    oc_lod lod;
+    lod_core(&v->block, x, z, min_spacing, &lod);
+    double ms = lod.s;
+    double px = x, pz = z, best = INFINITY, bx = x, bz = z;
+    const double tol = 1e-5;
+    oc_sample s0, sx, sz;
+    for (int it = 0; it < 24; it++) {
+        if (sample_core(v, px, pz, ms, W_D, interp, &s0))
+            return OCEAN_ENOTFOUND;
+        double rx = px + s0.dx - x, rz = pz + s0.dz - z;
+        double res = hypot(rx, rz);
+        if (res < best) {
+            best = res;
+            bx = px;
+            bz = pz;
+        }
+        if (res < tol)
+            break;
+        /* Newton on p + D(p) = (x, z) with a finite-difference Jacobian */
+        double d = 1e-3 > 0.01 * ms ? 1e-3 : 0.01 * ms;
+        if (sample_core(v, px + d, pz, ms, W_D, interp, &sx) || sample_core(v, px, pz + d, ms, W_D, interp, &sz))
+            return OCEAN_ENOTFOUND;
+        double a = 1 + (sx.dx - s0.dx) / d, bq = (sz.dx - s0.dx) / d;
+        double c = (sx.dz - s0.dz) / d, e = 1 + (sz.dz - s0.dz) / d;
+        double det = a * e - bq * c;
+        if (det > 0.05) {
+            px -= (e * rx - bq * rz) / det;
+            pz -= (-c * rx + a * rz) / det;
+        } else {
+            /* near a fold the Jacobian says little: a damped fixed-point step */
+            px -= 0.5 * rx;
+            pz -= 0.5 * rz;
+        }
+    }
+    if (sample_core(v, bx, bz, ms, W_ALL, interp, out)) {
+        memset(out, 0, sizeof *out);
+        return OCEAN_ENOTFOUND;
+    }
+    out->residual = best;
+    return best <= 1e-4 ? OCEAN_OK : OCEAN_EDIVERGED;
+}
+
+ocean_result oc_frame_surface(const oc_frame *f, double x, double z, double min_spacing, oc_sample *out)
+{
+    return oc_frame_surface_interp(f, x, z, min_spacing, OC_INTERP_CUBIC, out);
+}
+
+/* ============================================================ mesh */
+
+double oc_mesh_morph_weight(const float zone[4], double d, int is_coarsest)
+{
+    if (is_coarsest)
+        return 0;
+    double R = zone[1], bl = zone[2];
+    if (!(bl > 0))
+        return d >= R ? 1 : 0;
+    double u = (d - (R - bl)) / (2 * bl);
+    u = u < 0 ? 0 : u > 1 ? 1 : u;
+    return u * u * (3 - 2 * u);
+}
+
+ocean_result oc_frame_mesh_positions_ex(const oc_frame *f, const oc_topology *t, oc_interp interp, float *xyz,
+                                        size_t *missing)
+{
+    if (missing)
+        *missing = 0;
+    if (!f || !t || !xyz ||
+        (interp != OC_INTERP_CUBIC && interp != OC_INTERP_LINEAR && interp != OC_INTERP_LANCZOS3))
+        return OCEAN_EINVAL;
+    const oc_cascade_view *v;
+    ocean_result r = frame_view(f, &v);
+    if (r != OCEAN_OK)
+        return r;
+    if (!f->info.has_mesh)
+        return OCEAN_ESTATE;
+    if (!(t->flags & PROTO_TOPO_FLAT) || !t->flat || !t->zones || !t->level || t->lod_levels < 1 ||
+        t->mesh_id != f->info.placement.mesh_id)
+        return OCEAN_EINVAL;
+    const double *o = f->info.placement.origin;
+    const double *cam = v->block.camera;
+    size_t miss = 0;
+    for (uint32_t i = 0; i < t->vertex_count; i++) {
+        unsigned L = t->level[i];
+        if (L >= t->lod_levels)
+            return OCEAN_EINVAL;
+        double px = t->flat[2 * i], pz = t->flat[2 * i + 1];
+        int coarsest = L + 1 >= t->lod_levels;
+        double w = oc_mesh_morph_weight(t->zones + 4 * L, hypot(o[0] + px - cam[0], o[2] + pz - cam[2]), coarsest);
+        if (w > 0) {
+            /* slide toward the coarser level's lattice point */
+            double g = t->zones[4 * (L + 1)];
+            px -= w * (px - g * floor(px / g + 0.5));
+            pz -= w * (pz - g * floor(pz / g + 0.5));
+        }
+        oc_sample s;
+        float *q = xyz + 3 * (size_t)i;
+        if (sample_core(v, o[0] + px, o[2] + pz, t->zones[4 * L], W_H | W_D, interp, &s)) {
+            miss++;
+            q[0] = (float)px;
+            q[1] = 0.0f;
+            q[2] = (float)pz;
+            continue;
+        }
+        q[0] = (float)(px + s.dx);
+        q[1] = (float)s.height;
+        q[2] = (float)(pz + s.dz);
+    }
+    if (missing)
+        *missing = miss;
+    return miss ? OCEAN_ENOTFOUND : OCEAN_OK;
+}
+
+ocean_result oc_frame_mesh_positions(const oc_frame *f, const oc_topology *t, float *xyz)
+{
+    return oc_frame_mesh_positions_ex(f, t, OC_INTERP_CUBIC, xyz, NULL);
+}
