@@ -47,22 +47,10 @@ typedef struct tables {
     double tail_mss[3];    /* the short-wave tail beyond the shortest simulated wave */
 } tables;
 
-/* Encoded bytes per tile sample of a (codec, accuracy, channels, side),
- * learnt from the tiles encoded so far: what the byte budget plans with. */
-#define RATES 16
-typedef struct rate {
-    int used;
-    uint8_t codec;
-    uint16_t channels, size;
-    float accuracy;
-    double bytes_per_sample;
-} rate;
 
 struct srv_cascade {
     tables tab;
     int tab_valid;
-    rate rates[RATES];
-    int rate_next;
     ocean_frame *mipf[MAX_MIPS];  /* mip level m of every cascade, this batch */
     srv_tile_cache *cache; /* the encoded records, key layout 1 */
 };
@@ -232,38 +220,30 @@ static unsigned chan_of(const plan *pl, int c)
     return c == 0 ? pl->channels : pl->channels & ~(unsigned)PROTO_CH_FOAM;
 }
 
-static rate *rate_find(srv_cascade *k, unsigned codec, float accuracy, unsigned channels, unsigned size)
+/* Encoded bytes of one tile of side T, from a fixed model of each codec -
+ * never from what this daemon happened to encode before, so that two
+ * replicas plan every frame alike (the ocean and what travels are pure
+ * functions of the sea, t and the camera).  qz: 0.48 bytes a sample and
+ * plane at accuracy 5e-3 (1/8.3 of f32, tests/bench/out/bench_codec.md),
+ * one more bit per halving of the accuracy; f16 and the half-float EXR
+ * codecs 2; f32 and exr-zip 4. */
+static double tile_bytes(const proto_subscribe *sub, unsigned channels, int T)
 {
-    for (int i = 0; i < RATES; i++) {
-        rate *r = &k->rates[i];
-        if (r->used && r->codec == codec && r->accuracy == accuracy && r->channels == channels && r->size == size)
-            return r;
+    double per;
+    switch (sub->codec) {
+    case PROTO_CODEC_QZ:
+        per = 0.48 + 0.125 * log2(5e-3 / fmax((double)sub->accuracy, 1e-6));
+        per = fmin(fmax(per, 0.1), 4.0);
+        break;
+    case PROTO_CODEC_F32:
+    case PROTO_CODEC_EXR_ZIP:
+        per = 4.0;
+        break;
+    default:
+        per = 2.0;
+        break;
     }
-    return NULL;
-}
-
-/* Estimated encoded bytes of one tile of side T; before any such tile was
- * encoded, the codec's design point of 1/8 of f32. */
-static double tile_bytes(srv_cascade *k, const proto_subscribe *sub, unsigned channels, int T)
-{
-    const rate *r = rate_find(k, sub->codec, sub->accuracy, channels, (unsigned)T);
-    double per = r ? r->bytes_per_sample : proto_tile_planes(channels) * 4.0 / 8.0;
-    return per * T * T + 64; /* record and TILE headers */
-}
-
-/* Learns from encoded tiles (an exponential average per kind). */
-static void rate_learn(srv_cascade *k, const srv_tile *t)
-{
-    if (t->result != OCEAN_OK || !t->payload_len) return;
-    rate *r = rate_find(k, t->key.codec, t->key.accuracy, t->key.channels, t->key.size);
-    if (!r) {
-        r = &k->rates[k->rate_next];
-        k->rate_next = (k->rate_next + 1) % RATES;
-        *r = (rate){1, t->key.codec, t->key.channels, t->key.size, t->key.accuracy, 0};
-        r->bytes_per_sample = (double)t->payload_len / ((double)t->key.size * t->key.size);
-        return;
-    }
-    r->bytes_per_sample += 0.05 * ((double)t->payload_len / ((double)t->key.size * t->key.size) - r->bytes_per_sample);
+    return per * proto_tile_planes(channels) * T * T + 64; /* record and TILE headers */
 }
 
 /* The bounding box [x0, x1] x [z0, z1] of the sea a camera may draw from
@@ -321,7 +301,8 @@ static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, c
 
 /* A job's plan at the server's quality target (server.px_per_sample),
  * coarsened (q raised by steps of 2^(1/4)) until the frame's tiles fit the
- * viewer's byte budget (server.viewer_bytes_per_s over its frame rate): a
+ * viewer's byte budget (server.viewer_bytes_per_s over its frame rate,
+ * estimated with tile_bytes' model): a
  * large viewport or a low camera gets a little less geometry and a little
  * more unresolved roughness, never more bytes than the budget. */
 static void plan_job(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
@@ -411,7 +392,7 @@ static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, c
             span(box[2], box[3], w, ntile, &g->z0, &g->nz);
             pl->need[c][m] = 1;
             pl->tiles += g->nx * g->nz;
-            samples += (double)g->nx * g->nz * tile_bytes(k, sub, chan_of(pl, c), t);
+            samples += (double)g->nx * g->nz * tile_bytes(sub, chan_of(pl, c), t);
         }
     }
     pl->ok = 1;
@@ -843,7 +824,6 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
 #pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
         for (size_t q = 0; q < nmiss; q++)
             tile_build(missing[q], k->mipf[missing[q]->key.level], tb);
-        for (size_t q = 0; q < nmiss; q++) rate_learn(k, missing[q]);
         atomic_fetch_add(&st->tiles_encoded, (uint64_t)nmiss);
     }
     free(missing);

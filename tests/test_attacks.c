@@ -814,6 +814,9 @@ static void a_heavy_subscriber(void **state)
     test_ws w;
     proto_subscribe s;
     live_subscribe(&s);
+    /* per-camera tiles (layout 0) are what a subscription can make heavy;
+     * layout 1's shared tiles are held to the viewer's byte budget */
+    s.layout = PROTO_LAYOUT_WORLD;
     s.tile_size = 128;
     s.lod_levels = 8;
     s.frame_rate_hz = 60;

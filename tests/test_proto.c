@@ -229,7 +229,7 @@ static const proto_tile sample_tiles[2] = {
 /* Layout-1 tiles: mip 1 of cascade 0 and mip 0 of cascade 1 (cascade-local origins). */
 static const proto_tile cascade_tiles[2] = {
     {1, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, 3, 1, 46.875, 15.625, 7.8125, 0.0f, 16, tile_payload, 0},
-    {0, PROTO_CODEC_F16, PROTO_CH_HEIGHT, 2, 1, 0, 5, 0.0, 9.09375, 0.9093750, 0.00048828125f, 4, tile_payload, 1},
+    {0, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, 0, 5, 0.0, 9.09375, 0.9093750, 0.0f, 16, tile_payload, 1},
 };
 static const float sample_flat[6] = {-1, 0, 1, 0, 0, 1.5f};
 static const float sample_zones[8] = {1, 30, 4.5f, 0, 2, 120, 18, 0};
