@@ -93,8 +93,19 @@ ocean_result srv_hub_init(srv_hub *h, const srv_settings *s)
     h->settings = *s;
     h->tick_rate = s->srv.tick_rate;
     h->next_id = 1;
-    h->wall0 = srv_now();
+    struct timespec rt;
+    clock_gettime(CLOCK_REALTIME, &rt);
+    double epoch;
+    if (!s->srv.epoch[0] || srv_epoch_parse(s->srv.epoch, &epoch, NULL, 0) != OCEAN_OK) {
+        /* default: the start, to the nanosecond */
+        h->epoch_s = (int64_t)rt.tv_sec;
+        h->epoch_frac = 1e-9 * (double)rt.tv_nsec;
+    } else {
+        h->epoch_s = (int64_t)floor(epoch);
+        h->epoch_frac = epoch - floor(epoch);
+    }
     srv_sea_from_params(&s->params, &h->sea_now);
+    h->sea_effective = srv_hub_sim_time(h);
     return OCEAN_OK;
 }
 
@@ -111,7 +122,87 @@ void srv_hub_fini(srv_hub *h)
     pthread_mutex_destroy(&h->lock);
 }
 
-double srv_hub_sim_time(const srv_hub *h) { return srv_now() - h->wall0; }
+double srv_hub_sim_time(const srv_hub *h)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    /* whole seconds apart from the fraction: a Unix time as one double
+     * would keep only ~0.2 us */
+    return (double)((int64_t)ts.tv_sec - h->epoch_s) + (1e-9 * (double)ts.tv_nsec - h->epoch_frac);
+}
+
+double srv_hub_sim_time_at(const srv_hub *h, double unix_s)
+{
+    double w = floor(unix_s);
+    return (double)((int64_t)w - h->epoch_s) + ((unix_s - w) - h->epoch_frac);
+}
+
+/* ---- the sea-state timeline ------------------------------------------------- */
+
+static srv_msg *sea_announce_msg(const proto_sea *sea, double eff, double now)
+{
+    proto_msg m;
+    proto_msg_init(&m, PROTO_SEA_STATE);
+    m.hdr.sim_time = now;
+    m.u.sea_state.op = PROTO_SEA_ANNOUNCE;
+    m.u.sea_state.effective_time = eff;
+    m.u.sea_state.sea = *sea;
+    srv_msg *q = srv_msg_new();
+    if (!q) return NULL;
+    if (proto_encode(&q->buf, &m, NULL, 0) != OCEAN_OK) {
+        srv_msg_free(q);
+        return NULL;
+    }
+    return q;
+}
+
+ocean_result srv_hub_sea_schedule(srv_hub *h, const ocean_params *p, double requested, double *eff,
+                                  char *why, size_t whylen)
+{
+    double now = srv_hub_sim_time(h);
+    double e = requested > now ? requested : now;
+    int at = 0;
+    while (at < h->n_sea_pending && h->sea_pending[at].effective_time < e) at++;
+    int replace = at < h->n_sea_pending && h->sea_pending[at].effective_time == e;
+    if (!replace && h->n_sea_pending >= SRV_SEA_PENDING_MAX) {
+        if (why)
+            snprintf(why, whylen, "SEA_STATE set refused: %d changes are already pending "
+                     "(the most a server holds); wait until one takes effect", SRV_SEA_PENDING_MAX);
+        return OCEAN_ERATE;
+    }
+    if (!replace) {
+        memmove(&h->sea_pending[at + 1], &h->sea_pending[at],
+                (size_t)(h->n_sea_pending - at) * sizeof h->sea_pending[0]);
+        h->n_sea_pending++;
+    }
+    srv_sea_change *c = &h->sea_pending[at];
+    c->effective_time = e;
+    c->params = *p;
+    srv_sea_from_params(p, &c->sea);
+    h->sea_gen++;
+    for (srv_client *k = h->clients; k; k = k->next) {
+        if (k->closed || !k->hello_sent) continue;
+        srv_msg *q = sea_announce_msg(&c->sea, e, now);
+        if (q) srv_client_queue(k, q);
+    }
+    pthread_cond_signal(&h->wake);
+    if (eff) *eff = e;
+    return OCEAN_OK;
+}
+
+int srv_hub_sea_take_due(srv_hub *h, double t, srv_sea_change *out)
+{
+    int n = 0;
+    while (n < h->n_sea_pending && h->sea_pending[n].effective_time <= t) n++;
+    if (!n) return 0;
+    *out = h->sea_pending[n - 1];
+    memmove(&h->sea_pending[0], &h->sea_pending[n], (size_t)(h->n_sea_pending - n) * sizeof h->sea_pending[0]);
+    h->n_sea_pending -= n;
+    h->sea_now = out->sea;
+    h->sea_effective = out->effective_time;
+    h->settings.params = out->params;
+    return 1;
+}
 
 void srv_hub_wake_net(srv_hub *h)
 {
@@ -407,19 +498,41 @@ void srv_client_send_hello(srv_client *c)
     o->tick_rate_hz = (float)s->srv.tick_rate;
     o->max_frame_rate_hz = (float)s->srv.max_frame_rate;
     o->sea = h->sea_now;
-    pthread_mutex_unlock(&h->lock);
     o->client_id = c->id;
     snprintf(o->server_version, sizeof o->server_version, "%s", SERVER_VERSION);
     m.hdr.sim_time = srv_hub_sim_time(h);
     srv_msg *q = srv_msg_new();
-    if (!q) return;
     char err[256];
-    if (proto_encode(&q->buf, &m, err, sizeof err) != OCEAN_OK) {
+    if (q && proto_encode(&q->buf, &m, err, sizeof err) != OCEAN_OK) {
         fprintf(stderr, "oceand: cannot encode HELLO: %s\n", err);
         srv_msg_free(q);
-        return;
+        q = NULL;
     }
-    srv_client_queue(c, q);
+    if (q) {
+        /* HELLO, then the pending changes, before any later announce */
+        srv_client_queue(c, q);
+        for (int i = 0; i < h->n_sea_pending; i++) {
+            srv_msg *a = sea_announce_msg(&h->sea_pending[i].sea, h->sea_pending[i].effective_time,
+                                          m.hdr.sim_time);
+            if (a) srv_client_queue(c, a);
+        }
+        c->hello_sent = 1;
+    }
+    pthread_mutex_unlock(&h->lock);
+}
+
+void srv_client_send_sea_timeline(srv_client *c)
+{
+    srv_hub *h = c->hub;
+    pthread_mutex_lock(&h->lock);
+    double now = srv_hub_sim_time(h);
+    srv_msg *a = sea_announce_msg(&h->sea_now, h->sea_effective, now);
+    if (a) srv_client_queue(c, a);
+    for (int i = 0; i < h->n_sea_pending; i++) {
+        a = sea_announce_msg(&h->sea_pending[i].sea, h->sea_pending[i].effective_time, now);
+        if (a) srv_client_queue(c, a);
+    }
+    pthread_mutex_unlock(&h->lock);
 }
 
 /* ---- incoming ------------------------------------------------------------- */
@@ -622,6 +735,10 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
     }
     case PROTO_SEA_STATE: {
         const proto_sea_state *s = &m.u.sea_state;
+        if (s->op == PROTO_SEA_GET) {
+            srv_client_send_sea_timeline(c);
+            break;
+        }
         if (s->op != PROTO_SEA_SET) {
             srv_client_send_error(c, buf, len, OCEAN_EINVAL,
                                   "SEA_STATE announce is server-to-client; send op = set");
@@ -646,16 +763,15 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         char msg[256];
         r = ocean_params_validate(&np, msg, sizeof msg);
         if (r == OCEAN_OK) {
-            h->sea_req.pending = 1;
-            h->sea_req.params = np;
-            h->sea_req.effective_time = s->effective_time;
-            pthread_cond_signal(&h->wake);
+            /* entered and announced (to the setter too: that is the reply)
+             * in this hold of the lock */
+            r = srv_hub_sea_schedule(h, &np, s->effective_time, NULL, why, sizeof why);
+        } else {
+            snprintf(why, sizeof why, "SEA_STATE set refused: %s", msg);
         }
         pthread_mutex_unlock(&h->lock);
-        if (r != OCEAN_OK) {
-            snprintf(why, sizeof why, "SEA_STATE set refused: %s", msg);
-            srv_client_send_error(c, buf, len, r, why);
-        }
+        if (r != OCEAN_OK) srv_client_send_error(c, buf, len, r, why);
+        else srv_hub_wake_net(h);
         break;
     }
     case PROTO_BYE:

@@ -3,6 +3,7 @@
  */
 #include "srv_daemon.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -55,6 +56,7 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     if (o->port != s->srv.port) restart[nr++] = "server.port";
     if (strcmp(o->bind, s->srv.bind)) restart[nr++] = "server.bind";
     if (strcmp(o->web_root, s->srv.web_root)) restart[nr++] = "server.web_root";
+    if (strcmp(o->epoch, s->srv.epoch)) restart[nr++] = "server.epoch";
     if (o->workers != s->srv.workers) restart[nr++] = "server.workers";
     srv_settings keep = h->settings;
     h->settings = *s;
@@ -63,17 +65,20 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     snprintf(h->settings.srv.bind, sizeof h->settings.srv.bind, "%s", keep.srv.bind);
     snprintf(h->settings.srv.web_root, sizeof h->settings.srv.web_root, "%s", keep.srv.web_root);
     h->settings.srv.workers = keep.srv.workers;
+    snprintf(h->settings.srv.epoch, sizeof h->settings.srv.epoch, "%s", keep.srv.epoch);
     /* effects and near field are fixed by the running ocean's scene */
     h->settings.effects = keep.effects;
     h->settings.params = keep.params;
     if (memcmp(&keep.params, &s->params, sizeof s->params) != 0) {
-        h->sea_req.pending = 1;
-        h->sea_req.params = s->params;
-        h->sea_req.effective_time = 0; /* now */
+        /* a changed sea enters the timeline now, announced to every client */
+        char why[200];
+        if (srv_hub_sea_schedule(h, &s->params, -INFINITY, NULL, why, sizeof why) != OCEAN_OK)
+            fprintf(stderr, "oceand: reload: %s\n", why);
     }
     h->settings_gen++;
     pthread_cond_signal(&h->wake);
     pthread_mutex_unlock(&h->lock);
+    srv_hub_wake_net(h);
     atomic_fetch_add(&h->stats.reloads, 1);
     if (nr) {
         size_t off = (size_t)snprintf(msg, msglen, "restart needed for:");
