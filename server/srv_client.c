@@ -491,12 +491,15 @@ void srv_client_send_hello(srv_client *c)
     o->cutoff_policies = 7;
     o->modes = 3;
     o->max_message = (uint32_t)s->srv.max_message;
-    o->max_query_points = (uint32_t)s->srv.max_query_points;
+    /* the most points a QUERY within max_message can carry: 32 + 24 + 16 N */
+    uint32_t fit = s->srv.max_message > 56 ? (uint32_t)((s->srv.max_message - 56) / 16) : 0;
+    o->max_query_points = (uint32_t)s->srv.max_query_points < fit ? (uint32_t)s->srv.max_query_points : fit;
     o->max_tile_size = (uint16_t)s->srv.max_tile_size;
     o->max_lod_levels = (uint8_t)s->srv.max_lod_levels;
     o->max_layers = (uint8_t)s->params.cascades;
     o->tick_rate_hz = (float)s->srv.tick_rate;
-    o->max_frame_rate_hz = (float)s->srv.max_frame_rate;
+    /* frames go out on ticks: no faster than the tick rate */
+    o->max_frame_rate_hz = (float)fmin(s->srv.max_frame_rate, s->srv.tick_rate);
     o->sea = h->sea_now;
     o->client_id = c->id;
     snprintf(o->server_version, sizeof o->server_version, "%s", SERVER_VERSION);
@@ -566,6 +569,14 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
     if (sub->frame_rate_hz > s->srv.max_frame_rate) {
         snprintf(why, n, "subscribe.frame_rate_hz %g above the server's %g (server.max_frame_rate)",
                  (double)sub->frame_rate_hz, s->srv.max_frame_rate);
+        return OCEAN_EINVAL;
+    }
+    if (sub->frame_rate_hz > (float)s->srv.tick_rate) {
+        /* one frame per tick at most: a faster rate would be served at the
+         * tick rate without a word */
+        snprintf(why, n, "subscribe.frame_rate_hz %g above the server's tick rate %g "
+                 "(HELLO tick_rate_hz, server.tick_rate): frames are made on ticks",
+                 (double)sub->frame_rate_hz, s->srv.tick_rate);
         return OCEAN_EINVAL;
     }
     double spacing = sub->base_spacing_m > 0 ? sub->base_spacing_m : s->srv.base_spacing;
@@ -774,13 +785,21 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         else srv_hub_wake_net(h);
         break;
     }
+    case PROTO_ERROR:
+        /* a client's ERROR reports a server message it refused: logged,
+         * never answered (an ERROR for an ERROR could loop) */
+        if (cfg.verbose)
+            fprintf(stderr, "oceand: client %u reports ERROR %u (%s) for its message type %u seq %u: %s\n",
+                    c->id, m.u.error.code, ocean_strerror((ocean_result)m.u.error.code),
+                    m.u.error.offending_type, m.u.error.offending_seq, m.u.error.message);
+        break;
     case PROTO_BYE:
         c->closing = 2; /* close without a reply */
         atomic_store(&c->want_write, 1);
         break;
     default:
         snprintf(why, sizeof why, "%s is a server-to-client message; clients send SUBSCRIBE, "
-                 "CAMERA, QUERY, SEA_STATE or BYE", proto_type_name(m.hdr.type));
+                 "CAMERA, QUERY, SEA_STATE, ERROR or BYE", proto_type_name(m.hdr.type));
         srv_client_send_error(c, buf, len, OCEAN_ETYPE, why);
         break;
     }

@@ -944,10 +944,10 @@ static void bad_input_gets_error(void **state)
     cases[nc++] = (bad_case){"oversized", b, big, 2, OCEAN_ETOOBIG};
     /* a server-to-client message */
     proto_msg hm;
-    proto_msg_init(&hm, PROTO_BYE);
-    proto_msg_init(&hm, PROTO_ERROR);
-    hm.u.error.code = 1;
-    snprintf(hm.u.error.message, sizeof hm.u.error.message, "x");
+    proto_msg_init(&hm, PROTO_QUERY_RESULT);
+    proto_query_sample qs = {0};
+    hm.u.result.count = 1;
+    hm.u.result.samples = &qs;
     cases[nc++] = (bad_case){"server-only", encode(&hm, &len), len, 2, OCEAN_ETYPE};
     /* tile size above the server's maximum */
     proto_msg bs = sm;
@@ -1450,6 +1450,109 @@ static void epoch_shared_clock(void **state)
     srv_daemon_stop(d2);
 }
 
+/* ---- the server as PROTOCOL.md states it (issue 16 deviations) ----------------- */
+
+static void raw_query(test_ws *w, uint32_t id, uint32_t n)
+{
+    double *pts = calloc(2 * (size_t)n, sizeof *pts);
+    for (uint32_t i = 0; i < n; i++) pts[2 * i] = i;
+    proto_msg q;
+    proto_msg_init(&q, PROTO_QUERY);
+    q.u.query.query_id = id;
+    q.u.query.count = n;
+    q.u.query.points = pts;
+    raw_send_msg(w, &q);
+    free(pts);
+}
+
+/* Waits for the first FRAME and returns its tile count (-1: none came). */
+static int raw_frame_tiles(test_ws *w, int ms)
+{
+    proto_msg m;
+    if (!raw_wait_type(w, PROTO_FRAME, ms, &m)) return -1;
+    int n = m.u.frame.tile_count;
+    proto_msg_free(&m);
+    return n;
+}
+
+/* HELLO's limits are ones the server honours: a QUERY of max_query_points
+ * fits max_message (32 + 24 + 16 N bytes) and is answered, one more point is
+ * ETOOBIG; max_frame_rate_hz is not above tick_rate_hz and a faster
+ * SUBSCRIBE is refused, not served slower in silence; a client ERROR is not
+ * answered; SUBSCRIBE accuracy at its lower bound (f32 of 1e-6) gives tiles. */
+static void hello_limits_are_honoured(void **state)
+{
+    (void)state;
+    test_ws w;
+    assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
+    proto_msg m;
+    assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+    proto_hello h = m.u.hello;
+    proto_msg_free(&m);
+    uint32_t fit = (h.max_message - 32 - 24) / 16;
+    assert_true(h.max_query_points <= fit);
+    assert_true(h.max_query_points == fit); /* the test config: 64 KiB messages, 65 536 points */
+    raw_query(&w, 7, h.max_query_points);
+    assert_true(raw_wait_type(&w, PROTO_QUERY_RESULT, 5000, &m));
+    assert_int_equal(m.u.result.query_id, 7);
+    assert_int_equal(m.u.result.count, h.max_query_points);
+    proto_msg_free(&m);
+    raw_query(&w, 8, h.max_query_points + 1);
+    assert_true(raw_wait_type(&w, PROTO_ERROR, 3000, &m));
+    assert_int_equal(m.u.error.code, OCEAN_ETOOBIG);
+    proto_msg_free(&m);
+
+    /* frame rate: at most the tick rate */
+    assert_true(h.max_frame_rate_hz <= h.tick_rate_hz);
+    proto_msg sm;
+    proto_msg_init(&sm, PROTO_SUBSCRIBE);
+    small_subscribe(&sm.u.subscribe);
+    sm.u.subscribe.mesh_kind = PROTO_MESH_NONE;
+    sm.u.subscribe.tile_size = 16;
+    sm.u.subscribe.lod_levels = 1;
+    sm.u.subscribe.frame_rate_hz = 2 * h.tick_rate_hz;
+    raw_send_msg(&w, &sm);
+    assert_true(raw_wait_type(&w, PROTO_ERROR, 3000, &m));
+    assert_int_equal(m.u.error.code, OCEAN_EINVAL);
+    assert_non_null(strstr(m.u.error.message, "tick"));
+    proto_msg_free(&m);
+
+    /* accuracy at the spec's lower bound: tiles in every frame, both layouts */
+    sm.u.subscribe.frame_rate_hz = h.max_frame_rate_hz;
+    sm.u.subscribe.accuracy = (float)1e-6;
+    assert_true((double)sm.u.subscribe.accuracy < 1e-6); /* f32 rounds below the bound */
+    raw_send_msg(&w, &sm);
+    assert_true(raw_frame_tiles(&w, 5000) > 0);
+    assert_true(raw_frame_tiles(&w, 5000) > 0);
+    proto_msg cs;
+    proto_msg_init(&cs, PROTO_SUBSCRIBE);
+    cascade_subscribe(&cs.u.subscribe);
+    cs.u.subscribe.accuracy = (float)1e-6;
+    raw_send_msg(&w, &cs);
+    int tiles = 0;
+    for (int i = 0; i < 5; i++) {
+        proto_msg f;
+        assert_true(raw_wait_type(&w, PROTO_FRAME, 5000, &f));
+        if (f.u.frame.layout == PROTO_LAYOUT_CASCADE) tiles = f.u.frame.tile_count;
+        proto_msg_free(&f);
+    }
+    assert_true(tiles > 0);
+
+    /* a client ERROR: no reply, the connection stays */
+    proto_msg em;
+    proto_msg_init(&em, PROTO_ERROR);
+    em.u.error.code = OCEAN_ECODEC;
+    em.u.error.offending_type = PROTO_FRAME;
+    snprintf(em.u.error.message, sizeof em.u.error.message, "cannot decode that tile");
+    raw_send_msg(&w, &em);
+    assert_false(raw_wait_type(&w, PROTO_ERROR, 600, &m));
+    raw_query(&w, 9, 2);
+    assert_true(raw_wait_type(&w, PROTO_QUERY_RESULT, 5000, &m));
+    assert_int_equal(m.u.result.query_id, 9);
+    proto_msg_free(&m);
+    test_ws_close(&w);
+}
+
 /* /metrics and /status answer over plain HTTP. */
 static char *http_get(int p, const char *path)
 {
@@ -1760,6 +1863,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(sea_timeline_get),
         cmocka_unit_test(epoch_parse),
         cmocka_unit_test(epoch_shared_clock),
+        cmocka_unit_test(hello_limits_are_honoured),
         cmocka_unit_test(http_metrics_and_status),
         cmocka_unit_test(recording_writes_camera_path),
         cmocka_unit_test(max_clients_refused),
