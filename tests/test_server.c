@@ -1551,6 +1551,23 @@ static void hello_limits_are_honoured(void **state)
     assert_int_equal(m.u.result.query_id, 9);
     proto_msg_free(&m);
     test_ws_close(&w);
+
+    /* a WebSocket without the subprotocol is closed with a reason, not left
+     * in silence; any path serves ocean.v1 */
+    test_ws x;
+    assert_int_equal(test_ws_connect(&x, port, "/", NULL), 0);
+    uint8_t *b = NULL;
+    size_t n = 0;
+    int op = test_ws_recv(&x, 3000, &b, &n);
+    assert_int_equal(op, 8);
+    assert_true(n >= 2 && ((b[0] << 8) | b[1]) == 1002);
+    assert_non_null(memmem(b, n, "ocean.v1", 8));
+    free(b);
+    test_ws_close(&x);
+    assert_int_equal(test_ws_connect(&x, port, "/any/path?x=1", PROTO_SUBPROTOCOL), 0);
+    assert_true(raw_wait_type(&x, PROTO_HELLO, 3000, &m));
+    proto_msg_free(&m);
+    test_ws_close(&x);
 }
 
 /* /metrics and /status answer over plain HTTP. */
