@@ -1233,6 +1233,14 @@ static void sea_timeline_scheduled_change(void **state)
     assert_true(same_sea(tl_at(&tb, eff), &nw));
     /* the server still serves the old sea before eff ... */
     oc_client *q = connect_client(port, NULL);
+    /* the C library keeps the timeline too */
+    proto_sea lib;
+    double lib_eff;
+    usleep(200000);
+    assert_int_equal(oc_client_sea_at(q, eff - 0.01, &lib, &lib_eff), OCEAN_OK);
+    assert_true(same_sea(&lib, &old));
+    assert_int_equal(oc_client_sea_at(q, eff, &lib, &lib_eff), OCEAN_OK);
+    assert_true(same_sea(&lib, &nw) && lib_eff == eff);
     const double xz[] = {13.5, -7.25, 250.0, 125.0, -1e5, 3e4};
     oc_query_result qr;
     ocean_query_result lr[3];
@@ -1354,6 +1362,51 @@ static void sea_timeline_get(void **state)
     assert_true(g.eff[0] == t0 + 3.0);
     sea_send(&a, PROTO_SEA_SET, &old, 0);
     wait_hub_wind(old.wind_u10, 5);
+    test_ws_close(&a);
+}
+
+/* SEA_STATE set is checked against the simulation's ranges, which
+ * PROTOCOL.md states beside the block's: swell [0, 10], phillips_a [0, 1],
+ * small_wave_m [0, 100]; the bound is accepted, beyond it EINVAL names the
+ * field. */
+static void sea_set_ranges(void **state)
+{
+    (void)state;
+    test_ws a;
+    timeline ta;
+    sea_connect(&a, &ta, 300);
+    proto_sea old = *tl_at(&ta, hub_now());
+    struct { const char *name; size_t off; double ok, bad; } f[] = {
+        {"swell", offsetof(proto_sea, swell), 10, 10.5},
+        {"phillips_a", offsetof(proto_sea, phillips_a), 1, 1.5},
+        {"small_wave", offsetof(proto_sea, small_wave_m), 100, 150},
+    };
+    for (size_t i = 0; i < sizeof f / sizeof f[0]; i++) {
+        proto_sea x = old;
+        *(double *)((char *)&x + f[i].off) = f[i].bad;
+        sea_send(&a, PROTO_SEA_SET, &x, hub_now() + 100);
+        proto_msg m;
+        assert_true(raw_wait_type(&a, PROTO_ERROR, 3000, &m));
+        assert_int_equal(m.u.error.code, OCEAN_EINVAL);
+        if (!strstr(m.u.error.message, f[i].name)) fail_msg("%s: %s", f[i].name, m.u.error.message);
+        proto_msg_free(&m);
+        x = old;
+        *(double *)((char *)&x + f[i].off) = f[i].ok;
+        sea_send(&a, PROTO_SEA_SET, &x, hub_now() + 0.05 * (double)(i + 1));
+        timeline r;
+        memset(&r, 0, sizeof r);
+        r.hello = 1;
+        assert_int_equal(tl_read(&a, &r, 300), 1);
+    }
+    sea_send(&a, PROTO_SEA_SET, &old, hub_now() + 0.5);
+    usleep(800000);
+    wait_hub_wind(old.wind_u10, 5);
+    srv_hub *h = srv_daemon_hub(daemon_);
+    pthread_mutex_lock(&h->lock);
+    int same = h->sea_now.swell == old.swell && h->sea_now.phillips_a == old.phillips_a &&
+               h->sea_now.small_wave_m == old.small_wave_m;
+    pthread_mutex_unlock(&h->lock);
+    assert_true(same);
     test_ws_close(&a);
 }
 
@@ -1878,6 +1931,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(sea_timeline_scheduled_change),
         cmocka_unit_test(sea_timeline_late_joiner),
         cmocka_unit_test(sea_timeline_get),
+        cmocka_unit_test(sea_set_ranges),
         cmocka_unit_test(epoch_parse),
         cmocka_unit_test(epoch_shared_clock),
         cmocka_unit_test(hello_limits_are_honoured),
