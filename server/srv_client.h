@@ -185,7 +185,16 @@ typedef struct srv_hub {
     double epoch_frac;                    /* [const]   whole seconds + fraction [0, 1) */
     double tick_rate;                     /* [hub.lock] */
     srv_stats stats;                      /* atomics */
+    char fingerprint[17];                 /* [const] determinism fingerprint, 16 hex digits */
 } srv_hub;
+
+/* The determinism fingerprint (16 hex digits + NUL into out): FNV-1a 64 of
+ * everything besides the sea timeline that decides a FRAME's bytes: the
+ * compiler, the CPU features that pick code paths (target_clones' avx2;
+ * FFTW's SIMD: avx, avx2, fma, avx512f), the FFTW version, plan mode and
+ * threads, and the configuration that shapes frames.  Announced in HELLO's
+ * server_version (PROTOCOL.md "HELLO"). */
+void srv_fingerprint(const srv_settings *s, char out[17]);
 
 /* Monotonic seconds. */
 double srv_now(void);

@@ -1461,6 +1461,23 @@ static void epoch_shared_clock(void **state)
     assert_true(fabs(a - (unix_now - 1767225600.0)) < 1e-6);
     /* the frames: same tick -> same sim time on both; tick = floor(t * rate) */
     oc_client *c[2] = {connect_client(srv_daemon_port(d1), NULL), connect_client(srv_daemon_port(d2), NULL)};
+    /* both announce the same determinism fingerprint; another grid would not */
+    proto_hello h1, h2;
+    assert_int_equal(oc_client_hello(c[0], &h1), OCEAN_OK);
+    assert_int_equal(oc_client_hello(c[1], &h2), OCEAN_OK);
+    assert_string_equal(h1.server_version, h2.server_version);
+    char fp[17], fp2[17];
+    srv_fingerprint(&s1, fp);
+    assert_non_null(strstr(h1.server_version, fp));
+    assert_non_null(strstr(h1.server_version, " fp="));
+    srv_settings s3 = s1;
+    s3.params.n *= 2;
+    srv_fingerprint(&s3, fp2);
+    assert_string_not_equal(fp, fp2);
+    s3 = s1;
+    s3.params.plan_measure = !s3.params.plan_measure;
+    srv_fingerprint(&s3, fp2);
+    assert_string_not_equal(fp, fp2);
     uint32_t ticks[2][40];
     double times[2][40];
     int nt[2] = {0, 0};
