@@ -18,6 +18,7 @@
 #include <time.h>
 
 #include "srv_record.h"
+#include "srv_redis.h"
 
 #define SERVER_VERSION "oceand 0.1"
 
@@ -836,6 +837,14 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         srv_params_from_sea(&s->sea, &h->settings.params, &np);
         char msg[256];
         r = ocean_params_validate(&np, msg, sizeof msg);
+        if (r == OCEAN_OK && h->redis) {
+            /* replicated: into the shared stream; the announce comes back
+             * through it, to every replica's clients alike */
+            pthread_mutex_unlock(&h->lock);
+            r = srv_redis_publish(h->redis, &s->sea, s->effective_time, why, sizeof why);
+            if (r != OCEAN_OK) srv_client_send_error(c, buf, len, r, why);
+            break;
+        }
         if (r == OCEAN_OK) {
             /* entered and announced (to the setter too: that is the reply)
              * in this hold of the lock */

@@ -186,6 +186,7 @@ typedef struct srv_hub {
     double tick_rate;                     /* [hub.lock] */
     srv_stats stats;                      /* atomics */
     char fingerprint[17];                 /* [const] determinism fingerprint, 16 hex digits */
+    struct srv_redis *redis;              /* [const once started] replicated timeline, or NULL */
 } srv_hub;
 
 /* The determinism fingerprint (16 hex digits + NUL into out): FNV-1a 64 of

@@ -78,6 +78,19 @@ static const conf_entry srv_entries[] = {
              "2026-01-01T00:00:00Z, or Unix seconds. Daemons given the same epoch on "
              "NTP/PTP-synchronised machines agree on the sim time and tick index (to their "
              "clock offset). Empty: the daemon's start. Needs a restart to change."},
+    {.name = "server.redis", .type = CONF_STRING, .offset = SRV(redis), .size = SRV_BIND_MAX,
+     .def = "",
+     .help = "host:port of a Redis server holding the sea-state timeline shared by replicas "
+             "(a stream, server.redis_stream): every sea-state change is appended there and "
+             "applied by every replica at its effective time. Empty: this daemon's timeline is "
+             "its own. Needs a restart to change."},
+    {.name = "server.redis_stream", .type = CONF_STRING, .offset = SRV(redis_stream),
+     .size = SRV_REDIS_KEY_MAX, .def = "oceand:sea",
+     .help = "Key of the Redis stream of sea-state changes; replicas of one exercise share it."},
+    {.name = "server.sea_lead", .type = CONF_DOUBLE, .offset = SRV(sea_lead), .min = 0.05,
+     .max = 3600, .def = "0.5", .unit = "s",
+     .help = "With server.redis: a sea-state change must take effect at least this long after "
+             "it is set, so it reaches every replica first; a nearer one is refused."},
     {.name = "server.workers", .type = CONF_INT, .offset = SRV(workers), .min = 1, .max = 64,
      .def = "2",
      .help = "Threads that encode tiles and build meshes each tick (besides FFTW's "

@@ -22,6 +22,7 @@
 #define SRV_TOKEN_MAX 256
 #define SRV_BIND_MAX 64
 #define SRV_EPOCH_MAX 64
+#define SRV_REDIS_KEY_MAX 128
 
 typedef struct srv_config {
     /* network */
@@ -39,6 +40,9 @@ typedef struct srv_config {
     /* simulation */
     double tick_rate;            /* Hz */
     char epoch[SRV_EPOCH_MAX];   /* sim t = 0: ISO 8601 UTC or Unix seconds; "" = start */
+    char redis[SRV_BIND_MAX];    /* "host:port" of the replicated timeline; "" none */
+    char redis_stream[SRV_REDIS_KEY_MAX]; /* its stream key */
+    double sea_lead;             /* replicated: least lead of a change's effective time, s */
     int workers;                 /* threads building frames */
     char scene[SRV_PATH_MAX];    /* scene name (in scene_dir) or path; "" none */
     char scene_dir[SRV_PATH_MAX];
