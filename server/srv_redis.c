@@ -40,6 +40,10 @@ static redisContext *connect_to(const srv_redis *r, char *msg, size_t msglen)
         if (c) redisFree(c);
         return NULL;
     }
+    /* a Redis that stops answering must not hold a thread for ever (the
+     * service thread publishes; XREAD blocks 200 ms at most) */
+    struct timeval io = {1, 0};
+    redisSetTimeout(c, io);
     return c;
 }
 
@@ -111,10 +115,14 @@ static void *reader(void *arg)
                 continue;
             }
         }
-        if (read_once(r, 200) < 0 && r->rd->err) {
-            fprintf(stderr, "oceand: redis %s:%d: %s; reconnecting\n", r->host, r->port, r->rd->errstr);
-            redisFree(r->rd);
-            r->rd = NULL;
+        if (read_once(r, 200) < 0) {
+            if (r->rd->err) {
+                fprintf(stderr, "oceand: redis %s:%d: %s; reconnecting\n", r->host, r->port, r->rd->errstr);
+                redisFree(r->rd);
+                r->rd = NULL;
+            }
+            struct timespec ts = {0, 200 * 1000 * 1000}; /* no busy loop on a refused XREAD */
+            nanosleep(&ts, NULL);
         }
     }
     return NULL;
