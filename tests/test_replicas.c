@@ -10,7 +10,9 @@
  * policy none) are byte-identical across replicas, per-connection fields
  * aside; a replica is killed (SIGKILL) in the middle of a client's stream, the
  * client reconnects through the proxy to the survivor and gets the same bytes
- * for the same camera and time.
+ * for the same camera and time; restarted, the killed replica reads the
+ * timeline back from the stream.  Live FRAMEs of one tick are the same bytes
+ * on both replicas too.
  */
 #include <arpa/inet.h>
 #include <errno.h>
@@ -475,6 +477,31 @@ static void replicas_behind_haproxy(void **state)
         }
     }
     assert_int_equal(moved, 1); /* round robin put one proxied client on each replica */
+
+    /* the killed replica restarts: it reads the timeline from the stream and
+     * serves the same sea and the same bytes at once */
+    {
+        char exe[600], conf[600];
+        snprintf(exe, sizeof exe, "%s/oceand", exe_dir);
+        snprintf(conf, sizeof conf, "%s/r1.conf", tmp);
+        snprintf(log, sizeof log, "%s/r1b.log", tmp);
+        char *oargv[] = {exe, "--config", conf, NULL};
+        pids[1] = spawn(log, oargv);
+        assert_true(wait_port(p1, 20));
+        test_ws r;
+        proto_hello hr;
+        connect_hello(&r, p1, &hr);
+        assert_true(hr.sea.wind_u10 == 14 && hr.sea.wind_dir_deg == 35);
+        subscribe_replay(&r);
+        size_t l;
+        uint8_t *o = replay_frame(&r, times[0], &l);
+        assert_non_null(o);
+        assert_int_equal(l, reflen[0]);
+        assert_memory_equal(o, ref[0], l);
+        free(o);
+        test_ws_close(&r);
+        stop(&pids[1], SIGTERM);
+    }
 
     for (int i = 0; i < NFRAMES; i++) free(ref[i]);
     test_ws_close(&a);
