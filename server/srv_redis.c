@@ -164,6 +164,12 @@ ocean_result srv_redis_start(srv_hub *h, const srv_settings *s, srv_redis **out,
         srv_redis_stop(r);
         return OCEAN_EIO;
     }
+    /* changes already in force are the current sea from the first tick
+     * (the simulation builds its ocean from the hub's settings after this) */
+    srv_sea_change due;
+    pthread_mutex_lock(&h->lock);
+    srv_hub_sea_take_due(h, srv_hub_sim_time(h), &due);
+    pthread_mutex_unlock(&h->lock);
     if (pthread_create(&r->thread, NULL, reader, r) != 0) {
         srv_redis_stop(r);
         return OCEAN_ENOMEM;

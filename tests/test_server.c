@@ -1220,7 +1220,7 @@ static void sea_timeline_scheduled_change(void **state)
     proto_sea nw = old;
     nw.wind_u10 = old.wind_u10 + 4;
     nw.seed = old.seed + 1;
-    double eff = hub_now() + 2.0;
+    double eff = hub_now() + 3.0; /* room for a loaded machine before it takes effect */
     sea_send(&a, PROTO_SEA_SET, &nw, eff);
     /* the setter's reply is the announce, with the effective time asked */
     assert_int_equal(tl_read(&a, &ta, 400), 1);
@@ -1235,8 +1235,10 @@ static void sea_timeline_scheduled_change(void **state)
     oc_client *q = connect_client(port, NULL);
     /* the C library keeps the timeline too */
     proto_sea lib;
-    double lib_eff;
-    usleep(200000);
+    double lib_eff = 0;
+    /* the announce behind HELLO may still be on its way to the library */
+    for (double end = now_s() + 5; now_s() < end; usleep(20000))
+        if (oc_client_sea_at(q, eff, &lib, &lib_eff) == OCEAN_OK && lib_eff == eff) break;
     assert_int_equal(oc_client_sea_at(q, eff - 0.01, &lib, &lib_eff), OCEAN_OK);
     assert_true(same_sea(&lib, &old));
     assert_int_equal(oc_client_sea_at(q, eff, &lib, &lib_eff), OCEAN_OK);
