@@ -48,7 +48,7 @@ CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -fopenmp -pthread
 # .pc file's Libs.private is generated from it, so they cannot disagree.
 LIB_LDLIBS := -lwebsockets -lOpenEXRCore-3_1 -lfftw3f_omp -lfftw3f \
               -lzstd -lcjson -lm -lpthread
-LDLIBS += $(LIB_LDLIBS)
+LDLIBS += $(LIB_LDLIBS) -lhiredis
 ifeq ($(SAN),1)
 CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 LDFLAGS += -fsanitize=address,undefined

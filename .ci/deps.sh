@@ -5,7 +5,7 @@ set -euo pipefail
 pkgs=(gcc make clang pkg-config libclang-rt-14-dev
       libwebsockets-dev libopenexr-dev libfftw3-dev libzstd-dev libcjson-dev
       librandom123-dev libcmocka-dev libwslay-dev gnuplot-nox openexr chromium
-      curl python3)
+      curl python3 haproxy redis-server libhiredis-dev)
 missing=()
 for p in "${pkgs[@]}"; do
     st=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)

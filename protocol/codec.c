@@ -554,7 +554,8 @@ static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, 
                               const float *planes, proto_buf *out, double *max_err, char *err, size_t errlen)
 {
     double acc = p->accuracy;
-    if (!(acc >= PROTO_ACCURACY_MIN && acc <= PROTO_ACCURACY_MAX)) {
+    /* the bound as the f32 the wire carries (float 1e-6 is 9.99999997e-7) */
+    if (!(acc >= (double)(float)PROTO_ACCURACY_MIN && acc <= PROTO_ACCURACY_MAX)) {
         ocean_seterr(err, errlen, "qz accuracy %g outside %g..%g", acc, PROTO_ACCURACY_MIN, PROTO_ACCURACY_MAX);
         return OCEAN_EINVAL;
     }

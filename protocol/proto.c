@@ -469,8 +469,22 @@ static ocean_result v_sea_state(ctx *c, const proto_sea_state *s)
 {
     TRY(chk_enum(c, "sea_state.op", s->op, PROTO_SEA_OP_COUNT_));
     TRY(chk_time(c, "sea_state.effective_time", s->effective_time));
-    TRY(v_sea(c, &s->sea));
     TRY(chk_str(c, "sea_state.token", s->token, PROTO_TOKEN_MAX));
+    if (s->op == PROTO_SEA_GET) {
+        /* A get carries no state: every field zero, so a future version can
+         * give them a meaning without old servers misreading them. */
+        const proto_sea *z = &s->sea;
+        const double d[11] = {s->effective_time, z->wind_u10, z->wind_dir_deg, z->fetch_m, z->depth_m,
+                              z->swell, z->phillips_a, z->small_wave_m, z->choppiness, z->hs, z->tp};
+        int nonzero = z->spectrum || z->spreading || z->seed;
+        for (int i = 0; i < 11; i++) nonzero |= d[i] != 0 || signbit(d[i]);
+        if (nonzero)
+            FAIL(c, OCEAN_EFORMAT, "sea_state get: effective_time and the sea block must be zero bytes");
+        if (s->token[0])
+            FAIL(c, OCEAN_EFORMAT, "sea_state get must not carry a token");
+        return OCEAN_OK;
+    }
+    TRY(v_sea(c, &s->sea));
     if (s->op == PROTO_SEA_ANNOUNCE && s->token[0])
         FAIL(c, OCEAN_EFORMAT, "sea_state announce must not carry a token");
     return OCEAN_OK;

@@ -122,6 +122,8 @@ typedef enum proto_layout {
 typedef enum proto_sea_op {
     PROTO_SEA_ANNOUNCE = 0,  /* server -> client: the state in force from effective_time */
     PROTO_SEA_SET = 1,       /* client -> server: admin request, needs the token */
+    PROTO_SEA_GET = 2,       /* client -> server: ask for the timeline (no token; the
+                              * sea block all zero bytes, effective_time 0) */
     PROTO_SEA_OP_COUNT_
 } proto_sea_op;
 
@@ -324,7 +326,7 @@ typedef struct proto_sea_state {
     uint8_t op;               /* proto_sea_op */
     double effective_time;    /* sim time the state takes effect */
     proto_sea sea;
-    char token[PROTO_TOKEN_MAX + 1];  /* SET: admin token; ANNOUNCE: empty */
+    char token[PROTO_TOKEN_MAX + 1];  /* SET: admin token; ANNOUNCE, GET: empty */
 } proto_sea_state;
 
 typedef struct proto_error {

@@ -296,7 +296,7 @@ static void view_box(const srv_cascade_job *j, const sector *sc, double R, doubl
 static double nadir_error(const tables *tb, const plan *pl, const proto_camera *cam);
 
 /* The plan for spacing factor q; returns the estimated bytes of its tiles. */
-static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
+static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
                       const sector *sc, double q, plan *pl);
 
 /* A job's plan at the server's quality target (server.px_per_sample),
@@ -305,7 +305,7 @@ static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, c
  * estimated with tile_bytes' model): a
  * large viewport or a low camera gets a little less geometry and a little
  * more unresolved roughness, never more bytes than the budget. */
-static void plan_job(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
+static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
 {
     mesh_camera mc;
     srv_mesh_camera(&j->cam, &mc);
@@ -316,20 +316,20 @@ static void plan_job(srv_cascade *k, const tables *tb, const srv_config *cfg, co
     sector sc;
     sector_of(&j->cam, &sc);
     double hi = q;
-    if (plan_at(k, tb, cfg, j, &sc, q, pl) > budget) {
+    if (plan_at(tb, cfg, j, &sc, q, pl) > budget) {
         /* octaves first, then quarter octaves back down to the finest that fits */
         for (int it = 0; it < 40; it++) {
             hi *= 2;
-            if (plan_at(k, tb, cfg, j, &sc, hi, pl) <= budget)
+            if (plan_at(tb, cfg, j, &sc, hi, pl) <= budget)
                 break;
         }
         for (int it = 0; it < 3; it++) {
             double t = hi / 1.189207115002721; /* 2^(1/4) */
-            if (t <= q || plan_at(k, tb, cfg, j, &sc, t, pl) > budget)
+            if (t <= q || plan_at(tb, cfg, j, &sc, t, pl) > budget)
                 break;
             hi = t;
         }
-        plan_at(k, tb, cfg, j, &sc, hi, pl);
+        plan_at(tb, cfg, j, &sc, hi, pl);
     }
     /* Seed 000's energy guard, E <= 5 %: a subscription without normals
      * has no shading to carry what the tiles drop (its e_total is its
@@ -340,8 +340,8 @@ static void plan_job(srv_cascade *k, const tables *tb, const srv_config *cfg, co
     if (!(j->c->sim.sub.effects & PROTO_FX_NORMALS)) {
         while (hi > q / 64 && nadir_error(tb, pl, &j->cam) > SRV_CASCADE_E_GUARD) {
             double t = hi / 1.189207115002721;
-            if (plan_at(k, tb, cfg, j, &sc, t, pl) > 2.0 * budget) {
-                plan_at(k, tb, cfg, j, &sc, hi, pl);
+            if (plan_at(tb, cfg, j, &sc, t, pl) > 2.0 * budget) {
+                plan_at(tb, cfg, j, &sc, hi, pl);
                 break;
             }
             hi = t;
@@ -349,7 +349,7 @@ static void plan_job(srv_cascade *k, const tables *tb, const srv_config *cfg, co
     }
 }
 
-static double plan_at(srv_cascade *k, const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
+static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
                       const sector *sc, double q, plan *pl)
 {
     const proto_subscribe *sub = &j->c->sim.sub;
@@ -738,7 +738,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
     if (!pl) return;
     /* 1. plans and meshes */
     for (int i = 0; i < n; i++) {
-        plan_job(k, tb, cfg, &jobs[i], &pl[i]);
+        plan_job(tb, cfg, &jobs[i], &pl[i]);
         pl[i].share_with = i;
         if (pl[i].tiles > (int)PROTO_MAX_FRAME_TILES) {
             char why[200];

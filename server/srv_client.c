@@ -9,6 +9,7 @@
 #include "srv_client.h"
 #include "srv_cascade.h"
 
+#include <fftw3.h>
 #include <libwebsockets.h>
 #include <math.h>
 #include <stdio.h>
@@ -18,6 +19,7 @@
 
 #include "srv_record.h"
 #include "srv_tiles.h"
+#include "srv_redis.h"
 
 #define SERVER_VERSION "oceand 0.1"
 
@@ -81,6 +83,67 @@ void srv_mesh_camera(const proto_camera *pc, mesh_camera *c)
     c->viewport_h = pc->viewport_h;
 }
 
+/* ---- determinism fingerprint ---------------------------------------------- */
+
+static uint64_t fnv(uint64_t h, const void *p, size_t n)
+{
+    const uint8_t *b = p;
+    for (size_t i = 0; i < n; i++) {
+        h ^= b[i];
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+
+static uint64_t fnv_str(uint64_t h, const char *s) { return fnv(h, s, strlen(s) + 1); }
+
+static uint64_t fnv_f64(uint64_t h, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, 8);
+    return fnv(h, &u, 8);
+}
+
+static uint64_t fnv_int(uint64_t h, long long v) { return fnv(h, &v, sizeof v); }
+
+void srv_fingerprint(const srv_settings *s, char out[17])
+{
+    uint64_t h = 0xcbf29ce484222325ull;
+    h = fnv_str(h, SERVER_VERSION);
+    h = fnv_str(h, __VERSION__);
+#ifdef __OPTIMIZE__
+    h = fnv_int(h, 1);
+#endif
+    __builtin_cpu_init();
+    h = fnv_int(h, __builtin_cpu_supports("avx"));
+    h = fnv_int(h, __builtin_cpu_supports("avx2"));
+    h = fnv_int(h, __builtin_cpu_supports("fma"));
+    h = fnv_int(h, __builtin_cpu_supports("avx512f"));
+    h = fnv_str(h, fftwf_version);
+    const ocean_params *p = &s->params;
+    h = fnv_int(h, p->n);
+    h = fnv_int(h, p->cascades);
+    h = fnv_f64(h, p->patch_m);
+    h = fnv_f64(h, p->cascade_ratio);
+    h = fnv_f64(h, p->k_max);
+    h = fnv_int(h, p->threads);
+    h = fnv_int(h, p->plan_measure);
+    h = fnv_f64(h, p->drop_gain);
+    const srv_config *c = &s->srv;
+    h = fnv_int(h, (long long)s->effects);
+    h = fnv_f64(h, c->tick_rate);
+    h = fnv_int(h, c->tiles_per_side);
+    h = fnv_f64(h, c->base_spacing);
+    h = fnv_f64(h, c->view_range);
+    h = fnv_f64(h, c->mesh_error_px);
+    h = fnv_f64(h, c->px_per_sample);
+    h = fnv_f64(h, c->viewer_bytes_per_s);
+    h = fnv_int(h, c->near_field_waves);
+    h = fnv_f64(h, c->near_field_radius);
+    h = fnv_f64(h, c->near_field_min_wavelength);
+    snprintf(out, 17, "%016llx", (unsigned long long)h);
+}
+
 /* ---- hub ------------------------------------------------------------------ */
 
 ocean_result srv_hub_init(srv_hub *h, const srv_settings *s)
@@ -99,8 +162,20 @@ ocean_result srv_hub_init(srv_hub *h, const srv_settings *s)
     h->settings = *s;
     h->tick_rate = s->srv.tick_rate;
     h->next_id = 1;
-    h->wall0 = srv_now();
+    struct timespec rt;
+    clock_gettime(CLOCK_REALTIME, &rt);
+    double epoch;
+    if (!s->srv.epoch[0] || srv_epoch_parse(s->srv.epoch, &epoch, NULL, 0) != OCEAN_OK) {
+        /* default: the start, to the nanosecond */
+        h->epoch_s = (int64_t)rt.tv_sec;
+        h->epoch_frac = 1e-9 * (double)rt.tv_nsec;
+    } else {
+        h->epoch_s = (int64_t)floor(epoch);
+        h->epoch_frac = epoch - floor(epoch);
+    }
     srv_sea_from_params(&s->params, &h->sea_now);
+    h->sea_effective = srv_hub_sim_time(h);
+    srv_fingerprint(s, h->fingerprint);
     return OCEAN_OK;
 }
 
@@ -117,7 +192,87 @@ void srv_hub_fini(srv_hub *h)
     pthread_mutex_destroy(&h->lock);
 }
 
-double srv_hub_sim_time(const srv_hub *h) { return srv_now() - h->wall0; }
+double srv_hub_sim_time(const srv_hub *h)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    /* whole seconds apart from the fraction: a Unix time as one double
+     * would keep only ~0.2 us */
+    return (double)((int64_t)ts.tv_sec - h->epoch_s) + (1e-9 * (double)ts.tv_nsec - h->epoch_frac);
+}
+
+double srv_hub_sim_time_at(const srv_hub *h, double unix_s)
+{
+    double w = floor(unix_s);
+    return (double)((int64_t)w - h->epoch_s) + ((unix_s - w) - h->epoch_frac);
+}
+
+/* ---- the sea-state timeline ------------------------------------------------- */
+
+static srv_msg *sea_announce_msg(const proto_sea *sea, double eff, double now)
+{
+    proto_msg m;
+    proto_msg_init(&m, PROTO_SEA_STATE);
+    m.hdr.sim_time = now;
+    m.u.sea_state.op = PROTO_SEA_ANNOUNCE;
+    m.u.sea_state.effective_time = eff;
+    m.u.sea_state.sea = *sea;
+    srv_msg *q = srv_msg_new();
+    if (!q) return NULL;
+    if (proto_encode(&q->buf, &m, NULL, 0) != OCEAN_OK) {
+        srv_msg_free(q);
+        return NULL;
+    }
+    return q;
+}
+
+ocean_result srv_hub_sea_schedule(srv_hub *h, const ocean_params *p, double requested, double *eff,
+                                  char *why, size_t whylen)
+{
+    double now = srv_hub_sim_time(h);
+    double e = requested > now ? requested : now;
+    int at = 0;
+    while (at < h->n_sea_pending && h->sea_pending[at].effective_time < e) at++;
+    int replace = at < h->n_sea_pending && h->sea_pending[at].effective_time == e;
+    if (!replace && h->n_sea_pending >= SRV_SEA_PENDING_MAX) {
+        if (why)
+            snprintf(why, whylen, "SEA_STATE set refused: %d changes are already pending "
+                     "(the most a server holds); wait until one takes effect", SRV_SEA_PENDING_MAX);
+        return OCEAN_ERATE;
+    }
+    if (!replace) {
+        memmove(&h->sea_pending[at + 1], &h->sea_pending[at],
+                (size_t)(h->n_sea_pending - at) * sizeof h->sea_pending[0]);
+        h->n_sea_pending++;
+    }
+    srv_sea_change *c = &h->sea_pending[at];
+    c->effective_time = e;
+    c->params = *p;
+    srv_sea_from_params(p, &c->sea);
+    h->sea_gen++;
+    for (srv_client *k = h->clients; k; k = k->next) {
+        if (k->closed || !k->hello_sent) continue;
+        srv_msg *q = sea_announce_msg(&c->sea, e, now);
+        if (q) srv_client_queue(k, q);
+    }
+    pthread_cond_signal(&h->wake);
+    if (eff) *eff = e;
+    return OCEAN_OK;
+}
+
+int srv_hub_sea_take_due(srv_hub *h, double t, srv_sea_change *out)
+{
+    int n = 0;
+    while (n < h->n_sea_pending && h->sea_pending[n].effective_time <= t) n++;
+    if (!n) return 0;
+    *out = h->sea_pending[n - 1];
+    memmove(&h->sea_pending[0], &h->sea_pending[n], (size_t)(h->n_sea_pending - n) * sizeof h->sea_pending[0]);
+    h->n_sea_pending -= n;
+    h->sea_now = out->sea;
+    h->sea_effective = out->effective_time;
+    h->settings.params = out->params;
+    return 1;
+}
 
 void srv_hub_wake_net(srv_hub *h)
 {
@@ -494,26 +649,51 @@ void srv_client_send_hello(srv_client *c)
     o->cutoff_policies = 7;
     o->modes = 3;
     o->max_message = (uint32_t)s->srv.max_message;
-    o->max_query_points = (uint32_t)s->srv.max_query_points;
+    /* the most points a QUERY within max_message can carry: 32 + 24 + 16 N */
+    uint32_t fit = s->srv.max_message > 56 ? (uint32_t)((s->srv.max_message - 56) / 16) : 0;
+    o->max_query_points = (uint32_t)s->srv.max_query_points < fit ? (uint32_t)s->srv.max_query_points : fit;
     o->max_tile_size = (uint16_t)s->srv.max_tile_size;
     o->max_lod_levels = (uint8_t)s->srv.max_lod_levels;
     o->max_layers = (uint8_t)s->params.cascades;
     o->tick_rate_hz = (float)s->srv.tick_rate;
-    o->max_frame_rate_hz = (float)s->srv.max_frame_rate;
+    /* frames go out on ticks: no faster than the tick rate */
+    o->max_frame_rate_hz = (float)fmin(s->srv.max_frame_rate, s->srv.tick_rate);
     o->sea = h->sea_now;
-    pthread_mutex_unlock(&h->lock);
     o->client_id = c->id;
-    snprintf(o->server_version, sizeof o->server_version, "%s", SERVER_VERSION);
+    snprintf(o->server_version, sizeof o->server_version, "%s fp=%s", SERVER_VERSION, h->fingerprint);
     m.hdr.sim_time = srv_hub_sim_time(h);
     srv_msg *q = srv_msg_new();
-    if (!q) return;
     char err[256];
-    if (proto_encode(&q->buf, &m, err, sizeof err) != OCEAN_OK) {
+    if (q && proto_encode(&q->buf, &m, err, sizeof err) != OCEAN_OK) {
         fprintf(stderr, "oceand: cannot encode HELLO: %s\n", err);
         srv_msg_free(q);
-        return;
+        q = NULL;
     }
-    srv_client_queue(c, q);
+    if (q) {
+        /* HELLO, then the pending changes, before any later announce */
+        srv_client_queue(c, q);
+        for (int i = 0; i < h->n_sea_pending; i++) {
+            srv_msg *a = sea_announce_msg(&h->sea_pending[i].sea, h->sea_pending[i].effective_time,
+                                          m.hdr.sim_time);
+            if (a) srv_client_queue(c, a);
+        }
+        c->hello_sent = 1;
+    }
+    pthread_mutex_unlock(&h->lock);
+}
+
+void srv_client_send_sea_timeline(srv_client *c)
+{
+    srv_hub *h = c->hub;
+    pthread_mutex_lock(&h->lock);
+    double now = srv_hub_sim_time(h);
+    srv_msg *a = sea_announce_msg(&h->sea_now, h->sea_effective, now);
+    if (a) srv_client_queue(c, a);
+    for (int i = 0; i < h->n_sea_pending; i++) {
+        a = sea_announce_msg(&h->sea_pending[i].sea, h->sea_pending[i].effective_time, now);
+        if (a) srv_client_queue(c, a);
+    }
+    pthread_mutex_unlock(&h->lock);
 }
 
 /* ---- incoming ------------------------------------------------------------- */
@@ -547,6 +727,14 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
     if (sub->frame_rate_hz > s->srv.max_frame_rate) {
         snprintf(why, n, "subscribe.frame_rate_hz %g above the server's %g (server.max_frame_rate)",
                  (double)sub->frame_rate_hz, s->srv.max_frame_rate);
+        return OCEAN_EINVAL;
+    }
+    if (sub->frame_rate_hz > (float)s->srv.tick_rate) {
+        /* one frame per tick at most: a faster rate would be served at the
+         * tick rate without a word */
+        snprintf(why, n, "subscribe.frame_rate_hz %g above the server's tick rate %g "
+                 "(HELLO tick_rate_hz, server.tick_rate): frames are made on ticks",
+                 (double)sub->frame_rate_hz, s->srv.tick_rate);
         return OCEAN_EINVAL;
     }
     double spacing = sub->base_spacing_m > 0 ? sub->base_spacing_m : s->srv.base_spacing;
@@ -786,6 +974,10 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
     }
     case PROTO_SEA_STATE: {
         const proto_sea_state *s = &m.u.sea_state;
+        if (s->op == PROTO_SEA_GET) {
+            srv_client_send_sea_timeline(c);
+            break;
+        }
         if (s->op != PROTO_SEA_SET) {
             srv_client_send_error(c, buf, len, OCEAN_EINVAL,
                                   "SEA_STATE announce is server-to-client; send op = set");
@@ -840,26 +1032,41 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         srv_params_from_sea(&s->sea, &h->settings.params, &np);
         char msg[256];
         r = ocean_params_validate(&np, msg, sizeof msg);
+        if (r == OCEAN_OK && h->redis) {
+            /* replicated: into the shared stream; the announce comes back
+             * through it, to every replica's clients alike */
+            pthread_mutex_unlock(&h->lock);
+            r = srv_redis_publish(h->redis, &s->sea, s->effective_time, why, sizeof why);
+            if (r != OCEAN_OK) srv_client_send_error(c, buf, len, r, why);
+            break;
+        }
         if (r == OCEAN_OK) {
-            h->sea_req.pending = 1;
-            h->sea_req.params = np;
-            h->sea_req.effective_time = s->effective_time;
-            pthread_cond_signal(&h->wake);
+            /* entered and announced (to the setter too: that is the reply)
+             * in this hold of the lock */
+            r = srv_hub_sea_schedule(h, &np, s->effective_time, NULL, why, sizeof why);
+        } else {
+            snprintf(why, sizeof why, "SEA_STATE set refused: %s", msg);
         }
         pthread_mutex_unlock(&h->lock);
-        if (r != OCEAN_OK) {
-            snprintf(why, sizeof why, "SEA_STATE set refused: %s", msg);
-            srv_client_send_error(c, buf, len, r, why);
-        }
+        if (r != OCEAN_OK) srv_client_send_error(c, buf, len, r, why);
+        else srv_hub_wake_net(h);
         break;
     }
+    case PROTO_ERROR:
+        /* a client's ERROR reports a server message it refused: logged,
+         * never answered (an ERROR for an ERROR could loop) */
+        if (cfg.verbose)
+            fprintf(stderr, "oceand: client %u reports ERROR %u (%s) for its message type %u seq %u: %s\n",
+                    c->id, m.u.error.code, ocean_strerror((ocean_result)m.u.error.code),
+                    m.u.error.offending_type, m.u.error.offending_seq, m.u.error.message);
+        break;
     case PROTO_BYE:
         c->closing = 2; /* close without a reply */
         atomic_store(&c->want_write, 1);
         break;
     default:
         snprintf(why, sizeof why, "%s is a server-to-client message; clients send SUBSCRIBE, "
-                 "CAMERA, QUERY, SEA_STATE or BYE", proto_type_name(m.hdr.type));
+                 "CAMERA, QUERY, SEA_STATE, ERROR or BYE", proto_type_name(m.hdr.type));
         srv_client_send_error(c, buf, len, OCEAN_ETYPE, why);
         break;
     }

@@ -119,6 +119,7 @@ typedef struct srv_client {
     srv_replay_cam *replay, *replay_tail; /* FIFO */
     int n_replay;
     int closed;                           /* connection gone; sim skips it */
+    int hello_sent;                       /* HELLO queued: sea changes are announced to it */
     struct srv_client *next;              /* hub list */
 
     /* ---- outgoing: [sim + svc / out_lock] ---- */
@@ -163,12 +164,17 @@ typedef struct srv_client {
     srv_client_sim sim;                   /* [sim] */
 } srv_client;
 
-/* A pending sea-state change. */
-typedef struct srv_sea_request {
-    int pending;
-    ocean_params params;
+/* A sea-state change on the timeline: from effective_time (sim time) on,
+ * the sea is params.  The hub lists the pending ones (effective_time after
+ * the latest tick applied), earliest first. */
+typedef struct srv_sea_change {
     double effective_time;
-} srv_sea_request;
+    ocean_params params;
+    proto_sea sea;          /* params as announced */
+} srv_sea_change;
+
+/* Pending changes a hub holds at most; one more is refused (ERATE). */
+#define SRV_SEA_PENDING_MAX 16
 
 /* The shared heart of the daemon. */
 typedef struct srv_hub {
@@ -180,13 +186,20 @@ typedef struct srv_hub {
     uint32_t next_id;                     /* [hub.lock] */
     srv_settings settings;                /* [hub.lock] in force; copy before use */
     uint64_t settings_gen;                /* [hub.lock] bumps on reload */
-    srv_sea_request sea_req;              /* [hub.lock] from an admin or a reload */
-    proto_sea sea_now;                    /* [hub.lock] current sea for HELLO */
-    double sea_effective;                 /* [hub.lock] */
+    /* The sea-state timeline.  Every change enters it (and is announced to
+     * every client that has had its HELLO) in one hold of hub.lock, and a
+     * HELLO is built and queued with the pending changes in one hold too,
+     * so no client misses a change whatever the moment it joins. */
+    proto_sea sea_now;                    /* [hub.lock] the sea of the latest tick applied */
+    double sea_effective;                 /* [hub.lock] the sim time it took effect */
+    srv_sea_change sea_pending[SRV_SEA_PENDING_MAX]; /* [hub.lock] earliest first */
+    int n_sea_pending;                    /* [hub.lock] */
+    uint64_t sea_gen;                     /* [hub.lock] bumps on every change entered */
     int stopping;                         /* [hub.lock] */
     void (*wake_net)(void *ctx);          /* [const] wakes the service thread */
     void *wake_ctx;
-    double wall0;                         /* [const] monotonic time of sim t = 0 */
+    int64_t epoch_s;                      /* [const] the epoch (sim t = 0) in Unix time: */
+    double epoch_frac;                    /* [const]   whole seconds + fraction [0, 1) */
     double tick_rate;                     /* [hub.lock] */
     uint64_t partial_held;                /* [svc] bytes of unfinished messages, all clients */
     double admin_window_t;                /* [svc] start of the global admin-miss window */
@@ -195,15 +208,43 @@ typedef struct srv_hub {
     atomic_uint_fast64_t record_files;    /* recordings opened this run */
     atomic_uint_fast64_t record_bytes;    /* bytes written to recordings this run */
     srv_stats stats;                      /* atomics */
+    char fingerprint[17];                 /* [const] determinism fingerprint, 16 hex digits */
+    struct srv_redis *redis;              /* [const once started] replicated timeline, or NULL */
 } srv_hub;
+
+/* The determinism fingerprint (16 hex digits + NUL into out): FNV-1a 64 of
+ * everything besides the sea timeline that decides a FRAME's bytes: the
+ * compiler, the CPU features that pick code paths (target_clones' avx2;
+ * FFTW's SIMD: avx, avx2, fma, avx512f), the FFTW version, plan mode and
+ * threads, and the configuration that shapes frames.  Announced in HELLO's
+ * server_version (PROTOCOL.md "HELLO"). */
+void srv_fingerprint(const srv_settings *s, char out[17]);
 
 /* Monotonic seconds. */
 double srv_now(void);
 
 ocean_result srv_hub_init(srv_hub *h, const srv_settings *s);
 void srv_hub_fini(srv_hub *h);
-/* The shared simulation clock (s): seconds since start, any thread. */
+/* The shared simulation clock (s): seconds of the system clock (UTC,
+ * CLOCK_REALTIME) since the epoch (server.epoch), any thread.  Daemons given
+ * the same epoch on synchronised machines read the same time. */
 double srv_hub_sim_time(const srv_hub *h);
+/* Sim time at Unix time `unix_s` (for tests and tools). */
+double srv_hub_sim_time_at(const srv_hub *h, double unix_s);
+
+/* Enters a sea-state change into the timeline and announces it to every
+ * client that has had its HELLO [caller holds hub.lock].  The effective time
+ * is max(requested, the clock now) (a change never rewrites ticks already
+ * served); a change at the same effective time as a pending one replaces it.
+ * *eff gets the effective time entered.  OCEAN_ERATE (why filled) when
+ * SRV_SEA_PENDING_MAX changes are already pending.  The caller wakes the
+ * service thread after unlocking. */
+ocean_result srv_hub_sea_schedule(srv_hub *h, const ocean_params *p, double requested, double *eff,
+                                  char *why, size_t whylen);
+/* Takes from the timeline every change due at sim time t (effective_time
+ * <= t), makes the last one the current sea (sea_now, settings.params) and
+ * returns 1 with it in *out, or 0 when none is due [caller holds hub.lock]. */
+int srv_hub_sea_take_due(srv_hub *h, double t, srv_sea_change *out);
 /* Wakes the service thread (lws_cancel_service). */
 void srv_hub_wake_net(srv_hub *h);
 
@@ -262,7 +303,12 @@ size_t srv_msg_cost(const srv_msg *m);
 void srv_client_send_error(srv_client *c, const void *bad, size_t badlen, ocean_result code,
                            const char *why);
 void srv_client_send_bye(srv_client *c, int reason, const char *why);
+/* Queues HELLO and, right behind it, a SEA_STATE announce for every pending
+ * change (one hold of hub.lock: no change can fall between them). */
 void srv_client_send_hello(srv_client *c);
+/* Answers SEA_STATE get: an announce of the current sea (effective_time: when
+ * it took effect), then one per pending change, earliest first. */
+void srv_client_send_sea_timeline(srv_client *c);
 
 /* Handles one complete binary message from the client [svc]. */
 void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len);

@@ -52,7 +52,8 @@ static const conf_entry srv_entries[] = {
     {.name = "server.max_message", .type = CONF_INT, .offset = SRV(max_message), .min = 256,
      .max = 64 << 20, .def = "1048576", .unit = "bytes",
      .help = "Largest message a client may send; a longer one is discarded with an ERROR "
-             "(1 MiB holds a QUERY of 65 536 points)."},
+             "(1 MiB holds a QUERY of 65 532 points: 56 + 16 per point; HELLO announces "
+             "the smaller of this and server.max_query_points)."},
     {.name = "server.msg_rate", .type = CONF_DOUBLE, .offset = SRV(msg_rate), .min = 0.1,
      .max = 1e5, .def = "200", .unit = "messages/s",
      .help = "Sustained messages per second a client may send (token bucket); excess "
@@ -105,6 +106,25 @@ static const conf_entry srv_entries[] = {
      .max = 240, .def = "30", .unit = "Hz",
      .help = "Simulation ticks per second; one shared clock advances by 1/tick_rate per tick. "
              "A client's frame rate is met on the nearest tick."},
+    {.name = "server.epoch", .type = CONF_STRING, .offset = SRV(epoch), .size = SRV_EPOCH_MAX,
+     .def = "",
+     .help = "Instant of sim time 0 on the system clock (UTC): an ISO 8601 time such as "
+             "2026-01-01T00:00:00Z, or Unix seconds. Daemons given the same epoch on "
+             "NTP/PTP-synchronised machines agree on the sim time and tick index (to their "
+             "clock offset). Empty: the daemon's start. Needs a restart to change."},
+    {.name = "server.redis", .type = CONF_STRING, .offset = SRV(redis), .size = SRV_BIND_MAX,
+     .def = "",
+     .help = "host:port of a Redis server holding the sea-state timeline shared by replicas "
+             "(a stream, server.redis_stream): every sea-state change is appended there and "
+             "applied by every replica at its effective time. Empty: this daemon's timeline is "
+             "its own. Needs a restart to change."},
+    {.name = "server.redis_stream", .type = CONF_STRING, .offset = SRV(redis_stream),
+     .size = SRV_REDIS_KEY_MAX, .def = "oceand:sea",
+     .help = "Key of the Redis stream of sea-state changes; replicas of one exercise share it."},
+    {.name = "server.sea_lead", .type = CONF_DOUBLE, .offset = SRV(sea_lead), .min = 0.05,
+     .max = 3600, .def = "0.5", .unit = "s",
+     .help = "With server.redis: a sea-state change must take effect at least this long after "
+             "it is set, so it reaches every replica first; a nearer one is refused."},
     {.name = "server.workers", .type = CONF_INT, .offset = SRV(workers), .min = 1, .max = 64,
      .def = "2",
      .help = "Threads that encode tiles and build meshes each tick (besides FFTW's "
@@ -232,6 +252,70 @@ static void set_err(char *err, size_t errlen, const char *fmt, const char *a, co
     if (err && errlen) snprintf(err, errlen, fmt, a, b);
 }
 
+ocean_result srv_epoch_parse(const char *text, double *unix_s, char *why, size_t whylen)
+{
+    const char *p = text;
+    char *end;
+    int digits_only = *p != 0;
+    for (const char *q = p; *q; q++)
+        if (!((*q >= '0' && *q <= '9') || *q == '.')) digits_only = 0;
+    if (digits_only) {
+        double v = strtod(p, &end);
+        if (*end || !isfinite(v) || v > 253402300799.0) goto bad;
+        *unix_s = v;
+        return OCEAN_OK;
+    }
+    int Y, M, D, h, m, sec, n = 0;
+    if (sscanf(p, "%4d-%2d-%2d%*1[T ]%2d:%2d:%2d%n", &Y, &M, &D, &h, &m, &sec, &n) != 6 || n != 19)
+        goto bad;
+    static const int mdays[12] = {31, 29, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+    if (Y < 1970 || M < 1 || M > 12 || D < 1 || D > mdays[M - 1] || h > 23 || m > 59 || sec > 59 ||
+        h < 0 || m < 0 || sec < 0)
+        goto bad;
+    if (M == 2 && D == 29 && !((Y % 4 == 0 && Y % 100 != 0) || Y % 400 == 0)) goto bad;
+    p += n;
+    double frac = 0;
+    if (*p == '.') {
+        double scale = 0.1;
+        p++;
+        if (*p < '0' || *p > '9') goto bad;
+        while (*p >= '0' && *p <= '9') {
+            frac += scale * (*p - '0');
+            scale *= 0.1;
+            p++;
+        }
+    }
+    int off = 0;
+    if (*p == 'Z' || *p == 'z') {
+        p++;
+    } else if (*p == '+' || *p == '-') {
+        int oh, om, k = 0;
+        if (sscanf(p + 1, "%2d:%2d%n", &oh, &om, &k) != 2 || k != 5 || oh > 23 || om > 59 || oh < 0 ||
+            om < 0)
+            goto bad;
+        off = (*p == '-' ? -1 : 1) * (oh * 3600 + om * 60);
+        p += 6;
+    } else {
+        goto bad; /* a local time would depend on the machine: refused */
+    }
+    if (*p) goto bad;
+    /* days since 1970-01-01 (proleptic Gregorian; Howard Hinnant's
+     * days_from_civil algorithm) */
+    int y = Y - (M <= 2);
+    long era = y / 400;
+    long yoe = y - era * 400;
+    long doy = (153L * (M + (M > 2 ? -3 : 9)) + 2) / 5 + D - 1;
+    long doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    long days = era * 146097 + doe - 719468;
+    *unix_s = (double)days * 86400.0 + h * 3600 + m * 60 + sec - off + frac;
+    return OCEAN_OK;
+bad:
+    if (why)
+        snprintf(why, whylen, "server.epoch '%.64s': expected Unix seconds or an ISO 8601 UTC time "
+                 "like 2026-01-01T00:00:00Z (Z or +HH:MM required)", text);
+    return OCEAN_EINVAL;
+}
+
 ocean_result srv_settings_default(srv_settings *s, char *err, size_t errlen)
 {
     return srv_settings_load(NULL, NULL, 0, s, err, errlen);
@@ -288,6 +372,12 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
     if (r == OCEAN_OK) {
         char msg[256];
         r = ocean_params_validate(&tmp->params, msg, sizeof msg);
+        if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", path ? path : "(defaults)", msg);
+    }
+    if (r == OCEAN_OK && tmp->srv.epoch[0]) {
+        double e;
+        char msg[200];
+        r = srv_epoch_parse(tmp->srv.epoch, &e, msg, sizeof msg);
         if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", path ? path : "(defaults)", msg);
     }
     if (r == OCEAN_OK) {

@@ -21,6 +21,8 @@
 #define SRV_PATH_MAX 512
 #define SRV_TOKEN_MAX 256
 #define SRV_BIND_MAX 64
+#define SRV_EPOCH_MAX 64
+#define SRV_REDIS_KEY_MAX 128
 
 typedef struct srv_config {
     /* network */
@@ -41,6 +43,10 @@ typedef struct srv_config {
     char web_root[SRV_PATH_MAX];
     /* simulation */
     double tick_rate;            /* Hz */
+    char epoch[SRV_EPOCH_MAX];   /* sim t = 0: ISO 8601 UTC or Unix seconds; "" = start */
+    char redis[SRV_BIND_MAX];    /* "host:port" of the replicated timeline; "" none */
+    char redis_stream[SRV_REDIS_KEY_MAX]; /* its stream key */
+    double sea_lead;             /* replicated: least lead of a change's effective time, s */
     int workers;                 /* threads building frames */
     char scene[SRV_PATH_MAX];    /* scene name (in scene_dir) or path; "" none */
     char scene_dir[SRV_PATH_MAX];
@@ -97,6 +103,12 @@ ocean_result srv_settings_default(srv_settings *s, char *err, size_t errlen);
  * unchanged and err holds "file:line: message: 'text'". */
 ocean_result srv_settings_load(const char *path, const char *const *sets, int nsets,
                                srv_settings *out, char *err, size_t errlen);
+
+/* Parses a server.epoch value into Unix seconds (UTC): a decimal number of
+ * Unix seconds ("1764000000", "1764000000.25") or an ISO 8601 UTC time
+ * "YYYY-MM-DDTHH:MM:SS[.frac]" ending in Z or an offset +HH:MM / -HH:MM (a
+ * space may stand for T).  Range: years 1970..9999.  OCEAN_EINVAL with why. */
+ocean_result srv_epoch_parse(const char *text, double *unix_s, char *why, size_t whylen);
 
 /* Prints the server table with its help as a commented config section. */
 ocean_result srv_config_dump(FILE *f);

@@ -3,11 +3,13 @@
  */
 #include "srv_daemon.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "srv_net.h"
+#include "srv_redis.h"
 #include "srv_sim.h"
 
 struct srv_daemon {
@@ -26,6 +28,15 @@ ocean_result srv_daemon_start(const srv_settings *s, srv_daemon **out, char *msg
         free(d);
         return r;
     }
+    if (s->srv.redis[0]) {
+        /* the shared timeline so far enters the hub before any tick */
+        r = srv_redis_start(&d->hub, s, &d->hub.redis, msg, msglen);
+        if (r != OCEAN_OK) {
+            srv_hub_fini(&d->hub);
+            free(d);
+            return r;
+        }
+    }
     r = srv_sim_create(&d->hub, &d->sim, msg, msglen);
     if (r == OCEAN_OK) r = srv_net_create(&d->hub, &d->net, msg, msglen);
     if (r == OCEAN_OK) r = srv_sim_start(d->sim);
@@ -33,6 +44,7 @@ ocean_result srv_daemon_start(const srv_settings *s, srv_daemon **out, char *msg
     if (r != OCEAN_OK) {
         srv_sim_destroy(d->sim);
         srv_net_destroy(d->net);
+        srv_redis_stop(d->hub.redis);
         srv_hub_fini(&d->hub);
         free(d);
         return r;
@@ -55,6 +67,9 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     if (o->port != s->srv.port) restart[nr++] = "server.port";
     if (strcmp(o->bind, s->srv.bind)) restart[nr++] = "server.bind";
     if (strcmp(o->web_root, s->srv.web_root)) restart[nr++] = "server.web_root";
+    if (strcmp(o->epoch, s->srv.epoch)) restart[nr++] = "server.epoch";
+    if (strcmp(o->redis, s->srv.redis) || strcmp(o->redis_stream, s->srv.redis_stream))
+        restart[nr++] = "server.redis";
     if (o->workers != s->srv.workers) restart[nr++] = "server.workers";
     srv_settings keep = h->settings;
     h->settings = *s;
@@ -63,17 +78,25 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     snprintf(h->settings.srv.bind, sizeof h->settings.srv.bind, "%s", keep.srv.bind);
     snprintf(h->settings.srv.web_root, sizeof h->settings.srv.web_root, "%s", keep.srv.web_root);
     h->settings.srv.workers = keep.srv.workers;
+    snprintf(h->settings.srv.epoch, sizeof h->settings.srv.epoch, "%s", keep.srv.epoch);
+    snprintf(h->settings.srv.redis, sizeof h->settings.srv.redis, "%s", keep.srv.redis);
+    snprintf(h->settings.srv.redis_stream, sizeof h->settings.srv.redis_stream, "%s", keep.srv.redis_stream);
     /* effects and near field are fixed by the running ocean's scene */
     h->settings.effects = keep.effects;
     h->settings.params = keep.params;
-    if (memcmp(&keep.params, &s->params, sizeof s->params) != 0) {
-        h->sea_req.pending = 1;
-        h->sea_req.params = s->params;
-        h->sea_req.effective_time = 0; /* now */
+    if (memcmp(&keep.params, &s->params, sizeof s->params) != 0 && h->redis) {
+        fprintf(stderr, "oceand: reload: the sea is replicated (server.redis): the file's sea is not "
+                "applied; change it with SEA_STATE set\n");
+    } else if (memcmp(&keep.params, &s->params, sizeof s->params) != 0) {
+        /* a changed sea enters the timeline now, announced to every client */
+        char why[200];
+        if (srv_hub_sea_schedule(h, &s->params, -INFINITY, NULL, why, sizeof why) != OCEAN_OK)
+            fprintf(stderr, "oceand: reload: %s\n", why);
     }
     h->settings_gen++;
     pthread_cond_signal(&h->wake);
     pthread_mutex_unlock(&h->lock);
+    srv_hub_wake_net(h);
     atomic_fetch_add(&h->stats.reloads, 1);
     if (nr) {
         size_t off = (size_t)snprintf(msg, msglen, "restart needed for:");
@@ -90,6 +113,7 @@ void srv_daemon_stop(srv_daemon *d)
     srv_sim_stop(d->sim);
     srv_net_destroy(d->net);
     srv_sim_destroy(d->sim);
+    srv_redis_stop(d->hub.redis);
     srv_hub_fini(&d->hub);
     free(d);
 }

@@ -380,6 +380,14 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
     switch (reason) {
     case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION:
         return filter_upgrade(n, wsi, 0);
+    case LWS_CALLBACK_ESTABLISHED: {
+        /* A WebSocket that did not offer the ocean.v1 subprotocol lands on
+         * the first protocol (this one): close it with a reason rather than
+         * leave it in silence (PROTOCOL.md "Transport"). */
+        static const char why[] = "subprotocol ocean.v1 required (Sec-WebSocket-Protocol: ocean.v1)";
+        lws_close_reason(wsi, LWS_CLOSE_STATUS_PROTOCOL_ERR, (unsigned char *)why, sizeof why - 1);
+        return -1;
+    }
     case LWS_CALLBACK_HTTP: {
         char uri[128] = "";
         lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI);

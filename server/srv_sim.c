@@ -87,6 +87,7 @@ struct srv_sim {
     ocean_gerstner *next_g;
     ocean_params next_params;
     double next_eff;
+    uint64_t sea_gen;           /* hub.sea_gen last seen */
     eval_entry ev[EVAL_MAX];
     uint64_t use;
     srv_tile_cache *tiles;
@@ -849,67 +850,81 @@ static const ocean_frame *query_eval(void *ctx, double t, int cached_only)
 
 /* ---- sea changes ------------------------------------------------------------ */
 
-static void announce_sea(srv_sim *s, const ocean_params *p, double eff)
+/* The hub holds the timeline (srv_client.h); the simulation thread follows
+ * it: the ocean of a tick at sim time t is that of the last change with
+ * effective_time <= t.  The earliest pending change's ocean is built ahead
+ * (ocean_create can take a while), and is used only if the entry taken
+ * when due is still the same one. */
+
+static void prebuild_sea(srv_sim *s)
 {
-    proto_msg m;
-    proto_msg_init(&m, PROTO_SEA_STATE);
-    m.hdr.sim_time = srv_hub_sim_time(s->hub);
-    m.u.sea_state.op = PROTO_SEA_ANNOUNCE;
-    m.u.sea_state.effective_time = eff;
-    srv_sea_from_params(p, &m.u.sea_state.sea);
     srv_hub *h = s->hub;
     pthread_mutex_lock(&h->lock);
-    for (srv_client *c = h->clients; c; c = c->next) {
-        if (c->closed) continue;
-        srv_msg *q = srv_msg_encode(&m);
-        if (q) srv_client_queue(c, q);
-    }
+    int have = h->n_sea_pending > 0;
+    srv_sea_change c;
+    if (have) c = h->sea_pending[0];
     pthread_mutex_unlock(&h->lock);
-    srv_hub_wake_net(h);
-}
-
-static void schedule_sea(srv_sim *s, const ocean_params *p, double eff)
-{
+    if (!have || (s->next_oc && s->next_eff == c.effective_time &&
+                  memcmp(&s->next_params, &c.params, sizeof c.params) == 0))
+        return;
     char msg[256];
     ocean *oc;
     ocean_gerstner *g;
-    if (make_ocean(&s->set, p, &oc, &g, msg, sizeof msg) != OCEAN_OK) {
-        fprintf(stderr, "oceand: sea-state change refused: %s\n", msg);
+    if (make_ocean(&s->set, &c.params, &oc, &g, msg, sizeof msg) != OCEAN_OK) {
+        fprintf(stderr, "oceand: cannot build the sea due at t = %.3f s ahead: %s\n", c.effective_time, msg);
         return;
     }
     ocean_gerstner_destroy(s->next_g);
     ocean_destroy(s->next_oc);
     s->next_oc = oc;
     s->next_g = g;
-    s->next_params = *p;
-    s->next_eff = eff;
-    announce_sea(s, p, eff);
+    s->next_params = c.params;
+    s->next_eff = c.effective_time;
 }
 
-static void maybe_swap_sea(srv_sim *s, double t)
+/* Applies the changes due at tick time t before the tick's frames are made. */
+static void follow_sea(srv_sim *s, double t)
 {
-    if (!s->next_oc || t < s->next_eff) return;
-    eval_clear(s);
-    srv_tiles_clear(s->tiles);
-    srv_cascade_reset(s->casc);
-    ocean_gerstner_destroy(s->g);
-    ocean_destroy(s->oc);
-    s->oc = s->next_oc;
-    s->g = s->next_g;
-    s->next_oc = NULL;
-    s->next_g = NULL;
-    adopt_sea(s, &s->next_params);
     srv_hub *h = s->hub;
-    proto_sea ps;
-    srv_sea_from_params(&s->next_params, &ps);
+    srv_sea_change c;
     pthread_mutex_lock(&h->lock);
-    h->settings.params = s->next_params;
-    h->sea_now = ps;
-    h->sea_effective = s->next_eff;
-    /* Meshes follow the new dominant wavelength. */
-    for (srv_client *c = h->clients; c; c = c->next) c->sim.sub_gen = 0;
+    int due = srv_hub_sea_take_due(h, t, &c);
+    if (due) {
+        /* meshes follow the new dominant wavelength */
+        for (srv_client *k = h->clients; k; k = k->next) k->sim.sub_gen = 0;
+    }
     pthread_mutex_unlock(&h->lock);
-    atomic_fetch_add(&h->stats.sea_changes, 1);
+    if (due) {
+        ocean *oc = NULL;
+        ocean_gerstner *g = NULL;
+        if (s->next_oc && s->next_eff == c.effective_time &&
+            memcmp(&s->next_params, &c.params, sizeof c.params) == 0) {
+            oc = s->next_oc;
+            g = s->next_g;
+            s->next_oc = NULL;
+            s->next_g = NULL;
+        } else {
+            char msg[256];
+            if (make_ocean(&s->set, &c.params, &oc, &g, msg, sizeof msg) != OCEAN_OK) {
+                /* validated on entry: only memory can fail here */
+                fprintf(stderr, "oceand: the sea due at t = %.3f s cannot be built (%s); "
+                        "clients are told a sea this daemon does not serve\n", c.effective_time, msg);
+                oc = NULL;
+            }
+        }
+        if (oc) {
+            eval_clear(s);
+            srv_tiles_clear(s->tiles);
+            srv_cascade_reset(s->casc);
+            ocean_gerstner_destroy(s->g);
+            ocean_destroy(s->oc);
+            s->oc = oc;
+            s->g = g;
+            adopt_sea(s, &c.params);
+            atomic_fetch_add(&h->stats.sea_changes, 1);
+        }
+    }
+    prebuild_sea(s);
 }
 
 /* ---- the loop ------------------------------------------------------------------ */
@@ -951,10 +966,12 @@ static void *sim_main(void *arg)
     for (;;) {
         pthread_mutex_lock(&h->lock);
         int live_due = 0;
+        double rate_w = s->set.srv.tick_rate;
         for (;;) {
             if (s->stop) break;
             double now = srv_now();
-            int pending = h->sea_req.pending || h->settings_gen != s->set_gen;
+            double simt = srv_hub_sim_time(h);
+            int pending = h->sea_gen != s->sea_gen || h->settings_gen != s->set_gen;
             /* queries and replay frames run in bounded slices, at most one
              * turn per tick period (srv_work.c, server.replay_per_tick) */
             int bg = srv_work_busy(s->work);
@@ -962,12 +979,14 @@ static void *sim_main(void *arg)
                 if (!c->closed && (c->queries || c->replay)) bg = 1;
             if (bg && now >= s->work_due) pending = 1;
             if (h->n_subscribed > 0 && now >= next_tick_wall) live_due = 1;
-            if (live_due || pending || (s->next_oc && h->n_subscribed == 0 &&
-                                        now - h->wall0 >= s->next_eff)) break;
+            /* a change is due at the first tick at or after its effective time */
+            double due_t = h->n_sea_pending ? ceil(h->sea_pending[0].effective_time * rate_w) / rate_w
+                                            : INFINITY;
+            if (live_due || pending || simt >= due_t) break;
             struct timespec ts;
             double until = h->n_subscribed > 0 ? next_tick_wall : now + 1.0;
             if (bg && s->work_due < until) until = s->work_due;
-            if (s->next_oc && h->wall0 + s->next_eff < until) until = h->wall0 + s->next_eff;
+            if (now + (due_t - simt) < until) until = now + (due_t - simt);
             if (h->n_subscribed == 0) atomic_fetch_add(&h->stats.idle_ticks, 1);
             ts_from(until, &ts);
             pthread_cond_timedwait(&h->wake, &h->lock, &ts);
@@ -989,13 +1008,14 @@ static void *sim_main(void *arg)
             reload = 1;
         }
         (void)reload;
-        srv_sea_request req = h->sea_req;
-        h->sea_req.pending = 0;
+        s->sea_gen = h->sea_gen;
         /* snapshot */
         w.ncl = w.njobs = 0;
-        uint64_t tick_no = (uint64_t)floor((t0 - h->wall0) * rate);
+        double sim0 = srv_hub_sim_time(h);
+        /* tick k shows sim time k / rate; ticks before the epoch are negative */
+        int64_t tick_no = (int64_t)floor(sim0 * rate);
         double t = (double)tick_no / rate;
-        double tick_wall = h->wall0 + t;
+        double tick_wall = t0 - (sim0 - t);      /* monotonic time of the tick */
         for (srv_client *c = h->clients; c; c = c->next) {
             if (c->closed) continue;
             srv_work_take(s->work, c, t);
@@ -1057,17 +1077,8 @@ static void *sim_main(void *arg)
         }
         pthread_mutex_unlock(&h->lock);
 
-        if (req.pending) {
-            double now_t = srv_hub_sim_time(h);
-            schedule_sea(s, &req.params, req.effective_time > now_t ? req.effective_time : now_t);
-        } else if (reload && memcmp(&h->settings.params, &s->set.params, sizeof s->set.params) != 0) {
-            /* the reloaded file changed the sea: a new ocean from the next tick */
-            pthread_mutex_lock(&h->lock);
-            ocean_params np = h->settings.params;
-            pthread_mutex_unlock(&h->lock);
-            schedule_sea(s, &np, srv_hub_sim_time(h));
-        }
-        maybe_swap_sea(s, live_due ? t : srv_hub_sim_time(h));
+        /* the sea of tick t (a reload's changed sea entered the timeline) */
+        follow_sea(s, t);
 
         /* filter jobs: apply subscriptions, cutoffs; drop due-checks;
          * layout-1 jobs go to the shared cascade products */
@@ -1128,7 +1139,7 @@ static void *sim_main(void *arg)
         if (live_due) {
             srv_tiles_sweep(s->tiles, s->gen > 1 ? s->gen - 1 : 0);
             srv_cascade_sweep(s->casc, s->gen > 1 ? s->gen - 1 : 0);
-            next_tick_wall = h->wall0 + (double)(tick_no + 1) / rate;
+            next_tick_wall = t0 + ((double)(tick_no + 1) / rate - sim0);
             double dt = srv_now() - t0;
             atomic_fetch_add(&h->stats.ticks, 1);
             atomic_fetch_add(&h->stats.tick_ns_total, (uint64_t)(dt * 1e9));

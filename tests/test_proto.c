@@ -389,6 +389,19 @@ static int sample_named(proto_msg *m, const char *name)
         m->u.topology.zones = sample_zones;
         return 0;
     }
+    if (!strcmp(name, "sea_state_announce")) {
+        sample(m, PROTO_SEA_STATE);
+        m->u.sea_state.op = PROTO_SEA_ANNOUNCE;
+        m->u.sea_state.token[0] = 0;
+        return 0;
+    }
+    if (!strcmp(name, "sea_state_get")) {
+        proto_msg_init(m, PROTO_SEA_STATE);
+        m->hdr.seq = 9;
+        m->hdr.sim_time = 12.5;
+        m->u.sea_state.op = PROTO_SEA_GET;
+        return 0;
+    }
     if (!strcmp(name, "subscribe_cascade")) {
         sample(m, PROTO_SUBSCRIBE);
         m->u.subscribe.layout = PROTO_LAYOUT_CASCADE;
@@ -408,7 +421,8 @@ static int sample_named(proto_msg *m, const char *name)
     return -1;
 }
 
-static const char *const extra_vectors[] = {"frame_cascade", "mesh_topology_flat", "subscribe_cascade"};
+static const char *const extra_vectors[] = {"frame_cascade", "mesh_topology_flat", "subscribe_cascade",
+                                            "sea_state_announce", "sea_state_get"};
 #define N_EXTRA ((int)(sizeof extra_vectors / sizeof extra_vectors[0]))
 
 static uint8_t *encode_sample(proto_type type, size_t *len)
@@ -700,7 +714,8 @@ static void test_payload_errors(void **state)
     expect_field(PROTO_TILE, P(2), 2, 0x40, OCEAN_ETYPE);        /* tile channels */
     expect_field(PROTO_MESH_TOPOLOGY, P(4), 1, 3, OCEAN_ETYPE);  /* kind none */
     expect_field(PROTO_QUERY, P(8), 1, 2, OCEAN_ETYPE);          /* at_time */
-    expect_field(PROTO_SEA_STATE, P(0), 1, 2, OCEAN_ETYPE);      /* op */
+    expect_field(PROTO_SEA_STATE, P(0), 1, 3, OCEAN_ETYPE);      /* op */
+    expect_field(PROTO_SEA_STATE, P(0), 1, 2, OCEAN_EFORMAT);    /* get carrying a sea */
     expect_field(PROTO_SEA_STATE, P(16), 1, 4, OCEAN_ETYPE);     /* spectrum */
     expect_field(PROTO_BYE, P(0), 2, 7, OCEAN_ETYPE);            /* reason */
     expect_field(PROTO_HELLO, P(0), 4, 0x80, OCEAN_ETYPE);       /* codec mask */
@@ -913,6 +928,8 @@ static const bad_vector bad_vectors[] = {
     {"bad_cascade_count", "frame_cascade", P(56), 1, 5, OCEAN_EINVAL, -1},
     {"bad_topology_flags", "mesh_topology_flat", P(6), 2, 2, OCEAN_EFORMAT, -1},
     {"bad_subscribe_layout", "subscribe", P(7), 1, 2, OCEAN_ETYPE, -1},
+    {"bad_sea_get_with_sea", "sea_state_get", P(32), 8, 0x4024000000000000ull, OCEAN_EFORMAT, -1},
+    {"bad_sea_op", "sea_state", P(0), 1, 3, OCEAN_ETYPE, -1},
 };
 
 static const char *code_name(ocean_result r)

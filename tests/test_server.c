@@ -979,10 +979,10 @@ static void bad_input_gets_error(void **state)
     cases[nc++] = (bad_case){"oversized", b, big, 2, OCEAN_ETOOBIG};
     /* a server-to-client message */
     proto_msg hm;
-    proto_msg_init(&hm, PROTO_BYE);
-    proto_msg_init(&hm, PROTO_ERROR);
-    hm.u.error.code = 1;
-    snprintf(hm.u.error.message, sizeof hm.u.error.message, "x");
+    proto_msg_init(&hm, PROTO_QUERY_RESULT);
+    proto_query_sample qs = {0};
+    hm.u.result.count = 1;
+    hm.u.result.samples = &qs;
     cases[nc++] = (bad_case){"server-only", encode(&hm, &len), len, 2, OCEAN_ETYPE};
     /* tile size above the server's maximum */
     proto_msg bs = sm;
@@ -1087,6 +1087,588 @@ static void sea_state_admin_change(void **state)
     usleep(300000);
     oc_client_destroy(d);
     oc_client_destroy(c);
+}
+
+/* ---- the sea-state timeline ------------------------------------------------------ */
+
+/* What one raw client knows of the timeline, built only from what it
+ * received (PROTOCOL.md "Sea-state timeline"): the HELLO's sea holds from
+ * the client's start, each announce from its effective_time, a later
+ * announce at the same effective_time replaces the earlier. */
+typedef struct timeline {
+    int n;
+    double eff[64];
+    proto_sea sea[64];
+    double hello_t;        /* HELLO header sim_time */
+    int hello;
+} timeline;
+
+static void tl_add(timeline *tl, double eff, const proto_sea *sea)
+{
+    int at = 0;
+    while (at < tl->n && tl->eff[at] < eff) at++;
+    if (!(at < tl->n && tl->eff[at] == eff)) {
+        assert_true(tl->n < 64);
+        memmove(&tl->eff[at + 1], &tl->eff[at], (size_t)(tl->n - at) * sizeof tl->eff[0]);
+        memmove(&tl->sea[at + 1], &tl->sea[at], (size_t)(tl->n - at) * sizeof tl->sea[0]);
+        tl->n++;
+    }
+    tl->eff[at] = eff;
+    tl->sea[at] = *sea;
+}
+
+/* The sea this client holds for sim time t. */
+static const proto_sea *tl_at(const timeline *tl, double t)
+{
+    const proto_sea *r = NULL;
+    for (int i = 0; i < tl->n; i++)
+        if (tl->eff[i] <= t) r = &tl->sea[i];
+    return r;
+}
+
+/* Reads what arrives for `ms` into the timeline; returns the number of
+ * SEA_STATE announces read. */
+static int tl_read(test_ws *w, timeline *tl, int ms)
+{
+    int got = 0;
+    double end = now_s() + ms / 1000.0;
+    while (now_s() < end) {
+        uint8_t *b;
+        size_t n;
+        int op = test_ws_recv(w, (int)((end - now_s()) * 1000) + 1, &b, &n);
+        if (op <= 0) break;
+        proto_msg m;
+        ocean_result r = op == 2 ? proto_decode(b, n, &m, NULL, 0) : OCEAN_EFORMAT;
+        free(b);
+        if (r != OCEAN_OK) continue;
+        if (m.hdr.type == PROTO_HELLO) {
+            assert_false(tl->hello);          /* HELLO comes first, once */
+            assert_int_equal(tl->n, 0);       /* no announce before it */
+            tl->hello = 1;
+            tl->hello_t = m.hdr.sim_time;
+            tl_add(tl, -INFINITY, &m.u.hello.sea);
+        } else if (m.hdr.type == PROTO_SEA_STATE) {
+            assert_true(tl->hello);
+            assert_int_equal(m.u.sea_state.op, PROTO_SEA_ANNOUNCE);
+            tl_add(tl, m.u.sea_state.effective_time, &m.u.sea_state.sea);
+            got++;
+        }
+        proto_msg_free(&m);
+    }
+    return got;
+}
+
+static void sea_connect(test_ws *w, timeline *tl, int ms)
+{
+    memset(tl, 0, sizeof *tl);
+    assert_int_equal(test_ws_connect(w, port, "/", PROTO_SUBPROTOCOL), 0);
+    tl_read(w, tl, ms);
+    assert_true(tl->hello);
+}
+
+static void sea_send(test_ws *w, int op, const proto_sea *sea, double eff)
+{
+    proto_msg m;
+    proto_msg_init(&m, PROTO_SEA_STATE);
+    m.u.sea_state.op = (uint8_t)op;
+    if (op == PROTO_SEA_SET) {
+        m.u.sea_state.sea = *sea;
+        m.u.sea_state.effective_time = eff;
+        snprintf(m.u.sea_state.token, sizeof m.u.sea_state.token, "test-token");
+    }
+    raw_send_msg(w, &m);
+}
+
+static double hub_now(void) { return srv_hub_sim_time(srv_daemon_hub(daemon_)); }
+
+/* Waits until the daemon's current sea has this wind (the change applied). */
+static void wait_hub_wind(double wind, double seconds)
+{
+    srv_hub *h = srv_daemon_hub(daemon_);
+    double end = now_s() + seconds;
+    double w = -1;
+    while (now_s() < end) {
+        pthread_mutex_lock(&h->lock);
+        w = h->sea_now.wind_u10;
+        pthread_mutex_unlock(&h->lock);
+        if (w == wind) return;
+        usleep(20000);
+    }
+    fail_msg("the daemon's sea has wind %g, want %g", w, wind);
+}
+
+/* Height, normal and velocity the sea `sea` gives at (x, z) and time t,
+ * evaluated here with the simulation library (what a QUERY answers). */
+static void local_query(const proto_sea *sea, double t, const double *xz, size_t n, ocean_query_result *res)
+{
+    ocean_params p;
+    srv_params_from_sea(sea, &settings.params, &p);
+    ocean *o;
+    char msg[256];
+    assert_int_equal(ocean_create(&p, &o, msg, sizeof msg), OCEAN_OK);
+    ocean_frame *lf;
+    assert_int_equal(ocean_frame_create(o, &lf), OCEAN_OK);
+    ocean_request rq;
+    memset(&rq, 0, sizeof rq);
+    for (int k = 0; k < p.cascades; k++) rq.effects[k] = OCEAN_QUERY_EFFECTS;
+    rq.cutoff_k = INFINITY;
+    ocean_filter_config fc;
+    ocean_filter_config_default(&fc, &p.sea);
+    rq.order = fc.order;
+    rq.low_boost = 1.0;
+    assert_int_equal(ocean_evaluate(o, t, &rq, lf), OCEAN_OK);
+    double patch, klo, khi;
+    ocean_cascade_band(o, p.cascades - 1, &patch, &klo, &khi);
+    ocean_gerstner_params gp;
+    ocean_gerstner_params_default(&gp);
+    gp.sea = p.sea;
+    gp.seed = p.seed;
+    gp.count = settings.srv.near_field_waves;
+    gp.k_lo = khi;
+    gp.k_hi = 2 * M_PI / settings.srv.near_field_min_wavelength;
+    ocean_gerstner *g = NULL;
+    assert_int_equal(ocean_gerstner_create(&gp, &g, msg, sizeof msg), OCEAN_OK);
+    ocean_query_options opt;
+    ocean_query_options_default(&opt);
+    assert_int_equal(ocean_query_points(lf, g, NULL, t, xz, n, &opt, res, NULL), OCEAN_OK);
+    ocean_gerstner_destroy(g);
+    ocean_frame_destroy(lf);
+    ocean_destroy(o);
+}
+
+static int same_sea(const proto_sea *a, const proto_sea *b)
+{
+    return a && b && a->wind_u10 == b->wind_u10 && a->seed == b->seed && a->wind_dir_deg == b->wind_dir_deg;
+}
+
+/* A change scheduled for later reaches clients that join before it takes
+ * effect (HELLO + the pending announce) and after (HELLO with the new sea);
+ * every client holds the same sea for every sim time from its HELLO on;
+ * the daemon serves that sea from the first tick at or after the effective
+ * time (QUERY heights against the simulation library on either side). */
+static void sea_timeline_scheduled_change(void **state)
+{
+    (void)state;
+    test_ws a, b, c;
+    timeline ta, tb, tc;
+    sea_connect(&a, &ta, 300);
+    proto_sea old = *tl_at(&ta, hub_now());
+    proto_sea nw = old;
+    nw.wind_u10 = old.wind_u10 + 4;
+    nw.seed = old.seed + 1;
+    double eff = hub_now() + 3.0; /* room for a loaded machine before it takes effect */
+    sea_send(&a, PROTO_SEA_SET, &nw, eff);
+    /* the setter's reply is the announce, with the effective time asked */
+    assert_int_equal(tl_read(&a, &ta, 400), 1);
+    assert_int_equal(ta.n, 2);
+    assert_true(ta.eff[1] == eff);
+    /* B joins before the change takes effect */
+    sea_connect(&b, &tb, 400);
+    assert_true(tb.hello_t < eff);
+    assert_true(same_sea(tl_at(&tb, tb.hello_t), &old));
+    assert_true(same_sea(tl_at(&tb, eff), &nw));
+    /* the server still serves the old sea before eff ... */
+    oc_client *q = connect_client(port, NULL);
+    /* the C library keeps the timeline too */
+    proto_sea lib;
+    double lib_eff = 0;
+    /* the announce behind HELLO may still be on its way to the library */
+    for (double end = now_s() + 5; now_s() < end; oc_service(q, 20))
+        if (oc_client_sea_at(q, eff, &lib, &lib_eff) == OCEAN_OK && lib_eff == eff) break;
+    assert_int_equal(oc_client_sea_at(q, eff - 0.01, &lib, &lib_eff), OCEAN_OK);
+    assert_true(same_sea(&lib, &old));
+    assert_int_equal(oc_client_sea_at(q, eff, &lib, &lib_eff), OCEAN_OK);
+    assert_true(same_sea(&lib, &nw) && lib_eff == eff);
+    const double xz[] = {13.5, -7.25, 250.0, 125.0, -1e5, 3e4};
+    oc_query_result qr;
+    ocean_query_result lr[3];
+    assert_int_equal(oc_client_query(q, xz, 3, 0, 0, 5000, &qr), OCEAN_OK);
+    assert_true(qr.t < eff);
+    local_query(&old, qr.t, xz, 3, lr);
+    for (int i = 0; i < 3; i++) assert_true(fabs(qr.samples[i].height - lr[i].height) <= 1e-5 + 1e-6 * fabs(lr[i].height));
+    oc_query_result_free(&qr);
+    /* ... and the new one from its effective time */
+    while (hub_now() < eff + 0.3) usleep(50000);
+    sea_connect(&c, &tc, 400);
+    assert_true(same_sea(tl_at(&tc, tc.hello_t), &nw));
+    assert_int_equal(oc_client_query(q, xz, 3, 0, 0, 5000, &qr), OCEAN_OK);
+    assert_true(qr.t >= eff);
+    local_query(&nw, qr.t, xz, 3, lr);
+    double dmax = 0;
+    for (int i = 0; i < 3; i++) {
+        assert_true(fabs(qr.samples[i].height - lr[i].height) <= 1e-5 + 1e-6 * fabs(lr[i].height));
+        dmax = fmax(dmax, fabs(lr[i].height));
+    }
+    assert_true(dmax > 0.01);
+    oc_query_result_free(&qr);
+    /* every client holds the same sea at every sim time since it joined */
+    tl_read(&a, &ta, 100);
+    tl_read(&b, &tb, 100);
+    for (double t = tc.hello_t - 3.0; t < eff + 1.0; t += 1.0 / 30) {
+        const proto_sea *sa = tl_at(&ta, t), *sb = tl_at(&tb, t), *sc = tl_at(&tc, t);
+        const proto_sea *want = t < eff ? &old : &nw;
+        if (t >= ta.hello_t) assert_true(same_sea(sa, want));
+        if (t >= tb.hello_t) assert_true(same_sea(sb, want));
+        if (t >= tc.hello_t) assert_true(same_sea(sc, want));
+    }
+    /* back to the original sea */
+    sea_send(&a, PROTO_SEA_SET, &old, 0);
+    wait_hub_wind(old.wind_u10, 5);
+    oc_client_destroy(q);
+    test_ws_close(&a);
+    test_ws_close(&b);
+    test_ws_close(&c);
+}
+
+/* The late joiner of issue 16: a client connecting right after a change
+ * (effective now) is entered gets a HELLO and the announce, never the
+ * previous sea alone.  Repeated on the idle daemon, where the old code lost
+ * every time. */
+static void sea_timeline_late_joiner(void **state)
+{
+    (void)state;
+    test_ws a;
+    timeline ta;
+    sea_connect(&a, &ta, 300);
+    proto_sea old = *tl_at(&ta, hub_now());
+    for (int k = 1; k <= 8; k++) {
+        proto_sea nw = old;
+        nw.wind_u10 = old.wind_u10 + k;
+        sea_send(&a, PROTO_SEA_SET, &nw, 0);
+        /* no waiting: the joiner races the change */
+        test_ws b;
+        timeline tb;
+        memset(&tb, 0, sizeof tb);
+        assert_int_equal(test_ws_connect(&b, port, "/", PROTO_SUBPROTOCOL), 0);
+        tl_read(&b, &tb, 250);
+        tl_read(&a, &ta, 50);
+        assert_true(tb.hello);
+        double t = hub_now();
+        if (!same_sea(tl_at(&tb, t), &nw))
+            fail_msg("try %d: the joiner holds wind %g at t = %.3f, everyone else %g", k,
+                     tl_at(&tb, t)->wind_u10, t, nw.wind_u10);
+        assert_true(same_sea(tl_at(&ta, t), &nw));
+        test_ws_close(&b);
+    }
+    sea_send(&a, PROTO_SEA_SET, &old, 0);
+    wait_hub_wind(old.wind_u10, 5);
+    test_ws_close(&a);
+}
+
+/* SEA_STATE get: the current sea (with the time it took effect) and every
+ * pending change, without reconnecting. */
+static void sea_timeline_get(void **state)
+{
+    (void)state;
+    test_ws a;
+    timeline ta;
+    sea_connect(&a, &ta, 300);
+    proto_sea old = *tl_at(&ta, hub_now());
+    proto_sea n1 = old, n2 = old;
+    n1.wind_u10 += 1;
+    n2.wind_u10 += 2;
+    double t0 = hub_now();
+    sea_send(&a, PROTO_SEA_SET, &n2, t0 + 3.0);   /* entered out of order */
+    sea_send(&a, PROTO_SEA_SET, &n1, t0 + 1.5);
+    assert_int_equal(tl_read(&a, &ta, 300), 2);
+    timeline g;
+    memset(&g, 0, sizeof g);
+    g.hello = 1;   /* get answers announces only */
+    sea_send(&a, PROTO_SEA_GET, NULL, 0);
+    assert_int_equal(tl_read(&a, &g, 400), 3);
+    assert_true(g.eff[0] <= hub_now());
+    assert_true(same_sea(&g.sea[0], &old));
+    assert_true(g.eff[1] == t0 + 1.5 && same_sea(&g.sea[1], &n1));
+    assert_true(g.eff[2] == t0 + 3.0 && same_sea(&g.sea[2], &n2));
+    /* a set at a past effective time takes effect now, never earlier */
+    proto_sea n3 = old;
+    n3.wind_u10 += 3;
+    double before = hub_now();
+    sea_send(&a, PROTO_SEA_SET, &n3, before - 100);
+    timeline r;
+    memset(&r, 0, sizeof r);
+    r.hello = 1;
+    assert_int_equal(tl_read(&a, &r, 300), 1);
+    assert_true(r.eff[0] >= before && r.eff[0] <= hub_now());
+    /* after both pending changes are due, get gives n2 alone (entered last in time) */
+    while (hub_now() < t0 + 3.3) usleep(50000);
+    memset(&g, 0, sizeof g);
+    g.hello = 1;
+    sea_send(&a, PROTO_SEA_GET, NULL, 0);
+    assert_int_equal(tl_read(&a, &g, 400), 1);
+    assert_true(same_sea(&g.sea[0], &n2));
+    assert_true(g.eff[0] == t0 + 3.0);
+    sea_send(&a, PROTO_SEA_SET, &old, 0);
+    wait_hub_wind(old.wind_u10, 5);
+    test_ws_close(&a);
+}
+
+/* SEA_STATE set is checked against the simulation's ranges, which
+ * PROTOCOL.md states beside the block's: swell [0, 10], phillips_a [0, 1],
+ * small_wave_m [0, 100]; the bound is accepted, beyond it EINVAL names the
+ * field. */
+static void sea_set_ranges(void **state)
+{
+    (void)state;
+    test_ws a;
+    timeline ta;
+    sea_connect(&a, &ta, 300);
+    proto_sea old = *tl_at(&ta, hub_now());
+    struct { const char *name; size_t off; double ok, bad; } f[] = {
+        {"swell", offsetof(proto_sea, swell), 10, 10.5},
+        {"phillips_a", offsetof(proto_sea, phillips_a), 1, 1.5},
+        {"small_wave", offsetof(proto_sea, small_wave_m), 100, 150},
+    };
+    for (size_t i = 0; i < sizeof f / sizeof f[0]; i++) {
+        proto_sea x = old;
+        *(double *)((char *)&x + f[i].off) = f[i].bad;
+        sea_send(&a, PROTO_SEA_SET, &x, hub_now() + 100);
+        proto_msg m;
+        assert_true(raw_wait_type(&a, PROTO_ERROR, 3000, &m));
+        assert_int_equal(m.u.error.code, OCEAN_EINVAL);
+        if (!strstr(m.u.error.message, f[i].name)) fail_msg("%s: %s", f[i].name, m.u.error.message);
+        proto_msg_free(&m);
+        x = old;
+        *(double *)((char *)&x + f[i].off) = f[i].ok;
+        sea_send(&a, PROTO_SEA_SET, &x, hub_now() + 0.05 * (double)(i + 1));
+        timeline r;
+        memset(&r, 0, sizeof r);
+        r.hello = 1;
+        assert_int_equal(tl_read(&a, &r, 300), 1);
+    }
+    sea_send(&a, PROTO_SEA_SET, &old, hub_now() + 0.5);
+    usleep(800000);
+    wait_hub_wind(old.wind_u10, 5);
+    srv_hub *h = srv_daemon_hub(daemon_);
+    pthread_mutex_lock(&h->lock);
+    int same = h->sea_now.swell == old.swell && h->sea_now.phillips_a == old.phillips_a &&
+               h->sea_now.small_wave_m == old.small_wave_m;
+    pthread_mutex_unlock(&h->lock);
+    assert_true(same);
+    test_ws_close(&a);
+}
+
+/* server.epoch: ISO 8601 and Unix seconds give the instant the published
+ * calendar gives (2026-01-01T00:00:00Z = 1 767 225 600 s, POSIX time). */
+static void epoch_parse(void **state)
+{
+    (void)state;
+    double e;
+    assert_int_equal(srv_epoch_parse("2026-01-01T00:00:00Z", &e, NULL, 0), OCEAN_OK);
+    assert_true(e == 1767225600.0);
+    assert_int_equal(srv_epoch_parse("2026-01-01T01:30:00+01:30", &e, NULL, 0), OCEAN_OK);
+    assert_true(e == 1767225600.0);
+    assert_int_equal(srv_epoch_parse("2025-12-31 23:59:59.5Z", &e, NULL, 0), OCEAN_OK);
+    assert_true(e == 1767225599.5);
+    assert_int_equal(srv_epoch_parse("1970-01-01T00:00:00Z", &e, NULL, 0), OCEAN_OK);
+    assert_true(e == 0);
+    assert_int_equal(srv_epoch_parse("2000-02-29T00:00:00Z", &e, NULL, 0), OCEAN_OK);
+    assert_true(e == 951782400.0);
+    assert_int_equal(srv_epoch_parse("1767225600.25", &e, NULL, 0), OCEAN_OK);
+    assert_true(e == 1767225600.25);
+    const char *bad[] = {"2026-01-01T00:00:00", "2026-13-01T00:00:00Z", "2025-02-29T00:00:00Z",
+                         "yesterday", "-5", "2026-01-01T00:00:00Zjunk", "1e400", "nan"};
+    char why[200];
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        assert_int_equal(srv_epoch_parse(bad[i], &e, why, sizeof why), OCEAN_EINVAL);
+        assert_non_null(strstr(why, "server.epoch"));
+    }
+}
+
+/* Two daemons started apart with the same epoch agree on the sim time and
+ * the tick of every instant; the tick of a frame is the one the system
+ * clock gives at its sim time. */
+static void epoch_shared_clock(void **state)
+{
+    (void)state;
+    const char *sets[] = {"server.epoch=2026-01-01T00:00:00Z"};
+    srv_settings s1, s2;
+    char err[512];
+    assert_int_equal(srv_settings_load(conf_path, sets, 1, &s1, err, sizeof err), OCEAN_OK);
+    s2 = s1;
+    srv_daemon *d1, *d2;
+    assert_int_equal(srv_daemon_start(&s1, &d1, err, sizeof err), OCEAN_OK);
+    usleep(123456); /* not a whole number of ticks */
+    assert_int_equal(srv_daemon_start(&s2, &d2, err, sizeof err), OCEAN_OK);
+    struct timespec rt;
+    clock_gettime(CLOCK_REALTIME, &rt);
+    double unix_now = (double)rt.tv_sec + 1e-9 * rt.tv_nsec;
+    double a = srv_hub_sim_time_at(srv_daemon_hub(d1), unix_now);
+    double b = srv_hub_sim_time_at(srv_daemon_hub(d2), unix_now);
+    assert_true(a == b);
+    assert_true(fabs(a - (unix_now - 1767225600.0)) < 1e-6);
+    /* the frames: same tick -> same sim time on both; tick = floor(t * rate) */
+    oc_client *c[2] = {connect_client(srv_daemon_port(d1), NULL), connect_client(srv_daemon_port(d2), NULL)};
+    /* both announce the same determinism fingerprint; another grid would not */
+    proto_hello h1, h2;
+    assert_int_equal(oc_client_hello(c[0], &h1), OCEAN_OK);
+    assert_int_equal(oc_client_hello(c[1], &h2), OCEAN_OK);
+    assert_string_equal(h1.server_version, h2.server_version);
+    char fp[17], fp2[17];
+    srv_fingerprint(&s1, fp);
+    assert_non_null(strstr(h1.server_version, fp));
+    assert_non_null(strstr(h1.server_version, " fp="));
+    srv_settings s3 = s1;
+    s3.params.n *= 2;
+    srv_fingerprint(&s3, fp2);
+    assert_string_not_equal(fp, fp2);
+    s3 = s1;
+    s3.params.plan_measure = !s3.params.plan_measure;
+    srv_fingerprint(&s3, fp2);
+    assert_string_not_equal(fp, fp2);
+    uint32_t ticks[2][40];
+    double times[2][40];
+    int nt[2] = {0, 0};
+    for (int k = 0; k < 2; k++) {
+        proto_subscribe sub;
+        small_subscribe(&sub);
+        sub.mesh_kind = PROTO_MESH_NONE;
+        sub.frame_rate_hz = 30;
+        assert_int_equal(oc_client_subscribe(c[k], &sub), OCEAN_OK);
+    }
+    double end = now_s() + (sanitized ? 6 : 3);
+    while (now_s() < end && (nt[0] < 40 || nt[1] < 40)) {
+        for (int k = 0; k < 2; k++) {
+            oc_frame *f;
+            if (nt[k] < 40 && oc_client_next_frame(c[k], 20, &f) == OCEAN_OK) {
+                ticks[k][nt[k]] = f->info.tick;
+                times[k][nt[k]] = f->hdr.sim_time;
+                clock_gettime(CLOCK_REALTIME, &rt);
+                double recv_t = (double)rt.tv_sec + 1e-9 * rt.tv_nsec - 1767225600.0;
+                /* shown no later than received, and not long before */
+                assert_true(f->hdr.sim_time <= recv_t + 1e-3);
+                assert_true(f->hdr.sim_time > recv_t - 2.0);
+                assert_true(ticks[k][nt[k]] == (uint32_t)(int64_t)floor(times[k][nt[k]] * 30 + 1e-6));
+                nt[k]++;
+                oc_frame_free(f);
+            }
+        }
+    }
+    int common = 0;
+    for (int i = 0; i < nt[0]; i++)
+        for (int j = 0; j < nt[1]; j++)
+            if (ticks[0][i] == ticks[1][j]) {
+                assert_true(times[0][i] == times[1][j]);
+                common++;
+            }
+    assert_true(common >= 5);
+    oc_client_destroy(c[0]);
+    oc_client_destroy(c[1]);
+    srv_daemon_stop(d1);
+    srv_daemon_stop(d2);
+}
+
+/* ---- the server as PROTOCOL.md states it (issue 16 deviations) ----------------- */
+
+static void raw_query(test_ws *w, uint32_t id, uint32_t n)
+{
+    double *pts = calloc(2 * (size_t)n, sizeof *pts);
+    for (uint32_t i = 0; i < n; i++) pts[2 * i] = i;
+    proto_msg q;
+    proto_msg_init(&q, PROTO_QUERY);
+    q.u.query.query_id = id;
+    q.u.query.count = n;
+    q.u.query.points = pts;
+    raw_send_msg(w, &q);
+    free(pts);
+}
+
+/* Waits for the first FRAME and returns its tile count (-1: none came). */
+static int raw_frame_tiles(test_ws *w, int ms)
+{
+    proto_msg m;
+    if (!raw_wait_type(w, PROTO_FRAME, ms, &m)) return -1;
+    int n = m.u.frame.tile_count;
+    proto_msg_free(&m);
+    return n;
+}
+
+/* HELLO's limits are ones the server honours: a QUERY of max_query_points
+ * fits max_message (32 + 24 + 16 N bytes) and is answered, one more point is
+ * ETOOBIG; max_frame_rate_hz is not above tick_rate_hz and a faster
+ * SUBSCRIBE is refused, not served slower in silence; a client ERROR is not
+ * answered; SUBSCRIBE accuracy at its lower bound (f32 of 1e-6) gives tiles. */
+static void hello_limits_are_honoured(void **state)
+{
+    (void)state;
+    test_ws w;
+    assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
+    proto_msg m;
+    assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+    proto_hello h = m.u.hello;
+    proto_msg_free(&m);
+    uint32_t fit = (h.max_message - 32 - 24) / 16;
+    assert_true(h.max_query_points <= fit);
+    assert_true(h.max_query_points == fit); /* the test config: 64 KiB messages, 65 536 points */
+    raw_query(&w, 7, h.max_query_points);
+    assert_true(raw_wait_type(&w, PROTO_QUERY_RESULT, 5000, &m));
+    assert_int_equal(m.u.result.query_id, 7);
+    assert_int_equal(m.u.result.count, h.max_query_points);
+    proto_msg_free(&m);
+    raw_query(&w, 8, h.max_query_points + 1);
+    assert_true(raw_wait_type(&w, PROTO_ERROR, 3000, &m));
+    assert_int_equal(m.u.error.code, OCEAN_ETOOBIG);
+    proto_msg_free(&m);
+
+    /* frame rate: at most the tick rate */
+    assert_true(h.max_frame_rate_hz <= h.tick_rate_hz);
+    proto_msg sm;
+    proto_msg_init(&sm, PROTO_SUBSCRIBE);
+    small_subscribe(&sm.u.subscribe);
+    sm.u.subscribe.mesh_kind = PROTO_MESH_NONE;
+    sm.u.subscribe.tile_size = 16;
+    sm.u.subscribe.lod_levels = 1;
+    sm.u.subscribe.frame_rate_hz = 2 * h.tick_rate_hz;
+    raw_send_msg(&w, &sm);
+    assert_true(raw_wait_type(&w, PROTO_ERROR, 3000, &m));
+    assert_int_equal(m.u.error.code, OCEAN_EINVAL);
+    assert_non_null(strstr(m.u.error.message, "tick"));
+    proto_msg_free(&m);
+
+    /* accuracy at the spec's lower bound: tiles in every frame, both layouts */
+    sm.u.subscribe.frame_rate_hz = h.max_frame_rate_hz;
+    sm.u.subscribe.accuracy = (float)1e-6;
+    assert_true((double)sm.u.subscribe.accuracy < 1e-6); /* f32 rounds below the bound */
+    raw_send_msg(&w, &sm);
+    assert_true(raw_frame_tiles(&w, 5000) > 0);
+    assert_true(raw_frame_tiles(&w, 5000) > 0);
+    proto_msg cs;
+    proto_msg_init(&cs, PROTO_SUBSCRIBE);
+    cascade_subscribe(&cs.u.subscribe);
+    cs.u.subscribe.accuracy = (float)1e-6;
+    raw_send_msg(&w, &cs);
+    int tiles = 0;
+    for (int i = 0; i < 5; i++) {
+        proto_msg f;
+        assert_true(raw_wait_type(&w, PROTO_FRAME, 5000, &f));
+        if (f.u.frame.layout == PROTO_LAYOUT_CASCADE) tiles = f.u.frame.tile_count;
+        proto_msg_free(&f);
+    }
+    assert_true(tiles > 0);
+
+    /* a client ERROR: no reply, the connection stays */
+    proto_msg em;
+    proto_msg_init(&em, PROTO_ERROR);
+    em.u.error.code = OCEAN_ECODEC;
+    em.u.error.offending_type = PROTO_FRAME;
+    snprintf(em.u.error.message, sizeof em.u.error.message, "cannot decode that tile");
+    raw_send_msg(&w, &em);
+    assert_false(raw_wait_type(&w, PROTO_ERROR, 600, &m));
+    raw_query(&w, 9, 2);
+    assert_true(raw_wait_type(&w, PROTO_QUERY_RESULT, 5000, &m));
+    assert_int_equal(m.u.result.query_id, 9);
+    proto_msg_free(&m);
+    test_ws_close(&w);
+
+    /* an upgrade without the subprotocol is refused at the handshake (HTTP
+     * 400, test_attacks checks the status), not left in silence; any path
+     * serves ocean.v1 */
+    test_ws x;
+    assert_int_not_equal(test_ws_connect(&x, port, "/", NULL), 0);
+    assert_int_equal(test_ws_connect(&x, port, "/any/path?x=1", PROTO_SUBPROTOCOL), 0);
+    assert_true(raw_wait_type(&x, PROTO_HELLO, 3000, &m));
+    proto_msg_free(&m);
+    test_ws_close(&x);
 }
 
 /* /metrics and /status answer over plain HTTP. */
@@ -1394,6 +1976,13 @@ int main(int argc, char **argv)
         cmocka_unit_test(slow_reader_never_delays_fast),
         cmocka_unit_test(bad_input_gets_error),
         cmocka_unit_test(sea_state_admin_change),
+        cmocka_unit_test(sea_timeline_scheduled_change),
+        cmocka_unit_test(sea_timeline_late_joiner),
+        cmocka_unit_test(sea_timeline_get),
+        cmocka_unit_test(sea_set_ranges),
+        cmocka_unit_test(epoch_parse),
+        cmocka_unit_test(epoch_shared_clock),
+        cmocka_unit_test(hello_limits_are_honoured),
         cmocka_unit_test(http_metrics_and_status),
         cmocka_unit_test(recording_writes_camera_path),
         cmocka_unit_test(max_clients_refused),

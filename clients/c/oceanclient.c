@@ -225,6 +225,11 @@ struct oc_client {
     int have_hello;               /* [mu] */
     proto_sea sea;                /* [mu] */
     double sea_time;              /* [mu] */
+    /* the sea-state timeline (PROTOCOL.md "Sea-state timeline"): HELLO's sea
+     * from -inf, then each announce from its effective time [mu] */
+    double tl_eff[OC_SEA_TIMELINE_MAX];
+    proto_sea tl_sea[OC_SEA_TIMELINE_MAX];
+    int tl_n;
     float frame_rate;             /* [mu] of the last SUBSCRIBE */
     /* frames [mu] */
     frame_priv **fq;
@@ -612,6 +617,8 @@ static ocean_result peek_frame(const uint8_t *raw, size_t len, const proto_limit
     return r;
 }
 
+static void timeline_add(oc_client *c, double eff, const proto_sea *sea);
+
 static void handle_message(oc_client *c, uint8_t *raw, size_t len)
 {
     oc_loop *l = c->loop;
@@ -670,6 +677,8 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
             c->have_hello = 1;
             c->sea = m.u.hello.sea;
             c->sea_time = m.hdr.sim_time;
+            c->tl_n = 0;
+            timeline_add(c, -INFINITY, &m.u.hello.sea);
             if (c->state == OC_CONNECTING)
                 c->state = OC_READY;
             break;
@@ -787,6 +796,7 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
             if (m.u.sea_state.op == PROTO_SEA_ANNOUNCE) {
                 c->sea = m.u.sea_state.sea;
                 c->sea_time = m.u.sea_state.effective_time;
+                timeline_add(c, m.u.sea_state.effective_time, &m.u.sea_state.sea);
                 if (c->sea_wait && !c->sea_done) {
                     c->sea_done = 1;
                     c->sea_res = OCEAN_OK;
@@ -1789,6 +1799,48 @@ ocean_result oc_client_query(oc_client *c, const double *xz, size_t n, int at_ti
 }
 
 /* =========================================================== sea state */
+
+/* Enters (eff, sea) in c's timeline; the same effective time replaces.  Full:
+ * the oldest entry goes (it only describes times long past) [mu]. */
+static void timeline_add(oc_client *c, double eff, const proto_sea *sea)
+{
+    int at = 0;
+    while (at < c->tl_n && c->tl_eff[at] < eff)
+        at++;
+    if (!(at < c->tl_n && c->tl_eff[at] == eff)) {
+        if (c->tl_n == OC_SEA_TIMELINE_MAX) {
+            if (at == 0)
+                return;
+            memmove(&c->tl_eff[0], &c->tl_eff[1], (size_t)(at - 1) * sizeof c->tl_eff[0]);
+            memmove(&c->tl_sea[0], &c->tl_sea[1], (size_t)(at - 1) * sizeof c->tl_sea[0]);
+            at--;
+        } else {
+            memmove(&c->tl_eff[at + 1], &c->tl_eff[at], (size_t)(c->tl_n - at) * sizeof c->tl_eff[0]);
+            memmove(&c->tl_sea[at + 1], &c->tl_sea[at], (size_t)(c->tl_n - at) * sizeof c->tl_sea[0]);
+            c->tl_n++;
+        }
+    }
+    c->tl_eff[at] = eff;
+    c->tl_sea[at] = *sea;
+}
+
+ocean_result oc_client_sea_at(const oc_client *c, double t, proto_sea *out, double *effective_time)
+{
+    if (!c || !out || !isfinite(t))
+        return OCEAN_EINVAL;
+    pthread_mutex_lock(&c->loop->mu);
+    int k = -1;
+    for (int i = 0; i < c->tl_n; i++)
+        if (c->tl_eff[i] <= t)
+            k = i;
+    if (k >= 0) {
+        *out = c->tl_sea[k];
+        if (effective_time)
+            *effective_time = c->tl_eff[k];
+    }
+    pthread_mutex_unlock(&c->loop->mu);
+    return k >= 0 ? OCEAN_OK : OCEAN_ESTATE;
+}
 
 ocean_result oc_client_sea_state(const oc_client *c, proto_sea *out, double *effective_time)
 {

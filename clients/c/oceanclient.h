@@ -359,9 +359,20 @@ ocean_result oc_client_query(oc_client *c, const double *xz, size_t n, int at_ti
 
 /* -------------------------------------------------------------- sea state */
 
-/* The sea state in force as last announced (HELLO or SEA_STATE ANNOUNCE),
- * with its effective time.  OCEAN_ESTATE before HELLO. */
+/* The sea state last announced (HELLO or SEA_STATE ANNOUNCE), with its
+ * effective time, which may lie ahead (a pending change): for the sea of a
+ * given tick use oc_client_sea_at.  OCEAN_ESTATE before HELLO. */
 ocean_result oc_client_sea_state(const oc_client *c, proto_sea *out, double *effective_time);
+
+/* Entries of the sea-state timeline a client keeps (older ones are dropped). */
+#define OC_SEA_TIMELINE_MAX 64
+
+/* The sea in force at sim time t by the timeline the server sent (HELLO's
+ * sea, then every announce from its effective time; PROTOCOL.md "Sea-state
+ * timeline"): what every client and the server use for a tick at t.
+ * *effective_time (may be NULL) gets the entry's time (-inf for HELLO's).
+ * OCEAN_ESTATE before HELLO, OCEAN_EINVAL for a non-finite t. */
+ocean_result oc_client_sea_at(const oc_client *c, double t, proto_sea *out, double *effective_time);
 
 /* Sends SEA_STATE SET with the admin token and waits up to timeout_ms for
  * the server's ANNOUNCE (OCEAN_OK) or ERROR about it (its code, e.g.

@@ -666,8 +666,18 @@ function dSeaState(r) {
     s.sea = dSea(r);
     s.token = r.str(255, 'token');
     r.finish();
-    chkEnum('sea_state.op', s.op, 2);
+    chkEnum('sea_state.op', s.op, 3);
     chkTime('sea_state.effective_time', s.effectiveTime);
+    if (s.op === 2) {
+        /* get (client -> server): no state, every field zero bytes */
+        const z = s.sea;
+        const nums = [s.effectiveTime, z.windU10, z.windDirDeg, z.fetchM, z.depthM, z.swell, z.phillipsA,
+                      z.smallWaveM, z.choppiness, z.hs, z.tp];
+        if (z.spectrum || z.spreading || BigInt(z.seed) !== 0n || !nums.every((v) => Object.is(v, 0)))
+            fail(R.EFORMAT, 'sea_state get: effective_time and the sea block must be zero bytes');
+        if (s.token) fail(R.EFORMAT, 'sea_state get must not carry a token');
+        return s;
+    }
     vSea(s.sea);
     if (s.op === 0 && s.token) fail(R.EFORMAT, 'sea_state announce must not carry a token');
     return s;
