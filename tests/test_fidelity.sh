@@ -10,7 +10,8 @@
 #  - total mean-square slope (resolved in tiles + carried unresolved), per
 #    area of sea in view and per pixel, both within 30 % of Cox & Munk 1954, clean sea: 0.003 + 5.12e-3 U12.5, U12.5 from the
 #    scene's U10 by the neutral log profile (u* from Wu 1982's drag law);
-#  - whitecap coverage (mean foam over the sampled sea) within a factor 2 of
+#  - whitecap coverage (the mean of the frames' cascade-0 FOAM samples by sea
+#    area: the coverage the tiles carry) within a factor 2 of
 #    Monahan & O'Muircheartaigh 1980, W = 3.84e-6 U10^3.41, for scenes with
 #    U10 in 8..26 m/s.
 # Every measured figure is printed as a table, failing or not.
@@ -79,7 +80,7 @@ for d in rows:
     print("%-12s %6g %5g %5.2f | %8.5f %8.5f %8.5f %8.5f %6.3f | %8.5f %8.5f %6.3f | %8.5f %8.5f %7s %7.4f %8.5f | %7.4f %7.4f" % (
         d["scene"], d["camera_height_m"], d["speed_m_s"], d["u10"], d["mss_resolved"], d["mss_unresolved"],
         d["mss_total"], d["mss_cox_munk"], d["mss_ratio"], d["mss_resolved_per_pixel"], d["mss_total_per_pixel"],
-        d["mss_ratio_per_pixel"], d["foam_mean"], d["whitecap_monahan"],
+        d["mss_ratio_per_pixel"], d["foam_tiles"] if d["foam_tiles"] is not None else float("nan"), d["whitecap_monahan"],
         "%.3f" % fr if fr is not None else "-", d["foam_fraction_ge_half"], d["foam_mean_per_pixel"],
         d["e_error"], d["e_total"]))
     where = "%s at %g m, %g m/s" % (d["scene"], d["camera_height_m"], d["speed_m_s"])
@@ -89,7 +90,7 @@ for d in rows:
                                      d["mss_ratio_per_pixel"], d["mss_cox_munk"]))
     if d["foam_checked"] and not d["foam_within_factor_2"]:
         bad.append("%s: foam coverage %.5f is %sx Monahan-OMuircheartaigh %.5f (outside a factor 2)%s" % (
-            where, d["foam_mean"], "%.3f" % fr if fr is not None else "?", d["whitecap_monahan"],
+            where, d["foam_tiles"] if d["foam_tiles"] is not None else float("nan"), "%.3f" % fr if fr is not None else "?", d["whitecap_monahan"],
             "" if d["foam_offered"] else "; the scene offers no foam"))
 print("%d runs measured, %d runs failed to measure, %d bounds missed" % (len(rows), runs_failed, len(bad)))
 for b in bad:

@@ -245,6 +245,75 @@ static uint8_t *replay_frame(test_ws *w, double t, size_t *len)
     return raw;
 }
 
+/* Subscribes d1 and d2 (connected to the two replicas) live in `layout` at
+ * one camera and checks that the FRAMEs of every tick both deliver are the
+ * same bytes, per-connection fields (header seq, camera_seq, mesh_id) aside. */
+static void live_identical(test_ws *d1, test_ws *d2, int layout)
+{
+    test_ws *dd[2] = {d1, d2};
+    uint32_t lt[2][30];
+    uint8_t *lb[2][30];
+    size_t ll[2][30];
+    int ln[2] = {0, 0};
+    proto_msg m;
+    for (int k = 0; k < 2; k++) {
+        proto_msg sm;
+        proto_msg_init(&sm, PROTO_SUBSCRIBE);
+        oc_subscribe_default(&sm.u.subscribe);
+        sm.u.subscribe.layout = (uint8_t)layout;
+        if (layout == PROTO_LAYOUT_WORLD) {
+            sm.u.subscribe.cutoff_policy = PROTO_CUTOFF_NONE;
+            sm.u.subscribe.mesh_kind = PROTO_MESH_NONE;
+            sm.u.subscribe.tile_size = 32;
+            sm.u.subscribe.lod_levels = 2;
+        }
+        sm.u.subscribe.frame_rate_hz = 30;
+        raw_send(dd[k], &sm);
+        proto_msg c;
+        proto_msg_init(&c, PROTO_CAMERA);
+        oc_camera_default(&c.u.camera);
+        c.u.camera.pos[0] = 1234.5;
+        c.u.camera.pos[1] = 25;
+        raw_send(dd[k], &c);
+    }
+    double lend = now_s() + 3.0;
+    while (now_s() < lend && (ln[0] < 30 || ln[1] < 30))
+        for (int k = 0; k < 2; k++) {
+            uint8_t *raw;
+            size_t len;
+            if (ln[k] < 30 && wait_type(dd[k], PROTO_FRAME, 20, &m, &raw, &len) == 1) {
+                /* before our CAMERA, or still the other layout's frames */
+                if (m.u.frame.camera_seq == PROTO_NO_CAMERA || m.u.frame.layout != layout) {
+                    proto_msg_free(&m);
+                    free(raw);
+                    continue;
+                }
+                size_t cam_at, mesh_at;
+                assert_int_equal(proto_frame_client_fields(raw, len, &cam_at, &mesh_at), OCEAN_OK);
+                memset(raw + 16, 0, 4);
+                memset(raw + cam_at, 0, 4);
+                if (mesh_at) memset(raw + mesh_at, 0, 4);
+                lt[k][ln[k]] = m.u.frame.tick;
+                lb[k][ln[k]] = raw;
+                ll[k][ln[k]++] = len;
+                proto_msg_free(&m);
+            }
+        }
+    int common = 0;
+    for (int i = 0; i < ln[0]; i++)
+        for (int q = 0; q < ln[1]; q++)
+            if (lt[0][i] == lt[1][q]) {
+                assert_int_equal(ll[0][i], ll[1][q]);
+                assert_memory_equal(lb[0][i], lb[1][q], ll[0][i]);
+                common++;
+            }
+    for (int k = 0; k < 2; k++)
+        for (int i = 0; i < ln[k]; i++) free(lb[k][i]);
+    print_message("live layout %d: %d + %d frames, %d ticks from both replicas, identical\n", layout, ln[0],
+                  ln[1], common);
+    assert_true(common >= 5);
+}
+
 static void replicas_behind_haproxy(void **state)
 {
     (void)state;
@@ -378,64 +447,11 @@ static void replicas_behind_haproxy(void **state)
         free(o);
     }
 
-    /* live frames too: the same tick from both replicas is the same bytes
-     * (one epoch, one timeline, policy none: nothing depends on history) */
-    test_ws *dd[2] = {&d1, &d2};
-    uint32_t lt[2][30];
-    uint8_t *lb[2][30];
-    size_t ll[2][30];
-    int ln[2] = {0, 0};
-    for (int k = 0; k < 2; k++) {
-        proto_msg sm;
-        proto_msg_init(&sm, PROTO_SUBSCRIBE);
-        oc_subscribe_default(&sm.u.subscribe);
-        sm.u.subscribe.layout = PROTO_LAYOUT_WORLD;
-        sm.u.subscribe.cutoff_policy = PROTO_CUTOFF_NONE;
-        sm.u.subscribe.mesh_kind = PROTO_MESH_NONE;
-        sm.u.subscribe.tile_size = 32;
-        sm.u.subscribe.lod_levels = 2;
-        sm.u.subscribe.frame_rate_hz = 30;
-        raw_send(dd[k], &sm);
-        proto_msg c;
-        proto_msg_init(&c, PROTO_CAMERA);
-        oc_camera_default(&c.u.camera);
-        c.u.camera.pos[0] = 1234.5;
-        c.u.camera.pos[1] = 25;
-        raw_send(dd[k], &c);
-    }
-    double lend = now_s() + 2.0;
-    while (now_s() < lend && (ln[0] < 30 || ln[1] < 30))
-        for (int k = 0; k < 2; k++) {
-            uint8_t *raw;
-            size_t len;
-            if (ln[k] < 30 && wait_type(dd[k], PROTO_FRAME, 20, &m, &raw, &len) == 1) {
-                if (m.u.frame.camera_seq == PROTO_NO_CAMERA) { /* before our CAMERA */
-                    proto_msg_free(&m);
-                    free(raw);
-                    continue;
-                }
-                size_t cam_at, mesh_at;
-                assert_int_equal(proto_frame_client_fields(raw, len, &cam_at, &mesh_at), OCEAN_OK);
-                memset(raw + 16, 0, 4);
-                memset(raw + cam_at, 0, 4);
-                lt[k][ln[k]] = m.u.frame.tick;
-                lb[k][ln[k]] = raw;
-                ll[k][ln[k]++] = len;
-                proto_msg_free(&m);
-            }
-        }
-    int common = 0;
-    for (int i = 0; i < ln[0]; i++)
-        for (int q = 0; q < ln[1]; q++)
-            if (lt[0][i] == lt[1][q]) {
-                assert_int_equal(ll[0][i], ll[1][q]);
-                assert_memory_equal(lb[0][i], lb[1][q], ll[0][i]);
-                common++;
-            }
-    for (int k = 0; k < 2; k++)
-        for (int i = 0; i < ln[k]; i++) free(lb[k][i]);
-    print_message("live: %d + %d frames, %d ticks from both replicas, identical\n", ln[0], ln[1], common);
-    assert_true(common >= 5);
+    /* live frames too: the same tick from both replicas is the same bytes,
+     * in both layouts (one epoch, one timeline; layout 0 with policy none,
+     * layout 1 as the viewer subscribes: nothing depends on history) */
+    live_identical(&d1, &d2, PROTO_LAYOUT_WORLD);
+    live_identical(&d1, &d2, PROTO_LAYOUT_CASCADE);
 
     /* the proxied clients stream; replica 1 is killed in the middle */
     subscribe_replay(&a);

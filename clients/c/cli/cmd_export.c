@@ -4,7 +4,9 @@
  * file (protocol/codec.h) and is written as is; with any other codec the
  * tile is decoded and re-encoded with exr-zip (lossless on the decoded
  * floats).  An index tiles.csv beside them gives each file's frame, sim
- * time, level, tile index, world origin, spacing, size and channels.
+ * time, layout, cascade, level, tile index, origin, spacing, size and
+ * channels (layout 1: the origin is cascade-local, periodic on the
+ * cascade's patch; PROTOCOL.md "Cascade mips").
  */
 #include <errno.h>
 #include <math.h>
@@ -81,8 +83,8 @@ int cmd_export(int argc, char **argv)
         fprintf(stderr, "ocean-client export: cannot create %s: %s\n", idx_path, strerror(errno));
         return 1;
     }
-    fprintf(idx, "file,frame,sim_time,level,ix,iz,origin_x,origin_z,spacing,width,height,channels,codec,"
-                 "error_bound\n");
+    fprintf(idx, "file,frame,sim_time,layout,cascade,level,ix,iz,origin_x,origin_z,spacing,width,height,channels,"
+                 "codec,error_bound\n");
     oc_options o;
     oc_options_default(&o);
     o.frame_queue = 64;
@@ -140,15 +142,18 @@ int cmd_export(int argc, char **argv)
                 written = PROTO_CODEC_EXR_ZIP;
             }
             char name[256], full[1400];
-            snprintf(name, sizeof name, "f%04d_L%02u_x%d_z%d.exr", got, t->info.level, t->info.ix, t->info.iz);
+            /* layout 1: tiles of different cascades share (level, ix, iz) */
+            snprintf(name, sizeof name, "f%04d_C%u_L%02u_x%d_z%d.exr", got, t->info.cascade, t->info.level,
+                     t->info.ix, t->info.iz);
             snprintf(full, sizeof full, "%s/%s", out, name);
             if (write_file(full, data, n) != 0) {
                 fprintf(stderr, "ocean-client export: cannot write %s: %s\n", full, strerror(errno));
                 rc = 1;
                 break;
             }
-            fprintf(idx, "%s,%d,%.17g,%u,%d,%d,%.17g,%.17g,%.17g,%u,%u,%u,%s,%.9g\n", name, got, f->hdr.sim_time,
-                    t->info.level, t->info.ix, t->info.iz, t->info.origin_x, t->info.origin_z, t->info.spacing,
+            fprintf(idx, "%s,%d,%.17g,%u,%u,%u,%d,%d,%.17g,%.17g,%.17g,%u,%u,%u,%s,%.9g\n", name, got, f->hdr.sim_time,
+                    f->info.layout, t->info.cascade, t->info.level, t->info.ix, t->info.iz, t->info.origin_x,
+                    t->info.origin_z, t->info.spacing,
                     t->info.width, t->info.height, t->info.channels, proto_codec_name(written),
                     (double)t->info.error_bound);
             files++;

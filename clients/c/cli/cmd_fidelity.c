@@ -68,6 +68,7 @@ typedef struct fid_sums {
 
 typedef struct fid_acc {
     fid_sums px, area;
+    double tile_foam, tile_area;     /* cascade-0 FOAM samples of the frames, by sea area */
     double e_error, e_total, e_total_max;
     uint64_t samples, above, outside, frames, stale;
 } fid_acc;
@@ -82,6 +83,29 @@ static void sums_add(fid_sums *S, double w, const oc_sample *s, double whole)
     S->foam += w * s->foam;
     S->foam_half += w * (s->foam >= 0.5);
     S->claimed += w * whole;
+}
+
+/* The whitecap coverage the frame's tiles carry: the mean of every FOAM
+ * sample of cascade 0 (the only cascade that carries foam, PROTOCOL.md),
+ * each weighted by the sea it stands for (spacing^2).  From a low camera
+ * the sea in view is a few square metres - far too few whitecaps for an
+ * area statistic - while each tile stands for at least its cascade's
+ * grid of 32 x 32 samples. */
+static void tile_foam(const oc_frame *f, fid_acc *A)
+{
+    for (int t = 0; t < f->info.tile_count; t++) {
+        const oc_tile *tl = &f->tiles[t];
+        unsigned ch = tl->info.channels;
+        if (tl->info.cascade != 0 || !(ch & PROTO_CH_FOAM) || !tl->data) continue;
+        /* planes in codec order H, DX, DZ, NU, NV, FOAM: FOAM follows those present */
+        int before = proto_tile_planes(ch & (PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL));
+        size_t n = (size_t)tl->info.width * tl->info.height;
+        const float *fp = tl->data + (size_t)before * n;
+        double w = tl->info.spacing * tl->info.spacing, sum = 0;
+        for (size_t i = 0; i < n; i++) sum += fp[i] < 0 ? 0 : fp[i] > 1 ? 1 : fp[i];
+        A->tile_foam += w * sum;
+        A->tile_area += w * (double)n;
+    }
 }
 
 /* Casts grid x grid*9/16 rays of camera `cam` (position from the frame's
@@ -341,6 +365,7 @@ int cmd_fidelity(int argc, char **argv)
             continue;
         }
         last_measured = occli_mono();
+        tile_foam(f, &A);
         measure_frame(f, &cam, grid, verbose, interp, &A);
         oc_frame_free(f);
     }
@@ -359,13 +384,16 @@ int cmd_fidelity(int argc, char **argv)
     double u10 = sea.wind_u10, cm = cox_munk_mss(u10);
     double foam = S->foam / S->w, foam_half = S->foam_half / S->w, W = monahan_whitecap(u10);
     double foam_px = P->foam / P->w;
+    double foam_tiles = A.tile_area > 0 ? A.tile_foam / A.tile_area : NAN;
     int foam_applies = u10 >= 8 && u10 <= 26;
     int foam_offered = (hello.effects & PROTO_FX_FOAM) != 0;
     /* slopes: both means must hold (per pixel: what the screen shows, near
-     * detail included; per area: the sea in view); foam: per area (a
-     * coverage is an area fraction; per pixel from a low camera it is a few
-     * square metres of sea, far too few whitecaps to count) */
-    double mss_ratio = total / cm, mss_ratio_px = total_px / cm, foam_ratio = W > 0 ? foam / W : NAN;
+     * detail included; per area: the sea in view); foam: the coverage the
+     * tiles carry (an area fraction needs an area: the sea in view from a
+     * low camera is a few square metres, far too few whitecaps to count;
+     * its mean is reported beside) */
+    double mss_ratio = total / cm, mss_ratio_px = total_px / cm;
+    double foam_ratio = W > 0 && isfinite(foam_tiles) ? foam_tiles / W : NAN;
     int mss_ok = fabs(mss_ratio - 1) <= 0.3 && fabs(mss_ratio_px - 1) <= 0.3;
     int foam_ok = !foam_applies || (foam_ratio >= 0.5 && foam_ratio <= 2);
     FILE *lines = json ? stderr : stdout;
@@ -384,11 +412,13 @@ int cmd_fidelity(int argc, char **argv)
     fprintf(lines, "mss_total       %.5f  Cox-Munk %.5f (U12.5 %.2f m/s): ratio %.3f, per pixel %.5f ratio %.3f: %s\n",
             total, cm, u125_from_u10(u10), mss_ratio, total_px, mss_ratio_px,
             mss_ok ? "both within 30 %" : "OUTSIDE 30 %");
-    fprintf(lines, "foam_mean       %.5f  Monahan-OMuircheartaigh %.5f: ratio %.3f %s%s (per pixel %.5f)\n", foam, W,
-            foam_ratio,
+    fprintf(lines, "foam_coverage   %.5f  (tiles) Monahan-OMuircheartaigh %.5f: ratio %.3f %s%s (sea in view %.5f, "
+            "per pixel %.5f)\n", foam_tiles, W, foam_ratio,
             !foam_applies ? "(U10 outside 8..26 m/s: not checked)" : foam_ok ? "within a factor 2" : "OUTSIDE a factor 2",
-            foam_offered ? "" : " [the scene offers no foam]", foam_px);
+            foam_offered ? "" : " [the scene offers no foam]", foam, foam_px);
     fprintf(lines, "foam_ge_half    %.5f  (fraction of samples with foam >= 0.5)\n", foam_half);
+    fprintf(lines, "foam_tiles      %.5f  (cascade-0 FOAM samples of the frames by sea area: the coverage checked)\n",
+            foam_tiles);
     fprintf(lines, "e_error         %.5f  (mean over frames)\n", A.e_error / A.frames);
     fprintf(lines, "e_total         %.5f  (mean over frames; max %.5f)\n", A.e_total / A.frames, A.e_total_max);
     if (json) {
@@ -420,7 +450,11 @@ int cmd_fidelity(int argc, char **argv)
         cJSON_AddBoolToObject(o, "mss_within_30pct", mss_ok);
         cJSON_AddNumberToObject(o, "foam_mean", foam);
         cJSON_AddNumberToObject(o, "foam_fraction_ge_half", foam_half);
-        cJSON_AddStringToObject(o, "foam_coverage_is", "foam_mean");
+        if (isfinite(foam_tiles))
+            cJSON_AddNumberToObject(o, "foam_tiles", foam_tiles);
+        else
+            cJSON_AddNullToObject(o, "foam_tiles");
+        cJSON_AddStringToObject(o, "foam_coverage_is", "foam_tiles");
         cJSON_AddNumberToObject(o, "whitecap_monahan", W);
         if (isfinite(foam_ratio))
             cJSON_AddNumberToObject(o, "foam_ratio", foam_ratio);
