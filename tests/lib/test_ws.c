@@ -83,7 +83,11 @@ int test_ws_connect(test_ws *w, int port, const char *path, const char *subproto
                      "Sec-WebSocket-Version: 13\r\n%s%s%s\r\n",
                      path ? path : "/", port, subprotocol ? "Sec-WebSocket-Protocol: " : "",
                      subprotocol ? subprotocol : "", subprotocol ? "\r\n" : "");
-    if (write_all(w->fd, req, (size_t)n)) return -1;
+    /* a refused handshake leaves nothing open or allocated */
+    if (write_all(w->fd, req, (size_t)n)) {
+        test_ws_close(w);
+        return -1;
+    }
     double deadline = now_ms() + 3000;
     for (;;) {
         if (w->len >= 4) {
@@ -93,10 +97,14 @@ int test_ws_connect(test_ws *w, int port, const char *path, const char *subproto
                 int ok = w->len >= 12 && memcmp(w->buf, "HTTP/1.1 101", 12) == 0;
                 memmove(w->buf, w->buf + hl, w->len - hl);
                 w->len -= hl;
+                if (!ok) test_ws_close(w);
                 return ok ? 0 : -1;
             }
         }
-        if (fill(w, deadline) <= 0) return -1;
+        if (fill(w, deadline) <= 0) {
+            test_ws_close(w);
+            return -1;
+        }
     }
 }
 
