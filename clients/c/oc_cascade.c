@@ -528,19 +528,30 @@ static ocean_result frame_view(const oc_frame *f, const oc_cascade_view **v)
     return OCEAN_OK;
 }
 
-ocean_result oc_frame_sample_interp(const oc_frame *f, double x, double z, double min_spacing, oc_interp interp,
-                                    oc_sample *out)
+/* The checks every point reader makes: out cleared, the frame's view, a
+ * finite point and spacing, a known kernel. */
+static ocean_result point_args(const oc_frame *f, double x, double z, double min_spacing, oc_interp interp,
+                               oc_sample *out, const oc_cascade_view **v)
 {
     if (!out)
         return OCEAN_EINVAL;
     memset(out, 0, sizeof *out);
-    const oc_cascade_view *v;
-    ocean_result r = frame_view(f, &v);
+    ocean_result r = frame_view(f, v);
     if (r != OCEAN_OK)
         return r;
     if (!isfinite(x) || !isfinite(z) || !isfinite(min_spacing) ||
         (interp != OC_INTERP_CUBIC && interp != OC_INTERP_LINEAR && interp != OC_INTERP_LANCZOS3))
         return OCEAN_EINVAL;
+    return OCEAN_OK;
+}
+
+ocean_result oc_frame_sample_interp(const oc_frame *f, double x, double z, double min_spacing, oc_interp interp,
+                                    oc_sample *out)
+{
+    const oc_cascade_view *v;
+    ocean_result r = point_args(f, x, z, min_spacing, interp, out, &v);
+    if (r != OCEAN_OK)
+        return r;
     if (sample_core(v, x, z, min_spacing, W_ALL, interp, out)) {
         memset(out, 0, sizeof *out);
         return OCEAN_ENOTFOUND;
@@ -556,16 +567,10 @@ ocean_result oc_frame_sample(const oc_frame *f, double x, double z, double min_s
 ocean_result oc_frame_surface_interp(const oc_frame *f, double x, double z, double min_spacing, oc_interp interp,
                                      oc_sample *out)
 {
-    if (!out)
-        return OCEAN_EINVAL;
-    memset(out, 0, sizeof *out);
     const oc_cascade_view *v;
-    ocean_result r = frame_view(f, &v);
+    ocean_result r = point_args(f, x, z, min_spacing, interp, out, &v);
     if (r != OCEAN_OK)
         return r;
-    if (!isfinite(x) || !isfinite(z) || !isfinite(min_spacing) ||
-        (interp != OC_INTERP_CUBIC && interp != OC_INTERP_LINEAR && interp != OC_INTERP_LANCZOS3))
-        return OCEAN_EINVAL;
     /* the levels are those of the asked point, held while p moves */
     oc_lod lod;
     lod_core(&v->block, x, z, min_spacing, &lod);
