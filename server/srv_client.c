@@ -138,6 +138,7 @@ void srv_fingerprint(const srv_settings *s, char out[17])
     h = fnv_f64(h, c->mesh_error_px);
     h = fnv_f64(h, c->px_per_sample);
     h = fnv_f64(h, c->viewer_bytes_per_s);
+    h = fnv_int(h, c->cascade_tile);
     h = fnv_int(h, c->near_field_waves);
     h = fnv_f64(h, c->near_field_radius);
     h = fnv_f64(h, c->near_field_min_wavelength);
