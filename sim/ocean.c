@@ -18,6 +18,7 @@
  * are zero in every channel (S. G. Johnson 2011), so the band is symmetric.
  */
 #include "ocean.h"
+#include "ocean_internal.h"
 
 #include <errno.h>
 #include <math.h>
@@ -28,6 +29,11 @@
 
 #include <fftw3.h>
 #include <omp.h>
+#include <stdint.h>
+#include <unistd.h>
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#include <immintrin.h>
+#endif
 
 #include "filter.h"
 #include "foam.h"
@@ -125,6 +131,8 @@ struct ocean {
     int foam_next;
     gain_plane gains[GAIN_PLANES];
     uint64_t gain_clock;
+    int fused;          /* row pass: AVX2+FMA where the CPU has both */
+    double stream_bytes; /* spectra larger than this are streamed (half the LLC) */
 };
 
 struct ocean_frame {
@@ -404,6 +412,27 @@ ocean_result ocean_wisdom_export(const char *path, char *msg, size_t msglen)
     return OCEAN_OK;
 }
 
+void ocean_force_paths(ocean *o, int fused, int stream)
+{
+    if (!o)
+        return;
+    int can = 0;
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+    can = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#endif
+    o->fused = fused < 0 ? can : fused && can;
+    if (stream < 0) {
+        /* Stream what would not stay in the last-level cache anyway: a
+         * spectrum over half of it (the FFT's output needs the rest). */
+        long llc = sysconf(_SC_LEVEL3_CACHE_SIZE);
+        if (llc <= 0)
+            llc = sysconf(_SC_LEVEL2_CACHE_SIZE);
+        o->stream_bytes = llc > 0 ? llc / 2.0 : 8e6;
+    } else {
+        o->stream_bytes = stream ? 0.0 : INFINITY;
+    }
+}
+
 ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t msglen)
 {
     *out = NULL;
@@ -417,6 +446,7 @@ ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t 
         return OCEAN_ENOMEM;
     }
     o->p = *p;
+    ocean_force_paths(o, -1, -1);
     for (int c = 0; c < p->cascades; c++) {
         r = cascade_init(o, c);
         if (r != OCEAN_OK) {
@@ -826,6 +856,8 @@ typedef struct stage_args {
     fftwf_complex *spec;
     float *gain;            /* gain plane of this bucket, or NULL (compute) */
     int gain_ready;         /* 1: gain holds the gains, 0: fill it */
+    int fused;              /* 1: the AVX2+FMA row pass (same bits) */
+    int stream;             /* 1: write spec with streaming stores */
 } stage_args;
 
 /* sin and cos of a phase x already reduced to [-pi, pi] (exactly, in
@@ -867,11 +899,16 @@ static inline float gain_fast(float k, float kc, int order)
     return k <= kc ? inv : q * inv;
 }
 
-/* h(k,t) (and, with_dt, dh/dt) of one row into the cache.  Inlined with
- * a literal with_dt, so each variant is one branch-free vector loop.
- * Out-of-band modes have h0 = 0, so they need no branch either. */
+/* h(k,t) (and, with_dt, dh/dt) of one row, and with pair of its mirror
+ * row too, into the cache.  Rows mz and -mz hold the same |k|, so the
+ * same w and phase (cascade_init fills turns from |k| alone; no current
+ * makes w depend on direction): one phase and sin/cos serve both rows,
+ * half the stage's trigonometry.  Inlined with literal with_dt and pair,
+ * so each variant is one branch-free vector loop.  Out-of-band modes have
+ * h0 = 0, so they need no branch either. */
 static inline __attribute__((always_inline)) void
-row_evolve(const cascade *cs, size_t base, int half, double t, const int with_dt)
+row_evolve(const cascade *cs, size_t base, size_t mirror, int half, double t,
+           const int with_dt, const int fused, const int pair)
 {
     const double *fh = cs->turns_hi + base, *fl = cs->turns_lo + base;
     double th, tl;
@@ -880,19 +917,39 @@ row_evolve(const cascade *cs, size_t base, int half, double t, const int with_dt
     const float *mr = cs->h0[H0M_RE] + base, *mi = cs->h0[H0M_IM] + base;
     float *c_hr = cs->cache[C_HR] + base, *c_hi = cs->cache[C_HI] + base;
     float *c_tr = cs->cache[C_TR] + base, *c_ti = cs->cache[C_TI] + base;
+    const float *qpr = cs->h0[H0P_RE] + mirror, *qpi = cs->h0[H0P_IM] + mirror;
+    const float *qmr = cs->h0[H0M_RE] + mirror, *qmi = cs->h0[H0M_IM] + mirror;
+    float *q_hr = cs->cache[C_HR] + mirror, *q_hi = cs->cache[C_HI] + mirror;
+    float *q_tr = cs->cache[C_TR] + mirror, *q_ti = cs->cache[C_TI] + mirror;
 #pragma omp simd
     for (int ix = 0; ix < half; ix++) {
         float s, c;
-        phase_sincos(ocean_phase_turns(fh[ix], fl[ix], t, th, tl), &s, &c);
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+        double ph = fused ? ocean_phase_turns_fma(fh[ix], fl[ix], t)
+                          : ocean_phase_turns(fh[ix], fl[ix], t, th, tl);
+#else
+        double ph = ocean_phase_turns(fh[ix], fl[ix], t, th, tl);
+#endif
+        phase_sincos(ph, &s, &c);
+        float w = with_dt ? (float)(fh[ix] * OCEAN_TWO_PI_C1) : 0.0f;
         /* u = h0p e^{-i ph}, v = h0m e^{+i ph}, h = u + v, dh/dt = -i w u + i w v */
         float ur = pr[ix] * c + pi[ix] * s, ui = pi[ix] * c - pr[ix] * s;
         float vr = mr[ix] * c - mi[ix] * s, vi = mi[ix] * c + mr[ix] * s;
         c_hr[ix] = ur + vr;
         c_hi[ix] = ui + vi;
         if (with_dt) {
-            float w = (float)(fh[ix] * OCEAN_TWO_PI_C1);
             c_tr[ix] = w * (ui - vi);
             c_ti[ix] = w * (vr - ur);
+        }
+        if (pair) {
+            float qur = qpr[ix] * c + qpi[ix] * s, qui = qpi[ix] * c - qpr[ix] * s;
+            float qvr = qmr[ix] * c - qmi[ix] * s, qvi = qmi[ix] * c + qmr[ix] * s;
+            q_hr[ix] = qur + qvr;
+            q_hi[ix] = qui + qvi;
+            if (with_dt) {
+                q_tr[ix] = w * (qui - qvi);
+                q_ti[ix] = w * (qvr - qur);
+            }
         }
     }
 }
@@ -905,9 +962,28 @@ row_evolve(const cascade *cs, size_t base, int half, double t, const int with_dt
 /* The row passes vectorise 8 wide with AVX2; the default clone keeps the
  * library runnable on any x86-64 (glibc picks the clone at load time). */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
+/* Copies m floats to dst with non-temporal stores, then fences.  For
+ * spectra larger than the cache: a plain store first reads the line it
+ * writes (the spectra are written whole, never read here), so streaming
+ * halves the memory traffic of the stage; values are unchanged. */
+__attribute__((target("avx2"))) static void spectrum_row_stream(float *dst, const float *src,
+                                                                int m)
+{
+    int i = 0;
+    while (i < m && ((uintptr_t)(dst + i) & 31u))
+        dst[i] = src[i], i++;
+    for (; i + 8 <= m; i += 8)
+        _mm256_stream_ps(dst + i, _mm256_loadu_ps(src + i));
+    for (; i < m; i++)
+        dst[i] = src[i];
+    /* Streaming stores are weakly ordered: fence before the FFT (another
+     * thread) reads them. */
+    _mm_sfence();
+}
 #endif
-static void spectrum_row(const stage_args *a, int r)
+
+static inline __attribute__((always_inline)) void
+spectrum_row_channels(const stage_args *a, int r, const int fused)
 {
     int n = a->n, half = n / 2 + 1, full_half = a->n_full / 2 + 1;
     size_t plane = (size_t)n * half;
@@ -916,12 +992,6 @@ static void spectrum_row(const stage_args *a, int r)
     const cascade *cs = a->cs;
     float *c_hr = cs->cache[C_HR] + base, *c_hi = cs->cache[C_HI] + base;
     float *c_tr = cs->cache[C_TR] + base, *c_ti = cs->cache[C_TI] + base;
-    if (!a->cached) {
-        if (a->need_dt)
-            row_evolve(cs, base, half, a->t, 1);
-        else
-            row_evolve(cs, base, half, a->t, 0);
-    }
     const float *kx = cs->kx, *kinv = cs->kinv + base;
     const float *hr = c_hr, *hi = c_hi, *tr = c_tr, *ti = c_ti;
     float g[ROW_MAX], fhr[ROW_MAX], fhi[ROW_MAX], ftr[ROW_MAX], fti[ROW_MAX];
@@ -961,8 +1031,13 @@ static void spectrum_row(const stage_args *a, int r)
         ti = fti;
     }
     float kz = (float)(mz * a->cs->dk), lam = (float)a->lambda;
+    /* Streaming: each channel's row is made in this L1 buffer and then
+     * written past the caches (spectrum_row_stream). */
+    float rowbuf[ROW_MAX][2];
+    const int stream = fused && a->stream;
     for (int j = 0; j < a->nch; j++) {
-        float (*o)[2] = &a->spec[(size_t)j * plane + (size_t)r * half];
+        float (*dst)[2] = &a->spec[(size_t)j * plane + (size_t)r * half];
+        float (*o)[2] = stream ? rowbuf : dst;
         switch (a->ch[j]) {
         case CH_H:
             for (int ix = 0; ix < half; ix++) { o[ix][0] = hr[ix]; o[ix][1] = hi[ix]; }
@@ -1019,7 +1094,63 @@ static void spectrum_row(const stage_args *a, int r)
             }
             break;
         }
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+        if (stream)
+            spectrum_row_stream(&dst[0][0], &rowbuf[0][0], 2 * half);
+#endif
     }
+}
+
+/* Rows p and n - p of the n-point grid (mz = p and -p; rows 0 and n/2
+ * alone): h(k,t) for both (unless cached), then their channels. */
+static inline __attribute__((always_inline)) void
+spectrum_row_body(const stage_args *a, int p, const int fused)
+{
+    int n = a->n, half = n / 2 + 1, full_half = a->n_full / 2 + 1;
+    int alone = p == 0 || p == n / 2;
+    int mz = p < n / 2 ? p : p - n;
+    size_t base = (size_t)wrap_index(mz, a->n_full) * full_half;
+    size_t mirror = (size_t)wrap_index(-mz, a->n_full) * full_half;
+    if (!a->cached) {
+        if (alone && a->need_dt)
+            row_evolve(a->cs, base, base, half, a->t, 1, fused, 0);
+        else if (alone)
+            row_evolve(a->cs, base, base, half, a->t, 0, fused, 0);
+        else if (a->need_dt)
+            row_evolve(a->cs, base, mirror, half, a->t, 1, fused, 1);
+        else
+            row_evolve(a->cs, base, mirror, half, a->t, 0, fused, 1);
+    }
+    spectrum_row_channels(a, p, fused);
+    if (!alone)
+        spectrum_row_channels(a, n - p, fused);
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+static void spectrum_row_plain(const stage_args *a, int r)
+{
+    spectrum_row_body(a, r, 0);
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target("avx2,fma")))
+static void spectrum_row_fused(const stage_args *a, int r)
+{
+    spectrum_row_body(a, r, 1);
+}
+#endif
+
+static void spectrum_row(const stage_args *a, int r)
+{
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+    if (a->fused) {
+        spectrum_row_fused(a, r);
+        return;
+    }
+#endif
+    spectrum_row_plain(a, r);
 }
 
 /* Jacobian J = (1 + Dxx)(1 + Dzz) - Dxz^2 and foam for rows [r0, r1) of an
@@ -1191,7 +1322,8 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
         int need_dt = (fx & OCEAN_FX_VELOCITY) != 0;
         int cached = cs->cache_n >= n && cs->cache_t == t && (cs->cache_dt || !need_dt);
         stage_args a = {cs, cached, need_dt, n_full, n, nch, ch, t, kc, kneg, scale, boost,
-                        o->p.sea.choppiness, r->order, o->spec, NULL, 0};
+                        o->p.sea.choppiness, r->order, o->spec, NULL, 0, o->fused,
+                        (double)nch * n * (n / 2 + 1) * sizeof(fftwf_complex) > o->stream_bytes};
         if (cs->k_lo >= kneg) {
             memset(f->block[c], 0, sizeof(float) * nch * (size_t)n * n);
         } else {
@@ -1200,7 +1332,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
             if (!(isinf(kc) && scale == 1.0 && boost == 1.0 && n == n_full))
                 a.gain = gain_plane_get(o, c, n, kc, r->order, scale, boost, &a.gain_ready);
 #pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
-            for (int row = 0; row < n; row++)
+            for (int row = 0; row <= n / 2; row++)
                 spectrum_row(&a, row);
             if (!cached) {
                 cs->cache_t = t;

@@ -121,4 +121,19 @@ static inline double ocean_phase_turns(double fh, double fl, double t, double th
     return r * OCEAN_TWO_PI_C1;
 }
 
+/* ocean_phase_turns with the product's error from one fused multiply-add:
+ * fma(fh, t, -p) is fh t - p exactly, as Dekker's sum above is, so both
+ * give the same bits.  Only for code compiled for a target with FMA (a
+ * call elsewhere would go to libm's software fma). */
+#if defined(__GNUC__)
+static inline double ocean_phase_turns_fma(double fh, double fl, double t)
+{
+    double p = fh * t;
+    double e = __builtin_fma(fh, t, -p);
+    double n = (p + 6755399441055744.0) - 6755399441055744.0;
+    double r = (p - n) + (e + fl * t);
+    return r * OCEAN_TWO_PI_C1;
+}
+#endif
+
 #endif

@@ -1,0 +1,21 @@
+/*
+ * ocean_internal.h - hooks of ocean.c for oceand's own tests; not
+ * installed, not part of the library's API.
+ */
+#ifndef OCEAN_INTERNAL_H
+#define OCEAN_INTERNAL_H
+
+#include "ocean.h"
+
+/* Chooses the spectrum stage's code paths, which must all give the same
+ * bits (tests/test_ocean.c compares them):
+ *   fused  1: the AVX2+FMA row pass (only where the CPU has both; else
+ *             the plain pass), 0: the plain pass, -1: the CPU's best;
+ *   stream 1: write every spectrum with streaming stores (AVX2+FMA pass
+ *             only), 0: never, -1: spectra larger than half the
+ *             last-level cache (the default).
+ * ocean_create applies (-1, -1).  Not thread-safe against a running
+ * ocean_evaluate on the same ocean.  Accepts NULL (does nothing). */
+void ocean_force_paths(ocean *o, int fused, int stream);
+
+#endif
