@@ -7,11 +7,13 @@
  * bind, admin disabled without a token).
  */
 #include "srv_config.h"
+#include "ocean_time.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <sys/stat.h>
 
 #include "codec.h"
@@ -380,6 +382,21 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
         char msg[200];
         r = srv_epoch_parse(tmp->srv.epoch, &e, msg, sizeof msg);
         if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", path ? path : "(defaults)", msg);
+        /* Sim time is now - epoch; beyond the exact-time limit the ocean
+         * refuses to evaluate (ocean_time.h), so say so now, not with a
+         * daemon that serves no frames. */
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        double simt = (double)ts.tv_sec - e;
+        if (r == OCEAN_OK && !ocean_time_ok(simt)) {
+            if (err)
+                snprintf(err, errlen,
+                         "%s: server.epoch '%.64s' puts the sim time now at %.0f s, beyond the "
+                         "exact-time limit of +-%.0f s (OCEAN_TIME_MAX, 4.25 years): choose an "
+                         "epoch within 4.25 years of now",
+                         path ? path : "(defaults)", tmp->srv.epoch, simt, OCEAN_TIME_MAX);
+            r = OCEAN_EINVAL;
+        }
     }
     if (r == OCEAN_OK) {
         snprintf(tmp->path, sizeof tmp->path, "%s", path ? path : "");

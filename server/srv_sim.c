@@ -10,6 +10,7 @@
  *   4. hand the bytes to the clients and wake the service thread.
  */
 #include "srv_sim.h"
+#include "ocean_time.h"
 
 #include <errno.h>
 #include <float.h>
@@ -97,6 +98,7 @@ struct srv_sim {
     double camera_hint[5];
     srv_work *work;             /* queries in slices (srv_work.c) */
     double work_due;            /* monotonic: background work's next turn */
+    double time_warned;         /* monotonic: last "sim time out of range" log */
 };
 
 /* ---- ocean construction ----------------------------------------------------- */
@@ -1016,6 +1018,16 @@ static void *sim_main(void *arg)
         int64_t tick_no = (int64_t)floor(sim0 * rate);
         double t = (double)tick_no / rate;
         double tick_wall = t0 - (sim0 - t);      /* monotonic time of the tick */
+        /* Beyond the exact-time limit the ocean refuses every evaluation
+         * (ocean_time.h): say why frames stopped, once a minute. */
+        if (!ocean_time_ok(t) && (s->time_warned == 0.0 || t0 - s->time_warned >= 60.0)) {
+            fprintf(stderr,
+                    "oceand: sim time %.0f s (now - server.epoch) is beyond the exact-time limit of "
+                    "+-%.0f s (OCEAN_TIME_MAX): no frames or queries until server.epoch is set "
+                    "within 4.25 years of now\n",
+                    t, OCEAN_TIME_MAX);
+            s->time_warned = t0;
+        }
         for (srv_client *c = h->clients; c; c = c->next) {
             if (c->closed) continue;
             srv_work_take(s->work, c, t);

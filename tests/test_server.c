@@ -1475,13 +1475,34 @@ static void epoch_parse(void **state)
     }
 }
 
+/* An epoch that puts the sim time beyond the exact-time limit is refused
+ * at start, naming the limit (the daemon would serve no frames). */
+static void epoch_beyond_time_limit(void **state)
+{
+    (void)state;
+    const char *sets[] = {"server.epoch=1970-01-01T00:00:00Z"};
+    srv_settings s1;
+    char err[512] = "";
+    assert_int_equal(srv_settings_load(conf_path, sets, 1, &s1, err, sizeof err), OCEAN_EINVAL);
+    assert_non_null(strstr(err, "OCEAN_TIME_MAX"));
+    assert_non_null(strstr(err, "server.epoch"));
+    /* a year ago is fine */
+    char near[64];
+    snprintf(near, sizeof near, "server.epoch=%lld", (long long)time(NULL) - 31536000LL);
+    const char *ok[] = {near};
+    assert_int_equal(srv_settings_load(conf_path, ok, 1, &s1, err, sizeof err), OCEAN_OK);
+}
+
 /* Two daemons started apart with the same epoch agree on the sim time and
  * the tick of every instant; the tick of a frame is the one the system
  * clock gives at its sim time. */
 static void epoch_shared_clock(void **state)
 {
     (void)state;
-    const char *sets[] = {"server.epoch=2026-01-01T00:00:00Z"};
+    /* a whole day about a month ago: any epoch within the exact-time limit */
+    char ep[64];
+    snprintf(ep, sizeof ep, "server.epoch=%lld", ((long long)time(NULL) / 86400 - 30) * 86400);
+    const char *sets[] = {ep};
     srv_settings s1, s2;
     char err[512];
     assert_int_equal(srv_settings_load(conf_path, sets, 1, &s1, err, sizeof err), OCEAN_OK);
@@ -1982,6 +2003,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(sea_set_ranges),
         cmocka_unit_test(epoch_parse),
         cmocka_unit_test(epoch_shared_clock),
+        cmocka_unit_test(epoch_beyond_time_limit),
         cmocka_unit_test(hello_limits_are_honoured),
         cmocka_unit_test(http_metrics_and_status),
         cmocka_unit_test(recording_writes_camera_path),
