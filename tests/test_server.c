@@ -1501,7 +1501,8 @@ static void epoch_shared_clock(void **state)
     (void)state;
     /* a whole day about a month ago: any epoch within the exact-time limit */
     char ep[64];
-    snprintf(ep, sizeof ep, "server.epoch=%lld", ((long long)time(NULL) / 86400 - 30) * 86400);
+    const double epoch_s = (double)(((long long)time(NULL) / 86400 - 30) * 86400);
+    snprintf(ep, sizeof ep, "server.epoch=%.0f", epoch_s);
     const char *sets[] = {ep};
     srv_settings s1, s2;
     char err[512];
@@ -1517,7 +1518,7 @@ static void epoch_shared_clock(void **state)
     double a = srv_hub_sim_time_at(srv_daemon_hub(d1), unix_now);
     double b = srv_hub_sim_time_at(srv_daemon_hub(d2), unix_now);
     assert_true(a == b);
-    assert_true(fabs(a - (unix_now - 1767225600.0)) < 1e-6);
+    assert_true(fabs(a - (unix_now - epoch_s)) < 1e-6);
     /* the frames: same tick -> same sim time on both; tick = floor(t * rate) */
     oc_client *c[2] = {connect_client(srv_daemon_port(d1), NULL), connect_client(srv_daemon_port(d2), NULL)};
     /* both announce the same determinism fingerprint; another grid would not */
@@ -1555,7 +1556,7 @@ static void epoch_shared_clock(void **state)
                 ticks[k][nt[k]] = f->info.tick;
                 times[k][nt[k]] = f->hdr.sim_time;
                 clock_gettime(CLOCK_REALTIME, &rt);
-                double recv_t = (double)rt.tv_sec + 1e-9 * rt.tv_nsec - 1767225600.0;
+                double recv_t = (double)rt.tv_sec + 1e-9 * rt.tv_nsec - epoch_s;
                 /* shown no later than received, and not long before */
                 assert_true(f->hdr.sim_time <= recv_t + 1e-3);
                 assert_true(f->hdr.sim_time > recv_t - 2.0);
