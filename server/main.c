@@ -255,6 +255,14 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
+#ifdef OCEAND_DATADIR
+    /* An installed oceand reads the configuration `make install` put in
+     * SYSCONFDIR when no --config names another (the unit passes it too). */
+    if (!config && access(OCEAND_SYSCONFDIR "/oceand.conf", R_OK) == 0) {
+        config = OCEAND_SYSCONFDIR "/oceand.conf";
+        fprintf(stderr, "oceand: reading %s (no --config given)\n", config);
+    }
+#endif
     /* Without a config file, an installed oceand's data directory comes
      * first, so --port/--set still override it. */
     if (!config && N_DATADIR_SETS) {

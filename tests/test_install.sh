@@ -111,8 +111,17 @@ stop_daemon() {  # name
 echo "== installed oceand, no config, from another directory ($SECONDS s)"
 start_daemon "$tmp/d1.log" "$prefix/bin/oceand" --port 0
 grep -q "scene ship-bridge" "$tmp/d1.log" || fail "default scene not served: $(cat "$tmp/d1.log")"
+# it reads PREFIX/etc/oceand/oceand.conf, the file `make install` put there
+grep -q "reading $prefix/etc/oceand/oceand.conf" "$tmp/d1.log" || fail "installed config not read: $(cat "$tmp/d1.log")"
 check_serves "no config"
 stop_daemon "no config"
+# a key changed in the installed config takes effect without --config
+sed -i 's|^server.tick_rate = .*|server.tick_rate = 20|' "$prefix/etc/oceand/oceand.conf"
+grep -q '^server.tick_rate = 20$' "$prefix/etc/oceand/oceand.conf" || fail "no server.tick_rate line in the installed config"
+start_daemon "$tmp/d1b.log" "$prefix/bin/oceand" --port 0
+grep -q "20 Hz" "$tmp/d1b.log" || fail "installed config's tick rate not used: $(cat "$tmp/d1b.log")"
+stop_daemon "installed config edited"
+sed -i 's|^server.tick_rate = 20$|server.tick_rate = 30|' "$prefix/etc/oceand/oceand.conf"
 
 echo "== the systemd unit's commands ($SECONDS s)"
 unit=$prefix/lib/systemd/system/oceand.service
