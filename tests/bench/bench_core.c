@@ -41,6 +41,7 @@
 #include <fftw3.h>
 
 #include "ocean.h"
+#include "ocean_internal.h"
 
 typedef struct fxset {
     const char *name;
@@ -207,6 +208,60 @@ static int core_table(const int *sizes, int nsizes, int plan, int quick, FILE *c
     return failed;
 }
 
+/* What each spectrum-stage path contributes (issue 14): the full
+ * evaluation (+foam, 2 threads, MEASURE plans) with the plain row pass,
+ * the AVX2+FMA pass, and the AVX2+FMA pass with streaming stores, each
+ * interleaved with FFTW alone on one ocean (ocean_force_paths; all three
+ * give the same bits, tests/test_ocean.c).  Every path already takes one
+ * phase per mirror-row pair.  Returns 0, or 1 when the ocean could not be
+ * made. */
+static int stage_paths(int n, int quick)
+{
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = n;
+    p.threads = 2;
+    p.plan_measure = OCEAN_PLAN_MEASURE;
+    ocean *o = NULL;
+    ocean_frame *f = NULL;
+    char msg[600] = "";
+    if (ocean_create(&p, &o, msg, sizeof msg) != OCEAN_OK || ocean_frame_create(o, &f) != OCEAN_OK) {
+        fprintf(stderr, "bench_core: N=%d: %s\n", n, msg);
+        ocean_destroy(o);
+        return 1;
+    }
+    static const struct { const char *name; int fused, stream; } path[] = {
+        {"plain row pass", 0, 0}, {"AVX2+FMA", 1, 0}, {"AVX2+FMA, streaming stores", 1, 1}};
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL);
+    r.foam_map = 0;
+    int reps = quick ? 5 : (n >= 1024 ? 15 : 41);
+    double *ms = malloc(sizeof(double) * reps * 7), *fw = ms + 3 * reps, *q = fw + reps;
+    for (int i = 0; i < reps; i++) {
+        double t0 = bench_now_ms();
+        ocean_transform_only(o, &r, f);
+        fw[i] = bench_now_ms() - t0;
+        for (int k = 0; k < 3; k++) {
+            int pk = (i + k) % 3; /* rotate which path goes first */
+            ocean_force_paths(o, path[pk].fused, path[pk].stream);
+            t0 = bench_now_ms();
+            ocean_evaluate(o, 10.0 + i / 30.0 + pk, &r, f);
+            ms[pk * reps + i] = bench_now_ms() - t0;
+        }
+    }
+    for (int k = 0; k < 3; k++) {
+        for (int i = 0; i < reps; i++)
+            q[i] = ms[k * reps + i] / fw[i];
+        printf("| %d | %s | %.3f | %.3f | %.3f |\n", n, path[k].name, bench_median(ms + k * reps, reps),
+               bench_median(fw, reps), bench_median(q, reps));
+    }
+    ocean_force_paths(o, -1, -1);
+    free(ms);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    return 0;
+}
+
 /* A process that only burns CPU, optionally pinned to one CPU.  Started
  * stopped; the caller toggles it with SIGCONT / SIGSTOP. */
 static pid_t spinner(int cpu)
@@ -321,6 +376,18 @@ int main(int argc, char **argv)
                "with MEASURE plans: measured %.3fx - %s; with the whole-field foam map %.3fx.\n\n",
                mea_sizes[i], mea[i], isnan(mea[i]) ? "NOT MEASURED" : mea[i] <= 1.15 ? "met" : "NOT met",
                mea_map[i]);
+
+    printf("#### The spectrum stage's paths (same bits, MEASURE plans, 2 threads, +foam)\n\n");
+    printf("One ocean, its paths forced in turn and interleaved with FFTW alone on the same plans "
+           "and buffers; every path takes one phase and sin/cos per pair of rows mz, -mz (same "
+           "|k|, same w). The AVX2+FMA pass forms the phase product's error with one fused "
+           "multiply-add (exact, as the plain pass's Dekker product is); streaming stores write "
+           "spectra larger than half the last-level cache without first reading the lines "
+           "(oceand picks by size: streaming at N = 1024, not at 512).\n\n");
+    printf("| N | path | ms | FFTW ms | ratio |\n|---:|---|---:|---:|---:|\n");
+    for (int i = 0; i < 2; i++)
+        failed |= stage_paths(mea_sizes[i], quick);
+    printf("\n");
 
     /* Packing two real channels into one complex transform. */
     printf("#### Packing two real channels into one complex transform (FFTW alone)\n\n");
