@@ -1089,6 +1089,40 @@ static void sea_state_admin_change(void **state)
     oc_client_destroy(c);
 }
 
+/* Every client receives every admin's announces: a SET is answered only by
+ * the announce of its own sea (or an ERROR), not by another admin's change
+ * that happens to arrive first.  B's set is sent raw, just before A's
+ * refused one; A must see its EAUTH, every time. */
+static void sea_state_set_answered_by_its_own_announce(void **state)
+{
+    (void)state;
+    oc_client *a = connect_client(port, NULL);
+    proto_sea sea;
+    double eff;
+    assert_int_equal(oc_client_sea_state(a, &sea, &eff), OCEAN_OK);
+    const double old_wind = sea.wind_u10;
+    test_ws b;
+    assert_int_equal(test_ws_connect(&b, port, "/", PROTO_SUBPROTOCOL), 0);
+    for (int i = 0; i < 5; i++) {
+        proto_msg m;
+        proto_msg_init(&m, PROTO_SEA_STATE);
+        m.u.sea_state.op = PROTO_SEA_SET;
+        m.u.sea_state.effective_time = 0;
+        m.u.sea_state.sea = sea;
+        m.u.sea_state.sea.wind_u10 = old_wind + 1 + i;
+        snprintf(m.u.sea_state.token, sizeof m.u.sea_state.token, "test-token");
+        raw_send_msg(&b, &m);
+        proto_sea mine = sea;
+        mine.wind_u10 = old_wind + 2 + i;
+        assert_int_equal(oc_client_sea_state_set(a, &mine, 0, "wrong-token", 5000), OCEAN_EAUTH);
+    }
+    test_ws_close(&b);
+    /* back to the original sea for the other tests */
+    assert_int_equal(oc_client_sea_state_set(a, &sea, 0, "test-token", 5000), OCEAN_OK);
+    usleep(300000);
+    oc_client_destroy(a);
+}
+
 /* ---- the sea-state timeline ------------------------------------------------------ */
 
 /* What one raw client knows of the timeline, built only from what it
@@ -1998,6 +2032,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(slow_reader_never_delays_fast),
         cmocka_unit_test(bad_input_gets_error),
         cmocka_unit_test(sea_state_admin_change),
+        cmocka_unit_test(sea_state_set_answered_by_its_own_announce),
         cmocka_unit_test(sea_timeline_scheduled_change),
         cmocka_unit_test(sea_timeline_late_joiner),
         cmocka_unit_test(sea_timeline_get),

@@ -246,6 +246,8 @@ struct oc_client {
     pending_query *queries;
     uint32_t next_query_id;
     int sea_wait;                 /* 1 waiting for ANNOUNCE/ERROR */
+    proto_sea sea_want;           /* the SET in flight: its announce is the one */
+    double sea_want_t;            /* with this sea at or after this time */
     uint32_t sea_seq;
     ocean_result sea_res;
     int sea_done;
@@ -353,6 +355,8 @@ typedef struct notify {
     int close_reason;
     char close_msg[PROTO_BYE_MSG_MAX + 64];
 } notify;
+
+static int sea_same(const proto_sea *a, const proto_sea *b);
 
 static void fail_pending_locked(oc_client *c, pending_query **async_list)
 {
@@ -797,7 +801,11 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
                 c->sea = m.u.sea_state.sea;
                 c->sea_time = m.u.sea_state.effective_time;
                 timeline_add(c, m.u.sea_state.effective_time, &m.u.sea_state.sea);
-                if (c->sea_wait && !c->sea_done) {
+                /* Every client sees every admin's announces: only the one
+                 * of this client's own SET answers it (its sea, entered at
+                 * max(requested, now), PROTOCOL.md SEA_STATE). */
+                if (c->sea_wait && !c->sea_done && sea_same(&m.u.sea_state.sea, &c->sea_want) &&
+                    m.u.sea_state.effective_time >= c->sea_want_t) {
                     c->sea_done = 1;
                     c->sea_res = OCEAN_OK;
                 }
@@ -1857,6 +1865,17 @@ ocean_result oc_client_sea_state(const oc_client *c, proto_sea *out, double *eff
     return have ? OCEAN_OK : OCEAN_ESTATE;
 }
 
+/* Same sea state, the informational hs and tp aside (the server fills
+ * them in). */
+static int sea_same(const proto_sea *a, const proto_sea *b)
+{
+    return a->spectrum == b->spectrum && a->spreading == b->spreading && a->seed == b->seed &&
+           a->wind_u10 == b->wind_u10 && a->wind_dir_deg == b->wind_dir_deg &&
+           a->fetch_m == b->fetch_m && a->depth_m == b->depth_m && a->swell == b->swell &&
+           a->phillips_a == b->phillips_a && a->small_wave_m == b->small_wave_m &&
+           a->choppiness == b->choppiness;
+}
+
 static int pred_sea(oc_client *c, void *arg)
 {
     (void)arg;
@@ -1886,6 +1905,8 @@ ocean_result oc_client_sea_state_set(oc_client *c, const proto_sea *sea, double 
     if (r == OCEAN_OK) {
         c->sea_wait = 1;
         c->sea_done = 0;
+        c->sea_want = *sea;
+        c->sea_want_t = effective_time;
     } else {
         set_local_error(c, r, "cannot send SEA_STATE: %s", err[0] ? err : ocean_strerror(r));
     }
