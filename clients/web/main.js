@@ -23,6 +23,7 @@
 import { Renderer, normalize3 } from './render.js';
 import { FlyCamera } from './camera.js';
 import { CODEC, CUTOFF, LAYOUT } from './protocol.js';
+import { SeaTimeline } from './timeline.js';
 
 const qs = new URLSearchParams(location.search);
 const num = (k, d) => (qs.has(k) && Number.isFinite(Number(qs.get(k))) ? Number(qs.get(k)) : d);
@@ -132,6 +133,18 @@ worker.onerror = (e) => { stats.lastError = `worker: ${e.message}`; stats.state 
 
 let sub = null;
 let lastFrameSim = 0, lastFrameWall = 0, haveFrame = false;
+/* The sea-state timeline (HELLO, then announces ahead of their time): the
+ * renderer's wind and Hs follow the state in force at each frame's time. */
+let seaTimeline = new SeaTimeline();
+let seaShown = null;
+function applySea(sea) {
+    if (!sea || sea === seaShown) return;
+    seaShown = sea;
+    const d = sea.windDirDeg * Math.PI / 180;
+    renderer.wind = [Math.cos(d), Math.sin(d)];
+    if (sea.hs > 0) renderer.hs = sea.hs;
+    stats.sea = sea;
+}
 let pendingFrame = null;
 const latencies = [];
 let sendTimer = null;
@@ -160,9 +173,10 @@ worker.onmessage = (ev) => {
         stats.clientId = m.hello.clientId;
         stats.serverVersion = m.hello.serverVersion;
         stats.hello = { tickRateHz: m.hello.tickRateHz, codecs: m.hello.codecs, sea: m.hello.sea, maxLayers: m.hello.maxLayers, effects: m.hello.effects };
+        seaTimeline = new SeaTimeline();
+        seaTimeline.add(-Infinity, m.hello.sea);
+        applySea(m.hello.sea);
         const d = m.hello.sea.windDirDeg * Math.PI / 180;
-        renderer.wind = [Math.cos(d), Math.sin(d)];
-        if (m.hello.sea.hs > 0) renderer.hs = m.hello.sea.hs;
         /* sun low over the downwind side: glitter on the waves' faces */
         renderer.sunDir = normalize3([Math.cos(d + 0.5), 0.32, Math.sin(d + 0.5)]);
         lastFrameSim = m.simTime;
@@ -214,12 +228,11 @@ worker.onmessage = (ev) => {
         }
         break;
     }
-    case 'sea': {
-        const d = m.sea.windDirDeg * Math.PI / 180;
-        renderer.wind = [Math.cos(d), Math.sin(d)];
-        if (m.sea.hs > 0) renderer.hs = m.sea.hs;
+    case 'sea':
+        /* in force from its effective time, which may be ahead: applied
+         * by the frame whose sim time reaches it */
+        seaTimeline.add(m.effectiveTime, m.sea);
         break;
-    }
     default:
         break;
     }
@@ -293,6 +306,8 @@ function applyFrame(m) {
     lastFrameSim = m.simTime;
     lastFrameWall = performance.now();
     haveFrame = true;
+    applySea(seaTimeline.at(m.simTime));
+    seaTimeline.prune(m.simTime);
     stats.simTime = m.simTime;
     stats.tick = m.tick;
     stats.origin = m.placement ? m.placement.origin.slice() : m.origin;
