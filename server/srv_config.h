@@ -110,6 +110,14 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
  * space may stand for T).  Range: years 1970..9999.  OCEAN_EINVAL with why. */
 ocean_result srv_epoch_parse(const char *text, double *unix_s, char *why, size_t whylen);
 
+/* 1 when s serves a Gerstner near field (effect near-field, waves > 0, a
+ * band above the FFT's k_max): layout 1 then carries it as one more
+ * cascade, after the FFT cascades (PROTOCOL.md "Layouts"). */
+int srv_settings_near_cascade(const srv_settings *s);
+/* Cascades a layout-1 subscription may receive: the FFT's plus the near
+ * field's (HELLO max_layers). */
+int srv_settings_layout1_cascades(const srv_settings *s);
+
 /* Prints the server table with its help as a commented config section. */
 ocean_result srv_config_dump(FILE *f);
 
