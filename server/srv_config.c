@@ -413,6 +413,25 @@ int srv_settings_near_cascade(const srv_settings *s)
     return 2 * M_PI / s->srv.near_field_min_wavelength > s->params.k_max * 1.01;
 }
 
+int srv_settings_near_field(const srv_settings *s, const ocean_params *p, ocean_gerstner_params *gp)
+{
+    ocean_gerstner_params_default(gp);
+    if (!srv_settings_near_cascade(s))
+        return 0;
+    gp->sea = p->sea;
+    gp->seed = p->seed;
+    gp->count = s->srv.near_field_waves;
+    /* the finest cascade stops at k_max (srv_settings_load sets it) */
+    gp->k_lo = p->k_max;
+    gp->k_hi = 2 * M_PI / s->srv.near_field_min_wavelength;
+    /* Snapped to the lattice of a periodic patch whose n-point grid holds
+     * the shortest wave, so layout 1 carries the set as one more cascade
+     * (gerstner.h "Lattice"); meshes and queries use the same snapped
+     * waves, so all of them agree. */
+    gp->lattice_m = ocean_gerstner_lattice_for(p->n, gp->k_hi);
+    return 1;
+}
+
 int srv_settings_layout1_cascades(const srv_settings *s)
 {
     return s->params.cascades + srv_settings_near_cascade(s);
