@@ -211,7 +211,10 @@ static const conf_entry srv_entries[] = {
     {.name = "server.near_field_waves", .type = CONF_INT, .offset = SRV(near_field_waves),
      .min = 0, .max = 1024, .def = "64",
      .help = "Gerstner waves of the near field (scenes with near-field), shorter than the "
-             "finest cascade."},
+             "finest cascade.  They are snapped to the lattice of a periodic patch of "
+             "(ocean.n / 2 - 1) x server.near_field_min_wavelength, which layout 1 carries as "
+             "one more cascade (with ocean.cascades = 4 there is no room: such a scene is "
+             "refused)."},
     {.name = "server.near_field_radius", .type = CONF_DOUBLE, .offset = SRV(near_field_radius),
      .min = 1, .max = 10000, .def = "60", .unit = "m",
      .help = "The near field fades from full strength at half this radius to nothing at it, "
