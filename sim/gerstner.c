@@ -204,18 +204,41 @@ static double annulus_variance(const ocean_sea_state *sea, int nr, const double 
 }
 
 /* Moves wave w onto the lattice 2 pi (i, j) / L (gerstner.h "Lattice"):
- * the wave vector is rebuilt from its integer indices, so an FFT of the
- * L patch holds exactly this wave. */
-static void snap(ocean_gerstner *g, int w, double L)
+ * the nearest lattice point to its drawn wave vector that no earlier wave
+ * holds, within max(|i|, |j|) <= top.  Two waves on one point would be one
+ * wave of amplitude |a1 + a2| (its variance is not a1^2/2 + a2^2/2), so a
+ * taken point sends the wave to the nearest free one.  The wave vector is
+ * rebuilt from the integer indices, so an FFT of the L patch holds exactly
+ * this wave. */
+static void snap(ocean_gerstner *g, int w, double L, long top)
 {
-    double dk = TWO_PI / L;
-    long mx = lround(g->kx[w] / dk), mz = lround(g->kz[w] / dk);
-    if (mx == 0 && mz == 0) /* a wave longer than the patch: keep it one cell out */
-        mx = g->kx[w] >= 0.0 ? 1 : -1;
-    g->mx[w] = (int)mx;
-    g->mz[w] = (int)mz;
-    g->kx[w] = (double)mx * dk;
-    g->kz[w] = (double)mz * dk;
+    double dk = TWO_PI / L, ux = g->kx[w] / dk, uz = g->kz[w] / dk;
+    long cx = lround(ux), cz = lround(uz), bx = cx, bz = cz;
+    for (long r = 0; r <= 16; r++) {
+        double best = INFINITY;
+        for (long i = cx - r; i <= cx + r; i++)
+            for (long j = cz - r; j <= cz + r; j++) {
+                if (labs(i - cx) != r && labs(j - cz) != r)
+                    continue; /* inside: seen at a smaller r */
+                if ((i == 0 && j == 0) || labs(i) > top || labs(j) > top)
+                    continue;
+                int taken = 0;
+                for (int q = 0; q < w && !taken; q++)
+                    taken = g->mx[q] == i && g->mz[q] == j;
+                double d = (i - ux) * (i - ux) + (j - uz) * (j - uz);
+                if (!taken && d < best) {
+                    best = d;
+                    bx = i;
+                    bz = j;
+                }
+            }
+        if (best < INFINITY)
+            break;
+    }
+    g->mx[w] = (int)bx;
+    g->mz[w] = (int)bz;
+    g->kx[w] = (double)bx * dk;
+    g->kz[w] = (double)bz * dk;
     g->k[w] = hypot(g->kx[w], g->kz[w]);
     g->hx[w] = g->kx[w] / g->k[w];
     g->hz[w] = g->kz[w] / g->k[w];
@@ -293,6 +316,9 @@ ocean_result ocean_gerstner_create(const ocean_gerstner_params *p, ocean_gerstne
         }
         g->p.annuli = R;
         double lspan = log(p->k_hi / p->k_lo);
+        /* lattice indices stay within the band's top (|i| dk <= k_hi):
+         * with ocean_gerstner_lattice_for's L that is n/2 - 1 */
+        long top = p->lattice_m > 0.0 ? (long)floor(p->k_hi * p->lattice_m / TWO_PI + 1e-9) : 0;
         int w = 0;
         for (int a = 0; a < R; a++) {
             double ka = a == 0 ? p->k_lo : p->k_lo * exp(lspan * a / R);
@@ -327,7 +353,7 @@ ocean_result ocean_gerstner_create(const ocean_gerstner_params *p, ocean_gerstne
                 g->kx[w] = k * g->hx[w];
                 g->kz[w] = k * g->hz[w];
                 if (p->lattice_m > 0.0)
-                    snap(g, w, p->lattice_m);
+                    snap(g, w, p->lattice_m, top);
                 k = g->k[w];
                 g->omega[w] = ocean_dispersion(k, p->sea.depth_m);
                 g->amp[w] = amp;

@@ -35,10 +35,11 @@
  * draw, each wave vector is moved to the nearest point 2 pi (i, j) / L of
  * the lattice of a periodic patch of side L, and w follows the moved |k|.
  * Amplitudes, phases and cells are kept, so the variance stays exactly the
- * band's; a wave moves by at most pi sqrt 2 / L in k (2.3 % at the band's
- * lower edge for ship-bridge's L = 12.7 m, 15 rad/m).  Two waves may land
- * on one lattice point; they stay two terms of the sum (an FFT adds their
- * complex amplitudes, the same thing).  Every user of the set - tiles,
+ * band's; a wave moves to the nearest lattice point no earlier wave holds
+ * (two waves on one point would be one wave whose variance is not the sum
+ * of theirs), so by pi sqrt 2 / L in k unless its point was taken (2.3 %
+ * at the band's lower edge for ship-bridge's L = 12.7 m, 15 rad/m), and
+ * never beyond |i|, |j| <= k_hi L / 2 pi.  Every user of the set - tiles,
  * meshes, queries - sees the moved waves, so they all agree.
  *
  * Surface (a wave's phase th = k.x0 - w t + phi, w from the finite-depth

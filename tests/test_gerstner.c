@@ -867,6 +867,7 @@ static void lattice_snapping_keeps_variance(void **state)
     q.lattice_m = 0.0;
     ocean_gerstner *free_set = make(&q);
     double dk = 2 * M_PI / L, v = 0.0;
+    int moved = 0;
     for (int i = 0; i < ocean_gerstner_count(g); i++) {
         ocean_gerstner_wave w, w0;
         assert_int_equal(ocean_gerstner_get_wave(g, i, &w), OCEAN_OK);
@@ -875,7 +876,19 @@ static void lattice_snapping_keeps_variance(void **state)
         assert_close(w.kx, w.mx * dk, 1e-12 * w.k);
         assert_close(w.kz, w.mz * dk, 1e-12 * w.k);
         assert_close(w.k, hypot(w.kx, w.kz), 1e-12 * w.k);
-        assert_true(hypot(w.kx - w0.kx, w.kz - w0.kz) <= M_SQRT1_2 * dk * (1 + 1e-12));
+        /* the nearest lattice point, unless an earlier wave holds it */
+        long rx = lround(w0.kx / dk), rz = lround(w0.kz / dk);
+        int held = 0;
+        for (int q = 0; q < i; q++) {
+            ocean_gerstner_wave e;
+            ocean_gerstner_get_wave(g, q, &e);
+            assert_false(e.mx == w.mx && e.mz == w.mz); /* every point holds one wave */
+            held |= e.mx == rx && e.mz == rz;
+        }
+        if (held)
+            moved++;
+        else
+            assert_true(hypot(w.kx - w0.kx, w.kz - w0.kz) <= M_SQRT1_2 * dk * (1 + 1e-12));
         assert_close(w.omega, ocean_dispersion(w.k, p.sea.depth_m), 1e-12 * w.omega);
         assert_close(w.amplitude, w0.amplitude, 0.0);
         assert_close(w.phase, w0.phase, 0.0);
@@ -884,6 +897,37 @@ static void lattice_snapping_keeps_variance(void **state)
     double ref = band_integral_1d(&p.sea, p.k_lo, p.k_hi);
     assert_close(v, ref, 1e-9 * ref);
     assert_close(ocean_gerstner_variance(g, NULL), ref, 1e-9 * ref);
+    print_message("lattice %.4g m: %d of %d waves moved past a taken point\n", L, moved,
+                  ocean_gerstner_count(g));
+    /* a coarse lattice (a 3.1 m patch, 64 waves from 3.7 rad/m): points
+     * are shared often, and still every wave gets its own */
+    ship_bridge_near_field(&q, 64);
+    q.k_lo = M_PI * 64 / (1000.0 / (4.3 * 4.3));
+    ocean_gerstner *coarse = make(&q);
+    double cdk = 2 * M_PI / q.lattice_m;
+    q.lattice_m = 0.0;
+    ocean_gerstner *coarse_free = make(&q);
+    int shared = 0;
+    for (int i = 0; i < ocean_gerstner_count(coarse); i++) {
+        ocean_gerstner_wave a_, b_, f_;
+        ocean_gerstner_get_wave(coarse, i, &a_);
+        ocean_gerstner_get_wave(coarse_free, i, &f_);
+        assert_true(abs(a_.mx) <= 31 && abs(a_.mz) <= 31);
+        long rx = lround(f_.kx / cdk), rz = lround(f_.kz / cdk);
+        int held = 0;
+        for (int j = 0; j < i; j++) {
+            ocean_gerstner_get_wave(coarse, j, &b_);
+            assert_false(a_.mx == b_.mx && a_.mz == b_.mz);
+            held |= b_.mx == rx && b_.mz == rz;
+        }
+        shared += held;
+    }
+    print_message("lattice 3.1 m: %d of %d waves found their nearest point taken\n", shared,
+                  ocean_gerstner_count(coarse));
+    assert_true(shared > 0);
+    ocean_gerstner_destroy(coarse_free);
+    ocean_gerstner_destroy(coarse);
+    q = p;
     /* hostile lattice sides */
     q.lattice_m = -1.0;
     ocean_gerstner *bad = NULL;
