@@ -618,6 +618,18 @@ static void cascade_near_field_ship_bridge(void **state)
             }
             print_message("3 m: %d near-field tiles, %d samples checked against the Gerstner sum\n", near_tiles,
                           checked);
+            /* what a tile costs, per cascade (the planner's qz model: 0.48 B per sample and plane) */
+            for (int k = 0; k < 4; k++) {
+                double bytes = 0, samples = 0;
+                for (int t = 0; t < f->info.tile_count; t++)
+                    if (f->tiles[t].info.cascade == k) {
+                        bytes += f->tiles[t].info.payload_len;
+                        samples += (double)f->tiles[t].info.width * f->tiles[t].info.height *
+                                   proto_tile_planes(f->tiles[t].info.channels);
+                    }
+                if (samples > 0)
+                    print_message("3 m: cascade %d: %.3f B per sample and plane\n", k, bytes / samples);
+            }
             assert_true(near_tiles > 0);
             assert_true(checked > 0);
         } else {
