@@ -5,8 +5,10 @@
  *   1. plan every job: from its camera, the (cascade, mip) pairs it reads
  *      and the tile index ranges of each (PROTOCOL.md "Where each mip is
  *      read"; the daemon and every client apply the same rule);
- *   2. per distinct time: evaluate each needed mip level once (all cascades
- *      in one ocean_evaluate, each at its own cutoff), then encode the
+ *   2. per distinct time: evaluate each needed mip level once (all FFT
+ *      cascades in one ocean_evaluate, each at its own cutoff; the near
+ *      field's lattice cascade, the last, in its own, only when a tile of
+ *      it is missing), then encode the
  *      tiles no earlier job of this tick asked for, in parallel, straight
  *      into FRAME records (proto_tile_record_encode);
  *   3. per job: the cascade block, the records, the mesh placement (and a
