@@ -5,8 +5,10 @@
  *   1. plan every job: from its camera, the (cascade, mip) pairs it reads
  *      and the tile index ranges of each (PROTOCOL.md "Where each mip is
  *      read"; the daemon and every client apply the same rule);
- *   2. per distinct time: evaluate each needed mip level once (all cascades
- *      in one ocean_evaluate, each at its own cutoff), then encode the
+ *   2. per distinct time: evaluate each needed mip level once (all FFT
+ *      cascades in one ocean_evaluate, each at its own cutoff; the near
+ *      field's lattice cascade, the last, in its own, only when a tile of
+ *      it is missing), then encode the
  *      tiles no earlier job of this tick asked for, in parallel, straight
  *      into FRAME records (proto_tile_record_encode);
  *   3. per job: the cascade block, the records, the mesh placement (and a
@@ -30,20 +32,28 @@
 #define MAX_MIPS PROTO_MAX_MIPS
 
 
-/* Time-independent facts of the current ocean (per filter order). */
+/* Time-independent facts of the current ocean (per filter order).  The
+ * layout-1 cascades are the FFT's (0 .. fft - 1) and, when the sea has a
+ * near field, its lattice cascade (index fft, the finest): a periodic
+ * patch like any other, so the same mips, moments, planning and tiles
+ * serve it. */
 typedef struct tables {
     const ocean *oc;
+    const ocean *nf;       /* the near field's lattice cascade, or NULL */
     int order;
-    int cascades, n;
-    double patch[OCEAN_MAX_CASCADES];
-    int mips[OCEAN_MAX_CASCADES];
-    double kc[OCEAN_MAX_CASCADES][MAX_MIPS];
+    int cascades, n;       /* cascades = fft + (nf != NULL) */
+    int fft;               /* FFT cascades */
+    double patch[PROTO_MAX_LAYERS];
+    int mips[PROTO_MAX_LAYERS];
+    double kc[PROTO_MAX_LAYERS][MAX_MIPS];
     /* mip table entries: [m] for m < mips = what mip m lacks; [mips] = all */
-    proto_mip_entry entry[OCEAN_MAX_CASCADES][PROTO_MIP_ENTRIES];
-    double var_removed[OCEAN_MAX_CASCADES][PROTO_MIP_ENTRIES];
-    double total_var;      /* all cascades, m^2 */
+    proto_mip_entry entry[PROTO_MAX_LAYERS][PROTO_MIP_ENTRIES];
+    double var_removed[PROTO_MAX_LAYERS][PROTO_MIP_ENTRIES];
+    double total_var;      /* the FFT cascades, m^2 */
+    double nf_var;         /* the near-field cascade, m^2 */
     const ocean_gerstner *g;
-    double near_mss[3];    /* the Gerstner near field's slope moments */
+    double near_mss[3];    /* the Gerstner near field's slope moments (shading
+                              only when there is no near-field cascade) */
     double tail_mss[3];    /* the short-wave tail beyond the shortest simulated wave */
 } tables;
 
@@ -51,8 +61,10 @@ typedef struct tables {
 struct srv_cascade {
     tables tab;
     int tab_valid;
-    ocean_frame *mipf[MAX_MIPS];  /* mip level m of every cascade, this batch */
+    ocean_frame *mipf[MAX_MIPS];  /* mip level m of every FFT cascade, this batch */
+    ocean_frame *nff[MAX_MIPS];   /* mip level m of the near-field cascade */
     srv_tile_cache *cache; /* the encoded records, key layout 1 */
+    const ocean *nf_in;    /* the near-field ocean the tables were made with */
 };
 
 /* A job's plan: which tiles of which mips. */
@@ -62,11 +74,13 @@ typedef struct range {
 
 typedef struct plan {
     int ok;
-    int layers;
+    int ncas;              /* cascades this subscription may have: the FFT's, and the
+                              near field's when it asks for that effect */
+    int layers;            /* those it gets (its SUBSCRIBE.layers) */
     double q, min_spacing;
     unsigned channels;
-    int need[OCEAN_MAX_CASCADES][MAX_MIPS];
-    range r[OCEAN_MAX_CASCADES][MAX_MIPS];
+    int need[PROTO_MAX_LAYERS][MAX_MIPS];
+    range r[PROTO_MAX_LAYERS][MAX_MIPS];
     int tiles;
     srv_tile **list;       /* the records, in frame order */
     int has_mesh;
@@ -100,8 +114,10 @@ void srv_cascade_destroy(srv_cascade *k)
     if (!k)
         return;
     srv_tiles_destroy(k->cache);
-    for (int m = 0; m < MAX_MIPS; m++)
+    for (int m = 0; m < MAX_MIPS; m++) {
         ocean_frame_destroy(k->mipf[m]);
+        ocean_frame_destroy(k->nff[m]);
+    }
     free(k);
 }
 
@@ -135,14 +151,14 @@ uint32_t srv_cascade_max_tiles(const ocean_params *p, int layers, int tile_size)
 
 /* ---- tables -------------------------------------------------------------- */
 
-static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstner *g, int order)
+static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstner *g, const ocean *nf,
+                                int order)
 {
     memset(tb, 0, sizeof *tb);
     tb->g = g;
     /* A Gerstner wave A cos(k.x - w t + phi) has mean-square slopes
-     * A^2 kx^2 / 2, A^2 kz^2 / 2 and cross moment A^2 kx kz / 2.  The near
-     * field is not in cascade tiles: its slopes travel as unresolved
-     * roughness. */
+     * A^2 kx^2 / 2, A^2 kz^2 / 2 and cross moment A^2 kx kz / 2: what
+     * shading carries of a near field that has no cascade. */
     for (int i = 0; g && i < ocean_gerstner_count(g); i++) {
         ocean_gerstner_wave w;
         if (ocean_gerstner_get_wave(g, i, &w) != OCEAN_OK) continue;
@@ -154,7 +170,11 @@ static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstne
     const ocean_params *p = ocean_get_params(oc);
     tb->oc = oc;
     tb->order = order;
-    tb->cascades = p->cascades;
+    tb->fft = p->cascades;
+    /* the near-field cascade needs a slot in the protocol's cascade block
+     * (srv_settings_load refuses a scene without one) and the same grid */
+    tb->nf = nf && p->cascades < PROTO_MAX_LAYERS && ocean_get_params(nf)->n == p->n ? nf : NULL;
+    tb->cascades = p->cascades + (tb->nf != NULL);
     tb->n = p->n;
     /* The waves shorter than any the simulation holds (the sea state's
      * spectrum to 10 cm, then Elfouhaily et al. 1997's B_h to 1 mm;
@@ -168,15 +188,18 @@ static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstne
         tb->tail_mss[2] = ss.tail.mss_xz;
     }
     ocean_slope_table_destroy(st);
-    for (int c = 0; c < p->cascades; c++) {
+    for (int c = 0; c < tb->cascades; c++) {
         double klo, khi;
-        ocean_cascade_band(oc, c, &tb->patch[c], &klo, &khi);
-        ocean_result r = ocean_cascade_mips(oc, c, order, MAX_MIPS, &tb->mips[c], tb->kc[c]);
+        /* the near-field cascade is cascade 0 of its own ocean */
+        const ocean *src = c < tb->fft ? oc : tb->nf;
+        int sc = c < tb->fft ? c : 0;
+        ocean_cascade_band(src, sc, &tb->patch[c], &klo, &khi);
+        ocean_result r = ocean_cascade_mips(src, sc, order, MAX_MIPS, &tb->mips[c], tb->kc[c]);
         if (r != OCEAN_OK)
             return r;
         for (int m = 0; m <= tb->mips[c]; m++) {
             ocean_moments mo;
-            r = ocean_cascade_moments(oc, c, m < tb->mips[c] ? tb->kc[c][m] : 0.0, order, &mo);
+            r = ocean_cascade_moments(src, sc, m < tb->mips[c] ? tb->kc[c][m] : 0.0, order, &mo);
             if (r != OCEAN_OK)
                 return r;
             proto_mip_entry *e = &tb->entry[c][m];
@@ -185,8 +208,10 @@ static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstne
             e->mss_z = (float)mo.mss_z;
             e->mss_xz = (float)mo.mss_xz;
             tb->var_removed[c][m] = mo.var_h;
-            if (m == tb->mips[c])
-                tb->total_var += mo.total_var_h;
+            if (m == tb->mips[c]) {
+                if (c < tb->fft) tb->total_var += mo.total_var_h;
+                else tb->nf_var = mo.total_var_h;
+            }
         }
     }
     return OCEAN_OK;
@@ -357,7 +382,8 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
     memset(pl->need, 0, sizeof pl->need);
     pl->tiles = 0;
     double samples = 0;
-    pl->layers = sub->layers < tb->cascades ? sub->layers : tb->cascades;
+    pl->ncas = tb->fft + (tb->nf && (sub->effects & PROTO_FX_NEAR_FIELD) ? 1 : 0);
+    pl->layers = sub->layers < pl->ncas ? sub->layers : pl->ncas;
     pl->q = q;
     /* The velocity policy's cutoff as a floor on the spacing read: a mip
      * whose cutoff lies above it is not needed (kc of mip m is pi / (2 sigma_m)). */
@@ -408,7 +434,8 @@ static void tile_build(srv_tile *t, const ocean_frame *f, const tables *tb)
 {
     const srv_tile_key *k = &t->key;
     t->ready = 1;
-    const ocean_field *fd = ocean_frame_field(f, k->cascade);
+    /* the near-field cascade is cascade 0 of its own frame */
+    const ocean_field *fd = ocean_frame_field(f, k->cascade < tb->fft ? k->cascade : 0);
     int np = tb->n >> k->level, T = k->size;
     if (!fd || fd->n < np || fd->n % np) {
         t->result = OCEAN_ESTATE;
@@ -501,11 +528,14 @@ static void tile_build(srv_tile *t, const ocean_frame *f, const tables *tb)
  * there (PROTOCOL.md), blended between mips as a client blends them. */
 static double nadir_error(const tables *tb, const plan *pl, const proto_camera *cam)
 {
-    if (!(tb->total_var > 0))
+    /* the sea this subscription is served: the near field's variance
+     * counts when it asks for that effect */
+    double total = tb->total_var + (pl->ncas > tb->fft ? tb->nf_var : 0.0);
+    if (!(total > 0))
         return 0.0;
     double s = fmax(pl->min_spacing, pl->q * fmax(fabs(cam->pos[1]), 1.0));
     double miss = 0.0;
-    for (int c = 0; c < tb->cascades; c++) {
+    for (int c = 0; c < pl->ncas; c++) {
         int M = tb->mips[c];
         if (c >= pl->layers) {
             miss += tb->var_removed[c][M];
@@ -525,7 +555,7 @@ static double nadir_error(const tables *tb, const plan *pl, const proto_camera *
         }
         miss += v;
     }
-    double e = miss / tb->total_var;
+    double e = miss / total;
     return e < 0 ? 0 : e > 1 ? 1 : e;
 }
 
@@ -635,12 +665,16 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
         e->fades = c > 0;
         for (int q = 0; q <= tb->mips[c]; q++) e->mip[q] = tb->entry[c][q];
     }
+    /* The near field is the last cascade when the sea has one: its
+     * moments are in its mip table (where geometry does not resolve it,
+     * the lod rule reads them there), never again in the tail.  Without a
+     * cascade its slopes shade only. */
     for (int i = 0; i < 3; i++) {
         b->tail_mss[i] = (float)tb->tail_mss[i];
-        if (sub->effects & PROTO_FX_NEAR_FIELD) b->tail_mss[i] += (float)tb->near_mss[i];
+        if ((sub->effects & PROTO_FX_NEAR_FIELD) && !tb->nf) b->tail_mss[i] += (float)tb->near_mss[i];
     }
     /* cascades the subscription leaves out: their slopes only shade */
-    for (int c = pl->layers; c < tb->cascades; c++) {
+    for (int c = pl->layers; c < pl->ncas; c++) {
         const proto_mip_entry *all = &tb->entry[c][tb->mips[c]];
         b->tail_mss[0] += all->mss_x;
         b->tail_mss[1] += all->mss_z;
@@ -675,7 +709,7 @@ static int same_frame(const srv_cascade_job *a, const plan *pa, const srv_cascad
 {
     const proto_subscribe *x = &a->c->sim.sub, *y = &b->c->sim.sub;
     if (a->t != b->t || a->tick != b->tick || a->policy_k != b->policy_k || pa->tiles != pb->tiles ||
-        pa->has_mesh != pb->has_mesh || pa->layers != pb->layers || pa->q != pb->q ||
+        pa->has_mesh != pb->has_mesh || pa->layers != pb->layers || pa->ncas != pb->ncas || pa->q != pb->q ||
         pa->min_spacing != pb->min_spacing || x->effects != y->effects || memcmp(a->cam.pos, b->cam.pos, sizeof a->cam.pos))
         return 0;
     if (pa->has_mesh && (pa->mv.topology_key != pb->mv.topology_key ||
@@ -684,15 +718,43 @@ static int same_frame(const srv_cascade_job *a, const plan *pa, const srv_cascad
     return pa->tiles == 0 || memcmp(pa->list, pb->list, sizeof *pa->list * (size_t)pa->tiles) == 0;
 }
 
+/* One mip level m of the near-field cascade, when a tile of it is
+ * missing: the near field is simulated only for a live layout-1 viewer
+ * whose camera resolves it. */
+static ocean_result eval_near_mip(srv_cascade *k, ocean *nf, const tables *tb, double t, int m,
+                                  unsigned fx, srv_stats *st)
+{
+    int c = tb->fft;
+    if (!k->nff[m]) {
+        ocean_result r = ocean_frame_create(nf, &k->nff[m]);
+        if (r != OCEAN_OK) return r;
+    }
+    ocean_request rq;
+    memset(&rq, 0, sizeof rq);
+    rq.effects[0] = fx & ~(unsigned)OCEAN_FX_FOAM; /* foam travels with cascade 0 */
+    rq.cascade_cutoff_k[0] = m < tb->mips[c] ? tb->kc[c][m] : 0.0;
+    rq.cutoff_k = INFINITY;
+    rq.order = tb->order;
+    rq.low_boost = 1.0;
+    rq.per_cascade = 1;
+    ocean_result r = ocean_evaluate(nf, t, &rq, k->nff[m]);
+    if (r == OCEAN_OK) atomic_fetch_add(&st->evaluations, 1);
+    return r;
+}
+
 /* Evaluates the mips needed at time t (need_fx[c][m]: ocean effects). */
-static ocean_result eval_mips(srv_cascade *k, ocean *oc, const tables *tb, double t,
-                              unsigned need_fx[OCEAN_MAX_CASCADES][MAX_MIPS], srv_stats *st)
+static ocean_result eval_mips(srv_cascade *k, ocean *oc, ocean *nf, const tables *tb, double t,
+                              unsigned need_fx[PROTO_MAX_LAYERS][MAX_MIPS], srv_stats *st)
 {
     for (int m = 0; m < MAX_MIPS; m++) {
+        if (tb->nf && need_fx[tb->fft][m]) {
+            ocean_result r = eval_near_mip(k, nf, tb, t, m, need_fx[tb->fft][m], st);
+            if (r != OCEAN_OK) return r;
+        }
         ocean_request rq;
         memset(&rq, 0, sizeof rq);
         int any = 0;
-        for (int c = 0; c < tb->cascades; c++) {
+        for (int c = 0; c < tb->fft; c++) {
             rq.effects[c] = need_fx[c][m];
             rq.cascade_cutoff_k[c] = m < tb->mips[c] ? tb->kc[c][m] : 0.0;
             if (need_fx[c][m]) any = 1;
@@ -714,18 +776,21 @@ static ocean_result eval_mips(srv_cascade *k, ocean *oc, const tables *tb, doubl
     return OCEAN_OK;
 }
 
-void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int order, const srv_config *cfg,
-                     srv_stats *st, srv_cascade_job *jobs, int n, uint64_t gen)
+void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *nf, int order,
+                     const srv_config *cfg, srv_stats *st, srv_cascade_job *jobs, int n, uint64_t gen)
 {
     if (n <= 0) return;
-    if (!k->tab_valid || k->tab.oc != oc || k->tab.g != g || k->tab.order != order) {
+    if (!k->tab_valid || k->tab.oc != oc || k->tab.g != g || k->nf_in != nf || k->tab.order != order) {
         /* a new ocean: its frames have other grids, its tiles other bytes */
         for (int m = 0; m < MAX_MIPS; m++) {
             ocean_frame_destroy(k->mipf[m]);
             k->mipf[m] = NULL;
+            ocean_frame_destroy(k->nff[m]);
+            k->nff[m] = NULL;
         }
         srv_tiles_clear(k->cache);
-        if (tables_make(&k->tab, oc, g, order) != OCEAN_OK) {
+        k->nf_in = nf;
+        if (tables_make(&k->tab, oc, g, nf, order) != OCEAN_OK) {
             k->tab_valid = 0;
             for (int i = 0; i < n; i++)
                 srv_client_send_error(jobs[i].c, NULL, 0, OCEAN_ESTATE, "cascade tables unavailable");
@@ -759,7 +824,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
     for (int i0 = 0; i0 < n && done; i0++) {
         if (done[i0]) continue;
         double t = jobs[i0].t;
-        unsigned need_fx[OCEAN_MAX_CASCADES][MAX_MIPS];
+        unsigned need_fx[PROTO_MAX_LAYERS][MAX_MIPS];
         memset(need_fx, 0, sizeof need_fx);
         size_t nmiss = 0;
         for (int i = i0; i < n; i++) {
@@ -816,14 +881,15 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, int ord
         if (!nmiss) continue;
         /* A tile cached under another channel set is a distinct key, so
          * every missing tile's mip is evaluated with its channels. */
-        ocean_result r = eval_mips(k, oc, tb, t, need_fx, st);
+        ocean_result r = eval_mips(k, oc, nf, tb, t, need_fx, st);
         if (r != OCEAN_OK) {
             for (size_t q = 0; q < nmiss; q++) missing[q]->result = r;
             continue;
         }
 #pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
         for (size_t q = 0; q < nmiss; q++)
-            tile_build(missing[q], k->mipf[missing[q]->key.level], tb);
+            tile_build(missing[q], missing[q]->key.cascade < tb->fft ? k->mipf[missing[q]->key.level]
+                                                                     : k->nff[missing[q]->key.level], tb);
         atomic_fetch_add(&st->tiles_encoded, (uint64_t)nmiss);
     }
     free(missing);

@@ -60,12 +60,15 @@ uint32_t srv_cascade_max_tiles(const ocean_params *p, int layers, int tile_size)
  * gen; entries unused for a generation are dropped by the caller's sweep
  * through srv_cascade_sweep), assembles each frame.  Jobs of identical
  * cameras share one encoding.  order is the Butterworth order of the mips;
- * g (may be NULL) the Gerstner near field, whose slopes are carried as
- * unresolved moments.
+ * g (may be NULL) the Gerstner near field and nf (may be NULL) the same
+ * waves as a lattice cascade (ocean_gerstner_cascade_create): layout 1
+ * lists it as the last cascade, after oc's, for subscriptions with the
+ * near-field effect, and evaluates it only when one of its tiles is
+ * needed.  Without nf the near field's slopes travel in tail_mss.
  * Errors go to the client as ERROR messages;
  * a job whose frame could not be built has frame NULL. */
 struct ocean_gerstner;
-void srv_cascade_run(srv_cascade *k, ocean *oc, const struct ocean_gerstner *g, int order,
+void srv_cascade_run(srv_cascade *k, ocean *oc, const struct ocean_gerstner *g, ocean *nf, int order,
                      const srv_config *cfg, srv_stats *st, srv_cascade_job *jobs, int n, uint64_t gen);
 
 /* Drops cached tiles last used before generation keep_from. */

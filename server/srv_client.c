@@ -655,7 +655,8 @@ void srv_client_send_hello(srv_client *c)
     o->max_query_points = (uint32_t)s->srv.max_query_points < fit ? (uint32_t)s->srv.max_query_points : fit;
     o->max_tile_size = (uint16_t)s->srv.max_tile_size;
     o->max_lod_levels = (uint8_t)s->srv.max_lod_levels;
-    o->max_layers = (uint8_t)s->params.cascades;
+    /* layout 1 counts the near-field cascade as one more layer */
+    o->max_layers = (uint8_t)srv_settings_layout1_cascades(s);
     o->tick_rate_hz = (float)s->srv.tick_rate;
     /* frames go out on ticks: no faster than the tick rate */
     o->max_frame_rate_hz = (float)fmin(s->srv.max_frame_rate, s->srv.tick_rate);
@@ -752,7 +753,9 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
                      "needs layout 0", mesh_kind_name((mesh_kind)sub->mesh_kind));
             return OCEAN_EUNSUPPORTED;
         }
-        uint32_t most = srv_cascade_max_tiles(&s->params, sub->layers, s->srv.cascade_tile);
+        ocean_params served = s->params;
+        served.cascades = srv_settings_layout1_cascades(s); /* with the near field's */
+        uint32_t most = srv_cascade_max_tiles(&served, sub->layers, s->srv.cascade_tile);
         if (most > PROTO_MAX_FRAME_TILES) {
             snprintf(why, n, "layout 1: a frame could need %u tiles of server.cascade_tile %d samples, above "
                      "the protocol's %u", most, s->srv.cascade_tile, PROTO_MAX_FRAME_TILES);
@@ -775,7 +778,8 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
         }
     }
     sub->effects = (uint8_t)eff;
-    if (sub->layers > s->params.cascades) sub->layers = (uint8_t)s->params.cascades;
+    int most_layers = sub->layout == PROTO_LAYOUT_CASCADE ? srv_settings_layout1_cascades(s) : s->params.cascades;
+    if (sub->layers > most_layers) sub->layers = (uint8_t)most_layers;
     return OCEAN_OK;
 }
 

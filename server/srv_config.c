@@ -17,6 +17,7 @@
 #include <sys/stat.h>
 
 #include "codec.h"
+#include "proto.h"
 
 #define SRV(f) offsetof(srv_config, f)
 
@@ -212,7 +213,10 @@ static const conf_entry srv_entries[] = {
     {.name = "server.near_field_waves", .type = CONF_INT, .offset = SRV(near_field_waves),
      .min = 0, .max = 1024, .def = "64",
      .help = "Gerstner waves of the near field (scenes with near-field), shorter than the "
-             "finest cascade."},
+             "finest cascade.  They are snapped to the lattice of a periodic patch of "
+             "(ocean.n / 2 - 1) x server.near_field_min_wavelength, which layout 1 carries as "
+             "one more cascade (with ocean.cascades = 4 there is no room: such a scene is "
+             "refused)."},
     {.name = "server.near_field_radius", .type = CONF_DOUBLE, .offset = SRV(near_field_radius),
      .min = 1, .max = 10000, .def = "60", .unit = "m",
      .help = "The near field fades from full strength at half this radius to nothing at it, "
@@ -377,6 +381,21 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
         r = ocean_params_validate(&tmp->params, msg, sizeof msg);
         if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", path ? path : "(defaults)", msg);
     }
+    /* Layout 1 carries the near field as one more periodic cascade after
+     * the FFT's (srv_cascade.c); the protocol's cascade block holds
+     * PROTO_MAX_LAYERS, so a scene needing more is refused here, with the
+     * numbers, rather than served without its near field in silence. */
+    if (r == OCEAN_OK && srv_settings_near_cascade(tmp) &&
+        tmp->params.cascades + 1 > PROTO_MAX_LAYERS) {
+        char msg[400];
+        snprintf(msg, sizeof msg, "ocean.cascades = %d with the near-field effect (server.near_field_waves = %d) "
+                 "needs %d layout-1 cascades (the near field is one more), above the protocol's %d: use "
+                 "ocean.cascades <= %d, server.near_field_waves = 0, or drop near-field from scene.effects",
+                 tmp->params.cascades, tmp->srv.near_field_waves, tmp->params.cascades + 1, PROTO_MAX_LAYERS,
+                 PROTO_MAX_LAYERS - 1);
+        set_err(err, errlen, "%s: %s", path ? path : "(defaults)", msg);
+        r = OCEAN_EINVAL;
+    }
     if (r == OCEAN_OK && tmp->srv.epoch[0]) {
         double e;
         char msg[200];
@@ -404,6 +423,38 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
     }
     free(tmp);
     return r;
+}
+
+int srv_settings_near_cascade(const srv_settings *s)
+{
+    if (!(s->effects & OCEAN_FX_NEAR_FIELD) || s->srv.near_field_waves <= 0 || !isfinite(s->params.k_max))
+        return 0;
+    /* the same test as the daemon's make_ocean: a band at least 1 % wide */
+    return 2 * M_PI / s->srv.near_field_min_wavelength > s->params.k_max * 1.01;
+}
+
+int srv_settings_near_field(const srv_settings *s, const ocean_params *p, ocean_gerstner_params *gp)
+{
+    ocean_gerstner_params_default(gp);
+    if (!srv_settings_near_cascade(s))
+        return 0;
+    gp->sea = p->sea;
+    gp->seed = p->seed;
+    gp->count = s->srv.near_field_waves;
+    /* the finest cascade stops at k_max (srv_settings_load sets it) */
+    gp->k_lo = p->k_max;
+    gp->k_hi = 2 * M_PI / s->srv.near_field_min_wavelength;
+    /* Snapped to the lattice of a periodic patch whose n-point grid holds
+     * the shortest wave, so layout 1 carries the set as one more cascade
+     * (gerstner.h "Lattice"); meshes and queries use the same snapped
+     * waves, so all of them agree. */
+    gp->lattice_m = ocean_gerstner_lattice_for(p->n, gp->k_hi);
+    return 1;
+}
+
+int srv_settings_layout1_cascades(const srv_settings *s)
+{
+    return s->params.cascades + srv_settings_near_cascade(s);
 }
 
 ocean_result srv_config_dump(FILE *f)

@@ -16,6 +16,7 @@
 #include <stdio.h>
 
 #include "conf.h"
+#include "gerstner.h"
 #include "ocean_conf.h"
 
 #define SRV_PATH_MAX 512
@@ -109,6 +110,21 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
  * "YYYY-MM-DDTHH:MM:SS[.frac]" ending in Z or an offset +HH:MM / -HH:MM (a
  * space may stand for T).  Range: years 1970..9999.  OCEAN_EINVAL with why. */
 ocean_result srv_epoch_parse(const char *text, double *unix_s, char *why, size_t whylen);
+
+/* 1 when s serves a Gerstner near field (effect near-field, waves > 0, a
+ * band above the FFT's k_max): layout 1 then carries it as one more
+ * cascade, after the FFT cascades (PROTOCOL.md "Layouts"). */
+int srv_settings_near_cascade(const srv_settings *s);
+/* The Gerstner near field the daemon serves with settings s and sea/ocean
+ * p (the sea in force: p->sea may differ from s->params.sea after a
+ * SEA_STATE change): 1 and *gp filled when there is one, 0 otherwise.  The
+ * one definition the daemon, its tests and benchmarks build the same set
+ * from. */
+int srv_settings_near_field(const srv_settings *s, const ocean_params *p, ocean_gerstner_params *gp);
+
+/* Cascades a layout-1 subscription may receive: the FFT's plus the near
+ * field's (HELLO max_layers). */
+int srv_settings_layout1_cascades(const srv_settings *s);
 
 /* Prints the server table with its help as a commented config section. */
 ocean_result srv_config_dump(FILE *f);

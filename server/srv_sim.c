@@ -81,11 +81,13 @@ struct srv_sim {
     uint64_t set_gen;
     ocean *oc;
     ocean_gerstner *g;
+    ocean *nf;                  /* the near field as a lattice cascade (layout 1), or NULL */
     ocean_filter_config fcfg;
     ocean_filter_buckets buckets;
     double lambda_dom;
     ocean *next_oc;             /* pending sea change */
     ocean_gerstner *next_g;
+    ocean *next_nf;
     ocean_params next_params;
     double next_eff;
     uint64_t sea_gen;           /* hub.sea_gen last seen */
@@ -104,10 +106,11 @@ struct srv_sim {
 /* ---- ocean construction ----------------------------------------------------- */
 
 static ocean_result make_ocean(const srv_settings *s, const ocean_params *p, ocean **oc,
-                               ocean_gerstner **g, char *msg, size_t msglen)
+                               ocean_gerstner **g, ocean **nf, char *msg, size_t msglen)
 {
     *oc = NULL;
     *g = NULL;
+    *nf = NULL;
     ocean_result r = ocean_create(p, oc, msg, msglen);
     if (r != OCEAN_OK) return r;
     /* The scene plan's warnings go to the log (its refusals stopped
@@ -121,21 +124,18 @@ static ocean_result make_ocean(const srv_settings *s, const ocean_params *p, oce
                              2 * M_PI / s->srv.near_field_min_wavelength, s->srv.base_spacing};
     ocean_plan_ocean(*oc, &sv, &plan);
     ocean_plan_print(&plan, stderr, "oceand: scene plan");
-    if ((s->effects & OCEAN_FX_NEAR_FIELD) && s->srv.near_field_waves > 0) {
-        ocean_gerstner_params gp;
-        ocean_gerstner_params_default(&gp);
-        gp.sea = p->sea;
-        gp.seed = p->seed;
-        gp.count = s->srv.near_field_waves;
-        gp.k_lo = khi;
-        gp.k_hi = 2 * M_PI / s->srv.near_field_min_wavelength;
-        if (isfinite(gp.k_lo) && gp.k_hi > gp.k_lo * 1.01) {
-            r = ocean_gerstner_create(&gp, g, msg, msglen);
-            if (r != OCEAN_OK) {
-                ocean_destroy(*oc);
-                *oc = NULL;
-                return r;
-            }
+    ocean_gerstner_params gp;
+    if (srv_settings_near_field(s, p, &gp)) {
+        gp.k_lo = khi; /* = p->k_max: the finest cascade's edge */
+        r = ocean_gerstner_create(&gp, g, msg, msglen);
+        if (r == OCEAN_OK)
+            r = ocean_gerstner_cascade_create(*g, p, nf, msg, msglen);
+        if (r != OCEAN_OK) {
+            ocean_gerstner_destroy(*g);
+            *g = NULL;
+            ocean_destroy(*oc);
+            *oc = NULL;
+            return r;
         }
     }
     return OCEAN_OK;
@@ -167,7 +167,7 @@ ocean_result srv_sim_create(srv_hub *h, srv_sim **out, char *msg, size_t msglen)
     s->set = h->settings;
     s->set_gen = h->settings_gen;
     pthread_mutex_unlock(&h->lock);
-    ocean_result r = make_ocean(&s->set, &s->set.params, &s->oc, &s->g, msg, msglen);
+    ocean_result r = make_ocean(&s->set, &s->set.params, &s->oc, &s->g, &s->nf, msg, msglen);
     if (r == OCEAN_OK) r = srv_tiles_create(&s->tiles);
     if (r == OCEAN_OK) r = srv_cascade_create(&s->casc);
     if (r == OCEAN_OK) r = srv_work_create(&s->work);
@@ -193,8 +193,10 @@ void srv_sim_destroy(srv_sim *s)
     srv_tiles_destroy(s->tiles);
     srv_cascade_destroy(s->casc);
     ocean_gerstner_destroy(s->g);
+    ocean_destroy(s->nf);
     ocean_destroy(s->oc);
     ocean_gerstner_destroy(s->next_g);
+    ocean_destroy(s->next_nf);
     ocean_destroy(s->next_oc);
     free(s);
 }
@@ -370,7 +372,7 @@ static void run_cascade(srv_sim *s, srv_cascade_job *cj, int n, double tick_wall
     srv_stats *st = &s->hub->stats;
     s->gen++;
     double p0 = srv_now();
-    srv_cascade_run(s->casc, s->oc, s->g, s->fcfg.order, &s->set.srv, st, cj, n, s->gen);
+    srv_cascade_run(s->casc, s->oc, s->g, s->nf, s->fcfg.order, &s->set.srv, st, cj, n, s->gen);
     static int prof = -1;
     if (prof < 0) prof = getenv("OCEAND_PROFILE") != NULL;
     if (prof) fprintf(stderr, "cascade batch %d jobs: %.2f ms\n", n, (srv_now() - p0) * 1e3);
@@ -870,16 +872,18 @@ static void prebuild_sea(srv_sim *s)
                   memcmp(&s->next_params, &c.params, sizeof c.params) == 0))
         return;
     char msg[256];
-    ocean *oc;
+    ocean *oc, *nf;
     ocean_gerstner *g;
-    if (make_ocean(&s->set, &c.params, &oc, &g, msg, sizeof msg) != OCEAN_OK) {
+    if (make_ocean(&s->set, &c.params, &oc, &g, &nf, msg, sizeof msg) != OCEAN_OK) {
         fprintf(stderr, "oceand: cannot build the sea due at t = %.3f s ahead: %s\n", c.effective_time, msg);
         return;
     }
     ocean_gerstner_destroy(s->next_g);
+    ocean_destroy(s->next_nf);
     ocean_destroy(s->next_oc);
     s->next_oc = oc;
     s->next_g = g;
+    s->next_nf = nf;
     s->next_params = c.params;
     s->next_eff = c.effective_time;
 }
@@ -897,17 +901,19 @@ static void follow_sea(srv_sim *s, double t)
     }
     pthread_mutex_unlock(&h->lock);
     if (due) {
-        ocean *oc = NULL;
+        ocean *oc = NULL, *nf = NULL;
         ocean_gerstner *g = NULL;
         if (s->next_oc && s->next_eff == c.effective_time &&
             memcmp(&s->next_params, &c.params, sizeof c.params) == 0) {
             oc = s->next_oc;
             g = s->next_g;
+            nf = s->next_nf;
             s->next_oc = NULL;
             s->next_g = NULL;
+            s->next_nf = NULL;
         } else {
             char msg[256];
-            if (make_ocean(&s->set, &c.params, &oc, &g, msg, sizeof msg) != OCEAN_OK) {
+            if (make_ocean(&s->set, &c.params, &oc, &g, &nf, msg, sizeof msg) != OCEAN_OK) {
                 /* validated on entry: only memory can fail here */
                 fprintf(stderr, "oceand: the sea due at t = %.3f s cannot be built (%s); "
                         "clients are told a sea this daemon does not serve\n", c.effective_time, msg);
@@ -919,9 +925,11 @@ static void follow_sea(srv_sim *s, double t)
             srv_tiles_clear(s->tiles);
             srv_cascade_reset(s->casc);
             ocean_gerstner_destroy(s->g);
+            ocean_destroy(s->nf);
             ocean_destroy(s->oc);
             s->oc = oc;
             s->g = g;
+            s->nf = nf;
             adopt_sea(s, &c.params);
             atomic_fetch_add(&h->stats.sea_changes, 1);
         }

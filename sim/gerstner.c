@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ocean.h"
 #include "ocean_time.h"
 #include "wave_rng.h"
 
@@ -26,7 +27,7 @@ struct ocean_gerstner {
     int count;
     /* structure of arrays, count entries each */
     double *kx, *kz, *k, *hx, *hz, *omega, *amp, *phase;
-    int *annulus, *sector;
+    int *annulus, *sector, *mx, *mz;
 };
 
 void ocean_gerstner_params_default(ocean_gerstner_params *p)
@@ -61,17 +62,21 @@ ocean_result ocean_gerstner_params_validate(const ocean_gerstner_params *p, char
         return bad(msg, msglen, "annuli", p->annuli);
     if (!(p->steepness_max > 0.0 && p->steepness_max <= 1.0))
         return bad(msg, msglen, "steepness_max", p->steepness_max);
+    if (!(p->lattice_m >= 0.0 && p->lattice_m <= 1e5))
+        return bad(msg, msglen, "lattice_m", p->lattice_m);
     if (p->count > 0) {
         if (!(p->k_lo > 0.0) || !isfinite(p->k_lo))
             return bad(msg, msglen, "k_lo", p->k_lo);
         /* no wave faster than OCEAN_OMEGA_MAX: the time limit's phase bound */
         if (!(p->k_hi > p->k_lo))
             return bad(msg, msglen, "k_hi", p->k_hi);
-        if (!(ocean_dispersion(p->k_hi, p->sea.depth_m) <= OCEAN_OMEGA_MAX)) {
+        /* a snapped wave may lie up to half a lattice cell's diagonal above k_hi */
+        double k_top = p->k_hi + (p->lattice_m > 0.0 ? M_SQRT2 * M_PI / p->lattice_m : 0.0);
+        if (!(ocean_dispersion(k_top, p->sea.depth_m) <= OCEAN_OMEGA_MAX)) {
             if (msg != NULL && msglen > 0)
                 snprintf(msg, msglen, "gerstner: k_hi = %g rad/m (%.3g m waves) is faster than "
                          "OCEAN_OMEGA_MAX = %g rad/s, the frequency the time limit is built on",
-                         p->k_hi, 2.0 * M_PI / p->k_hi, OCEAN_OMEGA_MAX);
+                         k_top, 2.0 * M_PI / k_top, OCEAN_OMEGA_MAX);
             return OCEAN_EINVAL;
         }
     }
@@ -198,6 +203,54 @@ static double annulus_variance(const ocean_sea_state *sea, int nr, const double 
     return total;
 }
 
+/* Moves wave w onto the lattice 2 pi (i, j) / L (gerstner.h "Lattice"):
+ * the nearest lattice point to its drawn wave vector that no earlier wave
+ * holds, within max(|i|, |j|) <= top.  Two waves on one point would be one
+ * wave of amplitude |a1 + a2| (its variance is not a1^2/2 + a2^2/2), so a
+ * taken point sends the wave to the nearest free one.  The wave vector is
+ * rebuilt from the integer indices, so an FFT of the L patch holds exactly
+ * this wave. */
+static void snap(ocean_gerstner *g, int w, double L, long top)
+{
+    double dk = TWO_PI / L, ux = g->kx[w] / dk, uz = g->kz[w] / dk;
+    long cx = lround(ux), cz = lround(uz), bx = cx, bz = cz;
+    for (long r = 0; r <= 16; r++) {
+        double best = INFINITY;
+        for (long i = cx - r; i <= cx + r; i++)
+            for (long j = cz - r; j <= cz + r; j++) {
+                if (labs(i - cx) != r && labs(j - cz) != r)
+                    continue; /* inside: seen at a smaller r */
+                if ((i == 0 && j == 0) || labs(i) > top || labs(j) > top)
+                    continue;
+                int taken = 0;
+                for (int q = 0; q < w && !taken; q++)
+                    taken = g->mx[q] == i && g->mz[q] == j;
+                double d = (i - ux) * (i - ux) + (j - uz) * (j - uz);
+                if (!taken && d < best) {
+                    best = d;
+                    bx = i;
+                    bz = j;
+                }
+            }
+        if (best < INFINITY)
+            break;
+    }
+    g->mx[w] = (int)bx;
+    g->mz[w] = (int)bz;
+    g->kx[w] = (double)bx * dk;
+    g->kz[w] = (double)bz * dk;
+    g->k[w] = hypot(g->kx[w], g->kz[w]);
+    g->hx[w] = g->kx[w] / g->k[w];
+    g->hz[w] = g->kz[w] / g->k[w];
+}
+
+double ocean_gerstner_lattice_for(int n, double k_hi)
+{
+    if (n < 8 || !(k_hi > 0.0) || !isfinite(k_hi))
+        return NAN;
+    return (n / 2 - 1) * TWO_PI / k_hi;
+}
+
 /* Inverse of the tabulated direction CDF (piecewise linear in theta):
  * the theta at which the cumulative variance reaches target. */
 static double invert_cdf(const double *cdf, double target)
@@ -235,7 +288,7 @@ ocean_result ocean_gerstner_create(const ocean_gerstner_params *p, ocean_gerstne
     g->count = M;
     size_t n = M > 0 ? (size_t)M : 1;
     g->kx = malloc(8 * n * sizeof(double));
-    g->annulus = malloc(2 * n * sizeof(int));
+    g->annulus = calloc(4 * n, sizeof(int));
     double *m = malloc((2 * THETA_BINS + 1) * sizeof(double));
     if (g->kx == NULL || g->annulus == NULL || m == NULL) {
         free(m);
@@ -250,6 +303,8 @@ ocean_result ocean_gerstner_create(const ocean_gerstner_params *p, ocean_gerstne
     g->amp = g->omega + n;
     g->phase = g->amp + n;
     g->sector = g->annulus + n;
+    g->mx = g->sector + n;
+    g->mz = g->mx + n;
     double *cdf = m + THETA_BINS;
 
     if (M > 0) {
@@ -261,6 +316,9 @@ ocean_result ocean_gerstner_create(const ocean_gerstner_params *p, ocean_gerstne
         }
         g->p.annuli = R;
         double lspan = log(p->k_hi / p->k_lo);
+        /* lattice indices stay within the band's top (|i| dk <= k_hi):
+         * with ocean_gerstner_lattice_for's L that is n/2 - 1 */
+        long top = p->lattice_m > 0.0 ? (long)floor(p->k_hi * p->lattice_m / TWO_PI + 1e-9) : 0;
         int w = 0;
         for (int a = 0; a < R; a++) {
             double ka = a == 0 ? p->k_lo : p->k_lo * exp(lspan * a / R);
@@ -294,6 +352,9 @@ ocean_result ocean_gerstner_create(const ocean_gerstner_params *p, ocean_gerstne
                 g->hz[w] = sin(th);
                 g->kx[w] = k * g->hx[w];
                 g->kz[w] = k * g->hz[w];
+                if (p->lattice_m > 0.0)
+                    snap(g, w, p->lattice_m, top);
+                k = g->k[w];
                 g->omega[w] = ocean_dispersion(k, p->sea.depth_m);
                 g->amp[w] = amp;
                 g->phase[w] = TWO_PI * ph[0];
@@ -305,6 +366,36 @@ ocean_result ocean_gerstner_create(const ocean_gerstner_params *p, ocean_gerstne
     free(m);
     *out = g;
     return OCEAN_OK;
+}
+
+ocean_result ocean_gerstner_cascade_create(const ocean_gerstner *g, const ocean_params *p,
+                                           ocean **out, char *msg, size_t msglen)
+{
+    if (out)
+        *out = NULL;
+    if (!g || !p || !out || !(g->p.lattice_m > 0.0)) {
+        if (msg && msglen > 0)
+            snprintf(msg, msglen, "gerstner: the near-field cascade needs a set snapped to a lattice "
+                     "(lattice_m > 0)");
+        return OCEAN_EINVAL;
+    }
+    ocean_gerstner_view v;
+    ocean_gerstner_view_default(&v);
+    double q;
+    ocean_result r = ocean_gerstner_effective_q(g, &v, &q, NULL);
+    if (r != OCEAN_OK)
+        return r;
+    ocean_lattice_wave *w = malloc(sizeof *w * (size_t)(g->count > 0 ? g->count : 1));
+    if (!w)
+        return OCEAN_ENOMEM;
+    for (int i = 0; i < g->count; i++)
+        w[i] = (ocean_lattice_wave){g->mx[i], g->mz[i], g->amp[i], g->phase[i]};
+    ocean_params lp = *p;
+    lp.sea = g->p.sea;
+    lp.sea.choppiness = q;
+    r = ocean_create_lattice(&lp, g->p.lattice_m, w, g->count, out, msg, msglen);
+    free(w);
+    return r;
 }
 
 int ocean_gerstner_count(const ocean_gerstner *g)
@@ -329,6 +420,8 @@ ocean_result ocean_gerstner_get_wave(const ocean_gerstner *g, int i, ocean_gerst
     out->phase = g->phase[i];
     out->annulus = g->annulus[i];
     out->sector = g->sector[i];
+    out->mx = g->mx[i];
+    out->mz = g->mz[i];
     return OCEAN_OK;
 }
 

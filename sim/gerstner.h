@@ -31,6 +31,17 @@
  * waves on every machine.  (Changing M or R re-cuts the cells and so
  * draws a different set.)
  *
+ * Lattice (lattice_m > 0, the layout-1 near-field cascade): after the
+ * draw, each wave vector is moved to the nearest point 2 pi (i, j) / L of
+ * the lattice of a periodic patch of side L, and w follows the moved |k|.
+ * Amplitudes, phases and cells are kept, so the variance stays exactly the
+ * band's; a wave moves to the nearest lattice point no earlier wave holds
+ * (two waves on one point would be one wave whose variance is not the sum
+ * of theirs), so by pi sqrt 2 / L in k unless its point was taken (2.3 %
+ * at the band's lower edge for ship-bridge's L = 12.7 m, 15 rad/m), and
+ * never beyond |i|, |j| <= k_hi L / 2 pi.  Every user of the set - tiles,
+ * meshes, queries - sees the moved waves, so they all agree.
+ *
  * Surface (a wave's phase th = k.x0 - w t + phi, w from the finite-depth
  * dispersion relation, phases reduced mod 2 pi in double):
  *   height     eta = f(x0) sum a_i cos th_i
@@ -68,10 +79,15 @@ typedef struct ocean_gerstner_params {
     double k_lo;            /* band's lower edge, rad/m (= ocean k_max) */
     double k_hi;            /* 2 pi / shortest wavelength, rad/m, <= 1e5 */
     double steepness_max;   /* bound on sum Q k a, (0, 1]; default 1 */
+    double lattice_m;       /* 0: wave vectors as drawn; > 0: each snapped to
+                               the nearest 2 pi (i, j) / lattice_m (integer
+                               i, j), so the set is periodic on a lattice_m
+                               patch and an FFT of that patch can carry it
+                               (ocean_create_lattice); <= 1e5 m */
 } ocean_gerstner_params;
 
 /* Defaults: sea = ocean_sea_state_default, seed 1, 256 waves, auto annuli,
- * band 2 pi/8 m .. 2 pi/0.05 m, steepness_max 1. */
+ * band 2 pi/8 m .. 2 pi/0.05 m, steepness_max 1, no lattice. */
 void ocean_gerstner_params_default(ocean_gerstner_params *p);
 
 /* Checks p; OCEAN_EINVAL with a message naming the field. */
@@ -93,7 +109,29 @@ typedef struct ocean_gerstner_wave {
     double amplitude;     /* A, m (before gain and fade) */
     double phase;         /* phi in [0, 2 pi) */
     int annulus, sector;  /* its cell */
+    int mx, mz;           /* lattice indices: (kx, kz) = 2 pi (mx, mz) / lattice_m
+                             (0, 0 without a lattice) */
 } ocean_gerstner_wave;
+
+/* The patch side L the near field of a FFT of n x n samples per side is
+ * snapped to so that its shortest wave, 2 pi / k_hi, is held: every
+ * lattice index stays within +-(n/2 - 1) (the Nyquist row and column stay
+ * empty, as in every cascade), L = (n/2 - 1) 2 pi / k_hi.  NaN for n < 8 or
+ * k_hi not positive and finite. */
+double ocean_gerstner_lattice_for(int n, double k_hi);
+
+/* The near-field cascade of a snapped set (lattice_m > 0): an ocean of one
+ * lattice cascade (ocean_create_lattice) of patch lattice_m on an n x n
+ * grid holding exactly g's waves, with lambda = the set's effective Q in
+ * the default view (no fade, no filter: the one queries use), so its
+ * fields equal ocean_gerstner_evaluate's at the grid points (to float
+ * rounding).  n, threads and planning come from p; p's sea must be g's.
+ * OCEAN_EINVAL (with msg) for a set without a lattice or one the grid
+ * cannot hold. */
+struct ocean_params;
+struct ocean;
+ocean_result ocean_gerstner_cascade_create(const ocean_gerstner *g, const struct ocean_params *p,
+                                           struct ocean **out, char *msg, size_t msglen);
 
 int ocean_gerstner_count(const ocean_gerstner *g);
 /* OCEAN_EINVAL for i out of range. */

@@ -70,6 +70,10 @@ typedef struct cascade {
     double cache_t;
     int cache_n;
     int cache_dt;           /* 1: dh/dt is cached too (a velocity request) */
+    /* A lattice cascade (ocean_create_lattice): its waves, not a spectrum,
+     * give h0; NULL for a spectrum cascade. */
+    ocean_lattice_wave *lw;
+    int nlw;
 } cascade;
 
 #define FILTER_MEMO 32
@@ -287,9 +291,26 @@ static double mode_p(const ocean_params *p, const cascade *cs, double kx, double
     return ocean_spectrum_f(&p->sea, kx, kz) * cs->dk * cs->dk * 0.5;
 }
 
+/* h0 of a lattice cascade at (mx, mz): a wave A cos(k.x - w t + phi) is
+ * h0(k) = (A / 2) e^{i phi} (h0(-k) = 0), so that h(k) e^{ik.x} + c.c. is
+ * the wave (file comment); waves on one point add. */
+static void lattice_h0(const cascade *cs, int mx, int mz, double out[2])
+{
+    out[0] = out[1] = 0.0;
+    for (int i = 0; i < cs->nlw; i++)
+        if (cs->lw[i].mx == mx && cs->lw[i].mz == mz) {
+            out[0] += 0.5 * cs->lw[i].amplitude * cos(cs->lw[i].phase);
+            out[1] += 0.5 * cs->lw[i].amplitude * sin(cs->lw[i].phase);
+        }
+}
+
 /* h0(k) for the integer wave vector (mx, mz): keyed by (seed, patch, mx, mz). */
 static void draw_h0(const ocean_params *p, const cascade *cs, int mx, int mz, double out[2])
 {
+    if (cs->lw) {
+        lattice_h0(cs, mx, mz, out);
+        return;
+    }
     double kx = mx * cs->dk, kz = mz * cs->dk;
     double k = hypot(kx, kz);
     if (!in_band(cs, k)) {
@@ -303,17 +324,10 @@ static void draw_h0(const ocean_params *p, const cascade *cs, int mx, int mz, do
     out[1] = xi[1] * a;
 }
 
-static ocean_result cascade_init(ocean *o, int c)
+/* The per-mode arrays of a cascade of n x (n/2 + 1) modes, zeroed. */
+static ocean_result cascade_alloc(cascade *cs, int n)
 {
-    cascade *cs = &o->cas[c];
-    const ocean_params *p = &o->p;
-    int n = p->n, half = n / 2 + 1;
-    cs->patch = p->patch_m / pow(p->cascade_ratio, c);
-    cs->dk = 2.0 * M_PI / cs->patch;
-    /* Coarser cascades stop at half their Nyquist: at least 4 samples per
-     * wavelength (Crest PR #903); the next cascade takes over from there. */
-    cs->k_lo = c == 0 ? 0.0 : o->cas[c - 1].k_hi;
-    cs->k_hi = c == p->cascades - 1 ? p->k_max : M_PI * n / (2.0 * cs->patch);
+    int half = n / 2 + 1;
     size_t nm = (size_t)n * half;
     int ok = (cs->turns_hi = calloc(nm, sizeof(double))) != NULL;
     ok &= (cs->turns_lo = calloc(nm, sizeof(double))) != NULL;
@@ -330,6 +344,23 @@ static ocean_result cascade_init(ocean *o, int c)
         return OCEAN_ENOMEM;
     for (int ix = 0; ix < half; ix++)
         cs->kx[ix] = (float)(ix * cs->dk);
+    return OCEAN_OK;
+}
+
+static ocean_result cascade_init(ocean *o, int c)
+{
+    cascade *cs = &o->cas[c];
+    const ocean_params *p = &o->p;
+    int n = p->n, half = n / 2 + 1;
+    cs->patch = p->patch_m / pow(p->cascade_ratio, c);
+    cs->dk = 2.0 * M_PI / cs->patch;
+    /* Coarser cascades stop at half their Nyquist: at least 4 samples per
+     * wavelength (Crest PR #903); the next cascade takes over from there. */
+    cs->k_lo = c == 0 ? 0.0 : o->cas[c - 1].k_hi;
+    cs->k_hi = c == p->cascades - 1 ? p->k_max : M_PI * n / (2.0 * cs->patch);
+    ocean_result r = cascade_alloc(cs, n);
+    if (r != OCEAN_OK)
+        return r;
     double var = 0.0;
     for (int iz = 0; iz < n; iz++) {
         int mz = iz < n / 2 ? iz : iz - n;
@@ -433,12 +464,151 @@ void ocean_force_paths(ocean *o, int fused, int stream)
     }
 }
 
+/* The lattice cascade of ocean_create_lattice: h0 from the waves (sparse:
+ * only their lattice points are non-zero), every other per-mode array as
+ * a spectrum cascade fills it, so ocean_evaluate, the mips and the
+ * moments treat it like any cascade.  Band [k_lo, k_hi) = the waves' |k|
+ * range, so mip levels that hold none of them are empty. */
+static ocean_result cascade_init_lattice(ocean *o, const ocean_lattice_wave *w, int count,
+                                         char *msg, size_t msglen)
+{
+    cascade *cs = &o->cas[0];
+    const ocean_params *p = &o->p;
+    int n = p->n, half = n / 2 + 1;
+    cs->patch = p->patch_m;
+    cs->dk = 2.0 * M_PI / cs->patch;
+    cs->k_lo = INFINITY;
+    cs->k_hi = 0.0;
+    for (int i = 0; i < count; i++) {
+        /* the Nyquist row and column stay empty, as in every cascade */
+        if (w[i].mx <= -n / 2 || w[i].mx >= n / 2 || w[i].mz <= -n / 2 || w[i].mz >= n / 2 ||
+            (w[i].mx == 0 && w[i].mz == 0) || !isfinite(w[i].amplitude) || w[i].amplitude < 0.0 ||
+            !isfinite(w[i].phase)) {
+            if (msg) snprintf(msg, msglen, "lattice wave %d: (mx, mz) = (%d, %d), amplitude %g, phase %g: "
+                              "indices must be within +-%d and not both 0, amplitude finite and >= 0",
+                              i, w[i].mx, w[i].mz, w[i].amplitude, w[i].phase, n / 2 - 1);
+            return OCEAN_EINVAL;
+        }
+        double k = hypot(w[i].mx * cs->dk, w[i].mz * cs->dk);
+        cs->k_lo = fmin(cs->k_lo, k);
+        cs->k_hi = fmax(cs->k_hi, k);
+    }
+    if (count == 0)
+        cs->k_lo = cs->k_hi = 0.0;
+    else
+        cs->k_hi = nextafter(cs->k_hi, INFINITY);
+    ocean_result r = cascade_alloc(cs, n);
+    if (r != OCEAN_OK)
+        return r;
+    cs->lw = malloc(sizeof *cs->lw * (size_t)(count > 0 ? count : 1));
+    if (!cs->lw)
+        return OCEAN_ENOMEM;
+    memcpy(cs->lw, w, sizeof *cs->lw * (size_t)count);
+    cs->nlw = count;
+    /* the half spectrum's entries a wave at (mx, mz) touches: (mx, mz)
+     * itself when mx >= 0, the mirror (-mx, -mz) otherwise, and both in
+     * column 0 (which holds k and -k as separate entries) */
+    double var = 0.0;
+    for (int i = 0; i < count; i++) {
+        int ends[2][2] = {{w[i].mx, w[i].mz}, {-w[i].mx, -w[i].mz}};
+        for (int e = 0; e < 2; e++) {
+            int mx = ends[e][0], mz = ends[e][1];
+            if (mx < 0)
+                continue;
+            size_t at = (size_t)wrap_index(mz, n) * half + mx;
+            if (cs->k[at] != 0.0f)
+                continue; /* filled from another wave on the same point */
+            double hp[2], hm[2];
+            draw_h0(p, cs, mx, mz, hp);
+            draw_h0(p, cs, -mx, -mz, hm);
+            double kx = mx * cs->dk, kz = mz * cs->dk, k = hypot(kx, kz);
+            ocean_turns_of(ocean_dispersion(k, p->sea.depth_m), &cs->turns_hi[at], &cs->turns_lo[at]);
+            /* The stage takes one phase for rows mz and -mz (same |k|):
+             * the row mirror carries the same w whether or not a wave
+             * sits there. */
+            size_t mir = (size_t)wrap_index(-mz, n) * half + mx;
+            cs->turns_hi[mir] = cs->turns_hi[at];
+            cs->turns_lo[mir] = cs->turns_lo[at];
+            cs->h0[H0P_RE][at] = (float)hp[0];
+            cs->h0[H0P_IM][at] = (float)hp[1];
+            cs->h0[H0M_RE][at] = (float)hm[0];
+            cs->h0[H0M_IM][at] = (float)-hm[1];
+            cs->k[at] = (float)k;
+            cs->kinv[at] = (float)(1.0 / k);
+            /* E|h(k,t)|^2 over time: the two terms' cross product averages out */
+            double v = hp[0] * hp[0] + hp[1] * hp[1] + hm[0] * hm[0] + hm[1] * hm[1];
+            cs->var[at] = (float)v;
+            var += mx == 0 ? v : 2.0 * v;
+        }
+    }
+    cs->variance = var;
+    return OCEAN_OK;
+}
+
+static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_lattice_wave *lw,
+                                int nlw, ocean **out, char *msg, size_t msglen);
+
 ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t msglen)
 {
     *out = NULL;
     ocean_result r = ocean_params_validate(p, msg, msglen);
     if (r != OCEAN_OK)
         return r;
+    return ocean_build(p, 0, NULL, 0, out, msg, msglen);
+}
+
+ocean_result ocean_create_lattice(const ocean_params *p, double patch_m, const ocean_lattice_wave *w,
+                                  int count, ocean **out, char *msg, size_t msglen)
+{
+    if (!out)
+        return OCEAN_EINVAL;
+    *out = NULL;
+    if (!p || (count > 0 && !w) || count < 0 || count > OCEAN_LATTICE_MAX_WAVES) {
+        if (msg) snprintf(msg, msglen, "lattice: parameters or waves missing, or count = %d "
+                          "outside [0, %d]", count, OCEAN_LATTICE_MAX_WAVES);
+        return OCEAN_EINVAL;
+    }
+    if (!isfinite(patch_m) || patch_m < 1e-3 || patch_m > 1e5) {
+        if (msg) snprintf(msg, msglen, "lattice: patch = %g m is out of range [0.001, 100000]", patch_m);
+        return OCEAN_EINVAL;
+    }
+    /* The spectrum checks of ocean_params_validate (peak within the patch,
+     * breaking height) are about a spectrum cascade; a lattice carries
+     * given waves.  What the evaluation relies on is checked: the grid,
+     * threads, planning, the sea (depth, choppiness) and the time limit. */
+    ocean_params q = *p;
+    q.cascades = 1;
+    q.patch_m = patch_m;
+    q.k_max = INFINITY;
+    ocean_result r = ocean_sea_state_validate(&q.sea, msg, msglen);
+    if (r != OCEAN_OK)
+        return r;
+    if (q.n < OCEAN_MIN_N || q.n > OCEAN_MAX_N || (q.n & (q.n - 1)) != 0 || q.threads < 1 ||
+        q.threads > 64 || !(q.drop_gain > 0.0 && q.drop_gain <= M_SQRT1_2 + 1e-12) ||
+        q.plan_measure < OCEAN_PLAN_ESTIMATE || q.plan_measure > OCEAN_PLAN_WISDOM ||
+        memchr(q.wisdom, '\0', sizeof q.wisdom) == NULL ||
+        (q.plan_measure == OCEAN_PLAN_WISDOM && q.wisdom[0] == '\0')) {
+        if (msg) snprintf(msg, msglen, "lattice: n = %d, threads = %d, drop_gain = %g or the plan "
+                          "mode is invalid (see ocean_params_validate)", q.n, q.threads, q.drop_gain);
+        return OCEAN_EINVAL;
+    }
+    double dk = 2.0 * M_PI / patch_m;
+    for (int i = 0; i < count; i++) {
+        double w_i = ocean_dispersion(hypot(w[i].mx * dk, w[i].mz * dk), q.sea.depth_m);
+        if (!(w_i <= OCEAN_OMEGA_MAX)) {
+            if (msg) snprintf(msg, msglen, "lattice wave %d: w = %g rad/s is beyond OCEAN_OMEGA_MAX = %g",
+                              i, w_i, OCEAN_OMEGA_MAX);
+            return OCEAN_EINVAL;
+        }
+    }
+    return ocean_build(&q, 1, w, count, out, msg, msglen);
+}
+
+static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_lattice_wave *lw,
+                                int nlw, ocean **out, char *msg, size_t msglen)
+{
+    ocean_result r;
+    *out = NULL;
     pthread_once(&fftw_once, fftw_init_once);
     ocean *o = calloc(1, sizeof *o);
     if (!o) {
@@ -448,9 +618,13 @@ ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t 
     o->p = *p;
     ocean_force_paths(o, -1, -1);
     for (int c = 0; c < p->cascades; c++) {
-        r = cascade_init(o, c);
+        char why[256] = "";
+        r = lattice ? cascade_init_lattice(o, lw, nlw, why, sizeof why) : cascade_init(o, c);
         if (r != OCEAN_OK) {
-            if (msg) snprintf(msg, msglen, "out of memory for cascade %d", c);
+            if (msg) {
+                if (why[0]) snprintf(msg, msglen, "%s", why);
+                else snprintf(msg, msglen, "out of memory for cascade %d", c);
+            }
             ocean_destroy(o);
             return r;
         }
@@ -545,6 +719,7 @@ void ocean_destroy(ocean *o)
         free(cs->k);
         free(cs->kinv);
         free(cs->var);
+        free(cs->lw);
     }
     for (int i = 0; i < GAIN_PLANES; i++)
         free(o->gains[i].g);

@@ -115,6 +115,32 @@ typedef struct ocean ocean;
  * to it. */
 ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t msglen);
 
+/* One wave A cos(k.x - w t + phi) of a lattice cascade, on the lattice of
+ * its patch: k = 2 pi (mx, mz) / patch_m. */
+typedef struct ocean_lattice_wave {
+    int mx, mz;
+    double amplitude;   /* A, m, >= 0 */
+    double phase;       /* phi, rad */
+} ocean_lattice_wave;
+#define OCEAN_LATTICE_MAX_WAVES 4096
+
+/* An ocean of one cascade that carries given waves instead of a spectrum:
+ * the Gerstner near field snapped to a periodic patch (gerstner.h
+ * "Lattice"), evaluated by the same inverse FFT as any cascade (its h0 is
+ * sparse: only the waves' lattice points are non-zero).  From p it takes
+ * n, threads, the plan mode, drop_gain and the sea's depth (dispersion)
+ * and choppiness, which is the lambda of the displacement channels: give
+ * the near field's effective Q (ocean_gerstner_effective_q) and the
+ * channels equal the Gerstner sum of the same waves,
+ *   D = -Q A (k/|k|) sin(k.x - w t + phi).
+ * Every ocean_* function then works on it as on a one-cascade ocean
+ * (ocean_cascade_mips/moments, ocean_reference_point, ...); its band
+ * [k_lo, k_hi) is the waves' |k| range.  Indices must lie within
+ * +-(n/2 - 1) (not both 0) and every w within OCEAN_OMEGA_MAX; count
+ * 0..OCEAN_LATTICE_MAX_WAVES.  OCEAN_EINVAL with msg naming the field. */
+ocean_result ocean_create_lattice(const ocean_params *p, double patch_m, const ocean_lattice_wave *w,
+                                  int count, ocean **out, char *msg, size_t msglen);
+
 /* Writes the FFTW wisdom this process has accumulated (every plan made by
  * OCEAN_PLAN_MEASURE oceans since the last ESTIMATE or WISDOM one) to path,
  * for replicas to import with OCEAN_PLAN_WISDOM.  OCEAN_EIO and a message

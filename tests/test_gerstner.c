@@ -829,6 +829,236 @@ static void derivatives_match_finite_differences(void **state)
     ocean_gerstner_destroy(g);
 }
 
+
+/* The ship-bridge scene's near field (config/scenes/ship-bridge.conf: JONSWAP,
+ * Mitsuyasu, Beaufort 6 = 12.3 m/s toward 30 degrees, 100 km fetch,
+ * choppiness 1.3; 3 cascades from 1000 m at ratio 4.3, n = 256, so the FFT
+ * stops at pi n / L_finest; 64 waves to 0.1 m). */
+static void ship_bridge_near_field(ocean_gerstner_params *p, int n)
+{
+    ocean_gerstner_params_default(p);
+    p->sea.spectrum = OCEAN_SPECTRUM_JONSWAP;
+    p->sea.spreading = OCEAN_SPREAD_MITSUYASU;
+    p->sea.wind_u10 = 12.3;
+    p->sea.wind_dir_deg = 30.0;
+    p->sea.fetch_m = 1e5;
+    p->sea.choppiness = 1.3;
+    p->count = 64;
+    p->k_lo = M_PI * n / (1000.0 / (4.3 * 4.3));
+    p->k_hi = 2 * M_PI / 0.1;
+    p->lattice_m = ocean_gerstner_lattice_for(n, p->k_hi);
+}
+
+/* Snapped waves (gerstner.h "Lattice"): every wave vector on the lattice
+ * 2 pi (i, j) / L within the n-point grid's band, moved by at most half a
+ * cell's diagonal from the wave drawn without the lattice, on the
+ * dispersion relation of its new |k|, and the set's variance still the
+ * band's integral of the spectrum (computed independently, 1-D in w). */
+static void lattice_snapping_keeps_variance(void **state)
+{
+    (void)state;
+    const int n = 256;
+    ocean_gerstner_params p;
+    ship_bridge_near_field(&p, n);
+    double L = p.lattice_m;
+    assert_close(L, 127 * 0.1, 1e-12);
+    ocean_gerstner *g = make(&p);
+    ocean_gerstner_params q = p;
+    q.lattice_m = 0.0;
+    ocean_gerstner *free_set = make(&q);
+    double dk = 2 * M_PI / L, v = 0.0;
+    int moved = 0;
+    for (int i = 0; i < ocean_gerstner_count(g); i++) {
+        ocean_gerstner_wave w, w0;
+        assert_int_equal(ocean_gerstner_get_wave(g, i, &w), OCEAN_OK);
+        assert_int_equal(ocean_gerstner_get_wave(free_set, i, &w0), OCEAN_OK);
+        assert_true(abs(w.mx) <= n / 2 - 1 && abs(w.mz) <= n / 2 - 1);
+        assert_close(w.kx, w.mx * dk, 1e-12 * w.k);
+        assert_close(w.kz, w.mz * dk, 1e-12 * w.k);
+        assert_close(w.k, hypot(w.kx, w.kz), 1e-12 * w.k);
+        /* the nearest lattice point, unless an earlier wave holds it */
+        long rx = lround(w0.kx / dk), rz = lround(w0.kz / dk);
+        int held = 0;
+        for (int q = 0; q < i; q++) {
+            ocean_gerstner_wave e;
+            ocean_gerstner_get_wave(g, q, &e);
+            assert_false(e.mx == w.mx && e.mz == w.mz); /* every point holds one wave */
+            held |= e.mx == rx && e.mz == rz;
+        }
+        if (held)
+            moved++;
+        else
+            assert_true(hypot(w.kx - w0.kx, w.kz - w0.kz) <= M_SQRT1_2 * dk * (1 + 1e-12));
+        assert_close(w.omega, ocean_dispersion(w.k, p.sea.depth_m), 1e-12 * w.omega);
+        assert_close(w.amplitude, w0.amplitude, 0.0);
+        assert_close(w.phase, w0.phase, 0.0);
+        v += 0.5 * w.amplitude * w.amplitude;
+    }
+    double ref = band_integral_1d(&p.sea, p.k_lo, p.k_hi);
+    assert_close(v, ref, 1e-9 * ref);
+    assert_close(ocean_gerstner_variance(g, NULL), ref, 1e-9 * ref);
+    print_message("lattice %.4g m: %d of %d waves moved past a taken point\n", L, moved,
+                  ocean_gerstner_count(g));
+    /* a coarse lattice (a 3.1 m patch, 64 waves from 3.7 rad/m): points
+     * are shared often, and still every wave gets its own */
+    ship_bridge_near_field(&q, 64);
+    q.k_lo = M_PI * 64 / (1000.0 / (4.3 * 4.3));
+    ocean_gerstner *coarse = make(&q);
+    double cdk = 2 * M_PI / q.lattice_m;
+    q.lattice_m = 0.0;
+    ocean_gerstner *coarse_free = make(&q);
+    int shared = 0;
+    for (int i = 0; i < ocean_gerstner_count(coarse); i++) {
+        ocean_gerstner_wave a_, b_, f_;
+        ocean_gerstner_get_wave(coarse, i, &a_);
+        ocean_gerstner_get_wave(coarse_free, i, &f_);
+        assert_true(abs(a_.mx) <= 31 && abs(a_.mz) <= 31);
+        long rx = lround(f_.kx / cdk), rz = lround(f_.kz / cdk);
+        int held = 0;
+        for (int j = 0; j < i; j++) {
+            ocean_gerstner_get_wave(coarse, j, &b_);
+            assert_false(a_.mx == b_.mx && a_.mz == b_.mz);
+            held |= b_.mx == rx && b_.mz == rz;
+        }
+        shared += held;
+    }
+    print_message("lattice 3.1 m: %d of %d waves found their nearest point taken\n", shared,
+                  ocean_gerstner_count(coarse));
+    assert_true(shared > 0);
+    ocean_gerstner_destroy(coarse_free);
+    ocean_gerstner_destroy(coarse);
+    q = p;
+    /* hostile lattice sides */
+    q.lattice_m = -1.0;
+    ocean_gerstner *bad = NULL;
+    assert_int_equal(ocean_gerstner_create(&q, &bad, NULL, 0), OCEAN_EINVAL);
+    q.lattice_m = NAN;
+    assert_int_equal(ocean_gerstner_create(&q, &bad, NULL, 0), OCEAN_EINVAL);
+    assert_true(isnan(ocean_gerstner_lattice_for(4, 10.0)));
+    assert_true(isnan(ocean_gerstner_lattice_for(256, INFINITY)));
+    ocean_gerstner_destroy(free_set);
+    ocean_gerstner_destroy(g);
+}
+
+/* The near-field cascade (ocean_create_lattice) evaluated by the FFT equals
+ * the exact Gerstner sum of the same snapped waves (ocean_gerstner_evaluate,
+ * double precision, no FFT) at every grid point: height, displacement and
+ * slopes, to float precision (a few 1e-7 of each channel's largest possible
+ * value, the sum of its coefficients' magnitudes); and its moments are the
+ * waves' own (A^2/2 times 1, kx^2, kz^2, kx kz). */
+static void lattice_cascade_matches_gerstner_sum(void **state)
+{
+    (void)state;
+    const int n = 256;
+    ocean_gerstner_params p;
+    ship_bridge_near_field(&p, n);
+    ocean_gerstner *g = make(&p);
+    ocean_gerstner_view v;
+    ocean_gerstner_view_default(&v);
+    double Q, steep;
+    assert_int_equal(ocean_gerstner_effective_q(g, &v, &Q, &steep), OCEAN_OK);
+    assert_true(Q > 0.0);
+    int M = ocean_gerstner_count(g);
+    ocean_lattice_wave lw[64];
+    double s_a = 0, s_qa = 0, s_ak = 0, var = 0, mxx = 0, mzz = 0, mxz = 0;
+    for (int i = 0; i < M; i++) {
+        ocean_gerstner_wave w;
+        ocean_gerstner_get_wave(g, i, &w);
+        lw[i] = (ocean_lattice_wave){w.mx, w.mz, w.amplitude, w.phase};
+        s_a += w.amplitude;
+        s_qa += Q * w.amplitude;
+        s_ak += w.amplitude * w.k;
+        var += 0.5 * w.amplitude * w.amplitude;
+        mxx += 0.5 * w.amplitude * w.amplitude * w.kx * w.kx;
+        mzz += 0.5 * w.amplitude * w.amplitude * w.kz * w.kz;
+        mxz += 0.5 * w.amplitude * w.amplitude * w.kx * w.kz;
+    }
+    ocean_params op;
+    ocean_params_default(&op);
+    op.sea = p.sea;
+    op.sea.choppiness = Q;
+    op.n = n;
+    op.threads = 1;
+    ocean *oc = NULL;
+    char msg[256] = "";
+    ocean_result r = ocean_create_lattice(&op, p.lattice_m, lw, M, &oc, msg, sizeof msg);
+    if (r != OCEAN_OK)
+        print_error("%s\n", msg);
+    assert_int_equal(r, OCEAN_OK);
+    ocean_frame *f = NULL;
+    assert_int_equal(ocean_frame_create(oc, &f), OCEAN_OK);
+    ocean_request rq;
+    ocean_request_all(&rq, OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT | OCEAN_FX_NORMALS);
+    double t = 3600.0 + 1.0 / 3.0;
+    assert_int_equal(ocean_evaluate(oc, t, &rq, f), OCEAN_OK);
+    const ocean_field *fd = ocean_frame_field(f, 0);
+    assert_int_equal(fd->n, n);
+    assert_close(fd->patch_m, p.lattice_m, 0.0);
+    /* every grid point against the exact sum */
+    size_t nn = (size_t)n * n;
+    double *x = malloc(2 * nn * sizeof *x), *z = x + nn;
+    ocean_gerstner_point *gp = malloc(nn * sizeof *gp);
+    assert_non_null(x);
+    assert_non_null(gp);
+    double sp = p.lattice_m / n;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            x[(size_t)i * n + j] = j * sp;
+            z[(size_t)i * n + j] = i * sp;
+        }
+    assert_int_equal(ocean_gerstner_evaluate(g, &v, t, x, z, nn, gp), OCEAN_OK);
+    double eh = 0, ed = 0, es = 0, rms = 0;
+    for (size_t i = 0; i < nn; i++) {
+        eh = fmax(eh, fabs(fd->height[i] - gp[i].dy));
+        ed = fmax(ed, fmax(fabs(fd->dx[i] - gp[i].dx), fabs(fd->dz[i] - gp[i].dz)));
+        es = fmax(es, fmax(fabs(fd->slope_x[i] - gp[i].slope_x), fabs(fd->slope_z[i] - gp[i].slope_z)));
+        rms += gp[i].dy * gp[i].dy;
+    }
+    rms = sqrt(rms / nn);
+    print_message("near-field cascade vs Gerstner sum: height %.3g m (sum a %.3g, rms %.3g), "
+                  "displacement %.3g m, slope %.3g (sum a k %.3g)\n", eh, s_a, rms, ed, es, s_ak);
+    /* the field is really there (not two zeros agreeing) */
+    assert_close(rms * rms, var, 0.5 * var);
+    assert_true(eh <= 1e-6 * s_a);
+    assert_true(ed <= 1e-6 * s_qa);
+    assert_true(es <= 1e-6 * s_ak);
+    /* moments and mips of the cascade are the waves' own */
+    ocean_moments mo;
+    assert_int_equal(ocean_cascade_moments(oc, 0, 0.0, 6, &mo), OCEAN_OK);
+    assert_close(mo.total_var_h, var, 1e-6 * var);
+    assert_close(mo.var_h, var, 1e-6 * var);
+    assert_close(mo.mss_x, mxx, 1e-6 * (mxx + mzz));
+    assert_close(mo.mss_z, mzz, 1e-6 * (mxx + mzz));
+    assert_close(mo.mss_xz, mxz, 1e-6 * (mxx + mzz));
+    assert_int_equal(ocean_cascade_moments(oc, 0, INFINITY, 6, &mo), OCEAN_OK);
+    assert_close(mo.var_h, 0.0, 0.0);
+    int mips = 0;
+    double kc[12];
+    assert_int_equal(ocean_cascade_mips(oc, 0, 6, 12, &mips, kc), OCEAN_OK);
+    /* mip 0 is the whole cascade, mip 1 its half-Nyquist cutoff (n/8) dk
+     * (PROTOCOL.md "Cascade mips"); the near field (14.9 to 62.8 rad/m on
+     * a 12.7 m patch) holds waves at least there */
+    assert_true(mips >= 2);
+    assert_true(isinf(kc[0]));
+    assert_close(kc[1], (n / 8) * 2 * M_PI / p.lattice_m, 1e-12 * kc[1]);
+    print_message("near-field cascade: patch %.4g m, %d mips\n", p.lattice_m, mips);
+    /* hostile waves: off the grid's band, the origin */
+    ocean_lattice_wave badw = {n / 2, 0, 0.01, 0.0};
+    ocean *bad = NULL;
+    assert_int_equal(ocean_create_lattice(&op, p.lattice_m, &badw, 1, &bad, msg, sizeof msg), OCEAN_EINVAL);
+    badw = (ocean_lattice_wave){0, 0, 0.01, 0.0};
+    assert_int_equal(ocean_create_lattice(&op, p.lattice_m, &badw, 1, &bad, msg, sizeof msg), OCEAN_EINVAL);
+    badw = (ocean_lattice_wave){3, 4, NAN, 0.0};
+    assert_int_equal(ocean_create_lattice(&op, p.lattice_m, &badw, 1, &bad, msg, sizeof msg), OCEAN_EINVAL);
+    assert_int_equal(ocean_create_lattice(&op, NAN, lw, M, &bad, msg, sizeof msg), OCEAN_EINVAL);
+    assert_null(bad);
+    free(gp);
+    free(x);
+    ocean_frame_destroy(f);
+    ocean_destroy(oc);
+    ocean_gerstner_destroy(g);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -844,6 +1074,8 @@ int main(void)
         cmocka_unit_test(hostile_parameters),
         cmocka_unit_test(grid_matches_direct_sum),
         cmocka_unit_test(derivatives_match_finite_differences),
+        cmocka_unit_test(lattice_snapping_keeps_variance),
+        cmocka_unit_test(lattice_cascade_matches_gerstner_sum),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -265,6 +265,9 @@ static void storm_make(storm *s)
     gp.count = 64;
     gp.k_lo = khi;
     gp.k_hi = 2 * M_PI / 0.1;
+    /* snapped to its layout-1 cascade's lattice, as the daemon serves it
+     * (srv_settings_near_field) */
+    gp.lattice_m = ocean_gerstner_lattice_for(p.n, gp.k_hi);
     assert_int_equal(ocean_gerstner_create(&gp, &s->g, err, sizeof err), OCEAN_OK);
 }
 

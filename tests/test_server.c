@@ -31,6 +31,7 @@
 #include "gerstner.h"
 #include "oceanclient.h"
 #include "query.h"
+#include "slope.h"
 #include "srv_cascade.h"
 #include "srv_daemon.h"
 #include "lib/test_ws.h"
@@ -247,7 +248,7 @@ static void frames_tiles_and_mesh_decode(void **state)
     oc_client *c = connect_client(port, NULL);
     proto_hello hello;
     assert_int_equal(oc_client_hello(c, &hello), OCEAN_OK);
-    assert_true(hello.max_layers == 2);
+    assert_true(hello.max_layers == 3); /* 2 cascades + the near field's (layout 1) */
     assert_true(hello.codecs & (1u << PROTO_CODEC_QZ));
     proto_subscribe s;
     small_subscribe(&s);
@@ -483,6 +484,189 @@ static void cascade_tiles_are_the_mips(void **state)
     oc_client_destroy(c);
 }
 
+/* Issue 13 item 4: in layout 1 the near field is one more periodic cascade
+ * (the Gerstner waves snapped to a 12.7 m lattice, gerstner.h "Lattice"),
+ * after the FFT's.  Served from the scene `make run` serves (ship-bridge:
+ * 3 cascades + near field = 4 layout-1 cascades): a camera 3 m above the
+ * water gets near-field tiles that equal the exact Gerstner sum of the
+ * same waves, and the cascade's mip table holds the near field's own
+ * slope moments (sum A^2 k^2 / 2 over its waves, computed here from the
+ * waves), which therefore leave tail_mss (it equals the slope table's
+ * short-wave tail alone); from 1500 m no near-field tile is sent and the
+ * lod rule reads the cascade's "whole cascade" entry: all its slopes
+ * shade. */
+static void cascade_near_field_ship_bridge(void **state)
+{
+    (void)state;
+    /* The byte budget is raised so that the lod rule, not the budget,
+     * decides: at the default 3.6 MB/s the planner coarsens a 3 m camera's
+     * spacing about 35-fold whether or not the near field is served (the
+     * finest FFT cascade's mip 0 does not fit either), and near-field tiles
+     * come only below about 1.5 m. */
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2",
+                          sanitized ? "ocean.n=64" : "ocean.n=256", "server.viewer_bytes_per_s=1e9"};
+    srv_settings sb;
+    char err[512];
+    ocean_result lr = srv_settings_load(NULL, sets, 6, &sb, err, sizeof err);
+    if (lr != OCEAN_OK) fprintf(stderr, "%s\n", err);
+    assert_int_equal(lr, OCEAN_OK);
+    assert_int_equal(sb.params.cascades, 3);
+    assert_true(srv_settings_near_cascade(&sb));
+    assert_int_equal(srv_settings_layout1_cascades(&sb), 4);
+    srv_daemon *d;
+    assert_int_equal(srv_daemon_start(&sb, &d, err, sizeof err), OCEAN_OK);
+    oc_client *c = connect_client(srv_daemon_port(d), NULL);
+    proto_hello h;
+    assert_int_equal(oc_client_hello(c, &h), OCEAN_OK);
+    assert_int_equal(h.max_layers, 4);
+    /* the same near field as the daemon's (srv_sim.c make_ocean) */
+    ocean *o;
+    char msg[256];
+    assert_int_equal(ocean_create(&sb.params, &o, msg, sizeof msg), OCEAN_OK);
+    double patch, klo, khi;
+    ocean_cascade_band(o, 2, &patch, &klo, &khi);
+    ocean_gerstner_params gp;
+    assert_true(srv_settings_near_field(&sb, &sb.params, &gp));
+    assert_true(gp.k_lo == khi);
+    assert_true(fabs(gp.lattice_m - (sb.params.n / 2 - 1) * 0.1) < 1e-12);
+    ocean_gerstner *g;
+    assert_int_equal(ocean_gerstner_create(&gp, &g, msg, sizeof msg), OCEAN_OK);
+    double near[3] = {0, 0, 0};
+    for (int i = 0; i < ocean_gerstner_count(g); i++) {
+        ocean_gerstner_wave w;
+        ocean_gerstner_get_wave(g, i, &w);
+        double a2 = 0.5 * w.amplitude * w.amplitude;
+        near[0] += a2 * w.kx * w.kx;
+        near[1] += a2 * w.kz * w.kz;
+        near[2] += a2 * w.kx * w.kz;
+    }
+    ocean_slope_table *st;
+    ocean_slope_stats ss;
+    assert_int_equal(ocean_slope_table_create(o, g, &st, msg, sizeof msg), OCEAN_OK);
+    assert_int_equal(ocean_slope_table_get(st, INFINITY, 6, &ss), OCEAN_OK);
+    ocean_slope_table_destroy(st);
+    print_message("near field: patch %.4g m, mss %.4g %.4g; tail %.4g %.4g\n", gp.lattice_m, near[0], near[1],
+                  ss.tail.mss_x, ss.tail.mss_z);
+    /* the near field's slopes are not a rounding error beside the tail */
+    assert_true(near[0] + near[1] > 0.1 * (ss.tail.mss_x + ss.tail.mss_z));
+
+    proto_subscribe s;
+    cascade_subscribe(&s);
+    s.effects = PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT | PROTO_FX_NORMALS | PROTO_FX_NEAR_FIELD;
+    s.layers = 4;
+    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.pos[0] = 1234.5;
+    cam.pos[1] = 3;
+    cam.pos[2] = -987.25;
+    cam.pitch_deg = -30;
+    int near_tiles = 0, checked = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        uint32_t seq;
+        assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+        oc_frame *f = frame_for(c, seq, sanitized ? 20000 : 8000);
+        assert_non_null(f);
+        const proto_cascade_block *b = &f->info.cascades;
+        assert_int_equal(b->cascade_count, 4);
+        const proto_cascade_entry *e = &b->cascade[3];
+        assert_true(fabs(e->patch_m - gp.lattice_m) <= 1e-12 * gp.lattice_m);
+        assert_int_equal(e->n, sb.params.n);
+        assert_int_equal(e->fades, 1);
+        assert_true(e->mips >= 2);
+        /* mip 0 holds every near-field wave; the "whole cascade" entry lacks them all */
+        assert_true(e->mip[0].mss_x == 0 && e->mip[0].mss_z == 0);
+        for (int k = 0; k < 3; k++) {
+            double got = k == 0 ? e->mip[e->mips].mss_x : k == 1 ? e->mip[e->mips].mss_z : e->mip[e->mips].mss_xz;
+            assert_true(fabs(got - near[k]) <= 1e-5 * (near[0] + near[1]));
+        }
+        /* no double counting: the tail is the short-wave tail alone */
+        assert_true(fabs(b->tail_mss[0] - ss.tail.mss_x) <= 1e-5 * ss.tail.mss_x + 1e-9);
+        assert_true(fabs(b->tail_mss[1] - ss.tail.mss_z) <= 1e-5 * ss.tail.mss_z + 1e-9);
+        double sigma = e->patch_m / e->n;
+        double sp_nadir = fmax(b->min_spacing_m, b->spacing_per_m * fmax(fabs(b->camera[1]), 1.0));
+        double lam = log2(sp_nadir / sigma);
+        if (pass == 0) {
+            /* 3 m up: the rule reads the near field's geometry at the nadir */
+            print_message("3 m: near-field level %.2f of %d mips, q %.3g\n", lam, e->mips, (double)b->spacing_per_m);
+            assert_true(lam < e->mips);
+            for (int t = 0; t < f->info.tile_count; t++) {
+                const oc_tile *tl = &f->tiles[t];
+                if (tl->info.cascade != 3) continue;
+                near_tiles++;
+                assert_int_equal(tl->decode_result, OCEAN_OK);
+                if (tl->info.level != 0) continue;
+                /* mip 0 is the unfiltered near field: the exact sum of the waves */
+                int T = tl->info.width;
+                double x[64], z[64];
+                ocean_gerstner_point gpt[64];
+                int np = 0;
+                for (int i = 0; i < T && np < 64; i += 5)
+                    for (int j = 0; j < T && np < 64; j += 7, np++) {
+                        x[np] = tl->info.origin_x + j * tl->info.spacing;
+                        z[np] = tl->info.origin_z + i * tl->info.spacing;
+                    }
+                ocean_gerstner_view v;
+                ocean_gerstner_view_default(&v);
+                assert_int_equal(ocean_gerstner_evaluate(g, &v, f->hdr.sim_time, x, z, (size_t)np, gpt), OCEAN_OK);
+                for (int q = 0, i = 0; i < T && q < np; i += 5)
+                    for (int j = 0; j < T && q < np; j += 7, q++) {
+                        double got = tl->data[i * T + j];
+                        assert_true(fabs(got - gpt[q].dy) <= tl->info.error_bound + 1e-6);
+                        checked++;
+                    }
+            }
+            print_message("3 m: %d near-field tiles, %d samples checked against the Gerstner sum\n", near_tiles,
+                          checked);
+            /* what a tile costs, per cascade (the planner's qz model: 0.48 B per sample and plane) */
+            for (int k = 0; k < 4; k++) {
+                double bytes = 0, samples = 0;
+                for (int t = 0; t < f->info.tile_count; t++)
+                    if (f->tiles[t].info.cascade == k) {
+                        bytes += f->tiles[t].info.payload_len;
+                        samples += (double)f->tiles[t].info.width * f->tiles[t].info.height *
+                                   proto_tile_planes(f->tiles[t].info.channels);
+                    }
+                if (samples > 0)
+                    print_message("3 m: cascade %d: %.3f B per sample and plane\n", k, bytes / samples);
+            }
+            assert_true(near_tiles > 0);
+            assert_true(checked > 0);
+        } else {
+            /* 1500 m: no near-field tile; the lod rule fades the cascade out
+             * (w = clamp(mips - lambda, 0, 1) = 0), so shading adds its whole
+             * entry - the near field's slopes - at every point */
+            print_message("1500 m: near-field level %.2f of %d mips\n", lam, e->mips);
+            assert_true(lam >= e->mips);
+            for (int t = 0; t < f->info.tile_count; t++) assert_true(f->tiles[t].info.cascade != 3);
+            assert_true(f->info.tile_count > 0);
+        }
+        oc_frame_free(f);
+        cam.pos[1] = 1500;
+        cam.pitch_deg = -15;
+    }
+    /* a subscription without the near-field effect: 3 cascades, as before */
+    s.effects = PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT | PROTO_FX_NORMALS;
+    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    uint32_t seq;
+    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+    oc_frame *f = frame_for(c, seq, sanitized ? 20000 : 8000);
+    assert_non_null(f);
+    assert_int_equal(f->info.cascades.cascade_count, 3);
+    oc_frame_free(f);
+    oc_client_destroy(c);
+    ocean_gerstner_destroy(g);
+    ocean_destroy(o);
+    srv_daemon_stop(d);
+    /* four cascades and a near field do not fit the protocol's cascade
+     * block: refused at load, with the numbers */
+    const char *four[] = {"server.port=0", "server.scene=ship-bridge", "ocean.cascades=4", "ocean.patch=4000"};
+    assert_int_equal(srv_settings_load(NULL, four, 4, &sb, err, sizeof err), OCEAN_EINVAL);
+    print_message("refused: %s\n", err);
+    assert_non_null(strstr(err, "ocean.cascades = 4"));
+    assert_non_null(strstr(err, "near"));
+}
+
 /* Layout 1 shares work across cameras: viewers 2 km apart get
  * byte-identical records for the tiles they have in common, and the
  * tiles the daemon encodes per tick stay bounded by the pyramid however
@@ -669,12 +853,8 @@ static void queries_agree_with_sim(void **state)
     double patch, klo, khi;
     ocean_cascade_band(o, settings.params.cascades - 1, &patch, &klo, &khi);
     ocean_gerstner_params gp;
-    ocean_gerstner_params_default(&gp);
-    gp.sea = settings.params.sea;
-    gp.seed = settings.params.seed;
-    gp.count = settings.srv.near_field_waves;
-    gp.k_lo = khi;
-    gp.k_hi = 2 * M_PI / settings.srv.near_field_min_wavelength;
+    assert_true(srv_settings_near_field(&settings, &settings.params, &gp)); /* the daemon's near field */
+    assert_true(gp.k_lo == khi);
     ocean_gerstner *g = NULL;
     char msg[256];
     assert_int_equal(ocean_gerstner_create(&gp, &g, msg, sizeof msg), OCEAN_OK);
@@ -1254,12 +1434,8 @@ static void local_query(const proto_sea *sea, double t, const double *xz, size_t
     double patch, klo, khi;
     ocean_cascade_band(o, p.cascades - 1, &patch, &klo, &khi);
     ocean_gerstner_params gp;
-    ocean_gerstner_params_default(&gp);
-    gp.sea = p.sea;
-    gp.seed = p.seed;
-    gp.count = settings.srv.near_field_waves;
-    gp.k_lo = khi;
-    gp.k_hi = 2 * M_PI / settings.srv.near_field_min_wavelength;
+    assert_true(srv_settings_near_field(&settings, &p, &gp)); /* the daemon's near field */
+    assert_true(gp.k_lo == khi);
     ocean_gerstner *g = NULL;
     assert_int_equal(ocean_gerstner_create(&gp, &g, msg, sizeof msg), OCEAN_OK);
     ocean_query_options opt;
@@ -2024,6 +2200,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(frames_tiles_and_mesh_decode),
         cmocka_unit_test(cascade_tiles_are_the_mips),
+        cmocka_unit_test(cascade_near_field_ship_bridge),
         cmocka_unit_test(cascade_tiles_shared_across_cameras),
         cmocka_unit_test(cutoff_follows_velocity),
         cmocka_unit_test(queries_agree_with_sim),
