@@ -222,8 +222,10 @@ static const conf_entry srv_entries[] = {
      .help = "The near field fades from full strength at half this radius to nothing at it, "
              "around each camera."},
     {.name = "server.near_field_min_wavelength", .type = CONF_DOUBLE,
-     .offset = SRV(near_field_min_wavelength), .min = 0.001, .max = 100, .def = "0.1",
-     .unit = "m", .help = "Shortest near-field wavelength."},
+     .offset = SRV(near_field_min_wavelength), .min = 0.0151, .max = 100, .def = "0.1",
+     .unit = "m", .help = "Shortest near-field wavelength.  Shorter waves than 1.51 cm would "
+     "oscillate faster than OCEAN_OMEGA_MAX = 64 rad/s in deep water, beyond what the exact-time "
+     "limit is built on (sim/ocean_time.h)."},
     {.name = "server.record", .type = CONF_BOOL, .offset = SRV(record), .def = "off",
      .help = "Record every client's camera path (server/RECORDING.md)."},
     {.name = "server.record_clients", .type = CONF_BOOL, .offset = SRV(record_clients),

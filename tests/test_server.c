@@ -1703,6 +1703,22 @@ static void epoch_beyond_time_limit(void **state)
     assert_int_equal(srv_settings_load(conf_path, ok, 1, &s1, err, sizeof err), OCEAN_OK);
 }
 
+/* A near-field wavelength the exact-time limit cannot serve is refused by
+ * the key's range, before anything is built (was: accepted, then refused at
+ * start by the near field's OCEAN_OMEGA_MAX check). */
+static void near_field_wavelength_range(void **state)
+{
+    (void)state;
+    srv_settings s1;
+    char err[512] = "";
+    const char *bad[] = {"server.near_field_min_wavelength=0.01"};
+    assert_int_equal(srv_settings_load(conf_path, bad, 1, &s1, err, sizeof err), OCEAN_EINVAL);
+    assert_non_null(strstr(err, "server.near_field_min_wavelength"));
+    assert_non_null(strstr(err, "0.0151"));
+    const char *ok[] = {"server.near_field_min_wavelength=0.0151"};
+    assert_int_equal(srv_settings_load(conf_path, ok, 1, &s1, err, sizeof err), OCEAN_OK);
+}
+
 /* Two daemons started apart with the same epoch agree on the sim time and
  * the tick of every instant; the tick of a frame is the one the system
  * clock gives at its sim time. */
@@ -2217,6 +2233,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(epoch_parse),
         cmocka_unit_test(epoch_shared_clock),
         cmocka_unit_test(epoch_beyond_time_limit),
+        cmocka_unit_test(near_field_wavelength_range),
         cmocka_unit_test(hello_limits_are_honoured),
         cmocka_unit_test(http_metrics_and_status),
         cmocka_unit_test(recording_writes_camera_path),
