@@ -110,11 +110,18 @@ test('FRAME from C: header, mesh and tiles decode; tile samples equal the C deco
         seen.add(t.codec);
     });
     assert.deepEqual([...seen].sort(), [CODEC.F32, CODEC.F16, CODEC.QZ].sort());
-    /* the qz tile must exercise the LS6 predictor (2) as well as planar (1) */
+    /* the qz tile is format 2 and must exercise the LSX predictor (3) with
+     * the H plane as reference, so the C and JS reference paths are compared */
     const qz = f.tiles.find((t) => t.codec === CODEC.QZ);
-    const preds = new Set();
-    for (let c = 0; c < qz.payload[0]; c++) preds.add(qz.payload[4 + 24 * c + 9]);
-    assert.ok(preds.has(2), `qz predictors used: ${[...preds]}`);
+    assert.equal(qz.payload[1], 2, 'qz format');
+    const preds = new Set(), refs = new Set();
+    for (let c = 0, o = 4; c < qz.payload[0]; c++) {
+        const p = qz.payload[o + 9], r = qz.payload[o + 10];
+        preds.add(p); refs.add(r);
+        o += 12 + (p === 3 ? 2 * (r === 255 ? 8 : 17) : 0);
+    }
+    assert.ok(preds.has(3), `qz predictors used: ${[...preds]}`);
+    assert.ok(refs.has(0), `qz reference planes used: ${[...refs]}`);
 });
 
 test('layout-1 FRAME from C: cascade block, mip tables, tags, placement; tiles bit for bit', () => {
