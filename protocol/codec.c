@@ -1,6 +1,6 @@
 /*
- * codec.c - tile codecs f32, f16 and qz (quantised + planar prediction +
- * zstd), octahedral normals and half-float conversion.  The OpenEXR codecs
+ * codec.c - tile codecs f32, f16 and qz (quantised + least-squares spatial
+ * prediction + zstd), octahedral normals and half-float conversion.  The OpenEXR codecs
  * live in proto_exr.c.  Byte layouts are specified in PROTOCOL.md; this file
  * and that document must change together.
  */
@@ -730,6 +730,20 @@ static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, 
     if (max_err)
         *max_err = merr;
     return OCEAN_OK;
+}
+
+double proto_codec_plane_error_bound(proto_codec c, const proto_codec_params *p, unsigned channels, int plane,
+                                     double lo, double hi, double h_range)
+{
+    if (c != PROTO_CODEC_QZ)
+        return proto_codec_error_bound(c, p, lo, hi);
+    int kind = qz_kind(channels, plane);
+    if (kind < 0)
+        return INFINITY;
+    double acc = p ? p->accuracy : PROTO_ACCURACY_DEFAULT;
+    double amax = fmax(fabs(lo), fabs(hi)), range = hi - lo;
+    double step = (double)(float)qz2_step(acc, kind, range, h_range);
+    return step * 0.5 + amax * 0x1p-24 + (range > 0 ? range * 0x1p-40 : 0.0);
 }
 
 /* Format 1 (decoded for payloads recorded before format 2). */
