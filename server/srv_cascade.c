@@ -232,7 +232,7 @@ static unsigned chan_of(const plan *pl, int c)
  * halving below and 0.05 less per doubling above the table; plus the
  * payload header, 8 + ~40 bytes a plane (weights of the LSX predictor).
  * f16 and the half-float EXR codecs 2; f32 and exr-zip 4 a sample. */
-static double tile_bytes(const proto_subscribe *sub, unsigned channels, int T)
+double srv_cascade_tile_bytes(const proto_subscribe *sub, unsigned channels, int T)
 {
     static const double qz_res[7] = {0.311, 0.361, 0.430, 0.524, 0.635, 0.764, 0.905}; /* L = -2 .. 4 */
     int planes = proto_tile_planes(channels);
@@ -320,7 +320,7 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
 /* A job's plan at the server's quality target (server.px_per_sample),
  * coarsened (q raised by steps of 2^(1/4)) until the frame's tiles fit the
  * viewer's byte budget (server.viewer_bytes_per_s over its frame rate,
- * estimated with tile_bytes' model): a
+ * estimated with srv_cascade_tile_bytes' model): a
  * large viewport or a low camera gets a little less geometry and a little
  * more unresolved roughness, never more bytes than the budget. */
 static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
@@ -410,7 +410,7 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
             span(box[2], box[3], w, ntile, &g->z0, &g->nz);
             pl->need[c][m] = 1;
             pl->tiles += g->nx * g->nz;
-            samples += (double)g->nx * g->nz * tile_bytes(sub, chan_of(pl, c), t);
+            samples += (double)g->nx * g->nz * srv_cascade_tile_bytes(sub, chan_of(pl, c), t);
         }
     }
     pl->ok = 1;
