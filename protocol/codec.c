@@ -437,10 +437,12 @@ static int qz2_fit(const int64_t *q, const int64_t *rq, int w, int h, int16_t *c
         return 0;
     int nt = rq ? QZ_NTAP : QZ_NOWN;
     uint64_t s[QZ_NTAP * (QZ_NTAP + 1) / 2] = {0}, sb[QZ_NTAP] = {0};
-    /* Every other row of the region: half the work, weights as good to
-     * the bytes (bench_codec), and still an exact integer sum. */
+    /* A quincunx quarter of the region (every other row, every other
+     * column, shifted by one on alternate rows): a quarter of the work
+     * for 0.3 % more bytes on the viewer's tiles (bench_codec), and still
+     * an exact integer sum. */
     for (int i = 2; i < h; i += 2)
-        for (int j = 2; j + 1 < w; j++) {
+        for (int j = 2 + (i >> 1 & 1); j + 1 < w; j += 2) {
             uint64_t x[QZ_NTAP], v = (uint64_t)q[(size_t)i * w + j];
             const int64_t *row = q + (size_t)i * w;
             for (int t = 0; t < QZ_NOWN; t++)
@@ -506,6 +508,25 @@ static int qz2_fit(const int64_t *q, const int64_t *rq, int w, int h, int16_t *c
     return 1;
 }
 
+/* The LSX sum at q[i][j] (pointer p) away from every edge the clamp
+ * touches (i + 2 < h, j + 2 < w): fixed offsets, no branches. */
+static inline int64_t qz2_sum_fast(const int64_t *p, const int64_t *r, int w, const int16_t *c)
+{
+    int64_t s = c[0] * p[-1] + c[1] * p[-w] + c[2] * p[-w - 1] + c[3] * p[-w + 1] + c[4] * p[-2] +
+                c[5] * p[-2 * w] + c[6] * p[-w - 2] + c[7] * p[-2 * w - 1];
+    if (r)
+        s += c[8] * r[0] + c[9] * r[-1] + c[10] * r[1] + c[11] * r[-w] + c[12] * r[w] + c[13] * r[-2] +
+             c[14] * r[2] + c[15] * r[-2 * w] + c[16] * r[2 * w];
+    return s;
+}
+
+/* Whether (i, j) may use qz2_sum_fast: inside the LSX region and, with a
+ * reference, two samples from the bottom and right edges. */
+static inline int qz2_fast(int w, int h, int i, int j, int pred, int ref)
+{
+    return pred == QZ_PRED_LSX && i >= 2 && j >= 2 && j + 1 < w && (!ref || (i + 2 < h && j + 2 < w));
+}
+
 /* Residuals of q under (pred, rq, coef) into z exactly as the decoder's
  * qz2_predict; returns sum |r| (the cost) and the largest zigzag code. */
 static uint64_t qz2_residuals(const int64_t *q, const int64_t *rq, int w, int h, int pred, const int16_t *coef,
@@ -513,15 +534,24 @@ static uint64_t qz2_residuals(const int64_t *q, const int64_t *rq, int w, int h,
 {
     uint64_t cost = 0;
     uint32_t m = 0;
-    for (int i = 0; i < h; i++)
-        for (int j = 0; j < w; j++) {
+    for (int i = 0; i < h; i++) {
+        const int64_t *row = q + (size_t)i * w;
+        int j = 0;
+        while (j < w) {
             size_t k = (size_t)i * w + j;
-            int64_t r = q[k] - qz2_predict(q, rq, w, h, i, j, pred, coef);
+            int64_t pr;
+            if (qz2_fast(w, h, i, j, pred, rq != NULL))
+                pr = floordiv4096(qz2_sum_fast(row + j, rq ? rq + k : NULL, w, coef) + 2048);
+            else
+                pr = qz2_predict(q, rq, w, h, i, j, pred, coef);
+            int64_t r = row[j] - pr;
             uint32_t zz = zigzag(r);
             z[k] = zz;
             cost += (uint64_t)(r < 0 ? -r : r);
             m = zz > m ? zz : m;
+            j++;
         }
+    }
     *zmax = m;
     return cost;
 }
@@ -943,7 +973,10 @@ static ocean_result qz2_decode(int w, int h, int np, const uint8_t *data, size_t
                 uint32_t zz = 0;
                 for (int b = 0; b < nb[c]; b++)
                     zz |= (uint32_t)raw[ro + (size_t)b * n + k] << (8 * b);
-                int64_t v = qz2_predict(q, rq, w, h, i, j, pred[c], coef[c]) + unzigzag(zz);
+                int64_t pr = qz2_fast(w, h, i, j, pred[c], rq != NULL)
+                                 ? floordiv4096(qz2_sum_fast(q + k, rq ? rq + k : NULL, w, coef[c]) + 2048)
+                                 : qz2_predict(q, rq, w, h, i, j, pred[c], coef[c]);
+                int64_t v = pr + unzigzag(zz);
                 if (v > QZ_Q_LIMIT || v < -QZ_Q_LIMIT) {
                     ocean_seterr(err, errlen, "qz plane %d: level %lld out of range at (%d,%d)", c, (long long)v, i, j);
                     res = OCEAN_ECODEC;
