@@ -1,6 +1,7 @@
 /*
  * codec.js - tile payload decoders for the browser: f32, f16 and qz
- * (quantised + planar prediction + zstd), plus octahedral normals.
+ * (quantised + least-squares spatial prediction + zstd; formats 1 and 2),
+ * plus octahedral normals.
  * Mirrors protocol/codec.c (byte layouts in PROTOCOL.md).  The EXR codecs
  * are not decoded here; the viewer never subscribes with them.
  *
@@ -22,7 +23,8 @@ const QZ2_FORMAT = 2;         /* format 2 (what oceand writes): LSX with a refer
 const QZ2_PLANE_HEAD = 12;    /* base f32, step f32, nbytes u8, predictor u8, ref u8, reserved u8 */
 const QZ_PRED_LSX = 3;
 const QZ_NOREF = 255;
-const QZ_OWN = [[0, -1], [-1, 0], [-1, -1], [-1, 1], [0, -2], [-2, 0], [-1, -2], [-2, -1]];
+/* LSX taps (di, dj): own causal 8 (written out in qz2Decode in this order:
+ * (0,-1) (-1,0) (-1,-1) (-1,1) (0,-2) (-2,0) (-1,-2) (-2,-1)), then the reference plane's 9 */
 const QZ_REF = [[0, 0], [0, -1], [0, 1], [-1, 0], [1, 0], [0, -2], [0, 2], [-2, 0], [2, 0]];
 const QZ_HEAD = 4;            /* planes u8, format u8, reserved u16 */
 const QZ_PLANE_HEAD = 24;     /* base f32, step f32, nbytes u8, predictor u8, reserved u16, coef i16[6] */
@@ -208,7 +210,6 @@ function qz2Decode(w, h, np, data, dv, out) {
     if (q2Scratch.length < n * np) q2Scratch = new Float64Array(n * np);
     if (rScratch.length < n) rScratch = new Int32Array(n);
     const qa = q2Scratch, res = rScratch;
-    const own = QZ_OWN.map(([di, dj]) => di * w + dj);
     let ro = 0;
     for (let c = 0; c < np; c++) {
         const k = nb[c], bs = base[c], st = step[c], lsx = pred[c] === QZ_PRED_LSX, cf = coefs[c];
@@ -223,12 +224,19 @@ function qz2Decode(w, h, np, data, dv, out) {
                 if (i === 0) p = j === 0 ? 0 : qa[idx - 1];
                 else if (j === 0) p = qa[idx - w];
                 else if (lsx && i >= 2 && j >= 2 && j + 1 < w) {
-                    let s = 0;
-                    for (let t = 0; t < 8; t++) s += cf[t] * qa[idx + own[t]];
+                    let s = cf[0] * qa[idx - 1] + cf[1] * qa[idx - w] + cf[2] * qa[idx - w - 1] + cf[3] * qa[idx - w + 1] +
+                            cf[4] * qa[idx - 2] + cf[5] * qa[idx - 2 * w] + cf[6] * qa[idx - w - 2] + cf[7] * qa[idx - 2 * w - 1];
                     if (ref >= 0) {
-                        for (let t = 0; t < 9; t++) {
-                            const ii = Math.min(Math.max(i + QZ_REF[t][0], 0), h - 1), jj = Math.min(Math.max(j + QZ_REF[t][1], 0), w - 1);
-                            s += cf[8 + t] * qa[ref + ii * w + jj];
+                        if (i + 2 < h && j + 2 < w) {
+                            /* away from the edges the clamp does not bite */
+                            const r = ref + i * w + j;
+                            s += cf[8] * qa[r] + cf[9] * qa[r - 1] + cf[10] * qa[r + 1] + cf[11] * qa[r - w] + cf[12] * qa[r + w] +
+                                 cf[13] * qa[r - 2] + cf[14] * qa[r + 2] + cf[15] * qa[r - 2 * w] + cf[16] * qa[r + 2 * w];
+                        } else {
+                            for (let t = 0; t < 9; t++) {
+                                const ii = Math.min(Math.max(i + QZ_REF[t][0], 0), h - 1), jj = Math.min(Math.max(j + QZ_REF[t][1], 0), w - 1);
+                                s += cf[8 + t] * qa[ref + ii * w + jj];
+                            }
                         }
                     }
                     p = Math.floor((s + 2048) / 4096);

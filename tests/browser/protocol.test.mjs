@@ -122,6 +122,8 @@ test('FRAME from C: header, mesh and tiles decode; tile samples equal the C deco
     }
     assert.ok(preds.has(3), `qz predictors used: ${[...preds]}`);
     assert.ok(refs.has(0), `qz reference planes used: ${[...refs]}`);
+    /* and a format-1 payload (recordings before format 2) decoded alike above */
+    assert.ok(f.tiles.some((t) => t.codec === CODEC.QZ && t.payload[1] === 1), 'a qz format 1 tile');
 });
 
 test('layout-1 FRAME from C: cascade block, mip tables, tags, placement; tiles bit for bit', () => {
