@@ -519,6 +519,145 @@ static void test_qz2_hostile_headers(void **state)
     free(back);
 }
 
+/* ---- fixed qz vectors: tests/vectors/codec ------------------------------- */
+
+/* NAME.qz is one qz payload, NAME.txt its tile (codec, format, width,
+ * height, channels), NAME.f32 the planes a conforming decoder makes of it
+ * (little-endian binary32, plane after plane), bit for bit; the browser
+ * decoder is held to the same files (tests/browser/protocol.test.mjs).
+ * The payloads are a 16 x 12 window of a real layout-1 tile (default
+ * scene, cascade 0, mip 1) at accuracy 5e-3: format 2 as encoders write it
+ * today, format 1 as recordings made before hold it.  Regenerate:
+ * build/tests/test_codec --write-vectors tests/vectors/codec (only when
+ * the format changes: the expectations are the decoder's contract). */
+#define CV_W 16
+#define CV_H 12
+#define CV_CH (PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM)
+static const struct { const char *name; int format; } codec_vectors[] = {{"qz2_viewer_tile", 2}, {"qz1_viewer_tile", 1}};
+
+static const char *codec_vector_dir(void)
+{
+    const char *d = getenv("OCEAN_CODEC_VECTORS");
+    return d ? d : "tests/vectors/codec";
+}
+
+static int put_file(const char *dir, const char *name, const char *ext, const void *p, size_t n)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/%s.%s", dir, name, ext);
+    FILE *f = fopen(path, "wb");
+    if (!f || fwrite(p, 1, n, f) != n) {
+        fprintf(stderr, "cannot write %s\n", path);
+        if (f)
+            fclose(f);
+        return -1;
+    }
+    return fclose(f);
+}
+
+static uint8_t *get_file(const char *dir, const char *name, const char *ext, size_t *n)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/%s.%s", dir, name, ext);
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    long l = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    uint8_t *b = malloc(l > 0 ? (size_t)l + 1 : 1);
+    *n = l > 0 && fread(b, 1, (size_t)l, f) == (size_t)l ? (size_t)l : 0;
+    fclose(f);
+    b[*n] = 0;
+    return b;
+}
+
+static int write_codec_vectors(const char *dir)
+{
+    tile_l1 s;
+    if (tile_l1_open(&s, "config/oceand.conf", "config/scenes/ship-bridge.conf", 100.0))
+        return 1;
+    float *tile = malloc(6 * 32 * 32 * sizeof *tile), win[6 * CV_W * CV_H], dec[6 * CV_W * CV_H];
+    if (tile_l1_cut(&s, 0, 1, 3, 2, 32, tile))
+        return 1;
+    for (int p = 0; p < 6; p++)
+        for (int i = 0; i < CV_H; i++)
+            for (int j = 0; j < CV_W; j++)
+                win[(p * CV_H + i) * CV_W + j] = tile[(p * 32 + i) * 32 + j];
+    free(tile);
+    tile_l1_close(&s);
+    proto_codec_params p;
+    proto_codec_params_default(&p);
+    p.accuracy = 5e-3;
+    for (size_t v = 0; v < sizeof codec_vectors / sizeof codec_vectors[0]; v++) {
+        proto_buf b;
+        proto_buf_init(&b, 0);
+        ocean_result r = codec_vectors[v].format == 2
+                             ? proto_tile_encode(PROTO_CODEC_QZ, &p, CV_W, CV_H, CV_CH, win, &b, NULL, NULL, 0)
+                             : qzb_encode(&p, CV_W, CV_H, 6, win, &b, NULL, NULL, 0);
+        if (r != OCEAN_OK || b.mem[1] != codec_vectors[v].format ||
+            proto_tile_decode(PROTO_CODEC_QZ, CV_W, CV_H, CV_CH, b.mem, b.len, dec, NULL, 0) != OCEAN_OK)
+            return 1;
+        uint8_t le[sizeof dec];
+        for (size_t i = 0; i < 6 * CV_W * CV_H; i++)
+            proto_stf32(le + 4 * i, dec[i]);
+        char txt[256];
+        int tl = snprintf(txt, sizeof txt, "codec = qz\nformat = %d\nwidth = %d\nheight = %d\nchannels = 0x%x\n",
+                          codec_vectors[v].format, CV_W, CV_H, (unsigned)CV_CH);
+        if (put_file(dir, codec_vectors[v].name, "qz", b.mem, b.len) ||
+            put_file(dir, codec_vectors[v].name, "f32", le, sizeof le) ||
+            put_file(dir, codec_vectors[v].name, "txt", txt, (size_t)tl))
+            return 1;
+        proto_buf_free(&b);
+    }
+    return 0;
+}
+
+/* The committed payloads decode to the committed samples, bit for bit;
+ * the format-2 vector uses LSX with the H plane as reference, so the
+ * contract covers it; every truncation of them is refused. */
+static void test_codec_vectors(void **state)
+{
+    (void)state;
+    for (size_t v = 0; v < sizeof codec_vectors / sizeof codec_vectors[0]; v++) {
+        size_t nq = 0, nf = 0, nt = 0;
+        uint8_t *q = get_file(codec_vector_dir(), codec_vectors[v].name, "qz", &nq);
+        uint8_t *f = get_file(codec_vector_dir(), codec_vectors[v].name, "f32", &nf);
+        char *t = (char *)get_file(codec_vector_dir(), codec_vectors[v].name, "txt", &nt);
+        if (!q || !f || !t)
+            fail_msg("codec vector %s missing in %s (run from the repository root)", codec_vectors[v].name,
+                     codec_vector_dir());
+        int fmt = 0, w = 0, h = 0;
+        unsigned ch = 0;
+        assert_int_equal(sscanf(t, "codec = qz\nformat = %d\nwidth = %d\nheight = %d\nchannels = 0x%x", &fmt, &w, &h, &ch), 4);
+        int np = proto_tile_planes(ch);
+        assert_int_equal(nf, 4 * (size_t)np * w * h);
+        assert_int_equal(q[1], fmt);
+        float *dec = malloc(nf);
+        char err[256];
+        assert_int_equal(proto_tile_decode(PROTO_CODEC_QZ, w, h, ch, q, nq, dec, err, sizeof err), OCEAN_OK);
+        for (size_t i = 0; i < nf / 4; i++) {
+            float want = proto_ldf32(f + 4 * i);
+            if (memcmp(&want, &dec[i], 4))
+                fail_msg("%s sample %zu: %.9g, expected %.9g", codec_vectors[v].name, i, (double)dec[i], (double)want);
+        }
+        if (fmt == 2) {
+            int refs = 0;
+            for (int c = 0, o = 4; c < np; c++) {
+                refs += q[o + 9] == 3 && q[o + 10] == 0;
+                o += 12 + (q[o + 9] == 3 ? 2 * (q[o + 10] == 255 ? 8 : 17) : 0);
+            }
+            assert_true(refs > 0);
+        }
+        for (size_t l = 0; l < nq; l++)
+            assert_int_equal(proto_tile_decode(PROTO_CODEC_QZ, w, h, ch, q, l, dec, err, sizeof err), OCEAN_ECODEC);
+        free(dec);
+        free(q);
+        free(f);
+        free(t);
+    }
+}
+
 /* Writes the EXR payload to a file and opens it with OpenEXRCore's own file
  * reader: proves the payload is a standalone .exr with the documented
  * channels, size and compression. */
@@ -731,8 +870,10 @@ static void test_codec_ctx_reuse(void **state)
     proto_codec_ctx_destroy(ctx);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    if (argc == 3 && strcmp(argv[1], "--write-vectors") == 0)
+        return write_codec_vectors(argv[2]);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_f16_values),
         cmocka_unit_test(test_octahedral),
@@ -745,6 +886,7 @@ int main(void)
         cmocka_unit_test(test_normal_budget_angle),
         cmocka_unit_test(test_qz_format1_still_decodes),
         cmocka_unit_test(test_qz2_hostile_headers),
+        cmocka_unit_test(test_codec_vectors),
         cmocka_unit_test(test_exr_file),
         cmocka_unit_test(test_encode_refusals),
         cmocka_unit_test(test_decode_hostile),

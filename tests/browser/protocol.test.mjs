@@ -11,6 +11,8 @@
  *    vectors are decoded by both; both must accept or refuse each one alike
  *    and, when refusing, report the same ocean_result code;
  *  - corrupt qz payloads are refused with ECODEC, never decoded to junk;
+ *  - the committed qz payload vectors (tests/vectors/codec, formats 2 and 1)
+ *    decode to their committed samples bit for bit, as the C decoder's;
  *  - the protocol's own vectors (tests/vectors, PROTO_VECTORS) decode to
  *    their stated fields, bad ones get their stated code, and the messages
  *    the viewer sends re-encode to identical bytes.
@@ -378,6 +380,32 @@ test('hostile input: truncated and corrupted messages get the same verdict and c
     });
     assert.deepEqual(mismatches.slice(0, 10), [], `${mismatches.length} of ${variants.length} verdicts differ`);
     assert.ok(refused > variants.length / 3, `only ${refused} of ${variants.length} variants were refused`);
+});
+
+test('qz payload vectors (tests/vectors/codec): formats 2 and 1 decode to the committed samples, bit for bit', (t) => {
+    const vdir = process.env.PROTO_VECTORS;
+    if (!vdir) { t.skip('PROTO_VECTORS not set'); return; }
+    const dir = join(vdir, 'codec');
+    const names = readdirSync(dir).filter((f) => f.endsWith('.qz')).map((f) => f.slice(0, -3));
+    assert.ok(names.length >= 2, `codec vectors in ${dir}: ${names}`);
+    const formats = new Set();
+    for (const name of names) {
+        const meta = Object.fromEntries(readFileSync(join(dir, `${name}.txt`), 'utf8').trim().split('\n')
+            .map((l) => l.split(' = ')));
+        const payload = new Uint8Array(readFileSync(join(dir, `${name}.qz`)));
+        const want = readFileSync(join(dir, `${name}.f32`));
+        const w = Number(meta.width), h = Number(meta.height), ch = Number(meta.channels);
+        assert.equal(payload[1], Number(meta.format));
+        formats.add(payload[1]);
+        const d = decodeTile(CODEC.QZ, w, h, ch, payload);
+        assert.equal(d.data.length * 4, want.length);
+        const got = new Uint8Array(d.data.buffer, d.data.byteOffset, d.data.byteLength);
+        for (let i = 0; i < want.length; i++)
+            if (got[i] !== want[i]) assert.fail(`${name}: byte ${i} of the samples differs`);
+        for (let l = 0; l < payload.length; l += 7)
+            assert.throws(() => decodeTile(CODEC.QZ, w, h, ch, payload.subarray(0, l)), (e) => e.code === R.ECODEC);
+    }
+    assert.deepEqual([...formats].sort(), [1, 2]);
 });
 
 test('corrupt qz payloads are refused with ECODEC, never decoded to junk', () => {
