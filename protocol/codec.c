@@ -1,8 +1,9 @@
 /*
  * codec.c - tile codecs f32, f16 and qz (quantised + least-squares spatial
- * prediction + zstd), octahedral normals and half-float conversion.  The OpenEXR codecs
- * live in proto_exr.c.  Byte layouts are specified in PROTOCOL.md; this file
- * and that document must change together.
+ * prediction + zstd; format 2 written, formats 1 and 2 read), octahedral
+ * normals and half-float conversion.  The OpenEXR codecs live in
+ * proto_exr.c.  Byte layouts are specified in PROTOCOL.md; this file and
+ * that document must change together.
  */
 #include "codec.h"
 
@@ -322,10 +323,12 @@ static inline int64_t qz_predict(const int64_t *q, int w, int i, int j, int pred
  * neighbours at the band's top: the planar (Lorenzo) predictor misses
  * there by up to 1.4 x the amplitude, and the least-squares weights of a
  * wider causal stencil do much better.  DX, DZ and the normals are linear
- * functions of the same spectrum as H (Tessendorf 2001, eqs. 29-30: D =
- * -i k/|k| h~, slope = i k h~), so the decoded H plane around the sample -
- * not causal, but already decoded - predicts them further (measured on the
- * default scene's mip tiles: bench_codec). */
+ * functions of the same spectrum as H (Tessendorf 2001, "Simulating Ocean
+ * Water": D = sum -i k/|k| h~ e^{ikx}, slope = sum i k h~ e^{ikx}), so the
+ * decoded H plane around the sample - not causal, but already decoded -
+ * predicts them further: on the default scene's mip tiles their residuals
+ * shrink by about a fifth (an experiment while designing format 2; the
+ * result is bench_codec's layout-1 table). */
 #define QZ2_FORMAT 2
 #define QZ2_PLANE_HEAD 12 /* base f32, step f32, nbytes u8, predictor u8, ref u8, reserved u8 */
 #define QZ_PRED_LSX 3
@@ -359,9 +362,12 @@ static int qz_kind(unsigned channels, int i)
  *   DX, DZ positions, so the height's metres: accuracy x max(H range, own
  *          range) (never finer than their own relative budget);
  *   NU, NV the octahedral normal to accuracy/2 per component, whatever the
- *          tile's slope range: <= 0.22 deg at the default 5e-3 (the bound
- *          test_codec checks), below the sun's 0.27 deg radius, so a glint
- *          moves by less than the sun's own size;
+ *          tile's slope range: <= 2.2 x accuracy rad of normal angle (0.63
+ *          deg at 5e-3; test_codec), a small fraction of the slope spread
+ *          every viewer adds for the waves shorter than the simulation
+ *          (about 8 deg per axis in the default scene), so the shaded glint
+ *          cannot tell, while a calm tile's tiny slope range no longer buys
+ *          precision nobody sees;
  *   FOAM   accuracy x range, but never coarser than an 8-bit level (1/255).
  * A step that would make more than QZ2_QMAX levels (hostile ranges) falls
  * back to the relative one, which makes at most 1 / (2 accuracy). */
@@ -425,53 +431,86 @@ static inline int64_t qz2_predict(const int64_t *q, const int64_t *rq, int w, in
     return row[j - 1] + up[j] - up[j - 1];
 }
 
+/* sum a[i] b[i] over n unsigned 32-bit pairs, exactly in 64 bits (the
+ * caller keeps the sum below 2^64).  SSE2 multiplies two pairs per
+ * pmuludq, even and odd lanes apart; integer sums do not depend on the
+ * order, so the portable loop (alone with -DQZ_NO_SIMD) gives the same. */
+static uint64_t qz_dot_u32(const uint32_t *a, const uint32_t *b, size_t n)
+{
+    size_t i = 0;
+    uint64_t s = 0;
+#if defined(__SSE2__) && !defined(QZ_NO_SIMD)
+    __m128i acc = _mm_setzero_si128();
+    for (; i + 4 <= n; i += 4) {
+        __m128i x = _mm_loadu_si128((const __m128i *)(const void *)(a + i));
+        __m128i y = _mm_loadu_si128((const __m128i *)(const void *)(b + i));
+        acc = _mm_add_epi64(acc, _mm_mul_epu32(x, y));
+        acc = _mm_add_epi64(acc, _mm_mul_epu32(_mm_srli_epi64(x, 32), _mm_srli_epi64(y, 32)));
+    }
+    uint64_t l[2];
+    _mm_storeu_si128((__m128i *)(void *)l, acc);
+    s = l[0] + l[1];
+#endif
+    for (; i < n; i++)
+        s += (uint64_t)a[i] * b[i];
+    return s;
+}
+
+/* Samples the fit reads: a quincunx quarter of the LSX region (every
+ * other row, every other column, shifted by one on alternate rows) - a
+ * quarter of the work for 0.3 % more bytes on the viewer's tiles
+ * (bench_codec). */
+static size_t qz2_fit_samples(int w, int h)
+{
+    size_t s = 0;
+    for (int i = 2; i < h; i += 2)
+        for (int j = 2 + (i >> 1 & 1); j + 1 < w; j += 2)
+            s++;
+    return s;
+}
+
 /* Least-squares LSX weights (x 4096, rounded) for plane q with reference
- * rq (NULL: own taps only).  The normal equations are summed exactly in
+ * rq (NULL: own taps only), fx scratch of (QZ_NTAP + 1) x
+ * qz2_fit_samples(w, h) words.  The normal equations are summed exactly in
  * 64-bit unsigned integers (levels are >= 0 and < QZ2_QMAX = 2^21 here, so
- * each product < 2^42 and a 1024 x 1024 tile's sums < 2^62): the weights
- * are the same on every machine, as two replicas need.  Returns 0 if the
- * system is singular, a weight exceeds +-7.9 or the tile is too small. */
-static int qz2_fit(const int64_t *q, const int64_t *rq, int w, int h, int16_t *coef)
+ * each product < 2^42 and a 1024 x 1024 tile's sums < 2^60): the weights
+ * are the same on every machine, as two replicas need.  The taps are laid
+ * out a column per tap so that each entry is one dot product.  Returns 0
+ * if the system is singular, a weight exceeds +-7.9 or the tile is too
+ * small. */
+static int qz2_fit(const int64_t *q, const int64_t *rq, int w, int h, int16_t *coef, uint32_t *fx)
 {
     if (w < 4 || h < 3)
         return 0;
     int nt = rq ? QZ_NTAP : QZ_NOWN;
-    uint64_t s[QZ_NTAP * (QZ_NTAP + 1) / 2] = {0}, sb[QZ_NTAP] = {0};
-    /* A quincunx quarter of the region (every other row, every other
-     * column, shifted by one on alternate rows): a quarter of the work
-     * for 0.3 % more bytes on the viewer's tiles (bench_codec), and still
-     * an exact integer sum. */
+    size_t S = qz2_fit_samples(w, h), k = 0;
+    if (S == 0)
+        return 0;
     for (int i = 2; i < h; i += 2)
-        for (int j = 2 + (i >> 1 & 1); j + 1 < w; j += 2) {
-            uint64_t x[QZ_NTAP], v = (uint64_t)q[(size_t)i * w + j];
+        for (int j = 2 + (i >> 1 & 1); j + 1 < w; j += 2, k++) {
             const int64_t *row = q + (size_t)i * w;
+            fx[(size_t)QZ_NTAP * S + k] = (uint32_t)row[j];
             for (int t = 0; t < QZ_NOWN; t++)
-                x[t] = (uint64_t)row[qz_own[t][0] * w + j + qz_own[t][1]];
-            if (rq) {
-                if (i + 2 < h && j + 2 < w) {
-                    const int64_t *rr = rq + (size_t)i * w + j;
-                    for (int t = 0; t < QZ_NREF; t++)
-                        x[QZ_NOWN + t] = (uint64_t)rr[qz_ref[t][0] * w + qz_ref[t][1]];
-                } else {
-                    int64_t xs[QZ_NTAP];
-                    qz2_taps(q, rq, w, h, i, j, xs);
-                    for (int t = QZ_NOWN; t < QZ_NTAP; t++)
-                        x[t] = (uint64_t)xs[t];
-                }
-            }
-            int k = 0;
-            for (int a = 0; a < nt; a++) {
-                uint64_t xa = x[a];
-                for (int c = a; c < nt; c++, k++)
-                    s[k] += xa * x[c];
-                sb[a] += xa * v;
+                fx[(size_t)t * S + k] = (uint32_t)row[qz_own[t][0] * w + j + qz_own[t][1]];
+            if (!rq)
+                continue;
+            if (i + 2 < h && j + 2 < w) {
+                const int64_t *rr = rq + (size_t)i * w + j;
+                for (int t = 0; t < QZ_NREF; t++)
+                    fx[(size_t)(QZ_NOWN + t) * S + k] = (uint32_t)rr[qz_ref[t][0] * w + qz_ref[t][1]];
+            } else {
+                int64_t xs[QZ_NTAP];
+                qz2_taps(q, rq, w, h, i, j, xs);
+                for (int t = QZ_NOWN; t < QZ_NTAP; t++)
+                    fx[(size_t)t * S + k] = (uint32_t)xs[t];
             }
         }
+    const uint32_t *v = fx + (size_t)QZ_NTAP * S;
     double A[QZ_NTAP][QZ_NTAP], b[QZ_NTAP];
-    for (int i = 0, k = 0; i < nt; i++) {
-        b[i] = (double)sb[i];
-        for (int c = i; c < nt; c++, k++)
-            A[i][c] = A[c][i] = (double)s[k];
+    for (int i = 0; i < nt; i++) {
+        b[i] = (double)qz_dot_u32(fx + (size_t)i * S, v, S);
+        for (int c = i; c < nt; c++)
+            A[i][c] = A[c][i] = (double)qz_dot_u32(fx + (size_t)i * S, fx + (size_t)c * S, S);
     }
     /* Gauss-Jordan with partial pivoting. */
     for (int i = 0; i < nt; i++) {
@@ -527,30 +566,50 @@ static inline int qz2_fast(int w, int h, int i, int j, int pred, int ref)
     return pred == QZ_PRED_LSX && i >= 2 && j >= 2 && j + 1 < w && (!ref || (i + 2 < h && j + 2 < w));
 }
 
+/* One residual: zigzag into z[k], |r| added to cost, max kept in m. */
+#define QZ2_PUT(k, pr)                                    \
+    do {                                                  \
+        int64_t r_ = q[k] - (pr);                         \
+        uint32_t z_ = zigzag(r_);                         \
+        z[k] = z_;                                        \
+        cost += (uint64_t)(r_ < 0 ? -r_ : r_);            \
+        m = z_ > m ? z_ : m;                              \
+    } while (0)
+
 /* Residuals of q under (pred, rq, coef) into z exactly as the decoder's
- * qz2_predict; returns sum |r| (the cost) and the largest zigzag code. */
+ * qz2_predict, with the interior runs (planar, or LSX away from the
+ * clamped edges) peeled off so they carry no branches; returns sum |r|
+ * (the cost) and the largest zigzag code. */
 static uint64_t qz2_residuals(const int64_t *q, const int64_t *rq, int w, int h, int pred, const int16_t *coef,
                               uint32_t *z, uint32_t *zmax)
 {
     uint64_t cost = 0;
     uint32_t m = 0;
     for (int i = 0; i < h; i++) {
-        const int64_t *row = q + (size_t)i * w;
-        int j = 0;
-        while (j < w) {
-            size_t k = (size_t)i * w + j;
-            int64_t pr;
-            if (qz2_fast(w, h, i, j, pred, rq != NULL))
-                pr = floordiv4096(qz2_sum_fast(row + j, rq ? rq + k : NULL, w, coef) + 2048);
-            else
-                pr = qz2_predict(q, rq, w, h, i, j, pred, coef);
-            int64_t r = row[j] - pr;
-            uint32_t zz = zigzag(r);
-            z[k] = zz;
-            cost += (uint64_t)(r < 0 ? -r : r);
-            m = zz > m ? zz : m;
-            j++;
+        size_t o = (size_t)i * w;
+        const int64_t *row = q + o;
+        if (i == 0 || pred != QZ_PRED_LSX || i < 2) {
+            if (i == 0) {
+                for (int j = 0; j < w; j++)
+                    QZ2_PUT(o + j, j == 0 ? 0 : row[j - 1]);
+                continue;
+            }
+            QZ2_PUT(o, row[-w]);
+            for (int j = 1; j < w; j++)
+                QZ2_PUT(o + j, row[j - 1] + row[j - w] - row[j - w - 1]);
+            continue;
         }
+        /* LSX rows: the fast run is 2 <= j < jend */
+        int jend = rq ? (i + 2 < h ? w - 2 : 2) : w - 1;
+        if (jend < 2)
+            jend = 2;
+        int j = 0;
+        for (; j < 2 && j < w; j++)
+            QZ2_PUT(o + j, qz2_predict(q, rq, w, h, i, j, pred, coef));
+        for (; j < jend; j++)
+            QZ2_PUT(o + j, floordiv4096(qz2_sum_fast(row + j, rq ? rq + o + j : NULL, w, coef) + 2048));
+        for (; j < w; j++)
+            QZ2_PUT(o + j, qz2_predict(q, rq, w, h, i, j, pred, coef));
     }
     *zmax = m;
     return cost;
@@ -568,6 +627,8 @@ struct proto_codec_ctx {
     uint32_t *z, *z2;    /* zigzag residuals: kept, candidate */
     size_t rawcap;
     uint8_t *raw;        /* byte planes of every plane's residuals */
+    size_t fxcap;
+    uint32_t *fx;        /* the fit's taps, a column per tap (qz2_fit) */
 };
 
 ocean_result proto_codec_ctx_create(proto_codec_ctx **out)
@@ -587,10 +648,11 @@ void proto_codec_ctx_destroy(proto_codec_ctx *c)
     free(c->z);
     free(c->z2);
     free(c->raw);
+    free(c->fx);
     free(c);
 }
 
-static ocean_result ctx_reserve(proto_codec_ctx *c, size_t n, size_t rawlen)
+static ocean_result ctx_reserve(proto_codec_ctx *c, size_t n, size_t rawlen, size_t fxlen)
 {
     if (n > c->cap) {
         int64_t *q = realloc(c->q, n * PROTO_TILE_MAX_PLANES * sizeof *q);
@@ -609,6 +671,13 @@ static ocean_result ctx_reserve(proto_codec_ctx *c, size_t n, size_t rawlen)
             return OCEAN_ENOMEM;
         c->raw = r;
         c->rawcap = rawlen;
+    }
+    if (fxlen > c->fxcap) {
+        uint32_t *f = realloc(c->fx, fxlen * sizeof *f);
+        if (!f)
+            return OCEAN_ENOMEM;
+        c->fx = f;
+        c->fxcap = fxlen;
     }
     return OCEAN_OK;
 }
@@ -654,7 +723,7 @@ static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, 
     if (level < 1 || level > 19)
         level = 3;
     size_t n = (size_t)w * h;
-    ocean_result res = ctx_reserve(cx, n, n * 4 * (size_t)np + 1);
+    ocean_result res = ctx_reserve(cx, n, n * 4 * (size_t)np + 1, (QZ_NTAP + 1) * qz2_fit_samples(w, h) + 1);
     if (res != OCEAN_OK)
         return res;
     uint32_t *z = cx->z, *z2 = cx->z2;
@@ -702,10 +771,10 @@ static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, 
         if (cost > 0) {
             int16_t cf[QZ_NTAP] = {0};
             const int64_t *r2 = rq;
-            int ok = qz2_fit(q, r2, w, h, cf);
+            int ok = qz2_fit(q, r2, w, h, cf, cx->fx);
             if (!ok && r2) {
                 r2 = NULL;
-                ok = qz2_fit(q, NULL, w, h, cf);
+                ok = qz2_fit(q, NULL, w, h, cf, cx->fx);
             }
             if (ok) {
                 uint64_t cost2 = qz2_residuals(q, r2, w, h, QZ_PRED_LSX, cf, z2, &zmax2);
