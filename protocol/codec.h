@@ -87,7 +87,9 @@ int proto_tile_planes(unsigned channels);
 const char *proto_tile_plane_name(unsigned channels, int i);
 
 /* A-priori bound on |decoded - input| for one plane whose values lie in
- * [lo, hi], for codec c with params p.  0 for lossless codecs.  For exr-b44/
+ * [lo, hi], for codec c with params p.  0 for lossless codecs.  For qz
+ * this is the relative budget (accuracy x range) of the H and J planes;
+ * proto_codec_plane_error_bound gives every plane's.  For exr-b44/
  * b44a the bound is loose (B44 can lose up to half of a block's
  * magnitude when a block straddles zero); proto_tile_encode reports the
  * achieved error, which is what TILE messages carry. */

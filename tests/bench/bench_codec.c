@@ -358,7 +358,9 @@ static int layout1_table(int quick, FILE *csv)
     printf("%d tiles: every mip of each of %d cascades (%d / %d / %d tiles), channels H DX DZ NU NV (+ FOAM on "
            "cascade 0), as server/srv_cascade.c samples them; one proto_codec_ctx per row, median of %d runs. Max "
            "errors are over all tiles (m for H DX DZ; octahedral units for NU NV); normal deg = worst angle between "
-           "decoded and input unit normals; model = the planner's srv_cascade_tile_bytes against the measured bytes.\n\n",
+           "decoded and input unit normals; model = the planner's srv_cascade_tile_bytes against the measured bytes. "
+           "Format 1 rows run the frozen encoder (qz_before.h: a new ZSTD_CCtx per call, as before per-worker "
+           "contexts), format 2 rows today's with one context, as the daemon's workers do.\n\n",
            nt, cascades, per_mip[0], per_mip[1], per_mip[2], reps);
     printf("| codec | bytes/tile | vs f32 | H PSNR worst (dB) | H max | DX max | DZ max | NU max | NV max | FOAM max | "
            "normal deg | encode ms | decode ms | model |\n");
