@@ -460,12 +460,15 @@ static uint64_t qz_dot_u32(const uint32_t *a, const uint32_t *b, size_t n)
  * other row, every other column, shifted by one on alternate rows) - a
  * quarter of the work for 0.3 % more bytes on the viewer's tiles
  * (bench_codec). */
+#define QZ2_FOR_FIT_SAMPLES(i, j)             \
+    for (int i = 2; i < h; i += 2)            \
+        for (int j = 2 + (i >> 1 & 1); j + 1 < w; j += 2)
+
 static size_t qz2_fit_samples(int w, int h)
 {
     size_t s = 0;
-    for (int i = 2; i < h; i += 2)
-        for (int j = 2 + (i >> 1 & 1); j + 1 < w; j += 2)
-            s++;
+    QZ2_FOR_FIT_SAMPLES(i, j)
+        s++;
     return s;
 }
 
@@ -486,25 +489,23 @@ static int qz2_fit(const int64_t *q, const int64_t *rq, int w, int h, int16_t *c
     size_t S = qz2_fit_samples(w, h), k = 0;
     if (S == 0)
         return 0;
-    for (int i = 2; i < h; i += 2)
-        for (int j = 2 + (i >> 1 & 1); j + 1 < w; j += 2, k++) {
-            const int64_t *row = q + (size_t)i * w;
-            fx[(size_t)QZ_NTAP * S + k] = (uint32_t)row[j];
-            for (int t = 0; t < QZ_NOWN; t++)
-                fx[(size_t)t * S + k] = (uint32_t)row[qz_own[t][0] * w + j + qz_own[t][1]];
-            if (!rq)
-                continue;
-            if (i + 2 < h && j + 2 < w) {
-                const int64_t *rr = rq + (size_t)i * w + j;
-                for (int t = 0; t < QZ_NREF; t++)
-                    fx[(size_t)(QZ_NOWN + t) * S + k] = (uint32_t)rr[qz_ref[t][0] * w + qz_ref[t][1]];
-            } else {
-                int64_t xs[QZ_NTAP];
-                qz2_taps(q, rq, w, h, i, j, xs);
-                for (int t = QZ_NOWN; t < QZ_NTAP; t++)
-                    fx[(size_t)t * S + k] = (uint32_t)xs[t];
-            }
+    QZ2_FOR_FIT_SAMPLES(i, j) {
+        const int64_t *row = q + (size_t)i * w;
+        fx[(size_t)QZ_NTAP * S + k] = (uint32_t)row[j];
+        for (int t = 0; t < QZ_NOWN; t++)
+            fx[(size_t)t * S + k] = (uint32_t)row[qz_own[t][0] * w + j + qz_own[t][1]];
+        if (rq && i + 2 < h && j + 2 < w) {
+            const int64_t *rr = rq + (size_t)i * w + j;
+            for (int t = 0; t < QZ_NREF; t++)
+                fx[(size_t)(QZ_NOWN + t) * S + k] = (uint32_t)rr[qz_ref[t][0] * w + qz_ref[t][1]];
+        } else if (rq) {
+            int64_t xs[QZ_NTAP];
+            qz2_taps(q, rq, w, h, i, j, xs);
+            for (int t = QZ_NOWN; t < QZ_NTAP; t++)
+                fx[(size_t)t * S + k] = (uint32_t)xs[t];
         }
+        k++;
+    }
     const uint32_t *v = fx + (size_t)QZ_NTAP * S;
     double A[QZ_NTAP][QZ_NTAP], b[QZ_NTAP];
     for (int i = 0; i < nt; i++) {
@@ -512,37 +513,41 @@ static int qz2_fit(const int64_t *q, const int64_t *rq, int w, int h, int16_t *c
         for (int c = i; c < nt; c++)
             A[i][c] = A[c][i] = (double)qz_dot_u32(fx + (size_t)i * S, fx + (size_t)c * S, S);
     }
-    /* Gauss-Jordan with partial pivoting. */
+    /* Cholesky A = L L^T (A is a Gram matrix: symmetric, positive
+     * definite unless the taps are linearly dependent - a flat or ramp
+     * tile - which a vanishing pivot reports): a sixth of Gauss-Jordan's
+     * work, in a fixed order, so every machine gets the same weights. */
+    double L[QZ_NTAP][QZ_NTAP], y[QZ_NTAP], x[QZ_NTAP];
     for (int i = 0; i < nt; i++) {
-        int p = i;
-        for (int r = i + 1; r < nt; r++)
-            if (fabs(A[r][i]) > fabs(A[p][i]))
-                p = r;
-        if (!(fabs(A[p][i]) > 1e-9 * (fabs(A[0][0]) + 1.0)))
-            return 0;
-        for (int c = 0; c < nt; c++) {
-            double t = A[i][c];
-            A[i][c] = A[p][c];
-            A[p][c] = t;
-        }
-        double t = b[i];
-        b[i] = b[p];
-        b[p] = t;
-        for (int r = 0; r < nt; r++)
-            if (r != i) {
-                double f = A[r][i] / A[i][i];
-                if (f == 0.0)
-                    continue;
-                for (int c = i; c < nt; c++)
-                    A[r][c] -= f * A[i][c];
-                b[r] -= f * b[i];
+        for (int j = 0; j <= i; j++) {
+            double sum = A[i][j];
+            for (int k = 0; k < j; k++)
+                sum -= L[i][k] * L[j][k];
+            if (i == j) {
+                if (!(sum > 1e-12 * A[i][i]) || !(sum > 0.0))
+                    return 0;
+                L[i][i] = sqrt(sum);
+            } else {
+                L[i][j] = sum / L[j][j];
             }
+        }
     }
     for (int i = 0; i < nt; i++) {
-        double x = b[i] / A[i][i];
-        if (!isfinite(x) || fabs(x) > 7.9)
+        double sum = b[i];
+        for (int k = 0; k < i; k++)
+            sum -= L[i][k] * y[k];
+        y[i] = sum / L[i][i];
+    }
+    for (int i = nt - 1; i >= 0; i--) {
+        double sum = y[i];
+        for (int k = i + 1; k < nt; k++)
+            sum -= L[k][i] * x[k];
+        x[i] = sum / L[i][i];
+    }
+    for (int i = 0; i < nt; i++) {
+        if (!isfinite(x[i]) || fabs(x[i]) > 7.9)
             return 0;
-        coef[i] = (int16_t)lround(x * 4096.0);
+        coef[i] = (int16_t)lround(x[i] * 4096.0);
     }
     return 1;
 }
@@ -564,6 +569,21 @@ static inline int64_t qz2_sum_fast(const int64_t *p, const int64_t *r, int w, co
 static inline int qz2_fast(int w, int h, int i, int j, int pred, int ref)
 {
     return pred == QZ_PRED_LSX && i >= 2 && j >= 2 && j + 1 < w && (!ref || (i + 2 < h && j + 2 < w));
+}
+
+/* sum |r| of q under the planar predictor (format 1's and the edges'). */
+static uint64_t qz2_planar_cost(const int64_t *q, int w, int h)
+{
+    uint64_t cost = 0;
+    for (int j = 1; j < w; j++)
+        cost += (uint64_t)llabs(q[j] - q[j - 1]);
+    for (int i = 1; i < h; i++) {
+        const int64_t *row = q + (size_t)i * w, *up = row - w;
+        cost += (uint64_t)llabs(row[0] - up[0]);
+        for (int j = 1; j < w; j++)
+            cost += (uint64_t)llabs(row[j] - row[j - 1] - up[j] + up[j - 1]);
+    }
+    return cost + (uint64_t)llabs(q[0]);
 }
 
 /* One residual: zigzag into z[k], |r| added to cost, max kept in m. */
@@ -622,9 +642,9 @@ static uint64_t qz2_residuals(const int64_t *q, const int64_t *rq, int w, int h,
 struct proto_codec_ctx {
     ZSTD_CCtx *zc;
     int zc_level;        /* level zc holds; 0: parameters not set yet */
-    size_t cap;          /* samples z, z2 hold; q holds cap * PROTO_TILE_MAX_PLANES */
+    size_t cap;          /* samples z holds; q holds cap * PROTO_TILE_MAX_PLANES */
     int64_t *q;          /* quantised planes, every plane kept (references) */
-    uint32_t *z, *z2;    /* zigzag residuals: kept, candidate */
+    uint32_t *z;         /* zigzag residuals of the plane being encoded */
     size_t rawcap;
     uint8_t *raw;        /* byte planes of every plane's residuals */
     size_t fxcap;
@@ -646,7 +666,6 @@ void proto_codec_ctx_destroy(proto_codec_ctx *c)
     ZSTD_freeCCtx(c->zc);
     free(c->q);
     free(c->z);
-    free(c->z2);
     free(c->raw);
     free(c->fx);
     free(c);
@@ -659,9 +678,7 @@ static ocean_result ctx_reserve(proto_codec_ctx *c, size_t n, size_t rawlen, siz
         if (q) c->q = q;
         uint32_t *z = realloc(c->z, n * sizeof *z);
         if (z) c->z = z;
-        uint32_t *z2 = realloc(c->z2, n * sizeof *z2);
-        if (z2) c->z2 = z2;
-        if (!q || !z || !z2)
+        if (!q || !z)
             return OCEAN_ENOMEM;
         c->cap = n;
     }
@@ -726,7 +743,7 @@ static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, 
     ocean_result res = ctx_reserve(cx, n, n * 4 * (size_t)np + 1, (QZ_NTAP + 1) * qz2_fit_samples(w, h) + 1);
     if (res != OCEAN_OK)
         return res;
-    uint32_t *z = cx->z, *z2 = cx->z2;
+    uint32_t *z = cx->z;
     uint8_t *raw = cx->raw;
     uint8_t head[QZ_HEAD + (QZ2_PLANE_HEAD + 2 * QZ_NTAP) * PROTO_TILE_MAX_PLANES + 4];
     memset(head, 0, sizeof head);
@@ -765,30 +782,27 @@ static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, 
         /* H predicts the planes made from the same spectrum */
         const int64_t *rq = (h_plane >= 0 && kind >= 1 && kind <= 4) ? cx->q + (size_t)h_plane * n : NULL;
         int16_t coef[QZ_NTAP] = {0};
-        uint32_t zmax, zmax2;
+        uint32_t zmax;
         int pred = QZ_PRED_PLANAR, nt = 0;
-        uint64_t cost = qz2_residuals(q, NULL, w, h, QZ_PRED_PLANAR, coef, z, &zmax);
-        if (cost > 0) {
-            int16_t cf[QZ_NTAP] = {0};
-            const int64_t *r2 = rq;
-            int ok = qz2_fit(q, r2, w, h, cf, cx->fx);
+        /* LSX when its fit exists and beats planar on sum |r| (planar's
+         * residuals are only written when they are kept) */
+        int ok = 0;
+        const int64_t *r2 = rq;
+        int16_t cf[QZ_NTAP] = {0};
+        if (qmax > 0) {
+            ok = qz2_fit(q, r2, w, h, cf, cx->fx);
             if (!ok && r2) {
                 r2 = NULL;
                 ok = qz2_fit(q, NULL, w, h, cf, cx->fx);
             }
-            if (ok) {
-                uint64_t cost2 = qz2_residuals(q, r2, w, h, QZ_PRED_LSX, cf, z2, &zmax2);
-                if (cost2 < cost) {
-                    uint32_t *t = z;
-                    z = z2;
-                    z2 = t;
-                    zmax = zmax2;
-                    pred = QZ_PRED_LSX;
-                    rq = r2;
-                    nt = r2 ? QZ_NTAP : QZ_NOWN;
-                    memcpy(coef, cf, sizeof coef);
-                }
-            }
+        }
+        if (ok && qz2_residuals(q, r2, w, h, QZ_PRED_LSX, cf, z, &zmax) < qz2_planar_cost(q, w, h)) {
+            pred = QZ_PRED_LSX;
+            rq = r2;
+            nt = r2 ? QZ_NTAP : QZ_NOWN;
+            memcpy(coef, cf, sizeof coef);
+        } else {
+            qz2_residuals(q, NULL, w, h, QZ_PRED_PLANAR, coef, z, &zmax);
         }
         int nb = zmax == 0 ? 0 : zmax < 0x100u ? 1 : zmax < 0x10000u ? 2 : zmax < 0x1000000u ? 3 : 4;
         uint8_t *ph = head + headlen;
