@@ -1,8 +1,9 @@
 /*
- * codec.c - tile codecs f32, f16 and qz (quantised + planar prediction +
- * zstd), octahedral normals and half-float conversion.  The OpenEXR codecs
- * live in proto_exr.c.  Byte layouts are specified in PROTOCOL.md; this file
- * and that document must change together.
+ * codec.c - tile codecs f32, f16 and qz (quantised + least-squares spatial
+ * prediction + zstd; format 2 written, formats 1 and 2 read), octahedral
+ * normals and half-float conversion.  The OpenEXR codecs live in
+ * proto_exr.c.  Byte layouts are specified in PROTOCOL.md; this file and
+ * that document must change together.
  */
 #include "codec.h"
 
@@ -314,6 +315,326 @@ static inline int64_t qz_predict(const int64_t *q, int w, int i, int j, int pred
     return row[j - 1] + up[j] - up[j - 1];
 }
 
+/* ---- qz format 2 ----------------------------------------------------------- */
+
+/* Format 2 (what the encoder writes; PROTOCOL.md "qz"): per-plane error
+ * budgets and the LSX predictor.  Layout-1 mip tiles are band-limited at
+ * half their grid's Nyquist, so a sample sits a quarter wavelength from its
+ * neighbours at the band's top: the planar (Lorenzo) predictor misses
+ * there by up to 1.4 x the amplitude, and the least-squares weights of a
+ * wider causal stencil do much better.  DX, DZ and the normals are linear
+ * functions of the same spectrum as H (Tessendorf 2001, "Simulating Ocean
+ * Water": D = sum -i k/|k| h~ e^{ikx}, slope = sum i k h~ e^{ikx}), so the
+ * decoded H plane around the sample - not causal, but already decoded -
+ * predicts them further: on the default scene's mip tiles their residuals
+ * shrink by about a fifth (an experiment while designing format 2; the
+ * result is bench_codec's layout-1 table). */
+#define QZ2_FORMAT 2
+#define QZ2_PLANE_HEAD 12 /* base f32, step f32, nbytes u8, predictor u8, ref u8, reserved u8 */
+#define QZ_PRED_LSX 3
+#define QZ_NOREF 255
+#define QZ_NOWN 8
+#define QZ_NREF 9
+#define QZ_NTAP (QZ_NOWN + QZ_NREF)
+#define QZ2_QMAX (1 << 21) /* encoder levels stay below: keeps the fit's sums exact */
+
+/* (di, dj) of the own causal taps and of the reference plane's taps. */
+static const int8_t qz_own[QZ_NOWN][2] = {{0, -1}, {-1, 0}, {-1, -1}, {-1, 1}, {0, -2}, {-2, 0}, {-1, -2}, {-2, -1}};
+static const int8_t qz_ref[QZ_NREF][2] = {{0, 0}, {0, -1}, {0, 1}, {-1, 0}, {1, 0}, {0, -2}, {0, 2}, {-2, 0}, {2, 0}};
+
+/* Plane kind: its slot in H DX DZ NU NV FOAM J. */
+static int qz_kind(unsigned channels, int i)
+{
+    static const int slot_bit[PROTO_TILE_MAX_PLANES] = {0, 1, 2, 3, 3, 4, 5};
+    int k = 0;
+    for (int s = 0; s < PROTO_TILE_MAX_PLANES; s++)
+        if (channels & (1u << slot_bit[s])) {
+            if (k == i)
+                return s;
+            k++;
+        }
+    return -1;
+}
+
+/* The step of a plane of kind `kind` whose values span `range`, in a tile
+ * whose H plane spans h_range (0: no H plane).  Why each budget:
+ *   H, J   accuracy x the plane's range (H: PSNR ~ 4.8 - 20 log10 accuracy dB);
+ *   DX, DZ positions, so the height's metres: accuracy x max(H range, own
+ *          range) (never finer than their own relative budget);
+ *   NU, NV the octahedral normal to accuracy/2 per component, whatever the
+ *          tile's slope range: <= 2.2 x accuracy rad of normal angle (0.63
+ *          deg at 5e-3; test_codec), a small fraction of the slope spread
+ *          every viewer adds for the waves shorter than the simulation
+ *          (about 8 deg per axis in the default scene), so the shaded glint
+ *          cannot tell, while a calm tile's tiny slope range no longer buys
+ *          precision nobody sees;
+ *   FOAM   accuracy x range, but never coarser than an 8-bit level (1/255).
+ * A step that would make more than QZ2_QMAX levels (hostile ranges) falls
+ * back to the relative one, which makes at most 1 / (2 accuracy). */
+static double qz2_step(double acc, int kind, double range, double h_range)
+{
+    double s;
+    switch (kind) {
+    case 1:
+    case 2:
+        s = qz_step(acc, fmax(range, h_range));
+        break;
+    case 3:
+    case 4:
+        s = (double)(float)acc;
+        break;
+    case 5:
+        s = fmin(qz_step(acc, range), (double)(float)(1.0 / 255.0));
+        break;
+    default:
+        s = qz_step(acc, range);
+        break;
+    }
+    if (!(range / s < (double)QZ2_QMAX))
+        s = qz_step(acc, range);
+    return s;
+}
+
+static inline int qz_clampi(int v, int hi) { return v < 0 ? 0 : v > hi ? hi : v; }
+
+/* The LSX taps of (i, j) (i >= 2, 2 <= j <= w - 2) into x: the own
+ * causal neighbours, then (if rq) the reference plane's, with coordinates
+ * clamped into the tile. */
+static inline void qz2_taps(const int64_t *q, const int64_t *rq, int w, int h, int i, int j, int64_t *x)
+{
+    const int64_t *row = q + (size_t)i * w;
+    for (int t = 0; t < QZ_NOWN; t++)
+        x[t] = row[qz_own[t][0] * w + j + qz_own[t][1]];
+    if (rq)
+        for (int t = 0; t < QZ_NREF; t++)
+            x[QZ_NOWN + t] = rq[(size_t)qz_clampi(i + qz_ref[t][0], h - 1) * w + qz_clampi(j + qz_ref[t][1], w - 1)];
+}
+
+/* Format 2's prediction of q[i][j]: LSX where i >= 2 and 2 <= j <= w - 2,
+ * floor((sum coef x + 2048) / 4096); elsewhere as format 1's planar. */
+static inline int64_t qz2_predict(const int64_t *q, const int64_t *rq, int w, int h, int i, int j, int pred,
+                                  const int16_t *coef)
+{
+    if (i == 0)
+        return j == 0 ? 0 : q[j - 1];
+    const int64_t *row = q + (size_t)i * w, *up = row - w;
+    if (j == 0)
+        return up[0];
+    if (pred == QZ_PRED_LSX && i >= 2 && j >= 2 && j + 1 < w) {
+        int64_t x[QZ_NTAP], s = 0;
+        int nt = rq ? QZ_NTAP : QZ_NOWN;
+        qz2_taps(q, rq, w, h, i, j, x);
+        for (int t = 0; t < nt; t++)
+            s += coef[t] * x[t];
+        return floordiv4096(s + 2048);
+    }
+    return row[j - 1] + up[j] - up[j - 1];
+}
+
+/* sum a[i] b[i] over n unsigned 32-bit pairs, exactly in 64 bits (the
+ * caller keeps the sum below 2^64).  SSE2 multiplies two pairs per
+ * pmuludq, even and odd lanes apart; integer sums do not depend on the
+ * order, so the portable loop (alone with -DQZ_NO_SIMD) gives the same. */
+static uint64_t qz_dot_u32(const uint32_t *a, const uint32_t *b, size_t n)
+{
+    size_t i = 0;
+    uint64_t s = 0;
+#if defined(__SSE2__) && !defined(QZ_NO_SIMD)
+    __m128i acc = _mm_setzero_si128();
+    for (; i + 4 <= n; i += 4) {
+        __m128i x = _mm_loadu_si128((const __m128i *)(const void *)(a + i));
+        __m128i y = _mm_loadu_si128((const __m128i *)(const void *)(b + i));
+        acc = _mm_add_epi64(acc, _mm_mul_epu32(x, y));
+        acc = _mm_add_epi64(acc, _mm_mul_epu32(_mm_srli_epi64(x, 32), _mm_srli_epi64(y, 32)));
+    }
+    uint64_t l[2];
+    _mm_storeu_si128((__m128i *)(void *)l, acc);
+    s = l[0] + l[1];
+#endif
+    for (; i < n; i++)
+        s += (uint64_t)a[i] * b[i];
+    return s;
+}
+
+/* Samples the fit reads: a quincunx quarter of the LSX region (every
+ * other row, every other column, shifted by one on alternate rows) - a
+ * quarter of the work for 0.3 % more bytes on the viewer's tiles
+ * (bench_codec). */
+#define QZ2_FOR_FIT_SAMPLES(i, j)             \
+    for (int i = 2; i < h; i += 2)            \
+        for (int j = 2 + (i >> 1 & 1); j + 1 < w; j += 2)
+
+static size_t qz2_fit_samples(int w, int h)
+{
+    size_t s = 0;
+    QZ2_FOR_FIT_SAMPLES(i, j)
+        s++;
+    return s;
+}
+
+/* Least-squares LSX weights (x 4096, rounded) for plane q with reference
+ * rq (NULL: own taps only), fx scratch of (QZ_NTAP + 1) x
+ * qz2_fit_samples(w, h) words.  The normal equations are summed exactly in
+ * 64-bit unsigned integers (levels are >= 0 and < QZ2_QMAX = 2^21 here, so
+ * each product < 2^42 and a 1024 x 1024 tile's sums < 2^60): the weights
+ * are the same on every machine, as two replicas need.  The taps are laid
+ * out a column per tap so that each entry is one dot product.  Returns 0
+ * if the system is singular, a weight exceeds +-7.9 or the tile is too
+ * small. */
+static int qz2_fit(const int64_t *q, const int64_t *rq, int w, int h, int16_t *coef, uint32_t *fx)
+{
+    if (w < 4 || h < 3)
+        return 0;
+    int nt = rq ? QZ_NTAP : QZ_NOWN;
+    size_t S = qz2_fit_samples(w, h), k = 0;
+    if (S == 0)
+        return 0;
+    QZ2_FOR_FIT_SAMPLES(i, j) {
+        const int64_t *row = q + (size_t)i * w;
+        fx[(size_t)QZ_NTAP * S + k] = (uint32_t)row[j];
+        for (int t = 0; t < QZ_NOWN; t++)
+            fx[(size_t)t * S + k] = (uint32_t)row[qz_own[t][0] * w + j + qz_own[t][1]];
+        if (rq && i + 2 < h && j + 2 < w) {
+            const int64_t *rr = rq + (size_t)i * w + j;
+            for (int t = 0; t < QZ_NREF; t++)
+                fx[(size_t)(QZ_NOWN + t) * S + k] = (uint32_t)rr[qz_ref[t][0] * w + qz_ref[t][1]];
+        } else if (rq) {
+            int64_t xs[QZ_NTAP];
+            qz2_taps(q, rq, w, h, i, j, xs);
+            for (int t = QZ_NOWN; t < QZ_NTAP; t++)
+                fx[(size_t)t * S + k] = (uint32_t)xs[t];
+        }
+        k++;
+    }
+    const uint32_t *v = fx + (size_t)QZ_NTAP * S;
+    double A[QZ_NTAP][QZ_NTAP], b[QZ_NTAP];
+    for (int i = 0; i < nt; i++) {
+        b[i] = (double)qz_dot_u32(fx + (size_t)i * S, v, S);
+        for (int c = i; c < nt; c++)
+            A[i][c] = A[c][i] = (double)qz_dot_u32(fx + (size_t)i * S, fx + (size_t)c * S, S);
+    }
+    /* Cholesky A = L L^T (A is a Gram matrix: symmetric, positive
+     * definite unless the taps are linearly dependent - a flat or ramp
+     * tile - which a vanishing pivot reports): a sixth of Gauss-Jordan's
+     * work, in a fixed order, so every machine gets the same weights. */
+    double L[QZ_NTAP][QZ_NTAP], y[QZ_NTAP], x[QZ_NTAP];
+    for (int i = 0; i < nt; i++) {
+        for (int j = 0; j <= i; j++) {
+            double sum = A[i][j];
+            for (int k = 0; k < j; k++)
+                sum -= L[i][k] * L[j][k];
+            if (i == j) {
+                if (!(sum > 1e-12 * A[i][i]) || !(sum > 0.0))
+                    return 0;
+                L[i][i] = sqrt(sum);
+            } else {
+                L[i][j] = sum / L[j][j];
+            }
+        }
+    }
+    for (int i = 0; i < nt; i++) {
+        double sum = b[i];
+        for (int k = 0; k < i; k++)
+            sum -= L[i][k] * y[k];
+        y[i] = sum / L[i][i];
+    }
+    for (int i = nt - 1; i >= 0; i--) {
+        double sum = y[i];
+        for (int k = i + 1; k < nt; k++)
+            sum -= L[k][i] * x[k];
+        x[i] = sum / L[i][i];
+    }
+    for (int i = 0; i < nt; i++) {
+        if (!isfinite(x[i]) || fabs(x[i]) > 7.9)
+            return 0;
+        coef[i] = (int16_t)lround(x[i] * 4096.0);
+    }
+    return 1;
+}
+
+/* The LSX sum at q[i][j] (pointer p) away from every edge the clamp
+ * touches (i + 2 < h, j + 2 < w): fixed offsets, no branches. */
+static inline int64_t qz2_sum_fast(const int64_t *p, const int64_t *r, int w, const int16_t *c)
+{
+    int64_t s = c[0] * p[-1] + c[1] * p[-w] + c[2] * p[-w - 1] + c[3] * p[-w + 1] + c[4] * p[-2] +
+                c[5] * p[-2 * w] + c[6] * p[-w - 2] + c[7] * p[-2 * w - 1];
+    if (r)
+        s += c[8] * r[0] + c[9] * r[-1] + c[10] * r[1] + c[11] * r[-w] + c[12] * r[w] + c[13] * r[-2] +
+             c[14] * r[2] + c[15] * r[-2 * w] + c[16] * r[2 * w];
+    return s;
+}
+
+/* Whether (i, j) may use qz2_sum_fast: inside the LSX region and, with a
+ * reference, two samples from the bottom and right edges. */
+static inline int qz2_fast(int w, int h, int i, int j, int pred, int ref)
+{
+    return pred == QZ_PRED_LSX && i >= 2 && j >= 2 && j + 1 < w && (!ref || (i + 2 < h && j + 2 < w));
+}
+
+/* sum |r| of q under the planar predictor (format 1's and the edges'). */
+static uint64_t qz2_planar_cost(const int64_t *q, int w, int h)
+{
+    uint64_t cost = 0;
+    for (int j = 1; j < w; j++)
+        cost += (uint64_t)llabs(q[j] - q[j - 1]);
+    for (int i = 1; i < h; i++) {
+        const int64_t *row = q + (size_t)i * w, *up = row - w;
+        cost += (uint64_t)llabs(row[0] - up[0]);
+        for (int j = 1; j < w; j++)
+            cost += (uint64_t)llabs(row[j] - row[j - 1] - up[j] + up[j - 1]);
+    }
+    return cost + (uint64_t)llabs(q[0]);
+}
+
+/* One residual: zigzag into z[k], |r| added to cost, max kept in m. */
+#define QZ2_PUT(k, pr)                                    \
+    do {                                                  \
+        int64_t r_ = q[k] - (pr);                         \
+        uint32_t z_ = zigzag(r_);                         \
+        z[k] = z_;                                        \
+        cost += (uint64_t)(r_ < 0 ? -r_ : r_);            \
+        m = z_ > m ? z_ : m;                              \
+    } while (0)
+
+/* Residuals of q under (pred, rq, coef) into z exactly as the decoder's
+ * qz2_predict, with the interior runs (planar, or LSX away from the
+ * clamped edges) peeled off so they carry no branches; returns sum |r|
+ * (the cost) and the largest zigzag code. */
+static uint64_t qz2_residuals(const int64_t *q, const int64_t *rq, int w, int h, int pred, const int16_t *coef,
+                              uint32_t *z, uint32_t *zmax)
+{
+    uint64_t cost = 0;
+    uint32_t m = 0;
+    for (int i = 0; i < h; i++) {
+        size_t o = (size_t)i * w;
+        const int64_t *row = q + o;
+        if (i == 0 || pred != QZ_PRED_LSX || i < 2) {
+            if (i == 0) {
+                for (int j = 0; j < w; j++)
+                    QZ2_PUT(o + j, j == 0 ? 0 : row[j - 1]);
+                continue;
+            }
+            QZ2_PUT(o, row[-w]);
+            for (int j = 1; j < w; j++)
+                QZ2_PUT(o + j, row[j - 1] + row[j - w] - row[j - w - 1]);
+            continue;
+        }
+        /* LSX rows: the fast run is 2 <= j < jend */
+        int jend = rq ? (i + 2 < h ? w - 2 : 2) : w - 1;
+        if (jend < 2)
+            jend = 2;
+        int j = 0;
+        for (; j < 2 && j < w; j++)
+            QZ2_PUT(o + j, qz2_predict(q, rq, w, h, i, j, pred, coef));
+        for (; j < jend; j++)
+            QZ2_PUT(o + j, floordiv4096(qz2_sum_fast(row + j, rq ? rq + o + j : NULL, w, coef) + 2048));
+        for (; j < w; j++)
+            QZ2_PUT(o + j, qz2_predict(q, rq, w, h, i, j, pred, coef));
+    }
+    *zmax = m;
+    return cost;
+}
+
 /* ---- qz encoder ---------------------------------------------------------- */
 
 /* What a worker keeps between tiles: the zstd context (creating one costs
@@ -321,11 +642,13 @@ static inline int64_t qz_predict(const int64_t *q, int w, int i, int j, int pred
 struct proto_codec_ctx {
     ZSTD_CCtx *zc;
     int zc_level;        /* level zc holds; 0: parameters not set yet */
-    size_t cap;          /* samples q, z, z2 hold */
-    int32_t *q;          /* quantised plane (the encoder's q fits 32 bits) */
-    uint32_t *z, *z2;    /* zigzag residuals: kept, candidate */
+    size_t cap;          /* samples z holds; q holds cap * PROTO_TILE_MAX_PLANES */
+    int64_t *q;          /* quantised planes, every plane kept (references) */
+    uint32_t *z;         /* zigzag residuals of the plane being encoded */
     size_t rawcap;
     uint8_t *raw;        /* byte planes of every plane's residuals */
+    size_t fxcap;
+    uint32_t *fx;        /* the fit's taps, a column per tap (qz2_fit) */
 };
 
 ocean_result proto_codec_ctx_create(proto_codec_ctx **out)
@@ -343,21 +666,19 @@ void proto_codec_ctx_destroy(proto_codec_ctx *c)
     ZSTD_freeCCtx(c->zc);
     free(c->q);
     free(c->z);
-    free(c->z2);
     free(c->raw);
+    free(c->fx);
     free(c);
 }
 
-static ocean_result ctx_reserve(proto_codec_ctx *c, size_t n, size_t rawlen)
+static ocean_result ctx_reserve(proto_codec_ctx *c, size_t n, size_t rawlen, size_t fxlen)
 {
     if (n > c->cap) {
-        int32_t *q = realloc(c->q, n * sizeof *q);
+        int64_t *q = realloc(c->q, n * PROTO_TILE_MAX_PLANES * sizeof *q);
         if (q) c->q = q;
         uint32_t *z = realloc(c->z, n * sizeof *z);
         if (z) c->z = z;
-        uint32_t *z2 = realloc(c->z2, n * sizeof *z2);
-        if (z2) c->z2 = z2;
-        if (!q || !z || !z2)
+        if (!q || !z)
             return OCEAN_ENOMEM;
         c->cap = n;
     }
@@ -368,159 +689,14 @@ static ocean_result ctx_reserve(proto_codec_ctx *c, size_t n, size_t rawlen)
         c->raw = r;
         c->rawcap = rawlen;
     }
+    if (fxlen > c->fxcap) {
+        uint32_t *f = realloc(c->fx, fxlen * sizeof *f);
+        if (!f)
+            return OCEAN_ENOMEM;
+        c->fx = f;
+        c->fxcap = fxlen;
+    }
     return OCEAN_OK;
-}
-
-/* Least-squares weights of the LS6 neighbours for this plane, rounded to
- * multiples of 1/4096.  Returns 0 if the system is singular or the tile too
- * small, leaving the planar predictor in charge.  The normal equations are
- * summed in 64-bit integers, exactly (|q| < 2^20 from this encoder, so
- * each product < 2^40 and a 1024 x 1024 tile's sums < 2^60), and only the
- * 21 distinct entries of the symmetric matrix. */
-/* One row's contribution to the normal equations (see qz_fit_ls6): the 21
- * distinct products of the six neighbours and the 6 with the sample,
- * summed over j = 2 .. w-2.  Exact in 64-bit unsigned arithmetic, so the
- * SSE2 path and the portable one (alone with -DQZ_NO_SIMD) give the same
- * sums; SSE2 made a default height tile's encode 28 % faster here. */
-static void qz_fit_row(const uint32_t *row, const uint32_t *up, const uint32_t *up2, int w, uint64_t *r,
-                       uint64_t *rb)
-{
-    int j = 2;
-#if defined(__SSE2__) && !defined(QZ_NO_SIMD)
-    /* Two samples per step: each neighbour of (j, j+1) is two adjacent
-     * words, widened into the 64-bit lanes pmuludq multiplies. */
-    __m128i acc[27], zero = _mm_setzero_si128();
-    for (int k = 0; k < 27; k++)
-        acc[k] = zero;
-    for (; j + 2 < w; j += 2) {
-#define QZ_LD(p) _mm_unpacklo_epi32(_mm_loadl_epi64((const __m128i *)(const void *)(p)), zero)
-        __m128i n[6] = {QZ_LD(row + j - 1), QZ_LD(up + j), QZ_LD(up + j - 1),
-                        QZ_LD(up + j + 1), QZ_LD(row + j - 2), QZ_LD(up2 + j)};
-        __m128i v = QZ_LD(row + j);
-#undef QZ_LD
-        int k = 0;
-        for (int a = 0; a < 6; a++)
-            for (int c = a; c < 6; c++, k++)
-                acc[k] = _mm_add_epi64(acc[k], _mm_mul_epu32(n[a], n[c]));
-        for (int a = 0; a < 6; a++)
-            acc[21 + a] = _mm_add_epi64(acc[21 + a], _mm_mul_epu32(n[a], v));
-    }
-    for (int k = 0; k < 27; k++) {
-        uint64_t l[2];
-        _mm_storeu_si128((__m128i *)(void *)l, acc[k]);
-        (k < 21 ? r : rb)[k < 21 ? k : k - 21] += l[0] + l[1];
-    }
-#endif
-    for (; j + 1 < w; j++) {
-        uint64_t n[6] = {row[j - 1], up[j], up[j - 1], up[j + 1], row[j - 2], up2[j]}, v = row[j];
-        int k = 0;
-        for (int a = 0; a < 6; a++)
-            for (int c = a; c < 6; c++, k++)
-                r[k] += n[a] * n[c];
-        for (int a = 0; a < 6; a++)
-            rb[a] += n[a] * v;
-    }
-}
-
-static int qz_fit_ls6(const int32_t *q, int w, int h, int16_t *coef)
-{
-    if (w < 5 || h < 3)
-        return 0;
-    /* q >= 0 here, so each product is an unsigned 32 x 32 -> 64 bit
-     * multiply (pmuludq on x86, two samples at a time). */
-    uint64_t s[QZ_NCOEF * (QZ_NCOEF + 1) / 2] = {0}, sb[QZ_NCOEF] = {0};
-    for (int i = 2; i < h; i++) {
-        const uint32_t *row = (const uint32_t *)q + (size_t)i * w, *up = row - w, *up2 = up - w;
-        uint64_t r[21] = {0}, rb[6] = {0};
-        qz_fit_row(row, up, up2, w, r, rb);
-        for (int k = 0; k < 21; k++)
-            s[k] += r[k];
-        for (int k = 0; k < 6; k++)
-            sb[k] += rb[k];
-    }
-    double A[QZ_NCOEF][QZ_NCOEF], b[QZ_NCOEF], x[QZ_NCOEF];
-    for (int i = 0, k = 0; i < QZ_NCOEF; i++) {
-        b[i] = (double)sb[i];
-        for (int c = i; c < QZ_NCOEF; c++, k++)
-            A[i][c] = A[c][i] = (double)s[k];
-    }
-    /* Gaussian elimination with partial pivoting. */
-    for (int i = 0; i < QZ_NCOEF; i++) {
-        int p = i;
-        for (int r = i + 1; r < QZ_NCOEF; r++)
-            if (fabs(A[r][i]) > fabs(A[p][i]))
-                p = r;
-        if (!(fabs(A[p][i]) > 1e-9 * (fabs(A[0][0]) + 1.0)))
-            return 0;
-        for (int c = 0; c < QZ_NCOEF; c++) {
-            double t = A[i][c];
-            A[i][c] = A[p][c];
-            A[p][c] = t;
-        }
-        double t = b[i];
-        b[i] = b[p];
-        b[p] = t;
-        for (int r = 0; r < QZ_NCOEF; r++)
-            if (r != i) {
-                double f = A[r][i] / A[i][i];
-                for (int c = 0; c < QZ_NCOEF; c++)
-                    A[r][c] -= f * A[i][c];
-                b[r] -= f * b[i];
-            }
-    }
-    for (int i = 0; i < QZ_NCOEF; i++) {
-        x[i] = b[i] / A[i][i];
-        if (!isfinite(x[i]) || fabs(x[i]) > 7.9)
-            return 0;
-        coef[i] = (int16_t)lround(x[i] * 4096.0);
-    }
-    return 1;
-}
-
-/* One residual: zigzag into *z, |r| added to the cost, max kept. */
-#define QZ_PUT(k, pred)                                   \
-    do {                                                  \
-        int64_t r_ = (int64_t)q[k] - (int64_t)(pred);     \
-        uint32_t z_ = zigzag(r_);                         \
-        z[k] = z_;                                        \
-        cost += (uint64_t)(r_ < 0 ? -r_ : r_);            \
-        m = z_ > m ? z_ : m;                              \
-    } while (0)
-
-/* Residuals of q under (pred, coef) into z, exactly as qz_predict (the
- * decoder's) predicts, with the edge cases peeled off so the interior
- * loops carry no branches; returns the sum of |r| as a cost estimate and
- * the largest zigzag value in *zmax. */
-static uint64_t qz_residuals32(const int32_t *q, int w, int h, int pred, const int16_t *coef, uint32_t *z,
-                               uint32_t *zmax)
-{
-    uint64_t cost = 0;
-    uint32_t m = 0;
-    QZ_PUT(0, 0);
-    for (int j = 1; j < w; j++)
-        QZ_PUT(j, q[j - 1]);
-    const int64_t c0 = coef[0], c1 = coef[1], c2 = coef[2], c3 = coef[3], c4 = coef[4], c5 = coef[5];
-    for (int i = 1; i < h; i++) {
-        size_t o = (size_t)i * w;
-        const int32_t *row = q + o, *up = row - w;
-        QZ_PUT(o, up[0]);
-        if (pred != QZ_PRED_LS6 || i < 2 || w < 4) {
-            for (int j = 1; j < w; j++)
-                QZ_PUT(o + j, (int64_t)row[j - 1] + up[j] - up[j - 1]);
-            continue;
-        }
-        const int32_t *up2 = up - w;
-        QZ_PUT(o + 1, (int64_t)row[0] + up[1] - up[0]);
-        for (int j = 2; j + 1 < w; j++) {
-            int64_t sum = c0 * row[j - 1] + c1 * up[j] + c2 * up[j - 1] + c3 * up[j + 1] + c4 * row[j - 2] +
-                          c5 * up2[j];
-            /* floor((sum + 2048) / 4096): an arithmetic shift floors (gcc). */
-            QZ_PUT(o + j, (sum + 2048) >> 12);
-        }
-        QZ_PUT(o + w - 1, (int64_t)row[w - 2] + up[w - 1] - up[w - 2]);
-    }
-    *zmax = m;
-    return cost;
 }
 
 /* Residual bytes are nearly i.i.d., so zstd's match finder mostly finds
@@ -550,8 +726,9 @@ static size_t qz_zstd(proto_codec_ctx *c, void *dst, size_t cap, const void *src
     return ZSTD_compress2(c->zc, dst, cap, src, n);
 }
 
-static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, int w, int h, int np,
-                              const float *planes, proto_buf *out, double *max_err, char *err, size_t errlen)
+static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, int w, int h, unsigned channels,
+                              int np, const float *planes, proto_buf *out, double *max_err, char *err,
+                              size_t errlen)
 {
     double acc = p->accuracy;
     /* the bound as the f32 the wire carries (float 1e-6 is 9.99999997e-7) */
@@ -563,65 +740,81 @@ static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, 
     if (level < 1 || level > 19)
         level = 3;
     size_t n = (size_t)w * h;
-    ocean_result res = ctx_reserve(cx, n, n * 4 * (size_t)np + 1);
+    ocean_result res = ctx_reserve(cx, n, n * 4 * (size_t)np + 1, (QZ_NTAP + 1) * qz2_fit_samples(w, h) + 1);
     if (res != OCEAN_OK)
         return res;
-    int32_t *q = cx->q;
-    uint32_t *z = cx->z, *z2 = cx->z2;
+    uint32_t *z = cx->z;
     uint8_t *raw = cx->raw;
-    uint8_t head[QZ_HEAD + QZ_PLANE_HEAD * PROTO_TILE_MAX_PLANES + 4];
+    uint8_t head[QZ_HEAD + (QZ2_PLANE_HEAD + 2 * QZ_NTAP) * PROTO_TILE_MAX_PLANES + 4];
     memset(head, 0, sizeof head);
     head[0] = (uint8_t)np;
-    head[1] = QZ_FORMAT;
-    size_t rawlen = 0;
-    double merr = 0.0;
+    head[1] = QZ2_FORMAT;
+    size_t headlen = QZ_HEAD, rawlen = 0;
+    double merr = 0.0, h_range = 0.0;
+    int h_plane = -1;
     for (int c = 0; c < np; c++) {
         const float *src = planes + (size_t)c * n;
+        int64_t *q = cx->q + (size_t)c * n;
+        int kind = qz_kind(channels, c);
         float lo = src[0], hi = src[0];
         for (size_t k = 1; k < n; k++) {
             lo = src[k] < lo ? src[k] : lo;
             hi = src[k] > hi ? src[k] : hi;
         }
         double range = (double)hi - (double)lo;
-        double step = qz_step(acc, range);
-        /* accuracy >= 1e-6 gives qmax <= 5e5 (< 2^20): int32 holds q. */
+        double step = (double)(float)qz2_step(acc, kind, range, h_range);
+        if (kind == 0) {
+            h_plane = c;
+            h_range = range;
+        }
+        /* range / step < 2^21 (qz2_step), so int64 and the fit's sums hold q. */
         int64_t qmax = (int64_t)llround(range / step);
         for (size_t k = 0; k < n; k++) {
-            /* t >= 0 (src >= lo), so llround(t) is the truncation plus one
-             * when the fraction is at least 1/2: the same integer without
-             * a libm call, which kept this loop from staying in registers. */
+            /* t >= 0 (src >= lo): llround(t) without a libm call */
             double t = ((double)src[k] - (double)lo) / step;
             int64_t v = (int64_t)t;
             v += t - (double)v >= 0.5;
             v = v > qmax ? qmax : v;
-            q[k] = (int32_t)v;
+            q[k] = v;
             double d = fabs((double)(float)((double)lo + (double)v * step) - (double)src[k]);
             merr = d > merr ? d : merr;
         }
-        int16_t coef[QZ_NCOEF] = {0}, none[QZ_NCOEF] = {0};
-        uint32_t zmax, zmax2;
-        int pred = QZ_PRED_PLANAR;
-        uint64_t cost = qz_residuals32(q, w, h, QZ_PRED_PLANAR, none, z, &zmax);
-        if (cost > 0 && qz_fit_ls6(q, w, h, coef)) {
-            uint64_t cost2 = qz_residuals32(q, w, h, QZ_PRED_LS6, coef, z2, &zmax2);
-            if (cost2 < cost) {
-                uint32_t *t = z;
-                z = z2;
-                z2 = t;
-                zmax = zmax2;
-                pred = QZ_PRED_LS6;
+        /* H predicts the planes made from the same spectrum */
+        const int64_t *rq = (h_plane >= 0 && kind >= 1 && kind <= 4) ? cx->q + (size_t)h_plane * n : NULL;
+        int16_t coef[QZ_NTAP] = {0};
+        uint32_t zmax;
+        int pred = QZ_PRED_PLANAR, nt = 0;
+        /* LSX when its fit exists and beats planar on sum |r| (planar's
+         * residuals are only written when they are kept) */
+        int ok = 0;
+        const int64_t *r2 = rq;
+        int16_t cf[QZ_NTAP] = {0};
+        if (qmax > 0) {
+            ok = qz2_fit(q, r2, w, h, cf, cx->fx);
+            if (!ok && r2) {
+                r2 = NULL;
+                ok = qz2_fit(q, NULL, w, h, cf, cx->fx);
             }
         }
-        if (pred != QZ_PRED_LS6)
-            memset(coef, 0, sizeof coef);
+        if (ok && qz2_residuals(q, r2, w, h, QZ_PRED_LSX, cf, z, &zmax) < qz2_planar_cost(q, w, h)) {
+            pred = QZ_PRED_LSX;
+            rq = r2;
+            nt = r2 ? QZ_NTAP : QZ_NOWN;
+            memcpy(coef, cf, sizeof coef);
+        } else {
+            qz2_residuals(q, NULL, w, h, QZ_PRED_PLANAR, coef, z, &zmax);
+        }
         int nb = zmax == 0 ? 0 : zmax < 0x100u ? 1 : zmax < 0x10000u ? 2 : zmax < 0x1000000u ? 3 : 4;
-        uint8_t *ph = head + QZ_HEAD + QZ_PLANE_HEAD * c;
+        uint8_t *ph = head + headlen;
         proto_stf32(ph, lo);
         proto_stf32(ph + 4, (float)step);
         ph[8] = (uint8_t)nb;
         ph[9] = (uint8_t)pred;
-        for (int k = 0; k < QZ_NCOEF; k++)
-            proto_st16(ph + 12 + 2 * k, (uint16_t)coef[k]);
+        ph[10] = (uint8_t)(pred == QZ_PRED_LSX && rq ? h_plane : QZ_NOREF);
+        ph[11] = 0;
+        for (int k = 0; k < nt; k++)
+            proto_st16(ph + QZ2_PLANE_HEAD + 2 * k, (uint16_t)coef[k]);
+        headlen += QZ2_PLANE_HEAD + 2 * (size_t)nt;
         for (int b = 0; b < nb; b++) {
             uint8_t *dst = raw + rawlen;
             for (size_t k = 0; k < n; k++)
@@ -629,7 +822,6 @@ static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, 
             rawlen += n;
         }
     }
-    size_t headlen = QZ_HEAD + QZ_PLANE_HEAD * (size_t)np;
     proto_st32(head + headlen, (uint32_t)rawlen);
     headlen += 4;
     size_t bound = ZSTD_compressBound(rawlen);
@@ -653,7 +845,22 @@ static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, 
     return OCEAN_OK;
 }
 
-static ocean_result qz_decode(int w, int h, int np, const uint8_t *data, size_t len, float *planes,
+double proto_codec_plane_error_bound(proto_codec c, const proto_codec_params *p, unsigned channels, int plane,
+                                     double lo, double hi, double h_range)
+{
+    if (c != PROTO_CODEC_QZ)
+        return proto_codec_error_bound(c, p, lo, hi);
+    int kind = qz_kind(channels, plane);
+    if (kind < 0)
+        return INFINITY;
+    double acc = p ? p->accuracy : PROTO_ACCURACY_DEFAULT;
+    double amax = fmax(fabs(lo), fabs(hi)), range = hi - lo;
+    double step = (double)(float)qz2_step(acc, kind, range, h_range);
+    return step * 0.5 + amax * 0x1p-24 + (range > 0 ? range * 0x1p-40 : 0.0);
+}
+
+/* Format 1 (decoded for payloads recorded before format 2). */
+static ocean_result qz1_decode(int w, int h, int np, const uint8_t *data, size_t len, float *planes,
                               char *err, size_t errlen)
 {
     size_t headlen = QZ_HEAD + QZ_PLANE_HEAD * (size_t)np + 4;
@@ -756,6 +963,133 @@ done:
     return res;
 }
 
+/* Format 2 (PROTOCOL.md "qz"): variable-length plane headers, LSX with an
+ * optional reference plane decoded before. */
+static ocean_result qz2_decode(int w, int h, int np, const uint8_t *data, size_t len, float *planes,
+                               char *err, size_t errlen)
+{
+    if (len < QZ_HEAD + 4) {
+        ocean_seterr(err, errlen, "qz payload of %zu bytes shorter than its header", len);
+        return OCEAN_ECODEC;
+    }
+    if (data[0] != np) {
+        ocean_seterr(err, errlen, "qz header says %u planes, tile has %d", data[0], np);
+        return OCEAN_ECODEC;
+    }
+    if (proto_ld16(data + 2) != 0) {
+        ocean_seterr(err, errlen, "qz format 2 reserved %u not 0", proto_ld16(data + 2));
+        return OCEAN_ECODEC;
+    }
+    size_t n = (size_t)w * h, want = 0, off = QZ_HEAD;
+    float base[PROTO_TILE_MAX_PLANES];
+    double step[PROTO_TILE_MAX_PLANES];
+    int nb[PROTO_TILE_MAX_PLANES], pred[PROTO_TILE_MAX_PLANES], ref[PROTO_TILE_MAX_PLANES];
+    int16_t coef[PROTO_TILE_MAX_PLANES][QZ_NTAP];
+    for (int c = 0; c < np; c++) {
+        if (len - off < QZ2_PLANE_HEAD + 4) {
+            ocean_seterr(err, errlen, "qz payload of %zu bytes ends inside plane %d's header", len, c);
+            return OCEAN_ECODEC;
+        }
+        const uint8_t *ph = data + off;
+        base[c] = proto_ldf32(ph);
+        float s = proto_ldf32(ph + 4);
+        nb[c] = ph[8];
+        pred[c] = ph[9];
+        ref[c] = ph[10];
+        int nt = pred[c] == QZ_PRED_LSX ? (ref[c] == QZ_NOREF ? QZ_NOWN : QZ_NTAP) : 0;
+        if (!isfinite(base[c]) || !isfinite(s) || !(s > 0.0f) || nb[c] > 4 || ph[11] != 0 ||
+            (pred[c] != QZ_PRED_PLANAR && pred[c] != QZ_PRED_LSX) ||
+            (pred[c] == QZ_PRED_PLANAR && ref[c] != QZ_NOREF) || (ref[c] != QZ_NOREF && ref[c] >= c)) {
+            ocean_seterr(err, errlen, "qz plane %d header invalid (base %g, step %g, bytes %d, predictor %d, ref %d)", c,
+                         (double)base[c], (double)s, nb[c], pred[c], ref[c]);
+            return OCEAN_ECODEC;
+        }
+        if (len - off - QZ2_PLANE_HEAD < 2 * (size_t)nt + 4) {
+            ocean_seterr(err, errlen, "qz payload of %zu bytes ends inside plane %d's weights", len, c);
+            return OCEAN_ECODEC;
+        }
+        for (int k = 0; k < nt; k++)
+            coef[c][k] = (int16_t)proto_ld16(ph + QZ2_PLANE_HEAD + 2 * k);
+        off += QZ2_PLANE_HEAD + 2 * (size_t)nt;
+        step[c] = s;
+        want += (size_t)nb[c] * n;
+    }
+    uint32_t rawlen = proto_ld32(data + off);
+    off += 4;
+    if (rawlen != want) {
+        ocean_seterr(err, errlen, "qz residual length %u, header implies %zu", rawlen, want);
+        return OCEAN_ECODEC;
+    }
+    const uint8_t *zsrc = data + off;
+    size_t zlen = len - off;
+    size_t fsz = ZSTD_findFrameCompressedSize(zsrc, zlen);
+    if (ZSTD_isError(fsz) || fsz != zlen) {
+        ocean_seterr(err, errlen, "qz: zstd frame malformed or followed by junk");
+        return OCEAN_ECODEC;
+    }
+    unsigned long long csz = ZSTD_getFrameContentSize(zsrc, zlen);
+    if (csz != rawlen) {
+        ocean_seterr(err, errlen, "qz: zstd frame content size does not match %u", rawlen);
+        return OCEAN_ECODEC;
+    }
+    uint8_t *raw = malloc(want ? want : 1);
+    int64_t *qall = malloc(n * (size_t)np * sizeof *qall);
+    ocean_result res = OCEAN_OK;
+    if (!raw || !qall) {
+        res = OCEAN_ENOMEM;
+        goto done;
+    }
+    size_t got = ZSTD_decompress(raw, want, zsrc, zlen);
+    if (ZSTD_isError(got) || got != want) {
+        ocean_seterr(err, errlen, "qz: zstd: %s", ZSTD_isError(got) ? ZSTD_getErrorName(got) : "short output");
+        res = OCEAN_ECODEC;
+        goto done;
+    }
+    size_t ro = 0;
+    for (int c = 0; c < np; c++) {
+        float *dst = planes + (size_t)c * n;
+        int64_t *q = qall + (size_t)c * n;
+        const int64_t *rq = ref[c] != QZ_NOREF ? qall + (size_t)ref[c] * n : NULL;
+        for (int i = 0; i < h; i++)
+            for (int j = 0; j < w; j++) {
+                size_t k = (size_t)i * w + j;
+                uint32_t zz = 0;
+                for (int b = 0; b < nb[c]; b++)
+                    zz |= (uint32_t)raw[ro + (size_t)b * n + k] << (8 * b);
+                int64_t pr = qz2_fast(w, h, i, j, pred[c], rq != NULL)
+                                 ? floordiv4096(qz2_sum_fast(q + k, rq ? rq + k : NULL, w, coef[c]) + 2048)
+                                 : qz2_predict(q, rq, w, h, i, j, pred[c], coef[c]);
+                int64_t v = pr + unzigzag(zz);
+                if (v > QZ_Q_LIMIT || v < -QZ_Q_LIMIT) {
+                    ocean_seterr(err, errlen, "qz plane %d: level %lld out of range at (%d,%d)", c, (long long)v, i, j);
+                    res = OCEAN_ECODEC;
+                    goto done;
+                }
+                q[k] = v;
+                float f = (float)((double)base[c] + (double)v * step[c]);
+                if (!isfinite(f)) {
+                    ocean_seterr(err, errlen, "qz plane %d: non-finite value at (%d,%d)", c, i, j);
+                    res = OCEAN_ECODEC;
+                    goto done;
+                }
+                dst[k] = f;
+            }
+        ro += (size_t)nb[c] * n;
+    }
+done:
+    free(raw);
+    free(qall);
+    return res;
+}
+
+static ocean_result qz_decode(int w, int h, int np, const uint8_t *data, size_t len, float *planes,
+                              char *err, size_t errlen)
+{
+    if (len >= 2 && data[1] == QZ2_FORMAT)
+        return qz2_decode(w, h, np, data, len, planes, err, errlen);
+    return qz1_decode(w, h, np, data, len, planes, err, errlen);
+}
+
 /* ---- dispatch ------------------------------------------------------------ */
 
 ocean_result proto_tile_encode(proto_codec c, const proto_codec_params *p, int w, int h,
@@ -806,12 +1140,12 @@ ocean_result proto_tile_encode_ctx(proto_codec_ctx *ctx, proto_codec c, const pr
         return f16_encode(planes, total, out, max_err, err, errlen);
     case PROTO_CODEC_QZ: {
         if (ctx)
-            return qz_encode(ctx, p, w, h, np, planes, out, max_err, err, errlen);
+            return qz_encode(ctx, p, w, h, channels, np, planes, out, max_err, err, errlen);
         /* Context-free callers pay for a context per call, as before. */
         proto_codec_ctx *tmp;
         if ((r = proto_codec_ctx_create(&tmp)) != OCEAN_OK)
             return r;
-        r = qz_encode(tmp, p, w, h, np, planes, out, max_err, err, errlen);
+        r = qz_encode(tmp, p, w, h, channels, np, planes, out, max_err, err, errlen);
         proto_codec_ctx_destroy(tmp);
         return r;
     }

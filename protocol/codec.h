@@ -10,8 +10,10 @@
  * Codecs (ids are on the wire; see PROTOCOL.md for exact byte layouts):
  *   f32       raw IEEE binary32, lossless
  *   f16       IEEE binary16, round to nearest even
- *   qz        quantised with a step from an accuracy target relative to each
- *             plane's range, planar spatial prediction, zstd    (the default)
+ *   qz        quantised with a step from an accuracy target (per plane kind:
+ *             see proto_codec_plane_error_bound), least-squares spatial
+ *             prediction (DX, DZ, NU, NV also from the decoded H plane),
+ *             zstd                                               (the default)
  *   exr-zip   OpenEXR file in memory, FLOAT channels, ZIP (lossless)
  *   exr-piz   OpenEXR file in memory, HALF channels, PIZ (lossless on half)
  *   exr-b44   OpenEXR file in memory, HALF channels, B44 (lossy, fixed rate)
@@ -85,11 +87,22 @@ int proto_tile_planes(unsigned channels);
 const char *proto_tile_plane_name(unsigned channels, int i);
 
 /* A-priori bound on |decoded - input| for one plane whose values lie in
- * [lo, hi], for codec c with params p.  0 for lossless codecs.  For exr-b44/
+ * [lo, hi], for codec c with params p.  0 for lossless codecs.  For qz
+ * this is the relative budget (accuracy x range) of the H and J planes;
+ * proto_codec_plane_error_bound gives every plane's.  For exr-b44/
  * b44a the bound is loose (B44 can lose up to half of a block's
  * magnitude when a block straddles zero); proto_tile_encode reports the
  * achieved error, which is what TILE messages carry. */
 double proto_codec_error_bound(proto_codec c, const proto_codec_params *p, double lo, double hi);
+
+/* The same bound for plane `plane` of a tile with the given channels, as
+ * proto_tile_encode applies it: qz (format 2) gives each plane kind its own
+ * budget (PROTOCOL.md "qz": H and J accuracy x range; DX, DZ accuracy x
+ * max(h_range, own range), h_range being the tile's H plane range, 0 if
+ * none; NU, NV accuracy / 2 in octahedral units; FOAM at most half of
+ * 1/255).  Other codecs: as proto_codec_error_bound. */
+double proto_codec_plane_error_bound(proto_codec c, const proto_codec_params *p, unsigned channels, int plane,
+                                     double lo, double hi, double h_range);
 
 /* Encodes planes (proto_tile_planes(channels) planes of w*h floats, plane
  * after plane) and appends the payload to out.  Input values must be finite

@@ -248,18 +248,36 @@ static unsigned chan_of(const plan *pl, int c)
 /* Encoded bytes of one tile of side T, from a fixed model of each codec -
  * never from what this daemon happened to encode before, so that two
  * replicas plan every frame alike (the ocean and what travels are pure
- * functions of the sea, t and the camera).  qz: 0.48 bytes a sample and
- * plane at accuracy 5e-3 (1/8.3 of f32, tests/bench/out/bench_codec.md),
- * one more bit per halving of the accuracy; f16 and the half-float EXR
- * codecs 2; f32 and exr-zip 4. */
-static double tile_bytes(const proto_subscribe *sub, unsigned channels, int T)
+ * functions of the sea, t and the camera).
+ * qz (format 2): residual bytes per sample and plane measured on the
+ * default scene's layout-1 mip tiles (bench_codec, "as the viewer receives
+ * them": 32 x 32, H DX DZ NU NV [FOAM], every mip of every cascade) at
+ * accuracies 2^k x 5e-3, k = 2 .. -4, linear in log2(accuracy) between
+ * them (5e-3: 0.430, i.e. 1/8.5 of f32 with the headers), 0.14 more per
+ * halving below and 0.05 less per doubling above the table; plus the
+ * payload header, 8 + ~40 bytes a plane (weights of the LSX predictor).
+ * f16 and the half-float EXR codecs 2; f32 and exr-zip 4 a sample. */
+double srv_cascade_tile_bytes(const proto_subscribe *sub, unsigned channels, int T)
 {
-    double per;
+    static const double qz_res[7] = {0.311, 0.361, 0.430, 0.524, 0.635, 0.764, 0.905}; /* L = -2 .. 4 */
+    int planes = proto_tile_planes(channels);
+    double per, head = 0.0;
     switch (sub->codec) {
-    case PROTO_CODEC_QZ:
-        per = 0.48 + 0.125 * log2(5e-3 / fmax((double)sub->accuracy, 1e-6));
-        per = fmin(fmax(per, 0.1), 4.0);
+    case PROTO_CODEC_QZ: {
+        double L = log2(5e-3 / fmax((double)sub->accuracy, 1e-6));
+        if (L <= -2)
+            per = qz_res[0] + 0.05 * (L + 2);
+        else if (L >= 4)
+            per = qz_res[6] + 0.14 * (L - 4);
+        else {
+            int i = (int)floor(L + 2);
+            double f = L + 2 - i;
+            per = i >= 6 ? qz_res[6] : qz_res[i] + f * (qz_res[i + 1] - qz_res[i]);
+        }
+        per = fmin(fmax(per, 0.05), 4.0);
+        head = 8.0 + 40.0 * planes;
         break;
+    }
     case PROTO_CODEC_F32:
     case PROTO_CODEC_EXR_ZIP:
         per = 4.0;
@@ -268,7 +286,7 @@ static double tile_bytes(const proto_subscribe *sub, unsigned channels, int T)
         per = 2.0;
         break;
     }
-    return per * proto_tile_planes(channels) * T * T + 64; /* record and TILE headers */
+    return per * planes * T * T + head + 64; /* + record and TILE headers */
 }
 
 /* The bounding box [x0, x1] x [z0, z1] of the sea a camera may draw from
@@ -327,7 +345,7 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
 /* A job's plan at the server's quality target (server.px_per_sample),
  * coarsened (q raised by steps of 2^(1/4)) until the frame's tiles fit the
  * viewer's byte budget (server.viewer_bytes_per_s over its frame rate,
- * estimated with tile_bytes' model): a
+ * estimated with srv_cascade_tile_bytes' model): a
  * large viewport or a low camera gets a little less geometry and a little
  * more unresolved roughness, never more bytes than the budget. */
 static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
@@ -418,7 +436,7 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
             span(box[2], box[3], w, ntile, &g->z0, &g->nz);
             pl->need[c][m] = 1;
             pl->tiles += g->nx * g->nz;
-            samples += (double)g->nx * g->nz * tile_bytes(sub, chan_of(pl, c), t);
+            samples += (double)g->nx * g->nz * srv_cascade_tile_bytes(sub, chan_of(pl, c), t);
         }
     }
     pl->ok = 1;

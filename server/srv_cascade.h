@@ -55,6 +55,13 @@ void srv_cascade_reset(srv_cascade *k);
  * subscription check refuses what would exceed PROTO_MAX_FRAME_TILES. */
 uint32_t srv_cascade_max_tiles(const ocean_params *p, int layers, int tile_size);
 
+/* The planner's fixed model of one encoded layout-1 tile's bytes (record
+ * and TILE headers included) for subscription sub's codec and accuracy,
+ * the given channels and side T: what server.viewer_bytes_per_s is
+ * planned against, the same on every replica (bench_codec compares it
+ * with the measured bytes). */
+double srv_cascade_tile_bytes(const proto_subscribe *sub, unsigned channels, int T);
+
 /* Builds the FRAMEs (and MESH_TOPOLOGYs) of jobs[0..n): evaluates the mips
  * the jobs need at their times, encodes missing tiles (cache generation
  * gen; entries unused for a generation are dropped by the caller's sweep

@@ -1,6 +1,7 @@
 /*
  * codec.js - tile payload decoders for the browser: f32, f16 and qz
- * (quantised + planar prediction + zstd), plus octahedral normals.
+ * (quantised + least-squares spatial prediction + zstd; formats 1 and 2),
+ * plus octahedral normals.
  * Mirrors protocol/codec.c (byte layouts in PROTOCOL.md).  The EXR codecs
  * are not decoded here; the viewer never subscribes with them.
  *
@@ -17,7 +18,14 @@
 import { decompress } from './vendor/fzstd.js';
 import { CODEC, CODEC_NAMES, ProtoError, R, tilePlanes } from './protocol.js';
 
-const QZ_FORMAT = 1;
+const QZ_FORMAT = 1;          /* format 1: fixed 24-byte plane headers, planar / LS6 */
+const QZ2_FORMAT = 2;         /* format 2 (what oceand writes): LSX with a reference plane */
+const QZ2_PLANE_HEAD = 12;    /* base f32, step f32, nbytes u8, predictor u8, ref u8, reserved u8 */
+const QZ_PRED_LSX = 3;
+const QZ_NOREF = 255;
+/* LSX taps (di, dj): own causal 8 (written out in qz2Decode in this order:
+ * (0,-1) (-1,0) (-1,-1) (-1,1) (0,-2) (-2,0) (-1,-2) (-2,-1)), then the reference plane's 9 */
+const QZ_REF = [[0, 0], [0, -1], [0, 1], [-1, 0], [1, 0], [0, -2], [0, 2], [-2, 0], [2, 0]];
 const QZ_HEAD = 4;            /* planes u8, format u8, reserved u16 */
 const QZ_PLANE_HEAD = 24;     /* base f32, step f32, nbytes u8, predictor u8, reserved u16, coef i16[6] */
 const QZ_PRED_PLANAR = 1;
@@ -82,6 +90,7 @@ let qScratch = new Float64Array(0);
 let rScratch = new Int32Array(0);
 
 function qzDecode(w, h, np, data, dv, out) {
+    if (data.byteLength >= 2 && data[1] === QZ2_FORMAT) return qz2Decode(w, h, np, data, dv, out);
     const len = data.byteLength;
     const headlen = QZ_HEAD + QZ_PLANE_HEAD * np + 4;
     if (len < headlen) bad(`qz payload of ${len} bytes shorter than its ${headlen}-byte header`);
@@ -152,6 +161,95 @@ function qzDecode(w, h, np, data, dv, out) {
         if (!Number.isFinite(Math.fround(bs + lo * st)) || !Number.isFinite(Math.fround(bs + hi * st)))
             bad(`qz plane ${c}: non-finite values (base ${bs}, step ${st}, levels ${lo}..${hi})`);
         for (let i = 0; i < n; i++) out[dst + i] = bs + q[i] * st;   /* Float32Array store rounds as (float) */
+    }
+}
+
+/* Residual stream: for plane c, nb little-endian byte planes -> res (zigzag-decoded). */
+function residuals(raw, off, k, n, res) {
+    if (k === 0) res.fill(0, 0, n);
+    else if (k === 1) for (let i = 0; i < n; i++) { const z = raw[off + i]; res[i] = (z >>> 1) ^ -(z & 1); }
+    else if (k === 2) for (let i = 0; i < n; i++) { const z = raw[off + i] | (raw[off + n + i] << 8); res[i] = (z >>> 1) ^ -(z & 1); }
+    else if (k === 3) for (let i = 0; i < n; i++) { const z = raw[off + i] | (raw[off + n + i] << 8) | (raw[off + 2 * n + i] << 16); res[i] = (z >>> 1) ^ -(z & 1); }
+    else for (let i = 0; i < n; i++) { const z = (raw[off + i] | (raw[off + n + i] << 8) | (raw[off + 2 * n + i] << 16) | (raw[off + 3 * n + i] << 24)) >>> 0; res[i] = (z >>> 1) ^ -(z & 1); }
+}
+
+let q2Scratch = new Float64Array(0);
+
+/* qz format 2 (PROTOCOL.md "qz"): variable plane headers; LSX = 8 causal
+ * taps plus, with a reference plane, 9 taps of that (already decoded)
+ * plane with coordinates clamped into the tile.  Sums stay below 2^50:
+ * exact in doubles, as the C decoder's int64. */
+function qz2Decode(w, h, np, data, dv, out) {
+    const len = data.byteLength;
+    if (len < QZ_HEAD + 4) bad(`qz payload of ${len} bytes shorter than its header`);
+    if (data[0] !== np) bad(`qz header says ${data[0]} planes, tile has ${np}`);
+    if (dv.getUint16(2, true) !== 0) bad(`qz format 2 reserved ${dv.getUint16(2, true)} not 0`);
+    const n = w * h;
+    const base = [], step = [], nb = [], pred = [], refs = [], coefs = [];
+    let want = 0, off = QZ_HEAD;
+    for (let c = 0; c < np; c++) {
+        if (len - off < QZ2_PLANE_HEAD + 4) bad(`qz payload of ${len} bytes ends inside plane ${c}'s header`);
+        const b = dv.getFloat32(off, true), s = dv.getFloat32(off + 4, true), k = data[off + 8], p = data[off + 9], r = data[off + 10];
+        const nt = p === QZ_PRED_LSX ? (r === QZ_NOREF ? 8 : 17) : 0;
+        if (!Number.isFinite(b) || !Number.isFinite(s) || !(s > 0) || k > 4 || data[off + 11] !== 0 ||
+            (p !== QZ_PRED_PLANAR && p !== QZ_PRED_LSX) || (p === QZ_PRED_PLANAR && r !== QZ_NOREF) || (r !== QZ_NOREF && r >= c))
+            bad(`qz plane ${c} header invalid (base ${b}, step ${s}, bytes ${k}, predictor ${p}, ref ${r})`);
+        if (len - off - QZ2_PLANE_HEAD < 2 * nt + 4) bad(`qz payload of ${len} bytes ends inside plane ${c}'s weights`);
+        const coef = new Float64Array(nt);
+        for (let i = 0; i < nt; i++) coef[i] = dv.getInt16(off + QZ2_PLANE_HEAD + 2 * i, true);
+        off += QZ2_PLANE_HEAD + 2 * nt;
+        base.push(b); step.push(s); nb.push(k); pred.push(p); refs.push(r); coefs.push(coef);
+        want += k * n;
+    }
+    const rawlen = dv.getUint32(off, true);
+    off += 4;
+    if (rawlen !== want) bad(`qz residual length ${rawlen}, header implies ${want}`);
+    let raw;
+    try { raw = decompress(data.subarray(off)); } catch (e) { bad(`qz: zstd: ${e.message || e}`); }
+    if (raw.length !== want) bad(`qz: zstd frame content size ${raw.length} does not match ${want}`);
+    if (q2Scratch.length < n * np) q2Scratch = new Float64Array(n * np);
+    if (rScratch.length < n) rScratch = new Int32Array(n);
+    const qa = q2Scratch, res = rScratch;
+    let ro = 0;
+    for (let c = 0; c < np; c++) {
+        const k = nb[c], bs = base[c], st = step[c], lsx = pred[c] === QZ_PRED_LSX, cf = coefs[c];
+        const qo = c * n, ref = refs[c] === QZ_NOREF ? -1 : refs[c] * n;
+        residuals(raw, ro, k, n, res);
+        ro += k * n;
+        let lo = 0, hi = 0;
+        for (let i = 0; i < h; i++) {
+            for (let j = 0; j < w; j++) {
+                const idx = qo + i * w + j;
+                let p;
+                if (i === 0) p = j === 0 ? 0 : qa[idx - 1];
+                else if (j === 0) p = qa[idx - w];
+                else if (lsx && i >= 2 && j >= 2 && j + 1 < w) {
+                    let s = cf[0] * qa[idx - 1] + cf[1] * qa[idx - w] + cf[2] * qa[idx - w - 1] + cf[3] * qa[idx - w + 1] +
+                            cf[4] * qa[idx - 2] + cf[5] * qa[idx - 2 * w] + cf[6] * qa[idx - w - 2] + cf[7] * qa[idx - 2 * w - 1];
+                    if (ref >= 0) {
+                        if (i + 2 < h && j + 2 < w) {
+                            /* away from the edges the clamp does not bite */
+                            const r = ref + i * w + j;
+                            s += cf[8] * qa[r] + cf[9] * qa[r - 1] + cf[10] * qa[r + 1] + cf[11] * qa[r - w] + cf[12] * qa[r + w] +
+                                 cf[13] * qa[r - 2] + cf[14] * qa[r + 2] + cf[15] * qa[r - 2 * w] + cf[16] * qa[r + 2 * w];
+                        } else {
+                            for (let t = 0; t < 9; t++) {
+                                const ii = Math.min(Math.max(i + QZ_REF[t][0], 0), h - 1), jj = Math.min(Math.max(j + QZ_REF[t][1], 0), w - 1);
+                                s += cf[8 + t] * qa[ref + ii * w + jj];
+                            }
+                        }
+                    }
+                    p = Math.floor((s + 2048) / 4096);
+                } else p = qa[idx - 1] + qa[idx - w] - qa[idx - w - 1];
+                const v = p + res[i * w + j];
+                if (v > QZ_Q_LIMIT || v < -QZ_Q_LIMIT) bad(`qz plane ${c}: level ${v} out of range at (${i},${j})`);
+                qa[idx] = v;
+                if (v < lo) lo = v; else if (v > hi) hi = v;
+            }
+        }
+        if (!Number.isFinite(Math.fround(bs + lo * st)) || !Number.isFinite(Math.fround(bs + hi * st)))
+            bad(`qz plane ${c}: non-finite values (base ${bs}, step ${st}, levels ${lo}..${hi})`);
+        for (let i = 0; i < n; i++) out[qo + i] = bs + qa[qo + i] * st;
     }
 }
 

@@ -89,7 +89,7 @@ function chooseSubscription(h, want) {
         lodLevels: Math.max(1, Math.min(want.lodLevels ?? 8, h.maxLodLevels)),
         tileSize: Math.max(2, Math.min(want.tileSize ?? 64, h.maxTileSize)),
         frameRateHz: Math.min(want.frameRateHz ?? 30, h.maxFrameRateHz),
-        accuracy: want.accuracy ?? 1e-3,
+        accuracy: want.accuracy ?? 5e-3,
         baseSpacingM: want.baseSpacingM ?? 0,
         viewRangeM: want.viewRangeM ?? 0,
         layout,

@@ -27,6 +27,7 @@
 
 #include "codec.h"
 #include "proto.h"
+#include "../bench/qz_before.h"
 
 static int write_msg(const char *dir, const char *name, proto_msg *m)
 {
@@ -121,12 +122,15 @@ static int gen(const char *dir)
                "\"tickRateHz\":30,\"serverVersion\":\"%s\",\"simTime\":12.5,\"seq\":1},\n",
             (unsigned long long)sea.seed, h->server_version);
 
-    /* FRAME: three tiles (qz, f16, f32), different shapes/channels, and a mesh */
-    enum { NT = 3 };
-    const proto_codec codecs[NT] = {PROTO_CODEC_QZ, PROTO_CODEC_F16, PROTO_CODEC_F32};
+    /* FRAME: four tiles (qz format 2, f16, f32, and a qz format 1 payload as
+     * recordings made before format 2 hold: tests/bench/qz_before.h),
+     * different shapes/channels, and a mesh */
+    enum { NT = 4 };
+    const proto_codec codecs[NT] = {PROTO_CODEC_QZ, PROTO_CODEC_F16, PROTO_CODEC_F32, PROTO_CODEC_QZ};
     const unsigned chans[NT] = {PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM,
-                                PROTO_CH_HEIGHT | PROTO_CH_NORMAL, PROTO_CH_HEIGHT | PROTO_CH_FOAM};
-    const int ws[NT] = {17, 8, 5}, hs[NT] = {13, 8, 3};
+                                PROTO_CH_HEIGHT | PROTO_CH_NORMAL, PROTO_CH_HEIGHT | PROTO_CH_FOAM,
+                                PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_NORMAL};
+    const int ws[NT] = {17, 8, 5, 11}, hs[NT] = {13, 8, 3, 9};
     proto_tile tiles[NT];
     proto_buf pay[NT];
     float *dec[NT];
@@ -157,7 +161,8 @@ static int gen(const char *dir)
         proto_buf_init(&pay[t], 0);
         double merr;
         char err[256];
-        if (proto_tile_encode(codecs[t], &p, w, hh, chans[t], pl, &pay[t], &merr, err, sizeof err) != OCEAN_OK) {
+        if ((t == 3 ? qzb_encode(&p, w, hh, np, pl, &pay[t], &merr, err, sizeof err)
+                    : proto_tile_encode(codecs[t], &p, w, hh, chans[t], pl, &pay[t], &merr, err, sizeof err)) != OCEAN_OK) {
             fprintf(stderr, "tile encode: %s\n", err);
             return 1;
         }

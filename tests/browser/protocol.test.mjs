@@ -11,6 +11,8 @@
  *    vectors are decoded by both; both must accept or refuse each one alike
  *    and, when refusing, report the same ocean_result code;
  *  - corrupt qz payloads are refused with ECODEC, never decoded to junk;
+ *  - the committed qz payload vectors (tests/vectors/codec, formats 2 and 1)
+ *    decode to their committed samples bit for bit, as the C decoder's;
  *  - the protocol's own vectors (tests/vectors, PROTO_VECTORS) decode to
  *    their stated fields, bad ones get their stated code, and the messages
  *    the viewer sends re-encode to identical bytes.
@@ -110,11 +112,20 @@ test('FRAME from C: header, mesh and tiles decode; tile samples equal the C deco
         seen.add(t.codec);
     });
     assert.deepEqual([...seen].sort(), [CODEC.F32, CODEC.F16, CODEC.QZ].sort());
-    /* the qz tile must exercise the LS6 predictor (2) as well as planar (1) */
+    /* the qz tile is format 2 and must exercise the LSX predictor (3) with
+     * the H plane as reference, so the C and JS reference paths are compared */
     const qz = f.tiles.find((t) => t.codec === CODEC.QZ);
-    const preds = new Set();
-    for (let c = 0; c < qz.payload[0]; c++) preds.add(qz.payload[4 + 24 * c + 9]);
-    assert.ok(preds.has(2), `qz predictors used: ${[...preds]}`);
+    assert.equal(qz.payload[1], 2, 'qz format');
+    const preds = new Set(), refs = new Set();
+    for (let c = 0, o = 4; c < qz.payload[0]; c++) {
+        const p = qz.payload[o + 9], r = qz.payload[o + 10];
+        preds.add(p); refs.add(r);
+        o += 12 + (p === 3 ? 2 * (r === 255 ? 8 : 17) : 0);
+    }
+    assert.ok(preds.has(3), `qz predictors used: ${[...preds]}`);
+    assert.ok(refs.has(0), `qz reference planes used: ${[...refs]}`);
+    /* and a format-1 payload (recordings before format 2) decoded alike above */
+    assert.ok(f.tiles.some((t) => t.codec === CODEC.QZ && t.payload[1] === 1), 'a qz format 1 tile');
 });
 
 test('layout-1 FRAME from C: cascade block, mip tables, tags, placement; tiles bit for bit', () => {
@@ -369,6 +380,32 @@ test('hostile input: truncated and corrupted messages get the same verdict and c
     });
     assert.deepEqual(mismatches.slice(0, 10), [], `${mismatches.length} of ${variants.length} verdicts differ`);
     assert.ok(refused > variants.length / 3, `only ${refused} of ${variants.length} variants were refused`);
+});
+
+test('qz payload vectors (tests/vectors/codec): formats 2 and 1 decode to the committed samples, bit for bit', (t) => {
+    const vdir = process.env.PROTO_VECTORS;
+    if (!vdir) { t.skip('PROTO_VECTORS not set'); return; }
+    const dir = join(vdir, 'codec');
+    const names = readdirSync(dir).filter((f) => f.endsWith('.qz')).map((f) => f.slice(0, -3));
+    assert.ok(names.length >= 2, `codec vectors in ${dir}: ${names}`);
+    const formats = new Set();
+    for (const name of names) {
+        const meta = Object.fromEntries(readFileSync(join(dir, `${name}.txt`), 'utf8').trim().split('\n')
+            .map((l) => l.split(' = ')));
+        const payload = new Uint8Array(readFileSync(join(dir, `${name}.qz`)));
+        const want = readFileSync(join(dir, `${name}.f32`));
+        const w = Number(meta.width), h = Number(meta.height), ch = Number(meta.channels);
+        assert.equal(payload[1], Number(meta.format));
+        formats.add(payload[1]);
+        const d = decodeTile(CODEC.QZ, w, h, ch, payload);
+        assert.equal(d.data.length * 4, want.length);
+        const got = new Uint8Array(d.data.buffer, d.data.byteOffset, d.data.byteLength);
+        for (let i = 0; i < want.length; i++)
+            if (got[i] !== want[i]) assert.fail(`${name}: byte ${i} of the samples differs`);
+        for (let l = 0; l < payload.length; l += 7)
+            assert.throws(() => decodeTile(CODEC.QZ, w, h, ch, payload.subarray(0, l)), (e) => e.code === R.ECODEC);
+    }
+    assert.deepEqual([...formats].sort(), [1, 2]);
 });
 
 test('corrupt qz payloads are refused with ECODEC, never decoded to junk', () => {

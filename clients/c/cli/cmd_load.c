@@ -233,7 +233,7 @@ int cmd_load(int argc, char **argv)
     occli_sub s;
     /* the library's defaults, which are the browser viewer's subscription
      * (clients/web/worker.js): every effect and every cascade (the daemon
-     * clamps both to what the scene has), 64-sample tiles at accuracy 1e-3,
+     * clamps both to what the scene has), 64-sample tiles at accuracy 5e-3,
      * 8 levels, layout 1 */
     occli_sub_default(&s);
     int layout = PROTO_LAYOUT_CASCADE;
