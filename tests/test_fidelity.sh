@@ -29,8 +29,10 @@
 #    not a published threshold); the cameras agree within about 3 % today,
 #    and dropping the unresolved moments in the client takes 90-100 % away
 #    from a high camera.  Beside it, conservation (an internal consistency
-#    check, not an anchor): each camera's delivered total within 15 % of
-#    the whole-sea moments its frames claim (every cascade + tail_mss); it
+#    check, not an anchor): each camera's delivered total per area within
+#    15 % of the whole-sea moments its frames claim (every cascade +
+#    tail_mss; per pixel printed beside: from 2 m it is a few square metres
+#    of sea, +16 % in flight at 15 m/s); it
 #    catches a drop of part of the moments that is the same at every height.
 # Every measured figure is printed as a table, failing or not.
 #   env: BUILD (build), FIDELITY_FRAMES (3), FIDELITY_SCENES (all),
@@ -159,22 +161,22 @@ if rows and glitter_checked == 0:
 # unresolved moments (e.g. the mip tables' share) the same way at every
 # height, which the comparison between heights cannot see.
 print()
-print("conservation: delivered total mean-square slope against the frames' whole-sea moments, tolerance %d %%"
-      % round(100 * TOL))
+print("conservation: delivered total mean-square slope against the frames' whole-sea moments, tolerance %d %% "
+      "per area (per pixel printed: from 2 m the pixels see a few square metres of sea, too little for a slope "
+      "statistic)" % round(100 * TOL))
 print("%-12s %6s %5s | %8s %8s %8s | %7s %7s" % ("scene", "height", "speed", "claimed", "area", "pixel", "d_area",
                                                "d_pixel"))
 for d in rows:
     cl = d["mss_sea_claimed"]
     ra, rp = d["mss_total"] / cl - 1 if cl > 0 else float("inf"), d["mss_total_per_pixel"] / cl - 1 if cl > 0 else float("inf")
-    ok = abs(ra) <= TOL and abs(rp) <= TOL
+    ok = abs(ra) <= TOL
     print("%-12s %6g %5g | %8.5f %8.5f %8.5f | %+6.1f%% %+6.1f%% %s" % (
         d["scene"], d["camera_height_m"], d["speed_m_s"], cl, d["mss_total"], d["mss_total_per_pixel"], 100 * ra,
         100 * rp, "" if ok else "OUTSIDE %d %%" % round(100 * TOL)))
     if not ok:
-        bad.append("conservation: %s at %g m, %g m/s: delivered mean-square slope %.5f per area, %.5f per pixel, "
-                   "against the frames' whole sea %.5f: outside %d %%" % (
-                       d["scene"], d["camera_height_m"], d["speed_m_s"], d["mss_total"], d["mss_total_per_pixel"],
-                       cl, round(100 * TOL)))
+        bad.append("conservation: %s at %g m, %g m/s: delivered mean-square slope %.5f per area against the "
+                   "frames' whole sea %.5f: outside %d %%" % (
+                       d["scene"], d["camera_height_m"], d["speed_m_s"], d["mss_total"], cl, round(100 * TOL)))
 print("%d runs measured, %d runs failed to measure, %d bounds missed" % (len(rows), runs_failed, len(bad)))
 for b in bad:
     print("FAIL: " + b)
