@@ -95,6 +95,10 @@ typedef struct av_row {
     double bytes_s, frames_s, kib_frame, tiles_frame, cores;
     double points, above, outside;
     av_err carried, shading, total;
+    av_err v_carried, v_geom;   /* the vertex rule: spacing max(s, g_L) */
+    double v_points;
+    int has_mesh;
+    double g0, r0, glast;        /* the mesh's finest ring spacing and radius, coarsest spacing */
     double mss_left_meas, mss_left_claim, mss_res_exact, mss_tail;
     int ok;
     char why[200];
@@ -412,7 +416,18 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, double h
     double ty = tan(cam.fov_y_deg * M_PI / 360), aspect = (double)cam.viewport_w / cam.viewport_h;
     int gw = grid, gh = grid * cam.viewport_h / cam.viewport_w;
     int npx = gw * gh;
-    double *res = xcalloc((size_t)npx * 20, sizeof(double));
+    double *res = xcalloc((size_t)npx * 32, sizeof(double));
+    /* the mesh's rings (MESH_TOPOLOGY zones): a vertex of level L reads
+     * with spacing max(s, g_L); a point at horizontal distance d from the
+     * camera lies in the first level whose zone radius R_L reaches d */
+    const oc_topology *topo = keep->topology;
+    int nlev = topo && (topo->flags & PROTO_TOPO_FLAT) && topo->zones ? topo->lod_levels : 0;
+    R->has_mesh = nlev > 0;
+    if (nlev > 0) {
+        R->g0 = topo->zones[0];
+        R->r0 = topo->zones[1];
+        R->glast = topo->zones[4 * (nlev - 1)];
+    }
     unsigned char *st = xcalloc((size_t)npx, 1);   /* 0 above, 1 outside, 2 measured */
 #pragma omp parallel for schedule(dynamic, 4)
     for (int ij = 0; ij < npx; ij++) {
@@ -432,7 +447,7 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, double h
         }
         double full[5], car[5];
         av_exact(C, b->cascade_count, &L, x, z, full, car);
-        double *o = res + (size_t)ij * 20;
+        double *o = res + (size_t)ij * 32;
         double rec[5] = {s.height, s.dx, s.dz, s.slope_x, s.slope_z};
         for (int k = 0; k < 5; k++) {
             o[k] = rec[k];
@@ -441,6 +456,28 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, double h
         }
         o[15] = s.mss[0] + s.mss[1];
         st[ij] = 2;
+        if (nlev > 0) {
+            double dist = hypot(x - cp[0], z - cp[2]), g = topo->zones[4 * (nlev - 1)];
+            for (int lv = 0; lv < nlev; lv++)
+                if (dist <= topo->zones[4 * lv + 1]) {
+                    g = topo->zones[4 * lv];
+                    break;
+                }
+            oc_sample sv;
+            oc_lod Lv;
+            if (oc_frame_sample_interp(keep, x, z, g, OC_INTERP_CUBIC, &sv) == OCEAN_OK &&
+                oc_cascade_lod(b, x, z, g, &Lv) == OCEAN_OK) {
+                double fv[5], cv[5];
+                av_exact(C, b->cascade_count, &Lv, x, z, fv, cv);
+                double rv[3] = {sv.height, sv.dx, sv.dz};
+                for (int k = 0; k < 3; k++) {
+                    o[16 + k] = rv[k];
+                    o[19 + k] = cv[k];
+                }
+                o[22] = g;
+                st[ij] = 3;
+            }
+        }
     }
     for (int ij = 0; ij < npx; ij++) {
         if (st[ij] == 0) {
@@ -451,7 +488,13 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, double h
             R->outside++;
             continue;
         }
-        const double *o = res + (size_t)ij * 20, *rec = o, *car = o + 5, *full = o + 10;
+        const double *o = res + (size_t)ij * 32, *rec = o, *car = o + 5, *full = o + 10;
+        if (st[ij] == 3) {
+            const double *rv = o + 16, *cv = o + 19;
+            R->v_points++;
+            av_err_add(&R->v_carried, rv[0] - cv[0], hypot(rv[1] - cv[1], rv[2] - cv[2]), 0.0);
+            av_err_add(&R->v_geom, full[0] - cv[0], hypot(full[1] - cv[1], full[2] - cv[2]), 0.0);
+        }
         R->points++;
         av_err_add(&R->carried, rec[0] - car[0], hypot(rec[1] - car[1], rec[2] - car[2]),
                    av_angle_deg(rec[3], rec[4], car[3], car[4]));
@@ -613,7 +656,11 @@ static int viewer_section(void)
            "Columns: **carried error** = reconstruction - exact carried waves (codec, storage, cubic reading); "
            "**left to shading** = exact full - exact carried (what the frame hands to shading as unresolved "
            "slope variance; e_error is its height-variance fraction at the nadir); **total** = reconstruction - "
-           "exact full. Each as RMS / max over the points (per pixel, not per sea area) of height (m, and %% of "
+           "exact full. *Mesh vertex rule* rows read the same points as a vertex of the mesh ring there reads them "
+           "(spacing max(s, g_L), g_L of the first MESH_TOPOLOGY zone whose radius reaches the point's distance; "
+           "height and displacement only, the viewer's normals come from the shading read; the interpolation "
+           "across a triangle between vertices is not included): what the geometry itself carries. "
+           "Each as RMS / max over the points (per pixel, not per sea area) of height (m, and %% of "
            "Hs), horizontal displacement |(dx, dz)| (m) and normal angle (deg; normals from the parameter "
            "surface's slopes, as the tiles carry them). The Gerstner near field is not a cascade's mode: it is "
            "outside every figure (the frames carry it only in tail_mss). Bytes/s = FRAME bytes received over %.0f s "
@@ -650,7 +697,25 @@ static int viewer_section(void)
             av_print_err(what[k], e[k], hs);
             printf("\n");
         }
+        if (r->v_points > 0) {
+            const av_err *v[2] = {&r->v_carried, &r->v_geom};
+            const char *vw[2] = {"mesh vertex rule: the waves it carries", "mesh vertex rule: waves not in geometry"};
+            for (int k = 0; k < 2; k++) {
+                double n = v[k]->n;
+                printf("| %g | %s | %.3g / %.3g | %.3g / %.3g | %.3g / %.3g | - |\n", r->height, vw[k],
+                       sqrt(v[k]->h2 / n), v[k]->hmax, 100 * sqrt(v[k]->h2 / n) / hs, 100 * v[k]->hmax / hs,
+                       sqrt(v[k]->d2 / n), v[k]->dmax);
+            }
+        } else {
+            printf("| %g | mesh vertex rule | no FLAT topology with the frame: not measured | | | |\n", r->height);
+        }
     }
+    printf("\nMesh rings of the frames measured (MESH_TOPOLOGY zones):");
+    for (int h = 0; h < AV_HEIGHTS; h++)
+        if (rows_v[h].has_mesh)
+            printf(" %g m: g_0 %g m within %.0f m, coarsest g %g m;", rows_v[h].height, rows_v[h].g0, rows_v[h].r0,
+                   rows_v[h].glast);
+    printf("\n");
     printf("\n| camera m | mean-square slope of every mode (exact) | left to shading: measured | left to shading: the frame's mip tables | tail_mss (near field, tail; not in the exact sum) |\n");
     printf("|---:|---:|---:|---:|---:|\n");
     for (int h = 0; h < AV_HEIGHTS; h++) {
