@@ -75,7 +75,14 @@ for scene in $scenes; do
     for h in $heights; do
         for v in $speeds; do
             out="$tmp/$scene-$h-$v.json"
-            if "$OC" fidelity "$url" --camera-height "$h" --speed "$v" --frames "$FRAMES" --settle 0.2 \
+            # Low cameras see a few square metres of sea per pixel row: their
+            # per-pixel means need frames spread over wave periods (6 frames
+            # 0.25 s apart), not 3 consecutive ones of the same waves (flight
+            # at 2 m, 15 m/s read 1.31x Cox-Munk per pixel once that way,
+            # 0.94-1.10 otherwise).
+            spread=(--frames "$FRAMES")
+            [[ $h -le 25 ]] && spread=(--frames $((FRAMES * 2)) --interval 0.25)
+            if "$OC" fidelity "$url" --camera-height "$h" --speed "$v" "${spread[@]}" --settle 0.2 \
                 --timeout 20000 --json >"$out" 2>"$tmp/err"; then
                 python3 -c "import json,sys; d=json.load(open('$out')); d['scene']='$scene'; print(json.dumps(d))" \
                     >>"$results"
