@@ -80,6 +80,7 @@ run_one() {  # name title command...
     else
         STATUS+=("FAILED (exit $rc)"); ANY_FAILED=1
     fi
+    echo "$DATE, revision $REV, \`$CMD\`" >"$OUT/$name.stamp"
     echo "bench: $name: ${STATUS[-1]} in $((t1 - t0)) s" >&2
 }
 
@@ -102,9 +103,20 @@ ORDER=(bench_core bench_accuracy bench_codec bench_mesh bench_server)
 declare -A DONE=()
 ONLY=" ${BENCH_ONLY:-} "
 selected() { [ -z "${BENCH_ONLY:-}" ] || [[ "$ONLY" == *" $1 "* ]]; }
+# A benchmark BENCH_ONLY leaves out keeps the section of the run that last
+# made it (out/NAME.md, its run stamped in out/NAME.stamp; a section older
+# than the stamps is credited to the previous report's date and revision),
+# labelled with that run, so a partial run does not erase the others.
+PREV_RUN=$(sed -n 's/^| date | \(.*\) |$/\1/p' "$REPORT" 2>/dev/null | head -n1)
+PREV_REV=$(sed -n 's/^| revision | \(.*\) |$/\1/p' "$REPORT" 2>/dev/null | head -n1)
 skipped() {  # name title
-    NAMES+=("$1"); TITLES+=("$2"); SECS+=("-"); STATUS+=("skipped (BENCH_ONLY)")
-    : >"$OUT/$1.md"
+    NAMES+=("$1"); TITLES+=("$2"); SECS+=("-")
+    if [ -s "$OUT/$1.md" ]; then
+        [ -s "$OUT/$1.stamp" ] || echo "${PREV_RUN:-an earlier run}, revision ${PREV_REV:-?} (from the previous report)" >"$OUT/$1.stamp"
+        STATUS+=("skipped (BENCH_ONLY); section kept from the run of $(cat "$OUT/$1.stamp")")
+    else
+        STATUS+=("skipped (BENCH_ONLY)")
+    fi
 }
 for name in "${ORDER[@]}"; do
     title=${KNOWN_TITLE[$name]}
@@ -181,13 +193,19 @@ fi
         echo "| [${TITLES[$i]}](#${NAMES[$i]}) (\`${NAMES[$i]}\`) | ${STATUS[$i]} | ${SECS[$i]} |"
     done
     echo
-    if [ -s "$OUT/headline.md" ]; then
+    if [ -s "$OUT/headline_viewer.md" ] || [ -s "$OUT/headline.md" ]; then
         echo "## Headline: what accuracy costs"
         echo
-        echo "Selected rows of the accuracy sweep (full tables below; all rows in \`out/accuracy.csv\`)."
-        echo
-        cat "$OUT/headline.md"
-        echo
+        if [ -s "$OUT/headline_viewer.md" ]; then
+            cat "$OUT/headline_viewer.md"
+            echo
+        fi
+        if [ -s "$OUT/headline.md" ]; then
+            echo "Selected rows of the accuracy sweep (full tables below; all rows in \`out/accuracy.csv\`)."
+            echo
+            cat "$OUT/headline.md"
+            echo
+        fi
     fi
     if [ ${#PLOTS[@]} -gt 0 ]; then
         echo "## Error against time"
@@ -207,7 +225,13 @@ fi
         echo
         echo "## ${TITLES[$i]}"
         echo
-        echo "\`${NAMES[$i]}\`: ${STATUS[$i]}$([ "${SECS[$i]}" != "-" ] && echo ", ${SECS[$i]} s"). Machine: $MACHINE. Date: $DATE. Reproduce: \`$CMD\`."
+        kept=
+        [ "${STATUS[$i]#skipped}" != "${STATUS[$i]}" ] && [ -s "$OUT/${NAMES[$i]}.md" ] && kept=1
+        if [ -n "$kept" ]; then
+            echo "\`${NAMES[$i]}\`: not run this time (BENCH_ONLY=\"${BENCH_ONLY:-}\"); **the section below is from the run of $(cat "$OUT/${NAMES[$i]}.stamp" 2>/dev/null)**, not from the date above. Machine: $MACHINE."
+        else
+            echo "\`${NAMES[$i]}\`: ${STATUS[$i]}$([ "${SECS[$i]}" != "-" ] && echo ", ${SECS[$i]} s"). Machine: $MACHINE. Date: $DATE. Reproduce: \`$CMD\`."
+        fi
         echo
         if [ -s "$OUT/${NAMES[$i]}.md" ]; then
             cat "$OUT/${NAMES[$i]}.md"
@@ -258,6 +282,10 @@ QNOTE=
     echo "N = 2048 summed directly in double, and writes [tests/bench/REPORT.md](tests/bench/REPORT.md)"
     echo "with every table, CSV and plot. Headline ($MACHINE; $DATE; \`$CMD\`; medians, ratios from one run$QNOTE):"
     echo
+    if [ -s "$OUT/headline_viewer.md" ]; then
+        cat "$OUT/headline_viewer.md"
+        echo
+    fi
     if [ -s "$OUT/headline.md" ]; then
         cat "$OUT/headline.md"
     else

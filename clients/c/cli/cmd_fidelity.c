@@ -20,7 +20,10 @@
  *     frame carries for what those mips leave out (mip tables) and what no
  *     cascade holds (tail_mss);
  *   - total = resolved + unresolved: the slope variance a renderer that
- *     shades with both draws.  Compared with Cox & Munk (1954), clean sea:
+ *     shades with both draws; per component (x, z and the xz cross moment,
+ *     JSON mss_total_x / _z / _xz) it is the slope covariance that shapes
+ *     sun glitter and sky reflection (tests/test_fidelity.sh checks that
+ *     high cameras get the covariance a low one gets).  Compared with Cox & Munk (1954), clean sea:
  *     sigma^2 = 0.003 + 5.12e-3 U (U in m/s at 12.5 m), U from the scene's
  *     U10 by the neutral logarithmic profile U(z) = (u_* / kappa) ln(z/z0):
  *     U12.5 = U10 + (u_* / kappa) ln(12.5/10), kappa = 0.4, u_* = sqrt(C_D) U10
@@ -63,7 +66,7 @@ static double monahan_whitecap(double u10)
 /* Sums over the samples, each weighted (w = 1: per pixel; w = the sea
  * area the pixel covers: per square metre of sea in view). */
 typedef struct fid_sums {
-    double w, res_x, res_z, unres_x, unres_z, foam, foam_half, claimed;
+    double w, res_x, res_z, res_xz, unres_x, unres_z, unres_xz, foam, foam_half, claimed;
 } fid_sums;
 
 typedef struct fid_acc {
@@ -78,8 +81,10 @@ static void sums_add(fid_sums *S, double w, const oc_sample *s, double whole)
     S->w += w;
     S->res_x += w * s->slope_x * s->slope_x;
     S->res_z += w * s->slope_z * s->slope_z;
+    S->res_xz += w * s->slope_x * s->slope_z;
     S->unres_x += w * s->mss[0];
     S->unres_z += w * s->mss[1];
+    S->unres_xz += w * s->mss[2];
     S->foam += w * s->foam;
     S->foam_half += w * (s->foam >= 0.5);
     S->claimed += w * whole;
@@ -402,12 +407,14 @@ int cmd_fidelity(int argc, char **argv)
             height, speed, pitch, (unsigned long long)A.frames, (unsigned long long)A.samples,
             (unsigned long long)A.above, (unsigned long long)A.outside, u10);
     fprintf(lines, "(means per area of sea in view; per pixel in brackets where given)\n");
-    fprintf(lines, "mss_resolved    %.5f  (x %.5f, z %.5f; per pixel %.5f)\n", res, S->res_x / S->w, S->res_z / S->w,
-            res_px);
+    fprintf(lines, "mss_resolved    %.5f  (x %.5f, z %.5f, xz %.5f; per pixel %.5f)\n", res, S->res_x / S->w,
+            S->res_z / S->w, S->res_xz / S->w, res_px);
     fprintf(lines, "mss_res_claimed %.5f  (what the mip tables say the mips read hold; the measured value differs "
             "by the sampling of a finite patch)\n", claimed_res);
-    fprintf(lines, "mss_unresolved  %.5f  (x %.5f, z %.5f; mip tables + tail_mss)\n", unres, S->unres_x / S->w,
-            S->unres_z / S->w);
+    fprintf(lines, "mss_unresolved  %.5f  (x %.5f, z %.5f, xz %.5f; mip tables + tail_mss)\n", unres,
+            S->unres_x / S->w, S->unres_z / S->w, S->unres_xz / S->w);
+    fprintf(lines, "mss_total x/z/xz %.5f %.5f %.5f  (resolved + unresolved: the slope covariance shading draws)\n",
+            (S->res_x + S->unres_x) / S->w, (S->res_z + S->unres_z) / S->w, (S->res_xz + S->unres_xz) / S->w);
     fprintf(lines, "mss_sea_claimed %.5f  (the frame's whole sea: every cascade's moments + tail_mss)\n", claimed);
     fprintf(lines, "mss_total       %.5f  Cox-Munk %.5f (U12.5 %.2f m/s): ratio %.3f, per pixel %.5f ratio %.3f: %s\n",
             total, cm, u125_from_u10(u10), mss_ratio, total_px, mss_ratio_px,
@@ -436,6 +443,19 @@ int cmd_fidelity(int argc, char **argv)
         cJSON_AddNumberToObject(o, "mss_resolved", res);
         cJSON_AddNumberToObject(o, "mss_resolved_x", S->res_x / S->w);
         cJSON_AddNumberToObject(o, "mss_resolved_z", S->res_z / S->w);
+        cJSON_AddNumberToObject(o, "mss_resolved_xz", S->res_xz / S->w);
+        cJSON_AddNumberToObject(o, "mss_unresolved_x", S->unres_x / S->w);
+        cJSON_AddNumberToObject(o, "mss_unresolved_z", S->unres_z / S->w);
+        cJSON_AddNumberToObject(o, "mss_unresolved_xz", S->unres_xz / S->w);
+        /* the slope covariance a renderer that shades with both draws:
+         * what sun glitter and sky reflection are made of */
+        cJSON_AddNumberToObject(o, "mss_total_x", (S->res_x + S->unres_x) / S->w);
+        cJSON_AddNumberToObject(o, "mss_total_z", (S->res_z + S->unres_z) / S->w);
+        cJSON_AddNumberToObject(o, "mss_total_xz", (S->res_xz + S->unres_xz) / S->w);
+        cJSON_AddNumberToObject(o, "mss_total_x_per_pixel", (P->res_x + P->unres_x) / P->w);
+        cJSON_AddNumberToObject(o, "mss_total_z_per_pixel", (P->res_z + P->unres_z) / P->w);
+        cJSON_AddNumberToObject(o, "mss_total_xz_per_pixel", (P->res_xz + P->unres_xz) / P->w);
+        cJSON_AddNumberToObject(o, "mss_unresolved_per_pixel", (P->unres_x + P->unres_z) / P->w);
         cJSON_AddNumberToObject(o, "mss_resolved_per_pixel", res_px);
         cJSON_AddNumberToObject(o, "mss_total_per_pixel", total_px);
         cJSON_AddNumberToObject(o, "foam_mean_per_pixel", foam_px);

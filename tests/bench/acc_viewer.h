@@ -1,0 +1,765 @@
+/*
+ * acc_viewer.h - the accuracy of what the browser viewer receives
+ * (issue 13): layout-1 frames from a real oceand, reconstructed as the
+ * client does, against the exact waves.  Included by bench_accuracy.c
+ * (every .c file in tests/bench is a program of its own, so this part is a header).
+ *
+ * What is measured, and why this way:
+ *  - the daemon: build/oceand started as `make run` starts it
+ *    (--config config/oceand.conf, nothing else but a free --port), so the
+ *    scene is server.scene of the shipped config (ship-bridge) and every
+ *    server.* key is the shipped one;
+ *  - the subscription: oc_subscribe_default, which is the browser viewer's
+ *    (clients/web/worker.js chooseSubscription: layout 1, qz, antialias,
+ *    30 Hz, lod 8, tile 64, accuracy 1e-3, concentric mesh) with layers =
+ *    HELLO.max_layers and effects = all & HELLO.effects, as the viewer
+ *    computes them;
+ *  - the camera: a still camera at (0, H, 0), heading 0, 60 deg vertical
+ *    field of view, 1920 x 1080 viewport (a desktop browser's drawing
+ *    buffer; the viewer reports its real one), pitch atan(H / 10 km) +
+ *    fov / 4 below the horizon (ocean-client fidelity's default: half the
+ *    view or more lands on sea within the view range from every height);
+ *  - the reconstruction: a grid of the viewport's pixel centres is cast onto
+ *    the mean sea plane and the frame is read there by oc_frame_sample
+ *    (clients/c/oc_cascade.c: the spec's lod rule with the pixel footprint,
+ *    Keys cubic within a mip, cascades summed), i.e. what the viewer's
+ *    fragment shading reads at that pixel (spacing s, no vertex floor), at
+ *    the parameter point (x, z);
+ *  - the exact waves: the same ocean built in-process from the same config
+ *    (srv_settings_load, as the daemon loads it), checked against the
+ *    frame's cascade block (patches, grids, every mip's cutoff), every mode
+ *    of every cascade summed directly in double at each point at the frame's
+ *    sim time (ocean_mode_amplitude; checked against ocean_reference_point).
+ *    "Carried" weights each mode with what the frame's mips read at that
+ *    point hold of it: sum over the mips the lod rule reads of weight x
+ *    Butterworth gain (the block's order and each mip's kc, waves below
+ *    ocean.drop_gain left out, as ocean_evaluate does), fade included.
+ *    "Full" takes every mode at gain 1.  So:
+ *      carried error  = reconstruction - exact carried waves (the codec,
+ *                       float storage, cubic reading between samples);
+ *      left to shading = exact full - exact carried (the waves the frame
+ *                       hands to shading as unresolved slope variance;
+ *                       e_error is its height-variance fraction at the
+ *                       nadir), beside the variance the frame claims for it;
+ *      total          = reconstruction - exact full.
+ *    The Gerstner near field (ship-bridge has one) is not a cascade's
+ *    mode: it is outside every figure here; the frames carry it only in
+ *    tail_mss.
+ *  - cost: bytes/s = FRAME bytes received over a window of frames made for
+ *    the camera; daemon cores = the daemon's CPU time (utime + stime,
+ *    /proc/PID/stat) over the same window, with this one viewer connected.
+ */
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "oc_cascade.h"
+#include "oceanclient.h"
+#include "srv_config.h"
+
+#define AV_HEIGHTS 3
+static const double av_heights[AV_HEIGHTS] = {25.0, 300.0, 1500.0};
+
+typedef struct av_casc {
+    int m;                    /* modes |mx|, |mz| <= m */
+    double dk, patch;
+    size_t count;
+    int *mx, *mz;
+    double *kx, *kz, *lkx, *lkz; /* kx, kz, lambda kx / k, lambda kz / k */
+    double *hr, *hi;          /* h(k, t) */
+    int mips;
+    float *gain[PROTO_MAX_MIPS]; /* per mip, per mode */
+} av_casc;
+
+typedef struct av_err {       /* sums over points */
+    double n, h2, hmax, d2, dmax, a2, amax;
+} av_err;
+
+static void av_err_add(av_err *e, double dh, double dd, double ang)
+{
+    e->n++;
+    e->h2 += dh * dh;
+    e->d2 += dd * dd;
+    e->a2 += ang * ang;
+    if (fabs(dh) > e->hmax) e->hmax = fabs(dh);
+    if (dd > e->dmax) e->dmax = dd;
+    if (ang > e->amax) e->amax = ang;
+}
+
+typedef struct av_row {
+    double height, pitch, q, e_error, e_total;
+    double bytes_s, frames_s, kib_frame, tiles_frame, cores;
+    double points, above, outside;
+    av_err carried, shading, total;
+    av_err v_carried, v_geom;   /* the vertex rule: spacing max(s, g_L) */
+    double v_points;
+    int has_mesh;
+    double g0, r0, glast;        /* the mesh's finest ring spacing and radius, coarsest spacing */
+    double mss_left_meas, mss_left_claim, mss_res_exact, mss_tail;
+    int ok;
+    char why[200];
+} av_row;
+
+static double av_angle_deg(double sx0, double sz0, double sx1, double sz1)
+{
+    double a[3], b[3];
+    normal_of(sx0, sz0, a);
+    normal_of(sx1, sz1, b);
+    double c = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    double cx = a[1] * b[2] - a[2] * b[1], cy = a[2] * b[0] - a[0] * b[2], cz = a[0] * b[1] - a[1] * b[0];
+    return atan2(sqrt(cx * cx + cy * cy + cz * cz), c) * 180.0 / M_PI;
+}
+
+static void av_casc_free(av_casc *C)
+{
+    free(C->mx);
+    free(C->mz);
+    free(C->kx);
+    free(C->kz);
+    free(C->lkx);
+    free(C->lkz);
+    free(C->hr);
+    free(C->hi);
+    for (int i = 0; i < PROTO_MAX_MIPS; i++)
+        free(C->gain[i]);
+    memset(C, 0, sizeof *C);
+}
+
+/* Cascade c's modes at time t and, per mip of the frame's block, the gain
+ * ocean_evaluate gives each (ocean.c effective_gain: Butterworth below
+ * ocean_filter_negligible_k(kc, order, drop_gain), 0 above). */
+static void av_casc_build(av_casc *C, const ocean *o, int c, double t, const proto_cascade_block *b)
+{
+    memset(C, 0, sizeof *C);
+    double patch, klo, khi;
+    ocean_cascade_band(o, c, &patch, &klo, &khi);
+    const ocean_params *p = ocean_get_params(o);
+    C->patch = patch;
+    C->dk = 2.0 * M_PI / patch;
+    C->m = p->n / 2 - 1;
+    size_t cap = (size_t)(C->m + 1) * (2 * C->m + 1);
+    C->mx = xcalloc(cap, sizeof(int));
+    C->mz = xcalloc(cap, sizeof(int));
+    double **arr[] = {&C->kx, &C->kz, &C->lkx, &C->lkz, &C->hr, &C->hi};
+    for (size_t i = 0; i < sizeof arr / sizeof arr[0]; i++)
+        *arr[i] = xcalloc(cap, sizeof(double));
+    double lam = p->sea.choppiness;
+    for (int mz = 0; mz <= C->m; mz++)
+        for (int mx = mz == 0 ? 1 : -C->m; mx <= C->m; mx++) {
+            double h[2];
+            ocean_mode_amplitude(o, c, mx, mz, t, h);
+            if (h[0] == 0.0 && h[1] == 0.0)
+                continue;
+            size_t q = C->count++;
+            double kx = mx * C->dk, kz = mz * C->dk, k = hypot(kx, kz);
+            C->mx[q] = mx;
+            C->mz[q] = mz;
+            C->kx[q] = kx;
+            C->kz[q] = kz;
+            C->lkx[q] = lam * kx / k;
+            C->lkz[q] = lam * kz / k;
+            C->hr[q] = h[0];
+            C->hi[q] = h[1];
+        }
+    const proto_cascade_entry *e = &b->cascade[c];
+    C->mips = e->mips;
+    for (int mi = 0; mi < e->mips; mi++) {
+        C->gain[mi] = xcalloc(C->count, sizeof(float));
+        double kc = e->mip[mi].kc;
+        double kneg = isinf(kc) ? INFINITY : ocean_filter_negligible_k(kc, b->order, p->drop_gain);
+        for (size_t q = 0; q < C->count; q++) {
+            double k = hypot(C->kx[q], C->kz[q]);
+            C->gain[mi][q] = isinf(kc) ? 1.0f : k < kneg ? (float)ocean_filter_gain(k, kc, b->order) : 0.0f;
+        }
+    }
+}
+
+/* Exact fields at world (x, z): full[5] = h, dx, dz, sx, sz of every mode
+ * of every cascade; car[5] the same with each mode weighted by what the
+ * frame's mips read there hold of it (lod L). */
+static void av_exact(const av_casc *C, int nc, const oc_lod *L, double x, double z, double full[5], double car[5])
+{
+    for (int i = 0; i < 5; i++)
+        full[i] = car[i] = 0.0;
+    for (int c = 0; c < nc; c++) {
+        const av_casc *K = &C[c];
+        int m = K->m, ncol = 2 * m + 1;
+        double *exr = xcalloc((size_t)ncol, sizeof(double)), *exi = xcalloc((size_t)ncol, sizeof(double));
+        double *ezr = xcalloc((size_t)m + 1, sizeof(double)), *ezi = xcalloc((size_t)m + 1, sizeof(double));
+        double xr = fmod(x, K->patch), zr = fmod(z, K->patch);
+        for (int j = -m; j <= m; j++) {
+            double ph = fmod(j * K->dk * xr, 2.0 * M_PI);
+            exr[j + m] = cos(ph);
+            exi[j + m] = sin(ph);
+        }
+        for (int j = 0; j <= m; j++) {
+            double ph = fmod(j * K->dk * zr, 2.0 * M_PI);
+            ezr[j] = cos(ph);
+            ezi[j] = sin(ph);
+        }
+        const oc_lod_cascade *lc = &L->c[c];
+        const float *g0 = lc->mip[0] >= 0 && lc->weight[0] != 0 ? K->gain[lc->mip[0]] : NULL;
+        const float *g1 = lc->mip[1] >= 0 && lc->weight[1] != 0 ? K->gain[lc->mip[1]] : NULL;
+        double w0 = lc->weight[0], w1 = lc->weight[1];
+        double f[5] = {0}, a[5] = {0};
+        for (size_t q = 0; q < K->count; q++) {
+            int jx = K->mx[q] + m, jz = K->mz[q];
+            double er = exr[jx] * ezr[jz] - exi[jx] * ezi[jz], ei = exr[jx] * ezi[jz] + exi[jx] * ezr[jz];
+            double pr = K->hr[q] * er - K->hi[q] * ei, pi = K->hr[q] * ei + K->hi[q] * er;
+            double v[5] = {pr, -K->lkx[q] * pi, -K->lkz[q] * pi, -K->kx[q] * pi, -K->kz[q] * pi};
+            double g = (g0 ? w0 * g0[q] : 0.0) + (g1 ? w1 * g1[q] : 0.0);
+            for (int i = 0; i < 5; i++) {
+                f[i] += v[i];
+                a[i] += g * v[i];
+            }
+        }
+        for (int i = 0; i < 5; i++) {
+            full[i] += 2.0 * f[i];
+            car[i] += 2.0 * a[i];
+        }
+        free(exr);
+        free(exi);
+        free(ezr);
+        free(ezi);
+    }
+}
+
+static int av_free_port(void)
+{
+    int s = socket(AF_INET, SOCK_STREAM, 0);
+    if (s < 0)
+        return -1;
+    struct sockaddr_in a;
+    memset(&a, 0, sizeof a);
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t len = sizeof a;
+    int port = -1;
+    if (bind(s, (struct sockaddr *)&a, sizeof a) == 0 && getsockname(s, (struct sockaddr *)&a, &len) == 0)
+        port = ntohs(a.sin_port);
+    close(s);
+    return port;
+}
+
+/* CPU seconds the process has used (utime + stime). */
+static double av_cpu_s(pid_t pid)
+{
+    char path[64], buf[2048];
+    snprintf(path, sizeof path, "/proc/%d/stat", (int)pid);
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return NAN;
+    size_t n = fread(buf, 1, sizeof buf - 1, f);
+    fclose(f);
+    buf[n] = 0;
+    char *p = strrchr(buf, ')');
+    if (!p)
+        return NAN;
+    unsigned long ut = 0, st = 0;
+    /* after ") ": state ppid pgrp session tty tpgid flags minflt cminflt majflt cmajflt utime stime */
+    if (sscanf(p + 2, "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %lu %lu", &ut, &st) != 2)
+        return NAN;
+    return (double)(ut + st) / (double)sysconf(_SC_CLK_TCK);
+}
+
+static double av_now_s(void) { return bench_now_ms() * 1e-3; }
+
+/* One camera height: subscribe, settle, measure bytes and cost over a
+ * window, keep the window's last frame and measure its accuracy. */
+static void av_measure(const char *url, pid_t daemon, const ocean *ref, double height, int grid, double window_s,
+                       av_row *R)
+{
+    memset(R, 0, sizeof *R);
+    R->height = height;
+    oc_options o;
+    oc_options_default(&o);
+    o.url = url;
+    oc_client *c = NULL;
+    char err[512] = "";
+    if (oc_connect(&o, 10000, &c, err, sizeof err) != OCEAN_OK) {
+        snprintf(R->why, sizeof R->why, "connect: %.150s", err);
+        return;
+    }
+    proto_hello hello;
+    oc_client_hello(c, &hello);
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    sub.layers = hello.max_layers;
+    sub.effects = (uint8_t)(PROTO_FX_ALL & (hello.effects ? hello.effects : PROTO_FX_ALL));
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.pos[1] = R->height;
+    cam.fov_y_deg = 60.0f;
+    cam.viewport_w = 1920;
+    cam.viewport_h = 1080;
+    cam.yaw_deg = 0.0f;
+    R->pitch = -(atan(R->height / 10000.0) * 180.0 / M_PI + 60.0 / 4.0);
+    cam.pitch_deg = (float)R->pitch;
+    uint32_t seq = 0;
+    if (oc_client_subscribe(c, &sub) != OCEAN_OK || oc_client_send_camera(c, &cam, &seq) != OCEAN_OK) {
+        oc_client_last_error(c, err, sizeof err);
+        snprintf(R->why, sizeof R->why, "subscribe: %.150s", err);
+        oc_client_destroy(c);
+        return;
+    }
+    /* settle: the first frame made for this camera, then 1 s (the byte
+     * budget's planning and the mesh topology have arrived) */
+    double t0 = av_now_s(), first = NAN;
+    oc_frame *keep = NULL;
+    double bytes = 0, tiles = 0, nfr = 0, w0 = NAN, cpu0 = NAN, q = 0, ee = 0, et = 0;
+    while (av_now_s() - t0 < 30.0) {
+        oc_frame *f = NULL;
+        ocean_result r = oc_client_next_frame(c, 2000, &f);
+        if (r == OCEAN_ESTATE)
+            continue;
+        if (r != OCEAN_OK) {
+            oc_client_last_error(c, err, sizeof err);
+            snprintf(R->why, sizeof R->why, "frame: %.150s", err);
+            break;
+        }
+        if (f->info.camera_seq == PROTO_NO_CAMERA || (int32_t)(f->info.camera_seq - seq) < 0 ||
+            f->info.layout != PROTO_LAYOUT_CASCADE) {
+            oc_frame_free(f);
+            continue;
+        }
+        double now = av_now_s();
+        if (isnan(first))
+            first = now;
+        if (now - first < 1.0) {
+            oc_frame_free(f);
+            continue;
+        }
+        if (isnan(w0)) {   /* the window opens at this frame's receipt */
+            w0 = now;
+            cpu0 = av_cpu_s(daemon);
+            oc_frame_free(f);
+            continue;
+        }
+        bytes += (double)f->raw_len;
+        tiles += f->info.tile_count;
+        q += f->info.cascades.spacing_per_m;
+        ee += f->info.e_error;
+        et += f->info.cascades.e_total;
+        nfr++;
+        if (keep)
+            oc_frame_free(keep);
+        keep = f;
+        if (now - w0 >= window_s) {
+            double cpu1 = av_cpu_s(daemon);
+            R->bytes_s = bytes / (now - w0);
+            R->frames_s = nfr / (now - w0);
+            R->cores = (cpu1 - cpu0) / (now - w0);
+            break;
+        }
+    }
+    oc_client_destroy(c);
+    if (!keep || nfr == 0 || R->frames_s == 0) {
+        if (!R->why[0])
+            snprintf(R->why, sizeof R->why, "no measurement window of frames made for the camera");
+        if (keep)
+            oc_frame_free(keep);
+        return;
+    }
+    R->kib_frame = bytes / nfr / 1024.0;
+    R->tiles_frame = tiles / nfr;
+    R->q = q / nfr;
+    R->e_error = ee / nfr;
+    R->e_total = et / nfr;
+    if (!keep->view) {
+        snprintf(R->why, sizeof R->why, "frame without a layout-1 view: %.150s", keep->view_error);
+        oc_frame_free(keep);
+        return;
+    }
+
+    /* the exact waves of this frame's instant, checked against its block */
+    const proto_cascade_block *b = &keep->info.cascades;
+    const ocean_params *p = ocean_get_params(ref);
+    if (b->cascade_count != p->cascades) {
+        snprintf(R->why, sizeof R->why, "frame has %d cascades, the config %d", b->cascade_count, p->cascades);
+        oc_frame_free(keep);
+        return;
+    }
+    for (int k = 0; k < b->cascade_count; k++) {
+        double patch, klo, khi, kc[PROTO_MAX_MIPS];
+        int mips = 0;
+        ocean_cascade_band(ref, k, &patch, &klo, &khi);
+        ocean_cascade_mips(ref, k, b->order, PROTO_MAX_MIPS, &mips, kc);
+        int same = fabs(patch - b->cascade[k].patch_m) < 1e-9 * patch && b->cascade[k].n == p->n &&
+                   mips == b->cascade[k].mips;
+        for (int m = 0; same && m < mips; m++)
+            same = isinf(kc[m]) ? isinf(b->cascade[k].mip[m].kc)
+                                : fabs((float)kc[m] - b->cascade[k].mip[m].kc) <= 1e-6 * kc[m];
+        if (!same) {
+            snprintf(R->why, sizeof R->why, "cascade %d of the frame (patch %g, n %d, %d mips) is not the config's "
+                     "(patch %g, n %d, %d mips)", k, b->cascade[k].patch_m, b->cascade[k].n, b->cascade[k].mips,
+                     patch, p->n, mips);
+            oc_frame_free(keep);
+            return;
+        }
+    }
+    double t = keep->hdr.sim_time;
+    av_casc C[PROTO_MAX_LAYERS];
+    for (int k = 0; k < b->cascade_count; k++)
+        av_casc_build(&C[k], ref, k, t, b);
+    R->mss_tail = (double)b->tail_mss[0] + b->tail_mss[1];
+
+    /* rays through a grid of pixel centres (PROTOCOL.md "Camera orientation") */
+    const double *cp = b->camera;
+    double yaw = cam.yaw_deg * M_PI / 180, pitch = cam.pitch_deg * M_PI / 180;
+    double fw[3] = {cos(pitch) * cos(yaw), sin(pitch), cos(pitch) * sin(yaw)};
+    double rt[3] = {-sin(yaw), 0, cos(yaw)};
+    double up[3] = {rt[1] * fw[2] - rt[2] * fw[1], rt[2] * fw[0] - rt[0] * fw[2], rt[0] * fw[1] - rt[1] * fw[0]};
+    double ty = tan(cam.fov_y_deg * M_PI / 360), aspect = (double)cam.viewport_w / cam.viewport_h;
+    int gw = grid, gh = grid * cam.viewport_h / cam.viewport_w;
+    int npx = gw * gh;
+    double *res = xcalloc((size_t)npx * 32, sizeof(double));
+    /* the mesh's rings (MESH_TOPOLOGY zones): a vertex of level L reads
+     * with spacing max(s, g_L); a point at horizontal distance d from the
+     * camera lies in the first level whose zone radius R_L reaches d */
+    const oc_topology *topo = keep->topology;
+    int nlev = topo && (topo->flags & PROTO_TOPO_FLAT) && topo->zones ? topo->lod_levels : 0;
+    R->has_mesh = nlev > 0;
+    if (nlev > 0) {
+        R->g0 = topo->zones[0];
+        R->r0 = topo->zones[1];
+        R->glast = topo->zones[4 * (nlev - 1)];
+    }
+    unsigned char *st = xcalloc((size_t)npx, 1);   /* 0 above, 1 outside, 2 measured */
+#pragma omp parallel for schedule(dynamic, 4)
+    for (int ij = 0; ij < npx; ij++) {
+        int i = ij / gw, j = ij % gw;
+        double sx = ((j + 0.5) / gw * 2 - 1) * ty * aspect, sy = (1 - (i + 0.5) / gh * 2) * ty, d[3];
+        for (int k = 0; k < 3; k++)
+            d[k] = fw[k] + sx * rt[k] + sy * up[k];
+        if (!(d[1] < -1e-9))
+            continue;
+        double tt = -cp[1] / d[1], x = cp[0] + tt * d[0], z = cp[2] + tt * d[2];
+        oc_sample s;
+        oc_lod L;
+        if (oc_frame_sample_interp(keep, x, z, 0, OC_INTERP_CUBIC, &s) != OCEAN_OK ||
+            oc_cascade_lod(b, x, z, 0, &L) != OCEAN_OK) {
+            st[ij] = 1;
+            continue;
+        }
+        double full[5], car[5];
+        av_exact(C, b->cascade_count, &L, x, z, full, car);
+        double *o = res + (size_t)ij * 32;
+        double rec[5] = {s.height, s.dx, s.dz, s.slope_x, s.slope_z};
+        for (int k = 0; k < 5; k++) {
+            o[k] = rec[k];
+            o[5 + k] = car[k];
+            o[10 + k] = full[k];
+        }
+        o[15] = s.mss[0] + s.mss[1];
+        st[ij] = 2;
+        if (nlev > 0) {
+            double dist = hypot(x - cp[0], z - cp[2]), g = topo->zones[4 * (nlev - 1)];
+            for (int lv = 0; lv < nlev; lv++)
+                if (dist <= topo->zones[4 * lv + 1]) {
+                    g = topo->zones[4 * lv];
+                    break;
+                }
+            oc_sample sv;
+            oc_lod Lv;
+            if (oc_frame_sample_interp(keep, x, z, g, OC_INTERP_CUBIC, &sv) == OCEAN_OK &&
+                oc_cascade_lod(b, x, z, g, &Lv) == OCEAN_OK) {
+                double fv[5], cv[5];
+                av_exact(C, b->cascade_count, &Lv, x, z, fv, cv);
+                double rv[3] = {sv.height, sv.dx, sv.dz};
+                for (int k = 0; k < 3; k++) {
+                    o[16 + k] = rv[k];
+                    o[19 + k] = cv[k];
+                }
+                o[22] = g;
+                st[ij] = 3;
+            }
+        }
+    }
+    for (int ij = 0; ij < npx; ij++) {
+        if (st[ij] == 0) {
+            R->above++;
+            continue;
+        }
+        if (st[ij] == 1) {
+            R->outside++;
+            continue;
+        }
+        const double *o = res + (size_t)ij * 32, *rec = o, *car = o + 5, *full = o + 10;
+        if (st[ij] == 3) {
+            const double *rv = o + 16, *cv = o + 19;
+            R->v_points++;
+            av_err_add(&R->v_carried, rv[0] - cv[0], hypot(rv[1] - cv[1], rv[2] - cv[2]), 0.0);
+            av_err_add(&R->v_geom, full[0] - cv[0], hypot(full[1] - cv[1], full[2] - cv[2]), 0.0);
+        }
+        R->points++;
+        av_err_add(&R->carried, rec[0] - car[0], hypot(rec[1] - car[1], rec[2] - car[2]),
+                   av_angle_deg(rec[3], rec[4], car[3], car[4]));
+        av_err_add(&R->shading, full[0] - car[0], hypot(full[1] - car[1], full[2] - car[2]),
+                   av_angle_deg(full[3], full[4], car[3], car[4]));
+        av_err_add(&R->total, rec[0] - full[0], hypot(rec[1] - full[1], rec[2] - full[2]),
+                   av_angle_deg(rec[3], rec[4], full[3], full[4]));
+        double ex = full[3] - car[3], ez = full[4] - car[4];
+        R->mss_left_meas += ex * ex + ez * ez;
+        R->mss_left_claim += o[15] - R->mss_tail;
+        R->mss_res_exact += full[3] * full[3] + full[4] * full[4];
+    }
+    if (R->points > 0) {
+        R->mss_left_meas /= R->points;
+        R->mss_left_claim /= R->points;
+        R->mss_res_exact /= R->points;
+        R->ok = 1;
+    } else {
+        snprintf(R->why, sizeof R->why, "no ray landed on sea the frame covers");
+    }
+    free(res);
+    free(st);
+    for (int k = 0; k < b->cascade_count; k++)
+        av_casc_free(&C[k]);
+    oc_frame_free(keep);
+}
+
+static void av_print_err(const char *what, const av_err *e, double hs)
+{
+    double n = e->n > 0 ? e->n : 1;
+    printf(" %s | %.3g / %.3g | %.3g / %.3g | %.3g / %.3g | %.3g / %.3g |", what, sqrt(e->h2 / n),
+           e->hmax, 100.0 * sqrt(e->h2 / n) / hs, 100.0 * e->hmax / hs, sqrt(e->d2 / n), e->dmax,
+           sqrt(e->a2 / n), e->amax);
+}
+
+/* The whole section: returns 0 when every height was measured. */
+static int viewer_section(void)
+{
+    int q = bench_quick();
+    double t_start = bench_now_ms();
+    srv_settings S;
+    char err[512] = "";
+    if (srv_settings_load(CONF_PATH, NULL, 0, &S, err, sizeof err) != OCEAN_OK) {
+        printf("### What the browser viewer receives (layout 1)\n\n_Not measured: %s did not load: %s._\n\n",
+               CONF_PATH, err);
+        return 1;
+    }
+    ocean *ref = NULL;
+    if (ocean_create(&S.params, &ref, err, sizeof err) != OCEAN_OK) {
+        printf("### What the browser viewer receives (layout 1)\n\n_Not measured: ocean_create: %s._\n\n", err);
+        return 1;
+    }
+    ocean_spectrum_stats ss;
+    ocean_get_spectrum_stats(ref, &ss);
+    double hs = ss.hs;
+
+    /* the exact sum's self-check against ocean_reference_point (every mode
+     * of every cascade, unfiltered) at a few points */
+    double chk = 0.0;
+    {
+        proto_cascade_block b0;
+        memset(&b0, 0, sizeof b0);
+        b0.cascade_count = (uint8_t)S.params.cascades;
+        b0.order = 6;
+        av_casc C[PROTO_MAX_LAYERS];
+        oc_lod L;
+        memset(&L, 0, sizeof L);
+        for (int k = 0; k < S.params.cascades; k++) {
+            av_casc_build(&C[k], ref, k, 1234.5, &b0);
+            L.c[k].mip[0] = L.c[k].mip[1] = -1;
+        }
+        for (int i = 0; i < 3; i++) {
+            double x = 37.1 + 913.7 * i, z = -211.9 + 377.3 * i, full[5], car[5];
+            av_exact(C, S.params.cascades, &L, x, z, full, car);
+            ocean_point pt;
+            ocean_reference_point(ref, 1234.5, x, z, INFINITY, 6, &pt);
+            double d = fmax(fabs(full[0] - pt.height), fmax(fabs(full[1] - pt.dx), fabs(full[2] - pt.dz)));
+            d = fmax(d, fmax(fabs(full[3] - pt.slope_x), fabs(full[4] - pt.slope_z)));
+            if (d > chk)
+                chk = d;
+        }
+        for (int k = 0; k < S.params.cascades; k++)
+            av_casc_free(&C[k]);
+    }
+
+    char exe[4096], od[4200];
+    ssize_t el = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    exe[el > 0 ? el : 0] = 0;
+    char *sl = strrchr(exe, '/');
+    if (sl)
+        *sl = 0;
+    snprintf(od, sizeof od, "%s/../oceand", exe);
+    int port = av_free_port();
+    char portarg[16], url[64];
+    snprintf(portarg, sizeof portarg, "%d", port);
+    snprintf(url, sizeof url, "ws://127.0.0.1:%d/", port);
+    fflush(stdout);
+    fflush(stderr);
+    pid_t pid = fork();
+    if (pid == 0) {
+        /* only async-signal-safe calls between fork and exec: this process
+         * has OpenMP and FFTW threads */
+        int fd = open(OUT_DIR "/bench_accuracy_oceand.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (fd >= 0) {
+            dup2(fd, 1);
+            dup2(fd, 2);
+            close(fd);
+        }
+        execl(od, "oceand", "--config", CONF_PATH, "--port", portarg, (char *)NULL);
+        _exit(127);
+    }
+    av_row rows_v[AV_HEIGHTS];
+    memset(rows_v, 0, sizeof rows_v);
+    for (int h = 0; h < AV_HEIGHTS; h++) {
+        rows_v[h].height = av_heights[h];
+        snprintf(rows_v[h].why, sizeof rows_v[h].why, "the daemon did not start (%.120s)", od);
+    }
+    int up = 0;
+    for (int i = 0; i < 100 && pid > 0 && !up; i++) {
+        oc_options o;
+        oc_options_default(&o);
+        o.url = url;
+        oc_client *c = NULL;
+        if (oc_connect(&o, 1000, &c, NULL, 0) == OCEAN_OK) {
+            up = 1;
+            oc_client_destroy(c);
+        } else {
+            usleep(100000);
+        }
+    }
+    int grid = q ? 32 : 64;
+    double window_s = q ? 2.0 : 4.0;
+    for (int h = 0; h < AV_HEIGHTS && up; h++) {
+        av_measure(url, pid, ref, av_heights[h], grid, window_s, &rows_v[h]);
+        fprintf(stderr, "bench_accuracy: viewer at %g m: %s\n", av_heights[h], rows_v[h].ok ? "measured" : rows_v[h].why);
+    }
+    if (pid > 0) {
+        kill(pid, SIGTERM);
+        waitpid(pid, NULL, 0);
+    }
+
+    const ocean_params *p = &S.params;
+    printf("### What the browser viewer receives: layout-1 frames against the exact waves (issue 13)\n\n");
+    printf("**Configuration** (what `make run` serves): `build/oceand --config %s` (port aside), scene %s "
+           "(\"%s\"): %s %s, U10 %.3g m/s, choppiness %.3g, %d cascades of N = %d from a %.0f m patch, seed %llu; "
+           "Hs of the spectrum %.3f m; server.px_per_sample %g, server.cascade_tile %d, "
+           "server.viewer_bytes_per_s %.3g. **Subscription** (the browser viewer's, clients/web/worker.js "
+           "chooseSubscription = oc_subscribe_default): layout 1, codec qz, policy antialias, 30 Hz, accuracy "
+           "1e-3, concentric mesh, layers = HELLO.max_layers, every effect the scene offers. **Camera**: still at "
+           "(0, H, 0), heading 0, 60 deg vertical fov, 1920 x 1080 viewport, pitch atan(H / 10 km) + 15 deg below "
+           "the horizon.\n\n",
+           CONF_PATH, S.scene.name[0] ? S.scene.name : "(none)", S.scene.description,
+           ocean_spectrum_name(p->sea.spectrum), ocean_spreading_name(p->sea.spreading), p->sea.wind_u10,
+           p->sea.choppiness, p->cascades, p->n, p->patch_m, (unsigned long long)p->seed, hs, S.srv.px_per_sample,
+           S.srv.cascade_tile, S.srv.viewer_bytes_per_s);
+    printf("**Method.** %d x %d pixel centres of the viewport cast onto the mean sea plane; at each point the "
+           "frame is read as the viewer shades it: oc_frame_sample (the spec's lod rule with the pixel footprint, "
+           "Keys cubic within a mip, cascades summed) at the parameter point. **Exact waves**: the same ocean "
+           "built in-process from the same config (srv_settings_load; the frame's patches, grids and every "
+           "mip's cutoff checked equal), every mode of every cascade summed directly in double at the frame's "
+           "sim time (self-check against ocean_reference_point: max difference %.1e). *Carried* weights each mode "
+           "by what the mips the lod rule reads there hold of it (their weights x Butterworth gain of the "
+           "block's order, waves below ocean.drop_gain left out, fade included); *full* takes every mode. "
+           "Columns: **carried error** = reconstruction - exact carried waves (codec, storage, cubic reading); "
+           "**left to shading** = exact full - exact carried (what the frame hands to shading as unresolved "
+           "slope variance; e_error is its height-variance fraction at the nadir); **total** = reconstruction - "
+           "exact full. *Mesh vertex rule* rows read the same points as a vertex of the mesh ring there reads them "
+           "(spacing max(s, g_L), g_L of the first MESH_TOPOLOGY zone whose radius reaches the point's distance; "
+           "height and displacement only, the viewer's normals come from the shading read; the interpolation "
+           "across a triangle between vertices is not included): what the geometry itself carries. "
+           "Each as RMS / max over the points (per pixel, not per sea area) of height (m, and %% of "
+           "Hs), horizontal displacement |(dx, dz)| (m) and normal angle (deg; normals from the parameter "
+           "surface's slopes, as the tiles carry them). The Gerstner near field is not a cascade's mode: it is "
+           "outside every figure (the frames carry it only in tail_mss). Bytes/s = FRAME bytes received over %.0f s "
+           "of frames made for the camera (after 1 s of settling); daemon cores = its CPU time over the same "
+           "window with this one viewer connected. One frame (the window's last) per height for the errors.\n\n",
+           grid, grid * 1080 / 1920, chk, window_s);
+    printf("| camera m | pitch deg | points (above horizon, outside tiles) | q | e_error | e_total | KiB/frame | tiles/frame | frames/s | MB/s | daemon cores |\n");
+    printf("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    int bad = 0;
+    for (int h = 0; h < AV_HEIGHTS; h++) {
+        const av_row *r = &rows_v[h];
+        if (!r->frames_s) {
+            printf("| %g | - | not measured: %s | | | | | | | | |\n", r->height, r->why[0] ? r->why : "daemon did not start");
+            bad = 1;
+            continue;
+        }
+        printf("| %g | %.1f | %.0f (%.0f, %.0f) | %.3g | %.4f | %.4f | %.1f | %.0f | %.1f | %.2f | %.2f |\n",
+               r->height, r->pitch, r->points, r->above, r->outside, r->q, r->e_error, r->e_total, r->kib_frame,
+               r->tiles_frame, r->frames_s, r->bytes_s / 1e6, r->cores);
+    }
+    printf("\n| camera m | error of | height RMS / max m | height RMS / max %%Hs | displacement RMS / max m | normal RMS / max deg |\n");
+    printf("|---:|---|---:|---:|---:|---:|\n");
+    for (int h = 0; h < AV_HEIGHTS; h++) {
+        const av_row *r = &rows_v[h];
+        if (!r->ok) {
+            printf("| %g | not measured: %s | | | | |\n", r->height, r->why);
+            bad = 1;
+            continue;
+        }
+        const char *what[3] = {"the waves the frame carries", "the waves left to shading", "total (against every wave)"};
+        const av_err *e[3] = {&r->carried, &r->shading, &r->total};
+        for (int k = 0; k < 3; k++) {
+            printf("| %g |", r->height);
+            av_print_err(what[k], e[k], hs);
+            printf("\n");
+        }
+        if (r->v_points > 0) {
+            const av_err *v[2] = {&r->v_carried, &r->v_geom};
+            const char *vw[2] = {"mesh vertex rule: the waves it carries", "mesh vertex rule: waves not in geometry"};
+            for (int k = 0; k < 2; k++) {
+                double n = v[k]->n;
+                printf("| %g | %s | %.3g / %.3g | %.3g / %.3g | %.3g / %.3g | - |\n", r->height, vw[k],
+                       sqrt(v[k]->h2 / n), v[k]->hmax, 100 * sqrt(v[k]->h2 / n) / hs, 100 * v[k]->hmax / hs,
+                       sqrt(v[k]->d2 / n), v[k]->dmax);
+            }
+        } else {
+            printf("| %g | mesh vertex rule | no FLAT topology with the frame: not measured | | | |\n", r->height);
+        }
+    }
+    printf("\nMesh rings of the frames measured (MESH_TOPOLOGY zones):");
+    for (int h = 0; h < AV_HEIGHTS; h++)
+        if (rows_v[h].has_mesh)
+            printf(" %g m: g_0 %g m within %.0f m, coarsest g %g m;", rows_v[h].height, rows_v[h].g0, rows_v[h].r0,
+                   rows_v[h].glast);
+    printf("\n");
+    printf("\n| camera m | mean-square slope of every mode (exact) | left to shading: measured | left to shading: the frame's mip tables | tail_mss (near field, tail; not in the exact sum) |\n");
+    printf("|---:|---:|---:|---:|---:|\n");
+    for (int h = 0; h < AV_HEIGHTS; h++) {
+        const av_row *r = &rows_v[h];
+        if (!r->ok)
+            continue;
+        printf("| %g | %.5f | %.5f | %.5f | %.5f |\n", r->height, r->mss_res_exact, r->mss_left_meas,
+               r->mss_left_claim, r->mss_tail);
+    }
+    printf("\nMean-square slope = <s_x^2 + s_z^2> over the points. *Measured* is the exact slope of the modes the "
+           "frame leaves out at each point (full - carried); *mip tables* is what the frame says they hold "
+           "(oc_sample mss minus tail_mss): the statistic shading adds, to compare with the measured one over "
+           "%d x %d points of one instant.\n\n", grid, grid * 1080 / 1920);
+    /* the README's headline: what the viewer gets, first */
+    FILE *hf = fopen(OUT_DIR "/headline_viewer.md", "w");
+    if (hf) {
+        fprintf(hf, "What the browser viewer receives from `make run` (scene %s, Hs %.2f m; layout 1, the viewer's "
+                "subscription, 1920 x 1080, still camera; errors per pixel against the exact waves; one viewer):\n\n",
+                S.scene.name[0] ? S.scene.name : "(none)", hs);
+        fprintf(hf, "| camera m | MB/s | daemon cores | e_error | height RMS %%Hs: carried / left to shading | "
+                    "normal RMS deg: carried / left to shading | mss left to shading: measured / frame's tables |\n");
+        fprintf(hf, "|---:|---:|---:|---:|---:|---:|---:|\n");
+        for (int h = 0; h < AV_HEIGHTS; h++) {
+            const av_row *r = &rows_v[h];
+            if (!r->ok) {
+                fprintf(hf, "| %g | not measured: %s | | | | | |\n", r->height, r->why);
+                continue;
+            }
+            double n = r->carried.n;
+            fprintf(hf, "| %g | %.2f | %.2f | %.3f | %.3g / %.3g | %.3g / %.3g | %.4f / %.4f |\n", r->height,
+                    r->bytes_s / 1e6, r->cores, r->e_error, 100 * sqrt(r->carried.h2 / n) / hs,
+                    100 * sqrt(r->shading.h2 / n) / hs, sqrt(r->carried.a2 / n), sqrt(r->shading.a2 / n),
+                    r->mss_left_meas, r->mss_left_claim);
+        }
+        fprintf(hf, "\n");
+        fclose(hf);
+    }
+    fprintf(stderr, "bench_accuracy: viewer section in %.1f s\n", (bench_now_ms() - t_start) / 1e3);
+    ocean_destroy(ref);
+    return bad;
+}
