@@ -12,7 +12,7 @@
  *   fused  1: the AVX2+FMA row pass (only where the CPU has both; else
  *             the plain pass), 0: the plain pass, -1: the CPU's best;
  *   stream 1: write every spectrum with streaming stores (AVX2+FMA pass
- *             only), 0: never, -1: spectra larger than half the
+ *             only), 0: never, -1: spectra larger than twice the
  *             last-level cache (the default).
  * ocean_create applies (-1, -1).  Not thread-safe against a running
  * ocean_evaluate on the same ocean.  Accepts NULL (does nothing). */

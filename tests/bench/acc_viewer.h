@@ -42,9 +42,11 @@
  *                       e_error is its height-variance fraction at the
  *                       nadir), beside the variance the frame claims for it;
  *      total          = reconstruction - exact full.
- *    The Gerstner near field (ship-bridge has one) is not a cascade's
- *    mode: it is outside every figure here; the frames carry it only in
- *    tail_mss.
+ *    The Gerstner near field (ship-bridge has one) travels in layout 1 as
+ *    one more cascade, its waves on a lattice: the exact sum takes those
+ *    waves from the same lattice ocean the daemon builds
+ *    (srv_settings_near_field, ocean_gerstner_cascade_create).  The
+ *    short-wave tail beyond the near field is in no figure (tail_mss).
  *  - cost: bytes/s = FRAME bytes received over a window of frames made for
  *    the camera; daemon cores = the daemon's CPU time (utime + stime,
  *    /proc/PID/stat) over the same window, with this one viewer connected.
@@ -133,7 +135,10 @@ static void av_casc_free(av_casc *C)
 /* Cascade c's modes at time t and, per mip of the frame's block, the gain
  * ocean_evaluate gives each (ocean.c effective_gain: Butterworth below
  * ocean_filter_negligible_k(kc, order, drop_gain), 0 above). */
-static void av_casc_build(av_casc *C, const ocean *o, int c, double t, const proto_cascade_block *b)
+/* Cascade c of ocean o, read by the frame's cascade entry bk (the
+ * near-field lattice is a one-cascade ocean of its own, the block's last
+ * entry). */
+static void av_casc_build(av_casc *C, const ocean *o, int c, int bk, double t, const proto_cascade_block *b)
 {
     memset(C, 0, sizeof *C);
     double patch, klo, khi;
@@ -166,7 +171,7 @@ static void av_casc_build(av_casc *C, const ocean *o, int c, double t, const pro
             C->hr[q] = h[0];
             C->hi[q] = h[1];
         }
-    const proto_cascade_entry *e = &b->cascade[c];
+    const proto_cascade_entry *e = &b->cascade[bk];
     C->mips = e->mips;
     for (int mi = 0; mi < e->mips; mi++) {
         C->gain[mi] = xcalloc(C->count, sizeof(float));
@@ -271,7 +276,8 @@ static double av_now_s(void) { return bench_now_ms() * 1e-3; }
 
 /* One camera height: subscribe, settle, measure bytes and cost over a
  * window, keep the window's last frame and measure its accuracy. */
-static void av_measure(const char *url, pid_t daemon, const ocean *ref, double height, int grid, double window_s,
+static void av_measure(const char *url, pid_t daemon, const ocean *ref, const ocean *nf, double height, int grid,
+                       double window_s,
                        av_row *R)
 {
     memset(R, 0, sizeof *R);
@@ -379,16 +385,25 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, double h
     /* the exact waves of this frame's instant, checked against its block */
     const proto_cascade_block *b = &keep->info.cascades;
     const ocean_params *p = ocean_get_params(ref);
-    if (b->cascade_count != p->cascades) {
-        snprintf(R->why, sizeof R->why, "frame has %d cascades, the config %d", b->cascade_count, p->cascades);
+    /* the FFT's cascades, then the near field's lattice cascade (the
+     * daemon's, built from the same settings) */
+    int want = p->cascades + (nf ? 1 : 0);
+    if (b->cascade_count != want) {
+        snprintf(R->why, sizeof R->why, "frame has %d cascades, the config %d", b->cascade_count, want);
         oc_frame_free(keep);
         return;
+    }
+    const ocean *oc_of[PROTO_MAX_LAYERS];
+    int c_of[PROTO_MAX_LAYERS];
+    for (int k = 0; k < b->cascade_count; k++) {
+        oc_of[k] = k < p->cascades ? ref : nf;
+        c_of[k] = k < p->cascades ? k : 0;
     }
     for (int k = 0; k < b->cascade_count; k++) {
         double patch, klo, khi, kc[PROTO_MAX_MIPS];
         int mips = 0;
-        ocean_cascade_band(ref, k, &patch, &klo, &khi);
-        ocean_cascade_mips(ref, k, b->order, PROTO_MAX_MIPS, &mips, kc);
+        ocean_cascade_band(oc_of[k], c_of[k], &patch, &klo, &khi);
+        ocean_cascade_mips(oc_of[k], c_of[k], b->order, PROTO_MAX_MIPS, &mips, kc);
         int same = fabs(patch - b->cascade[k].patch_m) < 1e-9 * patch && b->cascade[k].n == p->n &&
                    mips == b->cascade[k].mips;
         for (int m = 0; same && m < mips; m++)
@@ -405,7 +420,7 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, double h
     double t = keep->hdr.sim_time;
     av_casc C[PROTO_MAX_LAYERS];
     for (int k = 0; k < b->cascade_count; k++)
-        av_casc_build(&C[k], ref, k, t, b);
+        av_casc_build(&C[k], oc_of[k], c_of[k], k, t, b);
     R->mss_tail = (double)b->tail_mss[0] + b->tail_mss[1];
 
     /* rays through a grid of pixel centres (PROTOCOL.md "Camera orientation") */
@@ -551,6 +566,27 @@ static int viewer_section(void)
     ocean_spectrum_stats ss;
     ocean_get_spectrum_stats(ref, &ss);
     double hs = ss.hs;
+    /* the near field as the daemon serves it in layout 1: its waves on
+     * their lattice, one more cascade (srv_settings_near_field is the
+     * daemon's own definition; k_lo = the finest cascade's edge) */
+    ocean_gerstner *g = NULL;
+    ocean *nf = NULL;
+    {
+        ocean_gerstner_params gp;
+        if (srv_settings_near_field(&S, &S.params, &gp)) {
+            double patch, klo, khi;
+            ocean_cascade_band(ref, S.params.cascades - 1, &patch, &klo, &khi);
+            gp.k_lo = khi;
+            if (ocean_gerstner_create(&gp, &g, err, sizeof err) != OCEAN_OK ||
+                ocean_gerstner_cascade_create(g, &S.params, &nf, err, sizeof err) != OCEAN_OK) {
+                printf("### What the browser viewer receives (layout 1)\n\n_Not measured: the near field: %s._\n\n",
+                       err);
+                ocean_gerstner_destroy(g);
+                ocean_destroy(ref);
+                return 1;
+            }
+        }
+    }
 
     /* the exact sum's self-check against ocean_reference_point (every mode
      * of every cascade, unfiltered) at a few points */
@@ -564,7 +600,7 @@ static int viewer_section(void)
         oc_lod L;
         memset(&L, 0, sizeof L);
         for (int k = 0; k < S.params.cascades; k++) {
-            av_casc_build(&C[k], ref, k, 1234.5, &b0);
+            av_casc_build(&C[k], ref, k, k, 1234.5, &b0);
             L.c[k].mip[0] = L.c[k].mip[1] = -1;
         }
         for (int i = 0; i < 3; i++) {
@@ -629,7 +665,7 @@ static int viewer_section(void)
     int grid = q ? 32 : 64;
     double window_s = q ? 2.0 : 4.0;
     for (int h = 0; h < AV_HEIGHTS && up; h++) {
-        av_measure(url, pid, ref, av_heights[h], grid, window_s, &rows_v[h]);
+        av_measure(url, pid, ref, nf, av_heights[h], grid, window_s, &rows_v[h]);
         fprintf(stderr, "bench_accuracy: viewer at %g m: %s\n", av_heights[h], rows_v[h].ok ? "measured" : rows_v[h].why);
     }
     if (pid > 0) {
@@ -668,8 +704,9 @@ static int viewer_section(void)
            "across a triangle between vertices is not included): what the geometry itself carries. "
            "Each as RMS / max over the points (per pixel, not per sea area) of height (m, and %% of "
            "Hs), horizontal displacement |(dx, dz)| (m) and normal angle (deg; normals from the parameter "
-           "surface's slopes, as the tiles carry them). The Gerstner near field is not a cascade's mode: it is "
-           "outside every figure (the frames carry it only in tail_mss). Bytes/s = FRAME bytes received over %.0f s "
+           "surface's slopes, as the tiles carry them). The Gerstner near field is the last cascade: its waves on "
+           "their lattice, from the same lattice ocean the daemon builds; the short-wave tail beyond it is in no "
+           "figure (tail_mss). Bytes/s = FRAME bytes received over %.0f s "
            "of frames made for the camera (after 1 s of settling); daemon cores = its CPU time over the same "
            "window with this one viewer connected. One frame (the window's last) per height for the errors.\n\n",
            grid, grid * 1080 / 1920, chk, window_s);
@@ -722,7 +759,7 @@ static int viewer_section(void)
             printf(" %g m: g_0 %g m within %.0f m, coarsest g %g m;", rows_v[h].height, rows_v[h].g0, rows_v[h].r0,
                    rows_v[h].glast);
     printf("\n");
-    printf("\n| camera m | mean-square slope of every mode (exact) | left to shading: measured | left to shading: the frame's mip tables | tail_mss (near field, tail; not in the exact sum) |\n");
+    printf("\n| camera m | mean-square slope of every mode (exact) | left to shading: measured | left to shading: the frame's mip tables | tail_mss (the short-wave tail; not in the exact sum) |\n");
     printf("|---:|---:|---:|---:|---:|\n");
     for (int h = 0; h < AV_HEIGHTS; h++) {
         const av_row *r = &rows_v[h];
@@ -760,6 +797,8 @@ static int viewer_section(void)
         fclose(hf);
     }
     fprintf(stderr, "bench_accuracy: viewer section in %.1f s\n", (bench_now_ms() - t_start) / 1e3);
+    ocean_destroy(nf);
+    ocean_gerstner_destroy(g);
     ocean_destroy(ref);
     return bad;
 }
