@@ -22,6 +22,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "ocean.h"
 #include "srv_daemon.h"
 
 #define MAX_SETS 64
@@ -193,12 +194,11 @@ int main(int argc, char **argv)
 {
     /* OpenMP worker threads (frame building, the spectrum stage) must sleep
      * between ticks, not spin: on a 2-core host spinning teams starve the
-     * libwebsockets thread.  libgomp reads the policy when it loads, so set
-     * it and start again. */
-    if (!getenv("OMP_WAIT_POLICY")) {
-        setenv("OMP_WAIT_POLICY", "passive", 1);
+     * libwebsockets thread (ocean_wait_policy_setenv: a spin of ~30 us
+     * within an evaluation, sleep beyond).  libgomp reads the policy when
+     * it loads, so set it and start again. */
+    if (ocean_wait_policy_setenv())
         execv("/proc/self/exe", argv);
-    }
     /* Every tick builds and frees FRAME encodings of 100-200 KB, and
      * libwebsockets copies each partial write's remainder into a fresh
      * buffer.  With glibc's defaults such blocks come from new mmaps or are

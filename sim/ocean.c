@@ -137,6 +137,7 @@ struct ocean {
     uint64_t gain_clock;
     int fused;          /* row pass: AVX2+FMA where the CPU has both */
     double stream_bytes; /* spectra larger than this are streamed (twice the LLC) */
+    int group;           /* channels per FFTW call forced by a test, 0: group_size's rule */
 };
 
 struct ocean_frame {
@@ -176,6 +177,15 @@ void ocean_params_default(ocean_params *p)
     p->threads = 2;
     p->plan_measure = OCEAN_PLAN_ESTIMATE;
     p->drop_gain = OCEAN_DROP_GAIN_DEFAULT;
+}
+
+int ocean_wait_policy_setenv(void)
+{
+    if (getenv("OMP_WAIT_POLICY"))
+        return 0;
+    setenv("OMP_WAIT_POLICY", "passive", 1);
+    setenv("GOMP_SPINCOUNT", OCEAN_GOMP_SPINCOUNT, 0);
+    return 1;
 }
 
 ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msglen)
@@ -543,6 +553,16 @@ static ocean_result cascade_init_lattice(ocean *o, const ocean_lattice_wave *w, 
             cs->var[at] = (float)v;
             var += mx == 0 ? v : 2.0 * v;
         }
+    }
+    /* The stage reads |k| and 1/|k| of row |mz| for rows mz and -mz (kz
+     * enters squared): a wave on row -mz alone gets them on row mz too. */
+    for (int mz = 1; mz < n / 2; mz++) {
+        size_t up = (size_t)mz * half, down = (size_t)wrap_index(-mz, n) * half;
+        for (int mx = 0; mx < half; mx++)
+            if (cs->k[up + mx] == 0.0f && cs->k[down + mx] != 0.0f) {
+                cs->k[up + mx] = cs->k[down + mx];
+                cs->kinv[up + mx] = cs->kinv[down + mx];
+            }
     }
     cs->variance = var;
     return OCEAN_OK;
@@ -1167,10 +1187,13 @@ spectrum_row_channels(const stage_args *a, int r, const int fused)
     size_t plane = (size_t)n * half;
     int mz = r < n / 2 ? r : r - n;
     size_t base = (size_t)wrap_index(mz, a->n_full) * full_half;
+    /* |k| and 1/|k| of rows mz and -mz are equal (kz enters squared): both
+     * rows of a pair read row |mz|, so the second finds it in L1. */
+    size_t kbase = (size_t)wrap_index(mz < 0 ? -mz : mz, a->n_full) * full_half;
     const cascade *cs = a->cs;
     float *c_hr = cs->cache[C_HR] + base, *c_hi = cs->cache[C_HI] + base;
     float *c_tr = cs->cache[C_TR] + base, *c_ti = cs->cache[C_TI] + base;
-    const float *kx = cs->kx, *kinv = cs->kinv + base;
+    const float *kx = cs->kx, *kinv = cs->kinv + kbase;
     const float *hr = c_hr, *hi = c_hi, *tr = c_tr, *ti = c_ti;
     float g[ROW_MAX], fhr[ROW_MAX], fhi[ROW_MAX], ftr[ROW_MAX], fti[ROW_MAX];
     /* Unfiltered, the grid is the full one, whose Nyquist row and column
@@ -1179,7 +1202,7 @@ spectrum_row_channels(const stage_args *a, int r, const int fused)
     if (!(isinf(a->kc) && a->scale == 1.0 && a->boost == 1.0 && n == a->n_full)) {
         float *gr = a->gain ? a->gain + (size_t)r * half : g;
         if (!a->gain_ready) {
-            const float *kk = cs->k + base;
+            const float *kk = cs->k + kbase;
             float kc = (float)a->kc, kneg = (float)a->kneg, scale = (float)a->scale;
             float boost = (float)a->boost;
             for (int ix = 0; ix < half; ix++) {
@@ -1441,6 +1464,31 @@ static float *gain_plane_get(ocean *o, int c, int n, double kc, int order, doubl
     return victim->g;
 }
 
+/* Channels per FFTW call on the n-point grid.  Eight spectra at N = 1024
+ * are 34 MB, more than a last-level cache holds, so one batched transform
+ * found what the row pass wrote already evicted and ran from memory; in
+ * groups of at most GROUP_BYTES of spectra, each group's row pass writes
+ * into the same region of o->spec and its transform reads it from the cache
+ * (bench_core, "Channels per FFTW call").  A constant rather than the
+ * machine's cache size: the plans a group uses, and so the bits, must not
+ * depend on the host (replicas agree bit for bit). */
+#define GROUP_BYTES 8.5e6
+
+static int group_size(const ocean *o, int n, int nch)
+{
+    if (o->group > 0)
+        return o->group < nch ? o->group : nch;
+    double per = (double)n * (n / 2 + 1) * sizeof(fftwf_complex);
+    int g = (int)(GROUP_BYTES / per);
+    return g < 1 ? 1 : g < nch ? g : nch;
+}
+
+void ocean_force_group(ocean *o, int group)
+{
+    if (o)
+        o->group = group > 0 && group <= CH_COUNT ? group : 0;
+}
+
 double ocean_effective_cutoff(const ocean *o, double cutoff_k, int order)
 {
     if (isnan(cutoff_k) || cutoff_k < 0.0 || order < 1 || order > OCEAN_FILTER_MAX_ORDER)
@@ -1509,15 +1557,29 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
              * above: a claimed plane is trusted from then on. */
             if (!(isinf(kc) && scale == 1.0 && boost == 1.0 && n == n_full))
                 a.gain = gain_plane_get(o, c, n, kc, r->order, scale, boost, &a.gain_ready);
+            /* Group by group: the first group's row pass evolves h(k,t)
+             * into the cache, the others read it back (and the gain plane
+             * the first one filled). */
+            int g = group_size(o, n, nch);
+            for (int j0 = 0; j0 < nch; j0 += g) {
+                int gn = nch - j0 < g ? nch - j0 : g;
+                a.ch = ch + j0;
+                a.nch = gn;
+                a.stream = (double)gn * n * (n / 2 + 1) * sizeof(fftwf_complex) > o->stream_bytes;
 #pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
-            for (int row = 0; row <= n / 2; row++)
-                spectrum_row(&a, row);
-            if (!cached) {
-                cs->cache_t = t;
-                cs->cache_n = n;
-                cs->cache_dt = need_dt;
+                for (int row = 0; row <= n / 2; row++)
+                    spectrum_row(&a, row);
+                if (!a.cached) {
+                    cs->cache_t = t;
+                    cs->cache_n = n;
+                    cs->cache_dt = need_dt;
+                    a.cached = 1;
+                }
+                a.gain_ready = a.gain != NULL;
+                fftwf_execute_dft_c2r(o->plan[level_of(n)][gn - 1], o->spec,
+                                      f->block[c] + (size_t)j0 * n * n);
+                o->counters.fft_calls++;
             }
-            fftwf_execute_dft_c2r(o->plan[level_of(n)][nch - 1], o->spec, f->block[c]);
             transforms += nch;
             for (int j = 0; j < nch; j++) {
                 int e = ch[j] == CH_H ? 0 : ch[j] <= CH_DZ ? 1 : ch[j] <= CH_SZ ? 2
@@ -1564,7 +1626,12 @@ ocean_result ocean_transform_only(ocean *o, const ocean_request *r, ocean_frame 
         if (nch == 0 || cs->k_lo >= kneg)
             continue;
         int n = pick_size(cs, o->p.n, kneg);
-        fftwf_execute_dft_c2r(o->plan[level_of(n)][nch - 1], o->spec, f->block[c]);
+        int g = group_size(o, n, nch);
+        for (int j0 = 0; j0 < nch; j0 += g) {
+            int gn = nch - j0 < g ? nch - j0 : g;
+            fftwf_execute_dft_c2r(o->plan[level_of(n)][gn - 1], o->spec,
+                                  f->block[c] + (size_t)j0 * n * n);
+        }
     }
     return OCEAN_OK;
 }

@@ -13,11 +13,12 @@
  *
  * Threads: an ocean is used by one thread at a time (it owns scratch
  * spectra and FFTW plans); FFTW and the spectrum stage use params.threads
- * worker threads internally (an OpenMP team).  Run the process with
- * OMP_WAIT_POLICY=passive, as oceand does: with libgomp's default spinning
- * barriers, another process holding one of the cores turned a 0.7 ms
- * evaluation at N = 256 on 2 threads into 20-35 ms (issue 14).  Frames are independent objects: one ocean can
- * fill many frames (one per cutoff bucket).
+ * worker threads internally (an OpenMP team).  Run the process with the
+ * wait policy ocean_wait_policy_setenv sets, as oceand does: with libgomp's
+ * default spinning barriers, another process holding one of the cores
+ * turned a 0.7 ms evaluation at N = 256 on 2 threads into 20-35 ms.
+ * Frames are independent objects: one ocean can fill many frames (one per
+ * cutoff bucket).
  */
 #ifndef OCEAN_H
 #define OCEAN_H
@@ -94,6 +95,22 @@ typedef struct ocean_params {
 /* Fills p with the shipped defaults (PM sea, 10 m/s, N = 256, 1 cascade,
  * 1000 m patch, seed 1). */
 void ocean_params_default(ocean_params *p);
+
+/* The OpenMP wait policy an evaluation is made for, set in the environment
+ * unless OMP_WAIT_POLICY is already there: OMP_WAIT_POLICY=passive and
+ * (unless set) GOMP_SPINCOUNT=OCEAN_GOMP_SPINCOUNT.  A team member spins
+ * that long (libgomp: ~10 ns a count, so ~30 us) for the next parallel
+ * region, then sleeps.  An evaluation is a chain of regions (the spectrum
+ * stage, then FFTW's passes), a few microseconds apart: with no spin
+ * (passive alone) each one waited for a sleeping thread to be woken, and an
+ * evaluation at N = 512 on 2 threads took 14 % longer (bench_core,
+ * "OpenMP wait policy"); with libgomp's default spin (~3 ms) a team member
+ * whose core another process holds costs the others a time slice at every
+ * barrier.  libgomp reads both when it loads: returns 1 when it set
+ * something (the caller should re-execute itself, e.g.
+ * execv("/proc/self/exe", argv)), 0 when the environment had chosen. */
+#define OCEAN_GOMP_SPINCOUNT "3000"
+int ocean_wait_policy_setenv(void);
 
 /* Checks every field of p (ranges, NaN/Inf, power-of-two N, and that no
  * wave held is faster than OCEAN_OMEGA_MAX, the frequency the time limit
@@ -366,6 +383,8 @@ typedef struct ocean_counters {
     uint64_t evaluations;
     uint64_t transforms;               /* all 2-D inverse FFTs */
     uint64_t transforms_by_effect[5];  /* height, displacement, normals, foam, velocity */
+    uint64_t fft_calls;                /* FFTW executions: transforms go in groups of at
+                                          most 8.5 MB of spectra (N = 1024: 2 a call) */
 } ocean_counters;
 void ocean_get_counters(const ocean *o, ocean_counters *out);
 

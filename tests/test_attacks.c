@@ -48,6 +48,7 @@
 #include <cmocka.h>
 #include <cJSON.h>
 
+#include "ocean.h"
 #include "oceanclient.h"
 #include "srv_daemon.h"
 #include "srv_stats.h"
@@ -1177,8 +1178,7 @@ int main(int argc, char **argv)
     (void)argc;
     /* as test_server.c: OpenMP teams sleep; libcrypto's store that lws
      * loads for client contexts is suppressed in LSan, nothing else */
-    if (!getenv("OMP_WAIT_POLICY")) {
-        setenv("OMP_WAIT_POLICY", "passive", 1);
+    if (ocean_wait_policy_setenv()) {
         static char supp[64];
         snprintf(supp, sizeof supp, "/tmp/test_attacks.%d.lsan", (int)getpid());
         FILE *f = fopen(supp, "w");

@@ -1257,6 +1257,101 @@ static void test_stage_paths_same_bits(void **state)
     ocean_destroy(o);
 }
 
+/* Channels go to FFTW in groups (at most 8.5 MB of spectra a call, so a
+ * group's spectra are still cached when its transform reads them).  Every
+ * group size must give every channel's waves: against the direct sum of the
+ * modes (ocean_reference_point, double) unfiltered, and against the one-call
+ * batch with a filter and velocity (the gain plane and h(k,t) that the first
+ * group's row pass fills and the later groups reuse).  And the default rule
+ * groups 8 channels at N = 1024 (4.2 MB each) two by two. */
+static void test_grouped_transforms(void **state)
+{
+    (void)state;
+    ocean_params p;
+    pm_params(&p, 64);
+    p.patch_m = 500.0;
+    p.sea.choppiness = 1.0;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o), *ref = frame(o);
+    ocean_spectrum_stats ss;
+    ocean_get_spectrum_stats(o, &ss);
+    const double t = 987.654;
+    const int groups[] = {1, 2, 3, 5};
+    for (size_t gi = 0; gi < sizeof groups / sizeof groups[0]; gi++) {
+        ocean_force_group(o, groups[gi]);
+        ocean_counters c0, c1;
+        ocean_get_counters(o, &c0);
+        ocean_request r;
+        ocean_request_all(&r, OCEAN_FX_ALL | OCEAN_FX_VELOCITY);
+        assert_int_equal(ocean_evaluate(o, t, &r, f), OCEAN_OK);
+        ocean_get_counters(o, &c1);
+        /* 11 channels: height, 2 displacement, 2 slopes, 3 for foam, 3 velocities */
+        assert_int_equal(c1.transforms - c0.transforms, 11);
+        assert_int_equal(c1.fft_calls - c0.fft_calls, (11 + groups[gi] - 1) / groups[gi]);
+        double se_h = 0.0, se_s = 0.0, se_j = 0.0, se_v = 0.0, ss_v = 0.0;
+        for (int q = 0; q < 48; q++) {
+            double x = (q * 7 % 64) * p.patch_m / 64, z = (q * 13 % 64) * p.patch_m / 64;
+            ocean_point a, b;
+            ocean_frame_sample(f, x, z, &a);
+            ocean_reference_point(o, t, x, z, INFINITY, 6, &b);
+            se_h += (a.height - b.height) * (a.height - b.height) + (a.dx - b.dx) * (a.dx - b.dx) +
+                    (a.dz - b.dz) * (a.dz - b.dz);
+            se_s += (a.slope_x - b.slope_x) * (a.slope_x - b.slope_x) +
+                    (a.slope_z - b.slope_z) * (a.slope_z - b.slope_z);
+            se_j += (a.jacobian - b.jacobian) * (a.jacobian - b.jacobian);
+            se_v += (a.vel_x - b.vel_x) * (a.vel_x - b.vel_x) + (a.vel_y - b.vel_y) * (a.vel_y - b.vel_y) +
+                    (a.vel_z - b.vel_z) * (a.vel_z - b.vel_z);
+            ss_v += b.vel_x * b.vel_x + b.vel_y * b.vel_y + b.vel_z * b.vel_z;
+        }
+        double rh = sqrt(se_h / 144), rs = sqrt(se_s / 96), rj = sqrt(se_j / 48), rv = sqrt(se_v / ss_v);
+        print_message("%d channels a call vs direct sum: height/displacement RMS %.3g m (Hs %.3g m), "
+                      "slope %.3g, Jacobian %.3g, velocity %.3g relative\n", groups[gi], rh, ss.hs, rs,
+                      rj, rv);
+        assert_true(rh < 1e-4 * ss.hs);
+        assert_true(rs < 1e-4);
+        assert_true(rj < 1e-4);
+        assert_true(rv < 1e-4);
+        /* Filtered: same waves as one batched call, to float rounding. */
+        r.cutoff_k = 0.3;
+        ocean_force_group(o, 0);
+        assert_int_equal(ocean_evaluate(o, t + 1.0, &r, ref), OCEAN_OK);
+        ocean_force_group(o, groups[gi]);
+        assert_int_equal(ocean_evaluate(o, t + 1.0, &r, f), OCEAN_OK);
+        const ocean_field *fa = ocean_frame_field(f, 0), *fb = ocean_frame_field(ref, 0);
+        assert_int_equal(fa->n, fb->n);
+        const float *pa[] = {fa->height, fa->dx, fa->dz, fa->slope_x, fa->slope_z, fa->dxx, fa->dzz,
+                             fa->dxz, fa->vel_x, fa->vel_y, fa->vel_z};
+        const float *pb[] = {fb->height, fb->dx, fb->dz, fb->slope_x, fb->slope_z, fb->dxx, fb->dzz,
+                             fb->dxz, fb->vel_x, fb->vel_y, fb->vel_z};
+        for (int k = 0; k < 11; k++) {
+            double d2 = 0.0, s2 = 0.0;
+            for (size_t i = 0; i < (size_t)fa->n * fa->n; i++) {
+                d2 += ((double)pa[k][i] - pb[k][i]) * ((double)pa[k][i] - pb[k][i]);
+                s2 += (double)pb[k][i] * pb[k][i];
+            }
+            assert_true(s2 > 0.0);
+            assert_true(sqrt(d2 / s2) < 1e-5);
+        }
+    }
+    ocean_frame_destroy(ref);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    /* The default rule at N = 1024: two channels a call. */
+    pm_params(&p, 1024);
+    o = make(&p);
+    f = frame(o);
+    ocean_counters c0, c1;
+    ocean_get_counters(o, &c0);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL);
+    assert_int_equal(ocean_evaluate(o, t, &r, f), OCEAN_OK);
+    ocean_get_counters(o, &c1);
+    assert_int_equal(c1.transforms - c0.transforms, 8);
+    assert_int_equal(c1.fft_calls - c0.fft_calls, 4);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1283,6 +1378,7 @@ int main(void)
         cmocka_unit_test(test_sample_some_matches_full),
         cmocka_unit_test(test_gain_planes_reused_exactly),
         cmocka_unit_test(test_stage_paths_same_bits),
+        cmocka_unit_test(test_grouped_transforms),
     };
     return cmocka_run_group_tests_name("ocean", tests, NULL, NULL);
 }

@@ -29,6 +29,7 @@
 
 #include "filter.h"
 #include "gerstner.h"
+#include "ocean.h"
 #include "oceanclient.h"
 #include "query.h"
 #include "slope.h"
@@ -2196,8 +2197,7 @@ int main(int argc, char **argv)
      * OpenSSL's certificate store that libwebsockets loads for every client
      * context is reported as an indirect leak inside libcrypto (not ours:
      * no frame of this project is on those stacks); suppress exactly that. */
-    if (!getenv("OMP_WAIT_POLICY")) {
-        setenv("OMP_WAIT_POLICY", "passive", 1);
+    if (ocean_wait_policy_setenv()) {
         static char supp[64];
         snprintf(supp, sizeof supp, "/tmp/test_server.%d.lsan", (int)getpid());
         FILE *f = fopen(supp, "w");

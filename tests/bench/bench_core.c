@@ -342,10 +342,8 @@ int main(int argc, char **argv)
     (void)argc;
     /* As oceand: a spinning OpenMP barrier waits out a whole time slice
      * whenever another process holds the core a team member needs. */
-    if (!getenv("OMP_WAIT_POLICY")) {
-        setenv("OMP_WAIT_POLICY", "passive", 1);
+    if (ocean_wait_policy_setenv())
         execv("/proc/self/exe", argv);
-    }
     const char *policy = getenv("OMP_WAIT_POLICY");
     int quick = bench_quick();
     const int est_sizes[] = {256, 512, 1024}, mea_sizes[] = {512, 1024};
