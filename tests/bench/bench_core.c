@@ -262,6 +262,159 @@ static int stage_paths(int n, int quick)
     return 0;
 }
 
+/* Channels per FFTW call (ocean_force_group): the full evaluation (+foam, 8
+ * transforms, MEASURE plans, 2 threads) with the default rule (at most
+ * 8.5 MB of spectra a call) and with 8, 4, 2 and 1 channels a call, each
+ * interleaved with FFTW alone on the same grouping, and beside FFTW alone
+ * in one call of 8 (the plan oceand used before).  Prints rows; *ratio_def
+ * gets the default's ratio to FFTW alone on its own grouping and
+ * *ratio_one its ratio to FFTW alone in one call.  Returns 0, or 1 when
+ * the ocean could not be made. */
+static int group_table(int n, int quick, double *ratio_def, double *ratio_one)
+{
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = n;
+    p.threads = 2;
+    p.plan_measure = OCEAN_PLAN_MEASURE;
+    ocean *o = NULL;
+    ocean_frame *f = NULL;
+    char msg[600] = "";
+    *ratio_def = *ratio_one = NAN;
+    if (ocean_create(&p, &o, msg, sizeof msg) != OCEAN_OK || ocean_frame_create(o, &f) != OCEAN_OK) {
+        fprintf(stderr, "bench_core: N=%d: %s\n", n, msg);
+        ocean_destroy(o);
+        return 1;
+    }
+    enum { NG = 5 };
+    static const int gs[NG] = {0, 8, 4, 2, 1};
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL);
+    r.foam_map = 0;
+    int reps = quick ? 5 : (n >= 1024 ? 15 : 41);
+    double *ms = malloc(sizeof(double) * reps * NG * 4), *fw = ms + reps * NG, *q = fw + reps * NG,
+           *q1 = q + reps * NG;
+    uint64_t calls[NG] = {0};
+    for (int i = 0; i < reps; i++) {
+        for (int k = 0; k < NG; k++) {
+            int g = (i + k) % NG; /* rotate which grouping goes first */
+            ocean_force_group(o, gs[g]);
+            ocean_counters c0, c1;
+            ocean_get_counters(o, &c0);
+            double t0 = bench_now_ms();
+            ocean_evaluate(o, 10.0 + i / 30.0 + g, &r, f);
+            double t1 = bench_now_ms();
+            ocean_get_counters(o, &c1);
+            ocean_transform_only(o, &r, f);
+            double t2 = bench_now_ms();
+            ms[g * reps + i] = t1 - t0;
+            fw[g * reps + i] = t2 - t1;
+            calls[g] = c1.fft_calls - c0.fft_calls;
+        }
+        for (int g = 0; g < NG; g++) {
+            q[g * reps + i] = ms[g * reps + i] / fw[g * reps + i];
+            q1[g * reps + i] = ms[g * reps + i] / fw[1 * reps + i];
+        }
+    }
+    for (int g = 0; g < NG; g++) {
+        char name[48];
+        if (gs[g] == 0)
+            snprintf(name, sizeof name, "**default: %d**", 8 / (int)(calls[g] ? calls[g] : 1));
+        else
+            snprintf(name, sizeof name, "%d", gs[g]);
+        double rq = bench_median(q + g * reps, reps), r1 = bench_median(q1 + g * reps, reps);
+        printf("| %d | %s | %llu | %.3f | %.3f | %.3f | %.3f |\n", n, name, (unsigned long long)calls[g],
+               bench_median(ms + g * reps, reps), bench_median(fw + g * reps, reps), rq, r1);
+        if (gs[g] == 0) {
+            *ratio_def = rq;
+            *ratio_one = r1;
+        }
+    }
+    ocean_force_group(o, 0);
+    free(ms);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    return 0;
+}
+
+/* The child of policy_table: median ms of the full evaluation and of FFTW
+ * alone at N (MEASURE, 2 threads), printed as "ms fftw ratio". */
+static int policy_child(int n, int quick)
+{
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = n;
+    p.threads = 2;
+    p.plan_measure = OCEAN_PLAN_MEASURE;
+    ocean *o = NULL;
+    ocean_frame *f = NULL;
+    char msg[600] = "";
+    if (ocean_create(&p, &o, msg, sizeof msg) != OCEAN_OK || ocean_frame_create(o, &f) != OCEAN_OK) {
+        fprintf(stderr, "bench_core: N=%d: %s\n", n, msg);
+        ocean_destroy(o);
+        return 1;
+    }
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL);
+    r.foam_map = 0;
+    int reps = quick ? 5 : (n >= 1024 ? 21 : 61);
+    double *a = malloc(sizeof(double) * reps * 3), *b = a + reps, *q = b + reps;
+    ocean_evaluate(o, 0.0, &r, f);
+    for (int i = 0; i < reps; i++) {
+        double t0 = bench_now_ms();
+        ocean_evaluate(o, 10.0 + i / 30.0, &r, f);
+        double t1 = bench_now_ms();
+        ocean_transform_only(o, &r, f);
+        double t2 = bench_now_ms();
+        a[i] = t1 - t0;
+        b[i] = t2 - t1;
+        q[i] = a[i] / b[i];
+    }
+    printf("%.4f %.4f %.4f\n", bench_median(a, reps), bench_median(b, reps), bench_median(q, reps));
+    free(a);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    return 0;
+}
+
+/* Runs policy_child in a fresh process (libgomp reads the policy when it
+ * loads) with OMP_WAIT_POLICY=passive and GOMP_SPINCOUNT=spin.  Returns 0
+ * and fills out[3], or -1. */
+static int policy_run(int n, const char *spin, int quick, double out[3])
+{
+    int fd[2];
+    if (pipe(fd) != 0)
+        return -1;
+    pid_t pid = fork();
+    if (pid == 0) {
+        dup2(fd[1], 1);
+        close(fd[0]);
+        close(fd[1]);
+        setenv("OMP_WAIT_POLICY", "passive", 1);
+        setenv("GOMP_SPINCOUNT", spin, 1);
+        char ns[16];
+        snprintf(ns, sizeof ns, "%d", n);
+        execl("/proc/self/exe", "bench_core", "--policy-child", ns, quick ? "1" : "0", (char *)NULL);
+        _exit(127);
+    }
+    close(fd[1]);
+    if (pid < 0) {
+        close(fd[0]);
+        return -1;
+    }
+    char buf[256] = "";
+    ssize_t got = 0, k;
+    while (got < (ssize_t)sizeof buf - 1 && (k = read(fd[0], buf + got, sizeof buf - 1 - got)) > 0)
+        got += k;
+    buf[got > 0 ? got : 0] = 0;
+    close(fd[0]);
+    int st = 0;
+    waitpid(pid, &st, 0);
+    if (!WIFEXITED(st) || WEXITSTATUS(st) != 0 || sscanf(buf, "%lf %lf %lf", &out[0], &out[1], &out[2]) != 3)
+        return -1;
+    return 0;
+}
+
 /* A process that only burns CPU, optionally pinned to one CPU.  Started
  * stopped; the caller toggles it with SIGCONT / SIGSTOP. */
 static pid_t spinner(int cpu)
@@ -339,12 +492,16 @@ static double contention(int n, int cpu, int reps, double *quiet_ms, double *bus
 
 int main(int argc, char **argv)
 {
-    (void)argc;
     /* As oceand: a spinning OpenMP barrier waits out a whole time slice
      * whenever another process holds the core a team member needs. */
+    if (argc == 4 && strcmp(argv[1], "--policy-child") == 0)
+        return policy_child(atoi(argv[2]), atoi(argv[3]));
     if (ocean_wait_policy_setenv())
         execv("/proc/self/exe", argv);
-    const char *policy = getenv("OMP_WAIT_POLICY");
+    char policy[96];
+    snprintf(policy, sizeof policy, "%s%s%s", getenv("OMP_WAIT_POLICY"),
+             getenv("GOMP_SPINCOUNT") ? ", GOMP_SPINCOUNT=" : "",
+             getenv("GOMP_SPINCOUNT") ? getenv("GOMP_SPINCOUNT") : "");
     int quick = bench_quick();
     const int est_sizes[] = {256, 512, 1024}, mea_sizes[] = {512, 1024};
     FILE *csv = fopen("tests/bench/out/core.csv", "w");
@@ -385,6 +542,59 @@ int main(int argc, char **argv)
     printf("| N | path | ms | FFTW ms | ratio |\n|---:|---|---:|---:|---:|\n");
     for (int i = 0; i < 2; i++)
         failed |= stage_paths(mea_sizes[i], quick);
+    printf("\n");
+
+    printf("#### Channels per FFTW call (MEASURE plans, 2 threads, +foam)\n\n");
+    printf("oceand hands FFTW the channels in groups of at most 8.5 MB of spectra (a constant, so "
+           "every replica runs the same plans): at N = 1024 the 8 spectra are 34 MB, more than the "
+           "last-level cache, and one call of 8 read them back from memory. Each grouping is "
+           "interleaved with FFTW alone on the same calls; the last column divides by FFTW alone "
+           "in one call of 8, the plan oceand used before.\n\n");
+    printf("| N | channels a call | FFTW calls | ms | FFTW ms (same calls) | ratio | ms / FFTW in one call |\n"
+           "|---:|---|---:|---:|---:|---:|---:|\n");
+    double g_def[2], g_one[2];
+    for (int i = 0; i < 2; i++)
+        failed |= group_table(mea_sizes[i], quick, &g_def[i], &g_one[i]);
+    printf("\n");
+    for (int i = 0; i < 2; i++)
+        printf("Target (issue 14), this table: full evaluation at N = %d within 1.15x of FFTW alone "
+               "with MEASURE plans: %.3fx of FFTW alone on the same calls - %s; %.3fx of FFTW alone "
+               "in one call of 8.\n\n", mea_sizes[i], g_def[i],
+               isnan(g_def[i]) ? "NOT MEASURED" : g_def[i] <= 1.15 ? "met" : "NOT met", g_one[i]);
+
+    printf("#### OpenMP wait policy (MEASURE plans, 2 threads, +foam)\n\n");
+    printf("An evaluation is a chain of parallel regions (the spectrum stage, FFTW's passes) a few "
+           "microseconds apart. Passive alone puts a team member to sleep at once, so each region "
+           "first waits for it to be woken; oceand now lets it spin about 30 us first "
+           "(GOMP_SPINCOUNT=" OCEAN_GOMP_SPINCOUNT ", ocean_wait_policy_setenv) and still sleeps "
+           "between ticks and under contention (next table). Each row is its own process (libgomp "
+           "reads the policy when it loads), run twice in alternation; the medians of the two "
+           "runs are averaged.\n\n");
+    printf("| N | policy | ms | FFTW ms | ratio |\n|---:|---|---:|---:|---:|\n");
+    for (int i = 0; i < 2; i++) {
+        static const char *spins[2] = {"0", OCEAN_GOMP_SPINCOUNT};
+        double acc[2][3] = {{0}};
+        int ok[2] = {0, 0};
+        for (int round = 0; round < 2; round++)
+            for (int k = 0; k < 2; k++) {
+                double v[3];
+                if (policy_run(mea_sizes[i], spins[k], quick, v) == 0) {
+                    for (int j = 0; j < 3; j++)
+                        acc[k][j] += v[j];
+                    ok[k]++;
+                }
+            }
+        for (int k = 0; k < 2; k++) {
+            if (!ok[k]) {
+                printf("| %d | passive, GOMP_SPINCOUNT=%s | failed | | |\n", mea_sizes[i], spins[k]);
+                failed = 1;
+                continue;
+            }
+            printf("| %d | passive, GOMP_SPINCOUNT=%s%s | %.3f | %.3f | %.3f |\n", mea_sizes[i], spins[k],
+                   k ? " (oceand)" : " (before)", acc[k][0] / ok[k], acc[k][1] / ok[k], acc[k][2] / ok[k]);
+        }
+        fflush(stdout);
+    }
     printf("\n");
 
     /* Packing two real channels into one complex transform. */
