@@ -40,8 +40,11 @@
 #include "proto.h"
 #include "lib/test_ws.h"
 
-#define EPOCH_UNIX 1767225600.0 /* 2026-01-01T00:00:00Z */
-#define EPOCH_ISO "2026-01-01T00:00:00Z"
+/* One epoch for both replicas: midnight UTC yesterday, set in main.  Not a
+ * fixed date: the daemon refuses an epoch whose sim time would pass
+ * OCEAN_TIME_MAX (about 4.25 years). */
+static double EPOCH_UNIX;
+static char EPOCH_ISO[32];
 #define NFRAMES 8
 
 static char exe_dir[512];
@@ -550,6 +553,11 @@ int main(int argc, char **argv)
     char t[512];
     snprintf(t, sizeof t, "%s", argv[0]);
     snprintf(exe_dir, sizeof exe_dir, "%s", dirname(dirname(t)));
+    time_t day = time(NULL) / 86400 * 86400 - 86400;
+    EPOCH_UNIX = (double)day;
+    struct tm tm;
+    gmtime_r(&day, &tm);
+    strftime(EPOCH_ISO, sizeof EPOCH_ISO, "%Y-%m-%dT%H:%M:%SZ", &tm);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_teardown(replicas_behind_haproxy, teardown),
     };
