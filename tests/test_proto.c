@@ -89,8 +89,8 @@ static void dump_verts_qz(sbuf *b, const char *p, const proto_mesh_vertices *v)
         v->vertex_count, p, v->origin[0], v->origin[1], v->origin[2]);
     proto_mesh_qz_info in;
     if (proto_mesh_qz_header(v->qz, v->qz_len, v->vertex_count, &in, NULL, 0) == OCEAN_OK) {
-        out(b, "%s.qz.format = %u\n%s.qz.predictor = %u\n", p, in.format, p, in.predictor);
-        out(b, "%s.qz.base = %.9g %.9g %.9g\n%s.qz.step = %.9g %.9g %.9g\n%s.qz.nbytes = %u %u %u\n%s.qz.raw_len = %u\n",
+        out(b, "%s.qz_header.format = %u\n%s.qz_header.predictor = %u\n", p, in.format, p, in.predictor);
+        out(b, "%s.qz_header.base = %.9g %.9g %.9g\n%s.qz_header.step = %.9g %.9g %.9g\n%s.qz_header.nbytes = %u %u %u\n%s.qz_header.raw_len = %u\n",
             p, (double)in.base[0], (double)in.base[1], (double)in.base[2], p, (double)in.step[0], (double)in.step[1],
             (double)in.step[2], p, in.nbytes[0], in.nbytes[1], in.nbytes[2], p, in.raw_len);
     }
