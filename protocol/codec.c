@@ -679,38 +679,27 @@ void proto_codec_ctx_destroy(proto_codec_ctx *c)
     free(c);
 }
 
+/* Grows *p to hold n elements of el bytes (*cap counts them); 0 if out of
+ * memory (*p unchanged). */
+static int ctx_grow(void **p, size_t *cap, size_t n, size_t el)
+{
+    if (n <= *cap)
+        return 1;
+    void *q = realloc(*p, n * el);
+    if (!q)
+        return 0;
+    *p = q;
+    *cap = n;
+    return 1;
+}
+
 /* Scratch for nq levels (q), n residuals (z), rawlen byte-plane bytes and
  * fxlen fit words; grows only. */
 static ocean_result ctx_reserve(proto_codec_ctx *c, size_t nq, size_t n, size_t rawlen, size_t fxlen)
 {
-    if (nq > c->qcap) {
-        int64_t *q = realloc(c->q, nq * sizeof *q);
-        if (!q)
-            return OCEAN_ENOMEM;
-        c->q = q;
-        c->qcap = nq;
-    }
-    if (n > c->cap) {
-        uint32_t *z = realloc(c->z, n * sizeof *z);
-        if (!z)
-            return OCEAN_ENOMEM;
-        c->z = z;
-        c->cap = n;
-    }
-    if (rawlen > c->rawcap) {
-        uint8_t *r = realloc(c->raw, rawlen);
-        if (!r)
-            return OCEAN_ENOMEM;
-        c->raw = r;
-        c->rawcap = rawlen;
-    }
-    if (fxlen > c->fxcap) {
-        uint32_t *f = realloc(c->fx, fxlen * sizeof *f);
-        if (!f)
-            return OCEAN_ENOMEM;
-        c->fx = f;
-        c->fxcap = fxlen;
-    }
+    if (!ctx_grow((void **)&c->q, &c->qcap, nq, sizeof *c->q) || !ctx_grow((void **)&c->z, &c->cap, n, sizeof *c->z) ||
+        !ctx_grow((void **)&c->raw, &c->rawcap, rawlen, 1) || !ctx_grow((void **)&c->fx, &c->fxcap, fxlen, sizeof *c->fx))
+        return OCEAN_ENOMEM;
     return OCEAN_OK;
 }
 

@@ -269,7 +269,7 @@ static ocean_result v_tile(ctx *c, const proto_tile *t)
 
 /* A FRAME's has_mesh 2 record: the counts and origin as MESH_VERTICES,
  * then the qz payload's header (the positions need the topology). */
-static ocean_result v_vertices_qz(ctx *c, const proto_mesh_vertices *v)
+static ocean_result v_vertices_head(ctx *c, const proto_mesh_vertices *v)
 {
     if (v->vertex_count == 0)
         FAIL(c, OCEAN_EINVAL, "mesh vertex_count is 0");
@@ -277,6 +277,12 @@ static ocean_result v_vertices_qz(ctx *c, const proto_mesh_vertices *v)
         FAIL(c, OCEAN_ETOOBIG, "mesh vertex_count %u above the limit %u", v->vertex_count, c->lim->max_vertices);
     for (int i = 0; i < 3; i++)
         TRY(chk_range(c, "mesh.origin", v->origin[i], -MAX_WORLD, MAX_WORLD));
+    return OCEAN_OK;
+}
+
+static ocean_result v_vertices_qz(ctx *c, const proto_mesh_vertices *v)
+{
+    TRY(v_vertices_head(c, v));
     char why[200];
     ocean_result r = proto_mesh_qz_header(v->qz, v->qz_len, v->vertex_count, NULL, why, sizeof why);
     if (r != OCEAN_OK)
@@ -286,12 +292,7 @@ static ocean_result v_vertices_qz(ctx *c, const proto_mesh_vertices *v)
 
 static ocean_result v_vertices(ctx *c, const proto_mesh_vertices *v)
 {
-    if (v->vertex_count == 0)
-        FAIL(c, OCEAN_EINVAL, "mesh vertex_count is 0");
-    if (v->vertex_count > c->lim->max_vertices)
-        FAIL(c, OCEAN_ETOOBIG, "mesh vertex_count %u above the limit %u", v->vertex_count, c->lim->max_vertices);
-    for (int i = 0; i < 3; i++)
-        TRY(chk_range(c, "mesh.origin", v->origin[i], -MAX_WORLD, MAX_WORLD));
+    TRY(v_vertices_head(c, v));
     if (!v->positions)
         FAIL(c, OCEAN_EINVAL, "mesh has no positions");
     for (size_t i = 0; i < 3 * (size_t)v->vertex_count; i++)
@@ -798,7 +799,9 @@ static ocean_result d_floats(rd *r, size_t count, float **out, const char *field
     return OCEAN_OK;
 }
 
-static ocean_result d_vertices(rd *r, proto_mesh_vertices *v)
+/* MESH_VERTICES' fixed fields (mesh_id, vertex_count, origin), shared by
+ * the f32 and the qz body. */
+static ocean_result d_vertices_head(rd *r, proto_mesh_vertices *v)
 {
     TRY(need(r, VERTS_FIXED, "mesh vertices fixed fields"));
     const uint8_t *p = r->p + r->off;
@@ -810,6 +813,12 @@ static ocean_result d_vertices(rd *r, proto_mesh_vertices *v)
     if (v->vertex_count > r->c->lim->max_vertices)
         FAIL(r->c, OCEAN_ETOOBIG, "%s: vertex_count %u above the limit %u", r->what, v->vertex_count,
              r->c->lim->max_vertices);
+    return OCEAN_OK;
+}
+
+static ocean_result d_vertices(rd *r, proto_mesh_vertices *v)
+{
+    TRY(d_vertices_head(r, v));
     float *pos;
     TRY(d_floats(r, 3 * (size_t)v->vertex_count, &pos, "positions"));
     v->positions = pos;
@@ -820,13 +829,7 @@ static ocean_result d_vertices(rd *r, proto_mesh_vertices *v)
  * (kept as bytes: decoding it needs the topology). */
 static ocean_result d_vertices_qz(rd *r, proto_mesh_vertices *v)
 {
-    TRY(need(r, VERTS_FIXED, "mesh vertices fixed fields"));
-    const uint8_t *p = r->p + r->off;
-    v->mesh_id = proto_ld32(p);
-    v->vertex_count = proto_ld32(p + 4);
-    for (int i = 0; i < 3; i++)
-        v->origin[i] = proto_ldf64(p + 8 + 8 * i);
-    r->off += VERTS_FIXED;
+    TRY(d_vertices_head(r, v));
     size_t n = r->end - r->off;
     if (n > UINT32_MAX)
         FAIL(r->c, OCEAN_ETOOBIG, "%s: mesh qz payload of %zu bytes", r->what, n);
@@ -1313,14 +1316,19 @@ static ocean_result e_tile(proto_buf *b, const proto_tile *t)
     return proto_buf_append(b, t->payload, t->payload_len);
 }
 
-static ocean_result e_vertices(proto_buf *b, const proto_mesh_vertices *v)
+static void vertices_head_write(uint8_t *p, const proto_mesh_vertices *v)
 {
-    uint8_t *p;
-    TRY(put(b, VERTS_FIXED + 12 * (size_t)v->vertex_count, &p));
     proto_st32(p, v->mesh_id);
     proto_st32(p + 4, v->vertex_count);
     for (int i = 0; i < 3; i++)
         proto_stf64(p + 8 + 8 * i, v->origin[i]);
+}
+
+static ocean_result e_vertices(proto_buf *b, const proto_mesh_vertices *v)
+{
+    uint8_t *p;
+    TRY(put(b, VERTS_FIXED + 12 * (size_t)v->vertex_count, &p));
+    vertices_head_write(p, v);
     for (size_t i = 0; i < 3 * (size_t)v->vertex_count; i++)
         proto_stf32(p + VERTS_FIXED + 4 * i, v->positions[i]);
     return OCEAN_OK;
@@ -1330,10 +1338,7 @@ static ocean_result e_vertices_qz(proto_buf *b, const proto_mesh_vertices *v)
 {
     uint8_t *p;
     TRY(put(b, VERTS_FIXED, &p));
-    proto_st32(p, v->mesh_id);
-    proto_st32(p + 4, v->vertex_count);
-    for (int i = 0; i < 3; i++)
-        proto_stf64(p + 8 + 8 * i, v->origin[i]);
+    vertices_head_write(p, v);
     return proto_buf_append(b, v->qz, v->qz_len);
 }
 

@@ -970,13 +970,14 @@ static void identical_cameras_share_tiles(void **state)
     oc_client_destroy(b);
 }
 
-/* Replays one camera path and returns the FRAME bytes concatenated. */
-static uint8_t *replay_run(int p, size_t *len, int nframes)
+/* Replays one camera path with mesh_codec `mc` into out[0..nframes). */
+static void replay_frames(int p, int mc, oc_frame **out, int nframes)
 {
     oc_client *c = connect_client(p, NULL);
     proto_subscribe s;
     small_subscribe(&s);
     s.mode = PROTO_MODE_REPLAY;
+    s.mesh_codec = (uint8_t)mc;
     assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
     proto_camera cam;
     oc_camera_default(&cam);
@@ -988,18 +989,28 @@ static uint8_t *replay_run(int p, size_t *len, int nframes)
         cam.render_time = 1000.0 + i / 30.0;
         assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
     }
+    for (int i = 0; i < nframes; i++) {
+        out[i] = next_frame(c, 5000);
+        assert_true(out[i]->hdr.sim_time == 1000.0 + i / 30.0);
+    }
+    oc_client_destroy(c);
+}
+
+/* Replays one camera path and returns the FRAME bytes concatenated. */
+static uint8_t *replay_run(int p, size_t *len, int nframes)
+{
+    oc_frame *f[16];
+    assert_true(nframes <= 16);
+    replay_frames(p, PROTO_MESH_CODEC_QZ, f, nframes);
     uint8_t *all = NULL;
     size_t n = 0;
     for (int i = 0; i < nframes; i++) {
-        oc_frame *f = next_frame(c, 5000);
-        assert_true(f->hdr.sim_time == 1000.0 + i / 30.0);
-        all = realloc(all, n + f->raw_len);
+        all = realloc(all, n + f[i]->raw_len);
         assert_non_null(all);
-        memcpy(all + n, f->raw, f->raw_len);
-        n += f->raw_len;
-        oc_frame_free(f);
+        memcpy(all + n, f[i]->raw, f[i]->raw_len);
+        n += f[i]->raw_len;
+        oc_frame_free(f[i]);
     }
-    oc_client_destroy(c);
     *len = n;
     return all;
 }
@@ -1025,29 +1036,6 @@ static void replay_identical_bytes(void **state)
     free(r1);
     free(r2);
     free(r3);
-}
-
-/* Replays one camera path with mesh_codec `mc`; returns the frames. */
-static void replay_frames(int p, int mc, oc_frame **out, int nframes)
-{
-    oc_client *c = connect_client(p, NULL);
-    proto_subscribe s;
-    small_subscribe(&s);
-    s.mode = PROTO_MODE_REPLAY;
-    s.mesh_codec = (uint8_t)mc;
-    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
-    proto_camera cam;
-    oc_camera_default(&cam);
-    for (int i = 0; i < nframes; i++) {
-        cam.pos[0] = 100.0 + 8.0 * i / 30.0;
-        cam.pos[1] = 20 + 3.0 * i;
-        cam.yaw_deg = (float)(10 * i);
-        cam.render_time = 500.0 + i / 30.0;
-        assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
-    }
-    for (int i = 0; i < nframes; i++)
-        out[i] = next_frame(c, 5000);
-    oc_client_destroy(c);
 }
 
 /* Layout 0 with mesh_codec qz (issue 14): the same replayed cameras and

@@ -392,29 +392,36 @@ function vTile(t) {
 }
 
 /* MESH_VERTICES body (structure; vVertices checks values). */
-function dVertices(r, limits) {
+function dVerticesHead(r, limits) {
     r.need(VERTS_FIXED, 'mesh vertices fixed fields');
     const o = r.off;
     const v = { meshId: r.u32(o), vertexCount: r.u32(o + 4), origin: [r.f64(o + 8), r.f64(o + 16), r.f64(o + 24)] };
     r.off += VERTS_FIXED;
     if (v.vertexCount > limits.maxVertices)
         fail(R.ETOOBIG, `${r.what}: vertex_count ${v.vertexCount} above the limit ${limits.maxVertices}`);
+    return v;
+}
+
+function dVertices(r, limits) {
+    const v = dVerticesHead(r, limits);
     v.positions = r.floats(3 * v.vertexCount, 'positions');
     r.finish();
     return v;
 }
 
-function vVerticesQz(v, limits) {
+function vVerticesHead(v, limits) {
     if (v.vertexCount === 0) fail(R.EINVAL, 'mesh vertex_count is 0');
     if (v.vertexCount > limits.maxVertices) fail(R.ETOOBIG, `mesh vertex_count ${v.vertexCount} above the limit ${limits.maxVertices}`);
     for (let i = 0; i < 3; i++) chkRange('mesh.origin', v.origin[i], -MAX_WORLD, MAX_WORLD);
+}
+
+function vVerticesQz(v, limits) {
+    vVerticesHead(v, limits);
     v.qzHeader = meshQzHeader(v.qz, v.vertexCount);
 }
 
 function vVertices(v, limits) {
-    if (v.vertexCount === 0) fail(R.EINVAL, 'mesh vertex_count is 0');
-    if (v.vertexCount > limits.maxVertices) fail(R.ETOOBIG, `mesh vertex_count ${v.vertexCount} above the limit ${limits.maxVertices}`);
-    for (let i = 0; i < 3; i++) chkRange('mesh.origin', v.origin[i], -MAX_WORLD, MAX_WORLD);
+    vVerticesHead(v, limits);
     const p = v.positions;
     for (let i = 0; i < p.length; i++) {
         const x = p[i];
@@ -450,12 +457,7 @@ export function meshQzHeader(data, vertexCount) {
 /* FRAME has_mesh 2 record: MESH_VERTICES' fixed fields, then the qz
  * payload kept as bytes (positions need the topology: decodeMeshQz). */
 function dVerticesQz(r, limits) {
-    r.need(VERTS_FIXED, 'mesh vertices fixed fields');
-    const o = r.off;
-    const v = { meshId: r.u32(o), vertexCount: r.u32(o + 4), origin: [r.f64(o + 8), r.f64(o + 16), r.f64(o + 24)] };
-    r.off += VERTS_FIXED;
-    if (v.vertexCount > limits.maxVertices)
-        fail(R.ETOOBIG, `${r.what}: vertex_count ${v.vertexCount} above the limit ${limits.maxVertices}`);
+    const v = dVerticesHead(r, limits);
     v.qz = r.u8.subarray(r.off, r.end);
     v.positions = null;
     r.off = r.end;

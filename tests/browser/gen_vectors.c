@@ -51,6 +51,23 @@ static int write_msg(const char *dir, const char *name, proto_msg *m)
     return 0;
 }
 
+/* A MESH_TOPOLOGY message with these fields (not FLAT unless the caller
+ * sets flags, flat and zones afterwards). */
+static void topology_msg(proto_msg *m, uint32_t seq, uint32_t mesh_id, uint8_t lod_levels, uint32_t vertex_count,
+                         uint32_t index_count, const uint32_t *indices, const float *morph, const uint8_t *level)
+{
+    proto_msg_init(m, PROTO_MESH_TOPOLOGY);
+    m->hdr.seq = seq;
+    m->u.topology.mesh_id = mesh_id;
+    m->u.topology.mesh_kind = PROTO_MESH_CONCENTRIC;
+    m->u.topology.lod_levels = lod_levels;
+    m->u.topology.vertex_count = vertex_count;
+    m->u.topology.index_count = index_count;
+    m->u.topology.indices = indices;
+    m->u.topology.morph = morph;
+    m->u.topology.level = level;
+}
+
 static void print_floats(FILE *o, const float *v, size_t n)
 {
     fputc('[', o);
@@ -326,16 +343,7 @@ static int gen(const char *dir)
         uint8_t flev[3 + 1] = {0, 0, 1, 2};
         float flat[8] = {-1.5f, 0, 1.5f, 0, 0, 3, 12, -12};
         float zones[12] = {1.5f, 40, 6, 0, 3, 80, 12, 0, 6, 160, 0, 0};
-        proto_msg_init(&m, PROTO_MESH_TOPOLOGY);
-        m.hdr.seq = 5;
-        m.u.topology.mesh_id = 6;
-        m.u.topology.mesh_kind = PROTO_MESH_CONCENTRIC;
-        m.u.topology.lod_levels = 3;
-        m.u.topology.vertex_count = 4;
-        m.u.topology.index_count = 6;
-        m.u.topology.indices = fidx;
-        m.u.topology.morph = fmorph;
-        m.u.topology.level = flev;
+        topology_msg(&m, 5, 6, 3, 4, 6, fidx, fmorph, flev);
         m.u.topology.flags = PROTO_TOPO_FLAT;
         m.u.topology.flat = flat;
         m.u.topology.zones = zones;
@@ -352,16 +360,7 @@ static int gen(const char *dir)
     uint32_t idx[6] = {0, 2, 1, 1, 2, 3};
     float morph[4] = {0, 0.25f, 0.5f, 1};
     uint8_t lev[4] = {0, 0, 1, 1};
-    proto_msg_init(&m, PROTO_MESH_TOPOLOGY);
-    m.hdr.seq = 3;
-    m.u.topology.mesh_id = 5;
-    m.u.topology.mesh_kind = PROTO_MESH_CONCENTRIC;
-    m.u.topology.lod_levels = 2;
-    m.u.topology.vertex_count = 4;
-    m.u.topology.index_count = 6;
-    m.u.topology.indices = idx;
-    m.u.topology.morph = morph;
-    m.u.topology.level = lev;
+    topology_msg(&m, 3, 5, 2, 4, 6, idx, morph, lev);
     if (write_msg(dir, "topology", &m))
         return 1;
     fprintf(o, "\"topology\": {\"meshId\":5,\"indices\":[0,2,1,1,2,3],\"morph\":[0,0.25,0.5,1],\"level\":[0,0,1,1]},\n");
@@ -392,16 +391,7 @@ static int gen(const char *dir)
                 q[1] = (float)(1.5 * sin(0.45 * x - 0.2 * z) + 0.3 * cos(1.3 * z + 0.5 * x));
                 q[2] = (float)(z - 0.35 * cos(0.5 * z - 0.6 * x));
             }
-        proto_msg_init(&m, PROTO_MESH_TOPOLOGY);
-        m.hdr.seq = 6;
-        m.u.topology.mesh_id = 11;
-        m.u.topology.mesh_kind = PROTO_MESH_CONCENTRIC;
-        m.u.topology.lod_levels = 1;
-        m.u.topology.vertex_count = V;
-        m.u.topology.index_count = I;
-        m.u.topology.indices = gi;
-        m.u.topology.morph = gm;
-        m.u.topology.level = gl;
+        topology_msg(&m, 6, 11, 1, V, I, gi, gm, gl);
         if (write_msg(dir, "topology_mesh_qz", &m))
             return 1;
         proto_codec_ctx *cx = NULL;
