@@ -608,10 +608,12 @@ static void test_roundtrip_all(void **state)
 static void test_frame_client_fields(void **state)
 {
     (void)state;
-    for (int with_mesh = 0; with_mesh <= 1; with_mesh++) {
+    for (int with_mesh = 0; with_mesh <= 2; with_mesh++) {
         proto_msg m, d;
-        sample(&m, PROTO_FRAME);
-        m.u.frame.has_mesh = (uint8_t)with_mesh;
+        /* 2: the qz mesh record (has_mesh 2) */
+        sample_named(&m, with_mesh == 2 ? "frame_mesh_qz" : "frame");
+        if (with_mesh < 2)
+            m.u.frame.has_mesh = (uint8_t)with_mesh;
         proto_buf pb;
         proto_buf_init(&pb, 0);
         char err[256];
