@@ -175,8 +175,8 @@ typedef struct topo_ref {
     oc_topology pub;
     atomic_int refs;
     proto_msg msg;
-    uint32_t *qz_refs;        /* [mu] MESH_VERTICES_QZ prediction references,
-                                 made at the first has_mesh 2 frame */
+    uint32_t *qz_refs;        /* [const] MESH_VERTICES_QZ prediction references
+                                 (layout-0 topologies), made when it arrived */
 } topo_ref;
 
 typedef struct frame_priv {
@@ -712,6 +712,33 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
         if (fr)
             raw_taken = 1;
     }
+    /* MESH_VERTICES_QZ work outside the loop's lock: a layout-0 topology's
+     * prediction references, made once when it arrives; a has_mesh 2
+     * frame's positions, decoded with the current topology (held by a
+     * reference meanwhile), so callers see floats */
+    uint32_t *new_refs = NULL;
+    if (type == PROTO_MESH_TOPOLOGY && !(m.u.topology.flags & PROTO_TOPO_FLAT)) {
+        const proto_mesh_topology *pt = &m.u.topology;
+        new_refs = malloc(3 * sizeof *new_refs * (size_t)pt->vertex_count);
+        if (new_refs && proto_mesh_qz_refs(pt->indices, pt->index_count, pt->vertex_count, new_refs) != OCEAN_OK) {
+            free(new_refs);
+            new_refs = NULL;
+        }
+    }
+    ocean_result mesh_res = OCEAN_OK;
+    char mesh_why[200] = "";
+    if (fr && !peeked && fr->pub.info.has_mesh == 2) {
+        pthread_mutex_lock(&l->mu);
+        topo_ref *tr = c->topo && c->topo->pub.mesh_id == fr->pub.info.mesh.mesh_id ? c->topo : NULL;
+        if (tr)
+            atomic_fetch_add(&tr->refs, 1);
+        pthread_mutex_unlock(&l->mu);
+        mesh_res = OCEAN_ESTATE;
+        snprintf(mesh_why, sizeof mesh_why, "no MESH_TOPOLOGY for the frame's mesh %u", fr->pub.info.mesh.mesh_id);
+        if (tr && tr->qz_refs)
+            mesh_res = frame_mesh_qz(fr, &tr->pub, tr->qz_refs, mesh_why, sizeof mesh_why);
+        topo_unref(tr);
+    }
 
     pthread_mutex_lock(&l->mu);
     c->st.messages_rx++;
@@ -782,25 +809,9 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
                 atomic_fetch_add(&c->topo->refs, 1);
                 fr->pub.topology = &c->topo->pub;
             }
-            if (!peeked && fr->pub.info.has_mesh == 2) {
-                /* compressed positions: decoded here, so callers see floats */
-                char why[200] = "no MESH_TOPOLOGY for the frame's mesh_id";
-                ocean_result mr = OCEAN_ESTATE;
-                topo_ref *tr = fr->topo;
-                if (tr && !tr->qz_refs) {
-                    tr->qz_refs = malloc(3 * sizeof *tr->qz_refs * (size_t)tr->pub.vertex_count);
-                    if (tr->qz_refs && proto_mesh_qz_refs(tr->pub.indices, tr->pub.index_count, tr->pub.vertex_count,
-                                                          tr->qz_refs) != OCEAN_OK) {
-                        free(tr->qz_refs);
-                        tr->qz_refs = NULL;
-                    }
-                }
-                if (tr && tr->qz_refs)
-                    mr = frame_mesh_qz(fr, &tr->pub, tr->qz_refs, why, sizeof why);
-                if (mr != OCEAN_OK) {
-                    c->st.decode_errors++;
-                    set_local_error(c, mr, "FRAME tick %u: mesh positions: %s", fr->pub.info.tick, why);
-                }
+            if (mesh_res != OCEAN_OK) {
+                c->st.decode_errors++;
+                set_local_error(c, mesh_res, "FRAME tick %u: mesh positions: %s", fr->pub.info.tick, mesh_why);
             }
             if (c->opt.cb.on_frame) {
                 nt.call_frame = 1;
@@ -838,6 +849,8 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
             t->pub.flags = pt->flags;
             t->pub.flat = pt->flat;
             t->pub.zones = pt->zones;
+            t->qz_refs = new_refs;
+            new_refs = NULL;
             topo_unref(c->topo);
             c->topo = t;
             break;
@@ -925,6 +938,7 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
     }
     pthread_cond_broadcast(&l->cv);
     pthread_mutex_unlock(&l->mu);
+    free(new_refs);   /* not taken: the topology could not be kept */
 
     if (res == OCEAN_OK) {
         if (nt.call_error && c->opt.cb.on_error)
