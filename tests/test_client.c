@@ -832,6 +832,22 @@ static void connect_refused(void **state)
     assert_non_null(strstr(err, "scheme"));
 }
 
+/* A client connected to the fake server with the default options. */
+static oc_client *fake_client(fake_server *s)
+{
+    char url[64], err[256] = "";
+    fake_url(s, url, sizeof url);
+    oc_options o;
+    oc_options_default(&o);
+    o.url = url;
+    oc_client *c = NULL;
+    ocean_result r = oc_connect(&o, 5000, &c, err, sizeof err);
+    if (r != OCEAN_OK)
+        print_error("connect: %s\n", err);
+    assert_int_equal(r, OCEAN_OK);
+    return c;
+}
+
 /* Layout 0 with the library's default mesh codec (qz): has_mesh 2 frames
  * reach the caller with float positions, decoded with the topology, each
  * within the bound the spec states (half the step f32(2a range_y), plus
@@ -842,14 +858,8 @@ static void qz_mesh_frames(void **state)
 {
     (void)state;
     fake_server *s = fake_start();
-    char url[64];
-    fake_url(s, url, sizeof url);
-    oc_options o;
-    oc_options_default(&o);
-    o.url = url;
-    oc_client *c = NULL;
     char err[256] = "";
-    assert_int_equal(oc_connect(&o, 5000, &c, err, sizeof err), OCEAN_OK);
+    oc_client *c = fake_client(s);
     proto_subscribe sub;
     oc_subscribe_default(&sub);
     assert_int_equal(sub.mesh_codec, PROTO_MESH_CODEC_QZ);
@@ -890,17 +900,9 @@ static void live_frames_and_queries(void **state)
 {
     (void)state;
     fake_server *s = fake_start();
-    char url[64];
-    fake_url(s, url, sizeof url);
-    oc_options o;
-    oc_options_default(&o);
-    o.url = url;
-    oc_client *c = NULL;
     char err[256] = "";
-    ocean_result r = oc_connect(&o, 5000, &c, err, sizeof err);
-    if (r != OCEAN_OK)
-        print_error("connect: %s\n", err);
-    assert_int_equal(r, OCEAN_OK);
+    ocean_result r;
+    oc_client *c = fake_client(s);
     assert_int_equal(oc_client_state(c), OC_READY);
     proto_hello h;
     assert_int_equal(oc_client_hello(c, &h), OCEAN_OK);
