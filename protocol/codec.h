@@ -160,4 +160,72 @@ ocean_result proto_exr_encode(proto_codec c, const proto_codec_params *p, int w,
 ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *data,
                               size_t len, float *planes, char *err, size_t errlen);
 
+/* ---- compressed mesh positions (PROTOCOL.md "MESH_VERTICES_QZ") ------
+ * A layout-0 mesh record with FRAME.has_mesh 2 carries, after mesh_id,
+ * vertex_count and origin, this payload: u8 format (1), u8 predictor (1:
+ * parallelogram over the topology's triangles), u16 0, f32 base[3],
+ * f32 step[3], u8 nbytes[3], u8 0, u32 R, then one zstd frame of R bytes
+ * (byte planes of the zigzagged residuals, axis x, y, z).  Decoding needs
+ * the MESH_TOPOLOGY the record's mesh_id names (its triangles say which
+ * vertices predict which), through proto_mesh_qz_refs. */
+#define PROTO_MESH_QZ_FORMAT 1
+#define PROTO_MESH_QZ_HEAD 36
+#define PROTO_MESH_QZ_NONE 0xFFFFFFFFu
+
+/* The fields of a payload's header (proto_mesh_qz_header). */
+typedef struct proto_mesh_qz_info {
+    uint8_t format, predictor;
+    float base[3], step[3];   /* per axis x, y, z: value = f32(base + q step) */
+    uint8_t nbytes[3];
+    uint32_t raw_len;         /* R */
+} proto_mesh_qz_info;
+
+/* The prediction references of a topology: refs (3 * vertex_count words)
+ * gets, per vertex v, (a, b, c) - the parallelogram a + b - c - or (a, b,
+ * NONE) - the floor of their mean - or (NONE, NONE, NONE) - the previous
+ * vertex (0 for vertex 0); every reference < v.  The rule (PROTOCOL.md):
+ * among the triangles holding v, in index-buffer order, whose two other
+ * vertices a, b are both < v, the first for which another triangle (the
+ * first in index order) holds edge (a, b) with a third vertex c < v; else
+ * the first such triangle's midpoint.  Computed once per topology by both
+ * sides.  OCEAN_EINVAL for an index >= vertex_count, OCEAN_ENOMEM. */
+ocean_result proto_mesh_qz_refs(const uint32_t *indices, uint32_t index_count, uint32_t vertex_count,
+                                uint32_t *refs);
+
+/* The encoder's per-axis base (the minimum) and step for positions xyz
+ * (3 per vertex) at qz accuracy a: y's step f32(2a . range_y) (the tiles'
+ * height budget; 1 m of range for a sea without relief), x and z the same
+ * metres, any axis coarser only where it would need 2^29 levels.
+ * OCEAN_EINVAL for a bad accuracy, no vertices or a non-finite value. */
+ocean_result proto_mesh_qz_steps(double accuracy, uint32_t vertex_count, const float *xyz, float base[3],
+                                 float step[3]);
+
+/* The a-priori bound on |decoded - input| of one axis (0 x, 1 y, 2 z):
+ * step/2 plus the f32 rounding of the decoded value. */
+double proto_mesh_qz_error_bound(const float base[3], const float step[3], uint32_t vertex_count, const float *xyz,
+                                 int axis);
+
+/* Appends the payload (from the format byte on) for positions xyz of
+ * vertex_count vertices with the topology's refs, at accuracy, using the
+ * worker's ctx (required: a server encodes a mesh per frame).  max_err
+ * (may be NULL) gets the largest |decoded - input| per axis.  On failure
+ * out is unchanged. */
+ocean_result proto_mesh_qz_encode(proto_codec_ctx *ctx, double accuracy, uint32_t vertex_count, const float *xyz,
+                                  const uint32_t *refs, proto_buf *out, double max_err[3], char *err,
+                                  size_t errlen);
+
+/* Checks a payload's header against vertex_count without decompressing:
+ * format, predictor, reserved bytes, finite bases, finite steps > 0,
+ * nbytes <= 4, R = sum nbytes . vertex_count, one zstd frame of exactly R
+ * bytes and nothing after it.  OCEAN_ECODEC naming the field. */
+ocean_result proto_mesh_qz_header(const uint8_t *data, size_t len, uint32_t vertex_count, proto_mesh_qz_info *info,
+                                  char *err, size_t errlen);
+
+/* Decodes a payload into xyz (3 * vertex_count floats) with the refs of
+ * its topology.  OCEAN_ECODEC for a bad header or stream, a level beyond
+ * 2^30, a non-finite or |.| > 1e7 position; OCEAN_EINVAL for refs that
+ * point at vertices not yet decoded. */
+ocean_result proto_mesh_qz_decode(const uint8_t *data, size_t len, uint32_t vertex_count, const uint32_t *refs,
+                                  float *xyz, char *err, size_t errlen);
+
 #endif

@@ -205,6 +205,8 @@ static ocean_result v_subscribe(ctx *c, const proto_subscribe *s)
     TRY(chk_range(c, "subscribe.layers", s->layers, 1, PROTO_MAX_LAYERS));
     TRY(chk_range(c, "subscribe.lod_levels", s->lod_levels, 1, PROTO_MAX_LOD_LEVELS));
     TRY(chk_enum(c, "subscribe.layout", s->layout, PROTO_LAYOUT_COUNT_));
+    if (s->mesh_codec != PROTO_MESH_CODEC_F32 && s->mesh_codec != PROTO_MESH_CODEC_QZ)
+        FAIL(c, OCEAN_ETYPE, "subscribe.mesh_codec %u unknown (0 f32, 2 qz)", s->mesh_codec);
     TRY(chk_range(c, "subscribe.tile_size", s->tile_size, 2, PROTO_TILE_MAX_SIZE));
     TRY(chk_range(c, "subscribe.frame_rate_hz", s->frame_rate_hz, 0, PROTO_MAX_FRAME_RATE));
     if (s->frame_rate_hz <= 0.0f)
@@ -265,7 +267,9 @@ static ocean_result v_tile(ctx *c, const proto_tile *t)
     return OCEAN_OK;
 }
 
-static ocean_result v_vertices(ctx *c, const proto_mesh_vertices *v)
+/* A FRAME's has_mesh 2 record: the counts and origin as MESH_VERTICES,
+ * then the qz payload's header (the positions need the topology). */
+static ocean_result v_vertices_head(ctx *c, const proto_mesh_vertices *v)
 {
     if (v->vertex_count == 0)
         FAIL(c, OCEAN_EINVAL, "mesh vertex_count is 0");
@@ -273,6 +277,22 @@ static ocean_result v_vertices(ctx *c, const proto_mesh_vertices *v)
         FAIL(c, OCEAN_ETOOBIG, "mesh vertex_count %u above the limit %u", v->vertex_count, c->lim->max_vertices);
     for (int i = 0; i < 3; i++)
         TRY(chk_range(c, "mesh.origin", v->origin[i], -MAX_WORLD, MAX_WORLD));
+    return OCEAN_OK;
+}
+
+static ocean_result v_vertices_qz(ctx *c, const proto_mesh_vertices *v)
+{
+    TRY(v_vertices_head(c, v));
+    char why[200];
+    ocean_result r = proto_mesh_qz_header(v->qz, v->qz_len, v->vertex_count, NULL, why, sizeof why);
+    if (r != OCEAN_OK)
+        FAIL(c, r, "frame mesh (has_mesh 2): %s", why);
+    return OCEAN_OK;
+}
+
+static ocean_result v_vertices(ctx *c, const proto_mesh_vertices *v)
+{
+    TRY(v_vertices_head(c, v));
     if (!v->positions)
         FAIL(c, OCEAN_EINVAL, "mesh has no positions");
     for (size_t i = 0; i < 3 * (size_t)v->vertex_count; i++)
@@ -373,10 +393,12 @@ static ocean_result v_frame(ctx *c, const proto_frame *f)
                      f->tiles[i].cascade, f->layout, f->cascades.cascade_count);
         }
     }
-    if (f->has_mesh > 1)
-        FAIL(c, OCEAN_EFORMAT, "frame.has_mesh is %u (0 or 1)", f->has_mesh);
-    if (f->has_mesh && f->layout == PROTO_LAYOUT_WORLD)
+    if (f->has_mesh > 2 || (f->has_mesh == 2 && f->layout != PROTO_LAYOUT_WORLD))
+        FAIL(c, OCEAN_EFORMAT, "frame.has_mesh is %u (0 or 1; 2 in layout 0)", f->has_mesh);
+    if (f->has_mesh == 1 && f->layout == PROTO_LAYOUT_WORLD)
         TRY(v_vertices(c, &f->mesh));
+    if (f->has_mesh == 2)
+        TRY(v_vertices_qz(c, &f->mesh));
     if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
         for (int i = 0; i < 3; i++)
             TRY(chk_range(c, "frame.placement.origin", f->placement.origin[i], -MAX_WORLD, MAX_WORLD));
@@ -695,7 +717,7 @@ static ocean_result d_subscribe(rd *r, proto_subscribe *s)
 {
     TRY(need(r, SUBSCRIBE_SIZE, "fixed fields"));
     const uint8_t *p = r->p + r->off;
-    TRY(zero_bytes(r, r->off + 10, 2, "subscribe"));
+    TRY(zero_bytes(r, r->off + 11, 1, "subscribe"));
     s->effects = p[0];
     s->mesh_kind = p[1];
     s->codec = p[2];
@@ -705,6 +727,7 @@ static ocean_result d_subscribe(rd *r, proto_subscribe *s)
     s->lod_levels = p[6];
     s->layout = p[7];
     s->tile_size = proto_ld16(p + 8);
+    s->mesh_codec = p[10];
     s->frame_rate_hz = proto_ldf32(p + 12);
     s->accuracy = proto_ldf32(p + 16);
     s->base_spacing_m = proto_ldf32(p + 20);
@@ -776,7 +799,9 @@ static ocean_result d_floats(rd *r, size_t count, float **out, const char *field
     return OCEAN_OK;
 }
 
-static ocean_result d_vertices(rd *r, proto_mesh_vertices *v)
+/* MESH_VERTICES' fixed fields (mesh_id, vertex_count, origin), shared by
+ * the f32 and the qz body. */
+static ocean_result d_vertices_head(rd *r, proto_mesh_vertices *v)
 {
     TRY(need(r, VERTS_FIXED, "mesh vertices fixed fields"));
     const uint8_t *p = r->p + r->off;
@@ -788,10 +813,36 @@ static ocean_result d_vertices(rd *r, proto_mesh_vertices *v)
     if (v->vertex_count > r->c->lim->max_vertices)
         FAIL(r->c, OCEAN_ETOOBIG, "%s: vertex_count %u above the limit %u", r->what, v->vertex_count,
              r->c->lim->max_vertices);
+    return OCEAN_OK;
+}
+
+static ocean_result d_vertices(rd *r, proto_mesh_vertices *v)
+{
+    TRY(d_vertices_head(r, v));
     float *pos;
     TRY(d_floats(r, 3 * (size_t)v->vertex_count, &pos, "positions"));
     v->positions = pos;
     return rd_end(r);
+}
+
+/* A has_mesh 2 record: MESH_VERTICES' fixed fields, then the qz payload
+ * (kept as bytes: decoding it needs the topology). */
+static ocean_result d_vertices_qz(rd *r, proto_mesh_vertices *v)
+{
+    TRY(d_vertices_head(r, v));
+    size_t n = r->end - r->off;
+    if (n > UINT32_MAX)
+        FAIL(r->c, OCEAN_ETOOBIG, "%s: mesh qz payload of %zu bytes", r->what, n);
+    uint8_t *d = arena_take(r, n);
+    if (!d)
+        FAIL(r->c, OCEAN_ENOMEM, "decoder arena exhausted");
+    if (n)
+        memcpy(d, r->p + r->off, n);
+    v->qz = d;
+    v->qz_len = (uint32_t)n;
+    v->positions = NULL;
+    r->off += n;
+    return OCEAN_OK;
 }
 
 /* A layout-1 mesh record: the placement. */
@@ -807,7 +858,7 @@ static ocean_result d_placement(rd *r, proto_mesh_placement *pl)
     return rd_end(r);
 }
 
-enum { REC_TILE, REC_VERTICES, REC_PLACEMENT };
+enum { REC_TILE, REC_VERTICES, REC_PLACEMENT, REC_VERTICES_QZ };
 
 /* Reads one FRAME record (u32 length, u32 tag, body, zero padding to a
  * multiple of 8) and parses the body as `kind`.  Tags above max_tag are
@@ -826,6 +877,7 @@ static ocean_result d_record(rd *r, int kind, void *dst, uint32_t max_tag, uint3
     size_t outer_end = r->end;
     r->end = body_end;
     ocean_result res = kind == REC_VERTICES ? d_vertices(r, dst)
+                     : kind == REC_VERTICES_QZ ? d_vertices_qz(r, dst)
                      : kind == REC_PLACEMENT ? d_placement(r, dst) : d_tile(r, dst);
     r->end = outer_end;
     if (res != OCEAN_OK)
@@ -934,9 +986,12 @@ ocean_result proto_frame_client_fields(const uint8_t *msg, size_t len, size_t *c
             return OCEAN_EFORMAT;
         off += bs;
     }
-    size_t mesh_min = layout == PROTO_LAYOUT_CASCADE ? PROTO_MESH_PLACEMENT_SIZE : VERTS_FIXED;
+    if (has_mesh > 2 || (has_mesh == 2 && layout != PROTO_LAYOUT_WORLD))
+        return OCEAN_EFORMAT;
+    size_t mesh_min = layout == PROTO_LAYOUT_CASCADE ? PROTO_MESH_PLACEMENT_SIZE
+                    : has_mesh == 2 ? VERTS_FIXED + PROTO_MESH_QZ_HEAD : VERTS_FIXED;
     /* Records as e_record lays them out: u32 length, u32 tag, body, pad to 8. */
-    for (unsigned i = 0; i < tiles + (has_mesh == 1); i++) {
+    for (unsigned i = 0; i < tiles + (has_mesh != 0); i++) {
         if (len - off < RECORD_HEAD)
             return OCEAN_EFORMAT;
         size_t blen = proto_ld32(msg + off), pad = (8u - (blen & 7u)) & 7u;
@@ -984,8 +1039,8 @@ static ocean_result d_frame(rd *r, proto_frame *f)
     }
     if (f->tile_count > r->c->lim->max_frame_tiles)
         FAIL(r->c, OCEAN_ETOOBIG, "FRAME: tile_count %u above the limit %u", f->tile_count, r->c->lim->max_frame_tiles);
-    if (f->has_mesh > 1)
-        FAIL(r->c, OCEAN_EFORMAT, "FRAME: has_mesh is %u (0 or 1)", f->has_mesh);
+    if (f->has_mesh > 2 || (f->has_mesh == 2 && f->layout != PROTO_LAYOUT_WORLD))
+        FAIL(r->c, OCEAN_EFORMAT, "FRAME: has_mesh is %u (0 or 1; 2 in layout 0)", f->has_mesh);
     /* Each record needs at least its 8-byte head plus the tile's fixed part. */
     if ((size_t)f->tile_count * (RECORD_HEAD + TILE_FIXED) > r->end - r->off)
         FAIL(r->c, OCEAN_ETRUNC, "FRAME: %u tiles cannot fit in the %zu bytes left", f->tile_count, r->end - r->off);
@@ -1003,7 +1058,8 @@ static ocean_result d_frame(rd *r, proto_frame *f)
         tiles[i].cascade = (uint8_t)tag;
     }
     if (f->has_mesh)
-        TRY(d_record(r, f->layout == PROTO_LAYOUT_CASCADE ? REC_PLACEMENT : REC_VERTICES,
+        TRY(d_record(r, f->layout == PROTO_LAYOUT_CASCADE ? REC_PLACEMENT
+                        : f->has_mesh == 2 ? REC_VERTICES_QZ : REC_VERTICES,
                      f->layout == PROTO_LAYOUT_CASCADE ? (void *)&f->placement : (void *)&f->mesh, 0, &tag));
     return rd_end(r);
 }
@@ -1260,17 +1316,30 @@ static ocean_result e_tile(proto_buf *b, const proto_tile *t)
     return proto_buf_append(b, t->payload, t->payload_len);
 }
 
-static ocean_result e_vertices(proto_buf *b, const proto_mesh_vertices *v)
+static void vertices_head_write(uint8_t *p, const proto_mesh_vertices *v)
 {
-    uint8_t *p;
-    TRY(put(b, VERTS_FIXED + 12 * (size_t)v->vertex_count, &p));
     proto_st32(p, v->mesh_id);
     proto_st32(p + 4, v->vertex_count);
     for (int i = 0; i < 3; i++)
         proto_stf64(p + 8 + 8 * i, v->origin[i]);
+}
+
+static ocean_result e_vertices(proto_buf *b, const proto_mesh_vertices *v)
+{
+    uint8_t *p;
+    TRY(put(b, VERTS_FIXED + 12 * (size_t)v->vertex_count, &p));
+    vertices_head_write(p, v);
     for (size_t i = 0; i < 3 * (size_t)v->vertex_count; i++)
         proto_stf32(p + VERTS_FIXED + 4 * i, v->positions[i]);
     return OCEAN_OK;
+}
+
+static ocean_result e_vertices_qz(proto_buf *b, const proto_mesh_vertices *v)
+{
+    uint8_t *p;
+    TRY(put(b, VERTS_FIXED, &p));
+    vertices_head_write(p, v);
+    return proto_buf_append(b, v->qz, v->qz_len);
 }
 
 static ocean_result e_placement(proto_buf *b, const proto_mesh_placement *pl)
@@ -1289,8 +1358,8 @@ static ocean_result e_record(proto_buf *b, int kind, const void *body, uint32_t 
     size_t at = b->len;
     TRY(put(b, RECORD_HEAD, &p));
     proto_st32(p + 4, tag);
-    TRY(kind == REC_VERTICES ? e_vertices(b, body) : kind == REC_PLACEMENT ? e_placement(b, body)
-                                                                         : e_tile(b, body));
+    TRY(kind == REC_VERTICES ? e_vertices(b, body) : kind == REC_VERTICES_QZ ? e_vertices_qz(b, body)
+        : kind == REC_PLACEMENT ? e_placement(b, body) : e_tile(b, body));
     size_t blen = b->len - at - RECORD_HEAD;
     if (blen > UINT32_MAX)
         return OCEAN_ETOOBIG;
@@ -1334,6 +1403,7 @@ static ocean_result e_payload(proto_buf *b, const proto_msg *m)
         p[6] = s->lod_levels;
         p[7] = s->layout;
         proto_st16(p + 8, s->tile_size);
+        p[10] = s->mesh_codec;
         proto_stf32(p + 12, s->frame_rate_hz);
         proto_stf32(p + 16, s->accuracy);
         proto_stf32(p + 20, s->base_spacing_m);
@@ -1390,7 +1460,7 @@ static ocean_result e_payload(proto_buf *b, const proto_msg *m)
         if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
             TRY(e_record(b, REC_PLACEMENT, &f->placement, 0));
         else if (f->has_mesh)
-            TRY(e_record(b, REC_VERTICES, &f->mesh, 0));
+            TRY(e_record(b, f->has_mesh == 2 ? REC_VERTICES_QZ : REC_VERTICES, &f->mesh, 0));
         return OCEAN_OK;
     }
     case PROTO_TILE:

@@ -110,6 +110,13 @@ typedef enum proto_layout {
     PROTO_LAYOUT_COUNT_
 } proto_layout;
 
+/* SUBSCRIBE.mesh_codec: how a layout-0 FRAME carries mesh positions (the
+ * values are those of the tile codecs they resemble). */
+typedef enum proto_mesh_codec {
+    PROTO_MESH_CODEC_F32 = 0,  /* MESH_VERTICES: raw f32 (FRAME.has_mesh 1) */
+    PROTO_MESH_CODEC_QZ = 2    /* MESH_VERTICES_QZ (FRAME.has_mesh 2) */
+} proto_mesh_codec;
+
 /* Cascade layout limits: mips per cascade and mip-table entries (mips + 1). */
 #define PROTO_MAX_MIPS 12
 #define PROTO_MIP_ENTRIES 13
@@ -192,6 +199,10 @@ typedef struct proto_subscribe {
     float base_spacing_m;     /* level-0 sample spacing; 0 = server default */
     float view_range_m;       /* radius served; 0 = server default */
     uint8_t layout;           /* proto_layout */
+    uint8_t mesh_codec;       /* layout 0: how mesh positions travel,
+                                 PROTO_MESH_CODEC_F32 (raw f32, FRAME.has_mesh
+                                 1) or PROTO_MESH_CODEC_QZ (MESH_VERTICES_QZ at
+                                 `accuracy`, has_mesh 2); layout 1 ignores it */
 } proto_subscribe;
 
 typedef struct proto_camera {
@@ -263,7 +274,14 @@ typedef struct proto_mesh_vertices {
     uint32_t mesh_id;
     uint32_t vertex_count;
     double origin[3];         /* world position the vertices are relative to */
-    const float *positions;   /* 3 * vertex_count floats x, y, z */
+    const float *positions;   /* 3 * vertex_count floats x, y, z; in a FRAME
+                                 with has_mesh 2: NULL as decoded (the client
+                                 decodes qz with the topology:
+                                 proto_mesh_qz_decode), unused to encode */
+    const uint8_t *qz;        /* FRAME has_mesh 2: the MESH_VERTICES_QZ
+                                 payload from its format byte on
+                                 (proto_mesh_qz_encode), qz_len bytes */
+    uint32_t qz_len;
 } proto_mesh_vertices;
 
 typedef struct proto_frame {
@@ -274,7 +292,8 @@ typedef struct proto_frame {
     uint32_t tick;            /* server tick counter (wraps) */
     uint16_t tile_count;
     const proto_tile *tiles;
-    uint8_t has_mesh;
+    uint8_t has_mesh;         /* 0 none; 1 mesh (layout 0: f32 positions);
+                                 2 (layout 0 only): positions as qz */
     proto_mesh_vertices mesh; /* layout 0, valid when has_mesh */
     uint8_t layout;           /* proto_layout */
     const proto_bytes *tile_records; /* encoding only: when non-NULL, tile_count

@@ -471,6 +471,7 @@ void srv_client_unref(srv_client *c)
     srv_msg_free(c->slot_topo);
     srv_msg_free(c->slot_frame);
     mesh_destroy(c->sim.mesh);
+    free(c->sim.qz_refs);
     srv_record_close(c->rec);
     free(c->rx);
     pthread_mutex_destroy(&c->out_lock);

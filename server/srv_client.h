@@ -98,6 +98,11 @@ typedef struct srv_client_sim {
     int primed;
     double cutoff_k;             /* smoothed cutoff of the last frame */
     int mesh_over;               /* the camera's mesh is over server.max_mesh_vertices */
+    uint32_t *qz_refs;           /* mesh_codec qz: the prediction references
+                                    (proto_mesh_qz_refs) of topology qz_refs_key,
+                                    3 per vertex, made once per topology */
+    uint64_t qz_refs_key;
+    uint32_t qz_refs_n;          /* vertices qz_refs holds (0: none) */
 } srv_client_sim;
 
 typedef struct srv_client {

@@ -69,6 +69,10 @@ typedef struct job {
     int fshare;             /* live: index of the job whose FRAME bytes this one shares */
     int has_mesh;           /* the FRAME carries a mesh */
     int no_share;           /* its FRAME bytes cannot be shared */
+    uint8_t *mesh_qz;       /* mesh_codec qz: the MESH_VERTICES_QZ payload of
+                               the displaced mesh (malloc'd, freed at hand-over);
+                               NULL: positions travel as f32 */
+    uint32_t mesh_qz_len;
 } job;
 
 struct srv_sim {
@@ -448,6 +452,36 @@ static void sample_disp(void *ctx, double x, double z, double out[3])
 }
 
 
+/* Encodes job j's displaced mesh as MESH_VERTICES_QZ at the subscription's
+ * accuracy, once for every viewer that shares the mesh (same_mesh asks
+ * them for the same mesh codec and accuracy), with the worker's codec
+ * context.  The topology's prediction references are kept per client
+ * until its topology changes.  On failure j->mesh_qz stays NULL and the
+ * frame carries f32 positions, which every client decodes [worker thread
+ * owning the client]. */
+static void mesh_qz_stage(srv_client_sim *cs, job *j)
+{
+    const mesh_view *v = &j->mv;
+    if (!cs->qz_refs || cs->qz_refs_key != v->topology_key || cs->qz_refs_n != v->vertex_count) {
+        uint32_t *refs = realloc(cs->qz_refs, 3 * sizeof *refs * (size_t)v->vertex_count);
+        if (!refs) return;
+        cs->qz_refs = refs;
+        cs->qz_refs_n = 0;
+        if (proto_mesh_qz_refs(v->indices, v->index_count, v->vertex_count, refs) != OCEAN_OK) return;
+        cs->qz_refs_key = v->topology_key;
+        cs->qz_refs_n = v->vertex_count;
+    }
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    if (proto_mesh_qz_encode(srv_tiles_codec_ctx(), cs->sub.accuracy, v->vertex_count, v->positions, cs->qz_refs,
+                             &b, NULL, NULL, 0) == OCEAN_OK && proto_buf_len(&b) <= UINT32_MAX) {
+        j->mesh_qz = b.mem;   /* no headroom: the payload starts at mem */
+        j->mesh_qz_len = (uint32_t)proto_buf_len(&b);
+        return;
+    }
+    proto_buf_free(&b);
+}
+
 /* Builds and displaces the client's mesh for job j [worker thread; the
  * client's sim state is only touched by the one worker that owns it]. */
 static void mesh_stage(srv_sim *s, job *j)
@@ -502,11 +536,12 @@ static void mesh_stage(srv_sim *s, job *j)
         r = mesh_displace(cs->mesh, sample_disp, &sc);
         ocean_gerstner_frame_destroy(sc.gf);
     }
-    atomic_fetch_add(&c->cpu_ns, (uint64_t)((srv_now() - m0) * 1e9));
     if (r == OCEAN_OK) {
         mesh_get_view(cs->mesh, &j->mv);
         if (j->mv.levels > PROTO_MAX_LOD_LEVELS || j->mv.vertex_count == 0) r = OCEAN_ETOOBIG;
     }
+    if (r == OCEAN_OK && cs->sub.mesh_codec == PROTO_MESH_CODEC_QZ) mesh_qz_stage(cs, j);
+    atomic_fetch_add(&c->cpu_ns, (uint64_t)((srv_now() - m0) * 1e9));
     if (r != OCEAN_OK) {
         char why[256];
         snprintf(why, sizeof why, "mesh build failed (%s); frames come without a mesh until "
@@ -567,6 +602,11 @@ static void frame_stage(srv_sim *s, job *j, const job *src, int shared)
         fr->mesh.vertex_count = v->vertex_count;
         memcpy(fr->mesh.origin, v->origin, sizeof v->origin);
         fr->mesh.positions = v->positions;
+        if (src->mesh_qz && cs->sub.mesh_codec == PROTO_MESH_CODEC_QZ) {
+            fr->has_mesh = 2;
+            fr->mesh.qz = src->mesh_qz;
+            fr->mesh.qz_len = src->mesh_qz_len;
+        }
         memcpy(fr->origin, v->origin, sizeof v->origin);
     }
     j->frame = srv_msg_encode(&m);
@@ -631,6 +671,10 @@ static int same_mesh(const job *a, const job *b)
     if (!x->mesh || !y->mesh || a->t != b->t || !group_eq(&a->g, &b->g)) return 0;
     const unsigned fx = OCEAN_FX_DISPLACEMENT | OCEAN_FX_NEAR_FIELD;
     if ((x->sub.effects & fx) != (y->sub.effects & fx)) return 0;
+    /* the shared mesh is encoded once, for one mesh codec and accuracy */
+    if (x->sub.mesh_codec != y->sub.mesh_codec ||
+        (x->sub.mesh_codec == PROTO_MESH_CODEC_QZ && x->sub.accuracy != y->sub.accuracy))
+        return 0;
     const mesh_config *p = &x->mesh_cfg, *q = &y->mesh_cfg;
     if (p->kind != q->kind || p->range_m != q->range_m || p->error_px != q->error_px ||
         p->lambda_dominant_m != q->lambda_dominant_m)
@@ -827,6 +871,8 @@ static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
         job *j = &jobs[i];
         free(j->tiles);
         j->tiles = NULL;
+        free(j->mesh_qz);
+        j->mesh_qz = NULL;
         srv_client_hand_over(j->c, st, j->topo, j->frame, j->replay, tick_wall);
         j->topo = j->frame = NULL;
     }

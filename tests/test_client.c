@@ -422,6 +422,7 @@ typedef struct fake_conn {
     int out_head, out_len;
     uint32_t seq;
     int subscribed, replay, sent_topology;
+    int mesh_qz;          /* layout 0 with mesh_codec qz: has_mesh 2 frames */
     uint32_t tick;
     uint8_t *rx;
     size_t rx_len;
@@ -474,10 +475,12 @@ static void fake_queue_raw(fake_conn *fc, const void *bytes, size_t len)
 
 /* A frame at time t: a 16x16 qz tile and an 8x8 f32 tile with height
  * sin(x + t), and a 4-vertex mesh (topology sent first). */
+static const uint32_t fake_idx[6] = {0, 1, 2, 2, 1, 3};
+
 static void fake_frame(fake_server *s, fake_conn *fc, double t, uint32_t camera_seq)
 {
     if (!fc->sent_topology) {
-        static const uint32_t idx[6] = {0, 1, 2, 2, 1, 3};
+        const uint32_t *idx = fake_idx;
         static const float morph[4] = {0, 0, 0.5f, 1};
         static const uint8_t lev[4] = {0, 0, 0, 0};
         proto_msg m;
@@ -537,7 +540,25 @@ static void fake_frame(fake_server *s, fake_conn *fc, double t, uint32_t camera_
     m.u.frame.mesh.mesh_id = 7;
     m.u.frame.mesh.vertex_count = 4;
     m.u.frame.mesh.positions = pos;
+    proto_buf qz;
+    proto_buf_init(&qz, 0);
+    if (fc->mesh_qz) {
+        /* the positions as MESH_VERTICES_QZ at the default accuracy; at
+         * t = 666 for a mesh_id whose topology was never sent */
+        uint32_t refs[12];
+        proto_codec_ctx *cx = NULL;
+        assert_int_equal(proto_codec_ctx_create(&cx), OCEAN_OK);
+        assert_int_equal(proto_mesh_qz_refs(fake_idx, 6, 4, refs), OCEAN_OK);
+        assert_int_equal(proto_mesh_qz_encode(cx, PROTO_ACCURACY_DEFAULT, 4, pos, refs, &qz, NULL, NULL, 0), OCEAN_OK);
+        proto_codec_ctx_destroy(cx);
+        m.u.frame.has_mesh = 2;
+        m.u.frame.mesh.qz = proto_buf_data(&qz);
+        m.u.frame.mesh.qz_len = (uint32_t)proto_buf_len(&qz);
+        if (t == 666)
+            m.u.frame.mesh.mesh_id = 99;
+    }
     fake_queue(fc, &m);
+    proto_buf_free(&qz);
     proto_buf_free(&p16);
     proto_buf_free(&p8);
     (void)s;
@@ -566,6 +587,7 @@ static void fake_handle(fake_server *s, fake_conn *fc, const uint8_t *buf, size_
     case PROTO_SUBSCRIBE:
         fc->subscribed = 1;
         fc->replay = m.u.subscribe.mode == PROTO_MODE_REPLAY;
+        fc->mesh_qz = m.u.subscribe.layout == PROTO_LAYOUT_WORLD && m.u.subscribe.mesh_codec == PROTO_MESH_CODEC_QZ;
         break;
     case PROTO_CAMERA:
         if (fc->replay)
@@ -810,21 +832,77 @@ static void connect_refused(void **state)
     assert_non_null(strstr(err, "scheme"));
 }
 
-static void live_frames_and_queries(void **state)
+/* A client connected to the fake server with the default options. */
+static oc_client *fake_client(fake_server *s)
 {
-    (void)state;
-    fake_server *s = fake_start();
-    char url[64];
+    char url[64], err[256] = "";
     fake_url(s, url, sizeof url);
     oc_options o;
     oc_options_default(&o);
     o.url = url;
     oc_client *c = NULL;
-    char err[256] = "";
     ocean_result r = oc_connect(&o, 5000, &c, err, sizeof err);
     if (r != OCEAN_OK)
         print_error("connect: %s\n", err);
     assert_int_equal(r, OCEAN_OK);
+    return c;
+}
+
+/* Layout 0 with the library's default mesh codec (qz): has_mesh 2 frames
+ * reach the caller with float positions, decoded with the topology, each
+ * within the bound the spec states (half the step f32(2a range_y), plus
+ * the f32 rounding); a has_mesh 2 frame whose mesh_id names no topology
+ * still arrives, without positions, counted as a decode error with the
+ * reason. */
+static void qz_mesh_frames(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    char err[256] = "";
+    oc_client *c = fake_client(s);
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    assert_int_equal(sub.mesh_codec, PROTO_MESH_CODEC_QZ);
+    sub.layout = PROTO_LAYOUT_WORLD;
+    sub.mode = PROTO_MODE_REPLAY;
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.render_time = 5;
+    assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
+    oc_frame *f = NULL;
+    assert_int_equal(oc_client_next_frame(c, 3000, &f), OCEAN_OK);
+    assert_int_equal(f->info.has_mesh, 2);
+    assert_non_null(f->topology);
+    assert_non_null(f->info.mesh.positions);
+    const float want[12] = {0, 5, 0, 1, 0, 0, 0, 0, 1, 1, 0, 1};
+    double step = (double)(float)(2 * PROTO_ACCURACY_DEFAULT * 5.0);
+    for (int i = 0; i < 12; i++)
+        assert_true(fabs((double)f->info.mesh.positions[i] - want[i]) <= 0.5 * step + fabs(want[i]) * 0x1p-24);
+    oc_frame_free(f);
+    oc_client_stats st0, st1;
+    oc_client_get_stats(c, &st0);
+    cam.render_time = 666;
+    assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
+    assert_int_equal(oc_client_next_frame(c, 3000, &f), OCEAN_OK);
+    assert_int_equal(f->info.has_mesh, 2);
+    assert_null(f->info.mesh.positions);
+    oc_client_get_stats(c, &st1);
+    assert_int_equal(st1.decode_errors, st0.decode_errors + 1);
+    oc_client_last_error(c, err, sizeof err);
+    assert_non_null(strstr(err, "mesh positions"));
+    oc_frame_free(f);
+    oc_client_destroy(c);
+    fake_stop(s);
+}
+
+static void live_frames_and_queries(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    char err[256] = "";
+    ocean_result r;
+    oc_client *c = fake_client(s);
     assert_int_equal(oc_client_state(c), OC_READY);
     proto_hello h;
     assert_int_equal(oc_client_hello(c, &h), OCEAN_OK);
@@ -1341,6 +1419,7 @@ int main(void)
         cmocka_unit_test(store_compare),
         cmocka_unit_test(connect_refused),
         cmocka_unit_test(live_frames_and_queries),
+        cmocka_unit_test(qz_mesh_frames),
         cmocka_unit_test(threaded_shared_loop),
         cmocka_unit_test(replay_same_bytes),
         cmocka_unit_test(connect_cycles),

@@ -43,6 +43,8 @@ grep -q -- "--points" "$tmp/err" || fail "message does not name --points"
 # one time limit (sim/ocean_time.h): beyond 2^27 s refused, naming it
 "$OC" query "$URL" --points "1,2" --t 134217729 2>"$tmp/err"; [[ $? -eq 2 ]] || fail "--t beyond the time limit accepted"
 grep -q -- "OCEAN_TIME_MAX" "$tmp/err" || fail "message does not name OCEAN_TIME_MAX: $(cat "$tmp/err")"
+"$OC" watch "$URL" --mesh-codec f16 2>"$tmp/err"; [[ $? -eq 2 ]] || fail "--mesh-codec f16 accepted"
+grep -q -- "--mesh-codec" "$tmp/err" || fail "message does not name --mesh-codec: $(cat "$tmp/err")"
 "$OC" frobnicate 2>/dev/null; [[ $? -eq 2 ]] || fail "unknown command accepted"
 for c in watch query record replay export load sea; do
     "$OC" $c --help >/dev/null || fail "$c --help"
@@ -72,6 +74,8 @@ done
 # two the old help text had wrong among them.
 "$OC" watch --help | grep -- "--cutoff-policy" | grep -q "(default antialias)" || fail "--cutoff-policy default"
 "$OC" watch --help | grep -- "--tile-size" | grep -q "(default 64)" || fail "--tile-size default"
+# layout 0's mesh positions travel compressed unless asked otherwise (issue 14)
+"$OC" load --help | grep -- "--mesh-codec" | grep -q "(default qz)" || fail "--mesh-codec default"
 
 echo "== nothing is silently ignored ($SECONDS s)"
 "$OC" sea "$URL" --wind 20 >"$tmp/out" 2>"$tmp/err"; rc=$?

@@ -870,6 +870,120 @@ static void test_codec_ctx_reuse(void **state)
     proto_codec_ctx_destroy(ctx);
 }
 
+/* MESH_VERTICES_QZ prediction references (PROTOCOL.md), worked by hand on
+ * a quad of two triangles (0,2,1), (1,2,3): vertex 1 has no triangle whose
+ * other vertices are both decoded (previous vertex); vertex 2's triangle
+ * (0,2,1) has 1 and 0 decoded but no other triangle on edge 1-0
+ * (midpoint of 1 and 0); vertex 3's (1,2,3) has 1, 2 and triangle (0,2,1)
+ * across that edge (parallelogram 1 + 2 - 0).  An index out of range is
+ * refused. */
+static void test_mesh_qz_refs(void **state)
+{
+    (void)state;
+    const uint32_t idx[6] = {0, 2, 1, 1, 2, 3};
+    uint32_t refs[12];
+    assert_int_equal(proto_mesh_qz_refs(idx, 6, 4, refs), OCEAN_OK);
+    const uint32_t N = PROTO_MESH_QZ_NONE;
+    const uint32_t want[12] = {N, N, N, N, N, N, 1, 0, N, 1, 2, 0};
+    assert_memory_equal(refs, want, sizeof want);
+    assert_int_equal(proto_mesh_qz_refs(idx, 6, 3, refs), OCEAN_EINVAL);
+    assert_int_equal(proto_mesh_qz_refs(idx, 5, 4, refs), OCEAN_EINVAL);
+}
+
+/* A displaced lattice mesh (G x G, two triangles a cell, row-major) round
+ * trips within the stated bound per axis (half the step + f32 rounding),
+ * with steps f32(2a range_y) on every axis, in well under the f32 bytes;
+ * one context gives the same bytes as a fresh one; every truncation and
+ * a wrong vertex count are refused, corrupt bytes never give a non-finite
+ * or out-of-range position; NaN input and a bad accuracy are refused. */
+static void test_mesh_qz_roundtrip(void **state)
+{
+    (void)state;
+    enum { G = 40, V = G * G, I = 6 * (G - 1) * (G - 1) };
+    static uint32_t idx[I], refs[3 * V];
+    static float xyz[3 * V], back[3 * V];
+    int k = 0;
+    for (int i = 0; i + 1 < G; i++)
+        for (int j = 0; j + 1 < G; j++) {
+            uint32_t a = (uint32_t)(i * G + j);
+            const uint32_t t[6] = {a, a + G, a + 1, a + 1, a + G, a + G + 1};
+            memcpy(idx + k, t, sizeof t);
+            k += 6;
+        }
+    for (int i = 0; i < G; i++)
+        for (int j = 0; j < G; j++) {
+            float *q = xyz + 3 * (i * G + j);
+            q[0] = (float)(1e4 + 2.0 * j + 0.5 * sin(0.3 * i + 0.2 * j));
+            q[1] = (float)(2.0 * sin(0.25 * j) * cos(0.15 * i));
+            q[2] = (float)(-3e4 + 2.0 * i + 0.4 * cos(0.35 * j));
+        }
+    assert_int_equal(proto_mesh_qz_refs(idx, I, V, refs), OCEAN_OK);
+    proto_codec_ctx *cx = NULL, *cy = NULL;
+    assert_int_equal(proto_codec_ctx_create(&cx), OCEAN_OK);
+    assert_int_equal(proto_codec_ctx_create(&cy), OCEAN_OK);
+    const double accs[3] = {1e-3, 5e-3, 0.5};
+    for (int a = 0; a < 3; a++) {
+        proto_buf b, c;
+        proto_buf_init(&b, 0);
+        proto_buf_init(&c, 0);
+        double merr[3];
+        assert_int_equal(proto_mesh_qz_encode(cx, accs[a], V, xyz, refs, &b, merr, NULL, 0), OCEAN_OK);
+        assert_int_equal(proto_mesh_qz_encode(cy, accs[a], V, xyz, refs, &c, NULL, NULL, 0), OCEAN_OK);
+        assert_int_equal(b.len, c.len);
+        assert_memory_equal(proto_buf_data(&b), proto_buf_data(&c), b.len);
+        assert_true(b.len < 12u * V / 2);
+        assert_int_equal(proto_mesh_qz_decode(proto_buf_data(&b), b.len, V, refs, back, NULL, 0), OCEAN_OK);
+        proto_mesh_qz_info in;
+        assert_int_equal(proto_mesh_qz_header(proto_buf_data(&b), b.len, V, &in, NULL, 0), OCEAN_OK);
+        /* the step the spec states: f32(2 a range_y) on every axis */
+        float ylo = xyz[1], yhi = xyz[1];
+        for (int v = 0; v < V; v++) {
+            ylo = fminf(ylo, xyz[3 * v + 1]);
+            yhi = fmaxf(yhi, xyz[3 * v + 1]);
+        }
+        float s = (float)(2.0 * accs[a] * ((double)yhi - (double)ylo));
+        for (int ax = 0; ax < 3; ax++) {
+            assert_true(in.step[ax] == s);
+            double e = 0, amax = 0;
+            for (int v = 0; v < V; v++) {
+                e = fmax(e, fabs((double)back[3 * v + ax] - (double)xyz[3 * v + ax]));
+                amax = fmax(amax, fabs((double)xyz[3 * v + ax]));
+            }
+            assert_true(e <= 0.5 * s + amax * 0x1p-24);
+            assert_true(e == merr[ax]);
+        }
+        if (a == 1) {
+            char err[200];
+            for (size_t cut = 0; cut < b.len; cut++)
+                assert_int_equal(proto_mesh_qz_decode(proto_buf_data(&b), cut, V, refs, back, err, sizeof err),
+                                 OCEAN_ECODEC);
+            assert_int_equal(proto_mesh_qz_decode(proto_buf_data(&b), b.len, V - 1, refs, back, NULL, 0), OCEAN_ECODEC);
+            uint32_t rng = 12345;
+            for (int t = 0; t < 400; t++) {
+                uint8_t *m = malloc(b.len);
+                memcpy(m, proto_buf_data(&b), b.len);
+                rng = rng * 1664525u + 1013904223u;
+                m[(rng >> 8) % b.len] ^= (uint8_t)(1u << (rng % 8));
+                if (proto_mesh_qz_decode(m, b.len, V, refs, back, NULL, 0) == OCEAN_OK)
+                    for (int v = 0; v < 3 * V; v++)
+                        assert_true(isfinite(back[v]) && fabsf(back[v]) <= 1e7f);
+                free(m);
+            }
+        }
+        proto_buf_free(&b);
+        proto_buf_free(&c);
+    }
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    assert_int_equal(proto_mesh_qz_encode(cx, 1e-9, V, xyz, refs, &b, NULL, NULL, 0), OCEAN_EINVAL);
+    xyz[7] = NAN;
+    assert_int_equal(proto_mesh_qz_encode(cx, 5e-3, V, xyz, refs, &b, NULL, NULL, 0), OCEAN_EINVAL);
+    assert_int_equal(b.len, 0);
+    proto_buf_free(&b);
+    proto_codec_ctx_destroy(cx);
+    proto_codec_ctx_destroy(cy);
+}
+
 int main(int argc, char **argv)
 {
     if (argc == 3 && strcmp(argv[1], "--write-vectors") == 0)
@@ -890,6 +1004,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_exr_file),
         cmocka_unit_test(test_encode_refusals),
         cmocka_unit_test(test_decode_hostile),
+        cmocka_unit_test(test_mesh_qz_refs),
+        cmocka_unit_test(test_mesh_qz_roundtrip),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

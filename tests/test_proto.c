@@ -78,6 +78,39 @@ static void dump_verts(sbuf *b, const char *p, const proto_mesh_vertices *v)
     out(b, "\n");
 }
 
+static const uint32_t sample_idx[3];
+
+/* A has_mesh 2 record: the fixed fields, the qz header, the payload bytes
+ * and the positions decoded with the triangles of the mesh_topology vector
+ * (its vertex count is the record's). */
+static void dump_verts_qz(sbuf *b, const char *p, const proto_mesh_vertices *v)
+{
+    out(b, "%s.mesh_id = %u\n%s.vertex_count = %u\n%s.origin = %.17g %.17g %.17g\n", p, v->mesh_id, p,
+        v->vertex_count, p, v->origin[0], v->origin[1], v->origin[2]);
+    proto_mesh_qz_info in;
+    if (proto_mesh_qz_header(v->qz, v->qz_len, v->vertex_count, &in, NULL, 0) == OCEAN_OK) {
+        out(b, "%s.qz_header.format = %u\n%s.qz_header.predictor = %u\n", p, in.format, p, in.predictor);
+        out(b, "%s.qz_header.base = %.9g %.9g %.9g\n%s.qz_header.step = %.9g %.9g %.9g\n%s.qz_header.nbytes = %u %u %u\n%s.qz_header.raw_len = %u\n",
+            p, (double)in.base[0], (double)in.base[1], (double)in.base[2], p, (double)in.step[0], (double)in.step[1],
+            (double)in.step[2], p, in.nbytes[0], in.nbytes[1], in.nbytes[2], p, in.raw_len);
+    }
+    out(b, "%s.qz =", p);
+    for (uint32_t i = 0; i < v->qz_len; i++)
+        out(b, " %02x", v->qz[i]);
+    out(b, "\n");
+    if (v->vertex_count == 3) {
+        uint32_t refs[9];
+        float pos[9];
+        if (proto_mesh_qz_refs(sample_idx, 3, 3, refs) == OCEAN_OK &&
+            proto_mesh_qz_decode(v->qz, v->qz_len, 3, refs, pos, NULL, 0) == OCEAN_OK) {
+            out(b, "%s.positions =", p);
+            for (int i = 0; i < 9; i++)
+                out(b, " %.9g", (double)pos[i]);
+            out(b, "\n");
+        }
+    }
+}
+
 static char *dump(const proto_msg *m)
 {
     sbuf b = {0};
@@ -103,7 +136,7 @@ static char *dump(const proto_msg *m)
         out(&b, "tile_size = %u\nframe_rate_hz = %.9g\naccuracy = %.9g\nbase_spacing_m = %.9g\nview_range_m = %.9g\n",
             s->tile_size, (double)s->frame_rate_hz, (double)s->accuracy, (double)s->base_spacing_m,
             (double)s->view_range_m);
-        out(&b, "layout = %u\n", s->layout);
+        out(&b, "layout = %u\nmesh_codec = %u\n", s->layout, s->mesh_codec);
         break;
     }
     case PROTO_CAMERA: {
@@ -147,6 +180,8 @@ static char *dump(const proto_msg *m)
         if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
             out(&b, "placement.mesh_id = %u\nplacement.origin = %.17g %.17g %.17g\n", f->placement.mesh_id,
                 f->placement.origin[0], f->placement.origin[1], f->placement.origin[2]);
+        else if (f->has_mesh == 2)
+            dump_verts_qz(&b, "mesh", &f->mesh);
         else if (f->has_mesh)
             dump_verts(&b, "mesh", &f->mesh);
         break;
@@ -289,7 +324,7 @@ static void sample(proto_msg *m, proto_type type)
     case PROTO_SUBSCRIBE:
         m->u.subscribe = (proto_subscribe){PROTO_FX_HEIGHT | PROTO_FX_NORMALS, PROTO_MESH_CONCENTRIC, PROTO_CODEC_QZ,
                                            PROTO_CUTOFF_ANTIALIAS, PROTO_MODE_LIVE, 2, 5, 64, 30.0f, 0.005f, 0.0f, 5000.0f,
-                                           PROTO_LAYOUT_WORLD};
+                                           PROTO_LAYOUT_WORLD, PROTO_MESH_CODEC_QZ};
         break;
     case PROTO_CAMERA:
         m->u.camera = (proto_camera){{1e7 + 0.125, 150.0, -2.5e6}, {250.0f, 0.0f, -3.5f}, 45.0f, -10.0f, 5.0f, 60.0f,
@@ -297,7 +332,7 @@ static void sample(proto_msg *m, proto_type type)
         break;
     case PROTO_FRAME:
         m->u.frame = (proto_frame){0.5, 0.03125, {1e7, 0.0, -2.5e6}, 77, 9001, 2, sample_tiles, 1,
-                                   {3, 3, {1e7, 0.0, -2.5e6}, sample_pos}, PROTO_LAYOUT_WORLD, NULL, {0, {0, 0, 0}},
+                                   {3, 3, {1e7, 0.0, -2.5e6}, sample_pos, NULL, 0}, PROTO_LAYOUT_WORLD, NULL, {0, {0, 0, 0}},
                                    {0}};
         break;
     case PROTO_TILE:
@@ -308,7 +343,7 @@ static void sample(proto_msg *m, proto_type type)
                                               0, NULL, NULL};
         break;
     case PROTO_MESH_VERTICES:
-        m->u.vertices = (proto_mesh_vertices){3, 3, {-5.5, 0.0, 1e6}, sample_pos};
+        m->u.vertices = (proto_mesh_vertices){3, 3, {-5.5, 0.0, 1e6}, sample_pos, NULL, 0};
         break;
     case PROTO_QUERY:
         m->u.query = (proto_query){7, 3, 1, 600.25, sample_points};
@@ -382,6 +417,27 @@ static int sample_named(proto_msg *m, const char *name)
         f->placement.origin[2] = -2.5e6 - 8;
         return 0;
     }
+    if (!strcmp(name, "frame_mesh_qz")) {
+        /* layout 0 with qz positions, for the mesh_topology vector's mesh */
+        static proto_buf qz;
+        static int made;
+        if (!made) {
+            uint32_t refs[9];
+            proto_codec_ctx *cx = NULL;
+            proto_buf_init(&qz, 0);
+            if (proto_codec_ctx_create(&cx) != OCEAN_OK || proto_mesh_qz_refs(sample_idx, 3, 3, refs) != OCEAN_OK ||
+                proto_mesh_qz_encode(cx, 0.005, 3, sample_pos, refs, &qz, NULL, NULL, 0) != OCEAN_OK)
+                return -1;
+            proto_codec_ctx_destroy(cx);
+            made = 1;
+        }
+        sample(m, PROTO_FRAME);
+        m->u.frame.has_mesh = 2;
+        m->u.frame.mesh.positions = NULL;
+        m->u.frame.mesh.qz = proto_buf_data(&qz);
+        m->u.frame.mesh.qz_len = (uint32_t)proto_buf_len(&qz);
+        return 0;
+    }
     if (!strcmp(name, "mesh_topology_flat")) {
         sample(m, PROTO_MESH_TOPOLOGY);
         m->u.topology.flags = PROTO_TOPO_FLAT;
@@ -422,7 +478,7 @@ static int sample_named(proto_msg *m, const char *name)
 }
 
 static const char *const extra_vectors[] = {"frame_cascade", "mesh_topology_flat", "subscribe_cascade",
-                                            "sea_state_announce", "sea_state_get"};
+                                            "sea_state_announce", "sea_state_get", "frame_mesh_qz"};
 #define N_EXTRA ((int)(sizeof extra_vectors / sizeof extra_vectors[0]))
 
 static uint8_t *encode_sample(proto_type type, size_t *len)
@@ -552,10 +608,12 @@ static void test_roundtrip_all(void **state)
 static void test_frame_client_fields(void **state)
 {
     (void)state;
-    for (int with_mesh = 0; with_mesh <= 1; with_mesh++) {
+    for (int with_mesh = 0; with_mesh <= 2; with_mesh++) {
         proto_msg m, d;
-        sample(&m, PROTO_FRAME);
-        m.u.frame.has_mesh = (uint8_t)with_mesh;
+        /* 2: the qz mesh record (has_mesh 2) */
+        sample_named(&m, with_mesh == 2 ? "frame_mesh_qz" : "frame");
+        if (with_mesh < 2)
+            m.u.frame.has_mesh = (uint8_t)with_mesh;
         proto_buf pb;
         proto_buf_init(&pb, 0);
         char err[256];
@@ -765,7 +823,10 @@ static void test_payload_errors(void **state)
     expect_field(PROTO_TILE, P(4), 2, 3, OCEAN_EFORMAT);                /* f32 size mismatch */
     expect_field(PROTO_FRAME, P(48), 2, 3, OCEAN_ETRUNC);               /* tile_count lies */
     expect_field(PROTO_FRAME, P(48), 2, 5000, OCEAN_ETOOBIG);
-    expect_field(PROTO_FRAME, P(50), 1, 2, OCEAN_EFORMAT);              /* has_mesh */
+    expect_field(PROTO_FRAME, P(50), 1, 3, OCEAN_EFORMAT);              /* has_mesh */
+    expect_field(PROTO_FRAME, P(50), 1, 2, OCEAN_ECODEC);               /* f32 body read as qz */
+    expect_field(PROTO_SUBSCRIBE, P(10), 1, 1, OCEAN_ETYPE);            /* mesh_codec */
+    expect_field(PROTO_SUBSCRIBE, P(10), 1, 0, OCEAN_OK);               /* mesh_codec f32 */
     expect_field(PROTO_FRAME, P(56), 4, 1000, OCEAN_ETRUNC);            /* record length lies */
     expect_field(PROTO_FRAME, P(56), 4, 63, OCEAN_ETRUNC);              /* record shorter than its tile */
     expect_field(PROTO_FRAME, P(60), 4, 1, OCEAN_EFORMAT);              /* record reserved */
@@ -899,6 +960,11 @@ static void test_error_reply(void **state)
 
 /* ---- test vectors ----------------------------------------------------------- */
 
+/* The qz payload of frame_mesh_qz: after the frame's fixed fields, its
+ * tile records (72 and 64 bytes), the mesh record's head and the 32
+ * fixed bytes. */
+#define QZ_AT (56 + 72 + 64 + 8 + 32)
+
 typedef struct bad_vector {
     const char *name;
     const char *base;
@@ -930,6 +996,15 @@ static const bad_vector bad_vectors[] = {
     {"bad_subscribe_layout", "subscribe", P(7), 1, 2, OCEAN_ETYPE, -1},
     {"bad_sea_get_with_sea", "sea_state_get", P(32), 8, 0x4024000000000000ull, OCEAN_EFORMAT, -1},
     {"bad_sea_op", "sea_state", P(0), 1, 3, OCEAN_ETYPE, -1},
+    {"bad_subscribe_mesh_codec", "subscribe", P(10), 1, 1, OCEAN_ETYPE, -1},
+    {"bad_subscribe_reserved", "subscribe", P(11), 1, 1, OCEAN_EFORMAT, -1},
+    {"bad_frame_has_mesh", "frame_mesh_qz", P(50), 1, 3, OCEAN_EFORMAT, -1},
+    {"bad_frame_cascade_mesh_qz", "frame_cascade", P(50), 1, 2, OCEAN_EFORMAT, -1},
+    {"bad_mesh_qz_format", "frame_mesh_qz", P(QZ_AT), 1, 9, OCEAN_ECODEC, -1},
+    {"bad_mesh_qz_step", "frame_mesh_qz", P(QZ_AT + 16), 4, 0, OCEAN_ECODEC, -1},
+    {"bad_mesh_qz_nan_base", "frame_mesh_qz", P(QZ_AT + 8), 4, 0x7FC00000u, OCEAN_ECODEC, -1},
+    {"bad_mesh_qz_raw_len", "frame_mesh_qz", P(QZ_AT + 32), 4, 1, OCEAN_ECODEC, -1},
+    {"bad_mesh_qz_vertex_count", "frame_mesh_qz", P(QZ_AT - 28), 4, 4, OCEAN_ECODEC, -1},
 };
 
 static const char *code_name(ocean_result r)

@@ -175,6 +175,8 @@ typedef struct topo_ref {
     oc_topology pub;
     atomic_int refs;
     proto_msg msg;
+    uint32_t *qz_refs;        /* [const] MESH_VERTICES_QZ prediction references
+                                 (layout-0 topologies), made when it arrived */
 } topo_ref;
 
 typedef struct frame_priv {
@@ -182,6 +184,8 @@ typedef struct frame_priv {
     proto_msg msg;
     uint8_t *raw;
     topo_ref *topo;
+    float *mesh_pos;          /* has_mesh 2: the decoded positions
+                                 (pub.info.mesh.positions points here) */
 } frame_priv;
 
 struct oc_loop {
@@ -265,6 +269,7 @@ static void topo_unref(topo_ref *t)
 {
     if (t && atomic_fetch_sub(&t->refs, 1) == 1) {
         proto_msg_free(&t->msg);
+        free(t->qz_refs);
         free(t);
     }
 }
@@ -282,8 +287,54 @@ void oc_frame_free(oc_frame *f)
     oc_cascade_view_free((oc_cascade_view *)p->pub.view);
     proto_msg_free(&p->msg);
     free(p->raw);
+    free(p->mesh_pos);
     topo_unref(p->topo);
     free(p);
+}
+
+/* Decodes a has_mesh 2 frame's positions with refs (those of topology t)
+ * into the frame: info.mesh.positions points at them afterwards. */
+static ocean_result frame_mesh_qz(frame_priv *p, const oc_topology *t, const uint32_t *refs, char *err,
+                                  size_t errlen)
+{
+    const proto_mesh_vertices *v = &p->pub.info.mesh;
+    if (t->vertex_count != v->vertex_count || t->mesh_id != v->mesh_id) {
+        ocean_seterr(err, errlen, "mesh qz: the frame's mesh %u has %u vertices, topology %u has %u", v->mesh_id,
+                     v->vertex_count, t->mesh_id, t->vertex_count);
+        return OCEAN_EINVAL;
+    }
+    float *pos = malloc(3 * sizeof *pos * (size_t)v->vertex_count);
+    if (!pos)
+        return OCEAN_ENOMEM;
+    ocean_result r = proto_mesh_qz_decode(v->qz, v->qz_len, v->vertex_count, refs, pos, err, errlen);
+    if (r != OCEAN_OK) {
+        free(pos);
+        return r;
+    }
+    free(p->mesh_pos);
+    p->mesh_pos = pos;
+    p->pub.info.mesh.positions = pos;
+    return OCEAN_OK;
+}
+
+ocean_result oc_frame_mesh_decode(oc_frame *f, const oc_topology *t, char *err, size_t errlen)
+{
+    if (!f || !t || !t->indices) {
+        ocean_seterr(err, errlen, "oc_frame_mesh_decode: NULL frame or topology");
+        return OCEAN_EINVAL;
+    }
+    if (f->info.has_mesh != 2)
+        return f->info.has_mesh && f->info.layout == PROTO_LAYOUT_WORLD ? OCEAN_OK : OCEAN_ESTATE;
+    uint32_t *refs = malloc(3 * sizeof *refs * (size_t)t->vertex_count);
+    if (!refs)
+        return OCEAN_ENOMEM;
+    ocean_result r = proto_mesh_qz_refs(t->indices, t->index_count, t->vertex_count, refs);
+    if (r == OCEAN_OK)
+        r = frame_mesh_qz((frame_priv *)f, t, refs, err, errlen);
+    else
+        ocean_seterr(err, errlen, "mesh qz: topology indices out of range");
+    free(refs);
+    return r;
 }
 
 void oc_query_result_free(oc_query_result *r)
@@ -546,7 +597,8 @@ ocean_result oc_frame_peek(const uint8_t *msg, size_t have, size_t len, proto_fr
     }
     const uint8_t *p = msg + PROTO_HEADER_SIZE;
     proto_frame_fixed_read(p, f);
-    if (isnan(f->cutoff_k) || f->cutoff_k < 0 || !(f->e_error >= 0 && f->e_error <= 1) || f->has_mesh > 1 ||
+    if (isnan(f->cutoff_k) || f->cutoff_k < 0 || !(f->e_error >= 0 && f->e_error <= 1) || f->has_mesh > 2 ||
+        (f->has_mesh == 2 && f->layout != PROTO_LAYOUT_WORLD) ||
         f->tile_count > PROTO_MAX_FRAME_TILES) {
         ocean_seterr(err, errlen, "FRAME fixed fields out of range");
         return OCEAN_EINVAL;
@@ -660,6 +712,33 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
         if (fr)
             raw_taken = 1;
     }
+    /* MESH_VERTICES_QZ work outside the loop's lock: a layout-0 topology's
+     * prediction references, made once when it arrives; a has_mesh 2
+     * frame's positions, decoded with the current topology (held by a
+     * reference meanwhile), so callers see floats */
+    uint32_t *new_refs = NULL;
+    if (type == PROTO_MESH_TOPOLOGY && !(m.u.topology.flags & PROTO_TOPO_FLAT)) {
+        const proto_mesh_topology *pt = &m.u.topology;
+        new_refs = malloc(3 * sizeof *new_refs * (size_t)pt->vertex_count);
+        if (new_refs && proto_mesh_qz_refs(pt->indices, pt->index_count, pt->vertex_count, new_refs) != OCEAN_OK) {
+            free(new_refs);
+            new_refs = NULL;
+        }
+    }
+    ocean_result mesh_res = OCEAN_OK;
+    char mesh_why[200] = "";
+    if (fr && !peeked && fr->pub.info.has_mesh == 2) {
+        pthread_mutex_lock(&l->mu);
+        topo_ref *tr = c->topo && c->topo->pub.mesh_id == fr->pub.info.mesh.mesh_id ? c->topo : NULL;
+        if (tr)
+            atomic_fetch_add(&tr->refs, 1);
+        pthread_mutex_unlock(&l->mu);
+        mesh_res = OCEAN_ESTATE;
+        snprintf(mesh_why, sizeof mesh_why, "no MESH_TOPOLOGY for the frame's mesh %u", fr->pub.info.mesh.mesh_id);
+        if (tr && tr->qz_refs)
+            mesh_res = frame_mesh_qz(fr, &tr->pub, tr->qz_refs, mesh_why, sizeof mesh_why);
+        topo_unref(tr);
+    }
 
     pthread_mutex_lock(&l->mu);
     c->st.messages_rx++;
@@ -730,6 +809,10 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
                 atomic_fetch_add(&c->topo->refs, 1);
                 fr->pub.topology = &c->topo->pub;
             }
+            if (mesh_res != OCEAN_OK) {
+                c->st.decode_errors++;
+                set_local_error(c, mesh_res, "FRAME tick %u: mesh positions: %s", fr->pub.info.tick, mesh_why);
+            }
             if (c->opt.cb.on_frame) {
                 nt.call_frame = 1;
                 nt.frame = fr;
@@ -766,6 +849,8 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
             t->pub.flags = pt->flags;
             t->pub.flat = pt->flat;
             t->pub.zones = pt->zones;
+            t->qz_refs = new_refs;
+            new_refs = NULL;
             topo_unref(c->topo);
             c->topo = t;
             break;
@@ -853,6 +938,7 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
     }
     pthread_cond_broadcast(&l->cv);
     pthread_mutex_unlock(&l->mu);
+    free(new_refs);   /* not taken: the topology could not be kept */
 
     if (res == OCEAN_OK) {
         if (nt.call_error && c->opt.cb.on_error)
@@ -1582,6 +1668,9 @@ void oc_subscribe_default(proto_subscribe *s)
     s->base_spacing_m = 0;
     s->view_range_m = 0;
     s->layout = PROTO_LAYOUT_CASCADE;
+    /* a layout-0 subscriber gets its mesh positions compressed (1/4 to 1/5
+     * of f32 at 5e-3, decoded here); layout 1 sends none */
+    s->mesh_codec = PROTO_MESH_CODEC_QZ;
 }
 
 void oc_camera_default(proto_camera *cam)
@@ -1616,6 +1705,10 @@ ocean_result oc_client_subscribe(oc_client *c, const proto_subscribe *s)
     proto_msg m;
     proto_msg_init(&m, PROTO_SUBSCRIBE);
     m.u.subscribe = *s;
+    /* layout 1 ignores mesh_codec: send 0 there, the byte a daemon that
+     * predates mesh_codec requires */
+    if (s->layout != PROTO_LAYOUT_WORLD)
+        m.u.subscribe.mesh_codec = PROTO_MESH_CODEC_F32;
     ocean_result r = send_msg(c, &m, NULL);
     if (r == OCEAN_OK) {
         pthread_mutex_lock(&c->loop->mu);

@@ -144,7 +144,9 @@ struct oc_frame {
     proto_frame info;           /* cutoff_k, e_error, origin, camera_seq, tick,
                                    tile_count, has_mesh, layout; layout 0: mesh
                                    (vertex positions, relative to
-                                   info.mesh.origin); layout 1: cascades (the
+                                   info.mesh.origin; has_mesh 2: sent as qz
+                                   and decoded by the client with the
+                                   topology); layout 1: cascades (the
                                    cascade block: camera, q, e_total, tail_mss,
                                    mip tables) and placement; info.tiles[i]
                                    equals tiles[i].info (tiles[i].info.cascade:
@@ -196,6 +198,18 @@ ocean_result oc_frame_peek(const uint8_t *msg, size_t have, size_t len, proto_fr
  * failure *out is NULL and err names the cause (a tile that does not
  * decode, or a layout-1 view that does not build, is an error here). */
 ocean_result oc_frame_decode(const uint8_t *msg, size_t len, oc_frame **out, char *err, size_t errlen);
+
+/* Decodes the compressed mesh positions of a layout-0 frame with
+ * has_mesh 2 (MESH_VERTICES_QZ) with the frame's topology t (same mesh_id
+ * and vertex count): info.mesh.positions points at them afterwards, owned
+ * by the frame.  A client decodes them on receipt (the frames it hands out
+ * have positions whenever it holds the topology; decode_errors counts the
+ * others); this is for frames from oc_frame_decode, which has no topology
+ * (their info.mesh.positions is NULL until then).  OCEAN_OK for a frame
+ * with f32 positions; OCEAN_ESTATE for a frame without a layout-0 mesh;
+ * OCEAN_EINVAL for a topology that does not match; OCEAN_ECODEC for a
+ * payload that does not decode. */
+ocean_result oc_frame_mesh_decode(oc_frame *f, const oc_topology *t, char *err, size_t errlen);
 
 /* --------------------------------------------------------------- clients */
 
@@ -303,7 +317,11 @@ ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen);
  * (layout 0 only), server default spacing and range.  Subscribing as the
  * viewer does lets the daemon serve the library the very tile encodings it
  * already made for viewers.  Set layout = 0 for server-summed world tiles
- * and server-displaced mesh vertices. */
+ * and server-displaced mesh vertices, which then travel compressed
+ * (mesh_codec qz, MESH_VERTICES_QZ at `accuracy`; the library decodes
+ * them, so info.mesh.positions holds floats as with f32); set mesh_codec
+ * to PROTO_MESH_CODEC_F32 for raw f32 positions.  oc_client_subscribe
+ * sends mesh_codec 0 for layout 1, which ignores it. */
 void oc_subscribe_default(proto_subscribe *s);
 
 /* Sends SUBSCRIBE (validated by the encoder first).  May be sent again to

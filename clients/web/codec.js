@@ -16,7 +16,7 @@
  * throws a ProtoError with code ECODEC.
  */
 import { decompress } from './vendor/fzstd.js';
-import { CODEC, CODEC_NAMES, ProtoError, R, tilePlanes } from './protocol.js';
+import { CODEC, CODEC_NAMES, MESH_QZ_HEAD, ProtoError, R, meshQzHeader, tilePlanes } from './protocol.js';
 
 const QZ_FORMAT = 1;          /* format 1: fixed 24-byte plane headers, planar / LS6 */
 const QZ2_FORMAT = 2;         /* format 2 (what oceand writes): LSX with a reference plane */
@@ -121,9 +121,7 @@ function qzDecode(w, h, np, data, dv, out) {
     /* fzstd validates the frame and block structure and allocates exactly
      * the content size; we insist on exactly `want` bytes of output (a
      * frame that says otherwise, or extra frames, change the length). */
-    let raw;
-    try { raw = decompress(zsrc); } catch (e) { bad(`qz: zstd: ${e.message || e}`); }
-    if (raw.length !== want) bad(`qz: zstd frame content size ${raw.length} does not match ${want}`);
+    const raw = inflate(zsrc, want);
     if (qScratch.length < n) { qScratch = new Float64Array(n); rScratch = new Int32Array(n); }
     const q = qScratch, res = rScratch;
     let off = 0;
@@ -132,11 +130,7 @@ function qzDecode(w, h, np, data, dv, out) {
         const [c0, c1, c2, c3, c4, c5] = coefs[c];
         const dst = c * n;
         /* residuals: k little-endian byte planes, zigzag-decoded */
-        if (k === 0) res.fill(0, 0, n);
-        else if (k === 1) for (let i = 0; i < n; i++) { const z = raw[off + i]; res[i] = (z >>> 1) ^ -(z & 1); }
-        else if (k === 2) for (let i = 0; i < n; i++) { const z = raw[off + i] | (raw[off + n + i] << 8); res[i] = (z >>> 1) ^ -(z & 1); }
-        else if (k === 3) for (let i = 0; i < n; i++) { const z = raw[off + i] | (raw[off + n + i] << 8) | (raw[off + 2 * n + i] << 16); res[i] = (z >>> 1) ^ -(z & 1); }
-        else for (let i = 0; i < n; i++) { const z = (raw[off + i] | (raw[off + n + i] << 8) | (raw[off + 2 * n + i] << 16) | (raw[off + 3 * n + i] << 24)) >>> 0; res[i] = (z >>> 1) ^ -(z & 1); }
+        residuals(raw, off, k, n, res);
         off += k * n;
         /* prediction, in the order the encoder used (row by row) */
         let lo = 0, hi = 0;
@@ -162,6 +156,17 @@ function qzDecode(w, h, np, data, dv, out) {
             bad(`qz plane ${c}: non-finite values (base ${bs}, step ${st}, levels ${lo}..${hi})`);
         for (let i = 0; i < n; i++) out[dst + i] = bs + q[i] * st;   /* Float32Array store rounds as (float) */
     }
+}
+
+/* A qz residual stream: exactly one zstd frame of `want` bytes.  fzstd
+ * validates the frame and block structure and allocates exactly the
+ * content size; a frame that says otherwise, or extra frames, change the
+ * length. */
+function inflate(zsrc, want) {
+    let raw;
+    try { raw = decompress(zsrc); } catch (e) { bad(`qz: zstd: ${e.message || e}`); }
+    if (raw.length !== want) bad(`qz: zstd frame content size ${raw.length} does not match ${want}`);
+    return raw;
 }
 
 /* Residual stream: for plane c, nb little-endian byte planes -> res (zigzag-decoded). */
@@ -204,9 +209,7 @@ function qz2Decode(w, h, np, data, dv, out) {
     const rawlen = dv.getUint32(off, true);
     off += 4;
     if (rawlen !== want) bad(`qz residual length ${rawlen}, header implies ${want}`);
-    let raw;
-    try { raw = decompress(data.subarray(off)); } catch (e) { bad(`qz: zstd: ${e.message || e}`); }
-    if (raw.length !== want) bad(`qz: zstd frame content size ${raw.length} does not match ${want}`);
+    const raw = inflate(data.subarray(off), want);
     if (q2Scratch.length < n * np) q2Scratch = new Float64Array(n * np);
     if (rScratch.length < n) rScratch = new Int32Array(n);
     const qa = q2Scratch, res = rScratch;
@@ -265,5 +268,74 @@ export function octDecode(u, v, out = [0, 0, 0]) {
     const l = Math.hypot(x, y, z);
     if (!(l > 0)) { out[0] = 0; out[1] = 1; out[2] = 0; return out; }
     out[0] = x / l; out[1] = y / l; out[2] = z / l;
+    return out;
+}
+
+/* ---- MESH_VERTICES_QZ (PROTOCOL.md; protocol/codec.c proto_mesh_qz_*) ---- */
+
+const MESH_QZ_NONE = 0xffffffff;
+
+/* The prediction references of a topology (indices: Uint32Array, every
+ * index < vertexCount, checked by the MESH_TOPOLOGY decoder): per vertex v
+ * (a, b, c) for the parallelogram a + b - c, (a, b, NONE) for the floor of
+ * their mean, (NONE, NONE, NONE) for the previous vertex; the rule of
+ * proto_mesh_qz_refs, so both sides predict alike. */
+export function meshQzRefs(indices, vertexCount) {
+    const ni = indices.length, start = new Uint32Array(vertexCount + 1), tri = new Uint32Array(ni);
+    for (let i = 0; i < ni; i++) start[indices[i] + 1]++;
+    for (let v = 0; v < vertexCount; v++) start[v + 1] += start[v];
+    const fill = start.slice();
+    for (let i = 0; i < ni; i++) tri[fill[indices[i]]++] = (i / 3) | 0;
+    const refs = new Uint32Array(3 * vertexCount).fill(MESH_QZ_NONE);
+    for (let v = 0; v < vertexCount; v++) {
+        const r = 3 * v;
+        for (let k = start[v]; k < start[v + 1] && refs[r + 2] === MESH_QZ_NONE; k++) {
+            const t = 3 * tri[k], t0 = indices[t], t1 = indices[t + 1], t2 = indices[t + 2];
+            let a, b;
+            if (t0 === v) { a = t1; b = t2; } else if (t1 === v) { a = t2; b = t0; } else { a = t0; b = t1; }
+            if (a >= v || b >= v || a === b) continue;
+            if (refs[r] === MESH_QZ_NONE) { refs[r] = a; refs[r + 1] = b; }
+            for (let m = start[a]; m < start[a + 1]; m++) {
+                if (tri[m] === tri[k]) continue;
+                const u = 3 * tri[m], u0 = indices[u], u1 = indices[u + 1], u2 = indices[u + 2];
+                const hasB = u0 === b || u1 === b || u2 === b;
+                const c = u0 !== a && u0 !== b ? u0 : u1 !== a && u1 !== b ? u1 : u2;
+                if (hasB && c !== a && c !== b && c < v) {
+                    refs[r] = a; refs[r + 1] = b; refs[r + 2] = c;
+                    break;
+                }
+            }
+        }
+    }
+    return refs;
+}
+
+/* Decodes a has_mesh 2 record's payload (Uint8Array from its format byte)
+ * for vertexCount vertices with the refs of its topology into a new
+ * Float32Array of x, y, z per vertex.  Throws ECODEC (as the C decoder). */
+export function decodeMeshQz(data, vertexCount, refs) {
+    const h = meshQzHeader(data, vertexCount);
+    if (refs.length !== 3 * vertexCount) bad(`mesh qz: topology of ${refs.length / 3} vertices, record has ${vertexCount}`);
+    const raw = inflate(data.subarray(MESH_QZ_HEAD), h.rawLen);
+    const n = vertexCount, q = new Float64Array(3 * n), res = new Int32Array(n), out = new Float32Array(3 * n);
+    let ro = 0;
+    for (let a = 0; a < 3; a++) {
+        residuals(raw, ro, h.nbytes[a], n, res);
+        ro += h.nbytes[a] * n;
+        const bs = h.base[a], st = h.step[a];
+        for (let v = 0; v < n; v++) {
+            const r = 3 * v, ra = refs[r], rb = refs[r + 1], rc = refs[r + 2];
+            let p;
+            if (rc !== MESH_QZ_NONE) p = q[3 * ra + a] + q[3 * rb + a] - q[3 * rc + a];
+            else if (ra !== MESH_QZ_NONE) p = Math.floor((q[3 * ra + a] + q[3 * rb + a]) / 2);
+            else p = v ? q[3 * (v - 1) + a] : 0;
+            const lv = p + res[v];
+            if (!(Math.abs(lv) <= QZ_Q_LIMIT)) bad(`mesh qz axis ${'xyz'[a]}: level ${lv} out of range at vertex ${v}`);
+            q[r + a] = lv;
+            const f = Math.fround(bs + lv * st);
+            if (!(Math.abs(f) <= 1e7)) bad(`mesh qz axis ${'xyz'[a]}: position ${f} at vertex ${v} (finite, |.| <= 1e7)`);
+            out[r + a] = f;
+        }
+    }
     return out;
 }

@@ -9,6 +9,7 @@
  *   policy=antialias|seed|none   cutoff policy (default antialias)
  *   layout=1|0      what travels (default 1, cascade tiles summed here; 0 world
  *                   tiles and server-displaced mesh, for comparison)
+ *   meshcodec=qz|f32   layout 0: how the mesh positions travel (default qz)
  *   rate=HZ tile=N levels=N layers=N accuracy=A range=M spacing=M
  *   rough=0         layout 1: shade without the unresolved slope variance
  *                   (a mirror; the browser test's control)
@@ -22,7 +23,7 @@
  */
 import { Renderer, normalize3 } from './render.js';
 import { FlyCamera } from './camera.js';
-import { CODEC, CUTOFF, LAYOUT } from './protocol.js';
+import { CODEC, CUTOFF, LAYOUT, MESH_CODEC } from './protocol.js';
 import { SeaTimeline } from './timeline.js';
 
 const qs = new URLSearchParams(location.search);
@@ -91,6 +92,10 @@ const policyByName = { none: CUTOFF.NONE, seed: CUTOFF.SEED, antialias: CUTOFF.A
 const want = {
     layout,
     codec: codecByName[qs.get('codec')] ?? CODEC.QZ,
+    /* layout 0: the server-displaced mesh positions as qz at the same
+     * accuracy (about 1/5 of f32; PROTOCOL.md "MESH_VERTICES_QZ") unless
+     * meshcodec=f32 */
+    meshCodec: layout === LAYOUT.WORLD && qs.get('meshcodec') !== 'f32' ? MESH_CODEC.QZ : MESH_CODEC.F32,
     cutoffPolicy: policyByName[qs.get('policy')] ?? CUTOFF.ANTIALIAS,
     /* software GL draws a few frames per second: do not make the daemon
      * send (and the worker decode) 30 */

@@ -42,6 +42,9 @@ export const BYE_REASONS = ['normal', 'shutdown', 'slow consumer', 'protocol err
 export const NO_CAMERA = 0xffffffff;
 /* SUBSCRIBE.layout / FRAME.layout (PROTOCOL.md "Layouts"). */
 export const LAYOUT = Object.freeze({ WORLD: 0, CASCADE: 1 });
+/* SUBSCRIBE.mesh_codec: how layout-0 mesh positions travel (FRAME.has_mesh 1 / 2). */
+export const MESH_CODEC = Object.freeze({ F32: 0, QZ: 2 });
+export const MESH_QZ_HEAD = 36;
 export const LAYOUT_COUNT = 2;
 export const MAX_MIPS = 12;
 export const MIP_ENTRIES = 13;
@@ -284,8 +287,9 @@ function dHello(r) {
 function dSubscribe(r) {
     r.need(SUBSCRIBE_SIZE, 'fixed fields');
     const o = r.off;
-    r.zero(o + 10, 2, 'subscribe');
+    r.zero(o + 11, 1, 'subscribe');
     const s = {
+        meshCodec: r.u8at(o + 10),
         effects: r.u8at(o), meshKind: r.u8at(o + 1), codec: r.u8at(o + 2), cutoffPolicy: r.u8at(o + 3),
         mode: r.u8at(o + 4), layers: r.u8at(o + 5), lodLevels: r.u8at(o + 6), layout: r.u8at(o + 7), tileSize: r.u16(o + 8),
         frameRateHz: r.f32(o + 12), accuracy: r.f32(o + 16), baseSpacingM: r.f32(o + 20), viewRangeM: r.f32(o + 24),
@@ -306,6 +310,8 @@ function vSubscribe(s) {
     chkRange('subscribe.layers', s.layers, 1, LIMITS.maxLayers);
     chkRange('subscribe.lod_levels', s.lodLevels, 1, LIMITS.maxLodLevels);
     chkEnum('subscribe.layout', s.layout, LAYOUT_COUNT);
+    if (s.meshCodec !== MESH_CODEC.F32 && s.meshCodec !== MESH_CODEC.QZ)
+        fail(R.ETYPE, `subscribe.mesh_codec ${s.meshCodec} unknown (0 f32, 2 qz)`);
     chkRange('subscribe.tile_size', s.tileSize, 2, LIMITS.tileMaxSize);
     chkRange('subscribe.frame_rate_hz', s.frameRateHz, 0, LIMITS.maxFrameRate);
     if (!(s.frameRateHz > 0)) fail(R.EINVAL, 'subscribe.frame_rate_hz must be > 0');
@@ -386,28 +392,76 @@ function vTile(t) {
 }
 
 /* MESH_VERTICES body (structure; vVertices checks values). */
-function dVertices(r, limits) {
+function dVerticesHead(r, limits) {
     r.need(VERTS_FIXED, 'mesh vertices fixed fields');
     const o = r.off;
     const v = { meshId: r.u32(o), vertexCount: r.u32(o + 4), origin: [r.f64(o + 8), r.f64(o + 16), r.f64(o + 24)] };
     r.off += VERTS_FIXED;
     if (v.vertexCount > limits.maxVertices)
         fail(R.ETOOBIG, `${r.what}: vertex_count ${v.vertexCount} above the limit ${limits.maxVertices}`);
+    return v;
+}
+
+function dVertices(r, limits) {
+    const v = dVerticesHead(r, limits);
     v.positions = r.floats(3 * v.vertexCount, 'positions');
     r.finish();
     return v;
 }
 
-function vVertices(v, limits) {
+function vVerticesHead(v, limits) {
     if (v.vertexCount === 0) fail(R.EINVAL, 'mesh vertex_count is 0');
     if (v.vertexCount > limits.maxVertices) fail(R.ETOOBIG, `mesh vertex_count ${v.vertexCount} above the limit ${limits.maxVertices}`);
     for (let i = 0; i < 3; i++) chkRange('mesh.origin', v.origin[i], -MAX_WORLD, MAX_WORLD);
+}
+
+function vVerticesQz(v, limits) {
+    vVerticesHead(v, limits);
+    v.qzHeader = meshQzHeader(v.qz, v.vertexCount);
+}
+
+function vVertices(v, limits) {
+    vVerticesHead(v, limits);
     const p = v.positions;
     for (let i = 0; i < p.length; i++) {
         const x = p[i];
         if (!(x >= -MAX_LOCAL && x <= MAX_LOCAL))
             fail(R.EINVAL, `mesh position component ${i} is ${x} (finite, |v| <= 1e7 required)`);
     }
+}
+
+/* The header of a MESH_VERTICES_QZ payload (PROTOCOL.md; data from its
+ * format byte on) for vertexCount vertices, as proto_mesh_qz_header checks
+ * it: format 1, predictor 1, reserved 0, finite bases, finite steps > 0,
+ * nbytes <= 4, R = sum nbytes * V.  (The zstd frame itself is checked when
+ * decodeMeshQz decompresses it.)  Throws ECODEC. */
+export function meshQzHeader(data, vertexCount) {
+    const bad = (m) => fail(R.ECODEC, m);
+    if (data.byteLength < MESH_QZ_HEAD) bad(`mesh qz payload of ${data.byteLength} bytes shorter than its ${MESH_QZ_HEAD}-byte header`);
+    if (data[0] !== 1 || data[1] !== 1) bad(`mesh qz format ${data[0]} / predictor ${data[1]} not supported (format 1, predictor 1)`);
+    const dv = new DataView(data.buffer, data.byteOffset, data.byteLength);
+    if (dv.getUint16(2, true) !== 0 || data[31] !== 0) bad('mesh qz reserved bytes not 0');
+    const h = { format: data[0], predictor: data[1], base: [], step: [], nbytes: [], rawLen: dv.getUint32(32, true) };
+    let want = 0;
+    for (let a = 0; a < 3; a++) {
+        const b = dv.getFloat32(4 + 4 * a, true), st = dv.getFloat32(16 + 4 * a, true), k = data[28 + a];
+        if (!Number.isFinite(b) || !Number.isFinite(st) || !(st > 0) || k > 4)
+            bad(`mesh qz axis ${'xyz'[a]} header invalid (base ${b}, step ${st}, bytes ${k})`);
+        h.base.push(b); h.step.push(st); h.nbytes.push(k);
+        want += k * vertexCount;
+    }
+    if (h.rawLen !== want) bad(`mesh qz residual length ${h.rawLen}, header and ${vertexCount} vertices imply ${want}`);
+    return h;
+}
+
+/* FRAME has_mesh 2 record: MESH_VERTICES' fixed fields, then the qz
+ * payload kept as bytes (positions need the topology: decodeMeshQz). */
+function dVerticesQz(r, limits) {
+    const v = dVerticesHead(r, limits);
+    v.qz = r.u8.subarray(r.off, r.end);
+    v.positions = null;
+    r.off = r.end;
+    return v;
 }
 
 /* Layout-1 mesh record body: where the flat mesh goes this frame. */
@@ -422,7 +476,7 @@ function dPlacement(r) {
     return pl;
 }
 
-const REC_TILE = 0, REC_VERTICES = 1, REC_PLACEMENT = 2;
+const REC_TILE = 0, REC_VERTICES = 1, REC_PLACEMENT = 2, REC_VERTICES_QZ = 3;
 
 /* One FRAME record: u32 body length, u32 tag (<= maxTag), body, zero
  * padding to a multiple of 8.  Returns [body, tag]. */
@@ -439,7 +493,8 @@ function dRecord(r, kind, maxTag, limits) {
     r.end = bodyEnd;
     let body;
     try {
-        body = kind === REC_VERTICES ? dVertices(r, limits) : kind === REC_PLACEMENT ? dPlacement(r) : dTile(r);
+        body = kind === REC_VERTICES ? dVertices(r, limits) : kind === REC_VERTICES_QZ ? dVerticesQz(r, limits)
+            : kind === REC_PLACEMENT ? dPlacement(r) : dTile(r);
     } finally {
         r.end = outer;
     }
@@ -530,7 +585,8 @@ function dFrame(r, limits) {
     }
     if (f.tileCount > limits.maxFrameTiles)
         fail(R.ETOOBIG, `FRAME: tile_count ${f.tileCount} above the limit ${limits.maxFrameTiles}`);
-    if (f.hasMesh > 1) fail(R.EFORMAT, `FRAME: has_mesh is ${f.hasMesh} (0 or 1)`);
+    if (f.hasMesh > 2 || (f.hasMesh === 2 && f.layout !== LAYOUT.WORLD))
+        fail(R.EFORMAT, `FRAME: has_mesh is ${f.hasMesh} (0 or 1; 2 in layout 0)`);
     if (f.tileCount * (RECORD_HEAD + TILE_FIXED) > r.end - r.off)
         fail(R.ETRUNC, `FRAME: ${f.tileCount} tiles cannot fit in the ${r.end - r.off} bytes left`);
     for (let i = 0; i < f.tileCount; i++) {
@@ -540,7 +596,7 @@ function dFrame(r, limits) {
     }
     if (f.hasMesh) {
         if (f.layout === LAYOUT.CASCADE) f.placement = dRecord(r, REC_PLACEMENT, 0, limits)[0];
-        else f.mesh = dRecord(r, REC_VERTICES, 0, limits)[0];
+        else f.mesh = dRecord(r, f.hasMesh === 2 ? REC_VERTICES_QZ : REC_VERTICES, 0, limits)[0];
     }
     r.finish();
     /* values, as v_frame */
@@ -549,7 +605,8 @@ function dFrame(r, limits) {
     for (let i = 0; i < 3; i++) chkRange('frame.origin', f.origin[i], -MAX_WORLD, MAX_WORLD);
     if (f.cascades) vCascades(f.cascades);
     for (const t of f.tiles) vTile(t);
-    if (f.mesh) vVertices(f.mesh, limits);
+    if (f.mesh && f.hasMesh === 2) vVerticesQz(f.mesh, limits);
+    else if (f.mesh) vVertices(f.mesh, limits);
     if (f.placement) for (let i = 0; i < 3; i++) chkRange('frame.placement.origin', f.placement.origin[i], -MAX_WORLD, MAX_WORLD);
     return f;
 }
@@ -753,11 +810,12 @@ class Writer {
 const P = HEADER_SIZE;
 
 /* sub: {effects, meshKind, codec, cutoffPolicy, mode, layers, lodLevels,
- * layout (default 0), tileSize, frameRateHz, accuracy, baseSpacingM, viewRangeM}.  Validated as
+ * layout (default 0), meshCodec (default f32; layout 0 only), tileSize,
+ * frameRateHz, accuracy, baseSpacingM, viewRangeM}.  Validated as
  * the server will; returns an ArrayBuffer. */
 export function encodeSubscribe(sub, seq, simTime = 0) {
     const s = {
-        baseSpacingM: 0, viewRangeM: 0, accuracy: 1e-3, mode: MODE.LIVE, layout: LAYOUT.WORLD, ...sub,
+        baseSpacingM: 0, viewRangeM: 0, accuracy: 1e-3, mode: MODE.LIVE, layout: LAYOUT.WORLD, meshCodec: MESH_CODEC.F32, ...sub,
     };
     for (const k of ['frameRateHz', 'accuracy', 'baseSpacingM', 'viewRangeM']) s[k] = f32(s[k]);
     vSubscribe(s);
@@ -766,6 +824,7 @@ export function encodeSubscribe(sub, seq, simTime = 0) {
     u[P] = s.effects; u[P + 1] = s.meshKind; u[P + 2] = s.codec; u[P + 3] = s.cutoffPolicy;
     u[P + 4] = s.mode; u[P + 5] = s.layers; u[P + 6] = s.lodLevels; u[P + 7] = s.layout;
     dv.setUint16(P + 8, s.tileSize, true);
+    u[P + 10] = s.meshCodec;
     dv.setFloat32(P + 12, s.frameRateHz, true);
     dv.setFloat32(P + 16, s.accuracy, true);
     dv.setFloat32(P + 20, s.baseSpacingM, true);

@@ -30,15 +30,17 @@
  *                 'frame'|'error'|'bye'|'sea'|'result'|'capture', ...}.
  */
 import {
-    CODEC, CODEC_NAMES, CUTOFF, FX, LAYOUT, MESH, SUBPROTOCOL, T, BYE_REASONS, RESULT_NAMES,
+    CODEC, CODEC_NAMES, CUTOFF, FX, LAYOUT, MESH, MESH_CODEC, SUBPROTOCOL, T, BYE_REASONS, RESULT_NAMES,
     decode, decodeHeader, encodeCamera, encodeSubscribe, encodeQuery, encodeBye, ProtoError, tilePlanes,
 } from './protocol.js';
 import { assembleLevel, assembleCascadeTile, groupByLevel } from './assemble.js';
+import { decodeMeshQz, meshQzRefs } from './codec.js';
 
 let ws = null;
 let seq = 0;
 let hello = null;
 let subscription = null;
+let meshQz = null;           /* layout 0 with mesh_codec qz: {meshId, vertexCount, refs} of the latest topology */
 let wantSub = null;
 let lastSimTime = 0;
 let pendingFrame = null;     /* newest undecoded FRAME bytes */
@@ -93,6 +95,9 @@ function chooseSubscription(h, want) {
         baseSpacingM: want.baseSpacingM ?? 0,
         viewRangeM: want.viewRangeM ?? 0,
         layout,
+        /* layout 0: mesh positions compressed unless the page asks for f32;
+         * layout 1 sends none (and an older daemon wants 0 there) */
+        meshCodec: layout === LAYOUT.WORLD && want.meshCodec !== MESH_CODEC.F32 ? MESH_CODEC.QZ : MESH_CODEC.F32,
     };
 }
 
@@ -197,6 +202,10 @@ function onMessage(data) {
     case T.MESH_TOPOLOGY: {
         stats.topologies++;
         const t = msg.body;
+        /* kept before the arrays go to the page: has_mesh 2 frames are
+         * predicted over this topology's triangles */
+        meshQz = subscription && subscription.meshCodec === MESH_CODEC.QZ
+            ? { meshId: t.meshId, vertexCount: t.vertexCount, refs: meshQzRefs(t.indices, t.vertexCount) } : null;
         const transfer = [t.indices.buffer, t.morph.buffer, t.level.buffer];
         if (t.flat) transfer.push(t.flat.buffer, t.zones.buffer);
         post({ kind: 'topology', meshId: t.meshId, meshKind: t.meshKind, lodLevels: t.lodLevels, flags: t.flags,
@@ -298,6 +307,17 @@ function processFrame() {
         codecs: [...new Set(f.tiles.map((t) => CODEC_NAMES[t.codec]))].join('+'),
         mesh: f.mesh ? { meshId: f.mesh.meshId, origin: f.mesh.origin, positions: f.mesh.positions } : null,
     };
+    if (f.mesh && f.hasMesh === 2) {
+        /* compressed positions: decoded here with the topology's refs */
+        try {
+            if (!meshQz || meshQz.meshId !== f.mesh.meshId || meshQz.vertexCount !== f.mesh.vertexCount)
+                throw new ProtoError(12, `no MESH_TOPOLOGY for the frame's mesh ${f.mesh.meshId}`);
+            meta.mesh.positions = decodeMeshQz(f.mesh.qz, f.mesh.vertexCount, meshQz.refs);
+        } catch (e) {
+            noteError(e, 'FRAME mesh');
+            meta.mesh = null;
+        }
+    }
     if (f.layout === LAYOUT.CASCADE) {
         processCascadeFrame(f, meta, t0);
         return;

@@ -18,9 +18,11 @@
 # the concentric mesh, qz at accuracy 5e-3 (the viewer's since qz format 2: height >= 50 dB), the antialias cutoff policy,
 # camera at (0, 25, 0), yaw 30, pitch -10, fov 60.  Rows marked "viewer
 # before issue 14" subscribe as the viewer did before: layout 0 (per-camera
-# world tiles and a server-displaced mesh), 64-sample tiles, min(8,
-# server.max_lod_levels) levels, level-0 spacing 1 m - the capacity table
-# before and after the redesign, from one run.
+# world tiles and a server-displaced mesh, its positions f32), 64-sample
+# tiles, min(8, server.max_lod_levels) levels, level-0 spacing 1 m - the
+# capacity table before and after the redesign, from one run.  The row
+# "layout 0 thin client, compressed mesh" is that subscription with the
+# mesh positions as qz (mesh_codec qz), at 256 viewers 20 m apart.
 #
 # Cameras: "shared" puts every viewer at one camera (the daemon encodes a
 # FRAME once and shares it); "S m apart" places them on a grid S metres
@@ -72,7 +74,11 @@ browser=(--layout 1 --effects height,displacement,normals,foam,near --layers 4 -
          --pos 0,25,0 --yaw 30 --pitch -10 --fov 60 --verify-every 300)
 before=(--layout 0 --effects height,displacement,normals,foam,near --layers 4 --mesh concentric --codec qz
         --accuracy 0.001 --cutoff-policy antialias --tile-size 64 --levels "$levels" --spacing 1
-        --pos 0,25,0 --yaw 30 --pitch -10 --fov 60 --verify-every 300)
+        --mesh-codec f32 --pos 0,25,0 --yaw 30 --pitch -10 --fov 60 --verify-every 300)
+# A layout-0 thin client today: the same, with the mesh positions as qz
+# (MESH_VERTICES_QZ at the same accuracy; bench_meshqz has their bytes and
+# error) instead of f32.
+thin=("${before[@]/#f32/qz}")   # the one element "f32" (--mesh-codec) becomes "qz"
 echo "viewers,seconds,frames_per_viewer,frames_expected,latency_p50_ms,latency_p99_ms,frames_skipped_per_viewer,daemon_cpu_cores,bytes_per_viewer_per_s,disconnects,errors,generator_cpu_cores,decode_errors,camera_spread_m,subscription,generator_cpu_cores_proc" >"$csv"
 echo "| subscription | viewers | cameras | frames/viewer (expected) | p50 ms | p99 ms | skipped/viewer | daemon CPU (cores) | MB/s per viewer | generator CPU (cores, measured window / whole run) |"
 echo "|:---|---:|:---|---:|---:|---:|---:|---:|---:|---:|"
@@ -82,13 +88,14 @@ if [[ -n "$quick" ]]; then
 else
     runs=(browser:1:0 browser:64:0 browser:256:0 browser:64:20 browser:256:20
           browser:64:2000 browser:256:2000 before:1:0 before:256:0 before:64:20 before:256:20
-          before:256:2000)
+          before:256:2000 thin:256:20)
 fi
 for run in "${runs[@]}"; do
     IFS=: read -r sub n spread <<<"$run"
     cams=$(awk -v s="$spread" 'BEGIN {print (s > 0) ? (s >= 1000 ? s / 1000 " km apart" : s " m apart") : "shared"}')
     ramp=$(awk -v n="$n" 'BEGIN {print (n > 64) ? 3 : 1}')
     if [[ "$sub" == browser ]]; then subopts=("${browser[@]}"); label="browser viewer (layout 1)"
+    elif [[ "$sub" == thin ]]; then subopts=("${thin[@]}"); label="layout 0 thin client, compressed mesh"
     else subopts=("${before[@]}"); label="viewer before issue 14 (layout 0)"; fi
     c0=$(cpu "$pid"); t0=$(date +%s.%N)
     jf=$(mktemp)

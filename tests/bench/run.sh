@@ -97,9 +97,10 @@ declare -A KNOWN_TITLE=(
     [bench_accuracy]="Accuracy against cost (issue 8)"
     [bench_codec]="Tile codecs (issue 5)"
     [bench_mesh]="LOD meshes (issue 4)"
+    [bench_meshqz]="Layout-0 mesh positions, f32 and qz (issue 14)"
     [bench_server]="Daemon under load"
 )
-ORDER=(bench_core bench_accuracy bench_codec bench_mesh bench_server)
+ORDER=(bench_core bench_accuracy bench_codec bench_mesh bench_meshqz bench_server)
 declare -A DONE=()
 ONLY=" ${BENCH_ONLY:-} "
 selected() { [ -z "${BENCH_ONLY:-}" ] || [[ "$ONLY" == *" $1 "* ]]; }

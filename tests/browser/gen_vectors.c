@@ -51,6 +51,23 @@ static int write_msg(const char *dir, const char *name, proto_msg *m)
     return 0;
 }
 
+/* A MESH_TOPOLOGY message with these fields (not FLAT unless the caller
+ * sets flags, flat and zones afterwards). */
+static void topology_msg(proto_msg *m, uint32_t seq, uint32_t mesh_id, uint8_t lod_levels, uint32_t vertex_count,
+                         uint32_t index_count, const uint32_t *indices, const float *morph, const uint8_t *level)
+{
+    proto_msg_init(m, PROTO_MESH_TOPOLOGY);
+    m->hdr.seq = seq;
+    m->u.topology.mesh_id = mesh_id;
+    m->u.topology.mesh_kind = PROTO_MESH_CONCENTRIC;
+    m->u.topology.lod_levels = lod_levels;
+    m->u.topology.vertex_count = vertex_count;
+    m->u.topology.index_count = index_count;
+    m->u.topology.indices = indices;
+    m->u.topology.morph = morph;
+    m->u.topology.level = level;
+}
+
 static void print_floats(FILE *o, const float *v, size_t n)
 {
     fputc('[', o);
@@ -326,16 +343,7 @@ static int gen(const char *dir)
         uint8_t flev[3 + 1] = {0, 0, 1, 2};
         float flat[8] = {-1.5f, 0, 1.5f, 0, 0, 3, 12, -12};
         float zones[12] = {1.5f, 40, 6, 0, 3, 80, 12, 0, 6, 160, 0, 0};
-        proto_msg_init(&m, PROTO_MESH_TOPOLOGY);
-        m.hdr.seq = 5;
-        m.u.topology.mesh_id = 6;
-        m.u.topology.mesh_kind = PROTO_MESH_CONCENTRIC;
-        m.u.topology.lod_levels = 3;
-        m.u.topology.vertex_count = 4;
-        m.u.topology.index_count = 6;
-        m.u.topology.indices = fidx;
-        m.u.topology.morph = fmorph;
-        m.u.topology.level = flev;
+        topology_msg(&m, 5, 6, 3, 4, 6, fidx, fmorph, flev);
         m.u.topology.flags = PROTO_TOPO_FLAT;
         m.u.topology.flat = flat;
         m.u.topology.zones = zones;
@@ -352,19 +360,83 @@ static int gen(const char *dir)
     uint32_t idx[6] = {0, 2, 1, 1, 2, 3};
     float morph[4] = {0, 0.25f, 0.5f, 1};
     uint8_t lev[4] = {0, 0, 1, 1};
-    proto_msg_init(&m, PROTO_MESH_TOPOLOGY);
-    m.hdr.seq = 3;
-    m.u.topology.mesh_id = 5;
-    m.u.topology.mesh_kind = PROTO_MESH_CONCENTRIC;
-    m.u.topology.lod_levels = 2;
-    m.u.topology.vertex_count = 4;
-    m.u.topology.index_count = 6;
-    m.u.topology.indices = idx;
-    m.u.topology.morph = morph;
-    m.u.topology.level = lev;
+    topology_msg(&m, 3, 5, 2, 4, 6, idx, morph, lev);
     if (write_msg(dir, "topology", &m))
         return 1;
     fprintf(o, "\"topology\": {\"meshId\":5,\"indices\":[0,2,1,1,2,3],\"morph\":[0,0.25,0.5,1],\"level\":[0,0,1,1]},\n");
+
+    /* Layout 0 with qz mesh positions (has_mesh 2) and the MESH_TOPOLOGY
+     * they are predicted over: a G x G lattice (1 m, row-major, two
+     * triangles a cell) far from the origin, displaced by a few smooth
+     * waves, so the parallelogram, midpoint and previous-vertex rules all
+     * occur; expected: the C refs and the C-decoded positions */
+    {
+        enum { G = 24, V = G * G, I = 6 * (G - 1) * (G - 1) };
+        static uint32_t gi[I];
+        static float gm[V], gp[3 * V], back[3 * V];
+        static uint8_t gl[V];
+        static uint32_t refs[3 * V];
+        int k = 0;
+        for (int i = 0; i + 1 < G; i++)
+            for (int j = 0; j + 1 < G; j++) {
+                uint32_t a = (uint32_t)(i * G + j), b = a + 1, c = a + G, d = c + 1;
+                gi[k++] = a; gi[k++] = c; gi[k++] = b;
+                gi[k++] = b; gi[k++] = c; gi[k++] = d;
+            }
+        for (int i = 0; i < G; i++)
+            for (int j = 0; j < G; j++) {
+                float *q = gp + 3 * (i * G + j);
+                double x = j - 11.5, z = i - 11.5;
+                q[0] = (float)(x + 0.4 * sin(0.7 * x + 0.3 * z));
+                q[1] = (float)(1.5 * sin(0.45 * x - 0.2 * z) + 0.3 * cos(1.3 * z + 0.5 * x));
+                q[2] = (float)(z - 0.35 * cos(0.5 * z - 0.6 * x));
+            }
+        topology_msg(&m, 6, 11, 1, V, I, gi, gm, gl);
+        if (write_msg(dir, "topology_mesh_qz", &m))
+            return 1;
+        proto_codec_ctx *cx = NULL;
+        proto_buf qz;
+        proto_buf_init(&qz, 0);
+        char err[256];
+        if (proto_mesh_qz_refs(gi, I, V, refs) != OCEAN_OK || proto_codec_ctx_create(&cx) != OCEAN_OK ||
+            proto_mesh_qz_encode(cx, 2e-3, V, gp, refs, &qz, NULL, err, sizeof err) != OCEAN_OK ||
+            proto_mesh_qz_decode(proto_buf_data(&qz), proto_buf_len(&qz), V, refs, back, err, sizeof err) != OCEAN_OK) {
+            fprintf(stderr, "mesh qz: %s\n", err);
+            return 1;
+        }
+        proto_codec_ctx_destroy(cx);
+        proto_msg_init(&m, PROTO_FRAME);
+        m.hdr.seq = 7;
+        m.hdr.sim_time = 321.5;
+        f = &m.u.frame;
+        f->cutoff_k = INFINITY;
+        f->origin[0] = -3e6 + 0.5;
+        f->origin[2] = 7e5;
+        f->camera_seq = 44;
+        f->tick = 9003;
+        f->has_mesh = 2;
+        f->mesh.mesh_id = 11;
+        f->mesh.vertex_count = V;
+        f->mesh.origin[0] = -3e6 + 0.5;
+        f->mesh.origin[2] = 7e5;
+        f->mesh.qz = proto_buf_data(&qz);
+        f->mesh.qz_len = (uint32_t)proto_buf_len(&qz);
+        if (write_msg(dir, "frame_mesh_qz", &m))
+            return 1;
+        int kinds[3] = {0, 0, 0};
+        for (int v = 0; v < V; v++)
+            kinds[refs[3 * v + 2] != PROTO_MESH_QZ_NONE ? 0 : refs[3 * v] != PROTO_MESH_QZ_NONE ? 1 : 2]++;
+        fprintf(o, "\"frame_mesh_qz\": {\"meshId\":11,\"vertexCount\":%d,\"qzLen\":%u,\"refKinds\":[%d,%d,%d],\"refs\":[",
+                V, f->mesh.qz_len, kinds[0], kinds[1], kinds[2]);
+        for (int i = 0; i < 3 * V; i++)
+            fprintf(o, "%s%u", i ? "," : "", refs[i]);
+        fprintf(o, "],\"input\":");
+        print_floats(o, gp, 3 * V);
+        fprintf(o, ",\"positions\":");
+        print_floats(o, back, 3 * V);
+        fprintf(o, "},\n");
+        proto_buf_free(&qz);
+    }
 
     /* QUERY_RESULT */
     proto_query_sample qs[2] = {{0.5f, {0, 1, 0}, {0.1f, 0.2f, 0.3f}, 0.25f, 0.001f},
@@ -453,10 +525,10 @@ static int decode_files(int n, char **files)
                 proto_subscribe *s = &m.u.subscribe;
                 printf(",\"effects\":%u,\"meshKind\":%u,\"codec\":%u,\"cutoffPolicy\":%u,\"mode\":%u,\"layers\":%u,"
                        "\"lodLevels\":%u,\"tileSize\":%u,\"frameRateHz\":%.9g,\"accuracy\":%.9g,\"baseSpacingM\":%.9g,"
-                       "\"viewRangeM\":%.9g,\"layout\":%u",
+                       "\"viewRangeM\":%.9g,\"layout\":%u,\"meshCodec\":%u",
                        s->effects, s->mesh_kind, s->codec, s->cutoff_policy, s->mode, s->layers, s->lod_levels,
                        s->tile_size, (double)s->frame_rate_hz, (double)s->accuracy, (double)s->base_spacing_m,
-                       (double)s->view_range_m, s->layout);
+                       (double)s->view_range_m, s->layout, s->mesh_codec);
                 break;
             }
             case PROTO_CAMERA: {

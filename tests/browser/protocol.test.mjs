@@ -31,7 +31,7 @@ import {
     decode, encodeSubscribe, encodeCamera, encodeQuery, encodeBye, ProtoError, R, T, CODEC, FX, tilePlanes,
     LAYOUT, MIP_ENTRIES, TOPO_FLAT,
 } from '../../clients/web/protocol.js';
-import { decodeTile, octDecode, f32FromF16 } from '../../clients/web/codec.js';
+import { decodeTile, octDecode, f32FromF16, decodeMeshQz, meshQzRefs } from '../../clients/web/codec.js';
 
 const dir = process.env.VECTOR_DIR;
 const gen = process.env.GEN_VECTORS;
@@ -128,6 +128,50 @@ test('FRAME from C: header, mesh and tiles decode; tile samples equal the C deco
     assert.ok(f.tiles.some((t) => t.codec === CODEC.QZ && t.payload[1] === 1), 'a qz format 1 tile');
 });
 
+test('layout-0 FRAME with qz mesh positions from C: refs and positions equal the C decoder bit for bit', () => {
+    const e = expected.frame_mesh_qz;
+    const t = decode(vec('topology_mesh_qz')).body;
+    const m = decode(vec('frame_mesh_qz'));
+    const f = m.body;
+    assert.equal(f.hasMesh, 2);
+    assert.equal(f.layout, LAYOUT.WORLD);
+    assert.equal(f.mesh.meshId, e.meshId);
+    assert.equal(f.mesh.vertexCount, e.vertexCount);
+    assert.equal(f.mesh.qz.length, e.qzLen);
+    assert.equal(f.mesh.positions, null);
+    /* every prediction rule occurs: parallelogram, midpoint, previous vertex */
+    assert.ok(e.refKinds.every((n) => n > 0), `ref kinds ${e.refKinds}`);
+    const refs = meshQzRefs(t.indices, t.vertexCount);
+    assert.deepEqual(Array.from(refs), e.refs);
+    const pos = decodeMeshQz(f.mesh.qz, f.mesh.vertexCount, refs);
+    assert.equal(pos.length, e.positions.length);
+    for (let i = 0; i < pos.length; i++) assert.equal(pos[i], Math.fround(e.positions[i]), `component ${i}`);
+    /* within the stated bound of the input: half the axis step + f32 rounding */
+    const h = f.mesh.qzHeader;
+    for (let i = 0; i < pos.length; i++) {
+        const a = i % 3, x = Math.fround(e.input[i]);
+        assert.ok(Math.abs(pos[i] - x) <= 0.5 * h.step[a] + Math.abs(x) * 2 ** -24, `component ${i}: ${pos[i]} vs ${x}`);
+    }
+    /* hostile payloads: refused with ECODEC or decoded to finite positions, never anything else */
+    const rand = rng(77);
+    let refused = 0;
+    for (let k = 0; k < 300; k++) {
+        const b = f.mesh.qz.slice();
+        const i = Math.floor(rand() * b.length);
+        b[i] = [0, 0xff, 0x80, b[i] ^ (1 << Math.floor(rand() * 8))][Math.floor(rand() * 4)];
+        const cut = k % 10 === 0 ? b.subarray(0, Math.floor(rand() * b.length)) : b;
+        try {
+            const p = decodeMeshQz(cut, f.mesh.vertexCount, refs);
+            assert.ok(p.every((x) => Math.abs(x) <= 1e7));
+        } catch (err) {
+            assert.ok(err instanceof ProtoError && err.code === R.ECODEC, String(err));
+            refused++;
+        }
+    }
+    assert.ok(refused > 0);
+    assert.throws(() => decodeMeshQz(f.mesh.qz, f.mesh.vertexCount - 1, refs), (err) => err.code === R.ECODEC);
+});
+
 test('layout-1 FRAME from C: cascade block, mip tables, tags, placement; tiles bit for bit', () => {
     const m = decode(vec('frame_cascade'));
     const e = expected.frame_cascade;
@@ -208,7 +252,7 @@ test('SUBSCRIBE, CAMERA, QUERY, BYE encoded in JS decode in C to the same fields
         rollDeg: 3, fovYDeg: 55, viewportW: 1920, viewportH: 1080, renderTime: 0,
     };
     const pts = [1e6 + 0.125, -3.5, 42, 1e9];
-    const sub1 = { ...sub, layout: LAYOUT.CASCADE, lodLevels: 1, baseSpacingM: 0 };
+    const sub1 = { ...sub, layout: LAYOUT.CASCADE, lodLevels: 1, baseSpacingM: 0, meshCodec: 2 };
     const [cs, cc, cq, cb, cs1] = cDecode([
         new Uint8Array(encodeSubscribe(sub, 7, 1.5)), new Uint8Array(encodeCamera(cam, 8, 2.5)),
         new Uint8Array(encodeQuery(99, pts, 12.75, 9, 3.5)), new Uint8Array(encodeBye(0, 'viewer closed ✓', 10, 4.5)),
@@ -218,6 +262,8 @@ test('SUBSCRIBE, CAMERA, QUERY, BYE encoded in JS decode in C to the same fields
     assert.equal(cs1.layout, LAYOUT.CASCADE);
     assert.equal(cs1.lodLevels, 1);
     assert.equal(cs.layout, LAYOUT.WORLD, 'layout defaults to 0');
+    assert.equal(cs.meshCodec, 0, 'mesh_codec defaults to f32');
+    assert.equal(cs1.meshCodec, 2, 'mesh_codec qz');
     assert.equal(cs.code, 0, cs.err);
     assert.equal(cs.type, T.SUBSCRIBE);
     assert.equal(cs.seq, 7);
@@ -247,6 +293,7 @@ test('JS encoders refuse what the C decoder would refuse', () => {
     assert.throws(() => encodeSubscribe({ ...base, codec: 9 }, 1), (e) => e.code === R.ETYPE);
     assert.throws(() => encodeSubscribe({ ...base, frameRateHz: NaN }, 1), (e) => e.code === R.EINVAL);
     assert.throws(() => encodeSubscribe({ ...base, layout: 2 }, 1), (e) => e.code === R.ETYPE);
+    assert.throws(() => encodeSubscribe({ ...base, meshCodec: 1 }, 1), (e) => e.code === R.ETYPE);
     const cam = { pos: [0, 10, 0], vel: [0, 0, 0], yawDeg: 0, pitchDeg: 0, fovYDeg: 60, viewportW: 10, viewportH: 10 };
     assert.throws(() => encodeCamera({ ...cam, pos: [NaN, 0, 0] }, 1), (e) => e.code === R.EINVAL);
     assert.throws(() => encodeCamera({ ...cam, fovYDeg: 180 }, 1), (e) => e.code === R.EINVAL);
@@ -466,7 +513,7 @@ function flatten(m) {
     if (m.type === T.TILE) m = { ...m, body: { tile: m.body } };
     const flat = { type: m.name, version: String(m.hdr.version), flags: String(m.hdr.flags), seq: String(m.hdr.seq), sim_time: String(m.hdr.simTime) };
     const val = (k, v) => {
-        if (v instanceof Uint8Array && k === 'payload') return Array.from(v, (b) => b.toString(16).padStart(2, '0')).join(' ');
+        if (v instanceof Uint8Array && (k === 'payload' || k === 'qz')) return Array.from(v, (b) => b.toString(16).padStart(2, '0')).join(' ');
         if (ArrayBuffer.isView(v) || Array.isArray(v)) return Array.from(v).join(' ');
         return String(v);
     };
@@ -527,6 +574,11 @@ test('the protocol vectors in tests/vectors decode to their stated fields; bad o
             continue;
         }
         const m = decode(bytes);
+        if (m.type === T.FRAME && m.body.hasMesh === 2) {
+            /* positions need the topology: the mesh_topology vector's (PROTOCOL.md "Test vectors") */
+            const topo = decode(new Uint8Array(readFileSync(join(vdir, 'mesh_topology.bin')))).body;
+            m.body.mesh.positions = decodeMeshQz(m.body.mesh.qz, m.body.mesh.vertexCount, meshQzRefs(topo.indices, topo.vertexCount));
+        }
         const flat = flatten(m);
         let compared = 0;
         for (const [k, v] of Object.entries(want)) {

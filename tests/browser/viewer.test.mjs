@@ -230,10 +230,14 @@ try {
      * on layout 0 with f16 tiles, so that path and codec are exercised too */
     await page2.goto(`${url}&sea=0&codec=f16&layout=0`, { waitUntil: 'load', timeout: 30000 });
     await waitFor(page2, () => window.oceanStats && window.oceanStats.tilesDecoded > 0, null, timeoutMs);
+    await waitFor(page2, () => window.oceanStats && window.oceanStats.framesWithMesh > 0, null, timeoutMs);
     const sC = await stats(page2);
-    check('the f16 codec and layout 0 work end to end too', sC.codec === 'f16' && sC.layout === 0 && sC.subscription.layout === 0 &&
+    /* layout 0's mesh positions arrive as qz (mesh_codec 2) and the worker
+     * decodes them with the topology: frames carry a mesh, no errors */
+    check('the f16 codec and layout 0 (qz mesh positions) work end to end too', sC.codec === 'f16' && sC.layout === 0 &&
+        sC.subscription.layout === 0 && sC.subscription.meshCodec === 2 && sC.framesWithMesh > 0 &&
         sC.tilesDecoded > 0 && sC.decodeErrors === 0 && sC.serverErrors === 0,
-        `codec ${sC.codec}, layout ${sC.layout}, ${sC.tilesDecoded} tiles, ${sC.decodeErrors} errors ${sC.errors.join(' | ')}`);
+        `codec ${sC.codec}, layout ${sC.layout}, mesh codec ${sC.subscription.meshCodec}, ${sC.framesWithMesh} frames with a mesh, ${sC.tilesDecoded} tiles, ${sC.decodeErrors} errors ${sC.errors.join(' | ')}`);
     await page2.waitForTimeout(1500);
     const pngC = await page2.screenshot({ type: 'png' });
     writeFileSync(join(artifacts, 'viewer-control.png'), pngC);

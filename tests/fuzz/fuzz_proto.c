@@ -8,7 +8,8 @@
  *     format has one encoding per message) and decodes again;
  *   - proto_error_reply always yields a decodable ERROR;
  *   - every decoded tile's payload goes through proto_tile_decode, which
- *     returns OK with finite values or a clean error.
+ *     returns OK with finite values or a clean error; so does a FRAME's
+ *     qz mesh payload through proto_mesh_qz_decode.
  */
 #include <math.h>
 #include <stdint.h>
@@ -35,6 +36,29 @@ static void fuzz_tile(const proto_tile *t)
             if (!isfinite(planes[i]))
                 abort();
     free(planes);
+}
+
+/* A has_mesh 2 record's positions (MESH_VERTICES_QZ): decoded with
+ * previous-vertex references (valid for any vertex count; a topology's
+ * only choose other decoded vertices), OK with finite |.| <= 1e7 values
+ * or a clean error. */
+static void fuzz_mesh_qz(const proto_mesh_vertices *v)
+{
+    size_t n = v->vertex_count;
+    if (n == 0 || n > (1u << 16))
+        return;
+    uint32_t *refs = malloc(3 * n * sizeof *refs);
+    float *xyz = malloc(3 * n * sizeof *xyz);
+    if (refs && xyz) {
+        memset(refs, 0xff, 3 * n * sizeof *refs);
+        char err[256];
+        if (proto_mesh_qz_decode(v->qz, v->qz_len, (uint32_t)n, refs, xyz, err, sizeof err) == OCEAN_OK)
+            for (size_t i = 0; i < 3 * n; i++)
+                if (!isfinite(xyz[i]) || fabsf(xyz[i]) > 1e7f)
+                    abort();
+    }
+    free(refs);
+    free(xyz);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -66,6 +90,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (m.hdr.type == PROTO_FRAME)
         for (unsigned i = 0; i < m.u.frame.tile_count && i < 8; i++)
             fuzz_tile(&m.u.frame.tiles[i]);
+    if (m.hdr.type == PROTO_FRAME && m.u.frame.has_mesh == 2)
+        fuzz_mesh_qz(&m.u.frame.mesh);
     proto_msg_free(&m);
     proto_buf_free(&b);
     return 0;

@@ -392,7 +392,9 @@ static int verify_frame(worker *w, const uint8_t *p, size_t n)
     if (oc_frame_decode(p, n, &f, err, sizeof err) != OCEAN_OK)
         return 1;
     int bad = 0;
-    if (f->info.has_mesh && f->info.layout == PROTO_LAYOUT_WORLD && f->info.mesh.vertex_count &&
+    /* has_mesh 2 (qz positions): proto_decode checked the payload's header;
+     * its positions need the topology, which this reader does not keep */
+    if (f->info.has_mesh == 1 && f->info.layout == PROTO_LAYOUT_WORLD && f->info.mesh.vertex_count &&
         !f->info.mesh.positions)
         bad++;
     if (f->info.layout == PROTO_LAYOUT_CASCADE && f->info.tile_count) {

@@ -352,6 +352,7 @@ void occli_sub_default(occli_sub *s)
             snprintf(fx + strlen(fx), sizeof fx - strlen(fx), "%s%s", fx[0] ? "," : "", fxn[i].name);
     s->effects = fx;
     s->mesh = d.mesh_kind < 4 ? mesh_names[d.mesh_kind] : "concentric";
+    s->mesh_codec = d.mesh_codec == PROTO_MESH_CODEC_QZ ? "qz" : "f32";
     s->policy = d.cutoff_policy < 3 ? policy_names[d.cutoff_policy] : "antialias";
     s->rate = d.frame_rate_hz;
     /* The wire carries accuracy as float32; the double the library starts
@@ -417,6 +418,15 @@ int occli_sub_build(const char *cmd, const occli_sub *s, proto_subscribe *sub, p
         return 2;
     }
     sub->mesh_kind = (uint8_t)mk;
+    if (!strcmp(s->mesh_codec, "f32"))
+        sub->mesh_codec = PROTO_MESH_CODEC_F32;
+    else if (!strcmp(s->mesh_codec, "qz"))
+        sub->mesh_codec = PROTO_MESH_CODEC_QZ;
+    else {
+        fprintf(stderr, "ocean-client %s: option '--mesh-codec': unknown mesh codec '%s' (f32 or qz)\n", cmd,
+                s->mesh_codec);
+        return 2;
+    }
     int pk = -1;
     for (int i = 0; i < 3; i++)
         if (!strcmp(s->policy, policy_names[i]))

@@ -39,6 +39,7 @@ typedef struct occli_sub {
     const char *codec;     /* --codec NAME */
     const char *effects;   /* --effects LIST */
     const char *mesh;      /* --mesh KIND */
+    const char *mesh_codec;/* --mesh-codec f32|qz (layout 0) */
     const char *policy;    /* --cutoff-policy NAME */
     double rate;           /* --rate HZ */
     double accuracy;       /* --accuracy A */
@@ -57,6 +58,7 @@ typedef struct occli_sub {
     {"codec", OCCLI_STRING, &(s)->codec, 0, 0, "NAME  tile codec: f32 f16 qz exr-zip exr-piz exr-b44 exr-b44a", NULL}, \
     {"effects", OCCLI_STRING, &(s)->effects, 0, 0, "LIST  height,displacement,normals,foam,near or all", NULL},        \
     {"mesh", OCCLI_STRING, &(s)->mesh, 0, 0, "KIND  concentric chunked projected none", NULL},                        \
+    {"mesh-codec", OCCLI_STRING, &(s)->mesh_codec, 0, 0, "NAME  layout-0 mesh positions: f32 or qz (at --accuracy)", NULL}, \
     {"cutoff-policy", OCCLI_STRING, &(s)->policy, 0, 0, "NAME  none seed antialias", NULL},                          \
     {"rate", OCCLI_DOUBLE, &(s)->rate, 0.1, 240, "HZ  frame rate asked of the server", NULL},                        \
     {"accuracy", OCCLI_DOUBLE, &(s)->accuracy, 1e-6, 0.5, "A  qz accuracy target", NULL},                           \
