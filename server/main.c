@@ -193,11 +193,11 @@ static int probe_listen(const srv_config *c, char *err, size_t errlen)
 int main(int argc, char **argv)
 {
     /* OpenMP worker threads (frame building, the spectrum stage) must sleep
-     * between ticks, not spin: on a 2-core host spinning teams starve the
-     * libwebsockets thread (ocean_wait_policy_setenv: a spin of ~30 us
-     * within an evaluation, sleep beyond).  libgomp reads the policy when
-     * it loads, so set it and start again. */
-    if (ocean_wait_policy_setenv())
+     * when they wait, not spin: on a 2-core host spinning teams starve the
+     * libwebsockets thread (even the ~30 us spin that speeds a lone
+     * evaluation made 256 viewers' frames later: ocean_wait_policy_setenv).
+     * libgomp reads the policy when it loads, so set it and start again. */
+    if (ocean_wait_policy_setenv(0))
         execv("/proc/self/exe", argv);
     /* Every tick builds and frees FRAME encodings of 100-200 KB, and
      * libwebsockets copies each partial write's remainder into a fresh

@@ -179,12 +179,13 @@ void ocean_params_default(ocean_params *p)
     p->drop_gain = OCEAN_DROP_GAIN_DEFAULT;
 }
 
-int ocean_wait_policy_setenv(void)
+int ocean_wait_policy_setenv(int spin)
 {
     if (getenv("OMP_WAIT_POLICY"))
         return 0;
     setenv("OMP_WAIT_POLICY", "passive", 1);
-    setenv("GOMP_SPINCOUNT", OCEAN_GOMP_SPINCOUNT, 0);
+    if (spin)
+        setenv("GOMP_SPINCOUNT", OCEAN_GOMP_SPINCOUNT, 0);
     return 1;
 }
 

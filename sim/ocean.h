@@ -96,21 +96,27 @@ typedef struct ocean_params {
  * 1000 m patch, seed 1). */
 void ocean_params_default(ocean_params *p);
 
-/* The OpenMP wait policy an evaluation is made for, set in the environment
- * unless OMP_WAIT_POLICY is already there: OMP_WAIT_POLICY=passive and
- * (unless set) GOMP_SPINCOUNT=OCEAN_GOMP_SPINCOUNT.  A team member spins
- * that long (libgomp: ~10 ns a count, so ~30 us) for the next parallel
- * region, then sleeps.  An evaluation is a chain of regions (the spectrum
- * stage, then FFTW's passes), a few microseconds apart: with no spin
- * (passive alone) each one waited for a sleeping thread to be woken, and an
- * evaluation at N = 512 on 2 threads took 14 % longer (bench_core,
- * "OpenMP wait policy"); with libgomp's default spin (~3 ms) a team member
- * whose core another process holds costs the others a time slice at every
- * barrier.  libgomp reads both when it loads: returns 1 when it set
- * something (the caller should re-execute itself, e.g.
- * execv("/proc/self/exe", argv)), 0 when the environment had chosen. */
+/* Sets the OpenMP wait policy in the environment unless OMP_WAIT_POLICY
+ * is already there: OMP_WAIT_POLICY=passive and, with spin (unless set),
+ * GOMP_SPINCOUNT=OCEAN_GOMP_SPINCOUNT.
+ * - Passive: a team member sleeps as soon as it waits.  With libgomp's
+ *   default spin (~3 ms) a team member whose core another process holds
+ *   cost the others a time slice at every barrier (N = 256 on 2 threads:
+ *   0.7 ms became 20-35 ms).
+ * - spin = 1: it first spins ~30 us (libgomp: ~10 ns a count).  An
+ *   evaluation is a chain of parallel regions (the spectrum stage, FFTW's
+ *   passes) microseconds apart, and without the spin each region first
+ *   waits for a sleeping thread to be woken: 10-16 % of an evaluation at
+ *   N = 512-1024 on 2 threads (bench_core, "OpenMP wait policy").  For
+ *   programs whose work is evaluating (ocean-sim, bench_core).  oceand
+ *   passes 0: on 2 cores the spinning team took time from the service
+ *   thread, and frames at 256 viewers came later (p50 8.0 -> 10.7 ms, p99
+ *   16 -> 21 ms).
+ * libgomp reads both when it loads: returns 1 when it set something (the
+ * caller should re-execute itself, e.g. execv("/proc/self/exe", argv)), 0
+ * when the environment had chosen. */
 #define OCEAN_GOMP_SPINCOUNT "3000"
-int ocean_wait_policy_setenv(void);
+int ocean_wait_policy_setenv(int spin);
 
 /* Checks every field of p (ranges, NaN/Inf, power-of-two N, and that no
  * wave held is faster than OCEAN_OMEGA_MAX, the frequency the time limit

@@ -1178,7 +1178,7 @@ int main(int argc, char **argv)
     (void)argc;
     /* as test_server.c: OpenMP teams sleep; libcrypto's store that lws
      * loads for client contexts is suppressed in LSan, nothing else */
-    if (ocean_wait_policy_setenv()) {
+    if (ocean_wait_policy_setenv(0)) {
         static char supp[64];
         snprintf(supp, sizeof supp, "/tmp/test_attacks.%d.lsan", (int)getpid());
         FILE *f = fopen(supp, "w");

@@ -2263,7 +2263,7 @@ int main(int argc, char **argv)
      * OpenSSL's certificate store that libwebsockets loads for every client
      * context is reported as an indirect leak inside libcrypto (not ours:
      * no frame of this project is on those stacks); suppress exactly that. */
-    if (ocean_wait_policy_setenv()) {
+    if (ocean_wait_policy_setenv(0)) {
         static char supp[64];
         snprintf(supp, sizeof supp, "/tmp/test_server.%d.lsan", (int)getpid());
         FILE *f = fopen(supp, "w");

@@ -4,8 +4,10 @@
  */
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cli.h"
+#include "ocean.h"
 
 static const struct {
     const char *name;
@@ -31,6 +33,10 @@ static void usage(FILE *to)
 
 int main(int argc, char **argv)
 {
+    /* Its work is evaluating: passive with a short spin between an
+     * evaluation's parallel regions (ocean_wait_policy_setenv). */
+    if (ocean_wait_policy_setenv(1))
+        execv("/proc/self/exe", argv);
     if (argc < 2) {
         usage(stderr);
         return 2;
