@@ -389,8 +389,9 @@ typedef struct ocean_counters {
     uint64_t evaluations;
     uint64_t transforms;               /* all 2-D inverse FFTs */
     uint64_t transforms_by_effect[5];  /* height, displacement, normals, foam, velocity */
-    uint64_t fft_calls;                /* FFTW executions: transforms go in groups of at
-                                          most 8.5 MB of spectra (N = 1024: 2 a call) */
+    uint64_t fft_calls;                /* FFTW executions of ocean_evaluate: transforms go
+                                          in groups of at most 8.5 MB of spectra
+                                          (N = 1024: 2 a call) */
 } ocean_counters;
 void ocean_get_counters(const ocean *o, ocean_counters *out);
 

@@ -19,8 +19,8 @@
 void ocean_force_paths(ocean *o, int fused, int stream);
 
 /* Transforms the channels of an evaluation group channels per FFTW call
- * (1..8; 0 or out of range: the default rule, at most 8.5 MB of spectra a
- * call).  Each group size is its own FFTW plan, so results may differ from
+ * (1 up to the 11 channels an evaluation can hold; 0 or out of range: the
+ * default rule, at most 8.5 MB of spectra a call).  Each group size is its own FFTW plan, so results may differ from
  * the default's in the last bits.  Accepts NULL. */
 void ocean_force_group(ocean *o, int group);
 
