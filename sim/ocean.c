@@ -135,7 +135,7 @@ struct ocean {
     int foam_next;
     gain_plane gains[GAIN_PLANES];
     uint64_t gain_clock;
-    int fused;          /* row pass: AVX2+FMA where the CPU has both */
+    int fused;          /* row pass: 0 plain, 1 AVX2+FMA, 2 AVX-512 (ocean_force_paths) */
     double stream_bytes; /* spectra larger than this are streamed (twice the LLC) */
     int group;           /* channels per FFTW call forced by a test, 0: group_size's rule */
 };
@@ -454,15 +454,21 @@ ocean_result ocean_wisdom_export(const char *path, char *msg, size_t msglen)
     return OCEAN_OK;
 }
 
-void ocean_force_paths(ocean *o, int fused, int stream)
+int ocean_force_paths(ocean *o, int fused, int stream)
 {
     if (!o)
-        return;
+        return -1;
+    /* The widest pass the CPU runs: 2 needs AVX-512 F, VL, DQ and BW as
+     * well as AVX2 and FMA. */
     int can = 0;
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-    can = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+        can = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+                      __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw")
+                  ? 2
+                  : 1;
 #endif
-    o->fused = fused < 0 ? can : fused && can;
+    o->fused = fused < 0 ? can : fused < can ? fused : can;
     if (stream < 0) {
         /* Stream only what could not stay in the last-level cache at all:
          * a spectrum over twice its size.  Below that the FFT finds the
@@ -476,6 +482,7 @@ void ocean_force_paths(ocean *o, int fused, int stream)
     } else {
         o->stream_bytes = stream ? 0.0 : INFINITY;
     }
+    return o->fused;
 }
 
 /* The lattice cascade of ocean_create_lattice: h0 from the waves (sparse:
@@ -1055,7 +1062,7 @@ typedef struct stage_args {
     fftwf_complex *spec;
     float *gain;            /* gain plane of this bucket, or NULL (compute) */
     int gain_ready;         /* 1: gain holds the gains, 0: fill it */
-    int fused;              /* 1: the AVX2+FMA row pass (same bits) */
+    int fused;              /* 1: AVX2+FMA, 2: AVX-512 row pass (same bits) */
     int stream;             /* 1: write spec with streaming stores */
 } stage_args;
 
@@ -1342,11 +1349,26 @@ static void spectrum_row_fused(const stage_args *a, int r)
 {
     spectrum_row_body(a, r, 1);
 }
+
+/* The same source 16 floats wide.  With AVX2 the row loop runs out of
+ * registers and reloads the sin/cos coefficients from the stack; 32
+ * vector registers hold them (bench_core, "the spectrum stage's paths").
+ * Same operations in the same order, no contraction (ISO C: no
+ * -ffp-contract), so the same bits (tests/test_ocean.c). */
+__attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,avx2,fma,prefer-vector-width=512")))
+static void spectrum_row_wide(const stage_args *a, int r)
+{
+    spectrum_row_body(a, r, 1);
+}
 #endif
 
 static void spectrum_row(const stage_args *a, int r)
 {
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+    if (a->fused == 2) {
+        spectrum_row_wide(a, r);
+        return;
+    }
     if (a->fused) {
         spectrum_row_fused(a, r);
         return;

@@ -9,14 +9,17 @@
 
 /* Chooses the spectrum stage's code paths, which must all give the same
  * bits (tests/test_ocean.c compares them):
- *   fused  1: the AVX2+FMA row pass (only where the CPU has both; else
- *             the plain pass), 0: the plain pass, -1: the CPU's best;
- *   stream 1: write every spectrum with streaming stores (AVX2+FMA pass
- *             only), 0: never, -1: spectra larger than twice the
- *             last-level cache (the default).
+ *   fused  2: the AVX-512 row pass (AVX-512 F/VL/DQ/BW, AVX2 and FMA),
+ *             1: the AVX2+FMA row pass, 0: the plain pass, -1: the
+ *             CPU's best; a pass the CPU lacks falls back to the best
+ *             below it;
+ *   stream 1: write every spectrum with streaming stores (AVX2+FMA and
+ *             AVX-512 passes only), 0: never, -1: spectra larger than
+ *             twice the last-level cache (the default).
  * ocean_create applies (-1, -1).  Not thread-safe against a running
- * ocean_evaluate on the same ocean.  Accepts NULL (does nothing). */
-void ocean_force_paths(ocean *o, int fused, int stream);
+ * ocean_evaluate on the same ocean.  Returns the row pass now in force
+ * (0, 1 or 2); NULL: does nothing, returns -1. */
+int ocean_force_paths(ocean *o, int fused, int stream);
 
 /* Transforms the channels of an evaluation group channels per FFTW call
  * (1 up to the 11 channels an evaluation can hold; 0 or out of range: the

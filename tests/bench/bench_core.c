@@ -210,9 +210,10 @@ static int core_table(const int *sizes, int nsizes, int plan, int quick, FILE *c
 
 /* What each spectrum-stage path contributes (issue 14): the full
  * evaluation (+foam, 2 threads, MEASURE plans) with the plain row pass,
- * the AVX2+FMA pass, and the AVX2+FMA pass with streaming stores, each
- * interleaved with FFTW alone on one ocean (ocean_force_paths; all three
- * give the same bits, tests/test_ocean.c).  Every path already takes one
+ * the AVX2+FMA pass, the AVX-512 pass, and the widest pass with streaming
+ * stores, each interleaved with FFTW alone on one ocean
+ * (ocean_force_paths; all give the same bits, tests/test_ocean.c); a
+ * pass the CPU lacks is labelled with the one that ran.  Every path already takes one
  * phase per mirror-row pair.  Returns 0, or 1 when the ocean could not be
  * made. */
 static int stage_paths(int n, int quick)
@@ -230,30 +231,37 @@ static int stage_paths(int n, int quick)
         ocean_destroy(o);
         return 1;
     }
-    static const struct { const char *name; int fused, stream; } path[] = {
-        {"plain row pass", 0, 0}, {"AVX2+FMA", 1, 0}, {"AVX2+FMA, streaming stores", 1, 1}};
+    enum { PATHS = 4 };
+    static const struct { int fused, stream; } path[PATHS] = {{0, 0}, {1, 0}, {2, 0}, {2, 1}};
+    static const char *const pass_name[] = {"plain row pass", "AVX2+FMA", "AVX-512"};
+    int ran[PATHS];
+    for (int k = 0; k < PATHS; k++)
+        ran[k] = ocean_force_paths(o, path[k].fused, path[k].stream);
+    int best = ocean_force_paths(o, -1, -1);
     ocean_request r;
     ocean_request_all(&r, OCEAN_FX_ALL);
     r.foam_map = 0;
     int reps = quick ? 5 : (n >= 1024 ? 15 : 41);
-    double *ms = malloc(sizeof(double) * reps * 7), *fw = ms + 3 * reps, *q = fw + reps;
+    double *ms = malloc(sizeof(double) * reps * (PATHS + 2)), *fw = ms + PATHS * reps, *q = fw + reps;
     for (int i = 0; i < reps; i++) {
         double t0 = bench_now_ms();
         ocean_transform_only(o, &r, f);
         fw[i] = bench_now_ms() - t0;
-        for (int k = 0; k < 3; k++) {
-            int pk = (i + k) % 3; /* rotate which path goes first */
+        for (int k = 0; k < PATHS; k++) {
+            int pk = (i + k) % PATHS; /* rotate which path goes first */
             ocean_force_paths(o, path[pk].fused, path[pk].stream);
             t0 = bench_now_ms();
             ocean_evaluate(o, 10.0 + i / 30.0 + pk, &r, f);
             ms[pk * reps + i] = bench_now_ms() - t0;
         }
     }
-    for (int k = 0; k < 3; k++) {
+    for (int k = 0; k < PATHS; k++) {
         for (int i = 0; i < reps; i++)
             q[i] = ms[k * reps + i] / fw[i];
-        printf("| %d | %s | %.3f | %.3f | %.3f |\n", n, path[k].name, bench_median(ms + k * reps, reps),
-               bench_median(fw, reps), bench_median(q, reps));
+        printf("| %d | %s%s%s%s | %.3f | %.3f | %.3f |\n", n, pass_name[ran[k]],
+               ran[k] != path[k].fused ? " (the CPU lacks the wider pass)" : "",
+               path[k].stream ? ", streaming stores" : "", ran[k] == best && !path[k].stream ? " **(default)**" : "",
+               bench_median(ms + k * reps, reps), bench_median(fw, reps), bench_median(q, reps));
     }
     ocean_force_paths(o, -1, -1);
     free(ms);
@@ -558,9 +566,12 @@ int main(int argc, char **argv)
     printf("One ocean, its paths forced in turn and interleaved with FFTW alone on the same plans "
            "and buffers; every path takes one phase and sin/cos per pair of rows mz, -mz (same "
            "|k|, same w). The AVX2+FMA pass forms the phase product's error with one fused "
-           "multiply-add (exact, as the plain pass's Dekker product is); streaming stores write "
-           "the spectra without first reading the lines, forced here at both sizes (oceand streams "
-           "only spectra over twice the last-level cache: none at N <= 1024 on this machine).\n\n");
+           "multiply-add (exact, as the plain pass's Dekker product is); the AVX-512 pass is the "
+           "same source 16 floats wide, with registers enough to keep the sin/cos coefficients "
+           "(AVX2 reloads them from the stack); streaming stores write the spectra without first "
+           "reading the lines, forced here at both sizes (oceand streams only spectra over twice "
+           "the last-level cache: none at N <= 1024 on this machine). **(default)** marks the "
+           "pass oceand runs on this CPU.\n\n");
     printf("| N | path | ms | FFTW ms | ratio |\n|---:|---|---:|---:|---:|\n");
     for (int i = 0; i < 2; i++)
         failed |= stage_paths(mea_sizes[i], quick);
