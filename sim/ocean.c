@@ -1636,7 +1636,10 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
     return OCEAN_OK;
 }
 
-ocean_result ocean_transform_only(ocean *o, const ocean_request *r, ocean_frame *f)
+/* The FFTW calls of ocean_evaluate(o, ., r, f); with write_spectra, each
+ * call's spectra are first overwritten with zeros, row pairs split over
+ * the threads as the stage splits them. */
+static ocean_result transform_groups(ocean *o, const ocean_request *r, ocean_frame *f, int write_spectra)
 {
     if (!o || !r || !f || f->cascades != o->p.cascades || isnan(r->cutoff_k) ||
         r->cutoff_k < 0.0 || r->order < 1 || r->order > OCEAN_FILTER_MAX_ORDER)
@@ -1648,15 +1651,36 @@ ocean_result ocean_transform_only(ocean *o, const ocean_request *r, ocean_frame 
         int nch = channel_list(r->effects[c] & (OCEAN_FX_ALL | OCEAN_FX_VELOCITY), ch);
         if (nch == 0 || cs->k_lo >= kneg)
             continue;
-        int n = pick_size(cs, o->p.n, kneg);
+        int n = pick_size(cs, o->p.n, kneg), half = n / 2 + 1;
+        size_t plane = (size_t)n * half;
         int g = group_size(o, n, nch);
         for (int j0 = 0; j0 < nch; j0 += g) {
             int gn = nch - j0 < g ? nch - j0 : g;
+            if (write_spectra) {
+#pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
+                for (int p = 0; p <= n / 2; p++)
+                    for (int j = 0; j < gn; j++) {
+                        fftwf_complex *row = o->spec + (size_t)j * plane;
+                        memset(row + (size_t)p * half, 0, sizeof(fftwf_complex) * half);
+                        if (p != 0 && p != n / 2)
+                            memset(row + (size_t)(n - p) * half, 0, sizeof(fftwf_complex) * half);
+                    }
+            }
             fftwf_execute_dft_c2r(o->plan[level_of(n)][gn - 1], o->spec,
                                   f->block[c] + (size_t)j0 * n * n);
         }
     }
     return OCEAN_OK;
+}
+
+ocean_result ocean_transform_only(ocean *o, const ocean_request *r, ocean_frame *f)
+{
+    return transform_groups(o, r, f, 0);
+}
+
+ocean_result ocean_transform_floor(ocean *o, const ocean_request *r, ocean_frame *f)
+{
+    return transform_groups(o, r, f, 1);
 }
 
 const ocean_field *ocean_frame_field(const ocean_frame *f, int cascade)

@@ -27,4 +27,11 @@ int ocean_force_paths(ocean *o, int fused, int stream);
  * the default's in the last bits.  Accepts NULL. */
 void ocean_force_group(ocean *o, int group);
 
+/* ocean_transform_only with each FFTW call's spectra first written
+ * (zeros, rows split over the threads as the spectrum stage splits
+ * them): the least any stage that writes the spectra FFTW reads can cost,
+ * the floor bench_core puts beside the full evaluation.  f's contents are
+ * garbage afterwards. */
+ocean_result ocean_transform_floor(ocean *o, const ocean_request *r, ocean_frame *f);
+
 #endif
