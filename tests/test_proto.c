@@ -1005,6 +1005,11 @@ static const bad_vector bad_vectors[] = {
     {"bad_mesh_qz_nan_base", "frame_mesh_qz", P(QZ_AT + 8), 4, 0x7FC00000u, OCEAN_ECODEC, -1},
     {"bad_mesh_qz_raw_len", "frame_mesh_qz", P(QZ_AT + 32), 4, 1, OCEAN_ECODEC, -1},
     {"bad_mesh_qz_vertex_count", "frame_mesh_qz", P(QZ_AT - 28), 4, 4, OCEAN_ECODEC, -1},
+    /* the zstd frame (at QZ_AT + 36: magic, descriptor 0x20 = one segment,
+     * a 1-byte content size, then one raw last block): a content size
+     * other than the header's, and a last block that says it is not */
+    {"bad_mesh_qz_zstd_size", "frame_mesh_qz", P(QZ_AT + 41), 1, 16, OCEAN_ECODEC, -1},
+    {"bad_mesh_qz_zstd_blocks", "frame_mesh_qz", P(QZ_AT + 42), 1, 0x78, OCEAN_ECODEC, -1},
 };
 
 static const char *code_name(ocean_result r)

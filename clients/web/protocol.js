@@ -433,8 +433,9 @@ function vVertices(v, limits) {
 /* The header of a MESH_VERTICES_QZ payload (PROTOCOL.md; data from its
  * format byte on) for vertexCount vertices, as proto_mesh_qz_header checks
  * it: format 1, predictor 1, reserved 0, finite bases, finite steps > 0,
- * nbytes <= 4, R = sum nbytes * V.  (The zstd frame itself is checked when
- * decodeMeshQz decompresses it.)  Throws ECODEC. */
+ * nbytes <= 4, R = sum nbytes * V, then exactly one zstd frame of R bytes
+ * (zstdFrameSizes; its blocks are decompressed by decodeMeshQz).  Throws
+ * ECODEC. */
 export function meshQzHeader(data, vertexCount) {
     const bad = (m) => fail(R.ECODEC, m);
     if (data.byteLength < MESH_QZ_HEAD) bad(`mesh qz payload of ${data.byteLength} bytes shorter than its ${MESH_QZ_HEAD}-byte header`);
@@ -451,7 +452,42 @@ export function meshQzHeader(data, vertexCount) {
         want += k * vertexCount;
     }
     if (h.rawLen !== want) bad(`mesh qz residual length ${h.rawLen}, header and ${vertexCount} vertices imply ${want}`);
+    const z = zstdFrameSizes(data.subarray(MESH_QZ_HEAD));
+    if (!z || z.frameLength !== data.byteLength - MESH_QZ_HEAD || z.contentSize !== want)
+        bad(`mesh qz: zstd frame malformed, followed by junk or not of ${want} bytes`);
     return h;
+}
+
+/* The content size and length of the zstd frame that u8 starts with (RFC
+ * 8878 section 3.1.1: frame header, then blocks up to the last one, then
+ * the optional checksum), as libzstd's ZSTD_getFrameContentSize and
+ * ZSTD_findFrameCompressedSize give them; null when u8 does not start
+ * with a whole frame that states its content size.  Headers only: the
+ * blocks are not decompressed. */
+export function zstdFrameSizes(u8) {
+    const n = u8.byteLength;
+    if (n < 5 || u8[0] !== 0x28 || u8[1] !== 0xb5 || u8[2] !== 0x2f || u8[3] !== 0xfd) return null;
+    const fhd = u8[4];
+    if (fhd & 0x08) return null;                      /* reserved bit */
+    const single = (fhd >> 5) & 1;
+    const fcsLen = [single ? 1 : 0, 2, 4, 8][fhd >> 6];
+    let off = 5 + (single ? 0 : 1) + [0, 1, 2, 4][fhd & 3];
+    if (fcsLen === 0 || off + fcsLen > n) return null;   /* no content size, or cut short */
+    let size = 0;
+    for (let i = fcsLen - 1; i >= 0; i--) size = size * 256 + u8[off + i];
+    if (fcsLen === 2) size += 256;
+    off += fcsLen;
+    for (let last = 0; !last;) {
+        if (off + 3 > n) return null;
+        const bh = u8[off] | (u8[off + 1] << 8) | (u8[off + 2] << 16);
+        const type = (bh >> 1) & 3;
+        if (type === 3) return null;                  /* reserved block type */
+        last = bh & 1;
+        off += 3 + (type === 1 ? 1 : bh >>> 3);       /* RLE blocks carry one byte */
+        if (off > n) return null;
+    }
+    off += fhd & 0x04 ? 4 : 0;                        /* content checksum */
+    return off > n ? null : { contentSize: size, frameLength: off };
 }
 
 /* FRAME has_mesh 2 record: MESH_VERTICES' fixed fields, then the qz

@@ -25,6 +25,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <zstd.h>
+
 #include "codec.h"
 #include "proto.h"
 #include "../bench/qz_before.h"
@@ -458,6 +460,48 @@ static int gen(const char *dir)
     if (write_msg(dir, "sea", &m))
         return 1;
     fprintf(o, "\"sea\": {\"effectiveTime\":60,\"windDirDeg\":35},\n");
+
+    /* zstd frames as libzstd makes them with every header form the JS
+     * frame walk (zstdFrameSizes) must read: 1-, 2- and 4-byte content
+     * sizes (2 bytes store size - 256), a checksum, a window descriptor
+     * (not single-segment: a 1 KB window under 300 KB), several blocks, RLE
+     * blocks (300 KB of zeros: libzstd never makes the first block RLE);
+     * expected: ZSTD_getFrameContentSize and
+     * ZSTD_findFrameCompressedSize */
+    fprintf(o, "\"zstd_frames\": [");
+    static const struct { size_t len; int checksum, window_log, pattern; } zf[] = {
+        {15, 0, 0, 0}, {300, 1, 0, 0}, {70000, 0, 0, 1}, {300000, 1, 10, 1}, {300000, 0, 0, 2}};
+    ZSTD_CCtx *zc = ZSTD_createCCtx();
+    for (size_t z = 0; z < sizeof zf / sizeof zf[0]; z++) {
+        uint8_t *src = malloc(zf[z].len), *dst = malloc(ZSTD_compressBound(zf[z].len));
+        uint32_t st = 12345u + (uint32_t)z;
+        for (size_t i = 0; i < zf[z].len; i++) {
+            st = st * 1664525u + 1013904223u;
+            /* 0: noise, 1: a repeating ramp with noise in one byte of 8 (compressible), 2: zeros */
+            src[i] = zf[z].pattern == 0 ? (uint8_t)(st >> 24)
+                   : zf[z].pattern == 1 ? (uint8_t)(i % 8 ? i % 251 : st >> 24) : 0;
+        }
+        ZSTD_CCtx_reset(zc, ZSTD_reset_session_and_parameters);
+        ZSTD_CCtx_setParameter(zc, ZSTD_c_contentSizeFlag, 1);
+        ZSTD_CCtx_setParameter(zc, ZSTD_c_checksumFlag, zf[z].checksum);
+        if (zf[z].window_log)
+            ZSTD_CCtx_setParameter(zc, ZSTD_c_windowLog, zf[z].window_log);
+        size_t n = ZSTD_compress2(zc, dst, ZSTD_compressBound(zf[z].len), src, zf[z].len);
+        if (ZSTD_isError(n) || ZSTD_getFrameContentSize(dst, n) != zf[z].len ||
+            ZSTD_findFrameCompressedSize(dst, n) != n) {
+            fprintf(stderr, "gen_vectors: zstd frame %zu: %s\n", z, ZSTD_isError(n) ? ZSTD_getErrorName(n) : "sizes");
+            return 1;
+        }
+        fprintf(o, "%s{\"contentSize\":%zu,\"frameLength\":%zu,\"descriptor\":%u,\"hex\":\"", z ? "," : "",
+                zf[z].len, n, dst[4]);
+        for (size_t i = 0; i < n; i++)
+            fprintf(o, "%02x", dst[i]);
+        fprintf(o, "\"}");
+        free(src);
+        free(dst);
+    }
+    ZSTD_freeCCtx(zc);
+    fprintf(o, "],\n");
 
     /* ERROR and BYE */
     proto_buf eb;

@@ -29,9 +29,10 @@ import { join } from 'node:path';
 
 import {
     decode, encodeSubscribe, encodeCamera, encodeQuery, encodeBye, ProtoError, R, T, CODEC, FX, tilePlanes,
-    LAYOUT, MIP_ENTRIES, TOPO_FLAT,
+    LAYOUT, MIP_ENTRIES, TOPO_FLAT, zstdFrameSizes,
 } from '../../clients/web/protocol.js';
 import { decodeTile, octDecode, f32FromF16, decodeMeshQz, meshQzRefs } from '../../clients/web/codec.js';
+import { decompress } from '../../clients/web/vendor/fzstd.js';
 
 const dir = process.env.VECTOR_DIR;
 const gen = process.env.GEN_VECTORS;
@@ -126,6 +127,40 @@ test('FRAME from C: header, mesh and tiles decode; tile samples equal the C deco
     assert.ok(refs.has(0), `qz reference planes used: ${[...refs]}`);
     /* and a format-1 payload (recordings before format 2) decoded alike above */
     assert.ok(f.tiles.some((t) => t.codec === CODEC.QZ && t.payload[1] === 1), 'a qz format 1 tile');
+});
+
+test('zstd frames from libzstd: the JS frame walk gives libzstd\'s content size and length, and refuses every cut and any junk', () => {
+    const frames = expected.zstd_frames;
+    assert.ok(frames.length >= 5);
+    const seen = { fcs: new Set(), checksum: 0, window: 0, blocks: 0, rle: 0 };
+    for (const z of frames) {
+        const u8 = Uint8Array.from(z.hex.match(/../g).map((h) => parseInt(h, 16)));
+        assert.equal(u8.length, z.frameLength);
+        assert.deepEqual(zstdFrameSizes(u8), { contentSize: z.contentSize, frameLength: z.frameLength });
+        assert.equal(decompress(u8).length, z.contentSize);
+        /* what the header forms cover (the descriptor byte: RFC 8878 3.1.1.1.1) */
+        const d = z.descriptor, single = (d >> 5) & 1;
+        seen.fcs.add([single ? 1 : 0, 2, 4, 8][d >> 6]);
+        seen.checksum += (d >> 2) & 1;
+        seen.window += single ? 0 : 1;
+        let off = 5 + (single ? 0 : 1) + [0, 1, 2, 4][d & 3] + [single ? 1 : 0, 2, 4, 8][d >> 6], nb = 0;
+        for (let last = 0; !last; nb++) {
+            const bh = u8[off] | (u8[off + 1] << 8) | (u8[off + 2] << 16), type = (bh >> 1) & 3;
+            seen.rle += type === 1;
+            last = bh & 1;
+            off += 3 + (type === 1 ? 1 : bh >>> 3);
+        }
+        seen.blocks = Math.max(seen.blocks, nb);
+        /* cut anywhere: not a whole frame; junk behind it: a longer input, the same frame */
+        const step = Math.max(1, Math.floor(u8.length / 4000));
+        for (let cut = 0; cut < u8.length; cut += step)
+            assert.equal(zstdFrameSizes(u8.subarray(0, cut)), null, `cut at ${cut} of ${u8.length}`);
+        const longer = new Uint8Array(u8.length + 3);
+        longer.set(u8);
+        assert.equal(zstdFrameSizes(longer).frameLength, z.frameLength);
+    }
+    assert.deepEqual([...seen.fcs].sort(), [1, 2, 4]);
+    assert.ok(seen.checksum > 0 && seen.window > 0 && seen.rle > 0 && seen.blocks > 1, JSON.stringify({ ...seen, fcs: [...seen.fcs] }));
 });
 
 test('layout-0 FRAME with qz mesh positions from C: refs and positions equal the C decoder bit for bit', () => {
