@@ -6,7 +6,9 @@
  * conj(h0(-k)), the angular frequency in double and the wave vector.  An
  * evaluation then runs one pass over the modes (the "spectrum stage") that
  * writes every asked channel's spectrum, and one batched c2r transform per
- * cascade.  A low cutoff picks a smaller transform: the modes it keeps are
+ * cascade (per group of channels at large N).  The stage touches only the
+ * columns of each row that hold a wave (cascade.lo, hi) and writes zeros
+ * past them: a coarse cascade's band fills about 40 % of its grid.  A low cutoff picks a smaller transform: the modes it keeps are
  * the same waves, only fewer of them.
  *
  * Conventions: eta(x) = sum_k h(k,t) e^{i k.x},
@@ -67,6 +69,12 @@ typedef struct cascade {
      * modes of grids up to cache_n: several cutoff buckets in one tick pay
      * for the trigonometry once. */
     float *cache[4];
+    /* Rows mz and -mz hold waves (h0 != 0) only in columns [lo, hi) of
+     * row |mz| (empty: lo = hi = 0); the rest of both rows is zero in
+     * every channel.  The coarse cascades stop at half their Nyquist, so
+     * about 60 % of their modes are zero: the stage reads, evolves and
+     * multiplies this range only and writes zeros past it. */
+    int *lo, *hi;
     double cache_t;
     int cache_n;
     int cache_dt;           /* 1: dh/dt is cached too (a velocity request) */
@@ -350,12 +358,37 @@ static ocean_result cascade_alloc(cascade *cs, int n)
     ok &= (cs->k = calloc(nm, sizeof(float))) != NULL;
     ok &= (cs->kinv = calloc(nm, sizeof(float))) != NULL;
     ok &= (cs->var = calloc(nm, sizeof(float))) != NULL;
+    ok &= (cs->lo = calloc((size_t)half, sizeof(int))) != NULL;
+    ok &= (cs->hi = calloc((size_t)half, sizeof(int))) != NULL;
     cs->cache_n = 0;
     if (!ok)
         return OCEAN_ENOMEM;
     for (int ix = 0; ix < half; ix++)
         cs->kx[ix] = (float)(ix * cs->dk);
     return OCEAN_OK;
+}
+
+/* The columns of each row pair (mz, -mz) that hold a wave: cs->lo, cs->hi
+ * from the h0 just drawn.  Any h0 of the pair nonzero counts, so a range
+ * covers both rows (the stage takes them together). */
+static void cascade_ranges(cascade *cs, int n)
+{
+    int half = n / 2 + 1;
+    for (int m = 0; m <= n / 2; m++) {
+        size_t up = (size_t)wrap_index(m, n) * half, down = (size_t)wrap_index(-m, n) * half;
+        int lo = half, hi = 0;
+        for (int ix = 0; ix < half; ix++) {
+            int any = 0;
+            for (int j = 0; j < 4; j++)
+                any |= cs->h0[j][up + ix] != 0.0f || cs->h0[j][down + ix] != 0.0f;
+            if (any) {
+                lo = lo < ix ? lo : ix;
+                hi = ix + 1;
+            }
+        }
+        cs->lo[m] = lo < hi ? lo : 0;
+        cs->hi[m] = lo < hi ? hi : 0;
+    }
 }
 
 static ocean_result cascade_init(ocean *o, int c)
@@ -402,6 +435,7 @@ static ocean_result cascade_init(ocean *o, int c)
         }
     }
     cs->variance = var;
+    cascade_ranges(cs, n);
     return OCEAN_OK;
 }
 
@@ -573,6 +607,7 @@ static ocean_result cascade_init_lattice(ocean *o, const ocean_lattice_wave *w, 
             }
     }
     cs->variance = var;
+    cascade_ranges(cs, n);
     return OCEAN_OK;
 }
 
@@ -750,6 +785,8 @@ void ocean_destroy(ocean *o)
         free(cs->k);
         free(cs->kinv);
         free(cs->var);
+        free(cs->lo);
+        free(cs->hi);
         free(cs->lw);
     }
     for (int i = 0; i < GAIN_PLANES; i++)
@@ -1188,8 +1225,20 @@ __attribute__((target("avx2"))) static void spectrum_row_stream(float *dst, cons
 }
 #endif
 
+/* Columns [*lo, *hi) of row pair p (rows p and n - p) of the n-point grid
+ * that hold a wave: the cascade's range (cs->lo, hi) within this grid,
+ * whose Nyquist row (p = n/2, mz = -n/2) and column are zero. */
+static inline void pair_range(const cascade *cs, int n, int p, int *lo, int *hi)
+{
+    *lo = *hi = 0;
+    if (p < n / 2) {
+        *hi = cs->hi[p] < n / 2 ? cs->hi[p] : n / 2;
+        *lo = cs->lo[p] < *hi ? cs->lo[p] : *hi;
+    }
+}
+
 static inline __attribute__((always_inline)) void
-spectrum_row_channels(const stage_args *a, int r, const int fused)
+spectrum_row_channels(const stage_args *a, int r, int x0, int x1, const int fused)
 {
     int n = a->n, half = n / 2 + 1, full_half = a->n_full / 2 + 1;
     size_t plane = (size_t)n * half;
@@ -1204,33 +1253,29 @@ spectrum_row_channels(const stage_args *a, int r, const int fused)
     const float *kx = cs->kx, *kinv = cs->kinv + kbase;
     const float *hr = c_hr, *hi = c_hi, *tr = c_tr, *ti = c_ti;
     float g[ROW_MAX], fhr[ROW_MAX], fhi[ROW_MAX], ftr[ROW_MAX], fti[ROW_MAX];
-    /* Unfiltered, the grid is the full one, whose Nyquist row and column
-     * hold no wave: the cached h is the spectrum as it stands.  Otherwise
-     * apply the gains, and zero this grid's own Nyquist row and column. */
+    /* Unfiltered, the grid is the full one: the cached h is the spectrum
+     * as it stands.  Otherwise apply the gains.  Columns outside [x0, x1)
+     * (no wave, or this grid's Nyquist column) are written as zeros. */
     if (!(isinf(a->kc) && a->scale == 1.0 && a->boost == 1.0 && n == a->n_full)) {
         float *gr = a->gain ? a->gain + (size_t)r * half : g;
         if (!a->gain_ready) {
             const float *kk = cs->k + kbase;
             float kc = (float)a->kc, kneg = (float)a->kneg, scale = (float)a->scale;
             float boost = (float)a->boost;
-            for (int ix = 0; ix < half; ix++) {
+            for (int ix = x0; ix < x1; ix++) {
                 float k = kk[ix], gb = k < kneg ? gain_fast(k, kc, a->order) : 0.0f;
                 /* The low boost fades in with the gain (ocean_filter_cutoff_gain):
                  * no step at kc. */
                 gr[ix] = gb * scale * (1.0f + (boost - 1.0f) * gb * gb);
             }
-            if (mz == -n / 2)
-                for (int ix = 0; ix < half; ix++)
-                    gr[ix] = 0.0f;
-            gr[n / 2] = 0.0f;
         }
         const float *restrict gv = gr;
-        for (int ix = 0; ix < half; ix++) {
+        for (int ix = x0; ix < x1; ix++) {
             fhr[ix] = c_hr[ix] * gv[ix];
             fhi[ix] = c_hi[ix] * gv[ix];
         }
         if (a->need_dt)
-            for (int ix = 0; ix < half; ix++) {
+            for (int ix = x0; ix < x1; ix++) {
                 ftr[ix] = c_tr[ix] * gv[ix];
                 fti[ix] = c_ti[ix] * gv[ix];
             }
@@ -1247,57 +1292,59 @@ spectrum_row_channels(const stage_args *a, int r, const int fused)
     for (int j = 0; j < a->nch; j++) {
         float (*dst)[2] = &a->spec[(size_t)j * plane + (size_t)r * half];
         float (*o)[2] = stream ? rowbuf : dst;
+        memset(o, 0, sizeof o[0] * (size_t)x0);
+        memset(o + x1, 0, sizeof o[0] * (size_t)(half - x1));
         switch (a->ch[j]) {
         case CH_H:
-            for (int ix = 0; ix < half; ix++) { o[ix][0] = hr[ix]; o[ix][1] = hi[ix]; }
+            for (int ix = x0; ix < x1; ix++) { o[ix][0] = hr[ix]; o[ix][1] = hi[ix]; }
             break;
         case CH_DX: /* i k/|k| h */
-            for (int ix = 0; ix < half; ix++) {
+            for (int ix = x0; ix < x1; ix++) {
                 float f = lam * kx[ix] * kinv[ix];
                 o[ix][0] = -f * hi[ix]; o[ix][1] = f * hr[ix];
             }
             break;
         case CH_DZ:
-            for (int ix = 0; ix < half; ix++) {
+            for (int ix = x0; ix < x1; ix++) {
                 float f = lam * kz * kinv[ix];
                 o[ix][0] = -f * hi[ix]; o[ix][1] = f * hr[ix];
             }
             break;
         case CH_SX: /* i k h */
-            for (int ix = 0; ix < half; ix++) { o[ix][0] = -kx[ix] * hi[ix]; o[ix][1] = kx[ix] * hr[ix]; }
+            for (int ix = x0; ix < x1; ix++) { o[ix][0] = -kx[ix] * hi[ix]; o[ix][1] = kx[ix] * hr[ix]; }
             break;
         case CH_SZ:
-            for (int ix = 0; ix < half; ix++) { o[ix][0] = -kz * hi[ix]; o[ix][1] = kz * hr[ix]; }
+            for (int ix = x0; ix < x1; ix++) { o[ix][0] = -kz * hi[ix]; o[ix][1] = kz * hr[ix]; }
             break;
         case CH_DXX: /* i kx * i k/|k| h = -kx k/|k| h */
-            for (int ix = 0; ix < half; ix++) {
+            for (int ix = x0; ix < x1; ix++) {
                 float f = -lam * kx[ix] * kx[ix] * kinv[ix];
                 o[ix][0] = f * hr[ix]; o[ix][1] = f * hi[ix];
             }
             break;
         case CH_DZZ:
-            for (int ix = 0; ix < half; ix++) {
+            for (int ix = x0; ix < x1; ix++) {
                 float f = -lam * kz * kz * kinv[ix];
                 o[ix][0] = f * hr[ix]; o[ix][1] = f * hi[ix];
             }
             break;
         case CH_DXZ:
-            for (int ix = 0; ix < half; ix++) {
+            for (int ix = x0; ix < x1; ix++) {
                 float f = -lam * kx[ix] * kz * kinv[ix];
                 o[ix][0] = f * hr[ix]; o[ix][1] = f * hi[ix];
             }
             break;
         case CH_VX:
-            for (int ix = 0; ix < half; ix++) {
+            for (int ix = x0; ix < x1; ix++) {
                 float f = lam * kx[ix] * kinv[ix];
                 o[ix][0] = -f * ti[ix]; o[ix][1] = f * tr[ix];
             }
             break;
         case CH_VY:
-            for (int ix = 0; ix < half; ix++) { o[ix][0] = tr[ix]; o[ix][1] = ti[ix]; }
+            for (int ix = x0; ix < x1; ix++) { o[ix][0] = tr[ix]; o[ix][1] = ti[ix]; }
             break;
         case CH_VZ:
-            for (int ix = 0; ix < half; ix++) {
+            for (int ix = x0; ix < x1; ix++) {
                 float f = lam * kz * kinv[ix];
                 o[ix][0] = -f * ti[ix]; o[ix][1] = f * tr[ix];
             }
@@ -1315,24 +1362,26 @@ spectrum_row_channels(const stage_args *a, int r, const int fused)
 static inline __attribute__((always_inline)) void
 spectrum_row_body(const stage_args *a, int p, const int fused)
 {
-    int n = a->n, half = n / 2 + 1, full_half = a->n_full / 2 + 1;
+    int n = a->n, full_half = a->n_full / 2 + 1;
     int alone = p == 0 || p == n / 2;
     int mz = p < n / 2 ? p : p - n;
     size_t base = (size_t)wrap_index(mz, a->n_full) * full_half;
     size_t mirror = (size_t)wrap_index(-mz, a->n_full) * full_half;
+    int lo, hi;
+    pair_range(a->cs, n, p, &lo, &hi);
     if (!a->cached) {
         if (alone && a->need_dt)
-            row_evolve(a->cs, base, base, half, a->t, 1, fused, 0);
+            row_evolve(a->cs, base + lo, base + lo, hi - lo, a->t, 1, fused, 0);
         else if (alone)
-            row_evolve(a->cs, base, base, half, a->t, 0, fused, 0);
+            row_evolve(a->cs, base + lo, base + lo, hi - lo, a->t, 0, fused, 0);
         else if (a->need_dt)
-            row_evolve(a->cs, base, mirror, half, a->t, 1, fused, 1);
+            row_evolve(a->cs, base + lo, mirror + lo, hi - lo, a->t, 1, fused, 1);
         else
-            row_evolve(a->cs, base, mirror, half, a->t, 0, fused, 1);
+            row_evolve(a->cs, base + lo, mirror + lo, hi - lo, a->t, 0, fused, 1);
     }
-    spectrum_row_channels(a, p, fused);
+    spectrum_row_channels(a, p, lo, hi, fused);
     if (!alone)
-        spectrum_row_channels(a, n - p, fused);
+        spectrum_row_channels(a, n - p, lo, hi, fused);
 }
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
@@ -1487,6 +1536,12 @@ static float *gain_plane_get(ocean *o, int c, int n, double kc, int order, doubl
     return victim->g;
 }
 
+/* Row pairs a thread takes at a time in the spectrum stage.  Interleaved
+ * rather than halves: the rows of a coarse cascade beyond its band
+ * (|mz| >= n/4) are zeros only, so halves would leave one thread the
+ * arithmetic and the other the memset. */
+#define STAGE_CHUNK 4
+
 /* Channels per FFTW call on the n-point grid.  Eight spectra at N = 1024
  * are 34 MB, more than a last-level cache holds, so one batched transform
  * found what the row pass wrote already evicted and ran from memory; in
@@ -1589,10 +1644,15 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
                 a.ch = ch + j0;
                 a.nch = gn;
                 a.stream = (double)gn * n * (n / 2 + 1) * sizeof(fftwf_complex) > o->stream_bytes;
-#pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
+#pragma omp parallel for num_threads(o->p.threads) schedule(static, STAGE_CHUNK) if (n >= PARALLEL_MIN_N)
                 for (int row = 0; row <= n / 2; row++)
                     spectrum_row(&a, row);
                 if (!a.cached) {
+                    for (int p = 0; p <= n / 2; p++) {
+                        int lo, hi;
+                        pair_range(cs, n, p, &lo, &hi);
+                        o->counters.modes_evolved += (uint64_t)(hi - lo) * (p == 0 || p == n / 2 ? 1 : 2);
+                    }
                     cs->cache_t = t;
                     cs->cache_n = n;
                     cs->cache_dt = need_dt;
@@ -1657,7 +1717,7 @@ static ocean_result transform_groups(ocean *o, const ocean_request *r, ocean_fra
         for (int j0 = 0; j0 < nch; j0 += g) {
             int gn = nch - j0 < g ? nch - j0 : g;
             if (write_spectra) {
-#pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
+#pragma omp parallel for num_threads(o->p.threads) schedule(static, STAGE_CHUNK) if (n >= PARALLEL_MIN_N)
                 for (int p = 0; p <= n / 2; p++)
                     for (int j = 0; j < gn; j++) {
                         fftwf_complex *row = o->spec + (size_t)j * plane;

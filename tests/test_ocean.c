@@ -1278,6 +1278,68 @@ static void test_stage_paths_same_bits(void **state)
     ocean_destroy(o);
 }
 
+/* The spectrum stage evolves only the modes that hold a wave: a coarse
+ * cascade stops at half its Nyquist (k_hi = pi n / (2 patch)), so most of
+ * its grid is zero and must cost no inputs read and no trigonometry.
+ * Counted against the band (ocean_cascade_band) and the amplitudes drawn
+ * afresh (ocean_mode_amplitude), not against the stage's own ranges: at
+ * least every mode with a wave, at most the modes of the band.  A second
+ * request of the same tick reuses h(k,t) and evolves nothing. */
+static void test_stage_evolves_only_waves(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 128;
+    p.cascades = 3;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o);
+    int n = p.n, half = n / 2 + 1;
+    long in_band = 0, with_wave = 0, all = 0;
+    for (int c = 0; c < p.cascades; c++) {
+        double patch, k_lo, k_hi;
+        ocean_cascade_band(o, c, &patch, &k_lo, &k_hi);
+        double dk = 2.0 * M_PI / patch;
+        long band_c = 0;
+        for (int iz = 0; iz < n; iz++)
+            for (int ix = 0; ix < half; ix++) {
+                int mz = iz < n / 2 ? iz : iz - n;
+                all++;
+                if (mz == -n / 2 || ix == n / 2)
+                    continue;
+                double k = hypot(ix * dk, mz * dk);
+                if (!(k > 0.0 && k >= k_lo && k < k_hi))
+                    continue;
+                band_c++;
+                double h[2];
+                ocean_mode_amplitude(o, c, ix, mz, 0.0, h);
+                with_wave += h[0] != 0.0 || h[1] != 0.0;
+            }
+        in_band += band_c;
+        if (c < p.cascades - 1) /* a disc of radius n/4 on the half grid */
+            assert_true(band_c < 0.45 * n * half);
+    }
+    ocean_counters c0, c1, c2;
+    ocean_get_counters(o, &c0);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL);
+    assert_int_equal(ocean_evaluate(o, 7.25, &r, f), OCEAN_OK);
+    ocean_get_counters(o, &c1);
+    long evolved = (long)(c1.modes_evolved - c0.modes_evolved);
+    print_message("modes evolved %ld: %ld with a wave, %ld in the bands, %ld on the grids\n",
+                  evolved, with_wave, in_band, all);
+    assert_true(with_wave > 0);
+    assert_true(evolved >= with_wave);
+    assert_true(evolved <= in_band);
+    assert_true(in_band < 0.7 * all);
+    r.cutoff_k = 0.5;
+    assert_int_equal(ocean_evaluate(o, 7.25, &r, f), OCEAN_OK);
+    ocean_get_counters(o, &c2);
+    assert_true(c2.modes_evolved == c1.modes_evolved);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
 /* Channels go to FFTW in groups (at most 8.5 MB of spectra a call, so a
  * group's spectra are still cached when its transform reads them).  Every
  * group size must give every channel's waves: against the direct sum of the
@@ -1399,6 +1461,7 @@ int main(void)
         cmocka_unit_test(test_sample_some_matches_full),
         cmocka_unit_test(test_gain_planes_reused_exactly),
         cmocka_unit_test(test_stage_paths_same_bits),
+        cmocka_unit_test(test_stage_evolves_only_waves),
         cmocka_unit_test(test_grouped_transforms),
     };
     return cmocka_run_group_tests_name("ocean", tests, NULL, NULL);
