@@ -8,8 +8,9 @@
  * writes every asked channel's spectrum, and one batched c2r transform per
  * cascade (per group of channels at large N).  The stage touches only the
  * columns of each row that hold a wave (cascade.lo, hi) and writes zeros
- * past them: a coarse cascade's band fills about 40 % of its grid.  A low cutoff picks a smaller transform: the modes it keeps are
- * the same waves, only fewer of them.
+ * past them: a coarse cascade's band (a half disc of radius n/4) fills
+ * about 20 % of its half spectrum.  A low cutoff picks a smaller
+ * transform: the modes it keeps are the same waves, only fewer of them.
  *
  * Conventions: eta(x) = sum_k h(k,t) e^{i k.x},
  *   h(k,t) = h0(k) e^{-i w t} + conj(h0(-k)) e^{+i w t},   E|h0(k)|^2 = P(k),
@@ -72,7 +73,7 @@ typedef struct cascade {
     /* Rows mz and -mz hold waves (h0 != 0) only in columns [lo, hi) of
      * row |mz| (empty: lo = hi = 0); the rest of both rows is zero in
      * every channel.  The coarse cascades stop at half their Nyquist, so
-     * about 60 % of their modes are zero: the stage reads, evolves and
+     * about 80 % of their modes are zero: the stage reads, evolves and
      * multiplies this range only and writes zeros past it. */
     int *lo, *hi;
     double cache_t;

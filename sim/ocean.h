@@ -395,7 +395,7 @@ typedef struct ocean_counters {
     uint64_t modes_evolved;            /* modes of the half spectra whose h(k,t) the
                                           spectrum stage computed: only those of a row
                                           that hold a wave (a coarse cascade's band
-                                          |k| < pi n / (2 patch) is ~40 % of its grid) */
+                                          |k| < pi n / (2 patch) is ~20 % of its grid) */
 } ocean_counters;
 void ocean_get_counters(const ocean *o, ocean_counters *out);
 
