@@ -1537,11 +1537,53 @@ static float *gain_plane_get(ocean *o, int c, int n, double kc, int order, doubl
     return victim->g;
 }
 
-/* Row pairs a thread takes at a time in the spectrum stage.  Interleaved
- * rather than halves: the rows of a coarse cascade beyond its band
- * (|mz| >= n/4) are zeros only, so halves would leave one thread the
- * arithmetic and the other the memset. */
-#define STAGE_CHUNK 4
+/* The spectrum stage's split of row pairs 0..n/2 over nt threads: thread
+ * t takes [b[t], b[t+1]), contiguous, so two threads share at most one
+ * cache line of a spectrum (rows are 8 (n/2 + 1) bytes, not whole lines;
+ * interleaved chunks made every chunk edge a line both threads write, and
+ * cost 30-60 % at N = 256 and 512).  The blocks are balanced by weight:
+ * a pair's columns with a wave cost STAGE_WAVE_COST times a column of
+ * zeros, so a coarse cascade, whose rows beyond |mz| = n/4 are zeros only,
+ * is not split into one thread's arithmetic and the other's memset. */
+#define STAGE_WAVE_COST 4
+#define STAGE_MAX_THREADS 64
+
+static void stage_split(const cascade *cs, int n, int nt, int *b)
+{
+    double w[OCEAN_MAX_N / 2 + 1], total = 0.0;
+    for (int p = 0; p <= n / 2; p++) {
+        int lo, hi;
+        pair_range(cs, n, p, &lo, &hi);
+        w[p] = (p == 0 || p == n / 2 ? 1.0 : 2.0) * (n / 2 + 1 + (STAGE_WAVE_COST - 1.0) * (hi - lo));
+        total += w[p];
+    }
+    b[0] = 0;
+    double acc = 0.0;
+    int p = 0;
+    for (int t = 1; t < nt; t++) {
+        while (p <= n / 2 && acc + w[p] * 0.5 < total * t / nt)
+            acc += w[p++];
+        b[t] = p;
+    }
+    b[nt] = n / 2 + 1;
+}
+
+/* The calling team member's rows [*r0, *r1) of the split b made for nt
+ * threads; OpenMP may grant a team smaller than asked, and then every
+ * member splits again for the team it got, so no row is left out. */
+static void stage_rows(const cascade *cs, int n, int nt, const int *b, int *r0, int *r1)
+{
+    int t = omp_get_thread_num(), m = omp_get_num_threads();
+    if (m == nt) {
+        *r0 = b[t];
+        *r1 = b[t + 1];
+        return;
+    }
+    int mine[STAGE_MAX_THREADS + 1];
+    stage_split(cs, n, m, mine);
+    *r0 = mine[t];
+    *r1 = mine[t + 1];
+}
 
 /* Channels per FFTW call on the n-point grid.  Eight spectra at N = 1024
  * are 34 MB, more than a last-level cache holds, so one batched transform
@@ -1640,14 +1682,20 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
              * into the cache, the others read it back (and the gain plane
              * the first one filled). */
             int g = group_size(o, n, nch);
+            int nt = n >= PARALLEL_MIN_N ? o->p.threads : 1, split[STAGE_MAX_THREADS + 1];
+            stage_split(cs, n, nt, split);
             for (int j0 = 0; j0 < nch; j0 += g) {
                 int gn = nch - j0 < g ? nch - j0 : g;
                 a.ch = ch + j0;
                 a.nch = gn;
                 a.stream = (double)gn * n * (n / 2 + 1) * sizeof(fftwf_complex) > o->stream_bytes;
-#pragma omp parallel for num_threads(o->p.threads) schedule(static, STAGE_CHUNK) if (n >= PARALLEL_MIN_N)
-                for (int row = 0; row <= n / 2; row++)
-                    spectrum_row(&a, row);
+#pragma omp parallel num_threads(nt) if (nt > 1)
+                {
+                    int r0, r1;
+                    stage_rows(cs, n, nt, split, &r0, &r1);
+                    for (int row = r0; row < r1; row++)
+                        spectrum_row(&a, row);
+                }
                 if (!a.cached) {
                     for (int p = 0; p <= n / 2; p++) {
                         int lo, hi;
@@ -1715,17 +1763,23 @@ static ocean_result transform_groups(ocean *o, const ocean_request *r, ocean_fra
         int n = pick_size(cs, o->p.n, kneg), half = n / 2 + 1;
         size_t plane = (size_t)n * half;
         int g = group_size(o, n, nch);
+        int nt = n >= PARALLEL_MIN_N ? o->p.threads : 1, split[STAGE_MAX_THREADS + 1];
+        stage_split(cs, n, nt, split);
         for (int j0 = 0; j0 < nch; j0 += g) {
             int gn = nch - j0 < g ? nch - j0 : g;
             if (write_spectra) {
-#pragma omp parallel for num_threads(o->p.threads) schedule(static, STAGE_CHUNK) if (n >= PARALLEL_MIN_N)
-                for (int p = 0; p <= n / 2; p++)
-                    for (int j = 0; j < gn; j++) {
-                        fftwf_complex *row = o->spec + (size_t)j * plane;
-                        memset(row + (size_t)p * half, 0, sizeof(fftwf_complex) * half);
-                        if (p != 0 && p != n / 2)
-                            memset(row + (size_t)(n - p) * half, 0, sizeof(fftwf_complex) * half);
-                    }
+#pragma omp parallel num_threads(nt) if (nt > 1)
+                {
+                    int r0, r1;
+                    stage_rows(cs, n, nt, split, &r0, &r1);
+                    for (int p = r0; p < r1; p++)
+                        for (int j = 0; j < gn; j++) {
+                            fftwf_complex *row = o->spec + (size_t)j * plane;
+                            memset(row + (size_t)p * half, 0, sizeof(fftwf_complex) * half);
+                            if (p != 0 && p != n / 2)
+                                memset(row + (size_t)(n - p) * half, 0, sizeof(fftwf_complex) * half);
+                        }
+                }
             }
             fftwf_execute_dft_c2r(o->plan[level_of(n)][gn - 1], o->spec,
                                   f->block[c] + (size_t)j0 * n * n);
