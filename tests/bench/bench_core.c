@@ -17,6 +17,9 @@
  * 1.15x of FFTW alone (ESTIMATE); issue 14, the same at N = 512 and 1024
  * with MEASURE plans, and the evaluation under a competing busy process no
  * worse than 1.5x its quiet time.  Verdict lines say whether each holds.
+ * The floor table measures two oceans: the one-cascade default sea of the
+ * main tables and the ocean `make run` serves (config/oceand.conf and its
+ * scene through srv_settings_load, ocean.n set to 512 and 1024).
  * Also: packing two real channels into one complex transform, FFTW alone,
  * with both planners.
  *
