@@ -656,7 +656,7 @@ int main(int argc, char **argv)
            "writes` is FFTW alone with each call's spectra first overwritten with zeros, rows split "
            "over the threads as the stage splits them: no arithmetic, no inputs read, so no stage "
            "that writes what FFTW reads can cost less. The stage also reads 24 bytes of inputs for "
-           "each mode that holds a wave (h0(k), conj h0(-k), w/2pi in two doubles shared by rows mz "
+           "each mode that holds a wave (its standing-wave coefficients a and b, w/2pi in two doubles shared by rows mz "
            "and -mz) and keeps h(k,t) for the later calls. The three are interleaved; ratios are "
            "medians of per-repetition ratios. Two oceans: the one-cascade default sea of the tables "
            "above, every mode of its grid a wave; and the ocean of the scene `make run` serves "
