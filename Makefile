@@ -103,6 +103,8 @@ deps:
 # The spectrum stage's row passes need -O3's vectoriser (GCC 12's -O2 cost
 # model leaves them scalar); a command-line OPT (the ASan build) still wins.
 $(BUILD)/obj/sim/ocean.o $(BUILD)/pic/sim/ocean.o: OPT = -O3
+# sqrt must not set errno there, or GCC cannot vectorise deep_turns.
+$(BUILD)/obj/sim/ocean.o $(BUILD)/pic/sim/ocean.o: CFLAGS += -fno-math-errno
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)

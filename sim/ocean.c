@@ -58,6 +58,8 @@ enum {
  * the per-row passes vectorise.  Coefficients are float (they are data);
  * the frequency is kept as w / 2 pi in double-double (turns_hi + turns_lo)
  * so the row loop reduces w t to its phase exactly (ocean_time.h).
+ * In deep water the stage computes the frequency instead (cascade.deep,
+ * deep_turns); the table holds the same double there.
  * Out-of-band modes are all zero.  Rows are FFTW's (row = kz index), except
  * in the two arrays the stage streams for a pair of rows mz, -mz at once
  * (coef and cache): there the pair's rows sit side by side (pair_row), so
@@ -85,6 +87,12 @@ typedef struct cascade {
      * about 80 % of their modes are zero: the stage reads, evolves and
      * multiplies this range only and writes zeros past it. */
     int *lo, *hi;
+    /* Deep water: from column deep[p] on, the modes of rows +-p have
+     * k d >= DEEP_KD, and the stage computes their frequency (deep_turns)
+     * instead of reading turns_hi/lo; the table holds the same value.
+     * deep[p] = n/2 + 1 (never): a lattice cascade, or shallow water. */
+    int *deep;
+    double cf;              /* deep_turns' constant: sqrt(g dk) / 2 pi */
     double cache_t;
     int cache_n;
     int cache_dt;           /* 1: dh/dt is cached too (a velocity request) */
@@ -155,6 +163,7 @@ struct ocean {
     uint64_t gain_clock;
     int fused;          /* row pass: 0 plain, 1 AVX2+FMA, 2 AVX-512 (ocean_force_paths) */
     double stream_bytes; /* spectra larger than this are streamed (twice the LLC) */
+    int deep_table;     /* 1: the stage reads deep water's w too (ocean_force_frequency_table) */
     int group;           /* channels per FFTW call forced by a test, 0: group_size's rule */
 };
 
@@ -375,6 +384,24 @@ static void draw_h0(const ocean_params *p, const cascade *cs, int mx, int mz, do
     out[1] = xi[1] * a;
 }
 
+/* Where tanh(k d) = 1 to 2^-62 (1 - tanh x < 2 e^-2x), w^2 = g k tanh(k d)
+ * is the deep-water law w = sqrt(g k) (Airy; Tessendorf 2001, eq. 14). */
+#define DEEP_KD 22.0
+
+/* w / 2 pi of mode (mx, mz) in deep water: sqrt(g dk |m|) / 2 pi with
+ * |m|^2 = mx^2 + mz^2 exact in double, as cf * |m|^(1/2).  Two correctly
+ * rounded square roots and a product, so every path (scalar, AVX2,
+ * AVX-512) and every replica gets the same double; it is within 3 ulp of
+ * the exact w / 2 pi.  The model's deep-water frequency is this double,
+ * read from no table: the stage's frequency table (16 B a pair of modes)
+ * was a third of the bytes it streamed from memory every tick, and the
+ * phase stays exact for it (ocean_time.h), so only the model's w moves,
+ * by under 1e-15 relative. */
+static inline double deep_turns(double cf, double m2)
+{
+    return cf * sqrt(sqrt(m2));
+}
+
 /* The per-mode arrays of a cascade of n x (n/2 + 1) modes, zeroed. */
 static ocean_result cascade_alloc(cascade *cs, int n)
 {
@@ -392,9 +419,12 @@ static ocean_result cascade_alloc(cascade *cs, int n)
     ok &= (cs->var = calloc(nm, sizeof(float))) != NULL;
     ok &= (cs->lo = calloc((size_t)half, sizeof(int))) != NULL;
     ok &= (cs->hi = calloc((size_t)half, sizeof(int))) != NULL;
+    ok &= (cs->deep = calloc((size_t)half, sizeof(int))) != NULL;
     cs->cache_n = 0;
     if (!ok)
         return OCEAN_ENOMEM;
+    for (int m = 0; m < half; m++)
+        cs->deep[m] = half;
     for (int ix = 0; ix < half; ix++)
         cs->kx[ix] = (float)(ix * cs->dk);
     return OCEAN_OK;
@@ -437,6 +467,14 @@ static ocean_result cascade_init(ocean *o, int c)
     ocean_result r = cascade_alloc(cs, n);
     if (r != OCEAN_OK)
         return r;
+    cs->cf = sqrt(OCEAN_G * cs->dk) / OCEAN_TWO_PI_C1;
+    /* k grows along a row: deep water is a tail of each row pair. */
+    for (int m = 0; m < half; m++) {
+        int x = 0;
+        while (x < half && !(hypot(x * cs->dk, m * cs->dk) * p->sea.depth_m >= DEEP_KD))
+            x++;
+        cs->deep[m] = x;
+    }
     double var = 0.0;
     for (int iz = 0; iz < n; iz++) {
         int mz = iz < n / 2 ? iz : iz - n;
@@ -452,8 +490,13 @@ static ocean_result cascade_init(ocean *o, int c)
             double hp[2], hm[2];
             draw_h0(p, cs, mx, mz, hp);
             draw_h0(p, cs, -mx, -mz, hm);
-            ocean_turns_of(ocean_dispersion(k, p->sea.depth_m), &cs->turns_hi[i],
-                           &cs->turns_lo[i]);
+            if (ix >= cs->deep[abs(mz)]) {
+                cs->turns_hi[i] = deep_turns(cs->cf, (double)mx * mx + (double)mz * mz);
+                cs->turns_lo[i] = 0.0;
+            } else {
+                ocean_turns_of(ocean_dispersion(k, p->sea.depth_m), &cs->turns_hi[i],
+                               &cs->turns_lo[i]);
+            }
             coef_put(cs, pair_row(mz, n) * half + ix, hp, hm);
             cs->k[i] = (float)k;
             cs->kinv[i] = (float)(1.0 / k);
@@ -515,6 +558,12 @@ ocean_result ocean_wisdom_export(const char *path, char *msg, size_t msglen)
         return OCEAN_EIO;
     }
     return OCEAN_OK;
+}
+
+void ocean_force_frequency_table(ocean *o, int table)
+{
+    if (o)
+        o->deep_table = table != 0;
 }
 
 int ocean_force_paths(ocean *o, int fused, int stream)
@@ -813,6 +862,7 @@ void ocean_destroy(ocean *o)
         free(cs->var);
         free(cs->lo);
         free(cs->hi);
+        free(cs->deep);
         free(cs->lw);
     }
     for (int i = 0; i < GAIN_PLANES; i++)
@@ -1127,6 +1177,7 @@ typedef struct stage_args {
     int gain_ready;         /* 1: gain holds the gains, 0: fill it */
     int fused;              /* 1: AVX2+FMA, 2: AVX-512 row pass (same bits) */
     int stream;             /* 1: write spec with streaming stores */
+    int deep_table;         /* 1: read every frequency (ocean_force_frequency_table) */
 } stage_args;
 
 /* sin and cos of a phase x already reduced to [-pi, pi] (exactly, in
@@ -1174,12 +1225,15 @@ static inline float gain_fast(float k, float kc, int order)
  * makes w depend on direction): one phase and sin/cos serve both rows,
  * half the stage's trigonometry.  turns is the index of the row's first
  * mode in turns_hi/lo (FFTW's rows), row and mirror those of the two rows
- * in coef and cache (pair_row).  Inlined with literal with_dt and pair,
- * so each variant is one branch-free vector loop.  Out-of-band modes have
+ * in coef and cache (pair_row).  deep: the columns x0 .. x0 + count - 1
+ * of rows +-sqrt(mz2) are deep water, so w / 2 pi is deep_turns, not read
+ * (cs->deep).  Inlined with literal with_dt, pair and deep, so each
+ * variant is one branch-free vector loop.  Out-of-band modes have
  * a = b = 0, so they need no branch either. */
 static inline __attribute__((always_inline)) void
 row_evolve(const cascade *cs, size_t turns, size_t row, size_t mirror, int count, double t,
-           const int with_dt, const int fused, const int pair)
+           int x0, double mz2, const int with_dt, const int fused, const int pair,
+           const int deep)
 {
     const double *fh = cs->turns_hi + turns, *fl = cs->turns_lo + turns;
     double th, tl;
@@ -1192,17 +1246,21 @@ row_evolve(const cascade *cs, size_t turns, size_t row, size_t mirror, int count
     const float *qbr = cs->coef[B_RE] + mirror, *qbi = cs->coef[B_IM] + mirror;
     float *q_hr = cs->cache[C_HR] + mirror, *q_hi = cs->cache[C_HI] + mirror;
     float *q_tr = cs->cache[C_TR] + mirror, *q_ti = cs->cache[C_TI] + mirror;
+    const double cf = cs->cf;
 #pragma omp simd
     for (int ix = 0; ix < count; ix++) {
         float s, c;
+        double mx = (double)(x0 + ix);
+        double f_hi = deep ? deep_turns(cf, mx * mx + mz2) : fh[ix];
+        double f_lo = deep ? 0.0 : fl[ix];
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-        double ph = fused ? ocean_phase_turns_fma(fh[ix], fl[ix], t)
-                          : ocean_phase_turns(fh[ix], fl[ix], t, th, tl);
+        double ph = fused ? ocean_phase_turns_fma(f_hi, f_lo, t)
+                          : ocean_phase_turns(f_hi, f_lo, t, th, tl);
 #else
-        double ph = ocean_phase_turns(fh[ix], fl[ix], t, th, tl);
+        double ph = ocean_phase_turns(f_hi, f_lo, t, th, tl);
 #endif
         phase_sincos(ph, &s, &c);
-        float w = with_dt ? (float)(fh[ix] * OCEAN_TWO_PI_C1) : 0.0f;
+        float w = with_dt ? (float)(f_hi * OCEAN_TWO_PI_C1) : 0.0f;
         /* h = a cos + b sin, dh/dt = w (b cos - a sin) */
         c_hr[ix] = ar[ix] * c + br[ix] * s;
         c_hi[ix] = ai[ix] * c + bi[ix] * s;
@@ -1381,6 +1439,23 @@ spectrum_row_channels(const stage_args *a, int r, int x0, int x1, const int fuse
     }
 }
 
+/* row_evolve for one span of a row pair, with_dt and pair made literal. */
+static inline __attribute__((always_inline)) void
+evolve_span(const stage_args *a, size_t turns, size_t row, size_t mirror, int count, int x0,
+            double mz2, int alone, const int fused, const int deep)
+{
+    if (count <= 0)
+        return;
+    if (alone && a->need_dt)
+        row_evolve(a->cs, turns, row, row, count, a->t, x0, mz2, 1, fused, 0, deep);
+    else if (alone)
+        row_evolve(a->cs, turns, row, row, count, a->t, x0, mz2, 0, fused, 0, deep);
+    else if (a->need_dt)
+        row_evolve(a->cs, turns, row, mirror, count, a->t, x0, mz2, 1, fused, 1, deep);
+    else
+        row_evolve(a->cs, turns, row, mirror, count, a->t, x0, mz2, 0, fused, 1, deep);
+}
+
 /* Rows p and n - p of the n-point grid (mz = p and -p; rows 0 and n/2
  * alone): h(k,t) for both (unless cached), then their channels. */
 static inline __attribute__((always_inline)) void
@@ -1395,14 +1470,13 @@ spectrum_row_body(const stage_args *a, int p, const int fused)
     size_t row = pair_row(mz, a->n_full) * full_half + (size_t)lo;
     size_t mirror = pair_row(-mz, a->n_full) * full_half + (size_t)lo;
     if (!a->cached) {
-        if (alone && a->need_dt)
-            row_evolve(a->cs, turns, row, row, hi - lo, a->t, 1, fused, 0);
-        else if (alone)
-            row_evolve(a->cs, turns, row, row, hi - lo, a->t, 0, fused, 0);
-        else if (a->need_dt)
-            row_evolve(a->cs, turns, row, mirror, hi - lo, a->t, 1, fused, 1);
-        else
-            row_evolve(a->cs, turns, row, mirror, hi - lo, a->t, 0, fused, 1);
+        /* Columns [lo, d) read their frequency, [d, hi) compute it. */
+        int d = a->deep_table ? hi : a->cs->deep[p];
+        d = d < lo ? lo : d > hi ? hi : d;
+        int skip = d - lo;
+        double mz2 = (double)mz * mz;
+        evolve_span(a, turns, row, mirror, skip, lo, mz2, alone, fused, 0);
+        evolve_span(a, turns + skip, row + skip, mirror + skip, hi - d, d, mz2, alone, fused, 1);
     }
     spectrum_row_channels(a, p, lo, hi, fused);
     if (!alone)
@@ -1699,7 +1773,8 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
         int cached = cs->cache_n >= n && cs->cache_t == t && (cs->cache_dt || !need_dt);
         stage_args a = {cs, cached, need_dt, n_full, n, nch, ch, t, kc, kneg, scale, boost,
                         o->p.sea.choppiness, r->order, o->spec, NULL, 0, o->fused,
-                        (double)nch * n * (n / 2 + 1) * sizeof(fftwf_complex) > o->stream_bytes};
+                        (double)nch * n * (n / 2 + 1) * sizeof(fftwf_complex) > o->stream_bytes,
+                        o->deep_table};
         if (cs->k_lo >= kneg) {
             memset(f->block[c], 0, sizeof(float) * nch * (size_t)n * n);
         } else {
@@ -1729,7 +1804,9 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
                     for (int p = 0; p <= n / 2; p++) {
                         int lo, hi;
                         pair_range(cs, n, p, &lo, &hi);
-                        o->counters.modes_evolved += (uint64_t)(hi - lo) * (p == 0 || p == n / 2 ? 1 : 2);
+                        int rows = p == 0 || p == n / 2 ? 1 : 2, d = o->deep_table ? hi : cs->deep[p];
+                        o->counters.modes_evolved += (uint64_t)(hi - lo) * rows;
+                        o->counters.modes_deep += (uint64_t)(hi - (d > lo ? (d < hi ? d : hi) : lo)) * rows;
                     }
                     cs->cache_t = t;
                     cs->cache_n = n;

@@ -396,6 +396,9 @@ typedef struct ocean_counters {
                                           spectrum stage computed: only those of a row
                                           that hold a wave (a coarse cascade's band
                                           |k| < pi n / (2 patch) is ~20 % of its grid) */
+    uint64_t modes_deep;               /* of those, modes in deep water (k d >= 22), whose
+                                          frequency the stage computed (sqrt(g k) / 2 pi)
+                                          instead of reading it from memory */
 } ocean_counters;
 void ocean_get_counters(const ocean *o, ocean_counters *out);
 

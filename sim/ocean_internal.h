@@ -21,6 +21,14 @@
  * (0, 1 or 2); NULL: does nothing, returns -1. */
 int ocean_force_paths(ocean *o, int fused, int stream);
 
+/* table 1: the spectrum stage reads every mode's frequency from its table,
+ * deep water's too; 0 (ocean_create's): it computes deep water's
+ * (k d >= 22) as sqrt(g k) / 2 pi from the mode's integer wave vector.
+ * Both give the same bits (the table holds the computed value); the
+ * switch is for the tests and benchmarks that compare them.  Same thread
+ * rules as ocean_force_paths; NULL: does nothing. */
+void ocean_force_frequency_table(ocean *o, int table);
+
 /* Transforms the channels of an evaluation group channels per FFTW call
  * (1 up to the 11 channels an evaluation can hold; 0 or out of range: the
  * default rule, at most 8.5 MB of spectra a call).  Each group size is its own FFTW plan, so results may differ from

@@ -26,7 +26,11 @@
  * of w / 2 pi held as a double-double, so the phase is reduced in turns,
  * where taking the nearest integer off is exact; the result is w t mod 2 pi
  * of the two doubles to within a few ulp of pi (< 4e-15 rad; 4.4e-16
- * measured), tested against __float128 in tests/test_ocean.c.  Above the limit every entry
+ * measured), tested against __float128 in tests/test_ocean.c.  (The FFT
+ * ocean computes deep water's w / 2 pi from the wave vector, within 3 ulp
+ * of sqrt(g k) / 2 pi, as the dispersion relation's own rounding is within
+ * a few: that double is the model's w, and the phase is exact for it.)
+ * Above the limit every entry
  * point refuses t with OCEAN_EINVAL: the library (ocean_evaluate, the
  * Gerstner near field, queries), the protocol decoder (header sim_time,
  * camera.render_time, query.t, query_result.t, sea_state.effective_time),

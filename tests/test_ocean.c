@@ -1340,6 +1340,104 @@ static void test_stage_evolves_only_waves(void **state)
     ocean_destroy(o);
 }
 
+/* Deep water (k d >= 22, where tanh(k d) = 1 to 2^-62): the stage
+ * computes w = sqrt(g k) from the mode's integer wave vector instead of
+ * reading its frequency from memory; shallower modes read theirs.  A sea
+ * 30 m deep holds both kinds.  The counter must see exactly the deep
+ * modes the stage evolves (bounds from the band and from amplitudes drawn
+ * afresh), and the fields must be bit for bit those of the table (every
+ * frequency read), on the plain and the widest row pass, with velocity,
+ * at an ordinary and at the largest time. */
+static void test_deep_water_frequency_computed(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 128;
+    p.cascades = 3;
+    p.sea.depth_m = 30.0;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o);
+    int n = p.n, half = n / 2 + 1;
+    long deep_wave = 0, deep_band = 0, shallow_wave = 0, shallow_band = 0;
+    for (int c = 0; c < p.cascades; c++) {
+        double patch, k_lo, k_hi;
+        ocean_cascade_band(o, c, &patch, &k_lo, &k_hi);
+        double dk = 2.0 * M_PI / patch;
+        for (int iz = 0; iz < n; iz++)
+            for (int ix = 0; ix < half; ix++) {
+                int mz = iz < n / 2 ? iz : iz - n;
+                if (mz == -n / 2 || ix == n / 2)
+                    continue;
+                double k = hypot(ix * dk, mz * dk);
+                if (!(k > 0.0 && k >= k_lo && k < k_hi))
+                    continue;
+                int deep = k * p.sea.depth_m >= 22.0;
+                double h[2];
+                ocean_mode_amplitude(o, c, ix, mz, 0.0, h);
+                int wave = h[0] != 0.0 || h[1] != 0.0;
+                deep_band += deep;
+                shallow_band += !deep;
+                deep_wave += deep && wave;
+                shallow_wave += !deep && wave;
+            }
+    }
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL | OCEAN_FX_VELOCITY);
+    ocean_counters c0, c1;
+    ocean_get_counters(o, &c0);
+    assert_int_equal(ocean_evaluate(o, 7.25, &r, f), OCEAN_OK);
+    ocean_get_counters(o, &c1);
+    long deep = (long)(c1.modes_deep - c0.modes_deep);
+    long evolved = (long)(c1.modes_evolved - c0.modes_evolved);
+    print_message("30 m deep: %ld of %ld modes evolved computed their w (%ld deep with a wave, "
+                  "%ld deep in the bands, %ld shallow with a wave, %ld in the bands)\n",
+                  deep, evolved, deep_wave, deep_band, shallow_wave, shallow_band);
+    assert_true(deep_wave > 0 && shallow_wave > 0);
+    assert_true(deep >= deep_wave && deep <= deep_band);
+    /* (A few shallow modes of this TMA sea are under float's range, so
+     * they hold no wave in the stage: no lower bound from them.) */
+    assert_true(evolved - deep > 0 && evolved - deep <= shallow_band);
+    const double ts[] = {1234.5678, OCEAN_TIME_MAX - 0.5};
+    uint64_t ref = 0;
+    for (int v = 0; v < 4; v++) {
+        int table = v & 1, fused = v & 2 ? 2 : 0;
+        ocean_force_paths(o, fused, -1);
+        ocean_force_frequency_table(o, table);
+        uint64_t h = 1469598103934665603ull;
+        ocean_get_counters(o, &c0);
+        for (int a = 0; a < 2; a++) {
+            assert_int_equal(ocean_evaluate(o, ts[a], &r, f), OCEAN_OK);
+            hash_frame(f, p.cascades, &h);
+        }
+        ocean_get_counters(o, &c1);
+        /* The table path reads every frequency. */
+        assert_true(table ? c1.modes_deep == c0.modes_deep : c1.modes_deep > c0.modes_deep);
+        print_message("row pass %d, %s: %016llx\n", fused, table ? "table" : "computed",
+                      (unsigned long long)h);
+        if (v == 0)
+            ref = h;
+        else
+            assert_true(h == ref);
+    }
+    /* Shallow everywhere (k d < 22 for every wave of a 3 m sea of this
+     * band, |k| < 0.41 rad/m): nothing is computed. */
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    pm_params(&p, 64);
+    p.patch_m = 500.0;
+    p.sea.depth_m = 3.0;
+    o = make(&p);
+    f = frame(o);
+    ocean_get_counters(o, &c0);
+    assert_int_equal(ocean_evaluate(o, 7.25, &r, f), OCEAN_OK);
+    ocean_get_counters(o, &c1);
+    assert_true(c1.modes_evolved > c0.modes_evolved);
+    assert_true(c1.modes_deep == c0.modes_deep);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
 /* Channels go to FFTW in groups (at most 8.5 MB of spectra a call, so a
  * group's spectra are still cached when its transform reads them).  Every
  * group size must give every channel's waves: against the direct sum of the
@@ -1462,6 +1560,7 @@ int main(void)
         cmocka_unit_test(test_gain_planes_reused_exactly),
         cmocka_unit_test(test_stage_paths_same_bits),
         cmocka_unit_test(test_stage_evolves_only_waves),
+        cmocka_unit_test(test_deep_water_frequency_computed),
         cmocka_unit_test(test_grouped_transforms),
     };
     return cmocka_run_group_tests_name("ocean", tests, NULL, NULL);

@@ -216,9 +216,11 @@ static int core_table(const int *sizes, int nsizes, int plan, int quick, FILE *c
 
 /* What each spectrum-stage path contributes (issue 14): the full
  * evaluation (+foam, 2 threads, MEASURE plans) with the plain row pass,
- * the AVX2+FMA pass, the AVX-512 pass, and the widest pass with streaming
- * stores, each interleaved with FFTW alone on one ocean
- * (ocean_force_paths; all give the same bits, tests/test_ocean.c); a
+ * the AVX2+FMA pass, the AVX-512 pass, the widest pass with streaming
+ * stores, and the widest pass reading every frequency from memory (deep
+ * water's too: ocean_force_frequency_table), each interleaved with FFTW
+ * alone on one ocean (ocean_force_paths; all give the same bits,
+ * tests/test_ocean.c); a
  * pass the CPU lacks is labelled with the one that ran.  Every path already takes one
  * phase per mirror-row pair.  Returns 0, or 1 when the ocean could not be
  * made. */
@@ -237,8 +239,11 @@ static int stage_paths(int n, int quick)
         ocean_destroy(o);
         return 1;
     }
-    enum { PATHS = 4 };
-    static const struct { int fused, stream; } path[PATHS] = {{0, 0}, {1, 0}, {2, 0}, {2, 1}};
+    enum { PATHS = 5 };
+    /* table: every frequency read from memory, deep water's too (the
+     * stage before it computed deep water's). */
+    static const struct { int fused, stream, table; } path[PATHS] = {
+        {0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {2, 1, 0}, {2, 0, 1}};
     static const char *const pass_name[] = {"plain row pass", "AVX2+FMA", "AVX-512"};
     int ran[PATHS];
     for (int k = 0; k < PATHS; k++)
@@ -256,6 +261,7 @@ static int stage_paths(int n, int quick)
         for (int k = 0; k < PATHS; k++) {
             int pk = (i + k) % PATHS; /* rotate which path goes first */
             ocean_force_paths(o, path[pk].fused, path[pk].stream);
+            ocean_force_frequency_table(o, path[pk].table);
             t0 = bench_now_ms();
             ocean_evaluate(o, 10.0 + i / 30.0 + pk, &r, f);
             ms[pk * reps + i] = bench_now_ms() - t0;
@@ -264,12 +270,15 @@ static int stage_paths(int n, int quick)
     for (int k = 0; k < PATHS; k++) {
         for (int i = 0; i < reps; i++)
             q[i] = ms[k * reps + i] / fw[i];
-        printf("| %d | %s%s%s%s | %.3f | %.3f | %.3f |\n", n, pass_name[ran[k]],
+        printf("| %d | %s%s%s%s%s | %.3f | %.3f | %.3f |\n", n, pass_name[ran[k]],
                ran[k] != path[k].fused ? " (the CPU lacks the wider pass)" : "",
-               path[k].stream ? ", streaming stores" : "", ran[k] == best && !path[k].stream ? " **(default)**" : "",
+               path[k].stream ? ", streaming stores" : "",
+               path[k].table ? ", every frequency read from memory (deep water's too)" : "",
+               ran[k] == best && !path[k].stream && !path[k].table ? " **(default)**" : "",
                bench_median(ms + k * reps, reps), bench_median(fw, reps), bench_median(q, reps));
     }
     ocean_force_paths(o, -1, -1);
+    ocean_force_frequency_table(o, 0);
     free(ms);
     ocean_frame_destroy(f);
     ocean_destroy(o);
@@ -693,8 +702,10 @@ int main(int argc, char **argv)
            "same source 16 floats wide, with registers enough to keep the sin/cos coefficients "
            "(AVX2 reloads them from the stack); streaming stores write the spectra without first "
            "reading the lines, forced here at both sizes (oceand streams only spectra over twice "
-           "the last-level cache: none at N <= 1024 on this machine). **(default)** marks the "
-           "pass oceand runs on this CPU.\n\n");
+           "the last-level cache: none at N <= 1024 on this machine). The last row reads every "
+           "mode's frequency from its table, as the stage did before it computed deep water's "
+           "(k d >= 22: sqrt(g k) / 2 pi from the integer wave vector; same bits). **(default)** "
+           "marks the pass oceand runs on this CPU.\n\n");
     printf("| N | path | ms | FFTW ms | ratio |\n|---:|---|---:|---:|---:|\n");
     for (int i = 0; i < 2; i++)
         failed |= stage_paths(mea_sizes[i], quick);
