@@ -37,6 +37,7 @@
 #include <fftw3.h>
 #include <omp.h>
 #include <stdint.h>
+#include <time.h>
 #include <unistd.h>
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #include <immintrin.h>
@@ -130,6 +131,15 @@ static void memo_put(filter_memo *m, int *next, double kc, int order, double sca
  * (n/2 + 1) per row, including the grid's zeroed Nyquist row and column.
  * A bucket keeps its cutoff for many ticks, so its gains are computed
  * once instead of per tick (a division and a square root per mode). */
+/* The running cost of one way of splitting the stage's passes (rows or
+ * channels) for one kind of cascade evaluation: ns per channel of the
+ * passes and FFTW calls together, an exponential average; 0 = not yet
+ * measured. */
+typedef struct split_stat {
+    double ns[2];
+    uint32_t evals;
+} split_stat;
+
 #define GAIN_PLANES 12
 typedef struct gain_plane {
     int cascade, n, order;
@@ -165,6 +175,12 @@ struct ocean {
     double stream_bytes; /* spectra larger than this are streamed (twice the LLC) */
     int deep_table;     /* 1: the stage reads deep water's w too (ocean_force_frequency_table) */
     int group;           /* channels per FFTW call forced by a test, 0: group_size's rule */
+    /* How the stage splits a call over the threads (stage_pass): -1 the
+     * faster as measured (split_pick), 0 rows, 1 channels
+     * (ocean_force_stage_split).  Timings per cascade, grid level, and
+     * whether h(k,t) was cached. */
+    int split_mode;
+    split_stat split[OCEAN_MAX_CASCADES][MAX_LEVELS][2];
 };
 
 struct ocean_frame {
@@ -758,6 +774,7 @@ static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_
     }
     o->p = *p;
     ocean_force_paths(o, -1, -1);
+    o->split_mode = -1;
     for (int c = 0; c < p->cascades; c++) {
         char why[256] = "";
         r = lattice ? cascade_init_lattice(o, lw, nlw, why, sizeof why) : cascade_init(o, c);
@@ -1688,6 +1705,74 @@ static void stage_rows(const cascade *cs, int n, int nt, const int *b, int *r0, 
     *r1 = mine[t + 1];
 }
 
+/* Monotonic nanoseconds, for ocean_counters' time split. */
+static inline uint64_t now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
+/* The channels [*c0, *c1) of a gn-channel FFTW call that this team
+ * member writes when the stage splits a call by channel: the block of the
+ * batch FFTW's threaded plan hands the same member (its threads split a
+ * batch of 2-D transforms into blocks of ceil(gn / threads) transforms,
+ * member i taking block i: fftw3's X(spawn_loop)).  Then the FFT reads
+ * each spectrum from the core that wrote it; split by rows, half of every
+ * spectrum a thread transforms was written by the other core, and when this
+ * VM's caches are busy that cross-core read cost the FFT 10-20 % (FFTW
+ * alone after zero writes, row split 1.15-1.21x, channel split 1.02-1.03x,
+ * N = 512 and 1024, same minutes). */
+static void stage_channels(int gn, int *c0, int *c1)
+{
+#ifdef _OPENMP
+    int t = omp_get_thread_num(), m = omp_get_num_threads();
+#else
+    int t = 0, m = 1;
+#endif
+    int bs = (gn + m - 1) / m;
+    *c0 = t * bs < gn ? t * bs : gn;
+    *c1 = *c0 + bs < gn ? *c0 + bs : gn;
+}
+
+/* One FFTW call's stage pass on team member's share: split by channel
+ * (stage_channels) when the call has a channel for every thread, else by
+ * rows (stage_rows).  By channel, an evolving pass (a->cached = 0) first
+ * evolves this member's rows and writes its channels there from h in L1,
+ * then, once every row's h(k,t) and gains are in place, its channels in
+ * the other rows from the cache. */
+static void stage_pass(const stage_args *a, int nt, const int *split, size_t plane, int by_channel)
+{
+    const cascade *cs = a->cs;
+    int n = a->n, r0, r1;
+    stage_rows(cs, n, nt, split, &r0, &r1);
+    if (!by_channel) {
+        for (int p = r0; p < r1; p++)
+            spectrum_row(a, p);
+        return;
+    }
+    int c0, c1;
+    stage_channels(a->nch, &c0, &c1);
+    stage_args my = *a;
+    my.ch = a->ch + c0;
+    my.nch = c1 - c0;
+    my.spec = a->spec + (size_t)c0 * plane;
+    if (!a->cached) {
+        for (int p = r0; p < r1; p++)
+            spectrum_row(&my, p);
+#pragma omp barrier
+        my.cached = 1;
+        my.gain_ready = a->gain != NULL;
+        for (int p = 0; p < r0; p++)
+            spectrum_row(&my, p);
+        for (int p = r1; p <= n / 2; p++)
+            spectrum_row(&my, p);
+    } else {
+        for (int p = 0; p <= n / 2; p++)
+            spectrum_row(&my, p);
+    }
+}
+
 /* Channels per FFTW call on the n-point grid.  Eight spectra at N = 1024
  * are 34 MB, more than a last-level cache holds, so one batched transform
  * found what the row pass wrote already evicted and ran from memory; in
@@ -1705,6 +1790,44 @@ static int group_size(const ocean *o, int n, int nch)
     double per = (double)n * (n / 2 + 1) * sizeof(fftwf_complex);
     int g = (int)(GROUP_BYTES / per);
     return g < 1 ? 1 : g < nch ? g : nch;
+}
+
+void ocean_force_stage_split(ocean *o, int mode)
+{
+    if (o)
+        o->split_mode = mode == 0 || mode == 1 ? mode : -1;
+}
+
+/* Every SPLIT_PROBE-th evaluation of a kind runs the split that is
+ * measured slower, so a change in the machine's load (the better split
+ * changes with it) is seen within a few seconds at 30 Hz. */
+#define SPLIT_PROBE 16
+
+/* The split (0 rows, 1 channels) for the next evaluation of a kind: each
+ * measured once first, then the faster with a probe of the other. */
+static int split_pick(const ocean *o, split_stat *st)
+{
+    if (o->split_mode >= 0)
+        return o->split_mode;
+    if (st->ns[0] == 0.0)
+        return 0;
+    if (st->ns[1] == 0.0)
+        return 1;
+    int best = st->ns[1] < st->ns[0];
+    return ++st->evals % SPLIT_PROBE == 0 ? !best : best;
+}
+
+/* split_pick's choice without a probe: the split the stage runs now. */
+static int split_best(const ocean *o, const split_stat *st)
+{
+    if (o->split_mode >= 0)
+        return o->split_mode;
+    return st->ns[0] != 0.0 && st->ns[1] != 0.0 && st->ns[1] < st->ns[0];
+}
+
+static void split_note(split_stat *st, int split, double ns)
+{
+    st->ns[split] = st->ns[split] == 0.0 ? ns : 0.75 * st->ns[split] + 0.25 * ns;
 }
 
 void ocean_force_group(ocean *o, int group)
@@ -1787,19 +1910,25 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
              * the first one filled). */
             int g = group_size(o, n, nch);
             int nt = n >= PARALLEL_MIN_N ? o->p.threads : 1, split[STAGE_MAX_THREADS + 1];
+            size_t plane = (size_t)n * (n / 2 + 1);
             stage_split(cs, n, nt, split);
+            /* Split by channel or by rows: the same bits, but which is
+             * faster depends on how busy this machine's caches are
+             * (stage_channels), so the ocean measures both and runs the
+             * faster.  Only where a call has a channel for every thread. */
+            split_stat *st = &o->split[c][level_of(n)][a.cached];
+            int by_channel = nt > 1 && (g < nch ? g : nch) >= nt ? split_pick(o, st) : 0;
+            uint64_t c_start = now_ns();
             for (int j0 = 0; j0 < nch; j0 += g) {
                 int gn = nch - j0 < g ? nch - j0 : g;
                 a.ch = ch + j0;
                 a.nch = gn;
                 a.stream = (double)gn * n * (n / 2 + 1) * sizeof(fftwf_complex) > o->stream_bytes;
+                uint64_t t0 = now_ns();
 #pragma omp parallel num_threads(nt) if (nt > 1)
-                {
-                    int r0, r1;
-                    stage_rows(cs, n, nt, split, &r0, &r1);
-                    for (int row = r0; row < r1; row++)
-                        spectrum_row(&a, row);
-                }
+                stage_pass(&a, nt, split, plane, by_channel && gn >= nt);
+                uint64_t t1 = now_ns();
+                *(a.cached ? &o->counters.ns_channels : &o->counters.ns_evolve) += t1 - t0;
                 if (!a.cached) {
                     for (int p = 0; p <= n / 2; p++) {
                         int lo, hi;
@@ -1814,10 +1943,15 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
                     a.cached = 1;
                 }
                 a.gain_ready = a.gain != NULL;
+                uint64_t t2 = now_ns();
                 fftwf_execute_dft_c2r(o->plan[level_of(n)][gn - 1], o->spec,
                                       f->block[c] + (size_t)j0 * n * n);
+                o->counters.ns_fft += now_ns() - t2;
                 o->counters.fft_calls++;
+                o->counters.fft_calls_by_channel += by_channel && gn >= nt;
             }
+            if (nt > 1 && (g < nch ? g : nch) >= nt)
+                split_note(st, by_channel, (double)(now_ns() - c_start) / nch);
             transforms += nch;
             for (int j = 0; j < nch; j++) {
                 int e = ch[j] == CH_H ? 0 : ch[j] <= CH_DZ ? 1 : ch[j] <= CH_SZ ? 2
@@ -1852,8 +1986,9 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
 }
 
 /* The FFTW calls of ocean_evaluate(o, ., r, f); with write_spectra, each
- * call's spectra are first overwritten with zeros, row pairs split over
- * the threads as the stage splits them. */
+ * call's spectra are first overwritten with zeros, split over the threads
+ * as the stage would split an evolving pass now (split_best: by channel,
+ * or by row pairs). */
 static ocean_result transform_groups(ocean *o, const ocean_request *r, ocean_frame *f, int write_spectra)
 {
     if (!o || !r || !f || f->cascades != o->p.cascades || isnan(r->cutoff_k) ||
@@ -1873,7 +2008,14 @@ static ocean_result transform_groups(ocean *o, const ocean_request *r, ocean_fra
         stage_split(cs, n, nt, split);
         for (int j0 = 0; j0 < nch; j0 += g) {
             int gn = nch - j0 < g ? nch - j0 : g;
-            if (write_spectra) {
+            if (write_spectra && nt > 1 && gn >= nt && split_best(o, &o->split[c][level_of(n)][0])) {
+#pragma omp parallel num_threads(nt)
+                {
+                    int c0, c1;
+                    stage_channels(gn, &c0, &c1);
+                    memset(o->spec + (size_t)c0 * plane, 0, sizeof(fftwf_complex) * plane * (size_t)(c1 - c0));
+                }
+            } else if (write_spectra) {
 #pragma omp parallel num_threads(nt) if (nt > 1)
                 {
                     int r0, r1;

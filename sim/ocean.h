@@ -399,6 +399,16 @@ typedef struct ocean_counters {
     uint64_t modes_deep;               /* of those, modes in deep water (k d >= 22), whose
                                           frequency the stage computed (sqrt(g k) / 2 pi)
                                           instead of reading it from memory */
+    /* Where ocean_evaluate's time went, in monotonic nanoseconds (wall time
+     * of the parallel regions, so per evaluation, not per thread): */
+    uint64_t ns_evolve;                /* stage passes that evolved h(k,t) (the first
+                                          call of a cascade in a tick) and wrote that
+                                          call's spectra */
+    uint64_t ns_channels;              /* stage passes that read h(k,t) back from the
+                                          tick's cache and wrote their call's spectra */
+    uint64_t ns_fft;                   /* FFTW calls */
+    uint64_t fft_calls_by_channel;     /* of fft_calls, those whose stage pass was split
+                                          over the threads by channel, not by rows */
 } ocean_counters;
 void ocean_get_counters(const ocean *o, ocean_counters *out);
 

@@ -35,11 +35,21 @@ void ocean_force_frequency_table(ocean *o, int table);
  * the default's in the last bits.  Accepts NULL. */
 void ocean_force_group(ocean *o, int group);
 
+/* How the spectrum stage splits an FFTW call's pass over the threads:
+ * mode 0 by rows, 1 by channel (each thread the channels FFTW's threaded
+ * plan transforms on it), -1 (ocean_create's) whichever the ocean has
+ * measured faster, with a probe of the other every 16th evaluation.  A
+ * call with fewer channels than threads always splits by rows.  Every
+ * mode gives the same bits; the switch is for the tests and benchmarks
+ * that compare them.  Same thread rules as ocean_force_paths; NULL: does
+ * nothing. */
+void ocean_force_stage_split(ocean *o, int mode);
+
 /* ocean_transform_only with each FFTW call's spectra first written
- * (zeros, rows split over the threads as the spectrum stage splits
- * them): the least any stage that writes the spectra FFTW reads can cost,
- * the floor bench_core puts beside the full evaluation.  f's contents are
- * garbage afterwards. */
+ * (zeros, split over the threads as the spectrum stage splits them): the
+ * least any stage that writes the spectra FFTW reads can cost, the floor
+ * bench_core puts beside the full evaluation.  f's contents are garbage
+ * afterwards. */
 ocean_result ocean_transform_floor(ocean *o, const ocean_request *r, ocean_frame *f);
 
 #endif

@@ -10,6 +10,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <cmocka.h>
 #include <fftw3.h>
@@ -1438,6 +1439,121 @@ static void test_deep_water_frequency_computed(void **state)
     ocean_destroy(o);
 }
 
+/* ocean_counters' time split: the pass that evolves h(k,t) is timed as
+ * ns_evolve, the passes that read it back from the tick's cache as
+ * ns_channels, FFTW as ns_fft; all three lie inside ocean_evaluate's own
+ * wall time.  bench_core prints them beside its floor table ("Where each
+ * evaluation of that table went"). */
+static void test_time_split_counters(void **state)
+{
+    (void)state;
+    ocean_params p;
+    pm_params(&p, 64);
+    p.patch_m = 500.0;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL);
+    ocean_counters c0, c1;
+    struct timespec w0, w1;
+    /* 8 channels two a call: one evolving pass, three reading back. */
+    ocean_force_group(o, 2);
+    ocean_get_counters(o, &c0);
+    clock_gettime(CLOCK_MONOTONIC, &w0);
+    assert_int_equal(ocean_evaluate(o, 3.5, &r, f), OCEAN_OK);
+    clock_gettime(CLOCK_MONOTONIC, &w1);
+    ocean_get_counters(o, &c1);
+    uint64_t wall = (uint64_t)(w1.tv_sec - w0.tv_sec) * 1000000000u + (uint64_t)w1.tv_nsec -
+                    (uint64_t)w0.tv_nsec;
+    uint64_t ev = c1.ns_evolve - c0.ns_evolve, chn = c1.ns_channels - c0.ns_channels,
+             fft = c1.ns_fft - c0.ns_fft;
+    print_message("N = 64, 4 calls: evolve %llu ns, channels %llu ns, FFTW %llu ns, wall %llu ns\n",
+                  (unsigned long long)ev, (unsigned long long)chn, (unsigned long long)fft,
+                  (unsigned long long)wall);
+    assert_int_equal(c1.fft_calls - c0.fft_calls, 4);
+    assert_true(ev > 0 && chn > 0 && fft > 0);
+    assert_true(ev + chn + fft <= wall);
+    /* The same tick again: h(k,t) is cached, so nothing evolves. */
+    ocean_get_counters(o, &c0);
+    assert_int_equal(ocean_evaluate(o, 3.5, &r, f), OCEAN_OK);
+    ocean_get_counters(o, &c1);
+    assert_true(c1.ns_evolve == c0.ns_evolve);
+    assert_true(c1.ns_channels > c0.ns_channels && c1.ns_fft > c0.ns_fft);
+    /* A new tick in one call: only the evolving pass. */
+    ocean_force_group(o, 8);
+    ocean_get_counters(o, &c0);
+    assert_int_equal(ocean_evaluate(o, 4.5, &r, f), OCEAN_OK);
+    ocean_get_counters(o, &c1);
+    assert_true(c1.ns_evolve > c0.ns_evolve && c1.ns_fft > c0.ns_fft);
+    assert_true(c1.ns_channels == c0.ns_channels);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
+/* One run of test_stage_split_same_bits under split `mode`: every frame
+ * hashed into *h; FFTW calls and those split by channel counted. */
+static void split_run(ocean *o, ocean_frame *f, int cascades, int mode, double t_off, uint64_t *h,
+                      uint64_t *calls, uint64_t *by_ch)
+{
+    const double ts[] = {1234.5678, 3.0e6 + 0.1};
+    const double kcs[] = {INFINITY, 0.4};
+    ocean_force_stage_split(o, mode);
+    ocean_counters c0, c1;
+    ocean_get_counters(o, &c0);
+    *h = 1469598103934665603ull;
+    for (int g = 0; g < 2; g++) {
+        ocean_force_group(o, g ? 2 : 0);
+        for (int a = 0; a < 2; a++)
+            for (int b = 0; b < 2; b++)
+                /* A tick's first evaluation evolves h(k,t); the second
+                 * reads it back. */
+                for (int again = 0; again < 2; again++) {
+                    ocean_request r;
+                    ocean_request_all(&r, OCEAN_FX_ALL | OCEAN_FX_VELOCITY);
+                    r.cutoff_k = kcs[b];
+                    assert_int_equal(ocean_evaluate(o, ts[a] + t_off + 10.0 * g, &r, f), OCEAN_OK);
+                    hash_frame(f, cascades, h);
+                }
+    }
+    ocean_get_counters(o, &c1);
+    *calls = c1.fft_calls - c0.fft_calls;
+    *by_ch = c1.fft_calls_by_channel - c0.fft_calls_by_channel;
+}
+
+/* The stage splits a call's pass over the threads by rows or by channel
+ * (each thread the channels FFTW's threaded plan transforms on it), and by
+ * default runs whichever it has measured faster.  Every split must give
+ * the same bits: with a filter (the gain plane one thread fills and the
+ * other reads) and without, in one call and in calls of 2 (whose last
+ * holds one channel: rows), evolving h(k,t) and reading it back.  And the
+ * measuring mode must really run both. */
+static void test_stage_split_same_bits(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = 128;
+    p.cascades = 2;
+    p.threads = 2;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o);
+    const int modes[] = {1, -1};
+    for (int m = 0; m < 2; m++) {
+        uint64_t h, rows, calls, by_ch, rcalls, rby_ch;
+        /* Fresh ticks for each run, the same for the mode and for rows. */
+        split_run(o, f, p.cascades, modes[m], 100.0 * m, &h, &calls, &by_ch);
+        split_run(o, f, p.cascades, 0, 100.0 * m, &rows, &rcalls, &rby_ch);
+        print_message("split mode %d: %016llx, %llu of %llu FFTW calls by channel; rows %016llx\n",
+                      modes[m], (unsigned long long)h, (unsigned long long)by_ch,
+                      (unsigned long long)calls, (unsigned long long)rows);
+        assert_true(h == rows);
+        assert_true(rcalls == calls && rby_ch == 0);
+        assert_true(by_ch > 0 && by_ch < calls);
+    }
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
 /* Channels go to FFTW in groups (at most 8.5 MB of spectra a call, so a
  * group's spectra are still cached when its transform reads them).  Every
  * group size must give every channel's waves: against the direct sum of the
@@ -1561,6 +1677,8 @@ int main(void)
         cmocka_unit_test(test_stage_paths_same_bits),
         cmocka_unit_test(test_stage_evolves_only_waves),
         cmocka_unit_test(test_deep_water_frequency_computed),
+        cmocka_unit_test(test_time_split_counters),
+        cmocka_unit_test(test_stage_split_same_bits),
         cmocka_unit_test(test_grouped_transforms),
     };
     return cmocka_run_group_tests_name("ocean", tests, NULL, NULL);

@@ -128,6 +128,28 @@ typedef struct cell {
     int transforms;
 } cell;
 
+/* The default sea at N = n on 2 threads with MEASURE plans, and a frame
+ * for it: 0, or 1 (after saying why on stderr, `what` naming the table)
+ * with *o and *f NULL. */
+static int measure_default_sea(int n, const char *what, ocean **o, ocean_frame **f, char *msg,
+                               size_t msglen)
+{
+    ocean_params p;
+    ocean_params_default(&p);
+    p.n = n;
+    p.threads = 2;
+    p.plan_measure = OCEAN_PLAN_MEASURE;
+    *o = NULL;
+    *f = NULL;
+    if (ocean_create(&p, o, msg, msglen) != OCEAN_OK || ocean_frame_create(*o, f) != OCEAN_OK) {
+        fprintf(stderr, "bench_core: %s, N=%d: %s\n", what, n, msg);
+        ocean_destroy(*o);
+        *o = NULL;
+        return 1;
+    }
+    return 0;
+}
+
 /* One ocean per (N, threads, planner), every effects set on it: ms of
  * ocean_evaluate and of ocean_transform_only interleaved. */
 static int measure_ocean(int n, int th, int plan, int quick, FILE *csv, cell out[NSETS])
@@ -226,19 +248,11 @@ static int core_table(const int *sizes, int nsizes, int plan, int quick, FILE *c
  * made. */
 static int stage_paths(int n, int quick)
 {
-    ocean_params p;
-    ocean_params_default(&p);
-    p.n = n;
-    p.threads = 2;
-    p.plan_measure = OCEAN_PLAN_MEASURE;
-    ocean *o = NULL;
-    ocean_frame *f = NULL;
+    ocean *o;
+    ocean_frame *f;
     char msg[600] = "";
-    if (ocean_create(&p, &o, msg, sizeof msg) != OCEAN_OK || ocean_frame_create(o, &f) != OCEAN_OK) {
-        fprintf(stderr, "bench_core: N=%d: %s\n", n, msg);
-        ocean_destroy(o);
+    if (measure_default_sea(n, "stage paths", &o, &f, msg, sizeof msg))
         return 1;
-    }
     enum { PATHS = 5 };
     /* table: every frequency read from memory, deep water's too (the
      * stage before it computed deep water's). */
@@ -288,11 +302,20 @@ static int stage_paths(int n, int quick)
 /* The floor under the target (issue 14): the full evaluation (+foam, 2
  * threads, MEASURE plans) of the ocean *p0 at N = n, FFTW alone, and FFTW
  * alone with each call's spectra first written (ocean_transform_floor:
- * zeros, the stage's row split; the least a stage that writes what FFTW
+ * zeros, split as the stage splits them; the least a stage that writes what FFTW
  * reads can cost), the three interleaved, the first of each repetition
  * rotating.  Prints a row labelled `label`; *ratio gets evaluation / FFTW.
  * Returns 0, or 1 when the ocean could not be made. */
-static int floor_table(const ocean_params *p0, const char *label, int n, int quick, double *ratio)
+/* Where one row of the floor table's evaluation time went (medians over
+ * its repetitions, ms; ocean_counters' ns_* deltas). */
+typedef struct split_row {
+    char label[96];
+    int n;
+    double eval, fftw_alone, fft_in_eval, evolve, channels, rest;
+} split_row;
+
+static int floor_table(const ocean_params *p0, const char *label, int n, int quick, double *ratio,
+                       split_row *sp)
 {
     ocean_params p = *p0;
     p.n = n;
@@ -312,13 +335,16 @@ static int floor_table(const ocean_params *p0, const char *label, int n, int qui
     ocean_request_all(&r, OCEAN_FX_ALL);
     r.foam_map = 0;
     int reps = quick ? 6 : (n * p.cascades >= 1024 ? 30 : 60);
-    double *m = malloc(sizeof(double) * reps * 6), *q = m + 3 * reps;
+    double *m = malloc(sizeof(double) * reps * 10), *q = m + 3 * reps, *ev = q + 3 * reps,
+           *ch = ev + reps, *ff = ch + reps, *rest = ff + reps;
     ocean_evaluate(o, 1.0, &r, f);
     ocean_transform_floor(o, &r, f);
     ocean_transform_only(o, &r, f);
     for (int i = 0; i < reps; i++)
         for (int k = 0; k < 3; k++) {
             int w = (i + k) % 3;
+            ocean_counters c0, c1;
+            ocean_get_counters(o, &c0);
             double t0 = bench_now_ms();
             if (w == 0)
                 ocean_evaluate(o, 10.0 + i / 30.0, &r, f);
@@ -327,6 +353,13 @@ static int floor_table(const ocean_params *p0, const char *label, int n, int qui
             else
                 ocean_transform_floor(o, &r, f);
             m[w * reps + i] = bench_now_ms() - t0;
+            if (w == 0) {
+                ocean_get_counters(o, &c1);
+                ev[i] = (double)(c1.ns_evolve - c0.ns_evolve) * 1e-6;
+                ch[i] = (double)(c1.ns_channels - c0.ns_channels) * 1e-6;
+                ff[i] = (double)(c1.ns_fft - c0.ns_fft) * 1e-6;
+                rest[i] = m[i] - ev[i] - ch[i] - ff[i];
+            }
         }
     double med[3], rat[3];
     for (int w = 0; w < 3; w++)
@@ -343,6 +376,72 @@ static int floor_table(const ocean_params *p0, const char *label, int n, int qui
     printf("| %s | %d | %d | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n", label, n, p.cascades,
            info.transforms, med[1], med[2], rat[0], med[0], rat[1], rat[2], med[0] - med[2]);
     *ratio = rat[1];
+    *sp = (split_row){"", n, med[0], med[1], bench_median(ff, reps), bench_median(ev, reps),
+                      bench_median(ch, reps), bench_median(rest, reps)};
+    snprintf(sp->label, sizeof sp->label, "%s", label);
+    free(m);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    return 0;
+}
+
+/* How the stage splits a call over the threads (ocean_force_stage_split),
+ * one cascade of the default sea at N = n (+foam, 2 threads, MEASURE
+ * plans): the evaluation split by rows, by channel, and as oceand runs it
+ * (the split measured faster), and the floor (zero writes) split each
+ * way, all interleaved with FFTW alone, the first of each repetition
+ * rotating.  *ratio gets the default's evaluation / FFTW alone.  Returns 0,
+ * or 1 when the ocean could not be made. */
+#define SPLITS 5
+static int split_table(int n, int quick, double *ratio)
+{
+    ocean *o;
+    ocean_frame *f;
+    char msg[600] = "";
+    *ratio = NAN;
+    if (measure_default_sea(n, "split table", &o, &f, msg, sizeof msg)) {
+        printf("| %d | (not measured: %s) | | | |\n", n, msg);
+        return 1;
+    }
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL);
+    r.foam_map = 0;
+    static const char *const names[SPLITS] = {
+        "evaluation, by rows", "evaluation, by channel", "evaluation, the split measured faster **(default)**",
+        "FFTW + writes (zeros), by rows", "FFTW + writes (zeros), by channel"};
+    static const int mode[SPLITS] = {0, 1, -1, 0, 1};
+    int reps = quick ? 6 : (n >= 1024 ? 30 : 60);
+    double *m = malloc(sizeof(double) * reps * (SPLITS + 2)), *fw = m + SPLITS * reps, *q = fw + reps;
+    ocean_evaluate(o, 1.0, &r, f);
+    ocean_transform_only(o, &r, f);
+    for (int i = 0; i < reps; i++)
+        for (int k = 0; k <= SPLITS; k++) {
+            int w = (i + k) % (SPLITS + 1);
+            double t0;
+            if (w == SPLITS) {
+                t0 = bench_now_ms();
+                ocean_transform_only(o, &r, f);
+                fw[i] = bench_now_ms() - t0;
+                continue;
+            }
+            ocean_force_stage_split(o, mode[w]);
+            t0 = bench_now_ms();
+            if (w < 3)
+                ocean_evaluate(o, 10.0 + i / 30.0 + w * 1e-3, &r, f);
+            else
+                ocean_transform_floor(o, &r, f);
+            m[w * reps + i] = bench_now_ms() - t0;
+        }
+    ocean_force_stage_split(o, -1);
+    for (int w = 0; w < SPLITS; w++) {
+        for (int i = 0; i < reps; i++)
+            q[i] = m[w * reps + i] / fw[i];
+        double rq = bench_median(q, reps);
+        if (w == 2)
+            *ratio = rq;
+        printf("| %d | %s | %.3f | %.3f | %.3f |\n", n, names[w], bench_median(m + w * reps, reps),
+               bench_median(fw, reps), rq);
+    }
     free(m);
     ocean_frame_destroy(f);
     ocean_destroy(o);
@@ -359,20 +458,12 @@ static int floor_table(const ocean_params *p0, const char *label, int n, int qui
  * the ocean could not be made. */
 static int group_table(int n, int quick, double *ratio_def, double *ratio_one)
 {
-    ocean_params p;
-    ocean_params_default(&p);
-    p.n = n;
-    p.threads = 2;
-    p.plan_measure = OCEAN_PLAN_MEASURE;
-    ocean *o = NULL;
-    ocean_frame *f = NULL;
+    ocean *o;
+    ocean_frame *f;
     char msg[600] = "";
     *ratio_def = *ratio_one = NAN;
-    if (ocean_create(&p, &o, msg, sizeof msg) != OCEAN_OK || ocean_frame_create(o, &f) != OCEAN_OK) {
-        fprintf(stderr, "bench_core: N=%d: %s\n", n, msg);
-        ocean_destroy(o);
+    if (measure_default_sea(n, "channels per call", &o, &f, msg, sizeof msg))
         return 1;
-    }
     enum { NG = 5 };
     static const int gs[NG] = {0, 8, 4, 2, 1};
     ocean_request r;
@@ -433,19 +524,11 @@ static int group_table(int n, int quick, double *ratio_def, double *ratio_one)
  * alone at N (MEASURE, 2 threads), printed as "ms fftw ratio". */
 static int policy_child(int n, int quick)
 {
-    ocean_params p;
-    ocean_params_default(&p);
-    p.n = n;
-    p.threads = 2;
-    p.plan_measure = OCEAN_PLAN_MEASURE;
-    ocean *o = NULL;
-    ocean_frame *f = NULL;
+    ocean *o;
+    ocean_frame *f;
     char msg[600] = "";
-    if (ocean_create(&p, &o, msg, sizeof msg) != OCEAN_OK || ocean_frame_create(o, &f) != OCEAN_OK) {
-        fprintf(stderr, "bench_core: N=%d: %s\n", n, msg);
-        ocean_destroy(o);
+    if (measure_default_sea(n, "wait policy", &o, &f, msg, sizeof msg))
         return 1;
-    }
     ocean_request r;
     ocean_request_all(&r, OCEAN_FX_ALL);
     r.foam_map = 0;
@@ -662,8 +745,9 @@ int main(int argc, char **argv)
            "2 threads, +foam)\n\n");
     printf("An evaluation has to write the spectra FFTW reads: 8 x N x (N/2+1) complex floats a "
            "cascade, 34 MB at N = 1024 (in calls of 2 channels) and 8.4 MB at N = 512. `FFTW + "
-           "writes` is FFTW alone with each call's spectra first overwritten with zeros, rows split "
-           "over the threads as the stage splits them: no arithmetic, no inputs read, so no stage "
+           "writes` is FFTW alone with each call's spectra first overwritten with zeros, split "
+           "over the threads as the stage splits them (the split it has measured faster, next table "
+           "but one): no arithmetic, no inputs read, so no stage "
            "that writes what FFTW reads can cost less. The stage also reads the inputs of "
            "each mode that holds a wave (its standing-wave coefficients a and b, 16 bytes; and, "
            "where k d < 22, w/2pi in two doubles shared by rows mz and -mz: deep water's it "
@@ -677,14 +761,39 @@ int main(int argc, char **argv)
            "evaluation ms | evaluation / FFTW | evaluation / floor | evaluation - floor ms |\n"
            "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     double served_ratio[2] = {NAN, NAN}, one_ratio[2];
+    split_row split[4];
+    int nsplit = 0;
     {
         ocean_params dp;
         ocean_params_default(&dp);
         for (int i = 0; i < 2; i++)
-            failed |= floor_table(&dp, "one cascade, default sea", mea_sizes[i], quick, &one_ratio[i]);
+            if (floor_table(&dp, "one cascade, default sea", mea_sizes[i], quick, &one_ratio[i],
+                            &split[nsplit]) == 0)
+                nsplit++;
+            else
+                failed = 1;
         for (int i = 0; i < 2 && served_ok; i++)
-            failed |= floor_table(&served[i], served_name, mea_sizes[i], quick, &served_ratio[i]);
+            if (floor_table(&served[i], served_name, mea_sizes[i], quick, &served_ratio[i],
+                            &split[nsplit]) == 0)
+                nsplit++;
+            else
+                failed = 1;
     }
+    printf("\n");
+    printf("Where each evaluation of that table went (medians over its repetitions, ms). `FFTW in "
+           "the evaluation` is the time inside its FFTW calls, beside the same calls alone; the "
+           "stage's passes are timed as the ocean counts them (ocean_counters: ns_evolve, the pass "
+           "of each cascade's first call, which evolves h(k,t) and writes that call's spectra; "
+           "ns_channels, the later calls' passes, which read h(k,t) back from the tick's cache); "
+           "`other` is the rest of ocean_evaluate (request checks, filter memos).\n\n");
+    printf("| ocean | N | evaluation ms | FFTW alone ms | FFTW in the evaluation ms | evolving pass ms | "
+           "later passes ms | other ms | stage / FFTW alone |\n"
+           "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (int i = 0; i < nsplit; i++)
+        printf("| %s | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n", split[i].label,
+               split[i].n, split[i].eval, split[i].fftw_alone, split[i].fft_in_eval, split[i].evolve,
+               split[i].channels, split[i].rest,
+               (split[i].evolve + split[i].channels) / split[i].fftw_alone);
     printf("\n");
     if (!served_ok)
         printf("_The served ocean was not measured: %s._\n\n", served_err);
@@ -694,6 +803,30 @@ int main(int argc, char **argv)
                mea_sizes[i], served_ratio[i],
                isnan(served_ratio[i]) ? "NOT MEASURED" : served_ratio[i] <= 1.15 ? "met" : "NOT met",
                one_ratio[i], isnan(one_ratio[i]) ? "NOT MEASURED" : one_ratio[i] <= 1.15 ? "met" : "NOT met");
+
+    printf("#### How the stage splits a call over the threads (same bits, MEASURE plans, 2 threads, "
+           "+foam)\n\n");
+    printf("FFTW's threaded plan for a call of several channels gives each thread whole channels (a "
+           "block of the batch). A stage pass split by rows makes every thread write part of every "
+           "channel, so each FFTW thread then reads half its spectra from the core that wrote them; "
+           "split by channel, each thread writes the channels its FFTW thread will transform, but "
+           "every thread reads all of h(k,t) and an evolving pass takes two steps (its own rows "
+           "from h in L1, then, after a barrier, the other rows from the cache). Which costs less "
+           "depends on how busy the shared caches are: on this VM the row split's cross-core reads "
+           "cost FFTW 10-20 %% in some minutes and nothing in others. So oceand measures both per "
+           "cascade and grid (ns per channel of the passes and FFTW calls together, an exponential "
+           "average), runs the faster and tries the other every 16th evaluation. One cascade of "
+           "the default sea; each row interleaved with FFTW alone on the same plans and buffers, "
+           "ratios the medians of per-repetition ratios.\n\n");
+    printf("| N | stage split | ms | FFTW ms | ratio |\n|---:|---|---:|---:|---:|\n");
+    double split_ratio[2] = {NAN, NAN};
+    for (int i = 0; i < 2; i++)
+        failed |= split_table(mea_sizes[i], quick, &split_ratio[i]);
+    printf("\n");
+    for (int i = 0; i < 2; i++)
+        printf("Target (issue 14), this table: full evaluation at N = %d within 1.15x of FFTW alone with "
+               "MEASURE plans (oceand's split): %.3fx - %s.\n\n", mea_sizes[i], split_ratio[i],
+               isnan(split_ratio[i]) ? "NOT MEASURED" : split_ratio[i] <= 1.15 ? "met" : "NOT met");
 
     printf("#### The spectrum stage's paths (same bits, MEASURE plans, 2 threads, +foam)\n\n");
     printf("One ocean, its paths forced in turn and interleaved with FFTW alone on the same plans "
