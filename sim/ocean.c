@@ -127,19 +127,19 @@ static void memo_put(filter_memo *m, int *next, double kc, int order, double sca
     *next = (*next + 1) % FILTER_MEMO;
 }
 
-/* The filter gains of one cutoff bucket on one cascade's n-point grid,
- * (n/2 + 1) per row, including the grid's zeroed Nyquist row and column.
- * A bucket keeps its cutoff for many ticks, so its gains are computed
- * once instead of per tick (a division and a square root per mode). */
 /* The running cost of one way of splitting the stage's passes (rows or
  * channels) for one kind of cascade evaluation: ns per channel of the
  * passes and FFTW calls together, an exponential average; 0 = not yet
  * measured. */
 typedef struct split_stat {
     double ns[2];
-    uint32_t evals;
+    uint32_t evals;         /* evaluations split_pick chose for, for its probes */
 } split_stat;
 
+/* The filter gains of one cutoff bucket on one cascade's n-point grid,
+ * (n/2 + 1) per row, including the grid's zeroed Nyquist row and column.
+ * A bucket keeps its cutoff for many ticks, so its gains are computed
+ * once instead of per tick (a division and a square root per mode). */
 #define GAIN_PLANES 12
 typedef struct gain_plane {
     int cascade, n, order;
@@ -1735,7 +1735,7 @@ static void stage_channels(int gn, int *c0, int *c1)
     *c1 = *c0 + bs < gn ? *c0 + bs : gn;
 }
 
-/* One FFTW call's stage pass on team member's share: split by channel
+/* This team member's share of one FFTW call's stage pass: split by channel
  * (stage_channels) when the call has a channel for every thread, else by
  * rows (stage_rows).  By channel, an evolving pass (a->cached = 0) first
  * evolves this member's rows and writes its channels there from h in L1,

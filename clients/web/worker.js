@@ -34,13 +34,14 @@ import {
     decode, decodeHeader, encodeCamera, encodeSubscribe, encodeQuery, encodeBye, ProtoError, tilePlanes,
 } from './protocol.js';
 import { assembleLevel, assembleCascadeTile, groupByLevel } from './assemble.js';
-import { decodeMeshQz, meshQzRefs } from './codec.js';
+import { decodeMeshQz } from './codec.js';
+import { MeshQzStore } from './meshstore.js';
 
 let ws = null;
 let seq = 0;
 let hello = null;
 let subscription = null;
-let meshQz = null;           /* layout 0 with mesh_codec qz: {meshId, vertexCount, refs} of the latest topology */
+const meshQz = new MeshQzStore();  /* layout 0 with mesh_codec qz: the topologies' prediction refs */
 let wantSub = null;
 let lastSimTime = 0;
 let pendingFrame = null;     /* newest undecoded FRAME bytes */
@@ -125,6 +126,7 @@ function connect(url, want) {
     ws.onclose = (ev) => {
         subscription = null;
         hello = null;
+        meshQz.clear();           /* mesh ids are per connection */
         post({ kind: 'status', state: 'closed', code: ev.code, reason: ev.reason, retryMs: closing ? null : retryMs });
         if (!closing) {
             setTimeout(() => connect(wsUrl, null), retryMs);
@@ -204,8 +206,9 @@ function onMessage(data) {
         const t = msg.body;
         /* kept before the arrays go to the page: has_mesh 2 frames are
          * predicted over this topology's triangles */
-        meshQz = subscription && subscription.meshCodec === MESH_CODEC.QZ
-            ? { meshId: t.meshId, vertexCount: t.vertexCount, refs: meshQzRefs(t.indices, t.vertexCount) } : null;
+        if (subscription && subscription.meshCodec === MESH_CODEC.QZ) {
+            meshQz.add(t.meshId, t.vertexCount, t.indices);
+        }
         const transfer = [t.indices.buffer, t.morph.buffer, t.level.buffer];
         if (t.flat) transfer.push(t.flat.buffer, t.zones.buffer);
         post({ kind: 'topology', meshId: t.meshId, meshKind: t.meshKind, lodLevels: t.lodLevels, flags: t.flags,
@@ -310,9 +313,10 @@ function processFrame() {
     if (f.mesh && f.hasMesh === 2) {
         /* compressed positions: decoded here with the topology's refs */
         try {
-            if (!meshQz || meshQz.meshId !== f.mesh.meshId || meshQz.vertexCount !== f.mesh.vertexCount)
+            const refs = meshQz.refs(f.mesh.meshId, f.mesh.vertexCount);
+            if (!refs)
                 throw new ProtoError(12, `no MESH_TOPOLOGY for the frame's mesh ${f.mesh.meshId}`);
-            meta.mesh.positions = decodeMeshQz(f.mesh.qz, f.mesh.vertexCount, meshQz.refs);
+            meta.mesh.positions = decodeMeshQz(f.mesh.qz, f.mesh.vertexCount, refs);
         } catch (e) {
             noteError(e, 'FRAME mesh');
             meta.mesh = null;
