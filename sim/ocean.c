@@ -127,12 +127,16 @@ static void memo_put(filter_memo *m, int *next, double kc, int order, double sca
     *next = (*next + 1) % FILTER_MEMO;
 }
 
-/* The running cost of one way of splitting the stage's passes (rows or
- * channels) for one kind of cascade evaluation: ns per channel of the
- * passes and FFTW calls together, an exponential average; 0 = not yet
- * measured. */
+/* What each way of splitting the stage's passes (rows, channels) has cost
+ * one kind of cascade evaluation lately: ns per channel of the passes and
+ * FFTW calls together, its last SPLIT_WINDOW samples.  Compared by their
+ * minimum: a busy machine only ever adds time, so the minimum tracks what
+ * a split costs, where an average flipped with every spike (an
+ * exponential average chose the slower split a third of the time). */
+#define SPLIT_WINDOW 8
 typedef struct split_stat {
-    double ns[2];
+    double ns[2][SPLIT_WINDOW];
+    uint8_t next[2], have[2];
     uint32_t evals;         /* evaluations split_pick chose for, for its probes */
 } split_stat;
 
@@ -1803,18 +1807,13 @@ void ocean_force_stage_split(ocean *o, int mode)
  * changes with it) is seen within a few seconds at 30 Hz. */
 #define SPLIT_PROBE 16
 
-/* The split (0 rows, 1 channels) for the next evaluation of a kind: each
- * measured once first, then the faster with a probe of the other. */
-static int split_pick(const ocean *o, split_stat *st)
+/* The least of split s's recent costs (split_stat). */
+static double split_min(const split_stat *st, int s)
 {
-    if (o->split_mode >= 0)
-        return o->split_mode;
-    if (st->ns[0] == 0.0)
-        return 0;
-    if (st->ns[1] == 0.0)
-        return 1;
-    int best = st->ns[1] < st->ns[0];
-    return ++st->evals % SPLIT_PROBE == 0 ? !best : best;
+    double m = INFINITY;
+    for (int i = 0; i < st->have[s]; i++)
+        m = st->ns[s][i] < m ? st->ns[s][i] : m;
+    return m;
 }
 
 /* split_pick's choice without a probe: the split the stage runs now. */
@@ -1822,12 +1821,29 @@ static int split_best(const ocean *o, const split_stat *st)
 {
     if (o->split_mode >= 0)
         return o->split_mode;
-    return st->ns[0] != 0.0 && st->ns[1] != 0.0 && st->ns[1] < st->ns[0];
+    return st->have[0] && st->have[1] && split_min(st, 1) < split_min(st, 0);
+}
+
+/* The split (0 rows, 1 channels) for the next evaluation of a kind: each
+ * measured once first, then the faster with a probe of the other. */
+static int split_pick(const ocean *o, split_stat *st)
+{
+    if (o->split_mode >= 0)
+        return o->split_mode;
+    if (!st->have[0])
+        return 0;
+    if (!st->have[1])
+        return 1;
+    int best = split_best(o, st);
+    return ++st->evals % SPLIT_PROBE == 0 ? !best : best;
 }
 
 static void split_note(split_stat *st, int split, double ns)
 {
-    st->ns[split] = st->ns[split] == 0.0 ? ns : 0.75 * st->ns[split] + 0.25 * ns;
+    st->ns[split][st->next[split]] = ns;
+    st->next[split] = (uint8_t)((st->next[split] + 1) % SPLIT_WINDOW);
+    if (st->have[split] < SPLIT_WINDOW)
+        st->have[split]++;
 }
 
 void ocean_force_group(ocean *o, int group)

@@ -411,36 +411,36 @@ static int split_table(int n, int quick, double *ratio)
         "FFTW + writes (zeros), by rows", "FFTW + writes (zeros), by channel"};
     static const int mode[SPLITS] = {0, 1, -1, 0, 1};
     int reps = quick ? 6 : (n >= 1024 ? 30 : 60);
-    double *m = malloc(sizeof(double) * reps * (SPLITS + 2)), *fw = m + SPLITS * reps, *q = fw + reps;
+    double *m = malloc(sizeof(double) * reps * SPLITS * 3), *fw = m + SPLITS * reps, *q = fw + SPLITS * reps;
     ocean_evaluate(o, 1.0, &r, f);
     ocean_transform_only(o, &r, f);
+    /* Each run right after its own FFTW alone, so every one follows the
+     * same kind of work (an evaluation right after another finds some of
+     * its inputs still cached). */
     for (int i = 0; i < reps; i++)
-        for (int k = 0; k <= SPLITS; k++) {
-            int w = (i + k) % (SPLITS + 1);
-            double t0;
-            if (w == SPLITS) {
-                t0 = bench_now_ms();
-                ocean_transform_only(o, &r, f);
-                fw[i] = bench_now_ms() - t0;
-                continue;
-            }
+        for (int k = 0; k < SPLITS; k++) {
+            int w = (i + k) % SPLITS;
+            double t0 = bench_now_ms();
+            ocean_transform_only(o, &r, f);
+            double t1 = bench_now_ms();
             ocean_force_stage_split(o, mode[w]);
-            t0 = bench_now_ms();
             if (w < 3)
                 ocean_evaluate(o, 10.0 + i / 30.0 + w * 1e-3, &r, f);
             else
                 ocean_transform_floor(o, &r, f);
-            m[w * reps + i] = bench_now_ms() - t0;
+            double t2 = bench_now_ms();
+            fw[w * reps + i] = t1 - t0;
+            m[w * reps + i] = t2 - t1;
         }
     ocean_force_stage_split(o, -1);
     for (int w = 0; w < SPLITS; w++) {
         for (int i = 0; i < reps; i++)
-            q[i] = m[w * reps + i] / fw[i];
+            q[i] = m[w * reps + i] / fw[w * reps + i];
         double rq = bench_median(q, reps);
         if (w == 2)
             *ratio = rq;
         printf("| %d | %s | %.3f | %.3f | %.3f |\n", n, names[w], bench_median(m + w * reps, reps),
-               bench_median(fw, reps), rq);
+               bench_median(fw + w * reps, reps), rq);
     }
     free(m);
     ocean_frame_destroy(f);
@@ -814,10 +814,10 @@ int main(int argc, char **argv)
            "from h in L1, then, after a barrier, the other rows from the cache). Which costs less "
            "depends on how busy the shared caches are: on this VM the row split's cross-core reads "
            "cost FFTW 10-20 %% in some minutes and nothing in others. So oceand measures both per "
-           "cascade and grid (ns per channel of the passes and FFTW calls together, an exponential "
-           "average), runs the faster and tries the other every 16th evaluation. One cascade of "
-           "the default sea; each row interleaved with FFTW alone on the same plans and buffers, "
-           "ratios the medians of per-repetition ratios.\n\n");
+           "cascade and grid (ns per channel of the passes and FFTW calls together, the least of "
+           "each split's last 8), runs the faster and tries the other every 16th evaluation. One "
+           "cascade of the default sea; each run right after its own FFTW alone on the same plans "
+           "and buffers, the rows rotating; ratios the medians of per-repetition ratios.\n\n");
     printf("| N | stage split | ms | FFTW ms | ratio |\n|---:|---|---:|---:|---:|\n");
     double split_ratio[2] = {NAN, NAN};
     for (int i = 0; i < 2; i++)
