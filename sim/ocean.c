@@ -2369,10 +2369,10 @@ static double hermite_read(const float *g, const float *gx, const float *gz, con
                            int finest, double *bound)
 {
     double h = s->h, acc = 0.0, big = 0.0, hx = 0.0, hz = 0.0;
-    /* h^2 f_xz at the nodes, the mean of f_x differenced along z and f_z
-     * along x, times ku kv: by the stencil's folded weights */
-    /* One sum per node column (z) and per node row (x), all advanced
-     * together: eight independent chains of adds, not one. */
+    /* The cross term: h^2 f_xz at the nodes (the mean of f_x differenced
+     * along z and f_z along x) times ku kv, by the stencil's folded
+     * weights; az[a] sums node column a along z, ax[a] node row a along x,
+     * all advanced together: eight independent chains of adds, not one. */
     double az[ACC_MAXN] = {0}, ax[ACC_MAXN] = {0}, cross = 0.0;
     for (int j = s->lo; j <= s->hi; j++) {
         double wz = s->wz[j + ACC_REACH], wx = s->wx[j + ACC_REACH];
