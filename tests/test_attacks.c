@@ -1176,21 +1176,10 @@ static void admin_global_lockout(void **state) { run_attack(a_admin_global_locko
 int main(int argc, char **argv)
 {
     (void)argc;
-    /* as test_server.c: OpenMP teams sleep; libcrypto's store that lws
-     * loads for client contexts is suppressed in LSan, nothing else */
-    if (ocean_wait_policy_setenv(0)) {
-        static char supp[64];
-        snprintf(supp, sizeof supp, "/tmp/test_attacks.%d.lsan", (int)getpid());
-        FILE *f = fopen(supp, "w");
-        if (f) {
-            fputs("leak:libcrypto.so\nleak:libssl.so\n", f);
-            fclose(f);
-            char opt[128];
-            snprintf(opt, sizeof opt, "suppressions=%s:print_suppressions=0", supp);
-            setenv("LSAN_OPTIONS", opt, 0);
-        }
+    /* as test_server.c: OpenMP teams sleep (LSan's suppressions:
+     * tests/lib/test_ws.c) */
+    if (ocean_wait_policy_setenv(0))
         execv("/proc/self/exe", argv);
-    }
     char tmp[512];
     snprintf(tmp, sizeof tmp, "%s", argv[0]);
     snprintf(exe_dir, sizeof exe_dir, "%s", dirname(dirname(tmp)));

@@ -2259,23 +2259,11 @@ static void sighup_and_sigterm(void **state)
 int main(int argc, char **argv)
 {
     (void)argc;
-    /* as build/oceand does: OpenMP teams must sleep, not spin.  Under ASan,
-     * OpenSSL's certificate store that libwebsockets loads for every client
-     * context is reported as an indirect leak inside libcrypto (not ours:
-     * no frame of this project is on those stacks); suppress exactly that. */
-    if (ocean_wait_policy_setenv(0)) {
-        static char supp[64];
-        snprintf(supp, sizeof supp, "/tmp/test_server.%d.lsan", (int)getpid());
-        FILE *f = fopen(supp, "w");
-        if (f) {
-            fputs("leak:libcrypto.so\nleak:libssl.so\n", f);
-            fclose(f);
-            char opt[128];
-            snprintf(opt, sizeof opt, "suppressions=%s:print_suppressions=0", supp);
-            setenv("LSAN_OPTIONS", opt, 0);
-        }
+    /* as build/oceand does: OpenMP teams must sleep, not spin (the
+     * variable is read when libgomp starts, hence the re-exec).  LSan's
+     * suppressions for lws client contexts: tests/lib/test_ws.c. */
+    if (ocean_wait_policy_setenv(0))
         execv("/proc/self/exe", argv);
-    }
     char tmp[512];
     snprintf(tmp, sizeof tmp, "%s", argv[0]);
     snprintf(exe_dir, sizeof exe_dir, "%s", dirname(dirname(tmp)));
