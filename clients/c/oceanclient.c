@@ -1098,6 +1098,21 @@ static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user,
             notify_closed(c, -1, "connection closed");
         break;
 
+    case LWS_CALLBACK_WSI_DESTROY:
+        /* Every wsi ends here.  One that lws closes before its handshake
+         * completed (the kill timeout of oc_client_destroy on a server that
+         * accepted but never answered) may get neither CLIENT_CLOSED nor
+         * CLIENT_CONNECTION_ERROR, and c->wsi must not outlive it: the next
+         * EVENT_WAIT_CANCELLED would hand lws the freed wsi. */
+        if (c && l) {
+            pthread_mutex_lock(&l->mu);
+            int mine = c->wsi == wsi;
+            pthread_mutex_unlock(&l->mu);
+            if (mine)
+                notify_closed(c, -1, "connection closed before the WebSocket handshake completed");
+        }
+        break;
+
     case LWS_CALLBACK_CLIENT_RECEIVE: {
         if (!c)
             break;
