@@ -72,7 +72,7 @@ static const od_opt od_opts[] = {
     {"bind", 'b', "ADDR", OD_KEY, "server.bind", "listen address; \"\" for all interfaces"},
     {"scene", 's', "NAME", OD_KEY, "server.scene", "scene name in server.scene_dir, or a .conf path"},
     {"set", 'S', "KEY=VALUE", OD_SET, NULL, "override any key (repeatable), e.g. --set sea.wind=15"},
-    {"dump-config", 'D', NULL, OD_DUMP, NULL, "print the server.* keys with their help and exit"},
+    {"dump-config", 'D', NULL, OD_DUMP, NULL, "print every key as the command line resolves it (config file, scene, --set) and exit"},
     {"help", 'h', NULL, OD_HELP, NULL, "this text"},
 };
 #define N_OD_OPTS (int)(sizeof od_opts / sizeof od_opts[0])
@@ -213,7 +213,7 @@ int main(int argc, char **argv)
     const char *config = NULL;
     const char *sets[MAX_SETS + N_DATADIR_SETS];
     char setbuf[MAX_SETS][600];
-    int nsets = 0, nbuf = 0;
+    int nsets = 0, nbuf = 0, dump = 0;
     struct option lo[N_OD_OPTS + 1];
     char shorts[3 * N_OD_OPTS + 1], *sp = shorts;
     for (int i = 0; i < N_OD_OPTS; i++) {
@@ -246,7 +246,7 @@ int main(int argc, char **argv)
             sets[nsets++] = setbuf[nbuf++];
             break;
         case OD_SET: sets[nsets++] = optarg; break;
-        case OD_DUMP: return srv_config_dump(stdout) == OCEAN_OK ? 0 : 1;
+        case OD_DUMP: dump = 1; break;
         case OD_HELP: usage(stdout); return 0;
         }
     }
@@ -277,6 +277,16 @@ int main(int argc, char **argv)
         fprintf(stderr, "oceand: %s\n", err);
         free(s);
         return 1;
+    }
+    if (dump) {
+        printf("# oceand --dump-config: every key as this command line resolves it.\n");
+        if (s->srv.scene[0])
+            printf("# sea.* and ocean.* include scene '%s' and then --set; loading this file\n"
+                   "# applies the scene over its sea.* and ocean.* again (--set wins over it).\n",
+                   s->srv.scene);
+        ocean_result r = srv_settings_dump(s, stdout);
+        free(s);
+        return r == OCEAN_OK ? 0 : 1;
     }
     if (probe_listen(&s->srv, err, sizeof err) != 0) {
         fprintf(stderr, "oceand: %s\n", err);

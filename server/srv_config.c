@@ -15,6 +15,7 @@
 #include <string.h>
 #include <time.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "codec.h"
 #include "proto.h"
@@ -358,6 +359,17 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
         char sp[2 * SRV_PATH_MAX + 16];
         scene_path(&tmp->srv, sp, sizeof sp);
         r = ocean_conf_scene_load(sp, &tmp->params, &tmp->scene, err, errlen);
+        if (r == OCEAN_EIO && sp[0] != '/' && err && errlen) {
+            /* The shipped config names its scenes relative to the source
+             * tree (make install writes absolute ones): say so, and from
+             * where the path was read. */
+            char cwd[512], why[1024];
+            if (!getcwd(cwd, sizeof cwd)) snprintf(cwd, sizeof cwd, "?");
+            snprintf(why, sizeof why, "%s (server.scene '%s'; relative paths are read from the "
+                     "working directory %s: start oceand in the source tree, or give "
+                     "server.scene_dir or server.scene as an absolute path)", err, tmp->srv.scene, cwd);
+            snprintf(err, errlen, "%s", why);
+        }
         if (r == OCEAN_OK) {
             tmp->params = tmp->scene.params;
             tmp->effects = tmp->scene.effects;
@@ -460,12 +472,12 @@ int srv_settings_layout1_cascades(const srv_settings *s)
     return s->params.cascades + srv_settings_near_cascade(s);
 }
 
-ocean_result srv_config_dump(FILE *f)
+ocean_result srv_settings_dump(const srv_settings *s, FILE *f)
 {
-    srv_config c;
-    const conf_table *tables[] = {&srv_table};
-    void *targets[] = {&c};
-    conf_set set = {tables, targets, 1};
-    if (conf_defaults(&set, NULL, 0) != OCEAN_OK) return OCEAN_EINVAL;
+    if (!s || !f) return OCEAN_EINVAL;
+    /* conf_dump only reads through the targets */
+    const conf_table *tables[] = {ocean_conf_table(), &srv_table};
+    void *targets[] = {(void *)&s->params, (void *)&s->srv};
+    conf_set set = {tables, targets, 2};
     return conf_dump(f, &set, CONF_DUMP_HELP);
 }

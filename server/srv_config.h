@@ -126,7 +126,10 @@ int srv_settings_near_field(const srv_settings *s, const ocean_params *p, ocean_
  * field's (HELLO max_layers). */
 int srv_settings_layout1_cascades(const srv_settings *s);
 
-/* Prints the server table with its help as a commented config section. */
-ocean_result srv_config_dump(FILE *f);
+/* Prints settings s - every sea.*, ocean.* and server.* key as a config
+ * file, the scene's sea and ocean keys applied, with each key's help as
+ * comments - that loads back to the same values.  OCEAN_EIO on a write
+ * error. */
+ocean_result srv_settings_dump(const srv_settings *s, FILE *f);
 
 #endif

@@ -5,6 +5,12 @@
 #  - a busy port fails naming the way out (--port, make run ARGS);
 #  - --help shows the defaults the daemon really starts with: each equals
 #    the value --dump-config gives for the key;
+#  - a relative scene path that does not resolve (oceand started outside
+#    the source tree) is explained: the working directory it was read
+#    from and the keys that take an absolute path;
+#  - --dump-config prints what --config, the scene, --port and --set
+#    resolve to, as a file that loads back to the same (the scene's keys
+#    applied over it again, so its sea.* --set given again);
 #  - /status carries the scene's camera hint (the browser viewer opens
 #    there), as config/scenes/flight.conf writes it.
 set -u
@@ -41,6 +47,14 @@ rc=$?
 [[ $rc -ne 0 && $rc -ne 124 ]] || fail "busy port $busy: exit $rc"
 grep -q -- "--port" "$tmp/err" && grep -q "ARGS=" "$tmp/err" || fail "busy port: no way out named: $(cat "$tmp/err")"
 
+echo "== started outside the source tree: the relative scene path is explained ($SECONDS s)"
+conf=$(pwd)/config/oceand.conf od=$(cd "$(dirname "$OD")" && pwd)/$(basename "$OD")
+(cd "$tmp" && timeout 20 "$od" --config "$conf" --port 0 >"$tmp/out" 2>"$tmp/err")
+rc=$?
+[[ $rc -ne 0 && $rc -ne 124 ]] || fail "started in $tmp: exit $rc"
+grep -q "working directory $tmp" "$tmp/err" && grep -q "server.scene_dir" "$tmp/err" ||
+    fail "started in $tmp: the message does not say where the relative path was read from: $(cat "$tmp/err")"
+
 echo "== --help defaults are the real defaults ($SECONDS s)"
 "$OD" --help >"$tmp/help" || fail "--help"
 "$OD" --dump-config >"$tmp/dump" || fail "--dump-config"
@@ -51,6 +65,15 @@ while read -r key val; do
     n=$((n + 1))
 done < <(sed -n 's/.*(\(server\.[a-z_]*\); default \(.*\))$/\1 \2/p' "$tmp/help")
 [[ $n -ge 3 ]] || fail "--help shows $n defaults: $(cat "$tmp/help")"
+echo "== --dump-config prints what the command line resolves to ($SECONDS s)"
+"$OD" --config config/oceand.conf --port 18999 --set server.tick_rate=10 --set sea.choppiness=0.9 \
+    --dump-config >"$tmp/dump2" || fail "--dump-config with --config"
+for want in "server.port = 18999" "server.tick_rate = 10" "sea.choppiness = 0.9" \
+            "ocean.cascades = 3" "server.scene = ship-bridge"; do
+    grep -qxF "$want" "$tmp/dump2" || fail "--dump-config: no line '$want' (the scene gives 3 cascades)"
+done
+"$OD" --config "$tmp/dump2" --set sea.choppiness=0.9 --dump-config | diff -q - "$tmp/dump2" >/dev/null ||
+    fail "--dump-config output with its --set does not load back to the same configuration"
 echo "== /status carries the scene camera hint ($SECONDS s)"
 "$OD" --config config/oceand.conf --scene flight --port 0 >"$tmp/d.log" 2>&1 &
 dpid=$!
