@@ -175,4 +175,20 @@ for (const p of q.points) {
   if (!(p.error > 0 && p.error < 0.1)) throw "error " + p.error;
 }' "$tmp/q.json" || fail "query json"
 expect_refused "point 2" query --points "1,2;x,3"
+# a mesh priced beyond --max-vertices is refused before it is built (a
+# 0.01-degree camera asked for gigabytes and ran for minutes)
+expect_refused "max-vertices" mesh --n 16 --camera 0,20,0 --fov 0.01
+expect_refused "max-vertices" mesh --n 16 --camera 0,20,0 --max-vertices 5000
+# a bake whose last frame passes the time limit is refused before it writes
+expect_refused "last frame time" bake --n 16 --out "$tmp/late" --time 134217727 --fps 1 --frames 3
+[[ ! -e $tmp/late ]] || fail "a refused bake left $tmp/late behind"
+# sample --json is JSON, one entry per sample
+"$sim" sample --n 16 --x 3 --z 4 --count 3 --json > "$tmp/sample.json"
+node -e '
+const j = JSON.parse(require("fs").readFileSync(process.argv[1]));
+if (j.x !== 3 || j.z !== 4 || j.samples.length !== 3) throw "sample json " + JSON.stringify(j);
+if (!(Math.abs(j.samples[1].t - 0.1) < 1e-12) || !isFinite(j.samples[2].height)) throw "samples";
+' "$tmp/sample.json" || fail "sample --json"
+# a point the library cannot answer (beyond 1e12 m) is refused, not printed as zeros
+expect_refused "point 2 (1e+17, 0) refused" query --n 16 --points "1,2;1e17,0"
 echo "ocean-sim CLI: all checks passed"

@@ -182,6 +182,14 @@ int cmd_bake(int argc, char **argv)
         fprintf(stderr, "error: bake needs --out DIR\n");
         return 2;
     }
+    /* The whole sequence's times are checked before anything is written:
+     * a bake must not stop half-way at the time limit. */
+    char tmsg[256];
+    if (ocean_time_check(c.time + (frames - 1) / fps, "last frame time --time + (frames - 1) / fps",
+                         tmsg, sizeof tmsg) != OCEAN_OK) {
+        fprintf(stderr, "error: %s\n", tmsg);
+        return 2;
+    }
     if (mkdir(out, 0777) != 0 && errno != EEXIST) {
         fprintf(stderr, "error: cannot create %s: %s\n", out, strerror(errno));
         return 1;
@@ -206,7 +214,7 @@ int cmd_bake(int argc, char **argv)
     for (int i = 0; i < frames && status == 0; i++) {
         double t = c.time + i / fps;
         if (ocean_evaluate(o, t, &req, f) != OCEAN_OK) {
-            fprintf(stderr, "error: evaluation at t = %g failed\n", t);
+            fprintf(stderr, "error: evaluation at t = %.15g failed\n", t);
             status = 1;
             break;
         }

@@ -95,7 +95,7 @@ int cmd_sample(int argc, char **argv)
         {"count", CLI_INT, &count, 1, 1000000, "C     number of samples", NULL},
         {"direct", CLI_FLAG, &direct, 0, 0, "      sum the waves directly in double instead of FFT fields", NULL},
     };
-    int r = cli_parse(argc, argv, "sample --x X --z Z [--t0 T] [--dt D] [--count C] [options]",
+    int r = cli_parse(argc, argv, "sample --x X --z Z [--t0 T] [--dt D] [--count C] [--json] [options]",
                       opts, (int)(sizeof opts / sizeof opts[0]), &c, NULL, NULL);
     if (r)
         return r == 1 ? 0 : 2;
@@ -116,21 +116,39 @@ int cmd_sample(int argc, char **argv)
     /* Only the height is asked: one transform per cascade per sample. */
     ocean_request req;
     ocean_request_all(&req, OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT);
-    printf("t,height,dx,dz\n");
+    /* --json streams its array: a million samples need no tree in memory */
+    if (c.json)
+        printf("{\"x\": %.17g, \"z\": %.17g, \"direct\": %s, \"samples\": [\n", x, z,
+               direct ? "true" : "false");
+    else
+        printf("t,height,dx,dz\n");
+    int rc = 0;
     for (int i = 0; i < count; i++) {
         double t = t0 + i * dt;
         ocean_point pt;
-        if (direct) {
-            ocean_reference_point(o, t, x, z, INFINITY, 6, &pt);
-        } else {
-            ocean_evaluate(o, t, &req, f);
-            ocean_frame_sample(f, x, z, &pt);
+        ocean_result er = OCEAN_OK;
+        if (direct)
+            ocean_reference_point(o, t, x, z, INFINITY, 6, &pt); /* void: t checked above */
+        else
+            er = ocean_evaluate(o, t, &req, f);
+        if (er != OCEAN_OK) {
+            fprintf(stderr, "error: sample at t = %.9g failed: %s\n", t, ocean_strerror(er));
+            rc = 1;
+            break;
         }
-        printf("%.6f,%.6f,%.6f,%.6f\n", t, pt.height, pt.dx, pt.dz);
+        if (!direct)
+            ocean_frame_sample(f, x, z, &pt);
+        if (c.json)
+            printf("  {\"t\": %.15g, \"height\": %.9g, \"dx\": %.9g, \"dz\": %.9g}%s\n", t,
+                   pt.height, pt.dx, pt.dz, i + 1 < count ? "," : "");
+        else
+            printf("%.6f,%.6f,%.6f,%.6f\n", t, pt.height, pt.dx, pt.dz);
     }
+    if (c.json && rc == 0)
+        printf("]}\n");
     ocean_frame_destroy(f);
     ocean_destroy(o);
-    return 0;
+    return rc;
 }
 
 int cmd_bench(int argc, char **argv)

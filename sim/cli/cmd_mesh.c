@@ -76,7 +76,7 @@ int cmd_mesh(int argc, char **argv)
     snprintf(viewport_def, sizeof viewport_def, "%dx%d", dcam.viewport_w, dcam.viewport_h);
     const char *kind_s = mesh_kind_name(dcfg.kind), *camera_s = NULL, *viewport_s = viewport_def, *obj = NULL;
     double yaw = dcam.yaw_deg, pitch = -10, roll = dcam.roll_deg, fov = dcam.fov_y_deg, range = dcfg.range_m;
-    double err_px = MESH_CLI_ERROR_PX, margin = NAN;
+    double err_px = MESH_CLI_ERROR_PX, margin = NAN, max_vertices = 4e6;
     const cli_opt opts[] = {
         {"kind", CLI_STRING, &kind_s, 0, 0, "K     concentric | chunked | projected", NULL},
         {"camera", CLI_STRING, &camera_s, 0, 0, "X,Y,Z camera world position, m (Y above the sea; required)", NULL},
@@ -90,6 +90,8 @@ int cmd_mesh(int argc, char **argv)
         {"margin", CLI_DOUBLE, &margin, 0, 1000,
          "M     projected grid displacement margin, m (not given: 1.2 Hs (1 + choppiness))", NULL},
         {"obj", CLI_STRING, &obj, 0, 0, "FILE  write the displaced mesh as Wavefront OBJ", NULL},
+        {"max-vertices", CLI_DOUBLE, &max_vertices, 1e3, 1e9,
+         "V     refuse a mesh whose vertex count, priced before building, exceeds V", NULL},
     };
     cli_common c;
     int r = cli_parse(argc, argv,
@@ -140,6 +142,16 @@ int cmd_mesh(int argc, char **argv)
         return 2;
     }
 
+    /* Priced from the plan before anything is built, as oceand does
+     * (server.max_mesh_vertices): a 0.01-degree camera would otherwise ask
+     * for gigabytes and minutes. */
+    double est = 0;
+    if (mesh_estimate_vertices(&cfg, &cam, &est) == OCEAN_OK && est > max_vertices) {
+        fprintf(stderr, "error: this mesh would have up to %.3g vertices, more than --max-vertices "
+                "%.3g: raise --error-px or --fov, lower --range or the viewport, or raise "
+                "--max-vertices\n", est, max_vertices);
+        return 2;
+    }
     ocean *o;
     ocean_frame *f;
     mesh *m = NULL;

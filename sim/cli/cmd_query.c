@@ -166,10 +166,26 @@ int cmd_query(int argc, char **argv)
     ocean_request_all(&req, OCEAN_QUERY_EFFECTS);
     req.cutoff_k = cutoff;
     double t0 = cli_now_ms();
-    ocean_evaluate(o, t, &req, f);
+    ocean_result er = ocean_evaluate(o, t, &req, f);
     double t1 = cli_now_ms();
-    ocean_query_points(f, NULL, NULL, t, xz, (size_t)n, NULL, res, NULL);
+    size_t bad = 0;
+    ocean_result qr = er == OCEAN_OK ? ocean_query_points(f, NULL, NULL, t, xz, (size_t)n, NULL, res, &bad) : er;
     double t2 = cli_now_ms();
+    if (qr != OCEAN_OK) {
+        /* the library refuses what it cannot answer (a point beyond
+         * |x|, |z| <= 1e12 m, where a double no longer resolves the waves)
+         * rather than print zeros for it */
+        if (er != OCEAN_OK)
+            fprintf(stderr, "error: evaluation at t = %.9g failed: %s\n", t, ocean_strerror(er));
+        else
+            fprintf(stderr, "error: point %zu (%g, %g) refused: %s (world points within |x|, |z| <= 1e12 m)\n",
+                    bad + 1, xz[2 * bad], xz[2 * bad + 1], ocean_strerror(qr));
+        free(res);
+        free(xz);
+        ocean_frame_destroy(f);
+        ocean_destroy(o);
+        return 2;
+    }
     if (c.json) {
         cJSON *j = cJSON_CreateObject(), *arr = cJSON_AddArrayToObject(j, "points");
         cJSON_AddNumberToObject(j, "t", t);
