@@ -164,6 +164,21 @@ for _ in $(seq 50); do
 done
 json "$tmp/sea3.json" "d['spectrum'] == 'jonswap' and d['wind_u10'] == 12"
 
+echo "== sea --set takes what the config takes: swell 5, a seed past 2^53 ($SECONDS s)"
+# --swell had [0, 1] where sea.swell is [0, 10]; --seed went through a double,
+# so 2^53 + 1 arrived as 2^53, and the JSON printed seeds rounded
+"$OC" sea "$URL" --set --token $TOKEN --swell 5 --seed 9007199254740993 >/dev/null 2>"$tmp/sea.err" ||
+    fail "sea --set --swell 5 --seed 2^53+1: $(cat "$tmp/sea.err")"
+for _ in $(seq 50); do
+    "$OC" sea "$URL" >"$tmp/sea4.json" || fail "sea after set"
+    grep -q '"seed":[[:space:]]*9007199254740993,' "$tmp/sea4.json" && break
+    sleep 0.1
+done
+grep -q '"seed":[[:space:]]*9007199254740993,' "$tmp/sea4.json" || fail "seed not 9007199254740993: $(cat "$tmp/sea4.json")"
+json "$tmp/sea4.json" "d['swell'] == 5"
+"$OC" sea "$URL" --set --token $TOKEN --swell 11 2>"$tmp/sea.err"; [[ $? -eq 2 ]] || fail "--swell 11 accepted"
+grep -q "\[0, 10\]" "$tmp/sea.err" || fail "--swell 11: the range is not sea.swell's: $(cat "$tmp/sea.err")"
+
 kill -TERM "$pid"
 wait "$pid"
 rc=$?

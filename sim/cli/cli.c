@@ -181,18 +181,32 @@ static int apply_opt(const cli_opt *o, const char *val)
             return -1;
         *(double *)o->target = v;
         return 0;
+    case CLI_U64: {
+        /* Read as an integer, never through a double: seeds past 2^53
+         * would round to a neighbour's and give its sea (min and max are
+         * taken as 0 and 2^64 - 1). */
+        char *end;
+        errno = 0;
+        const char *d = val;
+        while (*d == ' ')
+            d++;
+        unsigned long long u = *d >= '0' && *d <= '9' ? strtoull(d, &end, 10) : 0;
+        if (!(*d >= '0' && *d <= '9') || *end != '\0' || errno == ERANGE) {
+            fprintf(stderr, "error: --%s: '%s' is not a whole number in [0, %llu]\n", o->name, val,
+                    (unsigned long long)UINT64_MAX);
+            return -1;
+        }
+        *(uint64_t *)o->target = (uint64_t)u;
+        return 0;
+    }
     case CLI_INT:
-    case CLI_U64:
         if (parse_number(o->name, val, o->min, o->max, &v))
             return -1;
         if (v != floor(v)) {
             fprintf(stderr, "error: --%s: '%s' must be a whole number\n", o->name, val);
             return -1;
         }
-        if (o->kind == CLI_INT)
-            *(int *)o->target = (int)v;
-        else
-            *(uint64_t *)o->target = (uint64_t)v;
+        *(int *)o->target = (int)v;
         return 0;
     case CLI_STRING:
         *(const char **)o->target = val;
@@ -271,7 +285,7 @@ int cli_parse(int argc, char **argv, const char *usage,
         {"cascades", CLI_INT, &p->cascades, 1, OCEAN_MAX_CASCADES, "K     cascades", NULL},
         {"cascade-ratio", CLI_DOUBLE, &p->cascade_ratio, 1.5, 100, "R     patch ratio between cascades", NULL},
         {"choppiness", CLI_DOUBLE, &p->sea.choppiness, 0, 10, "L     choppy displacement scale", NULL},
-        {"seed", CLI_U64, &p->seed, 0, 9007199254740992.0, "S     random seed", NULL},
+        {"seed", CLI_U64, &p->seed, 0, 0, "S     random seed, 0 .. 2^64 - 1", NULL},
         {"time", CLI_DOUBLE, &c->time, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s", NULL},
         {"effects", CLI_EFFECTS, &c->effects, 0, 0, "LIST  height,displacement,normals,foam,velocity,near-field or all", NULL},
         {"threads", CLI_INT, &p->threads, 1, 64, "T     worker threads", NULL},

@@ -18,7 +18,7 @@ typedef enum cli_opt_kind {
     CLI_INT,      /* int *, checked against [min, max] */
     CLI_STRING,   /* const char ** */
     CLI_FLAG,     /* int *, set to 1, takes no argument */
-    CLI_U64,      /* uint64_t *, a whole number in [min, max] */
+    CLI_U64,      /* uint64_t *, any whole number 0 .. 2^64 - 1 (min, max unused) */
     CLI_CHOICE,   /* int *, index of the value in names[] */
     CLI_EFFECTS   /* unsigned *, OCEAN_FX_* mask from a list of names */
 } cli_opt_kind;

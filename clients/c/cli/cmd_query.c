@@ -10,7 +10,9 @@
 
 #include <cJSON.h>
 
+#include "conf.h"
 #include "occli.h"
+#include "ocean_conf.h"
 #include "spectrum.h"
 #include "ocean_time.h"
 
@@ -169,7 +171,10 @@ static cJSON *sea_json(const proto_sea *s, double eff)
         cJSON_AddStringToObject(o, "spreading", pn);
     else
         cJSON_AddNumberToObject(o, "spreading", s->spreading);
-    cJSON_AddNumberToObject(o, "seed", (double)s->seed);
+    /* the seed's every digit: a double would round seeds past 2^53 */
+    char seed[24];
+    snprintf(seed, sizeof seed, "%llu", (unsigned long long)s->seed);
+    cJSON_AddRawToObject(o, "seed", seed);
     cJSON_AddNumberToObject(o, "wind_u10", s->wind_u10);
     cJSON_AddNumberToObject(o, "wind_dir_deg", s->wind_dir_deg);
     cJSON_AddNumberToObject(o, "fetch_m", s->fetch_m);
@@ -183,12 +188,28 @@ static cJSON *sea_json(const proto_sea *s, double eff)
     return o;
 }
 
+/* The range the daemon's config table gives sea key `key` (sim/ocean_conf.c):
+ * one source, so this tool never refuses what oceand accepts or sends what
+ * it refuses. */
+static void sea_range(const char *key, double *lo, double *hi)
+{
+    const conf_table *t[] = {ocean_conf_table()};
+    void *tg[] = {NULL};
+    conf_set set = {t, tg, 1};
+    const conf_entry *e = conf_find(&set, key, NULL);
+    if (e) {
+        *lo = e->min;
+        *hi = e->max;
+    }
+}
+
 int cmd_sea(int argc, char **argv)
 {
     int set = 0, timeout_ms = 5000;
     const char *token = NULL;
     double wind = NAN, dir = NAN, fetch = NAN, depth = NAN, swell = NAN, chop = NAN, pa = NAN, small = NAN;
-    double at = NAN, seed = NAN;
+    double at = NAN;
+    const char *seed_s = NULL;
     int spectrum = -1, spreading = -1;
     /* Spectrum and spreading by name, in sim/spectrum.h's order (the wire
      * carries the index). */
@@ -201,26 +222,37 @@ int cmd_sea(int argc, char **argv)
         {"set", OCCLI_FLAG, &set, 0, 0, "send SEA_STATE SET (needs --token)", NULL},
         {"token", OCCLI_STRING, &token, 0, 0, "TOKEN  the admin token from the server's config", NULL},
         {"at", OCCLI_DOUBLE, &at, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T  sim time the change takes effect (not given: now)", NULL},
-        {"wind", OCCLI_DOUBLE, &wind, 0, 100, "U  wind speed at 10 m, m/s", NULL},
-        {"wind-dir", OCCLI_DOUBLE, &dir, -360, 360, "DEG  wind direction", NULL},
-        {"fetch", OCCLI_DOUBLE, &fetch, 1, 1e8, "M  fetch", NULL},
-        {"depth", OCCLI_DOUBLE, &depth, 0.01, 1e5, "M  water depth", NULL},
-        {"swell", OCCLI_DOUBLE, &swell, 0, 1, "S  swell", NULL},
-        {"choppiness", OCCLI_DOUBLE, &chop, 0, 10, "L  choppiness", NULL},
-        {"phillips-a", OCCLI_DOUBLE, &pa, 0, 1e6, "A  Phillips constant", NULL},
-        {"small-wave", OCCLI_DOUBLE, &small, 0, 100, "M  small-wave suppression length", NULL},
+        {"wind", OCCLI_DOUBLE, &wind, 0, 0, "U  wind speed at 10 m, m/s", NULL},
+        {"wind-dir", OCCLI_DOUBLE, &dir, 0, 0, "DEG  wind direction", NULL},
+        {"fetch", OCCLI_DOUBLE, &fetch, 0, 0, "M  fetch", NULL},
+        {"depth", OCCLI_DOUBLE, &depth, 0, 0, "M  water depth", NULL},
+        {"swell", OCCLI_DOUBLE, &swell, 0, 0, "S  swell", NULL},
+        {"choppiness", OCCLI_DOUBLE, &chop, 0, 0, "L  choppiness", NULL},
+        {"phillips-a", OCCLI_DOUBLE, &pa, 0, 0, "A  Phillips constant", NULL},
+        {"small-wave", OCCLI_DOUBLE, &small, 0, 0, "M  small-wave suppression length", NULL},
         {"spectrum", OCCLI_CHOICE, &spectrum, 0, 0, "NAME  spectrum", spectra},
         {"spreading", OCCLI_CHOICE, &spreading, 0, 0, "NAME  directional spreading", spreads},
-        {"seed", OCCLI_DOUBLE, &seed, 0, 9007199254740992.0, "N  random seed", NULL},
+        {"seed", OCCLI_STRING, &seed_s, 0, 0, "N  random seed, 0 .. 2^64 - 1", NULL},
         {"timeout", OCCLI_INT, &timeout_ms, 1, 3600000, "MS  connect / answer timeout", NULL},
     };
+    /* each option's range is its config key's */
+    static const char *const keys[][2] = {
+        {"wind", "sea.wind"}, {"wind-dir", "sea.direction"}, {"fetch", "sea.fetch"},
+        {"depth", "sea.depth"}, {"swell", "sea.swell"}, {"choppiness", "sea.choppiness"},
+        {"phillips-a", "sea.phillips_a"}, {"small-wave", "sea.small_wave"}};
+    occli_opt ranged[sizeof opts / sizeof opts[0]];
+    memcpy(ranged, opts, sizeof opts);
+    for (size_t i = 0; i < sizeof opts / sizeof opts[0]; i++)
+        for (size_t k = 0; k < sizeof keys / sizeof keys[0]; k++)
+            if (!strcmp(ranged[i].name, keys[k][0]))
+                sea_range(keys[k][1], &ranged[i].min, &ranged[i].max);
     const char *pos[1];
     int np = 0;
     int pr = occli_parse(argc, argv,
                          "usage: ocean-client sea URL [--set --token T [--at T] [--wind U] ...]\n"
                          "Prints the sea state in force (JSON).  With --set, changes the given fields and asks\n"
                          "the server to apply them for every client at sim time --at.",
-                         opts, (int)(sizeof opts / sizeof opts[0]), pos, 1, &np);
+                         ranged, (int)(sizeof opts / sizeof opts[0]), pos, 1, &np);
     if (pr)
         return pr == 1 ? 0 : 2;
     if (np != 1) {
@@ -236,7 +268,7 @@ int cmd_sea(int argc, char **argv)
         const char *given = !isnan(wind) ? "wind" : !isnan(dir) ? "wind-dir" : !isnan(fetch) ? "fetch"
                           : !isnan(depth) ? "depth" : !isnan(swell) ? "swell" : !isnan(chop) ? "choppiness"
                           : !isnan(pa) ? "phillips-a" : !isnan(small) ? "small-wave" : spectrum >= 0 ? "spectrum"
-                          : spreading >= 0 ? "spreading" : !isnan(seed) ? "seed" : !isnan(at) ? "at"
+                          : spreading >= 0 ? "spreading" : seed_s ? "seed" : !isnan(at) ? "at"
                           : token ? "token" : NULL;
         if (given) {
             fprintf(stderr, "ocean-client sea: option '--%s' changes the sea state only with '--set' "
@@ -244,9 +276,17 @@ int cmd_sea(int argc, char **argv)
             return 2;
         }
     }
-    if (!isnan(seed) && seed != floor(seed)) {
-        fprintf(stderr, "ocean-client sea: option '--seed': %.17g is not a whole number\n", seed);
-        return 2;
+    /* read as an integer, never through a double (seeds past 2^53) */
+    unsigned long long seed = 0;
+    if (seed_s) {
+        char *end;
+        errno = 0;
+        seed = *seed_s >= '0' && *seed_s <= '9' ? strtoull(seed_s, &end, 10) : 0;
+        if (!(*seed_s >= '0' && *seed_s <= '9') || *end || errno == ERANGE) {
+            fprintf(stderr, "ocean-client sea: option '--seed': '%s' is not a whole number in [0, %llu]\n",
+                    seed_s, (unsigned long long)UINT64_MAX);
+            return 2;
+        }
     }
     oc_client *c = occli_connect("sea", pos[0], NULL, timeout_ms);
     if (!c)
@@ -266,7 +306,7 @@ int cmd_sea(int argc, char **argv)
         if (!isnan(small)) sea.small_wave_m = small;
         if (spectrum >= 0) sea.spectrum = (uint8_t)spectrum;
         if (spreading >= 0) sea.spreading = (uint8_t)spreading;
-        if (!isnan(seed)) sea.seed = (uint64_t)seed;
+        if (seed_s) sea.seed = (uint64_t)seed;
         sea.hs = 0;
         sea.tp = 0;
         /* default "now": the state's current effective time; the server
