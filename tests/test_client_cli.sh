@@ -19,7 +19,8 @@ URL=ws://127.0.0.1:$port/
 TOKEN=test-token-17
 "$OD" --config config/oceand.conf --port "$port" --set server.admin_token=$TOKEN >"$tmp/oceand.log" 2>&1 &
 pid=$!
-cleanup() { kill "$pid" 2>/dev/null; wait "$pid" 2>/dev/null; rm -rf "$tmp"; }
+pid2=
+cleanup() { kill "$pid" $pid2 2>/dev/null; wait "$pid" $pid2 2>/dev/null; rm -rf "$tmp"; }
 trap cleanup EXIT
 fail() { echo "FAIL: $*"; echo "--- oceand log:"; tail -20 "$tmp/oceand.log"; exit 1; }
 json() { python3 -c "import json,sys; d=json.load(open('$1')); sys.exit(0 if ($2) else 1)" || fail "$1: $2: $(cat "$1")"; }
@@ -153,6 +154,25 @@ python3 -c "import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if d['sp
 echo "== ship against the daemon ($SECONDS s)"
 "$SHIP" "$URL" --seconds 5 --dt 0.1 --quiet >"$tmp/ship.out" 2>&1 || fail "ship: $(cat "$tmp/ship.out")"
 grep -q "heave spectrum peak" "$tmp/ship.out" || fail "ship printed no summary"
+
+echo "== load against a full server fails with the server's reason ($SECONDS s)"
+# it printed "only 2 of 4 viewers connected" and exited 0, the BYE unsaid
+port2=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
+"$OD" --config config/oceand.conf --scene "" --port "$port2" --set server.max_clients=2 >"$tmp/full.log" 2>&1 &
+pid2=$!
+for i in $(seq 50); do
+    "$OC" watch "ws://127.0.0.1:$port2/" --frames 1 --seconds 2 --mesh none >/dev/null 2>&1 && break
+    sleep 0.1
+done
+for path in "" --library; do
+    "$OC" load "ws://127.0.0.1:$port2/" --clients 4 --seconds 1 --rate 10 --mesh none --ramp 0.1 $path \
+        >"$tmp/full.out" 2>"$tmp/full.err"
+    rc=$?
+    [[ $rc -eq 1 ]] || fail "load ${path:-(direct)} with 2 of 4 viewers served: exit $rc"
+    grep -q "2 of 4 viewers were not served: .*server full" "$tmp/full.err" ||
+        fail "load ${path:-(direct)}: the server's reason is not given: $(cat "$tmp/full.err")"
+done
+kill "$pid2"; wait "$pid2"; pid2=
 
 echo "== sea --set by name ($SECONDS s)"
 "$OC" sea "$URL" --set --token $TOKEN --spectrum jonswap --wind 12 >"$tmp/sea2.json" 2>"$tmp/sea.err" ||

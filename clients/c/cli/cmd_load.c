@@ -38,6 +38,7 @@ typedef struct load_ctx {
     occli_vec *delay;         /* recv_wall - sim_time, s, of frames in the window */
     double min_delay;         /* over all frames and connections, whole run */
     uint64_t tiles_bad;
+    char why[320];          /* the first viewer's closing reason */
 } load_ctx;
 
 static void on_frame(void *user, oc_client *c, const oc_frame *f)
@@ -60,10 +61,13 @@ static void on_frame(void *user, oc_client *c, const oc_frame *f)
 
 static void on_close(void *user, oc_client *c, int reason, const char *msg)
 {
-    (void)c;
     (void)reason;
-    (void)msg;
-    ((viewer *)user)->closed = 1;
+    viewer *v = user;
+    v->closed = 1;
+    load_ctx *L = v->ctx;
+    /* the client's last error holds a BYE's reason and text */
+    if (!L->why[0] && oc_client_last_error(c, L->why, sizeof L->why) == OCEAN_OK && !L->why[0])
+        snprintf(L->why, sizeof L->why, "%s", msg && msg[0] ? msg : "connection closed");
 }
 
 static double cpu_seconds(void)
@@ -170,6 +174,7 @@ int load_library_run(const load_cfg *cfg, load_result *R)
     R->cpu = cpu_seconds() - c0;
     R->created = created;
     R->ready = ready;
+    snprintf(R->why, sizeof R->why, "%s", L.why);
     R->fmin = UINT64_MAX;
     for (int i = 0; i < created; i++) {
         viewer *v = &vs[i];
@@ -398,7 +403,12 @@ int cmd_load(int argc, char **argv)
                (unsigned long long)R.verified, R.cpu, path);
     }
     occli_vec_free(&R.delay);
-    if (R.ready == 0 || R.frames == 0)
+    /* a run that did not serve every viewer measured something else than
+     * was asked: say why, and fail */
+    if (R.ready < nclients)
+        fprintf(stderr, "ocean-client load: %d of %d viewers were not served%s%s\n", nclients - R.ready,
+                nclients, R.why[0] ? ": " : "", R.why);
+    if (R.ready < nclients || R.frames == 0)
         return 1;
     return 0;
 }

@@ -82,6 +82,8 @@ typedef struct shared {
     oc_url url;
     double t_start;
     atomic_int ready, failed, created, measuring, stop;
+    atomic_int why_set;         /* why[] written (the first closing reason) */
+    char why[320];
 } shared;
 
 typedef struct worker {
@@ -487,6 +489,9 @@ static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n
         v->errors++;
         break;
     case PROTO_BYE:
+        if (!atomic_exchange(&w->S->why_set, 1))
+            snprintf(w->S->why, sizeof w->S->why, "server said BYE (reason %u): %s",
+                     (unsigned)m.u.bye.reason, m.u.bye.message);
         close_viewer(w, v);
         break;
     default:
@@ -856,6 +861,8 @@ int load_direct_run(const load_cfg *cfg, load_result *R)
         pthread_join(ws[t].th, NULL);
     R->created = atomic_load(&S.created);
     R->ready = atomic_load(&S.ready);
+    if (atomic_load(&S.why_set))
+        snprintf(R->why, sizeof R->why, "%s", S.why);
     R->fmin = UINT64_MAX;
     for (int i = 0; i < cfg->nclients; i++) {
         dv *v = &vs[i];

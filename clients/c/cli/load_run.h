@@ -52,10 +52,13 @@ typedef struct load_result {
     double min_delay;             /* smallest such value over the whole run */
     double min_any;               /* same over every message, HELLO included
                                      (direct path; NAN if unknown) */
+    char why[320];                /* the first reason a viewer was closed or
+                                     refused (a BYE's text), or "" */
 } load_result;
 
-/* Both return 0 when the run took place (the result says how well), 1 on a
- * setup failure (message printed). */
+/* Both return 0 when the run took place (the result says how well, and
+ * ready < nclients that some viewers were never served), 1 on a setup
+ * failure (message printed). */
 int load_direct_run(const load_cfg *cfg, load_result *out);
 int load_library_run(const load_cfg *cfg, load_result *out);
 
