@@ -34,6 +34,10 @@ echo "== watch --json ($SECONDS s)"
 "$OC" watch "$URL" --seconds 2 --json --mesh none >"$tmp/watch.json" || fail "watch exited $?"
 json "$tmp/watch.json" "d['frames'] > 0 and d['bytes'] > 0 and d['latency_p50_ms'] is not None and d['latency_p99_ms'] >= d['latency_p50_ms'] and d['decode_errors'] == 0"
 
+# a rate needs two frames: one frame 10 ms after the start is not 100 fps
+"$OC" watch "$URL" --frames 1 --seconds 5 --json --mesh none >"$tmp/watch1.json" || fail "watch --frames 1 exited $?"
+json "$tmp/watch1.json" "d['frames'] == 1 and d['fps'] is None"
+
 echo "== bad options are refused by name ($SECONDS s)"
 "$OC" watch "$URL" --bogus 2>"$tmp/err" && fail "--bogus accepted"
 grep -q -- "--bogus" "$tmp/err" || fail "message does not name --bogus: $(cat "$tmp/err")"

@@ -58,7 +58,7 @@ int cmd_watch(int argc, char **argv)
                (double)sub.frame_rate_hz);
     occli_vec lat = {0};
     uint64_t frames = 0, bytes = 0, tiles = 0, bad_tiles = 0;
-    double e_sum = 0, first_t = NAN, last_t = NAN, last_cut = NAN;
+    double e_sum = 0, first_t = NAN, last_t = NAN, last_cut = NAN, first_rx = NAN, last_rx = NAN;
     double t0 = occli_mono(), last_cam = t0;
     double end = t0 + seconds;
     int rc = 0;
@@ -93,8 +93,9 @@ int cmd_watch(int argc, char **argv)
             bad_tiles += f->tiles[i].decode_result != OCEAN_OK;
         e_sum += f->info.e_error;
         if (isnan(first_t))
-            first_t = f->hdr.sim_time;
+            first_t = f->hdr.sim_time, first_rx = f->recv_wall;
         last_t = f->hdr.sim_time;
+        last_rx = f->recv_wall;
         last_cut = f->info.cutoff_k;
         occli_vec_push(&lat, f->latency_ms);
         if (!json) {
@@ -112,6 +113,10 @@ int cmd_watch(int argc, char **argv)
     oc_client_get_stats(c, &st);
     double p50 = occli_percentile(lat.v, lat.n, 50), p99 = occli_percentile(lat.v, lat.n, 99);
     double pmax = lat.n ? lat.v[lat.n - 1] : NAN;
+    /* The rate frames arrived at: intervals between the first and the
+     * last, not frames over the wait (one frame 10 ms after the start is
+     * not 100 fps).  Undefined below two frames. */
+    double fps = frames >= 2 && last_rx > first_rx ? (double)(frames - 1) / (last_rx - first_rx) : NAN;
     if (json) {
         cJSON *o = cJSON_CreateObject();
         cJSON_AddStringToObject(o, "url", pos[0]);
@@ -120,7 +125,10 @@ int cmd_watch(int argc, char **argv)
         cJSON_AddNumberToObject(o, "frames", (double)frames);
         cJSON_AddNumberToObject(o, "bytes", (double)bytes);
         cJSON_AddNumberToObject(o, "bytes_per_s", wall > 0 ? (double)bytes / wall : 0);
-        cJSON_AddNumberToObject(o, "fps", wall > 0 ? (double)frames / wall : 0);
+        if (isfinite(fps))
+            cJSON_AddNumberToObject(o, "fps", fps);
+        else
+            cJSON_AddNullToObject(o, "fps");
         cJSON_AddNumberToObject(o, "tiles", (double)tiles);
         cJSON_AddNumberToObject(o, "tile_decode_errors", (double)bad_tiles);
         if (lat.n) {
@@ -150,9 +158,12 @@ int cmd_watch(int argc, char **argv)
         free(txt);
         cJSON_Delete(o);
     } else {
-        printf("# %llu frames in %.2f s (%.1f fps), %llu bytes (%.0f B/s), latency p50 %.2f ms p99 %.2f ms, "
+        char rate[32] = "fewer than 2 frames: no rate";
+        if (isfinite(fps))
+            snprintf(rate, sizeof rate, "%.1f fps", fps);
+        printf("# %llu frames in %.2f s (%s), %llu bytes (%.0f B/s), latency p50 %.2f ms p99 %.2f ms, "
                "%llu skipped by the server, %llu decode errors\n",
-               (unsigned long long)frames, wall, wall > 0 ? frames / wall : 0, (unsigned long long)bytes,
+               (unsigned long long)frames, wall, rate, (unsigned long long)bytes,
                wall > 0 ? bytes / wall : 0, p50, p99, (unsigned long long)st.frames_gap,
                (unsigned long long)st.decode_errors);
     }
