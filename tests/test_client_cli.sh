@@ -128,7 +128,14 @@ script -qec "'$OC' load '$URL' --clients 2 --seconds 1 --rate 10 --mesh none --r
 grep -q "\[#.*load: 2 viewers" "$tmp/tty.log" || fail "load shows no progress on a terminal: $(cat -v "$tmp/tty.log")"
 
 echo "== export ($SECONDS s)"
-"$OC" export "$URL" --out "$tmp/exr" --mesh none --codec qz 2>"$tmp/exp.log" || fail "export: $(cat "$tmp/exp.log")"
+# the default codec is the one that carries the most sea within the byte
+# budget (qz, re-encoded): exr-zip on the wire left 3 tiles of cascade 0
+"$OC" export "$URL" --out "$tmp/exr" --mesh none 2>"$tmp/exp.log" || fail "export: $(cat "$tmp/exp.log")"
+[[ $(cut -d, -f5 "$tmp/exr/tiles.csv" | sed 1d | sort -u | wc -l) -ge 3 ]] ||
+    fail "export by default: tiles of fewer than 3 cascades: $(cut -d, -f5 "$tmp/exr/tiles.csv" | sort | uniq -c)"
+grep -q "warning" "$tmp/exp.log" && fail "export by default warns: $(cat "$tmp/exp.log")"
+"$OC" export "$URL" --out "$tmp/exr-zip" --mesh none --codec exr-zip 2>"$tmp/exp2.log" || fail "export exr-zip: $(cat "$tmp/exp2.log")"
+grep -q "warning: .*E_error" "$tmp/exp2.log" || fail "export --codec exr-zip: no warning of the coarsened tiles: $(cat "$tmp/exp2.log")"
 n=$(ls "$tmp/exr"/*.exr | wc -l)
 [[ $n -gt 0 ]] || fail "no EXR files"
 first=$(ls "$tmp/exr"/*.exr | head -1)
