@@ -2,7 +2,7 @@
  * main.c - build/oceand: the networked ocean-state daemon.
  *
  *   oceand [--config FILE] [--port P] [--bind ADDR] [--scene NAME]
- *          [--set KEY=VALUE]... [--dump-config] [--help]
+ *          [--set KEY=VALUE]... [--dump-config] [--version] [--help]
  *
  * Signals: SIGHUP reloads the configuration file (a bad file keeps the
  * running configuration and logs file:line); SIGTERM and SIGINT send every
@@ -52,6 +52,7 @@ typedef enum od_kind {
     OD_KEY,      /* shorthand for --set KEY=VALUE */
     OD_SET,      /* --set KEY=VALUE */
     OD_DUMP,     /* --dump-config */
+    OD_VERSION,  /* --version */
     OD_HELP      /* --help */
 } od_kind;
 
@@ -73,6 +74,7 @@ static const od_opt od_opts[] = {
     {"scene", 's', "NAME", OD_KEY, "server.scene", "scene name in server.scene_dir, or a .conf path"},
     {"set", 'S', "KEY=VALUE", OD_SET, NULL, "override any key (repeatable), e.g. --set sea.wind=15"},
     {"dump-config", 'D', NULL, OD_DUMP, NULL, "print every key as the command line resolves it (config file, scene, --set) and exit"},
+    {"version", 'V', NULL, OD_VERSION, NULL, "print the version and the protocol and exit"},
     {"help", 'h', NULL, OD_HELP, NULL, "this text"},
 };
 #define N_OD_OPTS (int)(sizeof od_opts / sizeof od_opts[0])
@@ -247,6 +249,7 @@ int main(int argc, char **argv)
             break;
         case OD_SET: sets[nsets++] = optarg; break;
         case OD_DUMP: dump = 1; break;
+        case OD_VERSION: printf("%s (protocol %s)\n", SRV_VERSION, PROTO_SUBPROTOCOL); return 0;
         case OD_HELP: usage(stdout); return 0;
         }
     }

@@ -21,7 +21,6 @@
 #include "srv_tiles.h"
 #include "srv_redis.h"
 
-#define SERVER_VERSION "oceand 0.1"
 
 /* Admin guessing across all connections: more than this many misses in
  * ADMIN_WINDOW seconds lock SEA_STATE set for everyone that long. */
@@ -109,7 +108,7 @@ static uint64_t fnv_int(uint64_t h, long long v) { return fnv(h, &v, sizeof v); 
 void srv_fingerprint(const srv_settings *s, char out[17])
 {
     uint64_t h = 0xcbf29ce484222325ull;
-    h = fnv_str(h, SERVER_VERSION);
+    h = fnv_str(h, SRV_VERSION);
     h = fnv_str(h, __VERSION__);
 #ifdef __OPTIMIZE__
     h = fnv_int(h, 1);
@@ -663,7 +662,7 @@ void srv_client_send_hello(srv_client *c)
     o->max_frame_rate_hz = (float)fmin(s->srv.max_frame_rate, s->srv.tick_rate);
     o->sea = h->sea_now;
     o->client_id = c->id;
-    snprintf(o->server_version, sizeof o->server_version, "%s fp=%s", SERVER_VERSION, h->fingerprint);
+    snprintf(o->server_version, sizeof o->server_version, "%s fp=%s", SRV_VERSION, h->fingerprint);
     m.hdr.sim_time = srv_hub_sim_time(h);
     srv_msg *q = srv_msg_new();
     char err[256];

@@ -19,6 +19,9 @@
 #include "gerstner.h"
 #include "ocean_conf.h"
 
+/* The daemon's name and version: HELLO.server_version, oceand --version. */
+#define SRV_VERSION "oceand 0.1"
+
 #define SRV_PATH_MAX 512
 #define SRV_TOKEN_MAX 256
 #define SRV_BIND_MAX 64

@@ -55,6 +55,10 @@ rc=$?
 grep -q "working directory $tmp" "$tmp/err" && grep -q "server.scene_dir" "$tmp/err" ||
     fail "started in $tmp: the message does not say where the relative path was read from: $(cat "$tmp/err")"
 
+echo "== --version ($SECONDS s)"
+"$OD" --version >"$tmp/ver" || fail "--version exited $?"
+grep -qx "oceand [0-9][0-9.]* (protocol ocean\.v[0-9]*)" "$tmp/ver" || fail "--version: $(cat "$tmp/ver")"
+
 echo "== --help defaults are the real defaults ($SECONDS s)"
 "$OD" --help >"$tmp/help" || fail "--help"
 "$OD" --dump-config >"$tmp/dump" || fail "--dump-config"
