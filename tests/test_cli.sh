@@ -179,6 +179,14 @@ expect_refused "point 2" query --points "1,2;x,3"
 # 0.01-degree camera asked for gigabytes and ran for minutes)
 expect_refused "max-vertices" mesh --n 16 --camera 0,20,0 --fov 0.01
 expect_refused "max-vertices" mesh --n 16 --camera 0,20,0 --max-vertices 5000
+# wisdom checks every scene and --out before it times the first plan (a
+# minute at N = 1024): a typo fails at once, not after the planning
+for args in "--out $tmp/w.wisdom config/scenes/nope.conf|nope.conf" "--out $tmp/no/such/w.wisdom|cannot write"; do
+    rc=0
+    timeout 20 "$sim" wisdom --n 1024 ${args%|*} >"$tmp/out" 2>"$tmp/err" || rc=$?
+    [[ $rc -eq 2 ]] || fail "wisdom ${args%|*}: exit $rc (124: it planned first)"
+    grep -q "${args#*|}" "$tmp/err" || fail "wisdom ${args%|*}: $(cat "$tmp/err")"
+done
 # a bake whose last frame passes the time limit is refused before it writes
 expect_refused "last frame time" bake --n 16 --out "$tmp/late" --time 134217727 --fps 1 --frames 3
 [[ ! -e $tmp/late ]] || fail "a refused bake left $tmp/late behind"

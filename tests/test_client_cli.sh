@@ -158,6 +158,8 @@ json "$tmp/sea.json" "d['wind_u10'] >= 0 and d['depth_m'] > 0 and d['tp'] >= 0"
 "$OC" sea "$URL" --set --token not-the-token --wind 3 >/dev/null 2>"$tmp/sea.err" && fail "sea --set with a wrong token succeeded"
 grep -q "SEA_STATE" "$tmp/sea.err" || fail "no server ERROR shown: $(cat "$tmp/sea.err")"
 "$OC" sea "$URL" --set 2>"$tmp/sea.err"; [[ $? -eq 2 ]] || fail "--set without --token accepted"
+"$OC" sea "$URL" --set --token $TOKEN 2>"$tmp/sea.err"; [[ $? -eq 2 ]] || fail "--set with nothing to change accepted"
+grep -q "nothing to change" "$tmp/sea.err" || fail "--set with nothing to change: $(cat "$tmp/sea.err")"
 # The sea's enums travel as names both ways.
 python3 -c "import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if d['spectrum'] in ('phillips','pierson-moskowitz','jonswap','tma') and isinstance(d['spreading'], str) else 1)" "$tmp/sea.json" ||
     fail "sea JSON spectrum/spreading are not names: $(cat "$tmp/sea.json")"

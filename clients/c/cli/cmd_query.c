@@ -276,6 +276,13 @@ int cmd_sea(int argc, char **argv)
             return 2;
         }
     }
+    if (set && isnan(wind) && isnan(dir) && isnan(fetch) && isnan(depth) && isnan(swell) && isnan(chop) &&
+        isnan(pa) && isnan(small) && spectrum < 0 && spreading < 0 && !seed_s) {
+        fprintf(stderr, "ocean-client sea: '--set' with nothing to change: give one of --wind, "
+                "--wind-dir, --fetch, --depth, --swell, --choppiness, --phillips-a, --small-wave, "
+                "--spectrum, --spreading, --seed\n");
+        return 2;
+    }
     /* read as an integer, never through a double (seeds past 2^53) */
     unsigned long long seed = 0;
     if (seed_s) {
