@@ -362,6 +362,16 @@ static int refuse_upgrade(srv_net *n, struct lws *wsi, int status, const char *w
  * a subprotocol lands on the HTTP protocol and would be held, uncounted). */
 static int filter_upgrade(srv_net *n, struct lws *wsi, int ocean)
 {
+    /* A WebSocket inside an HTTP/2 stream (RFC 8441, after an h2c
+     * upgrade): ocean.v1 is RFC 6455 over its own TCP connection, and the
+     * frame tracker (trk_*) and the send path read and write that
+     * connection's bytes as such; one SUBSCRIBE on such a stream made
+     * lws_write read before the message buffer.  Refused: the stream is
+     * reset, the HTTP/2 connection's other streams carry on. */
+    if (lws_get_network_wsi(wsi) != wsi) {
+        atomic_fetch_add(&n->hub->stats.refused_upgrade, 1);
+        return 1;
+    }
     char ver[16] = "";
     lws_hdr_copy(wsi, ver, sizeof ver, WSI_TOKEN_VERSION);
     if (strcmp(ver, "13") != 0)
