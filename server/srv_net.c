@@ -50,7 +50,10 @@
  * then starts mid-stream and may read a violation where there is none:
  * such a client is closed with 1002, which it earned. */
 
-enum { TRK_HDR0, TRK_HDR1, TRK_LEN, TRK_MASK, TRK_PAYLOAD };
+/* TRK_DONE: a violation was found; the connection is over, the tracker
+ * reads no more of it but stays its owner's, so the callbacks still see
+ * `bad` (clearing the owner there let a flagged connection run on). */
+enum { TRK_HDR0, TRK_HDR1, TRK_LEN, TRK_MASK, TRK_PAYLOAD, TRK_DONE };
 
 typedef struct ws_track {
     const void *owner;       /* the wsi that registered this fd; NULL: not tracked */
@@ -59,7 +62,8 @@ typedef struct ws_track {
     uint64_t len, left;      /* payload length and bytes still to come */
     uint8_t mask[4];
     uint8_t ctl[125];        /* a close frame's payload, unmasked */
-    atomic_int bad;          /* 1002 owed (set here, read by the callbacks) */
+    atomic_int bad;          /* 1: 1002 owed by the callbacks; 2: lws sends it (a
+                                byte rewritten here); set here, read by the callbacks */
 } ws_track;
 
 static ws_track *trk;        /* indexed by fd; never freed (one per process) */
@@ -109,7 +113,7 @@ static void trk_feed(ws_track *t, uint8_t *b, size_t n)
 {
     long hdr0_at = -1;                     /* this frame's first byte, if in b */
     long code_at[2] = {-1, -1};            /* a close frame's code bytes, if in b */
-    for (size_t i = 0; i < n && t->owner;) {
+    for (size_t i = 0; i < n && t->owner && t->state != TRK_DONE;) {
         switch (t->state) {
         case TRK_HDR0:
             t->opcode = b[i] & 0x0f;
@@ -127,9 +131,13 @@ static void trk_feed(ws_track *t, uint8_t *b, size_t n)
              * two-byte code, so one byte is malformed (lws answers that with
              * an empty close) */
             if (!masked || (t->opcode == 8 && l7 == 1)) {
-                if (hdr0_at >= 0) b[hdr0_at] |= 0x40; /* lws: 1002 "rsv bits" */
-                else atomic_store(&t->bad, 1);
-                t->owner = NULL;                   /* the connection is over */
+                if (hdr0_at >= 0) {
+                    b[hdr0_at] |= 0x40;            /* lws: 1002 "rsv bits" */
+                    atomic_store(&t->bad, 2);
+                } else {
+                    atomic_store(&t->bad, 1);
+                }
+                t->state = TRK_DONE;               /* the connection is over */
                 break;
             }
             t->len = l7;
@@ -171,6 +179,7 @@ static void trk_feed(ws_track *t, uint8_t *b, size_t n)
                         /* 999: a code lws refuses with 1002 itself */
                         b[code_at[0]] = 0x03 ^ t->mask[0];
                         b[code_at[1]] = 0xe7 ^ t->mask[1];
+                        atomic_store(&t->bad, 2);
                     } else if (t->len >= 2) {
                         atomic_store(&t->bad, 1);
                     }
@@ -506,7 +515,8 @@ static void on_wake(srv_net *n)
         if (!c->wsi || c->closed) continue;
         atomic_store(&c->output_hard, cfg.output_hard);
         ws_track *t = trk_of(lws_get_socket_fd(c->wsi));
-        if (t && t->owner == c->wsi && atomic_load(&t->bad)) {
+        if (t && t->owner == c->wsi && atomic_load(&t->bad) == 1) {
+            atomic_store(&t->bad, 3);              /* counted */
             atomic_fetch_add(&h->stats.disconnects_protocol, 1);
             kill_client_code(c, LWS_CLOSE_STATUS_PROTOCOL_ERR, "protocol error (RFC 6455)");
             continue;
@@ -699,7 +709,8 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         srv_client *c = pss->c;
         if (!c || c->closing) break;
         ws_track *t = trk_of(lws_get_socket_fd(wsi));
-        if (t && t->owner == wsi && atomic_load(&t->bad)) {
+        if (t && t->owner == wsi && atomic_load(&t->bad) == 1) {
+            atomic_store(&t->bad, 3);              /* counted */
             atomic_fetch_add(&h->stats.disconnects_protocol, 1);
             lws_close_reason(wsi, LWS_CLOSE_STATUS_PROTOCOL_ERR, (unsigned char *)"protocol error (RFC 6455)", 25);
             return -1;
@@ -795,6 +806,11 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         break;
     }
     case LWS_CALLBACK_CLOSED: {
+        /* a violation lws answered itself (a byte rewritten by trk_feed)
+         * is a protocol disconnect too */
+        ws_track *t = trk_of(lws_get_socket_fd(wsi));
+        if (t && t->owner == wsi && atomic_load(&t->bad) == 2)
+            atomic_fetch_add(&h->stats.disconnects_protocol, 1);
         trk_forget(wsi);
         srv_client *c = pss->c;
         if (!c) break;

@@ -27,6 +27,7 @@
 #include <libgen.h>
 #include <math.h>
 #include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <poll.h>
 #include <pthread.h>
 #include <setjmp.h>
@@ -588,12 +589,34 @@ static void a_rfc_unmasked_and_utf8(void **state)
 {
     (void)state;
     window_begin();
+    srv_hub *h = srv_daemon_hub(daemon_);
+    uint64_t proto0 = stat_of(&h->stats.disconnects_protocol);
     test_ws w;
     attacker(&w, NULL, NULL);
     uint8_t junk[40] = {0};
     assert_int_equal(raw_frame(w.fd, 2, 1, 0, sizeof junk, junk, sizeof junk), 0);
     assert_int_equal(wait_close(&w, 2000), 1002);
     test_ws_close(&w);
+    /* the same with the frame's first byte in a TCP segment of its own:
+     * the violation is seen after lws has the byte, the connection is
+     * flagged and closed from the callback (it was served on: the flag
+     * was dropped with the tracker) */
+    attacker(&w, NULL, NULL);
+    int one = 1;
+    setsockopt(w.fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+    uint8_t first = 0x82; /* FIN, binary */
+    assert_int_equal(send(w.fd, &first, 1, MSG_NOSIGNAL), 1);
+    usleep(100000);
+    uint8_t rest[1 + sizeof junk];
+    rest[0] = sizeof junk; /* no MASK bit */
+    memcpy(rest + 1, junk, sizeof junk);
+    assert_int_equal(send(w.fd, rest, sizeof rest, MSG_NOSIGNAL), (ssize_t)sizeof rest);
+    assert_int_equal(wait_close(&w, 2000), 1002);
+    test_ws_close(&w);
+    /* both counted as protocol disconnects (/metrics
+     * oceand_disconnects_protocol_total), the one lws closed too */
+    for (int i = 0; i < 50 && stat_of(&h->stats.disconnects_protocol) < proto0 + 2; i++) usleep(20000);
+    assert_true(stat_of(&h->stats.disconnects_protocol) >= proto0 + 2);
     attacker(&w, NULL, NULL);
     const uint8_t bad[] = {'o', 'k', 0xc3, 0x28, 0xff, 0xfe}; /* 0xc3 0x28: invalid sequence */
     assert_int_equal(test_ws_send(&w, 1, bad, sizeof bad), 0);
