@@ -363,7 +363,7 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
             /* The shipped config names its scenes relative to the source
              * tree (make install writes absolute ones): say so, and from
              * where the path was read. */
-            char cwd[512], why[1024];
+            char cwd[512], why[2400];
             if (!getcwd(cwd, sizeof cwd)) snprintf(cwd, sizeof cwd, "?");
             snprintf(why, sizeof why, "%s (server.scene '%s'; relative paths are read from the "
                      "working directory %s: start oceand in the source tree, or give "
