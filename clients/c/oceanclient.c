@@ -1077,6 +1077,9 @@ static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user,
         char msg[300];
         snprintf(msg, sizeof msg, "connection to %s:%d failed: %s", c->url.host, c->url.port,
                  in ? (const char *)in : "unknown reason");
+        /* c may be freed once it is marked closed (oc_client_destroy waits
+         * for that): the wsi's later callbacks (WSI_DESTROY) must not see it */
+        lws_set_wsi_user(wsi, NULL);
         notify_closed(c, -1, msg);
         break;
     }
@@ -1094,8 +1097,10 @@ static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user,
         break;
 
     case LWS_CALLBACK_CLIENT_CLOSED:
-        if (c)
+        if (c) {
+            lws_set_wsi_user(wsi, NULL); /* as above: WSI_DESTROY follows */
             notify_closed(c, -1, "connection closed");
+        }
         break;
 
     case LWS_CALLBACK_WSI_DESTROY:
@@ -1103,7 +1108,9 @@ static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user,
          * completed (the kill timeout of oc_client_destroy on a server that
          * accepted but never answered) may get neither CLIENT_CLOSED nor
          * CLIENT_CONNECTION_ERROR, and c->wsi must not outlive it: the next
-         * EVENT_WAIT_CANCELLED would hand lws the freed wsi. */
+         * EVENT_WAIT_CANCELLED would hand lws the freed wsi.  After those
+         * two the user pointer is NULL (c may be gone); here c still holds
+         * this wsi, so oc_client_destroy has not freed it. */
         if (c && l) {
             pthread_mutex_lock(&l->mu);
             int mine = c->wsi == wsi;
