@@ -162,7 +162,10 @@ typedef struct srv_client {
     double over_soft_since;               /* monotonic; 0: under the soft limit */
     double last_progress;                 /* monotonic time of the last completed send */
     double pending_since;                 /* monotonic time output began waiting; 0: none */
-    int closing;                          /* BYE queued; close when sent */
+    int closing;                          /* 1 BYE queued; 2 client said BYE; 3 cut by a
+                                             limit (kill_code, kill_why); 4 BYE sent */
+    uint16_t kill_code;                   /* closing 3: the close frame's code */
+    char kill_why[124];                   /* and its reason (a close payload <= 125) */
     struct srv_record *rec;
 
     /* ---- simulation thread only ---- */

@@ -461,14 +461,19 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
 
 /* ---- WebSocket: ocean.v1 ----------------------------------------------------- */
 
+/* Ends c for breaking a limit: the close frame with `code` and `why` goes
+ * out at the next writeable callback (send_next), once what lws holds of
+ * the last message is flushed, so the client learns which limit; a client
+ * that cannot take even that within KILL_GRACE_S is cut without it. */
+#define KILL_GRACE_S 2
 static void kill_client_code(srv_client *c, enum lws_close_status code, const char *why)
 {
     if (!c->wsi || c->closing == 3) return;
     c->closing = 3;
-    size_t n = strlen(why);
-    if (n > 123) n = 123; /* a close frame's payload is at most 125 bytes */
-    lws_close_reason(c->wsi, code, (unsigned char *)why, n);
-    lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, LWS_TO_KILL_ASYNC);
+    c->kill_code = (uint16_t)code;
+    snprintf(c->kill_why, sizeof c->kill_why, "%s", why);
+    lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, KILL_GRACE_S);
+    lws_callback_on_writable(c->wsi);
 }
 
 static void kill_client(srv_client *c, const char *why)
@@ -574,7 +579,8 @@ static void on_wake(srv_net *n)
             kill_client(c, "slow consumer: no bytes read for server.output_soft_seconds");
             continue;
         }
-        if (atomic_exchange(&c->want_write, 0) || c->closing == 2) lws_callback_on_writable(c->wsi);
+        if (atomic_exchange(&c->want_write, 0) || c->closing == 2 || c->closing == 3)
+            lws_callback_on_writable(c->wsi);
     }
     pthread_mutex_unlock(&h->lock);
 }
@@ -585,6 +591,16 @@ static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now
     *close_now = 0;
     if (c->closing == 2) { /* client said BYE */
         lws_close_reason(wsi, LWS_CLOSE_STATUS_NORMAL, (unsigned char *)"bye", 3);
+        *close_now = 1;
+        return;
+    }
+    if (c->closing == 3) { /* a limit: the close frame names it (kill_client_code) */
+        if (lws_partial_buffered(wsi)) {
+            lws_callback_on_writable(wsi);
+            return;
+        }
+        lws_close_reason(wsi, (enum lws_close_status)c->kill_code, (unsigned char *)c->kill_why,
+                         strlen(c->kill_why));
         *close_now = 1;
         return;
     }
