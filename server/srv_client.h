@@ -152,6 +152,8 @@ typedef struct srv_client {
     double text_err_t;                    /* last text-frame ERROR sent; one per second */
     uint64_t rate_refused;                /* messages refused since that ERROR */
     double rx_started;                    /* monotonic time the unfinished message began */
+    double last_rx;                       /* monotonic time of the connection or of its last
+                                             message's first bytes (server.idle_seconds) */
     double rx_tokens, rx_tokens_t;        /* read budget (server.read_rate), bytes; refill time */
     int rx_paused;                        /* reading paused until the budget refills */
     size_t rx_held;                       /* rx_cap counted in the hub's partial total */

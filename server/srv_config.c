@@ -90,9 +90,14 @@ static const conf_entry srv_entries[] = {
              "decoding its messages cannot starve the other connections."},
     {.name = "server.partial_seconds", .type = CONF_DOUBLE, .offset = SRV(partial_seconds),
      .min = 0.1, .max = 3600, .def = "5", .unit = "s",
-     .help = "A message a client has begun (fragmented or not yet all arrived) must be "
-             "complete within this; a client that holds one longer is disconnected (close "
-             "1008), so half-sent messages cannot pin memory."},
+     .help = "A message a client has begun (from its first frame header on, fragmented or "
+             "not yet all arrived) must be complete within this; a client that holds one "
+             "longer is disconnected (close 1008), so half-sent messages cannot pin memory."},
+    {.name = "server.idle_seconds", .type = CONF_DOUBLE, .offset = SRV(idle_seconds),
+     .min = 1, .max = 86400, .def = "60", .unit = "s",
+     .help = "A connection that has not subscribed and has sent no message for this long is "
+             "closed with BYE idle, so connections that never ask for anything cannot hold "
+             "the server.max_clients slots; a subscribed client may stay silent."},
     {.name = "server.partial_total", .type = CONF_U64, .offset = SRV(partial_total),
      .min = 65536, .max = 1e12, .def = "67108864", .unit = "bytes",
      .help = "Bytes of unfinished client messages the daemon holds at once, all clients "

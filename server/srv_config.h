@@ -42,6 +42,7 @@ typedef struct srv_config {
     char admin_token[SRV_TOKEN_MAX]; /* "" disables SEA_STATE set */
     double read_rate;            /* bytes/s the service thread reads from one client */
     double partial_seconds;      /* an unfinished message must complete within this */
+    double idle_seconds;         /* an unsubscribed connection silent this long gets BYE idle */
     uint64_t partial_total;      /* bytes of unfinished messages held, all clients */
     double admin_lockout;        /* s a connection waits after wrong admin tokens */
     char web_root[SRV_PATH_MAX];

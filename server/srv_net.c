@@ -62,6 +62,8 @@ typedef struct ws_track {
     uint64_t len, left;      /* payload length and bytes still to come */
     uint8_t mask[4];
     uint8_t ctl[125];        /* a close frame's payload, unmasked */
+    double frame_t;          /* srv_now() at the unfinished frame's first byte; 0: none.
+                                Written here, read by the sweep (both [svc]) */
     atomic_int bad;          /* 1: 1002 owed by the callbacks; 2: lws sends it (a
                                 byte rewritten here); set here, read by the callbacks */
 } ws_track;
@@ -117,6 +119,7 @@ static void trk_feed(ws_track *t, uint8_t *b, size_t n)
         switch (t->state) {
         case TRK_HDR0:
             t->opcode = b[i] & 0x0f;
+            t->frame_t = srv_now();
             hdr0_at = (long)i;
             code_at[0] = code_at[1] = -1;
             t->state = TRK_HDR1;
@@ -160,6 +163,7 @@ static void trk_feed(ws_track *t, uint8_t *b, size_t n)
                 t->have = 0;
                 t->left = t->len;
                 t->state = t->left ? TRK_PAYLOAD : TRK_HDR0;
+                if (!t->left) t->frame_t = 0;
             }
             break;
         case TRK_PAYLOAD: {
@@ -185,9 +189,12 @@ static void trk_feed(ws_track *t, uint8_t *b, size_t n)
                     }
                 }
                 t->state = TRK_HDR0;
+                t->frame_t = 0;
             }
             break;
         }
+        case TRK_DONE:
+            break;
         }
     }
 }
@@ -536,10 +543,27 @@ static void on_wake(srv_net *n)
             c->rx_paused = 0;
             lws_rx_flow_control(c->wsi, 1);
         }
-        /* (not while we hold its reading back ourselves) */
-        if (c->rx_started > 0 && now - c->rx_started > cfg.partial_seconds && !c->rx_paused) {
+        /* (not while we hold its reading back ourselves).  From the
+         * frame's first byte (the tracker), not only from the first payload
+         * byte lws hands over: a header whose payload never comes is
+         * unfinished too. */
+        double began = c->rx_started;
+        if (t && t->owner == c->wsi && t->frame_t > 0 && (began == 0 || t->frame_t < began))
+            began = t->frame_t;
+        if (began > 0 && now - began > cfg.partial_seconds && !c->rx_paused) {
             atomic_fetch_add(&h->stats.disconnects_partial, 1);
             kill_client(c, "message unfinished for server.partial_seconds");
+            continue;
+        }
+        /* A connection that asks for nothing must not hold a slot of
+         * server.max_clients for ever (PROTOCOL.md: BYE idle). */
+        if (!c->subscribed && !c->closing && c->last_rx > 0 && now - c->last_rx > cfg.idle_seconds) {
+            atomic_fetch_add(&h->stats.disconnects_idle, 1);
+            c->closing = 1;
+            snprintf(c->kill_why, sizeof c->kill_why, "idle: no SUBSCRIBE and no message for "
+                     "server.idle_seconds");
+            srv_client_send_bye(c, PROTO_BYE_IDLE, c->kill_why);
+            lws_callback_on_writable(c->wsi);
             continue;
         }
         if (stopping && c->closing != 1 && c->closing != 3 && c->closing != 4) {
@@ -604,8 +628,9 @@ static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now
         *close_now = 1;
         return;
     }
-    if (c->closing == 4) { /* BYE written and flushed */
-        lws_close_reason(wsi, LWS_CLOSE_STATUS_GOINGAWAY, (unsigned char *)"server shutting down", 20);
+    if (c->closing == 4) { /* BYE written and flushed: the close says what it did */
+        const char *why = c->kill_why[0] ? c->kill_why : "server shutting down";
+        lws_close_reason(wsi, LWS_CLOSE_STATUS_GOINGAWAY, (unsigned char *)why, strlen(why));
         *close_now = 1;
         return;
     }
@@ -662,6 +687,7 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         srv_client *c;
         if (srv_client_create(h, wsi, &c) != OCEAN_OK) return -1;
         pss->c = c;
+        c->last_rx = srv_now();
         pthread_mutex_lock(&h->lock);
         int maxc = h->settings.srv.max_clients;
         if (n->fd_clients > 0 && maxc > n->fd_clients) maxc = n->fd_clients;
@@ -679,9 +705,9 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         if (full || stopping) {
             if (full) atomic_fetch_add(&h->stats.refused_full, 1);
             c->closing = 1;
-            srv_client_send_bye(c, stopping ? PROTO_BYE_SHUTDOWN : PROTO_BYE_SERVER_FULL,
-                                stopping ? "server shutting down"
-                                         : "server full: server.max_clients connections in use");
+            snprintf(c->kill_why, sizeof c->kill_why, "%s",
+                     stopping ? "server shutting down" : "server full: server.max_clients connections in use");
+            srv_client_send_bye(c, stopping ? PROTO_BYE_SHUTDOWN : PROTO_BYE_SERVER_FULL, c->kill_why);
             lws_callback_on_writable(wsi);
             break;
         }
@@ -750,7 +776,7 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
             c->rx_len = 0;
             c->rx_discard = 0;
             c->rx_discarded = 0;
-            c->rx_started = srv_now();
+            c->rx_started = c->last_rx = srv_now();
         }
         if (!c->rx_discard && c->rx_len + len > maxm) {
             c->rx_discard = 1;

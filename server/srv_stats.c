@@ -124,6 +124,8 @@ char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t h
            "descriptors reserved.", (double)LD(accept_refused));
     metric(&b, "oceand_disconnects_partial_total", "counter", "Clients dropped for an unfinished "
            "message (server.partial_seconds, server.partial_total).", (double)LD(disconnects_partial));
+    metric(&b, "oceand_disconnects_idle_total", "counter", "Connections closed with BYE idle: "
+           "no SUBSCRIBE and no message for server.idle_seconds.", (double)LD(disconnects_idle));
     metric(&b, "oceand_disconnects_output_total", "counter", "Clients dropped when a reply "
            "would pass server.output_hard as it was queued.", (double)LD(disconnects_output));
     metric(&b, "oceand_disconnects_protocol_total", "counter", "Clients closed for breaking "

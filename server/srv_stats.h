@@ -27,6 +27,7 @@ typedef struct srv_stats {
     /* issue 15: what was refused to keep one client from hurting the others */
     atomic_uint_fast64_t refused_rate, refused_silent, refused_mesh, refused_upgrade;
     atomic_uint_fast64_t disconnects_partial, disconnects_output, disconnects_protocol;
+    atomic_uint_fast64_t disconnects_idle;   /* BYE idle (server.idle_seconds) */
     atomic_uint_fast64_t admin_misses, admin_locked, accept_refused, query_slices;
     atomic_uint_fast64_t lat_hist[SRV_LAT_BUCKETS];
 } srv_stats;

@@ -884,7 +884,60 @@ static void a_partial_messages(void **state)
     free(part);
     assert_int_equal(closed, N);
     assert_true(stat_of(&h->stats.disconnects_partial) - p0 >= N);
+    /* a frame header whose payload never comes: unfinished from its first
+     * byte (it was held for ever: lws hands over nothing, so the deadline
+     * never started) */
+    test_ws hw;
+    attacker(&hw, NULL, NULL);
+    uint8_t hdr[] = {0x82, 0x80 | 126, 0x03, 0xe8, 1, 2, 3, 4}; /* 1000 bytes, masked, none sent */
+    assert_int_equal(send(hw.fd, hdr, sizeof hdr, MSG_NOSIGNAL), (ssize_t)sizeof hdr);
+    assert_int_equal(wait_close(&hw, 4000), 1008);
+    test_ws_close(&hw);
     window_end("partial-messages");
+}
+
+/* Connections that ask for nothing (1024 of them held every slot for
+ * ever, newcomers got BYE server-full): one that neither subscribes nor
+ * sends a message for server.idle_seconds gets BYE idle; a subscribed one
+ * (the witness) and one that keeps sending stay. */
+static void a_idle_connections(void **state)
+{
+    (void)state;
+    srv_hub *h = srv_daemon_hub(daemon_);
+    uint64_t idle0 = stat_of(&h->stats.disconnects_idle);
+    pthread_mutex_lock(&h->lock);
+    double was = h->settings.srv.idle_seconds;
+    h->settings.srv.idle_seconds = 1.0;
+    pthread_mutex_unlock(&h->lock);
+    window_begin();
+    test_ws quiet, talker;
+    attacker(&quiet, NULL, NULL);
+    attacker(&talker, NULL, NULL);
+    proto_msg m, got;
+    int bye = -1;
+    for (double end = now_s() + 4; now_s() < end && bye < 0;) {
+        proto_msg_init(&m, PROTO_SEA_STATE); /* a get: a message, not a subscription */
+        m.u.sea_state.op = PROTO_SEA_GET;
+        raw_send_msg(&talker, &m);
+        if (raw_wait_type(&quiet, PROTO_BYE, 400, &got)) {
+            bye = got.u.bye.reason;
+            proto_msg_free(&got);
+        }
+    }
+    assert_int_equal(bye, PROTO_BYE_IDLE);
+    /* the talker is still served: its SEA_STATE gets are answered */
+    proto_msg_init(&m, PROTO_SEA_STATE);
+    m.u.sea_state.op = PROTO_SEA_GET;
+    raw_send_msg(&talker, &m);
+    assert_true(raw_wait_type(&talker, PROTO_SEA_STATE, 2000, &got));
+    proto_msg_free(&got);
+    test_ws_close(&quiet);
+    test_ws_close(&talker);
+    pthread_mutex_lock(&h->lock);
+    h->settings.srv.idle_seconds = was;
+    pthread_mutex_unlock(&h->lock);
+    assert_true(stat_of(&h->stats.disconnects_idle) > idle0);
+    window_end("idle");
 }
 
 /* A text-frame flood from a client that does not read (1 M ERRORs, +366
@@ -1193,6 +1246,7 @@ static void replay_flood(void **state) { run_attack(a_replay_flood, state); }
 static void heavy_subscriber(void **state) { run_attack(a_heavy_subscriber, state); }
 static void partial_messages(void **state) { run_attack(a_partial_messages, state); }
 static void text_and_garbage_flood(void **state) { run_attack(a_text_and_garbage_flood, state); }
+static void idle_connections(void **state) { run_attack(a_idle_connections, state); }
 static void recording_quotas(void **state) { run_attack(a_recording_quotas, state); }
 static void metrics_and_status(void **state) { run_attack(a_metrics_and_status, state); }
 static void fd_limit(void **state) { run_attack(a_fd_limit, state); }
@@ -1219,6 +1273,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(heavy_subscriber),
         cmocka_unit_test(partial_messages),
         cmocka_unit_test(text_and_garbage_flood),
+        cmocka_unit_test(idle_connections),
         cmocka_unit_test(recording_quotas),
         cmocka_unit_test(metrics_and_status),
         cmocka_unit_test(fd_limit),
