@@ -767,13 +767,18 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
          * at its frame rate.  Layout 1 tiles are shared; its bytes are held
          * to server.viewer_bytes_per_s by the planner. */
         double per = s->srv.tiles_per_side;
-        double rate = per * per * sub->lod_levels * (double)sub->tile_size * sub->tile_size *
-                      sub->frame_rate_hz;
+        /* Replay frames come from CAMERA reports, up to server.replay_per_tick
+         * a tick, whatever frame_rate_hz says (1e-30 Hz priced a replay of
+         * the heaviest tiles at nothing) */
+        int replay = sub->mode == PROTO_MODE_REPLAY;
+        double hz = replay ? (double)s->srv.replay_per_tick * s->srv.tick_rate : sub->frame_rate_hz;
+        double rate = per * per * sub->lod_levels * (double)sub->tile_size * sub->tile_size * hz;
         if (srv_tiles_channels(eff) && rate > s->srv.max_sample_rate) {
             snprintf(why, n, "subscribe: %.4g tile samples/s (%d x %d tiles x %u levels x %u^2 "
-                     "samples x %g Hz) above the server's %.4g (server.max_sample_rate)", rate,
-                     s->srv.tiles_per_side, s->srv.tiles_per_side, sub->lod_levels, sub->tile_size,
-                     (double)sub->frame_rate_hz, s->srv.max_sample_rate);
+                     "samples x %g Hz%s) above the server's %.4g (server.max_sample_rate)", rate,
+                     s->srv.tiles_per_side, s->srv.tiles_per_side, sub->lod_levels, sub->tile_size, hz,
+                     replay ? ": a replay's frames, server.replay_per_tick x server.tick_rate" : "",
+                     s->srv.max_sample_rate);
             return OCEAN_ETOOBIG;
         }
     }

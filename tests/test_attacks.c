@@ -848,6 +848,14 @@ static void a_heavy_subscriber(void **state)
     attacker(&w, NULL, &s);
     expect_error(&w, OCEAN_ETOOBIG, "server.max_sample_rate", 3000);
     test_ws_close(&w);
+    /* the same tiles in replay mode at a frame rate of next to nothing:
+     * a replay's frames come from its CAMERAs (server.replay_per_tick a
+     * tick), so it is priced at that rate (it was priced at ~0 and taken) */
+    s.mode = PROTO_MODE_REPLAY;
+    s.frame_rate_hz = 1e-30f;
+    attacker(&w, NULL, &s);
+    expect_error(&w, OCEAN_ETOOBIG, "replay_per_tick", 3000);
+    test_ws_close(&w);
     window_end("heavy-subscriber");
 }
 
