@@ -716,12 +716,15 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
                  "(HELLO effects 0x%x)", sub->effects, s->effects & PROTO_FX_ALL);
         return OCEAN_EUNSUPPORTED;
     }
-    if (sub->tile_size > s->srv.max_tile_size) {
+    /* tile_size and lod_levels shape layout 0's per-camera tiles; layout 1
+     * ignores them (PROTOCOL.md, SUBSCRIBE), so they are checked there only */
+    int world = sub->layout != PROTO_LAYOUT_CASCADE;
+    if (world && sub->tile_size > s->srv.max_tile_size) {
         snprintf(why, n, "subscribe.tile_size %u above the server's %d (server.max_tile_size)",
                  sub->tile_size, s->srv.max_tile_size);
         return OCEAN_ETOOBIG;
     }
-    if (sub->lod_levels > s->srv.max_lod_levels) {
+    if (world && sub->lod_levels > s->srv.max_lod_levels) {
         snprintf(why, n, "subscribe.lod_levels %u above the server's %d (server.max_lod_levels)",
                  sub->lod_levels, s->srv.max_lod_levels);
         return OCEAN_ETOOBIG;
@@ -741,7 +744,7 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
     }
     double spacing = sub->base_spacing_m > 0 ? sub->base_spacing_m : s->srv.base_spacing;
     double top = spacing * ldexp(1.0, sub->lod_levels - 1) * sub->tile_size;
-    if (top > 1e7) {
+    if (world && top > 1e7) {
         snprintf(why, n, "subscribe: the coarsest tile would span %g m (base spacing %g m, "
                  "%u levels, %u samples); keep it under 10 000 km", top, spacing, sub->lod_levels,
                  sub->tile_size);

@@ -856,6 +856,20 @@ static void a_heavy_subscriber(void **state)
     attacker(&w, NULL, &s);
     expect_error(&w, OCEAN_ETOOBIG, "replay_per_tick", 3000);
     test_ws_close(&w);
+    /* layout 1 ignores tile_size and lod_levels (PROTOCOL.md, SUBSCRIBE):
+     * their largest values and a base spacing that only they made
+     * "span 8e7 m" are served, not refused ETOOBIG / EINVAL */
+    live_subscribe(&s);
+    s.layout = PROTO_LAYOUT_CASCADE;
+    s.tile_size = 1024;
+    s.lod_levels = 16;
+    s.base_spacing_m = 1e4f;
+    s.mesh_kind = PROTO_MESH_NONE;
+    attacker(&w, NULL, &s);
+    proto_msg m;
+    assert_true(raw_wait_type(&w, PROTO_FRAME, 3000, &m));
+    proto_msg_free(&m);
+    test_ws_close(&w);
     window_end("heavy-subscriber");
 }
 
