@@ -1068,10 +1068,20 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
     case PROTO_ERROR:
         /* a client's ERROR reports a server message it refused: logged,
          * never answered (an ERROR for an ERROR could loop) */
-        if (cfg.verbose)
-            fprintf(stderr, "oceand: client %u reports ERROR %u (%s) for its message type %u seq %u: %s\n",
+        if (cfg.verbose) {
+            /* the client's text, quoted with its control bytes escaped: a
+             * newline or an ANSI sequence in it must not forge log lines */
+            char safe[4 * PROTO_ERROR_MSG_MAX + 1];
+            size_t k = 0;
+            for (const unsigned char *p = (const unsigned char *)m.u.error.message; *p && k + 5 < sizeof safe; p++)
+                k += (size_t)(*p < 0x20 || *p == 0x7f || *p == '\\' || *p == '"'
+                                  ? snprintf(safe + k, sizeof safe - k, "\\x%02x", *p)
+                                  : snprintf(safe + k, sizeof safe - k, "%c", *p));
+            safe[k] = '\0';
+            fprintf(stderr, "oceand: client %u reports ERROR %u (%s) for its message type %u seq %u: \"%s\"\n",
                     c->id, m.u.error.code, ocean_strerror((ocean_result)m.u.error.code),
-                    m.u.error.offending_type, m.u.error.offending_seq, m.u.error.message);
+                    m.u.error.offending_type, m.u.error.offending_seq, safe);
+        }
         break;
     case PROTO_BYE:
         c->closing = 2; /* close without a reply */

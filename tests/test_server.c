@@ -7,6 +7,7 @@
  * input no proper client would send and for a reader that never reads, the
  * raw WebSocket client of tests/lib/test_ws.h.
  */
+#include <fcntl.h>
 #include <math.h>
 #include <setjmp.h>
 #include <signal.h>
@@ -1145,6 +1146,63 @@ static void slow_reader_never_delays_fast(void **state)
     oc_client_destroy(fast);
 }
 
+/* A client's ERROR is logged (server.verbose) with its text quoted and its
+ * control bytes escaped: a newline or an ANSI escape in it forged daemon
+ * log lines before. */
+static void client_error_log_is_escaped(void **state)
+{
+    (void)state;
+    srv_hub *h = srv_daemon_hub(daemon_);
+    pthread_mutex_lock(&h->lock);
+    int was = h->settings.srv.verbose;
+    h->settings.srv.verbose = 1;
+    pthread_mutex_unlock(&h->lock);
+    char path[600];
+    snprintf(path, sizeof path, "%s/verbose.log", tmpdir);
+    fflush(stderr);
+    int saved = dup(2), fd = open(path, O_CREAT | O_TRUNC | O_WRONLY, 0600);
+    assert_true(saved >= 0 && fd >= 0);
+    dup2(fd, 2);
+    test_ws w;
+    assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
+    proto_msg m;
+    assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+    proto_msg_free(&m);
+    proto_msg_init(&m, PROTO_ERROR);
+    m.u.error.code = OCEAN_EFORMAT;
+    snprintf(m.u.error.message, sizeof m.u.error.message,
+             "x\noceand: forged line\n\x1b[2J");
+    raw_send_msg(&w, &m);
+    /* a SEA_STATE get answered after it: the ERROR was handled */
+    proto_msg_init(&m, PROTO_SEA_STATE);
+    m.u.sea_state.op = PROTO_SEA_GET;
+    raw_send_msg(&w, &m);
+    assert_true(raw_wait_type(&w, PROTO_SEA_STATE, 3000, &m));
+    proto_msg_free(&m);
+    test_ws_close(&w);
+    fflush(stderr);
+    dup2(saved, 2);
+    close(saved);
+    close(fd);
+    pthread_mutex_lock(&h->lock);
+    h->settings.srv.verbose = was;
+    pthread_mutex_unlock(&h->lock);
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    char line[4096];
+    int reported = 0, forged = 0, escape = 0;
+    while (fgets(line, sizeof line, f)) {
+        if (strstr(line, "reports ERROR") && strstr(line, "\"x\\x0aoceand: forged line\\x0a\\x1b[2J\""))
+            reported = 1;
+        forged |= strncmp(line, "oceand: forged line", 19) == 0;
+        escape |= strchr(line, 0x1b) != NULL;
+    }
+    fclose(f);
+    assert_true(reported);
+    assert_false(forged);
+    assert_false(escape);
+}
+
 typedef struct bad_case {
     const char *what;
     uint8_t *bytes;
@@ -2279,6 +2337,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(mesh_qz_within_bound),
         cmocka_unit_test(slow_reader_never_delays_fast),
         cmocka_unit_test(bad_input_gets_error),
+        cmocka_unit_test(client_error_log_is_escaped),
         cmocka_unit_test(sea_state_admin_change),
         cmocka_unit_test(sea_state_set_answered_by_its_own_announce),
         cmocka_unit_test(sea_timeline_scheduled_change),
