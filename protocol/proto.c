@@ -36,6 +36,11 @@
 /* Coordinates beyond these are absurd for a sea on this planet. */
 #define MAX_WORLD 1e10
 #define MAX_LOCAL 1e7
+/* What the server derives from a camera within MAX_WORLD (tile, frame,
+ * mesh and placement origins) reaches past it by what one frame covers:
+ * the view range and the coarsest tile, each at most MAX_LOCAL.  At
+ * MAX_WORLD they were refused, and a camera near x = -1e10 got no frames. */
+#define MAX_ORIGIN (MAX_WORLD + 2 * MAX_LOCAL)
 
 static const char *const type_names[PROTO_TYPE_END_] = {
     "?", "HELLO", "SUBSCRIBE", "CAMERA", "FRAME", "TILE", "MESH_TOPOLOGY", "MESH_VERTICES",
@@ -246,8 +251,8 @@ static ocean_result v_tile(ctx *c, const proto_tile *t)
         FAIL(c, OCEAN_EINVAL, "tile.channels is empty");
     TRY(chk_range(c, "tile.width", t->width, 1, PROTO_TILE_MAX_SIZE));
     TRY(chk_range(c, "tile.height", t->height, 1, PROTO_TILE_MAX_SIZE));
-    TRY(chk_range(c, "tile.origin_x", t->origin_x, -MAX_WORLD, MAX_WORLD));
-    TRY(chk_range(c, "tile.origin_z", t->origin_z, -MAX_WORLD, MAX_WORLD));
+    TRY(chk_range(c, "tile.origin_x", t->origin_x, -MAX_ORIGIN, MAX_ORIGIN));
+    TRY(chk_range(c, "tile.origin_z", t->origin_z, -MAX_ORIGIN, MAX_ORIGIN));
     TRY(chk_range(c, "tile.spacing", t->spacing, 0, 1e6));
     if (!(t->spacing > 0))
         FAIL(c, OCEAN_EINVAL, "tile.spacing must be > 0");
@@ -276,7 +281,7 @@ static ocean_result v_vertices_head(ctx *c, const proto_mesh_vertices *v)
     if (v->vertex_count > c->lim->max_vertices)
         FAIL(c, OCEAN_ETOOBIG, "mesh vertex_count %u above the limit %u", v->vertex_count, c->lim->max_vertices);
     for (int i = 0; i < 3; i++)
-        TRY(chk_range(c, "mesh.origin", v->origin[i], -MAX_WORLD, MAX_WORLD));
+        TRY(chk_range(c, "mesh.origin", v->origin[i], -MAX_ORIGIN, MAX_ORIGIN));
     return OCEAN_OK;
 }
 
@@ -373,7 +378,7 @@ static ocean_result v_frame(ctx *c, const proto_frame *f)
         FAIL(c, OCEAN_EINVAL, "frame.cutoff_k = %g; must be >= 0 (or +inf)", f->cutoff_k);
     TRY(chk_range(c, "frame.e_error", f->e_error, 0, 1));
     for (int i = 0; i < 3; i++)
-        TRY(chk_range(c, "frame.origin", f->origin[i], -MAX_WORLD, MAX_WORLD));
+        TRY(chk_range(c, "frame.origin", f->origin[i], -MAX_ORIGIN, MAX_ORIGIN));
     if (f->tile_count > c->lim->max_frame_tiles)
         FAIL(c, OCEAN_ETOOBIG, "frame.tile_count %u above the limit %u", f->tile_count, c->lim->max_frame_tiles);
     if (f->tile_count && !f->tiles && !f->tile_records)
@@ -401,7 +406,7 @@ static ocean_result v_frame(ctx *c, const proto_frame *f)
         TRY(v_vertices_qz(c, &f->mesh));
     if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
         for (int i = 0; i < 3; i++)
-            TRY(chk_range(c, "frame.placement.origin", f->placement.origin[i], -MAX_WORLD, MAX_WORLD));
+            TRY(chk_range(c, "frame.placement.origin", f->placement.origin[i], -MAX_ORIGIN, MAX_ORIGIN));
     return OCEAN_OK;
 }
 

@@ -1203,6 +1203,46 @@ static void client_error_log_is_escaped(void **state)
     assert_false(escape);
 }
 
+/* A camera at the edge of the world (x = -1e10 + 10 m, within CAMERA's
+ * bound): layout 0's tiles and mesh reach past it, and their
+ * origins were refused by the encoder: one frame, then silence and a log
+ * line a tick.  Both layouts are served there. */
+static void camera_at_the_world_edge(void **state)
+{
+    (void)state;
+    for (int layout = 0; layout < 2; layout++) {
+        oc_client *c = connect_bg(port);
+        proto_subscribe s;
+        small_subscribe(&s);
+        s.layout = (uint8_t)(layout ? PROTO_LAYOUT_CASCADE : PROTO_LAYOUT_WORLD);
+        s.mesh_kind = PROTO_MESH_CONCENTRIC;
+        s.mesh_codec = layout ? 0 : 2;
+        s.lod_levels = 4;
+        s.frame_rate_hz = 10;
+        assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+        proto_camera cam;
+        oc_camera_default(&cam);
+        cam.pos[0] = -1e10 + 10;
+        cam.pos[1] = 20;
+        assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
+        int got = 0;
+        double end = now_s() + 5;
+        while (got < 3 && now_s() < end) {
+            oc_frame *f;
+            if (oc_client_next_frame(c, 200, &f) != OCEAN_OK) continue;
+            /* frames made for this camera, every tile decoded */
+            int whole = f->info.camera_seq != PROTO_NO_CAMERA && f->info.tile_count > 0;
+            for (uint32_t i = 0; whole && i < f->info.tile_count; i++)
+                whole = f->tiles[i].decode_result == OCEAN_OK;
+            got += whole;
+            oc_frame_free(f);
+        }
+        if (got < 3) fprintf(stderr, "layout %d: %d frames at x = -1e10\n", layout, got);
+        assert_true(got >= 3);
+        oc_client_destroy(c);
+    }
+}
+
 typedef struct bad_case {
     const char *what;
     uint8_t *bytes;
@@ -2338,6 +2378,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(slow_reader_never_delays_fast),
         cmocka_unit_test(bad_input_gets_error),
         cmocka_unit_test(client_error_log_is_escaped),
+        cmocka_unit_test(camera_at_the_world_edge),
         cmocka_unit_test(sea_state_admin_change),
         cmocka_unit_test(sea_state_set_answered_by_its_own_announce),
         cmocka_unit_test(sea_timeline_scheduled_change),

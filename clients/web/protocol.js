@@ -81,6 +81,9 @@ const RECORD_HEAD = 8, TOPO_FIXED = 16, VERTS_FIXED = 32, QUERY_FIXED = 24, RESU
 const SAMPLE_SIZE = 36, SEASTATE_FIXED = 16 + SEA_SIZE, ERROR_FIXED = 8, BYE_FIXED = 4;
 const CASCADE_FIXED = 56, CASCADE_ENTRY = 224, PLACEMENT_SIZE = 32;
 const MAX_WORLD = 1e10, MAX_LOCAL = 1e7;
+// what the server derives from a camera within MAX_WORLD reaches past it by
+// one frame's cover (view range, coarsest tile): as protocol/proto.c
+const MAX_ORIGIN = MAX_WORLD + 2 * MAX_LOCAL;
 
 export class ProtoError extends Error {
     constructor(code, message) {
@@ -377,8 +380,8 @@ function vTile(t) {
     if (!t.channels) fail(R.EINVAL, 'tile.channels is empty');
     chkRange('tile.width', t.width, 1, LIMITS.tileMaxSize);
     chkRange('tile.height', t.height, 1, LIMITS.tileMaxSize);
-    chkRange('tile.origin_x', t.originX, -MAX_WORLD, MAX_WORLD);
-    chkRange('tile.origin_z', t.originZ, -MAX_WORLD, MAX_WORLD);
+    chkRange('tile.origin_x', t.originX, -MAX_ORIGIN, MAX_ORIGIN);
+    chkRange('tile.origin_z', t.originZ, -MAX_ORIGIN, MAX_ORIGIN);
     chkRange('tile.spacing', t.spacing, 0, 1e6);
     if (!(t.spacing > 0)) fail(R.EINVAL, 'tile.spacing must be > 0');
     chkRange('tile.error_bound', t.errorBound, 0, 1e30);
@@ -412,7 +415,7 @@ function dVertices(r, limits) {
 function vVerticesHead(v, limits) {
     if (v.vertexCount === 0) fail(R.EINVAL, 'mesh vertex_count is 0');
     if (v.vertexCount > limits.maxVertices) fail(R.ETOOBIG, `mesh vertex_count ${v.vertexCount} above the limit ${limits.maxVertices}`);
-    for (let i = 0; i < 3; i++) chkRange('mesh.origin', v.origin[i], -MAX_WORLD, MAX_WORLD);
+    for (let i = 0; i < 3; i++) chkRange('mesh.origin', v.origin[i], -MAX_ORIGIN, MAX_ORIGIN);
 }
 
 function vVerticesQz(v, limits) {
@@ -638,12 +641,12 @@ function dFrame(r, limits) {
     /* values, as v_frame */
     if (Number.isNaN(f.cutoffK) || f.cutoffK < 0) fail(R.EINVAL, `frame.cutoff_k = ${f.cutoffK}; must be >= 0 (or +inf)`);
     chkRange('frame.e_error', f.eError, 0, 1);
-    for (let i = 0; i < 3; i++) chkRange('frame.origin', f.origin[i], -MAX_WORLD, MAX_WORLD);
+    for (let i = 0; i < 3; i++) chkRange('frame.origin', f.origin[i], -MAX_ORIGIN, MAX_ORIGIN);
     if (f.cascades) vCascades(f.cascades);
     for (const t of f.tiles) vTile(t);
     if (f.mesh && f.hasMesh === 2) vVerticesQz(f.mesh, limits);
     else if (f.mesh) vVertices(f.mesh, limits);
-    if (f.placement) for (let i = 0; i < 3; i++) chkRange('frame.placement.origin', f.placement.origin[i], -MAX_WORLD, MAX_WORLD);
+    if (f.placement) for (let i = 0; i < 3; i++) chkRange('frame.placement.origin', f.placement.origin[i], -MAX_ORIGIN, MAX_ORIGIN);
     return f;
 }
 
