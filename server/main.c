@@ -216,6 +216,7 @@ int main(int argc, char **argv)
     const char *sets[MAX_SETS + N_DATADIR_SETS];
     char setbuf[MAX_SETS][600];
     int nsets = 0, nbuf = 0, dump = 0;
+    int key_given[N_OD_OPTS] = {0}; /* a shorthand (--port ...) was typed for its key */
     struct option lo[N_OD_OPTS + 1];
     char shorts[3 * N_OD_OPTS + 1], *sp = shorts;
     for (int i = 0; i < N_OD_OPTS; i++) {
@@ -244,10 +245,18 @@ int main(int argc, char **argv)
         switch (op->kind) {
         case OD_CONFIG: config = optarg; break;
         case OD_KEY:
+            key_given[op - od_opts] = 1;
             snprintf(setbuf[nbuf], sizeof setbuf[nbuf], "%s=%s", op->key, optarg);
             sets[nsets++] = setbuf[nbuf++];
             break;
-        case OD_SET: sets[nsets++] = optarg; break;
+        case OD_SET:
+            /* an explicit --set of a shorthand's key: its errors say --set */
+            for (int i = 0; i < N_OD_OPTS; i++)
+                if (od_opts[i].kind == OD_KEY && !strncmp(optarg, od_opts[i].key, strlen(od_opts[i].key)) &&
+                    optarg[strlen(od_opts[i].key)] == '=')
+                    key_given[i] = 0;
+            sets[nsets++] = optarg;
+            break;
         case OD_DUMP: dump = 1; break;
         case OD_VERSION: printf("%s (protocol %s)\n", SRV_VERSION, PROTO_SUBPROTOCOL); return 0;
         case OD_HELP: usage(stdout); return 0;
@@ -277,7 +286,20 @@ int main(int argc, char **argv)
     if (!s) return 1;
     char err[1024];
     if (srv_settings_load(config, sets, nsets, s, err, sizeof err) != OCEAN_OK) {
-        fprintf(stderr, "oceand: %s\n", err);
+        /* A value refused for a shorthand (--port 70000) is named by the
+         * option typed, not by the --set it stands for. */
+        const char *label = NULL;
+        for (int i = 0; i < N_OD_OPTS && strncmp(err, "--set: ", 7) == 0; i++) {
+            const char *k = od_opts[i].key;
+            size_t kl = k ? strlen(k) : 0;
+            if (od_opts[i].kind == OD_KEY && key_given[i] && strncmp(err + 7, k, kl) == 0 &&
+                err[7 + kl] == ':')
+                label = od_opts[i].name;
+        }
+        if (label)
+            fprintf(stderr, "oceand: --%s: %s\n", label, err + 7);
+        else
+            fprintf(stderr, "oceand: %s\n", err);
         free(s);
         return 1;
     }

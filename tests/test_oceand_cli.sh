@@ -55,6 +55,12 @@ rc=$?
 grep -q "working directory $tmp" "$tmp/err" && grep -q "server.scene_dir" "$tmp/err" ||
     fail "started in $tmp: the message does not say where the relative path was read from: $(cat "$tmp/err")"
 
+echo "== a shorthand's bad value is named by the option typed ($SECONDS s)"
+"$OD" --config config/oceand.conf --port 70000 >"$tmp/out" 2>"$tmp/err" && fail "--port 70000 accepted"
+grep -q "^oceand: --port: server.port: out of range" "$tmp/err" || fail "--port 70000: $(cat "$tmp/err")"
+"$OD" --config config/oceand.conf --set server.port=70000 >"$tmp/out" 2>"$tmp/err" && fail "--set server.port=70000 accepted"
+grep -q "^oceand: --set: server.port" "$tmp/err" || fail "--set server.port=70000: $(cat "$tmp/err")"
+
 echo "== --version ($SECONDS s)"
 "$OD" --version >"$tmp/ver" || fail "--version exited $?"
 grep -qx "oceand [0-9][0-9.]* (protocol ocean\.v[0-9]*)" "$tmp/ver" || fail "--version: $(cat "$tmp/ver")"
