@@ -404,6 +404,23 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
     http_pss *pss = user;
     srv_net *n = lws_context_user(lws_get_context(wsi));
     switch (reason) {
+    case LWS_CALLBACK_HTTP_CONFIRM_UPGRADE: {
+        /* A WebSocket upgrade that does not offer ocean.v1 at all (only
+         * "chat", or a different case) never reaches a protocol's filter:
+         * lws 4.1.6 finds no protocol and hangs up without a word.  Answer
+         * it here, as one without any subprotocol is answered (400). */
+        if (!in || strcasecmp((const char *)in, "websocket") != 0) break;
+        char list[256] = "";
+        lws_hdr_copy(wsi, list, sizeof list, WSI_TOKEN_PROTOCOL);
+        int offered = 0;
+        for (char *save = NULL, *tok = strtok_r(list, ", \t", &save); tok && !offered;
+             tok = strtok_r(NULL, ", \t", &save))
+            offered = strcmp(tok, PROTO_SUBPROTOCOL) == 0;
+        if (!offered)
+            return refuse_upgrade(n, wsi, 400, "WebSocket connections must ask for the ocean.v1 "
+                                  "subprotocol (Sec-WebSocket-Protocol: ocean.v1)");
+        break;
+    }
     case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION:
         return filter_upgrade(n, wsi, 0);
     case LWS_CALLBACK_ESTABLISHED: {

@@ -544,6 +544,22 @@ static void a_rfc_handshake_refusals(void **state)
     close(fd);
     assert_true(strncmp(resp, "HTTP/1.1 426", 12) == 0);
     assert_non_null(strstr(resp, "Sec-WebSocket-Version: 13"));
+    /* subprotocols offered, none of them ocean.v1 (names are case-sensitive):
+     * 400 naming it, as with none at all (lws hung up without a word) */
+    const char *others[] = {"chat", "OCEAN.V1"};
+    for (int i = 0; i < 2; i++) {
+        char req[512];
+        snprintf(req, sizeof req, "GET / HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                 "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
+                 "Sec-WebSocket-Protocol: %s\r\n\r\n", others[i]);
+        fd = tcp_connect(port);
+        assert_true(fd >= 0);
+        http_exchange(fd, req, resp, sizeof resp, 2000);
+        close(fd);
+        if (strncmp(resp, "HTTP/1.1 400", 12) != 0) fprintf(stderr, "subprotocol %s: '%.60s'\n", others[i], resp);
+        assert_true(strncmp(resp, "HTTP/1.1 400", 12) == 0);
+        assert_non_null(strstr(resp, "ocean.v1"));
+    }
     /* 300 upgrades without the subprotocol, held open by the attacker */
     enum { N = 300 };
     int fds[N], refused = 0;
