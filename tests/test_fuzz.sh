@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Script test (make test): a short bounded libFuzzer pass of every
-# tests/fuzz/fuzz_*.c target under ASan/UBSan, ~20 s each (FUZZ_TEST_SECONDS).
+# tests/fuzz/fuzz_*.c target under ASan/UBSan, ~20 s each (FUZZ_TEST_SECONDS),
+# one target per core at once.
 # Fails on any crash, sanitizer report or build failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
