@@ -791,6 +791,31 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
     return OCEAN_OK;
 }
 
+/* A layout-0 subscription whose level-0 spacing is too coarse for the near
+ * field's longest wave (two samples a wave: 2 pi / k_lo < 2 spacing) cannot
+ * be carried the near field: its tiles never hold it, and the antialias
+ * cutoff that spacing sets (a wavelength of 4 spacings) filters it from the
+ * mesh.  Said in the log at the first such subscription of a run: the
+ * default spacing is such a one, and a note at every start (when no layout-0
+ * client may ever come: the browser viewer subscribes with layout 1) read
+ * as a fault in the shipped configuration.  Returns 1 with the text in out
+ * when s and sub call for the note [svc, hub.lock held]. */
+static int near_spacing_note(const srv_settings *s, const proto_subscribe *sub, uint32_t id, char *out,
+                             size_t n)
+{
+    if (sub->layout != PROTO_LAYOUT_WORLD || !(sub->effects & PROTO_FX_NEAR_FIELD) ||
+        !srv_settings_near_cascade(s))
+        return 0;
+    double spacing = sub->base_spacing_m > 0 ? sub->base_spacing_m : s->srv.base_spacing;
+    double longest = 2 * M_PI / s->params.k_max, shortest = s->srv.near_field_min_wavelength;
+    if (!(longest < 2 * spacing)) return 0;
+    snprintf(out, n, "client %u: layout 0 at a %g m level-0 spacing: the near field's waves (%.3g m to "
+             "%.3g m) are all shorter than two samples, so its frames cannot carry them (a spacing "
+             "<= %.3g m can; layout 1 carries them in a cascade of its own); said once a run",
+             id, spacing, shortest, longest, 0.5 * longest);
+    return 1;
+}
+
 static int rate_ok(srv_client *c, double rate, double burst)
 {
     double now = srv_now();
@@ -885,6 +910,7 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
     switch (m.hdr.type) {
     case PROTO_SUBSCRIBE: {
         proto_subscribe sub = m.u.subscribe;
+        char note[400] = "";
         pthread_mutex_lock(&h->lock);
         r = check_subscribe(&h->settings, &sub, why, sizeof why);
         if (r == OCEAN_OK) {
@@ -894,9 +920,12 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
             c->sub = sub;
             c->sub_gen++;
             pthread_cond_signal(&h->wake);
+            if (!h->near_spacing_said && near_spacing_note(&h->settings, &sub, c->id, note, sizeof note))
+                h->near_spacing_said = 1;
         }
         pthread_mutex_unlock(&h->lock);
         if (r != OCEAN_OK) srv_client_send_error(c, buf, len, r, why);
+        if (note[0]) fprintf(stderr, "oceand: %s\n", note);
         break;
     }
     case PROTO_CAMERA: {

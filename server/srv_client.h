@@ -193,6 +193,7 @@ typedef struct srv_hub {
     srv_client *clients;                  /* [hub.lock] */
     int n_clients;                        /* [hub.lock] connections */
     int n_subscribed;                     /* [hub.lock] */
+    int near_spacing_said;                /* [hub.lock] the layout-0 near-field note, once a run */
     uint32_t next_id;                     /* [hub.lock] */
     srv_settings settings;                /* [hub.lock] in force; copy before use */
     uint64_t settings_gen;                /* [hub.lock] bumps on reload */

@@ -125,7 +125,7 @@ static ocean_result make_ocean(const srv_settings *s, const ocean_params *p, oce
     double patch, klo, khi;
     ocean_cascade_band(*oc, p->cascades - 1, &patch, &klo, &khi);
     ocean_plan_serving sv = {(s->effects & OCEAN_FX_NEAR_FIELD) && s->srv.near_field_waves > 0, khi,
-                             2 * M_PI / s->srv.near_field_min_wavelength, s->srv.base_spacing};
+                             2 * M_PI / s->srv.near_field_min_wavelength};
     ocean_plan_ocean(*oc, &sv, &plan);
     ocean_plan_print(&plan, stderr, "oceand: scene plan");
     ocean_gerstner_params gp;

@@ -97,13 +97,6 @@ void ocean_plan_ocean(const ocean *o, const ocean_plan_serving *sv, ocean_plan *
                 "%.3g m to %.3g m): the FFT already reaches its shortest wave, no near field "
                 "is built",
                 klo, khi, 2.0 * M_PI / khi, 2.0 * M_PI / klo);
-        else if (sv->spacing_m > 0.0 && 2.0 * M_PI / klo < 2.0 * sv->spacing_m)
-            add(plan, OCEAN_PLAN_WARN, "near",
-                "the near field's waves (%.3g m to %.3g m) are all shorter than two samples of "
-                "the %.3g m level-0 spacing served by default: layout-0 meshes and tiles at that "
-                "spacing cannot carry them (a client must ask for a spacing <= %.3g m; layout 1 "
-                "carries them in its near-field cascade where the camera resolves them)",
-                2.0 * M_PI / khi, 2.0 * M_PI / klo, sv->spacing_m, M_PI / klo);
     }
     /* HOOK (issue 13, items 2 and 6): once ocean.h exposes e_total (the
      * energy missing from geometry and shading together), warn or refuse

@@ -20,10 +20,9 @@
  *             Higgins 1952, Rayleigh heights), exceeds H_b: those waves
  *             would break and a linear sea does not break them.
  *   near      WARN (the daemon) when the near-field band is empty (it is
- *             then silently not built) or when its longest wave is shorter
- *             than two samples of the level-0 spacing the daemon serves by
- *             default, so no mesh or tile at that spacing can carry it; a
- *             client asking for a finer spacing still can, hence a warning.
+ *             then silently not built).  A spacing too coarse for the near
+ *             field's longest wave is one client's choice, not the scene's:
+ *             the daemon says so when such a client subscribes.
  *   e_total   (hook) the 5 % bound on the energy missing from geometry and
  *             shading together (seed 000) belongs here once e_total exists:
  *             see ocean_plan_ocean.
@@ -74,11 +73,12 @@ void ocean_plan_params(const ocean_params *p, ocean_plan *plan);
 typedef struct ocean_plan_serving {
     int near_field;          /* 1: the scene asks for the Gerstner near field */
     double near_k_lo, near_k_hi; /* its band, rad/m (k_lo = the FFT's k_max) */
-    double spacing_m;        /* level-0 spacing served by default, m (0: unknown) */
 } ocean_plan_serving;
 
 /* The checks on a built ocean (grid Hs vs analytic) and, if sv != NULL,
- * on how it is served (near field vs spacing), appended to plan. */
+ * on how it is served (a near field with an empty band), appended to plan.
+ * Whether a client's sample spacing carries the near field is the
+ * server's to say when that client subscribes. */
 void ocean_plan_ocean(const ocean *o, const ocean_plan_serving *sv, ocean_plan *plan);
 
 /* Writes each item as "<prefix>: warning|refused (check): text\n" to f. */

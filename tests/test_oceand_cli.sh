@@ -12,7 +12,10 @@
 #    resolve to, as a file that loads back to the same (the scene's keys
 #    applied over it again, so its sea.* --set given again);
 #  - /status carries the scene's camera hint (the browser viewer opens
-#    there), as config/scenes/flight.conf writes it.
+#    there), as config/scenes/flight.conf writes it;
+#  - the shipped configuration starts without a warning; the near field a
+#    layout-0 subscription at the default 2 m spacing cannot carry is said
+#    when the first such client subscribes, once a run, never for layout 1.
 set -u
 BUILD=${BUILD:-build}
 OD=$BUILD/oceand
@@ -100,4 +103,22 @@ want = [float(v) for v in sys.argv[2].split(",")] + [0.0] * 2
 got = [h["x"], h["y"], h["z"], h["yaw"], h["pitch"]]
 sys.exit(0 if all(abs(a - b) < 1e-9 for a, b in zip(got, want[:5])) else 1)
 PY
+echo "== the default start says nothing a layout-0 client may never need ($SECONDS s)"
+OC=$BUILD/ocean-client
+"$OD" --config config/oceand.conf --port 0 >"$tmp/d.log" 2>&1 &
+dpid=$!
+for _ in $(seq 200); do grep -q "listening on" "$tmp/d.log" && break; sleep 0.05; done
+port=$(sed -n 's|^oceand: listening on http://[0-9.]*:\([0-9]*\)/.*|\1|p' "$tmp/d.log")
+[[ -n $port ]] || { kill "$dpid"; fail "default daemon: $(cat "$tmp/d.log")"; }
+grep -q "warning" "$tmp/d.log" && { kill "$dpid"; fail "the shipped configuration starts with a warning: $(cat "$tmp/d.log")"; }
+"$OC" load "ws://127.0.0.1:$port/" --clients 2 --seconds 1 --rate 10 --layout 1 >/dev/null 2>&1 ||
+    { kill "$dpid"; fail "layout-1 load against the default daemon"; }
+grep -q "near field" "$tmp/d.log" && { kill "$dpid"; fail "layout 1 carries the near field, yet: $(cat "$tmp/d.log")"; }
+for _ in 1 2; do
+    "$OC" load "ws://127.0.0.1:$port/" --clients 2 --seconds 1 --rate 10 --layout 0 >/dev/null 2>&1 ||
+        { kill "$dpid"; fail "layout-0 load against the default daemon"; }
+done
+kill -TERM "$dpid"; wait "$dpid"
+n=$(grep -c "layout 0 at a 2 m level-0 spacing: the near field's waves (0.1 m to 0.423 m).*<= 0.211 m can" "$tmp/d.log")
+[[ $n -eq 1 ]] || fail "4 layout-0 clients at 2 m: the near-field note said $n times (want once): $(cat "$tmp/d.log")"
 echo "ok ($SECONDS s)"
