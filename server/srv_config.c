@@ -360,10 +360,24 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
                           : conf_defaults(&set, err, errlen);
     for (int i = 0; r == OCEAN_OK && i < nsets; i++)
         r = conf_apply(sets[i], &set, err, errlen);
+    /* What a check of the keys together names: every source that set them
+     * (a wisdom plan given by --set and refused for want of a file was
+     * blamed on the scene file, which says neither). */
+    char from[2 * SRV_PATH_MAX + 96];
+    snprintf(from, sizeof from, "%.*s", SRV_PATH_MAX, path ? path : "(defaults)");
     if (r == OCEAN_OK && tmp->srv.scene[0]) {
         char sp[2 * SRV_PATH_MAX + 16];
         scene_path(&tmp->srv, sp, sizeof sp);
         r = ocean_conf_scene_load(sp, &tmp->params, &tmp->scene, err, errlen);
+        size_t spl = strlen(sp);
+        if (r == OCEAN_EINVAL && err && strncmp(err, sp, spl) == 0 && strncmp(err + spl, ": ", 2) == 0) {
+            /* "scene: text" is the check of the scene over the base (a
+             * parse error reads "scene:LINE: text" and stays the file's) */
+            char why[2400];
+            snprintf(why, sizeof why, "%s with its scene %s%s: %s", from, sp,
+                     nsets > 0 ? " and the command line" : "", err + spl + 2);
+            snprintf(err, errlen, "%s", why);
+        }
         if (r == OCEAN_EIO && sp[0] != '/' && err && errlen) {
             /* The shipped config names its scenes relative to the source
              * tree (make install writes absolute ones): say so, and from
@@ -378,6 +392,8 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
         if (r == OCEAN_OK) {
             tmp->params = tmp->scene.params;
             tmp->effects = tmp->scene.effects;
+            size_t fl = strlen(from);
+            snprintf(from + fl, sizeof from - fl, " with its scene %.*s", SRV_PATH_MAX, sp);
         }
         /* --set wins over the scene for sea.* and ocean.* too. */
         for (int i = 0; r == OCEAN_OK && i < nsets; i++)
@@ -386,6 +402,10 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
         tmp->effects = OCEAN_SCENE_FX_ALL;
         tmp->scene.params = tmp->params;
         tmp->scene.effects = tmp->effects;
+    }
+    if (nsets > 0) {
+        size_t fl = strlen(from);
+        snprintf(from + fl, sizeof from - fl, " and the command line");
     }
     /* The near field takes over where the FFT stops: with ocean.k_max = inf
      * the finest cascade would keep its whole square band and the Gerstner
@@ -399,7 +419,7 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
     if (r == OCEAN_OK) {
         char msg[256];
         r = ocean_params_validate(&tmp->params, msg, sizeof msg);
-        if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", path ? path : "(defaults)", msg);
+        if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", from, msg);
     }
     /* Layout 1 carries the near field as one more periodic cascade after
      * the FFT's (srv_cascade.c); the protocol's cascade block holds
@@ -413,14 +433,14 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
                  "ocean.cascades <= %d, server.near_field_waves = 0, or drop near-field from scene.effects",
                  tmp->params.cascades, tmp->srv.near_field_waves, tmp->params.cascades + 1, PROTO_MAX_LAYERS,
                  PROTO_MAX_LAYERS - 1);
-        set_err(err, errlen, "%s: %s", path ? path : "(defaults)", msg);
+        set_err(err, errlen, "%s: %s", from, msg);
         r = OCEAN_EINVAL;
     }
     if (r == OCEAN_OK && tmp->srv.epoch[0]) {
         double e;
         char msg[200];
         r = srv_epoch_parse(tmp->srv.epoch, &e, msg, sizeof msg);
-        if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", path ? path : "(defaults)", msg);
+        if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", from, msg);
         /* Sim time is now - epoch; beyond the exact-time limit the ocean
          * refuses to evaluate (ocean_time.h), so say so now, not with a
          * daemon that serves no frames. */
@@ -433,7 +453,7 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
                          "%s: server.epoch '%.64s' puts the sim time now at %.0f s, beyond the "
                          "exact-time limit of +-%.0f s (OCEAN_TIME_MAX, 4.25 years): choose an "
                          "epoch within 4.25 years of now",
-                         path ? path : "(defaults)", tmp->srv.epoch, simt, OCEAN_TIME_MAX);
+                         from, tmp->srv.epoch, simt, OCEAN_TIME_MAX);
             r = OCEAN_EINVAL;
         }
     }

@@ -5,6 +5,8 @@
 #  - a busy port fails naming the way out (--port, make run ARGS);
 #  - --help shows the defaults the daemon really starts with: each equals
 #    the value --dump-config gives for the key;
+#  - a refusal of keys together (a wisdom plan without a file) names the
+#    config, the scene and the command line that set them, not one file;
 #  - a relative scene path that does not resolve (oceand started outside
 #    the source tree) is explained: the working directory it was read
 #    from and the keys that take an absolute path;
@@ -63,6 +65,17 @@ echo "== a shorthand's bad value is named by the option typed ($SECONDS s)"
 grep -q "^oceand: --port: server.port: out of range" "$tmp/err" || fail "--port 70000: $(cat "$tmp/err")"
 "$OD" --config config/oceand.conf --set server.port=70000 >"$tmp/out" 2>"$tmp/err" && fail "--set server.port=70000 accepted"
 grep -q "^oceand: --set: server.port" "$tmp/err" || fail "--set server.port=70000: $(cat "$tmp/err")"
+
+echo "== a check of keys together names every source that set them ($SECONDS s)"
+# the plan comes from --set, the refusal was blamed on the scene file alone
+"$OD" --config config/oceand.conf --port 0 --set ocean.plan=wisdom >"$tmp/out" 2>"$tmp/err" &&
+    fail "--set ocean.plan=wisdom without a wisdom file accepted"
+grep -q "^oceand: config/oceand.conf with its scene config/scenes/ship-bridge.conf and the command line: plan = wisdom needs a wisdom file" "$tmp/err" ||
+    fail "--set ocean.plan=wisdom: $(cat "$tmp/err")"
+"$OD" --config config/oceand.conf --port 0 --set server.scene= --set ocean.plan=wisdom >"$tmp/out" 2>"$tmp/err" &&
+    fail "--set ocean.plan=wisdom without a scene accepted"
+grep -q "^oceand: config/oceand.conf and the command line: plan = wisdom needs" "$tmp/err" ||
+    fail "--set ocean.plan=wisdom, no scene: $(cat "$tmp/err")"
 
 echo "== --version ($SECONDS s)"
 "$OD" --version >"$tmp/ver" || fail "--version exited $?"
