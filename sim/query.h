@@ -19,6 +19,10 @@
 #include "gerstner.h"
 #include "ocean.h"
 
+/* Farthest an answer's displaced point may lie from the asked (x, z), m,
+ * and still carry a finite error bound (the bound is first order in it). */
+#define OCEAN_QUERY_MISS_MAX 0.01
+
 typedef struct ocean_query_result {
     double height;        /* surface height above the mean sea level, m */
     double normal[3];     /* unit normal (x, y, z), y up */
@@ -26,8 +30,10 @@ typedef struct ocean_query_result {
     double foam;          /* foam coverage 0..1 */
     double error;         /* bound on |height - the exact sum of the same waves|
                              at (x, z), m: the reading's and the inversion's
-                             (INFINITY where the surface folds, J <= 0, or a
-                             derivative channel is missing) */
+                             (INFINITY where the surface folds, J <= 0, a
+                             derivative channel is missing, or the iteration
+                             stopped more than OCEAN_QUERY_MISS_MAX from
+                             (x, z): see residual) */
     double residual;      /* horizontal |x0 + D(x0) - x| left, m */
     int iterations;
     int folded;           /* 1: the surface folds here (J <= 0 at the answer
