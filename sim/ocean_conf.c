@@ -135,14 +135,15 @@ static const conf_entry ocean_entries[] = {
      .help = "Direction the wind blows toward, measured from +x toward +z."},
     {.name = "sea.fetch", .type = CONF_DOUBLE, .offset = SEA(fetch_m), .min = 1, .max = 1e7,
      .def = "100000", .unit = "m",
-     .help = "Fetch: distance over which the wind has blown (jonswap and tma)."},
+     .help = "Fetch: distance over which the wind has blown (jonswap and tma); the sea "
+             "grows no more past full development, g F / U10^2 = 1.07e4 (109 km at 10 m/s)."},
     {.name = "sea.depth", .type = CONF_DOUBLE, .offset = SEA(depth_m), .min = 0.01,
      .max = 12000, .def = "4000", .unit = "m",
      .help = "Water depth; enters the dispersion relation and the tma spectrum."},
     {.name = "sea.swell", .type = CONF_DOUBLE, .offset = SEA(swell), .min = 0, .max = 10,
      .def = "0",
-     .help = "Swell parameter xi: narrows the spreading (s += 16 tanh(wp/w) xi^2); 0 is a pure "
-             "wind sea."},
+     .help = "Swell parameter xi: narrows the spreading (s += 16 tanh(wp/w) xi^2; the "
+             "mitsuyasu and hasselmann spreadings only); 0 is a pure wind sea."},
     {.name = "sea.phillips_a", .type = CONF_DOUBLE, .offset = SEA(phillips_a), .min = 0,
      .max = 1, .def = "0.00405",
      .help = "Phillips constant A (phillips spectrum only)."},
@@ -153,7 +154,9 @@ static const conf_entry ocean_entries[] = {
     {.name = "sea.choppiness", .type = CONF_DOUBLE, .offset = SEA(choppiness), .min = 0,
      .max = 10, .def = "1",
      .help = "Choppiness lambda: scale of the horizontal (choppy) displacement; 0 gives "
-             "rounded crests, above about 1.5 crests fold."},
+             "rounded crests and no foam (the wind sets the whitecap coverage, the displacement's "
+             "convergence places it), "
+             "above about 1.5 crests fold; between 0 and 0.001 refused."},
     {.name = "ocean.seed", .type = CONF_U64, .offset = PAR(seed), .min = 0,
      .max = 18446744073709551616.0, .def = "1",
      .help = "Random seed of the wave amplitudes; the same seed and sea state give the same "

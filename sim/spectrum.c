@@ -73,6 +73,27 @@ ocean_result ocean_sea_state_validate(const ocean_sea_state *s, char *msg, size_
         !check_range("small_wave", s->small_wave_m, 0.0, 100.0, msg, msglen) ||
         !check_range("choppiness", s->choppiness, 0.0, 10.0, msg, msglen))
         return OCEAN_EINVAL;
+    /* The displacement channels hold lambda D in float and foam reads them
+     * back divided by lambda: below 1e-3 the displacement is under a
+     * millimetre per metre of slope (nothing to see), and near 1e-38 the
+     * channels leave float's normal range and foam became NaN. */
+    if (s->choppiness > 0.0 && s->choppiness < OCEAN_CHOPPINESS_MIN) {
+        if (msg)
+            snprintf(msg, msglen, "choppiness = %g: use 0 (no choppy displacement, no foam) or "
+                     "%g .. 10", s->choppiness, OCEAN_CHOPPINESS_MIN);
+        return OCEAN_EINVAL;
+    }
+    /* The swell term raises s of the cos-2s family, narrowing it (Horvath
+     * 2015: s += 16 tanh(wp/w) xi^2); the cos^2 and sech^2 spreadings have
+     * no s to raise, and a swell silently ignored there reads as a sea
+     * that does not respond. */
+    if (s->swell > 0.0 && s->spreading != OCEAN_SPREAD_MITSUYASU && s->spreading != OCEAN_SPREAD_HASSELMANN) {
+        if (msg)
+            snprintf(msg, msglen, "swell = %g applies to the cos-2s spreadings (mitsuyasu, hasselmann); "
+                     "spreading %s has none: use swell = 0 or one of those",
+                     s->swell, ocean_spreading_name(s->spreading));
+        return OCEAN_EINVAL;
+    }
     return OCEAN_OK;
 }
 
@@ -158,11 +179,18 @@ static double u195(const ocean_sea_state *s)
 /* JONSWAP fetch laws (Hasselmann et al. 1973) in the dimensionless fetch
  * x = g F / U10^2: alpha = 0.076 x^-0.22, wp = 22 (g / U10) x^(-1/3) (the
  * form 22 (g^2 / (U10 F))^(1/3); the other published form differs ~3 %).
- * Growth stops at full development: x is capped where wp reaches the
- * Pierson-Moskowitz peak 0.877 g / U19.5 = 0.855 g / U10, i.e.
- * x = (22 / 0.855)^3 ~ 1.7e4 (there alpha = 0.0089, close to PM's 0.0081),
- * so a 1000 km fetch does not grow a sea bigger than the wind can hold. */
-#define JONSWAP_X_FULL 17036.0
+ * Growth stops at full development, where the sea holds the energy of the
+ * fully developed Pierson-Moskowitz sea of the same wind (1964: Hs =
+ * 0.20925 U19.5^2 / g, U19.5 = 1.026 U10).  JONSWAP's m0 is
+ * alpha g^2 wp^-4 R / 5, R = m0(gamma 3.3) / m0(gamma 1) = 1.525; PM's is
+ * a g^2 (g / U19.5)^-4 / (4 b), a = 0.0081, b = 0.74; equal where
+ *   x^(4/3 - 0.22) = 5 22^4 1.026^4 a / (4 b 0.076 R),  x = 1.0707e4
+ * (independent of the wind; the constant below is that root, solved with
+ * the integrals themselves).  There the peak is 1.004 g / U10, 17 % above
+ * PM's 0.855 g / U10: JONSWAP's peak is narrower, so the same energy sits
+ * higher.  Capped at PM's peak instead (x = 1.7e4) the sea grew to 1.30 x
+ * PM's Hs, more than the wind can hold. */
+#define JONSWAP_X_FULL 10707.25
 
 static double jonswap_x(const ocean_sea_state *s)
 {

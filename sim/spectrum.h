@@ -37,6 +37,9 @@ typedef enum ocean_spreading_kind {
     OCEAN_SPREAD_COUNT_
 } ocean_spreading_kind;
 
+/* The least non-zero choppiness (ocean_sea_state_validate says why). */
+#define OCEAN_CHOPPINESS_MIN 1e-3
+
 typedef struct ocean_sea_state {
     ocean_spectrum_kind spectrum;
     ocean_spreading_kind spreading;
@@ -47,7 +50,8 @@ typedef struct ocean_sea_state {
     double swell;         /* swell parameter xi >= 0: s += 16 tanh(wp/w) xi^2 */
     double phillips_a;    /* Phillips constant A (density form, see spectrum.c) */
     double small_wave_m;  /* Phillips small-wave suppression length l, m */
-    double choppiness;    /* lambda for the choppy displacement, 0..10 */
+    double choppiness;    /* lambda for the choppy displacement: 0, or
+                             OCEAN_CHOPPINESS_MIN .. 10 */
 } ocean_sea_state;
 
 /* Shipped defaults: PM, Mitsuyasu, 10 m/s toward +x, 100 km fetch, 4 km deep. */

@@ -124,9 +124,23 @@ static void test_jonswap(void **state)
     double full = ocean_spectrum_hs(&s);
     s.fetch_m = 1e6;
     assert_true(ocean_spectrum_hs(&s) == full);
-    /* gamma = 3.3 keeps its peak enhancement (m0 x 1.525, Hs x 1.235) and
-     * alpha 0.0089 vs 0.0081: the cap stays within 1.3 x PM's Hs. */
-    assert_true(full < 1.3 * ocean_spectrum_hs(&pm));
+    /* Fully developed: the Pierson-Moskowitz sea's Hs = 0.20925 U19.5^2 / g
+     * (1964; U19.5 = 1.026 U10), whatever the wind (capped at PM's peak
+     * frequency instead, it had grown to 1.295 x). */
+    const double winds[] = {1.0, 10.0, 26.45, 60.0};
+    for (int i = 0; i < 4; i++) {
+        s.wind_u10 = winds[i];
+        s.fetch_m = 1e7;
+        double u195 = 1.026 * winds[i], hs_pm = 0.20925 * u195 * u195 / g;
+        double got = ocean_spectrum_hs(&s);
+        print_message("U10 %g m/s, fetch 1e7 m: Hs %.4f m, fully developed (PM) %.4f m\n", winds[i], got,
+                      hs_pm);
+        assert_close(got, hs_pm, 2e-3);
+        /* and growth stops there, not before: 5 % less fetch, less sea */
+        s.fetch_m = 0.95 * 10707.25 * winds[i] * winds[i] / g;
+        assert_true(ocean_spectrum_hs(&s) < 0.99 * got);
+    }
+    (void)pm;
 }
 
 /* Hs against the JONSWAP energy growth law, g Hs / U10^2 = 1.6e-3 chi^(1/2)
@@ -277,7 +291,8 @@ static void test_extremes_finite(void **state)
                         s.wind_u10 = winds[a];
                         s.depth_m = depths[b];
                         s.fetch_m = fetches[c];
-                        s.swell = 10.0;
+                        /* swell narrows the cos-2s spreadings only */
+                        s.swell = sd == OCEAN_SPREAD_MITSUYASU || sd == OCEAN_SPREAD_HASSELMANN ? 10.0 : 0.0;
                         assert_int_equal(ocean_sea_state_validate(&s, NULL, 0), OCEAN_OK);
                         for (size_t i = 0; i < 8; i++)
                             for (int d = 0; d < 8; d++) {
@@ -319,6 +334,27 @@ static void test_validate_refuses(void **state)
     ocean_sea_state_default(&s);
     s.spectrum = (ocean_spectrum_kind)42;
     assert_int_equal(ocean_sea_state_validate(&s, msg, sizeof msg), OCEAN_EINVAL);
+    /* choppiness: 0, or at least 1e-3 (at 1e-40 the float displacement
+     * channels underflowed and foam came out NaN) */
+    ocean_sea_state_default(&s);
+    s.choppiness = 1e-40;
+    assert_int_equal(ocean_sea_state_validate(&s, msg, sizeof msg), OCEAN_EINVAL);
+    assert_non_null(strstr(msg, "choppiness = 1e-40: use 0"));
+    s.choppiness = OCEAN_CHOPPINESS_MIN;
+    assert_int_equal(ocean_sea_state_validate(&s, msg, sizeof msg), OCEAN_OK);
+    s.choppiness = 0.0;
+    assert_int_equal(ocean_sea_state_validate(&s, msg, sizeof msg), OCEAN_OK);
+    /* swell where the spreading has no s to narrow: refused, not ignored */
+    const ocean_spreading_kind no_s[] = {OCEAN_SPREAD_TESSENDORF, OCEAN_SPREAD_DONELAN_BANNER};
+    for (int i = 0; i < 2; i++) {
+        ocean_sea_state_default(&s);
+        s.spreading = no_s[i];
+        s.swell = 1.0;
+        assert_int_equal(ocean_sea_state_validate(&s, msg, sizeof msg), OCEAN_EINVAL);
+        assert_non_null(strstr(msg, "cos-2s"));
+        s.swell = 0.0;
+        assert_int_equal(ocean_sea_state_validate(&s, msg, sizeof msg), OCEAN_OK);
+    }
     ocean_spectrum_kind k;
     assert_int_equal(ocean_spectrum_parse("jonswap", &k), OCEAN_OK);
     assert_int_equal(k, OCEAN_SPECTRUM_JONSWAP);
