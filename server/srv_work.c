@@ -100,13 +100,17 @@ static void answer(srv_hub *h, item *it)
             o->velocity[k] = (float)a->velocity[k];
         }
         o->foam = (float)(a->foam < 0 ? 0 : a->foam > 1 ? 1 : a->foam);
-        /* no bound (a fold: J <= 0) is sent as the largest float, never
-         * as 0, which would claim an exact answer */
+        /* no bound (a fold, or a point the iteration did not reach) is
+         * sent as the largest float, never as 0, which would claim an
+         * exact answer */
         o->error_bound = a->error >= 0 && a->error < FLT_MAX ? (float)a->error : FLT_MAX;
     }
     proto_msg m;
     proto_msg_init(&m, PROTO_QUERY_RESULT);
-    m.hdr.sim_time = it->t;
+    /* the header is the server's clock when sending (PROTOCOL.md "Header"),
+     * which clients fold into their clock and latency estimates; the time
+     * the answer describes is the body's t */
+    m.hdr.sim_time = srv_hub_sim_time(h);
     m.u.result.query_id = q->query_id;
     m.u.result.count = q->count;
     m.u.result.t = it->t;

@@ -881,6 +881,16 @@ static void queries_agree_with_sim(void **state)
     assert_int_equal(oc_client_query(c, xz, 2, 0, 0, 5000, &qr), OCEAN_OK);
     assert_true(fabs(qr.t - srv_hub_sim_time(srv_daemon_hub(daemon_))) < 2.0);
     oc_query_result_free(&qr);
+    /* a query far in the future says when it was evaluated in its body;
+     * its header's sim_time is the server's clock (it was the query's t,
+     * and one such answer set the client's clock to 1e6 s and every later
+     * frame's latency to 1e9 ms) */
+    assert_int_equal(oc_client_query(c, xz, 1, 1, 1e6, 5000, &qr), OCEAN_OK);
+    assert_true(qr.t == 1e6);
+    oc_query_result_free(&qr);
+    double now = srv_hub_sim_time(srv_daemon_hub(daemon_)), seen = oc_client_sim_time(c);
+    if (!(fabs(seen - now) < 2.0))
+        fail_msg("after a query at t = 1e6 the client's clock reads %.3f s, the server's %.3f s", seen, now);
     ocean_gerstner_destroy(g);
     ocean_frame_destroy(lf);
     ocean_destroy(o);
