@@ -925,6 +925,8 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         }
         pthread_mutex_unlock(&h->lock);
         if (r != OCEAN_OK) srv_client_send_error(c, buf, len, r, why);
+        else if (c->rec && srv_record_mode(c->rec, srv_hub_sim_time(h), sub.mode == PROTO_MODE_REPLAY) != OCEAN_OK)
+            fprintf(stderr, "oceand: client %u: recording stopped (quota or write error)\n", c->id);
         if (note[0]) fprintf(stderr, "oceand: %s\n", note);
         break;
     }

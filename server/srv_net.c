@@ -750,8 +750,7 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         }
         if (record) {
             char path[1100], msg[300];
-            if (srv_record_open(dir, c->id, scene, "live", &c->rec, path, sizeof path, msg,
-                                sizeof msg) != OCEAN_OK) {
+            if (srv_record_open(dir, c->id, scene, &c->rec, path, sizeof path, msg, sizeof msg) != OCEAN_OK) {
                 fprintf(stderr, "oceand: client %u: not recording: %s\n", c->id, msg);
             } else {
                 atomic_fetch_add(&h->record_files, 1);

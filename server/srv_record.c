@@ -30,8 +30,7 @@ static double mono(void)
 }
 
 ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *scene,
-                             const char *mode, srv_record **out, char *path, size_t pathlen,
-                             char *msg, size_t msglen)
+                             srv_record **out, char *path, size_t pathlen, char *msg, size_t msglen)
 {
     *out = NULL;
     if (mkdir(dir, 0755) != 0 && errno != EEXIST) {
@@ -48,9 +47,9 @@ ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *sc
         free(r);
         return OCEAN_EIO;
     }
-    fprintf(r->f, "# oceand camera path v1\n# client %u scene %s mode %s\n"
+    fprintf(r->f, "# oceand camera path v1\n# client %u scene %s\n"
                   "t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h\n",
-            client_id, scene && *scene ? scene : "-", mode);
+            client_id, scene && *scene ? scene : "-");
     r->last_flush = mono();
     if (path && pathlen) snprintf(path, pathlen, "%s", name);
     *out = r;
@@ -72,15 +71,10 @@ void srv_record_set_quota(srv_record *r, atomic_uint_fast64_t *used, uint64_t qu
     r->quota = quota;
 }
 
-ocean_result srv_record_camera(srv_record *r, double t, const proto_camera *cam)
+/* One write of n bytes done: counted, flushed once a second; a failure
+ * stops the recording (OCEAN_EIO, once). */
+static ocean_result wrote(srv_record *r, int n)
 {
-    if (!r || r->failed) return OCEAN_OK;
-    if (r->used && atomic_load(r->used) + LINE_MAX_BYTES > r->quota) {
-        r->failed = 1;
-        fflush(r->f);
-        return OCEAN_ETOOBIG;
-    }
-    int n = srv_record_format(r->f, t, cam);
     int bad = n < 0;
     if (!bad && r->used) atomic_fetch_add(r->used, (uint64_t)n);
     double now = mono();
@@ -93,6 +87,28 @@ ocean_result srv_record_camera(srv_record *r, double t, const proto_camera *cam)
         return OCEAN_EIO;
     }
     return OCEAN_OK;
+}
+
+ocean_result srv_record_camera(srv_record *r, double t, const proto_camera *cam)
+{
+    if (!r || r->failed) return OCEAN_OK;
+    if (r->used && atomic_load(r->used) + LINE_MAX_BYTES > r->quota) {
+        r->failed = 1;
+        fflush(r->f);
+        return OCEAN_ETOOBIG;
+    }
+    return wrote(r, srv_record_format(r->f, t, cam));
+}
+
+ocean_result srv_record_mode(srv_record *r, double t, int replay)
+{
+    if (!r || r->failed) return OCEAN_OK;
+    if (r->used && atomic_load(r->used) + LINE_MAX_BYTES > r->quota) {
+        r->failed = 1;
+        fflush(r->f);
+        return OCEAN_ETOOBIG;
+    }
+    return wrote(r, fprintf(r->f, "# subscribed at %.17g: mode %s\n", t, replay ? "replay" : "live"));
 }
 
 void srv_record_close(srv_record *r)

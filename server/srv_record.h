@@ -19,8 +19,12 @@ typedef struct srv_record srv_record;
  * header.  *out is NULL on failure (OCEAN_EIO, OCEAN_ENOMEM); msg says why.
  * path (if not NULL) receives the file name. */
 ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *scene,
-                             const char *mode, srv_record **out, char *path, size_t pathlen,
-                             char *msg, size_t msglen);
+                             srv_record **out, char *path, size_t pathlen, char *msg, size_t msglen);
+/* Notes an accepted SUBSCRIBE's mode at sim time t as a comment line: the
+ * t column of the lines after it is the server's clock (live) or the
+ * CAMERA's render_time (replay), and the mode is known only then, not when
+ * the file is opened.  Counted and stopped as srv_record_camera. */
+ocean_result srv_record_mode(srv_record *r, double t, int replay);
 /* Counts what r writes into *used, shared by every recording of a run; a
  * report that could take *used past quota stops the recording instead. */
 void srv_record_set_quota(srv_record *r, atomic_uint_fast64_t *used, uint64_t quota);

@@ -2161,6 +2161,14 @@ static void recording_writes_camera_path(void **state)
         cm.u.camera.vel[2] = 8;
         raw_send_msg(&w, &cm);
     }
+    /* the mode is known at SUBSCRIBE, not when the file opens: a replay
+     * client's file said "mode live" in its header */
+    usleep(100000);
+    sm.u.subscribe.mode = PROTO_MODE_REPLAY;
+    raw_send_msg(&w, &sm);
+    cm.u.camera.pos[0] = 0.1 * 3 + 1e6;
+    cm.u.camera.render_time = 5.0;
+    raw_send_msg(&w, &cm);
     usleep(200000);
     test_ws_close(&w);
     usleep(300000);
@@ -2178,10 +2186,19 @@ static void recording_writes_camera_path(void **state)
     FILE *f = fopen(path, "r");
     assert_non_null(f);
     char line[512];
-    int data = 0;
+    int data = 0, modes = 0;
+    double t_replay = -1;
     assert_non_null(fgets(line, sizeof line, f));
     assert_string_equal(line, "# oceand camera path v1\n");
     while (fgets(line, sizeof line, f)) {
+        if (strstr(line, "mode ")) {
+            /* "# subscribed at T: mode live", then "... mode replay" */
+            const char *want_mode = modes == 0 ? ": mode live\n" : ": mode replay\n";
+            if (strncmp(line, "# subscribed at ", 16) != 0 || !strstr(line, want_mode) || data != 3 * modes)
+                fail_msg("mode line %d after %d reports: %s", modes, data, line);
+            modes++;
+            continue;
+        }
         if (line[0] == '#' || line[0] == 't') continue;
         double v[13];
         int n = sscanf(line, "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2],
@@ -2189,10 +2206,13 @@ static void recording_writes_camera_path(void **state)
         assert_int_equal(n, 13);
         assert_true(v[1] == 0.1 * data + 1e6);
         assert_true(v[6] == 8);
+        if (data == 3) t_replay = v[0];
         data++;
     }
     fclose(f);
-    assert_int_equal(data, 3);
+    assert_int_equal(data, 4);
+    assert_int_equal(modes, 2);
+    assert_true(t_replay == 5.0); /* a replay report's t is its render_time */
 }
 
 /* max_clients: one more connection is told BYE server-full. */
