@@ -175,6 +175,14 @@ for (const p of q.points) {
   if (!(p.error > 0 && p.error < 0.1)) throw "error " + p.error;
 }' "$tmp/q.json" || fail "query json"
 expect_refused "point 2" query --points "1,2;x,3"
+# query takes the common --time as it does --t (it evaluated t = 0 instead)
+"$sim" query --n 64 --time 3 --points "1,2;30.5,-7" --json > "$tmp/q2.json" || fail "query --time"
+python3 - "$tmp/q.json" "$tmp/q2.json" <<'PY' || fail "query --time 3 does not answer at t = 3"
+import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:3])
+sys.exit(0 if b["t"] == 3 and [p["height"] for p in a["points"]] == [p["height"] for p in b["points"]] else 1)
+PY
+expect_refused "disagree" query --n 16 --t 3 --time 4 --points "1,2"
 # a mesh priced beyond --max-vertices is refused before it is built (a
 # 0.01-degree camera asked for gigabytes and ran for minutes)
 expect_refused "max-vertices" mesh --n 16 --camera 0,20,0 --fov 0.01

@@ -114,10 +114,12 @@ static char *read_file(const char *path)
 int cmd_query(int argc, char **argv)
 {
     cli_common c;
-    double t = 0.0, cutoff = INFINITY;   /* INFINITY: outside --cutoff's range, "not given" */
+    /* NAN: --t not given; the common --time (every other command's) then
+     * says the time, which query once ignored in silence */
+    double t = NAN, cutoff = INFINITY;   /* INFINITY: outside --cutoff's range, "not given" */
     const char *points = NULL, *file = NULL;
     const cli_opt opts[] = {
-        {"t", CLI_DOUBLE, &t, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s", NULL},
+        {"t", CLI_DOUBLE, &t, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s (as --time; default 0)", NULL},
         {"points", CLI_STRING, &points, 0, 0, "LIST  \"x1,z1;x2,z2;...\" world points, m", NULL},
         {"points-file", CLI_STRING, &file, 0, 0, "FILE  one 'x,z' per line ('-': stdin)", NULL},
         {"cutoff", CLI_DOUBLE, &cutoff, 0, 1e6, "K     Butterworth cutoff, rad/m (not given: unfiltered)", NULL},
@@ -126,6 +128,12 @@ int cmd_query(int argc, char **argv)
                       opts, 4, &c, NULL, NULL);
     if (r)
         return r == 1 ? 0 : 2;
+    if (isnan(t)) {
+        t = c.time;
+    } else if (c.time != 0.0 && c.time != t) {
+        fprintf(stderr, "error: query: --t %.17g and --time %.17g disagree: give one\n", t, c.time);
+        return 2;
+    }
     if (!points == !file) {
         fprintf(stderr, "error: query needs exactly one of --points or --points-file\n");
         return 2;
