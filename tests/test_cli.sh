@@ -37,6 +37,8 @@ expect_refused "n = 100" stats --n 100
 expect_refused "--spectrum" stats --spectrum bogus
 expect_refused "--bogus" stats --bogus 1
 expect_refused "--effects" stats --effects height,sparkle
+# the near field is the daemon's: asked of ocean-sim it was ignored in silence
+expect_refused "near-field is oceand's" query --effects height,near-field --points 0,0
 expect_refused "--depth" stats --depth 0
 expect_refused "unknown command" nonsense
 # One time limit (sim/ocean_time.h): 2^27 s is served, the next second is

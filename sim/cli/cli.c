@@ -228,7 +228,14 @@ static int apply_opt(const cli_opt *o, const char *val)
     case CLI_EFFECTS:
         if (cli_parse_effects(val, (unsigned *)o->target)) {
             fprintf(stderr, "error: --%s: '%s' is not a list of "
-                    "height,displacement,normals,foam,velocity,near-field (or all)\n", o->name, val);
+                    "height,displacement,normals,foam,velocity (or all)\n", o->name, val);
+            return -1;
+        }
+        /* The near field is the daemon's (its Gerstner set comes from the
+         * server.near_field_* keys); taken here, it was ignored in silence. */
+        if (*(unsigned *)o->target & OCEAN_FX_NEAR_FIELD) {
+            fprintf(stderr, "error: --%s: near-field is oceand's (server.near_field_*): ocean-sim "
+                    "evaluates the FFT cascades alone\n", o->name);
             return -1;
         }
         return 0;
@@ -287,7 +294,7 @@ int cli_parse(int argc, char **argv, const char *usage,
         {"choppiness", CLI_DOUBLE, &p->sea.choppiness, 0, 10, "L     choppy displacement scale", NULL},
         {"seed", CLI_U64, &p->seed, 0, 0, "S     random seed, 0 .. 2^64 - 1", NULL},
         {"time", CLI_DOUBLE, &c->time, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s", NULL},
-        {"effects", CLI_EFFECTS, &c->effects, 0, 0, "LIST  height,displacement,normals,foam,velocity,near-field or all", NULL},
+        {"effects", CLI_EFFECTS, &c->effects, 0, 0, "LIST  height,displacement,normals,foam,velocity or all", NULL},
         {"threads", CLI_INT, &p->threads, 1, 64, "T     worker threads", NULL},
         {"plan", CLI_CHOICE, &p->plan_measure, 0, 0, "MODE  FFTW planning (estimate is bit-reproducible)", plans},
         {"config", CLI_STRING, &config, 0, 0, "FILE  read sea.* and ocean.* keys from a config file first", NULL},
