@@ -2465,7 +2465,10 @@ void ocean_frame_sample_accurate(const ocean_frame *f, double x, double z, unsig
     double jac = (1.0 + v[DXX]) * (1.0 + v[DZZ]) - v[DXZ] * v[DXZ];
     *out = (ocean_point){.height = v[H], .dx = v[DX], .dz = v[DZ], .slope_x = v[SX],
                          .slope_z = v[SZ], .jacobian = jac,
-                         .foam = any_foam ? ocean_foam_from_jacobian((float)jac) : 0.0,
+                         /* the frame's whitecap foam, as ocean_frame_sample
+                          * and every tile (it was the legacy Jacobian ramp,
+                          * near 0 where tiles carried the wind's coverage) */
+                         .foam = any_foam ? ocean_frame_foam(f, v[DXX], v[DZZ]) : 0.0,
                          .vel_x = v[VX], .vel_y = v[VY], .vel_z = v[VZ], .dxx = v[DXX],
                          .dzz = v[DZZ], .dxz = v[DXZ]};
     if (err)

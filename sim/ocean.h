@@ -241,7 +241,8 @@ typedef struct ocean_field {
  * finest cascade's grid.
  *
  * Legacy mapping, 1 where folded fading to 0 at J = OCEAN_FOAM_J_CLEAR;
- * no longer used by frames (query.c still uses it). */
+ * no longer used by frames, samples or queries (bench_accuracy compares
+ * folding with it). */
 #define OCEAN_FOAM_J_CLEAR 0.5
 float ocean_foam_from_jacobian(float j);
 

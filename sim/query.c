@@ -182,9 +182,10 @@ static void answer_one(const ctx *c, double x, double z, const ocean_query_optio
     out->velocity[1] = pt.vel_y + gp.vy;
     out->velocity[2] = pt.vel_z + gp.vz;
     double jac = txx * tzz - tzx * txz;
-    out->foam = ocean_foam_from_jacobian((float)jac);
-    if (!have_derivs)
-        out->foam = 0.0;
+    /* the whitecaps tiles carry (ocean.h "Whitecap foam"), the near field's
+     * divergence included: the legacy Jacobian ramp answered near 0 where
+     * a viewer saw the wind's coverage */
+    out->foam = have_derivs ? ocean_frame_foam(c->f, dxx, dzz) : 0.0;
     out->folded = jac <= 0.0 || jmin <= 0.0;
     out->residual = res;
     /* A horizontal miss m in the world moves the parameter point by J^-1 m

@@ -226,6 +226,31 @@ static void test_reports_folding(void **state)
     ocean_destroy(o);
 }
 
+/* A query's foam is the whitecap coverage tiles carry (ocean.h "Whitecap
+ * foam"): over the sea its mean is the frame's, ocean_foam_coverage_target
+ * (Monahan and O'Muircheartaigh 1980) within what the doc allows.  The
+ * legacy Jacobian ramp it answered with gave 0.0000 here, where a viewer
+ * saw the wind's 1-2 %. */
+static void test_foam_is_the_whitecap_coverage(void **state)
+{
+    fixture *x = *state;
+    ocean_frame_info info;
+    ocean_frame_get_info(x->f, &info);
+    double sum = 0.0;
+    const int n = 4000;
+    for (int i = 0; i < n; i++) {
+        double xz[2] = {0.37 + 256.0 * (i % 64) / 64.0, 0.71 + 256.0 * (i / 64) / 64.0};
+        ocean_query_result q;
+        assert_int_equal(ocean_query_points(x->f, NULL, NULL, 17.0, xz, 1, NULL, &q, NULL), OCEAN_OK);
+        assert_true(q.foam >= 0.0 && q.foam <= 1.0);
+        sum += q.foam;
+    }
+    double mean = sum / n;
+    print_message("query foam mean %.5f, the frame's whitecap target %.5f\n", mean, info.whitecap_target);
+    assert_true(info.whitecap_target > 0.0);
+    assert_true(mean > 0.5 * info.whitecap_target && mean < 3.0 * info.whitecap_target);
+}
+
 /* At choppiness 10 the iteration can stop with no descent left far from
  * the asked point, J > 0 all the way (so not folded): at (120.82, 551.78)
  * of the default sea at t = 0 it stopped 0.42 m away and answered 0.326 m
@@ -443,6 +468,7 @@ int main(void)
         cmocka_unit_test(test_hostile_points),
         cmocka_unit_test(test_reports_folding),
         cmocka_unit_test(test_unreached_point_has_no_bound),
+        cmocka_unit_test(test_foam_is_the_whitecap_coverage),
         cmocka_unit_test(test_storm_inversion_converges),
         cmocka_unit_test(test_storm_heights_match_exact_waves),
     };
