@@ -114,6 +114,19 @@ static void test_breaking_height(void **state)
             assert_true(a && sscanf(a, "breaking height %lf", &got) == 1);
             if (fabs(got - hb) > 0.01 * hb + 1e-4)
                 fail_msg("depth %g: message says H_b %g m, published %g m", d, got, hb);
+            /* the depth it suggests is accepted when typed back (Hs / 0.78
+             * at the refused depth was not: TMA's Hs grows with depth) */
+            const char *u = strstr(msg, "use sea.depth >= ");
+            double dd;
+            assert_true(u && sscanf(u, "use sea.depth >= %lf", &dd) == 1);
+            ocean_params q = p;
+            q.sea.depth_m = dd;
+            char msg2[512];
+            if (try_create(&q, msg2, sizeof msg2) != OCEAN_OK)
+                fail_msg("depth %g: suggested sea.depth >= %g, which is refused: %s", d, dd, msg2);
+            /* and it is the least such depth, to the 3 digits printed */
+            q.sea.depth_m = dd * 0.99;
+            assert_int_equal(try_create(&q, msg2, sizeof msg2), OCEAN_EINVAL);
             refused++;
         } else {
             if (r != OCEAN_OK)
@@ -164,6 +177,19 @@ static void test_grid_hs_warning(void **state)
     ocean_plan_ocean(o, NULL, &plan);
     if (plan.count)
         fail_msg("unexpected: %s", plan.item[0].text);
+    ocean_destroy(o);
+    /* ocean.k_max stops the grid first: the warning names it, not n (it
+     * said the waves ran down to the grid's 7.81 m and advised a larger
+     * patch, where k_max had cut everything under 126 m) */
+    ocean_params_default(&p);
+    p.k_max = 0.05;
+    assert_int_equal(ocean_create(&p, &o, msg, sizeof msg), OCEAN_OK);
+    ocean_plan_init(&plan);
+    ocean_plan_ocean(o, NULL, &plan);
+    assert_true(has_item(&plan, OCEAN_PLAN_WARN, "peak"));
+    const char *t = plan.item[plan.count - 1].text;
+    if (!strstr(t, "down to 126 m (ocean.k_max 0.05 rad/m)") || !strstr(t, "raise ocean.k_max"))
+        fail_msg("k_max 0.05: %s", t);
     ocean_destroy(o);
 }
 
