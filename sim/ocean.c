@@ -286,7 +286,7 @@ ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msgl
         if (msg) snprintf(msg, msglen,
                           "the shortest wave held, %.3g m (k = %.4g rad/m, w = %.4g rad/s, finest "
                           "patch %g m at n = %d), is beyond w = %g rad/s (OCEAN_OMEGA_MAX, the "
-                          "%.3g m wave the time limit is built on): use k_max <= %.4g rad/m, a "
+                          "%.3g m wave the time limit is built on): use ocean.k_max <= %.4g rad/m, a "
                           "smaller n or a larger finest patch",
                           2.0 * M_PI / k_top, k_top, w_top, fine, p->n, OCEAN_OMEGA_MAX,
                           2.0 * M_PI / ocean_wavenumber(OCEAN_OMEGA_MAX, p->sea.depth_m),

@@ -11,7 +11,7 @@ ocean_result ocean_time_check(double t, const char *field, char *msg, size_t msg
     if (ocean_time_ok(t))
         return OCEAN_OK;
     ocean_seterr(msg, msglen,
-                 "%s = %.15g s is beyond the time limit +-%.0f s (OCEAN_TIME_MAX = 2^27 s, "
+                 "%s = %.17g s is beyond the time limit +-%.0f s (OCEAN_TIME_MAX = 2^27 s, "
                  "where double precision keeps wave phases within 1e-6 rad)",
                  field ? field : "t", t, OCEAN_TIME_MAX);
     return OCEAN_EINVAL;

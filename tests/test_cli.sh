@@ -47,6 +47,9 @@ expect_refused "unknown command" nonsense
 "$sim" stats --n 16 --time 134217728 >/dev/null || fail "stats at the time limit"
 expect_refused "OCEAN_TIME_MAX" stats --n 16 --time 134217729
 expect_refused "OCEAN_TIME_MAX" stats --n 16 --time -1e16
+# the refused time is printed with every digit it has (15 digits said
+# "134217728 s is beyond +-134217728 s")
+expect_refused "134217728.00000003 s is beyond" query --n 16 --t 134217728.00000003 --points 0,0
 expect_refused "OCEAN_TIME_MAX" query --n 16 --t 1e13 --points "0,0"
 expect_refused "OCEAN_TIME_MAX" sample --n 16 --t0 134217729 --count 1
 expect_refused "OCEAN_TIME_MAX" sample --n 16 --x 0 --z 0 --t0 134217728 --dt 1 --count 2
