@@ -188,6 +188,9 @@ a, b = (json.load(open(f)) for f in sys.argv[1:3])
 sys.exit(0 if b["t"] == 3 and [p["height"] for p in a["points"]] == [p["height"] for p in b["points"]] else 1)
 PY
 expect_refused "disagree" query --n 16 --t 3 --time 4 --points "1,2"
+# a direct sum is priced before it starts (--count 1e6 at n 256: 7 hours)
+expect_refused "more than --max-terms" sample --x 1 --z 2 --direct --count 1000000
+"$sim" sample --n 16 --x 1 --z 2 --direct --count 3 --max-terms 1e3 >/dev/null || fail "sample --direct within --max-terms"
 # a mesh priced beyond --max-vertices is refused before it is built (a
 # 0.01-degree camera asked for gigabytes and ran for minutes)
 expect_refused "max-vertices" mesh --n 16 --camera 0,20,0 --fov 0.01

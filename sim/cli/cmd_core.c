@@ -87,6 +87,7 @@ int cmd_sample(int argc, char **argv)
     cli_common c;
     double x = NAN, z = NAN, t0 = 0.0, dt = 0.1;   /* the point has no default */
     int count = 100, direct = 0;
+    double max_terms = 2e9;
     const cli_opt opts[] = {
         {"x", CLI_DOUBLE, &x, -1e9, 1e9, "X     world x of the point, m (required)", NULL},
         {"z", CLI_DOUBLE, &z, -1e9, 1e9, "Z     world z of the point, m (required)", NULL},
@@ -94,6 +95,9 @@ int cmd_sample(int argc, char **argv)
         {"dt", CLI_DOUBLE, &dt, 1e-6, 1e6, "D     time step, s", NULL},
         {"count", CLI_INT, &count, 1, 1000000, "C     number of samples", NULL},
         {"direct", CLI_FLAG, &direct, 0, 0, "      sum the waves directly in double instead of FFT fields", NULL},
+        {"max-terms", CLI_DOUBLE, &max_terms, 1e3, 1e15,
+         "W     refuse a --direct series summing more than W wave terms (count x cascades x n^2;\n"
+         "                         the default is about 15 minutes here)", NULL},
     };
     int r = cli_parse(argc, argv, "sample --x X --z Z [--t0 T] [--dt D] [--count C] [--json] [options]",
                       opts, (int)(sizeof opts / sizeof opts[0]), &c, NULL, NULL);
@@ -101,6 +105,16 @@ int cmd_sample(int argc, char **argv)
         return r == 1 ? 0 : 2;
     if (isnan(x) || isnan(z)) {
         fprintf(stderr, "error: sample needs the point: --%s is missing (see sample --help)\n", isnan(x) ? "x" : "z");
+        return 2;
+    }
+    /* A direct sum costs every wave of every cascade per sample (~0.4 us a
+     * term): priced before it starts, as mesh prices its vertices (an
+     * accepted --count 1e6 at n 2048 meant weeks) */
+    double terms = (double)count * c.params.cascades * (double)c.params.n * c.params.n;
+    if (direct && terms > max_terms) {
+        fprintf(stderr, "error: --direct would sum %.3g wave terms (--count %d x %d cascades x n %d^2), more "
+                "than --max-terms %.3g (about %.0f s here at 0.4 us a term): lower --count or --n, or raise "
+                "--max-terms\n", terms, count, c.params.cascades, c.params.n, max_terms, terms * 4e-7);
         return 2;
     }
     char tmsg[256];
