@@ -349,8 +349,10 @@ typedef struct ocean_field_stats {
     double foam_coverage;        /* mean foam over the finest cascade's grid
                                     nodes: a small patch, read without the
                                     damping of interpolation, so it runs
-                                    ~1.1-1.5x the sea's coverage; for the
-                                    coverage tiles carry use
+                                    above the sea's coverage (1.7x the
+                                    whitecap target on the default 10 m/s
+                                    sea, 2.7x at 8 m/s); for the coverage
+                                    tiles carry use
                                     ocean_whitecap_coverage_frame (foam.h) */
 } ocean_field_stats;
 void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out);
