@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "ocean.h"
+#include "ocean_plan.h"
 #include "ocean_time.h"
 #include "wave_rng.h"
 
@@ -56,6 +57,16 @@ ocean_result ocean_gerstner_params_validate(const ocean_gerstner_params *p, char
     ocean_result r = ocean_sea_state_validate(&p->sea, msg, msglen);
     if (r != OCEAN_OK)
         return r;
+    /* the sea the FFT ocean refuses (ocean_plan.h: Hs beyond the breaking
+     * height) is refused here too: 1 cm of water held a 2.2 m near field */
+    ocean_plan plan;
+    ocean_plan_init(&plan);
+    ocean_plan_sea(&p->sea, &plan);
+    for (int i = 0; i < plan.count; i++)
+        if (plan.item[i].level == OCEAN_PLAN_REFUSE) {
+            if (msg != NULL && msglen > 0) snprintf(msg, msglen, "gerstner: %s", plan.item[i].text);
+            return OCEAN_EINVAL;
+        }
     if (p->count < 0 || p->count > OCEAN_GERSTNER_MAX_WAVES)
         return bad(msg, msglen, "count", p->count);
     if (p->annuli < 0 || (p->count > 0 && p->annuli > p->count))

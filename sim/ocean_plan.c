@@ -76,15 +76,24 @@ void ocean_plan_params(const ocean_params *p, ocean_plan *plan)
     double wp = ocean_spectrum_peak(s);
     if (!(wp > 0.0))
         return; /* no wind, no sea: nothing to check */
-    double d = s->depth_m;
-    double kp = ocean_wavenumber(wp, d), lp = 2.0 * M_PI / kp;
-    double hs = ocean_spectrum_hs(s);
+    double kp = ocean_wavenumber(wp, s->depth_m), lp = 2.0 * M_PI / kp;
     if (lp > p->patch_m)
         add(plan, OCEAN_PLAN_REFUSE, "peak",
             "the dominant wavelength %.4g m (peak period %.3g s) exceeds the %.4g m patch: the "
             "grid starts above the peak and would hold a small part of the sea's Hs %.3g m; "
             "use ocean.patch >= %.4g m or less wind",
-            lp, 2.0 * M_PI / wp, p->patch_m, hs, lp);
+            lp, 2.0 * M_PI / wp, p->patch_m, ocean_spectrum_hs(s), lp);
+    ocean_plan_sea(s, plan);
+}
+
+void ocean_plan_sea(const ocean_sea_state *s, ocean_plan *plan)
+{
+    double wp = ocean_spectrum_peak(s);
+    if (!(wp > 0.0))
+        return; /* no wind, no sea: nothing to check */
+    double d = s->depth_m;
+    double kp = ocean_wavenumber(wp, d), lp = 2.0 * M_PI / kp;
+    double hs = ocean_spectrum_hs(s);
     const char *which;
     double hb = breaking_height(s, d, &which);
     if (hs > hb) {

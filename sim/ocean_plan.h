@@ -69,6 +69,11 @@ int ocean_plan_count(const ocean_plan *plan, ocean_plan_level level);
  * (which calls this and refuses on the first REFUSE item). */
 void ocean_plan_params(const ocean_params *p, ocean_plan *plan);
 
+/* The checks on the sea state alone (breaking), appended to plan: part of
+ * ocean_plan_params, and of ocean_gerstner_params_validate, so a near field
+ * on its own refuses the sea the FFT ocean refuses. */
+void ocean_plan_sea(const ocean_sea_state *s, ocean_plan *plan);
+
 /* How a scene is served, for the checks that depend on it. */
 typedef struct ocean_plan_serving {
     int near_field;          /* 1: the scene asks for the Gerstner near field */

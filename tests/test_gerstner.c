@@ -705,11 +705,20 @@ static void hostile_parameters(void **state)
     ocean_gerstner_wave w;
     assert_int_equal(ocean_gerstner_get_wave(g, -1, &w), OCEAN_EINVAL);
     assert_int_equal(ocean_gerstner_get_wave(g, p.count, &w), OCEAN_EINVAL);
-    /* extreme but valid: huge t, far point, steep sea, shallow water */
     ocean_gerstner_destroy(g);
+    /* a sea the FFT ocean refuses, refused here too: Hs 110 m in 5 cm of
+     * water exceeds the depth-limited breaking height (McCowan 1894) */
     p.sea.wind_u10 = 70.0;
     p.sea.depth_m = 0.05;
     p.sea.choppiness = 10.0;
+    assert_int_equal(ocean_gerstner_params_validate(&p, msg, sizeof msg), OCEAN_EINVAL);
+    assert_non_null(strstr(msg, "breaking height"));
+    ocean_gerstner *none = NULL;
+    assert_int_equal(ocean_gerstner_create(&p, &none, msg, sizeof msg), OCEAN_EINVAL);
+    assert_null(none);
+    /* extreme but valid: huge t, far point, steep sea, shallow water (the
+     * 70 m/s sea's 4.3 km peak in 150 m: k d = 0.47) */
+    p.sea.depth_m = 150.0;
     g = make(&p);
     eval1(g, &v, OCEAN_TIME_MAX, -1e9, 1e9, &o);
     assert_true(isfinite(o.dy) && isfinite(o.dx) && isfinite(o.vx) && isfinite(o.ny));
