@@ -1070,10 +1070,23 @@ static double foam_sigma_cascade(ocean *o, int c, double kc, int order)
 }
 
 /* The whitecap ramp for a field of breaking-index std sigma (foam.h). */
+/* The whitecap coverage of o's sea: the wind's, but none when the grid
+ * holds no wave at all (Phillips A = 0, or k_max below every mode: no
+ * breakers, whatever the wind says; it gave 0.93 % of foam on a flat sea).
+ * A filter that removes every wave still leaves the sea's coverage, spread
+ * evenly (foam.h). */
+static double whitecap_target(const ocean *o)
+{
+    double energy = 0.0;
+    for (int c = 0; c < o->p.cascades; c++)
+        energy += o->cas[c].variance;
+    return energy > 0.0 ? ocean_foam_coverage_target(o->p.sea.wind_u10) : 0.0;
+}
+
 static ocean_foam_map foam_map_for(const ocean *o, double sigma)
 {
     ocean_foam_map m;
-    if (ocean_foam_map_solve(sigma, ocean_foam_coverage_target(o->p.sea.wind_u10), &m) != OCEAN_OK)
+    if (ocean_foam_map_solve(sigma, whitecap_target(o), &m) != OCEAN_OK)
         m = (ocean_foam_map){INFINITY, INFINITY, -1.0};
     return m;
 }
@@ -1888,7 +1901,7 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
     double lam = o->p.sea.choppiness;
     f->foam_inv_lambda = lam > 0.0 ? 1.0 / lam : 0.0;
     f->info.foam_sigma = any_foam ? foam_sigma(o, kc_all, r->order, scale, boost) : 0.0;
-    f->info.whitecap_target = ocean_foam_coverage_target(o->p.sea.wind_u10);
+    f->info.whitecap_target = whitecap_target(o);
     f->foam_map = foam_map_for(o, f->info.foam_sigma);
     for (int c = 0; c < o->p.cascades; c++) {
         cascade *cs = &o->cas[c];

@@ -351,6 +351,48 @@ static void coverage_against_callaghan(void **state)
  * foam channels equals -d2(eta)/dt2 / g of the same waves, from the
  * velocity channel's time derivative by central difference (deep water,
  * so w^2 = g k). */
+/* No wave, no whitecap: a Phillips sea with A = 0 holds nothing, and its
+ * foam is 0 everywhere, whatever the wind (it was the wind's 0.93 %, spread
+ * evenly over a flat sea). */
+static void flat_sea_has_no_foam(void **state)
+{
+    (void)state;
+    ocean_params p;
+    ocean_params_default(&p);
+    p.threads = 1;
+    p.n = 32;
+    p.sea.spectrum = OCEAN_SPECTRUM_PHILLIPS;
+    p.sea.phillips_a = 0.0;
+    ocean *o = NULL;
+    assert_int_equal(ocean_create(&p, &o, NULL, 0), OCEAN_OK);
+    ocean_frame *f;
+    assert_int_equal(ocean_frame_create(o, &f), OCEAN_OK);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL);
+    assert_int_equal(ocean_evaluate(o, 3.0, &r, f), OCEAN_OK);
+    ocean_frame_info info;
+    ocean_frame_get_info(f, &info);
+    assert_true(info.whitecap_target == 0.0);
+    ocean_field_stats st;
+    ocean_frame_get_field_stats(f, &st);
+    assert_true(st.hs == 0.0);
+    if (st.foam_coverage != 0.0) fail_msg("flat sea: foam coverage %g", st.foam_coverage);
+    ocean_point pt;
+    ocean_frame_sample(f, 12.0, -3.0, &pt);
+    assert_true(pt.foam == 0.0);
+    /* the same wind over a real sea keeps its whitecaps */
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+    p.sea.phillips_a = 0.00405;
+    assert_int_equal(ocean_create(&p, &o, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_frame_create(o, &f), OCEAN_OK);
+    assert_int_equal(ocean_evaluate(o, 3.0, &r, f), OCEAN_OK);
+    ocean_frame_get_info(f, &info);
+    assert_true(info.whitecap_target > 0.0);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
 static void beta_is_downward_acceleration(void **state)
 {
     (void)state;
@@ -392,6 +434,7 @@ int main(void)
         cmocka_unit_test(coverage_against_monahan),
         cmocka_unit_test(coverage_against_callaghan),
         cmocka_unit_test(beta_is_downward_acceleration),
+        cmocka_unit_test(flat_sea_has_no_foam),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
