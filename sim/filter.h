@@ -27,7 +27,8 @@
 
 /* Amplitude gain H(k) = 1 / sqrt(1 + (k/kc)^(2n)) of the order-n
  * Butterworth at wave number k >= 0 for cutoff kc >= 0, evaluated without
- * overflow or NaN for any ratio (REFERENCES.md): k <= kc uses
+ * overflow or NaN for any ratio (the naive (k/kc)^(2n) overflows float
+ * once k/kc > 65536 at n = 4): k <= kc uses
  * q = (k/kc)^n, H = 1/sqrt(1+q^2); k > kc uses q = (kc/k)^n,
  * H = q/sqrt(1+q^2).  Conventions at the edges: kc = INFINITY gives 1 for
  * every k (no filter); kc = 0 gives 0 for every k (everything filtered,
@@ -78,8 +79,9 @@ ocean_result ocean_filter_policy_parse(const char *name, ocean_filter_policy *ou
  *
  * antialias policy: kc = min(k_space, k_time) (then lowered by alias_gain):
  *   k_space = 2 pi / (4 dx): at least 4 samples per wavelength at the mesh
- *     spacing dx the client receives (REFERENCES.md: 2 is too few for foam
- *     and normals); no spatial limit when dx = 0.
+ *     spacing dx the client receives (2 is too few for foam and normals:
+ *     Crest, wave-harmonic/crest PR #903, moved to 4); no spatial limit
+ *     when dx = 0.
  *   k_time solves omega(k) + |v| k = pi fps (finite-depth dispersion with
  *     depth_m): the fastest apparent phase rate of a wave seen from a camera
  *     moving at |v| against it stays below the Nyquist of the frame rate;

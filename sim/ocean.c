@@ -1242,7 +1242,7 @@ static inline void phase_sincos(double x, float *s_out, float *c_out)
 }
 
 /* Butterworth gain without pow(): q = r^order by squaring.  Same
- * stable split as ocean_filter_gain (REFERENCES.md). */
+ * stable split as ocean_filter_gain (filter.h). */
 static inline float gain_fast(float k, float kc, int order)
 {
     float r = k <= kc ? k / kc : kc / k, q = 1.0f, b = r;

@@ -2,8 +2,10 @@
  * spectrum.h - wave spectra, directional spreading, dispersion, Beaufort.
  *
  * Pure double-precision functions of the sea state; no allocation, no state.
- * Every formula and check value comes from shared/REFERENCES.md.  Wind speed
- * is always U10 (m/s at 10 m); Pierson-Moskowitz converts to U19.5 itself.
+ * Every formula and check value comes from the published source named where
+ * it is used (Pierson & Moskowitz 1964, Hasselmann et al. 1973, Bouws et al.
+ * 1985, Horvath 2015, Tessendorf 2001).  Wind speed is always U10 (m/s at
+ * 10 m); Pierson-Moskowitz converts to U19.5 itself.
  *
  * Conventions: S(w) is the one-sided variance density in angular frequency
  * (m^2 s/rad), integral S dw = m0.  D(theta, w) integrates to 1 over
@@ -18,7 +20,8 @@
 
 #include "ocean_result.h"
 
-/* g as used by every check value in REFERENCES.md (lambda 100 m -> w 0.78510). */
+/* g behind the published check values the tests use (deep water, lambda
+ * 100 m -> w = sqrt(2 pi g / 100) = 0.78510 rad/s, T = 8.003 s). */
 #define OCEAN_G 9.81
 
 typedef enum ocean_spectrum_kind {

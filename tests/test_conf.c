@@ -539,7 +539,7 @@ static void test_shipped_scenes(void **state)
         for (int i = 0; i < 4; i++)
             if (strcmp(s.name, need[i]) == 0) found[i] = 1;
         /* Each sea is the sea its name promises (analytic Hs of the 1-D
-         * spectrum against the Met Office table in REFERENCES.md). */
+         * spectrum against the Met Office marine Beaufort table). */
         double u10, hs = ocean_spectrum_hs(&s.params.sea);
         if (strcmp(s.name, "flight") == 0 || strcmp(s.name, "ship-bridge") == 0)
             assert_true(hs > 1.5 && hs <= 4.0);   /* force 6: 3.0 probable, 4.0 max */

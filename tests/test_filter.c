@@ -37,7 +37,7 @@ static void gain_at_cutoff_is_half_power(void **state)
 static void gain_reference_values(void **state)
 {
     (void)state;
-    /* REFERENCES.md: H(2 fc, n = 4) = 0.0623783 */
+    /* Butterworth (1930): H(2 fc, n = 4) = 1 / sqrt(1 + 2^8) = 0.0623783 */
     assert_close(ocean_filter_gain(2.0, 1.0, 4), 0.0623783, 5e-8);
     assert_close(ocean_filter_gain(0.2, 0.1, 4), 0.0623783, 5e-8);
     /* n = 1: H = 1/sqrt(1 + r^2) */
@@ -188,7 +188,8 @@ static void seed_policy_reproduces_formula(void **state)
         assert_int_equal(out.order, 6);
         assert_true(isfinite(out.k));
     }
-    /* the seed's cutoff rises with speed (noted in SEEDS.md) */
+    /* the seed policy's cutoff rises with speed (f_c = f_base + beta |v|,
+     * as the design card writes it, although a faster camera needs less) */
     ocean_filter_client a = {20, 60, 0}, b = {40, 60, 0};
     ocean_filter_cutoff ca, cb;
     ocean_filter_cutoff_compute(&c, OCEAN_FILTER_SEED, &a, &ca);

@@ -263,7 +263,8 @@ static void test_beaufort(void **state)
         prev_hs = hs;
         /* The Met Office table as a monotonic band: force 3..9 seas sit
          * within a factor 2 of the "probable" height (fully developed PM
-         * exceeds it above force 6, as REFERENCES.md notes). */
+         * exceeds it above force 6: the table is for the open sea's
+         * usual, not fully developed, state). */
         static const double probable[13] = {0, 0, 0, 0.6, 1.0, 2.0, 3.0, 4.0, 5.5, 7.0, 9.0, 11.5, 14.0};
         if (f >= 3 && f <= 9)
             assert_true(hs > 0.5 * probable[f] && hs < 2.0 * probable[f]);
