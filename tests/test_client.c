@@ -1260,6 +1260,47 @@ static void service_timeout_is_bounded(void **state)
     fake_stop(s);
 }
 
+/* oc_service(c, 0) reads everything that has arrived, not one socket
+ * chunk: a caller servicing once per 60 Hz step with 80 KB frames got ~6
+ * of 30 fps, ever later.  Here the fake server's 50 frames/s pile up in
+ * the socket for 400 ms while nobody services; a single 0-timeout call
+ * must then take them all (one chunk per call took about 3). */
+static void service_zero_drains(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    oc_client *c = fake_client(s);
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    sub.frame_rate_hz = 50;
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    oc_frame *f = NULL;
+    assert_int_equal(oc_client_next_frame(c, 3000, &f), OCEAN_OK);   /* the stream runs */
+    oc_frame_free(f);
+    oc_client_stats st0, st1;
+    oc_client_get_stats(c, &st0);
+    struct timespec ts = {0, 400 * 1000 * 1000};
+    nanosleep(&ts, NULL);
+    assert_int_equal(oc_service(c, 0), OCEAN_OK);
+    oc_client_get_stats(c, &st1);
+    uint64_t got = st1.frames_rx - st0.frames_rx;
+    /* about 20 were sent meanwhile; generous for a loaded machine */
+    if (got < 10) {
+        print_error("one oc_service(c, 0) after 400 ms took %llu frames (%llu bytes)\n", (unsigned long long)got,
+                    (unsigned long long)(st1.bytes_rx - st0.bytes_rx));
+        fail();
+    }
+    /* the queue kept the newest frame_queue (4) of them */
+    int queued = 0;
+    while (oc_client_next_frame(c, 0, &f) == OCEAN_OK) {
+        queued++;
+        oc_frame_free(f);
+    }
+    assert_true(queued >= 4);
+    oc_client_destroy(c);
+    fake_stop(s);
+}
+
 /* A server that accepts the connection and never answers the handshake
  * (here: a listening socket nobody accepts from; the kernel completes the
  * TCP handshake).  The client gives up waiting for HELLO, and destroying
@@ -1477,6 +1518,7 @@ int main(void)
         cmocka_unit_test(replay_same_bytes),
         cmocka_unit_test(connect_cycles),
         cmocka_unit_test(service_timeout_is_bounded),
+        cmocka_unit_test(service_zero_drains),
         cmocka_unit_test(header_only_frames),
         cmocka_unit_test(hostile_server_messages),
         cmocka_unit_test(daemon_round_trip),

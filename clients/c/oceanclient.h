@@ -98,9 +98,18 @@ ocean_result oc_loop_create(oc_loop **out, char *err, size_t errlen);
  * (they must be destroyed by their owners before this call or are freed
  * here), frees the loop.  Accepts NULL. */
 void oc_loop_destroy(oc_loop *l);
-/* Services the loop for up to timeout_ms (0: only what is ready now).
- * Returns early once at least one message was received or a connection
- * changed state.  OCEAN_ESTATE if the loop runs its own thread. */
+/* The longest oc_loop_service(l, 0) keeps reading while data keeps
+ * arriving, in ms (it may overrun by the handling of one message). */
+#define OC_SERVICE_DRAIN_MS 10
+
+/* Services the loop for up to timeout_ms.  0 (or less): no waiting, but
+ * everything ready now - every connection is read until nothing more has
+ * arrived, so one call per simulation step keeps up with any stream the
+ * machine can decode - stopping after OC_SERVICE_DRAIN_MS if data keeps
+ * coming (a flood cannot hold the caller; the rest waits for the next
+ * call).  Above 0: waits, and returns early once at least one message was
+ * received or a connection changed state.  OCEAN_ESTATE if the loop runs
+ * its own thread. */
 ocean_result oc_loop_service(oc_loop *l, int timeout_ms);
 /* Runs the service loop on a library thread (see threading contract). */
 ocean_result oc_loop_start(oc_loop *l);
