@@ -1255,8 +1255,25 @@ ocean_result oc_loop_create(oc_loop **out, char *err, size_t errlen)
     info.uid = -1;
     info.user = l;
     info.fd_limit_per_thread = 0;
-    info.options = LWS_SERVER_OPTION_DO_SSL_GLOBAL_INIT;
+    /* TLS (wss://) needs LWS_SERVER_OPTION_DO_SSL_GLOBAL_INIT on the vhost,
+     * which makes its client SSL_CTX, but not on the context: there lws
+     * 4.1 redoes OpenSSL's global init per context, which allocates a new
+     * SSL_CTX ex_data index into a process-wide variable.  lws stores a
+     * client SSL_CTX's refcount record at the index current when it was
+     * made and looks it up at the current index when the vhost goes: once
+     * a second loop was made, destroying the first found no record and
+     * kept its SSL_CTX and system CA store (~0.85 MB) for good.  Without
+     * the option on the context the index never moves (OpenSSL 1.1+
+     * initialises itself), so every loop finds its record. */
+    info.options = LWS_SERVER_OPTION_EXPLICIT_VHOSTS;
     l->ctx = lws_create_context(&info);
+    if (l->ctx) {
+        info.options = LWS_SERVER_OPTION_DO_SSL_GLOBAL_INIT;
+        if (!lws_create_vhost(l->ctx, &info)) {
+            lws_context_destroy(l->ctx);
+            l->ctx = NULL;
+        }
+    }
     if (!l->ctx) {
         ocean_seterr(err, errlen, "libwebsockets could not create a client context");
         pthread_mutex_destroy(&l->mu);

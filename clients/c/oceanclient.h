@@ -92,7 +92,12 @@ ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen
 
 typedef struct oc_loop oc_loop;
 
-/* Makes a loop (one lws context, client side only).  *out NULL on failure. */
+/* Makes a loop (one lws context, client side only).  *out NULL on failure.
+ * wss:// uses OpenSSL's default CA store (SSL_CERT_FILE / SSL_CERT_DIR
+ * apply), loaded per loop.  The loop leaves OpenSSL's global init to
+ * OpenSSL: an lws 4.1 context made elsewhere in the process with
+ * LWS_SERVER_OPTION_DO_SSL_GLOBAL_INIT while loops exist makes lws keep
+ * those loops' TLS contexts (~0.85 MB each) when they are destroyed. */
 ocean_result oc_loop_create(oc_loop **out, char *err, size_t errlen);
 /* Stops the thread if running, closes every client still on the loop
  * (they must be destroyed by their owners before this call or are freed
