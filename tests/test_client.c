@@ -440,6 +440,8 @@ typedef struct fake_server {
     int frames_per_tick;
     proto_sea sea;
     int connections_seen;
+    int cameras_seen;     /* CAMERAs received (__atomic: read by the test) */
+    int last_cam_x;       /* pos[0] of the latest, as an int */
 } fake_server;
 
 static void fake_queue(fake_conn *fc, proto_msg *m)
@@ -591,6 +593,8 @@ static void fake_handle(fake_server *s, fake_conn *fc, const uint8_t *buf, size_
         fc->mesh_qz = m.u.subscribe.layout == PROTO_LAYOUT_WORLD && m.u.subscribe.mesh_codec == PROTO_MESH_CODEC_QZ;
         break;
     case PROTO_CAMERA:
+        __atomic_store_n(&s->last_cam_x, (int)m.u.camera.pos[0], __ATOMIC_SEQ_CST);
+        __atomic_add_fetch(&s->cameras_seen, 1, __ATOMIC_SEQ_CST);
         if (fc->replay)
             fake_frame(s, fc, m.u.camera.render_time, m.hdr.seq);
         break;
@@ -1312,6 +1316,75 @@ static void service_zero_drains(void **state)
     fake_stop(s);
 }
 
+/* The send queue: in live mode a CAMERA still queued is replaced by the
+ * next (only the newest matters; 5000 sent without servicing reach the
+ * server as one, the last, under the first's seq); replay CAMERAs are
+ * requests and are all kept, up to OC_SEND_QUEUE_MAX queued messages,
+ * then OCEAN_ERATE with the reason, until the loop is serviced (the queue
+ * used to grow without bound: 1.5 GB in 4 s of a tight loop). */
+static void send_queue_bounded(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    oc_client *c = fake_client(s);
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    oc_client_stats st0, st1;
+    oc_client_get_stats(c, &st0);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    uint32_t seq0 = 0, seq = 0;
+    for (int i = 0; i < 5000; i++) {
+        cam.pos[0] = i;
+        assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+        if (i == 0)
+            seq0 = seq;
+        assert_int_equal(seq, seq0);
+    }
+    oc_client_get_stats(c, &st1);
+    if (st1.messages_tx - st0.messages_tx != 1) {
+        print_error("5000 live CAMERAs queued %llu messages\n", (unsigned long long)(st1.messages_tx - st0.messages_tx));
+        fail();
+    }
+    for (int w = 0; w < 300 && __atomic_load_n(&s->cameras_seen, __ATOMIC_SEQ_CST) < 1; w++)
+        oc_service(c, 10);
+    oc_service(c, 50);
+    assert_int_equal(__atomic_load_n(&s->cameras_seen, __ATOMIC_SEQ_CST), 1);
+    assert_int_equal(__atomic_load_n(&s->last_cam_x, __ATOMIC_SEQ_CST), 4999);
+    /* sent: the next one is a new message */
+    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+    assert_int_equal(seq, seq0 + 1);
+
+    sub.mode = PROTO_MODE_REPLAY;
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    ocean_result r = OCEAN_OK;
+    unsigned n = 0;
+    for (; n < 5000 && r == OCEAN_OK; n++) {
+        cam.render_time = n;
+        r = oc_client_send_camera(c, &cam, &seq);
+    }
+    assert_int_equal(r, OCEAN_ERATE);
+    n--;
+    /* the camera and SUBSCRIBE above may not have left yet */
+    if (n + 3 < OC_SEND_QUEUE_MAX || n > OC_SEND_QUEUE_MAX) {
+        print_error("%u replay CAMERAs queued before ERATE (limit %u messages)\n", n, OC_SEND_QUEUE_MAX);
+        fail();
+    }
+    char why[512] = "";
+    assert_int_equal(oc_client_last_error(c, why, sizeof why), OCEAN_ERATE);
+    assert_non_null(strstr(why, "send queue full"));
+    assert_non_null(strstr(why, "1024"));
+    /* serviced, the queue drains and sends work again */
+    for (int w = 0; w < 300 && r != OCEAN_OK; w++) {
+        oc_service(c, 10);
+        r = oc_client_send_camera(c, &cam, NULL);
+    }
+    assert_int_equal(r, OCEAN_OK);
+    oc_client_destroy(c);
+    fake_stop(s);
+}
+
 /* Heap in use (glibc: every arena, and mmapped blocks). */
 static size_t heap_in_use(void)
 {
@@ -1612,6 +1685,7 @@ int main(void)
         cmocka_unit_test(private_loops_no_leak_and_wss),
         cmocka_unit_test(service_timeout_is_bounded),
         cmocka_unit_test(service_zero_drains),
+        cmocka_unit_test(send_queue_bounded),
         cmocka_unit_test(header_only_frames),
         cmocka_unit_test(hostile_server_messages),
         cmocka_unit_test(daemon_round_trip),

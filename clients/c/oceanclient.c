@@ -160,6 +160,8 @@ ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen
 typedef struct txmsg {
     struct txmsg *next;
     proto_buf buf;           /* with LWS_PRE headroom */
+    uint32_t seq;
+    int live_camera;         /* a live-mode CAMERA: a newer one replaces it */
 } txmsg;
 
 typedef struct pending_query {
@@ -223,6 +225,8 @@ struct oc_client {
     int rx_skip;
     /* tx */
     txmsg *tx_head, *tx_tail;     /* [mu] */
+    size_t tx_count, tx_bytes;    /* [mu] queued, not yet given to lws */
+    int replay;                   /* [mu] the last SUBSCRIBE asked for replay */
     uint32_t seq;                 /* [mu] */
     double last_sim;              /* [mu] sim time of the latest message */
     double last_frame_sim;        /* [mu] of the latest FRAME (sent in our headers) */
@@ -363,6 +367,16 @@ static ocean_result queue_msg_locked(oc_client *c, proto_msg *m, uint32_t *seq_o
         ocean_seterr(err, errlen, "not connected");
         return OCEAN_ESTATE;
     }
+    /* bounded: a caller that sends faster than the socket takes (or never
+     * services a caller-driven loop) is told, instead of growing without
+     * end; BYE still goes */
+    if (m->hdr.type != PROTO_BYE && (c->tx_count >= OC_SEND_QUEUE_MAX || c->tx_bytes >= OC_SEND_QUEUE_MAX_BYTES)) {
+        ocean_seterr(err, errlen,
+                     "send queue full: %zu messages (%zu bytes) not yet written to the socket (limit %u messages, "
+                     "%u bytes); service the loop and send less often",
+                     c->tx_count, c->tx_bytes, OC_SEND_QUEUE_MAX, OC_SEND_QUEUE_MAX_BYTES);
+        return OCEAN_ERATE;
+    }
     txmsg *t = calloc(1, sizeof *t);
     if (!t)
         return OCEAN_ENOMEM;
@@ -379,12 +393,14 @@ static ocean_result queue_msg_locked(oc_client *c, proto_msg *m, uint32_t *seq_o
     }
     if (seq_out)
         *seq_out = c->seq;
-    c->seq++;
+    t->seq = c->seq++;
     if (c->tx_tail)
         c->tx_tail->next = t;
     else
         c->tx_head = t;
     c->tx_tail = t;
+    c->tx_count++;
+    c->tx_bytes += proto_buf_len(&t->buf);
     c->want_write = 1;
     c->st.messages_tx++;
     c->st.bytes_tx += proto_buf_len(&t->buf);
@@ -1190,6 +1206,8 @@ static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user,
             c->tx_head = t->next;
             if (!c->tx_head)
                 c->tx_tail = NULL;
+            c->tx_count--;
+            c->tx_bytes -= proto_buf_len(&t->buf);
         }
         int more = c->tx_head != NULL;
         c->want_write = more;
@@ -1757,22 +1775,6 @@ void oc_camera_default(proto_camera *cam)
     cam->viewport_h = 1080;
 }
 
-static ocean_result send_msg(oc_client *c, proto_msg *m, uint32_t *seq_out)
-{
-    if (!c)
-        return OCEAN_EINVAL;
-    char err[256] = "";
-    pthread_mutex_lock(&c->loop->mu);
-    ocean_result r = queue_msg_locked(c, m, seq_out, err, sizeof err);
-    if (r != OCEAN_OK)
-        set_local_error(c, r, "cannot send %s: %s", proto_type_name(m->hdr.type),
-                        err[0] ? err : ocean_strerror(r));
-    pthread_mutex_unlock(&c->loop->mu);
-    if (r == OCEAN_OK)
-        wake(c->loop);
-    return r;
-}
-
 ocean_result oc_client_subscribe(oc_client *c, const proto_subscribe *s)
 {
     if (!c || !s)
@@ -1784,12 +1786,22 @@ ocean_result oc_client_subscribe(oc_client *c, const proto_subscribe *s)
      * predates mesh_codec requires */
     if (s->layout != PROTO_LAYOUT_WORLD)
         m.u.subscribe.mesh_codec = PROTO_MESH_CODEC_F32;
-    ocean_result r = send_msg(c, &m, NULL);
+    char err[256] = "";
+    pthread_mutex_lock(&c->loop->mu);
+    ocean_result r = queue_msg_locked(c, &m, NULL, err, sizeof err);
     if (r == OCEAN_OK) {
-        pthread_mutex_lock(&c->loop->mu);
         c->frame_rate = s->frame_rate_hz;
-        pthread_mutex_unlock(&c->loop->mu);
+        c->replay = s->mode == PROTO_MODE_REPLAY;
+        /* cameras queued before belong to the old subscription: a later
+         * live one must not move its content ahead of this SUBSCRIBE */
+        for (txmsg *t = c->tx_head; t; t = t->next)
+            t->live_camera = 0;
+    } else {
+        set_local_error(c, r, "cannot send SUBSCRIBE: %s", err[0] ? err : ocean_strerror(r));
     }
+    pthread_mutex_unlock(&c->loop->mu);
+    if (r == OCEAN_OK)
+        wake(c->loop);
     return r;
 }
 
@@ -1800,15 +1812,48 @@ ocean_result oc_client_send_camera(oc_client *c, const proto_camera *cam, uint32
     proto_msg m;
     proto_msg_init(&m, PROTO_CAMERA);
     m.u.camera = *cam;
-    uint32_t seq;
+    uint32_t seq = 0;
     char err[256] = "";
     pthread_mutex_lock(&c->loop->mu);
-    ocean_result r = queue_msg_locked(c, &m, &seq, err, sizeof err);
-    if (r == OCEAN_OK) {
-        c->cams[c->cam_pos % CAM_RING].seq = seq;
-        c->cams[c->cam_pos % CAM_RING].wall = wall_now();
-        c->cam_pos++;
+    ocean_result r = OCEAN_OK;
+    txmsg *old = NULL;
+    /* live mode: only the newest camera matters, and a CAMERA still
+     * queued has not left: this one takes its place and seq (the seq
+     * stays +1 per message sent), so a caller reporting its camera faster
+     * than the link carries it does not queue stale ones */
+    if (!c->replay && c->state == OC_READY && c->wsi && !c->close_req)
+        for (txmsg *t = c->tx_head; t && !old; t = t->next)
+            if (t->live_camera)
+                old = t;
+    if (old) {
+        proto_buf nb;
+        proto_buf_init(&nb, LWS_PRE);
+        seq = old->seq;
+        m.hdr.seq = seq;
+        m.hdr.sim_time = isfinite(c->last_frame_sim) ? c->last_frame_sim : 0.0;
+        r = proto_encode(&nb, &m, err, sizeof err);
+        if (r == OCEAN_OK) {
+            size_t ol = proto_buf_len(&old->buf), nl = proto_buf_len(&nb);
+            c->tx_bytes = c->tx_bytes - ol + nl;
+            c->st.bytes_tx = c->st.bytes_tx - ol + nl;
+            proto_buf_free(&old->buf);
+            old->buf = nb;
+            for (int i = 0; i < CAM_RING; i++)
+                if (c->cams[i].seq == seq)
+                    c->cams[i].wall = wall_now();
+        } else {
+            proto_buf_free(&nb);
+        }
     } else {
+        r = queue_msg_locked(c, &m, &seq, err, sizeof err);
+        if (r == OCEAN_OK) {
+            c->tx_tail->live_camera = !c->replay;
+            c->cams[c->cam_pos % CAM_RING].seq = seq;
+            c->cams[c->cam_pos % CAM_RING].wall = wall_now();
+            c->cam_pos++;
+        }
+    }
+    if (r != OCEAN_OK) {
         set_local_error(c, r, "cannot send CAMERA: %s", err[0] ? err : ocean_strerror(r));
     }
     pthread_mutex_unlock(&c->loop->mu);

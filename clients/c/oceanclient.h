@@ -345,9 +345,29 @@ ocean_result oc_client_subscribe(oc_client *c, const proto_subscribe *s);
 /* A level camera at (0, 20, 0), 60 degree fov, 1920x1080, at rest. */
 void oc_camera_default(proto_camera *cam);
 
-/* Sends CAMERA.  In replay mode cam->render_time names the sim time to
- * render.  *seq_out (may be NULL) gets the message's seq, which the
- * answering FRAME carries as info.camera_seq. */
+/* Messages a client queues before the socket takes them (every kind but
+ * the BYE of oc_client_destroy), and their bytes: beyond either, sends fail
+ * with OCEAN_ERATE ("send queue full", oc_client_last_error) until the
+ * loop has been serviced.  A caller-driven loop writes only while it is
+ * serviced. */
+#define OC_SEND_QUEUE_MAX 1024u
+#define OC_SEND_QUEUE_MAX_BYTES (8u << 20)
+
+/* Sends CAMERA.  *seq_out (may be NULL) gets the message's seq, which the
+ * answering FRAME carries as info.camera_seq.
+ * Live mode (the last SUBSCRIBE's mode; live before any): only the newest
+ * camera matters, so a CAMERA still queued unsent is replaced by this one,
+ * which takes its seq (*seq_out then repeats it): reporting the camera
+ * every simulation step never queues stale ones.
+ * Replay mode: cam->render_time names the sim time to render; each CAMERA
+ * is a request answered by one FRAME and is never replaced, so a
+ * caller-driven loop must be serviced between them: beyond
+ * OC_SEND_QUEUE_MAX queued messages the call fails with OCEAN_ERATE.
+ * The daemon limits every client to server.msg_rate messages per second
+ * (200 in the shipped config, bursts up to server.msg_burst, 400) and at
+ * most server.replay_queue (256) unanswered replay CAMERAs; beyond, it
+ * refuses with ERROR ERATE (on_error, oc_client_last_error): a client
+ * stepping faster than ~100 Hz should not send a CAMERA every step. */
 ocean_result oc_client_send_camera(oc_client *c, const proto_camera *cam, uint32_t *seq_out);
 
 /* Takes the oldest queued frame, waiting up to timeout_ms (0: no wait,
