@@ -146,6 +146,22 @@ static void path_good(void **state)
     assert_true(cam.pos[0] == 0.266667 && cam.render_time == 12.066666666666666 && cam.viewport_w == 640);
     assert_true(cam.viewport_h == 480 && cam.vel[0] == 8.0f && cam.pitch_deg == -5.0f);
     oc_path_destroy(r);
+    /* the CAMERA bounds, which the daemon records, are the path's:
+     * |x|, |z| <= 1e10, |y| <= 1e7 (the reader stopped at 1e9 and 1e6) */
+    const char *far = "t,x,y,z,vx,vy,vz,yaw,pitch,roll,fov\n"
+                      "0,-1e10,1e7,1e10,0,0,0,0,0,0,60\n"
+                      "1,9999999999.5,-1e7,-2e9,0,0,0,0,0,0,60\n";
+    assert_int_equal(oc_path_parse(far, strlen(far), "far", &r, err, sizeof err), OCEAN_OK);
+    assert_true(r->pts[0].pos[0] == -1e10 && r->pts[0].pos[1] == 1e7 && r->pts[0].pos[2] == 1e10);
+    oc_path_camera(&r->pts[1], &cam);
+    proto_msg cm;
+    proto_msg_init(&cm, PROTO_CAMERA);
+    cm.u.camera = cam;
+    proto_buf cb;
+    proto_buf_init(&cb, 0);
+    assert_int_equal(proto_encode(&cb, &cm, err, sizeof err), OCEAN_OK);   /* the protocol takes it */
+    proto_buf_free(&cb);
+    oc_path_destroy(r);
     oc_path_camera(&p->pts[1], &cam);
     assert_true(cam.pos[0] == -1000 && cam.render_time == 0.5 && cam.viewport_w == 1280);
     assert_true(cam.fov_y_deg == 45.5f);
@@ -174,8 +190,9 @@ static void path_bad(void **state)
         {"0,0,0,0,0,0,0,0,0,0,nan\n", "p:2: field fov_y_deg is not a finite", 1},
         {"0,0,0,0,0,0,0,0,0,0,180\n", "p:2: field fov_y_deg outside", 1},
         {"0,0,0,0,0,0,0,0,0,0,0\n", "p:2: field fov_y_deg outside", 1},
-        {"0,2e9,0,0,0,0,0,0,0,0,60\n", "p:2: field x beyond", 1},
-        {"0,0,2e6,0,0,0,0,0,0,0,60\n", "p:2: field y beyond", 1},
+        {"0,1.0000001e10,0,0,0,0,0,0,0,0,60\n", "p:2: field x beyond +-1e10 m", 1},
+        {"0,0,0,-2e10,0,0,0,0,0,0,60\n", "p:2: field z beyond +-1e10 m", 1},
+        {"0,0,2e7,0,0,0,0,0,0,0,60\n", "p:2: field y beyond +-1e7 m", 1},
         {"0,0,0,0,0,0,0,0,0,0,60\n1,0,0,0,0,0,0,0,0,0,60\n0.5,0,0,0,0,0,0,0,0,0,60\n", "p:4: t 0.5 goes back", 1},
         {"0,0,0,0,0,0,0,0,0,0,60\n1,0,0,0,0,0,0,0,0,0,inf\n", "p:3: field fov_y_deg is not a finite", 1},
         {"1e999,0,0,0,0,0,0,0,0,0,60\n", "p:2: field t \"1e999\" is not a number", 1},

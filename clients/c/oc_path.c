@@ -71,15 +71,17 @@ static const char *check_point(const oc_path_point *q, int *field)
     *field = 0;
     if (!ocean_time_ok(q->t))
         return "beyond the time limit +-134217728 s (OCEAN_TIME_MAX)";
+    /* the CAMERA bounds (PROTOCOL.md), which the daemon accepts and so
+     * records: a recording must replay */
     *field = 1;
-    if (fabs(q->pos[0]) > 1e9)
-        return "beyond +-1e9 m";
+    if (fabs(q->pos[0]) > OC_PATH_MAX_XZ)
+        return "beyond +-1e10 m (CAMERA x)";
     *field = 2;
-    if (fabs(q->pos[1]) > 1e6)
-        return "beyond +-1e6 m";
+    if (fabs(q->pos[1]) > OC_PATH_MAX_Y)
+        return "beyond +-1e7 m (CAMERA y)";
     *field = 3;
-    if (fabs(q->pos[2]) > 1e9)
-        return "beyond +-1e9 m";
+    if (fabs(q->pos[2]) > OC_PATH_MAX_XZ)
+        return "beyond +-1e10 m (CAMERA z)";
     for (int i = 0; i < 3; i++)
         if (fabs(q->vel[i]) > 1e5) {
             *field = 4 + i;

@@ -30,6 +30,10 @@
 #define OC_PATH_DEFAULT_VIEWPORT_W 1280
 #define OC_PATH_DEFAULT_VIEWPORT_H 720
 #define OC_PATH_MAX_POINTS 10000000u
+/* Largest |x|, |z| and |y| of a point, metres: PROTOCOL.md's CAMERA bounds
+ * (what the daemon accepts and records; proto.c's MAX_WORLD, MAX_LOCAL). */
+#define OC_PATH_MAX_XZ 1e10
+#define OC_PATH_MAX_Y 1e7
 
 typedef struct oc_path_point {
     double t;
