@@ -1190,7 +1190,10 @@ static void hostile_server_messages(void **state)
     oc_subscribe_default(&sub);
     assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
     oc_frame *f = NULL;
-    assert_int_equal(oc_client_next_frame(c, 300, &f), OCEAN_ESTATE);
+    for (int i = 0; i < 10; i++)
+        assert_int_equal(oc_service(c, 30), OCEAN_OK);
+    /* none; an empty poll is no failure and leaves last_error as it was */
+    assert_int_equal(oc_client_next_frame(c, 0, &f), OCEAN_ESTATE);
     oc_client_get_stats(c, &st);
     assert_true(st.decode_errors > 2);
     assert_int_equal(st.frames_rx, 0);
@@ -1400,6 +1403,56 @@ static void send_queue_bounded(void **state)
     assert_int_equal(r, OCEAN_OK);
     oc_client_destroy(c);
     fake_stop(s);
+}
+
+/* oc_client_last_error describes the latest failure: local refusals
+ * (a non-finite query time, a NULL token) and timeouts record their reason
+ * (they left it empty or stale); the end of the connection replaces an
+ * older local error (it was recorded only when none existed); and calls on
+ * the closed client fail with OCEAN_EIO naming the closure, as the header
+ * says (they returned OCEAN_ESTATE "not connected"). */
+static void errors_follow_the_latest_failure(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    oc_client *c = fake_client(s);
+    char msg[512];
+    double xz[2] = {1, 2};
+    oc_query_result q;
+    assert_int_equal(oc_client_query(c, xz, 1, 1, NAN, 100, &q), OCEAN_EINVAL);
+    assert_int_equal(oc_client_last_error(c, msg, sizeof msg), OCEAN_EINVAL);
+    assert_non_null(strstr(msg, "not finite"));
+    proto_sea sea;
+    assert_int_equal(oc_client_sea_state(c, &sea, NULL), OCEAN_OK);
+    assert_int_equal(oc_client_sea_state_set(c, &sea, 0, NULL, 100), OCEAN_EINVAL);
+    assert_int_equal(oc_client_last_error(c, msg, sizeof msg), OCEAN_EINVAL);
+    assert_non_null(strstr(msg, "token"));
+    oc_frame *f = NULL;
+    assert_int_equal(oc_client_next_frame(c, 50, &f), OCEAN_ESTATE);   /* not subscribed */
+    assert_int_equal(oc_client_last_error(c, msg, sizeof msg), OCEAN_ESTATE);
+    assert_non_null(strstr(msg, "timed out after 50 ms"));
+    /* an older local failure, then the connection is lost */
+    assert_int_equal(oc_client_query(c, xz, 0, 0, 0, 100, &q), OCEAN_EINVAL);
+    fake_stop(s);
+    assert_int_equal(oc_client_next_frame(c, 5000, &f), OCEAN_EIO);
+    assert_int_equal(oc_client_state(c), OC_CLOSED);
+    assert_int_equal(oc_client_last_error(c, msg, sizeof msg), OCEAN_EIO);
+    if (!strstr(msg, "closed")) {
+        print_error("last_error after the connection was lost: \"%s\"\n", msg);
+        fail();
+    }
+    assert_int_equal(oc_client_query(c, xz, 1, 0, 0, 100, &q), OCEAN_EIO);
+    assert_int_equal(oc_client_last_error(c, msg, sizeof msg), OCEAN_EIO);
+    assert_non_null(strstr(msg, "connection is closed"));
+    proto_camera cam;
+    oc_camera_default(&cam);
+    assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_EIO);
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_EIO);
+    assert_int_equal(oc_client_sea_state_set(c, &sea, 0, "secret", 100), OCEAN_EIO);
+    assert_int_equal(oc_client_connect_wait(c, 10), OCEAN_EIO);
+    oc_client_destroy(c);
 }
 
 /* Heap in use (glibc: every arena, and mmapped blocks). */
@@ -1703,6 +1756,7 @@ int main(void)
         cmocka_unit_test(service_timeout_is_bounded),
         cmocka_unit_test(service_zero_drains),
         cmocka_unit_test(send_queue_bounded),
+        cmocka_unit_test(errors_follow_the_latest_failure),
         cmocka_unit_test(header_only_frames),
         cmocka_unit_test(hostile_server_messages),
         cmocka_unit_test(daemon_round_trip),

@@ -265,6 +265,8 @@ struct oc_client {
     char last_err_msg[PROTO_ERROR_MSG_MAX + 64];
     int bye_reason;
     int closed_notified;
+    int close_recorded;           /* [mu] last_err already says why it ended */
+    char close_msg[PROTO_ERROR_MSG_MAX + 64];   /* [mu] and this is why */
     oc_client_stats st;           /* [mu] */
 };
 
@@ -359,12 +361,32 @@ static void set_local_error(oc_client *c, ocean_result r, const char *fmt, ...)
     va_end(ap);
 }
 
+/* set_local_error under the loop's lock; returns r.  For calls that fail
+ * before they touch the connection: last_error describes the latest
+ * failure, whatever it was. */
+static ocean_result fail_local(oc_client *c, ocean_result r, const char *fmt, ...)
+{
+    char msg[sizeof c->last_err_msg];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    pthread_mutex_lock(&c->loop->mu);
+    set_local_error(c, r, "%s", msg);
+    pthread_mutex_unlock(&c->loop->mu);
+    return r;
+}
+
 /* Encodes m with the client's next seq and queues it.  Caller holds mu. */
 static ocean_result queue_msg_locked(oc_client *c, proto_msg *m, uint32_t *seq_out, char *err,
                                      size_t errlen)
 {
+    if (c->state == OC_CLOSED) {
+        ocean_seterr(err, errlen, "the connection is closed (%s)", c->close_msg[0] ? c->close_msg : "closed");
+        return OCEAN_EIO;
+    }
     if (c->state != OC_READY || !c->wsi || c->close_req) {
-        ocean_seterr(err, errlen, "not connected");
+        ocean_seterr(err, errlen, c->close_req ? "the client is being destroyed" : "not connected yet (no HELLO)");
         return OCEAN_ESTATE;
     }
     /* bounded: a caller that sends faster than the socket takes (or never
@@ -468,8 +490,13 @@ static int mark_closed_locked(oc_client *c, int reason, const char *msg, pending
     fail_pending_locked(c, async);
     c->loop->events++;
     pthread_cond_broadcast(&c->loop->cv);
-    if (msg && c->last_err == OCEAN_OK)
+    /* the end of the connection is the latest failure, whatever came
+     * before; a BYE or close frame received just before has said more */
+    if (msg && !c->close_recorded) {
         set_local_error(c, OCEAN_EIO, "%s", msg);
+        snprintf(c->close_msg, sizeof c->close_msg, "%s", msg);
+        c->close_recorded = 1;
+    }
     if (c->bye_reason < 0 || reason >= 0)
         c->bye_reason = reason;
     if (c->closed_notified)
@@ -948,6 +975,8 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
             snprintf(nt.close_msg, sizeof nt.close_msg, "%s", m.u.bye.message);
             set_local_error(c, OCEAN_EIO, "server said BYE (reason %u): %s", m.u.bye.reason,
                             m.u.bye.message);
+            snprintf(c->close_msg, sizeof c->close_msg, "%s", c->last_err_msg);
+            c->close_recorded = 1;
             break;
         default:
             break;
@@ -1106,9 +1135,12 @@ static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user,
             const uint8_t *p = in;
             unsigned code = (unsigned)p[0] << 8 | p[1];
             pthread_mutex_lock(&l->mu);
-            if (c->last_err == OCEAN_OK)
+            if (!c->close_recorded) {
                 set_local_error(c, OCEAN_EIO, "server closed the connection (code %u: %.*s)", code,
                                 (int)(len - 2 > 200 ? 200 : len - 2), (const char *)p + 2);
+                snprintf(c->close_msg, sizeof c->close_msg, "%s", c->last_err_msg);
+                c->close_recorded = 1;
+            }
             pthread_mutex_unlock(&l->mu);
         }
         break;
@@ -1605,9 +1637,9 @@ ocean_result oc_client_connect_wait(oc_client *c, int timeout_ms)
     wait_until(c, timeout_ms, pred_ready, NULL);
     pthread_mutex_lock(&c->loop->mu);
     oc_state s = c->state;
-    if (s == OC_CONNECTING && c->last_err == OCEAN_OK)
-        set_local_error(c, OCEAN_ESTATE, "no HELLO from %s:%d within %d ms", c->url.host, c->url.port,
-                        timeout_ms);
+    if (s == OC_CONNECTING)
+        set_local_error(c, OCEAN_ESTATE, "timed out after %d ms: no HELLO from %s:%d", timeout_ms, c->url.host,
+                        c->url.port);
     pthread_mutex_unlock(&c->loop->mu);
     return s == OC_READY ? OCEAN_OK : s == OC_CLOSED ? OCEAN_EIO : OCEAN_ESTATE;
 }
@@ -1777,8 +1809,10 @@ void oc_camera_default(proto_camera *cam)
 
 ocean_result oc_client_subscribe(oc_client *c, const proto_subscribe *s)
 {
-    if (!c || !s)
+    if (!c)
         return OCEAN_EINVAL;
+    if (!s)
+        return fail_local(c, OCEAN_EINVAL, "oc_client_subscribe: no subscription (NULL)");
     proto_msg m;
     proto_msg_init(&m, PROTO_SUBSCRIBE);
     m.u.subscribe = *s;
@@ -1807,8 +1841,10 @@ ocean_result oc_client_subscribe(oc_client *c, const proto_subscribe *s)
 
 ocean_result oc_client_send_camera(oc_client *c, const proto_camera *cam, uint32_t *seq_out)
 {
-    if (!c || !cam)
+    if (!c)
         return OCEAN_EINVAL;
+    if (!cam)
+        return fail_local(c, OCEAN_EINVAL, "oc_client_send_camera: no camera (NULL)");
     proto_msg m;
     proto_msg_init(&m, PROTO_CAMERA);
     m.u.camera = *cam;
@@ -1873,8 +1909,10 @@ static int pred_frame(oc_client *c, void *arg)
 
 ocean_result oc_client_next_frame(oc_client *c, int timeout_ms, oc_frame **out)
 {
-    if (!c || !out)
+    if (!c)
         return OCEAN_EINVAL;
+    if (!out)
+        return fail_local(c, OCEAN_EINVAL, "oc_client_next_frame: no place for the frame (out NULL)");
     *out = NULL;
     if (timeout_ms != 0)
         wait_until(c, timeout_ms, pred_frame, NULL);
@@ -1888,8 +1926,15 @@ ocean_result oc_client_next_frame(oc_client *c, int timeout_ms, oc_frame **out)
         c->fq_len--;
         *out = &f->pub;
         r = OCEAN_OK;
+    } else if (c->state == OC_CLOSED) {
+        r = OCEAN_EIO;   /* last_error already says why it closed */
     } else {
-        r = c->state == OC_CLOSED ? OCEAN_EIO : OCEAN_ESTATE;
+        r = OCEAN_ESTATE;
+        /* an empty poll (timeout 0) is the normal answer of a caller
+         * polling every step, not a failure: it would hide the server's
+         * ERRORs within a step */
+        if (timeout_ms != 0)
+            set_local_error(c, r, "timed out after %d ms: no FRAME arrived", timeout_ms);
     }
     pthread_mutex_unlock(&c->loop->mu);
     return r;
@@ -1924,7 +1969,7 @@ static ocean_result query_send(oc_client *c, const double *xz, size_t n, int at_
             return OCEAN_EINVAL;
         }
     if (at_time && !isfinite(t))
-        return OCEAN_EINVAL;
+        return fail_local(c, OCEAN_EINVAL, "query time t = %g is not finite", t);
     proto_msg m;
     proto_msg_init(&m, PROTO_QUERY);
     m.u.query.count = (uint32_t)n;
@@ -1985,8 +2030,10 @@ static int pred_query(oc_client *c, void *arg)
 ocean_result oc_client_query(oc_client *c, const double *xz, size_t n, int at_time, double t,
                              int timeout_ms, oc_query_result *out)
 {
-    if (!c || !out)
+    if (!c)
         return OCEAN_EINVAL;
+    if (!out)
+        return fail_local(c, OCEAN_EINVAL, "oc_client_query: no place for the result (out NULL)");
     memset(out, 0, sizeof *out);
     pending_query *q = calloc(1, sizeof *q);
     if (!q)
@@ -2006,7 +2053,7 @@ ocean_result oc_client_query(oc_client *c, const double *xz, size_t n, int at_ti
         }
     if (!q->done) {
         r = OCEAN_ESTATE;
-        set_local_error(c, r, "no QUERY_RESULT for query %u within %d ms", q->id, timeout_ms);
+        set_local_error(c, r, "timed out after %d ms: no QUERY_RESULT for query %u", timeout_ms, q->id);
     } else {
         r = q->res;
     }
@@ -2098,10 +2145,13 @@ static int pred_sea(oc_client *c, void *arg)
 ocean_result oc_client_sea_state_set(oc_client *c, const proto_sea *sea, double effective_time,
                                      const char *token, int timeout_ms)
 {
-    if (!c || !sea || !token)
+    if (!c)
         return OCEAN_EINVAL;
+    if (!sea || !token)
+        return fail_local(c, OCEAN_EINVAL, "oc_client_sea_state_set: no %s (NULL)", !sea ? "sea" : "admin token");
     if (strlen(token) > PROTO_TOKEN_MAX)
-        return OCEAN_EINVAL;
+        return fail_local(c, OCEAN_EINVAL, "admin token of %zu bytes is longer than %u", strlen(token),
+                          (unsigned)PROTO_TOKEN_MAX);
     proto_msg m;
     proto_msg_init(&m, PROTO_SEA_STATE);
     m.u.sea_state.op = PROTO_SEA_SET;
@@ -2111,8 +2161,10 @@ ocean_result oc_client_sea_state_set(oc_client *c, const proto_sea *sea, double 
     char err[256] = "";
     pthread_mutex_lock(&c->loop->mu);
     if (c->sea_wait) {
+        /* one SET at a time per client */
+        set_local_error(c, OCEAN_ESTATE, "a SEA_STATE set of this client is still waiting for its answer");
         pthread_mutex_unlock(&c->loop->mu);
-        return OCEAN_ESTATE;   /* one SET at a time per client */
+        return OCEAN_ESTATE;
     }
     ocean_result r = queue_msg_locked(c, &m, &c->sea_seq, err, sizeof err);
     if (r == OCEAN_OK) {
@@ -2134,7 +2186,7 @@ ocean_result oc_client_sea_state_set(oc_client *c, const proto_sea *sea, double 
         r = c->sea_res;
     } else {
         r = OCEAN_ESTATE;
-        set_local_error(c, r, "no answer to SEA_STATE within %d ms", timeout_ms);
+        set_local_error(c, r, "timed out after %d ms: no answer to SEA_STATE set", timeout_ms);
     }
     c->sea_wait = 0;
     c->sea_done = 0;

@@ -313,8 +313,12 @@ ocean_result oc_client_hello(const oc_client *c, proto_hello *out);
  * NAN before HELLO. */
 double oc_client_sim_time(const oc_client *c);
 
-/* Text of the last ERROR received or the last local failure ("" if none)
- * and its code (OCEAN_OK if none). */
+/* Text and code of the most recent failure on this client ("" and
+ * OCEAN_OK if none): an ERROR from the server, a call that failed (bad
+ * arguments, a full send queue, a timeout: "timed out after N ms: ..."),
+ * an undecodable message, or the end of the connection (the BYE's or
+ * close frame's text, else why it was lost), which replaces any earlier
+ * one.  An empty oc_client_next_frame poll (timeout 0) is not a failure. */
 ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen);
 
 /* The qz accuracy of oc_subscribe_default (the viewer's: height tiles >=
@@ -339,7 +343,8 @@ ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen);
 void oc_subscribe_default(proto_subscribe *s);
 
 /* Sends SUBSCRIBE (validated by the encoder first).  May be sent again to
- * change the subscription.  OCEAN_ESTATE before READY. */
+ * change the subscription.  OCEAN_ESTATE before READY, OCEAN_EIO once the
+ * connection closed (every send does the same). */
 ocean_result oc_client_subscribe(oc_client *c, const proto_subscribe *s);
 
 /* A level camera at (0, 20, 0), 60 degree fov, 1920x1080, at rest. */
@@ -371,8 +376,9 @@ void oc_camera_default(proto_camera *cam);
 ocean_result oc_client_send_camera(oc_client *c, const proto_camera *cam, uint32_t *seq_out);
 
 /* Takes the oldest queued frame, waiting up to timeout_ms (0: no wait,
- * -1: forever).  OCEAN_OK and *out, or OCEAN_ESTATE on timeout (*out NULL)
- * or OCEAN_EIO once the connection is closed and the queue empty. */
+ * -1: forever).  OCEAN_OK and *out, or OCEAN_ESTATE on timeout (*out NULL;
+ * last_error "timed out after N ms" unless timeout_ms is 0) or OCEAN_EIO
+ * once the connection is closed and the queue empty. */
 ocean_result oc_client_next_frame(oc_client *c, int timeout_ms, oc_frame **out);
 
 /* Latest topology received (borrowed; valid until the client is destroyed
