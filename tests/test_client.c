@@ -444,6 +444,7 @@ typedef struct fake_conn {
     uint32_t tick;
     uint8_t *rx;
     size_t rx_len;
+    int close_after;      /* close once the queued messages are written */
 } fake_conn;
 
 typedef struct fake_server {
@@ -616,6 +617,16 @@ static void fake_handle(fake_server *s, fake_conn *fc, const uint8_t *buf, size_
             fake_frame(s, fc, m.u.camera.render_time, m.hdr.seq);
         break;
     case PROTO_QUERY: {
+        if (m.u.query.points[0] == 777) {
+            /* BYE, then the connection closes */
+            proto_msg b;
+            proto_msg_init(&b, PROTO_BYE);
+            b.u.bye.reason = 2;
+            snprintf(b.u.bye.message, sizeof b.u.bye.message, "fake server shutting down");
+            fake_queue(fc, &b);
+            fc->close_after = 1;
+            break;
+        }
         if (m.u.query.points[0] == 666) {
             /* hostile: a message with a bad magic, then one lying about its
              * length, then a valid answer */
@@ -739,8 +750,11 @@ static int fake_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user
             fc->out_len--;
             if (n < 0)
                 return -1;
-            if (fc->out_len)
+            if (fc->out_len || fc->close_after)
                 lws_callback_on_writable(wsi);
+        } else if (fc->close_after) {
+            lws_close_reason(wsi, LWS_CLOSE_STATUS_GOINGAWAY, (unsigned char *)"away", 4);
+            return -1;
         }
         break;
     case LWS_CALLBACK_CLOSED:
@@ -1455,6 +1469,56 @@ static void errors_follow_the_latest_failure(void **state)
     oc_client_destroy(c);
 }
 
+typedef struct close_seen {
+    int calls, reason;
+    char message[300];
+} close_seen;
+
+static void on_close_cb(void *user, oc_client *c, int reason, const char *message)
+{
+    (void)c;
+    close_seen *cs = user;
+    cs->calls++;
+    cs->reason = reason;
+    snprintf(cs->message, sizeof cs->message, "%s", message);
+}
+
+/* on_close after a BYE gets the BYE's reason and message, as the header
+ * says (it got "connection closed", the transport's word that follows). */
+static void on_close_gets_bye(void **state)
+{
+    (void)state;
+    fake_server *s = fake_start();
+    char url[64], err[256];
+    fake_url(s, url, sizeof url);
+    close_seen cs;
+    memset(&cs, 0, sizeof cs);
+    oc_options o;
+    oc_options_default(&o);
+    o.url = url;
+    o.cb.user = &cs;
+    o.cb.on_close = on_close_cb;
+    oc_client *c;
+    assert_int_equal(oc_connect(&o, 5000, &c, err, sizeof err), OCEAN_OK);
+    double xz[2] = {777, 0};
+    oc_query_result q;
+    assert_int_equal(oc_client_query(c, xz, 1, 0, 0, 5000, &q), OCEAN_EIO);
+    for (int i = 0; i < 100 && oc_client_state(c) != OC_CLOSED; i++)
+        oc_service(c, 20);
+    assert_int_equal(oc_client_state(c), OC_CLOSED);
+    assert_int_equal(cs.calls, 1);
+    assert_int_equal(cs.reason, 2);
+    if (strcmp(cs.message, "fake server shutting down") != 0) {
+        print_error("on_close after BYE got \"%s\"\n", cs.message);
+        fail();
+    }
+    char msg[512];
+    assert_int_equal(oc_client_last_error(c, msg, sizeof msg), OCEAN_EIO);
+    assert_non_null(strstr(msg, "fake server shutting down"));
+    oc_client_destroy(c);
+    fake_stop(s);
+}
+
 /* Heap in use (glibc: every arena, and mmapped blocks). */
 static size_t heap_in_use(void)
 {
@@ -1757,6 +1821,7 @@ int main(void)
         cmocka_unit_test(service_zero_drains),
         cmocka_unit_test(send_queue_bounded),
         cmocka_unit_test(errors_follow_the_latest_failure),
+        cmocka_unit_test(on_close_gets_bye),
         cmocka_unit_test(header_only_frames),
         cmocka_unit_test(hostile_server_messages),
         cmocka_unit_test(daemon_round_trip),

@@ -266,6 +266,8 @@ struct oc_client {
     int bye_reason;
     int closed_notified;
     int close_recorded;           /* [mu] last_err already says why it ended */
+    int bye_received;             /* [mu] the server said BYE: */
+    char bye_msg[PROTO_BYE_MSG_MAX + 1];        /* [mu] its message */
     char close_msg[PROTO_ERROR_MSG_MAX + 64];   /* [mu] and this is why */
     oc_client_stats st;           /* [mu] */
 };
@@ -977,6 +979,8 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
                             m.u.bye.message);
             snprintf(c->close_msg, sizeof c->close_msg, "%s", c->last_err_msg);
             c->close_recorded = 1;
+            c->bye_received = 1;
+            snprintf(c->bye_msg, sizeof c->bye_msg, "%s", m.u.bye.message);
             break;
         default:
             break;
@@ -1020,11 +1024,15 @@ static void notify_closed(oc_client *c, int reason, const char *msg)
     pthread_mutex_lock(&l->mu);
     int call = mark_closed_locked(c, reason, msg, &async);
     int r = c->bye_reason;
+    /* after a BYE, on_close gets its message (the header's contract), not
+     * the transport's "connection closed" that follows it */
+    char why[sizeof c->close_msg];
+    snprintf(why, sizeof why, "%s", c->bye_received ? c->bye_msg : msg ? msg : "");
     c->busy++;
     pthread_mutex_unlock(&l->mu);
     run_async_failures(c, async);
     if (call && c->opt.cb.on_close)
-        c->opt.cb.on_close(c->opt.cb.user, c, r, msg ? msg : "");
+        c->opt.cb.on_close(c->opt.cb.user, c, r, why);
     pthread_mutex_lock(&l->mu);
     c->busy--;
     pthread_cond_broadcast(&l->cv);
