@@ -330,8 +330,9 @@ ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen);
  * (clients/web): layout 1 (shared cascade tiles; the library sums the
  * cascades and displaces the mesh: oc_frame_sample,
  * oc_frame_mesh_positions), every effect, every cascade (layers 4; the
- * server sends those it has), concentric mesh, codec qz at accuracy 1e-3,
- * 64-sample tiles, antialias cutoff policy, live at 30 Hz, 8 LOD levels
+ * server sends those it has), concentric mesh, codec qz at accuracy
+ * OC_ACCURACY_DEFAULT (5e-3), 64-sample tiles, antialias cutoff policy,
+ * live at 30 Hz, 8 LOD levels
  * (layout 0 only), server default spacing and range.  Subscribing as the
  * viewer does lets the daemon serve the library the very tile encodings it
  * already made for viewers.  Set layout = 0 for server-summed world tiles
