@@ -848,6 +848,27 @@ static void fake_url(fake_server *s, char *out, size_t n) { snprintf(out, n, "ws
 
 /* ============================================================ net tests */
 
+/* Argument errors say which argument, and *out is NULL on every failure
+ * (a NULL o was "no options" and left *out as it was). */
+static void create_argument_errors(void **state)
+{
+    (void)state;
+    oc_options o;
+    oc_options_default(&o);
+    o.url = "ws://127.0.0.1:9/";
+    char err[256];
+    oc_client *c = (oc_client *)&o; /* not NULL: must be cleared */
+    assert_int_equal(oc_client_create(NULL, &c, err, sizeof err), OCEAN_EINVAL);
+    assert_null(c);
+    assert_non_null(strstr(err, "o is NULL"));
+    assert_int_equal(oc_client_create(&o, NULL, err, sizeof err), OCEAN_EINVAL);
+    assert_non_null(strstr(err, "out is NULL"));
+    c = (oc_client *)&o;
+    o.url = "http://nowhere/";
+    assert_int_equal(oc_client_create(&o, &c, err, sizeof err), OCEAN_EINVAL);
+    assert_null(c);
+}
+
 static void connect_refused(void **state)
 {
     (void)state;
@@ -1809,6 +1830,7 @@ int main(void)
         cmocka_unit_test(path_bad),
         cmocka_unit_test(store_round_trip),
         cmocka_unit_test(store_compare),
+        cmocka_unit_test(create_argument_errors),
         cmocka_unit_test(connect_refused),
         cmocka_unit_test(silent_server_destroy),
         cmocka_unit_test(live_frames_and_queries),

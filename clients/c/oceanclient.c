@@ -1566,11 +1566,12 @@ static void free_client_mem(oc_client *c)
 
 ocean_result oc_client_create(const oc_options *o, oc_client **out, char *err, size_t errlen)
 {
+    if (out)
+        *out = NULL; /* on every failure, as the contract says */
     if (!out || !o) {
-        ocean_seterr(err, errlen, "no options");
+        ocean_seterr(err, errlen, !out ? "out is NULL: nowhere to put the client" : "no options (o is NULL)");
         return OCEAN_EINVAL;
     }
-    *out = NULL;
     oc_url url;
     ocean_result r = oc_url_parse(o->url, &url, err, errlen);
     if (r != OCEAN_OK)

@@ -283,7 +283,8 @@ typedef enum oc_state {
  * (lws_client_connect_via_info, subprotocol PROTO_SUBPROTOCOL) on its next
  * pass; progress happens while the loop is serviced, and a refused or
  * failed connect shows as OC_CLOSED with the reason in
- * oc_client_last_error.  OCEAN_EINVAL for a bad URL or options. */
+ * oc_client_last_error.  OCEAN_EINVAL for a bad URL or options, or a NULL
+ * o or out (err says which).  On any failure *out is NULL (out permitting). */
 ocean_result oc_client_create(const oc_options *o, oc_client **out, char *err, size_t errlen);
 
 /* Closes the connection (sends BYE NORMAL and a close frame when it can
