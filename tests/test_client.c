@@ -201,6 +201,16 @@ static void path_bad(void **state)
         {"t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h\n0,0,0,0,0,0,0,0,0,0,60,0,720\n", "p:2: field viewport_w must be an integer", 0},
         {"t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h\n0,0,0,0,0,0,0,0,0,0,60,1.5,720\n", "p:2: field viewport_w must be an integer", 0},
         {"t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h\n0,0,0,0,0,0,0,0,0,0,60,640\n", "p:2: expected 13 fields", 0},
+        /* version lines are exact ("v1x", "v01" read as v1) */
+        {"# oceand camera path v1x\n", "p:1: malformed version line", 0},
+        {"# oceand camera path v01\n", "p:1: malformed version line", 0},
+        {"# oceand camera path\n", "p:1: malformed version line", 0},
+        /* decimal numbers only ("0x10" read as 16) */
+        {"0,0x10,0,0,0,0,0,0,0,0,60\n", "p:2: field x \"0x10\" is not a number", 1},
+        /* CAMERA's orientation bounds, not +-3600: replay could not encode them */
+        {"0,0,0,0,0,0,0,361,0,0,60\n", "p:2: field yaw_deg beyond +-360 degrees", 1},
+        {"0,0,0,0,0,0,0,0,-91,0,60\n", "p:2: field pitch_deg beyond +-90 degrees", 1},
+        {"0,0,0,0,0,0,0,0,0,180.5,60\n", "p:2: field roll_deg beyond +-180 degrees", 1},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         char text[512];
@@ -222,6 +232,10 @@ static void path_bad(void **state)
     /* a missing file is reported with its name */
     assert_int_equal(oc_path_load("/nonexistent/x.csv", &p, err, sizeof err), OCEAN_ENOTFOUND);
     assert_non_null(strstr(err, "/nonexistent/x.csv"));
+    /* a NULL text says so (the message was empty) */
+    err[0] = 0;
+    assert_int_equal(oc_path_parse(NULL, 10, "f.csv", &p, err, sizeof err), OCEAN_EINVAL);
+    assert_non_null(strstr(err, "text is NULL"));
 }
 
 /* ========================================================= frame stores */

@@ -87,11 +87,16 @@ static const char *check_point(const oc_path_point *q, int *field)
             *field = 4 + i;
             return "beyond +-1e5 m/s";
         }
+    /* CAMERA's orientation bounds (PROTOCOL.md): +-3600 was read, and such a
+     * path failed only when replay encoded it */
+    static const double most[3] = {360, 90, 180};
+    static const char *const why[3] = {"beyond +-360 degrees (CAMERA yaw)", "beyond +-90 degrees (CAMERA pitch)",
+                                       "beyond +-180 degrees (CAMERA roll)"};
     for (int i = 0; i < 3; i++) {
         double a = i == 0 ? q->yaw_deg : i == 1 ? q->pitch_deg : q->roll_deg;
-        if (fabs(a) > 3600) {
+        if (fabs(a) > most[i]) {
             *field = 7 + i;
-            return "beyond +-3600 degrees";
+            return why[i];
         }
     }
     *field = 10;
@@ -109,11 +114,15 @@ static const char *check_point(const oc_path_point *q, int *field)
 ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_path **out, char *err,
                            size_t errlen)
 {
-    if (!out)
+    if (!out) {
+        ocean_seterr(err, errlen, "oc_path_parse: out is NULL");
         return OCEAN_EINVAL;
+    }
     *out = NULL;
-    if (!text && len)
+    if (!text && len) {
+        ocean_seterr(err, errlen, "oc_path_parse: text is NULL with len %zu", len);
         return OCEAN_EINVAL;
+    }
     if (!name)
         name = "path";
     oc_path *p = calloc(1, sizeof *p);
@@ -147,12 +156,25 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
         line[ll] = 0;
         char *s = trim(line);
         if (*s == '#') {
-            unsigned v;
-            if (sscanf(s, "# oceand camera path v%u", &v) == 1 && v != 1) {
-                ocean_seterr(err, errlen, "%s:%u: camera path format version %u; this reader knows v1",
-                       name, lineno, v);
-                res = OCEAN_EVERSION;
-                break;
+            static const char magic[] = "# oceand camera path";
+            if (strncmp(s, magic, sizeof magic - 1) == 0) {
+                /* exactly " v" and a decimal version: "v1x" and "v01" were
+                 * read as version 1 */
+                const char *v = s + sizeof magic - 1;
+                v += *v == ' ';
+                size_t nd = v[0] == 'v' && v[-1] == ' ' ? strspn(v + 1, "0123456789") : 0;
+                if (nd == 0 || v[1 + nd] != 0 || (v[1] == '0' && nd > 1)) {
+                    ocean_seterr(err, errlen, "%s:%u: malformed version line \"%s\" (expected \"%s v1\")", name,
+                                 lineno, s, magic);
+                    res = OCEAN_EFORMAT;
+                    break;
+                }
+                if (nd != 1 || v[1] != '1') {
+                    ocean_seterr(err, errlen, "%s:%u: camera path format version %s; this reader knows v1", name,
+                                 lineno, v + 1);
+                    res = OCEAN_EVERSION;
+                    break;
+                }
             }
             continue;
         }
@@ -198,7 +220,9 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
             errno = 0;
             char *end;
             v[nf] = strtod(f, &end);
-            if (*end || errno == ERANGE) {
+            /* decimal only (RECORDING.md writes %.17g): strtod also reads
+             * hex ("0x10" was 16) */
+            if (*end || errno == ERANGE || strpbrk(f, "xX")) {
                 ocean_seterr(err, errlen, "%s:%u: field %s \"%s\" is not a number in \"%s\"", name, lineno,
                        FIELD[nf], f, orig);
                 res = OCEAN_EFORMAT;
