@@ -1471,6 +1471,10 @@ static void errors_follow_the_latest_failure(void **state)
     assert_int_equal(oc_client_query(c, xz, 1, 1, NAN, 100, &q), OCEAN_EINVAL);
     assert_int_equal(oc_client_last_error(c, msg, sizeof msg), OCEAN_EINVAL);
     assert_non_null(strstr(msg, "not finite"));
+    /* at_time is 0 or 1 (7 and 255 were sent as 1) */
+    assert_int_equal(oc_client_query(c, xz, 1, 7, 1.0, 100, &q), OCEAN_EINVAL);
+    assert_int_equal(oc_client_last_error(c, msg, sizeof msg), OCEAN_EINVAL);
+    assert_non_null(strstr(msg, "at_time 7"));
     proto_sea sea;
     assert_int_equal(oc_client_sea_state(c, &sea, NULL), OCEAN_OK);
     assert_int_equal(oc_client_sea_state_set(c, &sea, 0, NULL, 100), OCEAN_EINVAL);

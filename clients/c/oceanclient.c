@@ -1977,6 +1977,10 @@ static ocean_result query_send(oc_client *c, const double *xz, size_t n, int at_
             pthread_mutex_unlock(&c->loop->mu);
             return OCEAN_EINVAL;
         }
+    /* the protocol's two values (PROTOCOL.md QUERY): 7 or 255 were sent
+     * as 1 */
+    if (at_time != 0 && at_time != 1)
+        return fail_local(c, OCEAN_EINVAL, "query at_time %d: 0 (the latest tick) or 1 (at t)", at_time);
     if (at_time && !isfinite(t))
         return fail_local(c, OCEAN_EINVAL, "query time t = %g is not finite", t);
     proto_msg m;

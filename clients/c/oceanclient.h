@@ -405,7 +405,8 @@ typedef void (*oc_query_fn)(void *user, oc_client *c, ocean_result res,
                             const oc_query_result *r);
 
 /* Sends QUERY for n points xz[2i], xz[2i+1] (world x, z in double).
- * at_time 0: the latest tick (t ignored); 1: at sim time t.  The answer
+ * at_time 0: the latest tick (t ignored); 1: at sim time t; any other
+ * value is refused (OCEAN_EINVAL).  The answer
  * goes to fn (on the servicing thread).  *query_id (may be NULL) gets the
  * id.  OCEAN_EINVAL for n = 0, n above the server's limit or non-finite
  * input. */
