@@ -193,7 +193,7 @@ install: all
 	install -m 644 $(OCLIB_A) $(OCLIB_SO) $(DESTDIR)$(PREFIX)/lib/
 	ln -sf $(notdir $(OCLIB_SO)) $(DESTDIR)$(PREFIX)/lib/liboceanclient.so.$(OC_SOVERSION)
 	ln -sf $(notdir $(OCLIB_SO)) $(DESTDIR)$(PREFIX)/lib/liboceanclient.so
-	install -m 644 $(filter-out sim/ocean_internal.h,$(wildcard sim/*.h)) protocol/*.h clients/c/*.h \
+	install -m 644 $(filter-out sim/ocean_internal.h sim/mesh_internal.h,$(wildcard sim/*.h)) protocol/*.h clients/c/*.h \
 	    $(DESTDIR)$(PREFIX)/include/oceand/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(OC_VERSION)|g' \
 	    -e 's|@LIBS_PRIVATE@|$(LIB_LDLIBS) -fopenmp|g' \

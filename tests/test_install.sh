@@ -28,6 +28,11 @@ for f in bin/oceand bin/ocean-client bin/ocean-sim lib/liboceanclient.a lib/libo
          share/oceand/scenes/storm.conf etc/oceand/oceand.conf lib/systemd/system/oceand.service; do
     [[ -e $prefix/$f ]] || fail "not installed: $f"
 done
+# private headers stay private; the .pc's comment is not rewritten by install
+for f in include/oceand/ocean_internal.h include/oceand/mesh_internal.h; do
+    [[ -e $prefix/$f ]] && fail "a private header is installed: $f"
+done
+grep -q "^#.*$prefix" "$prefix/lib/pkgconfig/oceanclient.pc" && fail "install rewrote the .pc's comment: $(head -3 "$prefix/lib/pkgconfig/oceanclient.pc")"
 soname=$(readelf -d "$prefix/lib/liboceanclient.so" | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p')
 [[ $soname == liboceanclient.so.0 ]] || fail "soname '$soname', want liboceanclient.so.0"
 
