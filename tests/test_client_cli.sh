@@ -155,7 +155,9 @@ json "$tmp/q.json" "len(d['points']) == 2 and all(abs(p['height']) < 50 and abs(
 echo "== sea ($SECONDS s)"
 "$OC" sea "$URL" >"$tmp/sea.json" || fail "sea exited $?"
 json "$tmp/sea.json" "d['wind_u10'] >= 0 and d['depth_m'] > 0 and d['tp'] >= 0"
-"$OC" sea "$URL" --set --token not-the-token --wind 3 >/dev/null 2>"$tmp/sea.err" && fail "sea --set with a wrong token succeeded"
+"$OC" sea "$URL" --set --token not-the-token --wind 3 >"$tmp/sea.out" 2>"$tmp/sea.err" && fail "sea --set with a wrong token succeeded"
+# a refused --set prints only the error (it printed the unchanged state too)
+[[ -s $tmp/sea.out ]] && fail "sea --set refused, yet stdout has: $(head -3 "$tmp/sea.out")"
 grep -q "SEA_STATE" "$tmp/sea.err" || fail "no server ERROR shown: $(cat "$tmp/sea.err")"
 "$OC" sea "$URL" --set 2>"$tmp/sea.err"; [[ $? -eq 2 ]] || fail "--set without --token accepted"
 "$OC" sea "$URL" --set --token $TOKEN 2>"$tmp/sea.err"; [[ $? -eq 2 ]] || fail "--set with nothing to change accepted"

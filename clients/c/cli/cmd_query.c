@@ -328,11 +328,15 @@ int cmd_sea(int argc, char **argv)
         }
         oc_client_sea_state(c, &sea, &eff);
     }
-    cJSON *o = sea_json(&sea, eff);
-    char *txt = cJSON_Print(o);
-    printf("%s\n", txt);
-    free(txt);
-    cJSON_Delete(o);
+    /* a refused --set prints only its error: the state in force on stdout
+     * read as the change having been made */
+    if (rc == 0) {
+        cJSON *o = sea_json(&sea, eff);
+        char *txt = cJSON_Print(o);
+        printf("%s\n", txt);
+        free(txt);
+        cJSON_Delete(o);
+    }
     oc_client_destroy(c);
     return rc;
 }
