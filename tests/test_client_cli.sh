@@ -38,6 +38,11 @@ json "$tmp/watch.json" "d['frames'] > 0 and d['bytes'] > 0 and d['latency_p50_ms
 "$OC" watch "$URL" --frames 1 --seconds 5 --json --mesh none >"$tmp/watch1.json" || fail "watch --frames 1 exited $?"
 json "$tmp/watch1.json" "d['frames'] == 1 and d['fps'] is None"
 
+# --layout is every subscribing command's (watch had only --mesh-codec,
+# for layout 0, and no way to ask for it)
+"$OC" watch "$URL" --frames 2 --seconds 5 --json --layout 0 --mesh-codec qz >"$tmp/watch0.json" || fail "watch --layout 0 exited $?"
+json "$tmp/watch0.json" "d['frames'] == 2 and d['frames_layout0'] == 2 and d['frames_layout1'] == 0 and d['decode_errors'] == 0"
+
 echo "== bad options are refused by name ($SECONDS s)"
 "$OC" watch "$URL" --bogus 2>"$tmp/err" && fail "--bogus accepted"
 grep -q -- "--bogus" "$tmp/err" || fail "message does not name --bogus: $(cat "$tmp/err")"

@@ -241,11 +241,7 @@ int cmd_load(int argc, char **argv)
      * clamps both to what the scene has), 64-sample tiles at accuracy 5e-3,
      * 8 levels, layout 1 */
     occli_sub_default(&s);
-    int layout = PROTO_LAYOUT_CASCADE;
     const occli_opt opts[] = {
-        {.name = "layout", .kind = OCCLI_INT, .target = &layout, .min = 0, .max = 1,
-         .help = "N  0: world tiles summed per camera, mesh displaced by the server;\n"
-                 "                       1: shared cascade tiles (the viewer's and the library's)"},
         {"clients", OCCLI_INT, &nclients, 1, 10000, "N  viewers", NULL},
         {"seconds", OCCLI_DOUBLE, &seconds, 0.1, 1e6, "S  measured duration", NULL},
         {"json", OCCLI_FLAG, &json, 0, 0, "print a JSON summary", NULL},
@@ -284,7 +280,6 @@ int cmd_load(int argc, char **argv)
     memset(&cfg, 0, sizeof cfg);
     if (occli_sub_build("load", &s, &cfg.sub, &cfg.cam0))
         return 2;
-    cfg.sub.layout = (uint8_t)layout;
     if (threads == 0) {
         long nc = sysconf(_SC_NPROCESSORS_ONLN);
         threads = nc < 1 ? 1 : nc > 4 ? 4 : (int)nc;
@@ -341,7 +336,7 @@ int cmd_load(int argc, char **argv)
         cJSON_AddNumberToObject(o, "seconds", wall);
         cJSON_AddNumberToObject(o, "rate_hz", s.rate);
         cJSON_AddStringToObject(o, "codec", s.codec);
-        cJSON_AddNumberToObject(o, "layout", layout);
+        cJSON_AddNumberToObject(o, "layout", cfg.sub.layout);
         cJSON_AddNumberToObject(o, "effects", cfg.sub.effects);
         cJSON_AddNumberToObject(o, "layers", cfg.sub.layers);
         cJSON_AddNumberToObject(o, "tile_size", cfg.sub.tile_size);
@@ -391,7 +386,7 @@ int cmd_load(int argc, char **argv)
         free(txt);
         cJSON_Delete(o);
     } else {
-        printf("layout %d (frames: %llu layout 0, %llu layout 1)\n", layout,
+        printf("layout %d (frames: %llu layout 0, %llu layout 1)\n", cfg.sub.layout,
                (unsigned long long)R.frames_layout[0], (unsigned long long)R.frames_layout[1]);
         printf("viewers %d/%d, %.2f s at %.1f Hz: %.1f frames/viewer (min %llu, max %llu, %.1f fps), "
                "latency p50 %.2f ms p99 %.2f ms max %.2f ms, skipped %llu, %.0f B/viewer/s, "

@@ -57,7 +57,7 @@ int cmd_watch(int argc, char **argv)
                (double)hello.tick_rate_hz, hello.client_id, proto_codec_name((proto_codec)sub.codec),
                (double)sub.frame_rate_hz);
     occli_vec lat = {0};
-    uint64_t frames = 0, bytes = 0, tiles = 0, bad_tiles = 0;
+    uint64_t frames = 0, bytes = 0, tiles = 0, bad_tiles = 0, frames_layout[2] = {0, 0};
     double e_sum = 0, first_t = NAN, last_t = NAN, last_cut = NAN, first_rx = NAN, last_rx = NAN;
     double t0 = occli_mono(), last_cam = t0;
     double end = t0 + seconds;
@@ -89,6 +89,7 @@ int cmd_watch(int argc, char **argv)
         frames++;
         bytes += f->raw_len;
         tiles += f->info.tile_count;
+        frames_layout[f->info.layout == PROTO_LAYOUT_CASCADE]++;
         for (unsigned i = 0; i < f->info.tile_count; i++)
             bad_tiles += f->tiles[i].decode_result != OCEAN_OK;
         e_sum += f->info.e_error;
@@ -130,6 +131,8 @@ int cmd_watch(int argc, char **argv)
         else
             cJSON_AddNullToObject(o, "fps");
         cJSON_AddNumberToObject(o, "tiles", (double)tiles);
+        cJSON_AddNumberToObject(o, "frames_layout0", (double)frames_layout[0]);
+        cJSON_AddNumberToObject(o, "frames_layout1", (double)frames_layout[1]);
         cJSON_AddNumberToObject(o, "tile_decode_errors", (double)bad_tiles);
         if (lat.n) {
             cJSON_AddNumberToObject(o, "latency_p50_ms", p50);

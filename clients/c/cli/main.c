@@ -352,6 +352,7 @@ void occli_sub_default(occli_sub *s)
             snprintf(fx + strlen(fx), sizeof fx - strlen(fx), "%s%s", fx[0] ? "," : "", fxn[i].name);
     s->effects = fx;
     s->mesh = d.mesh_kind < 4 ? mesh_names[d.mesh_kind] : "concentric";
+    s->layout = d.layout;
     s->mesh_codec = d.mesh_codec == PROTO_MESH_CODEC_QZ ? "qz" : "f32";
     s->policy = d.cutoff_policy < 3 ? policy_names[d.cutoff_policy] : "antialias";
     s->rate = d.frame_rate_hz;
@@ -383,6 +384,9 @@ int occli_sub_build(const char *cmd, const occli_sub *s, proto_subscribe *sub, p
         return 2;
     }
     sub->codec = (uint8_t)codec;
+    /* --layout is every subscribing command's (--mesh-codec, for layout 0,
+     * did nothing where only load had it) */
+    sub->layout = (uint8_t)s->layout;
     unsigned fx = 0;
     char buf[256];
     snprintf(buf, sizeof buf, "%s", s->effects);

@@ -39,6 +39,7 @@ typedef struct occli_sub {
     const char *codec;     /* --codec NAME */
     const char *effects;   /* --effects LIST */
     const char *mesh;      /* --mesh KIND */
+    int layout;            /* --layout 0|1 */
     const char *mesh_codec;/* --mesh-codec f32|qz (layout 0) */
     const char *policy;    /* --cutoff-policy NAME */
     double rate;           /* --rate HZ */
@@ -58,6 +59,8 @@ typedef struct occli_sub {
     {"codec", OCCLI_STRING, &(s)->codec, 0, 0, "NAME  tile codec: f32 f16 qz exr-zip exr-piz exr-b44 exr-b44a", NULL}, \
     {"effects", OCCLI_STRING, &(s)->effects, 0, 0, "LIST  height,displacement,normals,foam,near or all", NULL},        \
     {"mesh", OCCLI_STRING, &(s)->mesh, 0, 0, "KIND  concentric chunked projected none", NULL},                        \
+    {"layout", OCCLI_INT, &(s)->layout, 0, 1, "N  0: world tiles summed per camera, mesh displaced by the server;\n"     \
+                                              "                       1: shared cascade tiles (the viewer's and the library's)", NULL}, \
     {"mesh-codec", OCCLI_STRING, &(s)->mesh_codec, 0, 0, "NAME  layout-0 mesh positions: f32 or qz (at --accuracy)", NULL}, \
     {"cutoff-policy", OCCLI_STRING, &(s)->policy, 0, 0, "NAME  none seed antialias", NULL},                          \
     {"rate", OCCLI_DOUBLE, &(s)->rate, 0.1, 240, "HZ  frame rate asked of the server", NULL},                        \
@@ -69,7 +72,7 @@ typedef struct occli_sub {
     {"range", OCCLI_DOUBLE, &(s)->range, 0, 1e7, "M  view range, 0 = server default", NULL},                         \
     {"pos", OCCLI_STRING, &(s)->pos, 0, 0, "X,Y,Z  camera position", NULL},                                          \
     {"vel", OCCLI_STRING, &(s)->vel, 0, 0, "VX,VY,VZ  camera velocity", NULL},                                       \
-    {"yaw", OCCLI_DOUBLE, &(s)->yaw, -3600, 3600, "DEG  camera yaw", NULL},                                          \
+    {"yaw", OCCLI_DOUBLE, &(s)->yaw, -360, 360, "DEG  camera yaw", NULL},                                          \
     {"pitch", OCCLI_DOUBLE, &(s)->pitch, -90, 90, "DEG  camera pitch", NULL},                                        \
     {"fov", OCCLI_DOUBLE, &(s)->fov, 0.01, 179.9, "DEG  vertical field of view", NULL},                              \
     {"timeout", OCCLI_INT, &(s)->timeout_ms, 1, 3600000, "MS  connect / reply timeout", NULL}
