@@ -160,6 +160,7 @@ ocean_result srv_hub_init(srv_hub *h, const srv_settings *s)
         return OCEAN_ENOMEM;
     }
     h->settings = *s;
+    h->file_params = s->params;
     h->tick_rate = s->srv.tick_rate;
     h->next_id = 1;
     struct timespec rt;

@@ -196,6 +196,8 @@ typedef struct srv_hub {
     int near_spacing_said;                /* [hub.lock] the layout-0 near-field note, once a run */
     uint32_t next_id;                     /* [hub.lock] */
     srv_settings settings;                /* [hub.lock] in force; copy before use */
+    ocean_params file_params;             /* [hub.lock] the sea as the configuration last gave it
+                                             (settings.params follows SEA_STATE changes too) */
     uint64_t settings_gen;                /* [hub.lock] bumps on reload */
     /* The sea-state timeline.  Every change enters it (and is announced to
      * every client that has had its HELLO) in one hold of hub.lock, and a

@@ -62,7 +62,7 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     msg[0] = 0;
     pthread_mutex_lock(&h->lock);
     const srv_config *o = &h->settings.srv;
-    const char *restart[4];
+    const char *restart[8]; /* one per key tested below (6): 4 overflowed */
     int nr = 0;
     if (o->port != s->srv.port) restart[nr++] = "server.port";
     if (strcmp(o->bind, s->srv.bind)) restart[nr++] = "server.bind";
@@ -84,14 +84,21 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     /* effects and near field are fixed by the running ocean's scene */
     h->settings.effects = keep.effects;
     h->settings.params = keep.params;
-    if (memcmp(&keep.params, &s->params, sizeof s->params) != 0 && h->redis) {
+    /* The file's sea against the file's sea of the last load, not against
+     * the sea in force: a reload of an unchanged file undid a SEA_STATE set
+     * and announced the old sea to every client. */
+    int file_sea_changed = memcmp(&h->file_params, &s->params, sizeof s->params) != 0;
+    h->file_params = s->params;
+    if (file_sea_changed && h->redis) {
         fprintf(stderr, "oceand: reload: the sea is replicated (server.redis): the file's sea is not "
                 "applied; change it with SEA_STATE set\n");
-    } else if (memcmp(&keep.params, &s->params, sizeof s->params) != 0) {
+    } else if (file_sea_changed) {
         /* a changed sea enters the timeline now, announced to every client */
         char why[200];
         if (srv_hub_sea_schedule(h, &s->params, -INFINITY, NULL, why, sizeof why) != OCEAN_OK)
             fprintf(stderr, "oceand: reload: %s\n", why);
+        else
+            fprintf(stderr, "oceand: reload: the file's sea changed: it replaces the sea in force\n");
     }
     h->settings_gen++;
     pthread_cond_signal(&h->wake);

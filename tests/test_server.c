@@ -2223,6 +2223,71 @@ static void on_close_full(void *user, oc_client *c, int reason, const char *msg)
     full_reason = reason;
 }
 
+/* A reload: every key that needs a restart is named (six at once wrote
+ * past a four-entry array: ASan's stack-buffer-overflow), and a file whose
+ * sea did not change leaves a SEA_STATE change in force (a reload of the
+ * same file put the old wind back and announced it to every client). */
+static void reload_restart_keys_and_runtime_sea(void **state)
+{
+    (void)state;
+    srv_settings s2 = settings;
+    s2.srv.port = 0;
+    srv_daemon *d;
+    char err[256];
+    assert_int_equal(srv_daemon_start(&s2, &d, err, sizeof err), OCEAN_OK);
+    srv_hub *h = srv_daemon_hub(d);
+    /* the sea changed at run time (as SEA_STATE set does) and applied */
+    ocean_params p = s2.params;
+    p.sea.wind_u10 = s2.params.sea.wind_u10 + 1.5;
+    char why[200];
+    pthread_mutex_lock(&h->lock);
+    assert_int_equal(srv_hub_sea_schedule(h, &p, -INFINITY, NULL, why, sizeof why), OCEAN_OK);
+    pthread_mutex_unlock(&h->lock);
+    double end = now_s() + 5;
+    double wind = 0;
+    while (now_s() < end) {
+        pthread_mutex_lock(&h->lock);
+        wind = h->settings.params.sea.wind_u10;
+        pthread_mutex_unlock(&h->lock);
+        if (wind == p.sea.wind_u10) break;
+        usleep(20000);
+    }
+    assert_true(wind == p.sea.wind_u10);
+    /* the same file again: the runtime sea stays, nothing is scheduled */
+    char msg[512];
+    assert_int_equal(srv_daemon_reload(d, &s2, msg, sizeof msg), OCEAN_OK);
+    assert_string_equal(msg, "");
+    pthread_mutex_lock(&h->lock);
+    int pending = h->n_sea_pending;
+    wind = h->settings.params.sea.wind_u10;
+    pthread_mutex_unlock(&h->lock);
+    assert_int_equal(pending, 0);
+    assert_true(wind == p.sea.wind_u10);
+    /* six keys that need a restart, all named */
+    srv_settings s3 = s2;
+    s3.srv.port = 1;
+    snprintf(s3.srv.bind, sizeof s3.srv.bind, "127.0.0.2");
+    snprintf(s3.srv.web_root, sizeof s3.srv.web_root, "/nonexistent");
+    snprintf(s3.srv.epoch, sizeof s3.srv.epoch, "2026-01-01T00:00:00Z");
+    snprintf(s3.srv.redis, sizeof s3.srv.redis, "127.0.0.1:1");
+    s3.srv.workers = s2.srv.workers + 1;
+    assert_int_equal(srv_daemon_reload(d, &s3, msg, sizeof msg), OCEAN_OK);
+    const char *keys[] = {"server.port", "server.bind", "server.web_root", "server.epoch", "server.redis",
+                          "server.workers"};
+    for (int i = 0; i < 6; i++)
+        if (!strstr(msg, keys[i])) fail_msg("reload of six restart keys: '%s' lacks %s", msg, keys[i]);
+    /* and a changed sea in the file is applied */
+    srv_settings s4 = s2;
+    s4.params.sea.wind_u10 = s2.params.sea.wind_u10 + 3.0;
+    assert_int_equal(srv_daemon_reload(d, &s4, msg, sizeof msg), OCEAN_OK);
+    pthread_mutex_lock(&h->lock);
+    pending = h->n_sea_pending;
+    double next = pending ? h->sea_pending[pending - 1].params.sea.wind_u10 : h->settings.params.sea.wind_u10;
+    pthread_mutex_unlock(&h->lock);
+    assert_true(next == s4.params.sea.wind_u10);
+    srv_daemon_stop(d);
+}
+
 static void max_clients_refused(void **state)
 {
     (void)state;
@@ -2422,6 +2487,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(hello_limits_are_honoured),
         cmocka_unit_test(http_metrics_and_status),
         cmocka_unit_test(recording_writes_camera_path),
+        cmocka_unit_test(reload_restart_keys_and_runtime_sea),
         cmocka_unit_test(max_clients_refused),
         cmocka_unit_test(connect_disconnect_cycles),
         cmocka_unit_test(sighup_and_sigterm),
