@@ -463,6 +463,16 @@ static void free_requests(srv_client *c)
     c->n_replay = 0;
 }
 
+/* Closes c's recording, saying what was lost if its file could not take
+ * the last lines. */
+static void close_recording(srv_client *c)
+{
+    char why[1200];
+    if (c->rec && srv_record_close(c->rec, why, sizeof why) != OCEAN_OK)
+        fprintf(stderr, "oceand: client %u: recording incomplete: %s\n", c->id, why);
+    c->rec = NULL;
+}
+
 void srv_client_unref(srv_client *c)
 {
     if (!c || atomic_fetch_sub(&c->refs, 1) != 1) return;
@@ -472,7 +482,7 @@ void srv_client_unref(srv_client *c)
     srv_msg_free(c->slot_frame);
     mesh_destroy(c->sim.mesh);
     free(c->sim.qz_refs);
-    srv_record_close(c->rec);
+    close_recording(c);
     free(c->rx);
     pthread_mutex_destroy(&c->out_lock);
     free(c);
@@ -494,8 +504,7 @@ void srv_client_remove(srv_client *c)
     c->wsi = NULL;
     free_requests(c);
     pthread_mutex_unlock(&h->lock);
-    srv_record_close(c->rec);
-    c->rec = NULL;
+    close_recording(c);
     srv_client_unref(c);
 }
 
@@ -975,9 +984,12 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         }
         pthread_mutex_unlock(&h->lock);
         if (r != OCEAN_OK) srv_client_send_error(c, buf, len, r, why);
-        else if (c->rec && (r = srv_record_camera(c->rec, t_rec, k)) != OCEAN_OK)
-            fprintf(stderr, "oceand: client %u: recording stopped %s\n", c->id,
-                    r == OCEAN_ETOOBIG ? "at server.record_max_bytes" : "after a write error");
+        else if (c->rec && (r = srv_record_camera(c->rec, t_rec, k)) != OCEAN_OK) {
+            char what[1200];
+            fprintf(stderr, "oceand: client %u: recording stopped %s%s\n", c->id,
+                    r == OCEAN_ETOOBIG ? "at server.record_max_bytes" : "after a write error: ",
+                    r == OCEAN_ETOOBIG ? "" : srv_record_why(c->rec, what, sizeof what));
+        }
         break;
     }
     case PROTO_QUERY: {

@@ -14,6 +14,8 @@ struct srv_record {
     FILE *f;
     double last_flush;
     int failed;
+    int err_no;                   /* errno of the first failed write, flush or close */
+    char path[1024];
     atomic_uint_fast64_t *used;   /* bytes written by every recording of the run */
     uint64_t quota;
 };
@@ -47,6 +49,7 @@ ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *sc
         free(r);
         return OCEAN_EIO;
     }
+    snprintf(r->path, sizeof r->path, "%s", name);
     fprintf(r->f, "# oceand camera path v1\n# client %u scene %s\n"
                   "t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h\n",
             client_id, scene && *scene ? scene : "-");
@@ -76,10 +79,12 @@ void srv_record_set_quota(srv_record *r, atomic_uint_fast64_t *used, uint64_t qu
 static ocean_result wrote(srv_record *r, int n)
 {
     int bad = n < 0;
+    if (bad) r->err_no = errno;
     if (!bad && r->used) atomic_fetch_add(r->used, (uint64_t)n);
     double now = mono();
     if (!bad && now - r->last_flush >= 1.0) {
         bad = fflush(r->f) != 0;
+        if (bad) r->err_no = errno;
         r->last_flush = now;
     }
     if (bad) {
@@ -87,6 +92,13 @@ static ocean_result wrote(srv_record *r, int n)
         return OCEAN_EIO;
     }
     return OCEAN_OK;
+}
+
+const char *srv_record_why(const srv_record *r, char *buf, size_t n)
+{
+    if (!r) return "";
+    snprintf(buf, n, "%s: %s", r->path, r->err_no ? strerror(r->err_no) : "write error");
+    return buf;
 }
 
 ocean_result srv_record_camera(srv_record *r, double t, const proto_camera *cam)
@@ -111,9 +123,16 @@ ocean_result srv_record_mode(srv_record *r, double t, int replay)
     return wrote(r, fprintf(r->f, "# subscribed at %.17g: mode %s\n", t, replay ? "replay" : "live"));
 }
 
-void srv_record_close(srv_record *r)
+ocean_result srv_record_close(srv_record *r, char *why, size_t whylen)
 {
-    if (!r) return;
-    if (r->f) fclose(r->f);
+    if (why && whylen) why[0] = 0;
+    if (!r) return OCEAN_OK;
+    /* the buffered tail is written here: a full disk shows at fclose (three
+     * short recordings were left empty and nothing was said) */
+    int bad = r->f && fclose(r->f) != 0;
+    if (bad && !r->err_no) r->err_no = errno;
+    ocean_result res = bad || (r->failed && r->err_no) ? OCEAN_EIO : OCEAN_OK;
+    if (res != OCEAN_OK && why) srv_record_why(r, why, whylen);
     free(r);
+    return res;
 }

@@ -34,7 +34,11 @@ void srv_record_set_quota(srv_record *r, atomic_uint_fast64_t *used, uint64_t qu
 ocean_result srv_record_camera(srv_record *r, double t, const proto_camera *cam);
 /* Writes one report line to f in the recording format (shared with tests). */
 int srv_record_format(FILE *f, double t, const proto_camera *cam);
-/* Flushes and closes.  Accepts NULL. */
-void srv_record_close(srv_record *r);
+/* "PATH: reason" of r's write failure into buf (n bytes); returns buf. */
+const char *srv_record_why(const srv_record *r, char *buf, size_t n);
+/* Flushes, closes and frees r.  OCEAN_EIO when a write, flush or the close
+ * failed (lines were lost): why (if not NULL) gets "PATH: reason".  Accepts
+ * NULL. */
+ocean_result srv_record_close(srv_record *r, char *why, size_t whylen);
 
 #endif

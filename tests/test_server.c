@@ -11,6 +11,7 @@
 #include <math.h>
 #include <setjmp.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -2367,6 +2368,92 @@ static void connect_disconnect_cycles(void **state)
     assert_int_equal(left, 0);
 }
 
+/* A recording whose file cannot take its lines says so, with the file and
+ * the reason: the real binary, its file size limited (RLIMIT_FSIZE: writes
+ * past 600 bytes fail with EFBIG, as on a full disk).  The buffered lines
+ * failed at fclose, unchecked: three short recordings on a full disk were
+ * left empty and nothing was logged. */
+static void recording_write_error_is_said(void **state)
+{
+    (void)state;
+    char exe[700], conf[400], log[400];
+    snprintf(exe, sizeof exe, "%s/oceand", exe_dir);
+    snprintf(conf, sizeof conf, "%s/fsize.conf", tmpdir);
+    snprintf(log, sizeof log, "%s/fsize.log", tmpdir);
+    write_conf(conf, 10, 100);
+    int pfd[2];
+    assert_int_equal(pipe(pfd), 0);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        int lf = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0644); /* opened before the limit */
+        dup2(pfd[1], 1);
+        dup2(lf, 2);
+        close(pfd[0]);
+        signal(SIGXFSZ, SIG_IGN); /* a write past the limit fails, the process lives */
+        struct rlimit rl = {600, 600};
+        setrlimit(RLIMIT_FSIZE, &rl);
+        execl(exe, exe, "--config", conf, (char *)NULL);
+        _exit(127);
+    }
+    close(pfd[1]);
+    FILE *out = fdopen(pfd[0], "r");
+    char line[512];
+    int p = 0;
+    while (fgets(line, sizeof line, out)) {
+        char *at = strstr(line, "http://127.0.0.1:");
+        if (at) {
+            p = atoi(at + strlen("http://127.0.0.1:"));
+            break;
+        }
+    }
+    assert_true(p > 0);
+    test_ws w;
+    assert_int_equal(test_ws_connect(&w, p, "/?record=1", PROTO_SUBPROTOCOL), 0);
+    proto_msg m;
+    assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+    proto_msg_free(&m);
+    proto_msg sm;
+    proto_msg_init(&sm, PROTO_SUBSCRIBE);
+    small_subscribe(&sm.u.subscribe);
+    sm.u.subscribe.mesh_kind = PROTO_MESH_NONE;
+    raw_send_msg(&w, &sm);
+    proto_msg cm;
+    proto_msg_init(&cm, PROTO_CAMERA);
+    oc_camera_default(&cm.u.camera);
+    for (int i = 0; i < 20; i++) { /* ~2.4 KB of lines, past the 600-byte limit */
+        cm.u.camera.pos[0] = 1e6 + 0.1 * i;
+        raw_send_msg(&w, &cm);
+    }
+    usleep(200000);
+    test_ws_close(&w);
+    int said = 0;
+    double end = now_s() + 5;
+    while (now_s() < end && !said) {
+        usleep(100000);
+        FILE *lf = fopen(log, "r");
+        if (!lf) continue;
+        while (fgets(line, sizeof line, lf))
+            if (strstr(line, "recording") && strstr(line, "/rec/client-") && strstr(line, "File too large"))
+                said = 1;
+        fclose(lf);
+    }
+    kill(pid, SIGTERM);
+    int status;
+    waitpid(pid, &status, 0);
+    fclose(out);
+    if (!said) {
+        char buf[2000] = "";
+        FILE *lf = fopen(log, "r");
+        if (lf) {
+            size_t n = fread(buf, 1, sizeof buf - 1, lf);
+            buf[n] = 0;
+            fclose(lf);
+        }
+        fail_msg("no log line naming the recording and its write error; the log:\n%s", buf);
+    }
+}
+
 /* SIGHUP reloads (a changed sea is announced), SIGTERM closes every client
  * with BYE shutdown and exits 0: the real binary. */
 static int term_reason = -2;
@@ -2487,6 +2574,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(hello_limits_are_honoured),
         cmocka_unit_test(http_metrics_and_status),
         cmocka_unit_test(recording_writes_camera_path),
+        cmocka_unit_test(recording_write_error_is_said),
         cmocka_unit_test(reload_restart_keys_and_runtime_sea),
         cmocka_unit_test(max_clients_refused),
         cmocka_unit_test(connect_disconnect_cycles),
