@@ -432,22 +432,42 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
         return -1;
     }
     case LWS_CALLBACK_HTTP: {
+        /* The mounts match by prefix: only the exact paths are answered
+         * (/metricsfoo was served the metrics), GET and HEAD alike (HEAD
+         * got 404, which a load balancer's health check reads as down);
+         * other methods get 405 naming the two. */
         char uri[128] = "";
-        lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI);
+        int head = 0;
+        if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) <= 0) {
+            if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_HEAD_URI) > 0) {
+                head = 1;
+            } else {
+                uint8_t hdr[LWS_PRE + 256], *start = hdr + LWS_PRE, *p = start, *end = hdr + sizeof hdr - 1;
+                if (lws_add_http_header_status(wsi, HTTP_STATUS_METHOD_NOT_ALLOWED, &p, end) ||
+                    lws_add_http_header_by_token(wsi, WSI_TOKEN_HTTP_ALLOW, (const unsigned char *)"GET, HEAD",
+                                                 9, &p, end) ||
+                    lws_add_http_header_content_length(wsi, 0, &p, end) ||
+                    lws_finalize_write_http_header(wsi, start, &p, end))
+                    return 1;
+                return lws_http_transaction_completed(wsi) ? -1 : 0;
+            }
+        }
+        int metrics = strcmp(uri, "/metrics") == 0, status = strcmp(uri, "/status") == 0;
+        if (!metrics && !status) {
+            lws_return_http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL);
+            return lws_http_transaction_completed(wsi) ? -1 : 0;
+        }
         srv_stats_view v;
         srv_stats_client *per = NULL;
         char scene[OCEAN_SCENE_NAME_MAX];
         stats_view(n, &v, scene, sizeof scene, &per);
         const char *type;
-        if (strncmp(uri, "/metrics", 8) == 0) {
+        if (metrics) {
             pss->body = srv_stats_prometheus(&n->hub->stats, &v, LWS_PRE, &pss->len);
             type = "text/plain; version=0.0.4; charset=utf-8";
-        } else if (strncmp(uri, "/status", 7) == 0) {
+        } else {
             pss->body = srv_stats_json(&n->hub->stats, &v, LWS_PRE, &pss->len);
             type = "application/json";
-        } else {
-            free(per);
-            return lws_callback_http_dummy(wsi, reason, user, in, len);
         }
         free(per);
         if (!pss->body) {
@@ -460,6 +480,11 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
                                          (const unsigned char *)"no-store", 8, &p, end) ||
             lws_finalize_write_http_header(wsi, start, &p, end))
             return 1;
+        if (head) { /* the headers GET would send, Content-Length included, no body */
+            free(pss->body);
+            pss->body = NULL;
+            return lws_http_transaction_completed(wsi) ? -1 : 0;
+        }
         lws_callback_on_writable(wsi);
         return 0;
     }

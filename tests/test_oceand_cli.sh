@@ -14,7 +14,8 @@
 #    resolve to, as a file that loads back to the same (the scene's keys
 #    applied over it again, so its sea.* --set given again);
 #  - /status carries the scene's camera hint (the browser viewer opens
-#    there), as config/scenes/flight.conf writes it;
+#    there), as config/scenes/flight.conf writes it; /status and /metrics
+#    answer GET and HEAD at their exact paths, 405 to other methods;
 #  - the shipped configuration starts without a warning; the near field a
 #    layout-0 subscription at the default 2 m spacing cannot carry is said
 #    when the first such client subscribes, once a run, never for layout 1.
@@ -107,6 +108,18 @@ for _ in $(seq 200); do grep -q "listening on" "$tmp/d.log" && break; sleep 0.05
 port=$(sed -n 's|^oceand: listening on http://[0-9.]*:\([0-9]*\)/.*|\1|p' "$tmp/d.log")
 [[ -n $port ]] || { kill "$dpid"; fail "daemon with --scene flight: $(cat "$tmp/d.log")"; }
 curl -sf "http://127.0.0.1:$port/status" -o "$tmp/status.json" || { kill "$dpid"; fail "GET /status"; }
+# exact paths, GET and HEAD alike (HEAD got 404, /metricsfoo the metrics),
+# other methods 405 naming the two
+code() { curl -s -o /dev/null -w "%{http_code}" --max-time 5 "$@"; }
+for u in /status /metrics; do
+    [[ $(code -I "http://127.0.0.1:$port$u") == 200 ]] || { kill "$dpid"; fail "HEAD $u: $(code -I "http://127.0.0.1:$port$u")"; }
+done
+for u in /statusz /metricsfoo /status/x; do
+    [[ $(code "http://127.0.0.1:$port$u") == 404 ]] || { kill "$dpid"; fail "GET $u: $(code "http://127.0.0.1:$port$u"), want 404"; }
+done
+[[ $(code -X POST "http://127.0.0.1:$port/metrics") == 405 ]] || { kill "$dpid"; fail "POST /metrics is not 405"; }
+curl -s -D - -o /dev/null -X OPTIONS "http://127.0.0.1:$port/status" | grep -qi "^allow: GET, HEAD" ||
+    { kill "$dpid"; fail "OPTIONS /status: no 'Allow: GET, HEAD'"; }
 kill -TERM "$dpid"; wait "$dpid"
 hint=$(sed -n 's/^scene.camera_hint *= *\([^ #]*\).*/\1/p' config/scenes/flight.conf)
 python3 - "$tmp/status.json" "$hint" <<'PY' || fail "/status camera_hint: $(cat "$tmp/status.json") vs flight.conf '$hint'"
