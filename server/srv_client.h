@@ -194,6 +194,8 @@ typedef struct srv_hub {
     int n_clients;                        /* [hub.lock] connections */
     int n_subscribed;                     /* [hub.lock] */
     int near_spacing_said;                /* [hub.lock] the layout-0 near-field note, once a run */
+    unsigned record_said;                 /* [svc] recording refusals logged (once a run each):
+                                             1 max_files, 2 max_bytes, 4 the file cannot be opened */
     uint32_t next_id;                     /* [hub.lock] */
     srv_settings settings;                /* [hub.lock] in force; copy before use */
     ocean_params file_params;             /* [hub.lock] the sea as the configuration last gave it

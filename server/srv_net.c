@@ -763,20 +763,30 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
                 fprintf(stderr, "oceand: client %u: ?record=1 ignored (server.record_clients "
                         "is off)\n", c->id);
         }
+        /* Each refusal is logged once a run: one line per connection let
+         * any client that connects fill the log (300 connections, 299
+         * lines) */
         if (record && atomic_load(&h->record_files) >= (uint64_t)record_files) {
-            fprintf(stderr, "oceand: client %u: not recording: %d recordings opened this run "
-                    "(server.record_max_files)\n", c->id, record_files);
+            if (!(h->record_said & 1))
+                fprintf(stderr, "oceand: client %u: not recording: %d recordings opened this run "
+                        "(server.record_max_files); no later client is recorded (said once)\n", c->id,
+                        record_files);
+            h->record_said |= 1;
             record = 0;
         }
         if (record && atomic_load(&h->record_bytes) >= record_bytes) {
-            fprintf(stderr, "oceand: client %u: not recording: server.record_max_bytes "
-                    "written this run\n", c->id);
+            if (!(h->record_said & 2))
+                fprintf(stderr, "oceand: client %u: not recording: server.record_max_bytes written this "
+                        "run; no later client is recorded (said once)\n", c->id);
+            h->record_said |= 2;
             record = 0;
         }
         if (record) {
             char path[1100], msg[300];
             if (srv_record_open(dir, c->id, scene, &c->rec, path, sizeof path, msg, sizeof msg) != OCEAN_OK) {
-                fprintf(stderr, "oceand: client %u: not recording: %s\n", c->id, msg);
+                if (!(h->record_said & 4))
+                    fprintf(stderr, "oceand: client %u: not recording: %s (said once a run)\n", c->id, msg);
+                h->record_said |= 4;
             } else {
                 atomic_fetch_add(&h->record_files, 1);
                 srv_record_set_quota(c->rec, &h->record_bytes, record_bytes);
@@ -914,6 +924,32 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
 
 /* ---- lifecycle ---------------------------------------------------------------- */
 
+/* libwebsockets' own log lines, prefixed and held to one a second: each
+ * request with a 9 KB URL logged "Ran out of header data space" at the
+ * default level, so any client could fill the log.  What is held back is
+ * counted in the next line.  lws logs from the service thread (and from
+ * the thread creating or destroying the context, never at the same time). */
+static void lws_log_emit(int level, const char *line)
+{
+    static double last = -1e9;
+    static unsigned long held;
+    double now = srv_now();
+    if (now - last < 1.0) {
+        held++;
+        return;
+    }
+    last = now;
+    size_t n = strlen(line);
+    while (n && (line[n - 1] == '\n' || line[n - 1] == '\r')) n--;
+    if (held)
+        fprintf(stderr, "oceand: lws %s: %.*s (and %lu more lws lines in the last seconds)\n",
+                level & LLL_ERR ? "error" : level & LLL_WARN ? "warning" : "note", (int)n, line, held);
+    else
+        fprintf(stderr, "oceand: lws %s: %.*s\n", level & LLL_ERR ? "error" : level & LLL_WARN ? "warning" : "note",
+                (int)n, line);
+    held = 0;
+}
+
 ocean_result srv_net_create(srv_hub *h, srv_net **out, char *msg, size_t msglen)
 {
     srv_net *n = calloc(1, sizeof *n);
@@ -923,7 +959,7 @@ ocean_result srv_net_create(srv_hub *h, srv_net **out, char *msg, size_t msglen)
     srv_config cfg = h->settings.srv;
     pthread_mutex_unlock(&h->lock);
     snprintf(n->web_root, sizeof n->web_root, "%s", cfg.web_root);
-    lws_set_log_level(cfg.verbose ? (LLL_ERR | LLL_WARN | LLL_NOTICE) : LLL_ERR, NULL);
+    lws_set_log_level(cfg.verbose ? (LLL_ERR | LLL_WARN | LLL_NOTICE) : LLL_ERR, lws_log_emit);
 
     /* Every client is a descriptor: take the hard limit, and serve no more
      * clients than it allows (lws sizes its tables from the soft limit at

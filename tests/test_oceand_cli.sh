@@ -129,6 +129,25 @@ want = [float(v) for v in sys.argv[2].split(",")] + [0.0] * 2
 got = [h["x"], h["y"], h["z"], h["yaw"], h["pitch"]]
 sys.exit(0 if all(abs(a - b) < 1e-9 for a, b in zip(got, want[:5])) else 1)
 PY
+echo "== no client can flood the log ($SECONDS s)"
+# 40 requests with 9 KB URLs (lws: "Ran out of header data space" a line
+# each) and 6 recording clients past server.record_max_files = 1 (a line
+# each): a few lines in all
+"$OD" --config config/oceand.conf --port 0 --set server.record_clients=on --set "server.record_dir=$tmp/rec" \
+    --set server.record_max_files=1 >"$tmp/f.log" 2>&1 &
+dpid=$!
+for _ in $(seq 200); do grep -q "listening on" "$tmp/f.log" && break; sleep 0.05; done
+port=$(sed -n 's|^oceand: listening on http://[0-9.]*:\([0-9]*\)/.*|\1|p' "$tmp/f.log")
+[[ -n $port ]] || { kill "$dpid"; fail "daemon for the log flood: $(cat "$tmp/f.log")"; }
+long=/$(head -c 9000 /dev/zero | tr '\0' a)
+for _ in $(seq 40); do curl -s -o /dev/null --max-time 2 "http://127.0.0.1:$port$long"; done
+"$BUILD/ocean-client" load "ws://127.0.0.1:$port/?record=1" --clients 6 --seconds 1 --rate 5 >/dev/null 2>&1
+kill -TERM "$dpid"; wait "$dpid"
+n_lws=$(grep -c "^oceand: lws" "$tmp/f.log")
+n_rec=$(grep -c "not recording" "$tmp/f.log")
+[[ $n_lws -ge 1 && $n_lws -le 3 ]] || fail "40 long URLs: $n_lws lws lines (want 1-3): $(head -5 "$tmp/f.log")"
+[[ $n_rec -eq 1 ]] || fail "6 recording clients past record_max_files 1: $n_rec lines (want 1): $(grep "not recording" "$tmp/f.log" | head -3)"
+
 echo "== the default start says nothing a layout-0 client may never need ($SECONDS s)"
 OC=$BUILD/ocean-client
 "$OD" --config config/oceand.conf --port 0 >"$tmp/d.log" 2>&1 &
