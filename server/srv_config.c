@@ -150,7 +150,8 @@ static const conf_entry srv_entries[] = {
      .help = "Tile codecs clients may choose (announced in HELLO); qz is the compact default."},
     {.name = "server.max_frame_rate", .type = CONF_DOUBLE, .offset = SRV(max_frame_rate),
      .min = 0.1, .max = 240, .def = "60", .unit = "Hz",
-     .help = "Highest frame rate a client may subscribe to."},
+     .help = "Highest frame rate a client may subscribe to; frames are made on ticks, so "
+             "above server.tick_rate a subscription is refused too (naming the tick rate)."},
     {.name = "server.max_tile_size", .type = CONF_INT, .offset = SRV(max_tile_size), .min = 2,
      .max = 1024, .def = "128", .unit = "samples",
      .help = "Largest tile side a client may ask for."},

@@ -43,6 +43,12 @@ json "$tmp/watch1.json" "d['frames'] == 1 and d['fps'] is None"
 "$OC" watch "$URL" --frames 2 --seconds 5 --json --layout 0 --mesh-codec qz >"$tmp/watch0.json" || fail "watch --layout 0 exited $?"
 json "$tmp/watch0.json" "d['frames'] == 2 and d['frames_layout0'] == 2 and d['frames_layout1'] == 0 and d['decode_errors'] == 0"
 
+# a refused SUBSCRIBE is said, not only "no frame received" (60 Hz above
+# the 30 Hz ticks)
+"$OC" watch "$URL" --seconds 1 --rate 60 >/dev/null 2>"$tmp/err" && fail "watch --rate 60 above the ticks succeeded"
+grep -q "no frame received; the server said: .*frame_rate_hz 60 above the server's tick rate" "$tmp/err" ||
+    fail "watch --rate 60: the server's reason is not shown: $(cat "$tmp/err")"
+
 echo "== bad options are refused by name ($SECONDS s)"
 "$OC" watch "$URL" --bogus 2>"$tmp/err" && fail "--bogus accepted"
 grep -q -- "--bogus" "$tmp/err" || fail "message does not name --bogus: $(cat "$tmp/err")"

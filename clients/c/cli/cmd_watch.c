@@ -11,6 +11,15 @@
 
 #include "occli.h"
 
+/* The server's first ERROR: a refused SUBSCRIBE, the cause; the refusals
+ * of every CAMERA after it follow from it. */
+static void keep_error(void *user, oc_client *c, const proto_error *e)
+{
+    (void)c;
+    char *buf = user;
+    if (!buf[0]) snprintf(buf, PROTO_ERROR_MSG_MAX + 32, "%s: %s", ocean_strerror((ocean_result)e->code), e->message);
+}
+
 int cmd_watch(int argc, char **argv)
 {
     double seconds = 10;
@@ -40,7 +49,14 @@ int cmd_watch(int argc, char **argv)
     proto_camera cam;
     if (occli_sub_build("watch", &s, &sub, &cam))
         return 2;
-    oc_client *c = occli_connect("watch", pos[0], NULL, s.timeout_ms);
+    /* the server's first ERROR, said if no frame comes (the library's
+     * last_error is the latest failure, a poll's timeout by then) */
+    char server_error[PROTO_ERROR_MSG_MAX + 32] = "";
+    oc_options o;
+    oc_options_default(&o);
+    o.cb.user = server_error;
+    o.cb.on_error = keep_error;
+    oc_client *c = occli_connect("watch", pos[0], &o, s.timeout_ms);
     if (!c)
         return 1;
     proto_hello hello;
@@ -173,7 +189,9 @@ int cmd_watch(int argc, char **argv)
     occli_vec_free(&lat);
     oc_client_destroy(c);
     if (!rc && frames == 0) {
-        fprintf(stderr, "ocean-client watch: no frame received\n");
+        /* a SUBSCRIBE refused with ERROR left only this line on the screen */
+        fprintf(stderr, "ocean-client watch: no frame received%s%s\n", server_error[0] ? "; the server said: " : "",
+                server_error);
         rc = 1;
     }
     return rc;
