@@ -140,8 +140,8 @@ static const conf_entry srv_entries[] = {
              "ocean.threads)."},
     {.name = "server.scene", .type = CONF_STRING, .offset = SRV(scene), .size = SRV_PATH_MAX,
      .def = "ship-bridge",
-     .help = "Scene to serve: a name looked up as server.scene_dir/NAME.conf, or a path "
-             "ending in .conf; empty serves the sea above with every effect."},
+     .help = "Scene to serve: a name looked up as server.scene_dir/NAME.conf, or a path (a "
+             "value with a '/' or ending in .conf); empty serves the sea above with every effect."},
     {.name = "server.scene_dir", .type = CONF_STRING, .offset = SRV(scene_dir),
      .size = SRV_PATH_MAX, .def = "config/scenes",
      .help = "Directory of scene files."},

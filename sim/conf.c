@@ -387,8 +387,11 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
                 if (!hit) {
                     char names[MSG_MAX];
                     names_list(e, names, sizeof names);
-                    ocean_seterr(msg, msglen, "%s: unknown name in the list (names: %s; or none, all)",
-                            e->name, names);
+                    /* none and all stand alone; none only where the key
+                     * may be empty (it said "or none, all" to keys that
+                     * refuse none, and all in a list was "unknown") */
+                    ocean_seterr(msg, msglen, "%s: unknown name in the list (names: %s; or, alone, %s)",
+                                 e->name, names, e->min >= 1 ? "all" : "none or all");
                     return OCEAN_EFORMAT;
                 }
                 if ((v & hit->value) == hit->value) {

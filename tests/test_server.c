@@ -2289,6 +2289,31 @@ static void reload_restart_keys_and_runtime_sea(void **state)
     srv_daemon_stop(d);
 }
 
+/* config/oceand.conf says it documents every server.* key: each key of
+ * the daemon's table is there (server.read_rate was missing). */
+static void shipped_config_has_every_key(void **state)
+{
+    (void)state;
+    FILE *f = fopen("config/oceand.conf", "r");
+    assert_non_null(f);
+    static char text[1 << 17];
+    size_t n = fread(text, 1, sizeof text - 1, f);
+    fclose(f);
+    text[n] = 0;
+    const conf_table *t = srv_config_table();
+    int missing = 0;
+    for (size_t i = 0; i < t->count; i++) {
+        char want[160], commented[160];
+        snprintf(want, sizeof want, "\n%s = ", t->entries[i].name);
+        snprintf(commented, sizeof commented, "\n# %s = ", t->entries[i].name);
+        if (!strstr(text, want) && !strstr(text, commented)) {
+            print_error("config/oceand.conf lacks %s\n", t->entries[i].name);
+            missing++;
+        }
+    }
+    assert_int_equal(missing, 0);
+}
+
 static void max_clients_refused(void **state)
 {
     (void)state;
@@ -2576,6 +2601,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(recording_writes_camera_path),
         cmocka_unit_test(recording_write_error_is_said),
         cmocka_unit_test(reload_restart_keys_and_runtime_sea),
+        cmocka_unit_test(shipped_config_has_every_key),
         cmocka_unit_test(max_clients_refused),
         cmocka_unit_test(connect_disconnect_cycles),
         cmocka_unit_test(sighup_and_sigterm),
