@@ -280,7 +280,7 @@ static void test_errors(void **state)
         {"kit.bool = maybe\n", 0, OCEAN_EFORMAT, "kit.bool: not a boolean (on/off, true/false, yes/no, 1/0): 'maybe'"},
         {"kit.bool = 2\n", 0, OCEAN_EFORMAT, "kit.bool: not a boolean"},
         {"kit.enum = purple\n", 0, OCEAN_EFORMAT, "kit.enum: unknown name (one of red, green, blue, crimson): 'purple'"},
-        {"kit.flags = a,e\n", 0, OCEAN_EFORMAT, "kit.flags: unknown name in the list (names: a, b, c, d; or none, all): 'e'"},
+        {"kit.flags = a,e\n", 0, OCEAN_EFORMAT, "kit.flags: unknown name in the list (names: a, b, c, d; or, alone, none or all): 'e'"},
         {"kit.flags = a,,b\n", 0, OCEAN_EFORMAT, "kit.flags: empty item in the list: ''"},
         {"kit.flags = a,\n", 0, OCEAN_EFORMAT, "kit.flags: empty item in the list"},
         {"kit.flags = a, b ,A\n", 0, OCEAN_EFORMAT, "kit.flags: listed twice: 'A'"},
