@@ -186,7 +186,7 @@ install: all
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/include/oceand \
 	    $(DESTDIR)$(DATADIR)/web $(DESTDIR)$(DATADIR)/scenes $(DESTDIR)$(SYSCONFDIR) $(DESTDIR)$(UNITDIR) \
 	    $(BUILD)/install
-	install -m 755 $(filter-out $(BUILD)/oceand,$(PROGS)) $(DESTDIR)$(PREFIX)/bin/
+	install -m 755 $(filter-out $(BUILD)/oceand $(BUILD)/examples/%,$(PROGS)) $(DESTDIR)$(PREFIX)/bin/
 	$(CC) $(CPPFLAGS) $(INST_DEFS) $(CFLAGS) -c server/main.c -o $(BUILD)/install/main.o
 	$(CC) $(CFLAGS) $(LDFLAGS) $(BUILD)/install/main.o $(ALL_LIBS) $(LDLIBS) -o $(BUILD)/install/oceand
 	install -m 755 $(BUILD)/install/oceand $(DESTDIR)$(PREFIX)/bin/

@@ -68,7 +68,11 @@ typedef struct od_opt {
 static const od_opt od_opts[] = {
     {"config", 'c', "FILE", OD_CONFIG, NULL,
      "configuration file (every key documented in " OCEAND_SYSCONFDIR "/oceand.conf);\n"
+#ifdef OCEAND_DATADIR
+     "without it " OCEAND_SYSCONFDIR "/oceand.conf if readable, else the built-in defaults below"},
+#else
      "without it the built-in defaults below"},
+#endif
     {"port", 'p', "P", OD_KEY, "server.port", "listen port; 0 picks a free one"},
     {"bind", 'b', "ADDR", OD_KEY, "server.bind", "listen address; \"\" for all interfaces"},
     {"scene", 's', "NAME", OD_KEY, "server.scene", "scene name in server.scene_dir, or a .conf path"},

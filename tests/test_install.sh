@@ -28,6 +28,11 @@ for f in bin/oceand bin/ocean-client bin/ocean-sim lib/liboceanclient.a lib/libo
          share/oceand/scenes/storm.conf etc/oceand/oceand.conf lib/systemd/system/oceand.service; do
     [[ -e $prefix/$f ]] || fail "not installed: $f"
 done
+# the installed daemon's --help says which file it reads without --config
+"$prefix/bin/oceand" --help | grep -q "without it $prefix/etc/oceand/oceand.conf if readable" ||
+    fail "installed oceand --help: $("$prefix/bin/oceand" --help | grep -A1 -- --config)"
+# examples are source, not commands: a 'ship' in PREFIX/bin could shadow another
+[[ -e $prefix/bin/ship ]] && fail "the ship example is installed as $prefix/bin/ship"
 # private headers stay private; the .pc's comment is not rewritten by install
 for f in include/oceand/ocean_internal.h include/oceand/mesh_internal.h; do
     [[ -e $prefix/$f ]] && fail "a private header is installed: $f"
