@@ -959,6 +959,20 @@ ocean_result srv_net_create(srv_hub *h, srv_net **out, char *msg, size_t msglen)
     srv_config cfg = h->settings.srv;
     pthread_mutex_unlock(&h->lock);
     snprintf(n->web_root, sizeof n->web_root, "%s", cfg.web_root);
+    {
+        /* A web root without the viewer served 404 at / and said nothing,
+         * as when oceand starts outside the source tree (the relative
+         * default); the scene path's refusal says where it looked, so this
+         * does too.  A warning: a daemon may serve only WebSocket clients. */
+        char index[SRV_PATH_MAX + 16], cwd[512];
+        snprintf(index, sizeof index, "%s/index.html", n->web_root);
+        if (access(index, R_OK) != 0) {
+            if (!getcwd(cwd, sizeof cwd)) snprintf(cwd, sizeof cwd, "?");
+            fprintf(stderr, "oceand: warning: server.web_root '%s' has no readable index.html (%s; relative "
+                    "paths are read from %s): the browser viewer is not served\n", n->web_root, strerror(errno),
+                    cwd);
+        }
+    }
     lws_set_log_level(cfg.verbose ? (LLL_ERR | LLL_WARN | LLL_NOTICE) : LLL_ERR, lws_log_emit);
 
     /* Every client is a descriptor: take the hard limit, and serve no more

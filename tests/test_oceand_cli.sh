@@ -129,6 +129,11 @@ want = [float(v) for v in sys.argv[2].split(",")] + [0.0] * 2
 got = [h["x"], h["y"], h["z"], h["yaw"], h["pitch"]]
 sys.exit(0 if all(abs(a - b) < 1e-9 for a, b in zip(got, want[:5])) else 1)
 PY
+echo "== a web root without the viewer is said at start ($SECONDS s)"
+timeout 3 "$OD" --config config/oceand.conf --port 0 --set server.web_root=/nonexistent-web >"$tmp/w.log" 2>&1
+grep -q "warning: server.web_root '/nonexistent-web' has no readable index.html" "$tmp/w.log" ||
+    fail "a missing web root is not said: $(cat "$tmp/w.log")"
+
 echo "== no client can flood the log ($SECONDS s)"
 # 40 requests with 9 KB URLs (lws: "Ran out of header data space" a line
 # each) and 6 recording clients past server.record_max_files = 1 (a line
