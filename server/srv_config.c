@@ -437,6 +437,25 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
         set_err(err, errlen, "%s: %s", from, msg);
         r = OCEAN_EINVAL;
     }
+    /* Keys that contradict each other, each accepted alone: a soft limit
+     * above the hard one never acts; a largest message above what all
+     * clients together may hold unfinished is never received whole. */
+    if (r == OCEAN_OK && tmp->srv.output_soft > tmp->srv.output_hard) {
+        char msg[300];
+        snprintf(msg, sizeof msg, "server.output_soft %.0f is above server.output_hard %.0f: the soft limit "
+                 "would never act; keep output_soft <= output_hard", (double)tmp->srv.output_soft,
+                 (double)tmp->srv.output_hard);
+        set_err(err, errlen, "%s: %s", from, msg);
+        r = OCEAN_EINVAL;
+    }
+    if (r == OCEAN_OK && (double)tmp->srv.max_message > (double)tmp->srv.partial_total) {
+        char msg[300];
+        snprintf(msg, sizeof msg, "server.max_message %.0f is above server.partial_total %.0f: a message that "
+                 "large could never be received whole; keep max_message <= partial_total",
+                 (double)tmp->srv.max_message, (double)tmp->srv.partial_total);
+        set_err(err, errlen, "%s: %s", from, msg);
+        r = OCEAN_EINVAL;
+    }
     if (r == OCEAN_OK && tmp->srv.epoch[0]) {
         double e;
         char msg[200];

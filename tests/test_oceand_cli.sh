@@ -78,6 +78,14 @@ grep -q "^oceand: config/oceand.conf with its scene config/scenes/ship-bridge.co
 grep -q "^oceand: config/oceand.conf and the command line: plan = wisdom needs" "$tmp/err" ||
     fail "--set ocean.plan=wisdom, no scene: $(cat "$tmp/err")"
 
+# keys that contradict each other are refused together, naming both
+"$OD" --config config/oceand.conf --port 0 --set server.output_soft=40000000 >"$tmp/out" 2>"$tmp/err" &&
+    fail "output_soft above output_hard accepted"
+grep -q "server.output_soft 40000000 is above server.output_hard 33554432" "$tmp/err" || fail "output_soft > output_hard: $(cat "$tmp/err")"
+"$OD" --config config/oceand.conf --port 0 --set server.partial_total=65536 >"$tmp/out" 2>"$tmp/err" &&
+    fail "max_message above partial_total accepted"
+grep -q "server.max_message 1048576 is above server.partial_total 65536" "$tmp/err" || fail "max_message > partial_total: $(cat "$tmp/err")"
+
 echo "== --version ($SECONDS s)"
 "$OD" --version >"$tmp/ver" || fail "--version exited $?"
 grep -qx "oceand [0-9][0-9.]* (protocol ocean\.v[0-9]*)" "$tmp/ver" || fail "--version: $(cat "$tmp/ver")"
