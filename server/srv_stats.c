@@ -74,7 +74,7 @@ char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t h
     metric(&b, "oceand_clients_subscribed", "gauge", "Clients with a subscription.", v->subscribed);
     metric(&b, "oceand_sim_time_seconds", "gauge", "The shared simulation clock.", v->sim_time);
     metric(&b, "oceand_ticks_total", "counter", "Simulation ticks run.", (double)LD(ticks));
-    metric(&b, "oceand_idle_ticks_total", "counter", "Ticks skipped with nobody subscribed.",
+    metric(&b, "oceand_idle_ticks_total", "counter", "Idle waits with nobody subscribed, about one a second (no tick runs then; not a count of ticks).",
            (double)LD(idle_ticks));
     metric(&b, "oceand_tick_seconds_total", "counter", "Time spent in ticks.",
            (double)LD(tick_ns_total) * 1e-9);
