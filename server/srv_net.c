@@ -617,8 +617,8 @@ static void on_wake(srv_net *n)
         if (q > cfg.output_hard) {
             /* the limit is named with its value: set below one frame, it
              * cuts a client that is not slow at all */
-            char why[160];
-            snprintf(why, sizeof why, "slow consumer: %llu bytes queued, over server.output_hard (%llu)",
+            char why[120];
+            snprintf(why, sizeof why, "slow consumer: %llu bytes queued, over server.output_hard %llu",
                      (unsigned long long)q, (unsigned long long)cfg.output_hard);
             atomic_fetch_add(&h->stats.disconnects_slow, 1);
             kill_client(c, why);
