@@ -38,6 +38,7 @@
 #include <omp.h>
 #include <stdint.h>
 #include <time.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #include <immintrin.h>
@@ -536,10 +537,16 @@ static ocean_result cascade_init(ocean *o, int c)
  * standing in for the file's, which other replicas do not have. */
 static ocean_result wisdom_import(const char *path, char *msg, size_t msglen)
 {
-    FILE *fp = fopen(path, "r");
+    /* A directory opens for reading and then read as "corrupt"; a relative
+     * path that is missing is said with the directory it was read from */
+    struct stat st;
+    FILE *fp = stat(path, &st) == 0 && S_ISDIR(st.st_mode) ? (errno = EISDIR, NULL) : fopen(path, "r");
     if (!fp) {
-        if (msg) snprintf(msg, msglen, "wisdom file '%s': %s (`ocean-sim wisdom --out %s` writes one)",
-                          path, strerror(errno), path);
+        int e = errno;
+        char cwd[512] = "";
+        int rel = path[0] != '/' && getcwd(cwd, sizeof cwd) != NULL;
+        if (msg) snprintf(msg, msglen, "wisdom file '%s': %s%s%s (`ocean-sim wisdom --out %s` writes one)",
+                          path, strerror(e), rel ? "; relative paths are read from " : "", rel ? cwd : "", path);
         return OCEAN_EIO;
     }
     fftwf_forget_wisdom();

@@ -189,6 +189,19 @@ static void test_bad_wisdom_refused(void **state)
     snprintf(p.wisdom, sizeof p.wisdom, "%s/no-such.wisdom", dir);
     expect_refused(&p, OCEAN_EIO, p.wisdom);
 
+    /* A directory is said to be one (it read as "corrupt"), and a missing
+     * relative path names the directory it was read from. */
+    snprintf(p.wisdom, sizeof p.wisdom, "%s", dir);
+    {
+        ocean *o = NULL;
+        char m2[600] = "";
+        assert_int_equal(ocean_create(&p, &o, m2, sizeof m2), OCEAN_EIO);
+        if (!strstr(m2, "Is a directory")) fail_msg("a directory as wisdom: %s", m2);
+        snprintf(p.wisdom, sizeof p.wisdom, "no-such-relative.wisdom");
+        assert_int_equal(ocean_create(&p, &o, m2, sizeof m2), OCEAN_EIO);
+        if (!strstr(m2, "relative paths are read from /")) fail_msg("a missing relative wisdom: %s", m2);
+    }
+
     /* Not wisdom. */
     snprintf(p.wisdom, sizeof p.wisdom, "%s/corrupt.wisdom", dir);
     write_file(p.wisdom, "(not wisdom at all\n", 19);
