@@ -13,6 +13,7 @@
 #include <errno.h>
 #include <getopt.h>
 #include <malloc.h>
+#include <ifaddrs.h>
 #include <net/if.h>
 #include <netinet/in.h>
 #include <signal.h>
@@ -166,8 +167,13 @@ static int probe_listen(const srv_config *c, char *err, size_t errlen)
         /* libwebsockets also takes an interface name (e.g. "lo"). */
         if (if_nametoindex(c->bind) != 0)
             return 0;
-        snprintf(err, errlen, "server.bind: '%s' is neither an IPv4 address nor a network interface "
-                 "of this host (--bind ADDR, \"\" for all interfaces)", c->bind);
+        struct in6_addr a6;
+        if (inet_pton(AF_INET6, c->bind, &a6) == 1)
+            snprintf(err, errlen, "server.bind: '%s' is an IPv6 address; oceand listens on IPv4 only "
+                     "(--bind an IPv4 address or interface, \"\" for all interfaces)", c->bind);
+        else
+            snprintf(err, errlen, "server.bind: '%s' is neither an IPv4 address nor a network interface "
+                     "of this host (--bind ADDR, \"\" for all interfaces)", c->bind);
         return -1;
     }
     int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
@@ -194,6 +200,26 @@ static int probe_listen(const srv_config *c, char *err, size_t errlen)
     else
         snprintf(err, errlen, "cannot listen on %s:%d: %s", addr, c->port, strerror(e));
     return -1;
+}
+
+/* The host of the URL the start line prints: the bind address, 0.0.0.0
+ * for all interfaces, and for an interface name ("lo") its IPv4 address
+ * (http://lo:PORT/ was printed, which no browser opens). */
+static void listen_host(const char *bind, char *out, size_t n)
+{
+    struct in_addr a;
+    snprintf(out, n, "%s", bind[0] ? bind : "0.0.0.0");
+    if (!bind[0] || inet_pton(AF_INET, bind, &a) == 1) return;
+    struct ifaddrs *ifs = NULL;
+    if (getifaddrs(&ifs) != 0) return;
+    for (struct ifaddrs *i = ifs; i; i = i->ifa_next)
+        if (i->ifa_addr && i->ifa_addr->sa_family == AF_INET && strcmp(i->ifa_name, bind) == 0) {
+            char ip[INET_ADDRSTRLEN];
+            if (inet_ntop(AF_INET, &((struct sockaddr_in *)i->ifa_addr)->sin_addr, ip, sizeof ip))
+                snprintf(out, n, "%s", ip);
+            break;
+        }
+    freeifaddrs(ifs);
 }
 
 int main(int argc, char **argv)
@@ -337,8 +363,10 @@ int main(int argc, char **argv)
         free(s);
         return 1;
     }
+    char host[INET_ADDRSTRLEN + 64];
+    listen_host(s->srv.bind, host, sizeof host);
     printf("oceand: listening on http://%s:%d/ (scene %s, %d cascades of %d^2, tick %g Hz)\n",
-           s->srv.bind[0] ? s->srv.bind : "0.0.0.0", srv_daemon_port(d),
+           host, srv_daemon_port(d),
            s->scene.name[0] ? s->scene.name : "(none)", s->params.cascades, s->params.n,
            s->srv.tick_rate);
     fflush(stdout);

@@ -40,6 +40,13 @@ rc=$?
 [[ $rc -ne 0 && $rc -ne 124 ]] || fail "--bind no-such-if0: exit $rc"
 grep -q "no-such-if0" "$tmp/err" || fail "message does not name the bad bind: $(cat "$tmp/err")"
 
+# an IPv6 address is said to be one (oceand listens on IPv4); an interface
+# name prints its address in the URL, not http://lo:PORT/
+"$OD" --config config/oceand.conf --bind ::1 --port 0 >"$tmp/out" 2>"$tmp/err" && fail "--bind ::1 accepted"
+grep -q "'::1' is an IPv6 address; oceand listens on IPv4 only" "$tmp/err" || fail "--bind ::1: $(cat "$tmp/err")"
+timeout 3 "$OD" --config config/oceand.conf --bind lo --port 0 >"$tmp/out" 2>&1
+grep -q "^oceand: listening on http://127\.0\.0\.1:[0-9]*/" "$tmp/out" || fail "--bind lo: $(head -2 "$tmp/out")"
+
 echo "== a busy port names the way out ($SECONDS s)"
 python3 -c '
 import socket, sys, time
