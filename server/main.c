@@ -222,6 +222,17 @@ static void listen_host(const char *bind, char *out, size_t n)
     freeifaddrs(ifs);
 }
 
+/* Keys the configuration file changed that its scene sets otherwise
+ * (srv_settings.overridden): the scene wins, so the edit did nothing. */
+static void say_overridden(const srv_settings *s)
+{
+    if (s->overridden[0])
+        fprintf(stderr, "oceand: %s: scene '%s' sets %s otherwise, and a scene wins over the file: "
+                "%s; change %s in the scene file, or give --set KEY=VALUE (it wins over both)\n",
+                s->path, s->srv.scene, strchr(s->overridden, ',') ? "these keys" : "this key",
+                s->overridden, strchr(s->overridden, ',') ? "them" : "it");
+}
+
 int main(int argc, char **argv)
 {
     /* OpenMP worker threads (frame building, the spectrum stage) must sleep
@@ -333,6 +344,7 @@ int main(int argc, char **argv)
         free(s);
         return 1;
     }
+    say_overridden(s);
     if (dump) {
         printf("# oceand --dump-config: every key as this command line resolves it.\n");
         if (s->srv.scene[0])
@@ -379,7 +391,8 @@ int main(int argc, char **argv)
             if (srv_settings_load(config, sets, nsets, ns, err, sizeof err) != OCEAN_OK) {
                 fprintf(stderr, "oceand: reload refused, keeping the running configuration: %s\n", err);
             } else {
-                char msg[256];
+                char msg[1024];
+                say_overridden(ns);
                 srv_daemon_reload(d, ns, msg, sizeof msg);
                 printf("oceand: configuration reloaded%s%s\n", msg[0] ? "; " : "", msg);
                 fflush(stdout);

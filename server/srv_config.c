@@ -348,6 +348,43 @@ static void scene_path(const srv_config *c, char *out, size_t len)
         snprintf(out, len, "%s/%s.conf", c->scene_dir, c->scene);
 }
 
+/* The sea.* and ocean.* keys the file changed from their defaults that
+ * the scene sets otherwise, and that stay as the scene set them (no --set
+ * over them): the scene wins over the file, so an edit of such a key in
+ * the file would otherwise change nothing, without a word.  Comparing
+ * against the defaults keeps quiet about a file that spells every key out
+ * at its default (the shipped one), which a scene is meant to override.
+ * Writes "KEY = FILE (scene: SCENE), ..." into out, or "". */
+static void scene_overrides(const ocean_params *file, const ocean_params *scene,
+                            const ocean_params *final, char *out, size_t outlen)
+{
+    ocean_params def;
+    ocean_params_default(&def);
+    const conf_table *t = ocean_conf_table();
+    size_t off = 0;
+    out[0] = '\0';
+    for (size_t i = 0; i < t->count; i++) {
+        const conf_entry *e = &t->entries[i];
+        if (e->flags & CONF_F_NOSTORE) continue; /* sea.beaufort: its sea.wind is compared */
+        char f[96], d[96], sc[96], fi[96];
+        conf_format(e, file, f, sizeof f);
+        conf_format(e, &def, d, sizeof d);
+        conf_format(e, scene, sc, sizeof sc);
+        conf_format(e, final, fi, sizeof fi);
+        if (!strcmp(f, d) || !strcmp(f, sc) || strcmp(fi, sc)) continue;
+        if (off + 1 >= outlen) break;
+        int w = snprintf(out + off, outlen - off, "%s%s = %s (scene: %s)", off ? ", " : "",
+                         e->name, f, sc);
+        off = w < 0 ? off : off + (size_t)w;
+        if (off >= outlen) {
+            /* cut at a whole entry: better fewer than a torn one */
+            char *comma = strrchr(out, ',');
+            if (comma) *comma = '\0';
+            break;
+        }
+    }
+}
+
 ocean_result srv_settings_load(const char *path, const char *const *sets, int nsets,
                                srv_settings *out, char *err, size_t errlen)
 {
@@ -359,6 +396,9 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
     conf_set set = {tables, targets, 2};
     ocean_result r = path ? conf_load_file(path, &set, NULL, err, errlen)
                           : conf_defaults(&set, err, errlen);
+    /* The file's own sea and ocean, before --set and the scene: what
+     * scene_overrides compares. */
+    ocean_params file_params = tmp->params;
     for (int i = 0; r == OCEAN_OK && i < nsets; i++)
         r = conf_apply(sets[i], &set, err, errlen);
     /* What a check of the keys together names: every source that set them
@@ -399,6 +439,9 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
         /* --set wins over the scene for sea.* and ocean.* too. */
         for (int i = 0; r == OCEAN_OK && i < nsets; i++)
             r = conf_apply(sets[i], &set, err, errlen);
+        if (r == OCEAN_OK && path)
+            scene_overrides(&file_params, &tmp->scene.params, &tmp->params, tmp->overridden,
+                            sizeof tmp->overridden);
     } else if (r == OCEAN_OK) {
         tmp->effects = OCEAN_SCENE_FX_ALL;
         tmp->scene.params = tmp->params;

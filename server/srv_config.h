@@ -97,6 +97,10 @@ typedef struct srv_settings {
     ocean_scene scene;          /* scene.name "" when no scene is configured */
     unsigned effects;           /* effects the daemon may compute (scene's, or all) */
     char path[SRV_PATH_MAX];    /* file it came from ("" for built-in defaults) */
+    /* sea.* and ocean.* keys the file changed from their defaults and the
+     * scene replaced ("KEY = FILE (scene: SCENE), ..."; "" if none):
+     * the scene wins over the file, so oceand says so at start and reload */
+    char overridden[1024];
 } srv_settings;
 
 /* Built-in defaults (every table's defaults, no scene, all effects). */

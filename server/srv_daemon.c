@@ -60,6 +60,22 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
 {
     srv_hub *h = &d->hub;
     msg[0] = 0;
+    /* A changed sea is built once here, off the lock (the simulation thread
+     * ticks on), before any client is told of it: a sea that cannot be
+     * built (a wisdom file without its grid's plans) was announced to
+     * every client and then never served, after "configuration reloaded". */
+    srv_settings *probe = malloc(sizeof *probe);
+    if (!probe) return OCEAN_ENOMEM;
+    pthread_mutex_lock(&h->lock);
+    int file_sea_changed = memcmp(&h->file_params, &s->params, sizeof s->params) != 0;
+    int replicated = h->redis != NULL;
+    *probe = *s;
+    probe->effects = h->settings.effects; /* fixed by the running scene */
+    pthread_mutex_unlock(&h->lock);
+    char sea_why[600] = "";
+    int sea_ok = !file_sea_changed || replicated ||
+                 srv_sim_sea_check(probe, &s->params, sea_why, sizeof sea_why) == OCEAN_OK;
+    free(probe);
     pthread_mutex_lock(&h->lock);
     const srv_config *o = &h->settings.srv;
     const char *restart[8]; /* one per key tested below (6): 4 overflowed */
@@ -87,9 +103,12 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     /* The file's sea against the file's sea of the last load, not against
      * the sea in force: a reload of an unchanged file undid a SEA_STATE set
      * and announced the old sea to every client. */
-    int file_sea_changed = memcmp(&h->file_params, &s->params, sizeof s->params) != 0;
-    h->file_params = s->params;
-    if (file_sea_changed && h->redis) {
+    /* Refused, the file's sea is not taken as seen: the next reload tries
+     * it again. */
+    if (sea_ok) h->file_params = s->params;
+    if (file_sea_changed && !sea_ok) {
+        /* said in msg, on the "configuration reloaded" line */
+    } else if (file_sea_changed && h->redis) {
         fprintf(stderr, "oceand: reload: the sea is replicated (server.redis): the file's sea is not "
                 "applied; change it with SEA_STATE set\n");
     } else if (file_sea_changed) {
@@ -105,11 +124,15 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     pthread_mutex_unlock(&h->lock);
     srv_hub_wake_net(h);
     atomic_fetch_add(&h->stats.reloads, 1);
+    size_t off = 0;
     if (nr) {
-        size_t off = (size_t)snprintf(msg, msglen, "restart needed for:");
+        off = (size_t)snprintf(msg, msglen, "restart needed for:");
         for (int i = 0; i < nr && off < msglen; i++)
             off += (size_t)snprintf(msg + off, msglen - off, " %s", restart[i]);
     }
+    if (!sea_ok && off < msglen)
+        snprintf(msg + off, msglen - off, "%sthe file's sea is not applied, it cannot be built: %s; the "
+                 "sea in force is kept and no client was told of the new one", off ? "; " : "", sea_why);
     return OCEAN_OK;
 }
 

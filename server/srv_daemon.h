@@ -19,8 +19,10 @@ int srv_daemon_port(const srv_daemon *d);
 srv_hub *srv_daemon_hub(srv_daemon *d);
 /* Applies reloaded settings (SIGHUP): limits, rates, token, recording at
  * once; a changed sea or ocean takes effect at the next tick through a new
- * ocean announced to every client.  Port, bind address, web root and
- * workers need a restart; msg lists any such key that changed. */
+ * ocean announced to every client, once it has been built here (a sea that
+ * cannot be built is not applied, and msg says why).  Port, bind address,
+ * web root and workers need a restart; msg lists any such key that
+ * changed. */
 ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, size_t msglen);
 /* Sends every client BYE (shutdown) with a close reason, stops the threads
  * and frees everything.  Accepts NULL. */

@@ -110,7 +110,7 @@ struct srv_sim {
 /* ---- ocean construction ----------------------------------------------------- */
 
 static ocean_result make_ocean(const srv_settings *s, const ocean_params *p, ocean **oc,
-                               ocean_gerstner **g, ocean **nf, char *msg, size_t msglen)
+                               ocean_gerstner **g, ocean **nf, int say_plan, char *msg, size_t msglen)
 {
     *oc = NULL;
     *g = NULL;
@@ -127,7 +127,7 @@ static ocean_result make_ocean(const srv_settings *s, const ocean_params *p, oce
     ocean_plan_serving sv = {(s->effects & OCEAN_FX_NEAR_FIELD) && s->srv.near_field_waves > 0, khi,
                              2 * M_PI / s->srv.near_field_min_wavelength};
     ocean_plan_ocean(*oc, &sv, &plan);
-    ocean_plan_print(&plan, stderr, "oceand: scene plan");
+    if (say_plan) ocean_plan_print(&plan, stderr, "oceand: scene plan");
     ocean_gerstner_params gp;
     if (srv_settings_near_field(s, p, &gp)) {
         gp.k_lo = khi; /* = p->k_max: the finest cascade's edge */
@@ -143,6 +143,17 @@ static ocean_result make_ocean(const srv_settings *s, const ocean_params *p, oce
         }
     }
     return OCEAN_OK;
+}
+
+ocean_result srv_sim_sea_check(const srv_settings *s, const ocean_params *p, char *msg, size_t msglen)
+{
+    ocean *oc, *nf;
+    ocean_gerstner *g;
+    ocean_result r = make_ocean(s, p, &oc, &g, &nf, 0, msg, msglen);
+    ocean_destroy(nf);
+    ocean_gerstner_destroy(g);
+    ocean_destroy(oc);
+    return r;
 }
 
 static void eval_clear(srv_sim *s)
@@ -171,7 +182,7 @@ ocean_result srv_sim_create(srv_hub *h, srv_sim **out, char *msg, size_t msglen)
     s->set = h->settings;
     s->set_gen = h->settings_gen;
     pthread_mutex_unlock(&h->lock);
-    ocean_result r = make_ocean(&s->set, &s->set.params, &s->oc, &s->g, &s->nf, msg, msglen);
+    ocean_result r = make_ocean(&s->set, &s->set.params, &s->oc, &s->g, &s->nf, 1, msg, msglen);
     if (r == OCEAN_OK) r = srv_tiles_create(&s->tiles);
     if (r == OCEAN_OK) r = srv_cascade_create(&s->casc);
     if (r == OCEAN_OK) r = srv_work_create(&s->work);
@@ -920,7 +931,7 @@ static void prebuild_sea(srv_sim *s)
     char msg[256];
     ocean *oc, *nf;
     ocean_gerstner *g;
-    if (make_ocean(&s->set, &c.params, &oc, &g, &nf, msg, sizeof msg) != OCEAN_OK) {
+    if (make_ocean(&s->set, &c.params, &oc, &g, &nf, 1, msg, sizeof msg) != OCEAN_OK) {
         fprintf(stderr, "oceand: cannot build the sea due at t = %.3f s ahead: %s\n", c.effective_time, msg);
         return;
     }
@@ -959,8 +970,9 @@ static void follow_sea(srv_sim *s, double t)
             s->next_nf = NULL;
         } else {
             char msg[256];
-            if (make_ocean(&s->set, &c.params, &oc, &g, &nf, msg, sizeof msg) != OCEAN_OK) {
-                /* validated on entry: only memory can fail here */
+            if (make_ocean(&s->set, &c.params, &oc, &g, &nf, 1, msg, sizeof msg) != OCEAN_OK) {
+                /* checked when scheduled (srv_sim_sea_check, or the
+                 * validation of SEA_STATE set): only memory fails here */
                 fprintf(stderr, "oceand: the sea due at t = %.3f s cannot be built (%s); "
                         "clients are told a sea this daemon does not serve\n", c.effective_time, msg);
                 oc = NULL;

@@ -27,5 +27,12 @@ ocean_result srv_sim_start(srv_sim *s);
 /* Asks the thread to stop and joins it. */
 void srv_sim_stop(srv_sim *s);
 void srv_sim_destroy(srv_sim *s);  /* stops first; accepts NULL */
+/* Builds, then frees, the ocean (and near field) that settings s with sea
+ * p would run, as the simulation thread builds it when p takes effect:
+ * OCEAN_OK, or why it cannot be built (a wisdom file without the plans
+ * of p's grid, memory) in msg.  For a sea about to be announced to every
+ * client, so none is told of a sea this daemon would not serve.  Any
+ * thread; takes about as long as the ocean's start. */
+ocean_result srv_sim_sea_check(const srv_settings *s, const ocean_params *p, char *msg, size_t msglen);
 
 #endif

@@ -116,6 +116,15 @@ for want in "server.port = 18999" "server.tick_rate = 10" "sea.choppiness = 0.9"
 done
 "$OD" --config "$tmp/dump2" --set sea.choppiness=0.9 --dump-config | diff -q - "$tmp/dump2" >/dev/null ||
     fail "--dump-config output with its --set does not load back to the same configuration"
+echo "== a key the scene overrides is named ($SECONDS s)"
+# the scene wins over the file: ocean.n = 512 in oceand.conf with the
+# shipped scene stayed 256 without a word
+sed 's/^ocean.n = 256$/ocean.n = 512/' config/oceand.conf >"$tmp/n512.conf"
+"$OD" --config "$tmp/n512.conf" --dump-config 2>"$tmp/n512.err" >/dev/null || fail "--dump-config with ocean.n = 512"
+grep -qF "scene 'ship-bridge' sets this key otherwise, and a scene wins over the file: ocean.n = 512 (scene: 256)" \
+    "$tmp/n512.err" || fail "ocean.n = 512 under the scene: $(cat "$tmp/n512.err")"
+"$OD" --config config/oceand.conf --dump-config 2>"$tmp/shipped.err" >/dev/null || fail "--dump-config"
+[[ ! -s $tmp/shipped.err ]] || fail "the shipped configuration is not quiet: $(cat "$tmp/shipped.err")"
 echo "== /status carries the scene camera hint ($SECONDS s)"
 "$OD" --config config/oceand.conf --scene flight --port 0 >"$tmp/d.log" 2>&1 &
 dpid=$!

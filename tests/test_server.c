@@ -2289,6 +2289,92 @@ static void reload_restart_keys_and_runtime_sea(void **state)
     srv_daemon_stop(d);
 }
 
+/* A reload whose sea cannot be built (here: a wisdom file without its
+ * grid's plans) is not applied: the sea in force stays, no change is
+ * scheduled or announced, and msg says why; it said "configuration
+ * reloaded", told every client of the new sea, and the simulation thread
+ * then logged that it could not build it.  The next reload tries again. */
+static void reload_sea_that_cannot_be_built(void **state)
+{
+    (void)state;
+    srv_settings s2 = settings;
+    s2.srv.port = 0;
+    srv_daemon *d;
+    char err[512];
+    assert_int_equal(srv_daemon_start(&s2, &d, err, sizeof err), OCEAN_OK);
+    srv_hub *h = srv_daemon_hub(d);
+    char wis[400];
+    snprintf(wis, sizeof wis, "%s/no-such-grid.wisdom", tmpdir);
+    assert_int_equal(ocean_wisdom_export(wis, err, sizeof err), OCEAN_OK);
+    srv_settings s5 = s2;
+    s5.params.n = s2.params.n * 2;
+    s5.params.plan_measure = OCEAN_PLAN_WISDOM;
+    snprintf(s5.params.wisdom, sizeof s5.params.wisdom, "%s", wis);
+    for (int round = 0; round < 2; round++) {
+        char msg[1024];
+        assert_int_equal(srv_daemon_reload(d, &s5, msg, sizeof msg), OCEAN_OK);
+        if (!strstr(msg, "the file's sea is not applied, it cannot be built") || !strstr(msg, wis) ||
+            !strstr(msg, "no client was told"))
+            fail_msg("reload %d of an unbuildable sea: '%s'", round, msg);
+        pthread_mutex_lock(&h->lock);
+        int pending = h->n_sea_pending, n = h->settings.params.n;
+        pthread_mutex_unlock(&h->lock);
+        assert_int_equal(pending, 0);
+        assert_int_equal(n, s2.params.n);
+    }
+    /* the same grid with plans the process can make is applied */
+    srv_settings s6 = s2;
+    s6.params.n = s2.params.n * 2;
+    char msg[1024];
+    assert_int_equal(srv_daemon_reload(d, &s6, msg, sizeof msg), OCEAN_OK);
+    assert_string_equal(msg, "");
+    pthread_mutex_lock(&h->lock);
+    int pending = h->n_sea_pending;
+    int next = pending ? h->sea_pending[pending - 1].params.n : h->settings.params.n;
+    pthread_mutex_unlock(&h->lock);
+    assert_int_equal(next, s6.params.n);
+    srv_daemon_stop(d);
+}
+
+/* A scene wins over the configuration file for sea.* and ocean.*: a key
+ * the file changed from its default and the scene sets otherwise is named
+ * in srv_settings.overridden (oceand prints it), since the edit changes
+ * nothing (ocean.n = 512 in oceand.conf with the shipped scene stayed 256,
+ * without a word).  Keys the file leaves at their defaults (the shipped
+ * file spells every key out), keys the scene does not set, and keys --set
+ * gives are not named. */
+static void scene_overrides_named(void **state)
+{
+    (void)state;
+    char scene[400], conf[400];
+    snprintf(scene, sizeof scene, "%s/override-scene.conf", tmpdir);
+    snprintf(conf, sizeof conf, "%s/override.conf", tmpdir);
+    FILE *f = fopen(scene, "w");
+    assert_non_null(f);
+    fprintf(f, "scene.name = over\nscene.effects = height\nsea.wind = 9\nocean.n = 32\nsea.choppiness = 0.5\n");
+    fclose(f);
+    f = fopen(conf, "w");
+    assert_non_null(f);
+    fprintf(f, "sea.wind = 15\nocean.n = 64\nocean.seed = 7\nsea.choppiness = 1\nocean.threads = 1\n"
+            "server.port = 0\nserver.scene = \"%s\"\n", scene);
+    fclose(f);
+    srv_settings *s1 = malloc(sizeof *s1);
+    assert_non_null(s1);
+    char err[1024] = "";
+    if (srv_settings_load(conf, NULL, 0, s1, err, sizeof err) != OCEAN_OK) fail_msg("%s", err);
+    assert_string_equal(s1->overridden, "sea.wind = 15 (scene: 9), ocean.n = 64 (scene: 32)");
+    assert_int_equal(s1->params.n, 32);
+    assert_int_equal((int)s1->params.seed, 7);
+    const char *sets[] = {"ocean.n=64"};
+    if (srv_settings_load(conf, sets, 1, s1, err, sizeof err) != OCEAN_OK) fail_msg("%s", err);
+    assert_string_equal(s1->overridden, "sea.wind = 15 (scene: 9)");
+    assert_int_equal(s1->params.n, 64);
+    /* the shipped file and scene: every key at its default, nothing named */
+    if (srv_settings_load("config/oceand.conf", NULL, 0, s1, err, sizeof err) != OCEAN_OK) fail_msg("%s", err);
+    assert_string_equal(s1->overridden, "");
+    free(s1);
+}
+
 /* config/oceand.conf says it documents every server.* key: each key of
  * the daemon's table is there (server.read_rate was missing). */
 static void shipped_config_has_every_key(void **state)
@@ -2601,6 +2687,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(recording_writes_camera_path),
         cmocka_unit_test(recording_write_error_is_said),
         cmocka_unit_test(reload_restart_keys_and_runtime_sea),
+        cmocka_unit_test(reload_sea_that_cannot_be_built),
+        cmocka_unit_test(scene_overrides_named),
         cmocka_unit_test(shipped_config_has_every_key),
         cmocka_unit_test(max_clients_refused),
         cmocka_unit_test(connect_disconnect_cycles),
