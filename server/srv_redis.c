@@ -105,15 +105,24 @@ static int read_once(srv_redis *r, int block_ms)
 static void *reader(void *arg)
 {
     srv_redis *r = arg;
+    int said = 0; /* this outage's failed reconnect is logged once */
     while (!atomic_load(&r->stop)) {
         if (!r->rd) {
             char msg[200];
             r->rd = connect_to(r, msg, sizeof msg);
             if (!r->rd) {
+                if (!said)
+                    fprintf(stderr, "oceand: redis: cannot reconnect (%s); retrying every 0.2 s\n", msg);
+                said = 1;
                 struct timespec ts = {0, 200 * 1000 * 1000};
                 nanosleep(&ts, NULL);
                 continue;
             }
+            /* An operator watching the log sees the outage end, and from
+             * where the timeline is read again. */
+            fprintf(stderr, "oceand: redis %s:%d: reconnected; reading stream %s after entry %s\n", r->host,
+                    r->port, r->key, r->last_id);
+            said = 0;
         }
         if (read_once(r, 200) < 0) {
             if (r->rd->err) {
@@ -216,12 +225,24 @@ ocean_result srv_redis_publish(srv_redis *r, const proto_sea *sea, double effect
         return res;
     }
     pthread_mutex_lock(&r->pub_lock);
-    if (!r->pub || r->pub->err) {
-        char msg[200];
-        if (r->pub) redisFree(r->pub);
-        r->pub = connect_to(r, msg, sizeof msg);
+    redisReply *rep = NULL;
+    /* A connection Redis closed (a restart) is found dead only by the
+     * command that uses it: then reconnect and send once more, so the set
+     * that meets the outage's end is stored, not refused (the second try
+     * of the same announce would be harmless: replicas replace a change
+     * with the same effective time). */
+    for (int attempt = 0; attempt < 2 && !rep; attempt++) {
+        if (!r->pub || r->pub->err) {
+            char msg[200];
+            int lost = r->pub != NULL;
+            if (r->pub) redisFree(r->pub);
+            r->pub = connect_to(r, msg, sizeof msg);
+            if (lost && r->pub)
+                fprintf(stderr, "oceand: redis %s:%d: publishing connection reconnected\n", r->host, r->port);
+        }
+        if (!r->pub) break;
+        rep = redisCommand(r->pub, "XADD %s * msg %b", r->key, proto_buf_data(&b), b.len);
     }
-    redisReply *rep = r->pub ? redisCommand(r->pub, "XADD %s * msg %b", r->key, proto_buf_data(&b), b.len) : NULL;
     int ok = rep && rep->type == REDIS_REPLY_STRING;
     if (!ok)
         snprintf(why, whylen, "SEA_STATE set not stored: Redis %s:%d %s", r->host, r->port,

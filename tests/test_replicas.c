@@ -522,6 +522,48 @@ static void replicas_behind_haproxy(void **state)
         stop(&pids[1], SIGTERM);
     }
 
+    /* Redis restarts: the first set after it is stored and announced (it
+     * was refused once per replica, "SEA_STATE set not stored", the dead
+     * publishing connection found only by that XADD), and the replica's log
+     * says the reader reconnected (it said only "reconnecting"). */
+    {
+        stop(&pids[0], SIGKILL);
+        snprintf(log, sizeof log, "%s/redis2.log", tmp);
+        pids[0] = spawn(log, rargv);
+        assert_true(wait_port(prd, 10));
+        usleep(600000); /* the reader's retry (every 0.2 s) finds it */
+        double eff2 = sim_now() + 1.5;
+        set.u.sea_state.effective_time = eff2;
+        set.u.sea_state.sea.wind_u10 = 16;
+        raw_send(&d2, &set);
+        int announced = 0;
+        char got[1100] = "nothing within 3 s";
+        for (double end = now_s() + 3; !announced && now_s() < end;) {
+            uint8_t *b;
+            size_t bl;
+            int op = test_ws_recv(&d2, (int)((end - now_s()) * 1000) + 1, &b, &bl);
+            if (op <= 0) break;
+            proto_msg g;
+            if (op != 8 && proto_decode(b, bl, &g, NULL, 0) == OCEAN_OK) {
+                if (g.hdr.type == PROTO_ERROR) {
+                    snprintf(got, sizeof got, "ERROR %s", g.u.error.message);
+                    end = 0;
+                }
+                announced = g.hdr.type == PROTO_SEA_STATE && g.u.sea_state.effective_time == eff2;
+                proto_msg_free(&g);
+            }
+            free(b);
+        }
+        if (!announced) fail_msg("a set after a Redis restart: %s", got);
+        snprintf(path, sizeof path, "%s/r2.log", tmp);
+        FILE *lf = fopen(path, "r");
+        assert_non_null(lf);
+        size_t n = fread(text, 1, sizeof text - 1, lf);
+        fclose(lf);
+        text[n] = 0;
+        if (!strstr(text, "reconnected; reading stream")) fail_msg("replica 2's log: %s", text);
+    }
+
     for (int i = 0; i < NFRAMES; i++) free(ref[i]);
     test_ws_close(&a);
     test_ws_close(&b);
