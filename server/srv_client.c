@@ -883,19 +883,6 @@ void srv_client_handle_text(srv_client *c)
                               "messages (one such ERROR a second at most)");
 }
 
-void srv_mesh_config(const srv_settings *s, const proto_subscribe *sub, double lambda_dominant,
-                     mesh_config *mc)
-{
-    /* as the simulation thread's apply_subscription (srv_sim.c) */
-    mesh_config_default(mc);
-    mc->kind = (mesh_kind)sub->mesh_kind;
-    mc->range_m = sub->view_range_m > 0 ? sub->view_range_m : s->srv.view_range;
-    if (mc->range_m < 10) mc->range_m = 10;
-    if (mc->range_m > 1e6) mc->range_m = 1e6;
-    mc->error_px = s->srv.mesh_error_px;
-    mc->lambda_dominant_m = lambda_dominant;
-}
-
 void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
 {
     srv_hub *h = c->hub;

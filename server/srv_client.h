@@ -332,10 +332,6 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len);
  * second [svc]. */
 void srv_client_handle_text(srv_client *c);
 
-/* The mesh configuration the simulation thread builds for sub under s. */
-void srv_mesh_config(const srv_settings *s, const proto_subscribe *sub, double lambda_dominant,
-                     mesh_config *out);
-
 /* Conversions shared by the daemon's modules. */
 void srv_sea_from_params(const ocean_params *p, proto_sea *out);
 void srv_params_from_sea(const proto_sea *s, const ocean_params *base, ocean_params *out);

@@ -172,7 +172,9 @@ static const conf_entry srv_entries[] = {
      .min = 0.1, .max = 64, .def = "16", .unit = "px",
      .help = "Screen-space error budget of the concentric mesh; larger means fewer vertices "
              "(16 px keeps a 20 m camera at 1080p near 5 800 vertices, 70 KB a frame; 4 px "
-             "gives 73 000). Clients render fine detail from the tiles."},
+             "gives 73 000). Clients render fine detail from the tiles. Above sea.choppiness "
+             "1.3 the spacing shrinks as 1.3 / choppiness, since the sideways error grows with "
+             "it (about 10x the vertices at choppiness 5)."},
     {.name = "server.px_per_sample", .type = CONF_DOUBLE, .offset = SRV(px_per_sample),
      .min = 0.5, .max = 1024, .def = "4", .unit = "px",
      .help = "Cascade tile layout: the finest detail wanted, as the pixels one tile sample "

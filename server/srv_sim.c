@@ -89,6 +89,7 @@ struct srv_sim {
     ocean_filter_config fcfg;
     ocean_filter_buckets buckets;
     double lambda_dom;
+    double roughness;           /* mesh_roughness of the sea in force */
     ocean *next_oc;             /* pending sea change */
     ocean_gerstner *next_g;
     ocean *next_nf;
@@ -171,6 +172,7 @@ static void adopt_sea(srv_sim *s, const ocean_params *p)
     double lam = 0;
     if (mesh_lambda_dominant(&p->sea, &lam) != OCEAN_OK) lam = 0;
     s->lambda_dom = lam;
+    s->roughness = mesh_roughness(&p->sea);
 }
 
 ocean_result srv_sim_create(srv_hub *h, srv_sim **out, char *msg, size_t msglen)
@@ -418,6 +420,7 @@ static void apply_subscription(srv_sim *s, srv_client *c)
     if (mc.range_m > 1e6) mc.range_m = 1e6;
     mc.error_px = s->set.srv.mesh_error_px;
     mc.lambda_dominant_m = s->lambda_dom;
+    mc.roughness = s->roughness;
     char msg[256];
     ocean_result r = mesh_config_validate(&mc, msg, sizeof msg);
     if (r == OCEAN_OK) r = mesh_create(&mc, &cs->mesh);
@@ -688,7 +691,7 @@ static int same_mesh(const job *a, const job *b)
         return 0;
     const mesh_config *p = &x->mesh_cfg, *q = &y->mesh_cfg;
     if (p->kind != q->kind || p->range_m != q->range_m || p->error_px != q->error_px ||
-        p->lambda_dominant_m != q->lambda_dominant_m)
+        p->lambda_dominant_m != q->lambda_dominant_m || p->roughness != q->roughness)
         return 0;
     const proto_camera *k = &a->cam, *l = &b->cam;
     return k->pos[0] == l->pos[0] && k->pos[1] == l->pos[1] && k->pos[2] == l->pos[2] &&

@@ -138,7 +138,7 @@ void mesh_config_default(mesh_config *c)
     c->kind = MESH_CONCENTRIC;
     c->range_m = 90000;
     c->error_px = 1;
-    c->roughness = 0.075;
+    c->roughness = MESH_ROUGHNESS;
     c->lambda_dominant_m = 0;
     c->k_lambda = 0.1;
     c->min_spacing_m = 0.02;
@@ -204,6 +204,15 @@ ocean_result mesh_lambda_dominant(const ocean_sea_state *sea, double *out)
     if (kp > 0 && isfinite(kp))
         *out = 2 * M_PI / kp;
     return OCEAN_OK;
+}
+
+double mesh_roughness(const ocean_sea_state *sea)
+{
+    double lam = sea ? sea->choppiness : NAN;
+    if (!isfinite(lam) || lam <= MESH_CHOP_VERTICAL)
+        return MESH_ROUGHNESS;
+    double r = MESH_ROUGHNESS * lam / MESH_CHOP_VERTICAL;
+    return r < 1 ? r : 1;
 }
 
 /* ---- object ---------------------------------------------------------- */

@@ -95,12 +95,8 @@ typedef struct mesh_config {
     double error_px;         /* screen-space error budget, px (1) */
     double roughness;        /* largest geometric error per metre of spacing of
                                 the sea drawn (m/m); with error_px sets rho_err.
-                                0.075: a saturated wind-sea tail (PM alpha) puts
-                                rms sqrt(alpha)/(2 pi) s = 0.014 s in the band a
-                                spacing s cannot carry; the maximum over a
-                                frame's samples is ~4.5 sigma, and choppy
-                                displacement adds as much sideways (bench_mesh
-                                calibrates it: <= 1 px at 2..2000 m) */
+                                MESH_ROUGHNESS; for a given sea,
+                                mesh_roughness() */
     double lambda_dominant_m;/* dominant wavelength, m; 0 = unknown (no cap) */
     double k_lambda;         /* near spacing <= k * lambda_dominant, 0.1 .. 0.5 */
     double min_spacing_m;    /* finest near spacing (the sea's finest detail) */
@@ -121,7 +117,24 @@ typedef struct mesh_config {
                                 horizontal), so waves never open holes (6) */
 } mesh_config;
 
+/* The default mesh_config.roughness, 0.075 m/m: a saturated wind-sea tail
+ * (PM alpha) puts rms sqrt(alpha)/(2 pi) s = 0.014 s in the band a spacing
+ * s cannot carry; the maximum over a frame's samples is ~4.5 sigma, and
+ * choppy displacement at choppiness 1 adds as much sideways (bench_mesh
+ * calibrates it: <= 1 px at 2..2000 m). */
+#define MESH_ROUGHNESS 0.075
+#define MESH_CHOP_VERTICAL 1.3
+
 void mesh_config_default(mesh_config *c);
+
+/* The roughness of a sea drawn with its choppy displacement: the vertical
+ * and horizontal errors a spacing leaves are orthogonal, the horizontal one
+ * choppiness lambda times the calibration's, so the error grows as
+ * sqrt((1 + lambda^2) / 2); MESH_ROUGHNESS up to lambda = 1 (calm seas keep
+ * the calibrated mesh), at most 1.  With MESH_ROUGHNESS alone the error
+ * outgrew the budget from lambda ~3 on (ocean-sim mesh, camera at 25 m,
+ * 16 px: 16.2 px at 3, 54 px at 10).  An invalid sea gets MESH_ROUGHNESS. */
+double mesh_roughness(const ocean_sea_state *sea);
 ocean_result mesh_config_validate(const mesh_config *c, char *msg, size_t msglen);
 
 /* Dominant wavelength of a sea state: 2 pi / k_p with k_p the wave number

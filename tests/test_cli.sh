@@ -191,6 +191,22 @@ expect_refused "disagree" query --n 16 --t 3 --time 4 --points "1,2"
 # a direct sum is priced before it starts (--count 1e6 at n 256: 7 hours)
 expect_refused "more than --max-terms" sample --x 1 --z 2 --direct --count 1000000
 "$sim" sample --n 16 --x 1 --z 2 --direct --count 3 --max-terms 1e3 >/dev/null || fail "sample --direct within --max-terms"
+# the concentric mesh keeps its error budget (16 px) on steep chop: the
+# sideways error grows with the choppiness, and with one roughness for
+# every sea it was 16.2 px at choppiness 3 and 54 px at 10 (camera 25 m);
+# up to 1.3 (the shipped scene's) the mesh is the calibrated one
+for chop in 1 1.3 3 10; do
+    "$sim" mesh --camera 0,25,0 --choppiness "$chop" --json > "$tmp/mesh_$chop.json" || fail "mesh --choppiness $chop"
+done
+python3 - "$tmp" <<'PY' || fail "mesh error budget on steep chop"
+import json, sys
+d = {c: json.load(open(f"{sys.argv[1]}/mesh_{c}.json")) for c in ("1", "1.3", "3", "10")}
+for c, m in d.items():
+    if not m["max_error_px"] <= 16:
+        sys.exit(f"choppiness {c}: mesh error {m['max_error_px']:.1f} px over the 16 px budget")
+if d["1.3"]["vertices"] != d["1"]["vertices"]:
+    sys.exit(f"choppiness 1.3 densified the calibrated mesh: {d['1.3']['vertices']} vertices, {d['1']['vertices']} at 1")
+PY
 # a mesh priced beyond --max-vertices is refused before it is built (a
 # 0.01-degree camera asked for gigabytes and ran for minutes)
 expect_refused "max-vertices" mesh --n 16 --camera 0,20,0 --fov 0.01

@@ -255,6 +255,50 @@ static void test_lambda_dominant(void **state)
     assert_int_equal(mesh_lambda_dominant(&sea, &lam), OCEAN_EINVAL);
 }
 
+/* The roughness a sea's mesh is built with: the calibrated one up to
+ * choppiness MESH_CHOP_VERTICAL, then growing as the choppiness (the
+ * sideways error), at most 1; a sea without a valid choppiness keeps the
+ * calibration.  And it densifies the mesh: more vertices at choppiness 5
+ * than at 1, none more at 1.3. */
+static void test_roughness_follows_choppiness(void **state)
+{
+    (void)state;
+    ocean_sea_state sea;
+    ocean_sea_state_default(&sea);
+    const double lam[] = {0, 0.5, 1, 1.3, 2.6, 5, 10};
+    const double want[] = {0.075, 0.075, 0.075, 0.075, 0.15, 0.075 * 5 / 1.3, 0.075 * 10 / 1.3};
+    for (int i = 0; i < 7; i++) {
+        sea.choppiness = lam[i];
+        assert_float_equal(mesh_roughness(&sea), want[i], 1e-12);
+    }
+    sea.choppiness = 1e3; /* beyond the config's range: the cap */
+    assert_true(mesh_roughness(&sea) == 1.0);
+    sea.choppiness = NAN;
+    assert_true(mesh_roughness(&sea) == MESH_ROUGHNESS);
+    assert_true(mesh_roughness(NULL) == MESH_ROUGHNESS);
+    mesh_camera cam;
+    mesh_camera_default(&cam);
+    size_t count[3];
+    const double chop[3] = {1, 1.3, 5};
+    for (int i = 0; i < 3; i++) {
+        mesh_config cfg;
+        mesh_config_default(&cfg);
+        cfg.error_px = 16;
+        cfg.range_m = 2000;
+        sea.choppiness = chop[i];
+        cfg.roughness = mesh_roughness(&sea);
+        mesh *m = NULL;
+        assert_int_equal(mesh_create(&cfg, &m), OCEAN_OK);
+        assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
+        mesh_view v;
+        mesh_get_view(m, &v);
+        count[i] = v.vertex_count;
+        mesh_destroy(m);
+    }
+    assert_true(count[1] == count[0]);
+    assert_true(count[2] > 4 * count[0]);
+}
+
 /* ---- concentric ------------------------------------------------------- */
 
 static void test_concentric_watertight_full_range(void **state)
@@ -1211,6 +1255,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_config_and_camera),
         cmocka_unit_test(test_lambda_dominant),
+        cmocka_unit_test(test_roughness_follows_choppiness),
         cmocka_unit_test(test_concentric_watertight_full_range),
         cmocka_unit_test(test_concentric_no_tjunctions),
         cmocka_unit_test(test_concentric_counts_and_symmetry),

@@ -2289,6 +2289,44 @@ static void reload_restart_keys_and_runtime_sea(void **state)
     srv_daemon_stop(d);
 }
 
+/* The mesh a camera gets on steep chop is denser (mesh_roughness: the
+ * sideways error grows with the choppiness), so it keeps the error budget;
+ * the daemon built every sea's mesh with one roughness. */
+static size_t mesh_vertices_at(double choppiness)
+{
+    srv_settings s2 = settings;
+    s2.srv.port = 0;
+    s2.params.sea.choppiness = choppiness;
+    srv_daemon *d;
+    char err[512];
+    assert_int_equal(srv_daemon_start(&s2, &d, err, sizeof err), OCEAN_OK);
+    oc_client *c = connect_client(srv_daemon_port(d), NULL);
+    proto_subscribe sub;
+    small_subscribe(&sub);
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
+    size_t n = 0;
+    for (int k = 0; k < 40 && !n; k++) {
+        oc_frame *f = next_frame(c, 3000);
+        if (f->info.camera_seq != PROTO_NO_CAMERA && f->info.has_mesh) n = f->info.mesh.vertex_count;
+        oc_frame_free(f);
+    }
+    oc_client_destroy(c);
+    srv_daemon_stop(d);
+    return n;
+}
+
+static void mesh_denser_on_steep_chop(void **state)
+{
+    (void)state;
+    size_t calm = mesh_vertices_at(1.0), steep = mesh_vertices_at(5.0);
+    print_message("mesh vertices: %zu at choppiness 1, %zu at 5\n", calm, steep);
+    assert_true(calm > 0);
+    assert_true(steep > 4 * calm);
+}
+
 /* A reload whose sea cannot be built (here: a wisdom file without its
  * grid's plans) is not applied: the sea in force stays, no change is
  * scheduled or announced, and msg says why; it said "configuration
@@ -2688,6 +2726,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(recording_write_error_is_said),
         cmocka_unit_test(reload_restart_keys_and_runtime_sea),
         cmocka_unit_test(reload_sea_that_cannot_be_built),
+        cmocka_unit_test(mesh_denser_on_steep_chop),
         cmocka_unit_test(scene_overrides_named),
         cmocka_unit_test(shipped_config_has_every_key),
         cmocka_unit_test(max_clients_refused),

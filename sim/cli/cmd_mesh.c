@@ -132,6 +132,7 @@ int cmd_mesh(int argc, char **argv)
     }
     const ocean_sea_state *sea = &c.params.sea;
     mesh_lambda_dominant(sea, &cfg.lambda_dominant_m);
+    cfg.roughness = mesh_roughness(sea);
     cfg.range_m = range;
     cfg.error_px = err_px;
     double hs = ocean_spectrum_hs(sea);
