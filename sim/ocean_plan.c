@@ -157,10 +157,6 @@ void ocean_plan_ocean(const ocean *o, const ocean_plan_serving *sv, ocean_plan *
                 "is built",
                 klo, khi, 2.0 * M_PI / khi, 2.0 * M_PI / klo);
     }
-    /* HOOK (issue 13, items 2 and 6): once ocean.h exposes e_total (the
-     * energy missing from geometry and shading together), warn or refuse
-     * here when the scene's served levels can make e_total exceed seed
-     * 000's 5 % guard, with the numbers, as the checks above do. */
 }
 
 void ocean_plan_print(const ocean_plan *plan, FILE *f, const char *prefix)

@@ -23,9 +23,10 @@
  *             then silently not built).  A spacing too coarse for the near
  *             field's longest wave is one client's choice, not the scene's:
  *             the daemon says so when such a client subscribes.
- *   e_total   (hook) the 5 % bound on the energy missing from geometry and
- *             shading together (seed 000) belongs here once e_total exists:
- *             see ocean_plan_ocean.
+ * Not here: e_total, the energy missing from geometry and shading together
+ * (seed 000's 5 % guard), depends on each client's camera, cutoffs and
+ * whether it takes normals, not on the scene; every layout-1 frame states
+ * its own (PROTOCOL.md, the cascade block's e_total).
  *
  * Refusals are part of ocean_params_validate, so every entry point refuses
  * the same way; warnings are collected by ocean_plan_params and
@@ -49,7 +50,7 @@ typedef enum { OCEAN_PLAN_WARN = 1, OCEAN_PLAN_REFUSE = 2 } ocean_plan_level;
 #define OCEAN_PLAN_MAX 8
 typedef struct ocean_plan_item {
     ocean_plan_level level;
-    const char *check;      /* "peak", "breaking", "near", "e_total" */
+    const char *check;      /* "peak", "breaking", "near" ... (the checks above) */
     char text[320];         /* what and the numbers */
 } ocean_plan_item;
 
