@@ -445,6 +445,18 @@ ocean_result srv_client_create(srv_hub *h, struct lws *wsi, srv_client **out)
 
 void srv_client_ref(srv_client *c) { atomic_fetch_add(&c->refs, 1); }
 
+/* The replay cameras c sent and the server has not yet answered. */
+static void free_replay(srv_client *c)
+{
+    while (c->replay) {
+        srv_replay_cam *r = c->replay;
+        c->replay = r->next;
+        free(r);
+    }
+    c->replay_tail = NULL;
+    c->n_replay = 0;
+}
+
 static void free_requests(srv_client *c)
 {
     while (c->queries) {
@@ -454,13 +466,7 @@ static void free_requests(srv_client *c)
         free(q);
     }
     c->n_queries = 0;
-    while (c->replay) {
-        srv_replay_cam *r = c->replay;
-        c->replay = r->next;
-        free(r);
-    }
-    c->replay_tail = NULL;
-    c->n_replay = 0;
+    free_replay(c);
 }
 
 /* Closes c's recording, saying what was lost if its file could not take
@@ -912,7 +918,10 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         r = check_subscribe(&h->settings, &sub, why, sizeof why);
         if (r == OCEAN_OK) {
             if (!c->subscribed) h->n_subscribed++;
-            if (sub.mode != PROTO_MODE_REPLAY) free_requests(c); /* drop replay backlog */
+            /* A live subscription drops the replay backlog, never the
+             * QUERYs: they are answered in order whatever the mode (it
+             * dropped them too, with neither QUERY_RESULT nor ERROR). */
+            if (sub.mode != PROTO_MODE_REPLAY) free_replay(c);
             c->subscribed = 1;
             c->sub = sub;
             c->sub_gen++;

@@ -2007,6 +2007,35 @@ static int raw_frame_tiles(test_ws *w, int ms)
     return n;
 }
 
+/* A live SUBSCRIBE drops the replay backlog, not the QUERYs still waiting
+ * for the next tick: three QUERYs then a SUBSCRIBE, sent together, get
+ * three QUERY_RESULTs in order (they got none, and no ERROR). */
+static void subscribe_keeps_pending_queries(void **state)
+{
+    (void)state;
+    for (int round = 0; round < 3; round++) {
+        test_ws w;
+        assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
+        proto_msg m;
+        assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+        proto_msg_free(&m);
+        for (uint32_t id = 1; id <= 3; id++) raw_query(&w, id, 1);
+        proto_msg sm;
+        proto_msg_init(&sm, PROTO_SUBSCRIBE);
+        small_subscribe(&sm.u.subscribe);
+        sm.u.subscribe.mode = PROTO_MODE_LIVE;
+        sm.u.subscribe.frame_rate_hz = 1;
+        raw_send_msg(&w, &sm);
+        for (uint32_t id = 1; id <= 3; id++) {
+            if (!raw_wait_type(&w, PROTO_QUERY_RESULT, 3000, &m))
+                fail_msg("round %d: QUERY %u sent before a SUBSCRIBE was never answered", round, id);
+            assert_int_equal(m.u.result.query_id, id);
+            proto_msg_free(&m);
+        }
+        test_ws_close(&w);
+    }
+}
+
 /* HELLO's limits are ones the server honours: a QUERY of max_query_points
  * fits max_message (32 + 24 + 16 N bytes) and is answered, one more point is
  * ETOOBIG; max_frame_rate_hz is not above tick_rate_hz and a faster
@@ -2726,6 +2755,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(recording_write_error_is_said),
         cmocka_unit_test(reload_restart_keys_and_runtime_sea),
         cmocka_unit_test(reload_sea_that_cannot_be_built),
+        cmocka_unit_test(subscribe_keeps_pending_queries),
         cmocka_unit_test(mesh_denser_on_steep_chop),
         cmocka_unit_test(scene_overrides_named),
         cmocka_unit_test(shipped_config_has_every_key),
