@@ -21,11 +21,19 @@
 #include "srv_tiles.h"
 #include "srv_redis.h"
 
+#define ADMIN_GLOBAL_MISSES SRV_ADMIN_GLOBAL_MISSES
+#define ADMIN_WINDOW SRV_ADMIN_WINDOW
 
-/* Admin guessing across all connections: more than this many misses in
- * ADMIN_WINDOW seconds lock SEA_STATE set for everyone that long. */
-#define ADMIN_GLOBAL_MISSES 20
-#define ADMIN_WINDOW 10
+int srv_hub_admin_miss(srv_hub *h, double now)
+{
+    /* The last ADMIN_GLOBAL_MISSES + 1 misses in a ring: the slot written
+     * next holds the oldest of them. */
+    h->admin_miss_t[h->admin_miss_next] = now;
+    h->admin_miss_next = (h->admin_miss_next + 1) % (ADMIN_GLOBAL_MISSES + 1);
+    if (h->admin_miss_count <= ADMIN_GLOBAL_MISSES) h->admin_miss_count++;
+    return h->admin_miss_count > ADMIN_GLOBAL_MISSES &&
+           now - h->admin_miss_t[h->admin_miss_next] <= ADMIN_WINDOW;
+}
 
 double srv_now(void)
 {
@@ -1064,11 +1072,7 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
             int k = c->admin_misses < 6 ? c->admin_misses : 6;
             c->admin_misses++;
             c->admin_until = now + cfg.admin_lockout * (double)(1 << k);
-            if (now - h->admin_window_t > ADMIN_WINDOW) {
-                h->admin_window_t = now;
-                h->admin_window_misses = 0;
-            }
-            if (++h->admin_window_misses > ADMIN_GLOBAL_MISSES) {
+            if (srv_hub_admin_miss(h, now)) {
                 h->admin_global_until = now + ADMIN_WINDOW;
                 fprintf(stderr, "oceand: more than %d wrong admin tokens in %g s: SEA_STATE set "
                         "locked for every connection for %g s\n", ADMIN_GLOBAL_MISSES,

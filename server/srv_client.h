@@ -186,6 +186,12 @@ typedef struct srv_sea_change {
 /* Pending changes a hub holds at most; one more is refused (ERATE). */
 #define SRV_SEA_PENDING_MAX 16
 
+/* Admin guessing across all connections: more than SRV_ADMIN_GLOBAL_MISSES
+ * wrong tokens within any SRV_ADMIN_WINDOW seconds lock SEA_STATE set for
+ * everyone that long. */
+#define SRV_ADMIN_GLOBAL_MISSES 20
+#define SRV_ADMIN_WINDOW 10
+
 /* The shared heart of the daemon. */
 typedef struct srv_hub {
     pthread_mutex_t lock;
@@ -217,8 +223,8 @@ typedef struct srv_hub {
     double epoch_frac;                    /* [const]   whole seconds + fraction [0, 1) */
     double tick_rate;                     /* [hub.lock] */
     uint64_t partial_held;                /* [svc] bytes of unfinished messages, all clients */
-    double admin_window_t;                /* [svc] start of the global admin-miss window */
-    int admin_window_misses;              /* [svc] misses in that window */
+    double admin_miss_t[SRV_ADMIN_GLOBAL_MISSES + 1]; /* [svc] the last misses' times, a ring */
+    int admin_miss_next, admin_miss_count; /* [svc] its next slot; misses in it */
     double admin_global_until;            /* [svc] every SEA_STATE set refused until then */
     atomic_uint_fast64_t record_files;    /* recordings opened this run */
     atomic_uint_fast64_t record_bytes;    /* bytes written to recordings this run */
@@ -237,6 +243,12 @@ void srv_fingerprint(const srv_settings *s, char out[17]);
 
 /* Monotonic seconds. */
 double srv_now(void);
+
+/* Notes a wrong admin token at monotonic time now [svc]; 1 when it makes
+ * more than SRV_ADMIN_GLOBAL_MISSES within the last SRV_ADMIN_WINDOW
+ * seconds.  A sliding window: a fixed one, restarted every 10 s, let 39
+ * guesses through in 0.6 s across its edge. */
+int srv_hub_admin_miss(srv_hub *h, double now);
 
 ocean_result srv_hub_init(srv_hub *h, const srv_settings *s);
 void srv_hub_fini(srv_hub *h);

@@ -1861,6 +1861,29 @@ static void epoch_parse(void **state)
     }
 }
 
+/* The global admin lock counts wrong tokens in a sliding window.  One
+ * miss at t = 0, 19 at t = 9.5 s, then 20 at t = 10.1 s: a fixed window
+ * (started by the first miss, restarted at 10.1) saw 20 and 20 and never
+ * locked, letting 39 guesses through in 0.6 s; the 21st within 10 s locks.
+ * Misses spread thinner than 21 in 10 s never lock. */
+static void admin_lock_sliding_window(void **state)
+{
+    (void)state;
+    srv_hub *h = calloc(1, sizeof *h);
+    assert_non_null(h);
+    int locked = srv_hub_admin_miss(h, 1000.0);
+    for (int i = 0; i < 19; i++) locked |= srv_hub_admin_miss(h, 1009.5 + i * 0.01);
+    assert_false(locked); /* 20 misses */
+    int at = -1;
+    for (int i = 0; i < 20 && at < 0; i++)
+        if (srv_hub_admin_miss(h, 1010.1 + i * 0.01)) at = i;
+    assert_int_equal(at, 1); /* 1010.11: 19 + 2 within the last 10 s */
+    /* one miss every 0.51 s: at most 20 in any 10 s */
+    memset(h, 0, sizeof *h);
+    for (int i = 0; i < 200; i++) assert_false(srv_hub_admin_miss(h, 2000.0 + 0.51 * i));
+    free(h);
+}
+
 /* An epoch that puts the sim time beyond the exact-time limit is refused
  * at start, naming the limit (the daemon would serve no frames). */
 static void epoch_beyond_time_limit(void **state)
@@ -2756,6 +2779,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(reload_restart_keys_and_runtime_sea),
         cmocka_unit_test(reload_sea_that_cannot_be_built),
         cmocka_unit_test(subscribe_keeps_pending_queries),
+        cmocka_unit_test(admin_lock_sliding_window),
         cmocka_unit_test(mesh_denser_on_steep_chop),
         cmocka_unit_test(scene_overrides_named),
         cmocka_unit_test(shipped_config_has_every_key),
