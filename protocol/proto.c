@@ -253,7 +253,7 @@ static ocean_result v_tile(ctx *c, const proto_tile *t)
     TRY(chk_range(c, "tile.height", t->height, 1, PROTO_TILE_MAX_SIZE));
     TRY(chk_range(c, "tile.origin_x", t->origin_x, -MAX_ORIGIN, MAX_ORIGIN));
     TRY(chk_range(c, "tile.origin_z", t->origin_z, -MAX_ORIGIN, MAX_ORIGIN));
-    TRY(chk_range(c, "tile.spacing", t->spacing, 0, 1e6));
+    TRY(chk_range(c, "tile.spacing", t->spacing, 0, PROTO_TILE_SPACING_MAX));
     if (!(t->spacing > 0))
         FAIL(c, OCEAN_EINVAL, "tile.spacing must be > 0");
     TRY(chk_range(c, "tile.error_bound", t->error_bound, 0, 1e30));

@@ -303,7 +303,19 @@ srv_msg *srv_msg_encode(const proto_msg *m)
     if (!q) return NULL;
     char err[256];
     if (proto_encode(&q->buf, m, err, sizeof err) != OCEAN_OK) {
-        fprintf(stderr, "oceand: cannot encode %s: %s\n", proto_type_name(m->hdr.type), err);
+        /* Once a second at most: a failure repeats with every frame, and
+         * any thread may get here. */
+        static _Atomic int64_t said_s = INT64_MIN;
+        static atomic_uint_fast64_t quiet;
+        int64_t now = (int64_t)srv_now(), last = atomic_load(&said_s);
+        if (now != last && atomic_compare_exchange_strong(&said_s, &last, now)) {
+            uint64_t q_n = atomic_exchange(&quiet, 0);
+            fprintf(stderr, "oceand: cannot encode %s: %s", proto_type_name(m->hdr.type), err);
+            if (q_n) fprintf(stderr, " (%llu more since the last such line)", (unsigned long long)q_n);
+            fputc('\n', stderr);
+        } else {
+            atomic_fetch_add(&quiet, 1);
+        }
         srv_msg_free(q);
         return NULL;
     }
@@ -772,6 +784,16 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
         snprintf(why, n, "subscribe: the coarsest tile would span %g m (base spacing %g m, "
                  "%u levels, %u samples); keep it under 10 000 km", top, spacing, sub->lod_levels,
                  sub->tile_size);
+        return OCEAN_EINVAL;
+    }
+    /* Small tiles keep the span above in bounds while the coarsest spacing
+     * passes what a TILE can state: accepted, every FRAME then failed to
+     * encode (no FRAME, no ERROR, a log line per frame). */
+    double coarsest = spacing * ldexp(1.0, sub->lod_levels - 1);
+    if (world && coarsest > PROTO_TILE_SPACING_MAX) {
+        snprintf(why, n, "subscribe: the coarsest level's spacing would be %g m (base spacing %g m x 2^%u), "
+                 "above TILE.spacing's %g m: fewer lod_levels or a smaller base_spacing_m", coarsest,
+                 spacing, sub->lod_levels - 1, PROTO_TILE_SPACING_MAX);
         return OCEAN_EINVAL;
     }
     if (sub->layout == PROTO_LAYOUT_CASCADE) {

@@ -1348,6 +1348,14 @@ static void bad_input_gets_error(void **state)
     bs = sm;
     bs.u.subscribe.frame_rate_hz = 200;
     cases[nc++] = (bad_case){"frame_rate", encode(&bs, &len), len, 2, OCEAN_EINVAL};
+    /* a coarsest level spacing (1e4 m x 2^7) beyond what a TILE can state,
+     * with tiles small enough to pass the span check: it was accepted and
+     * then no FRAME could be encoded, without an ERROR */
+    bs = sm;
+    bs.u.subscribe.tile_size = 2;
+    bs.u.subscribe.lod_levels = 8;
+    bs.u.subscribe.base_spacing_m = 1e4f;
+    cases[nc++] = (bad_case){"coarsest_spacing", encode(&bs, &len), len, 2, OCEAN_EINVAL};
     /* unknown codec */
     bs = sm;
     uint8_t *sb = encode(&bs, &len);
