@@ -143,6 +143,7 @@ void mesh_config_default(mesh_config *c)
     c->k_lambda = 0.1;
     c->min_spacing_m = 0.02;
     c->blend_frac = 0.2;
+    c->max_levels = MESH_MAX_LEVELS;
     c->far_skirt = 1;
     c->chunk_tiles = 6;
     c->chunk_tile_m = 128;
@@ -175,6 +176,8 @@ ocean_result mesh_config_validate(const mesh_config *c, char *msg, size_t msglen
         FAIL("mesh min_spacing: %g outside [0.005, 1000] m", c->min_spacing_m);
     if (!isfinite(c->blend_frac) || c->blend_frac < 0 || c->blend_frac > 0.45)
         FAIL("mesh blend_frac: %g outside [0, 0.45]", c->blend_frac);
+    if (c->max_levels < 1 || c->max_levels > MESH_MAX_LEVELS)
+        FAIL("mesh max_levels: %d outside 1..%d", c->max_levels, MESH_MAX_LEVELS);
     if (c->far_skirt != 0 && c->far_skirt != 1)
         FAIL("mesh far_skirt: %d is neither 0 nor 1", c->far_skirt);
     if (c->chunk_tiles < 1 || c->chunk_tiles > 64)

@@ -101,6 +101,10 @@ typedef struct mesh_config {
     double k_lambda;         /* near spacing <= k * lambda_dominant, 0.1 .. 0.5 */
     double min_spacing_m;    /* finest near spacing (the sea's finest detail) */
     double blend_frac;       /* morph zone half-width / zone radius, 0..0.45 (0.2) */
+    int max_levels;          /* most levels, 1..MESH_MAX_LEVELS (MESH_MAX_LEVELS): a
+                                camera near the water with a long range that would
+                                need more gets a coarser near spacing (one
+                                doubling per level saved) */
     int far_skirt;           /* 1 (default): rings of flat triangles (morph 1, never
                                 sampled, the sea's mean level) from the range out to
                                 the horizon of the camera's height octave,

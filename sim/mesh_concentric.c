@@ -54,20 +54,29 @@ static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
     while (cfg->range_m / p->s0 > (double)(1 << 28))
         p->s0 *= 2;
     p->range = cfg->range_m;
-    /* R_L - b_L = rho * s_(L+1): the morph toward the coarser level starts
-     * exactly where the coarser spacing meets the error budget */
-    double r0 = 2 * p->rho * p->s0 / (1 - cfg->blend_frac);
-    int L = 0;
+    /* A camera near the water with a long range needs more levels than a
+     * reader may take (a protocol's 16): each doubling of the near spacing
+     * removes one, so the core coarsens, never the range. */
+    int most = cfg->max_levels >= 1 && cfg->max_levels <= MESH_MAX_LEVELS ? cfg->max_levels : MESH_MAX_LEVELS;
     for (;;) {
-        p->units[L] = L == 0 ? 1 : L == 1 ? 2 : L == 2 ? 8 : p->units[L - 1] * 2;
-        p->radius[L] = L == 0 ? r0 : L == 1 ? 4 * r0 : 2 * p->radius[L - 1];
-        p->blend[L] = cfg->blend_frac * p->radius[L];
-        /* the next level would start beyond the range: this is the last */
-        if (p->radius[L] + p->blend[L] >= p->range || L == MESH_MAX_LEVELS - 1)
+        /* R_L - b_L = rho * s_(L+1): the morph toward the coarser level
+         * starts exactly where the coarser spacing meets the error budget */
+        double r0 = 2 * p->rho * p->s0 / (1 - cfg->blend_frac);
+        int L = 0;
+        for (;;) {
+            p->units[L] = L == 0 ? 1 : L == 1 ? 2 : L == 2 ? 8 : p->units[L - 1] * 2;
+            p->radius[L] = L == 0 ? r0 : L == 1 ? 4 * r0 : 2 * p->radius[L - 1];
+            p->blend[L] = cfg->blend_frac * p->radius[L];
+            /* the next level would start beyond the range: this is the last */
+            if (p->radius[L] + p->blend[L] >= p->range || L == MESH_MAX_LEVELS - 1)
+                break;
+            L++;
+        }
+        p->levels = L + 1;
+        if (p->levels <= most || p->s0 >= p->range)
             break;
-        L++;
+        p->s0 *= 2;
     }
-    p->levels = L + 1;
     int snapL = p->levels > 2 ? 2 : p->levels - 1;
     p->slack = 0.5 * M_SQRT2 * p->units[snapL] * p->s0;
     /* The far skirt: the sea's mean level from the mesh's edge out to the

@@ -299,6 +299,53 @@ static void test_roughness_follows_choppiness(void **state)
     assert_true(count[2] > 4 * count[0]);
 }
 
+/* A camera at the water with a long range needs more levels than a
+ * reader may take: with max_levels the near spacing coarsens until it
+ * fits, and the mesh still reaches the range (a camera at 0.5 m with a
+ * 200 km range had 20 levels; the daemon, whose frames hold 16, refused it
+ * and dropped the mesh). */
+static void world_of(const mesh_view *v, uint32_t i, double out[2]);
+
+static void test_concentric_max_levels(void **state)
+{
+    (void)state;
+    mesh_camera cam;
+    mesh_camera_default(&cam);
+    cam.pos[1] = 0.5;
+    mesh_config cfg;
+    mesh_config_default(&cfg);
+    cfg.error_px = 16;
+    cfg.range_m = 2e5;
+    cfg.far_skirt = 0; /* the mesh itself must reach the range */
+    mesh *m = NULL;
+    assert_int_equal(mesh_create(&cfg, &m), OCEAN_OK);
+    assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
+    mesh_view v;
+    mesh_get_view(m, &v);
+    int free_levels = v.levels;
+    mesh_destroy(m);
+    assert_true(free_levels > 16);
+    cfg.max_levels = 16;
+    assert_int_equal(mesh_create(&cfg, &m), OCEAN_OK);
+    assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
+    mesh_get_view(m, &v);
+    assert_true(v.levels <= 16 && v.levels >= 2);
+    /* it still covers the range: a vertex at least that far out */
+    double far = 0;
+    for (uint32_t i = 0; i < v.vertex_count; i++) {
+        double w[2];
+        world_of(&v, i, w);
+        double d = hypot(w[0] - cam.pos[0], w[1] - cam.pos[2]);
+        far = d > far ? d : far;
+    }
+    assert_true(far >= cfg.range_m);
+    mesh_destroy(m);
+    cfg.max_levels = 0;
+    char msg[200];
+    assert_int_equal(mesh_config_validate(&cfg, msg, sizeof msg), OCEAN_EINVAL);
+    assert_non_null(strstr(msg, "max_levels"));
+}
+
 /* ---- concentric ------------------------------------------------------- */
 
 static void test_concentric_watertight_full_range(void **state)
@@ -1256,6 +1303,7 @@ int main(void)
         cmocka_unit_test(test_config_and_camera),
         cmocka_unit_test(test_lambda_dominant),
         cmocka_unit_test(test_roughness_follows_choppiness),
+        cmocka_unit_test(test_concentric_max_levels),
         cmocka_unit_test(test_concentric_watertight_full_range),
         cmocka_unit_test(test_concentric_no_tjunctions),
         cmocka_unit_test(test_concentric_counts_and_symmetry),

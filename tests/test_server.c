@@ -2378,6 +2378,41 @@ static size_t mesh_vertices_at(double choppiness)
     return n;
 }
 
+/* A camera at the water with a long view range keeps its mesh (20 levels
+ * were built, refused as more than a FRAME holds, and the client went
+ * without a mesh until its next SUBSCRIBE, whatever its camera), in both
+ * layouts. */
+static void mesh_low_camera_long_range(void **state)
+{
+    (void)state;
+    for (int layout = 0; layout < 2; layout++) {
+        oc_client *c = connect_client(port, NULL);
+        proto_subscribe sub;
+        small_subscribe(&sub);
+        if (layout) sub.layout = PROTO_LAYOUT_CASCADE;
+        sub.view_range_m = 1e6f;
+        assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+        proto_camera cam;
+        oc_camera_default(&cam);
+        cam.pos[1] = 0.5;
+        uint32_t seq = 0;
+        assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+        int meshed = 0;
+        for (int k = 0; k < 60 && !meshed; k++) {
+            oc_frame *f = next_frame(c, 3000);
+            if (f->info.camera_seq == seq && f->info.has_mesh) meshed = 1;
+            oc_frame_free(f);
+        }
+        oc_client_stats st;
+        oc_client_get_stats(c, &st);
+        char e[256] = "";
+        oc_client_last_error(c, e, sizeof e);
+        if (!meshed || st.errors_rx) fail_msg("layout %d, camera at 0.5 m, range 1e6 m: mesh %d, %llu ERRORs (%s)", layout,
+                                              meshed, (unsigned long long)st.errors_rx, e);
+        oc_client_destroy(c);
+    }
+}
+
 static void mesh_denser_on_steep_chop(void **state)
 {
     (void)state;
@@ -2789,6 +2824,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(subscribe_keeps_pending_queries),
         cmocka_unit_test(admin_lock_sliding_window),
         cmocka_unit_test(mesh_denser_on_steep_chop),
+        cmocka_unit_test(mesh_low_camera_long_range),
         cmocka_unit_test(scene_overrides_named),
         cmocka_unit_test(shipped_config_has_every_key),
         cmocka_unit_test(max_clients_refused),
