@@ -162,6 +162,35 @@ static void path_good(void **state)
     assert_int_equal(proto_encode(&cb, &cm, err, sizeof err), OCEAN_OK);   /* the protocol takes it */
     proto_buf_free(&cb);
     oc_path_destroy(r);
+    /* segments: live t is the clock, replay t the client's render_time in
+     * its order, so it may go back there and at a change of mode (the
+     * daemon wrote such files and the reader refused them) */
+    const char *seg = "# oceand camera path v1\n"
+                      "t,x,y,z,vx,vy,vz,yaw,pitch,roll,fov\n"
+                      "# subscribed at 300: mode live\n"
+                      "300.1,0,0,0,0,0,0,0,0,0,60\n"
+                      "# subscribed at 301: mode replay\n"
+                      "5,0,0,0,0,0,0,0,0,0,60\n"
+                      "2,0,0,0,0,0,0,0,0,0,60\n"
+                      "# subscribed at 302: mode live\n"
+                      "302.1,0,0,0,0,0,0,0,0,0,60\n";
+    assert_int_equal(oc_path_parse(seg, strlen(seg), "seg", &r, err, sizeof err), OCEAN_OK);
+    assert_int_equal(r->count, 4);
+    assert_false(r->monotonic);
+    assert_int_equal(r->back_line, 6);
+    assert_true(p->monotonic);
+    /* written back, it reads back (the writer marks a replay segment) */
+    char *sbuf = NULL;
+    size_t slen = 0;
+    FILE *sf = open_memstream(&sbuf, &slen);
+    assert_int_equal(oc_path_write(r, sf), OCEAN_OK);
+    fclose(sf);
+    oc_path *r2 = NULL;
+    if (oc_path_parse(sbuf, slen, "seg2", &r2, err, sizeof err) != OCEAN_OK) fail_msg("%s", err);
+    assert_memory_equal(r2->pts, r->pts, r->count * sizeof *r->pts);
+    oc_path_destroy(r2);
+    free(sbuf);
+    oc_path_destroy(r);
     oc_path_camera(&p->pts[1], &cam);
     assert_true(cam.pos[0] == -1000 && cam.render_time == 0.5 && cam.viewport_w == 1280);
     assert_true(cam.fov_y_deg == 45.5f);
@@ -194,6 +223,9 @@ static void path_bad(void **state)
         {"0,0,0,-2e10,0,0,0,0,0,0,60\n", "p:2: field z beyond +-1e10 m", 1},
         {"0,0,2e7,0,0,0,0,0,0,0,60\n", "p:2: field y beyond +-1e7 m", 1},
         {"0,0,0,0,0,0,0,0,0,0,60\n1,0,0,0,0,0,0,0,0,0,60\n0.5,0,0,0,0,0,0,0,0,0,60\n", "p:4: t 0.5 goes back", 1},
+        /* a live segment never goes back */
+        {"# subscribed at 1: mode replay\n5,0,0,0,0,0,0,0,0,0,60\n# subscribed at 6: mode live\n6,0,0,0,0,0,0,0,0,0,60\n"
+         "5.5,0,0,0,0,0,0,0,0,0,60\n", "p:6: t 5.5 goes back", 1},
         {"0,0,0,0,0,0,0,0,0,0,60\n1,0,0,0,0,0,0,0,0,0,inf\n", "p:3: field fov_y_deg is not a finite", 1},
         {"1e999,0,0,0,0,0,0,0,0,0,60\n", "p:2: field t \"1e999\" is not a number", 1},
         {"# oceand camera path v2\n" "t,x,y,z,vx,vy,vz,yaw,pitch,roll,fov\n0,0,0,0,0,0,0,0,0,0,60\n", "p:1: camera path format version 2", 0},

@@ -38,6 +38,7 @@
 #include "srv_cascade.h"
 #include "srv_daemon.h"
 #include "lib/test_ws.h"
+#include "oc_path.h"
 
 static int sanitized;
 static char tmpdir[256];
@@ -2230,6 +2231,10 @@ static void recording_writes_camera_path(void **state)
     cm.u.camera.pos[0] = 0.1 * 3 + 1e6;
     cm.u.camera.render_time = 5.0;
     raw_send_msg(&w, &cm);
+    /* a replay client may scrub back */
+    cm.u.camera.pos[0] = 0.1 * 4 + 1e6;
+    cm.u.camera.render_time = 2.0;
+    raw_send_msg(&w, &cm);
     usleep(200000);
     test_ws_close(&w);
     usleep(300000);
@@ -2271,9 +2276,18 @@ static void recording_writes_camera_path(void **state)
         data++;
     }
     fclose(f);
-    assert_int_equal(data, 4);
+    assert_int_equal(data, 5);
     assert_int_equal(modes, 2);
     assert_true(t_replay == 5.0); /* a replay report's t is its render_time */
+    /* and the reader takes what the daemon writes: live t, then replay t
+     * back at 5 and back again at 2 (it refused: "t 5 goes back in time") */
+    oc_path *rp = NULL;
+    char perr[512] = "";
+    if (oc_path_load(path, &rp, perr, sizeof perr) != OCEAN_OK) fail_msg("the recording does not read back: %s", perr);
+    assert_int_equal(rp->count, 5);
+    assert_false(rp->monotonic);
+    assert_true(rp->pts[4].t == 2.0);
+    oc_path_destroy(rp);
 }
 
 /* max_clients: one more connection is told BYE server-full. */

@@ -133,6 +133,11 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
     size_t pos = 0;
     unsigned lineno = 0;
     int have_header = 0, ncol = 0;
+    /* The daemon's "# subscribed at T: mode live|replay" starts a segment:
+     * live t is the server's clock (never back), replay t the render_time
+     * the client asked for, in its order (it may scrub back). */
+    int seg_replay = 0, seg_start = 0;
+    p->monotonic = 1;
     ocean_result res = OCEAN_OK;
     while (pos < len) {
         size_t start = pos;
@@ -175,6 +180,12 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
                     res = OCEAN_EVERSION;
                     break;
                 }
+            }
+            static const char subscribed[] = "# subscribed at ";
+            if (strncmp(s, subscribed, sizeof subscribed - 1) == 0) {
+                const char *m = strstr(s, ": mode ");
+                seg_replay = m && strcmp(m + 7, "replay") == 0;
+                seg_start = 1;
             }
             continue;
         }
@@ -264,11 +275,18 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
             break;
         }
         if (p->count && q.t < p->pts[p->count - 1].t) {
-            ocean_seterr(err, errlen, "%s:%u: t %.17g goes back in time (previous line has %.17g) in \"%s\"",
-                   name, lineno, q.t, p->pts[p->count - 1].t, orig);
-            res = OCEAN_EINVAL;
-            break;
+            if (!seg_replay && !seg_start) {
+                ocean_seterr(err, errlen, "%s:%u: t %.17g goes back in time (previous line has %.17g) in \"%s\" "
+                             "(only a replay-mode segment, after \"# subscribed at T: mode replay\", may)",
+                             name, lineno, q.t, p->pts[p->count - 1].t, orig);
+                res = OCEAN_EINVAL;
+                break;
+            }
+            if (p->monotonic)
+                p->back_line = lineno;
+            p->monotonic = 0;
         }
+        seg_start = 0;
         if (p->count >= OC_PATH_MAX_POINTS) {
             ocean_seterr(err, errlen, "%s:%u: more than %u points", name, lineno, OC_PATH_MAX_POINTS);
             res = OCEAN_ETOOBIG;
@@ -359,6 +377,9 @@ ocean_result oc_path_write(const oc_path *p, FILE *f)
     if (!p || !f)
         return OCEAN_EINVAL;
     if (fprintf(f, "%s\n%s\n", OC_PATH_VERSION_LINE, OC_PATH_HEADER) < 0)
+        return OCEAN_EIO;
+    /* t that goes back is read only in a replay-mode segment */
+    if (!p->monotonic && p->count && fprintf(f, "# subscribed at %.17g: mode replay\n", p->pts[0].t) < 0)
         return OCEAN_EIO;
     for (size_t i = 0; i < p->count; i++) {
         const oc_path_point *q = &p->pts[i];

@@ -7,7 +7,9 @@
  *   t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h
  *   12.5,0,25,0,8,0,0,0,-5,0,60,1280,720
  *
- * t sim seconds (non-decreasing), x/y/z world metres (y up), vx/vy/vz m/s,
+ * t sim seconds, non-decreasing except in a replay-mode segment (after the
+ * daemon's "# subscribed at T: mode replay" comment t is the render_time
+ * the client asked for, in its order), x/y/z world metres (y up), vx/vy/vz m/s,
  * yaw/pitch/roll degrees (PROTOCOL.md "Camera orientation"), the vertical
  * field of view in degrees, the viewport in pixels.  '#' starts a comment
  * line; a "# oceand camera path vN" comment with N != 1 is refused; blank
@@ -47,6 +49,11 @@ typedef struct oc_path_point {
 typedef struct oc_path {
     size_t count;
     oc_path_point *pts;
+    /* 1: t never goes back.  0: a replay-mode segment scrubs back (the
+     * first such point on line back_line): send it as recorded (replay
+     * mode), not paced by t. */
+    int monotonic;
+    unsigned back_line;
 } oc_path;
 
 /* Parses text (len bytes, need not be NUL-terminated); name is used in

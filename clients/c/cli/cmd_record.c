@@ -97,6 +97,14 @@ int cmd_record(int argc, char **argv)
         fprintf(stderr, "ocean-client record: %s\n", err);
         return 2;
     }
+    if (!p->monotonic) {
+        /* live mode paces the reports by t */
+        fprintf(stderr, "ocean-client record: %s:%u: t goes back in time (a replay-mode recording that "
+                "scrubs): `ocean-client replay` sends it as recorded; record paces reports by t\n", path,
+                p->back_line);
+        oc_path_destroy(p);
+        return 2;
+    }
     rec_ctx r;
     memset(&r, 0, sizeof r);
     if (oc_store_writer_open(out, &r.w, err, sizeof err) != OCEAN_OK) {
