@@ -4,11 +4,13 @@
 #include "srv_record.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 struct srv_record {
     FILE *f;
@@ -23,6 +25,9 @@ struct srv_record {
 /* Longest report line srv_record_format writes: 4 %.17g (24 chars each),
  * 7 %.9g (16), 2 %u (5), 12 commas and a newline. */
 #define LINE_MAX_BYTES 320
+
+/* Names tried for one recording: client-<id>-<time>.csv, then -1 .. -99. */
+#define SRV_RECORD_NAME_TRIES 100
 
 static double mono(void)
 {
@@ -39,16 +44,48 @@ ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *sc
         snprintf(msg, msglen, "cannot create recording directory %s: %s", dir, strerror(errno));
         return OCEAN_EIO;
     }
+    /* A new file, never an existing name: fopen "w" followed a symlink
+     * planted at the predictable name (overwriting whatever it pointed at
+     * that the daemon could write) and truncated another run's recording
+     * of the same client id and second.  O_EXCL fails on any existing
+     * name, a symlink included (dangling or not); a taken name moves on to
+     * -1, -2 ... so a collision never loses a recording. */
+    long long now = (long long)time(NULL);
     char name[1024];
-    snprintf(name, sizeof name, "%s/client-%u-%lld.csv", dir, client_id, (long long)time(NULL));
-    srv_record *r = calloc(1, sizeof *r);
-    if (!r) return OCEAN_ENOMEM;
-    r->f = fopen(name, "w");
-    if (!r->f) {
-        snprintf(msg, msglen, "cannot open %s: %s", name, strerror(errno));
-        free(r);
+    int fd = -1, err = 0;
+    for (int k = 0; k < SRV_RECORD_NAME_TRIES && fd < 0; k++) {
+        int len = k == 0 ? snprintf(name, sizeof name, "%s/client-%u-%lld.csv", dir, client_id, now)
+                         : snprintf(name, sizeof name, "%s/client-%u-%lld-%d.csv", dir, client_id, now, k);
+        if (len < 0 || (size_t)len >= sizeof name) { /* a cut name could be another file's */
+            snprintf(msg, msglen, "cannot create a recording in %.200s...: the path is over %zu bytes; "
+                     "choose a shorter server.record_dir", dir, sizeof name - 1);
+            return OCEAN_EIO;
+        }
+        fd = open(name, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+        err = errno;
+        if (fd < 0 && err != EEXIST) break;
+    }
+    if (fd < 0) {
+        if (err == EEXIST)
+            snprintf(msg, msglen, "cannot create a recording for client %u in %s: client-%u-%lld.csv "
+                     "and its alternatives -1 .. -%d all exist; move old recordings out of "
+                     "server.record_dir", client_id, dir, client_id, now, SRV_RECORD_NAME_TRIES - 1);
+        else
+            snprintf(msg, msglen, "cannot create recording %s: %s%s", name, strerror(err),
+                     err == ELOOP ? " (a symbolic link: recordings are never written through one)" : "");
         return OCEAN_EIO;
     }
+    srv_record *r = calloc(1, sizeof *r);
+    FILE *f = r ? fdopen(fd, "w") : NULL;
+    if (!f) {
+        err = r ? errno : ENOMEM;
+        close(fd);
+        unlink(name);
+        free(r);
+        snprintf(msg, msglen, "cannot open recording %s: %s", name, strerror(err));
+        return err == ENOMEM ? OCEAN_ENOMEM : OCEAN_EIO;
+    }
+    r->f = f;
     snprintf(r->path, sizeof r->path, "%s", name);
     fprintf(r->f, "# oceand camera path v1\n# client %u scene %s\n"
                   "t,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h\n",

@@ -15,9 +15,11 @@
 
 typedef struct srv_record srv_record;
 
-/* Opens dir/client-<id>-<unix time>.csv (creating dir) and writes the
- * header.  *out is NULL on failure (OCEAN_EIO, OCEAN_ENOMEM); msg says why.
- * path (if not NULL) receives the file name. */
+/* Creates dir/client-<id>-<unix time>.csv (creating dir) and writes the
+ * header.  Only a new file: an existing name, a symlink included, is never
+ * opened; the next free of client-<id>-<unix time>-1.csv .. -99.csv is
+ * taken instead.  *out is NULL on failure (OCEAN_EIO, OCEAN_ENOMEM); msg
+ * says why, naming the path.  path (if not NULL) receives the file name. */
 ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *scene,
                              srv_record **out, char *path, size_t pathlen, char *msg, size_t msglen);
 /* Notes an accepted SUBSCRIBE's mode at sim time t as a comment line: the

@@ -37,6 +37,7 @@
 #include "slope.h"
 #include "srv_cascade.h"
 #include "srv_daemon.h"
+#include "srv_record.h"
 #include "lib/test_ws.h"
 #include "oc_path.h"
 
@@ -2290,6 +2291,109 @@ static void recording_writes_camera_path(void **state)
     oc_path_destroy(rp);
 }
 
+/* ---- recordings are new files ---- */
+
+static void put_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+}
+
+/* The file's first 255 bytes ("" when it cannot be read). */
+static const char *file_text(const char *path, char buf[256])
+{
+    buf[0] = 0;
+    FILE *f = fopen(path, "r");
+    if (!f) return buf;
+    size_t n = fread(buf, 1, 255, f);
+    buf[n] = 0;
+    fclose(f);
+    return buf;
+}
+
+/* A recording is always a new file: the name client-<id>-<unix time>.csv
+ * is predictable, and a symlink planted there made the daemon overwrite
+ * the link's target (fopen "w" follows it), a dangling one made it create
+ * the target, and another run's recording of the same id and second was
+ * truncated.  A name that exists is left alone and the recording goes to
+ * the next free -1, -2 ...; past the last alternative, or on any other
+ * failure, it is refused with the path and the reason. */
+static void recording_never_overwrites(void **state)
+{
+    (void)state;
+    char dir[300], victim[320], absent[320], name[400], buf[256];
+    snprintf(dir, sizeof dir, "%s/rec-excl", tmpdir);
+    assert_int_equal(mkdir(dir, 0755), 0);
+    snprintf(victim, sizeof victim, "%s/victim.txt", tmpdir);
+    snprintf(absent, sizeof absent, "%s/made-through-link.txt", tmpdir);
+    put_file(victim, "precious data\n");
+    /* every name the next seconds could give (the clock may tick) */
+    long long now = (long long)time(NULL);
+    for (int d = 0; d < 3; d++) {
+        snprintf(name, sizeof name, "%s/client-900001-%lld.csv", dir, now + d);
+        assert_int_equal(symlink(victim, name), 0);            /* a planted link */
+        snprintf(name, sizeof name, "%s/client-900002-%lld.csv", dir, now + d);
+        put_file(name, "# earlier run\n");                      /* another run's recording */
+        snprintf(name, sizeof name, "%s/client-900002-%lld-1.csv", dir, now + d);
+        put_file(name, "# earlier run\n");
+        snprintf(name, sizeof name, "%s/client-900003-%lld.csv", dir, now + d);
+        assert_int_equal(symlink(absent, name), 0);            /* a dangling link */
+        for (int k = 0; k < 100; k++) {                         /* every name taken */
+            if (k == 0) snprintf(name, sizeof name, "%s/client-900004-%lld.csv", dir, now + d);
+            else snprintf(name, sizeof name, "%s/client-900004-%lld-%d.csv", dir, now + d, k);
+            put_file(name, "# earlier run\n");
+        }
+    }
+    const char *want_suffix[3] = {"-1.csv", "-2.csv", "-1.csv"};
+    char path[3][1100];
+    for (int i = 0; i < 3; i++) {
+        srv_record *r = NULL;
+        char msg[300] = "";
+        if (srv_record_open(dir, 900001u + (uint32_t)i, "test", &r, path[i], sizeof path[i], msg, sizeof msg) !=
+            OCEAN_OK)
+            fail_msg("client %u: recording refused: %s", 900001u + i, msg);
+        proto_camera cam;
+        oc_camera_default(&cam);
+        assert_int_equal(srv_record_camera(r, 1.0, &cam), OCEAN_OK);
+        assert_int_equal(srv_record_close(r, NULL, 0), OCEAN_OK);
+    }
+    if (strcmp(file_text(victim, buf), "precious data\n") != 0)
+        fail_msg("a symlink at the recording's name: its target %s was overwritten, now:\n%s", victim, buf);
+    if (access(absent, F_OK) == 0)
+        fail_msg("a dangling symlink at the recording's name: its target %s was created", absent);
+    for (int d = 0; d < 3; d++)
+        for (int k = 0; k < 2; k++) {
+            if (k == 0) snprintf(name, sizeof name, "%s/client-900002-%lld.csv", dir, now + d);
+            else snprintf(name, sizeof name, "%s/client-900002-%lld-1.csv", dir, now + d);
+            if (strcmp(file_text(name, buf), "# earlier run\n") != 0)
+                fail_msg("an existing recording %s was overwritten, now:\n%s", name, buf);
+        }
+    for (int i = 0; i < 3; i++) {
+        struct stat st;
+        assert_int_equal(lstat(path[i], &st), 0);
+        if (!S_ISREG(st.st_mode) || strlen(path[i]) < 6 ||
+            strcmp(path[i] + strlen(path[i]) - 6, want_suffix[i]) != 0)
+            fail_msg("client %u recorded to %s: want a new regular file ending %s", 900001u + i, path[i],
+                     want_suffix[i]);
+        assert_non_null(strstr(file_text(path[i], buf), "# oceand camera path v1\n"));
+    }
+    /* every alternative taken: refused, and the message says what to do */
+    srv_record *r = (srv_record *)1;
+    char msg[300] = "", p4[1100];
+    assert_int_equal(srv_record_open(dir, 900004u, "test", &r, p4, sizeof p4, msg, sizeof msg), OCEAN_EIO);
+    assert_null(r);
+    if (!strstr(msg, "client-900004-") || !strstr(msg, "-99") || !strstr(msg, "server.record_dir"))
+        fail_msg("every name taken: %s", msg);
+    /* any other failure names the path and the reason */
+    char notdir[320];
+    snprintf(notdir, sizeof notdir, "%s/victim.txt", tmpdir);
+    assert_int_equal(srv_record_open(notdir, 1u, "test", &r, p4, sizeof p4, msg, sizeof msg), OCEAN_EIO);
+    if (!strstr(msg, notdir) || !strstr(msg, "Not a directory")) fail_msg("record_dir a file: %s", msg);
+    assert_string_equal(file_text(victim, buf), "precious data\n");
+}
+
 /* max_clients: one more connection is told BYE server-full. */
 static int full_reason = -2;
 static void on_close_full(void *user, oc_client *c, int reason, const char *msg)
@@ -2833,6 +2937,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(http_metrics_and_status),
         cmocka_unit_test(recording_writes_camera_path),
         cmocka_unit_test(recording_write_error_is_said),
+        cmocka_unit_test(recording_never_overwrites),
         cmocka_unit_test(reload_restart_keys_and_runtime_sea),
         cmocka_unit_test(reload_sea_that_cannot_be_built),
         cmocka_unit_test(subscribe_keeps_pending_queries),
@@ -2845,5 +2950,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(connect_disconnect_cycles),
         cmocka_unit_test(sighup_and_sigterm),
     };
+    const char *filter = getenv("SERVER_TEST_FILTER"); /* one test (cmocka pattern) while debugging */
+    if (filter && *filter) cmocka_set_test_filter(filter);
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }
