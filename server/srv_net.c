@@ -26,6 +26,10 @@
  * FD_ACCEPT_SLACK, so the process itself never runs out. */
 #define FD_RESERVE 96
 #define FD_ACCEPT_SLACK 32
+/* Longest file path libwebsockets 4.1.6 serves from a file mount: it
+ * writes origin "/" uri into char path[256] with lws_snprintf(path,
+ * sizeof path - 1, ...), so 254 characters, the rest cut off. */
+#define SRV_LWS_FILE_PATH_MAX 254
 
 /* ---- RFC 6455 guard ------------------------------------------------------------
  *
@@ -435,23 +439,37 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
         /* The mounts match by prefix: only the exact paths are answered
          * (/metricsfoo was served the metrics), GET and HEAD alike (HEAD
          * got 404, which a load balancer's health check reads as down);
-         * other methods get 405 naming the two. */
+         * other methods get 405 naming the two.  The method is told by
+         * the URI header's length, not by a copy of it: a path too long
+         * for the copy made a GET look like no method at all (405). */
         char uri[128] = "";
-        int head = 0;
-        if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) <= 0) {
-            if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_HEAD_URI) > 0) {
-                head = 1;
-            } else {
-                uint8_t hdr[LWS_PRE + 256], *start = hdr + LWS_PRE, *p = start, *end = hdr + sizeof hdr - 1;
-                if (lws_add_http_header_status(wsi, HTTP_STATUS_METHOD_NOT_ALLOWED, &p, end) ||
-                    lws_add_http_header_by_token(wsi, WSI_TOKEN_HTTP_ALLOW, (const unsigned char *)"GET, HEAD",
-                                                 9, &p, end) ||
-                    lws_add_http_header_content_length(wsi, 0, &p, end) ||
-                    lws_finalize_write_http_header(wsi, start, &p, end))
-                    return 1;
-                return lws_http_transaction_completed(wsi) ? -1 : 0;
-            }
+        int head = 0, ulen = lws_hdr_total_length(wsi, WSI_TOKEN_GET_URI);
+        if (ulen <= 0) {
+            ulen = lws_hdr_total_length(wsi, WSI_TOKEN_HEAD_URI);
+            head = ulen > 0;
         }
+        if (ulen <= 0) {
+            uint8_t hdr[LWS_PRE + 256], *start = hdr + LWS_PRE, *p = start, *end = hdr + sizeof hdr - 1;
+            if (lws_add_http_header_status(wsi, HTTP_STATUS_METHOD_NOT_ALLOWED, &p, end) ||
+                lws_add_http_header_by_token(wsi, WSI_TOKEN_HTTP_ALLOW, (const unsigned char *)"GET, HEAD",
+                                             9, &p, end) ||
+                lws_add_http_header_content_length(wsi, 0, &p, end) ||
+                lws_finalize_write_http_header(wsi, start, &p, end))
+                return 1;
+            return lws_http_transaction_completed(wsi) ? -1 : 0;
+        }
+        if ((size_t)ulen >= sizeof uri) {
+            /* Not /status or /metrics, and not a file the web root mount
+             * served (it tried first).  lws names a file as web_root "/"
+             * path in 255 bytes and cuts the rest: a path longer than that
+             * could be a file it cannot serve (414), a shorter one is not
+             * there (404). */
+            int too_long = strlen(n->web_root) + (size_t)ulen > SRV_LWS_FILE_PATH_MAX;
+            lws_return_http_status(wsi, too_long ? HTTP_STATUS_REQ_URI_TOO_LONG : HTTP_STATUS_NOT_FOUND,
+                                   too_long ? "path too long for a file under server.web_root" : NULL);
+            return lws_http_transaction_completed(wsi) ? -1 : 0;
+        }
+        lws_hdr_copy(wsi, uri, sizeof uri, head ? WSI_TOKEN_HEAD_URI : WSI_TOKEN_GET_URI);
         int metrics = strcmp(uri, "/metrics") == 0, status = strcmp(uri, "/status") == 0;
         if (!metrics && !status) {
             lws_return_http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL);

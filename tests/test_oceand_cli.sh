@@ -15,7 +15,8 @@
 #    applied over it again, so its sea.* --set given again);
 #  - /status carries the scene's camera hint (the browser viewer opens
 #    there), as config/scenes/flight.conf writes it; /status and /metrics
-#    answer GET and HEAD at their exact paths, 405 to other methods;
+#    answer GET and HEAD at their exact paths, 405 to other methods; a
+#    long path is 404 or 414, never 405;
 #  - the shipped configuration starts without a warning; the near field a
 #    layout-0 subscription at the default 2 m spacing cannot carry is said
 #    when the first such client subscribes, once a run, never for layout 1.
@@ -142,6 +143,21 @@ for u in /statusz /metricsfoo /status/x; do
     [[ $(code "http://127.0.0.1:$port$u") == 404 ]] || { kill "$dpid"; fail "GET $u: $(code "http://127.0.0.1:$port$u"), want 404"; }
 done
 [[ $(code -X POST "http://127.0.0.1:$port/metrics") == 405 ]] || { kill "$dpid"; fail "POST /metrics is not 405"; }
+# a GET or HEAD path too long for the daemon's 128-byte copy was taken for
+# neither (405 "Allow: GET, HEAD"): it is not there (404), and past what
+# lws can name as a file under server.web_root (255 bytes) it is 414
+long=$(python3 -c 'print("a" * 130)')
+for u in "/$long" "/status$long" "/metrics/$long"; do
+    for c in "$(code "http://127.0.0.1:$port$u")" "$(code -I "http://127.0.0.1:$port$u")"; do
+        [[ $c == 404 ]] || { kill "$dpid"; fail "GET/HEAD of a ${#u}-byte path ${u:0:12}...: $c, want 404"; }
+    done
+done
+long=$(python3 -c 'print("a" * 300)')
+for u in "/$long" "/status/$long"; do
+    for c in "$(code "http://127.0.0.1:$port$u")" "$(code -I "http://127.0.0.1:$port$u")"; do
+        [[ $c == 414 ]] || { kill "$dpid"; fail "GET/HEAD of a ${#u}-byte path ${u:0:12}...: $c, want 414"; }
+    done
+done
 curl -s -D - -o /dev/null -X OPTIONS "http://127.0.0.1:$port/status" | grep -qi "^allow: GET, HEAD" ||
     { kill "$dpid"; fail "OPTIONS /status: no 'Allow: GET, HEAD'"; }
 kill -TERM "$dpid"; wait "$dpid"
