@@ -661,7 +661,10 @@ void srv_client_send_bye(srv_client *c, int reason, const char *why)
     if (!m) return;
     proto_msg b;
     proto_msg_init(&b, PROTO_BYE);
-    b.hdr.sim_time = srv_hub_sim_time(c->hub);
+    /* past the exact-time limit the clock is no time the encoder takes
+     * (as proto_error_reply: 0), and the BYE saying so must still go */
+    double now = srv_hub_sim_time(c->hub);
+    b.hdr.sim_time = ocean_time_ok(now) ? now : 0.0;
     b.u.bye.reason = (uint16_t)reason;
     snprintf(b.u.bye.message, sizeof b.u.bye.message, "%s", why);
     if (proto_encode(&m->buf, &b, NULL, 0) != OCEAN_OK) {

@@ -18,6 +18,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "ocean_time.h"
 #include "srv_record.h"
 
 /* File descriptors kept free of client connections: the HTTP pages, the
@@ -307,6 +308,7 @@ struct srv_net {
     struct lws_protocols protocols[3];
     lws_sorted_usec_list_t sweep;  /* [svc] limits are checked 4x a second even when idle */
     int fd_clients;                /* [const] most clients the fd limit allows */
+    int time_said;                 /* [svc] past the exact-time limit: logged */
 };
 
 typedef struct ws_pss {
@@ -322,6 +324,35 @@ static void net_wake(void *ctx)
 {
     srv_net *n = ctx;
     if (n->ctx) lws_cancel_service(n->ctx);
+}
+
+/* ---- past the exact-time limit ---------------------------------------------
+ *
+ * The clock is now - server.epoch, and past OCEAN_TIME_MAX (2^27 s, 4.25
+ * years) nothing can be served: no HELLO, FRAME or announce encodes
+ * (sim/ocean_time.h).  Connections were left open in silence.  Every
+ * client, connected or new, is told why (BYE shutdown) and closed, and
+ * /status answers 503; the epoch is fixed for the run, so only a restart
+ * with a nearer server.epoch ends it. */
+#define TIME_LIMIT_BYE "sim time is past the exact-time limit OCEAN_TIME_MAX (2^27 s, 4.25 years " \
+                       "after server.epoch): nothing can be served; the operator must set " \
+                       "server.epoch within 4.25 years of now and restart oceand"
+/* the close frame's reason (<= 123 bytes) */
+#define TIME_LIMIT_CLOSE "sim time past OCEAN_TIME_MAX (4.25 years after server.epoch): set " \
+                         "server.epoch nearer now and restart"
+
+/* 1 when the clock is past the limit; said in the log once a run [svc]. */
+static int past_time_limit(srv_net *n)
+{
+    double t = srv_hub_sim_time(n->hub);
+    if (ocean_time_ok(t)) return 0;
+    if (!n->time_said)
+        fprintf(stderr, "oceand: sim time %.3f s (now - server.epoch) is past the exact-time limit "
+                "OCEAN_TIME_MAX (%.0f s, 4.25 years): every client is closed with BYE shutdown, new "
+                "ones too, and /status answers 503; set server.epoch within 4.25 years of now and "
+                "restart (said once)\n", t, OCEAN_TIME_MAX);
+    n->time_said = 1;
+    return 1;
 }
 
 /* ---- HTTP: /metrics and /status ------------------------------------------- */
@@ -355,6 +386,7 @@ static void stats_view(srv_net *n, srv_stats_view *v, char *scene, size_t sl,
                          ocean_conf_camera_hint_parse(h->settings.scene.camera_hint, v->camera_hint) == OCEAN_OK;
     pthread_mutex_unlock(&h->lock);
     v->sim_time = srv_hub_sim_time(h);
+    v->past_time_limit = past_time_limit(n) ? TIME_LIMIT_BYE : NULL;
     v->scene = scene;
     v->version = "oceand 0.1";
     v->port = n->port;
@@ -493,7 +525,11 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
             return -1;
         }
         uint8_t hdr[LWS_PRE + 512], *start = hdr + LWS_PRE, *p = start, *end = hdr + sizeof hdr - 1;
-        if (lws_add_http_common_headers(wsi, HTTP_STATUS_OK, type, pss->len, &p, end) ||
+        /* past the exact-time limit this replica serves nothing: /status
+         * says so to health checks (503, its body says why); /metrics
+         * stays 200 for the scraper (oceand_past_time_limit 1) */
+        unsigned code = status && v.past_time_limit ? HTTP_STATUS_SERVICE_UNAVAILABLE : HTTP_STATUS_OK;
+        if (lws_add_http_common_headers(wsi, code, type, pss->len, &p, end) ||
             lws_add_http_header_by_token(wsi, WSI_TOKEN_HTTP_CACHE_CONTROL,
                                          (const unsigned char *)"no-store", 8, &p, end) ||
             lws_finalize_write_http_header(wsi, start, &p, end))
@@ -577,6 +613,7 @@ static void on_wake(srv_net *n)
     srv_hub *h = n->hub;
     double now = srv_now();
     int stopping = atomic_load(&n->stop);
+    int past = past_time_limit(n);
     pthread_mutex_lock(&h->lock);
     srv_config cfg = h->settings.srv;
     if (stopping && n->stop_phase == 0) {
@@ -626,10 +663,12 @@ static void on_wake(srv_net *n)
             lws_callback_on_writable(c->wsi);
             continue;
         }
-        if (stopping && c->closing != 1 && c->closing != 3 && c->closing != 4) {
-            /* queue BYE after whatever is queued; frames stop mattering */
+        if ((stopping || past) && c->closing != 1 && c->closing != 3 && c->closing != 4) {
+            /* queue BYE after whatever is queued; frames stop mattering
+             * (past the exact-time limit none can be built any more) */
             c->closing = 1;
-            srv_client_send_bye(c, PROTO_BYE_SHUTDOWN, "server shutting down");
+            if (!stopping) snprintf(c->kill_why, sizeof c->kill_why, "%s", TIME_LIMIT_CLOSE);
+            srv_client_send_bye(c, PROTO_BYE_SHUTDOWN, stopping ? "server shutting down" : TIME_LIMIT_BYE);
         }
         uint64_t q = srv_client_queued(c) + c->inflight;
         if (q > cfg.output_hard) {
@@ -764,6 +803,13 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         snprintf(scene, sizeof scene, "%s", h->settings.scene.name);
         int verbose = h->settings.srv.verbose;
         pthread_mutex_unlock(&h->lock);
+        if (past_time_limit(n)) { /* no HELLO can be sent: say why instead of nothing */
+            c->closing = 1;
+            snprintf(c->kill_why, sizeof c->kill_why, "%s", TIME_LIMIT_CLOSE);
+            srv_client_send_bye(c, PROTO_BYE_SHUTDOWN, TIME_LIMIT_BYE);
+            lws_callback_on_writable(wsi);
+            break;
+        }
         if (full || stopping) {
             if (full) atomic_fetch_add(&h->stats.refused_full, 1);
             c->closing = 1;

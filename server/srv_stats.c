@@ -73,6 +73,9 @@ char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t h
     metric(&b, "oceand_clients", "gauge", "Connected clients.", v->clients);
     metric(&b, "oceand_clients_subscribed", "gauge", "Clients with a subscription.", v->subscribed);
     metric(&b, "oceand_sim_time_seconds", "gauge", "The shared simulation clock.", v->sim_time);
+    metric(&b, "oceand_past_time_limit", "gauge", "1: the clock is past the exact-time limit "
+           "(OCEAN_TIME_MAX after server.epoch); every client is closed until a restart with a nearer "
+           "server.epoch.", v->past_time_limit != NULL);
     metric(&b, "oceand_ticks_total", "counter", "Simulation ticks run.", (double)LD(ticks));
     metric(&b, "oceand_idle_ticks_total", "counter", "Idle waits with nobody subscribed, about one a second (no tick runs then; not a count of ticks).",
            (double)LD(idle_ticks));
@@ -174,6 +177,9 @@ char *srv_stats_json(const srv_stats *s, const srv_stats_view *v, size_t headroo
     cJSON_AddNumberToObject(o, "clients", v->clients);
     cJSON_AddNumberToObject(o, "subscribed", v->subscribed);
     cJSON_AddNumberToObject(o, "sim_time", v->sim_time);
+    /* /status answers 503 then: a health check takes the replica out */
+    cJSON_AddBoolToObject(o, "past_time_limit", v->past_time_limit != NULL);
+    if (v->past_time_limit) cJSON_AddStringToObject(o, "error", v->past_time_limit);
     cJSON_AddNumberToObject(o, "tick_rate_hz", v->tick_rate);
     cJSON_AddNumberToObject(o, "wind_u10", v->wind);
     /* Where the scene suggests a viewer starts (the browser viewer opens

@@ -57,6 +57,8 @@ typedef struct srv_stats_view {
     double wind, hs;
     int has_camera_hint;         /* the scene's scene.camera_hint, for viewers */
     double camera_hint[5];       /* x, y, z (m), yaw, pitch (deg) */
+    const char *past_time_limit; /* NULL, or why nothing can be served: the clock is past
+                                    OCEAN_TIME_MAX after server.epoch */
 } srv_stats_view;
 
 /* Prometheus text exposition (version 0.0.4) into a malloc'ed string with

@@ -2201,6 +2201,131 @@ static void http_metrics_and_status(void **state)
     free(s);
 }
 
+/* The first message within ms: its type (PROTO_BYE's fields in *bye), 0
+ * for nothing, -1 for the connection closed without a message. */
+static int raw_first_type(test_ws *w, int ms, proto_bye *bye)
+{
+    uint8_t *b;
+    size_t n;
+    int op = test_ws_recv(w, ms, &b, &n);
+    if (op == 0) return 0;
+    if (op < 0) return -1;
+    proto_msg m;
+    char err[256];
+    int type = op == 8 ? -1 : proto_decode(b, n, &m, err, sizeof err) == OCEAN_OK ? (int)m.hdr.type : -2;
+    free(b);
+    if (type == PROTO_BYE) *bye = m.u.bye;
+    if (type > 0) proto_msg_free(&m);
+    return type;
+}
+
+/* The close frame's reason within ms into why ("" when none came). */
+static void raw_close_reason(test_ws *w, int ms, char *why, size_t n)
+{
+    why[0] = 0;
+    double end = now_s() + ms / 1000.0;
+    while (now_s() < end) {
+        uint8_t *b;
+        size_t len;
+        int op = test_ws_recv(w, (int)((end - now_s()) * 1000) + 1, &b, &len);
+        if (op <= 0) return;
+        if (op == 8) {
+            snprintf(why, n, "%.*s", len > 2 ? (int)(len - 2) : 0, len > 2 ? (const char *)b + 2 : "");
+            free(b);
+            return;
+        }
+        free(b);
+    }
+}
+
+/* Past the exact-time limit (the clock at OCEAN_TIME_MAX after
+ * server.epoch) nothing encodes, and connections hung in silence: a new
+ * one got no HELLO, no BYE, no close; a connected one's frames stopped;
+ * /status said 200.  Now every client is told (BYE shutdown naming the
+ * limit and what to do), then closed, and /status is 503 with
+ * past_time_limit. */
+static void past_time_limit_closes_clients(void **state)
+{
+    (void)state;
+    char ep[64], err[512];
+    /* the limit passes 3 to 4 s from now */
+    snprintf(ep, sizeof ep, "server.epoch=%lld", (long long)time(NULL) - (long long)OCEAN_TIME_MAX + 4);
+    const char *sets[] = {ep};
+    srv_settings s1;
+    assert_int_equal(srv_settings_load(conf_path, sets, 1, &s1, err, sizeof err), OCEAN_OK);
+    srv_daemon *d;
+    if (srv_daemon_start(&s1, &d, err, sizeof err) != OCEAN_OK) fail_msg("%s", err);
+    srv_hub *h = srv_daemon_hub(d);
+    int p = srv_daemon_port(d);
+    double left = OCEAN_TIME_MAX - srv_hub_sim_time(h);
+    if (left < 1.0) {
+        srv_daemon_stop(d);
+        fail_msg("the daemon took too long to start: %.2f s left before the limit", left);
+    }
+    /* a client connected and subscribed before the limit */
+    test_ws a;
+    assert_int_equal(test_ws_connect(&a, p, "/", PROTO_SUBPROTOCOL), 0);
+    proto_msg m;
+    assert_true(raw_wait_type(&a, PROTO_HELLO, 3000, &m));
+    proto_msg_free(&m);
+    proto_msg sm;
+    proto_msg_init(&sm, PROTO_SUBSCRIBE);
+    small_subscribe(&sm.u.subscribe);
+    sm.u.subscribe.mesh_kind = PROTO_MESH_NONE;
+    raw_send_msg(&a, &sm);
+    assert_true(raw_wait_type(&a, PROTO_FRAME, 3000, &m));
+    proto_msg_free(&m);
+    while (srv_hub_sim_time(h) <= OCEAN_TIME_MAX) usleep(20000);
+    char said[1200] = "";
+    size_t k = 0;
+    /* the connected client: BYE, then the close */
+    int got = 0;
+    double end = now_s() + 3;
+    while (!got && now_s() < end) {
+        if (!raw_wait_type(&a, PROTO_BYE, (int)((end - now_s()) * 1000) + 1, &m)) break;
+        got = 1;
+        if (m.u.bye.reason != PROTO_BYE_SHUTDOWN || !strstr(m.u.bye.message, "OCEAN_TIME_MAX") ||
+            !strstr(m.u.bye.message, "server.epoch") || !strstr(m.u.bye.message, "restart"))
+            k += (size_t)snprintf(said + k, sizeof said - k, "connected client: BYE %u '%s'; ", m.u.bye.reason,
+                                  m.u.bye.message);
+        proto_msg_free(&m);
+    }
+    if (!got) k += (size_t)snprintf(said + k, sizeof said - k, "connected client: no BYE within 3 s; ");
+    char why[200];
+    raw_close_reason(&a, 3000, why, sizeof why);
+    if (got && !strstr(why, "OCEAN_TIME_MAX"))
+        k += (size_t)snprintf(said + k, sizeof said - k, "connected client: close reason '%s'; ", why);
+    test_ws_close(&a);
+    /* a new client: BYE instead of HELLO, then the close */
+    test_ws b;
+    assert_int_equal(test_ws_connect(&b, p, "/", PROTO_SUBPROTOCOL), 0);
+    proto_bye bye;
+    int first = raw_first_type(&b, 3000, &bye);
+    if (first != PROTO_BYE)
+        k += (size_t)snprintf(said + k, sizeof said - k, "new client: first message %s; ",
+                              first == 0 ? "none within 3 s" : first == -1 ? "none, closed" :
+                              first == PROTO_HELLO ? "HELLO" : "another type");
+    else if (bye.reason != PROTO_BYE_SHUTDOWN || !strstr(bye.message, "OCEAN_TIME_MAX"))
+        k += (size_t)snprintf(said + k, sizeof said - k, "new client: BYE %u '%s'; ", bye.reason, bye.message);
+    raw_close_reason(&b, 3000, why, sizeof why);
+    if (first == PROTO_BYE && !strstr(why, "OCEAN_TIME_MAX"))
+        k += (size_t)snprintf(said + k, sizeof said - k, "new client: close reason '%s'; ", why);
+    test_ws_close(&b);
+    /* health checks take the replica out */
+    char *st = http_get(p, "/status");
+    assert_non_null(st);
+    char *body = strstr(st, "\r\n\r\n");
+    cJSON *j = body ? cJSON_Parse(body + 4) : NULL;
+    if (strncmp(st, "HTTP/1.", 7) != 0 || strncmp(st + 8, " 503 ", 5) != 0 || !j ||
+        !cJSON_IsTrue(cJSON_GetObjectItem(j, "past_time_limit")))
+        k += (size_t)snprintf(said + k, sizeof said - k, "/status: %.*s, past_time_limit %s", (int)strcspn(st, "\r"),
+                              st, j && cJSON_GetObjectItem(j, "past_time_limit") ? "false" : "missing");
+    cJSON_Delete(j);
+    free(st);
+    srv_daemon_stop(d);
+    if (k) fail_msg("past the exact-time limit: %s", said);
+}
+
 /* ?record=1 records the camera path in the documented format. */
 static void recording_writes_camera_path(void **state)
 {
@@ -2932,6 +3057,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(epoch_parse),
         cmocka_unit_test(epoch_shared_clock),
         cmocka_unit_test(epoch_beyond_time_limit),
+        cmocka_unit_test(past_time_limit_closes_clients),
         cmocka_unit_test(near_field_wavelength_range),
         cmocka_unit_test(hello_limits_are_honoured),
         cmocka_unit_test(http_metrics_and_status),
