@@ -440,6 +440,20 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
     http_pss *pss = user;
     srv_net *n = lws_context_user(lws_get_context(wsi));
     switch (reason) {
+    case LWS_CALLBACK_FILTER_HTTP_CONNECTION: {
+        /* Before the web root mount looks for a file: lws names it as
+         * web_root "/" path in 255 bytes and cuts the rest, so a longer
+         * path whose first bytes name a file was served that file (or 415
+         * for a name without a type) in place of the one asked for. */
+        int ulen = lws_hdr_total_length(wsi, WSI_TOKEN_GET_URI);
+        if (ulen <= 0) ulen = lws_hdr_total_length(wsi, WSI_TOKEN_HEAD_URI);
+        if (ulen > 0 && strlen(n->web_root) + 1 + (size_t)ulen > SRV_LWS_FILE_PATH_MAX) {
+            lws_return_http_status(wsi, HTTP_STATUS_REQ_URI_TOO_LONG,
+                                   "path too long for a file under server.web_root");
+            return 1;
+        }
+        break;
+    }
     case LWS_CALLBACK_HTTP_CONFIRM_UPGRADE: {
         /* A WebSocket upgrade that does not offer ocean.v1 at all (only
          * "chat", or a different case) never reaches a protocol's filter:
@@ -492,10 +506,10 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
         }
         if ((size_t)ulen >= sizeof uri) {
             /* Not /status or /metrics, and not a file the web root mount
-             * served (it tried first).  lws names a file as web_root "/"
-             * path in 255 bytes and cuts the rest: a path longer than that
-             * could be a file it cannot serve (414), a shorter one is not
-             * there (404). */
+             * served (it tried first): not there (404).  A path too long
+             * for lws to name as a file never gets here (the 414 of
+             * LWS_CALLBACK_FILTER_HTTP_CONNECTION); kept for any mount
+             * that skips the filter. */
             int too_long = strlen(n->web_root) + (size_t)ulen > SRV_LWS_FILE_PATH_MAX;
             lws_return_http_status(wsi, too_long ? HTTP_STATUS_REQ_URI_TOO_LONG : HTTP_STATUS_NOT_FOUND,
                                    too_long ? "path too long for a file under server.web_root" : NULL);

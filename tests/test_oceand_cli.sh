@@ -174,6 +174,32 @@ timeout 3 "$OD" --config config/oceand.conf --port 0 --set server.web_root=/none
 grep -q "warning: server.web_root '/nonexistent-web' has no readable index.html" "$tmp/w.log" ||
     fail "a missing web root is not said: $(cat "$tmp/w.log")"
 
+echo "== a long path is never served another file ($SECONDS s)"
+# lws names a file as web_root "/" path in 255 bytes and cut the rest, so a
+# longer path whose first bytes named a file was served that file
+mkdir -p "$tmp/wr"
+python3 - "$tmp/wr" >"$tmp/wr.urls" <<'PY'
+import os, sys
+for L in range(150, 251):
+    try:
+        open(os.path.join(sys.argv[1], "f" * L + ".txt"), "w").close()
+    except OSError:
+        pass
+    print("/" + "f" * L + ".txt" + "X" * 20)
+PY
+echo hello >"$tmp/wr/short.txt"
+"$OD" --config config/oceand.conf --port 0 --set "server.web_root=$tmp/wr" >"$tmp/wr.log" 2>&1 &
+dpid=$!
+for _ in $(seq 200); do grep -q "listening on" "$tmp/wr.log" && break; sleep 0.05; done
+port=$(sed -n 's|^oceand: listening on http://[0-9.]*:\([0-9]*\)/.*|\1|p' "$tmp/wr.log")
+[[ -n $port ]] || { kill "$dpid"; fail "daemon with a web root of long names: $(cat "$tmp/wr.log")"; }
+[[ $(code "http://127.0.0.1:$port/short.txt") == 200 ]] || { kill "$dpid"; fail "a file under the web root is not served"; }
+while read -r u; do
+    c=$(code "http://127.0.0.1:$port$u")
+    [[ $c == 404 || $c == 414 ]] || { kill "$dpid"; fail "GET of a ${#u}-byte path naming no file: $c (want 404 or 414)"; }
+done <"$tmp/wr.urls"
+kill -TERM "$dpid"; wait "$dpid"
+
 echo "== no client can flood the log ($SECONDS s)"
 # 40 requests with 9 KB URLs (lws: "Ran out of header data space" a line
 # each) and 6 recording clients past server.record_max_files = 1 (a line
