@@ -683,13 +683,18 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
         e->fades = c > 0;
         for (int q = 0; q <= tb->mips[c]; q++) e->mip[q] = tb->entry[c][q];
     }
-    /* The near field is the last cascade when the sea has one: its
-     * moments are in its mip table (where geometry does not resolve it,
-     * the lod rule reads them there), never again in the tail.  Without a
-     * cascade its slopes shade only. */
+    /* The near field is the last cascade when the sea has one and the
+     * subscription asks for it: its moments are in its mip table (where
+     * geometry does not resolve it, the lod rule reads them there), never
+     * again in the tail.  Without such a cascade - no near-field cascade,
+     * or a subscription without the effect - its waves are still the
+     * sea's (the tail starts above them), so they shade, in the tail (a
+     * subscription without the effect had them nowhere: a gap in its
+     * spectrum, 13 % of ship-bridge's slope variance). */
+    int near_in_frame = tb->nf && (sub->effects & PROTO_FX_NEAR_FIELD);
     for (int i = 0; i < 3; i++) {
         b->tail_mss[i] = (float)tb->tail_mss[i];
-        if ((sub->effects & PROTO_FX_NEAR_FIELD) && !tb->nf) b->tail_mss[i] += (float)tb->near_mss[i];
+        if (!near_in_frame) b->tail_mss[i] += (float)tb->near_mss[i];
     }
     /* cascades the subscription leaves out: their slopes only shade */
     for (int c = pl->layers; c < pl->ncas; c++) {

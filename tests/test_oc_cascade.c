@@ -354,6 +354,16 @@ static void blend_and_fade(void **state)
             }
             mx += (1 - fade) * b.cascade[c].mip[M].mss_x;
             mxz += (1 - fade) * b.cascade[c].mip[M].mss_xz;
+            /* two entries blended with weights a, 1 - a add a (1 - a) (coarser - finer) */
+            if (lam > 0 && lam < M - 1) {
+                int m0 = (int)lam;
+                double a = w[m0];
+                mx += a * (1 - a) * (b.cascade[c].mip[m0 + 1].mss_x - b.cascade[c].mip[m0].mss_x);
+                mxz += a * (1 - a) * (b.cascade[c].mip[m0 + 1].mss_xz - b.cascade[c].mip[m0].mss_xz);
+            } else if (fade > 0 && fade < 1) {
+                mx += fade * (1 - fade) * (b.cascade[c].mip[M].mss_x - b.cascade[c].mip[M - 1].mss_x);
+                mxz += fade * (1 - fade) * (b.cascade[c].mip[M].mss_xz - b.cascade[c].mip[M - 1].mss_xz);
+            }
             if (c == 0)
                 foam0 = foam_c;   /* the whole sea's foam travels in cascade 0 */
         }

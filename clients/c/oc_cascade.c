@@ -493,6 +493,27 @@ static int sample_core(const oc_cascade_view *v, double x, double z, double min_
             mss[1] += (1 - L->fade) * me->mss_z;
             mss[2] += (1 - L->fade) * me->mss_xz;
         }
+        /* PROTOCOL.md "Where each mip is read": two entries blended with
+         * weights a, 1 - a also add a (1 - a) (coarser - finer), the slope
+         * variance the tiles' linear blend of two band-limited fields
+         * loses (24.6 % of the near field's at its mid-fade, without) */
+        const proto_mip_entry *fine = NULL, *coarse = NULL;
+        double a = 0;
+        if (L->mip[1] >= 0 && L->weight[0] > 0 && L->weight[1] > 0) {
+            fine = &e->mip[L->mip[0]];
+            coarse = &e->mip[L->mip[1]];
+            a = L->weight[0];
+        } else if (L->fade > 0 && L->fade < 1) {
+            fine = &e->mip[L->mip[0]];
+            coarse = &e->mip[cc->mips];
+            a = L->fade;
+        }
+        if (fine) {
+            double k = a * (1 - a);
+            mss[0] += k * ((double)coarse->mss_x - fine->mss_x);
+            mss[1] += k * ((double)coarse->mss_z - fine->mss_z);
+            mss[2] += k * ((double)coarse->mss_xz - fine->mss_xz);
+        }
         out->height += acc[V_H];
         out->dx += acc[V_DX];
         out->dz += acc[V_DZ];

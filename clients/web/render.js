@@ -369,12 +369,21 @@ vec3 casMss(int c, float lam) {
     int base = c * MIPE;
     float top = C.z - 1.0;
     if (lam <= 0.0) return u_mipTab[base].yzw;
+    /* entries blended with weights 1 - f, f also add f (1 - f) (coarser -
+     * finer): the slope variance the linear blend of two band-limited
+     * fields loses (PROTOCOL.md "Where each mip is read") */
     if (lam < top) {
         int m = int(floor(lam));
-        return mix(u_mipTab[base + m].yzw, u_mipTab[base + m + 1].yzw, lam - float(m));
+        float f = lam - float(m);
+        vec3 e0 = u_mipTab[base + m].yzw, e1 = u_mipTab[base + m + 1].yzw;
+        return mix(e0, e1, f) + f * (1.0 - f) * (e1 - e0);
     }
     vec3 e = u_mipTab[base + int(top)].yzw;
-    if (C.w > 0.5) e = mix(u_mipTab[base + int(C.z)].yzw, e, clamp(C.z - lam, 0.0, 1.0));
+    if (C.w > 0.5) {
+        vec3 all = u_mipTab[base + int(C.z)].yzw;
+        float w = clamp(C.z - lam, 0.0, 1.0);
+        e = mix(all, e, w) + w * (1.0 - w) * (all - e);
+    }
     return e;
 }
 /* displacement (DX, H, DZ) and foam summed over cascades at spacing s */
