@@ -8,6 +8,7 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/random.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -26,7 +27,8 @@ struct srv_record {
  * 7 %.9g (16), 2 %u (5), 12 commas and a newline. */
 #define LINE_MAX_BYTES 320
 
-/* Names tried for one recording: client-<id>-<time>.csv, then -1 .. -99. */
+/* Names tried for one recording: client-<id>-<time>.csv, then that with a
+ * random 32-bit suffix (-<8 hex digits>), up to 99 times. */
 #define SRV_RECORD_NAME_TRIES 100
 
 static double mono(void)
@@ -48,14 +50,22 @@ ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *sc
      * planted at the predictable name (overwriting whatever it pointed at
      * that the daemon could write) and truncated another run's recording
      * of the same client id and second.  O_EXCL fails on any existing
-     * name, a symlink included (dangling or not); a taken name moves on to
-     * -1, -2 ... so a collision never loses a recording. */
+     * name, a symlink included (dangling or not).  A taken name moves on to
+     * one with a random suffix, as mkstemp does: a fixed sequence of
+     * alternatives (-1 .. -99) could be filled in advance by anyone who
+     * can write the directory, and every later recording of that client id
+     * and second was refused. */
     long long now = (long long)time(NULL);
     char name[1024];
     int fd = -1, err = 0;
     for (int k = 0; k < SRV_RECORD_NAME_TRIES && fd < 0; k++) {
+        uint32_t tag = 0;
+        if (k > 0 && getrandom(&tag, sizeof tag, 0) != (ssize_t)sizeof tag) {
+            err = errno;
+            break;
+        }
         int len = k == 0 ? snprintf(name, sizeof name, "%s/client-%u-%lld.csv", dir, client_id, now)
-                         : snprintf(name, sizeof name, "%s/client-%u-%lld-%d.csv", dir, client_id, now, k);
+                         : snprintf(name, sizeof name, "%s/client-%u-%lld-%08x.csv", dir, client_id, now, tag);
         if (len < 0 || (size_t)len >= sizeof name) { /* a cut name could be another file's */
             snprintf(msg, msglen, "cannot create a recording in %.200s...: the path is over %zu bytes; "
                      "choose a shorter server.record_dir", dir, sizeof name - 1);
@@ -67,9 +77,9 @@ ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *sc
     }
     if (fd < 0) {
         if (err == EEXIST)
-            snprintf(msg, msglen, "cannot create a recording for client %u in %s: client-%u-%lld.csv "
-                     "and its alternatives -1 .. -%d all exist; move old recordings out of "
-                     "server.record_dir", client_id, dir, client_id, now, SRV_RECORD_NAME_TRIES - 1);
+            snprintf(msg, msglen, "cannot create a recording for client %u in %s: client-%u-%lld.csv and "
+                     "%d names with a random suffix all exist; move old recordings out of server.record_dir",
+                     client_id, dir, client_id, now, SRV_RECORD_NAME_TRIES - 1);
         else
             snprintf(msg, msglen, "cannot create recording %s: %s%s", name, strerror(err),
                      err == ELOOP ? " (a symbolic link: recordings are never written through one)" : "");

@@ -2462,8 +2462,23 @@ static const char *file_text(const char *path, char buf[256])
  * the link's target (fopen "w" follows it), a dangling one made it create
  * the target, and another run's recording of the same id and second was
  * truncated.  A name that exists is left alone and the recording goes to
- * the next free -1, -2 ...; past the last alternative, or on any other
- * failure, it is refused with the path and the reason. */
+ * the same name with a random suffix.  The suffixes were -1 .. -99 once:
+ * anyone who could write the directory filled those 100 names and every
+ * recording of that client id and second was refused ("client-900004-...
+ * and its alternatives -1 .. -99 all exist"). */
+static int random_suffix_name(const char *path, const char *dir, uint32_t id)
+{
+    char head[400];
+    int n = snprintf(head, sizeof head, "%s/client-%u-", dir, id);
+    if (strncmp(path, head, (size_t)n) != 0) return 0;
+    const char *p = path + n;
+    while (*p >= '0' && *p <= '9') p++;
+    if (*p++ != '-') return 0;
+    for (int i = 0; i < 8; i++, p++)
+        if (!((*p >= '0' && *p <= '9') || (*p >= 'a' && *p <= 'f'))) return 0;
+    return strcmp(p, ".csv") == 0;
+}
+
 static void recording_never_overwrites(void **state)
 {
     (void)state;
@@ -2480,19 +2495,16 @@ static void recording_never_overwrites(void **state)
         assert_int_equal(symlink(victim, name), 0);            /* a planted link */
         snprintf(name, sizeof name, "%s/client-900002-%lld.csv", dir, now + d);
         put_file(name, "# earlier run\n");                      /* another run's recording */
-        snprintf(name, sizeof name, "%s/client-900002-%lld-1.csv", dir, now + d);
-        put_file(name, "# earlier run\n");
         snprintf(name, sizeof name, "%s/client-900003-%lld.csv", dir, now + d);
         assert_int_equal(symlink(absent, name), 0);            /* a dangling link */
-        for (int k = 0; k < 100; k++) {                         /* every name taken */
+        for (int k = 0; k < 100; k++) {                         /* the old alternatives, filled */
             if (k == 0) snprintf(name, sizeof name, "%s/client-900004-%lld.csv", dir, now + d);
             else snprintf(name, sizeof name, "%s/client-900004-%lld-%d.csv", dir, now + d, k);
             put_file(name, "# earlier run\n");
         }
     }
-    const char *want_suffix[3] = {"-1.csv", "-2.csv", "-1.csv"};
-    char path[3][1100];
-    for (int i = 0; i < 3; i++) {
+    char path[4][1100];
+    for (int i = 0; i < 4; i++) {
         srv_record *r = NULL;
         char msg[300] = "";
         if (srv_record_open(dir, 900001u + (uint32_t)i, "test", &r, path[i], sizeof path[i], msg, sizeof msg) !=
@@ -2508,32 +2520,44 @@ static void recording_never_overwrites(void **state)
     if (access(absent, F_OK) == 0)
         fail_msg("a dangling symlink at the recording's name: its target %s was created", absent);
     for (int d = 0; d < 3; d++)
-        for (int k = 0; k < 2; k++) {
-            if (k == 0) snprintf(name, sizeof name, "%s/client-900002-%lld.csv", dir, now + d);
-            else snprintf(name, sizeof name, "%s/client-900002-%lld-1.csv", dir, now + d);
+        for (int k = 0; k < 100; k++) {
+            if (k == 0) snprintf(name, sizeof name, "%s/client-900004-%lld.csv", dir, now + d);
+            else snprintf(name, sizeof name, "%s/client-900004-%lld-%d.csv", dir, now + d, k);
+            if (strcmp(file_text(name, buf), "# earlier run\n") != 0)
+                fail_msg("an existing file %s was overwritten, now:\n%s", name, buf);
+            snprintf(name, sizeof name, "%s/client-900002-%lld.csv", dir, now + d);
             if (strcmp(file_text(name, buf), "# earlier run\n") != 0)
                 fail_msg("an existing recording %s was overwritten, now:\n%s", name, buf);
         }
-    for (int i = 0; i < 3; i++) {
+    for (int i = 0; i < 4; i++) {
         struct stat st;
         assert_int_equal(lstat(path[i], &st), 0);
-        if (!S_ISREG(st.st_mode) || strlen(path[i]) < 6 ||
-            strcmp(path[i] + strlen(path[i]) - 6, want_suffix[i]) != 0)
-            fail_msg("client %u recorded to %s: want a new regular file ending %s", 900001u + i, path[i],
-                     want_suffix[i]);
+        if (!S_ISREG(st.st_mode) || !random_suffix_name(path[i], dir, 900001u + (uint32_t)i))
+            fail_msg("client %u recorded to %s: want a new regular file client-%u-<time>-<8 hex digits>.csv",
+                     900001u + i, path[i], 900001u + i);
         assert_non_null(strstr(file_text(path[i], buf), "# oceand camera path v1\n"));
     }
-    /* every alternative taken: refused, and the message says what to do */
+    /* a free name is the plain one */
+    {
+        srv_record *r = NULL;
+        char msg[300] = "", p5[1100], want[400];
+        long long t0 = (long long)time(NULL);
+        assert_int_equal(srv_record_open(dir, 900005u, "test", &r, p5, sizeof p5, msg, sizeof msg), OCEAN_OK);
+        assert_int_equal(srv_record_close(r, NULL, 0), OCEAN_OK);
+        int ok = 0;
+        for (int d = 0; d < 2 && !ok; d++) {
+            snprintf(want, sizeof want, "%s/client-900005-%lld.csv", dir, t0 + d);
+            ok = strcmp(p5, want) == 0;
+        }
+        if (!ok) fail_msg("a free name: recorded to %s, want client-900005-<time>.csv", p5);
+    }
     srv_record *r = (srv_record *)1;
     char msg[300] = "", p4[1100];
-    assert_int_equal(srv_record_open(dir, 900004u, "test", &r, p4, sizeof p4, msg, sizeof msg), OCEAN_EIO);
-    assert_null(r);
-    if (!strstr(msg, "client-900004-") || !strstr(msg, "-99") || !strstr(msg, "server.record_dir"))
-        fail_msg("every name taken: %s", msg);
     /* any other failure names the path and the reason */
     char notdir[320];
     snprintf(notdir, sizeof notdir, "%s/victim.txt", tmpdir);
     assert_int_equal(srv_record_open(notdir, 1u, "test", &r, p4, sizeof p4, msg, sizeof msg), OCEAN_EIO);
+    assert_null(r);
     if (!strstr(msg, notdir) || !strstr(msg, "Not a directory")) fail_msg("record_dir a file: %s", msg);
     assert_string_equal(file_text(victim, buf), "precious data\n");
 }
