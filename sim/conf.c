@@ -19,7 +19,7 @@
 #include <strings.h>
 
 /* Longest offending text quoted in a message (display bytes). */
-#define SHOW_MAX 80
+#define SHOW_MAX CONF_SHOW_MAX
 /* Value messages are composed here before the location is added. */
 #define MSG_MAX 256
 
@@ -69,10 +69,7 @@ static bool invisible(unsigned cp)
            (cp >= 0x2060 && cp <= 0x2069);
 }
 
-/* Copies text into out (size outlen) fit for a message: printable ASCII and
- * valid UTF-8 as they are, invisible format characters as \uNNNN, anything
- * else as \xNN; cut at SHOW_MAX with "...". */
-static void show_text(const char *text, size_t len, char *out, size_t outlen)
+void conf_show_text(const char *text, size_t len, char *out, size_t outlen)
 {
     const unsigned char *s = (const unsigned char *)text;
     size_t o = 0, i = 0;
@@ -108,7 +105,7 @@ static ocean_result fail(loader *ld, ocean_result code, const char *msg,
 {
     if (ld->err && ld->errlen) {
         char shown[SHOW_MAX * 4 + 16];
-        show_text(text ? text : "", text ? textlen : 0, shown, sizeof shown);
+        conf_show_text(text ? text : "", text ? textlen : 0, shown, sizeof shown);
         if (ld->line > 0)
             snprintf(ld->err, ld->errlen, "%s:%d: %s: '%s'", ld->name, ld->line, msg, shown);
         else

@@ -165,4 +165,14 @@ int conf_format(const conf_entry *e, const void *target, char *buf, size_t len);
 #define CONF_DUMP_HELP 1u
 ocean_result conf_dump(FILE *out, const conf_set *set, unsigned flags);
 
+/* Copies len bytes of text into out (outlen bytes, always terminated) fit
+ * to quote in a message printed to a terminal or log: printable ASCII and
+ * valid UTF-8 as they are, invisible format characters (byte-order mark,
+ * bidi controls) as \uNNNN, control and other bytes as \xNN, cut after
+ * CONF_SHOW_MAX bytes with "...".  Every parser of the project quotes
+ * offending input through it, so no file or message can write an escape
+ * sequence to the reader's terminal. */
+#define CONF_SHOW_MAX 80
+void conf_show_text(const char *text, size_t len, char *out, size_t outlen);
+
 #endif

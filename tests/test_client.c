@@ -109,12 +109,17 @@ static void path_good(void **state)
                        "0,1,2,3,4,5,6,7,8,9,60\n"
                        "# mid comment\n"
                        "0.5, -1e3 ,30,1.25e2,0,0,0,-90,-10,0,45.5\r\n"
-                       "0.5,0,0,0,0,0,0,0,0,0,1";   /* equal t allowed, no final newline */
+                       "0.5,0,0,0,0,0,0,0,0,0,1\n"   /* equal t allowed */
+                       /* float fields given past float precision (no final newline) */
+                       "0.75,0,0,0,0.123456789012345,0,0,359.99999999,-12.3456789012345,0,179.99999";
     oc_path *p = NULL;
     char err[256] = "";
     assert_int_equal(oc_path_parse(text, strlen(text), "mem", &p, err, sizeof err), OCEAN_OK);
     assert_non_null(p);
-    assert_int_equal(p->count, 3);
+    assert_int_equal(p->count, 4);
+    /* velocity, angles and fov are kept as the floats CAMERA carries */
+    assert_true(p->pts[3].vel[0] == (double)0.123456789012345f && p->pts[3].yaw_deg == 360.0 &&
+                p->pts[3].pitch_deg == (double)-12.3456789012345f && p->pts[3].fov_deg == (double)179.99999f);
     assert_true(p->pts[0].t == 0 && p->pts[0].pos[0] == 1 && p->pts[0].pos[2] == 3 && p->pts[0].fov_deg == 60);
     assert_true(p->pts[0].vel[1] == 5 && p->pts[0].yaw_deg == 7 && p->pts[0].roll_deg == 9);
     assert_true(p->pts[1].pos[0] == -1000 && p->pts[1].pos[2] == 125 && p->pts[1].pitch_deg == -10);
@@ -218,6 +223,9 @@ static void path_bad(void **state)
         {"0,0,,0,0,0,0,0,0,0,60\n", "p:2: field y is empty", 1},
         {"0,0,0,0,0,0,0,0,0,0,nan\n", "p:2: field fov_y_deg is not a finite", 1},
         {"0,0,0,0,0,0,0,0,0,0,180\n", "p:2: field fov_y_deg outside", 1},
+        /* 180.0f on the wire, which the server refuses (it was accepted and
+         * written back as "180", which this reader refused) */
+        {"0,0,0,0,0,0,0,0,0,0,179.9999999999\n", "p:2: field fov_y_deg outside", 1},
         {"0,0,0,0,0,0,0,0,0,0,0\n", "p:2: field fov_y_deg outside", 1},
         {"0,1.0000001e10,0,0,0,0,0,0,0,0,60\n", "p:2: field x beyond +-1e10 m", 1},
         {"0,0,0,-2e10,0,0,0,0,0,0,60\n", "p:2: field z beyond +-1e10 m", 1},
@@ -261,6 +269,22 @@ static void path_bad(void **state)
     char err[256];
     assert_int_not_equal(oc_path_parse(t2, strlen(t2), "f.csv", &p, err, sizeof err), OCEAN_OK);
     assert_non_null(strstr(err, "\"0,0,0,0,0,0,0,0,0,0,999\""));
+    /* ... with its control bytes escaped: a path file is text its reader may
+     * not have written, and `ocean-client replay` prints the message to a
+     * terminal (an ESC sequence in a field, a DEL, a bidi override in the
+     * header were quoted raw; fuzz_path found the DEL) */
+    const char *t3[] = {"t,x,y,z,vx,vy,vz,yaw,pitch,roll,fov\n0,0,0,0,0,0,0,0,-10,0,60\x7f\n",
+                        "t,x,y,z,vx,vy,vz,yaw,pitch,roll,fov\n0,\x1b]2;pwned\x07,0,0,0,0,0,0,0,0,60\n",
+                        "t,x,y\xe2\x80\xae,z\n",
+                        "# oceand camera path v1\x1b[2J\n"};
+    const char *want[] = {"60\\x7F\"", "\\x1B]2;pwned\\x07", "y\\u202E,z", "v1\\x1B[2J"};
+    for (size_t i = 0; i < sizeof t3 / sizeof t3[0]; i++) {
+        assert_int_not_equal(oc_path_parse(t3[i], strlen(t3[i]), "f.csv", &p, err, sizeof err), OCEAN_OK);
+        for (const char *c = err; *c; c++)
+            if ((unsigned char)*c < 0x20 || *c == 0x7f || (c[0] == '\xe2' && c[1] == '\x80' && c[2] == '\xae'))
+                fail_msg("case %zu: a control byte 0x%02x quoted raw in \"%s\"", i, (unsigned char)*c, err);
+        if (!strstr(err, want[i])) fail_msg("case %zu: \"%s\" does not show %s", i, err, want[i]);
+    }
     /* a missing file is reported with its name */
     assert_int_equal(oc_path_load("/nonexistent/x.csv", &p, err, sizeof err), OCEAN_ENOTFOUND);
     assert_non_null(strstr(err, "/nonexistent/x.csv"));

@@ -2,6 +2,7 @@
  * oc_path.c - camera path files (see oc_path.h).
  */
 #include "oc_path.h"
+#include "conf.h"
 #include "ocean_time.h"
 
 #include <errno.h>
@@ -9,6 +10,12 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* Room for a line as messages quote it (conf_show_text: at most
+ * CONF_SHOW_MAX display bytes, a 4-byte escape each, and "..."): a path
+ * file is text a user may not have written, and what a message quotes is
+ * printed to a terminal. */
+#define SHOWN (CONF_SHOW_MAX * 4 + 16)
 
 static const char *const FIELD[13] = {"t",       "x",         "y",        "z",         "vx",
                                       "vy",      "vz",        "yaw_deg",  "pitch_deg", "roll_deg",
@@ -56,6 +63,13 @@ void oc_path_destroy(oc_path *p)
         return;
     free(p->pts);
     free(p);
+}
+
+/* x as the float a CAMERA field carries; a value past float's range is
+ * left as it is (converting it is undefined) for check_point to refuse. */
+static double as_wire_float(double x)
+{
+    return fabs(x) <= 1e30 ? (double)(float)x : x;
 }
 
 /* Checks one parsed point; returns a static reason or NULL. */
@@ -169,8 +183,10 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
                 v += *v == ' ';
                 size_t nd = v[0] == 'v' && v[-1] == ' ' ? strspn(v + 1, "0123456789") : 0;
                 if (nd == 0 || v[1 + nd] != 0 || (v[1] == '0' && nd > 1)) {
+                    char shown[SHOWN];
+                    conf_show_text(s, strlen(s), shown, sizeof shown);
                     ocean_seterr(err, errlen, "%s:%u: malformed version line \"%s\" (expected \"%s v1\")", name,
-                                 lineno, s, magic);
+                                 lineno, shown, magic);
                     res = OCEAN_EFORMAT;
                     break;
                 }
@@ -200,16 +216,18 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
             hdr[k] = 0;
             ncol = header_columns(hdr);
             if (!ncol) {
+                char shown[SHOWN];
+                conf_show_text(s, strlen(s), shown, sizeof shown);
                 ocean_seterr(err, errlen, "%s:%u: expected the header \"%s\" (or its first 11 columns), got \"%s\"",
-                       name, lineno, OC_PATH_HEADER, s);
+                       name, lineno, OC_PATH_HEADER, shown);
                 res = OCEAN_EFORMAT;
                 break;
             }
             have_header = 1;
             continue;
         }
-        char orig[1024];
-        snprintf(orig, sizeof orig, "%s", s);
+        char orig[SHOWN];   /* the line as messages quote it */
+        conf_show_text(s, strlen(s), orig, sizeof orig);
         double v[13];
         int nf = 0;
         char *tok = s;
@@ -234,8 +252,10 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
             /* decimal only (RECORDING.md writes %.17g): strtod also reads
              * hex ("0x10" was 16) */
             if (*end || errno == ERANGE || strpbrk(f, "xX")) {
+                char shown[SHOWN];
+                conf_show_text(f, strlen(f), shown, sizeof shown);
                 ocean_seterr(err, errlen, "%s:%u: field %s \"%s\" is not a number in \"%s\"", name, lineno,
-                       FIELD[nf], f, orig);
+                       FIELD[nf], shown, orig);
                 res = OCEAN_EFORMAT;
                 break;
             }
@@ -266,6 +286,12 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
             vw = (int)v[11];
             vh = (int)v[12];
         }
+        /* velocity, angles and fov travel in CAMERA as floats: kept as the
+         * floats sent, so the bounds below hold for what the server gets
+         * (fov 179.9999999999 is 180.0f, which it refuses) and a path
+         * written back (%.9g) reads back to the same values */
+        for (int k = 4; k <= 10; k++)
+            v[k] = as_wire_float(v[k]);
         oc_path_point q = {v[0], {v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7], v[8], v[9], v[10], vw, vh};
         int fi;
         const char *why = check_point(&q, &fi);

@@ -40,6 +40,9 @@
 typedef struct oc_path_point {
     double t;
     double pos[3];
+    /* vel, the angles and fov hold the floats CAMERA carries (the text's
+     * value rounded to float when parsed), so they are what the server
+     * receives and check and round-trip through oc_path_write */
     double vel[3];
     double yaw_deg, pitch_deg, roll_deg;
     double fov_deg;
