@@ -2,7 +2,8 @@
 # Builds every tests/fuzz/fuzz_*.c with clang -fsanitize=fuzzer,address,undefined
 # and runs each for $1 seconds (default 60) on its corpus tests/fuzz/corpus_<name>/.
 # Sources are compiled directly with clang (not the gcc-built libraries):
-# each target links protocol/*.c and sim/*.c, whose unused parts cost nothing.
+# each target links protocol/*.c, sim/*.c and the client library
+# (clients/c/*.c), whose unused parts cost nothing.
 # Targets build and run FUZZ_JOBS (default: the number of cores) at a time.
 #   usage: tests/fuzz/run.sh [SECONDS] [TARGET...]     (run from anywhere)
 # Exit status: 0 when every target ran its time without a crash.
@@ -12,11 +13,11 @@ secs=${1:-60}
 shift || true
 out=${FUZZ_BUILD:-build/fuzz}
 mkdir -p "$out"
-CFLAGS=(-std=c11 -g -O1 -fno-omit-frame-pointer -D_GNU_SOURCE -Isim -Iprotocol
+CFLAGS=(-std=c11 -g -O1 -fno-omit-frame-pointer -D_GNU_SOURCE -Isim -Iprotocol -Iclients/c
         -I/usr/include/OpenEXR -I/usr/include/cjson
         -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
         -Wno-unknown-pragmas)
-LIBS=(-lOpenEXRCore-3_1 -lfftw3f_threads -lfftw3f -lzstd -lcjson -lm -lpthread)
+LIBS=(-lwebsockets -lOpenEXRCore-3_1 -lfftw3f_threads -lfftw3f -lzstd -lcjson -lm -lpthread)
 targets=("$@")
 if ((${#targets[@]} == 0)); then
     for f in tests/fuzz/fuzz_*.c; do t=$(basename "$f" .c); targets+=("${t#fuzz_}"); done
@@ -26,7 +27,7 @@ mkdir -p "$out/obj"
 
 # Build: every source once (a target's own object is the only one carrying
 # LLVMFuzzerTestOneInput), compiled $jobs at a time, then one link per target.
-srcs=(protocol/*.c sim/*.c)
+srcs=(protocol/*.c sim/*.c clients/c/*.c)
 for name in "${targets[@]}"; do srcs+=("tests/fuzz/fuzz_$name.c"); done
 obj_of() { echo "$out/obj/$(echo "$1" | tr / _).o"; }
 echo "== fuzz: build ${#targets[@]} targets"
@@ -34,7 +35,7 @@ export -f obj_of; export out
 printf '%s\n' "${srcs[@]}" | xargs -P "$jobs" -I{} \
     bash -c 'clang "$@" -c {} -o "$(obj_of {})"' _ "${CFLAGS[@]}"
 shared=()
-for s in protocol/*.c sim/*.c; do shared+=("$(obj_of "$s")"); done
+for s in protocol/*.c sim/*.c clients/c/*.c; do shared+=("$(obj_of "$s")"); done
 for name in "${targets[@]}"; do
     clang "${CFLAGS[@]}" "$(obj_of "tests/fuzz/fuzz_$name.c")" "${shared[@]}" "${LIBS[@]}" -o "$out/fuzz_$name"
 done
