@@ -587,21 +587,7 @@ static void mesh_part(const srv_config *cfg, srv_stats *st, srv_cascade_job *j, 
     srv_mesh_camera(&j->cam, &mc);
     /* Priced before it is placed, as for layout 0: a camera the protocol
      * allows may ask for a topology no server should build. */
-    double est = 0;
-    if (mesh_estimate_vertices(&cs->mesh_cfg, &mc, &est) == OCEAN_OK && est > cfg->max_mesh_vertices) {
-        if (!cs->mesh_over) {
-            char why[320];
-            snprintf(why, sizeof why, "camera %u: its %s mesh is estimated at %.4g vertices, above the server's "
-                     "limit of %d (server.max_mesh_vertices); frames come without a mesh until a camera asks "
-                     "for less (wider fov, smaller viewport or range)", j->cam_seq,
-                     mesh_kind_name(cs->mesh_cfg.kind), est, cfg->max_mesh_vertices);
-            atomic_fetch_add(&st->refused_mesh, 1);
-            srv_client_send_error(j->c, NULL, 0, OCEAN_ETOOBIG, why);
-            cs->mesh_over = 1;
-        }
-        return;
-    }
-    cs->mesh_over = 0;
+    if (!srv_client_mesh_fit(j->c, &mc, cfg->max_mesh_vertices, j->cam_seq, st)) return;
     ocean_result r = mesh_place(cs->mesh, &mc);
     if (r == OCEAN_OK) {
         mesh_get_view(cs->mesh, &pl->mv);

@@ -641,6 +641,74 @@ static int verbose(srv_client *c)
     return v;
 }
 
+/* The largest error budget a mesh takes (mesh_config_validate). */
+#define MESH_ERROR_PX_MAX 100.0
+
+int srv_client_mesh_fit(srv_client *c, const mesh_camera *mc, int max_vertices, uint32_t cam_seq,
+                        srv_stats *st)
+{
+    srv_client_sim *cs = &c->sim;
+    if (!cs->mesh) /* none subscribed, or it failed: not remade before the next SUBSCRIBE */
+        return 0;
+    const mesh_config *sub = &cs->mesh_cfg;
+    mesh_config cfg = *sub;
+    double est = 0, est0 = 0;
+    int k = 0;
+    for (;; k++) {
+        cfg.error_px = sub->error_px * (double)(1 << k);
+        if (cfg.error_px > MESH_ERROR_PX_MAX || mesh_estimate_vertices(&cfg, mc, &est) != OCEAN_OK) {
+            k = -1;
+            break;
+        }
+        if (k == 0)
+            est0 = est;
+        /* a coarser mesh comes back only with room to spare, so a camera
+         * hovering at the limit does not flip topologies every frame */
+        if (est <= max_vertices && (k >= cs->mesh_coarsen || est <= 0.8 * max_vertices))
+            break;
+    }
+    if (k < 0) {
+        if (!cs->mesh_over) {
+            char why[320];
+            snprintf(why, sizeof why, "camera %u: its %s mesh is estimated at %.4g vertices, above the "
+                     "server's limit of %d (server.max_mesh_vertices), even at %g px; frames come "
+                     "without a mesh until a camera asks for less (wider fov, smaller viewport or range)",
+                     cam_seq, mesh_kind_name(sub->kind), est0, max_vertices,
+                     sub->kind == MESH_CONCENTRIC ? MESH_ERROR_PX_MAX : sub->error_px);
+            atomic_fetch_add(&st->refused_mesh, 1);
+            srv_client_send_error(c, NULL, 0, OCEAN_ETOOBIG, why);
+            cs->mesh_over = 1;
+        }
+        return 0;
+    }
+    cs->mesh_over = 0;
+    if (k == cs->mesh_coarsen)
+        return 1;
+    mesh *m = NULL;
+    ocean_result r = mesh_create(&cfg, &m);
+    if (r != OCEAN_OK) {
+        char why[200];
+        snprintf(why, sizeof why, "mesh %s unavailable, frames come without a mesh: %s",
+                 mesh_kind_name(cfg.kind), ocean_strerror(r));
+        srv_client_send_error(c, NULL, 0, r, why);
+        return 0;
+    }
+    mesh_destroy(cs->mesh);
+    cs->mesh = m;
+    cs->topo_valid = 0;
+    if (k > 0) {
+        char why[320];
+        snprintf(why, sizeof why, "camera %u: its %s mesh at %g px (server.mesh_error_px) would be %.4g "
+                 "vertices, above the server's limit of %d (server.max_mesh_vertices); it is drawn at "
+                 "%g px (%.4g vertices) while the camera needs it", cam_seq, mesh_kind_name(cfg.kind),
+                 sub->error_px, est0, max_vertices, cfg.error_px, est);
+        atomic_fetch_add(&st->coarsened_mesh, 1);
+        srv_client_send_error(c, NULL, 0, OCEAN_ETOOBIG, why);
+    }
+    cs->mesh_coarsen = k;
+    return 1;
+}
+
 void srv_client_send_error(srv_client *c, const void *bad, size_t badlen, ocean_result code,
                            const char *why)
 {

@@ -98,6 +98,8 @@ typedef struct srv_client_sim {
     int primed;
     double cutoff_k;             /* smoothed cutoff of the last frame */
     int mesh_over;               /* the camera's mesh is over server.max_mesh_vertices */
+    int mesh_coarsen;            /* cs->mesh is built at mesh_cfg.error_px << this
+                                    (srv_client_mesh_fit) */
     uint32_t *qz_refs;           /* mesh_codec qz: the prediction references
                                     (proto_mesh_qz_refs) of topology qz_refs_key,
                                     3 per vertex, made once per topology */
@@ -327,6 +329,20 @@ size_t srv_msg_len(const srv_msg *m);
 size_t srv_msg_cost(const srv_msg *m);
 
 /* Builds and queues messages the service thread sends [svc]. */
+/* Fits the client's mesh to the server's vertex limit for camera mc, priced
+ * before anything is built [the worker that owns the client]: at the
+ * subscription's error budget when it fits, else at the least power-of-two
+ * multiple of it, up to the mesh's largest budget, that does (a camera
+ * near steep chop asks for more vertices than its budget alone would),
+ * rebuilding c->sim.mesh when the multiple changes, with one ERROR ETOOBIG
+ * naming both budgets.  Returns 1 when c->sim.mesh may be built for mc; 0
+ * when no budget fits (the frame goes without a mesh, with one ERROR
+ * ETOOBIG naming the limit) or the mesh could not be made.  Viewers that
+ * share a leader's mesh (same camera and subscription) take the leader's
+ * budget. */
+int srv_client_mesh_fit(srv_client *c, const mesh_camera *mc, int max_vertices, uint32_t cam_seq,
+                        srv_stats *st);
+
 void srv_client_send_error(srv_client *c, const void *bad, size_t badlen, ocean_result code,
                            const char *why);
 void srv_client_send_bye(srv_client *c, int reason, const char *why);

@@ -408,6 +408,7 @@ static void apply_subscription(srv_sim *s, srv_client *c)
     mesh_destroy(cs->mesh);
     cs->mesh = NULL;
     cs->topo_valid = 0;
+    cs->mesh_coarsen = 0;
     cs->primed = 0;
     cs->next_frame_t = -INFINITY;
     ocean_filter_smoother_init(&cs->smoother);
@@ -513,24 +514,11 @@ static void mesh_stage(srv_sim *s, job *j)
     srv_mesh_camera(&j->cam, &mc);
     /* Priced before it is built: a camera the protocol allows may ask for
      * a mesh no server should build (a 1-degree 1080p camera: 10^7
-     * vertices).  Its frames come without a mesh, with one ERROR naming
-     * the limit, until a camera asks for less. */
-    double est = 0;
-    if (mesh_estimate_vertices(&cs->mesh_cfg, &mc, &est) == OCEAN_OK &&
-        est > s->set.srv.max_mesh_vertices) {
-        if (!cs->mesh_over) {
-            char why[320];
-            snprintf(why, sizeof why, "camera %u: its %s mesh is estimated at %.4g vertices, above "
-                     "the server's limit of %d (server.max_mesh_vertices); frames come without a "
-                     "mesh until a camera asks for less (wider fov, smaller viewport or range)",
-                     j->cam_seq, mesh_kind_name(cs->mesh_cfg.kind), est, s->set.srv.max_mesh_vertices);
-            atomic_fetch_add(&s->hub->stats.refused_mesh, 1);
-            srv_client_send_error(c, NULL, 0, OCEAN_ETOOBIG, why);
-            cs->mesh_over = 1;
-        }
-        return;
-    }
-    cs->mesh_over = 0;
+     * vertices).  Steep chop asks for a finer mesh than its budget alone,
+     * and gets a coarser budget up to the mesh's largest; beyond that its
+     * frames come without a mesh, with one ERROR naming the limit, until a
+     * camera asks for less (srv_client_mesh_fit). */
+    if (!srv_client_mesh_fit(c, &mc, s->set.srv.max_mesh_vertices, j->cam_seq, &s->hub->stats)) return;
     double m0 = srv_now();
     ocean_result r = mesh_build(cs->mesh, &mc);
     if (r == OCEAN_OK) {

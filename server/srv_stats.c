@@ -121,6 +121,8 @@ char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t h
            "second at most per client.", (double)LD(refused_silent));
     metric(&b, "oceand_refused_mesh_total", "counter", "Meshes refused above "
            "server.max_mesh_vertices (estimated before building).", (double)LD(refused_mesh));
+    metric(&b, "oceand_coarsened_mesh_total", "counter", "Meshes built at a multiple of "
+           "server.mesh_error_px to stay within server.max_mesh_vertices.", (double)LD(coarsened_mesh));
     metric(&b, "oceand_refused_upgrade_total", "counter", "WebSocket upgrades refused (no "
            "ocean.v1 subprotocol, version other than 13).", (double)LD(refused_upgrade));
     metric(&b, "oceand_refused_accept_total", "counter", "Connections closed at accept: file "

@@ -2638,30 +2638,14 @@ static void reload_restart_keys_and_runtime_sea(void **state)
 /* The mesh a camera gets on steep chop is denser (mesh_roughness: the
  * sideways error grows with the choppiness), so it keeps the error budget;
  * the daemon built every sea's mesh with one roughness. */
+static size_t mesh_at_limit(double choppiness, int max_vertices, int layout, double height,
+                            unsigned long long *errors, char *err, size_t errlen);
+
 static size_t mesh_vertices_at(double choppiness)
 {
-    srv_settings s2 = settings;
-    s2.srv.port = 0;
-    s2.params.sea.choppiness = choppiness;
-    srv_daemon *d;
-    char err[512];
-    assert_int_equal(srv_daemon_start(&s2, &d, err, sizeof err), OCEAN_OK);
-    oc_client *c = connect_client(srv_daemon_port(d), NULL);
-    proto_subscribe sub;
-    small_subscribe(&sub);
-    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
-    proto_camera cam;
-    oc_camera_default(&cam);
-    assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
-    size_t n = 0;
-    for (int k = 0; k < 40 && !n; k++) {
-        oc_frame *f = next_frame(c, 3000);
-        if (f->info.camera_seq != PROTO_NO_CAMERA && f->info.has_mesh) n = f->info.mesh.vertex_count;
-        oc_frame_free(f);
-    }
-    oc_client_destroy(c);
-    srv_daemon_stop(d);
-    return n;
+    unsigned long long errors;
+    char e[512];
+    return mesh_at_limit(choppiness, settings.srv.max_mesh_vertices, 0, 0.0, &errors, e, sizeof e);
 }
 
 /* A camera at the water with a long view range keeps its mesh (20 levels
@@ -2706,6 +2690,76 @@ static void mesh_denser_on_steep_chop(void **state)
     print_message("mesh vertices: %zu at choppiness 1, %zu at 5\n", calm, steep);
     assert_true(calm > 0);
     assert_true(steep > 4 * calm);
+}
+
+/* The vertices of the first meshed frame of a camera height m over a sea
+ * of the given choppiness (height 0: oc_camera_default's), with the
+ * server's vertex limit at max_vertices, in the given layout (0 if no
+ * frame of that camera came with a mesh); *errors and err: the ERRORs the
+ * client got, and the last one's text. */
+static size_t mesh_at_limit(double choppiness, int max_vertices, int layout, double height,
+                            unsigned long long *errors, char *err, size_t errlen)
+{
+    srv_settings s2 = settings;
+    s2.srv.port = 0;
+    s2.srv.max_mesh_vertices = max_vertices;
+    s2.params.sea.choppiness = choppiness;
+    srv_daemon *d;
+    char e[512];
+    assert_int_equal(srv_daemon_start(&s2, &d, e, sizeof e), OCEAN_OK);
+    oc_client *c = connect_client(srv_daemon_port(d), NULL);
+    proto_subscribe sub;
+    small_subscribe(&sub);
+    if (layout) sub.layout = PROTO_LAYOUT_CASCADE;
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    if (height > 0) cam.pos[1] = height;
+    uint32_t seq = 0;
+    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+    size_t n = 0;
+    for (int k = 0; k < 40 && !n; k++) {
+        oc_frame *f = next_frame(c, 3000);
+        /* layout 1: the vertices are the topology's (the frame carries
+         * only its placement) */
+        if (f->info.camera_seq == seq && f->info.has_mesh)
+            n = layout ? (f->topology ? f->topology->vertex_count : 0) : f->info.mesh.vertex_count;
+        oc_frame_free(f);
+    }
+    oc_client_stats st;
+    oc_client_get_stats(c, &st);
+    *errors = (unsigned long long)st.errors_rx;
+    err[0] = '\0';
+    oc_client_last_error(c, err, errlen);
+    oc_client_destroy(c);
+    srv_daemon_stop(d);
+    return n;
+}
+
+/* A camera near steep chop whose mesh at the configured error budget is
+ * over server.max_mesh_vertices gets it at a coarser budget, within the
+ * limit, with one ERROR ETOOBIG naming both budgets, in both layouts; its
+ * frames came without a mesh (at choppiness 10, 2 m up: 485 k vertices
+ * against the default limit of 262 144). */
+static void mesh_fits_the_limit_on_steep_chop(void **state)
+{
+    (void)state;
+    for (int layout = 0; layout < 2; layout++) {
+        unsigned long long errors;
+        char e[1024];
+        size_t free_n = mesh_at_limit(10.0, 1 << 30, layout, 2.0, &errors, e, sizeof e);
+        assert_true(free_n > 0);
+        int limit = (int)(0.6 * (double)free_n);
+        if (limit < 1000) limit = 1000;
+        size_t n = mesh_at_limit(10.0, limit, layout, 2.0, &errors, e, sizeof e);
+        print_message("layout %d, choppiness 10, 2 m up: %zu vertices unlimited; %zu under a limit of %d (%llu ERRORs: %s)\n",
+                      layout, free_n, n, limit, errors, e);
+        if (!n) fail_msg("layout %d: no mesh under a limit of %d (%s)", layout, limit, e);
+        assert_true(n <= (size_t)limit);
+        assert_true(errors == 1);
+        if (!strstr(e, "server.max_mesh_vertices") || !strstr(e, "is drawn at"))
+            fail_msg("layout %d: the ERROR does not name the limit and the budget used: '%s'", layout, e);
+    }
 }
 
 /* A reload whose sea cannot be built (here: a wisdom file without its
@@ -3112,6 +3166,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(subscribe_keeps_pending_queries),
         cmocka_unit_test(admin_lock_sliding_window),
         cmocka_unit_test(mesh_denser_on_steep_chop),
+        cmocka_unit_test(mesh_fits_the_limit_on_steep_chop),
         cmocka_unit_test(mesh_low_camera_long_range),
         cmocka_unit_test(scene_overrides_named),
         cmocka_unit_test(shipped_config_has_every_key),
