@@ -331,6 +331,9 @@ static ocean_result v_cascades(ctx *c, const proto_cascade_block *b)
             FAIL(c, OCEAN_EFORMAT, "frame.cascades[%u].fades is %u (0 or 1)", k, e->fades);
         if ((e->n >> (e->mips - 1)) < 1)
             FAIL(c, OCEAN_EINVAL, "frame.cascades[%u]: %u mips of a %u grid", k, e->mips, e->n);
+        if (!(e->spacing_per_m > 0.0f) || !(e->spacing_per_m <= b->spacing_per_m))
+            FAIL(c, OCEAN_EINVAL, "frame.cascades[%u].spacing_per_m = %g; must be > 0 and <= the block's %g", k,
+                 (double)e->spacing_per_m, (double)b->spacing_per_m);
         for (int m = 0; m < PROTO_MIP_ENTRIES; m++) {
             const proto_mip_entry *q = &b->cascade[k].mip[m];
             if (m > e->mips) {
@@ -936,6 +939,7 @@ static void cascade_block_read(const uint8_t *p, proto_cascade_block *b)
         e->n = proto_ld16(q + 8);
         e->mips = q[10];
         e->fades = q[11];
+        e->spacing_per_m = proto_ldf32(q + 12);
         for (int m = 0; m < PROTO_MIP_ENTRIES; m++) {
             const uint8_t *w = q + 16 + 16 * m;
             e->mip[m].kc = proto_ldf32(w);
@@ -964,6 +968,7 @@ static void cascade_block_write(uint8_t *p, const proto_cascade_block *b)
         proto_st16(q + 8, e->n);
         q[10] = e->mips;
         q[11] = e->fades;
+        proto_stf32(q + 12, e->spacing_per_m);
         for (int m = 0; m < PROTO_MIP_ENTRIES; m++) {
             uint8_t *w = q + 16 + 16 * m;
             proto_stf32(w, e->mip[m].kc);
@@ -1035,9 +1040,6 @@ static ocean_result d_frame(rd *r, proto_frame *f)
         TRY(need(r, PROTO_CASCADE_BLOCK_FIXED + (size_t)cc * PROTO_CASCADE_ENTRY_SIZE, "cascade entries"));
         TRY(zero_bytes(r, r->off + 2, 2, "cascade block"));
         TRY(zero_bytes(r, r->off + 52, 4, "cascade block"));
-        for (unsigned k = 0; k < cc; k++)
-            TRY(zero_bytes(r, r->off + PROTO_CASCADE_BLOCK_FIXED + (size_t)k * PROTO_CASCADE_ENTRY_SIZE + 12, 4,
-                           "cascade entry"));
         cascade_block_read(r->p + r->off, &f->cascades);
         r->off += PROTO_CASCADE_BLOCK_FIXED + (size_t)cc * PROTO_CASCADE_ENTRY_SIZE;
         max_tag = cc - 1;

@@ -243,6 +243,8 @@ typedef struct proto_cascade_entry {
     uint16_t n;               /* grid of mip 0, power of two */
     uint8_t mips;             /* 1..PROTO_MAX_MIPS mips that hold waves */
     uint8_t fades;            /* 1: fades out of geometry beyond its last mip */
+    float spacing_per_m;      /* q_c: this cascade's spacing wanted per metre of
+                                 distance, > 0 and <= the block's */
     proto_mip_entry mip[PROTO_MIP_ENTRIES]; /* entries 0..mips; the rest 0 */
 } proto_cascade_entry;
 
@@ -250,7 +252,8 @@ typedef struct proto_cascade_entry {
 typedef struct proto_cascade_block {
     uint8_t cascade_count;    /* 1..PROTO_MAX_LAYERS */
     uint8_t order;            /* Butterworth order of the mips, 1..64 */
-    float spacing_per_m;      /* q: spacing wanted per metre of distance, > 0 */
+    float spacing_per_m;      /* q: the coarsest cascade's spacing wanted per metre
+                                 of distance, > 0 (each entry has its own) */
     double camera[3];         /* camera position the frame was made for */
     float min_spacing_m;      /* >= 0 */
     float e_total;            /* [0, 1] */

@@ -77,7 +77,10 @@ typedef struct plan {
     int ncas;              /* cascades this subscription may have: the FFT's, and the
                               near field's when it asks for that effect */
     int layers;            /* those it gets (its SUBSCRIBE.layers) */
-    double q, min_spacing;
+    double q, min_spacing; /* q: the coarsest cascade's (the block's spacing_per_m) */
+    double qc[PROTO_MAX_LAYERS];     /* each cascade's q (its entry's spacing_per_m), <= q */
+    double cbytes[PROTO_MAX_LAYERS]; /* estimated bytes of each cascade's tiles */
+    int ctiles[PROTO_MAX_LAYERS];
     unsigned channels;
     int need[PROTO_MAX_LAYERS][MAX_MIPS];
     range r[PROTO_MAX_LAYERS][MAX_MIPS];
@@ -338,16 +341,43 @@ static void view_box(const srv_cascade_job *j, const sector *sc, double R, doubl
 
 static double nadir_error(const tables *tb, const plan *pl, const proto_camera *cam);
 
-/* The plan for spacing factor q; returns the estimated bytes of its tiles. */
+/* The plan for spacing factor q at every cascade; returns the estimated
+ * bytes of its tiles. */
 static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
                       const sector *sc, double q, plan *pl);
+/* Cascade c of plan pl at spacing factor q (pl's other cascades stay);
+ * returns the estimated bytes of that cascade's tiles. */
+static double plan_cascade(const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
+                           const sector *sc, int c, double q, plan *pl);
+
+#define QUARTER_OCTAVE 1.189207115002721 /* 2^(1/4) */
+
+static double plan_bytes(const plan *pl)
+{
+    double b = 0;
+    for (int c = 0; c < pl->layers; c++) b += pl->cbytes[c];
+    return b;
+}
 
 /* A job's plan at the server's quality target (server.px_per_sample),
  * coarsened (q raised by steps of 2^(1/4)) until the frame's tiles fit the
  * viewer's byte budget (server.viewer_bytes_per_s over its frame rate,
  * estimated with srv_cascade_tile_bytes' model): a
  * large viewport or a low camera gets a little less geometry and a little
- * more unresolved roughness, never more bytes than the budget. */
+ * more unresolved roughness, never more bytes than the budget.
+ *
+ * Then each cascade spends what that left of the budget on its own q.
+ * Bytes grow with q in steps of whole tiles, and a step of one coarse
+ * cascade (tiles 125 m wide at ship-bridge) can cost more than all the
+ * fine cascades' mips together: with one q for every cascade, a camera
+ * 25 m up with the viewer's subscription stopped at 111 of its 130 KB (at
+ * qz accuracy 1e-3: at 105 KB, with no tile of the finest FFT cascade).
+ * So, finest cascade first, a quarter octave per cascade
+ * per round, every cascade refines while its next step fits and its q is
+ * above the target; a cascade whose step does not fit stops (its bytes
+ * only grow as its q falls).  The fine cascades' patches are small, so
+ * their mips come whole and cheap, and they carry the slopes the near
+ * sea shows. */
 static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
 {
     mesh_camera mc;
@@ -367,7 +397,7 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
                 break;
         }
         for (int it = 0; it < 3; it++) {
-            double t = hi / 1.189207115002721; /* 2^(1/4) */
+            double t = hi / QUARTER_OCTAVE;
             if (t <= q || plan_at(tb, cfg, j, &sc, t, pl) > budget)
                 break;
             hi = t;
@@ -382,7 +412,7 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
      * past that the frame reports what is missing in e_total. */
     if (!(j->c->sim.sub.effects & PROTO_FX_NORMALS)) {
         while (hi > q / 64 && nadir_error(tb, pl, &j->cam) > SRV_CASCADE_E_GUARD) {
-            double t = hi / 1.189207115002721;
+            double t = hi / QUARTER_OCTAVE;
             if (plan_at(tb, cfg, j, &sc, t, pl) > 2.0 * budget) {
                 plan_at(tb, cfg, j, &sc, hi, pl);
                 break;
@@ -390,6 +420,27 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
             hi = t;
         }
     }
+    /* each cascade its own q, within what is left (see above) */
+    double bytes = plan_bytes(pl);
+    int open = 0;
+    for (int c = 0; c < pl->layers; c++)
+        if (pl->qc[c] / QUARTER_OCTAVE >= q * 0.999999) open |= 1 << c;
+    while (open) {
+        for (int c = pl->layers - 1; c >= 0; c--) {
+            if (!(open & (1 << c))) continue;
+            double was_q = pl->qc[c], was_b = pl->cbytes[c], t = was_q / QUARTER_OCTAVE;
+            double nb = bytes - was_b + plan_cascade(tb, cfg, j, &sc, c, t, pl);
+            if (nb > budget) {
+                plan_cascade(tb, cfg, j, &sc, c, was_q, pl);
+                open &= ~(1 << c);
+                continue;
+            }
+            bytes = nb;
+            if (t / QUARTER_OCTAVE < q * 0.999999) open &= ~(1 << c);
+        }
+    }
+    pl->tiles = 0;
+    for (int c = 0; c < pl->layers; c++) pl->tiles += pl->ctiles[c];
 }
 
 static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
@@ -398,8 +449,8 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
     const proto_subscribe *sub = &j->c->sim.sub;
     /* only the fields a plan computes: the mesh parts stay */
     memset(pl->need, 0, sizeof pl->need);
-    pl->tiles = 0;
-    double samples = 0;
+    memset(pl->cbytes, 0, sizeof pl->cbytes);
+    memset(pl->ctiles, 0, sizeof pl->ctiles);
     pl->ncas = tb->fft + (tb->nf && (sub->effects & PROTO_FX_NEAR_FIELD) ? 1 : 0);
     pl->layers = sub->layers < pl->ncas ? sub->layers : pl->ncas;
     pl->q = q;
@@ -408,39 +459,54 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
     double pol = isfinite(j->policy_k) && j->policy_k > 0 ? M_PI / (2.0 * j->policy_k) : 0.0;
     pl->min_spacing = fmax(sub->base_spacing_m > 0 ? sub->base_spacing_m : 0.0, pol);
     pl->channels = srv_tiles_channels(sub->effects);
-    double range_m = sub->view_range_m > 0 ? sub->view_range_m : cfg->view_range;
-    double cy = fmax(fabs(j->cam.pos[1]), 1.0);
+    double bytes = 0;
+    pl->tiles = 0;
     for (int c = 0; c < pl->layers; c++) {
-        if (!chan_of(pl, c)) continue;
-        double sigma = tb->patch[c] / tb->n;
-        int fades = c > 0;
-        for (int m = 0; m < tb->mips[c]; m++) {
-            int np = tb->n >> m, t = cfg->cascade_tile < np ? cfg->cascade_tile : np, ntile = np / t;
-            double sp = sigma * ldexp(1.0, m), lim = 2.0 * sp;
-            int last = m == tb->mips[c] - 1;
-            double R;
-            if (last && !fades) {
-                R = range_m;
-            } else {
-                if (pl->min_spacing >= lim)
-                    continue;
-                double r2 = (lim / pl->q) * (lim / pl->q) - cy * cy;
-                if (!(r2 > 0))
-                    continue;
-                R = fmin(sqrt(r2), range_m);
-            }
-            double box[4], w = t * sp;
-            view_box(j, sc, R, 2.0 * sp, box);
-            range *g = &pl->r[c][m];
-            span(box[0], box[1], w, ntile, &g->x0, &g->nx);
-            span(box[2], box[3], w, ntile, &g->z0, &g->nz);
-            pl->need[c][m] = 1;
-            pl->tiles += g->nx * g->nz;
-            samples += (double)g->nx * g->nz * srv_cascade_tile_bytes(sub, chan_of(pl, c), t);
-        }
+        bytes += plan_cascade(tb, cfg, j, sc, c, q, pl);
+        pl->tiles += pl->ctiles[c];
     }
     pl->ok = 1;
-    return samples;
+    return bytes;
+}
+
+static double plan_cascade(const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
+                           const sector *sc, int c, double q, plan *pl)
+{
+    const proto_subscribe *sub = &j->c->sim.sub;
+    double range_m = sub->view_range_m > 0 ? sub->view_range_m : cfg->view_range;
+    double cy = fmax(fabs(j->cam.pos[1]), 1.0);
+    pl->qc[c] = q;
+    pl->cbytes[c] = 0;
+    pl->ctiles[c] = 0;
+    memset(pl->need[c], 0, sizeof pl->need[c]);
+    if (!chan_of(pl, c)) return 0;
+    double sigma = tb->patch[c] / tb->n;
+    int fades = c > 0;
+    for (int m = 0; m < tb->mips[c]; m++) {
+        int np = tb->n >> m, t = cfg->cascade_tile < np ? cfg->cascade_tile : np, ntile = np / t;
+        double sp = sigma * ldexp(1.0, m), lim = 2.0 * sp;
+        int last = m == tb->mips[c] - 1;
+        double R;
+        if (last && !fades) {
+            R = range_m;
+        } else {
+            if (pl->min_spacing >= lim)
+                continue;
+            double r2 = (lim / q) * (lim / q) - cy * cy;
+            if (!(r2 > 0))
+                continue;
+            R = fmin(sqrt(r2), range_m);
+        }
+        double box[4], w = t * sp;
+        view_box(j, sc, R, 2.0 * sp, box);
+        range *g = &pl->r[c][m];
+        span(box[0], box[1], w, ntile, &g->x0, &g->nx);
+        span(box[2], box[3], w, ntile, &g->z0, &g->nz);
+        pl->need[c][m] = 1;
+        pl->ctiles[c] += g->nx * g->nz;
+        pl->cbytes[c] += (double)g->nx * g->nz * srv_cascade_tile_bytes(sub, chan_of(pl, c), t);
+    }
+    return pl->cbytes[c];
 }
 
 /* ---- tiles ------------------------------------------------------------------ */
@@ -551,7 +617,7 @@ static double nadir_error(const tables *tb, const plan *pl, const proto_camera *
     double total = tb->total_var + (pl->ncas > tb->fft ? tb->nf_var : 0.0);
     if (!(total > 0))
         return 0.0;
-    double s = fmax(pl->min_spacing, pl->q * fmax(fabs(cam->pos[1]), 1.0));
+    double cy = fmax(fabs(cam->pos[1]), 1.0);
     double miss = 0.0;
     for (int c = 0; c < pl->ncas; c++) {
         int M = tb->mips[c];
@@ -559,6 +625,7 @@ static double nadir_error(const tables *tb, const plan *pl, const proto_camera *
             miss += tb->var_removed[c][M];
             continue;
         }
+        double s = fmax(pl->min_spacing, pl->qc[c] * cy);
         double lam = log2(s / (tb->patch[c] / tb->n));
         double v;
         if (lam <= 0) {
@@ -667,6 +734,7 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
         e->n = (uint16_t)tb->n;
         e->mips = (uint8_t)tb->mips[c];
         e->fades = c > 0;
+        e->spacing_per_m = (float)pl->qc[c];
         for (int q = 0; q <= tb->mips[c]; q++) e->mip[q] = tb->entry[c][q];
     }
     /* The near field is the last cascade when the sea has one and the
@@ -721,6 +789,8 @@ static int same_frame(const srv_cascade_job *a, const plan *pa, const srv_cascad
         pa->has_mesh != pb->has_mesh || pa->layers != pb->layers || pa->ncas != pb->ncas || pa->q != pb->q ||
         pa->min_spacing != pb->min_spacing || x->effects != y->effects || memcmp(a->cam.pos, b->cam.pos, sizeof a->cam.pos))
         return 0;
+    for (int c = 0; c < pa->layers; c++)
+        if (pa->qc[c] != pb->qc[c]) return 0;
     if (pa->has_mesh && (pa->mv.topology_key != pb->mv.topology_key ||
                          memcmp(pa->mv.origin, pb->mv.origin, sizeof pa->mv.origin)))
         return 0;

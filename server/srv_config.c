@@ -190,7 +190,8 @@ static const conf_entry srv_entries[] = {
      .min = 1e4, .max = 1e10, .def = "3.9e6", .unit = "B/s",
      .help = "Cascade tile layout: tile bytes one viewer may receive per second (its frame "
              "budget is this over its frame rate).  A camera whose footprint needs more (a "
-             "large viewport, a camera near the water) reads coarser mips until it fits; the "
+             "large viewport, a camera near the water) reads coarser mips until it fits, and "
+             "each cascade then refines on its own, finest first, within what is left; the "
              "server plans with a fixed model of each codec's bytes per sample (the same on every replica; "
              "within 1 % of the measured qz bytes, `make bench`): 3.9e6 keeps the viewer under "
              "4 MB/s with frame headers."},

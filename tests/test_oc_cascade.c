@@ -180,6 +180,14 @@ static oc_frame *decode_built(built B)
     return f;
 }
 
+/* q of the block and of every cascade entry. */
+static void block_set_q(proto_cascade_block *b, float q)
+{
+    b->spacing_per_m = q;
+    for (int c = 0; c < b->cascade_count; c++)
+        b->cascade[c].spacing_per_m = q;
+}
+
 /* A block with one entry per (patch, n, mips, fades); kc per mip as the
  * spec's table wants (mip 0 unfiltered, then > 0, entry `mips` 0); the
  * moments are distinct per (c, m) so their blending can be followed. */
@@ -208,6 +216,7 @@ static void block_init(proto_cascade_block *b, int count, const double *patch, c
             e->mip[m].mss_xz = (float)(-1e-4 * (m + 1));
         }
     }
+    block_set_q(b, 1.0f / 1024);
 }
 
 /* A world point at horizontal distance d (direction th) from the block's
@@ -288,6 +297,45 @@ static void lod_rule(void **state)
     assert_int_equal(oc_cascade_lod(&b, NAN, 0, 0, &L), OCEAN_EINVAL);
     assert_int_equal(oc_cascade_lod(&b, 0, 0, INFINITY, &L), OCEAN_EINVAL);
     b.spacing_per_m = 0;
+    assert_int_equal(oc_cascade_lod(&b, 0, 0, 0, &L), OCEAN_EINVAL);
+}
+
+/* Each cascade at its own q_c (PROTOCOL.md "Where each mip is read"): the
+ * server spends what one q for all leaves of the byte budget on the cascades
+ * whose next step is cheap, so a cascade's levels follow its entry's q, not
+ * the block's. */
+static void lod_rule_per_cascade_q(void **state)
+{
+    (void)state;
+    /* as lod_rule: lambda_1 = lambda_0 + 2 at one q; cascade 1 at q / 4
+     * reads two levels finer, lambda_1 = lambda_0 */
+    const double patch[2] = {1000, 250};
+    const int n[2] = {256, 256}, mips[2] = {6, 4}, fades[2] = {0, 1};
+    proto_cascade_block b;
+    block_init(&b, 2, patch, n, mips, fades);
+    b.camera[0] = -40;
+    b.camera[1] = 25;
+    b.cascade[1].spacing_per_m = b.spacing_per_m / 4;
+    double s0 = 1000.0 / 256;
+    for (double lam0 = 0.25; lam0 < 5; lam0 += 0.5) {
+        double x, z;
+        point_at_level(&b, s0, lam0, 1.0 + lam0, &x, &z);
+        oc_lod L;
+        assert_int_equal(oc_cascade_lod(&b, x, z, 0, &L), OCEAN_OK);
+        assert_true(fabs(L.c[0].lambda - lam0) < 1e-9);
+        assert_true(fabs(L.c[1].lambda - lam0) < 1e-9);
+        assert_true(fabs(L.c[1].s - L.s / 4) < 1e-9 * L.s && fabs(L.c[0].s - L.s) < 1e-9 * L.s);
+    }
+    /* the floors (block min_spacing_m, the caller's g_L) hold every cascade */
+    oc_lod L;
+    assert_int_equal(oc_cascade_lod(&b, b.camera[0], b.camera[2], 8 * s0, &L), OCEAN_OK);
+    assert_true(fabs(L.c[0].s - 8 * s0) < 1e-9 && fabs(L.c[1].s - 8 * s0) < 1e-9);
+    /* a cascade's q must be > 0 and no coarser than the block's */
+    b.cascade[1].spacing_per_m = 2 * b.spacing_per_m;
+    assert_int_equal(oc_cascade_lod(&b, 0, 0, 0, &L), OCEAN_EINVAL);
+    b.cascade[1].spacing_per_m = 0;
+    assert_int_equal(oc_cascade_lod(&b, 0, 0, 0, &L), OCEAN_EINVAL);
+    b.cascade[1].spacing_per_m = NAN;
     assert_int_equal(oc_cascade_lod(&b, 0, 0, 0, &L), OCEAN_EINVAL);
 }
 
@@ -529,7 +577,7 @@ static void missing_tiles(void **state)
     int n = 64, mips = 3, fades = 0;
     proto_cascade_block b;
     block_init(&b, 1, &P, &n, &mips, &fades);
-    b.spacing_per_m = 1e-6f;   /* mip 0 everywhere */
+    block_set_q(&b, 1e-6f);   /* mip 0 everywhere */
     field F = {.fn = sin_fn, .want = want_one, .a = 1, .kx = 1, .kz = 1, .patch = P, .chop = 0.5};
     oc_frame *f = decode_built(build_frame(&b, &F, PROTO_CH_HEIGHT | PROTO_CH_NORMAL, 16, NULL, PROTO_CODEC_F32));
     /* mip 0 holds only tile (1, 2): samples [32, 48) x [16, 32) at 4 m */
@@ -699,7 +747,7 @@ static void mesh_positions(void **state)
     int n = 256, mips = 6, fades = 0;
     proto_cascade_block b;
     block_init(&b, 1, &P, &n, &mips, &fades);
-    b.spacing_per_m = 1e-7f;
+    block_set_q(&b, 1e-7f);
     b.camera[0] = 1000.5;
     b.camera[1] = 3;
     b.camera[2] = -2000;
@@ -967,6 +1015,7 @@ int main(void)
     signal(SIGPIPE, SIG_IGN);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(lod_rule),
+        cmocka_unit_test(lod_rule_per_cascade_q),
         cmocka_unit_test(blend_and_fade),
         cmocka_unit_test(sinusoid_and_wrap),
         cmocka_unit_test(missing_tiles),

@@ -165,6 +165,7 @@ static char *dump(const proto_msg *m)
                 const proto_cascade_entry *e = &k->cascade[c];
                 out(&b, "cascade[%u].patch_m = %.17g\ncascade[%u].n = %u\ncascade[%u].mips = %u\ncascade[%u].fades = %u\n",
                     c, e->patch_m, c, e->n, c, e->mips, c, e->fades);
+                out(&b, "cascade[%u].spacing_per_m = %.9g\n", c, (double)e->spacing_per_m);
                 for (int q = 0; q <= e->mips; q++)
                     out(&b, "cascade[%u].mip[%d] = %.9g %.9g %.9g %.9g\n", c, q, (double)e->mip[q].kc,
                         (double)e->mip[q].mss_x, (double)e->mip[q].mss_z, (double)e->mip[q].mss_xz);
@@ -395,7 +396,9 @@ static void sample_cascade_block(proto_cascade_block *b)
     e->mip[0] = (proto_mip_entry){INFINITY, 0.00390625f, 0.001953125f, 0.0f};
     e->mip[1] = (proto_mip_entry){0.36f, 0.0078125f, 0.00390625f, 0.0001220703125f};
     e->mip[2] = (proto_mip_entry){0.0f, 0.03125f, 0.015625f, 0.000244140625f};
+    e->spacing_per_m = b->spacing_per_m;
     e = &b->cascade[1];
+    e->spacing_per_m = b->spacing_per_m / 4;
     e->patch_m = 232.8;
     e->n = 256;
     e->mips = 1;
@@ -992,6 +995,8 @@ static const bad_vector bad_vectors[] = {
     {"bad_cascade_tag", "frame_cascade", P(56 + 56 + 2 * 224 + 4), 4, 2, OCEAN_EFORMAT, -1},
     {"bad_cascade_nan_spacing", "frame_cascade", P(56 + 4), 4, 0x7FC00000u, OCEAN_EINVAL, -1},
     {"bad_cascade_count", "frame_cascade", P(56), 1, 5, OCEAN_EINVAL, -1},
+    /* cascade 1's own q (entry offset 12) twice the block's 0.046875 */
+    {"bad_cascade_entry_spacing", "frame_cascade", P(56 + 56 + 224 + 12), 4, 0x3DC00000u, OCEAN_EINVAL, -1},
     {"bad_topology_flags", "mesh_topology_flat", P(6), 2, 2, OCEAN_EFORMAT, -1},
     {"bad_subscribe_layout", "subscribe", P(7), 1, 2, OCEAN_ETYPE, -1},
     {"bad_sea_get_with_sea", "sea_state_get", P(32), 8, 0x4024000000000000ull, OCEAN_EFORMAT, -1},

@@ -441,8 +441,11 @@ static void cascade_tiles_are_the_mips(void **state)
     }
     assert_true(checked > 100);
     /* the camera's own tile of every mip the rule reads at its nadir is there */
-    double cy = fmax(fabs(cam.pos[1]), 1.0), s0 = b->spacing_per_m * cy;
+    double cy = fmax(fabs(cam.pos[1]), 1.0);
     for (int k = 0; k < 2; k++) {
+        /* each cascade at its own q (PROTOCOL.md "Where each mip is read") */
+        double s0 = b->cascade[k].spacing_per_m * cy;
+        assert_true(b->cascade[k].spacing_per_m <= b->spacing_per_m);
         double sigma = b->cascade[k].patch_m / b->cascade[k].n;
         double lam = log2(s0 / sigma);
         int m = lam <= 0 ? 0 : (int)floor(lam);
@@ -487,6 +490,84 @@ static void cascade_tiles_are_the_mips(void **state)
     assert_int_equal(oc_client_last_error(c, e, sizeof e), OCEAN_EUNSUPPORTED);
     assert_non_null(strstr(e, "layout"));
     oc_client_destroy(c);
+}
+
+/* Each cascade its own q.  With one q for every cascade, a plan stops
+ * where the next quarter octave of every cascade together does not fit,
+ * and a coarse cascade's step costs whole tiles 125 m wide: a camera 25 m
+ * up over the scene `make run` serves, with the viewer's subscription and
+ * viewport, got 111 of its 130 KB a frame, and at accuracy 1e-3 the finest
+ * FFT cascade (54 m patch, where the near sea's slopes are) sent no tile.
+ * Now the cascades refine on their own within what is left: some entry's
+ * q is below the block's, the finest FFT cascade has tiles, every point of
+ * the visible sea reads from tiles the frame has (the server's tile set
+ * follows the per-cascade rule the client applies), and the frame spends
+ * its budget without passing it. */
+static void cascade_q_spends_the_budget(void **state)
+{
+    (void)state;
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
+    srv_settings sb;
+    char err[512];
+    ocean_result lr = srv_settings_load(NULL, sets, 4, &sb, err, sizeof err);
+    if (lr != OCEAN_OK) fprintf(stderr, "%s\n", err);
+    assert_int_equal(lr, OCEAN_OK);
+    srv_daemon *d;
+    assert_int_equal(srv_daemon_start(&sb, &d, err, sizeof err), OCEAN_OK);
+    oc_client *c = connect_client(srv_daemon_port(d), NULL);
+    proto_subscribe s;
+    oc_subscribe_default(&s);
+    s.mesh_kind = PROTO_MESH_NONE;
+    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.pos[0] = 321.5;
+    cam.pos[1] = 25;
+    cam.pos[2] = -77.25;
+    cam.pitch_deg = -15.1;
+    cam.fov_y_deg = 60;
+    cam.viewport_w = 1920;
+    cam.viewport_h = 1080;
+    uint32_t seq;
+    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+    oc_frame *f = frame_for(c, seq, sanitized ? 20000 : 8000);
+    assert_non_null(f);
+    const proto_cascade_block *b = &f->info.cascades;
+    assert_true(b->cascade_count >= 3);
+    int refined = 0, fine_tiles = 0;
+    double bytes = 0;
+    for (int k = 0; k < b->cascade_count; k++) {
+        assert_true(b->cascade[k].spacing_per_m > 0 && b->cascade[k].spacing_per_m <= b->spacing_per_m);
+        refined += b->cascade[k].spacing_per_m < b->spacing_per_m;
+    }
+    for (int t = 0; t < f->info.tile_count; t++) {
+        fine_tiles += f->tiles[t].info.cascade == 2;
+        bytes += 64.0 + f->tiles[t].info.payload_len;
+    }
+    double budget = sb.srv.viewer_bytes_per_s / s.frame_rate_hz;
+    print_message("25 m: q %.4g; cascade q %.4g %.4g %.4g; %d tiles, %d of the finest FFT cascade; %.0f of %.0f B\n",
+                  (double)b->spacing_per_m, (double)b->cascade[0].spacing_per_m, (double)b->cascade[1].spacing_per_m,
+                  (double)b->cascade[2].spacing_per_m, f->info.tile_count, fine_tiles, bytes, budget);
+    assert_true(refined >= 1);
+    if (fine_tiles == 0) fail_msg("the finest FFT cascade sent no tile to a camera 25 m up");
+    /* for this camera one q left 15 % of the budget unspent (111 of 130 KB) */
+    if (!(bytes >= 0.9 * budget && bytes <= 1.25 * budget))
+        fail_msg("%.0f tile bytes against a budget of %.0f a frame", bytes, budget);
+    /* every point of the sea in view reads from the frame's tiles */
+    int points = 0;
+    for (double r = 30; r < 3000; r *= 1.3)
+        for (double a = -40; a <= 40; a += 8) {
+            double th = (cam.yaw_deg + a) * M_PI / 180;
+            double x = cam.pos[0] + r * cos(th), z = cam.pos[2] + r * sin(th); /* yaw 0 looks along +x */
+            oc_sample sm;
+            ocean_result rr = oc_frame_sample(f, x, z, 0, &sm);
+            if (rr != OCEAN_OK) fail_msg("no tile at %.1f m, %.0f deg: %s", r, a, ocean_strerror(rr));
+            points++;
+        }
+    assert_true(points > 100);
+    oc_frame_free(f);
+    oc_client_destroy(c);
+    srv_daemon_stop(d);
 }
 
 /* Issue 13 item 4: in layout 1 the near field is one more periodic cascade
@@ -589,7 +670,7 @@ static void cascade_near_field_ship_bridge(void **state)
         assert_true(fabs(b->tail_mss[0] - ss.tail.mss_x) <= 1e-5 * ss.tail.mss_x + 1e-9);
         assert_true(fabs(b->tail_mss[1] - ss.tail.mss_z) <= 1e-5 * ss.tail.mss_z + 1e-9);
         double sigma = e->patch_m / e->n;
-        double sp_nadir = fmax(b->min_spacing_m, b->spacing_per_m * fmax(fabs(b->camera[1]), 1.0));
+        double sp_nadir = fmax(b->min_spacing_m, e->spacing_per_m * fmax(fabs(b->camera[1]), 1.0));
         double lam = log2(sp_nadir / sigma);
         if (pass == 0) {
             /* 3 m up: the rule reads the near field's geometry at the nadir */
@@ -3167,6 +3248,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(admin_lock_sliding_window),
         cmocka_unit_test(mesh_denser_on_steep_chop),
         cmocka_unit_test(mesh_fits_the_limit_on_steep_chop),
+        cmocka_unit_test(cascade_q_spends_the_budget),
         cmocka_unit_test(mesh_low_camera_long_range),
         cmocka_unit_test(scene_overrides_named),
         cmocka_unit_test(shipped_config_has_every_key),

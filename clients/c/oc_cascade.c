@@ -234,31 +234,32 @@ static int block_ok(const proto_cascade_block *b)
             return 0;
     for (int c = 0; c < b->cascade_count; c++) {
         const proto_cascade_entry *e = &b->cascade[c];
-        if (!(e->patch_m > 0) || !isfinite(e->patch_m) || e->n < 1 || e->mips < 1 || e->mips > PROTO_MAX_MIPS)
+        if (!(e->patch_m > 0) || !isfinite(e->patch_m) || e->n < 1 || e->mips < 1 || e->mips > PROTO_MAX_MIPS ||
+            !(e->spacing_per_m > 0) || !(e->spacing_per_m <= b->spacing_per_m))
             return 0;
     }
     return 1;
 }
 
-/* The rule itself, on a block already checked. */
+/* The rule itself, on a block already checked: each cascade at its own
+ * spacing max(min_spacing_m, q_c * distance), raised to min_spacing. */
 static void lod_core(const proto_cascade_block *b, double x, double z, double min_spacing, oc_lod *out)
 {
     double dx = x - b->camera[0], dz = z - b->camera[2];
     double h = fabs(b->camera[1]);
     if (h < 1)
         h = 1;
-    double s = b->spacing_per_m * sqrt(dx * dx + dz * dz + h * h);
-    if (s < b->min_spacing_m)
-        s = b->min_spacing_m;
-    if (s < min_spacing)
-        s = min_spacing;
-    out->s = s;
+    double d = sqrt(dx * dx + dz * dz + h * h);
+    double floor_s = b->min_spacing_m > min_spacing ? b->min_spacing_m : min_spacing;
+    out->s = fmax(floor_s, b->spacing_per_m * d);
     out->count = b->cascade_count;
     for (int c = 0; c < b->cascade_count; c++) {
         const proto_cascade_entry *e = &b->cascade[c];
         oc_lod_cascade *L = &out->c[c];
         int M = e->mips;
+        double s = fmax(floor_s, e->spacing_per_m * d);
         double lam = log2(s / (e->patch_m / e->n));
+        L->s = s;
         L->lambda = lam;
         L->fade = 1;
         L->mip[1] = -1;
@@ -455,14 +456,13 @@ static int read_mip(const oc_cascade_view *v, const cv_mip *mp, double u, double
     }
 }
 
-/* The sum of the cascades at (x, z).  0, or -1 when a mip read is not in
- * the frame's tiles. */
-static int sample_core(const oc_cascade_view *v, double x, double z, double min_spacing, unsigned want,
-                       oc_interp interp, oc_sample *out)
+/* The sum of the cascades at (x, z), each read at the levels `lod` names.
+ * 0, or -1 when a mip read is not in the frame's tiles. */
+static int sample_lod(const oc_cascade_view *v, double x, double z, const oc_lod *lodp, unsigned want,
+                      oc_interp interp, oc_sample *out)
 {
     const proto_cascade_block *b = &v->block;
-    oc_lod lod;
-    lod_core(b, x, z, min_spacing, &lod);
+    const oc_lod lod = *lodp;
     memset(out, 0, sizeof *out);
     out->s = lod.s;
     const unsigned all = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM;
@@ -539,6 +539,15 @@ static int sample_core(const oc_cascade_view *v, double x, double z, double min_
     return 0;
 }
 
+/* sample_lod at the levels the rule gives (x, z). */
+static int sample_core(const oc_cascade_view *v, double x, double z, double min_spacing, unsigned want,
+                       oc_interp interp, oc_sample *out)
+{
+    oc_lod lod;
+    lod_core(&v->block, x, z, min_spacing, &lod);
+    return sample_lod(v, x, z, &lod, want, interp, out);
+}
+
 static ocean_result frame_view(const oc_frame *f, const oc_cascade_view **v)
 {
     if (!f)
@@ -595,12 +604,14 @@ ocean_result oc_frame_surface_interp(const oc_frame *f, double x, double z, doub
     /* the levels are those of the asked point, held while p moves */
     oc_lod lod;
     lod_core(&v->block, x, z, min_spacing, &lod);
-    double ms = lod.s;
+    double ms = lod.s;   /* the finest spacing read sets the difference step */
+    for (int c = 0; c < lod.count; c++)
+        ms = fmin(ms, lod.c[c].s);
     double px = x, pz = z, best = INFINITY, bx = x, bz = z;
     const double tol = 1e-5;
     oc_sample s0, sx, sz;
     for (int it = 0; it < 24; it++) {
-        if (sample_core(v, px, pz, ms, W_D, interp, &s0))
+        if (sample_lod(v, px, pz, &lod, W_D, interp, &s0))
             return OCEAN_ENOTFOUND;
         double rx = px + s0.dx - x, rz = pz + s0.dz - z;
         double res = hypot(rx, rz);
@@ -613,7 +624,7 @@ ocean_result oc_frame_surface_interp(const oc_frame *f, double x, double z, doub
             break;
         /* Newton on p + D(p) = (x, z) with a finite-difference Jacobian */
         double d = 1e-3 > 0.01 * ms ? 1e-3 : 0.01 * ms;
-        if (sample_core(v, px + d, pz, ms, W_D, interp, &sx) || sample_core(v, px, pz + d, ms, W_D, interp, &sz))
+        if (sample_lod(v, px + d, pz, &lod, W_D, interp, &sx) || sample_lod(v, px, pz + d, &lod, W_D, interp, &sz))
             return OCEAN_ENOTFOUND;
         double a = 1 + (sx.dx - s0.dx) / d, bq = (sz.dx - s0.dx) / d;
         double c = (sx.dz - s0.dz) / d, e = 1 + (sz.dz - s0.dz) / d;
@@ -627,7 +638,7 @@ ocean_result oc_frame_surface_interp(const oc_frame *f, double x, double z, doub
             pz -= 0.5 * rz;
         }
     }
-    if (sample_core(v, bx, bz, ms, W_ALL, interp, out)) {
+    if (sample_lod(v, bx, bz, &lod, W_ALL, interp, out)) {
         memset(out, 0, sizeof *out);
         return OCEAN_ENOTFOUND;
     }

@@ -14,9 +14,10 @@
  * never filled from an older frame.
  *
  * Reading (oc_frame_sample):
- *  - level: s = max(min_spacing_m, q * sqrt(dx^2 + dz^2 + max(|cy|, 1)^2))
- *    from the frame's cascade block, raised to the caller's min_spacing (the
- *    vertex rule max(s, g_L)); per cascade lambda = log2(s / sigma_c); mip 0
+ *  - level: per cascade s_c = max(min_spacing_m, q_c * sqrt(dx^2 + dz^2 +
+ *    max(|cy|, 1)^2)) from the frame's cascade block (each cascade entry
+ *    has its own q_c), raised to the caller's min_spacing (the vertex rule
+ *    max(s, g_L)); lambda_c = log2(s_c / sigma_c); mip 0
  *    at lambda <= 0, the two mips around lambda blended linearly
  *    (trilinear), the last mip beyond, times the fade
  *    w = clamp(mips - lambda, 0, 1) for a cascade that fades.  Exactly the
@@ -74,6 +75,7 @@ typedef enum oc_interp {
 
 /* Which mips of each cascade a point reads, and with what weight. */
 typedef struct oc_lod_cascade {
+    double s;             /* spacing this cascade is read at, m: its own q_c */
     double lambda;        /* continuous level log2(s / sigma_c) */
     int mip[2];           /* mips read; mip[1] = -1 when only one */
     double weight[2];     /* their weights, the fade included (sum = fade) */
@@ -81,7 +83,8 @@ typedef struct oc_lod_cascade {
 } oc_lod_cascade;
 
 typedef struct oc_lod {
-    double s;             /* spacing wanted at the point, m */
+    double s;             /* spacing wanted at the point at the block's q (the
+                             coarsest cascade's), m; each cascade's is in c[] */
     int count;            /* cascades */
     oc_lod_cascade c[PROTO_MAX_LAYERS];
 } oc_lod;

@@ -558,7 +558,7 @@ function readCascades(r, cc) {
         const q = o + CASCADE_FIXED + k * CASCADE_ENTRY;
         const mip = new Float32Array(4 * MIP_ENTRIES);
         for (let m = 0; m < 4 * MIP_ENTRIES; m++) mip[m] = r.f32(q + 16 + 4 * m);
-        b.cascade.push({ patchM: r.f64(q), n: r.u16(q + 8), mips: r.u8at(q + 10), fades: r.u8at(q + 11), mip });
+        b.cascade.push({ patchM: r.f64(q), n: r.u16(q + 8), mips: r.u8at(q + 10), fades: r.u8at(q + 11), spacingPerM: r.f32(q + 12), mip });
     }
     return b;
 }
@@ -581,6 +581,8 @@ function vCascades(b) {
         chkRange('frame.cascades.mips', e.mips, 1, MAX_MIPS);
         if (e.fades > 1) fail(R.EFORMAT, `frame.cascades[${k}].fades is ${e.fades} (0 or 1)`);
         if ((e.n >> (e.mips - 1)) < 1) fail(R.EINVAL, `frame.cascades[${k}]: ${e.mips} mips of a ${e.n} grid`);
+        if (!(e.spacingPerM > 0) || !(e.spacingPerM <= b.spacingPerM))
+            fail(R.EINVAL, `frame.cascades[${k}].spacing_per_m = ${e.spacingPerM}; must be > 0 and <= the block's ${b.spacingPerM}`);
         for (let m = 0; m < MIP_ENTRIES; m++) {
             const kc = e.mip[4 * m], sx = e.mip[4 * m + 1], sz = e.mip[4 * m + 2], sxz = e.mip[4 * m + 3];
             if (m > e.mips) {
@@ -617,7 +619,6 @@ function dFrame(r, limits) {
         r.need(CASCADE_FIXED + cc * CASCADE_ENTRY, 'cascade entries');
         r.zero(r.off + 2, 2, 'cascade block');
         r.zero(r.off + 52, 4, 'cascade block');
-        for (let k = 0; k < cc; k++) r.zero(r.off + CASCADE_FIXED + k * CASCADE_ENTRY + 12, 4, 'cascade entry');
         f.cascades = readCascades(r, cc);
         r.off += CASCADE_FIXED + cc * CASCADE_ENTRY;
         maxTag = cc - 1;

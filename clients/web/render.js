@@ -335,16 +335,18 @@ uniform vec4 u_cas[MAXC];        /* patch P, native spacing sigma, mips, fades *
 uniform vec2 u_casEye[MAXC];     /* (eye xz mod P) / P */
 uniform vec4 u_mipTab[MAXC * MIPE]; /* kc, mss_x, mss_z, mss_xz (PROTOCOL.md "Cascade entry") */
 uniform vec3 u_blk;              /* q = spacing_per_m, min_spacing_m, max(|cy|, 1) */
+uniform float u_casQ[MAXC];      /* each cascade's own q (its entry's spacing_per_m) */
 uniform vec2 u_blkCam;           /* the block's camera xz relative to the eye */
 uniform vec3 u_tailMss;          /* moments no cascade holds */
 uniform float u_roughScale;      /* 1; 0 draws the unresolved moments as a mirror (test control) */
 uniform float u_foamScale;       /* 1; 0 draws no foam (test control) */
 uniform sampler2D u_cd0, u_cd1, u_cd2, u_cd3;   /* disp per cascade */
 
-/* s(x, z): the spacing wanted at eye-relative rel */
-float wantSpacing(vec2 rel) {
+/* s_c(x, z): the spacing cascade c is read at, at eye-relative rel, raised
+ * to floorS (the vertex's lattice g_L, or the pixel's footprint) */
+float wantSpacing(int c, vec2 rel, float floorS) {
     vec2 d = rel - u_blkCam;
-    return max(u_blk.y, u_blk.x * sqrt(dot(d, d) + u_blk.z * u_blk.z));
+    return max(floorS, max(u_blk.y, u_casQ[c] * sqrt(dot(d, d) + u_blk.z * u_blk.z)));
 }
 /* continuous level of cascade c for spacing s, clamped to its mips; *w
  * the fade of a cascade that fades beyond its last mip */
@@ -386,12 +388,13 @@ vec3 casMss(int c, float lam) {
     }
     return e;
 }
-/* displacement (DX, H, DZ) and foam summed over cascades at spacing s */
-vec4 casDisp(vec2 rel, float s) {
+/* displacement (DX, H, DZ) and foam summed over cascades, each at its own
+ * spacing raised to floorS */
+vec4 casDisp(vec2 rel, float floorS) {
     vec4 acc = vec4(0.0);
     float keep = 1.0, w, lam;
     vec4 d;
-#define CAS_D(C, T) if (u_nCas > C) { lam = casLod(C, s, w); d = w * casRead(T, C, rel, lam); acc.xyz += d.xyz; keep *= 1.0 - clamp(d.w, 0.0, 1.0); }
+#define CAS_D(C, T) if (u_nCas > C) { lam = casLod(C, wantSpacing(C, rel, floorS), w); d = w * casRead(T, C, rel, lam); acc.xyz += d.xyz; keep *= 1.0 - clamp(d.w, 0.0, 1.0); }
     CAS_D(0, u_cd0) CAS_D(1, u_cd1) CAS_D(2, u_cd2) CAS_D(3, u_cd3)
     acc.w = 1.0 - keep;
     return acc;
@@ -400,13 +403,14 @@ vec4 casDisp(vec2 rel, float s) {
 
 const CASCADE_FRAG_GLSL = `
 uniform sampler2D u_cs0, u_cs1, u_cs2, u_cs3;   /* slope per cascade */
-/* mean slope, unresolved slope moments (x, z, xz) and foam at spacing s */
-void seaSample(vec2 rel, float s, out vec2 slope, out vec3 mss, out float foam) {
+/* mean slope, unresolved slope moments (x, z, xz) and foam, each cascade
+ * at its own spacing raised to floorS */
+void seaSample(vec2 rel, float floorS, out vec2 slope, out vec3 mss, out float foam) {
     slope = vec2(0.0);
     mss = u_tailMss;
-    float keep = 1.0, w, lam;
+    float keep = 1.0, w, lam, s;
     vec4 d;
-#define CAS_S(C, TD, TS) if (u_nCas > C) { lam = casLod(C, s, w); slope += w * casRead(TS, C, rel, lam).xy; d = casRead(TD, C, rel, lam); keep *= 1.0 - clamp(w * d.w, 0.0, 1.0); mss += casMss(C, log2(s / u_cas[C].y)); }
+#define CAS_S(C, TD, TS) if (u_nCas > C) { s = wantSpacing(C, rel, floorS); lam = casLod(C, s, w); slope += w * casRead(TS, C, rel, lam).xy; d = casRead(TD, C, rel, lam); keep *= 1.0 - clamp(w * d.w, 0.0, 1.0); mss += casMss(C, log2(s / u_cas[C].y)); }
     CAS_S(0, u_cd0, u_cs0) CAS_S(1, u_cd1, u_cs1) CAS_S(2, u_cd2, u_cs2) CAS_S(3, u_cd3, u_cs3)
     foam = (1.0 - keep) * u_foamScale;
     mss *= u_roughScale;
@@ -518,7 +522,7 @@ void main() {
         g = mix(g, gc, w);
     }
     vec2 rel = u_meshOff.xz + p;
-    vec4 D = casDisp(rel, max(wantSpacing(rel), g));
+    vec4 D = casDisp(rel, g);
     v_rel = vec3(rel.x + D.x, u_meshOff.y + D.y, rel.y + D.z);
     v_base = rel;
     v_crest = D.y;
@@ -547,9 +551,8 @@ void main() {
      * extents): where it is coarser than s, a coarser mip is read and the
      * mip tables account for what it leaves out, so nothing aliases */
     float foot = dist * u_pixAngle / sqrt(max(abs(V.y), 0.02));
-    float s = max(wantSpacing(v_base), foot);
     vec2 slope; vec3 mss; float foam;
-    seaSample(v_base, s, slope, mss, foam);
+    seaSample(v_base, foot, slope, mss, foam);
     foam = foamBreakUp(foam, v_base, dist);
     float shadow = cloudShadow(v_rel);
     vec3 col = seaShade(V, slope, mss, foam, v_crest / max(u_hs * 0.5, 0.2), shadow);
@@ -582,7 +585,7 @@ void main() {
         vec3 hit = V * dist;
         float foot = dist * u_pixAngle / sqrt(max(-V.y, 0.02));
         vec2 slope = vec2(0.0); vec3 mss = vec3(0.02, 0.02, 0.0); float foam = 0.0;
-        if (u_nCas > 0) seaSample(hit.xz, max(wantSpacing(hit.xz), foot), slope, mss, foam);
+        if (u_nCas > 0) seaSample(hit.xz, foot, slope, mss, foam);
         col = seaShade(V, slope, mss, foamBreakUp(foam, hit.xz, dist), 0.0, cloudShadow(hit));
         col = haze(col, V, dist);
     }
@@ -746,10 +749,12 @@ export class Renderer {
     cascadeUniforms(u, eye) {
         const gl = this.gl, b = this.block, nc = this.cas.length;
         const cas = new Float32Array(4 * MAX_CASCADES), ce = new Float32Array(2 * MAX_CASCADES);
+        const casQ = new Float32Array(MAX_CASCADES);
         const tab = new Float32Array(4 * MIP_ENTRIES * MAX_CASCADES);
         for (let c = 0; c < nc; c++) {
             const C = this.cas[c], e = b.cascade[c];
             cas.set([C.patch, C.sigma, C.mips, C.fades], 4 * c);
+            casQ[c] = e.spacingPerM;
             /* eye modulo the patch, in double, as texture coordinates */
             const m = (v) => { const r = v % C.patch; return (r < 0 ? r + C.patch : r) / C.patch; };
             ce[2 * c] = m(eye[0]);
@@ -758,6 +763,7 @@ export class Renderer {
         }
         gl.uniform1i(u.u_nCas, nc);
         gl.uniform4fv(u.u_cas, cas);
+        gl.uniform1fv(u.u_casQ, casQ);
         gl.uniform2fv(u.u_casEye, ce);
         gl.uniform4fv(u.u_mipTab, tab);
         gl.uniform3f(u.u_blk, b.spacingPerM, b.minSpacingM, Math.max(Math.abs(b.camera[1]), 1));

@@ -297,6 +297,7 @@ static int gen(const char *dir)
             e->n = 256;
             e->mips = (uint8_t)mips[c];
             e->fades = (uint8_t)c;
+            e->spacing_per_m = cb->spacing_per_m / (float)(1 << c);   /* each cascade its own q */
             for (int k = 0; k <= mips[c]; k++) {
                 e->mip[k].kc = k == 0 ? INFINITY : k == mips[c] ? 0.0f : (float)(3.14159265358979323846 * 256 / patch[c] / (1 << k));
                 e->mip[k].mss_x = 0.001f * (float)(k * k) * (c + 1);
@@ -313,8 +314,8 @@ static int gen(const char *dir)
                 (double)cb->tail_mss[1], (double)cb->tail_mss[2]);
         for (int c = 0; c < 2; c++) {
             const proto_cascade_entry *e = &cb->cascade[c];
-            fprintf(o, "%s{\"patchM\":%.17g,\"n\":%u,\"mips\":%u,\"fades\":%u,\"mip\":[", c ? "," : "", e->patch_m, e->n,
-                    e->mips, e->fades);
+            fprintf(o, "%s{\"patchM\":%.17g,\"n\":%u,\"mips\":%u,\"fades\":%u,\"spacingPerM\":%.9g,\"mip\":[",
+                    c ? "," : "", e->patch_m, e->n, e->mips, e->fades, (double)e->spacing_per_m);
             for (int k = 0; k < PROTO_MIP_ENTRIES; k++) {
                 fprintf(o, "%s", k ? "," : "");
                 if (isinf(e->mip[k].kc))

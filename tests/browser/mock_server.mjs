@@ -279,6 +279,9 @@ function frameCascade(cam, t, camSeq, tick, sub) {
     for (let ci = 0; ci < nc; ci++) {
         const c = CAS[ci], e = 56 + 224 * ci;
         blk.writeDoubleLE(c.P, e); blk.writeUInt16LE(c.n, e + 8); blk[e + 10] = c.mips; blk[e + 11] = c.fades;
+        /* each cascade its own q (the finest at half the block's), as oceand
+         * sends when the byte budget lets fine cascades refine */
+        blk.writeFloatLE(ci === nc - 1 && nc > 1 ? cam.q / 2 : cam.q, e + 12);
         for (let m = 0; m <= c.mips; m++) {
             const kc = m === c.mips ? 0 : casKc(c, m), mss = casMss(c, m === c.mips ? 0 : kc);
             blk.writeFloatLE(kc, e + 16 + 16 * m);

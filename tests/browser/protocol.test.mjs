@@ -228,6 +228,7 @@ test('layout-1 FRAME from C: cascade block, mip tables, tags, placement; tiles b
     b.cascade.forEach((c, i) => {
         const x = e.cascades[i];
         for (const k of ['patchM', 'n', 'mips', 'fades']) assert.equal(c[k], x[k], `cascade ${i} ${k}`);
+        assert.equal(c.spacingPerM, Math.fround(x.spacingPerM), `cascade ${i} spacingPerM`);
         assert.equal(c.mip.length, 4 * MIP_ENTRIES);
         for (let k = 0; k < 4 * MIP_ENTRIES; k++)
             assert.equal(c.mip[k], x.mip[k] === 'inf' ? Infinity : Math.fround(x.mip[k]), `cascade ${i} mip word ${k}`);
@@ -415,7 +416,8 @@ test('hostile input: truncated and corrupted messages get the same verdict and c
     put([['u16', E + 8, 8], ['u8', E + 10, 6]]);                      /* 6 mips of an 8 grid: fine; 5 of 8 */
     put([['u16', E + 8, 16], ['u8', E + 10, 12]]);                    /* 12 mips of 16: refused */
     put([['u8', E + 11, 2]]);                                         /* fades */
-    put([['u8', E + 12, 1]]);                                         /* entry reserved */
+    for (const v of [NaN, 0, -1, Infinity, 1]) put([['f32', E + 12, v]]);        /* the entry's own q (1: above the block's) */
+    for (const v of [NaN, 0.5]) put([['f32', E + 224 + 12, v]]);                /* the second entry's */
     put([['f32', E + 16, NaN]]);                                      /* mip 0 kc */
     put([['f32', E + 16, 0]]);
     put([['f32', E + 16 + 16 * 6, 1]]);                               /* entry mips must have kc 0 */
@@ -560,7 +562,7 @@ function flatten(m) {
              * table entries 0..mips one line each (kc mss_x mss_z mss_xz) */
             if (k === 'cascade' && Array.isArray(v)) {
                 v.forEach((e, c) => {
-                    for (const key of ['patchM', 'n', 'mips', 'fades']) flat[`cascade[${c}].${snake(key)}`] = String(e[key]);
+                    for (const key of ['patchM', 'n', 'mips', 'fades', 'spacingPerM']) flat[`cascade[${c}].${snake(key)}`] = String(e[key]);
                     for (let m = 0; m <= e.mips; m++) flat[`cascade[${c}].mip[${m}]`] = Array.from(e.mip.subarray(4 * m, 4 * m + 4)).join(' ');
                 });
                 continue;
