@@ -11,7 +11,8 @@
  *    server.* key is the shipped one;
  *  - the subscription: oc_subscribe_default, which is the browser viewer's
  *    (clients/web/worker.js chooseSubscription: layout 1, qz, antialias,
- *    30 Hz, lod 8, tile 64, accuracy 1e-3, concentric mesh) with layers =
+ *    30 Hz, lod 8, tile 64, accuracy OC_ACCURACY_DEFAULT = 5e-3, concentric
+ *    mesh) with layers =
  *    HELLO.max_layers and effects = all & HELLO.effects, as the viewer
  *    computes them;
  *  - the camera: a still camera at (0, H, 0), heading 0, 60 deg vertical
@@ -680,13 +681,13 @@ static int viewer_section(void)
            "Hs of the spectrum %.3f m; server.px_per_sample %g, server.cascade_tile %d, "
            "server.viewer_bytes_per_s %.3g. **Subscription** (the browser viewer's, clients/web/worker.js "
            "chooseSubscription = oc_subscribe_default): layout 1, codec qz, policy antialias, 30 Hz, accuracy "
-           "1e-3, concentric mesh, layers = HELLO.max_layers, every effect the scene offers. **Camera**: still at "
+           "%g, concentric mesh, layers = HELLO.max_layers, every effect the scene offers. **Camera**: still at "
            "(0, H, 0), heading 0, 60 deg vertical fov, 1920 x 1080 viewport, pitch atan(H / 10 km) + 15 deg below "
            "the horizon.\n\n",
            CONF_PATH, S.scene.name[0] ? S.scene.name : "(none)", S.scene.description,
            ocean_spectrum_name(p->sea.spectrum), ocean_spreading_name(p->sea.spreading), p->sea.wind_u10,
            p->sea.choppiness, p->cascades, p->n, p->patch_m, (unsigned long long)p->seed, hs, S.srv.px_per_sample,
-           S.srv.cascade_tile, S.srv.viewer_bytes_per_s);
+           S.srv.cascade_tile, S.srv.viewer_bytes_per_s, (double)OC_ACCURACY_DEFAULT);
     printf("**Method.** %d x %d pixel centres of the viewport cast onto the mean sea plane; at each point the "
            "frame is read as the viewer shades it: oc_frame_sample (the spec's lod rule with the pixel footprint, "
            "Keys cubic within a mip, cascades summed) at the parameter point. **Exact waves**: the same ocean "
