@@ -458,20 +458,19 @@ static int read_mip(const oc_cascade_view *v, const cv_mip *mp, double u, double
 
 /* The sum of the cascades at (x, z), each read at the levels `lod` names.
  * 0, or -1 when a mip read is not in the frame's tiles. */
-static int sample_lod(const oc_cascade_view *v, double x, double z, const oc_lod *lodp, unsigned want,
+static int sample_lod(const oc_cascade_view *v, double x, double z, const oc_lod *lod, unsigned want,
                       oc_interp interp, oc_sample *out)
 {
     const proto_cascade_block *b = &v->block;
-    const oc_lod lod = *lodp;
     memset(out, 0, sizeof *out);
-    out->s = lod.s;
+    out->s = lod->s;
     const unsigned all = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM;
     unsigned common = all, foam_ch = 0;
     double mss[3] = {b->tail_mss[0], b->tail_mss[1], b->tail_mss[2]};
     for (int c = 0; c < v->count; c++) {
         const cv_cascade *cc = &v->c[c];
         const proto_cascade_entry *e = &b->cascade[c];
-        const oc_lod_cascade *L = &lod.c[c];
+        const oc_lod_cascade *L = &lod->c[c];
         double u = wrap(x, cc->patch), w = wrap(z, cc->patch);
         double acc[V_COUNT] = {0};
         unsigned chan = all;
