@@ -321,6 +321,7 @@ static ocean_result v_cascades(ctx *c, const proto_cascade_block *b)
     TRY(chk_range(c, "frame.cascades.tail_mss_x", b->tail_mss[0], 0, 1e3));
     TRY(chk_range(c, "frame.cascades.tail_mss_z", b->tail_mss[1], 0, 1e3));
     TRY(chk_range(c, "frame.cascades.tail_mss_xz", b->tail_mss[2], -1e3, 1e3));
+    TRY(chk_range(c, "frame.cascades.geometry_spacing_m", b->geometry_spacing_m, 0, 1e6));
     for (unsigned k = 0; k < b->cascade_count; k++) {
         const proto_cascade_entry *e = &b->cascade[k];
         TRY(chk_range(c, "frame.cascades.patch_m", e->patch_m, 1e-3, 1e7));
@@ -932,6 +933,7 @@ static void cascade_block_read(const uint8_t *p, proto_cascade_block *b)
     b->e_total = proto_ldf32(p + 36);
     for (int i = 0; i < 3; i++)
         b->tail_mss[i] = proto_ldf32(p + 40 + 4 * i);
+    b->geometry_spacing_m = proto_ldf32(p + 52);
     for (unsigned k = 0; k < b->cascade_count && k < PROTO_MAX_LAYERS; k++) {
         const uint8_t *q = p + PROTO_CASCADE_BLOCK_FIXED + (size_t)k * PROTO_CASCADE_ENTRY_SIZE;
         proto_cascade_entry *e = &b->cascade[k];
@@ -961,6 +963,7 @@ static void cascade_block_write(uint8_t *p, const proto_cascade_block *b)
     proto_stf32(p + 36, b->e_total);
     for (int i = 0; i < 3; i++)
         proto_stf32(p + 40 + 4 * i, b->tail_mss[i]);
+    proto_stf32(p + 52, b->geometry_spacing_m);
     for (unsigned k = 0; k < b->cascade_count; k++) {
         uint8_t *q = p + PROTO_CASCADE_BLOCK_FIXED + (size_t)k * PROTO_CASCADE_ENTRY_SIZE;
         const proto_cascade_entry *e = &b->cascade[k];
@@ -1039,7 +1042,6 @@ static ocean_result d_frame(rd *r, proto_frame *f)
             FAIL(r->c, OCEAN_EINVAL, "FRAME: cascade_count %u outside 1..%d", cc, PROTO_MAX_LAYERS);
         TRY(need(r, PROTO_CASCADE_BLOCK_FIXED + (size_t)cc * PROTO_CASCADE_ENTRY_SIZE, "cascade entries"));
         TRY(zero_bytes(r, r->off + 2, 2, "cascade block"));
-        TRY(zero_bytes(r, r->off + 52, 4, "cascade block"));
         cascade_block_read(r->p + r->off, &f->cascades);
         r->off += PROTO_CASCADE_BLOCK_FIXED + (size_t)cc * PROTO_CASCADE_ENTRY_SIZE;
         max_tag = cc - 1;

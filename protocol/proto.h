@@ -258,6 +258,9 @@ typedef struct proto_cascade_block {
     float min_spacing_m;      /* >= 0 */
     float e_total;            /* [0, 1] */
     float tail_mss[3];        /* x, z, xz moments no cascade holds, >= 0 (xz any sign) */
+    float geometry_spacing_m; /* G >= 0: height and displacement are read at
+                                 max(s_c, G); a mip with 2^(m+1) sigma_c <= G
+                                 carries no H, DX, DZ.  0: no such floor */
     proto_cascade_entry cascade[PROTO_MAX_LAYERS];
 } proto_cascade_block;
 

@@ -86,6 +86,8 @@ typedef struct plan {
     range r[PROTO_MAX_LAYERS][MAX_MIPS];
     int tiles;
     srv_tile **list;       /* the records, in frame order */
+    double geo;            /* G, the block's geometry_spacing_m: g_0 of the mesh
+                              when the frame has one and normals, else 0 */
     int has_mesh;
     mesh_view mv;
     mesh_info mi;
@@ -240,12 +242,18 @@ static void span(double lo, double hi, double w, int ntile, int32_t *first, int3
     *count = (int32_t)cnt;
 }
 
-/* Channels of cascade c's tiles: foam travels with cascade 0 alone (the
- * whole sea's whitecaps placed by its breaking index; PROTOCOL.md), so no
- * two cascades count the coverage twice. */
-static unsigned chan_of(const plan *pl, int c)
+/* Channels of the tiles of mip m of cascade c: foam travels with cascade 0
+ * alone (the whole sea's whitecaps placed by its breaking index;
+ * PROTOCOL.md), so no two cascades count the coverage twice; and a mip
+ * finer than the mesh can show (2^(m+1) sigma_c <= G) is geometry-free:
+ * every reader reads height and displacement at max(s, G), so that mip's
+ * H, DX and DZ would travel unread, and only its normals (and foam) go. */
+static unsigned chan_of(const tables *tb, const plan *pl, int c, int m)
 {
-    return c == 0 ? pl->channels : pl->channels & ~(unsigned)PROTO_CH_FOAM;
+    unsigned ch = c == 0 ? pl->channels : pl->channels & ~(unsigned)PROTO_CH_FOAM;
+    if (pl->geo > 0 && ldexp(tb->patch[c] / tb->n, m + 1) <= pl->geo)
+        ch &= PROTO_CH_NORMAL | PROTO_CH_FOAM;
+    return ch;
 }
 
 /* Encoded bytes of one tile of side T, from a fixed model of each codec -
@@ -479,10 +487,11 @@ static double plan_cascade(const tables *tb, const srv_config *cfg, const srv_ca
     pl->cbytes[c] = 0;
     pl->ctiles[c] = 0;
     memset(pl->need[c], 0, sizeof pl->need[c]);
-    if (!chan_of(pl, c)) return 0;
     double sigma = tb->patch[c] / tb->n;
     int fades = c > 0;
     for (int m = 0; m < tb->mips[c]; m++) {
+        unsigned ch = chan_of(tb, pl, c, m);
+        if (!ch) continue;
         int np = tb->n >> m, t = cfg->cascade_tile < np ? cfg->cascade_tile : np, ntile = np / t;
         double sp = sigma * ldexp(1.0, m), lim = 2.0 * sp;
         int last = m == tb->mips[c] - 1;
@@ -504,7 +513,7 @@ static double plan_cascade(const tables *tb, const srv_config *cfg, const srv_ca
         span(box[2], box[3], w, ntile, &g->z0, &g->nz);
         pl->need[c][m] = 1;
         pl->ctiles[c] += g->nx * g->nz;
-        pl->cbytes[c] += (double)g->nx * g->nz * srv_cascade_tile_bytes(sub, chan_of(pl, c), t);
+        pl->cbytes[c] += (double)g->nx * g->nz * srv_cascade_tile_bytes(sub, ch, t);
     }
     return pl->cbytes[c];
 }
@@ -625,7 +634,8 @@ static double nadir_error(const tables *tb, const plan *pl, const proto_camera *
             miss += tb->var_removed[c][M];
             continue;
         }
-        double s = fmax(pl->min_spacing, pl->qc[c] * cy);
+        /* height is read at max(s, G) (PROTOCOL.md) */
+        double s = fmax(fmax(pl->min_spacing, pl->qc[c] * cy), pl->geo);
         double lam = log2(s / (tb->patch[c] / tb->n));
         double v;
         if (lam <= 0) {
@@ -724,6 +734,7 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
     b->spacing_per_m = (float)pl->q;
     for (int i = 0; i < 3; i++) b->camera[i] = j->cam.pos[i];
     b->min_spacing_m = (float)pl->min_spacing;
+    b->geometry_spacing_m = (float)pl->geo;
     /* Without normals the client has nothing to shade what geometry
      * drops; with them every simulated wave is carried by one or the
      * other. */
@@ -787,7 +798,7 @@ static int same_frame(const srv_cascade_job *a, const plan *pa, const srv_cascad
     const proto_subscribe *x = &a->c->sim.sub, *y = &b->c->sim.sub;
     if (a->t != b->t || a->tick != b->tick || a->policy_k != b->policy_k || pa->tiles != pb->tiles ||
         pa->has_mesh != pb->has_mesh || pa->layers != pb->layers || pa->ncas != pb->ncas || pa->q != pb->q ||
-        pa->min_spacing != pb->min_spacing || x->effects != y->effects || memcmp(a->cam.pos, b->cam.pos, sizeof a->cam.pos))
+        pa->min_spacing != pb->min_spacing || pa->geo != pb->geo || x->effects != y->effects || memcmp(a->cam.pos, b->cam.pos, sizeof a->cam.pos))
         return 0;
     for (int c = 0; c < pa->layers; c++)
         if (pa->qc[c] != pb->qc[c]) return 0;
@@ -880,8 +891,12 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *
     const tables *tb = &k->tab;
     plan *pl = calloc((size_t)n, sizeof *pl);
     if (!pl) return;
-    /* 1. plans and meshes */
+    /* 1. meshes, then plans: the mesh's finest lattice decides which mips
+     * travel without geometry */
     for (int i = 0; i < n; i++) {
+        mesh_part(cfg, st, &jobs[i], &pl[i]);
+        pl[i].geo = pl[i].has_mesh && (jobs[i].c->sim.sub.effects & PROTO_FX_NORMALS) && pl[i].mi.levels > 0
+                        ? pl[i].mi.level_spacing_m[0] : 0.0;
         plan_job(tb, cfg, &jobs[i], &pl[i]);
         pl[i].share_with = i;
         if (pl[i].tiles > (int)PROTO_MAX_FRAME_TILES) {
@@ -894,7 +909,6 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *
         }
         pl[i].list = calloc((size_t)(pl[i].tiles ? pl[i].tiles : 1), sizeof *pl[i].list);
         if (!pl[i].list) pl[i].ok = 0;
-        mesh_part(cfg, st, &jobs[i], &pl[i]);
     }
     /* 2. per distinct time: evaluate, look tiles up, encode the missing */
     int *done = calloc((size_t)n, sizeof *done);
@@ -926,7 +940,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *
                             key.accuracy = sub->accuracy;
                             key.ix = (g->x0 + b) % ntile;
                             key.iz = (g->z0 + a) % ntile;
-                            key.channels = (uint16_t)chan_of(p, c);
+                            key.channels = (uint16_t)chan_of(tb, p, c, m);
                             key.size = (uint16_t)T;
                             key.layout = PROTO_LAYOUT_CASCADE;
                             key.cascade = (uint8_t)c;
@@ -948,7 +962,7 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *
                                     cap_missing = nc;
                                 }
                                 missing[nmiss++] = tl;
-                                need_fx[c][m] |= ocean_fx_of(chan_of(p, c));
+                                need_fx[c][m] |= ocean_fx_of(chan_of(tb, p, c, m));
                                 atomic_fetch_add(&st->tile_cache_misses, 1);
                             } else {
                                 atomic_fetch_add(&st->tile_cache_hits, 1);

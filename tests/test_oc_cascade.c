@@ -48,6 +48,9 @@ struct field {
     void (*fn)(const field *F, int c, int m, double x, double z, double out[6]);
     /* which tiles go into the frame (NULL: all) */
     int (*want)(const field *F, int c, int m, int ix, int iz);
+    /* the channels of mip m's tiles (NULL: the frame's) */
+    unsigned (*chan)(const field *F, int c, int m, unsigned channels);
+    double G;                        /* for chan: the block's geometry_spacing_m */
     double a, kx, kz, phase, chop;   /* sinusoid parameters (cycles per patch) */
     double patch;
 };
@@ -67,7 +70,7 @@ typedef struct built {
     size_t len;
 } built;
 
-static built build_frame(const proto_cascade_block *b, const field *F, unsigned channels, int tile_size,
+static built build_frame(const proto_cascade_block *b, const field *F, unsigned frame_channels, int tile_size,
                          const proto_mesh_placement *pl, proto_codec codec)
 {
     static proto_tile tiles[PROTO_MAX_FRAME_TILES];
@@ -87,6 +90,7 @@ static built build_frame(const proto_cascade_block *b, const field *F, unsigned 
                         continue;
                     assert_true(nt < PROTO_MAX_FRAME_TILES);
                     int w = n - ix * T < T ? n - ix * T : T, h = n - iz * T < T ? n - iz * T : T;
+                    unsigned channels = F->chan ? F->chan(F, c, m, frame_channels) : frame_channels;
                     int planes = proto_tile_planes(channels);
                     float *pl_ = calloc((size_t)planes * w * h, sizeof(float));
                     assert_non_null(pl_);
@@ -453,6 +457,102 @@ static void blend_and_fade(void **state)
     assert_int_equal(oc_frame_sample(f0, 0, 0, 0, &s), OCEAN_ESTATE);
     oc_frame_free(f0);
     proto_buf_free(&out);
+}
+
+/* Geometry-free mips (PROTOCOL.md "Where each mip is read"): a mip with
+ * 2^(m+1) sigma <= G carries NU, NV, FOAM alone, as the server sends it. */
+static unsigned geometry_free_chan(const field *F, int c, int m, unsigned channels)
+{
+    (void)c;
+    double sigma = 1000.0 / 64;
+    if (ldexp(sigma, m + 1) <= F->G)
+        channels &= PROTO_CH_NORMAL | PROTO_CH_FOAM;
+    return channels;
+}
+
+/* The spec's weights of cascade 0 (6 mips, no fade) at level lam. */
+static void level_weights(double lam, int M, double w[PROTO_MAX_MIPS])
+{
+    memset(w, 0, sizeof(double) * PROTO_MAX_MIPS);
+    if (lam <= 0)
+        w[0] = 1;
+    else if (lam < M - 1)
+        w[(int)lam] = 1 - (lam - floor(lam)), w[(int)lam + 1] = lam - floor(lam);
+    else
+        w[M - 1] = 1;
+}
+
+/* With G in the block, height and displacement are read at max(s, G) and
+ * slopes, foam and the unresolved moments at s: each from the mips the
+ * rule names for its own spacing, so a point near the camera gets its
+ * geometry from the first mip that carries it and its normals from the
+ * finest.  The same tiles with G = 0 are read at s alone and the point
+ * lacks the geometry the fine mips do not carry. */
+static void geometry_read_at_G(void **state)
+{
+    (void)state;
+    const double patch = 1000;
+    const int n = 64, mips = 6, fades = 0;
+    const double sigma = patch / n;
+    proto_cascade_block b;
+    block_init(&b, 1, &patch, &n, &mips, &fades);
+    b.camera[0] = 300;
+    b.camera[2] = -200;
+    b.geometry_spacing_m = (float)(4 * sigma);   /* mips 0 and 1 geometry-free */
+    field F = {.fn = const_fn, .chan = geometry_free_chan, .G = b.geometry_spacing_m};
+    const unsigned all = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM;
+    oc_frame *f = decode_built(build_frame(&b, &F, all, 16, NULL, PROTO_CODEC_F32));
+    const double lams[] = {-2, 0.25, 1.5, 2.5, 3.75};
+    for (size_t i = 0; i < sizeof lams / sizeof lams[0]; i++) {
+        double x, z, wg[PROTO_MAX_MIPS], ws[PROTO_MAX_MIPS];
+        point_at_level(&b, sigma, lams[i], 0.7 * i, &x, &z);
+        level_weights(fmax(lams[i], 2.0), mips, wg);  /* log2(G / sigma) = 2 */
+        level_weights(lams[i], mips, ws);
+        double H = 0, DX = 0, SX = 0, FO = 0, MX = b.tail_mss[0];
+        for (int m = 0; m < mips; m++) {
+            double o[6];
+            const_fn(&F, 0, m, 0, 0, o);
+            H += wg[m] * o[0];
+            DX += wg[m] * o[1];
+            SX += ws[m] * o[3];
+            FO += ws[m] * o[5];
+            MX += ws[m] * b.cascade[0].mip[m].mss_x;
+        }
+        double lam = lams[i];
+        if (lam > 0 && lam < mips - 1) {
+            int m0 = (int)lam;
+            double a = ws[m0];
+            MX += a * (1 - a) * (b.cascade[0].mip[m0 + 1].mss_x - b.cascade[0].mip[m0].mss_x);
+        }
+        oc_sample s;
+        assert_int_equal(oc_frame_sample(f, x, z, 0, &s), OCEAN_OK);
+        if (fabs(s.height - H) > 1e-5 || fabs(s.dx - DX) > 1e-6 || fabs(s.slope_x - SX) > 2e-6 ||
+            fabs(s.foam - FO) > 1e-6 || fabs(s.mss[0] - MX) > 1e-7) {
+            print_error("lambda %g: H %.9g (want %.9g) DX %.9g (%.9g) SX %.9g (%.9g) foam %.9g (%.9g) mss_x %.9g "
+                        "(%.9g)\n", lams[i], s.height, H, s.dx, DX, s.slope_x, SX, s.foam, FO, s.mss[0], MX);
+            fail();
+        }
+        assert_int_equal(s.channels, all);
+        /* the mesh rule's floor g_L >= G reads the same geometry */
+        oc_sample sg;
+        assert_int_equal(oc_frame_sample(f, x, z, b.geometry_spacing_m, &sg), OCEAN_OK);
+        assert_true(fabs(sg.height - H) < 1e-5);
+        /* the surface inversion reads geometry at G too */
+        assert_int_equal(oc_frame_surface(f, x, z, 0, &sg), OCEAN_OK);
+        assert_int_equal(sg.channels, all);
+    }
+    oc_frame_free(f);
+    /* the same tiles without G: near the camera the rule reads mip 0,
+     * which has no geometry */
+    b.geometry_spacing_m = 0;
+    f = decode_built(build_frame(&b, &F, all, 16, NULL, PROTO_CODEC_F32));
+    double x, z;
+    point_at_level(&b, sigma, 0.25, 0, &x, &z);
+    oc_sample s;
+    assert_int_equal(oc_frame_sample(f, x, z, 0, &s), OCEAN_OK);
+    assert_int_equal(s.channels, PROTO_CH_NORMAL | PROTO_CH_FOAM);
+    assert_true(s.height == 0);
+    oc_frame_free(f);
 }
 
 /* ============================================ interpolation and wrap */
@@ -1017,6 +1117,7 @@ int main(void)
         cmocka_unit_test(lod_rule),
         cmocka_unit_test(lod_rule_per_cascade_q),
         cmocka_unit_test(blend_and_fade),
+        cmocka_unit_test(geometry_read_at_G),
         cmocka_unit_test(sinusoid_and_wrap),
         cmocka_unit_test(missing_tiles),
         cmocka_unit_test(misplaced_tiles),

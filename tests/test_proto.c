@@ -161,6 +161,7 @@ static char *dump(const proto_msg *m)
                 k->camera[0], k->camera[1], k->camera[2], (double)k->min_spacing_m, (double)k->e_total);
             out(&b, "cascades.tail_mss = %.9g %.9g %.9g\n", (double)k->tail_mss[0], (double)k->tail_mss[1],
                 (double)k->tail_mss[2]);
+            out(&b, "cascades.geometry_spacing_m = %.9g\n", (double)k->geometry_spacing_m);
             for (unsigned c = 0; c < k->cascade_count; c++) {
                 const proto_cascade_entry *e = &k->cascade[c];
                 out(&b, "cascade[%u].patch_m = %.17g\ncascade[%u].n = %u\ncascade[%u].mips = %u\ncascade[%u].fades = %u\n",
@@ -388,6 +389,7 @@ static void sample_cascade_block(proto_cascade_block *b)
     b->tail_mss[0] = 0.0125f;
     b->tail_mss[1] = 0.00625f;
     b->tail_mss[2] = -0.0009765625f;
+    b->geometry_spacing_m = 2.5f; /* the finest lattice of a mesh 25 m up */
     proto_cascade_entry *e = &b->cascade[0];
     e->patch_m = 1000;
     e->n = 256;
@@ -997,6 +999,8 @@ static const bad_vector bad_vectors[] = {
     {"bad_cascade_count", "frame_cascade", P(56), 1, 5, OCEAN_EINVAL, -1},
     /* cascade 1's own q (entry offset 12) twice the block's 0.046875 */
     {"bad_cascade_entry_spacing", "frame_cascade", P(56 + 56 + 224 + 12), 4, 0x3DC00000u, OCEAN_EINVAL, -1},
+    /* geometry_spacing_m (block offset 52) -1 */
+    {"bad_cascade_geometry_spacing", "frame_cascade", P(56 + 52), 4, 0xBF800000u, OCEAN_EINVAL, -1},
     {"bad_topology_flags", "mesh_topology_flat", P(6), 2, 2, OCEAN_EFORMAT, -1},
     {"bad_subscribe_layout", "subscribe", P(7), 1, 2, OCEAN_ETYPE, -1},
     {"bad_sea_get_with_sea", "sea_state_get", P(32), 8, 0x4024000000000000ull, OCEAN_EFORMAT, -1},

@@ -570,6 +570,127 @@ static void cascade_q_spends_the_budget(void **state)
     srv_daemon_stop(d);
 }
 
+/* Geometry-free mips (PROTOCOL.md "Where each mip is read"): a viewer's
+ * frame (mesh + normals) names its mesh's finest lattice g_0 as G, and the
+ * tiles of every mip with 2^(m+1) sigma_c <= G carry normals (and cascade
+ * 0's foam) without H, DX, DZ - no reader reads them there - while every
+ * coarser mip carries all.  The client reads geometry at max(s, G): every
+ * point in view still gets height and displacement from tiles that hold
+ * them, and the mesh is displaced with no vertex missing.  A subscription
+ * without a mesh gets G = 0 and every channel at every mip.  Ship-bridge,
+ * the viewer's subscription, a camera 25 m up at 1920 x 1080. */
+static void cascade_fine_mips_without_geometry(void **state)
+{
+    (void)state;
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
+    srv_settings sb;
+    char err[512];
+    ocean_result lr = srv_settings_load(NULL, sets, 4, &sb, err, sizeof err);
+    if (lr != OCEAN_OK) fprintf(stderr, "%s\n", err);
+    assert_int_equal(lr, OCEAN_OK);
+    srv_daemon *d;
+    assert_int_equal(srv_daemon_start(&sb, &d, err, sizeof err), OCEAN_OK);
+    double qfine[2] = {0, 0};
+    for (int with_mesh = 1; with_mesh >= 0; with_mesh--) {
+        oc_client *c = connect_client(srv_daemon_port(d), NULL);
+        proto_subscribe s;
+        oc_subscribe_default(&s);
+        if (!with_mesh) s.mesh_kind = PROTO_MESH_NONE;
+        assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+        proto_camera cam;
+        oc_camera_default(&cam);
+        cam.pos[0] = 321.5;
+        cam.pos[1] = 25;
+        cam.pos[2] = -77.25;
+        cam.pitch_deg = -15.1;
+        cam.fov_y_deg = 60;
+        cam.viewport_w = 1920;
+        cam.viewport_h = 1080;
+        uint32_t seq;
+        assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+        oc_frame *f = frame_for(c, seq, sanitized ? 20000 : 8000);
+        assert_non_null(f);
+        const proto_cascade_block *b = &f->info.cascades;
+        double G = b->geometry_spacing_m;
+        int free_tiles = 0, full_tiles = 0;
+        double free_bytes = 0;
+        for (int t = 0; t < f->info.tile_count; t++) {
+            const proto_tile *ti = &f->tiles[t].info;
+            const proto_cascade_entry *e = &b->cascade[ti->cascade];
+            unsigned geo = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ;
+            int geometry_free = G > 0 && ldexp(e->patch_m / e->n, ti->level + 1) <= G;
+            if (geometry_free) {
+                if (ti->channels & geo)
+                    fail_msg("cascade %u mip %u (spacing %.3g m, G %.3g m) carries channels 0x%x", ti->cascade,
+                             ti->level, ti->spacing, G, ti->channels);
+                assert_true(ti->channels & PROTO_CH_NORMAL);
+                free_tiles++;
+                free_bytes += 64.0 + ti->payload_len;
+            } else {
+                if ((ti->channels & geo) != geo)
+                    fail_msg("cascade %u mip %u (spacing %.3g m, G %.3g m) lacks geometry: channels 0x%x",
+                             ti->cascade, ti->level, ti->spacing, G, ti->channels);
+                full_tiles++;
+            }
+        }
+        qfine[with_mesh] = b->cascade[2].spacing_per_m;
+        print_message("%s: G %.3g m; %d tiles without geometry (%.0f B), %d with; finest FFT cascade q %.4g\n",
+                      with_mesh ? "viewer (mesh, normals)" : "no mesh", G, free_tiles, free_bytes, full_tiles,
+                      (double)b->cascade[2].spacing_per_m);
+        if (with_mesh) {
+            const oc_topology *tp = oc_client_topology(c);
+            assert_non_null(tp);
+            assert_true(tp->zones != NULL);
+            assert_true(G > 0 && G == tp->zones[0]);
+            if (free_tiles == 0) fail_msg("no mip travelled without geometry at G = %.3g m", G);
+            /* the mesh is displaced wherever the camera looks (the ring
+             * behind it has no tiles: the spec sends the view's sector) */
+            float *xyz = malloc(sizeof(float) * 3 * tp->vertex_count);
+            size_t missing = 0;
+            assert_non_null(xyz);
+            oc_frame_mesh_positions_ex(f, tp, OC_INTERP_CUBIC, xyz, &missing);
+            const double *o = f->info.placement.origin;
+            int in_view = 0, flat = 0;
+            for (uint32_t v = 0; v < tp->vertex_count; v++) {
+                double x = o[0] + tp->flat[2 * v] - cam.pos[0], z = o[2] + tp->flat[2 * v + 1] - cam.pos[2];
+                double r = hypot(x, z), a = atan2(z, x) * 180 / M_PI - cam.yaw_deg;
+                if (r < 5 || r > 3000 || fabs(remainder(a, 360)) > 40) continue;
+                in_view++;
+                flat += xyz[3 * v + 1] == 0.0f;
+            }
+            print_message("mesh: %zu of %u vertices outside the tiles, %d of the %d in view\n", missing,
+                          tp->vertex_count, flat, in_view);
+            assert_true(in_view > 100);
+            assert_int_equal(flat, 0);
+            free(xyz);
+        } else {
+            assert_true(G == 0);
+            assert_int_equal(free_tiles, 0);
+        }
+        /* every point in view: geometry from tiles that hold it, shading too */
+        int points = 0;
+        for (double r = 5; r < 3000; r *= 1.3)
+            for (double a = -40; a <= 40; a += 8) {
+                double th = (cam.yaw_deg + a) * M_PI / 180;
+                double x = cam.pos[0] + r * cos(th), z = cam.pos[2] + r * sin(th);
+                oc_sample sm;
+                ocean_result rr = oc_frame_sample(f, x, z, 0, &sm);
+                if (rr != OCEAN_OK) fail_msg("no tile at %.1f m, %.0f deg: %s", r, a, ocean_strerror(rr));
+                unsigned want = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL;
+                if ((sm.channels & want) != want)
+                    fail_msg("%.1f m, %.0f deg: read channels 0x%x (s %.3g m, G %.3g m)", r, a, sm.channels, sm.s, G);
+                points++;
+            }
+        assert_true(points > 100);
+        oc_frame_free(f);
+        oc_client_destroy(c);
+    }
+    print_message("finest FFT cascade q: %.4g with the mesh, %.4g without\n", qfine[1], qfine[0]);
+    /* the bytes the normals-only mips leave buy finer mips */
+    assert_true(qfine[1] < qfine[0]);
+    srv_daemon_stop(d);
+}
+
 /* Issue 13 item 4: in layout 1 the near field is one more periodic cascade
  * (the Gerstner waves snapped to a 12.7 m lattice, gerstner.h "Lattice"),
  * after the FFT's.  Served from the scene `make run` serves (ship-bridge:
@@ -3249,6 +3370,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(mesh_denser_on_steep_chop),
         cmocka_unit_test(mesh_fits_the_limit_on_steep_chop),
         cmocka_unit_test(cascade_q_spends_the_budget),
+        cmocka_unit_test(cascade_fine_mips_without_geometry),
         cmocka_unit_test(mesh_low_camera_long_range),
         cmocka_unit_test(scene_overrides_named),
         cmocka_unit_test(shipped_config_has_every_key),

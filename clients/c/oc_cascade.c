@@ -456,17 +456,23 @@ static int read_mip(const oc_cascade_view *v, const cv_mip *mp, double u, double
     }
 }
 
-/* The sum of the cascades at (x, z), each read at the levels `lod` names.
- * 0, or -1 when a mip read is not in the frame's tiles. */
-static int sample_lod(const oc_cascade_view *v, double x, double z, const oc_lod *lod, unsigned want,
-                      oc_interp interp, oc_sample *out)
+/* The PROTO_CH_* channels a W_* set reads. */
+static unsigned want_channels(unsigned want)
+{
+    return ((want & W_H) ? PROTO_CH_HEIGHT : 0) | ((want & W_D) ? PROTO_CH_DX | PROTO_CH_DZ : 0) |
+           ((want & W_S) ? PROTO_CH_NORMAL : 0) | ((want & W_F) ? PROTO_CH_FOAM : 0);
+}
+
+/* Adds to out the cascades at (x, z), each read at the levels `lod` names,
+ * for the channels in want; with W_S the unresolved slope moments of those
+ * levels go to mss.  *common gathers the channels every tile read had,
+ * *foam_ch cascade 0's FOAM.  0, or -1 when a mip read is not in the
+ * frame's tiles. */
+static int levels_read(const oc_cascade_view *v, double x, double z, const oc_lod *lod, unsigned want,
+                       oc_interp interp, oc_sample *out, double mss[3], unsigned *common, unsigned *foam_ch)
 {
     const proto_cascade_block *b = &v->block;
-    memset(out, 0, sizeof *out);
-    out->s = lod->s;
     const unsigned all = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM;
-    unsigned common = all, foam_ch = 0;
-    double mss[3] = {b->tail_mss[0], b->tail_mss[1], b->tail_mss[2]};
     for (int c = 0; c < v->count; c++) {
         const cv_cascade *cc = &v->c[c];
         const proto_cascade_entry *e = &b->cascade[c];
@@ -481,12 +487,14 @@ static int sample_lod(const oc_cascade_view *v, double x, double z, const oc_lod
                 continue;
             if (read_mip(v, &cc->mip[L->mip[k]], u, w, want_c, interp, L->weight[k], acc, &chan))
                 return -1;
+            if (!(want & W_S))
+                continue;
             const proto_mip_entry *me = &e->mip[L->mip[k]];
             mss[0] += L->weight[k] * me->mss_x;
             mss[1] += L->weight[k] * me->mss_z;
             mss[2] += L->weight[k] * me->mss_xz;
         }
-        if (L->fade < 1) {
+        if ((want & W_S) && L->fade < 1) {
             const proto_mip_entry *me = &e->mip[cc->mips];
             mss[0] += (1 - L->fade) * me->mss_x;
             mss[1] += (1 - L->fade) * me->mss_z;
@@ -498,7 +506,9 @@ static int sample_lod(const oc_cascade_view *v, double x, double z, const oc_lod
          * loses (24.6 % of the near field's at its mid-fade, without) */
         const proto_mip_entry *fine = NULL, *coarse = NULL;
         double a = 0;
-        if (L->mip[1] >= 0 && L->weight[0] > 0 && L->weight[1] > 0) {
+        if (!(want & W_S)) {
+            /* geometry alone: no moments */
+        } else if (L->mip[1] >= 0 && L->weight[0] > 0 && L->weight[1] > 0) {
             fine = &e->mip[L->mip[0]];
             coarse = &e->mip[L->mip[1]];
             a = L->weight[0];
@@ -518,12 +528,39 @@ static int sample_lod(const oc_cascade_view *v, double x, double z, const oc_lod
         out->dz += acc[V_DZ];
         out->slope_x += acc[V_SX];
         out->slope_z += acc[V_SZ];
-        common &= chan | PROTO_CH_FOAM;
-        if (c == 0) {
+        /* only the channels this pass reads: a shading pass at a
+         * geometry-free mip (no H there) says nothing of the geometry */
+        *common &= chan | PROTO_CH_FOAM | ~want_channels(want);
+        if (c == 0 && (want & W_F)) {
             double fc = acc[V_FOAM];
             out->foam = fc < 0 ? 0 : fc > 1 ? 1 : fc;
-            foam_ch = chan & PROTO_CH_FOAM;
+            *foam_ch = chan & PROTO_CH_FOAM;
         }
+    }
+    return 0;
+}
+
+/* The sum of the cascades at (x, z): height and displacement at the levels
+ * `geo` names, slopes, foam and the unresolved moments at those of
+ * `shade` (PROTOCOL.md: geometry is read at max(s, G), shading at s; the
+ * two are one set when G does not raise s).  0, or -1 when a mip read is
+ * not in the frame's tiles. */
+static int sample_lod(const oc_cascade_view *v, double x, double z, const oc_lod *geo, const oc_lod *shade,
+                      unsigned want, oc_interp interp, oc_sample *out)
+{
+    const proto_cascade_block *b = &v->block;
+    memset(out, 0, sizeof *out);
+    out->s = shade->s;
+    unsigned common = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM, foam_ch = 0;
+    double mss[3] = {b->tail_mss[0], b->tail_mss[1], b->tail_mss[2]};
+    const unsigned wg = W_H | W_D;
+    if (geo == shade || !(want & wg) || !(want & ~wg)) {
+        const oc_lod *lod = (want & ~wg) ? shade : geo;
+        if (levels_read(v, x, z, lod, want, interp, out, mss, &common, &foam_ch))
+            return -1;
+    } else if (levels_read(v, x, z, geo, want & wg, interp, out, mss, &common, &foam_ch) ||
+               levels_read(v, x, z, shade, want & ~wg, interp, out, mss, &common, &foam_ch)) {
+        return -1;
     }
     unsigned chan = (common & ~(unsigned)PROTO_CH_FOAM) | foam_ch;
     double nl = sqrt(out->slope_x * out->slope_x + 1 + out->slope_z * out->slope_z);
@@ -532,19 +569,37 @@ static int sample_lod(const oc_cascade_view *v, double x, double z, const oc_lod
     out->normal[2] = -out->slope_z / nl;
     for (int i = 0; i < 3; i++)
         out->mss[i] = mss[i];
-    unsigned asked = ((want & W_H) ? PROTO_CH_HEIGHT : 0) | ((want & W_D) ? PROTO_CH_DX | PROTO_CH_DZ : 0) |
-                     ((want & W_S) ? PROTO_CH_NORMAL : 0) | ((want & W_F) ? PROTO_CH_FOAM : 0);
-    out->channels = chan & asked;
+    out->channels = chan & want_channels(want);
     return 0;
+}
+
+/* The two level sets of a point: shading at the rule's s (raised to
+ * min_spacing), geometry at max(s, G).  *geo points at shade when G does
+ * not raise any cascade's spacing. */
+static void lods_of(const oc_cascade_view *v, double x, double z, double min_spacing, oc_lod *shade,
+                    oc_lod *geo_store, const oc_lod **geo)
+{
+    lod_core(&v->block, x, z, min_spacing, shade);
+    double G = v->block.geometry_spacing_m;
+    *geo = shade;
+    if (!(G > min_spacing))
+        return;
+    for (int c = 0; c < shade->count; c++)
+        if (shade->c[c].s < G) {
+            lod_core(&v->block, x, z, G, geo_store);
+            *geo = geo_store;
+            return;
+        }
 }
 
 /* sample_lod at the levels the rule gives (x, z). */
 static int sample_core(const oc_cascade_view *v, double x, double z, double min_spacing, unsigned want,
                        oc_interp interp, oc_sample *out)
 {
-    oc_lod lod;
-    lod_core(&v->block, x, z, min_spacing, &lod);
-    return sample_lod(v, x, z, &lod, want, interp, out);
+    oc_lod shade, gstore;
+    const oc_lod *geo;
+    lods_of(v, x, z, min_spacing, &shade, &gstore, &geo);
+    return sample_lod(v, x, z, geo, &shade, want, interp, out);
 }
 
 static ocean_result frame_view(const oc_frame *f, const oc_cascade_view **v)
@@ -601,16 +656,17 @@ ocean_result oc_frame_surface_interp(const oc_frame *f, double x, double z, doub
     if (r != OCEAN_OK)
         return r;
     /* the levels are those of the asked point, held while p moves */
-    oc_lod lod;
-    lod_core(&v->block, x, z, min_spacing, &lod);
-    double ms = lod.s;   /* the finest spacing read sets the difference step */
-    for (int c = 0; c < lod.count; c++)
-        ms = fmin(ms, lod.c[c].s);
+    oc_lod lod, gstore;
+    const oc_lod *geo;
+    lods_of(v, x, z, min_spacing, &lod, &gstore, &geo);
+    double ms = geo->s;   /* the finest spacing read sets the difference step */
+    for (int c = 0; c < geo->count; c++)
+        ms = fmin(ms, geo->c[c].s);
     double px = x, pz = z, best = INFINITY, bx = x, bz = z;
     const double tol = 1e-5;
     oc_sample s0, sx, sz;
     for (int it = 0; it < 24; it++) {
-        if (sample_lod(v, px, pz, &lod, W_D, interp, &s0))
+        if (sample_lod(v, px, pz, geo, &lod, W_D, interp, &s0))
             return OCEAN_ENOTFOUND;
         double rx = px + s0.dx - x, rz = pz + s0.dz - z;
         double res = hypot(rx, rz);
@@ -623,7 +679,8 @@ ocean_result oc_frame_surface_interp(const oc_frame *f, double x, double z, doub
             break;
         /* Newton on p + D(p) = (x, z) with a finite-difference Jacobian */
         double d = 1e-3 > 0.01 * ms ? 1e-3 : 0.01 * ms;
-        if (sample_lod(v, px + d, pz, &lod, W_D, interp, &sx) || sample_lod(v, px, pz + d, &lod, W_D, interp, &sz))
+        if (sample_lod(v, px + d, pz, geo, &lod, W_D, interp, &sx) ||
+            sample_lod(v, px, pz + d, geo, &lod, W_D, interp, &sz))
             return OCEAN_ENOTFOUND;
         double a = 1 + (sx.dx - s0.dx) / d, bq = (sz.dx - s0.dx) / d;
         double c = (sx.dz - s0.dz) / d, e = 1 + (sz.dz - s0.dz) / d;
@@ -637,7 +694,7 @@ ocean_result oc_frame_surface_interp(const oc_frame *f, double x, double z, doub
             pz -= 0.5 * rz;
         }
     }
-    if (sample_lod(v, bx, bz, &lod, W_ALL, interp, out)) {
+    if (sample_lod(v, bx, bz, geo, &lod, W_ALL, interp, out)) {
         memset(out, 0, sizeof *out);
         return OCEAN_ENOTFOUND;
     }

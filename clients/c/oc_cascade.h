@@ -21,7 +21,13 @@
  *    at lambda <= 0, the two mips around lambda blended linearly
  *    (trilinear), the last mip beyond, times the fade
  *    w = clamp(mips - lambda, 0, 1) for a cascade that fades.  Exactly the
- *    spec's rule; oc_cascade_lod exposes the weights.
+ *    spec's rule; oc_cascade_lod exposes the weights.  Height and
+ *    displacement are read at the levels of max(s_c, G), G the block's
+ *    geometry_spacing_m (the mesh's finest lattice when the frame has a
+ *    mesh and normals; 0 otherwise): the server sends mips finer than the
+ *    mesh can show with normals only.  A simulator that wants heights
+ *    finer than its mesh subscribes without a mesh (G is then 0) or
+ *    asks QUERY.
  *  - position: world x, z reduced mod P_c with fmod (exact in IEEE double,
  *    so |x| = 1e7 m loses nothing), then a mip's periodic grid.
  *  - within a mip: Keys' cubic convolution (Keys 1981, "Cubic convolution

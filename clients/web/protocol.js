@@ -552,7 +552,7 @@ function readCascades(r, cc) {
     const b = {
         cascadeCount: cc, order: r.u8at(o + 1), spacingPerM: r.f32(o + 4),
         camera: [r.f64(o + 8), r.f64(o + 16), r.f64(o + 24)], minSpacingM: r.f32(o + 32), eTotal: r.f32(o + 36),
-        tailMss: [r.f32(o + 40), r.f32(o + 44), r.f32(o + 48)], cascade: [],
+        tailMss: [r.f32(o + 40), r.f32(o + 44), r.f32(o + 48)], geometrySpacingM: r.f32(o + 52), cascade: [],
     };
     for (let k = 0; k < cc; k++) {
         const q = o + CASCADE_FIXED + k * CASCADE_ENTRY;
@@ -574,6 +574,7 @@ function vCascades(b) {
     chkRange('frame.cascades.tail_mss_x', b.tailMss[0], 0, 1e3);
     chkRange('frame.cascades.tail_mss_z', b.tailMss[1], 0, 1e3);
     chkRange('frame.cascades.tail_mss_xz', b.tailMss[2], -1e3, 1e3);
+    chkRange('frame.cascades.geometry_spacing_m', b.geometrySpacingM, 0, 1e6);
     b.cascade.forEach((e, k) => {
         chkRange('frame.cascades.patch_m', e.patchM, 1e-3, 1e7);
         if (e.n < 8 || e.n > 2048 || (e.n & (e.n - 1)))
@@ -618,7 +619,6 @@ function dFrame(r, limits) {
         if (cc < 1 || cc > LIMITS.maxLayers) fail(R.EINVAL, `FRAME: cascade_count ${cc} outside 1..${LIMITS.maxLayers}`);
         r.need(CASCADE_FIXED + cc * CASCADE_ENTRY, 'cascade entries');
         r.zero(r.off + 2, 2, 'cascade block');
-        r.zero(r.off + 52, 4, 'cascade block');
         f.cascades = readCascades(r, cc);
         r.off += CASCADE_FIXED + cc * CASCADE_ENTRY;
         maxTag = cc - 1;

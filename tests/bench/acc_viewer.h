@@ -34,7 +34,9 @@
  *    "Carried" weights each mode with what the frame's mips read at that
  *    point hold of it: sum over the mips the lod rule reads of weight x
  *    Butterworth gain (the block's order and each mip's kc, waves below
- *    ocean.drop_gain left out, as ocean_evaluate does), fade included.
+ *    ocean.drop_gain left out, as ocean_evaluate does), fade included;
+ *    height and displacement by the mips read at max(s, G) (the block's
+ *    geometry_spacing_m: finer mips carry normals alone), slopes at s.
  *    "Full" takes every mode at gain 1.  So:
  *      carried error  = reconstruction - exact carried waves (the codec,
  *                       float storage, cubic reading between samples);
@@ -464,6 +466,15 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, const oc
         }
         double full[5], car[5];
         av_exact(C, b->cascade_count, &L, x, z, full, car);
+        /* height and displacement are read at max(s, G) (PROTOCOL.md:
+         * the mips finer than the mesh carry normals alone) */
+        oc_lod Lg;
+        if (b->geometry_spacing_m > 0 && oc_cascade_lod(b, x, z, b->geometry_spacing_m, &Lg) == OCEAN_OK) {
+            double fg[5], cg[5];
+            av_exact(C, b->cascade_count, &Lg, x, z, fg, cg);
+            for (int k = 0; k < 3; k++)
+                car[k] = cg[k];
+        }
         double *o = res + (size_t)ij * 32;
         double rec[5] = {s.height, s.dx, s.dz, s.slope_x, s.slope_z};
         for (int k = 0; k < 5; k++) {

@@ -289,6 +289,7 @@ static int gen(const char *dir)
         cb->tail_mss[0] = 0.0123f;
         cb->tail_mss[1] = 0.0071f;
         cb->tail_mss[2] = -0.0007f;
+        cb->geometry_spacing_m = 18.75f;
         const double patch[2] = {1000, 232.5};
         const int mips[2] = {6, 4};
         for (int c = 0; c < 2; c++) {
@@ -309,9 +310,10 @@ static int gen(const char *dir)
             return 1;
         fprintf(o, "\"frame_cascade\": {\"layout\":1,\"cameraSeq\":43,\"meshId\":6,\"placement\":[-7654320,0,1232],"
                    "\"cascadeCount\":2,\"order\":8,\"spacingPerM\":%.9g,\"camera\":[-7654321.25,300.5,1234.5],"
-                   "\"minSpacingM\":%.9g,\"eTotal\":%.9g,\"tailMss\":[%.9g,%.9g,%.9g],\"cascades\":[",
+                   "\"minSpacingM\":%.9g,\"eTotal\":%.9g,\"tailMss\":[%.9g,%.9g,%.9g],\"geometrySpacingM\":%.9g,"
+                   "\"cascades\":[",
                 (double)cb->spacing_per_m, (double)cb->min_spacing_m, (double)cb->e_total, (double)cb->tail_mss[0],
-                (double)cb->tail_mss[1], (double)cb->tail_mss[2]);
+                (double)cb->tail_mss[1], (double)cb->tail_mss[2], (double)cb->geometry_spacing_m);
         for (int c = 0; c < 2; c++) {
             const proto_cascade_entry *e = &cb->cascade[c];
             fprintf(o, "%s{\"patchM\":%.17g,\"n\":%u,\"mips\":%u,\"fades\":%u,\"spacingPerM\":%.9g,\"mip\":[",

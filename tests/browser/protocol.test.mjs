@@ -224,6 +224,7 @@ test('layout-1 FRAME from C: cascade block, mip tables, tags, placement; tiles b
     assert.equal(b.minSpacingM, Math.fround(e.minSpacingM));
     assert.equal(b.eTotal, Math.fround(e.eTotal));
     assert.deepEqual(b.tailMss, e.tailMss.map(Math.fround));
+    assert.equal(b.geometrySpacingM, Math.fround(e.geometrySpacingM));
     assert.equal(b.cascade.length, e.cascades.length);
     b.cascade.forEach((c, i) => {
         const x = e.cascades[i];
@@ -409,7 +410,7 @@ test('hostile input: truncated and corrupted messages get the same verdict and c
     for (const v of [NaN, -1e-3, 2e3]) put([['f32', B + 40, v]]);     /* tail_mss_x */
     for (const v of [-2e3, Infinity]) put([['f32', B + 48, v]]);      /* tail_mss_xz */
     put([['u8', B + 2, 1]]);                                          /* reserved */
-    put([['u8', B + 53, 1]]);
+    for (const v of [NaN, -1, Infinity, 2e6]) put([['f32', B + 52, v]]);  /* geometry_spacing_m */
     for (const v of [NaN, 0, 2e7]) put([['f64', E, v]]);              /* patch_m */
     for (const v of [0, 100, 4096, 7]) put([['u16', E + 8, v]]);      /* n */
     for (const v of [0, 13, 9]) put([['u8', E + 10, v]]);             /* mips (9 of 256 ok, 13 not) */
