@@ -783,6 +783,7 @@ static void peek_cascade_block(void **state)
     b.camera[0] = 1e6;
     b.camera[1] = 300;
     b.e_total = 0.03f;
+    b.geometry_spacing_m = 4.0f;
     field F = {.fn = const_fn};
     built B = build_frame(&b, &F, PROTO_CH_HEIGHT, 8, NULL, PROTO_CODEC_F32);
     proto_frame pf;
@@ -793,12 +794,17 @@ static void peek_cascade_block(void **state)
     assert_int_equal(pf.cascades.cascade_count, 3);
     assert_true(pf.cascades.camera[0] == 1e6 && pf.cascades.camera[1] == 300);
     assert_true(pf.cascades.e_total == 0.03f);
+    assert_true(pf.cascades.geometry_spacing_m == 4.0f);
     assert_int_equal(at, PROTO_HEADER_SIZE + 56 + 56 + 3 * 224);
     /* the first record starts there: its length field is the first tile's */
     assert_int_equal(proto_ld32(B.msg + at), 48 + 8 * 8 * 4);
     assert_int_equal(oc_frame_peek(B.msg, 100, B.len, &pf, &at, err, sizeof err), OCEAN_ETRUNC);
     /* a length that cannot hold the block and the tiles */
     assert_int_equal(oc_frame_peek(B.msg, OC_FRAME_PEEK_BYTES, at + 10, &pf, &at, err, sizeof err), OCEAN_ETRUNC);
+    /* a negative G (block offset 52) */
+    proto_stf32(B.msg + PROTO_HEADER_SIZE + 56 + 52, -1.0f);
+    assert_int_equal(oc_frame_peek(B.msg, OC_FRAME_PEEK_BYTES, B.len, &pf, &at, err, sizeof err), OCEAN_EINVAL);
+    proto_stf32(B.msg + PROTO_HEADER_SIZE + 56 + 52, 4.0f);
     B.msg[PROTO_HEADER_SIZE + 56] = 7;   /* cascade_count */
     assert_int_equal(oc_frame_peek(B.msg, OC_FRAME_PEEK_BYTES, B.len, &pf, &at, err, sizeof err), OCEAN_EINVAL);
     B.msg[PROTO_HEADER_SIZE + 51] = 2;   /* layout */

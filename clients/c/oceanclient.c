@@ -670,11 +670,13 @@ ocean_result oc_frame_peek(const uint8_t *msg, size_t have, size_t len, proto_fr
         k->e_total = proto_ldf32(b + 36);
         for (int i = 0; i < 3; i++)
             k->tail_mss[i] = proto_ldf32(b + 40 + 4 * i);
+        k->geometry_spacing_m = proto_ldf32(b + 52);
         int bad = k->cascade_count < 1 || k->cascade_count > PROTO_MAX_LAYERS || k->order < 1 || k->order > 64 ||
                   !(k->spacing_per_m > 0) || !isfinite(k->spacing_per_m) || !(k->min_spacing_m >= 0) ||
                   !isfinite(k->min_spacing_m) || !(k->e_total >= 0 && k->e_total <= 1) ||
                   !(k->tail_mss[0] >= 0) || !(k->tail_mss[1] >= 0) || !isfinite(k->tail_mss[0]) ||
-                  !isfinite(k->tail_mss[1]) || !isfinite(k->tail_mss[2]);
+                  !isfinite(k->tail_mss[1]) || !isfinite(k->tail_mss[2]) ||
+                  !(k->geometry_spacing_m >= 0 && k->geometry_spacing_m <= 1e6f);
         for (int i = 0; i < 3; i++)
             bad |= !isfinite(k->camera[i]);
         if (bad) {
