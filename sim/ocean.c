@@ -2275,6 +2275,8 @@ typedef struct stencil {
      * -11 .. 12 by index + ACC_REACH, nonzero in [lo, hi] (stencil_of). */
     double wz[ACC_SPAN], wx[ACC_SPAN];
     int lo, hi;
+    int contig;                       /* columns lo .. hi do not wrap */
+    size_t off[ACC_MAXN * ACC_MAXN];  /* the 4 x 4 nodes' offsets, row-major */
 } stencil;
 
 static void lagrange4(double t, double w[4])
@@ -2351,6 +2353,10 @@ static void stencil_of(const ocean_field *fd, double x, double z, int finest, st
         }
     sp->lo = sp->first - reach;
     sp->hi = sp->first + nodes - 1 + reach;
+    sp->contig = sp->col[sp->hi + ACC_REACH] - sp->col[sp->lo + ACC_REACH] == sp->hi - sp->lo;
+    for (int b = 0; b < nodes; b++)
+        for (int a = 0; a < nodes; a++)
+            sp->off[b * nodes + a] = sp->row[b + sp->first + ACC_REACH] + (size_t)sp->col[a + sp->first + ACC_REACH];
 }
 
 /* Node (r, c) relative to the cell's corner, r and c in -11..12. */
@@ -2361,25 +2367,25 @@ static inline double node(const float *g, const stencil *s, int r, int c)
 
 static double lagrange_read(const float *g, const stencil *s)
 {
+    /* nodes -1 .. 2 are the Hermite nodes (first = -1): their offsets */
     double acc = 0.0;
     for (int r = 0; r < 4; r++) {
         double rowv = 0.0;
         for (int c = 0; c < 4; c++)
-            rowv += s->lu[c] * node(g, s, r - 1, c - 1);
+            rowv += s->lu[c] * g[s->off[4 * r + c]];
         acc += s->lv[r] * rowv;
     }
     return acc;
 }
 
-/* Fourth difference of plane g along x (dir 0) or z (dir 1) at node
- * (r, c): a high-pass whose response to a wave of k h = th is
- * (2 sin(th / 2))^4, 16 at the grid's Nyquist rate. */
-static inline double diff4(const float *g, const stencil *s, int r, int c, int dir)
+/* Fourth difference along x (dir 0) or z (dir 1) at node (i, k) (row,
+ * column) of a block of loaded nodes: a high-pass whose response to a wave
+ * of k h = th is (2 sin(th / 2))^4, 16 at the grid's Nyquist rate. */
+static inline double diff4_blk(const float blk[ACC_MAXN + 4][ACC_MAXN + 4], int i, int k, int dir)
 {
-    int dr = dir, dc = 1 - dir;
-    return node(g, s, r - 2 * dr, c - 2 * dc) - 4.0 * node(g, s, r - dr, c - dc) +
-           6.0 * node(g, s, r, c) - 4.0 * node(g, s, r + dr, c + dc) +
-           node(g, s, r + 2 * dr, c + 2 * dc);
+    int di = dir, dk = 1 - dir;
+    return (double)blk[i - 2 * di][k - 2 * dk] - 4.0 * blk[i - di][k - dk] + 6.0 * blk[i][k] -
+           4.0 * blk[i + di][k + dk] + blk[i + 2 * di][k + 2 * dk];
 }
 
 /* Hermite reading of value plane g with derivative planes gx (d/dx) and
@@ -2394,24 +2400,47 @@ static double hermite_read(const float *g, const float *gx, const float *gz, con
      * weights; az[a] sums node column a along z, ax[a] node row a along x,
      * all advanced together: eight independent chains of adds, not one. */
     double az[ACC_MAXN] = {0}, ax[ACC_MAXN] = {0}, cross = 0.0;
-    for (int j = s->lo; j <= s->hi; j++) {
-        double wz = s->wz[j + ACC_REACH], wx = s->wx[j + ACC_REACH];
-        for (int a = 0; a < ACC_MAXN; a++) {
-            az[a] += wz * node(gx, s, j, a + s->first);
-            ax[a] += wx * node(gz, s, a + s->first, j);
+    if (s->contig) {
+        /* the columns lo .. hi do not wrap: plain pointers, the same sums */
+        const int c0 = s->col[s->first + ACC_REACH], cl = s->col[s->lo + ACC_REACH];
+        const float *ra[ACC_MAXN];
+        for (int a = 0; a < ACC_MAXN; a++)
+            ra[a] = gz + s->row[a + s->first + ACC_REACH] + cl - s->lo;
+        for (int j = s->lo; j <= s->hi; j++) {
+            double wz = s->wz[j + ACC_REACH], wx = s->wx[j + ACC_REACH];
+            const float *rj = gx + s->row[j + ACC_REACH] + c0;
+            for (int a = 0; a < ACC_MAXN; a++) {
+                az[a] += wz * rj[a];
+                ax[a] += wx * ra[a][j];
+            }
+        }
+    } else {
+        for (int j = s->lo; j <= s->hi; j++) {
+            double wz = s->wz[j + ACC_REACH], wx = s->wx[j + ACC_REACH];
+            for (int a = 0; a < ACC_MAXN; a++) {
+                az[a] += wz * node(gx, s, j, a + s->first);
+                ax[a] += wx * node(gz, s, a + s->first, j);
+            }
         }
     }
     for (int a = 0; a < ACC_MAXN; a++)
         cross += s->ku[a] * az[a] + s->kv[a] * ax[a];
     acc += 0.5 * cross * h;
+    /* With a bound, the nodes the fourth differences reach (two beyond the
+     * 4 x 4 on each side) are loaded once into blk, not five times each. */
+    float blk[ACC_MAXN + 4][ACC_MAXN + 4];
+    if (bound)
+        for (int i = 0; i < ACC_MAXN + 4; i++)
+            for (int k = 0; k < ACC_MAXN + 4; k++)
+                blk[i][k] = (float)node(g, s, s->first - 2 + i, s->first - 2 + k);
     for (int b = 0; b < s->nodes; b++) {          /* row node r (z) */
         for (int a = 0; a < s->nodes; a++) {      /* column node c (x) */
-            int r = b + s->first, c = a + s->first;
-            double fv = node(g, s, r, c), fx = node(gx, s, r, c) * h, fz = node(gz, s, r, c) * h;
+            size_t o = s->off[b * ACC_MAXN + a];
+            double fv = g[o], fx = gx[o] * h, fz = gz[o] * h;
             acc += fv * s->hu[a] * s->hv[b] + fx * s->ku[a] * s->hv[b] + fz * s->hu[a] * s->kv[b];
             if (!bound)
                 continue;
-            double d4x = fabs(diff4(g, s, r, c, 0)), d4z = fabs(diff4(g, s, r, c, 1));
+            double d4x = fabs(diff4_blk(blk, b + 2, a + 2, 0)), d4z = fabs(diff4_blk(blk, b + 2, a + 2, 1));
             if (fabs(fv) > big) big = fabs(fv);
             if (d4x > hx) hx = d4x;
             if (d4z > hz) hz = d4z;
