@@ -99,6 +99,8 @@ static void av_err_add(av_err *e, double dh, double dd, double ang)
 typedef struct av_row {
     double height, pitch, q, e_error, e_total;
     double bytes_s, frames_s, kib_frame, tiles_frame, cores;
+    double tile_ratio;           /* raw f32 bytes of the tiles' planes over their payload bytes */
+    double normals_only;         /* tiles a frame without H (geometry-free mips) */
     double points, above, outside;
     av_err carried, shading, total;
     av_err v_carried, v_geom;   /* the vertex rule: spacing max(s, g_L) */
@@ -321,6 +323,7 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, const oc
     double t0 = av_now_s(), first = NAN;
     oc_frame *keep = NULL;
     double bytes = 0, tiles = 0, nfr = 0, w0 = NAN, cpu0 = NAN, q = 0, ee = 0, et = 0;
+    double tpay = 0, traw = 0, tnorm = 0;   /* the tiles: payload and raw f32 bytes, normals-only count */
     while (av_now_s() - t0 < 30.0) {
         oc_frame *f = NULL;
         ocean_result r = oc_client_next_frame(c, 2000, &f);
@@ -351,6 +354,12 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, const oc
         }
         bytes += (double)f->raw_len;
         tiles += f->info.tile_count;
+        for (int t = 0; t < f->info.tile_count; t++) {
+            const proto_tile *ti = &f->tiles[t].info;
+            tpay += ti->payload_len;
+            traw += 4.0 * proto_tile_planes(ti->channels) * ti->width * ti->height;
+            tnorm += !(ti->channels & PROTO_CH_HEIGHT);
+        }
         q += f->info.cascades.spacing_per_m;
         ee += f->info.e_error;
         et += f->info.cascades.e_total;
@@ -376,6 +385,8 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, const oc
     }
     R->kib_frame = bytes / nfr / 1024.0;
     R->tiles_frame = tiles / nfr;
+    R->tile_ratio = tpay > 0 ? traw / tpay : 0.0;
+    R->normals_only = tnorm / nfr;
     R->q = q / nfr;
     R->e_error = ee / nfr;
     R->e_total = et / nfr;
@@ -718,23 +729,26 @@ static int viewer_section(void)
            "Hs), horizontal displacement |(dx, dz)| (m) and normal angle (deg; normals from the parameter "
            "surface's slopes, as the tiles carry them). The Gerstner near field is the last cascade: its waves on "
            "their lattice, from the same lattice ocean the daemon builds; the short-wave tail beyond it is in no "
-           "figure (tail_mss). Bytes/s = FRAME bytes received over %.0f s "
+           "figure (tail_mss). Tiles vs f32 = the raw f32 bytes of the received tiles' planes over their qz "
+           "payload bytes; normals only = tiles of mips finer than the viewer's mesh, which carry NU NV (and "
+           "FOAM) alone (the block's geometry_spacing_m). Bytes/s = FRAME bytes received over %.0f s "
            "of frames made for the camera (after 1 s of settling); daemon cores = its CPU time over the same "
            "window with this one viewer connected. One frame (the window's last) per height for the errors.\n\n",
            grid, grid * 1080 / 1920, chk, window_s);
-    printf("| camera m | pitch deg | points (above horizon, outside tiles) | q | e_error | e_total | KiB/frame | tiles/frame | frames/s | MB/s | daemon cores |\n");
-    printf("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    printf("| camera m | pitch deg | points (above horizon, outside tiles) | q | e_error | e_total | KiB/frame | tiles/frame "
+           "(of which normals only) | tiles vs f32 | frames/s | MB/s | daemon cores |\n");
+    printf("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     int bad = 0;
     for (int h = 0; h < AV_HEIGHTS; h++) {
         const av_row *r = &rows_v[h];
         if (!r->frames_s) {
-            printf("| %g | - | not measured: %s | | | | | | | | |\n", r->height, r->why[0] ? r->why : "daemon did not start");
+            printf("| %g | - | not measured: %s | | | | | | | | | |\n", r->height, r->why[0] ? r->why : "daemon did not start");
             bad = 1;
             continue;
         }
-        printf("| %g | %.1f | %.0f (%.0f, %.0f) | %.3g | %.4f | %.4f | %.1f | %.0f | %.1f | %.2f | %.2f |\n",
+        printf("| %g | %.1f | %.0f (%.0f, %.0f) | %.3g | %.4f | %.4f | %.1f | %.0f (%.0f) | 1/%.2f | %.1f | %.2f | %.2f |\n",
                r->height, r->pitch, r->points, r->above, r->outside, r->q, r->e_error, r->e_total, r->kib_frame,
-               r->tiles_frame, r->frames_s, r->bytes_s / 1e6, r->cores);
+               r->tiles_frame, r->normals_only, r->tile_ratio, r->frames_s, r->bytes_s / 1e6, r->cores);
     }
     printf("\n| camera m | error of | height RMS / max m | height RMS / max %%Hs | displacement RMS / max m | normal RMS / max deg |\n");
     printf("|---:|---|---:|---:|---:|---:|\n");

@@ -356,7 +356,9 @@ static int layout1_table(int quick, FILE *csv)
     printf("\n### Tiles as the browser viewer receives them (issue 14): layout-1 mip tiles, %dx%d, scene ship-bridge "
            "(config/oceand.conf), t = 100 s\n\n", L1_T, L1_T);
     printf("%d tiles: every mip of each of %d cascades (%d / %d / %d tiles), channels H DX DZ NU NV (+ FOAM on "
-           "cascade 0), as server/srv_cascade.c samples them; one proto_codec_ctx per row, median of %d runs. Max "
+           "cascade 0), as server/srv_cascade.c samples them (a viewer whose mesh cannot show a mip gets that mip's "
+           "NU NV and FOAM alone: the accuracy section's viewer table gives the ratio of the mix it receives); one "
+           "proto_codec_ctx per row, median of %d runs. Max "
            "errors are over all tiles (m for H DX DZ; octahedral units for NU NV); normal deg = worst angle between "
            "decoded and input unit normals; model = the planner's srv_cascade_tile_bytes against the measured bytes. "
            "Format 1 rows run the frozen encoder (qz_before.h: a new ZSTD_CCtx per call, as before per-worker "
