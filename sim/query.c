@@ -16,9 +16,10 @@
  * accurate iteration takes a step or two from there; and its last step,
  * taken from under 0.3 sqrt(tolerance) where Newton converges
  * quadratically, is checked by the final reading instead of a reading of
- * its own (8.5 -> 6.2 us a point on the ocean `make run` serves, with the
- * same error against the exact waves, 0.036 mm RMS; bench_filter "Point
- * queries").
+ * its own.  On the ocean `make run` serves that took a point from 8.5 to
+ * 6.2 us (5.6 with the accurate reading's loads restructured, ocean.c),
+ * with the same error against the exact waves, 0.036 mm RMS (bench_filter
+ * "Point queries").
  *
  * The FFT fields are read with ocean_frame_sample_accurate (Hermite on the
  * spectral derivatives, about a millimetre from the waves themselves in a
