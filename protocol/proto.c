@@ -212,6 +212,8 @@ static ocean_result v_subscribe(ctx *c, const proto_subscribe *s)
     TRY(chk_enum(c, "subscribe.layout", s->layout, PROTO_LAYOUT_COUNT_));
     if (s->mesh_codec != PROTO_MESH_CODEC_F32 && s->mesh_codec != PROTO_MESH_CODEC_QZ)
         FAIL(c, OCEAN_ETYPE, "subscribe.mesh_codec %u unknown (0 f32, 2 qz)", s->mesh_codec);
+    if (s->flags & ~(unsigned)PROTO_SUB_FLAGS_ALL)
+        FAIL(c, OCEAN_EFORMAT, "subscribe.flags 0x%x has unknown bits (bit 0: full geometry)", s->flags);
     TRY(chk_range(c, "subscribe.tile_size", s->tile_size, 2, PROTO_TILE_MAX_SIZE));
     TRY(chk_range(c, "subscribe.frame_rate_hz", s->frame_rate_hz, 0, PROTO_MAX_FRAME_RATE));
     if (s->frame_rate_hz <= 0.0f)
@@ -726,7 +728,6 @@ static ocean_result d_subscribe(rd *r, proto_subscribe *s)
 {
     TRY(need(r, SUBSCRIBE_SIZE, "fixed fields"));
     const uint8_t *p = r->p + r->off;
-    TRY(zero_bytes(r, r->off + 11, 1, "subscribe"));
     s->effects = p[0];
     s->mesh_kind = p[1];
     s->codec = p[2];
@@ -737,6 +738,7 @@ static ocean_result d_subscribe(rd *r, proto_subscribe *s)
     s->layout = p[7];
     s->tile_size = proto_ld16(p + 8);
     s->mesh_codec = p[10];
+    s->flags = p[11];
     s->frame_rate_hz = proto_ldf32(p + 12);
     s->accuracy = proto_ldf32(p + 16);
     s->base_spacing_m = proto_ldf32(p + 20);
@@ -1413,6 +1415,7 @@ static ocean_result e_payload(proto_buf *b, const proto_msg *m)
         p[7] = s->layout;
         proto_st16(p + 8, s->tile_size);
         p[10] = s->mesh_codec;
+        p[11] = s->flags;
         proto_stf32(p + 12, s->frame_rate_hz);
         proto_stf32(p + 16, s->accuracy);
         proto_stf32(p + 20, s->base_spacing_m);

@@ -204,7 +204,18 @@ typedef struct proto_subscribe {
                                  PROTO_MESH_CODEC_F32 (raw f32, FRAME.has_mesh
                                  1) or PROTO_MESH_CODEC_QZ (MESH_VERTICES_QZ at
                                  `accuracy`, has_mesh 2); layout 1 ignores it */
+    uint8_t flags;            /* PROTO_SUB_* bits */
 } proto_subscribe;
+
+/* SUBSCRIBE.flags. */
+enum {
+    /* Layout 1: every mip carries height and displacement, whatever the
+     * mesh (the frames' geometry_spacing_m is 0), for a client that reads
+     * heights finer than its mesh shows; costs the bytes the normals-only
+     * mips save. */
+    PROTO_SUB_FULL_GEOMETRY = 1,
+    PROTO_SUB_FLAGS_ALL = 1
+};
 
 typedef struct proto_camera {
     double pos[3];            /* world x, y (up), z, m */

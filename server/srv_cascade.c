@@ -895,7 +895,9 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *
      * travel without geometry */
     for (int i = 0; i < n; i++) {
         mesh_part(cfg, st, &jobs[i], &pl[i]);
-        pl[i].geo = pl[i].has_mesh && (jobs[i].c->sim.sub.effects & PROTO_FX_NORMALS) && pl[i].mi.levels > 0
+        const proto_subscribe *sub = &jobs[i].c->sim.sub;
+        pl[i].geo = pl[i].has_mesh && (sub->effects & PROTO_FX_NORMALS) && !(sub->flags & PROTO_SUB_FULL_GEOMETRY) &&
+                            pl[i].mi.levels > 0
                         ? pl[i].mi.level_spacing_m[0] : 0.0;
         plan_job(tb, cfg, &jobs[i], &pl[i]);
         pl[i].share_with = i;

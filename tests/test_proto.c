@@ -136,7 +136,7 @@ static char *dump(const proto_msg *m)
         out(&b, "tile_size = %u\nframe_rate_hz = %.9g\naccuracy = %.9g\nbase_spacing_m = %.9g\nview_range_m = %.9g\n",
             s->tile_size, (double)s->frame_rate_hz, (double)s->accuracy, (double)s->base_spacing_m,
             (double)s->view_range_m);
-        out(&b, "layout = %u\nmesh_codec = %u\n", s->layout, s->mesh_codec);
+        out(&b, "layout = %u\nmesh_codec = %u\nflags = %u\n", s->layout, s->mesh_codec, s->flags);
         break;
     }
     case PROTO_CAMERA: {
@@ -326,7 +326,7 @@ static void sample(proto_msg *m, proto_type type)
     case PROTO_SUBSCRIBE:
         m->u.subscribe = (proto_subscribe){PROTO_FX_HEIGHT | PROTO_FX_NORMALS, PROTO_MESH_CONCENTRIC, PROTO_CODEC_QZ,
                                            PROTO_CUTOFF_ANTIALIAS, PROTO_MODE_LIVE, 2, 5, 64, 30.0f, 0.005f, 0.0f, 5000.0f,
-                                           PROTO_LAYOUT_WORLD, PROTO_MESH_CODEC_QZ};
+                                           PROTO_LAYOUT_WORLD, PROTO_MESH_CODEC_QZ, 0};
         break;
     case PROTO_CAMERA:
         m->u.camera = (proto_camera){{1e7 + 0.125, 150.0, -2.5e6}, {250.0f, 0.0f, -3.5f}, 45.0f, -10.0f, 5.0f, 60.0f,
@@ -467,6 +467,7 @@ static int sample_named(proto_msg *m, const char *name)
         sample(m, PROTO_SUBSCRIBE);
         m->u.subscribe.layout = PROTO_LAYOUT_CASCADE;
         m->u.subscribe.layers = 3;
+        m->u.subscribe.flags = PROTO_SUB_FULL_GEOMETRY;
         return 0;
     }
     for (int t = 1; t < PROTO_TYPE_END_; t++) {
@@ -1006,7 +1007,8 @@ static const bad_vector bad_vectors[] = {
     {"bad_sea_get_with_sea", "sea_state_get", P(32), 8, 0x4024000000000000ull, OCEAN_EFORMAT, -1},
     {"bad_sea_op", "sea_state", P(0), 1, 3, OCEAN_ETYPE, -1},
     {"bad_subscribe_mesh_codec", "subscribe", P(10), 1, 1, OCEAN_ETYPE, -1},
-    {"bad_subscribe_reserved", "subscribe", P(11), 1, 1, OCEAN_EFORMAT, -1},
+    /* SUBSCRIBE.flags: bit 1 is not defined */
+    {"bad_subscribe_flags", "subscribe", P(11), 1, 2, OCEAN_EFORMAT, -1},
     {"bad_frame_has_mesh", "frame_mesh_qz", P(50), 1, 3, OCEAN_EFORMAT, -1},
     {"bad_frame_cascade_mesh_qz", "frame_cascade", P(50), 1, 2, OCEAN_EFORMAT, -1},
     {"bad_mesh_qz_format", "frame_mesh_qz", P(QZ_AT), 1, 9, OCEAN_ECODEC, -1},

@@ -577,8 +577,9 @@ static void cascade_q_spends_the_budget(void **state)
  * coarser mip carries all.  The client reads geometry at max(s, G): every
  * point in view still gets height and displacement from tiles that hold
  * them, and the mesh is displaced with no vertex missing.  A subscription
- * without a mesh gets G = 0 and every channel at every mip.  Ship-bridge,
- * the viewer's subscription, a camera 25 m up at 1920 x 1080. */
+ * without a mesh, or with the full_geometry flag, gets G = 0 and every
+ * channel at every mip.  Ship-bridge, the viewer's subscription, a camera
+ * 25 m up at 1920 x 1080. */
 static void cascade_fine_mips_without_geometry(void **state)
 {
     (void)state;
@@ -591,11 +592,14 @@ static void cascade_fine_mips_without_geometry(void **state)
     srv_daemon *d;
     assert_int_equal(srv_daemon_start(&sb, &d, err, sizeof err), OCEAN_OK);
     double qfine[2] = {0, 0};
-    for (int with_mesh = 1; with_mesh >= 0; with_mesh--) {
+    /* 2: the viewer's subscription; 1: the same with the full_geometry flag; 0: no mesh */
+    for (int run = 2; run >= 0; run--) {
+        int with_mesh = run == 2;
         oc_client *c = connect_client(srv_daemon_port(d), NULL);
         proto_subscribe s;
         oc_subscribe_default(&s);
-        if (!with_mesh) s.mesh_kind = PROTO_MESH_NONE;
+        if (run == 1) s.flags = PROTO_SUB_FULL_GEOMETRY;
+        if (run == 0) s.mesh_kind = PROTO_MESH_NONE;
         assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
         proto_camera cam;
         oc_camera_default(&cam);
@@ -633,10 +637,10 @@ static void cascade_fine_mips_without_geometry(void **state)
                 full_tiles++;
             }
         }
-        qfine[with_mesh] = b->cascade[2].spacing_per_m;
+        if (run != 1) qfine[with_mesh] = b->cascade[2].spacing_per_m;
         print_message("%s: G %.3g m; %d tiles without geometry (%.0f B), %d with; finest FFT cascade q %.4g\n",
-                      with_mesh ? "viewer (mesh, normals)" : "no mesh", G, free_tiles, free_bytes, full_tiles,
-                      (double)b->cascade[2].spacing_per_m);
+                      run == 2 ? "viewer (mesh, normals)" : run == 1 ? "viewer, full_geometry" : "no mesh", G,
+                      free_tiles, free_bytes, full_tiles, (double)b->cascade[2].spacing_per_m);
         if (with_mesh) {
             const oc_topology *tp = oc_client_topology(c);
             assert_non_null(tp);

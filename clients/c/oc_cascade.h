@@ -26,8 +26,8 @@
  *    geometry_spacing_m (the mesh's finest lattice when the frame has a
  *    mesh and normals; 0 otherwise): the server sends mips finer than the
  *    mesh can show with normals only.  A simulator that wants heights
- *    finer than its mesh subscribes without a mesh (G is then 0) or
- *    asks QUERY.
+ *    finer than its mesh sets SUBSCRIBE.flags PROTO_SUB_FULL_GEOMETRY or
+ *    subscribes without a mesh (G is then 0), or asks QUERY.
  *  - position: world x, z reduced mod P_c with fmod (exact in IEEE double,
  *    so |x| = 1e7 m loses nothing), then a mip's periodic grid.
  *  - within a mip: Keys' cubic convolution (Keys 1981, "Cubic convolution

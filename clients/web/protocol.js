@@ -44,6 +44,10 @@ export const NO_CAMERA = 0xffffffff;
 export const LAYOUT = Object.freeze({ WORLD: 0, CASCADE: 1 });
 /* SUBSCRIBE.mesh_codec: how layout-0 mesh positions travel (FRAME.has_mesh 1 / 2). */
 export const MESH_CODEC = Object.freeze({ F32: 0, QZ: 2 });
+/* SUBSCRIBE.flags: FULL_GEOMETRY asks every layout-1 mip with height and
+ * displacement, whatever the mesh (PROTOCOL.md "Where each mip is read") */
+export const SUB_FLAG = Object.freeze({ FULL_GEOMETRY: 1 });
+const SUB_FLAGS_ALL = 1;
 export const MESH_QZ_HEAD = 36;
 export const LAYOUT_COUNT = 2;
 export const MAX_MIPS = 12;
@@ -290,9 +294,8 @@ function dHello(r) {
 function dSubscribe(r) {
     r.need(SUBSCRIBE_SIZE, 'fixed fields');
     const o = r.off;
-    r.zero(o + 11, 1, 'subscribe');
     const s = {
-        meshCodec: r.u8at(o + 10),
+        meshCodec: r.u8at(o + 10), flags: r.u8at(o + 11),
         effects: r.u8at(o), meshKind: r.u8at(o + 1), codec: r.u8at(o + 2), cutoffPolicy: r.u8at(o + 3),
         mode: r.u8at(o + 4), layers: r.u8at(o + 5), lodLevels: r.u8at(o + 6), layout: r.u8at(o + 7), tileSize: r.u16(o + 8),
         frameRateHz: r.f32(o + 12), accuracy: r.f32(o + 16), baseSpacingM: r.f32(o + 20), viewRangeM: r.f32(o + 24),
@@ -315,6 +318,8 @@ function vSubscribe(s) {
     chkEnum('subscribe.layout', s.layout, LAYOUT_COUNT);
     if (s.meshCodec !== MESH_CODEC.F32 && s.meshCodec !== MESH_CODEC.QZ)
         fail(R.ETYPE, `subscribe.mesh_codec ${s.meshCodec} unknown (0 f32, 2 qz)`);
+    if (s.flags & ~SUB_FLAGS_ALL)
+        fail(R.EFORMAT, `subscribe.flags 0x${s.flags.toString(16)} has unknown bits (bit 0: full geometry)`);
     chkRange('subscribe.tile_size', s.tileSize, 2, LIMITS.tileMaxSize);
     chkRange('subscribe.frame_rate_hz', s.frameRateHz, 0, LIMITS.maxFrameRate);
     if (!(s.frameRateHz > 0)) fail(R.EINVAL, 'subscribe.frame_rate_hz must be > 0');
@@ -850,12 +855,14 @@ class Writer {
 const P = HEADER_SIZE;
 
 /* sub: {effects, meshKind, codec, cutoffPolicy, mode, layers, lodLevels,
- * layout (default 0), meshCodec (default f32; layout 0 only), tileSize,
+ * layout (default 0), meshCodec (default f32; layout 0 only), flags
+ * (default 0; SUB_FLAG.FULL_GEOMETRY), tileSize,
  * frameRateHz, accuracy, baseSpacingM, viewRangeM}.  Validated as
  * the server will; returns an ArrayBuffer. */
 export function encodeSubscribe(sub, seq, simTime = 0) {
     const s = {
-        baseSpacingM: 0, viewRangeM: 0, accuracy: 1e-3, mode: MODE.LIVE, layout: LAYOUT.WORLD, meshCodec: MESH_CODEC.F32, ...sub,
+        baseSpacingM: 0, viewRangeM: 0, accuracy: 1e-3, mode: MODE.LIVE, layout: LAYOUT.WORLD, meshCodec: MESH_CODEC.F32, flags: 0,
+        ...sub,
     };
     for (const k of ['frameRateHz', 'accuracy', 'baseSpacingM', 'viewRangeM']) s[k] = f32(s[k]);
     vSubscribe(s);
@@ -865,6 +872,7 @@ export function encodeSubscribe(sub, seq, simTime = 0) {
     u[P + 4] = s.mode; u[P + 5] = s.layers; u[P + 6] = s.lodLevels; u[P + 7] = s.layout;
     dv.setUint16(P + 8, s.tileSize, true);
     u[P + 10] = s.meshCodec;
+    u[P + 11] = s.flags;
     dv.setFloat32(P + 12, s.frameRateHz, true);
     dv.setFloat32(P + 16, s.accuracy, true);
     dv.setFloat32(P + 20, s.baseSpacingM, true);

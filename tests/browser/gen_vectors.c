@@ -572,10 +572,10 @@ static int decode_files(int n, char **files)
                 proto_subscribe *s = &m.u.subscribe;
                 printf(",\"effects\":%u,\"meshKind\":%u,\"codec\":%u,\"cutoffPolicy\":%u,\"mode\":%u,\"layers\":%u,"
                        "\"lodLevels\":%u,\"tileSize\":%u,\"frameRateHz\":%.9g,\"accuracy\":%.9g,\"baseSpacingM\":%.9g,"
-                       "\"viewRangeM\":%.9g,\"layout\":%u,\"meshCodec\":%u",
+                       "\"viewRangeM\":%.9g,\"layout\":%u,\"meshCodec\":%u,\"flags\":%u",
                        s->effects, s->mesh_kind, s->codec, s->cutoff_policy, s->mode, s->layers, s->lod_levels,
                        s->tile_size, (double)s->frame_rate_hz, (double)s->accuracy, (double)s->base_spacing_m,
-                       (double)s->view_range_m, s->layout, s->mesh_codec);
+                       (double)s->view_range_m, s->layout, s->mesh_codec, s->flags);
                 break;
             }
             case PROTO_CAMERA: {

@@ -29,7 +29,7 @@ import { join } from 'node:path';
 
 import {
     decode, encodeSubscribe, encodeCamera, encodeQuery, encodeBye, ProtoError, R, T, CODEC, FX, tilePlanes,
-    LAYOUT, MIP_ENTRIES, TOPO_FLAT, zstdFrameSizes,
+    LAYOUT, MIP_ENTRIES, TOPO_FLAT, zstdFrameSizes, SUB_FLAG,
 } from '../../clients/web/protocol.js';
 import { decodeTile, octDecode, f32FromF16, decodeMeshQz, meshQzRefs } from '../../clients/web/codec.js';
 import { decompress } from '../../clients/web/vendor/fzstd.js';
@@ -289,7 +289,7 @@ test('SUBSCRIBE, CAMERA, QUERY, BYE encoded in JS decode in C to the same fields
         rollDeg: 3, fovYDeg: 55, viewportW: 1920, viewportH: 1080, renderTime: 0,
     };
     const pts = [1e6 + 0.125, -3.5, 42, 1e9];
-    const sub1 = { ...sub, layout: LAYOUT.CASCADE, lodLevels: 1, baseSpacingM: 0, meshCodec: 2 };
+    const sub1 = { ...sub, layout: LAYOUT.CASCADE, lodLevels: 1, baseSpacingM: 0, meshCodec: 2, flags: SUB_FLAG.FULL_GEOMETRY };
     const [cs, cc, cq, cb, cs1] = cDecode([
         new Uint8Array(encodeSubscribe(sub, 7, 1.5)), new Uint8Array(encodeCamera(cam, 8, 2.5)),
         new Uint8Array(encodeQuery(99, pts, 12.75, 9, 3.5)), new Uint8Array(encodeBye(0, 'viewer closed ✓', 10, 4.5)),
@@ -301,6 +301,8 @@ test('SUBSCRIBE, CAMERA, QUERY, BYE encoded in JS decode in C to the same fields
     assert.equal(cs.layout, LAYOUT.WORLD, 'layout defaults to 0');
     assert.equal(cs.meshCodec, 0, 'mesh_codec defaults to f32');
     assert.equal(cs1.meshCodec, 2, 'mesh_codec qz');
+    assert.equal(cs.flags, 0, 'flags default to 0');
+    assert.equal(cs1.flags, SUB_FLAG.FULL_GEOMETRY, 'flags: full geometry');
     assert.equal(cs.code, 0, cs.err);
     assert.equal(cs.type, T.SUBSCRIBE);
     assert.equal(cs.seq, 7);
@@ -331,6 +333,7 @@ test('JS encoders refuse what the C decoder would refuse', () => {
     assert.throws(() => encodeSubscribe({ ...base, frameRateHz: NaN }, 1), (e) => e.code === R.EINVAL);
     assert.throws(() => encodeSubscribe({ ...base, layout: 2 }, 1), (e) => e.code === R.ETYPE);
     assert.throws(() => encodeSubscribe({ ...base, meshCodec: 1 }, 1), (e) => e.code === R.ETYPE);
+    assert.throws(() => encodeSubscribe({ ...base, flags: 2 }, 1), (e) => e.code === R.EFORMAT);
     const cam = { pos: [0, 10, 0], vel: [0, 0, 0], yawDeg: 0, pitchDeg: 0, fovYDeg: 60, viewportW: 10, viewportH: 10 };
     assert.throws(() => encodeCamera({ ...cam, pos: [NaN, 0, 0] }, 1), (e) => e.code === R.EINVAL);
     assert.throws(() => encodeCamera({ ...cam, fovYDeg: 180 }, 1), (e) => e.code === R.EINVAL);

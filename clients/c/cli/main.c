@@ -440,6 +440,7 @@ int occli_sub_build(const char *cmd, const occli_sub *s, proto_subscribe *sub, p
         return 2;
     }
     sub->cutoff_policy = (uint8_t)pk;
+    sub->flags = s->full_geometry ? PROTO_SUB_FULL_GEOMETRY : 0;
     sub->frame_rate_hz = (float)s->rate;
     sub->accuracy = (float)s->accuracy;
     sub->tile_size = (uint16_t)s->tile_size;

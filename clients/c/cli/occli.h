@@ -41,6 +41,7 @@ typedef struct occli_sub {
     const char *mesh;      /* --mesh KIND */
     int layout;            /* --layout 0|1 */
     const char *mesh_codec;/* --mesh-codec f32|qz (layout 0) */
+    int full_geometry;     /* --full-geometry (layout 1: SUBSCRIBE.flags bit 0) */
     const char *policy;    /* --cutoff-policy NAME */
     double rate;           /* --rate HZ */
     double accuracy;       /* --accuracy A */
@@ -62,6 +63,8 @@ typedef struct occli_sub {
     {"layout", OCCLI_INT, &(s)->layout, 0, 1, "N  0: world tiles summed per camera, mesh displaced by the server;\n"     \
                                               "                       1: shared cascade tiles (the viewer's and the library's)", NULL}, \
     {"mesh-codec", OCCLI_STRING, &(s)->mesh_codec, 0, 0, "NAME  layout-0 mesh positions: f32 or qz (at --accuracy)", NULL}, \
+    {"full-geometry", OCCLI_FLAG, &(s)->full_geometry, 0, 0, "layout 1: height and displacement in every mip, also\n"   \
+                                                      "                       those finer than the mesh shows", NULL}, \
     {"cutoff-policy", OCCLI_STRING, &(s)->policy, 0, 0, "NAME  none seed antialias", NULL},                          \
     {"rate", OCCLI_DOUBLE, &(s)->rate, 0.1, 240, "HZ  frame rate asked of the server", NULL},                        \
     {"accuracy", OCCLI_DOUBLE, &(s)->accuracy, 1e-6, 0.5, "A  qz accuracy target", NULL},                           \
