@@ -10,7 +10,9 @@
  * cascade (per group of channels at large N).  The stage touches only the
  * columns of each row that hold a wave (cascade.lo, hi) and writes zeros
  * past them: a coarse cascade's band (a half disc of radius n/4) fills
- * about 20 % of its half spectrum.  A low cutoff picks a smaller
+ * about 20 % of its half spectrum, and its waves lie in the first n/4 of
+ * the n/2 + 1 columns, so its transform runs the 2-D c2r's column pass on
+ * those columns only (transform_call).  A low cutoff picks a smaller
  * transform: the modes it keeps are the same waves, only fewer of them.
  *
  * Conventions: eta(x) = sum_k h(k,t) e^{i k.x},
@@ -89,6 +91,10 @@ typedef struct cascade {
      * about 80 % of their modes are zero: the stage reads, evolves and
      * multiplies this range only and writes zeros past it. */
     int *lo, *hi;
+    /* Columns of the l-th grid (8 << l points) up to the last that holds a
+     * wave of this cascade: transform_call skips the column transforms
+     * past it where the ocean has a pruned plan (prune_cols). */
+    int width[MAX_LEVELS];
     /* Deep water: from column deep[p] on, the modes of rows +-p have
      * k d >= DEEP_KD, and the stage computes their frequency (deep_turns)
      * instead of reading turns_hi/lo; the table holds the same value.
@@ -164,6 +170,14 @@ struct ocean {
     cascade cas[OCEAN_MAX_CASCADES];
     fftwf_complex *spec;                /* CH_COUNT x n x (n/2+1) scratch */
     fftwf_plan plan[MAX_LEVELS][CH_COUNT]; /* [level][channels - 1] */
+    /* The pruned 2-D transform (transform_call), on levels where some
+     * cascade's waves stop at a quarter of the grid or below: its first
+     * pass (c2c down the columns) over columns [0, prune_cols[l]) only,
+     * then the rows' c2r as the 2-D plan does it.  prune_cols[l] = 0: the
+     * level has no such plans. */
+    int prune_cols[MAX_LEVELS];
+    fftwf_plan cols_plan[MAX_LEVELS][CH_COUNT], rows_plan[MAX_LEVELS][CH_COUNT];
+    int prune;           /* 1: prune where a band allows, 0: never (ocean_force_pruning) */
     ocean_counters counters;
     double k_top;                       /* largest |k| any band holds */
     /* Per-filter sums over every mode cost O(n^2); a tick serving several
@@ -716,6 +730,54 @@ static ocean_result cascade_init_lattice(ocean *o, const ocean_lattice_wave *w, 
 static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_lattice_wave *lw,
                                 int nlw, ocean **out, char *msg, size_t msglen);
 
+/* Columns of the m-point grid (m = 8 << l) up to the last that holds a wave
+ * of cascade cs: pair_range's hi over the grid's row pairs. */
+static int cascade_width(const cascade *cs, int m)
+{
+    int w = 0;
+    for (int p = 0; p < m / 2; p++) {
+        int hi = cs->hi[p] < m / 2 ? cs->hi[p] : m / 2;
+        if (cs->lo[p] < hi && hi > w)
+            w = hi;
+    }
+    return w;
+}
+
+/* The columns level l's pruned plans transform: a quarter of the m-point
+ * grid (m = 8 << l), where a coarse cascade's half disc of radius m/4
+ * ends on its full grid.  Fixed rather than each band's own width, so
+ * every ocean of an (N, threads) has the same plans: a wisdom file made
+ * from the FFT ocean serves the near field's lattice ocean too.  Grids
+ * below PARALLEL_MIN_N: 0, no pruned plans (the 2-D plan is a few
+ * microseconds there).  Fills every cascade's width at this level. */
+static int prune_columns(ocean *o, int l)
+{
+    int m = 8 << l;
+    for (int c = 0; c < o->p.cascades; c++)
+        o->cas[c].width[l] = cascade_width(&o->cas[c], m);
+    return m >= PARALLEL_MIN_N ? m / 4 : 0;
+}
+
+/* The two passes of level l's pruned c transforms (caller holds
+ * planner_lock, with the level's thread count set).  The 2-D c2r of the
+ * spectra at o->spec is a c2c down each column (the m rows, stride m/2+1)
+ * and then a c2r along each row; a column with no wave stays zero through
+ * the first pass, so only columns [0, cols) take it, in place.  The
+ * second pass is the 2-D plan's own: out of place, free to overwrite its
+ * input (the stage writes every column again before the next call). */
+static void plan_pruned(ocean *o, int l, int c, float *tmp, unsigned flags)
+{
+    int m = 8 << l, half = m / 2 + 1;
+    ptrdiff_t plane = (ptrdiff_t)m * half;
+    fftwf_iodim col = {m, half, half};
+    fftwf_iodim col_many[2] = {{o->prune_cols[l], 1, 1}, {c, plane, plane}};
+    o->cols_plan[l][c - 1] = fftwf_plan_guru_dft(1, &col, 2, col_many, o->spec, o->spec,
+                                                 FFTW_BACKWARD, flags);
+    fftwf_iodim row = {m, 1, 1};
+    fftwf_iodim row_many[2] = {{m, half, m}, {c, plane, (ptrdiff_t)m * m}};
+    o->rows_plan[l][c - 1] = fftwf_plan_guru_dft_c2r(1, &row, 2, row_many, o->spec, tmp, flags);
+}
+
 ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t msglen)
 {
     *out = NULL;
@@ -786,6 +848,7 @@ static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_
     o->p = *p;
     ocean_force_paths(o, -1, -1);
     o->split_mode = -1;
+    o->prune = 1;
     for (int c = 0; c < p->cascades; c++) {
         char why[256] = "";
         r = lattice ? cascade_init_lattice(o, lw, nlw, why, sizeof why) : cascade_init(o, c);
@@ -838,18 +901,28 @@ static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_
         int nthr = m >= PARALLEL_MIN_N ? p->threads : 1;
         if (fftw_threads_ok)
             fftwf_plan_with_nthreads(nthr);
+        o->prune_cols[l] = prune_columns(o, l);
         for (int c = 1; c <= CH_COUNT; c++) {
             int dims[2] = {m, m};
             o->plan[l][c - 1] = fftwf_plan_many_dft_c2r(
                 2, dims, c, o->spec, NULL, 1, m * (m / 2 + 1), tmp, NULL, 1, m * m, flags);
-            if (!o->plan[l][c - 1]) {
+            if (o->plan[l][c - 1] && o->prune_cols[l])
+                plan_pruned(o, l, c, tmp, flags);
+            if (!o->plan[l][c - 1] || (o->prune_cols[l] && (!o->cols_plan[l][c - 1] || !o->rows_plan[l][c - 1]))) {
                 pthread_mutex_unlock(&planner_lock);
                 fftwf_free(tmp);
                 if (flags & FFTW_WISDOM_ONLY) {
+                    char what[96];
+                    if (o->plan[l][c - 1])
+                        snprintf(what, sizeof what, " (its column pass over %d of %d columns)",
+                                 o->prune_cols[l], m / 2 + 1);
+                    else
+                        what[0] = '\0';
                     if (msg) snprintf(msg, msglen, "wisdom file '%s' has no plan for a %dx%d x%d "
-                                      "transform on %d thread%s (made for another N or "
-                                      "ocean.threads?): regenerate it with `ocean-sim wisdom`",
-                                      p->wisdom, m, m, c, nthr, nthr == 1 ? "" : "s");
+                                      "transform%s on %d thread%s (made for another N, "
+                                      "ocean.threads or scene, or by an older oceand?): "
+                                      "regenerate it with `ocean-sim wisdom`",
+                                      p->wisdom, m, m, c, what, nthr, nthr == 1 ? "" : "s");
                     ocean_destroy(o);
                     return OCEAN_EUNSUPPORTED;
                 }
@@ -871,9 +944,14 @@ void ocean_destroy(ocean *o)
         return;
     pthread_mutex_lock(&planner_lock);
     for (int l = 0; l < MAX_LEVELS; l++)
-        for (int c = 0; c < CH_COUNT; c++)
+        for (int c = 0; c < CH_COUNT; c++) {
             if (o->plan[l][c])
                 fftwf_destroy_plan(o->plan[l][c]);
+            if (o->cols_plan[l][c])
+                fftwf_destroy_plan(o->cols_plan[l][c]);
+            if (o->rows_plan[l][c])
+                fftwf_destroy_plan(o->rows_plan[l][c]);
+        }
     pthread_mutex_unlock(&planner_lock);
     fftwf_free(o->spec);
     for (int c = 0; c < OCEAN_MAX_CASCADES; c++) {
@@ -1881,6 +1959,31 @@ double ocean_effective_cutoff(const ocean *o, double cutoff_k, int order)
     return cutoff_k;
 }
 
+/* One FFTW call: the 2-D c2r of gn channels of cascade cs's n-point
+ * spectra at o->spec into out.  A cascade whose waves all lie in the
+ * first prune_cols columns (the coarse cascades: a half disc of radius
+ * n/4) runs the 2-D transform as its two passes and leaves the column
+ * pass out where no wave is: those columns are zero on input and stay
+ * zero through it, so the result is the same transform (bench_core: the
+ * column pass is about half of FFTW's work).  Returns 1 when pruned. */
+static int transform_call(ocean *o, const cascade *cs, int n, int gn, float *out)
+{
+    int l = level_of(n);
+    if (o->prune && o->prune_cols[l] && cs->width[l] <= o->prune_cols[l]) {
+        fftwf_execute_dft(o->cols_plan[l][gn - 1], o->spec, o->spec);
+        fftwf_execute_dft_c2r(o->rows_plan[l][gn - 1], o->spec, out);
+        return 1;
+    }
+    fftwf_execute_dft_c2r(o->plan[l][gn - 1], o->spec, out);
+    return 0;
+}
+
+void ocean_force_pruning(ocean *o, int prune)
+{
+    if (o)
+        o->prune = prune != 0;
+}
+
 ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_frame *f)
 {
     if (!o || !r || !f || f->cascades != o->p.cascades || f->n_max != o->p.n)
@@ -1980,8 +2083,8 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
                 }
                 a.gain_ready = a.gain != NULL;
                 uint64_t t2 = now_ns();
-                fftwf_execute_dft_c2r(o->plan[level_of(n)][gn - 1], o->spec,
-                                      f->block[c] + (size_t)j0 * n * n);
+                o->counters.fft_calls_pruned +=
+                    transform_call(o, cs, n, gn, f->block[c] + (size_t)j0 * n * n);
                 o->counters.ns_fft += now_ns() - t2;
                 o->counters.fft_calls++;
                 o->counters.fft_calls_by_channel += by_channel && gn >= nt;
@@ -2065,8 +2168,7 @@ static ocean_result transform_groups(ocean *o, const ocean_request *r, ocean_fra
                         }
                 }
             }
-            fftwf_execute_dft_c2r(o->plan[level_of(n)][gn - 1], o->spec,
-                                  f->block[c] + (size_t)j0 * n * n);
+            transform_call(o, cs, n, gn, f->block[c] + (size_t)j0 * n * n);
         }
     }
     return OCEAN_OK;

@@ -412,6 +412,10 @@ typedef struct ocean_counters {
     uint64_t ns_fft;                   /* FFTW calls */
     uint64_t fft_calls_by_channel;     /* of fft_calls, those whose stage pass was split
                                           over the threads by channel, not by rows */
+    uint64_t fft_calls_pruned;         /* of fft_calls, those that left out the column
+                                          transforms of the columns no wave reaches: a
+                                          coarse cascade's waves fill n/4 of its grid's
+                                          n/2 + 1 columns, so its column pass halves */
 } ocean_counters;
 void ocean_get_counters(const ocean *o, ocean_counters *out);
 

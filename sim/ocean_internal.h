@@ -45,6 +45,15 @@ void ocean_force_group(ocean *o, int group);
  * nothing. */
 void ocean_force_stage_split(ocean *o, int mode);
 
+/* prune 0: every transform runs FFTW's whole-grid 2-D plan; 1
+ * (ocean_create's): a cascade whose waves stop at a quarter of the grid
+ * runs the pruned column pass (ocean_counters.fft_calls_pruned).  Both
+ * are the same transform; the bits may differ in the last place (other
+ * FFTW plans).  For the tests and benchmarks that compare them; also
+ * applies to ocean_transform_only.  Same thread rules as
+ * ocean_force_paths; NULL: does nothing. */
+void ocean_force_pruning(ocean *o, int prune);
+
 /* ocean_transform_only with each FFTW call's spectra first written
  * (zeros, split over the threads as the spectrum stage splits them): the
  * least any stage that writes the spectra FFTW reads can cost, the floor

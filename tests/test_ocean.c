@@ -1559,6 +1559,27 @@ static void test_stage_split_same_bits(void **state)
     }
 }
 
+/* Every channel of two fields of the same grid agrees to `tol` relative
+ * RMS (a channel zero in b must be zero in a: a cascade wholly above the
+ * cutoff); fails naming the channel. */
+static void assert_fields_close(const ocean_field *fa, const ocean_field *fb, double tol, const char *what)
+{
+    assert_int_equal(fa->n, fb->n);
+    const float *pa[] = {fa->height, fa->dx, fa->dz, fa->slope_x, fa->slope_z, fa->dxx, fa->dzz,
+                         fa->dxz, fa->vel_x, fa->vel_y, fa->vel_z};
+    const float *pb[] = {fb->height, fb->dx, fb->dz, fb->slope_x, fb->slope_z, fb->dxx, fb->dzz,
+                         fb->dxz, fb->vel_x, fb->vel_y, fb->vel_z};
+    for (int k = 0; k < 11; k++) {
+        double d2 = 0.0, s2 = 0.0;
+        for (size_t i = 0; i < (size_t)fa->n * fa->n; i++) {
+            d2 += ((double)pa[k][i] - pb[k][i]) * ((double)pa[k][i] - pb[k][i]);
+            s2 += (double)pb[k][i] * pb[k][i];
+        }
+        if (s2 == 0.0 ? d2 != 0.0 : sqrt(d2 / s2) >= tol)
+            fail_msg("%s: channel %d differs by %.3g relative RMS", what, k, s2 > 0.0 ? sqrt(d2 / s2) : d2);
+    }
+}
+
 /* Channels go to FFTW in groups (at most 8.5 MB of spectra a call, so a
  * group's spectra are still cached when its transform reads them).  Every
  * group size must give every channel's waves: against the direct sum of the
@@ -1619,21 +1640,7 @@ static void test_grouped_transforms(void **state)
         assert_int_equal(ocean_evaluate(o, t + 1.0, &r, ref), OCEAN_OK);
         ocean_force_group(o, groups[gi]);
         assert_int_equal(ocean_evaluate(o, t + 1.0, &r, f), OCEAN_OK);
-        const ocean_field *fa = ocean_frame_field(f, 0), *fb = ocean_frame_field(ref, 0);
-        assert_int_equal(fa->n, fb->n);
-        const float *pa[] = {fa->height, fa->dx, fa->dz, fa->slope_x, fa->slope_z, fa->dxx, fa->dzz,
-                             fa->dxz, fa->vel_x, fa->vel_y, fa->vel_z};
-        const float *pb[] = {fb->height, fb->dx, fb->dz, fb->slope_x, fb->slope_z, fb->dxx, fb->dzz,
-                             fb->dxz, fb->vel_x, fb->vel_y, fb->vel_z};
-        for (int k = 0; k < 11; k++) {
-            double d2 = 0.0, s2 = 0.0;
-            for (size_t i = 0; i < (size_t)fa->n * fa->n; i++) {
-                d2 += ((double)pa[k][i] - pb[k][i]) * ((double)pa[k][i] - pb[k][i]);
-                s2 += (double)pb[k][i] * pb[k][i];
-            }
-            assert_true(s2 > 0.0);
-            assert_true(sqrt(d2 / s2) < 1e-5);
-        }
+        assert_fields_close(ocean_frame_field(f, 0), ocean_frame_field(ref, 0), 1e-5, "grouped");
     }
     ocean_frame_destroy(ref);
     ocean_frame_destroy(f);
@@ -1650,6 +1657,91 @@ static void test_grouped_transforms(void **state)
     ocean_get_counters(o, &c1);
     assert_int_equal(c1.transforms - c0.transforms, 8);
     assert_int_equal(c1.fft_calls - c0.fft_calls, 4);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
+/* A coarse cascade's waves fill columns [0, n/4) of its n x (n/2 + 1)
+ * half spectrum, so its 2-D c2r leaves the column transforms of the other
+ * columns out (ocean.c, transform_call).  The pruned transform must be the
+ * same transform: every channel of every cascade as the whole-grid 2-D
+ * plan makes it, to float rounding, evolving h(k,t) and reading it back,
+ * in one call and in calls of 2; and the direct sum of the modes
+ * (ocean_reference_point) agrees.  Only the coarse cascades prune, only
+ * on their full grid: the finest reaches its grid's Nyquist, and a
+ * cutoff that picks a smaller grid fills that grid's columns. */
+static void test_pruned_column_pass(void **state)
+{
+    (void)state;
+    ocean_params p;
+    pm_params(&p, 128);
+    p.cascades = 3;
+    p.threads = 2;
+    p.patch_m = 1000.0;
+    p.cascade_ratio = 4.0; /* cascade 0's grid points lie on every grid: exact samples */
+    p.sea.choppiness = 1.0;
+    ocean *o = make(&p);
+    ocean_frame *f = frame(o), *ref = frame(o);
+    const double t = 4321.125;
+    const double cutoffs[] = {INFINITY, 0.25};
+    for (int g = 0; g < 2; g++)
+        for (int kc = 0; kc < 2; kc++) {
+            ocean_force_group(o, g ? 2 : 0);
+            ocean_request r;
+            ocean_request_all(&r, OCEAN_FX_ALL | OCEAN_FX_VELOCITY);
+            r.cutoff_k = cutoffs[kc];
+            ocean_counters c0, c1, c2;
+            ocean_force_pruning(o, 0);
+            ocean_get_counters(o, &c0);
+            assert_int_equal(ocean_evaluate(o, t + g, &r, ref), OCEAN_OK);
+            ocean_force_pruning(o, 1);
+            ocean_get_counters(o, &c1);
+            assert_int_equal(ocean_evaluate(o, t + g, &r, f), OCEAN_OK);
+            ocean_get_counters(o, &c2);
+            uint64_t calls = c2.fft_calls - c1.fft_calls, pruned = c2.fft_calls_pruned - c1.fft_calls_pruned;
+            int per_cascade = g ? 6 : 1; /* 11 channels: 6 calls of 2, or 1 of 11 */
+            print_message("group %d, cutoff %g: %llu of %llu FFTW calls pruned\n", g ? 2 : 11,
+                          cutoffs[kc], (unsigned long long)pruned, (unsigned long long)calls);
+            assert_int_equal(c1.fft_calls_pruned - c0.fft_calls_pruned, 0);
+            /* Coarse cascades on their full grid prune; the finest, and
+             * the smaller grid a cutoff picks (its waves fill it), do not. */
+            int full_coarse = 0, smaller = 0;
+            for (int c = 0; c < 3; c++) {
+                int nc = ocean_frame_field(f, c)->n;
+                full_coarse += c < 2 && nc == p.n;
+                smaller += nc < p.n;
+            }
+            assert_int_equal(pruned, (uint64_t)(full_coarse * per_cascade));
+            assert_int_equal(full_coarse, kc == 0 ? 2 : 1);
+            assert_int_equal(smaller, kc == 0 ? 0 : 2);
+            for (int c = 0; c < 3; c++)
+                assert_fields_close(ocean_frame_field(f, c), ocean_frame_field(ref, c), 1e-6,
+                                    c == 0 ? "cascade 0" : c == 1 ? "cascade 1" : "cascade 2");
+        }
+    /* The pruned coarse cascades against the direct sum of their modes. */
+    ocean_force_group(o, 0);
+    ocean_counters c0, c1;
+    ocean_get_counters(o, &c0);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_ALL);
+    assert_int_equal(ocean_evaluate(o, t, &r, f), OCEAN_OK);
+    ocean_get_counters(o, &c1);
+    assert_int_equal(c1.fft_calls_pruned - c0.fft_calls_pruned, 2);
+    ocean_spectrum_stats ss;
+    ocean_get_spectrum_stats(o, &ss);
+    double se = 0.0;
+    for (int q = 0; q < 40; q++) {
+        double x = (q * 37 % 128) * 1000.0 / 128, z = (q * 53 % 128) * 1000.0 / 128;
+        ocean_point a, b;
+        ocean_frame_sample(f, x, z, &a);
+        ocean_reference_point(o, t, x, z, INFINITY, 6, &b);
+        se += (a.height - b.height) * (a.height - b.height) + (a.dx - b.dx) * (a.dx - b.dx) +
+              (a.dz - b.dz) * (a.dz - b.dz);
+    }
+    print_message("pruned: height/displacement RMS %.3g m against the direct sum (Hs %.3g m)\n",
+                  sqrt(se / 120), ss.hs);
+    assert_true(sqrt(se / 120) < 1e-4 * ss.hs);
+    ocean_frame_destroy(ref);
     ocean_frame_destroy(f);
     ocean_destroy(o);
 }
@@ -1685,6 +1777,7 @@ int main(void)
         cmocka_unit_test(test_time_split_counters),
         cmocka_unit_test(test_stage_split_same_bits),
         cmocka_unit_test(test_grouped_transforms),
+        cmocka_unit_test(test_pruned_column_pass),
     };
     return cmocka_run_group_tests_name("ocean", tests, NULL, NULL);
 }
