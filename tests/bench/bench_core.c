@@ -19,7 +19,10 @@
  * worse than 1.5x its quiet time.  Verdict lines say whether each holds.
  * The floor table measures two oceans: the one-cascade default sea of the
  * main tables and the ocean `make run` serves (config/oceand.conf and its
- * scene through srv_settings_load, ocean.n set to 512 and 1024).
+ * scene through srv_settings_load, ocean.n set to 512 and 1024), and puts
+ * each beside FFTW's whole-grid 2-D transform of the same spectra as well
+ * as FFTW on the calls the evaluation makes (whose coarse cascades leave
+ * out the column transforms of columns no wave reaches).
  * Also: packing two real channels into one complex transform, FFTW alone,
  * with both planners.
  *
