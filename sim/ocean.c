@@ -170,11 +170,11 @@ struct ocean {
     cascade cas[OCEAN_MAX_CASCADES];
     fftwf_complex *spec;                /* CH_COUNT x n x (n/2+1) scratch */
     fftwf_plan plan[MAX_LEVELS][CH_COUNT]; /* [level][channels - 1] */
-    /* The pruned 2-D transform (transform_call), on levels where some
-     * cascade's waves stop at a quarter of the grid or below: its first
-     * pass (c2c down the columns) over columns [0, prune_cols[l]) only,
-     * then the rows' c2r as the 2-D plan does it.  prune_cols[l] = 0: the
-     * level has no such plans. */
+    /* The pruned 2-D transform (transform_call) of every grid of at least
+     * PARALLEL_MIN_N points: its first pass (c2c down the columns) over
+     * columns [0, prune_cols[l]) only, then the rows' c2r as the 2-D plan
+     * does it; run by the cascades whose waves all lie in those columns.
+     * prune_cols[l] = 0: the level has no such plans (prune_columns). */
     int prune_cols[MAX_LEVELS];
     fftwf_plan cols_plan[MAX_LEVELS][CH_COUNT], rows_plan[MAX_LEVELS][CH_COUNT];
     int prune;           /* 1: prune where a band allows, 0: never (ocean_force_pruning) */
