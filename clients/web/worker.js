@@ -36,6 +36,7 @@ import {
 import { assembleLevel, assembleCascadeTile, groupByLevel } from './assemble.js';
 import { decodeMeshQz } from './codec.js';
 import { MeshQzStore } from './meshstore.js';
+import { ByteRate } from './rate.js';
 
 let ws = null;
 let seq = 0;
@@ -54,7 +55,7 @@ const stats = {
     messages: 0, frames: 0, framesDecoded: 0, skipped: 0, bytes: 0, tiles: 0, topologies: 0,
     decodeErrors: 0, serverErrors: 0, camerasSent: 0, decodeMs: 0, lastError: '',
 };
-const byteWindow = [];       /* [time, bytes] over the last second */
+const byteRate = new ByteRate(); /* bytes a second over the last second */
 
 function post(msg, transfer) { self.postMessage(msg, transfer || []); }
 
@@ -62,14 +63,6 @@ function nextSeq() { seq = (seq + 1) >>> 0; return seq; }
 
 function send(buf) {
     if (ws && ws.readyState === 1) ws.send(buf);
-}
-
-function bytesPerSecond(now) {
-    while (byteWindow.length && now - byteWindow[0][0] > 1000) byteWindow.shift();
-    let s = 0;
-    for (const [, b] of byteWindow) s += b;
-    const span = byteWindow.length ? Math.max(250, now - byteWindow[0][0]) : 1000;
-    return s * 1000 / span;
 }
 
 /* Chooses the subscription from what the page asked and what HELLO offers. */
@@ -151,7 +144,7 @@ function onMessage(data) {
     }
     stats.messages++;
     stats.bytes += data.byteLength;
-    byteWindow.push([now, data.byteLength]);
+    byteRate.add(now, data.byteLength);
     let hdr;
     try {
         hdr = decodeHeader(new Uint8Array(data));
@@ -421,7 +414,7 @@ function finishFrame(job) {
     for (const L of levels) transfer.push(L.disp.buffer, L.nrm.buffer);
     for (const b of blocks) transfer.push(b.disp.buffer, b.slope.buffer);
     const out = {
-        kind: 'frame', ...meta, mesh: meta.mesh, levels, blocks, latencyMs, bytesPerSec: bytesPerSecond(now),
+        kind: 'frame', ...meta, mesh: meta.mesh, levels, blocks, latencyMs, bytesPerSec: byteRate.perSecond(now),
         decodeWorkers: pool ? pool.length : 0, stats: { ...stats },
     };
     if (meta.mesh) transfer.push(meta.mesh.positions.buffer);
