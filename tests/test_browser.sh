@@ -57,8 +57,8 @@ ${CC:-cc} -std=c11 -O1 -Wall -Wextra -Werror -Isim -Iprotocol tests/browser/gen_
 rm -rf "$WORK/vectors" && mkdir -p "$WORK/vectors"
 "$WORK/gen_vectors" gen "$WORK/vectors" || die "gen_vectors gen failed"
 if ! VECTOR_DIR="$WORK/vectors" GEN_VECTORS="$WORK/gen_vectors" PROTO_VECTORS=tests/vectors \
-        node --test --test-reporter=tap tests/browser/protocol.test.mjs tests/browser/timeline.test.mjs tests/browser/rate.test.mjs \
-            tests/browser/meshstore.test.mjs; then
+        node --test --test-reporter=tap tests/browser/protocol.test.mjs tests/browser/timeline.test.mjs \
+            tests/browser/rate.test.mjs tests/browser/meshstore.test.mjs; then
     echo "test_browser: protocol cross-check FAILED"
     status=1
 fi
