@@ -909,6 +909,37 @@ static ocean_result qz_inflate(const uint8_t *zsrc, size_t zlen, size_t want, ui
     return OCEAN_OK;
 }
 
+/* The residual of sample k from its nb byte planes of n bytes each
+ * (PROTOCOL.md "qz": byte b of every residual, then byte b + 1), zigzag
+ * decoded. */
+static inline int64_t qz_residual(const uint8_t *raw, size_t n, size_t k, int nb)
+{
+    uint32_t zz = 0;
+    for (int b = 0; b < nb; b++)
+        zz |= (uint32_t)raw[(size_t)b * n + k] << (8 * b);
+    return unzigzag(zz);
+}
+
+/* Keeps decoded level v in *q and its value base + v step in *dst, or
+ * refuses it (OCEAN_ECODEC naming plane c and sample (i, j)): a level
+ * beyond QZ_Q_LIMIT, or a value that is not finite, is a corrupt payload. */
+static inline ocean_result qz_store(int64_t v, float base, double step, int64_t *q, float *dst, int c,
+                                    int i, int j, char *err, size_t errlen)
+{
+    if (v > QZ_Q_LIMIT || v < -QZ_Q_LIMIT) {
+        ocean_seterr(err, errlen, "qz plane %d: level %lld out of range at (%d,%d)", c, (long long)v, i, j);
+        return OCEAN_ECODEC;
+    }
+    *q = v;
+    float f = (float)((double)base + (double)v * step);
+    if (!isfinite(f)) {
+        ocean_seterr(err, errlen, "qz plane %d: non-finite value at (%d,%d)", c, i, j);
+        return OCEAN_ECODEC;
+    }
+    *dst = f;
+    return OCEAN_OK;
+}
+
 /* Format 1 (decoded for payloads recorded before format 2). */
 static ocean_result qz1_decode(int w, int h, int np, const uint8_t *data, size_t len, float *planes,
                               char *err, size_t errlen)
@@ -971,23 +1002,10 @@ static ocean_result qz1_decode(int w, int h, int np, const uint8_t *data, size_t
         for (int i = 0; i < h; i++)
             for (int j = 0; j < w; j++) {
                 size_t k = (size_t)i * w + j;
-                uint32_t zz = 0;
-                for (int b = 0; b < nb[c]; b++)
-                    zz |= (uint32_t)raw[off + (size_t)b * n + k] << (8 * b);
-                int64_t v = qz_predict(q, w, i, j, pred[c], coef[c]) + unzigzag(zz);
-                if (v > QZ_Q_LIMIT || v < -QZ_Q_LIMIT) {
-                    ocean_seterr(err, errlen, "qz plane %d: level %lld out of range at (%d,%d)", c, (long long)v, i, j);
-                    res = OCEAN_ECODEC;
+                int64_t v = qz_predict(q, w, i, j, pred[c], coef[c]) + qz_residual(raw + off, n, k, nb[c]);
+                res = qz_store(v, base[c], step[c], q + k, dst + k, c, i, j, err, errlen);
+                if (res != OCEAN_OK)
                     goto done;
-                }
-                q[k] = v;
-                float f = (float)((double)base[c] + (double)v * step[c]);
-                if (!isfinite(f)) {
-                    ocean_seterr(err, errlen, "qz plane %d: non-finite value at (%d,%d)", c, i, j);
-                    res = OCEAN_ECODEC;
-                    goto done;
-                }
-                dst[k] = f;
             }
         off += (size_t)nb[c] * n;
     }
@@ -1071,26 +1089,13 @@ static ocean_result qz2_decode(int w, int h, int np, const uint8_t *data, size_t
         for (int i = 0; i < h; i++)
             for (int j = 0; j < w; j++) {
                 size_t k = (size_t)i * w + j;
-                uint32_t zz = 0;
-                for (int b = 0; b < nb[c]; b++)
-                    zz |= (uint32_t)raw[ro + (size_t)b * n + k] << (8 * b);
                 int64_t pr = qz2_fast(w, h, i, j, pred[c], rq != NULL)
                                  ? floordiv4096(qz2_sum_fast(q + k, rq ? rq + k : NULL, w, coef[c]) + 2048)
                                  : qz2_predict(q, rq, w, h, i, j, pred[c], coef[c]);
-                int64_t v = pr + unzigzag(zz);
-                if (v > QZ_Q_LIMIT || v < -QZ_Q_LIMIT) {
-                    ocean_seterr(err, errlen, "qz plane %d: level %lld out of range at (%d,%d)", c, (long long)v, i, j);
-                    res = OCEAN_ECODEC;
+                int64_t v = pr + qz_residual(raw + ro, n, k, nb[c]);
+                res = qz_store(v, base[c], step[c], q + k, dst + k, c, i, j, err, errlen);
+                if (res != OCEAN_OK)
                     goto done;
-                }
-                q[k] = v;
-                float f = (float)((double)base[c] + (double)v * step[c]);
-                if (!isfinite(f)) {
-                    ocean_seterr(err, errlen, "qz plane %d: non-finite value at (%d,%d)", c, i, j);
-                    res = OCEAN_ECODEC;
-                    goto done;
-                }
-                dst[k] = f;
             }
         ro += (size_t)nb[c] * n;
     }

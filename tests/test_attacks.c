@@ -54,6 +54,7 @@
 #include "srv_daemon.h"
 #include "srv_stats.h"
 #include "lib/test_ws.h"
+#include "lib/test_net.h"
 
 #define WITNESS_HZ 20.0
 #define KEEP_MIN 0.95          /* frames the witness must keep */
@@ -68,13 +69,6 @@ static srv_settings settings;
 static srv_daemon *daemon_;
 static int port;
 static oc_loop *loop;
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
 
 static uint64_t stat_of(atomic_uint_fast64_t *a) { return (uint64_t)atomic_load(a); }
 
@@ -91,7 +85,7 @@ static struct {
 static void on_witness_frame(void *user, oc_client *c, const oc_frame *f)
 {
     (void)user, (void)c, (void)f;
-    double t = now_s();
+    double t = test_now_s();
     pthread_mutex_lock(&wit.mu);
     if (wit.counting) {
         wit.frames++;
@@ -142,7 +136,7 @@ static void window_begin(void)
     wit.counting = 1;
     wit.frames = 0;
     wit.max_gap = 0;
-    wit.last = now_s();
+    wit.last = test_now_s();
     win_t0 = wit.last;
     pthread_mutex_unlock(&wit.mu);
     pthread_mutex_lock(&mem.mu);
@@ -169,9 +163,9 @@ typedef struct verdict {
 /* Closes the current window (at least WINDOW_MIN_S long) into *v. */
 static void window_close(verdict *v)
 {
-    while (now_s() - win_t0 < WINDOW_MIN_S) usleep(20000);
+    while (test_now_s() - win_t0 < WINDOW_MIN_S) usleep(20000);
     pthread_mutex_lock(&wit.mu);
-    double t = now_s();
+    double t = test_now_s();
     if (t - wit.last > wit.max_gap) wit.max_gap = t - wit.last; /* a stall at the end counts */
     v->frames = wit.frames;
     v->gap = wit.max_gap;
@@ -244,56 +238,14 @@ static void run_attack(void (*fn)(void **), void **state)
 
 /* ---- raw helpers ------------------------------------------------------------- */
 
-static uint8_t *encode(proto_msg *m, size_t *len)
-{
-    proto_buf b;
-    proto_buf_init(&b, 0);
-    char err[256];
-    ocean_result r = proto_encode(&b, m, err, sizeof err);
-    if (r != OCEAN_OK) fprintf(stderr, "encode: %s\n", err);
-    assert_int_equal(r, OCEAN_OK);
-    *len = b.len;
-    return b.mem;
-}
-
-static void raw_send_msg(test_ws *w, proto_msg *m)
-{
-    size_t len;
-    uint8_t *b = encode(m, &len);
-    assert_int_equal(test_ws_send(w, 2, b, len), 0);
-    free(b);
-}
-
-/* Next decoded message of `type` within ms; 0 on timeout, close or EOF. */
-static int raw_wait_type(test_ws *w, unsigned type, int ms, proto_msg *m)
-{
-    double end = now_s() + ms / 1000.0;
-    while (now_s() < end) {
-        uint8_t *b;
-        size_t n;
-        int op = test_ws_recv(w, (int)((end - now_s()) * 1000) + 1, &b, &n);
-        if (op <= 0) return 0;
-        if (op == 8) {
-            free(b);
-            return 0;
-        }
-        char err[256];
-        ocean_result r = proto_decode(b, n, m, err, sizeof err);
-        free(b);
-        if (r == OCEAN_OK && m->hdr.type == type) return 1;
-        if (r == OCEAN_OK) proto_msg_free(m);
-    }
-    return 0;
-}
-
 /* The close code the server sends within ms (-1: none, EOF or timeout). */
 static int wait_close(test_ws *w, int ms)
 {
-    double end = now_s() + ms / 1000.0;
-    while (now_s() < end) {
+    double end = test_now_s() + ms / 1000.0;
+    while (test_now_s() < end) {
         uint8_t *b;
         size_t n;
-        int op = test_ws_recv(w, (int)((end - now_s()) * 1000) + 1, &b, &n);
+        int op = test_ws_recv(w, (int)((end - test_now_s()) * 1000) + 1, &b, &n);
         if (op <= 0) return -1;
         int code = op == 8 && n >= 2 ? b[0] << 8 | b[1] : -2;
         free(b);
@@ -362,10 +314,10 @@ static size_t http_exchange(int fd, const char *req, char *out, size_t cap, int 
 {
     if (send(fd, req, strlen(req), MSG_NOSIGNAL) < 0) return 0;
     size_t len = 0;
-    double end = now_s() + ms / 1000.0;
-    while (len + 1 < cap && now_s() < end) {
+    double end = test_now_s() + ms / 1000.0;
+    while (len + 1 < cap && test_now_s() < end) {
         struct pollfd pf = {fd, POLLIN, 0};
-        if (poll(&pf, 1, (int)((end - now_s()) * 1000) + 1) <= 0) break;
+        if (poll(&pf, 1, (int)((end - test_now_s()) * 1000) + 1) <= 0) break;
         ssize_t k = recv(fd, out + len, cap - 1 - len, 0);
         if (k <= 0) break;
         len += (size_t)k;
@@ -400,12 +352,12 @@ static void attacker(test_ws *w, const char *path, const proto_subscribe *sub)
 {
     assert_int_equal(test_ws_connect(w, port, path ? path : "/", PROTO_SUBPROTOCOL), 0);
     proto_msg m;
-    assert_true(raw_wait_type(w, PROTO_HELLO, 3000, &m));
+    assert_true(test_msg_wait(w, PROTO_HELLO, 3000, &m));
     proto_msg_free(&m);
     if (sub) {
         proto_msg_init(&m, PROTO_SUBSCRIBE);
         m.u.subscribe = *sub;
-        raw_send_msg(w, &m);
+        test_msg_send(w, &m);
     }
 }
 
@@ -413,9 +365,9 @@ static void attacker(test_ws *w, const char *path, const proto_subscribe *sub)
 static void expect_error(test_ws *w, ocean_result code, const char *names, int ms)
 {
     proto_msg m;
-    double end = now_s() + ms / 1000.0;
-    while (now_s() < end) {
-        if (!raw_wait_type(w, PROTO_ERROR, (int)((end - now_s()) * 1000) + 1, &m)) break;
+    double end = test_now_s() + ms / 1000.0;
+    while (test_now_s() < end) {
+        if (!test_msg_wait(w, PROTO_ERROR, (int)((end - test_now_s()) * 1000) + 1, &m)) break;
         int ok = m.u.error.code == code && (!names || strstr(m.u.error.message, names));
         if (!ok)
             fprintf(stderr, "  (other ERROR %s: %s)\n", ocean_strerror((ocean_result)m.u.error.code),
@@ -577,10 +529,10 @@ static void a_rfc_handshake_refusals(void **state)
         /* the refusal, then EOF: the daemon holds nothing */
         char r[1024];
         size_t n = 0;
-        double end = now_s() + 3;
+        double end = test_now_s() + 3;
         for (;;) {
             struct pollfd pf = {fds[i], POLLIN, 0};
-            if (now_s() > end || poll(&pf, 1, 100) < 0) break;
+            if (test_now_s() > end || poll(&pf, 1, 100) < 0) break;
             if (!(pf.revents & POLLIN)) continue;
             ssize_t k = recv(fds[i], r + n, sizeof r - 1 - n, 0);
             if (k <= 0) break;
@@ -699,13 +651,13 @@ static void a_mesh_bomb(void **state)
     cm.u.camera.fov_y_deg = 1;
     cm.u.camera.viewport_w = 1920;
     cm.u.camera.viewport_h = 1080;
-    raw_send_msg(&w, &cm);
+    test_msg_send(&w, &cm);
     expect_error(&w, OCEAN_ETOOBIG, "server.max_mesh_vertices", 3000);
     /* frames still come, without a mesh */
     proto_msg m;
     int meshless = 0;
     for (int i = 0; i < 10 && !meshless; i++) {
-        assert_true(raw_wait_type(&w, PROTO_FRAME, 2000, &m));
+        assert_true(test_msg_wait(&w, PROTO_FRAME, 2000, &m));
         meshless = !m.u.frame.has_mesh && m.u.frame.camera_seq == cm.hdr.seq;
         proto_msg_free(&m);
     }
@@ -717,10 +669,10 @@ static void a_mesh_bomb(void **state)
         cm.u.camera.fov_y_deg = (float)fov[k];
         memcpy(cm.u.camera.pos, pos[k], sizeof pos[k]);
         cm.hdr.seq = 100 + (uint32_t)k;
-        raw_send_msg(&w, &cm);
+        test_msg_send(&w, &cm);
         int seen = 0;
         for (int i = 0; i < 40 && !seen; i++) {
-            if (!raw_wait_type(&w, PROTO_FRAME, 2000, &m)) break;
+            if (!test_msg_wait(&w, PROTO_FRAME, 2000, &m)) break;
             seen = m.u.frame.camera_seq == cm.hdr.seq;
             proto_msg_free(&m);
         }
@@ -758,7 +710,7 @@ static void a_query_flood(void **state)
     /* encoded and masked once, sent 17 times: the attacker's own CPU
      * (in this process, on the daemon's 2 cores) is not the test */
     size_t qlen;
-    uint8_t *qb = encode(&q, &qlen);
+    uint8_t *qb = test_msg_encode(&q, &qlen);
     size_t flen = qlen + 14;
     uint8_t *frame = malloc(flen);
     assert_non_null(frame);
@@ -785,11 +737,11 @@ static void a_query_flood(void **state)
     attacker(&o, NULL, NULL);
     q.u.query.count = 100;
     q.u.query.query_id = 777;
-    double t0 = now_s();
-    raw_send_msg(&o, &q);
+    double t0 = test_now_s();
+    test_msg_send(&o, &q);
     proto_msg m;
-    assert_true(raw_wait_type(&o, PROTO_QUERY_RESULT, 3000, &m));
-    double waited = now_s() - t0;
+    assert_true(test_msg_wait(&o, PROTO_QUERY_RESULT, 3000, &m));
+    double waited = test_now_s() - t0;
     assert_int_equal(m.u.result.query_id, 777);
     proto_msg_free(&m);
     fprintf(stderr, "  small query answered in %.0f ms during the flood\n", 1e3 * waited);
@@ -829,14 +781,14 @@ static void a_replay_flood(void **state)
         oc_camera_default(&cm.u.camera);
         cm.u.camera.render_time = 0.05 * i;
         cm.hdr.seq = (uint32_t)i;
-        raw_send_msg(&w, &cm);
-        if (i < 256) raw_send_msg(&hog, &cm);
+        test_msg_send(&w, &cm);
+        if (i < 256) test_msg_send(&hog, &cm);
     }
     expect_error(&w, OCEAN_ERATE, "server.replay_queue", 3000);
     test_ws_close(&w);
     /* the hog reads nothing: its frames pile up to the hard limit */
-    double end = now_s() + 5;
-    while (now_s() < end &&
+    double end = test_now_s() + 5;
+    while (test_now_s() < end &&
            stat_of(&h->stats.disconnects_output) + stat_of(&h->stats.disconnects_slow) == out0)
         usleep(50000);
     int cut = stat_of(&h->stats.disconnects_output) + stat_of(&h->stats.disconnects_slow) > out0;
@@ -883,7 +835,7 @@ static void a_heavy_subscriber(void **state)
     s.mesh_kind = PROTO_MESH_NONE;
     attacker(&w, NULL, &s);
     proto_msg m;
-    assert_true(raw_wait_type(&w, PROTO_FRAME, 3000, &m));
+    assert_true(test_msg_wait(&w, PROTO_FRAME, 3000, &m));
     proto_msg_free(&m);
     test_ws_close(&w);
     window_end("heavy-subscriber");
@@ -953,11 +905,11 @@ static void a_idle_connections(void **state)
     attacker(&talker, NULL, NULL);
     proto_msg m, got;
     int bye = -1;
-    for (double end = now_s() + 4; now_s() < end && bye < 0;) {
+    for (double end = test_now_s() + 4; test_now_s() < end && bye < 0;) {
         proto_msg_init(&m, PROTO_SEA_STATE); /* a get: a message, not a subscription */
         m.u.sea_state.op = PROTO_SEA_GET;
-        raw_send_msg(&talker, &m);
-        if (raw_wait_type(&quiet, PROTO_BYE, 400, &got)) {
+        test_msg_send(&talker, &m);
+        if (test_msg_wait(&quiet, PROTO_BYE, 400, &got)) {
             bye = got.u.bye.reason;
             proto_msg_free(&got);
         }
@@ -966,8 +918,8 @@ static void a_idle_connections(void **state)
     /* the talker is still served: its SEA_STATE gets are answered */
     proto_msg_init(&m, PROTO_SEA_STATE);
     m.u.sea_state.op = PROTO_SEA_GET;
-    raw_send_msg(&talker, &m);
-    assert_true(raw_wait_type(&talker, PROTO_SEA_STATE, 2000, &got));
+    test_msg_send(&talker, &m);
+    assert_true(test_msg_wait(&talker, PROTO_SEA_STATE, 2000, &got));
     proto_msg_free(&got);
     test_ws_close(&quiet);
     test_ws_close(&talker);
@@ -990,15 +942,15 @@ static void a_text_and_garbage_flood(void **state)
     test_ws w;
     attacker(&w, NULL, NULL);
     test_ws_small_rcvbuf(&w, 4096);
-    double t0 = now_s();
+    double t0 = test_now_s();
     for (int i = 0; i < 20000; i++) {
         if (i % 2) test_ws_send(&w, 1, "x", 1);
         else test_ws_send(&w, 2, "garbage!", 8); /* bad binary: an ERROR each within the burst */
     }
-    double flood_s = now_s() - t0;
+    double flood_s = test_now_s() - t0;
     int errors = 0, rate = 0;
     proto_msg m;
-    while (raw_wait_type(&w, PROTO_ERROR, 700, &m)) {
+    while (test_msg_wait(&w, PROTO_ERROR, 700, &m)) {
         errors++;
         rate += m.u.error.code == OCEAN_ERATE;
         proto_msg_free(&m);
@@ -1043,7 +995,7 @@ static void a_recording_quotas(void **state)
     oc_camera_default(&cm.u.camera);
     for (int i = 0; i < 150; i++) {
         cm.u.camera.pos[0] = i;
-        raw_send_msg(&w[0], &cm);
+        test_msg_send(&w[0], &cm);
         usleep(2000);
     }
     usleep(200000);
@@ -1080,7 +1032,7 @@ static void sea_set(test_ws *w, const char *token)
     ss.u.sea_state.op = PROTO_SEA_SET;
     srv_sea_from_params(&settings.params, &ss.u.sea_state.sea);
     snprintf(ss.u.sea_state.token, sizeof ss.u.sea_state.token, "%s", token);
-    raw_send_msg(w, &ss);
+    test_msg_send(w, &ss);
 }
 
 /* Token guessing (200 a second per connection before): a miss locks the
@@ -1109,7 +1061,7 @@ static void a_admin_guessing(void **state)
     usleep(300000);
     sea_set(&w, "attack-token");
     proto_msg m;
-    assert_true(raw_wait_type(&w, PROTO_SEA_STATE, 3000, &m));
+    assert_true(test_msg_wait(&w, PROTO_SEA_STATE, 3000, &m));
     proto_msg_free(&m);
     test_ws_close(&w);
 }

@@ -32,6 +32,7 @@
 #include "oc_store.h"
 #include "oceanclient.h"
 #include "proto.h"
+#include "lib/test_net.h"
 
 /* ================================================================ URLs */
 
@@ -1781,65 +1782,24 @@ static void connect_cycles(void **state)
 
 /* ====================================================== the real daemon */
 
-static int free_port(void)
-{
-    int fd = socket(AF_INET, SOCK_STREAM, 0);
-    struct sockaddr_in a = {0};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (bind(fd, (struct sockaddr *)&a, sizeof a) != 0) {
-        close(fd);
-        return -1;
-    }
-    socklen_t al = sizeof a;
-    getsockname(fd, (struct sockaddr *)&a, &al);
-    close(fd);
-    return ntohs(a.sin_port);
-}
-
 static void daemon_round_trip(void **state)
 {
     (void)state;
-    const char *bin = getenv("OCEAND_BIN");
-    char path[512];
-    if (!bin) {
-        const char *build = getenv("BUILD");
-        snprintf(path, sizeof path, "%s/oceand", build ? build : "build");
-        bin = path;
-    }
+    char bin[512];
+    test_oceand_bin(bin, sizeof bin);
     if (access(bin, X_OK) != 0 || access("config/oceand.conf", R_OK) != 0) {
         print_message("(%s not built: live daemon round trip skipped)\n", bin);
         skip();
     }
-    int port = free_port();
+    int port = test_free_port();
     assert_true(port > 0);
-    char ports[16];
-    snprintf(ports, sizeof ports, "%d", port);
-    pid_t pid = fork();
+    pid_t pid = test_oceand_spawn(bin, port, NULL);
     assert_true(pid >= 0);
-    if (pid == 0) {
-        freopen("/dev/null", "w", stdout);
-        execl(bin, bin, "--config", "config/oceand.conf", "--port", ports, (char *)NULL);
-        _exit(127);
-    }
-    char url[64];
-    snprintf(url, sizeof url, "ws://127.0.0.1:%d/", port);
-    oc_options o;
-    oc_options_default(&o);
-    o.url = url;
     oc_client *c = NULL;
     char err[256] = "";
-    ocean_result r = OCEAN_EIO;
-    for (int i = 0; i < 100 && r != OCEAN_OK; i++) {
-        r = oc_connect(&o, 2000, &c, err, sizeof err);
-        if (r != OCEAN_OK) {
-            struct timespec ts = {0, 50 * 1000 * 1000};
-            nanosleep(&ts, NULL);
-        }
-    }
+    ocean_result r = test_oceand_connect(port, 100, &c, err, sizeof err);
     if (r != OCEAN_OK) {
-        kill(pid, SIGTERM);
-        waitpid(pid, NULL, 0);
+        test_oceand_stop(pid);
         print_error("could not connect to %s: %s\n", bin, err);
         fail();
     }
@@ -1875,9 +1835,7 @@ static void daemon_round_trip(void **state)
         assert_true(isfinite(q.samples[0].height) && fabsf(q.samples[0].height) < 100);
     oc_query_result_free(&q);
     oc_client_destroy(c);
-    kill(pid, SIGTERM);
-    int status = 0;
-    waitpid(pid, &status, 0);
+    test_oceand_stop(pid);
     assert_int_equal(frames, 3);
     assert_int_equal(qr, OCEAN_OK);
 }

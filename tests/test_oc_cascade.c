@@ -38,6 +38,7 @@
 #include "codec.h"
 #include "oceanclient.h"
 #include "proto.h"
+#include "lib/test_net.h"
 
 /* ===================================================== frame building */
 
@@ -944,21 +945,6 @@ static void surface_inversion(void **state)
 
 /* ============================================ against the real daemon */
 
-static int free_port(void)
-{
-    int fd = socket(AF_INET, SOCK_STREAM, 0);
-    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
-    if (fd < 0 || bind(fd, (struct sockaddr *)&a, sizeof a) != 0) {
-        if (fd >= 0)
-            close(fd);
-        return -1;
-    }
-    socklen_t al = sizeof a;
-    getsockname(fd, (struct sockaddr *)&a, &al);
-    close(fd);
-    return ntohs(a.sin_port);
-}
-
 /*
  * The heights the library reads from the daemon's layout-1 frames next to
  * the camera against QUERY_RESULT at the frame's tick (queries are exact
@@ -979,49 +965,23 @@ static int free_port(void)
 static void daemon_layout1_heights(void **state)
 {
     (void)state;
-    const char *bin = getenv("OCEAND_BIN");
-    char path[512];
-    if (!bin) {
-        const char *build = getenv("BUILD");
-        snprintf(path, sizeof path, "%s/oceand", build ? build : "build");
-        bin = path;
-    }
+    char bin[512];
+    test_oceand_bin(bin, sizeof bin);
     if (access(bin, X_OK) != 0 || access("config/oceand.conf", R_OK) != 0) {
         print_message("(%s not built: live daemon comparison skipped)\n", bin);
         skip();
     }
-    int port = free_port();
+    int port = test_free_port();
     assert_true(port > 0);
-    char ports[16];
-    snprintf(ports, sizeof ports, "%d", port);
-    pid_t pid = fork();
+    const char *args[] = {"--scene", "ship-bridge", "--set", "server.px_per_sample=1", "--set",
+                          "server.viewer_bytes_per_s=1e10", "--set", "server.near_field_waves=0", NULL};
+    pid_t pid = test_oceand_spawn(bin, port, args);
     assert_true(pid >= 0);
-    if (pid == 0) {
-        if (!freopen("/dev/null", "w", stdout))
-            _exit(127);
-        execl(bin, bin, "--config", "config/oceand.conf", "--scene", "ship-bridge", "--port", ports, "--set",
-              "server.px_per_sample=1", "--set", "server.viewer_bytes_per_s=1e10", "--set",
-              "server.near_field_waves=0", (char *)NULL);
-        _exit(127);
-    }
-    char url[64];
-    snprintf(url, sizeof url, "ws://127.0.0.1:%d/", port);
-    oc_options o;
-    oc_options_default(&o);
-    o.url = url;
     oc_client *c = NULL;
     char err[256] = "";
-    ocean_result r = OCEAN_EIO;
-    for (int i = 0; i < 200 && r != OCEAN_OK; i++) {
-        r = oc_connect(&o, 2000, &c, err, sizeof err);
-        if (r != OCEAN_OK) {
-            struct timespec ts = {0, 50 * 1000 * 1000};
-            nanosleep(&ts, NULL);
-        }
-    }
+    ocean_result r = test_oceand_connect(port, 200, &c, err, sizeof err);
     if (r != OCEAN_OK) {
-        kill(pid, SIGTERM);
-        waitpid(pid, NULL, 0);
+        test_oceand_stop(pid);
         print_error("could not connect to %s: %s\n", bin, err);
         fail();
     }
@@ -1103,8 +1063,7 @@ static void daemon_layout1_heights(void **state)
     }
     oc_frame_free(f);
     oc_client_destroy(c);
-    kill(pid, SIGTERM);
-    waitpid(pid, NULL, 0);
+    test_oceand_stop(pid);
     assert_true(ok);
     double rms = got ? sqrt(sum2 / got) : NAN;
     print_message("layout-1 heights vs QUERY_RESULT: %d points, RMS %.4f m, max %.4f m, %d outside the tiles, "

@@ -39,6 +39,7 @@
 #include "oceanclient.h"
 #include "proto.h"
 #include "lib/test_ws.h"
+#include "lib/test_net.h"
 
 /* One epoch for both replicas: midnight UTC yesterday, set in main.  Not a
  * fixed date: the daemon refuses an epoch whose sim time would pass
@@ -51,13 +52,6 @@ static char exe_dir[512];
 static char tmp[256];
 static pid_t pids[4]; /* redis, r1, r2, haproxy */
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
 /* The replicas' sim time, computed here from the epoch (PROTOCOL.md
  * "Simulation clock"). */
 static double sim_now(void)
@@ -65,19 +59,6 @@ static double sim_now(void)
     struct timespec ts;
     clock_gettime(CLOCK_REALTIME, &ts);
     return (double)ts.tv_sec - EPOCH_UNIX + 1e-9 * ts.tv_nsec;
-}
-
-static int free_port(void)
-{
-    int fd = socket(AF_INET, SOCK_STREAM, 0);
-    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
-    socklen_t l = sizeof a;
-    if (bind(fd, (struct sockaddr *)&a, sizeof a) || getsockname(fd, (struct sockaddr *)&a, &l)) {
-        close(fd);
-        return -1;
-    }
-    close(fd);
-    return ntohs(a.sin_port);
 }
 
 static int port_open(int port)
@@ -92,8 +73,8 @@ static int port_open(int port)
 
 static int wait_port(int port, double secs)
 {
-    double end = now_s() + secs;
-    while (now_s() < end) {
+    double end = test_now_s() + secs;
+    while (test_now_s() < end) {
         if (port_open(port)) return 1;
         usleep(50000);
     }
@@ -161,11 +142,11 @@ static void raw_send(test_ws *w, const proto_msg *m)
  * 0 on timeout, -1 when the connection closed. */
 static int wait_type(test_ws *w, unsigned type, int ms, proto_msg *m, uint8_t **raw, size_t *rawlen)
 {
-    double end = now_s() + ms / 1000.0;
-    while (now_s() < end) {
+    double end = test_now_s() + ms / 1000.0;
+    while (test_now_s() < end) {
         uint8_t *b;
         size_t n;
-        int op = test_ws_recv(w, (int)((end - now_s()) * 1000) + 1, &b, &n);
+        int op = test_ws_recv(w, (int)((end - test_now_s()) * 1000) + 1, &b, &n);
         if (op < 0) return -1;
         if (op == 0) return 0;
         if (op == 8) {
@@ -190,8 +171,8 @@ static int wait_type(test_ws *w, unsigned type, int ms, proto_msg *m, uint8_t **
 
 static void connect_hello(test_ws *w, int port, proto_hello *h)
 {
-    double end = now_s() + 5;
-    while (now_s() < end) {
+    double end = test_now_s() + 5;
+    while (test_now_s() < end) {
         if (test_ws_connect(w, port, "/", PROTO_SUBPROTOCOL) == 0) {
             proto_msg m;
             if (wait_type(w, PROTO_HELLO, 3000, &m, NULL, NULL) == 1) {
@@ -279,8 +260,8 @@ static void live_identical(test_ws *d1, test_ws *d2, int layout)
         c.u.camera.pos[1] = 25;
         raw_send(dd[k], &c);
     }
-    double lend = now_s() + 3.0;
-    while (now_s() < lend && (ln[0] < 30 || ln[1] < 30))
+    double lend = test_now_s() + 3.0;
+    while (test_now_s() < lend && (ln[0] < 30 || ln[1] < 30))
         for (int k = 0; k < 2; k++) {
             uint8_t *raw;
             size_t len;
@@ -326,7 +307,7 @@ static void replicas_behind_haproxy(void **state)
     }
     snprintf(tmp, sizeof tmp, "/tmp/test_replicas.%d", (int)getpid());
     mkdir(tmp, 0755);
-    int prd = free_port(), p1 = free_port(), p2 = free_port(), ph = free_port();
+    int prd = test_free_port(), p1 = test_free_port(), p2 = test_free_port(), ph = test_free_port();
     assert_true(prd > 0 && p1 > 0 && p2 > 0 && ph > 0);
     char path[600], log[600], text[4096], ports[16];
 
@@ -538,10 +519,10 @@ static void replicas_behind_haproxy(void **state)
         raw_send(&d2, &set);
         int announced = 0;
         char got[1100] = "nothing within 3 s";
-        for (double end = now_s() + 3; !announced && now_s() < end;) {
+        for (double end = test_now_s() + 3; !announced && test_now_s() < end;) {
             uint8_t *b;
             size_t bl;
-            int op = test_ws_recv(&d2, (int)((end - now_s()) * 1000) + 1, &b, &bl);
+            int op = test_ws_recv(&d2, (int)((end - test_now_s()) * 1000) + 1, &b, &bl);
             if (op <= 0) break;
             proto_msg g;
             if (op != 8 && proto_decode(b, bl, &g, NULL, 0) == OCEAN_OK) {

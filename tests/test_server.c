@@ -39,6 +39,7 @@
 #include "srv_daemon.h"
 #include "srv_record.h"
 #include "lib/test_ws.h"
+#include "lib/test_net.h"
 #include "oc_path.h"
 
 static int sanitized;
@@ -49,13 +50,6 @@ static srv_settings settings;
 static srv_daemon *daemon_;
 static int port;
 static oc_loop *bg_loop; /* serviced by a library thread */
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
 
 static void write_conf(const char *path, double wind, int max_clients)
 {
@@ -192,49 +186,6 @@ static void drain_frames(oc_client *c)
 
 static uint64_t stat_of(atomic_uint_fast64_t *a) { return (uint64_t)atomic_load(a); }
 
-/* Encodes a message into a malloc'ed buffer. */
-static uint8_t *encode(proto_msg *m, size_t *len)
-{
-    proto_buf b;
-    proto_buf_init(&b, 0);
-    char err[256];
-    ocean_result r = proto_encode(&b, m, err, sizeof err);
-    if (r != OCEAN_OK) fprintf(stderr, "encode: %s\n", err);
-    assert_int_equal(r, OCEAN_OK);
-    *len = b.len;
-    return b.mem;
-}
-
-static void raw_send_msg(test_ws *w, proto_msg *m)
-{
-    size_t len;
-    uint8_t *b = encode(m, &len);
-    assert_int_equal(test_ws_send(w, 2, b, len), 0);
-    free(b);
-}
-
-/* Reads raw messages until one of `type` arrives (decoded into *m). */
-static int raw_wait_type(test_ws *w, unsigned type, int ms, proto_msg *m)
-{
-    double end = now_s() + ms / 1000.0;
-    while (now_s() < end) {
-        uint8_t *b;
-        size_t n;
-        int op = test_ws_recv(w, (int)((end - now_s()) * 1000) + 1, &b, &n);
-        if (op <= 0) return 0;
-        if (op == 8) {
-            free(b);
-            return 0;
-        }
-        char err[256];
-        ocean_result r = proto_decode(b, n, m, err, sizeof err);
-        free(b);
-        if (r == OCEAN_OK && m->hdr.type == type) return 1;
-        if (r == OCEAN_OK) proto_msg_free(m);
-    }
-    return 0;
-}
-
 static ocean *local_ocean(void)
 {
     ocean *o;
@@ -340,8 +291,8 @@ static void cascade_subscribe(proto_subscribe *s)
 /* The first frame answering camera seq `seq` (NULL after ms). */
 static oc_frame *frame_for(oc_client *c, uint32_t seq, int ms)
 {
-    double end = now_s() + ms / 1000.0;
-    while (now_s() < end) {
+    double end = test_now_s() + ms / 1000.0;
+    while (test_now_s() < end) {
         oc_frame *f = NULL;
         if (oc_client_next_frame(c, 20, &f) != OCEAN_OK) continue;
         if (f->info.camera_seq == seq) return f;
@@ -492,6 +443,42 @@ static void cascade_tiles_are_the_mips(void **state)
     oc_client_destroy(c);
 }
 
+/* Loads the built-in defaults with `sets` applied; asserts they load. */
+static void load_settings(const char *const *sets, int n, srv_settings *out)
+{
+    char err[512];
+    ocean_result r = srv_settings_load(NULL, sets, n, out, err, sizeof err);
+    if (r != OCEAN_OK) fprintf(stderr, "%s\n", err);
+    assert_int_equal(r, OCEAN_OK);
+}
+
+/* A daemon in this process on the defaults with `sets` applied (their
+ * settings in *out); asserts it starts. */
+static srv_daemon *start_daemon(const char *const *sets, int n, srv_settings *out)
+{
+    char err[512];
+    srv_daemon *d = NULL;
+    load_settings(sets, n, out);
+    ocean_result r = srv_daemon_start(out, &d, err, sizeof err);
+    if (r != OCEAN_OK) fprintf(stderr, "%s\n", err);
+    assert_int_equal(r, OCEAN_OK);
+    return d;
+}
+
+/* The camera of the browser viewer on a bridge 25 m up (the scene `make
+ * run` serves), looking a little down, on a 1920 x 1080 viewport. */
+static void bridge_camera(proto_camera *cam)
+{
+    oc_camera_default(cam);
+    cam->pos[0] = 321.5;
+    cam->pos[1] = 25;
+    cam->pos[2] = -77.25;
+    cam->pitch_deg = -15.1;
+    cam->fov_y_deg = 60;
+    cam->viewport_w = 1920;
+    cam->viewport_h = 1080;
+}
+
 /* Each cascade its own q.  With one q for every cascade, a plan stops
  * where the next quarter octave of every cascade together does not fit,
  * and a coarse cascade's step costs whole tiles 125 m wide: a camera 25 m
@@ -508,26 +495,14 @@ static void cascade_q_spends_the_budget(void **state)
     (void)state;
     const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
     srv_settings sb;
-    char err[512];
-    ocean_result lr = srv_settings_load(NULL, sets, 4, &sb, err, sizeof err);
-    if (lr != OCEAN_OK) fprintf(stderr, "%s\n", err);
-    assert_int_equal(lr, OCEAN_OK);
-    srv_daemon *d;
-    assert_int_equal(srv_daemon_start(&sb, &d, err, sizeof err), OCEAN_OK);
+    srv_daemon *d = start_daemon(sets, 4, &sb);
     oc_client *c = connect_client(srv_daemon_port(d), NULL);
     proto_subscribe s;
     oc_subscribe_default(&s);
     s.mesh_kind = PROTO_MESH_NONE;
     assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
     proto_camera cam;
-    oc_camera_default(&cam);
-    cam.pos[0] = 321.5;
-    cam.pos[1] = 25;
-    cam.pos[2] = -77.25;
-    cam.pitch_deg = -15.1;
-    cam.fov_y_deg = 60;
-    cam.viewport_w = 1920;
-    cam.viewport_h = 1080;
+    bridge_camera(&cam);
     uint32_t seq;
     assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
     oc_frame *f = frame_for(c, seq, sanitized ? 20000 : 8000);
@@ -585,12 +560,7 @@ static void cascade_fine_mips_without_geometry(void **state)
     (void)state;
     const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
     srv_settings sb;
-    char err[512];
-    ocean_result lr = srv_settings_load(NULL, sets, 4, &sb, err, sizeof err);
-    if (lr != OCEAN_OK) fprintf(stderr, "%s\n", err);
-    assert_int_equal(lr, OCEAN_OK);
-    srv_daemon *d;
-    assert_int_equal(srv_daemon_start(&sb, &d, err, sizeof err), OCEAN_OK);
+    srv_daemon *d = start_daemon(sets, 4, &sb);
     double qfine[2] = {0, 0};
     /* 2: the viewer's subscription; 1: the same with the full_geometry flag; 0: no mesh */
     for (int run = 2; run >= 0; run--) {
@@ -602,14 +572,7 @@ static void cascade_fine_mips_without_geometry(void **state)
         if (run == 0) s.mesh_kind = PROTO_MESH_NONE;
         assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
         proto_camera cam;
-        oc_camera_default(&cam);
-        cam.pos[0] = 321.5;
-        cam.pos[1] = 25;
-        cam.pos[2] = -77.25;
-        cam.pitch_deg = -15.1;
-        cam.fov_y_deg = 60;
-        cam.viewport_w = 1920;
-        cam.viewport_h = 1080;
+        bridge_camera(&cam);
         uint32_t seq;
         assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
         oc_frame *f = frame_for(c, seq, sanitized ? 20000 : 8000);
@@ -718,9 +681,7 @@ static void cascade_near_field_ship_bridge(void **state)
                           sanitized ? "ocean.n=64" : "ocean.n=256", "server.viewer_bytes_per_s=1e9"};
     srv_settings sb;
     char err[512];
-    ocean_result lr = srv_settings_load(NULL, sets, 6, &sb, err, sizeof err);
-    if (lr != OCEAN_OK) fprintf(stderr, "%s\n", err);
-    assert_int_equal(lr, OCEAN_OK);
+    load_settings(sets, 6, &sb);
     assert_int_equal(sb.params.cascades, 3);
     assert_true(srv_settings_near_cascade(&sb));
     assert_int_equal(srv_settings_layout1_cascades(&sb), 4);
@@ -925,15 +886,15 @@ static void cascade_tiles_shared_across_cameras(void **state)
     uint64_t e0 = stat_of(&h->stats.tiles_encoded), t0 = stat_of(&h->stats.ticks);
     uint64_t hit0 = stat_of(&h->stats.tile_cache_hits);
     /* a few ticks pass with every camera live */
-    for (double until = now_s() + 10; now_s() < until && stat_of(&h->stats.ticks) < t0 + 3;) usleep(10000);
+    for (double until = test_now_s() + 10; test_now_s() < until && stat_of(&h->stats.ticks) < t0 + 3;) usleep(10000);
     uint64_t e1 = stat_of(&h->stats.tiles_encoded), t1 = stat_of(&h->stats.ticks);
     for (int i = 0; i < NV; i++) drain_frames(v[i]);
     /* two viewers' frames of one tick */
     enum { KEEP = 16 };
     oc_frame *fa[KEEP] = {0}, *fb[KEEP] = {0}, *a = NULL, *bb = NULL;
     int na = 0, nb = 0;
-    double end = now_s() + 5;
-    while (now_s() < end && !a) {
+    double end = test_now_s() + 5;
+    while (test_now_s() < end && !a) {
         oc_frame *f;
         if (na < KEEP && oc_client_next_frame(v[0], 5, &f) == OCEAN_OK) fa[na++] = f;
         if (nb < KEEP && oc_client_next_frame(v[3], 5, &f) == OCEAN_OK) fb[nb++] = f;
@@ -1019,8 +980,8 @@ static void cutoff_run(ocean_filter_policy pol, double speed)
     assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
     double prev = k0, last = k0;
     int steps = 0;
-    double end = now_s() + 8;
-    while (now_s() < end && last != expect) {
+    double end = test_now_s() + 8;
+    while (test_now_s() < end && last != expect) {
         oc_frame *f = next_frame(c, 3000);
         if (f->info.camera_seq == seq) {
             last = f->info.cutoff_k;
@@ -1144,8 +1105,8 @@ static void identical_cameras_share_tiles(void **state)
     uint64_t shared0 = stat_of(&h->stats.frames_shared);
     oc_frame *fa[32] = {0};
     int na = 0, matched = 0;
-    double end = now_s() + 5;
-    while (now_s() < end && matched < 3) {
+    double end = test_now_s() + 5;
+    while (test_now_s() < end && matched < 3) {
         oc_frame *f;
         if (oc_client_next_frame(a, 10, &f) == OCEAN_OK) {
             if (f->info.camera_seq == sa && na < 32) fa[na++] = f;
@@ -1335,16 +1296,16 @@ static void slow_reader_never_delays_fast(void **state)
     proto_msg_init(&m, PROTO_SUBSCRIBE);
     small_subscribe(&m.u.subscribe);
     m.u.subscribe.lod_levels = 4;
-    raw_send_msg(&slow, &m);
+    test_msg_send(&slow, &m);
     oc_client *fast = connect_bg(port);
     proto_subscribe s;
     small_subscribe(&s);
     assert_int_equal(oc_client_subscribe(fast, &s), OCEAN_OK);
     drain_frames(fast);
-    double t0 = now_s();
+    double t0 = test_now_s();
     int frames = 0;
     double lat[256];
-    while (now_s() - t0 < 2.5) {
+    while (test_now_s() - t0 < 2.5) {
         oc_frame *f;
         if (oc_client_next_frame(fast, 100, &f) == OCEAN_OK) {
             if (frames < 256) lat[frames] = f->latency_ms;
@@ -1361,8 +1322,8 @@ static void slow_reader_never_delays_fast(void **state)
     assert_true(frames >= (sanitized ? 15 : 35));
     if (!sanitized) assert_true(stat_of(&h->stats.frames_skipped) > skipped0);
     /* no bytes read for output_soft_seconds (1 s): dropped with a reason */
-    double end = now_s() + 5;
-    while (now_s() < end && stat_of(&h->stats.disconnects_slow) == slow0) usleep(50000);
+    double end = test_now_s() + 5;
+    while (test_now_s() < end && stat_of(&h->stats.disconnects_slow) == slow0) usleep(50000);
     assert_true(stat_of(&h->stats.disconnects_slow) > slow0);
     assert_int_equal(oc_client_state(fast), OC_READY); /* the fast one stays */
     oc_frame *f;
@@ -1393,18 +1354,18 @@ static void client_error_log_is_escaped(void **state)
     test_ws w;
     assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
     proto_msg m;
-    assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+    assert_true(test_msg_wait(&w, PROTO_HELLO, 3000, &m));
     proto_msg_free(&m);
     proto_msg_init(&m, PROTO_ERROR);
     m.u.error.code = OCEAN_EFORMAT;
     snprintf(m.u.error.message, sizeof m.u.error.message,
              "x\noceand: forged line\n\x1b[2J");
-    raw_send_msg(&w, &m);
+    test_msg_send(&w, &m);
     /* a SEA_STATE get answered after it: the ERROR was handled */
     proto_msg_init(&m, PROTO_SEA_STATE);
     m.u.sea_state.op = PROTO_SEA_GET;
-    raw_send_msg(&w, &m);
-    assert_true(raw_wait_type(&w, PROTO_SEA_STATE, 3000, &m));
+    test_msg_send(&w, &m);
+    assert_true(test_msg_wait(&w, PROTO_SEA_STATE, 3000, &m));
     proto_msg_free(&m);
     test_ws_close(&w);
     fflush(stderr);
@@ -1453,8 +1414,8 @@ static void camera_at_the_world_edge(void **state)
         cam.pos[1] = 20;
         assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
         int got = 0;
-        double end = now_s() + 5;
-        while (got < 3 && now_s() < end) {
+        double end = test_now_s() + 5;
+        while (got < 3 && test_now_s() < end) {
             oc_frame *f;
             if (oc_client_next_frame(c, 200, &f) != OCEAN_OK) continue;
             /* frames made for this camera, every tile decoded */
@@ -1492,15 +1453,15 @@ static void bad_input_gets_error(void **state)
     test_ws w;
     assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
     proto_msg m;
-    assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+    assert_true(test_msg_wait(&w, PROTO_HELLO, 3000, &m));
     proto_msg_free(&m);
 
     /* CAMERA before SUBSCRIBE */
     proto_msg cm;
     proto_msg_init(&cm, PROTO_CAMERA);
     oc_camera_default(&cm.u.camera);
-    raw_send_msg(&w, &cm);
-    assert_true(raw_wait_type(&w, PROTO_ERROR, 3000, &m));
+    test_msg_send(&w, &cm);
+    assert_true(test_msg_wait(&w, PROTO_ERROR, 3000, &m));
     assert_int_equal(m.u.error.code, OCEAN_ESTATE);
     assert_int_equal(m.u.error.offending_type, PROTO_CAMERA);
     proto_msg_free(&m);
@@ -1512,12 +1473,12 @@ static void bad_input_gets_error(void **state)
     sm.u.subscribe.tile_size = 16;
     sm.u.subscribe.lod_levels = 1;
     sm.u.subscribe.mesh_kind = PROTO_MESH_NONE;
-    raw_send_msg(&w, &sm);
+    test_msg_send(&w, &sm);
 
     bad_case cases[20];
     int nc = 0;
     size_t len;
-    uint8_t *good_cam = encode(&cm, &len);
+    uint8_t *good_cam = test_msg_encode(&cm, &len);
     size_t cam_len = len;
     /* shorter than a header */
     cases[nc++] = (bad_case){"truncated", memcpy(malloc(10), good_cam, 10), 10, 2, OCEAN_ETRUNC};
@@ -1555,15 +1516,15 @@ static void bad_input_gets_error(void **state)
     proto_query_sample qs = {0};
     hm.u.result.count = 1;
     hm.u.result.samples = &qs;
-    cases[nc++] = (bad_case){"server-only", encode(&hm, &len), len, 2, OCEAN_ETYPE};
+    cases[nc++] = (bad_case){"server-only", test_msg_encode(&hm, &len), len, 2, OCEAN_ETYPE};
     /* tile size above the server's maximum */
     proto_msg bs = sm;
     bs.u.subscribe.tile_size = 1000;
-    cases[nc++] = (bad_case){"tile_size", encode(&bs, &len), len, 2, OCEAN_ETOOBIG};
+    cases[nc++] = (bad_case){"tile_size", test_msg_encode(&bs, &len), len, 2, OCEAN_ETOOBIG};
     /* frame rate above the server's maximum */
     bs = sm;
     bs.u.subscribe.frame_rate_hz = 200;
-    cases[nc++] = (bad_case){"frame_rate", encode(&bs, &len), len, 2, OCEAN_EINVAL};
+    cases[nc++] = (bad_case){"frame_rate", test_msg_encode(&bs, &len), len, 2, OCEAN_EINVAL};
     /* a coarsest level spacing (1e4 m x 2^7) beyond what a TILE can state,
      * with tiles small enough to pass the span check: it was accepted and
      * then no FRAME could be encoded, without an ERROR */
@@ -1571,10 +1532,10 @@ static void bad_input_gets_error(void **state)
     bs.u.subscribe.tile_size = 2;
     bs.u.subscribe.lod_levels = 8;
     bs.u.subscribe.base_spacing_m = 1e4f;
-    cases[nc++] = (bad_case){"coarsest_spacing", encode(&bs, &len), len, 2, OCEAN_EINVAL};
+    cases[nc++] = (bad_case){"coarsest_spacing", test_msg_encode(&bs, &len), len, 2, OCEAN_EINVAL};
     /* unknown codec */
     bs = sm;
-    uint8_t *sb = encode(&bs, &len);
+    uint8_t *sb = test_msg_encode(&bs, &len);
     sb[PROTO_HEADER_SIZE + 2] = 77;
     cases[nc++] = (bad_case){"codec", sb, len, 2, OCEAN_ETYPE};
     /* camera outside the protocol's range of positions (5e6 m is inside:
@@ -1588,15 +1549,15 @@ static void bad_input_gets_error(void **state)
     ss.u.sea_state.op = PROTO_SEA_SET;
     srv_sea_from_params(&settings.params, &ss.u.sea_state.sea);
     snprintf(ss.u.sea_state.token, sizeof ss.u.sea_state.token, "guess");
-    cases[nc++] = (bad_case){"token", encode(&ss, &len), len, 2, OCEAN_EAUTH};
+    cases[nc++] = (bad_case){"token", test_msg_encode(&ss, &len), len, 2, OCEAN_EAUTH};
     /* a sea the decoder lets through but the simulation refuses */
     ss.u.sea_state.sea.swell = 50;
     snprintf(ss.u.sea_state.token, sizeof ss.u.sea_state.token, "test-token");
-    cases[nc++] = (bad_case){"sea_depth", encode(&ss, &len), len, 2, OCEAN_EINVAL};
+    cases[nc++] = (bad_case){"sea_depth", test_msg_encode(&ss, &len), len, 2, OCEAN_EINVAL};
 
     for (int i = 0; i < nc; i++) {
         assert_int_equal(test_ws_send(&w, cases[i].opcode, cases[i].bytes, cases[i].len), 0);
-        int got = raw_wait_type(&w, PROTO_ERROR, 3000, &m);
+        int got = test_msg_wait(&w, PROTO_ERROR, 3000, &m);
         if (!got || m.u.error.code != cases[i].want)
             fprintf(stderr, "case %s: got %s (%u: %s), want %s\n", cases[i].what, got ? "ERROR" : "nothing",
                     got ? m.u.error.code : 0, got ? m.u.error.message : "", ocean_strerror(cases[i].want));
@@ -1609,7 +1570,7 @@ static void bad_input_gets_error(void **state)
     /* message rate: a burst beyond server.msg_burst is refused */
     int rate_errors = 0;
     for (int i = 0; i < 150; i++) test_ws_send(&w, 2, good_cam, cam_len);
-    while (raw_wait_type(&w, PROTO_ERROR, 500, &m)) {
+    while (test_msg_wait(&w, PROTO_ERROR, 500, &m)) {
         if (m.u.error.code == OCEAN_ERATE) rate_errors++;
         proto_msg_free(&m);
     }
@@ -1618,7 +1579,7 @@ static void bad_input_gets_error(void **state)
     /* the sender's subscription is untouched: still 16-sample tiles */
     int ok = 0;
     for (int i = 0; i < 5 && !ok; i++) {
-        if (!raw_wait_type(&w, PROTO_FRAME, 2000, &m)) break;
+        if (!test_msg_wait(&w, PROTO_FRAME, 2000, &m)) break;
         if (m.u.frame.tile_count == 4 && m.u.frame.tiles[0].width == 16 && !m.u.frame.has_mesh) ok = 1;
         proto_msg_free(&m);
     }
@@ -1691,7 +1652,7 @@ static void sea_state_set_answered_by_its_own_announce(void **state)
         m.u.sea_state.sea = sea;
         m.u.sea_state.sea.wind_u10 = old_wind + 1 + i;
         snprintf(m.u.sea_state.token, sizeof m.u.sea_state.token, "test-token");
-        raw_send_msg(&b, &m);
+        test_msg_send(&b, &m);
         proto_sea mine = sea;
         mine.wind_u10 = old_wind + 2 + i;
         assert_int_equal(oc_client_sea_state_set(a, &mine, 0, "wrong-token", 5000), OCEAN_EAUTH);
@@ -1745,11 +1706,11 @@ static const proto_sea *tl_at(const timeline *tl, double t)
 static int tl_read(test_ws *w, timeline *tl, int ms)
 {
     int got = 0;
-    double end = now_s() + ms / 1000.0;
-    while (now_s() < end) {
+    double end = test_now_s() + ms / 1000.0;
+    while (test_now_s() < end) {
         uint8_t *b;
         size_t n;
-        int op = test_ws_recv(w, (int)((end - now_s()) * 1000) + 1, &b, &n);
+        int op = test_ws_recv(w, (int)((end - test_now_s()) * 1000) + 1, &b, &n);
         if (op <= 0) break;
         proto_msg m;
         ocean_result r = op == 2 ? proto_decode(b, n, &m, NULL, 0) : OCEAN_EFORMAT;
@@ -1790,7 +1751,7 @@ static void sea_send(test_ws *w, int op, const proto_sea *sea, double eff)
         m.u.sea_state.effective_time = eff;
         snprintf(m.u.sea_state.token, sizeof m.u.sea_state.token, "test-token");
     }
-    raw_send_msg(w, &m);
+    test_msg_send(w, &m);
 }
 
 static double hub_now(void) { return srv_hub_sim_time(srv_daemon_hub(daemon_)); }
@@ -1799,9 +1760,9 @@ static double hub_now(void) { return srv_hub_sim_time(srv_daemon_hub(daemon_)); 
 static void wait_hub_wind(double wind, double seconds)
 {
     srv_hub *h = srv_daemon_hub(daemon_);
-    double end = now_s() + seconds;
+    double end = test_now_s() + seconds;
     double w = -1;
-    while (now_s() < end) {
+    while (test_now_s() < end) {
         pthread_mutex_lock(&h->lock);
         w = h->sea_now.wind_u10;
         pthread_mutex_unlock(&h->lock);
@@ -1883,7 +1844,7 @@ static void sea_timeline_scheduled_change(void **state)
     proto_sea lib;
     double lib_eff = 0;
     /* the announce behind HELLO may still be on its way to the library */
-    for (double end = now_s() + 5; now_s() < end; oc_service(q, 20))
+    for (double end = test_now_s() + 5; test_now_s() < end; oc_service(q, 20))
         if (oc_client_sea_at(q, eff, &lib, &lib_eff) == OCEAN_OK && lib_eff == eff) break;
     assert_int_equal(oc_client_sea_at(q, eff - 0.01, &lib, &lib_eff), OCEAN_OK);
     assert_true(same_sea(&lib, &old));
@@ -2034,7 +1995,7 @@ static void sea_set_ranges(void **state)
         *(double *)((char *)&x + f[i].off) = f[i].bad;
         sea_send(&a, PROTO_SEA_SET, &x, hub_now() + 100);
         proto_msg m;
-        assert_true(raw_wait_type(&a, PROTO_ERROR, 3000, &m));
+        assert_true(test_msg_wait(&a, PROTO_ERROR, 3000, &m));
         assert_int_equal(m.u.error.code, OCEAN_EINVAL);
         if (!strstr(m.u.error.message, f[i].name)) fail_msg("%s: %s", f[i].name, m.u.error.message);
         proto_msg_free(&m);
@@ -2197,8 +2158,8 @@ static void epoch_shared_clock(void **state)
         sub.frame_rate_hz = 30;
         assert_int_equal(oc_client_subscribe(c[k], &sub), OCEAN_OK);
     }
-    double end = now_s() + (sanitized ? 6 : 3);
-    while (now_s() < end && (nt[0] < 40 || nt[1] < 40)) {
+    double end = test_now_s() + (sanitized ? 6 : 3);
+    while (test_now_s() < end && (nt[0] < 40 || nt[1] < 40)) {
         for (int k = 0; k < 2; k++) {
             oc_frame *f;
             if (nt[k] < 40 && oc_client_next_frame(c[k], 20, &f) == OCEAN_OK) {
@@ -2240,7 +2201,7 @@ static void raw_query(test_ws *w, uint32_t id, uint32_t n)
     q.u.query.query_id = id;
     q.u.query.count = n;
     q.u.query.points = pts;
-    raw_send_msg(w, &q);
+    test_msg_send(w, &q);
     free(pts);
 }
 
@@ -2248,7 +2209,7 @@ static void raw_query(test_ws *w, uint32_t id, uint32_t n)
 static int raw_frame_tiles(test_ws *w, int ms)
 {
     proto_msg m;
-    if (!raw_wait_type(w, PROTO_FRAME, ms, &m)) return -1;
+    if (!test_msg_wait(w, PROTO_FRAME, ms, &m)) return -1;
     int n = m.u.frame.tile_count;
     proto_msg_free(&m);
     return n;
@@ -2264,7 +2225,7 @@ static void subscribe_keeps_pending_queries(void **state)
         test_ws w;
         assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
         proto_msg m;
-        assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+        assert_true(test_msg_wait(&w, PROTO_HELLO, 3000, &m));
         proto_msg_free(&m);
         for (uint32_t id = 1; id <= 3; id++) raw_query(&w, id, 1);
         proto_msg sm;
@@ -2272,9 +2233,9 @@ static void subscribe_keeps_pending_queries(void **state)
         small_subscribe(&sm.u.subscribe);
         sm.u.subscribe.mode = PROTO_MODE_LIVE;
         sm.u.subscribe.frame_rate_hz = 1;
-        raw_send_msg(&w, &sm);
+        test_msg_send(&w, &sm);
         for (uint32_t id = 1; id <= 3; id++) {
-            if (!raw_wait_type(&w, PROTO_QUERY_RESULT, 3000, &m))
+            if (!test_msg_wait(&w, PROTO_QUERY_RESULT, 3000, &m))
                 fail_msg("round %d: QUERY %u sent before a SUBSCRIBE was never answered", round, id);
             assert_int_equal(m.u.result.query_id, id);
             proto_msg_free(&m);
@@ -2294,19 +2255,19 @@ static void hello_limits_are_honoured(void **state)
     test_ws w;
     assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
     proto_msg m;
-    assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+    assert_true(test_msg_wait(&w, PROTO_HELLO, 3000, &m));
     proto_hello h = m.u.hello;
     proto_msg_free(&m);
     uint32_t fit = (h.max_message - 32 - 24) / 16;
     assert_true(h.max_query_points <= fit);
     assert_true(h.max_query_points == fit); /* the test config: 64 KiB messages, 65 536 points */
     raw_query(&w, 7, h.max_query_points);
-    assert_true(raw_wait_type(&w, PROTO_QUERY_RESULT, 5000, &m));
+    assert_true(test_msg_wait(&w, PROTO_QUERY_RESULT, 5000, &m));
     assert_int_equal(m.u.result.query_id, 7);
     assert_int_equal(m.u.result.count, h.max_query_points);
     proto_msg_free(&m);
     raw_query(&w, 8, h.max_query_points + 1);
-    assert_true(raw_wait_type(&w, PROTO_ERROR, 3000, &m));
+    assert_true(test_msg_wait(&w, PROTO_ERROR, 3000, &m));
     assert_int_equal(m.u.error.code, OCEAN_ETOOBIG);
     proto_msg_free(&m);
 
@@ -2319,8 +2280,8 @@ static void hello_limits_are_honoured(void **state)
     sm.u.subscribe.tile_size = 16;
     sm.u.subscribe.lod_levels = 1;
     sm.u.subscribe.frame_rate_hz = 2 * h.tick_rate_hz;
-    raw_send_msg(&w, &sm);
-    assert_true(raw_wait_type(&w, PROTO_ERROR, 3000, &m));
+    test_msg_send(&w, &sm);
+    assert_true(test_msg_wait(&w, PROTO_ERROR, 3000, &m));
     assert_int_equal(m.u.error.code, OCEAN_EINVAL);
     assert_non_null(strstr(m.u.error.message, "tick"));
     proto_msg_free(&m);
@@ -2329,18 +2290,18 @@ static void hello_limits_are_honoured(void **state)
     sm.u.subscribe.frame_rate_hz = h.max_frame_rate_hz;
     sm.u.subscribe.accuracy = (float)1e-6;
     assert_true((double)sm.u.subscribe.accuracy < 1e-6); /* f32 rounds below the bound */
-    raw_send_msg(&w, &sm);
+    test_msg_send(&w, &sm);
     assert_true(raw_frame_tiles(&w, 5000) > 0);
     assert_true(raw_frame_tiles(&w, 5000) > 0);
     proto_msg cs;
     proto_msg_init(&cs, PROTO_SUBSCRIBE);
     cascade_subscribe(&cs.u.subscribe);
     cs.u.subscribe.accuracy = (float)1e-6;
-    raw_send_msg(&w, &cs);
+    test_msg_send(&w, &cs);
     int tiles = 0;
     for (int i = 0; i < 5; i++) {
         proto_msg f;
-        assert_true(raw_wait_type(&w, PROTO_FRAME, 5000, &f));
+        assert_true(test_msg_wait(&w, PROTO_FRAME, 5000, &f));
         if (f.u.frame.layout == PROTO_LAYOUT_CASCADE) tiles = f.u.frame.tile_count;
         proto_msg_free(&f);
     }
@@ -2352,10 +2313,10 @@ static void hello_limits_are_honoured(void **state)
     em.u.error.code = OCEAN_ECODEC;
     em.u.error.offending_type = PROTO_FRAME;
     snprintf(em.u.error.message, sizeof em.u.error.message, "cannot decode that tile");
-    raw_send_msg(&w, &em);
-    assert_false(raw_wait_type(&w, PROTO_ERROR, 600, &m));
+    test_msg_send(&w, &em);
+    assert_false(test_msg_wait(&w, PROTO_ERROR, 600, &m));
     raw_query(&w, 9, 2);
-    assert_true(raw_wait_type(&w, PROTO_QUERY_RESULT, 5000, &m));
+    assert_true(test_msg_wait(&w, PROTO_QUERY_RESULT, 5000, &m));
     assert_int_equal(m.u.result.query_id, 9);
     proto_msg_free(&m);
     test_ws_close(&w);
@@ -2366,7 +2327,7 @@ static void hello_limits_are_honoured(void **state)
     test_ws x;
     assert_int_not_equal(test_ws_connect(&x, port, "/", NULL), 0);
     assert_int_equal(test_ws_connect(&x, port, "/any/path?x=1", PROTO_SUBPROTOCOL), 0);
-    assert_true(raw_wait_type(&x, PROTO_HELLO, 3000, &m));
+    assert_true(test_msg_wait(&x, PROTO_HELLO, 3000, &m));
     proto_msg_free(&m);
     test_ws_close(&x);
 }
@@ -2448,11 +2409,11 @@ static int raw_first_type(test_ws *w, int ms, proto_bye *bye)
 static void raw_close_reason(test_ws *w, int ms, char *why, size_t n)
 {
     why[0] = 0;
-    double end = now_s() + ms / 1000.0;
-    while (now_s() < end) {
+    double end = test_now_s() + ms / 1000.0;
+    while (test_now_s() < end) {
         uint8_t *b;
         size_t len;
-        int op = test_ws_recv(w, (int)((end - now_s()) * 1000) + 1, &b, &len);
+        int op = test_ws_recv(w, (int)((end - test_now_s()) * 1000) + 1, &b, &len);
         if (op <= 0) return;
         if (op == 8) {
             snprintf(why, n, "%.*s", len > 2 ? (int)(len - 2) : 0, len > 2 ? (const char *)b + 2 : "");
@@ -2491,23 +2452,23 @@ static void past_time_limit_closes_clients(void **state)
     test_ws a;
     assert_int_equal(test_ws_connect(&a, p, "/", PROTO_SUBPROTOCOL), 0);
     proto_msg m;
-    assert_true(raw_wait_type(&a, PROTO_HELLO, 3000, &m));
+    assert_true(test_msg_wait(&a, PROTO_HELLO, 3000, &m));
     proto_msg_free(&m);
     proto_msg sm;
     proto_msg_init(&sm, PROTO_SUBSCRIBE);
     small_subscribe(&sm.u.subscribe);
     sm.u.subscribe.mesh_kind = PROTO_MESH_NONE;
-    raw_send_msg(&a, &sm);
-    assert_true(raw_wait_type(&a, PROTO_FRAME, 3000, &m));
+    test_msg_send(&a, &sm);
+    assert_true(test_msg_wait(&a, PROTO_FRAME, 3000, &m));
     proto_msg_free(&m);
     while (srv_hub_sim_time(h) <= OCEAN_TIME_MAX) usleep(20000);
     char said[1200] = "";
     size_t k = 0;
     /* the connected client: BYE, then the close */
     int got = 0;
-    double end = now_s() + 3;
-    while (!got && now_s() < end) {
-        if (!raw_wait_type(&a, PROTO_BYE, (int)((end - now_s()) * 1000) + 1, &m)) break;
+    double end = test_now_s() + 3;
+    while (!got && test_now_s() < end) {
+        if (!test_msg_wait(&a, PROTO_BYE, (int)((end - test_now_s()) * 1000) + 1, &m)) break;
         got = 1;
         if (m.u.bye.reason != PROTO_BYE_SHUTDOWN || !strstr(m.u.bye.message, "OCEAN_TIME_MAX") ||
             !strstr(m.u.bye.message, "server.epoch") || !strstr(m.u.bye.message, "restart"))
@@ -2558,34 +2519,34 @@ static void recording_writes_camera_path(void **state)
     test_ws w;
     assert_int_equal(test_ws_connect(&w, port, "/?record=1", PROTO_SUBPROTOCOL), 0);
     proto_msg m;
-    assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+    assert_true(test_msg_wait(&w, PROTO_HELLO, 3000, &m));
     uint32_t id = m.u.hello.client_id;
     proto_msg_free(&m);
     proto_msg sm;
     proto_msg_init(&sm, PROTO_SUBSCRIBE);
     small_subscribe(&sm.u.subscribe);
     sm.u.subscribe.mesh_kind = PROTO_MESH_NONE;
-    raw_send_msg(&w, &sm);
+    test_msg_send(&w, &sm);
     proto_msg cm;
     proto_msg_init(&cm, PROTO_CAMERA);
     oc_camera_default(&cm.u.camera);
     for (int i = 0; i < 3; i++) {
         cm.u.camera.pos[0] = 0.1 * i + 1e6;
         cm.u.camera.vel[2] = 8;
-        raw_send_msg(&w, &cm);
+        test_msg_send(&w, &cm);
     }
     /* the mode is known at SUBSCRIBE, not when the file opens: a replay
      * client's file said "mode live" in its header */
     usleep(100000);
     sm.u.subscribe.mode = PROTO_MODE_REPLAY;
-    raw_send_msg(&w, &sm);
+    test_msg_send(&w, &sm);
     cm.u.camera.pos[0] = 0.1 * 3 + 1e6;
     cm.u.camera.render_time = 5.0;
-    raw_send_msg(&w, &cm);
+    test_msg_send(&w, &cm);
     /* a replay client may scrub back */
     cm.u.camera.pos[0] = 0.1 * 4 + 1e6;
     cm.u.camera.render_time = 2.0;
-    raw_send_msg(&w, &cm);
+    test_msg_send(&w, &cm);
     usleep(200000);
     test_ws_close(&w);
     usleep(300000);
@@ -2796,9 +2757,9 @@ static void reload_restart_keys_and_runtime_sea(void **state)
     pthread_mutex_lock(&h->lock);
     assert_int_equal(srv_hub_sea_schedule(h, &p, -INFINITY, NULL, why, sizeof why), OCEAN_OK);
     pthread_mutex_unlock(&h->lock);
-    double end = now_s() + 5;
+    double end = test_now_s() + 5;
     double wind = 0;
-    while (now_s() < end) {
+    while (test_now_s() < end) {
         pthread_mutex_lock(&h->lock);
         wind = h->settings.params.sea.wind_u10;
         pthread_mutex_unlock(&h->lock);
@@ -3097,8 +3058,8 @@ static void max_clients_refused(void **state)
     o.cb.on_close = on_close_full;
     oc_client *c = NULL;
     assert_int_equal(oc_client_create(&o, &c, err, sizeof err), OCEAN_OK);
-    double end = now_s() + 5;
-    while (now_s() < end && oc_client_state(c) != OC_CLOSED) oc_service(c, 50);
+    double end = test_now_s() + 5;
+    while (test_now_s() < end && oc_client_state(c) != OC_CLOSED) oc_service(c, 50);
     assert_int_equal(oc_client_state(c), OC_CLOSED);
     assert_int_equal(full_reason, PROTO_BYE_SERVER_FULL);
     oc_client_destroy(c);
@@ -3124,31 +3085,31 @@ static void connect_disconnect_cycles(void **state)
         assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
         proto_msg m;
         if (i % 2 == 0) {
-            assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+            assert_true(test_msg_wait(&w, PROTO_HELLO, 3000, &m));
             proto_msg_free(&m);
             proto_msg sm;
             proto_msg_init(&sm, PROTO_SUBSCRIBE);
             small_subscribe(&sm.u.subscribe);
             sm.u.subscribe.mode = (i % 4 == 0) ? PROTO_MODE_LIVE : PROTO_MODE_REPLAY;
-            raw_send_msg(&w, &sm);
+            test_msg_send(&w, &sm);
             proto_msg cm;
             proto_msg_init(&cm, PROTO_CAMERA);
             oc_camera_default(&cm.u.camera);
             cm.u.camera.render_time = i;
-            raw_send_msg(&w, &cm);
+            test_msg_send(&w, &cm);
             proto_msg q;
             proto_msg_init(&q, PROTO_QUERY);
             double pts[2] = {i, -i};
             q.u.query.count = 1;
             q.u.query.points = pts;
-            raw_send_msg(&w, &q);
-            if (i % 8 == 0 && raw_wait_type(&w, PROTO_FRAME, 3000, &m)) proto_msg_free(&m);
+            test_msg_send(&w, &q);
+            if (i % 8 == 0 && test_msg_wait(&w, PROTO_FRAME, 3000, &m)) proto_msg_free(&m);
         }
         test_ws_close(&w); /* abrupt: no BYE, no close frame */
     }
-    double end = now_s() + 10;
+    double end = test_now_s() + 10;
     int left = -1;
-    while (now_s() < end) {
+    while (test_now_s() < end) {
         pthread_mutex_lock(&h->lock);
         left = h->n_clients;
         pthread_mutex_unlock(&h->lock);
@@ -3201,25 +3162,25 @@ static void recording_write_error_is_said(void **state)
     test_ws w;
     assert_int_equal(test_ws_connect(&w, p, "/?record=1", PROTO_SUBPROTOCOL), 0);
     proto_msg m;
-    assert_true(raw_wait_type(&w, PROTO_HELLO, 3000, &m));
+    assert_true(test_msg_wait(&w, PROTO_HELLO, 3000, &m));
     proto_msg_free(&m);
     proto_msg sm;
     proto_msg_init(&sm, PROTO_SUBSCRIBE);
     small_subscribe(&sm.u.subscribe);
     sm.u.subscribe.mesh_kind = PROTO_MESH_NONE;
-    raw_send_msg(&w, &sm);
+    test_msg_send(&w, &sm);
     proto_msg cm;
     proto_msg_init(&cm, PROTO_CAMERA);
     oc_camera_default(&cm.u.camera);
     for (int i = 0; i < 20; i++) { /* ~2.4 KB of lines, past the 600-byte limit */
         cm.u.camera.pos[0] = 1e6 + 0.1 * i;
-        raw_send_msg(&w, &cm);
+        test_msg_send(&w, &cm);
     }
     usleep(200000);
     test_ws_close(&w);
     int said = 0;
-    double end = now_s() + 5;
-    while (now_s() < end && !said) {
+    double end = test_now_s() + 5;
+    while (test_now_s() < end && !said) {
         usleep(100000);
         FILE *lf = fopen(log, "r");
         if (!lf) continue;
@@ -3302,16 +3263,16 @@ static void sighup_and_sigterm(void **state)
     usleep(300000);
     write_conf(conf2, 14, 100);
     kill(pid, SIGHUP);
-    double end = now_s() + 8;
-    while (now_s() < end) {
+    double end = test_now_s() + 8;
+    while (test_now_s() < end) {
         oc_service(c, 50);
         drain_frames(c);
         if (oc_client_sea_state(c, &sea, &eff) == OCEAN_OK && sea.wind_u10 == 14) break;
     }
     assert_true(sea.wind_u10 == 14);
     kill(pid, SIGTERM);
-    end = now_s() + 8;
-    while (now_s() < end && oc_client_state(c) != OC_CLOSED) oc_service(c, 50);
+    end = test_now_s() + 8;
+    while (test_now_s() < end && oc_client_state(c) != OC_CLOSED) oc_service(c, 50);
     assert_int_equal(oc_client_state(c), OC_CLOSED);
     assert_int_equal(term_reason, PROTO_BYE_SHUTDOWN);
     int status = -1;

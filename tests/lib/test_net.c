@@ -1,0 +1,147 @@
+/*
+ * test_net.c - the integration tests' shared daemon and message helpers
+ * (test_net.h).
+ */
+#include "test_net.h"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <setjmp.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "proto_buf.h"
+
+double test_now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+int test_free_port(void)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t l = sizeof a;
+    if (fd < 0)
+        return -1;
+    if (bind(fd, (struct sockaddr *)&a, sizeof a) != 0 || getsockname(fd, (struct sockaddr *)&a, &l) != 0) {
+        close(fd);
+        return -1;
+    }
+    close(fd);
+    return ntohs(a.sin_port);
+}
+
+const char *test_oceand_bin(char *buf, size_t len)
+{
+    const char *bin = getenv("OCEAND_BIN"), *build = getenv("BUILD");
+    if (bin)
+        snprintf(buf, len, "%s", bin);
+    else
+        snprintf(buf, len, "%s/oceand", build ? build : "build");
+    return buf;
+}
+
+pid_t test_oceand_spawn(const char *bin, int port, const char *const *args)
+{
+    char ports[16];
+    snprintf(ports, sizeof ports, "%d", port);
+    const char *argv[64] = {bin, "--config", "config/oceand.conf", "--port", ports};
+    int n = 5;
+    for (; args && *args && n < 63; args++)
+        argv[n++] = *args;
+    argv[n] = NULL;
+    pid_t pid = fork();
+    if (pid == 0) {
+        if (!freopen("/dev/null", "w", stdout))
+            _exit(127);
+        execv(bin, (char *const *)argv);
+        _exit(127);
+    }
+    return pid;
+}
+
+ocean_result test_oceand_connect(int port, int tries, oc_client **out, char *err, size_t errlen)
+{
+    char url[64];
+    snprintf(url, sizeof url, "ws://127.0.0.1:%d/", port);
+    oc_options o;
+    oc_options_default(&o);
+    o.url = url;
+    *out = NULL;
+    ocean_result r = OCEAN_EIO;
+    for (int i = 0; i < tries && r != OCEAN_OK; i++) {
+        r = oc_connect(&o, 2000, out, err, errlen);
+        if (r != OCEAN_OK) {
+            struct timespec ts = {0, 50 * 1000 * 1000};
+            nanosleep(&ts, NULL);
+        }
+    }
+    return r;
+}
+
+int test_oceand_stop(pid_t pid)
+{
+    int status = 0;
+    if (pid <= 0)
+        return -1;
+    kill(pid, SIGTERM);
+    waitpid(pid, &status, 0);
+    return status;
+}
+
+uint8_t *test_msg_encode(proto_msg *m, size_t *len)
+{
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    char err[256];
+    ocean_result r = proto_encode(&b, m, err, sizeof err);
+    if (r != OCEAN_OK)
+        fprintf(stderr, "encode: %s\n", err);
+    assert_int_equal(r, OCEAN_OK);
+    *len = b.len;
+    return b.mem;
+}
+
+void test_msg_send(test_ws *w, proto_msg *m)
+{
+    size_t len;
+    uint8_t *b = test_msg_encode(m, &len);
+    assert_int_equal(test_ws_send(w, 2, b, len), 0);
+    free(b);
+}
+
+int test_msg_wait(test_ws *w, unsigned type, int ms, proto_msg *m)
+{
+    double end = test_now_s() + ms / 1000.0;
+    while (test_now_s() < end) {
+        uint8_t *b;
+        size_t n;
+        int op = test_ws_recv(w, (int)((end - test_now_s()) * 1000) + 1, &b, &n);
+        if (op <= 0)
+            return 0;
+        if (op == 8) {
+            free(b);
+            return 0;
+        }
+        char err[256];
+        ocean_result r = proto_decode(b, n, m, err, sizeof err);
+        free(b);
+        if (r == OCEAN_OK && m->hdr.type == type)
+            return 1;
+        if (r == OCEAN_OK)
+            proto_msg_free(m);
+    }
+    return 0;
+}
