@@ -15,6 +15,8 @@
 #include <string.h>
 #include <time.h>
 
+#include <cJSON.h>
+
 #include "ocean_conf.h"
 #include "ocean_plan.h"
 
@@ -427,4 +429,13 @@ int cli_make_ocean(const cli_common *c, ocean **o, ocean_frame **f)
         return 1;
     }
     return 0;
+}
+
+void cli_print_json(cJSON *o)
+{
+    char *s = cJSON_Print(o);
+    if (s)
+        puts(s);
+    free(s);
+    cJSON_Delete(o);
 }

@@ -81,4 +81,9 @@ int cmd_filter(int argc, char **argv);
 int cmd_mesh(int argc, char **argv);
 int cmd_wisdom(int argc, char **argv);
 
+/* Prints a cJSON object (pretty, one trailing newline) to stdout and frees
+ * it; prints nothing if cJSON cannot allocate the text. */
+struct cJSON;
+void cli_print_json(struct cJSON *o);
+
 #endif

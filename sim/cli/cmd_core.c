@@ -10,16 +10,6 @@
 
 #include "cli.h"
 
-/* Prints a cJSON object and frees it. */
-static void print_json(cJSON *o)
-{
-    char *s = cJSON_Print(o);
-    if (s)
-        puts(s);
-    free(s);
-    cJSON_Delete(o);
-}
-
 int cmd_stats(int argc, char **argv)
 {
     cli_common c;
@@ -66,7 +56,7 @@ int cmd_stats(int argc, char **argv)
         cJSON_AddNumberToObject(j, "cascades", p->cascades);
         cJSON_AddStringToObject(j, "spectrum", ocean_spectrum_name(p->sea.spectrum));
         cJSON_AddNumberToObject(j, "wind", p->sea.wind_u10);
-        print_json(j);
+        cli_print_json(j);
     } else {
         printf("spectrum %s, wind %.2f m/s, N %d, %d cascade(s), t = %g s\n",
                ocean_spectrum_name(p->sea.spectrum), p->sea.wind_u10, p->n, p->cascades, c.time);
@@ -213,7 +203,7 @@ int cmd_bench(int argc, char **argv)
         cJSON_AddNumberToObject(j, "ms", ms);
         cJSON_AddNumberToObject(j, "ms_fftw", ms_fft);
         cJSON_AddNumberToObject(j, "ratio", ms / ms_fft);
-        print_json(j);
+        cli_print_json(j);
     } else {
         printf("N %d, %d cascade(s), %d thread(s), %d transforms: %.3f ms per evaluation, "
                "FFTW alone %.3f ms (x%.3f), median of %d\n", c.params.n, c.params.cascades,

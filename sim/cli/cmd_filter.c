@@ -183,11 +183,7 @@ int cmd_filter(int argc, char **argv)
         cJSON_AddNumberToObject(j, "repeat", repeat);
         cJSON_AddNumberToObject(j, "n", p->n);
         cJSON_AddNumberToObject(j, "cascades", p->cascades);
-        char *s = cJSON_Print(j);
-        if (s)
-            puts(s);
-        free(s);
-        cJSON_Delete(j);
+        cli_print_json(j);
     } else {
         printf("policy %s, speed %g m/s, %g fps, spacing %g m\n", ocean_filter_policy_name(policy),
                speed, fps, spacing);

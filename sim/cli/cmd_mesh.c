@@ -213,11 +213,7 @@ int cmd_mesh(int argc, char **argv)
             cJSON_AddItemToArray(org, cJSON_CreateNumber(v.origin[k]));
         if (obj)
             cJSON_AddStringToObject(j, "obj", obj);
-        char *s = cJSON_Print(j);
-        if (s)
-            puts(s);
-        free(s);
-        cJSON_Delete(j);
+        cli_print_json(j);
     } else {
         printf("%s mesh: %u vertices, %u triangles, %d levels, near spacing %g m, "
                "max error %.3f px, built in %.1f ms%s%s\n",

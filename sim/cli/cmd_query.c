@@ -212,11 +212,7 @@ int cmd_query(int argc, char **argv)
             cJSON_AddBoolToObject(p, "folded", res[i].folded);
             cJSON_AddItemToArray(arr, p);
         }
-        char *s = cJSON_Print(j);
-        if (s)
-            puts(s);
-        free(s);
-        cJSON_Delete(j);
+        cli_print_json(j);
     } else {
         printf("x,z,height,nx,ny,nz,vx,vy,vz,foam,error,folded\n");
         for (long i = 0; i < n; i++)

@@ -490,10 +490,7 @@ int cmd_fidelity(int argc, char **argv)
                                 "Cox & Munk 1954 clean sea 0.003 + 5.12e-3 U12.5; U12.5 = U10 + u*/0.4 ln(1.25), "
                                 "u* = sqrt((0.8 + 0.065 U10) 1e-3) U10 (Wu 1982)");
         cJSON_AddStringToObject(o, "foam_reference", "Monahan & O'Muircheartaigh 1980: W = 3.84e-6 U10^3.41");
-        char *txt = cJSON_Print(o);
-        printf("%s\n", txt);
-        free(txt);
-        cJSON_Delete(o);
+        occli_print_json(o);
     }
     return 0;
 }

@@ -381,10 +381,7 @@ int cmd_load(int argc, char **argv)
         cJSON_AddStringToObject(o, "latency_basis",
                                 "receipt wall time minus FRAME sim_time, zero at the fastest delivery seen "
                                 "over all viewers (sim clock assumed to run at wall rate)");
-        char *txt = cJSON_Print(o);
-        printf("%s\n", txt);
-        free(txt);
-        cJSON_Delete(o);
+        occli_print_json(o);
     } else {
         printf("layout %d (frames: %llu layout 0, %llu layout 1)\n", cfg.sub.layout,
                (unsigned long long)R.frames_layout[0], (unsigned long long)R.frames_layout[1]);

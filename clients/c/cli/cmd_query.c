@@ -135,10 +135,7 @@ int cmd_query(int argc, char **argv)
             cJSON_AddNumberToObject(p, "error_bound", sm->error_bound);
             cJSON_AddItemToArray(arr, p);
         }
-        char *txt = cJSON_Print(o);
-        printf("%s\n", txt);
-        free(txt);
-        cJSON_Delete(o);
+        occli_print_json(o);
     } else {
         printf("# t = %.9g s\n%12s %12s %10s %26s %26s %6s %10s\n", q.t, "x", "z", "height", "normal",
                "velocity", "foam", "error");
@@ -332,10 +329,7 @@ int cmd_sea(int argc, char **argv)
      * read as the change having been made */
     if (rc == 0) {
         cJSON *o = sea_json(&sea, eff);
-        char *txt = cJSON_Print(o);
-        printf("%s\n", txt);
-        free(txt);
-        cJSON_Delete(o);
+        occli_print_json(o);
     }
     oc_client_destroy(c);
     return rc;

@@ -172,10 +172,7 @@ int cmd_watch(int argc, char **argv)
         cJSON_AddStringToObject(o, "latency_basis",
                                 "receipt wall time minus FRAME sim_time, offset by the smallest such "
                                 "difference seen (sim clock assumed to run at wall rate)");
-        char *txt = cJSON_Print(o);
-        printf("%s\n", txt);
-        free(txt);
-        cJSON_Delete(o);
+        occli_print_json(o);
     } else {
         char rate[32] = "fewer than 2 frames: no rate";
         if (isfinite(fps))

@@ -11,6 +11,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <cJSON.h>
+
 #include "occli.h"
 #include "ocean_time.h"
 
@@ -290,6 +292,15 @@ int occli_parse(int argc, char **argv, const char *usage, const occli_opt *opts,
     if (npos)
         *npos = np;
     return 0;
+}
+
+void occli_print_json(cJSON *o)
+{
+    char *txt = cJSON_Print(o);
+    if (txt)
+        puts(txt);
+    free(txt);
+    cJSON_Delete(o);
 }
 
 static int progress_open;   /* a progress line is on the terminal */

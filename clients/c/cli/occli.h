@@ -116,6 +116,11 @@ double occli_mono(void);       /* monotonic seconds */
 double occli_wall(void);       /* realtime seconds */
 void occli_sleep(double s);
 
+/* Prints a cJSON object (pretty, one trailing newline) to stdout and frees
+ * it; prints nothing if cJSON cannot allocate the text. */
+struct cJSON;
+void occli_print_json(struct cJSON *o);
+
 /* p-th percentile (0..100) of v[0..n) (sorts v in place); NAN if n == 0. */
 double occli_percentile(double *v, size_t n, double p);
 
