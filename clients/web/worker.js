@@ -340,7 +340,14 @@ function processFrame() {
         b.levels.push({ level: L, tiles: copies });
         b.load += load;
     }
-    const busy = buckets.map((b, i) => [b, i]).filter(([b]) => b.levels.length);
+    dispatchBuckets(p, buckets, 'levels', meta, t0);
+}
+
+/* Posts each bucket's work (its `field`: 'levels' or 'tiles') to its pool
+ * worker as one job, the frame's inflight record counting the answers; a
+ * frame with no work for any worker is finished at once. */
+function dispatchBuckets(p, buckets, field, meta, t0) {
+    const busy = buckets.map((b, i) => [b, i]).filter(([b]) => b[field].length);
     inflight = { id: ++jobId, meta, remaining: busy.length, levels: [], blocks: [], t0 };
     if (!busy.length) {
         const job = inflight;
@@ -348,7 +355,7 @@ function processFrame() {
         finishFrame(job);
         return;
     }
-    for (const [b, i] of busy) p[i].postMessage({ id: inflight.id, levels: b.levels }, b.transfer);
+    for (const [b, i] of busy) p[i].postMessage({ id: inflight.id, [field]: b[field] }, b.transfer);
 }
 
 /* Layout 1: every tile is independent (its own place in its own mip), so
@@ -376,15 +383,7 @@ function processCascadeFrame(f, meta, t0) {
         b.transfer.push(c.payload.buffer);
         b.load += t.width * t.height * tilePlanes(t.channels);
     }
-    const busy = buckets.map((b, i) => [b, i]).filter(([b]) => b.tiles.length);
-    inflight = { id: ++jobId, meta, remaining: busy.length, levels: [], blocks: [], t0 };
-    if (!busy.length) {
-        const job = inflight;
-        inflight = null;
-        finishFrame(job);
-        return;
-    }
-    for (const [b, i] of busy) p[i].postMessage({ id: inflight.id, tiles: b.tiles }, b.transfer);
+    dispatchBuckets(p, buckets, 'tiles', meta, t0);
 }
 
 function onPoolResult(ev) {
