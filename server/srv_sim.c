@@ -105,7 +105,6 @@ struct srv_sim {
     double camera_hint[5];
     srv_work *work;             /* queries in slices (srv_work.c) */
     double work_due;            /* monotonic: background work's next turn */
-    double time_warned;         /* monotonic: last "sim time out of range" log */
 };
 
 /* ---- ocean construction ----------------------------------------------------- */
@@ -1081,15 +1080,8 @@ static void *sim_main(void *arg)
         double t = (double)tick_no / rate;
         double tick_wall = t0 - (sim0 - t);      /* monotonic time of the tick */
         /* Beyond the exact-time limit the ocean refuses every evaluation
-         * (ocean_time.h): say why frames stopped, once a minute. */
-        if (!ocean_time_ok(t) && (s->time_warned == 0.0 || t0 - s->time_warned >= 60.0)) {
-            fprintf(stderr,
-                    "oceand: sim time %.0f s (now - server.epoch) is beyond the exact-time limit of "
-                    "+-%.0f s (OCEAN_TIME_MAX): no frames or queries until server.epoch is set "
-                    "within 4.25 years of now\n",
-                    t, OCEAN_TIME_MAX);
-            s->time_warned = t0;
-        }
+         * (ocean_time.h); the service thread says so, once, and closes
+         * every client (srv_net.c "past the exact-time limit"). */
         for (srv_client *c = h->clients; c; c = c->next) {
             if (c->closed) continue;
             srv_work_take(s->work, c, t);
