@@ -1129,6 +1129,15 @@ static void a_metrics_and_status(void **state)
  * 160 (96 kept), refuses the rest with BYE server-full, closes connections
  * at accept beyond the reserve with one log line a second (not one per
  * attempt: 120 000 lines in seconds before) and keeps answering /status. */
+/* In the child: the low descriptor limit, stderr to the file arg. */
+static void fd_limit_child(void *arg)
+{
+    struct rlimit rl = {256, 256};
+    setrlimit(RLIMIT_NOFILE, &rl);
+    int e = open((const char *)arg, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (e >= 0) dup2(e, 2);
+}
+
 static void a_fd_limit(void **state)
 {
     (void)state;
@@ -1142,32 +1151,12 @@ static void a_fd_limit(void **state)
     snprintf(conf2, sizeof conf2, "%s/fd.conf", tmpdir);
     write_conf(conf2, 1000);
     snprintf(errlog, sizeof errlog, "%s/fd.err", tmpdir);
-    int pfd[2];
-    assert_int_equal(pipe(pfd), 0);
-    pid_t pid = fork();
-    assert_true(pid >= 0);
-    if (pid == 0) {
-        struct rlimit rl = {256, 256};
-        setrlimit(RLIMIT_NOFILE, &rl);
-        dup2(pfd[1], 1);
-        int e = open(errlog, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        if (e >= 0) dup2(e, 2);
-        close(pfd[0]);
-        execl(exe, exe, "--config", conf2, (char *)NULL);
-        _exit(127);
-    }
-    close(pfd[1]);
-    FILE *out = fdopen(pfd[0], "r");
-    char line[512];
-    int p = 0;
-    while (fgets(line, sizeof line, out)) {
-        char *at = strstr(line, "http://127.0.0.1:");
-        if (at) {
-            p = atoi(at + strlen("http://127.0.0.1:"));
-            break;
-        }
-    }
+    FILE *out;
+    int p;
+    pid_t pid = test_oceand_exec(exe, conf2, fd_limit_child, errlog, &p, &out);
+    assert_true(pid > 0);
     assert_true(p > 0);
+    char line[512];
     /* 300 bare TCP connections (no handshake) and 200 WebSocket clients */
     enum { RAW = 300, WS = 200 };
     int raw[RAW];

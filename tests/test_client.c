@@ -1785,24 +1785,10 @@ static void connect_cycles(void **state)
 static void daemon_round_trip(void **state)
 {
     (void)state;
-    char bin[512];
-    test_oceand_bin(bin, sizeof bin);
-    if (access(bin, X_OK) != 0 || access("config/oceand.conf", R_OK) != 0) {
-        print_message("(%s not built: live daemon round trip skipped)\n", bin);
-        skip();
-    }
-    int port = test_free_port();
-    assert_true(port > 0);
-    pid_t pid = test_oceand_spawn(bin, port, NULL);
-    assert_true(pid >= 0);
     oc_client *c = NULL;
+    pid_t pid = test_oceand_up(NULL, 100, &c);
     char err[256] = "";
-    ocean_result r = test_oceand_connect(port, 100, &c, err, sizeof err);
-    if (r != OCEAN_OK) {
-        test_oceand_stop(pid);
-        print_error("could not connect to %s: %s\n", bin, err);
-        fail();
-    }
+    ocean_result r;
     proto_subscribe sub;
     oc_subscribe_default(&sub);
     assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);

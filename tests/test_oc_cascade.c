@@ -965,26 +965,12 @@ static void surface_inversion(void **state)
 static void daemon_layout1_heights(void **state)
 {
     (void)state;
-    char bin[512];
-    test_oceand_bin(bin, sizeof bin);
-    if (access(bin, X_OK) != 0 || access("config/oceand.conf", R_OK) != 0) {
-        print_message("(%s not built: live daemon comparison skipped)\n", bin);
-        skip();
-    }
-    int port = test_free_port();
-    assert_true(port > 0);
     const char *args[] = {"--scene", "ship-bridge", "--set", "server.px_per_sample=1", "--set",
                           "server.viewer_bytes_per_s=1e10", "--set", "server.near_field_waves=0", NULL};
-    pid_t pid = test_oceand_spawn(bin, port, args);
-    assert_true(pid >= 0);
     oc_client *c = NULL;
+    pid_t pid = test_oceand_up(args, 200, &c);
     char err[256] = "";
-    ocean_result r = test_oceand_connect(port, 200, &c, err, sizeof err);
-    if (r != OCEAN_OK) {
-        test_oceand_stop(pid);
-        print_error("could not connect to %s: %s\n", bin, err);
-        fail();
-    }
+    ocean_result r;
     proto_subscribe sub;
     oc_subscribe_default(&sub);
     sub.codec = PROTO_CODEC_F32;

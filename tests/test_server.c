@@ -3124,6 +3124,18 @@ static void connect_disconnect_cycles(void **state)
  * past 600 bytes fail with EFBIG, as on a full disk).  The buffered lines
  * failed at fclose, unchecked: three short recordings on a full disk were
  * left empty and nothing was logged. */
+/* In the child: stderr to the file arg, opened before the file size
+ * limit; a write past the limit then fails (SIGXFSZ ignored) and the
+ * process lives. */
+static void fsize_limit_child(void *arg)
+{
+    int lf = open((const char *)arg, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (lf >= 0) dup2(lf, 2);
+    signal(SIGXFSZ, SIG_IGN);
+    struct rlimit rl = {600, 600};
+    setrlimit(RLIMIT_FSIZE, &rl);
+}
+
 static void recording_write_error_is_said(void **state)
 {
     (void)state;
@@ -3132,33 +3144,12 @@ static void recording_write_error_is_said(void **state)
     snprintf(conf, sizeof conf, "%s/fsize.conf", tmpdir);
     snprintf(log, sizeof log, "%s/fsize.log", tmpdir);
     write_conf(conf, 10, 100);
-    int pfd[2];
-    assert_int_equal(pipe(pfd), 0);
-    pid_t pid = fork();
-    assert_true(pid >= 0);
-    if (pid == 0) {
-        int lf = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0644); /* opened before the limit */
-        dup2(pfd[1], 1);
-        dup2(lf, 2);
-        close(pfd[0]);
-        signal(SIGXFSZ, SIG_IGN); /* a write past the limit fails, the process lives */
-        struct rlimit rl = {600, 600};
-        setrlimit(RLIMIT_FSIZE, &rl);
-        execl(exe, exe, "--config", conf, (char *)NULL);
-        _exit(127);
-    }
-    close(pfd[1]);
-    FILE *out = fdopen(pfd[0], "r");
-    char line[512];
-    int p = 0;
-    while (fgets(line, sizeof line, out)) {
-        char *at = strstr(line, "http://127.0.0.1:");
-        if (at) {
-            p = atoi(at + strlen("http://127.0.0.1:"));
-            break;
-        }
-    }
+    FILE *out;
+    int p;
+    pid_t pid = test_oceand_exec(exe, conf, fsize_limit_child, log, &p, &out);
+    assert_true(pid > 0);
     assert_true(p > 0);
+    char line[512];
     test_ws w;
     assert_int_equal(test_ws_connect(&w, p, "/?record=1", PROTO_SUBPROTOCOL), 0);
     proto_msg m;
@@ -3226,27 +3217,10 @@ static void sighup_and_sigterm(void **state)
     char conf2[400];
     snprintf(conf2, sizeof conf2, "%s/sig.conf", tmpdir);
     write_conf(conf2, 10, 100);
-    int pfd[2];
-    assert_int_equal(pipe(pfd), 0);
-    pid_t pid = fork();
-    assert_true(pid >= 0);
-    if (pid == 0) {
-        dup2(pfd[1], 1);
-        close(pfd[0]);
-        execl(exe, exe, "--config", conf2, (char *)NULL);
-        _exit(127);
-    }
-    close(pfd[1]);
-    FILE *out = fdopen(pfd[0], "r");
-    char line[512];
-    int p = 0;
-    while (fgets(line, sizeof line, out)) {
-        char *at = strstr(line, "http://127.0.0.1:");
-        if (at) {
-            p = atoi(at + strlen("http://127.0.0.1:"));
-            break;
-        }
-    }
+    FILE *out;
+    int p;
+    pid_t pid = test_oceand_exec(exe, conf2, NULL, NULL, &p, &out);
+    assert_true(pid > 0);
     assert_true(p > 0);
     oc_callbacks cb = {0};
     cb.on_close = on_close_term;

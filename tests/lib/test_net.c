@@ -43,7 +43,8 @@ int test_free_port(void)
     return ntohs(a.sin_port);
 }
 
-const char *test_oceand_bin(char *buf, size_t len)
+/* $OCEAND_BIN, else $BUILD/oceand, else build/oceand, into buf. */
+static const char *oceand_bin(char *buf, size_t len)
 {
     const char *bin = getenv("OCEAND_BIN"), *build = getenv("BUILD");
     if (bin)
@@ -53,7 +54,8 @@ const char *test_oceand_bin(char *buf, size_t len)
     return buf;
 }
 
-pid_t test_oceand_spawn(const char *bin, int port, const char *const *args)
+/* bin --config config/oceand.conf --port port args..., stdout to /dev/null. */
+static pid_t oceand_spawn(const char *bin, int port, const char *const *args)
 {
     char ports[16];
     snprintf(ports, sizeof ports, "%d", port);
@@ -72,7 +74,48 @@ pid_t test_oceand_spawn(const char *bin, int port, const char *const *args)
     return pid;
 }
 
-ocean_result test_oceand_connect(int port, int tries, oc_client **out, char *err, size_t errlen)
+pid_t test_oceand_exec(const char *exe, const char *conf, void (*in_child)(void *), void *arg, int *port,
+                       FILE **out)
+{
+    int pfd[2];
+    *port = 0;
+    *out = NULL;
+    if (pipe(pfd) != 0)
+        return -1;
+    pid_t pid = fork();
+    if (pid < 0) {
+        close(pfd[0]);
+        close(pfd[1]);
+        return -1;
+    }
+    if (pid == 0) {
+        dup2(pfd[1], 1);
+        close(pfd[0]);
+        if (in_child)
+            in_child(arg);
+        execl(exe, exe, "--config", conf, (char *)NULL);
+        _exit(127);
+    }
+    close(pfd[1]);
+    *out = fdopen(pfd[0], "r");
+    if (!*out) {
+        close(pfd[0]);
+        return pid;
+    }
+    static const char at_url[] = "http://127.0.0.1:";
+    char line[512];
+    while (fgets(line, sizeof line, *out)) {
+        const char *at = strstr(line, at_url);
+        if (at) {
+            *port = atoi(at + strlen(at_url));
+            break;
+        }
+    }
+    return pid;
+}
+
+/* An oc_client on ws://127.0.0.1:port/, tried every 50 ms up to `tries` times. */
+static ocean_result oceand_connect(int port, int tries, oc_client **out, char *err, size_t errlen)
 {
     char url[64];
     snprintf(url, sizeof url, "ws://127.0.0.1:%d/", port);
@@ -89,6 +132,25 @@ ocean_result test_oceand_connect(int port, int tries, oc_client **out, char *err
         }
     }
     return r;
+}
+
+pid_t test_oceand_up(const char *const *args, int tries, oc_client **c)
+{
+    char bin[512], err[256] = "";
+    oceand_bin(bin, sizeof bin);
+    if (access(bin, X_OK) != 0 || access("config/oceand.conf", R_OK) != 0) {
+        print_message("(%s not built: the test against the live daemon is skipped)\n", bin);
+        skip();
+    }
+    int port = test_free_port();
+    assert_true(port > 0);
+    pid_t pid = oceand_spawn(bin, port, args);
+    assert_true(pid > 0);
+    if (oceand_connect(port, tries, c, err, sizeof err) != OCEAN_OK) {
+        test_oceand_stop(pid);
+        fail_msg("could not connect to %s: %s", bin, err);
+    }
+    return pid;
 }
 
 int test_oceand_stop(pid_t pid)

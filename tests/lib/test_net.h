@@ -12,6 +12,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <sys/types.h>
 
 #include "oceanclient.h"
@@ -26,22 +27,27 @@ double test_now_s(void);
  * the caller binds it; tests start one daemon per port they asked for. */
 int test_free_port(void);
 
-/* The oceand binary of this build: $OCEAND_BIN, else $BUILD/oceand, else
- * build/oceand, written into buf.  Returns buf. */
-const char *test_oceand_bin(char *buf, size_t len);
+/* Runs `exe --config conf` as a child with its stdout on a pipe (after
+ * in_child(arg) in the child, unless NULL: limits, stderr) and reads that
+ * stdout up to the line announcing http://127.0.0.1:PORT.  Returns the
+ * child's pid, or -1 if pipe or fork failed; *port gets PORT (0 if the
+ * child's stdout ended first) and *out the rest of that stdout (fclose it
+ * once the child is stopped). */
+pid_t test_oceand_exec(const char *exe, const char *conf, void (*in_child)(void *), void *arg, int *port,
+                       FILE **out);
 
-/* Starts `bin --config config/oceand.conf --port port args...` as a child
- * (args: NULL-terminated, may be NULL), its stdout sent to /dev/null.
- * Returns the child's pid, or -1 if fork failed. */
-pid_t test_oceand_spawn(const char *bin, int port, const char *const *args);
+/* The start of a test against this build's oceand: skips the test (cmocka
+ * skip) when the binary or config/oceand.conf is missing; otherwise starts
+ * `build/oceand --config config/oceand.conf --port PORT args...` (args
+ * NULL-terminated, may be NULL; the binary is $OCEAND_BIN, else
+ * $BUILD/oceand, else build/oceand) on a free port, its stdout to
+ * /dev/null, and connects *c to ws://127.0.0.1:PORT/, trying every 50 ms up
+ * to `tries` times while it starts; fails the test if it cannot.  Returns
+ * the child's pid (stop it with test_oceand_stop). */
+pid_t test_oceand_up(const char *const *args, int tries, oc_client **c);
 
-/* Connects an oc_client to ws://127.0.0.1:port/, retrying every 50 ms up
- * to `tries` times while the daemon starts.  On failure *out is NULL and
- * err holds the last error. */
-ocean_result test_oceand_connect(int port, int tries, oc_client **out, char *err, size_t errlen);
-
-/* Stops a child started by test_oceand_spawn (SIGTERM, then reaps it);
- * returns its wait status. */
+/* Stops a child started by test_oceand_up or test_oceand_exec (SIGTERM,
+ * then reaps it); returns its wait status. */
 int test_oceand_stop(pid_t pid);
 
 /* Encodes m into a malloc'ed buffer of *len bytes; asserts it encodes. */
