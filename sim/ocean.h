@@ -373,6 +373,25 @@ void ocean_frame_sample_displacement(const ocean_frame *f, double x, double z,
 void ocean_reference_point(const ocean *o, double t, double x, double z,
                            double cutoff_k, int order, ocean_point *out);
 
+/* The same reference for many points at one (t, cutoff, order): every
+ * wave's h(k, t) and dh/dt are drawn once by ocean_reference_create (the
+ * per-point cost of ocean_reference_point is mostly those draws), then
+ * ocean_reference_eval sums them at any point, e^{i k.x} formed as
+ * e^{i kx x} e^{i kz z} from 2 (n - 1) sines and cosines a cascade (each of
+ * its own phase reduced in double), so the sums agree with
+ * ocean_reference_point to double rounding (~1e-15 relative), about 30
+ * times faster.  The reference keeps a pointer to o: destroy it first.
+ * create: OCEAN_EINVAL (o NULL, t beyond OCEAN_TIME_MAX, cutoff NaN or
+ * negative, order < 1), OCEAN_ENOMEM; eval: every field NaN if its
+ * scratch (4 n doubles) cannot be allocated.  Immutable once made: any
+ * number of threads may evaluate one reference at once. */
+typedef struct ocean_reference ocean_reference;
+ocean_result ocean_reference_create(const ocean *o, double t, double cutoff_k, int order,
+                                    ocean_reference **out);
+/* Accepts NULL. */
+void ocean_reference_destroy(ocean_reference *r);
+void ocean_reference_eval(const ocean_reference *r, double x, double z, ocean_point *out);
+
 /* h(k, t) of the wave with integer wave vector (mx, mz) of cascade c, in
  * double, built from h0(k) and h0(-k) drawn afresh: 0 outside the band.
  * For any (mx, mz), h(-k, t) = conj(h(k, t)) - the Hermitian symmetry that
