@@ -379,8 +379,10 @@ void ocean_reference_point(const ocean *o, double t, double x, double z,
  * ocean_reference_eval sums them at any point, e^{i k.x} formed as
  * e^{i kx x} e^{i kz z} from 2 (n - 1) sines and cosines a cascade (each of
  * its own phase reduced in double), so the sums agree with
- * ocean_reference_point to double rounding (~1e-15 relative), about 30
- * times faster.  The reference keeps a pointer to o: destroy it first.
+ * ocean_reference_point to double rounding (2e-15 in test_ocean).  On the
+ * storm scene (3 cascades of 256) a point takes 1.0 ms against 51 ms, and
+ * the create about one point's 49 ms.  The reference keeps a pointer to
+ * o: destroy it first.
  * create: OCEAN_EINVAL (o NULL, t beyond OCEAN_TIME_MAX, cutoff NaN or
  * negative, order < 1), OCEAN_ENOMEM; eval: every field NaN if its
  * scratch (4 n doubles) cannot be allocated.  Immutable once made: any
