@@ -466,8 +466,11 @@ static void test_storm_heights_match_exact_waves(void **state)
      * worst over the 240 points) */
     assert_true(rms <= 0.2e-3 && worst <= 1e-3);
     /* not absurdly loose: a bound of the order of a millimetre, within ten
-     * times the worst error (mean bound 1.5 mm over the 240 points) */
-    assert_true(mean_bound <= 2e-3 && mean_bound <= 10.0 * worst);
+     * times the worst error (mean bound 2.5 mm over the 240 points; 1.5
+     * before the bound took the nodes' slopes and the mixed difference,
+     * when it fell short of single near-Nyquist waves: test_ocean
+     * accurate_bound_holds_wave_by_wave) */
+    assert_true(mean_bound <= 3e-3 && mean_bound <= 10.0 * worst);
     storm_free(&s);
 }
 
