@@ -2480,25 +2480,10 @@ static double lagrange_read(const float *g, const stencil *s)
     return acc;
 }
 
-/* Fourth difference along x (dir 0) or z (dir 1) at node (i, k) (row,
- * column) of a block of loaded nodes: a high-pass whose response to a wave
- * of k h = th is (2 sin(th / 2))^4, 16 at the grid's Nyquist rate. */
-static inline double diff4_blk(const float blk[ACC_MAXN + 4][ACC_MAXN + 4], int i, int k, int dir)
+/* The larger of two finite values, inlined (libm's fmax is a call). */
+static inline double max2(double a, double b)
 {
-    int di = dir, dk = 1 - dir;
-    return (double)blk[i - 2 * di][k - 2 * dk] - 4.0 * blk[i - di][k - dk] + 6.0 * blk[i][k] -
-           4.0 * blk[i + di][k + dk] + blk[i + 2 * di][k + 2 * dk];
-}
-
-/* The mixed difference (second along x, second along z) at node (i, k):
- * a wave's response is (2 sin(th_x / 2))^2 (2 sin(th_z / 2))^2, large only
- * where both components are. */
-static inline double mixed_blk(const float blk[ACC_MAXN + 4][ACC_MAXN + 4], int i, int k)
-{
-    double d[3];
-    for (int r = -1; r <= 1; r++)
-        d[r + 1] = (double)blk[i + r][k - 1] - 2.0 * blk[i + r][k] + blk[i + r][k + 1];
-    return d[0] - 2.0 * d[1] + d[2];
+    return a > b ? a : b;
 }
 
 /* Hermite reading of value plane g with derivative planes gx (d/dx) and
@@ -2567,19 +2552,40 @@ static double hermite_read(const float *g, const float *gx, const float *gz, con
             size_t o = s->off[b * ACC_MAXN + a];
             double fv = g[o], fx = gx[o] * h, fz = gz[o] * h;
             acc += fv * s->hu[a] * s->hv[b] + fx * s->ku[a] * s->hv[b] + fz * s->hu[a] * s->kv[b];
-            if (!bound)
-                continue;
-            double d4x = fmax(fabs(diff4_blk(blk, b + 2, a + 2, 0)),
-                              fabs(diff4_blk(bx, b + 2, a + 2, 0)) / th_top);
-            double d4z = fmax(fabs(diff4_blk(blk, b + 2, a + 2, 1)),
-                              fabs(diff4_blk(bz, b + 2, a + 2, 1)) / th_top);
-            double dm = fmax(fabs(mixed_blk(blk, b + 2, a + 2)),
-                             fmax(fabs(mixed_blk(bx, b + 2, a + 2)), fabs(mixed_blk(bz, b + 2, a + 2))) / th_top);
-            if (fabs(fv) > big) big = fabs(fv);
-            if (d4x > hx) hx = d4x;
-            if (d4z > hz) hz = d4z;
-            if (dm > hxz) hxz = dm;
+            if (bound && fabs(fv) > big)
+                big = fabs(fv);
         }
+    }
+    if (bound) {
+        /* Second differences first, each once: along x of the values (vx)
+         * and of h f_x (sx), along z of the values (vz) and of h f_z (sz).
+         * At the 4 x 4 nodes (block rows and columns 2..5) the fourth
+         * differences along x and z (a wave's response (2 sin(th / 2))^4,
+         * 16 at the Nyquist rate) and the mixed one, second along x and
+         * along z ((2 sin(th_x / 2))^2 (2 sin(th_z / 2))^2, large only
+         * where both components are), are second differences of those. */
+        enum { B = ACC_MAXN + 4 };
+        float vx[B][B], vz[B][B], sx[B][B], sz[B][B];
+        for (int i = 0; i < B; i++)
+            for (int k = 1; k < B - 1; k++) {
+                vx[i][k] = blk[i][k - 1] - 2.0f * blk[i][k] + blk[i][k + 1];
+                sx[i][k] = bx[i][k - 1] - 2.0f * bx[i][k] + bx[i][k + 1];
+                vz[k][i] = blk[k - 1][i] - 2.0f * blk[k][i] + blk[k + 1][i];
+                sz[k][i] = bz[k - 1][i] - 2.0f * bz[k][i] + bz[k + 1][i];
+            }
+        for (int i = 2; i < B - 2; i++)
+            for (int k = 2; k < B - 2; k++) {
+                double d4x = max2(fabs(vx[i][k - 1] - 2.0 * vx[i][k] + vx[i][k + 1]),
+                                  fabs(sx[i][k - 1] - 2.0 * sx[i][k] + sx[i][k + 1]) / th_top);
+                double d4z = max2(fabs(vz[i - 1][k] - 2.0 * vz[i][k] + vz[i + 1][k]),
+                                  fabs(sz[i - 1][k] - 2.0 * sz[i][k] + sz[i + 1][k]) / th_top);
+                double dm = max2(fabs(vx[i - 1][k] - 2.0 * vx[i][k] + vx[i + 1][k]),
+                                 max2(fabs(sx[i - 1][k] - 2.0 * sx[i][k] + sx[i + 1][k]),
+                                      fabs(sz[i][k - 1] - 2.0 * sz[i][k] + sz[i][k + 1])) / th_top);
+                if (d4x > hx) hx = d4x;
+                if (d4z > hz) hz = d4z;
+                if (dm > hxz) hxz = dm;
+            }
     }
     /* Per wave, the 1-D error over the fourth difference's response peaks
      * at the band's top: 6.3e-5 at k h = pi / 2 (coarse cascades' edge),
