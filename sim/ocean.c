@@ -2526,15 +2526,18 @@ static double hermite_read(const float *g, const float *gx, const float *gz, con
     acc += 0.5 * cross * h;
     /* With a bound, the nodes the fourth differences reach (two beyond the
      * 4 x 4 on each side) are loaded once into blk (values), bx (h f_x)
-     * and bz (h f_z), not five times each. */
+     * and bz (h f_z), not five times each.  The slopes only on the finest
+     * cascade: a coarse one stops at k h = pi / 2, where any four
+     * consecutive node values hold 0.71 of a wave's amplitude (the factor
+     * 2 below covers that), so its values alone bound it, as before. */
     float blk[ACC_MAXN + 4][ACC_MAXN + 4], bx[ACC_MAXN + 4][ACC_MAXN + 4], bz[ACC_MAXN + 4][ACC_MAXN + 4];
     if (bound)
         for (int i = 0; i < ACC_MAXN + 4; i++)
             for (int k = 0; k < ACC_MAXN + 4; k++) {
                 int r = s->first - 2 + i, c = s->first - 2 + k;
                 blk[i][k] = (float)node(g, s, r, c);
-                bx[i][k] = (float)(h * node(gx, s, r, c));
-                bz[i][k] = (float)(h * node(gz, s, r, c));
+                bx[i][k] = finest ? (float)(h * node(gx, s, r, c)) : 0.0f;
+                bz[i][k] = finest ? (float)(h * node(gz, s, r, c)) : 0.0f;
             }
     /* A wave near the band's top, k h = th_top, beats against the nodes:
      * its node values follow an envelope |cos| that passes through 0 where
