@@ -864,7 +864,7 @@ static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub,
     if (world && coarsest > PROTO_TILE_SPACING_MAX) {
         snprintf(why, n, "subscribe: the coarsest level's spacing would be %g m (base spacing %g m x 2^%u), "
                  "above TILE.spacing's %g m: fewer lod_levels or a smaller base_spacing_m", coarsest,
-                 spacing, sub->lod_levels - 1, PROTO_TILE_SPACING_MAX);
+                 spacing, (unsigned)sub->lod_levels - 1u, PROTO_TILE_SPACING_MAX);
         return OCEAN_EINVAL;
     }
     if (sub->layout == PROTO_LAYOUT_CASCADE) {

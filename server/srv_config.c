@@ -506,7 +506,7 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
         r = OCEAN_EINVAL;
     }
     if (r == OCEAN_OK && tmp->srv.epoch[0]) {
-        double e;
+        double e = 0.0;
         char msg[200];
         r = srv_epoch_parse(tmp->srv.epoch, &e, msg, sizeof msg);
         if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", from, msg);

@@ -129,12 +129,20 @@ static int write_exr(const char *path, int n, const exr_plane *planes, int np, c
             for (int i = 0; i < np; i++)
                 if (strcmp(ch->channel_name, planes[i].name) == 0)
                     src = planes[i].data;
+            if (!src) {
+                /* the header was written from planes[]: a channel it
+                 * does not name means the library renamed it */
+                rv = EXR_ERR_INVALID_ARGUMENT;
+                break;
+            }
             ch->encode_from_ptr = (const uint8_t *)(src + (size_t)y * n);
             ch->user_pixel_stride = sizeof(float);
             ch->user_line_stride = (int32_t)(sizeof(float) * n);
             ch->user_bytes_per_element = sizeof(float);
             ch->user_data_type = EXR_PIXEL_FLOAT;
         }
+        if (rv != EXR_ERR_SUCCESS)
+            break;
         if (!have_enc) {
             rv = exr_encoding_choose_default_routines(ctx, part, &enc);
             have_enc = 1;
