@@ -2486,6 +2486,82 @@ static inline double max2(double a, double b)
     return a > b ? a : b;
 }
 
+/* The envelope terms of hermite_read's bound (see there): *hx, *hz and
+ * *hxz from the 8 x 8 nodes around the cell.  Always inlined, so each
+ * call with a constant `finest` gets its own copy; a coarse cascade's
+ * copy loads and differences no slopes, and gives the terms the general
+ * code gave with them zero, bit for bit. */
+static inline __attribute__((always_inline)) void envelope(const float *g, const float *gx,
+                                                           const float *gz, const stencil *s,
+                                                           int finest, double *hx_out,
+                                                           double *hz_out, double *hxz_out)
+{
+    enum { B = ACC_MAXN + 4 };
+    double h = s->h, hx = 0.0, hz = 0.0, hxz = 0.0;
+    /* The nodes the fourth differences reach (two beyond the 4 x 4 on each
+     * side) are loaded once into blk (values), bx (h f_x) and bz (h f_z),
+     * not five times each.  The slopes only on the finest cascade: a
+     * coarse one stops at k h = pi / 2, where any four consecutive node
+     * values hold 0.71 of a wave's amplitude (the bound's factor 2 covers
+     * that), so its values alone bound it. */
+    float blk[B][B], bx[B][B], bz[B][B];
+    for (int i = 0; i < B; i++)
+        for (int k = 0; k < B; k++) {
+            int r = s->first - 2 + i, c = s->first - 2 + k;
+            blk[i][k] = (float)node(g, s, r, c);
+            if (finest) {
+                bx[i][k] = (float)(h * node(gx, s, r, c));
+                bz[i][k] = (float)(h * node(gz, s, r, c));
+            }
+        }
+    /* A wave near the band's top, k h = th_top, beats against the nodes:
+     * its node values follow an envelope |cos| that passes through 0 where
+     * the wave between them still has its full amplitude (at th = pi - e,
+     * A cos(th j + phi) = (-1)^j A cos(e j - phi)).  Its slopes at the
+     * nodes then hold that amplitude (h f_x = -th A sin(...)), so the
+     * envelope is taken from both: the fourth difference of the values,
+     * and that of h times the derivative over th_top.  For one wave of any
+     * k h <= th_top the larger of the two is within a factor th_top / th
+     * of its amplitude times the difference's response, and where that
+     * factor matters (low k h) the values alone hold it. */
+    /* Second differences first, each once: along x of the values (vx)
+     * and of h f_x (sx), along z of the values (vz) and of h f_z (sz).
+     * At the 4 x 4 nodes (block rows and columns 2..5) the fourth
+     * differences along x and z (a wave's response (2 sin(th / 2))^4, 16
+     * at the Nyquist rate) and the mixed one, second along x and along z
+     * ((2 sin(th_x / 2))^2 (2 sin(th_z / 2))^2, large only where both
+     * components are), are second differences of those.  The slopes'
+     * terms are divided by th_top = pi, the finest cascade's band top. */
+    float vx[B][B], vz[B][B], sx[B][B], sz[B][B];
+    for (int i = 0; i < B; i++)
+        for (int k = 1; k < B - 1; k++) {
+            vx[i][k] = blk[i][k - 1] - 2.0f * blk[i][k] + blk[i][k + 1];
+            vz[k][i] = blk[k - 1][i] - 2.0f * blk[k][i] + blk[k + 1][i];
+            if (finest) {
+                sx[i][k] = bx[i][k - 1] - 2.0f * bx[i][k] + bx[i][k + 1];
+                sz[k][i] = bz[k - 1][i] - 2.0f * bz[k][i] + bz[k + 1][i];
+            }
+        }
+    for (int i = 2; i < B - 2; i++)
+        for (int k = 2; k < B - 2; k++) {
+            double d4x = fabs(vx[i][k - 1] - 2.0 * vx[i][k] + vx[i][k + 1]);
+            double d4z = fabs(vz[i - 1][k] - 2.0 * vz[i][k] + vz[i + 1][k]);
+            double dm = fabs(vx[i - 1][k] - 2.0 * vx[i][k] + vx[i + 1][k]);
+            if (finest) {
+                d4x = max2(d4x, fabs(sx[i][k - 1] - 2.0 * sx[i][k] + sx[i][k + 1]) / M_PI);
+                d4z = max2(d4z, fabs(sz[i - 1][k] - 2.0 * sz[i][k] + sz[i + 1][k]) / M_PI);
+                dm = max2(dm, max2(fabs(sx[i - 1][k] - 2.0 * sx[i][k] + sx[i + 1][k]),
+                                   fabs(sz[i][k - 1] - 2.0 * sz[i][k] + sz[i][k + 1])) / M_PI);
+            }
+            if (d4x > hx) hx = d4x;
+            if (d4z > hz) hz = d4z;
+            if (dm > hxz) hxz = dm;
+        }
+    *hx_out = hx;
+    *hz_out = hz;
+    *hxz_out = hxz;
+}
+
 /* Hermite reading of value plane g with derivative planes gx (d/dx) and
  * gz (d/dz); *bound (unless NULL) receives its error bound (see the
  * section comment). */
@@ -2524,32 +2600,6 @@ static double hermite_read(const float *g, const float *gx, const float *gz, con
     for (int a = 0; a < ACC_MAXN; a++)
         cross += s->ku[a] * az[a] + s->kv[a] * ax[a];
     acc += 0.5 * cross * h;
-    /* With a bound, the nodes the fourth differences reach (two beyond the
-     * 4 x 4 on each side) are loaded once into blk (values), bx (h f_x)
-     * and bz (h f_z), not five times each.  The slopes only on the finest
-     * cascade: a coarse one stops at k h = pi / 2, where any four
-     * consecutive node values hold 0.71 of a wave's amplitude (the factor
-     * 2 below covers that), so its values alone bound it, as before. */
-    float blk[ACC_MAXN + 4][ACC_MAXN + 4], bx[ACC_MAXN + 4][ACC_MAXN + 4], bz[ACC_MAXN + 4][ACC_MAXN + 4];
-    if (bound)
-        for (int i = 0; i < ACC_MAXN + 4; i++)
-            for (int k = 0; k < ACC_MAXN + 4; k++) {
-                int r = s->first - 2 + i, c = s->first - 2 + k;
-                blk[i][k] = (float)node(g, s, r, c);
-                bx[i][k] = finest ? (float)(h * node(gx, s, r, c)) : 0.0f;
-                bz[i][k] = finest ? (float)(h * node(gz, s, r, c)) : 0.0f;
-            }
-    /* A wave near the band's top, k h = th_top, beats against the nodes:
-     * its node values follow an envelope |cos| that passes through 0 where
-     * the wave between them still has its full amplitude (at th = pi - e,
-     * A cos(th j + phi) = (-1)^j A cos(e j - phi)).  Its slopes at the
-     * nodes then hold that amplitude (h f_x = -th A sin(...)), so the
-     * envelope is taken from both: the fourth difference of the values,
-     * and that of h times the derivative over th_top.  For one wave of any
-     * k h <= th_top the larger of the two is within a factor th_top / th
-     * of its amplitude times the difference's response, and where that
-     * factor matters (low k h) the values alone hold it. */
-    double th_top = finest ? M_PI : M_PI / 2;
     for (int b = 0; b < s->nodes; b++) {          /* row node r (z) */
         for (int a = 0; a < s->nodes; a++) {      /* column node c (x) */
             size_t o = s->off[b * ACC_MAXN + a];
@@ -2560,35 +2610,10 @@ static double hermite_read(const float *g, const float *gx, const float *gz, con
         }
     }
     if (bound) {
-        /* Second differences first, each once: along x of the values (vx)
-         * and of h f_x (sx), along z of the values (vz) and of h f_z (sz).
-         * At the 4 x 4 nodes (block rows and columns 2..5) the fourth
-         * differences along x and z (a wave's response (2 sin(th / 2))^4,
-         * 16 at the Nyquist rate) and the mixed one, second along x and
-         * along z ((2 sin(th_x / 2))^2 (2 sin(th_z / 2))^2, large only
-         * where both components are), are second differences of those. */
-        enum { B = ACC_MAXN + 4 };
-        float vx[B][B], vz[B][B], sx[B][B], sz[B][B];
-        for (int i = 0; i < B; i++)
-            for (int k = 1; k < B - 1; k++) {
-                vx[i][k] = blk[i][k - 1] - 2.0f * blk[i][k] + blk[i][k + 1];
-                sx[i][k] = bx[i][k - 1] - 2.0f * bx[i][k] + bx[i][k + 1];
-                vz[k][i] = blk[k - 1][i] - 2.0f * blk[k][i] + blk[k + 1][i];
-                sz[k][i] = bz[k - 1][i] - 2.0f * bz[k][i] + bz[k + 1][i];
-            }
-        for (int i = 2; i < B - 2; i++)
-            for (int k = 2; k < B - 2; k++) {
-                double d4x = max2(fabs(vx[i][k - 1] - 2.0 * vx[i][k] + vx[i][k + 1]),
-                                  fabs(sx[i][k - 1] - 2.0 * sx[i][k] + sx[i][k + 1]) / th_top);
-                double d4z = max2(fabs(vz[i - 1][k] - 2.0 * vz[i][k] + vz[i + 1][k]),
-                                  fabs(sz[i - 1][k] - 2.0 * sz[i][k] + sz[i + 1][k]) / th_top);
-                double dm = max2(fabs(vx[i - 1][k] - 2.0 * vx[i][k] + vx[i + 1][k]),
-                                 max2(fabs(sx[i - 1][k] - 2.0 * sx[i][k] + sx[i + 1][k]),
-                                      fabs(sz[i][k - 1] - 2.0 * sz[i][k] + sz[i][k + 1])) / th_top);
-                if (d4x > hx) hx = d4x;
-                if (d4z > hz) hz = d4z;
-                if (dm > hxz) hxz = dm;
-            }
+        if (finest)
+            envelope(g, gx, gz, s, 1, &hx, &hz, &hxz);
+        else
+            envelope(g, gx, gz, s, 0, &hx, &hz, &hxz);
     }
     /* Per wave, the 1-D error over the fourth difference's response peaks
      * at the band's top: 6.3e-5 at k h = pi / 2 (coarse cascades' edge),
