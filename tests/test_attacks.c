@@ -24,7 +24,6 @@
 #include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
-#include <libgen.h>
 #include <math.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
@@ -1235,13 +1234,8 @@ static void admin_global_lockout(void **state) { run_attack(a_admin_global_locko
 int main(int argc, char **argv)
 {
     (void)argc;
-    /* as test_server.c: OpenMP teams sleep (LSan's suppressions:
-     * tests/lib/test_ws.c) */
-    if (ocean_wait_policy_setenv(0))
-        execv("/proc/self/exe", argv);
-    char tmp[512];
-    snprintf(tmp, sizeof tmp, "%s", argv[0]);
-    snprintf(exe_dir, sizeof exe_dir, "%s", dirname(dirname(tmp)));
+    test_wait_policy_passive(argv);
+    test_build_dir(argv[0], exe_dir, sizeof exe_dir);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(rfc_handshake_refusals),
         cmocka_unit_test(rfc_unmasked_and_utf8),

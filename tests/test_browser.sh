@@ -38,6 +38,27 @@ trap cleanup EXIT INT TERM
 
 die() { echo "test_browser: $*" >&2; exit 1; }
 
+# start_daemon LOG [OCEAND ARGS...]: starts $BUILD/oceand on a free loopback
+# port with config/oceand.conf (daemon_pid), waits up to 10 s for the URL it
+# announces (url); status 1 if it did not announce one.  LOG is emptied
+# here, not by the child's redirection: the grep must not read a previous
+# run's log.
+start_daemon() {
+    local log=$1
+    shift
+    : >"$log"
+    "$BUILD/oceand" --config config/oceand.conf --bind 127.0.0.1 --port 0 "$@" >"$log" 2>&1 &
+    daemon_pid=$!
+    url=""
+    for _ in $(seq 100); do
+        url=$(grep -o 'listening on http://[^ ]*' "$log" 2>/dev/null | head -1 | sed 's/^listening on //')
+        [[ -n "$url" ]] && return 0
+        kill -0 "$daemon_pid" 2>/dev/null || return 1
+        sleep 0.1
+    done
+    return 1
+}
+
 command -v node >/dev/null || die "node not found (apt-get install nodejs; .ci/deps.sh does it)"
 [[ -x "${CHROMIUM:-/usr/bin/chromium}" ]] || die "${CHROMIUM:-/usr/bin/chromium} not found (apt-get install chromium)"
 if [[ ! -d tests/browser/node_modules/playwright-core ]]; then
@@ -66,20 +87,7 @@ fi
 # ---- 2. the page in a real browser, served by the daemon -----------------
 echo "== viewer: headless Chromium against oceand =="
 log="$WORK/oceand.log"
-: >"$log"   # emptied here, not by the child's redirection: the URL grep below must not read a previous run's log
-"$BUILD/oceand" --config config/oceand.conf --bind 127.0.0.1 --port 0 >"$log" 2>&1 &
-daemon_pid=$!
-url=""
-for _ in $(seq 100); do
-    url=$(grep -o 'listening on http://[^ ]*' "$log" 2>/dev/null | head -1 | sed 's/^listening on //')
-    [[ -n "$url" ]] && break
-    kill -0 "$daemon_pid" 2>/dev/null || break
-    sleep 0.1
-done
-if [[ -z "$url" ]]; then
-    echo "test_browser: oceand did not start:"; cat "$log"
-    exit 1
-fi
+start_daemon "$log" || { echo "test_browser: oceand did not start:"; cat "$log"; exit 1; }
 echo "oceand at $url (pid $daemon_pid)"
 if ! OCEAN_URL="$url" ARTIFACT_DIR="$ART" VIEWER_TIMEOUT_S="${VIEWER_TIMEOUT_S:-90}" \
         timeout 300 node tests/browser/viewer.test.mjs; then
@@ -99,17 +107,7 @@ rm -f "$ART/scenes.jsonl"
 for scene in ship-bridge storm flight; do
     echo "== viewer: layout 1 screenshots, scene $scene =="
     log="$WORK/oceand-$scene.log"
-    : >"$log"
-    "$BUILD/oceand" --config config/oceand.conf --bind 127.0.0.1 --port 0 --scene "$scene" >"$log" 2>&1 &
-    daemon_pid=$!
-    url=""
-    for _ in $(seq 100); do
-        url=$(grep -o 'listening on http://[^ ]*' "$log" 2>/dev/null | head -1 | sed 's/^listening on //')
-        [[ -n "$url" ]] && break
-        kill -0 "$daemon_pid" 2>/dev/null || break
-        sleep 0.1
-    done
-    if [[ -z "$url" ]]; then
+    if ! start_daemon "$log" --scene "$scene"; then
         echo "test_browser: oceand --scene $scene did not start:"; cat "$log"
         status=1
         continue

@@ -17,7 +17,6 @@
 #include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
-#include <libgen.h>
 #include <math.h>
 #include <netinet/in.h>
 #include <setjmp.h>
@@ -573,9 +572,7 @@ int main(int argc, char **argv)
 {
     (void)argc;
     signal(SIGPIPE, SIG_IGN);
-    char t[512];
-    snprintf(t, sizeof t, "%s", argv[0]);
-    snprintf(exe_dir, sizeof exe_dir, "%s", dirname(dirname(t)));
+    test_build_dir(argv[0], exe_dir, sizeof exe_dir);
     time_t day = time(NULL) / 86400 * 86400 - 86400;
     EPOCH_UNIX = (double)day;
     struct tm tm;

@@ -27,7 +27,6 @@
 #include <cmocka.h>
 #include <cJSON.h>
 #include <dirent.h>
-#include <libgen.h>
 
 #include "filter.h"
 #include "gerstner.h"
@@ -3264,14 +3263,8 @@ static void sighup_and_sigterm(void **state)
 int main(int argc, char **argv)
 {
     (void)argc;
-    /* as build/oceand does: OpenMP teams must sleep, not spin (the
-     * variable is read when libgomp starts, hence the re-exec).  LSan's
-     * suppressions for lws client contexts: tests/lib/test_ws.c. */
-    if (ocean_wait_policy_setenv(0))
-        execv("/proc/self/exe", argv);
-    char tmp[512];
-    snprintf(tmp, sizeof tmp, "%s", argv[0]);
-    snprintf(exe_dir, sizeof exe_dir, "%s", dirname(dirname(tmp)));
+    test_wait_policy_passive(argv);
+    test_build_dir(argv[0], exe_dir, sizeof exe_dir);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(frames_tiles_and_mesh_decode),
         cmocka_unit_test(cascade_tiles_are_the_mips),

@@ -5,6 +5,8 @@
 #include "test_net.h"
 
 #include <arpa/inet.h>
+#include <errno.h>
+#include <libgen.h>
 #include <netinet/in.h>
 #include <setjmp.h>
 #include <signal.h>
@@ -19,6 +21,7 @@
 
 #include <cmocka.h>
 
+#include "ocean.h"
 #include "proto_buf.h"
 
 double test_now_s(void)
@@ -26,6 +29,22 @@ double test_now_s(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+void test_build_dir(const char *argv0, char *out, size_t n)
+{
+    char tmp[512];
+    snprintf(tmp, sizeof tmp, "%s", argv0);
+    snprintf(out, n, "%s", dirname(dirname(tmp)));
+}
+
+void test_wait_policy_passive(char **argv)
+{
+    if (ocean_wait_policy_setenv(0)) {
+        execv("/proc/self/exe", argv);
+        fprintf(stderr, "%s: cannot re-execute with OMP_WAIT_POLICY set: %s\n", argv[0], strerror(errno));
+        exit(1);
+    }
 }
 
 int test_free_port(void)

@@ -22,6 +22,17 @@
 /* Seconds on CLOCK_MONOTONIC. */
 double test_now_s(void);
 
+/* The build directory of the test program run as argv0 (BUILD of
+ * BUILD/tests/test_x), where its oceand is, into out (n bytes). */
+void test_build_dir(const char *argv0, char *out, size_t n);
+
+/* The start of main() in a program that runs the daemon in process: as
+ * build/oceand does, OpenMP teams must sleep, not spin, and libgomp reads
+ * the policy when it starts, so this re-executes the program with the
+ * policy set (ocean_wait_policy_setenv) and returns only when it is set.
+ * LSan's suppressions for lws client contexts: tests/lib/test_ws.c. */
+void test_wait_policy_passive(char **argv);
+
 /* A loopback TCP port nothing listens on at the time of the call (the
  * kernel's choice for port 0), or -1.  Another process may take it before
  * the caller binds it; tests start one daemon per port they asked for. */
