@@ -5,7 +5,9 @@
 # `ocean-client load` at 30 Hz for SECONDS (default 20; 5 with BENCH_QUICK)
 # per row and reports frames per viewer, tick-to-receipt latency p50/p99,
 # frames skipped, the daemon's CPU (utime+stime over the run, in cores),
-# bytes per viewer per second, and beside the daemon's the load generator's
+# bytes per viewer per second, the daemon's resident memory after the row
+# (one daemon serves every row in turn, so the column shows whether memory
+# stays bounded as loads come and go), and beside the daemon's the load generator's
 # own CPU: as the generator measures it over its window (getrusage), and
 # from /proc over the whole run (connects and ramp included).  Two machines'
 # worth of work share these 2 cores, so a generator near a core is part of
@@ -54,6 +56,7 @@ done
 [[ -n "$port" ]] || { echo "oceand did not start:"; cat "$log"; exit 1; }
 tck=$(getconf CLK_TCK)
 cpu() { awk '{print $14 + $15}' "/proc/$1/stat" 2>/dev/null || echo 0; }
+rss_mb() { awk '/^VmRSS:/ {printf "%.1f", $2 / 1024}' "/proc/$1/status" 2>/dev/null || echo nan; }
 # The browser's level count: min(8, HELLO max_lod_levels).
 maxlod=$("$build/oceand" --config config/oceand.conf --dump-config 2>/dev/null |
          sed -n 's/^server.max_lod_levels = \([0-9]*\).*/\1/p' | head -1)
@@ -79,9 +82,9 @@ before=(--layout 0 --effects height,displacement,normals,foam,near --layers 4 --
 # (MESH_VERTICES_QZ at the same accuracy; bench_meshqz has their bytes and
 # error) instead of f32.
 thin=("${before[@]/#f32/qz}")   # the one element "f32" (--mesh-codec) becomes "qz"
-echo "viewers,seconds,frames_per_viewer,frames_expected,latency_p50_ms,latency_p99_ms,frames_skipped_per_viewer,daemon_cpu_cores,bytes_per_viewer_per_s,disconnects,errors,generator_cpu_cores,decode_errors,camera_spread_m,subscription,generator_cpu_cores_proc" >"$csv"
-echo "| subscription | viewers | cameras | frames/viewer (expected) | p50 ms | p99 ms | skipped/viewer | daemon CPU (cores) | MB/s per viewer | generator CPU (cores, measured window / whole run) |"
-echo "|:---|---:|:---|---:|---:|---:|---:|---:|---:|---:|"
+echo "viewers,seconds,frames_per_viewer,frames_expected,latency_p50_ms,latency_p99_ms,frames_skipped_per_viewer,daemon_cpu_cores,bytes_per_viewer_per_s,disconnects,errors,generator_cpu_cores,decode_errors,camera_spread_m,subscription,generator_cpu_cores_proc,daemon_rss_mb" >"$csv"
+echo "| subscription | viewers | cameras | frames/viewer (expected) | p50 ms | p99 ms | skipped/viewer | daemon CPU (cores) | MB/s per viewer | daemon RSS after, MB | generator CPU (cores, measured window / whole run) |"
+echo "|:---|---:|:---|---:|---:|---:|---:|---:|---:|---:|---:|"
 # subscription:viewers:spread_m (0: every viewer at the same camera)
 if [[ -n "$quick" ]]; then
     runs=(browser:1:0 browser:64:0 browser:64:20 browser:64:2000 before:64:20)
@@ -109,7 +112,7 @@ for run in "${runs[@]}"; do
         sleep 0.2
     done
     wait "$lpid" || true
-    c1=$(cpu "$pid"); t1=$(date +%s.%N)
+    c1=$(cpu "$pid"); t1=$(date +%s.%N); rss=$(rss_mb "$pid")
     json=$(cat "$jf"); rm -f "$jf"
     cores=$(awk -v a="$c0" -v b="$c1" -v s="$t0" -v e="$t1" -v t="$tck" 'BEGIN {printf "%.2f", (b - a) / t / (e - s)}')
     gproc=$(awk -v g="$gticks" -v s="$t0" -v e="$t1" -v t="$tck" 'BEGIN {printf "%.2f", g / t / (e - s)}')
@@ -129,9 +132,9 @@ print("%.1f,%.1f,%.2f,%.2f,%.1f,%.0f,%d,%d,%.2f,%d" % (g("frames_per_viewer"), g
 PY
 )
     IFS=, read -r fpv fexp p50 p99 skip bps disc err gcpu derr <<<"$row"
-    echo "$n,$secs,$fpv,$fexp,$p50,$p99,$skip,$cores,$bps,$disc,$err,$gcpu,$derr,$spread,$sub,$gproc" >>"$csv"
+    echo "$n,$secs,$fpv,$fexp,$p50,$p99,$skip,$cores,$bps,$disc,$err,$gcpu,$derr,$spread,$sub,$gproc,$rss" >>"$csv"
     mbs=$(awk -v b="$bps" 'BEGIN {printf "%.2f", b / 1e6}')
-    echo "| $label | $n | $cams | $fpv ($fexp) | $p50 | $p99 | $skip | $cores | $mbs | $gcpu / $gproc |"
+    echo "| $label | $n | $cams | $fpv ($fexp) | $p50 | $p99 | $skip | $cores | $mbs | $rss | $gcpu / $gproc |"
 done
 echo
 echo "oceand on $(nproc) cores, config/oceand.conf ($(grep -o 'scene [a-z-]*, [0-9]* cascades of [0-9^]*' "$log" | head -1)), ${secs} s a row; browser-viewer subscription: ocean-client load ${browser[*]} ${extra[*]}; CSV: $csv"
