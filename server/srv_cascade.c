@@ -933,15 +933,15 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *
                 for (int m = 0; m < tb->mips[c]; m++) {
                     if (!p->need[c][m]) continue;
                     int np = tb->n >> m, T = cfg->cascade_tile < np ? cfg->cascade_tile : np, ntile = np / T;
-                    const range *g = &p->r[c][m];
-                    for (int a = 0; a < g->nz; a++)
-                        for (int b = 0; b < g->nx; b++) {
+                    const range *rg = &p->r[c][m];
+                    for (int a = 0; a < rg->nz; a++)
+                        for (int b = 0; b < rg->nx; b++) {
                             srv_tile_key key;
                             srv_tile_key_init(&key);
                             key.t = t;
                             key.accuracy = sub->accuracy;
-                            key.ix = (g->x0 + b) % ntile;
-                            key.iz = (g->z0 + a) % ntile;
+                            key.ix = (rg->x0 + b) % ntile;
+                            key.iz = (rg->z0 + a) % ntile;
                             key.channels = (uint16_t)chan_of(tb, p, c, m);
                             key.size = (uint16_t)T;
                             key.layout = PROTO_LAYOUT_CASCADE;

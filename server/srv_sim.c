@@ -766,10 +766,10 @@ static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
                     if (fresh) {
                         missing[nmiss++] = t;
                         t->ready = 0;
-                        /* remember which frame to sample: stash in payload_len's place */
+                        atomic_fetch_add(&st->tile_cache_misses, 1);
+                    } else {
+                        atomic_fetch_add(&st->tile_cache_hits, 1);
                     }
-                    if (fresh) atomic_fetch_add(&st->tile_cache_misses, 1);
-                    else atomic_fetch_add(&st->tile_cache_hits, 1);
                     j->tiles[j->ntiles++] = t;
                 }
         }
