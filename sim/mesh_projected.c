@@ -197,7 +197,7 @@ ocean_result mesh_build_projected(mesh *m, const mesh_camera *cam)
     double psi0 = atan(rmin / hp), psi1 = atan(rmax / hp);
 
     const int gw = c->grid_w, gh = c->grid_h;
-    const int cols = full ? gw : gw;            /* full: column gw wraps to 0 */
+    const int cols = gw;  /* full or not: a full ring's column gw wraps to column 0 */
     const uint32_t nv = full ? (uint32_t)(1 + (gh - 1) * cols) : (uint32_t)(gh * cols);
     const uint32_t nq = full ? (uint32_t)((gh - 2) * gw) : (uint32_t)((gh - 1) * (gw - 1));
     const uint32_t ni = full ? 3u * ((uint32_t)gw + 2 * nq) : 6 * nq;
