@@ -131,6 +131,12 @@ void srv_cascade_sweep(srv_cascade *k, uint64_t keep_from)
     srv_tiles_sweep(k->cache, keep_from);
 }
 
+void srv_cascade_cache_size(const srv_cascade *k, size_t *entries, size_t *bytes)
+{
+    *entries = srv_tiles_count(k->cache);
+    *bytes = srv_tiles_bytes(k->cache);
+}
+
 
 static unsigned ocean_fx_of(unsigned ch)
 {
@@ -604,13 +610,7 @@ static void tile_build(srv_tile *t, const ocean_frame *f, const tables *tb)
         proto_buf_free(&rec);
         return;
     }
-    if (rec.len > UINT32_MAX) {
-        proto_buf_free(&rec);
-        t->result = OCEAN_ETOOBIG;
-        return;
-    }
-    t->payload = rec.mem;   /* headroom 0: the bytes start at mem */
-    t->payload_len = (uint32_t)rec.len;
+    t->result = srv_tile_take_payload(t, &rec);
 }
 
 /* ---- frames ----------------------------------------------------------------- */

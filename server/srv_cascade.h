@@ -81,4 +81,8 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const struct ocean_gerstner *g, 
 /* Drops cached tiles last used before generation keep_from. */
 void srv_cascade_sweep(srv_cascade *k, uint64_t keep_from);
 
+/* Tiles the cache holds and their bytes as of the last sweep
+ * (srv_tiles_count, srv_tiles_bytes). */
+void srv_cascade_cache_size(const srv_cascade *k, size_t *entries, size_t *bytes);
+
 #endif

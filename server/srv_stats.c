@@ -105,6 +105,10 @@ char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t h
            (double)LD(tile_cache_hits));
     metric(&b, "oceand_tile_cache_misses_total", "counter", "Tile requests that had to be encoded.",
            (double)LD(tile_cache_misses));
+    metric(&b, "oceand_tile_cache_entries", "gauge", "Encoded tiles the caches hold (last sweep; 0 once idle).",
+           (double)LD(tile_cache_entries));
+    metric(&b, "oceand_tile_cache_bytes", "gauge", "Bytes those tiles take, entries included.",
+           (double)LD(tile_cache_bytes));
     metric(&b, "oceand_queries_total", "counter", "QUERY messages answered.", (double)LD(queries));
     metric(&b, "oceand_query_points_total", "counter", "Points answered.", (double)LD(query_points));
     metric(&b, "oceand_errors_sent_total", "counter", "ERROR replies sent.", (double)LD(errors_sent));
@@ -214,6 +218,8 @@ char *srv_stats_json(const srv_stats *s, const srv_stats_view *v, size_t headroo
     cJSON_AddNumberToObject(o, "bytes_sent", (double)LD(bytes_sent));
     cJSON_AddNumberToObject(o, "tile_cache_hits", (double)LD(tile_cache_hits));
     cJSON_AddNumberToObject(o, "tile_cache_misses", (double)LD(tile_cache_misses));
+    cJSON_AddNumberToObject(o, "tile_cache_entries", (double)LD(tile_cache_entries));
+    cJSON_AddNumberToObject(o, "tile_cache_bytes", (double)LD(tile_cache_bytes));
     cJSON_AddNumberToObject(o, "queries", (double)LD(queries));
     cJSON_AddNumberToObject(o, "errors_sent", (double)LD(errors_sent));
     cJSON_AddNumberToObject(o, "disconnects_slow", (double)LD(disconnects_slow));

@@ -21,6 +21,9 @@ typedef struct srv_stats {
     atomic_uint_fast64_t frames_built, frames_shared, frames_sent, frames_skipped;
     atomic_uint_fast64_t bytes_sent, messages_sent, messages_received;
     atomic_uint_fast64_t tiles_encoded, tile_cache_hits, tile_cache_misses;
+    /* gauges the simulation thread stores: what its tile caches (layout 0's
+     * world tiles and layout 1's cascade tiles) hold after its last sweep */
+    atomic_uint_fast64_t tile_cache_entries, tile_cache_bytes;
     atomic_uint_fast64_t queries, query_points, errors_sent;
     atomic_uint_fast64_t connections_total, disconnects_slow, refused_full;
     atomic_uint_fast64_t sea_changes, reloads;

@@ -38,6 +38,7 @@ proto_codec_ctx *srv_tiles_codec_ctx(void)
 struct srv_tile_cache {
     srv_tile *b[NBUCKETS];
     size_t count;
+    size_t bytes;          /* of the entries the last sweep kept */
 };
 
 ocean_result srv_tiles_create(srv_tile_cache **out)
@@ -62,6 +63,7 @@ void srv_tiles_clear(srv_tile_cache *c)
         }
     }
     c->count = 0;
+    c->bytes = 0;
 }
 
 void srv_tiles_destroy(srv_tile_cache *c)
@@ -109,6 +111,7 @@ srv_tile *srv_tiles_get(srv_tile_cache *c, const srv_tile_key *k, uint64_t gen, 
 
 void srv_tiles_sweep(srv_tile_cache *c, uint64_t keep_from)
 {
+    size_t bytes = 0;
     for (int i = 0; i < NBUCKETS; i++) {
         srv_tile **p = &c->b[i];
         while (*p) {
@@ -118,13 +121,17 @@ void srv_tiles_sweep(srv_tile_cache *c, uint64_t keep_from)
                 tile_free(t);
                 c->count--;
             } else {
+                bytes += sizeof *t + t->payload_len;
                 p = &t->next;
             }
         }
     }
+    c->bytes = bytes;
 }
 
 size_t srv_tiles_count(const srv_tile_cache *c) { return c->count; }
+
+size_t srv_tiles_bytes(const srv_tile_cache *c) { return c->bytes; }
 
 unsigned srv_tiles_channels(unsigned effects)
 {
@@ -193,12 +200,27 @@ void srv_tile_build(srv_tile *t, const ocean_frame *f)
     double max_err = 0;
     t->result = srv_tiles_encode(k, n, buf, &pb, &max_err);
     free(buf);
+    if (t->result == OCEAN_OK)
+        t->result = srv_tile_take_payload(t, &pb);
     if (t->result != OCEAN_OK)
         return;
-    /* Keep just the bytes (proto_buf with headroom 0 starts at mem). */
-    t->payload = pb.mem;
-    t->payload_len = (uint32_t)pb.len;
     t->error_bound = isfinite(max_err) && max_err >= 0 ? (float)max_err : 0.0f;
+}
+
+ocean_result srv_tile_take_payload(srv_tile *t, proto_buf *b)
+{
+    if (b->len > UINT32_MAX) {
+        proto_buf_free(b);
+        return OCEAN_ETOOBIG;
+    }
+    /* headroom 0: the bytes start at mem; shrinking a block moves nothing
+     * and hands its tail back to the allocator (if it cannot, the block
+     * stays as it was) */
+    uint8_t *m = b->mem ? realloc(b->mem, b->len ? b->len : 1) : NULL;
+    t->payload = m ? m : b->mem;
+    t->payload_len = (uint32_t)b->len;
+    proto_buf_init(b, 0);
+    return OCEAN_OK;
 }
 
 ocean_result srv_tiles_encode(const srv_tile_key *k, int n, const float *planes, proto_buf *out, double *max_err)

@@ -22,6 +22,7 @@
 #include "codec.h"
 #include "ocean.h"
 #include "proto.h"
+#include "proto_buf.h"
 
 typedef struct srv_tile_key {
     double t;          /* sim time of the evaluation */
@@ -62,11 +63,15 @@ void srv_tile_key_init(srv_tile_key *k);
 /* Finds or inserts the entry for k and marks it used in generation gen.
  * *fresh is 1 for a new (not yet built) entry.  NULL on OOM. */
 srv_tile *srv_tiles_get(srv_tile_cache *c, const srv_tile_key *k, uint64_t gen, int *fresh);
-/* Drops every entry last used before generation keep_from. */
+/* Drops every entry last used before generation keep_from, and counts
+ * what the rest take (srv_tiles_bytes). */
 void srv_tiles_sweep(srv_tile_cache *c, uint64_t keep_from);
 /* Drops everything (the sea changed). */
 void srv_tiles_clear(srv_tile_cache *c);
 size_t srv_tiles_count(const srv_tile_cache *c);
+/* Bytes the entries kept by the last sweep take (entry and payload); 0
+ * after srv_tiles_clear. */
+size_t srv_tiles_bytes(const srv_tile_cache *c);
 
 /* Channels (PROTO_CH_*) that a PROTO_FX_* effects mask puts in tiles. */
 unsigned srv_tiles_channels(unsigned effects);
@@ -74,6 +79,14 @@ unsigned srv_tiles_channels(unsigned effects);
 /* The first tile index of an n x n block around camera coordinate x at
  * tiles of world size w: the camera lies in the block's middle half. */
 int32_t srv_tiles_first(double x, double w, int n);
+
+/* Makes b's bytes (b made with headroom 0) the payload of t, in an
+ * allocation shrunk to their length, and leaves b empty.  An encoder grows
+ * its buffer to the worst case (zstd's bound over the raw planes, about
+ * eight times what a qz tile keeps), and cached tiles that kept that
+ * capacity held 1.3 GB for 256 layout-0 viewers 2 km apart.  Returns
+ * OCEAN_ETOOBIG (t unchanged, b freed) past UINT32_MAX bytes. */
+ocean_result srv_tile_take_payload(srv_tile *t, proto_buf *b);
 
 /* Samples the tile t->key describes from frame f and encodes it into
  * t->payload; sets ready, result, error_bound.  Thread safe for distinct t. */

@@ -27,6 +27,7 @@
 #include <cmocka.h>
 #include <cJSON.h>
 #include <dirent.h>
+#include <malloc.h>
 
 #include "filter.h"
 #include "gerstner.h"
@@ -37,6 +38,7 @@
 #include "srv_cascade.h"
 #include "srv_daemon.h"
 #include "srv_record.h"
+#include "srv_tiles.h"
 #include "lib/test_ws.h"
 #include "lib/test_net.h"
 #include "oc_path.h"
@@ -197,6 +199,70 @@ static ocean *local_ocean(void)
 
 /* Frames arrive, every tile decodes and equals the simulation at the
  * frame's time and cutoff, the mesh decodes against its topology. */
+/* A cached tile holds its encoded bytes, not the encoder's buffer: qz
+ * grows that to zstd's worst case over the raw planes, about eight times
+ * what the tile keeps, and with the capacity kept 256 layout-0 viewers 2 km
+ * apart held 1.3 GB of tiles (bench_server's daemon RSS column). */
+static void tile_payload_fits_its_bytes(void **state)
+{
+    (void)state;
+    /* the helper itself: a buffer reserved far past its bytes */
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    assert_int_equal(proto_buf_reserve(&b, 1 << 17), OCEAN_OK);
+    for (int i = 0; i < 1000; i++) {
+        uint8_t v = (uint8_t)(i * 7);
+        assert_int_equal(proto_buf_append(&b, &v, 1), OCEAN_OK);
+    }
+    srv_tile t1;
+    memset(&t1, 0, sizeof t1);
+    assert_int_equal(srv_tile_take_payload(&t1, &b), OCEAN_OK);
+    assert_null(b.mem);
+    assert_int_equal(t1.payload_len, 1000);
+    for (int i = 0; i < 1000; i++)
+        assert_int_equal(t1.payload[i], (uint8_t)(i * 7));
+    assert_true(malloc_usable_size(t1.payload) < 1000 + 64);
+    free(t1.payload);
+
+    /* a layout-0 tile as the daemon builds it: 64 x 64 samples, every
+     * channel, qz at the old viewer's accuracy */
+    ocean_params p;
+    ocean_params_default(&p);
+    p.threads = 1;
+    ocean *o = NULL;
+    ocean_frame *f = NULL;
+    char msg[256];
+    assert_int_equal(ocean_create(&p, &o, msg, sizeof msg), OCEAN_OK);
+    assert_int_equal(ocean_frame_create(o, &f), OCEAN_OK);
+    ocean_request rq;
+    ocean_request_all(&rq, OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT | OCEAN_FX_NORMALS | OCEAN_FX_FOAM);
+    assert_int_equal(ocean_evaluate(o, 12.0, &rq, f), OCEAN_OK);
+    srv_tile t;
+    memset(&t, 0, sizeof t);
+    srv_tile_key_init(&t.key);
+    t.key.t = 12.0;
+    t.key.spacing = 1.0;
+    t.key.accuracy = 1e-3f;
+    t.key.ix = 3;
+    t.key.iz = -2;
+    t.key.channels = (uint16_t)srv_tiles_channels(PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT | PROTO_FX_NORMALS |
+                                                  PROTO_FX_FOAM);
+    t.key.size = 64;
+    t.key.codec = PROTO_CODEC_QZ;
+    t.key.layers = 1;
+    srv_tile_build(&t, f);
+    assert_int_equal(t.result, OCEAN_OK);
+    size_t raw = (size_t)64 * 64 * sizeof(float) * (size_t)proto_tile_planes(t.key.channels);
+    assert_true(t.payload_len > 0 && t.payload_len < raw / 4);
+    size_t usable = malloc_usable_size(t.payload);
+    print_message("layout-0 tile: %u bytes kept in a %zu-byte block (raw planes %zu bytes)\n", t.payload_len,
+                  usable, raw);
+    assert_true(usable < (size_t)t.payload_len + 64);
+    free(t.payload);
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
 static void frames_tiles_and_mesh_decode(void **state)
 {
     (void)state;
@@ -1072,6 +1138,48 @@ static void queries_agree_with_sim(void **state)
     ocean_frame_destroy(lf);
     ocean_destroy(o);
     oc_client_destroy(c);
+}
+
+static char *http_get(int p, const char *path);
+
+/* A daemon nobody watches holds no tiles: the caches keep the last ticks'
+ * tiles (keyed by their sim time, so no later tick can use them) only
+ * until the next sweep, and with nobody subscribed no tick runs.  Seen as
+ * an operator sees it: /metrics's tile-cache gauges fall to 0 once the
+ * last viewer leaves (they were 0.9 GB after 256 layout-0 viewers). */
+static void idle_daemon_drops_its_tiles(void **state)
+{
+    (void)state;
+    srv_hub *h = srv_daemon_hub(daemon_);
+    oc_client *c = connect_bg(port);
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);        /* the viewer's: layout 1, every cascade */
+    proto_camera cam;
+    oc_camera_default(&cam);
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
+    for (int i = 0; i < 3; i++) oc_frame_free(next_frame(c, 5000));
+    /* the world tiles of layout 0 too */
+    small_subscribe(&sub);
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    for (int i = 0; i < 3; i++) oc_frame_free(next_frame(c, 5000));
+    assert_true(stat_of(&h->stats.tile_cache_entries) > 0);
+    assert_true(stat_of(&h->stats.tile_cache_bytes) > 0);
+    char *m = http_get(port, "/metrics");
+    assert_non_null(m);
+    assert_non_null(strstr(m, "oceand_tile_cache_entries "));
+    assert_null(strstr(m, "oceand_tile_cache_entries 0\n"));
+    free(m);
+    oc_client_destroy(c);
+    double end = test_now_s() + 5;
+    while (test_now_s() < end && stat_of(&h->stats.tile_cache_entries) > 0) usleep(20000);
+    assert_int_equal(stat_of(&h->stats.tile_cache_entries), 0);
+    assert_int_equal(stat_of(&h->stats.tile_cache_bytes), 0);
+    m = http_get(port, "/metrics");
+    assert_non_null(m);
+    assert_non_null(strstr(m, "oceand_tile_cache_entries 0\n"));
+    assert_non_null(strstr(m, "oceand_tile_cache_bytes 0\n"));
+    free(m);
 }
 
 /* Two viewers with identical cameras receive identical tile bytes, encoded
@@ -3266,6 +3374,7 @@ int main(int argc, char **argv)
     test_wait_policy_passive(argv);
     test_build_dir(argv[0], exe_dir, sizeof exe_dir);
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(tile_payload_fits_its_bytes),
         cmocka_unit_test(frames_tiles_and_mesh_decode),
         cmocka_unit_test(cascade_tiles_are_the_mips),
         cmocka_unit_test(cascade_near_field_ship_bridge),
@@ -3273,6 +3382,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(cutoff_follows_velocity),
         cmocka_unit_test(queries_agree_with_sim),
         cmocka_unit_test(identical_cameras_share_tiles),
+        cmocka_unit_test(idle_daemon_drops_its_tiles),
         cmocka_unit_test(replay_identical_bytes),
         cmocka_unit_test(mesh_qz_within_bound),
         cmocka_unit_test(slow_reader_never_delays_fast),
