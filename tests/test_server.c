@@ -224,15 +224,10 @@ static void tile_payload_fits_its_bytes(void **state)
     assert_true(malloc_usable_size(t1.payload) < 1000 + 64);
     free(t1.payload);
 
-    /* a layout-0 tile as the daemon builds it: 64 x 64 samples, every
-     * channel, qz at the old viewer's accuracy */
-    ocean_params p;
-    ocean_params_default(&p);
-    p.threads = 1;
-    ocean *o = NULL;
+    /* a layout-0 tile as the daemon builds it from the sea it serves: 64 x
+     * 64 samples, every channel, qz at the old viewer's accuracy */
+    ocean *o = local_ocean();
     ocean_frame *f = NULL;
-    char msg[256];
-    assert_int_equal(ocean_create(&p, &o, msg, sizeof msg), OCEAN_OK);
     assert_int_equal(ocean_frame_create(o, &f), OCEAN_OK);
     ocean_request rq;
     ocean_request_all(&rq, OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT | OCEAN_FX_NORMALS | OCEAN_FX_FOAM);
