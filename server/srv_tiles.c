@@ -213,9 +213,9 @@ ocean_result srv_tile_take_payload(srv_tile *t, proto_buf *b)
         proto_buf_free(b);
         return OCEAN_ETOOBIG;
     }
-    /* headroom 0: the bytes start at mem; shrinking a block moves nothing
-     * and hands its tail back to the allocator (if it cannot, the block
-     * stays as it was) */
+    /* headroom 0: the bytes start at mem.  glibc shrinks a heap block in
+     * place and hands its tail back; if realloc fails, the block stays as
+     * it was and still holds the bytes. */
     uint8_t *m = b->mem ? realloc(b->mem, b->len ? b->len : 1) : NULL;
     t->payload = m ? m : b->mem;
     t->payload_len = (uint32_t)b->len;
