@@ -91,11 +91,14 @@ PROGS := $(BUILD)/ocean-sim \
          $(patsubst clients/examples/%.c,$(BUILD)/examples/%,$(EXAMPLE_SRC))
 TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC))
 BENCHES := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
+WASM_CC ?= clang
+WASM := clients/web/ocean.wasm
+WASM_SRC := clients/wasm/oc_wasm.c protocol/codec.c protocol/proto_buf.c sim/ocean_result.c
 
 .PHONY: all deps test test-plain test-asan run bench fuzz clean install
 .DEFAULT_GOAL := all
 
-all: $(PROGS) $(TESTS) $(BENCHES) $(OCLIB_A) $(OCLIB_SO)
+all: $(PROGS) $(TESTS) $(BENCHES) $(OCLIB_A) $(OCLIB_SO) $(WASM)
 
 deps:
 	@bash .ci/deps.sh
@@ -105,6 +108,15 @@ deps:
 $(BUILD)/obj/sim/ocean.o $(BUILD)/pic/sim/ocean.o: OPT = -O3
 # sqrt must not set errno there, or GCC cannot vectorise deep_turns.
 $(BUILD)/obj/sim/ocean.o $(BUILD)/pic/sim/ocean.o: CFLAGS += -fno-math-errno
+
+# The browser viewer's decoders: protocol/codec.c's own, compiled to
+# WebAssembly with Debian's clang, wasm-ld (lld) and wasi-libc, and written
+# beside the page (the daemon serves clients/web/).  Exports and the zstd
+# bridge: clients/wasm/oc_wasm.c; loader: clients/web/codec.js.
+$(WASM): $(WASM_SRC) $(wildcard protocol/*.h) sim/ocean_result.h
+	$(WASM_CC) --target=wasm32-wasi --sysroot=/usr -std=c11 -O2 -Wall -Wextra -Werror -D_GNU_SOURCE \
+	    -Isim -Iprotocol -ffunction-sections -fdata-sections -nostartfiles \
+	    -Wl,--no-entry -Wl,--gc-sections -Wl,--strip-all $(WASM_SRC) -o $@
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -208,6 +220,6 @@ install: all
 	    server/oceand.service.in > $(DESTDIR)$(UNITDIR)/oceand.service
 
 clean:
-	rm -rf build
+	rm -rf build $(WASM)
 
 -include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)

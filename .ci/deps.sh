@@ -2,7 +2,7 @@
 # Installs the Debian packages oceand needs that are missing.  Idempotent and
 # quick when everything is present (one dpkg-query, no network).
 set -euo pipefail
-pkgs=(gcc make clang pkg-config libclang-rt-14-dev
+pkgs=(gcc make clang lld wasi-libc pkg-config libclang-rt-14-dev
       libwebsockets-dev libopenexr-dev libfftw3-dev libzstd-dev libcjson-dev
       librandom123-dev libcmocka-dev libwslay-dev gnuplot-nox openexr chromium
       curl python3 haproxy redis-server libhiredis-dev)

@@ -168,6 +168,25 @@ void proto_normal_oct_decode(float u, float v, float *nx, float *ny, float *nz)
     *nz = z / l;
 }
 
+void proto_normal_oct_slopes(float u, float v, float max_slope, float *sx, float *sz)
+{
+    double x = u, z = v, y = 1.0 - fabs(x) - fabs(z);
+    if (y < 0) {
+        double ox = x;
+        x = (1.0 - fabs(z)) * (ox >= 0 ? 1 : -1);
+        z = (1.0 - fabs(ox)) * (z >= 0 ? 1 : -1);
+    }
+    double len = sqrt(x * x + y * y + z * z);
+    if (!(len > 0) || !(max_slope > 0)) {
+        *sx = *sz = 0;
+        return;
+    }
+    if (y < len / max_slope)
+        y = len / max_slope;
+    *sx = (float)(-x / y);
+    *sz = (float)(-z / y);
+}
+
 void proto_normals_from_slopes(const float *sx, const float *sz, size_t n, float *nu, float *nv)
 {
     for (size_t i = 0; i < n; i++)

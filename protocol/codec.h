@@ -149,6 +149,11 @@ float proto_f32_from_f16(uint16_t h);
  * not be normalised; a zero vector encodes as straight up. */
 void proto_normal_oct_encode(float nx, float ny, float nz, float *u, float *v);
 void proto_normal_oct_decode(float u, float v, float *nx, float *ny, float *nz);
+/* The slopes d(eta)/dx, d(eta)/dz of the surface whose octahedral normal
+ * is (u, v): the inverse of n = normalise(-sx, 1, -sz).  A facet that
+ * overhangs or stands vertical (a folded crest: n_y <= |n| / max_slope) is
+ * held at slope max_slope, so no reader divides by a vanishing n_y. */
+void proto_normal_oct_slopes(float u, float v, float max_slope, float *sx, float *sz);
 /* Unit normals of a height field from its slopes d(eta)/dx, d(eta)/dz
  * (n = normalise(-sx, 1, -sz)), packed into the NU, NV planes. */
 void proto_normals_from_slopes(const float *sx, const float *sz, size_t n, float *nu, float *nv);

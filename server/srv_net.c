@@ -1089,9 +1089,13 @@ ocean_result srv_net_create(srv_hub *h, srv_net **out, char *msg, size_t msglen)
                                            .origin = "http", .protocol = "http",
                                            .origin_protocol = LWSMPRO_CALLBACK,
                                            .mountpoint_len = 8};
+    /* lws refuses (415) a file whose type it does not know; the viewer's
+     * decoders are WebAssembly modules */
+    static const struct lws_protocol_vhost_options wasm_mime = {NULL, NULL, ".wasm", "application/wasm"};
     n->m_root = (struct lws_http_mount){.mount_next = &n->m_metrics, .mountpoint = "/",
                                         .origin = n->web_root, .def = "index.html",
-                                        .origin_protocol = LWSMPRO_FILE, .mountpoint_len = 1};
+                                        .origin_protocol = LWSMPRO_FILE, .mountpoint_len = 1,
+                                        .extra_mimetypes = &wasm_mime};
     struct lws_context_creation_info info;
     memset(&info, 0, sizeof info);
     info.port = cfg.port;

@@ -15,8 +15,8 @@
 #include "oceanclient.h"
 
 #define NO_TILE 0xFFFFu
-/* n_y floor when a normal is turned into slopes: |slope| <= ~100 */
-#define NY_MIN 0.01
+/* a folded crest's slope when a normal is turned into slopes */
+#define MAX_SLOPE 100.0f
 
 /* Values a mip read produces, in this order. */
 enum { V_H, V_DX, V_DZ, V_SX, V_SZ, V_FOAM, V_COUNT };
@@ -308,26 +308,6 @@ static double wrap(double x, double P)
     return u;
 }
 
-/* Slopes from an octahedral normal (PROTOCOL.md "Octahedral normals"). */
-static void oct_slopes(float u, float v, float *sx, float *sz)
-{
-    double x = u, z = v, y = 1.0 - fabs(x) - fabs(z);
-    if (y < 0) {
-        double ox = x;
-        x = (1.0 - fabs(z)) * (ox >= 0 ? 1 : -1);
-        z = (1.0 - fabs(ox)) * (z >= 0 ? 1 : -1);
-    }
-    double len = sqrt(x * x + y * y + z * z);
-    if (!(len > 0)) {
-        *sx = *sz = 0;
-        return;
-    }
-    if (y < NY_MIN * len)
-        y = NY_MIN * len;
-    *sx = (float)(-x / y);
-    *sz = (float)(-z / y);
-}
-
 /* Sample (i, j) (row z, column x; already in [0, n)) of a mip: 0, or -1
  * when the frame has no tile there. */
 static inline int fetch(const oc_cascade_view *v, const cv_mip *mp, int i, int j, unsigned want, float *val,
@@ -348,7 +328,7 @@ static inline int fetch(const oc_cascade_view *v, const cv_mip *mp, int i, int j
     }
     if (want & W_S) {
         if (t->off[3] >= 0)
-            oct_slopes(d[t->off[3] + k], d[t->off[4] + k], &val[V_SX], &val[V_SZ]);
+            proto_normal_oct_slopes(d[t->off[3] + k], d[t->off[4] + k], MAX_SLOPE, &val[V_SX], &val[V_SZ]);
         else
             val[V_SX] = val[V_SZ] = 0.0f;
     }

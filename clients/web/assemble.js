@@ -6,8 +6,12 @@
  * right (gaps keep coverage 0 and an upward normal).  Used by the decode
  * pool (decoder.js) and, without a pool, by the network worker itself.
  */
-import { decodeTile } from './codec.js';
+import { decodeTile, decodeCascadeBlock, octNormals } from './codec.js';
 import { CH, CODEC_NAMES } from './protocol.js';
+
+/* A folded crest's slope in the renderer's slope textures: steep enough
+ * for any real facet, bounded so one texel cannot dominate a mip's mean. */
+const MAX_SLOPE = 20;
 
 /* Splits tiles by level: Map level -> tiles, levels ascending. */
 export function groupByLevel(tiles) {
@@ -58,7 +62,8 @@ export function assembleLevel(level, tiles, onError) {
         for (const [bit, names] of [[CH.HEIGHT, ['H']], [CH.DX, ['DX']], [CH.DZ, ['DZ']], [CH.NORMAL, ['NU', 'NV']], [CH.FOAM, ['FOAM']], [CH.JACOBIAN, ['J']]])
             if (t.channels & bit) for (const nm of names) { plane[nm] = p * n; p++; }
         const pH = plane.H, pX = plane.DX, pZ = plane.DZ, pU = plane.NU, pV = plane.NV, pF = plane.FOAM;
-        if (pU !== undefined) hasNormals = true;
+        const nrmT = pU !== undefined ? octNormals(d.subarray(pU, pU + n), d.subarray(pV, pV + n)) : null;
+        if (nrmT) hasNormals = true;
         for (let r = 0; r < t.height; r++) {
             for (let c = 0; c < t.width; c++) {
                 const k = r * t.width + c;
@@ -70,18 +75,7 @@ export function assembleLevel(level, tiles, onError) {
                 disp[o + 3] = fo;
                 if (fo > foamMax) foamMax = fo;
                 foamSum += fo;
-                if (pU !== undefined) {
-                    /* octahedral decode (proto_normal_oct_decode), inlined */
-                    let x = d[pU + k], z = d[pV + k];
-                    const y = 1 - Math.abs(x) - Math.abs(z);
-                    if (y < 0) {
-                        const ox2 = (1 - Math.abs(z)) * (x >= 0 ? 1 : -1);
-                        z = (1 - Math.abs(x)) * (z >= 0 ? 1 : -1);
-                        x = ox2;
-                    }
-                    const l = Math.sqrt(x * x + y * y + z * z);
-                    if (l > 0) { nrm[o] = x / l; nrm[o + 1] = y / l; nrm[o + 2] = z / l; }
-                }
+                if (nrmT) { nrm[o] = nrmT[4 * k]; nrm[o + 1] = nrmT[4 * k + 1]; nrm[o + 2] = nrmT[4 * k + 2]; }
                 nrm[o + 3] = 1;
             }
         }
@@ -104,56 +98,17 @@ export function assembleLevel(level, tiles, onError) {
  * (GL-filtered) mean slope is the mean of its texels' slopes.
  * Returns null (and tells onError) if the tile does not decode. */
 export function assembleCascadeTile(t, onError) {
-    let dec;
+    let b;
     try {
-        dec = decodeTile(t.codec, t.width, t.height, t.channels, t.payload);
+        b = decodeCascadeBlock(t, MAX_SLOPE);
     } catch (e) {
         onError(e, `cascade ${t.cascade} mip ${t.level} tile (${t.ix},${t.iz}) ${CODEC_NAMES[t.codec]}`);
         return null;
     }
-    const w = t.width, h = t.height, n = w * h, d = dec.data;
-    const plane = {};
-    let p = 0;
-    for (const [bit, names] of [[CH.HEIGHT, ['H']], [CH.DX, ['DX']], [CH.DZ, ['DZ']], [CH.NORMAL, ['NU', 'NV']], [CH.FOAM, ['FOAM']], [CH.JACOBIAN, ['J']]])
-        if (t.channels & bit) for (const nm of names) { plane[nm] = p * n; p++; }
-    const disp = new Float32Array(4 * n), slope = new Float32Array(2 * n);
-    const pH = plane.H, pX = plane.DX, pZ = plane.DZ, pU = plane.NU, pV = plane.NV, pF = plane.FOAM;
-    let foamSum = 0, foamMax = 0;
-    for (let k = 0; k < n; k++) {
-        disp[4 * k] = pX !== undefined ? d[pX + k] : 0;
-        disp[4 * k + 1] = pH !== undefined ? d[pH + k] : 0;
-        disp[4 * k + 2] = pZ !== undefined ? d[pZ + k] : 0;
-        const fo = pF !== undefined ? d[pF + k] : 0;
-        disp[4 * k + 3] = fo;
-        foamSum += fo;
-        if (fo > foamMax) foamMax = fo;
-        if (pU !== undefined) {
-            /* octahedral decode (PROTOCOL.md "Octahedral normals") */
-            let x = d[pU + k], z = d[pV + k];
-            const y = 1 - Math.abs(x) - Math.abs(z);
-            if (y < 0) {
-                const x2 = (1 - Math.abs(z)) * (x >= 0 ? 1 : -1);
-                z = (1 - Math.abs(x)) * (z >= 0 ? 1 : -1);
-                x = x2;
-            }
-            /* (x, y, z) need no normalising for a ratio; an overhanging
-             * facet (y <= 0, folded crest) is held at slope 20 */
-            const yy = Math.max(y, 0.05 * Math.hypot(x, z), 1e-6);
-            slope[2 * k] = -x / yy;
-            slope[2 * k + 1] = -z / yy;
-        }
-    }
-    if (pU === undefined && pH !== undefined) {
-        const s = t.spacing;
-        for (let i = 0; i < h; i++)
-            for (let j = 0; j < w; j++) {
-                const j0 = Math.max(0, j - 1), j1 = Math.min(w - 1, j + 1), i0 = Math.max(0, i - 1), i1 = Math.min(h - 1, i + 1);
-                slope[2 * (i * w + j)] = j1 > j0 ? (d[pH + i * w + j1] - d[pH + i * w + j0]) / ((j1 - j0) * s) : 0;
-                slope[2 * (i * w + j) + 1] = i1 > i0 ? (d[pH + i1 * w + j] - d[pH + i0 * w + j]) / ((i1 - i0) * s) : 0;
-            }
-    }
+    const w = t.width, h = t.height;
     return {
-        cascade: t.cascade, mip: t.level, x: t.ix * w, y: t.iz * h, w, h, disp, slope,
-        errorBound: t.errorBound, foamSum, foamMax, n, hasNormals: pU !== undefined,
+        cascade: t.cascade, mip: t.level, x: t.ix * w, y: t.iz * h, w, h, disp: b.disp, slope: b.slope,
+        errorBound: t.errorBound, foamSum: b.foamSum, foamMax: b.foamMax, n: w * h,
+        hasNormals: (t.channels & CH.NORMAL) !== 0,
     };
 }

@@ -210,7 +210,8 @@ worker.onmessage = (ev) => {
         renderer.setVertices(m);
         break;
     case 'frame':
-        stats.framesReceived++;
+        stats.framesReceived = m.stats.frames;   /* FRAMEs that reached the worker */
+        stats.framesDecoded = (stats.framesDecoded || 0) + 1;
         pendingFrame = m;       /* latest wins: uploaded on the next animation frame */
         break;
     case 'error':
@@ -380,7 +381,11 @@ function tick(now) {
     stats.camera = cam.pos.slice();
     stats.cameraVel = cam.measuredVel.slice();
     adaptSpacing(now);
-    if (pendingFrame) { applyFrame(pendingFrame); pendingFrame = null; }
+    if (pendingFrame) {
+        applyFrame(pendingFrame);
+        pendingFrame = null;
+        worker.postMessage({ cmd: 'taken' });   /* the worker decodes the next frame only now */
+    }
     const simNow = haveFrame ? lastFrameSim + Math.min(0.5, (now - lastFrameWall) / 1000) : lastFrameSim;
     try {
         if (renderer.draw({ pos: cam.pos, basis: cam.basis, fovYDeg: cam.fovYDeg }, simNow)) stats.framesRendered++;

@@ -7,8 +7,10 @@
  * posts the results to the page with their buffers transferred.
  *
  * Latest wins, as on the server: FRAMEs that arrive while one is being
- * decoded are coalesced and only the newest is decoded (counted in
- * `skipped`).  Latency is measured here, on one clock: the time from
+ * decoded, or while the page has not yet drawn the last one decoded, are
+ * coalesced and only the newest is decoded (counted in `skipped`).  So the
+ * decoding follows the page's drawing rate: a page that draws 2 frames a
+ * second (software GL on a busy host) costs 2 decodes a second, not 30.  Latency is measured here, on one clock: the time from
  * sending CAMERA seq s to receiving the first FRAME that answers s.
  *
  * Tiles are decoded by a pool of decoder workers (decoder.js), whole
@@ -23,6 +25,7 @@
  * placement go with them.
  *
  * Page -> worker: {cmd:'connect', url, sub}, {cmd:'camera', cam},
+ *                 {cmd:'taken'} (the page applied the last frame posted),
  *                 {cmd:'subscribe', sub} (change), {cmd:'query', id, points},
  *                 {cmd:'pause', paused}, {cmd:'capture'} (next FRAME's raw
  *                 bytes, for debugging), {cmd:'close'}.
@@ -33,19 +36,28 @@ import {
     CODEC, CODEC_NAMES, CUTOFF, FX, LAYOUT, MESH, MESH_CODEC, SUBPROTOCOL, T, BYE_REASONS, RESULT_NAMES,
     decode, decodeHeader, encodeCamera, encodeSubscribe, encodeQuery, encodeBye, ProtoError, tilePlanes,
 } from './protocol.js';
-import { assembleLevel, assembleCascadeTile, groupByLevel } from './assemble.js';
-import { decodeMeshQz } from './codec.js';
-import { MeshQzStore } from './meshstore.js';
 import { ByteRate } from './rate.js';
 
 let ws = null;
 let seq = 0;
 let hello = null;
 let subscription = null;
-const meshQz = new MeshQzStore();  /* layout 0 with mesh_codec qz: the topologies' prediction refs */
+/* The decoders (codec.js) load their WebAssembly modules as they are
+ * imported; a static import would hold this module's evaluation, and with
+ * it the onmessage handler below, until they have loaded, and a message
+ * the page sends meanwhile would be lost.  So they come in dynamically and
+ * the socket opens once they are here. */
+let assembleLevel, assembleCascadeTile, groupByLevel, decodeMeshQz, meshQz;
+const decodersReady = Promise.all([import('./assemble.js'), import('./codec.js'), import('./meshstore.js')])
+    .then(([a, c, m]) => {
+        ({ assembleLevel, assembleCascadeTile, groupByLevel } = a);
+        ({ decodeMeshQz } = c);
+        meshQz = new m.MeshQzStore();  /* layout 0 with mesh_codec qz: the topologies' prediction refs */
+    });
 let wantSub = null;
 let lastSimTime = 0;
 let pendingFrame = null;     /* newest undecoded FRAME bytes */
+let pageHolds = false;       /* a decoded frame is posted and the page has not taken it yet */
 let frameScheduled = false;
 const sentAt = new Map();    /* CAMERA seq -> performance.now() at send */
 let answeredSeq = -1;
@@ -119,7 +131,7 @@ function connect(url, want) {
     ws.onclose = (ev) => {
         subscription = null;
         hello = null;
-        meshQz.clear();           /* mesh ids are per connection */
+        if (meshQz) meshQz.clear();   /* mesh ids are per connection */
         post({ kind: 'status', state: 'closed', code: ev.code, reason: ev.reason, retryMs: closing ? null : retryMs });
         if (!closing) {
             setTimeout(() => connect(wsUrl, null), retryMs);
@@ -276,7 +288,7 @@ function getPool() {
 }
 
 function schedule() {
-    if (!frameScheduled && pendingFrame) {
+    if (!frameScheduled && pendingFrame && !pageHolds) {
         frameScheduled = true;
         setTimeout(processFrame, 0);
     }
@@ -417,6 +429,7 @@ function finishFrame(job) {
         decodeWorkers: pool ? pool.length : 0, stats: { ...stats },
     };
     if (meta.mesh) transfer.push(meta.mesh.positions.buffer);
+    pageHolds = true;
     post(out, transfer);
 }
 
@@ -424,7 +437,11 @@ self.onmessage = (ev) => {
     const m = ev.data;
     switch (m.cmd) {
     case 'connect':
-        connect(m.url, m.sub || {});
+        decodersReady.then(() => connect(m.url, m.sub || {}), (e) => {
+            stats.lastError = `decoders: ${e.message || e}`;
+            post({ kind: 'status', state: 'failed', reason: stats.lastError });
+            post({ kind: 'error', source: 'client', message: stats.lastError, code: 0 });
+        });
         break;
     case 'camera': {
         if (!subscription) return;
@@ -459,6 +476,11 @@ self.onmessage = (ev) => {
     case 'capture':
         /* debugging aid: the next FRAME's raw bytes go to the page */
         captureNext = true;
+        break;
+    case 'taken':
+        /* the page applied the frame we posted: decode the newest next */
+        pageHolds = false;
+        schedule();
         break;
     case 'pause':
         paused = !!m.paused;
