@@ -1,13 +1,19 @@
 #!/usr/bin/env bash
 # Runs every test program in BUILD/tests (cmocka) and every tests/test_*.sh
 # script, then prints one closing line "N passed, N failed, N skipped".
-#   usage: tests/run.sh BUILD LABEL
+#   usage: tests/run.sh BUILD LABEL        (TEST_JOBS=N: at most N at once)
 # A cmocka program contributes its own pass/fail/skip counts (a skipped test
 # is neither a pass nor a failure, but the closing line says how many); a
 # script or a program that crashes before its summary counts as one failure.
+#
+# Tests run side by side, one per core by default (each starts its daemons
+# on ports of its own, in directories of its own, and waits for conditions,
+# not for time), longest first so the pass ends when its longest test does;
+# their lines are printed in name order once all are done.
 set -u
 build=${1:-build}
 label=${2:-plain}
+jobs=${TEST_JOBS:-$(nproc 2>/dev/null || echo 2)}
 passed=0
 failed=0
 skipped=0
@@ -21,36 +27,64 @@ count_cmocka() {  # file -> sets p f k
     k=$(grep -E '^\[  SKIPPED \] [0-9]+ test' "$1" | awk '{s+=$4} END {print s+0}')
 }
 
-for t in "$build"/tests/test_*; do
-    [[ -x "$t" && -f "$t" ]] || continue
-    name=$(basename "$t")
-    log="$logdir/$name.log"
+# One test in the background: its output in LOG, then its exit status and
+# seconds in LOG.rc.
+run_one() {  # name kind(c|sh) path
+    local log="$logdir/$1.log" start rc
     start=$(date +%s.%N)
-    "$t" >"$log" 2>&1
+    if [[ $2 == c ]]; then "$3" >"$log" 2>&1; else BUILD="$build" bash "$3" >"$log" 2>&1; fi
     rc=$?
-    secs=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN {printf "%.1f", b - a}')
-    count_cmocka "$log"
-    if [[ $rc -ne 0 && $f -eq 0 ]]; then f=1; fi
-    passed=$((passed + p)); failed=$((failed + f)); skipped=$((skipped + k))
-    printf '%-28s %4d passed %3d failed %3d skipped  %6ss  [%s]\n' "$name" "$p" "$f" "$k" "$secs" "$label"
-    if [[ $f -ne 0 ]]; then failures+=("$name"); grep -E 'FAILED|ERROR|error|Assert|runtime error|Sanitizer' "$log" | head -20; fi
-done
+    echo "$rc $(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN {printf "%.1f", b - a}')" >"$log.rc"
+}
 
+tests=()   # "name kind path"
+for t in "$build"/tests/test_*; do
+    [[ -x "$t" && -f "$t" ]] && tests+=("$(basename "$t") c $t")
+done
 # Script tests (integration, browser) run only in the plain pass: they drive
 # the plain binaries; the daemon's sanitizer coverage comes from its own C tests.
 if [[ "$label" == plain ]]; then
     for s in tests/test_*.sh; do
-        [[ -f "$s" ]] || continue
-        name=$(basename "$s")
-        log="$logdir/$name.log"
-        start=$(date +%s.%N)
-        BUILD="$build" bash "$s" >"$log" 2>&1
-        rc=$?
-        secs=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN {printf "%.1f", b - a}')
-        if [[ $rc -eq 0 ]]; then passed=$((passed + 1)); r="1 passed   0"; else failed=$((failed + 1)); r="0 passed   1"; failures+=("$name"); tail -20 "$log"; fi
-        printf '%-28s    %s failed   0 skipped  %6ss  [%s]\n' "$name" "$r" "$secs" "$label"
+        [[ -f "$s" ]] && tests+=("$(basename "$s") sh $s")
     done
 fi
+# The longest first: by the seconds of the last run where there was one;
+# a first run starts the browser test first, the longest by far.
+order=()
+for e in "${tests[@]}"; do
+    read -r name _ _ <<<"$e"
+    secs=$(awk '{print $2}' "$logdir/$name.log.rc" 2>/dev/null)
+    [[ -z "$secs" && $name == test_browser.sh ]] && secs=1000
+    order+=("${secs:-0} $e")
+done
+mapfile -t order < <(printf '%s\n' "${order[@]}" | sort -s -k1,1 -g -r)
+
+for e in "${order[@]}"; do
+    read -r _ name kind path <<<"$e"
+    rm -f "$logdir/$name.log.rc"
+    while (($(jobs -rp | wc -l) >= jobs)); do wait -n; done
+    run_one "$name" "$kind" "$path" &
+done
+wait
+
+for e in "${tests[@]}"; do
+    read -r name kind _ <<<"$e"
+    log="$logdir/$name.log"
+    read -r rc secs <"$log.rc" 2>/dev/null || { rc=1; secs=0; }
+    if [[ $kind == c ]]; then
+        count_cmocka "$log"
+        if [[ $rc -ne 0 && $f -eq 0 ]]; then f=1; fi
+    else
+        k=0
+        if [[ $rc -eq 0 ]]; then p=1; f=0; else p=0; f=1; fi
+    fi
+    passed=$((passed + p)); failed=$((failed + f)); skipped=$((skipped + k))
+    printf '%-28s %4d passed %3d failed %3d skipped  %6ss  [%s]\n' "$name" "$p" "$f" "$k" "$secs" "$label"
+    if [[ $f -ne 0 ]]; then
+        failures+=("$name")
+        if [[ $kind == c ]]; then grep -E 'FAILED|ERROR|error|Assert|runtime error|Sanitizer' "$log" | head -20; else tail -20 "$log"; fi
+    fi
+done
 
 if ((${#failures[@]})); then echo "failing: ${failures[*]} (logs in $logdir)"; fi
 echo "$passed $failed $skipped" > "$build/test-summary"

@@ -71,7 +71,7 @@ fi
 status=0
 
 # ---- 1. protocol cross-check --------------------------------------------
-echo "== protocol: JavaScript decoder vs C (protocol/) =="
+echo "== protocol: JavaScript decoder vs C (protocol/) == (${SECONDS} s)"
 ${CC:-cc} -std=c11 -O1 -Wall -Wextra -Werror -Isim -Iprotocol tests/browser/gen_vectors.c \
     "$BUILD/libocean_proto.a" "$BUILD/libocean_sim.a" -lzstd -lOpenEXRCore-3_1 -lm \
     -o "$WORK/gen_vectors" || die "cannot build gen_vectors"
@@ -85,7 +85,7 @@ if ! VECTOR_DIR="$WORK/vectors" GEN_VECTORS="$WORK/gen_vectors" PROTO_VECTORS=te
 fi
 
 # ---- 2. the page in a real browser, served by the daemon -----------------
-echo "== viewer: headless Chromium against oceand =="
+echo "== viewer: headless Chromium against oceand == (${SECONDS} s)"
 log="$WORK/oceand.log"
 start_daemon "$log" || { echo "test_browser: oceand did not start:"; cat "$log"; exit 1; }
 echo "oceand at $url (pid $daemon_pid)"
@@ -105,7 +105,7 @@ daemon_pid=""
 # SHOTS_OUT=tests/bench/out copies the PNGs there for the benchmark report.
 rm -f "$ART/scenes.jsonl"
 for scene in ship-bridge storm flight; do
-    echo "== viewer: layout 1 screenshots, scene $scene =="
+    echo "== viewer: layout 1 screenshots, scene $scene == (${SECONDS} s)"
     log="$WORK/oceand-$scene.log"
     if ! start_daemon "$log" --scene "$scene"; then
         echo "test_browser: oceand --scene $scene did not start:"; cat "$log"
@@ -122,4 +122,5 @@ for scene in ship-bridge storm flight; do
     cleanup
     daemon_pid=""
 done
+echo "test_browser: done in ${SECONDS} s"
 exit $status

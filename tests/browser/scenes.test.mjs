@@ -72,10 +72,15 @@ try {
             '--disable-backgrounding-occluded-windows'],
         timeout: 60000,
     });
+    /* every action (screenshot, click, navigation) waits for its condition
+     * up to the test's deadline: a software renderer on a host with a core
+     * taken by another process draws a frame in seconds, not milliseconds */
+    context.setDefaultTimeout(timeoutMs);
+    context.setDefaultNavigationTimeout(timeoutMs);
     const page = context.pages()[0] || await context.newPage();
     const pageErrors = [];
     page.on('pageerror', (e) => pageErrors.push(String(e)));
-    await page.goto(`${base}?overlay=0&x=0&y=25&z=0&pitch=-8&fov=${FOV}`, { waitUntil: 'load', timeout: 30000 });
+    await page.goto(`${base}?overlay=0&x=0&y=25&z=0&pitch=-8&fov=${FOV}`, { waitUntil: 'load', timeout: timeoutMs });
     const up = await waitFor(page, () => window.oceanStats && window.oceanStats.hello && window.oceanStats.framesRendered >= 2, null, timeoutMs);
     let s = await stats(page);
     check('viewer up on layout 1', up && s.layout === 1 && s.subscription && s.subscription.layout === 1,

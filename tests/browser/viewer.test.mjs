@@ -101,6 +101,11 @@ try {
             '--disable-backgrounding-occluded-windows'],
         timeout: 60000,
     });
+    /* every action (screenshot, click, navigation) waits for its condition
+     * up to the test's deadline: a software renderer on a host with a core
+     * taken by another process draws a frame in seconds, not milliseconds */
+    context.setDefaultTimeout(timeoutMs);
+    context.setDefaultNavigationTimeout(timeoutMs);
     /* nothing but the daemon may be contacted */
     const foreign = [];
     const origin = new URL(base).host;
@@ -116,7 +121,7 @@ try {
     page.on('pageerror', (e) => pageErrors.push(String(e)));
     page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
     page.on('response', (r) => { if (r.status() >= 400) badResponses.push(`${r.status()} ${r.url()}`); });
-    const resp = await page.goto(url, { waitUntil: 'load', timeout: 30000 });
+    const resp = await page.goto(url, { waitUntil: 'load', timeout: timeoutMs });
     check('page loads from the daemon', resp && resp.status() === 200, `HTTP ${resp && resp.status()}`);
     const ctype = resp ? (resp.headers()['content-type'] || '') : '';
     check('page is served as HTML', /text\/html/.test(ctype), ctype);
@@ -164,7 +169,11 @@ try {
         `sky rgb ${skyC.map((x) => x.toFixed(0))}, sea rgb ${seaC.map((x) => x.toFixed(0))}`);
     const det = detail(img1, sea0, img1.h);
     void horizon;
+    /* a newer frame drawn (twice), however long the renderer takes */
+    const s0 = await stats(page);
     await page.waitForTimeout(1200);
+    await waitFor(page, ([d, r]) => window.oceanStats.framesDecoded > d && window.oceanStats.framesRendered >= r + 2,
+        [s0.framesDecoded, s0.framesRendered], timeoutMs);
     const png2 = await page.screenshot({ type: 'png' });
     const img2 = decodePng(png2);
     const moved = meanAbsDiff(img1, img2, sea0, img1.h);
@@ -208,7 +217,7 @@ try {
     const page2 = await context.newPage();
     const page2Errors = [];
     page2.on('pageerror', (e) => page2Errors.push(String(e)));
-    await page2.goto(`${base}?x=40&y=30&z=-25&yaw=-60&pitch=-15`, { waitUntil: 'load', timeout: 30000 });
+    await page2.goto(`${base}?x=40&y=30&z=-25&yaw=-60&pitch=-15`, { waitUntil: 'load', timeout: timeoutMs });
     const before = (await stats(page)).framesReceived;
     const both = await waitFor(page2, () => window.oceanStats && window.oceanStats.framesReceived >= 5 && window.oceanStats.framesRendered >= 2, null, timeoutMs);
     const s1 = await stats(page), s2 = await stats(page2);
@@ -218,9 +227,20 @@ try {
     const sea1 = s1.hello && s1.hello.sea, sea2 = s2.hello && s2.hello.sea;
     check('one ocean: same sea state and seed for both', !!sea1 && JSON.stringify(sea1) === JSON.stringify(sea2),
         sea1 ? `seed ${sea1.seed}, wind ${sea1.windU10} m/s` : 'no HELLO');
-    /* one clock: both pages show times of the same server clock (each lags
-     * by its own frame latency, seconds at most under software GL) */
-    check('one ocean: both on one sim clock', Math.abs(s1.simTime - s2.simTime) < 10, `${s1.simTime.toFixed(2)} / ${s2.simTime.toFixed(2)}`);
+    /* one clock: both pages show times of the same server clock.  Each
+     * shows the frame it drew last, as old as its drawing interval (seconds
+     * under software GL on a busy host), so the two are compared until they
+     * come within 2 s of each other, up to the deadline: pages on clocks of
+     * their own would drift apart by the time between their connections */
+    let clock = null;
+    for (const until = Date.now() + timeoutMs; Date.now() < until;) {
+        const [a, b] = [(await stats(page)).simTime, (await stats(page2)).simTime];
+        clock = [a, b];
+        if (Math.abs(a - b) < 2) break;
+        await page.waitForTimeout(250);
+    }
+    check('one ocean: both on one sim clock', clock && Math.abs(clock[0] - clock[1]) < 2,
+        clock ? `${clock[0].toFixed(2)} / ${clock[1].toFixed(2)}` : 'no reading');
     check('second page: no errors', page2Errors.length === 0 && s2.decodeErrors === 0 && s2.serverErrors === 0, [...page2Errors, ...s2.errors].join(' | '));
     await page2.waitForTimeout(800);
     writeFileSync(join(artifacts, 'viewer-2.png'), await page2.screenshot({ type: 'png' }));
@@ -228,7 +248,7 @@ try {
     /* control: the same view without the streamed sea (sky and flat far
      * sea only) must have far less structure than the real view; it runs
      * on layout 0 with f16 tiles, so that path and codec are exercised too */
-    await page2.goto(`${url}&sea=0&codec=f16&layout=0`, { waitUntil: 'load', timeout: 30000 });
+    await page2.goto(`${url}&sea=0&codec=f16&layout=0`, { waitUntil: 'load', timeout: timeoutMs });
     await waitFor(page2, () => window.oceanStats && window.oceanStats.tilesDecoded > 0, null, timeoutMs);
     await waitFor(page2, () => window.oceanStats && window.oceanStats.framesWithMesh > 0, null, timeoutMs);
     const sC = await stats(page2);
@@ -257,7 +277,7 @@ try {
     check('/status carries the scene camera hint', !!h && [h.x, h.y, h.z, h.yaw, h.pitch].every(Number.isFinite),
         JSON.stringify(h));
     if (h) {
-        await page2.goto(base, { waitUntil: 'load', timeout: 30000 });
+        await page2.goto(base, { waitUntil: 'load', timeout: timeoutMs });
         await waitFor(page2, () => window.oceanViewer && window.oceanStats && window.oceanStats.framesReceived >= 1, null, timeoutMs);
         const c = await page2.evaluate(() => ({ pos: window.oceanViewer.camera.pos.slice(), yaw: window.oceanViewer.camera.yawDeg,
             pitch: window.oceanViewer.camera.pitchDeg }));
