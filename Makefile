@@ -3,7 +3,8 @@
 #   make          build everything into build/
 #   make test     install missing Debian packages, build, run every test
 #                 (plain build, then again under ASan + UBSan)
-#   make run      install, build, start oceand on config/oceand.conf;
+#   make run      install what building and running need (Debian packages
+#                 only, no npm), build, start oceand on config/oceand.conf;
 #                 ARGS="--port 0 --scene storm" passes options to oceand
 #   make bench    run the benchmarks, write tests/bench/REPORT.md
 #   make fuzz     run each libFuzzer target for FUZZ_SECONDS
@@ -41,8 +42,23 @@ endif
 # deleted after the link, so the next `make` rebuilt and relinked everything.
 .SECONDARY:
 
-CPPFLAGS += -D_GNU_SOURCE -Isim -Iprotocol -Iclients/c -Iserver \
-            -I/usr/include/OpenEXR -I/usr/include/cjson
+CPPFLAGS += -D_GNU_SOURCE -I/usr/include/OpenEXR -I/usr/include/cjson
+# Layering by the build: each layer sees its own headers and the layers'
+# below it (sim <- protocol <- clients/c; sim <- protocol <- server), so an
+# include that points up does not compile (tests/test_build.sh proves it).
+# Test programs and benches see every layer.
+INC = -Isim -Iprotocol -Iclients/c -Iserver
+$(BUILD)/obj/sim/%.o $(BUILD)/pic/sim/%.o: INC = -Isim
+$(BUILD)/obj/protocol/%.o $(BUILD)/pic/protocol/%.o: INC = -Isim -Iprotocol
+$(BUILD)/obj/clients/%.o $(BUILD)/pic/clients/%.o: INC = -Isim -Iprotocol -Iclients/c
+$(BUILD)/obj/server/%.o: INC = -Isim -Iprotocol -Iserver
+# The installed API: `make install` puts it in PREFIX/include/oceand/ and a
+# program includes <oceand/oceanclient.h> (so no generic name - conf.h,
+# codec.h - sits at the top of anyone's include path).  The examples are
+# built as a user builds them, against BUILD/include/oceand, a staged copy.
+PUBLIC_HEADERS := $(filter-out sim/ocean_internal.h sim/mesh_internal.h,$(wildcard sim/*.h)) \
+                  $(wildcard protocol/*.h) $(wildcard clients/c/*.h)
+$(BUILD)/obj/clients/examples/%.o: INC = -I$(BUILD)/include
 CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -fopenmp -pthread
 # What the client library (sim + protocol + clients/c) links against; the
 # .pc file's Libs.private is generated from it, so they cannot disagree.
@@ -95,13 +111,13 @@ WASM_CC ?= clang
 WASM := clients/web/ocean.wasm
 WASM_SRC := clients/wasm/oc_wasm.c protocol/codec.c protocol/proto_buf.c sim/ocean_result.c
 
-.PHONY: all deps test test-plain test-asan run bench fuzz clean install
+.PHONY: all deps test test-plain test-asan test-bins run bench fuzz clean install
 .DEFAULT_GOAL := all
 
 all: $(PROGS) $(TESTS) $(BENCHES) $(OCLIB_A) $(OCLIB_SO) $(WASM)
 
 deps:
-	@bash .ci/deps.sh
+	@bash .ci/deps.sh run
 
 # The spectrum stage's row passes need -O3's vectoriser (GCC 12's -O2 cost
 # model leaves them scalar); a command-line OPT (the ASan build) still wins.
@@ -120,11 +136,11 @@ $(WASM): $(WASM_SRC) $(wildcard protocol/*.h) sim/ocean_result.h
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
-	$(CC) $(CPPFLAGS) $(CFLAGS) -MMD -MP -c $< -o $@
+	$(CC) $(CPPFLAGS) $(INC) $(CFLAGS) -MMD -MP -c $< -o $@
 
 $(BUILD)/pic/%.o: %.c
 	@mkdir -p $(dir $@)
-	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -MMD -MP -c $< -o $@
+	$(CC) $(CPPFLAGS) $(INC) $(CFLAGS) -fPIC -MMD -MP -c $< -o $@
 
 $(OCLIB_A): $(call obj,$(OCLIB_SRC))
 	rm -f $@ && ar rcs $@ $^
@@ -153,6 +169,9 @@ $(BUILD)/oceand: $(call obj,server/main.c) $(ALL_LIBS)
 # ocean-client's load generator frames WebSocket with libwslay (load_direct.c).
 $(BUILD)/ocean-client: $(call obj,$(CLIENTCLI_SRC)) $(ALL_LIBS)
 	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -lwslay -o $@
+$(BUILD)/include/oceand: $(PUBLIC_HEADERS)
+	rm -rf $@ && mkdir -p $@ && ln -s $(abspath $(PUBLIC_HEADERS)) $@/ && touch $@
+$(call obj,$(EXAMPLE_SRC)): | $(BUILD)/include/oceand
 $(BUILD)/examples/%: $(BUILD)/obj/clients/examples/%.o $(ALL_LIBS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -o $@
@@ -165,7 +184,8 @@ $(BUILD)/bench/%: $(BUILD)/obj/tests/bench/%.o $(if $(TESTLIB_SRC),$(LIB_TEST)) 
 
 # deps first, then one pass after the other: each pass builds in parallel,
 # the two passes must not run side by side.
-test: deps
+test:
+	@bash .ci/deps.sh test
 	@$(MAKE) --no-print-directory test-plain
 	@$(MAKE) --no-print-directory test-asan
 	@cat $(BUILD)/test-summary build/asan/test-summary | \
@@ -174,8 +194,13 @@ test: deps
 test-plain: all
 	@bash tests/run.sh $(BUILD) plain
 
+# The sanitizer pass builds what it runs: the test programs and the daemon
+# three of them start (not the client library's PIC copy, the benches, the
+# examples or the command-line tools, which the plain pass builds and tests).
+test-bins: $(TESTS) $(if $(SERVER_SRC),$(BUILD)/oceand)
+
 test-asan:
-	@$(MAKE) --no-print-directory BUILD=build/asan SAN=1 OPT=-O1 all
+	@$(MAKE) --no-print-directory BUILD=build/asan SAN=1 OPT=-O1 test-bins
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	 OCEAN_TEST_SANITIZED=1 bash tests/run.sh build/asan asan
 
@@ -183,12 +208,14 @@ run: deps
 	@$(MAKE) --no-print-directory all
 	./$(BUILD)/oceand --config config/oceand.conf $(ARGS)
 
-bench: deps
+bench:
+	@bash .ci/deps.sh bench
 	@$(MAKE) --no-print-directory all
 	@bash tests/bench/run.sh $(BUILD)
 
 FUZZ_SECONDS ?= 60
-fuzz: deps
+fuzz:
+	@bash .ci/deps.sh run
 	@bash tests/fuzz/run.sh $(FUZZ_SECONDS)
 
 # The installed oceand is build/oceand relinked with main.c compiled for the
@@ -199,14 +226,13 @@ install: all
 	    $(DESTDIR)$(DATADIR)/web $(DESTDIR)$(DATADIR)/scenes $(DESTDIR)$(SYSCONFDIR) $(DESTDIR)$(UNITDIR) \
 	    $(BUILD)/install
 	install -m 755 $(filter-out $(BUILD)/oceand $(BUILD)/examples/%,$(PROGS)) $(DESTDIR)$(PREFIX)/bin/
-	$(CC) $(CPPFLAGS) $(INST_DEFS) $(CFLAGS) -c server/main.c -o $(BUILD)/install/main.o
+	$(CC) $(CPPFLAGS) -Isim -Iprotocol -Iserver $(INST_DEFS) $(CFLAGS) -c server/main.c -o $(BUILD)/install/main.o
 	$(CC) $(CFLAGS) $(LDFLAGS) $(BUILD)/install/main.o $(ALL_LIBS) $(LDLIBS) -o $(BUILD)/install/oceand
 	install -m 755 $(BUILD)/install/oceand $(DESTDIR)$(PREFIX)/bin/
 	install -m 644 $(OCLIB_A) $(OCLIB_SO) $(DESTDIR)$(PREFIX)/lib/
 	ln -sf $(notdir $(OCLIB_SO)) $(DESTDIR)$(PREFIX)/lib/liboceanclient.so.$(OC_SOVERSION)
 	ln -sf $(notdir $(OCLIB_SO)) $(DESTDIR)$(PREFIX)/lib/liboceanclient.so
-	install -m 644 $(filter-out sim/ocean_internal.h sim/mesh_internal.h,$(wildcard sim/*.h)) protocol/*.h clients/c/*.h \
-	    $(DESTDIR)$(PREFIX)/include/oceand/
+	install -m 644 $(PUBLIC_HEADERS) $(DESTDIR)$(PREFIX)/include/oceand/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(OC_VERSION)|g' \
 	    -e 's|@LIBS_PRIVATE@|$(LIB_LDLIBS) -fopenmp|g' \
 	    clients/c/oceanclient.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/oceanclient.pc

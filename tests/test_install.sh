@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # test_install.sh - `make install` into a temporary prefix, used the way a
-# newcomer does (issue 17 items 1-2):
-#  - a program built with `pkg-config --cflags --libs oceanclient` links the
-#    shared library (soname liboceanclient.so.0) and runs; one built with
-#    `--static` links the archive with Libs.private alone and runs;
+# newcomer does:
+#  - a program that includes <oceand/oceanclient.h>, built with `pkg-config
+#    --cflags --libs oceanclient`, links the shared library (soname
+#    liboceanclient.so.0) and runs without LD_LIBRARY_PATH; one built with
+#    `--static` links the archive with Libs.private alone and runs; the
+#    include path the .pc gives holds no generic header name;
 #  - the installed oceand, started from another directory with no config,
 #    serves the viewer at / and streams a frame (scenes and web viewer found
 #    under PREFIX/share/oceand); so does the systemd unit's ExecStart, which
@@ -50,8 +52,8 @@ mkdir -p "$tmp/app"
 cat >"$tmp/app/app.c" <<'C'
 /* A user's first program: the library's own ocean, and a client handle. */
 #include <stdio.h>
-#include "oceanclient.h"
-#include "ocean.h"
+#include <oceand/oceanclient.h>
+#include <oceand/ocean.h>
 int main(void)
 {
     ocean_params p;
@@ -71,7 +73,15 @@ C
 cc -o "$tmp/app/app_shared" "$tmp/app/app.c" $(pkg-config --cflags --libs oceanclient) 2>"$tmp/cc.log" ||
     fail "shared link: $(head -20 "$tmp/cc.log")"
 ldd "$tmp/app/app_shared" | grep -q 'liboceanclient.so.0 =>' || fail "app_shared does not use liboceanclient.so.0"
-LD_LIBRARY_PATH=$prefix/lib "$tmp/app/app_shared" | grep -q "ok" || fail "app_shared does not run"
+env -u LD_LIBRARY_PATH "$tmp/app/app_shared" | grep -q "ok" || fail "app_shared does not run without LD_LIBRARY_PATH"
+# nothing generic on the include path the library gives: its headers are
+# <oceand/...>, and a bare "codec.h" or "conf.h" is not found through it
+for h in codec.h conf.h oceanclient.h; do
+    printf '#include "%s"\n' "$h" >"$tmp/app/generic.c"
+    # shellcheck disable=SC2046
+    cc -fsyntax-only "$tmp/app/generic.c" $(pkg-config --cflags oceanclient) 2>/dev/null &&
+        fail "pkg-config --cflags puts $h at the top of the include path"
+done
 # shellcheck disable=SC2046
 cc -o "$tmp/app/app_static" "$tmp/app/app.c" \
     $(pkg-config --static --cflags --libs oceanclient | sed 's/-loceanclient/-l:liboceanclient.a/') 2>"$tmp/cc.log" ||
@@ -82,7 +92,7 @@ ldd "$tmp/app/app_static" | grep -q liboceanclient && fail "app_static still nee
 # shellcheck disable=SC2046
 cc -o "$tmp/app/ship" clients/examples/ship.c $(pkg-config --cflags --libs oceanclient) -lm 2>"$tmp/cc.log" ||
     fail "ship.c against the installed library: $(head -20 "$tmp/cc.log")"
-LD_LIBRARY_PATH=$prefix/lib "$tmp/app/ship" --offline --seconds 2 --quiet >"$tmp/ship.out" 2>&1 ||
+env -u LD_LIBRARY_PATH "$tmp/app/ship" --offline --seconds 2 --quiet >"$tmp/ship.out" 2>&1 ||
     fail "installed ship --offline: $(cat "$tmp/ship.out")"
 
 # start_daemon LOG CMD... : runs CMD from an empty directory, waits for

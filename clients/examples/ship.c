@@ -16,9 +16,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "oc_ship.h"
-#include "oceanclient.h"
-#include "ocean.h"
+#include <oceand/oc_ship.h>
+#include <oceand/ocean.h>
+#include <oceand/oceanclient.h>
 
 static void usage(FILE *f)
 {
