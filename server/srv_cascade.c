@@ -397,7 +397,10 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
     mesh_camera mc;
     srv_mesh_camera(&j->cam, &mc);
     double ppr = mesh_camera_px_per_rad(&mc);
-    double q = cfg->px_per_sample / (ppr > 0 ? ppr : 1.0);
+    /* A camera's q has no use below SRV_CASCADE_Q_MIN (a degenerate field
+     * of view, 1e-45 deg, asks for 1e-37): the plan starts there, so the
+     * octave search below reaches a plan that fits in its 64 steps. */
+    double q = fmax(cfg->px_per_sample / (ppr > 0 ? ppr : 1.0), SRV_CASCADE_Q_MIN);
     double rate_hz = j->c->sim.sub.frame_rate_hz > 0 ? j->c->sim.sub.frame_rate_hz : 30.0;
     double budget = cfg->viewer_bytes_per_s / rate_hz;
     sector sc;
@@ -405,7 +408,7 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
     double hi = q;
     if (plan_at(tb, cfg, j, &sc, q, pl) > budget) {
         /* octaves first, then quarter octaves back down to the finest that fits */
-        for (int it = 0; it < 40; it++) {
+        for (int it = 0; it < 64; it++) {
             hi *= 2;
             if (plan_at(tb, cfg, j, &sc, hi, pl) <= budget)
                 break;

@@ -809,6 +809,29 @@ void srv_client_send_sea_timeline(srv_client *c)
 
 /* Checks a SUBSCRIBE against this server; fills *eff with the effects that
  * will be served.  OCEAN_OK or an error with why. */
+/* Whether two subscriptions ask for the same stream. */
+static int sub_same(const proto_subscribe *a, const proto_subscribe *b)
+{
+    return a->effects == b->effects && a->mesh_kind == b->mesh_kind && a->codec == b->codec &&
+           a->cutoff_policy == b->cutoff_policy && a->mode == b->mode && a->layers == b->layers &&
+           a->lod_levels == b->lod_levels && a->tile_size == b->tile_size &&
+           a->frame_rate_hz == b->frame_rate_hz && a->accuracy == b->accuracy &&
+           a->base_spacing_m == b->base_spacing_m && a->view_range_m == b->view_range_m &&
+           a->layout == b->layout && a->mesh_codec == b->mesh_codec && a->flags == b->flags;
+}
+
+/* Takes one of the client's SUBSCRIBE changes (SRV_SUBSCRIBE_*): 1 if it may
+ * change its subscription now.  Service thread. */
+static int sub_token(srv_client *c, double now)
+{
+    if (c->sub_tokens_t == 0) c->sub_tokens = SRV_SUBSCRIBE_BURST;
+    else c->sub_tokens = fmin(SRV_SUBSCRIBE_BURST, c->sub_tokens + (now - c->sub_tokens_t) * SRV_SUBSCRIBE_PER_S);
+    c->sub_tokens_t = now;
+    if (c->sub_tokens < 1) return 0;
+    c->sub_tokens -= 1;
+    return 1;
+}
+
 static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub, char *why,
                                     size_t n)
 {
@@ -1017,6 +1040,16 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         char note[400] = "";
         pthread_mutex_lock(&h->lock);
         r = check_subscribe(&h->settings, &sub, why, sizeof why);
+        if (r == OCEAN_OK && c->subscribed && sub_same(&c->sub, &sub)) {
+            /* the stream in force already: nothing to change or send */
+            pthread_mutex_unlock(&h->lock);
+            break;
+        }
+        if (r == OCEAN_OK && !sub_token(c, srv_now())) {
+            r = OCEAN_ERATE;
+            snprintf(why, sizeof why, "SUBSCRIBE changes limited to %g a second (burst %g): refused, the "
+                     "subscription in force stays", SRV_SUBSCRIBE_PER_S, SRV_SUBSCRIBE_BURST);
+        }
         if (r == OCEAN_OK) {
             if (!c->subscribed) h->n_subscribed++;
             /* A live subscription drops the replay backlog, never the

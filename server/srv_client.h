@@ -95,6 +95,8 @@ typedef struct srv_client_sim {
     ocean_filter_smoother smoother;
     double last_t;               /* sim time of the last frame (smoother dt) */
     double next_frame_t;         /* live: when the next frame is due */
+    double last_frame_t;         /* live: sim time of the last frame scheduled */
+    int framed;                  /* a live frame has been scheduled (last_frame_t holds) */
     int primed;
     double cutoff_k;             /* smoothed cutoff of the last frame */
     int mesh_over;               /* the camera's mesh is over server.max_mesh_vertices */
@@ -159,6 +161,7 @@ typedef struct srv_client {
     double rx_tokens, rx_tokens_t;        /* read budget (server.read_rate), bytes; refill time */
     int rx_paused;                        /* reading paused until the budget refills */
     size_t rx_held;                       /* rx_cap counted in the hub's partial total */
+    double sub_tokens, sub_tokens_t;      /* changed SUBSCRIBEs allowed (SRV_SUBSCRIBE_*); refill time */
     int admin_misses;                     /* wrong admin tokens in a row */
     double admin_until;                   /* SEA_STATE set refused until then (monotonic) */
     uint32_t tx_seq;                      /* header seq of the next message */
@@ -184,6 +187,14 @@ typedef struct srv_sea_change {
     ocean_params params;
     proto_sea sea;          /* params as announced */
 } srv_sea_change;
+
+/* A SUBSCRIBE that changes the subscription rebuilds the client's mesh and
+ * topology and restarts its stream: at most SRV_SUBSCRIBE_PER_S a second
+ * after a burst of SRV_SUBSCRIBE_BURST; one more is refused (ERATE) and the
+ * subscription in force stays.  A SUBSCRIBE equal to the one in force
+ * changes nothing and sends nothing. */
+#define SRV_SUBSCRIBE_PER_S 2.0
+#define SRV_SUBSCRIBE_BURST 4.0
 
 /* Pending changes a hub holds at most; one more is refused (ERATE). */
 #define SRV_SEA_PENDING_MAX 16

@@ -411,7 +411,9 @@ static void apply_subscription(srv_sim *s, srv_client *c)
     cs->topo_valid = 0;
     cs->mesh_coarsen = 0;
     cs->primed = 0;
-    cs->next_frame_t = -INFINITY;
+    /* a new subscription keeps the stream's schedule at its own rate: a
+     * client cannot buy frames by re-subscribing */
+    cs->next_frame_t = cs->framed ? cs->last_frame_t + 1.0 / cs->sub.frame_rate_hz : -INFINITY;
     ocean_filter_smoother_init(&cs->smoother);
     if (cs->sub.mesh_kind == PROTO_MESH_NONE) return;
     mesh_config mc;
@@ -1200,6 +1202,8 @@ static void *sim_main(void *arg)
                 double period = 1.0 / c->sim.sub.frame_rate_hz;
                 if (t + 0.5 / rate < c->sim.next_frame_t) continue;
                 c->sim.next_frame_t = fmax(c->sim.next_frame_t + period, t + period - 0.5 / rate);
+                c->sim.last_frame_t = t;
+                c->sim.framed = 1;
                 if (j.replay == -2) default_camera(s, &j.cam);
                 j.replay = 0;
             } else {

@@ -8,6 +8,7 @@
  * raw WebSocket client of tests/lib/test_ws.h.
  */
 #include <fcntl.h>
+#include <float.h>
 #include <math.h>
 #include <setjmp.h>
 #include <signal.h>
@@ -537,6 +538,136 @@ static void bridge_camera(proto_camera *cam)
     cam->fov_y_deg = 60;
     cam->viewport_w = 1920;
     cam->viewport_h = 1080;
+}
+
+/* What a client receives while it re-sends SUBSCRIBE. */
+typedef struct resub_count {
+    int frames, topologies, erate;
+    char erate_text[200];
+} resub_count;
+
+static void resub_on_message(void *user, oc_client *c, const uint8_t *raw, size_t len, const proto_msg *m,
+                             ocean_result res)
+{
+    (void)c, (void)raw, (void)len;
+    resub_count *k = user;
+    if (res != OCEAN_OK || !m) return;
+    k->frames += m->hdr.type == PROTO_FRAME;
+    k->topologies += m->hdr.type == PROTO_MESH_TOPOLOGY;
+}
+
+static void resub_on_error(void *user, oc_client *c, const proto_error *e)
+{
+    (void)c;
+    resub_count *k = user;
+    if (e->code != OCEAN_ERATE) return;
+    k->erate++;
+    snprintf(k->erate_text, sizeof k->erate_text, "%.150s", e->message);
+}
+
+/* Reads the client's stream for secs seconds (frames taken and dropped). */
+static void pump(oc_client *c, double secs)
+{
+    double end = test_now_s() + secs;
+    while (test_now_s() < end) {
+        oc_frame *f = NULL;
+        if (oc_client_next_frame(c, 20, &f) == OCEAN_OK) oc_frame_free(f);
+    }
+}
+
+/* Re-sending SUBSCRIBE buys no frames (each one restarted the stream: a
+ * client re-subscribing every tick at 0.05 Hz got a full frame and a
+ * topology every tick, 6.7 MB/s): the same SUBSCRIBE changes nothing and
+ * sends nothing; a changed one keeps the stream's schedule at its rate, and
+ * changes beyond SRV_SUBSCRIBE_BURST, SRV_SUBSCRIBE_PER_S a second, are
+ * refused with ERATE. */
+static void resubscribe_buys_no_frames(void **state)
+{
+    (void)state;
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
+    srv_settings sb;
+    srv_daemon *d = start_daemon(sets, 4, &sb);
+    resub_count k = {0};
+    oc_callbacks cb = {.user = &k, .on_message = resub_on_message, .on_error = resub_on_error};
+    oc_client *c = connect_client(srv_daemon_port(d), &cb);
+    proto_subscribe s;
+    oc_subscribe_default(&s);
+    s.frame_rate_hz = 1;
+    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    proto_camera cam;
+    bridge_camera(&cam);
+    uint32_t seq;
+    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+    oc_frame *f = frame_for(c, seq, sanitized ? 20000 : 8000);
+    assert_non_null(f);
+    oc_frame_free(f);
+    pump(c, 0.2);
+    int f0 = k.frames, t0 = k.topologies;
+    double t_start = test_now_s();
+    for (int i = 0; i < 30; i++) {
+        assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+        pump(c, 0.05);
+    }
+    double secs = test_now_s() - t_start;
+    print_message("the same SUBSCRIBE 30 times in %.2f s at 1 Hz: %d frames, %d topologies, %d ERATE\n", secs,
+                  k.frames - f0, k.topologies - t0, k.erate);
+    if (k.frames - f0 > (int)secs + 2) fail_msg("%d frames in %.2f s at 1 Hz", k.frames - f0, secs);
+    assert_int_equal(k.topologies, t0);
+    assert_int_equal(k.erate, 0);
+    f0 = k.frames;
+    t_start = test_now_s();
+    for (int i = 0; i < 10; i++) {
+        s.accuracy = i % 2 ? 5e-3f : 6e-3f;
+        assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+        pump(c, 0.02);
+    }
+    pump(c, 0.3);
+    secs = test_now_s() - t_start;
+    print_message("10 changed SUBSCRIBEs in %.2f s at 1 Hz: %d frames, %d ERATE\n", secs, k.frames - f0, k.erate);
+    if (k.frames - f0 > (int)secs + 2) fail_msg("%d frames in %.2f s at 1 Hz", k.frames - f0, secs);
+    if (secs < 2.5 && k.erate < 1) fail_msg("10 changes in %.2f s and none refused", secs);
+    if (k.erate) assert_non_null(strstr(k.erate_text, "SUBSCRIBE changes limited"));
+    oc_client_destroy(c);
+    srv_daemon_stop(d);
+}
+
+/* The byte budget holds whatever the field of view: a binocular or sensor
+ * view (5 and 2 deg) and degenerate ones (1e-20 deg and the smallest float,
+ * 1.4e-45 deg) each get frames within the budget.  The smallest float asked
+ * for q = 1.5e-37, whose plan 40 octaves could not coarsen to fit: 335
+ * tiles, 856 KB a frame against 130 KB. */
+static void narrow_fov_keeps_the_budget(void **state)
+{
+    (void)state;
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
+    srv_settings sb;
+    srv_daemon *d = start_daemon(sets, 4, &sb);
+    oc_client *c = connect_client(srv_daemon_port(d), NULL);
+    proto_subscribe s;
+    oc_subscribe_default(&s);
+    s.mesh_kind = PROTO_MESH_NONE;
+    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    const float fovs[] = {5.0f, 2.0f, 1e-20f, FLT_TRUE_MIN};
+    double budget = sb.srv.viewer_bytes_per_s / s.frame_rate_hz;
+    for (size_t k = 0; k < sizeof fovs / sizeof fovs[0]; k++) {
+        proto_camera cam;
+        bridge_camera(&cam);
+        cam.fov_y_deg = fovs[k];
+        uint32_t seq;
+        assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+        oc_frame *f = frame_for(c, seq, sanitized ? 20000 : 8000);
+        if (!f) fail_msg("fov %g deg: no frame answered the camera", (double)fovs[k]);
+        double bytes = 0;
+        for (int t = 0; t < f->info.tile_count; t++) bytes += 64.0 + f->tiles[t].info.payload_len;
+        print_message("fov %g deg: q %.4g, %d tiles, %.0f of %.0f B\n", (double)fovs[k],
+                      (double)f->info.cascades.spacing_per_m, f->info.tile_count, bytes, budget);
+        if (bytes > 1.25 * budget)
+            fail_msg("fov %g deg: %.0f tile bytes against a budget of %.0f a frame", (double)fovs[k], bytes, budget);
+        assert_true(f->info.tile_count > 0);
+        oc_frame_free(f);
+    }
+    oc_client_destroy(c);
+    srv_daemon_stop(d);
 }
 
 /* Each cascade its own q.  With one q for every cascade, a plan stops
@@ -1193,9 +1324,12 @@ static void identical_cameras_share_tiles(void **state)
     cam.pos[0] = 5000;
     cam.pos[2] = 77;
     uint32_t sa, sb;
-    /* a has seen a topology before (its mesh ids run ahead of b's) and its
-     * camera seq differs from b's */
-    assert_int_equal(oc_client_subscribe(a, &s), OCEAN_OK);
+    /* a has seen a topology before (its mesh ids run ahead of b's: it was
+     * subscribed with another view range, so another mesh) and its camera
+     * seq differs from b's */
+    proto_subscribe s0 = s;
+    s0.view_range_m = 2000;
+    assert_int_equal(oc_client_subscribe(a, &s0), OCEAN_OK);
     assert_int_equal(oc_client_send_camera(a, &cam, &sa), OCEAN_OK);
     oc_frame_free(next_frame(a, 5000));
     assert_int_equal(oc_client_subscribe(a, &s), OCEAN_OK);
@@ -3407,6 +3541,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(mesh_denser_on_steep_chop),
         cmocka_unit_test(mesh_fits_the_limit_on_steep_chop),
         cmocka_unit_test(cascade_q_spends_the_budget),
+        cmocka_unit_test(narrow_fov_keeps_the_budget),
+        cmocka_unit_test(resubscribe_buys_no_frames),
         cmocka_unit_test(cascade_fine_mips_without_geometry),
         cmocka_unit_test(mesh_low_camera_long_range),
         cmocka_unit_test(scene_overrides_named),
