@@ -99,8 +99,9 @@ declare -A KNOWN_TITLE=(
     [bench_mesh]="LOD meshes (issue 4)"
     [bench_meshqz]="Layout-0 mesh positions, f32 and qz (issue 14)"
     [bench_server]="Daemon under load"
+    [bench_decode]="The viewer's decoding: WebAssembly against native C"
 )
-ORDER=(bench_core bench_accuracy bench_codec bench_mesh bench_meshqz bench_server)
+ORDER=(bench_core bench_accuracy bench_codec bench_mesh bench_meshqz bench_server bench_decode)
 declare -A DONE=()
 ONLY=" ${BENCH_ONLY:-} "
 selected() { [ -z "${BENCH_ONLY:-}" ] || [[ "$ONLY" == *" $1 "* ]]; }
