@@ -402,7 +402,11 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
      * octave search below reaches a plan that fits in its 64 steps. */
     double q = fmax(cfg->px_per_sample / (ppr > 0 ? ppr : 1.0), SRV_CASCADE_Q_MIN);
     double rate_hz = j->c->sim.sub.frame_rate_hz > 0 ? j->c->sim.sub.frame_rate_hz : 30.0;
-    double budget = cfg->viewer_bytes_per_s / rate_hz;
+    /* live frames at the rate the client's link carries (srv_link.h), up to
+     * server.viewer_bytes_per_s; a replay plans from the recording alone */
+    double bps = cfg->viewer_bytes_per_s, link = (double)atomic_load(&j->c->link_bps);
+    if (!j->replay && link > 0 && link < bps) bps = link;
+    double budget = bps / rate_hz;
     sector sc;
     sector_of(&j->cam, &sc);
     double hi = q;

@@ -448,6 +448,8 @@ ocean_result srv_client_create(srv_hub *h, struct lws *wsi, srv_client **out)
     c->wsi = wsi;
     c->hub = h;
     c->bucket_t = c->last_progress = srv_now();
+    srv_link_init(&c->link);
+    atomic_init(&c->link_bps, 0);
     ocean_filter_smoother_init(&c->sim.smoother);
     pthread_mutex_lock(&h->lock);
     c->id = h->next_id++;
@@ -616,11 +618,20 @@ srv_msg *srv_client_take(srv_client *c)
     } else if (c->slot_frame) {
         m = c->slot_frame;
         c->slot_frame = NULL;
+        m->live = 1;
     }
     if (m) c->queued_bytes -= msg_bytes(m);
     pthread_mutex_unlock(&c->out_lock);
     if (m) m->next = NULL;
     return m;
+}
+
+int srv_client_next_is_live(srv_client *c)
+{
+    pthread_mutex_lock(&c->out_lock);
+    int live = !c->ctrl && (c->slot_topo || c->slot_frame);
+    pthread_mutex_unlock(&c->out_lock);
+    return live;
 }
 
 uint64_t srv_client_queued(srv_client *c)
@@ -1033,6 +1044,13 @@ void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len)
         snprintf(why, sizeof why, "%s", err[0] ? err : ocean_strerror(r));
         srv_client_send_error(c, buf, len, r, why);
         return;
+    }
+    /* every message names the last frame the client received (its
+     * header's sim_time): the link's confirmations (srv_link.h) */
+    if (m.hdr.sim_time != 0) {
+        srv_link_confirmed(&c->link, m.hdr.sim_time, cfg.viewer_bytes_per_s, srv_now());
+        atomic_store(&c->link_bps, (uint64_t)llround(srv_link_bps(&c->link)));
+        atomic_store(&c->want_write, 1);
     }
     switch (m.hdr.type) {
     case PROTO_SUBSCRIBE: {

@@ -31,6 +31,7 @@
 #include "mesh.h"
 #include "proto.h"
 #include "srv_config.h"
+#include "srv_link.h"
 #include "srv_stats.h"
 
 struct lws;
@@ -63,6 +64,7 @@ typedef struct srv_msg {
     uint32_t mesh_id_at;/*   at this byte offset (0: no mesh) */
     double tick_wall;   /* monotonic time of the tick that made it (0: none) */
     int is_frame;       /* counts as a frame for statistics */
+    int live;           /* a live FRAME from the latest-wins slot (srv_link counts it) */
     int close_after;    /* close the connection once this is sent (BYE) */
 } srv_msg;
 
@@ -144,6 +146,8 @@ typedef struct srv_client {
     /* ---- what the client costs, for /metrics [atomics, any thread] ---- */
     atomic_uint_fast64_t cpu_ns;          /* simulation-thread time spent on its requests */
     atomic_uint_fast64_t bytes_out;       /* bytes sent to it */
+    atomic_uint_fast64_t link_bps;        /* [svc writes] the byte rate its link carries, for
+                                             the planner (srv_link_bps); 0: the ceiling */
 
     /* ---- service thread only [svc] ---- */
     uint8_t *rx;                          /* message being reassembled */
@@ -162,6 +166,7 @@ typedef struct srv_client {
     int rx_paused;                        /* reading paused until the budget refills */
     size_t rx_held;                       /* rx_cap counted in the hub's partial total */
     double sub_tokens, sub_tokens_t;      /* changed SUBSCRIBEs allowed (SRV_SUBSCRIBE_*); refill time */
+    srv_link link;                        /* live frames in flight and what the link carries */
     int admin_misses;                     /* wrong admin tokens in a row */
     double admin_until;                   /* SEA_STATE set refused until then (monotonic) */
     uint32_t tx_seq;                      /* header seq of the next message */
@@ -305,6 +310,9 @@ void srv_client_publish(srv_client *c, srv_msg *topo, srv_msg *frame);
 /* Takes the next message to send (control first), or NULL [svc]. */
 srv_msg *srv_client_take(srv_client *c);
 uint64_t srv_client_queued(srv_client *c);
+/* Whether the next message to send is a live frame (or its topology) from
+ * the latest-wins slots, nothing from the control FIFO before it. */
+int srv_client_next_is_live(srv_client *c);
 
 srv_msg *srv_msg_new(void);
 /* A new message holding m's encoding, or NULL on OOM or a message the

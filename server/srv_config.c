@@ -188,8 +188,10 @@ static const conf_entry srv_entries[] = {
              "tiles fit a camera's footprint closer, larger ones compress a little better."},
     {.name = "server.viewer_bytes_per_s", .type = CONF_DOUBLE, .offset = SRV(viewer_bytes_per_s),
      .min = 1e4, .max = 1e10, .def = "3.9e6", .unit = "B/s",
-     .help = "Cascade tile layout: tile bytes one viewer may receive per second (its frame "
-             "budget is this over its frame rate).  A camera whose footprint needs more (a "
+     .help = "Cascade tile layout: tile bytes one viewer may receive per second at most (its "
+             "frame budget is this over its frame rate); a viewer whose link carries less gets its "
+             "frames planned for what its link delivers (PROTOCOL.md \"Pacing\").  A camera whose "
+             "footprint needs more (a "
              "large viewport, a camera near the water) reads coarser mips until it fits, and "
              "each cascade then refines on its own, finest first, within what is left; the "
              "server plans with a fixed model of each codec's bytes per sample (the same on every replica; "

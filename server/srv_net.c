@@ -754,6 +754,12 @@ static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now
         return;
     }
     c->inflight = 0;
+    /* a live frame waits while the link has its window in flight; a newer
+     * one replaces it meanwhile, and a confirmation asks to write again */
+    if (srv_client_next_is_live(c) && !srv_link_may_send(&c->link, srv_now())) {
+        atomic_fetch_add(&h->stats.frames_held, 1);
+        return;
+    }
     srv_msg *m = srv_client_take(c);
     if (!m) return;
     size_t len;
@@ -770,6 +776,7 @@ static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now
     atomic_fetch_add(&c->bytes_out, len);
     atomic_fetch_add(&h->stats.bytes_sent, len);
     atomic_fetch_add(&h->stats.messages_sent, 1);
+    if (m->live && m->is_frame && len >= PROTO_HEADER_SIZE) srv_link_sent(&c->link, proto_ldf64(data + 24), len);
     if (m->is_frame) {
         atomic_fetch_add(&h->stats.frames_sent, 1);
         if (m->tick_wall > 0) srv_stats_latency(&h->stats, now - m->tick_wall);

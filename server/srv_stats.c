@@ -97,6 +97,8 @@ char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t h
     metric(&b, "oceand_frames_sent_total", "counter", "Frames written to sockets.", (double)LD(frames_sent));
     metric(&b, "oceand_frames_skipped_total", "counter", "Frames replaced before a slow client "
            "could take them (latest wins).", (double)LD(frames_skipped));
+    metric(&b, "oceand_frames_held_total", "counter", "Times a live frame waited because its client's link "
+           "had a window of frames unconfirmed (srv_link.h).", (double)LD(frames_held));
     metric(&b, "oceand_bytes_sent_total", "counter", "WebSocket payload bytes written.", (double)LD(bytes_sent));
     metric(&b, "oceand_messages_received_total", "counter", "Client messages received.",
            (double)LD(messages_received));
@@ -215,6 +217,7 @@ char *srv_stats_json(const srv_stats *s, const srv_stats_view *v, size_t headroo
     cJSON_AddNumberToObject(o, "frames_shared", (double)LD(frames_shared));
     cJSON_AddNumberToObject(o, "frames_sent", (double)LD(frames_sent));
     cJSON_AddNumberToObject(o, "frames_skipped", (double)LD(frames_skipped));
+    cJSON_AddNumberToObject(o, "frames_held", (double)LD(frames_held));
     cJSON_AddNumberToObject(o, "bytes_sent", (double)LD(bytes_sent));
     cJSON_AddNumberToObject(o, "tile_cache_hits", (double)LD(tile_cache_hits));
     cJSON_AddNumberToObject(o, "tile_cache_misses", (double)LD(tile_cache_misses));

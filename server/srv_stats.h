@@ -18,7 +18,7 @@ typedef struct srv_stats {
     atomic_uint_fast64_t ticks, idle_ticks, tick_ns_total, tick_ns_last;
     atomic_uint_fast64_t evaluations, transforms;
     atomic_uint_fast64_t transforms_by_effect[SRV_FX_CHANNELS];
-    atomic_uint_fast64_t frames_built, frames_shared, frames_sent, frames_skipped;
+    atomic_uint_fast64_t frames_built, frames_shared, frames_sent, frames_skipped, frames_held;
     atomic_uint_fast64_t bytes_sent, messages_sent, messages_received;
     atomic_uint_fast64_t tiles_encoded, tile_cache_hits, tile_cache_misses;
     /* gauges the simulation thread stores: what its tile caches (layout 0's

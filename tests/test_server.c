@@ -540,6 +540,114 @@ static void bridge_camera(proto_camera *cam)
     cam->viewport_h = 1080;
 }
 
+/* Frames a link-shaped reader received: wire size, and age (the daemon's
+ * sim clock at receipt minus the frame's sim time). */
+typedef struct shaped_frames {
+    int n;
+    double at[2048], bytes[2048], age[2048];
+} shaped_frames;
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The median of v[i] over frames received at or after `from` (s). */
+static double median_since(const shaped_frames *f, const double *v, double from, int *count)
+{
+    static double tmp[2048];
+    int k = 0;
+    for (int i = 0; i < f->n; i++)
+        if (f->at[i] >= from) tmp[k++] = v[i];
+    *count = k;
+    if (!k) return NAN;
+    qsort(tmp, (size_t)k, sizeof *tmp, cmp_double);
+    return tmp[k / 2];
+}
+
+/* A viewer behind a link of `bps` bytes/s (a 32 KB receive buffer, reads
+ * paced to bps) with the viewer's subscription, reporting its camera at
+ * 30 Hz with the sim time of the last frame it received, for secs. */
+static void read_through_link(srv_daemon *d, double bps, double secs, shaped_frames *out)
+{
+    srv_hub *h = srv_daemon_hub(d);
+    test_ws w;
+    assert_int_equal(test_ws_connect(&w, srv_daemon_port(d), "/", PROTO_SUBPROTOCOL), 0);
+    test_ws_small_rcvbuf(&w, 32768);
+    proto_msg m;
+    proto_msg_init(&m, PROTO_SUBSCRIBE);
+    oc_subscribe_default(&m.u.subscribe);
+    test_msg_send(&w, &m);
+    proto_camera cam;
+    bridge_camera(&cam);
+    double t0 = test_now_s(), next_cam = t0, last_t = 0, tokens = 0, tokens_t = t0;
+    memset(out, 0, sizeof *out);
+    while (test_now_s() - t0 < secs) {
+        double now = test_now_s();
+        if (now >= next_cam) {
+            proto_msg_init(&m, PROTO_CAMERA);
+            m.u.camera = cam;
+            m.hdr.sim_time = last_t;
+            test_msg_send(&w, &m);
+            next_cam += 1.0 / 30;
+        }
+        /* the link: bps, with a burst of a tenth of a second */
+        tokens = fmin(tokens + bps * (now - tokens_t), 0.1 * bps);
+        tokens_t = now;
+        if (tokens <= 0) {
+            usleep(2000);
+            continue;
+        }
+        uint8_t *msg = NULL;
+        size_t len = 0;
+        int op = test_ws_recv(&w, 5, &msg, &len);
+        if (op < 0) fail_msg("the shaped reader was disconnected");
+        if (op == 2 && len >= PROTO_HEADER_SIZE) {
+            tokens -= (double)len;
+            if (proto_ld16(msg + 6) == PROTO_FRAME && out->n < 2048) {
+                last_t = proto_ldf64(msg + 24);
+                out->at[out->n] = test_now_s() - t0;
+                out->bytes[out->n] = (double)len;
+                out->age[out->n] = srv_hub_sim_time(h) - last_t;
+                out->n++;
+            }
+        }
+        free(msg);
+    }
+    test_ws_close(&w);
+}
+
+/* A viewer on a slow link gets coarser frames, never older ones: behind a
+ * 1 MB/s link (a quarter of what the viewer's frames take at the ceiling,
+ * server.viewer_bytes_per_s) it received frames of the ceiling's size ever
+ * further behind the clock, buffered in the sockets.  Now the daemon holds
+ * a frame while three are unconfirmed and plans that viewer's frames for
+ * the rate its link delivers (srv_link.h): in the last 4 s the frames fit
+ * the link at 30 Hz and are under a third of a second old. */
+static void slow_link_gets_coarser_not_older(void **state)
+{
+    (void)state;
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
+    srv_settings sb;
+    srv_daemon *d = start_daemon(sets, 4, &sb);
+    srv_hub *h = srv_daemon_hub(d);
+    const double bps = 1e6, secs = sanitized ? 14 : 10;
+    static shaped_frames f;
+    read_through_link(d, bps, secs, &f);
+    int n_size, n_age;
+    double size = median_since(&f, f.bytes, secs - 4, &n_size), age = median_since(&f, f.age, secs - 4, &n_age);
+    double early = median_since(&f, f.bytes, 0, &n_age);
+    print_message("1 MB/s link: %d frames; last 4 s: %d frames, median %.0f B (all frames' median %.0f, ceiling "
+                  "%.0f a frame), median age %.3f s; %llu frames held\n", f.n, n_size, size, early,
+                  sb.srv.viewer_bytes_per_s / 30, age, (unsigned long long)stat_of(&h->stats.frames_held));
+    if (n_size < (sanitized ? 8 : 20)) fail_msg("only %d frames in the last 4 s through a 1 MB/s link", n_size);
+    if (size > 1.2 * bps / 30) fail_msg("frames of %.0f B through a link of %.0f B a frame at 30 Hz", size, bps / 30);
+    if (age > (sanitized ? 0.6 : 0.35)) fail_msg("frames %.3f s old through a 1 MB/s link", age);
+    assert_true(stat_of(&h->stats.frames_held) > 0);
+    srv_daemon_stop(d);
+}
+
 /* What a client receives while it re-sends SUBSCRIBE. */
 typedef struct resub_count {
     int frames, topologies, erate;
@@ -3543,6 +3651,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(cascade_q_spends_the_budget),
         cmocka_unit_test(narrow_fov_keeps_the_budget),
         cmocka_unit_test(resubscribe_buys_no_frames),
+        cmocka_unit_test(slow_link_gets_coarser_not_older),
         cmocka_unit_test(cascade_fine_mips_without_geometry),
         cmocka_unit_test(mesh_low_camera_long_range),
         cmocka_unit_test(scene_overrides_named),
@@ -3553,5 +3662,7 @@ int main(int argc, char **argv)
     };
     const char *filter = getenv("SERVER_TEST_FILTER"); /* one test (cmocka pattern) while debugging */
     if (filter && *filter) cmocka_set_test_filter(filter);
+    /* TEST_FILTER=NAME (a cmocka pattern) runs only the tests it matches */
+    if (getenv("TEST_FILTER")) cmocka_set_test_filter(getenv("TEST_FILTER"));
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

@@ -55,7 +55,7 @@ const decodersReady = Promise.all([import('./assemble.js'), import('./codec.js')
         meshQz = new m.MeshQzStore();  /* layout 0 with mesh_codec qz: the topologies' prediction refs */
     });
 let wantSub = null;
-let lastSimTime = 0;
+let lastSimTime = 0;         /* sim time of the last FRAME received */
 let pendingFrame = null;     /* newest undecoded FRAME bytes */
 let pageHolds = false;       /* a decoded frame is posted and the page has not taken it yet */
 let frameScheduled = false;
@@ -164,8 +164,10 @@ function onMessage(data) {
         noteError(e, 'header');
         return;
     }
-    lastSimTime = hdr.simTime;
     if (hdr.type === T.FRAME) {
+        /* what every message we send says we received last (PROTOCOL.md
+         * "Header"): the daemon paces this link's frames by it */
+        lastSimTime = hdr.simTime;
         stats.frames++;
         if (pendingFrame) stats.skipped++;
         /* latency is taken at arrival, before any decoding queue */

@@ -1,0 +1,64 @@
+/*
+ * srv_link.h - what one connection carries: the live FRAMEs in flight to a
+ * client, the rate its link delivers them at, and the byte rate its frames
+ * are planned for, the way adaptive video streaming follows a link (the
+ * stream gets coarser on a slow link, never older).
+ *
+ * A client's messages carry, in the header's sim_time, the sim time of the
+ * last FRAME it received (PROTOCOL.md "Header"); every CAMERA therefore
+ * confirms the frames up to that one.  The link counts the bytes confirmed
+ * per second (the delivery rate), holds the next frame while
+ * SRV_LINK_WINDOW frames are unconfirmed (a newer frame replaces it: latest
+ * wins at the sender, so no frame waits in a socket buffer for seconds),
+ * and when frames had to wait, plans this client's frames for 85 % of the
+ * delivery rate, raising that by a fifth a second while none waits, up to
+ * the ceiling (server.viewer_bytes_per_s).  A client that confirms nothing
+ * (no message with a frame's sim time for SRV_LINK_QUIET seconds: a fixed
+ * camera sends no CAMERA) is served as before: no window, the ceiling.
+ *
+ * Threads: a srv_link belongs to its connection's service thread; the
+ * planner (simulation thread) reads only srv_client.link_bps, which the
+ * service thread stores.
+ */
+#ifndef SRV_LINK_H
+#define SRV_LINK_H
+
+#include <stddef.h>
+
+/* Frames in flight (sent, not confirmed) before the next one is held. */
+#define SRV_LINK_WINDOW 3
+/* Seconds without a confirmation after which the window no longer holds. */
+#define SRV_LINK_QUIET 1.0
+/* The least byte rate a congested link is planned for, bytes/s. */
+#define SRV_LINK_FLOOR 16e3
+#define SRV_LINK_RING 64
+
+typedef struct srv_link {
+    struct {
+        double sim_t;     /* the frame's sim time (header) */
+        double bytes;     /* its wire size */
+    } ring[SRV_LINK_RING];/* live frames sent and not yet confirmed, oldest first */
+    int head, n;
+    double last_ack;      /* monotonic time of the last confirmation; 0: none */
+    double win_t0, win_bytes; /* delivery-rate window: start, bytes confirmed since */
+    double rate;          /* delivered bytes/s (0: not measured yet) */
+    double bps;           /* the byte rate frames are planned for; 0: the ceiling */
+    double changed;       /* monotonic time bps last went down */
+    int waited;           /* a frame was held since the last confirmation */
+} srv_link;
+
+void srv_link_init(srv_link *l);
+/* A live FRAME of `bytes` bytes with header sim time sim_t was written. */
+void srv_link_sent(srv_link *l, double sim_t, size_t bytes);
+/* A message from the client said it has received the frame of sim time
+ * sim_t (its header's sim_time); ceiling is server.viewer_bytes_per_s. */
+void srv_link_confirmed(srv_link *l, double sim_t, double ceiling, double now);
+/* 1 if the next live FRAME may be written now; 0: hold it (and remember
+ * that a frame waited). */
+int srv_link_may_send(srv_link *l, double now);
+/* The byte rate to plan this client's frames for: 0 means the ceiling. */
+double srv_link_bps(const srv_link *l);
+/* Frames in flight (sent, not confirmed). */
+int srv_link_in_flight(const srv_link *l);
+
+#endif
