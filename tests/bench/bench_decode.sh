@@ -6,7 +6,7 @@
 # every effect and cascade, qz at 5e-3); then every FRAME of the recording
 # decoded on one core, as the viewer's decode workers do (message, then each
 # tile into its texel block), by
-#   - the C decoders, native (decode_native.c: the floor for these frames);
+#   - the C decoders, native (helpers/decode_native.c: the floor for these frames);
 #   - the viewer's decoders in Node.js: protocol/codec.c as WebAssembly
 #     (clients/web/codec.js) and, where git has them, the JavaScript
 #     decoders it replaced (qz in JavaScript, zstd by fzstd);
@@ -25,7 +25,7 @@ cleanup() { [[ -n $dpid ]] && kill "$dpid" 2>/dev/null; wait 2>/dev/null; rm -rf
 trap cleanup EXIT
 die() { echo "bench_decode: $*" >&2; exit 1; }
 
-cc -std=c11 -O2 -Wall -Wextra -Werror -D_GNU_SOURCE -Isim -Iprotocol -Iclients/c tests/bench/decode_native.c \
+cc -std=c11 -O2 -Wall -Wextra -Werror -D_GNU_SOURCE -Isim -Iprotocol -Iclients/c tests/bench/helpers/decode_native.c \
     "$BUILD/libocean_client.a" "$BUILD/libocean_proto.a" "$BUILD/libocean_sim.a" -lzstd -lOpenEXRCore-3_1 \
     -lfftw3f_omp -lfftw3f -lcjson -lwebsockets -lm -fopenmp -o "$tmp/decode_native" || die "cannot build decode_native"
 

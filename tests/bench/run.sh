@@ -80,7 +80,7 @@ run_one() {  # name title command...
     else
         STATUS+=("FAILED (exit $rc)"); ANY_FAILED=1
     fi
-    echo "$DATE, revision $REV, \`$CMD\`" >"$OUT/$name.stamp"
+    echo "$DATE, revision $REV, \`$CMD\`, on $MACHINE" >"$OUT/$name.stamp"
     echo "bench: $name: ${STATUS[-1]} in $((t1 - t0)) s" >&2
 }
 
@@ -152,7 +152,11 @@ declare -A AXIS_TITLE=(
     [mesh]="mesh kind and density"
 )
 PLOTS=()
-if command -v gnuplot >/dev/null 2>&1; then
+if ! selected bench_accuracy; then
+    # the plots are bench_accuracy's: a run without it keeps them as they
+    # are (re-drawn, they would carry this run's date on the other's data)
+    for axis in grid cutoff gerstner precision codec mesh; do [ -f "$OUT/acc_$axis.png" ] && PLOTS+=("$axis"); done
+elif command -v gnuplot >/dev/null 2>&1; then
     for axis in grid cutoff gerstner precision codec mesh; do
         dat="$OUT/acc_$axis.dat"
         [ -f "$dat" ] || continue
@@ -230,7 +234,7 @@ fi
         kept=
         [ "${STATUS[$i]#skipped}" != "${STATUS[$i]}" ] && [ -s "$OUT/${NAMES[$i]}.md" ] && kept=1
         if [ -n "$kept" ]; then
-            echo "\`${NAMES[$i]}\`: not run this time (BENCH_ONLY=\"${BENCH_ONLY:-}\"); **the section below is from the run of $(cat "$OUT/${NAMES[$i]}.stamp" 2>/dev/null)**, not from the date above. Machine: $MACHINE."
+            echo "\`${NAMES[$i]}\`: not run this time (BENCH_ONLY=\"${BENCH_ONLY:-}\"); **the section below is from the run of $(cat "$OUT/${NAMES[$i]}.stamp" 2>/dev/null)**, not from the date and machine above."
         else
             echo "\`${NAMES[$i]}\`: ${STATUS[$i]}$([ "${SECS[$i]}" != "-" ] && echo ", ${SECS[$i]} s"). Machine: $MACHINE. Date: $DATE. Reproduce: \`$CMD\`."
         fi
@@ -276,6 +280,12 @@ echo "bench: wrote $REPORT" >&2
 # ---- the README's section (pasted by hand into README.md) -------------------------
 QNOTE=
 [ -n "$QUICK" ] && QNOTE='; a quick run - rerun `make bench` for the full figures'
+# README's section is the headline of bench_accuracy: rewritten only by a
+# run that made it, so its machine and date are that run's.
+if ! selected bench_accuracy; then
+    echo "bench: bench_accuracy not run; tests/bench/README-section.md kept" >&2
+    exit $ANY_FAILED
+fi
 {
     echo "## What accuracy costs"
     echo
