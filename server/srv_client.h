@@ -372,12 +372,9 @@ void srv_client_send_hello(srv_client *c);
  * it took effect), then one per pending change, earliest first. */
 void srv_client_send_sea_timeline(srv_client *c);
 
-/* Handles one complete binary message from the client [svc]. */
-void srv_client_handle(srv_client *c, const uint8_t *buf, size_t len);
-/* Handles one complete text message (not part of ocean.v1): counts against
- * the message rate like any message, answered by at most one ERROR a
- * second [svc]. */
-void srv_client_handle_text(srv_client *c);
+/* Drops the replay cameras c sent and the server has not answered
+ * [hub.lock held]. */
+void srv_client_drop_replay(srv_client *c);
 
 /* Conversions shared by the daemon's modules. */
 void srv_sea_from_params(const ocean_params *p, proto_sea *out);

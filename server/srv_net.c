@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "ocean_time.h"
+#include "srv_handle.h"
 #include "srv_record.h"
 
 /* File descriptors kept free of client connections: the HTTP pages, the
@@ -954,14 +955,14 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         if (!lws_is_final_fragment(wsi) || lws_remaining_packet_payload(wsi)) break;
         c->rx_started = 0;
         if (!lws_frame_is_binary(wsi)) {
-            srv_client_handle_text(c);
+            srv_handle_text(c);
         } else if (c->rx_discard) {
             char why[200];
             snprintf(why, sizeof why, "message of %zu bytes or more exceeds server.max_message (%zu bytes)",
                      c->rx_discarded, maxm);
             srv_client_send_error(c, c->rx, c->rx_len, OCEAN_ETOOBIG, why);
         } else {
-            srv_client_handle(c, c->rx, c->rx_len);
+            srv_handle(c, c->rx, c->rx_len);
         }
         c->rx_len = 0;
         c->rx_discard = 0;
