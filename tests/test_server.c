@@ -540,6 +540,42 @@ static void bridge_camera(proto_camera *cam)
     cam->viewport_h = 1080;
 }
 
+/* A daemon in this process on the scene `make run` serves (ship-bridge, one
+ * FFT thread, two workers); bridge_client adds a client of it with
+ * callbacks cb (NULL: frames queued). */
+static srv_daemon *bridge_daemon(srv_settings *sb)
+{
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
+    return start_daemon(sets, 4, sb);
+}
+
+static oc_client *bridge_client(srv_daemon **d, srv_settings *sb, const oc_callbacks *cb)
+{
+    *d = bridge_daemon(sb);
+    return connect_client(srv_daemon_port(*d), cb);
+}
+
+/* Sends cam and waits for the frame that answers it (asserted). */
+static oc_frame *frame_for_camera(oc_client *c, const proto_camera *cam)
+{
+    uint32_t seq;
+    assert_int_equal(oc_client_send_camera(c, cam, &seq), OCEAN_OK);
+    oc_frame *f = frame_for(c, seq, sanitized ? 20000 : 8000);
+    assert_non_null(f);
+    return f;
+}
+
+/* A bridge_client subscribed as the viewer is (*s) but without a mesh: the
+ * frames carry tiles alone. */
+static oc_client *bridge_tiles_client(srv_daemon **d, srv_settings *sb, proto_subscribe *s)
+{
+    oc_client *c = bridge_client(d, sb, NULL);
+    oc_subscribe_default(s);
+    s->mesh_kind = PROTO_MESH_NONE;
+    assert_int_equal(oc_client_subscribe(c, s), OCEAN_OK);
+    return c;
+}
+
 /* Frames a link-shaped reader received: wire size, and age (the daemon's
  * sim clock at receipt minus the frame's sim time). */
 typedef struct shaped_frames {
@@ -628,9 +664,8 @@ static void read_through_link(srv_daemon *d, double bps, double secs, shaped_fra
 static void slow_link_gets_coarser_not_older(void **state)
 {
     (void)state;
-    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
     srv_settings sb;
-    srv_daemon *d = start_daemon(sets, 4, &sb);
+    srv_daemon *d = bridge_daemon(&sb);
     srv_hub *h = srv_daemon_hub(d);
     const double bps = 1e6, secs = sanitized ? 14 : 10;
     static shaped_frames f;
@@ -692,23 +727,18 @@ static void pump(oc_client *c, double secs)
 static void resubscribe_buys_no_frames(void **state)
 {
     (void)state;
-    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
     srv_settings sb;
-    srv_daemon *d = start_daemon(sets, 4, &sb);
+    srv_daemon *d;
     resub_count k = {0};
     oc_callbacks cb = {.user = &k, .on_message = resub_on_message, .on_error = resub_on_error};
-    oc_client *c = connect_client(srv_daemon_port(d), &cb);
+    oc_client *c = bridge_client(&d, &sb, &cb);
     proto_subscribe s;
     oc_subscribe_default(&s);
     s.frame_rate_hz = 1;
     assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
     proto_camera cam;
     bridge_camera(&cam);
-    uint32_t seq;
-    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
-    oc_frame *f = frame_for(c, seq, sanitized ? 20000 : 8000);
-    assert_non_null(f);
-    oc_frame_free(f);
+    oc_frame_free(frame_for_camera(c, &cam));
     pump(c, 0.2);
     int f0 = k.frames, t0 = k.topologies;
     double t_start = test_now_s();
@@ -747,24 +777,17 @@ static void resubscribe_buys_no_frames(void **state)
 static void narrow_fov_keeps_the_budget(void **state)
 {
     (void)state;
-    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
     srv_settings sb;
-    srv_daemon *d = start_daemon(sets, 4, &sb);
-    oc_client *c = connect_client(srv_daemon_port(d), NULL);
+    srv_daemon *d;
     proto_subscribe s;
-    oc_subscribe_default(&s);
-    s.mesh_kind = PROTO_MESH_NONE;
-    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    oc_client *c = bridge_tiles_client(&d, &sb, &s);
     const float fovs[] = {5.0f, 2.0f, 1e-20f, FLT_TRUE_MIN};
     double budget = sb.srv.viewer_bytes_per_s / s.frame_rate_hz;
     for (size_t k = 0; k < sizeof fovs / sizeof fovs[0]; k++) {
         proto_camera cam;
         bridge_camera(&cam);
         cam.fov_y_deg = fovs[k];
-        uint32_t seq;
-        assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
-        oc_frame *f = frame_for(c, seq, sanitized ? 20000 : 8000);
-        if (!f) fail_msg("fov %g deg: no frame answered the camera", (double)fovs[k]);
+        oc_frame *f = frame_for_camera(c, &cam);
         double bytes = 0;
         for (int t = 0; t < f->info.tile_count; t++) bytes += 64.0 + f->tiles[t].info.payload_len;
         print_message("fov %g deg: q %.4g, %d tiles, %.0f of %.0f B\n", (double)fovs[k],
@@ -792,14 +815,10 @@ static void narrow_fov_keeps_the_budget(void **state)
 static void cascade_q_spends_the_budget(void **state)
 {
     (void)state;
-    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
     srv_settings sb;
-    srv_daemon *d = start_daemon(sets, 4, &sb);
-    oc_client *c = connect_client(srv_daemon_port(d), NULL);
+    srv_daemon *d;
     proto_subscribe s;
-    oc_subscribe_default(&s);
-    s.mesh_kind = PROTO_MESH_NONE;
-    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    oc_client *c = bridge_tiles_client(&d, &sb, &s);
     proto_camera cam;
     bridge_camera(&cam);
     uint32_t seq;
