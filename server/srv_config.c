@@ -42,6 +42,19 @@ static ocean_result tile_pow2_hook(void *target, const conf_entry *e, const void
     return OCEAN_OK;
 }
 
+/* server.epoch: refused where it is written (file:line, or the --set),
+ * like every other bad value; an empty one is the daemon's start. */
+static ocean_result epoch_hook(void *target, const conf_entry *e, const void *value, char *msg, size_t msglen)
+{
+    (void)target;
+    const char *text = value;
+    double unix_s;
+    if (!text[0] || srv_epoch_parse(text, &unix_s, NULL, 0) == OCEAN_OK) return OCEAN_OK;
+    snprintf(msg, msglen, "%s: expected Unix seconds or an ISO 8601 UTC time like 2026-01-01T00:00:00Z "
+             "(a real date; Z or +HH:MM required)", e->name);
+    return OCEAN_EINVAL;
+}
+
 static const conf_entry srv_entries[] = {
     {.name = "server.port", .type = CONF_INT, .offset = SRV(port), .min = 0, .max = 65535,
      .def = "8740",
@@ -116,7 +129,7 @@ static const conf_entry srv_entries[] = {
      .help = "Simulation ticks per second; one shared clock advances by 1/tick_rate per tick. "
              "A client's frame rate is met on the nearest tick."},
     {.name = "server.epoch", .type = CONF_STRING, .offset = SRV(epoch), .size = SRV_EPOCH_MAX,
-     .def = "",
+     .def = "", .hook = epoch_hook,
      .help = "Instant of sim time 0 on the system clock (UTC): an ISO 8601 time such as "
              "2026-01-01T00:00:00Z, or Unix seconds. Daemons given the same epoch on "
              "NTP/PTP-synchronised machines agree on the sim time and tick index (to their "

@@ -2407,6 +2407,21 @@ static void epoch_parse(void **state)
         assert_int_equal(srv_epoch_parse(bad[i], &e, why, sizeof why), OCEAN_EINVAL);
         assert_non_null(strstr(why, "server.epoch"));
     }
+    /* in a file, a bad epoch is refused at its file:line, like any bad value
+     * (it was refused with the file's name alone, after the load) */
+    char path[] = "/tmp/oc-epoch-XXXXXX";
+    int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    const char *text = "# a config\nserver.port = 0\nserver.scene = \"\"\nserver.epoch = 2020-02-30T00:00:00Z\n";
+    assert_int_equal(write(fd, text, strlen(text)), (ssize_t)strlen(text));
+    close(fd);
+    srv_settings st;
+    char err[600];
+    assert_int_equal(srv_settings_load(path, NULL, 0, &st, err, sizeof err), OCEAN_EINVAL);
+    char at[64];
+    snprintf(at, sizeof at, "%s:4: server.epoch", path);
+    if (!strstr(err, at)) fail_msg("a bad epoch's error does not name %s: '%s'", at, err);
+    unlink(path);
 }
 
 /* The global admin lock counts wrong tokens in a sliding window.  One
