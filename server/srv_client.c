@@ -18,20 +18,6 @@
 #include "srv_tiles.h"
 #include "srv_redis.h"
 
-#define ADMIN_GLOBAL_MISSES SRV_ADMIN_GLOBAL_MISSES
-#define ADMIN_WINDOW SRV_ADMIN_WINDOW
-
-int srv_hub_admin_miss(srv_hub *h, double now)
-{
-    /* The last ADMIN_GLOBAL_MISSES + 1 misses in a ring: the slot written
-     * next holds the oldest of them. */
-    h->admin_miss_t[h->admin_miss_next] = now;
-    h->admin_miss_next = (h->admin_miss_next + 1) % (ADMIN_GLOBAL_MISSES + 1);
-    if (h->admin_miss_count <= ADMIN_GLOBAL_MISSES) h->admin_miss_count++;
-    return h->admin_miss_count > ADMIN_GLOBAL_MISSES &&
-           now - h->admin_miss_t[h->admin_miss_next] <= ADMIN_WINDOW;
-}
-
 double srv_now(void)
 {
     struct timespec ts;

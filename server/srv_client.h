@@ -30,6 +30,7 @@
 #include "filter.h"
 #include "mesh.h"
 #include "proto.h"
+#include "srv_admin.h"
 #include "srv_config.h"
 #include "srv_link.h"
 #include "srv_stats.h"
@@ -169,6 +170,7 @@ typedef struct srv_client {
     srv_link link;                        /* live frames in flight and what the link carries */
     int admin_misses;                     /* wrong admin tokens in a row */
     double admin_until;                   /* SEA_STATE set refused until then (monotonic) */
+    char peer[SRV_ADMIN_ADDR_MAX];        /* the client's address (srv_admin's key) */
     uint32_t tx_seq;                      /* header seq of the next message */
     uint64_t inflight;                    /* bytes lws still holds of the last write */
     double over_soft_since;               /* monotonic; 0: under the soft limit */
@@ -204,11 +206,6 @@ typedef struct srv_sea_change {
 /* Pending changes a hub holds at most; one more is refused (ERATE). */
 #define SRV_SEA_PENDING_MAX 16
 
-/* Admin guessing across all connections: more than SRV_ADMIN_GLOBAL_MISSES
- * wrong tokens within any SRV_ADMIN_WINDOW seconds lock SEA_STATE set for
- * everyone that long. */
-#define SRV_ADMIN_GLOBAL_MISSES 20
-#define SRV_ADMIN_WINDOW 10
 
 /* The shared heart of the daemon. */
 typedef struct srv_hub {
@@ -241,9 +238,7 @@ typedef struct srv_hub {
     double epoch_frac;                    /* [const]   whole seconds + fraction [0, 1) */
     double tick_rate;                     /* [hub.lock] */
     uint64_t partial_held;                /* [svc] bytes of unfinished messages, all clients */
-    double admin_miss_t[SRV_ADMIN_GLOBAL_MISSES + 1]; /* [svc] the last misses' times, a ring */
-    int admin_miss_next, admin_miss_count; /* [svc] its next slot; misses in it */
-    double admin_global_until;            /* [svc] every SEA_STATE set refused until then */
+    srv_admin admin;                      /* [svc] the admin token's guard */
     atomic_uint_fast64_t record_files;    /* recordings opened this run */
     atomic_uint_fast64_t record_bytes;    /* bytes written to recordings this run */
     srv_stats stats;                      /* atomics */
@@ -262,11 +257,6 @@ void srv_fingerprint(const srv_settings *s, char out[17]);
 /* Monotonic seconds. */
 double srv_now(void);
 
-/* Notes a wrong admin token at monotonic time now [svc]; 1 when it makes
- * more than SRV_ADMIN_GLOBAL_MISSES within the last SRV_ADMIN_WINDOW
- * seconds.  A sliding window: a fixed one, restarted every 10 s, let 39
- * guesses through in 0.6 s across its edge. */
-int srv_hub_admin_miss(srv_hub *h, double now);
 
 ocean_result srv_hub_init(srv_hub *h, const srv_settings *s);
 void srv_hub_fini(srv_hub *h);

@@ -117,9 +117,10 @@ static const conf_entry srv_entries[] = {
              "together; the client whose message would pass it is disconnected (close 1008)."},
     {.name = "server.admin_lockout", .type = CONF_DOUBLE, .offset = SRV(admin_lockout),
      .min = 0, .max = 3600, .def = "1", .unit = "s",
-     .help = "After a wrong admin token a connection's SEA_STATE sets are refused for this "
-             "long, doubling with each further miss (to 64x); more than 20 misses in 10 s "
-             "from all connections together lock every connection out for 10 s."},
+     .help = "After a wrong admin token the connection's and its address's SEA_STATE sets "
+             "are refused for this long, doubling with each further miss (to 64x); more than "
+             "20 misses in 10 s from all addresses together lock every address that missed out "
+             "for 10 s.  An address that sent no wrong token is never locked out."},
     {.name = "server.web_root", .type = CONF_STRING, .offset = SRV(web_root), .size = SRV_PATH_MAX,
      .def = "clients/web",
      .help = "Directory served over HTTP at / (the browser viewer); relative to the working "

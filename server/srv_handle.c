@@ -24,9 +24,6 @@
 #include "srv_redis.h"
 #include "srv_tiles.h"
 
-#define ADMIN_GLOBAL_MISSES SRV_ADMIN_GLOBAL_MISSES
-#define ADMIN_WINDOW SRV_ADMIN_WINDOW
-
 /* Whether two subscriptions ask for the same stream. */
 static int sub_same(const proto_subscribe *a, const proto_subscribe *b)
 {
@@ -386,12 +383,10 @@ static void on_query(const srv_in *in)
     }
 }
 
-/* The admin token of a SEA_STATE set, checked in constant time after the
- * guessing throttle: after a miss this connection waits admin_lockout,
- * doubling per further miss (to 64x); more than ADMIN_GLOBAL_MISSES misses
- * in ADMIN_WINDOW s from all connections lock everyone out for
- * ADMIN_WINDOW s (a guesser with many connections).  A locked-out attempt
- * is not compared.  1 if the token is right; else refused (ERROR sent). */
+/* The admin token of a SEA_STATE set, compared in constant time unless
+ * this connection or its address is in the guard's backoff (srv_admin.h:
+ * the guesser waits, not the holder of the right token; a waiting attempt
+ * is not compared).  1 if the token is right; else refused (ERROR sent). */
 static int admin_ok(const srv_in *in, const char *token)
 {
     srv_client *c = in->c;
@@ -399,11 +394,11 @@ static int admin_ok(const srv_in *in, const char *token)
     const srv_config *cfg = in->cfg;
     char why[300];
     double now = srv_now();
-    if (now < c->admin_until || now < h->admin_global_until) {
-        double until = fmax(c->admin_until, h->admin_global_until);
+    double until = fmax(c->admin_until, srv_admin_locked_until(&h->admin, c->peer, now));
+    if (now < until) {
         atomic_fetch_add(&h->stats.admin_locked, 1);
         snprintf(why, sizeof why, "SEA_STATE set refused: admin token locked out for %.1f s more after "
-                 "wrong tokens (server.admin_lockout)", until - now);
+                 "wrong tokens from this connection or address (server.admin_lockout)", until - now);
         refuse(in, OCEAN_ERATE, why);
         return 0;
     }
@@ -412,19 +407,20 @@ static int admin_ok(const srv_in *in, const char *token)
     for (size_t i = 0; i < a; i++) diff |= (unsigned)(cfg->admin_token[i] ^ token[i < b ? i : 0]);
     if (!diff) {
         c->admin_misses = 0;
+        srv_admin_hit(&h->admin, c->peer);
         return 1;
     }
     atomic_fetch_add(&h->stats.admin_misses, 1);
-    int k = c->admin_misses < 6 ? c->admin_misses : 6;
+    int k = c->admin_misses < 6 ? c->admin_misses : 6, alarm;
     c->admin_misses++;
     c->admin_until = now + cfg->admin_lockout * (double)(1 << k);
-    if (srv_hub_admin_miss(h, now)) {
-        h->admin_global_until = now + ADMIN_WINDOW;
-        fprintf(stderr, "oceand: more than %d wrong admin tokens in %g s: SEA_STATE set locked for every "
-                "connection for %g s\n", ADMIN_GLOBAL_MISSES, (double)ADMIN_WINDOW, (double)ADMIN_WINDOW);
-    }
+    srv_admin_miss(&h->admin, c->peer, cfg->admin_lockout, now, &alarm);
+    if (alarm)
+        fprintf(stderr, "oceand: more than %d wrong admin tokens in %d s: SEA_STATE set locked for %d s for "
+                "every address that sent one (the last: %s)\n", SRV_ADMIN_GLOBAL_MISSES, SRV_ADMIN_WINDOW,
+                SRV_ADMIN_WINDOW, c->peer);
     snprintf(why, sizeof why, "SEA_STATE set refused: wrong admin token; next attempt in %.1f s "
-             "(server.admin_lockout)", c->admin_until - now);
+             "(server.admin_lockout)", fmax(c->admin_until, srv_admin_locked_until(&h->admin, c->peer, now)) - now);
     refuse(in, OCEAN_EAUTH, why);
     return 0;
 }

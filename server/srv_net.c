@@ -810,6 +810,7 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
         srv_client *c;
         if (srv_client_create(h, wsi, &c) != OCEAN_OK) return -1;
         pss->c = c;
+        lws_get_peer_simple(wsi, c->peer, sizeof c->peer);
         c->last_rx = srv_now();
         pthread_mutex_lock(&h->lock);
         int maxc = h->settings.srv.max_clients;

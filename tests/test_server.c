@@ -2424,27 +2424,46 @@ static void epoch_parse(void **state)
     unlink(path);
 }
 
-/* The global admin lock counts wrong tokens in a sliding window.  One
- * miss at t = 0, 19 at t = 9.5 s, then 20 at t = 10.1 s: a fixed window
+/* The admin guard (srv_admin.h) counts wrong tokens in a sliding window.
+ * One miss at t = 0, 19 at t = 9.5 s, then 20 at t = 10.1 s: a fixed window
  * (started by the first miss, restarted at 10.1) saw 20 and 20 and never
  * locked, letting 39 guesses through in 0.6 s; the 21st within 10 s locks.
- * Misses spread thinner than 21 in 10 s never lock. */
+ * Misses spread thinner than 21 in 10 s never lock.  The alarm locks the
+ * addresses that guessed, never another (the admin's); an address's own
+ * backoff doubles per miss and a right token resets it. */
 static void admin_lock_sliding_window(void **state)
 {
     (void)state;
-    srv_hub *h = calloc(1, sizeof *h);
-    assert_non_null(h);
-    int locked = srv_hub_admin_miss(h, 1000.0);
-    for (int i = 0; i < 19; i++) locked |= srv_hub_admin_miss(h, 1009.5 + i * 0.01);
+    srv_admin *a = calloc(1, sizeof *a);
+    assert_non_null(a);
+    int locked = srv_admin_window_miss(a, 1000.0);
+    for (int i = 0; i < 19; i++) locked |= srv_admin_window_miss(a, 1009.5 + i * 0.01);
     assert_false(locked); /* 20 misses */
     int at = -1;
     for (int i = 0; i < 20 && at < 0; i++)
-        if (srv_hub_admin_miss(h, 1010.1 + i * 0.01)) at = i;
+        if (srv_admin_window_miss(a, 1010.1 + i * 0.01)) at = i;
     assert_int_equal(at, 1); /* 1010.11: 19 + 2 within the last 10 s */
     /* one miss every 0.51 s: at most 20 in any 10 s */
-    memset(h, 0, sizeof *h);
-    for (int i = 0; i < 200; i++) assert_false(srv_hub_admin_miss(h, 2000.0 + 0.51 * i));
-    free(h);
+    memset(a, 0, sizeof *a);
+    for (int i = 0; i < 200; i++) assert_false(srv_admin_window_miss(a, 2000.0 + 0.51 * i));
+    /* the alarm locks the addresses that guessed, not the others: 21
+     * guesses from 10.0.0.1 in 2 s, then an attempt from each address */
+    memset(a, 0, sizeof *a);
+    int alarm = 0;
+    for (int i = 0; i < 21; i++) srv_admin_miss(a, "10.0.0.1", 0.3, 3000.0 + 0.1 * i, &alarm);
+    assert_true(alarm);
+    assert_true(srv_admin_locked_until(a, "10.0.0.1", 3002.5) >= 3012.0);
+    assert_true(srv_admin_locked_until(a, "10.0.0.2", 3002.5) <= 3002.5);
+    /* its own backoff doubles per miss (to 64 x the lockout) and a hit resets the count */
+    memset(a, 0, sizeof *a);
+    srv_admin_miss(a, "10.0.0.3", 0.3, 4000.0, &alarm);
+    assert_true(fabs(srv_admin_locked_until(a, "10.0.0.3", 4000.0) - 4000.3) < 1e-9);
+    srv_admin_miss(a, "10.0.0.3", 0.3, 4001.0, &alarm);
+    assert_true(fabs(srv_admin_locked_until(a, "10.0.0.3", 4001.0) - 4001.6) < 1e-9);
+    srv_admin_hit(a, "10.0.0.3");
+    srv_admin_miss(a, "10.0.0.3", 0.3, 4002.0, &alarm);
+    assert_true(fabs(srv_admin_locked_until(a, "10.0.0.3", 4002.0) - 4002.3) < 1e-9);
+    free(a);
 }
 
 /* An epoch that puts the sim time beyond the exact-time limit is refused

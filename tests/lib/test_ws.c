@@ -83,9 +83,22 @@ static int fill(test_ws *w, double deadline)
 
 int test_ws_connect(test_ws *w, int port, const char *path, const char *subprotocol)
 {
+    return test_ws_connect_from(w, NULL, port, path, subprotocol);
+}
+
+int test_ws_connect_from(test_ws *w, const char *src, int port, const char *path, const char *subprotocol)
+{
     memset(w, 0, sizeof *w);
     w->fd = socket(AF_INET, SOCK_STREAM, 0);
     if (w->fd < 0) return -1;
+    if (src) {
+        struct sockaddr_in b = {.sin_family = AF_INET};
+        if (inet_pton(AF_INET, src, &b.sin_addr) != 1 || bind(w->fd, (struct sockaddr *)&b, sizeof b) != 0) {
+            close(w->fd);
+            w->fd = -1;
+            return -1;
+        }
+    }
     struct sockaddr_in a = {0};
     a.sin_family = AF_INET;
     a.sin_port = htons((uint16_t)port);

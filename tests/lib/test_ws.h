@@ -19,6 +19,9 @@ typedef struct test_ws {
 /* Connects to 127.0.0.1:port and completes the handshake for subprotocol
  * (NULL: none), with an optional path ("/?record=1").  0 on success. */
 int test_ws_connect(test_ws *w, int port, const char *path, const char *subprotocol);
+/* The same from source address src (e.g. "127.0.0.2": a client of another
+ * host, on loopback), or from any when src is NULL. */
+int test_ws_connect_from(test_ws *w, const char *src, int port, const char *path, const char *subprotocol);
 void test_ws_close(test_ws *w);
 /* Sends one message as a single frame (opcode 2 binary, 1 text). */
 int test_ws_send(test_ws *w, int opcode, const void *data, size_t len);
