@@ -277,7 +277,7 @@ fi
 
 echo "bench: wrote $REPORT" >&2
 
-# ---- the README's section (pasted by hand into README.md) -------------------------
+# ---- the headline section (pasted by hand into docs/design.md, "Benchmarks") ----
 QNOTE=
 [ -n "$QUICK" ] && QNOTE='; a quick run - rerun `make bench` for the full figures'
 # README's section is the headline of bench_accuracy: rewritten only by a
