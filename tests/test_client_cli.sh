@@ -17,7 +17,9 @@ tmp=$(mktemp -d /tmp/oc-cli.XXXXXX)
 port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
 URL=ws://127.0.0.1:$port/
 TOKEN=test-token-17
-"$OD" --config config/oceand.conf --port "$port" --set server.admin_token=$TOKEN >"$tmp/oceand.log" 2>&1 &
+EPOCH=$(date +%s)
+"$OD" --config config/oceand.conf --port "$port" --set server.admin_token=$TOKEN --set server.epoch="$EPOCH" \
+    >"$tmp/oceand.log" 2>&1 &
 pid=$!
 pid2=
 cleanup() { kill "$pid" $pid2 2>/dev/null; wait "$pid" $pid2 2>/dev/null; rm -rf "$tmp"; }
@@ -158,6 +160,11 @@ fi
 echo "== load ($SECONDS s)"
 "$OC" load "$URL" --clients 4 --seconds 2 --rate 10 --mesh none --ramp 0.2 --json >"$tmp/load.json" || fail "load exited $?"
 json "$tmp/load.json" "d['connected'] == 4 and d['frames_per_viewer_min'] > 0 and d['latency_p99_ms'] is not None and d['bytes_per_viewer_per_s'] > 0"
+# with the daemon's epoch, latency is each frame's age from its tick: at
+# least 0 (no frame leaves before its tick) and far under a second here
+"$OC" load "$URL" --clients 2 --seconds 2 --rate 10 --mesh none --ramp 0.2 --epoch "$EPOCH" --json \
+    >"$tmp/load-age.json" || fail "load --epoch exited $?"
+json "$tmp/load-age.json" "'age from its tick' in d['latency_basis'] and 0 <= d['latency_p50_ms'] <= d['latency_p99_ms'] < 1000"
 
 echo "== query ($SECONDS s)"
 "$OC" query "$URL" --points "0,0;10.5,-3" --json >"$tmp/q.json" 2>"$tmp/q.err" || fail "query: $(cat "$tmp/q.err")"

@@ -3,7 +3,8 @@
 #
 # Starts BUILD/oceand on config/oceand.conf (a free loopback port), then runs
 # `ocean-client load` at 30 Hz for SECONDS (default 20; 5 with BENCH_QUICK)
-# per row and reports frames per viewer, tick-to-receipt latency p50/p99,
+# per row and reports frames per viewer, each frame's age from its tick's
+# wall time (p50/p99; the daemon runs with a known server.epoch),
 # frames skipped, the daemon's CPU (utime+stime over the run, in cores),
 # bytes per viewer per second, the daemon's resident memory after the row
 # (one daemon serves every row in turn, so the column shows whether memory
@@ -44,7 +45,10 @@ out=tests/bench/out
 mkdir -p "$out"
 csv="$out/server.csv"
 log=$(mktemp)
-"$build/oceand" --config config/oceand.conf --port 0 >"$log" 2>&1 &
+# an epoch the load generator is told: it measures each frame's age from
+# its tick's wall time (epoch + sim time), not from the fastest delivery
+epoch=$(date +%s)
+"$build/oceand" --config config/oceand.conf --port 0 --set server.epoch="$epoch" >"$log" 2>&1 &
 pid=$!
 trap 'kill -TERM $pid 2>/dev/null; wait $pid 2>/dev/null; rm -f "$log"' EXIT
 port=""
@@ -83,7 +87,7 @@ before=(--layout 0 --effects height,displacement,normals,foam,near --layers 4 --
 # error) instead of f32.
 thin=("${before[@]/#f32/qz}")   # the one element "f32" (--mesh-codec) becomes "qz"
 echo "viewers,seconds,frames_per_viewer,frames_expected,latency_p50_ms,latency_p99_ms,frames_skipped_per_viewer,daemon_cpu_cores,bytes_per_viewer_per_s,disconnects,errors,generator_cpu_cores,decode_errors,camera_spread_m,subscription,generator_cpu_cores_proc,daemon_rss_mb" >"$csv"
-echo "| subscription | viewers | cameras | frames/viewer (expected) | p50 ms | p99 ms | skipped/viewer | daemon CPU (cores) | MB/s per viewer | daemon RSS after, MB | generator CPU (cores, measured window / whole run) |"
+echo "| subscription | viewers | cameras | frames/viewer (expected) | age p50 ms | age p99 ms | skipped/viewer | daemon CPU (cores) | MB/s per viewer | daemon RSS after, MB | generator CPU (cores, measured window / whole run) |"
 echo "|:---|---:|:---|---:|---:|---:|---:|---:|---:|---:|---:|"
 # subscription:viewers:spread_m (0: every viewer at the same camera)
 if [[ -n "$quick" ]]; then
@@ -103,7 +107,7 @@ for run in "${runs[@]}"; do
     c0=$(cpu "$pid"); t0=$(date +%s.%N)
     jf=$(mktemp)
     "$build/ocean-client" load "ws://127.0.0.1:$port/" --clients "$n" --seconds "$secs" \
-        --rate 30 --ramp "$ramp" --spread "$spread" --json "${subopts[@]}" "${extra[@]}" >"$jf" 2>/dev/null &
+        --rate 30 --ramp "$ramp" --spread "$spread" --epoch "$epoch" --json "${subopts[@]}" "${extra[@]}" >"$jf" 2>/dev/null &
     lpid=$!
     # The generator's CPU from /proc, sampled until it exits (whole run).
     gticks=0

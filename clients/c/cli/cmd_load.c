@@ -7,11 +7,12 @@
  * threads, bulk frame reading, every Nth frame decoded in full) and the
  * client library (--library).
  *
- * Latency: FRAME carries its tick's sim time but no server wall clock, so
- * the latency of a frame is (receipt wall time - sim_time) minus the
- * smallest such difference seen over every connection in the run (all
- * share one server clock).  The zero point is the fastest delivery seen;
- * the sim clock is assumed to run at wall rate (live mode).
+ * Latency: a frame's sim time is its tick's, and its tick's wall time is
+ * the daemon's server.epoch plus that (PROTOCOL.md "Simulation clock"), so
+ * with --epoch the latency is each frame's age from its tick (receipt wall
+ * time - epoch - sim_time; exact on one host).  Without it, the zero point
+ * is the fastest delivery seen over every connection in the run, which
+ * hides the time every frame spends being built.
  */
 #include <math.h>
 #include <pthread.h>
@@ -234,7 +235,7 @@ static void *load_progress_main(void *arg)
 int cmd_load(int argc, char **argv)
 {
     int nclients = 1, json = 0, decode = 0, library = 0, threads = 0, verify_every = 30;
-    double seconds = 10, ramp = 1.0, spread = 0, speed = 0, warmup = 0.5;
+    double seconds = 10, ramp = 1.0, spread = 0, speed = 0, warmup = 0.5, epoch = NAN;
     occli_sub s;
     /* the library's defaults, which are the browser viewer's subscription
      * (clients/web/worker.js): every effect and every cascade (the daemon
@@ -245,6 +246,9 @@ int cmd_load(int argc, char **argv)
         {"clients", OCCLI_INT, &nclients, 1, 10000, "N  viewers", NULL},
         {"seconds", OCCLI_DOUBLE, &seconds, 0.1, 1e6, "S  measured duration", NULL},
         {"json", OCCLI_FLAG, &json, 0, 0, "print a JSON summary", NULL},
+        {"epoch", OCCLI_DOUBLE, &epoch, 0, 1e11, "S  the daemon's server.epoch in Unix seconds: latency becomes each\n"
+                                                  "                       frame's age from its tick's wall time (same host or\n"
+                                                  "                       synchronised clocks); without it, from the fastest delivery", NULL},
         {"ramp", OCCLI_DOUBLE, &ramp, 0, 600, "S  spread the connects over S seconds", NULL},
         {"warmup", OCCLI_DOUBLE, &warmup, 0, 600, "S  wait after all viewers subscribed before measuring", NULL},
         {"spread", OCCLI_DOUBLE, &spread, 0, 1e6, "M  place viewers on a grid with M metres between them (0: co-located)", NULL},
@@ -317,8 +321,11 @@ int cmd_load(int argc, char **argv)
         occli_vec_free(&R.delay);
         return rc;
     }
+    /* the zero point: the tick's own wall time (epoch + sim time) when the
+     * epoch is known, else the fastest delivery seen */
+    double zero = isfinite(epoch) ? epoch : R.min_delay;
     for (size_t i = 0; i < R.delay.n; i++)
-        R.delay.v[i] = 1e3 * (R.delay.v[i] - R.min_delay);
+        R.delay.v[i] = 1e3 * (R.delay.v[i] - zero);
     double p50 = occli_percentile(R.delay.v, R.delay.n, 50);
     double p90 = occli_percentile(R.delay.v, R.delay.n, 90);
     double p99 = occli_percentile(R.delay.v, R.delay.n, 99);
@@ -379,8 +386,11 @@ int cmd_load(int argc, char **argv)
         cJSON_AddNumberToObject(o, "threads", library ? 1 : (threads < nclients ? threads : nclients));
         cJSON_AddNumberToObject(o, "verify_every", library ? (decode ? 1 : 0) : verify_every);
         cJSON_AddStringToObject(o, "latency_basis",
-                                "receipt wall time minus FRAME sim_time, zero at the fastest delivery seen "
-                                "over all viewers (sim clock assumed to run at wall rate)");
+                                isfinite(epoch) ? "receipt wall time minus the tick's wall time (--epoch + FRAME "
+                                                  "sim_time): each frame's age from its tick"
+                                                : "receipt wall time minus FRAME sim_time, zero at the fastest "
+                                                  "delivery seen over all viewers (sim clock assumed to run at "
+                                                  "wall rate)");
         occli_print_json(o);
     } else {
         printf("layout %d (frames: %llu layout 0, %llu layout 1)\n", cfg.sub.layout,
