@@ -25,6 +25,7 @@
 #include <string.h>
 
 #include "gerstner.h"
+#include "lod.h"
 #include "mesh.h"
 #include "slope.h"
 #include "srv_tiles.h"
@@ -633,7 +634,6 @@ static double nadir_error(const tables *tb, const plan *pl, const proto_camera *
     double total = tb->total_var + (pl->ncas > tb->fft ? tb->nf_var : 0.0);
     if (!(total > 0))
         return 0.0;
-    double cy = fmax(fabs(cam->pos[1]), 1.0);
     double miss = 0.0;
     for (int c = 0; c < pl->ncas; c++) {
         int M = tb->mips[c];
@@ -641,20 +641,13 @@ static double nadir_error(const tables *tb, const plan *pl, const proto_camera *
             miss += tb->var_removed[c][M];
             continue;
         }
-        /* height is read at max(s, G) (PROTOCOL.md) */
-        double s = fmax(fmax(pl->min_spacing, pl->qc[c] * cy), pl->geo);
-        double lam = log2(s / (tb->patch[c] / tb->n));
-        double v;
-        if (lam <= 0) {
-            v = tb->var_removed[c][0];
-        } else if (lam < M - 1) {
-            int m = (int)floor(lam);
-            double f = lam - m;
-            v = (1 - f) * tb->var_removed[c][m] + f * tb->var_removed[c][m + 1];
-        } else {
-            double w = c > 0 ? fmin(fmax(M - lam, 0.0), 1.0) : 1.0;
-            v = w * tb->var_removed[c][M - 1] + (1 - w) * tb->var_removed[c][M];
-        }
+        /* height is read at max(s, G) (PROTOCOL.md), s at the nadir */
+        double s = fmax(proto_lod_spacing(pl->qc[c], pl->min_spacing, cam->pos[1], 0, 0), pl->geo);
+        proto_lod_read r;
+        proto_lod_read_at(s, tb->patch[c] / tb->n, M, c > 0, &r);
+        double v = (1 - r.fade) * tb->var_removed[c][M];
+        for (int k = 0; k < 2; k++)
+            if (r.mip[k] >= 0) v += r.weight[k] * tb->var_removed[c][r.mip[k]];
         miss += v;
     }
     double e = miss / total;

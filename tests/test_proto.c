@@ -21,6 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lod.h"
 #include "proto.h"
 #include "ocean_time.h"
 
@@ -1264,12 +1265,40 @@ static void test_cascade_layout(void **state)
     proto_buf_free(&c);
 }
 
+/* "Where each mip is read" (protocol/lod.c): the spacing at a point, and
+ * the mips read at a spacing, at the rule's boundaries. */
+static void test_lod_rule(void **state)
+{
+    (void)state;
+    /* s = max(min, q sqrt(dx^2 + dz^2 + max(|y|, 1)^2)) */
+    assert_true(proto_lod_spacing(0.01, 0, 25, 0, 0) == 0.25);
+    assert_true(proto_lod_spacing(0.01, 0, -0.5, 3, 4) == 0.01 * sqrt(26.0));
+    assert_true(proto_lod_spacing(0.01, 2, 25, 0, 0) == 2);
+    proto_lod_read r;
+    /* at or below sigma: mip 0 alone */
+    proto_lod_read_at(0.5, 1, 5, 1, &r);
+    assert_true(r.mip[0] == 0 && r.mip[1] == -1 && r.weight[0] == 1 && r.fade == 1);
+    /* between: two mips, linear */
+    proto_lod_read_at(pow(2, 2.25), 1, 5, 1, &r);
+    assert_true(r.mip[0] == 2 && r.mip[1] == 3);
+    assert_true(fabs(r.weight[0] - 0.75) < 1e-12 && fabs(r.weight[1] - 0.25) < 1e-12);
+    /* beyond the last mip: a fading cascade fades by clamp(mips - lambda) */
+    proto_lod_read_at(pow(2, 4.5), 1, 5, 1, &r);
+    assert_true(r.mip[0] == 4 && r.mip[1] == -1 && fabs(r.fade - 0.5) < 1e-12 && r.weight[0] == r.fade);
+    proto_lod_read_at(pow(2, 6), 1, 5, 1, &r);
+    assert_true(r.fade == 0 && r.weight[0] == 0);
+    /* the coarsest cascade does not fade */
+    proto_lod_read_at(pow(2, 6), 1, 5, 0, &r);
+    assert_true(r.mip[0] == 4 && r.fade == 1 && r.weight[0] == 1);
+}
+
 int main(int argc, char **argv)
 {
     if (argc == 3 && strcmp(argv[1], "--write-vectors") == 0)
         return write_vectors(argv[2]);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_roundtrip_all),
+        cmocka_unit_test(test_lod_rule),
         cmocka_unit_test(test_header_errors),
         cmocka_unit_test(test_time_limit),
         cmocka_unit_test(test_frame_client_fields),

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "codec.h"
+#include "lod.h"
 #include "oceanclient.h"
 
 #define NO_TILE 0xFFFFu
@@ -246,41 +247,20 @@ static int block_ok(const proto_cascade_block *b)
 static void lod_core(const proto_cascade_block *b, double x, double z, double min_spacing, oc_lod *out)
 {
     double dx = x - b->camera[0], dz = z - b->camera[2];
-    double h = fabs(b->camera[1]);
-    if (h < 1)
-        h = 1;
-    double d = sqrt(dx * dx + dz * dz + h * h);
     double floor_s = b->min_spacing_m > min_spacing ? b->min_spacing_m : min_spacing;
-    out->s = fmax(floor_s, b->spacing_per_m * d);
+    out->s = proto_lod_spacing(b->spacing_per_m, floor_s, b->camera[1], dx, dz);
     out->count = b->cascade_count;
     for (int c = 0; c < b->cascade_count; c++) {
         const proto_cascade_entry *e = &b->cascade[c];
         oc_lod_cascade *L = &out->c[c];
-        int M = e->mips;
-        double s = fmax(floor_s, e->spacing_per_m * d);
-        double lam = log2(s / (e->patch_m / e->n));
-        L->s = s;
-        L->lambda = lam;
-        L->fade = 1;
-        L->mip[1] = -1;
-        L->weight[1] = 0;
-        if (lam <= 0) {
-            L->mip[0] = 0;
-            L->weight[0] = 1;
-        } else if (lam < M - 1) {
-            int m0 = (int)floor(lam);
-            double f = lam - m0;
-            L->mip[0] = m0;
-            L->weight[0] = 1 - f;
-            L->mip[1] = m0 + 1;
-            L->weight[1] = f;
-        } else {
-            L->mip[0] = M - 1;
-            if (e->fades) {
-                double w = M - lam;
-                L->fade = w < 0 ? 0 : w > 1 ? 1 : w;
-            }
-            L->weight[0] = L->fade;
+        proto_lod_read r;
+        L->s = proto_lod_spacing(e->spacing_per_m, floor_s, b->camera[1], dx, dz);
+        proto_lod_read_at(L->s, e->patch_m / e->n, e->mips, e->fades, &r);
+        L->lambda = r.lambda;
+        L->fade = r.fade;
+        for (int k = 0; k < 2; k++) {
+            L->mip[k] = r.mip[k];
+            L->weight[k] = r.weight[k];
         }
     }
 }
