@@ -103,9 +103,11 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     /* The file's sea against the file's sea of the last load, not against
      * the sea in force: a reload of an unchanged file undid a SEA_STATE set
      * and announced the old sea to every client. */
-    /* Refused, the file's sea is not taken as seen: the next reload tries
-     * it again. */
-    if (sea_ok) h->file_params = s->params;
+    /* Refused (it cannot be built, or the timeline is full), the file's sea
+     * is not taken as seen: the next reload tries it again.  Taken as seen
+     * after a refusal, it was never applied, while the log said
+     * "configuration reloaded". */
+    char full_why[200] = "";
     if (file_sea_changed && !sea_ok) {
         /* said in msg, on the "configuration reloaded" line */
     } else if (file_sea_changed && h->redis) {
@@ -113,12 +115,12 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
                 "applied; change it with SEA_STATE set\n");
     } else if (file_sea_changed) {
         /* a changed sea enters the timeline now, announced to every client */
-        char why[200];
-        if (srv_hub_sea_schedule(h, &s->params, -INFINITY, NULL, why, sizeof why) != OCEAN_OK)
-            fprintf(stderr, "oceand: reload: %s\n", why);
+        if (srv_hub_sea_schedule(h, &s->params, -INFINITY, NULL, full_why, sizeof full_why) != OCEAN_OK)
+            sea_ok = 0;
         else
             fprintf(stderr, "oceand: reload: the file's sea changed: it replaces the sea in force\n");
     }
+    if (sea_ok) h->file_params = s->params;
     h->settings_gen++;
     pthread_cond_signal(&h->wake);
     pthread_mutex_unlock(&h->lock);
@@ -130,7 +132,10 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
         for (int i = 0; i < nr && off < msglen; i++)
             off += (size_t)snprintf(msg + off, msglen - off, " %s", restart[i]);
     }
-    if (!sea_ok && off < msglen)
+    if (!sea_ok && off < msglen && full_why[0])
+        snprintf(msg + off, msglen - off, "%sthe file's sea is not applied: %s; the sea in force is kept, "
+                 "and the next reload tries the file's sea again", off ? "; " : "", full_why);
+    else if (!sea_ok && off < msglen)
         snprintf(msg + off, msglen - off, "%sthe file's sea is not applied, it cannot be built: %s; the "
                  "sea in force is kept and no client was told of the new one", off ? "; " : "", sea_why);
     return OCEAN_OK;

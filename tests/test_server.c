@@ -3373,6 +3373,47 @@ static void reload_sea_that_cannot_be_built(void **state)
     srv_daemon_stop(d);
 }
 
+/* A reload whose changed sea the timeline cannot take (16 changes pend)
+ * says so and tries again at the next reload: the file's sea was taken as
+ * seen and never applied (depth 4000 m served, the file said 3000), while
+ * the log said "configuration reloaded". */
+static void reload_sea_retried_when_the_timeline_is_full(void **state)
+{
+    (void)state;
+    srv_settings s2 = settings;
+    s2.srv.port = 0;
+    srv_daemon *d;
+    char err[512], msg[1024], why[200];
+    assert_int_equal(srv_daemon_start(&s2, &d, err, sizeof err), OCEAN_OK);
+    srv_hub *h = srv_daemon_hub(d);
+    pthread_mutex_lock(&h->lock);
+    double t0 = srv_hub_sim_time(h);
+    for (int i = 0; i < SRV_SEA_PENDING_MAX; i++)
+        assert_int_equal(srv_hub_sea_schedule(h, &s2.params, t0 + 1000 + i, NULL, why, sizeof why), OCEAN_OK);
+    pthread_mutex_unlock(&h->lock);
+    srv_settings s3 = s2;
+    s3.params.sea.depth_m = s2.params.sea.depth_m > 3000 ? 2000 : 3000;
+    assert_int_equal(srv_daemon_reload(d, &s3, msg, sizeof msg), OCEAN_OK);
+    if (!strstr(msg, "the file's sea is not applied") || !strstr(msg, "pending") || !strstr(msg, "next reload"))
+        fail_msg("a reload into a full timeline: '%s'", msg);
+    /* the pending changes take effect (taken as the simulation thread does) */
+    pthread_mutex_lock(&h->lock);
+    srv_sea_change ch;
+    while (srv_hub_sea_take_due(h, t0 + 2000, &ch)) continue;
+    assert_int_equal(h->n_sea_pending, 0);
+    pthread_mutex_unlock(&h->lock);
+    /* the same file again: now its sea is applied */
+    assert_int_equal(srv_daemon_reload(d, &s3, msg, sizeof msg), OCEAN_OK);
+    assert_string_equal(msg, "");
+    pthread_mutex_lock(&h->lock);
+    int pending = h->n_sea_pending;
+    double depth = pending ? h->sea_pending[pending - 1].params.sea.depth_m : 0;
+    pthread_mutex_unlock(&h->lock);
+    assert_int_equal(pending, 1);
+    assert_true(depth == s3.params.sea.depth_m);
+    srv_daemon_stop(d);
+}
+
 /* A scene wins over the configuration file for sea.* and ocean.*: a key
  * the file changed from its default and the scene sets otherwise is named
  * in srv_settings.overridden (oceand prints it), since the edit changes
@@ -3697,6 +3738,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(recording_never_overwrites),
         cmocka_unit_test(reload_restart_keys_and_runtime_sea),
         cmocka_unit_test(reload_sea_that_cannot_be_built),
+        cmocka_unit_test(reload_sea_retried_when_the_timeline_is_full),
         cmocka_unit_test(subscribe_keeps_pending_queries),
         cmocka_unit_test(admin_lock_sliding_window),
         cmocka_unit_test(mesh_denser_on_steep_chop),
