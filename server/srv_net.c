@@ -435,6 +435,85 @@ static int filter_upgrade(srv_net *n, struct lws *wsi, int ocean)
     return 0;
 }
 
+/* GET or HEAD of /metrics or /status (srv_stats.c); everything else the
+ * web root mount did not serve: 404, or 405 for other methods. */
+static int on_http(srv_net *n, struct lws *wsi, http_pss *pss)
+{
+    /* The mounts match by prefix: only the exact paths are answered
+     * (/metricsfoo was served the metrics), GET and HEAD alike (HEAD
+     * got 404, which a load balancer's health check reads as down);
+     * other methods get 405 naming the two.  The method is told by
+     * the URI header's length, not by a copy of it: a path too long
+     * for the copy made a GET look like no method at all (405). */
+    char uri[128] = "";
+    int head = 0, ulen = lws_hdr_total_length(wsi, WSI_TOKEN_GET_URI);
+    if (ulen <= 0) {
+        ulen = lws_hdr_total_length(wsi, WSI_TOKEN_HEAD_URI);
+        head = ulen > 0;
+    }
+    if (ulen <= 0) {
+        uint8_t hdr[LWS_PRE + 256], *start = hdr + LWS_PRE, *p = start, *end = hdr + sizeof hdr - 1;
+        if (lws_add_http_header_status(wsi, HTTP_STATUS_METHOD_NOT_ALLOWED, &p, end) ||
+            lws_add_http_header_by_token(wsi, WSI_TOKEN_HTTP_ALLOW, (const unsigned char *)"GET, HEAD",
+                                         9, &p, end) ||
+            lws_add_http_header_content_length(wsi, 0, &p, end) ||
+            lws_finalize_write_http_header(wsi, start, &p, end))
+            return 1;
+        return lws_http_transaction_completed(wsi) ? -1 : 0;
+    }
+    if ((size_t)ulen >= sizeof uri) {
+        /* Not /status or /metrics, and not a file the web root mount
+         * served (it tried first): not there (404).  A path too long
+         * for lws to name as a file never gets here (the 414 of
+         * LWS_CALLBACK_FILTER_HTTP_CONNECTION); kept for any mount
+         * that skips the filter. */
+        int too_long = strlen(n->web_root) + (size_t)ulen > SRV_LWS_FILE_PATH_MAX;
+        lws_return_http_status(wsi, too_long ? HTTP_STATUS_REQ_URI_TOO_LONG : HTTP_STATUS_NOT_FOUND,
+                               too_long ? "path too long for a file under server.web_root" : NULL);
+        return lws_http_transaction_completed(wsi) ? -1 : 0;
+    }
+    lws_hdr_copy(wsi, uri, sizeof uri, head ? WSI_TOKEN_HEAD_URI : WSI_TOKEN_GET_URI);
+    int metrics = strcmp(uri, "/metrics") == 0, status = strcmp(uri, "/status") == 0;
+    if (!metrics && !status) {
+        lws_return_http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL);
+        return lws_http_transaction_completed(wsi) ? -1 : 0;
+    }
+    srv_stats_view v;
+    srv_stats_client *per = NULL;
+    char scene[OCEAN_SCENE_NAME_MAX];
+    stats_view(n, &v, scene, sizeof scene, &per);
+    const char *type;
+    if (metrics) {
+        pss->body = srv_stats_prometheus(&n->hub->stats, &v, LWS_PRE, &pss->len);
+        type = "text/plain; version=0.0.4; charset=utf-8";
+    } else {
+        pss->body = srv_stats_json(&n->hub->stats, &v, LWS_PRE, &pss->len);
+        type = "application/json";
+    }
+    free(per);
+    if (!pss->body) {
+        lws_return_http_status(wsi, HTTP_STATUS_INTERNAL_SERVER_ERROR, "out of memory");
+        return -1;
+    }
+    uint8_t hdr[LWS_PRE + 512], *start = hdr + LWS_PRE, *p = start, *end = hdr + sizeof hdr - 1;
+    /* past the exact-time limit this replica serves nothing: /status
+     * says so to health checks (503, its body says why); /metrics
+     * stays 200 for the scraper (oceand_past_time_limit 1) */
+    unsigned code = status && v.past_time_limit ? HTTP_STATUS_SERVICE_UNAVAILABLE : HTTP_STATUS_OK;
+    if (lws_add_http_common_headers(wsi, code, type, pss->len, &p, end) ||
+        lws_add_http_header_by_token(wsi, WSI_TOKEN_HTTP_CACHE_CONTROL,
+                                     (const unsigned char *)"no-store", 8, &p, end) ||
+        lws_finalize_write_http_header(wsi, start, &p, end))
+        return 1;
+    if (head) { /* the headers GET would send, Content-Length included, no body */
+        free(pss->body);
+        pss->body = NULL;
+        return lws_http_transaction_completed(wsi) ? -1 : 0;
+    }
+    lws_callback_on_writable(wsi);
+    return 0;
+}
+
 static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
                    size_t len)
 {
@@ -482,81 +561,8 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
         lws_close_reason(wsi, LWS_CLOSE_STATUS_PROTOCOL_ERR, (unsigned char *)why, sizeof why - 1);
         return -1;
     }
-    case LWS_CALLBACK_HTTP: {
-        /* The mounts match by prefix: only the exact paths are answered
-         * (/metricsfoo was served the metrics), GET and HEAD alike (HEAD
-         * got 404, which a load balancer's health check reads as down);
-         * other methods get 405 naming the two.  The method is told by
-         * the URI header's length, not by a copy of it: a path too long
-         * for the copy made a GET look like no method at all (405). */
-        char uri[128] = "";
-        int head = 0, ulen = lws_hdr_total_length(wsi, WSI_TOKEN_GET_URI);
-        if (ulen <= 0) {
-            ulen = lws_hdr_total_length(wsi, WSI_TOKEN_HEAD_URI);
-            head = ulen > 0;
-        }
-        if (ulen <= 0) {
-            uint8_t hdr[LWS_PRE + 256], *start = hdr + LWS_PRE, *p = start, *end = hdr + sizeof hdr - 1;
-            if (lws_add_http_header_status(wsi, HTTP_STATUS_METHOD_NOT_ALLOWED, &p, end) ||
-                lws_add_http_header_by_token(wsi, WSI_TOKEN_HTTP_ALLOW, (const unsigned char *)"GET, HEAD",
-                                             9, &p, end) ||
-                lws_add_http_header_content_length(wsi, 0, &p, end) ||
-                lws_finalize_write_http_header(wsi, start, &p, end))
-                return 1;
-            return lws_http_transaction_completed(wsi) ? -1 : 0;
-        }
-        if ((size_t)ulen >= sizeof uri) {
-            /* Not /status or /metrics, and not a file the web root mount
-             * served (it tried first): not there (404).  A path too long
-             * for lws to name as a file never gets here (the 414 of
-             * LWS_CALLBACK_FILTER_HTTP_CONNECTION); kept for any mount
-             * that skips the filter. */
-            int too_long = strlen(n->web_root) + (size_t)ulen > SRV_LWS_FILE_PATH_MAX;
-            lws_return_http_status(wsi, too_long ? HTTP_STATUS_REQ_URI_TOO_LONG : HTTP_STATUS_NOT_FOUND,
-                                   too_long ? "path too long for a file under server.web_root" : NULL);
-            return lws_http_transaction_completed(wsi) ? -1 : 0;
-        }
-        lws_hdr_copy(wsi, uri, sizeof uri, head ? WSI_TOKEN_HEAD_URI : WSI_TOKEN_GET_URI);
-        int metrics = strcmp(uri, "/metrics") == 0, status = strcmp(uri, "/status") == 0;
-        if (!metrics && !status) {
-            lws_return_http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL);
-            return lws_http_transaction_completed(wsi) ? -1 : 0;
-        }
-        srv_stats_view v;
-        srv_stats_client *per = NULL;
-        char scene[OCEAN_SCENE_NAME_MAX];
-        stats_view(n, &v, scene, sizeof scene, &per);
-        const char *type;
-        if (metrics) {
-            pss->body = srv_stats_prometheus(&n->hub->stats, &v, LWS_PRE, &pss->len);
-            type = "text/plain; version=0.0.4; charset=utf-8";
-        } else {
-            pss->body = srv_stats_json(&n->hub->stats, &v, LWS_PRE, &pss->len);
-            type = "application/json";
-        }
-        free(per);
-        if (!pss->body) {
-            lws_return_http_status(wsi, HTTP_STATUS_INTERNAL_SERVER_ERROR, "out of memory");
-            return -1;
-        }
-        uint8_t hdr[LWS_PRE + 512], *start = hdr + LWS_PRE, *p = start, *end = hdr + sizeof hdr - 1;
-        /* past the exact-time limit this replica serves nothing: /status
-         * says so to health checks (503, its body says why); /metrics
-         * stays 200 for the scraper (oceand_past_time_limit 1) */
-        unsigned code = status && v.past_time_limit ? HTTP_STATUS_SERVICE_UNAVAILABLE : HTTP_STATUS_OK;
-        if (lws_add_http_common_headers(wsi, code, type, pss->len, &p, end) ||
-            lws_add_http_header_by_token(wsi, WSI_TOKEN_HTTP_CACHE_CONTROL,
-                                         (const unsigned char *)"no-store", 8, &p, end) ||
-            lws_finalize_write_http_header(wsi, start, &p, end))
-            return 1;
-        if (head) { /* the headers GET would send, Content-Length included, no body */
-            free(pss->body);
-            pss->body = NULL;
-            return lws_http_transaction_completed(wsi) ? -1 : 0;
-        }
-        lws_callback_on_writable(wsi);
-        return 0;
-    }
+    case LWS_CALLBACK_HTTP:
+        return on_http(n, wsi, pss);
     case LWS_CALLBACK_HTTP_WRITEABLE: {
         if (!pss->body) break;
         int w = lws_write(wsi, (unsigned char *)pss->body + LWS_PRE, pss->len, LWS_WRITE_HTTP_FINAL);
@@ -789,6 +795,210 @@ static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now
     lws_callback_on_writable(wsi);
 }
 
+/* A ?record=1 connection or server.record: its camera path is recorded
+ * when the operator allows it and the run's quotas have room (each refusal
+ * logged once a run: one line per connection let any client that connects
+ * fill the log). */
+static void maybe_record(srv_hub *h, srv_client *c, struct lws *wsi)
+{
+    pthread_mutex_lock(&h->lock);
+    int record = h->settings.srv.record, record_clients = h->settings.srv.record_clients;
+    int record_files = h->settings.srv.record_max_files, verbose = h->settings.srv.verbose;
+    uint64_t record_bytes = h->settings.srv.record_max_bytes;
+    char dir[SRV_PATH_MAX], scene[OCEAN_SCENE_NAME_MAX];
+    snprintf(dir, sizeof dir, "%s", h->settings.srv.record_dir);
+    snprintf(scene, sizeof scene, "%s", h->settings.scene.name);
+    pthread_mutex_unlock(&h->lock);
+    char arg[16];
+    if (lws_get_urlarg_by_name(wsi, "record", arg, sizeof arg) &&
+        (strcmp(arg, "record=1") == 0 || strcmp(arg, "1") == 0)) {
+        /* a client's own request writes a file on the server's disk */
+        if (record_clients) record = 1;
+        else if (verbose)
+            fprintf(stderr, "oceand: client %u: ?record=1 ignored (server.record_clients is off)\n", c->id);
+    }
+    if (record && atomic_load(&h->record_files) >= (uint64_t)record_files) {
+        if (!(h->record_said & 1))
+            fprintf(stderr, "oceand: client %u: not recording: %d recordings opened this run "
+                    "(server.record_max_files); no later client is recorded (said once)\n", c->id, record_files);
+        h->record_said |= 1;
+        record = 0;
+    }
+    if (record && atomic_load(&h->record_bytes) >= record_bytes) {
+        if (!(h->record_said & 2))
+            fprintf(stderr, "oceand: client %u: not recording: server.record_max_bytes written this run; no "
+                    "later client is recorded (said once)\n", c->id);
+        h->record_said |= 2;
+        record = 0;
+    }
+    if (!record) return;
+    char path[1100], msg[300];
+    if (srv_record_open(dir, c->id, scene, &c->rec, path, sizeof path, msg, sizeof msg) != OCEAN_OK) {
+        if (!(h->record_said & 4))
+            fprintf(stderr, "oceand: client %u: not recording: %s (said once a run)\n", c->id, msg);
+        h->record_said |= 4;
+        return;
+    }
+    atomic_fetch_add(&h->record_files, 1);
+    srv_record_set_quota(c->rec, &h->record_bytes, record_bytes);
+    if (verbose) fprintf(stderr, "oceand: client %u: recording to %s\n", c->id, path);
+}
+
+/* A new connection: its client, refused with a BYE that says why when the
+ * server is full, stopping or past its clock's end, else greeted (HELLO). */
+static int on_established(srv_net *n, struct lws *wsi, ws_pss *pss)
+{
+    srv_hub *h = n->hub;
+    srv_client *c;
+    if (srv_client_create(h, wsi, &c) != OCEAN_OK) return -1;
+    pss->c = c;
+    lws_get_peer_simple(wsi, c->peer, sizeof c->peer);
+    c->last_rx = srv_now();
+    pthread_mutex_lock(&h->lock);
+    int maxc = h->settings.srv.max_clients;
+    if (n->fd_clients > 0 && maxc > n->fd_clients) maxc = n->fd_clients;
+    int full = h->n_clients > maxc, stopping = h->stopping, verbose = h->settings.srv.verbose;
+    pthread_mutex_unlock(&h->lock);
+    if (past_time_limit(n)) { /* no HELLO can be sent: say why instead of nothing */
+        c->closing = 1;
+        snprintf(c->kill_why, sizeof c->kill_why, "%s", TIME_LIMIT_CLOSE);
+        srv_client_send_bye(c, PROTO_BYE_SHUTDOWN, TIME_LIMIT_BYE);
+    } else if (full || stopping) {
+        if (full) atomic_fetch_add(&h->stats.refused_full, 1);
+        c->closing = 1;
+        snprintf(c->kill_why, sizeof c->kill_why, "%s",
+                 stopping ? "server shutting down" : "server full: server.max_clients connections in use");
+        srv_client_send_bye(c, stopping ? PROTO_BYE_SHUTDOWN : PROTO_BYE_SERVER_FULL, c->kill_why);
+    } else {
+        maybe_record(h, c, wsi);
+        if (verbose) fprintf(stderr, "oceand: client %u connected\n", c->id);
+        srv_client_send_hello(c);
+    }
+    lws_callback_on_writable(wsi);
+    return 0;
+}
+
+/* Appends len bytes of the message being received to c->rx (a message over
+ * server.max_message keeps only its header, for the ERROR).  -1 closes the
+ * connection: every client's unfinished messages together would pass
+ * server.partial_total, or memory ran out. */
+static int rx_append(srv_hub *h, srv_client *c, struct lws *wsi, const void *in, size_t len, size_t maxm,
+                     uint64_t total)
+{
+    if (!c->rx_discard && c->rx_len + len > maxm) {
+        c->rx_discard = 1;
+        c->rx_discarded = c->rx_len;
+        if (c->rx_len > PROTO_HEADER_SIZE) c->rx_len = PROTO_HEADER_SIZE;
+    }
+    if (c->rx_discard) {
+        c->rx_discarded += len;
+        size_t keep = c->rx_len < PROTO_HEADER_SIZE ? PROTO_HEADER_SIZE - c->rx_len : 0;
+        len = keep < len ? keep : len;
+    }
+    if (!len) return 0;
+    if (c->rx_len + len > c->rx_cap) {
+        size_t nc = c->rx_cap ? c->rx_cap : 4096;
+        while (nc < c->rx_len + len) nc *= 2;
+        if (nc > maxm + 4096) nc = maxm + 4096;
+        if (h->partial_held - c->rx_held + nc > total) {
+            atomic_fetch_add(&h->stats.disconnects_partial, 1);
+            rx_release(h, c);
+            lws_close_reason(wsi, LWS_CLOSE_STATUS_POLICY_VIOLATION,
+                             (unsigned char *)"unfinished messages over server.partial_total", 45);
+            return -1;
+        }
+        uint8_t *nb = realloc(c->rx, nc);
+        if (!nb) return -1;
+        c->rx = nb;
+        h->partial_held += nc - c->rx_held;
+        c->rx_held = c->rx_cap = nc;
+    }
+    memcpy(c->rx + c->rx_len, in, len);
+    c->rx_len += len;
+    return 0;
+}
+
+/* A whole message received: handled (srv_handle.c), then the buffer is
+ * cut back (between messages only a small one is kept, and it does not
+ * count as unfinished). */
+static void rx_complete(srv_hub *h, srv_client *c, struct lws *wsi, size_t maxm)
+{
+    c->rx_started = 0;
+    if (!lws_frame_is_binary(wsi)) {
+        srv_handle_text(c);
+    } else if (c->rx_discard) {
+        char why[200];
+        snprintf(why, sizeof why, "message of %zu bytes or more exceeds server.max_message (%zu bytes)",
+                 c->rx_discarded, maxm);
+        srv_client_send_error(c, c->rx, c->rx_len, OCEAN_ETOOBIG, why);
+    } else {
+        srv_handle(c, c->rx, c->rx_len);
+    }
+    c->rx_len = 0;
+    c->rx_discard = 0;
+    if (atomic_exchange(&c->want_write, 0) || c->closing) lws_callback_on_writable(wsi);
+    if (c->rx_cap > 4096) {
+        rx_release(h, c);
+    } else {
+        h->partial_held -= c->rx_held;
+        c->rx_held = 0;
+    }
+}
+
+/* Bytes of a client message: a frame lws's checks marked bad closes the
+ * connection (1002); a client over server.read_rate is paused (lws stops
+ * reading its socket, TCP pushes back) until its budget refills, so one
+ * client's flood cannot hold the service thread from the others. */
+static int on_receive(srv_hub *h, struct lws *wsi, srv_client *c, const void *in, size_t len)
+{
+    if (!c || c->closing) return 0;
+    ws_track *t = trk_of(lws_get_socket_fd(wsi));
+    if (t && t->owner == wsi && atomic_load(&t->bad) == 1) {
+        atomic_store(&t->bad, 3);              /* counted */
+        atomic_fetch_add(&h->stats.disconnects_protocol, 1);
+        lws_close_reason(wsi, LWS_CLOSE_STATUS_PROTOCOL_ERR, (unsigned char *)"protocol error (RFC 6455)", 25);
+        return -1;
+    }
+    pthread_mutex_lock(&h->lock);
+    srv_config cfg = h->settings.srv;
+    pthread_mutex_unlock(&h->lock);
+    rx_budget(c, &cfg, srv_now());
+    c->rx_tokens -= (double)len;
+    if (c->rx_tokens < 0 && !c->rx_paused) {
+        c->rx_paused = 1;
+        lws_rx_flow_control(wsi, 0);
+    }
+    if (lws_is_first_fragment(wsi)) {
+        c->rx_len = 0;
+        c->rx_discard = 0;
+        c->rx_discarded = 0;
+        c->rx_started = c->last_rx = srv_now();
+    }
+    if (rx_append(h, c, wsi, in, len, (size_t)cfg.max_message, cfg.partial_total)) return -1;
+    if (lws_is_final_fragment(wsi) && !lws_remaining_packet_payload(wsi))
+        rx_complete(h, c, wsi, (size_t)cfg.max_message);
+    return 0;
+}
+
+/* A connection gone: a violation lws answered itself (a byte rewritten by
+ * trk_feed) is a protocol disconnect too; its client leaves the hub. */
+static void on_closed(srv_hub *h, struct lws *wsi, ws_pss *pss)
+{
+    ws_track *t = trk_of(lws_get_socket_fd(wsi));
+    if (t && t->owner == wsi && atomic_load(&t->bad) == 2)
+        atomic_fetch_add(&h->stats.disconnects_protocol, 1);
+    trk_forget(wsi);
+    srv_client *c = pss->c;
+    if (!c) return;
+    rx_release(h, c);
+    pthread_mutex_lock(&h->lock);
+    int verbose = h->settings.srv.verbose;
+    pthread_mutex_unlock(&h->lock);
+    if (verbose) fprintf(stderr, "oceand: client %u closed\n", c->id);
+    pss->c = NULL;
+    srv_client_remove(c);
+}
+
 static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
                     size_t len)
 {
@@ -806,205 +1016,20 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
     case LWS_CALLBACK_WSI_DESTROY:
         trk_forget(wsi);
         break;
-    case LWS_CALLBACK_ESTABLISHED: {
-        srv_client *c;
-        if (srv_client_create(h, wsi, &c) != OCEAN_OK) return -1;
-        pss->c = c;
-        lws_get_peer_simple(wsi, c->peer, sizeof c->peer);
-        c->last_rx = srv_now();
-        pthread_mutex_lock(&h->lock);
-        int maxc = h->settings.srv.max_clients;
-        if (n->fd_clients > 0 && maxc > n->fd_clients) maxc = n->fd_clients;
-        int full = h->n_clients > maxc;
-        int stopping = h->stopping;
-        int record = h->settings.srv.record;
-        int record_clients = h->settings.srv.record_clients;
-        int record_files = h->settings.srv.record_max_files;
-        uint64_t record_bytes = h->settings.srv.record_max_bytes;
-        char dir[SRV_PATH_MAX], scene[OCEAN_SCENE_NAME_MAX];
-        snprintf(dir, sizeof dir, "%s", h->settings.srv.record_dir);
-        snprintf(scene, sizeof scene, "%s", h->settings.scene.name);
-        int verbose = h->settings.srv.verbose;
-        pthread_mutex_unlock(&h->lock);
-        if (past_time_limit(n)) { /* no HELLO can be sent: say why instead of nothing */
-            c->closing = 1;
-            snprintf(c->kill_why, sizeof c->kill_why, "%s", TIME_LIMIT_CLOSE);
-            srv_client_send_bye(c, PROTO_BYE_SHUTDOWN, TIME_LIMIT_BYE);
-            lws_callback_on_writable(wsi);
-            break;
-        }
-        if (full || stopping) {
-            if (full) atomic_fetch_add(&h->stats.refused_full, 1);
-            c->closing = 1;
-            snprintf(c->kill_why, sizeof c->kill_why, "%s",
-                     stopping ? "server shutting down" : "server full: server.max_clients connections in use");
-            srv_client_send_bye(c, stopping ? PROTO_BYE_SHUTDOWN : PROTO_BYE_SERVER_FULL, c->kill_why);
-            lws_callback_on_writable(wsi);
-            break;
-        }
-        char arg[16];
-        if (lws_get_urlarg_by_name(wsi, "record", arg, sizeof arg) &&
-            (strcmp(arg, "record=1") == 0 || strcmp(arg, "1") == 0)) {
-            /* A client's own request writes a file on the server's disk:
-             * only when the operator allows it, and within the quotas. */
-            if (record_clients) record = 1;
-            else if (verbose)
-                fprintf(stderr, "oceand: client %u: ?record=1 ignored (server.record_clients "
-                        "is off)\n", c->id);
-        }
-        /* Each refusal is logged once a run: one line per connection let
-         * any client that connects fill the log (300 connections, 299
-         * lines) */
-        if (record && atomic_load(&h->record_files) >= (uint64_t)record_files) {
-            if (!(h->record_said & 1))
-                fprintf(stderr, "oceand: client %u: not recording: %d recordings opened this run "
-                        "(server.record_max_files); no later client is recorded (said once)\n", c->id,
-                        record_files);
-            h->record_said |= 1;
-            record = 0;
-        }
-        if (record && atomic_load(&h->record_bytes) >= record_bytes) {
-            if (!(h->record_said & 2))
-                fprintf(stderr, "oceand: client %u: not recording: server.record_max_bytes written this "
-                        "run; no later client is recorded (said once)\n", c->id);
-            h->record_said |= 2;
-            record = 0;
-        }
-        if (record) {
-            char path[1100], msg[300];
-            if (srv_record_open(dir, c->id, scene, &c->rec, path, sizeof path, msg, sizeof msg) != OCEAN_OK) {
-                if (!(h->record_said & 4))
-                    fprintf(stderr, "oceand: client %u: not recording: %s (said once a run)\n", c->id, msg);
-                h->record_said |= 4;
-            } else {
-                atomic_fetch_add(&h->record_files, 1);
-                srv_record_set_quota(c->rec, &h->record_bytes, record_bytes);
-                if (verbose) fprintf(stderr, "oceand: client %u: recording to %s\n", c->id, path);
-            }
-        }
-        if (verbose) fprintf(stderr, "oceand: client %u connected\n", c->id);
-        srv_client_send_hello(c);
-        lws_callback_on_writable(wsi);
-        break;
-    }
-    case LWS_CALLBACK_RECEIVE: {
-        srv_client *c = pss->c;
-        if (!c || c->closing) break;
-        ws_track *t = trk_of(lws_get_socket_fd(wsi));
-        if (t && t->owner == wsi && atomic_load(&t->bad) == 1) {
-            atomic_store(&t->bad, 3);              /* counted */
-            atomic_fetch_add(&h->stats.disconnects_protocol, 1);
-            lws_close_reason(wsi, LWS_CLOSE_STATUS_PROTOCOL_ERR, (unsigned char *)"protocol error (RFC 6455)", 25);
-            return -1;
-        }
-        pthread_mutex_lock(&h->lock);
-        srv_config cfg = h->settings.srv;
-        pthread_mutex_unlock(&h->lock);
-        size_t maxm = (size_t)cfg.max_message;
-        uint64_t total = cfg.partial_total;
-        /* Fair reading: a client that sends faster than server.read_rate
-         * is paused (lws stops reading its socket; TCP pushes back) until
-         * its budget refills, so the decoding of one client's flood of
-         * large messages cannot hold the service thread from the others. */
-        rx_budget(c, &cfg, srv_now());
-        c->rx_tokens -= (double)len;
-        if (c->rx_tokens < 0 && !c->rx_paused) {
-            c->rx_paused = 1;
-            lws_rx_flow_control(wsi, 0);
-        }
-        if (lws_is_first_fragment(wsi)) {
-            c->rx_len = 0;
-            c->rx_discard = 0;
-            c->rx_discarded = 0;
-            c->rx_started = c->last_rx = srv_now();
-        }
-        if (!c->rx_discard && c->rx_len + len > maxm) {
-            c->rx_discard = 1;
-            c->rx_discarded = c->rx_len;
-            /* keep the header for the ERROR's offending type and seq */
-            if (c->rx_len > PROTO_HEADER_SIZE) c->rx_len = PROTO_HEADER_SIZE;
-        }
-        if (c->rx_discard) {
-            c->rx_discarded += len;
-            size_t keep = c->rx_len < PROTO_HEADER_SIZE ? PROTO_HEADER_SIZE - c->rx_len : 0;
-            if (keep > len) keep = len;
-            len = keep;
-        }
-        if (len) {
-            if (c->rx_len + len > c->rx_cap) {
-                size_t nc = c->rx_cap ? c->rx_cap : 4096;
-                while (nc < c->rx_len + len) nc *= 2;
-                if (nc > maxm + 4096) nc = maxm + 4096;
-                /* Unfinished messages of every client together stay under
-                 * server.partial_total: whoever would pass it goes. */
-                if (h->partial_held - c->rx_held + nc > total) {
-                    atomic_fetch_add(&h->stats.disconnects_partial, 1);
-                    rx_release(h, c);
-                    lws_close_reason(wsi, LWS_CLOSE_STATUS_POLICY_VIOLATION,
-                                     (unsigned char *)"unfinished messages over server.partial_total", 45);
-                    return -1;
-                }
-                uint8_t *nb = realloc(c->rx, nc);
-                if (!nb) return -1;
-                c->rx = nb;
-                h->partial_held += nc - c->rx_held;
-                c->rx_held = c->rx_cap = nc;
-            }
-            memcpy(c->rx + c->rx_len, in, len);
-            c->rx_len += len;
-        }
-        if (!lws_is_final_fragment(wsi) || lws_remaining_packet_payload(wsi)) break;
-        c->rx_started = 0;
-        if (!lws_frame_is_binary(wsi)) {
-            srv_handle_text(c);
-        } else if (c->rx_discard) {
-            char why[200];
-            snprintf(why, sizeof why, "message of %zu bytes or more exceeds server.max_message (%zu bytes)",
-                     c->rx_discarded, maxm);
-            srv_client_send_error(c, c->rx, c->rx_len, OCEAN_ETOOBIG, why);
-        } else {
-            srv_handle(c, c->rx, c->rx_len);
-        }
-        c->rx_len = 0;
-        c->rx_discard = 0;
-        if (atomic_exchange(&c->want_write, 0) || c->closing) lws_callback_on_writable(wsi);
-        /* Between messages only a small buffer is kept, and it does not
-         * count as unfinished: server.partial_total bounds what clients
-         * hold mid-message, not what they once sent. */
-        if (c->rx_cap > 4096) {
-            rx_release(h, c);
-        } else {
-            h->partial_held -= c->rx_held;
-            c->rx_held = 0;
-        }
-        break;
-    }
+    case LWS_CALLBACK_ESTABLISHED:
+        return on_established(n, wsi, pss);
+    case LWS_CALLBACK_RECEIVE:
+        return on_receive(h, wsi, pss->c, in, len);
     case LWS_CALLBACK_SERVER_WRITEABLE: {
-        srv_client *c = pss->c;
-        if (!c) break;
+        if (!pss->c) break;
         int close_now;
-        send_next(n, c, wsi, &close_now);
+        send_next(n, pss->c, wsi, &close_now);
         if (close_now) return -1;
         break;
     }
-    case LWS_CALLBACK_CLOSED: {
-        /* a violation lws answered itself (a byte rewritten by trk_feed)
-         * is a protocol disconnect too */
-        ws_track *t = trk_of(lws_get_socket_fd(wsi));
-        if (t && t->owner == wsi && atomic_load(&t->bad) == 2)
-            atomic_fetch_add(&h->stats.disconnects_protocol, 1);
-        trk_forget(wsi);
-        srv_client *c = pss->c;
-        if (!c) break;
-        rx_release(h, c);
-        pthread_mutex_lock(&h->lock);
-        int verbose = h->settings.srv.verbose;
-        pthread_mutex_unlock(&h->lock);
-        if (verbose) fprintf(stderr, "oceand: client %u closed\n", c->id);
-        pss->c = NULL;
-        srv_client_remove(c);
+    case LWS_CALLBACK_CLOSED:
+        on_closed(h, wsi, pss);
         break;
-    }
     default:
         break;
     }

@@ -723,6 +723,293 @@ static ocean_result peek_frame(const uint8_t *raw, size_t len, const proto_limit
 
 static void timeline_add(oc_client *c, double eff, const proto_sea *sea);
 
+/* One decoded server message, handled under the loop's lock by its type's
+ * handler (rx_handlers). */
+typedef struct rx_ctx {
+    oc_client *c;
+    proto_msg *m;
+    frame_priv *fr;            /* FRAME: built from m (NULL: it did not build) */
+    int peeked;                /* FRAME: fixed fields only (header_only) */
+    double now, sim_time;
+    ocean_result mesh_res;     /* FRAME has_mesh 2: its positions' decoding */
+    const char *mesh_why;
+    uint32_t **new_refs;       /* MESH_TOPOLOGY: its qz prediction references */
+    notify *nt;                /* what to tell the callbacks after the lock */
+} rx_ctx;
+
+static void rx_hello(rx_ctx *x)
+{
+    oc_client *c = x->c;
+    c->hello = x->m->u.hello;
+    c->have_hello = 1;
+    c->sea = x->m->u.hello.sea;
+    c->sea_time = x->m->hdr.sim_time;
+    c->tl_n = 0;
+    timeline_add(c, -INFINITY, &x->m->u.hello.sea);
+    if (c->state == OC_CONNECTING)
+        c->state = OC_READY;
+}
+
+/* Frames the server skipped between this one and the last (the tick
+ * counter against the frame rate). */
+static void rx_frame_gap(oc_client *c, const frame_priv *fr)
+{
+    if (c->have_tick && c->have_hello && c->frame_rate > 0) {
+        uint32_t d = fr->pub.info.tick - c->last_tick;
+        double step = c->hello.tick_rate_hz / c->frame_rate;
+        if (step < 1)
+            step = 1;
+        step = floor(step + 0.5);
+        double missed = floor((double)d / step + 0.5) - 1;
+        if (missed > 0 && d < (1u << 30))
+            c->st.frames_gap += (uint64_t)missed;
+    }
+    c->last_tick = fr->pub.info.tick;
+    c->have_tick = 1;
+}
+
+/* The frame to the callback, or into the queue (the oldest dropped when full). */
+static void rx_frame_deliver(oc_client *c, frame_priv *fr, notify *nt)
+{
+    if (c->opt.cb.on_frame) {
+        nt->call_frame = 1;
+        nt->frame = fr;
+        return;
+    }
+    if (c->fq_len == c->fq_cap) {
+        frame_priv *old = c->fq[c->fq_head];
+        c->fq_head = (c->fq_head + 1) % c->fq_cap;
+        c->fq_len--;
+        c->st.frames_dropped++;
+        oc_frame_free(&old->pub);
+    }
+    c->fq[(c->fq_head + c->fq_len) % c->fq_cap] = fr;
+    c->fq_len++;
+}
+
+static void rx_frame(rx_ctx *x)
+{
+    oc_client *c = x->c;
+    frame_priv *fr = x->fr;
+    if (!fr) {
+        c->st.decode_errors++;
+        return;
+    }
+    c->last_frame_sim = x->sim_time;
+    fr->pub.index = c->frame_index++;
+    fr->pub.latency_ms = 1e3 * (x->now - fr->pub.hdr.sim_time - c->min_offset);
+    for (unsigned i = 0; fr->pub.tiles && i < fr->pub.info.tile_count; i++)
+        if (fr->pub.tiles[i].decode_result != OCEAN_OK)
+            c->st.decode_errors++;
+    if (!x->peeked && c->opt.decode_tiles && fr->pub.info.layout == PROTO_LAYOUT_CASCADE &&
+        fr->pub.view_result != OCEAN_OK) {
+        c->st.decode_errors++;
+        set_local_error(c, fr->pub.view_result, "layout-1 FRAME tick %u: %s", fr->pub.info.tick,
+                        fr->pub.view_error);
+    }
+    if (fr->pub.info.camera_seq != PROTO_NO_CAMERA)
+        for (int i = 0; i < CAM_RING; i++)
+            if (c->cams[i].wall > 0 && c->cams[i].seq == fr->pub.info.camera_seq) {
+                fr->pub.camera_rtt_ms = 1e3 * (x->now - c->cams[i].wall);
+                break;
+            }
+    rx_frame_gap(c, fr);
+    c->st.frames_rx++;
+    uint32_t mesh_id = fr->pub.info.layout == PROTO_LAYOUT_CASCADE ? fr->pub.info.placement.mesh_id
+                                                                   : fr->pub.info.mesh.mesh_id;
+    if (!x->peeked && fr->pub.info.has_mesh && c->topo && c->topo->pub.mesh_id == mesh_id) {
+        fr->topo = c->topo;
+        atomic_fetch_add(&c->topo->refs, 1);
+        fr->pub.topology = &c->topo->pub;
+    }
+    if (x->mesh_res != OCEAN_OK) {
+        c->st.decode_errors++;
+        set_local_error(c, x->mesh_res, "FRAME tick %u: mesh positions: %s", fr->pub.info.tick, x->mesh_why);
+    }
+    rx_frame_deliver(c, fr, x->nt);
+}
+
+static void rx_topology(rx_ctx *x)
+{
+    oc_client *c = x->c;
+    topo_ref *t = calloc(1, sizeof *t);
+    if (!t) {
+        c->st.decode_errors++;
+        return;
+    }
+    atomic_init(&t->refs, 1);
+    t->msg = *x->m;
+    memset(x->m, 0, sizeof *x->m);
+    const proto_mesh_topology *pt = &t->msg.u.topology;
+    t->pub.mesh_id = pt->mesh_id;
+    t->pub.mesh_kind = pt->mesh_kind;
+    t->pub.lod_levels = pt->lod_levels;
+    t->pub.vertex_count = pt->vertex_count;
+    t->pub.index_count = pt->index_count;
+    t->pub.indices = pt->indices;
+    t->pub.morph = pt->morph;
+    t->pub.level = pt->level;
+    t->pub.flags = pt->flags;
+    t->pub.flat = pt->flat;
+    t->pub.zones = pt->zones;
+    t->qz_refs = *x->new_refs;
+    *x->new_refs = NULL;
+    topo_unref(c->topo);
+    c->topo = t;
+}
+
+/* The pending query that `matches` names done with res (and, for an
+ * asynchronous one, out of the list, to be answered after the lock). */
+static pending_query *query_done(oc_client *c, uint32_t id, uint32_t seq, int by_seq, notify *nt)
+{
+    for (pending_query **pp = &c->queries; *pp; pp = &(*pp)->next) {
+        pending_query *q = *pp;
+        if ((by_seq ? q->seq != seq : q->id != id) || q->done)
+            continue;
+        q->done = 1;
+        if (!q->blocking) {
+            *pp = q->next;
+            nt->q = q;
+        }
+        return q;
+    }
+    return NULL;
+}
+
+static void rx_query_result(rx_ctx *x)
+{
+    const proto_query_result *qr = &x->m->u.result;
+    pending_query *q = query_done(x->c, qr->query_id, 0, 0, x->nt);
+    if (!q)
+        return;
+    q->result.query_id = qr->query_id;
+    q->result.t = qr->t;
+    q->result.count = qr->count;
+    q->result.samples = malloc(sizeof *qr->samples * (qr->count ? qr->count : 1));
+    if (!q->result.samples) {
+        q->res = OCEAN_ENOMEM;
+        q->result.count = 0;
+    } else {
+        memcpy(q->result.samples, qr->samples, sizeof *qr->samples * qr->count);
+        q->res = OCEAN_OK;
+    }
+}
+
+static void rx_sea_state(rx_ctx *x)
+{
+    oc_client *c = x->c;
+    const proto_sea_state *ss = &x->m->u.sea_state;
+    if (ss->op != PROTO_SEA_ANNOUNCE)
+        return;
+    c->sea = ss->sea;
+    c->sea_time = ss->effective_time;
+    timeline_add(c, ss->effective_time, &ss->sea);
+    /* Every client sees every admin's announces: only the one of this
+     * client's own SET answers it (its sea, entered at max(requested,
+     * now), PROTOCOL.md SEA_STATE). */
+    if (c->sea_wait && !c->sea_done && sea_same(&ss->sea, &c->sea_want) && ss->effective_time >= c->sea_want_t) {
+        c->sea_done = 1;
+        c->sea_res = OCEAN_OK;
+    }
+    x->nt->call_sea = 1;
+}
+
+static void rx_error(rx_ctx *x)
+{
+    oc_client *c = x->c;
+    const proto_error *e = &x->m->u.error;
+    c->st.errors_rx++;
+    c->last_err = e->code < OCEAN_RESULT_COUNT_ && e->code ? (ocean_result)e->code : OCEAN_EINVAL;
+    snprintf(c->last_err_msg, sizeof c->last_err_msg, "server ERROR %u (%s) about %s seq %u: %s", e->code,
+             ocean_strerror((ocean_result)e->code), proto_type_name(e->offending_type), e->offending_seq,
+             e->message);
+    if (e->offending_type == PROTO_QUERY) {
+        pending_query *q = query_done(c, 0, e->offending_seq, 1, x->nt);
+        if (q)
+            q->res = c->last_err;
+    }
+    if (e->offending_type == PROTO_SEA_STATE && c->sea_wait && !c->sea_done && e->offending_seq == c->sea_seq) {
+        c->sea_done = 1;
+        c->sea_res = c->last_err;
+    }
+    x->nt->call_error = 1;
+}
+
+static void rx_bye(rx_ctx *x)
+{
+    oc_client *c = x->c;
+    const proto_bye *b = &x->m->u.bye;
+    c->bye_reason = b->reason;
+    snprintf(x->nt->close_msg, sizeof x->nt->close_msg, "%s", b->message);
+    set_local_error(c, OCEAN_EIO, "server said BYE (reason %u): %s", b->reason, b->message);
+    snprintf(c->close_msg, sizeof c->close_msg, "%s", c->last_err_msg);
+    c->close_recorded = 1;
+    c->bye_received = 1;
+    snprintf(c->bye_msg, sizeof c->bye_msg, "%s", b->message);
+}
+
+/* What the client does with each server message (the others are ignored). */
+static const struct {
+    unsigned type;
+    void (*handle)(rx_ctx *x);
+} rx_handlers[] = {
+    {PROTO_HELLO, rx_hello},         {PROTO_FRAME, rx_frame}, {PROTO_MESH_TOPOLOGY, rx_topology},
+    {PROTO_QUERY_RESULT, rx_query_result}, {PROTO_SEA_STATE, rx_sea_state}, {PROTO_ERROR, rx_error},
+    {PROTO_BYE, rx_bye},
+};
+
+/* MESH_VERTICES_QZ work done outside the loop's lock: a layout-0
+ * topology's prediction references, made once when it arrives
+ * (*new_refs); a has_mesh 2 frame's positions, decoded with the current
+ * topology (held by a reference meanwhile), so callers see floats. */
+static ocean_result rx_mesh_work(oc_client *c, const proto_msg *m, unsigned type, frame_priv *fr, int peeked,
+                                 uint32_t **new_refs, char *why, size_t whylen)
+{
+    if (type == PROTO_MESH_TOPOLOGY && !(m->u.topology.flags & PROTO_TOPO_FLAT)) {
+        const proto_mesh_topology *pt = &m->u.topology;
+        *new_refs = malloc(3 * sizeof **new_refs * (size_t)pt->vertex_count);
+        if (*new_refs && proto_mesh_qz_refs(pt->indices, pt->index_count, pt->vertex_count, *new_refs) != OCEAN_OK) {
+            free(*new_refs);
+            *new_refs = NULL;
+        }
+    }
+    if (!fr || peeked || fr->pub.info.has_mesh != 2)
+        return OCEAN_OK;
+    oc_loop *l = c->loop;
+    pthread_mutex_lock(&l->mu);
+    topo_ref *tr = c->topo && c->topo->pub.mesh_id == fr->pub.info.mesh.mesh_id ? c->topo : NULL;
+    if (tr)
+        atomic_fetch_add(&tr->refs, 1);
+    pthread_mutex_unlock(&l->mu);
+    ocean_result r = OCEAN_ESTATE;
+    snprintf(why, whylen, "no MESH_TOPOLOGY for the frame's mesh %u", fr->pub.info.mesh.mesh_id);
+    if (tr && tr->qz_refs)
+        r = frame_mesh_qz(fr, &tr->pub, tr->qz_refs, why, whylen);
+    topo_unref(tr);
+    return r;
+}
+
+/* The callbacks a message calls for, after the loop's lock. */
+static void rx_notify(oc_client *c, ocean_result res, const proto_msg *m, notify *nt)
+{
+    if (res == OCEAN_OK) {
+        if (nt->call_error && c->opt.cb.on_error)
+            c->opt.cb.on_error(c->opt.cb.user, c, &m->u.error);
+        if (nt->call_sea && c->opt.cb.on_sea_state)
+            c->opt.cb.on_sea_state(c->opt.cb.user, c, &m->u.sea_state);
+    }
+    if (nt->call_frame) {
+        c->opt.cb.on_frame(c->opt.cb.user, c, &nt->frame->pub);
+        oc_frame_free(&nt->frame->pub);
+    }
+    if (nt->q) {
+        if (nt->q->fn)
+            nt->q->fn(nt->q->user, c, nt->q->res, nt->q->res == OCEAN_OK ? &nt->q->result : NULL);
+        oc_query_result_free(&nt->q->result);
+        free(nt->q);
+    }
+}
+
 static void handle_message(oc_client *c, uint8_t *raw, size_t len)
 {
     oc_loop *l = c->loop;
@@ -740,7 +1027,6 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
     } else {
         res = proto_decode_limited(raw, len, &lim, &m, err, sizeof err);
     }
-
     pthread_mutex_lock(&l->mu);
     c->busy++;
     pthread_mutex_unlock(&l->mu);
@@ -749,44 +1035,15 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
 
     notify nt;
     memset(&nt, 0, sizeof nt);
-    pending_query *async_fail = NULL;
     frame_priv *fr = NULL;
-    int raw_taken = 0;
-
     unsigned type = res == OCEAN_OK ? m.hdr.type : 0;
     double sim_time = m.hdr.sim_time;
-    if (type == PROTO_FRAME) {
+    if (type == PROTO_FRAME)
         fr = build_frame(c->opt.decode_tiles && !peeked, &m, raw, len, now);   /* moves m into the frame */
-        if (fr)
-            raw_taken = 1;
-    }
-    /* MESH_VERTICES_QZ work outside the loop's lock: a layout-0 topology's
-     * prediction references, made once when it arrives; a has_mesh 2
-     * frame's positions, decoded with the current topology (held by a
-     * reference meanwhile), so callers see floats */
+    int raw_taken = fr != NULL;
     uint32_t *new_refs = NULL;
-    if (type == PROTO_MESH_TOPOLOGY && !(m.u.topology.flags & PROTO_TOPO_FLAT)) {
-        const proto_mesh_topology *pt = &m.u.topology;
-        new_refs = malloc(3 * sizeof *new_refs * (size_t)pt->vertex_count);
-        if (new_refs && proto_mesh_qz_refs(pt->indices, pt->index_count, pt->vertex_count, new_refs) != OCEAN_OK) {
-            free(new_refs);
-            new_refs = NULL;
-        }
-    }
-    ocean_result mesh_res = OCEAN_OK;
     char mesh_why[200] = "";
-    if (fr && !peeked && fr->pub.info.has_mesh == 2) {
-        pthread_mutex_lock(&l->mu);
-        topo_ref *tr = c->topo && c->topo->pub.mesh_id == fr->pub.info.mesh.mesh_id ? c->topo : NULL;
-        if (tr)
-            atomic_fetch_add(&tr->refs, 1);
-        pthread_mutex_unlock(&l->mu);
-        mesh_res = OCEAN_ESTATE;
-        snprintf(mesh_why, sizeof mesh_why, "no MESH_TOPOLOGY for the frame's mesh %u", fr->pub.info.mesh.mesh_id);
-        if (tr && tr->qz_refs)
-            mesh_res = frame_mesh_qz(fr, &tr->pub, tr->qz_refs, mesh_why, sizeof mesh_why);
-        topo_unref(tr);
-    }
+    ocean_result mesh_res = rx_mesh_work(c, &m, type, fr, peeked, &new_refs, mesh_why, sizeof mesh_why);
 
     pthread_mutex_lock(&l->mu);
     c->st.messages_rx++;
@@ -802,213 +1059,16 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
             c->have_offset = 1;
         }
         c->last_sim = sim_time;
-        switch (type) {
-        case PROTO_HELLO:
-            c->hello = m.u.hello;
-            c->have_hello = 1;
-            c->sea = m.u.hello.sea;
-            c->sea_time = m.hdr.sim_time;
-            c->tl_n = 0;
-            timeline_add(c, -INFINITY, &m.u.hello.sea);
-            if (c->state == OC_CONNECTING)
-                c->state = OC_READY;
-            break;
-        case PROTO_FRAME:
-            if (!fr) {
-                c->st.decode_errors++;
-                break;
-            }
-            c->last_frame_sim = sim_time;
-            fr->pub.index = c->frame_index++;
-            fr->pub.latency_ms = 1e3 * (now - fr->pub.hdr.sim_time - c->min_offset);
-            for (unsigned i = 0; fr->pub.tiles && i < fr->pub.info.tile_count; i++)
-                if (fr->pub.tiles[i].decode_result != OCEAN_OK)
-                    c->st.decode_errors++;
-            if (!peeked && c->opt.decode_tiles && fr->pub.info.layout == PROTO_LAYOUT_CASCADE &&
-                fr->pub.view_result != OCEAN_OK) {
-                c->st.decode_errors++;
-                set_local_error(c, fr->pub.view_result, "layout-1 FRAME tick %u: %s", fr->pub.info.tick,
-                                fr->pub.view_error);
-            }
-            if (fr->pub.info.camera_seq != PROTO_NO_CAMERA)
-                for (int i = 0; i < CAM_RING; i++)
-                    if (c->cams[i].wall > 0 && c->cams[i].seq == fr->pub.info.camera_seq) {
-                        fr->pub.camera_rtt_ms = 1e3 * (now - c->cams[i].wall);
-                        break;
-                    }
-            if (c->have_tick && c->have_hello && c->frame_rate > 0) {
-                uint32_t d = fr->pub.info.tick - c->last_tick;
-                double step = c->hello.tick_rate_hz / c->frame_rate;
-                if (step < 1)
-                    step = 1;
-                step = floor(step + 0.5);
-                double missed = floor((double)d / step + 0.5) - 1;
-                if (missed > 0 && d < (1u << 30))
-                    c->st.frames_gap += (uint64_t)missed;
-            }
-            c->last_tick = fr->pub.info.tick;
-            c->have_tick = 1;
-            c->st.frames_rx++;
-            if (!peeked && fr->pub.info.has_mesh && c->topo &&
-                c->topo->pub.mesh_id == (fr->pub.info.layout == PROTO_LAYOUT_CASCADE
-                                             ? fr->pub.info.placement.mesh_id
-                                             : fr->pub.info.mesh.mesh_id)) {
-                fr->topo = c->topo;
-                atomic_fetch_add(&c->topo->refs, 1);
-                fr->pub.topology = &c->topo->pub;
-            }
-            if (mesh_res != OCEAN_OK) {
-                c->st.decode_errors++;
-                set_local_error(c, mesh_res, "FRAME tick %u: mesh positions: %s", fr->pub.info.tick, mesh_why);
-            }
-            if (c->opt.cb.on_frame) {
-                nt.call_frame = 1;
-                nt.frame = fr;
-            } else {
-                if (c->fq_len == c->fq_cap) {
-                    frame_priv *old = c->fq[c->fq_head];
-                    c->fq_head = (c->fq_head + 1) % c->fq_cap;
-                    c->fq_len--;
-                    c->st.frames_dropped++;
-                    oc_frame_free(&old->pub);
-                }
-                c->fq[(c->fq_head + c->fq_len) % c->fq_cap] = fr;
-                c->fq_len++;
-            }
-            break;
-        case PROTO_MESH_TOPOLOGY: {
-            topo_ref *t = calloc(1, sizeof *t);
-            if (!t) {
-                c->st.decode_errors++;
-                break;
-            }
-            atomic_init(&t->refs, 1);
-            t->msg = m;
-            memset(&m, 0, sizeof m);
-            const proto_mesh_topology *pt = &t->msg.u.topology;
-            t->pub.mesh_id = pt->mesh_id;
-            t->pub.mesh_kind = pt->mesh_kind;
-            t->pub.lod_levels = pt->lod_levels;
-            t->pub.vertex_count = pt->vertex_count;
-            t->pub.index_count = pt->index_count;
-            t->pub.indices = pt->indices;
-            t->pub.morph = pt->morph;
-            t->pub.level = pt->level;
-            t->pub.flags = pt->flags;
-            t->pub.flat = pt->flat;
-            t->pub.zones = pt->zones;
-            t->qz_refs = new_refs;
-            new_refs = NULL;
-            topo_unref(c->topo);
-            c->topo = t;
-            break;
-        }
-        case PROTO_QUERY_RESULT: {
-            const proto_query_result *qr = &m.u.result;
-            for (pending_query **pp = &c->queries; *pp; pp = &(*pp)->next) {
-                pending_query *q = *pp;
-                if (q->id != qr->query_id || q->done)
-                    continue;
-                q->result.query_id = qr->query_id;
-                q->result.t = qr->t;
-                q->result.count = qr->count;
-                q->result.samples = malloc(sizeof *qr->samples * (qr->count ? qr->count : 1));
-                if (!q->result.samples) {
-                    q->res = OCEAN_ENOMEM;
-                    q->result.count = 0;
-                } else {
-                    memcpy(q->result.samples, qr->samples, sizeof *qr->samples * qr->count);
-                    q->res = OCEAN_OK;
-                }
-                q->done = 1;
-                if (!q->blocking) {
-                    *pp = q->next;
-                    nt.q = q;
-                }
-                break;
-            }
-            break;
-        }
-        case PROTO_SEA_STATE:
-            if (m.u.sea_state.op == PROTO_SEA_ANNOUNCE) {
-                c->sea = m.u.sea_state.sea;
-                c->sea_time = m.u.sea_state.effective_time;
-                timeline_add(c, m.u.sea_state.effective_time, &m.u.sea_state.sea);
-                /* Every client sees every admin's announces: only the one
-                 * of this client's own SET answers it (its sea, entered at
-                 * max(requested, now), PROTOCOL.md SEA_STATE). */
-                if (c->sea_wait && !c->sea_done && sea_same(&m.u.sea_state.sea, &c->sea_want) &&
-                    m.u.sea_state.effective_time >= c->sea_want_t) {
-                    c->sea_done = 1;
-                    c->sea_res = OCEAN_OK;
-                }
-                nt.call_sea = 1;
-            }
-            break;
-        case PROTO_ERROR: {
-            const proto_error *e = &m.u.error;
-            c->st.errors_rx++;
-            c->last_err = e->code < OCEAN_RESULT_COUNT_ && e->code ? (ocean_result)e->code : OCEAN_EINVAL;
-            snprintf(c->last_err_msg, sizeof c->last_err_msg, "server ERROR %u (%s) about %s seq %u: %s",
-                     e->code, ocean_strerror((ocean_result)e->code), proto_type_name(e->offending_type),
-                     e->offending_seq, e->message);
-            if (e->offending_type == PROTO_QUERY) {
-                for (pending_query **pp = &c->queries; *pp; pp = &(*pp)->next) {
-                    pending_query *q = *pp;
-                    if (q->seq != e->offending_seq || q->done)
-                        continue;
-                    q->done = 1;
-                    q->res = c->last_err;
-                    if (!q->blocking) {
-                        *pp = q->next;
-                        nt.q = q;
-                    }
-                    break;
-                }
-            }
-            if (e->offending_type == PROTO_SEA_STATE && c->sea_wait && !c->sea_done &&
-                e->offending_seq == c->sea_seq) {
-                c->sea_done = 1;
-                c->sea_res = c->last_err;
-            }
-            nt.call_error = 1;
-            break;
-        }
-        case PROTO_BYE:
-            c->bye_reason = m.u.bye.reason;
-            snprintf(nt.close_msg, sizeof nt.close_msg, "%s", m.u.bye.message);
-            set_local_error(c, OCEAN_EIO, "server said BYE (reason %u): %s", m.u.bye.reason,
-                            m.u.bye.message);
-            snprintf(c->close_msg, sizeof c->close_msg, "%s", c->last_err_msg);
-            c->close_recorded = 1;
-            c->bye_received = 1;
-            snprintf(c->bye_msg, sizeof c->bye_msg, "%s", m.u.bye.message);
-            break;
-        default:
-            break;
-        }
+        rx_ctx x = {.c = c, .m = &m, .fr = fr, .peeked = peeked, .now = now, .sim_time = sim_time,
+                    .mesh_res = mesh_res, .mesh_why = mesh_why, .new_refs = &new_refs, .nt = &nt};
+        for (size_t k = 0; k < sizeof rx_handlers / sizeof rx_handlers[0]; k++)
+            if (rx_handlers[k].type == type)
+                rx_handlers[k].handle(&x);
     }
     pthread_cond_broadcast(&l->cv);
     pthread_mutex_unlock(&l->mu);
     free(new_refs);   /* not taken: the topology could not be kept */
-
-    if (res == OCEAN_OK) {
-        if (nt.call_error && c->opt.cb.on_error)
-            c->opt.cb.on_error(c->opt.cb.user, c, &m.u.error);
-        if (nt.call_sea && c->opt.cb.on_sea_state)
-            c->opt.cb.on_sea_state(c->opt.cb.user, c, &m.u.sea_state);
-    }
-    if (nt.call_frame) {
-        c->opt.cb.on_frame(c->opt.cb.user, c, &nt.frame->pub);
-        oc_frame_free(&nt.frame->pub);
-    }
-    if (nt.q) {
-        if (nt.q->fn)
-            nt.q->fn(nt.q->user, c, nt.q->res, nt.q->res == OCEAN_OK ? &nt.q->result : NULL);
-        oc_query_result_free(&nt.q->result);
-        free(nt.q);
-    }
-    run_async_failures(c, async_fail);
+    rx_notify(c, res, &m, &nt);
     proto_msg_free(&m);
     if (!raw_taken)
         free(raw);
