@@ -1052,6 +1052,197 @@ static void release_idle(srv_sim *s)
     publish_cache_size(s);
 }
 
+/* Waits (hub.lock held, and still held on return) until a tick is due:
+ * a live frame (*live_due), background work, a settings or sea change, or
+ * a sea change's effective time; *idle when nobody is subscribed and no
+ * work is queued (the caches can go).  0 when the thread is to stop. */
+static int wait_for_work(srv_sim *s, double next_tick_wall, int *live_due, int *idle)
+{
+    srv_hub *h = s->hub;
+    double rate_w = s->set.srv.tick_rate;
+    *live_due = *idle = 0;
+    while (!s->stop) {
+        double now = srv_now();
+        double simt = srv_hub_sim_time(h);
+        int pending = h->sea_gen != s->sea_gen || h->settings_gen != s->set_gen;
+        /* queries and replay frames run in bounded slices, at most one
+         * turn per tick period (srv_work.c, server.replay_per_tick) */
+        int bg = srv_work_busy(s->work);
+        for (srv_client *c = h->clients; c && !bg; c = c->next)
+            if (!c->closed && (c->queries || c->replay)) bg = 1;
+        if (bg && now >= s->work_due) pending = 1;
+        if (h->n_subscribed > 0 && now >= next_tick_wall) *live_due = 1;
+        /* a change is due at the first tick at or after its effective time */
+        double due_t = h->n_sea_pending ? ceil(h->sea_pending[0].effective_time * rate_w) / rate_w : INFINITY;
+        if (*live_due || pending || simt >= due_t) return 1;
+        if (h->n_subscribed == 0 && !bg && s->holding) {
+            *idle = 1;
+            return 1;
+        }
+        struct timespec ts;
+        double until = h->n_subscribed > 0 ? next_tick_wall : now + 1.0;
+        if (bg && s->work_due < until) until = s->work_due;
+        if (now + (due_t - simt) < until) until = now + (due_t - simt);
+        if (h->n_subscribed == 0) atomic_fetch_add(&h->stats.idle_ticks, 1);
+        ts_from(until, &ts);
+        pthread_cond_timedwait(&h->wake, &h->lock, &ts);
+    }
+    return 0;
+}
+
+/* One more job in w for client c (NULL when memory ran out). */
+static job *add_job(work *w, srv_client *c)
+{
+    if (!grow((void **)&w->jobs, &w->capjobs, w->njobs + 1, sizeof *w->jobs)) return NULL;
+    job *j = &w->jobs[w->njobs++];
+    memset(j, 0, sizeof *j);
+    j->c = c;
+    return j;
+}
+
+/* A replay client's cameras, at most server.replay_per_tick a tick; a
+ * changed subscription without a camera still rebuilds the mesh. */
+static void take_replay(srv_sim *s, work *w, srv_client *c, int changed)
+{
+    int taken = 0;
+    while (c->replay && w->njobs < 4096 && taken++ < s->set.srv.replay_per_tick) {
+        job *j = add_job(w, c);
+        if (!j) break;
+        srv_replay_cam *rc = c->replay;
+        c->replay = rc->next;
+        if (!c->replay) c->replay_tail = NULL;
+        c->n_replay--;
+        j->t = rc->cam.render_time;
+        j->cam = rc->cam;
+        j->cam_seq = rc->seq;
+        j->replay = 1;
+        j->sub_changed = changed;
+        changed = 0;
+        free(rc);
+    }
+    job *j;
+    if (changed && (j = add_job(w, c))) {
+        j->sub_changed = 1;
+        j->replay = -1; /* no frame */
+    }
+}
+
+/* Under hub.lock: every subscribed client's requests of tick t, copied
+ * into w (its subscription when changed, its camera, its replay
+ * cameras). */
+static void snapshot_jobs(srv_sim *s, work *w, double t, int64_t tick_no, int live_due)
+{
+    w->ncl = w->njobs = 0;
+    for (srv_client *c = s->hub->clients; c; c = c->next) {
+        if (c->closed) continue;
+        srv_work_take(s->work, c, t);
+        if (!c->subscribed) continue;
+        if (!grow((void **)&w->cl, &w->capcl, w->ncl + 1, sizeof *w->cl)) break;
+        srv_client_ref(c);
+        w->cl[w->ncl++] = c;
+        int changed = 0;
+        if (c->sim.sub_gen != c->sub_gen) {
+            c->sim.sub = c->sub;
+            c->sim.sub_gen = c->sub_gen;
+            changed = 1;
+        }
+        if (c->sub.mode == PROTO_MODE_REPLAY) {
+            take_replay(s, w, c, changed);
+        } else if (live_due) {
+            job *j = add_job(w, c);
+            if (!j) break;
+            j->t = t;
+            j->tick = (uint32_t)tick_no;
+            j->sub_changed = changed;
+            if (c->has_camera) {
+                j->cam = c->cam;
+                j->cam_seq = c->cam_seq;
+            } else {
+                j->cam_seq = PROTO_NO_CAMERA;
+                j->replay = -2; /* camera filled below */
+            }
+        }
+    }
+}
+
+/* Applies changed subscriptions, keeps the live jobs whose frame is due
+ * (the client's frame rate on the nearest tick), sends layout-1 jobs to
+ * the shared cascade products (w->cjobs) and chooses the layout-0 jobs'
+ * cutoffs; returns how many layout-0 jobs are left at the front of
+ * w->jobs. */
+static int filter_jobs(srv_sim *s, work *w, double t, double rate)
+{
+    int n = 0;
+    w->ncjobs = 0;
+    for (int i = 0; i < w->njobs; i++) {
+        job j = w->jobs[i];
+        srv_client *c = j.c;
+        if (j.sub_changed || c->sim.sub_gen == 0) apply_subscription(s, c);
+        if (j.replay == -1) continue;
+        if (j.replay != 1) {
+            double period = 1.0 / c->sim.sub.frame_rate_hz;
+            if (t + 0.5 / rate < c->sim.next_frame_t) continue;
+            c->sim.next_frame_t = fmax(c->sim.next_frame_t + period, t + period - 0.5 / rate);
+            c->sim.last_frame_t = t;
+            c->sim.framed = 1;
+            if (j.replay == -2) default_camera(s, &j.cam);
+            j.replay = 0;
+        } else {
+            j.tick = (uint32_t)(int64_t)llround(j.t * rate);
+        }
+        if (c->sim.sub.layout == PROTO_LAYOUT_CASCADE) {
+            if (!grow((void **)&w->cjobs, &w->capcjobs, w->ncjobs + 1, sizeof *w->cjobs)) continue;
+            srv_cascade_job *q = &w->cjobs[w->ncjobs++];
+            memset(q, 0, sizeof *q);
+            q->c = c;
+            q->t = j.t;
+            q->cam = j.cam;
+            q->cam_seq = j.cam_seq;
+            q->tick = j.tick;
+            q->replay = j.replay == 1;
+            q->policy_k = layout1_policy(s, c, &j.cam);
+            continue;
+        }
+        choose_cutoff(s, c, &j);
+        w->jobs[n++] = j;
+    }
+    return n;
+}
+
+/* Layout-0 jobs in batches of at most EVAL_MAX / 2 distinct evaluations. */
+static void run_batches(srv_sim *s, job *jobs, int n, double tick_wall)
+{
+    int start = 0;
+    while (start < n) {
+        int end = start, distinct = 0;
+        while (end < n) {
+            int seen = 0;
+            for (int k = start; k < end && !seen; k++)
+                seen = jobs[k].t == jobs[end].t && group_eq(&jobs[k].g, &jobs[end].g);
+            if (!seen && distinct >= EVAL_MAX / 2) break;
+            distinct += !seen;
+            end++;
+        }
+        run_batch(s, jobs + start, end - start, tick_wall);
+        start = end;
+    }
+}
+
+/* After a live tick: the caches swept of the generations before, the
+ * next tick's wall time, the tick's cost counted. */
+static void end_live_tick(srv_sim *s, double t0, int64_t tick_no, double rate, double sim0, double *next_tick_wall)
+{
+    srv_hub *h = s->hub;
+    srv_tiles_sweep(s->tiles, s->gen > 1 ? s->gen - 1 : 0);
+    srv_cascade_sweep(s->casc, s->gen > 1 ? s->gen - 1 : 0);
+    publish_cache_size(s);
+    *next_tick_wall = t0 + ((double)(tick_no + 1) / rate - sim0);
+    double dt = srv_now() - t0;
+    atomic_fetch_add(&h->stats.ticks, 1);
+    atomic_fetch_add(&h->stats.tick_ns_total, (uint64_t)(dt * 1e9));
+    atomic_store(&h->stats.tick_ns_last, (uint64_t)(dt * 1e9));
+}
+
 static void *sim_main(void *arg)
 {
     srv_sim *s = arg;
@@ -1059,38 +1250,9 @@ static void *sim_main(void *arg)
     work w = {0};
     double next_tick_wall = 0;
     for (;;) {
+        int live_due, idle;
         pthread_mutex_lock(&h->lock);
-        int live_due = 0, idle = 0;
-        double rate_w = s->set.srv.tick_rate;
-        for (;;) {
-            if (s->stop) break;
-            double now = srv_now();
-            double simt = srv_hub_sim_time(h);
-            int pending = h->sea_gen != s->sea_gen || h->settings_gen != s->set_gen;
-            /* queries and replay frames run in bounded slices, at most one
-             * turn per tick period (srv_work.c, server.replay_per_tick) */
-            int bg = srv_work_busy(s->work);
-            for (srv_client *c = h->clients; c && !bg; c = c->next)
-                if (!c->closed && (c->queries || c->replay)) bg = 1;
-            if (bg && now >= s->work_due) pending = 1;
-            if (h->n_subscribed > 0 && now >= next_tick_wall) live_due = 1;
-            /* a change is due at the first tick at or after its effective time */
-            double due_t = h->n_sea_pending ? ceil(h->sea_pending[0].effective_time * rate_w) / rate_w
-                                            : INFINITY;
-            if (live_due || pending || simt >= due_t) break;
-            if (h->n_subscribed == 0 && !bg && s->holding) {
-                idle = 1;
-                break;
-            }
-            struct timespec ts;
-            double until = h->n_subscribed > 0 ? next_tick_wall : now + 1.0;
-            if (bg && s->work_due < until) until = s->work_due;
-            if (now + (due_t - simt) < until) until = now + (due_t - simt);
-            if (h->n_subscribed == 0) atomic_fetch_add(&h->stats.idle_ticks, 1);
-            ts_from(until, &ts);
-            pthread_cond_timedwait(&h->wake, &h->lock, &ts);
-        }
-        if (s->stop) {
+        if (!wait_for_work(s, next_tick_wall, &live_due, &idle)) {
             pthread_mutex_unlock(&h->lock);
             break;
         }
@@ -1101,161 +1263,32 @@ static void *sim_main(void *arg)
         }
         s->holding = 1;
         double t0 = srv_now();
-        double rate = s->set.srv.tick_rate;
-        /* settings */
-        int reload = 0;
         if (h->settings_gen != s->set_gen) {
             ocean_params keep = s->set.params;
             s->set = h->settings;
             s->set.params = keep;
             s->set_gen = h->settings_gen;
-            rate = s->set.srv.tick_rate;
-            reload = 1;
         }
-        (void)reload;
+        double rate = s->set.srv.tick_rate;
         s->sea_gen = h->sea_gen;
-        /* snapshot */
-        w.ncl = w.njobs = 0;
         double sim0 = srv_hub_sim_time(h);
         /* tick k shows sim time k / rate; ticks before the epoch are negative */
         int64_t tick_no = (int64_t)floor(sim0 * rate);
         double t = (double)tick_no / rate;
         double tick_wall = t0 - (sim0 - t);      /* monotonic time of the tick */
-        /* Beyond the exact-time limit the ocean refuses every evaluation
-         * (ocean_time.h); the service thread says so, once, and closes
-         * every client (srv_net.c "past the exact-time limit"). */
-        for (srv_client *c = h->clients; c; c = c->next) {
-            if (c->closed) continue;
-            srv_work_take(s->work, c, t);
-            if (!c->subscribed) continue;
-            if (!grow((void **)&w.cl, &w.capcl, w.ncl + 1, sizeof *w.cl)) break;
-            srv_client_ref(c);
-            w.cl[w.ncl++] = c;
-            int changed = 0;
-            if (c->sim.sub_gen != c->sub_gen) {
-                c->sim.sub = c->sub;
-                c->sim.sub_gen = c->sub_gen;
-                changed = 1;
-            }
-            if (c->sub.mode == PROTO_MODE_REPLAY) {
-                int taken = 0;
-                while (c->replay && w.njobs < 4096 && taken++ < s->set.srv.replay_per_tick) {
-                    if (!grow((void **)&w.jobs, &w.capjobs, w.njobs + 1, sizeof *w.jobs)) break;
-                    srv_replay_cam *rc = c->replay;
-                    c->replay = rc->next;
-                    if (!c->replay) c->replay_tail = NULL;
-                    c->n_replay--;
-                    job *j = &w.jobs[w.njobs++];
-                    memset(j, 0, sizeof *j);
-                    j->c = c;
-                    j->t = rc->cam.render_time;
-                    j->cam = rc->cam;
-                    j->cam_seq = rc->seq;
-                    j->replay = 1;
-                    j->sub_changed = changed;
-                    changed = 0;
-                    free(rc);
-                }
-                if (changed) {
-                    /* still rebuild the mesh on the sim side */
-                    if (grow((void **)&w.jobs, &w.capjobs, w.njobs + 1, sizeof *w.jobs)) {
-                        job *j = &w.jobs[w.njobs++];
-                        memset(j, 0, sizeof *j);
-                        j->c = c;
-                        j->sub_changed = 1;
-                        j->replay = -1; /* no frame */
-                    }
-                }
-            } else if (live_due) {
-                if (!grow((void **)&w.jobs, &w.capjobs, w.njobs + 1, sizeof *w.jobs)) break;
-                job *j = &w.jobs[w.njobs++];
-                memset(j, 0, sizeof *j);
-                j->c = c;
-                j->t = t;
-                j->tick = (uint32_t)tick_no;
-                j->sub_changed = changed;
-                if (c->has_camera) {
-                    j->cam = c->cam;
-                    j->cam_seq = c->cam_seq;
-                } else {
-                    j->cam_seq = PROTO_NO_CAMERA;
-                    j->replay = -2; /* camera filled below */
-                }
-            }
-        }
+        snapshot_jobs(s, &w, t, tick_no, live_due);
         pthread_mutex_unlock(&h->lock);
-
         /* the sea of tick t (a reload's changed sea entered the timeline) */
         follow_sea(s, t);
-
-        /* filter jobs: apply subscriptions, cutoffs; drop due-checks;
-         * layout-1 jobs go to the shared cascade products */
-        int n = 0;
-        w.ncjobs = 0;
-        for (int i = 0; i < w.njobs; i++) {
-            job j = w.jobs[i];
-            srv_client *c = j.c;
-            if (j.sub_changed || c->sim.sub_gen == 0) apply_subscription(s, c);
-            if (j.replay == -1) continue;
-            if (j.replay != 1) {
-                /* live: the client's frame rate on the nearest tick */
-                double period = 1.0 / c->sim.sub.frame_rate_hz;
-                if (t + 0.5 / rate < c->sim.next_frame_t) continue;
-                c->sim.next_frame_t = fmax(c->sim.next_frame_t + period, t + period - 0.5 / rate);
-                c->sim.last_frame_t = t;
-                c->sim.framed = 1;
-                if (j.replay == -2) default_camera(s, &j.cam);
-                j.replay = 0;
-            } else {
-                j.tick = (uint32_t)(int64_t)llround(j.t * rate);
-            }
-            if (c->sim.sub.layout == PROTO_LAYOUT_CASCADE) {
-                if (!grow((void **)&w.cjobs, &w.capcjobs, w.ncjobs + 1, sizeof *w.cjobs)) continue;
-                srv_cascade_job *q = &w.cjobs[w.ncjobs++];
-                memset(q, 0, sizeof *q);
-                q->c = c;
-                q->t = j.t;
-                q->cam = j.cam;
-                q->cam_seq = j.cam_seq;
-                q->tick = j.tick;
-                q->replay = j.replay == 1;
-                q->policy_k = layout1_policy(s, c, &j.cam);
-                continue;
-            }
-            choose_cutoff(s, c, &j);
-            w.jobs[n++] = j;
-        }
+        int n = filter_jobs(s, &w, t, rate);
         run_cascade(s, w.cjobs, w.ncjobs, tick_wall);
-        /* batches of at most EVAL_MAX / 2 distinct evaluations */
-        int start = 0;
-        while (start < n) {
-            int end = start, distinct = 0;
-            while (end < n) {
-                int seen = 0;
-                for (int k = start; k < end && !seen; k++)
-                    seen = w.jobs[k].t == w.jobs[end].t && group_eq(&w.jobs[k].g, &w.jobs[end].g);
-                if (!seen && distinct >= EVAL_MAX / 2) break;
-                distinct += !seen;
-                end++;
-            }
-            run_batch(s, w.jobs + start, end - start, tick_wall);
-            start = end;
-        }
+        run_batches(s, w.jobs, n, tick_wall);
         /* queries: a bounded slice of work per tick */
         if (srv_work_busy(s->work))
             srv_work_queries(s->work, h, query_eval, s, s->g, 1e-3 * s->set.srv.query_ms);
         s->work_due = t0 + 1.0 / rate;
         for (int i = 0; i < w.ncl; i++) srv_client_unref(w.cl[i]);
-        if (live_due) {
-            srv_tiles_sweep(s->tiles, s->gen > 1 ? s->gen - 1 : 0);
-            srv_cascade_sweep(s->casc, s->gen > 1 ? s->gen - 1 : 0);
-            publish_cache_size(s);
-            next_tick_wall = t0 + ((double)(tick_no + 1) / rate - sim0);
-            double dt = srv_now() - t0;
-            atomic_fetch_add(&h->stats.ticks, 1);
-            atomic_fetch_add(&h->stats.tick_ns_total, (uint64_t)(dt * 1e9));
-            atomic_store(&h->stats.tick_ns_last, (uint64_t)(dt * 1e9));
-        }
+        if (live_due) end_live_tick(s, t0, tick_no, rate, sim0, &next_tick_wall);
         publish_counters(s);
     }
     free(w.cl);
