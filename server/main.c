@@ -233,6 +233,185 @@ static void say_overridden(const srv_settings *s)
                 s->overridden, strchr(s->overridden, ',') ? "them" : "it");
 }
 
+/* The command line, parsed (sets points into setbuf: not to be copied). */
+typedef struct cmdline {
+    const char *config;
+    const char *sets[MAX_SETS + N_DATADIR_SETS];
+    char setbuf[MAX_SETS][600];
+    int nsets, nbuf, dump;
+    int key_given[N_OD_OPTS]; /* a shorthand (--port ...) was typed for its key */
+} cmdline;
+
+/* One option of od_opts into cl; -1 to go on, else the exit code. */
+static int take_option(const od_opt *op, cmdline *cl)
+{
+    if ((op->kind == OD_KEY || op->kind == OD_SET) && cl->nsets >= MAX_SETS) {
+        fprintf(stderr, "oceand: too many --set options (max %d)\n", MAX_SETS);
+        return 2;
+    }
+    switch (op->kind) {
+    case OD_CONFIG: cl->config = optarg; break;
+    case OD_KEY:
+        cl->key_given[op - od_opts] = 1;
+        snprintf(cl->setbuf[cl->nbuf], sizeof cl->setbuf[cl->nbuf], "%s=%s", op->key, optarg);
+        cl->sets[cl->nsets++] = cl->setbuf[cl->nbuf++];
+        break;
+    case OD_SET:
+        /* an explicit --set of a shorthand's key: its errors say --set */
+        for (int i = 0; i < N_OD_OPTS; i++)
+            if (od_opts[i].kind == OD_KEY && !strncmp(optarg, od_opts[i].key, strlen(od_opts[i].key)) &&
+                optarg[strlen(od_opts[i].key)] == '=')
+                cl->key_given[i] = 0;
+        cl->sets[cl->nsets++] = optarg;
+        break;
+    case OD_DUMP: cl->dump = 1; break;
+    case OD_VERSION: printf("%s (protocol %s)\n", SRV_VERSION, PROTO_SUBPROTOCOL); return 0;
+    case OD_HELP: usage(stdout); return 0;
+    }
+    return -1;
+}
+
+/* argv into cl; -1 to go on, else the exit code. */
+static int parse_args(int argc, char **argv, cmdline *cl)
+{
+    struct option lo[N_OD_OPTS + 1];
+    char shorts[3 * N_OD_OPTS + 1], *sp = shorts;
+    for (int i = 0; i < N_OD_OPTS; i++) {
+        lo[i] = (struct option){od_opts[i].name, od_opts[i].arg ? required_argument : no_argument, NULL, 256 + i};
+        if (od_opts[i].letter) {
+            *sp++ = od_opts[i].letter;
+            if (od_opts[i].arg) *sp++ = ':';
+        }
+    }
+    *sp = 0;
+    lo[N_OD_OPTS] = (struct option){NULL, 0, NULL, 0};
+    int o;
+    while ((o = getopt_long(argc, argv, shorts, lo, NULL)) != -1) {
+        const od_opt *op = NULL;
+        for (int i = 0; i < N_OD_OPTS; i++)
+            if (o == 256 + i || (od_opts[i].letter && o == od_opts[i].letter)) op = &od_opts[i];
+        if (!op) {
+            usage(stderr);
+            return 2;
+        }
+        int rc = take_option(op, cl);
+        if (rc >= 0) return rc;
+    }
+    if (optind < argc) {
+        fprintf(stderr, "oceand: unexpected argument '%s'\n", argv[optind]);
+        usage(stderr);
+        return 2;
+    }
+#ifdef OCEAND_DATADIR
+    /* An installed oceand reads the configuration `make install` put in
+     * SYSCONFDIR when no --config names another (the unit passes it too). */
+    if (!cl->config && access(OCEAND_SYSCONFDIR "/oceand.conf", R_OK) == 0) {
+        cl->config = OCEAND_SYSCONFDIR "/oceand.conf";
+        fprintf(stderr, "oceand: reading %s (no --config given)\n", cl->config);
+    }
+#endif
+    /* Without a config file, an installed oceand's data directory comes
+     * first, so --port/--set still override it. */
+    if (!cl->config && N_DATADIR_SETS) {
+        memmove(cl->sets + N_DATADIR_SETS, cl->sets, (size_t)cl->nsets * sizeof *cl->sets);
+        for (int i = 0; i < N_DATADIR_SETS; i++) cl->sets[i] = datadir_sets[i];
+        cl->nsets += N_DATADIR_SETS;
+    }
+    return -1;
+}
+
+/* The settings of cl into s; 1 (said) when they are refused.  A value
+ * refused for a shorthand (--port 70000) is named by the option typed,
+ * not by the --set it stands for. */
+static int load_settings(const cmdline *cl, srv_settings *s)
+{
+    char err[1024];
+    if (srv_settings_load(cl->config, cl->sets, cl->nsets, s, err, sizeof err) == OCEAN_OK) return 0;
+    const char *label = NULL;
+    for (int i = 0; i < N_OD_OPTS && strncmp(err, "--set: ", 7) == 0; i++) {
+        const char *k = od_opts[i].key;
+        size_t kl = k ? strlen(k) : 0;
+        if (od_opts[i].kind == OD_KEY && cl->key_given[i] && strncmp(err + 7, k, kl) == 0 && err[7 + kl] == ':')
+            label = od_opts[i].name;
+    }
+    if (label)
+        fprintf(stderr, "oceand: --%s: %s\n", label, err + 7);
+    else
+        fprintf(stderr, "oceand: %s\n", err);
+    return 1;
+}
+
+static int dump_config(const srv_settings *s)
+{
+    printf("# oceand --dump-config: every key as this command line resolves it.\n");
+    if (s->srv.scene[0])
+        printf("# sea.* and ocean.* include scene '%s' and then --set; loading this file\n"
+               "# applies the scene over its sea.* and ocean.* again (--set wins over it).\n",
+               s->srv.scene);
+    return srv_settings_dump(s, stdout) == OCEAN_OK ? 0 : 1;
+}
+
+/* SIGHUP: the configuration read again and applied, or refused whole. */
+static void reload(srv_daemon *d, const cmdline *cl)
+{
+    srv_settings *ns = calloc(1, sizeof *ns);
+    if (!ns) return;
+    char err[1024];
+    if (srv_settings_load(cl->config, cl->sets, cl->nsets, ns, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "oceand: reload refused, keeping the running configuration: %s\n", err);
+    } else {
+        char msg[1024];
+        say_overridden(ns);
+        srv_daemon_reload(d, ns, msg, sizeof msg);
+        printf("oceand: configuration reloaded%s%s\n", msg[0] ? "; " : "", msg);
+        fflush(stdout);
+    }
+    free(ns);
+}
+
+/* Starts the daemon on s and serves until SIGTERM or SIGINT (SIGHUP
+ * reloads).  The signals are blocked in every thread; this one takes them. */
+static int serve(const cmdline *cl, srv_settings *s)
+{
+    char err[1024];
+    if (probe_listen(&s->srv, err, sizeof err) != 0) {
+        fprintf(stderr, "oceand: %s\n", err);
+        return 1;
+    }
+    sigset_t sigs;
+    sigemptyset(&sigs);
+    sigaddset(&sigs, SIGHUP);
+    sigaddset(&sigs, SIGTERM);
+    sigaddset(&sigs, SIGINT);
+    pthread_sigmask(SIG_BLOCK, &sigs, NULL);
+    signal(SIGPIPE, SIG_IGN);
+    srv_daemon *d;
+    if (srv_daemon_start(s, &d, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "oceand: %s\n", err);
+        return 1;
+    }
+    char host[INET_ADDRSTRLEN + 64];
+    listen_host(s->srv.bind, host, sizeof host);
+    printf("oceand: listening on http://%s:%d/ (scene %s, %d cascades of %d^2, tick %g Hz)\n", host,
+           srv_daemon_port(d), s->scene.name[0] ? s->scene.name : "(none)", s->params.cascades, s->params.n,
+           s->srv.tick_rate);
+    fflush(stdout);
+    for (;;) {
+        int sig = 0;
+        if (sigwait(&sigs, &sig) != 0) continue;
+        if (sig == SIGHUP) {
+            reload(d, cl);
+            continue;
+        }
+        printf("oceand: %s: closing every client\n", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+        fflush(stdout);
+        break;
+    }
+    srv_daemon_stop(d);
+    printf("oceand: stopped\n");
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     /* OpenMP worker threads (frame building, the spectrum stage) must sleep
@@ -253,159 +432,17 @@ int main(int argc, char **argv)
      * and MALLOC_TRIM_THRESHOLD_ in the environment still decide. */
     if (!getenv("MALLOC_MMAP_THRESHOLD_")) mallopt(M_MMAP_THRESHOLD, 16 << 20);
     if (!getenv("MALLOC_TRIM_THRESHOLD_")) mallopt(M_TRIM_THRESHOLD, 256 << 20);
-    const char *config = NULL;
-    const char *sets[MAX_SETS + N_DATADIR_SETS];
-    char setbuf[MAX_SETS][600];
-    int nsets = 0, nbuf = 0, dump = 0;
-    int key_given[N_OD_OPTS] = {0}; /* a shorthand (--port ...) was typed for its key */
-    struct option lo[N_OD_OPTS + 1];
-    char shorts[3 * N_OD_OPTS + 1], *sp = shorts;
-    for (int i = 0; i < N_OD_OPTS; i++) {
-        lo[i] = (struct option){od_opts[i].name, od_opts[i].arg ? required_argument : no_argument, NULL,
-                                256 + i};
-        if (od_opts[i].letter) {
-            *sp++ = od_opts[i].letter;
-            if (od_opts[i].arg) *sp++ = ':';
-        }
-    }
-    *sp = 0;
-    lo[N_OD_OPTS] = (struct option){NULL, 0, NULL, 0};
-    int o;
-    while ((o = getopt_long(argc, argv, shorts, lo, NULL)) != -1) {
-        const od_opt *op = NULL;
-        for (int i = 0; i < N_OD_OPTS; i++)
-            if (o == 256 + i || (od_opts[i].letter && o == od_opts[i].letter)) op = &od_opts[i];
-        if (!op) {
-            usage(stderr);
-            return 2;
-        }
-        if ((op->kind == OD_KEY || op->kind == OD_SET) && nsets >= MAX_SETS) {
-            fprintf(stderr, "oceand: too many --set options (max %d)\n", MAX_SETS);
-            return 2;
-        }
-        switch (op->kind) {
-        case OD_CONFIG: config = optarg; break;
-        case OD_KEY:
-            key_given[op - od_opts] = 1;
-            snprintf(setbuf[nbuf], sizeof setbuf[nbuf], "%s=%s", op->key, optarg);
-            sets[nsets++] = setbuf[nbuf++];
-            break;
-        case OD_SET:
-            /* an explicit --set of a shorthand's key: its errors say --set */
-            for (int i = 0; i < N_OD_OPTS; i++)
-                if (od_opts[i].kind == OD_KEY && !strncmp(optarg, od_opts[i].key, strlen(od_opts[i].key)) &&
-                    optarg[strlen(od_opts[i].key)] == '=')
-                    key_given[i] = 0;
-            sets[nsets++] = optarg;
-            break;
-        case OD_DUMP: dump = 1; break;
-        case OD_VERSION: printf("%s (protocol %s)\n", SRV_VERSION, PROTO_SUBPROTOCOL); return 0;
-        case OD_HELP: usage(stdout); return 0;
-        }
-    }
-    if (optind < argc) {
-        fprintf(stderr, "oceand: unexpected argument '%s'\n", argv[optind]);
-        usage(stderr);
-        return 2;
-    }
-#ifdef OCEAND_DATADIR
-    /* An installed oceand reads the configuration `make install` put in
-     * SYSCONFDIR when no --config names another (the unit passes it too). */
-    if (!config && access(OCEAND_SYSCONFDIR "/oceand.conf", R_OK) == 0) {
-        config = OCEAND_SYSCONFDIR "/oceand.conf";
-        fprintf(stderr, "oceand: reading %s (no --config given)\n", config);
-    }
-#endif
-    /* Without a config file, an installed oceand's data directory comes
-     * first, so --port/--set still override it. */
-    if (!config && N_DATADIR_SETS) {
-        memmove(sets + N_DATADIR_SETS, sets, (size_t)nsets * sizeof *sets);
-        for (int i = 0; i < N_DATADIR_SETS; i++) sets[i] = datadir_sets[i];
-        nsets += N_DATADIR_SETS;
-    }
+    static cmdline cl;
+    int rc = parse_args(argc, argv, &cl);
+    if (rc >= 0) return rc;
     srv_settings *s = calloc(1, sizeof *s);
     if (!s) return 1;
-    char err[1024];
-    if (srv_settings_load(config, sets, nsets, s, err, sizeof err) != OCEAN_OK) {
-        /* A value refused for a shorthand (--port 70000) is named by the
-         * option typed, not by the --set it stands for. */
-        const char *label = NULL;
-        for (int i = 0; i < N_OD_OPTS && strncmp(err, "--set: ", 7) == 0; i++) {
-            const char *k = od_opts[i].key;
-            size_t kl = k ? strlen(k) : 0;
-            if (od_opts[i].kind == OD_KEY && key_given[i] && strncmp(err + 7, k, kl) == 0 &&
-                err[7 + kl] == ':')
-                label = od_opts[i].name;
-        }
-        if (label)
-            fprintf(stderr, "oceand: --%s: %s\n", label, err + 7);
-        else
-            fprintf(stderr, "oceand: %s\n", err);
+    if (load_settings(&cl, s)) {
         free(s);
         return 1;
     }
     say_overridden(s);
-    if (dump) {
-        printf("# oceand --dump-config: every key as this command line resolves it.\n");
-        if (s->srv.scene[0])
-            printf("# sea.* and ocean.* include scene '%s' and then --set; loading this file\n"
-                   "# applies the scene over its sea.* and ocean.* again (--set wins over it).\n",
-                   s->srv.scene);
-        ocean_result r = srv_settings_dump(s, stdout);
-        free(s);
-        return r == OCEAN_OK ? 0 : 1;
-    }
-    if (probe_listen(&s->srv, err, sizeof err) != 0) {
-        fprintf(stderr, "oceand: %s\n", err);
-        free(s);
-        return 1;
-    }
-    /* Block the signals in every thread; the main thread takes them. */
-    sigset_t sigs;
-    sigemptyset(&sigs);
-    sigaddset(&sigs, SIGHUP);
-    sigaddset(&sigs, SIGTERM);
-    sigaddset(&sigs, SIGINT);
-    pthread_sigmask(SIG_BLOCK, &sigs, NULL);
-    signal(SIGPIPE, SIG_IGN);
-
-    srv_daemon *d;
-    if (srv_daemon_start(s, &d, err, sizeof err) != OCEAN_OK) {
-        fprintf(stderr, "oceand: %s\n", err);
-        free(s);
-        return 1;
-    }
-    char host[INET_ADDRSTRLEN + 64];
-    listen_host(s->srv.bind, host, sizeof host);
-    printf("oceand: listening on http://%s:%d/ (scene %s, %d cascades of %d^2, tick %g Hz)\n",
-           host, srv_daemon_port(d),
-           s->scene.name[0] ? s->scene.name : "(none)", s->params.cascades, s->params.n,
-           s->srv.tick_rate);
-    fflush(stdout);
-    for (;;) {
-        int sig = 0;
-        if (sigwait(&sigs, &sig) != 0) continue;
-        if (sig == SIGHUP) {
-            srv_settings *ns = calloc(1, sizeof *ns);
-            if (!ns) continue;
-            if (srv_settings_load(config, sets, nsets, ns, err, sizeof err) != OCEAN_OK) {
-                fprintf(stderr, "oceand: reload refused, keeping the running configuration: %s\n", err);
-            } else {
-                char msg[1024];
-                say_overridden(ns);
-                srv_daemon_reload(d, ns, msg, sizeof msg);
-                printf("oceand: configuration reloaded%s%s\n", msg[0] ? "; " : "", msg);
-                fflush(stdout);
-            }
-            free(ns);
-            continue;
-        }
-        printf("oceand: %s: closing every client\n", sig == SIGTERM ? "SIGTERM" : "SIGINT");
-        fflush(stdout);
-        break;
-    }
-    srv_daemon_stop(d);
+    rc = cl.dump ? dump_config(s) : serve(&cl, s);
     free(s);
-    printf("oceand: stopped\n");
-    return 0;
+    return rc;
 }
