@@ -705,16 +705,11 @@ static int cmp_job(const void *a, const void *b)
     return 0;
 }
 
-static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
+/* Batch stage 1: one evaluation per (t, group), with the channels every
+ * job sharing it needs (jobs sharing (t, group) reuse the entry; EVAL_MAX
+ * bounds a batch). */
+static void batch_evaluate(srv_sim *s, job *jobs, int n)
 {
-    if (n <= 0) return;
-    srv_stats *st = &s->hub->stats;
-    const srv_config *cfg = &s->set.srv;
-    s->gen++;
-    static int prof = -1;
-    if (prof < 0) prof = getenv("OCEAND_PROFILE") != NULL;
-    double p0 = srv_now();
-    /* 1. evaluations */
     for (int i = 0; i < n; i++) {
         unsigned need = jobs[i].need;
         for (int k = i + 1; k < n; k++)
@@ -722,147 +717,166 @@ static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
         jobs[i].ev = NULL;
         jobs[i].need = need;
     }
-    for (int i = 0; i < n; i++) {
-        jobs[i].ev = evaluate(s, jobs[i].t, &jobs[i].g, jobs[i].need);
-        /* jobs sharing (t, group) reuse the entry; EVAL_MAX bounds a batch */
+    for (int i = 0; i < n; i++) jobs[i].ev = evaluate(s, jobs[i].t, &jobs[i].g, jobs[i].need);
+}
+
+/* Job j's world tiles from the cache; those not there yet (fresh) are
+ * appended to missing[*nmiss] to be built. */
+static void job_tiles(srv_sim *s, job *j, srv_tile **missing, int *nmiss)
+{
+    srv_stats *st = &s->hub->stats;
+    const proto_subscribe *sub = &j->c->sim.sub;
+    int per = s->set.srv.tiles_per_side, levels = sub->lod_levels;
+    unsigned ch = srv_tiles_channels(sub->effects);
+    j->ntiles = 0;
+    j->tiles = NULL;
+    if (!j->ev || !ch || levels * per * per > MAX_TILES_PER_JOB) return;
+    j->tiles = calloc((size_t)levels * per * per, sizeof(srv_tile *));
+    if (!j->tiles) return;
+    double base = base_spacing(s, sub);
+    for (int L = 0; L < levels; L++) {
+        double sp = base * ldexp(1.0, L), w = sp * sub->tile_size;
+        int32_t x0 = srv_tiles_first(j->cam.pos[0], w, per), z0 = srv_tiles_first(j->cam.pos[2], w, per);
+        for (int a = 0; a < per; a++)
+            for (int b = 0; b < per; b++) {
+                srv_tile_key k;
+                srv_tile_key_init(&k);
+                k.t = j->t;
+                k.spacing = sp;
+                k.bucket = j->g.bucket;
+                k.boost = j->g.boost;
+                k.accuracy = sub->accuracy;
+                k.ix = x0 + b;
+                k.iz = z0 + a;
+                k.channels = (uint16_t)ch;
+                k.size = sub->tile_size;
+                k.level = (uint8_t)L;
+                k.codec = sub->codec;
+                k.layers = (uint8_t)j->g.layers;
+                int fresh = 0;
+                srv_tile *t = srv_tiles_get(s->tiles, &k, s->gen, &fresh);
+                if (!t) continue;
+                if (fresh) {
+                    missing[(*nmiss)++] = t;
+                    t->ready = 0;
+                    atomic_fetch_add(&st->tile_cache_misses, 1);
+                } else {
+                    atomic_fetch_add(&st->tile_cache_hits, 1);
+                }
+                j->tiles[j->ntiles++] = t;
+            }
     }
-    double p1 = srv_now();
-    /* 2. tiles */
+}
+
+/* Each missing tile samples the evaluation of the first job that asked for
+ * it, found by key (t, group); built on the workers. */
+static void build_missing(srv_sim *s, srv_tile **missing, int nmiss)
+{
+    const ocean_frame **src = malloc(sizeof(*src) * (size_t)nmiss);
+    if (!src) return;
+    for (int m = 0; m < nmiss; m++) {
+        src[m] = NULL;
+        for (int e = 0; e < EVAL_MAX; e++) {
+            eval_entry *ev = &s->ev[e];
+            if (ev->used && ev->t == missing[m]->key.t && ev->g.bucket == missing[m]->key.bucket &&
+                ev->g.layers == missing[m]->key.layers && ev->g.boost == missing[m]->key.boost) {
+                src[m] = ev->f;
+                break;
+            }
+        }
+    }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(s->set.srv.workers)
+    for (int m = 0; m < nmiss; m++) {
+        if (src[m]) {
+            srv_tile_build(missing[m], src[m]);
+        } else {
+            missing[m]->ready = 1;
+            missing[m]->result = OCEAN_ESTATE;
+        }
+    }
+    free(src);
+    atomic_fetch_add(&s->hub->stats.tiles_encoded, (uint64_t)nmiss);
+}
+
+/* Batch stage 2: every job's tiles, the missing ones built; returns how
+ * many were built. */
+static int batch_tiles(srv_sim *s, job *jobs, int n)
+{
     srv_tile **missing = malloc(sizeof(srv_tile *) * (size_t)n * MAX_TILES_PER_JOB);
     int nmiss = 0;
-    for (int i = 0; i < n && missing; i++) {
-        job *j = &jobs[i];
-        const proto_subscribe *sub = &j->c->sim.sub;
-        j->ntiles = 0;
-        j->tiles = NULL;
-        if (!j->ev) continue;
-        unsigned ch = srv_tiles_channels(sub->effects);
-        int per = cfg->tiles_per_side;
-        int levels = sub->lod_levels;
-        if (!ch || levels * per * per > MAX_TILES_PER_JOB) continue;
-        j->tiles = calloc((size_t)levels * per * per, sizeof(srv_tile *));
-        if (!j->tiles) continue;
-        double base = base_spacing(s, sub);
-        for (int L = 0; L < levels; L++) {
-            double sp = base * ldexp(1.0, L);
-            double w = sp * sub->tile_size;
-            int32_t x0 = srv_tiles_first(j->cam.pos[0], w, per);
-            int32_t z0 = srv_tiles_first(j->cam.pos[2], w, per);
-            for (int a = 0; a < per; a++)
-                for (int b = 0; b < per; b++) {
-                    srv_tile_key k;
-                    srv_tile_key_init(&k);
-                    k.t = j->t;
-                    k.spacing = sp;
-                    k.bucket = j->g.bucket;
-                    k.boost = j->g.boost;
-                    k.accuracy = sub->accuracy;
-                    k.ix = x0 + b;
-                    k.iz = z0 + a;
-                    k.channels = (uint16_t)ch;
-                    k.size = sub->tile_size;
-                    k.level = (uint8_t)L;
-                    k.codec = sub->codec;
-                    k.layers = (uint8_t)j->g.layers;
-                    int fresh = 0;
-                    srv_tile *t = srv_tiles_get(s->tiles, &k, s->gen, &fresh);
-                    if (!t) continue;
-                    if (fresh) {
-                        missing[nmiss++] = t;
-                        t->ready = 0;
-                        atomic_fetch_add(&st->tile_cache_misses, 1);
-                    } else {
-                        atomic_fetch_add(&st->tile_cache_hits, 1);
-                    }
-                    j->tiles[j->ntiles++] = t;
-                }
-        }
-    }
-    /* Each missing tile samples the evaluation of the first job that asked for
-     * it; find it by key (t, group). */
-    if (missing && nmiss) {
-        const ocean_frame **src = malloc(sizeof(*src) * (size_t)nmiss);
-        if (src) {
-            for (int m = 0; m < nmiss; m++) {
-                src[m] = NULL;
-                for (int e = 0; e < EVAL_MAX; e++) {
-                    eval_entry *ev = &s->ev[e];
-                    if (ev->used && ev->t == missing[m]->key.t && ev->g.bucket == missing[m]->key.bucket &&
-                        ev->g.layers == missing[m]->key.layers && ev->g.boost == missing[m]->key.boost) {
-                        src[m] = ev->f;
-                        break;
-                    }
-                }
-            }
-#pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
-            for (int m = 0; m < nmiss; m++) {
-                if (src[m]) srv_tile_build(missing[m], src[m]);
-                else {
-                    missing[m]->ready = 1;
-                    missing[m]->result = OCEAN_ESTATE;
-                }
-            }
-            free(src);
-            atomic_fetch_add(&st->tiles_encoded, (uint64_t)nmiss);
-        }
-    }
+    for (int i = 0; i < n && missing; i++) job_tiles(s, &jobs[i], missing, &nmiss);
+    if (missing && nmiss) build_missing(s, missing, nmiss);
     free(missing);
-    double p2 = srv_now();
-    /* 3. meshes and frames.  Live jobs with identical cameras, time and
-     * cutoff share one mesh build (co-located viewers); replay jobs of one
-     * client run in order on one worker. */
+    return nmiss;
+}
+
+/* Live jobs with identical cameras, time and cutoff share one mesh build
+ * (co-located viewers): their leaders into leaders[]; replay jobs of one
+ * client form a run (runs[]: its first job) kept in order. */
+static void group_meshes(job *jobs, int n, int *runs, int *nruns, int *leaders, int *nlead)
+{
+    for (int i = 0; i < n; i++) {
+        jobs[i].leader = i;
+        if (!jobs[i].ev) continue;
+        if (jobs[i].replay) {
+            if (i == 0 || jobs[i].c != jobs[i - 1].c || !jobs[i - 1].replay) runs[(*nruns)++] = i;
+            continue;
+        }
+        for (int k = 0; k < *nlead; k++)
+            if (same_mesh(&jobs[leaders[k]], &jobs[i])) {
+                jobs[i].leader = leaders[k];
+                break;
+            }
+        if (jobs[i].leader == i) leaders[(*nlead)++] = i;
+    }
+}
+
+/* Live jobs whose FRAMEs would be identical but for the per-client fields
+ * share one encoding: it is built once (frame leaders, fl[]), the others
+ * refer to its bytes (fl NULL: no sharing). */
+static void group_frames(job *jobs, int n, int *fl)
+{
+    int nfl = 0;
+    for (int i = 0; i < n; i++) {
+        job *j = &jobs[i];
+        j->fshare = i;
+        j->no_share = 0;
+        if (!j->ev || j->replay || !fl) continue;
+        int jm = jobs[j->leader].mesh_ok && j->c->sim.sub.mesh_kind != PROTO_MESH_NONE;
+        for (int k = 0; k < nfl; k++) {
+            const job *o = &jobs[fl[k]];
+            int om = jobs[o->leader].mesh_ok && o->c->sim.sub.mesh_kind != PROTO_MESH_NONE;
+            if (frames_equal(o, j, om, jm)) {
+                j->fshare = fl[k];
+                break;
+            }
+        }
+        if (j->fshare == i) fl[nfl++] = i;
+    }
+}
+
+/* Batch stage 3: meshes and frames, on the workers. */
+static void batch_frames(srv_sim *s, job *jobs, int n)
+{
+    int workers = s->set.srv.workers;
     qsort(jobs, (size_t)n, sizeof *jobs, cmp_job);
-    int *runs = malloc(sizeof(int) * (size_t)(n + 1));
-    int *leaders = malloc(sizeof(int) * (size_t)(n + 1));
+    int *runs = malloc(sizeof(int) * (size_t)(n + 1)), *leaders = malloc(sizeof(int) * (size_t)(n + 1));
+    int *fl = malloc(sizeof(int) * (size_t)(n + 1));
     int nruns = 0, nlead = 0;
     if (runs && leaders) {
-        for (int i = 0; i < n; i++) {
-            jobs[i].leader = i;
-            if (!jobs[i].ev) continue;
-            if (jobs[i].replay) {
-                if (i == 0 || jobs[i].c != jobs[i - 1].c || !jobs[i - 1].replay) runs[nruns++] = i;
-                continue;
-            }
-            for (int k = 0; k < nlead; k++)
-                if (same_mesh(&jobs[leaders[k]], &jobs[i])) {
-                    jobs[i].leader = leaders[k];
-                    break;
-                }
-            if (jobs[i].leader == i) leaders[nlead++] = i;
-        }
-#pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
+        group_meshes(jobs, n, runs, &nruns, leaders, &nlead);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(workers)
         for (int k = 0; k < nlead; k++) mesh_stage(s, &jobs[leaders[k]]);
-        /* Live jobs whose FRAMEs would be identical but for the per-client
-         * fields share one encoding: it is built once (frame leaders), the
-         * others refer to its bytes. */
-        int *fl = malloc(sizeof(int) * (size_t)(n + 1));
-        int nfl = 0;
-        for (int i = 0; i < n; i++) {
-            job *j = &jobs[i];
-            j->fshare = i;
-            j->no_share = 0;
-            if (!j->ev || j->replay || !fl) continue;
-            int jm = jobs[j->leader].mesh_ok && j->c->sim.sub.mesh_kind != PROTO_MESH_NONE;
-            for (int k = 0; k < nfl; k++) {
-                const job *o = &jobs[fl[k]];
-                int om = jobs[o->leader].mesh_ok && o->c->sim.sub.mesh_kind != PROTO_MESH_NONE;
-                if (frames_equal(o, j, om, jm)) {
-                    j->fshare = fl[k];
-                    break;
-                }
-            }
-            if (j->fshare == i) fl[nfl++] = i;
-        }
-#pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
+        group_frames(jobs, n, fl);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(workers)
         for (int i = 0; i < n; i++)
             if (jobs[i].ev && !jobs[i].replay && jobs[i].fshare == i)
                 frame_stage(s, &jobs[i], &jobs[jobs[i].leader], fl != NULL);
-#pragma omp parallel for schedule(dynamic, 8) num_threads(cfg->workers)
+#pragma omp parallel for schedule(dynamic, 8) num_threads(workers)
         for (int i = 0; i < n; i++)
             if (jobs[i].ev && !jobs[i].replay && jobs[i].fshare != i)
                 share_stage(s, &jobs[i], &jobs[jobs[i].fshare], &jobs[jobs[i].leader]);
-        free(fl);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
+#pragma omp parallel for schedule(dynamic, 1) num_threads(workers)
         for (int r = 0; r < nruns; r++)
             for (int i = runs[r]; i < n && jobs[i].c == jobs[runs[r]].c && jobs[i].replay; i++) {
                 if (!jobs[i].ev) continue;
@@ -870,13 +884,30 @@ static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
                 frame_stage(s, &jobs[i], &jobs[i], 0);
             }
     }
+    free(fl);
     free(runs);
     free(leaders);
+}
+
+/* Layout 0: a batch of jobs evaluated, tiled, meshed, framed and handed
+ * over to their clients' queues. */
+static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
+{
+    if (n <= 0) return;
+    srv_stats *st = &s->hub->stats;
+    s->gen++;
+    static int prof = -1;
+    if (prof < 0) prof = getenv("OCEAND_PROFILE") != NULL;
+    double p0 = srv_now();
+    batch_evaluate(s, jobs, n);
+    double p1 = srv_now();
+    int nmiss = batch_tiles(s, jobs, n);
+    double p2 = srv_now();
+    batch_frames(s, jobs, n);
     double p3 = srv_now();
     if (prof)
         fprintf(stderr, "batch %d jobs: eval %.2f ms, tiles %.2f ms (%d new), frames %.2f ms\n", n,
                 (p1 - p0) * 1e3, (p2 - p1) * 1e3, nmiss, (p3 - p2) * 1e3);
-    /* 4. hand over */
     for (int i = 0; i < n; i++) {
         job *j = &jobs[i];
         free(j->tiles);
