@@ -866,39 +866,39 @@ static ocean_result eval_mips(srv_cascade *k, ocean *oc, ocean *nf, const tables
     return OCEAN_OK;
 }
 
-void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *nf, int order,
-                     const srv_config *cfg, srv_stats *st, srv_cascade_job *jobs, int n, uint64_t gen)
+/* The cascade tables of this ocean (made anew for a new ocean, whose
+ * frames have other grids and tiles other bytes); 0, every job told, when
+ * they cannot be made. */
+static int tables_current(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *nf, int order,
+                          srv_cascade_job *jobs, int n)
 {
-    if (n <= 0) return;
-    if (!k->tab_valid || k->tab.oc != oc || k->tab.g != g || k->nf_in != nf || k->tab.order != order) {
-        /* a new ocean: its frames have other grids, its tiles other bytes */
-        for (int m = 0; m < MAX_MIPS; m++) {
-            ocean_frame_destroy(k->mipf[m]);
-            k->mipf[m] = NULL;
-            ocean_frame_destroy(k->nff[m]);
-            k->nff[m] = NULL;
-        }
-        srv_tiles_clear(k->cache);
-        k->nf_in = nf;
-        if (tables_make(&k->tab, oc, g, nf, order) != OCEAN_OK) {
-            k->tab_valid = 0;
-            for (int i = 0; i < n; i++)
-                srv_client_send_error(jobs[i].c, NULL, 0, OCEAN_ESTATE, "cascade tables unavailable");
-            return;
-        }
-        k->tab_valid = 1;
+    if (k->tab_valid && k->tab.oc == oc && k->tab.g == g && k->nf_in == nf && k->tab.order == order) return 1;
+    for (int m = 0; m < MAX_MIPS; m++) {
+        ocean_frame_destroy(k->mipf[m]);
+        k->mipf[m] = NULL;
+        ocean_frame_destroy(k->nff[m]);
+        k->nff[m] = NULL;
     }
-    const tables *tb = &k->tab;
-    plan *pl = calloc((size_t)n, sizeof *pl);
-    if (!pl) return;
-    /* 1. meshes, then plans: the mesh's finest lattice decides which mips
-     * travel without geometry */
+    srv_tiles_clear(k->cache);
+    k->nf_in = nf;
+    k->tab_valid = tables_make(&k->tab, oc, g, nf, order) == OCEAN_OK;
+    if (!k->tab_valid)
+        for (int i = 0; i < n; i++)
+            srv_client_send_error(jobs[i].c, NULL, 0, OCEAN_ESTATE, "cascade tables unavailable");
+    return k->tab_valid;
+}
+
+/* Stage 1: each job's mesh, then its plan (the mesh's finest lattice
+ * decides which mips travel without geometry). */
+static void plan_jobs(const tables *tb, const srv_config *cfg, srv_stats *st, srv_cascade_job *jobs, plan *pl,
+                      int n)
+{
     for (int i = 0; i < n; i++) {
         mesh_part(cfg, st, &jobs[i], &pl[i]);
         const proto_subscribe *sub = &jobs[i].c->sim.sub;
-        pl[i].geo = pl[i].has_mesh && (sub->effects & PROTO_FX_NORMALS) && !(sub->flags & PROTO_SUB_FULL_GEOMETRY) &&
-                            pl[i].mi.levels > 0
-                        ? pl[i].mi.level_spacing_m[0] : 0.0;
+        int geo = pl[i].has_mesh && (sub->effects & PROTO_FX_NORMALS) && !(sub->flags & PROTO_SUB_FULL_GEOMETRY) &&
+                  pl[i].mi.levels > 0;
+        pl[i].geo = geo ? pl[i].mi.level_spacing_m[0] : 0.0;
         plan_job(tb, cfg, &jobs[i], &pl[i]);
         pl[i].share_with = i;
         if (pl[i].tiles > (int)PROTO_MAX_FRAME_TILES) {
@@ -912,84 +912,113 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *
         pl[i].list = calloc((size_t)(pl[i].tiles ? pl[i].tiles : 1), sizeof *pl[i].list);
         if (!pl[i].list) pl[i].ok = 0;
     }
-    /* 2. per distinct time: evaluate, look tiles up, encode the missing */
+}
+
+/* The tiles missing at one time, and the channels their mips need. */
+typedef struct missing_set {
+    srv_tile **tile;
+    size_t n, cap;
+    unsigned need_fx[PROTO_MAX_LAYERS][MAX_MIPS];
+} missing_set;
+
+/* One tile of plan p looked up in the cache (p->list); a fresh one joins ms. */
+static void lookup_tile(srv_cascade *k, const tables *tb, srv_stats *st, plan *p, int at, srv_tile_key *key,
+                        uint64_t gen, missing_set *ms)
+{
+    int fresh = 0;
+    srv_tile *tl = srv_tiles_get(k->cache, key, gen, &fresh);
+    p->list[at] = tl;
+    if (!tl) return;
+    if (!fresh) {
+        atomic_fetch_add(&st->tile_cache_hits, 1);
+        return;
+    }
+    if (ms->n == ms->cap) {
+        size_t nc = ms->cap ? 2 * ms->cap : 256;
+        srv_tile **nm = realloc(ms->tile, nc * sizeof *nm);
+        if (!nm) {
+            tl->result = OCEAN_ENOMEM;
+            return;
+        }
+        ms->tile = nm;
+        ms->cap = nc;
+    }
+    ms->tile[ms->n++] = tl;
+    ms->need_fx[key->cascade][key->level] |= ocean_fx_of(chan_of(tb, p, key->cascade, key->level));
+    atomic_fetch_add(&st->tile_cache_misses, 1);
+}
+
+/* Every tile job j's plan p needs at time t, from the cache or into ms. */
+static void lookup_job(srv_cascade *k, const tables *tb, const srv_config *cfg, srv_stats *st,
+                       const srv_cascade_job *j, plan *p, double t, uint64_t gen, missing_set *ms)
+{
+    const proto_subscribe *sub = &j->c->sim.sub;
+    int at = 0;
+    for (int c = 0; c < p->layers; c++)
+        for (int m = 0; m < tb->mips[c]; m++) {
+            if (!p->need[c][m]) continue;
+            int np = tb->n >> m, T = cfg->cascade_tile < np ? cfg->cascade_tile : np, ntile = np / T;
+            const range *rg = &p->r[c][m];
+            for (int a = 0; a < rg->nz; a++)
+                for (int b = 0; b < rg->nx; b++) {
+                    srv_tile_key key;
+                    srv_tile_key_init(&key);
+                    key.t = t;
+                    key.accuracy = sub->accuracy;
+                    key.ix = (rg->x0 + b) % ntile;
+                    key.iz = (rg->z0 + a) % ntile;
+                    key.channels = (uint16_t)chan_of(tb, p, c, m);
+                    key.size = (uint16_t)T;
+                    key.layout = PROTO_LAYOUT_CASCADE;
+                    key.cascade = (uint8_t)c;
+                    key.level = (uint8_t)m;
+                    key.codec = sub->codec;
+                    lookup_tile(k, tb, st, p, at++, &key, gen, ms);
+                }
+        }
+    p->tiles = at;
+}
+
+/* Stage 2, per distinct time: every job's tiles looked up, the missing
+ * mips evaluated (a tile cached under another channel set is a distinct
+ * key, so every missing tile's mip is evaluated with its channels) and the
+ * missing tiles encoded on the workers. */
+static void tiles_by_time(srv_cascade *k, ocean *oc, ocean *nf, const srv_config *cfg, srv_stats *st,
+                          srv_cascade_job *jobs, plan *pl, int n, uint64_t gen)
+{
+    const tables *tb = &k->tab;
     int *done = calloc((size_t)n, sizeof *done);
-    srv_tile **missing = NULL;
-    size_t cap_missing = 0;
+    missing_set ms = {0};
     for (int i0 = 0; i0 < n && done; i0++) {
         if (done[i0]) continue;
         double t = jobs[i0].t;
-        unsigned need_fx[PROTO_MAX_LAYERS][MAX_MIPS];
-        memset(need_fx, 0, sizeof need_fx);
-        size_t nmiss = 0;
+        memset(ms.need_fx, 0, sizeof ms.need_fx);
+        ms.n = 0;
         for (int i = i0; i < n; i++) {
             if (done[i] || jobs[i].t != t) continue;
             done[i] = 1;
-            plan *p = &pl[i];
-            if (!p->ok) continue;
-            const proto_subscribe *sub = &jobs[i].c->sim.sub;
-            int at = 0;
-            for (int c = 0; c < p->layers; c++)
-                for (int m = 0; m < tb->mips[c]; m++) {
-                    if (!p->need[c][m]) continue;
-                    int np = tb->n >> m, T = cfg->cascade_tile < np ? cfg->cascade_tile : np, ntile = np / T;
-                    const range *rg = &p->r[c][m];
-                    for (int a = 0; a < rg->nz; a++)
-                        for (int b = 0; b < rg->nx; b++) {
-                            srv_tile_key key;
-                            srv_tile_key_init(&key);
-                            key.t = t;
-                            key.accuracy = sub->accuracy;
-                            key.ix = (rg->x0 + b) % ntile;
-                            key.iz = (rg->z0 + a) % ntile;
-                            key.channels = (uint16_t)chan_of(tb, p, c, m);
-                            key.size = (uint16_t)T;
-                            key.layout = PROTO_LAYOUT_CASCADE;
-                            key.cascade = (uint8_t)c;
-                            key.level = (uint8_t)m;
-                            key.codec = sub->codec;
-                            int fresh = 0;
-                            srv_tile *tl = srv_tiles_get(k->cache, &key, gen, &fresh);
-                            p->list[at++] = tl;
-                            if (!tl) continue;
-                            if (fresh) {
-                                if (nmiss == cap_missing) {
-                                    size_t nc = cap_missing ? 2 * cap_missing : 256;
-                                    srv_tile **nm = realloc(missing, nc * sizeof *nm);
-                                    if (!nm) {
-                                        tl->result = OCEAN_ENOMEM;
-                                        continue;
-                                    }
-                                    missing = nm;
-                                    cap_missing = nc;
-                                }
-                                missing[nmiss++] = tl;
-                                need_fx[c][m] |= ocean_fx_of(chan_of(tb, p, c, m));
-                                atomic_fetch_add(&st->tile_cache_misses, 1);
-                            } else {
-                                atomic_fetch_add(&st->tile_cache_hits, 1);
-                            }
-                        }
-                }
-            p->tiles = at;
+            if (pl[i].ok) lookup_job(k, tb, cfg, st, &jobs[i], &pl[i], t, gen, &ms);
         }
-        if (!nmiss) continue;
-        /* A tile cached under another channel set is a distinct key, so
-         * every missing tile's mip is evaluated with its channels. */
-        ocean_result r = eval_mips(k, oc, nf, tb, t, need_fx, st);
+        if (!ms.n) continue;
+        ocean_result r = eval_mips(k, oc, nf, tb, t, ms.need_fx, st);
         if (r != OCEAN_OK) {
-            for (size_t q = 0; q < nmiss; q++) missing[q]->result = r;
+            for (size_t q = 0; q < ms.n; q++) ms.tile[q]->result = r;
             continue;
         }
 #pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
-        for (size_t q = 0; q < nmiss; q++)
-            tile_build(missing[q], missing[q]->key.cascade < tb->fft ? k->mipf[missing[q]->key.level]
-                                                                     : k->nff[missing[q]->key.level], tb);
-        atomic_fetch_add(&st->tiles_encoded, (uint64_t)nmiss);
+        for (size_t q = 0; q < ms.n; q++)
+            tile_build(ms.tile[q], ms.tile[q]->key.cascade < tb->fft ? k->mipf[ms.tile[q]->key.level]
+                                                                     : k->nff[ms.tile[q]->key.level], tb);
+        atomic_fetch_add(&st->tiles_encoded, (uint64_t)ms.n);
     }
-    free(missing);
+    free(ms.tile);
     free(done);
-    /* 3. frames: live jobs with the same frame share one encoding */
+}
+
+/* Stage 3: frames; live jobs with the same frame share one encoding. */
+static void frames_of(const tables *tb, const srv_config *cfg, srv_stats *st, srv_cascade_job *jobs, plan *pl,
+                      int n)
+{
     for (int i = 0; i < n; i++) {
         if (!pl[i].ok || jobs[i].replay) continue;
         for (int l = 0; l < i; l++)
@@ -1016,6 +1045,17 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *
         }
         frame_build(tb, &jobs[i], &pl[i], 0);
     }
+}
+
+void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *nf, int order,
+                     const srv_config *cfg, srv_stats *st, srv_cascade_job *jobs, int n, uint64_t gen)
+{
+    if (n <= 0 || !tables_current(k, oc, g, nf, order, jobs, n)) return;
+    plan *pl = calloc((size_t)n, sizeof *pl);
+    if (!pl) return;
+    plan_jobs(&k->tab, cfg, st, jobs, pl, n);
+    tiles_by_time(k, oc, nf, cfg, st, jobs, pl, n, gen);
+    frames_of(&k->tab, cfg, st, jobs, pl, n);
     for (int i = 0; i < n; i++) free(pl[i].list);
     free(pl);
 }
