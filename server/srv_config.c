@@ -407,6 +407,94 @@ static void scene_overrides(const ocean_params *file, const ocean_params *scene,
     }
 }
 
+/* The keys checked together, once every source is applied (each was
+ * accepted alone); errors name every source (`from`). */
+static ocean_result check_sea(srv_settings *tmp, const char *from, char *err, size_t errlen)
+{
+    /* The near field takes over where the FFT stops: with ocean.k_max = inf
+     * the finest cascade would keep its whole square band and the Gerstner
+     * set could not start above it without a gap or an overlap, so the band
+     * is cut at the finest grid's Nyquist circle, pi n / L_finest. */
+    if ((tmp->effects & OCEAN_FX_NEAR_FIELD) && tmp->srv.near_field_waves > 0 && !isfinite(tmp->params.k_max)) {
+        double lf = tmp->params.patch_m / pow(tmp->params.cascade_ratio, tmp->params.cascades - 1);
+        tmp->params.k_max = M_PI * tmp->params.n / lf;
+    }
+    char msg[400];
+    if (ocean_params_validate(&tmp->params, msg, sizeof msg) != OCEAN_OK) {
+        set_err(err, errlen, "%s: %s", from, msg);
+        return OCEAN_EINVAL;
+    }
+    /* Layout 1 carries the near field as one more periodic cascade after
+     * the FFT's (srv_cascade.c); the protocol's cascade block holds
+     * PROTO_MAX_LAYERS, so a scene needing more is refused here, with the
+     * numbers, rather than served without its near field in silence. */
+    if (srv_settings_near_cascade(tmp) && tmp->params.cascades + 1 > PROTO_MAX_LAYERS) {
+        snprintf(msg, sizeof msg, "ocean.cascades = %d with the near-field effect (server.near_field_waves = %d) "
+                 "needs %d layout-1 cascades (the near field is one more), above the protocol's %d: use "
+                 "ocean.cascades <= %d, server.near_field_waves = 0, or drop near-field from scene.effects",
+                 tmp->params.cascades, tmp->srv.near_field_waves, tmp->params.cascades + 1, PROTO_MAX_LAYERS,
+                 PROTO_MAX_LAYERS - 1);
+        set_err(err, errlen, "%s: %s", from, msg);
+        return OCEAN_EINVAL;
+    }
+    return OCEAN_OK;
+}
+
+/* Keys that contradict each other, each accepted alone: a soft limit
+ * above the hard one never acts; a largest message above what all
+ * clients together may hold unfinished is never received whole. */
+static ocean_result check_limits(const srv_settings *tmp, const char *from, char *err, size_t errlen)
+{
+    char msg[300];
+    if (tmp->srv.output_soft > tmp->srv.output_hard) {
+        snprintf(msg, sizeof msg, "server.output_soft %.0f is above server.output_hard %.0f: the soft limit "
+                 "would never act; keep output_soft <= output_hard", (double)tmp->srv.output_soft,
+                 (double)tmp->srv.output_hard);
+        set_err(err, errlen, "%s: %s", from, msg);
+        return OCEAN_EINVAL;
+    }
+    if ((double)tmp->srv.max_message > (double)tmp->srv.partial_total) {
+        snprintf(msg, sizeof msg, "server.max_message %.0f is above server.partial_total %.0f: a message that "
+                 "large could never be received whole; keep max_message <= partial_total",
+                 (double)tmp->srv.max_message, (double)tmp->srv.partial_total);
+        set_err(err, errlen, "%s: %s", from, msg);
+        return OCEAN_EINVAL;
+    }
+    return OCEAN_OK;
+}
+
+/* Sim time is now - epoch; beyond the exact-time limit the ocean refuses
+ * to evaluate (ocean_time.h), so say so now, not with a daemon that
+ * serves no frames. */
+static ocean_result check_epoch(const srv_settings *tmp, const char *from, char *err, size_t errlen)
+{
+    if (!tmp->srv.epoch[0]) return OCEAN_OK;
+    double e = 0.0;
+    char msg[200];
+    if (srv_epoch_parse(tmp->srv.epoch, &e, msg, sizeof msg) != OCEAN_OK) {
+        set_err(err, errlen, "%s: %s", from, msg);
+        return OCEAN_EINVAL;
+    }
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    double simt = (double)ts.tv_sec - e;
+    if (ocean_time_ok(simt)) return OCEAN_OK;
+    if (err)
+        snprintf(err, errlen,
+                 "%s: server.epoch '%.64s' puts the sim time now at %.0f s, beyond the exact-time limit of "
+                 "+-%.0f s (OCEAN_TIME_MAX, 4.25 years): choose an epoch within 4.25 years of now",
+                 from, tmp->srv.epoch, simt, OCEAN_TIME_MAX);
+    return OCEAN_EINVAL;
+}
+
+static ocean_result check_together(srv_settings *tmp, const char *from, char *err, size_t errlen)
+{
+    ocean_result r = check_sea(tmp, from, err, errlen);
+    if (r == OCEAN_OK) r = check_limits(tmp, from, err, errlen);
+    if (r == OCEAN_OK) r = check_epoch(tmp, from, err, errlen);
+    return r;
+}
+
 ocean_result srv_settings_load(const char *path, const char *const *sets, int nsets,
                                srv_settings *out, char *err, size_t errlen)
 {
@@ -473,75 +561,7 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
         size_t fl = strlen(from);
         snprintf(from + fl, sizeof from - fl, " and the command line");
     }
-    /* The near field takes over where the FFT stops: with ocean.k_max = inf
-     * the finest cascade would keep its whole square band and the Gerstner
-     * set could not start above it without a gap or an overlap, so the band
-     * is cut at the finest grid's Nyquist circle, pi n / L_finest. */
-    if (r == OCEAN_OK && (tmp->effects & OCEAN_FX_NEAR_FIELD) && tmp->srv.near_field_waves > 0 &&
-        !isfinite(tmp->params.k_max)) {
-        double lf = tmp->params.patch_m / pow(tmp->params.cascade_ratio, tmp->params.cascades - 1);
-        tmp->params.k_max = M_PI * tmp->params.n / lf;
-    }
-    if (r == OCEAN_OK) {
-        char msg[256];
-        r = ocean_params_validate(&tmp->params, msg, sizeof msg);
-        if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", from, msg);
-    }
-    /* Layout 1 carries the near field as one more periodic cascade after
-     * the FFT's (srv_cascade.c); the protocol's cascade block holds
-     * PROTO_MAX_LAYERS, so a scene needing more is refused here, with the
-     * numbers, rather than served without its near field in silence. */
-    if (r == OCEAN_OK && srv_settings_near_cascade(tmp) &&
-        tmp->params.cascades + 1 > PROTO_MAX_LAYERS) {
-        char msg[400];
-        snprintf(msg, sizeof msg, "ocean.cascades = %d with the near-field effect (server.near_field_waves = %d) "
-                 "needs %d layout-1 cascades (the near field is one more), above the protocol's %d: use "
-                 "ocean.cascades <= %d, server.near_field_waves = 0, or drop near-field from scene.effects",
-                 tmp->params.cascades, tmp->srv.near_field_waves, tmp->params.cascades + 1, PROTO_MAX_LAYERS,
-                 PROTO_MAX_LAYERS - 1);
-        set_err(err, errlen, "%s: %s", from, msg);
-        r = OCEAN_EINVAL;
-    }
-    /* Keys that contradict each other, each accepted alone: a soft limit
-     * above the hard one never acts; a largest message above what all
-     * clients together may hold unfinished is never received whole. */
-    if (r == OCEAN_OK && tmp->srv.output_soft > tmp->srv.output_hard) {
-        char msg[300];
-        snprintf(msg, sizeof msg, "server.output_soft %.0f is above server.output_hard %.0f: the soft limit "
-                 "would never act; keep output_soft <= output_hard", (double)tmp->srv.output_soft,
-                 (double)tmp->srv.output_hard);
-        set_err(err, errlen, "%s: %s", from, msg);
-        r = OCEAN_EINVAL;
-    }
-    if (r == OCEAN_OK && (double)tmp->srv.max_message > (double)tmp->srv.partial_total) {
-        char msg[300];
-        snprintf(msg, sizeof msg, "server.max_message %.0f is above server.partial_total %.0f: a message that "
-                 "large could never be received whole; keep max_message <= partial_total",
-                 (double)tmp->srv.max_message, (double)tmp->srv.partial_total);
-        set_err(err, errlen, "%s: %s", from, msg);
-        r = OCEAN_EINVAL;
-    }
-    if (r == OCEAN_OK && tmp->srv.epoch[0]) {
-        double e = 0.0;
-        char msg[200];
-        r = srv_epoch_parse(tmp->srv.epoch, &e, msg, sizeof msg);
-        if (r != OCEAN_OK) set_err(err, errlen, "%s: %s", from, msg);
-        /* Sim time is now - epoch; beyond the exact-time limit the ocean
-         * refuses to evaluate (ocean_time.h), so say so now, not with a
-         * daemon that serves no frames. */
-        struct timespec ts;
-        clock_gettime(CLOCK_REALTIME, &ts);
-        double simt = (double)ts.tv_sec - e;
-        if (r == OCEAN_OK && !ocean_time_ok(simt)) {
-            if (err)
-                snprintf(err, errlen,
-                         "%s: server.epoch '%.64s' puts the sim time now at %.0f s, beyond the "
-                         "exact-time limit of +-%.0f s (OCEAN_TIME_MAX, 4.25 years): choose an "
-                         "epoch within 4.25 years of now",
-                         from, tmp->srv.epoch, simt, OCEAN_TIME_MAX);
-            r = OCEAN_EINVAL;
-        }
-    }
+    if (r == OCEAN_OK) r = check_together(tmp, from, err, errlen);
     if (r == OCEAN_OK) {
         snprintf(tmp->path, sizeof tmp->path, "%s", path ? path : "");
         *out = *tmp;
