@@ -1379,193 +1379,228 @@ static ocean_result e_record(proto_buf *b, int kind, const void *body, uint32_t 
     return put(b, pad, &p);
 }
 
-static ocean_result e_payload(proto_buf *b, const proto_msg *m)
+static ocean_result e_hello(proto_buf *b, const proto_msg *m)
 {
     uint8_t *p;
-    switch (m->hdr.type) {
-    case PROTO_HELLO: {
-        const proto_hello *h = &m->u.hello;
-        TRY(put(b, HELLO_FIXED, &p));
-        proto_st32(p, h->codecs);
-        p[4] = h->mesh_kinds;
-        p[5] = h->effects;
-        p[6] = h->cutoff_policies;
-        p[7] = h->modes;
-        proto_st32(p + 8, h->max_message);
-        proto_st32(p + 12, h->max_query_points);
-        proto_st16(p + 16, h->max_tile_size);
-        p[18] = h->max_lod_levels;
-        p[19] = h->max_layers;
-        proto_stf32(p + 20, h->tick_rate_hz);
-        proto_stf32(p + 24, h->max_frame_rate_hz);
-        proto_st32(p + 28, h->client_id);
-        set_sea(p + 32, &h->sea);
-        return put_str(b, h->server_version);
+    const proto_hello *h = &m->u.hello;
+    TRY(put(b, HELLO_FIXED, &p));
+    proto_st32(p, h->codecs);
+    p[4] = h->mesh_kinds;
+    p[5] = h->effects;
+    p[6] = h->cutoff_policies;
+    p[7] = h->modes;
+    proto_st32(p + 8, h->max_message);
+    proto_st32(p + 12, h->max_query_points);
+    proto_st16(p + 16, h->max_tile_size);
+    p[18] = h->max_lod_levels;
+    p[19] = h->max_layers;
+    proto_stf32(p + 20, h->tick_rate_hz);
+    proto_stf32(p + 24, h->max_frame_rate_hz);
+    proto_st32(p + 28, h->client_id);
+    set_sea(p + 32, &h->sea);
+    return put_str(b, h->server_version);
+}
+
+static ocean_result e_subscribe(proto_buf *b, const proto_msg *m)
+{
+    uint8_t *p;
+    const proto_subscribe *s = &m->u.subscribe;
+    TRY(put(b, SUBSCRIBE_SIZE, &p));
+    p[0] = s->effects;
+    p[1] = s->mesh_kind;
+    p[2] = s->codec;
+    p[3] = s->cutoff_policy;
+    p[4] = s->mode;
+    p[5] = s->layers;
+    p[6] = s->lod_levels;
+    p[7] = s->layout;
+    proto_st16(p + 8, s->tile_size);
+    p[10] = s->mesh_codec;
+    p[11] = s->flags;
+    proto_stf32(p + 12, s->frame_rate_hz);
+    proto_stf32(p + 16, s->accuracy);
+    proto_stf32(p + 20, s->base_spacing_m);
+    proto_stf32(p + 24, s->view_range_m);
+    return OCEAN_OK;
+}
+
+static ocean_result e_camera(proto_buf *b, const proto_msg *m)
+{
+    uint8_t *p;
+    const proto_camera *k = &m->u.camera;
+    TRY(put(b, CAMERA_SIZE, &p));
+    for (int i = 0; i < 3; i++) {
+        proto_stf64(p + 8 * i, k->pos[i]);
+        proto_stf32(p + 24 + 4 * i, k->vel[i]);
     }
-    case PROTO_SUBSCRIBE: {
-        const proto_subscribe *s = &m->u.subscribe;
-        TRY(put(b, SUBSCRIBE_SIZE, &p));
-        p[0] = s->effects;
-        p[1] = s->mesh_kind;
-        p[2] = s->codec;
-        p[3] = s->cutoff_policy;
-        p[4] = s->mode;
-        p[5] = s->layers;
-        p[6] = s->lod_levels;
-        p[7] = s->layout;
-        proto_st16(p + 8, s->tile_size);
-        p[10] = s->mesh_codec;
-        p[11] = s->flags;
-        proto_stf32(p + 12, s->frame_rate_hz);
-        proto_stf32(p + 16, s->accuracy);
-        proto_stf32(p + 20, s->base_spacing_m);
-        proto_stf32(p + 24, s->view_range_m);
-        return OCEAN_OK;
+    proto_stf32(p + 36, k->yaw_deg);
+    proto_stf32(p + 40, k->pitch_deg);
+    proto_stf32(p + 44, k->roll_deg);
+    proto_stf32(p + 48, k->fov_y_deg);
+    proto_st16(p + 52, k->viewport_w);
+    proto_st16(p + 54, k->viewport_h);
+    proto_stf64(p + 56, k->render_time);
+    return OCEAN_OK;
+}
+
+static ocean_result e_frame(proto_buf *b, const proto_msg *m)
+{
+    uint8_t *p;
+    const proto_frame *f = &m->u.frame;
+    TRY(put(b, FRAME_FIXED, &p));
+    proto_stf64(p, f->cutoff_k);
+    proto_stf64(p + 8, f->e_error);
+    for (int i = 0; i < 3; i++)
+        proto_stf64(p + 16 + 8 * i, f->origin[i]);
+    proto_st32(p + 40, f->camera_seq);
+    proto_st32(p + 44, f->tick);
+    proto_st16(p + 48, f->tile_count);
+    p[50] = f->has_mesh;
+    p[51] = f->layout;
+    if (f->layout == PROTO_LAYOUT_CASCADE) {
+        TRY(put(b, PROTO_CASCADE_BLOCK_FIXED +
+                       (size_t)f->cascades.cascade_count * PROTO_CASCADE_ENTRY_SIZE, &p));
+        cascade_block_write(p, &f->cascades);
     }
-    case PROTO_CAMERA: {
-        const proto_camera *k = &m->u.camera;
-        TRY(put(b, CAMERA_SIZE, &p));
-        for (int i = 0; i < 3; i++) {
-            proto_stf64(p + 8 * i, k->pos[i]);
-            proto_stf32(p + 24 + 4 * i, k->vel[i]);
-        }
-        proto_stf32(p + 36, k->yaw_deg);
-        proto_stf32(p + 40, k->pitch_deg);
-        proto_stf32(p + 44, k->roll_deg);
-        proto_stf32(p + 48, k->fov_y_deg);
-        proto_st16(p + 52, k->viewport_w);
-        proto_st16(p + 54, k->viewport_h);
-        proto_stf64(p + 56, k->render_time);
-        return OCEAN_OK;
+    if (f->tile_records) {
+        /* one allocation for the whole frame: the records are most of it */
+        size_t total = RECORD_HEAD + VERTS_FIXED;
+        for (unsigned i = 0; i < f->tile_count; i++)
+            total += f->tile_records[i].len;
+        TRY(proto_buf_reserve(b, total));
     }
-    case PROTO_FRAME: {
-        const proto_frame *f = &m->u.frame;
-        TRY(put(b, FRAME_FIXED, &p));
-        proto_stf64(p, f->cutoff_k);
-        proto_stf64(p + 8, f->e_error);
-        for (int i = 0; i < 3; i++)
-            proto_stf64(p + 16 + 8 * i, f->origin[i]);
-        proto_st32(p + 40, f->camera_seq);
-        proto_st32(p + 44, f->tick);
-        proto_st16(p + 48, f->tile_count);
-        p[50] = f->has_mesh;
-        p[51] = f->layout;
-        if (f->layout == PROTO_LAYOUT_CASCADE) {
-            TRY(put(b, PROTO_CASCADE_BLOCK_FIXED +
-                           (size_t)f->cascades.cascade_count * PROTO_CASCADE_ENTRY_SIZE, &p));
-            cascade_block_write(p, &f->cascades);
-        }
+    for (unsigned i = 0; i < f->tile_count; i++) {
         if (f->tile_records) {
-            /* one allocation for the whole frame: the records are most of it */
-            size_t total = RECORD_HEAD + VERTS_FIXED;
-            for (unsigned i = 0; i < f->tile_count; i++)
-                total += f->tile_records[i].len;
-            TRY(proto_buf_reserve(b, total));
+            TRY(proto_buf_append(b, f->tile_records[i].p, f->tile_records[i].len));
+        } else {
+            TRY(e_record(b, REC_TILE, &f->tiles[i], f->tiles[i].cascade));
         }
-        for (unsigned i = 0; i < f->tile_count; i++) {
-            if (f->tile_records) {
-                TRY(proto_buf_append(b, f->tile_records[i].p, f->tile_records[i].len));
-            } else {
-                TRY(e_record(b, REC_TILE, &f->tiles[i], f->tiles[i].cascade));
-            }
+    }
+    if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
+        TRY(e_record(b, REC_PLACEMENT, &f->placement, 0));
+    else if (f->has_mesh)
+        TRY(e_record(b, f->has_mesh == 2 ? REC_VERTICES_QZ : REC_VERTICES, &f->mesh, 0));
+    return OCEAN_OK;
+}
+
+static ocean_result e_topology(proto_buf *b, const proto_msg *m)
+{
+    uint8_t *p;
+    const proto_mesh_topology *t = &m->u.topology;
+    size_t ic = t->index_count, vc = t->vertex_count;
+    size_t at = b->len;
+    TRY(put(b, TOPO_FIXED + 4 * ic + 5 * vc, &p));
+    proto_st32(p, t->mesh_id);
+    p[4] = t->mesh_kind;
+    p[5] = t->lod_levels;
+    proto_st16(p + 6, t->flags);
+    proto_st32(p + 8, t->vertex_count);
+    proto_st32(p + 12, t->index_count);
+    uint8_t *q = p + TOPO_FIXED;
+    for (size_t i = 0; i < ic; i++)
+        proto_st32(q + 4 * i, t->indices[i]);
+    q += 4 * ic;
+    for (size_t i = 0; i < vc; i++)
+        proto_stf32(q + 4 * i, t->morph[i]);
+    memcpy(q + 4 * vc, t->level, vc);
+    if (t->flags & PROTO_TOPO_FLAT) {
+        /* flat floats 4-aligned from the message start (the header
+         * is 32 bytes, so from the payload start too) */
+        size_t pad = (4u - ((b->len - at) & 3u)) & 3u;
+        TRY(put(b, pad + 8 * vc + 16 * (size_t)t->lod_levels, &p));
+        memset(p, 0, pad);
+        p += pad;
+        for (size_t i = 0; i < 2 * vc; i++)
+            proto_stf32(p + 4 * i, t->flat[i]);
+        p += 8 * vc;
+        for (size_t i = 0; i < 4 * (size_t)t->lod_levels; i++)
+            proto_stf32(p + 4 * i, t->zones[i]);
+    }
+    return OCEAN_OK;
+}
+
+static ocean_result e_query(proto_buf *b, const proto_msg *m)
+{
+    uint8_t *p;
+    const proto_query *q = &m->u.query;
+    TRY(put(b, QUERY_FIXED + 16 * (size_t)q->count, &p));
+    proto_st32(p, q->query_id);
+    proto_st32(p + 4, q->count);
+    p[8] = q->at_time;
+    proto_stf64(p + 16, q->t);
+    for (size_t i = 0; i < 2 * (size_t)q->count; i++)
+        proto_stf64(p + QUERY_FIXED + 8 * i, q->points[i]);
+    return OCEAN_OK;
+}
+
+static ocean_result e_result(proto_buf *b, const proto_msg *m)
+{
+    uint8_t *p;
+    const proto_query_result *q = &m->u.result;
+    TRY(put(b, RESULT_FIXED + SAMPLE_SIZE * (size_t)q->count, &p));
+    proto_st32(p, q->query_id);
+    proto_st32(p + 4, q->count);
+    proto_stf64(p + 8, q->t);
+    for (uint32_t i = 0; i < q->count; i++) {
+        uint8_t *s = p + RESULT_FIXED + SAMPLE_SIZE * (size_t)i;
+        const proto_query_sample *x = &q->samples[i];
+        proto_stf32(s, x->height);
+        for (int k = 0; k < 3; k++) {
+            proto_stf32(s + 4 + 4 * k, x->normal[k]);
+            proto_stf32(s + 16 + 4 * k, x->velocity[k]);
         }
-        if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
-            TRY(e_record(b, REC_PLACEMENT, &f->placement, 0));
-        else if (f->has_mesh)
-            TRY(e_record(b, f->has_mesh == 2 ? REC_VERTICES_QZ : REC_VERTICES, &f->mesh, 0));
-        return OCEAN_OK;
+        proto_stf32(s + 28, x->foam);
+        proto_stf32(s + 32, x->error_bound);
     }
-    case PROTO_TILE:
-        return e_tile(b, &m->u.tile);
-    case PROTO_MESH_TOPOLOGY: {
-        const proto_mesh_topology *t = &m->u.topology;
-        size_t ic = t->index_count, vc = t->vertex_count;
-        size_t at = b->len;
-        TRY(put(b, TOPO_FIXED + 4 * ic + 5 * vc, &p));
-        proto_st32(p, t->mesh_id);
-        p[4] = t->mesh_kind;
-        p[5] = t->lod_levels;
-        proto_st16(p + 6, t->flags);
-        proto_st32(p + 8, t->vertex_count);
-        proto_st32(p + 12, t->index_count);
-        uint8_t *q = p + TOPO_FIXED;
-        for (size_t i = 0; i < ic; i++)
-            proto_st32(q + 4 * i, t->indices[i]);
-        q += 4 * ic;
-        for (size_t i = 0; i < vc; i++)
-            proto_stf32(q + 4 * i, t->morph[i]);
-        memcpy(q + 4 * vc, t->level, vc);
-        if (t->flags & PROTO_TOPO_FLAT) {
-            /* flat floats 4-aligned from the message start (the header
-             * is 32 bytes, so from the payload start too) */
-            size_t pad = (4u - ((b->len - at) & 3u)) & 3u;
-            TRY(put(b, pad + 8 * vc + 16 * (size_t)t->lod_levels, &p));
-            memset(p, 0, pad);
-            p += pad;
-            for (size_t i = 0; i < 2 * vc; i++)
-                proto_stf32(p + 4 * i, t->flat[i]);
-            p += 8 * vc;
-            for (size_t i = 0; i < 4 * (size_t)t->lod_levels; i++)
-                proto_stf32(p + 4 * i, t->zones[i]);
-        }
-        return OCEAN_OK;
-    }
-    case PROTO_MESH_VERTICES:
-        return e_vertices(b, &m->u.vertices);
-    case PROTO_QUERY: {
-        const proto_query *q = &m->u.query;
-        TRY(put(b, QUERY_FIXED + 16 * (size_t)q->count, &p));
-        proto_st32(p, q->query_id);
-        proto_st32(p + 4, q->count);
-        p[8] = q->at_time;
-        proto_stf64(p + 16, q->t);
-        for (size_t i = 0; i < 2 * (size_t)q->count; i++)
-            proto_stf64(p + QUERY_FIXED + 8 * i, q->points[i]);
-        return OCEAN_OK;
-    }
-    case PROTO_QUERY_RESULT: {
-        const proto_query_result *q = &m->u.result;
-        TRY(put(b, RESULT_FIXED + SAMPLE_SIZE * (size_t)q->count, &p));
-        proto_st32(p, q->query_id);
-        proto_st32(p + 4, q->count);
-        proto_stf64(p + 8, q->t);
-        for (uint32_t i = 0; i < q->count; i++) {
-            uint8_t *s = p + RESULT_FIXED + SAMPLE_SIZE * (size_t)i;
-            const proto_query_sample *x = &q->samples[i];
-            proto_stf32(s, x->height);
-            for (int k = 0; k < 3; k++) {
-                proto_stf32(s + 4 + 4 * k, x->normal[k]);
-                proto_stf32(s + 16 + 4 * k, x->velocity[k]);
-            }
-            proto_stf32(s + 28, x->foam);
-            proto_stf32(s + 32, x->error_bound);
-        }
-        return OCEAN_OK;
-    }
-    case PROTO_SEA_STATE: {
-        const proto_sea_state *s = &m->u.sea_state;
-        TRY(put(b, SEASTATE_FIXED, &p));
-        p[0] = s->op;
-        proto_stf64(p + 8, s->effective_time);
-        set_sea(p + 16, &s->sea);
-        return put_str(b, s->token);
-    }
-    case PROTO_ERROR: {
-        const proto_error *e = &m->u.error;
-        TRY(put(b, ERROR_FIXED, &p));
-        proto_st16(p, e->code);
-        proto_st16(p + 2, e->offending_type);
-        proto_st32(p + 4, e->offending_seq);
-        return put_str(b, e->message);
-    }
-    case PROTO_BYE: {
-        TRY(put(b, BYE_FIXED, &p));
-        proto_st16(p, m->u.bye.reason);
-        return put_str(b, m->u.bye.message);
-    }
-    default:
-        return OCEAN_ETYPE;
-    }
+    return OCEAN_OK;
+}
+
+static ocean_result e_sea_state(proto_buf *b, const proto_msg *m)
+{
+    uint8_t *p;
+    const proto_sea_state *s = &m->u.sea_state;
+    TRY(put(b, SEASTATE_FIXED, &p));
+    p[0] = s->op;
+    proto_stf64(p + 8, s->effective_time);
+    set_sea(p + 16, &s->sea);
+    return put_str(b, s->token);
+}
+
+static ocean_result e_error(proto_buf *b, const proto_msg *m)
+{
+    uint8_t *p;
+    const proto_error *e = &m->u.error;
+    TRY(put(b, ERROR_FIXED, &p));
+    proto_st16(p, e->code);
+    proto_st16(p + 2, e->offending_type);
+    proto_st32(p + 4, e->offending_seq);
+    return put_str(b, e->message);
+}
+
+static ocean_result e_bye(proto_buf *b, const proto_msg *m)
+{
+    uint8_t *p;
+    TRY(put(b, BYE_FIXED, &p));
+    proto_st16(p, m->u.bye.reason);
+    return put_str(b, m->u.bye.message);
+}
+
+static ocean_result e_tile_msg(proto_buf *b, const proto_msg *m) { return e_tile(b, &m->u.tile); }
+static ocean_result e_vertices_msg(proto_buf *b, const proto_msg *m) { return e_vertices(b, &m->u.vertices); }
+
+/* The payload encoder of each message type (index: the type). */
+static ocean_result (*const e_payloads[])(proto_buf *b, const proto_msg *m) = {
+    [PROTO_HELLO] = e_hello,     [PROTO_SUBSCRIBE] = e_subscribe,        [PROTO_CAMERA] = e_camera,
+    [PROTO_FRAME] = e_frame,     [PROTO_TILE] = e_tile_msg,              [PROTO_MESH_TOPOLOGY] = e_topology,
+    [PROTO_MESH_VERTICES] = e_vertices_msg, [PROTO_QUERY] = e_query,     [PROTO_QUERY_RESULT] = e_result,
+    [PROTO_SEA_STATE] = e_sea_state, [PROTO_ERROR] = e_error,           [PROTO_BYE] = e_bye,
+};
+
+static ocean_result e_payload(proto_buf *b, const proto_msg *m)
+{
+    unsigned t = m->hdr.type;
+    if (t >= sizeof e_payloads / sizeof e_payloads[0] || !e_payloads[t]) return OCEAN_ETYPE;
+    return e_payloads[t](b, m);
 }
 
 ocean_result proto_encode(proto_buf *out, const proto_msg *msg, char *err, size_t errlen)
