@@ -1152,6 +1152,146 @@ static void do_connects(oc_loop *l)
     }
 }
 
+/* The loop was woken: connections to open, writes and kills to ask of lws. */
+static void on_loop_wake(oc_loop *l)
+{
+    if (!l || l->destroying)
+        return;
+    do_connects(l);
+    pthread_mutex_lock(&l->mu);
+    for (oc_client *k = l->clients; k; k = k->next) {
+        if (!k->wsi)
+            continue;
+        if (k->kill_req)
+            lws_set_timeout(k->wsi, PENDING_TIMEOUT_CLOSE_SEND, LWS_TO_KILL_ASYNC);
+        else if (k->want_write || k->close_req)
+            lws_callback_on_writable(k->wsi);
+    }
+    pthread_mutex_unlock(&l->mu);
+}
+
+/* The server's close frame: its code and text become the reason, unless a
+ * BYE gave one first. */
+static void on_peer_close(oc_client *c, oc_loop *l, const void *in, size_t len)
+{
+    if (!c || len < 2)
+        return;
+    const uint8_t *p = in;
+    unsigned code = (unsigned)p[0] << 8 | p[1];
+    pthread_mutex_lock(&l->mu);
+    if (!c->close_recorded) {
+        set_local_error(c, OCEAN_EIO, "server closed the connection (code %u: %.*s)", code,
+                        (int)(len - 2 > 200 ? 200 : len - 2), (const char *)p + 2);
+        snprintf(c->close_msg, sizeof c->close_msg, "%s", c->last_err_msg);
+        c->close_recorded = 1;
+    }
+    pthread_mutex_unlock(&l->mu);
+}
+
+/* Bytes of a server message into c->rx; a message over max_message is
+ * skipped (said once).  0 when memory ran out: this fragment is dropped
+ * with the message. */
+static int rx_take(oc_client *c, oc_loop *l, struct lws *wsi, const void *in, size_t len)
+{
+    if (!c->rx_skip && lws_is_first_fragment(wsi) && c->rx_len == 0) {
+        /* size the buffer once for the whole WebSocket frame (the daemon
+         * sends each message as one), instead of doubling */
+        size_t want = len + lws_remaining_packet_payload(wsi);
+        if (want > c->rx_cap && want <= c->opt.max_message) {
+            free(c->rx);
+            c->rx = malloc(want);
+            c->rx_cap = c->rx ? want : 0;
+        }
+    }
+    if (c->rx_skip)
+        return 1;
+    if (c->rx_len + len > c->opt.max_message) {
+        c->rx_skip = 1;
+        c->rx_len = 0;
+        pthread_mutex_lock(&l->mu);
+        c->st.decode_errors++;
+        set_local_error(c, OCEAN_ETOOBIG, "server message longer than max_message %u", c->opt.max_message);
+        pthread_mutex_unlock(&l->mu);
+        return 1;
+    }
+    if (c->rx_len + len > c->rx_cap) {
+        size_t nc = c->rx_cap ? c->rx_cap : 65536;
+        while (nc < c->rx_len + len)
+            nc *= 2;
+        uint8_t *nb = realloc(c->rx, nc);
+        if (!nb) {
+            c->rx_skip = 1;
+            c->rx_len = 0;
+            return 0;
+        }
+        c->rx = nb;
+        c->rx_cap = nc;
+    }
+    memcpy(c->rx + c->rx_len, in, len);
+    c->rx_len += len;
+    return 1;
+}
+
+static void on_receive(oc_client *c, oc_loop *l, struct lws *wsi, const void *in, size_t len)
+{
+    if (!c)
+        return;
+    int final = lws_is_final_fragment(wsi) && lws_remaining_packet_payload(wsi) == 0;
+    if (lws_is_first_fragment(wsi) && c->rx_len == 0)
+        c->rx_skip = 0;
+    if (!rx_take(c, l, wsi, in, len) || !final)
+        return;
+    if (!c->rx_skip && c->rx_len) {
+        /* hand the buffer over; a fresh one is grown on demand */
+        uint8_t *msg = c->rx;
+        size_t mlen = c->rx_len;
+        c->rx = NULL;
+        c->rx_cap = 0;
+        c->rx_len = 0;
+        handle_message(c, msg, mlen);
+    }
+    c->rx_len = 0;
+    c->rx_skip = 0;
+}
+
+/* The next queued message to the socket, or the close after the last. */
+static int on_writeable(oc_client *c, oc_loop *l, struct lws *wsi)
+{
+    if (!c)
+        return 0;
+    pthread_mutex_lock(&l->mu);
+    txmsg *t = c->tx_head;
+    if (t) {
+        c->tx_head = t->next;
+        if (!c->tx_head)
+            c->tx_tail = NULL;
+        c->tx_count--;
+        c->tx_bytes -= proto_buf_len(&t->buf);
+    }
+    int more = c->tx_head != NULL;
+    c->want_write = more;
+    int closing = c->close_req && !more && !t;
+    pthread_mutex_unlock(&l->mu);
+    if (closing) {
+        lws_close_reason(wsi, LWS_CLOSE_STATUS_NORMAL, (unsigned char *)"bye", 3);
+        return -1;
+    }
+    if (!t)
+        return 0;
+    size_t n = proto_buf_len(&t->buf);
+    int w = lws_write(wsi, proto_buf_data(&t->buf), n, LWS_WRITE_BINARY);
+    proto_buf_free(&t->buf);
+    free(t);
+    if (w < (int)n)
+        return -1;
+    pthread_mutex_lock(&l->mu);
+    int again = c->tx_head != NULL || c->close_req;
+    pthread_mutex_unlock(&l->mu);
+    if (again)
+        lws_callback_on_writable(wsi);
+    return 0;
+}
+
 static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in, size_t len)
 {
     oc_client *c = (oc_client *)user;
@@ -1160,21 +1300,8 @@ static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user,
 
     switch (reason) {
     case LWS_CALLBACK_EVENT_WAIT_CANCELLED:
-        if (!l || l->destroying)
-            break;
-        do_connects(l);
-        pthread_mutex_lock(&l->mu);
-        for (oc_client *k = l->clients; k; k = k->next) {
-            if (!k->wsi)
-                continue;
-            if (k->kill_req)
-                lws_set_timeout(k->wsi, PENDING_TIMEOUT_CLOSE_SEND, LWS_TO_KILL_ASYNC);
-            else if (k->want_write || k->close_req)
-                lws_callback_on_writable(k->wsi);
-        }
-        pthread_mutex_unlock(&l->mu);
+        on_loop_wake(l);
         break;
-
     case LWS_CALLBACK_CLIENT_ESTABLISHED:
         if (!c)
             break;
@@ -1186,7 +1313,6 @@ static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user,
         pthread_cond_broadcast(&l->cv);
         pthread_mutex_unlock(&l->mu);
         break;
-
     case LWS_CALLBACK_CLIENT_CONNECTION_ERROR: {
         if (!c)
             break;
@@ -1199,29 +1325,15 @@ static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user,
         notify_closed(c, -1, msg);
         break;
     }
-
     case LWS_CALLBACK_WS_PEER_INITIATED_CLOSE:
-        if (c && len >= 2) {
-            const uint8_t *p = in;
-            unsigned code = (unsigned)p[0] << 8 | p[1];
-            pthread_mutex_lock(&l->mu);
-            if (!c->close_recorded) {
-                set_local_error(c, OCEAN_EIO, "server closed the connection (code %u: %.*s)", code,
-                                (int)(len - 2 > 200 ? 200 : len - 2), (const char *)p + 2);
-                snprintf(c->close_msg, sizeof c->close_msg, "%s", c->last_err_msg);
-                c->close_recorded = 1;
-            }
-            pthread_mutex_unlock(&l->mu);
-        }
+        on_peer_close(c, l, in, len);
         break;
-
     case LWS_CALLBACK_CLIENT_CLOSED:
         if (c) {
             lws_set_wsi_user(wsi, NULL); /* as above: WSI_DESTROY follows */
             notify_closed(c, -1, "connection closed");
         }
         break;
-
     case LWS_CALLBACK_WSI_DESTROY:
         /* Every wsi ends here.  One that lws closes before its handshake
          * completed (the kill timeout of oc_client_destroy on a server that
@@ -1238,103 +1350,11 @@ static int lws_cb(struct lws *wsi, enum lws_callback_reasons reason, void *user,
                 notify_closed(c, -1, "connection closed before the WebSocket handshake completed");
         }
         break;
-
-    case LWS_CALLBACK_CLIENT_RECEIVE: {
-        if (!c)
-            break;
-        int first = lws_is_first_fragment(wsi);
-        int final = lws_is_final_fragment(wsi) && lws_remaining_packet_payload(wsi) == 0;
-        if (first && c->rx_len == 0)
-            c->rx_skip = 0;
-        if (!c->rx_skip && first && c->rx_len == 0) {
-            /* size the buffer once for the whole WebSocket frame (the
-             * daemon sends each message as one), instead of doubling */
-            size_t want = len + lws_remaining_packet_payload(wsi);
-            if (want > c->rx_cap && want <= c->opt.max_message) {
-                free(c->rx);
-                c->rx = malloc(want);
-                c->rx_cap = c->rx ? want : 0;
-            }
-        }
-        if (!c->rx_skip) {
-            if (c->rx_len + len > c->opt.max_message) {
-                c->rx_skip = 1;
-                c->rx_len = 0;
-                pthread_mutex_lock(&l->mu);
-                c->st.decode_errors++;
-                set_local_error(c, OCEAN_ETOOBIG, "server message longer than max_message %u",
-                                c->opt.max_message);
-                pthread_mutex_unlock(&l->mu);
-            } else {
-                if (c->rx_len + len > c->rx_cap) {
-                    size_t nc = c->rx_cap ? c->rx_cap : 65536;
-                    while (nc < c->rx_len + len)
-                        nc *= 2;
-                    uint8_t *nb = realloc(c->rx, nc);
-                    if (!nb) {
-                        c->rx_skip = 1;
-                        c->rx_len = 0;
-                        break;
-                    }
-                    c->rx = nb;
-                    c->rx_cap = nc;
-                }
-                memcpy(c->rx + c->rx_len, in, len);
-                c->rx_len += len;
-            }
-        }
-        if (final) {
-            if (!c->rx_skip && c->rx_len) {
-                uint8_t *msg = c->rx;
-                size_t mlen = c->rx_len;
-                /* hand the buffer over; a fresh one is grown on demand */
-                c->rx = NULL;
-                c->rx_cap = 0;
-                c->rx_len = 0;
-                handle_message(c, msg, mlen);
-            }
-            c->rx_len = 0;
-            c->rx_skip = 0;
-        }
+    case LWS_CALLBACK_CLIENT_RECEIVE:
+        on_receive(c, l, wsi, in, len);
         break;
-    }
-
-    case LWS_CALLBACK_CLIENT_WRITEABLE: {
-        if (!c)
-            break;
-        pthread_mutex_lock(&l->mu);
-        txmsg *t = c->tx_head;
-        if (t) {
-            c->tx_head = t->next;
-            if (!c->tx_head)
-                c->tx_tail = NULL;
-            c->tx_count--;
-            c->tx_bytes -= proto_buf_len(&t->buf);
-        }
-        int more = c->tx_head != NULL;
-        c->want_write = more;
-        int closing = c->close_req && !more && !t;
-        pthread_mutex_unlock(&l->mu);
-        if (closing) {
-            lws_close_reason(wsi, LWS_CLOSE_STATUS_NORMAL, (unsigned char *)"bye", 3);
-            return -1;
-        }
-        if (t) {
-            size_t n = proto_buf_len(&t->buf);
-            int w = lws_write(wsi, proto_buf_data(&t->buf), n, LWS_WRITE_BINARY);
-            proto_buf_free(&t->buf);
-            free(t);
-            if (w < (int)n)
-                return -1;
-            pthread_mutex_lock(&l->mu);
-            int again = c->tx_head != NULL || c->close_req;
-            pthread_mutex_unlock(&l->mu);
-            if (again)
-                lws_callback_on_writable(wsi);
-        }
-        break;
-    }
-
+    case LWS_CALLBACK_CLIENT_WRITEABLE:
+        return on_writeable(c, l, wsi);
     default:
         break;
     }
