@@ -125,6 +125,218 @@ static const char *check_point(const oc_path_point *q, int *field)
     return NULL;
 }
 
+/* A path being read, line by line. */
+typedef struct path_reader {
+    const char *name;
+    unsigned lineno;
+    int have_header, ncol;
+    /* The daemon's "# subscribed at T: mode live|replay" starts a segment:
+     * live t is the server's clock (never back), replay t the render_time
+     * the client asked for, in its order (it may scrub back). */
+    int seg_replay, seg_start;
+    size_t cap;
+    oc_path *p;
+    char *err;
+    size_t errlen;
+} path_reader;
+
+/* A comment line: the version line is checked, a "# subscribed at" line
+ * starts a segment; others are ignored. */
+static ocean_result comment_line(path_reader *r, const char *s)
+{
+    static const char magic[] = "# oceand camera path";
+    if (strncmp(s, magic, sizeof magic - 1) == 0) {
+        /* exactly " v" and a decimal version: "v1x" and "v01" were read as
+         * version 1 */
+        const char *v = s + sizeof magic - 1;
+        v += *v == ' ';
+        size_t nd = v[0] == 'v' && v[-1] == ' ' ? strspn(v + 1, "0123456789") : 0;
+        if (nd == 0 || v[1 + nd] != 0 || (v[1] == '0' && nd > 1)) {
+            char shown[SHOWN];
+            conf_show_text(s, strlen(s), shown, sizeof shown);
+            ocean_seterr(r->err, r->errlen, "%s:%u: malformed version line \"%s\" (expected \"%s v1\")", r->name,
+                         r->lineno, shown, magic);
+            return OCEAN_EFORMAT;
+        }
+        if (nd != 1 || v[1] != '1') {
+            ocean_seterr(r->err, r->errlen, "%s:%u: camera path format version %s; this reader knows v1", r->name,
+                         r->lineno, v + 1);
+            return OCEAN_EVERSION;
+        }
+    }
+    static const char subscribed[] = "# subscribed at ";
+    if (strncmp(s, subscribed, sizeof subscribed - 1) == 0) {
+        const char *m = strstr(s, ": mode ");
+        r->seg_replay = m && strcmp(m + 7, "replay") == 0;
+        r->seg_start = 1;
+    }
+    return OCEAN_OK;
+}
+
+static ocean_result header_line(path_reader *r, const char *s)
+{
+    char hdr[1024];
+    size_t k = 0;
+    for (const char *c = s; *c && k + 1 < sizeof hdr; c++)
+        if (*c != ' ' && *c != '\t')
+            hdr[k++] = *c;
+    hdr[k] = 0;
+    r->ncol = header_columns(hdr);
+    if (!r->ncol) {
+        char shown[SHOWN];
+        conf_show_text(s, strlen(s), shown, sizeof shown);
+        ocean_seterr(r->err, r->errlen, "%s:%u: expected the header \"%s\" (or its first 11 columns), got \"%s\"",
+                     r->name, r->lineno, OC_PATH_HEADER, shown);
+        return OCEAN_EFORMAT;
+    }
+    r->have_header = 1;
+    return OCEAN_OK;
+}
+
+/* The comma-separated numbers of a data line into v (as many as the header
+ * has columns; decimal only: RECORDING.md writes %.17g, and strtod would
+ * also read hex, "0x10" as 16). */
+static ocean_result line_fields(path_reader *r, char *s, const char *orig, double v[13])
+{
+    int nf = 0;
+    char *tok = s;
+    const char *bad = NULL;
+    for (;;) {
+        char *comma = strchr(tok, ',');
+        if (comma)
+            *comma = 0;
+        char *f = trim(tok);
+        if (nf >= r->ncol) {
+            bad = "too many fields";
+            break;
+        }
+        if (!*f) {
+            ocean_seterr(r->err, r->errlen, "%s:%u: field %s is empty in \"%s\"", r->name, r->lineno, FIELD[nf], orig);
+            return OCEAN_EFORMAT;
+        }
+        errno = 0;
+        char *end;
+        v[nf] = strtod(f, &end);
+        if (*end || errno == ERANGE || strpbrk(f, "xX")) {
+            char shown[SHOWN];
+            conf_show_text(f, strlen(f), shown, sizeof shown);
+            ocean_seterr(r->err, r->errlen, "%s:%u: field %s \"%s\" is not a number in \"%s\"", r->name, r->lineno,
+                         FIELD[nf], shown, orig);
+            return OCEAN_EFORMAT;
+        }
+        nf++;
+        if (!comma)
+            break;
+        tok = comma + 1;
+    }
+    if (bad || nf != r->ncol) {
+        ocean_seterr(r->err, r->errlen, "%s:%u: expected %d fields as the header says, got %s%d in \"%s\"", r->name,
+                     r->lineno, r->ncol, bad ? "more than " : "", bad ? r->ncol : nf, orig);
+        return OCEAN_EFORMAT;
+    }
+    return OCEAN_OK;
+}
+
+/* The point of fields v (checked; the viewport defaulted when the header
+ * has 11 columns). */
+static ocean_result line_point(path_reader *r, double v[13], const char *orig, oc_path_point *q)
+{
+    int vw = OC_PATH_DEFAULT_VIEWPORT_W, vh = OC_PATH_DEFAULT_VIEWPORT_H;
+    if (r->ncol == 13) {
+        for (int k = 11; k < 13; k++)
+            if (!(v[k] >= 1 && v[k] <= 16384 && v[k] == floor(v[k]))) {
+                ocean_seterr(r->err, r->errlen, "%s:%u: field %s must be an integer 1..16384 in \"%s\"", r->name,
+                             r->lineno, FIELD[k], orig);
+                return OCEAN_EINVAL;
+            }
+        vw = (int)v[11];
+        vh = (int)v[12];
+    }
+    /* velocity, angles and fov travel in CAMERA as floats: kept as the
+     * floats sent, so the bounds below hold for what the server gets (fov
+     * 179.9999999999 is 180.0f, which it refuses) and a path written back
+     * (%.9g) reads back to the same values */
+    for (int k = 4; k <= 10; k++)
+        v[k] = as_wire_float(v[k]);
+    *q = (oc_path_point){v[0], {v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7], v[8], v[9], v[10], vw, vh};
+    int fi;
+    const char *why = check_point(q, &fi);
+    if (why) {
+        ocean_seterr(r->err, r->errlen, "%s:%u: field %s %s in \"%s\"", r->name, r->lineno, FIELD[fi], why, orig);
+        return OCEAN_EINVAL;
+    }
+    return OCEAN_OK;
+}
+
+/* A camera report: parsed, checked, in time order unless in a replay
+ * segment, appended. */
+static ocean_result data_line(path_reader *r, char *s)
+{
+    oc_path *p = r->p;
+    char orig[SHOWN]; /* the line as messages quote it */
+    conf_show_text(s, strlen(s), orig, sizeof orig);
+    double v[13];
+    oc_path_point q;
+    ocean_result res = line_fields(r, s, orig, v);
+    if (res == OCEAN_OK) res = line_point(r, v, orig, &q);
+    if (res != OCEAN_OK) return res;
+    if (p->count && q.t < p->pts[p->count - 1].t) {
+        if (!r->seg_replay && !r->seg_start) {
+            ocean_seterr(r->err, r->errlen, "%s:%u: t %.17g goes back in time (previous line has %.17g) in \"%s\" "
+                         "(only a replay-mode segment, after \"# subscribed at T: mode replay\", may)",
+                         r->name, r->lineno, q.t, p->pts[p->count - 1].t, orig);
+            return OCEAN_EINVAL;
+        }
+        if (p->monotonic)
+            p->back_line = r->lineno;
+        p->monotonic = 0;
+    }
+    r->seg_start = 0;
+    if (p->count >= OC_PATH_MAX_POINTS) {
+        ocean_seterr(r->err, r->errlen, "%s:%u: more than %u points", r->name, r->lineno, OC_PATH_MAX_POINTS);
+        return OCEAN_ETOOBIG;
+    }
+    if (p->count == r->cap) {
+        size_t nc = r->cap ? 2 * r->cap : 256;
+        oc_path_point *np = realloc(p->pts, nc * sizeof *np);
+        if (!np) {
+            ocean_seterr(r->err, r->errlen, "%s:%u: out of memory", r->name, r->lineno);
+            return OCEAN_ENOMEM;
+        }
+        p->pts = np;
+        r->cap = nc;
+    }
+    p->pts[p->count++] = q;
+    return OCEAN_OK;
+}
+
+/* The next line of text (at *pos) into line, trimmed: NULL with *res set
+ * when it is too long or holds a NUL byte. */
+static char *next_line(path_reader *r, const char *text, size_t len, size_t *pos, char *line, size_t cap,
+                       ocean_result *res)
+{
+    size_t start = *pos;
+    while (*pos < len && text[*pos] != '\n')
+        (*pos)++;
+    size_t ll = *pos - start;
+    if (*pos < len)
+        (*pos)++;
+    r->lineno++;
+    *res = OCEAN_EFORMAT;
+    if (ll >= cap) {
+        ocean_seterr(r->err, r->errlen, "%s:%u: line longer than %zu bytes", r->name, r->lineno, cap - 1);
+        return NULL;
+    }
+    if (memchr(text + start, 0, ll)) {
+        ocean_seterr(r->err, r->errlen, "%s:%u: NUL byte in line", r->name, r->lineno);
+        return NULL;
+    }
+    *res = OCEAN_OK;
+    memcpy(line, text + start, ll);
+    line[ll] = 0;
+    return trim(line);
+}
+
 ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_path **out, char *err,
                            size_t errlen)
 {
@@ -137,213 +349,33 @@ ocean_result oc_path_parse(const char *text, size_t len, const char *name, oc_pa
         ocean_seterr(err, errlen, "oc_path_parse: text is NULL with len %zu", len);
         return OCEAN_EINVAL;
     }
-    if (!name)
-        name = "path";
-    oc_path *p = calloc(1, sizeof *p);
-    if (!p)
+    path_reader r = {.name = name ? name : "path", .err = err, .errlen = errlen};
+    r.p = calloc(1, sizeof *r.p);
+    if (!r.p)
         return OCEAN_ENOMEM;
-    size_t cap = 0;
+    r.p->monotonic = 1;
     char line[1024];
     size_t pos = 0;
-    unsigned lineno = 0;
-    int have_header = 0, ncol = 0;
-    /* The daemon's "# subscribed at T: mode live|replay" starts a segment:
-     * live t is the server's clock (never back), replay t the render_time
-     * the client asked for, in its order (it may scrub back). */
-    int seg_replay = 0, seg_start = 0;
-    p->monotonic = 1;
     ocean_result res = OCEAN_OK;
-    while (pos < len) {
-        size_t start = pos;
-        while (pos < len && text[pos] != '\n')
-            pos++;
-        size_t ll = pos - start;
-        if (pos < len)
-            pos++;
-        lineno++;
-        if (ll >= sizeof line) {
-            ocean_seterr(err, errlen, "%s:%u: line longer than %zu bytes", name, lineno, sizeof line - 1);
-            res = OCEAN_EFORMAT;
-            break;
-        }
-        if (memchr(text + start, 0, ll)) {
-            ocean_seterr(err, errlen, "%s:%u: NUL byte in line", name, lineno);
-            res = OCEAN_EFORMAT;
-            break;
-        }
-        memcpy(line, text + start, ll);
-        line[ll] = 0;
-        char *s = trim(line);
-        if (*s == '#') {
-            static const char magic[] = "# oceand camera path";
-            if (strncmp(s, magic, sizeof magic - 1) == 0) {
-                /* exactly " v" and a decimal version: "v1x" and "v01" were
-                 * read as version 1 */
-                const char *v = s + sizeof magic - 1;
-                v += *v == ' ';
-                size_t nd = v[0] == 'v' && v[-1] == ' ' ? strspn(v + 1, "0123456789") : 0;
-                if (nd == 0 || v[1 + nd] != 0 || (v[1] == '0' && nd > 1)) {
-                    char shown[SHOWN];
-                    conf_show_text(s, strlen(s), shown, sizeof shown);
-                    ocean_seterr(err, errlen, "%s:%u: malformed version line \"%s\" (expected \"%s v1\")", name,
-                                 lineno, shown, magic);
-                    res = OCEAN_EFORMAT;
-                    break;
-                }
-                if (nd != 1 || v[1] != '1') {
-                    ocean_seterr(err, errlen, "%s:%u: camera path format version %s; this reader knows v1", name,
-                                 lineno, v + 1);
-                    res = OCEAN_EVERSION;
-                    break;
-                }
-            }
-            static const char subscribed[] = "# subscribed at ";
-            if (strncmp(s, subscribed, sizeof subscribed - 1) == 0) {
-                const char *m = strstr(s, ": mode ");
-                seg_replay = m && strcmp(m + 7, "replay") == 0;
-                seg_start = 1;
-            }
+    while (pos < len && res == OCEAN_OK) {
+        char *s = next_line(&r, text, len, &pos, line, sizeof line, &res);
+        if (!s || !*s)
             continue;
-        }
-        if (!*s)
-            continue;
-        if (!have_header) {
-            char hdr[1024];
-            size_t k = 0;
-            for (char *c = s; *c && k + 1 < sizeof hdr; c++)
-                if (*c != ' ' && *c != '\t')
-                    hdr[k++] = *c;
-            hdr[k] = 0;
-            ncol = header_columns(hdr);
-            if (!ncol) {
-                char shown[SHOWN];
-                conf_show_text(s, strlen(s), shown, sizeof shown);
-                ocean_seterr(err, errlen, "%s:%u: expected the header \"%s\" (or its first 11 columns), got \"%s\"",
-                       name, lineno, OC_PATH_HEADER, shown);
-                res = OCEAN_EFORMAT;
-                break;
-            }
-            have_header = 1;
-            continue;
-        }
-        char orig[SHOWN];   /* the line as messages quote it */
-        conf_show_text(s, strlen(s), orig, sizeof orig);
-        double v[13];
-        int nf = 0;
-        char *tok = s;
-        const char *bad = NULL;
-        for (;;) {
-            char *comma = strchr(tok, ',');
-            if (comma)
-                *comma = 0;
-            char *f = trim(tok);
-            if (nf >= ncol) {
-                bad = "too many fields";
-                break;
-            }
-            if (!*f) {
-                ocean_seterr(err, errlen, "%s:%u: field %s is empty in \"%s\"", name, lineno, FIELD[nf], orig);
-                res = OCEAN_EFORMAT;
-                break;
-            }
-            errno = 0;
-            char *end;
-            v[nf] = strtod(f, &end);
-            /* decimal only (RECORDING.md writes %.17g): strtod also reads
-             * hex ("0x10" was 16) */
-            if (*end || errno == ERANGE || strpbrk(f, "xX")) {
-                char shown[SHOWN];
-                conf_show_text(f, strlen(f), shown, sizeof shown);
-                ocean_seterr(err, errlen, "%s:%u: field %s \"%s\" is not a number in \"%s\"", name, lineno,
-                       FIELD[nf], shown, orig);
-                res = OCEAN_EFORMAT;
-                break;
-            }
-            nf++;
-            if (!comma)
-                break;
-            tok = comma + 1;
-        }
-        if (res != OCEAN_OK)
-            break;
-        if (bad || nf != ncol) {
-            ocean_seterr(err, errlen, "%s:%u: expected %d fields as the header says, got %s%d in \"%s\"", name,
-                   lineno, ncol, bad ? "more than " : "", bad ? ncol : nf, orig);
-            res = OCEAN_EFORMAT;
-            break;
-        }
-        int vw = OC_PATH_DEFAULT_VIEWPORT_W, vh = OC_PATH_DEFAULT_VIEWPORT_H;
-        if (ncol == 13) {
-            for (int k = 11; k < 13; k++)
-                if (!(v[k] >= 1 && v[k] <= 16384 && v[k] == floor(v[k]))) {
-                    ocean_seterr(err, errlen, "%s:%u: field %s must be an integer 1..16384 in \"%s\"", name,
-                           lineno, FIELD[k], orig);
-                    res = OCEAN_EINVAL;
-                    break;
-                }
-            if (res != OCEAN_OK)
-                break;
-            vw = (int)v[11];
-            vh = (int)v[12];
-        }
-        /* velocity, angles and fov travel in CAMERA as floats: kept as the
-         * floats sent, so the bounds below hold for what the server gets
-         * (fov 179.9999999999 is 180.0f, which it refuses) and a path
-         * written back (%.9g) reads back to the same values */
-        for (int k = 4; k <= 10; k++)
-            v[k] = as_wire_float(v[k]);
-        oc_path_point q = {v[0], {v[1], v[2], v[3]}, {v[4], v[5], v[6]}, v[7], v[8], v[9], v[10], vw, vh};
-        int fi;
-        const char *why = check_point(&q, &fi);
-        if (why) {
-            ocean_seterr(err, errlen, "%s:%u: field %s %s in \"%s\"", name, lineno, FIELD[fi], why, orig);
-            res = OCEAN_EINVAL;
-            break;
-        }
-        if (p->count && q.t < p->pts[p->count - 1].t) {
-            if (!seg_replay && !seg_start) {
-                ocean_seterr(err, errlen, "%s:%u: t %.17g goes back in time (previous line has %.17g) in \"%s\" "
-                             "(only a replay-mode segment, after \"# subscribed at T: mode replay\", may)",
-                             name, lineno, q.t, p->pts[p->count - 1].t, orig);
-                res = OCEAN_EINVAL;
-                break;
-            }
-            if (p->monotonic)
-                p->back_line = lineno;
-            p->monotonic = 0;
-        }
-        seg_start = 0;
-        if (p->count >= OC_PATH_MAX_POINTS) {
-            ocean_seterr(err, errlen, "%s:%u: more than %u points", name, lineno, OC_PATH_MAX_POINTS);
-            res = OCEAN_ETOOBIG;
-            break;
-        }
-        if (p->count == cap) {
-            size_t nc = cap ? 2 * cap : 256;
-            oc_path_point *np = realloc(p->pts, nc * sizeof *np);
-            if (!np) {
-                res = OCEAN_ENOMEM;
-                ocean_seterr(err, errlen, "%s:%u: out of memory", name, lineno);
-                break;
-            }
-            p->pts = np;
-            cap = nc;
-        }
-        p->pts[p->count++] = q;
+        res = *s == '#' ? comment_line(&r, s) : !r.have_header ? header_line(&r, s) : data_line(&r, s);
     }
-    if (res == OCEAN_OK && !have_header) {
-        ocean_seterr(err, errlen, "%s: no header line \"%s\" (empty file?)", name, OC_PATH_HEADER);
+    if (res == OCEAN_OK && !r.have_header) {
+        ocean_seterr(err, errlen, "%s: no header line \"%s\" (empty file?)", r.name, OC_PATH_HEADER);
         res = OCEAN_EFORMAT;
     }
-    if (res == OCEAN_OK && p->count == 0) {
-        ocean_seterr(err, errlen, "%s: no camera reports after the header", name);
+    if (res == OCEAN_OK && r.p->count == 0) {
+        ocean_seterr(err, errlen, "%s: no camera reports after the header", r.name);
         res = OCEAN_EFORMAT;
     }
     if (res != OCEAN_OK) {
-        oc_path_destroy(p);
+        oc_path_destroy(r.p);
         return res;
     }
-    *out = p;
+    *out = r.p;
     return OCEAN_OK;
 }
 
