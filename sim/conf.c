@@ -218,20 +218,294 @@ static bool name_match(const char *want, size_t wlen, const char *name)
 /* Parses text (NUL-terminated, already trimmed; quoted says it came in
  * quotes) as entry e's type and stores it into target.  On failure writes
  * a message in msg and sets *bad and *badlen to the offending part of text. */
+/* One value being parsed for its entry (parse_value's arguments, and what
+ * every type's parser reports a refusal with). */
+typedef struct pv_ctx {
+    const conf_entry *e;
+    void *target;
+    char *field;               /* the entry's field in target */
+    const char *text;
+    size_t tlen;
+    bool store;                /* !CONF_F_NOSTORE */
+    char *msg;
+    size_t msglen;
+    const char *range, *unit, *usp;  /* for "out of range" */
+    const char **bad;          /* the part of text a refusal quotes */
+    size_t *badlen;
+} pv_ctx;
+
+static ocean_result pv_int(const pv_ctx *x)
+{
+    const conf_entry *e = x->e;
+    void *target = x->target;
+    char *field = x->field;
+    char *msg = x->msg;
+    size_t msglen = x->msglen;
+    const char *text = x->text;
+    const char *range = x->range;
+    const char *unit = x->unit;
+    const char *usp = x->usp;
+    bool store = x->store;
+    const char *p = text + (text[0] == '+' || text[0] == '-');
+    if (!(*p >= '0' && *p <= '9')) {
+        ocean_seterr(msg, msglen, "%s: not an integer", e->name);
+        return OCEAN_EFORMAT;
+    }
+    char *end;
+    errno = 0;
+    long long v = strtoll(text, &end, 10);
+    if (*end) {
+        ocean_seterr(msg, msglen, "%s: %s", e->name,
+                end > text ? "trailing text after the integer" : "not an integer");
+        return OCEAN_EFORMAT;
+    }
+    if (errno == ERANGE || (double)v < e->min || (double)v > e->max) {
+        ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
+        return OCEAN_EINVAL;
+    }
+    int iv = (int)v;
+    return accept_value(e, target, field, &iv, sizeof iv, store, msg, msglen);
+}
+
+static ocean_result pv_u64(const pv_ctx *x)
+{
+    const conf_entry *e = x->e;
+    void *target = x->target;
+    char *field = x->field;
+    char *msg = x->msg;
+    size_t msglen = x->msglen;
+    const char *text = x->text;
+    const char *range = x->range;
+    const char *unit = x->unit;
+    const char *usp = x->usp;
+    bool store = x->store;
+    const char *p = text + (text[0] == '+');
+    int base = 10;
+    if (p[0] == '0' && (p[1] == 'x' || p[1] == 'X')) {
+        base = 16;
+        p += 2;
+    }
+    /* Scan the digits ourselves: strtoull would also take blanks, a
+     * sign and a second "0x". */
+    const char *q = p;
+    while ((*q >= '0' && *q <= '9') ||
+           (base == 16 && ((*q >= 'a' && *q <= 'f') || (*q >= 'A' && *q <= 'F'))))
+        q++;
+    if (q == p || *q) {
+        ocean_seterr(msg, msglen, "%s: %s", e->name,
+                q == p ? "not an unsigned integer" : "trailing text after the integer");
+        return OCEAN_EFORMAT;
+    }
+    errno = 0;
+    unsigned long long v = strtoull(p, NULL, base);
+    bool over = errno == ERANGE || (double)v < e->min ||
+                (e->max < 18446744073709551616.0 && v > (unsigned long long)e->max);
+    if (over) {
+        ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
+        return OCEAN_EINVAL;
+    }
+    uint64_t uv = v;
+    return accept_value(e, target, field, &uv, sizeof uv, store, msg, msglen);
+}
+
+static ocean_result pv_double(const pv_ctx *x)
+{
+    const conf_entry *e = x->e;
+    void *target = x->target;
+    char *field = x->field;
+    char *msg = x->msg;
+    size_t msglen = x->msglen;
+    const char *text = x->text;
+    const char *range = x->range;
+    const char *unit = x->unit;
+    const char *usp = x->usp;
+    bool store = x->store;
+    double v;
+    const char *p = text + (text[0] == '+');
+    if ((e->flags & CONF_F_INF_OK) &&
+        (strcasecmp(p, "inf") == 0 || strcasecmp(p, "infinity") == 0)) {
+        v = INFINITY;
+    } else {
+        /* Decimal only: strtod would also take nan, inf and hex floats. */
+        for (const char *q = text; *q; q++)
+            if (!strchr("0123456789+-.eE", *q)) {
+                const char *u = text + (text[0] == '+' || text[0] == '-');
+                bool nonfinite = strncasecmp(u, "nan", 3) == 0 || strncasecmp(u, "inf", 3) == 0;
+                if (nonfinite)
+                    ocean_seterr(msg, msglen, "%s: NaN and infinity are not allowed", e->name);
+                else if ((*text >= '0' && *text <= '9') || *text == '.' ||
+                         ((*text == '-' || *text == '+') && text[1] >= '0' && text[1] <= '9'))
+                    ocean_seterr(msg, msglen, "%s: trailing text after the number", e->name);
+                else
+                    ocean_seterr(msg, msglen, "%s: not a number", e->name);
+                return OCEAN_EFORMAT;
+            }
+        char *end;
+        errno = 0;
+        v = strtod(text, &end);
+        if (end == text || *end) {
+            ocean_seterr(msg, msglen, "%s: not a number", e->name);
+            return OCEAN_EFORMAT;
+        }
+        if (!isfinite(v)) {
+            ocean_seterr(msg, msglen, "%s: too large for a double, out of range %s%s%s",
+                    e->name, range, usp, unit);
+            return OCEAN_EINVAL;
+        }
+    }
+    if (!(v >= e->min && v <= e->max)) {
+        ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
+        return OCEAN_EINVAL;
+    }
+    return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
+}
+
+static ocean_result pv_bool(const pv_ctx *x)
+{
+    const conf_entry *e = x->e;
+    void *target = x->target;
+    char *field = x->field;
+    char *msg = x->msg;
+    size_t msglen = x->msglen;
+    const char *text = x->text;
+    bool store = x->store;
+    static const char *const yes[] = {"on", "true", "yes", "1"};
+    static const char *const no[] = {"off", "false", "no", "0"};
+    int v = -1;
+    for (int i = 0; i < 4; i++) {
+        if (strcasecmp(text, yes[i]) == 0) v = 1;
+        if (strcasecmp(text, no[i]) == 0) v = 0;
+    }
+    if (v < 0) {
+        ocean_seterr(msg, msglen, "%s: not a boolean (on/off, true/false, yes/no, 1/0)", e->name);
+        return OCEAN_EFORMAT;
+    }
+    return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
+}
+
+static ocean_result pv_enum(const pv_ctx *x)
+{
+    const conf_entry *e = x->e;
+    void *target = x->target;
+    char *field = x->field;
+    char *msg = x->msg;
+    size_t msglen = x->msglen;
+    const char *text = x->text;
+    size_t tlen = x->tlen;
+    bool store = x->store;
+    for (const conf_name *n = e->names; n && n->name; n++)
+        if (name_match(text, tlen, n->name)) {
+            int v = (int)n->value;
+            return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
+        }
+    char names[MSG_MAX];
+    names_list(e, names, sizeof names);
+    ocean_seterr(msg, msglen, "%s: unknown name (one of %s)", e->name, names);
+    return OCEAN_EFORMAT;
+}
+
+static ocean_result pv_flags(const pv_ctx *x)
+{
+    const conf_entry *e = x->e;
+    void *target = x->target;
+    char *field = x->field;
+    char *msg = x->msg;
+    size_t msglen = x->msglen;
+    const char *text = x->text;
+    size_t tlen = x->tlen;
+    bool store = x->store;
+    unsigned v = 0, all = 0;
+    for (const conf_name *n = e->names; n && n->name; n++) all |= n->value;
+    if (strcasecmp(text, "none") == 0) {
+        v = 0;
+    } else if (strcasecmp(text, "all") == 0) {
+        v = all;
+    } else {
+        const char *p = text;
+        for (;;) {
+            const char *comma = strchr(p, ',');
+            const char *end = comma ? comma : p + strlen(p);
+            const char *a = p, *b = end;
+            while (a < b && is_blank(*a)) a++;
+            while (b > a && is_blank(b[-1])) b--;
+            *x->bad = a;
+            *x->badlen = (size_t)(b - a);
+            if (a == b) {
+                ocean_seterr(msg, msglen, "%s: empty item in the list", e->name);
+                return OCEAN_EFORMAT;
+            }
+            const conf_name *hit = NULL;
+            for (const conf_name *n = e->names; n && n->name && !hit; n++)
+                if (name_match(a, (size_t)(b - a), n->name)) hit = n;
+            if (!hit) {
+                char names[MSG_MAX];
+                names_list(e, names, sizeof names);
+                /* none and all stand alone; none only where the key
+                 * may be empty (it said "or none, all" to keys that
+                 * refuse none, and all in a list was "unknown") */
+                ocean_seterr(msg, msglen, "%s: unknown name in the list (names: %s; or, alone, %s)",
+                             e->name, names, e->min >= 1 ? "all" : "none or all");
+                return OCEAN_EFORMAT;
+            }
+            if ((v & hit->value) == hit->value) {
+                ocean_seterr(msg, msglen, "%s: listed twice", e->name);
+                return OCEAN_EFORMAT;
+            }
+            v |= hit->value;
+            if (!comma) break;
+            p = comma + 1;
+        }
+        *x->bad = text;
+        *x->badlen = tlen;
+    }
+    if (v == 0 && e->min >= 1) {
+        ocean_seterr(msg, msglen, "%s: at least one name is needed", e->name);
+        return OCEAN_EINVAL;
+    }
+    return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
+}
+
+static ocean_result pv_string(const pv_ctx *x)
+{
+    const conf_entry *e = x->e;
+    void *target = x->target;
+    char *field = x->field;
+    char *msg = x->msg;
+    size_t msglen = x->msglen;
+    const char *text = x->text;
+    size_t tlen = x->tlen;
+    bool store = x->store;
+    if (tlen + 1 > e->size) {
+        ocean_seterr(msg, msglen, "%s: string too long (%zu bytes, at most %zu)", e->name,
+                tlen, e->size - 1);
+        return OCEAN_ETOOBIG;
+    }
+    if (e->hook) {
+        ocean_result r = e->hook(target, e, text, msg, msglen);
+        if (r != OCEAN_OK) return r;
+    }
+    if (store) {
+        memset(field, 0, e->size);
+        memcpy(field, text, tlen);
+    }
+    return OCEAN_OK;
+}
+
+/* The parser of each value type (index: conf_type). */
+static ocean_result (*const pv_of[])(const pv_ctx *x) = {
+    [CONF_INT] = pv_int,   [CONF_U64] = pv_u64,   [CONF_DOUBLE] = pv_double, [CONF_BOOL] = pv_bool,
+    [CONF_ENUM] = pv_enum, [CONF_FLAGS] = pv_flags, [CONF_STRING] = pv_string,
+};
+
 static ocean_result parse_value(const conf_entry *e, void *target, const char *text,
                                 bool quoted, char *msg, size_t msglen,
                                 const char **bad, size_t *badlen)
 {
-    char *field = (char *)target + e->offset;
-    bool store = !(e->flags & CONF_F_NOSTORE);
     char range[96];
     size_t tlen = strlen(text);
     *bad = text;
     *badlen = tlen;
     fmt_range(e, range, sizeof range);
-    const char *unit = e->unit ? e->unit : "";
-    const char *usp = e->unit ? " " : "";
-
     if (quoted && e->type != CONF_STRING) {
         ocean_seterr(msg, msglen, "%s: quotes are only for string values", e->name);
         return OCEAN_EFORMAT;
@@ -240,192 +514,14 @@ static ocean_result parse_value(const conf_entry *e, void *target, const char *t
         ocean_seterr(msg, msglen, "%s: missing value", e->name);
         return OCEAN_EFORMAT;
     }
-
-    switch (e->type) {
-    case CONF_INT: {
-        const char *p = text + (text[0] == '+' || text[0] == '-');
-        if (!(*p >= '0' && *p <= '9')) {
-            ocean_seterr(msg, msglen, "%s: not an integer", e->name);
-            return OCEAN_EFORMAT;
-        }
-        char *end;
-        errno = 0;
-        long long v = strtoll(text, &end, 10);
-        if (*end) {
-            ocean_seterr(msg, msglen, "%s: %s", e->name,
-                    end > text ? "trailing text after the integer" : "not an integer");
-            return OCEAN_EFORMAT;
-        }
-        if (errno == ERANGE || (double)v < e->min || (double)v > e->max) {
-            ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
-            return OCEAN_EINVAL;
-        }
-        int iv = (int)v;
-        return accept_value(e, target, field, &iv, sizeof iv, store, msg, msglen);
+    if ((unsigned)e->type >= sizeof pv_of / sizeof pv_of[0] || !pv_of[e->type]) {
+        ocean_seterr(msg, msglen, "%s: entry has an unknown type %d", e->name, (int)e->type);
+        return OCEAN_EINVAL;
     }
-    case CONF_U64: {
-        const char *p = text + (text[0] == '+');
-        int base = 10;
-        if (p[0] == '0' && (p[1] == 'x' || p[1] == 'X')) {
-            base = 16;
-            p += 2;
-        }
-        /* Scan the digits ourselves: strtoull would also take blanks, a
-         * sign and a second "0x". */
-        const char *q = p;
-        while ((*q >= '0' && *q <= '9') ||
-               (base == 16 && ((*q >= 'a' && *q <= 'f') || (*q >= 'A' && *q <= 'F'))))
-            q++;
-        if (q == p || *q) {
-            ocean_seterr(msg, msglen, "%s: %s", e->name,
-                    q == p ? "not an unsigned integer" : "trailing text after the integer");
-            return OCEAN_EFORMAT;
-        }
-        errno = 0;
-        unsigned long long v = strtoull(p, NULL, base);
-        bool over = errno == ERANGE || (double)v < e->min ||
-                    (e->max < 18446744073709551616.0 && v > (unsigned long long)e->max);
-        if (over) {
-            ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
-            return OCEAN_EINVAL;
-        }
-        uint64_t uv = v;
-        return accept_value(e, target, field, &uv, sizeof uv, store, msg, msglen);
-    }
-    case CONF_DOUBLE: {
-        double v;
-        const char *p = text + (text[0] == '+');
-        if ((e->flags & CONF_F_INF_OK) &&
-            (strcasecmp(p, "inf") == 0 || strcasecmp(p, "infinity") == 0)) {
-            v = INFINITY;
-        } else {
-            /* Decimal only: strtod would also take nan, inf and hex floats. */
-            for (const char *q = text; *q; q++)
-                if (!strchr("0123456789+-.eE", *q)) {
-                    const char *u = text + (text[0] == '+' || text[0] == '-');
-                    bool nonfinite = strncasecmp(u, "nan", 3) == 0 || strncasecmp(u, "inf", 3) == 0;
-                    if (nonfinite)
-                        ocean_seterr(msg, msglen, "%s: NaN and infinity are not allowed", e->name);
-                    else if ((*text >= '0' && *text <= '9') || *text == '.' ||
-                             ((*text == '-' || *text == '+') && text[1] >= '0' && text[1] <= '9'))
-                        ocean_seterr(msg, msglen, "%s: trailing text after the number", e->name);
-                    else
-                        ocean_seterr(msg, msglen, "%s: not a number", e->name);
-                    return OCEAN_EFORMAT;
-                }
-            char *end;
-            errno = 0;
-            v = strtod(text, &end);
-            if (end == text || *end) {
-                ocean_seterr(msg, msglen, "%s: not a number", e->name);
-                return OCEAN_EFORMAT;
-            }
-            if (!isfinite(v)) {
-                ocean_seterr(msg, msglen, "%s: too large for a double, out of range %s%s%s",
-                        e->name, range, usp, unit);
-                return OCEAN_EINVAL;
-            }
-        }
-        if (!(v >= e->min && v <= e->max)) {
-            ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
-            return OCEAN_EINVAL;
-        }
-        return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
-    }
-    case CONF_BOOL: {
-        static const char *const yes[] = {"on", "true", "yes", "1"};
-        static const char *const no[] = {"off", "false", "no", "0"};
-        int v = -1;
-        for (int i = 0; i < 4; i++) {
-            if (strcasecmp(text, yes[i]) == 0) v = 1;
-            if (strcasecmp(text, no[i]) == 0) v = 0;
-        }
-        if (v < 0) {
-            ocean_seterr(msg, msglen, "%s: not a boolean (on/off, true/false, yes/no, 1/0)", e->name);
-            return OCEAN_EFORMAT;
-        }
-        return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
-    }
-    case CONF_ENUM: {
-        for (const conf_name *n = e->names; n && n->name; n++)
-            if (name_match(text, tlen, n->name)) {
-                int v = (int)n->value;
-                return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
-            }
-        char names[MSG_MAX];
-        names_list(e, names, sizeof names);
-        ocean_seterr(msg, msglen, "%s: unknown name (one of %s)", e->name, names);
-        return OCEAN_EFORMAT;
-    }
-    case CONF_FLAGS: {
-        unsigned v = 0, all = 0;
-        for (const conf_name *n = e->names; n && n->name; n++) all |= n->value;
-        if (strcasecmp(text, "none") == 0) {
-            v = 0;
-        } else if (strcasecmp(text, "all") == 0) {
-            v = all;
-        } else {
-            const char *p = text;
-            for (;;) {
-                const char *comma = strchr(p, ',');
-                const char *end = comma ? comma : p + strlen(p);
-                const char *a = p, *b = end;
-                while (a < b && is_blank(*a)) a++;
-                while (b > a && is_blank(b[-1])) b--;
-                *bad = a;
-                *badlen = (size_t)(b - a);
-                if (a == b) {
-                    ocean_seterr(msg, msglen, "%s: empty item in the list", e->name);
-                    return OCEAN_EFORMAT;
-                }
-                const conf_name *hit = NULL;
-                for (const conf_name *n = e->names; n && n->name && !hit; n++)
-                    if (name_match(a, (size_t)(b - a), n->name)) hit = n;
-                if (!hit) {
-                    char names[MSG_MAX];
-                    names_list(e, names, sizeof names);
-                    /* none and all stand alone; none only where the key
-                     * may be empty (it said "or none, all" to keys that
-                     * refuse none, and all in a list was "unknown") */
-                    ocean_seterr(msg, msglen, "%s: unknown name in the list (names: %s; or, alone, %s)",
-                                 e->name, names, e->min >= 1 ? "all" : "none or all");
-                    return OCEAN_EFORMAT;
-                }
-                if ((v & hit->value) == hit->value) {
-                    ocean_seterr(msg, msglen, "%s: listed twice", e->name);
-                    return OCEAN_EFORMAT;
-                }
-                v |= hit->value;
-                if (!comma) break;
-                p = comma + 1;
-            }
-            *bad = text;
-            *badlen = tlen;
-        }
-        if (v == 0 && e->min >= 1) {
-            ocean_seterr(msg, msglen, "%s: at least one name is needed", e->name);
-            return OCEAN_EINVAL;
-        }
-        return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
-    }
-    case CONF_STRING:
-        if (tlen + 1 > e->size) {
-            ocean_seterr(msg, msglen, "%s: string too long (%zu bytes, at most %zu)", e->name,
-                    tlen, e->size - 1);
-            return OCEAN_ETOOBIG;
-        }
-        if (e->hook) {
-            ocean_result r = e->hook(target, e, text, msg, msglen);
-            if (r != OCEAN_OK) return r;
-        }
-        if (store) {
-            memset(field, 0, e->size);
-            memcpy(field, text, tlen);
-        }
-        return OCEAN_OK;
-    }
-    ocean_seterr(msg, msglen, "%s: entry has an unknown type %d", e->name, (int)e->type);
-    return OCEAN_EINVAL;
+    pv_ctx x = {.e = e, .target = target, .field = (char *)target + e->offset, .text = text, .tlen = tlen,
+                .store = !(e->flags & CONF_F_NOSTORE), .msg = msg, .msglen = msglen, .range = range,
+                .unit = e->unit ? e->unit : "", .usp = e->unit ? " " : "", .bad = bad, .badlen = badlen};
+    return pv_of[e->type](&x);
 }
 
 /* ---- lines ------------------------------------------------------------------ */
