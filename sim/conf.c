@@ -215,9 +215,6 @@ static bool name_match(const char *want, size_t wlen, const char *name)
     return strlen(name) == wlen && strncasecmp(want, name, wlen) == 0;
 }
 
-/* Parses text (NUL-terminated, already trimmed; quoted says it came in
- * quotes) as entry e's type and stores it into target.  On failure writes
- * a message in msg and sets *bad and *badlen to the offending part of text. */
 /* One value being parsed for its entry (parse_value's arguments, and what
  * every type's parser reports a refusal with). */
 typedef struct pv_ctx {
@@ -497,6 +494,9 @@ static ocean_result (*const pv_of[])(const pv_ctx *x) = {
     [CONF_ENUM] = pv_enum, [CONF_FLAGS] = pv_flags, [CONF_STRING] = pv_string,
 };
 
+/* Parses text (NUL-terminated, already trimmed; quoted says it came in
+ * quotes) as entry e's type and stores it into target.  On failure writes
+ * a message in msg and sets *bad and *badlen to the offending part of text. */
 static ocean_result parse_value(const conf_entry *e, void *target, const char *text,
                                 bool quoted, char *msg, size_t msglen,
                                 const char **bad, size_t *badlen)
