@@ -91,6 +91,118 @@ static int near_eq(double a, double b, double tol)
     return fabs(a - b) <= tol;
 }
 
+/* The cascades' mip grids, from the block (the decoder checked patch > 0,
+ * n a power of two 8..2048, mips 1..12 with n >> (mips - 1) >= 1). */
+static void view_cascades(oc_cascade_view *v, const proto_cascade_block *b)
+{
+    v->block = *b;
+    v->count = b->cascade_count;
+    for (int c = 0; c < v->count; c++) {
+        const proto_cascade_entry *e = &b->cascade[c];
+        cv_cascade *cc = &v->c[c];
+        cc->patch = e->patch_m;
+        cc->sigma = e->patch_m / e->n;
+        cc->mips = e->mips;
+        cc->fades = e->fades;
+        for (int m = 0; m < cc->mips; m++) {
+            cc->mip[m].n = e->n >> m;
+            cc->mip[m].spacing = cc->sigma * ldexp(1.0, m);
+        }
+    }
+}
+
+/* Pass 1: each tile names a mip that exists at its spacing; T per mip. */
+static ocean_result view_sizes(oc_cascade_view *v, const proto_frame *info, const float *const *tile_data, char *err,
+                               size_t errlen)
+{
+    for (unsigned i = 0; i < info->tile_count; i++) {
+        const proto_tile *t = &info->tiles[i];
+        if (!tile_data || !tile_data[i]) {
+            ocean_seterr(err, errlen, "tile %u is not decoded", i);
+            return OCEAN_ESTATE;
+        }
+        if (t->cascade >= v->count || t->level >= v->c[t->cascade].mips) {
+            ocean_seterr(err, errlen, "tile %u: cascade %u mip %u is not in the cascade block", i, t->cascade,
+                         t->level);
+            return OCEAN_EFORMAT;
+        }
+        cv_mip *mp = &v->c[t->cascade].mip[t->level];
+        if (!near_eq(t->spacing, mp->spacing, 1e-9 * mp->spacing)) {
+            ocean_seterr(err, errlen, "tile %u: spacing %.9g, mip %u of cascade %u has %.9g", i, t->spacing,
+                         t->level, t->cascade, mp->spacing);
+            return OCEAN_EFORMAT;
+        }
+        int side = t->width > t->height ? t->width : t->height;
+        if (side > mp->T)
+            mp->T = side;
+    }
+    return OCEAN_OK;
+}
+
+/* Each mip with tiles: its tile grid, empty (T = min(tile_size, n') with
+ * tile_size >= 2). */
+static ocean_result view_grids(oc_cascade_view *v, char *err, size_t errlen)
+{
+    for (int c = 0; c < v->count; c++)
+        for (int m = 0; m < v->c[c].mips; m++) {
+            cv_mip *mp = &v->c[c].mip[m];
+            if (!mp->T)
+                continue;
+            if (mp->T > mp->n || mp->T < (mp->n < 2 ? mp->n : 2)) {
+                ocean_seterr(err, errlen, "cascade %d mip %d: tiles of %d samples on a grid of %d", c, m, mp->T,
+                             mp->n);
+                return OCEAN_EFORMAT;
+            }
+            mp->tps = (mp->n + mp->T - 1) / mp->T;
+            mp->grid = malloc((size_t)mp->tps * mp->tps * sizeof *mp->grid);
+            if (!mp->grid)
+                return OCEAN_ENOMEM;
+            memset(mp->grid, 0xFF, (size_t)mp->tps * mp->tps * sizeof *mp->grid);
+        }
+    return OCEAN_OK;
+}
+
+/* Pass 2: tile i in its place per the spec, no tile twice. */
+static ocean_result view_place(oc_cascade_view *v, const proto_frame *info, const float *const *tile_data, unsigned i,
+                               char *err, size_t errlen)
+{
+    const proto_tile *t = &info->tiles[i];
+    cv_mip *mp = &v->c[t->cascade].mip[t->level];
+    int T = mp->T;
+    if (t->ix < 0 || t->iz < 0 || t->ix >= mp->tps || t->iz >= mp->tps) {
+        ocean_seterr(err, errlen, "tile %u: index (%d, %d) outside the %d x %d tiles of cascade %u mip %u", i, t->ix,
+                     t->iz, mp->tps, mp->tps, t->cascade, t->level);
+        return OCEAN_EFORMAT;
+    }
+    int ww = mp->n - t->ix * T < T ? mp->n - t->ix * T : T;
+    int hh = mp->n - t->iz * T < T ? mp->n - t->iz * T : T;
+    if (t->width != ww || t->height != hh) {
+        ocean_seterr(err, errlen, "tile %u: %u x %u samples where cascade %u mip %u has %d x %d", i, t->width,
+                     t->height, t->cascade, t->level, ww, hh);
+        return OCEAN_EFORMAT;
+    }
+    double ox = (double)t->ix * T * mp->spacing, oz = (double)t->iz * T * mp->spacing;
+    if (!near_eq(t->origin_x, ox, 1e-6 * mp->spacing) || !near_eq(t->origin_z, oz, 1e-6 * mp->spacing)) {
+        ocean_seterr(err, errlen, "tile %u: origin (%.9g, %.9g), tile (%d, %d) of cascade %u mip %u is at "
+                     "(%.9g, %.9g)", i, t->origin_x, t->origin_z, t->ix, t->iz, t->cascade, t->level, ox, oz);
+        return OCEAN_EFORMAT;
+    }
+    uint16_t *g = &mp->grid[(size_t)t->iz * mp->tps + t->ix];
+    if (*g != NO_TILE) {
+        ocean_seterr(err, errlen, "tile %u: tile (%d, %d) of cascade %u mip %u sent twice (also tile %u)", i, t->ix,
+                     t->iz, t->cascade, t->level, *g);
+        return OCEAN_EFORMAT;
+    }
+    *g = (uint16_t)i;
+    cv_tile *ct = &v->tiles[i];
+    ct->data = tile_data[i];
+    ct->w = t->width;
+    ct->h = t->height;
+    ct->channels = t->channels;
+    plane_offsets(t->channels, (size_t)t->width * t->height, ct->off);
+    return OCEAN_OK;
+}
+
 ocean_result oc_cascade_view_build(const proto_frame *info, const float *const *tile_data,
                                    oc_cascade_view **out, char *err, size_t errlen)
 {
@@ -103,118 +215,16 @@ ocean_result oc_cascade_view_build(const proto_frame *info, const float *const *
     oc_cascade_view *v = calloc(1, sizeof *v);
     if (!v)
         return OCEAN_ENOMEM;
-    v->block = *b;
-    v->count = b->cascade_count;
-    for (int c = 0; c < v->count; c++) {
-        const proto_cascade_entry *e = &b->cascade[c];
-        cv_cascade *cc = &v->c[c];
-        /* the decoder checked patch > 0, n a power of two 8..2048, mips
-         * 1..12 with n >> (mips - 1) >= 1 */
-        cc->patch = e->patch_m;
-        cc->sigma = e->patch_m / e->n;
-        cc->mips = e->mips;
-        cc->fades = e->fades;
-        for (int m = 0; m < cc->mips; m++) {
-            cc->mip[m].n = e->n >> m;
-            cc->mip[m].spacing = cc->sigma * ldexp(1.0, m);
-        }
-    }
-    ocean_result r = OCEAN_OK;
+    view_cascades(v, b);
     unsigned n = info->tile_count;
-    if (n) {
-        v->tiles = calloc(n, sizeof *v->tiles);
-        if (!v->tiles) {
-            oc_cascade_view_free(v);
-            return OCEAN_ENOMEM;
-        }
+    if (n && !(v->tiles = calloc(n, sizeof *v->tiles))) {
+        oc_cascade_view_free(v);
+        return OCEAN_ENOMEM;
     }
     v->ntiles = n;
-    /* pass 1: each tile names a mip that exists at its spacing; T per mip */
-    for (unsigned i = 0; i < n && r == OCEAN_OK; i++) {
-        const proto_tile *t = &info->tiles[i];
-        if (!tile_data || !tile_data[i]) {
-            ocean_seterr(err, errlen, "tile %u is not decoded", i);
-            r = OCEAN_ESTATE;
-            break;
-        }
-        if (t->cascade >= v->count || t->level >= v->c[t->cascade].mips) {
-            ocean_seterr(err, errlen, "tile %u: cascade %u mip %u is not in the cascade block", i, t->cascade,
-                         t->level);
-            r = OCEAN_EFORMAT;
-            break;
-        }
-        cv_mip *mp = &v->c[t->cascade].mip[t->level];
-        if (!near_eq(t->spacing, mp->spacing, 1e-9 * mp->spacing)) {
-            ocean_seterr(err, errlen, "tile %u: spacing %.9g, mip %u of cascade %u has %.9g", i, t->spacing,
-                         t->level, t->cascade, mp->spacing);
-            r = OCEAN_EFORMAT;
-            break;
-        }
-        int side = t->width > t->height ? t->width : t->height;
-        if (side > mp->T)
-            mp->T = side;
-    }
-    for (int c = 0; c < v->count && r == OCEAN_OK; c++)
-        for (int m = 0; m < v->c[c].mips; m++) {
-            cv_mip *mp = &v->c[c].mip[m];
-            if (!mp->T)
-                continue;
-            /* T = min(tile_size, n') with tile_size >= 2 */
-            if (mp->T > mp->n || mp->T < (mp->n < 2 ? mp->n : 2)) {
-                ocean_seterr(err, errlen, "cascade %d mip %d: tiles of %d samples on a grid of %d", c, m, mp->T,
-                             mp->n);
-                r = OCEAN_EFORMAT;
-                break;
-            }
-            mp->tps = (mp->n + mp->T - 1) / mp->T;
-            mp->grid = malloc((size_t)mp->tps * mp->tps * sizeof *mp->grid);
-            if (!mp->grid) {
-                r = OCEAN_ENOMEM;
-                break;
-            }
-            memset(mp->grid, 0xFF, (size_t)mp->tps * mp->tps * sizeof *mp->grid);
-        }
-    /* pass 2: placement per the spec, no tile twice */
-    for (unsigned i = 0; i < n && r == OCEAN_OK; i++) {
-        const proto_tile *t = &info->tiles[i];
-        cv_mip *mp = &v->c[t->cascade].mip[t->level];
-        int T = mp->T;
-        if (t->ix < 0 || t->iz < 0 || t->ix >= mp->tps || t->iz >= mp->tps) {
-            ocean_seterr(err, errlen, "tile %u: index (%d, %d) outside the %d x %d tiles of cascade %u mip %u", i,
-                         t->ix, t->iz, mp->tps, mp->tps, t->cascade, t->level);
-            r = OCEAN_EFORMAT;
-            break;
-        }
-        int ww = mp->n - t->ix * T < T ? mp->n - t->ix * T : T;
-        int hh = mp->n - t->iz * T < T ? mp->n - t->iz * T : T;
-        if (t->width != ww || t->height != hh) {
-            ocean_seterr(err, errlen, "tile %u: %u x %u samples where cascade %u mip %u has %d x %d", i, t->width,
-                         t->height, t->cascade, t->level, ww, hh);
-            r = OCEAN_EFORMAT;
-            break;
-        }
-        double ox = (double)t->ix * T * mp->spacing, oz = (double)t->iz * T * mp->spacing;
-        if (!near_eq(t->origin_x, ox, 1e-6 * mp->spacing) || !near_eq(t->origin_z, oz, 1e-6 * mp->spacing)) {
-            ocean_seterr(err, errlen, "tile %u: origin (%.9g, %.9g), tile (%d, %d) of cascade %u mip %u is at "
-                         "(%.9g, %.9g)", i, t->origin_x, t->origin_z, t->ix, t->iz, t->cascade, t->level, ox, oz);
-            r = OCEAN_EFORMAT;
-            break;
-        }
-        uint16_t *g = &mp->grid[(size_t)t->iz * mp->tps + t->ix];
-        if (*g != NO_TILE) {
-            ocean_seterr(err, errlen, "tile %u: tile (%d, %d) of cascade %u mip %u sent twice (also tile %u)", i,
-                         t->ix, t->iz, t->cascade, t->level, *g);
-            r = OCEAN_EFORMAT;
-            break;
-        }
-        *g = (uint16_t)i;
-        cv_tile *ct = &v->tiles[i];
-        ct->data = tile_data[i];
-        ct->w = t->width;
-        ct->h = t->height;
-        ct->channels = t->channels;
-        plane_offsets(t->channels, (size_t)t->width * t->height, ct->off);
-    }
+    ocean_result r = view_sizes(v, info, tile_data, err, errlen);
+    if (r == OCEAN_OK) r = view_grids(v, err, errlen);
+    for (unsigned i = 0; i < n && r == OCEAN_OK; i++) r = view_place(v, info, tile_data, i, err, errlen);
     if (r != OCEAN_OK) {
         oc_cascade_view_free(v);
         return r;
