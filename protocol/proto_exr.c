@@ -218,6 +218,46 @@ ocean_result proto_exr_encode(proto_codec c, const proto_codec_params *p, int w,
     return OCEAN_OK;
 }
 
+/* exr_check_header's outcomes: the header suits the tile; an OpenEXR call
+ * failed (its code in *rv); the header does not suit it (said in err). */
+enum { EXR_CHECK_OK, EXR_CHECK_FAIL, EXR_CHECK_REFUSED };
+
+/* One scanline part with the tile's data window and, for each of its
+ * planes, a channel of that name sampled 1 x 1 as half or float. */
+static int exr_check_header(exr_context_t ctx, int w, int h, unsigned channels, exr_attr_box2i_t *dwp,
+                            exr_result_t *rv, char *err, size_t errlen)
+{
+    int np = proto_tile_planes(channels), count = 0;
+    exr_storage_t st;
+    const exr_attr_chlist_t *cl = NULL;
+    if ((*rv = exr_get_count(ctx, &count)) != EXR_ERR_SUCCESS || (*rv = exr_get_storage(ctx, 0, &st)) ||
+        (*rv = exr_get_data_window(ctx, 0, dwp)) || (*rv = exr_get_channels(ctx, 0, &cl)))
+        return EXR_CHECK_FAIL;
+    exr_attr_box2i_t dw = *dwp;
+    if (count != 1 || st != EXR_STORAGE_SCANLINE) {
+        ocean_seterr(err, errlen, "EXR tile must be one scanline part (has %d parts, storage %d)", count, (int)st);
+        return EXR_CHECK_REFUSED;
+    }
+    if ((int64_t)dw.max.x - dw.min.x + 1 != w || (int64_t)dw.max.y - dw.min.y + 1 != h) {
+        ocean_seterr(err, errlen, "EXR data window %dx%d, tile is %dx%d", dw.max.x - dw.min.x + 1,
+               dw.max.y - dw.min.y + 1, w, h);
+        return EXR_CHECK_REFUSED;
+    }
+    if (!cl || cl->num_channels != np) {
+        ocean_seterr(err, errlen, "EXR has %d channels, tile needs %d", cl ? cl->num_channels : 0, np);
+        return EXR_CHECK_REFUSED;
+    }
+    for (int k = 0; k < cl->num_channels; k++) {
+        const exr_attr_chlist_entry_t *e = &cl->entries[k];
+        if (plane_index(channels, e->name.str) < 0 || e->x_sampling != 1 || e->y_sampling != 1 ||
+            (e->pixel_type != EXR_PIXEL_HALF && e->pixel_type != EXR_PIXEL_FLOAT)) {
+            ocean_seterr(err, errlen, "EXR channel '%s' unexpected (name, sampling or type)", e->name.str);
+            return EXR_CHECK_REFUSED;
+        }
+    }
+    return EXR_CHECK_OK;
+}
+
 ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *data, size_t len,
                               float *planes, char *err, size_t errlen)
 {
@@ -248,35 +288,13 @@ ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *da
     rv = exr_start_read(&ctx, "tile.exr", &init);
     if (rv != EXR_ERR_SUCCESS)
         goto fail;
-    int count = 0;
-    exr_storage_t st;
     exr_attr_box2i_t dw;
-    const exr_attr_chlist_t *cl = NULL;
     stage = "header";
-    if ((rv = exr_get_count(ctx, &count)) != EXR_ERR_SUCCESS || (rv = exr_get_storage(ctx, 0, &st)) ||
-        (rv = exr_get_data_window(ctx, 0, &dw)) || (rv = exr_get_channels(ctx, 0, &cl)))
+    int hc = exr_check_header(ctx, w, h, channels, &dw, &rv, err, errlen);
+    if (hc == EXR_CHECK_FAIL)
         goto fail;
-    if (count != 1 || st != EXR_STORAGE_SCANLINE) {
-        ocean_seterr(err, errlen, "EXR tile must be one scanline part (has %d parts, storage %d)", count, (int)st);
+    if (hc == EXR_CHECK_REFUSED)
         goto out;
-    }
-    if ((int64_t)dw.max.x - dw.min.x + 1 != w || (int64_t)dw.max.y - dw.min.y + 1 != h) {
-        ocean_seterr(err, errlen, "EXR data window %dx%d, tile is %dx%d", dw.max.x - dw.min.x + 1,
-               dw.max.y - dw.min.y + 1, w, h);
-        goto out;
-    }
-    if (!cl || cl->num_channels != np) {
-        ocean_seterr(err, errlen, "EXR has %d channels, tile needs %d", cl ? cl->num_channels : 0, np);
-        goto out;
-    }
-    for (int k = 0; k < cl->num_channels; k++) {
-        const exr_attr_chlist_entry_t *e = &cl->entries[k];
-        if (plane_index(channels, e->name.str) < 0 || e->x_sampling != 1 || e->y_sampling != 1 ||
-            (e->pixel_type != EXR_PIXEL_HALF && e->pixel_type != EXR_PIXEL_FLOAT)) {
-            ocean_seterr(err, errlen, "EXR channel '%s' unexpected (name, sampling or type)", e->name.str);
-            goto out;
-        }
-    }
     int32_t lpc = 1;
     stage = "scanlines_per_chunk";
     if ((rv = exr_get_scanlines_per_chunk(ctx, 0, &lpc)) != EXR_ERR_SUCCESS)
