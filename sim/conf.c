@@ -231,51 +231,41 @@ typedef struct pv_ctx {
     size_t *badlen;
 } pv_ctx;
 
+/* Stores v (n bytes) as x's value: accept_value with x's entry. */
+static ocean_result accept(const pv_ctx *x, void *v, size_t n)
+{
+    return accept_value(x->e, x->target, x->field, v, n, x->store, x->msg, x->msglen);
+}
+
 static ocean_result pv_int(const pv_ctx *x)
 {
     const conf_entry *e = x->e;
-    void *target = x->target;
-    char *field = x->field;
-    char *msg = x->msg;
-    size_t msglen = x->msglen;
     const char *text = x->text;
-    const char *range = x->range;
-    const char *unit = x->unit;
-    const char *usp = x->usp;
-    bool store = x->store;
     const char *p = text + (text[0] == '+' || text[0] == '-');
     if (!(*p >= '0' && *p <= '9')) {
-        ocean_seterr(msg, msglen, "%s: not an integer", e->name);
+        ocean_seterr(x->msg, x->msglen, "%s: not an integer", e->name);
         return OCEAN_EFORMAT;
     }
     char *end;
     errno = 0;
     long long v = strtoll(text, &end, 10);
     if (*end) {
-        ocean_seterr(msg, msglen, "%s: %s", e->name,
+        ocean_seterr(x->msg, x->msglen, "%s: %s", e->name,
                 end > text ? "trailing text after the integer" : "not an integer");
         return OCEAN_EFORMAT;
     }
     if (errno == ERANGE || (double)v < e->min || (double)v > e->max) {
-        ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
+        ocean_seterr(x->msg, x->msglen, "%s: out of range %s%s%s", e->name, x->range, x->usp, x->unit);
         return OCEAN_EINVAL;
     }
     int iv = (int)v;
-    return accept_value(e, target, field, &iv, sizeof iv, store, msg, msglen);
+    return accept(x, &iv, sizeof iv);
 }
 
 static ocean_result pv_u64(const pv_ctx *x)
 {
     const conf_entry *e = x->e;
-    void *target = x->target;
-    char *field = x->field;
-    char *msg = x->msg;
-    size_t msglen = x->msglen;
     const char *text = x->text;
-    const char *range = x->range;
-    const char *unit = x->unit;
-    const char *usp = x->usp;
-    bool store = x->store;
     const char *p = text + (text[0] == '+');
     int base = 10;
     if (p[0] == '0' && (p[1] == 'x' || p[1] == 'X')) {
@@ -289,7 +279,7 @@ static ocean_result pv_u64(const pv_ctx *x)
            (base == 16 && ((*q >= 'a' && *q <= 'f') || (*q >= 'A' && *q <= 'F'))))
         q++;
     if (q == p || *q) {
-        ocean_seterr(msg, msglen, "%s: %s", e->name,
+        ocean_seterr(x->msg, x->msglen, "%s: %s", e->name,
                 q == p ? "not an unsigned integer" : "trailing text after the integer");
         return OCEAN_EFORMAT;
     }
@@ -298,25 +288,17 @@ static ocean_result pv_u64(const pv_ctx *x)
     bool over = errno == ERANGE || (double)v < e->min ||
                 (e->max < 18446744073709551616.0 && v > (unsigned long long)e->max);
     if (over) {
-        ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
+        ocean_seterr(x->msg, x->msglen, "%s: out of range %s%s%s", e->name, x->range, x->usp, x->unit);
         return OCEAN_EINVAL;
     }
     uint64_t uv = v;
-    return accept_value(e, target, field, &uv, sizeof uv, store, msg, msglen);
+    return accept(x, &uv, sizeof uv);
 }
 
 static ocean_result pv_double(const pv_ctx *x)
 {
     const conf_entry *e = x->e;
-    void *target = x->target;
-    char *field = x->field;
-    char *msg = x->msg;
-    size_t msglen = x->msglen;
     const char *text = x->text;
-    const char *range = x->range;
-    const char *unit = x->unit;
-    const char *usp = x->usp;
-    bool store = x->store;
     double v;
     const char *p = text + (text[0] == '+');
     if ((e->flags & CONF_F_INF_OK) &&
@@ -329,43 +311,38 @@ static ocean_result pv_double(const pv_ctx *x)
                 const char *u = text + (text[0] == '+' || text[0] == '-');
                 bool nonfinite = strncasecmp(u, "nan", 3) == 0 || strncasecmp(u, "inf", 3) == 0;
                 if (nonfinite)
-                    ocean_seterr(msg, msglen, "%s: NaN and infinity are not allowed", e->name);
+                    ocean_seterr(x->msg, x->msglen, "%s: NaN and infinity are not allowed", e->name);
                 else if ((*text >= '0' && *text <= '9') || *text == '.' ||
                          ((*text == '-' || *text == '+') && text[1] >= '0' && text[1] <= '9'))
-                    ocean_seterr(msg, msglen, "%s: trailing text after the number", e->name);
+                    ocean_seterr(x->msg, x->msglen, "%s: trailing text after the number", e->name);
                 else
-                    ocean_seterr(msg, msglen, "%s: not a number", e->name);
+                    ocean_seterr(x->msg, x->msglen, "%s: not a number", e->name);
                 return OCEAN_EFORMAT;
             }
         char *end;
         errno = 0;
         v = strtod(text, &end);
         if (end == text || *end) {
-            ocean_seterr(msg, msglen, "%s: not a number", e->name);
+            ocean_seterr(x->msg, x->msglen, "%s: not a number", e->name);
             return OCEAN_EFORMAT;
         }
         if (!isfinite(v)) {
-            ocean_seterr(msg, msglen, "%s: too large for a double, out of range %s%s%s",
-                    e->name, range, usp, unit);
+            ocean_seterr(x->msg, x->msglen, "%s: too large for a double, out of range %s%s%s",
+                    e->name, x->range, x->usp, x->unit);
             return OCEAN_EINVAL;
         }
     }
     if (!(v >= e->min && v <= e->max)) {
-        ocean_seterr(msg, msglen, "%s: out of range %s%s%s", e->name, range, usp, unit);
+        ocean_seterr(x->msg, x->msglen, "%s: out of range %s%s%s", e->name, x->range, x->usp, x->unit);
         return OCEAN_EINVAL;
     }
-    return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
+    return accept(x, &v, sizeof v);
 }
 
 static ocean_result pv_bool(const pv_ctx *x)
 {
     const conf_entry *e = x->e;
-    void *target = x->target;
-    char *field = x->field;
-    char *msg = x->msg;
-    size_t msglen = x->msglen;
     const char *text = x->text;
-    bool store = x->store;
     static const char *const yes[] = {"on", "true", "yes", "1"};
     static const char *const no[] = {"off", "false", "no", "0"};
     int v = -1;
@@ -374,43 +351,31 @@ static ocean_result pv_bool(const pv_ctx *x)
         if (strcasecmp(text, no[i]) == 0) v = 0;
     }
     if (v < 0) {
-        ocean_seterr(msg, msglen, "%s: not a boolean (on/off, true/false, yes/no, 1/0)", e->name);
+        ocean_seterr(x->msg, x->msglen, "%s: not a boolean (on/off, true/false, yes/no, 1/0)", e->name);
         return OCEAN_EFORMAT;
     }
-    return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
+    return accept(x, &v, sizeof v);
 }
 
 static ocean_result pv_enum(const pv_ctx *x)
 {
     const conf_entry *e = x->e;
-    void *target = x->target;
-    char *field = x->field;
-    char *msg = x->msg;
-    size_t msglen = x->msglen;
     const char *text = x->text;
-    size_t tlen = x->tlen;
-    bool store = x->store;
     for (const conf_name *n = e->names; n && n->name; n++)
-        if (name_match(text, tlen, n->name)) {
+        if (name_match(text, x->tlen, n->name)) {
             int v = (int)n->value;
-            return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
+            return accept(x, &v, sizeof v);
         }
     char names[MSG_MAX];
     names_list(e, names, sizeof names);
-    ocean_seterr(msg, msglen, "%s: unknown name (one of %s)", e->name, names);
+    ocean_seterr(x->msg, x->msglen, "%s: unknown name (one of %s)", e->name, names);
     return OCEAN_EFORMAT;
 }
 
 static ocean_result pv_flags(const pv_ctx *x)
 {
     const conf_entry *e = x->e;
-    void *target = x->target;
-    char *field = x->field;
-    char *msg = x->msg;
-    size_t msglen = x->msglen;
     const char *text = x->text;
-    size_t tlen = x->tlen;
-    bool store = x->store;
     unsigned v = 0, all = 0;
     for (const conf_name *n = e->names; n && n->name; n++) all |= n->value;
     if (strcasecmp(text, "none") == 0) {
@@ -428,7 +393,7 @@ static ocean_result pv_flags(const pv_ctx *x)
             *x->bad = a;
             *x->badlen = (size_t)(b - a);
             if (a == b) {
-                ocean_seterr(msg, msglen, "%s: empty item in the list", e->name);
+                ocean_seterr(x->msg, x->msglen, "%s: empty item in the list", e->name);
                 return OCEAN_EFORMAT;
             }
             const conf_name *hit = NULL;
@@ -440,12 +405,12 @@ static ocean_result pv_flags(const pv_ctx *x)
                 /* none and all stand alone; none only where the key
                  * may be empty (it said "or none, all" to keys that
                  * refuse none, and all in a list was "unknown") */
-                ocean_seterr(msg, msglen, "%s: unknown name in the list (names: %s; or, alone, %s)",
+                ocean_seterr(x->msg, x->msglen, "%s: unknown name in the list (names: %s; or, alone, %s)",
                              e->name, names, e->min >= 1 ? "all" : "none or all");
                 return OCEAN_EFORMAT;
             }
             if ((v & hit->value) == hit->value) {
-                ocean_seterr(msg, msglen, "%s: listed twice", e->name);
+                ocean_seterr(x->msg, x->msglen, "%s: listed twice", e->name);
                 return OCEAN_EFORMAT;
             }
             v |= hit->value;
@@ -453,37 +418,31 @@ static ocean_result pv_flags(const pv_ctx *x)
             p = comma + 1;
         }
         *x->bad = text;
-        *x->badlen = tlen;
+        *x->badlen = x->tlen;
     }
     if (v == 0 && e->min >= 1) {
-        ocean_seterr(msg, msglen, "%s: at least one name is needed", e->name);
+        ocean_seterr(x->msg, x->msglen, "%s: at least one name is needed", e->name);
         return OCEAN_EINVAL;
     }
-    return accept_value(e, target, field, &v, sizeof v, store, msg, msglen);
+    return accept(x, &v, sizeof v);
 }
 
 static ocean_result pv_string(const pv_ctx *x)
 {
     const conf_entry *e = x->e;
-    void *target = x->target;
-    char *field = x->field;
-    char *msg = x->msg;
-    size_t msglen = x->msglen;
     const char *text = x->text;
-    size_t tlen = x->tlen;
-    bool store = x->store;
-    if (tlen + 1 > e->size) {
-        ocean_seterr(msg, msglen, "%s: string too long (%zu bytes, at most %zu)", e->name,
-                tlen, e->size - 1);
+    if (x->tlen + 1 > e->size) {
+        ocean_seterr(x->msg, x->msglen, "%s: string too long (%zu bytes, at most %zu)", e->name,
+                x->tlen, e->size - 1);
         return OCEAN_ETOOBIG;
     }
     if (e->hook) {
-        ocean_result r = e->hook(target, e, text, msg, msglen);
+        ocean_result r = e->hook(x->target, e, text, x->msg, x->msglen);
         if (r != OCEAN_OK) return r;
     }
-    if (store) {
-        memset(field, 0, e->size);
-        memcpy(field, text, tlen);
+    if (x->store) {
+        memset(x->field, 0, e->size);
+        memcpy(x->field, text, x->tlen);
     }
     return OCEAN_OK;
 }
