@@ -100,8 +100,9 @@ declare -A KNOWN_TITLE=(
     [bench_meshqz]="Layout-0 mesh positions, f32 and qz (issue 14)"
     [bench_server]="Daemon under load"
     [bench_decode]="The viewer's decoding: WebAssembly against native C"
+    [bench_link]="A viewer on a slow link: frames coarser, not older"
 )
-ORDER=(bench_core bench_accuracy bench_codec bench_mesh bench_meshqz bench_server bench_decode)
+ORDER=(bench_core bench_accuracy bench_codec bench_mesh bench_meshqz bench_server bench_decode bench_link)
 declare -A DONE=()
 ONLY=" ${BENCH_ONLY:-} "
 selected() { [ -z "${BENCH_ONLY:-}" ] || [[ "$ONLY" == *" $1 "* ]]; }
