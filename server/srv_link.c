@@ -19,7 +19,7 @@ void srv_link_init(srv_link *l)
     memset(l, 0, sizeof *l);
 }
 
-void srv_link_sent(srv_link *l, double sim_t, size_t bytes)
+void srv_link_sent(srv_link *l, double sim_t, size_t bytes, double now)
 {
     if (l->n == SRV_LINK_RING) { /* nothing confirmed for 64 frames: forget the oldest */
         l->head = (l->head + 1) % SRV_LINK_RING;
@@ -28,6 +28,7 @@ void srv_link_sent(srv_link *l, double sim_t, size_t bytes)
     int i = (l->head + l->n) % SRV_LINK_RING;
     l->ring[i].sim_t = sim_t;
     l->ring[i].bytes = (double)bytes;
+    l->ring[i].sent = now;
     l->n++;
 }
 
@@ -65,6 +66,7 @@ void srv_link_confirmed(srv_link *l, double sim_t, double ceiling, double now)
     }
     if (!popped) return;
     double dt = quiet(l, now) ? 0 : now - l->last_ack;
+    if (dt > 0) l->ack_gap = l->ack_gap > 0 ? 0.8 * l->ack_gap + 0.2 * dt : dt;
     measure(l, got, now);
     l->last_ack = now;
     double cur = l->bps > 0 ? l->bps : ceiling;
@@ -84,6 +86,8 @@ void srv_link_confirmed(srv_link *l, double sim_t, double ceiling, double now)
 int srv_link_may_send(srv_link *l, double now)
 {
     if (quiet(l, now) || l->n < SRV_LINK_WINDOW) return 1;
+    /* the oldest frame in flight may just not be reported yet */
+    if (now - l->ring[l->head].sent <= 1.5 * l->ack_gap + 0.1) return 1;
     l->waited = 1;
     return 0;
 }

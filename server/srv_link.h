@@ -8,8 +8,11 @@
  * last FRAME it received (PROTOCOL.md "Header"); every CAMERA therefore
  * confirms the frames up to that one.  The link counts the bytes confirmed
  * per second (the delivery rate), holds the next frame while
- * SRV_LINK_WINDOW frames are unconfirmed (a newer frame replaces it: latest
- * wins at the sender, so no frame waits in a socket buffer for seconds),
+ * SRV_LINK_WINDOW frames are unconfirmed and the oldest of them has waited
+ * longer than the client's confirmations are apart (1.5 times their mean
+ * gap, plus 0.1 s: a client that reports twice a second is not held to
+ * three frames a report), so a newer frame replaces it: latest wins at the
+ * sender, and no frame waits in a socket buffer for seconds;
  * and when frames had to wait, plans this client's frames for 85 % of the
  * delivery rate, raising that by a fifth a second while none waits, up to
  * the ceiling (server.viewer_bytes_per_s).  A client that confirms nothing
@@ -37,9 +40,11 @@ typedef struct srv_link {
     struct {
         double sim_t;     /* the frame's sim time (header) */
         double bytes;     /* its wire size */
+        double sent;      /* monotonic time it was written */
     } ring[SRV_LINK_RING];/* live frames sent and not yet confirmed, oldest first */
     int head, n;
     double last_ack;      /* monotonic time of the last confirmation; 0: none */
+    double ack_gap;       /* mean time between confirmations, s (0: not known yet) */
     double win_t0, win_bytes; /* delivery-rate window: start, bytes confirmed since */
     double rate;          /* delivered bytes/s (0: not measured yet) */
     double bps;           /* the byte rate frames are planned for; 0: the ceiling */
@@ -48,8 +53,9 @@ typedef struct srv_link {
 } srv_link;
 
 void srv_link_init(srv_link *l);
-/* A live FRAME of `bytes` bytes with header sim time sim_t was written. */
-void srv_link_sent(srv_link *l, double sim_t, size_t bytes);
+/* A live FRAME of `bytes` bytes with header sim time sim_t was written at
+ * monotonic time now. */
+void srv_link_sent(srv_link *l, double sim_t, size_t bytes, double now);
 /* A message from the client said it has received the frame of sim time
  * sim_t (its header's sim_time); ceiling is server.viewer_bytes_per_s. */
 void srv_link_confirmed(srv_link *l, double sim_t, double ceiling, double now);

@@ -783,7 +783,7 @@ static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now
     atomic_fetch_add(&c->bytes_out, len);
     atomic_fetch_add(&h->stats.bytes_sent, len);
     atomic_fetch_add(&h->stats.messages_sent, 1);
-    if (m->live && m->is_frame && len >= PROTO_HEADER_SIZE) srv_link_sent(&c->link, proto_ldf64(data + 24), len);
+    if (m->live && m->is_frame && len >= PROTO_HEADER_SIZE) srv_link_sent(&c->link, proto_ldf64(data + 24), len, now);
     if (m->is_frame) {
         atomic_fetch_add(&h->stats.frames_sent, 1);
         if (m->tick_wall > 0) srv_stats_latency(&h->stats, now - m->tick_wall);

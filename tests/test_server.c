@@ -603,14 +603,15 @@ static double median_since(const shaped_frames *f, const double *v, double from,
 }
 
 /* A viewer behind a link of `bps` bytes/s (a 32 KB receive buffer, reads
- * paced to bps) with the viewer's subscription, reporting its camera at
- * 30 Hz with the sim time of the last frame it received, for secs. */
-static void read_through_link(srv_daemon *d, double bps, double secs, shaped_frames *out)
+ * paced to bps; 0: unshaped) with the viewer's subscription, reporting its
+ * camera report_hz times a second with the sim time of the last frame it
+ * received, for secs. */
+static void read_through_link(srv_daemon *d, double bps, double report_hz, double secs, shaped_frames *out)
 {
     srv_hub *h = srv_daemon_hub(d);
     test_ws w;
     assert_int_equal(test_ws_connect(&w, srv_daemon_port(d), "/", PROTO_SUBPROTOCOL), 0);
-    test_ws_small_rcvbuf(&w, 32768);
+    if (bps > 0) test_ws_small_rcvbuf(&w, 32768);
     proto_msg m;
     proto_msg_init(&m, PROTO_SUBSCRIBE);
     oc_subscribe_default(&m.u.subscribe);
@@ -626,12 +627,12 @@ static void read_through_link(srv_daemon *d, double bps, double secs, shaped_fra
             m.u.camera = cam;
             m.hdr.sim_time = last_t;
             test_msg_send(&w, &m);
-            next_cam += 1.0 / 30;
+            next_cam += 1.0 / report_hz;
         }
         /* the link: bps, with a burst of a tenth of a second */
         tokens = fmin(tokens + bps * (now - tokens_t), 0.1 * bps);
         tokens_t = now;
-        if (tokens <= 0) {
+        if (bps > 0 && tokens <= 0) {
             usleep(2000);
             continue;
         }
@@ -669,7 +670,7 @@ static void slow_link_gets_coarser_not_older(void **state)
     srv_hub *h = srv_daemon_hub(d);
     const double bps = 1e6, secs = sanitized ? 14 : 10;
     static shaped_frames f;
-    read_through_link(d, bps, secs, &f);
+    read_through_link(d, bps, 30, secs, &f);
     int n_size, n_age;
     double size = median_since(&f, f.bytes, secs - 4, &n_size), age = median_since(&f, f.age, secs - 4, &n_age);
     double early = median_since(&f, f.bytes, 0, &n_age);
@@ -680,6 +681,24 @@ static void slow_link_gets_coarser_not_older(void **state)
     if (size > 1.2 * bps / 30) fail_msg("frames of %.0f B through a link of %.0f B a frame at 30 Hz", size, bps / 30);
     if (age > (sanitized ? 0.6 : 0.35)) fail_msg("frames %.3f s old through a 1 MB/s link", age);
     assert_true(stat_of(&h->stats.frames_held) > 0);
+    srv_daemon_stop(d);
+}
+
+/* Pacing follows how often a client reports, not a fixed count: a viewer
+ * on a fast link that reports its camera twice a second still gets its
+ * 30 frames a second (a window of three unconfirmed frames held it to six). */
+static void rare_reports_are_not_held(void **state)
+{
+    (void)state;
+    srv_settings sb;
+    srv_daemon *d = bridge_daemon(&sb);
+    const double secs = sanitized ? 10 : 6;
+    static shaped_frames f;
+    read_through_link(d, 0, 2, secs, &f);
+    int n;
+    double size = median_since(&f, f.bytes, secs - 3, &n);
+    print_message("reports at 2 Hz, unshaped: %d frames in the last 3 s (median %.0f B)\n", n, size);
+    if (n < (sanitized ? 45 : 75)) fail_msg("%d frames in 3 s at 30 Hz with camera reports at 2 Hz", n);
     srv_daemon_stop(d);
 }
 
@@ -3747,6 +3766,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(narrow_fov_keeps_the_budget),
         cmocka_unit_test(resubscribe_buys_no_frames),
         cmocka_unit_test(slow_link_gets_coarser_not_older),
+        cmocka_unit_test(rare_reports_are_not_held),
         cmocka_unit_test(cascade_fine_mips_without_geometry),
         cmocka_unit_test(mesh_low_camera_long_range),
         cmocka_unit_test(scene_overrides_named),
