@@ -62,6 +62,15 @@ int proto_tile_planes(unsigned channels)
     return n;
 }
 
+void proto_tile_plane_offsets(unsigned channels, size_t wh, int off[6])
+{
+    static const unsigned bit[6] = {PROTO_CH_HEIGHT, PROTO_CH_DX, PROTO_CH_DZ, PROTO_CH_NORMAL, PROTO_CH_NORMAL,
+                                    PROTO_CH_FOAM};
+    int p = 0;
+    for (int k = 0; k < 6; k++)
+        off[k] = (channels & bit[k]) ? (int)(wh * (size_t)p++) : -1;
+}
+
 const char *proto_tile_plane_name(unsigned channels, int i)
 {
     if (proto_tile_planes(channels) == 0 || i < 0)

@@ -85,6 +85,10 @@ int proto_tile_planes(unsigned channels);
 /* Name of plane i ("H", "DX", "DZ", "NU", "NV", "FOAM", "J") of a tile with
  * the given channels, or NULL if i is out of range. */
 const char *proto_tile_plane_name(unsigned channels, int i);
+/* Where the H, DX, DZ, NU, NV and FOAM planes of a tile with `channels`
+ * start, in samples of a decoded tile of wh samples a plane (off[k] =
+ * plane index * wh), -1 where the tile has no such plane. */
+void proto_tile_plane_offsets(unsigned channels, size_t wh, int off[6]);
 
 /* A-priori bound on |decoded - input| for one plane whose values lie in
  * [lo, hi], for codec c with params p.  0 for lossless codecs.  For qz

@@ -96,8 +96,3 @@ double srv_link_bps(const srv_link *l)
 {
     return l->bps;
 }
-
-int srv_link_in_flight(const srv_link *l)
-{
-    return l->n;
-}

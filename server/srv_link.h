@@ -64,7 +64,5 @@ void srv_link_confirmed(srv_link *l, double sim_t, double ceiling, double now);
 int srv_link_may_send(srv_link *l, double now);
 /* The byte rate to plan this client's frames for: 0 means the ceiling. */
 double srv_link_bps(const srv_link *l);
-/* Frames in flight (sent, not confirmed). */
-int srv_link_in_flight(const srv_link *l);
 
 #endif

@@ -66,26 +66,6 @@ void oc_cascade_view_free(oc_cascade_view *v)
     free(v);
 }
 
-static void plane_offsets(unsigned ch, size_t wh, int off[6])
-{
-    /* codec.h plane order H, DX, DZ, NU, NV, FOAM, J; the normal bit is two planes */
-    int k = 0;
-    for (int i = 0; i < 6; i++)
-        off[i] = -1;
-    if (ch & PROTO_CH_HEIGHT)
-        off[0] = (int)(wh * (size_t)k++);
-    if (ch & PROTO_CH_DX)
-        off[1] = (int)(wh * (size_t)k++);
-    if (ch & PROTO_CH_DZ)
-        off[2] = (int)(wh * (size_t)k++);
-    if (ch & PROTO_CH_NORMAL) {
-        off[3] = (int)(wh * (size_t)k++);
-        off[4] = (int)(wh * (size_t)k++);
-    }
-    if (ch & PROTO_CH_FOAM)
-        off[5] = (int)(wh * (size_t)k++);
-}
-
 static int near_eq(double a, double b, double tol)
 {
     return fabs(a - b) <= tol;
@@ -199,7 +179,7 @@ static ocean_result view_place(oc_cascade_view *v, const proto_frame *info, cons
     ct->w = t->width;
     ct->h = t->height;
     ct->channels = t->channels;
-    plane_offsets(t->channels, (size_t)t->width * t->height, ct->off);
+    proto_tile_plane_offsets(t->channels, (size_t)t->width * t->height, ct->off);
     return OCEAN_OK;
 }
 

@@ -3,7 +3,7 @@
  * decoders (f32, f16, qz formats 1 and 2, MESH_VERTICES_QZ) compiled to
  * WebAssembly (clang --target=wasm32-wasi, wasm-ld; Makefile target
  * clients/web/ocean.wasm), with the few exports the viewer's workers call
- * (clients/web/wasmcodec.js).  One implementation of every codec: the
+ * (clients/web/codec.js).  One implementation of every codec: the
  * daemon, the C library and the browser run the same C.
  *
  * zstd: the residual streams are decompressed by zstd's own decoder, a
@@ -11,7 +11,7 @@
  * tests/browser/package.json and vendored as clients/web/vendor/zstd.wasm);
  * this file adapts the four libzstd calls codec.c makes to the two
  * functions that module exports, through the imports "zstd.content_size"
- * and "zstd.decompress" that wasmcodec.js provides.  zstddec exports no
+ * and "zstd.decompress" that codec.js provides.  zstddec exports no
  * frame-length function, so ZSTD_findFrameCompressedSize here answers "the
  * whole input" whenever the input parses as zstd frames: a payload of two
  * frames whose sizes add up to R decodes to the same residuals here and is
@@ -93,18 +93,6 @@ int ocw_tile_decode(int codec, int w, int h, unsigned channels, const uint8_t *d
     return proto_tile_decode((proto_codec)codec, w, h, channels, data, len, planes, ocw_err, sizeof ocw_err);
 }
 
-/* Offsets (in samples of w*h) of the tile's H DX DZ NU NV FOAM planes, -1
- * where the tile has none (PROTOCOL.md "Tile codecs": H, DX, DZ, NU, NV,
- * FOAM, J restricted to the channel bits). */
-static void plane_offsets(unsigned channels, int off[6])
-{
-    static const unsigned bit[6] = {PROTO_CH_HEIGHT, PROTO_CH_DX, PROTO_CH_DZ, PROTO_CH_NORMAL, PROTO_CH_NORMAL,
-                                    PROTO_CH_FOAM};
-    int p = 0;
-    for (int k = 0; k < 6; k++)
-        off[k] = (channels & bit[k]) ? p++ : -1;
-}
-
 /* The slopes of a tile without normal planes, from central differences of
  * its heights (one-sided at the edges). */
 static void slopes_from_heights(const float *H, int w, int h, double spacing, float *slope)
@@ -146,10 +134,10 @@ int ocw_cascade_block(int codec, int w, int h, unsigned channels, double spacing
         return r;
     }
     int off[6];
-    plane_offsets(channels, off);
+    proto_tile_plane_offsets(channels, n, off);
     const float *P[6];
     for (int k = 0; k < 6; k++)
-        P[k] = off[k] >= 0 ? d + (size_t)off[k] * n : NULL;
+        P[k] = off[k] >= 0 ? d + off[k] : NULL;
     double fsum = 0, fmax = 0;
     for (size_t k = 0; k < n; k++) {
         float fo = P[5] ? P[5][k] : 0.0f;

@@ -10,8 +10,9 @@
  * decoded, or while the page has not yet drawn the last one decoded, are
  * coalesced and only the newest is decoded (counted in `skipped`).  So the
  * decoding follows the page's drawing rate: a page that draws 2 frames a
- * second (software GL on a busy host) costs 2 decodes a second, not 30.  Latency is measured here, on one clock: the time from
- * sending CAMERA seq s to receiving the first FRAME that answers s.
+ * second (software GL on a busy host) costs 2 decodes a second, not 30.
+ * Latency is measured here, on one clock: the time from sending CAMERA
+ * seq s to receiving the first FRAME that answers s.
  *
  * Tiles are decoded by a pool of decoder workers (decoder.js), whole
  * levels at a time (layout 0) or shares of a frame's cascade tiles

@@ -36,19 +36,17 @@ static uint32_t fnv1a(uint32_t h, const void *p, size_t n)
 }
 
 /* The viewer's block of one decoded tile (clients/wasm/oc_wasm.c). */
-static void block(const float *d, int np, unsigned ch, size_t n, float *disp, float *slope)
+static void block(const float *d, unsigned ch, size_t n, float *disp, float *slope)
 {
-    int off[6], p = 0;
-    const unsigned bit[6] = {PROTO_CH_HEIGHT, PROTO_CH_DX, PROTO_CH_DZ, PROTO_CH_NORMAL, PROTO_CH_NORMAL, PROTO_CH_FOAM};
-    for (int k = 0; k < 6; k++) off[k] = (ch & bit[k]) ? p++ : -1;
-    (void)np;
+    int off[6];
+    proto_tile_plane_offsets(ch, n, off);
     for (size_t k = 0; k < n; k++) {
-        disp[4 * k] = off[1] >= 0 ? d[off[1] * n + k] : 0;
-        disp[4 * k + 1] = off[0] >= 0 ? d[off[0] * n + k] : 0;
-        disp[4 * k + 2] = off[2] >= 0 ? d[off[2] * n + k] : 0;
-        disp[4 * k + 3] = off[5] >= 0 ? d[off[5] * n + k] : 0;
+        disp[4 * k] = off[1] >= 0 ? d[off[1] + k] : 0;
+        disp[4 * k + 1] = off[0] >= 0 ? d[off[0] + k] : 0;
+        disp[4 * k + 2] = off[2] >= 0 ? d[off[2] + k] : 0;
+        disp[4 * k + 3] = off[5] >= 0 ? d[off[5] + k] : 0;
         if (off[3] >= 0)
-            proto_normal_oct_slopes(d[off[3] * n + k], d[off[4] * n + k], 20.0f, &slope[2 * k], &slope[2 * k + 1]);
+            proto_normal_oct_slopes(d[off[3] + k], d[off[4] + k], 20.0f, &slope[2 * k], &slope[2 * k + 1]);
     }
 }
 
@@ -99,7 +97,7 @@ int main(int argc, char **argv)
                 bad = 1;
                 break;
             }
-            block(planes, np, ti->channels, n, disp, slope);
+            block(planes, ti->channels, n, disp, slope);
             h = fnv1a(h, planes, n * (size_t)np * sizeof *planes);
         }
         double ms = now_ms() - t0;
