@@ -213,7 +213,7 @@ static ocean_result v_subscribe(ctx *c, const proto_subscribe *s)
     if (s->mesh_codec != PROTO_MESH_CODEC_F32 && s->mesh_codec != PROTO_MESH_CODEC_QZ)
         FAIL(c, OCEAN_ETYPE, "subscribe.mesh_codec %u unknown (0 f32, 2 qz)", s->mesh_codec);
     if (s->flags & ~(unsigned)PROTO_SUB_FLAGS_ALL)
-        FAIL(c, OCEAN_EFORMAT, "subscribe.flags 0x%x has unknown bits (bit 0: full geometry)", s->flags);
+        FAIL(c, OCEAN_EFORMAT, "subscribe.flags 0x%x has unknown bits (bit 0: full geometry, bit 1: time interpolation)", s->flags);
     TRY(chk_range(c, "subscribe.tile_size", s->tile_size, 2, PROTO_TILE_MAX_SIZE));
     TRY(chk_range(c, "subscribe.frame_rate_hz", s->frame_rate_hz, 0, PROTO_MAX_FRAME_RATE));
     if (s->frame_rate_hz <= 0.0f)
@@ -313,6 +313,8 @@ static ocean_result v_cascades(ctx *c, const proto_cascade_block *b)
 {
     TRY(chk_range(c, "frame.cascades.cascade_count", b->cascade_count, 1, PROTO_MAX_LAYERS));
     TRY(chk_range(c, "frame.cascades.order", b->order, 1, 64));
+    if (b->flags & ~PROTO_CASCADE_KEY)
+        FAIL(c, OCEAN_EFORMAT, "frame.cascades.flags is %u (bit 0 only)", b->flags);
     if (!(b->spacing_per_m > 0.0f) || !isfinite(b->spacing_per_m))
         FAIL(c, OCEAN_EINVAL, "frame.cascades.spacing_per_m = %g; must be finite and > 0",
              (double)b->spacing_per_m);
@@ -352,6 +354,12 @@ static ocean_result v_cascades(ctx *c, const proto_cascade_block *b)
                 FAIL(c, OCEAN_EINVAL, "frame.cascades[%u].mip[%d] slope moments %g %g %g out of range", k, m,
                      (double)q->mss_x, (double)q->mss_z, (double)q->mss_xz);
         }
+        for (int m = 0; m < PROTO_MAX_MIPS; m++) {
+            const proto_mip_time *t = &e->time[m];
+            if ((m >= e->mips || !t->interval) && (t->tick_a || t->interval || t->phase))
+                FAIL(c, OCEAN_EFORMAT, "frame.cascades[%u].time[%d] must be 0 (%s)", k, m,
+                     m >= e->mips ? "beyond mips" : "interval 0");
+        }
     }
     for (unsigned k = b->cascade_count; k < PROTO_MAX_LAYERS; k++) {
         static const proto_cascade_entry zero;
@@ -369,12 +377,19 @@ static ocean_result v_record_bytes(ctx *c, const proto_bytes *rec, const proto_f
     if (!rec->p || rec->len < RECORD_HEAD + TILE_FIXED || (rec->len & 7u))
         FAIL(c, OCEAN_EINVAL, "frame tile record of %zu bytes is not a record", rec->len);
     size_t blen = proto_ld32(rec->p);
-    uint32_t tag = proto_ld32(rec->p + 4);
+    uint32_t tag = f->record_tags ? f->record_tags[rec - f->tile_records] : proto_ld32(rec->p + 4);
     if (RECORD_HEAD + blen + ((8u - (blen & 7u)) & 7u) != rec->len)
         FAIL(c, OCEAN_EINVAL, "frame tile record length %zu does not match its %zu bytes", blen, rec->len);
-    if (f->layout == PROTO_LAYOUT_CASCADE ? tag >= f->cascades.cascade_count : tag != 0)
+    if (f->layout == PROTO_LAYOUT_CASCADE ? (tag & ~(0xFFu | PROTO_TAG_SLOT_B)) || (tag & 0xFFu) >= f->cascades.cascade_count
+                                          : tag != 0)
         FAIL(c, OCEAN_EINVAL, "frame tile record tag %u (layout %u, %u cascades)", tag, f->layout,
              f->cascades.cascade_count);
+    if (tag & PROTO_TAG_SLOT_B) {
+        unsigned level = rec->p[RECORD_HEAD];
+        const proto_cascade_entry *e = &f->cascades.cascade[tag & 0xFFu];
+        if (level >= e->mips || !e->time[level].interval)
+            FAIL(c, OCEAN_EINVAL, "frame tile record: sample B of mip %u, which has no time interval", level);
+    }
     return OCEAN_OK;
 }
 
@@ -402,6 +417,11 @@ static ocean_result v_frame(ctx *c, const proto_frame *f)
                                                   : f->tiles[i].cascade != 0)
                 FAIL(c, OCEAN_EINVAL, "frame tile %u: cascade %u (layout %u, %u cascades)", i,
                      f->tiles[i].cascade, f->layout, f->cascades.cascade_count);
+            const proto_tile *t = &f->tiles[i];
+            if (t->slot && (f->layout != PROTO_LAYOUT_CASCADE || t->slot > 1 ||
+                            t->level >= f->cascades.cascade[t->cascade].mips ||
+                            !f->cascades.cascade[t->cascade].time[t->level].interval))
+                FAIL(c, OCEAN_EINVAL, "frame tile %u: sample B of a mip without a time interval", i);
         }
     }
     if (f->has_mesh > 2 || (f->has_mesh == 2 && f->layout != PROTO_LAYOUT_WORLD))
@@ -928,6 +948,7 @@ static void cascade_block_read(const uint8_t *p, proto_cascade_block *b)
     memset(b, 0, sizeof *b);
     b->cascade_count = p[0];
     b->order = p[1];
+    b->flags = p[2];
     b->spacing_per_m = proto_ldf32(p + 4);
     for (int i = 0; i < 3; i++)
         b->camera[i] = proto_ldf64(p + 8 + 8 * i);
@@ -951,6 +972,12 @@ static void cascade_block_read(const uint8_t *p, proto_cascade_block *b)
             e->mip[m].mss_z = proto_ldf32(w + 8);
             e->mip[m].mss_xz = proto_ldf32(w + 12);
         }
+        for (int m = 0; m < PROTO_MAX_MIPS; m++) {
+            const uint8_t *w = q + 16 + 16 * PROTO_MIP_ENTRIES + 8 * m;
+            e->time[m].tick_a = proto_ld32(w);
+            e->time[m].interval = proto_ld16(w + 4);
+            e->time[m].phase = proto_ld16(w + 6);
+        }
     }
 }
 
@@ -958,6 +985,7 @@ static void cascade_block_write(uint8_t *p, const proto_cascade_block *b)
 {
     p[0] = b->cascade_count;
     p[1] = b->order;
+    p[2] = b->flags;
     proto_stf32(p + 4, b->spacing_per_m);
     for (int i = 0; i < 3; i++)
         proto_stf64(p + 8 + 8 * i, b->camera[i]);
@@ -980,6 +1008,12 @@ static void cascade_block_write(uint8_t *p, const proto_cascade_block *b)
             proto_stf32(w + 4, e->mip[m].mss_x);
             proto_stf32(w + 8, e->mip[m].mss_z);
             proto_stf32(w + 12, e->mip[m].mss_xz);
+        }
+        for (int m = 0; m < PROTO_MAX_MIPS; m++) {
+            uint8_t *w = q + 16 + 16 * PROTO_MIP_ENTRIES + 8 * m;
+            proto_st32(w, e->time[m].tick_a);
+            proto_st16(w + 4, e->time[m].interval);
+            proto_st16(w + 6, e->time[m].phase);
         }
     }
 }
@@ -1028,6 +1062,25 @@ ocean_result proto_frame_client_fields(const uint8_t *msg, size_t len, size_t *c
     return OCEAN_OK;
 }
 
+/* A layout-1 tile record's tag: its cascade, and sample B only of a mip
+ * with a time interval. */
+static ocean_result d_tile_tag(rd *r, const proto_frame *f, proto_tile *t, uint32_t tag)
+{
+    if (f->layout != PROTO_LAYOUT_CASCADE)
+        return OCEAN_OK;
+    unsigned c = tag & 0xFFu;
+    if ((tag & ~(0xFFu | PROTO_TAG_SLOT_B)) || c >= f->cascades.cascade_count)
+        FAIL(r->c, OCEAN_EFORMAT, "%s: record tag %u names no cascade of %u", r->what, tag,
+             f->cascades.cascade_count);
+    t->cascade = (uint8_t)c;
+    t->slot = (tag & PROTO_TAG_SLOT_B) ? 1 : 0;
+    const proto_cascade_entry *e = &f->cascades.cascade[c];
+    if (t->slot && (t->level >= e->mips || !e->time[t->level].interval))
+        FAIL(r->c, OCEAN_EINVAL, "%s: sample B of mip %u of cascade %u, which has no time interval", r->what,
+             t->level, c);
+    return OCEAN_OK;
+}
+
 static ocean_result d_frame(rd *r, proto_frame *f)
 {
     TRY(need(r, FRAME_FIXED, "fixed fields"));
@@ -1043,10 +1096,10 @@ static ocean_result d_frame(rd *r, proto_frame *f)
         if (cc < 1 || cc > PROTO_MAX_LAYERS)
             FAIL(r->c, OCEAN_EINVAL, "FRAME: cascade_count %u outside 1..%d", cc, PROTO_MAX_LAYERS);
         TRY(need(r, PROTO_CASCADE_BLOCK_FIXED + (size_t)cc * PROTO_CASCADE_ENTRY_SIZE, "cascade entries"));
-        TRY(zero_bytes(r, r->off + 2, 2, "cascade block"));
+        TRY(zero_bytes(r, r->off + 3, 1, "cascade block"));
         cascade_block_read(r->p + r->off, &f->cascades);
         r->off += PROTO_CASCADE_BLOCK_FIXED + (size_t)cc * PROTO_CASCADE_ENTRY_SIZE;
-        max_tag = cc - 1;
+        max_tag = PROTO_TAG_SLOT_B | 0xFFu;
     }
     if (f->tile_count > r->c->lim->max_frame_tiles)
         FAIL(r->c, OCEAN_ETOOBIG, "FRAME: tile_count %u above the limit %u", f->tile_count, r->c->lim->max_frame_tiles);
@@ -1066,7 +1119,7 @@ static ocean_result d_frame(rd *r, proto_frame *f)
     uint32_t tag;
     for (unsigned i = 0; i < f->tile_count; i++) {
         TRY(d_record(r, REC_TILE, &tiles[i], max_tag, &tag));
-        tiles[i].cascade = (uint8_t)tag;
+        TRY(d_tile_tag(r, f, &tiles[i], tag));
     }
     if (f->has_mesh)
         TRY(d_record(r, f->layout == PROTO_LAYOUT_CASCADE ? REC_PLACEMENT
@@ -1471,9 +1524,11 @@ static ocean_result e_frame(proto_buf *b, const proto_msg *m)
     }
     for (unsigned i = 0; i < f->tile_count; i++) {
         if (f->tile_records) {
+            size_t at = b->len;
             TRY(proto_buf_append(b, f->tile_records[i].p, f->tile_records[i].len));
+            if (f->record_tags) proto_st32(proto_buf_data(b) + at + 4, f->record_tags[i]);
         } else {
-            TRY(e_record(b, REC_TILE, &f->tiles[i], f->tiles[i].cascade));
+            TRY(e_record(b, REC_TILE, &f->tiles[i], f->tiles[i].cascade | (f->tiles[i].slot ? PROTO_TAG_SLOT_B : 0u)));
         }
     }
     if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
@@ -1686,4 +1741,11 @@ ocean_result proto_tile_record_encode(proto_buf *out, const proto_tile *t, uint3
     if (r != OCEAN_OK)
         out->len = at;
     return r;
+}
+
+proto_window_step proto_window_next(int valid, uint32_t tick_a, uint16_t interval, const proto_mip_time *t)
+{
+    if (!t->interval || !valid) return PROTO_WINDOW_DROP;
+    if (tick_a == t->tick_a && interval == t->interval) return PROTO_WINDOW_KEEP;
+    return (uint32_t)(tick_a + interval) == t->tick_a ? PROTO_WINDOW_SHIFT : PROTO_WINDOW_DROP;
 }

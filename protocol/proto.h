@@ -122,7 +122,13 @@ typedef enum proto_mesh_codec {
 #define PROTO_MAX_MIPS 12
 #define PROTO_MIP_ENTRIES 13
 #define PROTO_CASCADE_BLOCK_FIXED 56
-#define PROTO_CASCADE_ENTRY_SIZE 224
+#define PROTO_CASCADE_ENTRY_SIZE 320
+/* Cascade block flags: KEY, the client drops every sample it holds before
+ * it reads this frame's records (PROTOCOL.md "Samples in time"). */
+#define PROTO_CASCADE_KEY 1u
+/* A layout-1 tile record's tag: the cascade index, and this bit for sample
+ * B of the mip's time window (clear: sample A). */
+#define PROTO_TAG_SLOT_B 0x100u
 #define PROTO_MESH_PLACEMENT_SIZE 32
 /* MESH_TOPOLOGY.flags bit: flat positions and level zones follow. */
 #define PROTO_TOPO_FLAT 1u
@@ -214,7 +220,12 @@ enum {
      * heights finer than its mesh shows; costs the bytes the normals-only
      * mips save. */
     PROTO_SUB_FULL_GEOMETRY = 1,
-    PROTO_SUB_FLAGS_ALL = 1
+    /* Layout 1: the client holds each mip's tiles from frame to frame and
+     * blends two samples in time; each mip's samples then travel once per
+     * its update interval, not once per frame (PROTOCOL.md "Samples in
+     * time"). */
+    PROTO_SUB_TIME_INTERP = 2,
+    PROTO_SUB_FLAGS_ALL = 3
 };
 
 typedef struct proto_camera {
@@ -239,6 +250,7 @@ typedef struct proto_tile {
     const uint8_t *payload;   /* codec bytes (see codec.h) */
     uint8_t cascade;          /* not in the TILE body: a layout-1 FRAME record's
                                  tag (the cascade index); 0 otherwise */
+    uint8_t slot;             /* layout 1, from the tag: 0 sample A, 1 sample B */
 } proto_tile;
 
 /* One entry of a cascade's mip table (layout 1). */
@@ -249,6 +261,23 @@ typedef struct proto_mip_entry {
                                    does not hold */
 } proto_mip_entry;
 
+/* When mip m's samples were taken (layout 1, PROTOCOL.md "Samples in
+ * time").  interval 0: at the frame's own time (every entry field 0). */
+typedef struct proto_mip_time {
+    uint32_t tick_a;          /* tick of sample A, mod 2^32; B is tick_a + interval */
+    uint16_t interval;        /* ticks between samples */
+    uint16_t phase;           /* the frame reads (1 - w) A + w B, w = phase / 65536 */
+} proto_mip_time;
+
+/* What a client holding a mip's window (valid, tick_a, interval) does
+ * with the frame's time entry t (PROTOCOL.md "Samples in time", step 2). */
+typedef enum proto_window_step {
+    PROTO_WINDOW_KEEP,        /* the same window */
+    PROTO_WINDOW_SHIFT,       /* B becomes A, B empty */
+    PROTO_WINDOW_DROP         /* both samples dropped */
+} proto_window_step;
+proto_window_step proto_window_next(int valid, uint32_t tick_a, uint16_t interval, const proto_mip_time *t);
+
 typedef struct proto_cascade_entry {
     double patch_m;
     uint16_t n;               /* grid of mip 0, power of two */
@@ -257,12 +286,14 @@ typedef struct proto_cascade_entry {
     float spacing_per_m;      /* q_c: this cascade's spacing wanted per metre of
                                  distance, > 0 and <= the block's */
     proto_mip_entry mip[PROTO_MIP_ENTRIES]; /* entries 0..mips; the rest 0 */
+    proto_mip_time time[PROTO_MAX_MIPS];    /* entries 0..mips-1; the rest 0 */
 } proto_cascade_entry;
 
 /* The cascade block of a layout-1 FRAME (PROTOCOL.md "Cascade block"). */
 typedef struct proto_cascade_block {
     uint8_t cascade_count;    /* 1..PROTO_MAX_LAYERS */
     uint8_t order;            /* Butterworth order of the mips, 1..64 */
+    uint8_t flags;            /* PROTO_CASCADE_KEY */
     float spacing_per_m;      /* q: the coarsest cascade's spacing wanted per metre
                                  of distance, > 0 (each entry has its own) */
     double camera[3];         /* camera position the frame was made for */
@@ -316,6 +347,10 @@ typedef struct proto_frame {
     uint8_t layout;           /* proto_layout */
     const proto_bytes *tile_records; /* encoding only: when non-NULL, tile_count
                                         pre-encoded records used instead of tiles */
+    const uint32_t *record_tags;     /* encoding only, with tile_records: each
+                                        record's tag (cascade | PROTO_TAG_SLOT_B)
+                                        written over the one it was made with;
+                                        NULL keeps those */
     proto_mesh_placement placement; /* layout 1, valid when has_mesh */
     proto_cascade_block cascades;   /* layout 1 */
 } proto_frame;

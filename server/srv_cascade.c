@@ -28,6 +28,7 @@
 #include "lod.h"
 #include "mesh.h"
 #include "slope.h"
+#include "srv_held.h"
 #include "srv_tiles.h"
 
 #define MAX_MIPS PROTO_MAX_MIPS
@@ -50,6 +51,9 @@ typedef struct tables {
     /* mip table entries: [m] for m < mips = what mip m lacks; [mips] = all */
     proto_mip_entry entry[PROTO_MAX_LAYERS][PROTO_MIP_ENTRIES];
     double var_removed[PROTO_MAX_LAYERS][PROTO_MIP_ENTRIES];
+    /* How fast each mip's kept band changes: RMS of the second time
+     * derivative over RMS, of the heights and of the slopes, 1/s^2. */
+    double tt_h[PROTO_MAX_LAYERS][MAX_MIPS], tt_s[PROTO_MAX_LAYERS][MAX_MIPS];
     double total_var;      /* the FFT cascades, m^2 */
     double nf_var;         /* the near-field cascade, m^2 */
     const ocean_gerstner *g;
@@ -62,6 +66,8 @@ typedef struct tables {
 struct srv_cascade {
     tables tab;
     int tab_valid;
+    uint64_t tab_gen;      /* bumps with every new set of tables: what a client
+                              holds from older ones is of another sea */
     ocean_frame *mipf[MAX_MIPS];  /* mip level m of every FFT cascade, this batch */
     ocean_frame *nff[MAX_MIPS];   /* mip level m of the near-field cascade */
     srv_tile_cache *cache; /* the encoded records, key layout 1 */
@@ -93,6 +99,15 @@ typedef struct plan {
     mesh_view mv;
     mesh_info mi;
     int share_with;        /* index of the job whose bytes this one shares, or itself */
+    /* Samples in time (PROTOCOL.md): each mip's window and the times of
+     * its samples A and B (interval 0: A at the frame's time). */
+    proto_mip_time time[PROTO_MAX_LAYERS][MAX_MIPS];
+    double t_ab[PROTO_MAX_LAYERS][MAX_MIPS][2];
+    int ticks_per_frame;
+    srv_held *held;        /* time-interpolating client: what it holds, moved
+                              to this frame's windows; NULL otherwise */
+    int key;               /* the frame carries PROTO_CASCADE_KEY */
+    uint32_t *tags;        /* each record's tag, in frame order */
 } plan;
 
 ocean_result srv_cascade_create(srv_cascade **out)
@@ -220,6 +235,10 @@ static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstne
             e->mss_z = (float)mo.mss_z;
             e->mss_xz = (float)mo.mss_xz;
             tb->var_removed[c][m] = mo.var_h;
+            if (m < tb->mips[c]) {
+                tb->tt_h[c][m] = mo.kept_var_h > 0 ? sqrt(mo.kept_var_h_tt / mo.kept_var_h) : 0.0;
+                tb->tt_s[c][m] = mo.kept_mss > 0 ? sqrt(mo.kept_mss_tt / mo.kept_mss) : 0.0;
+            }
             if (m == tb->mips[c]) {
                 if (c < tb->fft) tb->total_var += mo.total_var_h;
                 else tb->nf_var = mo.total_var_h;
@@ -261,6 +280,73 @@ static unsigned chan_of(const tables *tb, const plan *pl, int c, int m)
     if (pl->geo > 0 && ldexp(tb->patch[c] / tb->n, m + 1) <= pl->geo)
         ch &= PROTO_CH_NORMAL | PROTO_CH_FOAM;
     return ch;
+}
+
+/* ---- samples in time ------------------------------------------------------ */
+
+/* The update interval of mip m of cascade c, in ticks, for subscription
+ * sub (PROTOCOL.md "Samples in time").  Linear interpolation between
+ * samples d apart misses a field f by -s(1-s) d^2 f''/2 at the fraction s
+ * of the way; over the interval its RMS is d^2 RMS(f'') / (2 sqrt 30).  A
+ * mip's interval is the longest power of two of ticks at which that, for
+ * its heights (with H or displacement) and its slopes (with normals or
+ * foam) relative to their own RMS, stays within the quantiser's RMS error
+ * for the subscription's accuracy a on a tile whose range is 6 RMS
+ * (2 sqrt 3 a): time costs no more error than the codec.  An interval
+ * shorter than two ticks, or than the subscription's frame period, would
+ * send as many samples as frames: 0, each frame's own time. */
+static int mip_interval(const tables *tb, const srv_config *cfg, const proto_subscribe *sub, int c, int m,
+                        int ticks_per_frame)
+{
+    if (!(sub->flags & PROTO_SUB_TIME_INTERP)) return 0;
+    double r = 0.0;
+    if (sub->effects & (PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT)) r = tb->tt_h[c][m];
+    if (sub->effects & (PROTO_FX_NORMALS | PROTO_FX_FOAM)) r = fmax(r, tb->tt_s[c][m]);
+    double eps = 2.0 * sqrt(3.0) * sub->accuracy;
+    int K = 0;
+    for (int k = 2; k <= SRV_CASCADE_MAX_INTERVAL; k *= 2) {
+        double d = k / cfg->tick_rate;
+        if (d * d * r / (2.0 * sqrt(30.0)) > eps) break;
+        K = k;
+    }
+    return K >= ticks_per_frame ? K : 0;
+}
+
+/* Job j's time table: each mip's window [tick_a, tick_a + K] around the
+ * frame's tick position p, with tick_a = K floor((p - phi) / K) + phi; the
+ * offset phi = (5c + 3m) mod K staggers the mips' refreshes over the ticks
+ * (whole mips of several cascades would otherwise all refresh on the same
+ * tick: one frame K times the mean). */
+static void time_table(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
+{
+    const proto_subscribe *sub = &j->c->sim.sub;
+    double fr = sub->frame_rate_hz > 0 ? sub->frame_rate_hz : cfg->tick_rate;
+    pl->ticks_per_frame = (int)fmax(1.0, floor(cfg->tick_rate / fr + 0.5));
+    memset(pl->time, 0, sizeof pl->time);
+    for (int c = 0; c < tb->cascades; c++)
+        for (int m = 0; m < tb->mips[c]; m++) {
+            int K = mip_interval(tb, cfg, sub, c, m, pl->ticks_per_frame);
+            pl->t_ab[c][m][0] = pl->t_ab[c][m][1] = j->t;
+            if (!K) continue;
+            int phi = (5 * c + 3 * m) % K;
+            double a = K * floor((j->tick_pos - phi) / K) + phi;
+            double w = (j->tick_pos - a) / K;
+            int64_t ka = (int64_t)a;
+            pl->time[c][m].tick_a = (uint32_t)(uint64_t)ka;
+            pl->time[c][m].interval = (uint16_t)K;
+            pl->time[c][m].phase = (uint16_t)fmin(65535.0, fmax(0.0, floor(w * 65536.0)));
+            pl->t_ab[c][m][0] = (double)ka / cfg->tick_rate;
+            pl->t_ab[c][m][1] = (double)(ka + K) / cfg->tick_rate;
+        }
+}
+
+/* What one frame of the plan costs of mip (c, m)'s tiles on average: a mip
+ * refreshed every K ticks sends each tile once every K / ticks_per_frame
+ * frames. */
+static double refresh_share(const plan *pl, int c, int m)
+{
+    int K = pl->time[c][m].interval;
+    return K ? fmin(1.0, (double)pl->ticks_per_frame / K) : 1.0;
 }
 
 /* Encoded bytes of one tile of side T, from a fixed model of each codec -
@@ -527,7 +613,7 @@ static double plan_cascade(const tables *tb, const srv_config *cfg, const srv_ca
         span(box[2], box[3], w, ntile, &g->z0, &g->nz);
         pl->need[c][m] = 1;
         pl->ctiles[c] += g->nx * g->nz;
-        pl->cbytes[c] += (double)g->nx * g->nz * srv_cascade_tile_bytes(sub, ch, t);
+        pl->cbytes[c] += (double)g->nx * g->nz * srv_cascade_tile_bytes(sub, ch, t) * refresh_share(pl, c, m);
     }
     return pl->cbytes[c];
 }
@@ -710,11 +796,18 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
 {
     const proto_subscribe *sub = &j->c->sim.sub;
     proto_bytes *recs = malloc(sizeof *recs * (size_t)(pl->tiles ? pl->tiles : 1));
-    if (!recs) return;
+    uint32_t *tags = malloc(sizeof *tags * (size_t)(pl->tiles ? pl->tiles : 1));
+    if (!recs || !tags) {
+        free(recs);
+        free(tags);
+        return;
+    }
     int nt = 0;
     for (int i = 0; i < pl->tiles; i++)
-        if (pl->list[i] && pl->list[i]->result == OCEAN_OK && pl->list[i]->payload)
+        if (pl->list[i] && pl->list[i]->result == OCEAN_OK && pl->list[i]->payload) {
+            tags[nt] = pl->tags[i];
             recs[nt++] = (proto_bytes){pl->list[i]->payload, pl->list[i]->payload_len};
+        }
     proto_msg m;
     proto_msg_init(&m, PROTO_FRAME);
     m.hdr.sim_time = j->t;
@@ -727,10 +820,12 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
     fr->tick = j->tick;
     fr->tile_count = (uint16_t)nt;
     fr->tile_records = recs;
+    fr->record_tags = tags;
     fr->layout = PROTO_LAYOUT_CASCADE;
     proto_cascade_block *b = &fr->cascades;
     b->cascade_count = (uint8_t)pl->layers;
     b->order = (uint8_t)tb->order;
+    b->flags = pl->key ? PROTO_CASCADE_KEY : 0;
     b->spacing_per_m = (float)pl->q;
     for (int i = 0; i < 3; i++) b->camera[i] = j->cam.pos[i];
     b->min_spacing_m = (float)pl->min_spacing;
@@ -747,6 +842,7 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
         e->fades = c > 0;
         e->spacing_per_m = (float)pl->qc[c];
         for (int q = 0; q <= tb->mips[c]; q++) e->mip[q] = tb->entry[c][q];
+        for (int q = 0; q < tb->mips[c]; q++) e->time[q] = pl->time[c][q];
     }
     /* The near field is the last cascade when the sea has one and the
      * subscription asks for it: its moments are in its mip table (where
@@ -775,6 +871,7 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
     }
     j->frame = srv_msg_encode(&m);
     free(recs);
+    free(tags);
     if (!shared || !j->frame || srv_msg_make_shared(j->frame) != OCEAN_OK) return;
     srv_msg *q = j->frame;
     size_t cam_at, mesh_at;
@@ -798,14 +895,16 @@ static int same_frame(const srv_cascade_job *a, const plan *pa, const srv_cascad
     const proto_subscribe *x = &a->c->sim.sub, *y = &b->c->sim.sub;
     if (a->t != b->t || a->tick != b->tick || a->policy_k != b->policy_k || pa->tiles != pb->tiles ||
         pa->has_mesh != pb->has_mesh || pa->layers != pb->layers || pa->ncas != pb->ncas || pa->q != pb->q ||
-        pa->min_spacing != pb->min_spacing || pa->geo != pb->geo || x->effects != y->effects || memcmp(a->cam.pos, b->cam.pos, sizeof a->cam.pos))
+        pa->min_spacing != pb->min_spacing || pa->geo != pb->geo || x->effects != y->effects || memcmp(a->cam.pos, b->cam.pos, sizeof a->cam.pos) ||
+        pa->key != pb->key || memcmp(pa->time, pb->time, sizeof pa->time))
         return 0;
     for (int c = 0; c < pa->layers; c++)
         if (pa->qc[c] != pb->qc[c]) return 0;
     if (pa->has_mesh && (pa->mv.topology_key != pb->mv.topology_key ||
                          memcmp(pa->mv.origin, pb->mv.origin, sizeof pa->mv.origin)))
         return 0;
-    return pa->tiles == 0 || memcmp(pa->list, pb->list, sizeof *pa->list * (size_t)pa->tiles) == 0;
+    return pa->tiles == 0 || (memcmp(pa->list, pb->list, sizeof *pa->list * (size_t)pa->tiles) == 0 &&
+                              memcmp(pa->tags, pb->tags, sizeof *pa->tags * (size_t)pa->tiles) == 0);
 }
 
 /* One mip level m of the near-field cascade, when a tile of it is
@@ -880,6 +979,7 @@ static int tables_current(srv_cascade *k, ocean *oc, const ocean_gerstner *g, oc
         k->nff[m] = NULL;
     }
     srv_tiles_clear(k->cache);
+    k->tab_gen++;
     k->nf_in = nf;
     k->tab_valid = tables_make(&k->tab, oc, g, nf, order) == OCEAN_OK;
     if (!k->tab_valid)
@@ -899,6 +999,7 @@ static void plan_jobs(const tables *tb, const srv_config *cfg, srv_stats *st, sr
         int geo = pl[i].has_mesh && (sub->effects & PROTO_FX_NORMALS) && !(sub->flags & PROTO_SUB_FULL_GEOMETRY) &&
                   pl[i].mi.levels > 0;
         pl[i].geo = geo ? pl[i].mi.level_spacing_m[0] : 0.0;
+        time_table(tb, cfg, &jobs[i], &pl[i]);
         plan_job(tb, cfg, &jobs[i], &pl[i]);
         pl[i].share_with = i;
         if (pl[i].tiles > (int)PROTO_MAX_FRAME_TILES) {
@@ -909,21 +1010,23 @@ static void plan_jobs(const tables *tb, const srv_config *cfg, srv_stats *st, sr
             pl[i].ok = 0;
             continue;
         }
-        pl[i].list = calloc((size_t)(pl[i].tiles ? pl[i].tiles : 1), sizeof *pl[i].list);
-        if (!pl[i].list) pl[i].ok = 0;
+        /* a time-interpolating client may need both samples of a tile */
+        size_t cap = 2 * (size_t)(pl[i].tiles ? pl[i].tiles : 1);
+        pl[i].list = calloc(cap, sizeof *pl[i].list);
+        pl[i].tags = calloc(cap, sizeof *pl[i].tags);
+        if (!pl[i].list || !pl[i].tags) pl[i].ok = 0;
     }
 }
 
-/* The tiles missing at one time, and the channels their mips need. */
+/* The tiles missing this batch, at their sample times. */
 typedef struct missing_set {
     srv_tile **tile;
     size_t n, cap;
-    unsigned need_fx[PROTO_MAX_LAYERS][MAX_MIPS];
 } missing_set;
 
 /* One tile of plan p looked up in the cache (p->list); a fresh one joins ms. */
-static void lookup_tile(srv_cascade *k, const tables *tb, srv_stats *st, plan *p, int at, srv_tile_key *key,
-                        uint64_t gen, missing_set *ms)
+static void lookup_tile(srv_cascade *k, srv_stats *st, plan *p, int at, srv_tile_key *key, uint64_t gen,
+                        missing_set *ms)
 {
     int fresh = 0;
     srv_tile *tl = srv_tiles_get(k->cache, key, gen, &fresh);
@@ -944,14 +1047,83 @@ static void lookup_tile(srv_cascade *k, const tables *tb, srv_stats *st, plan *p
         ms->cap = nc;
     }
     ms->tile[ms->n++] = tl;
-    ms->need_fx[key->cascade][key->level] |= ocean_fx_of(chan_of(tb, p, key->cascade, key->level));
     atomic_fetch_add(&st->tile_cache_misses, 1);
 }
 
-/* Every tile job j's plan p needs at time t, from the cache or into ms. */
-static void lookup_job(srv_cascade *k, const tables *tb, const srv_config *cfg, srv_stats *st,
-                       const srv_cascade_job *j, plan *p, double t, uint64_t gen, missing_set *ms)
+/* Tiles per side of mip m. */
+static int mip_tiles(const tables *tb, const srv_config *cfg, int m)
 {
+    int np = tb->n >> m, T = cfg->cascade_tile < np ? cfg->cascade_tile : np;
+    return np / T;
+}
+
+/* A time-interpolating job's model of what its client holds (srv_held.h),
+ * moved to this frame's windows as the client will move it.  Live, while
+ * the client's previous frame still waits unsent in the latest-wins slot,
+ * this frame replaces it: the model is the one from before that frame.
+ * A model from other tables (a new sea), another tile side or the other
+ * mode starts empty, and so the frame is a KEY frame. */
+static void held_begin(srv_cascade *k, const srv_config *cfg, srv_cascade_job *j, plan *pl)
+{
+    srv_client_sim *cs = &j->c->sim;
+    const tables *tb = &k->tab;
+    pl->held = NULL;
+    pl->key = 0;
+    if (!(cs->sub.flags & PROTO_SUB_TIME_INTERP)) return;
+    for (int i = 0; i < 2; i++)
+        if (!cs->held[i] && srv_held_create(&cs->held[i]) != OCEAN_OK) return;
+    if (cs->held_gen != k->tab_gen || cs->held_tile != cfg->cascade_tile || cs->held_replay != j->replay) {
+        srv_held_clear(cs->held[0]);
+        srv_held_clear(cs->held[1]);
+        cs->held_gen = k->tab_gen;
+        cs->held_tile = cfg->cascade_tile;
+        cs->held_replay = j->replay;
+    }
+    /* held[0]: what the client will hold; held[1]: that before the last frame */
+    if (!j->replay && srv_client_frame_waiting(j->c))
+        srv_held_copy(cs->held[0], cs->held[1]);
+    else
+        srv_held_copy(cs->held[1], cs->held[0]);
+    srv_held *h = cs->held[0];
+    for (int c = 0; c < PROTO_MAX_LAYERS; c++) {
+        int mips = c < pl->layers ? tb->mips[c] : 0;
+        for (int m = 0; m < mips; m++) {
+            int nt = mip_tiles(tb, cfg, m);
+            if (srv_held_advance(h, c, m, &pl->time[c][m], nt * nt) != OCEAN_OK) srv_held_clear(h);
+        }
+        srv_held_drop(h, c, mips);
+    }
+    pl->key = srv_held_key(h);
+    pl->held = h;
+}
+
+/* One needed tile (c, m, ix, iz) of job j: at the frame's time, or each
+ * sample of its window that the client does not hold. */
+static void lookup_needed(srv_cascade *k, const srv_config *cfg, srv_stats *st, const srv_cascade_job *j,
+                          plan *p, srv_tile_key *key, int ntile, uint64_t gen, missing_set *ms, int *at)
+{
+    int c = key->cascade, m = key->level, i = key->iz * ntile + key->ix;
+    (void)cfg;
+    if (!p->time[c][m].interval || !p->held) {
+        key->t = j->t;
+        p->tags[*at] = (uint32_t)c;
+        lookup_tile(k, st, p, (*at)++, key, gen, ms);
+        return;
+    }
+    for (int slot = 0; slot < 2; slot++) {
+        if (srv_held_has(p->held, c, m, slot, i, key->channels)) continue;
+        key->t = p->t_ab[c][m][slot];
+        p->tags[*at] = (uint32_t)c | (slot ? PROTO_TAG_SLOT_B : 0u);
+        lookup_tile(k, st, p, (*at)++, key, gen, ms);
+        srv_held_add(p->held, c, m, slot, i, key->channels);
+    }
+}
+
+/* Every tile job j's plan p needs, from the cache or into ms. */
+static void lookup_job(srv_cascade *k, const srv_config *cfg, srv_stats *st, const srv_cascade_job *j, plan *p,
+                       uint64_t gen, missing_set *ms)
+{
+    const tables *tb = &k->tab;
     const proto_subscribe *sub = &j->c->sim.sub;
     int at = 0;
     for (int c = 0; c < p->layers; c++)
@@ -963,7 +1135,6 @@ static void lookup_job(srv_cascade *k, const tables *tb, const srv_config *cfg, 
                 for (int b = 0; b < rg->nx; b++) {
                     srv_tile_key key;
                     srv_tile_key_init(&key);
-                    key.t = t;
                     key.accuracy = sub->accuracy;
                     key.ix = (rg->x0 + b) % ntile;
                     key.iz = (rg->z0 + a) % ntile;
@@ -973,46 +1144,57 @@ static void lookup_job(srv_cascade *k, const tables *tb, const srv_config *cfg, 
                     key.cascade = (uint8_t)c;
                     key.level = (uint8_t)m;
                     key.codec = sub->codec;
-                    lookup_tile(k, tb, st, p, at++, &key, gen, ms);
+                    lookup_needed(k, cfg, st, j, p, &key, ntile, gen, ms, &at);
                 }
         }
     p->tiles = at;
 }
 
-/* Stage 2, per distinct time: every job's tiles looked up, the missing
- * mips evaluated (a tile cached under another channel set is a distinct
- * key, so every missing tile's mip is evaluated with its channels) and the
- * missing tiles encoded on the workers. */
+/* Stage 2: every job's tiles looked up in job order (a client's model of
+ * what it holds moves frame by frame), then, per distinct sample time,
+ * the mips the missing tiles need evaluated (a tile cached under another
+ * channel set is a distinct key, so every missing tile's mip is evaluated
+ * with its channels) and the missing tiles encoded on the workers. */
 static void tiles_by_time(srv_cascade *k, ocean *oc, ocean *nf, const srv_config *cfg, srv_stats *st,
                           srv_cascade_job *jobs, plan *pl, int n, uint64_t gen)
 {
     const tables *tb = &k->tab;
-    int *done = calloc((size_t)n, sizeof *done);
     missing_set ms = {0};
-    for (int i0 = 0; i0 < n && done; i0++) {
-        if (done[i0]) continue;
-        double t = jobs[i0].t;
-        memset(ms.need_fx, 0, sizeof ms.need_fx);
-        ms.n = 0;
-        for (int i = i0; i < n; i++) {
-            if (done[i] || jobs[i].t != t) continue;
-            done[i] = 1;
-            if (pl[i].ok) lookup_job(k, tb, cfg, st, &jobs[i], &pl[i], t, gen, &ms);
+    for (int i = 0; i < n; i++) {
+        if (!pl[i].ok) continue;
+        held_begin(k, cfg, &jobs[i], &pl[i]);
+        lookup_job(k, cfg, st, &jobs[i], &pl[i], gen, &ms);
+    }
+    srv_tile **at_t = ms.n ? malloc(ms.n * sizeof *at_t) : NULL;
+    char *done = ms.n ? calloc(ms.n, 1) : NULL;
+    for (size_t q0 = 0; q0 < ms.n && at_t && done; q0++) {
+        if (done[q0]) continue;
+        double t = ms.tile[q0]->key.t;
+        unsigned need_fx[PROTO_MAX_LAYERS][MAX_MIPS];
+        memset(need_fx, 0, sizeof need_fx);
+        size_t nt = 0;
+        for (size_t q = q0; q < ms.n; q++) {
+            if (done[q] || ms.tile[q]->key.t != t) continue;
+            done[q] = 1;
+            at_t[nt++] = ms.tile[q];
+            need_fx[ms.tile[q]->key.cascade][ms.tile[q]->key.level] |= ocean_fx_of(ms.tile[q]->key.channels);
         }
-        if (!ms.n) continue;
-        ocean_result r = eval_mips(k, oc, nf, tb, t, ms.need_fx, st);
+        ocean_result r = eval_mips(k, oc, nf, tb, t, need_fx, st);
         if (r != OCEAN_OK) {
-            for (size_t q = 0; q < ms.n; q++) ms.tile[q]->result = r;
+            for (size_t q = 0; q < nt; q++) at_t[q]->result = r;
             continue;
         }
 #pragma omp parallel for schedule(dynamic, 1) num_threads(cfg->workers)
-        for (size_t q = 0; q < ms.n; q++)
-            tile_build(ms.tile[q], ms.tile[q]->key.cascade < tb->fft ? k->mipf[ms.tile[q]->key.level]
-                                                                     : k->nff[ms.tile[q]->key.level], tb);
-        atomic_fetch_add(&st->tiles_encoded, (uint64_t)ms.n);
+        for (size_t q = 0; q < nt; q++)
+            tile_build(at_t[q], at_t[q]->key.cascade < tb->fft ? k->mipf[at_t[q]->key.level]
+                                                               : k->nff[at_t[q]->key.level], tb);
+        atomic_fetch_add(&st->tiles_encoded, (uint64_t)nt);
     }
-    free(ms.tile);
+    if (ms.n && (!at_t || !done))
+        for (size_t q = 0; q < ms.n; q++) ms.tile[q]->result = OCEAN_ENOMEM;
+    free(at_t);
     free(done);
+    free(ms.tile);
 }
 
 /* Stage 3: frames; live jobs with the same frame share one encoding. */
@@ -1047,6 +1229,21 @@ static void frames_of(const tables *tb, const srv_config *cfg, srv_stats *st, sr
     }
 }
 
+/* The model of a time-interpolating client after its frame: a KEY frame
+ * made, or, when the frame or one of its tiles could not be made, the
+ * client's holdings no longer known: the next frame is a KEY frame. */
+static void held_end(const srv_cascade_job *j, plan *pl)
+{
+    if (!pl->held) return;
+    int whole = pl->ok && j->frame;
+    for (int i = 0; whole && i < pl->tiles; i++)
+        whole = pl->list[i] && pl->list[i]->result == OCEAN_OK && pl->list[i]->payload;
+    if (!whole)
+        srv_held_clear(pl->held);
+    else if (pl->key)
+        srv_held_keyed(pl->held);
+}
+
 void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *nf, int order,
                      const srv_config *cfg, srv_stats *st, srv_cascade_job *jobs, int n, uint64_t gen)
 {
@@ -1056,6 +1253,10 @@ void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *
     plan_jobs(&k->tab, cfg, st, jobs, pl, n);
     tiles_by_time(k, oc, nf, cfg, st, jobs, pl, n, gen);
     frames_of(&k->tab, cfg, st, jobs, pl, n);
-    for (int i = 0; i < n; i++) free(pl[i].list);
+    for (int i = 0; i < n; i++) {
+        held_end(&jobs[i], &pl[i]);
+        free(pl[i].list);
+        free(pl[i].tags);
+    }
     free(pl);
 }

@@ -27,6 +27,11 @@
 
 typedef struct srv_cascade srv_cascade;
 
+/* The longest update interval of a mip's samples, ticks (PROTOCOL.md
+ * "Samples in time"): 2.1 s at 30 Hz, within the shortest period a coarse
+ * mip holds at the ship-bridge scene, so no wave is aliased in time. */
+#define SRV_CASCADE_MAX_INTERVAL 64
+
 /* Seed 000's energy guard: at most this fraction of the sea's height
  * variance may be missing from what a client gets (e_total). */
 #define SRV_CASCADE_E_GUARD 0.05
@@ -44,6 +49,8 @@ typedef struct srv_cascade_job {
     proto_camera cam;
     uint32_t cam_seq;
     uint32_t tick;
+    double tick_pos;       /* the frame's time in ticks, t * tick_rate (live: the
+                              tick number exactly) */
     int replay;            /* 1: replay frame (queued in order), 0: live */
     double policy_k;       /* the velocity policy's cutoff, rad/m (INFINITY: none) */
     srv_msg *topo, *frame; /* out: MESH_TOPOLOGY (when new) and FRAME */

@@ -493,6 +493,8 @@ void srv_client_unref(srv_client *c)
     srv_msg_free(c->slot_frame);
     mesh_destroy(c->sim.mesh);
     free(c->sim.qz_refs);
+    srv_held_destroy(c->sim.held[0]);
+    srv_held_destroy(c->sim.held[1]);
     close_recording(c);
     free(c->rx);
     pthread_mutex_destroy(&c->out_lock);
@@ -615,6 +617,14 @@ int srv_client_next_is_live(srv_client *c)
     int live = !c->ctrl && (c->slot_topo || c->slot_frame);
     pthread_mutex_unlock(&c->out_lock);
     return live;
+}
+
+int srv_client_frame_waiting(srv_client *c)
+{
+    pthread_mutex_lock(&c->out_lock);
+    int waiting = c->slot_frame != NULL;
+    pthread_mutex_unlock(&c->out_lock);
+    return waiting;
 }
 
 uint64_t srv_client_queued(srv_client *c)

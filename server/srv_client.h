@@ -32,6 +32,7 @@
 #include "proto.h"
 #include "srv_admin.h"
 #include "srv_config.h"
+#include "srv_held.h"
 #include "srv_link.h"
 #include "srv_stats.h"
 
@@ -110,6 +111,12 @@ typedef struct srv_client_sim {
                                     3 per vertex, made once per topology */
     uint64_t qz_refs_key;
     uint32_t qz_refs_n;          /* vertices qz_refs holds (0: none) */
+    /* PROTO_SUB_TIME_INTERP: what the client holds ([0]) and held before
+     * its last frame ([1]), made from cascade tables held_gen, tile side
+     * held_tile, in replay (held_replay 1) or live mode */
+    srv_held *held[2];
+    uint64_t held_gen;
+    int held_tile, held_replay;
 } srv_client_sim;
 
 typedef struct srv_client {
@@ -303,6 +310,9 @@ uint64_t srv_client_queued(srv_client *c);
 /* Whether the next message to send is a live frame (or its topology) from
  * the latest-wins slots, nothing from the control FIFO before it. */
 int srv_client_next_is_live(srv_client *c);
+/* Whether a live frame waits unsent in the latest-wins slot (the next one
+ * published replaces it) [any thread]. */
+int srv_client_frame_waiting(srv_client *c);
 
 srv_msg *srv_msg_new(void);
 /* A new message holding m's encoding, or NULL on OOM or a message the

@@ -55,6 +55,7 @@ typedef struct job {
     uint32_t cam_seq;
     int replay;
     uint32_t tick;
+    int64_t tick_no;        /* live: the tick, unwrapped */
     group g;
     double cutoff_k;
     ocean_filter_cutoff cut;
@@ -411,6 +412,9 @@ static void apply_subscription(srv_sim *s, srv_client *c)
     cs->topo_valid = 0;
     cs->mesh_coarsen = 0;
     cs->primed = 0;
+    /* the client drops what it holds on the next frame (a KEY frame) */
+    srv_held_clear(cs->held[0]);
+    srv_held_clear(cs->held[1]);
     /* a new subscription keeps the stream's schedule at its own rate: a
      * client cannot buy frames by re-subscribing */
     cs->next_frame_t = cs->framed ? cs->last_frame_t + 1.0 / cs->sub.frame_rate_hz : -INFINITY;
@@ -1184,6 +1188,7 @@ static void snapshot_jobs(srv_sim *s, work *w, double t, int64_t tick_no, int li
             if (!j) break;
             j->t = t;
             j->tick = (uint32_t)tick_no;
+            j->tick_no = tick_no;
             j->sub_changed = changed;
             if (c->has_camera) {
                 j->cam = c->cam;
@@ -1230,6 +1235,7 @@ static int filter_jobs(srv_sim *s, work *w, double t, double rate)
             q->cam = j.cam;
             q->cam_seq = j.cam_seq;
             q->tick = j.tick;
+            q->tick_pos = j.replay == 1 ? j.t * rate : (double)j.tick_no;
             q->replay = j.replay == 1;
             q->policy_k = layout1_policy(s, c, &j.cam);
             continue;

@@ -1240,7 +1240,7 @@ ocean_result ocean_cascade_moments(const ocean *o, int c, double kc, int order, 
     const cascade *cs = &o->cas[c];
     double kneg = negligible_k(o, kc, order);
     int n = o->p.n, half = n / 2 + 1;
-    double vh = 0, sx = 0, sz = 0, sxz = 0, total = 0;
+    double vh = 0, sx = 0, sz = 0, sxz = 0, total = 0, kh = 0, khtt = 0, ks = 0, kstt = 0;
     for (int row = 0; row < n; row++) {
         double kz = (row < n / 2 ? row : row - n) * cs->dk;
         for (int ix = 0; ix < half; ix++) {
@@ -1256,8 +1256,19 @@ ocean_result ocean_cascade_moments(const ocean *o, int c, double kc, int order, 
             sx += rem * kx * kx;
             sz += rem * kz * kz;
             sxz += rem * kx * kz;
+            double w2 = 2.0 * M_PI * (cs->turns_hi[i] + cs->turns_lo[i]), k2 = kx * kx + kz * kz;
+            w2 *= w2;
+            double kept = w * g * g;
+            kh += kept;
+            khtt += kept * w2 * w2;
+            ks += kept * k2;
+            kstt += kept * k2 * w2 * w2;
         }
     }
+    out->kept_var_h = kh;
+    out->kept_var_h_tt = khtt;
+    out->kept_mss = ks;
+    out->kept_mss_tt = kstt;
     out->var_h = vh;
     out->mss_x = sx;
     out->mss_z = sz;

@@ -463,6 +463,12 @@ typedef struct ocean_moments {
     double var_h;                 /* height variance removed, m^2 */
     double mss_x, mss_z, mss_xz;  /* E[(d eta/dx)^2], E[(d eta/dz)^2], E[...x ...z] removed */
     double total_var_h;           /* the cascade's whole height variance, m^2 */
+    /* What the filtered band keeps, and the variance of its second time
+     * derivative (w^4 weights, w from the dispersion relation): how fast
+     * the kept heights and slopes change, which sets how long a sample of
+     * them stays within a linear interpolation's error. */
+    double kept_var_h, kept_var_h_tt;   /* m^2, m^2/s^4 */
+    double kept_mss, kept_mss_tt;       /* x + z slope variance; its d^2/dt^2, 1/s^4 */
 } ocean_moments;
 ocean_result ocean_cascade_moments(const ocean *o, int c, double kc, int order, ocean_moments *out);
 

@@ -796,7 +796,7 @@ static void peek_cascade_block(void **state)
     assert_true(pf.cascades.camera[0] == 1e6 && pf.cascades.camera[1] == 300);
     assert_true(pf.cascades.e_total == 0.03f);
     assert_true(pf.cascades.geometry_spacing_m == 4.0f);
-    assert_int_equal(at, PROTO_HEADER_SIZE + 56 + 56 + 3 * 224);
+    assert_int_equal(at, PROTO_HEADER_SIZE + 56 + 56 + 3 * 320);
     /* the first record starts there: its length field is the first tile's */
     assert_int_equal(proto_ld32(B.msg + at), 48 + 8 * 8 * 4);
     assert_int_equal(oc_frame_peek(B.msg, 100, B.len, &pf, &at, err, sizeof err), OCEAN_ETRUNC);

@@ -156,8 +156,9 @@ static char *dump(const proto_msg *m)
         out(&b, "tile_count = %u\nhas_mesh = %u\nlayout = %u\n", f->tile_count, f->has_mesh, f->layout);
         if (f->layout == PROTO_LAYOUT_CASCADE) {
             const proto_cascade_block *k = &f->cascades;
-            out(&b, "cascades.cascade_count = %u\ncascades.order = %u\ncascades.spacing_per_m = %.9g\n",
-                k->cascade_count, k->order, (double)k->spacing_per_m);
+            out(&b, "cascades.cascade_count = %u\ncascades.order = %u\ncascades.flags = %u\n", k->cascade_count,
+                k->order, k->flags);
+            out(&b, "cascades.spacing_per_m = %.9g\n", (double)k->spacing_per_m);
             out(&b, "cascades.camera = %.17g %.17g %.17g\ncascades.min_spacing_m = %.9g\ncascades.e_total = %.9g\n",
                 k->camera[0], k->camera[1], k->camera[2], (double)k->min_spacing_m, (double)k->e_total);
             out(&b, "cascades.tail_mss = %.9g %.9g %.9g\n", (double)k->tail_mss[0], (double)k->tail_mss[1],
@@ -171,6 +172,9 @@ static char *dump(const proto_msg *m)
                 for (int q = 0; q <= e->mips; q++)
                     out(&b, "cascade[%u].mip[%d] = %.9g %.9g %.9g %.9g\n", c, q, (double)e->mip[q].kc,
                         (double)e->mip[q].mss_x, (double)e->mip[q].mss_z, (double)e->mip[q].mss_xz);
+                for (int q = 0; q < e->mips; q++)
+                    out(&b, "cascade[%u].time[%d] = %u %u %u\n", c, q, e->time[q].tick_a, e->time[q].interval,
+                        e->time[q].phase);
             }
         }
         for (unsigned i = 0; i < f->tile_count; i++) {
@@ -178,7 +182,7 @@ static char *dump(const proto_msg *m)
             snprintf(p, sizeof p, "tile[%u]", i);
             dump_tile(&b, p, &f->tiles[i]);
             if (f->layout == PROTO_LAYOUT_CASCADE)
-                out(&b, "%s.cascade = %u\n", p, f->tiles[i].cascade);
+                out(&b, "%s.cascade = %u\n%s.slot = %u\n", p, f->tiles[i].cascade, p, f->tiles[i].slot);
         }
         if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
             out(&b, "placement.mesh_id = %u\nplacement.origin = %.17g %.17g %.17g\n", f->placement.mesh_id,
@@ -261,13 +265,18 @@ static char *dump(const proto_msg *m)
 static const uint8_t tile_payload[] = {0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0x00, 0xc0,
                                        0x00, 0x00, 0x40, 0x40, 0x00, 0x00, 0x80, 0x3e}; /* f32 1,-2,3,0.25 */
 static const proto_tile sample_tiles[2] = {
-    {0, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, -3, 7, -384.0, 896.0, 2.0, 0.0f, 16, tile_payload, 0},
-    {2, PROTO_CODEC_F16, PROTO_CH_HEIGHT, 2, 1, 0, 0, 1e6 + 0.5, -2.5e6, 8.0, 0.00048828125f, 4, tile_payload, 0},
+    {0, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, -3, 7, -384.0, 896.0, 2.0, 0.0f, 16, tile_payload, 0, 0},
+    {2, PROTO_CODEC_F16, PROTO_CH_HEIGHT, 2, 1, 0, 0, 1e6 + 0.5, -2.5e6, 8.0, 0.00048828125f, 4, tile_payload, 0, 0},
 };
 /* Layout-1 tiles: mip 1 of cascade 0 and mip 0 of cascade 1 (cascade-local origins). */
 static const proto_tile cascade_tiles[2] = {
-    {1, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, 3, 1, 46.875, 15.625, 7.8125, 0.0f, 16, tile_payload, 0},
-    {0, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, 0, 5, 0.0, 9.09375, 0.9093750, 0.0f, 16, tile_payload, 1},
+    {1, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, 3, 1, 46.875, 15.625, 7.8125, 0.0f, 16, tile_payload, 0, 0},
+    {0, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, 0, 5, 0.0, 9.09375, 0.9093750, 0.0f, 16, tile_payload, 1, 0},
+};
+/* frame_cascade_time: tile 0 is sample B of cascade 0's mip 1 */
+static const proto_tile cascade_time_tiles[2] = {
+    {1, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, 3, 1, 46.875, 15.625, 7.8125, 0.0f, 16, tile_payload, 0, 1},
+    {0, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, 0, 5, 0.0, 9.09375, 0.9093750, 0.0f, 16, tile_payload, 1, 0},
 };
 static const float sample_flat[6] = {-1, 0, 1, 0, 0, 1.5f};
 static const float sample_zones[8] = {1, 30, 4.5f, 0, 2, 120, 18, 0};
@@ -335,7 +344,7 @@ static void sample(proto_msg *m, proto_type type)
         break;
     case PROTO_FRAME:
         m->u.frame = (proto_frame){0.5, 0.03125, {1e7, 0.0, -2.5e6}, 77, 9001, 2, sample_tiles, 1,
-                                   {3, 3, {1e7, 0.0, -2.5e6}, sample_pos, NULL, 0}, PROTO_LAYOUT_WORLD, NULL, {0, {0, 0, 0}},
+                                   {3, 3, {1e7, 0.0, -2.5e6}, sample_pos, NULL, 0}, PROTO_LAYOUT_WORLD, NULL, NULL, {0, {0, 0, 0}},
                                    {0}};
         break;
     case PROTO_TILE:
@@ -423,6 +432,18 @@ static int sample_named(proto_msg *m, const char *name)
         f->placement.origin[2] = -2.5e6 - 8;
         return 0;
     }
+    if (!strcmp(name, "frame_cascade_time")) {
+        /* a key frame of a time-interpolating subscription: cascade 0's
+         * mip 1 every 4 ticks (a quarter of the way from A to B), cascade
+         * 1's mip 0 every 8, with sample A's tick wrapped below 2^32 */
+        sample_named(m, "frame_cascade");
+        proto_frame *f = &m->u.frame;
+        f->tiles = cascade_time_tiles;
+        f->cascades.flags = PROTO_CASCADE_KEY;
+        f->cascades.cascade[0].time[1] = (proto_mip_time){1000, 4, 16384};
+        f->cascades.cascade[1].time[0] = (proto_mip_time){0xFFFFFFFEu, 8, 49152};
+        return 0;
+    }
     if (!strcmp(name, "frame_mesh_qz")) {
         /* layout 0 with qz positions, for the mesh_topology vector's mesh */
         static proto_buf qz;
@@ -484,7 +505,7 @@ static int sample_named(proto_msg *m, const char *name)
     return -1;
 }
 
-static const char *const extra_vectors[] = {"frame_cascade", "mesh_topology_flat", "subscribe_cascade",
+static const char *const extra_vectors[] = {"frame_cascade", "frame_cascade_time", "mesh_topology_flat", "subscribe_cascade",
                                             "sea_state_announce", "sea_state_get", "frame_mesh_qz"};
 #define N_EXTRA ((int)(sizeof extra_vectors / sizeof extra_vectors[0]))
 
@@ -996,11 +1017,11 @@ static const bad_vector bad_vectors[] = {
     {"bad_query_count_lies", "query", P(4), 4, 1000, OCEAN_ETRUNC, -1},
     {"bad_frame_record_lies", "frame", P(56), 4, 4096, OCEAN_ETRUNC, -1},
     {"bad_frame_layout", "frame", P(51), 1, 7, OCEAN_ETYPE, -1},
-    {"bad_cascade_tag", "frame_cascade", P(56 + 56 + 2 * 224 + 4), 4, 2, OCEAN_EFORMAT, -1},
+    {"bad_cascade_tag", "frame_cascade", P(56 + 56 + 2 * 320 + 4), 4, 2, OCEAN_EFORMAT, -1},
     {"bad_cascade_nan_spacing", "frame_cascade", P(56 + 4), 4, 0x7FC00000u, OCEAN_EINVAL, -1},
     {"bad_cascade_count", "frame_cascade", P(56), 1, 5, OCEAN_EINVAL, -1},
     /* cascade 1's own q (entry offset 12) twice the block's 0.046875 */
-    {"bad_cascade_entry_spacing", "frame_cascade", P(56 + 56 + 224 + 12), 4, 0x3DC00000u, OCEAN_EINVAL, -1},
+    {"bad_cascade_entry_spacing", "frame_cascade", P(56 + 56 + 320 + 12), 4, 0x3DC00000u, OCEAN_EINVAL, -1},
     /* geometry_spacing_m (block offset 52) -1 */
     {"bad_cascade_geometry_spacing", "frame_cascade", P(56 + 52), 4, 0xBF800000u, OCEAN_EINVAL, -1},
     {"bad_topology_flags", "mesh_topology_flat", P(6), 2, 2, OCEAN_EFORMAT, -1},
@@ -1008,8 +1029,14 @@ static const bad_vector bad_vectors[] = {
     {"bad_sea_get_with_sea", "sea_state_get", P(32), 8, 0x4024000000000000ull, OCEAN_EFORMAT, -1},
     {"bad_sea_op", "sea_state", P(0), 1, 3, OCEAN_ETYPE, -1},
     {"bad_subscribe_mesh_codec", "subscribe", P(10), 1, 1, OCEAN_ETYPE, -1},
-    /* SUBSCRIBE.flags: bit 1 is not defined */
-    {"bad_subscribe_flags", "subscribe", P(11), 1, 2, OCEAN_EFORMAT, -1},
+    /* SUBSCRIBE.flags: bit 2 is not defined */
+    {"bad_subscribe_flags", "subscribe", P(11), 1, 4, OCEAN_EFORMAT, -1},
+    /* cascade block flags: bit 1 is not defined */
+    {"bad_cascade_flags", "frame_cascade", P(56 + 2), 1, 2, OCEAN_EFORMAT, -1},
+    /* cascade 0's time[0] (after its 13 mip entries): a tick with interval 0 */
+    {"bad_cascade_time", "frame_cascade", P(56 + 56 + 16 + 16 * 13), 4, 7, OCEAN_EFORMAT, -1},
+    /* the first record's tag: sample B of a mip without a time interval */
+    {"bad_cascade_slot", "frame_cascade", P(56 + 56 + 2 * 320 + 4), 4, 0x100, OCEAN_EINVAL, -1},
     {"bad_frame_has_mesh", "frame_mesh_qz", P(50), 1, 3, OCEAN_EFORMAT, -1},
     {"bad_frame_cascade_mesh_qz", "frame_cascade", P(50), 1, 2, OCEAN_EFORMAT, -1},
     {"bad_mesh_qz_format", "frame_mesh_qz", P(QZ_AT), 1, 9, OCEAN_ECODEC, -1},

@@ -576,6 +576,89 @@ static oc_client *bridge_tiles_client(srv_daemon **d, srv_settings *sb, proto_su
     return c;
 }
 
+/* Samples in time (PROTOCOL.md): a client that interpolates in time reads,
+ * at every frame, what a client sent every sample at that frame's tick
+ * reads, within the quantiser's error, for a fraction of the bytes.  The
+ * byte budget is lifted so that both plan the same mips. */
+static void time_interp_reads_the_frames_tick(void **state)
+{
+    (void)state;
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2",
+                          "server.viewer_bytes_per_s=1e9"};
+    srv_settings sb;
+    srv_daemon *d = start_daemon(sets, 5, &sb);
+    oc_client *a = connect_client(srv_daemon_port(d), NULL), *b = connect_client(srv_daemon_port(d), NULL);
+    proto_subscribe s;
+    oc_subscribe_default(&s);
+    s.mesh_kind = PROTO_MESH_NONE;
+    assert_int_equal(oc_client_subscribe(a, &s), OCEAN_OK);
+    s.flags |= PROTO_SUB_TIME_INTERP;
+    assert_int_equal(oc_client_subscribe(b, &s), OCEAN_OK);
+    proto_camera cam;
+    bridge_camera(&cam);
+    cam.viewport_w = 320; /* a plan both clients make whole, at server.px_per_sample */
+    cam.viewport_h = 180;
+    double bytes_a = 0, bytes_b = 0, se = 0, sv = 0;
+    int compared = 0, points = 0, keys = 0, interp = 0, frames_a = 0, frames_b = 0;
+    uint32_t seq;
+    assert_int_equal(oc_client_send_camera(a, &cam, &seq), OCEAN_OK);
+    assert_int_equal(oc_client_send_camera(b, &cam, &seq), OCEAN_OK);
+    /* the last frames of a, by tick, to meet b's frames of the same tick */
+    oc_frame *ring[16] = {0};
+    double end = test_now_s() + (sanitized ? 120.0 : 40.0);
+    while (compared < 12 && test_now_s() < end) {
+        oc_frame *f = NULL;
+        if (oc_client_next_frame(a, 5, &f) == OCEAN_OK) {
+            if (frames_a++ >= 8) bytes_a += f->raw_len;
+            oc_frame_free(ring[f->info.tick % 16]);
+            ring[f->info.tick % 16] = f;
+        }
+        if (oc_client_next_frame(b, 5, &f) != OCEAN_OK) continue;
+        if (frames_b++ >= 8) bytes_b += f->raw_len;
+        keys += frames_b == 1 ? 0 : (f->info.cascades.flags & PROTO_CASCADE_KEY) != 0;
+        assert_true(frames_b > 1 || (f->info.cascades.flags & PROTO_CASCADE_KEY));
+        for (int c = 0; c < f->info.cascades.cascade_count; c++)
+            for (int m = 0; m < f->info.cascades.cascade[c].mips; m++)
+                interp += f->info.cascades.cascade[c].time[m].interval > 0;
+        assert_int_equal(f->view_result, OCEAN_OK);
+        oc_frame *fa = ring[f->info.tick % 16];
+        if (frames_b > 8 && fa && fa->info.tick == f->info.tick && fa->view_result == OCEAN_OK) {
+            compared++;
+            for (int i = 0; i < 15; i++)
+                for (int k = 0; k < 15; k++) {
+                    double x = cam.pos[0] + 20.0 * (i - 7), z = cam.pos[2] + 20.0 * (k - 7);
+                    oc_sample pa, pb;
+                    if (oc_frame_sample(fa, x, z, 0, &pa) != OCEAN_OK || oc_frame_sample(f, x, z, 0, &pb) != OCEAN_OK)
+                        continue;
+                    se += (pa.height - pb.height) * (pa.height - pb.height);
+                    sv += pa.height * pa.height;
+                    points++;
+                }
+        }
+        oc_frame_free(f);
+    }
+    for (int i = 0; i < 16; i++) oc_frame_free(ring[i]);
+    frames_a -= 8;
+    frames_b -= 8;
+    print_message("time interp: %d frames compared (%d points), height error RMS %.4f of RMS %.3f m; "
+                  "bytes/frame %.0f plain, %.0f interpolating; %d more key frames\n",
+                  compared, points, sqrt(se / fmax(points, 1)), sqrt(sv / fmax(points, 1)),
+                  bytes_a / fmax(frames_a, 1), bytes_b / fmax(frames_b, 1), keys);
+    assert_true(compared >= 10);
+    assert_true(points >= 50 * compared);
+    /* the first frame is a KEY frame; only one that replaced it unsent may
+     * be one too */
+    assert_true(keys <= 1);
+    assert_true(interp > 0);
+    /* within the quantiser's RMS error at the default accuracy, 2 sqrt(3) a
+     * of each band's RMS, summed over the bands: well under 5 % */
+    assert_true(sqrt(se / points) <= 0.05 * sqrt(sv / points));
+    assert_true(bytes_b < 0.6 * bytes_a);
+    oc_client_destroy(a);
+    oc_client_destroy(b);
+    srv_daemon_stop(d);
+}
+
 /* Frames a link-shaped reader received: wire size, and age (the daemon's
  * sim clock at receipt minus the frame's sim time). */
 typedef struct shaped_frames {
@@ -3765,6 +3848,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(mesh_denser_on_steep_chop),
         cmocka_unit_test(mesh_fits_the_limit_on_steep_chop),
         cmocka_unit_test(cascade_q_spends_the_budget),
+        cmocka_unit_test(time_interp_reads_the_frames_tick),
         cmocka_unit_test(narrow_fov_keeps_the_budget),
         cmocka_unit_test(resubscribe_buys_no_frames),
         cmocka_unit_test(slow_link_gets_coarser_not_older),

@@ -7,11 +7,13 @@
  * A layout-1 FRAME carries, for each cascade c and mip m, the tiles its
  * camera needs of a grid of n_c/2^m samples that is periodic on the
  * cascade's patch P_c.  The library indexes those tiles per (c, m) into a
- * view (oc_cascade_view) when the frame is received; nothing is kept from
- * one frame to the next: the spec makes every FRAME self-contained (it
- * carries all tiles its camera needs), so a frame's view reads only its own
- * tiles and a point outside what they cover is reported (OCEAN_ENOTFOUND),
- * never filled from an older frame.
+ * view (oc_cascade_view) when the frame is received.  Without the
+ * subscription's time_interp flag every FRAME is self-contained (it carries
+ * all tiles its camera needs) and its view reads only its own tiles; with
+ * it, the connection holds each mip's two samples in time (oc_held.h) and
+ * the view reads their blend at the frame's instant.  Either way a point
+ * outside what the frame's instant covers is reported (OCEAN_ENOTFOUND),
+ * never filled from an older instant.
  *
  * Reading (oc_frame_sample):
  *  - level: per cascade s_c = max(min_spacing_m, q_c * sqrt(dx^2 + dz^2 +

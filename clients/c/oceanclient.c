@@ -25,6 +25,8 @@
 
 #include <libwebsockets.h>
 
+#include "oc_held.h"
+
 #define CAM_RING 256
 #define CLOSE_GRACE_MS 300
 
@@ -189,6 +191,10 @@ typedef struct frame_priv {
     topo_ref *topo;
     float *mesh_pos;          /* has_mesh 2: the decoded positions
                                  (pub.info.mesh.positions points here) */
+    proto_tile *blend_tiles;  /* a time-interpolated frame: the tiles of its
+                                 instant (oc_held_blend) the view reads */
+    float **blend_data;
+    unsigned nblend;
 } frame_priv;
 
 struct oc_loop {
@@ -206,6 +212,8 @@ struct oc_loop {
 };
 
 struct oc_client {
+    oc_held *held;             /* time-interpolating stream: the samples held
+                                  (receive thread), made at its first frame */
     oc_loop *loop;
     int own_loop;
     oc_client *next;              /* [mu] loop's list */
@@ -294,6 +302,7 @@ void oc_frame_free(oc_frame *f)
         free(p->pub.tiles);
     }
     oc_cascade_view_free((oc_cascade_view *)p->pub.view);
+    oc_held_blend_free(p->blend_tiles, p->blend_data, p->nblend);
     proto_msg_free(&p->msg);
     free(p->raw);
     free(p->mesh_pos);
@@ -511,7 +520,51 @@ static int mark_closed_locked(oc_client *c, int reason, const char *msg, pending
  * decode_tiles, then builds the layout-1 view.  A tile or view failure is
  * recorded in the frame (decode_result, view_result), not fatal.  NULL
  * only when out of memory (m and raw then still belong to the caller). */
-static frame_priv *build_frame(int decode_tiles, proto_msg *m, uint8_t *raw, size_t len, double now)
+/* The view of a frame of a time-interpolating stream: its records go into
+ * the connection's store (held; NULL when the frame is decoded alone,
+ * which only a KEY frame can be), and the view reads the blend of the
+ * store's samples at the frame's instant. */
+static void timed_view(frame_priv *f, oc_held *held)
+{
+    const proto_frame *info = &f->pub.info;
+    oc_held *tmp = NULL;
+    if (!held && !(info->cascades.flags & PROTO_CASCADE_KEY)) {
+        f->pub.view_result = OCEAN_ESTATE;
+        snprintf(f->pub.view_error, sizeof f->pub.view_error,
+                 "a frame of a time-interpolating stream reads the samples of the frames before it: "
+                 "decode it through its connection");
+        return;
+    }
+    if (!held && oc_held_create(&tmp) != OCEAN_OK) {
+        f->pub.view_result = OCEAN_ENOMEM;
+        return;
+    }
+    held = held ? held : tmp;
+    unsigned n = info->tile_count;
+    const float **data = calloc(n ? n : 1, sizeof *data);
+    ocean_result r = data ? OCEAN_OK : OCEAN_ENOMEM;
+    for (unsigned i = 0; data && i < n; i++) data[i] = f->pub.tiles ? f->pub.tiles[i].data : NULL;
+    if (r == OCEAN_OK)
+        r = oc_held_apply(held, info, data, f->pub.view_error, sizeof f->pub.view_error);
+    free(data);
+    if (r == OCEAN_OK) r = oc_held_blend(held, info, &f->blend_tiles, &f->blend_data, &f->nblend);
+    oc_held_destroy(tmp);
+    if (r == OCEAN_OK && f->nblend > UINT16_MAX) r = OCEAN_ETOOBIG;
+    if (r != OCEAN_OK) {
+        f->pub.view_result = r;
+        return;
+    }
+    proto_frame at = *info;
+    at.tiles = f->blend_tiles;
+    at.tile_count = (uint16_t)f->nblend;
+    oc_cascade_view *v = NULL;
+    f->pub.view_result = oc_cascade_view_build(&at, (const float *const *)f->blend_data, &v, f->pub.view_error,
+                                               sizeof f->pub.view_error);
+    f->pub.view = v;
+}
+
+static frame_priv *build_frame(int decode_tiles, oc_held *held, proto_msg *m, uint8_t *raw, size_t len,
+                               double now)
 {
     frame_priv *f = calloc(1, sizeof *f);
     if (!f)
@@ -560,7 +613,9 @@ static frame_priv *build_frame(int decode_tiles, proto_msg *m, uint8_t *raw, siz
              f->pub.info.layout != PROTO_LAYOUT_CASCADE ? "not a layout-1 frame"
              : !decode_tiles                          ? "tiles not decoded"
                                                       : "");
-    if (f->pub.info.layout == PROTO_LAYOUT_CASCADE && decode_tiles && f->pub.info.tiles) {
+    if (decode_tiles && oc_held_frame_timed(&f->pub.info)) {
+        timed_view(f, held);
+    } else if (f->pub.info.layout == PROTO_LAYOUT_CASCADE && decode_tiles && f->pub.info.tiles) {
         const float **data = calloc(n ? n : 1, sizeof *data);
         oc_cascade_view *v = NULL;
         if (!data) {
@@ -608,7 +663,7 @@ ocean_result oc_frame_decode(const uint8_t *msg, size_t len, oc_frame **out, cha
         return OCEAN_ENOMEM;
     }
     memcpy(raw, msg, len);
-    frame_priv *f = build_frame(1, &m, raw, len, 0.0);
+    frame_priv *f = build_frame(1, NULL, &m, raw, len, 0.0);
     if (!f) {
         proto_msg_free(&m);
         free(raw);
@@ -1038,8 +1093,11 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
     frame_priv *fr = NULL;
     unsigned type = res == OCEAN_OK ? m.hdr.type : 0;
     double sim_time = m.hdr.sim_time;
-    if (type == PROTO_FRAME)
-        fr = build_frame(c->opt.decode_tiles && !peeked, &m, raw, len, now);   /* moves m into the frame */
+    if (type == PROTO_FRAME) {
+        if (c->opt.decode_tiles && !peeked && !c->held && oc_held_frame_timed(&m.u.frame))
+            oc_held_create(&c->held);
+        fr = build_frame(c->opt.decode_tiles && !peeked, c->held, &m, raw, len, now);   /* moves m into the frame */
+    }
     int raw_taken = fr != NULL;
     uint32_t *new_refs = NULL;
     char mesh_why[200] = "";
@@ -1624,6 +1682,7 @@ void oc_options_default(oc_options *o)
 
 static void free_client_mem(oc_client *c)
 {
+    oc_held_destroy(c->held);
     txmsg *t = c->tx_head;
     while (t) {
         txmsg *n = t->next;

@@ -45,9 +45,11 @@ export const LAYOUT = Object.freeze({ WORLD: 0, CASCADE: 1 });
 /* SUBSCRIBE.mesh_codec: how layout-0 mesh positions travel (FRAME.has_mesh 1 / 2). */
 export const MESH_CODEC = Object.freeze({ F32: 0, QZ: 2 });
 /* SUBSCRIBE.flags: FULL_GEOMETRY asks every layout-1 mip with height and
- * displacement, whatever the mesh (PROTOCOL.md "Where each mip is read") */
-export const SUB_FLAG = Object.freeze({ FULL_GEOMETRY: 1 });
-const SUB_FLAGS_ALL = 1;
+ * displacement, whatever the mesh (PROTOCOL.md "Where each mip is read");
+ * TIME_INTERP: the client holds each mip's samples and blends two in time
+ * (PROTOCOL.md "Samples in time") */
+export const SUB_FLAG = Object.freeze({ FULL_GEOMETRY: 1, TIME_INTERP: 2 });
+const SUB_FLAGS_ALL = 3;
 export const MESH_QZ_HEAD = 36;
 export const LAYOUT_COUNT = 2;
 export const MAX_MIPS = 12;
@@ -83,7 +85,10 @@ export const LIMITS = Object.freeze({
 const SEA_SIZE = 96, SUBSCRIBE_SIZE = 28, CAMERA_SIZE = 64, TILE_FIXED = 48, FRAME_FIXED = 56;
 const RECORD_HEAD = 8, TOPO_FIXED = 16, VERTS_FIXED = 32, QUERY_FIXED = 24, RESULT_FIXED = 16;
 const SAMPLE_SIZE = 36, SEASTATE_FIXED = 16 + SEA_SIZE, ERROR_FIXED = 8, BYE_FIXED = 4;
-const CASCADE_FIXED = 56, CASCADE_ENTRY = 224, PLACEMENT_SIZE = 32;
+const CASCADE_FIXED = 56, CASCADE_ENTRY = 320, PLACEMENT_SIZE = 32;
+/* Cascade block flag KEY, and a layout-1 record tag's sample-B bit
+ * (PROTOCOL.md "Samples in time"). */
+const CASCADE_KEY = 1, TAG_SLOT_B = 0x100;
 const MAX_WORLD = 1e10, MAX_LOCAL = 1e7;
 // what the server derives from a camera within MAX_WORLD reaches past it by
 // one frame's cover (view range, coarsest tile): as protocol/proto.c
@@ -319,7 +324,7 @@ function vSubscribe(s) {
     if (s.meshCodec !== MESH_CODEC.F32 && s.meshCodec !== MESH_CODEC.QZ)
         fail(R.ETYPE, `subscribe.mesh_codec ${s.meshCodec} unknown (0 f32, 2 qz)`);
     if (s.flags & ~SUB_FLAGS_ALL)
-        fail(R.EFORMAT, `subscribe.flags 0x${s.flags.toString(16)} has unknown bits (bit 0: full geometry)`);
+        fail(R.EFORMAT, `subscribe.flags 0x${s.flags.toString(16)} has unknown bits (bit 0: full geometry, bit 1: time interpolation)`);
     chkRange('subscribe.tile_size', s.tileSize, 2, LIMITS.tileMaxSize);
     chkRange('subscribe.frame_rate_hz', s.frameRateHz, 0, LIMITS.maxFrameRate);
     if (!(s.frameRateHz > 0)) fail(R.EINVAL, 'subscribe.frame_rate_hz must be > 0');
@@ -555,7 +560,7 @@ function dRecord(r, kind, maxTag, limits) {
 function readCascades(r, cc) {
     const o = r.off;
     const b = {
-        cascadeCount: cc, order: r.u8at(o + 1), spacingPerM: r.f32(o + 4),
+        cascadeCount: cc, order: r.u8at(o + 1), flags: r.u8at(o + 2), spacingPerM: r.f32(o + 4),
         camera: [r.f64(o + 8), r.f64(o + 16), r.f64(o + 24)], minSpacingM: r.f32(o + 32), eTotal: r.f32(o + 36),
         tailMss: [r.f32(o + 40), r.f32(o + 44), r.f32(o + 48)], geometrySpacingM: r.f32(o + 52), cascade: [],
     };
@@ -563,7 +568,12 @@ function readCascades(r, cc) {
         const q = o + CASCADE_FIXED + k * CASCADE_ENTRY;
         const mip = new Float32Array(4 * MIP_ENTRIES);
         for (let m = 0; m < 4 * MIP_ENTRIES; m++) mip[m] = r.f32(q + 16 + 4 * m);
-        b.cascade.push({ patchM: r.f64(q), n: r.u16(q + 8), mips: r.u8at(q + 10), fades: r.u8at(q + 11), spacingPerM: r.f32(q + 12), mip });
+        const time = [];
+        for (let m = 0; m < MAX_MIPS; m++) {
+            const w = q + 16 + 16 * MIP_ENTRIES + 8 * m;
+            time.push({ tickA: r.u32(w), interval: r.u16(w + 4), phase: r.u16(w + 6) });
+        }
+        b.cascade.push({ patchM: r.f64(q), n: r.u16(q + 8), mips: r.u8at(q + 10), fades: r.u8at(q + 11), spacingPerM: r.f32(q + 12), mip, time });
     }
     return b;
 }
@@ -571,6 +581,7 @@ function readCascades(r, cc) {
 function vCascades(b) {
     chkRange('frame.cascades.cascade_count', b.cascadeCount, 1, LIMITS.maxLayers);
     chkRange('frame.cascades.order', b.order, 1, 64);
+    if (b.flags & ~CASCADE_KEY) fail(R.EFORMAT, `frame.cascades.flags is ${b.flags} (bit 0 only)`);
     if (!(b.spacingPerM > 0) || !Number.isFinite(b.spacingPerM))
         fail(R.EINVAL, `frame.cascades.spacing_per_m = ${b.spacingPerM}; must be finite and > 0`);
     for (let i = 0; i < 3; i++) chkRange('frame.cascades.camera', b.camera[i], -MAX_WORLD, MAX_WORLD);
@@ -601,7 +612,24 @@ function vCascades(b) {
             if (!(sx >= 0 && sx <= 1e3) || !(sz >= 0 && sz <= 1e3) || !(sxz >= -1e3 && sxz <= 1e3))
                 fail(R.EINVAL, `frame.cascades[${k}].mip[${m}] slope moments ${sx} ${sz} ${sxz} out of range`);
         }
+        e.time.forEach((t, m) => {
+            if ((m >= e.mips || !t.interval) && (t.tickA || t.interval || t.phase))
+                fail(R.EFORMAT, `frame.cascades[${k}].time[${m}] must be 0 (${m >= e.mips ? 'beyond mips' : 'interval 0'})`);
+        });
     });
+}
+
+/* A layout-1 tile record's tag (proto.c d_tile_tag): its cascade, and
+ * sample B only of a mip with a time interval. */
+function tileTag(r, b, t, tag) {
+    const c = tag & 0xFF;
+    if ((tag & ~(0xFF | TAG_SLOT_B)) || c >= b.cascadeCount)
+        fail(R.EFORMAT, `${r.what}: record tag ${tag} names no cascade of ${b.cascadeCount}`);
+    t.cascade = c;
+    t.slot = tag & TAG_SLOT_B ? 1 : 0;
+    const e = b.cascade[c];
+    if (t.slot && (t.level >= e.mips || !e.time[t.level].interval))
+        fail(R.EINVAL, `${r.what}: sample B of mip ${t.level} of cascade ${c}, which has no time interval`);
 }
 
 /* FRAME: parsed whole first, then validated in the C decoder's order
@@ -623,10 +651,10 @@ function dFrame(r, limits) {
         const cc = r.u8at(r.off);
         if (cc < 1 || cc > LIMITS.maxLayers) fail(R.EINVAL, `FRAME: cascade_count ${cc} outside 1..${LIMITS.maxLayers}`);
         r.need(CASCADE_FIXED + cc * CASCADE_ENTRY, 'cascade entries');
-        r.zero(r.off + 2, 2, 'cascade block');
+        r.zero(r.off + 3, 1, 'cascade block');
         f.cascades = readCascades(r, cc);
         r.off += CASCADE_FIXED + cc * CASCADE_ENTRY;
-        maxTag = cc - 1;
+        maxTag = TAG_SLOT_B | 0xFF;
     }
     if (f.tileCount > limits.maxFrameTiles)
         fail(R.ETOOBIG, `FRAME: tile_count ${f.tileCount} above the limit ${limits.maxFrameTiles}`);
@@ -636,7 +664,7 @@ function dFrame(r, limits) {
         fail(R.ETRUNC, `FRAME: ${f.tileCount} tiles cannot fit in the ${r.end - r.off} bytes left`);
     for (let i = 0; i < f.tileCount; i++) {
         const [t, tag] = dRecord(r, REC_TILE, maxTag, limits);
-        t.cascade = tag;
+        if (f.cascades) tileTag(r, f.cascades, t, tag);
         f.tiles.push(t);
     }
     if (f.hasMesh) {

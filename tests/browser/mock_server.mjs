@@ -270,14 +270,14 @@ function frameCascade(cam, t, camSeq, tick, sub) {
     const pl = Buffer.alloc(32);
     pl.writeUInt32LE(2, 0); pl.writeDoubleLE(ox, 8); pl.writeDoubleLE(0, 16); pl.writeDoubleLE(oz, 24);
     recs.push(record1(pl, 0));
-    const blk = Buffer.alloc(56 + 224 * nc);
+    const blk = Buffer.alloc(56 + 320 * nc);
     blk[0] = nc; blk[1] = 8;
     blk.writeFloatLE(cam.q, 4);
     blk.writeDoubleLE(cam.x, 8); blk.writeDoubleLE(cam.y, 16); blk.writeDoubleLE(cam.z, 24);
     blk.writeFloatLE(0, 32); blk.writeFloatLE(0.01, 36);
     blk.writeFloatLE(0.008, 40); blk.writeFloatLE(0.006, 44); blk.writeFloatLE(0.001, 48);
     for (let ci = 0; ci < nc; ci++) {
-        const c = CAS[ci], e = 56 + 224 * ci;
+        const c = CAS[ci], e = 56 + 320 * ci;
         blk.writeDoubleLE(c.P, e); blk.writeUInt16LE(c.n, e + 8); blk[e + 10] = c.mips; blk[e + 11] = c.fades;
         /* each cascade its own q (the finest at half the block's), as oceand
          * sends when the byte budget lets fine cascades refine */

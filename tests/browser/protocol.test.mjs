@@ -349,7 +349,7 @@ test('JS encoders refuse what the C decoder would refuse', () => {
     assert.throws(() => encodeSubscribe({ ...base, frameRateHz: NaN }, 1), (e) => e.code === R.EINVAL);
     assert.throws(() => encodeSubscribe({ ...base, layout: 2 }, 1), (e) => e.code === R.ETYPE);
     assert.throws(() => encodeSubscribe({ ...base, meshCodec: 1 }, 1), (e) => e.code === R.ETYPE);
-    assert.throws(() => encodeSubscribe({ ...base, flags: 2 }, 1), (e) => e.code === R.EFORMAT);
+    assert.throws(() => encodeSubscribe({ ...base, flags: 4 }, 1), (e) => e.code === R.EFORMAT);
     const cam = { pos: [0, 10, 0], vel: [0, 0, 0], yawDeg: 0, pitchDeg: 0, fovYDeg: 60, viewportW: 10, viewportH: 10 };
     assert.throws(() => encodeCamera({ ...cam, pos: [NaN, 0, 0] }, 1), (e) => e.code === R.EINVAL);
     assert.throws(() => encodeCamera({ ...cam, fovYDeg: 180 }, 1), (e) => e.code === R.EINVAL);
@@ -437,7 +437,7 @@ test('hostile input: truncated and corrupted messages get the same verdict and c
     put([['u16', E + 8, 16], ['u8', E + 10, 12]]);                    /* 12 mips of 16: refused */
     put([['u8', E + 11, 2]]);                                         /* fades */
     for (const v of [NaN, 0, -1, Infinity, 1]) put([['f32', E + 12, v]]);        /* the entry's own q (1: above the block's) */
-    for (const v of [NaN, 0.5]) put([['f32', E + 224 + 12, v]]);                /* the second entry's */
+    for (const v of [NaN, 0.5]) put([['f32', E + 320 + 12, v]]);                /* the second entry's */
     put([['f32', E + 16, NaN]]);                                      /* mip 0 kc */
     put([['f32', E + 16, 0]]);
     put([['f32', E + 16 + 16 * 6, 1]]);                               /* entry mips must have kc 0 */
@@ -447,7 +447,7 @@ test('hostile input: truncated and corrupted messages get the same verdict and c
     put([['f32', E + 16 + 12, NaN]]);                                 /* mss_xz */
     put([['u8', 32 + 51, 2]]);                                        /* layout */
     put([['u8', 32 + 51, 0]]);                                        /* layout 0 with a block: misparsed, refused */
-    const rec0 = E + 2 * 224;                                         /* first tile record */
+    const rec0 = E + 2 * 320;                                         /* first tile record */
     for (const v of [1, 2, 7, 0xffffffff]) put([['u32', rec0 + 4, v]]);   /* tags: 1 fine, 2+ refused */
     /* the placement record is the last 8 + 32 bytes */
     put([['u32', fc.length - 28, 1]]);                                /* placement reserved */

@@ -1,0 +1,244 @@
+/*
+ * oc_held.c - the samples a time-interpolating client holds (see
+ * oc_held.h).
+ *
+ * OOM policy: a tile that cannot be stored is not held (the frame's view
+ * then reports the point it would have covered, OCEAN_ENOTFOUND); a blend
+ * that cannot be allocated fails with OCEAN_ENOMEM.
+ */
+#include "oc_held.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "codec.h"
+#include "ocean_result.h"
+
+typedef struct held_tile {
+    proto_tile info;         /* payload NULL */
+    float *data;
+} held_tile;
+
+typedef struct held_slot {
+    held_tile *t;
+    unsigned n, cap;
+} held_slot;
+
+typedef struct held_mip {
+    int valid;
+    uint32_t tick_a;
+    uint16_t interval;
+    held_slot slot[2];
+} held_mip;
+
+struct oc_held {
+    held_mip mip[PROTO_MAX_LAYERS][PROTO_MAX_MIPS];
+};
+
+ocean_result oc_held_create(oc_held **out)
+{
+    *out = calloc(1, sizeof **out);
+    return *out ? OCEAN_OK : OCEAN_ENOMEM;
+}
+
+static void slot_empty(held_slot *s)
+{
+    for (unsigned i = 0; i < s->n; i++) free(s->t[i].data);
+    s->n = 0;
+}
+
+static void mip_drop(held_mip *m)
+{
+    m->valid = 0;
+    slot_empty(&m->slot[0]);
+    slot_empty(&m->slot[1]);
+}
+
+void oc_held_destroy(oc_held *h)
+{
+    if (!h) return;
+    for (int c = 0; c < PROTO_MAX_LAYERS; c++)
+        for (int m = 0; m < PROTO_MAX_MIPS; m++) {
+            mip_drop(&h->mip[c][m]);
+            free(h->mip[c][m].slot[0].t);
+            free(h->mip[c][m].slot[1].t);
+        }
+    free(h);
+}
+
+int oc_held_frame_timed(const proto_frame *f)
+{
+    if (f->layout != PROTO_LAYOUT_CASCADE) return 0;
+    if (f->cascades.flags & PROTO_CASCADE_KEY) return 1;
+    for (unsigned c = 0; c < f->cascades.cascade_count && c < PROTO_MAX_LAYERS; c++)
+        for (int m = 0; m < PROTO_MAX_MIPS; m++)
+            if (f->cascades.cascade[c].time[m].interval) return 1;
+    return 0;
+}
+
+/* The spec's window rule for one mip. */
+static void mip_advance(held_mip *hm, const proto_mip_time *t)
+{
+    proto_window_step step = proto_window_next(hm->valid, hm->tick_a, hm->interval, t);
+    if (!t->interval) {
+        mip_drop(hm);
+        return;
+    }
+    if (step == PROTO_WINDOW_KEEP) return;
+    if (step == PROTO_WINDOW_SHIFT) {
+        held_slot a = hm->slot[0];
+        hm->slot[0] = hm->slot[1];
+        hm->slot[1] = a;
+        slot_empty(&hm->slot[1]);
+    } else {
+        mip_drop(hm);
+    }
+    hm->valid = 1;
+    hm->tick_a = t->tick_a;
+    hm->interval = t->interval;
+}
+
+static held_tile *slot_find(held_slot *s, int32_t ix, int32_t iz)
+{
+    for (unsigned i = 0; i < s->n; i++)
+        if (s->t[i].info.ix == ix && s->t[i].info.iz == iz) return &s->t[i];
+    return NULL;
+}
+
+/* Stores tile t (decoded planes d) in slot s, replacing one at its place. */
+static ocean_result slot_put(held_slot *s, const proto_tile *t, const float *d)
+{
+    size_t cnt = (size_t)proto_tile_planes(t->channels) * t->width * t->height;
+    float *copy = malloc(cnt * sizeof *copy);
+    if (!copy) return OCEAN_ENOMEM;
+    memcpy(copy, d, cnt * sizeof *copy);
+    held_tile *e = slot_find(s, t->ix, t->iz);
+    if (!e) {
+        if (s->n == s->cap) {
+            unsigned nc = s->cap ? 2 * s->cap : 16;
+            held_tile *nt = realloc(s->t, nc * sizeof *nt);
+            if (!nt) {
+                free(copy);
+                return OCEAN_ENOMEM;
+            }
+            s->t = nt;
+            s->cap = nc;
+        }
+        e = &s->t[s->n++];
+        e->data = NULL;
+    }
+    free(e->data);
+    e->info = *t;
+    e->info.payload = NULL;
+    e->info.payload_len = 0;
+    e->data = copy;
+    return OCEAN_OK;
+}
+
+ocean_result oc_held_apply(oc_held *h, const proto_frame *f, const float *const *data, char *err, size_t errlen)
+{
+    const proto_cascade_block *b = &f->cascades;
+    if (f->layout != PROTO_LAYOUT_CASCADE) {
+        ocean_seterr(err, errlen, "not a layout-1 frame");
+        return OCEAN_ESTATE;
+    }
+    for (int c = 0; c < PROTO_MAX_LAYERS; c++)
+        for (int m = 0; m < PROTO_MAX_MIPS; m++) {
+            held_mip *hm = &h->mip[c][m];
+            if ((b->flags & PROTO_CASCADE_KEY) || c >= b->cascade_count || m >= b->cascade[c].mips)
+                mip_drop(hm);
+            else
+                mip_advance(hm, &b->cascade[c].time[m]);
+        }
+    ocean_result res = OCEAN_OK;
+    for (unsigned i = 0; i < f->tile_count; i++) {
+        const proto_tile *t = &f->tiles[i];
+        if (!data[i] || t->cascade >= PROTO_MAX_LAYERS || t->level >= PROTO_MAX_MIPS) continue;
+        ocean_result r = slot_put(&h->mip[t->cascade][t->level].slot[t->slot ? 1 : 0], t, data[i]);
+        if (r != OCEAN_OK && res == OCEAN_OK) {
+            ocean_seterr(err, errlen, "out of memory holding tile %u", i);
+            res = r;
+        }
+    }
+    return res;
+}
+
+void oc_held_blend_free(proto_tile *tiles, float **data, unsigned n)
+{
+    for (unsigned i = 0; data && i < n; i++) free(data[i]);
+    free(data);
+    free(tiles);
+}
+
+/* (1 - w) a + w b over the channels both tiles carry. */
+static float *blend_tile(const held_tile *a, const held_tile *b, double w, unsigned *channels)
+{
+    unsigned ch = b ? a->info.channels & b->info.channels : a->info.channels;
+    size_t plane = (size_t)a->info.width * a->info.height;
+    if (b && (b->info.width != a->info.width || b->info.height != a->info.height)) return NULL;
+    float *out = malloc((size_t)proto_tile_planes(ch) * plane * sizeof *out + 1);
+    if (!out) return NULL;
+    int oa[6], ob[6], oo[6];
+    proto_tile_plane_offsets(a->info.channels, plane, oa);
+    proto_tile_plane_offsets(b ? b->info.channels : 0, plane, ob);
+    proto_tile_plane_offsets(ch, plane, oo);
+    float wa = (float)(1.0 - w), wb = (float)w;
+    for (int p = 0; p < 6; p++) {
+        if (oo[p] < 0) continue;
+        const float *pa = a->data + oa[p];
+        float *po = out + oo[p];
+        if (!b) {
+            memcpy(po, pa, plane * sizeof *po);
+            continue;
+        }
+        const float *pb = b->data + ob[p];
+        for (size_t i = 0; i < plane; i++) po[i] = wa * pa[i] + wb * pb[i];
+    }
+    *channels = ch;
+    return out;
+}
+
+ocean_result oc_held_blend(const oc_held *h, const proto_frame *f, proto_tile **tiles, float ***data,
+                           unsigned *n)
+{
+    *tiles = NULL;
+    *data = NULL;
+    *n = 0;
+    unsigned cap = 0;
+    const proto_cascade_block *b = &f->cascades;
+    for (unsigned c = 0; c < b->cascade_count && c < PROTO_MAX_LAYERS; c++)
+        for (int m = 0; m < b->cascade[c].mips && m < PROTO_MAX_MIPS; m++) cap += h->mip[c][m].slot[0].n;
+    if (!cap) return OCEAN_OK;
+    proto_tile *ti = calloc(cap, sizeof *ti);
+    float **d = calloc(cap, sizeof *d);
+    if (!ti || !d) {
+        oc_held_blend_free(ti, d, 0);
+        return OCEAN_ENOMEM;
+    }
+    unsigned k = 0;
+    for (unsigned c = 0; c < b->cascade_count && c < PROTO_MAX_LAYERS; c++)
+        for (int m = 0; m < b->cascade[c].mips && m < PROTO_MAX_MIPS; m++) {
+            const held_mip *hm = &h->mip[c][m];
+            const proto_mip_time *tm = &b->cascade[c].time[m];
+            double w = tm->interval ? tm->phase / 65536.0 : 0.0;
+            for (unsigned i = 0; i < hm->slot[0].n; i++) {
+                const held_tile *a = &hm->slot[0].t[i];
+                held_tile *bt = tm->interval ? slot_find((held_slot *)&hm->slot[1], a->info.ix, a->info.iz) : NULL;
+                if (tm->interval && (!bt || !(a->info.channels & bt->info.channels))) continue;
+                unsigned ch = 0;
+                float *out = blend_tile(a, bt, w, &ch);
+                if (!out) {
+                    oc_held_blend_free(ti, d, k);
+                    return OCEAN_ENOMEM;
+                }
+                ti[k] = a->info;
+                ti[k].channels = (uint16_t)ch;
+                ti[k].slot = 0;
+                d[k++] = out;
+            }
+        }
+    *tiles = ti;
+    *data = d;
+    *n = k;
+    return OCEAN_OK;
+}
