@@ -1099,11 +1099,10 @@ static void held_begin(srv_cascade *k, const srv_config *cfg, srv_cascade_job *j
 
 /* One needed tile (c, m, ix, iz) of job j: at the frame's time, or each
  * sample of its window that the client does not hold. */
-static void lookup_needed(srv_cascade *k, const srv_config *cfg, srv_stats *st, const srv_cascade_job *j,
-                          plan *p, srv_tile_key *key, int ntile, uint64_t gen, missing_set *ms, int *at)
+static void lookup_needed(srv_cascade *k, srv_stats *st, const srv_cascade_job *j, plan *p, srv_tile_key *key,
+                          int ntile, uint64_t gen, missing_set *ms, int *at)
 {
     int c = key->cascade, m = key->level, i = key->iz * ntile + key->ix;
-    (void)cfg;
     if (!p->time[c][m].interval || !p->held) {
         key->t = j->t;
         p->tags[*at] = (uint32_t)c;
@@ -1144,7 +1143,7 @@ static void lookup_job(srv_cascade *k, const srv_config *cfg, srv_stats *st, con
                     key.cascade = (uint8_t)c;
                     key.level = (uint8_t)m;
                     key.codec = sub->codec;
-                    lookup_needed(k, cfg, st, j, p, &key, ntile, gen, ms, &at);
+                    lookup_needed(k, st, j, p, &key, ntile, gen, ms, &at);
                 }
         }
     p->tiles = at;

@@ -80,10 +80,6 @@ int oc_held_frame_timed(const proto_frame *f)
 static void mip_advance(held_mip *hm, const proto_mip_time *t)
 {
     proto_window_step step = proto_window_next(hm->valid, hm->tick_a, hm->interval, t);
-    if (!t->interval) {
-        mip_drop(hm);
-        return;
-    }
     if (step == PROTO_WINDOW_KEEP) return;
     if (step == PROTO_WINDOW_SHIFT) {
         held_slot a = hm->slot[0];
@@ -93,6 +89,7 @@ static void mip_advance(held_mip *hm, const proto_mip_time *t)
     } else {
         mip_drop(hm);
     }
+    if (!t->interval) return; /* the frame's own time: nothing held */
     hm->valid = 1;
     hm->tick_a = t->tick_a;
     hm->interval = t->interval;
