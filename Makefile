@@ -109,7 +109,8 @@ TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC))
 BENCHES := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 WASM_CC ?= clang
 WASM := clients/web/ocean.wasm
-WASM_SRC := clients/wasm/oc_wasm.c protocol/codec.c protocol/proto_buf.c sim/ocean_result.c
+WASM_SRC := clients/wasm/oc_wasm.c protocol/codec.c protocol/proto.c protocol/proto_buf.c sim/ocean_result.c \
+    sim/ocean_time.c clients/c/oc_held.c
 
 .PHONY: all deps test test-plain test-asan test-bins run bench fuzz clean install
 .DEFAULT_GOAL := all
@@ -125,13 +126,14 @@ $(BUILD)/obj/sim/ocean.o $(BUILD)/pic/sim/ocean.o: OPT = -O3
 # sqrt must not set errno there, or GCC cannot vectorise deep_turns.
 $(BUILD)/obj/sim/ocean.o $(BUILD)/pic/sim/ocean.o: CFLAGS += -fno-math-errno
 
-# The browser viewer's decoders: protocol/codec.c's own, compiled to
+# The browser viewer's decoders: protocol/'s own (messages and codecs) and
+# the C library's store of samples in time (oc_held.c), compiled to
 # WebAssembly with Debian's clang, wasm-ld (lld) and wasi-libc, and written
 # beside the page (the daemon serves clients/web/).  Exports and the zstd
 # bridge: clients/wasm/oc_wasm.c; loader: clients/web/codec.js.
-$(WASM): $(WASM_SRC) $(wildcard protocol/*.h) sim/ocean_result.h
+$(WASM): $(WASM_SRC) $(wildcard protocol/*.h) sim/ocean_result.h sim/ocean_time.h clients/c/oc_held.h
 	$(WASM_CC) --target=wasm32-wasi --sysroot=/usr -std=c11 -O2 -Wall -Wextra -Werror -D_GNU_SOURCE \
-	    -Isim -Iprotocol -ffunction-sections -fdata-sections -nostartfiles \
+	    -Isim -Iprotocol -Iclients/c -ffunction-sections -fdata-sections -nostartfiles \
 	    -Wl,--no-entry -Wl,--gc-sections -Wl,--strip-all $(WASM_SRC) -o $@
 
 $(BUILD)/obj/%.o: %.c

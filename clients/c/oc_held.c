@@ -2,9 +2,10 @@
  * oc_held.c - the samples a time-interpolating client holds (see
  * oc_held.h).
  *
- * OOM policy: a tile that cannot be stored is not held (the frame's view
- * then reports the point it would have covered, OCEAN_ENOTFOUND); a blend
- * that cannot be allocated fails with OCEAN_ENOMEM.
+ * OOM policy: a tile that cannot be stored or decoded is not held (the
+ * frame's view then reports the point it would have covered,
+ * OCEAN_ENOTFOUND); a blend that cannot be allocated fails with
+ * OCEAN_ENOMEM.
  */
 #include "oc_held.h"
 
@@ -16,7 +17,8 @@
 
 typedef struct held_tile {
     proto_tile info;         /* payload NULL */
-    float *data;
+    float *data;             /* decoded planes, or NULL while still a payload */
+    uint8_t *payload;        /* the codec bytes until decoded (oc_held_decode) */
 } held_tile;
 
 typedef struct held_slot {
@@ -41,9 +43,17 @@ ocean_result oc_held_create(oc_held **out)
     return *out ? OCEAN_OK : OCEAN_ENOMEM;
 }
 
+static void tile_free(held_tile *t)
+{
+    free(t->data);
+    free(t->payload);
+    t->data = NULL;
+    t->payload = NULL;
+}
+
 static void slot_empty(held_slot *s)
 {
-    for (unsigned i = 0; i < s->n; i++) free(s->t[i].data);
+    for (unsigned i = 0; i < s->n; i++) tile_free(&s->t[i]);
     s->n = 0;
 }
 
@@ -102,20 +112,34 @@ static held_tile *slot_find(held_slot *s, int32_t ix, int32_t iz)
     return NULL;
 }
 
-/* Stores tile t (decoded planes d) in slot s, replacing one at its place. */
+/* A copy of tile t's samples: its decoded planes d, or (d NULL) its
+ * payload; *data or *payload gets it, the other NULL. */
+static ocean_result tile_copy(const proto_tile *t, const float *d, float **data, uint8_t **payload)
+{
+    size_t n = d ? (size_t)proto_tile_planes(t->channels) * t->width * t->height * sizeof *d : t->payload_len;
+    void *copy = malloc(n ? n : 1);
+    if (!copy) return OCEAN_ENOMEM;
+    memcpy(copy, d ? (const void *)d : (const void *)t->payload, n);
+    *data = d ? copy : NULL;
+    *payload = d ? NULL : copy;
+    return OCEAN_OK;
+}
+
+/* Stores tile t (decoded planes d, or its payload) in slot s, replacing
+ * one at its place. */
 static ocean_result slot_put(held_slot *s, const proto_tile *t, const float *d)
 {
-    size_t cnt = (size_t)proto_tile_planes(t->channels) * t->width * t->height;
-    float *copy = malloc(cnt * sizeof *copy);
-    if (!copy) return OCEAN_ENOMEM;
-    memcpy(copy, d, cnt * sizeof *copy);
+    float *data;
+    uint8_t *payload;
+    if (tile_copy(t, d, &data, &payload) != OCEAN_OK) return OCEAN_ENOMEM;
     held_tile *e = slot_find(s, t->ix, t->iz);
     if (!e) {
         if (s->n == s->cap) {
             unsigned nc = s->cap ? 2 * s->cap : 16;
             held_tile *nt = realloc(s->t, nc * sizeof *nt);
             if (!nt) {
-                free(copy);
+                free(data);
+                free(payload);
                 return OCEAN_ENOMEM;
             }
             s->t = nt;
@@ -123,12 +147,13 @@ static ocean_result slot_put(held_slot *s, const proto_tile *t, const float *d)
         }
         e = &s->t[s->n++];
         e->data = NULL;
+        e->payload = NULL;
     }
-    free(e->data);
+    tile_free(e);
     e->info = *t;
     e->info.payload = NULL;
-    e->info.payload_len = 0;
-    e->data = copy;
+    e->data = data;
+    e->payload = payload;
     return OCEAN_OK;
 }
 
@@ -144,19 +169,66 @@ ocean_result oc_held_apply(oc_held *h, const proto_frame *f, const float *const 
             held_mip *hm = &h->mip[c][m];
             if ((b->flags & PROTO_CASCADE_KEY) || c >= b->cascade_count || m >= b->cascade[c].mips)
                 mip_drop(hm);
-            else
-                mip_advance(hm, &b->cascade[c].time[m]);
+            /* after a KEY's drop, its windows begin here */
+            if (c < b->cascade_count && m < b->cascade[c].mips) mip_advance(hm, &b->cascade[c].time[m]);
         }
     ocean_result res = OCEAN_OK;
     for (unsigned i = 0; i < f->tile_count; i++) {
         const proto_tile *t = &f->tiles[i];
-        if (!data[i] || t->cascade >= PROTO_MAX_LAYERS || t->level >= PROTO_MAX_MIPS) continue;
-        ocean_result r = slot_put(&h->mip[t->cascade][t->level].slot[t->slot ? 1 : 0], t, data[i]);
+        if ((data && !data[i]) || t->cascade >= PROTO_MAX_LAYERS || t->level >= PROTO_MAX_MIPS) continue;
+        ocean_result r = slot_put(&h->mip[t->cascade][t->level].slot[t->slot ? 1 : 0], t, data ? data[i] : NULL);
         if (r != OCEAN_OK && res == OCEAN_OK) {
             ocean_seterr(err, errlen, "out of memory holding tile %u", i);
             res = r;
         }
     }
+    return res;
+}
+
+/* Decodes tile t's payload into its planes; the payload goes either way. */
+static ocean_result tile_decode(held_tile *t, char *err, size_t errlen)
+{
+    const proto_tile *i = &t->info;
+    size_t cnt = (size_t)proto_tile_planes(i->channels) * i->width * i->height;
+    float *d = malloc(cnt * sizeof *d + 1);
+    ocean_result r = d ? proto_tile_decode((proto_codec)i->codec, i->width, i->height, i->channels, t->payload,
+                                           i->payload_len, d, err, errlen)
+                       : OCEAN_ENOMEM;
+    free(t->payload);
+    t->payload = NULL;
+    if (r != OCEAN_OK) {
+        free(d);
+        if (r == OCEAN_ENOMEM) ocean_seterr(err, errlen, "out of memory decoding a held tile");
+        return r;
+    }
+    t->data = d;
+    return OCEAN_OK;
+}
+
+ocean_result oc_held_decode(oc_held *h, char *err, size_t errlen)
+{
+    ocean_result res = OCEAN_OK;
+    char e[256];
+    for (int c = 0; c < PROTO_MAX_LAYERS; c++)
+        for (int m = 0; m < PROTO_MAX_MIPS; m++)
+            for (int k = 0; k < 2; k++) {
+                held_slot *s = &h->mip[c][m].slot[k];
+                for (unsigned i = 0; i < s->n;) {
+                    held_tile *t = &s->t[i];
+                    ocean_result r = t->data ? OCEAN_OK : tile_decode(t, e, sizeof e);
+                    if (r == OCEAN_OK) {
+                        i++;
+                        continue;
+                    }
+                    if (res == OCEAN_OK) {
+                        ocean_seterr(err, errlen, "cascade %d mip %d tile (%d, %d): %s", c, m, (int)t->info.ix,
+                                     (int)t->info.iz, e);
+                        res = r;
+                    }
+                    tile_free(t);
+                    *t = s->t[--s->n];
+                }
+            }
     return res;
 }
 
@@ -167,12 +239,19 @@ void oc_held_blend_free(proto_tile *tiles, float **data, unsigned n)
     free(tiles);
 }
 
-/* (1 - w) a + w b over the channels both tiles carry. */
+/* Whether a (and b, when blended) hold decoded samples of one shape. */
+static int blendable(const held_tile *a, const held_tile *b)
+{
+    if (!a->data) return 0;
+    return !b || (b->data && (a->info.channels & b->info.channels) && b->info.width == a->info.width &&
+                  b->info.height == a->info.height);
+}
+
+/* (1 - w) a + w b over the channels both tiles carry; NULL: out of memory. */
 static float *blend_tile(const held_tile *a, const held_tile *b, double w, unsigned *channels)
 {
     unsigned ch = b ? a->info.channels & b->info.channels : a->info.channels;
     size_t plane = (size_t)a->info.width * a->info.height;
-    if (b && (b->info.width != a->info.width || b->info.height != a->info.height)) return NULL;
     float *out = malloc((size_t)proto_tile_planes(ch) * plane * sizeof *out + 1);
     if (!out) return NULL;
     int oa[6], ob[6], oo[6];
@@ -221,7 +300,7 @@ ocean_result oc_held_blend(const oc_held *h, const proto_frame *f, proto_tile **
             for (unsigned i = 0; i < hm->slot[0].n; i++) {
                 const held_tile *a = &hm->slot[0].t[i];
                 held_tile *bt = tm->interval ? slot_find((held_slot *)&hm->slot[1], a->info.ix, a->info.iz) : NULL;
-                if (tm->interval && (!bt || !(a->info.channels & bt->info.channels))) continue;
+                if ((tm->interval && !bt) || !blendable(a, bt)) continue;
                 unsigned ch = 0;
                 float *out = blend_tile(a, bt, w, &ch);
                 if (!out) {
@@ -231,6 +310,7 @@ ocean_result oc_held_blend(const oc_held *h, const proto_frame *f, proto_tile **
                 ti[k] = a->info;
                 ti[k].channels = (uint16_t)ch;
                 ti[k].slot = 0;
+                if (bt && bt->info.error_bound > ti[k].error_bound) ti[k].error_bound = bt->info.error_bound;
                 d[k++] = out;
             }
         }

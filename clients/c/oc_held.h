@@ -30,16 +30,28 @@ void oc_held_destroy(oc_held *h);
  * mip that has a time interval. */
 int oc_held_frame_timed(const proto_frame *f);
 
-/* Applies FRAME f: data[i] are the decoded planes of f->tiles[i] (copied
- * into the store; NULL: that tile could not be decoded, and is not held).
- * OCEAN_ESTATE for a frame that is neither KEY nor continues what the
- * store holds is not detectable here: the spec's rules make every frame
- * of one connection, read in order, consistent. */
+/* Applies FRAME f.  With data, data[i] are the decoded planes of
+ * f->tiles[i] (copied into the store; NULL: that tile could not be
+ * decoded, and is not held).  Without (data NULL), each tile's payload is
+ * copied and decoded only when oc_held_decode needs it, so a reader that
+ * applies every frame but looks at few (a page drawing slower than the
+ * stream) never decodes a sample replaced before it was looked at.  A
+ * frame that is neither KEY nor continues what the store holds is not
+ * detectable here: the spec's rules make every frame of one connection,
+ * read in order, consistent. */
 ocean_result oc_held_apply(oc_held *h, const proto_frame *f, const float *const *data, char *err, size_t errlen);
+
+/* Decodes every held tile that is still a payload.  A tile that does not
+ * decode is dropped (the store stays consistent: its place reads as not
+ * held); the result is then that tile's decoder error, message in err,
+ * and the others are decoded all the same. */
+ocean_result oc_held_decode(oc_held *h, char *err, size_t errlen);
 
 /* The tiles of f's instant: for each mip of each cascade of f, its held
  * tiles (interval 0) or the blend (1 - w) A + w B of each tile held in
- * both samples, over the channels both carry.  *tiles (proto_tile, no
+ * both samples, over the channels both carry (a tile still a payload,
+ * see oc_held_decode, is left out).  error_bound is the larger of A's and
+ * B's.  *tiles (proto_tile, no
  * payload) and *data (one malloc'd array per tile) are the caller's to
  * free with oc_held_blend_free. */
 ocean_result oc_held_blend(const oc_held *h, const proto_frame *f, proto_tile **tiles, float ***data,

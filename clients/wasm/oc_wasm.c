@@ -1,10 +1,13 @@
 /*
- * oc_wasm.c - the browser viewer's tile decoders: protocol/codec.c's own
- * decoders (f32, f16, qz formats 1 and 2, MESH_VERTICES_QZ) compiled to
- * WebAssembly (clang --target=wasm32-wasi, wasm-ld; Makefile target
+ * oc_wasm.c - the browser viewer's decoders: protocol/codec.c's own
+ * decoders (f32, f16, qz formats 1 and 2, MESH_VERTICES_QZ), the message
+ * decoder (protocol/proto.c) and the C library's store of a
+ * time-interpolating stream (clients/c/oc_held.c) compiled to WebAssembly
+ * (clang --target=wasm32-wasi, wasm-ld; Makefile target
  * clients/web/ocean.wasm), with the few exports the viewer's workers call
- * (clients/web/codec.js).  One implementation of every codec: the
- * daemon, the C library and the browser run the same C.
+ * (clients/web/codec.js).  One implementation of every codec and of the
+ * samples-in-time rules: the daemon, the C library and the browser run
+ * the same C.
  *
  * zstd: the residual streams are decompressed by zstd's own decoder, a
  * separate WebAssembly module (the npm package zstddec, pinned in
@@ -26,9 +29,12 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 #include <zstd.h>
 
 #include "codec.h"
+#include "oc_held.h"
+#include "proto.h"
 
 #define OCW_EXPORT(name) __attribute__((export_name(#name)))
 #define OCW_IMPORT(mod, name) __attribute__((import_module(#mod), import_name(#name)))
@@ -107,32 +113,17 @@ static void slopes_from_heights(const float *H, int w, int h, double spacing, fl
         }
 }
 
-/* Layout 1 (PROTOCOL.md "Cascade mips"): one cascade mip tile decoded into
- * the viewer's texel block: disp = (DX, H, DZ, FOAM) per sample (4 w h
- * floats: a vertex adds disp.xyz to its flat position), slope = (d eta/dx,
- * d eta/dz) (2 w h floats; slopes, not normals, because cascades add and
- * a GL-filtered mip averages slopes) from the octahedral normal at
- * max_slope at most, else from the heights; foam = {sum, max} of FOAM. */
-OCW_EXPORT(ocw_cascade_block)
-int ocw_cascade_block(int codec, int w, int h, unsigned channels, double spacing, double max_slope,
-                      const uint8_t *data, size_t len, float *disp, float *slope, double *foam)
+/* Layout 1 (PROTOCOL.md "Cascade mips"): a cascade mip tile's decoded
+ * planes d (of channels) as the viewer's texel block: disp = (DX, H, DZ,
+ * FOAM) per sample (4 w h floats: a vertex adds disp.xyz to its flat
+ * position), slope = (d eta/dx, d eta/dz) (2 w h floats; slopes, not
+ * normals, because cascades add and a GL-filtered mip averages slopes)
+ * from the octahedral normal at max_slope at most, else from the heights;
+ * foam = {sum, max} of FOAM. */
+static void texel_block(const float *d, unsigned channels, int w, int h, double spacing, double max_slope,
+                        float *disp, float *slope, double *foam)
 {
-    ocw_err[0] = 0;
-    int np = proto_tile_planes(channels);
-    if (np <= 0 || w < 1 || h < 1 || w > PROTO_TILE_MAX_SIZE || h > PROTO_TILE_MAX_SIZE || !(spacing > 0) ||
-        !(max_slope > 0) || !disp || !slope || !foam) {
-        ocean_seterr(ocw_err, sizeof ocw_err, "cascade block: bad arguments");
-        return OCEAN_EINVAL;
-    }
     size_t n = (size_t)w * h;
-    float *d = malloc(n * (size_t)np * sizeof *d);
-    if (!d)
-        return OCEAN_ENOMEM;
-    ocean_result r = proto_tile_decode((proto_codec)codec, w, h, channels, data, len, d, ocw_err, sizeof ocw_err);
-    if (r != OCEAN_OK) {
-        free(d);
-        return r;
-    }
     int off[6];
     proto_tile_plane_offsets(channels, n, off);
     const float *P[6];
@@ -156,7 +147,182 @@ int ocw_cascade_block(int codec, int w, int h, unsigned channels, double spacing
         slopes_from_heights(P[0], w, h, spacing, slope);
     foam[0] = fsum;
     foam[1] = fmax;
+}
+
+static int block_args_ok(int w, int h, double spacing, double max_slope, const void *disp, const void *slope,
+                         const void *foam)
+{
+    if (w < 1 || h < 1 || w > PROTO_TILE_MAX_SIZE || h > PROTO_TILE_MAX_SIZE || !(spacing > 0) ||
+        !(max_slope > 0) || !disp || !slope || !foam) {
+        ocean_seterr(ocw_err, sizeof ocw_err, "cascade block: bad arguments");
+        return 0;
+    }
+    return 1;
+}
+
+/* One cascade mip tile's payload decoded into its texel block (texel_block). */
+OCW_EXPORT(ocw_cascade_block)
+int ocw_cascade_block(int codec, int w, int h, unsigned channels, double spacing, double max_slope,
+                      const uint8_t *data, size_t len, float *disp, float *slope, double *foam)
+{
+    ocw_err[0] = 0;
+    int np = proto_tile_planes(channels);
+    if (np <= 0 || !block_args_ok(w, h, spacing, max_slope, disp, slope, foam)) {
+        ocean_seterr(ocw_err, sizeof ocw_err, "cascade block: bad arguments");
+        return OCEAN_EINVAL;
+    }
+    float *d = malloc((size_t)w * h * (size_t)np * sizeof *d);
+    if (!d)
+        return OCEAN_ENOMEM;
+    ocean_result r = proto_tile_decode((proto_codec)codec, w, h, channels, data, len, d, ocw_err, sizeof ocw_err);
+    if (r == OCEAN_OK)
+        texel_block(d, channels, w, h, spacing, max_slope, disp, slope, foam);
     free(d);
+    return r;
+}
+
+/* ---- layout 1 samples in time (PROTOCOL.md "Samples in time") ---------- */
+
+/* A time-interpolating stream's store, clients/c/oc_held.c as the C
+ * library runs it, sharded: a viewer with several decode workers gives
+ * each one store that keeps the tiles of its shard (every FRAME goes to
+ * every worker, in order), so they decode and blend in parallel and each
+ * tile is decoded once, by one of them, when it is first blended. */
+typedef struct ocw_held {
+    oc_held *store;
+    proto_frame at;          /* the last frame applied, without tiles: the instant blended */
+    int have_frame;
+    proto_tile *tiles;       /* the last blend */
+    float **data;
+    unsigned n;
+} ocw_held;
+
+OCW_EXPORT(ocw_held_create) ocw_held *ocw_held_create(void)
+{
+    ocw_held *h = calloc(1, sizeof *h);
+    if (h && oc_held_create(&h->store) != OCEAN_OK) {
+        free(h);
+        h = NULL;
+    }
+    return h;
+}
+
+static void held_blend_drop(ocw_held *h)
+{
+    oc_held_blend_free(h->tiles, h->data, h->n);
+    h->tiles = NULL;
+    h->data = NULL;
+    h->n = 0;
+}
+
+OCW_EXPORT(ocw_held_destroy) void ocw_held_destroy(ocw_held *h)
+{
+    if (!h) return;
+    held_blend_drop(h);
+    oc_held_destroy(h->store);
+    free(h);
+}
+
+/* The shard of a tile: a hash of its place, the same in every worker. */
+static unsigned tile_shard(const proto_tile *t, unsigned shards)
+{
+    uint32_t k = (uint32_t)t->ix * 73856093u ^ (uint32_t)t->iz * 19349663u ^
+                 (uint32_t)(t->cascade * PROTO_MAX_MIPS + t->level) * 83492791u;
+    return k % shards;
+}
+
+/* Applies one whole FRAME message (layout 1) to the store, keeping the
+ * tiles of shard `shard` of `shards` as payloads (decoded when blended). */
+OCW_EXPORT(ocw_held_apply)
+int ocw_held_apply(ocw_held *h, const uint8_t *msg, size_t len, unsigned shard, unsigned shards)
+{
+    ocw_err[0] = 0;
+    if (!h || !shards || shard >= shards) {
+        ocean_seterr(ocw_err, sizeof ocw_err, "held store: bad arguments");
+        return OCEAN_EINVAL;
+    }
+    proto_msg m;
+    ocean_result r = proto_decode(msg, len, &m, ocw_err, sizeof ocw_err);
+    if (r != OCEAN_OK) return r;
+    proto_frame *f = &m.u.frame;
+    if (m.hdr.type != PROTO_FRAME || f->layout != PROTO_LAYOUT_CASCADE) {
+        proto_msg_free(&m);
+        ocean_seterr(ocw_err, sizeof ocw_err, "held store: not a layout-1 FRAME");
+        return OCEAN_ESTATE;
+    }
+    proto_tile *mine = malloc((f->tile_count ? f->tile_count : 1) * sizeof *mine);
+    if (!mine) {
+        proto_msg_free(&m);
+        return OCEAN_ENOMEM;
+    }
+    uint16_t k = 0;
+    for (unsigned i = 0; i < f->tile_count; i++)
+        if (tile_shard(&f->tiles[i], shards) == shard) mine[k++] = f->tiles[i];
+    proto_frame sub = *f;
+    sub.tiles = mine;
+    sub.tile_count = k;
+    r = oc_held_apply(h->store, &sub, NULL, ocw_err, sizeof ocw_err);
+    memset(&h->at, 0, sizeof h->at);
+    h->at.layout = f->layout;
+    h->at.tick = f->tick;
+    h->at.cascades = f->cascades;
+    h->have_frame = 1;
+    free(mine);
+    proto_msg_free(&m);
+    return r;
+}
+
+/* Decodes what the store has not decoded yet and blends the tiles of the
+ * last frame's instant; the count is ocw_held_count().  A tile that does
+ * not decode is left out and named in ocw_error (the result is then its
+ * decoder's), the rest blended all the same. */
+OCW_EXPORT(ocw_held_blend) int ocw_held_blend(ocw_held *h)
+{
+    ocw_err[0] = 0;
+    if (!h || !h->have_frame) {
+        ocean_seterr(ocw_err, sizeof ocw_err, "held store: no frame applied");
+        return OCEAN_ESTATE;
+    }
+    held_blend_drop(h);
+    char e[256] = "";
+    ocean_result dr = oc_held_decode(h->store, e, sizeof e);
+    ocean_result r = oc_held_blend(h->store, &h->at, &h->tiles, &h->data, &h->n);
+    if (r == OCEAN_OK && dr != OCEAN_OK) {
+        ocean_seterr(ocw_err, sizeof ocw_err, "%s", e);
+        r = dr;
+    }
+    return r;
+}
+
+OCW_EXPORT(ocw_held_count) unsigned ocw_held_count(const ocw_held *h) { return h ? h->n : 0; }
+
+/* Blended tile i: out = cascade, mip, ix, iz, width, height, channels,
+ * spacing, error_bound; the planes (proto_tile_planes(channels) w h
+ * floats, plane after plane) are at ocw_held_planes(h, i). */
+OCW_EXPORT(ocw_held_tile) int ocw_held_tile(const ocw_held *h, unsigned i, double *out)
+{
+    if (!h || i >= h->n || !out) return OCEAN_EINVAL;
+    const proto_tile *t = &h->tiles[i];
+    double v[9] = {t->cascade, t->level, t->ix, t->iz, t->width, t->height, t->channels, t->spacing,
+                   t->error_bound};
+    memcpy(out, v, sizeof v);
+    return OCEAN_OK;
+}
+
+OCW_EXPORT(ocw_held_planes) const float *ocw_held_planes(const ocw_held *h, unsigned i)
+{
+    return h && i < h->n ? h->data[i] : NULL;
+}
+
+/* Blended tile i as its texel block (texel_block). */
+OCW_EXPORT(ocw_held_texels)
+int ocw_held_texels(const ocw_held *h, unsigned i, double max_slope, float *disp, float *slope, double *foam)
+{
+    ocw_err[0] = 0;
+    if (!h || i >= h->n) return OCEAN_EINVAL;
+    const proto_tile *t = &h->tiles[i];
+    if (!block_args_ok(t->width, t->height, t->spacing, max_slope, disp, slope, foam)) return OCEAN_EINVAL;
+    texel_block(h->data[i], t->channels, t->width, t->height, t->spacing, max_slope, disp, slope, foam);
     return OCEAN_OK;
 }
 

@@ -105,10 +105,34 @@ export function assembleCascadeTile(t, onError) {
         onError(e, `cascade ${t.cascade} mip ${t.level} tile (${t.ix},${t.iz}) ${CODEC_NAMES[t.codec]}`);
         return null;
     }
+    return texelBlock(t.cascade, t.level, t, b);
+}
+
+/* The renderer's record of one texel block b of mip `mip` of cascade
+ * `cascade` for tile t. */
+function texelBlock(cascade, mip, t, b) {
     const w = t.width, h = t.height;
     return {
-        cascade: t.cascade, mip: t.level, x: t.ix * w, y: t.iz * h, w, h, disp: b.disp, slope: b.slope,
+        cascade, mip, x: t.ix * w, y: t.iz * h, w, h, disp: b.disp, slope: b.slope,
         errorBound: t.errorBound, foamSum: b.foamSum, foamMax: b.foamMax, n: w * h,
         hasNormals: (t.channels & CH.NORMAL) !== 0,
     };
+}
+
+/* Layout 1 with samples in time (PROTOCOL.md "Samples in time"): the
+ * tiles a HeldStore (codec.js) blends at its last frame's instant, as the
+ * texel blocks assembleCascadeTile makes of a frame's own tiles.
+ * onError(e, what) is told about tiles that did not decode (left out). */
+export function heldBlocks(store, onError) {
+    const { tiles, error } = store.blend();
+    if (error) onError(error, 'held samples');
+    const blocks = [];
+    tiles.forEach((t, i) => {
+        try {
+            blocks.push(texelBlock(t.cascade, t.mip, t, store.texels(i, t, MAX_SLOPE)));
+        } catch (e) {
+            onError(e, `cascade ${t.cascade} mip ${t.mip} tile (${t.ix},${t.iz}) blended`);
+        }
+    });
+    return blocks;
 }

@@ -8,6 +8,10 @@
  * implementation; tests/browser/protocol.test.mjs holds this module to the
  * native decoder bit for bit on every vector.
  *
+ * HeldStore runs the C library's store of a time-interpolating stream
+ * (clients/c/oc_held.c, with the message decoder protocol/proto.c) in the
+ * same module.
+ *
  * Both modules load when this module is imported (top-level await), from
  * beside this file: over HTTP in a page or worker, from disk in Node.js.
  * Each worker that imports it gets its own instances; none is shared
@@ -172,4 +176,71 @@ export function decodeMeshQz(data, vertexCount, refs) {
         check(oc.ocw_mesh_qz_decode(src, data.byteLength, vertexCount, r, out));
         return f32At(out, 3 * vertexCount);
     });
+}
+
+/* Layout 1 with samples in time (PROTOCOL.md "Samples in time"): a
+ * connection's store of held samples, clients/c/oc_held.c as the C library
+ * runs it (ocw_held_*).  Each FRAME of the connection goes through apply(),
+ * every one and in order (a frame alone is incomplete); the store keeps
+ * the tiles of its shard (shard of shards, a hash of the tile's place, so
+ * decode workers split the tiles between them) as payloads, and blend()
+ * decodes what it has not yet and blends the last frame's instant.  Call
+ * destroy() when the connection ends. */
+export class HeldStore {
+    constructor(shard = 0, shards = 1) {
+        this.shard = shard;
+        this.shards = shards;
+        this.h = oc.ocw_held_create();
+        if (!this.h) throw new ProtoError(R.ENOMEM, 'cannot allocate the held store');
+    }
+
+    /* frame: the whole FRAME message (ArrayBuffer or Uint8Array). */
+    apply(frame) {
+        const u8 = frame instanceof Uint8Array ? frame : new Uint8Array(frame);
+        withHeap((alloc) => {
+            const p = put(alloc, u8);
+            check(oc.ocw_held_apply(this.h, p, u8.byteLength, this.shard, this.shards));
+        });
+    }
+
+    /* Blends the last frame's instant: {tiles: [{cascade, mip, ix, iz,
+     * width, height, channels, spacing, errorBound}], error: ProtoError or
+     * null}; a tile that did not decode is left out and named in error. */
+    blend() {
+        const r = oc.ocw_held_blend(this.h);
+        const error = r === R.OK ? null : new ProtoError(r, lastError() || `held store failed (code ${r})`);
+        const n = oc.ocw_held_count(this.h), tiles = [];
+        withHeap((alloc) => {
+            const v = alloc(72);
+            for (let i = 0; i < n; i++) {
+                check(oc.ocw_held_tile(this.h, i, v));
+                const d = new Float64Array(oc.memory.buffer, v, 9);
+                tiles.push({ cascade: d[0], mip: d[1], ix: d[2], iz: d[3], width: d[4], height: d[5],
+                    channels: d[6], spacing: d[7], errorBound: d[8] });
+            }
+        });
+        return { tiles, error };
+    }
+
+    /* Blended tile i's planes as decodeTile gives them (proto_tile_planes). */
+    planes(i, t) {
+        const np = tilePlanes(t.channels);
+        return { planes: np, data: f32At(oc.ocw_held_planes(this.h, i), np * t.width * t.height) };
+    }
+
+    /* Blended tile i (t its blend() record) as decodeCascadeBlock's texel block. */
+    texels(i, t, maxSlope) {
+        const n = t.width * t.height;
+        return withHeap((alloc) => {
+            const disp = alloc(16 * n), slope = alloc(8 * n), foam = alloc(16);
+            check(oc.ocw_held_texels(this.h, i, maxSlope, disp, slope, foam));
+            const f = new Float64Array(oc.memory.buffer, foam, 2);
+            return { disp: f32At(disp, 4 * n), slope: f32At(slope, 2 * n), foamSum: f[0], foamMax: f[1] };
+        });
+    }
+
+    destroy() {
+        if (this.h) oc.ocw_held_destroy(this.h);
+        this.h = 0;
+    }
 }

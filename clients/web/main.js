@@ -109,6 +109,10 @@ const want = {
     accuracy: num('accuracy', 5e-3),
     viewRangeM: num('range', 0),
     baseSpacingM: num('spacing', 0),
+    /* layout 1: mips sent once per their update interval and blended in
+     * time here (PROTOCOL.md "Samples in time"); time=0 takes every
+     * tick's tiles, for comparison */
+    timeInterp: qs.get('time') !== '0',
 };
 /* Layout 0 only: unless the URL fixes it, the level-0 tile spacing follows
  * the camera's altitude (about 1/28 of the height, a power of two in

@@ -34,7 +34,7 @@
  *                 'frame'|'error'|'bye'|'sea'|'result'|'capture', ...}.
  */
 import {
-    CODEC, CODEC_NAMES, CUTOFF, FX, LAYOUT, MESH, MESH_CODEC, SUBPROTOCOL, T, BYE_REASONS, RESULT_NAMES,
+    CODEC, CODEC_NAMES, CUTOFF, FX, LAYOUT, MESH, MESH_CODEC, SUB_FLAG, SUBPROTOCOL, T, BYE_REASONS, RESULT_NAMES,
     decode, decodeHeader, encodeCamera, encodeSubscribe, encodeQuery, encodeBye, ProtoError, tilePlanes,
 } from './protocol.js';
 import { ByteRate } from './rate.js';
@@ -48,11 +48,11 @@ let subscription = null;
  * it the onmessage handler below, until they have loaded, and a message
  * the page sends meanwhile would be lost.  So they come in dynamically and
  * the socket opens once they are here. */
-let assembleLevel, assembleCascadeTile, groupByLevel, decodeMeshQz, meshQz;
+let assembleLevel, assembleCascadeTile, groupByLevel, heldBlocks, decodeMeshQz, HeldStore, meshQz;
 const decodersReady = Promise.all([import('./assemble.js'), import('./codec.js'), import('./meshstore.js')])
     .then(([a, c, m]) => {
-        ({ assembleLevel, assembleCascadeTile, groupByLevel } = a);
-        ({ decodeMeshQz } = c);
+        ({ assembleLevel, assembleCascadeTile, groupByLevel, heldBlocks } = a);
+        ({ decodeMeshQz, HeldStore } = c);
         meshQz = new m.MeshQzStore();  /* layout 0 with mesh_codec qz: the topologies' prediction refs */
     });
 let wantSub = null;
@@ -105,6 +105,10 @@ function chooseSubscription(h, want) {
         /* layout 0: mesh positions compressed unless the page asks for f32;
          * layout 1 sends none (and an older daemon wants 0 there) */
         meshCodec: layout === LAYOUT.WORLD && want.meshCodec !== MESH_CODEC.F32 ? MESH_CODEC.QZ : MESH_CODEC.F32,
+        /* layout 1: each mip travels once per its own update interval and
+         * the decode workers hold and blend its samples (PROTOCOL.md
+         * "Samples in time"), unless the page asks for every tick's tiles */
+        flags: layout === LAYOUT.CASCADE && want.timeInterp !== false ? SUB_FLAG.TIME_INTERP : 0,
     };
 }
 
@@ -133,6 +137,7 @@ function connect(url, want) {
         subscription = null;
         hello = null;
         if (meshQz) meshQz.clear();   /* mesh ids are per connection */
+        heldReset();                  /* so are held samples */
         post({ kind: 'status', state: 'closed', code: ev.code, reason: ev.reason, retryMs: closing ? null : retryMs });
         if (!closing) {
             setTimeout(() => connect(wsUrl, null), retryMs);
@@ -183,6 +188,7 @@ function onMessage(data) {
         }
         if (latencyMs != null) lastLatency = latencyMs;
         if (captureNext) { captureNext = false; post({ kind: 'capture', bytes: data.slice(0) }); }
+        if (timed()) heldApply(data);  /* every frame, in order, drawn or not */
         if (paused) return;
         pendingFrame = data;
         schedule();
@@ -279,6 +285,9 @@ function getPool() {
                 for (const x of pool) x.terminate();
                 pool = [];
                 inflight = null;
+                /* the samples it held are gone: a new connection starts
+                 * with a KEY frame, which the store here then follows */
+                if (timed() && ws) ws.close(4000, 'decode pool failed');
                 schedule();
             };
             pool.push(w);
@@ -331,6 +340,14 @@ function processFrame() {
         }
     }
     if (f.layout === LAYOUT.CASCADE) {
+        meta.cascades = f.cascades;
+        meta.placement = f.placement;
+    }
+    if (f.layout === LAYOUT.CASCADE && timed()) {
+        processHeldFrame(meta, t0);
+        return;
+    }
+    if (f.layout === LAYOUT.CASCADE) {
         processCascadeFrame(f, meta, t0);
         return;
     }
@@ -377,8 +394,6 @@ function dispatchBuckets(p, buckets, field, meta, t0) {
  * the pool gets shares of the tiles balanced by sample count. */
 function processCascadeFrame(f, meta, t0) {
     meta.layout = LAYOUT.CASCADE;
-    meta.cascades = f.cascades;
-    meta.placement = f.placement;
     meta.mesh = null;
     const p = getPool();
     if (!p.length) {
@@ -399,6 +414,57 @@ function processCascadeFrame(f, meta, t0) {
         b.load += t.width * t.height * tilePlanes(t.channels);
     }
     dispatchBuckets(p, buckets, 'tiles', meta, t0);
+}
+
+/* ---- samples in time ---------------------------------------------------- */
+
+/* A time-interpolating stream (PROTOCOL.md "Samples in time"): a FRAME
+ * carries only the samples that are new, so the store of what this
+ * connection holds must see every frame in order, while drawing still
+ * takes the newest only.  Each pool worker holds the tiles of its shard
+ * (HeldStore, the C library's store): every frame goes to all of them as
+ * it arrives (cheap: the payloads are copied, decoded only when first
+ * blended), and a frame to draw asks each for its blend.  Without a pool
+ * the store is here. */
+let localHeld = null;
+
+function timed() {
+    return !!subscription && subscription.layout === LAYOUT.CASCADE && (subscription.flags & SUB_FLAG.TIME_INTERP) !== 0;
+}
+
+function heldApply(data) {
+    const p = getPool();
+    if (!p.length) {
+        try {
+            if (!localHeld) localHeld = new HeldStore(0, 1);
+            localHeld.apply(data);
+        } catch (e) {
+            noteError(e, 'FRAME (held samples)');
+        }
+        return;
+    }
+    p.forEach((w, i) => {
+        const copy = data.slice(0);
+        w.postMessage({ held: 'apply', frame: copy, shard: i, shards: p.length }, [copy]);
+    });
+}
+
+function heldReset() {
+    if (localHeld) localHeld.destroy();
+    localHeld = null;
+    if (pool) for (const w of pool) w.postMessage({ held: 'reset' });
+}
+
+function processHeldFrame(meta, t0) {
+    meta.layout = LAYOUT.CASCADE;
+    meta.mesh = null;
+    const p = getPool();
+    if (!p.length) {
+        finishFrame({ meta, levels: [], blocks: localHeld ? heldBlocks(localHeld, noteError) : [], t0 });
+        return;
+    }
+    inflight = { id: ++jobId, meta, remaining: p.length, levels: [], blocks: [], t0 };
+    for (const w of p) w.postMessage({ id: inflight.id, held: 'blend' });
 }
 
 function onPoolResult(ev) {

@@ -17,7 +17,10 @@
  *    decode to their committed samples bit for bit, as the C decoder's;
  *  - the protocol's own vectors (tests/vectors, PROTO_VECTORS) decode to
  *    their stated fields, bad ones get their stated code, and the messages
- *    the viewer sends re-encode to identical bytes.
+ *    the viewer sends re-encode to identical bytes;
+ *  - the stream of tests/vectors/held (PROTOCOL.md "Samples in time")
+ *    through the viewer's HeldStore, whole and split into shards as the
+ *    decode pool splits it, blends to the committed tiles bit for bit.
  *
  * Run by tests/test_browser.sh with VECTOR_DIR (output of `gen_vectors gen`)
  * and GEN_VECTORS (the helper binary) set.  node --test.
@@ -33,7 +36,7 @@ import {
     decode, encodeSubscribe, encodeCamera, encodeQuery, encodeBye, ProtoError, R, T, CODEC, FX, tilePlanes,
     LAYOUT, MIP_ENTRIES, TOPO_FLAT, zstdFrameSizes, SUB_FLAG,
 } from '../../clients/web/protocol.js';
-import { decodeTile, decodeCascadeBlock, octNormals, decodeMeshQz, meshQzRefs } from '../../clients/web/codec.js';
+import { decodeTile, decodeCascadeBlock, octNormals, decodeMeshQz, meshQzRefs, HeldStore } from '../../clients/web/codec.js';
 
 const dir = process.env.VECTOR_DIR;
 const gen = process.env.GEN_VECTORS;
@@ -510,6 +513,62 @@ test('qz payload vectors (tests/vectors/codec): formats 2 and 1 decode to the co
             assert.throws(() => decodeTile(CODEC.QZ, w, h, ch, payload.subarray(0, l)), (e) => e.code === R.ECODEC);
     }
     assert.deepEqual([...formats].sort(), [1, 2]);
+});
+
+/* tests/vectors/held frame i's expected tiles: [{key, channels, bytes}] */
+function heldExpected(hdir, i) {
+    const lines = readFileSync(join(hdir, `frame_${i}.txt`), 'utf8').trim().split('\n').filter((l) => l);
+    const f32 = new Uint8Array(readFileSync(join(hdir, `frame_${i}.f32`)));
+    let off = 0;
+    return lines.map((l) => {
+        const [mip, ix, iz, channels] = l.split(' ').map(Number);
+        const n = 4 * tilePlanes(channels) * 16;   /* 4 x 4 samples per plane */
+        const bytes = f32.subarray(off, off + n);
+        off += n;
+        return { key: `0/${mip}/${ix}/${iz}`, channels, bytes };
+    });
+}
+
+test('samples in time (tests/vectors/held): the viewer\'s store blends every frame\'s instant bit for bit, whole and in shards', (t) => {
+    const vdir = process.env.PROTO_VECTORS;
+    if (!vdir) { t.skip('PROTO_VECTORS not set'); return; }
+    const hdir = join(vdir, 'held');
+    const frames = readdirSync(hdir).filter((f) => /^frame_\d+\.bin$/.test(f)).length;
+    assert.ok(frames >= 6, `held vectors in ${hdir}`);
+    for (const shards of [1, 2, 3]) {
+        const stores = Array.from({ length: shards }, (_, i) => new HeldStore(i, shards));
+        for (let i = 0; i < frames; i++) {
+            const bytes = new Uint8Array(readFileSync(join(hdir, `frame_${i}.bin`)));
+            const got = new Map();
+            for (const s of stores) {
+                s.apply(bytes);
+                const { tiles, error } = s.blend();
+                assert.equal(error, null);
+                tiles.forEach((tile, k) => {
+                    const key = `${tile.cascade}/${tile.mip}/${tile.ix}/${tile.iz}`;
+                    assert.ok(!got.has(key), `frame ${i}: ${key} in two shards`);
+                    const p = s.planes(k, tile).data;
+                    got.set(key, { channels: tile.channels, bytes: new Uint8Array(p.buffer, p.byteOffset, p.byteLength) });
+                });
+            }
+            const want = heldExpected(hdir, i);
+            assert.deepEqual([...got.keys()].sort(), want.map((w) => w.key).sort(), `frame ${i}, ${shards} shards`);
+            for (const w of want) {
+                const g = got.get(w.key);
+                assert.equal(g.channels, w.channels, `frame ${i} ${w.key}`);
+                assert.ok(Buffer.compare(Buffer.from(g.bytes), Buffer.from(w.bytes)) === 0, `frame ${i} ${w.key}: samples differ`);
+            }
+        }
+        for (const s of stores) s.destroy();
+    }
+    /* hostile: a truncated frame is refused with the decoder's code, and
+     * the store carries on */
+    const s = new HeldStore();
+    const f0 = new Uint8Array(readFileSync(join(hdir, 'frame_0.bin')));
+    assert.throws(() => s.apply(f0.subarray(0, f0.length - 9)), (e) => e instanceof ProtoError && e.code !== R.OK);
+    s.apply(f0);
+    assert.equal(s.blend().tiles.length, heldExpected(hdir, 0).length);
+    s.destroy();
 });
 
 test('corrupt qz payloads are refused with ECODEC, never decoded to junk', () => {
