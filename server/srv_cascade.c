@@ -108,6 +108,8 @@ typedef struct plan {
                               to this frame's windows; NULL otherwise */
     int key;               /* the frame carries PROTO_CASCADE_KEY */
     uint32_t *tags;        /* each record's tag, in frame order */
+    double burst_cap;      /* held samples one frame may carry (estimated bytes) */
+    double burst;          /* those this frame carries so far */
 } plan;
 
 ocean_result srv_cascade_create(srv_cascade **out)
@@ -494,6 +496,7 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
     double bps = cfg->viewer_bytes_per_s, link = (double)atomic_load(&j->c->link_bps);
     if (!j->replay && link > 0 && link < bps) bps = link;
     double budget = bps / rate_hz;
+    pl->burst_cap = SRV_CASCADE_BURST * budget;
     sector sc;
     sector_of(&j->cam, &sc);
     double hi = q;
@@ -1097,37 +1100,76 @@ static void held_begin(srv_cascade *k, const srv_config *cfg, srv_cascade_job *j
     pl->held = h;
 }
 
-/* One needed tile (c, m, ix, iz) of job j: at the frame's time, or each
- * sample of its window that the client does not hold. */
+/* One needed tile (c, m, ix, iz) of job j in pass `pass`: pass 0 the tile
+ * at the frame's time, or its window's sample A if the client lacks it;
+ * pass 1 its sample B if the client lacks it.  The plan prices a held mip
+ * at its share per frame (refresh_share), but what a client lacks can
+ * come at once: a KEY frame holds every sample, a frame that replaces an
+ * unsent one what both carry, a window's start the B of all the mip's
+ * tiles.  So the held samples a frame carries stop at p->burst_cap: every
+ * A first, coarse mips and cascades first, so the client's sea is whole
+ * at once, then the B samples, the windows ending soonest first (the
+ * client reads A alone until a tile's B comes: PROTOCOL.md "Samples in
+ * time"); the rest stay lacking in the
+ * model and go with the next frames.  One sample always goes, whatever its
+ * size, so the stream always progresses. */
 static void lookup_needed(srv_cascade *k, srv_stats *st, const srv_cascade_job *j, plan *p, srv_tile_key *key,
-                          int ntile, uint64_t gen, missing_set *ms, int *at)
+                          int ntile, int pass, uint64_t gen, missing_set *ms, int *at)
 {
     int c = key->cascade, m = key->level, i = key->iz * ntile + key->ix;
     if (!p->time[c][m].interval || !p->held) {
+        if (pass) return;
         key->t = j->t;
         p->tags[*at] = (uint32_t)c;
         lookup_tile(k, st, p, (*at)++, key, gen, ms);
         return;
     }
-    for (int slot = 0; slot < 2; slot++) {
-        if (srv_held_has(p->held, c, m, slot, i, key->channels)) continue;
-        key->t = p->t_ab[c][m][slot];
-        p->tags[*at] = (uint32_t)c | (slot ? PROTO_TAG_SLOT_B : 0u);
-        lookup_tile(k, st, p, (*at)++, key, gen, ms);
-        srv_held_add(p->held, c, m, slot, i, key->channels);
-    }
+    if (srv_held_has(p->held, c, m, pass, i, key->channels)) return;
+    double cost = srv_cascade_tile_bytes(&j->c->sim.sub, key->channels, key->size);
+    if (p->burst > 0 && p->burst + cost > p->burst_cap) return;
+    p->burst += cost;
+    key->t = p->t_ab[c][m][pass];
+    p->tags[*at] = (uint32_t)c | (pass ? PROTO_TAG_SLOT_B : 0u);
+    lookup_tile(k, st, p, (*at)++, key, gen, ms);
+    srv_held_add(p->held, c, m, pass, i, key->channels);
 }
 
-/* Every tile job j's plan p needs, from the cache or into ms. */
+/* The mips of plan p in the order lookup_job visits them in `pass`: coarse
+ * mips and cascades first; pass 1 (B samples) by the ticks left in their
+ * windows first (earliest deadline first: a B not come by its window's end
+ * is a tile lost at the shift), then coarse first.  Returns the count. */
+static int mip_order(const tables *tb, const plan *p, int pass, int order[][2])
+{
+    int n = 0;
+    for (int c = 0; c < p->layers; c++)
+        for (int m = tb->mips[c] - 1; m >= 0; m--)
+            if (p->need[c][m]) order[n][0] = c, order[n++][1] = m;
+    for (int i = 1; pass && i < n; i++)   /* insertion sort: stable, a few dozen mips */
+        for (int k = i; k > 0; k--) {
+            const proto_mip_time *x = &p->time[order[k][0]][order[k][1]];
+            const proto_mip_time *y = &p->time[order[k - 1][0]][order[k - 1][1]];
+            double lx = x->interval * (65536.0 - x->phase), ly = y->interval * (65536.0 - y->phase);
+            if (lx >= ly) break;
+            int t0 = order[k][0], t1 = order[k][1];
+            order[k][0] = order[k - 1][0], order[k][1] = order[k - 1][1];
+            order[k - 1][0] = t0, order[k - 1][1] = t1;
+        }
+    return n;
+}
+
+/* Every tile job j's plan p needs, from the cache or into ms: the tiles
+ * at the frame's time and the A samples, then the B samples (see
+ * lookup_needed and mip_order). */
 static void lookup_job(srv_cascade *k, const srv_config *cfg, srv_stats *st, const srv_cascade_job *j, plan *p,
                        uint64_t gen, missing_set *ms)
 {
     const tables *tb = &k->tab;
     const proto_subscribe *sub = &j->c->sim.sub;
-    int at = 0;
-    for (int c = 0; c < p->layers; c++)
-        for (int m = 0; m < tb->mips[c]; m++) {
-            if (!p->need[c][m]) continue;
+    int at = 0, order[PROTO_MAX_LAYERS * MAX_MIPS][2];
+    for (int pass = 0; pass < (p->held ? 2 : 1); pass++) {
+        int n = mip_order(tb, p, pass, order);
+        for (int o = 0; o < n; o++) {
+            int c = order[o][0], m = order[o][1];
             int np = tb->n >> m, T = cfg->cascade_tile < np ? cfg->cascade_tile : np, ntile = np / T;
             const range *rg = &p->r[c][m];
             for (int a = 0; a < rg->nz; a++)
@@ -1143,9 +1185,10 @@ static void lookup_job(srv_cascade *k, const srv_config *cfg, srv_stats *st, con
                     key.cascade = (uint8_t)c;
                     key.level = (uint8_t)m;
                     key.codec = sub->codec;
-                    lookup_needed(k, st, j, p, &key, ntile, gen, ms, &at);
+                    lookup_needed(k, st, j, p, &key, ntile, pass, gen, ms, &at);
                 }
         }
+    }
     p->tiles = at;
 }
 

@@ -32,6 +32,14 @@ typedef struct srv_cascade srv_cascade;
  * mip holds at the ship-bridge scene, so no wave is aliased in time. */
 #define SRV_CASCADE_MAX_INTERVAL 64
 
+/* The held samples one frame of a time-interpolating client may carry,
+ * in frame budgets (server.viewer_bytes_per_s, or the link's rate, over
+ * the frame rate): the plan prices each held mip at its share per frame,
+ * and this bounds what a KEY frame, or one replacing an unsent frame,
+ * carries at once.  Twice the budget lets the staggered windows of a
+ * steady stream through whole and spreads a KEY frame over about three. */
+#define SRV_CASCADE_BURST 2.0
+
 /* Seed 000's energy guard: at most this fraction of the sea's height
  * variance may be missing from what a client gets (e_total). */
 #define SRV_CASCADE_E_GUARD 0.05

@@ -85,9 +85,10 @@ static const frame_spec stream[N_FRAMES] = {
      {{0, 0, 0, 108, 1, CH_HN, PROTO_CODEC_F32, 0}, {0, 1, 0, 108, 1, CH_HN, PROTO_CODEC_F32, 0},
       {0, 0, 1, 108, 1, PROTO_CH_HEIGHT, PROTO_CODEC_F32, 0}, {1, 0, 0, 106, 1, PROTO_CH_HEIGHT, PROTO_CODEC_F32, 0}}},
     /* 4: mip 0 jumps to a window not starting at its B (no KEY): dropped,
-     * then both samples of (0,0) only; mip 1 half way */
-    {105, 0, {{200, 4, 16384}, {104, 2, 32768}}, 2,
-     {{0, 0, 0, 200, 0, CH_HN, PROTO_CODEC_F32, 0}, {0, 0, 0, 204, 1, CH_HN, PROTO_CODEC_F32, 0}}},
+     * then both samples of (0,0), sample A of (1,0); mip 1 half way */
+    {105, 0, {{200, 4, 16384}, {104, 2, 32768}}, 3,
+     {{0, 0, 0, 200, 0, CH_HN, PROTO_CODEC_F32, 0}, {0, 0, 0, 204, 1, CH_HN, PROTO_CODEC_F32, 0},
+      {0, 1, 0, 200, 0, CH_HN, PROTO_CODEC_F32, 0}}},
     /* 5: KEY drops all; mip 0 at the frame's own time, one tile; mip 1 a
      * window with sample A only (not read until B comes) */
     {106, 1, {{0, 0, 0}, {106, 2, 0}}, 2,
@@ -96,7 +97,7 @@ static const frame_spec stream[N_FRAMES] = {
 
 /* What each frame's instant reads: tile (mip, ix, iz) is the blend of
  * samples taken at ticks ta and tb (markers ma, mb) with weight w, over
- * `channels`; tb < 0: sample A alone (interval 0). */
+ * `channels`; tb < 0: sample A alone (interval 0, or B not come yet). */
 typedef struct blend_spec {
     int mip, ix, iz;
     int ta, tb;
@@ -109,8 +110,9 @@ static const struct {
     int n;
     blend_spec b[MAX_TILES];
 } expected[N_FRAMES] = {
-    /* 0: (0,0), (1,0) at w 0; (0,1), (1,1) lack B; mip 1 tick 100 */
-    {3, {{0, 0, 0, 100, 104, 0, 0, 0, CH_HN}, {0, 1, 0, 100, 104, 0, 0, 0, CH_HN},
+    /* 0: (0,0), (1,0) at w 0; (0,1), (1,1) A alone (no B yet); mip 1 tick 100 */
+    {5, {{0, 0, 0, 100, 104, 0, 0, 0, CH_HN}, {0, 1, 0, 100, 104, 0, 0, 0, CH_HN},
+         {0, 0, 1, 100, -1, 0, 0, 0, CH_HN}, {0, 1, 1, 100, -1, 0, 0, 0, CH_HN},
          {1, 0, 0, 100, -1, 0, 0, 0, PROTO_CH_HEIGHT}}},
     {5, {{0, 0, 0, 100, 104, 0, 0, 0.25, CH_HN}, {0, 1, 0, 100, 104, 0, 0, 0.25, CH_HN},
          {0, 0, 1, 100, 104, 0, 0, 0.25, CH_HN}, {0, 1, 1, 100, 104, 0, 0, 0.25, CH_HN},
@@ -118,10 +120,15 @@ static const struct {
     {5, {{0, 0, 0, 100, 104, 0, 0, 0.5, CH_HN}, {0, 1, 0, 100, 104, 0, 0, 0.5, CH_HN},
          {0, 0, 1, 100, 104, 0, 0, 0.5, CH_HN}, {0, 1, 1, 100, 104, 0, 1000, 0.5, CH_HN},
          {1, 0, 0, 102, 104, 0, 0, 0, PROTO_CH_HEIGHT}}},
-    {4, {{0, 0, 0, 104, 108, 0, 0, 0, CH_HN}, {0, 1, 0, 104, 108, 0, 0, 0, CH_HN},
-         {0, 0, 1, 104, 108, 0, 0, 0, PROTO_CH_HEIGHT}, {1, 0, 0, 104, 106, 0, 0, 0, PROTO_CH_HEIGHT}}},
-    {2, {{0, 0, 0, 200, 204, 0, 0, 0.25, CH_HN}, {1, 0, 0, 104, 106, 0, 0, 0.5, PROTO_CH_HEIGHT}}},
-    {1, {{0, 0, 1, 106, -1, 0, 0, 0, CH_HN}}},
+    /* 3: (1,1) A alone: its A is the replaced B */
+    {5, {{0, 0, 0, 104, 108, 0, 0, 0, CH_HN}, {0, 1, 0, 104, 108, 0, 0, 0, CH_HN},
+         {0, 0, 1, 104, 108, 0, 0, 0, PROTO_CH_HEIGHT}, {0, 1, 1, 104, -1, 1000, 0, 0, CH_HN},
+         {1, 0, 0, 104, 106, 0, 0, 0, PROTO_CH_HEIGHT}}},
+    /* 4: (1,0) A alone a quarter into its window */
+    {3, {{0, 0, 0, 200, 204, 0, 0, 0.25, CH_HN}, {0, 1, 0, 200, -1, 0, 0, 0, CH_HN},
+         {1, 0, 0, 104, 106, 0, 0, 0.5, PROTO_CH_HEIGHT}}},
+    /* 5: mip 1's window has A alone */
+    {2, {{0, 0, 1, 106, -1, 0, 0, 0, CH_HN}, {1, 0, 0, 106, -1, 0, 0, 0, PROTO_CH_HEIGHT}}},
 };
 
 static float value(uint32_t tick, int plane, int mip, int ix, int iz, int k, float marker)
@@ -325,8 +332,8 @@ static void undecodable_tile_dropped(void **state)
     float **data;
     unsigned n;
     assert_int_equal(oc_held_blend(h, &f, &bt, &data, &n), OCEAN_OK);
-    assert_int_equal(n, 2); /* (1,0) of mip 0 and mip 1's tile; (0,0) lacks its B */
-    for (unsigned k = 0; k < n; k++) assert_false(bt[k].level == 0 && bt[k].ix == 0);
+    /* every tile: (0,0) of mip 0 reads its A alone */
+    assert_int_equal(n, 5);
     oc_held_blend_free(bt, data, n);
     oc_held_destroy(h);
     proto_msg_free(&m);

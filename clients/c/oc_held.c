@@ -300,7 +300,9 @@ ocean_result oc_held_blend(const oc_held *h, const proto_frame *f, proto_tile **
             for (unsigned i = 0; i < hm->slot[0].n; i++) {
                 const held_tile *a = &hm->slot[0].t[i];
                 held_tile *bt = tm->interval ? slot_find((held_slot *)&hm->slot[1], a->info.ix, a->info.iz) : NULL;
-                if ((tm->interval && !bt) || !blendable(a, bt)) continue;
+                /* B not come yet: A alone (the spec's rule) */
+                if (bt && !blendable(a, bt)) bt = NULL;
+                if (!blendable(a, bt)) continue;
                 unsigned ch = 0;
                 float *out = blend_tile(a, bt, w, &ch);
                 if (!out) {

@@ -48,9 +48,9 @@ ocean_result oc_held_apply(oc_held *h, const proto_frame *f, const float *const 
 ocean_result oc_held_decode(oc_held *h, char *err, size_t errlen);
 
 /* The tiles of f's instant: for each mip of each cascade of f, its held
- * tiles (interval 0) or the blend (1 - w) A + w B of each tile held in
- * both samples, over the channels both carry (a tile still a payload,
- * see oc_held_decode, is left out).  error_bound is the larger of A's and
+ * tiles (interval 0) or, for each tile held in A, the blend (1 - w) A +
+ * w B over the channels both carry, or A alone while its B has not come
+ * (a tile still a payload, see oc_held_decode, is left out).  error_bound is the larger of A's and
  * B's.  *tiles (proto_tile, no
  * payload) and *data (one malloc'd array per tile) are the caller's to
  * free with oc_held_blend_free. */
