@@ -40,8 +40,8 @@
  *   oc_client_next_frame().  When the queue is full the OLDEST frame is
  *   dropped (latest wins, as the daemon does) and counted in
  *   oc_client_stats.frames_dropped.
- *   A stream subscribed with SUBSCRIBE flag PROTO_SUB_TIME_INTERP is not
- *   made of whole frames: each FRAME brings only the samples in time that
+ *   A stream subscribed with SUBSCRIBE flag PROTO_SUB_TIME_INTERP (the
+ *   viewer's, oc_subscribe_default's) is not made of whole frames: each FRAME brings only the samples in time that
  *   are due and its view blends the samples the connection holds
  *   (PROTOCOL.md "Samples in time").  A client
  *   with decode_tiles (the default) applies every FRAME to its store on
@@ -388,7 +388,15 @@ ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen);
 /* A SUBSCRIBE with the library's defaults, the browser viewer's
  * (clients/web): layout 1 (shared cascade tiles; the library sums the
  * cascades and displaces the mesh: oc_frame_sample,
- * oc_frame_mesh_positions), every effect, every cascade (layers 4; the
+ * oc_frame_mesh_positions), samples in time (flags
+ * PROTO_SUB_TIME_INTERP: each mip travels once per its own update
+ * interval, about a quarter of the bytes at ship-bridge, and each frame's
+ * view blends two samples the connection holds, within the codec's error
+ * at `accuracy`; a client that decodes its frames follows the stream by
+ * itself, but a reader of headers only, of frames alone (oc_frame_decode)
+ * or of some of a connection's frames cannot: it clears the flag, or
+ * decodes every frame in order (oc_frame_stream; "Frames" at the top),
+ * every effect, every cascade (layers 4; the
  * server sends those it has), concentric mesh, codec qz at accuracy
  * OC_ACCURACY_DEFAULT (5e-3), 64-sample tiles, antialias cutoff policy,
  * live at 30 Hz, 8 LOD levels
