@@ -2018,8 +2018,9 @@ void oc_subscribe_default(proto_subscribe *s)
     s->mesh_codec = PROTO_MESH_CODEC_QZ;
     /* the viewer holds each mip's samples and blends two in time, so each
      * mip travels once per its own update interval (PROTOCOL.md "Samples
-     * in time"): about a quarter of the bytes at ship-bridge; layout 0
-     * ignores the flag */
+     * in time"): a quarter of the bytes at ship-bridge for the same plan,
+     * and within the daemon's byte budget finer mips for them (make bench:
+     * bench_accuracy's viewer rows); layout 0 ignores the flag */
     s->flags = PROTO_SUB_TIME_INTERP;
 }
 

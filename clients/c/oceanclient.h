@@ -390,9 +390,10 @@ ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen);
  * cascades and displaces the mesh: oc_frame_sample,
  * oc_frame_mesh_positions), samples in time (flags
  * PROTO_SUB_TIME_INTERP: each mip travels once per its own update
- * interval, about a quarter of the bytes at ship-bridge, and each frame's
- * view blends two samples the connection holds, within the codec's error
- * at `accuracy`; a client that decodes its frames follows the stream by
+ * interval - a quarter of the bytes at ship-bridge for the same plan,
+ * which the daemon spends on finer mips within its byte budget - and each
+ * frame's view blends two samples the connection holds, within the
+ * codec's error at `accuracy`; a client that decodes its frames follows the stream by
  * itself, but a reader of headers only, of frames alone (oc_frame_decode)
  * or of some of a connection's frames cannot: it clears the flag, or
  * decodes every frame in order (oc_frame_stream; "Frames" at the top),
