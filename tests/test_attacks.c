@@ -341,6 +341,9 @@ static int http_get(int p, const char *path, char *out, size_t cap)
 static void live_subscribe(proto_subscribe *s)
 {
     oc_subscribe_default(s);
+    /* the witness reads FRAME headers only (its CPU must not limit it) and
+     * attackers read nothing: the plain stream, whose frames stand alone */
+    s->flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
     s->tile_size = 32;
     s->lod_levels = 2;
     s->frame_rate_hz = (float)WITNESS_HZ;

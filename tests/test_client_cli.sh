@@ -2,7 +2,8 @@
 # test_client_cli.sh - ocean-client and the ship example against a real
 # oceand on a free loopback port: watch --json, bad options refused by
 # name, record, replay twice with --check (identical) and once changed
-# (refused), export (files any EXR reader opens), load, query, ship; help
+# (refused), export (files any EXR reader opens), load (following the
+# viewer's time-interpolating stream, and the plain one), query, ship; help
 # defaults equal the parser's, no option silently ignored, progress on a
 # terminal (issue 17 items 5-7).
 set -u
@@ -89,9 +90,15 @@ for c in watch query record replay export load sea; do
     [[ $n -ge 1 ]] || fail "$c --help shows no default"
 done
 # The subscription defaults are the library's (oc_subscribe_default), the
-# two the old help text had wrong among them.
+# two the old help text had wrong among them; samples in time are the
+# viewer's stream (export alone reads the plain one).
 "$OC" watch --help | grep -- "--cutoff-policy" | grep -q "(default antialias)" || fail "--cutoff-policy default"
 "$OC" watch --help | grep -- "--tile-size" | grep -q "(default 64)" || fail "--tile-size default"
+for c in watch record replay load; do
+    "$OC" $c --show-options | grep -qx -- "--time-interp=on" || fail "$c --time-interp default"
+    "$OC" $c --help | grep -A2 -- "--time-interp" | grep -q "(default on)" || fail "$c --help: --time-interp default"
+done
+"$OC" export --show-options | grep -qx -- "--time-interp=off" || fail "export --time-interp default"
 # layout 0's mesh positions travel compressed unless asked otherwise (issue 14)
 "$OC" load --help | grep -- "--mesh-codec" | grep -q "(default qz)" || fail "--mesh-codec default"
 
@@ -110,6 +117,12 @@ t0=$SECONDS
 grep -q -- "--check" "$tmp/err" && grep -q "missing.frames" "$tmp/err" || fail "replay --check missing: $(cat "$tmp/err")"
 grep -q "answered" "$tmp/err" && fail "replay ran before checking --check: $(cat "$tmp/err")"
 [[ ! -e $tmp/never.frames ]] || fail "replay wrote --out before checking --check"
+# export writes each frame's tiles as the sea at its time: samples in time
+# (whose tiles are of other ticks) are refused by name, not exported
+"$OC" export "$URL" --out "$tmp/never-exr" --time-interp on 2>"$tmp/err"; rc=$?
+[[ $rc -eq 2 ]] || fail "export --time-interp on: exit $rc"
+grep -q -- "--time-interp" "$tmp/err" || fail "export --time-interp on: $(cat "$tmp/err")"
+[[ ! -e $tmp/never-exr ]] || fail "export --time-interp on created its directory"
 
 echo "== replay twice, --check ($SECONDS s)"
 head -n 33 clients/paths/jet.csv >"$tmp/jet.csv"   # 30 reports, 1 s of the pass
@@ -165,6 +178,30 @@ json "$tmp/load.json" "d['connected'] == 4 and d['frames_per_viewer_min'] > 0 an
 "$OC" load "$URL" --clients 2 --seconds 2 --rate 10 --mesh none --ramp 0.2 --epoch "$EPOCH" --json \
     >"$tmp/load-age.json" || fail "load --epoch exited $?"
 json "$tmp/load-age.json" "'age from its tick' in d['latency_basis'] and 0 <= d['latency_p50_ms'] <= d['latency_p99_ms'] < 1000"
+
+echo "== load follows the viewer's time-interpolating stream ($SECONDS s)"
+# The viewer's subscription samples in time: a frame is read from the
+# samples its connection holds, so a follower decodes every frame in order
+# through its own store and reads the sea at the frame's camera.  A frame
+# applied out of order, missed, or read alone reads nothing there (ENOTFOUND
+# or ESTATE: a decode error), so every frame verified without one is a
+# stream followed.  --verify-every 1: every viewer follows.
+"$OC" load "$URL" --clients 2 --seconds 2 --rate 30 --ramp 0.2 --verify-every 1 --json >"$tmp/load-ti.json" ||
+    fail "load --time-interp on exited $?"
+json "$tmp/load-ti.json" "d['time_interp'] and d['stream'] == 'time-interpolating' and d['streams_followed'] == 2 and d['frames'] > 0 and d['frames_verified'] == d['frames'] == d['frames_layout1'] and d['decode_errors'] == 0"
+# every 2nd viewer follows; the others' frames are counted, not read
+"$OC" load "$URL" --clients 4 --seconds 2 --rate 30 --ramp 0.2 --verify-every 2 --json >"$tmp/load-ti2.json" ||
+    fail "load --verify-every 2 exited $?"
+json "$tmp/load-ti2.json" "d['streams_followed'] == 2 and 0 < d['frames_verified'] < d['frames'] and d['decode_errors'] == 0"
+# the client library follows it by itself when it decodes
+"$OC" load "$URL" --clients 2 --seconds 2 --rate 30 --ramp 0.2 --library --decode --json >"$tmp/load-ti-lib.json" ||
+    fail "load --library --decode exited $?"
+json "$tmp/load-ti-lib.json" "d['streams_followed'] == 2 and d['frames'] > 0 and d['decode_errors'] == 0"
+# the plain stream on request: every frame whole
+"$OC" load "$URL" --clients 2 --seconds 2 --rate 30 --ramp 0.2 --verify-every 1 --time-interp off --json \
+    >"$tmp/load-plain.json" || fail "load --time-interp off exited $?"
+json "$tmp/load-plain.json" "not d['time_interp'] and d['stream'] == 'plain' and d['streams_followed'] == 0 and d['frames'] > 0 and d['frames_verified'] == d['frames'] and d['decode_errors'] == 0"
+python3 -c "import json; a=json.load(open('$tmp/load-ti.json')); b=json.load(open('$tmp/load-plain.json')); print('bytes per viewer per second: time-interpolating %.0f, plain %.0f' % (a['bytes_per_viewer_per_s'], b['bytes_per_viewer_per_s']))"
 
 echo "== query ($SECONDS s)"
 "$OC" query "$URL" --points "0,0;10.5,-3" --json >"$tmp/q.json" 2>"$tmp/q.err" || fail "query: $(cat "$tmp/q.err")"

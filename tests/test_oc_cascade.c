@@ -15,6 +15,9 @@
  *  - periodic wrap at |x| = 1e7 m against the field at x mod P;
  *  - the mesh rule ("Mesh in layout 1"): morph weights, snapping to the
  *    coarser lattice, displacement read with max(s, g_L).
+ *  - samples in time ("Samples in time"): frames of a time-interpolating
+ *    stream decoded in order through oc_frame_stream read the blend of
+ *    constant samples, computed by hand from the spec's window rule.
  * When build/oceand exists, the heights the library reads from the
  * daemon's layout-1 frames are compared with QUERY_RESULT at the same tick.
  */
@@ -52,6 +55,9 @@ struct field {
     /* the channels of mip m's tiles (NULL: the frame's) */
     unsigned (*chan)(const field *F, int c, int m, unsigned channels);
     double G;                        /* for chan: the block's geometry_spacing_m */
+    const field *sample_b;           /* time-interpolating frames: every tile also
+                                        travels as sample B, of this field */
+    int b_only;                      /* ... and only as sample B */
     double a, kx, kz, phase, chop;   /* sinusoid parameters (cycles per patch) */
     double patch;
 };
@@ -71,76 +77,90 @@ typedef struct built {
     size_t len;
 } built;
 
-static built build_frame(const proto_cascade_block *b, const field *F, unsigned frame_channels, int tile_size,
-                         const proto_mesh_placement *pl, proto_codec codec)
+/* Frames are encoded from these (tiles[i].payload is payloads[i]). */
+static proto_tile tiles_[PROTO_MAX_FRAME_TILES];
+static proto_buf payloads_[PROTO_MAX_FRAME_TILES];
+
+/* Tile (ix, iz) of mip m of cascade c as record nt, sample `slot`: F's
+ * values at its grid points, encoded with codec. */
+static void emit_tile(const proto_cascade_block *b, const field *F, unsigned frame_channels, int tile_size,
+                      proto_codec codec, int c, int m, int ix, int iz, int slot, unsigned nt)
 {
-    static proto_tile tiles[PROTO_MAX_FRAME_TILES];
-    static proto_buf payloads[PROTO_MAX_FRAME_TILES];
+    const proto_cascade_entry *e = &b->cascade[c];
+    int n = e->n >> m;
+    int T = tile_size < n ? tile_size : n;
+    double sp = e->patch_m / e->n * ldexp(1.0, m);
+    int w = n - ix * T < T ? n - ix * T : T, h = n - iz * T < T ? n - iz * T : T;
+    unsigned channels = F->chan ? F->chan(F, c, m, frame_channels) : frame_channels;
+    int planes = proto_tile_planes(channels);
+    float *pl_ = calloc((size_t)planes * w * h, sizeof(float));
+    assert_non_null(pl_);
+    for (int i = 0; i < h; i++)
+        for (int j = 0; j < w; j++) {
+            double v[6];
+            F->fn(F, c, m, (ix * T + j) * sp, (iz * T + i) * sp, v);
+            int k = 0;
+            size_t at = (size_t)i * w + j, wh = (size_t)w * h;
+            if (channels & PROTO_CH_HEIGHT)
+                pl_[wh * k++ + at] = (float)v[0];
+            if (channels & PROTO_CH_DX)
+                pl_[wh * k++ + at] = (float)v[1];
+            if (channels & PROTO_CH_DZ)
+                pl_[wh * k++ + at] = (float)v[2];
+            if (channels & PROTO_CH_NORMAL) {
+                float u, vv;
+                oct_encode(v[3], v[4], &u, &vv);
+                pl_[wh * k++ + at] = u;
+                pl_[wh * k++ + at] = vv;
+            }
+            if (channels & PROTO_CH_FOAM)
+                pl_[wh * k++ + at] = (float)v[5];
+        }
+    proto_buf_init(&payloads_[nt], 0);
+    char err[256];
+    double maxe = 0;
+    assert_int_equal(proto_tile_encode(codec, NULL, w, h, channels, pl_, &payloads_[nt], &maxe, err, sizeof err),
+                     OCEAN_OK);
+    free(pl_);
+    proto_tile *t = &tiles_[nt];
+    memset(t, 0, sizeof *t);
+    t->level = (uint8_t)m;
+    t->codec = (uint8_t)codec;
+    t->channels = (uint16_t)channels;
+    t->width = (uint16_t)w;
+    t->height = (uint16_t)h;
+    t->ix = ix;
+    t->iz = iz;
+    t->origin_x = ix * T * sp;
+    t->origin_z = iz * T * sp;
+    t->spacing = sp;
+    t->error_bound = (float)maxe;
+    t->payload_len = (uint32_t)proto_buf_len(&payloads_[nt]);
+    t->payload = proto_buf_data(&payloads_[nt]);
+    t->cascade = (uint8_t)c;
+    t->slot = (uint8_t)slot;
+}
+
+/* FRAME bytes of the tiles F wants of every mip of block b (each as sample
+ * A from F->fn and, when F->sample_b is set, as sample B from it, or B
+ * alone with F->b_only), tick `tick`. */
+static built build_frame_at(const proto_cascade_block *b, const field *F, unsigned frame_channels, int tile_size,
+                            const proto_mesh_placement *pl, proto_codec codec, uint32_t tick)
+{
     unsigned nt = 0;
     for (int c = 0; c < b->cascade_count; c++) {
         const proto_cascade_entry *e = &b->cascade[c];
-        double sigma = e->patch_m / e->n;
         for (int m = 0; m < e->mips; m++) {
-            int n = e->n >> m;
-            int T = tile_size < n ? tile_size : n;
-            int tps = (n + T - 1) / T;
-            double sp = sigma * ldexp(1.0, m);
+            int n = e->n >> m, T = tile_size < n ? tile_size : n, tps = (n + T - 1) / T;
             for (int iz = 0; iz < tps; iz++)
-                for (int ix = 0; ix < tps; ix++) {
-                    if (F->want && !F->want(F, c, m, ix, iz))
-                        continue;
-                    assert_true(nt < PROTO_MAX_FRAME_TILES);
-                    int w = n - ix * T < T ? n - ix * T : T, h = n - iz * T < T ? n - iz * T : T;
-                    unsigned channels = F->chan ? F->chan(F, c, m, frame_channels) : frame_channels;
-                    int planes = proto_tile_planes(channels);
-                    float *pl_ = calloc((size_t)planes * w * h, sizeof(float));
-                    assert_non_null(pl_);
-                    for (int i = 0; i < h; i++)
-                        for (int j = 0; j < w; j++) {
-                            double v[6];
-                            F->fn(F, c, m, (ix * T + j) * sp, (iz * T + i) * sp, v);
-                            int k = 0;
-                            size_t at = (size_t)i * w + j, wh = (size_t)w * h;
-                            if (channels & PROTO_CH_HEIGHT)
-                                pl_[wh * k++ + at] = (float)v[0];
-                            if (channels & PROTO_CH_DX)
-                                pl_[wh * k++ + at] = (float)v[1];
-                            if (channels & PROTO_CH_DZ)
-                                pl_[wh * k++ + at] = (float)v[2];
-                            if (channels & PROTO_CH_NORMAL) {
-                                float u, vv;
-                                oct_encode(v[3], v[4], &u, &vv);
-                                pl_[wh * k++ + at] = u;
-                                pl_[wh * k++ + at] = vv;
-                            }
-                            if (channels & PROTO_CH_FOAM)
-                                pl_[wh * k++ + at] = (float)v[5];
-                        }
-                    proto_buf_init(&payloads[nt], 0);
-                    char err[256];
-                    double maxe = 0;
-                    assert_int_equal(proto_tile_encode(codec, NULL, w, h, channels, pl_, &payloads[nt], &maxe, err,
-                                                       sizeof err),
-                                     OCEAN_OK);
-                    free(pl_);
-                    proto_tile *t = &tiles[nt];
-                    memset(t, 0, sizeof *t);
-                    t->level = (uint8_t)m;
-                    t->codec = (uint8_t)codec;
-                    t->channels = (uint16_t)channels;
-                    t->width = (uint16_t)w;
-                    t->height = (uint16_t)h;
-                    t->ix = ix;
-                    t->iz = iz;
-                    t->origin_x = ix * T * sp;
-                    t->origin_z = iz * T * sp;
-                    t->spacing = sp;
-                    t->error_bound = (float)maxe;
-                    t->payload_len = (uint32_t)proto_buf_len(&payloads[nt]);
-                    t->payload = proto_buf_data(&payloads[nt]);
-                    t->cascade = (uint8_t)c;
-                    nt++;
-                }
+                for (int ix = 0; ix < tps; ix++)
+                    for (int slot = F->b_only ? 1 : 0; slot < (F->sample_b ? 2 : 1); slot++) {
+                        if (F->want && !F->want(F, c, m, ix, iz))
+                            continue;
+                        assert_true(nt < PROTO_MAX_FRAME_TILES);
+                        emit_tile(b, slot ? F->sample_b : F, frame_channels, tile_size, codec, c, m, ix, iz, slot,
+                                  nt++);
+                    }
         }
     }
     proto_msg m;
@@ -149,11 +169,11 @@ static built build_frame(const proto_cascade_block *b, const field *F, unsigned 
     proto_frame *f = &m.u.frame;
     f->cutoff_k = INFINITY;
     f->camera_seq = PROTO_NO_CAMERA;
-    f->tick = 7;
+    f->tick = tick;
     f->layout = PROTO_LAYOUT_CASCADE;
     f->cascades = *b;
     f->tile_count = (uint16_t)nt;
-    f->tiles = tiles;
+    f->tiles = tiles_;
     if (pl) {
         f->has_mesh = 1;
         f->placement = *pl;
@@ -169,8 +189,14 @@ static built build_frame(const proto_cascade_block *b, const field *F, unsigned 
     memcpy(B.msg, proto_buf_data(&out), B.len);
     proto_buf_free(&out);
     for (unsigned i = 0; i < nt; i++)
-        proto_buf_free(&payloads[i]);
+        proto_buf_free(&payloads_[i]);
     return B;
+}
+
+static built build_frame(const proto_cascade_block *b, const field *F, unsigned frame_channels, int tile_size,
+                         const proto_mesh_placement *pl, proto_codec codec)
+{
+    return build_frame_at(b, F, frame_channels, tile_size, pl, codec, 7);
 }
 
 static oc_frame *decode_built(built B)
@@ -709,6 +735,131 @@ static void missing_tiles(void **state)
     oc_frame_free(f);
 }
 
+/* ============================================ samples in time */
+
+/* One level everywhere: F->a. */
+static void level_fn(const field *F, int c, int m, double x, double z, double o[6])
+{
+    (void)c;
+    (void)m;
+    (void)x;
+    (void)z;
+    memset(o, 0, 6 * sizeof *o);
+    o[0] = F->a;
+}
+
+static int want_none(const field *F, int c, int m, int ix, int iz)
+{
+    (void)F;
+    (void)c;
+    (void)m;
+    (void)ix;
+    (void)iz;
+    return 0;
+}
+
+/* Every mip of cascade 0: window (tick_a, interval) at w = phase / 65536. */
+static void set_window(proto_cascade_block *b, uint32_t tick_a, uint16_t interval, uint16_t phase)
+{
+    for (int m = 0; m < b->cascade[0].mips; m++) {
+        b->cascade[0].time[m].tick_a = tick_a;
+        b->cascade[0].time[m].interval = interval;
+        b->cascade[0].time[m].phase = phase;
+    }
+}
+
+/* Decodes B through stream s (and alone, which gives `alone`: OCEAN_OK for
+ * a frame that is whole by itself); frees B's bytes. */
+static oc_frame *stream_frame(oc_frame_stream *s, built B, ocean_result alone)
+{
+    oc_frame *f = NULL;
+    char err[256] = "";
+    ocean_result r = oc_frame_decode(B.msg, B.len, &f, err, sizeof err);
+    if (r != alone)
+        print_error("oc_frame_decode alone: %s (%s), expected %s\n", ocean_strerror(r), err, ocean_strerror(alone));
+    assert_int_equal(r, alone);
+    oc_frame_free(f);
+    r = oc_frame_stream_decode(s, B.msg, B.len, &f, err, sizeof err);
+    if (r != OCEAN_OK)
+        print_error("oc_frame_stream_decode: %s (%s)\n", ocean_strerror(r), err);
+    assert_int_equal(r, OCEAN_OK);
+    free(B.msg);
+    return f;
+}
+
+/* The height f reads (mip 0 everywhere: q 1e-6) at a point off the grid. */
+static double level_read(const oc_frame *f)
+{
+    oc_sample sm;
+    assert_int_equal(oc_frame_sample(f, 10.3, -20.7, 0, &sm), OCEAN_OK);
+    return sm.height;
+}
+
+/* Samples in time (PROTOCOL.md), through oc_frame_stream as a client does
+ * on receipt: each frame reads (1 - w) A + w B of the samples held; a KEY
+ * frame starts the windows it names (the next frame of the same window
+ * keeps them: the store once dropped them instead, and every frame after
+ * a KEY read nothing until its mips' windows moved twice); a window that
+ * starts at the held B makes it A; any other window drops the mip.  Only
+ * a KEY frame is whole alone.  Constant planes A = 1, B = 3, then B = 5:
+ * each expected value is the spec's blend by hand. */
+static void time_interp_stream(void **state)
+{
+    (void)state;
+    double P = 64;
+    int n = 16, mips = 2, fades = 0;
+    proto_cascade_block b;
+    block_init(&b, 1, &P, &n, &mips, &fades);
+    block_set_q(&b, 1e-6f);
+    field b3 = {.fn = level_fn, .a = 3}, key = {.fn = level_fn, .a = 1, .sample_b = &b3};
+    field b5 = {.fn = level_fn, .a = 5}, shift = {.fn = level_fn, .sample_b = &b5, .b_only = 1};
+    field none = {.fn = level_fn, .want = want_none};
+    const unsigned H = PROTO_CH_HEIGHT;
+    oc_frame_stream *s = NULL;
+    assert_int_equal(oc_frame_stream_create(&s), OCEAN_OK);
+    /* KEY, window (100, 4) at w = 1/4: both samples travel */
+    b.flags = PROTO_CASCADE_KEY;
+    set_window(&b, 100, 4, 16384);
+    oc_frame *f = stream_frame(s, build_frame_at(&b, &key, H, 8, NULL, PROTO_CODEC_F32, 101), OCEAN_OK);
+    assert_true(fabs(level_read(f) - 1.5) < 1e-5);
+    oc_frame_free(f);
+    /* the same window at w = 1/2, no records: the samples held */
+    b.flags = 0;
+    set_window(&b, 100, 4, 32768);
+    f = stream_frame(s, build_frame_at(&b, &none, H, 8, NULL, PROTO_CODEC_F32, 102), OCEAN_ESTATE);
+    assert_int_equal(f->info.tile_count, 0);
+    assert_true(fabs(level_read(f) - 2.0) < 1e-5);
+    /* its view's tiles are the blend: mip 0's 2 x 2 and mip 1's one */
+    assert_int_equal(oc_frame_view_tile_count(f), 5);
+    proto_tile ti;
+    const float *d = NULL;
+    assert_int_equal(oc_frame_view_tile(f, 4, &ti, &d), OCEAN_OK);
+    assert_true(ti.payload == NULL && ti.channels == H && fabsf(d[0] - 2.0f) < 1e-6f);
+    assert_int_equal(oc_frame_view_tile(f, 5, &ti, &d), OCEAN_EINVAL);
+    oc_frame_free(f);
+    /* the next window starts at B: B becomes A, the new B (5) travels */
+    set_window(&b, 104, 4, 0);
+    f = stream_frame(s, build_frame_at(&b, &shift, H, 8, NULL, PROTO_CODEC_F32, 104), OCEAN_ESTATE);
+    assert_true(fabs(level_read(f) - 3.0) < 1e-5);
+    oc_frame_free(f);
+    set_window(&b, 104, 4, 49152);
+    f = stream_frame(s, build_frame_at(&b, &none, H, 8, NULL, PROTO_CODEC_F32, 107), OCEAN_ESTATE);
+    assert_true(fabs(level_read(f) - 4.5) < 1e-5);
+    oc_frame_free(f);
+    /* a window that does not follow the held one: nothing is read from
+     * another instant */
+    set_window(&b, 200, 4, 0);
+    f = stream_frame(s, build_frame_at(&b, &none, H, 8, NULL, PROTO_CODEC_F32, 200), OCEAN_ESTATE);
+    oc_sample sm;
+    assert_int_equal(oc_frame_sample(f, 10.3, -20.7, 0, &sm), OCEAN_ENOTFOUND);
+    assert_int_equal(oc_frame_view_tile_count(f), 0);
+    oc_frame_free(f);
+    oc_frame_stream_destroy(s);
+    assert_int_equal(oc_frame_stream_create(NULL), OCEAN_EINVAL);
+    assert_int_equal(oc_frame_stream_decode(NULL, NULL, 0, &f, NULL, 0), OCEAN_EINVAL);
+    assert_null(f);
+}
+
 static void misplaced_tiles(void **state)
 {
     (void)state;
@@ -973,6 +1124,10 @@ static void daemon_layout1_heights(void **state)
     ocean_result r;
     proto_subscribe sub;
     oc_subscribe_default(&sub);
+    /* the library's reading of one tick's tiles against QUERY at that
+     * tick: the plain stream (time interpolation adds its own error, up to
+     * the quantiser's at the subscription's accuracy, to these f32 tiles) */
+    sub.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
     sub.codec = PROTO_CODEC_F32;
     sub.base_spacing_m = 0.001f;
     sub.mesh_kind = PROTO_MESH_NONE;
@@ -1071,6 +1226,7 @@ int main(void)
         cmocka_unit_test(geometry_read_at_G),
         cmocka_unit_test(sinusoid_and_wrap),
         cmocka_unit_test(missing_tiles),
+        cmocka_unit_test(time_interp_stream),
         cmocka_unit_test(misplaced_tiles),
         cmocka_unit_test(peek_cascade_block),
         cmocka_unit_test(morph_weights),

@@ -243,6 +243,11 @@ static void live_identical(test_ws *d1, test_ws *d2, int layout)
         proto_msg sm;
         proto_msg_init(&sm, PROTO_SUBSCRIBE);
         oc_subscribe_default(&sm.u.subscribe);
+        /* a time-interpolating frame carries what its own client lacks,
+         * which depends on that connection's history (the tick of its KEY
+         * frame, a frame replaced unsent): the plain stream, where a tick's
+         * frame for one camera is the same for every client */
+        sm.u.subscribe.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
         sm.u.subscribe.layout = (uint8_t)layout;
         if (layout == PROTO_LAYOUT_WORLD) {
             sm.u.subscribe.cutoff_policy = PROTO_CUTOFF_NONE;

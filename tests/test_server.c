@@ -342,6 +342,10 @@ static void frames_tiles_and_mesh_decode(void **state)
 static void cascade_subscribe(proto_subscribe *s)
 {
     oc_subscribe_default(s);
+    /* these tests hold one frame's tiles against the sea at its own tick
+     * (or count them): the plain stream, whose frames carry that tick's
+     * tiles; a time-interpolating frame carries samples of other ticks */
+    s->flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
     s->layout = PROTO_LAYOUT_CASCADE;
     s->effects = PROTO_FX_HEIGHT | PROTO_FX_DISPLACEMENT | PROTO_FX_NORMALS | PROTO_FX_FOAM;
     s->layers = 2;
@@ -565,12 +569,18 @@ static oc_frame *frame_for_camera(oc_client *c, const proto_camera *cam)
     return f;
 }
 
-/* A bridge_client subscribed as the viewer is (*s) but without a mesh: the
- * frames carry tiles alone. */
+/* A bridge_client subscribed as the viewer is (*s) but without a mesh, and
+ * on the plain stream: the frames carry tiles alone, each frame its own
+ * tick's, which the budget tests weigh against the byte budget of one
+ * frame (a time-interpolating stream's plan counts each mip's tiles once
+ * per update interval, PROTOCOL.md "Samples in time": it keeps the budget
+ * on average, while a KEY frame, or one whose camera moved, brings both
+ * samples of every tile it needs). */
 static oc_client *bridge_tiles_client(srv_daemon **d, srv_settings *sb, proto_subscribe *s)
 {
     oc_client *c = bridge_client(d, sb, NULL);
     oc_subscribe_default(s);
+    s->flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
     s->mesh_kind = PROTO_MESH_NONE;
     assert_int_equal(oc_client_subscribe(c, s), OCEAN_OK);
     return c;
@@ -591,8 +601,9 @@ static void time_interp_reads_the_frames_tick(void **state)
     proto_subscribe s;
     oc_subscribe_default(&s);
     s.mesh_kind = PROTO_MESH_NONE;
+    s.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;   /* a: the plain stream */
     assert_int_equal(oc_client_subscribe(a, &s), OCEAN_OK);
-    s.flags |= PROTO_SUB_TIME_INTERP;
+    s.flags |= PROTO_SUB_TIME_INTERP;             /* b: the viewer's */
     assert_int_equal(oc_client_subscribe(b, &s), OCEAN_OK);
     proto_camera cam;
     bridge_camera(&cam);
@@ -747,10 +758,13 @@ static void time_interp_key_frame_spread(void **state)
 }
 
 /* Frames a link-shaped reader received: wire size, and age (the daemon's
- * sim clock at receipt minus the frame's sim time). */
+ * sim clock at receipt minus the frame's sim time); with `follow`, the
+ * frames whose view did not read the sea in front of the camera. */
 typedef struct shaped_frames {
     int n;
     double at[2048], bytes[2048], age[2048];
+    int unfollowed;
+    char why[200];
 } shaped_frames;
 
 static int cmp_double(const void *a, const void *b)
@@ -772,11 +786,30 @@ static double median_since(const shaped_frames *f, const double *v, double from,
     return tmp[k / 2];
 }
 
+/* Frame msg of a followed stream s: decoded in order, as a client does on
+ * receipt, and read 30 m in front of the camera; counted in `out` when
+ * either fails. */
+static void follow_frame(oc_frame_stream *s, const uint8_t *msg, size_t len, const proto_camera *cam,
+                         shaped_frames *out)
+{
+    oc_frame *f = NULL;
+    char err[160] = "";
+    ocean_result r = oc_frame_stream_decode(s, msg, len, &f, err, sizeof err);
+    oc_sample sm;
+    if (r == OCEAN_OK) r = oc_frame_sample(f, cam->pos[0] + 30, cam->pos[2], 0, &sm);
+    if (r != OCEAN_OK && !out->unfollowed++)
+        snprintf(out->why, sizeof out->why, "frame %d: %s %s", out->n, ocean_strerror(r), err);
+    oc_frame_free(f);
+}
+
 /* A viewer behind a link of `bps` bytes/s (a 32 KB receive buffer, reads
- * paced to bps; 0: unshaped) with the viewer's subscription, reporting its
- * camera report_hz times a second with the sim time of the last frame it
- * received, for secs. */
-static void read_through_link(srv_daemon *d, double bps, double report_hz, double secs, shaped_frames *out)
+ * paced to bps; 0: unshaped) reporting its camera report_hz times a second
+ * with the sim time of the last frame it received, for secs.  follow: with
+ * the viewer's subscription (samples in time), every frame decoded through
+ * one oc_frame_stream and read; else the plain stream, whose frames this
+ * reader need not decode (its CPU must not slow its reading). */
+static void read_through_link(srv_daemon *d, double bps, double report_hz, double secs, int follow,
+                              shaped_frames *out)
 {
     srv_hub *h = srv_daemon_hub(d);
     test_ws w;
@@ -785,7 +818,10 @@ static void read_through_link(srv_daemon *d, double bps, double report_hz, doubl
     proto_msg m;
     proto_msg_init(&m, PROTO_SUBSCRIBE);
     oc_subscribe_default(&m.u.subscribe);
+    if (!follow) m.u.subscribe.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
     test_msg_send(&w, &m);
+    oc_frame_stream *fs = NULL;
+    if (follow) assert_int_equal(oc_frame_stream_create(&fs), OCEAN_OK);
     proto_camera cam;
     bridge_camera(&cam);
     double t0 = test_now_s(), next_cam = t0, last_t = 0, tokens = 0, tokens_t = t0;
@@ -812,6 +848,7 @@ static void read_through_link(srv_daemon *d, double bps, double report_hz, doubl
         if (op < 0) fail_msg("the shaped reader was disconnected");
         if (op == 2 && len >= PROTO_HEADER_SIZE) {
             tokens -= (double)len;
+            if (proto_ld16(msg + 6) == PROTO_FRAME && fs) follow_frame(fs, msg, len, &cam, out);
             if (proto_ld16(msg + 6) == PROTO_FRAME && out->n < 2048) {
                 last_t = proto_ldf64(msg + 24);
                 out->at[out->n] = test_now_s() - t0;
@@ -822,6 +859,7 @@ static void read_through_link(srv_daemon *d, double bps, double report_hz, doubl
         }
         free(msg);
     }
+    oc_frame_stream_destroy(fs);
     test_ws_close(&w);
 }
 
@@ -831,7 +869,10 @@ static void read_through_link(srv_daemon *d, double bps, double report_hz, doubl
  * further behind the clock, buffered in the sockets.  Now the daemon holds
  * a frame while three are unconfirmed and plans that viewer's frames for
  * the rate its link delivers (srv_link.h): in the last 4 s the frames fit
- * the link at 30 Hz and are under a third of a second old. */
+ * the link at 30 Hz and are under a third of a second old.  The viewer's
+ * subscription samples in time: the frames that replace unsent ones on
+ * this link are planned from what the client held before them, and every
+ * frame, decoded in order, reads the sea in front of the camera. */
 static void slow_link_gets_coarser_not_older(void **state)
 {
     (void)state;
@@ -840,13 +881,15 @@ static void slow_link_gets_coarser_not_older(void **state)
     srv_hub *h = srv_daemon_hub(d);
     const double bps = 1e6, secs = sanitized ? 14 : 10;
     static shaped_frames f;
-    read_through_link(d, bps, 30, secs, &f);
+    read_through_link(d, bps, 30, secs, 1, &f);
     int n_size, n_age;
     double size = median_since(&f, f.bytes, secs - 4, &n_size), age = median_since(&f, f.age, secs - 4, &n_age);
     double early = median_since(&f, f.bytes, 0, &n_age);
     print_message("1 MB/s link: %d frames; last 4 s: %d frames, median %.0f B (all frames' median %.0f, ceiling "
-                  "%.0f a frame), median age %.3f s; %llu frames held\n", f.n, n_size, size, early,
-                  sb.srv.viewer_bytes_per_s / 30, age, (unsigned long long)stat_of(&h->stats.frames_held));
+                  "%.0f a frame), median age %.3f s; %llu frames held; %d frames not followed %s\n", f.n, n_size,
+                  size, early, sb.srv.viewer_bytes_per_s / 30, age, (unsigned long long)stat_of(&h->stats.frames_held),
+                  f.unfollowed, f.why);
+    if (f.unfollowed) fail_msg("%d frames of the stream did not read the sea (first: %s)", f.unfollowed, f.why);
     if (n_size < (sanitized ? 8 : 20)) fail_msg("only %d frames in the last 4 s through a 1 MB/s link", n_size);
     if (size > 1.2 * bps / 30) fail_msg("frames of %.0f B through a link of %.0f B a frame at 30 Hz", size, bps / 30);
     if (age > (sanitized ? 0.6 : 0.35)) fail_msg("frames %.3f s old through a 1 MB/s link", age);
@@ -864,7 +907,7 @@ static void rare_reports_are_not_held(void **state)
     srv_daemon *d = bridge_daemon(&sb);
     const double secs = sanitized ? 10 : 6;
     static shaped_frames f;
-    read_through_link(d, 0, 2, secs, &f);
+    read_through_link(d, 0, 2, secs, 0, &f);
     int n;
     double size = median_since(&f, f.bytes, secs - 3, &n);
     print_message("reports at 2 Hz, unshaped: %d frames in the last 3 s (median %.0f B)\n", n, size);
@@ -1077,7 +1120,7 @@ static void cascade_fine_mips_without_geometry(void **state)
         oc_client *c = connect_client(srv_daemon_port(d), NULL);
         proto_subscribe s;
         oc_subscribe_default(&s);
-        if (run == 1) s.flags = PROTO_SUB_FULL_GEOMETRY;
+        if (run == 1) s.flags |= PROTO_SUB_FULL_GEOMETRY;
         if (run == 0) s.mesh_kind = PROTO_MESH_NONE;
         assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
         proto_camera cam;

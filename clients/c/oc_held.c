@@ -167,10 +167,16 @@ ocean_result oc_held_apply(oc_held *h, const proto_frame *f, const float *const 
     for (int c = 0; c < PROTO_MAX_LAYERS; c++)
         for (int m = 0; m < PROTO_MAX_MIPS; m++) {
             held_mip *hm = &h->mip[c][m];
-            if ((b->flags & PROTO_CASCADE_KEY) || c >= b->cascade_count || m >= b->cascade[c].mips)
+            if (c >= b->cascade_count || m >= b->cascade[c].mips) {
                 mip_drop(hm);
-            /* after a KEY's drop, its windows begin here */
-            if (c < b->cascade_count && m < b->cascade[c].mips) mip_advance(hm, &b->cascade[c].time[m]);
+                continue;
+            }
+            /* KEY empties the store, and the window rule still runs: the
+             * mip's window becomes the entry's, so the next frame's window
+             * keeps or shifts what this KEY frame brings (dropping alone
+             * left no window, and the next frame dropped every sample) */
+            if (b->flags & PROTO_CASCADE_KEY) mip_drop(hm);
+            mip_advance(hm, &b->cascade[c].time[m]);
         }
     ocean_result res = OCEAN_OK;
     for (unsigned i = 0; i < f->tile_count; i++) {

@@ -191,8 +191,9 @@ typedef struct frame_priv {
     topo_ref *topo;
     float *mesh_pos;          /* has_mesh 2: the decoded positions
                                  (pub.info.mesh.positions points here) */
-    proto_tile *blend_tiles;  /* a time-interpolated frame: the tiles of its
-                                 instant (oc_held_blend) the view reads */
+    int timed;                /* a frame of a time-interpolating stream: */
+    proto_tile *blend_tiles;  /* the tiles of its instant (oc_held_blend)
+                                 the view reads */
     float **blend_data;
     unsigned nblend;
 } frame_priv;
@@ -528,6 +529,7 @@ static void timed_view(frame_priv *f, oc_held *held)
 {
     const proto_frame *info = &f->pub.info;
     oc_held *tmp = NULL;
+    f->timed = 1;
     if (!held && !(info->cascades.flags & PROTO_CASCADE_KEY)) {
         f->pub.view_result = OCEAN_ESTATE;
         snprintf(f->pub.view_error, sizeof f->pub.view_error,
@@ -639,7 +641,10 @@ static frame_priv *build_frame(int decode_tiles, oc_held *held, proto_msg *m, ui
     return f;
 }
 
-ocean_result oc_frame_decode(const uint8_t *msg, size_t len, oc_frame **out, char *err, size_t errlen)
+/* oc_frame_decode, or oc_frame_stream_decode with the stream's store
+ * (held; NULL: the frame alone). */
+static ocean_result frame_decode_held(oc_held *held, const uint8_t *msg, size_t len, oc_frame **out, char *err,
+                                      size_t errlen)
 {
     if (!out)
         return OCEAN_EINVAL;
@@ -663,7 +668,7 @@ ocean_result oc_frame_decode(const uint8_t *msg, size_t len, oc_frame **out, cha
         return OCEAN_ENOMEM;
     }
     memcpy(raw, msg, len);
-    frame_priv *f = build_frame(1, NULL, &m, raw, len, 0.0);
+    frame_priv *f = build_frame(1, held, &m, raw, len, 0.0);
     if (!f) {
         proto_msg_free(&m);
         free(raw);
@@ -684,6 +689,71 @@ ocean_result oc_frame_decode(const uint8_t *msg, size_t len, oc_frame **out, cha
         return r;
     }
     *out = &f->pub;
+    return OCEAN_OK;
+}
+
+ocean_result oc_frame_decode(const uint8_t *msg, size_t len, oc_frame **out, char *err, size_t errlen)
+{
+    return frame_decode_held(NULL, msg, len, out, err, errlen);
+}
+
+struct oc_frame_stream {
+    oc_held *held;
+};
+
+ocean_result oc_frame_stream_create(oc_frame_stream **out)
+{
+    if (!out)
+        return OCEAN_EINVAL;
+    *out = calloc(1, sizeof **out);
+    if (!*out || oc_held_create(&(*out)->held) != OCEAN_OK) {
+        free(*out);
+        *out = NULL;
+        return OCEAN_ENOMEM;
+    }
+    return OCEAN_OK;
+}
+
+void oc_frame_stream_destroy(oc_frame_stream *s)
+{
+    if (!s)
+        return;
+    oc_held_destroy(s->held);
+    free(s);
+}
+
+ocean_result oc_frame_stream_decode(oc_frame_stream *s, const uint8_t *msg, size_t len, oc_frame **out, char *err,
+                                    size_t errlen)
+{
+    if (!s) {
+        if (out)
+            *out = NULL;
+        ocean_seterr(err, errlen, "no stream");
+        return OCEAN_EINVAL;
+    }
+    return frame_decode_held(s->held, msg, len, out, err, errlen);
+}
+
+unsigned oc_frame_view_tile_count(const oc_frame *f)
+{
+    const frame_priv *p = (const frame_priv *)f;
+    if (!f || !f->view)
+        return 0;
+    return p->timed ? p->nblend : f->info.tile_count;
+}
+
+ocean_result oc_frame_view_tile(const oc_frame *f, unsigned i, proto_tile *info, const float **data)
+{
+    const frame_priv *p = (const frame_priv *)f;
+    if (!info || !data || i >= oc_frame_view_tile_count(f))
+        return OCEAN_EINVAL;
+    if (p->timed) {
+        *info = p->blend_tiles[i];
+        *data = p->blend_data[i];
+    } else {
+        *info = f->tiles[i].info;
+        *data = f->tiles[i].data;
+    }
     return OCEAN_OK;
 }
 
@@ -1946,6 +2016,12 @@ void oc_subscribe_default(proto_subscribe *s)
     /* a layout-0 subscriber gets its mesh positions compressed (1/4 to 1/5
      * of f32 at 5e-3, decoded here); layout 1 sends none */
     s->mesh_codec = PROTO_MESH_CODEC_QZ;
+    /* the viewer holds each mip's samples and blends two in time, so each
+     * mip travels once per its own update interval (PROTOCOL.md "Samples
+     * in time"): a quarter of the bytes at ship-bridge for the same plan,
+     * and within the daemon's byte budget finer mips for them (make bench:
+     * bench_accuracy's viewer rows); layout 0 ignores the flag */
+    s->flags = PROTO_SUB_TIME_INTERP;
 }
 
 void oc_camera_default(proto_camera *cam)

@@ -40,6 +40,16 @@
  *   oc_client_next_frame().  When the queue is full the OLDEST frame is
  *   dropped (latest wins, as the daemon does) and counted in
  *   oc_client_stats.frames_dropped.
+ *   A stream subscribed with SUBSCRIBE flag PROTO_SUB_TIME_INTERP (the
+ *   viewer's, oc_subscribe_default's) is not made of whole frames: each FRAME brings only the samples in time that
+ *   are due and its view blends the samples the connection holds
+ *   (PROTOCOL.md "Samples in time").  A client
+ *   with decode_tiles (the default) applies every FRAME to its store on
+ *   receipt, in order, so a dropped or skipped frame costs nothing; one with
+ *   decode_tiles = 0 or header_only does not follow the stream (no view).
+ *   Outside a client, decode one connection's frames in order through an
+ *   oc_frame_stream; oc_frame_decode reads a frame alone, which such a
+ *   stream's frames are not (KEY frames aside).
  *
  * Latency
  *   FRAME carries the sim time of its tick in the message header, but no
@@ -176,24 +186,42 @@ struct oc_frame {
     uint64_t index;             /* 0, 1, 2 ... frames received by this client */
     /* Layout 1: the frame's tiles indexed per cascade and mip, for
      * oc_frame_sample, oc_frame_surface and oc_frame_mesh_positions
-     * (oc_cascade.h).  NULL for layout 0, header-only or undecoded frames,
-     * or when the tiles do not fit the cascade block (view_result and
-     * view_error say why; counted in oc_client_stats.decode_errors). */
+     * (oc_cascade.h); for a frame of a time-interpolating stream, the
+     * blend at the frame's instant of the samples its connection holds
+     * (oc_frame_view_tile lists them; tiles[] are only the samples this
+     * frame brought).  NULL for layout 0, header-only or undecoded frames,
+     * when the tiles do not fit the cascade block, or for a frame of a
+     * time-interpolating stream decoded alone (view_result and view_error
+     * say why; counted in oc_client_stats.decode_errors). */
     const oc_cascade_view *view;
     ocean_result view_result;
     char view_error[160];
 };
 
-/* Frees a frame taken from oc_client_next_frame or oc_frame_decode.
- * Accepts NULL. */
+/* Frees a frame taken from oc_client_next_frame, oc_frame_decode or
+ * oc_frame_stream_decode.  Accepts NULL. */
 void oc_frame_free(oc_frame *f);
+
+/* The tiles frame f's view reads (0 without a view): a whole frame's own
+ * decoded tiles, or, for a frame of a time-interpolating stream, the tiles
+ * of its instant, each the blend (1 - w) A + w B of the samples held
+ * (PROTOCOL.md "Samples in time"), for readers that take statistics over a
+ * frame's tiles rather than its records. */
+unsigned oc_frame_view_tile_count(const oc_frame *f);
+/* Tile i of them: *info (payload NULL for a blended tile; for a blend,
+ * channels are those both samples carry) and *data, its planes in codec
+ * order (proto_tile_planes(info->channels) x width x height floats, owned
+ * by the frame).  OCEAN_EINVAL for i out of range or a NULL argument. */
+ocean_result oc_frame_view_tile(const oc_frame *f, unsigned i, proto_tile *info, const float **data);
 
 /* Bytes of a FRAME that oc_frame_peek reads: header, fixed fields and a
  * layout-1 cascade block's fixed part. */
 #define OC_FRAME_PEEK_BYTES (PROTO_HEADER_SIZE + 56 + PROTO_CASCADE_BLOCK_FIXED)
 
 /* Reads the facts of a FRAME without its records, for readers that keep
- * only a message's first bytes (load generators): msg holds the first
+ * only a message's first bytes (load generators; they cannot follow a
+ * time-interpolating stream, whose frames need their records decoded in
+ * order: oc_frame_stream_decode): msg holds the first
  * `have` bytes of a FRAME of `len` bytes whose header the caller checked
  * (proto_header_decode).  Fills f's fixed fields and, for layout 1, the
  * fixed part of f->cascades (count, order, q, camera, min_spacing_m,
@@ -210,8 +238,32 @@ ocean_result oc_frame_peek(const uint8_t *msg, size_t have, size_t len, proto_fr
  * the layout-1 view built.  For tools that read recorded frames and for
  * tests.  recv_wall 0, latency and camera_rtt -1, topology NULL.  On
  * failure *out is NULL and err names the cause (a tile that does not
- * decode, or a layout-1 view that does not build, is an error here). */
+ * decode, or a layout-1 view that does not build, is an error here).
+ * A frame of a time-interpolating stream is whole alone only when it is a
+ * KEY frame; any other reads the samples of the frames before it and
+ * fails here with OCEAN_ESTATE: decode those through an oc_frame_stream. */
 ocean_result oc_frame_decode(const uint8_t *msg, size_t len, oc_frame **out, char *err, size_t errlen);
+
+/* The frames of one connection read outside an oc_client (a reader of its
+ * own socket, a recording): what a client does on receipt.  Each frame of
+ * a time-interpolating stream goes into the stream's store of samples
+ * (every frame, in the order received, from the first after SUBSCRIBE or
+ * a KEY frame) and its view reads the blend at its instant; a whole frame
+ * decodes as with oc_frame_decode.
+ * Threading: a stream belongs to the one thread that reads its frames. */
+typedef struct oc_frame_stream oc_frame_stream;
+
+/* OCEAN_EINVAL for a NULL out, OCEAN_ENOMEM. */
+ocean_result oc_frame_stream_create(oc_frame_stream **out);
+/* Accepts NULL; frames already decoded stay valid. */
+void oc_frame_stream_destroy(oc_frame_stream *s);
+/* The next FRAME of the stream, as oc_frame_decode (same results; a frame
+ * that fails is still applied to the store as far as it decoded, as a
+ * client does).  A message that does not decode at all is not applied:
+ * the frames after it may then read OCEAN_ESTATE or OCEAN_ENOTFOUND until
+ * the next KEY frame. */
+ocean_result oc_frame_stream_decode(oc_frame_stream *s, const uint8_t *msg, size_t len, oc_frame **out, char *err,
+                                    size_t errlen);
 
 /* Decodes the compressed mesh positions of a layout-0 frame with
  * has_mesh 2 (MESH_VERTICES_QZ) with the frame's topology t (same mesh_id
@@ -254,7 +306,10 @@ typedef struct oc_options {
     oc_loop *loop;            /* shared loop, or NULL for a private one */
     oc_callbacks cb;
     int frame_queue;          /* queued frames when on_frame is NULL (4), 1..1024 */
-    int decode_tiles;         /* 1: decode tile payloads to floats (default) */
+    int decode_tiles;         /* 1: decode tile payloads to floats (default);
+                                 0: tiles stay encoded and there is no view,
+                                 so a time-interpolating stream is not
+                                 followed (see "Frames" above) */
     int header_only;          /* 1: FRAMEs are checked (header, length) and
                                  only their fixed fields read (oc_frame.info:
                                  cutoff_k, e_error, origin, camera_seq, tick,
@@ -263,7 +318,10 @@ typedef struct oc_options {
                                  tiles NULL, info.tiles NULL, no mesh data,
                                  no view): for load generators,
                                  whose own CPU must not limit the test.
-                                 Other messages are decoded fully. (0) */
+                                 A time-interpolating stream is then not
+                                 followed: its frames are counted, never
+                                 read.  Other messages are decoded fully.
+                                 (0) */
     uint32_t max_message;     /* largest message accepted, bytes
                                  (PROTO_MAX_MESSAGE_DEFAULT) */
     const char *origin;       /* Origin header, NULL: none */
@@ -330,7 +388,16 @@ ocean_result oc_client_last_error(const oc_client *c, char *buf, size_t buflen);
 /* A SUBSCRIBE with the library's defaults, the browser viewer's
  * (clients/web): layout 1 (shared cascade tiles; the library sums the
  * cascades and displaces the mesh: oc_frame_sample,
- * oc_frame_mesh_positions), every effect, every cascade (layers 4; the
+ * oc_frame_mesh_positions), samples in time (flags
+ * PROTO_SUB_TIME_INTERP: each mip travels once per its own update
+ * interval - a quarter of the bytes at ship-bridge for the same plan,
+ * which the daemon spends on finer mips within its byte budget - and each
+ * frame's view blends two samples the connection holds, within the
+ * codec's error at `accuracy`; a client that decodes its frames follows the stream by
+ * itself, but a reader of headers only, of frames alone (oc_frame_decode)
+ * or of some of a connection's frames cannot: it clears the flag, or
+ * decodes every frame in order (oc_frame_stream; "Frames" at the top),
+ * every effect, every cascade (layers 4; the
  * server sends those it has), concentric mesh, codec qz at accuracy
  * OC_ACCURACY_DEFAULT (5e-3), 64-sample tiles, antialias cutoff policy,
  * live at 30 Hz, 8 LOD levels

@@ -12,14 +12,21 @@
  *  - the subscription: oc_subscribe_default, which is the browser viewer's
  *    (clients/web/worker.js chooseSubscription: layout 1, qz, antialias,
  *    30 Hz, lod 8, tile 64, accuracy OC_ACCURACY_DEFAULT = 5e-3, concentric
- *    mesh) with layers =
+ *    mesh, samples in time) with layers =
  *    HELLO.max_layers and effects = all & HELLO.effects, as the viewer
- *    computes them;
- *  - the camera: a still camera at (0, H, 0), heading 0, 60 deg vertical
- *    field of view, 1920 x 1080 viewport (a desktop browser's drawing
- *    buffer; the viewer reports its real one), pitch atan(H / 10 km) +
- *    fov / 4 below the horizon (ocean-client fidelity's default: half the
- *    view or more lands on sea within the view range from every height);
+ *    computes them; every camera is measured twice, before and after the
+ *    time_interp flag: the plain stream (the flag clear, every frame whole)
+ *    and the time-interpolating one (each frame read from the blend of two
+ *    samples the client holds, every frame applied on receipt), so the
+ *    bytes it saves and the error it adds sit side by side;
+ *  - the cameras: at (0, H, 0), H from 3 m to 1500 m, heading 0, 60 deg
+ *    vertical field of view, 1920 x 1080 viewport (a desktop browser's
+ *    drawing buffer; the viewer reports its real one), pitch atan(H / 10
+ *    km) + fov / 4 below the horizon (ocean-client fidelity's default: half
+ *    the view or more lands on sea within the view range from every
+ *    height); still, and flying at 60 m/s along the heading (reported 30
+ *    times a second: tiles come into view, and on the time-interpolating
+ *    stream both their samples travel);
  *  - the reconstruction: a grid of the viewport's pixel centres is cast onto
  *    the mean sea plane and the frame is read there by oc_frame_sample
  *    (clients/c/oc_cascade.c: the spec's lod rule with the pixel footprint,
@@ -52,7 +59,8 @@
  *    short-wave tail beyond the near field is in no figure (tail_mss).
  *  - cost: bytes/s = FRAME bytes received over a window of frames made for
  *    the camera; daemon cores = the daemon's CPU time (utime + stime,
- *    /proc/PID/stat) over the same window, with this one viewer connected.
+ *    /proc/PID/stat) over the same window, with this one viewer connected;
+ *    errors over AV_ERR_FRAMES frames spread over that window.
  */
 #include <arpa/inet.h>
 #include <errno.h>
@@ -67,8 +75,22 @@
 #include "oceanclient.h"
 #include "srv_config.h"
 
-#define AV_HEIGHTS 3
-static const double av_heights[AV_HEIGHTS] = {25.0, 300.0, 1500.0};
+/* The cameras: heights from a ship's deck to an aircraft's, each still and
+ * flying at 60 m/s along its heading (a fast ship's boat, a slow
+ * aircraft), reporting its camera 30 times a second as the viewer does. */
+typedef struct av_cam {
+    double height, speed;
+} av_cam;
+static const av_cam av_cams[] = {{3, 0}, {25, 0}, {300, 0}, {1500, 0}, {3, 60}, {25, 60}, {300, 60}, {1500, 60}};
+#define AV_CAMS ((int)(sizeof av_cams / sizeof av_cams[0]))
+/* Each camera with both streams: 0 the plain one (every frame whole), 1
+ * samples in time (SUBSCRIBE flag time_interp, the viewer's). */
+#define AV_STREAMS 2
+static const char *const av_stream_name[AV_STREAMS] = {"plain", "time-interp"};
+/* Frames whose errors are measured per row, spread over the window: a
+ * time-interpolating frame's error depends on where it falls between its
+ * mips' samples, so more than one instant is read. */
+#define AV_ERR_FRAMES 3
 
 typedef struct av_casc {
     int m;                    /* modes |mx|, |mz| <= m */
@@ -97,7 +119,9 @@ static void av_err_add(av_err *e, double dh, double dd, double ang)
 }
 
 typedef struct av_row {
-    double height, pitch, q, e_error, e_total;
+    double height, speed, pitch, q, e_error, e_total;
+    int timed;                   /* the time-interpolating stream */
+    int err_frames;              /* frames whose errors were measured */
     double bytes_s, frames_s, kib_frame, tiles_frame, cores;
     double tile_ratio;           /* raw f32 bytes of the tiles' planes over their payload bytes */
     double normals_only;         /* tiles a frame without H (geometry-free mips) */
@@ -279,14 +303,13 @@ static double av_cpu_s(pid_t pid)
 
 static double av_now_s(void) { return bench_now_ms() * 1e-3; }
 
-/* One camera height: subscribe, settle, measure bytes and cost over a
- * window, keep the window's last frame and measure its accuracy. */
-static void av_measure(const char *url, pid_t daemon, const ocean *ref, const ocean *nf, double height, int grid,
-                       double window_s,
-                       av_row *R)
+/* Subscribes as the viewer does (layers and effects from HELLO; flag
+ * time_interp as R->timed says) with the camera of R (still at (0, H, 0),
+ * heading 0, pitch atan(H / 10 km) + fov / 4 below the horizon, flying
+ * R->speed along x), reported 30 times a second when it flies.  NULL on
+ * failure (R->why). */
+static oc_client *av_subscribe(const char *url, av_row *R, proto_camera *cam, uint32_t *seq)
 {
-    memset(R, 0, sizeof *R);
-    R->height = height;
     oc_options o;
     oc_options_default(&o);
     o.url = url;
@@ -294,7 +317,7 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, const oc
     char err[512] = "";
     if (oc_connect(&o, 10000, &c, err, sizeof err) != OCEAN_OK) {
         snprintf(R->why, sizeof R->why, "connect: %.150s", err);
-        return;
+        return NULL;
     }
     proto_hello hello;
     oc_client_hello(c, &hello);
@@ -302,31 +325,76 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, const oc
     oc_subscribe_default(&sub);
     sub.layers = hello.max_layers;
     sub.effects = (uint8_t)(PROTO_FX_ALL & (hello.effects ? hello.effects : PROTO_FX_ALL));
-    proto_camera cam;
-    oc_camera_default(&cam);
-    cam.pos[1] = R->height;
-    cam.fov_y_deg = 60.0f;
-    cam.viewport_w = 1920;
-    cam.viewport_h = 1080;
-    cam.yaw_deg = 0.0f;
+    if (R->timed)
+        sub.flags |= PROTO_SUB_TIME_INTERP;
+    else
+        sub.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
+    oc_camera_default(cam);
+    cam->pos[1] = R->height;
+    cam->vel[0] = (float)R->speed;
+    cam->fov_y_deg = 60.0f;
+    cam->viewport_w = 1920;
+    cam->viewport_h = 1080;
+    cam->yaw_deg = 0.0f;
     R->pitch = -(atan(R->height / 10000.0) * 180.0 / M_PI + 60.0 / 4.0);
-    cam.pitch_deg = (float)R->pitch;
-    uint32_t seq = 0;
-    if (oc_client_subscribe(c, &sub) != OCEAN_OK || oc_client_send_camera(c, &cam, &seq) != OCEAN_OK) {
+    cam->pitch_deg = (float)R->pitch;
+    if (oc_client_subscribe(c, &sub) != OCEAN_OK || oc_client_send_camera(c, cam, seq) != OCEAN_OK) {
         oc_client_last_error(c, err, sizeof err);
         snprintf(R->why, sizeof R->why, "subscribe: %.150s", err);
         oc_client_destroy(c);
-        return;
+        return NULL;
     }
-    /* settle: the first frame made for this camera, then 1 s (the byte
-     * budget's planning and the mesh topology have arrived) */
-    double t0 = av_now_s(), first = NAN;
-    oc_frame *keep = NULL;
-    double bytes = 0, tiles = 0, nfr = 0, w0 = NAN, cpu0 = NAN, q = 0, ee = 0, et = 0;
-    double tpay = 0, traw = 0, tnorm = 0;   /* the tiles: payload and raw f32 bytes, normals-only count */
-    while (av_now_s() - t0 < 30.0) {
+    return c;
+}
+
+/* What the window's frames cost: sums over them. */
+typedef struct av_window {
+    double bytes, tiles, nfr, q, ee, et;
+    double tpay, traw, tnorm;   /* the tiles: payload and raw f32 bytes, normals-only count */
+} av_window;
+
+static void av_window_add(av_window *W, const oc_frame *f)
+{
+    W->bytes += (double)f->raw_len;
+    W->tiles += f->info.tile_count;
+    for (int t = 0; t < f->info.tile_count; t++) {
+        const proto_tile *ti = &f->tiles[t].info;
+        W->tpay += ti->payload_len;
+        W->traw += 4.0 * proto_tile_planes(ti->channels) * ti->width * ti->height;
+        W->tnorm += !(ti->channels & PROTO_CH_HEIGHT);
+    }
+    W->q += f->info.cascades.spacing_per_m;
+    W->ee += f->info.e_error;
+    W->et += f->info.cascades.e_total;
+    W->nfr++;
+}
+
+/* One row's stream: subscribe, settle 1 s after the first frame made for
+ * the camera, then measure bytes, frames and the daemon's CPU over
+ * window_s of frames and keep AV_ERR_FRAMES of them, spread over the
+ * window (the last at its end), in keep[].  *cam: the camera as last
+ * reported.  Returns how many frames it kept (R->why when none). */
+static int av_stream(const char *url, pid_t daemon, double window_s, av_row *R, proto_camera *cam,
+                     oc_frame *keep[AV_ERR_FRAMES])
+{
+    uint32_t seq = 0;
+    oc_client *c = av_subscribe(url, R, cam, &seq);
+    if (!c)
+        return 0;
+    double t0 = av_now_s(), first = NAN, w0 = NAN, cpu0 = NAN, last_cam = t0;
+    av_window W;
+    memset(&W, 0, sizeof W);
+    int kept = 0;
+    char err[512];
+    while (av_now_s() - t0 < 30.0 && kept < AV_ERR_FRAMES) {
+        double now = av_now_s();
+        if (R->speed > 0 && now - last_cam >= 1.0 / 30) {
+            cam->pos[0] = R->speed * (now - t0);
+            oc_client_send_camera(c, cam, NULL);
+            last_cam = now;
+        }
         oc_frame *f = NULL;
-        ocean_result r = oc_client_next_frame(c, 2000, &f);
+        ocean_result r = oc_client_next_frame(c, R->speed > 0 ? 20 : 2000, &f);
         if (r == OCEAN_ESTATE)
             continue;
         if (r != OCEAN_OK) {
@@ -334,81 +402,63 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, const oc
             snprintf(R->why, sizeof R->why, "frame: %.150s", err);
             break;
         }
-        if (f->info.camera_seq == PROTO_NO_CAMERA || (int32_t)(f->info.camera_seq - seq) < 0 ||
-            f->info.layout != PROTO_LAYOUT_CASCADE) {
-            oc_frame_free(f);
-            continue;
-        }
-        double now = av_now_s();
-        if (isnan(first))
+        now = av_now_s();
+        int mine = f->info.camera_seq != PROTO_NO_CAMERA && (int32_t)(f->info.camera_seq - seq) >= 0 &&
+                   f->info.layout == PROTO_LAYOUT_CASCADE;
+        if (mine && isnan(first))
             first = now;
-        if (now - first < 1.0) {
+        /* the window opens at the first frame after 1 s of settling */
+        if (!mine || now - first < 1.0 || isnan(w0)) {
+            if (mine && now - first >= 1.0) {
+                w0 = now;
+                cpu0 = av_cpu_s(daemon);
+            }
             oc_frame_free(f);
             continue;
         }
-        if (isnan(w0)) {   /* the window opens at this frame's receipt */
-            w0 = now;
-            cpu0 = av_cpu_s(daemon);
+        av_window_add(&W, f);
+        if (now - w0 >= (kept + 1) * window_s / AV_ERR_FRAMES) {
+            keep[kept++] = f;
+            if (kept == AV_ERR_FRAMES) {
+                R->bytes_s = W.bytes / (now - w0);
+                R->frames_s = W.nfr / (now - w0);
+                R->cores = (av_cpu_s(daemon) - cpu0) / (now - w0);
+            }
+        } else {
             oc_frame_free(f);
-            continue;
-        }
-        bytes += (double)f->raw_len;
-        tiles += f->info.tile_count;
-        for (int t = 0; t < f->info.tile_count; t++) {
-            const proto_tile *ti = &f->tiles[t].info;
-            tpay += ti->payload_len;
-            traw += 4.0 * proto_tile_planes(ti->channels) * ti->width * ti->height;
-            tnorm += !(ti->channels & PROTO_CH_HEIGHT);
-        }
-        q += f->info.cascades.spacing_per_m;
-        ee += f->info.e_error;
-        et += f->info.cascades.e_total;
-        nfr++;
-        if (keep)
-            oc_frame_free(keep);
-        keep = f;
-        if (now - w0 >= window_s) {
-            double cpu1 = av_cpu_s(daemon);
-            R->bytes_s = bytes / (now - w0);
-            R->frames_s = nfr / (now - w0);
-            R->cores = (cpu1 - cpu0) / (now - w0);
-            break;
         }
     }
     oc_client_destroy(c);
-    if (!keep || nfr == 0 || R->frames_s == 0) {
+    if (kept < AV_ERR_FRAMES || W.nfr == 0) {
         if (!R->why[0])
             snprintf(R->why, sizeof R->why, "no measurement window of frames made for the camera");
-        if (keep)
-            oc_frame_free(keep);
-        return;
+        for (int k = 0; k < kept; k++)
+            oc_frame_free(keep[k]);
+        return 0;
     }
-    R->kib_frame = bytes / nfr / 1024.0;
-    R->tiles_frame = tiles / nfr;
-    R->tile_ratio = tpay > 0 ? traw / tpay : 0.0;
-    R->normals_only = tnorm / nfr;
-    R->q = q / nfr;
-    R->e_error = ee / nfr;
-    R->e_total = et / nfr;
-    if (!keep->view) {
-        snprintf(R->why, sizeof R->why, "frame without a layout-1 view: %.150s", keep->view_error);
-        oc_frame_free(keep);
-        return;
-    }
+    R->kib_frame = W.bytes / W.nfr / 1024.0;
+    R->tiles_frame = W.tiles / W.nfr;
+    R->tile_ratio = W.tpay > 0 ? W.traw / W.tpay : 0.0;
+    R->normals_only = W.tnorm / W.nfr;
+    R->q = W.q / W.nfr;
+    R->e_error = W.ee / W.nfr;
+    R->e_total = W.et / W.nfr;
+    return kept;
+}
 
-    /* the exact waves of this frame's instant, checked against its block */
-    const proto_cascade_block *b = &keep->info.cascades;
+/* The ocean each of block b's cascades is (the FFT's, then the near
+ * field's lattice, the daemon's from the same settings) in oc_of / c_of,
+ * checked against the block: patches, grids, every mip's cutoff.  0 when
+ * they agree, else R->why. */
+static int av_block_oceans(const proto_cascade_block *b, const ocean *ref, const ocean *nf,
+                           const ocean *oc_of[PROTO_MAX_LAYERS], int c_of[PROTO_MAX_LAYERS], av_row *R)
+{
     const ocean_params *p = ocean_get_params(ref);
-    /* the FFT's cascades, then the near field's lattice cascade (the
-     * daemon's, built from the same settings) */
     int want = p->cascades + (nf ? 1 : 0);
     if (b->cascade_count != want) {
         snprintf(R->why, sizeof R->why, "frame has %d cascades, the config %d", b->cascade_count, want);
-        oc_frame_free(keep);
-        return;
+        return 1;
     }
-    const ocean *oc_of[PROTO_MAX_LAYERS];
-    int c_of[PROTO_MAX_LAYERS];
     for (int k = 0; k < b->cascade_count; k++) {
         oc_of[k] = k < p->cascades ? ref : nf;
         c_of[k] = k < p->cascades ? k : 0;
@@ -427,97 +477,95 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, const oc
             snprintf(R->why, sizeof R->why, "cascade %d of the frame (patch %g, n %d, %d mips) is not the config's "
                      "(patch %g, n %d, %d mips)", k, b->cascade[k].patch_m, b->cascade[k].n, b->cascade[k].mips,
                      patch, p->n, mips);
-            oc_frame_free(keep);
-            return;
+            return 1;
         }
     }
-    double t = keep->hdr.sim_time;
-    av_casc C[PROTO_MAX_LAYERS];
-    for (int k = 0; k < b->cascade_count; k++)
-        av_casc_build(&C[k], oc_of[k], c_of[k], k, t, b);
-    R->mss_tail = (double)b->tail_mss[0] + b->tail_mss[1];
+    return 0;
+}
 
-    /* rays through a grid of pixel centres (PROTOCOL.md "Camera orientation") */
+/* Per point of the grid: 0 above the horizon, 1 outside the tiles, 2
+ * measured, 3 measured with the vertex rule too; res[32] each:
+ * reconstruction (5), exact carried (5), exact full (5), claimed mss,
+ * vertex rule's reconstruction (3) and carried (3), its spacing. */
+enum { AV_RES = 32 };
+
+/* Reads frame `keep` at ray ij of the grid (camera cam at the block's
+ * position) and the exact waves C there; st/o as above. */
+static void av_point(const oc_frame *keep, const proto_camera *cam, const av_casc *C, int gw, int gh, int ij,
+                     unsigned char *st, double *o)
+{
+    const proto_cascade_block *b = &keep->info.cascades;
     const double *cp = b->camera;
-    double yaw = cam.yaw_deg * M_PI / 180, pitch = cam.pitch_deg * M_PI / 180;
+    double yaw = cam->yaw_deg * M_PI / 180, pitch = cam->pitch_deg * M_PI / 180;
     double fw[3] = {cos(pitch) * cos(yaw), sin(pitch), cos(pitch) * sin(yaw)};
     double rt[3] = {-sin(yaw), 0, cos(yaw)};
     double up[3] = {rt[1] * fw[2] - rt[2] * fw[1], rt[2] * fw[0] - rt[0] * fw[2], rt[0] * fw[1] - rt[1] * fw[0]};
-    double ty = tan(cam.fov_y_deg * M_PI / 360), aspect = (double)cam.viewport_w / cam.viewport_h;
-    int gw = grid, gh = grid * cam.viewport_h / cam.viewport_w;
-    int npx = gw * gh;
-    double *res = xcalloc((size_t)npx * 32, sizeof(double));
+    double ty = tan(cam->fov_y_deg * M_PI / 360), aspect = (double)cam->viewport_w / cam->viewport_h;
+    int i = ij / gw, j = ij % gw;
+    double sx = ((j + 0.5) / gw * 2 - 1) * ty * aspect, sy = (1 - (i + 0.5) / gh * 2) * ty, d[3];
+    for (int k = 0; k < 3; k++)
+        d[k] = fw[k] + sx * rt[k] + sy * up[k];
+    *st = 0;
+    if (!(d[1] < -1e-9))
+        return;
+    double tt = -cp[1] / d[1], x = cp[0] + tt * d[0], z = cp[2] + tt * d[2];
+    oc_sample s;
+    oc_lod L;
+    *st = 1;
+    if (oc_frame_sample_interp(keep, x, z, 0, OC_INTERP_CUBIC, &s) != OCEAN_OK ||
+        oc_cascade_lod(b, x, z, 0, &L) != OCEAN_OK)
+        return;
+    double full[5], car[5];
+    av_exact(C, b->cascade_count, &L, x, z, full, car);
+    /* height and displacement are read at max(s, G) (PROTOCOL.md: the
+     * mips finer than the mesh carry normals alone) */
+    oc_lod Lg;
+    if (b->geometry_spacing_m > 0 && oc_cascade_lod(b, x, z, b->geometry_spacing_m, &Lg) == OCEAN_OK) {
+        double fg[5], cg[5];
+        av_exact(C, b->cascade_count, &Lg, x, z, fg, cg);
+        for (int k = 0; k < 3; k++)
+            car[k] = cg[k];
+    }
+    double rec[5] = {s.height, s.dx, s.dz, s.slope_x, s.slope_z};
+    for (int k = 0; k < 5; k++) {
+        o[k] = rec[k];
+        o[5 + k] = car[k];
+        o[10 + k] = full[k];
+    }
+    o[15] = s.mss[0] + s.mss[1];
+    *st = 2;
     /* the mesh's rings (MESH_TOPOLOGY zones): a vertex of level L reads
      * with spacing max(s, g_L); a point at horizontal distance d from the
      * camera lies in the first level whose zone radius R_L reaches d */
     const oc_topology *topo = keep->topology;
     int nlev = topo && (topo->flags & PROTO_TOPO_FLAT) && topo->zones ? topo->lod_levels : 0;
-    R->has_mesh = nlev > 0;
-    if (nlev > 0) {
-        R->g0 = topo->zones[0];
-        R->r0 = topo->zones[1];
-        R->glast = topo->zones[4 * (nlev - 1)];
+    if (nlev <= 0)
+        return;
+    double dist = hypot(x - cp[0], z - cp[2]), g = topo->zones[4 * (nlev - 1)];
+    for (int lv = 0; lv < nlev; lv++)
+        if (dist <= topo->zones[4 * lv + 1]) {
+            g = topo->zones[4 * lv];
+            break;
+        }
+    oc_sample sv;
+    oc_lod Lv;
+    if (oc_frame_sample_interp(keep, x, z, g, OC_INTERP_CUBIC, &sv) == OCEAN_OK &&
+        oc_cascade_lod(b, x, z, g, &Lv) == OCEAN_OK) {
+        double fv[5], cv[5];
+        av_exact(C, b->cascade_count, &Lv, x, z, fv, cv);
+        double rv[3] = {sv.height, sv.dx, sv.dz};
+        for (int k = 0; k < 3; k++) {
+            o[16 + k] = rv[k];
+            o[19 + k] = cv[k];
+        }
+        o[22] = g;
+        *st = 3;
     }
-    unsigned char *st = xcalloc((size_t)npx, 1);   /* 0 above, 1 outside, 2 measured */
-#pragma omp parallel for schedule(dynamic, 4)
-    for (int ij = 0; ij < npx; ij++) {
-        int i = ij / gw, j = ij % gw;
-        double sx = ((j + 0.5) / gw * 2 - 1) * ty * aspect, sy = (1 - (i + 0.5) / gh * 2) * ty, d[3];
-        for (int k = 0; k < 3; k++)
-            d[k] = fw[k] + sx * rt[k] + sy * up[k];
-        if (!(d[1] < -1e-9))
-            continue;
-        double tt = -cp[1] / d[1], x = cp[0] + tt * d[0], z = cp[2] + tt * d[2];
-        oc_sample s;
-        oc_lod L;
-        if (oc_frame_sample_interp(keep, x, z, 0, OC_INTERP_CUBIC, &s) != OCEAN_OK ||
-            oc_cascade_lod(b, x, z, 0, &L) != OCEAN_OK) {
-            st[ij] = 1;
-            continue;
-        }
-        double full[5], car[5];
-        av_exact(C, b->cascade_count, &L, x, z, full, car);
-        /* height and displacement are read at max(s, G) (PROTOCOL.md:
-         * the mips finer than the mesh carry normals alone) */
-        oc_lod Lg;
-        if (b->geometry_spacing_m > 0 && oc_cascade_lod(b, x, z, b->geometry_spacing_m, &Lg) == OCEAN_OK) {
-            double fg[5], cg[5];
-            av_exact(C, b->cascade_count, &Lg, x, z, fg, cg);
-            for (int k = 0; k < 3; k++)
-                car[k] = cg[k];
-        }
-        double *o = res + (size_t)ij * 32;
-        double rec[5] = {s.height, s.dx, s.dz, s.slope_x, s.slope_z};
-        for (int k = 0; k < 5; k++) {
-            o[k] = rec[k];
-            o[5 + k] = car[k];
-            o[10 + k] = full[k];
-        }
-        o[15] = s.mss[0] + s.mss[1];
-        st[ij] = 2;
-        if (nlev > 0) {
-            double dist = hypot(x - cp[0], z - cp[2]), g = topo->zones[4 * (nlev - 1)];
-            for (int lv = 0; lv < nlev; lv++)
-                if (dist <= topo->zones[4 * lv + 1]) {
-                    g = topo->zones[4 * lv];
-                    break;
-                }
-            oc_sample sv;
-            oc_lod Lv;
-            if (oc_frame_sample_interp(keep, x, z, g, OC_INTERP_CUBIC, &sv) == OCEAN_OK &&
-                oc_cascade_lod(b, x, z, g, &Lv) == OCEAN_OK) {
-                double fv[5], cv[5];
-                av_exact(C, b->cascade_count, &Lv, x, z, fv, cv);
-                double rv[3] = {sv.height, sv.dx, sv.dz};
-                for (int k = 0; k < 3; k++) {
-                    o[16 + k] = rv[k];
-                    o[19 + k] = cv[k];
-                }
-                o[22] = g;
-                st[ij] = 3;
-            }
-        }
-    }
+}
+
+/* Adds the points of one frame (st, res) to R's sums. */
+static void av_add_points(av_row *R, const unsigned char *st, const double *res, int npx)
+{
     for (int ij = 0; ij < npx; ij++) {
         if (st[ij] == 0) {
             R->above++;
@@ -527,7 +575,7 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, const oc
             R->outside++;
             continue;
         }
-        const double *o = res + (size_t)ij * 32, *rec = o, *car = o + 5, *full = o + 10;
+        const double *o = res + (size_t)ij * AV_RES, *rec = o, *car = o + 5, *full = o + 10;
         if (st[ij] == 3) {
             const double *rv = o + 16, *cv = o + 19;
             R->v_points++;
@@ -546,19 +594,76 @@ static void av_measure(const char *url, pid_t daemon, const ocean *ref, const oc
         R->mss_left_claim += o[15] - R->mss_tail;
         R->mss_res_exact += full[3] * full[3] + full[4] * full[4];
     }
+}
+
+/* The errors of frame `keep` against the exact waves of its instant, its
+ * block checked against the config, added to R.  0, or 1 with R->why. */
+static int av_frame_errors(const oc_frame *keep, const proto_camera *cam, const ocean *ref, const ocean *nf,
+                           int grid, av_row *R)
+{
+    if (!keep->view) {
+        snprintf(R->why, sizeof R->why, "frame without a layout-1 view: %.150s", keep->view_error);
+        return 1;
+    }
+    const proto_cascade_block *b = &keep->info.cascades;
+    const ocean *oc_of[PROTO_MAX_LAYERS];
+    int c_of[PROTO_MAX_LAYERS];
+    if (av_block_oceans(b, ref, nf, oc_of, c_of, R))
+        return 1;
+    av_casc C[PROTO_MAX_LAYERS];
+    for (int k = 0; k < b->cascade_count; k++)
+        av_casc_build(&C[k], oc_of[k], c_of[k], k, keep->hdr.sim_time, b);
+    R->mss_tail = (double)b->tail_mss[0] + b->tail_mss[1];
+    const oc_topology *topo = keep->topology;
+    int nlev = topo && (topo->flags & PROTO_TOPO_FLAT) && topo->zones ? topo->lod_levels : 0;
+    R->has_mesh = nlev > 0;
+    if (nlev > 0) {
+        R->g0 = topo->zones[0];
+        R->r0 = topo->zones[1];
+        R->glast = topo->zones[4 * (nlev - 1)];
+    }
+    /* rays through a grid of pixel centres (PROTOCOL.md "Camera orientation") */
+    int gw = grid, gh = grid * cam->viewport_h / cam->viewport_w, npx = gw * gh;
+    double *res = xcalloc((size_t)npx * AV_RES, sizeof(double));
+    unsigned char *st = xcalloc((size_t)npx, 1);
+#pragma omp parallel for schedule(dynamic, 4)
+    for (int ij = 0; ij < npx; ij++)
+        av_point(keep, cam, C, gw, gh, ij, &st[ij], res + (size_t)ij * AV_RES);
+    av_add_points(R, st, res, npx);
+    R->err_frames++;
+    free(res);
+    free(st);
+    for (int k = 0; k < b->cascade_count; k++)
+        av_casc_free(&C[k]);
+    return 0;
+}
+
+/* One row: its stream's cost over a window, then the errors of
+ * AV_ERR_FRAMES of its frames against the exact waves (sums over all
+ * their points). */
+static void av_measure(const char *url, pid_t daemon, const ocean *ref, const ocean *nf, int grid, double window_s,
+                       av_row *R)
+{
+    proto_camera cam;
+    oc_frame *keep[AV_ERR_FRAMES];
+    int kept = av_stream(url, daemon, window_s, R, &cam, keep);
+    int bad = 0;
+    for (int k = 0; k < kept; k++) {
+        if (!bad)
+            bad = av_frame_errors(keep[k], &cam, ref, nf, grid, R);
+        oc_frame_free(keep[k]);
+    }
+    if (!kept || bad)
+        return;
+    /* per-point means; the point counts are over every frame measured */
     if (R->points > 0) {
         R->mss_left_meas /= R->points;
         R->mss_left_claim /= R->points;
         R->mss_res_exact /= R->points;
         R->ok = 1;
     } else {
-        snprintf(R->why, sizeof R->why, "no ray landed on sea the frame covers");
+        snprintf(R->why, sizeof R->why, "no ray landed on sea the frames cover");
     }
-    free(res);
-    free(st);
-    for (int k = 0; k < b->cascade_count; k++)
-        av_casc_free(&C[k]);
-    oc_frame_free(keep);
 }
 
 static void av_print_err(const char *what, const av_err *e, double hs)
@@ -569,7 +674,210 @@ static void av_print_err(const char *what, const av_err *e, double hs)
            sqrt(e->a2 / n), e->amax);
 }
 
-/* The whole section: returns 0 when every height was measured. */
+/* The section's heading, configuration and method. */
+static void av_print_intro(const srv_settings *S, double hs, double chk, int grid, double window_s)
+{
+    const ocean_params *p = &S->params;
+    printf("### What the browser viewer receives: layout-1 frames against the exact waves (issue 13)\n\n");
+    printf("**Configuration** (what `make run` serves): `build/oceand --config %s` (port aside), scene %s "
+           "(\"%s\"): %s %s, U10 %.3g m/s, choppiness %.3g, %d cascades of N = %d from a %.0f m patch, seed %llu; "
+           "Hs of the spectrum %.3f m; server.px_per_sample %g, server.cascade_tile %d, "
+           "server.viewer_bytes_per_s %.3g. **Subscription** (the browser viewer's, clients/web/worker.js "
+           "chooseSubscription = oc_subscribe_default): layout 1, codec qz, policy antialias, 30 Hz, accuracy "
+           "%g, concentric mesh, layers = HELLO.max_layers, every effect the scene offers; each camera twice: "
+           "**time-interp** (SUBSCRIBE flag time_interp, the viewer's: each mip's samples travel once per its "
+           "update interval and every frame is read from the blend of the two samples the client holds, "
+           "PROTOCOL.md \"Samples in time\"; the library applies every frame on receipt) and **plain** (the flag "
+           "clear: every frame whole, the viewer's subscription before it). **Cameras**: at (0, H, 0), heading 0, "
+           "60 deg vertical fov, 1920 x 1080 viewport, pitch atan(H / 10 km) + 15 deg below the horizon; still, "
+           "or flying at 60 m/s along the heading, reported 30 times a second.\n\n",
+           CONF_PATH, S->scene.name[0] ? S->scene.name : "(none)", S->scene.description,
+           ocean_spectrum_name(p->sea.spectrum), ocean_spreading_name(p->sea.spreading), p->sea.wind_u10,
+           p->sea.choppiness, p->cascades, p->n, p->patch_m, (unsigned long long)p->seed, hs, S->srv.px_per_sample,
+           S->srv.cascade_tile, S->srv.viewer_bytes_per_s, (double)OC_ACCURACY_DEFAULT);
+    printf("**Method.** %d x %d pixel centres of the viewport cast onto the mean sea plane; at each point the "
+           "frame is read as the viewer shades it: oc_frame_sample (the spec's lod rule with the pixel footprint, "
+           "Keys cubic within a mip, cascades summed) at the parameter point. **Exact waves**: the same ocean "
+           "built in-process from the same config (srv_settings_load; the frame's patches, grids and every "
+           "mip's cutoff checked equal), every mode of every cascade summed directly in double at the frame's "
+           "sim time (self-check against ocean_reference_point: max difference %.1e). *Carried* weights each mode "
+           "by what the mips the lod rule reads there hold of it (their weights x Butterworth gain of the "
+           "block's order, waves below ocean.drop_gain left out, fade included); *full* takes every mode. "
+           "Columns: **carried error** = reconstruction - exact carried waves (codec, storage, cubic reading, "
+           "and on the time-interp stream the blend between samples); "
+           "**left to shading** = exact full - exact carried (what the frame hands to shading as unresolved "
+           "slope variance; e_error is its height-variance fraction at the nadir); **total** = reconstruction - "
+           "exact full. *Mesh vertex rule* rows read the same points as a vertex of the mesh ring there reads them "
+           "(spacing max(s, g_L), g_L of the first MESH_TOPOLOGY zone whose radius reaches the point's distance; "
+           "height and displacement only, the viewer's normals come from the shading read; the interpolation "
+           "across a triangle between vertices is not included): what the geometry itself carries. "
+           "Each as RMS / max over the points (per pixel, not per sea area) of height (m, and %% of "
+           "Hs), horizontal displacement |(dx, dz)| (m) and normal angle (deg; normals from the parameter "
+           "surface's slopes, as the tiles carry them). The Gerstner near field is the last cascade: its waves on "
+           "their lattice, from the same lattice ocean the daemon builds; the short-wave tail beyond it is in no "
+           "figure (tail_mss). Tiles vs f32 = the raw f32 bytes of the received tiles' planes over their qz "
+           "payload bytes; normals only = tiles of mips finer than the viewer's mesh, which carry NU NV (and "
+           "FOAM) alone (the block's geometry_spacing_m); tiles/frame counts the records a frame brought "
+           "(time-interp: the samples due). Bytes/s = FRAME bytes received over %.0f s "
+           "of frames made for the camera (after 1 s of settling); daemon cores = its CPU time over the same "
+           "window with this one viewer connected. Errors over %d frames per row, spread over the window (the "
+           "last at its end): a time-interpolating frame's error depends on where it falls between samples.\n\n",
+           grid, grid * 1080 / 1920, chk, window_s, AV_ERR_FRAMES);
+}
+
+static double av_rms_h(const av_err *e, double hs) { return e->n > 0 ? 100.0 * sqrt(e->h2 / e->n) / hs : NAN; }
+static double av_rms_a(const av_err *e) { return e->n > 0 ? sqrt(e->a2 / e->n) : NAN; }
+
+/* Before and after the time_interp flag, camera by camera: cost and
+ * error side by side (plain / time-interp).  1 if a row is missing. */
+static int av_print_before_after(const av_row *rows, double hs)
+{
+    printf("**Before and after samples in time** (plain / time-interp, same camera, same daemon; ratio = "
+           "time-interp over plain):\n\n");
+    printf("| camera m | speed m/s | MB/s (ratio) | KiB/frame | q | e_error | height RMS %%Hs: carried | height RMS "
+           "%%Hs: left to shading | height RMS %%Hs: total | normal RMS deg: carried | normal RMS deg: total | "
+           "daemon cores |\n");
+    printf("|---:|---:|---|---|---|---|---|---|---|---|---|---|\n");
+    int bad = 0;
+    for (int c = 0; c < AV_CAMS; c++) {
+        const av_row *a = &rows[c * AV_STREAMS], *b = &rows[c * AV_STREAMS + 1];
+        if (!a->ok || !b->ok) {
+            printf("| %g | %g | not measured: %s | | | | | | | | | |\n", a->height, a->speed, !a->ok ? a->why : b->why);
+            bad = 1;
+            continue;
+        }
+        printf("| %g | %g | %.2f / %.2f (%.2f) | %.1f / %.1f | %.3g / %.3g | %.3f / %.3f | %.3g / %.3g | "
+               "%.3g / %.3g | %.3g / %.3g | %.3g / %.3g | %.3g / %.3g | %.2f / %.2f |\n",
+               a->height, a->speed, a->bytes_s / 1e6, b->bytes_s / 1e6, b->bytes_s / a->bytes_s, a->kib_frame,
+               b->kib_frame, a->q, b->q, a->e_error, b->e_error, av_rms_h(&a->carried, hs), av_rms_h(&b->carried, hs),
+               av_rms_h(&a->shading, hs), av_rms_h(&b->shading, hs), av_rms_h(&a->total, hs),
+               av_rms_h(&b->total, hs), av_rms_a(&a->carried), av_rms_a(&b->carried), av_rms_a(&a->total),
+               av_rms_a(&b->total), a->cores, b->cores);
+    }
+    printf("\n");
+    return bad;
+}
+
+/* Every row's cost and plan.  1 if a row is missing. */
+static int av_print_rows(const av_row *rows)
+{
+    printf("| camera m | speed m/s | stream | pitch deg | points (above horizon, outside tiles) | q | e_error | "
+           "e_total | KiB/frame | tiles/frame (of which normals only) | tiles vs f32 | frames/s | MB/s | daemon "
+           "cores |\n");
+    printf("|---:|---:|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    int bad = 0;
+    for (int i = 0; i < AV_CAMS * AV_STREAMS; i++) {
+        const av_row *r = &rows[i];
+        if (!r->frames_s) {
+            printf("| %g | %g | %s | - | not measured: %s | | | | | | | | | |\n", r->height, r->speed,
+                   av_stream_name[r->timed], r->why[0] ? r->why : "daemon did not start");
+            bad = 1;
+            continue;
+        }
+        printf("| %g | %g | %s | %.1f | %.0f (%.0f, %.0f) | %.3g | %.4f | %.4f | %.1f | %.0f (%.0f) | 1/%.2f | %.1f "
+               "| %.2f | %.2f |\n",
+               r->height, r->speed, av_stream_name[r->timed], r->pitch, r->points, r->above, r->outside, r->q,
+               r->e_error, r->e_total, r->kib_frame, r->tiles_frame, r->normals_only, r->tile_ratio, r->frames_s,
+               r->bytes_s / 1e6, r->cores);
+    }
+    return bad;
+}
+
+/* Every row's errors against the exact waves.  1 if a row is missing. */
+static int av_print_errors(const av_row *rows, double hs)
+{
+    printf("\n| camera m | speed m/s | stream | error of | height RMS / max m | height RMS / max %%Hs | displacement RMS "
+           "/ max m | normal RMS / max deg |\n");
+    printf("|---:|---:|---|---|---:|---:|---:|---:|\n");
+    int bad = 0;
+    for (int i = 0; i < AV_CAMS * AV_STREAMS; i++) {
+        const av_row *r = &rows[i];
+        const char *sn = av_stream_name[r->timed];
+        if (!r->ok) {
+            printf("| %g | %g | %s | not measured: %s | | | | |\n", r->height, r->speed, sn, r->why);
+            bad = 1;
+            continue;
+        }
+        const char *what[3] = {"the waves the frame carries", "the waves left to shading", "total (against every wave)"};
+        const av_err *e[3] = {&r->carried, &r->shading, &r->total};
+        for (int k = 0; k < 3; k++) {
+            printf("| %g | %g | %s |", r->height, r->speed, sn);
+            av_print_err(what[k], e[k], hs);
+            printf("\n");
+        }
+        if (r->v_points > 0) {
+            const av_err *v[2] = {&r->v_carried, &r->v_geom};
+            const char *vw[2] = {"mesh vertex rule: the waves it carries", "mesh vertex rule: waves not in geometry"};
+            for (int k = 0; k < 2; k++) {
+                double n = v[k]->n;
+                printf("| %g | %g | %s | %s | %.3g / %.3g | %.3g / %.3g | %.3g / %.3g | - |\n", r->height, r->speed,
+                       sn, vw[k], sqrt(v[k]->h2 / n), v[k]->hmax, 100 * sqrt(v[k]->h2 / n) / hs,
+                       100 * v[k]->hmax / hs, sqrt(v[k]->d2 / n), v[k]->dmax);
+            }
+        } else {
+            printf("| %g | %g | %s | mesh vertex rule | no FLAT topology with the frame: not measured | | | |\n",
+                   r->height, r->speed, sn);
+        }
+    }
+    printf("\nMesh rings of the frames measured (MESH_TOPOLOGY zones):");
+    for (int i = 0; i < AV_CAMS * AV_STREAMS; i += AV_STREAMS)
+        if (rows[i].has_mesh)
+            printf(" %g m, %g m/s: g_0 %g m within %.0f m, coarsest g %g m;", rows[i].height, rows[i].speed,
+                   rows[i].g0, rows[i].r0, rows[i].glast);
+    printf("\n");
+    return bad;
+}
+
+/* The slope variance left to shading, measured and claimed. */
+static void av_print_mss(const av_row *rows, int grid)
+{
+    printf("\n| camera m | speed m/s | stream | mean-square slope of every mode (exact) | left to shading: measured | "
+           "left to shading: the frame's mip tables | tail_mss (the short-wave tail; not in the exact sum) |\n");
+    printf("|---:|---:|---|---:|---:|---:|---:|\n");
+    for (int i = 0; i < AV_CAMS * AV_STREAMS; i++) {
+        const av_row *r = &rows[i];
+        if (!r->ok)
+            continue;
+        printf("| %g | %g | %s | %.5f | %.5f | %.5f | %.5f |\n", r->height, r->speed, av_stream_name[r->timed],
+               r->mss_res_exact, r->mss_left_meas, r->mss_left_claim, r->mss_tail);
+    }
+    printf("\nMean-square slope = <s_x^2 + s_z^2> over the points. *Measured* is the exact slope of the modes the "
+           "frame leaves out at each point (full - carried); *mip tables* is what the frame says they hold "
+           "(oc_sample mss minus tail_mss): the statistic shading adds, to compare with the measured one over "
+           "%d x %d points of %d instants.\n\n", grid, grid * 1080 / 1920, AV_ERR_FRAMES);
+}
+
+/* The README's headline: what the viewer gets (its stream, time-interp),
+ * with the plain stream's bytes beside. */
+static void av_write_headline(const av_row *rows, const srv_settings *S, double hs)
+{
+    FILE *hf = fopen(OUT_DIR "/headline_viewer.md", "w");
+    if (!hf)
+        return;
+    fprintf(hf, "What the browser viewer receives from `make run` (scene %s, Hs %.2f m; layout 1, the viewer's "
+            "subscription with samples in time, 1920 x 1080; errors per pixel against the exact waves; one "
+            "viewer; MB/s of the plain stream, every frame whole, beside):\n\n",
+            S->scene.name[0] ? S->scene.name : "(none)", hs);
+    fprintf(hf, "| camera m | speed m/s | MB/s (plain) | daemon cores | e_error | height RMS %%Hs: carried / left to "
+                "shading | normal RMS deg: carried / left to shading | mss left to shading: measured / frame's "
+                "tables |\n");
+    fprintf(hf, "|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (int c = 0; c < AV_CAMS; c++) {
+        const av_row *p = &rows[c * AV_STREAMS], *r = &rows[c * AV_STREAMS + 1];
+        if (!r->ok) {
+            fprintf(hf, "| %g | %g | not measured: %s | | | | | |\n", r->height, r->speed, r->why);
+            continue;
+        }
+        fprintf(hf, "| %g | %g | %.2f (%.2f) | %.2f | %.3f | %.3g / %.3g | %.3g / %.3g | %.4f / %.4f |\n",
+                r->height, r->speed, r->bytes_s / 1e6, p->ok ? p->bytes_s / 1e6 : NAN, r->cores, r->e_error,
+                av_rms_h(&r->carried, hs), av_rms_h(&r->shading, hs), av_rms_a(&r->carried), av_rms_a(&r->shading),
+                r->mss_left_meas, r->mss_left_claim);
+    }
+    fprintf(hf, "\n");
+    fclose(hf);
+}
+
+/* The whole section: returns 0 when every camera was measured on both streams. */
 static int viewer_section(void)
 {
     int q = bench_quick();
@@ -666,11 +974,14 @@ static int viewer_section(void)
         execl(od, "oceand", "--config", CONF_PATH, "--port", portarg, (char *)NULL);
         _exit(127);
     }
-    av_row rows_v[AV_HEIGHTS];
+    /* row = camera * AV_STREAMS + stream */
+    static av_row rows_v[AV_CAMS * AV_STREAMS];
     memset(rows_v, 0, sizeof rows_v);
-    for (int h = 0; h < AV_HEIGHTS; h++) {
-        rows_v[h].height = av_heights[h];
-        snprintf(rows_v[h].why, sizeof rows_v[h].why, "the daemon did not start (%.120s)", od);
+    for (int r = 0; r < AV_CAMS * AV_STREAMS; r++) {
+        rows_v[r].height = av_cams[r / AV_STREAMS].height;
+        rows_v[r].speed = av_cams[r / AV_STREAMS].speed;
+        rows_v[r].timed = r % AV_STREAMS;
+        snprintf(rows_v[r].why, sizeof rows_v[r].why, "the daemon did not start (%.120s)", od);
     }
     int up = 0;
     for (int i = 0; i < 100 && pid > 0 && !up; i++) {
@@ -687,141 +998,23 @@ static int viewer_section(void)
     }
     int grid = q ? 32 : 64;
     double window_s = q ? 2.0 : 4.0;
-    for (int h = 0; h < AV_HEIGHTS && up; h++) {
-        av_measure(url, pid, ref, nf, av_heights[h], grid, window_s, &rows_v[h]);
-        fprintf(stderr, "bench_accuracy: viewer at %g m: %s\n", av_heights[h], rows_v[h].ok ? "measured" : rows_v[h].why);
+    for (int r = 0; r < AV_CAMS * AV_STREAMS && up; r++) {
+        av_row *R = &rows_v[r];
+        R->why[0] = 0;
+        av_measure(url, pid, ref, nf, grid, window_s, R);
+        fprintf(stderr, "bench_accuracy: viewer at %g m, %g m/s, %s stream: %s\n", R->height, R->speed,
+                av_stream_name[R->timed], R->ok ? "measured" : R->why);
     }
     if (pid > 0) {
         kill(pid, SIGTERM);
         waitpid(pid, NULL, 0);
     }
-
-    const ocean_params *p = &S.params;
-    printf("### What the browser viewer receives: layout-1 frames against the exact waves (issue 13)\n\n");
-    printf("**Configuration** (what `make run` serves): `build/oceand --config %s` (port aside), scene %s "
-           "(\"%s\"): %s %s, U10 %.3g m/s, choppiness %.3g, %d cascades of N = %d from a %.0f m patch, seed %llu; "
-           "Hs of the spectrum %.3f m; server.px_per_sample %g, server.cascade_tile %d, "
-           "server.viewer_bytes_per_s %.3g. **Subscription** (the browser viewer's, clients/web/worker.js "
-           "chooseSubscription = oc_subscribe_default): layout 1, codec qz, policy antialias, 30 Hz, accuracy "
-           "%g, concentric mesh, layers = HELLO.max_layers, every effect the scene offers. **Camera**: still at "
-           "(0, H, 0), heading 0, 60 deg vertical fov, 1920 x 1080 viewport, pitch atan(H / 10 km) + 15 deg below "
-           "the horizon.\n\n",
-           CONF_PATH, S.scene.name[0] ? S.scene.name : "(none)", S.scene.description,
-           ocean_spectrum_name(p->sea.spectrum), ocean_spreading_name(p->sea.spreading), p->sea.wind_u10,
-           p->sea.choppiness, p->cascades, p->n, p->patch_m, (unsigned long long)p->seed, hs, S.srv.px_per_sample,
-           S.srv.cascade_tile, S.srv.viewer_bytes_per_s, (double)OC_ACCURACY_DEFAULT);
-    printf("**Method.** %d x %d pixel centres of the viewport cast onto the mean sea plane; at each point the "
-           "frame is read as the viewer shades it: oc_frame_sample (the spec's lod rule with the pixel footprint, "
-           "Keys cubic within a mip, cascades summed) at the parameter point. **Exact waves**: the same ocean "
-           "built in-process from the same config (srv_settings_load; the frame's patches, grids and every "
-           "mip's cutoff checked equal), every mode of every cascade summed directly in double at the frame's "
-           "sim time (self-check against ocean_reference_point: max difference %.1e). *Carried* weights each mode "
-           "by what the mips the lod rule reads there hold of it (their weights x Butterworth gain of the "
-           "block's order, waves below ocean.drop_gain left out, fade included); *full* takes every mode. "
-           "Columns: **carried error** = reconstruction - exact carried waves (codec, storage, cubic reading); "
-           "**left to shading** = exact full - exact carried (what the frame hands to shading as unresolved "
-           "slope variance; e_error is its height-variance fraction at the nadir); **total** = reconstruction - "
-           "exact full. *Mesh vertex rule* rows read the same points as a vertex of the mesh ring there reads them "
-           "(spacing max(s, g_L), g_L of the first MESH_TOPOLOGY zone whose radius reaches the point's distance; "
-           "height and displacement only, the viewer's normals come from the shading read; the interpolation "
-           "across a triangle between vertices is not included): what the geometry itself carries. "
-           "Each as RMS / max over the points (per pixel, not per sea area) of height (m, and %% of "
-           "Hs), horizontal displacement |(dx, dz)| (m) and normal angle (deg; normals from the parameter "
-           "surface's slopes, as the tiles carry them). The Gerstner near field is the last cascade: its waves on "
-           "their lattice, from the same lattice ocean the daemon builds; the short-wave tail beyond it is in no "
-           "figure (tail_mss). Tiles vs f32 = the raw f32 bytes of the received tiles' planes over their qz "
-           "payload bytes; normals only = tiles of mips finer than the viewer's mesh, which carry NU NV (and "
-           "FOAM) alone (the block's geometry_spacing_m). Bytes/s = FRAME bytes received over %.0f s "
-           "of frames made for the camera (after 1 s of settling); daemon cores = its CPU time over the same "
-           "window with this one viewer connected. One frame (the window's last) per height for the errors.\n\n",
-           grid, grid * 1080 / 1920, chk, window_s);
-    printf("| camera m | pitch deg | points (above horizon, outside tiles) | q | e_error | e_total | KiB/frame | tiles/frame "
-           "(of which normals only) | tiles vs f32 | frames/s | MB/s | daemon cores |\n");
-    printf("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-    int bad = 0;
-    for (int h = 0; h < AV_HEIGHTS; h++) {
-        const av_row *r = &rows_v[h];
-        if (!r->frames_s) {
-            printf("| %g | - | not measured: %s | | | | | | | | | |\n", r->height, r->why[0] ? r->why : "daemon did not start");
-            bad = 1;
-            continue;
-        }
-        printf("| %g | %.1f | %.0f (%.0f, %.0f) | %.3g | %.4f | %.4f | %.1f | %.0f (%.0f) | 1/%.2f | %.1f | %.2f | %.2f |\n",
-               r->height, r->pitch, r->points, r->above, r->outside, r->q, r->e_error, r->e_total, r->kib_frame,
-               r->tiles_frame, r->normals_only, r->tile_ratio, r->frames_s, r->bytes_s / 1e6, r->cores);
-    }
-    printf("\n| camera m | error of | height RMS / max m | height RMS / max %%Hs | displacement RMS / max m | normal RMS / max deg |\n");
-    printf("|---:|---|---:|---:|---:|---:|\n");
-    for (int h = 0; h < AV_HEIGHTS; h++) {
-        const av_row *r = &rows_v[h];
-        if (!r->ok) {
-            printf("| %g | not measured: %s | | | | |\n", r->height, r->why);
-            bad = 1;
-            continue;
-        }
-        const char *what[3] = {"the waves the frame carries", "the waves left to shading", "total (against every wave)"};
-        const av_err *e[3] = {&r->carried, &r->shading, &r->total};
-        for (int k = 0; k < 3; k++) {
-            printf("| %g |", r->height);
-            av_print_err(what[k], e[k], hs);
-            printf("\n");
-        }
-        if (r->v_points > 0) {
-            const av_err *v[2] = {&r->v_carried, &r->v_geom};
-            const char *vw[2] = {"mesh vertex rule: the waves it carries", "mesh vertex rule: waves not in geometry"};
-            for (int k = 0; k < 2; k++) {
-                double n = v[k]->n;
-                printf("| %g | %s | %.3g / %.3g | %.3g / %.3g | %.3g / %.3g | - |\n", r->height, vw[k],
-                       sqrt(v[k]->h2 / n), v[k]->hmax, 100 * sqrt(v[k]->h2 / n) / hs, 100 * v[k]->hmax / hs,
-                       sqrt(v[k]->d2 / n), v[k]->dmax);
-            }
-        } else {
-            printf("| %g | mesh vertex rule | no FLAT topology with the frame: not measured | | | |\n", r->height);
-        }
-    }
-    printf("\nMesh rings of the frames measured (MESH_TOPOLOGY zones):");
-    for (int h = 0; h < AV_HEIGHTS; h++)
-        if (rows_v[h].has_mesh)
-            printf(" %g m: g_0 %g m within %.0f m, coarsest g %g m;", rows_v[h].height, rows_v[h].g0, rows_v[h].r0,
-                   rows_v[h].glast);
-    printf("\n");
-    printf("\n| camera m | mean-square slope of every mode (exact) | left to shading: measured | left to shading: the frame's mip tables | tail_mss (the short-wave tail; not in the exact sum) |\n");
-    printf("|---:|---:|---:|---:|---:|\n");
-    for (int h = 0; h < AV_HEIGHTS; h++) {
-        const av_row *r = &rows_v[h];
-        if (!r->ok)
-            continue;
-        printf("| %g | %.5f | %.5f | %.5f | %.5f |\n", r->height, r->mss_res_exact, r->mss_left_meas,
-               r->mss_left_claim, r->mss_tail);
-    }
-    printf("\nMean-square slope = <s_x^2 + s_z^2> over the points. *Measured* is the exact slope of the modes the "
-           "frame leaves out at each point (full - carried); *mip tables* is what the frame says they hold "
-           "(oc_sample mss minus tail_mss): the statistic shading adds, to compare with the measured one over "
-           "%d x %d points of one instant.\n\n", grid, grid * 1080 / 1920);
-    /* the README's headline: what the viewer gets, first */
-    FILE *hf = fopen(OUT_DIR "/headline_viewer.md", "w");
-    if (hf) {
-        fprintf(hf, "What the browser viewer receives from `make run` (scene %s, Hs %.2f m; layout 1, the viewer's "
-                "subscription, 1920 x 1080, still camera; errors per pixel against the exact waves; one viewer):\n\n",
-                S.scene.name[0] ? S.scene.name : "(none)", hs);
-        fprintf(hf, "| camera m | MB/s | daemon cores | e_error | height RMS %%Hs: carried / left to shading | "
-                    "normal RMS deg: carried / left to shading | mss left to shading: measured / frame's tables |\n");
-        fprintf(hf, "|---:|---:|---:|---:|---:|---:|---:|\n");
-        for (int h = 0; h < AV_HEIGHTS; h++) {
-            const av_row *r = &rows_v[h];
-            if (!r->ok) {
-                fprintf(hf, "| %g | not measured: %s | | | | | |\n", r->height, r->why);
-                continue;
-            }
-            double n = r->carried.n;
-            fprintf(hf, "| %g | %.2f | %.2f | %.3f | %.3g / %.3g | %.3g / %.3g | %.4f / %.4f |\n", r->height,
-                    r->bytes_s / 1e6, r->cores, r->e_error, 100 * sqrt(r->carried.h2 / n) / hs,
-                    100 * sqrt(r->shading.h2 / n) / hs, sqrt(r->carried.a2 / n), sqrt(r->shading.a2 / n),
-                    r->mss_left_meas, r->mss_left_claim);
-        }
-        fprintf(hf, "\n");
-        fclose(hf);
-    }
+    av_print_intro(&S, hs, chk, grid, window_s);
+    int bad = av_print_before_after(rows_v, hs);
+    bad |= av_print_rows(rows_v);
+    bad |= av_print_errors(rows_v, hs);
+    av_print_mss(rows_v, grid);
+    av_write_headline(rows_v, &S, hs);
     fprintf(stderr, "bench_accuracy: viewer section in %.1f s\n", (bench_now_ms() - t_start) / 1e3);
     ocean_destroy(nf);
     ocean_gerstner_destroy(g);

@@ -11,6 +11,14 @@
  * at receipt minus the frame's sim time; one process, one clock), the
  * bytes of a frame, and what the frame gives up for its bytes: its
  * spacing per metre q (the block's; larger is coarser) and its tiles.
+ * Each link twice: the viewer's stream, samples in time (SUBSCRIBE flag
+ * time_interp: each mip's samples travel once per its update interval, a
+ * frame that replaces one still unsent is planned from what the client
+ * held before it), and the plain stream (the flag clear, every frame
+ * whole), the viewer's before it.  The reader follows its stream as the
+ * viewer does: every frame decoded in order through one oc_frame_stream
+ * (the samples it holds) and read 30 m ahead of the camera; a frame that
+ * does not read there (a sample missed, a frame misapplied) is counted.
  * Markdown on stdout, CSV in tests/bench/out/link.csv.  The first 4 s of
  * each row are the link's settling, not measured.
  */
@@ -34,6 +42,9 @@
 
 typedef struct row {
     double bps;                   /* the link; 0: unshaped */
+    int timed;                    /* the time-interpolating stream */
+    int unread;                   /* frames whose view did not read the sea ahead */
+    char why[160];                /* the first one's reason */
     int n;
     double at[MAX_FRAMES], age[MAX_FRAMES], bytes[MAX_FRAMES], q[MAX_FRAMES], tiles[MAX_FRAMES];
 } row;
@@ -83,6 +94,22 @@ static void send_camera(test_ws *w, const proto_camera *cam, double last_t)
     send_msg(w, &m);
 }
 
+/* Frame msg of the stream fs, decoded as the viewer does on receipt (in
+ * order, into the samples it holds) and read 30 m ahead of camera cam;
+ * counted in r when either fails. */
+static void follow_frame(oc_frame_stream *fs, const proto_camera *cam, row *r, const uint8_t *msg, size_t len)
+{
+    oc_frame *f = NULL;
+    char err[160] = "";
+    ocean_result res = oc_frame_stream_decode(fs, msg, len, &f, err, sizeof err);
+    double yaw = cam->yaw_deg * M_PI / 180;
+    oc_sample sm;
+    if (res == OCEAN_OK) res = oc_frame_sample(f, cam->pos[0] + 30 * cos(yaw), cam->pos[2] + 30 * sin(yaw), 0, &sm);
+    if (res != OCEAN_OK && !r->unread++)
+        snprintf(r->why, sizeof r->why, "%s %s", ocean_strerror(res), err);
+    oc_frame_free(f);
+}
+
 /* One FRAME received: its age, bytes, q and tile count. */
 static void take_frame(srv_hub *h, row *r, const uint8_t *msg, size_t len, double at, double *last_t)
 {
@@ -108,7 +135,12 @@ static int shaped_viewer(srv_daemon *d, double secs, row *r)
     proto_msg m;
     proto_msg_init(&m, PROTO_SUBSCRIBE);
     oc_subscribe_default(&m.u.subscribe);
-    if (send_msg(&w, &m)) {
+    if (r->timed)
+        m.u.subscribe.flags |= PROTO_SUB_TIME_INTERP;
+    else
+        m.u.subscribe.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
+    oc_frame_stream *fs = NULL;
+    if (send_msg(&w, &m) || oc_frame_stream_create(&fs) != OCEAN_OK) {
         test_ws_close(&w);
         return 1;
     }
@@ -139,15 +171,20 @@ static int shaped_viewer(srv_daemon *d, double secs, row *r)
         size_t n = 0;
         int op = test_ws_recv(&w, 5, &msg, &n);
         if (op < 0) {
+            oc_frame_stream_destroy(fs);
             test_ws_close(&w);
             return 1;
         }
         if (op == 2 && n >= PROTO_HEADER_SIZE) {
             tokens -= (double)n;
-            if (proto_ld16(msg + 6) == PROTO_FRAME) take_frame(h, r, msg, n, now_s() - t0, &last_t);
+            if (proto_ld16(msg + 6) == PROTO_FRAME) {
+                take_frame(h, r, msg, n, now_s() - t0, &last_t);
+                follow_frame(fs, &cam, r, msg, n);
+            }
         }
         free(msg);
     }
+    oc_frame_stream_destroy(fs);
     test_ws_close(&w);
     return 0;
 }
@@ -170,32 +207,50 @@ int main(void)
     }
     mkdir("tests/bench/out", 0755);
     FILE *csv = fopen("tests/bench/out/link.csv", "w");
-    if (csv) fprintf(csv, "link_bytes_per_s,fps,age_p50_ms,age_p99_ms,frame_bytes_p50,q_p50,tiles_p50\n");
-    printf("| link | frames/s | age p50 ms | age p99 ms | bytes a frame (p50) | q: spacing per metre (p50) | "
-           "tiles a frame (p50) |\n|---|---:|---:|---:|---:|---:|---:|\n");
+    if (csv)
+        fprintf(csv, "link_bytes_per_s,stream,fps,age_p50_ms,age_p99_ms,frame_bytes_p50,frame_bytes_mean,q_p50,"
+                     "tiles_p50,frames_unread\n");
+    printf("| link | stream | frames/s | age p50 ms | age p99 ms | bytes a frame (p50 / mean) | q: spacing per metre "
+           "(p50) | tiles a frame (p50) | frames not read |\n|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
     const double links[] = {0, 3e6, 2e6, 1e6};
     static row r;
     int rc = 0;
-    for (size_t k = 0; k < sizeof links / sizeof links[0] && !rc; k++) {
+    for (size_t k = 0; k < 2 * sizeof links / sizeof links[0] && !rc; k++) {
         memset(&r, 0, sizeof r);
-        r.bps = links[k];
+        r.bps = links[k / 2];
+        r.timed = k % 2 == 0;
         rc = shaped_viewer(d, secs, &r);
         int measured = 0;
-        for (int i = 0; i < r.n; i++) measured += r.at[i] >= settle;
-        double fps = measured / (secs - settle);
+        double bsum = 0;
+        for (int i = 0; i < r.n; i++)
+            if (r.at[i] >= settle) {
+                measured++;
+                bsum += r.bytes[i];
+            }
+        double fps = measured / (secs - settle), bmean = measured ? bsum / measured : NAN;
         double a50 = 1e3 * pct(&r, r.age, settle, 50), a99 = 1e3 * pct(&r, r.age, settle, 99);
         double b50 = pct(&r, r.bytes, settle, 50), q50 = pct(&r, r.q, settle, 50), t50 = pct(&r, r.tiles, settle, 50);
         char name[32];
         if (r.bps > 0) snprintf(name, sizeof name, "%.0f MB/s", r.bps / 1e6);
         else snprintf(name, sizeof name, "unshaped");
-        printf("| %s | %.1f | %.1f | %.1f | %.0f | %.4g | %.0f |\n", name, fps, a50, a99, b50, q50, t50);
-        if (csv) fprintf(csv, "%.0f,%.2f,%.2f,%.2f,%.0f,%.6g,%.0f\n", r.bps, fps, a50, a99, b50, q50, t50);
+        const char *stream = r.timed ? "time-interp" : "plain";
+        printf("| %s | %s | %.1f | %.1f | %.1f | %.0f / %.0f | %.4g | %.0f | %d%s%s |\n", name, stream, fps, a50, a99,
+               b50, bmean, q50, t50, r.unread, r.unread ? ": " : "", r.why);
+        if (csv)
+            fprintf(csv, "%.0f,%s,%.2f,%.2f,%.2f,%.0f,%.0f,%.6g,%.0f,%d\n", r.bps, stream, fps, a50, a99, b50, bmean,
+                    q50, t50, r.unread);
+        /* a stream the viewer cannot follow is a failure, not a figure */
+        if (r.unread) rc = 1;
     }
     if (csv) fclose(csv);
     printf("\nThe daemon on config/oceand.conf (ship-bridge) in this process; one viewer at a time with the browser "
            "viewer's subscription and camera (25 m, 1920 x 1080), %.0f s a row of which the first %.0f s are not "
-           "measured.  Age: the daemon's sim clock at receipt minus the frame's sim time.  A coarser q is what a "
-           "slow link's frames give up for their bytes (PROTOCOL.md \"Pacing\").\n", secs, settle);
+           "measured; each link with the viewer's stream (time-interp: samples in time) and the plain one (every "
+           "frame whole, the viewer's before it).  Age: the daemon's sim clock at receipt minus the frame's sim "
+           "time.  A coarser q is what a slow link's frames give up for their bytes (PROTOCOL.md \"Pacing\").  "
+           "Every frame is decoded in order as the viewer does and read 30 m ahead of the camera: frames not read "
+           "counts those whose view missed the sea there (a sample missed or misapplied; any fails the bench).\n",
+           secs, settle);
     srv_daemon_stop(d);
     return rc;
 }

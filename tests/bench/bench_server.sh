@@ -19,7 +19,13 @@
 # (cascade tiles), every effect the scene computes (height, displacement,
 # normals, foam, near field), every cascade (layers = the server's maximum),
 # the concentric mesh, qz at accuracy 5e-3 (the viewer's since qz format 2: height >= 50 dB), the antialias cutoff policy,
-# camera at (0, 25, 0), yaw 30, pitch -10, fov 60.  Rows marked "viewer
+# samples in time (SUBSCRIBE flag time_interp: each mip's samples travel
+# once per its update interval, the client blends two; the generator follows
+# every 300th viewer's stream, every frame decoded in order, and counts the
+# others' frames), camera at (0, 25, 0), yaw 30, pitch -10, fov 60.  Rows
+# "browser viewer, plain stream" subscribe as the viewer did before samples
+# in time (the flag clear, every frame whole): bytes per viewer before and
+# after, from one run.  Rows marked "viewer
 # before issue 14" subscribe as the viewer did before: layout 0 (per-camera
 # world tiles and a server-displaced mesh, its positions f32), 64-sample
 # tiles, min(8, server.max_lod_levels) levels, level-0 spacing 1 m - the
@@ -78,30 +84,34 @@ levels=$(( maxlod < 8 ? maxlod : 8 ))
 # cores are reported beside the daemon's either way.
 browser=(--layout 1 --effects height,displacement,normals,foam,near --layers 4 --mesh concentric --codec qz
          --accuracy 0.005 --cutoff-policy antialias --tile-size 64 --levels "$levels" --spacing 0
-         --pos 0,25,0 --yaw 30 --pitch -10 --fov 60 --verify-every 300)
+         --pos 0,25,0 --yaw 30 --pitch -10 --fov 60 --time-interp on --verify-every 300)
+# the viewer before samples in time: the same with the plain stream
+plain=("${browser[@]/#on/off}")   # the one element "on" (--time-interp) becomes "off"
 before=(--layout 0 --effects height,displacement,normals,foam,near --layers 4 --mesh concentric --codec qz
         --accuracy 0.001 --cutoff-policy antialias --tile-size 64 --levels "$levels" --spacing 1
-        --mesh-codec f32 --pos 0,25,0 --yaw 30 --pitch -10 --fov 60 --verify-every 300)
+        --mesh-codec f32 --pos 0,25,0 --yaw 30 --pitch -10 --fov 60 --time-interp off --verify-every 300)
 # A layout-0 thin client today: the same, with the mesh positions as qz
 # (MESH_VERTICES_QZ at the same accuracy; bench_meshqz has their bytes and
 # error) instead of f32.
 thin=("${before[@]/#f32/qz}")   # the one element "f32" (--mesh-codec) becomes "qz"
-echo "viewers,seconds,frames_per_viewer,frames_expected,latency_p50_ms,latency_p99_ms,frames_skipped_per_viewer,daemon_cpu_cores,bytes_per_viewer_per_s,disconnects,errors,generator_cpu_cores,decode_errors,camera_spread_m,subscription,generator_cpu_cores_proc,daemon_rss_mb" >"$csv"
-echo "| subscription | viewers | cameras | frames/viewer (expected) | age p50 ms | age p99 ms | skipped/viewer | daemon CPU (cores) | MB/s per viewer | daemon RSS after, MB | generator CPU (cores, measured window / whole run) |"
-echo "|:---|---:|:---|---:|---:|---:|---:|---:|---:|---:|---:|"
+echo "viewers,seconds,frames_per_viewer,frames_expected,latency_p50_ms,latency_p99_ms,frames_skipped_per_viewer,daemon_cpu_cores,bytes_per_viewer_per_s,disconnects,errors,generator_cpu_cores,decode_errors,camera_spread_m,subscription,generator_cpu_cores_proc,daemon_rss_mb,streams_followed" >"$csv"
+echo "| subscription | viewers | cameras | frames/viewer (expected) | age p50 ms | age p99 ms | skipped/viewer | daemon CPU (cores) | MB/s per viewer | daemon RSS after, MB | generator CPU (cores, measured window / whole run) | streams followed / decode errors |"
+echo "|:---|---:|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
 # subscription:viewers:spread_m (0: every viewer at the same camera)
 if [[ -n "$quick" ]]; then
-    runs=(browser:1:0 browser:64:0 browser:64:20 browser:64:2000 before:64:20)
+    runs=(browser:1:0 browser:64:0 browser:64:20 browser:64:2000 plain:1:0 plain:64:20 before:64:20)
 else
     runs=(browser:1:0 browser:64:0 browser:256:0 browser:64:20 browser:256:20
-          browser:64:2000 browser:256:2000 before:1:0 before:256:0 before:64:20 before:256:20
+          browser:64:2000 browser:256:2000 plain:1:0 plain:64:20 plain:256:20
+          before:1:0 before:256:0 before:64:20 before:256:20
           before:256:2000 thin:256:20)
 fi
 for run in "${runs[@]}"; do
     IFS=: read -r sub n spread <<<"$run"
     cams=$(awk -v s="$spread" 'BEGIN {print (s > 0) ? (s >= 1000 ? s / 1000 " km apart" : s " m apart") : "shared"}')
     ramp=$(awk -v n="$n" 'BEGIN {print (n > 64) ? 3 : 1}')
-    if [[ "$sub" == browser ]]; then subopts=("${browser[@]}"); label="browser viewer (layout 1)"
+    if [[ "$sub" == browser ]]; then subopts=("${browser[@]}"); label="browser viewer (layout 1, time-interp)"
+    elif [[ "$sub" == plain ]]; then subopts=("${plain[@]}"); label="browser viewer, plain stream (before time-interp)"
     elif [[ "$sub" == thin ]]; then subopts=("${thin[@]}"); label="layout 0 thin client, compressed mesh"
     else subopts=("${before[@]}"); label="viewer before issue 14 (layout 0)"; fi
     c0=$(cpu "$pid"); t0=$(date +%s.%N)
@@ -125,20 +135,20 @@ import json, sys
 try:
     j = json.loads(sys.argv[1])
 except Exception:
-    print("nan,nan,nan,nan,nan,nan,nan,nan,nan,nan"); sys.exit()
+    print("nan,nan,nan,nan,nan,nan,nan,nan,nan,nan,nan"); sys.exit()
 g = lambda k: j.get(k) if j.get(k) is not None else float("nan")
 cc = g("client_cpu_cores")
 if cc != cc and g("seconds") > 0:
     cc = g("client_cpu_s") / g("seconds")
-print("%.1f,%.1f,%.2f,%.2f,%.1f,%.0f,%d,%d,%.2f,%d" % (g("frames_per_viewer"), g("frames_expected_per_viewer"),
+print("%.1f,%.1f,%.2f,%.2f,%.1f,%.0f,%d,%d,%.2f,%d,%d" % (g("frames_per_viewer"), g("frames_expected_per_viewer"),
       g("latency_p50_ms"), g("latency_p99_ms"), g("frames_skipped_per_viewer"),
-      g("bytes_per_viewer_per_s"), g("disconnects"), g("errors"), cc, g("decode_errors")))
+      g("bytes_per_viewer_per_s"), g("disconnects"), g("errors"), cc, g("decode_errors"), g("streams_followed")))
 PY
 )
-    IFS=, read -r fpv fexp p50 p99 skip bps disc err gcpu derr <<<"$row"
-    echo "$n,$secs,$fpv,$fexp,$p50,$p99,$skip,$cores,$bps,$disc,$err,$gcpu,$derr,$spread,$sub,$gproc,$rss" >>"$csv"
+    IFS=, read -r fpv fexp p50 p99 skip bps disc err gcpu derr fol <<<"$row"
+    echo "$n,$secs,$fpv,$fexp,$p50,$p99,$skip,$cores,$bps,$disc,$err,$gcpu,$derr,$spread,$sub,$gproc,$rss,$fol" >>"$csv"
     mbs=$(awk -v b="$bps" 'BEGIN {printf "%.2f", b / 1e6}')
-    echo "| $label | $n | $cams | $fpv ($fexp) | $p50 | $p99 | $skip | $cores | $mbs | $rss | $gcpu / $gproc |"
+    echo "| $label | $n | $cams | $fpv ($fexp) | $p50 | $p99 | $skip | $cores | $mbs | $rss | $gcpu / $gproc | $fol / $derr |"
 done
 echo
 echo "oceand on $(nproc) cores, config/oceand.conf ($(grep -o 'scene [a-z-]*, [0-9]* cascades of [0-9^]*' "$log" | head -1)), ${secs} s a row; browser-viewer subscription: ocean-client load ${browser[*]} ${extra[*]}; CSV: $csv"

@@ -54,6 +54,10 @@ int cmd_export(int argc, char **argv)
      * wire (4 bytes a sample) left the default scene's frame 3 coarse
      * tiles of one cascade (E_error 0.98, against 31 tiles and 0.0065). */
     s.codec = "qz";
+    /* the plain stream: export writes each frame's records as the sea at
+     * the frame's sim time, and a time-interpolating frame's records are
+     * samples of other ticks (PROTOCOL.md "Samples in time") */
+    s.time_interp = 0;
     const occli_opt opts[] = {
         {"out", OCCLI_STRING, &out, 0, 0, "DIR  directory for the .exr files and tiles.csv (created)", NULL},
         {"frames", OCCLI_INT, &nframes, 1, 100000, "N  frames to export", NULL},
@@ -72,6 +76,12 @@ int cmd_export(int argc, char **argv)
         return pr == 1 ? 0 : 2;
     if (np != 1 || !out) {
         fprintf(stderr, "ocean-client export: needs URL and --out DIR (see --help)\n");
+        return 2;
+    }
+    if (s.time_interp == 1) {
+        fprintf(stderr, "ocean-client export: option '--time-interp': on is not offered: a time-interpolating "
+                "frame's tiles are samples of other ticks than the frame's, and export writes each frame's "
+                "tiles as the sea at its sim time\n");
         return 2;
     }
     proto_subscribe sub;

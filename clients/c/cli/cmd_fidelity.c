@@ -6,7 +6,10 @@
  * down at --pitch (by default atan(H / range) + fov/4 below the horizon:
  * from 2 m the view reaches the horizon and sees enough sea for slope and
  * whitecap statistics, from 10 km half of it still lands within range), subscribed as the client library does by default (layout
- * 1, the browser viewer's subscription).  From each frame made for that
+ * 1, the browser viewer's subscription, samples in time included: each
+ * frame is read from the samples its connection holds, every frame
+ * applied in order by the library on receipt; --time-interp off reads the
+ * plain stream, and the report says which).  From each frame made for that
  * camera, a grid of the viewport's pixels is cast onto the mean sea plane
  * (y = 0) and the sea is read where each ray lands, through the spec's lod
  * rule at that point (oc_frame_sample: the pixel footprint decides the
@@ -74,6 +77,7 @@ typedef struct fid_acc {
     double tile_foam, tile_area;     /* cascade-0 FOAM samples of the frames, by sea area */
     double e_error, e_total, e_total_max;
     uint64_t samples, above, outside, frames, stale;
+    uint64_t rx_frames, rx_bytes;    /* every frame made for the camera */
 } fid_acc;
 
 static void sums_add(fid_sums *S, double w, const oc_sample *s, double whole)
@@ -95,18 +99,22 @@ static void sums_add(fid_sums *S, double w, const oc_sample *s, double whole)
  * each weighted by the sea it stands for (spacing^2).  From a low camera
  * the sea in view is a few square metres - far too few whitecaps for an
  * area statistic - while each tile stands for at least its cascade's
- * grid of 32 x 32 samples. */
+ * grid of 32 x 32 samples.  The tiles are those the frame's view reads
+ * (oc_frame_view_tile): of a time-interpolating stream, the blend at the
+ * frame's instant, not the samples of other ticks the frame brought. */
 static void tile_foam(const oc_frame *f, fid_acc *A)
 {
-    for (int t = 0; t < f->info.tile_count; t++) {
-        const oc_tile *tl = &f->tiles[t];
-        unsigned ch = tl->info.channels;
-        if (tl->info.cascade != 0 || !(ch & PROTO_CH_FOAM) || !tl->data) continue;
+    for (unsigned t = 0; t < oc_frame_view_tile_count(f); t++) {
+        proto_tile ti;
+        const float *data = NULL;
+        if (oc_frame_view_tile(f, t, &ti, &data) != OCEAN_OK) continue;
+        unsigned ch = ti.channels;
+        if (ti.cascade != 0 || !(ch & PROTO_CH_FOAM) || !data) continue;
         /* planes in codec order H, DX, DZ, NU, NV, FOAM: FOAM follows those present */
         int before = proto_tile_planes(ch & (PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL));
-        size_t n = (size_t)tl->info.width * tl->info.height;
-        const float *fp = tl->data + (size_t)before * n;
-        double w = tl->info.spacing * tl->info.spacing, sum = 0;
+        size_t n = (size_t)ti.width * ti.height;
+        const float *fp = data + (size_t)before * n;
+        double w = ti.spacing * ti.spacing, sum = 0;
         for (size_t i = 0; i < n; i++) sum += fp[i] < 0 ? 0 : fp[i] > 1 ? 1 : fp[i];
         A->tile_foam += w * sum;
         A->tile_area += w * (double)n;
@@ -184,6 +192,10 @@ int cmd_fidelity(int argc, char **argv)
     double height = 25, speed = 0, pitch = 1000, yaw = 0, fov = 60, spacing = 0, range = 0, settle = 0.3,
            interval = 0;
     int frames = 10, json = 0, verbose = 0, grid = 64, timeout_ms = 5000, vw = 1920, vh = 1080;
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    /* the library's stream (the viewer's: samples in time) unless asked */
+    int time_interp = (sub.flags & PROTO_SUB_TIME_INTERP) != 0;
     const char *codec = "qz", *interp_name = "cubic";
     const occli_opt opts[] = {
         {.name = "camera-height", .kind = OCCLI_DOUBLE, .target = &height, .min = 0.1, .max = 1e5,
@@ -218,6 +230,10 @@ int cmd_fidelity(int argc, char **argv)
          .help = "NAME  reading within a mip: cubic (Keys), linear, lanczos3"},
         {.name = "codec", .kind = OCCLI_STRING, .target = &codec,
          .help = "NAME  tile codec: f32 f16 qz exr-zip exr-piz exr-b44 exr-b44a"},
+        {.name = "time-interp", .kind = OCCLI_CHOICE, .target = &time_interp, .names = occli_off_on,
+         .help = "MODE  samples in time (the viewer's stream): each frame read from the\n"
+                 "                       blend of two samples the connection holds, every frame\n"
+                 "                       applied in order; off: the plain stream, each frame whole"},
         {.name = "settle", .kind = OCCLI_DOUBLE, .target = &settle, .min = 0, .max = 60,
          .help = "S  wait after the first frame made for the camera before measuring"},
         {.name = "interval", .kind = OCCLI_DOUBLE, .target = &interval, .min = 0, .max = 3600,
@@ -231,7 +247,8 @@ int cmd_fidelity(int argc, char **argv)
     int pr = occli_parse(argc, argv,
                          "usage: ocean-client fidelity URL --camera-height H --speed V [--frames N] [--json] [options]\n"
                          "Flies (or holds) a camera at height H and speed V, subscribed as the client library does\n"
-                         "(layout 1), and measures from the frames it receives what the sea delivers where the\n"
+                         "(layout 1, samples in time: --time-interp), and measures from the frames it receives\n"
+                         "what the sea delivers where the\n"
                          "viewport's pixels land: mean-square slope resolved by the tiles plus the unresolved\n"
                          "moments the frame carries (against Cox & Munk 1954), foam coverage (against Monahan &\n"
                          "O'Muircheartaigh 1980), e_error and e_total.",
@@ -253,8 +270,10 @@ int cmd_fidelity(int argc, char **argv)
         fprintf(stderr, "ocean-client fidelity: option '--interp': unknown '%s' (cubic linear lanczos3)\n", interp_name);
         return 2;
     }
-    proto_subscribe sub;
-    oc_subscribe_default(&sub);
+    if (time_interp == 1)
+        sub.flags |= PROTO_SUB_TIME_INTERP;
+    else
+        sub.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
     proto_codec pc;
     if (proto_codec_parse(codec, &pc) != OCEAN_OK) {
         fprintf(stderr, "ocean-client fidelity: option '--codec': unknown codec '%s'\n", codec);
@@ -338,6 +357,8 @@ int cmd_fidelity(int argc, char **argv)
             oc_frame_free(f);
             continue;
         }
+        A.rx_frames++;
+        A.rx_bytes += f->raw_len;
         if (f->info.layout != PROTO_LAYOUT_CASCADE) {
             layout0++;
             oc_frame_free(f);
@@ -402,10 +423,13 @@ int cmd_fidelity(int argc, char **argv)
     int mss_ok = fabs(mss_ratio - 1) <= 0.3 && fabs(mss_ratio_px - 1) <= 0.3;
     int foam_ok = !foam_applies || (foam_ratio >= 0.5 && foam_ratio <= 2);
     FILE *lines = json ? stderr : stdout;
+    const char *stream = time_interp == 1 ? "time-interpolating" : "plain";
     fprintf(lines, "camera: height %g m, speed %g m/s, pitch %g deg; %llu frames, %llu samples (%llu rays above the "
             "horizon, %llu outside the tiles); sea U10 %.2f m/s\n",
             height, speed, pitch, (unsigned long long)A.frames, (unsigned long long)A.samples,
             (unsigned long long)A.above, (unsigned long long)A.outside, u10);
+    fprintf(lines, "stream: %s (--time-interp %s); %.0f bytes a frame received over the run\n", stream,
+            occli_off_on[time_interp == 1], A.rx_frames ? (double)A.rx_bytes / A.rx_frames : 0.0);
     fprintf(lines, "(means per area of sea in view; per pixel in brackets where given)\n");
     fprintf(lines, "mss_resolved    %.5f  (x %.5f, z %.5f, xz %.5f; per pixel %.5f)\n", res, S->res_x / S->w,
             S->res_z / S->w, S->res_xz / S->w, res_px);
@@ -431,6 +455,10 @@ int cmd_fidelity(int argc, char **argv)
     if (json) {
         cJSON *o = cJSON_CreateObject();
         cJSON_AddStringToObject(o, "url", pos[0]);
+        /* which stream was read, and what it cost */
+        cJSON_AddStringToObject(o, "stream", stream);
+        cJSON_AddBoolToObject(o, "time_interp", time_interp == 1);
+        cJSON_AddNumberToObject(o, "bytes_per_frame", A.rx_frames ? (double)A.rx_bytes / A.rx_frames : 0.0);
         cJSON_AddNumberToObject(o, "camera_height_m", height);
         cJSON_AddNumberToObject(o, "speed_m_s", speed);
         cJSON_AddNumberToObject(o, "pitch_deg", pitch);

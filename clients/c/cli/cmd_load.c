@@ -4,8 +4,10 @@
  * frames delivered per viewer, tick-to-receipt latency percentiles, frames
  * the server skipped, bytes per viewer per second and the generator's own
  * CPU.  Two receive paths (load_run.h): the direct one (default: worker
- * threads, bulk frame reading, every Nth frame decoded in full) and the
- * client library (--library).
+ * threads, bulk frame reading, every Nth frame decoded in full, or on the
+ * viewer's time-interpolating stream every Nth viewer's stream followed
+ * frame by frame) and the client library (--library).  The viewers
+ * subscribe as the browser viewer does, --time-interp included.
  *
  * Latency: a frame's sim time is its tick's, and its tick's wall time is
  * the daemon's server.epoch plus that (PROTOCOL.md "Simulation clock"), so
@@ -36,6 +38,7 @@ typedef struct viewer {
 
 typedef struct load_ctx {
     int measuring;
+    int decode;               /* frames decoded: read each one's view */
     occli_vec *delay;         /* recv_wall - sim_time, s, of frames in the window */
     double min_delay;         /* over all frames and connections, whole run */
     uint64_t tiles_bad;
@@ -50,6 +53,10 @@ static void on_frame(void *user, oc_client *c, const oc_frame *f)
     double d = f->recv_wall - f->hdr.sim_time;
     if (d < L->min_delay)
         L->min_delay = d;
+    /* decoded frames (--decode): the client applied this one to its store
+     * on receipt; its view is read as a verified frame's is */
+    if (L->decode)
+        L->tiles_bad += (uint64_t)load_frame_bad(f);
     if (!L->measuring)
         return;
     v->frames++;
@@ -94,6 +101,7 @@ int load_library_run(const load_cfg *cfg, load_result *R)
     memset(&L, 0, sizeof L);
     L.min_delay = INFINITY;
     L.delay = &R->delay;
+    L.decode = cfg->decode;
     viewer *vs = calloc((size_t)nclients, sizeof *vs);
     if (!vs) {
         oc_loop_destroy(loop);
@@ -190,6 +198,8 @@ int load_library_run(const load_cfg *cfg, load_result *R)
         R->errors += st.errors_rx;
         R->decode_errors += st.decode_errors;
         if (subscribed && subscribed[i] == 1) {
+            /* a client that decodes follows its stream by itself */
+            R->followed += cfg->decode && load_timed(cfg);
             if (v->frames < R->fmin)
                 R->fmin = v->frames;
             if (v->frames > R->fmax)
@@ -257,12 +267,17 @@ int cmd_load(int argc, char **argv)
                                                  "                       online CPU, at most 4)", NULL},
         {"verify-every", OCCLI_INT, &verify_every, 1, 1000000,
          "N  decode every Nth frame of each viewer in full, tiles included,\n"
-         "                       staggered between viewers (1: every frame)", NULL},
+         "                       staggered between viewers (1: every frame); with\n"
+         "                       --time-interp on, whose frames are not whole alone, every\n"
+         "                       Nth viewer follows its stream instead: all its frames\n"
+         "                       decoded in order and read (1: every viewer)", NULL},
         {"decode", OCCLI_FLAG, &decode, 0, 0, "decode every frame in full (--verify-every 1; with --library:\n"
-                                               "                       decode every tile in the library)", NULL},
+                                               "                       decode every tile in the library, which follows\n"
+                                               "                       a time-interpolating stream itself)", NULL},
         {"library", OCCLI_FLAG, &library, 0, 0, "receive through the C client library, all viewers on one\n"
                                                  "                       oc_loop (one thread; libwebsockets' client parser costs\n"
-                                                 "                       ~6 ns a byte, so this path saturates first)", NULL},
+                                                 "                       ~6 ns a byte, so this path saturates first); reads\n"
+                                                 "                       FRAME headers only unless --decode", NULL},
         OCCLI_SUB_OPTS(&s),
     };
     const char *pos[1];
@@ -272,7 +287,12 @@ int cmd_load(int argc, char **argv)
                          "Connects N viewers, subscribes each at --rate and measures for S seconds: frames per\n"
                          "viewer, latency tick-to-receipt p50/p99, frames the server skipped, bytes per viewer\n"
                          "per second, the generator's CPU.  Every FRAME's header and fixed fields are checked;\n"
-                         "every --verify-every'th is decoded in full.",
+                         "every --verify-every'th is decoded in full.  The viewers subscribe as the browser\n"
+                         "viewer does, samples in time included (--time-interp on): each mip's tiles travel once\n"
+                         "per its update interval and a frame is read from the samples its connection holds,\n"
+                         "so a frame cannot be checked alone: every --verify-every'th viewer follows its\n"
+                         "stream (every frame decoded in order); the others' frames are counted, their bytes\n"
+                         "and latency measured, not read.  --time-interp off: the plain stream.",
                          opts, (int)(sizeof opts / sizeof opts[0]), pos, 1, &np);
     if (pr)
         return pr == 1 ? 0 : 2;
@@ -335,6 +355,7 @@ int cmd_load(int argc, char **argv)
     double fpv = (double)R.frames / nv;
     double bpvs = wall > 0 ? (double)R.bytes / nv / wall : 0;
     const char *path = library ? "library" : "direct";
+    int timed = load_timed(&cfg);
     if (json) {
         cJSON *o = cJSON_CreateObject();
         cJSON_AddStringToObject(o, "url", pos[0]);
@@ -344,6 +365,11 @@ int cmd_load(int argc, char **argv)
         cJSON_AddNumberToObject(o, "rate_hz", s.rate);
         cJSON_AddStringToObject(o, "codec", s.codec);
         cJSON_AddNumberToObject(o, "layout", cfg.sub.layout);
+        /* which stream: samples in time (the viewer's) or plain, and how
+         * many viewers decoded theirs in order (the rest read headers) */
+        cJSON_AddBoolToObject(o, "time_interp", timed);
+        cJSON_AddStringToObject(o, "stream", timed ? "time-interpolating" : "plain");
+        cJSON_AddNumberToObject(o, "streams_followed", R.followed);
         cJSON_AddNumberToObject(o, "effects", cfg.sub.effects);
         cJSON_AddNumberToObject(o, "layers", cfg.sub.layers);
         cJSON_AddNumberToObject(o, "tile_size", cfg.sub.tile_size);
@@ -393,8 +419,12 @@ int cmd_load(int argc, char **argv)
                                                   "wall rate)");
         occli_print_json(o);
     } else {
-        printf("layout %d (frames: %llu layout 0, %llu layout 1)\n", cfg.sub.layout,
-               (unsigned long long)R.frames_layout[0], (unsigned long long)R.frames_layout[1]);
+        printf("layout %d (frames: %llu layout 0, %llu layout 1), %s\n", cfg.sub.layout,
+               (unsigned long long)R.frames_layout[0], (unsigned long long)R.frames_layout[1],
+               timed ? "time-interpolating stream" : "plain stream");
+        if (timed)
+            printf("streams followed (every frame decoded in order, its view read): %d of %d viewers%s\n",
+                   R.followed, R.ready, R.followed < R.ready ? "; the others' frames were counted, not read" : "");
         printf("viewers %d/%d, %.2f s at %.1f Hz: %.1f frames/viewer (min %llu, max %llu, %.1f fps), "
                "latency p50 %.2f ms p99 %.2f ms max %.2f ms, skipped %llu, %.0f B/viewer/s, "
                "disconnects %d, errors %llu, decode errors %llu (%llu frames verified), "

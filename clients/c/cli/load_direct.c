@@ -37,6 +37,7 @@
 #include <wslay/wslay.h>
 
 #include "codec.h"
+#include "oc_held.h"
 #include "proto_buf.h"
 
 #define RB_SIZE (256u << 10)
@@ -72,6 +73,8 @@ typedef struct dv {
     int have_tick;
     uint64_t frames, bytes, skipped, errors, decode_errors, verified, nframe;
     uint64_t frames_layout[2];   /* FRAMEs in the window by layout */
+    oc_frame_stream *fs;         /* a followed time-interpolating stream:
+                                    every FRAME decoded through it */
     proto_camera cam;
 } dv;
 
@@ -191,11 +194,16 @@ static int ws_genmask_cb(wslay_event_context_ptr ctx, uint8_t *buf, size_t len, 
 
 static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n, double now);
 
-/* Whether the viewer's next FRAME is one to decode in full (staggered
- * between viewers); on_message counts it. */
+/* Whether the viewer's next FRAME is one to decode in full: every one of a
+ * followed stream, else staggered between viewers (a time-interpolating
+ * stream not followed has none that stands alone past its KEY frame, so
+ * none); on_message counts it. */
 static int frame_wanted_whole(const dv *v)
 {
-    return (v->nframe + (uint64_t)v->index) % (uint64_t)v->w->S->cfg->verify_every == 0;
+    const load_cfg *cfg = v->w->S->cfg;
+    if (v->fs || load_timed(cfg))
+        return v->fs != NULL;
+    return (v->nframe + (uint64_t)v->index) % (uint64_t)cfg->verify_every == 0;
 }
 
 static int mb_reserve(dv *v, size_t need)
@@ -380,32 +388,43 @@ static int queue_camera(worker *w, dv *v)
 
 /* ---- messages ------------------------------------------------------------ */
 
-/* Full decode of a FRAME as the client library receives it
- * (oc_frame_decode): every record, every tile decoded (the codecs refuse
- * non-finite values), and for layout 1 every tile placed in its cascade's
- * mip grid as the spec lays them out (oc_cascade_view_build); then one
- * point of the sea is read through the lod rule at the frame's camera.
- * 0 if all of it held. */
-static int verify_frame(worker *w, const uint8_t *p, size_t n)
+int load_frame_bad(const oc_frame *f)
 {
-    (void)w;
-    oc_frame *f = NULL;
-    char err[256];
-    if (oc_frame_decode(p, n, &f, err, sizeof err) != OCEAN_OK)
-        return 1;
     int bad = 0;
     /* has_mesh 2 (qz positions): proto_decode checked the payload's header;
      * its positions need the topology, which this reader does not keep */
     if (f->info.has_mesh == 1 && f->info.layout == PROTO_LAYOUT_WORLD && f->info.mesh.vertex_count &&
         !f->info.mesh.positions)
         bad++;
-    if (f->info.layout == PROTO_LAYOUT_CASCADE && f->info.tile_count) {
+    /* a whole frame without tiles has nothing to read; a time-interpolating
+     * one reads the samples its connection holds, and a stream followed
+     * wrongly (a frame missed or misapplied) reads nothing there */
+    if (f->info.layout == PROTO_LAYOUT_CASCADE && (f->info.tile_count || oc_held_frame_timed(&f->info))) {
         const double *cam = f->info.cascades.camera;
         oc_sample s;
         ocean_result r = oc_frame_sample(f, cam[0], cam[2], 0, &s);
         if (r != OCEAN_OK || !isfinite(s.height))
             bad++;
     }
+    return bad;
+}
+
+/* Full decode of a FRAME as the client library receives it
+ * (oc_frame_decode; through the viewer's stream fs when it follows one,
+ * as a client applies every frame on receipt): every record, every tile
+ * decoded (the codecs refuse non-finite values), and for layout 1 every
+ * tile placed in its cascade's mip grid as the spec lays them out
+ * (oc_cascade_view_build); then one point of the sea is read through the
+ * lod rule at the frame's camera (load_frame_bad).  0 if all of it held. */
+static int verify_frame(oc_frame_stream *fs, const uint8_t *p, size_t n)
+{
+    oc_frame *f = NULL;
+    char err[256];
+    ocean_result r = fs ? oc_frame_stream_decode(fs, p, n, &f, err, sizeof err)
+                        : oc_frame_decode(p, n, &f, err, sizeof err);
+    if (r != OCEAN_OK)
+        return 1;
+    int bad = load_frame_bad(f);
     oc_frame_free(f);
     return bad;
 }
@@ -451,6 +470,11 @@ static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n
         v->have_tick = 1;
         if (d < w->min_delay)
             w->min_delay = d;
+        /* a followed stream takes every frame, the window's and the ones
+         * before it, in order */
+        int whole = frame_wanted_whole(v);
+        if (whole && v->fs)
+            v->decode_errors += (uint64_t)verify_frame(v->fs, p, have);
         if (!measuring)
             return;
         v->frames++;
@@ -458,9 +482,10 @@ static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n
         v->bytes += n;
         if (occli_vec_push(&w->delay, d))
             w->oom = 1;
-        if (frame_wanted_whole(v)) {
+        if (whole) {
             v->verified++;
-            v->decode_errors += (uint64_t)verify_frame(w, p, have);
+            if (!v->fs)
+                v->decode_errors += (uint64_t)verify_frame(NULL, p, have);
         }
         v->nframe++;
         return;
@@ -799,6 +824,11 @@ int load_direct_run(const load_cfg *cfg, load_result *R)
         v->cam.pos[2] += cfg->spread * (i / side);
         v->cam.vel[0] = (float)(v->cam.vel[0] + cfg->speed);
         v->w = &ws[i % nt];
+        if (load_timed(cfg) && i % cfg->verify_every == 0 && oc_frame_stream_create(&v->fs) != OCEAN_OK) {
+            fprintf(stderr, "ocean-client load: out of memory\n");
+            rc = 1;
+            goto out;
+        }
     }
     /* viewer i goes to worker i % nt, so the connect ramp is shared evenly */
     int k = 0;
@@ -875,6 +905,7 @@ int load_direct_run(const load_cfg *cfg, load_result *R)
         R->frames_layout[0] += v->frames_layout[0];
         R->frames_layout[1] += v->frames_layout[1];
         R->closed += v->closed;
+        R->followed += v->ready && v->fs;
         if (v->ready) {
             if (v->frames < R->fmin)
                 R->fmin = v->frames;
@@ -907,6 +938,7 @@ out:
             close(v->fd);
         }
         wslay_event_context_free(v->ws);
+        oc_frame_stream_destroy(v->fs);
         free(v->hb);
         free(v->mb);
         free(v->ob);

@@ -12,9 +12,15 @@
  *    generator, not the daemon, would be measured.  Every FRAME's header and
  *    fixed fields (and a layout-1 frame's cascade block) are checked; every
  *    verify_every-th FRAME of each viewer (staggered between viewers) is
- *    decoded in full as the client library would, tiles included.
+ *    decoded in full as the client library would, tiles included.  A
+ *    time-interpolating stream (the viewer's; load_timed) has no whole
+ *    frames but its KEY frames, so there every verify_every-th viewer
+ *    follows its stream instead: every frame decoded in order through an
+ *    oc_frame_stream, its view read; the other viewers' frames are
+ *    checked as above and counted, never read.
  *  - load_library_run: every viewer is an oc_client on one oc_loop, as a
- *    simulator would connect (--library); header-only unless --decode.
+ *    simulator would connect (--library); header-only unless --decode,
+ *    which also follows a time-interpolating stream (the client does).
  *
  * Latency samples are kept raw (receipt wall time - FRAME sim_time) and
  * merged over every thread before percentiles are taken.
@@ -47,6 +53,8 @@ typedef struct load_result {
     uint64_t frames, bytes, skipped, dropped, errors, decode_errors, verified;
     uint64_t fmin, fmax;          /* frames of the least / most served viewer */
     uint64_t frames_layout[2];    /* frames by their layout (0 world, 1 cascade) */
+    int followed;                 /* viewers whose time-interpolating stream
+                                     was followed (every frame decoded) */
     int closed;
     occli_vec delay;              /* raw recv_wall - sim_time, s, in the window */
     double min_delay;             /* smallest such value over the whole run */
@@ -55,6 +63,20 @@ typedef struct load_result {
     char why[320];                /* the first reason a viewer was closed or
                                      refused (a BYE's text), or "" */
 } load_result;
+
+/* Whether cfg subscribes to samples in time (layout 1 with
+ * PROTO_SUB_TIME_INTERP; layout 0 ignores the flag). */
+static inline int load_timed(const load_cfg *cfg)
+{
+    return (cfg->sub.flags & PROTO_SUB_TIME_INTERP) && cfg->sub.layout == PROTO_LAYOUT_CASCADE;
+}
+
+/* What a decoded frame f fails of the checks a verified frame passes
+ * (load_direct.c): 0, or the count of problems (a layout-0 f32 mesh
+ * without positions; a layout-1 frame with tiles, or of a time-
+ * interpolating stream, whose view does not read a finite height at its
+ * camera). */
+int load_frame_bad(const oc_frame *f);
 
 /* Both return 0 when the run took place (the result says how well, and
  * ready < nclients that some viewers were never served), 1 on a setup

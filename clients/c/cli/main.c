@@ -340,6 +340,8 @@ void occli_progress_end(void)
     }
 }
 
+const char *const occli_off_on[] = {"off", "on", NULL};
+
 /* Names of the subscription enums, in their wire order (protocol/proto.h). */
 static const char *const mesh_names[] = {"concentric", "chunked", "projected", "none"};
 static const char *const policy_names[] = {"none", "seed", "antialias"};
@@ -364,6 +366,7 @@ void occli_sub_default(occli_sub *s)
     s->effects = fx;
     s->mesh = d.mesh_kind < 4 ? mesh_names[d.mesh_kind] : "concentric";
     s->layout = d.layout;
+    s->time_interp = (d.flags & PROTO_SUB_TIME_INTERP) != 0;
     s->mesh_codec = d.mesh_codec == PROTO_MESH_CODEC_QZ ? "qz" : "f32";
     s->policy = d.cutoff_policy < 3 ? policy_names[d.cutoff_policy] : "antialias";
     s->rate = d.frame_rate_hz;
@@ -451,7 +454,8 @@ int occli_sub_build(const char *cmd, const occli_sub *s, proto_subscribe *sub, p
         return 2;
     }
     sub->cutoff_policy = (uint8_t)pk;
-    sub->flags = s->full_geometry ? PROTO_SUB_FULL_GEOMETRY : 0;
+    sub->flags = (uint8_t)((s->full_geometry ? PROTO_SUB_FULL_GEOMETRY : 0) |
+                           (s->time_interp == 1 ? PROTO_SUB_TIME_INTERP : 0));
     sub->frame_rate_hz = (float)s->rate;
     sub->accuracy = (float)s->accuracy;
     sub->tile_size = (uint16_t)s->tile_size;

@@ -42,6 +42,8 @@ typedef struct occli_sub {
     int layout;            /* --layout 0|1 */
     const char *mesh_codec;/* --mesh-codec f32|qz (layout 0) */
     int full_geometry;     /* --full-geometry (layout 1: SUBSCRIBE.flags bit 0) */
+    int time_interp;       /* --time-interp off|on (index in occli_off_on;
+                              layout 1: SUBSCRIBE.flags bit 1) */
     const char *policy;    /* --cutoff-policy NAME */
     double rate;           /* --rate HZ */
     double accuracy;       /* --accuracy A */
@@ -56,6 +58,9 @@ typedef struct occli_sub {
     int timeout_ms;        /* --timeout MS (connect and replies) */
 } occli_sub;
 
+/* Names of an off/on choice, in that order (OCCLI_CHOICE). */
+extern const char *const occli_off_on[];
+
 #define OCCLI_SUB_OPTS(s)                                                                                   \
     {"codec", OCCLI_STRING, &(s)->codec, 0, 0, "NAME  tile codec: f32 f16 qz exr-zip exr-piz exr-b44 exr-b44a", NULL}, \
     {"effects", OCCLI_STRING, &(s)->effects, 0, 0, "LIST  height,displacement,normals,foam,near or all", NULL},        \
@@ -65,6 +70,9 @@ typedef struct occli_sub {
     {"mesh-codec", OCCLI_STRING, &(s)->mesh_codec, 0, 0, "NAME  layout-0 mesh positions: f32 or qz (at --accuracy)", NULL}, \
     {"full-geometry", OCCLI_FLAG, &(s)->full_geometry, 0, 0, "layout 1: height and displacement in every mip, also\n"   \
                                                       "                       those finer than the mesh shows", NULL}, \
+    {"time-interp", OCCLI_CHOICE, &(s)->time_interp, 0, 0, "MODE  layout 1: samples in time, the viewer's stream: each mip\n" \
+                                                      "                       travels once per its update interval and each frame\n" \
+                                                      "                       blends two samples the client holds", occli_off_on}, \
     {"cutoff-policy", OCCLI_STRING, &(s)->policy, 0, 0, "NAME  none seed antialias", NULL},                          \
     {"rate", OCCLI_DOUBLE, &(s)->rate, 0.1, 240, "HZ  frame rate asked of the server", NULL},                        \
     {"accuracy", OCCLI_DOUBLE, &(s)->accuracy, 1e-6, 0.5, "A  qz accuracy target", NULL},                           \
