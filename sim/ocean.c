@@ -834,10 +834,96 @@ ocean_result ocean_create_lattice(const ocean_params *p, double patch_m, const o
     return ocean_build(&q, 1, w, count, out, msg, msglen);
 }
 
+/* Every cascade's waves: from the spectrum, or the given lattice waves. */
+static ocean_result build_cascades(ocean *o, int lattice, const ocean_lattice_wave *lw, int nlw,
+                                   char *msg, size_t msglen)
+{
+    for (int c = 0; c < o->p.cascades; c++) {
+        char why[256] = "";
+        ocean_result r = lattice ? cascade_init_lattice(o, lw, nlw, why, sizeof why) : cascade_init(o, c);
+        if (r != OCEAN_OK) {
+            if (msg) {
+                if (why[0]) snprintf(msg, msglen, "%s", why);
+                else snprintf(msg, msglen, "out of memory for cascade %d", c);
+            }
+            return r;
+        }
+    }
+    return OCEAN_OK;
+}
+
+/* The planner flags of p's plan mode (caller holds planner_lock). */
+static ocean_result plan_flags(const ocean_params *p, unsigned *flags, char *msg, size_t msglen)
+{
+    *flags = FFTW_ESTIMATE;
+    if (p->plan_measure == OCEAN_PLAN_ESTIMATE) {
+        /* An ESTIMATE planner still takes wisdom of a higher patience, so
+         * wisdom left by a MEASURE or WISDOM ocean of this process would
+         * make its plans differ from another process's. */
+        fftwf_forget_wisdom();
+    } else if (p->plan_measure == OCEAN_PLAN_MEASURE) {
+        *flags = FFTW_MEASURE;
+    } else {
+        ocean_result r = wisdom_import(p->wisdom, msg, msglen);
+        if (r != OCEAN_OK)
+            return r;
+        *flags = FFTW_MEASURE | FFTW_WISDOM_ONLY;
+    }
+    return OCEAN_OK;
+}
+
+/* Why level l's c-channel plans (m = 8 << l, nthr threads) could not be
+ * made: a wisdom file without them, or FFTW itself. */
+static ocean_result plan_failure(const ocean *o, int l, int c, int nthr, unsigned flags, char *msg,
+                                 size_t msglen)
+{
+    int m = 8 << l;
+    if (flags & FFTW_WISDOM_ONLY) {
+        char what[96];
+        if (o->plan[l][c - 1])
+            snprintf(what, sizeof what, " (its column pass over %d of %d columns)",
+                     o->prune_cols[l], m / 2 + 1);
+        else
+            what[0] = '\0';
+        if (msg) snprintf(msg, msglen, "wisdom file '%s' has no plan for a %dx%d x%d "
+                          "transform%s on %d thread%s (made for another N, "
+                          "ocean.threads or scene, or by an older oceand?): "
+                          "regenerate it with `ocean-sim wisdom`",
+                          o->p.wisdom, m, m, c, what, nthr, nthr == 1 ? "" : "s");
+        return OCEAN_EUNSUPPORTED;
+    }
+    if (msg) snprintf(msg, msglen, "FFTW could not plan a %dx%d x%d transform", m, m, c);
+    return OCEAN_ENOMEM;
+}
+
+/* Every (size, batch) planned once, so evaluations only execute (caller
+ * holds planner_lock); tmp is the planner's output scratch. */
+static ocean_result plan_all(ocean *o, float *tmp, unsigned flags, char *msg, size_t msglen)
+{
+    int n = o->p.n;
+    for (int l = 0; (8 << l) <= n; l++) {
+        int m = 8 << l;
+        o->levels = l + 1;
+        int nthr = m >= PARALLEL_MIN_N ? o->p.threads : 1;
+        if (fftw_threads_ok)
+            fftwf_plan_with_nthreads(nthr);
+        o->prune_cols[l] = prune_columns(o, l);
+        for (int c = 1; c <= CH_COUNT; c++) {
+            int dims[2] = {m, m};
+            o->plan[l][c - 1] = fftwf_plan_many_dft_c2r(
+                2, dims, c, o->spec, NULL, 1, m * (m / 2 + 1), tmp, NULL, 1, m * m, flags);
+            if (o->plan[l][c - 1] && o->prune_cols[l])
+                plan_pruned(o, l, c, tmp, flags);
+            if (!o->plan[l][c - 1] || (o->prune_cols[l] && (!o->cols_plan[l][c - 1] || !o->rows_plan[l][c - 1])))
+                return plan_failure(o, l, c, nthr, flags, msg, msglen);
+        }
+    }
+    return OCEAN_OK;
+}
+
 static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_lattice_wave *lw,
                                 int nlw, ocean **out, char *msg, size_t msglen)
 {
-    ocean_result r;
     *out = NULL;
     pthread_once(&fftw_once, fftw_init_once);
     ocean *o = calloc(1, sizeof *o);
@@ -849,17 +935,10 @@ static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_
     ocean_force_paths(o, -1, -1);
     o->split_mode = -1;
     o->prune = 1;
-    for (int c = 0; c < p->cascades; c++) {
-        char why[256] = "";
-        r = lattice ? cascade_init_lattice(o, lw, nlw, why, sizeof why) : cascade_init(o, c);
-        if (r != OCEAN_OK) {
-            if (msg) {
-                if (why[0]) snprintf(msg, msglen, "%s", why);
-                else snprintf(msg, msglen, "out of memory for cascade %d", c);
-            }
-            ocean_destroy(o);
-            return r;
-        }
+    ocean_result r = build_cascades(o, lattice, lw, nlw, msg, msglen);
+    if (r != OCEAN_OK) {
+        ocean_destroy(o);
+        return r;
     }
     int n = p->n;
     {
@@ -875,65 +954,17 @@ static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_
         ocean_destroy(o);
         return OCEAN_ENOMEM;
     }
-    /* Plan every (size, batch) once; evaluations only execute. */
     pthread_mutex_lock(&planner_lock);
-    unsigned flags = FFTW_ESTIMATE;
-    if (p->plan_measure == OCEAN_PLAN_ESTIMATE) {
-        /* An ESTIMATE planner still takes wisdom of a higher patience, so
-         * wisdom left by a MEASURE or WISDOM ocean of this process would
-         * make its plans differ from another process's. */
-        fftwf_forget_wisdom();
-    } else if (p->plan_measure == OCEAN_PLAN_MEASURE) {
-        flags = FFTW_MEASURE;
-    } else {
-        r = wisdom_import(p->wisdom, msg, msglen);
-        if (r != OCEAN_OK) {
-            pthread_mutex_unlock(&planner_lock);
-            fftwf_free(tmp);
-            ocean_destroy(o);
-            return r;
-        }
-        flags = FFTW_MEASURE | FFTW_WISDOM_ONLY;
-    }
-    for (int l = 0; (8 << l) <= n; l++) {
-        int m = 8 << l;
-        o->levels = l + 1;
-        int nthr = m >= PARALLEL_MIN_N ? p->threads : 1;
-        if (fftw_threads_ok)
-            fftwf_plan_with_nthreads(nthr);
-        o->prune_cols[l] = prune_columns(o, l);
-        for (int c = 1; c <= CH_COUNT; c++) {
-            int dims[2] = {m, m};
-            o->plan[l][c - 1] = fftwf_plan_many_dft_c2r(
-                2, dims, c, o->spec, NULL, 1, m * (m / 2 + 1), tmp, NULL, 1, m * m, flags);
-            if (o->plan[l][c - 1] && o->prune_cols[l])
-                plan_pruned(o, l, c, tmp, flags);
-            if (!o->plan[l][c - 1] || (o->prune_cols[l] && (!o->cols_plan[l][c - 1] || !o->rows_plan[l][c - 1]))) {
-                pthread_mutex_unlock(&planner_lock);
-                fftwf_free(tmp);
-                if (flags & FFTW_WISDOM_ONLY) {
-                    char what[96];
-                    if (o->plan[l][c - 1])
-                        snprintf(what, sizeof what, " (its column pass over %d of %d columns)",
-                                 o->prune_cols[l], m / 2 + 1);
-                    else
-                        what[0] = '\0';
-                    if (msg) snprintf(msg, msglen, "wisdom file '%s' has no plan for a %dx%d x%d "
-                                      "transform%s on %d thread%s (made for another N, "
-                                      "ocean.threads or scene, or by an older oceand?): "
-                                      "regenerate it with `ocean-sim wisdom`",
-                                      p->wisdom, m, m, c, what, nthr, nthr == 1 ? "" : "s");
-                    ocean_destroy(o);
-                    return OCEAN_EUNSUPPORTED;
-                }
-                if (msg) snprintf(msg, msglen, "FFTW could not plan a %dx%d x%d transform", m, m, c);
-                ocean_destroy(o);
-                return OCEAN_ENOMEM;
-            }
-        }
-    }
+    unsigned flags;
+    r = plan_flags(p, &flags, msg, msglen);
+    if (r == OCEAN_OK)
+        r = plan_all(o, tmp, flags, msg, msglen);
     pthread_mutex_unlock(&planner_lock);
     fftwf_free(tmp);
+    if (r != OCEAN_OK) {
+        ocean_destroy(o);
+        return r;
+    }
     *out = o;
     return OCEAN_OK;
 }
