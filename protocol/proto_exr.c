@@ -97,38 +97,148 @@ static int plane_index(unsigned channels, const char *name)
     return -1;
 }
 
+/* One tile as the file stores it: np planes of n samples, HALF (bpe 2)
+ * or FLOAT (bpe 4), from src. */
+typedef struct exr_job {
+    int w, h;
+    unsigned channels;
+    int np, half, bpe;
+    size_t n;
+    const uint8_t *src;
+} exr_job;
+
+static ocean_result exr_compression_of(proto_codec c, exr_compression_t *comp, int *half,
+                                       char *err, size_t errlen)
+{
+    *half = 1;
+    switch (c) {
+    case PROTO_CODEC_EXR_ZIP: *comp = EXR_COMPRESSION_ZIP; *half = 0; break;
+    case PROTO_CODEC_EXR_PIZ: *comp = EXR_COMPRESSION_PIZ; break;
+    case PROTO_CODEC_EXR_B44: *comp = EXR_COMPRESSION_B44; break;
+    case PROTO_CODEC_EXR_B44A: *comp = EXR_COMPRESSION_B44A; break;
+    default:
+        ocean_seterr(err, errlen, "codec %d is not an EXR codec", (int)c);
+        return OCEAN_ETYPE;
+    }
+    return OCEAN_OK;
+}
+
+/* The total samples of planes as half floats into *hbuf (the caller
+ * frees it); a value beyond half's range is refused, not clamped. */
+static ocean_result exr_to_half(const float *planes, size_t total, uint16_t **hbuf, char *err,
+                                size_t errlen)
+{
+    *hbuf = NULL;
+    for (size_t i = 0; i < total; i++)
+        if (fabsf(planes[i]) > 65504.0f) {
+            ocean_seterr(err, errlen, "value %g beyond the half-float range", (double)planes[i]);
+            return OCEAN_ECODEC;
+        }
+    *hbuf = malloc(total * sizeof **hbuf);
+    if (!*hbuf)
+        return OCEAN_ENOMEM;
+    for (size_t i = 0; i < total; i++)
+        (*hbuf)[i] = proto_f16_from_f32(planes[i]);
+    return OCEAN_OK;
+}
+
+/* The header: one scanline part with the tile's data window and a channel
+ * per plane.  *stage names the call that failed. */
+static exr_result_t exr_put_header(exr_context_t ctx, const exr_job *j, exr_compression_t comp,
+                                   int *part, const char **stage)
+{
+    *stage = "add_part";
+    exr_result_t rv = exr_add_part(ctx, "ocean", EXR_STORAGE_SCANLINE, part);
+    if (rv == EXR_ERR_SUCCESS) {
+        *stage = "required_attr";
+        rv = exr_initialize_required_attr_simple(ctx, *part, j->w, j->h, comp);
+    }
+    for (int i = 0; i < j->np && rv == EXR_ERR_SUCCESS; i++) {
+        *stage = "add_channel";
+        rv = exr_add_channel(ctx, *part, proto_tile_plane_name(j->channels, i),
+                             j->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+    }
+    if (rv == EXR_ERR_SUCCESS) {
+        *stage = "write_header";
+        rv = exr_write_header(ctx);
+    }
+    return rv;
+}
+
+/* Points each of the encoder's channels at its plane's rows from chunk
+ * ci's first. */
+static exr_result_t exr_bind_channels(exr_encode_pipeline_t *enc, const exr_chunk_info_t *ci,
+                                      const exr_job *j)
+{
+    for (int k = 0; k < enc->channel_count; k++) {
+        exr_coding_channel_info_t *ch = &enc->channels[k];
+        int pi = plane_index(j->channels, ch->channel_name);
+        if (pi < 0)
+            return EXR_ERR_INVALID_ARGUMENT;
+        ch->encode_from_ptr = j->src + ((size_t)pi * j->n + (size_t)(ci->start_y) * j->w) * j->bpe;
+        ch->user_pixel_stride = j->bpe;
+        ch->user_line_stride = j->w * j->bpe;
+        ch->user_bytes_per_element = (int16_t)j->bpe;
+        ch->user_data_type = j->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+    }
+    return EXR_ERR_SUCCESS;
+}
+
+/* Every chunk of scanlines, encoded and written.  *stage names the call
+ * that failed. */
+static exr_result_t exr_put_chunks(exr_context_t ctx, int part, const exr_job *j, const char **stage)
+{
+    exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    int have_enc = 0;
+    int32_t lpc = 1;
+    *stage = "scanlines_per_chunk";
+    exr_result_t rv = exr_get_scanlines_per_chunk(ctx, part, &lpc);
+    for (int y = 0; y < j->h && rv == EXR_ERR_SUCCESS; y += lpc) {
+        exr_chunk_info_t ci;
+        *stage = "chunk_info";
+        rv = exr_write_scanline_chunk_info(ctx, part, y, &ci);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        *stage = "encoding_init";
+        rv = have_enc ? exr_encoding_update(ctx, part, &ci, &enc) : exr_encoding_initialize(ctx, part, &ci, &enc);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        rv = exr_bind_channels(&enc, &ci, j);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        if (!have_enc) {
+            have_enc = 1;
+            *stage = "choose_routines";
+            rv = exr_encoding_choose_default_routines(ctx, part, &enc);
+            if (rv != EXR_ERR_SUCCESS)
+                break;
+        }
+        *stage = "encoding_run";
+        rv = exr_encoding_run(ctx, part, &enc);
+    }
+    if (have_enc)
+        exr_encoding_destroy(ctx, &enc);
+    return rv;
+}
+
 ocean_result proto_exr_encode(proto_codec c, const proto_codec_params *p, int w, int h,
                               unsigned channels, const float *planes, proto_buf *out,
                               char *err, size_t errlen)
 {
     exr_compression_t comp;
-    int half = 1;
-    switch (c) {
-    case PROTO_CODEC_EXR_ZIP: comp = EXR_COMPRESSION_ZIP; half = 0; break;
-    case PROTO_CODEC_EXR_PIZ: comp = EXR_COMPRESSION_PIZ; break;
-    case PROTO_CODEC_EXR_B44: comp = EXR_COMPRESSION_B44; break;
-    case PROTO_CODEC_EXR_B44A: comp = EXR_COMPRESSION_B44A; break;
-    default:
-        ocean_seterr(err, errlen, "codec %d is not an EXR codec", (int)c);
-        return OCEAN_ETYPE;
-    }
-    int np = proto_tile_planes(channels);
-    size_t n = (size_t)w * h, total = n * (size_t)np;
+    int half;
+    ocean_result r = exr_compression_of(c, &comp, &half, err, errlen);
+    if (r != OCEAN_OK)
+        return r;
+    exr_job job = {w, h, channels, proto_tile_planes(channels), half, half ? 2 : 4,
+                   (size_t)w * h, (const uint8_t *)planes};
     uint16_t *hbuf = NULL;
     if (half) {
-        for (size_t i = 0; i < total; i++)
-            if (fabsf(planes[i]) > 65504.0f) {
-                ocean_seterr(err, errlen, "value %g beyond the half-float range", (double)planes[i]);
-                return OCEAN_ECODEC;
-            }
-        hbuf = malloc(total * sizeof *hbuf);
-        if (!hbuf)
-            return OCEAN_ENOMEM;
-        for (size_t i = 0; i < total; i++)
-            hbuf[i] = proto_f16_from_f32(planes[i]);
+        r = exr_to_half(planes, job.n * (size_t)job.np, &hbuf, err, errlen);
+        if (r != OCEAN_OK)
+            return r;
+        job.src = (const uint8_t *)hbuf;
     }
-    int bpe = half ? 2 : 4;
-    const uint8_t *src = half ? (const uint8_t *)hbuf : (const uint8_t *)planes;
 
     wstream ws = {out, out->len, 0};
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
@@ -138,70 +248,13 @@ ocean_result proto_exr_encode(proto_codec c, const proto_codec_params *p, int w,
     if (p && p->zip_level >= 1 && p->zip_level <= 9)
         init.zip_level = p->zip_level;
     exr_context_t ctx = NULL;
-    exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
-    int have_enc = 0;
     const char *stage = "start_write";
     exr_result_t rv = exr_start_write(&ctx, "tile.exr", EXR_WRITE_FILE_DIRECTLY, &init);
     int part = 0;
-    if (rv == EXR_ERR_SUCCESS) {
-        stage = "add_part";
-        rv = exr_add_part(ctx, "ocean", EXR_STORAGE_SCANLINE, &part);
-    }
-    if (rv == EXR_ERR_SUCCESS) {
-        stage = "required_attr";
-        rv = exr_initialize_required_attr_simple(ctx, part, w, h, comp);
-    }
-    for (int i = 0; i < np && rv == EXR_ERR_SUCCESS; i++) {
-        stage = "add_channel";
-        rv = exr_add_channel(ctx, part, proto_tile_plane_name(channels, i),
-                             half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
-    }
-    if (rv == EXR_ERR_SUCCESS) {
-        stage = "write_header";
-        rv = exr_write_header(ctx);
-    }
-    int32_t lpc = 1;
-    if (rv == EXR_ERR_SUCCESS) {
-        stage = "scanlines_per_chunk";
-        rv = exr_get_scanlines_per_chunk(ctx, part, &lpc);
-    }
-    for (int y = 0; y < h && rv == EXR_ERR_SUCCESS; y += lpc) {
-        exr_chunk_info_t ci;
-        stage = "chunk_info";
-        rv = exr_write_scanline_chunk_info(ctx, part, y, &ci);
-        if (rv != EXR_ERR_SUCCESS)
-            break;
-        stage = "encoding_init";
-        rv = have_enc ? exr_encoding_update(ctx, part, &ci, &enc) : exr_encoding_initialize(ctx, part, &ci, &enc);
-        if (rv != EXR_ERR_SUCCESS)
-            break;
-        for (int k = 0; k < enc.channel_count; k++) {
-            exr_coding_channel_info_t *ch = &enc.channels[k];
-            int pi = plane_index(channels, ch->channel_name);
-            if (pi < 0) {
-                rv = EXR_ERR_INVALID_ARGUMENT;
-                break;
-            }
-            ch->encode_from_ptr = src + ((size_t)pi * n + (size_t)(ci.start_y) * w) * bpe;
-            ch->user_pixel_stride = bpe;
-            ch->user_line_stride = w * bpe;
-            ch->user_bytes_per_element = (int16_t)bpe;
-            ch->user_data_type = half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
-        }
-        if (rv != EXR_ERR_SUCCESS)
-            break;
-        if (!have_enc) {
-            have_enc = 1;
-            stage = "choose_routines";
-            rv = exr_encoding_choose_default_routines(ctx, part, &enc);
-            if (rv != EXR_ERR_SUCCESS)
-                break;
-        }
-        stage = "encoding_run";
-        rv = exr_encoding_run(ctx, part, &enc);
-    }
-    if (have_enc)
-        exr_encoding_destroy(ctx, &enc);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_put_header(ctx, &job, comp, &part, &stage);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_put_chunks(ctx, part, &job, &stage);
     exr_result_t frv = ctx ? exr_finish(&ctx) : EXR_ERR_SUCCESS;
     if (rv == EXR_ERR_SUCCESS && frv != EXR_ERR_SUCCESS) {
         rv = frv;

@@ -518,94 +518,108 @@ static bool ignored(const loader *ld, const char *key, size_t klen)
     return false;
 }
 
-/* Parses one checked line (s NUL-terminated).  *empty reports a blank or
- * comment-only line. */
-static ocean_result line_parse(loader *ld, char *s, bool *empty)
+/* The key at *pp, up to its '=' (checked): *key, *klen; *pp then points
+ * past the '=' and the blanks after it.  lend ends the trimmed line. */
+static ocean_result line_key(loader *ld, char **pp, const char *lend, char **key, size_t *klen)
 {
-    char msg[MSG_MAX];
-    size_t slen = strlen(s);
-    char *p = s;
-    *empty = false;
-    while (is_blank(*p)) p++;
-    if (*p == '\0' || *p == '#') {
-        *empty = true;
-        return OCEAN_OK;
-    }
-    /* Trimmed line, for messages about the line as a whole. */
-    char *lend = s + slen;
-    while (lend > p && is_blank(lend[-1])) lend--;
-
-    char *key = p;
+    char *p = *pp;
+    *key = p;
     while (*p && *p != '=' && *p != '#' && !is_blank(*p)) p++;
-    size_t klen = (size_t)(p - key);
+    *klen = (size_t)(p - *key);
     while (is_blank(*p)) p++;
     if (*p != '=')
-        return fail(ld, OCEAN_EFORMAT, "missing '=' (expected key = value)", key,
-                    (size_t)(lend - key));
-    if (klen == 0)
-        return fail(ld, OCEAN_EFORMAT, "missing key before '='", key, (size_t)(lend - key));
-    if (!key_valid(key, klen))
+        return fail(ld, OCEAN_EFORMAT, "missing '=' (expected key = value)", *key,
+                    (size_t)(lend - *key));
+    if (*klen == 0)
+        return fail(ld, OCEAN_EFORMAT, "missing key before '='", *key, (size_t)(lend - *key));
+    if (!key_valid(*key, *klen))
         return fail(ld, OCEAN_EFORMAT,
-                    "bad key (lower-case words of a-z, 0-9, '_', '-' joined by '.')", key, klen);
+                    "bad key (lower-case words of a-z, 0-9, '_', '-' joined by '.')", *key, *klen);
     p++;
     while (is_blank(*p)) p++;
+    *pp = p;
+    return OCEAN_OK;
+}
 
-    /* The value: quoted, or up to a comment, blanks trimmed. */
-    char *val = p, *vend;
-    bool quoted = false;
-    if (*p == '"') {
-        quoted = true;
-        char *w = ++p;
-        val = w;
-        for (;;) {
-            if (*p == '\0')
-                return fail(ld, OCEAN_EFORMAT, "unterminated quoted value", val - 1,
-                            (size_t)(lend - (val - 1)));
-            if (*p == '"') break;
-            if (*p == '\\') {
-                if (p[1] != '"' && p[1] != '\\')
-                    return fail(ld, OCEAN_EFORMAT, "bad escape in quoted value (only \\\" and \\\\)",
-                                p, p[1] ? 2 : 1);
-                p++;
-            }
-            *w++ = *p++;
+/* The quoted value whose opening quote is at p, unescaped in place into
+ * [*val, *vend); only blanks and a comment may follow it. */
+static ocean_result quoted_value(loader *ld, char *p, const char *lend, char **val, char **vend)
+{
+    char *w = ++p;
+    *val = w;
+    for (;;) {
+        if (*p == '\0')
+            return fail(ld, OCEAN_EFORMAT, "unterminated quoted value", *val - 1,
+                        (size_t)(lend - (*val - 1)));
+        if (*p == '"') break;
+        if (*p == '\\') {
+            if (p[1] != '"' && p[1] != '\\')
+                return fail(ld, OCEAN_EFORMAT, "bad escape in quoted value (only \\\" and \\\\)",
+                            p, p[1] ? 2 : 1);
+            p++;
         }
-        vend = w;
-        p++;
-        while (is_blank(*p)) p++;
-        if (*p != '\0' && *p != '#')
-            return fail(ld, OCEAN_EFORMAT, "trailing text after the quoted value", p,
-                        (size_t)(lend - p));
+        *w++ = *p++;
+    }
+    *vend = w;
+    p++;
+    while (is_blank(*p)) p++;
+    if (*p != '\0' && *p != '#')
+        return fail(ld, OCEAN_EFORMAT, "trailing text after the quoted value", p,
+                    (size_t)(lend - p));
+    return OCEAN_OK;
+}
+
+/* The value at p (the line ends at end, trimmed at lend): quoted, or up
+ * to a comment, blanks trimmed; NUL-terminated in place. */
+static ocean_result line_value(loader *ld, char *p, char *end, const char *lend, char **val,
+                               bool *quoted)
+{
+    char *vend;
+    *val = p;
+    *quoted = false;
+    if (*p == '"') {
+        *quoted = true;
+        ocean_result r = quoted_value(ld, p, lend, val, &vend);
+        if (r != OCEAN_OK) return r;
     } else {
         vend = strchr(p, '#');
-        if (!vend) vend = s + slen;
-        while (vend > val && is_blank(vend[-1])) vend--;
+        if (!vend) vend = end;
+        while (vend > *val && is_blank(vend[-1])) vend--;
     }
     *vend = '\0';
-    key[klen] = '\0'; /* the key ended at a blank or '=' already consumed */
+    return OCEAN_OK;
+}
 
-    size_t t;
-    const conf_entry *e = conf_find(ld->set, key, &t);
-    if (!e) {
-        if (ignored(ld, key, klen)) return OCEAN_OK;
-        const char *best = NULL;
-        size_t bestd = SIZE_MAX;
-        for (size_t i = 0; i < ld->set->n; i++)
-            for (size_t j = 0; j < ld->set->tables[i]->count; j++) {
-                size_t d = edit_distance(key, ld->set->tables[i]->entries[j].name);
-                if (d < bestd) {
-                    bestd = d;
-                    best = ld->set->tables[i]->entries[j].name;
-                }
+/* A key no table has: fine in an ignored namespace, else an error naming
+ * the nearest known key when one is close. */
+static ocean_result unknown_key(loader *ld, const char *key, size_t klen)
+{
+    char msg[MSG_MAX];
+    if (ignored(ld, key, klen)) return OCEAN_OK;
+    const char *best = NULL;
+    size_t bestd = SIZE_MAX;
+    for (size_t i = 0; i < ld->set->n; i++)
+        for (size_t j = 0; j < ld->set->tables[i]->count; j++) {
+            size_t d = edit_distance(key, ld->set->tables[i]->entries[j].name);
+            if (d < bestd) {
+                bestd = d;
+                best = ld->set->tables[i]->entries[j].name;
             }
-        if (best && bestd <= 2)
-            ocean_seterr(msg, sizeof msg, "unknown key (did you mean '%s'?)", best);
-        else
-            ocean_seterr(msg, sizeof msg, "unknown key");
-        return fail(ld, OCEAN_EFORMAT, msg, key, klen);
-    }
+        }
+    if (best && bestd <= 2)
+        ocean_seterr(msg, sizeof msg, "unknown key (did you mean '%s'?)", best);
+    else
+        ocean_seterr(msg, sizeof msg, "unknown key");
+    return fail(ld, OCEAN_EFORMAT, msg, key, klen);
+}
+
+/* Entry e (table t, index idx over all tables) already given, or another
+ * of its group: the error, else OCEAN_OK. */
+static ocean_result key_repeat(loader *ld, const conf_entry *e, size_t t, size_t idx,
+                               const char *key, size_t klen)
+{
+    char msg[MSG_MAX];
     const conf_table *tab = ld->set->tables[t];
-    size_t idx = ld->base[t] + (size_t)(e - tab->entries);
     if (ld->seen && ld->seen[idx]) {
         ocean_seterr(msg, sizeof msg, "duplicate key (first set on line %d)", ld->seen[idx]);
         return fail(ld, OCEAN_EFORMAT, msg, key, klen);
@@ -619,9 +633,43 @@ static ocean_result line_parse(loader *ld, char *s, bool *empty)
                 return fail(ld, OCEAN_EINVAL, msg, key, klen);
             }
         }
+    return OCEAN_OK;
+}
+
+/* Parses one checked line (s NUL-terminated).  *empty reports a blank or
+ * comment-only line. */
+static ocean_result line_parse(loader *ld, char *s, bool *empty)
+{
+    size_t slen = strlen(s);
+    char *p = s;
+    *empty = false;
+    while (is_blank(*p)) p++;
+    if (*p == '\0' || *p == '#') {
+        *empty = true;
+        return OCEAN_OK;
+    }
+    /* Trimmed line, for messages about the line as a whole. */
+    char *lend = s + slen;
+    while (lend > p && is_blank(lend[-1])) lend--;
+    char *key, *val;
+    size_t klen;
+    bool quoted;
+    ocean_result r = line_key(ld, &p, lend, &key, &klen);
+    if (r == OCEAN_OK)
+        r = line_value(ld, p, s + slen, lend, &val, &quoted);
+    if (r != OCEAN_OK) return r;
+    key[klen] = '\0'; /* the key ended at a blank or '=' already consumed */
+
+    size_t t;
+    const conf_entry *e = conf_find(ld->set, key, &t);
+    if (!e) return unknown_key(ld, key, klen);
+    size_t idx = ld->base[t] + (size_t)(e - ld->set->tables[t]->entries);
+    r = key_repeat(ld, e, t, idx, key, klen);
+    if (r != OCEAN_OK) return r;
+    char msg[MSG_MAX];
     const char *bad;
     size_t badlen;
-    ocean_result r = parse_value(e, ld->scratch[t], val, quoted, msg, sizeof msg, &bad, &badlen);
+    r = parse_value(e, ld->scratch[t], val, quoted, msg, sizeof msg, &bad, &badlen);
     if (r != OCEAN_OK) return fail(ld, r, msg, bad, badlen);
     if (ld->seen) ld->seen[idx] = ld->line > 0 ? ld->line : 1;
     return OCEAN_OK;

@@ -654,13 +654,116 @@ static int points_ok(const double *x, const double *z, size_t n, const void *out
     return 1;
 }
 
-static void evaluate_points(eval_state *st, const double *x, const double *z, size_t n,
-                            ocean_gerstner_point *out)
+/* The eleven sums over the waves at one point, the fade not yet
+ * applied: eta, grad eta, D, grad D, dD/dt and d eta/dt. */
+typedef struct wave_sums {
+    double C, Sx, Sz, Dx, Dz, Dxx, Dxz, Dzz, Vx, Vy, Vz;
+} wave_sums;
+
+/* The sums at offset (ux, uz) from the cell whose phases are base.
+ * Phases, then sin/cos of all of them, then the sums; each stage is a
+ * simple loop the compiler vectorises. */
+static void point_sums(const eval_state *st, const double *base, double ux, double uz, wave_sums *s)
 {
     const ocean_gerstner *g = st->g;
     int M = g->count;
     const double *a = st->a;
     double q = st->q;
+    double th[OCEAN_GERSTNER_MAX_WAVES], sn[OCEAN_GERSTNER_MAX_WAVES];
+    double cs[OCEAN_GERSTNER_MAX_WAVES];
+    for (int i = 0; i < M; i++)
+        th[i] = base[i] + g->kx[i] * ux + g->kz[i] * uz;
+    sincos_many(th, sn, cs, M);
+    /* Eleven sums in two interleaved lanes (even/odd waves), which the
+     * compiler packs into one SSE2 register each. */
+    double acc[11][2] = {{0}};
+    int m2 = M & ~1;
+    for (int i = 0; i < m2; i += 2) {
+        for (int l = 0; l < 2; l++) {
+            int j = i + l;
+            double ai = a[j], as = ai * sn[j], qc = q * ai * cs[j], qs = q * ai * sn[j];
+            double w = g->omega[j];
+            acc[0][l] += ai * cs[j];
+            acc[1][l] += as * g->kx[j];
+            acc[2][l] += as * g->kz[j];
+            acc[3][l] += qs * g->hx[j];
+            acc[4][l] += qs * g->hz[j];
+            acc[5][l] += qc * (g->hx[j] * g->kx[j]);
+            acc[6][l] += qc * (g->hx[j] * g->kz[j]);
+            acc[7][l] += qc * (g->hz[j] * g->kz[j]);
+            acc[8][l] += as * w;
+            acc[9][l] += qc * w * g->hx[j];
+            acc[10][l] += qc * w * g->hz[j];
+        }
+    }
+    for (int j = m2; j < M; j++) {
+        double ai = a[j], as = ai * sn[j], qc = q * ai * cs[j], qs = q * ai * sn[j];
+        double w = g->omega[j];
+        acc[0][0] += ai * cs[j];
+        acc[1][0] += as * g->kx[j];
+        acc[2][0] += as * g->kz[j];
+        acc[3][0] += qs * g->hx[j];
+        acc[4][0] += qs * g->hz[j];
+        acc[5][0] += qc * (g->hx[j] * g->kx[j]);
+        acc[6][0] += qc * (g->hx[j] * g->kz[j]);
+        acc[7][0] += qc * (g->hz[j] * g->kz[j]);
+        acc[8][0] += as * w;
+        acc[9][0] += qc * w * g->hx[j];
+        acc[10][0] += qc * w * g->hz[j];
+    }
+    /* Signs: eta = sum a cos; grad eta = -sum a k sin; D = -sum Q a h
+     * sin; grad D = -sum Q a h k cos (hx kz = hz kx); dD/dt = +sum Q a
+     * h w cos; d eta/dt = +sum a w sin. */
+    s->C = acc[0][0] + acc[0][1];
+    s->Sx = -(acc[1][0] + acc[1][1]);
+    s->Sz = -(acc[2][0] + acc[2][1]);
+    s->Dx = -(acc[3][0] + acc[3][1]);
+    s->Dz = -(acc[4][0] + acc[4][1]);
+    s->Dxx = -(acc[5][0] + acc[5][1]);
+    s->Dxz = -(acc[6][0] + acc[6][1]);
+    s->Dzz = -(acc[7][0] + acc[7][1]);
+    s->Vy = acc[8][0] + acc[8][1];
+    s->Vx = acc[9][0] + acc[9][1];
+    s->Vz = acc[10][0] + acc[10][1];
+}
+
+/* The point from its sums and the fade f (gradient fx, fz), whose own
+ * slope enters every derivative. */
+static void point_set(ocean_gerstner_point *o, double f, double fx, double fz, const wave_sums *s)
+{
+    o->dy = f * s->C;
+    o->dx = f * s->Dx;
+    o->dz = f * s->Dz;
+    o->vx = f * s->Vx;
+    o->vy = f * s->Vy;
+    o->vz = f * s->Vz;
+    double ex = f * s->Sx + fx * s->C, ez = f * s->Sz + fz * s->C; /* d eta/dx, d eta/dz */
+    double dxx = f * s->Dxx + fx * s->Dx, dxz = f * s->Dxz + fz * s->Dx; /* dDx/dx, dDx/dz */
+    double dzx = f * s->Dxz + fx * s->Dz, dzz = f * s->Dzz + fz * s->Dz; /* dDz/dx, dDz/dz */
+    double J = (1.0 + dxx) * (1.0 + dzz) - dxz * dzx;
+    o->jacobian = J;
+    o->slope_x = ex;
+    o->slope_z = ez;
+    o->dxx = dxx;
+    o->dxz = dxz;
+    o->dzx = dzx;
+    o->dzz = dzz;
+    /* N = T_z x T_x with T_x = (1+dxx, ex, dzx), T_z = (dxz, ez, 1+dzz). */
+    double nx = ez * dzx - (1.0 + dzz) * ex;
+    double ny = J;
+    double nz = dxz * ex - ez * (1.0 + dxx);
+    double len = sqrt(nx * nx + ny * ny + nz * nz);
+    if (len > 0.0 && isfinite(len)) {
+        o->nx = nx / len;
+        o->ny = ny / len;
+        o->nz = nz / len;
+    }
+}
+
+static void evaluate_points(eval_state *st, const double *x, const double *z, size_t n,
+                            ocean_gerstner_point *out)
+{
+    int M = st->g->count;
     for (size_t p = 0; p < n; p++) {
         ocean_gerstner_point *o = &out[p];
         double fx, fz;
@@ -671,95 +774,13 @@ static void evaluate_points(eval_state *st, const double *x, const double *z, si
         o->fade = f;
         if (f == 0.0 || M == 0)
             continue;
-
         double cx = CELL_M * nearbyint(x[p] / CELL_M), cz = CELL_M * nearbyint(z[p] / CELL_M);
         const double *base = cell_base(st, cx, cz);
-        double ux = x[p] - cx, uz = z[p] - cz; /* exact */
-
-        /* Phases, then sin/cos of all of them, then the sums (f not yet
-         * applied); each stage is a simple loop the compiler vectorises. */
-        double th[OCEAN_GERSTNER_MAX_WAVES], sn[OCEAN_GERSTNER_MAX_WAVES];
-        double cs[OCEAN_GERSTNER_MAX_WAVES];
-        for (int i = 0; i < M; i++)
-            th[i] = base[i] + g->kx[i] * ux + g->kz[i] * uz;
-        sincos_many(th, sn, cs, M);
-        /* Eleven sums in two interleaved lanes (even/odd waves), which
-         * the compiler packs into one SSE2 register each. */
-        double acc[11][2] = {{0}};
-        int m2 = M & ~1;
-        for (int i = 0; i < m2; i += 2) {
-            for (int l = 0; l < 2; l++) {
-                int j = i + l;
-                double ai = a[j], as = ai * sn[j], qc = q * ai * cs[j], qs = q * ai * sn[j];
-                double w = g->omega[j];
-                acc[0][l] += ai * cs[j];
-                acc[1][l] += as * g->kx[j];
-                acc[2][l] += as * g->kz[j];
-                acc[3][l] += qs * g->hx[j];
-                acc[4][l] += qs * g->hz[j];
-                acc[5][l] += qc * (g->hx[j] * g->kx[j]);
-                acc[6][l] += qc * (g->hx[j] * g->kz[j]);
-                acc[7][l] += qc * (g->hz[j] * g->kz[j]);
-                acc[8][l] += as * w;
-                acc[9][l] += qc * w * g->hx[j];
-                acc[10][l] += qc * w * g->hz[j];
-            }
-        }
-        for (int j = m2; j < M; j++) {
-            double ai = a[j], as = ai * sn[j], qc = q * ai * cs[j], qs = q * ai * sn[j];
-            double w = g->omega[j];
-            acc[0][0] += ai * cs[j];
-            acc[1][0] += as * g->kx[j];
-            acc[2][0] += as * g->kz[j];
-            acc[3][0] += qs * g->hx[j];
-            acc[4][0] += qs * g->hz[j];
-            acc[5][0] += qc * (g->hx[j] * g->kx[j]);
-            acc[6][0] += qc * (g->hx[j] * g->kz[j]);
-            acc[7][0] += qc * (g->hz[j] * g->kz[j]);
-            acc[8][0] += as * w;
-            acc[9][0] += qc * w * g->hx[j];
-            acc[10][0] += qc * w * g->hz[j];
-        }
-        /* Signs: eta = sum a cos; grad eta = -sum a k sin; D = -sum Q a h
-         * sin; grad D = -sum Q a h k cos (hx kz = hz kx); dD/dt = +sum Q a
-         * h w cos; d eta/dt = +sum a w sin. */
-        double C = acc[0][0] + acc[0][1];
-        double Sx = -(acc[1][0] + acc[1][1]), Sz = -(acc[2][0] + acc[2][1]);
-        double Dx = -(acc[3][0] + acc[3][1]), Dz = -(acc[4][0] + acc[4][1]);
-        double Dxx = -(acc[5][0] + acc[5][1]), Dxz = -(acc[6][0] + acc[6][1]);
-        double Dzz = -(acc[7][0] + acc[7][1]);
-        double Vy = acc[8][0] + acc[8][1];
-        double Vx = acc[9][0] + acc[9][1], Vz = acc[10][0] + acc[10][1];
-        o->dy = f * C;
-        o->dx = f * Dx;
-        o->dz = f * Dz;
-        o->vx = f * Vx;
-        o->vy = f * Vy;
-        o->vz = f * Vz;
-        double ex = f * Sx + fx * C, ez = f * Sz + fz * C; /* d eta/dx, d eta/dz */
-        double dxx = f * Dxx + fx * Dx, dxz = f * Dxz + fz * Dx; /* dDx/dx, dDx/dz */
-        double dzx = f * Dxz + fx * Dz, dzz = f * Dzz + fz * Dz; /* dDz/dx, dDz/dz */
-        double J = (1.0 + dxx) * (1.0 + dzz) - dxz * dzx;
-        o->jacobian = J;
-        o->slope_x = ex;
-        o->slope_z = ez;
-        o->dxx = dxx;
-        o->dxz = dxz;
-        o->dzx = dzx;
-        o->dzz = dzz;
-        /* N = T_z x T_x with T_x = (1+dxx, ex, dzx), T_z = (dxz, ez, 1+dzz). */
-        double nx = ez * dzx - (1.0 + dzz) * ex;
-        double ny = J;
-        double nz = dxz * ex - ez * (1.0 + dxx);
-        double len = sqrt(nx * nx + ny * ny + nz * nz);
-        if (len > 0.0 && isfinite(len)) {
-            o->nx = nx / len;
-            o->ny = ny / len;
-            o->nz = nz / len;
-        }
+        wave_sums s;
+        point_sums(st, base, x[p] - cx, z[p] - cz, &s); /* offsets exact */
+        point_set(o, f, fx, fz, &s);
     }
 }
-
 
 ocean_result ocean_gerstner_evaluate(const ocean_gerstner *g, const ocean_gerstner_view *v,
                                      double t, const double *x, const double *z, size_t n,
@@ -902,6 +923,172 @@ static void grid_store(float *plane, size_t at, double v, int acc)
     plane[at] = acc ? (float)(plane[at] + v) : (float)v;
 }
 
+/* Row r of every plane to zero (planes a grid does not accumulate into). */
+static void grid_clear_row(const ocean_gerstner_grid *g, int r)
+{
+    for (int j = 0; j < g->w; j++) {
+        size_t at = (size_t)r * g->stride + j;
+        grid_store(g->height, at, 0, 0); grid_store(g->dx, at, 0, 0);
+        grid_store(g->dz, at, 0, 0); grid_store(g->slope_x, at, 0, 0);
+        grid_store(g->slope_z, at, 0, 0); grid_store(g->dxx, at, 0, 0);
+        grid_store(g->dzz, at, 0, 0); grid_store(g->dxz, at, 0, 0);
+    }
+}
+
+/* The waves a grid evaluation sums (those the filter left), packed: each
+ * one's coefficient in every plane, its wave vector and its phase at
+ * sample (0, 0); with the row factor and the w column factors
+ * e^{i k.x}. */
+typedef struct grid_work {
+    int M;
+    size_t mm;
+    double *ca, *cdx, *cdz, *csx, *csz, *cxx, *cxz, *czz;   /* coefficients */
+    double *rc, *rs;        /* the row's factor, cos and sin */
+    double *colc, *cols;    /* column j's factor at [mm * j] */
+    double *th, *kx, *kz;   /* phase scratch, wave vectors */
+    double *row0;           /* phase at sample (0, 0) */
+    double *buf;
+} grid_work;
+
+static ocean_result grid_work_alloc(grid_work *gw, int M, int w)
+{
+    size_t mm = (size_t)M;
+    gw->M = M;
+    gw->mm = mm;
+    /* coefficient planes (8), row factor (2), column factors (2 w) */
+    gw->buf = malloc(sizeof(double) * mm * (8 + 2 + 2 * (size_t)w + 3));
+    gw->row0 = malloc(sizeof(double) * mm);
+    if (gw->buf == NULL || gw->row0 == NULL) {
+        free(gw->buf);
+        free(gw->row0);
+        return OCEAN_ENOMEM;
+    }
+    gw->ca = gw->buf;
+    gw->cdx = gw->ca + mm;
+    gw->cdz = gw->cdx + mm;
+    gw->csx = gw->cdz + mm;
+    gw->csz = gw->csx + mm;
+    gw->cxx = gw->csz + mm;
+    gw->cxz = gw->cxx + mm;
+    gw->czz = gw->cxz + mm;
+    gw->rc = gw->czz + mm;
+    gw->rs = gw->rc + mm;
+    gw->colc = gw->rs + mm;
+    gw->cols = gw->colc + mm * w;
+    gw->th = gw->cols + mm * w;
+    gw->kx = gw->th + mm;
+    gw->kz = gw->kx + mm;
+    return OCEAN_OK;
+}
+
+static void grid_work_free(grid_work *gw)
+{
+    free(gw->row0);
+    free(gw->buf);
+}
+
+/* The waves the filter left, packed into gw, and their column factors,
+ * each from its own reduced phase (no recurrence, so no error growth along
+ * the row). */
+static void grid_pack(grid_work *gw, const eval_state *st, const ocean_gerstner_grid *g)
+{
+    const ocean_gerstner *gs = st->g;
+    double q = st->q;
+    int m = 0;
+    for (int i = 0; i < gs->count; i++) {
+        double a = st->a[i];
+        if (a == 0.0)
+            continue;
+        gw->ca[m] = a;
+        gw->cdx[m] = -q * a * gs->hx[i];
+        gw->cdz[m] = -q * a * gs->hz[i];
+        gw->csx[m] = -a * gs->kx[i];
+        gw->csz[m] = -a * gs->kz[i];
+        gw->cxx[m] = -q * a * gs->hx[i] * gs->kx[i];
+        gw->cxz[m] = -q * a * gs->hx[i] * gs->kz[i];
+        gw->czz[m] = -q * a * gs->hz[i] * gs->kz[i];
+        gw->kx[m] = gs->kx[i];
+        gw->kz[m] = gs->kz[i];
+        /* phase at sample (0, 0), reduced exactly as the one-point path */
+        gw->th[m] = wrap_2pi(st->tphase[i] + mulmod_2pi(gs->kx[i], g->x0) +
+                             mulmod_2pi(gs->kz[i], g->z0));
+        m++;
+    }
+    memcpy(gw->row0, gw->th, sizeof(double) * gw->mm);
+    for (int j = 0; j < g->w; j++) {
+        double js = j * g->spacing;
+        for (int i = 0; i < gw->M; i++)
+            gw->th[i] = mulmod_2pi(gw->kx[i], js);
+        sincos_many(gw->th, gw->cols + gw->mm * j, gw->colc + gw->mm * j, gw->M);
+    }
+}
+
+/* The sums of the planes at column j of the current row (fade not yet
+ * applied); the phase of each wave is the row factor times the column's. */
+typedef struct grid_sums {
+    double C, Dx, Dz, Sx, Sz, Dxx, Dxz, Dzz;
+} grid_sums;
+
+static void grid_sum(const grid_work *gw, int j, grid_sums *out)
+{
+    const double *rc = gw->rc, *rs = gw->rs;
+    const double *cc = gw->colc + gw->mm * j, *cs = gw->cols + gw->mm * j;
+    const double *ca = gw->ca, *cdx = gw->cdx, *cdz = gw->cdz, *csx = gw->csx, *csz = gw->csz;
+    const double *cxx = gw->cxx, *cxz = gw->cxz, *czz = gw->czz;
+    double C = 0, Dx = 0, Dz = 0, Sx = 0, Sz = 0, Dxx = 0, Dxz = 0, Dzz = 0;
+    int M = gw->M;
+#pragma omp simd reduction(+ : C, Dx, Dz, Sx, Sz, Dxx, Dxz, Dzz)
+    for (int i = 0; i < M; i++) {
+        double c = rc[i] * cc[i] - rs[i] * cs[i];
+        double s = rs[i] * cc[i] + rc[i] * cs[i];
+        C += ca[i] * c;
+        Dx += cdx[i] * s;
+        Dz += cdz[i] * s;
+        Sx += csx[i] * s;
+        Sz += csz[i] * s;
+        Dxx += cxx[i] * c;
+        Dxz += cxz[i] * c;
+        Dzz += czz[i] * c;
+    }
+    *out = (grid_sums){C, Dx, Dz, Sx, Sz, Dxx, Dxz, Dzz};
+}
+
+/* Row r of the grid: rows wholly outside the fade are skipped. */
+static void grid_row(grid_work *gw, const eval_state *st, const ocean_gerstner_grid *g, int r)
+{
+    int fade = !isinf(st->view.fade_r1);
+    double z = g->z0 + r * g->spacing, rsp = r * g->spacing;
+    if (fade && fabs(z - st->view.camera_z) >= st->view.fade_r1) {
+        if (!g->accumulate)
+            grid_clear_row(g, r);
+        return;
+    }
+    for (int i = 0; i < gw->M; i++)
+        gw->th[i] = gw->row0[i] + mulmod_2pi(gw->kz[i], rsp);
+    sincos_many(gw->th, gw->rs, gw->rc, gw->M);
+    for (int j = 0; j < g->w; j++) {
+        double x = g->x0 + j * g->spacing;
+        double fx = 0.0, fz = 0.0, fv = 1.0;
+        if (fade)
+            fv = fade_at(&st->view, x, z, &fx, &fz);
+        size_t at = (size_t)r * g->stride + j;
+        grid_sums s = {0, 0, 0, 0, 0, 0, 0, 0};
+        if (fv != 0.0)
+            grid_sum(gw, j, &s);
+        int acc = g->accumulate;
+        if (fv == 0.0 && acc)
+            continue;
+        grid_store(g->height, at, fv * s.C, acc);
+        grid_store(g->dx, at, fv * s.Dx, acc);
+        grid_store(g->dz, at, fv * s.Dz, acc);
+        grid_store(g->slope_x, at, fv * s.Sx + fx * s.C, acc);
+        grid_store(g->slope_z, at, fv * s.Sz + fz * s.C, acc);
+        grid_store(g->dxx, at, fv * s.Dxx + fx * s.Dx, acc);
+        grid_store(g->dzz, at, fv * s.Dzz + fz * s.Dz, acc);
+        grid_store(g->dxz, at, fv * s.Dxz + 0.5 * (fz * s.Dx + fx * s.Dz), acc);
+    }
+}
+
 ocean_result ocean_gerstner_frame_sample_grid(ocean_gerstner_frame *f,
                                               const ocean_gerstner_grid *g)
 {
@@ -910,123 +1097,22 @@ ocean_result ocean_gerstner_frame_sample_grid(ocean_gerstner_frame *f,
     if (!f->ready)
         return OCEAN_ESTATE;
     const eval_state *st = &f->st;
-    const ocean_gerstner *gs = st->g;
-    int w = g->w, h = g->h;
     /* Waves the filter silenced cost nothing: keep the others, packed. */
     int M = 0;
-    for (int i = 0; i < gs->count; i++)
+    for (int i = 0; i < st->g->count; i++)
         M += st->a[i] != 0.0;
     if (M == 0) {
         if (!g->accumulate)
-            for (int i = 0; i < h; i++)
-                for (int j = 0; j < w; j++) {
-                    size_t at = (size_t)i * g->stride + j;
-                    grid_store(g->height, at, 0, 0); grid_store(g->dx, at, 0, 0);
-                    grid_store(g->dz, at, 0, 0); grid_store(g->slope_x, at, 0, 0);
-                    grid_store(g->slope_z, at, 0, 0); grid_store(g->dxx, at, 0, 0);
-                    grid_store(g->dzz, at, 0, 0); grid_store(g->dxz, at, 0, 0);
-                }
+            for (int r = 0; r < g->h; r++)
+                grid_clear_row(g, r);
         return OCEAN_OK;
     }
-    /* coefficient planes (8), row factor (2), column factors (2 w) */
-    size_t mm = (size_t)M;
-    double *buf = malloc(sizeof(double) * mm * (8 + 2 + 2 * (size_t)w + 3));
-    if (buf == NULL)
+    grid_work gw;
+    if (grid_work_alloc(&gw, M, g->w) != OCEAN_OK)
         return OCEAN_ENOMEM;
-    double *ca = buf, *cdx = ca + mm, *cdz = cdx + mm, *csx = cdz + mm, *csz = csx + mm;
-    double *cxx = csz + mm, *cxz = cxx + mm, *czz = cxz + mm;
-    double *rc = czz + mm, *rs = rc + mm, *colc = rs + mm, *cols = colc + mm * w;
-    double *th = cols + mm * w, *kx = th + mm, *kz = kx + mm;
-    double q = st->q;
-    int m = 0;
-    for (int i = 0; i < gs->count; i++) {
-        double a = st->a[i];
-        if (a == 0.0)
-            continue;
-        ca[m] = a;
-        cdx[m] = -q * a * gs->hx[i];
-        cdz[m] = -q * a * gs->hz[i];
-        csx[m] = -a * gs->kx[i];
-        csz[m] = -a * gs->kz[i];
-        cxx[m] = -q * a * gs->hx[i] * gs->kx[i];
-        cxz[m] = -q * a * gs->hx[i] * gs->kz[i];
-        czz[m] = -q * a * gs->hz[i] * gs->kz[i];
-        kx[m] = gs->kx[i];
-        kz[m] = gs->kz[i];
-        /* phase at sample (0, 0), reduced exactly as the one-point path */
-        th[m] = wrap_2pi(st->tphase[i] + mulmod_2pi(gs->kx[i], g->x0) +
-                         mulmod_2pi(gs->kz[i], g->z0));
-        m++;
-    }
-    double *row0 = malloc(sizeof(double) * mm);
-    if (row0 == NULL) {
-        free(buf);
-        return OCEAN_ENOMEM;
-    }
-    memcpy(row0, th, sizeof(double) * mm);
-    /* column factors e^{i kx j s}, each from its own reduced phase (no
-     * recurrence, so no error growth along the row) */
-    for (int j = 0; j < w; j++) {
-        double js = j * g->spacing;
-        for (int i = 0; i < M; i++)
-            th[i] = mulmod_2pi(kx[i], js);
-        sincos_many(th, cols + mm * j, colc + mm * j, M);
-    }
-    int fade = !isinf(st->view.fade_r1);
-    for (int r = 0; r < h; r++) {
-        double z = g->z0 + r * g->spacing, rsp = r * g->spacing;
-        /* skip a row wholly outside the fade */
-        if (fade && fabs(z - st->view.camera_z) >= st->view.fade_r1) {
-            if (!g->accumulate)
-                for (int j = 0; j < w; j++) {
-                    size_t at = (size_t)r * g->stride + j;
-                    grid_store(g->height, at, 0, 0); grid_store(g->dx, at, 0, 0);
-                    grid_store(g->dz, at, 0, 0); grid_store(g->slope_x, at, 0, 0);
-                    grid_store(g->slope_z, at, 0, 0); grid_store(g->dxx, at, 0, 0);
-                    grid_store(g->dzz, at, 0, 0); grid_store(g->dxz, at, 0, 0);
-                }
-            continue;
-        }
-        for (int i = 0; i < M; i++)
-            th[i] = row0[i] + mulmod_2pi(kz[i], rsp);
-        sincos_many(th, rs, rc, M);
-        for (int j = 0; j < w; j++) {
-            double x = g->x0 + j * g->spacing;
-            double fx = 0.0, fz = 0.0, fv = 1.0;
-            if (fade)
-                fv = fade_at(&st->view, x, z, &fx, &fz);
-            size_t at = (size_t)r * g->stride + j;
-            double C = 0, Dx = 0, Dz = 0, Sx = 0, Sz = 0, Dxx = 0, Dxz = 0, Dzz = 0;
-            if (fv != 0.0) {
-                const double *cc = colc + mm * j, *cs = cols + mm * j;
-#pragma omp simd reduction(+ : C, Dx, Dz, Sx, Sz, Dxx, Dxz, Dzz)
-                for (int i = 0; i < M; i++) {
-                    double c = rc[i] * cc[i] - rs[i] * cs[i];
-                    double s = rs[i] * cc[i] + rc[i] * cs[i];
-                    C += ca[i] * c;
-                    Dx += cdx[i] * s;
-                    Dz += cdz[i] * s;
-                    Sx += csx[i] * s;
-                    Sz += csz[i] * s;
-                    Dxx += cxx[i] * c;
-                    Dxz += cxz[i] * c;
-                    Dzz += czz[i] * c;
-                }
-            }
-            int acc = g->accumulate;
-            if (fv == 0.0 && acc)
-                continue;
-            grid_store(g->height, at, fv * C, acc);
-            grid_store(g->dx, at, fv * Dx, acc);
-            grid_store(g->dz, at, fv * Dz, acc);
-            grid_store(g->slope_x, at, fv * Sx + fx * C, acc);
-            grid_store(g->slope_z, at, fv * Sz + fz * C, acc);
-            grid_store(g->dxx, at, fv * Dxx + fx * Dx, acc);
-            grid_store(g->dzz, at, fv * Dzz + fz * Dz, acc);
-            grid_store(g->dxz, at, fv * Dxz + 0.5 * (fz * Dx + fx * Dz), acc);
-        }
-    }
-    free(row0);
-    free(buf);
+    grid_pack(&gw, st, g);
+    for (int r = 0; r < g->h; r++)
+        grid_row(&gw, st, g, r);
+    grid_work_free(&gw);
     return OCEAN_OK;
 }

@@ -104,101 +104,183 @@ static void fp_edge(const ray_ctx *rc, fp_acc *acc, double pu, double pv, double
         fp_add(acc, t, d);
 }
 
-ocean_result mesh_build_projected(mesh *m, const mesh_camera *cam)
+/* Screen coordinate of sample a of NS + 1 along one side. */
+static double fp_screen(int a)
 {
-    const mesh_config *c = &m->cfg;
-    const double A = c->margin_m, R = c->range_m;
-    double fw[3], rt[3], up[3];
-    mesh_camera_basis(cam, fw, rt, up);
-    double ty = tan(0.5 * cam->fov_y_deg * M_PI / 180);
-    double tx = ty * cam->viewport_w / cam->viewport_h;
-    double hp = cam->pos[1] > A ? cam->pos[1] : A + fmax(1.0, 0.1 * A);
+    return -1 + 2.0 * a / NS;
+}
 
-    /* footprint of frustum x slab x range, in polar coordinates around
-     * the camera's ground point: sampled rays, plus the exact edge of the
-     * footprint (found by bisection) wherever neighbouring rays disagree -
-     * that is where the horizon crosses the screen, which a narrow field
-     * of view would otherwise miss */
-    ray_ctx rc = {{cam->pos[0], cam->pos[1], cam->pos[2]}, {fw[0], fw[1], fw[2]},
-                  {rt[0], rt[1], rt[2]}, {up[0], up[1], up[2]}, tx, ty, A, R};
-    const int nsamp = (NS + 1) * (NS + 1) + 4 * NS * (NS + 1);
-    fp_acc acc = {malloc((size_t)nsamp * 4 * sizeof(double)), 0, 4 * nsamp, 0, 0,
-                  INFINITY, 0, A};
-    if (!acc.ang)
-        return OCEAN_ENOMEM;
+/* Footprint of frustum x slab x range, in polar coordinates around the
+ * camera's ground point: sampled rays, plus the exact edge of the
+ * footprint (found by bisection) wherever neighbouring rays disagree -
+ * that is where the horizon crosses the screen, which a narrow field of
+ * view would otherwise miss. */
+static ocean_result fp_trace(const ray_ctx *rc, fp_acc *acc)
+{
     unsigned char *hit = malloc((size_t)(NS + 1) * (NS + 1));
-    if (!hit) {
-        free(acc.ang);
+    if (!hit)
         return OCEAN_ENOMEM;
-    }
     for (int b = 0; b <= NS; b++)
         for (int a = 0; a <= NS; a++) {
-            double u = -1 + 2.0 * a / NS, v = -1 + 2.0 * b / NS, t[2], d[3];
-            hit[b * (NS + 1) + a] = (unsigned char)ray_slab(&rc, u, v, t, d);
+            double u = fp_screen(a), v = fp_screen(b), t[2], d[3];
+            hit[b * (NS + 1) + a] = (unsigned char)ray_slab(rc, u, v, t, d);
             if (hit[b * (NS + 1) + a])
-                fp_add(&acc, t, d);
+                fp_add(acc, t, d);
         }
     for (int b = 0; b <= NS; b++)
         for (int a = 0; a <= NS; a++) {
             int h = hit[b * (NS + 1) + a];
             if (a > 0 && hit[b * (NS + 1) + a - 1] != h)
-                fp_edge(&rc, &acc, -1 + 2.0 * (a - 1) / NS, -1 + 2.0 * b / NS,
-                        -1 + 2.0 * a / NS, -1 + 2.0 * b / NS, hit[b * (NS + 1) + a - 1]);
+                fp_edge(rc, acc, fp_screen(a - 1), fp_screen(b), fp_screen(a), fp_screen(b),
+                        hit[b * (NS + 1) + a - 1]);
             if (b > 0 && hit[(b - 1) * (NS + 1) + a] != h)
-                fp_edge(&rc, &acc, -1 + 2.0 * a / NS, -1 + 2.0 * (b - 1) / NS,
-                        -1 + 2.0 * a / NS, -1 + 2.0 * b / NS, hit[(b - 1) * (NS + 1) + a]);
+                fp_edge(rc, acc, fp_screen(a), fp_screen(b - 1), fp_screen(a), fp_screen(b),
+                        hit[(b - 1) * (NS + 1) + a]);
         }
     free(hit);
-    double *ang = acc.ang;
-    int na = acc.na, full = acc.full, any = acc.any;
-    double rmin = acc.rmin, rmax = acc.rmax;
-    double phi0 = 0, phi1 = 2 * M_PI;
-    if (!any) {
-        full = 1; /* no sea in view: keep a valid mesh around the camera */
-        rmin = 0;
-        rmax = R;
+    return OCEAN_OK;
+}
+
+/* The ground the grid covers, in polar coordinates around the camera's
+ * ground point. */
+typedef struct proj_span {
+    int full;  /* the whole disc: a ring of rows around a centre vertex */
+    double rmin, rmax, phi0, phi1;
+} proj_span;
+
+/* The covered arc is the complement of the largest empty gap between the
+ * footprint's angles; a gap too small to matter makes it the full circle. */
+static void span_arc(double *ang, int na, proj_span *sp)
+{
+    for (int i = 0; i < na; i++)
+        ang[i] = remainder(ang[i], 2 * M_PI);
+    qsort(ang, (size_t)na, sizeof *ang, cmp_double);
+    double gap = ang[0] + 2 * M_PI - ang[na - 1];
+    int gi = na - 1;
+    for (int i = 0; i + 1 < na; i++)
+        if (ang[i + 1] - ang[i] > gap) {
+            gap = ang[i + 1] - ang[i];
+            gi = i;
+        }
+    if (gap < 0.05) {
+        sp->full = 1;
+        return;
     }
-    if (!full && na > 0) {
-        for (int i = 0; i < na; i++)
-            ang[i] = remainder(ang[i], 2 * M_PI);
-        qsort(ang, (size_t)na, sizeof *ang, cmp_double);
-        /* the covered arc is the complement of the largest empty gap */
-        double gap = ang[0] + 2 * M_PI - ang[na - 1];
-        int gi = na - 1;
-        for (int i = 0; i + 1 < na; i++)
-            if (ang[i + 1] - ang[i] > gap) {
-                gap = ang[i + 1] - ang[i];
-                gi = i;
-            }
-        if (gap < 0.05) {
-            full = 1;
-        } else {
-            phi0 = ang[(gi + 1) % na];
-            phi1 = ang[gi];
-            if (phi1 <= phi0)
-                phi1 += 2 * M_PI;
-            /* half a sampling step more on each side for the rays between */
-            double padf = 0.5 * (phi1 - phi0) / NS;
-            phi0 -= padf;
-            phi1 += padf;
+    sp->phi0 = ang[(gi + 1) % na];
+    sp->phi1 = ang[gi];
+    if (sp->phi1 <= sp->phi0)
+        sp->phi1 += 2 * M_PI;
+    /* half a sampling step more on each side for the rays between */
+    double padf = 0.5 * (sp->phi1 - sp->phi0) / NS;
+    sp->phi0 -= padf;
+    sp->phi1 += padf;
+}
+
+/* The span of the traced footprint, dilated by the slab's margin A and
+ * clipped to the range R. */
+static void span_from_footprint(fp_acc *acc, double A, double R, proj_span *sp)
+{
+    sp->full = acc->full;
+    sp->rmin = acc->rmin;
+    sp->rmax = acc->rmax;
+    sp->phi0 = 0;
+    sp->phi1 = 2 * M_PI;
+    if (!acc->any) {
+        sp->full = 1; /* no sea in view: keep a valid mesh around the camera */
+        sp->rmin = 0;
+        sp->rmax = R;
+    }
+    if (!sp->full && acc->na > 0)
+        span_arc(acc->ang, acc->na, sp);
+    if (sp->full) {
+        sp->rmin = 0;
+        sp->phi0 = 0;
+        sp->phi1 = 2 * M_PI;
+    } else {
+        sp->rmin = fmax(0, sp->rmin - A);
+    }
+    sp->rmax = fmin(R, sp->rmax + A);
+    if (sp->rmax <= sp->rmin)
+        sp->rmax = fmin(R, sp->rmin + fmax(1.0, A));
+}
+
+static ocean_result projected_span(const ray_ctx *rc, proj_span *sp)
+{
+    const int nsamp = (NS + 1) * (NS + 1) + 4 * NS * (NS + 1);
+    fp_acc acc = {malloc((size_t)nsamp * 4 * sizeof(double)), 0, 4 * nsamp, 0, 0,
+                  INFINITY, 0, rc->A};
+    if (!acc.ang)
+        return OCEAN_ENOMEM;
+    if (fp_trace(rc, &acc) != OCEAN_OK) {
+        free(acc.ang);
+        return OCEAN_ENOMEM;
+    }
+    span_from_footprint(&acc, rc->A, rc->R, sp);
+    free(acc.ang);
+    return OCEAN_OK;
+}
+
+/* Rows uniform in the angle from the nadir seen from the projector at
+ * height hp; a full ring's column gw would be column 0 again, so it has
+ * none. */
+static void projected_vertices(float *base, const proj_span *sp, int gw, int gh, double hp)
+{
+    double psi0 = atan(sp->rmin / hp), psi1 = atan(sp->rmax / hp);
+    uint32_t v = 0;
+    int row0 = 0;
+    if (sp->full) {
+        base[0] = base[1] = base[2] = 0;
+        v = 1;
+        row0 = 1;
+    }
+    for (int i = row0; i < gh; i++) {
+        double psi = psi0 + (psi1 - psi0) * i / (gh - 1);
+        double r = i == gh - 1 ? sp->rmax : hp * tan(psi);
+        for (int j = 0; j < gw; j++) {
+            double phi = sp->full ? sp->phi0 + (sp->phi1 - sp->phi0) * j / gw
+                                  : sp->phi0 + (sp->phi1 - sp->phi0) * j / (gw - 1);
+            base[3 * v] = (float)(r * cos(phi));
+            base[3 * v + 1] = 0;
+            base[3 * v + 2] = (float)(r * sin(phi));
+            v++;
         }
     }
-    free(ang);
-    if (full) {
-        rmin = 0;
-        phi0 = 0;
-        phi1 = 2 * M_PI;
-    } else {
-        rmin = fmax(0, rmin - A);
-    }
-    rmax = fmin(R, rmax + A);
-    if (rmax <= rmin)
-        rmax = fmin(R, rmin + fmax(1.0, A));
-    double psi0 = atan(rmin / hp), psi1 = atan(rmax / hp);
+}
 
-    const int gw = c->grid_w, gh = c->grid_h;
-    const int cols = gw;  /* full or not: a full ring's column gw wraps to column 0 */
-    const uint32_t nv = full ? (uint32_t)(1 + (gh - 1) * cols) : (uint32_t)(gh * cols);
+static void projected_indices(uint32_t *idx, int full, int gw, int gh)
+{
+    uint32_t k = 0;
+    if (full) {
+        for (int j = 0; j < gw; j++) {
+            idx[k++] = 0;
+            idx[k++] = 1 + (uint32_t)((j + 1) % gw);
+            idx[k++] = 1 + (uint32_t)j;
+        }
+        for (int i = 0; i < gh - 2; i++)
+            for (int j = 0; j < gw; j++) {
+                uint32_t a = 1 + (uint32_t)(i * gw + j);
+                uint32_t b = 1 + (uint32_t)(i * gw + (j + 1) % gw);
+                uint32_t cc = b + (uint32_t)gw, d = a + (uint32_t)gw;
+                idx[k++] = a; idx[k++] = b; idx[k++] = cc;
+                idx[k++] = a; idx[k++] = cc; idx[k++] = d;
+            }
+    } else {
+        for (int i = 0; i < gh - 1; i++)
+            for (int j = 0; j < gw - 1; j++) {
+                uint32_t a = (uint32_t)(i * gw + j), b = a + 1;
+                uint32_t cc = b + (uint32_t)gw, d = a + (uint32_t)gw;
+                idx[k++] = a; idx[k++] = b; idx[k++] = cc;
+                idx[k++] = a; idx[k++] = cc; idx[k++] = d;
+            }
+    }
+}
+
+/* The grid's vertices, and its triangles unless the mesh already holds
+ * this topology (same key and vertex count): then only base changes. */
+static ocean_result projected_store(mesh *m, const proj_span *sp, double hp, int *rebuilt)
+{
+    const int gw = m->cfg.grid_w, gh = m->cfg.grid_h, full = sp->full;
+    const uint32_t nv = full ? (uint32_t)(1 + (gh - 1) * gw) : (uint32_t)(gh * gw);
     const uint32_t nq = full ? (uint32_t)((gh - 2) * gw) : (uint32_t)((gh - 1) * (gw - 1));
     const uint32_t ni = full ? 3u * ((uint32_t)gw + 2 * nq) : 6 * nq;
     uint64_t key = mesh_hash(0, "projected", 9);
@@ -218,69 +300,53 @@ ocean_result mesh_build_projected(mesh *m, const mesh_camera *cam)
             return OCEAN_ENOMEM;
         }
     }
-    uint32_t v = 0;
-    int row0 = 0;
-    if (full) {
-        base[0] = base[1] = base[2] = 0;
-        v = 1;
-        row0 = 1;
-    }
-    for (int i = row0; i < gh; i++) {
-        double psi = psi0 + (psi1 - psi0) * i / (gh - 1);
-        double r = i == gh - 1 ? rmax : hp * tan(psi);
-        for (int j = 0; j < cols; j++) {
-            double phi = full ? phi0 + (phi1 - phi0) * j / gw : phi0 + (phi1 - phi0) * j / (gw - 1);
-            base[3 * v] = (float)(r * cos(phi));
-            base[3 * v + 1] = 0;
-            base[3 * v + 2] = (float)(r * sin(phi));
-            v++;
-        }
-    }
-    if (!reuse) {
-        uint32_t k = 0;
-        if (full) {
-            for (int j = 0; j < gw; j++) {
-                idx[k++] = 0;
-                idx[k++] = 1 + (uint32_t)((j + 1) % gw);
-                idx[k++] = 1 + (uint32_t)j;
-            }
-            for (int i = 0; i < gh - 2; i++)
-                for (int j = 0; j < gw; j++) {
-                    uint32_t a = 1 + (uint32_t)(i * gw + j);
-                    uint32_t b = 1 + (uint32_t)(i * gw + (j + 1) % gw);
-                    uint32_t cc = b + (uint32_t)gw, d = a + (uint32_t)gw;
-                    idx[k++] = a; idx[k++] = b; idx[k++] = cc;
-                    idx[k++] = a; idx[k++] = cc; idx[k++] = d;
-                }
-        } else {
-            for (int i = 0; i < gh - 1; i++)
-                for (int j = 0; j < gw - 1; j++) {
-                    uint32_t a = (uint32_t)(i * gw + j), b = a + 1;
-                    uint32_t cc = b + (uint32_t)gw, d = a + (uint32_t)gw;
-                    idx[k++] = a; idx[k++] = b; idx[k++] = cc;
-                    idx[k++] = a; idx[k++] = cc; idx[k++] = d;
-                }
-        }
-        ocean_result r = mesh_install(m, nv, ni, base, idx);
-        if (r != OCEAN_OK) {
-            free(base);
-            free(idx);
-            return r;
-        }
-        m->key = key;
-    } else {
+    projected_vertices(base, sp, gw, gh, hp);
+    if (reuse) {
         free(m->base);
         m->base = base;
         memcpy(m->pos, base, (size_t)nv * 3 * sizeof *m->pos);
+        *rebuilt = 0;
+        return OCEAN_OK;
     }
+    projected_indices(idx, full, gw, gh);
+    ocean_result r = mesh_install(m, nv, ni, base, idx);
+    if (r != OCEAN_OK) {
+        free(base);
+        free(idx);
+        return r;
+    }
+    m->key = key;
+    *rebuilt = 1;
+    return OCEAN_OK;
+}
+
+ocean_result mesh_build_projected(mesh *m, const mesh_camera *cam)
+{
+    const mesh_config *c = &m->cfg;
+    const double A = c->margin_m, R = c->range_m;
+    double fw[3], rt[3], up[3];
+    mesh_camera_basis(cam, fw, rt, up);
+    double ty = tan(0.5 * cam->fov_y_deg * M_PI / 180);
+    double tx = ty * cam->viewport_w / cam->viewport_h;
+    double hp = cam->pos[1] > A ? cam->pos[1] : A + fmax(1.0, 0.1 * A);
+    ray_ctx rc = {{cam->pos[0], cam->pos[1], cam->pos[2]}, {fw[0], fw[1], fw[2]},
+                  {rt[0], rt[1], rt[2]}, {up[0], up[1], up[2]}, tx, ty, A, R};
+    proj_span sp;
+    ocean_result r = projected_span(&rc, &sp);
+    if (r != OCEAN_OK)
+        return r;
+    int rebuilt;
+    r = projected_store(m, &sp, hp, &rebuilt);
+    if (r != OCEAN_OK)
+        return r;
+    double build_ms = m->info.build_ms;
+    memset(&m->info, 0, sizeof m->info);
+    m->info.build_ms = build_ms;
+    m->info.rebuilt = rebuilt;
+    m->info.levels = 1;
     m->levels = 1;
     m->origin[0] = cam->pos[0];
     m->origin[1] = 0;
     m->origin[2] = cam->pos[2];
-    double build_ms = m->info.build_ms;
-    memset(&m->info, 0, sizeof m->info);
-    m->info.build_ms = build_ms;
-    m->info.rebuilt = !reuse;
-    m->info.levels = 1;
     return OCEAN_OK;
 }

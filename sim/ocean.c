@@ -834,10 +834,96 @@ ocean_result ocean_create_lattice(const ocean_params *p, double patch_m, const o
     return ocean_build(&q, 1, w, count, out, msg, msglen);
 }
 
+/* Every cascade's waves: from the spectrum, or the given lattice waves. */
+static ocean_result build_cascades(ocean *o, int lattice, const ocean_lattice_wave *lw, int nlw,
+                                   char *msg, size_t msglen)
+{
+    for (int c = 0; c < o->p.cascades; c++) {
+        char why[256] = "";
+        ocean_result r = lattice ? cascade_init_lattice(o, lw, nlw, why, sizeof why) : cascade_init(o, c);
+        if (r != OCEAN_OK) {
+            if (msg) {
+                if (why[0]) snprintf(msg, msglen, "%s", why);
+                else snprintf(msg, msglen, "out of memory for cascade %d", c);
+            }
+            return r;
+        }
+    }
+    return OCEAN_OK;
+}
+
+/* The planner flags of p's plan mode (caller holds planner_lock). */
+static ocean_result plan_flags(const ocean_params *p, unsigned *flags, char *msg, size_t msglen)
+{
+    *flags = FFTW_ESTIMATE;
+    if (p->plan_measure == OCEAN_PLAN_ESTIMATE) {
+        /* An ESTIMATE planner still takes wisdom of a higher patience, so
+         * wisdom left by a MEASURE or WISDOM ocean of this process would
+         * make its plans differ from another process's. */
+        fftwf_forget_wisdom();
+    } else if (p->plan_measure == OCEAN_PLAN_MEASURE) {
+        *flags = FFTW_MEASURE;
+    } else {
+        ocean_result r = wisdom_import(p->wisdom, msg, msglen);
+        if (r != OCEAN_OK)
+            return r;
+        *flags = FFTW_MEASURE | FFTW_WISDOM_ONLY;
+    }
+    return OCEAN_OK;
+}
+
+/* Why level l's c-channel plans (m = 8 << l, nthr threads) could not be
+ * made: a wisdom file without them, or FFTW itself. */
+static ocean_result plan_failure(const ocean *o, int l, int c, int nthr, unsigned flags, char *msg,
+                                 size_t msglen)
+{
+    int m = 8 << l;
+    if (flags & FFTW_WISDOM_ONLY) {
+        char what[96];
+        if (o->plan[l][c - 1])
+            snprintf(what, sizeof what, " (its column pass over %d of %d columns)",
+                     o->prune_cols[l], m / 2 + 1);
+        else
+            what[0] = '\0';
+        if (msg) snprintf(msg, msglen, "wisdom file '%s' has no plan for a %dx%d x%d "
+                          "transform%s on %d thread%s (made for another N, "
+                          "ocean.threads or scene, or by an older oceand?): "
+                          "regenerate it with `ocean-sim wisdom`",
+                          o->p.wisdom, m, m, c, what, nthr, nthr == 1 ? "" : "s");
+        return OCEAN_EUNSUPPORTED;
+    }
+    if (msg) snprintf(msg, msglen, "FFTW could not plan a %dx%d x%d transform", m, m, c);
+    return OCEAN_ENOMEM;
+}
+
+/* Every (size, batch) planned once, so evaluations only execute (caller
+ * holds planner_lock); tmp is the planner's output scratch. */
+static ocean_result plan_all(ocean *o, float *tmp, unsigned flags, char *msg, size_t msglen)
+{
+    int n = o->p.n;
+    for (int l = 0; (8 << l) <= n; l++) {
+        int m = 8 << l;
+        o->levels = l + 1;
+        int nthr = m >= PARALLEL_MIN_N ? o->p.threads : 1;
+        if (fftw_threads_ok)
+            fftwf_plan_with_nthreads(nthr);
+        o->prune_cols[l] = prune_columns(o, l);
+        for (int c = 1; c <= CH_COUNT; c++) {
+            int dims[2] = {m, m};
+            o->plan[l][c - 1] = fftwf_plan_many_dft_c2r(
+                2, dims, c, o->spec, NULL, 1, m * (m / 2 + 1), tmp, NULL, 1, m * m, flags);
+            if (o->plan[l][c - 1] && o->prune_cols[l])
+                plan_pruned(o, l, c, tmp, flags);
+            if (!o->plan[l][c - 1] || (o->prune_cols[l] && (!o->cols_plan[l][c - 1] || !o->rows_plan[l][c - 1])))
+                return plan_failure(o, l, c, nthr, flags, msg, msglen);
+        }
+    }
+    return OCEAN_OK;
+}
+
 static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_lattice_wave *lw,
                                 int nlw, ocean **out, char *msg, size_t msglen)
 {
-    ocean_result r;
     *out = NULL;
     pthread_once(&fftw_once, fftw_init_once);
     ocean *o = calloc(1, sizeof *o);
@@ -849,17 +935,10 @@ static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_
     ocean_force_paths(o, -1, -1);
     o->split_mode = -1;
     o->prune = 1;
-    for (int c = 0; c < p->cascades; c++) {
-        char why[256] = "";
-        r = lattice ? cascade_init_lattice(o, lw, nlw, why, sizeof why) : cascade_init(o, c);
-        if (r != OCEAN_OK) {
-            if (msg) {
-                if (why[0]) snprintf(msg, msglen, "%s", why);
-                else snprintf(msg, msglen, "out of memory for cascade %d", c);
-            }
-            ocean_destroy(o);
-            return r;
-        }
+    ocean_result r = build_cascades(o, lattice, lw, nlw, msg, msglen);
+    if (r != OCEAN_OK) {
+        ocean_destroy(o);
+        return r;
     }
     int n = p->n;
     {
@@ -875,65 +954,17 @@ static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_
         ocean_destroy(o);
         return OCEAN_ENOMEM;
     }
-    /* Plan every (size, batch) once; evaluations only execute. */
     pthread_mutex_lock(&planner_lock);
-    unsigned flags = FFTW_ESTIMATE;
-    if (p->plan_measure == OCEAN_PLAN_ESTIMATE) {
-        /* An ESTIMATE planner still takes wisdom of a higher patience, so
-         * wisdom left by a MEASURE or WISDOM ocean of this process would
-         * make its plans differ from another process's. */
-        fftwf_forget_wisdom();
-    } else if (p->plan_measure == OCEAN_PLAN_MEASURE) {
-        flags = FFTW_MEASURE;
-    } else {
-        r = wisdom_import(p->wisdom, msg, msglen);
-        if (r != OCEAN_OK) {
-            pthread_mutex_unlock(&planner_lock);
-            fftwf_free(tmp);
-            ocean_destroy(o);
-            return r;
-        }
-        flags = FFTW_MEASURE | FFTW_WISDOM_ONLY;
-    }
-    for (int l = 0; (8 << l) <= n; l++) {
-        int m = 8 << l;
-        o->levels = l + 1;
-        int nthr = m >= PARALLEL_MIN_N ? p->threads : 1;
-        if (fftw_threads_ok)
-            fftwf_plan_with_nthreads(nthr);
-        o->prune_cols[l] = prune_columns(o, l);
-        for (int c = 1; c <= CH_COUNT; c++) {
-            int dims[2] = {m, m};
-            o->plan[l][c - 1] = fftwf_plan_many_dft_c2r(
-                2, dims, c, o->spec, NULL, 1, m * (m / 2 + 1), tmp, NULL, 1, m * m, flags);
-            if (o->plan[l][c - 1] && o->prune_cols[l])
-                plan_pruned(o, l, c, tmp, flags);
-            if (!o->plan[l][c - 1] || (o->prune_cols[l] && (!o->cols_plan[l][c - 1] || !o->rows_plan[l][c - 1]))) {
-                pthread_mutex_unlock(&planner_lock);
-                fftwf_free(tmp);
-                if (flags & FFTW_WISDOM_ONLY) {
-                    char what[96];
-                    if (o->plan[l][c - 1])
-                        snprintf(what, sizeof what, " (its column pass over %d of %d columns)",
-                                 o->prune_cols[l], m / 2 + 1);
-                    else
-                        what[0] = '\0';
-                    if (msg) snprintf(msg, msglen, "wisdom file '%s' has no plan for a %dx%d x%d "
-                                      "transform%s on %d thread%s (made for another N, "
-                                      "ocean.threads or scene, or by an older oceand?): "
-                                      "regenerate it with `ocean-sim wisdom`",
-                                      p->wisdom, m, m, c, what, nthr, nthr == 1 ? "" : "s");
-                    ocean_destroy(o);
-                    return OCEAN_EUNSUPPORTED;
-                }
-                if (msg) snprintf(msg, msglen, "FFTW could not plan a %dx%d x%d transform", m, m, c);
-                ocean_destroy(o);
-                return OCEAN_ENOMEM;
-            }
-        }
-    }
+    unsigned flags;
+    r = plan_flags(p, &flags, msg, msglen);
+    if (r == OCEAN_OK)
+        r = plan_all(o, tmp, flags, msg, msglen);
     pthread_mutex_unlock(&planner_lock);
     fftwf_free(tmp);
+    if (r != OCEAN_OK) {
+        ocean_destroy(o);
+        return r;
+    }
     *out = o;
     return OCEAN_OK;
 }
@@ -1995,7 +2026,8 @@ void ocean_force_pruning(ocean *o, int prune)
         o->prune = prune != 0;
 }
 
-ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_frame *f)
+static ocean_result request_check(const ocean *o, double t, const ocean_request *r,
+                                  const ocean_frame *f)
 {
     if (!o || !r || !f || f->cascades != o->p.cascades || f->n_max != o->p.n)
         return OCEAN_EINVAL;
@@ -2009,127 +2041,179 @@ ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_fr
             if (isnan(r->cascade_cutoff_k[c]) || r->cascade_cutoff_k[c] < 0.0)
                 return OCEAN_EINVAL;
     }
-    double kc_all = ocean_effective_cutoff(o, r->cutoff_k, r->order);
-    double kneg_all = negligible_k(o, kc_all, r->order);
-    double scale = r->redistribute && !isinf(kc_all) ? redistribution_scale(o, kc_all, r->order) : 1.0;
-    double boost = r->low_boost > 0.0 ? r->low_boost : 1.0;
-    int n_full = o->p.n;
-    int transforms = 0;
-    /* The whitecap ramp depends on the filter, not on t: memoised. */
+    return OCEAN_OK;
+}
+
+/* The filter of one evaluation, as every cascade applies it unless the
+ * request gives each its own cutoff. */
+typedef struct eval_filter {
+    double kc, kneg, scale, boost;
+} eval_filter;
+
+/* The frame's foam mapping.  The whitecap ramp depends on the filter, not
+ * on t: memoised. */
+static void frame_foam_setup(ocean *o, const ocean_request *r, const eval_filter *ef, ocean_frame *f)
+{
     int any_foam = 0;
     for (int c = 0; c < o->p.cascades; c++)
         any_foam |= (r->effects[c] & OCEAN_FX_FOAM) != 0;
     double lam = o->p.sea.choppiness;
     f->foam_inv_lambda = lam > 0.0 ? 1.0 / lam : 0.0;
-    f->info.foam_sigma = any_foam ? foam_sigma(o, kc_all, r->order, scale, boost) : 0.0;
+    f->info.foam_sigma = any_foam ? foam_sigma(o, ef->kc, r->order, ef->scale, ef->boost) : 0.0;
     f->info.whitecap_target = whitecap_target(o);
     f->foam_map = foam_map_for(o, f->info.foam_sigma);
-    for (int c = 0; c < o->p.cascades; c++) {
-        cascade *cs = &o->cas[c];
-        double kc = kc_all, kneg = kneg_all;
-        if (r->per_cascade) {
-            kc = r->cascade_cutoff_k[c];
-            kneg = negligible_k(o, kc, r->order);
-        }
-        unsigned fx = r->effects[c] & (OCEAN_FX_ALL | OCEAN_FX_VELOCITY);
-        int ch[CH_COUNT];
-        int nch = channel_list(fx, ch);
-        /* A cascade wholly above the cutoff contributes zero fields at the
-         * smallest size: nothing to transform. */
-        int n = cs->k_lo >= kneg ? OCEAN_MIN_N : pick_size(cs, n_full, kneg);
-        set_field_pointers(f, c, n, fx, ch, nch, r->foam_map);
-        if (nch == 0)
-            continue;
+}
+
+/* Modes of the n-point grid an evolving pass computed, and of those the
+ * deep-water ones (ocean_counters). */
+static void count_evolved(ocean *o, const cascade *cs, int n)
+{
+    for (int p = 0; p <= n / 2; p++) {
+        int lo, hi;
+        pair_range(cs, n, p, &lo, &hi);
+        int rows = p == 0 || p == n / 2 ? 1 : 2, d = o->deep_table ? hi : cs->deep[p];
+        o->counters.modes_evolved += (uint64_t)(hi - lo) * rows;
+        o->counters.modes_deep += (uint64_t)(hi - (d > lo ? (d < hi ? d : hi) : lo)) * rows;
+    }
+}
+
+/* One FFTW call's a->nch channels: the stage pass writes their spectra
+ * (the first call of the tick evolving h(k,t) into the cache, the others
+ * reading it back), then FFTW transforms them into out. */
+static void stage_and_transform(ocean *o, stage_args *a, int nt, const int *split, size_t plane,
+                                int by_channel, float *out)
+{
+    cascade *cs = a->cs;
+    int n = a->n, gn = a->nch;
+    uint64_t t0 = now_ns();
+#pragma omp parallel num_threads(nt) if (nt > 1)
+    stage_pass(a, nt, split, plane, by_channel && gn >= nt);
+    uint64_t t1 = now_ns();
+    *(a->cached ? &o->counters.ns_channels : &o->counters.ns_evolve) += t1 - t0;
+    if (!a->cached) {
+        count_evolved(o, cs, n);
+        cs->cache_t = a->t;
+        cs->cache_n = n;
+        cs->cache_dt = a->need_dt;
+        a->cached = 1;
+    }
+    a->gain_ready = a->gain != NULL;
+    uint64_t t2 = now_ns();
+    o->counters.fft_calls_pruned += transform_call(o, cs, n, gn, out);
+    o->counters.ns_fft += now_ns() - t2;
+    o->counters.fft_calls++;
+    o->counters.fft_calls_by_channel += by_channel && gn >= nt;
+}
+
+/* Every channel a->ch[0 .. a->nch) of cascade c into the frame's block,
+ * in FFTW calls of group_size channels. */
+static void cascade_transform(ocean *o, int c, stage_args *a, ocean_frame *f)
+{
+    const cascade *cs = a->cs;
+    int n = a->n, nch = a->nch;
+    const int *ch = a->ch;
+    /* Claimed here, where every row fills it, never for a cascade wholly
+     * above the cutoff: a claimed plane is trusted from then on. */
+    if (!(isinf(a->kc) && a->scale == 1.0 && a->boost == 1.0 && n == a->n_full))
+        a->gain = gain_plane_get(o, c, n, a->kc, a->order, a->scale, a->boost, &a->gain_ready);
+    int g = group_size(o, n, nch);
+    int nt = n >= PARALLEL_MIN_N ? o->p.threads : 1, split[STAGE_MAX_THREADS + 1];
+    size_t plane = (size_t)n * (n / 2 + 1);
+    stage_split(cs, n, nt, split);
+    /* Split by channel or by rows: the same bits, but which is faster
+     * depends on how busy this machine's caches are (stage_channels), so
+     * the ocean measures both and runs the faster.  Only where a call has
+     * a channel for every thread. */
+    split_stat *st = &o->split[c][level_of(n)][a->cached];
+    int by_channel = nt > 1 && (g < nch ? g : nch) >= nt ? split_pick(o, st) : 0;
+    uint64_t c_start = now_ns();
+    for (int j0 = 0; j0 < nch; j0 += g) {
+        int gn = nch - j0 < g ? nch - j0 : g;
+        a->ch = ch + j0;
+        a->nch = gn;
+        a->stream = (double)gn * n * (n / 2 + 1) * sizeof(fftwf_complex) > o->stream_bytes;
+        stage_and_transform(o, a, nt, split, plane, by_channel, f->block[c] + (size_t)j0 * n * n);
+    }
+    if (nt > 1 && (g < nch ? g : nch) >= nt)
+        split_note(st, by_channel, (double)(now_ns() - c_start) / nch);
+    for (int j = 0; j < nch; j++) {
+        int e = ch[j] == CH_H ? 0 : ch[j] <= CH_DZ ? 1 : ch[j] <= CH_SZ ? 2
+              : ch[j] <= CH_DXZ ? 3 : 4;
+        o->counters.transforms_by_effect[e]++;
+    }
+}
+
+/* Cascade c's fields for request r; returns the transforms run. */
+static int evaluate_cascade(ocean *o, int c, double t, const ocean_request *r,
+                            const eval_filter *ef, ocean_frame *f)
+{
+    cascade *cs = &o->cas[c];
+    int n_full = o->p.n;
+    double kc = ef->kc, kneg = ef->kneg;
+    if (r->per_cascade) {
+        kc = r->cascade_cutoff_k[c];
+        kneg = negligible_k(o, kc, r->order);
+    }
+    unsigned fx = r->effects[c] & (OCEAN_FX_ALL | OCEAN_FX_VELOCITY);
+    int ch[CH_COUNT];
+    int nch = channel_list(fx, ch);
+    /* A cascade wholly above the cutoff contributes zero fields at the
+     * smallest size: nothing to transform. */
+    int n = cs->k_lo >= kneg ? OCEAN_MIN_N : pick_size(cs, n_full, kneg);
+    set_field_pointers(f, c, n, fx, ch, nch, r->foam_map);
+    if (nch == 0)
+        return 0;
+    int transforms = 0;
+    if (cs->k_lo >= kneg) {
+        memset(f->block[c], 0, sizeof(float) * nch * (size_t)n * n);
+    } else {
         /* The row pass caches every mode of the grid it covers, so any
          * later request of the same tick on a grid no larger reuses it. */
         int need_dt = (fx & OCEAN_FX_VELOCITY) != 0;
         int cached = cs->cache_n >= n && cs->cache_t == t && (cs->cache_dt || !need_dt);
-        stage_args a = {cs, cached, need_dt, n_full, n, nch, ch, t, kc, kneg, scale, boost,
+        stage_args a = {cs, cached, need_dt, n_full, n, nch, ch, t, kc, kneg, ef->scale, ef->boost,
                         o->p.sea.choppiness, r->order, o->spec, NULL, 0, o->fused,
                         (double)nch * n * (n / 2 + 1) * sizeof(fftwf_complex) > o->stream_bytes,
                         o->deep_table};
-        if (cs->k_lo >= kneg) {
-            memset(f->block[c], 0, sizeof(float) * nch * (size_t)n * n);
-        } else {
-            /* Claimed here, where every row fills it, never on the path
-             * above: a claimed plane is trusted from then on. */
-            if (!(isinf(kc) && scale == 1.0 && boost == 1.0 && n == n_full))
-                a.gain = gain_plane_get(o, c, n, kc, r->order, scale, boost, &a.gain_ready);
-            /* Group by group: the first group's row pass evolves h(k,t)
-             * into the cache, the others read it back (and the gain plane
-             * the first one filled). */
-            int g = group_size(o, n, nch);
-            int nt = n >= PARALLEL_MIN_N ? o->p.threads : 1, split[STAGE_MAX_THREADS + 1];
-            size_t plane = (size_t)n * (n / 2 + 1);
-            stage_split(cs, n, nt, split);
-            /* Split by channel or by rows: the same bits, but which is
-             * faster depends on how busy this machine's caches are
-             * (stage_channels), so the ocean measures both and runs the
-             * faster.  Only where a call has a channel for every thread. */
-            split_stat *st = &o->split[c][level_of(n)][a.cached];
-            int by_channel = nt > 1 && (g < nch ? g : nch) >= nt ? split_pick(o, st) : 0;
-            uint64_t c_start = now_ns();
-            for (int j0 = 0; j0 < nch; j0 += g) {
-                int gn = nch - j0 < g ? nch - j0 : g;
-                a.ch = ch + j0;
-                a.nch = gn;
-                a.stream = (double)gn * n * (n / 2 + 1) * sizeof(fftwf_complex) > o->stream_bytes;
-                uint64_t t0 = now_ns();
-#pragma omp parallel num_threads(nt) if (nt > 1)
-                stage_pass(&a, nt, split, plane, by_channel && gn >= nt);
-                uint64_t t1 = now_ns();
-                *(a.cached ? &o->counters.ns_channels : &o->counters.ns_evolve) += t1 - t0;
-                if (!a.cached) {
-                    for (int p = 0; p <= n / 2; p++) {
-                        int lo, hi;
-                        pair_range(cs, n, p, &lo, &hi);
-                        int rows = p == 0 || p == n / 2 ? 1 : 2, d = o->deep_table ? hi : cs->deep[p];
-                        o->counters.modes_evolved += (uint64_t)(hi - lo) * rows;
-                        o->counters.modes_deep += (uint64_t)(hi - (d > lo ? (d < hi ? d : hi) : lo)) * rows;
-                    }
-                    cs->cache_t = t;
-                    cs->cache_n = n;
-                    cs->cache_dt = need_dt;
-                    a.cached = 1;
-                }
-                a.gain_ready = a.gain != NULL;
-                uint64_t t2 = now_ns();
-                o->counters.fft_calls_pruned +=
-                    transform_call(o, cs, n, gn, f->block[c] + (size_t)j0 * n * n);
-                o->counters.ns_fft += now_ns() - t2;
-                o->counters.fft_calls++;
-                o->counters.fft_calls_by_channel += by_channel && gn >= nt;
-            }
-            if (nt > 1 && (g < nch ? g : nch) >= nt)
-                split_note(st, by_channel, (double)(now_ns() - c_start) / nch);
-            transforms += nch;
-            for (int j = 0; j < nch; j++) {
-                int e = ch[j] == CH_H ? 0 : ch[j] <= CH_DZ ? 1 : ch[j] <= CH_SZ ? 2
-                      : ch[j] <= CH_DXZ ? 3 : 4;
-                o->counters.transforms_by_effect[e]++;
-            }
-        }
-        /* Per-cascade mips (the cascade tile layout): each cascade's foam
-         * is placed by its own breaking index at its own cutoff, with the
-         * whole sea's coverage W (foam.h); the daemon asks foam of one
-         * cascade only, so W is not counted twice. */
-        ocean_foam_map cmap = f->foam_map;
-        if (r->per_cascade && (fx & OCEAN_FX_FOAM))
-            cmap = foam_map_for(o, foam_sigma_cascade(o, c, kc, r->order));
-        if ((fx & OCEAN_FX_FOAM) && r->foam_map) {
-            ocean_field *fd = &f->field[c];
-            long nn = (long)n * n, step = (long)n * 8;
-#pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
-            for (long i = 0; i < nn; i += step)
-                jacobian_rows(fd, i, i + step < nn ? i + step : nn, &cmap,
-                              f->foam_inv_lambda);
-        }
+        cascade_transform(o, c, &a, f);
+        transforms = nch;
     }
+    /* Per-cascade mips (the cascade tile layout): each cascade's foam is
+     * placed by its own breaking index at its own cutoff, with the whole
+     * sea's coverage W (foam.h); the daemon asks foam of one cascade only,
+     * so W is not counted twice. */
+    ocean_foam_map cmap = f->foam_map;
+    if (r->per_cascade && (fx & OCEAN_FX_FOAM))
+        cmap = foam_map_for(o, foam_sigma_cascade(o, c, kc, r->order));
+    if ((fx & OCEAN_FX_FOAM) && r->foam_map) {
+        ocean_field *fd = &f->field[c];
+        long nn = (long)n * n, step = (long)n * 8;
+#pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
+        for (long i = 0; i < nn; i += step)
+            jacobian_rows(fd, i, i + step < nn ? i + step : nn, &cmap, f->foam_inv_lambda);
+    }
+    return transforms;
+}
+
+ocean_result ocean_evaluate(ocean *o, double t, const ocean_request *r, ocean_frame *f)
+{
+    ocean_result res = request_check(o, t, r, f);
+    if (res != OCEAN_OK)
+        return res;
+    eval_filter ef;
+    ef.kc = ocean_effective_cutoff(o, r->cutoff_k, r->order);
+    ef.kneg = negligible_k(o, ef.kc, r->order);
+    ef.scale = r->redistribute && !isinf(ef.kc) ? redistribution_scale(o, ef.kc, r->order) : 1.0;
+    ef.boost = r->low_boost > 0.0 ? r->low_boost : 1.0;
+    frame_foam_setup(o, r, &ef, f);
+    int transforms = 0;
+    for (int c = 0; c < o->p.cascades; c++)
+        transforms += evaluate_cascade(o, c, t, r, &ef, f);
     f->info.t = t;
-    f->info.cutoff_k = r->per_cascade ? NAN : kc_all;
+    f->info.cutoff_k = r->per_cascade ? NAN : ef.kc;
     f->info.transforms = transforms;
     f->info.cascades = o->p.cascades;
-    f->info.e_error = r->per_cascade ? 0.0 : filter_error(o, kc_all, r->order, scale, boost);
+    f->info.e_error = r->per_cascade ? 0.0 : filter_error(o, ef.kc, r->order, ef.scale, ef.boost);
     o->counters.evaluations++;
     o->counters.transforms += (uint64_t)transforms;
     return OCEAN_OK;

@@ -134,153 +134,195 @@ static void predict(const ctx *c, double x, double z, double *px, double *pz, do
     *pz = z0;
 }
 
-static void answer_one(const ctx *c, double x, double z, const ocean_query_options *opt,
-                       int have_derivs, ocean_query_result *out)
-{
-    double x0 = x, z0 = z;
-    int it = 0;
-    /* the smallest J the iteration met: a path from x through J <= 0 means
-     * the surface folds between x and the answer */
-    double jmin = INFINITY;
-    int pit = 0;   /* the predictor's steps (not counted against max_iterations) */
-    if (have_derivs && !c->bilinear)
-        predict(c, x, z, &x0, &z0, &jmin, &pit);
+/* Where the inversion stands: the parameter point (x0, z0), the total
+ * displacement there, and what it misses (x, z) by, (ex, ez) and its
+ * length res. */
+typedef struct inv_state {
+    double x0, z0;
     disp d;
-    displacement_at(c, x0, z0, &d);
-    double ex = x0 + d.dx - x, ez = z0 + d.dz - z, res = norm2(ex, ez);
-    double j0 = d.jxx * d.jzz - d.jxz * d.jzx;
-    if (j0 < jmin)
-        jmin = j0;
-    /* Near the root Newton converges quadratically: a step from a residual
-     * under `quad` lands within about res^2 / (a wave's length) of it, far
-     * under the tolerance, so that step is taken without reading D there:
-     * the final reading, which the answer needs anyway, checks it, and the
-     * iteration goes on from it in the rare case it missed. */
-    double quad = 0.3 * sqrt(opt->tolerance);
+    double ex, ez, res;
+    /* the smallest J the iteration met: a path from x through J <= 0
+     * means the surface folds between x and the answer */
+    double jmin;
+    int it;
+} inv_state;
+
+/* The accurate iteration's start: the predictor's root where the fields
+ * have derivatives to predict with, else (x, z) itself.  *pit gets the
+ * predictor's steps. */
+static void inv_start(const ctx *c, double x, double z, int have_derivs, inv_state *s, int *pit)
+{
+    s->x0 = x;
+    s->z0 = z;
+    s->it = 0;
+    s->jmin = INFINITY;
+    if (have_derivs && !c->bilinear)
+        predict(c, x, z, &s->x0, &s->z0, &s->jmin, pit);
+    displacement_at(c, s->x0, s->z0, &s->d);
+    s->ex = s->x0 + s->d.dx - x;
+    s->ez = s->z0 + s->d.dz - z;
+    s->res = norm2(s->ex, s->ez);
+    double j0 = s->d.jxx * s->d.jzz - s->d.jxz * s->d.jzx;
+    if (j0 < s->jmin)
+        s->jmin = j0;
+}
+
+/* Moves s by the step (sx, sz) if the residual shrinks, halving the step
+ * until it does (at most 8 times: far from the root a full Newton step can
+ * overshoot a crest), else by a fixed-point step.  Returns 0, s unchanged,
+ * where neither descends. */
+static int inv_descend(const ctx *c, double x, double z, double sx, double sz, inv_state *s)
+{
+    double nx0 = s->x0, nz0 = s->z0, nres = INFINITY, nex = s->ex, nez = s->ez;
+    disp nd = s->d;
+    for (int k = 0; k < 8; k++) {
+        nx0 = s->x0 - sx;
+        nz0 = s->z0 - sz;
+        displacement_at(c, nx0, nz0, &nd);
+        nex = nx0 + nd.dx - x;
+        nez = nz0 + nd.dz - z;
+        nres = norm2(nex, nez);
+        if (nres < s->res)
+            break;
+        sx *= 0.5;
+        sz *= 0.5;
+    }
+    if (!(nres < s->res)) {
+        /* no descent along this direction: a fixed-point step instead */
+        nx0 = x - s->d.dx;
+        nz0 = z - s->d.dz;
+        displacement_at(c, nx0, nz0, &nd);
+        nex = nx0 + nd.dx - x;
+        nez = nz0 + nd.dz - z;
+        nres = norm2(nex, nez);
+        if (!(nres < s->res))
+            return 0;
+    }
+    s->x0 = nx0;
+    s->z0 = nz0;
+    s->d = nd;
+    s->ex = nex;
+    s->ez = nez;
+    s->res = nres;
+    return 1;
+}
+
+/* Newton steps (fixed-point ones where J is near singular or missing)
+ * until the tolerance, the iteration limit or no descent.  Returns 1 when
+ * the last step, taken from under quad, was not read (see inv_solve). */
+static int inv_iterate(const ctx *c, double x, double z, const ocean_query_options *opt,
+                       int have_derivs, double quad, inv_state *s)
+{
+    for (; s->it < opt->max_iterations && s->res > opt->tolerance; s->it++) {
+        const disp *d = &s->d;
+        double det = d->jxx * d->jzz - d->jxz * d->jzx;
+        if (det < s->jmin)
+            s->jmin = det;
+        double sx, sz;
+        int newton = have_derivs && fabs(det) > 1e-3;
+        if (newton) {
+            /* Newton: solve J step = e */
+            sx = (d->jzz * s->ex - d->jxz * s->ez) / det;
+            sz = (d->jxx * s->ez - d->jzx * s->ex) / det;
+        } else {
+            sx = s->ex;
+            sz = s->ez;
+        }
+        if (newton && s->res < quad) {
+            s->x0 -= sx;
+            s->z0 -= sz;
+            s->it++;
+            return 1;
+        }
+        if (!inv_descend(c, x, z, sx, sz, s)) {
+            s->it++;
+            return 0;
+        }
+    }
+    return 0;
+}
+
+/* Both fields read at the answer's parameter point. */
+typedef struct inv_reading {
     ocean_point pt, err;
     ocean_gerstner_point gp;
+} inv_reading;
+
+/* Inverts x0 + D(x0) = (x, z) from s and reads everything at the final
+ * point.  Near the root Newton converges quadratically: a step from a
+ * residual under `quad` lands within about res^2 / (a wave's length) of
+ * it, far under the tolerance, so that step is taken without reading D
+ * there: the final reading, which the answer needs anyway, checks it, and
+ * the iteration goes on from it in the rare case it missed. */
+static void inv_solve(const ctx *c, double x, double z, const ocean_query_options *opt,
+                      int have_derivs, inv_state *s, inv_reading *rd)
+{
+    double quad = 0.3 * sqrt(opt->tolerance);
     for (;;) {
-        int unread = 0;
-        for (; it < opt->max_iterations && res > opt->tolerance; it++) {
-            double det = d.jxx * d.jzz - d.jxz * d.jzx;
-            if (det < jmin)
-                jmin = det;
-            double sx, sz;
-            int newton = have_derivs && fabs(det) > 1e-3;
-            if (newton) {
-                /* Newton: solve J step = e */
-                sx = (d.jzz * ex - d.jxz * ez) / det;
-                sz = (d.jxx * ez - d.jzx * ex) / det;
-            } else {
-                sx = ex;
-                sz = ez;
-            }
-            if (newton && res < quad) {
-                x0 -= sx;
-                z0 -= sz;
-                it++;
-                unread = 1;
-                break;
-            }
-            /* Halve the step until the residual shrinks (at most 8 times: far
-             * from the root a full Newton step can overshoot a crest). */
-            double nx0 = x0, nz0 = z0, nres = INFINITY, nex = ex, nez = ez;
-            disp nd = d;
-            for (int k = 0; k < 8; k++) {
-                nx0 = x0 - sx;
-                nz0 = z0 - sz;
-                displacement_at(c, nx0, nz0, &nd);
-                nex = nx0 + nd.dx - x;
-                nez = nz0 + nd.dz - z;
-                nres = norm2(nex, nez);
-                if (nres < res)
-                    break;
-                sx *= 0.5;
-                sz *= 0.5;
-            }
-            if (!(nres < res)) {
-                /* no descent along this direction: a fixed-point step instead */
-                nx0 = x - d.dx;
-                nz0 = z - d.dz;
-                displacement_at(c, nx0, nz0, &nd);
-                nex = nx0 + nd.dx - x;
-                nez = nz0 + nd.dz - z;
-                nres = norm2(nex, nez);
-                if (!(nres < res)) {
-                    it++;
-                    break;
-                }
-            }
-            x0 = nx0;
-            z0 = nz0;
-            d = nd;
-            ex = nex;
-            ez = nez;
-            res = nres;
-        }
-        /* Everything at the final parameter point. */
-        read_fields(c, x0, z0, OCEAN_SAMPLE_ALL, &pt, &err);
-        memset(&gp, 0, sizeof gp);
+        int unread = inv_iterate(c, x, z, opt, have_derivs, quad, s);
+        read_fields(c, s->x0, s->z0, OCEAN_SAMPLE_ALL, &rd->pt, &rd->err);
+        memset(&rd->gp, 0, sizeof rd->gp);
         if (c->gf)
-            ocean_gerstner_frame_evaluate(c->gf, &x0, &z0, 1, &gp);
-        double fex = x0 + pt.dx + gp.dx - x, fez = z0 + pt.dz + gp.dz - z, fres = norm2(fex, fez);
-        if (!unread || fres <= opt->tolerance || it >= opt->max_iterations) {
-            ex = fex;
-            ez = fez;
-            res = fres;
-            break;
+            ocean_gerstner_frame_evaluate(c->gf, &s->x0, &s->z0, 1, &rd->gp);
+        const ocean_point *pt = &rd->pt;
+        const ocean_gerstner_point *gp = &rd->gp;
+        double fex = s->x0 + pt->dx + gp->dx - x, fez = s->z0 + pt->dz + gp->dz - z;
+        double fres = norm2(fex, fez);
+        if (!unread || fres <= opt->tolerance || s->it >= opt->max_iterations) {
+            s->ex = fex;
+            s->ez = fez;
+            s->res = fres;
+            return;
         }
         /* the unread step fell short: on from where it landed */
-        d = (disp){.dx = pt.dx + gp.dx, .dz = pt.dz + gp.dz, .jxx = 1.0 + pt.dxx + gp.dxx,
-                   .jxz = pt.dxz + gp.dxz, .jzx = pt.dxz + gp.dzx, .jzz = 1.0 + pt.dzz + gp.dzz};
-        ex = fex;
-        ez = fez;
-        res = fres;
+        s->d = (disp){.dx = pt->dx + gp->dx, .dz = pt->dz + gp->dz, .jxx = 1.0 + pt->dxx + gp->dxx,
+                      .jxz = pt->dxz + gp->dxz, .jzx = pt->dxz + gp->dzx,
+                      .jzz = 1.0 + pt->dzz + gp->dzz};
+        s->ex = fex;
+        s->ez = fez;
+        s->res = fres;
     }
+}
 
-    /* Tangents of the displaced surface along x0 and z0, both fields;
-     * normal = t_z x t_x, y up. */
-    double sx = pt.slope_x + gp.slope_x, sz = pt.slope_z + gp.slope_z;
-    double dxx = pt.dxx + gp.dxx, dzz = pt.dzz + gp.dzz;
-    double dxz = pt.dxz + gp.dxz, dzx = pt.dxz + gp.dzx; /* dDx/dz, dDz/dx */
-    double txx = 1.0 + dxx, txy = sx, txz = dzx;
-    double tzx = dxz, tzy = sz, tzz = 1.0 + dzz;
-    double nx = tzy * txz - tzz * txy;
-    double ny = tzz * txx - tzx * txz;
-    double nz = tzx * txy - tzy * txx;
+/* Tangents of the displaced surface along x0 (tx*) and z0 (tz*), both
+ * fields. */
+typedef struct tangents {
+    double txx, txy, txz, tzx, tzy, tzz;
+} tangents;
+
+/* normal = t_z x t_x, y up; where the surface folds or degenerates, the
+ * height field's normal. */
+static void surface_normal(const tangents *t, double sx, double sz, double n[3])
+{
+    double nx = t->tzy * t->txz - t->tzz * t->txy;
+    double ny = t->tzz * t->txx - t->tzx * t->txz;
+    double nz = t->tzx * t->txy - t->tzy * t->txx;
     double len = sqrt(nx * nx + ny * ny + nz * nz);
     if (!(len > 0.0) || ny <= 0.0) {
-        /* Folded or degenerate: fall back to the height-field normal. */
         nx = -sx;
         ny = 1.0;
         nz = -sz;
         len = sqrt(nx * nx + ny * ny + nz * nz);
     }
-    out->normal[0] = nx / len;
-    out->normal[1] = ny / len;
-    out->normal[2] = nz / len;
-    out->height = pt.height + gp.dy;
-    out->velocity[0] = pt.vel_x + gp.vx;
-    out->velocity[1] = pt.vel_y + gp.vy;
-    out->velocity[2] = pt.vel_z + gp.vz;
-    double jac = txx * tzz - tzx * txz;
-    /* the whitecaps tiles carry (ocean.h "Whitecap foam"), the near field's
-     * divergence included: the legacy Jacobian ramp answered near 0 where
-     * a viewer saw the wind's coverage */
-    out->foam = have_derivs ? ocean_frame_foam(c->f, dxx, dzz) : 0.0;
-    out->folded = jac <= 0.0 || jmin <= 0.0;
-    out->residual = res;
-    /* A horizontal miss m in the world moves the parameter point by J^-1 m
-     * and the height by grad(eta) J^-1 m: the world slope g = grad(eta)
-     * J^-1 times the miss, which is the residual plus what the reading of
-     * D may be off by.  Where J is singular (a fold) no bound holds. */
+    n[0] = nx / len;
+    n[1] = ny / len;
+    n[2] = nz / len;
+}
+
+/* A horizontal miss m in the world moves the parameter point by J^-1 m
+ * and the height by grad(eta) J^-1 m: the world slope g = grad(eta) J^-1
+ * times the miss, which is the residual plus what the reading of D may be
+ * off by.  Where J is singular (a fold) no bound holds. */
+static double error_bound(const tangents *t, double jac, double sx, double sz, double res,
+                          const ocean_point *err, const ocean_query_options *opt)
+{
     double gx = INFINITY, gz = INFINITY;
     if (jac > 0.0) {
-        gx = (sx * tzz - sz * txz) / jac;
-        gz = (sz * txx - sx * tzx) / jac;
+        gx = (sx * t->tzz - sz * t->txz) / jac;
+        gz = (sz * t->txx - sx * t->tzx) / jac;
     }
-    double miss = res + norm2(err.dx, err.dz);
-    out->error = err.height + (miss > 0.0 ? norm2(gx, gz) * miss : 0.0);
+    double miss = res + norm2(err->dx, err->dz);
+    double error = err->height + (miss > 0.0 ? norm2(gx, gz) * miss : 0.0);
     /* The slope times the miss is a first-order bound: it holds while the
      * miss is small beside the waves' curvature (a centimetre leaves a
      * second-order term under a tenth of a millimetre for the shortest
@@ -289,8 +331,39 @@ static void answer_one(const ctx *c, double x, double z, const ocean_query_optio
      * away with J > 0 on the way) answers for another point, and the bound
      * it would give (0.14 m against a true 0.35 m) is no bound. */
     if (res > opt->tolerance && res > OCEAN_QUERY_MISS_MAX)
-        out->error = INFINITY;
-    out->iterations = it + pit;
+        error = INFINITY;
+    return error;
+}
+
+static void answer_one(const ctx *c, double x, double z, const ocean_query_options *opt,
+                       int have_derivs, ocean_query_result *out)
+{
+    inv_state s;
+    int pit = 0;   /* the predictor's steps (not counted against max_iterations) */
+    inv_start(c, x, z, have_derivs, &s, &pit);
+    inv_reading rd;
+    inv_solve(c, x, z, opt, have_derivs, &s, &rd);
+    const ocean_point *pt = &rd.pt;
+    const ocean_gerstner_point *gp = &rd.gp;
+
+    double sx = pt->slope_x + gp->slope_x, sz = pt->slope_z + gp->slope_z;
+    double dxx = pt->dxx + gp->dxx, dzz = pt->dzz + gp->dzz;
+    double dxz = pt->dxz + gp->dxz, dzx = pt->dxz + gp->dzx; /* dDx/dz, dDz/dx */
+    tangents t = {1.0 + dxx, sx, dzx, dxz, sz, 1.0 + dzz};
+    surface_normal(&t, sx, sz, out->normal);
+    out->height = pt->height + gp->dy;
+    out->velocity[0] = pt->vel_x + gp->vx;
+    out->velocity[1] = pt->vel_y + gp->vy;
+    out->velocity[2] = pt->vel_z + gp->vz;
+    double jac = t.txx * t.tzz - t.tzx * t.txz;
+    /* the whitecaps tiles carry (ocean.h "Whitecap foam"), the near field's
+     * divergence included: the legacy Jacobian ramp answered near 0 where
+     * a viewer saw the wind's coverage */
+    out->foam = have_derivs ? ocean_frame_foam(c->f, dxx, dzz) : 0.0;
+    out->folded = jac <= 0.0 || s.jmin <= 0.0;
+    out->residual = s.res;
+    out->error = error_bound(&t, jac, sx, sz, s.res, &rd.err, opt);
+    out->iterations = s.it + pit;
 }
 
 ocean_result ocean_query_points(const ocean_frame *f, const ocean_gerstner *g,

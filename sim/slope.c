@@ -185,29 +185,20 @@ static int mode_cmp(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-ocean_result ocean_slope_table_create(const ocean *oc, const ocean_gerstner *nf,
-                                      ocean_slope_table **out, char *msg, size_t msglen)
+/* Every FFT mode of oc, sorted by |k|, with the prefix sums of their
+ * moments. */
+static ocean_result table_modes(ocean_slope_table *t, const ocean *oc)
 {
-    if (out)
-        *out = NULL;
-    if (!oc || !out) {
-        if (msg) snprintf(msg, msglen, "ocean or output is NULL");
-        return OCEAN_EINVAL;
-    }
     const ocean_params *p = ocean_get_params(oc);
     const ocean_sea_state *sea = &p->sea;
     int n = p->n, nc = p->cascades;
-    ocean_slope_table *t = calloc(1, sizeof *t);
-    if (!t)
-        goto nomem;
-    t->drop_gain = p->drop_gain;
     /* Half plane (mz > 0, or mz = 0 and mx > 0): each mode stands for
      * itself and its mirror -k, E|h(k)|^2 + E|h(-k)|^2 = (F(k) + F(-k)) dk^2
      * (ocean.c: P(k) = F dk^2 / 2 per draw, two draws per mode). */
     size_t cap = (size_t)nc * n * (n / 2 + 1);
     t->m = malloc(cap * sizeof *t->m);
     if (!t->m)
-        goto nomem;
+        return OCEAN_ENOMEM;
     for (int c = 0; c < nc; c++) {
         double patch, klo, khi;
         ocean_cascade_band(oc, c, &patch, &klo, &khi);
@@ -234,42 +225,47 @@ ocean_result ocean_slope_table_create(const ocean *oc, const ocean_gerstner *nf,
     qsort(t->m, t->nm, sizeof *t->m, mode_cmp);
     t->prefix = malloc((t->nm + 1) * sizeof *t->prefix);
     if (!t->prefix)
-        goto nomem;
+        return OCEAN_ENOMEM;
     memset(t->prefix[0], 0, sizeof t->prefix[0]);
     for (size_t i = 0; i < t->nm; i++)
         for (int j = 0; j < 4; j++)
             t->prefix[i + 1][j] = t->prefix[i][j] + t->m[i].c[j];
+    return OCEAN_OK;
+}
 
-    /* ocean.c's k_top: the finest cascade's k_hi or its corner. */
-    double fpatch, fklo, fkhi;
-    ocean_cascade_band(oc, nc - 1, &fpatch, &fklo, &fkhi);
-    double fdk = 2.0 * M_PI / fpatch;
-    double corner = M_SQRT2 * (n / 2 - 1) * fdk;
-    t->k_top = fkhi < corner ? fkhi : corner;
+/* Every wave of the near field nf with its moments. */
+static ocean_result table_near_field(ocean_slope_table *t, const ocean_gerstner *nf)
+{
+    t->nw = ocean_gerstner_count(nf);
+    t->wk = malloc(((size_t)t->nw + 1) * sizeof *t->wk);
+    t->wc = malloc(((size_t)t->nw + 1) * sizeof *t->wc);
+    if (!t->wk || !t->wc)
+        return OCEAN_ENOMEM;
+    for (int i = 0; i < t->nw; i++) {
+        ocean_gerstner_wave w;
+        ocean_gerstner_get_wave(nf, i, &w);
+        double v = 0.5 * w.amplitude * w.amplitude;
+        t->wk[i] = w.k;
+        t->wc[i][0] = v * w.kx * w.kx;
+        t->wc[i][1] = v * w.kz * w.kz;
+        t->wc[i][2] = v * w.kx * w.kz;
+        t->wc[i][3] = v;
+    }
+    return OCEAN_OK;
+}
 
-    /* Near field. */
+/* The tail: the sea state's spectrum beyond what the FFT (finest grid n
+ * points, fdk apart, band top fkhi) and the near field nf hold, up to
+ * k_short, then Elfouhaily's B_h up to the capillary cutoff. */
+static void table_tail(ocean_slope_table *t, const ocean_sea_state *sea, const ocean_gerstner *nf,
+                       int n, double fdk, double fkhi)
+{
     double nf_lo = INFINITY, nf_hi = INFINITY;
     if (nf) {
         const ocean_gerstner_params *gp = ocean_gerstner_get_params(nf);
         nf_lo = gp->k_lo;
         nf_hi = gp->k_hi;
-        t->nw = ocean_gerstner_count(nf);
-        t->wk = malloc(((size_t)t->nw + 1) * sizeof *t->wk);
-        t->wc = malloc(((size_t)t->nw + 1) * sizeof *t->wc);
-        if (!t->wk || !t->wc)
-            goto nomem;
-        for (int i = 0; i < t->nw; i++) {
-            ocean_gerstner_wave w;
-            ocean_gerstner_get_wave(nf, i, &w);
-            double v = 0.5 * w.amplitude * w.amplitude;
-            t->wk[i] = w.k;
-            t->wc[i][0] = v * w.kx * w.kx;
-            t->wc[i][1] = v * w.kz * w.kz;
-            t->wc[i][2] = v * w.kx * w.kz;
-            t->wc[i][3] = v;
-        }
     }
-
     /* The FFT's edge along a direction: its band's top, or the square of
      * the finest grid's cells (modes |m| <= n/2 - 1, each a cell of width
      * dk), whichever comes first. */
@@ -290,6 +286,31 @@ ocean_result ocean_slope_table_create(const ocean *oc, const ocean_gerstner *nf,
         }
     }
     short_tail(sea, t->k_short, OCEAN_SLOPE_K_CAPILLARY, &t->tail_short);
+}
+
+ocean_result ocean_slope_table_create(const ocean *oc, const ocean_gerstner *nf,
+                                      ocean_slope_table **out, char *msg, size_t msglen)
+{
+    if (out)
+        *out = NULL;
+    if (!oc || !out) {
+        if (msg) snprintf(msg, msglen, "ocean or output is NULL");
+        return OCEAN_EINVAL;
+    }
+    const ocean_params *p = ocean_get_params(oc);
+    ocean_slope_table *t = calloc(1, sizeof *t);
+    if (!t)
+        goto nomem;
+    t->drop_gain = p->drop_gain;
+    if (table_modes(t, oc) != OCEAN_OK || (nf && table_near_field(t, nf) != OCEAN_OK))
+        goto nomem;
+    /* ocean.c's k_top: the finest cascade's k_hi or its corner. */
+    double fpatch, fklo, fkhi;
+    ocean_cascade_band(oc, p->cascades - 1, &fpatch, &fklo, &fkhi);
+    double fdk = 2.0 * M_PI / fpatch;
+    double corner = M_SQRT2 * (p->n / 2 - 1) * fdk;
+    t->k_top = fkhi < corner ? fkhi : corner;
+    table_tail(t, &p->sea, nf, p->n, fdk, fkhi);
     *out = t;
     return OCEAN_OK;
 nomem:

@@ -257,38 +257,48 @@ static const cli_opt *find_opt(const char *arg, const cli_opt *const *tabs, cons
     return NULL;
 }
 
-int cli_parse(int argc, char **argv, const char *usage,
-              const cli_opt *opts, int nopts, cli_common *c,
-              const char **pos, int *npos)
-{
-    memset(c, 0, sizeof *c);
-    ocean_params *p = &c->params;
-    ocean_params_default(p);
-    c->effects = OCEAN_FX_ALL;
-    c->time = 0.0;
+/* What cli_parse works with beside cli_common. */
+typedef struct parse_state {
+    /* the common options' values that are not cli_common's own fields */
+    int spectrum, spreading, beaufort, help, show;
+    const char *config;
+    /* names of the sea-state enums, as the config file spells them */
+    const char *spectra[OCEAN_SPECTRUM_COUNT_ + 1];
+    const char *spreads[OCEAN_SPREAD_COUNT_ + 1];
+    /* the subcommand's table and the common one */
+    const cli_opt *tabs[2];
+    int ns[2];
+    /* positional arguments go to pos[], at most maxpos, *npos counting */
+    const char **pos;
+    int *npos, maxpos;
+} parse_state;
 
-    /* Names of the sea-state enums, as the config file spells them. */
-    const char *spectra[OCEAN_SPECTRUM_COUNT_ + 1] = {NULL};
-    const char *spreads[OCEAN_SPREAD_COUNT_ + 1] = {NULL};
-    for (int k = 0; k < OCEAN_SPECTRUM_COUNT_; k++)
-        spectra[k] = ocean_spectrum_name((ocean_spectrum_kind)k);
-    for (int k = 0; k < OCEAN_SPREAD_COUNT_; k++)
-        spreads[k] = ocean_spreading_name((ocean_spreading_kind)k);
+/* The common options' table into out[]; returns its length.  They write
+ * straight into the parameters, so what --help shows as a default is what
+ * the simulation gets. */
+static int common_opts(cli_common *c, parse_state *s, cli_opt *out)
+{
+    ocean_params *p = &c->params;
+    for (int k = 0; k <= OCEAN_SPECTRUM_COUNT_; k++)
+        s->spectra[k] = k < OCEAN_SPECTRUM_COUNT_ ? ocean_spectrum_name((ocean_spectrum_kind)k) : NULL;
+    for (int k = 0; k <= OCEAN_SPREAD_COUNT_; k++)
+        s->spreads[k] = k < OCEAN_SPREAD_COUNT_ ? ocean_spreading_name((ocean_spreading_kind)k) : NULL;
     static const char *const plans[] = {"estimate", "measure", NULL};
-    int spectrum = (int)p->sea.spectrum, spreading = (int)p->sea.spreading;
-    int beaufort = -1, help = 0, show = 0;
-    const char *config = NULL;
-    /* The common options write straight into the parameters, so what
-     * --help shows as a default is what the simulation gets. */
+    s->spectrum = (int)p->sea.spectrum;
+    s->spreading = (int)p->sea.spreading;
+    s->beaufort = -1;
+    s->help = 0;
+    s->show = 0;
+    s->config = NULL;
     const cli_opt common[] = {
-        {"spectrum", CLI_CHOICE, &spectrum, 0, 0, "NAME  wave spectrum", spectra},
+        {"spectrum", CLI_CHOICE, &s->spectrum, 0, 0, "NAME  wave spectrum", s->spectra},
         {"wind", CLI_DOUBLE, &p->sea.wind_u10, 0, 100, "U10   wind speed at 10 m, m/s", NULL},
         {"direction", CLI_DOUBLE, &p->sea.wind_dir_deg, -360, 360, "DEG   wind direction from +x toward +z", NULL},
         {"fetch", CLI_DOUBLE, &p->sea.fetch_m, 1, 1e7, "M     fetch for jonswap/tma", NULL},
         {"depth", CLI_DOUBLE, &p->sea.depth_m, 0.01, 12000, "M     water depth", NULL},
-        {"spreading", CLI_CHOICE, &spreading, 0, 0, "NAME  directional spreading", spreads},
+        {"spreading", CLI_CHOICE, &s->spreading, 0, 0, "NAME  directional spreading", s->spreads},
         {"swell", CLI_DOUBLE, &p->sea.swell, 0, 10, "X     swell parameter xi", NULL},
-        {"beaufort", CLI_INT, &beaufort, 0, 12, "F     Beaufort force: sets the wind (overrides --wind)", NULL},
+        {"beaufort", CLI_INT, &s->beaufort, 0, 12, "F     Beaufort force: sets the wind (overrides --wind)", NULL},
         {"size", CLI_DOUBLE, &p->patch_m, 1, 1e5, "L     largest patch size, m", NULL},
         {"n", CLI_INT, &p->n, OCEAN_MIN_N, OCEAN_MAX_N, "N     FFT resolution, power of two", NULL},
         {"cascades", CLI_INT, &p->cascades, 1, OCEAN_MAX_CASCADES, "K     cascades", NULL},
@@ -299,14 +309,132 @@ int cli_parse(int argc, char **argv, const char *usage,
         {"effects", CLI_EFFECTS, &c->effects, 0, 0, "LIST  height,displacement,normals,foam,velocity or all", NULL},
         {"threads", CLI_INT, &p->threads, 1, 64, "T     worker threads", NULL},
         {"plan", CLI_CHOICE, &p->plan_measure, 0, 0, "MODE  FFTW planning (estimate is bit-reproducible)", plans},
-        {"config", CLI_STRING, &config, 0, 0, "FILE  read sea.* and ocean.* keys from a config file first", NULL},
+        {"config", CLI_STRING, &s->config, 0, 0, "FILE  read sea.* and ocean.* keys from a config file first", NULL},
         {"json", CLI_FLAG, &c->json, 0, 0, "      machine-readable output", NULL},
-        {"show-options", CLI_FLAG, &show, 0, 0, "      print every option's value after parsing, and exit", NULL},
-        {"help", CLI_FLAG, &help, 0, 0, "      this help", NULL},
+        {"show-options", CLI_FLAG, &s->show, 0, 0, "      print every option's value after parsing, and exit", NULL},
+        {"help", CLI_FLAG, &s->help, 0, 0, "      this help", NULL},
     };
-    int ncommon = (int)(sizeof common / sizeof common[0]);
-    const cli_opt *tabs[2] = {opts, common};
-    int ns[2] = {nopts, ncommon};
+    _Static_assert(sizeof common / sizeof common[0] <= CLI_MAX_OPTS, "common options fit");
+    memcpy(out, common, sizeof common);
+    return (int)(sizeof common / sizeof common[0]);
+}
+
+/* The value of option o, named by arg = argv[*i]: after its '=' or the
+ * next argument (then *i advances); NULL for a flag.  Returns 0, or 2
+ * with the reason printed. */
+static int option_value(const cli_opt *o, const char *arg, int argc, char **argv, int *i,
+                        const char **val)
+{
+    const char *eq = strchr(arg + 2, '=');
+    *val = NULL;
+    if (o->kind == CLI_FLAG) {
+        if (eq) {
+            fprintf(stderr, "error: --%s takes no value\n", o->name);
+            return 2;
+        }
+    } else if (eq) {
+        *val = eq + 1;
+    } else if (*i + 1 < argc) {
+        *val = argv[++*i];
+    } else {
+        fprintf(stderr, "error: --%s needs a value\n", o->name);
+        return 2;
+    }
+    return 0;
+}
+
+/* One pass over the arguments: pass 0 checks every option and applies
+ * --config and --help, pass 1 applies the others.  Returns 0, or 2 with
+ * the reason printed. */
+static int scan_args(int argc, char **argv, int pass, parse_state *s)
+{
+    if (s->npos)
+        *s->npos = 0;
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i];
+        if (strncmp(arg, "--", 2) != 0) {
+            if (s->npos && *s->npos < s->maxpos) {
+                s->pos[(*s->npos)++] = arg;
+                continue;
+            }
+            fprintf(stderr, "error: unexpected argument '%s' (see %s --help)\n", arg, argv[0]);
+            return 2;
+        }
+        const cli_opt *o = find_opt(arg, s->tabs, s->ns, 2);
+        if (!o) {
+            const char *eq = strchr(arg + 2, '=');
+            fprintf(stderr, "error: unknown option '--%.*s' (see %s --help)\n",
+                    eq ? (int)(eq - arg - 2) : (int)strlen(arg + 2), arg + 2, argv[0]);
+            return 2;
+        }
+        const char *val;
+        if (option_value(o, arg, argc, argv, &i, &val))
+            return 2;
+        int first = o->target == (void *)&s->config || o->target == (void *)&s->help;
+        if (pass == 0 && first && apply_opt(o, val))
+            return 2;
+        if (pass == 1 && !first && apply_opt(o, val))
+            return 2;
+    }
+    return 0;
+}
+
+static void print_help(const char *usage, const char *cmd, const parse_state *s,
+                       char (*defs)[96])
+{
+    printf("usage: ocean-sim %s\n\n", usage);
+    if (s->ns[0]) {
+        printf("options of %s:\n", cmd);
+        print_opts(s->tabs[0], s->ns[0], defs);
+    }
+    printf("sea state and simulation options:\n");
+    print_opts(s->tabs[1], s->ns[1], defs + s->ns[0]);
+}
+
+/* --config FILE under the options; the enums' options read what it set.
+ * Returns 0, or 2 with the reason printed. */
+static int load_config(cli_common *c, parse_state *s)
+{
+    char err[512];
+    if (ocean_conf_load(s->config, &c->params, err, sizeof err) != OCEAN_OK) {
+        fprintf(stderr, "error: %s\n", err);
+        return 2;
+    }
+    c->config = s->config;
+    s->spectrum = (int)c->params.sea.spectrum;
+    s->spreading = (int)c->params.sea.spreading;
+    return 0;
+}
+
+static void show_options(const parse_state *s)
+{
+    for (int t = 0; t < 2; t++)
+        for (int k = 0; k < s->ns[t]; k++) {
+            const cli_opt *o = &s->tabs[t][k];
+            if (o->target == (const void *)&s->show || o->target == (const void *)&s->help)
+                continue;
+            char v[512];
+            format_value(o, v, sizeof v);
+            printf("--%s=%s\n", o->name, v);
+        }
+}
+
+int cli_parse(int argc, char **argv, const char *usage,
+              const cli_opt *opts, int nopts, cli_common *c,
+              const char **pos, int *npos)
+{
+    memset(c, 0, sizeof *c);
+    ocean_params *p = &c->params;
+    ocean_params_default(p);
+    c->effects = OCEAN_FX_ALL;
+    c->time = 0.0;
+    parse_state s;
+    cli_opt common[CLI_MAX_OPTS];
+    int ncommon = common_opts(c, &s, common);
+    s.tabs[0] = opts;
+    s.tabs[1] = common;
+    s.ns[0] = nopts;
+    s.ns[1] = ncommon;
     if (nopts + ncommon > CLI_MAX_OPTS) {
         fprintf(stderr, "error: internal: %d options (max %d)\n", nopts + ncommon, CLI_MAX_OPTS);
         return 2;
@@ -314,89 +442,32 @@ int cli_parse(int argc, char **argv, const char *usage,
     /* The defaults, before a config file or an option changes them. */
     char defs[CLI_MAX_OPTS][96];
     for (int t = 0, d = 0; t < 2; t++)
-        for (int k = 0; k < ns[t]; k++)
-            format_value(&tabs[t][k], defs[d++], sizeof defs[0]);
-    int maxpos = npos ? *npos : 0;
+        for (int k = 0; k < s.ns[t]; k++)
+            format_value(&s.tabs[t][k], defs[d++], sizeof defs[0]);
+    s.pos = pos;
+    s.npos = npos;
+    s.maxpos = npos ? *npos : 0;
     if (npos)
         *npos = 0;
 
     /* Two passes: the first checks every option and finds --config and
      * --help, the second applies the options over the config file. */
     for (int pass = 0; pass < 2; pass++) {
-        if (npos)
-            *npos = 0;
-        for (int i = 1; i < argc; i++) {
-            const char *arg = argv[i];
-            if (strncmp(arg, "--", 2) != 0) {
-                if (npos && *npos < maxpos) {
-                    pos[(*npos)++] = arg;
-                    continue;
-                }
-                fprintf(stderr, "error: unexpected argument '%s' (see %s --help)\n", arg, argv[0]);
-                return 2;
-            }
-            const cli_opt *o = find_opt(arg, tabs, ns, 2);
-            if (!o) {
-                const char *eq = strchr(arg + 2, '=');
-                fprintf(stderr, "error: unknown option '--%.*s' (see %s --help)\n",
-                        eq ? (int)(eq - arg - 2) : (int)strlen(arg + 2), arg + 2, argv[0]);
-                return 2;
-            }
-            const char *eq = strchr(arg + 2, '=');
-            const char *val = NULL;
-            if (o->kind == CLI_FLAG) {
-                if (eq) {
-                    fprintf(stderr, "error: --%s takes no value\n", o->name);
-                    return 2;
-                }
-            } else if (eq) {
-                val = eq + 1;
-            } else if (i + 1 < argc) {
-                val = argv[++i];
-            } else {
-                fprintf(stderr, "error: --%s needs a value\n", o->name);
-                return 2;
-            }
-            int first = o->target == (void *)&config || o->target == (void *)&help;
-            if (pass == 0 && first && apply_opt(o, val))
-                return 2;
-            if (pass == 1 && !first && apply_opt(o, val))
-                return 2;
-        }
-        if (pass == 0 && help) {
-            printf("usage: ocean-sim %s\n\n", usage);
-            if (nopts) {
-                printf("options of %s:\n", argv[0]);
-                print_opts(opts, nopts, defs);
-            }
-            printf("sea state and simulation options:\n");
-            print_opts(common, ncommon, defs + nopts);
+        if (scan_args(argc, argv, pass, &s))
+            return 2;
+        if (pass == 0 && s.help) {
+            print_help(usage, argv[0], &s, defs);
             return 1;
         }
-        if (pass == 0 && config) {
-            char err[512];
-            if (ocean_conf_load(config, p, err, sizeof err) != OCEAN_OK) {
-                fprintf(stderr, "error: %s\n", err);
-                return 2;
-            }
-            c->config = config;
-            spectrum = (int)p->sea.spectrum;
-            spreading = (int)p->sea.spreading;
-        }
+        if (pass == 0 && s.config && load_config(c, &s))
+            return 2;
     }
-    p->sea.spectrum = (ocean_spectrum_kind)spectrum;
-    p->sea.spreading = (ocean_spreading_kind)spreading;
-    if (beaufort >= 0)
-        ocean_beaufort_wind(beaufort, &p->sea.wind_u10);
-    if (show) {
-        for (int t = 0; t < 2; t++)
-            for (int k = 0; k < ns[t]; k++) {
-                if (tabs[t][k].target == (void *)&show || tabs[t][k].target == (void *)&help)
-                    continue;
-                char v[512];
-                format_value(&tabs[t][k], v, sizeof v);
-                printf("--%s=%s\n", tabs[t][k].name, v);
-            }
+    p->sea.spectrum = (ocean_spectrum_kind)s.spectrum;
+    p->sea.spreading = (ocean_spreading_kind)s.spreading;
+    if (s.beaufort >= 0)
+        ocean_beaufort_wind(s.beaufort, &p->sea.wind_u10);
+    if (s.show) {
+        show_options(&s);
         return 1;
     }
     char err[512];

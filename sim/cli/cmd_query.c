@@ -111,119 +111,165 @@ static char *read_file(const char *path)
     return buf;
 }
 
-int cmd_query(int argc, char **argv)
+/* What the command line sets beyond the common options. */
+typedef struct query_args {
+    double t, cutoff;
+    const char *points, *file;
+} query_args;
+
+/* Parses and checks the arguments: exactly one source of points, and one
+ * time (--t or --time).  Returns cli_parse's 0, 1 (help printed) or 2
+ * (error printed). */
+static int query_args_parse(int argc, char **argv, query_args *a, cli_common *c)
 {
-    cli_common c;
-    /* NAN: --t not given; the common --time (every other command's) then
-     * says the time, which query once ignored in silence */
-    double t = NAN, cutoff = INFINITY;   /* INFINITY: outside --cutoff's range, "not given" */
-    const char *points = NULL, *file = NULL;
+    /* t NAN: --t not given; the common --time (every other command's) then
+     * says the time, which query once ignored in silence.  cutoff
+     * INFINITY: outside --cutoff's range, "not given". */
+    *a = (query_args){.t = NAN, .cutoff = INFINITY, .points = NULL, .file = NULL};
     const cli_opt opts[] = {
-        {"t", CLI_DOUBLE, &t, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s (as --time; default 0)", NULL},
-        {"points", CLI_STRING, &points, 0, 0, "LIST  \"x1,z1;x2,z2;...\" world points, m", NULL},
-        {"points-file", CLI_STRING, &file, 0, 0, "FILE  one 'x,z' per line ('-': stdin)", NULL},
-        {"cutoff", CLI_DOUBLE, &cutoff, 0, 1e6, "K     Butterworth cutoff, rad/m (not given: unfiltered)", NULL},
+        {"t", CLI_DOUBLE, &a->t, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s (as --time; default 0)", NULL},
+        {"points", CLI_STRING, &a->points, 0, 0, "LIST  \"x1,z1;x2,z2;...\" world points, m", NULL},
+        {"points-file", CLI_STRING, &a->file, 0, 0, "FILE  one 'x,z' per line ('-': stdin)", NULL},
+        {"cutoff", CLI_DOUBLE, &a->cutoff, 0, 1e6, "K     Butterworth cutoff, rad/m (not given: unfiltered)", NULL},
     };
     int r = cli_parse(argc, argv, "query [--t T] --points \"x,z;...\" | --points-file F [--cutoff K] [--json]",
-                      opts, 4, &c, NULL, NULL);
+                      opts, 4, c, NULL, NULL);
     if (r)
-        return r == 1 ? 0 : 2;
-    if (isnan(t)) {
-        t = c.time;
-    } else if (c.time != 0.0 && c.time != t) {
-        fprintf(stderr, "error: query: --t %.17g and --time %.17g disagree: give one\n", t, c.time);
+        return r;
+    if (isnan(a->t)) {
+        a->t = c->time;
+    } else if (c->time != 0.0 && c->time != a->t) {
+        fprintf(stderr, "error: query: --t %.17g and --time %.17g disagree: give one\n", a->t, c->time);
         return 2;
     }
-    if (!points == !file) {
+    if (!a->points == !a->file) {
         fprintf(stderr, "error: query needs exactly one of --points or --points-file\n");
         return 2;
     }
-    double *xz = NULL;
+    return 0;
+}
+
+/* The points of --points or --points-file into *xz.  Returns their count
+ * (at least 1), or -1 with the reason printed. */
+static long query_points_read(const query_args *a, double **xz)
+{
     long n;
-    if (points) {
-        n = parse_points(points, "--points", 0, &xz);
+    *xz = NULL;
+    if (a->points) {
+        n = parse_points(a->points, "--points", 0, xz);
     } else {
-        char *text = read_file(file);
+        char *text = read_file(a->file);
         if (!text)
-            return 2;
-        n = parse_points(text, file, 1, &xz);
+            return -1;
+        n = parse_points(text, a->file, 1, xz);
         free(text);
     }
     if (n < 0)
-        return 2;
+        return -1;
     if (n == 0) {
         fprintf(stderr, "error: no points given\n");
-        free(xz);
-        return 2;
+        free(*xz);
+        *xz = NULL;
+        return -1;
     }
+    return n;
+}
+
+/* Evaluates the fields queries read at a->t and answers the n points into
+ * res; *ms_eval and *ms_query get the times.  Returns 0, or 2 with the
+ * reason printed. */
+static int query_answer(ocean *o, ocean_frame *f, const query_args *a, const double *xz, long n,
+                        ocean_query_result *res, double *ms_eval, double *ms_query)
+{
+    ocean_request req;
+    ocean_request_all(&req, OCEAN_QUERY_EFFECTS);
+    req.cutoff_k = a->cutoff;
+    double t0 = cli_now_ms();
+    ocean_result er = ocean_evaluate(o, a->t, &req, f);
+    double t1 = cli_now_ms();
+    size_t bad = 0;
+    ocean_result qr = er == OCEAN_OK ? ocean_query_points(f, NULL, NULL, a->t, xz, (size_t)n, NULL, res, &bad) : er;
+    double t2 = cli_now_ms();
+    *ms_eval = t1 - t0;
+    *ms_query = t2 - t1;
+    if (qr == OCEAN_OK)
+        return 0;
+    /* the library refuses what it cannot answer (a point beyond |x|, |z|
+     * <= 1e12 m, where a double no longer resolves the waves) rather than
+     * print zeros for it */
+    if (er != OCEAN_OK)
+        fprintf(stderr, "error: evaluation at t = %.9g failed: %s\n", a->t, ocean_strerror(er));
+    else
+        fprintf(stderr, "error: point %zu (%g, %g) refused: %s (world points within |x|, |z| <= 1e12 m)\n",
+                bad + 1, xz[2 * bad], xz[2 * bad + 1], ocean_strerror(qr));
+    return 2;
+}
+
+static void query_print_json(const query_args *a, const double *xz, long n,
+                             const ocean_query_result *res, double ms_eval, double ms_query)
+{
+    cJSON *j = cJSON_CreateObject(), *arr = cJSON_AddArrayToObject(j, "points");
+    cJSON_AddNumberToObject(j, "t", a->t);
+    cJSON_AddNumberToObject(j, "cutoff_k", isinf(a->cutoff) ? -1.0 : a->cutoff);
+    cJSON_AddNumberToObject(j, "evaluate_ms", ms_eval);
+    cJSON_AddNumberToObject(j, "query_ms", ms_query);
+    for (long i = 0; i < n; i++) {
+        cJSON *p = cJSON_CreateObject();
+        cJSON_AddNumberToObject(p, "x", xz[2 * i]);
+        cJSON_AddNumberToObject(p, "z", xz[2 * i + 1]);
+        cJSON_AddNumberToObject(p, "height", res[i].height);
+        cJSON_AddItemToObject(p, "normal", cJSON_CreateDoubleArray(res[i].normal, 3));
+        cJSON_AddItemToObject(p, "velocity", cJSON_CreateDoubleArray(res[i].velocity, 3));
+        cJSON_AddNumberToObject(p, "foam", res[i].foam);
+        cJSON_AddNumberToObject(p, "error", res[i].error);
+        cJSON_AddBoolToObject(p, "folded", res[i].folded);
+        cJSON_AddItemToArray(arr, p);
+    }
+    cli_print_json(j);
+}
+
+static void query_print_csv(const double *xz, long n, const ocean_query_result *res)
+{
+    printf("x,z,height,nx,ny,nz,vx,vy,vz,foam,error,folded\n");
+    for (long i = 0; i < n; i++)
+        printf("%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.4f,%.3g,%d\n", xz[2 * i],
+               xz[2 * i + 1], res[i].height, res[i].normal[0], res[i].normal[1],
+               res[i].normal[2], res[i].velocity[0], res[i].velocity[1], res[i].velocity[2],
+               res[i].foam, res[i].error, res[i].folded);
+}
+
+int cmd_query(int argc, char **argv)
+{
+    query_args a;
+    cli_common c;
+    int r = query_args_parse(argc, argv, &a, &c);
+    if (r)
+        return r == 1 ? 0 : 2;
+    double *xz;
+    long n = query_points_read(&a, &xz);
+    if (n < 0)
+        return 2;
     ocean *o;
     ocean_frame *f;
     if (cli_make_ocean(&c, &o, &f)) {
         free(xz);
         return 1;
     }
+    int status = 0;
     ocean_query_result *res = malloc(sizeof *res * (size_t)n);
+    double ms_eval, ms_query;
     if (!res) {
         fprintf(stderr, "error: out of memory\n");
-        ocean_frame_destroy(f);
-        ocean_destroy(o);
-        free(xz);
-        return 1;
-    }
-    ocean_request req;
-    ocean_request_all(&req, OCEAN_QUERY_EFFECTS);
-    req.cutoff_k = cutoff;
-    double t0 = cli_now_ms();
-    ocean_result er = ocean_evaluate(o, t, &req, f);
-    double t1 = cli_now_ms();
-    size_t bad = 0;
-    ocean_result qr = er == OCEAN_OK ? ocean_query_points(f, NULL, NULL, t, xz, (size_t)n, NULL, res, &bad) : er;
-    double t2 = cli_now_ms();
-    if (qr != OCEAN_OK) {
-        /* the library refuses what it cannot answer (a point beyond
-         * |x|, |z| <= 1e12 m, where a double no longer resolves the waves)
-         * rather than print zeros for it */
-        if (er != OCEAN_OK)
-            fprintf(stderr, "error: evaluation at t = %.9g failed: %s\n", t, ocean_strerror(er));
+        status = 1;
+    } else if ((status = query_answer(o, f, &a, xz, n, res, &ms_eval, &ms_query)) == 0) {
+        if (c.json)
+            query_print_json(&a, xz, n, res, ms_eval, ms_query);
         else
-            fprintf(stderr, "error: point %zu (%g, %g) refused: %s (world points within |x|, |z| <= 1e12 m)\n",
-                    bad + 1, xz[2 * bad], xz[2 * bad + 1], ocean_strerror(qr));
-        free(res);
-        free(xz);
-        ocean_frame_destroy(f);
-        ocean_destroy(o);
-        return 2;
-    }
-    if (c.json) {
-        cJSON *j = cJSON_CreateObject(), *arr = cJSON_AddArrayToObject(j, "points");
-        cJSON_AddNumberToObject(j, "t", t);
-        cJSON_AddNumberToObject(j, "cutoff_k", isinf(cutoff) ? -1.0 : cutoff);
-        cJSON_AddNumberToObject(j, "evaluate_ms", t1 - t0);
-        cJSON_AddNumberToObject(j, "query_ms", t2 - t1);
-        for (long i = 0; i < n; i++) {
-            cJSON *p = cJSON_CreateObject();
-            cJSON_AddNumberToObject(p, "x", xz[2 * i]);
-            cJSON_AddNumberToObject(p, "z", xz[2 * i + 1]);
-            cJSON_AddNumberToObject(p, "height", res[i].height);
-            cJSON_AddItemToObject(p, "normal", cJSON_CreateDoubleArray(res[i].normal, 3));
-            cJSON_AddItemToObject(p, "velocity", cJSON_CreateDoubleArray(res[i].velocity, 3));
-            cJSON_AddNumberToObject(p, "foam", res[i].foam);
-            cJSON_AddNumberToObject(p, "error", res[i].error);
-            cJSON_AddBoolToObject(p, "folded", res[i].folded);
-            cJSON_AddItemToArray(arr, p);
-        }
-        cli_print_json(j);
-    } else {
-        printf("x,z,height,nx,ny,nz,vx,vy,vz,foam,error,folded\n");
-        for (long i = 0; i < n; i++)
-            printf("%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.4f,%.3g,%d\n", xz[2 * i],
-                   xz[2 * i + 1], res[i].height, res[i].normal[0], res[i].normal[1],
-                   res[i].normal[2], res[i].velocity[0], res[i].velocity[1], res[i].velocity[2],
-                   res[i].foam, res[i].error, res[i].folded);
+            query_print_csv(xz, n, res);
     }
     free(res);
     free(xz);
     ocean_frame_destroy(f);
     ocean_destroy(o);
-    return 0;
+    return status;
 }
