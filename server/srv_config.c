@@ -201,7 +201,7 @@ static const conf_entry srv_entries[] = {
              "tile).  One size for every viewer, so every viewer shares every tile; smaller "
              "tiles fit a camera's footprint closer, larger ones compress a little better."},
     {.name = "server.viewer_bytes_per_s", .type = CONF_DOUBLE, .offset = SRV(viewer_bytes_per_s),
-     .min = 1e4, .max = 1e10, .def = "3.9e6", .unit = "B/s",
+     .min = 1e4, .max = 1e10, .def = "0.85e6", .unit = "B/s",
      .help = "Cascade tile layout: tile bytes one viewer may receive per second at most (its "
              "frame budget is this over its frame rate); a viewer whose link carries less gets its "
              "frames planned for what its link delivers (PROTOCOL.md \"Pacing\").  A camera whose "
@@ -209,8 +209,10 @@ static const conf_entry srv_entries[] = {
              "large viewport, a camera near the water) reads coarser mips until it fits, and "
              "each cascade then refines on its own, finest first, within what is left; the "
              "server plans with a fixed model of each codec's bytes per sample (the same on every replica; "
-             "within 1 % of the measured qz bytes, `make bench`): 3.9e6 keeps the viewer under "
-             "4 MB/s with frame headers."},
+             "within 1 % of the measured qz bytes, `make bench`), a time-interpolating "
+             "subscription's mips (the viewer's) each at its share per frame: 0.85e6 keeps the "
+             "viewer under 1 MB/s with frame headers, flying at 60 m/s included (a plain "
+             "subscription gets as many bytes of every tick's tiles)."},
     {.name = "server.max_query_points", .type = CONF_INT, .offset = SRV(max_query_points),
      .min = 1, .max = 65536, .def = "65536",
      .help = "Most points one QUERY may carry."},

@@ -14,11 +14,13 @@
  *    30 Hz, lod 8, tile 64, accuracy OC_ACCURACY_DEFAULT = 5e-3, concentric
  *    mesh, samples in time) with layers =
  *    HELLO.max_layers and effects = all & HELLO.effects, as the viewer
- *    computes them; every camera is measured twice, before and after the
- *    time_interp flag: the plain stream (the flag clear, every frame whole)
+ *    computes them; every camera is measured twice, before and after: the
+ *    plain stream (the time_interp flag clear, every frame whole) from a
+ *    daemon with the byte budget shipped before (AV_BEFORE_BYTES_PER_S),
  *    and the time-interpolating one (each frame read from the blend of two
- *    samples the client holds, every frame applied on receipt), so the
- *    bytes it saves and the error it adds sit side by side;
+ *    samples the client holds, every frame applied on receipt) from the
+ *    daemon as shipped, so what the viewer gets now sits beside what it
+ *    got;
  *  - the cameras: at (0, H, 0), H from 3 m to 1500 m, heading 0, 60 deg
  *    vertical field of view, 1920 x 1080 viewport (a desktop browser's
  *    drawing buffer; the viewer reports its real one), pitch atan(H / 10
@@ -87,6 +89,12 @@ static const av_cam av_cams[] = {{3, 0}, {25, 0}, {300, 0}, {1500, 0}, {3, 60}, 
  * samples in time (SUBSCRIBE flag time_interp, the viewer's). */
 #define AV_STREAMS 2
 static const char *const av_stream_name[AV_STREAMS] = {"plain", "time-interp"};
+
+/* The budget the plain stream was planned with before samples in time:
+ * server.viewer_bytes_per_s as config/oceand.conf shipped it, where a
+ * viewer took 3-5 MB/s.  The "before" rows are that stream as it was
+ * served; the "after" rows the viewer's stream on today's config. */
+#define AV_BEFORE_BYTES_PER_S "3.9e6"
 /* Frames whose errors are measured per row, spread over the window: a
  * time-interpolating frame's error depends on where it falls between its
  * mips' samples, so more than one instant is read. */
@@ -732,8 +740,10 @@ static double av_rms_a(const av_err *e) { return e->n > 0 ? sqrt(e->a2 / e->n) :
  * error side by side (plain / time-interp).  1 if a row is missing. */
 static int av_print_before_after(const av_row *rows, double hs)
 {
-    printf("**Before and after samples in time** (plain / time-interp, same camera, same daemon; ratio = "
-           "time-interp over plain):\n\n");
+    printf("**Before and after samples in time** (before: the plain stream, every tick's tiles, from a daemon "
+           "whose server.viewer_bytes_per_s is %s as shipped before; after: the viewer's stream, samples in "
+           "time, from the daemon as shipped; same camera; ratio = after over before):\n\n",
+           AV_BEFORE_BYTES_PER_S);
     printf("| camera m | speed m/s | MB/s (ratio) | KiB/frame | q | e_error | height RMS %%Hs: carried | height RMS "
            "%%Hs: left to shading | height RMS %%Hs: total | normal RMS deg: carried | normal RMS deg: total | "
            "daemon cores |\n");
@@ -878,6 +888,72 @@ static void av_write_headline(const av_row *rows, const srv_settings *S, double 
 }
 
 /* The whole section: returns 0 when every camera was measured on both streams. */
+/* One oceand as `make run` starts it (--config CONF_PATH, a free port),
+ * for stream k: the plain one with the budget of before, the
+ * time-interpolating one as shipped. */
+typedef struct av_daemon {
+    pid_t pid;
+    int up;
+    char url[64];
+    char log[128];
+} av_daemon;
+
+static void av_daemon_start(av_daemon *d, int k)
+{
+    char exe[4096], od[4200];
+    ssize_t el = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    exe[el > 0 ? el : 0] = 0;
+    char *sl = strrchr(exe, '/');
+    if (sl) *sl = 0;
+    snprintf(od, sizeof od, "%s/../oceand", exe);
+    int port = av_free_port();
+    char portarg[16];
+    snprintf(portarg, sizeof portarg, "%d", port);
+    snprintf(d->url, sizeof d->url, "ws://127.0.0.1:%d/", port);
+    snprintf(d->log, sizeof d->log, OUT_DIR "/bench_accuracy_oceand%s.log", k ? "" : "_before");
+    d->up = 0;
+    fflush(stdout);
+    fflush(stderr);
+    d->pid = fork();
+    if (d->pid == 0) {
+        /* only async-signal-safe calls between fork and exec: this process
+         * has OpenMP and FFTW threads */
+        int fd = open(d->log, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (fd >= 0) {
+            dup2(fd, 1);
+            dup2(fd, 2);
+            close(fd);
+        }
+        if (k)
+            execl(od, "oceand", "--config", CONF_PATH, "--port", portarg, (char *)NULL);
+        else
+            execl(od, "oceand", "--config", CONF_PATH, "--port", portarg, "--set",
+                  "server.viewer_bytes_per_s=" AV_BEFORE_BYTES_PER_S, (char *)NULL);
+        _exit(127);
+    }
+    for (int i = 0; i < 100 && d->pid > 0 && !d->up; i++) {
+        oc_options o;
+        oc_options_default(&o);
+        o.url = d->url;
+        oc_client *c = NULL;
+        if (oc_connect(&o, 1000, &c, NULL, 0) == OCEAN_OK) {
+            d->up = 1;
+            oc_client_destroy(c);
+        } else {
+            usleep(100000);
+        }
+    }
+}
+
+static void av_daemon_stop(av_daemon *d)
+{
+    if (d->pid > 0) {
+        kill(d->pid, SIGTERM);
+        waitpid(d->pid, NULL, 0);
+    }
+    d->pid = 0;
+}
+
 static int viewer_section(void)
 {
     int q = bench_quick();
@@ -948,67 +1024,29 @@ static int viewer_section(void)
             av_casc_free(&C[k]);
     }
 
-    char exe[4096], od[4200];
-    ssize_t el = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    exe[el > 0 ? el : 0] = 0;
-    char *sl = strrchr(exe, '/');
-    if (sl)
-        *sl = 0;
-    snprintf(od, sizeof od, "%s/../oceand", exe);
-    int port = av_free_port();
-    char portarg[16], url[64];
-    snprintf(portarg, sizeof portarg, "%d", port);
-    snprintf(url, sizeof url, "ws://127.0.0.1:%d/", port);
-    fflush(stdout);
-    fflush(stderr);
-    pid_t pid = fork();
-    if (pid == 0) {
-        /* only async-signal-safe calls between fork and exec: this process
-         * has OpenMP and FFTW threads */
-        int fd = open(OUT_DIR "/bench_accuracy_oceand.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        if (fd >= 0) {
-            dup2(fd, 1);
-            dup2(fd, 2);
-            close(fd);
-        }
-        execl(od, "oceand", "--config", CONF_PATH, "--port", portarg, (char *)NULL);
-        _exit(127);
-    }
     /* row = camera * AV_STREAMS + stream */
     static av_row rows_v[AV_CAMS * AV_STREAMS];
     memset(rows_v, 0, sizeof rows_v);
+    av_daemon D[AV_STREAMS];
+    for (int k = 0; k < AV_STREAMS; k++) av_daemon_start(&D[k], k);
     for (int r = 0; r < AV_CAMS * AV_STREAMS; r++) {
         rows_v[r].height = av_cams[r / AV_STREAMS].height;
         rows_v[r].speed = av_cams[r / AV_STREAMS].speed;
         rows_v[r].timed = r % AV_STREAMS;
-        snprintf(rows_v[r].why, sizeof rows_v[r].why, "the daemon did not start (%.120s)", od);
-    }
-    int up = 0;
-    for (int i = 0; i < 100 && pid > 0 && !up; i++) {
-        oc_options o;
-        oc_options_default(&o);
-        o.url = url;
-        oc_client *c = NULL;
-        if (oc_connect(&o, 1000, &c, NULL, 0) == OCEAN_OK) {
-            up = 1;
-            oc_client_destroy(c);
-        } else {
-            usleep(100000);
-        }
+        snprintf(rows_v[r].why, sizeof rows_v[r].why, "the daemon did not start (see %s)", D[r % AV_STREAMS].log);
     }
     int grid = q ? 32 : 64;
     double window_s = q ? 2.0 : 4.0;
-    for (int r = 0; r < AV_CAMS * AV_STREAMS && up; r++) {
+    for (int r = 0; r < AV_CAMS * AV_STREAMS; r++) {
         av_row *R = &rows_v[r];
+        const av_daemon *d = &D[R->timed];
+        if (!d->up) continue;
         R->why[0] = 0;
-        av_measure(url, pid, ref, nf, grid, window_s, R);
+        av_measure(d->url, d->pid, ref, nf, grid, window_s, R);
         fprintf(stderr, "bench_accuracy: viewer at %g m, %g m/s, %s stream: %s\n", R->height, R->speed,
                 av_stream_name[R->timed], R->ok ? "measured" : R->why);
     }
-    if (pid > 0) {
-        kill(pid, SIGTERM);
-        waitpid(pid, NULL, 0);
-    }
+    for (int k = 0; k < AV_STREAMS; k++) av_daemon_stop(&D[k]);
     av_print_intro(&S, hs, chk, grid, window_s);
     int bad = av_print_before_after(rows_v, hs);
     bad |= av_print_rows(rows_v);

@@ -11,8 +11,8 @@
 #   - the C decoders and store, native (helpers/decode_native.c: the floor);
 #   - the viewer's build in Node.js (decode_viewer.mjs) and in headless
 #     Chromium, in a module Worker (decode_chromium.mjs), both on
-#     clients/web/codec.js and ocean.wasm; and, where git has them, the
-#     JavaScript decoders it replaced (qz in JavaScript, zstd by fzstd);
+#     clients/web/codec.js and ocean.wasm (the JavaScript decoders they
+#     replaced cannot read today's layout-1 frames: earlier REPORT.md);
 # each run three times, interleaved; a frame's time is its median over the
 # runs.  The planes each frame's instant reads are hashed by each decoder:
 # the WebAssembly build must equal the native one bit for bit on every frame.
@@ -56,10 +56,6 @@ kill "$dpid" 2>/dev/null
 wait "$dpid" 2>/dev/null
 dpid=
 
-old=
-if git rev-parse -q --verify 07cc948^ >/dev/null 2>&1; then
-    mkdir -p "$tmp/old" && git archive 07cc948^ clients/web | tar x -C "$tmp/old" && old="$tmp/old/clients/web"
-fi
 chromium=
 [[ -x ${CHROMIUM:-/usr/bin/chromium} && -d tests/browser/node_modules/playwright-core ]] && chromium=1
 for run in 1 2 3; do
@@ -71,9 +67,6 @@ for run in 1 2 3; do
                 die "Chromium decode failed ($s)"
         fi
     done
-    if [[ -n $old ]]; then
-        node tests/bench/decode_viewer.mjs "$tmp/plain.frames" "$old" >"$tmp/plain.js.$run" || die "JavaScript decode failed"
-    fi
 done
 
 # per frame: the median of the three runs; then the median and p90 over frames
@@ -85,8 +78,7 @@ stats() {  # run-file prefix -> "median p90 frames"
 same() { paste "$tmp/$1.native.1" "$tmp/$1.$2.1" | awk '$6 == $12 && $2 == $8 {s++} END {print s + 0}'; }
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN { if (b > 0 && a != "-") printf "%.2f", a / b; else printf "-" }'; }
 mean_bytes() { awk '{b += $4} END {printf "%.0f", b / NR}' "$tmp/$1.native.1"; }
-declare -A NAME=([wasm]="viewer, WebAssembly, Node.js" [chromium]="viewer, WebAssembly, headless Chromium (a module Worker)"
-                 [js]="viewer before: JavaScript qz and fzstd (07cc948^), Node.js")
+declare -A NAME=([wasm]="viewer, WebAssembly, Node.js" [chromium]="viewer, WebAssembly, headless Chromium (a module Worker)")
 bad=0
 rows=
 echo "stream,decoder,bytes_per_frame,median_ms,p90_ms,frames,bit_identical_frames" >"$OUT/decode.csv"
@@ -97,11 +89,11 @@ for s in plain timed; do
     [[ $s == timed ]] && label="samples in time (the viewer's)"
     echo "$s,native C,$bytes,$n_med,$n_p90,$frames,$frames" >>"$OUT/decode.csv"
     rows+="| $label | native C (-O2): the floor | $bytes | $n_med | $n_p90 | 1.00 | $frames of $frames |"$'\n'
-    for d in wasm chromium js; do
+    for d in wasm chromium; do
         [[ -f $tmp/$s.$d.1 ]] || continue
         read -r med p90 _ <<<"$(stats "$s.$d")"
         sm=$(same "$s" "$d")
-        if [[ $d != js && $sm -ne $frames ]]; then
+        if [[ $sm -ne $frames ]]; then
             echo "bench_decode: $s/$d differs from the native decoder on $((frames - sm)) frames" >&2
             bad=1
         fi

@@ -7,7 +7,7 @@
  * as decode_native does.
  *   usage: node tests/bench/decode_viewer.mjs FRAMES [WEB_DIR]
  * WEB_DIR (default clients/web) may hold another version of the viewer's
- * modules (bench_decode.sh times the JavaScript decoders it replaced).
+ * modules.
  */
 import { readFileSync } from 'node:fs';
 import { performance } from 'node:perf_hooks';
