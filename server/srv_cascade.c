@@ -1096,7 +1096,10 @@ static void held_begin(srv_cascade *k, const srv_config *cfg, srv_cascade_job *j
         }
         srv_held_drop(h, c, mips);
     }
+    /* keyed now, not when the batch ends: a replay client's next frame in
+     * this batch continues from this one, as it does in the next batch */
     pl->key = srv_held_key(h);
+    if (pl->key) srv_held_keyed(h);
     pl->held = h;
 }
 
@@ -1271,19 +1274,16 @@ static void frames_of(const tables *tb, const srv_config *cfg, srv_stats *st, sr
     }
 }
 
-/* The model of a time-interpolating client after its frame: a KEY frame
- * made, or, when the frame or one of its tiles could not be made, the
- * client's holdings no longer known: the next frame is a KEY frame. */
+/* The model of a time-interpolating client after its frame: when the
+ * frame or one of its tiles could not be made, the client's holdings are
+ * no longer known: the next frame is a KEY frame. */
 static void held_end(const srv_cascade_job *j, plan *pl)
 {
     if (!pl->held) return;
     int whole = pl->ok && j->frame;
     for (int i = 0; whole && i < pl->tiles; i++)
         whole = pl->list[i] && pl->list[i]->result == OCEAN_OK && pl->list[i]->payload;
-    if (!whole)
-        srv_held_clear(pl->held);
-    else if (pl->key)
-        srv_held_keyed(pl->held);
+    if (!whole) srv_held_clear(pl->held);
 }
 
 void srv_cascade_run(srv_cascade *k, ocean *oc, const ocean_gerstner *g, ocean *nf, int order,

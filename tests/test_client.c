@@ -1795,8 +1795,8 @@ static void daemon_round_trip(void **state)
     proto_camera cam;
     oc_camera_default(&cam);
     assert_int_equal(oc_client_send_camera(c, &cam, NULL), OCEAN_OK);
-    int frames = 0;
-    for (int i = 0; i < 3; i++) {
+    int frames = 0, read_from = -1;
+    for (int i = 0; i < 12; i++) {
         oc_frame *f = NULL;
         r = oc_client_next_frame(c, 5000, &f);
         if (r != OCEAN_OK) {
@@ -1805,7 +1805,9 @@ static void daemon_round_trip(void **state)
             break;
         }
         /* the viewer's subscription samples in time: the first frame (KEY)
-         * brings tiles, and every frame's view reads the sea in front of the
+         * brings tiles, the rest of what the client lacks follows within a
+         * few frames (a frame carries at most twice its byte budget), and
+         * from then on every frame's view reads the sea in front of the
          * camera from the samples the client holds */
         assert_true(frames > 0 || f->info.tile_count > 0);
         for (unsigned k = 0; k < f->info.tile_count; k++)
@@ -1813,7 +1815,9 @@ static void daemon_round_trip(void **state)
         oc_sample sm;
         if (f->view_result != OCEAN_OK) print_error("frame %d: %s\n", frames, f->view_error);
         assert_int_equal(f->view_result, OCEAN_OK);
-        assert_int_equal(oc_frame_sample(f, cam.pos[0] + 30, cam.pos[2], 0, &sm), OCEAN_OK);
+        ocean_result sr = oc_frame_sample(f, cam.pos[0] + 30, cam.pos[2], 0, &sm);
+        if (read_from >= 0 || sr == OCEAN_OK) assert_int_equal(sr, OCEAN_OK);
+        if (read_from < 0 && sr == OCEAN_OK) read_from = frames;
         frames++;
         oc_frame_free(f);
     }
@@ -1829,7 +1833,8 @@ static void daemon_round_trip(void **state)
     oc_query_result_free(&q);
     oc_client_destroy(c);
     test_oceand_stop(pid);
-    assert_int_equal(frames, 3);
+    assert_int_equal(frames, 12);
+    assert_true(read_from >= 0 && read_from < 8);
     assert_int_equal(qr, OCEAN_OK);
 }
 

@@ -69,23 +69,24 @@ static const frame_spec stream[N_FRAMES] = {
       {0, 0, 1, 100, 0, CH_HN, PROTO_CODEC_F32, 0}, {0, 1, 1, 100, 0, CH_HN, PROTO_CODEC_F32, 0},
       {0, 0, 0, 104, 1, CH_HN, PROTO_CODEC_F32, 0}, {0, 1, 0, 104, 1, CH_HN, PROTO_CODEC_F32, 0},
       {1, 0, 0, 100, 0, PROTO_CH_HEIGHT, PROTO_CODEC_F32, 0}}},
-    /* 1: mip 0 keeps its window a quarter on (tiles (0,1), (1,1) get
-     * their B now); mip 1 the frame's own time again */
-    {101, 0, {{100, 4, 16384}, {0, 0, 0}}, 3,
-     {{0, 0, 1, 104, 1, CH_HN, PROTO_CODEC_F32, 0}, {0, 1, 1, 104, 1, CH_HN, PROTO_CODEC_F32, 0},
-      {1, 0, 0, 101, 0, PROTO_CH_HEIGHT, PROTO_CODEC_F32, 0}}},
+    /* 1: mip 0 keeps its window a quarter on ((1,1) gets its B now, (0,1)
+     * never in this window); mip 1 the frame's own time again */
+    {101, 0, {{100, 4, 16384}, {0, 0, 0}}, 2,
+     {{0, 1, 1, 104, 1, CH_HN, PROTO_CODEC_F32, 0}, {1, 0, 0, 101, 0, PROTO_CH_HEIGHT, PROTO_CODEC_F32, 0}}},
     /* 2: mip 0 half way, its (1,1) B replaced; mip 1 gets a window (a new
      * one: both samples) */
     {102, 0, {{100, 4, 32768}, {102, 2, 0}}, 3,
      {{0, 1, 1, 104, 1, CH_HN, PROTO_CODEC_F32, 1000}, {1, 0, 0, 102, 0, PROTO_CH_HEIGHT, PROTO_CODEC_F32, 0},
       {1, 0, 0, 104, 1, PROTO_CH_HEIGHT, PROTO_CODEC_F32, 0}}},
-    /* 3: both windows start at their held B: B moves to A.  mip 0's new B
-     * for three tiles, (0,1)'s with heights only; (1,1) has none */
+    /* 3: both windows start at their held B: B moves to A, (0,1) keeps
+     * its old A (no B came).  mip 0's new B for three tiles, (0,1)'s with
+     * heights only; (1,1) has none */
     {104, 0, {{104, 4, 0}, {104, 2, 0}}, 4,
      {{0, 0, 0, 108, 1, CH_HN, PROTO_CODEC_F32, 0}, {0, 1, 0, 108, 1, CH_HN, PROTO_CODEC_F32, 0},
       {0, 0, 1, 108, 1, PROTO_CH_HEIGHT, PROTO_CODEC_F32, 0}, {1, 0, 0, 106, 1, PROTO_CH_HEIGHT, PROTO_CODEC_F32, 0}}},
-    /* 4: mip 0 jumps to a window not starting at its B (no KEY): dropped,
-     * then both samples of (0,0), sample A of (1,0); mip 1 half way */
+    /* 4: mip 0 jumps to a window not starting at its B (no KEY): each
+     * tile's newest sample becomes A, then both samples of (0,0) and
+     * sample A of (1,0) replace theirs; mip 1 half way */
     {105, 0, {{200, 4, 16384}, {104, 2, 32768}}, 3,
      {{0, 0, 0, 200, 0, CH_HN, PROTO_CODEC_F32, 0}, {0, 0, 0, 204, 1, CH_HN, PROTO_CODEC_F32, 0},
       {0, 1, 0, 200, 0, CH_HN, PROTO_CODEC_F32, 0}}},
@@ -115,17 +116,20 @@ static const struct {
          {0, 0, 1, 100, -1, 0, 0, 0, CH_HN}, {0, 1, 1, 100, -1, 0, 0, 0, CH_HN},
          {1, 0, 0, 100, -1, 0, 0, 0, PROTO_CH_HEIGHT}}},
     {5, {{0, 0, 0, 100, 104, 0, 0, 0.25, CH_HN}, {0, 1, 0, 100, 104, 0, 0, 0.25, CH_HN},
-         {0, 0, 1, 100, 104, 0, 0, 0.25, CH_HN}, {0, 1, 1, 100, 104, 0, 0, 0.25, CH_HN},
+         {0, 0, 1, 100, -1, 0, 0, 0, CH_HN}, {0, 1, 1, 100, 104, 0, 0, 0.25, CH_HN},
          {1, 0, 0, 101, -1, 0, 0, 0, PROTO_CH_HEIGHT}}},
     {5, {{0, 0, 0, 100, 104, 0, 0, 0.5, CH_HN}, {0, 1, 0, 100, 104, 0, 0, 0.5, CH_HN},
-         {0, 0, 1, 100, 104, 0, 0, 0.5, CH_HN}, {0, 1, 1, 100, 104, 0, 1000, 0.5, CH_HN},
+         {0, 0, 1, 100, -1, 0, 0, 0, CH_HN}, {0, 1, 1, 100, 104, 0, 1000, 0.5, CH_HN},
          {1, 0, 0, 102, 104, 0, 0, 0, PROTO_CH_HEIGHT}}},
-    /* 3: (1,1) A alone: its A is the replaced B */
+    /* 3: (1,1) A alone: its A is the replaced B; (0,1) its old A (tick
+     * 100) blended with the new B */
     {5, {{0, 0, 0, 104, 108, 0, 0, 0, CH_HN}, {0, 1, 0, 104, 108, 0, 0, 0, CH_HN},
-         {0, 0, 1, 104, 108, 0, 0, 0, PROTO_CH_HEIGHT}, {0, 1, 1, 104, -1, 1000, 0, 0, CH_HN},
+         {0, 0, 1, 100, 108, 0, 0, 0, PROTO_CH_HEIGHT}, {0, 1, 1, 104, -1, 1000, 0, 0, CH_HN},
          {1, 0, 0, 104, 106, 0, 0, 0, PROTO_CH_HEIGHT}}},
-    /* 4: (1,0) A alone a quarter into its window */
-    {3, {{0, 0, 0, 200, 204, 0, 0, 0.25, CH_HN}, {0, 1, 0, 200, -1, 0, 0, 0, CH_HN},
+    /* 4: (1,0) A alone a quarter into its window; (0,1), (1,1) their
+     * newest samples (108 heights only; the replaced 104) alone */
+    {5, {{0, 0, 0, 200, 204, 0, 0, 0.25, CH_HN}, {0, 1, 0, 200, -1, 0, 0, 0, CH_HN},
+         {0, 0, 1, 108, -1, 0, 0, 0, PROTO_CH_HEIGHT}, {0, 1, 1, 104, -1, 1000, 0, 0, CH_HN},
          {1, 0, 0, 104, 106, 0, 0, 0.5, PROTO_CH_HEIGHT}}},
     /* 5: mip 1's window has A alone */
     {2, {{0, 0, 1, 106, -1, 0, 0, 0, CH_HN}, {1, 0, 0, 106, -1, 0, 0, 0, PROTO_CH_HEIGHT}}},

@@ -578,7 +578,15 @@ static oc_frame *frame_for_camera(oc_client *c, const proto_camera *cam)
  * samples of every tile it needs). */
 static oc_client *bridge_tiles_client(srv_daemon **d, srv_settings *sb, proto_subscribe *s)
 {
-    oc_client *c = bridge_client(d, sb, NULL);
+    /* at the byte budget the plain stream had before samples in time made
+     * the viewer's stream a quarter of it (3.9e6 B/s, 130 KB a frame):
+     * these tests are about how the planner spends a frame's budget, and
+     * the shipped 0.85e6 spent on every tick's tiles leaves the finest
+     * cascades out whatever the rule */
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2",
+                          "server.viewer_bytes_per_s=3.9e6"};
+    *d = start_daemon(sets, 5, sb);
+    oc_client *c = connect_client(srv_daemon_port(*d), NULL);
     oc_subscribe_default(s);
     s->flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
     s->mesh_kind = PROTO_MESH_NONE;
@@ -764,6 +772,7 @@ typedef struct shaped_frames {
     int n;
     double at[2048], bytes[2048], age[2048];
     int unfollowed;
+    int read_once, filling;  /* the sea read once; frames before that */
     char why[200];
 } shaped_frames;
 
@@ -796,7 +805,17 @@ static void follow_frame(oc_frame_stream *s, const uint8_t *msg, size_t len, con
     char err[160] = "";
     ocean_result r = oc_frame_stream_decode(s, msg, len, &f, err, sizeof err);
     oc_sample sm;
-    if (r == OCEAN_OK) r = oc_frame_sample(f, cam->pos[0] + 30, cam->pos[2], 0, &sm);
+    /* frames made before the camera's first report look elsewhere */
+    int for_cam = r == OCEAN_OK && f->info.camera_seq != PROTO_NO_CAMERA;
+    if (for_cam) r = oc_frame_sample(f, cam->pos[0] + 30, cam->pos[2], 0, &sm);
+    /* what the client lacks at first comes over a few frames (at most
+     * twice a frame's budget each): not read yet is not a miss */
+    if (r == OCEAN_ENOTFOUND && !out->read_once && out->filling < 10) {
+        out->filling++;
+        r = OCEAN_OK;
+    } else if (r == OCEAN_OK && for_cam) {
+        out->read_once = 1;
+    }
     if (r != OCEAN_OK && !out->unfollowed++)
         snprintf(out->why, sizeof out->why, "frame %d: %s %s", out->n, ocean_strerror(r), err);
     oc_frame_free(f);
@@ -864,9 +883,10 @@ static void read_through_link(srv_daemon *d, double bps, double report_hz, doubl
 }
 
 /* A viewer on a slow link gets coarser frames, never older ones: behind a
- * 1 MB/s link (a quarter of what the viewer's frames take at the ceiling,
- * server.viewer_bytes_per_s) it received frames of the ceiling's size ever
- * further behind the clock, buffered in the sockets.  Now the daemon holds
+ * link of under half of what the viewer's frames take at the ceiling
+ * (server.viewer_bytes_per_s; 1 MB/s against 3.9 when that was the
+ * ceiling, 0.4 against 0.85 now) it received frames of the ceiling's size
+ * ever further behind the clock, buffered in the sockets.  Now the daemon holds
  * a frame while three are unconfirmed and plans that viewer's frames for
  * the rate its link delivers (srv_link.h): in the last 4 s the frames fit
  * the link at 30 Hz and are under a third of a second old.  The viewer's
@@ -879,20 +899,20 @@ static void slow_link_gets_coarser_not_older(void **state)
     srv_settings sb;
     srv_daemon *d = bridge_daemon(&sb);
     srv_hub *h = srv_daemon_hub(d);
-    const double bps = 1e6, secs = sanitized ? 14 : 10;
+    const double bps = 0.4e6, secs = sanitized ? 14 : 10;
     static shaped_frames f;
     read_through_link(d, bps, 30, secs, 1, &f);
     int n_size, n_age;
     double size = median_since(&f, f.bytes, secs - 4, &n_size), age = median_since(&f, f.age, secs - 4, &n_age);
     double early = median_since(&f, f.bytes, 0, &n_age);
-    print_message("1 MB/s link: %d frames; last 4 s: %d frames, median %.0f B (all frames' median %.0f, ceiling "
-                  "%.0f a frame), median age %.3f s; %llu frames held; %d frames not followed %s\n", f.n, n_size,
+    print_message("%.2g MB/s link: %d frames; last 4 s: %d frames, median %.0f B (all frames' median %.0f, ceiling "
+                  "%.0f a frame), median age %.3f s; %llu frames held; %d frames not followed %s\n", bps / 1e6, f.n, n_size,
                   size, early, sb.srv.viewer_bytes_per_s / 30, age, (unsigned long long)stat_of(&h->stats.frames_held),
                   f.unfollowed, f.why);
     if (f.unfollowed) fail_msg("%d frames of the stream did not read the sea (first: %s)", f.unfollowed, f.why);
-    if (n_size < (sanitized ? 8 : 20)) fail_msg("only %d frames in the last 4 s through a 1 MB/s link", n_size);
+    if (n_size < (sanitized ? 8 : 20)) fail_msg("only %d frames in the last 4 s through a %.0f B/s link", n_size, bps);
     if (size > 1.2 * bps / 30) fail_msg("frames of %.0f B through a link of %.0f B a frame at 30 Hz", size, bps / 30);
-    if (age > (sanitized ? 0.6 : 0.35)) fail_msg("frames %.3f s old through a 1 MB/s link", age);
+    if (age > (sanitized ? 0.6 : 0.35)) fail_msg("frames %.3f s old through a %.0f B/s link", age, bps);
     assert_true(stat_of(&h->stats.frames_held) > 0);
     srv_daemon_stop(d);
 }
@@ -1110,9 +1130,10 @@ static void cascade_q_spends_the_budget(void **state)
 static void cascade_fine_mips_without_geometry(void **state)
 {
     (void)state;
-    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2"};
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2",
+                          "server.viewer_bytes_per_s=3.9e6"};
     srv_settings sb;
-    srv_daemon *d = start_daemon(sets, 4, &sb);
+    srv_daemon *d = start_daemon(sets, 5, &sb);
     double qfine[2] = {0, 0};
     /* 2: the viewer's subscription; 1: the same with the full_geometry flag; 0: no mesh */
     for (int run = 2; run >= 0; run--) {
@@ -1120,6 +1141,9 @@ static void cascade_fine_mips_without_geometry(void **state)
         oc_client *c = connect_client(srv_daemon_port(d), NULL);
         proto_subscribe s;
         oc_subscribe_default(&s);
+        /* every frame whole, so one frame holds every mip it reads (the
+         * rule is the same for samples in time) */
+        s.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
         if (run == 1) s.flags |= PROTO_SUB_FULL_GEOMETRY;
         if (run == 0) s.mesh_kind = PROTO_MESH_NONE;
         assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);

@@ -86,30 +86,55 @@ int oc_held_frame_timed(const proto_frame *f)
     return 0;
 }
 
-/* The spec's window rule for one mip. */
-static void mip_advance(held_mip *hm, const proto_mip_time *t)
-{
-    proto_window_step step = proto_window_next(hm->valid, hm->tick_a, hm->interval, t);
-    if (step == PROTO_WINDOW_KEEP) return;
-    if (step == PROTO_WINDOW_SHIFT) {
-        held_slot a = hm->slot[0];
-        hm->slot[0] = hm->slot[1];
-        hm->slot[1] = a;
-        slot_empty(&hm->slot[1]);
-    } else {
-        mip_drop(hm);
-    }
-    if (!t->interval) return; /* the frame's own time: nothing held */
-    hm->valid = 1;
-    hm->tick_a = t->tick_a;
-    hm->interval = t->interval;
-}
-
 static held_tile *slot_find(held_slot *s, int32_t ix, int32_t iz)
 {
     for (unsigned i = 0; i < s->n; i++)
         if (s->t[i].info.ix == ix && s->t[i].info.iz == iz) return &s->t[i];
     return NULL;
+}
+
+/* The spec's A <- B: each tile held in B becomes A; a tile held in A whose
+ * B has not come stays A (read alone until its new A comes).  The A-only
+ * tiles join B before the swap; one that cannot (out of memory) goes. */
+static void slot_shift(held_mip *hm)
+{
+    held_slot *a = &hm->slot[0], *b = &hm->slot[1];
+    for (unsigned i = 0; i < a->n; i++) {
+        held_tile *t = &a->t[i];
+        if (slot_find(b, t->info.ix, t->info.iz)) continue;
+        if (b->n == b->cap) {
+            unsigned nc = b->cap ? 2 * b->cap : 16;
+            held_tile *nt = realloc(b->t, nc * sizeof *nt);
+            if (!nt) continue;
+            b->t = nt;
+            b->cap = nc;
+        }
+        b->t[b->n++] = *t;
+        t->data = NULL;
+        t->payload = NULL;
+    }
+    held_slot x = *a;
+    *a = *b;
+    *b = x;
+    slot_empty(b);
+}
+
+/* The spec's window rule for one mip: a new window that starts where the
+ * held one ends (PROTO_WINDOW_SHIFT), or anywhere else (a frame was
+ * skipped), moves each tile's newest sample to A; the server counts what
+ * is not the new window's own A as lacking and sends it again first. */
+static void mip_advance(held_mip *hm, const proto_mip_time *t)
+{
+    proto_window_step step = proto_window_next(hm->valid, hm->tick_a, hm->interval, t);
+    if (step == PROTO_WINDOW_KEEP) return;
+    if (t->interval && hm->valid)
+        slot_shift(hm);
+    else
+        mip_drop(hm);
+    if (!t->interval) return; /* the frame's own time: nothing held */
+    hm->valid = 1;
+    hm->tick_a = t->tick_a;
+    hm->interval = t->interval;
 }
 
 /* A copy of tile t's samples: its decoded planes d, or (d NULL) its

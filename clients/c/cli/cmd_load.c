@@ -33,6 +33,7 @@ typedef struct viewer {
     struct load_ctx *ctx;
     uint64_t frames, bytes, frames_layout[2];
     int closed;
+    int fill;                 /* load_frame_followed_bad's state */
     proto_camera cam;
 } viewer;
 
@@ -56,7 +57,7 @@ static void on_frame(void *user, oc_client *c, const oc_frame *f)
     /* decoded frames (--decode): the client applied this one to its store
      * on receipt; its view is read as a verified frame's is */
     if (L->decode)
-        L->tiles_bad += (uint64_t)load_frame_bad(f);
+        L->tiles_bad += (uint64_t)load_frame_followed_bad(f, &v->fill);
     if (!L->measuring)
         return;
     v->frames++;

@@ -75,6 +75,8 @@ typedef struct dv {
     uint64_t frames_layout[2];   /* FRAMEs in the window by layout */
     oc_frame_stream *fs;         /* a followed time-interpolating stream:
                                     every FRAME decoded through it */
+    int fill;                    /* a followed stream's frames before its sea
+                                    was first read (-1: it was) */
     proto_camera cam;
 } dv;
 
@@ -409,6 +411,18 @@ int load_frame_bad(const oc_frame *f)
     return bad;
 }
 
+int load_frame_followed_bad(const oc_frame *f, int *fill)
+{
+    int bad = load_frame_bad(f);
+    if (fill && !bad)
+        *fill = -1;
+    else if (fill && *fill >= 0 && *fill < LOAD_FILL_FRAMES) {
+        ++*fill;
+        bad = 0;
+    }
+    return bad;
+}
+
 /* Full decode of a FRAME as the client library receives it
  * (oc_frame_decode; through the viewer's stream fs when it follows one,
  * as a client applies every frame on receipt): every record, every tile
@@ -416,7 +430,7 @@ int load_frame_bad(const oc_frame *f)
  * tile placed in its cascade's mip grid as the spec lays them out
  * (oc_cascade_view_build); then one point of the sea is read through the
  * lod rule at the frame's camera (load_frame_bad).  0 if all of it held. */
-static int verify_frame(oc_frame_stream *fs, const uint8_t *p, size_t n)
+static int verify_frame(oc_frame_stream *fs, int *fill, const uint8_t *p, size_t n)
 {
     oc_frame *f = NULL;
     char err[256];
@@ -424,7 +438,7 @@ static int verify_frame(oc_frame_stream *fs, const uint8_t *p, size_t n)
                         : oc_frame_decode(p, n, &f, err, sizeof err);
     if (r != OCEAN_OK)
         return 1;
-    int bad = load_frame_bad(f);
+    int bad = load_frame_followed_bad(f, fill);
     oc_frame_free(f);
     return bad;
 }
@@ -474,7 +488,7 @@ static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n
          * before it, in order */
         int whole = frame_wanted_whole(v);
         if (whole && v->fs)
-            v->decode_errors += (uint64_t)verify_frame(v->fs, p, have);
+            v->decode_errors += (uint64_t)verify_frame(v->fs, &v->fill, p, have);
         if (!measuring)
             return;
         v->frames++;
@@ -485,7 +499,7 @@ static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n
         if (whole) {
             v->verified++;
             if (!v->fs)
-                v->decode_errors += (uint64_t)verify_frame(NULL, p, have);
+                v->decode_errors += (uint64_t)verify_frame(NULL, NULL, p, have);
         }
         v->nframe++;
         return;

@@ -78,6 +78,14 @@ static inline int load_timed(const load_cfg *cfg)
  * camera). */
 int load_frame_bad(const oc_frame *f);
 
+/* load_frame_bad for a followed time-interpolating stream, *fill its state
+ * (0 at the start; NULL: a frame read alone): what the client lacks at
+ * first comes over a few frames (each at most twice a frame's byte budget,
+ * PROTOCOL.md "Samples in time"), so until the sea is read once, up to
+ * LOAD_FILL_FRAMES frames that do not read it yet are not errors. */
+#define LOAD_FILL_FRAMES 10
+int load_frame_followed_bad(const oc_frame *f, int *fill);
+
 /* Both return 0 when the run took place (the result says how well, and
  * ready < nclients that some viewers were never served), 1 on a setup
  * failure (message printed). */
