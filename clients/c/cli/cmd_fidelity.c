@@ -189,7 +189,7 @@ static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, 
 
 int cmd_fidelity(int argc, char **argv)
 {
-    double height = 25, speed = 0, pitch = 1000, yaw = 0, fov = 60, spacing = 0, range = 0, settle = 0.3,
+    double height = 25, speed = 0, pitch = 1000, yaw = 0, fov = 60, spacing = 0, range = 0, settle = NAN,
            interval = 0;
     int frames = 10, json = 0, verbose = 0, grid = 64, timeout_ms = 5000, vw = 1920, vh = 1080;
     proto_subscribe sub;
@@ -235,7 +235,9 @@ int cmd_fidelity(int argc, char **argv)
                  "                       blend of two samples the connection holds, every frame\n"
                  "                       applied in order; off: the plain stream, each frame whole"},
         {.name = "settle", .kind = OCCLI_DOUBLE, .target = &settle, .min = 0, .max = 60,
-         .help = "S  wait after the first frame made for the camera before measuring"},
+         .help = "S  wait after the first frame made for the camera before measuring (default 0.3;\n"
+                 "                       1 with --time-interp on: what the client lacks at first comes over\n"
+                 "                       several frames, each at most twice a frame's byte budget)"},
         {.name = "interval", .kind = OCCLI_DOUBLE, .target = &interval, .min = 0, .max = 3600,
          .help = "S  measure one frame per S seconds (0: consecutive frames); a longer span samples more "
                  "sea\n                       (a moving camera) and more wave periods"},
@@ -274,6 +276,8 @@ int cmd_fidelity(int argc, char **argv)
         sub.flags |= PROTO_SUB_TIME_INTERP;
     else
         sub.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
+    if (isnan(settle))
+        settle = time_interp == 1 ? 1.0 : 0.3;
     proto_codec pc;
     if (proto_codec_parse(codec, &pc) != OCEAN_OK) {
         fprintf(stderr, "ocean-client fidelity: option '--codec': unknown codec '%s'\n", codec);
