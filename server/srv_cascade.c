@@ -1109,9 +1109,11 @@ static void held_begin(srv_cascade *k, const srv_config *cfg, srv_cascade_job *j
  * at its share per frame (refresh_share), but what a client lacks can
  * come at once: a KEY frame holds every sample, a frame that replaces an
  * unsent one what both carry, a window's start the B of all the mip's
- * tiles.  So the held samples a frame carries stop at p->burst_cap: every
- * A first, coarse mips and cascades first, so the client's sea is whole
- * at once, then the B samples, the windows ending soonest first (the
+ * tiles.  So the held samples a frame carries stop at a cap: every A
+ * first, coarse mips and cascades first, up to SRV_CASCADE_BURST_A frame
+ * budgets, so the client's sea is whole at once (a camera moving fast
+ * needs both samples of every tile coming into view), then the B samples
+ * up to SRV_CASCADE_BURST budgets in all, the windows ending soonest first (the
  * client reads A alone until a tile's B comes: PROTOCOL.md "Samples in
  * time"); the rest stay lacking in the
  * model and go with the next frames.  One sample always goes, whatever its
@@ -1129,7 +1131,8 @@ static void lookup_needed(srv_cascade *k, srv_stats *st, const srv_cascade_job *
     }
     if (srv_held_has(p->held, c, m, pass, i, key->channels)) return;
     double cost = srv_cascade_tile_bytes(&j->c->sim.sub, key->channels, key->size);
-    if (p->burst > 0 && p->burst + cost > p->burst_cap) return;
+    double cap = pass ? p->burst_cap : SRV_CASCADE_BURST_A / SRV_CASCADE_BURST * p->burst_cap;
+    if (p->burst > 0 && p->burst + cost > cap) return;
     p->burst += cost;
     key->t = p->t_ab[c][m][pass];
     p->tags[*at] = (uint32_t)c | (pass ? PROTO_TAG_SLOT_B : 0u);

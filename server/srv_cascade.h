@@ -39,6 +39,10 @@ typedef struct srv_cascade srv_cascade;
  * carries at once.  Twice the budget lets the staggered windows of a
  * steady stream through whole and spreads a KEY frame over about three. */
 #define SRV_CASCADE_BURST 2.0
+/* The A samples (what makes the client's sea whole) one frame may carry,
+ * in frame budgets: a KEY frame's, or a fast camera's tiles coming into
+ * view, go whole unless the burst is larger than this. */
+#define SRV_CASCADE_BURST_A 4.0
 
 /* Seed 000's energy guard: at most this fraction of the sea's height
  * variance may be missing from what a client gets (e_total). */

@@ -689,7 +689,7 @@ static void time_interp_reads_the_frames_tick(void **state)
 }
 
 /* What a time-interpolating client lacks can come at once (a KEY frame
- * holds every sample); a frame carries at most SRV_CASCADE_BURST frame
+ * holds every sample); a frame carries at most SRV_CASCADE_BURST_A frame
  * budgets of held samples (estimated by the planner's byte model) and the
  * rest follows in the next frames: no frame is several budgets long on
  * its link, and within a few frames the client holds everything the
@@ -716,7 +716,7 @@ static void time_interp_key_frame_spread(void **state)
     assert_int_equal(oc_client_send_camera(b, &cam, &seq), OCEAN_OK);
     /* the byte model is the planner's estimate; the encoder's bytes are
      * within a quarter of it on these tiles (bench_codec) */
-    double cap = SRV_CASCADE_BURST * 1.5e6 / 30.0 * 1.25, biggest = 0, first = 0;
+    double cap = SRV_CASCADE_BURST_A * 1.5e6 / 30.0 * 1.25, biggest = 0, first = 0;
     int frames = 0, whole_at = -1, plain_points = 0, gaps = 0;
     oc_frame *plain = NULL;
     double end = test_now_s() + (sanitized ? 120.0 : 40.0);
