@@ -3678,11 +3678,12 @@ static void reload_sea_retried_when_the_timeline_is_full(void **state)
     /* the same file again: now its sea is applied */
     assert_int_equal(srv_daemon_reload(d, &s3, msg, sizeof msg), OCEAN_OK);
     assert_string_equal(msg, "");
+    /* pending, or (a slow host: its lead passed) already in force */
     pthread_mutex_lock(&h->lock);
     int pending = h->n_sea_pending;
-    double depth = pending ? h->sea_pending[pending - 1].params.sea.depth_m : 0;
+    double depth = pending ? h->sea_pending[pending - 1].params.sea.depth_m : h->settings.params.sea.depth_m;
     pthread_mutex_unlock(&h->lock);
-    assert_int_equal(pending, 1);
+    assert_true(pending <= 1);
     assert_true(depth == s3.params.sea.depth_m);
     srv_daemon_stop(d);
 }
