@@ -594,6 +594,27 @@ static oc_client *bridge_tiles_client(srv_daemon **d, srv_settings *sb, proto_su
     return c;
 }
 
+/* A daemon on the scene `make run` serves at byte budget `budget` and two
+ * clients of it with the viewer's subscription without a mesh: *a the
+ * plain stream, *b samples in time (the viewer's). */
+static srv_daemon *plain_and_timed(const char *budget, srv_settings *sb, oc_client **a, oc_client **b)
+{
+    char set[64];
+    snprintf(set, sizeof set, "server.viewer_bytes_per_s=%s", budget);
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2", set};
+    srv_daemon *d = start_daemon(sets, 5, sb);
+    *a = connect_client(srv_daemon_port(d), NULL);
+    *b = connect_client(srv_daemon_port(d), NULL);
+    proto_subscribe s;
+    oc_subscribe_default(&s);
+    s.mesh_kind = PROTO_MESH_NONE;
+    s.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
+    assert_int_equal(oc_client_subscribe(*a, &s), OCEAN_OK);
+    s.flags |= PROTO_SUB_TIME_INTERP;
+    assert_int_equal(oc_client_subscribe(*b, &s), OCEAN_OK);
+    return d;
+}
+
 /* Samples in time (PROTOCOL.md): a client that interpolates in time reads,
  * at every frame, what a client sent every sample at that frame's tick
  * reads, within the quantiser's error, for a fraction of the bytes.  The
@@ -601,18 +622,9 @@ static oc_client *bridge_tiles_client(srv_daemon **d, srv_settings *sb, proto_su
 static void time_interp_reads_the_frames_tick(void **state)
 {
     (void)state;
-    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2",
-                          "server.viewer_bytes_per_s=1e9"};
     srv_settings sb;
-    srv_daemon *d = start_daemon(sets, 5, &sb);
-    oc_client *a = connect_client(srv_daemon_port(d), NULL), *b = connect_client(srv_daemon_port(d), NULL);
-    proto_subscribe s;
-    oc_subscribe_default(&s);
-    s.mesh_kind = PROTO_MESH_NONE;
-    s.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;   /* a: the plain stream */
-    assert_int_equal(oc_client_subscribe(a, &s), OCEAN_OK);
-    s.flags |= PROTO_SUB_TIME_INTERP;             /* b: the viewer's */
-    assert_int_equal(oc_client_subscribe(b, &s), OCEAN_OK);
+    oc_client *a, *b;
+    srv_daemon *d = plain_and_timed("1e9", &sb, &a, &b);
     proto_camera cam;
     bridge_camera(&cam);
     cam.viewport_w = 320; /* a plan both clients make whole, at server.px_per_sample */
@@ -712,18 +724,9 @@ static void time_interp_reads_the_frames_tick(void **state)
 static void time_interp_key_frame_spread(void **state)
 {
     (void)state;
-    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2",
-                          "server.viewer_bytes_per_s=1.5e6"};
     srv_settings sb;
-    srv_daemon *d = start_daemon(sets, 5, &sb);
-    oc_client *a = connect_client(srv_daemon_port(d), NULL), *b = connect_client(srv_daemon_port(d), NULL);
-    proto_subscribe s;
-    oc_subscribe_default(&s);
-    s.mesh_kind = PROTO_MESH_NONE;
-    s.flags &= ~PROTO_SUB_TIME_INTERP;
-    assert_int_equal(oc_client_subscribe(a, &s), OCEAN_OK);
-    s.flags |= PROTO_SUB_TIME_INTERP;
-    assert_int_equal(oc_client_subscribe(b, &s), OCEAN_OK);
+    oc_client *a, *b;
+    srv_daemon *d = plain_and_timed("1.5e6", &sb, &a, &b);
     proto_camera cam;
     bridge_camera(&cam);
     uint32_t seq;
