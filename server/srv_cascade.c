@@ -108,8 +108,8 @@ typedef struct plan {
                               to this frame's windows; NULL otherwise */
     int key;               /* the frame carries PROTO_CASCADE_KEY */
     uint32_t *tags;        /* each record's tag, in frame order */
-    double burst_cap;      /* held samples one frame may carry (estimated bytes) */
-    double burst;          /* those this frame carries so far */
+    double budget;         /* the frame's byte budget (plan_job) */
+    double burst;          /* held samples this frame carries so far (estimated bytes) */
 } plan;
 
 ocean_result srv_cascade_create(srv_cascade **out)
@@ -496,7 +496,7 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
     double bps = cfg->viewer_bytes_per_s, link = (double)atomic_load(&j->c->link_bps);
     if (!j->replay && link > 0 && link < bps) bps = link;
     double budget = bps / rate_hz;
-    pl->burst_cap = SRV_CASCADE_BURST * budget;
+    pl->budget = budget;
     sector sc;
     sector_of(&j->cam, &sc);
     double hi = q;
@@ -1113,11 +1113,11 @@ static void held_begin(srv_cascade *k, const srv_config *cfg, srv_cascade_job *j
  * first, coarse mips and cascades first, up to SRV_CASCADE_BURST_A frame
  * budgets, so the client's sea is whole at once (a camera moving fast
  * needs both samples of every tile coming into view), then the B samples
- * up to SRV_CASCADE_BURST budgets in all, the windows ending soonest first (the
- * client reads A alone until a tile's B comes: PROTOCOL.md "Samples in
- * time"); the rest stay lacking in the
- * model and go with the next frames.  One sample always goes, whatever its
- * size, so the stream always progresses. */
+ * up to SRV_CASCADE_BURST budgets in all, the windows ending soonest first
+ * (the client reads A alone until a tile's B comes: PROTOCOL.md "Samples
+ * in time"); the rest stay lacking in the model and go with the next
+ * frames.  One sample always goes, whatever its size, so the stream always
+ * progresses. */
 static void lookup_needed(srv_cascade *k, srv_stats *st, const srv_cascade_job *j, plan *p, srv_tile_key *key,
                           int ntile, int pass, uint64_t gen, missing_set *ms, int *at)
 {
@@ -1131,7 +1131,7 @@ static void lookup_needed(srv_cascade *k, srv_stats *st, const srv_cascade_job *
     }
     if (srv_held_has(p->held, c, m, pass, i, key->channels)) return;
     double cost = srv_cascade_tile_bytes(&j->c->sim.sub, key->channels, key->size);
-    double cap = pass ? p->burst_cap : SRV_CASCADE_BURST_A / SRV_CASCADE_BURST * p->burst_cap;
+    double cap = (pass ? SRV_CASCADE_BURST : SRV_CASCADE_BURST_A) * p->budget;
     if (p->burst > 0 && p->burst + cost > cap) return;
     p->burst += cost;
     key->t = p->t_ab[c][m][pass];

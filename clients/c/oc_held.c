@@ -86,6 +86,22 @@ int oc_held_frame_timed(const proto_frame *f)
     return 0;
 }
 
+/* A new, empty entry at the end of slot s; NULL: out of memory. */
+static held_tile *slot_append(held_slot *s)
+{
+    if (s->n == s->cap) {
+        unsigned nc = s->cap ? 2 * s->cap : 16;
+        held_tile *nt = realloc(s->t, nc * sizeof *nt);
+        if (!nt) return NULL;
+        s->t = nt;
+        s->cap = nc;
+    }
+    held_tile *e = &s->t[s->n++];
+    e->data = NULL;
+    e->payload = NULL;
+    return e;
+}
+
 static held_tile *slot_find(held_slot *s, int32_t ix, int32_t iz)
 {
     for (unsigned i = 0; i < s->n; i++)
@@ -102,14 +118,9 @@ static void slot_shift(held_mip *hm)
     for (unsigned i = 0; i < a->n; i++) {
         held_tile *t = &a->t[i];
         if (slot_find(b, t->info.ix, t->info.iz)) continue;
-        if (b->n == b->cap) {
-            unsigned nc = b->cap ? 2 * b->cap : 16;
-            held_tile *nt = realloc(b->t, nc * sizeof *nt);
-            if (!nt) continue;
-            b->t = nt;
-            b->cap = nc;
-        }
-        b->t[b->n++] = *t;
+        held_tile *e = slot_append(b);
+        if (!e) continue;
+        *e = *t;
         t->data = NULL;
         t->payload = NULL;
     }
@@ -158,21 +169,11 @@ static ocean_result slot_put(held_slot *s, const proto_tile *t, const float *d)
     uint8_t *payload;
     if (tile_copy(t, d, &data, &payload) != OCEAN_OK) return OCEAN_ENOMEM;
     held_tile *e = slot_find(s, t->ix, t->iz);
+    if (!e) e = slot_append(s);
     if (!e) {
-        if (s->n == s->cap) {
-            unsigned nc = s->cap ? 2 * s->cap : 16;
-            held_tile *nt = realloc(s->t, nc * sizeof *nt);
-            if (!nt) {
-                free(data);
-                free(payload);
-                return OCEAN_ENOMEM;
-            }
-            s->t = nt;
-            s->cap = nc;
-        }
-        e = &s->t[s->n++];
-        e->data = NULL;
-        e->payload = NULL;
+        free(data);
+        free(payload);
+        return OCEAN_ENOMEM;
     }
     tile_free(e);
     e->info = *t;

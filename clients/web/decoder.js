@@ -25,7 +25,7 @@ const ready = Promise.all([import('./assemble.js'), import('./codec.js')]);
 let store = null;            /* HeldStore of this worker's shard, or null */
 let heldErrors = [];
 
-async function onHeld(m, modules) {
+function onHeld(m, modules) {
     const [a, c] = modules;
     const onError = (e, what) => heldErrors.push(`${what}: ${e.message || e}`);
     if (m.held === 'reset' || (m.held === 'apply' && store && (store.shard !== m.shard || store.shards !== m.shards))) {
@@ -59,7 +59,7 @@ self.onmessage = async (ev) => {
             if (ev.data.held === 'blend') self.postMessage({ id: ev.data.id, levels: [], blocks: [], errors: heldErrors });
             return;
         }
-        await onHeld(ev.data, modules);
+        onHeld(ev.data, modules);
         return;
     }
     const { id, levels, tiles } = ev.data;

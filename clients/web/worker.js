@@ -342,13 +342,8 @@ function processFrame() {
     if (f.layout === LAYOUT.CASCADE) {
         meta.cascades = f.cascades;
         meta.placement = f.placement;
-    }
-    if (f.layout === LAYOUT.CASCADE && timed()) {
-        processHeldFrame(meta, t0);
-        return;
-    }
-    if (f.layout === LAYOUT.CASCADE) {
-        processCascadeFrame(f, meta, t0);
+        if (timed()) processHeldFrame(meta, t0);
+        else processCascadeFrame(f, meta, t0);
         return;
     }
     const groups = groupByLevel(f.tiles);
