@@ -3,13 +3,14 @@
 # quick when everything is present (one dpkg-query, no network).
 #   usage: .ci/deps.sh [run|bench|test]
 #   run    what building and running needs (make, make run): compilers, the
-#          libraries, clang/lld/wasi-libc for the viewer's WebAssembly
+#          libraries, clang/lld/wasi-libc and compiler-rt's wasm32 builtins
+#          (clang links them into every wasm32-wasi program) for the viewer's WebAssembly
 #          decoders; no npm, so an air-gapped lab with a Debian mirror can run it
 #   bench  + the tools the benchmarks drive (make bench)
 #   test   + the browser test's Chromium and its npm driver (make test)
 set -euo pipefail
 what=${1:-run}
-pkgs=(gcc make clang lld wasi-libc pkg-config libclang-rt-14-dev
+pkgs=(gcc make clang lld wasi-libc libclang-rt-14-dev-wasm32 pkg-config libclang-rt-14-dev
       libwebsockets-dev libopenexr-dev libfftw3-dev libzstd-dev libcjson-dev
       librandom123-dev libcmocka-dev libwslay-dev libhiredis-dev)
 case "$what" in
