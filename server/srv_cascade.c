@@ -321,7 +321,7 @@ static int mip_interval(const tables *tb, const srv_config *cfg, const proto_sub
  * tick: one frame K times the mean). */
 static void time_table(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, plan *pl)
 {
-    const proto_subscribe *sub = &j->c->sim.sub;
+    const proto_subscribe *sub = &j->cs->sub;
     double fr = sub->frame_rate_hz > 0 ? sub->frame_rate_hz : cfg->tick_rate;
     pl->ticks_per_frame = (int)fmax(1.0, floor(cfg->tick_rate / fr + 0.5));
     memset(pl->time, 0, sizeof pl->time);
@@ -490,7 +490,7 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
      * of view, 1e-45 deg, asks for 1e-37): the plan starts there, so the
      * octave search below reaches a plan that fits in its 64 steps. */
     double q = fmax(cfg->px_per_sample / (ppr > 0 ? ppr : 1.0), SRV_CASCADE_Q_MIN);
-    double rate_hz = j->c->sim.sub.frame_rate_hz > 0 ? j->c->sim.sub.frame_rate_hz : 30.0;
+    double rate_hz = j->cs->sub.frame_rate_hz > 0 ? j->cs->sub.frame_rate_hz : 30.0;
     /* live frames at the rate the client's link carries (srv_link.h), up to
      * server.viewer_bytes_per_s; a replay plans from the recording alone */
     double bps = cfg->viewer_bytes_per_s, link = (double)atomic_load(&j->c->link_bps);
@@ -521,7 +521,7 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
      * need be - until the tiles carry 95 % of the height variance at the
      * nadir, spending up to twice the byte budget;
      * past that the frame reports what is missing in e_total. */
-    if (!(j->c->sim.sub.effects & PROTO_FX_NORMALS)) {
+    if (!(j->cs->sub.effects & PROTO_FX_NORMALS)) {
         while (hi > q / 64 && nadir_error(tb, pl, &j->cam) > SRV_CASCADE_E_GUARD) {
             double t = hi / QUARTER_OCTAVE;
             if (plan_at(tb, cfg, j, &sc, t, pl) > 2.0 * budget) {
@@ -557,7 +557,7 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
 static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
                       const sector *sc, double q, plan *pl)
 {
-    const proto_subscribe *sub = &j->c->sim.sub;
+    const proto_subscribe *sub = &j->cs->sub;
     /* only the fields a plan computes: the mesh parts stay */
     memset(pl->need, 0, sizeof pl->need);
     memset(pl->cbytes, 0, sizeof pl->cbytes);
@@ -583,7 +583,7 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
 static double plan_cascade(const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
                            const sector *sc, int c, double q, plan *pl)
 {
-    const proto_subscribe *sub = &j->c->sim.sub;
+    const proto_subscribe *sub = &j->cs->sub;
     double range_m = sub->view_range_m > 0 ? sub->view_range_m : cfg->view_range;
     double cy = fmax(fabs(j->cam.pos[1]), 1.0);
     pl->qc[c] = q;
@@ -747,13 +747,13 @@ static double nadir_error(const tables *tb, const plan *pl, const proto_camera *
  * MESH_TOPOLOGY to send first. */
 static void mesh_part(const srv_config *cfg, srv_stats *st, srv_cascade_job *j, plan *pl)
 {
-    srv_client_sim *cs = &j->c->sim;
+    srv_client_sim *cs = j->cs;
     if (!cs->mesh || cs->sub.mesh_kind == PROTO_MESH_NONE) return;
     mesh_camera mc;
     srv_mesh_camera(&j->cam, &mc);
     /* Priced before it is placed, as for layout 0: a camera the protocol
      * allows may ask for a topology no server should build. */
-    if (!srv_client_mesh_fit(j->c, &mc, cfg->max_mesh_vertices, j->cam_seq, st)) return;
+    if (!srv_client_sim_mesh_fit(j->cs, j->c, &mc, cfg->max_mesh_vertices, j->cam_seq, st)) return;
     ocean_result r = mesh_place(cs->mesh, &mc);
     if (r == OCEAN_OK) {
         mesh_get_view(cs->mesh, &pl->mv);
@@ -789,7 +789,7 @@ static void mesh_part(const srv_config *cfg, srv_stats *st, srv_cascade_job *j, 
         zones[4 * L + 2] = (float)pl->mi.blend_m[L];
         zones[4 * L + 3] = 0.0f;
     }
-    j->topo = srv_topology_encode(cs, v, j->t, flat, zones);
+    j->topo = srv_client_sim_topology(cs, v, j->t, flat, zones);
     free(flat);
     if (!j->topo)
         pl->has_mesh = 0;
@@ -797,7 +797,7 @@ static void mesh_part(const srv_config *cfg, srv_stats *st, srv_cascade_job *j, 
 
 static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shared)
 {
-    const proto_subscribe *sub = &j->c->sim.sub;
+    const proto_subscribe *sub = &j->cs->sub;
     proto_bytes *recs = malloc(sizeof *recs * (size_t)(pl->tiles ? pl->tiles : 1));
     uint32_t *tags = malloc(sizeof *tags * (size_t)(pl->tiles ? pl->tiles : 1));
     if (!recs || !tags) {
@@ -869,7 +869,7 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
     }
     if (pl->has_mesh) {
         fr->has_mesh = 1;
-        fr->placement.mesh_id = j->c->sim.mesh_id;
+        fr->placement.mesh_id = j->cs->mesh_id;
         memcpy(fr->placement.origin, pl->mv.origin, sizeof pl->mv.origin);
     }
     j->frame = srv_msg_encode(&m);
@@ -886,7 +886,7 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
     }
     q->camera_seq = j->cam_seq;
     if (pl->has_mesh) {
-        q->mesh_id = j->c->sim.mesh_id;
+        q->mesh_id = j->cs->mesh_id;
         q->mesh_id_at = (uint32_t)mesh_at;
     }
 }
@@ -895,7 +895,7 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
  * mesh_id and the header seq. */
 static int same_frame(const srv_cascade_job *a, const plan *pa, const srv_cascade_job *b, const plan *pb)
 {
-    const proto_subscribe *x = &a->c->sim.sub, *y = &b->c->sim.sub;
+    const proto_subscribe *x = &a->cs->sub, *y = &b->cs->sub;
     if (a->t != b->t || a->tick != b->tick || a->policy_k != b->policy_k || pa->tiles != pb->tiles ||
         pa->has_mesh != pb->has_mesh || pa->layers != pb->layers || pa->ncas != pb->ncas || pa->q != pb->q ||
         pa->min_spacing != pb->min_spacing || pa->geo != pb->geo || x->effects != y->effects || memcmp(a->cam.pos, b->cam.pos, sizeof a->cam.pos) ||
@@ -998,7 +998,7 @@ static void plan_jobs(const tables *tb, const srv_config *cfg, srv_stats *st, sr
 {
     for (int i = 0; i < n; i++) {
         mesh_part(cfg, st, &jobs[i], &pl[i]);
-        const proto_subscribe *sub = &jobs[i].c->sim.sub;
+        const proto_subscribe *sub = &jobs[i].cs->sub;
         int geo = pl[i].has_mesh && (sub->effects & PROTO_FX_NORMALS) && !(sub->flags & PROTO_SUB_FULL_GEOMETRY) &&
                   pl[i].mi.levels > 0;
         pl[i].geo = geo ? pl[i].mi.level_spacing_m[0] : 0.0;
@@ -1068,7 +1068,7 @@ static int mip_tiles(const tables *tb, const srv_config *cfg, int m)
  * mode starts empty, and so the frame is a KEY frame. */
 static void held_begin(srv_cascade *k, const srv_config *cfg, srv_cascade_job *j, plan *pl)
 {
-    srv_client_sim *cs = &j->c->sim;
+    srv_client_sim *cs = j->cs;
     const tables *tb = &k->tab;
     pl->held = NULL;
     pl->key = 0;
@@ -1083,7 +1083,7 @@ static void held_begin(srv_cascade *k, const srv_config *cfg, srv_cascade_job *j
         cs->held_replay = j->replay;
     }
     /* held[0]: what the client will hold; held[1]: that before the last frame */
-    if (!j->replay && srv_client_frame_waiting(j->c))
+    if (!j->replay && srv_outbox_frame_waiting(j->c->out))
         srv_held_copy(cs->held[0], cs->held[1]);
     else
         srv_held_copy(cs->held[1], cs->held[0]);
@@ -1130,7 +1130,7 @@ static void lookup_needed(srv_cascade *k, srv_stats *st, const srv_cascade_job *
         return;
     }
     if (srv_held_has(p->held, c, m, pass, i, key->channels)) return;
-    double cost = srv_cascade_tile_bytes(&j->c->sim.sub, key->channels, key->size);
+    double cost = srv_cascade_tile_bytes(&j->cs->sub, key->channels, key->size);
     double cap = (pass ? SRV_CASCADE_BURST : SRV_CASCADE_BURST_A) * p->budget;
     if (p->burst > 0 && p->burst + cost > cap) return;
     p->burst += cost;
@@ -1170,7 +1170,7 @@ static void lookup_job(srv_cascade *k, const srv_config *cfg, srv_stats *st, con
                        uint64_t gen, missing_set *ms)
 {
     const tables *tb = &k->tab;
-    const proto_subscribe *sub = &j->c->sim.sub;
+    const proto_subscribe *sub = &j->cs->sub;
     int at = 0, order[PROTO_MAX_LAYERS * MAX_MIPS][2];
     for (int pass = 0; pass < (p->held ? 2 : 1); pass++) {
         int n = mip_order(tb, p, pass, order);
@@ -1268,7 +1268,7 @@ static void frames_of(const tables *tb, const srv_config *cfg, srv_stats *st, sr
             jobs[i].frame = srv_msg_share(jobs[l].frame);
             if (jobs[i].frame) {
                 jobs[i].frame->camera_seq = jobs[i].cam_seq;
-                jobs[i].frame->mesh_id = jobs[i].c->sim.mesh_id;
+                jobs[i].frame->mesh_id = jobs[i].cs->mesh_id;
                 atomic_fetch_add(&st->frames_shared, 1);
                 continue;
             }

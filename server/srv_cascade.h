@@ -22,7 +22,7 @@
 
 #include "ocean.h"
 #include "proto.h"
-#include "srv_client.h"
+#include "srv_client_sim.h"
 #include "srv_config.h"
 
 typedef struct srv_cascade srv_cascade;
@@ -56,7 +56,9 @@ typedef struct srv_cascade srv_cascade;
 
 /* One layout-1 frame to build. */
 typedef struct srv_cascade_job {
-    srv_client *c;         /* holds a reference for the batch */
+    srv_client *c;         /* holds a reference for the batch: errors and the hand-over */
+    srv_client_sim *cs;    /* the client's entry in the simulation thread's table: its
+                              subscription, mesh and samples in time */
     double t;              /* sim time of the frame */
     proto_camera cam;
     uint32_t cam_seq;

@@ -1,7 +1,7 @@
 /*
- * srv_client.c - per-client state, the hub, the message queues between the
- * simulation and service threads, and the replies the daemon queues.  What
- * it does with each message a client sends is srv_handle.c's.
+ * srv_client.c - the shared part of each client, the hub and its sea-state
+ * timeline, and the replies the daemon queues (see srv_client.h).  What it
+ * does with each message a client sends is srv_handle.c's.
  */
 #include "srv_client.h"
 #include "srv_cascade.h"
@@ -177,7 +177,6 @@ void srv_hub_fini(srv_hub *h)
     while (h->clients) {
         srv_client *c = h->clients;
         h->clients = c->next;
-        c->closed = 1;
         srv_client_unref(c);
     }
     pthread_cond_destroy(&h->wake);
@@ -273,65 +272,6 @@ void srv_hub_wake_net(srv_hub *h)
 
 /* ---- messages ------------------------------------------------------------- */
 
-srv_msg *srv_msg_new(void)
-{
-    srv_msg *m = calloc(1, sizeof *m);
-    if (m) proto_buf_init(&m->buf, LWS_PRE);
-    return m;
-}
-
-srv_msg *srv_msg_encode(const proto_msg *m)
-{
-    srv_msg *q = srv_msg_new();
-    if (!q) return NULL;
-    char err[256];
-    if (proto_encode(&q->buf, m, err, sizeof err) != OCEAN_OK) {
-        /* Once a second at most: a failure repeats with every frame, and
-         * any thread may get here. */
-        static _Atomic int64_t said_s = INT64_MIN;
-        static atomic_uint_fast64_t quiet;
-        int64_t now = (int64_t)srv_now(), last = atomic_load(&said_s);
-        if (now != last && atomic_compare_exchange_strong(&said_s, &last, now)) {
-            uint64_t q_n = atomic_exchange(&quiet, 0);
-            fprintf(stderr, "oceand: cannot encode %s: %s", proto_type_name(m->hdr.type), err);
-            if (q_n) fprintf(stderr, " (%llu more since the last such line)", (unsigned long long)q_n);
-            fputc('\n', stderr);
-        } else {
-            atomic_fetch_add(&quiet, 1);
-        }
-        srv_msg_free(q);
-        return NULL;
-    }
-    return q;
-}
-
-srv_msg *srv_topology_encode(srv_client_sim *cs, const mesh_view *v, double t, const float *flat,
-                             const float *zones)
-{
-    cs->mesh_id++;
-    cs->topo_key = v->topology_key;
-    cs->topo_valid = 1;
-    proto_msg tm;
-    proto_msg_init(&tm, PROTO_MESH_TOPOLOGY);
-    tm.hdr.sim_time = t;
-    tm.u.topology.mesh_id = cs->mesh_id;
-    tm.u.topology.mesh_kind = (uint8_t)v->kind;
-    tm.u.topology.lod_levels = (uint8_t)(v->levels < 1 ? 1 : v->levels);
-    tm.u.topology.vertex_count = v->vertex_count;
-    tm.u.topology.index_count = v->index_count;
-    tm.u.topology.indices = v->indices;
-    tm.u.topology.morph = v->morph;
-    tm.u.topology.level = v->level;
-    if (flat) {
-        tm.u.topology.flags = PROTO_TOPO_FLAT;
-        tm.u.topology.flat = flat;
-        tm.u.topology.zones = zones;
-    }
-    srv_msg *q = srv_msg_encode(&tm);
-    if (!q) cs->topo_valid = 0;
-    return q;
-}
-
 void srv_client_hand_over(srv_client *c, srv_stats *st, srv_msg *topo, srv_msg *frame, int replay, double tick_wall)
 {
     if (!frame) {
@@ -345,100 +285,35 @@ void srv_client_hand_over(srv_client *c, srv_stats *st, srv_msg *topo, srv_msg *
     if (replay) {
         if (topo) srv_client_queue(c, topo);
         srv_client_queue(c, frame);
-    } else {
-        srv_client_publish(c, topo, frame);
+    } else if (srv_outbox_publish(c->out, topo, frame)) {
+        atomic_fetch_add(&st->frames_skipped, 1);
     }
 }
 
-void srv_msg_free(srv_msg *m)
+void srv_client_queue(srv_client *c, srv_msg *m)
 {
-    if (!m) return;
-    proto_buf_free(&m->buf);
-    if (m->blob && atomic_fetch_sub(&m->blob->refs, 1) == 1) {
-        proto_buf_free(&m->blob->buf);
-        free(m->blob);
-    }
-    free(m);
-}
-
-ocean_result srv_msg_make_shared(srv_msg *m)
-{
-    if (m->blob) return OCEAN_OK;
-    srv_blob *b = malloc(sizeof *b);
-    if (!b) return OCEAN_ENOMEM;
-    atomic_init(&b->refs, 1);
-    b->buf = m->buf;
-    proto_buf_init(&m->buf, LWS_PRE);
-    m->blob = b;
-    return OCEAN_OK;
-}
-
-srv_msg *srv_msg_share(const srv_msg *m)
-{
-    if (!m->blob) return NULL;
-    srv_msg *q = srv_msg_new();
-    if (!q) return NULL;
-    atomic_fetch_add(&m->blob->refs, 1);
-    q->blob = m->blob;
-    q->camera_seq = m->camera_seq;
-    q->mesh_id = m->mesh_id;
-    q->mesh_id_at = m->mesh_id_at;
-    q->tick_wall = m->tick_wall;
-    q->is_frame = m->is_frame;
-    q->close_after = m->close_after;
-    return q;
-}
-
-size_t srv_msg_len(const srv_msg *m)
-{
-    if (!m) return 0;
-    return proto_buf_len(m->blob ? &m->blob->buf : &m->buf);
-}
-
-uint8_t *srv_msg_wire(srv_msg *m, size_t *len)
-{
-    proto_buf *b = m->blob ? &m->blob->buf : &m->buf;
-    uint8_t *d = proto_buf_data(b);
-    *len = proto_buf_len(b);
-    if (m->blob && m->is_frame && *len >= SRV_FRAME_CAMERA_SEQ_AT + 4) {
-        proto_st32(d + SRV_FRAME_CAMERA_SEQ_AT, m->camera_seq);
-        if (m->mesh_id_at && (size_t)m->mesh_id_at + 4 <= *len) proto_st32(d + m->mesh_id_at, m->mesh_id);
-    }
-    return d;
-}
-
-static void free_list(srv_msg *m)
-{
-    while (m) {
-        srv_msg *n = m->next;
-        srv_msg_free(m);
-        m = n;
-    }
+    if (srv_outbox_queue(c->out, m) == 2) srv_hub_wake_net(c->hub);
 }
 
 /* ---- clients -------------------------------------------------------------- */
 
-ocean_result srv_client_create(srv_hub *h, struct lws *wsi, srv_client **out)
+ocean_result srv_client_create(srv_hub *h, srv_client **out)
 {
     srv_client *c = calloc(1, sizeof *c);
     if (!c) return OCEAN_ENOMEM;
-    if (pthread_mutex_init(&c->out_lock, NULL)) {
+    pthread_mutex_lock(&h->lock);
+    uint64_t hard = h->settings.srv.output_hard;
+    pthread_mutex_unlock(&h->lock);
+    if (srv_outbox_create(hard, &c->out) != OCEAN_OK) {
         free(c);
         return OCEAN_ENOMEM;
     }
     atomic_init(&c->refs, 1);
-    atomic_init(&c->want_write, 0);
-    c->wsi = wsi;
     c->hub = h;
-    c->bucket_t = c->last_progress = srv_now();
-    srv_link_init(&c->link);
     atomic_init(&c->link_bps, 0);
-    ocean_filter_smoother_init(&c->sim.smoother);
     pthread_mutex_lock(&h->lock);
     c->id = h->next_id++;
     if (h->next_id == 0) h->next_id = 1;
-    c->bucket = h->settings.srv.msg_burst;
-    atomic_init(&c->output_hard, h->settings.srv.output_hard);
     c->next = h->clients;
     h->clients = c;
     h->n_clients++;
@@ -474,30 +349,11 @@ static void free_requests(srv_client *c)
     srv_client_drop_replay(c);
 }
 
-/* Closes c's recording, saying what was lost if its file could not take
- * the last lines. */
-static void close_recording(srv_client *c)
-{
-    char why[1200];
-    if (c->rec && srv_record_close(c->rec, why, sizeof why) != OCEAN_OK)
-        fprintf(stderr, "oceand: client %u: recording incomplete: %s\n", c->id, why);
-    c->rec = NULL;
-}
-
 void srv_client_unref(srv_client *c)
 {
     if (!c || atomic_fetch_sub(&c->refs, 1) != 1) return;
     free_requests(c);
-    free_list(c->ctrl);
-    srv_msg_free(c->slot_topo);
-    srv_msg_free(c->slot_frame);
-    mesh_destroy(c->sim.mesh);
-    free(c->sim.qz_refs);
-    srv_held_destroy(c->sim.held[0]);
-    srv_held_destroy(c->sim.held[1]);
-    close_recording(c);
-    free(c->rx);
-    pthread_mutex_destroy(&c->out_lock);
+    srv_outbox_destroy(c->out);
     free(c);
 }
 
@@ -514,125 +370,9 @@ void srv_client_remove(srv_client *c)
         }
     }
     c->closed = 1;
-    c->wsi = NULL;
     free_requests(c);
     pthread_mutex_unlock(&h->lock);
-    close_recording(c);
     srv_client_unref(c);
-}
-
-/* glibc malloc: 16 bytes of header per block, rounded to 16. */
-#define MALLOC_OVERHEAD 16
-
-size_t srv_msg_cost(const srv_msg *m)
-{
-    if (!m) return 0;
-    size_t n = sizeof *m + MALLOC_OVERHEAD;
-    if (m->buf.mem) n += m->buf.head + m->buf.cap + MALLOC_OVERHEAD;
-    if (m->blob) n += sizeof *m->blob + m->blob->buf.head + m->blob->buf.cap + 2 * MALLOC_OVERHEAD;
-    return n;
-}
-
-static size_t msg_bytes(const srv_msg *m) { return srv_msg_cost(m); }
-
-void srv_client_queue(srv_client *c, srv_msg *m)
-{
-    m->next = NULL;
-    /* The hard output limit holds when a message is queued, not only when
-     * the service thread next looks: a client that makes the daemon queue
-     * faster than it reads (a flood of refused messages, replay frames it
-     * does not read) is cut off at the limit, and the message that would
-     * pass it is not kept.  A BYE always goes in (it ends the queue). */
-    size_t cost = msg_bytes(m);
-    uint64_t hard = atomic_load(&c->output_hard);
-    int refused = 0;
-    pthread_mutex_lock(&c->out_lock);
-    if (hard && !m->close_after && c->queued_bytes + cost > hard) {
-        refused = 1;
-    } else {
-        if (c->ctrl_tail) c->ctrl_tail->next = m;
-        else c->ctrl = m;
-        c->ctrl_tail = m;
-        c->queued_bytes += cost;
-    }
-    pthread_mutex_unlock(&c->out_lock);
-    if (refused) {
-        srv_msg_free(m);
-        if (!atomic_exchange(&c->over_hard, 1)) srv_hub_wake_net(c->hub);
-        return;
-    }
-    atomic_store(&c->want_write, 1);
-}
-
-void srv_client_publish(srv_client *c, srv_msg *topo, srv_msg *frame)
-{
-    srv_msg *drop_f = NULL, *drop_t = NULL;
-    pthread_mutex_lock(&c->out_lock);
-    if (c->slot_frame) {
-        drop_f = c->slot_frame;
-        c->queued_bytes -= msg_bytes(drop_f);
-    }
-    if (topo) {
-        if (c->slot_topo) {
-            drop_t = c->slot_topo;
-            c->queued_bytes -= msg_bytes(drop_t);
-        }
-        c->slot_topo = topo;
-        c->queued_bytes += msg_bytes(topo);
-    }
-    c->slot_frame = frame;
-    c->queued_bytes += msg_bytes(frame);
-    pthread_mutex_unlock(&c->out_lock);
-    atomic_store(&c->want_write, 1);
-    if (drop_f) atomic_fetch_add(&c->hub->stats.frames_skipped, 1);
-    srv_msg_free(drop_f);
-    srv_msg_free(drop_t);
-}
-
-srv_msg *srv_client_take(srv_client *c)
-{
-    srv_msg *m = NULL;
-    pthread_mutex_lock(&c->out_lock);
-    if (c->ctrl) {
-        m = c->ctrl;
-        c->ctrl = m->next;
-        if (!c->ctrl) c->ctrl_tail = NULL;
-    } else if (c->slot_topo) {
-        m = c->slot_topo;
-        c->slot_topo = NULL;
-    } else if (c->slot_frame) {
-        m = c->slot_frame;
-        c->slot_frame = NULL;
-        m->live = 1;
-    }
-    if (m) c->queued_bytes -= msg_bytes(m);
-    pthread_mutex_unlock(&c->out_lock);
-    if (m) m->next = NULL;
-    return m;
-}
-
-int srv_client_next_is_live(srv_client *c)
-{
-    pthread_mutex_lock(&c->out_lock);
-    int live = !c->ctrl && (c->slot_topo || c->slot_frame);
-    pthread_mutex_unlock(&c->out_lock);
-    return live;
-}
-
-int srv_client_frame_waiting(srv_client *c)
-{
-    pthread_mutex_lock(&c->out_lock);
-    int waiting = c->slot_frame != NULL;
-    pthread_mutex_unlock(&c->out_lock);
-    return waiting;
-}
-
-uint64_t srv_client_queued(srv_client *c)
-{
-    pthread_mutex_lock(&c->out_lock);
-    uint64_t q = c->queued_bytes;
-    pthread_mutex_unlock(&c->out_lock);
-    return q;
 }
 
 /* ---- replies ---------------------------------------------------------------- */
@@ -643,74 +383,6 @@ static int verbose(srv_client *c)
     int v = c->hub->settings.srv.verbose;
     pthread_mutex_unlock(&c->hub->lock);
     return v;
-}
-
-/* The largest error budget a mesh takes (mesh_config_validate). */
-#define MESH_ERROR_PX_MAX 100.0
-
-int srv_client_mesh_fit(srv_client *c, const mesh_camera *mc, int max_vertices, uint32_t cam_seq,
-                        srv_stats *st)
-{
-    srv_client_sim *cs = &c->sim;
-    if (!cs->mesh) /* none subscribed, or it failed: not remade before the next SUBSCRIBE */
-        return 0;
-    const mesh_config *sub = &cs->mesh_cfg;
-    mesh_config cfg = *sub;
-    double est = 0, est0 = 0;
-    int k = 0;
-    for (;; k++) {
-        cfg.error_px = sub->error_px * (double)(1 << k);
-        if (cfg.error_px > MESH_ERROR_PX_MAX || mesh_estimate_vertices(&cfg, mc, &est) != OCEAN_OK) {
-            k = -1;
-            break;
-        }
-        if (k == 0)
-            est0 = est;
-        /* a coarser mesh comes back only with room to spare, so a camera
-         * hovering at the limit does not flip topologies every frame */
-        if (est <= max_vertices && (k >= cs->mesh_coarsen || est <= 0.8 * max_vertices))
-            break;
-    }
-    if (k < 0) {
-        if (!cs->mesh_over) {
-            char why[320];
-            snprintf(why, sizeof why, "camera %u: its %s mesh is estimated at %.4g vertices, above the "
-                     "server's limit of %d (server.max_mesh_vertices), even at %g px; frames come "
-                     "without a mesh until a camera asks for less (wider fov, smaller viewport or range)",
-                     cam_seq, mesh_kind_name(sub->kind), est0, max_vertices,
-                     sub->kind == MESH_CONCENTRIC ? MESH_ERROR_PX_MAX : sub->error_px);
-            atomic_fetch_add(&st->refused_mesh, 1);
-            srv_client_send_error(c, NULL, 0, OCEAN_ETOOBIG, why);
-            cs->mesh_over = 1;
-        }
-        return 0;
-    }
-    cs->mesh_over = 0;
-    if (k == cs->mesh_coarsen)
-        return 1;
-    mesh *m = NULL;
-    ocean_result r = mesh_create(&cfg, &m);
-    if (r != OCEAN_OK) {
-        char why[200];
-        snprintf(why, sizeof why, "mesh %s unavailable, frames come without a mesh: %s",
-                 mesh_kind_name(cfg.kind), ocean_strerror(r));
-        srv_client_send_error(c, NULL, 0, r, why);
-        return 0;
-    }
-    mesh_destroy(cs->mesh);
-    cs->mesh = m;
-    cs->topo_valid = 0;
-    if (k > 0) {
-        char why[320];
-        snprintf(why, sizeof why, "camera %u: its %s mesh at %g px (server.mesh_error_px) would be %.4g "
-                 "vertices, above the server's limit of %d (server.max_mesh_vertices); it is drawn at "
-                 "%g px (%.4g vertices) while the camera needs it", cam_seq, mesh_kind_name(cfg.kind),
-                 sub->error_px, est0, max_vertices, cfg.error_px, est);
-        atomic_fetch_add(&st->coarsened_mesh, 1);
-        srv_client_send_error(c, NULL, 0, OCEAN_ETOOBIG, why);
-    }
-    cs->mesh_coarsen = k;
-    return 1;
 }
 
 void srv_client_send_error(srv_client *c, const void *bad, size_t badlen, ocean_result code,

@@ -37,13 +37,13 @@ static int sub_same(const proto_subscribe *a, const proto_subscribe *b)
 
 /* Takes one of the client's SUBSCRIBE changes (SRV_SUBSCRIBE_*): 1 if it may
  * change its subscription now.  Service thread. */
-static int sub_token(srv_client *c, double now)
+static int sub_token(srv_session *s, double now)
 {
-    if (c->sub_tokens_t == 0) c->sub_tokens = SRV_SUBSCRIBE_BURST;
-    else c->sub_tokens = fmin(SRV_SUBSCRIBE_BURST, c->sub_tokens + (now - c->sub_tokens_t) * SRV_SUBSCRIBE_PER_S);
-    c->sub_tokens_t = now;
-    if (c->sub_tokens < 1) return 0;
-    c->sub_tokens -= 1;
+    if (s->sub_tokens_t == 0) s->sub_tokens = SRV_SUBSCRIBE_BURST;
+    else s->sub_tokens = fmin(SRV_SUBSCRIBE_BURST, s->sub_tokens + (now - s->sub_tokens_t) * SRV_SUBSCRIBE_PER_S);
+    s->sub_tokens_t = now;
+    if (s->sub_tokens < 1) return 0;
+    s->sub_tokens -= 1;
     return 1;
 }
 
@@ -171,14 +171,14 @@ static int near_spacing_note(const srv_settings *s, const proto_subscribe *sub, 
     return 1;
 }
 
-static int rate_ok(srv_client *c, double rate, double burst)
+static int rate_ok(srv_session *s, double rate, double burst)
 {
     double now = srv_now();
-    c->bucket += (now - c->bucket_t) * rate;
-    c->bucket_t = now;
-    if (c->bucket > burst) c->bucket = burst;
-    if (c->bucket < 1.0) return 0;
-    c->bucket -= 1.0;
+    s->bucket += (now - s->bucket_t) * rate;
+    s->bucket_t = now;
+    if (s->bucket > burst) s->bucket = burst;
+    if (s->bucket < 1.0) return 0;
+    s->bucket -= 1.0;
     return 1;
 }
 
@@ -186,51 +186,52 @@ static int rate_ok(srv_client *c, double rate, double burst)
  * answered at most once a second: a reply per refused message would let a
  * client make the daemon queue as fast as it can send.  The ERROR says how
  * many went unanswered since the last one.  Returns 1 if one may go now. */
-static int one_per_window(srv_client *c, double *last)
+static int one_per_window(srv_session *s, double *last)
 {
     double now = srv_now();
     if (*last > 0 && now - *last < 1.0) {
-        c->rate_refused++;
-        atomic_fetch_add(&c->hub->stats.refused_silent, 1);
+        s->rate_refused++;
+        atomic_fetch_add(&s->c->hub->stats.refused_silent, 1);
         return 0;
     }
     *last = now;
     return 1;
 }
 
-static int admit(srv_client *c, const srv_config *cfg, const uint8_t *buf, size_t len)
+static int admit(srv_session *s, const srv_config *cfg, const uint8_t *buf, size_t len)
 {
-    if (rate_ok(c, cfg->msg_rate, cfg->msg_burst)) return 1;
-    atomic_fetch_add(&c->hub->stats.refused_rate, 1);
-    uint64_t before = c->rate_refused;
-    if (one_per_window(c, &c->rate_err_t)) {
+    if (rate_ok(s, cfg->msg_rate, cfg->msg_burst)) return 1;
+    atomic_fetch_add(&s->c->hub->stats.refused_rate, 1);
+    uint64_t before = s->rate_refused;
+    if (one_per_window(s, &s->rate_err_t)) {
         char why[300];
         snprintf(why, sizeof why, "message refused: more than %g messages/s (burst %d) "
                  "(server.msg_rate); %llu more refused without a reply since the last such ERROR",
                  cfg->msg_rate, cfg->msg_burst, (unsigned long long)before);
-        c->rate_refused = 0;
-        srv_client_send_error(c, buf, len, OCEAN_ERATE, why);
+        s->rate_refused = 0;
+        srv_client_send_error(s->c, buf, len, OCEAN_ERATE, why);
     }
     return 0;
 }
 
-void srv_handle_text(srv_client *c)
+void srv_handle_text(srv_session *s)
 {
-    srv_hub *h = c->hub;
+    srv_hub *h = s->c->hub;
     atomic_fetch_add(&h->stats.messages_received, 1);
     pthread_mutex_lock(&h->lock);
     srv_config cfg = h->settings.srv;
     pthread_mutex_unlock(&h->lock);
-    if (!admit(c, &cfg, NULL, 0)) return;
-    if (one_per_window(c, &c->text_err_t))
-        srv_client_send_error(c, NULL, 0, OCEAN_EFORMAT,
+    if (!admit(s, &cfg, NULL, 0)) return;
+    if (one_per_window(s, &s->text_err_t))
+        srv_client_send_error(s->c, NULL, 0, OCEAN_EFORMAT,
                               "text messages are not part of ocean.v1: send binary WebSocket "
                               "messages (one such ERROR a second at most)");
 }
 
 /* One decoded client message and what it is handled with [svc]. */
 typedef struct srv_in {
-    srv_client *c;
+    srv_session *s;
+    srv_client *c;              /* s->c */
     srv_hub *h;
     const srv_config *cfg;      /* the settings in force, copied */
     const uint8_t *buf;         /* the raw message, for ERROR's offending type and seq */
@@ -245,6 +246,7 @@ static void refuse(const srv_in *in, ocean_result r, const char *why)
 
 static void on_subscribe(const srv_in *in)
 {
+    srv_session *s = in->s;
     srv_client *c = in->c;
     srv_hub *h = in->h;
     proto_subscribe sub = in->m->u.subscribe;
@@ -256,7 +258,7 @@ static void on_subscribe(const srv_in *in)
         pthread_mutex_unlock(&h->lock);
         return;
     }
-    if (r == OCEAN_OK && !sub_token(c, srv_now())) {
+    if (r == OCEAN_OK && !sub_token(s, srv_now())) {
         r = OCEAN_ERATE;
         snprintf(why, sizeof why, "SUBSCRIBE changes limited to %g a second (burst %g): refused, the "
                  "subscription in force stays", SRV_SUBSCRIBE_PER_S, SRV_SUBSCRIBE_BURST);
@@ -275,7 +277,7 @@ static void on_subscribe(const srv_in *in)
     }
     pthread_mutex_unlock(&h->lock);
     if (r != OCEAN_OK) refuse(in, r, why);
-    else if (c->rec && srv_record_mode(c->rec, srv_hub_sim_time(h), sub.mode == PROTO_MODE_REPLAY) != OCEAN_OK)
+    else if (s->rec && srv_record_mode(s->rec, srv_hub_sim_time(h), sub.mode == PROTO_MODE_REPLAY) != OCEAN_OK)
         fprintf(stderr, "oceand: client %u: recording stopped (quota or write error)\n", c->id);
     if (note[0]) fprintf(stderr, "oceand: %s\n", note);
 }
@@ -309,6 +311,7 @@ static ocean_result replay_camera(const srv_in *in, double *t_rec, char *why, si
 
 static void on_camera(const srv_in *in)
 {
+    srv_session *s = in->s;
     srv_client *c = in->c;
     srv_hub *h = in->h;
     const proto_camera *k = &in->m->u.camera;
@@ -336,11 +339,11 @@ static void on_camera(const srv_in *in)
     pthread_mutex_unlock(&h->lock);
     if (r != OCEAN_OK) {
         refuse(in, r, why);
-    } else if (c->rec && (r = srv_record_camera(c->rec, t_rec, k)) != OCEAN_OK) {
+    } else if (s->rec && (r = srv_record_camera(s->rec, t_rec, k)) != OCEAN_OK) {
         char what[1200];
         fprintf(stderr, "oceand: client %u: recording stopped %s%s\n", c->id,
                 r == OCEAN_ETOOBIG ? "at server.record_max_bytes" : "after a write error: ",
-                r == OCEAN_ETOOBIG ? "" : srv_record_why(c->rec, what, sizeof what));
+                r == OCEAN_ETOOBIG ? "" : srv_record_why(s->rec, what, sizeof what));
     }
 }
 
@@ -389,12 +392,12 @@ static void on_query(const srv_in *in)
  * is not compared).  1 if the token is right; else refused (ERROR sent). */
 static int admin_ok(const srv_in *in, const char *token)
 {
-    srv_client *c = in->c;
+    srv_session *s = in->s;
     srv_hub *h = in->h;
     const srv_config *cfg = in->cfg;
     char why[300];
     double now = srv_now();
-    double until = fmax(c->admin_until, srv_admin_locked_until(&h->admin, c->peer, now));
+    double until = fmax(s->admin_until, srv_admin_locked_until(&h->admin, s->peer, now));
     if (now < until) {
         atomic_fetch_add(&h->stats.admin_locked, 1);
         snprintf(why, sizeof why, "SEA_STATE set refused: admin token locked out for %.1f s more after "
@@ -406,21 +409,21 @@ static int admin_ok(const srv_in *in, const char *token)
     unsigned diff = (unsigned)(a ^ b);
     for (size_t i = 0; i < a; i++) diff |= (unsigned)(cfg->admin_token[i] ^ token[i < b ? i : 0]);
     if (!diff) {
-        c->admin_misses = 0;
-        srv_admin_hit(&h->admin, c->peer);
+        s->admin_misses = 0;
+        srv_admin_hit(&h->admin, s->peer);
         return 1;
     }
     atomic_fetch_add(&h->stats.admin_misses, 1);
-    int k = c->admin_misses < 6 ? c->admin_misses : 6, alarm;
-    c->admin_misses++;
-    c->admin_until = now + cfg->admin_lockout * (double)(1 << k);
-    srv_admin_miss(&h->admin, c->peer, cfg->admin_lockout, now, &alarm);
+    int k = s->admin_misses < 6 ? s->admin_misses : 6, alarm;
+    s->admin_misses++;
+    s->admin_until = now + cfg->admin_lockout * (double)(1 << k);
+    srv_admin_miss(&h->admin, s->peer, cfg->admin_lockout, now, &alarm);
     if (alarm)
         fprintf(stderr, "oceand: more than %d wrong admin tokens in %d s: SEA_STATE set locked for %d s for "
                 "every address that sent one (the last: %s)\n", SRV_ADMIN_GLOBAL_MISSES, SRV_ADMIN_WINDOW,
-                SRV_ADMIN_WINDOW, c->peer);
+                SRV_ADMIN_WINDOW, s->peer);
     snprintf(why, sizeof why, "SEA_STATE set refused: wrong admin token; next attempt in %.1f s "
-             "(server.admin_lockout)", fmax(c->admin_until, srv_admin_locked_until(&h->admin, c->peer, now)) - now);
+             "(server.admin_lockout)", fmax(s->admin_until, srv_admin_locked_until(&h->admin, s->peer, now)) - now);
     refuse(in, OCEAN_EAUTH, why);
     return 0;
 }
@@ -486,8 +489,8 @@ static void on_error(const srv_in *in)
 
 static void on_bye(const srv_in *in)
 {
-    in->c->closing = 2; /* close without a reply */
-    atomic_store(&in->c->want_write, 1);
+    in->s->closing = 2; /* close without a reply */
+    srv_outbox_want_write(in->c->out);
 }
 
 /* What a client may send, and what handles it (the server-to-client types
@@ -502,22 +505,23 @@ static const struct {
 
 /* Every message names the last frame the client received (its header's
  * sim_time): the link's confirmations (srv_link.h). */
-static void confirm_frames(srv_client *c, double sim_t, const srv_config *cfg)
+static void confirm_frames(srv_session *s, double sim_t, const srv_config *cfg)
 {
     if (sim_t == 0) return;
-    srv_link_confirmed(&c->link, sim_t, cfg->viewer_bytes_per_s, srv_now());
-    atomic_store(&c->link_bps, (uint64_t)llround(srv_link_bps(&c->link)));
-    atomic_store(&c->want_write, 1);
+    srv_link_confirmed(&s->link, sim_t, cfg->viewer_bytes_per_s, srv_now());
+    atomic_store(&s->c->link_bps, (uint64_t)llround(srv_link_bps(&s->link)));
+    srv_outbox_want_write(s->c->out);
 }
 
-void srv_handle(srv_client *c, const uint8_t *buf, size_t len)
+void srv_handle(srv_session *s, const uint8_t *buf, size_t len)
 {
+    srv_client *c = s->c;
     srv_hub *h = c->hub;
     atomic_fetch_add(&h->stats.messages_received, 1);
     pthread_mutex_lock(&h->lock);
     srv_config cfg = h->settings.srv;
     pthread_mutex_unlock(&h->lock);
-    if (!admit(c, &cfg, buf, len)) return;
+    if (!admit(s, &cfg, buf, len)) return;
     proto_limits lim;
     proto_limits_default(&lim);
     lim.max_message = (uint32_t)cfg.max_message;
@@ -530,8 +534,8 @@ void srv_handle(srv_client *c, const uint8_t *buf, size_t len)
         srv_client_send_error(c, buf, len, r, why);
         return;
     }
-    confirm_frames(c, m.hdr.sim_time, &cfg);
-    srv_in in = {.c = c, .h = h, .cfg = &cfg, .buf = buf, .len = len, .m = &m};
+    confirm_frames(s, m.hdr.sim_time, &cfg);
+    srv_in in = {.s = s, .c = c, .h = h, .cfg = &cfg, .buf = buf, .len = len, .m = &m};
     size_t k = 0;
     while (k < sizeof handlers / sizeof handlers[0] && handlers[k].type != m.hdr.type) k++;
     if (k < sizeof handlers / sizeof handlers[0]) {

@@ -20,6 +20,7 @@
 
 #include "ocean_time.h"
 #include "srv_handle.h"
+#include "srv_session.h"
 #include "srv_record.h"
 
 /* File descriptors kept free of client connections: the HTTP pages, the
@@ -310,10 +311,11 @@ struct srv_net {
     lws_sorted_usec_list_t sweep;  /* [svc] limits are checked 4x a second even when idle */
     int fd_clients;                /* [const] most clients the fd limit allows */
     int time_said;                 /* [svc] past the exact-time limit: logged */
+    srv_session *sessions;         /* [svc] every open connection's session */
 };
 
 typedef struct ws_pss {
-    srv_client *c;
+    srv_session *s;
 } ws_pss;
 
 typedef struct http_pss {
@@ -373,7 +375,7 @@ static void stats_view(srv_net *n, srv_stats_view *v, char *scene, size_t sl,
         o->id = c->id;
         o->cpu_seconds = 1e-9 * (double)atomic_load(&c->cpu_ns);
         o->bytes_out = (double)atomic_load(&c->bytes_out);
-        o->queued = (double)srv_client_queued(c);
+        o->queued = (double)srv_outbox_queued(c->out);
     }
     v->per_client = *per;
     v->n_per_client = k;
@@ -590,41 +592,31 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
  * the last message is flushed, so the client learns which limit; a client
  * that cannot take even that within KILL_GRACE_S is cut without it. */
 #define KILL_GRACE_S 2
-static void kill_client_code(srv_client *c, enum lws_close_status code, const char *why)
+static void kill_client_code(srv_session *s, enum lws_close_status code, const char *why)
 {
-    if (!c->wsi || c->closing == 3) return;
-    c->closing = 3;
-    c->kill_code = (uint16_t)code;
-    snprintf(c->kill_why, sizeof c->kill_why, "%s", why);
-    lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, KILL_GRACE_S);
-    lws_callback_on_writable(c->wsi);
+    if (!s->wsi || s->closing == 3) return;
+    s->closing = 3;
+    s->kill_code = (uint16_t)code;
+    snprintf(s->kill_why, sizeof s->kill_why, "%s", why);
+    lws_set_timeout(s->wsi, PENDING_TIMEOUT_USER_OK, KILL_GRACE_S);
+    lws_callback_on_writable(s->wsi);
 }
 
-static void kill_client(srv_client *c, const char *why)
+static void kill_client(srv_session *s, const char *why)
 {
-    kill_client_code(c, LWS_CLOSE_STATUS_POLICY_VIOLATION, why);
+    kill_client_code(s, LWS_CLOSE_STATUS_POLICY_VIOLATION, why);
 }
 
 /* The client's read budget after refilling to now (server.read_rate, one
  * max_message plus one read buffer deep) [svc]. */
-static double rx_budget(srv_client *c, const srv_config *cfg, double now)
+static double rx_budget(srv_session *s, const srv_config *cfg, double now)
 {
     double depth = (double)cfg->max_message + 65536;
-    if (c->rx_tokens_t == 0) c->rx_tokens = depth;
-    else c->rx_tokens += (now - c->rx_tokens_t) * cfg->read_rate;
-    if (c->rx_tokens > depth) c->rx_tokens = depth;
-    c->rx_tokens_t = now;
-    return c->rx_tokens;
-}
-
-/* Releases what c's unfinished message holds [svc]. */
-static void rx_release(srv_hub *h, srv_client *c)
-{
-    h->partial_held -= c->rx_held;
-    c->rx_held = 0;
-    free(c->rx);
-    c->rx = NULL;
-    c->rx_cap = c->rx_len = 0;
+    if (s->rx_tokens_t == 0) s->rx_tokens = depth;
+    else s->rx_tokens += (now - s->rx_tokens_t) * cfg->read_rate;
+    if (s->rx_tokens > depth) s->rx_tokens = depth;
+    s->rx_tokens_t = now;
+    return s->rx_tokens;
 }
 
 /* Runs on every wake: hands writable requests to lws, enforces limits,
@@ -641,57 +633,57 @@ static void on_wake(srv_net *n)
         n->stop_phase = 1;
         h->stopping = 1;
     }
-    for (srv_client *c = h->clients; c; c = c->next) {
-        if (!c->wsi || c->closed) continue;
-        atomic_store(&c->output_hard, cfg.output_hard);
-        ws_track *t = trk_of(lws_get_socket_fd(c->wsi));
-        if (t && t->owner == c->wsi && atomic_load(&t->bad) == 1) {
+    for (srv_session *s = n->sessions; s; s = s->next) {
+        if (!s->wsi || s->c->closed) continue;
+        srv_outbox_set_hard(s->c->out, cfg.output_hard);
+        ws_track *t = trk_of(lws_get_socket_fd(s->wsi));
+        if (t && t->owner == s->wsi && atomic_load(&t->bad) == 1) {
             atomic_store(&t->bad, 3);              /* counted */
             atomic_fetch_add(&h->stats.disconnects_protocol, 1);
-            kill_client_code(c, LWS_CLOSE_STATUS_PROTOCOL_ERR, "protocol error (RFC 6455)");
+            kill_client_code(s, LWS_CLOSE_STATUS_PROTOCOL_ERR, "protocol error (RFC 6455)");
             continue;
         }
-        if (atomic_load(&c->over_hard)) {
+        if (srv_outbox_over_hard(s->c->out)) {
             atomic_fetch_add(&h->stats.disconnects_output, 1);
             atomic_fetch_add(&h->stats.disconnects_slow, 1);
-            kill_client(c, "output over server.output_hard: replies queued faster than read");
+            kill_client(s, "output over server.output_hard: replies queued faster than read");
             continue;
         }
-        if (c->rx_paused && rx_budget(c, &cfg, now) > 0) {
-            c->rx_paused = 0;
-            lws_rx_flow_control(c->wsi, 1);
+        if (s->rx_paused && rx_budget(s, &cfg, now) > 0) {
+            s->rx_paused = 0;
+            lws_rx_flow_control(s->wsi, 1);
         }
         /* (not while we hold its reading back ourselves).  From the
          * frame's first byte (the tracker), not only from the first payload
          * byte lws hands over: a header whose payload never comes is
          * unfinished too. */
-        double began = c->rx_started;
-        if (t && t->owner == c->wsi && t->frame_t > 0 && (began == 0 || t->frame_t < began))
+        double began = s->rx_started;
+        if (t && t->owner == s->wsi && t->frame_t > 0 && (began == 0 || t->frame_t < began))
             began = t->frame_t;
-        if (began > 0 && now - began > cfg.partial_seconds && !c->rx_paused) {
+        if (began > 0 && now - began > cfg.partial_seconds && !s->rx_paused) {
             atomic_fetch_add(&h->stats.disconnects_partial, 1);
-            kill_client(c, "message unfinished for server.partial_seconds");
+            kill_client(s, "message unfinished for server.partial_seconds");
             continue;
         }
         /* A connection that asks for nothing must not hold a slot of
          * server.max_clients for ever (PROTOCOL.md: BYE idle). */
-        if (!c->subscribed && !c->closing && c->last_rx > 0 && now - c->last_rx > cfg.idle_seconds) {
+        if (!s->c->subscribed && !s->closing && s->last_rx > 0 && now - s->last_rx > cfg.idle_seconds) {
             atomic_fetch_add(&h->stats.disconnects_idle, 1);
-            c->closing = 1;
-            snprintf(c->kill_why, sizeof c->kill_why, "idle: no SUBSCRIBE and no message for "
+            s->closing = 1;
+            snprintf(s->kill_why, sizeof s->kill_why, "idle: no SUBSCRIBE and no message for "
                      "server.idle_seconds");
-            srv_client_send_bye(c, PROTO_BYE_IDLE, c->kill_why);
-            lws_callback_on_writable(c->wsi);
+            srv_client_send_bye(s->c, PROTO_BYE_IDLE, s->kill_why);
+            lws_callback_on_writable(s->wsi);
             continue;
         }
-        if ((stopping || past) && c->closing != 1 && c->closing != 3 && c->closing != 4) {
+        if ((stopping || past) && s->closing != 1 && s->closing != 3 && s->closing != 4) {
             /* queue BYE after whatever is queued; frames stop mattering
              * (past the exact-time limit none can be built any more) */
-            c->closing = 1;
-            if (!stopping) snprintf(c->kill_why, sizeof c->kill_why, "%s", TIME_LIMIT_CLOSE);
-            srv_client_send_bye(c, PROTO_BYE_SHUTDOWN, stopping ? "server shutting down" : TIME_LIMIT_BYE);
+            s->closing = 1;
+            if (!stopping) snprintf(s->kill_why, sizeof s->kill_why, "%s", TIME_LIMIT_CLOSE);
+            srv_client_send_bye(s->c, PROTO_BYE_SHUTDOWN, stopping ? "server shutting down" : TIME_LIMIT_BYE);
         }
-        uint64_t q = srv_client_queued(c) + c->inflight;
+        uint64_t q = srv_outbox_queued(s->c->out) + s->inflight;
         if (q > cfg.output_hard) {
             /* the limit is named with its value: set below one frame, it
              * cuts a client that is not slow at all */
@@ -699,18 +691,18 @@ static void on_wake(srv_net *n)
             snprintf(why, sizeof why, "slow consumer: %llu bytes queued, over server.output_hard %llu",
                      (unsigned long long)q, (unsigned long long)cfg.output_hard);
             atomic_fetch_add(&h->stats.disconnects_slow, 1);
-            kill_client(c, why);
+            kill_client(s, why);
             continue;
         }
         if (q > cfg.output_soft) {
-            if (c->over_soft_since == 0) c->over_soft_since = now;
-            else if (now - c->over_soft_since > cfg.output_soft_seconds) {
+            if (s->over_soft_since == 0) s->over_soft_since = now;
+            else if (now - s->over_soft_since > cfg.output_soft_seconds) {
                 atomic_fetch_add(&h->stats.disconnects_slow, 1);
-                kill_client(c, "slow consumer: over server.output_soft for too long");
+                kill_client(s, "slow consumer: over server.output_soft for too long");
                 continue;
             }
         } else {
-            c->over_soft_since = 0;
+            s->over_soft_since = 0;
         }
         /* A reader that takes nothing at all for the soft period is gone:
          * output has waited that long with no send completed.  lws holding
@@ -718,40 +710,40 @@ static void on_wake(srv_net *n)
          * that never turns writable is the other, since the kernel may have
          * taken the last FRAME whole (lws sends it in one piece). */
         int pending = q > 0;
-        if (!pending) c->pending_since = 0;
-        else if (c->pending_since == 0) c->pending_since = now;
-        if (pending && now - fmax(c->pending_since, c->last_progress) > fmax(cfg.output_soft_seconds, 1.0)) {
+        if (!pending) s->pending_since = 0;
+        else if (s->pending_since == 0) s->pending_since = now;
+        if (pending && now - fmax(s->pending_since, s->last_progress) > fmax(cfg.output_soft_seconds, 1.0)) {
             atomic_fetch_add(&h->stats.disconnects_slow, 1);
-            kill_client(c, "slow consumer: no bytes read for server.output_soft_seconds");
+            kill_client(s, "slow consumer: no bytes read for server.output_soft_seconds");
             continue;
         }
-        if (atomic_exchange(&c->want_write, 0) || c->closing == 2 || c->closing == 3)
-            lws_callback_on_writable(c->wsi);
+        if (srv_outbox_take_want_write(s->c->out) || s->closing == 2 || s->closing == 3)
+            lws_callback_on_writable(s->wsi);
     }
     pthread_mutex_unlock(&h->lock);
 }
 
-static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now)
+static void send_next(srv_net *n, srv_session *s, struct lws *wsi, int *close_now)
 {
     srv_hub *h = n->hub;
     *close_now = 0;
-    if (c->closing == 2) { /* client said BYE */
+    if (s->closing == 2) { /* client said BYE */
         lws_close_reason(wsi, LWS_CLOSE_STATUS_NORMAL, (unsigned char *)"bye", 3);
         *close_now = 1;
         return;
     }
-    if (c->closing == 3) { /* a limit: the close frame names it (kill_client_code) */
+    if (s->closing == 3) { /* a limit: the close frame names it (kill_client_code) */
         if (lws_partial_buffered(wsi)) {
             lws_callback_on_writable(wsi);
             return;
         }
-        lws_close_reason(wsi, (enum lws_close_status)c->kill_code, (unsigned char *)c->kill_why,
-                         strlen(c->kill_why));
+        lws_close_reason(wsi, (enum lws_close_status)s->kill_code, (unsigned char *)s->kill_why,
+                         strlen(s->kill_why));
         *close_now = 1;
         return;
     }
-    if (c->closing == 4) { /* BYE written and flushed: the close says what it did */
-        const char *why = c->kill_why[0] ? c->kill_why : "server shutting down";
+    if (s->closing == 4) { /* BYE written and flushed: the close says what it did */
+        const char *why = s->kill_why[0] ? s->kill_why : "server shutting down";
         lws_close_reason(wsi, LWS_CLOSE_STATUS_GOINGAWAY, (unsigned char *)why, strlen(why));
         *close_now = 1;
         return;
@@ -760,18 +752,18 @@ static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now
         lws_callback_on_writable(wsi);
         return;
     }
-    c->inflight = 0;
+    s->inflight = 0;
     /* a live frame waits while the link has its window in flight; a newer
      * one replaces it meanwhile, and a confirmation asks to write again */
-    if (srv_client_next_is_live(c) && !srv_link_may_send(&c->link, srv_now())) {
+    if (srv_outbox_next_is_live(s->c->out) && !srv_link_may_send(&s->link, srv_now())) {
         atomic_fetch_add(&h->stats.frames_held, 1);
         return;
     }
-    srv_msg *m = srv_client_take(c);
+    srv_msg *m = srv_outbox_take(s->c->out);
     if (!m) return;
     size_t len;
     uint8_t *data = srv_msg_wire(m, &len);
-    if (len >= PROTO_HEADER_SIZE) proto_st32(data + 16, c->tx_seq++);
+    if (len >= PROTO_HEADER_SIZE) proto_st32(data + 16, s->tx_seq++);
     int w = lws_write(wsi, data, len, LWS_WRITE_BINARY);
     double now = srv_now();
     if (w < (int)len) {
@@ -779,17 +771,17 @@ static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now
         *close_now = 1;
         return;
     }
-    c->last_progress = now;
-    atomic_fetch_add(&c->bytes_out, len);
+    s->last_progress = now;
+    atomic_fetch_add(&s->c->bytes_out, len);
     atomic_fetch_add(&h->stats.bytes_sent, len);
     atomic_fetch_add(&h->stats.messages_sent, 1);
-    if (m->live && m->is_frame && len >= PROTO_HEADER_SIZE) srv_link_sent(&c->link, proto_ldf64(data + 24), len, now);
+    if (m->live && m->is_frame && len >= PROTO_HEADER_SIZE) srv_link_sent(&s->link, proto_ldf64(data + 24), len, now);
     if (m->is_frame) {
         atomic_fetch_add(&h->stats.frames_sent, 1);
         if (m->tick_wall > 0) srv_stats_latency(&h->stats, now - m->tick_wall);
     }
-    if (lws_partial_buffered(wsi)) c->inflight = len;
-    if (m->close_after) c->closing = 4;
+    if (lws_partial_buffered(wsi)) s->inflight = len;
+    if (m->close_after) s->closing = 4;
     srv_msg_free(m);
     /* more to send, or the final close after the BYE */
     lws_callback_on_writable(wsi);
@@ -799,7 +791,7 @@ static void send_next(srv_net *n, srv_client *c, struct lws *wsi, int *close_now
  * when the operator allows it and the run's quotas have room (each refusal
  * logged once a run: one line per connection let any client that connects
  * fill the log). */
-static void maybe_record(srv_hub *h, srv_client *c, struct lws *wsi)
+static void maybe_record(srv_hub *h, srv_session *s, struct lws *wsi)
 {
     pthread_mutex_lock(&h->lock);
     int record = h->settings.srv.record, record_clients = h->settings.srv.record_clients;
@@ -815,33 +807,33 @@ static void maybe_record(srv_hub *h, srv_client *c, struct lws *wsi)
         /* a client's own request writes a file on the server's disk */
         if (record_clients) record = 1;
         else if (verbose)
-            fprintf(stderr, "oceand: client %u: ?record=1 ignored (server.record_clients is off)\n", c->id);
+            fprintf(stderr, "oceand: client %u: ?record=1 ignored (server.record_clients is off)\n", s->c->id);
     }
     if (record && atomic_load(&h->record_files) >= (uint64_t)record_files) {
         if (!(h->record_said & 1))
             fprintf(stderr, "oceand: client %u: not recording: %d recordings opened this run "
-                    "(server.record_max_files); no later client is recorded (said once)\n", c->id, record_files);
+                    "(server.record_max_files); no later client is recorded (said once)\n", s->c->id, record_files);
         h->record_said |= 1;
         record = 0;
     }
     if (record && atomic_load(&h->record_bytes) >= record_bytes) {
         if (!(h->record_said & 2))
             fprintf(stderr, "oceand: client %u: not recording: server.record_max_bytes written this run; no "
-                    "later client is recorded (said once)\n", c->id);
+                    "later client is recorded (said once)\n", s->c->id);
         h->record_said |= 2;
         record = 0;
     }
     if (!record) return;
     char path[1100], msg[300];
-    if (srv_record_open(dir, c->id, scene, &c->rec, path, sizeof path, msg, sizeof msg) != OCEAN_OK) {
+    if (srv_record_open(dir, s->c->id, scene, &s->rec, path, sizeof path, msg, sizeof msg) != OCEAN_OK) {
         if (!(h->record_said & 4))
-            fprintf(stderr, "oceand: client %u: not recording: %s (said once a run)\n", c->id, msg);
+            fprintf(stderr, "oceand: client %u: not recording: %s (said once a run)\n", s->c->id, msg);
         h->record_said |= 4;
         return;
     }
     atomic_fetch_add(&h->record_files, 1);
-    srv_record_set_quota(c->rec, &h->record_bytes, record_bytes);
-    if (verbose) fprintf(stderr, "oceand: client %u: recording to %s\n", c->id, path);
+    srv_record_set_quota(s->rec, &h->record_bytes, record_bytes);
+    if (verbose) fprintf(stderr, "oceand: client %u: recording to %s\n", s->c->id, path);
 }
 
 /* A new connection: its client, refused with a BYE that says why when the
@@ -849,99 +841,100 @@ static void maybe_record(srv_hub *h, srv_client *c, struct lws *wsi)
 static int on_established(srv_net *n, struct lws *wsi, ws_pss *pss)
 {
     srv_hub *h = n->hub;
-    srv_client *c;
-    if (srv_client_create(h, wsi, &c) != OCEAN_OK) return -1;
-    pss->c = c;
-    lws_get_peer_simple(wsi, c->peer, sizeof c->peer);
-    c->last_rx = srv_now();
+    srv_session *s;
+    if (srv_session_create(h, wsi, &s) != OCEAN_OK) return -1;
+    pss->s = s;
+    s->next = n->sessions;
+    n->sessions = s;
+    lws_get_peer_simple(wsi, s->peer, sizeof s->peer);
     pthread_mutex_lock(&h->lock);
     int maxc = h->settings.srv.max_clients;
     if (n->fd_clients > 0 && maxc > n->fd_clients) maxc = n->fd_clients;
     int full = h->n_clients > maxc, stopping = h->stopping, verbose = h->settings.srv.verbose;
     pthread_mutex_unlock(&h->lock);
     if (past_time_limit(n)) { /* no HELLO can be sent: say why instead of nothing */
-        c->closing = 1;
-        snprintf(c->kill_why, sizeof c->kill_why, "%s", TIME_LIMIT_CLOSE);
-        srv_client_send_bye(c, PROTO_BYE_SHUTDOWN, TIME_LIMIT_BYE);
+        s->closing = 1;
+        snprintf(s->kill_why, sizeof s->kill_why, "%s", TIME_LIMIT_CLOSE);
+        srv_client_send_bye(s->c, PROTO_BYE_SHUTDOWN, TIME_LIMIT_BYE);
     } else if (full || stopping) {
         if (full) atomic_fetch_add(&h->stats.refused_full, 1);
-        c->closing = 1;
-        snprintf(c->kill_why, sizeof c->kill_why, "%s",
+        s->closing = 1;
+        snprintf(s->kill_why, sizeof s->kill_why, "%s",
                  stopping ? "server shutting down" : "server full: server.max_clients connections in use");
-        srv_client_send_bye(c, stopping ? PROTO_BYE_SHUTDOWN : PROTO_BYE_SERVER_FULL, c->kill_why);
+        srv_client_send_bye(s->c, stopping ? PROTO_BYE_SHUTDOWN : PROTO_BYE_SERVER_FULL, s->kill_why);
     } else {
-        maybe_record(h, c, wsi);
-        if (verbose) fprintf(stderr, "oceand: client %u connected\n", c->id);
-        srv_client_send_hello(c);
+        maybe_record(h, s, wsi);
+        if (verbose) fprintf(stderr, "oceand: client %u connected\n", s->c->id);
+        srv_client_send_hello(s->c);
     }
     lws_callback_on_writable(wsi);
     return 0;
 }
 
-/* Appends len bytes of the message being received to c->rx (a message over
+/* Appends len bytes of the message being received to s->rx (a message over
  * server.max_message keeps only its header, for the ERROR).  -1 closes the
  * connection: every client's unfinished messages together would pass
  * server.partial_total, or memory ran out. */
-static int rx_append(srv_hub *h, srv_client *c, struct lws *wsi, const void *in, size_t len, size_t maxm,
+static int rx_append(srv_hub *h, srv_session *s, struct lws *wsi, const void *in, size_t len, size_t maxm,
                      uint64_t total)
 {
-    if (!c->rx_discard && c->rx_len + len > maxm) {
-        c->rx_discard = 1;
-        c->rx_discarded = c->rx_len;
-        if (c->rx_len > PROTO_HEADER_SIZE) c->rx_len = PROTO_HEADER_SIZE;
+    if (!s->rx_discard && s->rx_len + len > maxm) {
+        s->rx_discard = 1;
+        s->rx_discarded = s->rx_len;
+        if (s->rx_len > PROTO_HEADER_SIZE) s->rx_len = PROTO_HEADER_SIZE;
     }
-    if (c->rx_discard) {
-        c->rx_discarded += len;
-        size_t keep = c->rx_len < PROTO_HEADER_SIZE ? PROTO_HEADER_SIZE - c->rx_len : 0;
+    if (s->rx_discard) {
+        s->rx_discarded += len;
+        size_t keep = s->rx_len < PROTO_HEADER_SIZE ? PROTO_HEADER_SIZE - s->rx_len : 0;
         len = keep < len ? keep : len;
     }
     if (!len) return 0;
-    if (c->rx_len + len > c->rx_cap) {
-        size_t nc = c->rx_cap ? c->rx_cap : 4096;
-        while (nc < c->rx_len + len) nc *= 2;
+    if (s->rx_len + len > s->rx_cap) {
+        size_t nc = s->rx_cap ? s->rx_cap : 4096;
+        while (nc < s->rx_len + len) nc *= 2;
         if (nc > maxm + 4096) nc = maxm + 4096;
-        if (h->partial_held - c->rx_held + nc > total) {
+        if (h->partial_held - s->rx_held + nc > total) {
             atomic_fetch_add(&h->stats.disconnects_partial, 1);
-            rx_release(h, c);
+            srv_session_rx_release(s);
             lws_close_reason(wsi, LWS_CLOSE_STATUS_POLICY_VIOLATION,
                              (unsigned char *)"unfinished messages over server.partial_total", 45);
             return -1;
         }
-        uint8_t *nb = realloc(c->rx, nc);
+        uint8_t *nb = realloc(s->rx, nc);
         if (!nb) return -1;
-        c->rx = nb;
-        h->partial_held += nc - c->rx_held;
-        c->rx_held = c->rx_cap = nc;
+        s->rx = nb;
+        h->partial_held += nc - s->rx_held;
+        s->rx_held = s->rx_cap = nc;
     }
-    memcpy(c->rx + c->rx_len, in, len);
-    c->rx_len += len;
+    memcpy(s->rx + s->rx_len, in, len);
+    s->rx_len += len;
     return 0;
 }
 
 /* A whole message received: handled (srv_handle.c), then the buffer is
  * cut back (between messages only a small one is kept, and it does not
  * count as unfinished). */
-static void rx_complete(srv_hub *h, srv_client *c, struct lws *wsi, size_t maxm)
+static void rx_complete(srv_hub *h, srv_session *s, struct lws *wsi, size_t maxm)
 {
-    c->rx_started = 0;
+    s->rx_started = 0;
     if (!lws_frame_is_binary(wsi)) {
-        srv_handle_text(c);
-    } else if (c->rx_discard) {
+        srv_handle_text(s);
+    } else if (s->rx_discard) {
         char why[200];
         snprintf(why, sizeof why, "message of %zu bytes or more exceeds server.max_message (%zu bytes)",
-                 c->rx_discarded, maxm);
-        srv_client_send_error(c, c->rx, c->rx_len, OCEAN_ETOOBIG, why);
+                 s->rx_discarded, maxm);
+        srv_client_send_error(s->c, s->rx, s->rx_len, OCEAN_ETOOBIG, why);
     } else {
-        srv_handle(c, c->rx, c->rx_len);
+        srv_handle(s, s->rx, s->rx_len);
     }
-    c->rx_len = 0;
-    c->rx_discard = 0;
-    if (atomic_exchange(&c->want_write, 0) || c->closing) lws_callback_on_writable(wsi);
-    if (c->rx_cap > 4096) {
-        rx_release(h, c);
+    s->rx_len = 0;
+    s->rx_discard = 0;
+    if (srv_outbox_take_want_write(s->c->out) || s->closing) lws_callback_on_writable(wsi);
+    if (s->rx_cap > 4096) {
+        srv_session_rx_release(s);
     } else {
-        h->partial_held -= c->rx_held;
-        c->rx_held = 0;
+        h->partial_held -= s->rx_held;
+        s->rx_held = 0;
     }
 }
 
@@ -949,9 +942,9 @@ static void rx_complete(srv_hub *h, srv_client *c, struct lws *wsi, size_t maxm)
  * connection (1002); a client over server.read_rate is paused (lws stops
  * reading its socket, TCP pushes back) until its budget refills, so one
  * client's flood cannot hold the service thread from the others. */
-static int on_receive(srv_hub *h, struct lws *wsi, srv_client *c, const void *in, size_t len)
+static int on_receive(srv_hub *h, struct lws *wsi, srv_session *s, const void *in, size_t len)
 {
-    if (!c || c->closing) return 0;
+    if (!s || s->closing) return 0;
     ws_track *t = trk_of(lws_get_socket_fd(wsi));
     if (t && t->owner == wsi && atomic_load(&t->bad) == 1) {
         atomic_store(&t->bad, 3);              /* counted */
@@ -962,41 +955,47 @@ static int on_receive(srv_hub *h, struct lws *wsi, srv_client *c, const void *in
     pthread_mutex_lock(&h->lock);
     srv_config cfg = h->settings.srv;
     pthread_mutex_unlock(&h->lock);
-    rx_budget(c, &cfg, srv_now());
-    c->rx_tokens -= (double)len;
-    if (c->rx_tokens < 0 && !c->rx_paused) {
-        c->rx_paused = 1;
+    rx_budget(s, &cfg, srv_now());
+    s->rx_tokens -= (double)len;
+    if (s->rx_tokens < 0 && !s->rx_paused) {
+        s->rx_paused = 1;
         lws_rx_flow_control(wsi, 0);
     }
     if (lws_is_first_fragment(wsi)) {
-        c->rx_len = 0;
-        c->rx_discard = 0;
-        c->rx_discarded = 0;
-        c->rx_started = c->last_rx = srv_now();
+        s->rx_len = 0;
+        s->rx_discard = 0;
+        s->rx_discarded = 0;
+        s->rx_started = s->last_rx = srv_now();
     }
-    if (rx_append(h, c, wsi, in, len, (size_t)cfg.max_message, cfg.partial_total)) return -1;
+    if (rx_append(h, s, wsi, in, len, (size_t)cfg.max_message, cfg.partial_total)) return -1;
     if (lws_is_final_fragment(wsi) && !lws_remaining_packet_payload(wsi))
-        rx_complete(h, c, wsi, (size_t)cfg.max_message);
+        rx_complete(h, s, wsi, (size_t)cfg.max_message);
     return 0;
 }
 
 /* A connection gone: a violation lws answered itself (a byte rewritten by
  * trk_feed) is a protocol disconnect too; its client leaves the hub. */
-static void on_closed(srv_hub *h, struct lws *wsi, ws_pss *pss)
+static void on_closed(srv_net *n, struct lws *wsi, ws_pss *pss)
 {
+    srv_hub *h = n->hub;
     ws_track *t = trk_of(lws_get_socket_fd(wsi));
     if (t && t->owner == wsi && atomic_load(&t->bad) == 2)
         atomic_fetch_add(&h->stats.disconnects_protocol, 1);
     trk_forget(wsi);
-    srv_client *c = pss->c;
-    if (!c) return;
-    rx_release(h, c);
+    srv_session *s = pss->s;
+    if (!s) return;
     pthread_mutex_lock(&h->lock);
     int verbose = h->settings.srv.verbose;
     pthread_mutex_unlock(&h->lock);
-    if (verbose) fprintf(stderr, "oceand: client %u closed\n", c->id);
-    pss->c = NULL;
-    srv_client_remove(c);
+    if (verbose) fprintf(stderr, "oceand: client %u closed\n", s->c->id);
+    pss->s = NULL;
+    for (srv_session **p = &n->sessions; *p; p = &(*p)->next) {
+        if (*p == s) {
+            *p = s->next;
+            break;
+        }
+    }
+    srv_session_destroy(s);
 }
 
 static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
@@ -1019,16 +1018,16 @@ static int cb_ocean(struct lws *wsi, enum lws_callback_reasons reason, void *use
     case LWS_CALLBACK_ESTABLISHED:
         return on_established(n, wsi, pss);
     case LWS_CALLBACK_RECEIVE:
-        return on_receive(h, wsi, pss->c, in, len);
+        return on_receive(h, wsi, pss->s, in, len);
     case LWS_CALLBACK_SERVER_WRITEABLE: {
-        if (!pss->c) break;
+        if (!pss->s) break;
         int close_now;
-        send_next(n, pss->c, wsi, &close_now);
+        send_next(n, pss->s, wsi, &close_now);
         if (close_now) return -1;
         break;
     }
     case LWS_CALLBACK_CLOSED:
-        on_closed(h, wsi, pss);
+        on_closed(n, wsi, pss);
         break;
     default:
         break;
@@ -1215,6 +1214,11 @@ void srv_net_destroy(srv_net *n)
     if (n->ctx) {
         lws_sul_cancel(&n->sweep);
         lws_context_destroy(n->ctx);
+    }
+    while (n->sessions) { /* connections lws tore down without a CLOSED callback */
+        srv_session *s = n->sessions;
+        n->sessions = s->next;
+        srv_session_destroy(s);
     }
     free(n);
 }

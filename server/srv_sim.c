@@ -50,6 +50,7 @@ typedef struct eval_entry {
 
 typedef struct job {
     srv_client *c;
+    srv_client_sim *cs;     /* the client's entry in the simulation thread's table */
     double t;
     proto_camera cam;
     uint32_t cam_seq;
@@ -106,6 +107,7 @@ struct srv_sim {
     uint64_t tick_no;
     double camera_hint[5];
     srv_work *work;             /* queries in slices (srv_work.c) */
+    srv_client_table *table;    /* what this thread keeps of each client */
     double work_due;            /* monotonic: background work's next turn */
     int holding;                /* caches may hold tiles or evaluations */
 };
@@ -190,6 +192,7 @@ ocean_result srv_sim_create(srv_hub *h, srv_sim **out, char *msg, size_t msglen)
     if (r == OCEAN_OK) r = srv_tiles_create(&s->tiles);
     if (r == OCEAN_OK) r = srv_cascade_create(&s->casc);
     if (r == OCEAN_OK) r = srv_work_create(&s->work);
+    if (r == OCEAN_OK) r = srv_client_table_create(&s->table);
     if (r != OCEAN_OK) {
         srv_sim_destroy(s);
         return r;
@@ -208,6 +211,7 @@ void srv_sim_destroy(srv_sim *s)
     if (!s) return;
     srv_sim_stop(s);
     srv_work_destroy(s->work);
+    srv_client_table_destroy(s->table);
     eval_clear(s);
     srv_tiles_destroy(s->tiles);
     srv_cascade_destroy(s->casc);
@@ -321,9 +325,10 @@ static double base_spacing(const srv_sim *s, const proto_subscribe *sub)
 }
 
 /* Chooses the client's cutoff for this frame and its evaluation group. */
-static void choose_cutoff(srv_sim *s, srv_client *c, job *j)
+static void choose_cutoff(srv_sim *s, job *j)
 {
-    const proto_subscribe *sub = &c->sim.sub;
+    srv_client_sim *cs = j->cs;
+    const proto_subscribe *sub = &cs->sub;
     ocean_filter_client cl;
     cl.speed_mps = sqrt((double)j->cam.vel[0] * j->cam.vel[0] + (double)j->cam.vel[1] * j->cam.vel[1] +
                         (double)j->cam.vel[2] * j->cam.vel[2]);
@@ -336,13 +341,13 @@ static void choose_cutoff(srv_sim *s, srv_client *c, job *j)
         cut.low_boost = 1;
         cut.order = s->fcfg.order;
     }
-    double dt = c->sim.primed ? j->t - c->sim.last_t : 0;
+    double dt = cs->primed ? j->t - cs->last_t : 0;
     if (!(dt >= 0) || !isfinite(dt)) dt = 0; /* replay may jump back: no smoothing step */
     double k = cut.k;
-    if (ocean_filter_smoother_update(&c->sim.smoother, cut.k, dt, &k) != OCEAN_OK) k = cut.k;
-    c->sim.primed = 1;
-    c->sim.last_t = j->t;
-    c->sim.cutoff_k = k;
+    if (ocean_filter_smoother_update(&cs->smoother, cut.k, dt, &k) != OCEAN_OK) k = cut.k;
+    cs->primed = 1;
+    cs->last_t = j->t;
+    cs->cutoff_k = k;
     int b = 0;
     if (ocean_filter_bucket_of(&s->buckets, k, &b) != OCEAN_OK) b = ocean_filter_bucket_count(&s->buckets) - 1;
     j->g.bucket = b;
@@ -370,9 +375,8 @@ static void choose_cutoff(srv_sim *s, srv_client *c, job *j)
  * spacing limits what it carries (PROTOCOL.md "Layouts").  The seed policy
  * (f_c = f_base + beta |v|, as seed 000 writes it) still chooses a cutoff;
  * what it removes is carried as unresolved slope variance. */
-static double layout1_policy(srv_sim *s, srv_client *c, const proto_camera *cam)
+static double layout1_policy(srv_sim *s, const proto_subscribe *sub, const proto_camera *cam)
 {
-    const proto_subscribe *sub = &c->sim.sub;
     if (sub->cutoff_policy != PROTO_CUTOFF_SEED) return INFINITY;
     ocean_filter_client cl;
     cl.speed_mps = sqrt((double)cam->vel[0] * cam->vel[0] + (double)cam->vel[1] * cam->vel[1] +
@@ -404,9 +408,8 @@ static void run_cascade(srv_sim *s, srv_cascade_job *cj, int n, double tick_wall
 }
 
 /* Rebuilds the client's mesh object after a new subscription. */
-static void apply_subscription(srv_sim *s, srv_client *c)
+static void apply_subscription(srv_sim *s, srv_client *c, srv_client_sim *cs)
 {
-    srv_client_sim *cs = &c->sim;
     mesh_destroy(cs->mesh);
     cs->mesh = NULL;
     cs->topo_valid = 0;
@@ -514,7 +517,7 @@ static void mesh_qz_stage(srv_client_sim *cs, job *j)
 static void mesh_stage(srv_sim *s, job *j)
 {
     srv_client *c = j->c;
-    srv_client_sim *cs = &c->sim;
+    srv_client_sim *cs = j->cs;
     j->mesh_ok = 0;
     if (!cs->mesh) return;
     mesh_camera mc;
@@ -524,8 +527,8 @@ static void mesh_stage(srv_sim *s, job *j)
      * vertices).  Steep chop asks for a finer mesh than its budget alone,
      * and gets a coarser budget up to the mesh's largest; beyond that its
      * frames come without a mesh, with one ERROR naming the limit, until a
-     * camera asks for less (srv_client_mesh_fit). */
-    if (!srv_client_mesh_fit(c, &mc, s->set.srv.max_mesh_vertices, j->cam_seq, &s->hub->stats)) return;
+     * camera asks for less (srv_client_sim_mesh_fit). */
+    if (!srv_client_sim_mesh_fit(cs, c, &mc, s->set.srv.max_mesh_vertices, j->cam_seq, &s->hub->stats)) return;
     double m0 = srv_now();
     ocean_result r = mesh_build(cs->mesh, &mc);
     if (r == OCEAN_OK) {
@@ -573,11 +576,11 @@ static void mesh_stage(srv_sim *s, job *j)
  * Returns 1 if the frame carries a mesh [worker thread owning the client]. */
 static int topo_stage(job *j, const job *src)
 {
-    srv_client_sim *cs = &j->c->sim;
+    srv_client_sim *cs = j->cs;
     if (!src->mesh_ok || cs->sub.mesh_kind == PROTO_MESH_NONE) return 0;
     const mesh_view *v = &src->mv;
     if (!cs->topo_valid || v->topology_key != cs->topo_key)
-        j->topo = srv_topology_encode(cs, v, j->t, NULL, NULL);
+        j->topo = srv_client_sim_topology(cs, v, j->t, NULL, NULL);
     return 1;
 }
 
@@ -589,7 +592,7 @@ static int topo_stage(job *j, const job *src)
 static void frame_stage(srv_sim *s, job *j, const job *src, int shared)
 {
     (void)s;
-    srv_client_sim *cs = &j->c->sim;
+    srv_client_sim *cs = j->cs;
     proto_msg m;
     proto_msg_init(&m, PROTO_FRAME);
     m.hdr.sim_time = j->t;
@@ -652,7 +655,7 @@ static void share_stage(srv_sim *s, job *j, const job *lead, const job *src)
             j->frame = srv_msg_share(lead->frame);
             if (j->frame) {
                 j->frame->camera_seq = j->cam_seq;
-                j->frame->mesh_id = j->c->sim.mesh_id;
+                j->frame->mesh_id = j->cs->mesh_id;
                 atomic_fetch_add(&s->hub->stats.frames_shared, 1);
                 return;
             }
@@ -660,7 +663,7 @@ static void share_stage(srv_sim *s, job *j, const job *lead, const job *src)
         /* topology bookkeeping is done; encode our own */
         srv_msg_free(j->topo);
         j->topo = NULL;
-        j->c->sim.topo_valid = 0;
+        j->cs->topo_valid = 0;
     }
     frame_stage(s, j, src, 0);
 }
@@ -681,7 +684,7 @@ static int frames_equal(const job *a, const job *b, int a_mesh, int b_mesh)
 /* Two live jobs whose meshes are bit for bit the same. */
 static int same_mesh(const job *a, const job *b)
 {
-    const srv_client_sim *x = &a->c->sim, *y = &b->c->sim;
+    const srv_client_sim *x = a->cs, *y = b->cs;
     if (!x->mesh || !y->mesh || a->t != b->t || !group_eq(&a->g, &b->g)) return 0;
     const unsigned fx = OCEAN_FX_DISPLACEMENT | OCEAN_FX_NEAR_FIELD;
     if ((x->sub.effects & fx) != (y->sub.effects & fx)) return 0;
@@ -729,7 +732,7 @@ static void batch_evaluate(srv_sim *s, job *jobs, int n)
 static void job_tiles(srv_sim *s, job *j, srv_tile **missing, int *nmiss)
 {
     srv_stats *st = &s->hub->stats;
-    const proto_subscribe *sub = &j->c->sim.sub;
+    const proto_subscribe *sub = &j->cs->sub;
     int per = s->set.srv.tiles_per_side, levels = sub->lod_levels;
     unsigned ch = srv_tiles_channels(sub->effects);
     j->ntiles = 0;
@@ -846,10 +849,10 @@ static void group_frames(job *jobs, int n, int *fl)
         j->fshare = i;
         j->no_share = 0;
         if (!j->ev || j->replay || !fl) continue;
-        int jm = jobs[j->leader].mesh_ok && j->c->sim.sub.mesh_kind != PROTO_MESH_NONE;
+        int jm = jobs[j->leader].mesh_ok && j->cs->sub.mesh_kind != PROTO_MESH_NONE;
         for (int k = 0; k < nfl; k++) {
             const job *o = &jobs[fl[k]];
-            int om = jobs[o->leader].mesh_ok && o->c->sim.sub.mesh_kind != PROTO_MESH_NONE;
+            int om = jobs[o->leader].mesh_ok && o->cs->sub.mesh_kind != PROTO_MESH_NONE;
             if (frames_equal(o, j, om, jm)) {
                 j->fshare = fl[k];
                 break;
@@ -988,7 +991,7 @@ static void follow_sea(srv_sim *s, double t)
     int due = srv_hub_sea_take_due(h, t, &c);
     if (due) {
         /* meshes follow the new dominant wavelength */
-        for (srv_client *k = h->clients; k; k = k->next) k->sim.sub_gen = 0;
+        srv_client_table_reapply(s->table);
     }
     pthread_mutex_unlock(&h->lock);
     if (due) {
@@ -1126,22 +1129,23 @@ static int wait_for_work(srv_sim *s, double next_tick_wall, int *live_due, int *
 }
 
 /* One more job in w for client c (NULL when memory ran out). */
-static job *add_job(work *w, srv_client *c)
+static job *add_job(work *w, srv_client *c, srv_client_sim *cs)
 {
     if (!grow((void **)&w->jobs, &w->capjobs, w->njobs + 1, sizeof *w->jobs)) return NULL;
     job *j = &w->jobs[w->njobs++];
     memset(j, 0, sizeof *j);
     j->c = c;
+    j->cs = cs;
     return j;
 }
 
 /* A replay client's cameras, at most server.replay_per_tick a tick; a
  * changed subscription without a camera still rebuilds the mesh. */
-static void take_replay(srv_sim *s, work *w, srv_client *c, int changed)
+static void take_replay(srv_sim *s, work *w, srv_client *c, srv_client_sim *cs, int changed)
 {
     int taken = 0;
     while (c->replay && w->njobs < 4096 && taken++ < s->set.srv.replay_per_tick) {
-        job *j = add_job(w, c);
+        job *j = add_job(w, c, cs);
         if (!j) break;
         srv_replay_cam *rc = c->replay;
         c->replay = rc->next;
@@ -1156,7 +1160,7 @@ static void take_replay(srv_sim *s, work *w, srv_client *c, int changed)
         free(rc);
     }
     job *j;
-    if (changed && (j = add_job(w, c))) {
+    if (changed && (j = add_job(w, c, cs))) {
         j->sub_changed = 1;
         j->replay = -1; /* no frame */
     }
@@ -1168,23 +1172,25 @@ static void take_replay(srv_sim *s, work *w, srv_client *c, int changed)
 static void snapshot_jobs(srv_sim *s, work *w, double t, int64_t tick_no, int live_due)
 {
     w->ncl = w->njobs = 0;
+    srv_client_table_sweep(s->table);
     for (srv_client *c = s->hub->clients; c; c = c->next) {
         if (c->closed) continue;
         srv_work_take(s->work, c, t);
         if (!c->subscribed) continue;
-        if (!grow((void **)&w->cl, &w->capcl, w->ncl + 1, sizeof *w->cl)) break;
+        srv_client_sim *cs = srv_client_table_get(s->table, c);
+        if (!cs || !grow((void **)&w->cl, &w->capcl, w->ncl + 1, sizeof *w->cl)) break;
         srv_client_ref(c);
         w->cl[w->ncl++] = c;
         int changed = 0;
-        if (c->sim.sub_gen != c->sub_gen) {
-            c->sim.sub = c->sub;
-            c->sim.sub_gen = c->sub_gen;
+        if (cs->sub_gen != c->sub_gen) {
+            cs->sub = c->sub;
+            cs->sub_gen = c->sub_gen;
             changed = 1;
         }
         if (c->sub.mode == PROTO_MODE_REPLAY) {
-            take_replay(s, w, c, changed);
+            take_replay(s, w, c, cs, changed);
         } else if (live_due) {
-            job *j = add_job(w, c);
+            job *j = add_job(w, c, cs);
             if (!j) break;
             j->t = t;
             j->tick = (uint32_t)tick_no;
@@ -1212,35 +1218,36 @@ static int filter_jobs(srv_sim *s, work *w, double t, double rate)
     w->ncjobs = 0;
     for (int i = 0; i < w->njobs; i++) {
         job j = w->jobs[i];
-        srv_client *c = j.c;
-        if (j.sub_changed || c->sim.sub_gen == 0) apply_subscription(s, c);
+        srv_client_sim *cs = j.cs;
+        if (j.sub_changed || cs->sub_gen == 0) apply_subscription(s, j.c, cs);
         if (j.replay == -1) continue;
         if (j.replay != 1) {
-            double period = 1.0 / c->sim.sub.frame_rate_hz;
-            if (t + 0.5 / rate < c->sim.next_frame_t) continue;
-            c->sim.next_frame_t = fmax(c->sim.next_frame_t + period, t + period - 0.5 / rate);
-            c->sim.last_frame_t = t;
-            c->sim.framed = 1;
+            double period = 1.0 / cs->sub.frame_rate_hz;
+            if (t + 0.5 / rate < cs->next_frame_t) continue;
+            cs->next_frame_t = fmax(cs->next_frame_t + period, t + period - 0.5 / rate);
+            cs->last_frame_t = t;
+            cs->framed = 1;
             if (j.replay == -2) default_camera(s, &j.cam);
             j.replay = 0;
         } else {
             j.tick = (uint32_t)(int64_t)llround(j.t * rate);
         }
-        if (c->sim.sub.layout == PROTO_LAYOUT_CASCADE) {
+        if (cs->sub.layout == PROTO_LAYOUT_CASCADE) {
             if (!grow((void **)&w->cjobs, &w->capcjobs, w->ncjobs + 1, sizeof *w->cjobs)) continue;
             srv_cascade_job *q = &w->cjobs[w->ncjobs++];
             memset(q, 0, sizeof *q);
-            q->c = c;
+            q->c = j.c;
+            q->cs = cs;
             q->t = j.t;
             q->cam = j.cam;
             q->cam_seq = j.cam_seq;
             q->tick = j.tick;
             q->tick_pos = j.replay == 1 ? j.t * rate : (double)j.tick_no;
             q->replay = j.replay == 1;
-            q->policy_k = layout1_policy(s, c, &j.cam);
+            q->policy_k = layout1_policy(s, &cs->sub, &j.cam);
             continue;
         }
-        choose_cutoff(s, c, &j);
+        choose_cutoff(s, &j);
         w->jobs[n++] = j;
     }
     return n;

@@ -782,9 +782,11 @@ static void a_replay_flood(void **state)
     test_ws_small_rcvbuf(&hog, 4096);
     proto_msg cm;
     proto_msg_init(&cm, PROTO_CAMERA);
-    for (int i = 0; i < 257; i++) {
-        /* within the message burst (400): the refusal must be the
-         * replay queue's */
+    for (int i = 0; i < 399; i++) {
+        /* within the message burst (400): the refusal must be the replay
+         * queue's (256).  The simulation thread takes server.replay_per_tick
+         * a tick meanwhile: 143 cameras past the queue's length keep it full
+         * for 2.4 s of ticks however slowly a busy host reads them. */
         oc_camera_default(&cm.u.camera);
         cm.u.camera.render_time = 0.05 * i;
         cm.hdr.seq = (uint32_t)i;
