@@ -39,12 +39,7 @@ static int sub_same(const proto_subscribe *a, const proto_subscribe *b)
  * change its subscription now.  Service thread. */
 static int sub_token(srv_session *s, double now)
 {
-    if (s->sub_tokens_t == 0) s->sub_tokens = SRV_SUBSCRIBE_BURST;
-    else s->sub_tokens = fmin(SRV_SUBSCRIBE_BURST, s->sub_tokens + (now - s->sub_tokens_t) * SRV_SUBSCRIBE_PER_S);
-    s->sub_tokens_t = now;
-    if (s->sub_tokens < 1) return 0;
-    s->sub_tokens -= 1;
-    return 1;
+    return srv_bucket_take(&s->sub_changes, SRV_SUBSCRIBE_PER_S, SRV_SUBSCRIBE_BURST, now, 1);
 }
 
 static ocean_result check_subscribe(const srv_settings *s, proto_subscribe *sub, char *why,
@@ -173,13 +168,7 @@ static int near_spacing_note(const srv_settings *s, const proto_subscribe *sub, 
 
 static int rate_ok(srv_session *s, double rate, double burst)
 {
-    double now = srv_now();
-    s->bucket += (now - s->bucket_t) * rate;
-    s->bucket_t = now;
-    if (s->bucket > burst) s->bucket = burst;
-    if (s->bucket < 1.0) return 0;
-    s->bucket -= 1.0;
-    return 1;
+    return srv_bucket_take(&s->messages, rate, burst, srv_now(), 1);
 }
 
 /* A refusal a flood would repeat (over the message rate, text frames) is
@@ -288,9 +277,9 @@ static ocean_result replay_camera(const srv_in *in, double *t_rec, char *why, si
 {
     srv_client *c = in->c;
     const proto_camera *k = &in->m->u.camera;
-    if (c->n_replay >= in->cfg->replay_queue) {
+    if (srv_inbox_replays(c->in) >= in->cfg->replay_queue) {
         snprintf(why, n, "replay queue full: %d cameras wait for frames (server.replay_queue); wait for "
-                 "FRAMEs before sending more", c->n_replay);
+                 "FRAMEs before sending more", srv_inbox_replays(c->in));
         return OCEAN_ERATE;
     }
     srv_replay_cam *rc = calloc(1, sizeof *rc);
@@ -300,10 +289,7 @@ static ocean_result replay_camera(const srv_in *in, double *t_rec, char *why, si
     }
     rc->cam = *k;
     rc->seq = in->m->hdr.seq;
-    if (c->replay_tail) c->replay_tail->next = rc;
-    else c->replay = rc;
-    c->replay_tail = rc;
-    c->n_replay++;
+    srv_inbox_push_replay(c->in, rc);
     *t_rec = k->render_time;
     pthread_cond_signal(&in->h->wake);
     return OCEAN_OK;
@@ -368,12 +354,9 @@ static void on_query(const srv_in *in)
     sq->points = pts;
     char why[200];
     pthread_mutex_lock(&h->lock);
-    int waiting = c->n_queries + c->n_queries_active;
+    int waiting = srv_inbox_queries(c->in) + c->n_queries_active;
     if (waiting < in->cfg->max_pending_queries) {
-        srv_query **p = &c->queries;
-        while (*p) p = &(*p)->next;
-        *p = sq;
-        c->n_queries++;
+        srv_inbox_push_query(c->in, sq);
         sq = NULL;
         pthread_cond_signal(&h->wake);
     }

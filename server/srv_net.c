@@ -611,12 +611,7 @@ static void kill_client(srv_session *s, const char *why)
  * max_message plus one read buffer deep) [svc]. */
 static double rx_budget(srv_session *s, const srv_config *cfg, double now)
 {
-    double depth = (double)cfg->max_message + 65536;
-    if (s->rx_tokens_t == 0) s->rx_tokens = depth;
-    else s->rx_tokens += (now - s->rx_tokens_t) * cfg->read_rate;
-    if (s->rx_tokens > depth) s->rx_tokens = depth;
-    s->rx_tokens_t = now;
-    return s->rx_tokens;
+    return srv_bucket_refill(&s->read, cfg->read_rate, (double)cfg->max_message + 65536, now);
 }
 
 /* Runs on every wake: hands writable requests to lws, enforces limits,
@@ -956,8 +951,8 @@ static int on_receive(srv_hub *h, struct lws *wsi, srv_session *s, const void *i
     srv_config cfg = h->settings.srv;
     pthread_mutex_unlock(&h->lock);
     rx_budget(s, &cfg, srv_now());
-    s->rx_tokens -= (double)len;
-    if (s->rx_tokens < 0 && !s->rx_paused) {
+    srv_bucket_spend(&s->read, (double)len);
+    if (s->read.tokens < 0 && !s->rx_paused) {
         s->rx_paused = 1;
         lws_rx_flow_control(wsi, 0);
     }

@@ -20,10 +20,7 @@ ocean_result srv_session_create(srv_hub *h, struct lws *wsi, srv_session **out)
     }
     srv_client_ref(s->c);
     s->wsi = wsi;
-    s->bucket_t = s->last_progress = s->last_rx = srv_now();
-    pthread_mutex_lock(&h->lock);
-    s->bucket = h->settings.srv.msg_burst;
-    pthread_mutex_unlock(&h->lock);
+    s->last_progress = s->last_rx = srv_now();
     srv_link_init(&s->link);
     *out = s;
     return OCEAN_OK;

@@ -18,6 +18,7 @@
 #include <stdint.h>
 
 #include "srv_admin.h"
+#include "srv_bucket.h"
 #include "srv_client.h"
 #include "srv_link.h"
 
@@ -38,15 +39,15 @@ typedef struct srv_session {
     double rx_started;              /* monotonic time the unfinished message began */
     double last_rx;                 /* monotonic time of the connection or of its last
                                        message's first bytes (server.idle_seconds) */
-    double rx_tokens, rx_tokens_t;  /* read budget (server.read_rate), bytes; refill time */
+    srv_bucket read;                /* bytes (server.read_rate) */
     int rx_paused;                  /* reading paused until the budget refills */
 
     /* admission of messages */
-    double bucket, bucket_t;        /* message-rate tokens; monotonic time of last refill */
+    srv_bucket messages;            /* messages (server.msg_rate, server.msg_burst) */
     double rate_err_t;              /* last ERATE ERROR sent; one per second */
     double text_err_t;              /* last text-frame ERROR sent; one per second */
     uint64_t rate_refused;          /* messages refused since that ERROR */
-    double sub_tokens, sub_tokens_t;/* changed SUBSCRIBEs allowed (SRV_SUBSCRIBE_*); refill time */
+    srv_bucket sub_changes;         /* changed SUBSCRIBEs (SRV_SUBSCRIBE_*) */
     int admin_misses;               /* wrong admin tokens in a row */
     double admin_until;             /* SEA_STATE set refused until then (monotonic) */
     char peer[SRV_ADMIN_ADDR_MAX];  /* the client's address (srv_admin's key) */

@@ -1107,7 +1107,7 @@ static int wait_for_work(srv_sim *s, double next_tick_wall, int *live_due, int *
          * turn per tick period (srv_work.c, server.replay_per_tick) */
         int bg = srv_work_busy(s->work);
         for (srv_client *c = h->clients; c && !bg; c = c->next)
-            if (!c->closed && (c->queries || c->replay)) bg = 1;
+            if (!c->closed && (srv_inbox_queries(c->in) || srv_inbox_replays(c->in))) bg = 1;
         if (bg && now >= s->work_due) pending = 1;
         if (h->n_subscribed > 0 && now >= next_tick_wall) *live_due = 1;
         /* a change is due at the first tick at or after its effective time */
@@ -1144,13 +1144,10 @@ static job *add_job(work *w, srv_client *c, srv_client_sim *cs)
 static void take_replay(srv_sim *s, work *w, srv_client *c, srv_client_sim *cs, int changed)
 {
     int taken = 0;
-    while (c->replay && w->njobs < 4096 && taken++ < s->set.srv.replay_per_tick) {
+    while (srv_inbox_replays(c->in) && w->njobs < 4096 && taken++ < s->set.srv.replay_per_tick) {
         job *j = add_job(w, c, cs);
         if (!j) break;
-        srv_replay_cam *rc = c->replay;
-        c->replay = rc->next;
-        if (!c->replay) c->replay_tail = NULL;
-        c->n_replay--;
+        srv_replay_cam *rc = srv_inbox_take_replay(c->in);
         j->t = rc->cam.render_time;
         j->cam = rc->cam;
         j->cam_seq = rc->seq;

@@ -66,14 +66,11 @@ int srv_work_busy(const srv_work *w) { return w->head != NULL; }
 
 void srv_work_take(srv_work *w, srv_client *c, double t_now)
 {
-    if (!c->queries || c->n_queries_active > 0) return;
+    if (!srv_inbox_queries(c->in) || c->n_queries_active > 0) return;
     item *it = calloc(1, sizeof *it);
     if (!it) return; /* stays pending; taken on a later tick */
-    srv_query *q = c->queries;
-    c->queries = q->next;
-    c->n_queries--;
+    srv_query *q = srv_inbox_take_query(c->in);
     c->n_queries_active++;
-    q->next = NULL;
     srv_client_ref(c);
     it->c = c;
     it->q = q;

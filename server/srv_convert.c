@@ -1,0 +1,56 @@
+/*
+ * srv_convert.c - the protocol's types as the simulation's and back (see
+ * srv_convert.h).
+ */
+#include "srv_convert.h"
+
+#include <math.h>
+#include <string.h>
+
+void srv_sea_from_params(const ocean_params *p, proto_sea *o)
+{
+    memset(o, 0, sizeof *o);
+    o->spectrum = (uint8_t)p->sea.spectrum;
+    o->spreading = (uint8_t)p->sea.spreading;
+    o->seed = p->seed;
+    o->wind_u10 = p->sea.wind_u10;
+    o->wind_dir_deg = p->sea.wind_dir_deg;
+    o->fetch_m = p->sea.fetch_m;
+    o->depth_m = p->sea.depth_m;
+    o->swell = p->sea.swell;
+    o->phillips_a = p->sea.phillips_a;
+    o->small_wave_m = p->sea.small_wave_m;
+    o->choppiness = p->sea.choppiness;
+    double hs = ocean_spectrum_hs(&p->sea);
+    double wp = ocean_spectrum_peak(&p->sea);
+    o->hs = isfinite(hs) && hs >= 0 && hs <= 1000 ? hs : 0;
+    o->tp = wp > 0 && 2 * M_PI / wp <= 1e4 ? 2 * M_PI / wp : 0;
+}
+
+void srv_params_from_sea(const proto_sea *s, const ocean_params *base, ocean_params *o)
+{
+    *o = *base;
+    o->sea.spectrum = (ocean_spectrum_kind)s->spectrum;
+    o->sea.spreading = (ocean_spreading_kind)s->spreading;
+    o->seed = s->seed;
+    o->sea.wind_u10 = s->wind_u10;
+    o->sea.wind_dir_deg = s->wind_dir_deg;
+    o->sea.fetch_m = s->fetch_m;
+    o->sea.depth_m = s->depth_m;
+    o->sea.swell = s->swell;
+    o->sea.phillips_a = s->phillips_a;
+    o->sea.small_wave_m = s->small_wave_m;
+    o->sea.choppiness = s->choppiness;
+}
+
+void srv_mesh_camera(const proto_camera *pc, mesh_camera *c)
+{
+    mesh_camera_default(c);
+    for (int i = 0; i < 3; i++) c->pos[i] = pc->pos[i];
+    c->yaw_deg = pc->yaw_deg;
+    c->pitch_deg = pc->pitch_deg;
+    c->roll_deg = pc->roll_deg;
+    c->fov_y_deg = pc->fov_y_deg;
+    c->viewport_w = pc->viewport_w;
+    c->viewport_h = pc->viewport_h;
+}

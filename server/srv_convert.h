@@ -1,0 +1,19 @@
+/*
+ * srv_convert.h - the protocol's types as the simulation's and back: a
+ * SEA_STATE's sea as ocean parameters, a CAMERA as a mesh camera.
+ *
+ * Threads: any (pure functions).
+ */
+#ifndef SRV_CONVERT_H
+#define SRV_CONVERT_H
+
+#include "mesh.h"
+#include "ocean.h"
+#include "proto.h"
+
+void srv_sea_from_params(const ocean_params *p, proto_sea *out);
+void srv_params_from_sea(const proto_sea *s, const ocean_params *base, ocean_params *out);
+void srv_mesh_camera(const proto_camera *pc, mesh_camera *out);
+
+
+#endif
