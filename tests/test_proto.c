@@ -1332,12 +1332,13 @@ static const lod_cascade lod_cascades[] = {
     {1000, 256, 6, 0}, {250, 256, 5, 1}, {12.5, 256, 8, 1}, {64, 64, 4, 1},
 };
 static const double lod_q[] = {0.046875, 0.01171875};
-static const double lod_cam_y[] = {25, -0.5};
+static const double lod_cam_y[] = {25, -40};
 static const double lod_d[][2] = {{0, 0}, {3, -4}, {30, 40}, {-300, 400}, {3000, -4000}, {-15000, 20000}};
 static const double lod_floor[][2] = {{0, 0}, {2, 0}, {0, 4}};
 /* the boundaries on cascade {64, 64, 4, 1} (sigma 1) at q 1/16 from
- * the nadir: lambda -4 (|cy| < 1), 0, 1, 3 (the last mip), 3.5, 4 */
-static const double lod_edge_y[] = {0.25, 16, 32, 128, 181, 256};
+ * the nadir: lambda -4 (|cy| < 1, either side of the sea), 0, 1, 3 (the
+ * last mip), 3.5, 4 */
+static const double lod_edge_y[] = {0.25, -0.5, 16, 32, 128, 181, 256};
 
 #define LOD_GRID ((int)(sizeof lod_cascades / sizeof *lod_cascades * sizeof lod_q / sizeof *lod_q * \
                         sizeof lod_cam_y / sizeof *lod_cam_y * sizeof lod_d / sizeof *lod_d * \
