@@ -5,8 +5,10 @@
 #     current $BUILD/libocean_proto.a and runs tests/browser/protocol.test.mjs
 #     (node --test): the viewer's JavaScript decoder/encoders and tile codecs
 #     against the C ones, byte for byte, including hostile input, plus the
-#     protocol's own vectors in tests/vectors/; and the viewer's small
-#     modules (timeline.test.mjs, rate.test.mjs, meshstore.test.mjs).
+#     protocol's own vectors in tests/vectors/; the viewer's GLSL of "Where
+#     each mip is read" run in headless Chromium against the C rule's points
+#     (lod.test.mjs, tests/vectors/lod.txt); and the viewer's small modules
+#     (timeline.test.mjs, rate.test.mjs, meshstore.test.mjs).
 #  2. Real browser: starts $BUILD/oceand on a free loopback port with
 #     config/oceand.conf and runs tests/browser/viewer.test.mjs: headless
 #     Chromium (/usr/bin/chromium, software GL) driven by playwright-core
@@ -78,8 +80,8 @@ ${CC:-cc} -std=c11 -O1 -Wall -Wextra -Werror -Isim -Iprotocol tests/browser/gen_
 rm -rf "$WORK/vectors" && mkdir -p "$WORK/vectors"
 "$WORK/gen_vectors" gen "$WORK/vectors" || die "gen_vectors gen failed"
 if ! VECTOR_DIR="$WORK/vectors" GEN_VECTORS="$WORK/gen_vectors" PROTO_VECTORS=tests/vectors \
-        node --test --test-reporter=tap tests/browser/protocol.test.mjs tests/browser/timeline.test.mjs \
-            tests/browser/rate.test.mjs tests/browser/meshstore.test.mjs; then
+        node --test --test-reporter=tap tests/browser/protocol.test.mjs tests/browser/lod.test.mjs \
+            tests/browser/timeline.test.mjs tests/browser/rate.test.mjs tests/browser/meshstore.test.mjs; then
     echo "test_browser: protocol cross-check FAILED"
     status=1
 fi

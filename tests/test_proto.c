@@ -115,8 +115,8 @@ static void dump_verts_qz(sbuf *b, const char *p, const proto_mesh_vertices *v)
 static char *dump(const proto_msg *m)
 {
     sbuf b = {0};
-    out(&b, "type = %s\nversion = %u\nflags = %u\nseq = %u\nsim_time = %.17g\n", proto_type_name(m->hdr.type),
-        m->hdr.version, m->hdr.flags, m->hdr.seq, m->hdr.sim_time);
+    out(&b, "version = %u\ntype = %s\nflags = %u\nseq = %u\nsim_time = %.17g\n", m->hdr.version,
+        proto_type_name(m->hdr.type), m->hdr.flags, m->hdr.seq, m->hdr.sim_time);
     switch (m->hdr.type) {
     case PROTO_HELLO: {
         const proto_hello *h = &m->u.hello;
@@ -134,10 +134,10 @@ static char *dump(const proto_msg *m)
         const proto_subscribe *s = &m->u.subscribe;
         out(&b, "effects = %u\nmesh_kind = %u\ncodec = %u\ncutoff_policy = %u\nmode = %u\nlayers = %u\nlod_levels = %u\n",
             s->effects, s->mesh_kind, s->codec, s->cutoff_policy, s->mode, s->layers, s->lod_levels);
-        out(&b, "tile_size = %u\nframe_rate_hz = %.9g\naccuracy = %.9g\nbase_spacing_m = %.9g\nview_range_m = %.9g\n",
-            s->tile_size, (double)s->frame_rate_hz, (double)s->accuracy, (double)s->base_spacing_m,
-            (double)s->view_range_m);
-        out(&b, "layout = %u\nmesh_codec = %u\nflags = %u\n", s->layout, s->mesh_codec, s->flags);
+        out(&b, "layout = %u\ntile_size = %u\nmesh_codec = %u\nflags = %u\n", s->layout, s->tile_size, s->mesh_codec,
+            s->flags);
+        out(&b, "frame_rate_hz = %.9g\naccuracy = %.9g\nbase_spacing_m = %.9g\nview_range_m = %.9g\n",
+            (double)s->frame_rate_hz, (double)s->accuracy, (double)s->base_spacing_m, (double)s->view_range_m);
         break;
     }
     case PROTO_CAMERA: {
@@ -180,9 +180,10 @@ static char *dump(const proto_msg *m)
         for (unsigned i = 0; i < f->tile_count; i++) {
             char p[32];
             snprintf(p, sizeof p, "tile[%u]", i);
-            dump_tile(&b, p, &f->tiles[i]);
+            /* the record's tag comes before its body */
             if (f->layout == PROTO_LAYOUT_CASCADE)
                 out(&b, "%s.cascade = %u\n%s.slot = %u\n", p, f->tiles[i].cascade, p, f->tiles[i].slot);
+            dump_tile(&b, p, &f->tiles[i]);
         }
         if (f->has_mesh && f->layout == PROTO_LAYOUT_CASCADE)
             out(&b, "placement.mesh_id = %u\nplacement.origin = %.17g %.17g %.17g\n", f->placement.mesh_id,
@@ -198,8 +199,8 @@ static char *dump(const proto_msg *m)
         break;
     case PROTO_MESH_TOPOLOGY: {
         const proto_mesh_topology *t = &m->u.topology;
-        out(&b, "mesh_id = %u\nmesh_kind = %u\nlod_levels = %u\nvertex_count = %u\nindex_count = %u\nindices =",
-            t->mesh_id, t->mesh_kind, t->lod_levels, t->vertex_count, t->index_count);
+        out(&b, "mesh_id = %u\nmesh_kind = %u\nlod_levels = %u\nflags = %u\nvertex_count = %u\nindex_count = %u\nindices =",
+            t->mesh_id, t->mesh_kind, t->lod_levels, t->flags, t->vertex_count, t->index_count);
         for (uint32_t i = 0; i < t->index_count; i++)
             out(&b, " %u", t->indices[i]);
         out(&b, "\nmorph =");
@@ -208,7 +209,7 @@ static char *dump(const proto_msg *m)
         out(&b, "\nlevel =");
         for (uint32_t i = 0; i < t->vertex_count; i++)
             out(&b, " %u", t->level[i]);
-        out(&b, "\nflags = %u\n", t->flags);
+        out(&b, "\n");
         if (t->flags & PROTO_TOPO_FLAT) {
             out(&b, "flat =");
             for (uint32_t i = 0; i < 2 * t->vertex_count; i++)
@@ -993,6 +994,10 @@ static void test_error_reply(void **state)
  * fixed bytes. */
 #define QZ_AT (56 + 72 + 64 + 8 + 32)
 
+/* An offset counted back from the message's end (for the last record). */
+#define END_BASE ((size_t)1 << 40)
+#define END(x) (END_BASE + (size_t)(x))
+
 typedef struct bad_vector {
     const char *name;
     const char *base;
@@ -1049,6 +1054,15 @@ static const bad_vector bad_vectors[] = {
      * other than the header's, and a last block that says it is not */
     {"bad_mesh_qz_zstd_size", "frame_mesh_qz", P(QZ_AT + 41), 1, 16, OCEAN_ECODEC, -1},
     {"bad_mesh_qz_zstd_blocks", "frame_mesh_qz", P(QZ_AT + 42), 1, 0x78, OCEAN_ECODEC, -1},
+    /* record tags: a layout-0 tile record's (must be 0), a layout-1 tile
+     * record's with a bit above bit 8, a layout-1 mesh record's (must be 0) */
+    {"bad_frame_tag", "frame", P(56 + 4), 4, 1, OCEAN_EFORMAT, -1},
+    {"bad_cascade_tag_bits", "frame_cascade", P(56 + 56 + 2 * 320 + 4), 4, 0x200, OCEAN_EFORMAT, -1},
+    {"bad_cascade_mesh_tag", "frame_cascade", END(PROTO_MESH_PLACEMENT_SIZE + 4), 4, 1, OCEAN_EFORMAT, -1},
+    /* an f32 tile 3 samples wide whose payload holds 2 x 2 */
+    {"bad_tile_f32_size", "tile", P(4), 2, 3, OCEAN_EFORMAT, -1},
+    /* tail_mss x (block offset 40) -1: only the cross moment xz may be negative */
+    {"bad_cascade_tail_mss", "frame_cascade", P(56 + 40), 4, 0xBF800000u, OCEAN_EINVAL, -1},
 };
 
 static const char *code_name(ocean_result r)
@@ -1093,6 +1107,8 @@ static const char *type_file(proto_type t)
     return buf;
 }
 
+static int write_lod_vectors(const char *path);
+
 static int write_vectors(const char *dir)
 {
     char path[512];
@@ -1131,10 +1147,11 @@ static int write_vectors(const char *dir)
         proto_encode(&b, &m, NULL, 0);
         uint8_t *p = proto_buf_data(&b);
         size_t n = v->cut >= 0 ? (size_t)v->cut : b.len;
-        if (v->width == 1) p[v->off] = (uint8_t)v->value;
-        else if (v->width == 2) proto_st16(p + v->off, (uint16_t)v->value);
-        else if (v->width == 4) proto_st32(p + v->off, (uint32_t)v->value);
-        else if (v->width == 8) proto_st64(p + v->off, v->value);
+        size_t at = v->off >= END_BASE ? b.len - (v->off - END_BASE) : v->off;
+        if (v->width == 1) p[at] = (uint8_t)v->value;
+        else if (v->width == 2) proto_st16(p + at, (uint16_t)v->value);
+        else if (v->width == 4) proto_st32(p + at, (uint32_t)v->value);
+        else if (v->width == 8) proto_st64(p + at, v->value);
         proto_msg d;
         char err[256];
         ocean_result r = proto_decode(p, n, &d, err, sizeof err);
@@ -1152,7 +1169,8 @@ static int write_vectors(const char *dir)
             return 1;
         proto_buf_free(&b);
     }
-    return 0;
+    snprintf(path, sizeof path, "%s/lod.txt", dir);
+    return write_lod_vectors(path) ? 1 : 0;
 }
 
 static const char *vector_dir(void)
@@ -1292,6 +1310,121 @@ static void test_cascade_layout(void **state)
     proto_buf_free(&c);
 }
 
+/* ---- lod vectors -------------------------------------------------------------- */
+
+/* tests/vectors/lod.txt: "Where each mip is read" as protocol/lod.c
+ * computes it, over cascades like the daemon's (a coarsest one that does
+ * not fade, finer ones that do) and points from the nadir to 25 km; the
+ * viewer's shader code is checked against the same lines
+ * (tests/browser/lod.test.mjs).  Inputs are binary32 values, as the
+ * frame carries them. */
+typedef struct lod_cascade {
+    double patch;
+    int n, mips, fades;
+} lod_cascade;
+
+typedef struct lod_case {
+    double q, min_s, cam_y, dx, dz, floor_s;
+    lod_cascade k;
+} lod_case;
+
+static const lod_cascade lod_cascades[] = {
+    {1000, 256, 6, 0}, {250, 256, 5, 1}, {12.5, 256, 8, 1}, {64, 64, 4, 1},
+};
+static const double lod_q[] = {0.046875, 0.01171875};
+static const double lod_cam_y[] = {25, -40};
+static const double lod_d[][2] = {{0, 0}, {3, -4}, {30, 40}, {-300, 400}, {3000, -4000}, {-15000, 20000}};
+static const double lod_floor[][2] = {{0, 0}, {2, 0}, {0, 4}};
+/* the boundaries on cascade {64, 64, 4, 1} (sigma 1) at q 1/16 from
+ * the nadir: lambda -4 (|cy| < 1, either side of the sea), 0, 1, 3 (the
+ * last mip), 3.5, 4 */
+static const double lod_edge_y[] = {0.25, -0.5, 16, 32, 128, 181, 256};
+
+#define LOD_GRID ((int)(sizeof lod_cascades / sizeof *lod_cascades * sizeof lod_q / sizeof *lod_q * \
+                        sizeof lod_cam_y / sizeof *lod_cam_y * sizeof lod_d / sizeof *lod_d * \
+                        sizeof lod_floor / sizeof *lod_floor))
+#define LOD_CASES (LOD_GRID + (int)(sizeof lod_edge_y / sizeof *lod_edge_y))
+
+static lod_case lod_case_at(int i)
+{
+    lod_case k = {0};
+    if (i >= LOD_GRID) {
+        k.q = 0.0625;
+        k.cam_y = lod_edge_y[i - LOD_GRID];
+        k.k = lod_cascades[3];
+        return k;
+    }
+    int nf = (int)(sizeof lod_floor / sizeof *lod_floor), nd = (int)(sizeof lod_d / sizeof *lod_d);
+    int ny = (int)(sizeof lod_cam_y / sizeof *lod_cam_y), nq = (int)(sizeof lod_q / sizeof *lod_q);
+    k.min_s = lod_floor[i % nf][0];
+    k.floor_s = lod_floor[i % nf][1];
+    i /= nf;
+    k.dx = lod_d[i % nd][0];
+    k.dz = lod_d[i % nd][1];
+    i /= nd;
+    k.cam_y = lod_cam_y[i % ny];
+    i /= ny;
+    k.q = lod_q[i % nq];
+    k.k = lod_cascades[i / nq];
+    return k;
+}
+
+/* One line: the inputs, " -> ", what the rule reads. */
+static void lod_line(char *buf, size_t len, const lod_case *k)
+{
+    double s = fmax(proto_lod_spacing(k->q, k->min_s, k->cam_y, k->dx, k->dz), k->floor_s);
+    proto_lod_read r;
+    proto_lod_read_at(s, k->k.patch / k->k.n, k->k.mips, k->k.fades, &r);
+    snprintf(buf, len, "%.9g %.9g %.9g %.9g %.9g %.9g %.9g %d %d %d -> %.17g %.17g %d %.17g %d %.17g %.17g\n", k->q,
+             k->min_s, k->cam_y, k->dx, k->dz, k->floor_s, k->k.patch, k->k.n, k->k.mips, k->k.fades, s, r.lambda,
+             r.mip[0], r.weight[0], r.mip[1], r.weight[1], r.fade);
+}
+
+static const char lod_head[] =
+    "# PROTOCOL.md \"Where each mip is read\", computed by protocol/lod.c; one point a line:\n"
+    "# q_c min_spacing_m cam_y dx dz floor_m patch_m n mips fades -> s lambda mip0 weight0 mip1 weight1 fade\n"
+    "# s = max(min_spacing_m, q_c sqrt(dx^2 + dz^2 + max(|cam_y|, 1)^2), floor_m) (floor_m: a vertex's g_L or G),\n"
+    "# sigma = patch_m / n, lambda = log2(s / sigma); mip1 -1 when one mip is read; the weights include the fade.\n";
+
+static int write_lod_vectors(const char *path)
+{
+    FILE *f = fopen(path, "w");
+    if (!f)
+        return -1;
+    fputs(lod_head, f);
+    for (int i = 0; i < LOD_CASES; i++) {
+        char line[512];
+        lod_case k = lod_case_at(i);
+        lod_line(line, sizeof line, &k);
+        fputs(line, f);
+    }
+    return fclose(f) == 0 ? 0 : -1;
+}
+
+/* The committed lod vectors are still what the C rule computes. */
+static void test_lod_vectors(void **state)
+{
+    (void)state;
+    char path[600];
+    snprintf(path, sizeof path, "%s/lod.txt", vector_dir());
+    size_t n;
+    char *text = (char *)read_file(path, &n);
+    if (!text)
+        fail_msg("cannot read %s", path);
+    sbuf want = {0};
+    out(&want, "%s", lod_head);
+    for (int i = 0; i < LOD_CASES; i++) {
+        char line[512];
+        lod_case k = lod_case_at(i);
+        lod_line(line, sizeof line, &k);
+        out(&want, "%s", line);
+    }
+    if (strcmp(want.s, text))
+        fail_msg("%s differs from protocol/lod.c's rule (regenerate: test_proto --write-vectors tests/vectors)", path);
+    free(want.s);
+    free(text);
+}
+
 /* "Where each mip is read" (protocol/lod.c): the spacing at a point, and
  * the mips read at a spacing, at the rule's boundaries. */
 static void test_lod_rule(void **state)
@@ -1326,6 +1459,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_roundtrip_all),
         cmocka_unit_test(test_lod_rule),
+        cmocka_unit_test(test_lod_vectors),
         cmocka_unit_test(test_header_errors),
         cmocka_unit_test(test_time_limit),
         cmocka_unit_test(test_frame_client_fields),

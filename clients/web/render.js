@@ -41,7 +41,7 @@ const CLOUD_SCALE = 1 / 2500;   /* noise units per metre: cloud period CLOUD_UV 
 const GRAIN_SCALE = 0.35;       /* foam grain: noise units per metre */
 const SKY_CUBE = 128;           /* sky cube-map face size */
 
-const COMMON = `#version 300 es
+export const COMMON = `#version 300 es
 precision highp float;
 precision highp int;
 precision highp sampler2DArray;
@@ -326,15 +326,19 @@ void main() {
  *
  * Precision: the eye's position modulo each patch is reduced in double on
  * the CPU (u_casEye, texture units); the GPU adds eye-relative offsets.
+ *
+ * This text is the viewer's only copy of the rule: tests/browser/lod.test.mjs
+ * runs it in Chromium's WebGL against tests/vectors/lod.txt, the points
+ * protocol/lod.c computes.
  */
-const CASCADE_GLSL = `
+export const CASCADE_GLSL = `
 #define MAXC ${MAX_CASCADES}
 #define MIPE ${MIP_ENTRIES}
 uniform int u_nCas;
 uniform vec4 u_cas[MAXC];        /* patch P, native spacing sigma, mips, fades */
 uniform vec2 u_casEye[MAXC];     /* (eye xz mod P) / P */
 uniform vec4 u_mipTab[MAXC * MIPE]; /* kc, mss_x, mss_z, mss_xz (PROTOCOL.md "Cascade entry") */
-uniform vec3 u_blk;              /* q = spacing_per_m, min_spacing_m, max(|cy|, 1) */
+uniform vec3 u_blk;              /* the block's q = spacing_per_m, min_spacing_m, camera y */
 uniform float u_casQ[MAXC];      /* each cascade's own q (its entry's spacing_per_m) */
 uniform vec2 u_blkCam;           /* the block's camera xz relative to the eye */
 uniform vec3 u_tailMss;          /* moments no cascade holds */
@@ -346,7 +350,8 @@ uniform sampler2D u_cd0, u_cd1, u_cd2, u_cd3;   /* disp per cascade */
  * to floorS (the vertex's lattice g_L, or the pixel's footprint) */
 float wantSpacing(int c, vec2 rel, float floorS) {
     vec2 d = rel - u_blkCam;
-    return max(floorS, max(u_blk.y, u_casQ[c] * sqrt(dot(d, d) + u_blk.z * u_blk.z)));
+    float h = max(abs(u_blk.z), 1.0);
+    return max(floorS, max(u_blk.y, u_casQ[c] * sqrt(dot(d, d) + h * h)));
 }
 /* continuous level of cascade c for spacing s, clamped to its mips; *w
  * the fade of a cascade that fades beyond its last mip */
@@ -401,7 +406,7 @@ vec4 casDisp(vec2 rel, float floorS) {
 }
 `;
 
-const CASCADE_FRAG_GLSL = `
+export const CASCADE_FRAG_GLSL = `
 uniform sampler2D u_cs0, u_cs1, u_cs2, u_cs3;   /* slope per cascade */
 /* mean slope, unresolved slope moments (x, z, xz) and foam, each cascade
  * at its own spacing raised to floorS */
@@ -766,7 +771,7 @@ export class Renderer {
         gl.uniform1fv(u.u_casQ, casQ);
         gl.uniform2fv(u.u_casEye, ce);
         gl.uniform4fv(u.u_mipTab, tab);
-        gl.uniform3f(u.u_blk, b.spacingPerM, b.minSpacingM, Math.max(Math.abs(b.camera[1]), 1));
+        gl.uniform3f(u.u_blk, b.spacingPerM, b.minSpacingM, b.camera[1]);
         gl.uniform2f(u.u_blkCam, b.camera[0] - eye[0], b.camera[2] - eye[2]);
         gl.uniform3fv(u.u_tailMss, b.tailMss);
         gl.uniform1f(u.u_roughScale, this.roughScale);
