@@ -614,6 +614,99 @@ static double rx_budget(srv_session *s, const srv_config *cfg, double now)
     return srv_bucket_refill(&s->read, cfg->read_rate, (double)cfg->max_message + 65536, now);
 }
 
+/* The reading side's limits of session s on a wake: a violation lws let
+ * through, a refused message over the outbox's hard limit, a paused read
+ * whose budget refilled, an unfinished message past its deadline, a
+ * connection that asks for nothing.  1 when s is being closed [hub.lock]. */
+static int session_input(srv_session *s, const srv_config *cfg, double now)
+{
+    srv_hub *h = s->c->hub;
+    ws_track *t = trk_of(lws_get_socket_fd(s->wsi));
+    if (t && t->owner == s->wsi && atomic_load(&t->bad) == 1) {
+        atomic_store(&t->bad, 3);              /* counted */
+        atomic_fetch_add(&h->stats.disconnects_protocol, 1);
+        kill_client_code(s, LWS_CLOSE_STATUS_PROTOCOL_ERR, "protocol error (RFC 6455)");
+        return 1;
+    }
+    if (srv_outbox_over_hard(s->c->out)) {
+        atomic_fetch_add(&h->stats.disconnects_output, 1);
+        atomic_fetch_add(&h->stats.disconnects_slow, 1);
+        kill_client(s, "output over server.output_hard: replies queued faster than read");
+        return 1;
+    }
+    if (s->rx_paused && rx_budget(s, cfg, now) > 0) {
+        s->rx_paused = 0;
+        lws_rx_flow_control(s->wsi, 1);
+    }
+    /* (not while we hold its reading back ourselves).  From the frame's
+     * first byte (the tracker), not only from the first payload byte lws
+     * hands over: a header whose payload never comes is unfinished too. */
+    double began = s->rx_started;
+    if (t && t->owner == s->wsi && t->frame_t > 0 && (began == 0 || t->frame_t < began))
+        began = t->frame_t;
+    if (began > 0 && now - began > cfg->partial_seconds && !s->rx_paused) {
+        atomic_fetch_add(&h->stats.disconnects_partial, 1);
+        kill_client(s, "message unfinished for server.partial_seconds");
+        return 1;
+    }
+    /* A connection that asks for nothing must not hold a slot of
+     * server.max_clients for ever (PROTOCOL.md: BYE idle). */
+    if (!s->c->subscribed && !s->closing && s->last_rx > 0 && now - s->last_rx > cfg->idle_seconds) {
+        atomic_fetch_add(&h->stats.disconnects_idle, 1);
+        s->closing = 1;
+        snprintf(s->kill_why, sizeof s->kill_why, "idle: no SUBSCRIBE and no message for "
+                 "server.idle_seconds");
+        srv_client_send_bye(s->c, PROTO_BYE_IDLE, s->kill_why);
+        lws_callback_on_writable(s->wsi);
+        return 1;
+    }
+    return 0;
+}
+
+/* The sending side's limits of session s on a wake: the bytes queued
+ * against server.output_hard and output_soft, and a reader that takes
+ * nothing at all.  1 when s is being closed. */
+static int session_output(srv_session *s, const srv_config *cfg, double now)
+{
+    srv_hub *h = s->c->hub;
+    uint64_t q = srv_outbox_queued(s->c->out) + s->inflight;
+    if (q > cfg->output_hard) {
+        /* the limit is named with its value: set below one frame, it cuts
+         * a client that is not slow at all */
+        char why[120];
+        snprintf(why, sizeof why, "slow consumer: %llu bytes queued, over server.output_hard %llu",
+                 (unsigned long long)q, (unsigned long long)cfg->output_hard);
+        atomic_fetch_add(&h->stats.disconnects_slow, 1);
+        kill_client(s, why);
+        return 1;
+    }
+    if (q > cfg->output_soft) {
+        if (s->over_soft_since == 0) {
+            s->over_soft_since = now;
+        } else if (now - s->over_soft_since > cfg->output_soft_seconds) {
+            atomic_fetch_add(&h->stats.disconnects_slow, 1);
+            kill_client(s, "slow consumer: over server.output_soft for too long");
+            return 1;
+        }
+    } else {
+        s->over_soft_since = 0;
+    }
+    /* A reader that takes nothing at all for the soft period is gone:
+     * output has waited that long with no send completed.  lws holding the
+     * rest of a write is one sign; a message waiting for a socket that
+     * never turns writable is the other, since the kernel may have taken
+     * the last FRAME whole (lws sends it in one piece). */
+    int pending = q > 0;
+    if (!pending) s->pending_since = 0;
+    else if (s->pending_since == 0) s->pending_since = now;
+    if (pending && now - fmax(s->pending_since, s->last_progress) > fmax(cfg->output_soft_seconds, 1.0)) {
+        atomic_fetch_add(&h->stats.disconnects_slow, 1);
+        kill_client(s, "slow consumer: no bytes read for server.output_soft_seconds");
+        return 1;
+    }
+    return 0;
+}
+
 /* Runs on every wake: hands writable requests to lws, enforces limits,
  * drives the shutdown. */
 static void on_wake(srv_net *n)
@@ -631,46 +724,7 @@ static void on_wake(srv_net *n)
     for (srv_session *s = n->sessions; s; s = s->next) {
         if (!s->wsi || s->c->closed) continue;
         srv_outbox_set_hard(s->c->out, cfg.output_hard);
-        ws_track *t = trk_of(lws_get_socket_fd(s->wsi));
-        if (t && t->owner == s->wsi && atomic_load(&t->bad) == 1) {
-            atomic_store(&t->bad, 3);              /* counted */
-            atomic_fetch_add(&h->stats.disconnects_protocol, 1);
-            kill_client_code(s, LWS_CLOSE_STATUS_PROTOCOL_ERR, "protocol error (RFC 6455)");
-            continue;
-        }
-        if (srv_outbox_over_hard(s->c->out)) {
-            atomic_fetch_add(&h->stats.disconnects_output, 1);
-            atomic_fetch_add(&h->stats.disconnects_slow, 1);
-            kill_client(s, "output over server.output_hard: replies queued faster than read");
-            continue;
-        }
-        if (s->rx_paused && rx_budget(s, &cfg, now) > 0) {
-            s->rx_paused = 0;
-            lws_rx_flow_control(s->wsi, 1);
-        }
-        /* (not while we hold its reading back ourselves).  From the
-         * frame's first byte (the tracker), not only from the first payload
-         * byte lws hands over: a header whose payload never comes is
-         * unfinished too. */
-        double began = s->rx_started;
-        if (t && t->owner == s->wsi && t->frame_t > 0 && (began == 0 || t->frame_t < began))
-            began = t->frame_t;
-        if (began > 0 && now - began > cfg.partial_seconds && !s->rx_paused) {
-            atomic_fetch_add(&h->stats.disconnects_partial, 1);
-            kill_client(s, "message unfinished for server.partial_seconds");
-            continue;
-        }
-        /* A connection that asks for nothing must not hold a slot of
-         * server.max_clients for ever (PROTOCOL.md: BYE idle). */
-        if (!s->c->subscribed && !s->closing && s->last_rx > 0 && now - s->last_rx > cfg.idle_seconds) {
-            atomic_fetch_add(&h->stats.disconnects_idle, 1);
-            s->closing = 1;
-            snprintf(s->kill_why, sizeof s->kill_why, "idle: no SUBSCRIBE and no message for "
-                     "server.idle_seconds");
-            srv_client_send_bye(s->c, PROTO_BYE_IDLE, s->kill_why);
-            lws_callback_on_writable(s->wsi);
-            continue;
-        }
+        if (session_input(s, &cfg, now)) continue;
         if ((stopping || past) && s->closing != 1 && s->closing != 3 && s->closing != 4) {
             /* queue BYE after whatever is queued; frames stop mattering
              * (past the exact-time limit none can be built any more) */
@@ -678,40 +732,7 @@ static void on_wake(srv_net *n)
             if (!stopping) snprintf(s->kill_why, sizeof s->kill_why, "%s", TIME_LIMIT_CLOSE);
             srv_client_send_bye(s->c, PROTO_BYE_SHUTDOWN, stopping ? "server shutting down" : TIME_LIMIT_BYE);
         }
-        uint64_t q = srv_outbox_queued(s->c->out) + s->inflight;
-        if (q > cfg.output_hard) {
-            /* the limit is named with its value: set below one frame, it
-             * cuts a client that is not slow at all */
-            char why[120];
-            snprintf(why, sizeof why, "slow consumer: %llu bytes queued, over server.output_hard %llu",
-                     (unsigned long long)q, (unsigned long long)cfg.output_hard);
-            atomic_fetch_add(&h->stats.disconnects_slow, 1);
-            kill_client(s, why);
-            continue;
-        }
-        if (q > cfg.output_soft) {
-            if (s->over_soft_since == 0) s->over_soft_since = now;
-            else if (now - s->over_soft_since > cfg.output_soft_seconds) {
-                atomic_fetch_add(&h->stats.disconnects_slow, 1);
-                kill_client(s, "slow consumer: over server.output_soft for too long");
-                continue;
-            }
-        } else {
-            s->over_soft_since = 0;
-        }
-        /* A reader that takes nothing at all for the soft period is gone:
-         * output has waited that long with no send completed.  lws holding
-         * the rest of a write is one sign; a message waiting for a socket
-         * that never turns writable is the other, since the kernel may have
-         * taken the last FRAME whole (lws sends it in one piece). */
-        int pending = q > 0;
-        if (!pending) s->pending_since = 0;
-        else if (s->pending_since == 0) s->pending_since = now;
-        if (pending && now - fmax(s->pending_since, s->last_progress) > fmax(cfg.output_soft_seconds, 1.0)) {
-            atomic_fetch_add(&h->stats.disconnects_slow, 1);
-            kill_client(s, "slow consumer: no bytes read for server.output_soft_seconds");
-            continue;
-        }
+        if (session_output(s, &cfg, now)) continue;
         if (srv_outbox_take_want_write(s->c->out) || s->closing == 2 || s->closing == 3)
             lws_callback_on_writable(s->wsi);
     }
