@@ -168,6 +168,130 @@ static void print_usage(FILE *f, const char *usage, const occli_opt *opts, int n
     fprintf(f, "  --%-18s %s\n", "help", "this text");
 }
 
+static const occli_opt *find_opt(const occli_opt *opts, int nopts, const char *name, size_t nl)
+{
+    for (int k = 0; k < nopts; k++)
+        if (strlen(opts[k].name) == nl && !strncmp(opts[k].name, name, nl))
+            return &opts[k];
+    return NULL;
+}
+
+/* Sets an OCCLI_CHOICE target to the index of val among its names. */
+static int set_choice(const char *cmd, const occli_opt *o, const char *val)
+{
+    int found = -1;
+    for (int k = 0; o->names[k]; k++)
+        if (!strcmp(o->names[k], val))
+            found = k;
+    if (found < 0) {
+        char list[256] = "";
+        size_t n = 0;
+        for (int k = 0; o->names[k] && n < sizeof list; k++)
+            n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", k ? ", " : "", o->names[k]);
+        fprintf(stderr, "ocean-client %s: option '--%s': unknown value '%s' (one of %s)\n", cmd, o->name, val,
+                list);
+        return 2;
+    }
+    *(int *)o->target = found;
+    return 0;
+}
+
+/* Sets an OCCLI_DOUBLE or OCCLI_INT target: a finite number within the
+ * option's range (and the time limit, for a time), whole for an int. */
+static int set_number(const char *cmd, const occli_opt *o, const char *val)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(val, &end);
+    if (end == val || *end || errno == ERANGE || !isfinite(v)) {
+        fprintf(stderr, "ocean-client %s: option '--%s': '%s' is not a number\n", cmd, o->name, val);
+        return 2;
+    }
+    if (o->max == OCEAN_TIME_MAX && !ocean_time_ok(v)) {
+        char m[256];
+        ocean_time_check(v, o->name, m, sizeof m);
+        fprintf(stderr, "ocean-client %s: option '--%s': %s\n", cmd, o->name, m);
+        return 2;
+    }
+    if (v < o->min || v > o->max) {
+        fprintf(stderr, "ocean-client %s: option '--%s': %s outside [%g, %g]\n", cmd, o->name, val, o->min,
+                o->max);
+        return 2;
+    }
+    if (o->kind == OCCLI_INT) {
+        if (v != floor(v)) {
+            fprintf(stderr, "ocean-client %s: option '--%s': '%s' is not an integer\n", cmd, o->name, val);
+            return 2;
+        }
+        *(int *)o->target = (int)v;
+    } else {
+        *(double *)o->target = v;
+    }
+    return 0;
+}
+
+/* One "--name[=value]" at argv[*i] (its value may be argv[*i + 1], which
+ * then is consumed): 0 set, 2 refused (said). */
+static int parse_option(int argc, char **argv, int *i, const occli_opt *opts, int nopts)
+{
+    const char *cmd = argv[0], *name = argv[*i] + 2;
+    const char *eq = strchr(name, '=');
+    size_t nl = eq ? (size_t)(eq - name) : strlen(name);
+    const occli_opt *o = find_opt(opts, nopts, name, nl);
+    if (!o) {
+        fprintf(stderr, "ocean-client %s: unknown option '--%.*s' (see --help)\n", cmd, (int)nl, name);
+        return 2;
+    }
+    if (o->kind == OCCLI_FLAG) {
+        if (eq) {
+            fprintf(stderr, "ocean-client %s: option '--%s' takes no value\n", cmd, o->name);
+            return 2;
+        }
+        *(int *)o->target = 1;
+        return 0;
+    }
+    const char *val = eq ? eq + 1 : NULL;
+    if (!val) {
+        if (*i + 1 >= argc) {
+            fprintf(stderr, "ocean-client %s: option '--%s' needs a value\n", cmd, o->name);
+            return 2;
+        }
+        val = argv[++*i];
+    }
+    if (o->kind == OCCLI_STRING) {
+        *(const char **)o->target = val;
+        return 0;
+    }
+    if (o->kind == OCCLI_CHOICE)
+        return set_choice(cmd, o, val);
+    return set_number(cmd, o, val);
+}
+
+/* A word that is not "--name": a positional argument, or a refused
+ * single-dash option or one argument too many. */
+static int take_positional(const char *cmd, const char *a, const char **pos, int max_pos, int *np)
+{
+    if (a[0] == '-' && a[1] && strcmp(a, "-") != 0) {
+        fprintf(stderr, "ocean-client %s: unknown option '%s' (see --help)\n", cmd, a);
+        return 2;
+    }
+    if (*np >= max_pos) {
+        fprintf(stderr, "ocean-client %s: unexpected argument '%s' (see --help)\n", cmd, a);
+        return 2;
+    }
+    pos[(*np)++] = a;
+    return 0;
+}
+
+static void print_options(const occli_opt *opts, int nopts)
+{
+    for (int i = 0; i < nopts; i++) {
+        char v[512];
+        format_value(&opts[i], v, sizeof v);
+        printf("--%s=%s\n", opts[i].name, v);
+    }
+}
+
 int occli_parse(int argc, char **argv, const char *usage, const occli_opt *opts, int nopts,
                 const char **pos, int max_pos, int *npos)
 {
@@ -183,110 +307,22 @@ int occli_parse(int argc, char **argv, const char *usage, const occli_opt *opts,
         format_value(&opts[i], defs[i], sizeof defs[i]);
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
+        int r = 0;
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
             print_usage(stdout, usage, opts, nopts, defs);
             return 1;
         }
-        if (strcmp(a, "--show-options") == 0) {
+        if (strcmp(a, "--show-options") == 0)
             show = 1;
-            continue;
-        }
-        if (strncmp(a, "--", 2) != 0 || a[2] == 0) {
-            if (a[0] == '-' && a[1] && strcmp(a, "-") != 0) {
-                fprintf(stderr, "ocean-client %s: unknown option '%s' (see --help)\n", cmd, a);
-                return 2;
-            }
-            if (np >= max_pos) {
-                fprintf(stderr, "ocean-client %s: unexpected argument '%s' (see --help)\n", cmd, a);
-                return 2;
-            }
-            pos[np++] = a;
-            continue;
-        }
-        const char *name = a + 2;
-        const char *eq = strchr(name, '=');
-        size_t nl = eq ? (size_t)(eq - name) : strlen(name);
-        const occli_opt *o = NULL;
-        for (int k = 0; k < nopts; k++)
-            if (strlen(opts[k].name) == nl && !strncmp(opts[k].name, name, nl)) {
-                o = &opts[k];
-                break;
-            }
-        if (!o) {
-            fprintf(stderr, "ocean-client %s: unknown option '--%.*s' (see --help)\n", cmd, (int)nl, name);
-            return 2;
-        }
-        if (o->kind == OCCLI_FLAG) {
-            if (eq) {
-                fprintf(stderr, "ocean-client %s: option '--%s' takes no value\n", cmd, o->name);
-                return 2;
-            }
-            *(int *)o->target = 1;
-            continue;
-        }
-        const char *val = eq ? eq + 1 : NULL;
-        if (!val) {
-            if (i + 1 >= argc) {
-                fprintf(stderr, "ocean-client %s: option '--%s' needs a value\n", cmd, o->name);
-                return 2;
-            }
-            val = argv[++i];
-        }
-        if (o->kind == OCCLI_STRING) {
-            *(const char **)o->target = val;
-            continue;
-        }
-        if (o->kind == OCCLI_CHOICE) {
-            int found = -1;
-            for (int k = 0; o->names[k]; k++)
-                if (!strcmp(o->names[k], val))
-                    found = k;
-            if (found < 0) {
-                char list[256] = "";
-                size_t n = 0;
-                for (int k = 0; o->names[k] && n < sizeof list; k++)
-                    n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", k ? ", " : "", o->names[k]);
-                fprintf(stderr, "ocean-client %s: option '--%s': unknown value '%s' (one of %s)\n", cmd, o->name,
-                        val, list);
-                return 2;
-            }
-            *(int *)o->target = found;
-            continue;
-        }
-        char *end;
-        errno = 0;
-        double v = strtod(val, &end);
-        if (end == val || *end || errno == ERANGE || !isfinite(v)) {
-            fprintf(stderr, "ocean-client %s: option '--%s': '%s' is not a number\n", cmd, o->name, val);
-            return 2;
-        }
-        if (o->max == OCEAN_TIME_MAX && !ocean_time_ok(v)) {
-            char m[256];
-            ocean_time_check(v, o->name, m, sizeof m);
-            fprintf(stderr, "ocean-client %s: option '--%s': %s\n", cmd, o->name, m);
-            return 2;
-        }
-        if (v < o->min || v > o->max) {
-            fprintf(stderr, "ocean-client %s: option '--%s': %s outside [%g, %g]\n", cmd, o->name, val,
-                    o->min, o->max);
-            return 2;
-        }
-        if (o->kind == OCCLI_INT) {
-            if (v != floor(v)) {
-                fprintf(stderr, "ocean-client %s: option '--%s': '%s' is not an integer\n", cmd, o->name, val);
-                return 2;
-            }
-            *(int *)o->target = (int)v;
-        } else {
-            *(double *)o->target = v;
-        }
+        else if (strncmp(a, "--", 2) != 0 || a[2] == 0)
+            r = take_positional(cmd, a, pos, max_pos, &np);
+        else
+            r = parse_option(argc, argv, &i, opts, nopts);
+        if (r)
+            return r;
     }
     if (show) {
-        for (int i = 0; i < nopts; i++) {
-            char v[512];
-            format_value(&opts[i], v, sizeof v);
-            printf("--%s=%s\n", opts[i].name, v);
-        }
+        print_options(opts, nopts);
         return 1;
     }
     if (npos)
@@ -346,6 +382,14 @@ const char *const occli_off_on[] = {"off", "on", NULL};
 static const char *const mesh_names[] = {"concentric", "chunked", "projected", "none"};
 static const char *const policy_names[] = {"none", "seed", "antialias"};
 
+/* The effect names as --effects spells them, in bit order (the first
+ * EFFECT_NAMES_CANONICAL), then the other spellings it takes. */
+static const struct { unsigned bit; const char *name; } effect_names[] = {
+    {PROTO_FX_HEIGHT, "height"}, {PROTO_FX_DISPLACEMENT, "displacement"}, {PROTO_FX_NORMALS, "normals"},
+    {PROTO_FX_FOAM, "foam"},     {PROTO_FX_NEAR_FIELD, "near"},           {PROTO_FX_NEAR_FIELD, "near-field"},
+    {PROTO_FX_ALL, "all"}};
+#define EFFECT_NAMES_CANONICAL 5
+
 void occli_sub_default(occli_sub *s)
 {
     memset(s, 0, sizeof *s);
@@ -354,15 +398,11 @@ void occli_sub_default(occli_sub *s)
     proto_camera cam;
     oc_camera_default(&cam);
     s->codec = proto_codec_name((proto_codec)d.codec);
-    /* The effect names as --effects spells them, in bit order. */
     static char fx[96];
-    static const struct { unsigned bit; const char *name; } fxn[] = {
-        {PROTO_FX_HEIGHT, "height"}, {PROTO_FX_DISPLACEMENT, "displacement"}, {PROTO_FX_NORMALS, "normals"},
-        {PROTO_FX_FOAM, "foam"}, {PROTO_FX_NEAR_FIELD, "near"}};
     fx[0] = 0;
-    for (size_t i = 0; i < sizeof fxn / sizeof fxn[0]; i++)
-        if (d.effects & fxn[i].bit)
-            snprintf(fx + strlen(fx), sizeof fx - strlen(fx), "%s%s", fx[0] ? "," : "", fxn[i].name);
+    for (size_t i = 0; i < EFFECT_NAMES_CANONICAL; i++)
+        if (d.effects & effect_names[i].bit)
+            snprintf(fx + strlen(fx), sizeof fx - strlen(fx), "%s%s", fx[0] ? "," : "", effect_names[i].name);
     s->effects = fx;
     s->mesh = d.mesh_kind < 4 ? mesh_names[d.mesh_kind] : "concentric";
     s->layout = d.layout;
@@ -389,80 +429,43 @@ void occli_sub_default(occli_sub *s)
     s->timeout_ms = 5000;
 }
 
-int occli_sub_build(const char *cmd, const occli_sub *s, proto_subscribe *sub, proto_camera *cam)
+/* --effects LIST as a PROTO_FX_* mask: 0, or 2 (said). */
+static int effects_parse(const char *cmd, const char *list, unsigned *out)
 {
-    oc_subscribe_default(sub);
-    proto_codec codec;
-    if (proto_codec_parse(s->codec, &codec) != OCEAN_OK) {
-        fprintf(stderr, "ocean-client %s: option '--codec': unknown codec '%s'\n", cmd, s->codec);
-        return 2;
-    }
-    sub->codec = (uint8_t)codec;
-    /* --layout is every subscribing command's (--mesh-codec, for layout 0,
-     * did nothing where only load had it) */
-    sub->layout = (uint8_t)s->layout;
     unsigned fx = 0;
     char buf[256];
-    snprintf(buf, sizeof buf, "%s", s->effects);
+    snprintf(buf, sizeof buf, "%s", list);
     for (char *save = NULL, *t = strtok_r(buf, ",", &save); t; t = strtok_r(NULL, ",", &save)) {
-        if (!strcmp(t, "height"))
-            fx |= PROTO_FX_HEIGHT;
-        else if (!strcmp(t, "displacement"))
-            fx |= PROTO_FX_DISPLACEMENT;
-        else if (!strcmp(t, "normals"))
-            fx |= PROTO_FX_NORMALS;
-        else if (!strcmp(t, "foam"))
-            fx |= PROTO_FX_FOAM;
-        else if (!strcmp(t, "near") || !strcmp(t, "near-field"))
-            fx |= PROTO_FX_NEAR_FIELD;
-        else if (!strcmp(t, "all"))
-            fx |= PROTO_FX_ALL;
-        else {
+        size_t i = 0, n = sizeof effect_names / sizeof effect_names[0];
+        while (i < n && strcmp(t, effect_names[i].name))
+            i++;
+        if (i == n) {
             fprintf(stderr, "ocean-client %s: option '--effects': unknown effect '%s'\n", cmd, t);
             return 2;
         }
+        fx |= effect_names[i].bit;
     }
     if (!fx) {
         fprintf(stderr, "ocean-client %s: option '--effects': empty\n", cmd);
         return 2;
     }
-    sub->effects = (uint8_t)fx;
-    int mk = -1;
-    for (int i = 0; i < 4; i++)
-        if (!strcmp(s->mesh, mesh_names[i]))
-            mk = i;
-    if (mk < 0) {
-        fprintf(stderr, "ocean-client %s: option '--mesh': unknown mesh kind '%s'\n", cmd, s->mesh);
-        return 2;
-    }
-    sub->mesh_kind = (uint8_t)mk;
-    if (!strcmp(s->mesh_codec, "f32"))
-        sub->mesh_codec = PROTO_MESH_CODEC_F32;
-    else if (!strcmp(s->mesh_codec, "qz"))
-        sub->mesh_codec = PROTO_MESH_CODEC_QZ;
-    else {
-        fprintf(stderr, "ocean-client %s: option '--mesh-codec': unknown mesh codec '%s' (f32 or qz)\n", cmd,
-                s->mesh_codec);
-        return 2;
-    }
-    int pk = -1;
-    for (int i = 0; i < 3; i++)
-        if (!strcmp(s->policy, policy_names[i]))
-            pk = i;
-    if (pk < 0) {
-        fprintf(stderr, "ocean-client %s: option '--cutoff-policy': unknown policy '%s'\n", cmd, s->policy);
-        return 2;
-    }
-    sub->cutoff_policy = (uint8_t)pk;
-    sub->flags = (uint8_t)((s->full_geometry ? PROTO_SUB_FULL_GEOMETRY : 0) |
-                           (s->time_interp == 1 ? PROTO_SUB_TIME_INTERP : 0));
-    sub->frame_rate_hz = (float)s->rate;
-    sub->accuracy = (float)s->accuracy;
-    sub->tile_size = (uint16_t)s->tile_size;
-    sub->lod_levels = (uint8_t)s->levels;
-    sub->layers = (uint8_t)s->layers;
-    sub->base_spacing_m = (float)s->spacing;
-    sub->view_range_m = (float)s->range;
+    *out = fx;
+    return 0;
+}
+
+/* The index of name in names[0..n), or -1. */
+static int name_index(const char *name, const char *const *names, int n)
+{
+    int k = -1;
+    for (int i = 0; i < n; i++)
+        if (!strcmp(name, names[i]))
+            k = i;
+    return k;
+}
+
+/* CAMERA from the camera options: 0, or 2 (said). */
+static int camera_build(const char *cmd, const occli_sub *s, proto_camera *cam)
+{
     oc_camera_default(cam);
     double v[3];
     if (occli_parse_vec(s->pos, v, 3) != 0) {
@@ -481,6 +484,53 @@ int occli_sub_build(const char *cmd, const occli_sub *s, proto_subscribe *sub, p
     cam->pitch_deg = (float)s->pitch;
     cam->fov_y_deg = (float)s->fov;
     return 0;
+}
+
+int occli_sub_build(const char *cmd, const occli_sub *s, proto_subscribe *sub, proto_camera *cam)
+{
+    oc_subscribe_default(sub);
+    proto_codec codec;
+    if (proto_codec_parse(s->codec, &codec) != OCEAN_OK) {
+        fprintf(stderr, "ocean-client %s: option '--codec': unknown codec '%s'\n", cmd, s->codec);
+        return 2;
+    }
+    sub->codec = (uint8_t)codec;
+    sub->layout = (uint8_t)s->layout;
+    unsigned fx;
+    if (effects_parse(cmd, s->effects, &fx))
+        return 2;
+    sub->effects = (uint8_t)fx;
+    int mk = name_index(s->mesh, mesh_names, 4);
+    if (mk < 0) {
+        fprintf(stderr, "ocean-client %s: option '--mesh': unknown mesh kind '%s'\n", cmd, s->mesh);
+        return 2;
+    }
+    sub->mesh_kind = (uint8_t)mk;
+    if (!strcmp(s->mesh_codec, "f32"))
+        sub->mesh_codec = PROTO_MESH_CODEC_F32;
+    else if (!strcmp(s->mesh_codec, "qz"))
+        sub->mesh_codec = PROTO_MESH_CODEC_QZ;
+    else {
+        fprintf(stderr, "ocean-client %s: option '--mesh-codec': unknown mesh codec '%s' (f32 or qz)\n", cmd,
+                s->mesh_codec);
+        return 2;
+    }
+    int pk = name_index(s->policy, policy_names, 3);
+    if (pk < 0) {
+        fprintf(stderr, "ocean-client %s: option '--cutoff-policy': unknown policy '%s'\n", cmd, s->policy);
+        return 2;
+    }
+    sub->cutoff_policy = (uint8_t)pk;
+    sub->flags = (uint8_t)((s->full_geometry ? PROTO_SUB_FULL_GEOMETRY : 0) |
+                           (s->time_interp == 1 ? PROTO_SUB_TIME_INTERP : 0));
+    sub->frame_rate_hz = (float)s->rate;
+    sub->accuracy = (float)s->accuracy;
+    sub->tile_size = (uint16_t)s->tile_size;
+    sub->lod_levels = (uint8_t)s->levels;
+    sub->layers = (uint8_t)s->layers;
+    sub->base_spacing_m = (float)s->spacing;
+    sub->view_range_m = (float)s->range;
+    return camera_build(cmd, s, cam);
 }
 
 oc_client *occli_connect(const char *cmd, const char *url, const oc_options *base, int timeout_ms)
