@@ -1,6 +1,10 @@
 /*
  * srv_stats.c - rendering the daemon's counters as Prometheus text and as
  * the /status JSON document.
+ *
+ * Threads: any thread adds to the counters (atomics); the renderers read
+ * them with atomic loads, on the service thread that answers /metrics and
+ * /status, and own nothing but the text they return.
  */
 #include "srv_stats.h"
 
@@ -149,26 +153,30 @@ static void stat_metrics(sb *b, const srv_stats *s, const stat_metric *m, size_t
     }
 }
 
-/* Each client's share: simulation-thread CPU, bytes sent, bytes queued. */
+/* Each client's share, one family per field of srv_stats_client. */
+static const struct client_metric {
+    const char *name, *type, *help;
+    size_t field;             /* offsetof(srv_stats_client, ...), a double */
+    int digits;               /* significant digits printed */
+} client_metrics[] = {
+    {"oceand_client_cpu_seconds_total", "counter", "Simulation-thread time spent on one client's queries, "
+     "replay frames and meshes.", offsetof(srv_stats_client, cpu_seconds), 9},
+    {"oceand_client_bytes_sent_total", "counter", "Bytes sent to one client.",
+     offsetof(srv_stats_client, bytes_out), 17},
+    {"oceand_client_queued_bytes", "gauge", "Bytes queued for one client (allocated size; server.output_hard "
+     "bounds it).", offsetof(srv_stats_client, queued), 17},
+};
+
 static void per_client_metrics(sb *b, const srv_stats_view *v)
 {
-    sb_printf(b, "# HELP oceand_client_cpu_seconds_total Simulation-thread time spent on "
-                 "one client's queries, replay frames and meshes.\n"
-                 "# TYPE oceand_client_cpu_seconds_total counter\n");
-    for (int i = 0; i < v->n_per_client; i++)
-        sb_printf(b, "oceand_client_cpu_seconds_total{client=\"%u\"} %.9g\n", v->per_client[i].id,
-                  v->per_client[i].cpu_seconds);
-    sb_printf(b, "# HELP oceand_client_bytes_sent_total Bytes sent to one client.\n"
-                 "# TYPE oceand_client_bytes_sent_total counter\n");
-    for (int i = 0; i < v->n_per_client; i++)
-        sb_printf(b, "oceand_client_bytes_sent_total{client=\"%u\"} %.17g\n", v->per_client[i].id,
-                  v->per_client[i].bytes_out);
-    sb_printf(b, "# HELP oceand_client_queued_bytes Bytes queued for one client "
-                 "(allocated size; server.output_hard bounds it).\n"
-                 "# TYPE oceand_client_queued_bytes gauge\n");
-    for (int i = 0; i < v->n_per_client; i++)
-        sb_printf(b, "oceand_client_queued_bytes{client=\"%u\"} %.17g\n", v->per_client[i].id,
-                  v->per_client[i].queued);
+    for (size_t k = 0; k < sizeof client_metrics / sizeof client_metrics[0]; k++) {
+        const struct client_metric *m = &client_metrics[k];
+        sb_printf(b, "# HELP %s %s\n# TYPE %s %s\n", m->name, m->help, m->name, m->type);
+        for (int i = 0; i < v->n_per_client; i++) {
+            double x = *(const double *)((const char *)&v->per_client[i] + m->field);
+            sb_printf(b, "%s{client=\"%u\"} %.*g\n", m->name, v->per_client[i].id, m->digits, x);
+        }
+    }
 }
 
 char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t headroom, size_t *len)
