@@ -443,73 +443,69 @@ static int verify_frame(oc_frame_stream *fs, int *fill, const uint8_t *p, size_t
     return bad;
 }
 
-/* One binary message of n bytes, of which p holds the first `have`: all of
- * it for every non-FRAME and each FRAME frame_wanted_whole picked, at least
- * the first HEAD_KEEP otherwise. */
-static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n, double now)
+/* A FRAME of n bytes, of which p holds the first `have`, received d
+ * seconds after its sim time: its head checked, the ticks it skipped
+ * counted, and decoded in full when it is one to verify or its viewer
+ * follows its stream. */
+static void on_frame_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n, double d)
 {
     const shared *S = w->S;
     proto_limits lim;
     proto_limits_default(&lim);
-    proto_header h;
     char err[256];
-    /* reads the 32 header bytes only; checks the declared length against n */
-    if (have < PROTO_HEADER_SIZE || proto_header_decode(p, n, &lim, &h, err, sizeof err) != OCEAN_OK) {
+    int measuring = atomic_load_explicit(&S->measuring, memory_order_relaxed);
+    /* fixed fields, and a layout-1 frame's cascade block (its records
+     * start after the block): oc_frame_peek reads both from the kept
+     * head and checks that n can hold the records it announces */
+    proto_frame f;
+    if (oc_frame_peek(p, have < n ? have : n, n, &f, NULL, err, sizeof err) != OCEAN_OK ||
+        f.tile_count > lim.max_frame_tiles) {
         v->decode_errors++;
         return;
     }
-    double d = now - h.sim_time;
-    if (d < w->min_any)
-        w->min_any = d;
-    v->last_sim = h.sim_time;
-    int measuring = atomic_load_explicit(&w->S->measuring, memory_order_relaxed);
-    if (h.type == PROTO_FRAME) {
-        /* fixed fields, and a layout-1 frame's cascade block (its records
-         * start after the block): oc_frame_peek reads both from the kept
-         * head and checks that n can hold the records it announces */
-        proto_frame f;
-        if (oc_frame_peek(p, have < n ? have : n, n, &f, NULL, err, sizeof err) != OCEAN_OK ||
-            f.tile_count > lim.max_frame_tiles) {
-            v->decode_errors++;
-            return;
-        }
-        if (v->have_tick && v->tick_rate > 0) {
-            uint32_t dt = f.tick - v->last_tick;
-            double step = floor(fmax(1.0, v->tick_rate / S->cfg->sub.frame_rate_hz) + 0.5);
-            double missed = floor((double)dt / step + 0.5) - 1;
-            if (measuring && missed > 0 && dt < (1u << 30))
-                v->skipped += (uint64_t)missed;
-        }
-        v->last_tick = f.tick;
-        v->have_tick = 1;
-        if (d < w->min_delay)
-            w->min_delay = d;
-        /* a followed stream takes every frame, the window's and the ones
-         * before it, in order */
-        int whole = frame_wanted_whole(v);
-        if (whole && v->fs)
-            v->decode_errors += (uint64_t)verify_frame(v->fs, &v->fill, p, have);
-        if (!measuring)
-            return;
-        v->frames++;
-        v->frames_layout[f.layout]++;
-        v->bytes += n;
-        if (occli_vec_push(&w->delay, d))
-            w->oom = 1;
-        if (whole) {
-            v->verified++;
-            if (!v->fs)
-                v->decode_errors += (uint64_t)verify_frame(NULL, NULL, p, have);
-        }
-        v->nframe++;
-        return;
+    if (v->have_tick && v->tick_rate > 0) {
+        uint32_t dt = f.tick - v->last_tick;
+        double step = floor(fmax(1.0, v->tick_rate / S->cfg->sub.frame_rate_hz) + 0.5);
+        double missed = floor((double)dt / step + 0.5) - 1;
+        if (measuring && missed > 0 && dt < (1u << 30))
+            v->skipped += (uint64_t)missed;
     }
+    v->last_tick = f.tick;
+    v->have_tick = 1;
+    if (d < w->min_delay)
+        w->min_delay = d;
+    /* a followed stream takes every frame, the window's and the ones
+     * before it, in order */
+    int whole = frame_wanted_whole(v);
+    if (whole && v->fs)
+        v->decode_errors += (uint64_t)verify_frame(v->fs, &v->fill, p, have);
+    if (!measuring)
+        return;
+    v->frames++;
+    v->frames_layout[f.layout]++;
+    v->bytes += n;
+    if (occli_vec_push(&w->delay, d))
+        w->oom = 1;
+    if (whole) {
+        v->verified++;
+        if (!v->fs)
+            v->decode_errors += (uint64_t)verify_frame(NULL, NULL, p, have);
+    }
+    v->nframe++;
+}
+
+/* Any other message, whole in p: HELLO answered with SUBSCRIBE and CAMERA,
+ * ERROR counted, BYE's reason kept and the viewer closed. */
+static void on_other_message(worker *w, dv *v, const uint8_t *p, size_t have)
+{
+    shared *S = w->S;
+    char err[256];
     proto_msg m;
     if (proto_decode(p, have, &m, err, sizeof err) != OCEAN_OK) {
         v->decode_errors++;
         return;
     }
-    switch (h.type) {
+    switch (m.hdr.type) {
     case PROTO_HELLO:
         v->tick_rate = m.u.hello.tick_rate_hz;
         if (!v->ready && !v->hello_seen) {
@@ -528,15 +524,39 @@ static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n
         v->errors++;
         break;
     case PROTO_BYE:
-        if (!atomic_exchange(&w->S->why_set, 1))
-            snprintf(w->S->why, sizeof w->S->why, "server said BYE (reason %u): %s",
-                     (unsigned)m.u.bye.reason, m.u.bye.message);
+        if (!atomic_exchange(&S->why_set, 1))
+            snprintf(S->why, sizeof S->why, "server said BYE (reason %u): %s", (unsigned)m.u.bye.reason,
+                     m.u.bye.message);
         close_viewer(w, v);
         break;
     default:
         break;
     }
     proto_msg_free(&m);
+}
+
+/* One binary message of n bytes, of which p holds the first `have`: all of
+ * it for every non-FRAME and each FRAME frame_wanted_whole picked, at least
+ * the first HEAD_KEEP otherwise. */
+static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n, double now)
+{
+    proto_limits lim;
+    proto_limits_default(&lim);
+    proto_header h;
+    char err[256];
+    /* reads the 32 header bytes only; checks the declared length against n */
+    if (have < PROTO_HEADER_SIZE || proto_header_decode(p, n, &lim, &h, err, sizeof err) != OCEAN_OK) {
+        v->decode_errors++;
+        return;
+    }
+    double d = now - h.sim_time;
+    if (d < w->min_any)
+        w->min_any = d;
+    v->last_sim = h.sim_time;
+    if (h.type == PROTO_FRAME)
+        on_frame_message(w, v, p, have, n, d);
+    else
+        on_other_message(w, v, p, have);
 }
 
 /* ---- connection state machine ---------------------------------------------- */
