@@ -1542,8 +1542,8 @@ ocean_result oc_loop_create(oc_loop **out, char *err, size_t errlen)
      * SSL_CTX ex_data index into a process-wide variable.  lws stores a
      * client SSL_CTX's refcount record at the index current when it was
      * made and looks it up at the current index when the vhost goes: once
-     * a second loop was made, destroying the first found no record and
-     * kept its SSL_CTX and system CA store (~0.85 MB) for good.  Without
+     * a second loop is made, destroying the first finds no record and
+     * keeps its SSL_CTX and system CA store (~0.85 MB) for good.  Without
      * the option on the context the index never moves (OpenSSL 1.1+
      * initialises itself), so every loop finds its record. */
     info.options = LWS_SERVER_OPTION_EXPLICIT_VHOSTS;
@@ -1640,8 +1640,8 @@ ocean_result oc_loop_service(oc_loop *l, int timeout_ms)
         return OCEAN_ESTATE;
     if (timeout_ms <= 0) {
         /* One lws_service pass reads at most one chunk per connection: a
-         * caller servicing once per 60 Hz step got ~6 of 30 fps of 80 KB
-         * frames, ever later.  Pass again while anything is ready, within
+         * caller servicing once per 60 Hz step would get ~6 of 30 fps of
+         * 80 KB frames, ever later.  Pass again while anything is ready, within
          * OC_SERVICE_DRAIN_MS so that a flood still returns. */
         double until = mono_now() + OC_SERVICE_DRAIN_MS * 1e-3;
         do
@@ -2207,8 +2207,8 @@ static ocean_result query_send(oc_client *c, const double *xz, size_t n, int at_
             pthread_mutex_unlock(&c->loop->mu);
             return OCEAN_EINVAL;
         }
-    /* the protocol's two values (PROTOCOL.md QUERY): 7 or 255 were sent
-     * as 1 */
+    /* the protocol's two values only (PROTOCOL.md QUERY): any other is
+     * refused here rather than sent as 1 */
     if (at_time != 0 && at_time != 1)
         return fail_local(c, OCEAN_EINVAL, "query at_time %d: 0 (the latest tick) or 1 (at t)", at_time);
     if (at_time && !isfinite(t))

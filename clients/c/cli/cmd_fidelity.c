@@ -1,12 +1,13 @@
 /*
- * cmd_fidelity.c - `ocean-client fidelity`: what the sea delivered to a
- * camera is, measured from the frames it receives (issue 13, "Done when").
+ * cmd_fidelity.c - `ocean-client fidelity`: what the sea delivers to a
+ * camera, measured from the frames it receives.
  *
  * A camera at height H flies along +x at speed V (or holds still), looking
  * down at --pitch (by default atan(H / range) + fov/4 below the horizon:
  * from 2 m the view reaches the horizon and sees enough sea for slope and
- * whitecap statistics, from 10 km half of it still lands within range), subscribed as the client library does by default (layout
- * 1, the browser viewer's subscription, samples in time included: each
+ * whitecap statistics, from 10 km half of it still lands within range),
+ * subscribed as the client library does by default (layout 1, the browser
+ * viewer's subscription, samples in time included: each
  * frame is read from the samples its connection holds, every frame
  * applied in order by the library on receipt; --time-interp off reads the
  * plain stream, and the report says which).  From each frame made for that
@@ -26,17 +27,19 @@
  *     shades with both draws; per component (x, z and the xz cross moment,
  *     JSON mss_total_x / _z / _xz) it is the slope covariance that shapes
  *     sun glitter and sky reflection (tests/test_fidelity.sh checks that
- *     high cameras get the covariance a low one gets).  Compared with Cox & Munk (1954), clean sea:
- *     sigma^2 = 0.003 + 5.12e-3 U (U in m/s at 12.5 m), U from the scene's
- *     U10 by the neutral logarithmic profile U(z) = (u_* / kappa) ln(z/z0):
- *     U12.5 = U10 + (u_* / kappa) ln(12.5/10), kappa = 0.4, u_* = sqrt(C_D) U10
- *     with Wu's (1982, JGR 87(C12) 9704) C_D = (0.8 + 0.065 U10) 1e-3;
- *   - foam: the mean foam over the sampled sea (each sample is a coverage
- *     fraction of the sea it stands for, and a mean of coverages survives
- *     the mip filtering that a threshold would not) is the whitecap
- *     coverage compared with Monahan & O'Muircheartaigh (1980),
- *     W = 3.84e-6 U10^3.41; the fraction of samples with foam >= 0.5 is
- *     reported beside it;
+ *     high cameras get the covariance a low one gets).  Compared with Cox &
+ *     Munk (1954), clean sea: sigma^2 = 0.003 + 5.12e-3 U (U in m/s at
+ *     12.5 m), U from the scene's U10 by the neutral logarithmic profile
+ *     U(z) = (u_* / kappa) ln(z/z0): U12.5 = U10 + (u_* / kappa)
+ *     ln(12.5/10), kappa = 0.4, u_* = sqrt(C_D) U10 with Wu's (1982, JGR
+ *     87(C12) 9704) C_D = (0.8 + 0.065 U10) 1e-3;
+ *   - foam: the whitecap coverage the frames' tiles carry (tile_foam: the
+ *     mean of cascade 0's FOAM samples by sea area; each sample is a
+ *     coverage fraction of the sea it stands for, and a mean of coverages
+ *     survives the mip filtering that a threshold would not), compared
+ *     with Monahan & O'Muircheartaigh (1980), W = 3.84e-6 U10^3.41; the
+ *     mean foam over the sampled sea and the fraction of samples with
+ *     foam >= 0.5 are reported beside it;
  *   - e_error (FRAME) and e_total (cascade block), averaged over frames.
  * Rays above the horizon, or whose point the frame's tiles do not cover,
  * are counted and left out.

@@ -1,9 +1,9 @@
 /*
- * cmd_record.c - `ocean-client record` (fly a camera path in live mode and
- * save every message that came back) and `ocean-client replay` (the same
- * path in replay mode, where each CAMERA names the sim time to render, so
- * the saved FRAMEs must be identical on every run; --check compares).
- * Saved files are frame stores (clients/c/oc_store.h).
+ * cmd_record.c - camera paths flown against the daemon and saved as frame
+ * stores (clients/c/oc_store.h): `ocean-client record` flies one in live
+ * mode and saves every message that came back; `ocean-client replay` flies
+ * it in replay mode, where each CAMERA names the sim time to render, so the
+ * saved FRAMEs must be identical on every run (--check compares).
  */
 #include <errno.h>
 #include <math.h>
