@@ -1,9 +1,9 @@
 /*
- * codec.c - tile codecs f32, f16 and qz (quantised + least-squares spatial
- * prediction + zstd; format 2 written, formats 1 and 2 read), octahedral
- * normals and half-float conversion.  The OpenEXR codecs live in
- * proto_exr.c.  Byte layouts are specified in PROTOCOL.md; this file and
- * that document must change together.
+ * codec.c - the tile codecs of codec.h but OpenEXR's (proto_exr.c): f32,
+ * f16 and qz (quantised + least-squares spatial prediction + zstd; format 2
+ * written, formats 1 and 2 read), with the octahedral normals and the
+ * half-float conversion they store.  Byte layouts are specified in
+ * PROTOCOL.md; this file and that document must change together.
  */
 #include "codec.h"
 
@@ -394,7 +394,7 @@ static int qz_kind(unsigned channels, int i)
  *          deg at 5e-3; test_codec), a small fraction of the slope spread
  *          every viewer adds for the waves shorter than the simulation
  *          (about 8 deg per axis in the default scene), so the shaded glint
- *          cannot tell, while a calm tile's tiny slope range no longer buys
+ *          cannot tell, while a calm tile's tiny slope range does not buy
  *          precision nobody sees;
  *   FOAM   accuracy x range, but never coarser than an 8-bit level (1/255).
  * A step that would make more than QZ2_QMAX levels (hostile ranges) falls

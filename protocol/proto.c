@@ -38,8 +38,8 @@
 #define MAX_LOCAL 1e7
 /* What the server derives from a camera within MAX_WORLD (tile, frame,
  * mesh and placement origins) reaches past it by what one frame covers:
- * the view range and the coarsest tile, each at most MAX_LOCAL.  At
- * MAX_WORLD they were refused, and a camera near x = -1e10 got no frames. */
+ * the view range and the coarsest tile, each at most MAX_LOCAL.  Bounded
+ * at MAX_WORLD, they would leave a camera near x = -1e10 without frames. */
 #define MAX_ORIGIN (MAX_WORLD + 2 * MAX_LOCAL)
 
 static const char *const type_names[PROTO_TYPE_END_] = {

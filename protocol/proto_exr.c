@@ -311,11 +311,94 @@ static int exr_check_header(exr_context_t ctx, int w, int h, unsigned channels, 
     return EXR_CHECK_OK;
 }
 
+/* Where a decoded tile goes: planes of w x h floats (n each), in the
+ * codec's plane order of `channels`. */
+typedef struct exr_sink {
+    int w, h;
+    unsigned channels;
+    size_t n;
+    float *planes;
+    char *err;
+    size_t errlen;
+} exr_sink;
+
+/* Points each channel of chunk `row`'s pipeline at its plane's rows. */
+static int exr_bind_planes(exr_decode_pipeline_t *dec, int64_t row, const exr_sink *k)
+{
+    for (int c = 0; c < dec->channel_count; c++) {
+        exr_coding_channel_info_t *ch = &dec->channels[c];
+        int pi = plane_index(k->channels, ch->channel_name);
+        if (pi < 0 || ch->width != k->w) {
+            ocean_seterr(k->err, k->errlen, "EXR chunk channel layout unexpected");
+            return EXR_CHECK_REFUSED;
+        }
+        ch->decode_to_ptr = (uint8_t *)(k->planes + (size_t)pi * k->n + (size_t)row * k->w);
+        ch->user_pixel_stride = 4;
+        ch->user_line_stride = k->w * 4;
+        ch->user_bytes_per_element = 4;
+        ch->user_data_type = EXR_PIXEL_FLOAT;
+    }
+    return EXR_CHECK_OK;
+}
+
+/* Every chunk of scanlines of data window dw, decoded into the sink: the
+ * outcomes of exr_check_header; *stage names the call that failed. */
+static int exr_get_chunks(exr_context_t ctx, const exr_attr_box2i_t *dw, const exr_sink *k, exr_result_t *rv,
+                          const char **stage)
+{
+    exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+    int have_dec = 0, res = EXR_CHECK_OK;
+    int32_t lpc = 1;
+    *stage = "scanlines_per_chunk";
+    if ((*rv = exr_get_scanlines_per_chunk(ctx, 0, &lpc)) != EXR_ERR_SUCCESS)
+        return EXR_CHECK_FAIL;
+    if (lpc < 1) {
+        ocean_seterr(k->err, k->errlen, "EXR scanlines per chunk %d", lpc);
+        return EXR_CHECK_REFUSED;
+    }
+    for (int64_t y = dw->min.y; y <= dw->max.y && res == EXR_CHECK_OK; y += lpc) {
+        exr_chunk_info_t ci;
+        *stage = "chunk_info";
+        if ((*rv = exr_read_scanline_chunk_info(ctx, 0, (int)y, &ci)) != EXR_ERR_SUCCESS) {
+            res = EXR_CHECK_FAIL;
+            break;
+        }
+        int64_t row = (int64_t)ci.start_y - dw->min.y;
+        if (row < 0 || row + ci.height > k->h) {
+            ocean_seterr(k->err, k->errlen, "EXR chunk rows %d..%d outside the tile", ci.start_y,
+                         ci.start_y + ci.height);
+            res = EXR_CHECK_REFUSED;
+            break;
+        }
+        *stage = "decoding_init";
+        *rv = have_dec ? exr_decoding_update(ctx, 0, &ci, &dec) : exr_decoding_initialize(ctx, 0, &ci, &dec);
+        if (*rv != EXR_ERR_SUCCESS) {
+            res = EXR_CHECK_FAIL;
+            break;
+        }
+        if ((res = exr_bind_planes(&dec, row, k)) != EXR_CHECK_OK)
+            break;
+        if (!have_dec) {
+            have_dec = 1;
+            *stage = "choose_routines";
+            if ((*rv = exr_decoding_choose_default_routines(ctx, 0, &dec)) != EXR_ERR_SUCCESS) {
+                res = EXR_CHECK_FAIL;
+                break;
+            }
+        }
+        *stage = "decoding_run";
+        if ((*rv = exr_decoding_run(ctx, 0, &dec)) != EXR_ERR_SUCCESS)
+            res = EXR_CHECK_FAIL;
+    }
+    if (have_dec)
+        exr_decoding_destroy(ctx, &dec);
+    return res;
+}
+
 ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *data, size_t len,
                               float *planes, char *err, size_t errlen)
 {
-    int np = proto_tile_planes(channels);
-    size_t n = (size_t)w * h;
+    exr_sink k = {w, h, channels, (size_t)w * h, planes, err, errlen};
     rstream rs = {data, len};
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = exr_on_error;
@@ -327,88 +410,34 @@ ocean_result proto_exr_decode(int w, int h, unsigned channels, const uint8_t *da
     init.max_image_height = PROTO_TILE_MAX_SIZE;
     init.max_tile_width = PROTO_TILE_MAX_SIZE;
     init.max_tile_height = PROTO_TILE_MAX_SIZE;
-    exr_context_t ctx = NULL;
-    exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
-    int have_dec = 0;
-    ocean_result res = OCEAN_ECODEC;
-    exr_result_t rv = EXR_ERR_SUCCESS;
-    const char *stage = "start_read";
     exr_last_msg[0] = 0;
     if (len < 8) {
         ocean_seterr(err, errlen, "EXR payload of %zu bytes is too short", len);
         return OCEAN_ECODEC;
     }
-    rv = exr_start_read(&ctx, "tile.exr", &init);
-    if (rv != EXR_ERR_SUCCESS)
-        goto fail;
+    exr_context_t ctx = NULL;
+    const char *stage = "start_read";
+    exr_result_t rv = exr_start_read(&ctx, "tile.exr", &init);
     exr_attr_box2i_t dw;
-    stage = "header";
-    int hc = exr_check_header(ctx, w, h, channels, &dw, &rv, err, errlen);
-    if (hc == EXR_CHECK_FAIL)
-        goto fail;
-    if (hc == EXR_CHECK_REFUSED)
-        goto out;
-    int32_t lpc = 1;
-    stage = "scanlines_per_chunk";
-    if ((rv = exr_get_scanlines_per_chunk(ctx, 0, &lpc)) != EXR_ERR_SUCCESS)
-        goto fail;
-    if (lpc < 1) {
-        ocean_seterr(err, errlen, "EXR scanlines per chunk %d", lpc);
-        goto out;
+    int res = rv != EXR_ERR_SUCCESS ? EXR_CHECK_FAIL : EXR_CHECK_OK;
+    if (res == EXR_CHECK_OK) {
+        stage = "header";
+        res = exr_check_header(ctx, w, h, channels, &dw, &rv, err, errlen);
     }
-    for (int64_t y = dw.min.y; y <= dw.max.y; y += lpc) {
-        exr_chunk_info_t ci;
-        stage = "chunk_info";
-        if ((rv = exr_read_scanline_chunk_info(ctx, 0, (int)y, &ci)) != EXR_ERR_SUCCESS)
-            goto fail;
-        int64_t row = (int64_t)ci.start_y - dw.min.y;
-        if (row < 0 || row + ci.height > h) {
-            ocean_seterr(err, errlen, "EXR chunk rows %d..%d outside the tile", ci.start_y, ci.start_y + ci.height);
-            goto out;
-        }
-        stage = "decoding_init";
-        rv = have_dec ? exr_decoding_update(ctx, 0, &ci, &dec) : exr_decoding_initialize(ctx, 0, &ci, &dec);
-        if (rv != EXR_ERR_SUCCESS)
-            goto fail;
-        for (int k = 0; k < dec.channel_count; k++) {
-            exr_coding_channel_info_t *ch = &dec.channels[k];
-            int pi = plane_index(channels, ch->channel_name);
-            if (pi < 0 || ch->width != w) {
-                ocean_seterr(err, errlen, "EXR chunk channel layout unexpected");
-                goto out;
-            }
-            ch->decode_to_ptr = (uint8_t *)(planes + (size_t)pi * n + (size_t)row * w);
-            ch->user_pixel_stride = 4;
-            ch->user_line_stride = w * 4;
-            ch->user_bytes_per_element = 4;
-            ch->user_data_type = EXR_PIXEL_FLOAT;
-        }
-        if (!have_dec) {
-            have_dec = 1;
-            stage = "choose_routines";
-            if ((rv = exr_decoding_choose_default_routines(ctx, 0, &dec)) != EXR_ERR_SUCCESS)
-                goto fail;
-        }
-        stage = "decoding_run";
-        if ((rv = exr_decoding_run(ctx, 0, &dec)) != EXR_ERR_SUCCESS)
-            goto fail;
-    }
-    for (size_t i = 0; i < n * (size_t)np; i++)
+    if (res == EXR_CHECK_OK)
+        res = exr_get_chunks(ctx, &dw, &k, &rv, &stage);
+    size_t total = k.n * (size_t)proto_tile_planes(channels);
+    for (size_t i = 0; res == EXR_CHECK_OK && i < total; i++)
         if (!isfinite(planes[i])) {
             ocean_seterr(err, errlen, "EXR holds a non-finite value at sample %zu", i);
-            goto out;
+            res = EXR_CHECK_REFUSED;
         }
-    res = OCEAN_OK;
-    goto out;
-fail:
     /* OpenEXRCore 3.1 reports corrupt compressed chunks as
      * EXR_ERR_OUT_OF_MEMORY ("unable to decompress"), so every failure
      * while reading is a codec failure of the payload. */
-    ocean_seterr(err, errlen, "OpenEXR %s failed: %s %s", stage, exr_get_error_code_as_string(rv), exr_last_msg);
-out:
-    if (have_dec)
-        exr_decoding_destroy(ctx, &dec);
+    if (res == EXR_CHECK_FAIL)
+        ocean_seterr(err, errlen, "OpenEXR %s failed: %s %s", stage, exr_get_error_code_as_string(rv), exr_last_msg);
     if (ctx)
         exr_finish(&ctx);
-    return res;
+    return res == EXR_CHECK_OK ? OCEAN_OK : OCEAN_ECODEC;
 }

@@ -1,12 +1,17 @@
 /*
  * srv_stats.c - rendering the daemon's counters as Prometheus text and as
  * the /status JSON document.
+ *
+ * Threads: any thread adds to the counters (atomics); the renderers read
+ * them with atomic loads, on the service thread that answers /metrics and
+ * /status, and own nothing but the text they return.
  */
 #include "srv_stats.h"
 
 #include <cJSON.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -66,6 +71,114 @@ static void metric(sb *b, const char *name, const char *type, const char *help, 
     sb_printf(b, "# HELP %s %s\n# TYPE %s %s\n%s %.17g\n", name, help, name, type, name, v);
 }
 
+/* A counter or gauge of srv_stats as one metric: its value is the field
+ * times scale. */
+typedef struct stat_metric {
+    const char *name, *type, *help;
+    size_t field;             /* offsetof(srv_stats, ...) */
+    double scale;
+} stat_metric;
+
+#define STAT(name, type, help, field, scale) {name, type, help, offsetof(srv_stats, field), scale}
+
+/* The clock's counters, before the per-channel transforms. */
+static const stat_metric tick_metrics[] = {
+    STAT("oceand_ticks_total", "counter", "Simulation ticks run.", ticks, 1),
+    STAT("oceand_idle_ticks_total", "counter", "Idle waits with nobody subscribed, about one a second (no tick "
+         "runs then; not a count of ticks).", idle_ticks, 1),
+    STAT("oceand_tick_seconds_total", "counter", "Time spent in ticks.", tick_ns_total, 1e-9),
+    STAT("oceand_tick_seconds_last", "gauge", "Duration of the last tick.", tick_ns_last, 1e-9),
+    STAT("oceand_evaluations_total", "counter", "Ocean evaluations (one per cutoff bucket and time).", evaluations,
+         1),
+};
+
+/* Frames, tiles, queries, connections and refusals. */
+static const stat_metric traffic_metrics[] = {
+    STAT("oceand_frames_built_total", "counter", "Frames built for clients.", frames_built, 1),
+    STAT("oceand_frames_shared_total", "counter", "Frames that reused another client's encoding (identical but "
+         "for camera_seq and mesh_id).", frames_shared, 1),
+    STAT("oceand_frames_sent_total", "counter", "Frames written to sockets.", frames_sent, 1),
+    STAT("oceand_frames_skipped_total", "counter", "Frames replaced before a slow client could take them "
+         "(latest wins).", frames_skipped, 1),
+    STAT("oceand_frames_held_total", "counter", "Times a live frame waited because its client's link had a "
+         "window of frames unconfirmed (srv_link.h).", frames_held, 1),
+    STAT("oceand_bytes_sent_total", "counter", "WebSocket payload bytes written.", bytes_sent, 1),
+    STAT("oceand_messages_received_total", "counter", "Client messages received.", messages_received, 1),
+    STAT("oceand_tiles_encoded_total", "counter", "Tiles encoded.", tiles_encoded, 1),
+    STAT("oceand_tile_cache_hits_total", "counter", "Tile requests served from the cache.", tile_cache_hits, 1),
+    STAT("oceand_tile_cache_misses_total", "counter", "Tile requests that had to be encoded.", tile_cache_misses,
+         1),
+    STAT("oceand_tile_cache_entries", "gauge", "Encoded tiles the caches hold (last sweep; 0 once idle).",
+         tile_cache_entries, 1),
+    STAT("oceand_tile_cache_bytes", "gauge", "Bytes those tiles take, entries included.", tile_cache_bytes, 1),
+    STAT("oceand_queries_total", "counter", "QUERY messages answered.", queries, 1),
+    STAT("oceand_query_points_total", "counter", "Points answered.", query_points, 1),
+    STAT("oceand_errors_sent_total", "counter", "ERROR replies sent.", errors_sent, 1),
+    STAT("oceand_connections_total", "counter", "Connections accepted.", connections_total, 1),
+    STAT("oceand_disconnects_slow_total", "counter", "Clients dropped for the output limit.", disconnects_slow, 1),
+    STAT("oceand_refused_full_total", "counter", "Connections refused at max_clients.", refused_full, 1),
+    STAT("oceand_sea_changes_total", "counter", "Sea-state changes applied.", sea_changes, 1),
+    STAT("oceand_reloads_total", "counter", "Configuration reloads (SIGHUP).", reloads, 1),
+    STAT("oceand_refused_rate_total", "counter", "Messages refused over server.msg_rate (text frames included).",
+         refused_rate, 1),
+    STAT("oceand_refused_silent_total", "counter", "Refusals not answered: one ERROR a second at most per client.",
+         refused_silent, 1),
+    STAT("oceand_refused_mesh_total", "counter", "Meshes refused above server.max_mesh_vertices (estimated "
+         "before building).", refused_mesh, 1),
+    STAT("oceand_coarsened_mesh_total", "counter", "Meshes built at a multiple of server.mesh_error_px to stay "
+         "within server.max_mesh_vertices.", coarsened_mesh, 1),
+    STAT("oceand_refused_upgrade_total", "counter", "WebSocket upgrades refused (no ocean.v1 subprotocol, "
+         "version other than 13).", refused_upgrade, 1),
+    STAT("oceand_refused_accept_total", "counter", "Connections closed at accept: file descriptors reserved.",
+         accept_refused, 1),
+    STAT("oceand_disconnects_partial_total", "counter", "Clients dropped for an unfinished message "
+         "(server.partial_seconds, server.partial_total).", disconnects_partial, 1),
+    STAT("oceand_disconnects_idle_total", "counter", "Connections closed with BYE idle: no SUBSCRIBE and no "
+         "message for server.idle_seconds.", disconnects_idle, 1),
+    STAT("oceand_disconnects_output_total", "counter", "Clients dropped when a reply would pass "
+         "server.output_hard as it was queued.", disconnects_output, 1),
+    STAT("oceand_disconnects_protocol_total", "counter", "Clients closed for breaking RFC 6455 (unmasked frame, "
+         "bad close code).", disconnects_protocol, 1),
+    STAT("oceand_admin_misses_total", "counter", "Wrong admin tokens.", admin_misses, 1),
+    STAT("oceand_admin_locked_total", "counter", "SEA_STATE sets refused in an admin lockout.", admin_locked, 1),
+    STAT("oceand_query_slices_total", "counter", "Slices of QUERY work run (a query larger than a tick's budget "
+         "takes several).", query_slices, 1),
+};
+
+static void stat_metrics(sb *b, const srv_stats *s, const stat_metric *m, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        const atomic_uint_fast64_t *f = (const atomic_uint_fast64_t *)((const char *)s + m[i].field);
+        metric(b, m[i].name, m[i].type, m[i].help, (double)(unsigned long long)atomic_load(f) * m[i].scale);
+    }
+}
+
+/* Each client's share, one family per field of srv_stats_client. */
+static const struct client_metric {
+    const char *name, *type, *help;
+    size_t field;             /* offsetof(srv_stats_client, ...), a double */
+    int digits;               /* significant digits printed */
+} client_metrics[] = {
+    {"oceand_client_cpu_seconds_total", "counter", "Simulation-thread time spent on one client's queries, "
+     "replay frames and meshes.", offsetof(srv_stats_client, cpu_seconds), 9},
+    {"oceand_client_bytes_sent_total", "counter", "Bytes sent to one client.",
+     offsetof(srv_stats_client, bytes_out), 17},
+    {"oceand_client_queued_bytes", "gauge", "Bytes queued for one client (allocated size; server.output_hard "
+     "bounds it).", offsetof(srv_stats_client, queued), 17},
+};
+
+static void per_client_metrics(sb *b, const srv_stats_view *v)
+{
+    for (size_t k = 0; k < sizeof client_metrics / sizeof client_metrics[0]; k++) {
+        const struct client_metric *m = &client_metrics[k];
+        sb_printf(b, "# HELP %s %s\n# TYPE %s %s\n", m->name, m->help, m->name, m->type);
+        for (int i = 0; i < v->n_per_client; i++) {
+            double x = *(const double *)((const char *)&v->per_client[i] + m->field);
+            sb_printf(b, "%s{client=\"%u\"} %.*g\n", m->name, v->per_client[i].id, m->digits, x);
+        }
+    }
+}
+
 char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t headroom, size_t *len)
 {
     sb b = {malloc(headroom + 4096), 0, headroom + 4096, headroom, 0};
@@ -76,95 +189,16 @@ char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t h
     metric(&b, "oceand_past_time_limit", "gauge", "1: the clock is past the exact-time limit "
            "(OCEAN_TIME_MAX after server.epoch); every client is closed until a restart with a nearer "
            "server.epoch.", v->past_time_limit != NULL);
-    metric(&b, "oceand_ticks_total", "counter", "Simulation ticks run.", (double)LD(ticks));
-    metric(&b, "oceand_idle_ticks_total", "counter", "Idle waits with nobody subscribed, about one a second (no tick runs then; not a count of ticks).",
-           (double)LD(idle_ticks));
-    metric(&b, "oceand_tick_seconds_total", "counter", "Time spent in ticks.",
-           (double)LD(tick_ns_total) * 1e-9);
-    metric(&b, "oceand_tick_seconds_last", "gauge", "Duration of the last tick.",
-           (double)LD(tick_ns_last) * 1e-9);
-    metric(&b, "oceand_evaluations_total", "counter", "Ocean evaluations (one per cutoff bucket "
-           "and time).", (double)LD(evaluations));
+    stat_metrics(&b, s, tick_metrics, sizeof tick_metrics / sizeof tick_metrics[0]);
     sb_printf(&b, "# HELP oceand_transforms_total Inverse 2-D FFTs run, per channel group.\n"
                   "# TYPE oceand_transforms_total counter\n");
     static const char *const ch[SRV_FX_CHANNELS] = {"height", "displacement", "normals", "foam",
                                                     "velocity"};
     for (int i = 0; i < SRV_FX_CHANNELS; i++)
         sb_printf(&b, "oceand_transforms_total{channel=\"%s\"} %llu\n", ch[i], LD(transforms_by_effect[i]));
-    metric(&b, "oceand_frames_built_total", "counter", "Frames built for clients.", (double)LD(frames_built));
-    metric(&b, "oceand_frames_shared_total", "counter", "Frames that reused another client's encoding "
-           "(identical but for camera_seq and mesh_id).", (double)LD(frames_shared));
-    metric(&b, "oceand_frames_sent_total", "counter", "Frames written to sockets.", (double)LD(frames_sent));
-    metric(&b, "oceand_frames_skipped_total", "counter", "Frames replaced before a slow client "
-           "could take them (latest wins).", (double)LD(frames_skipped));
-    metric(&b, "oceand_frames_held_total", "counter", "Times a live frame waited because its client's link "
-           "had a window of frames unconfirmed (srv_link.h).", (double)LD(frames_held));
-    metric(&b, "oceand_bytes_sent_total", "counter", "WebSocket payload bytes written.", (double)LD(bytes_sent));
-    metric(&b, "oceand_messages_received_total", "counter", "Client messages received.",
-           (double)LD(messages_received));
-    metric(&b, "oceand_tiles_encoded_total", "counter", "Tiles encoded.", (double)LD(tiles_encoded));
-    metric(&b, "oceand_tile_cache_hits_total", "counter", "Tile requests served from the cache.",
-           (double)LD(tile_cache_hits));
-    metric(&b, "oceand_tile_cache_misses_total", "counter", "Tile requests that had to be encoded.",
-           (double)LD(tile_cache_misses));
-    metric(&b, "oceand_tile_cache_entries", "gauge", "Encoded tiles the caches hold (last sweep; 0 once idle).",
-           (double)LD(tile_cache_entries));
-    metric(&b, "oceand_tile_cache_bytes", "gauge", "Bytes those tiles take, entries included.",
-           (double)LD(tile_cache_bytes));
-    metric(&b, "oceand_queries_total", "counter", "QUERY messages answered.", (double)LD(queries));
-    metric(&b, "oceand_query_points_total", "counter", "Points answered.", (double)LD(query_points));
-    metric(&b, "oceand_errors_sent_total", "counter", "ERROR replies sent.", (double)LD(errors_sent));
-    metric(&b, "oceand_connections_total", "counter", "Connections accepted.", (double)LD(connections_total));
-    metric(&b, "oceand_disconnects_slow_total", "counter", "Clients dropped for the output limit.",
-           (double)LD(disconnects_slow));
-    metric(&b, "oceand_refused_full_total", "counter", "Connections refused at max_clients.",
-           (double)LD(refused_full));
-    metric(&b, "oceand_sea_changes_total", "counter", "Sea-state changes applied.", (double)LD(sea_changes));
-    metric(&b, "oceand_reloads_total", "counter", "Configuration reloads (SIGHUP).", (double)LD(reloads));
-    metric(&b, "oceand_refused_rate_total", "counter", "Messages refused over server.msg_rate "
-           "(text frames included).", (double)LD(refused_rate));
-    metric(&b, "oceand_refused_silent_total", "counter", "Refusals not answered: one ERROR a "
-           "second at most per client.", (double)LD(refused_silent));
-    metric(&b, "oceand_refused_mesh_total", "counter", "Meshes refused above "
-           "server.max_mesh_vertices (estimated before building).", (double)LD(refused_mesh));
-    metric(&b, "oceand_coarsened_mesh_total", "counter", "Meshes built at a multiple of "
-           "server.mesh_error_px to stay within server.max_mesh_vertices.", (double)LD(coarsened_mesh));
-    metric(&b, "oceand_refused_upgrade_total", "counter", "WebSocket upgrades refused (no "
-           "ocean.v1 subprotocol, version other than 13).", (double)LD(refused_upgrade));
-    metric(&b, "oceand_refused_accept_total", "counter", "Connections closed at accept: file "
-           "descriptors reserved.", (double)LD(accept_refused));
-    metric(&b, "oceand_disconnects_partial_total", "counter", "Clients dropped for an unfinished "
-           "message (server.partial_seconds, server.partial_total).", (double)LD(disconnects_partial));
-    metric(&b, "oceand_disconnects_idle_total", "counter", "Connections closed with BYE idle: "
-           "no SUBSCRIBE and no message for server.idle_seconds.", (double)LD(disconnects_idle));
-    metric(&b, "oceand_disconnects_output_total", "counter", "Clients dropped when a reply "
-           "would pass server.output_hard as it was queued.", (double)LD(disconnects_output));
-    metric(&b, "oceand_disconnects_protocol_total", "counter", "Clients closed for breaking "
-           "RFC 6455 (unmasked frame, bad close code).", (double)LD(disconnects_protocol));
-    metric(&b, "oceand_admin_misses_total", "counter", "Wrong admin tokens.", (double)LD(admin_misses));
-    metric(&b, "oceand_admin_locked_total", "counter", "SEA_STATE sets refused in an admin "
-           "lockout.", (double)LD(admin_locked));
-    metric(&b, "oceand_query_slices_total", "counter", "Slices of QUERY work run (a query "
-           "larger than a tick's budget takes several).", (double)LD(query_slices));
-    if (v->n_per_client > 0) {
-        sb_printf(&b, "# HELP oceand_client_cpu_seconds_total Simulation-thread time spent on "
-                      "one client's queries, replay frames and meshes.\n"
-                      "# TYPE oceand_client_cpu_seconds_total counter\n");
-        for (int i = 0; i < v->n_per_client; i++)
-            sb_printf(&b, "oceand_client_cpu_seconds_total{client=\"%u\"} %.9g\n",
-                      v->per_client[i].id, v->per_client[i].cpu_seconds);
-        sb_printf(&b, "# HELP oceand_client_bytes_sent_total Bytes sent to one client.\n"
-                      "# TYPE oceand_client_bytes_sent_total counter\n");
-        for (int i = 0; i < v->n_per_client; i++)
-            sb_printf(&b, "oceand_client_bytes_sent_total{client=\"%u\"} %.17g\n",
-                      v->per_client[i].id, v->per_client[i].bytes_out);
-        sb_printf(&b, "# HELP oceand_client_queued_bytes Bytes queued for one client "
-                      "(allocated size; server.output_hard bounds it).\n"
-                      "# TYPE oceand_client_queued_bytes gauge\n");
-        for (int i = 0; i < v->n_per_client; i++)
-            sb_printf(&b, "oceand_client_queued_bytes{client=\"%u\"} %.17g\n",
-                      v->per_client[i].id, v->per_client[i].queued);
-    }
+    stat_metrics(&b, s, traffic_metrics, sizeof traffic_metrics / sizeof traffic_metrics[0]);
+    if (v->n_per_client > 0)
+        per_client_metrics(&b, v);
     metric(&b, "oceand_tick_to_send_p50_seconds", "gauge", "Median time from a tick to the "
            "write of its frame.", srv_stats_latency_quantile(s, 0.5));
     metric(&b, "oceand_tick_to_send_p99_seconds", "gauge", "99th percentile of the same.",

@@ -402,9 +402,9 @@ static ocean_result pv_flags(const pv_ctx *x)
             if (!hit) {
                 char names[MSG_MAX];
                 names_list(e, names, sizeof names);
-                /* none and all stand alone; none only where the key
-                 * may be empty (it said "or none, all" to keys that
-                 * refuse none, and all in a list was "unknown") */
+                /* none and all stand alone, so the message offers them
+                 * as words of their own, and none only where the key may
+                 * be empty */
                 ocean_seterr(x->msg, x->msglen, "%s: unknown name in the list (names: %s; or, alone, %s)",
                              e->name, names, e->min >= 1 ? "all" : "none or all");
                 return OCEAN_EFORMAT;

@@ -1,6 +1,7 @@
 /*
- * filter.c - Butterworth gain, cutoff policies, smoothing, buckets, E_error
- * and the dominant wavelength (see filter.h for the contracts).
+ * filter.c - the velocity-adaptive low-pass of filter.h: its Butterworth
+ * gain, cutoff policies, smoothing, buckets, E_error and the dominant
+ * wavelength (see filter.h for the contracts).
  */
 #include "filter.h"
 

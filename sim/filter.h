@@ -1,5 +1,5 @@
 /*
- * filter.h - the velocity-adaptive Butterworth low-pass of issue 3.
+ * filter.h - the velocity-adaptive Butterworth low-pass.
  *
  * Pure functions and small value types, no allocation: the Butterworth gain
  * and its negligible band, the per-client cutoff policies (seed 000 as

@@ -1,7 +1,8 @@
 /*
- * mesh.c - the mesh object, its shared triangulator, displacement, error
- * measure and OBJ output.  The three kinds live in mesh_concentric.c,
- * mesh_chunked.c and mesh_projected.c.
+ * mesh.c - what every kind of mesh shares: the mesh object, the
+ * triangulator, displacement, the error measure and OBJ output.  The kinds
+ * themselves live in mesh_concentric.c, mesh_chunked.c and
+ * mesh_projected.c.
  */
 #include <math.h>
 #include <stdio.h>

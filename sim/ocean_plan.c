@@ -50,8 +50,9 @@ static double breaking_height(const ocean_sea_state *s, double d, const char **w
 
 /* The least depth at which s's Hs is within its breaking height.  Hs moves
  * with the depth too (TMA's depth factor; the peak wavelength everywhere):
- * Hs / 0.78 at the refused depth was itself refused for a TMA sea (0.01 m
- * suggested 0.0803 m, that 0.227 m, ...), so the boundary is bisected.
+ * Hs / 0.78 at the refused depth can itself be refused for a TMA sea
+ * (0.01 m would suggest 0.0803 m, that 0.227 m, ...), so the boundary is
+ * bisected.
  * 0 when even the deepest accepted water (12000 m) breaks it. */
 static double least_depth(const ocean_sea_state *s)
 {

@@ -3,7 +3,7 @@
  * way it is served make physical and numerical sense, run at load
  * (config and scene files, --set, SEA_STATE set, ocean_create).
  *
- * Each check refuses or warns, with the numbers (issue 13, item 6):
+ * Each check refuses or warns, with the numbers:
  *
  *   peak      REFUSE when the dominant wavelength 2 pi / k_p exceeds the
  *             largest patch: the peak is below the grid's first wave

@@ -16,10 +16,9 @@
  * accurate iteration takes a step or two from there; and its last step,
  * taken from under 0.3 sqrt(tolerance) where Newton converges
  * quadratically, is checked by the final reading instead of a reading of
- * its own.  On the ocean `make run` serves that took a point from 8.5 to
- * 6.2 us (5.6 with the accurate reading's loads restructured, ocean.c),
- * with the same error against the exact waves, 0.036 mm RMS (bench_filter
- * "Point queries").
+ * its own.  On the ocean `make run` serves, the stages take a point from
+ * 8.5 to 6.2 us with the same error against the exact waves, 0.036 mm RMS
+ * (bench_filter "Point queries").
  *
  * The FFT fields are read with ocean_frame_sample_accurate (Hermite on the
  * spectral derivatives, about a millimetre from the waves themselves in a
@@ -63,7 +62,7 @@ static void read_fields(const ctx *c, double x0, double z0, unsigned want, ocean
 /* |(a, b)|.  Points are refused beyond 1e12 m and displacements, slopes
  * and bounds are far smaller, so the squares cannot overflow (an infinite
  * bound stays infinite): libm's hypot, which rescales to be safe anywhere,
- * was a tenth of a query's time. */
+ * costs a tenth of a query's time. */
 static inline double norm2(double a, double b)
 {
     return sqrt(a * a + b * b);

@@ -45,10 +45,9 @@ typedef struct ocean_query_result {
 typedef struct ocean_query_options {
     int max_iterations;   /* default 24 */
     double tolerance;     /* stop when the residual is below this, m (1e-5) */
-    int bilinear;         /* 1: read the fields bilinearly (ocean_frame_sample), as
-                             before issue 13: smoother than the waves, error
-                             then unknown (INFINITY); default 0, the accurate
-                             reading */
+    int bilinear;         /* 1: read the fields bilinearly (ocean_frame_sample):
+                             smoother than the waves, error then unknown
+                             (INFINITY); default 0, the accurate reading */
 } ocean_query_options;
 
 void ocean_query_options_default(ocean_query_options *o);

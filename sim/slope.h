@@ -2,9 +2,9 @@
  * slope.h - slope second moments of the represented sea, split by what a
  * Butterworth-filtered geometry level carries and what it leaves to shading.
  *
- * Issue 13 item 2 (Bruneton, Neyret & Holzschuch 2010, "Real-time
- * realistic ocean lighting using seamless transitions from geometry to
- * BRDF", Comput. Graph. Forum 29(2)): a level whose geometry holds the
+ * After Bruneton, Neyret & Holzschuch 2010 ("Real-time realistic ocean
+ * lighting using seamless transitions from geometry to BRDF", Comput.
+ * Graph. Forum 29(2)): a level whose geometry holds the
  * waves below its cutoff must hand the slope variance of every shorter
  * wave to the BRDF, so that geometry + roughness shows the same sea from
  * any distance.  This module computes, for one sea (an ocean, optionally

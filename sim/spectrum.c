@@ -76,7 +76,7 @@ ocean_result ocean_sea_state_validate(const ocean_sea_state *s, char *msg, size_
     /* The displacement channels hold lambda D in float and foam reads them
      * back divided by lambda: below 1e-3 the displacement is under a
      * millimetre per metre of slope (nothing to see), and near 1e-38 the
-     * channels leave float's normal range and foam became NaN. */
+     * channels leave float's normal range and foam becomes NaN. */
     if (s->choppiness > 0.0 && s->choppiness < OCEAN_CHOPPINESS_MIN) {
         if (msg)
             snprintf(msg, msglen, "choppiness = %g: use 0 (no choppy displacement, no foam) or "

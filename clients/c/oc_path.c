@@ -101,8 +101,9 @@ static const char *check_point(const oc_path_point *q, int *field)
             *field = 4 + i;
             return "beyond +-1e5 m/s";
         }
-    /* CAMERA's orientation bounds (PROTOCOL.md): +-3600 was read, and such a
-     * path failed only when replay encoded it */
+    /* CAMERA's orientation bounds (PROTOCOL.md), checked as the path is
+     * read: a path the encoder would refuse fails at its line, not when
+     * replay sends it */
     static const double most[3] = {360, 90, 180};
     static const char *const why[3] = {"beyond +-360 degrees (CAMERA yaw)", "beyond +-90 degrees (CAMERA pitch)",
                                        "beyond +-180 degrees (CAMERA roll)"};
@@ -146,8 +147,8 @@ static ocean_result comment_line(path_reader *r, const char *s)
 {
     static const char magic[] = "# oceand camera path";
     if (strncmp(s, magic, sizeof magic - 1) == 0) {
-        /* exactly " v" and a decimal version: "v1x" and "v01" were read as
-         * version 1 */
+        /* exactly " v" and a decimal version without leading zeros: "v1x"
+         * and "v01" are not version 1 */
         const char *v = s + sizeof magic - 1;
         v += *v == ' ';
         size_t nd = v[0] == 'v' && v[-1] == ' ' ? strspn(v + 1, "0123456789") : 0;

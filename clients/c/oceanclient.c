@@ -46,6 +46,92 @@ static double mono_now(void)
 
 /* ================================================================== URL */
 
+/* The port digits [port_s, end) into out->port. */
+static ocean_result url_port(const char *url, const char *port_s, const char *end, oc_url *out, char *err,
+                             size_t errlen)
+{
+    size_t pl = (size_t)(end - port_s);
+    long v = 0;
+    if (pl == 0 || pl > 5) {
+        ocean_seterr(err, errlen, "URL \"%.100s\": port must be a number 1..65535", url);
+        return OCEAN_EINVAL;
+    }
+    for (size_t i = 0; i < pl; i++) {
+        if (port_s[i] < '0' || port_s[i] > '9') {
+            ocean_seterr(err, errlen, "URL \"%.100s\": port must be a number 1..65535", url);
+            return OCEAN_EINVAL;
+        }
+        v = v * 10 + (port_s[i] - '0');
+    }
+    if (v < 1 || v > 65535) {
+        ocean_seterr(err, errlen, "URL \"%.100s\": port %ld outside 1..65535", url, v);
+        return OCEAN_EINVAL;
+    }
+    out->port = (int)v;
+    return OCEAN_OK;
+}
+
+/* The authority [host, end) - a name, an address or a bracketed IPv6
+ * address, then an optional ":port" - into out->host and out->port. */
+static ocean_result url_authority(const char *url, const char *host, const char *end, oc_url *out, char *err,
+                                  size_t errlen)
+{
+    if (memchr(host, '@', (size_t)(end - host))) {
+        ocean_seterr(err, errlen, "URL \"%.100s\": user information (user@) is not supported", url);
+        return OCEAN_EINVAL;
+    }
+    const char *host_end, *port_s = NULL;
+    if (*host == '[') {
+        const char *rb = memchr(host, ']', (size_t)(end - host));
+        if (!rb) {
+            ocean_seterr(err, errlen, "URL \"%.100s\": IPv6 address lacks its closing ']'", url);
+            return OCEAN_EINVAL;
+        }
+        host++;
+        host_end = rb;
+        if (rb + 1 < end) {
+            if (rb[1] != ':') {
+                ocean_seterr(err, errlen, "URL \"%.100s\": unexpected text after ']'", url);
+                return OCEAN_EINVAL;
+            }
+            port_s = rb + 2;
+        }
+    } else {
+        const char *colon = memchr(host, ':', (size_t)(end - host));
+        host_end = colon ? colon : end;
+        if (colon)
+            port_s = colon + 1;
+    }
+    size_t hl = (size_t)(host_end - host);
+    if (hl == 0) {
+        ocean_seterr(err, errlen, "URL \"%.100s\": empty host", url);
+        return OCEAN_EINVAL;
+    }
+    if (hl > OC_HOST_MAX) {
+        ocean_seterr(err, errlen, "URL \"%.100s\": host longer than %d bytes", url, OC_HOST_MAX);
+        return OCEAN_EINVAL;
+    }
+    memcpy(out->host, host, hl);
+    out->host[hl] = 0;
+    return port_s ? url_port(url, port_s, end, out, err, errlen) : OCEAN_OK;
+}
+
+/* The path and query from `path` on ("/" if none; a bare "?query" gets
+ * its "/") into out->path. */
+static ocean_result url_path(const char *url, const char *path, oc_url *out, char *err, size_t errlen)
+{
+    if (!*path)
+        path = "/";
+    size_t plen = strlen(path), lead = *path == '?';
+    if (plen + lead > OC_PATH_MAX) {
+        ocean_seterr(err, errlen, "URL \"%.100s\": path longer than %d bytes", url, OC_PATH_MAX);
+        return OCEAN_EINVAL;
+    }
+    out->path[0] = '/';
+    memcpy(out->path + lead, path, plen + 1);
+    return OCEAN_OK;
+}
+
 ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen)
 {
     if (!url || !out) {
@@ -74,87 +160,14 @@ ocean_result oc_url_parse(const char *url, oc_url *out, char *err, size_t errlen
         ocean_seterr(err, errlen, "URL \"%.100s\": fragments (#) are not allowed", url);
         return OCEAN_EINVAL;
     }
+    /* the authority ends at the path or at the query */
     const char *slash = strchr(rest, '/');
     const char *auth_end = slash ? slash : rest + strlen(rest);
     const char *q = memchr(rest, '?', (size_t)(auth_end - rest));
     if (q)
         auth_end = q;
-    if (memchr(rest, '@', (size_t)(auth_end - rest))) {
-        ocean_seterr(err, errlen, "URL \"%.100s\": user information (user@) is not supported", url);
-        return OCEAN_EINVAL;
-    }
-    const char *host = rest, *host_end, *port_s = NULL;
-    if (*host == '[') {
-        const char *rb = memchr(host, ']', (size_t)(auth_end - host));
-        if (!rb) {
-            ocean_seterr(err, errlen, "URL \"%.100s\": IPv6 address lacks its closing ']'", url);
-            return OCEAN_EINVAL;
-        }
-        host++;
-        host_end = rb;
-        if (rb + 1 < auth_end) {
-            if (rb[1] != ':') {
-                ocean_seterr(err, errlen, "URL \"%.100s\": unexpected text after ']'", url);
-                return OCEAN_EINVAL;
-            }
-            port_s = rb + 2;
-        }
-    } else {
-        const char *colon = memchr(host, ':', (size_t)(auth_end - host));
-        host_end = colon ? colon : auth_end;
-        if (colon)
-            port_s = colon + 1;
-    }
-    size_t hl = (size_t)(host_end - host);
-    if (hl == 0) {
-        ocean_seterr(err, errlen, "URL \"%.100s\": empty host", url);
-        return OCEAN_EINVAL;
-    }
-    if (hl > OC_HOST_MAX) {
-        ocean_seterr(err, errlen, "URL \"%.100s\": host longer than %d bytes", url, OC_HOST_MAX);
-        return OCEAN_EINVAL;
-    }
-    memcpy(out->host, host, hl);
-    out->host[hl] = 0;
-    if (port_s) {
-        size_t pl = (size_t)(auth_end - port_s);
-        long v = 0;
-        if (pl == 0 || pl > 5) {
-            ocean_seterr(err, errlen, "URL \"%.100s\": port must be a number 1..65535", url);
-            return OCEAN_EINVAL;
-        }
-        for (size_t i = 0; i < pl; i++) {
-            if (port_s[i] < '0' || port_s[i] > '9') {
-                ocean_seterr(err, errlen, "URL \"%.100s\": port must be a number 1..65535", url);
-                return OCEAN_EINVAL;
-            }
-            v = v * 10 + (port_s[i] - '0');
-        }
-        if (v < 1 || v > 65535) {
-            ocean_seterr(err, errlen, "URL \"%.100s\": port %ld outside 1..65535", url, v);
-            return OCEAN_EINVAL;
-        }
-        out->port = (int)v;
-    }
-    const char *path = auth_end;
-    if (!*path)
-        path = "/";
-    size_t plen = strlen(path);
-    if (plen > OC_PATH_MAX) {
-        ocean_seterr(err, errlen, "URL \"%.100s\": path longer than %d bytes", url, OC_PATH_MAX);
-        return OCEAN_EINVAL;
-    }
-    if (*path == '?') {
-        out->path[0] = '/';
-        if (plen + 1 > OC_PATH_MAX) {
-            ocean_seterr(err, errlen, "URL \"%.100s\": path longer than %d bytes", url, OC_PATH_MAX);
-            return OCEAN_EINVAL;
-        }
-        memcpy(out->path + 1, path, plen + 1);
-    } else {
-        memcpy(out->path, path, plen + 1);
-    }
-    return OCEAN_OK;
+    ocean_result r = url_authority(url, rest, auth_end, out, err, errlen);
+    return r != OCEAN_OK ? r : url_path(url, auth_end, out, err, errlen);
 }
 
 /* ============================================================ structures */
@@ -1529,8 +1542,8 @@ ocean_result oc_loop_create(oc_loop **out, char *err, size_t errlen)
      * SSL_CTX ex_data index into a process-wide variable.  lws stores a
      * client SSL_CTX's refcount record at the index current when it was
      * made and looks it up at the current index when the vhost goes: once
-     * a second loop was made, destroying the first found no record and
-     * kept its SSL_CTX and system CA store (~0.85 MB) for good.  Without
+     * a second loop is made, destroying the first finds no record and
+     * keeps its SSL_CTX and system CA store (~0.85 MB) for good.  Without
      * the option on the context the index never moves (OpenSSL 1.1+
      * initialises itself), so every loop finds its record. */
     info.options = LWS_SERVER_OPTION_EXPLICIT_VHOSTS;
@@ -1627,8 +1640,8 @@ ocean_result oc_loop_service(oc_loop *l, int timeout_ms)
         return OCEAN_ESTATE;
     if (timeout_ms <= 0) {
         /* One lws_service pass reads at most one chunk per connection: a
-         * caller servicing once per 60 Hz step got ~6 of 30 fps of 80 KB
-         * frames, ever later.  Pass again while anything is ready, within
+         * caller servicing once per 60 Hz step would get ~6 of 30 fps of
+         * 80 KB frames, ever later.  Pass again while anything is ready, within
          * OC_SERVICE_DRAIN_MS so that a flood still returns. */
         double until = mono_now() + OC_SERVICE_DRAIN_MS * 1e-3;
         do
@@ -2194,8 +2207,8 @@ static ocean_result query_send(oc_client *c, const double *xz, size_t n, int at_
             pthread_mutex_unlock(&c->loop->mu);
             return OCEAN_EINVAL;
         }
-    /* the protocol's two values (PROTOCOL.md QUERY): 7 or 255 were sent
-     * as 1 */
+    /* the protocol's two values only (PROTOCOL.md QUERY): any other is
+     * refused here rather than sent as 1 */
     if (at_time != 0 && at_time != 1)
         return fail_local(c, OCEAN_EINVAL, "query at_time %d: 0 (the latest tick) or 1 (at t)", at_time);
     if (at_time && !isfinite(t))

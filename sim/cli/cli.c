@@ -234,7 +234,8 @@ static int apply_opt(const cli_opt *o, const char *val)
             return -1;
         }
         /* The near field is the daemon's (its Gerstner set comes from the
-         * server.near_field_* keys); taken here, it was ignored in silence. */
+         * server.near_field_* keys); taken here, it would be ignored in
+         * silence. */
         if (*(unsigned *)o->target & OCEAN_FX_NEAR_FIELD) {
             fprintf(stderr, "error: --%s: near-field is oceand's (server.near_field_*): ocean-sim "
                     "evaluates the FFT cascades alone\n", o->name);

@@ -171,6 +171,54 @@ static void progress(int done, int total)
         fputc('\n', stderr);
 }
 
+/* Unit normals (nx, ny, nz planes of nn samples each) from the field's
+ * slopes: n = normalise(-sx, 1, -sz). */
+static void normals_from_slopes(const ocean_field *fd, float *nrm)
+{
+    size_t nn = (size_t)fd->n * fd->n;
+    for (size_t k = 0; k < nn; k++) {
+        double sx = fd->slope_x[k], sz = fd->slope_z[k];
+        double len = sqrt(sx * sx + 1.0 + sz * sz);
+        nrm[k] = (float)(-sx / len);
+        nrm[nn + k] = (float)(1.0 / len);
+        nrm[2 * nn + k] = (float)(-sz / len);
+    }
+}
+
+/* Writes the files of one cascade of one frame, those of the effects fx:
+ * 0, or 1 (said).  nrm holds 3 n x n planes; zero is an n x n plane of 0
+ * for a displacement component not computed. */
+static int bake_cascade(const char *out, unsigned fx, const ocean_field *fd, bake_meta *meta, float *nrm,
+                        const float *zero)
+{
+    char path[4096];
+    int m = fd->n, status = 0, cs = meta->cascade, i = meta->frame;
+    if (fx & (OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT)) {
+        exr_plane p[3] = {{"displacement.R", fd->dx ? fd->dx : zero},
+                          {"displacement.G", fd->height ? fd->height : zero},
+                          {"displacement.B", fd->dz ? fd->dz : zero}};
+        meta->channels = "displacement.R = Dx, displacement.G = height, displacement.B = Dz "
+                         "(metres, y up; R,G,B = x,y,z)";
+        snprintf(path, sizeof path, "%s/displacement_c%d_%04d.exr", out, cs, i);
+        status |= write_exr(path, m, p, 3, meta) ? 1 : 0;
+    }
+    if (fx & OCEAN_FX_NORMALS) {
+        size_t nn = (size_t)m * m;
+        normals_from_slopes(fd, nrm);
+        exr_plane p[3] = {{"normal.R", nrm}, {"normal.G", nrm + nn}, {"normal.B", nrm + 2 * nn}};
+        meta->channels = "normal.R, normal.G, normal.B = nx, ny, nz (unit normal, y up)";
+        snprintf(path, sizeof path, "%s/normal_c%d_%04d.exr", out, cs, i);
+        status |= write_exr(path, m, p, 3, meta) ? 1 : 0;
+    }
+    if (fx & OCEAN_FX_FOAM) {
+        exr_plane p[1] = {{"foam.Y", fd->foam}};
+        meta->channels = "foam.Y = foam coverage 0..1";
+        snprintf(path, sizeof path, "%s/foam_c%d_%04d.exr", out, cs, i);
+        status |= write_exr(path, m, p, 1, meta) ? 1 : 0;
+    }
+    return status;
+}
+
 int cmd_bake(int argc, char **argv)
 {
     cli_common c;
@@ -218,7 +266,6 @@ int cmd_bake(int argc, char **argv)
     ocean_request req;
     ocean_request_all(&req, fx);
     double hs = ocean_spectrum_hs(&c.params.sea);   /* Hs of the spectrum, m */
-    char path[4096];
     for (int i = 0; i < frames && status == 0; i++) {
         double t = c.time + i / fps;
         if (ocean_evaluate(o, t, &req, f) != OCEAN_OK) {
@@ -228,38 +275,9 @@ int cmd_bake(int argc, char **argv)
         }
         for (int cs = 0; cs < c.params.cascades && status == 0; cs++) {
             const ocean_field *fd = ocean_frame_field(f, cs);
-            int m = fd->n;
             bake_meta meta = {.params = &c.params, .fps = fps, .time = t, .patch_m = fd->patch_m,
                               .hs = hs, .frame = i, .cascade = cs};
-            if (fx & (OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT)) {
-                exr_plane p[3] = {{"displacement.R", fd->dx ? fd->dx : zero},
-                                  {"displacement.G", fd->height ? fd->height : zero},
-                                  {"displacement.B", fd->dz ? fd->dz : zero}};
-                meta.channels = "displacement.R = Dx, displacement.G = height, displacement.B = Dz "
-                                "(metres, y up; R,G,B = x,y,z)";
-                snprintf(path, sizeof path, "%s/displacement_c%d_%04d.exr", out, cs, i);
-                status |= write_exr(path, m, p, 3, &meta) ? 1 : 0;
-            }
-            if (fx & OCEAN_FX_NORMALS) {
-                size_t nn = (size_t)m * m;
-                for (size_t k = 0; k < nn; k++) {
-                    double sx = fd->slope_x[k], sz = fd->slope_z[k];
-                    double len = sqrt(sx * sx + 1.0 + sz * sz);
-                    nrm[k] = (float)(-sx / len);
-                    nrm[nn + k] = (float)(1.0 / len);
-                    nrm[2 * nn + k] = (float)(-sz / len);
-                }
-                exr_plane p[3] = {{"normal.R", nrm}, {"normal.G", nrm + nn}, {"normal.B", nrm + 2 * nn}};
-                meta.channels = "normal.R, normal.G, normal.B = nx, ny, nz (unit normal, y up)";
-                snprintf(path, sizeof path, "%s/normal_c%d_%04d.exr", out, cs, i);
-                status |= write_exr(path, m, p, 3, &meta) ? 1 : 0;
-            }
-            if (fx & OCEAN_FX_FOAM) {
-                exr_plane p[1] = {{"foam.Y", fd->foam}};
-                meta.channels = "foam.Y = foam coverage 0..1";
-                snprintf(path, sizeof path, "%s/foam_c%d_%04d.exr", out, cs, i);
-                status |= write_exr(path, m, p, 1, &meta) ? 1 : 0;
-            }
+            status |= bake_cascade(out, fx, fd, &meta, nrm, zero);
         }
         if (tty)
             progress(i + 1, frames);

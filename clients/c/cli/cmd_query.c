@@ -1,7 +1,6 @@
 /*
- * cmd_query.c - `ocean-client query` (points -> height, normal, velocity,
- * foam, error bound) and `ocean-client sea` (show or, with the admin token,
- * set the sea state).
+ * cmd_query.c - `ocean-client query`: the daemon's height, normal,
+ * velocity, foam and error bound at world points.
  */
 #include <errno.h>
 #include <math.h>
@@ -10,10 +9,7 @@
 
 #include <cJSON.h>
 
-#include "conf.h"
 #include "occli.h"
-#include "ocean_conf.h"
-#include "spectrum.h"
 #include "ocean_time.h"
 
 /* Parses "x1,z1;x2,z2;..." into a new array of 2n doubles. */
@@ -68,6 +64,40 @@ bad:
     return -1;
 }
 
+static void query_print_json(const oc_query_result *q, const double *xz, size_t n)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "t", q->t);
+    cJSON *arr = cJSON_AddArrayToObject(o, "points");
+    for (uint32_t i = 0; i < q->count && i < n; i++) {
+        const proto_query_sample *sm = &q->samples[i];
+        cJSON *p = cJSON_CreateObject();
+        cJSON_AddNumberToObject(p, "x", xz[2 * i]);
+        cJSON_AddNumberToObject(p, "z", xz[2 * i + 1]);
+        cJSON_AddNumberToObject(p, "height", sm->height);
+        double nv[3] = {sm->normal[0], sm->normal[1], sm->normal[2]};
+        double vv[3] = {sm->velocity[0], sm->velocity[1], sm->velocity[2]};
+        cJSON_AddItemToObject(p, "normal", cJSON_CreateDoubleArray(nv, 3));
+        cJSON_AddItemToObject(p, "velocity", cJSON_CreateDoubleArray(vv, 3));
+        cJSON_AddNumberToObject(p, "foam", sm->foam);
+        cJSON_AddNumberToObject(p, "error_bound", sm->error_bound);
+        cJSON_AddItemToArray(arr, p);
+    }
+    occli_print_json(o);
+}
+
+static void query_print_text(const oc_query_result *q, const double *xz, size_t n)
+{
+    printf("# t = %.9g s\n%12s %12s %10s %26s %26s %6s %10s\n", q->t, "x", "z", "height", "normal", "velocity",
+           "foam", "error");
+    for (uint32_t i = 0; i < q->count && i < n; i++) {
+        const proto_query_sample *sm = &q->samples[i];
+        printf("%12.4f %12.4f %10.5f  (%7.4f,%7.4f,%7.4f)  (%7.3f,%7.3f,%7.3f) %6.3f %10.3g\n", xz[2 * i],
+               xz[2 * i + 1], sm->height, sm->normal[0], sm->normal[1], sm->normal[2], sm->velocity[0],
+               sm->velocity[1], sm->velocity[2], sm->foam, sm->error_bound);
+    }
+}
+
 int cmd_query(int argc, char **argv)
 {
     const char *points = NULL;
@@ -117,220 +147,12 @@ int cmd_query(int argc, char **argv)
         free(xz);
         return 1;
     }
-    if (json) {
-        cJSON *o = cJSON_CreateObject();
-        cJSON_AddNumberToObject(o, "t", q.t);
-        cJSON *arr = cJSON_AddArrayToObject(o, "points");
-        for (uint32_t i = 0; i < q.count && i < n; i++) {
-            const proto_query_sample *sm = &q.samples[i];
-            cJSON *p = cJSON_CreateObject();
-            cJSON_AddNumberToObject(p, "x", xz[2 * i]);
-            cJSON_AddNumberToObject(p, "z", xz[2 * i + 1]);
-            cJSON_AddNumberToObject(p, "height", sm->height);
-            double nv[3] = {sm->normal[0], sm->normal[1], sm->normal[2]};
-            double vv[3] = {sm->velocity[0], sm->velocity[1], sm->velocity[2]};
-            cJSON_AddItemToObject(p, "normal", cJSON_CreateDoubleArray(nv, 3));
-            cJSON_AddItemToObject(p, "velocity", cJSON_CreateDoubleArray(vv, 3));
-            cJSON_AddNumberToObject(p, "foam", sm->foam);
-            cJSON_AddNumberToObject(p, "error_bound", sm->error_bound);
-            cJSON_AddItemToArray(arr, p);
-        }
-        occli_print_json(o);
-    } else {
-        printf("# t = %.9g s\n%12s %12s %10s %26s %26s %6s %10s\n", q.t, "x", "z", "height", "normal",
-               "velocity", "foam", "error");
-        for (uint32_t i = 0; i < q.count && i < n; i++) {
-            const proto_query_sample *sm = &q.samples[i];
-            printf("%12.4f %12.4f %10.5f  (%7.4f,%7.4f,%7.4f)  (%7.3f,%7.3f,%7.3f) %6.3f %10.3g\n", xz[2 * i],
-                   xz[2 * i + 1], sm->height, sm->normal[0], sm->normal[1], sm->normal[2], sm->velocity[0],
-                   sm->velocity[1], sm->velocity[2], sm->foam, sm->error_bound);
-        }
-    }
+    if (json)
+        query_print_json(&q, xz, n);
+    else
+        query_print_text(&q, xz, n);
     oc_query_result_free(&q);
     oc_client_destroy(c);
     free(xz);
     return 0;
-}
-
-static cJSON *sea_json(const proto_sea *s, double eff)
-{
-    cJSON *o = cJSON_CreateObject();
-    cJSON_AddNumberToObject(o, "effective_time", eff);
-    /* Names, as --spectrum and --spreading take them. */
-    /* An id this build does not know (a newer server) stays a number. */
-    const char *sn = s->spectrum < OCEAN_SPECTRUM_COUNT_ ? ocean_spectrum_name((ocean_spectrum_kind)s->spectrum) : NULL;
-    const char *pn = s->spreading < OCEAN_SPREAD_COUNT_ ? ocean_spreading_name((ocean_spreading_kind)s->spreading) : NULL;
-    if (sn)
-        cJSON_AddStringToObject(o, "spectrum", sn);
-    else
-        cJSON_AddNumberToObject(o, "spectrum", s->spectrum);
-    if (pn)
-        cJSON_AddStringToObject(o, "spreading", pn);
-    else
-        cJSON_AddNumberToObject(o, "spreading", s->spreading);
-    /* the seed's every digit: a double would round seeds past 2^53 */
-    char seed[24];
-    snprintf(seed, sizeof seed, "%llu", (unsigned long long)s->seed);
-    cJSON_AddRawToObject(o, "seed", seed);
-    cJSON_AddNumberToObject(o, "wind_u10", s->wind_u10);
-    cJSON_AddNumberToObject(o, "wind_dir_deg", s->wind_dir_deg);
-    cJSON_AddNumberToObject(o, "fetch_m", s->fetch_m);
-    cJSON_AddNumberToObject(o, "depth_m", s->depth_m);
-    cJSON_AddNumberToObject(o, "swell", s->swell);
-    cJSON_AddNumberToObject(o, "phillips_a", s->phillips_a);
-    cJSON_AddNumberToObject(o, "small_wave_m", s->small_wave_m);
-    cJSON_AddNumberToObject(o, "choppiness", s->choppiness);
-    cJSON_AddNumberToObject(o, "hs", s->hs);
-    cJSON_AddNumberToObject(o, "tp", s->tp);
-    return o;
-}
-
-/* The range the daemon's config table gives sea key `key` (sim/ocean_conf.c):
- * one source, so this tool never refuses what oceand accepts or sends what
- * it refuses. */
-static void sea_range(const char *key, double *lo, double *hi)
-{
-    const conf_table *t[] = {ocean_conf_table()};
-    void *tg[] = {NULL};
-    conf_set set = {t, tg, 1};
-    const conf_entry *e = conf_find(&set, key, NULL);
-    if (e) {
-        *lo = e->min;
-        *hi = e->max;
-    }
-}
-
-int cmd_sea(int argc, char **argv)
-{
-    int set = 0, timeout_ms = 5000;
-    const char *token = NULL;
-    double wind = NAN, dir = NAN, fetch = NAN, depth = NAN, swell = NAN, chop = NAN, pa = NAN, small = NAN;
-    double at = NAN;
-    const char *seed_s = NULL;
-    int spectrum = -1, spreading = -1;
-    /* Spectrum and spreading by name, in sim/spectrum.h's order (the wire
-     * carries the index). */
-    const char *spectra[OCEAN_SPECTRUM_COUNT_ + 1] = {NULL}, *spreads[OCEAN_SPREAD_COUNT_ + 1] = {NULL};
-    for (int k = 0; k < OCEAN_SPECTRUM_COUNT_; k++)
-        spectra[k] = ocean_spectrum_name((ocean_spectrum_kind)k);
-    for (int k = 0; k < OCEAN_SPREAD_COUNT_; k++)
-        spreads[k] = ocean_spreading_name((ocean_spreading_kind)k);
-    const occli_opt opts[] = {
-        {"set", OCCLI_FLAG, &set, 0, 0, "send SEA_STATE SET (needs --token)", NULL},
-        {"token", OCCLI_STRING, &token, 0, 0, "TOKEN  the admin token from the server's config", NULL},
-        {"at", OCCLI_DOUBLE, &at, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T  sim time the change takes effect (not given: now)", NULL},
-        {"wind", OCCLI_DOUBLE, &wind, 0, 0, "U  wind speed at 10 m, m/s", NULL},
-        {"wind-dir", OCCLI_DOUBLE, &dir, 0, 0, "DEG  wind direction", NULL},
-        {"fetch", OCCLI_DOUBLE, &fetch, 0, 0, "M  fetch", NULL},
-        {"depth", OCCLI_DOUBLE, &depth, 0, 0, "M  water depth", NULL},
-        {"swell", OCCLI_DOUBLE, &swell, 0, 0, "S  swell", NULL},
-        {"choppiness", OCCLI_DOUBLE, &chop, 0, 0, "L  choppiness", NULL},
-        {"phillips-a", OCCLI_DOUBLE, &pa, 0, 0, "A  Phillips constant", NULL},
-        {"small-wave", OCCLI_DOUBLE, &small, 0, 0, "M  small-wave suppression length", NULL},
-        {"spectrum", OCCLI_CHOICE, &spectrum, 0, 0, "NAME  spectrum", spectra},
-        {"spreading", OCCLI_CHOICE, &spreading, 0, 0, "NAME  directional spreading", spreads},
-        {"seed", OCCLI_STRING, &seed_s, 0, 0, "N  random seed, 0 .. 2^64 - 1", NULL},
-        {"timeout", OCCLI_INT, &timeout_ms, 1, 3600000, "MS  connect / answer timeout", NULL},
-    };
-    /* each option's range is its config key's */
-    static const char *const keys[][2] = {
-        {"wind", "sea.wind"}, {"wind-dir", "sea.direction"}, {"fetch", "sea.fetch"},
-        {"depth", "sea.depth"}, {"swell", "sea.swell"}, {"choppiness", "sea.choppiness"},
-        {"phillips-a", "sea.phillips_a"}, {"small-wave", "sea.small_wave"}};
-    occli_opt ranged[sizeof opts / sizeof opts[0]];
-    memcpy(ranged, opts, sizeof opts);
-    for (size_t i = 0; i < sizeof opts / sizeof opts[0]; i++)
-        for (size_t k = 0; k < sizeof keys / sizeof keys[0]; k++)
-            if (!strcmp(ranged[i].name, keys[k][0]))
-                sea_range(keys[k][1], &ranged[i].min, &ranged[i].max);
-    const char *pos[1];
-    int np = 0;
-    int pr = occli_parse(argc, argv,
-                         "usage: ocean-client sea URL [--set --token T [--at T] [--wind U] ...]\n"
-                         "Prints the sea state in force (JSON).  With --set, changes the given fields and asks\n"
-                         "the server to apply them for every client at sim time --at.",
-                         ranged, (int)(sizeof opts / sizeof opts[0]), pos, 1, &np);
-    if (pr)
-        return pr == 1 ? 0 : 2;
-    if (np != 1) {
-        fprintf(stderr, "ocean-client sea: needs the server URL (see --help)\n");
-        return 2;
-    }
-    if (set && !token) {
-        fprintf(stderr, "ocean-client sea: option '--set' needs '--token'\n");
-        return 2;
-    }
-    /* A change asked without --set would be ignored: say so instead. */
-    if (!set) {
-        const char *given = !isnan(wind) ? "wind" : !isnan(dir) ? "wind-dir" : !isnan(fetch) ? "fetch"
-                          : !isnan(depth) ? "depth" : !isnan(swell) ? "swell" : !isnan(chop) ? "choppiness"
-                          : !isnan(pa) ? "phillips-a" : !isnan(small) ? "small-wave" : spectrum >= 0 ? "spectrum"
-                          : spreading >= 0 ? "spreading" : seed_s ? "seed" : !isnan(at) ? "at"
-                          : token ? "token" : NULL;
-        if (given) {
-            fprintf(stderr, "ocean-client sea: option '--%s' changes the sea state only with '--set' "
-                    "(and '--token'); without --set the command only prints the state in force\n", given);
-            return 2;
-        }
-    }
-    if (set && isnan(wind) && isnan(dir) && isnan(fetch) && isnan(depth) && isnan(swell) && isnan(chop) &&
-        isnan(pa) && isnan(small) && spectrum < 0 && spreading < 0 && !seed_s) {
-        fprintf(stderr, "ocean-client sea: '--set' with nothing to change: give one of --wind, "
-                "--wind-dir, --fetch, --depth, --swell, --choppiness, --phillips-a, --small-wave, "
-                "--spectrum, --spreading, --seed\n");
-        return 2;
-    }
-    /* read as an integer, never through a double (seeds past 2^53) */
-    unsigned long long seed = 0;
-    if (seed_s) {
-        char *end;
-        errno = 0;
-        seed = *seed_s >= '0' && *seed_s <= '9' ? strtoull(seed_s, &end, 10) : 0;
-        if (!(*seed_s >= '0' && *seed_s <= '9') || *end || errno == ERANGE) {
-            fprintf(stderr, "ocean-client sea: option '--seed': '%s' is not a whole number in [0, %llu]\n",
-                    seed_s, (unsigned long long)UINT64_MAX);
-            return 2;
-        }
-    }
-    oc_client *c = occli_connect("sea", pos[0], NULL, timeout_ms);
-    if (!c)
-        return 1;
-    proto_sea sea;
-    double eff = 0;
-    oc_client_sea_state(c, &sea, &eff);
-    int rc = 0;
-    if (set) {
-        if (!isnan(wind)) sea.wind_u10 = wind;
-        if (!isnan(dir)) sea.wind_dir_deg = dir;
-        if (!isnan(fetch)) sea.fetch_m = fetch;
-        if (!isnan(depth)) sea.depth_m = depth;
-        if (!isnan(swell)) sea.swell = swell;
-        if (!isnan(chop)) sea.choppiness = chop;
-        if (!isnan(pa)) sea.phillips_a = pa;
-        if (!isnan(small)) sea.small_wave_m = small;
-        if (spectrum >= 0) sea.spectrum = (uint8_t)spectrum;
-        if (spreading >= 0) sea.spreading = (uint8_t)spreading;
-        if (seed_s) sea.seed = (uint64_t)seed;
-        sea.hs = 0;
-        sea.tp = 0;
-        /* default "now": the state's current effective time; the server
-         * applies a time already past at its next tick */
-        double when = isnan(at) ? eff : at;
-        ocean_result r = oc_client_sea_state_set(c, &sea, when, token, timeout_ms);
-        if (r != OCEAN_OK) {
-            char err[512];
-            oc_client_last_error(c, err, sizeof err);
-            fprintf(stderr, "ocean-client sea: %s\n", err[0] ? err : ocean_strerror(r));
-            rc = 1;
-        }
-        oc_client_sea_state(c, &sea, &eff);
-    }
-    /* a refused --set prints only its error: the state in force on stdout
-     * read as the change having been made */
-    if (rc == 0) {
-        cJSON *o = sea_json(&sea, eff);
-        occli_print_json(o);
-    }
-    oc_client_destroy(c);
-    return rc;
 }

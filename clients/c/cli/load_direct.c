@@ -443,73 +443,69 @@ static int verify_frame(oc_frame_stream *fs, int *fill, const uint8_t *p, size_t
     return bad;
 }
 
-/* One binary message of n bytes, of which p holds the first `have`: all of
- * it for every non-FRAME and each FRAME frame_wanted_whole picked, at least
- * the first HEAD_KEEP otherwise. */
-static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n, double now)
+/* A FRAME of n bytes, of which p holds the first `have`, received d
+ * seconds after its sim time: its head checked, the ticks it skipped
+ * counted, and decoded in full when it is one to verify or its viewer
+ * follows its stream. */
+static void on_frame_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n, double d)
 {
     const shared *S = w->S;
     proto_limits lim;
     proto_limits_default(&lim);
-    proto_header h;
     char err[256];
-    /* reads the 32 header bytes only; checks the declared length against n */
-    if (have < PROTO_HEADER_SIZE || proto_header_decode(p, n, &lim, &h, err, sizeof err) != OCEAN_OK) {
+    int measuring = atomic_load_explicit(&S->measuring, memory_order_relaxed);
+    /* fixed fields, and a layout-1 frame's cascade block (its records
+     * start after the block): oc_frame_peek reads both from the kept
+     * head and checks that n can hold the records it announces */
+    proto_frame f;
+    if (oc_frame_peek(p, have < n ? have : n, n, &f, NULL, err, sizeof err) != OCEAN_OK ||
+        f.tile_count > lim.max_frame_tiles) {
         v->decode_errors++;
         return;
     }
-    double d = now - h.sim_time;
-    if (d < w->min_any)
-        w->min_any = d;
-    v->last_sim = h.sim_time;
-    int measuring = atomic_load_explicit(&w->S->measuring, memory_order_relaxed);
-    if (h.type == PROTO_FRAME) {
-        /* fixed fields, and a layout-1 frame's cascade block (its records
-         * start after the block): oc_frame_peek reads both from the kept
-         * head and checks that n can hold the records it announces */
-        proto_frame f;
-        if (oc_frame_peek(p, have < n ? have : n, n, &f, NULL, err, sizeof err) != OCEAN_OK ||
-            f.tile_count > lim.max_frame_tiles) {
-            v->decode_errors++;
-            return;
-        }
-        if (v->have_tick && v->tick_rate > 0) {
-            uint32_t dt = f.tick - v->last_tick;
-            double step = floor(fmax(1.0, v->tick_rate / S->cfg->sub.frame_rate_hz) + 0.5);
-            double missed = floor((double)dt / step + 0.5) - 1;
-            if (measuring && missed > 0 && dt < (1u << 30))
-                v->skipped += (uint64_t)missed;
-        }
-        v->last_tick = f.tick;
-        v->have_tick = 1;
-        if (d < w->min_delay)
-            w->min_delay = d;
-        /* a followed stream takes every frame, the window's and the ones
-         * before it, in order */
-        int whole = frame_wanted_whole(v);
-        if (whole && v->fs)
-            v->decode_errors += (uint64_t)verify_frame(v->fs, &v->fill, p, have);
-        if (!measuring)
-            return;
-        v->frames++;
-        v->frames_layout[f.layout]++;
-        v->bytes += n;
-        if (occli_vec_push(&w->delay, d))
-            w->oom = 1;
-        if (whole) {
-            v->verified++;
-            if (!v->fs)
-                v->decode_errors += (uint64_t)verify_frame(NULL, NULL, p, have);
-        }
-        v->nframe++;
-        return;
+    if (v->have_tick && v->tick_rate > 0) {
+        uint32_t dt = f.tick - v->last_tick;
+        double step = floor(fmax(1.0, v->tick_rate / S->cfg->sub.frame_rate_hz) + 0.5);
+        double missed = floor((double)dt / step + 0.5) - 1;
+        if (measuring && missed > 0 && dt < (1u << 30))
+            v->skipped += (uint64_t)missed;
     }
+    v->last_tick = f.tick;
+    v->have_tick = 1;
+    if (d < w->min_delay)
+        w->min_delay = d;
+    /* a followed stream takes every frame, the window's and the ones
+     * before it, in order */
+    int whole = frame_wanted_whole(v);
+    if (whole && v->fs)
+        v->decode_errors += (uint64_t)verify_frame(v->fs, &v->fill, p, have);
+    if (!measuring)
+        return;
+    v->frames++;
+    v->frames_layout[f.layout]++;
+    v->bytes += n;
+    if (occli_vec_push(&w->delay, d))
+        w->oom = 1;
+    if (whole) {
+        v->verified++;
+        if (!v->fs)
+            v->decode_errors += (uint64_t)verify_frame(NULL, NULL, p, have);
+    }
+    v->nframe++;
+}
+
+/* Any other message, whole in p: HELLO answered with SUBSCRIBE and CAMERA,
+ * ERROR counted, BYE's reason kept and the viewer closed. */
+static void on_other_message(worker *w, dv *v, const uint8_t *p, size_t have)
+{
+    shared *S = w->S;
+    char err[256];
     proto_msg m;
     if (proto_decode(p, have, &m, err, sizeof err) != OCEAN_OK) {
         v->decode_errors++;
         return;
     }
-    switch (h.type) {
+    switch (m.hdr.type) {
     case PROTO_HELLO:
         v->tick_rate = m.u.hello.tick_rate_hz;
         if (!v->ready && !v->hello_seen) {
@@ -528,15 +524,39 @@ static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n
         v->errors++;
         break;
     case PROTO_BYE:
-        if (!atomic_exchange(&w->S->why_set, 1))
-            snprintf(w->S->why, sizeof w->S->why, "server said BYE (reason %u): %s",
-                     (unsigned)m.u.bye.reason, m.u.bye.message);
+        if (!atomic_exchange(&S->why_set, 1))
+            snprintf(S->why, sizeof S->why, "server said BYE (reason %u): %s", (unsigned)m.u.bye.reason,
+                     m.u.bye.message);
         close_viewer(w, v);
         break;
     default:
         break;
     }
     proto_msg_free(&m);
+}
+
+/* One binary message of n bytes, of which p holds the first `have`: all of
+ * it for every non-FRAME and each FRAME frame_wanted_whole picked, at least
+ * the first HEAD_KEEP otherwise. */
+static void on_message(worker *w, dv *v, const uint8_t *p, size_t have, size_t n, double now)
+{
+    proto_limits lim;
+    proto_limits_default(&lim);
+    proto_header h;
+    char err[256];
+    /* reads the 32 header bytes only; checks the declared length against n */
+    if (have < PROTO_HEADER_SIZE || proto_header_decode(p, n, &lim, &h, err, sizeof err) != OCEAN_OK) {
+        v->decode_errors++;
+        return;
+    }
+    double d = now - h.sim_time;
+    if (d < w->min_any)
+        w->min_any = d;
+    v->last_sim = h.sim_time;
+    if (h.type == PROTO_FRAME)
+        on_frame_message(w, v, p, have, n, d);
+    else
+        on_other_message(w, v, p, have);
 }
 
 /* ---- connection state machine ---------------------------------------------- */
@@ -779,76 +799,61 @@ static void *worker_main(void *arg)
     return NULL;
 }
 
-static double cpu_now(void)
+/* The daemon's address from cfg->url (plain ws:// only): 0, or 1 (said). */
+static int direct_resolve(const load_cfg *cfg, shared *S)
 {
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec + (double)ru.ru_stime.tv_sec +
-           1e-6 * (double)ru.ru_stime.tv_usec;
-}
-
-int load_direct_run(const load_cfg *cfg, load_result *R)
-{
-    memset(R, 0, sizeof *R);
-    R->min_delay = R->min_any = INFINITY;
-    shared S;
-    memset(&S, 0, sizeof S);
-    S.cfg = cfg;
     char err[256];
-    if (oc_url_parse(cfg->url, &S.url, err, sizeof err) != OCEAN_OK) {
+    if (oc_url_parse(cfg->url, &S->url, err, sizeof err) != OCEAN_OK) {
         fprintf(stderr, "ocean-client load: %s\n", err);
         return 1;
     }
-    if (S.url.tls) {
+    if (S->url.tls) {
         fprintf(stderr, "ocean-client load: wss:// needs --library (the direct path speaks plain ws://)\n");
         return 1;
     }
     struct addrinfo hints = {.ai_socktype = SOCK_STREAM}, *ai = NULL;
     char port[16];
-    snprintf(port, sizeof port, "%d", S.url.port);
-    int g = getaddrinfo(S.url.host, port, &hints, &ai);
+    snprintf(port, sizeof port, "%d", S->url.port);
+    int g = getaddrinfo(S->url.host, port, &hints, &ai);
     if (g || !ai) {
-        fprintf(stderr, "ocean-client load: %s: %s\n", S.url.host, gai_strerror(g));
+        fprintf(stderr, "ocean-client load: %s: %s\n", S->url.host, gai_strerror(g));
         return 1;
     }
-    memcpy(&S.sa, ai->ai_addr, ai->ai_addrlen);
-    S.salen = ai->ai_addrlen;
+    memcpy(&S->sa, ai->ai_addr, ai->ai_addrlen);
+    S->salen = ai->ai_addrlen;
     freeaddrinfo(ai);
+    return 0;
+}
 
-    int nt = cfg->threads < 1 ? 1 : cfg->threads;
-    if (nt > cfg->nclients)
-        nt = cfg->nclients;
-    dv *vs = calloc((size_t)cfg->nclients, sizeof *vs);
-    worker *ws = calloc((size_t)nt, sizeof *ws);
-    dv **slots = calloc((size_t)cfg->nclients, sizeof *slots);
-    int rc = 0, started = 0;
-    if (!vs || !ws || !slots) {
-        fprintf(stderr, "ocean-client load: out of memory\n");
-        rc = 1;
-        goto out;
-    }
+/* Viewer i goes to worker i % nt, so the connect ramp is shared evenly;
+ * every verify_every-th viewer of a time-interpolating stream follows it.
+ * 0, or 1 (said). */
+static int direct_viewers_init(const load_cfg *cfg, dv *vs, worker *ws, int nt)
+{
     int side = (int)ceil(sqrt((double)cfg->nclients));
     for (int i = 0; i < cfg->nclients; i++) {
         dv *v = &vs[i];
         v->fd = -1;
         v->index = i;
         v->last_sim = NAN;
-        v->cam = cfg->cam0;
-        v->cam.pos[0] += cfg->spread * (i % side);
-        v->cam.pos[2] += cfg->spread * (i / side);
-        v->cam.vel[0] = (float)(v->cam.vel[0] + cfg->speed);
+        load_viewer_place(cfg, i, side, &v->cam);
         v->w = &ws[i % nt];
         if (load_timed(cfg) && i % cfg->verify_every == 0 && oc_frame_stream_create(&v->fs) != OCEAN_OK) {
             fprintf(stderr, "ocean-client load: out of memory\n");
-            rc = 1;
-            goto out;
+            return 1;
         }
     }
-    /* viewer i goes to worker i % nt, so the connect ramp is shared evenly */
+    return 0;
+}
+
+/* Each worker's viewers (slots holds them grouped by worker), receive
+ * buffer, epoll set and random seed: 0, or 1 (said). */
+static int direct_workers_init(const load_cfg *cfg, shared *S, dv *vs, worker *ws, int nt, dv **slots)
+{
     int k = 0;
     for (int t = 0; t < nt; t++) {
         worker *w = &ws[t];
-        w->S = &S;
+        w->S = S;
         w->v = slots + k;
         for (int i = t; i < cfg->nclients; i += nt)
             slots[k++] = &vs[i];
@@ -860,56 +865,47 @@ int load_direct_run(const load_cfg *cfg, load_result *R)
         w->rng = seed | 1;
         if (!(w->rb = malloc(RB_SIZE))) {
             fprintf(stderr, "ocean-client load: out of memory\n");
-            rc = 1;
-            goto out;
+            return 1;
         }
         w->ep = epoll_create1(EPOLL_CLOEXEC);
         if (w->ep < 0) {
             fprintf(stderr, "ocean-client load: epoll: %s\n", strerror(errno));
-            rc = 1;
-            goto out;
+            return 1;
         }
     }
-    S.t_start = occli_mono();
-    for (int t = 0; t < nt; t++) {
-        if (pthread_create(&ws[t].th, NULL, worker_main, &ws[t])) {
-            fprintf(stderr, "ocean-client load: cannot start worker threads\n");
-            atomic_store(&S.stop, 1);
-            rc = 1;
-            break;
-        }
-        started++;
-    }
-    if (!rc) {
-        /* every viewer connected (or failed), then the warm-up, then the window */
-        double deadline = S.t_start + cfg->ramp + cfg->timeout_ms * 1e-3;
-        while (!occli_stop && occli_mono() < deadline &&
-               atomic_load(&S.ready) + atomic_load(&S.failed) < cfg->nclients)
-            occli_sleep(0.01);
-        if (atomic_load(&S.ready) < cfg->nclients)
-            fprintf(stderr, "ocean-client load: only %d of %d viewers connected\n", atomic_load(&S.ready),
-                    cfg->nclients);
-        double warm_end = occli_mono() + cfg->warmup;
-        while (!occli_stop && occli_mono() < warm_end)
-            occli_sleep(0.01);
-        double c0 = cpu_now(), m0 = occli_mono();
-        atomic_store(&S.measuring, 1);
-        while (!occli_stop && occli_mono() < m0 + cfg->seconds)
-            occli_sleep(0.005);
-        atomic_store(&S.measuring, 0);
-        R->wall = occli_mono() - m0;
-        R->cpu = cpu_now() - c0;
-        atomic_store(&S.stop, 1);
-    }
-    for (int t = 0; t < started; t++)
-        pthread_join(ws[t].th, NULL);
-    R->created = atomic_load(&S.created);
-    R->ready = atomic_load(&S.ready);
-    if (atomic_load(&S.why_set))
-        snprintf(R->why, sizeof R->why, "%s", S.why);
+    return 0;
+}
+
+/* While the workers run: every viewer connected (or failed), then the
+ * warm-up, then the measured window; the workers are told to stop. */
+static void direct_window(const load_cfg *cfg, shared *S, load_result *R)
+{
+    double deadline = S->t_start + cfg->ramp + cfg->timeout_ms * 1e-3;
+    while (!occli_stop && occli_mono() < deadline &&
+           atomic_load(&S->ready) + atomic_load(&S->failed) < cfg->nclients)
+        occli_sleep(0.01);
+    if (atomic_load(&S->ready) < cfg->nclients)
+        fprintf(stderr, "ocean-client load: only %d of %d viewers connected\n", atomic_load(&S->ready),
+                cfg->nclients);
+    double warm_end = occli_mono() + cfg->warmup;
+    while (!occli_stop && occli_mono() < warm_end)
+        occli_sleep(0.01);
+    double c0 = load_cpu_seconds(), m0 = occli_mono();
+    atomic_store(&S->measuring, 1);
+    while (!occli_stop && occli_mono() < m0 + cfg->seconds)
+        occli_sleep(0.005);
+    atomic_store(&S->measuring, 0);
+    R->wall = occli_mono() - m0;
+    R->cpu = load_cpu_seconds() - c0;
+    atomic_store(&S->stop, 1);
+}
+
+/* Sums the viewers' counts into R, after the join. */
+static void direct_collect_viewers(const load_cfg *cfg, const dv *vs, load_result *R)
+{
     R->fmin = UINT64_MAX;
     for (int i = 0; i < cfg->nclients; i++) {
-        dv *v = &vs[i];
+        const dv *v = &vs[i];
         R->frames += v->frames;
         R->bytes += v->bytes;
         R->skipped += v->skipped;
@@ -929,7 +925,12 @@ int load_direct_run(const load_cfg *cfg, load_result *R)
     }
     if (R->fmin == UINT64_MAX)
         R->fmin = 0;
-    /* merge the raw samples of every thread; the zero point is the global minimum */
+}
+
+/* Merges the raw samples of every thread; the zero point is the global
+ * minimum. */
+static void direct_collect_delays(worker *ws, int nt, load_result *R)
+{
     for (int t = 0; t < nt; t++) {
         worker *w = &ws[t];
         if (w->min_delay < R->min_delay)
@@ -942,7 +943,10 @@ int load_direct_run(const load_cfg *cfg, load_result *R)
         if (w->oom)
             fprintf(stderr, "ocean-client load: out of memory in a worker; figures are incomplete\n");
     }
-out:
+}
+
+static void direct_free(const load_cfg *cfg, dv *vs, worker *ws, int nt, dv **slots)
+{
     for (int i = 0; vs && i < cfg->nclients; i++) {
         dv *v = &vs[i];
         if (v->fd >= 0) {
@@ -966,5 +970,53 @@ out:
     free(slots);
     free(ws);
     free(vs);
+}
+
+int load_direct_run(const load_cfg *cfg, load_result *R)
+{
+    memset(R, 0, sizeof *R);
+    R->min_delay = R->min_any = INFINITY;
+    shared S;
+    memset(&S, 0, sizeof S);
+    S.cfg = cfg;
+    if (direct_resolve(cfg, &S))
+        return 1;
+    int nt = cfg->threads < 1 ? 1 : cfg->threads;
+    if (nt > cfg->nclients)
+        nt = cfg->nclients;
+    dv *vs = calloc((size_t)cfg->nclients, sizeof *vs);
+    worker *ws = calloc((size_t)nt, sizeof *ws);
+    dv **slots = calloc((size_t)cfg->nclients, sizeof *slots);
+    if (!vs || !ws || !slots) {
+        fprintf(stderr, "ocean-client load: out of memory\n");
+        direct_free(cfg, vs, ws, nt, slots);
+        return 1;
+    }
+    if (direct_viewers_init(cfg, vs, ws, nt) || direct_workers_init(cfg, &S, vs, ws, nt, slots)) {
+        direct_free(cfg, vs, ws, nt, slots);
+        return 1;
+    }
+    int rc = 0, started = 0;
+    S.t_start = occli_mono();
+    for (int t = 0; t < nt; t++) {
+        if (pthread_create(&ws[t].th, NULL, worker_main, &ws[t])) {
+            fprintf(stderr, "ocean-client load: cannot start worker threads\n");
+            atomic_store(&S.stop, 1);
+            rc = 1;
+            break;
+        }
+        started++;
+    }
+    if (!rc)
+        direct_window(cfg, &S, R);
+    for (int t = 0; t < started; t++)
+        pthread_join(ws[t].th, NULL);
+    R->created = atomic_load(&S.created);
+    R->ready = atomic_load(&S.ready);
+    if (atomic_load(&S.why_set))
+        snprintf(R->why, sizeof R->why, "%s", S.why);
+    direct_collect_viewers(cfg, vs, R);
+    direct_collect_delays(ws, nt, R);
+    direct_free(cfg, vs, ws, nt, slots);
     return rc;
 }

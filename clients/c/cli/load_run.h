@@ -86,6 +86,14 @@ int load_frame_bad(const oc_frame *f);
 #define LOAD_FILL_FRAMES 10
 int load_frame_followed_bad(const oc_frame *f, int *fill);
 
+/* Where viewer i of a grid `side` viewers wide starts: cfg->spread metres
+ * from its neighbours, flying at cfg->speed along +x on top of the
+ * camera's own velocity. */
+void load_viewer_place(const load_cfg *cfg, int i, int side, proto_camera *cam);
+
+/* CPU seconds this process has used, user and system. */
+double load_cpu_seconds(void);
+
 /* Both return 0 when the run took place (the result says how well, and
  * ready < nclients that some viewers were never served), 1 on a setup
  * failure (message printed). */
