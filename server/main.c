@@ -204,7 +204,7 @@ static int probe_listen(const srv_config *c, char *err, size_t errlen)
 
 /* The host of the URL the start line prints: the bind address, 0.0.0.0
  * for all interfaces, and for an interface name ("lo") its IPv4 address
- * (http://lo:PORT/ was printed, which no browser opens). */
+ * (no browser opens http://lo:PORT/). */
 static void listen_host(const char *bind, char *out, size_t n)
 {
     struct in_addr a;

@@ -852,9 +852,9 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
      * geometry does not resolve it, the lod rule reads them there), never
      * again in the tail.  Without such a cascade - no near-field cascade,
      * or a subscription without the effect - its waves are still the
-     * sea's (the tail starts above them), so they shade, in the tail (a
-     * subscription without the effect had them nowhere: a gap in its
-     * spectrum, 13 % of ship-bridge's slope variance). */
+     * sea's (the tail starts above them), so they shade, in the tail
+     * (left out, they would be a gap in the spectrum: 13 % of
+     * ship-bridge's slope variance). */
     int near_in_frame = tb->nf && (sub->effects & PROTO_FX_NEAR_FIELD);
     for (int i = 0; i < 3; i++) {
         b->tail_mss[i] = (float)tb->tail_mss[i];

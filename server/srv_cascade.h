@@ -51,7 +51,7 @@ typedef struct srv_cascade srv_cascade;
 /* The finest spacing per metre of distance a plan starts from: a 720-px
  * view 0.002 deg wide.  Any real optic asks for more (a 5 deg binocular
  * view: 2.9e-3); a degenerate field of view (the smallest float, 1e-45 deg)
- * asked for 1e-37 and got every tile of every mip, 6.6 times the budget. */
+ * would ask for 1e-37, every tile of every mip, 6.6 times the budget. */
 #define SRV_CASCADE_Q_MIN 1e-6
 
 /* One layout-1 frame to build. */

@@ -514,8 +514,7 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
     for (int i = 0; r == OCEAN_OK && i < nsets; i++)
         r = conf_apply(sets[i], &set, err, errlen);
     /* What a check of the keys together names: every source that set them
-     * (a wisdom plan given by --set and refused for want of a file was
-     * blamed on the scene file, which says neither). */
+     * (a key given by --set is not the scene file's fault). */
     char from[2 * SRV_PATH_MAX + 96];
     snprintf(from, sizeof from, "%.*s", SRV_PATH_MAX, path ? path : "(defaults)");
     if (r == OCEAN_OK && tmp->srv.scene[0]) {

@@ -62,8 +62,8 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     msg[0] = 0;
     /* A changed sea is built once here, off the lock (the simulation thread
      * ticks on), before any client is told of it: a sea that cannot be
-     * built (a wisdom file without its grid's plans) was announced to
-     * every client and then never served, after "configuration reloaded". */
+     * built (a wisdom file without its grid's plans) must not be announced
+     * to every client and then never served. */
     srv_settings *probe = malloc(sizeof *probe);
     if (!probe) return OCEAN_ENOMEM;
     pthread_mutex_lock(&h->lock);
@@ -104,9 +104,8 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
      * the sea in force: a reload of an unchanged file undid a SEA_STATE set
      * and announced the old sea to every client. */
     /* Refused (it cannot be built, or the timeline is full), the file's sea
-     * is not taken as seen: the next reload tries it again.  Taken as seen
-     * after a refusal, it was never applied, while the log said
-     * "configuration reloaded". */
+     * is not taken as seen: the next reload tries it again, so a refusal
+     * never leaves the file's sea unapplied for good. */
     char full_why[200] = "";
     if (file_sea_changed && !sea_ok) {
         /* said in msg, on the "configuration reloaded" line */

@@ -1,6 +1,8 @@
 /*
- * srv_net.c - libwebsockets service thread: connections, HTTP pages,
- * hand-over of queued bytes, limits.
+ * srv_net.c - the libwebsockets service thread (see srv_net.h): the one
+ * thread that owns every connection, from the upgrade's checks to the last
+ * byte sent, and the limits that keep one connection from hurting the
+ * others.  Each connection's own state is its session (srv_session.h).
  */
 #include "srv_net.h"
 
@@ -333,7 +335,7 @@ static void net_wake(void *ctx)
  *
  * The clock is now - server.epoch, and past OCEAN_TIME_MAX (2^27 s, 4.25
  * years) nothing can be served: no HELLO, FRAME or announce encodes
- * (sim/ocean_time.h).  Connections were left open in silence.  Every
+ * (sim/ocean_time.h).  Rather than leave connections open in silence, every
  * client, connected or new, is told why (BYE shutdown) and closed, and
  * /status answers 503; the epoch is fixed for the run, so only a restart
  * with a nearer server.epoch ends it. */
@@ -442,8 +444,8 @@ static int filter_upgrade(srv_net *n, struct lws *wsi, int ocean)
 static int on_http(srv_net *n, struct lws *wsi, http_pss *pss)
 {
     /* The mounts match by prefix: only the exact paths are answered
-     * (/metricsfoo was served the metrics), GET and HEAD alike (HEAD
-     * got 404, which a load balancer's health check reads as down);
+     * (/metricsfoo is not the metrics), GET and HEAD alike (a 404 to HEAD
+     * reads as down to a load balancer's health check);
      * other methods get 405 naming the two.  The method is told by
      * the URI header's length, not by a copy of it: a path too long
      * for the copy made a GET look like no method at all (405). */
@@ -525,8 +527,8 @@ static int cb_http(struct lws *wsi, enum lws_callback_reasons reason, void *user
     case LWS_CALLBACK_FILTER_HTTP_CONNECTION: {
         /* Before the web root mount looks for a file: lws names it as
          * web_root "/" path in 255 bytes and cuts the rest, so a longer
-         * path whose first bytes name a file was served that file (or 415
-         * for a name without a type) in place of the one asked for. */
+         * path whose first bytes name a file would be served that file (or
+         * 415 for a name without a type) in place of the one asked for. */
         int ulen = lws_hdr_total_length(wsi, WSI_TOKEN_GET_URI);
         if (ulen <= 0) ulen = lws_hdr_total_length(wsi, WSI_TOKEN_HEAD_URI);
         if (ulen > 0 && strlen(n->web_root) + 1 + (size_t)ulen > SRV_LWS_FILE_PATH_MAX) {
@@ -1125,7 +1127,7 @@ ocean_result srv_net_create(srv_hub *h, srv_net **out, char *msg, size_t msglen)
     /* tx_packet_size: a FRAME goes to send() whole.  Left at 0, lws caps
      * each send() at rx_buffer_size (64 KiB) and copies the rest of every
      * larger message into its own buffer for a later POLLOUT: at 256
-     * viewers that copy was 8 % of the service thread, and the extra
+     * viewers that copy is 8 % of the service thread, and the extra
      * writeable round per frame added to the fan-out.  What the kernel does
      * not take is still buffered by lws, and still counts as in flight
      * for the output limit. */

@@ -53,8 +53,8 @@ ocean_result srv_record_open(const char *dir, uint32_t client_id, const char *sc
      * name, a symlink included (dangling or not).  A taken name moves on to
      * one with a random suffix, as mkstemp does: a fixed sequence of
      * alternatives (-1 .. -99) could be filled in advance by anyone who
-     * can write the directory, and every later recording of that client id
-     * and second was refused. */
+     * can write the directory, refusing every later recording of that
+     * client id and second. */
     long long now = (long long)time(NULL);
     char name[1024];
     int fd = -1, err = 0;
@@ -174,8 +174,8 @@ ocean_result srv_record_close(srv_record *r, char *why, size_t whylen)
 {
     if (why && whylen) why[0] = 0;
     if (!r) return OCEAN_OK;
-    /* the buffered tail is written here: a full disk shows at fclose (three
-     * short recordings were left empty and nothing was said) */
+    /* the buffered tail is written here: a full disk shows at fclose, and
+     * a short recording would otherwise be left empty with nothing said */
     int bad = r->f && fclose(r->f) != 0;
     if (bad && !r->err_no) r->err_no = errno;
     ocean_result res = bad || (r->failed && r->err_no) ? OCEAN_EIO : OCEAN_OK;

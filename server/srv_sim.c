@@ -433,9 +433,9 @@ static void apply_subscription(srv_sim *s, srv_client *c, srv_client_sim *cs)
     mc.lambda_dominant_m = s->lambda_dom;
     mc.roughness = s->roughness;
     /* what MESH_TOPOLOGY can carry: a camera near the water with a long
-     * range gets a coarser core, not a mesh the frame cannot hold (it was
-     * built, refused, and the client went without a mesh until its next
-     * SUBSCRIBE) */
+     * range gets a coarser core, not a mesh the frame cannot hold (which
+     * would be built, refused, and leave the client without a mesh until
+     * its next SUBSCRIBE) */
     mc.max_levels = PROTO_MAX_LOD_LEVELS;
     char msg[256];
     ocean_result r = mesh_config_validate(&mc, msg, sizeof msg);

@@ -27,7 +27,7 @@ typedef struct srv_stats {
     atomic_uint_fast64_t queries, query_points, errors_sent;
     atomic_uint_fast64_t connections_total, disconnects_slow, refused_full;
     atomic_uint_fast64_t sea_changes, reloads;
-    /* issue 15: what was refused to keep one client from hurting the others */
+    /* what was refused to keep one client from hurting the others */
     atomic_uint_fast64_t refused_rate, refused_silent, refused_mesh, refused_upgrade;
     atomic_uint_fast64_t coarsened_mesh;     /* meshes built at a coarser budget to fit */
     atomic_uint_fast64_t disconnects_partial, disconnects_output, disconnects_protocol;

@@ -1,6 +1,8 @@
 /*
- * srv_tiles.c - tile sampling, encoding and the tile cache (a chained hash
- * table swept once a tick).
+ * srv_tiles.c - layout 0's tiles, made once however many clients ask: each
+ * sampled from an evaluated ocean, encoded, and kept in a cache (a chained
+ * hash table swept once a tick) keyed by what decides its bytes (see
+ * srv_tiles.h).
  */
 #include "srv_tiles.h"
 
@@ -13,9 +15,9 @@
 
 /* The encoding context of the calling thread (the sim thread and the
  * OpenMP workers srv_sim.c builds tiles on), made on its first tile and
- * freed when the thread exits: a new zstd context per tile cost about a
- * fifth of qz encoding (issue 14).  NULL if it cannot be made; the codec
- * then makes one per call, as before. */
+ * freed when the thread exits: a new zstd context per tile costs about a
+ * fifth of qz encoding.  NULL if it cannot be made; the codec then makes
+ * one per call. */
 static pthread_key_t codec_key;
 static pthread_once_t codec_once = PTHREAD_ONCE_INIT;
 static int codec_key_ok;

@@ -1,7 +1,7 @@
 /*
  * srv_work.h - client work the simulation thread does beside frames, cut
  * into bounded slices so that no client's request delays the tick that
- * serves everyone (issue 15).
+ * serves everyone.
  *
  * QUERY: a query is answered over as many ticks as it needs.  Each tick
  * the simulation thread gives queries a time budget (server.query_ms),
