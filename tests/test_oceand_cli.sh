@@ -211,12 +211,16 @@ for _ in $(seq 200); do grep -q "listening on" "$tmp/f.log" && break; sleep 0.05
 port=$(sed -n 's|^oceand: listening on http://[0-9.]*:\([0-9]*\)/.*|\1|p' "$tmp/f.log")
 [[ -n $port ]] || { kill "$dpid"; fail "daemon for the log flood: $(cat "$tmp/f.log")"; }
 long=/$(head -c 9000 /dev/zero | tr '\0' a)
+t0=$(date +%s.%N)
 for _ in $(seq 40); do curl -s -o /dev/null --max-time 2 "http://127.0.0.1:$port$long"; done
 "$BUILD/ocean-client" load "ws://127.0.0.1:$port/?record=1" --clients 6 --seconds 1 --rate 5 >/dev/null 2>&1
 kill -TERM "$dpid"; wait "$dpid"
 n_lws=$(grep -c "^oceand: lws" "$tmp/f.log")
 n_rec=$(grep -c "not recording" "$tmp/f.log")
-[[ $n_lws -ge 1 && $n_lws -le 3 ]] || fail "40 long URLs: $n_lws lws lines (want 1-3): $(head -5 "$tmp/f.log")"
+# lws's lines are held to one a second: at most one per second the requests
+# and the shutdown took, plus the shutdown's own, however slow the host
+most=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN {printf "%d", b - a + 2}')
+[[ $n_lws -ge 1 && $n_lws -le $most ]] || fail "40 long URLs: $n_lws lws lines (want 1-$most): $(head -5 "$tmp/f.log")"
 [[ $n_rec -eq 1 ]] || fail "6 recording clients past record_max_files 1: $n_rec lines (want 1): $(grep "not recording" "$tmp/f.log" | head -3)"
 
 echo "== the default start says nothing a layout-0 client may never need ($SECONDS s)"
