@@ -1,0 +1,201 @@
+/*
+ * test_srv_parts.c - the daemon's per-client parts on their own, without a
+ * connection or a thread: the token bucket every rate budget uses, a
+ * client's inbox (its QUERYs and replay cameras) and outbox (its FIFO and
+ * latest-wins frame slot, under a hard byte limit), and the simulation
+ * thread's table of what it keeps of each client.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "srv_bucket.h"
+#include "srv_client.h"
+#include "srv_client_sim.h"
+#include "srv_inbox.h"
+#include "srv_outbox.h"
+
+/* A bucket never used starts full; each take costs its tokens; refused
+ * takes cost nothing; tokens come back at the rate, never above the depth;
+ * spending may go into debt, which refills pay back. */
+static void bucket_rules(void **state)
+{
+    (void)state;
+    srv_bucket b = {0};
+    for (int i = 0; i < 4; i++) assert_true(srv_bucket_take(&b, 2.0, 4.0, 100.0, 1));
+    assert_false(srv_bucket_take(&b, 2.0, 4.0, 100.0, 1));
+    assert_false(srv_bucket_take(&b, 2.0, 4.0, 100.25, 1)); /* 0.5 token */
+    assert_true(srv_bucket_take(&b, 2.0, 4.0, 100.5, 1));   /* 1 token */
+    assert_true(srv_bucket_refill(&b, 2.0, 4.0, 200.0) == 4.0);
+    srv_bucket_spend(&b, 10.0);
+    assert_true(b.tokens == -6.0);
+    assert_true(srv_bucket_refill(&b, 2.0, 4.0, 203.0) == 0.0);
+    assert_false(srv_bucket_take(&b, 2.0, 4.0, 203.0, 1));
+    /* a clock that steps back refills nothing */
+    assert_true(srv_bucket_refill(&b, 2.0, 4.0, 150.0) == 0.0);
+}
+
+static srv_query *query(uint32_t id)
+{
+    srv_query *q = calloc(1, sizeof *q);
+    assert_non_null(q);
+    q->query_id = id;
+    q->count = 1;
+    q->points = calloc(2, sizeof(double));
+    return q;
+}
+
+static srv_replay_cam *replay_cam(uint32_t seq)
+{
+    srv_replay_cam *rc = calloc(1, sizeof *rc);
+    assert_non_null(rc);
+    rc->seq = seq;
+    return rc;
+}
+
+/* Both queues are FIFOs with their counts; dropping the replay cameras
+ * keeps the queries; what is left is freed with the inbox (LSan). */
+static void inbox_fifos(void **state)
+{
+    (void)state;
+    srv_inbox *in;
+    assert_int_equal(srv_inbox_create(&in), OCEAN_OK);
+    for (uint32_t i = 1; i <= 3; i++) {
+        srv_inbox_push_query(in, query(i));
+        srv_inbox_push_replay(in, replay_cam(10 + i));
+    }
+    assert_int_equal(srv_inbox_queries(in), 3);
+    assert_int_equal(srv_inbox_replays(in), 3);
+    srv_query *q = srv_inbox_take_query(in);
+    assert_int_equal(q->query_id, 1);
+    free(q->points);
+    free(q);
+    srv_replay_cam *rc = srv_inbox_take_replay(in);
+    assert_int_equal(rc->seq, 11);
+    free(rc);
+    srv_inbox_drop_replays(in);
+    assert_int_equal(srv_inbox_replays(in), 0);
+    assert_null(srv_inbox_take_replay(in));
+    assert_int_equal(srv_inbox_queries(in), 2);
+    q = srv_inbox_take_query(in);
+    assert_int_equal(q->query_id, 2);
+    free(q->points);
+    free(q);
+    srv_inbox_push_query(in, query(4));
+    assert_int_equal(srv_inbox_queries(in), 2);
+    srv_inbox_destroy(in);
+    srv_inbox_destroy(NULL);
+}
+
+static srv_msg *msg_of(size_t bytes, int close_after)
+{
+    srv_msg *m = srv_msg_new();
+    assert_non_null(m);
+    assert_int_equal(proto_buf_reserve(&m->buf, bytes), OCEAN_OK);
+    memset(proto_buf_data(&m->buf), 0, bytes);
+    m->buf.len = bytes;
+    m->close_after = close_after;
+    return m;
+}
+
+/* The FIFO goes before the frame slot; a published frame replaces an unsent
+ * one (reported as skipped) and keeps an unsent topology when it brings
+ * none; the hard limit refuses a message that would pass it (2 the first
+ * time, 1 after), never a BYE; a queue asks for a write once. */
+static void outbox_order_and_limit(void **state)
+{
+    (void)state;
+    srv_outbox *o;
+    assert_int_equal(srv_outbox_create(0, &o), OCEAN_OK);
+    srv_msg *topo = msg_of(10, 0), *f1 = msg_of(20, 0), *f2 = msg_of(30, 0), *c1 = msg_of(40, 0);
+    assert_int_equal(srv_outbox_publish(o, topo, f1), 0);
+    assert_int_equal(srv_outbox_publish(o, NULL, f2), 1);
+    assert_true(srv_outbox_frame_waiting(o));
+    assert_true(srv_outbox_next_is_live(o));
+    assert_int_equal(srv_outbox_queue(o, c1), 0);
+    assert_false(srv_outbox_next_is_live(o));
+    assert_true(srv_outbox_take_want_write(o));
+    assert_false(srv_outbox_take_want_write(o));
+    uint64_t queued = srv_outbox_queued(o);
+    assert_true(queued == srv_msg_cost(topo) + srv_msg_cost(f2) + srv_msg_cost(c1));
+    srv_msg *m = srv_outbox_take(o);
+    assert_ptr_equal(m, c1);
+    srv_msg_free(m);
+    m = srv_outbox_take(o);
+    assert_ptr_equal(m, topo);
+    srv_msg_free(m);
+    m = srv_outbox_take(o);
+    assert_ptr_equal(m, f2);
+    assert_true(m->live);
+    srv_msg_free(m);
+    assert_null(srv_outbox_take(o));
+    assert_true(srv_outbox_queued(o) == 0);
+
+    srv_msg *big = msg_of(1000, 0);
+    srv_outbox_set_hard(o, srv_msg_cost(big) + 10);
+    assert_int_equal(srv_outbox_queue(o, big), 0);
+    assert_false(srv_outbox_over_hard(o));
+    assert_int_equal(srv_outbox_queue(o, msg_of(100, 0)), 2);
+    assert_true(srv_outbox_over_hard(o));
+    assert_int_equal(srv_outbox_queue(o, msg_of(100, 0)), 1);
+    assert_int_equal(srv_outbox_queue(o, msg_of(100, 1)), 0); /* a BYE always goes in */
+    srv_outbox_destroy(o);
+    srv_outbox_destroy(NULL);
+}
+
+/* One entry per client, the same one each time it is asked for, made
+ * with its smoother ready; a closed client's entry goes at the next sweep;
+ * reapply asks every entry to apply its subscription again. */
+static void client_table(void **state)
+{
+    (void)state;
+    srv_settings s;
+    char err[256];
+    assert_int_equal(srv_settings_default(&s, err, sizeof err), OCEAN_OK);
+    srv_hub h;
+    assert_int_equal(srv_hub_init(&h, &s), OCEAN_OK);
+    srv_client *c[3];
+    for (int i = 0; i < 3; i++) assert_int_equal(srv_client_create(&h, &c[i]), OCEAN_OK);
+    srv_client_table *t;
+    assert_int_equal(srv_client_table_create(&t), OCEAN_OK);
+    srv_client_sim *cs[3];
+    for (int i = 2; i >= 0; i--) cs[i] = srv_client_table_get(t, c[i]);
+    for (int i = 0; i < 3; i++) {
+        assert_non_null(cs[i]);
+        assert_ptr_equal(srv_client_table_get(t, c[i]), cs[i]);
+        cs[i]->sub_gen = 7;
+    }
+    assert_true(cs[0] != cs[1] && cs[1] != cs[2]);
+    srv_client_ref(c[1]);
+    srv_client_remove(c[1]);          /* the hub's reference goes; closed */
+    pthread_mutex_lock(&h.lock);
+    srv_client_table_sweep(t);
+    pthread_mutex_unlock(&h.lock);
+    srv_client_sim *again = srv_client_table_get(t, c[1]); /* a new entry for a client seen anew */
+    assert_non_null(again);
+    assert_true(again->sub_gen == 0);
+    assert_ptr_equal(srv_client_table_get(t, c[0]), cs[0]);
+    assert_ptr_equal(srv_client_table_get(t, c[2]), cs[2]);
+    srv_client_table_reapply(t);
+    assert_true(cs[0]->sub_gen == 0 && cs[2]->sub_gen == 0);
+    srv_client_table_destroy(t);
+    srv_client_table_destroy(NULL);
+    srv_client_unref(c[1]);
+    srv_hub_fini(&h);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(bucket_rules),
+        cmocka_unit_test(inbox_fifos),
+        cmocka_unit_test(outbox_order_and_limit),
+        cmocka_unit_test(client_table),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
