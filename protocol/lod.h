@@ -1,14 +1,18 @@
 /*
  * lod.h - "Where each mip is read" (PROTOCOL.md): the spacing a layout-1
- * reader wants at a point and the mips of a cascade it reads there, with
- * their weights.  One rule for the daemon (which plans tiles and e_error
- * by it) and every client (which reads by it); the viewer's shader code
- * follows the same text.
+ * reader wants at a point, the mips of a cascade it reads there with
+ * their weights, and the unresolved slope moments those mips leave to
+ * shading.  One rule for the daemon (which plans tiles and e_error by it)
+ * and every client (which reads by it); the viewer's shader code follows
+ * the same text and is checked against points computed here
+ * (tests/vectors/lod.txt, lod_mss.txt).
  *
  * Threads: pure functions.
  */
 #ifndef PROTO_LOD_H
 #define PROTO_LOD_H
+
+#include "proto.h"
 
 /* The mips of one cascade read at spacing s. */
 typedef struct proto_lod_read {
@@ -27,5 +31,15 @@ double proto_lod_spacing(double q_c, double min_spacing, double cam_y, double dx
  * between, the last beyond, faded out by clamp(mips - lambda, 0, 1) when
  * the cascade fades. */
 void proto_lod_read_at(double s, double sigma, int mips, int fades, proto_lod_read *out);
+
+/* Adds to mss (x, z, xz) the unresolved slope moments of one cascade read
+ * as r says (r from proto_lod_read_at with the same mips): the mip table
+ * entries of the mips read with their weights, entry `mips` (the whole
+ * cascade) with 1 - fade, and, where two entries are blended with weights
+ * a and 1 - a (two mips, or the last mip and entry `mips` in a fade),
+ * a (1 - a) (coarser - finer).  tab holds entries 0..mips.  Term by term in
+ * that order, so a sum over cascades begun at tail_mss rounds alike for
+ * every caller.  A mip outside 0..mips-1 or of weight <= 0 adds nothing. */
+void proto_lod_mss_add(const proto_lod_read *r, const proto_mip_entry *tab, int mips, double mss[3]);
 
 #endif

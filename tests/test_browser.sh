@@ -7,8 +7,9 @@
 #     against the C ones, byte for byte, including hostile input, plus the
 #     protocol's own vectors in tests/vectors/; the viewer's GLSL of "Where
 #     each mip is read" run in headless Chromium against the C rule's points
-#     (lod.test.mjs, tests/vectors/lod.txt); and the viewer's small modules
-#     (timeline.test.mjs, rate.test.mjs, meshstore.test.mjs).
+#     (lod.test.mjs, tests/vectors/lod.txt and lod_mss.txt); and the
+#     viewer's small modules (timeline.test.mjs, rate.test.mjs,
+#     meshstore.test.mjs).
 #  2. Real browser: starts $BUILD/oceand on a free loopback port with
 #     config/oceand.conf and runs tests/browser/viewer.test.mjs: headless
 #     Chromium (/usr/bin/chromium, software GL) driven by playwright-core

@@ -2,7 +2,9 @@
  * test_proto.c - the ocean.v1 messages: round trip of every type, every
  * test vector in tests/vectors/ (bytes <-> decoded text), and each kind of
  * bad input (truncated, oversized, wrong version, wrong type, bad enum,
- * NaN, lying lengths) giving its specified ocean_result.
+ * NaN, lying lengths) giving its specified ocean_result; and "Where each
+ * mip is read" (protocol/lod.c) by hand and as its vectors lod.txt and
+ * lod_mss.txt.
  *
  * `test_proto --write-vectors DIR` (re)creates the vectors: NAME.bin is one
  * message, NAME.txt its decoded form (or "error = CODE" for the bad ones),
@@ -36,14 +38,19 @@ static void out(sbuf *b, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    char tmp[512];
-    int k = vsnprintf(tmp, sizeof tmp, fmt, ap);
+    int k = vsnprintf(NULL, 0, fmt, ap);
     va_end(ap);
+    if (k < 0)
+        fail_msg("out: bad format %s", fmt);
     if (b->n + (size_t)k + 1 > b->cap) {
         b->cap = (b->cap + (size_t)k + 1) * 2;
         b->s = realloc(b->s, b->cap);
+        if (!b->s)
+            fail_msg("out: no memory");
     }
-    memcpy(b->s + b->n, tmp, (size_t)k + 1);
+    va_start(ap, fmt);
+    vsnprintf(b->s + b->n, b->cap - b->n, fmt, ap);
+    va_end(ap);
     b->n += (size_t)k;
 }
 
@@ -1107,7 +1114,7 @@ static const char *type_file(proto_type t)
     return buf;
 }
 
-static int write_lod_vectors(const char *path);
+static int write_lod_vectors(const char *dir);
 
 static int write_vectors(const char *dir)
 {
@@ -1169,8 +1176,7 @@ static int write_vectors(const char *dir)
             return 1;
         proto_buf_free(&b);
     }
-    snprintf(path, sizeof path, "%s/lod.txt", dir);
-    return write_lod_vectors(path) ? 1 : 0;
+    return write_lod_vectors(dir) ? 1 : 0;
 }
 
 static const char *vector_dir(void)
@@ -1314,7 +1320,8 @@ static void test_cascade_layout(void **state)
 
 /* tests/vectors/lod.txt: "Where each mip is read" as protocol/lod.c
  * computes it, over cascades like the daemon's (a coarsest one that does
- * not fade, finer ones that do) and points from the nadir to 25 km; the
+ * not fade, finer ones that do) and points from the nadir to 25 km;
+ * lod_mss.txt: the unresolved slope moments at the same points.  The
  * viewer's shader code is checked against the same lines
  * (tests/browser/lod.test.mjs).  Inputs are binary32 values, as the
  * frame carries them. */
@@ -1326,6 +1333,7 @@ typedef struct lod_cascade {
 typedef struct lod_case {
     double q, min_s, cam_y, dx, dz, floor_s;
     lod_cascade k;
+    int j;              /* k's index in lod_cascades */
 } lod_case;
 
 static const lod_cascade lod_cascades[] = {
@@ -1351,7 +1359,8 @@ static lod_case lod_case_at(int i)
     if (i >= LOD_GRID) {
         k.q = 0.0625;
         k.cam_y = lod_edge_y[i - LOD_GRID];
-        k.k = lod_cascades[3];
+        k.j = 3;
+        k.k = lod_cascades[k.j];
         return k;
     }
     int nf = (int)(sizeof lod_floor / sizeof *lod_floor), nd = (int)(sizeof lod_d / sizeof *lod_d);
@@ -1365,19 +1374,68 @@ static lod_case lod_case_at(int i)
     k.cam_y = lod_cam_y[i % ny];
     i /= ny;
     k.q = lod_q[i % nq];
-    k.k = lod_cascades[i / nq];
+    k.j = i / nq;
+    k.k = lod_cascades[k.j];
     return k;
 }
 
-/* One line: the inputs, " -> ", what the rule reads. */
-static void lod_line(char *buf, size_t len, const lod_case *k)
+/* Cascade j's mip table moments and the block's tail_mss of the points on
+ * it in lod_mss.txt: entry m leaves out more of the cascade's waves as m
+ * grows, entry mips holds them all; x, z and xz take different shapes so a
+ * reader that swaps them differs, xz of either sign (PROTOCOL.md). */
+static void lod_table(int j, int mips, proto_mip_entry tab[PROTO_MIP_ENTRIES], double tail[3])
+{
+    static const double scale[][3] = {
+        {0.004, 0.0025, 0.0007}, {0.011, 0.0075, -0.0021}, {0.0065, 0.009, 0.0013}, {0.0093, 0.0041, -0.0032},
+    };
+    static const float tails[][3] = {
+        {0.0021f, 0.0017f, -0.0004f}, {0.0009f, 0.0012f, 0.0002f}, {0.0004f, 0.0003f, 0}, {0.0031f, 0.0026f, -0.0011f},
+    };
+    memset(tab, 0, sizeof(proto_mip_entry) * PROTO_MIP_ENTRIES);
+    for (int m = 0; m <= mips; m++) {
+        int whole = m == mips;
+        tab[m].mss_x = (float)(scale[j][0] * (whole ? 1 : 1 - pow(0.55, m + 1)));
+        tab[m].mss_z = (float)(scale[j][1] * (whole ? 1 : 1 - pow(0.7, m + 1)));
+        tab[m].mss_xz = (float)(scale[j][2] * (whole ? 1 : 1 - pow(0.45, m + 1)));
+    }
+    for (int i = 0; i < 3; i++)
+        tail[i] = tails[j][i];
+}
+
+/* A point's inputs, as both files list them. */
+static void lod_inputs(sbuf *b, const lod_case *k)
+{
+    out(b, "%.9g %.9g %.9g %.9g %.9g %.9g %.9g %d %d %d", k->q, k->min_s, k->cam_y, k->dx, k->dz, k->floor_s,
+        k->k.patch, k->k.n, k->k.mips, k->k.fades);
+}
+
+/* lod.txt's line: the inputs, " -> ", what the rule reads. */
+static void lod_line(sbuf *b, const lod_case *k)
 {
     double s = fmax(proto_lod_spacing(k->q, k->min_s, k->cam_y, k->dx, k->dz), k->floor_s);
     proto_lod_read r;
     proto_lod_read_at(s, k->k.patch / k->k.n, k->k.mips, k->k.fades, &r);
-    snprintf(buf, len, "%.9g %.9g %.9g %.9g %.9g %.9g %.9g %d %d %d -> %.17g %.17g %d %.17g %d %.17g %.17g\n", k->q,
-             k->min_s, k->cam_y, k->dx, k->dz, k->floor_s, k->k.patch, k->k.n, k->k.mips, k->k.fades, s, r.lambda,
-             r.mip[0], r.weight[0], r.mip[1], r.weight[1], r.fade);
+    lod_inputs(b, k);
+    out(b, " -> %.17g %.17g %d %.17g %d %.17g %.17g\n", s, r.lambda, r.mip[0], r.weight[0], r.mip[1], r.weight[1],
+        r.fade);
+}
+
+/* lod_mss.txt's line: the inputs, tail_mss and the mip table, " -> ", the
+ * unresolved slope moments there. */
+static void lod_mss_line(sbuf *b, const lod_case *k)
+{
+    double s = fmax(proto_lod_spacing(k->q, k->min_s, k->cam_y, k->dx, k->dz), k->floor_s);
+    proto_lod_read r;
+    proto_lod_read_at(s, k->k.patch / k->k.n, k->k.mips, k->k.fades, &r);
+    proto_mip_entry tab[PROTO_MIP_ENTRIES];
+    double mss[3];
+    lod_table(k->j, k->k.mips, tab, mss);
+    lod_inputs(b, k);
+    out(b, " %.9g %.9g %.9g", mss[0], mss[1], mss[2]);
+    for (int m = 0; m <= k->k.mips; m++)
+        out(b, " %.9g %.9g %.9g", tab[m].mss_x, tab[m].mss_z, tab[m].mss_xz);
+    proto_lod_mss_add(&r, tab, k->k.mips, mss);
+    out(b, " -> %.17g %.17g %.17g\n", mss[0], mss[1], mss[2]);
 }
 
 static const char lod_head[] =
@@ -1386,43 +1444,64 @@ static const char lod_head[] =
     "# s = max(min_spacing_m, q_c sqrt(dx^2 + dz^2 + max(|cam_y|, 1)^2), floor_m) (floor_m: a vertex's g_L or G),\n"
     "# sigma = patch_m / n, lambda = log2(s / sigma); mip1 -1 when one mip is read; the weights include the fade.\n";
 
-static int write_lod_vectors(const char *path)
+static const char lod_mss_head[] =
+    "# PROTOCOL.md \"Where each mip is read\": the unresolved slope moments, computed by protocol/lod.c; one point "
+    "a line:\n"
+    "# q_c min_spacing_m cam_y dx dz floor_m patch_m n mips fades tail_x tail_z tail_xz e0_x e0_z e0_xz ... "
+    "e<mips>_x e<mips>_z e<mips>_xz -> mss_x mss_z mss_xz\n"
+    "# the point and cascade as in lod.txt (the points are its points); tail: the block's tail_mss; e<m>: the mip\n"
+    "# table's entry m (m = mips: the whole cascade); mss = tail + the entries of the mips read with their weights\n"
+    "# + entry mips with 1 - fade + a (1 - a) (coarser - finer) where two entries are blended with a, 1 - a.\n";
+
+/* The text of lod.txt (mss 0) or lod_mss.txt (mss 1). */
+static void lod_text(sbuf *b, int mss)
 {
-    FILE *f = fopen(path, "w");
-    if (!f)
-        return -1;
-    fputs(lod_head, f);
+    out(b, "%s", mss ? lod_mss_head : lod_head);
     for (int i = 0; i < LOD_CASES; i++) {
-        char line[512];
         lod_case k = lod_case_at(i);
-        lod_line(line, sizeof line, &k);
-        fputs(line, f);
+        if (mss)
+            lod_mss_line(b, &k);
+        else
+            lod_line(b, &k);
     }
-    return fclose(f) == 0 ? 0 : -1;
+}
+
+static const char *const lod_files[] = {"lod.txt", "lod_mss.txt"};
+
+static int write_lod_vectors(const char *dir)
+{
+    for (int mss = 0; mss < 2; mss++) {
+        char path[512];
+        snprintf(path, sizeof path, "%s/%s", dir, lod_files[mss]);
+        sbuf b = {0};
+        lod_text(&b, mss);
+        int r = write_file(path, b.s, b.n);
+        free(b.s);
+        if (r)
+            return -1;
+    }
+    return 0;
 }
 
 /* The committed lod vectors are still what the C rule computes. */
 static void test_lod_vectors(void **state)
 {
     (void)state;
-    char path[600];
-    snprintf(path, sizeof path, "%s/lod.txt", vector_dir());
-    size_t n;
-    char *text = (char *)read_file(path, &n);
-    if (!text)
-        fail_msg("cannot read %s", path);
-    sbuf want = {0};
-    out(&want, "%s", lod_head);
-    for (int i = 0; i < LOD_CASES; i++) {
-        char line[512];
-        lod_case k = lod_case_at(i);
-        lod_line(line, sizeof line, &k);
-        out(&want, "%s", line);
+    for (int mss = 0; mss < 2; mss++) {
+        char path[600];
+        snprintf(path, sizeof path, "%s/%s", vector_dir(), lod_files[mss]);
+        size_t n;
+        char *text = (char *)read_file(path, &n);
+        if (!text)
+            fail_msg("cannot read %s", path);
+        sbuf want = {0};
+        lod_text(&want, mss);
+        if (strcmp(want.s, text))
+            fail_msg("%s differs from protocol/lod.c's rule (regenerate: test_proto --write-vectors tests/vectors)",
+                     path);
+        free(want.s);
+        free(text);
     }
-    if (strcmp(want.s, text))
-        fail_msg("%s differs from protocol/lod.c's rule (regenerate: test_proto --write-vectors tests/vectors)", path);
-    free(want.s);
-    free(text);
 }
 
 /* "Where each mip is read" (protocol/lod.c): the spacing at a point, and
@@ -1452,6 +1531,49 @@ static void test_lod_rule(void **state)
     assert_true(r.mip[0] == 4 && r.fade == 1 && r.weight[0] == 1);
 }
 
+/* The unresolved slope moments of one cascade (protocol/lod.c), by hand:
+ * a table of mips 3 whose entries double, read at each branch of the rule,
+ * added to a tail. */
+static void test_lod_mss(void **state)
+{
+    (void)state;
+    proto_mip_entry tab[PROTO_MIP_ENTRIES] = {{0}};
+    for (int m = 0; m <= 3; m++) {
+        tab[m].mss_x = (float)(1 << m);          /* 1 2 4 8 */
+        tab[m].mss_z = (float)(3 << m);          /* 3 6 12 24 */
+        tab[m].mss_xz = -(float)(1 << m) / 4;    /* -1/4 .. -2 */
+    }
+    static const struct {
+        double lambda;
+        int fades;
+        double x;   /* mss_x over a tail of 10 */
+    } cases[] = {
+        {-1, 1, 10 + 1},                                   /* mip 0 */
+        {0.25, 1, 10 + 0.75 * 1 + 0.25 * 2 + 0.75 * 0.25 * (2 - 1)},
+        {1, 1, 10 + 2},                                    /* mip 1 alone: no cross term */
+        {2.5, 1, 10 + 0.5 * 4 + 0.5 * 8 + 0.25 * (8 - 4)},  /* mid-fade */
+        {2.75, 1, 10 + 0.25 * 4 + 0.75 * 8 + 0.25 * 0.75 * (8 - 4)},
+        {3, 1, 10 + 8},                                    /* faded out: the whole cascade */
+        {5, 0, 10 + 4},                                    /* the coarsest cascade keeps its last mip */
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        proto_lod_read r;
+        proto_lod_read_at(pow(2, cases[i].lambda), 1, 3, cases[i].fades, &r);
+        double mss[3] = {10, 30, -2.5};
+        proto_lod_mss_add(&r, tab, 3, mss);
+        /* z and xz are x's table scaled by 3 and -1/4, as is the tail */
+        if (fabs(mss[0] - cases[i].x) > 1e-12 || fabs(mss[1] - 3 * cases[i].x) > 1e-12 ||
+            fabs(mss[2] + cases[i].x / 4) > 1e-12)
+            fail_msg("lambda %g: mss %.17g %.17g %.17g, want x %.17g", cases[i].lambda, mss[0], mss[1], mss[2],
+                     cases[i].x);
+    }
+    /* a read outside the table adds nothing */
+    proto_lod_read bad = {0, {7, -1}, {1, 0}, 1};
+    double mss[3] = {0, 0, 0};
+    proto_lod_mss_add(&bad, tab, 3, mss);
+    assert_true(mss[0] == 0 && mss[1] == 0 && mss[2] == 0);
+}
+
 int main(int argc, char **argv)
 {
     if (argc == 3 && strcmp(argv[1], "--write-vectors") == 0)
@@ -1459,6 +1581,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_roundtrip_all),
         cmocka_unit_test(test_lod_rule),
+        cmocka_unit_test(test_lod_mss),
         cmocka_unit_test(test_lod_vectors),
         cmocka_unit_test(test_header_errors),
         cmocka_unit_test(test_time_limit),

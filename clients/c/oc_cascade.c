@@ -413,6 +413,13 @@ static unsigned want_channels(unsigned want)
            ((want & W_S) ? PROTO_CH_NORMAL : 0) | ((want & W_F) ? PROTO_CH_FOAM : 0);
 }
 
+/* The rule's reading of one cascade, as lod_core stored it. */
+static proto_lod_read lod_read_of(const oc_lod_cascade *L)
+{
+    proto_lod_read r = {L->lambda, {L->mip[0], L->mip[1]}, {L->weight[0], L->weight[1]}, L->fade};
+    return r;
+}
+
 /* Adds to out the cascades at (x, z), each read at the levels `lod` names,
  * for the channels in want; with W_S the unresolved slope moments of those
  * levels go to mss.  *common gathers the channels every tile read had,
@@ -432,46 +439,13 @@ static int levels_read(const oc_cascade_view *v, double x, double z, const oc_lo
         unsigned chan = all;
         /* PROTOCOL.md: foam is the whole sea's, in cascade 0's tiles alone */
         unsigned want_c = c == 0 ? want : want & ~(unsigned)W_F;
-        for (int k = 0; k < 2; k++) {
-            if (L->mip[k] < 0 || !(L->weight[k] > 0))
-                continue;
-            if (read_mip(v, &cc->mip[L->mip[k]], u, w, want_c, interp, L->weight[k], acc, &chan))
+        for (int k = 0; k < 2; k++)
+            if (L->mip[k] >= 0 && L->weight[k] > 0 &&
+                read_mip(v, &cc->mip[L->mip[k]], u, w, want_c, interp, L->weight[k], acc, &chan))
                 return -1;
-            if (!(want & W_S))
-                continue;
-            const proto_mip_entry *me = &e->mip[L->mip[k]];
-            mss[0] += L->weight[k] * me->mss_x;
-            mss[1] += L->weight[k] * me->mss_z;
-            mss[2] += L->weight[k] * me->mss_xz;
-        }
-        if ((want & W_S) && L->fade < 1) {
-            const proto_mip_entry *me = &e->mip[cc->mips];
-            mss[0] += (1 - L->fade) * me->mss_x;
-            mss[1] += (1 - L->fade) * me->mss_z;
-            mss[2] += (1 - L->fade) * me->mss_xz;
-        }
-        /* PROTOCOL.md "Where each mip is read": two entries blended with
-         * weights a, 1 - a also add a (1 - a) (coarser - finer), the slope
-         * variance the tiles' linear blend of two band-limited fields
-         * loses (24.6 % of the near field's at its mid-fade, without) */
-        const proto_mip_entry *fine = NULL, *coarse = NULL;
-        double a = 0;
-        if (!(want & W_S)) {
-            /* geometry alone: no moments */
-        } else if (L->mip[1] >= 0 && L->weight[0] > 0 && L->weight[1] > 0) {
-            fine = &e->mip[L->mip[0]];
-            coarse = &e->mip[L->mip[1]];
-            a = L->weight[0];
-        } else if (L->fade > 0 && L->fade < 1) {
-            fine = &e->mip[L->mip[0]];
-            coarse = &e->mip[cc->mips];
-            a = L->fade;
-        }
-        if (fine) {
-            double k = a * (1 - a);
-            mss[0] += k * ((double)coarse->mss_x - fine->mss_x);
-            mss[1] += k * ((double)coarse->mss_z - fine->mss_z);
-            mss[2] += k * ((double)coarse->mss_xz - fine->mss_xz);
+        if (want & W_S) {
+            proto_lod_read r = lod_read_of(L);
+            proto_lod_mss_add(&r, e->mip, cc->mips, mss);
         }
         out->height += acc[V_H];
         out->dx += acc[V_DX];

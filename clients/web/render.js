@@ -33,7 +33,7 @@
 
 export const MAX_LEVELS = 16;
 export const MAX_CASCADES = 4;
-const MIP_ENTRIES = 13;
+export const MIP_ENTRIES = 13;
 
 const CLOUD_TEX = 512;          /* cloud texture size, texels */
 const CLOUD_UV = 32;            /* noise lattice units the cloud texture spans (it tiles) */
@@ -328,7 +328,8 @@ void main() {
  * the CPU (u_casEye, texture units); the GPU adds eye-relative offsets.
  *
  * This text is the viewer's only copy of the rule: tests/browser/lod.test.mjs
- * runs it in Chromium's WebGL against tests/vectors/lod.txt, the points
+ * runs it in Chromium's WebGL against tests/vectors/lod.txt (the mips read)
+ * and lod_mss.txt (the unresolved slope moments, casMss), the points
  * protocol/lod.c computes.
  */
 export const CASCADE_GLSL = `

@@ -1,7 +1,8 @@
 /*
  * lod.test.mjs - the viewer's shader code for "Where each mip is read"
  * (PROTOCOL.md) against the points protocol/lod.c computes
- * (tests/vectors/lod.txt, written and checked by test_proto).
+ * (tests/vectors/lod.txt and lod_mss.txt, written and checked by
+ * test_proto).
  *
  * The rule's only copy in the viewer is GLSL (clients/web/render.js:
  * CASCADE_GLSL, CASCADE_FRAG_GLSL, compiled after COMMON as the viewer
@@ -17,48 +18,78 @@
  * three sums).  Each point is read through cascade slot (i mod 4), the
  * other slots holding zeros, so each of the four unrolled slots is run.
  *
+ * The unresolved slope moments are checked the same way against
+ * tests/vectors/lod_mss.txt (the same points, each with a tail_mss and the
+ * cascade's mip table): the mss the shading path (seaSample, through
+ * casMss) returns with that table in the point's slot and that tail.
+ *
  * Tolerances are binary32's (the GPU's floats; the vectors are doubles)
- * and the shader's skip of a second read whose weight is under 1e-4.
+ * and the shader's skip of a second read whose weight is under 1e-4; for
+ * the moments 1e-6 of the largest term a component adds (the tail or an
+ * entry), about 16 ulp.
  *
  * Run by tests/test_browser.sh with PROTO_VECTORS=tests/vectors
  * (CHROMIUM: the browser, default /usr/bin/chromium).  node --test.
  */
-import { test } from 'node:test';
+import { test, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { createRequire } from 'node:module';
 import { readFileSync, mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 
-import { COMMON, CASCADE_GLSL, CASCADE_FRAG_GLSL, MAX_CASCADES } from '../../clients/web/render.js';
+import { COMMON, CASCADE_GLSL, CASCADE_FRAG_GLSL, MAX_CASCADES, MIP_ENTRIES } from '../../clients/web/render.js';
 
 const require = createRequire(new URL('./package.json', import.meta.url));
 const { chromium } = require('playwright-core');
 
-/* One point a line: inputs, "->", the C rule's reading (see the file's head). */
+/* The lines of a vector file as [inputs, outputs] number arrays. */
+function vectorLines(path) {
+    return readFileSync(path, 'utf8').split('\n').filter((l) => l.trim() && !l.startsWith('#'))
+        .map((line) => line.split('->').map((h) => h.trim().split(/\s+/).map(Number)));
+}
+
+/* The point and cascade of a line's first ten inputs (both files). */
+function pointOf([q, minS, camY, dx, dz, floorS, patch, n, mips, fades]) {
+    return { q, minS, camY, dx, dz, floorS, patch, n, mips, fades };
+}
+
+/* lod.txt: one point a line: inputs, "->", the C rule's reading (see the file's head). */
 function readVectors(path) {
-    const cases = [];
-    for (const line of readFileSync(path, 'utf8').split('\n')) {
-        if (!line.trim() || line.startsWith('#')) continue;
-        const [lhs, rhs] = line.split('->').map((h) => h.trim().split(/\s+/).map(Number));
-        assert.equal(lhs.length, 10, `input fields of: ${line}`);
-        assert.equal(rhs.length, 7, `output fields of: ${line}`);
-        const [q, minS, camY, dx, dz, floorS, patch, n, mips, fades] = lhs;
+    return vectorLines(path).map(([lhs, rhs]) => {
+        assert.equal(lhs.length, 10, `input fields of: ${lhs}`);
+        assert.equal(rhs.length, 7, `output fields of: ${rhs}`);
         const [s, lambda, mip0, w0, mip1, w1, fade] = rhs;
         const read = [[mip0, w0], [mip1, w1]].filter(([m]) => m >= 0);
-        cases.push({
-            q, minS, camY, dx, dz, floorS, patch, n, mips, fades, s, lambda, fade,
+        return {
+            ...pointOf(lhs), s, lambda, fade,
             sum: read.reduce((a, [, w]) => a + w, 0),
             sumM: read.reduce((a, [m, w]) => a + w * m, 0),
             sumM2: read.reduce((a, [m, w]) => a + w * m * m, 0),
-        });
-    }
-    return cases;
+        };
+    });
+}
+
+/* lod_mss.txt: a point, tail_mss, the mip table's moments of entries
+ * 0..mips, "->", the C rule's mss (see the file's head).  tab is the
+ * shader's u_mipTab rows (kc, mss_x, mss_z, mss_xz) of the cascade; kc,
+ * which the moments do not use, is set apart from them (1000 + m) so a
+ * shader that read it would differ. */
+function readMssVectors(path) {
+    return vectorLines(path).map(([lhs, rhs]) => {
+        const p = pointOf(lhs);
+        assert.equal(lhs.length, 13 + 3 * (p.mips + 1), `input fields of: ${lhs}`);
+        assert.equal(rhs.length, 3, `output fields of: ${rhs}`);
+        const tab = [];
+        for (let m = 0; m <= p.mips; m++) tab.push(1000 + m, ...lhs.slice(13 + 3 * m, 16 + 3 * m));
+        return { ...p, tail: lhs.slice(10, 13), tab, mss: rhs };
+    });
 }
 
 /* In the page: compiles the viewer's GLSL with a probe main(), draws one
- * pixel per point, returns the two render targets' floats. */
-function runInPage({ common, cascade, frag, cases, maxc }) {
+ * pixel per point (with its mip table and tail_mss when it has them,
+ * else zeros), returns the three render targets' floats. */
+function runInPage({ common, cascade, frag, cases, maxc, mipe }) {
     const LEVELS = 12, W = 1 << (LEVELS - 1);
     const canvas = document.createElement('canvas');
     const gl = canvas.getContext('webgl2');
@@ -71,6 +102,7 @@ uniform vec2 u_rel;
 uniform float u_floor;
 layout(location = 0) out vec4 o_a;
 layout(location = 1) out vec4 o_b;
+layout(location = 2) out vec4 o_c;
 void main() {
     float w;
     float s = wantSpacing(u_slot, u_rel, u_floor);
@@ -82,6 +114,7 @@ void main() {
     seaSample(u_rel, u_floor, slope, mss, foam);
     o_a = vec4(s, w, d.x, d.y);
     o_b = vec4(d.z, slope.x, slope.y, foam);
+    o_c = vec4(mss, 0.0);
 }
 `;
     const shader = (type, src) => {
@@ -122,23 +155,20 @@ void main() {
     const slope = tex(gl.RG16F, gl.RG, (m) => [1, m, 0, 0]);
     const zeroD = tex(gl.RGBA16F, gl.RGBA, () => [0, 0, 0, 0]);
     const zeroS = tex(gl.RG16F, gl.RG, () => [0, 0, 0, 0]);
-    /* two float targets, one pixel per point */
+    /* three float targets, one pixel per point */
     const fb = gl.createFramebuffer();
     gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
-    const targets = [0, 1].map((k) => {
+    [0, 1, 2].forEach((k) => {
         const t = gl.createTexture();
         gl.bindTexture(gl.TEXTURE_2D, t);
         gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, cases.length, 1);
         gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0 + k, gl.TEXTURE_2D, t, 0);
-        return t;
     });
-    gl.drawBuffers([gl.COLOR_ATTACHMENT0, gl.COLOR_ATTACHMENT1]);
+    gl.drawBuffers([gl.COLOR_ATTACHMENT0, gl.COLOR_ATTACHMENT1, gl.COLOR_ATTACHMENT2]);
     if (gl.checkFramebufferStatus(gl.FRAMEBUFFER) !== gl.FRAMEBUFFER_COMPLETE) return { error: 'float framebuffer incomplete' };
     const cam = [100.5, -250.25];   /* the block's camera xz relative to the eye */
     gl.uniform2f(loc('u_blkCam'), cam[0], cam[1]);
     gl.uniform2fv(loc('u_casEye'), new Float32Array(2 * maxc));
-    gl.uniform4fv(loc('u_mipTab'), new Float32Array(4 * 13 * maxc));
-    gl.uniform3f(loc('u_tailMss'), 0, 0, 0);
     gl.uniform1f(loc('u_roughScale'), 1);
     gl.uniform1f(loc('u_foamScale'), 1);
     for (let k = 0; k < maxc; k++) {
@@ -151,6 +181,11 @@ void main() {
         for (let k = 0; k < slot; k++) cas.set([1, 1, 1, 0], 4 * k);
         cas.set([p.patch, p.patch / p.n, p.mips, p.fades], 4 * slot);
         casQ[slot] = p.q;
+        /* the point's mip table in its slot's rows, zeros elsewhere */
+        const tab = new Float32Array(4 * mipe * maxc);
+        if (p.tab) tab.set(p.tab, 4 * mipe * slot);
+        gl.uniform4fv(loc('u_mipTab'), tab);
+        gl.uniform3fv(loc('u_tailMss'), p.tail || [0, 0, 0]);
         for (let k = 0; k < maxc; k++) {
             gl.activeTexture(gl.TEXTURE0 + k);
             gl.bindTexture(gl.TEXTURE_2D, k === slot ? disp : zeroD);
@@ -168,14 +203,59 @@ void main() {
         gl.drawArrays(gl.POINTS, 0, 1);
     });
     const out = [];
-    for (let k = 0; k < 2; k++) {
+    for (let k = 0; k < 3; k++) {
         gl.readBuffer(gl.COLOR_ATTACHMENT0 + k);
         const px = new Float32Array(4 * cases.length);
         gl.readPixels(0, 0, cases.length, 1, gl.RGBA, gl.FLOAT, px);
         out.push(Array.from(px));
     }
     const err = gl.getError();
-    return err ? { error: `GL error 0x${err.toString(16)}` } : { a: out[0], b: out[1] };
+    return err ? { error: `GL error 0x${err.toString(16)}` } : { a: out[0], b: out[1], c: out[2] };
+}
+
+/* One headless Chromium for both tests, launched by the first. */
+let browser = null;
+const userDataDir = mkdtempSync(join(tmpdir(), 'ocean-lod-'));
+after(async () => {
+    if (browser) await browser.close();
+    rmSync(userDataDir, { recursive: true, force: true });
+});
+
+/* runInPage's render targets for these points. */
+async function probe(cases) {
+    if (!browser) {
+        browser = await chromium.launchPersistentContext(userDataDir, {
+            executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+            headless: true,
+            args: ['--headless=new', '--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+                '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'],
+            timeout: 180000,
+        });
+    }
+    const page = browser.pages()[0] || await browser.newPage();
+    const r = await page.evaluate(runInPage, {
+        common: COMMON, cascade: CASCADE_GLSL, frag: CASCADE_FRAG_GLSL, cases, maxc: MAX_CASCADES, mipe: MIP_ENTRIES,
+    });
+    assert.equal(r.error, undefined, r.error);
+    return r;
+}
+
+/* Checks every point's [what, got, want, tolerance] (checksOf(point, i)),
+ * reports the largest difference of each as a fraction of its tolerance
+ * and fails listing the first ten disagreements. */
+function compare(t, cases, checksOf) {
+    const bad = [], worst = {};
+    cases.forEach((p, i) => {
+        for (const [what, got, want, tol] of checksOf(p, i)) {
+            worst[what] = Math.max(worst[what] || 0, Math.abs(got - want) / (tol || 1));
+            if (!(Math.abs(got - want) <= tol))
+                bad.push(`point ${i} (q ${p.q}, y ${p.camY}, d ${p.dx},${p.dz}, floor ${p.minS}/${p.floorS}, ` +
+                    `patch ${p.patch}/${p.n}, mips ${p.mips}, fades ${p.fades}; slot ${i % MAX_CASCADES}): ${what} ${got}, C rule ${want}`);
+        }
+    });
+    t.diagnostic(`${cases.length} points; largest difference as a fraction of its tolerance: ` +
+        Object.entries(worst).map(([k, v]) => `${k} ${v.toPrecision(2)}`).join(', '));
+    assert.deepEqual(bad.slice(0, 10), [], `${bad.length} disagreements`);
 }
 
 test('the viewer\'s GLSL reads the mips protocol/lod.c reads, with the same weights and fade (tests/vectors/lod.txt)', async (t) => {
@@ -187,48 +267,43 @@ test('the viewer\'s GLSL reads the mips protocol/lod.c reads, with the same weig
     assert.ok(cases.some((p) => p.lambda <= 0) && cases.some((p) => p.lambda > 0 && p.lambda < p.mips - 1) &&
         cases.some((p) => p.fades && p.fade > 0 && p.fade < 1) && cases.some((p) => p.fades && p.fade === 0) &&
         cases.some((p) => !p.fades && p.lambda > p.mips), 'the vectors cover every branch');
-    const userDataDir = mkdtempSync(join(tmpdir(), 'ocean-lod-'));
-    let context;
-    try {
-        context = await chromium.launchPersistentContext(userDataDir, {
-            executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-            headless: true,
-            args: ['--headless=new', '--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-                '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'],
-            timeout: 180000,
+    const r = await probe(cases);
+    compare(t, cases, (p, i) => {
+        const [s, w, d0, d1] = r.a.slice(4 * i, 4 * i + 4);
+        const [d2, s0, s1, foam] = r.b.slice(4 * i, 4 * i + 4);
+        return [
+            ['s', s, p.s, 2e-6 * p.s],
+            ['fade', w, p.fade, 1e-4],
+            ['casDisp sum w', d0, p.sum, 2e-4],
+            ['casDisp sum w m', d1, p.sumM, 1e-3],
+            ['casDisp sum w m^2', d2, p.sumM2, 5e-3],
+            ['seaSample sum w', s0, p.sum, 2e-4],
+            ['seaSample sum w m', s1, p.sumM, 1e-3],
+            ['seaSample foam', foam, 0, 0],
+        ];
+    });
+});
+
+test('the viewer\'s GLSL adds the unresolved slope moments protocol/lod.c adds (tests/vectors/lod_mss.txt)', async (t) => {
+    const vdir = process.env.PROTO_VECTORS;
+    if (!vdir) { t.skip('PROTO_VECTORS not set'); return; }
+    const cases = readMssVectors(join(vdir, 'lod_mss.txt'));
+    const lod = readVectors(join(vdir, 'lod.txt'));
+    /* lod.txt's points, whose readings say which branch each is on */
+    assert.equal(cases.length, lod.length, 'lod_mss.txt has lod.txt\'s points');
+    const inputs = (p) => [p.q, p.minS, p.camY, p.dx, p.dz, p.floorS, p.patch, p.n, p.mips, p.fades];
+    cases.forEach((p, i) => assert.deepEqual(inputs(p), inputs(lod[i]), `point ${i}`));
+    assert.ok(lod.some((p) => p.lambda <= 0) && lod.some((p) => p.sum && p.lambda % 1 > 0.1 && p.lambda < p.mips - 1) &&
+        lod.some((p) => p.fades && p.fade > 0.1 && p.fade < 0.9) && lod.some((p) => p.fades && p.fade === 0) &&
+        lod.some((p) => !p.fades && p.lambda > p.mips), 'the vectors cover every branch, mid-blend and mid-fade');
+    const r = await probe(cases);
+    compare(t, cases, (p, i) => {
+        const got = r.c.slice(4 * i, 4 * i + 3);
+        /* binary32 rounding of the largest term the sum adds */
+        return ['x', 'z', 'xz'].map((k, j) => {
+            let scale = Math.abs(p.tail[j]);
+            for (let m = 0; m <= p.mips; m++) scale = Math.max(scale, Math.abs(p.tab[4 * m + 1 + j]));
+            return [`mss_${k}`, got[j], p.mss[j], 1e-6 * scale];
         });
-        const page = context.pages()[0] || await context.newPage();
-        const r = await page.evaluate(runInPage, {
-            common: COMMON, cascade: CASCADE_GLSL, frag: CASCADE_FRAG_GLSL, cases, maxc: MAX_CASCADES,
-        });
-        assert.equal(r.error, undefined, r.error);
-        const bad = [], worst = {};
-        const near = (what, got, want, tol) => {
-            worst[what] = Math.max(worst[what] || 0, Math.abs(got - want) / (tol || 1));
-            return Math.abs(got - want) <= tol;
-        };
-        cases.forEach((p, i) => {
-            const [s, w, d0, d1] = r.a.slice(4 * i, 4 * i + 4);
-            const [d2, s0, s1, foam] = r.b.slice(4 * i, 4 * i + 4);
-            const checks = [
-                ['s', s, p.s, 2e-6 * p.s],
-                ['fade', w, p.fade, 1e-4],
-                ['casDisp sum w', d0, p.sum, 2e-4],
-                ['casDisp sum w m', d1, p.sumM, 1e-3],
-                ['casDisp sum w m^2', d2, p.sumM2, 5e-3],
-                ['seaSample sum w', s0, p.sum, 2e-4],
-                ['seaSample sum w m', s1, p.sumM, 1e-3],
-                ['seaSample foam', foam, 0, 0],
-            ];
-            for (const [what, got, want, tol] of checks)
-                if (!near(what, got, want, tol)) bad.push(`point ${i} (q ${p.q}, y ${p.camY}, d ${p.dx},${p.dz}, floor ${p.minS}/${p.floorS}, ` +
-                    `patch ${p.patch}/${p.n}, mips ${p.mips}, fades ${p.fades}; slot ${i % MAX_CASCADES}): ${what} ${got}, C rule ${want}`);
-        });
-        t.diagnostic(`${cases.length} points; largest difference as a fraction of its tolerance: ` +
-            Object.entries(worst).map(([k, v]) => `${k} ${v.toPrecision(2)}`).join(', '));
-        assert.deepEqual(bad.slice(0, 10), [], `${bad.length} disagreements`);
-    } finally {
-        if (context) await context.close();
-        rmSync(userDataDir, { recursive: true, force: true });
-    }
+    });
 });
