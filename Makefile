@@ -56,7 +56,7 @@ $(BUILD)/obj/server/%.o: INC = -Isim -Iprotocol -Iserver
 # program includes <oceand/oceanclient.h> (so no generic name - conf.h,
 # codec.h - sits at the top of anyone's include path).  The examples are
 # built as a user builds them, against BUILD/include/oceand, a staged copy.
-PUBLIC_HEADERS := $(filter-out sim/ocean_internal.h sim/mesh_internal.h,$(wildcard sim/*.h)) \
+PUBLIC_HEADERS := $(filter-out sim/ocean_internal.h sim/mesh_internal.h sim/ocean_reference.h,$(wildcard sim/*.h)) \
                   $(wildcard protocol/*.h) $(wildcard clients/c/*.h)
 $(BUILD)/obj/clients/examples/%.o: INC = -I$(BUILD)/include
 CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -fopenmp -pthread
@@ -120,11 +120,14 @@ all: $(PROGS) $(TESTS) $(BENCHES) $(OCLIB_A) $(OCLIB_SO) $(WASM)
 deps:
 	@bash .ci/deps.sh run
 
-# The spectrum stage's row passes need -O3's vectoriser (GCC 12's -O2 cost
-# model leaves them scalar); a command-line OPT (the ASan build) still wins.
-$(BUILD)/obj/sim/ocean.o $(BUILD)/pic/sim/ocean.o: OPT = -O3
-# sqrt must not set errno there, or GCC cannot vectorise deep_turns.
-$(BUILD)/obj/sim/ocean.o $(BUILD)/pic/sim/ocean.o: CFLAGS += -fno-math-errno
+# The ocean's vector passes need -O3's vectoriser (GCC 12's -O2 cost model
+# leaves them scalar): the spectrum stage's row passes, the evaluation's
+# Jacobian and foam pass, the per-vertex sampling and the accurate reading.
+# A command-line OPT (the ASan build) still wins.
+SIM_VEC_SRC := sim/ocean.c sim/ocean_stage.c sim/ocean_sample.c sim/ocean_accurate.c
+$(call obj,$(SIM_VEC_SRC)) $(call pic,$(SIM_VEC_SRC)): OPT = -O3
+# sqrt must not set errno there, or GCC cannot vectorise ocean_deep_turns.
+$(call obj,$(SIM_VEC_SRC)) $(call pic,$(SIM_VEC_SRC)): CFLAGS += -fno-math-errno
 
 # The browser viewer's decoders: protocol/'s own (messages and codecs) and
 # the C library's store of samples in time (oc_held.c), compiled to

@@ -17,7 +17,7 @@
  * taken from under 0.3 sqrt(tolerance) where Newton converges
  * quadratically, is checked by the final reading instead of a reading of
  * its own.  On the ocean `make run` serves that took a point from 8.5 to
- * 6.2 us (5.6 with the accurate reading's loads restructured, ocean.c),
+ * 6.2 us (5.6 with the accurate reading's loads restructured, ocean_accurate.c),
  * with the same error against the exact waves, 0.036 mm RMS (bench_filter
  * "Point queries").
  *
