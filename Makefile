@@ -10,7 +10,8 @@
 #   make fuzz     run each libFuzzer target for FUZZ_SECONDS
 #   make install  PREFIX=/usr/local (DESTDIR for staging): programs, the
 #                 client library (static and shared, pkg-config oceanclient),
-#                 headers, config, scenes, the web viewer, a systemd unit
+#                 the simulator library (pkg-config oceansim), headers,
+#                 config, scenes, the web viewer, a systemd unit
 #   make clean
 #
 # Builds run in parallel (one job per core) unless the command line gives -j,
@@ -60,11 +61,13 @@ PUBLIC_HEADERS := $(filter-out sim/ocean_internal.h sim/mesh_internal.h sim/ocea
                   $(wildcard protocol/*.h) $(wildcard clients/c/*.h)
 $(BUILD)/obj/clients/examples/%.o: INC = -I$(BUILD)/include
 CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -fopenmp -pthread
-# What the client library (sim + protocol + clients/c) links against; the
-# .pc file's Libs.private is generated from it, so they cannot disagree.
-LIB_LDLIBS := -lwebsockets -lOpenEXRCore-3_1 -lfftw3f_omp -lfftw3f \
-              -lzstd -lcjson -lm -lpthread
-LDLIBS += $(LIB_LDLIBS) -lhiredis
+# What the client library (protocol + clients/c + the sim/ files they use)
+# links against, OpenEXRCore for protocol/'s exr codec; then what the
+# simulator adds.  The .pc files' Libs.private are generated from these, so
+# they cannot disagree.
+LIB_LDLIBS := -lwebsockets -lOpenEXRCore-3_1 -lzstd -lcjson -lm -lpthread
+SIM_LDLIBS := -lfftw3f_omp -lfftw3f -lm
+LDLIBS += $(LIB_LDLIBS) $(SIM_LDLIBS) -lhiredis
 ifeq ($(SAN),1)
 CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 LDFLAGS += -fsanitize=address,undefined
@@ -92,13 +95,23 @@ LIB_TEST := $(BUILD)/libocean_testlib.a
 ALL_LIBS := $(if $(CLIENT_SRC),$(LIB_CLIENT)) $(if $(SERVER_SRC),$(LIB_SERVER)) \
             $(if $(PROTO_SRC),$(LIB_PROTO)) $(LIB_SIM)
 
-# The installable client library: sim + protocol + clients/c in one archive
-# and one shared object (built from -fPIC objects of its own).
+# The installable client library, in one archive and one shared object
+# (built from -fPIC objects of its own): protocol + clients/c and the
+# sim/ files they use (results, time, the config parser), no simulator, so
+# a program that links it gets no FFTW and no OpenMP.
 OC_VERSION := $(shell sed -n 's/^\#define OC_VERSION "\(.*\)"/\1/p' clients/c/oceanclient.h)
 OC_SOVERSION := $(firstword $(subst ., ,$(OC_VERSION)))
-OCLIB_SRC := $(CLIENT_SRC) $(PROTO_SRC) $(SIM_SRC)
+OCLIB_SIM_SRC := sim/ocean_result.c sim/ocean_time.c sim/conf.c
+OCLIB_SRC := $(filter-out clients/c/oc_ship_offline.c,$(CLIENT_SRC)) $(PROTO_SRC) $(OCLIB_SIM_SRC)
 OCLIB_A := $(BUILD)/liboceanclient.a
 OCLIB_SO := $(BUILD)/liboceanclient.so.$(OC_VERSION)
+# The installable simulator, for programs that run an ocean of their own
+# (the ship example's --offline): the rest of sim/ and the client piece
+# that runs on it.  It takes the shared sim/ files from liboceanclient
+# (oceansim.pc requires oceanclient), so no symbol is in both.
+OCSIM_SRC := $(filter-out $(OCLIB_SIM_SRC),$(SIM_SRC)) clients/c/oc_ship_offline.c
+OCSIM_A := $(BUILD)/liboceansim.a
+OCSIM_SO := $(BUILD)/liboceansim.so.$(OC_VERSION)
 pic = $(patsubst %.c,$(BUILD)/pic/%.o,$(1))
 
 PROGS := $(BUILD)/ocean-sim \
@@ -115,7 +128,7 @@ WASM_SRC := clients/wasm/oc_wasm.c protocol/codec.c protocol/proto.c protocol/pr
 .PHONY: all deps test test-plain test-asan test-bins run bench fuzz clean install
 .DEFAULT_GOAL := all
 
-all: $(PROGS) $(TESTS) $(BENCHES) $(OCLIB_A) $(OCLIB_SO) $(WASM)
+all: $(PROGS) $(TESTS) $(BENCHES) $(OCLIB_A) $(OCLIB_SO) $(OCSIM_A) $(OCSIM_SO) $(WASM)
 
 deps:
 	@bash .ci/deps.sh run
@@ -151,11 +164,19 @@ $(OCLIB_A): $(call obj,$(OCLIB_SRC))
 	rm -f $@ && ar rcs $@ $^
 # -z defs: every symbol the library uses is resolved by what it names (the
 # sanitizer runtime is only there in the executable, so not under SAN).
+# Linked without -fopenmp: nothing in it runs an OpenMP team.
 $(OCLIB_SO): $(call pic,$(OCLIB_SRC))
 	$(CC) -shared -Wl,-soname,liboceanclient.so.$(OC_SOVERSION) $(if $(filter 1,$(SAN)),,-Wl,-z,defs) \
-	    $(CFLAGS) $(LDFLAGS) $^ $(LIB_LDLIBS) -o $@
+	    $(filter-out -fopenmp,$(CFLAGS)) $(LDFLAGS) $^ $(LIB_LDLIBS) -o $@
 	ln -sf $(notdir $@) $(BUILD)/liboceanclient.so.$(OC_SOVERSION)
 	ln -sf $(notdir $@) $(BUILD)/liboceanclient.so
+$(OCSIM_A): $(call obj,$(OCSIM_SRC))
+	rm -f $@ && ar rcs $@ $^
+$(OCSIM_SO): $(call pic,$(OCSIM_SRC)) $(OCLIB_SO)
+	$(CC) -shared -Wl,-soname,liboceansim.so.$(OC_SOVERSION) $(if $(filter 1,$(SAN)),,-Wl,-z,defs) \
+	    $(CFLAGS) $(LDFLAGS) $^ $(SIM_LDLIBS) -o $@
+	ln -sf $(notdir $@) $(BUILD)/liboceansim.so.$(OC_SOVERSION)
+	ln -sf $(notdir $@) $(BUILD)/liboceansim.so
 
 $(LIB_SIM): $(call obj,$(SIM_SRC))
 $(LIB_PROTO): $(call obj,$(PROTO_SRC))
@@ -234,13 +255,18 @@ install: all
 	$(CC) $(CPPFLAGS) -Isim -Iprotocol -Iserver $(INST_DEFS) $(CFLAGS) -c server/main.c -o $(BUILD)/install/main.o
 	$(CC) $(CFLAGS) $(LDFLAGS) $(BUILD)/install/main.o $(ALL_LIBS) $(LDLIBS) -o $(BUILD)/install/oceand
 	install -m 755 $(BUILD)/install/oceand $(DESTDIR)$(PREFIX)/bin/
-	install -m 644 $(OCLIB_A) $(OCLIB_SO) $(DESTDIR)$(PREFIX)/lib/
+	install -m 644 $(OCLIB_A) $(OCLIB_SO) $(OCSIM_A) $(OCSIM_SO) $(DESTDIR)$(PREFIX)/lib/
 	ln -sf $(notdir $(OCLIB_SO)) $(DESTDIR)$(PREFIX)/lib/liboceanclient.so.$(OC_SOVERSION)
 	ln -sf $(notdir $(OCLIB_SO)) $(DESTDIR)$(PREFIX)/lib/liboceanclient.so
+	ln -sf $(notdir $(OCSIM_SO)) $(DESTDIR)$(PREFIX)/lib/liboceansim.so.$(OC_SOVERSION)
+	ln -sf $(notdir $(OCSIM_SO)) $(DESTDIR)$(PREFIX)/lib/liboceansim.so
 	install -m 644 $(PUBLIC_HEADERS) $(DESTDIR)$(PREFIX)/include/oceand/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(OC_VERSION)|g' \
-	    -e 's|@LIBS_PRIVATE@|$(LIB_LDLIBS) -fopenmp|g' \
+	    -e 's|@LIBS_PRIVATE@|$(LIB_LDLIBS)|g' \
 	    clients/c/oceanclient.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/oceanclient.pc
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(OC_VERSION)|g' \
+	    -e 's|@LIBS_PRIVATE@|$(SIM_LDLIBS) -fopenmp|g' \
+	    sim/oceansim.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/oceansim.pc
 	cp -R clients/web/. $(DESTDIR)$(DATADIR)/web/
 	install -m 644 config/scenes/*.conf $(DESTDIR)$(DATADIR)/scenes/
 	sed -e 's|^server.web_root = .*|server.web_root = $(DATADIR)/web|' \
