@@ -106,10 +106,11 @@ OCLIB_SRC := $(filter-out clients/c/oc_ship_offline.c,$(CLIENT_SRC)) $(PROTO_SRC
 OCLIB_A := $(BUILD)/liboceanclient.a
 OCLIB_SO := $(BUILD)/liboceanclient.so.$(OC_VERSION)
 # The installable simulator, for programs that run an ocean of their own
-# (the ship example's --offline): the rest of sim/ and the client piece
-# that runs on it.  It takes the shared sim/ files from liboceanclient
-# (oceansim.pc requires oceanclient), so no symbol is in both.
-OCSIM_SRC := $(filter-out $(OCLIB_SIM_SRC),$(SIM_SRC)) clients/c/oc_ship_offline.c
+# (the ship example's --offline): the rest of sim/, less the direct-sum
+# reference of the tests and benchmarks, and the client piece that runs on
+# it.  It takes the shared sim/ files from liboceanclient (oceansim.pc
+# requires oceanclient), so no symbol is in both.
+OCSIM_SRC := $(filter-out $(OCLIB_SIM_SRC) sim/ocean_reference.c,$(SIM_SRC)) clients/c/oc_ship_offline.c
 OCSIM_A := $(BUILD)/liboceansim.a
 OCSIM_SO := $(BUILD)/liboceansim.so.$(OC_VERSION)
 pic = $(patsubst %.c,$(BUILD)/pic/%.o,$(1))

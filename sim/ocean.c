@@ -62,6 +62,40 @@ int ocean_wait_policy_setenv(int spin)
     return 1;
 }
 
+/* The waves p would hold: the shortest within the time limit's
+ * OCEAN_OMEGA_MAX, and none of the scene plan's refusals. */
+static ocean_result params_check_waves(const ocean_params *p, char *msg, size_t msglen)
+{
+    /* The one time limit (ocean_time.h) holds for waves up to
+     * OCEAN_OMEGA_MAX: the shortest wave held is the finest cascade's band
+     * corner, or k_max below it. */
+    double fine = p->patch_m / pow(p->cascade_ratio, p->cascades - 1);
+    double k_top = fmin(M_SQRT2 * (p->n / 2 - 1) * 2.0 * M_PI / fine, p->k_max);
+    double w_top = ocean_dispersion(k_top, p->sea.depth_m);
+    if (w_top > OCEAN_OMEGA_MAX) {
+        if (msg) snprintf(msg, msglen,
+                          "the shortest wave held, %.3g m (k = %.4g rad/m, w = %.4g rad/s, finest "
+                          "patch %g m at n = %d), is beyond w = %g rad/s (OCEAN_OMEGA_MAX, the "
+                          "%.3g m wave the time limit is built on): use ocean.k_max <= %.4g rad/m, a "
+                          "smaller n or a larger finest patch",
+                          2.0 * M_PI / k_top, k_top, w_top, fine, p->n, OCEAN_OMEGA_MAX,
+                          2.0 * M_PI / ocean_wavenumber(OCEAN_OMEGA_MAX, p->sea.depth_m),
+                          ocean_wavenumber(OCEAN_OMEGA_MAX, p->sea.depth_m));
+        return OCEAN_EINVAL;
+    }
+    /* The scene plan's refusals (ocean_plan.h): peak beyond the patch,
+     * Hs beyond the breaking height. */
+    ocean_plan plan;
+    ocean_plan_init(&plan);
+    ocean_plan_params(p, &plan);
+    for (int i = 0; i < plan.count; i++)
+        if (plan.item[i].level == OCEAN_PLAN_REFUSE) {
+            if (msg) snprintf(msg, msglen, "%s", plan.item[i].text);
+            return OCEAN_EINVAL;
+        }
+    return OCEAN_OK;
+}
+
 ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msglen)
 {
     if (!p) {
@@ -102,33 +136,9 @@ ocean_result ocean_params_validate(const ocean_params *p, char *msg, size_t msgl
         if (msg) snprintf(msg, msglen, "threads = %d is out of range [1, 64]", p->threads);
         return OCEAN_EINVAL;
     }
-    /* The one time limit (ocean_time.h) holds for waves up to
-     * OCEAN_OMEGA_MAX: the shortest wave held is the finest cascade's band
-     * corner, or k_max below it. */
-    double fine = p->patch_m / pow(p->cascade_ratio, p->cascades - 1);
-    double k_top = fmin(M_SQRT2 * (p->n / 2 - 1) * 2.0 * M_PI / fine, p->k_max);
-    double w_top = ocean_dispersion(k_top, p->sea.depth_m);
-    if (w_top > OCEAN_OMEGA_MAX) {
-        if (msg) snprintf(msg, msglen,
-                          "the shortest wave held, %.3g m (k = %.4g rad/m, w = %.4g rad/s, finest "
-                          "patch %g m at n = %d), is beyond w = %g rad/s (OCEAN_OMEGA_MAX, the "
-                          "%.3g m wave the time limit is built on): use ocean.k_max <= %.4g rad/m, a "
-                          "smaller n or a larger finest patch",
-                          2.0 * M_PI / k_top, k_top, w_top, fine, p->n, OCEAN_OMEGA_MAX,
-                          2.0 * M_PI / ocean_wavenumber(OCEAN_OMEGA_MAX, p->sea.depth_m),
-                          ocean_wavenumber(OCEAN_OMEGA_MAX, p->sea.depth_m));
-        return OCEAN_EINVAL;
-    }
-    /* The scene plan's refusals (ocean_plan.h): peak beyond the patch,
-     * Hs beyond the breaking height. */
-    ocean_plan plan;
-    ocean_plan_init(&plan);
-    ocean_plan_params(p, &plan);
-    for (int i = 0; i < plan.count; i++)
-        if (plan.item[i].level == OCEAN_PLAN_REFUSE) {
-            if (msg) snprintf(msg, msglen, "%s", plan.item[i].text);
-            return OCEAN_EINVAL;
-        }
+    r = params_check_waves(p, msg, msglen);
+    if (r != OCEAN_OK)
+        return r;
     if (p->plan_measure < OCEAN_PLAN_ESTIMATE || p->plan_measure > OCEAN_PLAN_WISDOM) {
         if (msg) snprintf(msg, msglen, "plan = %d is not estimate, measure or wisdom", p->plan_measure);
         return OCEAN_EINVAL;
@@ -158,10 +168,8 @@ void ocean_cascade_band(const ocean *o, int c, double *patch_m, double *k_lo, do
     if (k_hi) *k_hi = cs->k_hi;
 }
 
-
 static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_lattice_wave *lw,
                                 int nlw, ocean **out, char *msg, size_t msglen);
-
 
 ocean_result ocean_create(const ocean_params *p, ocean **out, char *msg, size_t msglen)
 {
@@ -236,7 +244,6 @@ static ocean_result build_cascades(ocean *o, int lattice, const ocean_lattice_wa
     }
     return OCEAN_OK;
 }
-
 
 static ocean_result ocean_build(const ocean_params *p, int lattice, const ocean_lattice_wave *lw,
                                 int nlw, ocean **out, char *msg, size_t msglen)
@@ -346,7 +353,6 @@ void ocean_frame_destroy(ocean_frame *f)
  * no float: the evaluation is the unfiltered one. */
 #define NOOP_LOSS 1e-6
 
-
 /* Which channels an effect mask needs, in block order; returns the count. */
 static int channel_list(unsigned effects, int ch[CH_COUNT])
 {
@@ -358,7 +364,6 @@ static int channel_list(unsigned effects, int ch[CH_COUNT])
     if (effects & OCEAN_FX_VELOCITY) { ch[m++] = CH_VX; ch[m++] = CH_VY; ch[m++] = CH_VZ; }
     return m;
 }
-
 
 /* Jacobian J = (1 + Dxx)(1 + Dzz) - Dxz^2 and foam for rows [r0, r1) of an
  * n-point field; cloned for AVX2 like spectrum_row. */
@@ -385,7 +390,6 @@ static void jacobian_rows(ocean_field *fd, long i0, long i1, const ocean_foam_ma
         foam[i] = f < 0.0f ? 0.0f : (f > 1.0f ? 1.0f : f);
     }
 }
-
 
 static void set_field_pointers(ocean_frame *f, int c, int n, unsigned effects,
                                const int *ch, int nch, int foam_map)
@@ -453,7 +457,6 @@ static float *gain_plane_get(ocean *o, int c, int n, double kc, int order, doubl
     return victim->g;
 }
 
-
 /* Channels per FFTW call on the n-point grid.  Eight spectra at N = 1024
  * are 34 MB, more than a last-level cache holds, so one batched transform
  * found what the row pass wrote already evicted and ran from memory; in
@@ -473,7 +476,6 @@ static int group_size(const ocean *o, int n, int nch)
     return g < 1 ? 1 : g < nch ? g : nch;
 }
 
-
 void ocean_force_group(ocean *o, int group)
 {
     if (o)
@@ -488,7 +490,6 @@ double ocean_effective_cutoff(const ocean *o, double cutoff_k, int order)
         return INFINITY;
     return cutoff_k;
 }
-
 
 static ocean_result request_check(const ocean *o, double t, const ocean_request *r,
                                   const ocean_frame *f)
@@ -754,7 +755,6 @@ void ocean_frame_get_info(const ocean_frame *f, ocean_frame_info *out)
 {
     *out = f->info;
 }
-
 
 void ocean_get_counters(const ocean *o, ocean_counters *out)
 {

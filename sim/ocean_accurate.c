@@ -11,9 +11,7 @@
 #include <math.h>
 #include <string.h>
 
-/* ---- accurate reading ------------------------------------------------------
- *
- * Bilinear reading of a grid that holds waves up to half its Nyquist rate
+/* Bilinear reading of a grid that holds waves up to half its Nyquist rate
  * (coarse cascades) or up to it (the finest) leaves centimetres between
  * grid points: the error is ~ (k h)^2 / 8 of each wave's amplitude, and
  * the coarse cascades put metres of amplitude near k h = pi / 2.  The FFT
@@ -316,13 +314,12 @@ static double hermite_read(const float *g, const float *gx, const float *gz, con
      * so the mixed difference adds its own term, 5e-3 of it.  Scanned wave
      * by wave over every lattice wave of a 64-point grid (400 points
      * each), error over bound is at most 0.95 inside the Nyquist circle
-     * (it was 3.7 at k h = 3.04 along an axis, where the nodes' envelope
-     * passes through 0, and 1.4 for the cross term), but 2.7 for a lone
-     * wave at the square's corner, k h = (3.04, 3.04) (7.2 before): a band
-     * that fills the square relies on its corner waves carrying little
-     * beside the rest, as in the default sea (0 of 400 query points over
-     * their bound, 2 before).  Float storage adds 2^-22 of the nodes'
-     * magnitude. */
+     * (the slopes' envelope covers k h = 3.04 along an axis, where the
+     * values' envelope passes through 0), but 2.7 for a lone wave at the
+     * square's corner, k h = (3.04, 3.04): a band that fills the square
+     * relies on its corner waves carrying little beside the rest, as in
+     * the default sea (0 of 400 query points over their bound).  Float
+     * storage adds 2^-22 of the nodes' magnitude. */
     double ratio = finest ? 1.5e-3 : 6.3e-5, ratio_xz = finest ? 5e-3 : 0.0;
     if (bound)
         *bound = 2.0 * ratio * (hx + hz) + 2.0 * ratio_xz * hxz + big * 0x1p-22;
@@ -384,8 +381,7 @@ void ocean_frame_sample_accurate(const ocean_frame *f, double x, double z, unsig
     *out = (ocean_point){.height = v[H], .dx = v[DX], .dz = v[DZ], .slope_x = v[SX],
                          .slope_z = v[SZ], .jacobian = jac,
                          /* the frame's whitecap foam, as ocean_frame_sample
-                          * and every tile (it was the legacy Jacobian ramp,
-                          * near 0 where tiles carried the wind's coverage) */
+                          * and every tile give it */
                          .foam = any_foam ? ocean_frame_foam(f, v[DXX], v[DZZ]) : 0.0,
                          .vel_x = v[VX], .vel_y = v[VY], .vel_z = v[VZ], .dxx = v[DXX],
                          .dzz = v[DZZ], .dxz = v[DXZ]};
@@ -394,4 +390,3 @@ void ocean_frame_sample_accurate(const ocean_frame *f, double x, double z, unsig
                              .dx = blind[1] ? INFINITY : e[1],
                              .dz = blind[2] ? INFINITY : e[2]};
 }
-

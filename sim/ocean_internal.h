@@ -95,13 +95,11 @@ typedef struct ocean_memo {
     double kc, scale, boost, value;
 } ocean_memo;
 
-
 /* What each way of splitting the stage's passes (rows, channels) has cost
  * one kind of cascade evaluation lately: ns per channel of the passes and
  * FFTW calls together, its last SPLIT_WINDOW samples.  Compared by their
  * minimum: a busy machine only ever adds time, so the minimum tracks what
- * a split costs, where an average flipped with every spike (an
- * exponential average chose the slower split a third of the time). */
+ * a split costs, where an average flips with every spike. */
 #define SPLIT_WINDOW 8
 typedef struct ocean_split_stat {
     double ns[2][SPLIT_WINDOW];
@@ -178,7 +176,8 @@ struct ocean_frame {
     double foam_inv_lambda;
 };
 
-
+/* One FFTW call's spectrum stage pass (ocean_stage_pass): the cascade, the
+ * grid, the channels and the filter it writes the spectra of. */
 typedef struct ocean_stage_args {
     ocean_cascade *cs;
     int cached;             /* 1: read h from cs->cache, 0: compute and store */
@@ -196,7 +195,7 @@ typedef struct ocean_stage_args {
     int deep_table;         /* 1: read every frequency (ocean_force_frequency_table) */
 } ocean_stage_args;
 
-/* Channels the stage hands one team member: at most one per thread. */
+/* The largest team the stage splits a pass over (params.threads <= 64). */
 #define STAGE_MAX_THREADS 64
 
 /* Index of a signed wave number m in an n-point FFT axis. */
@@ -229,10 +228,9 @@ static inline int ocean_in_band(const ocean_cascade *cs, double k)
  * rounded square roots and a product, so every path (scalar, AVX2,
  * AVX-512) and every replica gets the same double; it is within 3 ulp of
  * the exact w / 2 pi.  The model's deep-water frequency is this double,
- * read from no table: the stage's frequency table (16 B a pair of modes)
- * was a third of the bytes it streamed from memory every tick, and the
- * phase stays exact for it (ocean_time.h), so only the model's w moves,
- * by under 1e-15 relative. */
+ * read from no table: a frequency table costs the stage 16 B a pair of
+ * modes, a third of the bytes it would stream from memory every tick,
+ * and the phase stays exact for the computed value (ocean_time.h). */
 static inline double ocean_deep_turns(double cf, double m2)
 {
     return cf * sqrt(sqrt(m2));
@@ -350,10 +348,19 @@ int ocean_fft_run(ocean *o, const ocean_cascade *cs, int n, int gn, float *out);
 
 /* ---- ocean_stage.c: the spectrum stage */
 
+/* The row pairs 0..n/2 of cascade cs's n-point grid split over nt
+ * threads, balanced by work: thread t takes [b[t], b[t+1]). */
 void ocean_stage_split(const ocean_cascade *cs, int n, int nt, int *b);
+/* The calling team member's share: its rows of split b (made for nt), or
+ * of a new split when OpenMP granted a smaller team; its channels of a
+ * gn-channel call, the block FFTW's threaded plan hands the same member. */
 void ocean_stage_rows(const ocean_cascade *cs, int n, int nt, const int *b, int *r0, int *r1);
 void ocean_stage_channels(int gn, int *c0, int *c1);
+/* This team member's share of one FFTW call's pass: by channel or by rows. */
 void ocean_stage_pass(const ocean_stage_args *a, int nt, const int *split, size_t plane, int by_channel);
+/* How the next pass of a kind splits (0 rows, 1 channels): the faster of
+ * the recent timings in st (best), with a probe of the other now and then
+ * (pick); note records a pass's ns per channel. */
 int ocean_stage_split_best(const ocean *o, const ocean_split_stat *st);
 int ocean_stage_split_pick(const ocean *o, ocean_split_stat *st);
 void ocean_stage_split_note(ocean_split_stat *st, int split, double ns);

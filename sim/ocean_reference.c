@@ -4,13 +4,12 @@
  * the truth the tests and the accuracy benchmark compare the FFT fields
  * with.  Reads the ocean's tables only.
  */
-#include "ocean.h"
-#include "ocean_internal.h"
-
 #include "ocean_reference.h"
 
 #include <math.h>
 #include <stdlib.h>
+
+#include "ocean_internal.h"
 
 /* x mod 2 pi in [-pi, pi], exact to a few ulp of pi (ocean_time.h); for
  * the spatial phases k.x of the reference sums (x already reduced modulo
@@ -214,4 +213,3 @@ void ocean_reference_eval(const ocean_reference *r, double x, double z, ocean_po
     free(ax);
     ref_finish(&a, r->lam, &r->foam, out);
 }
-

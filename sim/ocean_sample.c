@@ -157,4 +157,3 @@ void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out)
     out->folded_fraction = folded / ((double)n * n);
     out->foam_coverage = foam / ((double)n * n);
 }
-

@@ -206,6 +206,19 @@ row_gains(const ocean_stage_args *a, int r, int x0, int x1, size_t kbase, float 
     return gr;
 }
 
+/* o = i lam (k/|k|) (re + i im) over columns [x0, x1): a displacement or
+ * velocity channel, k the column's kx (col = 1) or the row's kz (col = 0).
+ * Inlined with a literal col, so each use is one simple loop. */
+static inline __attribute__((always_inline)) void
+row_times_ik(float (*o)[2], float lam, const float *kx, float kz, const float *kinv, const float *re,
+             const float *im, int x0, int x1, const int col)
+{
+    for (int ix = x0; ix < x1; ix++) {
+        float f = lam * (col ? kx[ix] : kz) * kinv[ix];
+        o[ix][0] = -f * im[ix]; o[ix][1] = f * re[ix];
+    }
+}
+
 /* One channel of a row into o, columns [x0, x1), from the row's filtered
  * h (hr, hi) and dh/dt (tr, ti); kx per column, kz of the row, kinv per
  * column, lam the choppiness. */
@@ -218,16 +231,10 @@ row_channel(float (*o)[2], int ch, const float *hr, const float *hi, const float
         for (int ix = x0; ix < x1; ix++) { o[ix][0] = hr[ix]; o[ix][1] = hi[ix]; }
         break;
     case CH_DX: /* i k/|k| h */
-        for (int ix = x0; ix < x1; ix++) {
-            float f = lam * kx[ix] * kinv[ix];
-            o[ix][0] = -f * hi[ix]; o[ix][1] = f * hr[ix];
-        }
+        row_times_ik(o, lam, kx, kz, kinv, hr, hi, x0, x1, 1);
         break;
     case CH_DZ:
-        for (int ix = x0; ix < x1; ix++) {
-            float f = lam * kz * kinv[ix];
-            o[ix][0] = -f * hi[ix]; o[ix][1] = f * hr[ix];
-        }
+        row_times_ik(o, lam, kx, kz, kinv, hr, hi, x0, x1, 0);
         break;
     case CH_SX: /* i k h */
         for (int ix = x0; ix < x1; ix++) { o[ix][0] = -kx[ix] * hi[ix]; o[ix][1] = kx[ix] * hr[ix]; }
@@ -253,20 +260,14 @@ row_channel(float (*o)[2], int ch, const float *hr, const float *hi, const float
             o[ix][0] = f * hr[ix]; o[ix][1] = f * hi[ix];
         }
         break;
-    case CH_VX:
-        for (int ix = x0; ix < x1; ix++) {
-            float f = lam * kx[ix] * kinv[ix];
-            o[ix][0] = -f * ti[ix]; o[ix][1] = f * tr[ix];
-        }
+    case CH_VX: /* i k/|k| dh/dt */
+        row_times_ik(o, lam, kx, kz, kinv, tr, ti, x0, x1, 1);
         break;
     case CH_VY:
         for (int ix = x0; ix < x1; ix++) { o[ix][0] = tr[ix]; o[ix][1] = ti[ix]; }
         break;
     case CH_VZ:
-        for (int ix = x0; ix < x1; ix++) {
-            float f = lam * kz * kinv[ix];
-            o[ix][0] = -f * ti[ix]; o[ix][1] = f * tr[ix];
-        }
+        row_times_ik(o, lam, kx, kz, kinv, tr, ti, x0, x1, 0);
         break;
     }
 }
@@ -466,7 +467,6 @@ void ocean_stage_rows(const ocean_cascade *cs, int n, int nt, const int *b, int 
     *r1 = mine[t + 1];
 }
 
-
 /* The channels [*c0, *c1) of a gn-channel FFTW call that this team
  * member writes when the stage splits a call by channel: the block of the
  * batch FFTW's threaded plan hands the same member (its threads split a
@@ -576,4 +576,3 @@ void ocean_stage_split_note(ocean_split_stat *st, int split, double ns)
     if (st->have[split] < SPLIT_WINDOW)
         st->have[split]++;
 }
-

@@ -265,4 +265,3 @@ void ocean_get_spectrum_stats(const ocean *o, ocean_spectrum_stats *out)
         out->lambda_dominant = 2.0 * M_PI / out->kp;
     }
 }
-

@@ -64,6 +64,10 @@ ldd "$prefix/lib/liboceanclient.so" >"$tmp/needs"
 no_sim "liboceanclient.so (ldd)"
 readelf -d "$prefix/lib/liboceansim.so" | grep NEEDED >"$tmp/needs"
 grep -q 'libfftw3f' "$tmp/needs" || fail "liboceansim.so does not need FFTW: $(cat "$tmp/needs")"
+# the direct-sum reference is the tests' tool, in no installed library
+nm -D --defined-only "$prefix/lib/liboceansim.so" "$prefix/lib/liboceanclient.so" | grep -q ocean_reference_ &&
+    fail "an installed library exports the reference sum (ocean_reference_*)"
+nm -D --defined-only "$prefix/lib/liboceansim.so" | grep -q ' T ocean_evaluate$' || fail "liboceansim.so lacks ocean_evaluate"
 
 echo "== a program against the installed library, via pkg-config ($SECONDS s)"
 export PKG_CONFIG_PATH=$prefix/lib/pkgconfig
