@@ -10,7 +10,8 @@
 #   make fuzz     run each libFuzzer target for FUZZ_SECONDS
 #   make install  PREFIX=/usr/local (DESTDIR for staging): programs, the
 #                 client library (static and shared, pkg-config oceanclient),
-#                 headers, config, scenes, the web viewer, a systemd unit
+#                 the simulator library (pkg-config oceansim), headers,
+#                 config, scenes, the web viewer, a systemd unit
 #   make clean
 #
 # Builds run in parallel (one job per core) unless the command line gives -j,
@@ -56,15 +57,17 @@ $(BUILD)/obj/server/%.o: INC = -Isim -Iprotocol -Iserver
 # program includes <oceand/oceanclient.h> (so no generic name - conf.h,
 # codec.h - sits at the top of anyone's include path).  The examples are
 # built as a user builds them, against BUILD/include/oceand, a staged copy.
-PUBLIC_HEADERS := $(filter-out sim/ocean_internal.h sim/mesh_internal.h,$(wildcard sim/*.h)) \
+PUBLIC_HEADERS := $(filter-out sim/ocean_internal.h sim/mesh_internal.h sim/ocean_reference.h,$(wildcard sim/*.h)) \
                   $(wildcard protocol/*.h) $(wildcard clients/c/*.h)
 $(BUILD)/obj/clients/examples/%.o: INC = -I$(BUILD)/include
 CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -fopenmp -pthread
-# What the client library (sim + protocol + clients/c) links against; the
-# .pc file's Libs.private is generated from it, so they cannot disagree.
-LIB_LDLIBS := -lwebsockets -lOpenEXRCore-3_1 -lfftw3f_omp -lfftw3f \
-              -lzstd -lcjson -lm -lpthread
-LDLIBS += $(LIB_LDLIBS) -lhiredis
+# What the client library (protocol + clients/c + the sim/ files they use)
+# links against, OpenEXRCore for protocol/'s exr codec; then what the
+# simulator adds.  The .pc files' Libs.private are generated from these, so
+# they cannot disagree.
+LIB_LDLIBS := -lwebsockets -lOpenEXRCore-3_1 -lzstd -lcjson -lm -lpthread
+SIM_LDLIBS := -lfftw3f_omp -lfftw3f -lm
+LDLIBS += $(LIB_LDLIBS) $(SIM_LDLIBS) -lhiredis
 ifeq ($(SAN),1)
 CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 LDFLAGS += -fsanitize=address,undefined
@@ -92,13 +95,24 @@ LIB_TEST := $(BUILD)/libocean_testlib.a
 ALL_LIBS := $(if $(CLIENT_SRC),$(LIB_CLIENT)) $(if $(SERVER_SRC),$(LIB_SERVER)) \
             $(if $(PROTO_SRC),$(LIB_PROTO)) $(LIB_SIM)
 
-# The installable client library: sim + protocol + clients/c in one archive
-# and one shared object (built from -fPIC objects of its own).
+# The installable client library, in one archive and one shared object
+# (built from -fPIC objects of its own): protocol + clients/c and the
+# sim/ files they use (results, time, the config parser), no simulator, so
+# a program that links it gets no FFTW and no OpenMP.
 OC_VERSION := $(shell sed -n 's/^\#define OC_VERSION "\(.*\)"/\1/p' clients/c/oceanclient.h)
 OC_SOVERSION := $(firstword $(subst ., ,$(OC_VERSION)))
-OCLIB_SRC := $(CLIENT_SRC) $(PROTO_SRC) $(SIM_SRC)
+OCLIB_SIM_SRC := sim/ocean_result.c sim/ocean_time.c sim/conf.c
+OCLIB_SRC := $(filter-out clients/c/oc_ship_offline.c,$(CLIENT_SRC)) $(PROTO_SRC) $(OCLIB_SIM_SRC)
 OCLIB_A := $(BUILD)/liboceanclient.a
 OCLIB_SO := $(BUILD)/liboceanclient.so.$(OC_VERSION)
+# The installable simulator, for programs that run an ocean of their own
+# (the ship example's --offline): the rest of sim/, less the direct-sum
+# reference of the tests and benchmarks, and the client piece that runs on
+# it.  It takes the shared sim/ files from liboceanclient (oceansim.pc
+# requires oceanclient), so no symbol is in both.
+OCSIM_SRC := $(filter-out $(OCLIB_SIM_SRC) sim/ocean_reference.c,$(SIM_SRC)) clients/c/oc_ship_offline.c
+OCSIM_A := $(BUILD)/liboceansim.a
+OCSIM_SO := $(BUILD)/liboceansim.so.$(OC_VERSION)
 pic = $(patsubst %.c,$(BUILD)/pic/%.o,$(1))
 
 PROGS := $(BUILD)/ocean-sim \
@@ -115,16 +129,19 @@ WASM_SRC := clients/wasm/oc_wasm.c protocol/codec.c protocol/proto.c protocol/pr
 .PHONY: all deps test test-plain test-asan test-bins run bench fuzz clean install
 .DEFAULT_GOAL := all
 
-all: $(PROGS) $(TESTS) $(BENCHES) $(OCLIB_A) $(OCLIB_SO) $(WASM)
+all: $(PROGS) $(TESTS) $(BENCHES) $(OCLIB_A) $(OCLIB_SO) $(OCSIM_A) $(OCSIM_SO) $(WASM)
 
 deps:
 	@bash .ci/deps.sh run
 
-# The spectrum stage's row passes need -O3's vectoriser (GCC 12's -O2 cost
-# model leaves them scalar); a command-line OPT (the ASan build) still wins.
-$(BUILD)/obj/sim/ocean.o $(BUILD)/pic/sim/ocean.o: OPT = -O3
-# sqrt must not set errno there, or GCC cannot vectorise deep_turns.
-$(BUILD)/obj/sim/ocean.o $(BUILD)/pic/sim/ocean.o: CFLAGS += -fno-math-errno
+# The ocean's vector passes need -O3's vectoriser (GCC 12's -O2 cost model
+# leaves them scalar): the spectrum stage's row passes, the evaluation's
+# Jacobian and foam pass, the per-vertex sampling and the accurate reading.
+# A command-line OPT (the ASan build) still wins.
+SIM_VEC_SRC := sim/ocean.c sim/ocean_stage.c sim/ocean_sample.c sim/ocean_accurate.c
+$(call obj,$(SIM_VEC_SRC)) $(call pic,$(SIM_VEC_SRC)): OPT = -O3
+# sqrt must not set errno there, or GCC cannot vectorise ocean_deep_turns.
+$(call obj,$(SIM_VEC_SRC)) $(call pic,$(SIM_VEC_SRC)): CFLAGS += -fno-math-errno
 
 # The browser viewer's decoders: protocol/'s own (messages and codecs) and
 # the C library's store of samples in time (oc_held.c), compiled to
@@ -148,11 +165,19 @@ $(OCLIB_A): $(call obj,$(OCLIB_SRC))
 	rm -f $@ && ar rcs $@ $^
 # -z defs: every symbol the library uses is resolved by what it names (the
 # sanitizer runtime is only there in the executable, so not under SAN).
+# Linked without -fopenmp: nothing in it runs an OpenMP team.
 $(OCLIB_SO): $(call pic,$(OCLIB_SRC))
 	$(CC) -shared -Wl,-soname,liboceanclient.so.$(OC_SOVERSION) $(if $(filter 1,$(SAN)),,-Wl,-z,defs) \
-	    $(CFLAGS) $(LDFLAGS) $^ $(LIB_LDLIBS) -o $@
+	    $(filter-out -fopenmp,$(CFLAGS)) $(LDFLAGS) $^ $(LIB_LDLIBS) -o $@
 	ln -sf $(notdir $@) $(BUILD)/liboceanclient.so.$(OC_SOVERSION)
 	ln -sf $(notdir $@) $(BUILD)/liboceanclient.so
+$(OCSIM_A): $(call obj,$(OCSIM_SRC))
+	rm -f $@ && ar rcs $@ $^
+$(OCSIM_SO): $(call pic,$(OCSIM_SRC)) $(OCLIB_SO)
+	$(CC) -shared -Wl,-soname,liboceansim.so.$(OC_SOVERSION) $(if $(filter 1,$(SAN)),,-Wl,-z,defs) \
+	    $(CFLAGS) $(LDFLAGS) $^ $(SIM_LDLIBS) -o $@
+	ln -sf $(notdir $@) $(BUILD)/liboceansim.so.$(OC_SOVERSION)
+	ln -sf $(notdir $@) $(BUILD)/liboceansim.so
 
 $(LIB_SIM): $(call obj,$(SIM_SRC))
 $(LIB_PROTO): $(call obj,$(PROTO_SRC))
@@ -231,13 +256,18 @@ install: all
 	$(CC) $(CPPFLAGS) -Isim -Iprotocol -Iserver $(INST_DEFS) $(CFLAGS) -c server/main.c -o $(BUILD)/install/main.o
 	$(CC) $(CFLAGS) $(LDFLAGS) $(BUILD)/install/main.o $(ALL_LIBS) $(LDLIBS) -o $(BUILD)/install/oceand
 	install -m 755 $(BUILD)/install/oceand $(DESTDIR)$(PREFIX)/bin/
-	install -m 644 $(OCLIB_A) $(OCLIB_SO) $(DESTDIR)$(PREFIX)/lib/
+	install -m 644 $(OCLIB_A) $(OCLIB_SO) $(OCSIM_A) $(OCSIM_SO) $(DESTDIR)$(PREFIX)/lib/
 	ln -sf $(notdir $(OCLIB_SO)) $(DESTDIR)$(PREFIX)/lib/liboceanclient.so.$(OC_SOVERSION)
 	ln -sf $(notdir $(OCLIB_SO)) $(DESTDIR)$(PREFIX)/lib/liboceanclient.so
+	ln -sf $(notdir $(OCSIM_SO)) $(DESTDIR)$(PREFIX)/lib/liboceansim.so.$(OC_SOVERSION)
+	ln -sf $(notdir $(OCSIM_SO)) $(DESTDIR)$(PREFIX)/lib/liboceansim.so
 	install -m 644 $(PUBLIC_HEADERS) $(DESTDIR)$(PREFIX)/include/oceand/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(OC_VERSION)|g' \
-	    -e 's|@LIBS_PRIVATE@|$(LIB_LDLIBS) -fopenmp|g' \
+	    -e 's|@LIBS_PRIVATE@|$(LIB_LDLIBS)|g' \
 	    clients/c/oceanclient.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/oceanclient.pc
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@VERSION@|$(OC_VERSION)|g' \
+	    -e 's|@LIBS_PRIVATE@|$(SIM_LDLIBS) -fopenmp|g' \
+	    sim/oceansim.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/oceansim.pc
 	cp -R clients/web/. $(DESTDIR)$(DATADIR)/web/
 	install -m 644 config/scenes/*.conf $(DESTDIR)$(DATADIR)/scenes/
 	sed -e 's|^server.web_root = .*|server.web_root = $(DATADIR)/web|' \

@@ -157,7 +157,7 @@ typedef struct ocean_lattice_wave {
  * channels equal the Gerstner sum of the same waves,
  *   D = -Q A (k/|k|) sin(k.x - w t + phi).
  * Every ocean_* function then works on it as on a one-cascade ocean
- * (ocean_cascade_mips/moments, ocean_reference_point, ...); its band
+ * (ocean_cascade_mips/moments, ...); its band
  * [k_lo, k_hi) is the waves' |k| range.  Indices must lie within
  * +-(n/2 - 1) (not both 0) and every w within OCEAN_OMEGA_MAX; count
  * 0..OCEAN_LATTICE_MAX_WAVES.  OCEAN_EINVAL with msg naming the field. */
@@ -334,7 +334,7 @@ void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned 
  * accurate displacement (without them those are read by Lagrange alone).
  * If err is not NULL, err->height, err->dx and err->dz receive a bound on
  * each one's interpolation error against the frame's own waves (see the
- * comment in ocean.c; INFINITY where a needed derivative channel is
+ * comment in ocean_accurate.c; INFINITY where a needed derivative channel is
  * missing); its other fields are 0.  About ten times the cost of the
  * bilinear reading (bench_near): meant for queries, not mesh vertices. */
 void ocean_frame_sample_accurate(const ocean_frame *f, double x, double z, unsigned want,
@@ -364,35 +364,6 @@ void ocean_frame_get_field_stats(const ocean_frame *f, ocean_field_stats *out);
  * has no displacement. */
 void ocean_frame_sample_displacement(const ocean_frame *f, double x, double z,
                                      double *dx, double *dz);
-
-/* Double-precision reference by direct summation of every wave in every
- * band (O(n^2 * cascades) per call), amplitudes drawn afresh in double:
- * height, displacement, slopes, Jacobian, velocity at (x, z, t), with an
- * optional Butterworth cutoff (INFINITY for none).  For tests and the
- * accuracy report. */
-void ocean_reference_point(const ocean *o, double t, double x, double z,
-                           double cutoff_k, int order, ocean_point *out);
-
-/* The same reference for many points at one (t, cutoff, order): every
- * wave's h(k, t) and dh/dt are drawn once by ocean_reference_create (the
- * per-point cost of ocean_reference_point is mostly those draws), then
- * ocean_reference_eval sums them at any point, e^{i k.x} formed as
- * e^{i kx x} e^{i kz z} from 2 (n - 1) sines and cosines a cascade (each of
- * its own phase reduced in double), so the sums agree with
- * ocean_reference_point to double rounding (2e-15 in test_ocean).  On the
- * storm scene (3 cascades of 256) a point takes 1.0 ms against 51 ms, and
- * the create about one point's 49 ms.  The reference keeps a pointer to
- * o: destroy it first.
- * create: OCEAN_EINVAL (o NULL, t beyond OCEAN_TIME_MAX, cutoff NaN or
- * negative, order < 1), OCEAN_ENOMEM; eval: every field NaN if its
- * scratch (4 n doubles) cannot be allocated.  Immutable once made: any
- * number of threads may evaluate one reference at once. */
-typedef struct ocean_reference ocean_reference;
-ocean_result ocean_reference_create(const ocean *o, double t, double cutoff_k, int order,
-                                    ocean_reference **out);
-/* Accepts NULL. */
-void ocean_reference_destroy(ocean_reference *r);
-void ocean_reference_eval(const ocean_reference *r, double x, double z, ocean_point *out);
 
 /* h(k, t) of the wave with integer wave vector (mx, mz) of cascade c, in
  * double, built from h0(k) and h0(-k) drawn afresh: 0 outside the band.

@@ -17,8 +17,9 @@
  * taken from under 0.3 sqrt(tolerance) where Newton converges
  * quadratically, is checked by the final reading instead of a reading of
  * its own.  On the ocean `make run` serves, the stages take a point from
- * 8.5 to 6.2 us with the same error against the exact waves, 0.036 mm RMS
- * (bench_filter "Point queries").
+ * 8.5 to 6.2 us (5.6 with the accurate reading's loads arranged as in
+ * ocean_accurate.c) with the same error against the exact waves, 0.036 mm
+ * RMS (bench_filter "Point queries").
  *
  * The FFT fields are read with ocean_frame_sample_accurate (Hermite on the
  * spectral derivatives, about a millimetre from the waves themselves in a

@@ -203,7 +203,7 @@ static ocean_result table_modes(ocean_slope_table *t, const ocean *oc)
         double patch, klo, khi;
         ocean_cascade_band(oc, c, &patch, &klo, &khi);
         double dk = 2.0 * M_PI / patch;
-        /* The same band test and Nyquist exclusion as ocean.c's draw_h0. */
+        /* The same band test and Nyquist exclusion as ocean_modes.c's ocean_modes_h0. */
         for (int mz = 0; mz < n / 2; mz++)
             for (int mx = -n / 2 + 1; mx < n / 2; mx++) {
                 if (mz == 0 && mx <= 0)

@@ -23,6 +23,7 @@
 #include "foam.h"
 #include "ocean.h"
 #include "ocean_conf.h"
+#include "ocean_reference.h"
 #include "spectrum.h"
 
 /* Monahan & O'Muircheartaigh 1980 (JPO 10, 2094, eq. 5), percent / 100. */

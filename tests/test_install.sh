@@ -6,6 +6,11 @@
 #    liboceanclient.so.0) and runs without LD_LIBRARY_PATH; one built with
 #    `--static` links the archive with Libs.private alone and runs; the
 #    include path the .pc gives holds no generic header name;
+#  - the client library pulls in no simulator: neither the installed
+#    liboceanclient.so nor a program linked with `pkg-config --libs
+#    oceanclient` needs FFTW or OpenMP (libgomp); a program that runs its
+#    own ocean links `pkg-config --libs oceansim` (shared and static), and
+#    the ship example's --offline run is built that way;
 #  - the installed oceand, started from another directory with no config,
 #    serves the viewer at / and streams a frame (scenes and web viewer found
 #    under PREFIX/share/oceand); so does the systemd unit's ExecStart, which
@@ -26,6 +31,8 @@ echo "== make install PREFIX=$prefix ($SECONDS s)"
 mk install PREFIX="$prefix" >"$tmp/install.log" 2>&1 || { tail -20 "$tmp/install.log"; fail "make install"; }
 for f in bin/oceand bin/ocean-client bin/ocean-sim lib/liboceanclient.a lib/liboceanclient.so \
          lib/liboceanclient.so.0 lib/pkgconfig/oceanclient.pc include/oceand/oceanclient.h \
+         lib/liboceansim.a lib/liboceansim.so lib/liboceansim.so.0 lib/pkgconfig/oceansim.pc \
+         include/oceand/ocean.h include/oceand/oc_ship_offline.h \
          share/oceand/web/index.html share/oceand/web/main.js share/oceand/scenes/ship-bridge.conf \
          share/oceand/scenes/storm.conf etc/oceand/oceand.conf lib/systemd/system/oceand.service; do
     [[ -e $prefix/$f ]] || fail "not installed: $f"
@@ -36,21 +43,53 @@ done
 # examples are source, not commands: a 'ship' in PREFIX/bin could shadow another
 [[ -e $prefix/bin/ship ]] && fail "the ship example is installed as $prefix/bin/ship"
 # private headers stay private; the .pc's comment is not rewritten by install
-for f in include/oceand/ocean_internal.h include/oceand/mesh_internal.h; do
+for f in include/oceand/ocean_internal.h include/oceand/mesh_internal.h include/oceand/ocean_reference.h; do
     [[ -e $prefix/$f ]] && fail "a private header is installed: $f"
 done
 grep -q "^#.*$prefix" "$prefix/lib/pkgconfig/oceanclient.pc" && fail "install rewrote the .pc's comment: $(head -3 "$prefix/lib/pkgconfig/oceanclient.pc")"
-soname=$(readelf -d "$prefix/lib/liboceanclient.so" | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p')
-[[ $soname == liboceanclient.so.0 ]] || fail "soname '$soname', want liboceanclient.so.0"
+for lib in oceanclient oceansim; do
+    soname=$(readelf -d "$prefix/lib/lib$lib.so" | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p')
+    [[ $soname == lib$lib.so.0 ]] || fail "soname '$soname', want lib$lib.so.0"
+done
+# no simulator in the client library: nothing it needs, directly or through
+# another library, is FFTW or libgomp (the simulator library needs both)
+no_sim() {  # what file
+    grep -E 'libfftw3f|libgomp' "$tmp/needs" && fail "$1 needs the simulator's libraries: $(cat "$tmp/needs")"
+    return 0
+}
+readelf -d "$prefix/lib/liboceanclient.so" | grep NEEDED >"$tmp/needs"
+grep -q 'libwebsockets' "$tmp/needs" || fail "readelf -d finds no NEEDED libwebsockets in liboceanclient.so: $(cat "$tmp/needs")"
+no_sim "liboceanclient.so (readelf -d)"
+ldd "$prefix/lib/liboceanclient.so" >"$tmp/needs"
+no_sim "liboceanclient.so (ldd)"
+readelf -d "$prefix/lib/liboceansim.so" | grep NEEDED >"$tmp/needs"
+grep -q 'libfftw3f' "$tmp/needs" || fail "liboceansim.so does not need FFTW: $(cat "$tmp/needs")"
+# the direct-sum reference is the tests' tool, in no installed library
+nm -D --defined-only "$prefix/lib/liboceansim.so" "$prefix/lib/liboceanclient.so" | grep -q ocean_reference_ &&
+    fail "an installed library exports the reference sum (ocean_reference_*)"
+nm -D --defined-only "$prefix/lib/liboceansim.so" | grep -q ' T ocean_evaluate$' || fail "liboceansim.so lacks ocean_evaluate"
 
 echo "== a program against the installed library, via pkg-config ($SECONDS s)"
 export PKG_CONFIG_PATH=$prefix/lib/pkgconfig
-pkg-config --exists oceanclient || fail "pkg-config does not find oceanclient"
-pkg-config --static --libs oceanclient | grep -q -- -lfftw3f_omp || fail "Libs.private lacks -lfftw3f_omp"
-pkg-config --static --libs oceanclient | grep -q -- -lfftw3f_threads && fail "Libs.private names -lfftw3f_threads"
+pkg-config --exists oceanclient oceansim || fail "pkg-config does not find oceanclient and oceansim"
+pkg-config --static --libs oceanclient | grep -Eq -- '-lfftw3f|-fopenmp' && fail "oceanclient's Libs.private names the simulator's: $(pkg-config --static --libs oceanclient)"
+pkg-config --static --libs oceansim | grep -q -- -lfftw3f_omp || fail "oceansim's Libs.private lacks -lfftw3f_omp"
+pkg-config --static --libs oceansim | grep -q -- -lfftw3f_threads && fail "oceansim's Libs.private names -lfftw3f_threads"
 mkdir -p "$tmp/app"
 cat >"$tmp/app/app.c" <<'C'
-/* A user's first program: the library's own ocean, and a client handle. */
+/* A user's first program: a client handle, and the library's result codes. */
+#include <stdio.h>
+#include <oceand/oceanclient.h>
+int main(void)
+{
+    proto_subscribe s;
+    oc_subscribe_default(&s);
+    printf("oceanclient %s ok tile_size %u (%s)\n", OC_VERSION, (unsigned)s.tile_size, ocean_strerror(OCEAN_OK));
+    return 0;
+}
+C
+cat >"$tmp/app/simapp.c" <<'C'
+/* A program that runs its own ocean beside the client library. */
 #include <stdio.h>
 #include <oceand/oceanclient.h>
 #include <oceand/ocean.h>
@@ -65,7 +104,7 @@ int main(void)
     ocean_destroy(o);
     proto_subscribe s;
     oc_subscribe_default(&s);
-    printf("oceanclient %s ok tile_size %u\n", OC_VERSION, (unsigned)s.tile_size);
+    printf("oceansim %s ok tile_size %u\n", OC_VERSION, (unsigned)s.tile_size);
     return 0;
 }
 C
@@ -74,6 +113,18 @@ cc -o "$tmp/app/app_shared" "$tmp/app/app.c" $(pkg-config --cflags --libs oceanc
     fail "shared link: $(head -20 "$tmp/cc.log")"
 ldd "$tmp/app/app_shared" | grep -q 'liboceanclient.so.0 =>' || fail "app_shared does not use liboceanclient.so.0"
 env -u LD_LIBRARY_PATH "$tmp/app/app_shared" | grep -q "ok" || fail "app_shared does not run without LD_LIBRARY_PATH"
+ldd "$tmp/app/app_shared" >"$tmp/needs"
+no_sim "a program linked with pkg-config --libs oceanclient"
+# shellcheck disable=SC2046
+cc -o "$tmp/app/simapp_shared" "$tmp/app/simapp.c" $(pkg-config --cflags --libs oceansim) 2>"$tmp/cc.log" ||
+    fail "shared link against oceansim: $(head -20 "$tmp/cc.log")"
+env -u LD_LIBRARY_PATH "$tmp/app/simapp_shared" | grep -q "ok" || fail "simapp_shared does not run without LD_LIBRARY_PATH"
+# shellcheck disable=SC2046
+cc -o "$tmp/app/simapp_static" "$tmp/app/simapp.c" \
+    $(pkg-config --static --cflags --libs oceansim | sed 's/-locean\([a-z]*\)/-l:libocean\1.a/g') 2>"$tmp/cc.log" ||
+    fail "static link against oceansim with Libs.private: $(head -20 "$tmp/cc.log")"
+ldd "$tmp/app/simapp_static" | grep -Eq 'libocean(client|sim)\.so' && fail "simapp_static still needs a shared oceand library"
+"$tmp/app/simapp_static" | grep -q "ok" || fail "simapp_static does not run"
 # nothing generic on the include path the library gives: its headers are
 # <oceand/...>, and a bare "codec.h" or "conf.h" is not found through it
 for h in codec.h conf.h oceanclient.h; do
@@ -90,7 +141,7 @@ ldd "$tmp/app/app_static" | grep -q liboceanclient && fail "app_static still nee
 "$tmp/app/app_static" | grep -q "ok" || fail "app_static does not run"
 # The project's own example, built as a user would.
 # shellcheck disable=SC2046
-cc -o "$tmp/app/ship" clients/examples/ship.c $(pkg-config --cflags --libs oceanclient) -lm 2>"$tmp/cc.log" ||
+cc -o "$tmp/app/ship" clients/examples/ship.c $(pkg-config --cflags --libs oceansim) -lm 2>"$tmp/cc.log" ||
     fail "ship.c against the installed library: $(head -20 "$tmp/cc.log")"
 env -u LD_LIBRARY_PATH "$tmp/app/ship" --offline --seconds 2 --quiet >"$tmp/ship.out" 2>&1 ||
     fail "installed ship --offline: $(cat "$tmp/ship.out")"

@@ -17,6 +17,7 @@
 
 #include "ocean.h"
 #include "ocean_internal.h"
+#include "ocean_reference.h"
 #include "ocean_time.h"
 
 static int sanitized(void)
@@ -1776,7 +1777,7 @@ static void test_grouped_transforms(void **state)
 
 /* A coarse cascade's waves fill columns [0, n/4) of its n x (n/2 + 1)
  * half spectrum, so its 2-D c2r leaves the column transforms of the other
- * columns out (ocean.c, transform_call).  The pruned transform must be the
+ * columns out (ocean_fft.c, ocean_fft_run).  The pruned transform must be the
  * same transform: every channel of every cascade as the whole-grid 2-D
  * plan makes it, to float rounding, evolving h(k,t) and reading it back,
  * in one call and in calls of 2; and the direct sum of the modes

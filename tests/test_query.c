@@ -14,6 +14,7 @@
 #include <cmocka.h>
 
 #include "ocean_conf.h"
+#include "ocean_reference.h"
 #include "query.h"
 
 typedef struct fixture {

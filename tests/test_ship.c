@@ -18,6 +18,7 @@
 #include <cmocka.h>
 
 #include "oc_ship.h"
+#include "oc_ship_offline.h"
 #include "ocean.h"
 
 #define assert_close(a, b, tol)                                                   \

@@ -9,8 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "query.h"
-
 static void setmsg(char *msg, size_t n, const char *fmt, ...)
 {
     if (!msg || !n)
@@ -275,82 +273,4 @@ void oc_ship_trace_free(oc_ship_trace *tr)
     free(tr->roll);
     free(tr->eta);
     memset(tr, 0, sizeof *tr);
-}
-
-ocean_result oc_ship_run_offline(const oc_ship_params *p, ocean *o, double t0, double seconds, double dt,
-                                 oc_ship_trace *out, char *msg, size_t msglen)
-{
-    if (!p || !o || !out || !(seconds > 0 && seconds <= 1e6) || !(dt > 0 && dt <= 0.5)) {
-        setmsg(msg, msglen, "bad arguments to the offline ship run");
-        return OCEAN_EINVAL;
-    }
-    memset(out, 0, sizeof *out);
-    oc_ship *s;
-    ocean_result r = oc_ship_create(p, t0, &s, msg, msglen);
-    if (r != OCEAN_OK)
-        return r;
-    size_t steps = (size_t)ceil(seconds / dt);
-    size_t n = oc_ship_point_count(s);
-    ocean_frame *f = NULL;
-    double *xz = malloc(2 * n * sizeof *xz);
-    double *h = malloc(n * sizeof *h);
-    ocean_query_result *qr = malloc(n * sizeof *qr);
-    out->t = malloc((steps + 1) * sizeof(double));
-    out->heave = malloc((steps + 1) * sizeof(double));
-    out->pitch = malloc((steps + 1) * sizeof(double));
-    out->roll = malloc((steps + 1) * sizeof(double));
-    out->eta = malloc((steps + 1) * sizeof(double));
-    r = ocean_frame_create(o, &f);
-    if (r == OCEAN_OK && (!xz || !h || !qr || !out->t || !out->heave || !out->pitch || !out->roll || !out->eta))
-        r = OCEAN_ENOMEM;
-    ocean_request req;
-    ocean_request_all(&req, OCEAN_FX_HEIGHT | OCEAN_FX_DISPLACEMENT);
-    ocean_query_options qo;
-    ocean_query_options_default(&qo);
-    /* The hull has always floated on the bilinear reading (which smooths
-     * the shortest waves of this coarse grid); the heave tests are
-     * calibrated on it (test_ship). */
-    qo.bilinear = 1;
-    out->dt = dt;
-    for (size_t i = 0; r == OCEAN_OK && i <= steps; i++) {
-        oc_ship_state st = s->st;
-        out->t[i] = st.t;
-        out->heave[i] = st.heave;
-        out->pitch[i] = st.pitch;
-        out->roll[i] = st.roll;
-        out->eta[i] = i ? out->eta[i - 1] : 0;
-        out->n = i + 1;
-        if (i == steps)
-            break;
-        r = ocean_evaluate(o, st.t, &req, f);
-        if (r != OCEAN_OK) {
-            setmsg(msg, msglen, "ocean_evaluate at t = %g: %s", st.t, ocean_strerror(r));
-            break;
-        }
-        oc_ship_points(s, xz);
-        r = ocean_query_points(f, NULL, NULL, st.t, xz, n, &qo, qr, NULL);
-        if (r != OCEAN_OK) {
-            setmsg(msg, msglen, "ocean_query_points at t = %g: %s", st.t, ocean_strerror(r));
-            break;
-        }
-        double mean = 0;
-        for (size_t j = 0; j < n; j++) {
-            h[j] = qr[j].height;
-            mean += h[j];
-        }
-        out->eta[i] = mean / (double)n;
-        r = oc_ship_step(s, h, dt);
-        if (r != OCEAN_OK)
-            setmsg(msg, msglen, "ship step at t = %g: %s", st.t, ocean_strerror(r));
-    }
-    ocean_frame_destroy(f);
-    free(xz);
-    free(h);
-    free(qr);
-    oc_ship_destroy(s);
-    if (r != OCEAN_OK && r != OCEAN_EDIVERGED) {
-        oc_ship_trace_free(out);
-        return r;
-    }
-    return r;   /* on divergence the trace up to it is kept for inspection */
 }

@@ -20,15 +20,14 @@
  * The caller supplies the heights: oc_ship_points gives the world (x, z) of
  * the hull points for the current state, the caller asks a daemon
  * (oc_client_query) or the simulation (ocean_query_points) for the heights
- * there, then oc_ship_step advances.  oc_ship_run_offline does the loop on
- * a local sim/ ocean.
+ * there, then oc_ship_step advances.  oc_ship_run_offline
+ * (oc_ship_offline.h, in liboceansim) does the loop on a local sim/ ocean.
  */
 #ifndef OC_SHIP_H
 #define OC_SHIP_H
 
 #include <stddef.h>
 
-#include "ocean.h"
 #include "ocean_result.h"
 
 #define OC_SHIP_MAX_POINTS 4096
@@ -94,12 +93,5 @@ typedef struct oc_ship_trace {
     double *eta;    /* mean sea height under the hull points, m */
 } oc_ship_trace;
 void oc_ship_trace_free(oc_ship_trace *tr);   /* accepts NULL; zeroes it */
-
-/* Floats the ship on a local ocean for `seconds` of sim time from t0,
- * stepping dt: each step evaluates o at t (height, displacement, velocity)
- * into a frame and answers the hull points with ocean_query_points.
- * Records every step into *out (free with oc_ship_trace_free). */
-ocean_result oc_ship_run_offline(const oc_ship_params *p, ocean *o, double t0, double seconds, double dt,
-                                 oc_ship_trace *out, char *msg, size_t msglen);
 
 #endif

@@ -9,6 +9,9 @@
  *
  *   ship ws://127.0.0.1:8740/ [options]     against a running oceand
  *   ship --offline [options]                on a local sim/ ocean, no daemon
+ *
+ * The offline run needs the simulator library beside the client library:
+ *   cc ship.c $(pkg-config --cflags --libs oceansim) -lm
  */
 #include <errno.h>
 #include <math.h>
@@ -17,6 +20,7 @@
 #include <string.h>
 
 #include <oceand/oc_ship.h>
+#include <oceand/oc_ship_offline.h>
 #include <oceand/ocean.h>
 #include <oceand/oceanclient.h>
 

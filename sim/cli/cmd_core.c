@@ -9,6 +9,7 @@
 #include <cJSON.h>
 
 #include "cli.h"
+#include "ocean_reference.h"
 
 int cmd_stats(int argc, char **argv)
 {

@@ -57,6 +57,7 @@
 #include "mesh.h"
 #include "ocean.h"
 #include "ocean_conf.h"
+#include "ocean_reference.h"
 #include "proto_buf.h"
 
 #define OUT_DIR "tests/bench/out"

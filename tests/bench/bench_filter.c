@@ -17,6 +17,7 @@
 #include "../lib/bench_util.h"
 #include "filter.h"
 #include "gerstner.h"
+#include "ocean_reference.h"
 #include "query.h"
 #include "slope.h"
 #include "srv_config.h"

@@ -32,6 +32,7 @@
 #include "gerstner.h"
 #include "ocean.h"
 #include "ocean_conf.h"
+#include "ocean_reference.h"
 #include "query.h"
 
 #define PTS 4096
