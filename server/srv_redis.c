@@ -23,6 +23,7 @@
 
 #include "srv_resp.h"
 
+#include <errno.h>
 #include <hiredis/hiredis.h>
 #include <inttypes.h>
 #include <math.h>
@@ -55,7 +56,6 @@ typedef struct anomalies {
 
 /* One usable entry, decoded. */
 typedef struct entry {
-    const char *id;
     double stored;              /* sim time Redis stored it, at most the clock */
     double effective;           /* as announced */
     proto_sea sea;
@@ -232,7 +232,6 @@ static int entry_decode(srv_redis *r, const char *id, const srv_resp *fields, en
     int ok = m.hdr.type == PROTO_SEA_STATE && m.u.sea_state.op == PROTO_SEA_ANNOUNCE &&
              ocean_time_ok(m.u.sea_state.effective_time);
     if (ok) {
-        e->id = id;
         e->sea = m.u.sea_state.sea;
         e->effective = m.u.sea_state.effective_time;
         e->stored = fmin(srv_hub_sim_time_at(h, stored_unix), srv_hub_sim_time(h));
@@ -482,14 +481,19 @@ static void catch_up(srv_redis *r)
  * restart) is found dead only by the command that uses it: then reconnect
  * and send once more, so the set that meets the outage's end is stored, not
  * refused (a second copy would be harmless: replicas replace a change with
- * the same effective time). */
+ * the same effective time).  A Redis that does not answer in time is not
+ * asked twice: the set is answered EIO after one timeout. */
 static int set_store(srv_redis *r, set_req *q, char *why, size_t whylen)
 {
     redisReply *rep = NULL;
-    for (int attempt = 0; attempt < 2 && !rep; attempt++) {
+    int timed_out = 0;
+    for (int attempt = 0; attempt < 2 && !rep && !timed_out; attempt++) {
         if (!r->rc && !connection_ensure(r)) break;
         rep = redisCommand(r->rc, "XADD %s * msg %b", r->key, proto_buf_data(&q->entry), q->entry.len);
-        if (!rep) connection_drop(r, r->rc->errstr);
+        if (!rep) {
+            timed_out = r->rc->err == REDIS_ERR_IO && (errno == EAGAIN || errno == EWOULDBLOCK);
+            connection_drop(r, r->rc->errstr);
+        }
     }
     int ok = rep && rep->type == REDIS_REPLY_STRING && rep->len < ID_MAX;
     if (ok) snprintf(q->id, sizeof q->id, "%s", rep->str);
@@ -500,14 +504,21 @@ static int set_store(srv_redis *r, set_req *q, char *why, size_t whylen)
     return ok;
 }
 
-/* Stores every queued set; the stored wait to be read back. */
-static void sets_store(srv_redis *r)
+/* The queued sets, taken off the queue. */
+static set_req *queue_take(srv_redis *r)
 {
     pthread_mutex_lock(&r->lock);
     set_req *q = r->queue;
     r->queue = r->queue_tail = NULL;
     r->n_queue = 0;
     pthread_mutex_unlock(&r->lock);
+    return q;
+}
+
+/* Stores every queued set; the stored wait to be read back. */
+static void sets_store(srv_redis *r)
+{
+    set_req *q = queue_take(r);
     while (q) {
         set_req *next = q->next;
         char why[400];
@@ -563,19 +574,15 @@ static void *replicate(void *arg)
 {
     srv_redis *r = arg;
     while (!thread_wait(r, r->rc ? r->poll_s : 0.2)) {
-        if (!connection_ensure(r)) {
+        if (connection_ensure(r)) {
+            sets_store(r);
+            if (r->rc) catch_up(r);
+        } else {
             char why[300];
             snprintf(why, sizeof why, "SEA_STATE set not stored: Redis %s:%d unreachable", r->host, r->port);
-            pthread_mutex_lock(&r->lock);
-            set_req *q = r->queue;
-            r->queue = r->queue_tail = NULL;
-            r->n_queue = 0;
-            pthread_mutex_unlock(&r->lock);
+            set_req *q = queue_take(r);
             sets_answer_all(r, &q, OCEAN_EIO, why);
-            continue;
         }
-        sets_store(r);
-        if (r->rc) catch_up(r);
         sets_expire(r);
         anomalies_report(r, 0);
     }

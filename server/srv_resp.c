@@ -36,31 +36,29 @@ static void fail(reader *r, const char *what)
     r->failed = 1;
 }
 
-/* Refills the buffer; 0 on failure. */
+/* Refills the buffer; 0 on failure.  It waits in poll, not in read: a
+ * socket with a receive timeout of its own would make the wait twice as
+ * long. */
 static int fill(reader *r)
 {
     if (r->failed) return 0;
     r->at = r->end = 0;
     for (;;) {
+        struct pollfd p = {.fd = r->fd, .events = POLLIN};
+        int ready = poll(&p, 1, (int)(r->lim->idle_s * 1e3));
+        if (ready < 0 && errno == EINTR) continue;
+        if (ready <= 0) {
+            fail(r, ready < 0 ? strerror(errno) : "no bytes within the timeout");
+            return 0;
+        }
         ssize_t n = read(r->fd, r->buf, sizeof r->buf);
         if (n > 0) {
             r->end = (size_t)n;
             return 1;
         }
-        if (n == 0) {
-            fail(r, "connection closed");
-            return 0;
-        }
-        if (errno == EINTR) continue;
-        if (errno != EAGAIN && errno != EWOULDBLOCK) {
-            fail(r, strerror(errno));
-            return 0;
-        }
-        struct pollfd p = {.fd = r->fd, .events = POLLIN};
-        if (poll(&p, 1, (int)(r->lim->idle_s * 1e3)) <= 0) {
-            fail(r, "no bytes within the timeout");
-            return 0;
-        }
+        if (n < 0 && (errno == EINTR || errno == EAGAIN || errno == EWOULDBLOCK)) continue;
+        fail(r, n == 0 ? "connection closed" : strerror(errno));
+        return 0;
     }
 }
 
@@ -120,7 +118,7 @@ static int parse(reader *r, srv_resp *out, int depth);
 static int parse_bulk(reader *r, srv_resp *out, long long len)
 {
     size_t n = (size_t)len;
-    int keep = out && n <= r->lim->max_string && r->kept_bytes + n <= r->lim->max_total;
+    int keep = out && n <= r->lim->max_string && (n <= SRV_RESP_SMALL || r->kept_bytes + n <= r->lim->max_total);
     char *s = keep ? malloc(n + 1) : NULL;
     if (keep && !s) {
         fail(r, "out of memory");
@@ -202,7 +200,11 @@ static int parse(reader *r, srv_resp *out, int depth)
         return 1;
     case '$':
     case '*':
-        if (!parse_number(r, line + 1, &v) || v < -1) return 0;
+        if (!parse_number(r, line + 1, &v)) return 0;
+        if (v < -1) {
+            fail(r, "a negative length");
+            return 0;
+        }
         if (v == -1) {
             if (out) out->type = SRV_RESP_NIL;
             return 1;

@@ -6,7 +6,9 @@
  * in memory: a bulk string over max_string bytes, or past max_total kept in
  * all, is read off the socket and dropped, its node saying only its length
  * (SRV_RESP_SKIPPED); an array over max_array elements, or past max_nodes,
- * is read off and dropped the same way.  The connection stays in step: the
+ * is read off and dropped the same way.  A string of at most SRV_RESP_SMALL
+ * bytes (an id, a field name) is kept past max_total, so the keys of a
+ * reply survive its large values; max_nodes bounds those.  The connection stays in step: the
  * whole reply is always consumed.  hiredis 0.14 (Debian 12) has no such
  * limit: its reader builds the whole reply in memory.
  *
@@ -18,6 +20,8 @@
 #include <stddef.h>
 
 #include "ocean_result.h"
+
+#define SRV_RESP_SMALL 64
 
 typedef enum srv_resp_type {
     SRV_RESP_STRING,    /* bulk string: str, len */
