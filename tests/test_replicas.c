@@ -26,9 +26,11 @@
 #include <fcntl.h>
 #include <math.h>
 #include <netinet/in.h>
+#include <pthread.h>
 #include <setjmp.h>
 #include <signal.h>
 #include <stdarg.h>
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -605,7 +607,9 @@ static int tools_missing(void)
     return 1;
 }
 
-/* Redis (pids[0]) and replica 1 (pids[1]) on *p1; a connection to Redis. */
+/* Redis (pids[0]) and replica 1 (pids[1]) on *p1; a connection to Redis
+ * (the teardown closes it). */
+static redisContext *test_rc;
 static redisContext *cluster_up(int *p1)
 {
     make_tmp();
@@ -614,9 +618,9 @@ static redisContext *cluster_up(int *p1)
     assert_true(prd > 0 && *p1 > 0);
     redis_start(prd, "redis.log");
     replica_start(1, *p1, "r1.log");
-    redisContext *rc = redisConnect("127.0.0.1", prd);
-    assert_true(rc && !rc->err);
-    return rc;
+    test_rc = redisConnect("127.0.0.1", prd);
+    assert_true(test_rc && !test_rc->err);
+    return test_rc;
 }
 
 /* The wind of change i in the tests' sequences: every change another sea. */
@@ -671,6 +675,112 @@ static void wait_wind(int port, double w)
     fail_msg("the replica on port %d serves wind %.2f, not %.2f", port, got, w);
 }
 
+/* The witness: a live viewer of replica 1 (20 Hz, layout 1) read by a
+ * thread of its own while a test does what it judges; it must keep 95 % of
+ * the frame rate it had before and no wait between frames over 200 ms (or
+ * over 1.5 times its longest wait before, on a host too loaded for 200 ms
+ * without anything being done to the daemon). */
+typedef struct witness {
+    test_ws w;
+    pthread_t thread;
+    atomic_int stop;
+    int frames, lost;   /* [thread until joined] */
+    double gap, last;   /* [thread until joined] longest wait, time of the last frame */
+    double base_rate, base_gap;
+    double t0;
+} witness;
+
+/* Reads the viewer for `secs`, counting its FRAMEs; 0 when it closed. */
+static int witness_read(witness *v, double secs)
+{
+    double end = test_now_s() + secs;
+    while (test_now_s() < end && !atomic_load(&v->stop)) {
+        uint8_t *b;
+        size_t n;
+        int op = test_ws_recv(&v->w, 10, &b, &n);
+        if (op < 0 || op == 8) {
+            if (op == 8) free(b);
+            return 0;
+        }
+        if (op == 0) continue;
+        proto_msg f;
+        if (proto_decode(b, n, &f, NULL, 0) == OCEAN_OK) {
+            if (f.hdr.type == PROTO_FRAME) {
+                double now = test_now_s();
+                v->gap = fmax(v->gap, now - v->last);
+                v->last = now;
+                v->frames++;
+            }
+            proto_msg_free(&f);
+        }
+        free(b);
+    }
+    return 1;
+}
+
+static void *witness_main(void *arg)
+{
+    witness *v = arg;
+    while (!atomic_load(&v->stop))
+        if (!witness_read(v, 0.1)) v->lost = 1;
+    return NULL;
+}
+
+/* Connects and subscribes the witness, measures its rate for 2 s and
+ * starts its thread. */
+static void witness_start(witness *v, int port)
+{
+    memset(v, 0, sizeof *v);
+    proto_hello h;
+    connect_hello(&v->w, port, &h);
+    subscribe_live(&v->w, PROTO_LAYOUT_CASCADE, 20);
+    v->last = test_now_s();
+    assert_true(witness_read(v, 1.0)); /* the stream starts */
+    v->frames = 0;
+    v->gap = 0;
+    double t0 = test_now_s();
+    assert_true(witness_read(v, 2.0));
+    v->base_rate = v->frames / (test_now_s() - t0);
+    v->base_gap = v->gap;
+    assert_true(v->frames > 0);
+    v->frames = 0;
+    v->gap = 0;
+    v->t0 = v->last = test_now_s();
+    atomic_init(&v->stop, 0);
+    assert_int_equal(pthread_create(&v->thread, NULL, witness_main, v), 0);
+}
+
+/* Stops the witness and prints what it saw since witness_start (over 2 s
+ * at least); returns its share of the rate it had before. */
+static double witness_report(witness *v, const char *what)
+{
+    /* a rate over a shorter window is a count of a few frames */
+    while (test_now_s() - v->t0 < 2.0) usleep(20000);
+    atomic_store(&v->stop, 1);
+    pthread_join(v->thread, NULL);
+    double now = test_now_s();
+    v->gap = fmax(v->gap, now - v->last);
+    double keep = v->frames / (now - v->t0) / v->base_rate;
+    print_message("%s: witness %d frames in %.2f s (%.0f %% of its rate before), longest gap %.0f ms "
+                  "(%.0f ms before)\n", what, v->frames, now - v->t0, 100 * keep, 1e3 * v->gap, 1e3 * v->base_gap);
+    test_ws_close(&v->w);
+    assert_false(v->lost);
+    return keep;
+}
+
+/* Whether the witness kept `keep` of its rate and its gaps short. */
+static int witness_kept(const witness *v, double keep)
+{
+    return keep >= 0.95 && v->gap <= fmax(0.2, 1.5 * v->base_gap);
+}
+
+/* witness_report, judged. */
+static void witness_judge(witness *v, const char *what)
+{
+    double keep = witness_report(v, what);
+    assert_true(witness_kept(v, keep));
+}
+
 /* A replica started 20, 200 and 2000 changes after another (every change
  * in force when it starts) serves the latest sea, as the running one does,
  * and the same live bytes tick for tick.  The first 20 come in tens, each
@@ -685,12 +795,20 @@ static void late_replicas_agree(void **state)
     static const int marks[] = {20, 200, 2000};
     int total = 0;
     for (int k = 0; k < 3; k++) {
+        witness v;
+        witness_start(&v, p1);
         while (total < marks[k]) {
             int n = total < 20 ? 10 : marks[k] - total < 300 ? marks[k] - total : 300;
             stream_append(rc, &base, total, n, sim_now() - 1);
             total += n;
             wait_wind(p1, wind_of(total - 1));
         }
+        /* each group of changes takes effect at once, its ocean built on
+         * the tick that applies it (not prebuilt, as a change announced
+         * ahead is): the witness's figures are printed, not judged here */
+        char what[64];
+        snprintf(what, sizeof what, "changes %d to %d", k ? marks[k - 1] : 0, marks[k]);
+        witness_report(&v, what);
         replica_start(2, p2, "r2.log");
         proto_sea s2 = hello_sea(p2);
         if (fabs(s2.wind_u10 - wind_of(total - 1)) > 1e-9)
@@ -706,100 +824,52 @@ static void late_replicas_agree(void **state)
         test_ws_close(&d2);
         stop(&pids[2], SIGTERM);
     }
-    redisFree(rc);
-}
-
-/* Frames a viewer received over a window, and the longest wait between two. */
-typedef struct watch {
-    int frames;
-    double gap, last;
-} watch;
-
-/* Reads w for up to ms, counting its FRAMEs into *v; returns early with 1
- * when `other` (may be NULL) has a message, decoded into *m. */
-static int watch_for(test_ws *w, watch *v, int ms, test_ws *other, proto_msg *m)
-{
-    double end = test_now_s() + ms / 1000.0;
-    while (test_now_s() < end) {
-        uint8_t *b;
-        size_t n;
-        int op = test_ws_recv(w, 10, &b, &n);
-        assert_true(op >= 0 && op != 8);
-        if (op > 0) {
-            proto_msg f;
-            if (proto_decode(b, n, &f, NULL, 0) == OCEAN_OK) {
-                if (f.hdr.type == PROTO_FRAME) {
-                    double now = test_now_s();
-                    if (v->last > 0) v->gap = fmax(v->gap, now - v->last);
-                    v->last = now;
-                    v->frames++;
-                }
-                proto_msg_free(&f);
-            }
-            free(b);
-        }
-        if (other && test_ws_recv(other, 0, &b, &n) > 0) {
-            int ok = proto_decode(b, n, m, NULL, 0) == OCEAN_OK;
-            free(b);
-            if (ok) return 1;
-        }
-    }
-    return 0;
+    stop(&pids[1], SIGTERM); /* its shutdown too runs under the sanitizers */
 }
 
 /* A set while Redis is stopped (SIGSTOP) is answered EIO by the
- * replication thread, and a live viewer of that replica keeps its frames
- * meanwhile: the service thread never waits for Redis. */
+ * replication thread, and the witness keeps its frames meanwhile: the
+ * service thread never waits for Redis.  Tried up to 3 times: a burst of
+ * load from the host's other jobs can cost the witness a frame on any try,
+ * a stalled Redis would on every one. */
 static void stalled_redis_costs_no_frame(void **state)
 {
     (void)state;
     if (tools_missing()) skip();
     int p1;
-    redisContext *rc = cluster_up(&p1);
-    test_ws v, s;
-    proto_hello hv, hs;
-    connect_hello(&v, p1, &hv);
+    cluster_up(&p1);
+    test_ws s;
+    proto_hello hs;
     connect_hello(&s, p1, &hs);
-    subscribe_live(&v, PROTO_LAYOUT_CASCADE, 20);
-    watch base = {0, 0, 0}, stall = {0, 0, 0};
-    watch_for(&v, &base, 1000, NULL, NULL); /* the stream starts */
-    base = (watch){0, 0, 0};
-    double t0 = test_now_s();
-    watch_for(&v, &base, 3000, NULL, NULL);
-    double base_s = test_now_s() - t0;
-
-    kill(pids[0], SIGSTOP);
-    proto_msg set, m;
-    proto_msg_init(&set, PROTO_SEA_STATE);
-    set.u.sea_state.op = PROTO_SEA_SET;
-    set.u.sea_state.sea = hs.sea;
-    set.u.sea_state.sea.wind_u10 = 12;
-    snprintf(set.u.sea_state.token, sizeof set.u.sea_state.token, "test-token");
-    set.u.sea_state.effective_time = sim_now() + 10;
-    t0 = test_now_s();
-    stall.last = t0; /* a wait from the set on counts as a gap */
-    raw_send(&s, &set);
-    int answered = watch_for(&v, &stall, 8000, &s, &m);
-    double answer_s = test_now_s() - t0;
-    watch_for(&v, &stall, 300, NULL, NULL);
-    double stall_s = test_now_s() - t0;
-    stall.gap = fmax(stall.gap, test_now_s() - stall.last);
-    kill(pids[0], SIGCONT);
-    assert_true(answered);
-    assert_int_equal(m.hdr.type, PROTO_ERROR);
-    assert_int_equal(m.u.error.code, OCEAN_EIO);
-    proto_msg_free(&m);
-    double keep = (stall.frames / stall_s) / (base.frames / base_s);
-    print_message("set answered EIO after %.2f s; viewer: %d frames in %.2f s (%.0f %% of its rate before), "
-                  "longest gap %.0f ms (%.0f ms before)\n", answer_s, stall.frames, stall_s, 100 * keep,
-                  1e3 * stall.gap, 1e3 * base.gap);
-    assert_true(keep >= 0.95);
-    /* a host too loaded to deliver 200 ms gaps without any stall is not
-     * what this judges: then the gap may be the host's, not above it */
-    assert_true(stall.gap <= fmax(0.2, 1.5 * base.gap));
-    test_ws_close(&v);
+    int ok = 0;
+    for (int attempt = 0; attempt < 3 && !ok; attempt++) {
+        witness v;
+        witness_start(&v, p1);
+        kill(pids[0], SIGSTOP);
+        proto_msg set, m;
+        proto_msg_init(&set, PROTO_SEA_STATE);
+        set.u.sea_state.op = PROTO_SEA_SET;
+        set.u.sea_state.sea = hs.sea;
+        set.u.sea_state.sea.wind_u10 = 12;
+        snprintf(set.u.sea_state.token, sizeof set.u.sea_state.token, "test-token");
+        set.u.sea_state.effective_time = sim_now() + 10;
+        double t0 = test_now_s();
+        raw_send(&s, &set);
+        int answered = wait_type(&s, PROTO_ERROR, 8000, &m, NULL, NULL);
+        double answer_s = test_now_s() - t0;
+        usleep(300000); /* the witness goes on a little after the answer */
+        kill(pids[0], SIGCONT);
+        double keep = witness_report(&v, "a set while Redis is stopped");
+        assert_int_equal(answered, 1);
+        print_message("the set was answered %s after %.2f s\n", ocean_strerror((ocean_result)m.u.error.code),
+                      answer_s);
+        assert_int_equal(m.u.error.code, OCEAN_EIO);
+        proto_msg_free(&m);
+        ok = witness_kept(&v, keep);
+    }
+    assert_true(ok);
     test_ws_close(&s);
-    redisFree(rc);
+    stop(&pids[1], SIGTERM);
 }
 
 /* A set through replica 1 (on test_ws w): its announce or an ERROR within
@@ -856,7 +926,8 @@ static void http_body(int port, const char *path, char *out, size_t cap)
 /* Every set is answered: a stream entry far in the future, then the stream
  * deleted, and the next set still comes back (the reset is seen, and shown
  * in /status and /metrics); with the pending changes at their limit, one
- * more set is refused ERATE, not left unanswered. */
+ * more set is refused ERATE, not left unanswered.  Every change is 30 s or
+ * more ahead: none takes effect while the witness is judged. */
 static void every_set_answered(void **state)
 {
     (void)state;
@@ -866,15 +937,17 @@ static void every_set_answered(void **state)
     test_ws w;
     proto_hello h;
     connect_hello(&w, p1, &h);
+    witness v;
+    witness_start(&v, p1);
     proto_sea sea = h.sea;
     sea.wind_u10 = 11;
-    assert_int_equal(set_answer(&w, &sea, sim_now() + 1), OCEAN_OK);
+    assert_int_equal(set_answer(&w, &sea, sim_now() + 30), OCEAN_OK);
 
     proto_msg far;
     proto_msg_init(&far, PROTO_SEA_STATE);
     far.hdr.sim_time = sim_now();
     far.u.sea_state.op = PROTO_SEA_ANNOUNCE;
-    far.u.sea_state.effective_time = sim_now() + 3;
+    far.u.sea_state.effective_time = sim_now() + 40;
     far.u.sea_state.sea = sea;
     proto_buf b;
     proto_buf_init(&b, 0);
@@ -887,7 +960,7 @@ static void every_set_answered(void **state)
     rep = redisCommand(rc, "DEL %s", stream_key());
     freeReplyObject(rep);
     sea.wind_u10 = 12;
-    assert_int_equal(set_answer(&w, &sea, sim_now() + 1), OCEAN_OK);
+    assert_int_equal(set_answer(&w, &sea, sim_now() + 50), OCEAN_OK);
     char body[16384];
     http_body(p1, "/status", body, sizeof body);
     if (!strstr(body, "\"stream_resets\":1") || !strstr(body, "\"future_ids\":1")) fail_msg("/status: %s", body);
@@ -902,11 +975,12 @@ static void every_set_answered(void **state)
         r = set_answer(&w, &sea, sim_now() + 60 + i);
         announced += r == OCEAN_OK;
     }
+    witness_judge(&v, "a far-future id, a deleted stream, the pending limit");
     print_message("%d sets announced, then %s\n", announced, ocean_strerror(r));
     assert_int_equal(r, OCEAN_ERATE);
     assert_true(announced <= SRV_SEA_PENDING_MAX);
     test_ws_close(&w);
-    redisFree(rc);
+    stop(&pids[1], SIGTERM);
 }
 
 /* VmHWM (peak resident set) of process pid, MB. */
@@ -951,6 +1025,8 @@ static void hostile_stream_bounded(void **state)
     test_ws w;
     proto_hello h;
     connect_hello(&w, p1, &h);
+    witness v;
+    witness_start(&v, p1);
     double peak0 = peak_mb(pids[1]);
     size_t big = 4u << 20;
     char *blob = malloc(big);
@@ -966,30 +1042,42 @@ static void hostile_stream_bounded(void **state)
         freeReplyObject(rep);
     }
     free(blob);
-    /* a set stored after them comes back: the replica has read them all */
+    /* a set stored after them comes back: the replica has read them all
+     * (30 s ahead: no new ocean is built while the witness is judged) */
     proto_sea sea = h.sea;
-    sea.wind_u10 = 9;
-    assert_int_equal(set_answer(&w, &sea, sim_now() + 1), OCEAN_OK);
+    sea.wind_u10 = 8;
+    assert_int_equal(set_answer(&w, &sea, sim_now() + 30), OCEAN_OK);
+    witness_judge(&v, "16 entries of 4 MB and 20 000 garbage entries");
     double grew = peak_mb(pids[1]) - peak0;
     int lines = log_lines("r1.log", "redis stream");
     print_message("%d hostile entries: peak memory +%.1f MB, %d log lines\n", BIG + GARBAGE, grew, lines);
-    assert_true(grew < 16);
+    /* half of the 64 MB the large entries hold: room for the sanitizers'
+     * quarantine of freed batches, none for holding the entries */
+    assert_true(grew < 32);
     assert_true(lines >= 1 && lines <= 2);
     char body[16384], want[64];
     snprintf(want, sizeof want, "\"skipped\":%d", BIG + GARBAGE);
     http_body(p1, "/status", body, sizeof body);
     if (!strstr(body, want)) fail_msg("/status after %d hostile entries: %s", BIG + GARBAGE, body);
+    sea.wind_u10 = 9;
+    assert_int_equal(set_answer(&w, &sea, sim_now() + 1), OCEAN_OK);
     wait_wind(p1, 9);
     replica_start(2, p2, "r2.log");
     assert_true(hello_sea(p2).wind_u10 == 9);
     assert_true(log_lines("r2.log", "redis stream") == 1);
+    double start_peak = peak_mb(pids[2]) - peak0;
+    print_message("a replica started on that stream: peak memory %+.1f MB against the first's before them\n",
+                  start_peak);
+    assert_true(start_peak < 32);
     test_ws_close(&w);
-    redisFree(rc);
+    stop(&pids[1], SIGTERM);
 }
 
 static int teardown(void **state)
 {
     (void)state;
+    if (test_rc) redisFree(test_rc);
+    test_rc = NULL;
     for (int i = 3; i >= 0; i--) {
         if (pids[i] > 0) kill(pids[i], SIGCONT); /* a test that failed with Redis stopped */
         stop(&pids[i], SIGKILL);
