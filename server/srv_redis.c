@@ -82,6 +82,12 @@ struct srv_redis {
     int lost_said;              /* [replication thread] this outage is logged */
     char last_id[ID_MAX];       /* [replication thread] last entry read */
     fold timeline;              /* [replication thread] what the entries read so far make */
+    /* [replication thread] what the last batch read while running gives the
+     * hub once read: a new change in force (one, whatever the batch holds)
+     * and the changes ahead */
+    int batch_now;
+    srv_sea_change batch_ahead[SRV_REDIS_BATCH];
+    int n_batch_ahead;
     set_req *stored;            /* [replication thread] stored, not yet read back */
     anomalies seen;             /* [replication thread] */
     double said_at;             /* [replication thread] monotonic time of the last report */
@@ -436,34 +442,50 @@ static int timeline_load(srv_redis *r)
 
 /* ---- the timeline while running ----------------------------------------------------- */
 
-/* An entry read as it comes: folded into the timeline as at start, then
- * given to the hub.  A change still ahead is scheduled at its time.  One
- * already in force (read late: a reconnect, a catch-up) enters at once if
- * the timeline makes it the change in force, superseding the due ones the
- * simulation thread has not taken yet (they are taken here, so the pending
- * limit counts only changes still ahead); otherwise a later change is in
- * force and it is not entered. */
+/* An entry read as it comes: folded into the timeline as at start, and
+ * noted for batch_sync. */
 static ocean_result running_entry(srv_redis *r, const entry *e, void *ctx, char *why, size_t whylen)
 {
     (void)ctx;
-    srv_hub *h = r->hub;
     ocean_result res = fold_entry(r, e, &r->timeline, why, whylen);
     if (res != OCEAN_OK) return res;
     double at = fmax(e->effective, e->stored);
+    if (at <= srv_hub_sim_time(r->hub)) {
+        r->batch_now = 1;
+    } else if (r->n_batch_ahead < SRV_REDIS_BATCH) {
+        r->batch_ahead[r->n_batch_ahead].effective_time = at;
+        r->batch_ahead[r->n_batch_ahead++].params = e->params;
+    }
+    return OCEAN_OK;
+}
+
+/* Gives the hub what a batch changed.  Entries already in force (read late:
+ * a reconnect, a catch-up, a writer straight into Redis) make at most one
+ * new change in force, the timeline's, entered at once: it supersedes the
+ * due ones the simulation thread has not taken yet (taken here, so the
+ * pending limit counts only changes ahead), and a burst of them costs the
+ * simulation one new ocean, not one per entry.  Changes ahead are
+ * scheduled at their times. */
+static void batch_sync(srv_redis *r)
+{
+    srv_hub *h = r->hub;
+    if (!r->batch_now && !r->n_batch_ahead) return;
     pthread_mutex_lock(&h->lock);
     double now = srv_hub_sim_time(h);
-    if (at <= now) {
+    if (r->batch_now) {
         fold_due(&r->timeline, now);
         srv_sea_change due;
-        if (r->timeline.now.effective_time == at) srv_hub_sea_take_due(h, now, &due);
-        else res = OCEAN_EINVAL;
+        srv_hub_sea_take_due(h, now, &due);
+        srv_hub_sea_schedule(h, &r->timeline.now.params, now, NULL, NULL, 0);
     }
-    if (res == OCEAN_OK) res = srv_hub_sea_schedule(h, &e->params, at, NULL, why, whylen);
-    else snprintf(why, whylen, "SEA_STATE set refused: a later change (t = %.3f) is in force first",
-                  r->timeline.now.effective_time);
+    for (int i = 0; i < r->n_batch_ahead; i++)
+        if (srv_hub_sea_schedule(h, &r->batch_ahead[i].params, r->batch_ahead[i].effective_time, NULL, NULL,
+                                 0) != OCEAN_OK)
+            r->seen.refused++;
     pthread_mutex_unlock(&h->lock);
+    r->batch_now = 0;
+    r->n_batch_ahead = 0;
     srv_hub_wake_net(h);
-    return res;
 }
 
 /* Reads what the stream gained (a failed read drops the connection). */
@@ -471,6 +493,7 @@ static void catch_up(srv_redis *r)
 {
     for (int b = 0; b < CATCH_UP_BATCHES; b++) {
         int reset, n = batch_read(r, running_entry, NULL, &reset);
+        batch_sync(r);
         if (n < 0 || (n < SRV_REDIS_BATCH && !reset)) return;
     }
 }
