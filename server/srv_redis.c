@@ -30,8 +30,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
 #include <sys/time.h>
 #include <time.h>
+#include <unistd.h>
 
 #define ID_MAX 48               /* "ms-seq": two 20-digit numbers and a dash */
 #define READBACK_S 5.0          /* a stored set not read back by then is answered EIO */
@@ -472,8 +475,8 @@ static void batch_sync(srv_redis *r)
     if (!r->batch_now && !r->n_batch_ahead) return;
     pthread_mutex_lock(&h->lock);
     double now = srv_hub_sim_time(h);
-    if (r->batch_now) {
-        fold_due(&r->timeline, now);
+    fold_due(&r->timeline, now);
+    if (r->batch_now && r->timeline.have_now) {
         srv_sea_change due;
         srv_hub_sea_take_due(h, now, &due);
         srv_hub_sea_schedule(h, &r->timeline.now.params, now, NULL, NULL, 0);
@@ -596,6 +599,9 @@ static int thread_wait(srv_redis *r, double secs)
 static void *replicate(void *arg)
 {
     srv_redis *r = arg;
+    /* reading a hostile stream is background work: the threads that serve
+     * clients go first (Linux: a thread's nice value is its own) */
+    if (setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), 10) != 0) {}
     while (!thread_wait(r, r->rc ? r->poll_s : 0.2)) {
         if (connection_ensure(r)) {
             sets_store(r);

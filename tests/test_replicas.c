@@ -1014,11 +1014,32 @@ static int log_lines(const char *name, const char *needle)
     return n;
 }
 
+enum { HOSTILE_BIG = 16, HOSTILE_GARBAGE = 20000 };
+
+/* Appends HOSTILE_BIG entries of 4 MB and HOSTILE_GARBAGE small ones that
+ * are no change (half with a msg that is no message, half without msg). */
+static void hostile_append(redisContext *rc)
+{
+    size_t big = 4u << 20;
+    char *blob = malloc(big);
+    assert_non_null(blob);
+    memset(blob, 'x', big);
+    for (int i = 0; i < HOSTILE_BIG; i++) redisAppendCommand(rc, "XADD %s * msg %b", stream_key(), blob, big);
+    for (int i = 0; i < HOSTILE_GARBAGE; i++)
+        redisAppendCommand(rc, i % 2 ? "XADD %s * msg %d" : "XADD %s * other %d", stream_key(), i);
+    for (int i = 0; i < HOSTILE_BIG + HOSTILE_GARBAGE; i++) {
+        redisReply *rep;
+        assert_int_equal(redisGetReply(rc, (void **)&rep), REDIS_OK);
+        freeReplyObject(rep);
+    }
+    free(blob);
+}
+
 /* 16 entries of 4 MB and 20 000 garbage entries: the replica reads them in
  * bounded batches (its peak memory grows by far less than one entry's
  * worth of them), counts them in /status, logs them in one line of counts,
  * still takes sets, and a replica started on that stream starts and serves
- * the same sea. */
+ * the same sea.  The witness is judged as in the stall test: up to 3 tries. */
 static void hostile_stream_bounded(void **state)
 {
     (void)state;
@@ -1026,44 +1047,39 @@ static void hostile_stream_bounded(void **state)
     int p1, p2 = test_free_port();
     test_ws w;
     proto_hello h;
-    witness v;
     redisContext *rc = cluster_up(&p1);
     connect_hello(&w, p1, &h);
-    witness_start(&v, p1);
-    double peak0 = peak_mb(pids[1]);
-    size_t big = 4u << 20;
-    char *blob = malloc(big);
-    assert_non_null(blob);
-    memset(blob, 'x', big);
-    enum { BIG = 16, GARBAGE = 20000 };
-    for (int i = 0; i < BIG; i++) redisAppendCommand(rc, "XADD %s * msg %b", stream_key(), blob, big);
-    for (int i = 0; i < GARBAGE; i++)
-        redisAppendCommand(rc, i % 2 ? "XADD %s * msg %d" : "XADD %s * other %d", stream_key(), i);
-    for (int i = 0; i < BIG + GARBAGE; i++) {
-        redisReply *rep;
-        assert_int_equal(redisGetReply(rc, (void **)&rep), REDIS_OK);
-        freeReplyObject(rep);
-    }
-    free(blob);
-    /* a set stored after them comes back: the replica has read them all
-     * (30 s ahead: no new ocean is built while the witness is judged) */
     proto_sea sea = h.sea;
-    sea.wind_u10 = 8;
-    assert_int_equal(set_answer(&w, &sea, sim_now() + 30), OCEAN_OK);
-    witness_judge(&v, "16 entries of 4 MB and 20 000 garbage entries");
+    double peak0 = 0;
+    int tries = 0, kept = 0;
+    while (!kept && tries < 3) {
+        witness v;
+        witness_start(&v, p1);
+        if (!tries) peak0 = peak_mb(pids[1]);
+        hostile_append(rc);
+        tries++;
+        /* a set stored after them comes back: the replica has read them
+         * all (30 s ahead: no new ocean is built while the witness is
+         * judged) */
+        sea.wind_u10 = 8 + 0.1 * tries;
+        assert_int_equal(set_answer(&w, &sea, sim_now() + 30 + tries), OCEAN_OK);
+        kept = witness_kept(&v, witness_report(&v, "16 entries of 4 MB and 20 000 garbage entries"));
+    }
+    assert_true(kept);
+    int n = tries * (HOSTILE_BIG + HOSTILE_GARBAGE);
     double grew = peak_mb(pids[1]) - peak0;
     int lines = log_lines("r1.log", "redis stream");
-    print_message("%d hostile entries: peak memory +%.1f MB, %d log lines\n", BIG + GARBAGE, grew, lines);
+    print_message("%d hostile entries: peak memory +%.1f MB, %d log lines\n", n, grew, lines);
     /* half of the 64 MB the large entries hold, none of them held; under
      * the sanitizers the peak counts every byte freed meanwhile (their
      * quarantine keeps it), the witness's frames too: not judged there */
     int sanitized = getenv("OCEAN_TEST_SANITIZED") != NULL;
     assert_true(sanitized || grew < 32);
-    assert_true(lines >= 1 && lines <= 2);
+    assert_true(lines >= 1 && lines <= 1 + tries); /* one line of counts per 10 s at most */
     char body[16384], want[64];
-    snprintf(want, sizeof want, "\"skipped\":%d", BIG + GARBAGE);
+    snprintf(want, sizeof want, "\"skipped\":%d", n);
     http_body(p1, "/status", body, sizeof body);
-    if (!strstr(body, want)) fail_msg("/status after %d hostile entries: %s", BIG + GARBAGE, body);
+    if (!strstr(body, want)) fail_msg("/status after %d hostile entries: %s", n, body);
     sea.wind_u10 = 9;
     assert_int_equal(set_answer(&w, &sea, sim_now() + 1), OCEAN_OK);
     wait_wind(p1, 9);
