@@ -17,7 +17,8 @@
  * The timeline tests: a replica started 20, 200 and 2000 changes after
  * another serves the same sea and the same live bytes; a stalled Redis
  * (SIGSTOP) costs a viewer no frame while a set waits for it; every set is
- * answered (the pending limit, a far-future id and a deleted stream); a
+ * answered (after a far-future id and a deleted stream, at the pending
+ * limit); a
  * stream of oversized and garbage entries is read in bounded batches,
  * logged in one line of counts, and a replica still starts on it.
  */
@@ -923,29 +924,35 @@ static void http_body(int port, const char *path, char *out, size_t cap)
     if (body) memmove(out, body + 4, strlen(body + 4) + 1);
 }
 
-/* Every set is answered: a stream entry far in the future, then the stream
- * deleted, and the next set still comes back (the reset is seen, and shown
- * in /status and /metrics); with the pending changes at their limit, one
- * more set is refused ERATE, not left unanswered.  Every change is 30 s or
- * more ahead: none takes effect while the witness is judged. */
-static void every_set_answered(void **state)
+/* cluster_up, a client of replica 1 on *w whose first set (30 s ahead) is
+ * announced, then the witness started: the simulation thread builds the
+ * ocean of the earliest pending change ahead of time, and that build is not
+ * what the set tests judge (every later change of theirs is later).  *sea
+ * gets that first change's sea. */
+static redisContext *set_ready(int *p1, test_ws *w, proto_sea *sea, witness *v)
+{
+    redisContext *rc = cluster_up(p1);
+    proto_hello h;
+    connect_hello(w, *p1, &h);
+    *sea = h.sea;
+    sea->wind_u10 = 11;
+    assert_int_equal(set_answer(w, sea, sim_now() + 30), OCEAN_OK);
+    witness_start(v, *p1);
+    return rc;
+}
+
+/* A stream entry far in the future, then the stream deleted: the next set
+ * still comes back (the reset is seen, and shown in /status and /metrics
+ * with the far-future id). */
+static void sets_answered_after_a_reset(void **state)
 {
     (void)state;
     if (tools_missing()) skip();
     int p1;
-    redisContext *rc = cluster_up(&p1);
     test_ws w;
-    proto_hello h;
-    connect_hello(&w, p1, &h);
-    proto_sea sea = h.sea;
-    sea.wind_u10 = 11;
-    assert_int_equal(set_answer(&w, &sea, sim_now() + 30), OCEAN_OK);
-    /* started after the first change: the simulation thread builds the
-     * ocean of the earliest pending change ahead of time, and that build is
-     * not what this judges (every later change is later) */
+    proto_sea sea;
     witness v;
-    witness_start(&v, p1);
-
+    redisContext *rc = set_ready(&p1, &w, &sea, &v);
     proto_msg far;
     proto_msg_init(&far, PROTO_SEA_STATE);
     far.hdr.sim_time = sim_now();
@@ -964,24 +971,39 @@ static void every_set_answered(void **state)
     freeReplyObject(rep);
     sea.wind_u10 = 12;
     assert_int_equal(set_answer(&w, &sea, sim_now() + 50), OCEAN_OK);
+    witness_judge(&v, "a far-future id, then the stream deleted");
     char body[16384];
     http_body(p1, "/status", body, sizeof body);
     if (!strstr(body, "\"stream_resets\":1") || !strstr(body, "\"future_ids\":1")) fail_msg("/status: %s", body);
     http_body(p1, "/metrics", body, sizeof body);
     assert_non_null(strstr(body, "oceand_redis_stream_resets_total 1\n"));
     assert_non_null(strstr(body, "oceand_redis_future_ids_total 1\n"));
+    test_ws_close(&w);
+    stop(&pids[1], SIGTERM);
+}
 
+/* With the pending changes at their limit, one more set is refused ERATE,
+ * not left unanswered. */
+static void sets_answered_at_the_pending_limit(void **state)
+{
+    (void)state;
+    if (tools_missing()) skip();
+    int p1;
+    test_ws w;
+    proto_sea sea;
+    witness v;
+    set_ready(&p1, &w, &sea, &v);
     int announced = 0;
     ocean_result r = OCEAN_OK;
-    for (int i = 0; i <= SRV_SEA_PENDING_MAX && r == OCEAN_OK; i++) {
+    for (int i = 0; i < SRV_SEA_PENDING_MAX && r == OCEAN_OK; i++) {
         sea.wind_u10 = 13 + 0.1 * i;
         r = set_answer(&w, &sea, sim_now() + 60 + i);
         announced += r == OCEAN_OK;
     }
-    witness_judge(&v, "a far-future id, a deleted stream, the pending limit");
-    print_message("%d sets announced, then %s\n", announced, ocean_strerror(r));
+    witness_judge(&v, "sets up to the pending limit and one more");
+    print_message("%d sets announced after the first, then %s\n", announced, ocean_strerror(r));
     assert_int_equal(r, OCEAN_ERATE);
-    assert_true(announced <= SRV_SEA_PENDING_MAX);
+    assert_int_equal(announced, SRV_SEA_PENDING_MAX - 1);
     test_ws_close(&w);
     stop(&pids[1], SIGTERM);
 }
@@ -1130,7 +1152,8 @@ int main(int argc, char **argv)
         cmocka_unit_test_teardown(replicas_behind_haproxy, teardown),
         cmocka_unit_test_teardown(late_replicas_agree, teardown),
         cmocka_unit_test_teardown(stalled_redis_costs_no_frame, teardown),
-        cmocka_unit_test_teardown(every_set_answered, teardown),
+        cmocka_unit_test_teardown(sets_answered_after_a_reset, teardown),
+        cmocka_unit_test_teardown(sets_answered_at_the_pending_limit, teardown),
         cmocka_unit_test_teardown(hostile_stream_bounded, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
