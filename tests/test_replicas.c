@@ -924,21 +924,30 @@ static void http_body(int port, const char *path, char *out, size_t cap)
     if (body) memmove(out, body + 4, strlen(body + 4) + 1);
 }
 
-/* cluster_up, a client of replica 1 on *w whose first set (30 s ahead) is
- * announced, then the witness started: the simulation thread builds the
- * ocean of the earliest pending change ahead of time, and that build is not
- * what the set tests judge (every later change of theirs is later).  *sea
- * gets that first change's sea. */
-static redisContext *set_ready(int *p1, test_ws *w, proto_sea *sea, witness *v)
+/* What the set tests start from: cluster_up (Redis, replica 1 on port), a
+ * client of replica 1 (w) whose first set (30 s ahead, sea) is announced,
+ * then the witness (v) started: the simulation thread builds the ocean of
+ * the earliest pending change ahead of time, and that build is not what
+ * these tests judge (every later change of theirs is later).  Skips the
+ * test without Redis. */
+typedef struct set_case {
+    int port;
+    test_ws w;
+    proto_sea sea;
+    witness v;
+    redisContext *rc;
+} set_case;
+
+static void set_ready(set_case *k)
 {
-    redisContext *rc = cluster_up(p1);
+    if (tools_missing()) skip();
+    k->rc = cluster_up(&k->port);
     proto_hello h;
-    connect_hello(w, *p1, &h);
-    *sea = h.sea;
-    sea->wind_u10 = 11;
-    assert_int_equal(set_answer(w, sea, sim_now() + 30), OCEAN_OK);
-    witness_start(v, *p1);
-    return rc;
+    connect_hello(&k->w, k->port, &h);
+    k->sea = h.sea;
+    k->sea.wind_u10 = 11;
+    assert_int_equal(set_answer(&k->w, &k->sea, sim_now() + 30), OCEAN_OK);
+    witness_start(&k->v, k->port);
 }
 
 /* A stream entry far in the future, then the stream deleted: the next set
@@ -947,38 +956,34 @@ static redisContext *set_ready(int *p1, test_ws *w, proto_sea *sea, witness *v)
 static void sets_answered_after_a_reset(void **state)
 {
     (void)state;
-    if (tools_missing()) skip();
-    int p1;
-    test_ws w;
-    proto_sea sea;
-    witness v;
-    redisContext *rc = set_ready(&p1, &w, &sea, &v);
+    set_case k;
+    set_ready(&k);
     proto_msg far;
     proto_msg_init(&far, PROTO_SEA_STATE);
     far.hdr.sim_time = sim_now();
     far.u.sea_state.op = PROTO_SEA_ANNOUNCE;
     far.u.sea_state.effective_time = sim_now() + 40;
-    far.u.sea_state.sea = sea;
+    far.u.sea_state.sea = k.sea;
     proto_buf b;
     proto_buf_init(&b, 0);
     assert_int_equal(proto_encode(&b, &far, NULL, 0), OCEAN_OK);
-    redisReply *rep = redisCommand(rc, "XADD %s 9999999999999-0 msg %b", stream_key(), proto_buf_data(&b), b.len);
+    redisReply *rep = redisCommand(k.rc, "XADD %s 9999999999999-0 msg %b", stream_key(), proto_buf_data(&b), b.len);
     assert_true(rep && rep->type == REDIS_REPLY_STRING);
     freeReplyObject(rep);
     proto_buf_free(&b);
-    assert_int_equal(wait_type(&w, PROTO_SEA_STATE, 3000, &far, NULL, NULL), 1); /* read: announced */
-    rep = redisCommand(rc, "DEL %s", stream_key());
+    assert_int_equal(wait_type(&k.w, PROTO_SEA_STATE, 3000, &far, NULL, NULL), 1); /* read: announced */
+    rep = redisCommand(k.rc, "DEL %s", stream_key());
     freeReplyObject(rep);
-    sea.wind_u10 = 12;
-    assert_int_equal(set_answer(&w, &sea, sim_now() + 50), OCEAN_OK);
-    witness_judge(&v, "a far-future id, then the stream deleted");
+    k.sea.wind_u10 = 12;
+    assert_int_equal(set_answer(&k.w, &k.sea, sim_now() + 50), OCEAN_OK);
+    witness_judge(&k.v, "a far-future id, then the stream deleted");
     char body[16384];
-    http_body(p1, "/status", body, sizeof body);
+    http_body(k.port, "/status", body, sizeof body);
     if (!strstr(body, "\"stream_resets\":1") || !strstr(body, "\"future_ids\":1")) fail_msg("/status: %s", body);
-    http_body(p1, "/metrics", body, sizeof body);
+    http_body(k.port, "/metrics", body, sizeof body);
     assert_non_null(strstr(body, "oceand_redis_stream_resets_total 1\n"));
     assert_non_null(strstr(body, "oceand_redis_future_ids_total 1\n"));
-    test_ws_close(&w);
+    test_ws_close(&k.w);
     stop(&pids[1], SIGTERM);
 }
 
@@ -987,24 +992,20 @@ static void sets_answered_after_a_reset(void **state)
 static void sets_answered_at_the_pending_limit(void **state)
 {
     (void)state;
-    if (tools_missing()) skip();
-    int p1;
-    test_ws w;
-    proto_sea sea;
-    witness v;
-    set_ready(&p1, &w, &sea, &v);
+    set_case k;
+    set_ready(&k);
     int announced = 0;
     ocean_result r = OCEAN_OK;
     for (int i = 0; i < SRV_SEA_PENDING_MAX && r == OCEAN_OK; i++) {
-        sea.wind_u10 = 13 + 0.1 * i;
-        r = set_answer(&w, &sea, sim_now() + 60 + i);
+        k.sea.wind_u10 = 13 + 0.1 * i;
+        r = set_answer(&k.w, &k.sea, sim_now() + 60 + i);
         announced += r == OCEAN_OK;
     }
-    witness_judge(&v, "sets up to the pending limit and one more");
+    witness_judge(&k.v, "sets up to the pending limit and one more");
     print_message("%d sets announced after the first, then %s\n", announced, ocean_strerror(r));
     assert_int_equal(r, OCEAN_ERATE);
     assert_int_equal(announced, SRV_SEA_PENDING_MAX - 1);
-    test_ws_close(&w);
+    test_ws_close(&k.w);
     stop(&pids[1], SIGTERM);
 }
 
