@@ -85,6 +85,8 @@ struct srv_redis {
     int lost_said;              /* [replication thread] this outage is logged */
     char last_id[ID_MAX];       /* [replication thread] last entry read */
     fold timeline;              /* [replication thread] what the entries read so far make */
+    ocean_params base;          /* [replication thread] the file's sea, what a change's sea completes;
+                                   copied once a batch: the hub's lock is not taken per entry */
     /* [replication thread] what the last batch read while running gives the
      * hub once read: a new change in force (one, whatever the batch holds)
      * and the changes ahead */
@@ -245,9 +247,7 @@ static int entry_decode(srv_redis *r, const char *id, const srv_resp *fields, en
         e->effective = m.u.sea_state.effective_time;
         e->stored = fmin(srv_hub_sim_time_at(h, stored_unix), srv_hub_sim_time(h));
         char msg[256];
-        pthread_mutex_lock(&h->lock);
-        srv_params_from_sea(&e->sea, &h->file_params, &e->params);
-        pthread_mutex_unlock(&h->lock);
+        srv_params_from_sea(&e->sea, &r->base, &e->params);
         ok = ocean_params_validate(&e->params, msg, sizeof msg) == OCEAN_OK;
     }
     proto_msg_free(&m);
@@ -341,6 +341,9 @@ static int batch_read(srv_redis *r, entry_use use, void *ctx, int *reset)
 {
     *reset = 0;
     int from_start = strcmp(r->last_id, "0-0") == 0;
+    pthread_mutex_lock(&r->hub->lock);
+    r->base = r->hub->file_params;
+    pthread_mutex_unlock(&r->hub->lock);
     srv_resp *rep = range_read(r);
     if (!rep) return -1;
     int n = 0;

@@ -156,7 +156,10 @@ static void redis_start(int port, const char *logname)
     char ports[16], log[600];
     snprintf(ports, sizeof ports, "%d", port);
     snprintf(log, sizeof log, "%s/%s", tmp, logname);
-    char *rargv[] = {"redis-server", "--port", ports, "--bind", "127.0.0.1", "--save", "",
+    /* at nice 10: the 2 cores of a CI host go to the daemon first, so what
+     * the witness measures is the daemon's work, not Redis storing what a
+     * test writes (in production Redis has a machine of its own) */
+    char *rargv[] = {"nice", "-n", "10", "redis-server", "--port", ports, "--bind", "127.0.0.1", "--save", "",
                      "--appendonly", "no", "--dir", tmp, NULL};
     pids[0] = spawn(log, rargv);
     assert_true(wait_port(port, 10));
