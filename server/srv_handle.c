@@ -435,10 +435,10 @@ static void on_sea_state(const srv_in *in)
     srv_params_from_sea(&s->sea, &h->settings.params, &np);
     ocean_result r = ocean_params_validate(&np, msg, sizeof msg);
     if (r == OCEAN_OK && h->redis) {
-        /* replicated: into the shared stream; the announce comes back
-         * through it, to every replica's clients alike */
+        /* replicated: queued for the shared stream; the announce comes
+         * back through it, to every replica's clients alike, or an ERROR */
         pthread_mutex_unlock(&h->lock);
-        r = srv_redis_publish(h->redis, &s->sea, s->effective_time, why, sizeof why);
+        r = srv_redis_submit(h->redis, in->c, in->buf, in->len, &s->sea, s->effective_time, why, sizeof why);
         if (r != OCEAN_OK) refuse(in, r, why);
         return;
     }

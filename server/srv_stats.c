@@ -179,6 +179,32 @@ static void per_client_metrics(sb *b, const srv_stats_view *v)
     }
 }
 
+/* The replicated timeline's health (srv_redis.h): what an operator needs
+ * to see a stream that was reset or written with ids far ahead. */
+static const stat_metric stream_metrics[] = {
+    STAT("oceand_redis_connected", "gauge", "1: the replication thread holds a Redis connection (0 also "
+         "without server.redis).", redis_connected, 1),
+    STAT("oceand_redis_entries_total", "counter", "Stream entries entered into the sea-state timeline.",
+         redis_entries, 1),
+    STAT("oceand_redis_skipped_total", "counter", "Stream entries skipped: too large, not one msg field, no "
+         "valid SEA_STATE announce, or refused by the timeline.", redis_skipped, 1),
+    STAT("oceand_redis_stream_resets_total", "counter", "Times the entry last read was gone from the stream "
+         "(deleted, recreated or trimmed): the timeline was read again from its start.", redis_resets, 1),
+    STAT("oceand_redis_future_ids_total", "counter", "Stream entries whose id is over 60 s ahead of this "
+         "server's clock.", redis_future_ids, 1),
+};
+
+static void stream_json(cJSON *o, const srv_stats *s)
+{
+    cJSON *r = cJSON_AddObjectToObject(o, "redis");
+    if (!r) return;
+    cJSON_AddBoolToObject(r, "connected", LD(redis_connected) != 0);
+    cJSON_AddNumberToObject(r, "entries", (double)LD(redis_entries));
+    cJSON_AddNumberToObject(r, "skipped", (double)LD(redis_skipped));
+    cJSON_AddNumberToObject(r, "stream_resets", (double)LD(redis_resets));
+    cJSON_AddNumberToObject(r, "future_ids", (double)LD(redis_future_ids));
+}
+
 char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t headroom, size_t *len)
 {
     sb b = {malloc(headroom + 4096), 0, headroom + 4096, headroom, 0};
@@ -199,6 +225,7 @@ char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t h
     stat_metrics(&b, s, traffic_metrics, sizeof traffic_metrics / sizeof traffic_metrics[0]);
     if (v->n_per_client > 0)
         per_client_metrics(&b, v);
+    stat_metrics(&b, s, stream_metrics, sizeof stream_metrics / sizeof stream_metrics[0]);
     metric(&b, "oceand_tick_to_send_p50_seconds", "gauge", "Median time from a tick to the "
            "write of its frame.", srv_stats_latency_quantile(s, 0.5));
     metric(&b, "oceand_tick_to_send_p99_seconds", "gauge", "99th percentile of the same.",
@@ -262,6 +289,7 @@ char *srv_stats_json(const srv_stats *s, const srv_stats_view *v, size_t headroo
     cJSON_AddNumberToObject(o, "disconnects_slow", (double)LD(disconnects_slow));
     cJSON_AddNumberToObject(o, "tick_to_send_p50_ms", 1e3 * srv_stats_latency_quantile(s, 0.5));
     cJSON_AddNumberToObject(o, "tick_to_send_p99_ms", 1e3 * srv_stats_latency_quantile(s, 0.99));
+    stream_json(o, s);
     char *txt = cJSON_PrintUnformatted(o);
     cJSON_Delete(o);
     if (!txt) return NULL;

@@ -33,6 +33,9 @@ typedef struct srv_stats {
     atomic_uint_fast64_t disconnects_partial, disconnects_output, disconnects_protocol;
     atomic_uint_fast64_t disconnects_idle;   /* BYE idle (server.idle_seconds) */
     atomic_uint_fast64_t admin_misses, admin_locked, accept_refused, query_slices;
+    /* the replicated timeline (srv_redis.h): entries entered and skipped,
+     * stream resets, far-future ids; connected is a gauge (0 or 1) */
+    atomic_uint_fast64_t redis_entries, redis_skipped, redis_resets, redis_future_ids, redis_connected;
     atomic_uint_fast64_t lat_hist[SRV_LAT_BUCKETS];
 } srv_stats;
 
