@@ -54,3 +54,12 @@ void srv_mesh_camera(const proto_camera *pc, mesh_camera *c)
     c->viewport_w = pc->viewport_w;
     c->viewport_h = pc->viewport_h;
 }
+
+void srv_sea_announce(const proto_sea *sea, double eff, double now, proto_msg *out)
+{
+    proto_msg_init(out, PROTO_SEA_STATE);
+    out->hdr.sim_time = now;
+    out->u.sea_state.op = PROTO_SEA_ANNOUNCE;
+    out->u.sea_state.effective_time = eff;
+    out->u.sea_state.sea = *sea;
+}

@@ -13,6 +13,9 @@
 
 void srv_sea_from_params(const ocean_params *p, proto_sea *out);
 void srv_params_from_sea(const proto_sea *s, const ocean_params *base, ocean_params *out);
+/* The SEA_STATE announce of sea, in force from sim time eff, sent at sim
+ * time now (the message every replica and client reads a change as). */
+void srv_sea_announce(const proto_sea *sea, double eff, double now, proto_msg *out);
 void srv_mesh_camera(const proto_camera *pc, mesh_camera *out);
 
 

@@ -89,11 +89,7 @@ double srv_hub_sim_time_at(const srv_hub *h, double unix_s)
 srv_msg *srv_hub_sea_announce(const proto_sea *sea, double eff, double now)
 {
     proto_msg m;
-    proto_msg_init(&m, PROTO_SEA_STATE);
-    m.hdr.sim_time = now;
-    m.u.sea_state.op = PROTO_SEA_ANNOUNCE;
-    m.u.sea_state.effective_time = eff;
-    m.u.sea_state.sea = *sea;
+    srv_sea_announce(sea, eff, now, &m);
     srv_msg *q = srv_msg_new();
     if (!q) return NULL;
     if (proto_encode(&q->buf, &m, NULL, 0) != OCEAN_OK) {

@@ -724,11 +724,7 @@ static set_req *set_new(srv_client *c, const void *bad, size_t badlen, const pro
     q->badlen = badlen;
     proto_buf_init(&q->entry, 0);
     proto_msg m;
-    proto_msg_init(&m, PROTO_SEA_STATE);
-    m.hdr.sim_time = now;
-    m.u.sea_state.op = PROTO_SEA_ANNOUNCE;
-    m.u.sea_state.effective_time = eff;
-    m.u.sea_state.sea = *sea;
+    srv_sea_announce(sea, eff, now, &m);
     char err[200];
     if (proto_encode(&q->entry, &m, err, sizeof err) != OCEAN_OK) {
         snprintf(why, whylen, "SEA_STATE set refused: %s", err);
