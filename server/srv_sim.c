@@ -109,6 +109,8 @@ struct srv_sim {
     srv_work *work;             /* queries in slices (srv_work.c) */
     srv_client_table *table;    /* what this thread keeps of each client */
     double work_due;            /* monotonic: background work's next turn */
+    int query_deferred;         /* ticks in a row with no slack for query work */
+    double eval_s;              /* measured seconds of one ocean evaluation (EWMA) */
     int holding;                /* caches may hold tiles or evaluations */
 };
 
@@ -271,7 +273,9 @@ static eval_entry *evaluate(srv_sim *s, double t, const group *g, unsigned effec
     rq.redistribute = 0;
     rq.low_boost = g->boost;
     victim->used = 0;
+    double e0 = srv_now();
     if (ocean_evaluate(s->oc, t, &rq, victim->f) != OCEAN_OK) return NULL;
+    s->eval_s = s->eval_s > 0 ? 0.8 * s->eval_s + 0.2 * (srv_now() - e0) : srv_now() - e0;
     victim->used = 1;
     victim->t = t;
     victim->g = *g;
@@ -1034,6 +1038,34 @@ static void follow_sea(srv_sim *s, double t)
 
 /* ---- the loop ------------------------------------------------------------------ */
 
+/* Ticks in a row a query turn may be put off for want of slack; then one
+ * turn runs whatever the tick left, so a query always progresses. */
+#define QUERY_DEFER_MAX 8
+/* What a turn leaves before the next tick is due (a frame's hand-over). */
+#define QUERY_MARGIN_S 2e-3
+
+/* Query work for one tick: server.query_ms at most, and no more than the
+ * tick left before the next one is due, so the frames of every client go
+ * first; a turn whose first query needs an evaluation of its own waits for
+ * a tick that leaves one's measured time.  On a host whose other core is
+ * busy a tick takes longer and leaves less; a turn put off QUERY_DEFER_MAX
+ * ticks runs anyway, at a quarter of its budget. */
+static void query_turn(srv_sim *s, double next_tick_wall, int live)
+{
+    double budget = 1e-3 * s->set.srv.query_ms;
+    if (live) {
+        double slack = next_tick_wall - srv_now() - QUERY_MARGIN_S, t;
+        double need = srv_work_next_time(s->work, &t) && !query_eval(s, t, 1) ? s->eval_s : 0;
+        if ((slack <= 0 || slack < need) && s->query_deferred < QUERY_DEFER_MAX) {
+            s->query_deferred++;
+            return;
+        }
+        budget = slack > 0 ? fmin(budget, slack) : 0.25 * budget;
+    }
+    s->query_deferred = 0;
+    srv_work_queries(s->work, s->hub, query_eval, s, s->g, budget);
+}
+
 static void ts_from(double secs, struct timespec *ts)
 {
     ts->tv_sec = (time_t)floor(secs);
@@ -1324,9 +1356,7 @@ static void *sim_main(void *arg)
         int n = filter_jobs(s, &w, t, rate);
         run_cascade(s, w.cjobs, w.ncjobs, tick_wall);
         run_batches(s, w.jobs, n, tick_wall);
-        /* queries: a bounded slice of work per tick */
-        if (srv_work_busy(s->work))
-            srv_work_queries(s->work, h, query_eval, s, s->g, 1e-3 * s->set.srv.query_ms);
+        if (srv_work_busy(s->work)) query_turn(s, tick_wall + 1.0 / rate, live_due);
         s->work_due = t0 + 1.0 / rate;
         for (int i = 0; i < w.ncl; i++) srv_client_unref(w.cl[i]);
         if (live_due) end_live_tick(s, t0, tick_no, rate, sim0, &next_tick_wall);

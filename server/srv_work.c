@@ -64,6 +64,13 @@ void srv_work_destroy(srv_work *w)
 
 int srv_work_busy(const srv_work *w) { return w->head != NULL; }
 
+int srv_work_next_time(const srv_work *w, double *t)
+{
+    if (!w->head) return 0;
+    *t = w->head->t;
+    return 1;
+}
+
 void srv_work_take(srv_work *w, srv_client *c, double t_now)
 {
     if (!srv_inbox_queries(c->in) || c->n_queries_active > 0) return;

@@ -36,6 +36,9 @@ void srv_work_destroy(srv_work *w);
 void srv_work_take(srv_work *w, srv_client *c, double t_now);
 /* 1 if queries are in progress [sim]. */
 int srv_work_busy(const srv_work *w);
+/* The sim time the next turn's first query is answered at (0 when none is
+ * queued). */
+int srv_work_next_time(const srv_work *w, double *t);
 
 /* An evaluation of the ocean at time t holding OCEAN_QUERY_EFFECTS,
  * unfiltered; NULL on failure, or with cached_only when none is at hand
