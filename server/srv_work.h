@@ -4,7 +4,8 @@
  * serves everyone.
  *
  * QUERY: a query is answered over as many ticks as it needs.  Each tick
- * the simulation thread gives queries a time budget (server.query_ms),
+ * the simulation thread gives queries a time budget (server.query_ms, less
+ * when the tick leaves less before the next one: srv_sim.c query_turn),
  * spent in slices of points sized from the measured cost per point, the
  * clients taking turns one slice at a time (one query per client in the
  * rotation; the client's other queries wait in its own FIFO).  The points'
