@@ -66,8 +66,6 @@ ocean_result srv_client_create(srv_hub *h, srv_client **out)
 
 void srv_client_ref(srv_client *c) { atomic_fetch_add(&c->refs, 1); }
 
-/* The replay cameras c sent and the server has not yet answered. */
-void srv_client_drop_replay(srv_client *c) { srv_inbox_drop_replays(c->in); }
 
 void srv_client_unref(srv_client *c)
 {

@@ -106,8 +106,5 @@ void srv_client_send_hello(srv_client *c);
  * it took effect), then one per pending change, earliest first. */
 void srv_client_send_sea_timeline(srv_client *c);
 
-/* Drops the replay cameras c sent and the server has not answered
- * [hub.lock held]. */
-void srv_client_drop_replay(srv_client *c);
 
 #endif

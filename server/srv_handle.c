@@ -256,7 +256,7 @@ static void on_subscribe(const srv_in *in)
         if (!c->subscribed) h->n_subscribed++;
         /* A live subscription drops the replay backlog, never the QUERYs:
          * they are answered in order whatever the mode. */
-        if (sub.mode != PROTO_MODE_REPLAY) srv_client_drop_replay(c);
+        if (sub.mode != PROTO_MODE_REPLAY) srv_inbox_drop_replays(c->in);
         c->subscribed = 1;
         c->sub = sub;
         c->sub_gen++;

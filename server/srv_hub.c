@@ -4,7 +4,6 @@
  */
 #include "srv_hub.h"
 
-#include <libwebsockets.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
