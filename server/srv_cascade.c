@@ -1060,34 +1060,10 @@ static int mip_tiles(const tables *tb, const srv_config *cfg, int m)
     return np / T;
 }
 
-/* A time-interpolating job's model of what its client holds (srv_held.h),
- * moved to this frame's windows as the client will move it.  Live, while
- * the client's previous frame still waits unsent in the latest-wins slot,
- * this frame replaces it: the model is the one from before that frame.
- * A model from other tables (a new sea), another tile side or the other
- * mode starts empty, and so the frame is a KEY frame. */
-static void held_begin(srv_cascade *k, const srv_config *cfg, srv_cascade_job *j, plan *pl)
+/* Moves model h to plan pl's windows, as the client moves what it holds on
+ * reading the frame. */
+static void held_advance(const tables *tb, const srv_config *cfg, const plan *pl, srv_held *h)
 {
-    srv_client_sim *cs = j->cs;
-    const tables *tb = &k->tab;
-    pl->held = NULL;
-    pl->key = 0;
-    if (!(cs->sub.flags & PROTO_SUB_TIME_INTERP)) return;
-    for (int i = 0; i < 2; i++)
-        if (!cs->held[i] && srv_held_create(&cs->held[i]) != OCEAN_OK) return;
-    if (cs->held_gen != k->tab_gen || cs->held_tile != cfg->cascade_tile || cs->held_replay != j->replay) {
-        srv_held_clear(cs->held[0]);
-        srv_held_clear(cs->held[1]);
-        cs->held_gen = k->tab_gen;
-        cs->held_tile = cfg->cascade_tile;
-        cs->held_replay = j->replay;
-    }
-    /* held[0]: what the client will hold; held[1]: that before the last frame */
-    if (!j->replay && srv_outbox_frame_waiting(j->c->out))
-        srv_held_copy(cs->held[0], cs->held[1]);
-    else
-        srv_held_copy(cs->held[1], cs->held[0]);
-    srv_held *h = cs->held[0];
     for (int c = 0; c < PROTO_MAX_LAYERS; c++) {
         int mips = c < pl->layers ? tb->mips[c] : 0;
         for (int m = 0; m < mips; m++) {
@@ -1096,11 +1072,69 @@ static void held_begin(srv_cascade *k, const srv_config *cfg, srv_cascade_job *j
         }
         srv_held_drop(h, c, mips);
     }
+}
+
+/* A time-interpolating job's model of what its client holds (srv_held.h),
+ * moved to this frame's windows as the client will move it.  Live, it is
+ * built on what the client holds for sure: while its last frame may still
+ * wait in the latest-wins slot (this frame would replace it) on what the
+ * client holds with that frame and without it (srv_client_sim.h); a
+ * frame the service thread has taken since is what it holds.  Building on
+ * the state before the waiting frame alone would, whenever every frame is
+ * planned while the one before waits (a writer slower than the tick),
+ * start every frame from the same model, and a KEY frame capped at
+ * SRV_CASCADE_BURST_A budgets would never make the sea whole.  A model
+ * from other tables (a new sea), another tile side or the other mode
+ * starts empty, and so the frame is a KEY frame. */
+static void held_begin(srv_cascade *k, const srv_config *cfg, srv_cascade_job *j, plan *pl)
+{
+    srv_client_sim *cs = j->cs;
+    const tables *tb = &k->tab;
+    pl->held = NULL;
+    pl->key = 0;
+    if (!(cs->sub.flags & PROTO_SUB_TIME_INTERP)) return;
+    for (int i = 0; i < 4; i++)
+        if (!cs->held[i] && srv_held_create(&cs->held[i]) != OCEAN_OK) return;
+    if (cs->held_gen != k->tab_gen || cs->held_tile != cfg->cascade_tile || cs->held_replay != j->replay) {
+        for (int i = 0; i < 4; i++) srv_held_clear(cs->held[i]);
+        cs->held_pending = 0;
+        cs->held_gen = k->tab_gen;
+        cs->held_tile = cfg->cascade_tile;
+        cs->held_replay = j->replay;
+    }
+    srv_held *h = cs->held[SRV_HELD_AFTER];
+    if (!j->replay) {
+        if (cs->held_pending && !srv_outbox_frame_waiting(j->c->out)) {
+            srv_held_copy(cs->held[SRV_HELD_KNOWN], cs->held[SRV_HELD_AFTER]);
+            cs->held_pending = 0;
+        }
+        h = cs->held[SRV_HELD_NEXT];
+        srv_held_copy(h, cs->held[SRV_HELD_KNOWN]);
+    }
+    held_advance(tb, cfg, pl, h);
+    if (!j->replay && cs->held_pending) {
+        srv_held *other = cs->held[SRV_HELD_SCRATCH];
+        srv_held_copy(other, cs->held[SRV_HELD_AFTER]);
+        held_advance(tb, cfg, pl, other);
+        srv_held_meet(h, other);
+    }
     /* keyed now, not when the batch ends: a replay client's next frame in
      * this batch continues from this one, as it does in the next batch */
     pl->key = srv_held_key(h);
     if (pl->key) srv_held_keyed(h);
     pl->held = h;
+}
+
+void srv_cascade_handed_over(const srv_cascade_job *j, int published, int replaced)
+{
+    srv_client_sim *cs = j->cs;
+    if (j->replay || !published || !(cs->sub.flags & PROTO_SUB_TIME_INTERP) || !cs->held[SRV_HELD_NEXT]) return;
+    /* the frame before was taken, not replaced: the client holds it */
+    if (cs->held_pending && !replaced) srv_held_copy(cs->held[SRV_HELD_KNOWN], cs->held[SRV_HELD_AFTER]);
+    srv_held *t = cs->held[SRV_HELD_AFTER];
+    cs->held[SRV_HELD_AFTER] = cs->held[SRV_HELD_NEXT];
+    cs->held[SRV_HELD_NEXT] = t;
+    cs->held_pending = 1;
 }
 
 /* One needed tile (c, m, ix, iz) of job j in pass `pass`: pass 0 the tile

@@ -105,6 +105,11 @@ struct ocean_gerstner;
 void srv_cascade_run(srv_cascade *k, ocean *oc, const struct ocean_gerstner *g, ocean *nf, int order,
                      const srv_config *cfg, srv_stats *st, srv_cascade_job *jobs, int n, uint64_t gen);
 
+/* Job j's frame was handed to its client (published 0: there was none to
+ * hand), replacing (replaced 1) or not an unsent frame in the latest-wins
+ * slot: the model of what a time-interpolating client holds follows. */
+void srv_cascade_handed_over(const srv_cascade_job *j, int published, int replaced);
+
 /* Drops cached tiles last used before generation keep_from. */
 void srv_cascade_sweep(srv_cascade *k, uint64_t keep_from);
 

@@ -12,11 +12,11 @@
 
 /* ---- messages ------------------------------------------------------------- */
 
-void srv_client_hand_over(srv_client *c, srv_stats *st, srv_msg *topo, srv_msg *frame, int replay, double tick_wall)
+int srv_client_hand_over(srv_client *c, srv_stats *st, srv_msg *topo, srv_msg *frame, int replay, double tick_wall)
 {
     if (!frame) {
         srv_msg_free(topo);
-        return;
+        return 0;
     }
     frame->is_frame = 1;
     frame->tick_wall = tick_wall;
@@ -27,7 +27,9 @@ void srv_client_hand_over(srv_client *c, srv_stats *st, srv_msg *topo, srv_msg *
         srv_client_queue(c, frame);
     } else if (srv_outbox_publish(c->out, topo, frame)) {
         atomic_fetch_add(&st->frames_skipped, 1);
+        return 1;
     }
+    return 0;
 }
 
 void srv_client_queue(srv_client *c, srv_msg *m)

@@ -93,8 +93,9 @@ void srv_client_remove(srv_client *c);
 void srv_client_queue(srv_client *c, srv_msg *m);
 /* Hands a built frame (and the topology to send first, may be NULL) to its
  * client: queued in order for replay, into the latest-wins slot live.
- * frame NULL frees topo.  Takes ownership of both [sim side]. */
-void srv_client_hand_over(srv_client *c, srv_stats *st, srv_msg *topo, srv_msg *frame, int replay,
+ * frame NULL frees topo.  Takes ownership of both [sim side].  Returns 1
+ * when the frame replaced an unsent live frame. */
+int srv_client_hand_over(srv_client *c, srv_stats *st, srv_msg *topo, srv_msg *frame, int replay,
                           double tick_wall);
 void srv_client_send_error(srv_client *c, const void *bad, size_t badlen, ocean_result code,
                            const char *why);

@@ -31,8 +31,7 @@ static void sim_free(srv_client_sim *cs)
     if (!cs) return;
     mesh_destroy(cs->mesh);
     free(cs->qz_refs);
-    srv_held_destroy(cs->held[0]);
-    srv_held_destroy(cs->held[1]);
+    for (int i = 0; i < 4; i++) srv_held_destroy(cs->held[i]);
     free(cs);
 }
 

@@ -22,6 +22,13 @@
 #include "srv_stats.h"
 
 /* What the simulation thread keeps of one client. */
+enum {
+    SRV_HELD_AFTER,  /* after the last frame handed over (replay: built in place) */
+    SRV_HELD_KNOWN,  /* what the client holds for sure */
+    SRV_HELD_NEXT,   /* the live frame being built */
+    SRV_HELD_SCRATCH
+};
+
 typedef struct srv_client_sim {
     uint64_t sub_gen;            /* subscription generation last applied */
     proto_subscribe sub;
@@ -45,10 +52,17 @@ typedef struct srv_client_sim {
                                     3 per vertex, made once per topology */
     uint64_t qz_refs_key;
     uint32_t qz_refs_n;          /* vertices qz_refs holds (0: none) */
-    /* PROTO_SUB_TIME_INTERP: what the client holds ([0]) and held before
-     * its last frame ([1]), made from cascade tables held_gen, tile side
-     * held_tile, in replay (held_replay 1) or live mode */
-    srv_held *held[2];
+    /* PROTO_SUB_TIME_INTERP: models of what the client holds (srv_held.h),
+     * made from cascade tables held_gen, tile side held_tile, in replay
+     * (held_replay 1) or live mode.  A live frame waits in the outbox's
+     * latest-wins slot until the service thread takes it, and the next
+     * frame replaces it if it is still there: while held_pending, the
+     * last frame published may be either, and the client holds
+     * held[SRV_HELD_AFTER] (it was taken) or held[SRV_HELD_KNOWN] (it
+     * was replaced); the next frame is built on what both hold
+     * (srv_cascade.c held_begin) in held[SRV_HELD_NEXT]. */
+    srv_held *held[4];
+    int held_pending;
     uint64_t held_gen;
     int held_tile, held_replay;
 } srv_client_sim;

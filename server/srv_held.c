@@ -154,6 +154,29 @@ void srv_held_add(srv_held *h, int c, int m, int slot, int i, unsigned channels)
     hm->slot[slot].bits[i / 64] |= (uint64_t)1 << (i % 64);
 }
 
+void srv_held_meet(srv_held *dst, const srv_held *src)
+{
+    for (int c = 0; c < PROTO_MAX_LAYERS; c++)
+        for (int m = 0; m < PROTO_MAX_MIPS; m++) {
+            held_mip *d = &dst->mip[c][m];
+            const held_mip *s = &src->mip[c][m];
+            if (!d->valid) continue;
+            if (!s->valid || s->tiles != d->tiles || s->tick_a != d->tick_a || s->interval != d->interval ||
+                !s->slot[0].bits || !d->slot[0].bits) {
+                mip_drop(d);
+                continue;
+            }
+            for (int k = 0; k < 2; k++) {
+                if (s->slot[k].channels != d->slot[k].channels) {
+                    slot_empty(d, k);
+                    continue;
+                }
+                for (size_t w = 0; w < words(d->tiles); w++) d->slot[k].bits[w] &= s->slot[k].bits[w];
+            }
+        }
+    dst->key = dst->key || src->key;
+}
+
 ocean_result srv_held_copy(srv_held *dst, const srv_held *src)
 {
     ocean_result res = OCEAN_OK;

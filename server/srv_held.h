@@ -36,6 +36,10 @@ int srv_held_key(const srv_held *h);
 void srv_held_keyed(srv_held *h);
 /* Makes dst a copy of src; OCEAN_ENOMEM leaves dst empty. */
 ocean_result srv_held_copy(srv_held *dst, const srv_held *src);
+/* Keeps in dst only what src holds too (the same window, channels and
+ * tile), and the KEY demand of either: what a client holds whichever of
+ * the two it has. */
+void srv_held_meet(srv_held *dst, const srv_held *src);
 
 /* Applies a frame's time table to (cascade c, mip m) as the client does
  * before reading the frame's records: interval 0 drops both samples; a

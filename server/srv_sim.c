@@ -405,7 +405,9 @@ static void run_cascade(srv_sim *s, srv_cascade_job *cj, int n, double tick_wall
     if (prof) fprintf(stderr, "cascade batch %d jobs: %.2f ms\n", n, (srv_now() - p0) * 1e3);
     for (int i = 0; i < n; i++) {
         srv_cascade_job *j = &cj[i];
-        srv_client_hand_over(j->c, st, j->topo, j->frame, j->replay, tick_wall);
+        int published = j->frame != NULL;
+        int replaced = srv_client_hand_over(j->c, st, j->topo, j->frame, j->replay, tick_wall);
+        srv_cascade_handed_over(j, published, replaced);
         j->topo = j->frame = NULL;
     }
     srv_hub_wake_net(s->hub);
@@ -420,8 +422,8 @@ static void apply_subscription(srv_sim *s, srv_client *c, srv_client_sim *cs)
     cs->mesh_coarsen = 0;
     cs->primed = 0;
     /* the client drops what it holds on the next frame (a KEY frame) */
-    srv_held_clear(cs->held[0]);
-    srv_held_clear(cs->held[1]);
+    for (int i = 0; i < 4; i++) srv_held_clear(cs->held[i]);
+    cs->held_pending = 0;
     /* a new subscription keeps the stream's schedule at its own rate: a
      * client cannot buy frames by re-subscribing */
     cs->next_frame_t = cs->framed ? cs->last_frame_t + 1.0 / cs->sub.frame_rate_hz : -INFINITY;

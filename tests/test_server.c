@@ -737,9 +737,12 @@ static void time_interp_key_frame_spread(void **state)
      * within a quarter of it on these tiles (bench_codec) */
     double cap = SRV_CASCADE_BURST_A * 1.5e6 / 30.0 * 1.25, biggest = 0, first = 0;
     int frames = 0, whole_at = -1, plain_points = 0, gaps = 0;
-    oc_frame *plain = NULL;
+    oc_frame *plain = NULL, *got[40] = {0};
+    /* the timed stream's frames are kept and judged once the plain
+     * stream's frame is in: when that frame comes is the other stream's
+     * pace on this host, not something the frame count should carry */
     double end = test_now_s() + (sanitized ? 120.0 : 40.0);
-    while (frames < 40 && test_now_s() < end) {
+    while ((frames < 40 || !plain) && test_now_s() < end) {
         oc_frame *f = NULL;
         if (!plain && oc_client_next_frame(a, 5, &f) == OCEAN_OK) {
             if (f->info.camera_seq != PROTO_NO_CAMERA)
@@ -747,17 +750,22 @@ static void time_interp_key_frame_spread(void **state)
             else
                 oc_frame_free(f);
         }
-        if (oc_client_next_frame(b, 5, &f) != OCEAN_OK) continue;
+        if (frames == 40 || oc_client_next_frame(b, 5, &f) != OCEAN_OK) continue;
         if (f->info.camera_seq == PROTO_NO_CAMERA) {
             oc_frame_free(f);
             continue;
         }
         assert_int_equal(f->view_result, OCEAN_OK);
-        if (!frames) first = (double)f->raw_len;
+        got[frames++] = f;
+    }
+    assert_non_null(plain);
+    for (int n = 0; n < frames; n++) {
+        oc_frame *f = got[n];
+        if (!n) first = (double)f->raw_len;
         biggest = fmax(biggest, (double)f->raw_len);
         /* points ahead of the camera (yaw 0: +x), where both plans read */
         int held = 0, covered = 0;
-        for (int i = 1; plain && i <= 15; i++)
+        for (int i = 1; i <= 15; i++)
             for (int k = -7; k <= 7; k++) {
                 double x = cam.pos[0] + 20.0 * i, z = cam.pos[2] + 20.0 * k;
                 oc_sample p;
@@ -765,9 +773,8 @@ static void time_interp_key_frame_spread(void **state)
                 covered++;
                 held += oc_frame_sample(f, x, z, 0, &p) == OCEAN_OK;
             }
-        if (plain && whole_at < 0 && covered && held == covered) whole_at = frames, plain_points = covered;
+        if (whole_at < 0 && covered && held == covered) whole_at = n, plain_points = covered;
         if (whole_at >= 0 && held < covered) gaps++;
-        frames++;
         oc_frame_free(f);
     }
     print_message("key frame spread: first frame %.0f bytes, largest %.0f (cap %.0f with the model's margin); "
@@ -775,7 +782,10 @@ static void time_interp_key_frame_spread(void **state)
                   first, biggest, cap, plain_points, whole_at, gaps);
     assert_true(frames >= 20);
     assert_true(biggest <= cap);
-    assert_true(whole_at >= 0 && whole_at < 10);
+    /* a frame planned while the one before waits unsent builds on what
+     * the client holds with it and without it: at most the first few
+     * are KEY frames, then the sea fills in */
+    assert_true(whole_at >= 0 && whole_at < 6);
     assert_int_equal(gaps, 0);
     assert_true(plain_points >= 50);
     oc_frame_free(plain);

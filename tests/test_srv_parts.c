@@ -2,8 +2,9 @@
  * test_srv_parts.c - the daemon's per-client parts on their own, without a
  * connection or a thread: the token bucket every rate budget uses, a
  * client's inbox (its QUERYs and replay cameras) and outbox (its FIFO and
- * latest-wins frame slot, under a hard byte limit), and the simulation
- * thread's table of what it keeps of each client.
+ * latest-wins frame slot, under a hard byte limit), the simulation
+ * thread's table of what it keeps of each client, and its model of what
+ * a time-interpolating client holds.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -17,6 +18,7 @@
 #include "srv_bucket.h"
 #include "srv_client.h"
 #include "srv_client_sim.h"
+#include "srv_held.h"
 #include "srv_inbox.h"
 #include "srv_outbox.h"
 
@@ -189,6 +191,52 @@ static void client_table(void **state)
     srv_hub_fini(&h);
 }
 
+/* A held model with window (tick_a, interval) on cascade 0's mips 0 and 1
+ * (16 tiles each), sample A holding tiles a[0..na) with channels cha and
+ * B tile b with channels chb. */
+static srv_held *held_with(uint32_t tick_a, const int *a, int na, int b, unsigned cha, unsigned chb)
+{
+    srv_held *h;
+    assert_int_equal(srv_held_create(&h), OCEAN_OK);
+    proto_mip_time t = {.tick_a = tick_a, .interval = 4};
+    for (int m = 0; m < 2; m++) {
+        assert_int_equal(srv_held_advance(h, 0, m, &t, 16), OCEAN_OK);
+        for (int i = 0; i < na; i++) srv_held_add(h, 0, m, 0, a[i], cha);
+        srv_held_add(h, 0, m, 1, b, chb);
+    }
+    srv_held_keyed(h);
+    return h;
+}
+
+/* What a client holds whichever of two frames reached it: the tiles both
+ * models hold in the same window with the same channels; a mip whose
+ * windows differ holds nothing; a model that demands a KEY frame makes
+ * the meet demand one. */
+static void held_meet(void **state)
+{
+    (void)state;
+    const int a[] = {1, 2, 3}, b[] = {2, 3, 4};
+    srv_held *x = held_with(10, a, 3, 5, 7, 7), *y = held_with(10, b, 3, 5, 7, 3);
+    proto_mip_time later = {.tick_a = 14, .interval = 4};
+    assert_int_equal(srv_held_advance(y, 0, 1, &later, 16), OCEAN_OK); /* B moved to A */
+    assert_true(srv_held_has(y, 0, 1, 0, 5, 3));
+    srv_held_meet(x, y);
+    for (int i = 0; i < 16; i++) {
+        assert_int_equal(srv_held_has(x, 0, 0, 0, i, 7), i == 2 || i == 3);
+        assert_false(srv_held_has(x, 0, 0, 1, i, 7) || srv_held_has(x, 0, 0, 1, i, 3));
+        assert_false(srv_held_has(x, 0, 1, 0, i, 7) || srv_held_has(x, 0, 1, 0, i, 3));
+    }
+    assert_false(srv_held_key(x));
+    srv_held *empty;
+    assert_int_equal(srv_held_create(&empty), OCEAN_OK);
+    srv_held_meet(x, empty);
+    assert_true(srv_held_key(x));
+    assert_false(srv_held_has(x, 0, 0, 0, 2, 7));
+    srv_held_destroy(x);
+    srv_held_destroy(y);
+    srv_held_destroy(empty);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -196,6 +244,7 @@ int main(void)
         cmocka_unit_test(inbox_fifos),
         cmocka_unit_test(outbox_order_and_limit),
         cmocka_unit_test(client_table),
+        cmocka_unit_test(held_meet),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
