@@ -27,14 +27,18 @@ count_cmocka() {  # file -> sets p f k
     k=$(grep -E '^\[  SKIPPED \] [0-9]+ test' "$1" | awk '{s+=$4} END {print s+0}')
 }
 
-# One test in the background: its output in LOG, then its exit status and
-# seconds in LOG.rc.
+# One test in the background: its output in LOG, then its exit status,
+# seconds and CPU seconds (user + system, its children's included) in
+# LOG.rc.
 run_one() {  # name kind(c|sh) path
-    local log="$logdir/$1.log" start rc
-    start=$(date +%s.%N)
-    if [[ $2 == c ]]; then "$3" >"$log" 2>&1; else BUILD="$build" bash "$3" >"$log" 2>&1; fi
-    rc=$?
-    echo "$rc $(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN {printf "%.1f", b - a}')" >"$log.rc"
+    local log="$logdir/$1.log" rc TIMEFORMAT='%R %U %S' t
+    { t=$( { time {
+        if [[ $2 == c ]]; then "$3" >"$log" 2>&1; else BUILD="$build" bash "$3" >"$log" 2>&1; fi
+        echo $? >"$log.exit"
+    } ; } 2>&1 ) ; }
+    read -r rc <"$log.exit" 2>/dev/null || rc=1
+    rm -f "$log.exit"
+    echo "$rc $(awk -v t="$t" 'BEGIN {split(t, v, " "); printf "%.1f %.1f", v[1], v[2] + v[3]}')" >"$log.rc"
 }
 
 tests=()   # "name kind path"
@@ -70,7 +74,7 @@ wait
 for e in "${tests[@]}"; do
     read -r name kind _ <<<"$e"
     log="$logdir/$name.log"
-    read -r rc secs <"$log.rc" 2>/dev/null || { rc=1; secs=0; }
+    read -r rc secs cpu <"$log.rc" 2>/dev/null || { rc=1; secs=0; cpu=0; }
     if [[ $kind == c ]]; then
         count_cmocka "$log"
         if [[ $rc -ne 0 && $f -eq 0 ]]; then f=1; fi
@@ -79,7 +83,7 @@ for e in "${tests[@]}"; do
         if [[ $rc -eq 0 ]]; then p=1; f=0; else p=0; f=1; fi
     fi
     passed=$((passed + p)); failed=$((failed + f)); skipped=$((skipped + k))
-    printf '%-28s %4d passed %3d failed %3d skipped  %6ss  [%s]\n' "$name" "$p" "$f" "$k" "$secs" "$label"
+    printf '%-28s %4d passed %3d failed %3d skipped  %6ss  cpu %6ss  [%s]\n' "$name" "$p" "$f" "$k" "$secs" "${cpu:-0}" "$label"
     if [[ $f -ne 0 ]]; then
         failures+=("$name")
         if [[ $kind == c ]]; then grep -E 'FAILED|ERROR|error|Assert|runtime error|Sanitizer' "$log" | head -20; else tail -20 "$log"; fi

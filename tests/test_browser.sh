@@ -20,6 +20,10 @@
 #     screenshots $BUILD/test-artifacts/scene-*.png, sun glitter spread by
 #     roughness at 1500 m against a mirror control, no mesh edge.
 #     SHOTS_OUT=DIR also copies the screenshots to DIR (tests/bench/out).
+# The pages of 2 and 3 draw a quarter of the viewer's own resolution without
+# multisampling (VIEW_QUERY, default scale=0.25&aa=0): nothing judged depends
+# on it, and Chromium's software renderer draws 4 times the frames (11 fps
+# against 3 on a quiet 2-core host); VIEW_QUERY= draws as a user's viewer.
 # The daemon is stopped on exit, whatever happens (trap).
 #   usage: BUILD=build bash tests/test_browser.sh
 set -uo pipefail
@@ -72,6 +76,7 @@ fi
 [[ -f "$BUILD/libocean_proto.a" && -f "$BUILD/libocean_sim.a" ]] || die "$BUILD/libocean_proto.a / libocean_sim.a not built"
 
 status=0
+export VIEW_QUERY="${VIEW_QUERY-scale=0.25&aa=0}"
 
 # ---- 1. protocol cross-check --------------------------------------------
 echo "== protocol: JavaScript decoder vs C (protocol/) == (${SECONDS} s)"

@@ -18,7 +18,8 @@
  * SHOTS_OUT (optional): a directory the screenshots are copied to
  * (tests/bench/out for the benchmark report).
  *
- * Env: OCEAN_URL, SCENE, ARTIFACT_DIR, CHROMIUM, VIEWER_TIMEOUT_S, SHOTS_OUT.
+ * Env: OCEAN_URL, SCENE, ARTIFACT_DIR, CHROMIUM, VIEWER_TIMEOUT_S, SHOTS_OUT,
+ * VIEW_QUERY.
  * Prints "N passed, N failed"; exits non-zero on any failure.
  */
 import { createRequire } from 'node:module';
@@ -36,6 +37,11 @@ const artifacts = process.env.ARTIFACT_DIR || 'build/test-artifacts';
 const shotsOut = process.env.SHOTS_OUT || '';
 const timeoutMs = 1000 * Number(process.env.VIEWER_TIMEOUT_S || 60);
 const exe = process.env.CHROMIUM || '/usr/bin/chromium';
+/* VIEW_QUERY: viewer options every page gets (tests/test_browser.sh asks
+ * for fewer pixels, scale=0.25&aa=0: what is judged here does not depend
+ * on the resolution, and a software renderer draws 4 times the frames) */
+const viewQuery = process.env.VIEW_QUERY || '';
+const withView = (u) => (viewQuery ? `${u}${u.includes('?') ? '&' : '?'}${viewQuery}` : u);
 mkdirSync(artifacts, { recursive: true });
 if (shotsOut) mkdirSync(shotsOut, { recursive: true });
 
@@ -80,7 +86,7 @@ try {
     const page = context.pages()[0] || await context.newPage();
     const pageErrors = [];
     page.on('pageerror', (e) => pageErrors.push(String(e)));
-    await page.goto(`${base}?overlay=0&x=0&y=25&z=0&pitch=-8&fov=${FOV}`, { waitUntil: 'load', timeout: timeoutMs });
+    await page.goto(withView(`${base}?overlay=0&x=0&y=25&z=0&pitch=-8&fov=${FOV}`), { waitUntil: 'load', timeout: timeoutMs });
     const up = await waitFor(page, () => window.oceanStats && window.oceanStats.hello && window.oceanStats.framesRendered >= 2, null, timeoutMs);
     let s = await stats(page);
     check('viewer up on layout 1', up && s.layout === 1 && s.subscription && s.subscription.layout === 1,

@@ -25,7 +25,7 @@
  * viewer-control.png).
  *
  * Env: OCEAN_URL (http://127.0.0.1:PORT/), ARTIFACT_DIR, CHROMIUM
- * (default /usr/bin/chromium), VIEWER_TIMEOUT_S (default 60).
+ * (default /usr/bin/chromium), VIEWER_TIMEOUT_S (default 60), VIEW_QUERY.
  * Prints "N passed, N failed" and exits non-zero on any failure.
  */
 import { createRequire } from 'node:module';
@@ -41,6 +41,11 @@ const base = process.env.OCEAN_URL || 'http://127.0.0.1:8740/';
 const artifacts = process.env.ARTIFACT_DIR || 'build/test-artifacts';
 const timeoutMs = 1000 * Number(process.env.VIEWER_TIMEOUT_S || 60);
 const exe = process.env.CHROMIUM || '/usr/bin/chromium';
+/* VIEW_QUERY: viewer options every page gets (tests/test_browser.sh asks
+ * for fewer pixels, scale=0.25&aa=0: what is judged here does not depend
+ * on the resolution, and a software renderer draws 4 times the frames) */
+const viewQuery = process.env.VIEW_QUERY || '';
+const withView = (u) => (viewQuery ? `${u}${u.includes('?') ? '&' : '?'}${viewQuery}` : u);
 mkdirSync(artifacts, { recursive: true });
 
 let passed = 0, failed = 0;
@@ -115,7 +120,7 @@ try {
         return route.continue();
     });
 
-    const url = `${base}?x=0&y=14&z=0&yaw=30&pitch=-12`;
+    const url = withView(`${base}?x=0&y=14&z=0&yaw=30&pitch=-12`);
     const page = context.pages()[0] || await context.newPage();
     const pageErrors = [], consoleErrors = [], badResponses = [];
     page.on('pageerror', (e) => pageErrors.push(String(e)));
@@ -217,7 +222,7 @@ try {
     const page2 = await context.newPage();
     const page2Errors = [];
     page2.on('pageerror', (e) => page2Errors.push(String(e)));
-    await page2.goto(`${base}?x=40&y=30&z=-25&yaw=-60&pitch=-15`, { waitUntil: 'load', timeout: timeoutMs });
+    await page2.goto(withView(`${base}?x=40&y=30&z=-25&yaw=-60&pitch=-15`), { waitUntil: 'load', timeout: timeoutMs });
     const before = (await stats(page)).framesReceived;
     const both = await waitFor(page2, () => window.oceanStats && window.oceanStats.framesReceived >= 5 && window.oceanStats.framesRendered >= 2, null, timeoutMs);
     const s1 = await stats(page), s2 = await stats(page2);
@@ -277,7 +282,7 @@ try {
     check('/status carries the scene camera hint', !!h && [h.x, h.y, h.z, h.yaw, h.pitch].every(Number.isFinite),
         JSON.stringify(h));
     if (h) {
-        await page2.goto(base, { waitUntil: 'load', timeout: timeoutMs });
+        await page2.goto(withView(base), { waitUntil: 'load', timeout: timeoutMs });
         await waitFor(page2, () => window.oceanViewer && window.oceanStats && window.oceanStats.framesReceived >= 1, null, timeoutMs);
         const c = await page2.evaluate(() => ({ pos: window.oceanViewer.camera.pos.slice(), yaw: window.oceanViewer.camera.yawDeg,
             pitch: window.oceanViewer.camera.pitchDeg }));
