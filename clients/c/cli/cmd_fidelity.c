@@ -194,6 +194,7 @@ static void measure_frame(const oc_frame *f, const proto_camera *cam, int grid, 
 typedef struct fid_cfg {
     double height, speed, pitch, yaw, fov, spacing, range, settle, interval;
     int frames, json, verbose, grid, timeout_ms, vw, vh;
+    int settle_frames;        /* -1: the default for the stream */
     int time_interp;          /* index in occli_off_on */
     const char *codec, *interp_name, *url;
     oc_interp interp;
@@ -245,7 +246,12 @@ static int fid_parse(int argc, char **argv, fid_cfg *F)
         {.name = "settle", .kind = OCCLI_DOUBLE, .target = &F->settle, .min = 0, .max = 60,
          .help = "S  wait after the first frame made for the camera before measuring (default 0.3;\n"
                  "                       1 with --time-interp on: what the client lacks at first comes over\n"
-                 "                       several frames, each at most twice a frame's byte budget)"},
+                 "                       several frames, each at most 4 frames' byte budgets)"},
+        {.name = "settle-frames", .kind = OCCLI_INT, .target = &F->settle_frames, .min = 0, .max = 100000,
+         .help = "N  frames made for the camera passed over before measuring, besides --settle (default 0;\n"
+                 "                       8 with --time-interp on: on a loaded host a second brings a few\n"
+                 "                       frames, and it is frames, not seconds, that fill what the client\n"
+                 "                       lacks)"},
         {.name = "interval", .kind = OCCLI_DOUBLE, .target = &F->interval, .min = 0, .max = 3600,
          .help = "S  measure one frame per S seconds (0: consecutive frames); a longer span samples more "
                  "sea\n                       (a moving camera) and more wave periods"},
@@ -298,6 +304,8 @@ static int fid_setup(fid_cfg *F)
         F->sub.flags &= (uint8_t)~PROTO_SUB_TIME_INTERP;
     if (isnan(F->settle))
         F->settle = F->time_interp == 1 ? 1.0 : 0.3;
+    if (F->settle_frames < 0)
+        F->settle_frames = F->time_interp == 1 ? 8 : 0;
     proto_codec pc;
     if (proto_codec_parse(F->codec, &pc) != OCEAN_OK) {
         fprintf(stderr, "ocean-client fidelity: option '--codec': unknown codec '%s'\n", F->codec);
@@ -340,6 +348,7 @@ typedef struct fid_run {
     fid_acc A;
     uint32_t first_seq;
     double t0, last_cam, settled_at, last_measured;
+    int seen;                 /* frames made for the camera, with a view */
     uint64_t layout0, noview;
     char why[256];
 } fid_run;
@@ -386,7 +395,7 @@ static int fid_take(fid_run *R, oc_frame *f)
     }
     if (isnan(R->settled_at))
         R->settled_at = occli_mono();
-    if (occli_mono() - R->settled_at < F->settle) {
+    if (++R->seen <= F->settle_frames || occli_mono() - R->settled_at < F->settle) {
         A->stale++;
         oc_frame_free(f);
         return 0;
@@ -618,7 +627,7 @@ static int fid_measure(const fid_cfg *F, fid_run *R, proto_hello *hello, proto_s
 
 int cmd_fidelity(int argc, char **argv)
 {
-    fid_cfg F = {.height = 25, .pitch = 1000, .fov = 60, .settle = NAN, .frames = 10, .grid = 64,
+    fid_cfg F = {.height = 25, .pitch = 1000, .fov = 60, .settle = NAN, .settle_frames = -1, .frames = 10, .grid = 64,
                  .timeout_ms = 5000, .vw = 1920, .vh = 1080, .codec = "qz", .interp_name = "cubic"};
     oc_subscribe_default(&F.sub);
     /* the library's stream (the viewer's: samples in time) unless asked */
