@@ -26,6 +26,7 @@
 #include "ocean_plan.h"
 #include "query.h"
 #include "srv_cascade.h"
+#include "srv_seabuild.h"
 #include "srv_tiles.h"
 #include "srv_work.h"
 
@@ -93,11 +94,7 @@ struct srv_sim {
     ocean_filter_buckets buckets;
     double lambda_dom;
     double roughness;           /* mesh_roughness of the sea in force */
-    ocean *next_oc;             /* pending sea change */
-    ocean_gerstner *next_g;
-    ocean *next_nf;
-    ocean_params next_params;
-    double next_eff;
+    srv_seabuild *build;        /* the next sea change's ocean, built ahead */
     uint64_t sea_gen;           /* hub.sea_gen last seen */
     eval_entry ev[EVAL_MAX];
     uint64_t use;
@@ -116,50 +113,11 @@ struct srv_sim {
 
 /* ---- ocean construction ----------------------------------------------------- */
 
-static ocean_result make_ocean(const srv_settings *s, const ocean_params *p, ocean **oc,
-                               ocean_gerstner **g, ocean **nf, int say_plan, char *msg, size_t msglen)
-{
-    *oc = NULL;
-    *g = NULL;
-    *nf = NULL;
-    ocean_result r = ocean_create(p, oc, msg, msglen);
-    if (r != OCEAN_OK) return r;
-    /* The scene plan's warnings go to the log (its refusals stopped
-     * ocean_create); the near field and spacing are what this daemon serves. */
-    ocean_plan plan;
-    ocean_plan_init(&plan);
-    ocean_plan_params(p, &plan);
-    double patch, klo, khi;
-    ocean_cascade_band(*oc, p->cascades - 1, &patch, &klo, &khi);
-    ocean_plan_serving sv = {(s->effects & OCEAN_FX_NEAR_FIELD) && s->srv.near_field_waves > 0, khi,
-                             2 * M_PI / s->srv.near_field_min_wavelength};
-    ocean_plan_ocean(*oc, &sv, &plan);
-    if (say_plan) ocean_plan_print(&plan, stderr, "oceand: scene plan");
-    ocean_gerstner_params gp;
-    if (srv_settings_near_field(s, p, &gp)) {
-        gp.k_lo = khi; /* = p->k_max: the finest cascade's edge */
-        r = ocean_gerstner_create(&gp, g, msg, msglen);
-        if (r == OCEAN_OK)
-            r = ocean_gerstner_cascade_create(*g, p, nf, msg, msglen);
-        if (r != OCEAN_OK) {
-            ocean_gerstner_destroy(*g);
-            *g = NULL;
-            ocean_destroy(*oc);
-            *oc = NULL;
-            return r;
-        }
-    }
-    return OCEAN_OK;
-}
-
 ocean_result srv_sim_sea_check(const srv_settings *s, const ocean_params *p, char *msg, size_t msglen)
 {
-    ocean *oc, *nf;
-    ocean_gerstner *g;
-    ocean_result r = make_ocean(s, p, &oc, &g, &nf, 0, msg, msglen);
-    ocean_destroy(nf);
-    ocean_gerstner_destroy(g);
-    ocean_destroy(oc);
+    srv_sea_ocean o;
+    ocean_result r = srv_sea_ocean_build(s, p, 0, &o, msg, msglen);
+    srv_sea_ocean_free(&o);
     return r;
 }
 
@@ -190,7 +148,12 @@ ocean_result srv_sim_create(srv_hub *h, srv_sim **out, char *msg, size_t msglen)
     s->set = h->settings;
     s->set_gen = h->settings_gen;
     pthread_mutex_unlock(&h->lock);
-    ocean_result r = make_ocean(&s->set, &s->set.params, &s->oc, &s->g, &s->nf, 1, msg, msglen);
+    srv_sea_ocean o;
+    ocean_result r = srv_sea_ocean_build(&s->set, &s->set.params, 1, &o, msg, msglen);
+    s->oc = o.oc;
+    s->g = o.g;
+    s->nf = o.nf;
+    if (r == OCEAN_OK) r = srv_seabuild_create(&s->build);
     if (r == OCEAN_OK) r = srv_tiles_create(&s->tiles);
     if (r == OCEAN_OK) r = srv_cascade_create(&s->casc);
     if (r == OCEAN_OK) r = srv_work_create(&s->work);
@@ -220,9 +183,7 @@ void srv_sim_destroy(srv_sim *s)
     ocean_gerstner_destroy(s->g);
     ocean_destroy(s->nf);
     ocean_destroy(s->oc);
-    ocean_gerstner_destroy(s->next_g);
-    ocean_destroy(s->next_nf);
-    ocean_destroy(s->next_oc);
+    srv_seabuild_destroy(s->build);
     free(s);
 }
 
@@ -954,13 +915,12 @@ static const ocean_frame *query_eval(void *ctx, double t, int cached_only)
 
 /* ---- sea changes ------------------------------------------------------------ */
 
-/* The hub holds the timeline (srv_client.h); the simulation thread follows
+/* The hub holds the timeline (srv_hub.h); the simulation thread follows
  * it: the ocean of a tick at sim time t is that of the last change with
  * effective_time <= t.  The earliest pending change's ocean is built ahead
- * (ocean_create can take a while), and is used only if the entry taken
- * when due is still the same one. */
+ * by srv_seabuild's thread, and taken when the change falls due. */
 
-static void prebuild_sea(srv_sim *s)
+static void want_next_sea(srv_sim *s)
 {
     srv_hub *h = s->hub;
     pthread_mutex_lock(&h->lock);
@@ -968,24 +928,7 @@ static void prebuild_sea(srv_sim *s)
     srv_sea_change c;
     if (have) c = h->sea_pending[0];
     pthread_mutex_unlock(&h->lock);
-    if (!have || (s->next_oc && s->next_eff == c.effective_time &&
-                  memcmp(&s->next_params, &c.params, sizeof c.params) == 0))
-        return;
-    char msg[256];
-    ocean *oc, *nf;
-    ocean_gerstner *g;
-    if (make_ocean(&s->set, &c.params, &oc, &g, &nf, 1, msg, sizeof msg) != OCEAN_OK) {
-        fprintf(stderr, "oceand: cannot build the sea due at t = %.3f s ahead: %s\n", c.effective_time, msg);
-        return;
-    }
-    ocean_gerstner_destroy(s->next_g);
-    ocean_destroy(s->next_nf);
-    ocean_destroy(s->next_oc);
-    s->next_oc = oc;
-    s->next_g = g;
-    s->next_nf = nf;
-    s->next_params = c.params;
-    s->next_eff = c.effective_time;
+    if (have) srv_seabuild_want(s->build, &s->set, s->set_gen, &c.params, c.effective_time);
 }
 
 /* Applies the changes due at tick time t before the tick's frames are made. */
@@ -1001,41 +944,30 @@ static void follow_sea(srv_sim *s, double t)
     }
     pthread_mutex_unlock(&h->lock);
     if (due) {
-        ocean *oc = NULL, *nf = NULL;
-        ocean_gerstner *g = NULL;
-        if (s->next_oc && s->next_eff == c.effective_time &&
-            memcmp(&s->next_params, &c.params, sizeof c.params) == 0) {
-            oc = s->next_oc;
-            g = s->next_g;
-            nf = s->next_nf;
-            s->next_oc = NULL;
-            s->next_g = NULL;
-            s->next_nf = NULL;
+        srv_sea_ocean o;
+        char msg[256];
+        int ahead = 0;
+        if (srv_seabuild_take(s->build, &s->set, s->set_gen, &c.params, c.effective_time, &o, &ahead, msg,
+                              sizeof msg) != OCEAN_OK) {
+            /* checked when scheduled (srv_sim_sea_check, or the
+             * validation of SEA_STATE set): only memory fails here */
+            fprintf(stderr, "oceand: the sea due at t = %.3f s cannot be built (%s); "
+                    "clients are told a sea this daemon does not serve\n", c.effective_time, msg);
         } else {
-            char msg[256];
-            if (make_ocean(&s->set, &c.params, &oc, &g, &nf, 1, msg, sizeof msg) != OCEAN_OK) {
-                /* checked when scheduled (srv_sim_sea_check, or the
-                 * validation of SEA_STATE set): only memory fails here */
-                fprintf(stderr, "oceand: the sea due at t = %.3f s cannot be built (%s); "
-                        "clients are told a sea this daemon does not serve\n", c.effective_time, msg);
-                oc = NULL;
-            }
-        }
-        if (oc) {
             eval_clear(s);
             srv_tiles_clear(s->tiles);
             srv_cascade_reset(s->casc);
-            ocean_gerstner_destroy(s->g);
-            ocean_destroy(s->nf);
-            ocean_destroy(s->oc);
-            s->oc = oc;
-            s->g = g;
-            s->nf = nf;
+            srv_sea_ocean old = {s->oc, s->g, s->nf};
+            srv_sea_ocean_free(&old);
+            s->oc = o.oc;
+            s->g = o.g;
+            s->nf = o.nf;
             adopt_sea(s, &c.params);
             atomic_fetch_add(&h->stats.sea_changes, 1);
+            atomic_fetch_add(ahead ? &h->stats.sea_built_ahead : &h->stats.sea_built_due, 1);
         }
     }
-    prebuild_sea(s);
+    want_next_sea(s);
 }
 
 /* ---- the loop ------------------------------------------------------------------ */

@@ -27,6 +27,9 @@ typedef struct srv_stats {
     atomic_uint_fast64_t queries, query_points, errors_sent;
     atomic_uint_fast64_t connections_total, disconnects_slow, refused_full;
     atomic_uint_fast64_t sea_changes, reloads;
+    /* sea changes whose ocean was built ahead, off the tick path, and those
+     * built when they fell due (never asked for ahead) */
+    atomic_uint_fast64_t sea_built_ahead, sea_built_due;
     /* what was refused to keep one client from hurting the others */
     atomic_uint_fast64_t refused_rate, refused_silent, refused_mesh, refused_upgrade;
     atomic_uint_fast64_t coarsened_mesh;     /* meshes built at a coarser budget to fit */

@@ -2577,12 +2577,15 @@ static void sea_timeline_late_joiner(void **state)
 }
 
 /* SEA_STATE get: the current sea (with the time it took effect) and every
- * pending change, without reconnecting. */
+ * pending change, without reconnecting.  The oceans of changes set ahead
+ * are built ahead, off the tick path (srv_seabuild.h). */
 static void sea_timeline_get(void **state)
 {
     (void)state;
     test_ws a;
     timeline ta;
+    srv_hub *h = srv_daemon_hub(daemon_);
+    uint64_t ahead0 = stat_of(&h->stats.sea_built_ahead), changes0 = stat_of(&h->stats.sea_changes);
     sea_connect(&a, &ta, 300);
     proto_sea old = *tl_at(&ta, hub_now());
     proto_sea n1 = old, n2 = old;
@@ -2619,6 +2622,9 @@ static void sea_timeline_get(void **state)
     assert_int_equal(tl_read(&a, &g, 400), 1);
     assert_true(same_sea(&g.sea[0], &n2));
     assert_true(g.eff[0] == t0 + 3.0);
+    /* n3 (now), n1 and n2 applied; n1 and n2 were pending for over a second */
+    assert_true(stat_of(&h->stats.sea_changes) >= changes0 + 3);
+    assert_true(stat_of(&h->stats.sea_built_ahead) >= ahead0 + 2);
     sea_send(&a, PROTO_SEA_SET, &old, 0);
     wait_hub_wind(old.wind_u10, 5);
     test_ws_close(&a);

@@ -3,8 +3,9 @@
  * connection or a thread: the token bucket every rate budget uses, a
  * client's inbox (its QUERYs and replay cameras) and outbox (its FIFO and
  * latest-wins frame slot, under a hard byte limit), the simulation
- * thread's table of what it keeps of each client, and its model of what
- * a time-interpolating client holds.
+ * thread's table of what it keeps of each client, its model of what a
+ * time-interpolating client holds, and the sea changes' oceans built
+ * ahead.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -21,6 +22,7 @@
 #include "srv_held.h"
 #include "srv_inbox.h"
 #include "srv_outbox.h"
+#include "srv_seabuild.h"
 
 /* A bucket never used starts full; each take costs its tokens; refused
  * takes cost nothing; tokens come back at the rate, never above the depth;
@@ -237,6 +239,54 @@ static void held_meet(void **state)
     srv_held_destroy(empty);
 }
 
+/* The change wanted is built by the module's thread and taken whole
+ * (take waits for a build under way, never builds it twice); a change
+ * wanted in its place replaces it; a change never wanted is built by the
+ * caller; what cannot be built is said with the builder's reason; a
+ * build left untaken is freed with the module. */
+static void seabuild_ahead(void **state)
+{
+    (void)state;
+    srv_settings s;
+    char err[256];
+    assert_int_equal(srv_settings_default(&s, err, sizeof err), OCEAN_OK);
+    s.params.n = 64;   /* small oceans: this is about who builds them */
+    ocean_params a = s.params, b = s.params, bad = s.params;
+    a.sea.wind_u10 = 7;
+    b.sea.wind_u10 = 9;
+    bad.n = 3;         /* not a power of two: ocean_create refuses it */
+    srv_seabuild *sb;
+    assert_int_equal(srv_seabuild_create(&sb), OCEAN_OK);
+    srv_sea_ocean o;
+    int ahead = -1;
+    srv_seabuild_want(sb, &s, 1, &a, 10.0);
+    srv_seabuild_want(sb, &s, 1, &b, 20.0);   /* b is needed first now */
+    assert_int_equal(srv_seabuild_take(sb, &s, 1, &b, 20.0, &o, &ahead, err, sizeof err), OCEAN_OK);
+    assert_int_equal(ahead, 1);
+    assert_non_null(o.oc);
+    srv_sea_ocean_free(&o);
+    assert_null(o.oc);
+    /* a is no longer wanted: taking it builds it here */
+    assert_int_equal(srv_seabuild_take(sb, &s, 1, &a, 10.0, &o, &ahead, err, sizeof err), OCEAN_OK);
+    assert_int_equal(ahead, 0);
+    assert_non_null(o.oc);
+    srv_sea_ocean_free(&o);
+    /* another settings generation is another change */
+    srv_seabuild_want(sb, &s, 1, &a, 30.0);
+    assert_int_equal(srv_seabuild_take(sb, &s, 2, &a, 30.0, &o, &ahead, err, sizeof err), OCEAN_OK);
+    assert_int_equal(ahead, 0);
+    srv_sea_ocean_free(&o);
+    srv_seabuild_want(sb, &s, 1, &bad, 40.0);
+    err[0] = 0;
+    assert_int_not_equal(srv_seabuild_take(sb, &s, 1, &bad, 40.0, &o, &ahead, err, sizeof err), OCEAN_OK);
+    assert_int_equal(ahead, 1);
+    assert_null(o.oc);
+    assert_true(strlen(err) > 5);
+    srv_seabuild_want(sb, &s, 1, &a, 50.0);   /* built, never taken */
+    srv_seabuild_destroy(sb);
+    srv_seabuild_destroy(NULL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -245,6 +295,7 @@ int main(void)
         cmocka_unit_test(outbox_order_and_limit),
         cmocka_unit_test(client_table),
         cmocka_unit_test(held_meet),
+        cmocka_unit_test(seabuild_ahead),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
