@@ -13,7 +13,11 @@
  * socket and dropped, never held, whatever the stream holds.  Each read
  * starts at the entry last read: when it is no longer there (the stream
  * was deleted, recreated or trimmed past it), the timeline is read again
- * from the stream's start.
+ * from the stream's start.  Redis builds a reply whole before its first
+ * byte goes out: a batch of large entries on a loaded host can take longer
+ * than a read waits for a byte, so after a read that failed the next asks
+ * a quarter as many entries (down to one), and twice as many after each
+ * read that did not.
  *
  * Anomalies (entries skipped, resets, far-future ids) are counted in the
  * hub's statistics and logged as one line of counts at most every
@@ -84,6 +88,8 @@ struct srv_redis {
     redisContext *rc;           /* [replication thread] */
     int lost_said;              /* [replication thread] this outage is logged */
     char last_id[ID_MAX];       /* [replication thread] last entry read */
+    int count;                  /* [replication thread] entries the next read asks for */
+    int asked;                  /* [replication thread] entries the last read asked for */
     fold timeline;              /* [replication thread] what the entries read so far make */
     ocean_params base;          /* [replication thread] the file's sea, what a change's sea completes;
                                    copied once a batch: the hub's lock is not taken per entry */
@@ -310,16 +316,18 @@ static srv_resp *range_read(srv_redis *r)
         .idle_s = 1.0,
     };
     int from_start = strcmp(r->last_id, "0-0") == 0;
-    int ok = from_start ? redisAppendCommand(r->rc, "XRANGE %s - + COUNT %d", r->key, SRV_REDIS_BATCH)
-                        : redisAppendCommand(r->rc, "XRANGE %s %s + COUNT %d", r->key, r->last_id,
-                                             SRV_REDIS_BATCH + 1);
+    r->asked = r->count;
+    int ok = from_start ? redisAppendCommand(r->rc, "XRANGE %s - + COUNT %d", r->key, r->asked)
+                        : redisAppendCommand(r->rc, "XRANGE %s %s + COUNT %d", r->key, r->last_id, r->asked + 1);
     for (int done = 0; ok == REDIS_OK && !done;) ok = redisBufferWrite(r->rc, &done);
     srv_resp *rep = NULL;
     char why[200];
     if (ok != REDIS_OK || srv_resp_read(r->rc->fd, &lim, &rep, why, sizeof why) != OCEAN_OK) {
+        if (ok == REDIS_OK) r->count = r->count > 4 ? r->count / 4 : 1;
         connection_drop(r, ok == REDIS_OK ? why : r->rc->errstr);
         return NULL;
     }
+    r->count = r->count < SRV_REDIS_BATCH / 2 ? 2 * r->count : SRV_REDIS_BATCH;
     return rep;
 }
 
@@ -436,11 +444,15 @@ static void fold_install(srv_hub *h, fold *f)
 }
 
 /* Reads the whole stream into the hub's timeline; 0, or -1 when Redis
- * failed. */
-static int timeline_load(srv_redis *r)
+ * failed (a read that failed is tried again, on a new connection, while
+ * it asked for more than one entry). */
+static int timeline_load(srv_redis *r, char *msg, size_t msglen)
 {
     int n, reset;
-    while ((n = batch_read(r, fold_entry, &r->timeline, &reset)) == SRV_REDIS_BATCH || reset) {}
+    for (;;) {
+        while ((n = batch_read(r, fold_entry, &r->timeline, &reset)) == r->asked || reset) {}
+        if (n >= 0 || r->asked <= 1 || !(r->rc = connect_to(r, msg, msglen))) break;
+    }
     if (n >= 0) fold_install(r->hub, &r->timeline);
     anomalies_report(r, 1);
     return n >= 0 ? 0 : -1;
@@ -500,7 +512,7 @@ static void catch_up(srv_redis *r)
     for (int b = 0; b < CATCH_UP_BATCHES; b++) {
         int reset, n = batch_read(r, running_entry, NULL, &reset);
         batch_sync(r);
-        if (n < 0 || (n < SRV_REDIS_BATCH && !reset)) return;
+        if (n < 0 || (n < r->asked && !reset)) return;
     }
 }
 
@@ -659,8 +671,9 @@ ocean_result srv_redis_start(srv_hub *h, const srv_settings *s, srv_redis **out,
     /* entries reach the replicas well inside the lead */
     r->poll_s = fmin(0.05, r->lead / 4);
     snprintf(r->last_id, sizeof r->last_id, "0-0");
+    r->count = SRV_REDIS_BATCH;
     r->rc = connect_to(r, msg, msglen);
-    if (r->rc && timeline_load(r) != 0)
+    if (r->rc && timeline_load(r, msg, msglen) != 0)
         snprintf(msg, msglen, "server.redis: reading the stream %s failed (the line before says why)", r->key);
     if (!r->rc) {
         srv_redis_stop(r);

@@ -5,6 +5,8 @@
  *
  * Replies are written into one end of a socket pair by a writer thread (a
  * reply larger than the socket buffer must be read while it is written).
+ * And how srv_redis reads through it when Redis is slow: a fake Redis on
+ * loopback that never answers a full batch.
  */
 #include <pthread.h>
 #include <setjmp.h>
@@ -14,11 +16,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <cmocka.h>
 
+#include "srv_redis.h"
 #include "srv_resp.h"
 
 static const srv_resp_limits LIM = {
@@ -154,12 +159,80 @@ static void refuses_what_is_no_resp(void **state)
     }
 }
 
+/* A fake Redis: every XRANGE's COUNT is recorded; one asking for more
+ * than `most` entries gets no reply (Redis still building it), the others
+ * an empty stream. */
+typedef struct fake_redis {
+    int listen_fd, port, most;
+    int counts[16], n;
+    volatile int stop;
+} fake_redis;
+
+static void *fake_serve(void *arg)
+{
+    fake_redis *f = arg;
+    while (!f->stop) {
+        int c = accept(f->listen_fd, NULL, NULL);
+        if (c < 0) break;
+        char buf[4096];
+        ssize_t n;
+        while ((n = read(c, buf, sizeof buf - 1)) > 0) {
+            buf[n] = 0;
+            const char *at = strstr(buf, "COUNT\r\n$");
+            int count = -1;
+            if (at && (at = strstr(at + 8, "\r\n"))) count = atoi(at + 2);
+            if (f->n < 16) f->counts[f->n++] = count;
+            if (count > f->most) continue;   /* no byte: the reader gives up after its wait */
+            if (write(c, "*0\r\n", 4) != 4) break;
+        }
+        close(c);
+    }
+    return NULL;
+}
+
+/* A replica's first read of a stream whose batches Redis is too slow to
+ * answer (no byte within the reader's wait) is asked again with a quarter
+ * of the entries, on a new connection, until one comes: the replica
+ * starts, where it refused to start on a loaded host. */
+static void slow_batches_ask_fewer(void **state)
+{
+    (void)state;
+    fake_redis f = {.most = 64};
+    f.listen_fd = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t al = sizeof a;
+    assert_int_equal(bind(f.listen_fd, (struct sockaddr *)&a, sizeof a), 0);
+    assert_int_equal(listen(f.listen_fd, 4), 0);
+    assert_int_equal(getsockname(f.listen_fd, (struct sockaddr *)&a, &al), 0);
+    pthread_t t;
+    assert_int_equal(pthread_create(&t, NULL, fake_serve, &f), 0);
+    srv_settings s;
+    char msg[300] = "";
+    assert_int_equal(srv_settings_default(&s, msg, sizeof msg), OCEAN_OK);
+    snprintf(s.srv.redis, sizeof s.srv.redis, "127.0.0.1:%d", ntohs(a.sin_port));
+    srv_hub h;
+    assert_int_equal(srv_hub_init(&h, &s), OCEAN_OK);
+    srv_redis *r = NULL;
+    ocean_result res = srv_redis_start(&h, &s, &r, msg, sizeof msg);
+    if (res != OCEAN_OK) fail_msg("the replica did not start: %s", msg);
+    srv_redis_stop(r);
+    f.stop = 1;
+    shutdown(f.listen_fd, SHUT_RDWR);
+    close(f.listen_fd);
+    pthread_join(t, NULL);
+    srv_hub_fini(&h);
+    assert_true(f.n >= 2);
+    assert_int_equal(f.counts[0], SRV_REDIS_BATCH);
+    assert_int_equal(f.counts[1], SRV_REDIS_BATCH / 4);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(keeps_small_drops_large),
         cmocka_unit_test(bounds_total_and_arrays),
         cmocka_unit_test(refuses_what_is_no_resp),
+        cmocka_unit_test(slow_batches_ask_fewer),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

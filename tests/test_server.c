@@ -2622,7 +2622,8 @@ static void sea_timeline_get(void **state)
     assert_int_equal(tl_read(&a, &g, 400), 1);
     assert_true(same_sea(&g.sea[0], &n2));
     assert_true(g.eff[0] == t0 + 3.0);
-    /* n3 (now), n1 and n2 applied; n1 and n2 were pending for over a second */
+    /* n3 (now), n1 and n2 applied; n1 and n2 were pending for over a
+     * second: their oceans were built ahead */
     assert_true(stat_of(&h->stats.sea_changes) >= changes0 + 3);
     assert_true(stat_of(&h->stats.sea_built_ahead) >= ahead0 + 2);
     sea_send(&a, PROTO_SEA_SET, &old, 0);
