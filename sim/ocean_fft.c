@@ -247,6 +247,14 @@ ocean_result ocean_fft_plan(ocean *o, char *msg, size_t msglen)
     return r;
 }
 
+void ocean_fft_planner_lock(void)
+{
+    ocean_fft_init();
+    pthread_mutex_lock(&planner_lock);
+}
+
+void ocean_fft_planner_unlock(void) { pthread_mutex_unlock(&planner_lock); }
+
 void ocean_fft_free(ocean *o)
 {
     pthread_mutex_lock(&planner_lock);

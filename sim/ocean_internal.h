@@ -342,6 +342,10 @@ void ocean_fft_init(void);
 ocean_result ocean_fft_plan(ocean *o, char *msg, size_t msglen);
 /* Destroys o's plans; accepts an ocean whose planning failed midway. */
 void ocean_fft_free(ocean *o);
+/* The process-wide planner lock, for the library's other FFTW plans
+ * (wake.c): plans are made and destroyed under it, executed without. */
+void ocean_fft_planner_lock(void);
+void ocean_fft_planner_unlock(void);
 /* The 2-D c2r of gn channels of cascade cs's n-point spectra at o->spec
  * into out; returns 1 when it ran the pruned column pass. */
 int ocean_fft_run(ocean *o, const ocean_cascade *cs, int n, int gn, float *out);

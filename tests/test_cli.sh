@@ -231,4 +231,21 @@ if (!(Math.abs(j.samples[1].t - 0.1) < 1e-12) || !isFinite(j.samples[2].height))
 ' "$tmp/sample.json" || fail "sample --json"
 # a point the library cannot answer (beyond 1e12 m) is refused, not printed as zeros
 expect_refused "point 2 (1e+17, 0) refused" query --n 16 --points "1,2;1e17,0"
+# wake --json: the fields the offline probe names, heights[iz * nx + ix] on
+# a grid reaching 20 transverse wavelengths (2 pi U^2 / g) behind and both
+# sides of the wedge; no wind sea, so no sea option is taken
+"$sim" wake --speed 8 --length 40 --json > "$tmp/wake.json"
+node -e '
+const w = JSON.parse(require("fs").readFileSync(process.argv[1]));
+for (const k of ["speed", "length", "depth", "x0", "z0", "dx", "nx", "nz", "heights"])
+    if (!(k in w)) throw "wake lacks " + k;
+const lam = 2 * Math.PI * 64 / 9.81;
+if (w.heights.length !== w.nx * w.nz || !w.heights.every(Number.isFinite)) throw "heights";
+if (!(w.x0 + (w.nx - 1) * w.dx >= 20 * lam && w.x0 < 0)) throw "reach behind " + (w.x0 + (w.nx - 1) * w.dx);
+if (!(-w.z0 >= 20 * lam * Math.tan(19.47 * Math.PI / 180))) throw "reach across " + w.z0;
+if (w.depth !== null || w.speed !== 8 || w.length !== 40) throw "echo " + JSON.stringify([w.depth, w.speed, w.length]);
+' "$tmp/wake.json" || fail "wake --json"
+expect_refused "speed" wake --speed 0 --length 40
+expect_refused "required" wake --length 40
+expect_refused "wind" wake --speed 8 --length 40 --wind 5
 echo "ocean-sim CLI: all checks passed"

@@ -388,7 +388,7 @@ static void print_help(const char *usage, const char *cmd, const parse_state *s,
         printf("options of %s:\n", cmd);
         print_opts(s->tabs[0], s->ns[0], defs);
     }
-    printf("sea state and simulation options:\n");
+    printf(s->ns[1] > 2 ? "sea state and simulation options:\n" : "and:\n");
     print_opts(s->tabs[1], s->ns[1], defs + s->ns[0]);
 }
 
@@ -424,6 +424,9 @@ int cli_parse(int argc, char **argv, const char *usage,
               const cli_opt *opts, int nopts, cli_common *c,
               const char **pos, int *npos)
 {
+    cli_common own;
+    int own_only = !c;   /* a command that takes no sea: its table alone */
+    if (own_only) c = &own;
     memset(c, 0, sizeof *c);
     ocean_params *p = &c->params;
     ocean_params_default(p);
@@ -433,9 +436,10 @@ int cli_parse(int argc, char **argv, const char *usage,
     cli_opt common[CLI_MAX_OPTS];
     int ncommon = common_opts(c, &s, common);
     s.tabs[0] = opts;
-    s.tabs[1] = common;
+    /* the last two common options are --show-options and --help */
+    s.tabs[1] = own_only ? common + ncommon - 2 : common;
     s.ns[0] = nopts;
-    s.ns[1] = ncommon;
+    s.ns[1] = own_only ? 2 : ncommon;
     if (nopts + ncommon > CLI_MAX_OPTS) {
         fprintf(stderr, "error: internal: %d options (max %d)\n", nopts + ncommon, CLI_MAX_OPTS);
         return 2;
@@ -472,7 +476,7 @@ int cli_parse(int argc, char **argv, const char *usage,
         return 1;
     }
     char err[512];
-    if (ocean_params_validate(p, err, sizeof err) != OCEAN_OK) {
+    if (!own_only && ocean_params_validate(p, err, sizeof err) != OCEAN_OK) {
         fprintf(stderr, "error: %s\n", err);
         return 2;
     }

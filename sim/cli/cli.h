@@ -52,7 +52,7 @@ typedef struct cli_common {
  * (defaults: ocean_params_default, then --config FILE wherever it stands,
  * then the other options), the subcommand's to its table.  Returns 0 on
  * success, 1 if --help or --show-options was printed, 2 on error (message already printed to stderr, naming the
- * option).  Positional arguments are refused unless npos != NULL, in which
+ * option).  c NULL: a command that takes no sea; its own options only.  Positional arguments are refused unless npos != NULL, in which
  * case they are collected into pos[] (at most *npos; *npos gets the count). */
 int cli_parse(int argc, char **argv, const char *usage,
               const cli_opt *opts, int nopts, cli_common *c,
@@ -78,6 +78,7 @@ int cmd_sample(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
 int cmd_query(int argc, char **argv);
 int cmd_filter(int argc, char **argv);
+int cmd_wake(int argc, char **argv);
 int cmd_mesh(int argc, char **argv);
 int cmd_wisdom(int argc, char **argv);
 

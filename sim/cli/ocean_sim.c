@@ -22,6 +22,7 @@ static const struct {
     {"filter", cmd_filter, "cutoff a camera speed gets under a policy, and its cost"},
     {"mesh", cmd_mesh, "build a LOD mesh for a camera, write OBJ"},
     {"wisdom", cmd_wisdom, "time FFTW plans once, write wisdom replicas share"},
+    {"wake", cmd_wake, "the steady wake of one moving body (JSON heights)"},
 };
 
 static void usage(FILE *to)
