@@ -449,8 +449,18 @@ static void fold_install(srv_hub *h, fold *f)
 static int timeline_load(srv_redis *r, char *msg, size_t msglen)
 {
     int n, reset;
+    double t0 = srv_now(), said = t0;
+    long long read = 0;
     for (;;) {
-        while ((n = batch_read(r, fold_entry, &r->timeline, &reset)) == r->asked || reset) {}
+        while ((n = batch_read(r, fold_entry, &r->timeline, &reset)) == r->asked || reset) {
+            read += n;
+            /* a long stream on a slow Redis: the operator sees the start progress */
+            if (srv_now() - said >= REPORT_EVERY_S) {
+                said = srv_now();
+                fprintf(stderr, "oceand: redis: reading stream %s before listening: %lld entries in %.0f s\n", r->key,
+                        read, said - t0);
+            }
+        }
         if (n >= 0 || r->asked <= 1 || !(r->rc = connect_to(r, msg, msglen))) break;
     }
     if (n >= 0) fold_install(r->hub, &r->timeline);

@@ -169,6 +169,25 @@ static void redis_start(int port, const char *logname)
 /* Replica k (1 or 2) on `port`, sharing the stream of the Redis that
  * redis_start started, logging to tmp/logname; returns once it listens
  * (it reads the stream's whole timeline first: within `deadline` s). */
+/* A replica that did not come up says why on stderr: how it ended, or
+ * where each of its threads is and the CPU seconds it used (a slow start
+ * keeps using them, a hang does not). */
+static void replica_explain(pid_t pid)
+{
+    int status;
+    if (waitpid(pid, &status, WNOHANG) == pid) {
+        fprintf(stderr, "replica pid %d ended: %s %d\n", (int)pid, WIFSIGNALED(status) ? "signal" : "exit",
+                WIFSIGNALED(status) ? WTERMSIG(status) : WEXITSTATUS(status));
+        return;
+    }
+    char cmd[300];
+    snprintf(cmd, sizeof cmd,
+             "cut -d' ' -f14,15 /proc/%d/stat >&2; timeout 60 gdb -batch -p %d -ex 'thread apply all bt 8' "
+             "2>/dev/null | grep -E '^(Thread|#)' >&2",
+             (int)pid, (int)pid);
+    if (system(cmd) != 0) fprintf(stderr, "replica pid %d: no stacks (gdb missing?)\n", (int)pid);
+}
+
 static void replica_start_within(int k, int port, const char *logname, double deadline)
 {
     char path[600], log[600], text[1024], exe[600];
@@ -186,6 +205,7 @@ static void replica_start_within(int k, int port, const char *logname, double de
     char *oargv[] = {exe, "--config", path, NULL};
     pids[k] = spawn(log, oargv);
     if (!wait_port(port, deadline)) {
+        replica_explain(pids[k]);
         char tail[2048] = "";
         FILE *f = fopen(log, "r");
         size_t n = f ? fread(tail, 1, sizeof tail - 1, f) : 0;
