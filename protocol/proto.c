@@ -473,6 +473,12 @@ static ocean_result v_topology(ctx *c, const proto_mesh_topology *t)
                 !(z[2] >= 0.0f && z[2] <= 1e8f) || z[3] != 0.0f)
                 FAIL(c, OCEAN_EINVAL, "mesh_topology zone %u = (%g, %g, %g, %g) out of range", L, (double)z[0],
                      (double)z[1], (double)z[2], (double)z[3]);
+            /* the morph rule slides odd vertices half a coarse cell: it
+             * holds for lattices that double, and turns triangles over
+             * where one is four times the one inside it */
+            if (L > 0 && z[0] != 2.0f * z[-4])
+                FAIL(c, OCEAN_EINVAL, "mesh_topology zone %u lattice %g is not twice zone %u's %g", L, (double)z[0],
+                     L - 1, (double)z[-4]);
         }
     }
     return OCEAN_OK;

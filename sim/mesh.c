@@ -177,6 +177,17 @@ ocean_result mesh_config_validate(const mesh_config *c, char *msg, size_t msglen
         FAIL("mesh min_spacing: %g outside [0.005, 1000] m", c->min_spacing_m);
     if (!isfinite(c->blend_frac) || c->blend_frac < 0 || c->blend_frac > 0.45)
         FAIL("mesh blend_frac: %g outside [0, 0.45]", c->blend_frac);
+    /* concentric zones double: level L's morph starts (1 - b) R_L out, the
+     * level inside it ends (1 + b) R_L / 2 plus the snapping slack, and past
+     * 0.24 the two meet at the coarsest budget (the layout-1 morph then moves
+     * the centres of fanned cells, mesh_concentric.c SNAP_LEVEL); below 0.15
+     * the morph weight changes by most of its range across one cell and
+     * neighbours slide far enough apart to turn triangles over (0.1 did at
+     * 25 m: tests/test_mesh.c test_layout1_morph_keeps_orientation) */
+    if (c->kind == MESH_CONCENTRIC &&
+        (c->blend_frac < MESH_CONCENTRIC_BLEND_MIN || c->blend_frac > MESH_CONCENTRIC_BLEND_MAX))
+        FAIL("mesh blend_frac: %g outside [%g, %g] for a concentric mesh", c->blend_frac, MESH_CONCENTRIC_BLEND_MIN,
+             MESH_CONCENTRIC_BLEND_MAX);
     if (c->max_levels < 1 || c->max_levels > MESH_MAX_LEVELS)
         FAIL("mesh max_levels: %d outside 1..%d", c->max_levels, MESH_MAX_LEVELS);
     if (c->far_skirt != 0 && c->far_skirt != 1)

@@ -6,14 +6,17 @@
  * uint32 indices, and per-vertex LOD level and morph weight:
  *
  *  - MESH_CONCENTRIC (seed 001, the default): nested levels centred under
- *    the camera.  Level 0 (spacing dx) and level 1 (2 dx) are the finely
- *    subdivided core (tessellation factors 8 and 4); then rings of doubling
- *    radius R_i = 2 R_(i-1) whose spacing doubles with them (factor 1 at
- *    the first ring) out to the range (90 km and beyond), so every
- *    direction gets the same vertex count.  The whole mesh moves with the
- *    camera in steps of the level-2 spacing (8 dx), so level 0-2 vertices
- *    stay on a world-fixed lattice and the topology never changes while the
- *    near spacing is unchanged: a client gets indices once, then positions.
+ *    the camera.  Level 0 (spacing dx) is the core; then rings of doubling
+ *    radius R_i = 2 R_(i-1) whose spacing doubles with them (dx, 2 dx,
+ *    4 dx, 8 dx, ...: seed 000's tessellation factors 8 / 4 / 1 at 0, R0
+ *    and 4 R0) out to the range (90 km and beyond), so every direction gets
+ *    the same vertex count.  Every lattice is twice the one inside it: the
+ *    layout-1 morph (PROTOCOL.md "Mesh in layout 1") slides an odd vertex
+ *    onto a coarse vertex that stays put, which turns no triangle over.
+ *    The whole mesh moves with the camera in steps of the level-2 spacing
+ *    (4 dx), so level 0-2 vertices stay on a world-fixed lattice and the
+ *    topology never changes while the near spacing is unchanged: a client
+ *    gets indices once, then positions.
  *    Cells bordering a finer level are fanned from their centre through
  *    every finer vertex on their edges, so no vertex lies inside an edge.
  *    Beyond the range a flat far skirt (mesh_config.far_skirt) reaches the
@@ -36,11 +39,10 @@
  * same rule: each level's morph zone R_i +- blend_frac R_i (50 m +- 10 m
  * in the defaults' proportions) starts where the next level's spacing
  * meets the error budget, R_i (1 - blend_frac) = rho_err dx_(i+1); so
- * R0 = 2 rho_err dx / (1 - blend_frac), R1 = 4 R0 (tessellation 8 / 4 / 1
- * as in seed 000, whose 50 m / 200 m this reproduces for a camera ~20 m
- * up), then R_i = 2 R_(i-1).  A camera at 3 000 m gets a coarser core than
- * one at 2 m, a narrow field of view a finer one, and every camera the
- * same error budget in pixels.
+ * R0 = 2 rho_err dx / (1 - blend_frac), then R_i = 2 R_(i-1) (seed 000's
+ * 50 m / 200 m are R0 and R2 for a camera ~20 m up).  A camera at 3 000 m
+ * gets a coarser core than one at 2 m, a narrow field of view a finer one,
+ * and every camera the same error budget in pixels.
  *
  * Threads: a mesh object is used by one thread at a time; distinct meshes
  * are independent.
@@ -56,6 +58,8 @@
 #include "spectrum.h"
 
 #define MESH_MAX_LEVELS 32
+#define MESH_CONCENTRIC_BLEND_MIN 0.15 /* blend_frac a concentric mesh takes (mesh.c) */
+#define MESH_CONCENTRIC_BLEND_MAX 0.24
 
 typedef enum mesh_kind {
     MESH_CONCENTRIC = 0,
@@ -100,7 +104,8 @@ typedef struct mesh_config {
     double lambda_dominant_m;/* dominant wavelength, m; 0 = unknown (no cap) */
     double k_lambda;         /* near spacing <= k * lambda_dominant, 0.1 .. 0.5 */
     double min_spacing_m;    /* finest near spacing (the sea's finest detail) */
-    double blend_frac;       /* morph zone half-width / zone radius, 0..0.45 (0.2) */
+    double blend_frac;       /* morph zone half-width / zone radius, 0..0.45 (0.2);
+                                concentric: MESH_CONCENTRIC_BLEND_MIN..MAX */
     int max_levels;          /* most levels, 1..MESH_MAX_LEVELS (MESH_MAX_LEVELS): a
                                 camera near the water with a long range that would
                                 need more gets a coarser near spacing (one
@@ -200,7 +205,7 @@ typedef struct mesh_info {
     double zone_radius_m[MESH_MAX_LEVELS];  /* outer radius of each level's zone */
     double blend_m[MESH_MAX_LEVELS];        /* morph zone half-width at that radius */
     /* seed 000's density rho(d) = rho_max exp(-alpha d) + rho_min (vertices
-     * per metre) fitted to the tessellation factors 8/4/1 at 0, R0, R1 */
+     * per metre) fitted to the tessellation factors 8/4/1 at 0, R0, R2 */
     double rho_max, alpha, rho_min;
     double build_ms;                  /* wall time of the last mesh_build */
     int rebuilt;                      /* 1 if the last build made new topology */

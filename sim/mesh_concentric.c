@@ -4,9 +4,9 @@
  * The plan (near spacing, zone radii, levels) depends only on the camera's
  * height octave, field of view and viewport, so the topology is a function
  * of the plan alone and the mesh translates rigidly with the camera in
- * steps of the level-2 cell (the "snapping"): levels 0-2 land on a
- * world-fixed lattice, coarser rings slide by under half a cell, and a
- * client re-uses its index buffer until the plan changes.
+ * steps of the level-2 cell, 4 near spacings (the "snapping"): levels
+ * 0-2 land on a world-fixed lattice, coarser rings slide by under half a
+ * cell, and a client re-uses its index buffer until the plan changes.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -28,6 +28,14 @@ typedef struct plan {
     int has_sky;                       /* 1: a far skirt from the range to sky */
     double sky;                        /* radius the skirt reaches, m */
 } plan;
+
+/* The level whose cells the origin moves by (4 s0).  A cell of level L
+ * is split while within R_(L-1) + b_(L-1) + slack of the camera, and its
+ * own morph starts at R_L - b_L, 0.2 R_L further out (blend 0.2): the
+ * slack, half a snapping cell's diagonal (2.8 s0), stays below that gap
+ * (0.2 R_1 = rho s0 >= 4 s0), so the fanned cells at a level's inner edge
+ * never morph and their centres never move. */
+#define SNAP_LEVEL 2
 
 /* Earth's mean radius, m (IUGG). */
 #define EARTH_R 6371008.8
@@ -64,8 +72,13 @@ static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
         double r0 = 2 * p->rho * p->s0 / (1 - cfg->blend_frac);
         int L = 0;
         for (;;) {
-            p->units[L] = L == 0 ? 1 : L == 1 ? 2 : L == 2 ? 8 : p->units[L - 1] * 2;
-            p->radius[L] = L == 0 ? r0 : L == 1 ? 4 * r0 : 2 * p->radius[L - 1];
+            /* every lattice twice the one inside it: the layout-1 morph
+             * slides a vertex half a coarse cell onto a coarse vertex that
+             * stays put, which no neighbour can overtake (with a four-fold
+             * step, vertices a quarter and a half cell along moved by
+             * different amounts and triangles turned over) */
+            p->units[L] = L == 0 ? 1 : p->units[L - 1] * 2;
+            p->radius[L] = L == 0 ? r0 : 2 * p->radius[L - 1];
             p->blend[L] = cfg->blend_frac * p->radius[L];
             /* the next level would start beyond the range: this is the last */
             if (p->radius[L] + p->blend[L] >= p->range || L == MESH_MAX_LEVELS - 1)
@@ -77,7 +90,7 @@ static void make_plan(const mesh_config *cfg, const mesh_camera *cam, plan *p)
             break;
         p->s0 *= 2;
     }
-    int snapL = p->levels > 2 ? 2 : p->levels - 1;
+    int snapL = p->levels > SNAP_LEVEL ? SNAP_LEVEL : p->levels - 1;
     p->slack = 0.5 * M_SQRT2 * p->units[snapL] * p->s0;
     /* The far skirt: the sea's mean level from the mesh's edge out to the
      * horizon of a camera at the top of its height octave (so it changes
@@ -209,20 +222,21 @@ static void update_morph(mesh *m, const plan *p, const mesh_camera *cam)
 }
 
 /* Vertices the plan's build will make, from zone areas: level L covers the
- * annulus between the previous zone's outer edge (R + b) and its own, clipped
- * to the range, at one vertex per (units[L] s0)^2.  Cells are square and
- * whole, so the built count runs above this by the cells the circles cut
- * (up to a third of a small mesh; measured 0.75..1.35 x the area count
- * over heights 2..300 m, fov 20..175 degrees, ranges 200..2000 m in
- * tests/test_mesh.c); the factor 1.6 covers it
- * and the seams' extra vertices, so the estimate errs high. */
+ * annulus between the previous zone's outer edge and its own, clipped to the
+ * range, at one vertex per (units[L] s0)^2; a zone reaches R + b plus the
+ * snapping slack (add_cell splits every cell that comes that near).  Cells
+ * are square and whole, so the built count runs above this by the cells
+ * the circles cut (up to a third of a small mesh; measured 0.81..1.49 x
+ * the area count over heights 2..300 m, fov 20..175 degrees, ranges
+ * 200..2000 m in tests/test_mesh.c); the factor 1.6 covers it and the
+ * seams' extra vertices, so the estimate errs high. */
 double mesh_estimate_concentric(const mesh_config *cfg, const mesh_camera *cam)
 {
     plan p;
     make_plan(cfg, cam, &p);
     double n = 0, inner = 0;
     for (int L = 0; L < p.levels; L++) {
-        double outer = L == p.levels - 1 ? p.range : fmin(p.range, p.radius[L] + p.blend[L]);
+        double outer = L == p.levels - 1 ? p.range : fmin(p.range, p.radius[L] + p.blend[L] + p.slack);
         if (outer > inner) {
             double s = p.units[L] * p.s0;
             n += M_PI * (outer * outer - inner * inner) / (s * s);
@@ -283,7 +297,7 @@ ocean_result mesh_build_concentric(mesh *m, const mesh_camera *cam)
     uint64_t key = plan_key(&m->cfg, &p);
     /* snap: the origin moves in whole level-2 cells (all finer lattices
      * nest in it); sub-cell camera moves change nothing but morph weights */
-    int snapL = p.levels > 2 ? 2 : p.levels - 1;
+    int snapL = p.levels > SNAP_LEVEL ? SNAP_LEVEL : p.levels - 1;
     double g = p.units[snapL] * p.s0;
     double ox = round(cam->pos[0] / g) * g, oz = round(cam->pos[2] / g) * g;
     int rebuilt = 0;

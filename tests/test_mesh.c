@@ -436,17 +436,15 @@ static void test_concentric_counts_and_symmetry(void **state)
     /* triangles ~ 2 per vertex */
     assert_true(v.index_count / 3 > 1.9 * v.vertex_count);
     assert_true(v.index_count / 3 < 2.1 * v.vertex_count);
-    /* levels: R0 = 2 rho dx / (1 - blend), R1 = 4 R0, then doubling to the range */
+    /* levels: R0 = 2 rho dx / (1 - blend), then doubling to the range */
     assert_float_equal(in.zone_radius_m[0], 2 * in.rho_err * in.near_spacing_m / 0.8, 1e-9);
-    assert_float_equal(in.zone_radius_m[1], 4 * in.zone_radius_m[0], 1e-9);
-    for (int L = 2; L < in.levels; L++)
+    for (int L = 1; L < in.levels; L++)
         assert_float_equal(in.zone_radius_m[L], 2 * in.zone_radius_m[L - 1], 1e-9);
     assert_true(in.zone_radius_m[in.levels - 1] + in.blend_m[in.levels - 1] >= 20000);
     assert_true(in.zone_radius_m[in.levels - 2] + in.blend_m[in.levels - 2] < 20000);
-    /* spacings: dx, 2 dx, 8 dx (tessellation 8/4/1), then doubling */
-    assert_float_equal(in.level_spacing_m[1], 2 * in.level_spacing_m[0], 0);
-    assert_float_equal(in.level_spacing_m[2], 8 * in.level_spacing_m[0], 0);
-    for (int L = 3; L < in.levels; L++)
+    /* spacings: dx, then doubling, each lattice twice the one inside it
+     * (the layout-1 morph rule's assumption) */
+    for (int L = 1; L < in.levels; L++)
         assert_float_equal(in.level_spacing_m[L], 2 * in.level_spacing_m[L - 1], 0);
     /* blend zone: R0 +- blend_frac R0 (50 m +- 10 m in proportion) */
     assert_float_equal(in.blend_m[0], 0.2 * in.zone_radius_m[0], 1e-9);
@@ -505,11 +503,13 @@ static void test_concentric_density_follows_rho(void **state)
     mesh_info in;
     mesh_get_info(m, &in);
     /* seed 000: rho(d) = rho_max e^(-alpha d) + rho_min hits the
-     * tessellation factors 8 / 4 / 1 at 0, R0 and R1 */
+     * tessellation factors 8 / 4 / 1 at 0, R0 and R2 = 4 R0 (where the
+     * level of spacing 8 dx starts) */
     double b = 1 / (8 * in.near_spacing_m);
     assert_float_equal(mesh_density_target(m, 0), 8 * b, 1e-9 * b);
     assert_float_equal(mesh_density_target(m, in.zone_radius_m[0]), 4 * b, 1e-9 * b);
-    assert_float_equal(in.rho_max * exp(-in.alpha * in.zone_radius_m[1]) + in.rho_min, b, 0.01 * b);
+    assert_float_equal(in.zone_radius_m[2], 4 * in.zone_radius_m[0], 1e-9 * in.zone_radius_m[0]);
+    assert_float_equal(in.rho_max * exp(-in.alpha * in.zone_radius_m[2]) + in.rho_min, b, 0.01 * b);
     /* monotone non-increasing */
     for (double d = 0; d < 4000; d += 7.3)
         assert_true(mesh_density_target(m, d + 7.3) <= mesh_density_target(m, d) * (1 + 1e-12));
@@ -1229,7 +1229,7 @@ static void test_concentric_boundary_fully_morphed(void **state)
                 if (budgets[b] < 4 && heights[hi] < 25 && sanitized())
                     continue;
                 mesh *m = make(MESH_CONCENTRIC, sanitized() ? 2000 : 5000, budgets[b]);
-                /* offsets spread over a level-2 cell (8 level-0 spacings) */
+                /* offsets spread over a snapping cell (8 level-0 spacings) */
                 mesh_camera cam = cam_at(1000.0 + 3.7 * k * k, heights[hi], -200.0 + 5.3 * k);
                 assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
                 mesh_view v;
@@ -1254,6 +1254,98 @@ static void test_concentric_boundary_fully_morphed(void **state)
                 mesh_destroy(m);
             }
     assert_true(checked > 1000);
+}
+
+/* The flat mesh morphed as PROTOCOL.md "Mesh in layout 1" says (written
+ * here from the spec's text: weight by smoothstep over R_L +- b_L, the
+ * flat position slid onto the coarser lattice, p - w (p - g floor(p/g +
+ * 1/2))) turns no triangle over, at any camera: heights from 1 m to 10 km,
+ * the camera anywhere in its snapping cell, the daemon's 16 px budget and
+ * a finer one.  With a lattice four times the one inside it (the plan
+ * before), vertices a quarter and a half coarse cell along slid different
+ * distances and one overtook the other. */
+static double morph_flat(const mesh_view *v, const mesh_info *in, const double cam[3], uint32_t i, int axis)
+{
+    int L = v->level[i];
+    double p = v->base[3 * i + axis];
+    if (L + 1 >= in->levels)
+        return p;
+    double d = hypot(v->origin[0] + v->base[3 * i] - cam[0], v->origin[2] + v->base[3 * i + 2] - cam[2]);
+    double R = in->zone_radius_m[L], b = in->blend_m[L], w;
+    if (b > 0) {
+        double u = fmin(fmax((d - (R - b)) / (2 * b), 0), 1);
+        w = u * u * (3 - 2 * u);
+    } else {
+        w = d >= R;
+    }
+    double g = in->level_spacing_m[L + 1];
+    return p - w * (p - g * floor(p / g + 0.5));
+}
+
+static void test_layout1_morph_keeps_orientation(void **state)
+{
+    (void)state;
+    const double heights[] = {1, 3, 10, 25, 80, 300, 1500, 10000};
+    /* budget px, blend_frac: the daemon's, a finer budget, the widest and
+     * the narrowest blend a concentric mesh takes */
+    const double cfgs[][2] = {{16, 0.2}, {4, 0.2}, {16, MESH_CONCENTRIC_BLEND_MAX}, {16, MESH_CONCENTRIC_BLEND_MIN}};
+    long checked = 0, turned = 0;
+    for (int b = 0; b < 4; b++)
+        for (int hi = 0; hi < 8; hi++)
+            for (int k = 0; k < 6; k += sanitized() ? 2 : 1) {
+                mesh_config c;
+                mesh_config_default(&c);
+                c.range_m = 10000;
+                c.error_px = cfgs[b][0];
+                c.blend_frac = cfgs[b][1];
+                mesh *m = NULL;
+                assert_int_equal(mesh_create(&c, &m), OCEAN_OK);
+                mesh_camera cam = cam_at(311.0 + 1.37 * k * k, heights[hi], -57.0 + 2.9 * k);
+                assert_int_equal(mesh_build(m, &cam), OCEAN_OK);
+                mesh_view v;
+                mesh_get_view(m, &v);
+                mesh_info in;
+                mesh_get_info(m, &in);
+                for (int L = 1; L < in.levels; L++)
+                    assert_true(in.level_spacing_m[L] <= 2 * in.level_spacing_m[L - 1]);
+                for (uint32_t t = 0; t < v.index_count; t += 3) {
+                    const uint32_t *tri = v.indices + t;
+                    double a[3][2], f[3][2];
+                    for (int q = 0; q < 3; q++) {
+                        f[q][0] = v.base[3 * tri[q]];
+                        f[q][1] = v.base[3 * tri[q] + 2];
+                        a[q][0] = morph_flat(&v, &in, cam.pos, tri[q], 0);
+                        a[q][1] = morph_flat(&v, &in, cam.pos, tri[q], 2);
+                    }
+                    double c0 = (f[1][0] - f[0][0]) * (f[2][1] - f[0][1]) - (f[1][1] - f[0][1]) * (f[2][0] - f[0][0]);
+                    double c1 = (a[1][0] - a[0][0]) * (a[2][1] - a[0][1]) - (a[1][1] - a[0][1]) * (a[2][0] - a[0][0]);
+                    checked++;
+                    /* collapsing to a line where a vertex lands on its coarse
+                     * neighbour is the morph's purpose; turning over is not */
+                    if (c0 * c1 < -1e-9 * c0 * c0 && turned++ < 3)
+                        print_error("budget %g px, blend %g, height %g m, camera %d: triangle %u turned over "
+                                    "(area %g -> %g)\n", cfgs[b][0], cfgs[b][1], heights[hi], k, t / 3, 0.5 * c0,
+                                    0.5 * c1);
+                }
+                mesh_destroy(m);
+            }
+    print_message("%ld triangles morphed, %ld turned over\n", checked, turned);
+    assert_true(checked > 100000);
+    assert_int_equal(turned, 0);
+    /* blends outside them turn triangles over (0.1 did at 25 m; 0.25 and
+     * up reach the fanned cells at a level's inner edge): refused for
+     * concentric meshes, not for chunked ones (their blend is their own) */
+    const double refused[] = {0, 0.1, MESH_CONCENTRIC_BLEND_MAX + 0.01, 0.45};
+    for (int i = 0; i < 4; i++) {
+        mesh_config c;
+        mesh_config_default(&c);
+        c.blend_frac = refused[i];
+        char why[200];
+        assert_int_equal(mesh_config_validate(&c, why, sizeof why), OCEAN_EINVAL);
+        assert_non_null(strstr(why, "blend_frac"));
+        c.kind = MESH_CHUNKED;
+        assert_int_equal(mesh_config_validate(&c, why, sizeof why), OCEAN_OK);
+    }
 }
 
 /* From 1500 m (the flight scene's camera) the horizon is 138 km away
@@ -1316,6 +1408,7 @@ int main(void)
         cmocka_unit_test(test_concentric_snapping),
         cmocka_unit_test(test_displace_and_morph),
         cmocka_unit_test(test_concentric_boundary_fully_morphed),
+        cmocka_unit_test(test_layout1_morph_keeps_orientation),
         cmocka_unit_test(test_concentric_far_skirt),
         cmocka_unit_test(test_far_from_origin_precision),
         cmocka_unit_test(test_topology_key),

@@ -1037,6 +1037,9 @@ static const bad_vector bad_vectors[] = {
     /* geometry_spacing_m (block offset 52) -1 */
     {"bad_cascade_geometry_spacing", "frame_cascade", P(56 + 52), 4, 0xBF800000u, OCEAN_EINVAL, -1},
     {"bad_topology_flags", "mesh_topology_flat", P(6), 2, 2, OCEAN_EFORMAT, -1},
+    /* zone 1's lattice (after 3 indices, morph, level, 1 padding byte and
+     * 3 flat points: offset 84) 4 where zone 0's is 1 */
+    {"bad_topology_zone_ratio", "mesh_topology_flat", P(84), 4, 0x40800000u, OCEAN_EINVAL, -1},
     {"bad_subscribe_layout", "subscribe", P(7), 1, 2, OCEAN_ETYPE, -1},
     {"bad_sea_get_with_sea", "sea_state_get", P(32), 8, 0x4024000000000000ull, OCEAN_EFORMAT, -1},
     {"bad_sea_op", "sea_state", P(0), 1, 3, OCEAN_ETYPE, -1},

@@ -736,6 +736,9 @@ function dTopology(r, limits) {
             const z = t.zones.subarray(4 * L, 4 * L + 4);
             if (!(z[0] > 0 && z[0] <= 1e7) || !(z[1] >= 0 && z[1] <= 1e8) || !(z[2] >= 0 && z[2] <= 1e8) || z[3] !== 0)
                 fail(R.EINVAL, `mesh_topology zone ${L} = (${z[0]}, ${z[1]}, ${z[2]}, ${z[3]}) out of range`);
+            /* the morph rule holds for lattices that double */
+            if (L > 0 && z[0] !== 2 * t.zones[4 * (L - 1)])
+                fail(R.EINVAL, `mesh_topology zone ${L} lattice ${z[0]} is not twice zone ${L - 1}'s ${t.zones[4 * (L - 1)]}`);
         }
     }
     return t;
