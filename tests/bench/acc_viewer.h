@@ -126,6 +126,27 @@ static void av_err_add(av_err *e, double dh, double dd, double ang)
     if (ang > e->amax) e->amax = ang;
 }
 
+/* The heights a mesh level's vertices take against the exact sea at the
+ * same points (sums): how much of the sea's height spread each ring keeps
+ * and how well it follows it. */
+typedef struct av_level {
+    double n, m, m2, e, e2, me, d2, dmin, dmax, g;
+} av_level;
+
+static void av_level_add(av_level *l, double mesh_h, double exact_h, double dist, double g)
+{
+    if (l->n == 0 || dist < l->dmin) l->dmin = dist;
+    if (dist > l->dmax) l->dmax = dist;
+    l->n++;
+    l->m += mesh_h;
+    l->m2 += mesh_h * mesh_h;
+    l->e += exact_h;
+    l->e2 += exact_h * exact_h;
+    l->me += mesh_h * exact_h;
+    l->d2 += (mesh_h - exact_h) * (mesh_h - exact_h);
+    l->g = g;
+}
+
 typedef struct av_row {
     double height, speed, pitch, q, e_error, e_total;
     int timed;                   /* the time-interpolating stream */
@@ -137,6 +158,7 @@ typedef struct av_row {
     av_err carried, shading, total;
     av_err v_carried, v_geom;   /* the vertex rule: spacing max(s, g_L) */
     double v_points;
+    av_level lev[PROTO_MAX_LOD_LEVELS]; /* the vertex rule per mesh level */
     int has_mesh;
     double g0, r0, glast;        /* the mesh's finest ring spacing and radius, coarsest spacing */
     double mss_left_meas, mss_left_claim, mss_res_exact, mss_tail;
@@ -550,9 +572,11 @@ static void av_point(const oc_frame *keep, const proto_camera *cam, const av_cas
     if (nlev <= 0)
         return;
     double dist = hypot(x - cp[0], z - cp[2]), g = topo->zones[4 * (nlev - 1)];
+    int level = nlev - 1;
     for (int lv = 0; lv < nlev; lv++)
         if (dist <= topo->zones[4 * lv + 1]) {
             g = topo->zones[4 * lv];
+            level = lv;
             break;
         }
     oc_sample sv;
@@ -567,6 +591,8 @@ static void av_point(const oc_frame *keep, const proto_camera *cam, const av_cas
             o[19 + k] = cv[k];
         }
         o[22] = g;
+        o[23] = level;
+        o[24] = dist;
         *st = 3;
     }
 }
@@ -589,6 +615,7 @@ static void av_add_points(av_row *R, const unsigned char *st, const double *res,
             R->v_points++;
             av_err_add(&R->v_carried, rv[0] - cv[0], hypot(rv[1] - cv[1], rv[2] - cv[2]), 0.0);
             av_err_add(&R->v_geom, full[0] - cv[0], hypot(full[1] - cv[1], full[2] - cv[2]), 0.0);
+            av_level_add(&R->lev[(int)o[23]], rv[0], full[0], o[24], o[22]);
         }
         R->points++;
         av_err_add(&R->carried, rec[0] - car[0], hypot(rec[1] - car[1], rec[2] - car[2]),
@@ -794,6 +821,30 @@ static int av_print_rows(const av_row *rows)
 }
 
 /* Every row's errors against the exact waves.  1 if a row is missing. */
+/* Per mesh level (the rows' points by ring, read by the vertex rule):
+ * the height spread its vertices keep of the exact sea's at the same
+ * points (std ratio), their correlation, and the RMS difference. */
+static void av_print_levels(const av_row *rows)
+{
+    printf("\nHeights a mesh level's vertices take (the vertex rule at the points in its ring) against every wave "
+           "at the same points: *spread kept* = std(vertex) / std(exact), *corr* = their correlation.\n\n");
+    printf("| camera m | speed m/s | stream | level | lattice g m | distance m | points | spread kept | corr | "
+           "RMS difference m |\n|---:|---:|---|---:|---:|---|---:|---:|---:|---:|\n");
+    for (int i = 0; i < AV_CAMS * AV_STREAMS; i++) {
+        const av_row *r = &rows[i];
+        for (int L = 0; r->ok && L < PROTO_MAX_LOD_LEVELS; L++) {
+            const av_level *l = &r->lev[L];
+            if (l->n < 8) continue; /* too few points to call a spread */
+            double vm = l->m2 / l->n - (l->m / l->n) * (l->m / l->n);
+            double ve = l->e2 / l->n - (l->e / l->n) * (l->e / l->n);
+            double cov = l->me / l->n - (l->m / l->n) * (l->e / l->n);
+            printf("| %g | %g | %s | %d | %g | %.0f-%.0f | %.0f | %.3f | %.3f | %.3g |\n", r->height, r->speed,
+                   av_stream_name[r->timed], L, l->g, l->dmin, l->dmax, l->n, ve > 0 ? sqrt(fmax(vm, 0) / ve) : NAN,
+                   vm > 0 && ve > 0 ? cov / sqrt(vm * ve) : NAN, sqrt(l->d2 / l->n));
+        }
+    }
+}
+
 static int av_print_errors(const av_row *rows, double hs)
 {
     printf("\n| camera m | speed m/s | stream | error of | height RMS / max m | height RMS / max %%Hs | displacement RMS "
@@ -829,6 +880,7 @@ static int av_print_errors(const av_row *rows, double hs)
                    r->height, r->speed, sn);
         }
     }
+    av_print_levels(rows);
     printf("\nMesh rings of the frames measured (MESH_TOPOLOGY zones):");
     for (int i = 0; i < AV_CAMS * AV_STREAMS; i += AV_STREAMS)
         if (rows[i].has_mesh)
