@@ -1390,8 +1390,9 @@ static void service_timeout_is_bounded(void **state)
         if (ms > worst)
             worst = ms;
     }
-    /* generous for a loaded machine; the failure was 30 000 ms */
-    if (worst > 1000) {
+    /* the failure slept in poll() for lws's 30 000 ms: judged by that
+     * signature, not by how promptly a loaded host schedules this thread */
+    if (worst > 10000) {
         print_error("oc_loop_service(<= 7 ms) took %.1f ms\n", worst);
         fail();
     }
@@ -1736,8 +1737,11 @@ static void silent_server_destroy(void **state)
         oc_client_destroy(c);
         clock_gettime(CLOCK_MONOTONIC, &t1);
         double ms = (t1.tv_sec - t0.tv_sec) * 1e3 + (t1.tv_nsec - t0.tv_nsec) * 1e-6;
-        /* the close grace (300 ms) and the kill; the failure was 2 300 ms */
-        if (ms > 1500) {
+        /* the failure waited out the close grace (300 ms) and then the
+         * whole kill timeout (2 000 ms): judged by that signature, not by
+         * how fast this host closes a socket (1 620 ms for the right path
+         * under CI with a core busy) */
+        if (ms >= 2250) {
             print_error("destroy of a client the server never answered took %.0f ms\n", ms);
             fail();
         }
