@@ -18,16 +18,24 @@
  *   vx= vy= vz=     constant camera velocity (m/s), for demos and tests
  *   debug=1         tint the sea by tile level
  *   overlay=0       hide the overlay
+ *   t=T             replay: the sea held at sim time T (s); every CAMERA asks
+ *                   for its frame at T (PROTOCOL.md "Replay mode"), so a
+ *                   screenshot shows the sea of that instant (with x= y= z=
+ *                   yaw= pitch= fov=, the view `ocean-sim` renders)
  *
  * window.oceanStats exposes live counters (the browser test reads them).
  */
 import { Renderer, normalize3 } from './render.js';
 import { FlyCamera } from './camera.js';
-import { CODEC, CUTOFF, LAYOUT, MESH_CODEC } from './protocol.js';
+import { CODEC, CUTOFF, LAYOUT, MESH_CODEC, MODE } from './protocol.js';
 import { SeaTimeline } from './timeline.js';
 
 const qs = new URLSearchParams(location.search);
 const num = (k, d) => (qs.has(k) && Number.isFinite(Number(qs.get(k))) ? Number(qs.get(k)) : d);
+/* t=T: the sea of one instant (replay mode); a t that is no number is said
+ * on the overlay once the page is up, and the sea is live */
+const replayT = num('t', NaN);
+const replay = Number.isFinite(replayT);
 
 const stats = {
     state: 'starting', url: '', clientId: null, serverVersion: '', codec: '', cutoffPolicy: '',
@@ -112,7 +120,8 @@ const want = {
     /* layout 1: mips sent once per their update interval and blended in
      * time here (PROTOCOL.md "Samples in time"); time=0 takes every
      * tick's tiles, for comparison */
-    timeInterp: qs.get('time') !== '0',
+    timeInterp: !replay && qs.get('time') !== '0',
+    mode: replay ? MODE.REPLAY : MODE.LIVE,
 };
 /* Layout 0 only: unless the URL fixes it, the level-0 tile spacing follows
  * the camera's altitude (about 1/28 of the height, a power of two in
@@ -166,6 +175,7 @@ function pushError(msg) {
     stats.errors.push(msg);
     if (stats.errors.length > 20) stats.errors.shift();
 }
+if (qs.has('t') && !replay) pushError(`t=${qs.get('t')} is not a sim time in seconds: showing the live sea`);
 
 worker.onmessage = (ev) => {
     const m = ev.data;
@@ -271,6 +281,7 @@ function startCameraReports() {
     const sendNow = () => {
         const [w, h] = renderer.resize();
         const rep = cam.report(w, h);
+        if (replay) rep.renderTime = replayT;
         stats.cameraSent = { viewport: [rep.viewportW, rep.viewportH], fovYDeg: rep.fovYDeg };
         worker.postMessage({ cmd: 'camera', cam: rep });
     };
@@ -390,7 +401,9 @@ function tick(now) {
         pendingFrame = null;
         worker.postMessage({ cmd: 'taken' });   /* the worker decodes the next frame only now */
     }
-    const simNow = haveFrame ? lastFrameSim + Math.min(0.5, (now - lastFrameWall) / 1000) : lastFrameSim;
+    /* live: the last frame's time carried on by the wall clock; replay: the
+     * instant asked for, held */
+    const simNow = replay ? replayT : haveFrame ? lastFrameSim + Math.min(0.5, (now - lastFrameWall) / 1000) : lastFrameSim;
     try {
         if (renderer.draw({ pos: cam.pos, basis: cam.basis, fovYDeg: cam.fovYDeg }, simNow)) stats.framesRendered++;
     } catch (e) {

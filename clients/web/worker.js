@@ -34,7 +34,7 @@
  *                 'frame'|'error'|'bye'|'sea'|'result'|'capture', ...}.
  */
 import {
-    CODEC, CODEC_NAMES, CUTOFF, FX, LAYOUT, MESH, MESH_CODEC, SUB_FLAG, SUBPROTOCOL, T, BYE_REASONS, RESULT_NAMES,
+    CODEC, CODEC_NAMES, CUTOFF, FX, LAYOUT, MESH, MESH_CODEC, MODE, SUB_FLAG, SUBPROTOCOL, T, BYE_REASONS, RESULT_NAMES,
     decode, decodeHeader, encodeCamera, encodeSubscribe, encodeQuery, encodeBye, ProtoError, tilePlanes,
 } from './protocol.js';
 import { ByteRate } from './rate.js';
@@ -93,7 +93,8 @@ function chooseSubscription(h, want) {
         meshKind,
         codec,
         cutoffPolicy: policy,
-        mode: 0,
+        /* replay (the page's t=): each CAMERA asks for its frame at its render_time */
+        mode: want.mode === MODE.REPLAY ? MODE.REPLAY : MODE.LIVE,
         layers: Math.max(1, Math.min(want.layers ?? h.maxLayers, h.maxLayers)),
         lodLevels: Math.max(1, Math.min(want.lodLevels ?? 8, h.maxLodLevels)),
         tileSize: Math.max(2, Math.min(want.tileSize ?? 64, h.maxTileSize)),
@@ -204,6 +205,7 @@ function onMessage(data) {
     switch (msg.type) {
     case T.HELLO: {
         hello = msg.body;
+        sentAt.clear();  /* a new connection answers none of the old CAMERAs */
         const h = { ...hello, sea: { ...hello.sea, seed: hello.sea.seed.toString() } };
         post({ kind: 'hello', hello: h, simTime: hdr.simTime });
         try {
@@ -509,6 +511,9 @@ self.onmessage = (ev) => {
         break;
     case 'camera': {
         if (!subscription) return;
+        /* replay: every CAMERA is answered by a frame; two in flight keep
+         * the stream full without queueing on the daemon */
+        if (subscription.mode === MODE.REPLAY && sentAt.size >= 2) return;
         const s = nextSeq();
         try {
             send(encodeCamera(m.cam, s, lastSimTime));

@@ -275,6 +275,30 @@ try {
      * 0); a blank or flat sea gives 1.0 */
     check('the sea has wave detail (vs. a view without the mesh)', det > 1.0 && det > 1.3 * detC,
         `structure ${det.toFixed(2)} with the mesh, ${detC.toFixed(2)} without`);
+    /* t=T: the sea of one instant (replay mode), the view a reference
+     * render of the exact sea is compared with: every frame is the sea at T,
+     * so two screenshots a few frames apart are the same picture */
+    const T = 123.25;
+    await page2.goto(withView(`${base}?x=0&y=14&z=0&yaw=30&pitch=-12&t=${T}&overlay=0`), { waitUntil: 'load', timeout: timeoutMs });
+    const held = await waitFor(page2, (t) => window.oceanStats && window.oceanStats.framesRendered >= 3 &&
+        window.oceanStats.simTime === t, T, timeoutMs);
+    const sR = await stats(page2);
+    check('t= opens the sea of that instant (replay mode, frames at T)', held && sR.subscription && sR.subscription.mode === 1 &&
+        sR.subscription.flags === 0 && sR.serverErrors === 0 && sR.decodeErrors === 0,
+        `sim time ${sR.simTime}, mode ${sR.subscription && sR.subscription.mode}, flags ${sR.subscription && sR.subscription.flags}, ` +
+        `${sR.framesRendered} rendered, errors ${sR.errors.join(' | ')}`);
+    const hudShown = await page2.evaluate(() => getComputedStyle(document.getElementById('hud')).display);
+    check('overlay=0 hides the overlay', hudShown === 'none', hudShown);
+    const pngR1 = await page2.screenshot({ type: 'png' });
+    await waitFor(page2, ([d, r]) => window.oceanStats.framesDecoded >= d + 2 && window.oceanStats.framesRendered >= r + 2,
+        [sR.framesDecoded, sR.framesRendered], timeoutMs);
+    const pngR2 = await page2.screenshot({ type: 'png' });
+    writeFileSync(join(artifacts, 'viewer-replay.png'), pngR2);
+    const imgR1 = decodePng(pngR1), imgR2 = decodePng(pngR2);
+    const still = meanAbsDiff(imgR1, imgR2, 0, imgR1.h);
+    const sR2 = await stats(page2);
+    check('t= holds the sea: two screenshots frames apart are the same', still < 0.05 && sR2.simTime === T,
+        `mean |diff| ${still.toFixed(3)} over ${sR2.framesRendered - sR.framesRendered} frames, sim time ${sR2.simTime}`);
     /* a page with no camera in its URL opens where the scene's
      * camera_hint says (served in /status), not at a fixed 25 m */
     const status = await (await fetch(new URL('status', base))).json();
