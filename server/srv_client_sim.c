@@ -179,15 +179,20 @@ int srv_client_sim_mesh_fit(srv_client_sim *cs, srv_client *c, const mesh_camera
     mesh_destroy(cs->mesh);
     cs->mesh = m;
     cs->topo_valid = 0;
-    if (k > 0) {
+    /* A layout-1 client learns the lattice it got from MESH_TOPOLOGY's
+     * zones and displaces it itself: a coarser mesh there is the same kind
+     * of adaptation as the byte budget raising q (a narrow field of view, a
+     * zoom), not an error to show; a layout-0 client gets positions it did
+     * not ask for, and is told. */
+    if (k > 0 && cs->sub.layout != PROTO_LAYOUT_CASCADE) {
         char why[320];
         snprintf(why, sizeof why, "camera %u: its %s mesh at %g px (server.mesh_error_px) would be %.4g "
                  "vertices, above the server's limit of %d (server.max_mesh_vertices); it is drawn at "
                  "%g px (%.4g vertices) while the camera needs it", cam_seq, mesh_kind_name(cfg.kind),
                  sub->error_px, est0, max_vertices, cfg.error_px, est);
-        atomic_fetch_add(&st->coarsened_mesh, 1);
         srv_client_send_error(c, NULL, 0, OCEAN_ETOOBIG, why);
     }
+    if (k > 0) atomic_fetch_add(&st->coarsened_mesh, 1);
     cs->mesh_coarsen = k;
     return 1;
 }

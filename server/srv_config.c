@@ -233,11 +233,12 @@ static const conf_entry srv_entries[] = {
     {.name = "server.max_mesh_vertices", .type = CONF_INT, .offset = SRV(max_mesh_vertices),
      .min = 1000, .max = 1 << 30, .def = "262144",
      .help = "Largest mesh the server builds for one camera, priced from the camera before "
-             "anything is built.  A concentric mesh above it (a camera near steep chop) is "
-             "built at server.mesh_error_px doubled until it fits, up to 100 px, with one "
-             "ERROR ETOOBIG naming both budgets; beyond that, or for the other mesh kinds, "
-             "the client's frames come without a mesh, with one ERROR ETOOBIG naming this "
-             "limit and the estimate."},
+             "anything is built.  A concentric mesh above it (a camera near steep chop, a "
+             "narrow field of view) is built at server.mesh_error_px doubled until it fits, up "
+             "to 100 px: a layout-0 client is told by one ERROR ETOOBIG naming both budgets, a "
+             "layout-1 client reads the lattice it got in MESH_TOPOLOGY's zones.  Beyond that, "
+             "or for the other mesh kinds, the client's frames come without a mesh, with one "
+             "ERROR ETOOBIG naming this limit and the estimate."},
     {.name = "server.max_sample_rate", .type = CONF_DOUBLE, .offset = SRV(max_sample_rate),
      .min = 1000, .max = 1e12, .def = "8e6", .unit = "samples/s",
      .help = "Tile samples per second one subscription may ask for (tiles per level x "

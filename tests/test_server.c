@@ -3497,13 +3497,13 @@ static void reload_restart_keys_and_runtime_sea(void **state)
  * sideways error grows with the choppiness), so it keeps the error budget;
  * the daemon built every sea's mesh with one roughness. */
 static size_t mesh_at_limit(double choppiness, int max_vertices, int layout, double height,
-                            unsigned long long *errors, char *err, size_t errlen);
+                            unsigned long long *errors, unsigned long long *coarsened, char *err, size_t errlen);
 
 static size_t mesh_vertices_at(double choppiness)
 {
-    unsigned long long errors;
+    unsigned long long errors, coarsened;
     char e[512];
-    return mesh_at_limit(choppiness, settings.srv.max_mesh_vertices, 0, 0.0, &errors, e, sizeof e);
+    return mesh_at_limit(choppiness, settings.srv.max_mesh_vertices, 0, 0.0, &errors, &coarsened, e, sizeof e);
 }
 
 /* A camera at the water with a long view range keeps its mesh (20 levels
@@ -3556,7 +3556,7 @@ static void mesh_denser_on_steep_chop(void **state)
  * frame of that camera came with a mesh); *errors and err: the ERRORs the
  * client got, and the last one's text. */
 static size_t mesh_at_limit(double choppiness, int max_vertices, int layout, double height,
-                            unsigned long long *errors, char *err, size_t errlen)
+                            unsigned long long *errors, unsigned long long *coarsened, char *err, size_t errlen)
 {
     srv_settings s2 = settings;
     s2.srv.port = 0;
@@ -3592,34 +3592,89 @@ static size_t mesh_at_limit(double choppiness, int max_vertices, int layout, dou
     err[0] = '\0';
     oc_client_last_error(c, err, errlen);
     oc_client_destroy(c);
+    *coarsened = (unsigned long long)atomic_load(&srv_daemon_hub(d)->stats.coarsened_mesh);
     srv_daemon_stop(d);
     return n;
 }
 
 /* A camera near steep chop whose mesh at the configured error budget is
  * over server.max_mesh_vertices gets it at a coarser budget, within the
- * limit, with one ERROR ETOOBIG naming both budgets, in both layouts; its
- * frames came without a mesh (at choppiness 10, 2 m up: 485 k vertices
- * against the default limit of 262 144). */
+ * limit, in both layouts (its frames came without a mesh; at choppiness 10,
+ * 2 m up: 485 k vertices against the default limit of 262 144), counted in
+ * oceand_coarsened_mesh_total.  Layout 0 is told by one ERROR ETOOBIG
+ * naming both budgets (the positions it gets are not those it asked for);
+ * layout 1 is not: its MESH_TOPOLOGY zones carry the lattice it got, and a
+ * narrow field of view (a sensor, binoculars) is a normal use, not an error
+ * line on the viewer. */
 static void mesh_fits_the_limit_on_steep_chop(void **state)
 {
     (void)state;
     for (int layout = 0; layout < 2; layout++) {
-        unsigned long long errors;
+        unsigned long long errors, coarsened;
         char e[1024];
-        size_t free_n = mesh_at_limit(10.0, 1 << 30, layout, 2.0, &errors, e, sizeof e);
+        size_t free_n = mesh_at_limit(10.0, 1 << 30, layout, 2.0, &errors, &coarsened, e, sizeof e);
         assert_true(free_n > 0);
+        assert_true(coarsened == 0 && errors == 0);
         int limit = (int)(0.6 * (double)free_n);
         if (limit < 1000) limit = 1000;
-        size_t n = mesh_at_limit(10.0, limit, layout, 2.0, &errors, e, sizeof e);
-        print_message("layout %d, choppiness 10, 2 m up: %zu vertices unlimited; %zu under a limit of %d (%llu ERRORs: %s)\n",
-                      layout, free_n, n, limit, errors, e);
+        size_t n = mesh_at_limit(10.0, limit, layout, 2.0, &errors, &coarsened, e, sizeof e);
+        print_message("layout %d, choppiness 10, 2 m up: %zu vertices unlimited; %zu under a limit of %d (%llu coarsened, "
+                      "%llu ERRORs: %s)\n", layout, free_n, n, limit, coarsened, errors, e);
         if (!n) fail_msg("layout %d: no mesh under a limit of %d (%s)", layout, limit, e);
         assert_true(n <= (size_t)limit);
+        assert_true(coarsened == 1);
+        if (layout == 1) {
+            if (errors != 0) fail_msg("layout 1: %llu ERRORs for a coarsened mesh: '%s'", errors, e);
+            continue;
+        }
         assert_true(errors == 1);
         if (!strstr(e, "server.max_mesh_vertices") || !strstr(e, "is drawn at"))
             fail_msg("layout %d: the ERROR does not name the limit and the budget used: '%s'", layout, e);
     }
+}
+
+/* A narrow field of view is a normal use (issue 45: a sensor or binocular
+ * view at 5 deg): the viewer's subscription (the library's default, layout
+ * 1) gets a mesh within the vertex limit and no ERROR line, where it got
+ * "is drawn at 32 px" as an ERROR before; the coarsening is counted. */
+static void narrow_fov_gets_a_mesh_without_error(void **state)
+{
+    (void)state;
+    srv_settings s2 = settings;
+    s2.srv.port = 0;
+    srv_daemon *d;
+    char e[512];
+    assert_int_equal(srv_daemon_start(&s2, &d, e, sizeof e), OCEAN_OK);
+    oc_client *c = connect_client(srv_daemon_port(d), NULL);
+    proto_subscribe sub;
+    oc_subscribe_default(&sub);
+    assert_int_equal(sub.layout, PROTO_LAYOUT_CASCADE);
+    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.pos[1] = 25;
+    cam.fov_y_deg = 5;
+    cam.viewport_w = 1920;
+    cam.viewport_h = 1080;
+    uint32_t seq = 0;
+    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+    uint32_t n = 0;
+    for (int k = 0; k < 40 && !n; k++) {
+        oc_frame *f = next_frame(c, 30000);
+        if (f->info.camera_seq == seq && f->info.has_mesh && f->topology) n = f->topology->vertex_count;
+        oc_frame_free(f);
+    }
+    oc_client_stats st;
+    oc_client_get_stats(c, &st);
+    oc_client_last_error(c, e, sizeof e);
+    unsigned long long coarsened = (unsigned long long)atomic_load(&srv_daemon_hub(d)->stats.coarsened_mesh);
+    print_message("5 deg at 25 m: %u vertices (limit %d), %llu coarsened, %llu ERRORs %s\n", n,
+                  s2.srv.max_mesh_vertices, coarsened, (unsigned long long)st.errors_rx, e);
+    assert_true(n > 0 && n <= (uint32_t)s2.srv.max_mesh_vertices);
+    assert_true(coarsened >= 1); /* the path this test is about */
+    if (st.errors_rx != 0) fail_msg("%llu ERRORs for a 5 deg view: %s", (unsigned long long)st.errors_rx, e);
+    oc_client_destroy(c);
+    srv_daemon_stop(d);
 }
 
 /* A reload whose sea cannot be built (here: a wisdom file without its
@@ -4040,6 +4095,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(admin_lock_sliding_window),
         cmocka_unit_test(mesh_denser_on_steep_chop),
         cmocka_unit_test(mesh_fits_the_limit_on_steep_chop),
+        cmocka_unit_test(narrow_fov_gets_a_mesh_without_error),
         cmocka_unit_test(cascade_q_spends_the_budget),
         cmocka_unit_test(time_interp_reads_the_frames_tick),
         cmocka_unit_test(time_interp_key_frame_spread),
