@@ -65,14 +65,15 @@ float clouds(vec2 relXZ) {
     float c = texture(u_cloudTex, relXZ * CLOUD_K + u_cloudOff).r;
     return smoothstep(0.48, 0.75, c);
 }
+/* the sun's halo at cosine sd of the angle from the sun */
+vec3 skyHalo(float sd) {
+    return u_sunColor * (0.25 * pow(sd, 8.0) + 0.45 * pow(sd, 64.0));
+}
+vec3 skyGradient(float y) {
+    return mix(vec3(0.55, 0.68, 0.82), vec3(0.09, 0.25, 0.60), pow(max(y, 0.0), 0.45));
+}
 vec3 skyBase(vec3 d) {
-    float y = max(d.y, 0.0);
-    vec3 zenith = vec3(0.09, 0.25, 0.60);
-    vec3 horizon = vec3(0.55, 0.68, 0.82);
-    vec3 c = mix(horizon, zenith, pow(y, 0.45));
-    float sd = max(dot(d, u_sunDir), 0.0);
-    c += u_sunColor * (0.25 * pow(sd, 8.0) + 0.45 * pow(sd, 64.0));
-    return c;
+    return skyGradient(d.y) + skyHalo(max(dot(d, u_sunDir), 0.0));
 }
 /* full sky (gradient, halo, clouds) in direction d; used to fill the cube map */
 vec3 skyFull(vec3 d) {
@@ -123,9 +124,14 @@ vec3 seaColor(vec3 V, vec3 N, float crest, float foam, float shadow, float rough
     col = mix(col, foamCol, clamp(foam, 0.0, 1.0));
     return col * mix(0.62, 1.0, shadow);
 }
+/* Airlight: the sky just above the horizon, brightened toward the sun by
+ * the angle between the view and the sun.  Not by the view's azimuth: a
+ * view straight down has none, and the sky taken in the direction
+ * (V.x, 0.03, V.z) turned to the zenith there (a dark spot at the nadir
+ * with a bright cone toward the sun from 10 km). */
 vec3 haze(vec3 col, vec3 V, float dist) {
     float f = 1.0 - exp(-dist / 42000.0);
-    vec3 hc = skyBase(normalize(vec3(V.x, 0.03, V.z)));
+    vec3 hc = skyGradient(0.03) + skyHalo(max(dot(V, u_sunDir), 0.0));
     return mix(col, hc, clamp(f, 0.0, 1.0));
 }
 vec3 tonemap(vec3 c) {

@@ -299,6 +299,28 @@ try {
     const sR2 = await stats(page2);
     check('t= holds the sea: two screenshots frames apart are the same', still < 0.05 && sR2.simTime === T,
         `mean |diff| ${still.toFixed(3)} over ${sR2.framesRendered - sR.framesRendered} frames, sim time ${sR2.simTime}`);
+    /* the nadir from 10 km: no spot of its own (issue 45: the haze took
+     * the sky's colour in the view's azimuth, which turned to the zenith
+     * straight down: a dark spot with a bright cone toward the sun, luma 80
+     * against 103 +- 12 around it); the centre's luminance lies within the
+     * spread of the ring around it */
+    await page2.goto(withView(`${base}?x=0&y=10000&z=0&yaw=0&pitch=-89&t=${T}&overlay=0`), { waitUntil: 'load', timeout: timeoutMs });
+    await waitFor(page2, (t) => window.oceanStats && window.oceanStats.framesRendered >= 3 && window.oceanStats.simTime === t, T, timeoutMs);
+    const pngN = await page2.screenshot({ type: 'png' });
+    writeFileSync(join(artifacts, 'viewer-nadir.png'), pngN);
+    const imgN = decodePng(pngN);
+    const ring = (r0, r1) => {
+        let sum = 0, sum2 = 0, n = 0;
+        for (let y = 0; y < imgN.h; y++) for (let x = 0; x < imgN.w; x++) {
+            const r = Math.hypot(x - imgN.w / 2, y - imgN.h / 2) / imgN.h;
+            if (r >= r0 && r < r1) { const l = lum(imgN, x, y); sum += l; sum2 += l * l; n++; }
+        }
+        const m = sum / n;
+        return [m, Math.sqrt(Math.max(sum2 / n - m * m, 0))];
+    };
+    const [nadirL] = ring(0, 0.03), [aroundL, aroundS] = ring(0.06, 0.15);
+    check('10 km, looking down: the nadir within the spread of its surroundings', Math.abs(nadirL - aroundL) <= Math.max(aroundS, 2),
+        `luma ${nadirL.toFixed(1)} at the nadir, ${aroundL.toFixed(1)} +- ${aroundS.toFixed(1)} around it`);
     /* a page with no camera in its URL opens where the scene's
      * camera_hint says (served in /status), not at a fixed 25 m */
     const status = await (await fetch(new URL('status', base))).json();
