@@ -43,6 +43,7 @@
 #define ID_MAX 48               /* "ms-seq": two 20-digit numbers and a dash */
 #define READBACK_S 5.0          /* a stored set not read back by then is answered EIO */
 #define REPORT_EVERY_S 10.0
+#define START_IDLE_MAX_S 16.0  /* the longest a starting replica waits for a reply's next byte */
 #define CATCH_UP_BATCHES 16     /* batches read before stored sets get a turn again */
 
 /* A SEA_STATE set on its way through the stream. */
@@ -90,6 +91,7 @@ struct srv_redis {
     char last_id[ID_MAX];       /* [replication thread] last entry read */
     int count;                  /* [replication thread] entries the next read asks for */
     int asked;                  /* [replication thread] entries the last read asked for */
+    double idle_s;              /* [replication thread] longest wait for a reply's next byte */
     fold timeline;              /* [replication thread] what the entries read so far make */
     ocean_params base;          /* [replication thread] the file's sea, what a change's sea completes;
                                    copied once a batch: the hub's lock is not taken per entry */
@@ -173,7 +175,8 @@ static redisContext *connect_to(const srv_redis *r, char *msg, size_t msglen)
         return NULL;
     }
     /* a Redis that stops answering holds the replication thread 1 s per
-     * command at most, and never any other thread */
+     * command at most (a reply's bytes: idle_s, longer only while a replica
+     * starts), and never any other thread */
     struct timeval io = {1, 0};
     redisSetTimeout(c, io);
     return c;
@@ -308,12 +311,12 @@ static srv_resp *range_read(srv_redis *r)
     /* ids, "msg" and the field lists of entries that are not one field
      * are kept whatever their number (each array at most a batch long);
      * only the msgs count against the bytes of a batch */
-    static const srv_resp_limits lim = {
+    const srv_resp_limits lim = {
         .max_string = SRV_REDIS_ENTRY_MAX,
         .max_total = (size_t)(SRV_REDIS_BATCH + 1) * (SRV_REDIS_ENTRY_MAX + 2 * ID_MAX),
         .max_array = SRV_REDIS_BATCH + 1,
         .max_nodes = (size_t)(SRV_REDIS_BATCH + 2) * (SRV_REDIS_BATCH + 6),
-        .idle_s = 1.0,
+        .idle_s = r->idle_s,
     };
     int from_start = strcmp(r->last_id, "0-0") == 0;
     r->asked = r->count;
@@ -444,8 +447,11 @@ static void fold_install(srv_hub *h, fold *f)
 }
 
 /* Reads the whole stream into the hub's timeline; 0, or -1 when Redis
- * failed (a read that failed is tried again, on a new connection, while
- * it asked for more than one entry). */
+ * failed.  A read that failed is tried again on a new connection, asking
+ * a quarter as many entries, then, at one entry, waiting twice as long for
+ * the reply up to START_IDLE_MAX_S: a replica that is starting serves
+ * nobody yet, and a Redis starved of CPU (or still building the replies of
+ * the reads abandoned before) answers late, not never. */
 static int timeline_load(srv_redis *r, char *msg, size_t msglen)
 {
     int n, reset;
@@ -461,8 +467,16 @@ static int timeline_load(srv_redis *r, char *msg, size_t msglen)
                         read, said - t0);
             }
         }
-        if (n >= 0 || r->asked <= 1 || !(r->rc = connect_to(r, msg, msglen))) break;
+        if (n >= 0) break;
+        if (r->asked <= 1) {
+            if (r->idle_s >= START_IDLE_MAX_S) break;
+            r->idle_s *= 2;
+            fprintf(stderr, "oceand: redis: reading stream %s before listening: waiting up to %g s for a reply\n",
+                    r->key, r->idle_s);
+        }
+        if (!(r->rc = connect_to(r, msg, msglen))) break;
     }
+    r->idle_s = 1.0;
     if (n >= 0) fold_install(r->hub, &r->timeline);
     anomalies_report(r, 1);
     return n >= 0 ? 0 : -1;
@@ -682,6 +696,7 @@ ocean_result srv_redis_start(srv_hub *h, const srv_settings *s, srv_redis **out,
     r->poll_s = fmin(0.05, r->lead / 4);
     snprintf(r->last_id, sizeof r->last_id, "0-0");
     r->count = SRV_REDIS_BATCH;
+    r->idle_s = 1.0;
     r->rc = connect_to(r, msg, msglen);
     if (r->rc && timeline_load(r, msg, msglen) != 0)
         snprintf(msg, msglen, "server.redis: reading the stream %s failed (the line before says why)", r->key);

@@ -166,16 +166,26 @@ static void redis_start(int port, const char *logname)
     redis_port = port;
 }
 
-/* Replica k (1 or 2) on `port`, sharing the stream of the Redis that
- * redis_start started, logging to tmp/logname; returns once it listens
- * (it reads the stream's whole timeline first: within `deadline` s). */
+/* Waits for replica `pid` to listen on `port`: 1; 0 after `secs`, or as
+ * soon as it ends (*status: its wait status, else -1). */
+static int wait_replica(pid_t pid, int port, double secs, int *status)
+{
+    double end = test_now_s() + secs;
+    *status = -1;
+    while (test_now_s() < end) {
+        if (port_open(port)) return 1;
+        if (waitpid(pid, status, WNOHANG) == pid) return 0;
+        usleep(50000);
+    }
+    return 0;
+}
+
 /* A replica that did not come up says why on stderr: how it ended, or
  * where each of its threads is and the CPU seconds it used (a slow start
  * keeps using them, a hang does not). */
-static void replica_explain(pid_t pid)
+static void replica_explain(pid_t pid, int status)
 {
-    int status;
-    if (waitpid(pid, &status, WNOHANG) == pid) {
+    if (status != -1) {
         fprintf(stderr, "replica pid %d ended: %s %d\n", (int)pid, WIFSIGNALED(status) ? "signal" : "exit",
                 WIFSIGNALED(status) ? WTERMSIG(status) : WEXITSTATUS(status));
         return;
@@ -188,6 +198,9 @@ static void replica_explain(pid_t pid)
     if (system(cmd) != 0) fprintf(stderr, "replica pid %d: no stacks (gdb missing?)\n", (int)pid);
 }
 
+/* Replica k (1 or 2) on `port`, sharing the stream of the Redis that
+ * redis_start started, logging to tmp/logname; returns once it listens
+ * (it reads the stream's whole timeline first: within `deadline` s). */
 static void replica_start_within(int k, int port, const char *logname, double deadline)
 {
     char path[600], log[600], text[1024], exe[600];
@@ -204,8 +217,10 @@ static void replica_start_within(int k, int port, const char *logname, double de
     snprintf(log, sizeof log, "%s/%s", tmp, logname);
     char *oargv[] = {exe, "--config", path, NULL};
     pids[k] = spawn(log, oargv);
-    if (!wait_port(port, deadline)) {
-        replica_explain(pids[k]);
+    int status = -1;
+    if (!wait_replica(pids[k], port, deadline, &status)) {
+        replica_explain(pids[k], status);
+        if (status != -1) pids[k] = 0; /* reaped */
         char tail[2048] = "";
         FILE *f = fopen(log, "r");
         size_t n = f ? fread(tail, 1, sizeof tail - 1, f) : 0;

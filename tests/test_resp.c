@@ -161,9 +161,9 @@ static void refuses_what_is_no_resp(void **state)
 
 /* A fake Redis: every XRANGE's COUNT is recorded; one asking for more
  * than `most` entries gets no reply (Redis still building it), the others
- * an empty stream. */
+ * an empty stream, after slow_ms (a Redis starved of CPU). */
 typedef struct fake_redis {
-    int listen_fd, port, most;
+    int listen_fd, port, most, slow_ms;
     int counts[16], n;
     volatile int stop;
 } fake_redis;
@@ -183,7 +183,8 @@ static void *fake_serve(void *arg)
             if (at && (at = strstr(at + 8, "\r\n"))) count = atoi(at + 2);
             if (f->n < 16) f->counts[f->n++] = count;
             if (count > f->most) continue;   /* no byte: the reader gives up after its wait */
-            if (write(c, "*0\r\n", 4) != 4) break;
+            if (f->slow_ms) usleep((useconds_t)f->slow_ms * 1000);
+            if (send(c, "*0\r\n", 4, MSG_NOSIGNAL) != 4) break;
         }
         close(c);
     }
@@ -226,6 +227,46 @@ static void slow_batches_ask_fewer(void **state)
     assert_int_equal(f.counts[1], SRV_REDIS_BATCH / 4);
 }
 
+/* A starting replica whose one-entry read Redis answers only after 1.3 s
+ * (more than the reader's 1 s wait: a Redis at nice 10 on a host with a
+ * core busy, still building the replies of the reads abandoned before)
+ * waits twice as long for the next: it starts, where it gave up after the
+ * one-entry read and refused to start (CI: test_replicas
+ * hostile_stream_bounded under ASan with a core busy). */
+static void slow_redis_waited_for_at_start(void **state)
+{
+    (void)state;
+    fake_redis f = {.most = 1, .slow_ms = 1300};
+    f.listen_fd = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t al = sizeof a;
+    assert_int_equal(bind(f.listen_fd, (struct sockaddr *)&a, sizeof a), 0);
+    assert_int_equal(listen(f.listen_fd, 4), 0);
+    assert_int_equal(getsockname(f.listen_fd, (struct sockaddr *)&a, &al), 0);
+    pthread_t t;
+    assert_int_equal(pthread_create(&t, NULL, fake_serve, &f), 0);
+    srv_settings s;
+    char msg[300] = "";
+    assert_int_equal(srv_settings_default(&s, msg, sizeof msg), OCEAN_OK);
+    snprintf(s.srv.redis, sizeof s.srv.redis, "127.0.0.1:%d", ntohs(a.sin_port));
+    srv_hub h;
+    assert_int_equal(srv_hub_init(&h, &s), OCEAN_OK);
+    srv_redis *r = NULL;
+    ocean_result res = srv_redis_start(&h, &s, &r, msg, sizeof msg);
+    if (res != OCEAN_OK) fail_msg("the replica did not start: %s", msg);
+    srv_redis_stop(r);
+    f.stop = 1;
+    shutdown(f.listen_fd, SHUT_RDWR);
+    close(f.listen_fd);
+    pthread_join(t, NULL);
+    srv_hub_fini(&h);
+    /* 256, 64, 16, 4, then one entry at 1 s, and again at a longer wait */
+    assert_true(f.n >= 6);
+    assert_int_equal(f.counts[3], 4);
+    assert_int_equal(f.counts[4], 1);
+    assert_int_equal(f.counts[5], 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -233,6 +274,7 @@ int main(void)
         cmocka_unit_test(bounds_total_and_arrays),
         cmocka_unit_test(refuses_what_is_no_resp),
         cmocka_unit_test(slow_batches_ask_fewer),
+        cmocka_unit_test(slow_redis_waited_for_at_start),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
