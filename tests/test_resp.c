@@ -191,6 +191,34 @@ static void *fake_serve(void *arg)
     return NULL;
 }
 
+/* Starts a replica (srv_redis_start) on fake Redis f and stops it again;
+ * the start's result, msg saying why it failed. */
+static ocean_result replica_on_fake(fake_redis *f, char *msg, size_t msglen)
+{
+    f->listen_fd = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t al = sizeof a;
+    assert_int_equal(bind(f->listen_fd, (struct sockaddr *)&a, sizeof a), 0);
+    assert_int_equal(listen(f->listen_fd, 4), 0);
+    assert_int_equal(getsockname(f->listen_fd, (struct sockaddr *)&a, &al), 0);
+    pthread_t t;
+    assert_int_equal(pthread_create(&t, NULL, fake_serve, f), 0);
+    srv_settings s;
+    assert_int_equal(srv_settings_default(&s, msg, msglen), OCEAN_OK);
+    snprintf(s.srv.redis, sizeof s.srv.redis, "127.0.0.1:%d", ntohs(a.sin_port));
+    srv_hub h;
+    assert_int_equal(srv_hub_init(&h, &s), OCEAN_OK);
+    srv_redis *r = NULL;
+    ocean_result res = srv_redis_start(&h, &s, &r, msg, msglen);
+    srv_redis_stop(r);
+    f->stop = 1;
+    shutdown(f->listen_fd, SHUT_RDWR);
+    close(f->listen_fd);
+    pthread_join(t, NULL);
+    srv_hub_fini(&h);
+    return res;
+}
+
 /* A replica's first read of a stream whose batches Redis is too slow to
  * answer (no byte within the reader's wait) is asked again with a quarter
  * of the entries, on a new connection, until one comes: the replica
@@ -199,29 +227,8 @@ static void slow_batches_ask_fewer(void **state)
 {
     (void)state;
     fake_redis f = {.most = 64};
-    f.listen_fd = socket(AF_INET, SOCK_STREAM, 0);
-    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
-    socklen_t al = sizeof a;
-    assert_int_equal(bind(f.listen_fd, (struct sockaddr *)&a, sizeof a), 0);
-    assert_int_equal(listen(f.listen_fd, 4), 0);
-    assert_int_equal(getsockname(f.listen_fd, (struct sockaddr *)&a, &al), 0);
-    pthread_t t;
-    assert_int_equal(pthread_create(&t, NULL, fake_serve, &f), 0);
-    srv_settings s;
     char msg[300] = "";
-    assert_int_equal(srv_settings_default(&s, msg, sizeof msg), OCEAN_OK);
-    snprintf(s.srv.redis, sizeof s.srv.redis, "127.0.0.1:%d", ntohs(a.sin_port));
-    srv_hub h;
-    assert_int_equal(srv_hub_init(&h, &s), OCEAN_OK);
-    srv_redis *r = NULL;
-    ocean_result res = srv_redis_start(&h, &s, &r, msg, sizeof msg);
-    if (res != OCEAN_OK) fail_msg("the replica did not start: %s", msg);
-    srv_redis_stop(r);
-    f.stop = 1;
-    shutdown(f.listen_fd, SHUT_RDWR);
-    close(f.listen_fd);
-    pthread_join(t, NULL);
-    srv_hub_fini(&h);
+    if (replica_on_fake(&f, msg, sizeof msg) != OCEAN_OK) fail_msg("the replica did not start: %s", msg);
     assert_true(f.n >= 2);
     assert_int_equal(f.counts[0], SRV_REDIS_BATCH);
     assert_int_equal(f.counts[1], SRV_REDIS_BATCH / 4);
@@ -237,29 +244,8 @@ static void slow_redis_waited_for_at_start(void **state)
 {
     (void)state;
     fake_redis f = {.most = 1, .slow_ms = 1300};
-    f.listen_fd = socket(AF_INET, SOCK_STREAM, 0);
-    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
-    socklen_t al = sizeof a;
-    assert_int_equal(bind(f.listen_fd, (struct sockaddr *)&a, sizeof a), 0);
-    assert_int_equal(listen(f.listen_fd, 4), 0);
-    assert_int_equal(getsockname(f.listen_fd, (struct sockaddr *)&a, &al), 0);
-    pthread_t t;
-    assert_int_equal(pthread_create(&t, NULL, fake_serve, &f), 0);
-    srv_settings s;
     char msg[300] = "";
-    assert_int_equal(srv_settings_default(&s, msg, sizeof msg), OCEAN_OK);
-    snprintf(s.srv.redis, sizeof s.srv.redis, "127.0.0.1:%d", ntohs(a.sin_port));
-    srv_hub h;
-    assert_int_equal(srv_hub_init(&h, &s), OCEAN_OK);
-    srv_redis *r = NULL;
-    ocean_result res = srv_redis_start(&h, &s, &r, msg, sizeof msg);
-    if (res != OCEAN_OK) fail_msg("the replica did not start: %s", msg);
-    srv_redis_stop(r);
-    f.stop = 1;
-    shutdown(f.listen_fd, SHUT_RDWR);
-    close(f.listen_fd);
-    pthread_join(t, NULL);
-    srv_hub_fini(&h);
+    if (replica_on_fake(&f, msg, sizeof msg) != OCEAN_OK) fail_msg("the replica did not start: %s", msg);
     /* 256, 64, 16, 4, then one entry at 1 s, and again at a longer wait */
     assert_true(f.n >= 6);
     assert_int_equal(f.counts[3], 4);
