@@ -3550,31 +3550,20 @@ static void mesh_denser_on_steep_chop(void **state)
     assert_true(steep > 4 * calm);
 }
 
-/* The vertices of the first meshed frame of a camera height m over a sea
- * of the given choppiness (height 0: oc_camera_default's), with the
- * server's vertex limit at max_vertices, in the given layout (0 if no
- * frame of that camera came with a mesh); *errors and err: the ERRORs the
- * client got, and the last one's text. */
-static size_t mesh_at_limit(double choppiness, int max_vertices, int layout, double height,
-                            unsigned long long *errors, unsigned long long *coarsened, char *err, size_t errlen)
+/* The vertices of the first meshed frame a daemon on settings s2 sends
+ * for subscription sub and camera cam (0 if no frame of that camera came
+ * with a mesh); *errors and err: the ERRORs the client got, and the last
+ * one's text; *coarsened: the daemon's count of coarsened meshes. */
+static size_t mesh_of(const srv_settings *s2, const proto_subscribe *sub, const proto_camera *cam,
+                      unsigned long long *errors, unsigned long long *coarsened, char *err, size_t errlen)
 {
-    srv_settings s2 = settings;
-    s2.srv.port = 0;
-    s2.srv.max_mesh_vertices = max_vertices;
-    s2.params.sea.choppiness = choppiness;
     srv_daemon *d;
     char e[512];
-    assert_int_equal(srv_daemon_start(&s2, &d, e, sizeof e), OCEAN_OK);
+    assert_int_equal(srv_daemon_start(s2, &d, e, sizeof e), OCEAN_OK);
     oc_client *c = connect_client(srv_daemon_port(d), NULL);
-    proto_subscribe sub;
-    small_subscribe(&sub);
-    if (layout) sub.layout = PROTO_LAYOUT_CASCADE;
-    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
-    proto_camera cam;
-    oc_camera_default(&cam);
-    if (height > 0) cam.pos[1] = height;
+    assert_int_equal(oc_client_subscribe(c, sub), OCEAN_OK);
     uint32_t seq = 0;
-    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
+    assert_int_equal(oc_client_send_camera(c, cam, &seq), OCEAN_OK);
     size_t n = 0;
     for (int k = 0; k < 40 && !n; k++) {
         /* a deadline, not a speed: half a million vertices take seconds to
@@ -3583,7 +3572,8 @@ static size_t mesh_at_limit(double choppiness, int max_vertices, int layout, dou
         /* layout 1: the vertices are the topology's (the frame carries
          * only its placement) */
         if (f->info.camera_seq == seq && f->info.has_mesh)
-            n = layout ? (f->topology ? f->topology->vertex_count : 0) : f->info.mesh.vertex_count;
+            n = sub->layout == PROTO_LAYOUT_CASCADE ? (f->topology ? f->topology->vertex_count : 0)
+                                                    : f->info.mesh.vertex_count;
         oc_frame_free(f);
     }
     oc_client_stats st;
@@ -3595,6 +3585,25 @@ static size_t mesh_at_limit(double choppiness, int max_vertices, int layout, dou
     *coarsened = (unsigned long long)atomic_load(&srv_daemon_hub(d)->stats.coarsened_mesh);
     srv_daemon_stop(d);
     return n;
+}
+
+/* mesh_of for a camera height m over a sea of the given choppiness
+ * (height 0: oc_camera_default's), with the server's vertex limit at
+ * max_vertices, in the given layout of the tests' small subscription. */
+static size_t mesh_at_limit(double choppiness, int max_vertices, int layout, double height,
+                            unsigned long long *errors, unsigned long long *coarsened, char *err, size_t errlen)
+{
+    srv_settings s2 = settings;
+    s2.srv.port = 0;
+    s2.srv.max_mesh_vertices = max_vertices;
+    s2.params.sea.choppiness = choppiness;
+    proto_subscribe sub;
+    small_subscribe(&sub);
+    if (layout) sub.layout = PROTO_LAYOUT_CASCADE;
+    proto_camera cam;
+    oc_camera_default(&cam);
+    if (height > 0) cam.pos[1] = height;
+    return mesh_of(&s2, &sub, &cam, errors, coarsened, err, errlen);
 }
 
 /* A camera near steep chop whose mesh at the configured error budget is
@@ -3642,39 +3651,23 @@ static void narrow_fov_gets_a_mesh_without_error(void **state)
     (void)state;
     srv_settings s2 = settings;
     s2.srv.port = 0;
-    srv_daemon *d;
-    char e[512];
-    assert_int_equal(srv_daemon_start(&s2, &d, e, sizeof e), OCEAN_OK);
-    oc_client *c = connect_client(srv_daemon_port(d), NULL);
     proto_subscribe sub;
     oc_subscribe_default(&sub);
     assert_int_equal(sub.layout, PROTO_LAYOUT_CASCADE);
-    assert_int_equal(oc_client_subscribe(c, &sub), OCEAN_OK);
     proto_camera cam;
     oc_camera_default(&cam);
     cam.pos[1] = 25;
     cam.fov_y_deg = 5;
     cam.viewport_w = 1920;
     cam.viewport_h = 1080;
-    uint32_t seq = 0;
-    assert_int_equal(oc_client_send_camera(c, &cam, &seq), OCEAN_OK);
-    uint32_t n = 0;
-    for (int k = 0; k < 40 && !n; k++) {
-        oc_frame *f = next_frame(c, 30000);
-        if (f->info.camera_seq == seq && f->info.has_mesh && f->topology) n = f->topology->vertex_count;
-        oc_frame_free(f);
-    }
-    oc_client_stats st;
-    oc_client_get_stats(c, &st);
-    oc_client_last_error(c, e, sizeof e);
-    unsigned long long coarsened = (unsigned long long)atomic_load(&srv_daemon_hub(d)->stats.coarsened_mesh);
-    print_message("5 deg at 25 m: %u vertices (limit %d), %llu coarsened, %llu ERRORs %s\n", n,
-                  s2.srv.max_mesh_vertices, coarsened, (unsigned long long)st.errors_rx, e);
-    assert_true(n > 0 && n <= (uint32_t)s2.srv.max_mesh_vertices);
+    unsigned long long errors, coarsened;
+    char e[512];
+    size_t n = mesh_of(&s2, &sub, &cam, &errors, &coarsened, e, sizeof e);
+    print_message("5 deg at 25 m: %zu vertices (limit %d), %llu coarsened, %llu ERRORs %s\n", n,
+                  s2.srv.max_mesh_vertices, coarsened, errors, e);
+    assert_true(n > 0 && n <= (size_t)s2.srv.max_mesh_vertices);
     assert_true(coarsened >= 1); /* the path this test is about */
-    if (st.errors_rx != 0) fail_msg("%llu ERRORs for a 5 deg view: %s", (unsigned long long)st.errors_rx, e);
-    oc_client_destroy(c);
-    srv_daemon_stop(d);
+    if (errors != 0) fail_msg("%llu ERRORs for a 5 deg view: %s", errors, e);
 }
 
 /* A reload whose sea cannot be built (here: a wisdom file without its
