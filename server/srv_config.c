@@ -243,6 +243,17 @@ static const conf_entry srv_entries[] = {
      .min = 1000, .max = 1e12, .def = "8e6", .unit = "samples/s",
      .help = "Tile samples per second one subscription may ask for (tiles per level x "
              "levels x tile_size^2 x frame rate); above it SUBSCRIBE is refused (ETOOBIG)."},
+    {.name = "server.admit_share", .type = CONF_DOUBLE, .offset = SRV(admit_share), .min = 0,
+     .max = 1, .def = "0.7",
+     .help = "Share of the cores the daemon can use (server.workers at most, less what other "
+             "processes use, measured each second) that admitted work may take, the rest left "
+             "as headroom for the clients already served.  A live layout-0 subscription is "
+             "priced at its tile samples/s x planes x the cost of a plane-sample measured on "
+             "this host for its codec; the shared work (evaluating the ocean, layout 1, meshes, "
+             "frames, queries) is measured.  A SUBSCRIBE that would take the sum past the share "
+             "is refused (ETOOBIG, naming each figure); layout 1 adds no tiles of its own and is "
+             "always admitted.  0: no admission for the daemon as a whole (each subscription is "
+             "still held to server.max_sample_rate)."},
     {.name = "server.near_field_waves", .type = CONF_INT, .offset = SRV(near_field_waves),
      .min = 0, .max = 1024, .def = "64",
      .help = "Gerstner waves of the near field (scenes with near-field), shorter than the "

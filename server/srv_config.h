@@ -74,6 +74,7 @@ typedef struct srv_config {
     double query_ms;             /* query work per tick (all clients), ms */
     int max_mesh_vertices;       /* a mesh estimated above this is refused */
     double max_sample_rate;      /* tile samples per second one subscription may ask */
+    double admit_share;          /* share of the usable cores admitted work may take; 0: off */
     /* near field */
     int near_field_waves;
     double near_field_radius;    /* fade to 0 at this radius, m */

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "srv_admit.h"
 #include "srv_net.h"
 #include "srv_redis.h"
 #include "srv_sim.h"
@@ -28,10 +29,17 @@ ocean_result srv_daemon_start(const srv_settings *s, srv_daemon **out, char *msg
         free(d);
         return r;
     }
+    r = srv_admit_create(s->srv.workers, &d->hub.admit);
+    if (r != OCEAN_OK) {
+        srv_hub_fini(&d->hub);
+        free(d);
+        return r;
+    }
     if (s->srv.redis[0]) {
         /* the shared timeline so far enters the hub before any tick */
         r = srv_redis_start(&d->hub, s, &d->hub.redis, msg, msglen);
         if (r != OCEAN_OK) {
+            srv_admit_destroy(d->hub.admit);
             srv_hub_fini(&d->hub);
             free(d);
             return r;
@@ -45,6 +53,7 @@ ocean_result srv_daemon_start(const srv_settings *s, srv_daemon **out, char *msg
         srv_sim_destroy(d->sim);
         srv_net_destroy(d->net);
         srv_redis_stop(d->hub.redis);
+        srv_admit_destroy(d->hub.admit);
         srv_hub_fini(&d->hub);
         free(d);
         return r;
@@ -148,6 +157,7 @@ void srv_daemon_stop(srv_daemon *d)
     srv_net_destroy(d->net);
     srv_sim_destroy(d->sim);
     srv_redis_stop(d->hub.redis);
+    srv_admit_destroy(d->hub.admit);
     srv_hub_fini(&d->hub);
     free(d);
 }

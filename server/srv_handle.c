@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "srv_admit.h"
 #include "srv_cascade.h"
 #include "srv_record.h"
 #include "srv_redis.h"
@@ -252,7 +253,14 @@ static void on_subscribe(const srv_in *in)
         snprintf(why, sizeof why, "SUBSCRIBE changes limited to %g a second (burst %g): refused, the "
                  "subscription in force stays", SRV_SUBSCRIBE_PER_S, SRV_SUBSCRIBE_BURST);
     }
+    /* the daemon as a whole: the last check, so a refusal leaves the
+     * price in force as it was */
+    double price = r == OCEAN_OK ? srv_admit_price(h->admit, &h->settings.srv, &sub) : 0;
+    if (r == OCEAN_OK && (r = srv_admit_take(h->admit, &h->settings.srv, &sub, s->price, price, why,
+                                             sizeof why)) != OCEAN_OK)
+        atomic_fetch_add(&h->stats.refused_admission, 1);
     if (r == OCEAN_OK) {
+        s->price = price;
         if (!c->subscribed) h->n_subscribed++;
         /* A live subscription drops the replay backlog, never the QUERYs:
          * they are answered in order whatever the mode. */

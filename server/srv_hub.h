@@ -24,6 +24,7 @@
 
 struct srv_client;
 struct srv_redis;
+struct srv_admit;
 
 /* A sea-state change on the timeline: from effective_time (sim time) on,
  * the sea is params.  The hub lists the pending ones (effective_time after
@@ -75,6 +76,7 @@ typedef struct srv_hub {
     srv_stats stats;                      /* atomics */
     char fingerprint[17];                 /* [const] determinism fingerprint, 16 hex digits */
     struct srv_redis *redis;              /* [const once started] replicated timeline, or NULL */
+    struct srv_admit *admit;              /* [const once started] admission (srv_admit.h) */
 } srv_hub;
 
 /* Monotonic seconds. */

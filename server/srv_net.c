@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include "ocean_time.h"
+#include "srv_admit.h"
 #include "srv_handle.h"
 #include "srv_session.h"
 #include "srv_record.h"
@@ -362,6 +363,20 @@ static int past_time_limit(srv_net *n)
 
 /* ---- HTTP: /metrics and /status ------------------------------------------- */
 
+/* Admission's figures into v [svc, hub.lock held for the settings]. */
+static void admission_view(const srv_hub *h, srv_stats_view *v)
+{
+    srv_admit_view av;
+    if (!h->admit) return;
+    srv_admit_get_view(h->admit, &h->settings.srv, &av);
+    v->admit_capacity = av.capacity;
+    v->admit_usable = av.usable;
+    v->admit_others = av.others;
+    v->admit_shared = av.shared;
+    v->admit_priced = av.priced;
+    v->admit_count = av.admitted;
+}
+
 /* Fills v; *per gets a malloc'ed per-client array (free it; NULL on OOM). */
 static void stats_view(srv_net *n, srv_stats_view *v, char *scene, size_t sl,
                        srv_stats_client **per)
@@ -389,6 +404,7 @@ static void stats_view(srv_net *n, srv_stats_view *v, char *scene, size_t sl,
     v->hs = h->sea_now.hs;
     v->has_camera_hint = h->settings.scene.camera_hint[0] &&
                          ocean_conf_camera_hint_parse(h->settings.scene.camera_hint, v->camera_hint) == OCEAN_OK;
+    admission_view(h, v);
     pthread_mutex_unlock(&h->lock);
     v->sim_time = srv_hub_sim_time(h);
     v->past_time_limit = past_time_limit(n) ? TIME_LIMIT_BYE : NULL;
@@ -1182,6 +1198,9 @@ static void sweep_cb(lws_sorted_usec_list_t *sul)
 {
     srv_net *n = (srv_net *)((char *)sul - offsetof(srv_net, sweep));
     on_wake(n);
+    const srv_stats *st = &n->hub->stats;
+    srv_admit_sample(n->hub->admit, srv_now(), 1e-9 * (double)atomic_load(&st->tick_ns_total),
+                     1e-9 * (double)atomic_load(&st->tile_ns_total));
     lws_sul_schedule(n->ctx, 0, &n->sweep, sweep_cb, 250 * LWS_US_PER_MS);
 }
 

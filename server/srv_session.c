@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "srv_admit.h"
 #include "srv_record.h"
 
 ocean_result srv_session_create(srv_hub *h, struct lws *wsi, srv_session **out)
@@ -50,6 +51,7 @@ void srv_session_destroy(srv_session *s)
     if (!s) return;
     srv_session_rx_release(s);
     close_recording(s);
+    srv_admit_release(s->c->hub->admit, s->price);
     srv_client_remove(s->c);
     srv_client_unref(s->c);
     free(s);

@@ -48,6 +48,7 @@ typedef struct srv_session {
     double text_err_t;              /* last text-frame ERROR sent; one per second */
     uint64_t rate_refused;          /* messages refused since that ERROR */
     srv_bucket sub_changes;         /* changed SUBSCRIBEs (SRV_SUBSCRIBE_*) */
+    double price;                   /* the subscription's price held in admission (srv_admit.h) */
     int admin_misses;               /* wrong admin tokens in a row */
     double admin_until;             /* SEA_STATE set refused until then (monotonic) */
     char peer[SRV_ADMIN_ADDR_MAX];  /* the client's address (srv_admin's key) */

@@ -25,6 +25,7 @@
 #include "gerstner.h"
 #include "ocean_plan.h"
 #include "query.h"
+#include "srv_admit.h"
 #include "srv_cascade.h"
 #include "srv_seabuild.h"
 #include "srv_tiles.h"
@@ -139,6 +140,43 @@ static void adopt_sea(srv_sim *s, const ocean_params *p)
     s->roughness = mesh_roughness(&p->sea);
 }
 
+static eval_entry *evaluate(srv_sim *s, double t, const group *g, unsigned effects);
+static void tile_cost(srv_sim *s, const srv_tile *t, double cpu_s);
+
+/* Admission's first prices (srv_admit.h): a 64^2 tile of the scene's
+ * channels in each codec the server offers, sampled from an evaluation at
+ * t = 0, before any client can ask; the live tiles' costs refine them. */
+static void calibrate(srv_sim *s)
+{
+    group g = {.bucket = -1, .layers = ocean_get_params(s->oc)->cascades, .boost = 1.0f};
+    unsigned fx = s->set.effects & OCEAN_FX_ALL, ch = srv_tiles_channels(fx);
+    eval_entry *ev = ch ? evaluate(s, 0.0, &g, fx) : NULL;
+    for (int c = 0; ev && c < PROTO_CODEC_COUNT_; c++) {
+        if (!(s->set.srv.codecs & (1u << c))) continue;
+        srv_tile t;
+        memset(&t, 0, sizeof t);
+        srv_tile_key_init(&t.key);
+        t.key.spacing = s->set.srv.base_spacing;
+        t.key.bucket = g.bucket;
+        t.key.boost = g.boost;
+        t.key.accuracy = (float)PROTO_ACCURACY_DEFAULT;
+        t.key.channels = (uint16_t)ch;
+        t.key.size = 64;
+        t.key.codec = (uint8_t)c;
+        t.key.layers = (uint8_t)g.layers;
+        /* the second build is timed: the first makes the thread's codec
+         * context and warms the caches, which no live tile pays for */
+        for (int pass = 0; pass < 2; pass++) {
+            double c0 = srv_admit_thread_cpu();
+            srv_tile_build(&t, ev->f);
+            if (pass == 1 && t.result == OCEAN_OK) tile_cost(s, &t, srv_admit_thread_cpu() - c0);
+            free(t.payload);
+            t.payload = NULL;
+        }
+    }
+    eval_clear(s);
+}
+
 ocean_result srv_sim_create(srv_hub *h, srv_sim **out, char *msg, size_t msglen)
 {
     srv_sim *s = calloc(1, sizeof *s);
@@ -167,6 +205,7 @@ ocean_result srv_sim_create(srv_hub *h, srv_sim **out, char *msg, size_t msglen)
     double v[5] = {0, 20, 0, 0, 0};
     if (s->set.scene.camera_hint[0]) ocean_conf_camera_hint_parse(s->set.scene.camera_hint, v);
     memcpy(s->camera_hint, v, sizeof v);
+    calibrate(s);
     *out = s;
     return OCEAN_OK;
 }
@@ -742,6 +781,13 @@ static void job_tiles(srv_sim *s, job *j, srv_tile **missing, int *nmiss)
     }
 }
 
+/* Tile t took cpu_s of its thread's CPU: admission's unit cost. */
+static void tile_cost(srv_sim *s, const srv_tile *t, double cpu_s)
+{
+    double samples = (double)t->key.size * t->key.size * proto_tile_planes(t->key.channels);
+    srv_admit_tiles(s->hub->admit, t->key.codec, cpu_s, samples);
+}
+
 /* Each missing tile samples the evaluation of the first job that asked for
  * it, found by key (t, group); built on the workers. */
 static void build_missing(srv_sim *s, srv_tile **missing, int nmiss)
@@ -759,15 +805,22 @@ static void build_missing(srv_sim *s, srv_tile **missing, int nmiss)
             }
         }
     }
+    double *cpu = calloc((size_t)nmiss, sizeof *cpu);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(s->set.srv.workers)
     for (int m = 0; m < nmiss; m++) {
         if (src[m]) {
+            double c0 = srv_admit_thread_cpu();
             srv_tile_build(missing[m], src[m]);
+            if (cpu) cpu[m] = srv_admit_thread_cpu() - c0;
         } else {
             missing[m]->ready = 1;
             missing[m]->result = OCEAN_ESTATE;
         }
     }
+    /* what each codec's tiles cost: admission's prices (srv_admit.h) */
+    for (int m = 0; m < nmiss && cpu; m++)
+        if (src[m] && missing[m]->result == OCEAN_OK) tile_cost(s, missing[m], cpu[m]);
+    free(cpu);
     free(src);
     atomic_fetch_add(&s->hub->stats.tiles_encoded, (uint64_t)nmiss);
 }
@@ -877,6 +930,11 @@ static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
     double p1 = srv_now();
     int nmiss = batch_tiles(s, jobs, n);
     double p2 = srv_now();
+    /* a replay's tiles are not priced (srv_admit.h): they stay in the
+     * shared work admission measures */
+    int live = 1;
+    for (int i = 0; i < n; i++) live &= !jobs[i].replay;
+    if (live) atomic_fetch_add(&st->tile_ns_total, (uint64_t)((p2 - p1) * 1e9));
     batch_frames(s, jobs, n);
     double p3 = srv_now();
     if (prof)

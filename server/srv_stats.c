@@ -88,6 +88,8 @@ static const stat_metric tick_metrics[] = {
          "runs then; not a count of ticks).", idle_ticks, 1),
     STAT("oceand_tick_seconds_total", "counter", "Time spent in ticks.", tick_ns_total, 1e-9),
     STAT("oceand_tick_seconds_last", "gauge", "Duration of the last tick.", tick_ns_last, 1e-9),
+    STAT("oceand_tile_seconds_total", "counter", "Time of the ticks spent building layout-0 tiles (priced per "
+         "subscription by admission, server.admit_share).", tile_ns_total, 1e-9),
     STAT("oceand_evaluations_total", "counter", "Ocean evaluations (one per cutoff bucket and time).", evaluations,
          1),
 };
@@ -127,6 +129,8 @@ static const stat_metric traffic_metrics[] = {
          refused_rate, 1),
     STAT("oceand_refused_silent_total", "counter", "Refusals not answered: one ERROR a second at most per client.",
          refused_silent, 1),
+    STAT("oceand_refused_admission_total", "counter", "SUBSCRIBEs refused: their price would take the daemon's "
+         "admitted work past server.admit_share of its usable cores.", refused_admission, 1),
     STAT("oceand_refused_mesh_total", "counter", "Meshes refused above server.max_mesh_vertices (estimated "
          "before building).", refused_mesh, 1),
     STAT("oceand_coarsened_mesh_total", "counter", "Meshes built at a multiple of server.mesh_error_px to stay "
@@ -209,6 +213,35 @@ static void stream_json(cJSON *o, const srv_stats *s)
     cJSON_AddNumberToObject(r, "future_ids", (double)LD(redis_future_ids));
 }
 
+/* Admission's figures (srv_admit.h): what admitted work may take and takes. */
+static void admission_metrics(sb *b, const srv_stats_view *v)
+{
+    metric(b, "oceand_admission_capacity_cores", "gauge", "What admitted work may take: "
+           "server.admit_share x the usable cores.", v->admit_capacity);
+    metric(b, "oceand_admission_usable_cores", "gauge", "Cores the daemon can use: server.workers at most, "
+           "less what other processes use (measured).", v->admit_usable);
+    metric(b, "oceand_admission_other_processes_cores", "gauge", "Cores other processes of the host used "
+           "(measured, smoothed).", v->admit_others);
+    metric(b, "oceand_admission_shared_cores", "gauge", "The simulation thread's work not priced per "
+           "subscription (measured, smoothed).", v->admit_shared);
+    metric(b, "oceand_admission_priced_cores", "gauge", "The admitted layout-0 subscriptions' prices, "
+           "summed.", v->admit_priced);
+    metric(b, "oceand_admission_priced_subscriptions", "gauge", "Subscriptions holding a price.",
+           v->admit_count);
+}
+
+static void admission_json(cJSON *o, const srv_stats_view *v)
+{
+    cJSON *a = cJSON_AddObjectToObject(o, "admission");
+    if (!a) return;
+    cJSON_AddNumberToObject(a, "capacity_cores", v->admit_capacity);
+    cJSON_AddNumberToObject(a, "usable_cores", v->admit_usable);
+    cJSON_AddNumberToObject(a, "other_processes_cores", v->admit_others);
+    cJSON_AddNumberToObject(a, "shared_cores", v->admit_shared);
+    cJSON_AddNumberToObject(a, "priced_cores", v->admit_priced);
+    cJSON_AddNumberToObject(a, "priced_subscriptions", v->admit_count);
+}
+
 char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t headroom, size_t *len)
 {
     sb b = {malloc(headroom + 4096), 0, headroom + 4096, headroom, 0};
@@ -220,6 +253,7 @@ char *srv_stats_prometheus(const srv_stats *s, const srv_stats_view *v, size_t h
            "(OCEAN_TIME_MAX after server.epoch); every client is closed until a restart with a nearer "
            "server.epoch.", v->past_time_limit != NULL);
     stat_metrics(&b, s, tick_metrics, sizeof tick_metrics / sizeof tick_metrics[0]);
+    admission_metrics(&b, v);
     sb_printf(&b, "# HELP oceand_transforms_total Inverse 2-D FFTs run, per channel group.\n"
                   "# TYPE oceand_transforms_total counter\n");
     static const char *const ch[SRV_FX_CHANNELS] = {"height", "displacement", "normals", "foam",
@@ -294,6 +328,7 @@ char *srv_stats_json(const srv_stats *s, const srv_stats_view *v, size_t headroo
     cJSON_AddNumberToObject(o, "tick_to_send_p50_ms", 1e3 * srv_stats_latency_quantile(s, 0.5));
     cJSON_AddNumberToObject(o, "tick_to_send_p99_ms", 1e3 * srv_stats_latency_quantile(s, 0.99));
     stream_json(o, s);
+    admission_json(o, v);
     char *txt = cJSON_PrintUnformatted(o);
     cJSON_Delete(o);
     if (!txt) return NULL;

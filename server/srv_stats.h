@@ -16,6 +16,9 @@
 
 typedef struct srv_stats {
     atomic_uint_fast64_t ticks, idle_ticks, tick_ns_total, tick_ns_last;
+    /* the part of the ticks' time layout-0 tiles took (admission prices it
+     * per subscription; the rest is the shared work it measures) */
+    atomic_uint_fast64_t tile_ns_total;
     atomic_uint_fast64_t evaluations, transforms;
     atomic_uint_fast64_t transforms_by_effect[SRV_FX_CHANNELS];
     atomic_uint_fast64_t frames_built, frames_shared, frames_sent, frames_skipped, frames_held;
@@ -32,6 +35,7 @@ typedef struct srv_stats {
     atomic_uint_fast64_t sea_built_ahead, sea_built_due;
     /* what was refused to keep one client from hurting the others */
     atomic_uint_fast64_t refused_rate, refused_silent, refused_mesh, refused_upgrade;
+    atomic_uint_fast64_t refused_admission;  /* SUBSCRIBEs past server.admit_share */
     atomic_uint_fast64_t coarsened_mesh;     /* meshes built at a coarser budget to fit */
     atomic_uint_fast64_t disconnects_partial, disconnects_output, disconnects_protocol;
     atomic_uint_fast64_t disconnects_idle;   /* BYE idle (server.idle_seconds) */
@@ -69,6 +73,9 @@ typedef struct srv_stats_view {
     double camera_hint[5];       /* x, y, z (m), yaw, pitch (deg) */
     const char *past_time_limit; /* NULL, or why nothing can be served: the clock is past
                                     OCEAN_TIME_MAX after server.epoch */
+    /* admission for the daemon as a whole (srv_admit.h), in cores */
+    double admit_capacity, admit_usable, admit_others, admit_shared, admit_priced;
+    int admit_count;
 } srv_stats_view;
 
 /* Prometheus text exposition (version 0.0.4) into a malloc'ed string with

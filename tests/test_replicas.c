@@ -210,7 +210,9 @@ static void replica_start_within(int k, int port, const char *logname, double de
              "server.port = %d\nserver.scene = \"\"\nserver.tick_rate = 30\n"
              "server.admin_token = \"test-token\"\nserver.epoch = %s\n"
              "server.redis = 127.0.0.1:%d\nserver.redis_stream = \"%s\"\nserver.sea_lead = 0.5\n"
-             "server.near_field_waves = 32\nserver.view_range = 2000\nserver.workers = 1\n",
+             "server.near_field_waves = 32\nserver.view_range = 2000\nserver.workers = 1\n"
+             /* admission prices from the host's speed: not what these replicas judge */
+             "server.admit_share = 0\n",
              port, EPOCH_ISO, redis_port, stream_key());
     write_file(path, text);
     snprintf(exe, sizeof exe, "%s/oceand", exe_dir);

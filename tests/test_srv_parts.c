@@ -4,9 +4,10 @@
  * client's inbox (its QUERYs and replay cameras) and outbox (its FIFO and
  * latest-wins frame slot, under a hard byte limit), the simulation
  * thread's table of what it keeps of each client, its model of what a
- * time-interpolating client holds, and the sea changes' oceans built
- * ahead.
+ * time-interpolating client holds, the sea changes' oceans built ahead,
+ * and admission for the daemon as a whole.
  */
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -16,6 +17,7 @@
 
 #include <cmocka.h>
 
+#include "srv_admit.h"
 #include "srv_bucket.h"
 #include "srv_client.h"
 #include "srv_client_sim.h"
@@ -287,6 +289,72 @@ static void seabuild_ahead(void **state)
     srv_seabuild_destroy(NULL);
 }
 
+/* Admission: a live layout-0 subscription is priced at its tile samples/s
+ * x planes x its codec's measured cost (a codec not measured yet at the
+ * dearest measured), layout 1 and replays at nothing; prices are taken
+ * while the sum fits server.admit_share of the usable cores, the next is
+ * refused ETOOBIG naming the limit with nothing changed, a price given
+ * back makes room, a cheaper re-subscription always passes, and share 0
+ * admits everything. */
+static void admission_prices_and_limits(void **state)
+{
+    (void)state;
+    srv_admit *a = NULL;
+    assert_int_equal(srv_admit_create(2, &a), OCEAN_OK);
+    srv_admit_tiles(a, PROTO_CODEC_QZ, 0.01, 1e6);        /* 10 ns a plane-sample */
+    srv_admit_tiles(a, PROTO_CODEC_EXR_PIZ, 0.04, 1e6);   /* 40 ns */
+    srv_admit_sample(a, 100.0, 0, 0);
+    srv_config cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.tiles_per_side = 2;
+    cfg.admit_share = 0.5;
+    proto_subscribe sub;
+    memset(&sub, 0, sizeof sub);
+    sub.layout = PROTO_LAYOUT_WORLD;
+    sub.mode = PROTO_MODE_LIVE;
+    sub.tile_size = 64;
+    sub.lod_levels = 8;
+    sub.frame_rate_hz = 30;
+    sub.effects = PROTO_FX_HEIGHT; /* one plane */
+    sub.codec = PROTO_CODEC_QZ;
+    double want = 2.0 * 2 * 8 * 64 * 64 * 1 * 30 * 1e-8;
+    double price = srv_admit_price(a, &cfg, &sub);
+    assert_true(fabs(price - want) < 1e-3 * want);
+    sub.codec = PROTO_CODEC_F16; /* not measured: the dearest, exr-piz's */
+    assert_true(fabs(srv_admit_price(a, &cfg, &sub) - 4 * want) < 4e-3 * want);
+    sub.codec = PROTO_CODEC_QZ;
+    proto_subscribe other = sub;
+    other.layout = PROTO_LAYOUT_CASCADE;
+    assert_true(srv_admit_price(a, &cfg, &other) == 0);
+    other = sub;
+    other.mode = PROTO_MODE_REPLAY;
+    assert_true(srv_admit_price(a, &cfg, &other) == 0);
+
+    srv_admit_view v;
+    srv_admit_get_view(a, &cfg, &v);
+    assert_true(v.capacity > 0 && fabs(v.capacity - 0.5 * v.usable) < 1e-12);
+    int fit = (int)floor((v.capacity - v.shared) / price + 1e-9);
+    assert_true(fit >= 1);
+    char why[1024];
+    for (int i = 0; i < fit; i++) assert_int_equal(srv_admit_take(a, &cfg, &sub, 0, price, why, sizeof why), OCEAN_OK);
+    assert_int_equal(srv_admit_take(a, &cfg, &sub, 0, price, why, sizeof why), OCEAN_ETOOBIG);
+    assert_non_null(strstr(why, "server.admit_share"));
+    srv_admit_get_view(a, &cfg, &v);
+    assert_int_equal(v.admitted, fit);
+    assert_true(fabs(v.priced - fit * price) < 1e-9);
+    /* a cheaper stream for one of them passes; a dearer one does not */
+    assert_int_equal(srv_admit_take(a, &cfg, &sub, price, 0.5 * price, why, sizeof why), OCEAN_OK);
+    assert_int_equal(srv_admit_take(a, &cfg, &sub, 0.5 * price, 2 * price, why, sizeof why), OCEAN_ETOOBIG);
+    srv_admit_release(a, 0.5 * price);
+    assert_int_equal(srv_admit_take(a, &cfg, &sub, 0, price, why, sizeof why), OCEAN_OK);
+    cfg.admit_share = 0;
+    assert_int_equal(srv_admit_take(a, &cfg, &sub, 0, 100.0, why, sizeof why), OCEAN_OK);
+    srv_admit_get_view(a, &cfg, &v);
+    assert_int_equal(v.admitted, fit + 1);
+    srv_admit_destroy(a);
+    srv_admit_destroy(NULL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -296,6 +364,7 @@ int main(void)
         cmocka_unit_test(client_table),
         cmocka_unit_test(held_meet),
         cmocka_unit_test(seabuild_ahead),
+        cmocka_unit_test(admission_prices_and_limits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

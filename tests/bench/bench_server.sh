@@ -54,7 +54,10 @@ log=$(mktemp)
 # an epoch the load generator is told: it measures each frame's age from
 # its tick's wall time (epoch + sim time), not from the fastest delivery
 epoch=$(date +%s)
-"$build/oceand" --config config/oceand.conf --port 0 --set server.epoch="$epoch" >"$log" 2>&1 &
+# admission off: the layout-0 rows measure what that path costs, for as many
+# viewers as asked (the shipped server.admit_share would refuse most)
+"$build/oceand" --config config/oceand.conf --port 0 --set server.epoch="$epoch" --set server.admit_share=0 \
+    >"$log" 2>&1 &
 pid=$!
 trap 'kill -TERM $pid 2>/dev/null; wait $pid 2>/dev/null; rm -f "$log"' EXIT
 port=""
