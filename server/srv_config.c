@@ -224,8 +224,10 @@ static const conf_entry srv_entries[] = {
      .help = "Replay-mode CAMERA reports a client may have waiting for their frames."},
     {.name = "server.replay_per_tick", .type = CONF_INT, .offset = SRV(replay_per_tick),
      .min = 1, .max = 1024, .def = "2",
-     .help = "Replay frames built per client per tick; the rest of a client's replay queue "
-             "waits for the next ticks, so one replaying client cannot delay everyone's tick."},
+     .help = "Replay frames built per client per tick at most; the rest of a client's replay "
+             "queue waits for the next ticks.  All clients together take what the live frames "
+             "leave of a tick (priced at each layout's measured cost of a replay frame), in turn, "
+             "so replaying clients cannot delay everyone's tick."},
     {.name = "server.query_ms", .type = CONF_DOUBLE, .offset = SRV(query_ms), .min = 0.1,
      .max = 1000, .def = "4", .unit = "ms",
      .help = "Time the simulation thread spends on QUERY points per tick, all clients "

@@ -109,6 +109,9 @@ struct srv_sim {
     double work_due;            /* monotonic: background work's next turn */
     int query_deferred;         /* ticks in a row with no slack for query work */
     double eval_s;              /* measured seconds of one ocean evaluation (EWMA) */
+    double replay_s[2];         /* measured seconds of one replay frame, by layout (EWMA; 0: none yet) */
+    int replay_put_off;         /* ticks in a row that left no time for a replay frame */
+    uint32_t replay_last;       /* the client whose replay frames came last (its id) */
     int holding;                /* caches may hold tiles or evaluations */
 };
 
@@ -1163,12 +1166,24 @@ static job *add_job(work *w, srv_client *c, srv_client_sim *cs)
     return j;
 }
 
-/* A replay client's cameras, at most server.replay_per_tick a tick; a
- * changed subscription without a camera still rebuilds the mesh. */
-static void take_replay(srv_sim *s, work *w, srv_client *c, srv_client_sim *cs, int changed)
+/* Replay frames of client c into w, at most server.replay_per_tick, while
+ * their measured cost fits *budget seconds (which they spend; a negative
+ * budget: one frame, the tick's put-off one; a layout whose cost is not
+ * measured yet: one frame, all the budget) [hub.lock held]; returns how
+ * many. */
+static int take_replay(srv_sim *s, work *w, srv_client *c, double *budget)
 {
+    srv_client_sim *cs = srv_client_table_get(s->table, c);
+    double cost = s->replay_s[c->sub.layout == PROTO_LAYOUT_CASCADE];
     int taken = 0;
-    while (srv_inbox_replays(c->in) && w->njobs < 4096 && taken++ < s->set.srv.replay_per_tick) {
+    while (cs && taken < s->set.srv.replay_per_tick && srv_inbox_replays(c->in) && w->njobs < 4096) {
+        if (*budget < 0 || (cost == 0 && *budget > 0)) {
+            *budget = 0; /* the put-off frame, or the first of its layout: measured */
+        } else if (cost > *budget || cost == 0) {
+            break;
+        } else {
+            *budget -= cost;
+        }
         job *j = add_job(w, c, cs);
         if (!j) break;
         srv_replay_cam *rc = srv_inbox_take_replay(c->in);
@@ -1176,15 +1191,10 @@ static void take_replay(srv_sim *s, work *w, srv_client *c, srv_client_sim *cs, 
         j->cam = rc->cam;
         j->cam_seq = rc->seq;
         j->replay = 1;
-        j->sub_changed = changed;
-        changed = 0;
         free(rc);
+        taken++;
     }
-    job *j;
-    if (changed && (j = add_job(w, c, cs))) {
-        j->sub_changed = 1;
-        j->replay = -1; /* no frame */
-    }
+    return taken;
 }
 
 /* Under hub.lock: every subscribed client's requests of tick t, copied
@@ -1209,7 +1219,13 @@ static void snapshot_jobs(srv_sim *s, work *w, double t, int64_t tick_no, int li
             changed = 1;
         }
         if (c->sub.mode == PROTO_MODE_REPLAY) {
-            take_replay(s, w, c, cs, changed);
+            job *j;
+            /* its frames come in the replay turn (replay_turn); a changed
+             * subscription rebuilds the mesh now */
+            if (changed && (j = add_job(w, c, cs))) {
+                j->sub_changed = 1;
+                j->replay = -1;
+            }
         } else if (live_due) {
             job *j = add_job(w, c, cs);
             if (!j) break;
@@ -1308,6 +1324,68 @@ static void end_live_tick(srv_sim *s, double t0, int64_t tick_no, double rate, d
     atomic_store(&h->stats.tick_ns_last, (uint64_t)(dt * 1e9));
 }
 
+#define REPLAY_HEADROOM 0.25  /* of a tick period, left to the live work's jitter */
+#define REPLAY_PUT_OFF 8      /* ticks without a replay frame before one is made anyway */
+
+static void replay_cost(srv_sim *s, int layout1, double seconds, int frames)
+{
+    if (frames <= 0) return;
+    double *c = &s->replay_s[layout1], per = seconds / frames;
+    *c = *c > 0 ? 0.7 * *c + 0.3 * per : per;
+}
+
+/* Replay jobs into w from the clients of this tick (w->cl) in turn, from
+ * the one after the client served last, each at most
+ * server.replay_per_tick, while their measured costs fit budget seconds;
+ * the first client that does not fit is first next time [hub.lock held].
+ * Returns how many; *waiting is 1 if any client has replay cameras. */
+static int take_replays(srv_sim *s, work *w, double budget, int *waiting)
+{
+    int start = 0, taken = 0;
+    *waiting = 0;
+    for (int i = 0; i < w->ncl; i++)
+        if (w->cl[i]->id == s->replay_last) start = i + 1;
+    for (int k = 0; k < w->ncl; k++) {
+        srv_client *c = w->cl[(start + k) % w->ncl];
+        if (c->closed || c->sub.mode != PROTO_MODE_REPLAY || !srv_inbox_replays(c->in)) continue;
+        *waiting = 1;
+        int n = take_replay(s, w, c, &budget);
+        if (!n) break;
+        s->replay_last = c->id;
+        taken += n;
+        if (srv_inbox_replays(c->in) && n < s->set.srv.replay_per_tick) break;
+    }
+    return taken;
+}
+
+/* Replay frames take what the live work left of the tick (the time before
+ * the next one, less REPLAY_HEADROOM of a period), clients in turn.  A
+ * tick that leaves room for none puts them off; after REPLAY_PUT_OFF such
+ * ticks one frame is made anyway, so every replay progresses however busy
+ * the live work keeps the ticks.  (Eight replay clients at two frames a
+ * tick each asked for more than the daemon makes in a tick, and every live
+ * viewer lost frames.) */
+static void replay_turn(srv_sim *s, work *w, double tick_wall, double rate)
+{
+    srv_hub *h = s->hub;
+    w->njobs = 0;
+    double budget = tick_wall + (1.0 - REPLAY_HEADROOM) / rate - srv_now();
+    pthread_mutex_lock(&h->lock);
+    int waiting;
+    int taken = take_replays(s, w, budget > 0 ? budget : 0, &waiting);
+    if (!taken && waiting && ++s->replay_put_off >= REPLAY_PUT_OFF) taken = take_replays(s, w, -1, &waiting);
+    if (taken || !waiting) s->replay_put_off = 0;
+    pthread_mutex_unlock(&h->lock);
+    if (!taken) return;
+    int n = filter_jobs(s, w, 0, rate);
+    double r0 = srv_now();
+    run_cascade(s, w->cjobs, w->ncjobs, tick_wall);
+    double r1 = srv_now();
+    run_batches(s, w->jobs, n, tick_wall);
+    replay_cost(s, 1, r1 - r0, w->ncjobs);
+    replay_cost(s, 0, srv_now() - r1, n);
+}
+
 static void *sim_main(void *arg)
 {
     srv_sim *s = arg;
@@ -1348,6 +1426,7 @@ static void *sim_main(void *arg)
         int n = filter_jobs(s, &w, t, rate);
         run_cascade(s, w.cjobs, w.ncjobs, tick_wall);
         run_batches(s, w.jobs, n, tick_wall);
+        replay_turn(s, &w, tick_wall, rate);
         if (srv_work_busy(s->work)) query_turn(s, tick_wall + 1.0 / rate, live_due);
         s->work_due = t0 + 1.0 / rate;
         for (int i = 0; i < w.ncl; i++) srv_client_unref(w.cl[i]);

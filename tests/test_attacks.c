@@ -386,6 +386,8 @@ static void expect_error(test_ws *w, ocean_result code, const char *names, int m
     fail();
 }
 
+static void count_frames(test_ws **w, int n, double seconds, int *got);
+
 /* ---- set-up -------------------------------------------------------------------- */
 
 static void write_conf(const char *path, int max_clients)
@@ -804,6 +806,60 @@ static void a_replay_flood(void **state)
     test_ws_close(&hog);
     window_end("replay-flood");
     assert_true(cut);
+}
+
+/* Eight replay clients, four in each layout, each with 256 cameras at
+ * times of their own, each within its own limits (server.replay_per_tick
+ * a tick, layout 0's tiles under server.max_sample_rate at that rate): the
+ * daemon as a whole cannot make 16 replay frames a tick (issue 46: the
+ * witness lost its frame rate: 45 % of its frames, with each replay client
+ * served 70 frames in 4 s).  Replay frames take what the ticks leave,
+ * clients in turn: the witness keeps its rate and every client's replay
+ * progresses, the least served at least a quarter of the most. */
+#define CROWD 8
+static void a_replay_crowd(void **state)
+{
+    (void)state;
+    window_begin();
+    static test_ws w[CROWD];
+    for (int k = 0; k < CROWD; k++) {
+        proto_subscribe s;
+        live_subscribe(&s);
+        s.mode = PROTO_MODE_REPLAY;
+        if (k % 2) {
+            s.layout = PROTO_LAYOUT_WORLD;
+            s.tile_size = 64;
+            s.lod_levels = 8;
+            s.mesh_kind = PROTO_MESH_NONE;
+        }
+        attacker(&w[k], NULL, &s);
+        proto_msg cm;
+        proto_msg_init(&cm, PROTO_CAMERA);
+        for (int i = 0; i < 256; i++) {
+            oc_camera_default(&cm.u.camera);
+            cm.u.camera.render_time = 1000.0 * k + 0.05 * i;
+            cm.hdr.seq = (uint32_t)i;
+            test_msg_send(&w[k], &cm);
+        }
+    }
+    test_ws *all[CROWD];
+    for (int k = 0; k < CROWD; k++) all[k] = &w[k];
+    int got[CROWD];
+    count_frames(all, CROWD, 4.0, got);
+    for (int k = 0; k < CROWD; k++) test_ws_close(&w[k]);
+    window_end("replay-crowd");
+    fprintf(stderr, "  replay frames in 4 s:");
+    for (int k = 0; k < CROWD; k++) fprintf(stderr, " %d", got[k]);
+    fprintf(stderr, "\n");
+    /* in turn: the least served client had at least a quarter of what the
+     * most served had */
+    int least = got[0], most = got[0];
+    for (int k = 0; k < CROWD; k++) {
+        least = got[k] < least ? got[k] : least;
+        most = got[k] > most ? got[k] : most;
+    }
+    assert_true(least >= 1);
+    assert_true(4 * least >= most);
 }
 
 /* A subscription priced above server.max_sample_rate (128^2 tiles x 8
@@ -1364,6 +1420,7 @@ static void rfc_close_codes(void **state) { run_attack(a_rfc_close_codes, state)
 static void mesh_bomb(void **state) { run_attack(a_mesh_bomb, state); }
 static void query_flood(void **state) { run_attack(a_query_flood, state); }
 static void replay_flood(void **state) { run_attack(a_replay_flood, state); }
+static void replay_crowd(void **state) { run_attack(a_replay_crowd, state); }
 static void heavy_subscriber(void **state) { run_attack(a_heavy_subscriber, state); }
 static void daemon_capacity(void **state) { run_attack(a_daemon_capacity, state); }
 static void partial_messages(void **state) { run_attack(a_partial_messages, state); }
@@ -1387,6 +1444,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(mesh_bomb),
         cmocka_unit_test(query_flood),
         cmocka_unit_test(replay_flood),
+        cmocka_unit_test(replay_crowd),
         cmocka_unit_test(heavy_subscriber),
         cmocka_unit_test(daemon_capacity),
         cmocka_unit_test(partial_messages),
