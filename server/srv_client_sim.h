@@ -44,6 +44,7 @@ typedef struct srv_client_sim {
     int framed;                  /* a live frame has been scheduled (last_frame_t holds) */
     int primed;
     double cutoff_k;             /* smoothed cutoff of the last frame */
+    double replay_deficit;       /* replay: seconds of replay work banked (srv_sim.c replay_turn) */
     int mesh_over;               /* the camera's mesh is over server.max_mesh_vertices */
     int mesh_coarsen;            /* cs->mesh is built at mesh_cfg.error_px << this
                                     (srv_client_mesh_fit) */

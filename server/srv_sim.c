@@ -110,8 +110,7 @@ struct srv_sim {
     int query_deferred;         /* ticks in a row with no slack for query work */
     double eval_s;              /* measured seconds of one ocean evaluation (EWMA) */
     double replay_s[2];         /* measured seconds of one replay frame, by layout (EWMA; 0: none yet) */
-    int replay_put_off;         /* ticks in a row that left no time for a replay frame */
-    uint32_t replay_last;       /* the client whose replay frames came last (its id) */
+    uint32_t replay_last;       /* the replay client first in the last turn (its id) */
     int holding;                /* caches may hold tiles or evaluations */
 };
 
@@ -1166,37 +1165,6 @@ static job *add_job(work *w, srv_client *c, srv_client_sim *cs)
     return j;
 }
 
-/* Replay frames of client c into w, at most server.replay_per_tick, while
- * their measured cost fits *budget seconds (which they spend; a negative
- * budget: one frame, the tick's put-off one; a layout whose cost is not
- * measured yet: one frame, all the budget) [hub.lock held]; returns how
- * many. */
-static int take_replay(srv_sim *s, work *w, srv_client *c, double *budget)
-{
-    srv_client_sim *cs = srv_client_table_get(s->table, c);
-    double cost = s->replay_s[c->sub.layout == PROTO_LAYOUT_CASCADE];
-    int taken = 0;
-    while (cs && taken < s->set.srv.replay_per_tick && srv_inbox_replays(c->in) && w->njobs < 4096) {
-        if (*budget < 0 || (cost == 0 && *budget > 0)) {
-            *budget = 0; /* the put-off frame, or the first of its layout: measured */
-        } else if (cost > *budget || cost == 0) {
-            break;
-        } else {
-            *budget -= cost;
-        }
-        job *j = add_job(w, c, cs);
-        if (!j) break;
-        srv_replay_cam *rc = srv_inbox_take_replay(c->in);
-        j->t = rc->cam.render_time;
-        j->cam = rc->cam;
-        j->cam_seq = rc->seq;
-        j->replay = 1;
-        free(rc);
-        taken++;
-    }
-    return taken;
-}
-
 /* Under hub.lock: every subscribed client's requests of tick t, copied
  * into w (its subscription when changed, its camera, its replay
  * cameras). */
@@ -1325,7 +1293,7 @@ static void end_live_tick(srv_sim *s, double t0, int64_t tick_no, double rate, d
 }
 
 #define REPLAY_HEADROOM 0.25  /* of a tick period, left to the live work's jitter */
-#define REPLAY_PUT_OFF 8      /* ticks without a replay frame before one is made anyway */
+#define REPLAY_FLOOR 0.125    /* of a tick period: replays' room however busy the live work */
 
 static void replay_cost(srv_sim *s, int layout1, double seconds, int frames)
 {
@@ -1334,47 +1302,71 @@ static void replay_cost(srv_sim *s, int layout1, double seconds, int frames)
     *c = *c > 0 ? 0.7 * *c + 0.3 * per : per;
 }
 
-/* Replay jobs into w from the clients of this tick (w->cl) in turn, from
- * the one after the client served last, each at most
- * server.replay_per_tick, while their measured costs fit budget seconds;
- * the first client that does not fit is first next time [hub.lock held].
- * Returns how many; *waiting is 1 if any client has replay cameras. */
-static int take_replays(srv_sim *s, work *w, double budget, int *waiting)
+/* Client c's replay frames into w: quantum seconds more in its deficit,
+ * then frames while their measured cost fits both it and the tick's room
+ * left (*room, which they spend; the tick's first frame needs only the
+ * deficit), at most server.replay_per_tick.  A layout whose cost is not
+ * measured yet costs all the room: one frame, measured.  What is left of
+ * the deficit stays banked, up to a frame's cost and a quantum; nothing
+ * once the queue is empty [hub.lock held].  Returns how many. */
+static int take_replay(srv_sim *s, work *w, srv_client *c, double quantum, double *room)
 {
-    int start = 0, taken = 0;
-    *waiting = 0;
-    for (int i = 0; i < w->ncl; i++)
-        if (w->cl[i]->id == s->replay_last) start = i + 1;
-    for (int k = 0; k < w->ncl; k++) {
-        srv_client *c = w->cl[(start + k) % w->ncl];
-        if (c->closed || c->sub.mode != PROTO_MODE_REPLAY || !srv_inbox_replays(c->in)) continue;
-        *waiting = 1;
-        int n = take_replay(s, w, c, &budget);
-        if (!n) break;
-        s->replay_last = c->id;
-        taken += n;
-        if (srv_inbox_replays(c->in) && n < s->set.srv.replay_per_tick) break;
+    srv_client_sim *cs = srv_client_table_get(s->table, c);
+    if (!cs) return 0;
+    double cost = s->replay_s[c->sub.layout == PROTO_LAYOUT_CASCADE];
+    if (cost <= 0) cost = fmax(*room, 1e-9);
+    cs->replay_deficit = fmin(cs->replay_deficit + quantum, cost + quantum);
+    int taken = 0;
+    while (taken < s->set.srv.replay_per_tick && srv_inbox_replays(c->in) && w->njobs < 4096 &&
+           cs->replay_deficit >= cost && (cost <= *room || w->njobs == 0)) {
+        job *j = add_job(w, c, cs);
+        if (!j) break;
+        srv_replay_cam *rc = srv_inbox_take_replay(c->in);
+        j->t = rc->cam.render_time;
+        j->cam = rc->cam;
+        j->cam_seq = rc->seq;
+        j->replay = 1;
+        free(rc);
+        cs->replay_deficit -= cost;
+        *room -= cost;
+        taken++;
     }
+    if (!srv_inbox_replays(c->in)) cs->replay_deficit = 0;
     return taken;
 }
 
-/* Replay frames take what the live work left of the tick (the time before
- * the next one, less REPLAY_HEADROOM of a period), clients in turn.  A
- * tick that leaves room for none puts them off; after REPLAY_PUT_OFF such
- * ticks one frame is made anyway, so every replay progresses however busy
- * the live work keeps the ticks.  (Eight replay clients at two frames a
- * tick each asked for more than the daemon makes in a tick, and every live
- * viewer lost frames.) */
+/* Replay frames take what the live work leaves of the tick (the time
+ * before the next one less REPLAY_HEADROOM of a period, and REPLAY_FLOOR
+ * of a period at least), shared by the replaying clients by deficit round
+ * robin (M. Shreedhar and G. Varghese, "Efficient fair queuing using
+ * deficit round robin", SIGCOMM 1995): each gets an equal quantum of it a
+ * tick and spends it on frames at its layout's measured cost, banking the
+ * rest, so a client whose frames cost more than a tick leaves still gets
+ * one every few ticks and the cheap ones are not held behind it; clients
+ * whose banks fill in the same tick take turns, the tick's room being
+ * spent.  (Eight replay clients at two frames a tick each asked for more
+ * than the daemon makes in a tick, and every live viewer lost frames.) */
 static void replay_turn(srv_sim *s, work *w, double tick_wall, double rate)
 {
     srv_hub *h = s->hub;
     w->njobs = 0;
-    double budget = tick_wall + (1.0 - REPLAY_HEADROOM) / rate - srv_now();
+    double room = fmax(tick_wall + (1.0 - REPLAY_HEADROOM) / rate - srv_now(), REPLAY_FLOOR / rate);
+    double quantum = 0;
+    int taken = 0, start = 0, active = 0, first = 1;
     pthread_mutex_lock(&h->lock);
-    int waiting;
-    int taken = take_replays(s, w, budget > 0 ? budget : 0, &waiting);
-    if (!taken && waiting && ++s->replay_put_off >= REPLAY_PUT_OFF) taken = take_replays(s, w, -1, &waiting);
-    if (taken || !waiting) s->replay_put_off = 0;
+    for (int i = 0; i < w->ncl; i++) {
+        srv_client *c = w->cl[i];
+        if (c->id == s->replay_last) start = i + 1;
+        active += !c->closed && c->sub.mode == PROTO_MODE_REPLAY && srv_inbox_replays(c->in);
+    }
+    if (active) quantum = room / active;
+    for (int k = 0; k < w->ncl && active; k++) {
+        srv_client *c = w->cl[(start + k) % w->ncl];
+        if (c->closed || c->sub.mode != PROTO_MODE_REPLAY || !srv_inbox_replays(c->in)) continue;
+        if (first) s->replay_last = c->id; /* the next tick starts after it */
+        first = 0;
+        taken += take_replay(s, w, c, quantum, &room);
+    }
     pthread_mutex_unlock(&h->lock);
     if (!taken) return;
     int n = filter_jobs(s, w, 0, rate);
