@@ -35,7 +35,7 @@ struct srv_admit {
     uint64_t seen_ns[PROTO_CODEC_COUNT_], seen_samples[PROTO_CODEC_COUNT_]; /* [svc] */
     double cost[PROTO_CODEC_COUNT_]; /* [svc] seconds per plane-sample */
     int sampled;                     /* [svc] a first sample was taken */
-    double last_now, last_shared_s, last_busy_s, last_self_s; /* [svc] */
+    double last_now, last_tiles_s, last_busy_s, last_self_s; /* [svc] */
     double shared, others;           /* [svc] cores, smoothed */
     double priced;                   /* [svc] */
     int admitted;                    /* [svc] */
@@ -118,24 +118,26 @@ static void sample_codecs(srv_admit *a)
     }
 }
 
-void srv_admit_sample(srv_admit *a, double now, double tick_s, double tiles_s)
+void srv_admit_sample(srv_admit *a, double now)
 {
     if (!a) return;
     double dt = now - a->last_now;
     if (a->sampled && dt < SAMPLE_S) return;
     sample_codecs(a);
-    double shared_s = tick_s - tiles_s, busy = host_busy_s(a), self = self_s();
-    if (a->sampled) {
-        double shared = fmax(0, (shared_s - a->last_shared_s) / dt);
+    double tiles = 0;
+    for (int c = 0; c < PROTO_CODEC_COUNT_; c++) tiles += 1e-9 * (double)atomic_load(&a->tile_ns[c]);
+    double busy = host_busy_s(a), self = self_s();
+    if (a->sampled && self >= 0 && a->last_self_s >= 0) {
+        double shared = fmax(0, ((self - a->last_self_s) - (tiles - a->last_tiles_s)) / dt);
         a->shared = smooth(a->shared, shared, 0);
-        if (busy >= 0 && self >= 0 && a->last_busy_s >= 0 && a->last_self_s >= 0) {
+        if (busy >= 0 && a->last_busy_s >= 0) {
             double others = fmax(0, ((busy - a->last_busy_s) - (self - a->last_self_s)) / dt);
             a->others = smooth(a->others, fmin(others, (double)a->ncpu), 0);
         }
     }
     a->sampled = 1;
     a->last_now = now;
-    a->last_shared_s = shared_s;
+    a->last_tiles_s = tiles;
     a->last_busy_s = busy;
     a->last_self_s = self;
 }
@@ -167,7 +169,10 @@ void srv_admit_get_view(const srv_admit *a, const srv_config *cfg, srv_admit_vie
 {
     memset(v, 0, sizeof *v);
     v->others = a->others;
-    v->usable = fmax(0, fmin((double)a->workers, (double)a->ncpu - a->others));
+    /* what other processes use is not all lost: the scheduler shares the
+     * cores with them, so half of what the daemon could use stays usable */
+    double most = fmin((double)a->workers, (double)a->ncpu);
+    v->usable = fmax(0.5 * most, most - a->others);
     v->capacity = cfg->admit_share * v->usable;
     v->shared = a->shared;
     v->priced = a->priced;

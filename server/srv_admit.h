@@ -8,11 +8,13 @@
  * around its camera, priced at tile samples/s x planes x the measured cost
  * of one plane-sample in its codec): that price is reserved for as long as
  * it is subscribed, whether its camera moves or not.  Everything else the
- * simulation thread does (evaluating the ocean, layout 1's shared tiles,
- * meshes, frames, queries) is measured as it happens: the "shared" load.
+ * daemon does (evaluating the ocean, layout 1's shared tiles, meshes,
+ * frames, replays, queries, sending) is measured as it happens, as its CPU
+ * time less the live layout-0 tiles': the "shared" load.
  * The capacity is server.admit_share of the cores the daemon can use:
  * server.workers at most, less what other processes use (/proc/stat against
- * the daemon's own getrusage, sampled once a second).  A subscription whose
+ * the daemon's own getrusage, sampled once a second), half of them at least
+ * (the scheduler shares the cores with the others).  A subscription whose
  * price would take the sum past the capacity is refused with an ERROR that
  * names each figure; a subscription that costs nothing of its own (layout 1,
  * whose tiles every viewer shares) is always admitted.
@@ -42,7 +44,7 @@ typedef struct srv_admit_view {
     double capacity;        /* share x usable: what admitted work may take */
     double usable;          /* cores the daemon can use (server.workers at most) */
     double others;          /* cores other processes used (measured) */
-    double shared;          /* the simulation thread's unpriced work (measured) */
+    double shared;          /* the daemon's unpriced work (measured) */
     double priced;          /* the admitted subscriptions' prices, summed */
     int admitted;           /* subscriptions holding a price */
     double sample_s[PROTO_CODEC_COUNT_]; /* seconds per tile plane-sample, by codec
@@ -55,15 +57,15 @@ double srv_admit_thread_cpu(void);
 ocean_result srv_admit_create(int workers, srv_admit **out);
 void srv_admit_destroy(srv_admit *a); /* accepts NULL */
 
-/* Tiles of `codec` took cpu_s thread CPU seconds for plane_samples samples
- * (tile samples x planes) [any thread]. */
+/* Live layout-0 tiles of `codec` took cpu_s thread CPU seconds for
+ * plane_samples samples (tile samples x planes) [any thread]. */
 void srv_admit_tiles(srv_admit *a, unsigned codec, double cpu_s, double plane_samples);
 
-/* Samples the rates since the last call: the simulation thread's tick time
- * (tick_s, a running total of its live ticks' wall seconds) less what its
- * layout-0 tiles took (tiles_s, a running total), the host's busy cores and
- * the codecs' costs.  Call about once a second [svc]. */
-void srv_admit_sample(srv_admit *a, double now, double tick_s, double tiles_s);
+/* Samples the rates since the last call, at most once a second: the
+ * daemon's CPU time (getrusage) less what the live layout-0 tiles took
+ * (srv_admit_tiles: the prices cover them), the host's busy cores and the
+ * codecs' costs [svc]. */
+void srv_admit_sample(srv_admit *a, double now);
 
 /* The price of subscription sub (effects already those the scene computes)
  * in cores: 0 for a replay or layout 1 [svc]. */

@@ -1198,9 +1198,7 @@ static void sweep_cb(lws_sorted_usec_list_t *sul)
 {
     srv_net *n = (srv_net *)((char *)sul - offsetof(srv_net, sweep));
     on_wake(n);
-    const srv_stats *st = &n->hub->stats;
-    srv_admit_sample(n->hub->admit, srv_now(), 1e-9 * (double)atomic_load(&st->tick_ns_total),
-                     1e-9 * (double)atomic_load(&st->tile_ns_total));
+    srv_admit_sample(n->hub->admit, srv_now());
     lws_sul_schedule(n->ctx, 0, &n->sweep, sweep_cb, 250 * LWS_US_PER_MS);
 }
 

@@ -791,8 +791,9 @@ static void tile_cost(srv_sim *s, const srv_tile *t, double cpu_s)
 }
 
 /* Each missing tile samples the evaluation of the first job that asked for
- * it, found by key (t, group); built on the workers. */
-static void build_missing(srv_sim *s, srv_tile **missing, int nmiss)
+ * it, found by key (t, group); built on the workers.  live: what the tiles
+ * took goes to admission's prices. */
+static void build_missing(srv_sim *s, srv_tile **missing, int nmiss, int live)
 {
     const ocean_frame **src = malloc(sizeof(*src) * (size_t)nmiss);
     if (!src) return;
@@ -819,8 +820,8 @@ static void build_missing(srv_sim *s, srv_tile **missing, int nmiss)
             missing[m]->result = OCEAN_ESTATE;
         }
     }
-    /* what each codec's tiles cost: admission's prices (srv_admit.h) */
-    for (int m = 0; m < nmiss && cpu; m++)
+    /* what each codec's live tiles cost: admission's prices (srv_admit.h) */
+    for (int m = 0; m < nmiss && cpu && live; m++)
         if (src[m] && missing[m]->result == OCEAN_OK) tile_cost(s, missing[m], cpu[m]);
     free(cpu);
     free(src);
@@ -831,10 +832,14 @@ static void build_missing(srv_sim *s, srv_tile **missing, int nmiss)
  * many were built. */
 static int batch_tiles(srv_sim *s, job *jobs, int n)
 {
+    /* a replay's tiles are not priced (srv_admit.h): their cost stays in
+     * the shared work admission measures */
+    int live = 1;
+    for (int i = 0; i < n; i++) live &= !jobs[i].replay;
     srv_tile **missing = malloc(sizeof(srv_tile *) * (size_t)n * MAX_TILES_PER_JOB);
     int nmiss = 0;
     for (int i = 0; i < n && missing; i++) job_tiles(s, &jobs[i], missing, &nmiss);
-    if (missing && nmiss) build_missing(s, missing, nmiss);
+    if (missing && nmiss) build_missing(s, missing, nmiss, live);
     free(missing);
     return nmiss;
 }
@@ -932,11 +937,6 @@ static void run_batch(srv_sim *s, job *jobs, int n, double tick_wall)
     double p1 = srv_now();
     int nmiss = batch_tiles(s, jobs, n);
     double p2 = srv_now();
-    /* a replay's tiles are not priced (srv_admit.h): they stay in the
-     * shared work admission measures */
-    int live = 1;
-    for (int i = 0; i < n; i++) live &= !jobs[i].replay;
-    if (live) atomic_fetch_add(&st->tile_ns_total, (uint64_t)((p2 - p1) * 1e9));
     batch_frames(s, jobs, n);
     double p3 = srv_now();
     if (prof)

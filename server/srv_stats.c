@@ -88,8 +88,6 @@ static const stat_metric tick_metrics[] = {
          "runs then; not a count of ticks).", idle_ticks, 1),
     STAT("oceand_tick_seconds_total", "counter", "Time spent in ticks.", tick_ns_total, 1e-9),
     STAT("oceand_tick_seconds_last", "gauge", "Duration of the last tick.", tick_ns_last, 1e-9),
-    STAT("oceand_tile_seconds_total", "counter", "Time of the ticks spent building layout-0 tiles (priced per "
-         "subscription by admission, server.admit_share).", tile_ns_total, 1e-9),
     STAT("oceand_evaluations_total", "counter", "Ocean evaluations (one per cutoff bucket and time).", evaluations,
          1),
 };

@@ -16,9 +16,6 @@
 
 typedef struct srv_stats {
     atomic_uint_fast64_t ticks, idle_ticks, tick_ns_total, tick_ns_last;
-    /* the part of the ticks' time layout-0 tiles took (admission prices it
-     * per subscription; the rest is the shared work it measures) */
-    atomic_uint_fast64_t tile_ns_total;
     atomic_uint_fast64_t evaluations, transforms;
     atomic_uint_fast64_t transforms_by_effect[SRV_FX_CHANNELS];
     atomic_uint_fast64_t frames_built, frames_shared, frames_sent, frames_skipped, frames_held;

@@ -2252,7 +2252,10 @@ static void bad_input_gets_error(void **state)
         frames++;
         oc_frame_free(f);
     }
-    assert_true(frames >= (sanitized ? 3 : 10));
+    /* a daemon a bad client stalls sends it none; how many more come over
+     * the phase is the host's speed (CI with a core busy, beside the browser
+     * test: fewer than 10 at 30 Hz) */
+    assert_true(frames >= 3);
     oc_client_stats st;
     oc_client_get_stats(good, &st);
     assert_int_equal(st.errors_rx, 0);
@@ -3899,7 +3902,9 @@ static void connect_disconnect_cycles(void **state)
         }
         test_ws_close(&w); /* abrupt: no BYE, no close frame */
     }
-    double end = test_now_s() + 10;
+    /* a deadline, not a speed: a leaked client never leaves (CI, a core busy
+     * beside the browser test: some were still closing after 10 s) */
+    double end = test_now_s() + 30;
     int left = -1;
     while (test_now_s() < end) {
         pthread_mutex_lock(&h->lock);

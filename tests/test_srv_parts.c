@@ -303,7 +303,7 @@ static void admission_prices_and_limits(void **state)
     assert_int_equal(srv_admit_create(2, &a), OCEAN_OK);
     srv_admit_tiles(a, PROTO_CODEC_QZ, 0.01, 1e6);        /* 10 ns a plane-sample */
     srv_admit_tiles(a, PROTO_CODEC_EXR_PIZ, 0.04, 1e6);   /* 40 ns */
-    srv_admit_sample(a, 100.0, 0, 0);
+    srv_admit_sample(a, 100.0);
     srv_config cfg;
     memset(&cfg, 0, sizeof cfg);
     cfg.tiles_per_side = 2;
