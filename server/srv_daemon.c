@@ -123,7 +123,8 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
                 "applied; change it with SEA_STATE set\n");
     } else if (file_sea_changed) {
         /* a changed sea enters the timeline now, announced to every client */
-        if (srv_hub_sea_schedule(h, &s->params, -INFINITY, NULL, full_why, sizeof full_why) != OCEAN_OK)
+        if (srv_hub_sea_schedule(h, &s->params, -INFINITY, srv_hub_sea_lead(h), NULL, full_why, sizeof full_why) !=
+            OCEAN_OK)
             sea_ok = 0;
         else
             fprintf(stderr, "oceand: reload: the file's sea changed: it replaces the sea in force\n");

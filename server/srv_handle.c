@@ -451,7 +451,7 @@ static void on_sea_state(const srv_in *in)
         return;
     }
     if (r == OCEAN_OK) /* entered and announced (to the setter too: that is the reply) in this hold */
-        r = srv_hub_sea_schedule(h, &np, s->effective_time, NULL, why, sizeof why);
+        r = srv_hub_sea_schedule(h, &np, s->effective_time, srv_hub_sea_lead(h), NULL, why, sizeof why);
     else
         snprintf(why, sizeof why, "SEA_STATE set refused: %s", msg);
     pthread_mutex_unlock(&h->lock);

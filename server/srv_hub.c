@@ -98,11 +98,27 @@ srv_msg *srv_hub_sea_announce(const proto_sea *sea, double eff, double now)
     return q;
 }
 
-ocean_result srv_hub_sea_schedule(srv_hub *h, const ocean_params *p, double requested, double *eff,
+double srv_hub_sea_lead(const srv_hub *h)
+{
+    return 2 * h->sea_build_s + 2 / h->tick_rate;
+}
+
+ocean_result srv_hub_sea_schedule(srv_hub *h, const ocean_params *p, double requested, double lead, double *eff,
                                   char *why, size_t whylen)
 {
     double now = srv_hub_sim_time(h);
-    double e = requested > now ? requested : now;
+    double e = requested > now + lead ? requested : now + lead;
+    /* earliest first: moving past one never brings e nearer an earlier
+     * one; a time asked for that equals a pending one replaces it, a time
+     * moved onto one goes past it */
+    int moved = 0;
+    for (int k = 0; k < h->n_sea_pending && lead > 0; k++) {
+        double ek = h->sea_pending[k].effective_time;
+        if (fabs(e - ek) < lead && (ek != e || moved)) {
+            e = ek + lead;
+            moved = 1;
+        }
+    }
     int at = 0;
     while (at < h->n_sea_pending && h->sea_pending[at].effective_time < e) at++;
     int replace = at < h->n_sea_pending && h->sea_pending[at].effective_time == e;

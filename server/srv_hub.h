@@ -63,6 +63,8 @@ typedef struct srv_hub {
     srv_sea_change sea_pending[SRV_SEA_PENDING_MAX]; /* [hub.lock] earliest first */
     int n_sea_pending;                    /* [hub.lock] */
     uint64_t sea_gen;                     /* [hub.lock] bumps on every change entered */
+    double sea_build_s;                   /* [hub.lock] wall seconds a sea's ocean takes to build
+                                             (smoothed; the simulation thread measures) */
     int stopping;                         /* [hub.lock] */
     void (*wake_net)(void *ctx);          /* [const] wakes the service thread */
     void *wake_ctx;
@@ -92,14 +94,20 @@ double srv_hub_sim_time(const srv_hub *h);
 /* Sim time at Unix time `unix_s` (for tests and tools). */
 double srv_hub_sim_time_at(const srv_hub *h, double unix_s);
 
+/* The lead a change set here needs so that its ocean is built before it
+ * falls due, off the tick path: two builds' measured time and two tick
+ * periods [hub.lock held]. */
+double srv_hub_sea_lead(const srv_hub *h);
 /* Enters a sea-state change into the timeline and announces it to every
  * client that has had its HELLO [caller holds hub.lock].  The effective time
- * is max(requested, the clock now) (a change never rewrites ticks already
- * served); a change at the same effective time as a pending one replaces it.
- * *eff gets the effective time entered.  OCEAN_ERATE (why filled) when
- * SRV_SEA_PENDING_MAX changes are already pending.  The caller wakes the
- * service thread after unlocking. */
-ocean_result srv_hub_sea_schedule(srv_hub *h, const ocean_params *p, double requested, double *eff,
+ * is max(requested, the clock now + lead) (a change never rewrites ticks
+ * already served), moved past any pending change nearer than lead to it, so
+ * each change's ocean has its build time (lead 0: the stream's times as
+ * they are, for replicas); a change at the same effective time as a pending
+ * one replaces it.  *eff gets the effective time entered.  OCEAN_ERATE (why
+ * filled) when SRV_SEA_PENDING_MAX changes are already pending.  The caller
+ * wakes the service thread after unlocking. */
+ocean_result srv_hub_sea_schedule(srv_hub *h, const ocean_params *p, double requested, double lead, double *eff,
                                   char *why, size_t whylen);
 /* Takes from the timeline every change due at sim time t (effective_time
  * <= t), makes the last one the current sea (sea_now, settings.params) and

@@ -442,7 +442,7 @@ static void fold_install(srv_hub *h, fold *f)
         h->sea_effective = f->now.effective_time;
     }
     for (int i = 0; i < f->n; i++)
-        srv_hub_sea_schedule(h, &f->pending[i].params, f->pending[i].effective_time, NULL, NULL, 0);
+        srv_hub_sea_schedule(h, &f->pending[i].params, f->pending[i].effective_time, 0, NULL, NULL, 0);
     pthread_mutex_unlock(&h->lock);
 }
 
@@ -518,10 +518,10 @@ static void batch_sync(srv_redis *r)
     if (r->batch_now && r->timeline.have_now) {
         srv_sea_change due;
         srv_hub_sea_take_due(h, now, &due);
-        srv_hub_sea_schedule(h, &r->timeline.now.params, now, NULL, NULL, 0);
+        srv_hub_sea_schedule(h, &r->timeline.now.params, now, 0, NULL, NULL, 0);
     }
     for (int i = 0; i < r->n_batch_ahead; i++)
-        if (srv_hub_sea_schedule(h, &r->batch_ahead[i].params, r->batch_ahead[i].effective_time, NULL, NULL,
+        if (srv_hub_sea_schedule(h, &r->batch_ahead[i].params, r->batch_ahead[i].effective_time, 0, NULL, NULL,
                                  0) != OCEAN_OK)
             r->seen.refused++;
     pthread_mutex_unlock(&h->lock);

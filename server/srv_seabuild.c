@@ -17,6 +17,7 @@
 #include <string.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "ocean_plan.h"
@@ -79,8 +80,16 @@ struct srv_seabuild {
     build_key done_key;
     ocean_result result;
     srv_sea_ocean built;
+    double built_s;          /* wall seconds the build took (the thread's priority included) */
     char why[256];
 };
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 static int key_eq(const build_key *a, const build_key *b)
 {
@@ -122,7 +131,9 @@ static void *builder(void *arg)
         pthread_mutex_unlock(&b->lock);
         srv_sea_ocean o;
         char why[256] = "";
+        double t0 = now_s();
         ocean_result r = srv_sea_ocean_build(s, &k.params, 1, &o, why, sizeof why);
+        double took = now_s() - t0;
         srv_sea_ocean stale = {0};
         pthread_mutex_lock(&b->lock);
         b->building = 0;
@@ -130,6 +141,7 @@ static void *builder(void *arg)
         b->built = o;
         b->result = r;
         b->done = 1;
+        b->built_s = took;
         b->done_key = k;
         snprintf(b->why, sizeof b->why, "%s", why);
         pthread_cond_broadcast(&b->cond);
@@ -196,7 +208,8 @@ void srv_seabuild_want(srv_seabuild *b, const srv_settings *s, uint64_t set_gen,
 }
 
 ocean_result srv_seabuild_take(srv_seabuild *b, const srv_settings *s, uint64_t set_gen, const ocean_params *p,
-                               double eff, srv_sea_ocean *out, int *ahead, char *msg, size_t msglen)
+                               double eff, srv_sea_ocean *out, int *ahead, double *seconds, char *msg,
+                               size_t msglen)
 {
     build_key k;
     key_make(&k, set_gen, p, eff);
@@ -213,11 +226,15 @@ ocean_result srv_seabuild_take(srv_seabuild *b, const srv_settings *s, uint64_t 
         memset(&b->built, 0, sizeof b->built);
         b->done = 0;
         if (msg && msglen) snprintf(msg, msglen, "%s", b->why);
+        *seconds = b->built_s;
         pthread_mutex_unlock(&b->lock);
         *ahead = 1;
         return r;
     }
     pthread_mutex_unlock(&b->lock);
     *ahead = 0;
-    return srv_sea_ocean_build(s, p, 1, out, msg, msglen);
+    double t0 = now_s();
+    ocean_result r = srv_sea_ocean_build(s, p, 1, out, msg, msglen);
+    *seconds = now_s() - t0;
+    return r;
 }

@@ -55,8 +55,10 @@ void srv_seabuild_want(srv_seabuild *b, const srv_settings *s, uint64_t set_gen,
                        double eff);
 /* The ocean of that change into *out: if it was asked for ahead, the
  * thread's build (*ahead 1), waited for if not done yet; else built here
- * (*ahead 0).  Results as srv_sea_ocean_build. */
+ * (*ahead 0).  *seconds gets the wall time the build took (at the
+ * builder's priority when ahead).  Results as srv_sea_ocean_build. */
 ocean_result srv_seabuild_take(srv_seabuild *b, const srv_settings *s, uint64_t set_gen, const ocean_params *p,
-                               double eff, srv_sea_ocean *out, int *ahead, char *msg, size_t msglen);
+                               double eff, srv_sea_ocean *out, int *ahead, double *seconds, char *msg,
+                               size_t msglen);
 
 #endif

@@ -189,7 +189,11 @@ ocean_result srv_sim_create(srv_hub *h, srv_sim **out, char *msg, size_t msglen)
     s->set_gen = h->settings_gen;
     pthread_mutex_unlock(&h->lock);
     srv_sea_ocean o;
+    double b0 = srv_now();
     ocean_result r = srv_sea_ocean_build(&s->set, &s->set.params, 1, &o, msg, msglen);
+    pthread_mutex_lock(&h->lock);
+    h->sea_build_s = srv_now() - b0; /* the first lead (srv_hub_sea_lead) */
+    pthread_mutex_unlock(&h->lock);
     s->oc = o.oc;
     s->g = o.g;
     s->nf = o.nf;
@@ -980,13 +984,22 @@ static const ocean_frame *query_eval(void *ctx, double t, int cached_only)
  * effective_time <= t.  The earliest pending change's ocean is built ahead
  * by srv_seabuild's thread, and taken when the change falls due. */
 
+/* The change the tick at which the earliest pending one falls due will
+ * take: the last one due by then (those before it are never served, and
+ * building them would only delay its build). */
 static void want_next_sea(srv_sim *s)
 {
     srv_hub *h = s->hub;
     pthread_mutex_lock(&h->lock);
     int have = h->n_sea_pending > 0;
     srv_sea_change c;
-    if (have) c = h->sea_pending[0];
+    if (have) {
+        double rate = h->settings.srv.tick_rate;
+        double tick = ceil(h->sea_pending[0].effective_time * rate) / rate;
+        int k = 0;
+        while (k + 1 < h->n_sea_pending && h->sea_pending[k + 1].effective_time <= tick) k++;
+        c = h->sea_pending[k];
+    }
     pthread_mutex_unlock(&h->lock);
     if (have) srv_seabuild_want(s->build, &s->set, s->set_gen, &c.params, c.effective_time);
 }
@@ -1007,8 +1020,13 @@ static void follow_sea(srv_sim *s, double t)
         srv_sea_ocean o;
         char msg[256];
         int ahead = 0;
-        if (srv_seabuild_take(s->build, &s->set, s->set_gen, &c.params, c.effective_time, &o, &ahead, msg,
-                              sizeof msg) != OCEAN_OK) {
+        double took = 0;
+        ocean_result r = srv_seabuild_take(s->build, &s->set, s->set_gen, &c.params, c.effective_time, &o, &ahead,
+                                           &took, msg, sizeof msg);
+        pthread_mutex_lock(&h->lock);
+        h->sea_build_s = 0.5 * h->sea_build_s + 0.5 * took; /* the lead of the changes set next */
+        pthread_mutex_unlock(&h->lock);
+        if (r != OCEAN_OK) {
             /* checked when scheduled (srv_sim_sea_check, or the
              * validation of SEA_STATE set): only memory fails here */
             fprintf(stderr, "oceand: the sea due at t = %.3f s cannot be built (%s); "
@@ -1293,7 +1311,7 @@ static void end_live_tick(srv_sim *s, double t0, int64_t tick_no, double rate, d
 }
 
 #define REPLAY_HEADROOM 0.25  /* of a tick period, left to the live work's jitter */
-#define REPLAY_FLOOR 0.125    /* of a tick period: replays' room however busy the live work */
+#define REPLAY_FLOOR 0.0625   /* of a tick period: replays' room however busy the live work */
 
 static void replay_cost(srv_sim *s, int layout1, double seconds, int frames)
 {

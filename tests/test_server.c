@@ -2326,6 +2326,79 @@ static void sea_state_set_answered_by_its_own_announce(void **state)
     oc_client_destroy(a);
 }
 
+/* Changes set "now" (effective time 0) one after another are entered L
+ * ahead of the clock and L apart (PROTOCOL.md "Sea-state timeline": L is
+ * twice the measured build time of an ocean and two tick periods), so each
+ * change's ocean is built ahead, off the tick path, and none when it falls
+ * due.  Issue 46: 1200 sets effective now had their oceans built on the
+ * tick path, one a tick, and the viewers starved meanwhile. */
+static void wait_hub_wind(double wind, double seconds);
+
+static void sea_changes_built_ahead(void **state)
+{
+    (void)state;
+    srv_hub *h = srv_daemon_hub(daemon_);
+    oc_client *a = connect_client(port, NULL);
+    proto_sea sea;
+    double eff;
+    assert_int_equal(oc_client_sea_state(a, &sea, &eff), OCEAN_OK);
+    /* the changes of the tests before have all taken effect */
+    int left = 1;
+    for (double end = test_now_s() + 20; left && test_now_s() < end; usleep(20000)) {
+        pthread_mutex_lock(&h->lock);
+        left = h->n_sea_pending;
+        pthread_mutex_unlock(&h->lock);
+    }
+    usleep(200000); /* and the tick of the last one */
+    uint64_t due0 = atomic_load(&h->stats.sea_built_due), ahead0 = atomic_load(&h->stats.sea_built_ahead);
+    test_ws b;
+    assert_int_equal(test_ws_connect(&b, port, "/", PROTO_SUBPROTOCOL), 0);
+    proto_msg m;
+    assert_true(test_msg_wait(&b, PROTO_HELLO, 3000, &m));
+    proto_msg_free(&m);
+    enum { N = 8 };
+    double asked[N], got[N];
+    for (int i = 0; i < N; i++) {
+        proto_msg_init(&m, PROTO_SEA_STATE);
+        m.u.sea_state.op = PROTO_SEA_SET;
+        m.u.sea_state.sea = sea;
+        m.u.sea_state.sea.wind_u10 = sea.wind_u10 + 0.5 + 0.25 * i;
+        snprintf(m.u.sea_state.token, sizeof m.u.sea_state.token, "test-token");
+        asked[i] = srv_hub_sim_time(h);
+        test_msg_send(&b, &m);
+        assert_true(test_msg_wait(&b, PROTO_SEA_STATE, 3000, &m));
+        got[i] = m.u.sea_state.effective_time;
+        proto_msg_free(&m);
+    }
+    double tick = 1.0 / settings.srv.tick_rate;
+    for (int i = 0; i < N; i++) {
+        assert_true(got[i] >= asked[i] + 2 * tick);
+        if (i) assert_true(got[i] - got[i - 1] >= 2 * tick);
+    }
+    double end = test_now_s() + 20;
+    left = 1;
+    while (left && test_now_s() < end) {
+        pthread_mutex_lock(&h->lock);
+        left = h->n_sea_pending;
+        pthread_mutex_unlock(&h->lock);
+        usleep(20000);
+    }
+    usleep(3 * 1000000 * tick); /* the last change's tick */
+    uint64_t due = atomic_load(&h->stats.sea_built_due) - due0;
+    uint64_t ahead = atomic_load(&h->stats.sea_built_ahead) - ahead0;
+    fprintf(stderr, "%d changes set now: entered %.3f-%.3f s ahead, %.3f-%.3f s apart; %llu built ahead, %llu when "
+            "due\n", N, got[0] - asked[0], got[N - 1] - asked[N - 1], got[1] - got[0], got[N - 1] - got[N - 2],
+            (unsigned long long)ahead, (unsigned long long)due);
+    assert_int_equal(left, 0);
+    assert_int_equal((int)due, 0);
+    assert_int_equal((int)ahead, N);
+    test_ws_close(&b);
+    /* the original sea back, in force before the next test */
+    assert_int_equal(oc_client_sea_state_set(a, &sea, 0, "test-token", 5000), OCEAN_OK);
+    wait_hub_wind(sea.wind_u10, 10);
+    oc_client_destroy(a);
+}
+
 /* ---- the sea-state timeline ------------------------------------------------------ */
 
 /* What one raw client knows of the timeline, built only from what it
@@ -3458,7 +3531,7 @@ static void reload_restart_keys_and_runtime_sea(void **state)
     p.sea.wind_u10 = s2.params.sea.wind_u10 + 1.5;
     char why[200];
     pthread_mutex_lock(&h->lock);
-    assert_int_equal(srv_hub_sea_schedule(h, &p, -INFINITY, NULL, why, sizeof why), OCEAN_OK);
+    assert_int_equal(srv_hub_sea_schedule(h, &p, -INFINITY, 0, NULL, why, sizeof why), OCEAN_OK);
     pthread_mutex_unlock(&h->lock);
     double end = test_now_s() + 5;
     double wind = 0;
@@ -3745,7 +3818,7 @@ static void reload_sea_retried_when_the_timeline_is_full(void **state)
     pthread_mutex_lock(&h->lock);
     double t0 = srv_hub_sim_time(h);
     for (int i = 0; i < SRV_SEA_PENDING_MAX; i++)
-        assert_int_equal(srv_hub_sea_schedule(h, &s2.params, t0 + 1000 + i, NULL, why, sizeof why), OCEAN_OK);
+        assert_int_equal(srv_hub_sea_schedule(h, &s2.params, t0 + 1000 + i, 0, NULL, why, sizeof why), OCEAN_OK);
     pthread_mutex_unlock(&h->lock);
     srv_settings s3 = s2;
     s3.params.sea.depth_m = s2.params.sea.depth_m > 3000 ? 2000 : 3000;
@@ -4081,6 +4154,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(camera_at_the_world_edge),
         cmocka_unit_test(sea_state_admin_change),
         cmocka_unit_test(sea_state_set_answered_by_its_own_announce),
+        cmocka_unit_test(sea_changes_built_ahead),
         cmocka_unit_test(sea_timeline_scheduled_change),
         cmocka_unit_test(sea_timeline_late_joiner),
         cmocka_unit_test(sea_timeline_get),

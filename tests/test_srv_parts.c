@@ -261,26 +261,30 @@ static void seabuild_ahead(void **state)
     assert_int_equal(srv_seabuild_create(&sb), OCEAN_OK);
     srv_sea_ocean o;
     int ahead = -1;
+    double secs = -1;
     srv_seabuild_want(sb, &s, 1, &a, 10.0);
     srv_seabuild_want(sb, &s, 1, &b, 20.0);   /* b is needed first now */
-    assert_int_equal(srv_seabuild_take(sb, &s, 1, &b, 20.0, &o, &ahead, err, sizeof err), OCEAN_OK);
+    assert_int_equal(srv_seabuild_take(sb, &s, 1, &b, 20.0, &o, &ahead, &secs, err, sizeof err), OCEAN_OK);
     assert_int_equal(ahead, 1);
+    assert_true(secs > 0); /* the builder's time, measured */
     assert_non_null(o.oc);
     srv_sea_ocean_free(&o);
     assert_null(o.oc);
     /* a is no longer wanted: taking it builds it here */
-    assert_int_equal(srv_seabuild_take(sb, &s, 1, &a, 10.0, &o, &ahead, err, sizeof err), OCEAN_OK);
+    secs = -1;
+    assert_int_equal(srv_seabuild_take(sb, &s, 1, &a, 10.0, &o, &ahead, &secs, err, sizeof err), OCEAN_OK);
     assert_int_equal(ahead, 0);
+    assert_true(secs > 0);
     assert_non_null(o.oc);
     srv_sea_ocean_free(&o);
     /* another settings generation is another change */
     srv_seabuild_want(sb, &s, 1, &a, 30.0);
-    assert_int_equal(srv_seabuild_take(sb, &s, 2, &a, 30.0, &o, &ahead, err, sizeof err), OCEAN_OK);
+    assert_int_equal(srv_seabuild_take(sb, &s, 2, &a, 30.0, &o, &ahead, &secs, err, sizeof err), OCEAN_OK);
     assert_int_equal(ahead, 0);
     srv_sea_ocean_free(&o);
     srv_seabuild_want(sb, &s, 1, &bad, 40.0);
     err[0] = 0;
-    assert_int_not_equal(srv_seabuild_take(sb, &s, 1, &bad, 40.0, &o, &ahead, err, sizeof err), OCEAN_OK);
+    assert_int_not_equal(srv_seabuild_take(sb, &s, 1, &bad, 40.0, &o, &ahead, &secs, err, sizeof err), OCEAN_OK);
     assert_int_equal(ahead, 1);
     assert_null(o.oc);
     assert_true(strlen(err) > 5);
