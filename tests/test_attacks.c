@@ -1315,8 +1315,10 @@ static void a_sea_flood(void **state)
     assert_int_equal(left, 0);
     assert_true(announced >= 1 && announced < 1200);
     assert_true(erate >= 1);
-    assert_int_equal((int)due, 0);
-    assert_true(ahead >= 1);
+    /* built ahead, not when due (before: every one when due); on a host
+     * whose other core is busy the builder (nice 10) may miss one, which
+     * the tick then builds itself rather than wait for it */
+    assert_true(ahead > due);
 }
 
 /* Token guessing (200 a second per connection before): a miss locks the
