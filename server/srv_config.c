@@ -248,7 +248,7 @@ static const conf_entry srv_entries[] = {
     {.name = "server.admit_share", .type = CONF_DOUBLE, .offset = SRV(admit_share), .min = 0,
      .max = 1, .def = "0.7",
      .help = "Share of the cores the daemon can use (server.workers at most, less what other "
-             "processes use, measured each second) that admitted work may take, the rest left "
+             "processes use, measured each second, half of them at least) that admitted work may take, the rest left "
              "as headroom for the clients already served.  A live layout-0 subscription is "
              "priced at its tile samples/s x planes x the cost of a plane-sample measured on "
              "this host for its codec; the shared work (evaluating the ocean, layout 1, meshes, "
