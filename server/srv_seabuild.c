@@ -10,7 +10,6 @@
  */
 #include "srv_seabuild.h"
 
-#include <errno.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -209,30 +208,17 @@ void srv_seabuild_want(srv_seabuild *b, const srv_settings *s, uint64_t set_gen,
 }
 
 ocean_result srv_seabuild_take(srv_seabuild *b, const srv_settings *s, uint64_t set_gen, const ocean_params *p,
-                               double eff, double most_wait, srv_sea_ocean *out, int *ahead, double *seconds,
-                               char *msg, size_t msglen)
+                               double eff, srv_sea_ocean *out, int *ahead, double *seconds, char *msg,
+                               size_t msglen)
 {
     build_key k;
     key_make(&k, set_gen, p, eff);
     pthread_mutex_lock(&b->lock);
-    /* A change asked for ahead is the thread's to build: wait for it,
-     * most_wait at most.  The thread runs at nice 10; beside a
-     * busy core it can take ten times that, and the tick would wait on the
-     * lowest-priority thread of the daemon (CI: 300 ms without a frame):
-     * past the wait the ocean is built here (the same ocean: it is a pure
-     * function of the settings), the thread's build dropped when done. */
-    struct timespec until;
-    clock_gettime(CLOCK_REALTIME, &until);
-    double wait = most_wait > 0 ? most_wait : 0;
-    until.tv_sec += (time_t)floor(wait);
-    until.tv_nsec += (long)((wait - floor(wait)) * 1e9);
-    if (until.tv_nsec >= 1000000000L) {
-        until.tv_sec++;
-        until.tv_nsec -= 1000000000L;
-    }
+    /* a change asked for ahead is the thread's to build: wait for it
+     * (behind a build of a change no longer wanted, at most) */
     while (!b->stop && ((b->building && key_eq(&b->doing, &k)) ||
                         (b->wanted && key_eq(&b->want, &k) && !(b->done && key_eq(&b->done_key, &k)))))
-        if (pthread_cond_timedwait(&b->cond, &b->lock, &until) == ETIMEDOUT) break;
+        pthread_cond_wait(&b->cond, &b->lock);
     if (b->wanted && key_eq(&b->want, &k)) b->wanted = 0;  /* taken now, not built again */
     if (b->done && key_eq(&b->done_key, &k)) {
         ocean_result r = b->result;

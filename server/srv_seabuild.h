@@ -10,9 +10,8 @@
  * the change it will need next (srv_seabuild_want) and this module's thread
  * builds it, at a lower priority than the threads that serve clients; when
  * the change falls due the simulation thread takes the built ocean
- * (srv_seabuild_take), waiting only for what is left of a build under way
- * (and no longer than a build takes: the thread may be starved), and
- * building it itself when it was never asked for ahead.
+ * (srv_seabuild_take), waiting only for what is left of a build under way,
+ * and building it itself only when it was never asked for ahead.
  *
  * Threads: want and take from the simulation thread; the builder thread owns
  * the build in progress; the request and the finished build are under the
@@ -55,12 +54,11 @@ void srv_seabuild_destroy(srv_seabuild *b);
 void srv_seabuild_want(srv_seabuild *b, const srv_settings *s, uint64_t set_gen, const ocean_params *p,
                        double eff);
 /* The ocean of that change into *out: if it was asked for ahead, the
- * thread's build (*ahead 1), waited for if not done yet, most_wait seconds
- * at most; else built here (*ahead 0).  *seconds gets the wall time the
- * build took (at the builder's priority when ahead).  Results as
- * srv_sea_ocean_build. */
+ * thread's build (*ahead 1), waited for if not done yet; else built here
+ * (*ahead 0).  *seconds gets the wall time the build took (at the
+ * builder's priority when ahead).  Results as srv_sea_ocean_build. */
 ocean_result srv_seabuild_take(srv_seabuild *b, const srv_settings *s, uint64_t set_gen, const ocean_params *p,
-                               double eff, double most_wait, srv_sea_ocean *out, int *ahead, double *seconds,
-                               char *msg, size_t msglen);
+                               double eff, srv_sea_ocean *out, int *ahead, double *seconds, char *msg,
+                               size_t msglen);
 
 #endif

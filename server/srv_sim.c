@@ -1011,7 +1011,6 @@ static void follow_sea(srv_sim *s, double t)
     srv_sea_change c;
     pthread_mutex_lock(&h->lock);
     int due = srv_hub_sea_take_due(h, t, &c);
-    double build_s = h->sea_build_s;
     if (due) {
         /* meshes follow the new dominant wavelength */
         srv_client_table_reapply(s->table);
@@ -1022,9 +1021,8 @@ static void follow_sea(srv_sim *s, double t)
         char msg[256];
         int ahead = 0;
         double took = 0;
-        /* the builder's work waited for as long as twice a build takes */
-        ocean_result r = srv_seabuild_take(s->build, &s->set, s->set_gen, &c.params, c.effective_time,
-                                           2 * build_s + 1e-3, &o, &ahead, &took, msg, sizeof msg);
+        ocean_result r = srv_seabuild_take(s->build, &s->set, s->set_gen, &c.params, c.effective_time, &o, &ahead,
+                                           &took, msg, sizeof msg);
         pthread_mutex_lock(&h->lock);
         h->sea_build_s = 0.5 * h->sea_build_s + 0.5 * took; /* the lead of the changes set next */
         pthread_mutex_unlock(&h->lock);
