@@ -2262,8 +2262,12 @@ static void bad_input_gets_error(void **state)
     oc_client_destroy(good);
 }
 
+static void wait_hub_wind(double wind, double seconds);
+
 /* Admin sea-state change: refused without the token (above), taken with it
- * at the stated time and announced to every client. */
+ * at the stated time and announced to every client.  The time leaves the
+ * server's lead (PROTOCOL.md "Sea-state timeline": a few build times and two
+ * ticks; on a loaded host more than 0.2 s) so it is taken as stated. */
 static void sea_state_admin_change(void **state)
 {
     (void)state;
@@ -2273,13 +2277,13 @@ static void sea_state_admin_change(void **state)
     assert_int_equal(oc_client_sea_state(c, &sea, &eff), OCEAN_OK);
     double old_wind = sea.wind_u10;
     sea.wind_u10 = old_wind + 3;
-    double at = srv_hub_sim_time(srv_daemon_hub(daemon_)) + 0.2;
+    double at = srv_hub_sim_time(srv_daemon_hub(daemon_)) + 2.0;
     assert_int_equal(oc_client_sea_state_set(c, &sea, at, "test-token", 5000), OCEAN_OK);
     proto_sea now;
     assert_int_equal(oc_client_sea_state(c, &now, &eff), OCEAN_OK);
     assert_true(now.wind_u10 == old_wind + 3);
     assert_true(fabs(eff - at) < 1e-9);
-    usleep(600000);
+    wait_hub_wind(old_wind + 3, 10);
     oc_client *d = connect_client(port, NULL);
     proto_hello h;
     assert_int_equal(oc_client_hello(d, &h), OCEAN_OK);
@@ -2332,8 +2336,6 @@ static void sea_state_set_answered_by_its_own_announce(void **state)
  * change's ocean is built ahead, off the tick path, and none when it falls
  * due.  Issue 46: 1200 sets effective now had their oceans built on the
  * tick path, one a tick, and the viewers starved meanwhile. */
-static void wait_hub_wind(double wind, double seconds);
-
 static void sea_changes_built_ahead(void **state)
 {
     (void)state;
