@@ -177,7 +177,6 @@ void srv_admit_get_view(const srv_admit *a, const srv_config *cfg, srv_admit_vie
     v->shared = a->shared;
     v->priced = a->priced;
     v->admitted = a->admitted;
-    for (int c = 0; c < PROTO_CODEC_COUNT_; c++) v->sample_s[c] = a->cost[c];
 }
 
 static void refusal(const srv_admit *a, const srv_config *cfg, const proto_subscribe *sub, double price,

@@ -47,8 +47,6 @@ typedef struct srv_admit_view {
     double shared;          /* the daemon's unpriced work (measured) */
     double priced;          /* the admitted subscriptions' prices, summed */
     int admitted;           /* subscriptions holding a price */
-    double sample_s[PROTO_CODEC_COUNT_]; /* seconds per tile plane-sample, by codec
-                                            (0: not measured) */
 } srv_admit_view;
 
 /* CPU seconds the calling thread has run (what srv_admit_tiles is told). */

@@ -17,10 +17,10 @@
 #include <string.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "ocean_plan.h"
+#include "srv_hub.h"
 
 ocean_result srv_sea_ocean_build(const srv_settings *s, const ocean_params *p, int say_plan, srv_sea_ocean *out,
                                  char *msg, size_t msglen)
@@ -84,13 +84,6 @@ struct srv_seabuild {
     char why[256];
 };
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static int key_eq(const build_key *a, const build_key *b)
 {
     return a->set_gen == b->set_gen && a->eff == b->eff && memcmp(&a->params, &b->params, sizeof a->params) == 0;
@@ -131,9 +124,9 @@ static void *builder(void *arg)
         pthread_mutex_unlock(&b->lock);
         srv_sea_ocean o;
         char why[256] = "";
-        double t0 = now_s();
+        double t0 = srv_now();
         ocean_result r = srv_sea_ocean_build(s, &k.params, 1, &o, why, sizeof why);
-        double took = now_s() - t0;
+        double took = srv_now() - t0;
         srv_sea_ocean stale = {0};
         pthread_mutex_lock(&b->lock);
         b->building = 0;
@@ -233,8 +226,8 @@ ocean_result srv_seabuild_take(srv_seabuild *b, const srv_settings *s, uint64_t 
     }
     pthread_mutex_unlock(&b->lock);
     *ahead = 0;
-    double t0 = now_s();
+    double t0 = srv_now();
     ocean_result r = srv_sea_ocean_build(s, p, 1, out, msg, msglen);
-    *seconds = now_s() - t0;
+    *seconds = srv_now() - t0;
     return r;
 }

@@ -1353,6 +1353,12 @@ static int take_replay(srv_sim *s, work *w, srv_client *c, double quantum, doubl
     return taken;
 }
 
+/* Client c has replay cameras waiting [hub.lock held]. */
+static int replay_waiting(const srv_client *c)
+{
+    return !c->closed && c->sub.mode == PROTO_MODE_REPLAY && srv_inbox_replays(c->in);
+}
+
 /* Replay frames take what the live work leaves of the tick (the time
  * before the next one less REPLAY_HEADROOM of a period, and REPLAY_FLOOR
  * of a period at least), shared by the replaying clients by deficit round
@@ -1375,12 +1381,12 @@ static void replay_turn(srv_sim *s, work *w, double tick_wall, double rate)
     for (int i = 0; i < w->ncl; i++) {
         srv_client *c = w->cl[i];
         if (c->id == s->replay_last) start = i + 1;
-        active += !c->closed && c->sub.mode == PROTO_MODE_REPLAY && srv_inbox_replays(c->in);
+        active += replay_waiting(c);
     }
     if (active) quantum = room / active;
     for (int k = 0; k < w->ncl && active; k++) {
         srv_client *c = w->cl[(start + k) % w->ncl];
-        if (c->closed || c->sub.mode != PROTO_MODE_REPLAY || !srv_inbox_replays(c->in)) continue;
+        if (!replay_waiting(c)) continue;
         if (first) s->replay_last = c->id; /* the next tick starts after it */
         first = 0;
         taken += take_replay(s, w, c, quantum, &room);
