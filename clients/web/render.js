@@ -958,13 +958,19 @@ export class Renderer {
         gl.uniform1i(u.u_skyCube, 3);
     }
 
-    /* Re-renders the sky cube map: all faces at first, then one face per
-     * frame every so often (clouds drift slowly; the sun does not move). */
+    /* Re-renders the sky cube map: all faces at first and whenever the sun
+     * or the wind changed (the HELLO's sea usually arrives after the first
+     * draw: faces of the default sky beside faces of the real one, changing
+     * for a second and a half, would show as a sky that moves by itself),
+     * then one face every so often (clouds drift slowly). */
     updateSkyCube(eye, time) {
         const gl = this.gl;
         const now = performance.now();
+        const key = `${this.sunDir} ${this.sunColor} ${this.wind}`;
+        if (key !== this.skyKey) this.skyReady = false;
         const faces = !this.skyReady ? [0, 1, 2, 3, 4, 5] : now - this.skyStamp > 250 ? [this.skyFace] : [];
         if (!faces.length) return;
+        this.skyKey = key;
         gl.bindFramebuffer(gl.FRAMEBUFFER, this.skyFbo);
         gl.viewport(0, 0, SKY_CUBE, SKY_CUBE);
         gl.disable(gl.DEPTH_TEST);

@@ -299,6 +299,25 @@ try {
     const sR2 = await stats(page2);
     check('t= holds the sea: two screenshots frames apart are the same', still < 0.05 && sR2.simTime === T,
         `mean |diff| ${still.toFixed(3)} over ${sR2.framesRendered - sR.framesRendered} frames, sim time ${sR2.simTime}`);
+    /* a change of wind (or sun) re-renders the whole sky at once: the
+     * HELLO's sea arrives after the first draw, and a sky cube refreshed a
+     * face every 250 ms showed the default sky's faces beside the real
+     * one's for 1.5 s, so a screenshot soon after the first frames was not
+     * the sea of T (seen as a failure of the check above on a busy host) */
+    const wind0 = await page2.evaluate(() => {
+        const r = window.oceanViewer.renderer, w = r.wind;
+        r.wind = [-w[1], w[0]];
+        return window.oceanStats.framesRendered;
+    });
+    await waitFor(page2, (r) => window.oceanStats.framesRendered >= r + 1, wind0, timeoutMs);
+    const imgW1 = decodePng(await page2.screenshot({ type: 'png' }));
+    await page2.waitForTimeout(1600);   /* past a whole round of faces (6 x 250 ms) */
+    await waitFor(page2, (r) => window.oceanStats.framesRendered >= r + 2, wind0, timeoutMs);
+    const imgW2 = decodePng(await page2.screenshot({ type: 'png' }));
+    const turned = meanAbsDiff(imgR2, imgW2, 0, imgR2.h), settled = meanAbsDiff(imgW1, imgW2, 0, imgW2.h);
+    check('a change of wind redraws the whole sky at once (not a face at a time)', turned > 0.05 && settled < 0.05,
+        `the wind turned 90 deg changed the picture by ${turned.toFixed(3)}; after one frame it differed from ` +
+        `1.6 s later by ${settled.toFixed(3)}`);
     /* the nadir from 10 km: no spot of its own (issue 45: the haze took
      * the sky's colour in the view's azimuth, which turned to the zenith
      * straight down: a dark spot with a bright cone toward the sun, luma 80
