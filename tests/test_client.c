@@ -1409,8 +1409,8 @@ static void service_timeout_is_bounded(void **state)
  * of 30 fps, ever later.  Here the fake server's frames pile up in the
  * socket while nobody services, until it has written 20 more (waited for
  * with a deadline, not a sleep: a loaded host may run its 50 Hz timer
- * late); a single 0-timeout call must then take them all (one chunk per
- * call took about 3). */
+ * late); a single 0-timeout call must then take them all, or read for
+ * its whole bound (one chunk per call took about 3). */
 static void service_zero_drains(void **state)
 {
     (void)state;
@@ -1434,13 +1434,20 @@ static void service_zero_drains(void **state)
         written = __atomic_load_n(&s->messages_written, __ATOMIC_SEQ_CST) - w0;
     }
     assert_true(written >= 20);
+    struct timespec a, b;
+    clock_gettime(CLOCK_MONOTONIC, &a);
     assert_int_equal(oc_service(c, 0), OCEAN_OK);
+    clock_gettime(CLOCK_MONOTONIC, &b);
+    double ms = (b.tv_sec - a.tv_sec) * 1e3 + (b.tv_nsec - a.tv_nsec) * 1e-6;
     oc_client_get_stats(c, &st1);
     uint64_t got = st1.frames_rx - st0.frames_rx;
-    /* every message written is a frame, and on loopback in this socket */
-    if (got + 1 < (uint64_t)written) {
-        print_error("one oc_service(c, 0) took %llu of the %d frames written (%llu bytes)\n", (unsigned long long)got,
-                    written, (unsigned long long)(st1.bytes_rx - st0.bytes_rx));
+    /* every message written is a frame, and on loopback in this socket:
+     * the call takes them all, or reads until its bound, OC_SERVICE_DRAIN_MS
+     * (a flood must not hold the caller; under ASan on a loaded host 13 of
+     * 20 took the 10 ms); one chunk per call stopped after ~3, at once */
+    if (got + 1 < (uint64_t)written && ms < OC_SERVICE_DRAIN_MS) {
+        print_error("one oc_service(c, 0) took %llu of the %d frames written (%llu bytes) and returned after %.1f ms\n",
+                    (unsigned long long)got, written, (unsigned long long)(st1.bytes_rx - st0.bytes_rx), ms);
         fail();
     }
     /* the queue kept the newest frame_queue (4) of them */
