@@ -163,12 +163,16 @@ static int radial_nodes(const ocean_sea_state *sea, double ka, double kb, double
     return n;
 }
 
-static double radial_sum(const ocean_sea_state *sea, double th, int n, const double *k,
+/* The radial sum at direction th (world radians) over the annulus's rings
+ * (the k nodes' spectrum and spreading, computed once per annulus). */
+static double radial_sum(const ocean_sea_state *sea, double th, int n, const ocean_spectrum_ring *ring,
                          const double *w)
 {
-    double c = cos(th), s = sin(th), acc = 0.0;
+    ocean_spreading_dir dir;
+    ocean_spreading_dir_at(sea->spreading, th - sea->wind_dir_deg * (M_PI / 180.0), &dir);
+    double acc = 0.0;
     for (int i = 0; i < n; i++) {
-        double f = ocean_spectrum_f(sea, k[i] * c, k[i] * s);
+        double f = ocean_spectrum_ring_f(&ring[i], &dir);
         if (f > 0.0 && isfinite(f))
             acc += f * w[i];
     }
@@ -180,12 +184,12 @@ static double radial_sum(const ocean_sea_state *sea, double th, int n, const dou
  * sum is only approximate (spreading functions have kinks and cusps: the
  * cos-2s cusp behind the wind, Tessendorf's edge at +-90 degrees); the
  * variance itself comes from annulus_variance. */
-static void annulus_marginal(const ocean_sea_state *sea, int nr, const double *k,
+static void annulus_marginal(const ocean_sea_state *sea, int nr, const ocean_spectrum_ring *ring,
                              const double *w, double *m)
 {
     double dth = TWO_PI / THETA_BINS;
     for (int j = 0; j < THETA_BINS; j++)
-        m[j] = radial_sum(sea, -M_PI + (j + 0.5) * dth, nr, k, w) * dth;
+        m[j] = radial_sum(sea, -M_PI + (j + 0.5) * dth, nr, ring, w) * dth;
 }
 
 /* The annulus variance int int F k dk dtheta: tanh-sinh (double
@@ -193,7 +197,7 @@ static void annulus_marginal(const ocean_sea_state *sea, int nr, const double *k
  * directions where spreading functions are not smooth (0, +-90, 180
  * degrees from the wind), which is exact to ~1e-13 despite the cusps;
  * Gauss-Legendre in ln k. */
-static double annulus_variance(const ocean_sea_state *sea, int nr, const double *k,
+static double annulus_variance(const ocean_sea_state *sea, int nr, const ocean_spectrum_ring *ring,
                                const double *w)
 {
     const double h = 1.0 / 16.0, tmax = 3.5;
@@ -207,7 +211,7 @@ static double annulus_variance(const ocean_sea_state *sea, int nr, const double 
             double wt = M_PI_2 * cosh(t) / (ch * ch);
             if (wt < 1e-300)
                 continue;
-            acc += wt * radial_sum(sea, mid + half * x, nr, k, w);
+            acc += wt * radial_sum(sea, mid + half * x, nr, ring, w);
         }
         total += acc * half * h;
     }
@@ -301,8 +305,10 @@ ocean_result ocean_gerstner_create(const ocean_gerstner_params *p, ocean_gerstne
     g->kx = malloc(8 * n * sizeof(double));
     g->annulus = calloc(4 * n, sizeof(int));
     double *m = malloc((2 * THETA_BINS + 1) * sizeof(double));
-    if (g->kx == NULL || g->annulus == NULL || m == NULL) {
+    ocean_spectrum_ring *ring = malloc(MAX_RADIAL * sizeof *ring);
+    if (g->kx == NULL || g->annulus == NULL || m == NULL || ring == NULL) {
         free(m);
+        free(ring);
         ocean_gerstner_destroy(g);
         return OCEAN_ENOMEM;
     }
@@ -337,11 +343,13 @@ ocean_result ocean_gerstner_create(const ocean_gerstner_params *p, ocean_gerstne
             int ma = M / R + (a < M % R ? 1 : 0);
             double rk[MAX_RADIAL], rw[MAX_RADIAL];
             int nr = radial_nodes(&p->sea, ka, kb, rk, rw);
-            annulus_marginal(&p->sea, nr, rk, rw, m);
+            for (int i = 0; i < nr; i++)
+                ocean_spectrum_ring_at(&p->sea, rk[i], &ring[i]);
+            annulus_marginal(&p->sea, nr, ring, rw, m);
             cdf[0] = 0.0;
             for (int j = 0; j < THETA_BINS; j++)
                 cdf[j + 1] = cdf[j] + m[j];
-            double v = annulus_variance(&p->sea, nr, rk, rw);
+            double v = annulus_variance(&p->sea, nr, ring, rw);
             double vt = cdf[THETA_BINS];
             double amp = sqrt(2.0 * v / ma);
             for (int s = 0; s < ma; s++, w++) {
@@ -375,6 +383,7 @@ ocean_result ocean_gerstner_create(const ocean_gerstner_params *p, ocean_gerstne
         }
     }
     free(m);
+    free(ring);
     *out = g;
     return OCEAN_OK;
 }

@@ -322,31 +322,24 @@ static double cos2s_exponent(const ocean_sea_state *s, double w, double wp)
     return fmin(fmax(sv, 0.0), 1e6);
 }
 
-double ocean_spreading_d(const ocean_sea_state *s, double theta, double w)
+void ocean_spreading_at(const ocean_sea_state *s, double w, ocean_spreading *out)
 {
-    theta = remainder(theta, 2.0 * M_PI); /* [-pi, pi] */
+    memset(out, 0, sizeof *out);
+    out->kind = s->spreading;
+    if (s->spreading == OCEAN_SPREAD_TESSENDORF)
+        return;
     double wp = ocean_spectrum_peak(s);
+    if (!(wp > 0.0) || !(w > 0.0)) {
+        out->uniform = 1;
+        return;
+    }
     switch (s->spreading) {
-    case OCEAN_SPREAD_TESSENDORF: {
-        if (fabs(theta) >= M_PI / 2)
-            return 0.0;
-        double c = cos(theta);
-        return (2.0 / M_PI) * c * c;
-    }
     case OCEAN_SPREAD_MITSUYASU:
-    case OCEAN_SPREAD_HASSELMANN: {
-        if (!(wp > 0.0) || !(w > 0.0))
-            return 1.0 / (2.0 * M_PI);
-        double sv = cos2s_exponent(s, w, wp);
-        double c = fabs(cos(theta / 2.0));
-        if (c == 0.0)
-            return sv == 0.0 ? ocean_cos2s_norm(0.0) : 0.0;
-        double ld = log(ocean_cos2s_norm(sv)) + 2.0 * sv * log(c);
-        return ld < EXP_UNDERFLOW ? 0.0 : exp(ld);
-    }
+    case OCEAN_SPREAD_HASSELMANN:
+        out->sv = cos2s_exponent(s, w, wp);
+        out->lnorm = log(ocean_cos2s_norm(out->sv));
+        break;
     case OCEAN_SPREAD_DONELAN_BANNER: {
-        if (!(wp > 0.0) || !(w > 0.0))
-            return 1.0 / (2.0 * M_PI);
         double r = w / wp, b;
         if (r < 0.95)
             b = 2.61 * pow(r, 1.3);
@@ -355,30 +348,103 @@ double ocean_spreading_d(const ocean_sea_state *s, double theta, double w)
         else
             b = pow(10.0, -0.4 + 0.8393 * exp(-0.567 * log(r * r)));
         /* b -> 0 (r -> 0) tends to the uniform 1/(2 pi). */
-        if (b < 1e-8)
+        if (b < 1e-8) {
+            out->uniform = 1;
+            break;
+        }
+        out->b = b;
+        out->pre = b / (2.0 * tanh(b * M_PI));
+        break;
+    }
+    default:
+        break;
+    }
+}
+
+void ocean_spreading_dir_at(ocean_spreading_kind kind, double theta, ocean_spreading_dir *out)
+{
+    memset(out, 0, sizeof *out);
+    out->theta = remainder(theta, 2.0 * M_PI); /* [-pi, pi] */
+    if (kind == OCEAN_SPREAD_TESSENDORF) {
+        out->cos_theta = cos(out->theta);
+    } else if (kind == OCEAN_SPREAD_MITSUYASU || kind == OCEAN_SPREAD_HASSELMANN) {
+        out->c_half = fabs(cos(out->theta / 2.0));
+        if (out->c_half != 0.0)
+            out->ln_c_half = log(out->c_half);
+    }
+}
+
+double ocean_spreading_eval(const ocean_spreading *d, const ocean_spreading_dir *dir)
+{
+    switch (d->kind) {
+    case OCEAN_SPREAD_TESSENDORF: {
+        if (fabs(dir->theta) >= M_PI / 2)
+            return 0.0;
+        double c = dir->cos_theta;
+        return (2.0 / M_PI) * c * c;
+    }
+    case OCEAN_SPREAD_MITSUYASU:
+    case OCEAN_SPREAD_HASSELMANN: {
+        if (d->uniform)
             return 1.0 / (2.0 * M_PI);
-        double ch = cosh(b * theta); /* inf for huge b*theta: 1/inf^2 = 0 */
-        return b / (2.0 * tanh(b * M_PI)) / (ch * ch);
+        if (dir->c_half == 0.0)
+            return d->sv == 0.0 ? ocean_cos2s_norm(0.0) : 0.0;
+        double ld = d->lnorm + 2.0 * d->sv * dir->ln_c_half;
+        return ld < EXP_UNDERFLOW ? 0.0 : exp(ld);
+    }
+    case OCEAN_SPREAD_DONELAN_BANNER: {
+        if (d->uniform)
+            return 1.0 / (2.0 * M_PI);
+        double ch = cosh(d->b * dir->theta); /* inf for huge b*theta: 1/inf^2 = 0 */
+        return d->pre / (ch * ch);
     }
     default:
         return 0.0;
     }
 }
 
-double ocean_spectrum_f(const ocean_sea_state *s, double kx, double kz)
+double ocean_spreading_d(const ocean_sea_state *s, double theta, double w)
 {
-    double k = hypot(kx, kz);
+    ocean_spreading d;
+    ocean_spreading_dir dir;
+    ocean_spreading_at(s, w, &d);
+    ocean_spreading_dir_at(s->spreading, theta, &dir);
+    return ocean_spreading_eval(&d, &dir);
+}
+
+void ocean_spectrum_ring_at(const ocean_sea_state *s, double k, ocean_spectrum_ring *out)
+{
+    memset(out, 0, sizeof *out);
     if (!(k > 0.0) || !isfinite(k) || !(s->wind_u10 > 1e-6))
-        return 0.0;
-    double theta = atan2(kz, kx) - s->wind_dir_deg * (M_PI / 180.0);
+        return;
+    out->k = k;
     double w = ocean_dispersion(k, s->depth_m);
-    double d = ocean_spreading_d(s, theta, w);
+    ocean_spreading_at(s, w, &out->d);
+    if (s->spectrum == OCEAN_SPECTRUM_PHILLIPS)
+        out->radial = phillips_sk(s, k);
+    else
+        out->radial = ocean_spectrum_s(s, w) * ocean_dispersion_dk(k, s->depth_m);
+}
+
+double ocean_spectrum_ring_f(const ocean_spectrum_ring *r, const ocean_spreading_dir *dir)
+{
+    if (!(r->k > 0.0))
+        return 0.0;
+    double d = ocean_spreading_eval(&r->d, dir);
     if (d == 0.0)
         return 0.0;
-    if (s->spectrum == OCEAN_SPECTRUM_PHILLIPS)
-        return phillips_sk(s, k) * d / k;
-    double sw = ocean_spectrum_s(s, w);
-    return sw * ocean_dispersion_dk(k, s->depth_m) * d / k;
+    return r->radial * d / r->k;
+}
+
+double ocean_spectrum_f(const ocean_sea_state *s, double kx, double kz)
+{
+    ocean_spectrum_ring r;
+    ocean_spectrum_ring_at(s, hypot(kx, kz), &r);
+    if (!(r.k > 0.0))
+        return 0.0;
+    ocean_spreading_dir dir;
+    ocean_spreading_dir_at(s->spreading, atan2(kz, kx) - s->wind_dir_deg * (M_PI / 180.0), &dir);
+    return ocean_spectrum_ring_f(&r, &dir);
 }
 
 ocean_result ocean_beaufort_wind(int force, double *u10)

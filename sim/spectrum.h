@@ -100,6 +100,46 @@ double ocean_cos2s_norm(double s);
  * including Phillips small-wave suppression.  0 at k = 0. */
 double ocean_spectrum_f(const ocean_sea_state *s, double kx, double kz);
 
+/* D(theta, w) at one w, its w-dependent parts (the peak, the spreading
+ * exponent and its normalisation: pow, tanh and lgamma) computed once. */
+typedef struct ocean_spreading {
+    ocean_spreading_kind kind;
+    int uniform;          /* 1 / (2 pi) at every theta */
+    double sv;            /* cos-2s: the exponent s(w) */
+    double lnorm;         /* cos-2s: ln Q(s) */
+    double b, pre;        /* Donelan-Banner: beta and b / (2 tanh(b pi)) */
+} ocean_spreading;
+
+/* One direction theta (radians from the wind), its theta-dependent parts
+ * for spreading `kind` computed once: a sum over wave numbers at one
+ * direction takes them from here. */
+typedef struct ocean_spreading_dir {
+    double theta;         /* reduced to [-pi, pi] */
+    double cos_theta;     /* Tessendorf: cos theta */
+    double c_half;        /* cos-2s: |cos(theta / 2)| */
+    double ln_c_half;     /* cos-2s: its log, when c_half > 0 */
+} ocean_spreading_dir;
+
+void ocean_spreading_at(const ocean_sea_state *s, double w, ocean_spreading *out);
+void ocean_spreading_dir_at(ocean_spreading_kind kind, double theta, ocean_spreading_dir *out);
+/* ocean_spreading_d(s, theta, w) is this of the two above, bit for bit. */
+double ocean_spreading_eval(const ocean_spreading *d, const ocean_spreading_dir *dir);
+
+/* F on the ring |k| = k: what depends on k alone (the spectrum, dw/dk and
+ * the spreading at w(k)) computed once, for sums that sweep the direction
+ * at fixed |k| (quadratures, a mode and its mirror).  ocean_spectrum_f is
+ * ocean_spectrum_ring_f of ocean_spectrum_ring_at, bit for bit. */
+typedef struct ocean_spectrum_ring {
+    double k;             /* |k|, rad/m; F is 0 on the ring unless k > 0 */
+    double radial;        /* S(w) dw/dk (Phillips: its density in k) */
+    ocean_spreading d;
+} ocean_spectrum_ring;
+
+void ocean_spectrum_ring_at(const ocean_sea_state *s, double k, ocean_spectrum_ring *out);
+/* F on the ring at direction dir (ocean_spreading_dir_at of the sea's
+ * spreading). */
+double ocean_spectrum_ring_f(const ocean_spectrum_ring *r, const ocean_spreading_dir *dir);
+
 /* Beaufort force 0..12 -> representative U10 (midpoint of the Met Office
  * band; force 12 gives 35 m/s).  OCEAN_EINVAL outside 0..12. */
 ocean_result ocean_beaufort_wind(int force, double *u10);

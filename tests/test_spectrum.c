@@ -235,6 +235,49 @@ static void test_spreading_integrates_to_one(void **state)
             }
 }
 
+/* The ring (what depends on |k| alone, computed once for a sweep of
+ * directions: the near field's quadrature) gives the point evaluation's F
+ * at every direction, for every spectrum and spreading: F k = S(w) dw/dk
+ * D(theta, w) with the ring's own w, and the wind's direction as
+ * ocean_spectrum_f takes it from the wave vector. */
+static void test_ring_sweeps_the_direction(void **state)
+{
+    (void)state;
+    ocean_sea_state s;
+    ocean_sea_state_default(&s);
+    s.wind_dir_deg = 37.0;
+    s.swell = 0.5;
+    s.depth_m = 30.0; /* TMA's depth factor and finite-depth dw/dk at work */
+    double ks[] = {0.004, 0.03, 0.2, 1.5, 12.0};
+    for (int sp = 0; sp < OCEAN_SPECTRUM_COUNT_; sp++)
+        for (int sd = 0; sd < OCEAN_SPREAD_COUNT_; sd++)
+            for (size_t i = 0; i < sizeof ks / sizeof ks[0]; i++) {
+                s.spectrum = (ocean_spectrum_kind)sp;
+                s.spreading = (ocean_spreading_kind)sd;
+                ocean_spectrum_ring r;
+                ocean_spectrum_ring_at(&s, ks[i], &r);
+                double w = ocean_dispersion(ks[i], s.depth_m);
+                int nonzero = 0;
+                for (int j = 0; j < 720; j++) {
+                    double th = -M_PI + (j + 0.37) * (2.0 * M_PI / 720);
+                    ocean_spreading_dir dir;
+                    ocean_spreading_dir_at(s.spreading, th, &dir);
+                    double f = ocean_spectrum_ring_f(&r, &dir);
+                    double want = r.radial * ocean_spreading_d(&s, th, w) / ks[i];
+                    double wa = th + s.wind_dir_deg * (M_PI / 180.0);
+                    double point = ocean_spectrum_f(&s, ks[i] * cos(wa), ks[i] * sin(wa));
+                    nonzero += f > 0.0;
+                    if (!(f == want) || !(fabs(f - point) <= 1e-9 * fabs(point) + 1e-300))
+                        fail_msg("%s / %s k %g theta %g: ring %.17g, S dw/dk D / k %.17g, point %.17g",
+                                 ocean_spectrum_name(s.spectrum), ocean_spreading_name(s.spreading), ks[i], th,
+                                 f, want, point);
+                }
+                if (ks[i] >= 0.03 && ks[i] <= 1.5 && nonzero == 0) /* about the peak: waves there */
+                    fail_msg("%s / %s k %g: F is 0 on the whole ring", ocean_spectrum_name(s.spectrum),
+                             ocean_spreading_name(s.spreading), ks[i]);
+            }
+}
+
 static void test_cos2s_norm(void **state)
 {
     (void)state;
@@ -371,6 +414,7 @@ int main(void)
         cmocka_unit_test(test_jonswap_energy_growth_law),
         cmocka_unit_test(test_tma),
         cmocka_unit_test(test_spreading_integrates_to_one),
+        cmocka_unit_test(test_ring_sweeps_the_direction),
         cmocka_unit_test(test_cos2s_norm),
         cmocka_unit_test(test_beaufort),
         cmocka_unit_test(test_extremes_finite),
