@@ -79,6 +79,13 @@ typedef struct srv_client {
 #define SRV_SUBSCRIBE_PER_S 2.0
 #define SRV_SUBSCRIBE_BURST 4.0
 
+/* SEA_STATE sets a connection may make: SRV_SEA_SET_PER_S a second after a
+ * burst of SRV_SEA_SET_BURST (more than the 16 changes the server holds
+ * pending, so one connection can reach that limit); one more is refused
+ * ERATE, answered once a second. */
+#define SRV_SEA_SET_PER_S 4.0
+#define SRV_SEA_SET_BURST 20.0
+
 /* Creates a client (refs = 1, the list's), adds it to the hub. */
 ocean_result srv_client_create(srv_hub *h, srv_client **out);
 void srv_client_ref(srv_client *c);

@@ -419,6 +419,28 @@ static int admin_ok(const srv_in *in, const char *token)
     return 0;
 }
 
+/* Takes one of the connection's SEA_STATE sets (SRV_SEA_SET_*): each is
+ * checked and built at a cost (ocean_params_validate: 0.4-1.4 ms; an ocean
+ * per change), so a client holding the token may not flood them.  Over the
+ * rate: refused ERATE, answered once a second as other floods are.
+ * Returns 1 if the set may go on. */
+static int sea_set_token(const srv_in *in)
+{
+    srv_session *s = in->s;
+    if (srv_bucket_take(&s->sea_sets, SRV_SEA_SET_PER_S, SRV_SEA_SET_BURST, srv_now(), 1)) return 1;
+    atomic_fetch_add(&in->h->stats.refused_rate, 1);
+    uint64_t before = s->rate_refused;
+    if (one_per_window(s, &s->sea_err_t)) {
+        char why[300];
+        snprintf(why, sizeof why, "SEA_STATE set refused: more than %g sets a second (burst %g) from this "
+                 "connection; %llu more refused without a reply since the last such ERROR",
+                 SRV_SEA_SET_PER_S, SRV_SEA_SET_BURST, (unsigned long long)before);
+        refuse(in, OCEAN_ERATE, why);
+        s->rate_refused = 0;
+    }
+    return 0;
+}
+
 static void on_sea_state(const srv_in *in)
 {
     srv_hub *h = in->h;
@@ -436,6 +458,7 @@ static void on_sea_state(const srv_in *in)
                                 "empty)");
         return;
     }
+    if (!sea_set_token(in)) return;
     if (!admin_ok(in, s->token)) return;
     char why[512], msg[256];
     pthread_mutex_lock(&h->lock);

@@ -48,6 +48,8 @@ typedef struct srv_session {
     double text_err_t;              /* last text-frame ERROR sent; one per second */
     uint64_t rate_refused;          /* messages refused since that ERROR */
     srv_bucket sub_changes;         /* changed SUBSCRIBEs (SRV_SUBSCRIBE_*) */
+    srv_bucket sea_sets;            /* SEA_STATE sets (SRV_SEA_SET_*) */
+    double sea_err_t;               /* last ERATE ERROR for a set over that rate */
     double price;                   /* the subscription's price held in admission (srv_admit.h) */
     int admin_misses;               /* wrong admin tokens in a row */
     double admin_until;             /* SEA_STATE set refused until then (monotonic) */
