@@ -6,18 +6,15 @@
 # is neither a pass nor a failure, but the closing line says how many); a
 # script or a program that crashes before its summary counts as one failure.
 #
-# Tests run side by side, two per core by default (each starts its daemons
+# Tests run side by side, one per core by default (each starts its daemons
 # on ports of its own, in directories of its own, and waits for conditions,
-# not for time; most follow real-time streams and use a third of their wall
-# time or less, so two per core fill the CPU their waits leave: the plain
-# pass on a 2-core host with one core busy took 329 s at 4, ~450 s at 2),
-# longest first so the pass ends when its longest test does,
+# not for time), longest first so the pass ends when its longest test does,
 # except test_attacks, which runs alone at the end (see below); their lines
 # are printed in name order once all are done.
 set -u
 build=${1:-build}
 label=${2:-plain}
-jobs=${TEST_JOBS:-$((2 * $(nproc 2>/dev/null || echo 1)))}
+jobs=${TEST_JOBS:-$(nproc 2>/dev/null || echo 2)}
 passed=0
 failed=0
 skipped=0
