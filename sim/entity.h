@@ -1,0 +1,107 @@
+/*
+ * entity.h - ships and rotorcraft in the sea: a table of entities, each an
+ * id, a shape and a track of samples in sim time, and the state of any of
+ * them at any instant.
+ *
+ * One concept for every feeder: an ocean.v1 client and a CIGI host's Entity
+ * Control enter the same samples (docs/design.md, "Entities"), and the sea
+ * stays a pure function of its inputs: the state at t depends only on the
+ * samples the table holds, in whatever order the instants are asked for,
+ * never on earlier calls.
+ *
+ * A track: samples (t, x, z in double, altitude, heading, speed) entered in
+ * strictly increasing t.  Between two samples the position is the cubic
+ * Hermite curve through both positions with both velocities (heading and
+ * speed) as tangents, so a turn drawn from sparse samples stays smooth and
+ * passes through every sample; heading turns the short way, speed and
+ * altitude go linearly.  After the last sample the entity goes on at that
+ * sample's velocity for at most `hold` seconds, then stays where that left
+ * it, stopped (state.held): a feeder that goes silent leaves no ship
+ * steaming off forever.  Before its first sample an entity is not in the
+ * sea (OCEAN_ENOTFOUND).  A track keeps its last OCEAN_TRACK_KEEP samples;
+ * an instant before the oldest kept is OCEAN_ENOTFOUND too.
+ *
+ * Every input is checked: NaN or Inf anywhere, sizes and speeds outside the
+ * kind's range, samples out of time order, and teleports (a sample whose
+ * distance from the previous one needs more than the kind's top speed,
+ * with a margin for the feeder's rounding) are refused with a message and
+ * change nothing.
+ *
+ * Threads: a table belongs to one thread; const calls may run in several
+ * threads at once when nothing writes it.
+ * OOM: OCEAN_ENOMEM, the table unchanged.
+ */
+#ifndef OCEAN_ENTITY_H
+#define OCEAN_ENTITY_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "ocean_result.h"
+
+typedef enum ocean_entity_kind {
+    OCEAN_ENTITY_SHIP = 0,
+    OCEAN_ENTITY_ROTORCRAFT = 1,
+    OCEAN_ENTITY_KIND_COUNT_
+} ocean_entity_kind;
+
+#define OCEAN_ENTITY_MAX 4096       /* the most a table may be made for */
+#define OCEAN_TRACK_KEEP 256        /* samples a track keeps */
+#define OCEAN_ENTITY_POS_MAX 2.0e7  /* |x|, |z| in m: half the Earth's circumference */
+/* Top speeds (m/s): a fast boat is 25, a helicopter's Vne about 90. */
+#define OCEAN_SHIP_SPEED_MAX 30.0
+#define OCEAN_ROTOR_SPEED_MAX 100.0
+#define OCEAN_ROTOR_ALTITUDE_MAX 5000.0
+
+typedef struct ocean_entity_desc {
+    uint32_t id;
+    ocean_entity_kind kind;
+    double length_m;     /* ship: waterline length [1, 500]; rotorcraft: rotor diameter [1, 40] */
+    double beam_m;       /* ship: [0.5, 100]; rotorcraft: 0 */
+    double draught_m;    /* ship: [0.1, 30]; rotorcraft: 0 */
+} ocean_entity_desc;
+
+typedef struct ocean_track_sample {
+    double t;            /* sim time, s */
+    double x, z;         /* world position, m */
+    double altitude_m;   /* rotorcraft: height above mean sea level [0, 5000]; ship: 0 */
+    double heading_deg;  /* direction of travel, degrees from +x toward +z (any finite value) */
+    double speed;        /* m/s along the heading, [0, the kind's top speed] */
+} ocean_track_sample;
+
+typedef struct ocean_entity_state {
+    double x, z, altitude_m;
+    double heading_deg;  /* [0, 360) */
+    double speed;        /* m/s; 0 once held */
+    double vx, vz;       /* velocity, m/s */
+    int extrapolated;    /* after the last sample */
+    int held;            /* after the last sample and its hold: stopped */
+} ocean_entity_state;
+
+typedef struct ocean_entities ocean_entities;
+
+/* A table for at most max_entities (1..OCEAN_ENTITY_MAX) entities whose
+ * tracks run on hold_s seconds (0..600) past their last sample. */
+ocean_result ocean_entities_create(int max_entities, double hold_s, ocean_entities **out, char *why, size_t n);
+void ocean_entities_destroy(ocean_entities *e); /* accepts NULL */
+
+/* Enters an entity with no track yet.  OCEAN_EINVAL (shape), OCEAN_ESTATE
+ * (the id is in the table), OCEAN_ETOOBIG (the table is full). */
+ocean_result ocean_entities_add(ocean_entities *e, const ocean_entity_desc *d, char *why, size_t n);
+/* Takes an entity and its track out.  OCEAN_ENOTFOUND for an unknown id. */
+ocean_result ocean_entities_remove(ocean_entities *e, uint32_t id);
+
+/* Appends a sample to id's track.  OCEAN_ENOTFOUND (unknown id),
+ * OCEAN_EINVAL (a value out of range, out of time order, a teleport). */
+ocean_result ocean_entities_sample(ocean_entities *e, uint32_t id, const ocean_track_sample *s, char *why,
+                                   size_t n);
+
+/* id's state at sim time t.  OCEAN_ENOTFOUND: unknown id, or t before the
+ * track's first kept sample; OCEAN_EINVAL: t not finite. */
+ocean_result ocean_entities_state(const ocean_entities *e, uint32_t id, double t, ocean_entity_state *out);
+
+int ocean_entities_count(const ocean_entities *e);
+/* The desc of the i-th entity (0 <= i < count), in increasing id. */
+ocean_result ocean_entities_get(const ocean_entities *e, int i, ocean_entity_desc *out);
+
+#endif

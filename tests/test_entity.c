@@ -1,0 +1,260 @@
+/*
+ * test_entity.c - the entity table (sim/entity.h): shapes and samples
+ * checked, a track's state at any instant (through every sample, smooth
+ * along a turn, on at its last velocity for the hold, then held), the same
+ * whatever order the instants are asked in, and refusals that change
+ * nothing.
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "entity.h"
+
+static const ocean_entity_desc frigate = {.id = 7, .kind = OCEAN_ENTITY_SHIP, .length_m = 120, .beam_m = 15,
+                                          .draught_m = 5};
+
+static ocean_entities *table(int max, double hold)
+{
+    ocean_entities *e = NULL;
+    assert_int_equal(ocean_entities_create(max, hold, &e, NULL, 0), OCEAN_OK);
+    return e;
+}
+
+static ocean_track_sample smp(double t, double x, double z, double heading, double speed)
+{
+    return (ocean_track_sample){.t = t, .x = x, .z = z, .heading_deg = heading, .speed = speed};
+}
+
+static void table_limits(void **state)
+{
+    (void)state;
+    ocean_entities *e = NULL;
+    char why[256];
+    assert_int_equal(ocean_entities_create(0, 5, &e, why, sizeof why), OCEAN_EINVAL);
+    assert_int_equal(ocean_entities_create(4, NAN, &e, why, sizeof why), OCEAN_EINVAL);
+    assert_null(e);
+    e = table(2, 5);
+    assert_int_equal(ocean_entities_add(e, &frigate, why, sizeof why), OCEAN_OK);
+    assert_int_equal(ocean_entities_add(e, &frigate, why, sizeof why), OCEAN_ESTATE);
+    ocean_entity_desc heli = {.id = 3, .kind = OCEAN_ENTITY_ROTORCRAFT, .length_m = 16};
+    assert_int_equal(ocean_entities_add(e, &heli, why, sizeof why), OCEAN_OK);
+    ocean_entity_desc third = frigate;
+    third.id = 9;
+    assert_int_equal(ocean_entities_add(e, &third, why, sizeof why), OCEAN_ETOOBIG);
+    assert_non_null(strstr(why, "holds 2"));
+    /* in increasing id */
+    ocean_entity_desc d;
+    assert_int_equal(ocean_entities_count(e), 2);
+    assert_int_equal(ocean_entities_get(e, 0, &d), OCEAN_OK);
+    assert_int_equal(d.id, 3);
+    assert_int_equal(ocean_entities_get(e, 1, &d), OCEAN_OK);
+    assert_int_equal(d.id, 7);
+    assert_int_equal(ocean_entities_get(e, 2, &d), OCEAN_EINVAL);
+    assert_int_equal(ocean_entities_remove(e, 3), OCEAN_OK);
+    assert_int_equal(ocean_entities_remove(e, 3), OCEAN_ENOTFOUND);
+    assert_int_equal(ocean_entities_add(e, &third, why, sizeof why), OCEAN_OK);
+    ocean_entities_destroy(e);
+    ocean_entities_destroy(NULL);
+}
+
+static void shapes_checked(void **state)
+{
+    (void)state;
+    ocean_entities *e = table(8, 5);
+    char why[256];
+    ocean_entity_desc bad[] = {
+        {.id = 1, .kind = OCEAN_ENTITY_SHIP, .length_m = NAN, .beam_m = 10, .draught_m = 3},
+        {.id = 1, .kind = OCEAN_ENTITY_SHIP, .length_m = 600, .beam_m = 10, .draught_m = 3},
+        {.id = 1, .kind = OCEAN_ENTITY_SHIP, .length_m = 50, .beam_m = 0, .draught_m = 3},
+        {.id = 1, .kind = OCEAN_ENTITY_ROTORCRAFT, .length_m = 80},
+        {.id = 1, .kind = OCEAN_ENTITY_ROTORCRAFT, .length_m = 10, .beam_m = 2},
+        {.id = 1, .kind = (ocean_entity_kind)5, .length_m = 50, .beam_m = 10, .draught_m = 3},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        why[0] = '\0';
+        assert_int_equal(ocean_entities_add(e, &bad[i], why, sizeof why), OCEAN_EINVAL);
+        assert_non_null(strstr(why, "entity 1"));
+    }
+    assert_int_equal(ocean_entities_count(e), 0);
+    ocean_entities_destroy(e);
+}
+
+/* Samples consistent with a straight run at 10 m/s: the curve between them
+ * is that run, on past the last at its velocity for the hold (30 s), then
+ * stopped where that left it. */
+static void straight_run_and_hold(void **state)
+{
+    (void)state;
+    ocean_entities *e = table(4, 30);
+    assert_int_equal(ocean_entities_add(e, &frigate, NULL, 0), OCEAN_OK);
+    ocean_entity_state st;
+    assert_int_equal(ocean_entities_state(e, 7, 0, &st), OCEAN_ENOTFOUND); /* no track yet */
+    ocean_track_sample a = smp(100, 1e6, -2e6, 90, 10), b = smp(110, 1e6, -2e6 + 100, 90, 10);
+    assert_int_equal(ocean_entities_sample(e, 7, &a, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 7, &b, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_state(e, 7, 99.9, &st), OCEAN_ENOTFOUND);
+    assert_int_equal(ocean_entities_state(e, 7, NAN, &st), OCEAN_EINVAL);
+    assert_int_equal(ocean_entities_state(e, 7, 105, &st), OCEAN_OK);
+    assert_true(fabs(st.x - 1e6) < 1e-6 && fabs(st.z - (-2e6 + 50)) < 1e-6);
+    assert_true(fabs(st.vx) < 1e-9 && fabs(st.vz - 10) < 1e-9 && st.speed == 10 && st.heading_deg == 90);
+    assert_false(st.extrapolated);
+    assert_int_equal(ocean_entities_state(e, 7, 125, &st), OCEAN_OK);
+    assert_true(st.extrapolated && !st.held && fabs(st.z - (-2e6 + 250)) < 1e-6);
+    assert_int_equal(ocean_entities_state(e, 7, 1e4, &st), OCEAN_OK);
+    assert_true(st.held && st.speed == 0 && st.vz == 0 && fabs(st.z - (-2e6 + 100 + 300)) < 1e-6);
+    ocean_entities_destroy(e);
+}
+
+/* A turn sampled every 10 s on a circle of 500 m at 8 m/s (9 deg a
+ * sample): the curve passes through every sample, stays within 0.1 % of the
+ * circle between them, and its heading turns the short way through 360. */
+static void turn_is_smooth(void **state)
+{
+    (void)state;
+    ocean_entities *e = table(4, 5);
+    assert_int_equal(ocean_entities_add(e, &frigate, NULL, 0), OCEAN_OK);
+    const double R = 500, U = 8, w = U / R;
+    for (int i = 0; i <= 60; i++) {
+        double t = 10.0 * i, a = w * t;
+        ocean_track_sample s = smp(t, R * cos(a), R * sin(a), a * 180 / M_PI + 90, U);
+        assert_int_equal(ocean_entities_sample(e, 7, &s, NULL, 0), OCEAN_OK);
+    }
+    double worst = 0;
+    int wrapped = 0;
+    for (double t = 0; t <= 600; t += 0.37) {
+        ocean_entity_state st;
+        assert_int_equal(ocean_entities_state(e, 7, t, &st), OCEAN_OK);
+        worst = fmax(worst, fabs(hypot(st.x, st.z) - R) / R);
+        double want = fmod(w * t * 180 / M_PI + 90, 360);
+        double dh = fabs(remainder(st.heading_deg - want, 360));
+        assert_true(dh < 0.01);
+        assert_true(st.heading_deg >= 0 && st.heading_deg < 360);
+        wrapped |= st.heading_deg < 5;
+    }
+    print_message("turn: the curve strays %.2e of the radius at most\n", worst);
+    assert_true(worst < 1e-3);
+    assert_true(wrapped);
+    ocean_entity_state st;
+    assert_int_equal(ocean_entities_state(e, 7, 250, &st), OCEAN_OK);
+    assert_true(fabs(st.x - R * cos(w * 250)) < 1e-9 && fabs(st.z - R * sin(w * 250)) < 1e-9);
+    ocean_entities_destroy(e);
+}
+
+/* The state at t is a function of the samples: asked forwards, backwards
+ * or at random, the same bits. */
+static void any_order_same_bits(void **state)
+{
+    (void)state;
+    ocean_entities *e = table(4, 20);
+    assert_int_equal(ocean_entities_add(e, &frigate, NULL, 0), OCEAN_OK);
+    double x = 0, z = 0, h = 10;
+    for (int i = 0; i < 40; i++) {
+        ocean_track_sample s = smp(2.5 * i, x, z, h, 6 + (i % 5));
+        assert_int_equal(ocean_entities_sample(e, 7, &s, NULL, 0), OCEAN_OK);
+        x += 2.5 * (6 + (i % 5)) * cos(h * M_PI / 180);
+        z += 2.5 * (6 + (i % 5)) * sin(h * M_PI / 180);
+        h += (i % 7) - 3;
+    }
+    enum { N = 400 };
+    ocean_entity_state fwd[N], back[N];
+    for (int i = 0; i < N; i++)
+        assert_int_equal(ocean_entities_state(e, 7, 0.3 * i, &fwd[i]), OCEAN_OK);
+    for (int i = N - 1; i >= 0; i--)
+        assert_int_equal(ocean_entities_state(e, 7, 0.3 * i, &back[i]), OCEAN_OK);
+    assert_memory_equal(fwd, back, sizeof fwd);
+    for (int k = 0; k < N; k++) {
+        int i = (k * 157) % N;
+        ocean_entity_state s;
+        assert_int_equal(ocean_entities_state(e, 7, 0.3 * i, &s), OCEAN_OK);
+        assert_memory_equal(&s, &fwd[i], sizeof s);
+    }
+    ocean_entities_destroy(e);
+}
+
+/* Every bad sample refused with its reason, the track as it was. */
+static void bad_samples_change_nothing(void **state)
+{
+    (void)state;
+    ocean_entities *e = table(4, 5);
+    assert_int_equal(ocean_entities_add(e, &frigate, NULL, 0), OCEAN_OK);
+    ocean_entity_desc heli = {.id = 3, .kind = OCEAN_ENTITY_ROTORCRAFT, .length_m = 16};
+    assert_int_equal(ocean_entities_add(e, &heli, NULL, 0), OCEAN_OK);
+    ocean_track_sample a = smp(10, 0, 0, 0, 10);
+    assert_int_equal(ocean_entities_sample(e, 7, &a, NULL, 0), OCEAN_OK);
+    ocean_entity_state before, after;
+    assert_int_equal(ocean_entities_state(e, 7, 12, &before), OCEAN_OK);
+    struct { ocean_track_sample s; const char *says; } bad[] = {
+        {smp(11, NAN, 0, 0, 10), "finite"},
+        {smp(11, 10, 0, INFINITY, 10), "finite"},
+        {smp(11, 10, 0, 0, 31), "speed"},
+        {smp(11, 10, 0, 0, -1), "speed"},
+        {smp(11, 3e7, 0, 0, 10), "|x|"},
+        {smp(10, 0, 0, 0, 10), "not after"},
+        {smp(9, 0, 0, 0, 10), "not after"},
+        {smp(11, 1000, 0, 0, 10), "teleport"},
+        {{.t = 11, .x = 10, .altitude_m = 20, .speed = 10}, "altitude"}, /* a ship flies not */
+    };
+    char why[400];
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        why[0] = '\0';
+        assert_int_equal(ocean_entities_sample(e, 7, &bad[i].s, why, sizeof why), OCEAN_EINVAL);
+        if (!strstr(why, bad[i].says)) fail_msg("sample %zu: '%s' does not say '%s'", i, why, bad[i].says);
+        assert_int_equal(ocean_entities_state(e, 7, 12, &after), OCEAN_OK);
+        assert_memory_equal(&before, &after, sizeof before);
+    }
+    assert_int_equal(ocean_entities_sample(e, 99, &a, why, sizeof why), OCEAN_ENOTFOUND);
+    /* a rotorcraft climbs within its range; above it, refused */
+    ocean_track_sample h1 = {.t = 0, .altitude_m = 30, .speed = 0};
+    ocean_track_sample h2 = {.t = 60, .altitude_m = 6000, .speed = 0};
+    assert_int_equal(ocean_entities_sample(e, 3, &h1, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 3, &h2, why, sizeof why), OCEAN_EINVAL);
+    h2.altitude_m = 300;
+    assert_int_equal(ocean_entities_sample(e, 3, &h2, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_state(e, 3, 30, &after), OCEAN_OK);
+    assert_true(fabs(after.altitude_m - 165) < 1e-9);
+    /* one good sample still goes in after all that */
+    ocean_track_sample b = smp(11, 10, 0, 0, 10);
+    assert_int_equal(ocean_entities_sample(e, 7, &b, NULL, 0), OCEAN_OK);
+    ocean_entities_destroy(e);
+}
+
+/* A track keeps its last OCEAN_TRACK_KEEP samples: an instant before the
+ * oldest kept is not answered (rather than guessed). */
+static void track_keeps_its_last_samples(void **state)
+{
+    (void)state;
+    ocean_entities *e = table(4, 5);
+    assert_int_equal(ocean_entities_add(e, &frigate, NULL, 0), OCEAN_OK);
+    int n = OCEAN_TRACK_KEEP + 44;
+    for (int i = 0; i < n; i++) {
+        ocean_track_sample s = smp(i, 5.0 * i, 0, 0, 5);
+        assert_int_equal(ocean_entities_sample(e, 7, &s, NULL, 0), OCEAN_OK);
+    }
+    ocean_entity_state st;
+    assert_int_equal(ocean_entities_state(e, 7, 43.5, &st), OCEAN_ENOTFOUND);
+    assert_int_equal(ocean_entities_state(e, 7, 44, &st), OCEAN_OK);
+    assert_true(fabs(st.x - 220) < 1e-9);
+    assert_int_equal(ocean_entities_state(e, 7, n - 1.5, &st), OCEAN_OK);
+    assert_true(fabs(st.x - 5.0 * (n - 1.5)) < 1e-9);
+    ocean_entities_destroy(e);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(table_limits),
+        cmocka_unit_test(shapes_checked),
+        cmocka_unit_test(straight_run_and_hold),
+        cmocka_unit_test(turn_is_smooth),
+        cmocka_unit_test(any_order_same_bits),
+        cmocka_unit_test(bad_samples_change_nothing),
+        cmocka_unit_test(track_keeps_its_last_samples),
+    };
+    return cmocka_run_group_tests_name("entity", tests, NULL, NULL);
+}
