@@ -62,6 +62,7 @@ typedef struct srv_hub {
     double sea_effective;                 /* [hub.lock] the sim time it took effect */
     srv_sea_change sea_pending[SRV_SEA_PENDING_MAX]; /* [hub.lock] earliest first */
     int n_sea_pending;                    /* [hub.lock] */
+    int sea_applying;                     /* [hub.lock] a change taken, its ocean not yet in force */
     uint64_t sea_gen;                     /* [hub.lock] bumps on every change entered */
     double sea_build_s;                   /* [hub.lock] wall seconds a sea's ocean takes to build
                                              (smoothed; the simulation thread measures) */

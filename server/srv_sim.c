@@ -1012,6 +1012,7 @@ static void follow_sea(srv_sim *s, double t)
     pthread_mutex_lock(&h->lock);
     int due = srv_hub_sea_take_due(h, t, &c);
     if (due) {
+        h->sea_applying = 1; /* until its ocean is in force and counted, below */
         /* meshes follow the new dominant wavelength */
         srv_client_table_reapply(s->table);
     }
@@ -1044,6 +1045,9 @@ static void follow_sea(srv_sim *s, double t)
             atomic_fetch_add(&h->stats.sea_changes, 1);
             atomic_fetch_add(ahead ? &h->stats.sea_built_ahead : &h->stats.sea_built_due, 1);
         }
+        pthread_mutex_lock(&h->lock);
+        h->sea_applying = 0;
+        pthread_mutex_unlock(&h->lock);
     }
     want_next_sea(s);
 }

@@ -2344,14 +2344,14 @@ static void sea_changes_built_ahead(void **state)
     proto_sea sea;
     double eff;
     assert_int_equal(oc_client_sea_state(a, &sea, &eff), OCEAN_OK);
-    /* the changes of the tests before have all taken effect */
+    /* the changes of the tests before have all taken effect and been counted */
     int left = 1;
     for (double end = test_now_s() + 20; left && test_now_s() < end; usleep(20000)) {
         pthread_mutex_lock(&h->lock);
-        left = h->n_sea_pending;
+        left = h->n_sea_pending || h->sea_applying;
         pthread_mutex_unlock(&h->lock);
     }
-    usleep(200000); /* and the tick of the last one */
+    assert_int_equal(left, 0);
     uint64_t due0 = atomic_load(&h->stats.sea_built_due), ahead0 = atomic_load(&h->stats.sea_built_ahead);
     test_ws b;
     assert_int_equal(test_ws_connect(&b, port, "/", PROTO_SUBPROTOCOL), 0);
@@ -2381,11 +2381,10 @@ static void sea_changes_built_ahead(void **state)
     left = 1;
     while (left && test_now_s() < end) {
         pthread_mutex_lock(&h->lock);
-        left = h->n_sea_pending;
+        left = h->n_sea_pending || h->sea_applying;
         pthread_mutex_unlock(&h->lock);
         usleep(20000);
     }
-    usleep(3 * 1000000 * tick); /* the last change's tick */
     uint64_t due = atomic_load(&h->stats.sea_built_due) - due0;
     uint64_t ahead = atomic_load(&h->stats.sea_built_ahead) - ahead0;
     fprintf(stderr, "%d changes set now: entered %.3f-%.3f s ahead, %.3f-%.3f s apart; %llu built ahead, %llu when "
@@ -2493,7 +2492,8 @@ static void sea_send(test_ws *w, int op, const proto_sea *sea, double eff)
 
 static double hub_now(void) { return srv_hub_sim_time(srv_daemon_hub(daemon_)); }
 
-/* Waits until the daemon's current sea has this wind (the change applied). */
+/* Waits until the daemon's current sea has this wind and no change is
+ * pending (the changes applied, none left to count in the next test). */
 static void wait_hub_wind(double wind, double seconds)
 {
     srv_hub *h = srv_daemon_hub(daemon_);
@@ -2502,8 +2502,9 @@ static void wait_hub_wind(double wind, double seconds)
     while (test_now_s() < end) {
         pthread_mutex_lock(&h->lock);
         w = h->sea_now.wind_u10;
+        int pending = h->n_sea_pending || h->sea_applying;
         pthread_mutex_unlock(&h->lock);
-        if (w == wind) return;
+        if (w == wind && !pending) return;
         usleep(20000);
     }
     fail_msg("the daemon's sea has wind %g, want %g", w, wind);
@@ -2766,7 +2767,8 @@ static void sea_set_ranges(void **state)
     for (double end = test_now_s() + 10; !same && test_now_s() < end; usleep(20000)) {
         pthread_mutex_lock(&h->lock);
         same = h->sea_now.wind_u10 == old.wind_u10 && h->sea_now.swell == old.swell &&
-               h->sea_now.phillips_a == old.phillips_a && h->sea_now.small_wave_m == old.small_wave_m;
+               h->sea_now.phillips_a == old.phillips_a && h->sea_now.small_wave_m == old.small_wave_m &&
+               h->n_sea_pending == 0 && !h->sea_applying;
         pthread_mutex_unlock(&h->lock);
     }
     assert_true(same);
