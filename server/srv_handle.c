@@ -188,19 +188,28 @@ static int one_per_window(srv_session *s, double *last)
     return 1;
 }
 
+/* A message over one of the connection's rates (what: the limit, said in
+ * the ERROR): counted, and answered ERATE once a second (one_per_window)
+ * with the count of those refused silently since. */
+static void refuse_over_rate(srv_session *s, double *last, const uint8_t *buf, size_t len, const char *what)
+{
+    atomic_fetch_add(&s->c->hub->stats.refused_rate, 1);
+    uint64_t before = s->rate_refused;
+    if (!one_per_window(s, last)) return;
+    char why[400];
+    snprintf(why, sizeof why, "%s; %llu more refused without a reply since the last such ERROR", what,
+             (unsigned long long)before);
+    s->rate_refused = 0;
+    srv_client_send_error(s->c, buf, len, OCEAN_ERATE, why);
+}
+
 static int admit(srv_session *s, const srv_config *cfg, const uint8_t *buf, size_t len)
 {
     if (rate_ok(s, cfg->msg_rate, cfg->msg_burst)) return 1;
-    atomic_fetch_add(&s->c->hub->stats.refused_rate, 1);
-    uint64_t before = s->rate_refused;
-    if (one_per_window(s, &s->rate_err_t)) {
-        char why[300];
-        snprintf(why, sizeof why, "message refused: more than %g messages/s (burst %d) "
-                 "(server.msg_rate); %llu more refused without a reply since the last such ERROR",
-                 cfg->msg_rate, cfg->msg_burst, (unsigned long long)before);
-        s->rate_refused = 0;
-        srv_client_send_error(s->c, buf, len, OCEAN_ERATE, why);
-    }
+    char what[200];
+    snprintf(what, sizeof what, "message refused: more than %g messages/s (burst %d) (server.msg_rate)",
+             cfg->msg_rate, cfg->msg_burst);
+    refuse_over_rate(s, &s->rate_err_t, buf, len, what);
     return 0;
 }
 
@@ -428,16 +437,10 @@ static int sea_set_token(const srv_in *in)
 {
     srv_session *s = in->s;
     if (srv_bucket_take(&s->sea_sets, SRV_SEA_SET_PER_S, SRV_SEA_SET_BURST, srv_now(), 1)) return 1;
-    atomic_fetch_add(&in->h->stats.refused_rate, 1);
-    uint64_t before = s->rate_refused;
-    if (one_per_window(s, &s->sea_err_t)) {
-        char why[300];
-        snprintf(why, sizeof why, "SEA_STATE set refused: more than %g sets a second (burst %g) from this "
-                 "connection; %llu more refused without a reply since the last such ERROR",
-                 SRV_SEA_SET_PER_S, SRV_SEA_SET_BURST, (unsigned long long)before);
-        refuse(in, OCEAN_ERATE, why);
-        s->rate_refused = 0;
-    }
+    char what[200];
+    snprintf(what, sizeof what, "SEA_STATE set refused: more than %g sets a second (burst %g) from this connection",
+             SRV_SEA_SET_PER_S, SRV_SEA_SET_BURST);
+    refuse_over_rate(s, &s->sea_err_t, in->buf, in->len, what);
     return 0;
 }
 

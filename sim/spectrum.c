@@ -412,6 +412,14 @@ double ocean_spreading_d(const ocean_sea_state *s, double theta, double w)
     return ocean_spreading_eval(&d, &dir);
 }
 
+/* S(w) dw/dk at k (Phillips: its density in k), w = w(k). */
+static double ring_radial(const ocean_sea_state *s, double k, double w)
+{
+    if (s->spectrum == OCEAN_SPECTRUM_PHILLIPS)
+        return phillips_sk(s, k);
+    return ocean_spectrum_s(s, w) * ocean_dispersion_dk(k, s->depth_m);
+}
+
 void ocean_spectrum_ring_at(const ocean_sea_state *s, double k, ocean_spectrum_ring *out)
 {
     memset(out, 0, sizeof *out);
@@ -420,10 +428,7 @@ void ocean_spectrum_ring_at(const ocean_sea_state *s, double k, ocean_spectrum_r
     out->k = k;
     double w = ocean_dispersion(k, s->depth_m);
     ocean_spreading_at(s, w, &out->d);
-    if (s->spectrum == OCEAN_SPECTRUM_PHILLIPS)
-        out->radial = phillips_sk(s, k);
-    else
-        out->radial = ocean_spectrum_s(s, w) * ocean_dispersion_dk(k, s->depth_m);
+    out->radial = ring_radial(s, k, w);
 }
 
 double ocean_spectrum_ring_f(const ocean_spectrum_ring *r, const ocean_spreading_dir *dir)
@@ -436,15 +441,23 @@ double ocean_spectrum_ring_f(const ocean_spectrum_ring *r, const ocean_spreading
     return r->radial * d / r->k;
 }
 
+/* One point: the spreading first, so a direction it leaves empty (half the
+ * plane for Tessendorf's) costs no spectrum; then ocean_spectrum_ring_f's
+ * product, in its order (the same bits). */
 double ocean_spectrum_f(const ocean_sea_state *s, double kx, double kz)
 {
-    ocean_spectrum_ring r;
-    ocean_spectrum_ring_at(s, hypot(kx, kz), &r);
-    if (!(r.k > 0.0))
+    double k = hypot(kx, kz);
+    if (!(k > 0.0) || !isfinite(k) || !(s->wind_u10 > 1e-6))
         return 0.0;
+    double w = ocean_dispersion(k, s->depth_m);
+    ocean_spreading sp;
     ocean_spreading_dir dir;
+    ocean_spreading_at(s, w, &sp);
     ocean_spreading_dir_at(s->spreading, atan2(kz, kx) - s->wind_dir_deg * (M_PI / 180.0), &dir);
-    return ocean_spectrum_ring_f(&r, &dir);
+    double d = ocean_spreading_eval(&sp, &dir);
+    if (d == 0.0)
+        return 0.0;
+    return ring_radial(s, k, w) * d / k;
 }
 
 ocean_result ocean_beaufort_wind(int force, double *u10)
