@@ -189,8 +189,9 @@ $(BUILD)/%.a:
 	@mkdir -p $(dir $@)
 	rm -f $@ && ar rcs $@ $^
 
+# ocean-sim render writes PNG with libpng.
 $(BUILD)/ocean-sim: $(call obj,$(SIMCLI_SRC)) $(ALL_LIBS)
-	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -o $@
+	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -lpng -o $@
 $(BUILD)/oceand: $(call obj,server/main.c) $(ALL_LIBS)
 	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -o $@
 # ocean-client's load generator frames WebSocket with libwslay (load_direct.c).
@@ -203,6 +204,12 @@ $(BUILD)/examples/%: $(BUILD)/obj/clients/examples/%.o $(ALL_LIBS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -o $@
 $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(if $(TESTLIB_SRC),$(LIB_TEST)) $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -lcmocka -o $@
+# test_render drives ocean-sim render's own modules.
+RENDER_SRC := sim/cli/render.c sim/cli/render_shade.c sim/cli/cli.c
+$(BUILD)/obj/tests/test_render.o: INC += -Isim/cli
+$(BUILD)/tests/test_render: $(BUILD)/obj/tests/test_render.o $(call obj,$(RENDER_SRC)) $(ALL_LIBS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(LDFLAGS) $^ $(LDLIBS) -lcmocka -o $@
 $(BUILD)/bench/%: $(BUILD)/obj/tests/bench/%.o $(if $(TESTLIB_SRC),$(LIB_TEST)) $(ALL_LIBS)

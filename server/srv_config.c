@@ -431,10 +431,8 @@ static ocean_result check_sea(srv_settings *tmp, const char *from, char *err, si
      * the finest cascade would keep its whole square band and the Gerstner
      * set could not start above it without a gap or an overlap, so the band
      * is cut at the finest grid's Nyquist circle, pi n / L_finest. */
-    if ((tmp->effects & OCEAN_FX_NEAR_FIELD) && tmp->srv.near_field_waves > 0 && !isfinite(tmp->params.k_max)) {
-        double lf = tmp->params.patch_m / pow(tmp->params.cascade_ratio, tmp->params.cascades - 1);
-        tmp->params.k_max = M_PI * tmp->params.n / lf;
-    }
+    if (tmp->effects & OCEAN_FX_NEAR_FIELD)
+        ocean_gerstner_near_cut(&tmp->params, tmp->srv.near_field_waves);
     char msg[400];
     if (ocean_params_validate(&tmp->params, msg, sizeof msg) != OCEAN_OK) {
         set_err(err, errlen, "%s: %s", from, msg);
@@ -587,29 +585,17 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
 
 int srv_settings_near_cascade(const srv_settings *s)
 {
-    if (!(s->effects & OCEAN_FX_NEAR_FIELD) || s->srv.near_field_waves <= 0 || !isfinite(s->params.k_max))
-        return 0;
-    /* the same test as the daemon's make_ocean: a band at least 1 % wide */
-    return 2 * M_PI / s->srv.near_field_min_wavelength > s->params.k_max * 1.01;
+    ocean_gerstner_params gp;
+    return srv_settings_near_field(s, &s->params, &gp);
 }
 
 int srv_settings_near_field(const srv_settings *s, const ocean_params *p, ocean_gerstner_params *gp)
 {
-    ocean_gerstner_params_default(gp);
-    if (!srv_settings_near_cascade(s))
+    if (!(s->effects & OCEAN_FX_NEAR_FIELD)) {
+        ocean_gerstner_params_default(gp);
         return 0;
-    gp->sea = p->sea;
-    gp->seed = p->seed;
-    gp->count = s->srv.near_field_waves;
-    /* the finest cascade stops at k_max (srv_settings_load sets it) */
-    gp->k_lo = p->k_max;
-    gp->k_hi = 2 * M_PI / s->srv.near_field_min_wavelength;
-    /* Snapped to the lattice of a periodic patch whose n-point grid holds
-     * the shortest wave, so layout 1 carries the set as one more cascade
-     * (gerstner.h "Lattice"); meshes and queries use the same snapped
-     * waves, so all of them agree. */
-    gp->lattice_m = ocean_gerstner_lattice_for(p->n, gp->k_hi);
-    return 1;
+    }
+    return ocean_gerstner_near_params(p, s->srv.near_field_waves, s->srv.near_field_min_wavelength, gp);
 }
 
 int srv_settings_layout1_cascades(const srv_settings *s)

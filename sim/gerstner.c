@@ -266,6 +266,33 @@ double ocean_gerstner_lattice_for(int n, double k_hi)
     return (n / 2 - 1) * TWO_PI / k_hi;
 }
 
+void ocean_gerstner_near_cut(struct ocean_params *p, int count)
+{
+    if (count <= 0 || isfinite(p->k_max))
+        return;
+    double finest = p->patch_m / pow(p->cascade_ratio, p->cascades - 1);
+    p->k_max = M_PI * p->n / finest;
+}
+
+int ocean_gerstner_near_params(const struct ocean_params *p, int count, double min_wavelength,
+                               ocean_gerstner_params *gp)
+{
+    ocean_gerstner_params_default(gp);
+    double k_hi = TWO_PI / min_wavelength;
+    if (count <= 0 || !isfinite(p->k_max) || !(k_hi > p->k_max * 1.01))
+        return 0;
+    gp->sea = p->sea;
+    gp->seed = p->seed;
+    gp->count = count;
+    gp->k_lo = p->k_max;
+    gp->k_hi = k_hi;
+    /* snapped to the lattice of a periodic patch whose n-point grid holds
+     * the shortest wave, so layout 1 carries the set as one more cascade
+     * (see "Lattice" above); meshes and queries use the same snapped waves */
+    gp->lattice_m = ocean_gerstner_lattice_for(p->n, k_hi);
+    return 1;
+}
+
 /* Inverse of the tabulated direction CDF (piecewise linear in theta):
  * the theta at which the cumulative variance reaches target. */
 static double invert_cdf(const double *cdf, double target)

@@ -122,6 +122,22 @@ typedef struct ocean_gerstner_wave {
  * k_hi not positive and finite. */
 double ocean_gerstner_lattice_for(int n, double k_hi);
 
+struct ocean_params;
+
+/* The near field a sea of cascades carries, as oceand builds it (and
+ * `ocean-sim render` draws it): `count` waves from where the finest
+ * cascade stops up to 2 pi / min_wavelength, on the lattice layout 1
+ * carries (ocean_gerstner_lattice_for(p->n, k_hi)).
+ * ocean_gerstner_near_cut first cuts a sea whose ocean.k_max is infinite
+ * at its finest grid's Nyquist circle, pi n / L_finest, so the set can
+ * start where the FFT stops without a gap or an overlap (no change for a
+ * finite k_max or count <= 0).  ocean_gerstner_near_params then fills *gp
+ * for the cut sea and returns 1, or returns 0 (gp defaulted) when there is
+ * no near field: count <= 0, k_max infinite, or a band under 1 % wide. */
+void ocean_gerstner_near_cut(struct ocean_params *p, int count);
+int ocean_gerstner_near_params(const struct ocean_params *p, int count, double min_wavelength,
+                               ocean_gerstner_params *gp);
+
 /* The near-field cascade of a snapped set (lattice_m > 0): an ocean of one
  * lattice cascade (ocean_create_lattice) of patch lattice_m on an n x n
  * grid holding exactly g's waves, with lambda = the set's effective Q in
@@ -130,7 +146,6 @@ double ocean_gerstner_lattice_for(int n, double k_hi);
  * rounding).  n, threads and planning come from p; p's sea must be g's.
  * OCEAN_EINVAL (with msg) for a set without a lattice or one the grid
  * cannot hold. */
-struct ocean_params;
 struct ocean;
 ocean_result ocean_gerstner_cascade_create(const ocean_gerstner *g, const struct ocean_params *p,
                                            struct ocean **out, char *msg, size_t msglen);

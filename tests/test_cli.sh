@@ -249,4 +249,19 @@ if (w.depth !== null || w.speed !== 8 || w.length !== 40) throw "echo " + JSON.s
 expect_refused "speed" wake --speed 0 --length 40
 expect_refused "required" wake --length 40
 expect_refused "wind" wake --speed 8 --length 40 --wind 5
+# render: a PNG of the asked size from a shipped scene (IHDR width and
+# height, big-endian at bytes 16-23), the same bytes from 1 and 2 threads
+# (the sea is a pure function of its inputs), bad views refused.
+"$sim" render --config config/oceand.conf --scene ship-bridge --pos 0,25,0 --pitch -5 --size 48x27 \
+    --supersample 1 --time 12.5 --threads 1 --out "$tmp/r1.png" --json > "$tmp/render.json"
+"$sim" render --config config/oceand.conf --scene ship-bridge --pos 0,25,0 --pitch -5 --size 48x27 \
+    --supersample 1 --time 12.5 --threads 2 --out "$tmp/r2.png"
+[[ $(od -An -tx1 -j16 -N8 "$tmp/r1.png" | tr -d ' \n') == 000000300000001b ]] || fail "render: PNG size"
+cmp -s "$tmp/r1.png" "$tmp/r2.png" || fail "render: 1 and 2 threads differ"
+grep -q '"sea_rays":' "$tmp/render.json" || fail "render --json lacks sea_rays"
+expect_refused "--out" render --size 8x8
+expect_refused "--size" render --size 0x8 --out "$tmp/x.png"
+expect_refused "--pos" render --pos 0,nan,0 --out "$tmp/x.png"
+expect_refused "scene" render --scene no-such-scene --out "$tmp/x.png"
+expect_refused "--fov" render --fov 200 --out "$tmp/x.png"
 echo "ocean-sim CLI: all checks passed"

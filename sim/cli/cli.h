@@ -79,6 +79,7 @@ int cmd_bench(int argc, char **argv);
 int cmd_query(int argc, char **argv);
 int cmd_filter(int argc, char **argv);
 int cmd_wake(int argc, char **argv);
+int cmd_render(int argc, char **argv);
 int cmd_mesh(int argc, char **argv);
 int cmd_wisdom(int argc, char **argv);
 

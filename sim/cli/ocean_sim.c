@@ -23,6 +23,7 @@ static const struct {
     {"mesh", cmd_mesh, "build a LOD mesh for a camera, write OBJ"},
     {"wisdom", cmd_wisdom, "time FFTW plans once, write wisdom replicas share"},
     {"wake", cmd_wake, "the steady wake of one moving body (JSON heights)"},
+    {"render", cmd_render, "the reference image of the exact sea from a camera (PNG)"},
 };
 
 static void usage(FILE *to)
