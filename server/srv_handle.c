@@ -444,6 +444,17 @@ static int sea_set_token(const srv_in *in)
     return 0;
 }
 
+/* Every sea change is logged with who made it: the client and its
+ * address (the admin token says only that it was an admin). */
+static void sea_set_log(const srv_in *in, const proto_sea *sea, double eff, const char *how)
+{
+    fprintf(stderr,
+            "oceand: sea state set by client %u (%s), %s t = %.3f s: spectrum %u, spreading %u, wind %.2f m/s "
+            "direction %.1f deg, fetch %.0f m, depth %.0f m, choppiness %.2f, seed %llu\n",
+            in->c->id, in->s->peer[0] ? in->s->peer : "?", how, eff, sea->spectrum, sea->spreading, sea->wind_u10,
+            sea->wind_dir_deg, sea->fetch_m, sea->depth_m, sea->choppiness, (unsigned long long)sea->seed);
+}
+
 static void on_sea_state(const srv_in *in)
 {
     srv_hub *h = in->h;
@@ -474,15 +485,21 @@ static void on_sea_state(const srv_in *in)
         pthread_mutex_unlock(&h->lock);
         r = srv_redis_submit(h->redis, in->c, in->buf, in->len, &s->sea, s->effective_time, why, sizeof why);
         if (r != OCEAN_OK) refuse(in, r, why);
+        else sea_set_log(in, &s->sea, s->effective_time, "sent to the shared timeline, asked for");
         return;
     }
+    double eff = 0;
     if (r == OCEAN_OK) /* entered and announced (to the setter too: that is the reply) in this hold */
-        r = srv_hub_sea_schedule(h, &np, s->effective_time, srv_hub_sea_lead(h), NULL, why, sizeof why);
+        r = srv_hub_sea_schedule(h, &np, s->effective_time, srv_hub_sea_lead(h), &eff, why, sizeof why);
     else
         snprintf(why, sizeof why, "SEA_STATE set refused: %s", msg);
     pthread_mutex_unlock(&h->lock);
-    if (r != OCEAN_OK) refuse(in, r, why);
-    else srv_hub_wake_net(h);
+    if (r != OCEAN_OK) {
+        refuse(in, r, why);
+        return;
+    }
+    sea_set_log(in, &s->sea, eff, "in force from");
+    srv_hub_wake_net(h);
 }
 
 /* A client's ERROR reports a server message it refused: logged (verbose),

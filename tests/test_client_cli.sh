@@ -255,6 +255,13 @@ for _ in $(seq 50); do
     sleep 0.1
 done
 json "$tmp/sea3.json" "d['spectrum'] == 'jonswap' and d['wind_u10'] == 12"
+# the state in force is reported with the time the change took effect, not
+# the time it was read (HELLO's sea carries none: SEA_STATE get does)
+python3 -c "import json,sys; a=json.load(open(sys.argv[1])); b=json.load(open(sys.argv[2])); sys.exit(0 if a['effective_time'] == b['effective_time'] > 0 else 1)" "$tmp/sea2.json" "$tmp/sea3.json" ||
+    fail "sea reports effective_time $(grep effective "$tmp/sea3.json") for the change entered at $(grep effective "$tmp/sea2.json")"
+# the daemon logs every change with who made it
+grep -q "sea state set by client [0-9]* (127.0.0.1), in force from t = .*wind 12.00 m/s" "$tmp/oceand.log" ||
+    fail "the change is not logged with its client and address: $(grep 'sea state' "$tmp/oceand.log" | head -3)"
 
 echo "== sea --set takes what the config takes: swell 5, a seed past 2^53 ($SECONDS s)"
 # --swell had [0, 1] where sea.swell is [0, 10]; --seed went through a double,

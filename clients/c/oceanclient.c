@@ -276,7 +276,10 @@ struct oc_client {
     /* requests [mu] */
     pending_query *queries;
     uint32_t next_query_id;
-    int sea_wait;                 /* 1 waiting for ANNOUNCE/ERROR */
+    int sea_wait;                 /* 1 a SET waits for its ANNOUNCE/ERROR, 2 a GET for
+                                     the state in force (sea_got, sea_got_t) */
+    proto_sea sea_got;
+    double sea_got_t;
     proto_sea sea_want;           /* the SET in flight: its announce is the one */
     double sea_want_t;            /* with this sea at or after this time */
     uint32_t sea_seq;
@@ -1045,7 +1048,15 @@ static void rx_sea_state(rx_ctx *x)
     /* Every client sees every admin's announces: only the one of this
      * client's own SET answers it (its sea, entered at max(requested,
      * now), PROTOCOL.md SEA_STATE). */
-    if (c->sea_wait && !c->sea_done && sea_same(&ss->sea, &c->sea_want) && ss->effective_time >= c->sea_want_t) {
+    if (c->sea_wait == 1 && !c->sea_done && sea_same(&ss->sea, &c->sea_want) && ss->effective_time >= c->sea_want_t) {
+        c->sea_done = 1;
+        c->sea_res = OCEAN_OK;
+    }
+    /* a GET's answer opens with the state in force, effective no later
+     * than the answer was sent; a pending change's lies ahead of it */
+    if (c->sea_wait == 2 && !c->sea_done && ss->effective_time <= x->m->hdr.sim_time) {
+        c->sea_got = ss->sea;
+        c->sea_got_t = ss->effective_time;
         c->sea_done = 1;
         c->sea_res = OCEAN_OK;
     }
@@ -2430,6 +2441,50 @@ ocean_result oc_client_sea_state_set(oc_client *c, const proto_sea *sea, double 
     } else {
         r = OCEAN_ESTATE;
         set_local_error(c, r, "timed out after %d ms: no answer to SEA_STATE set", timeout_ms);
+    }
+    c->sea_wait = 0;
+    c->sea_done = 0;
+    pthread_mutex_unlock(&c->loop->mu);
+    return r;
+}
+
+ocean_result oc_client_sea_state_fetch(oc_client *c, int timeout_ms, proto_sea *out, double *effective_time)
+{
+    if (!c || !out)
+        return OCEAN_EINVAL;
+    proto_msg m;
+    proto_msg_init(&m, PROTO_SEA_STATE);
+    m.u.sea_state.op = PROTO_SEA_GET;
+    char err[256] = "";
+    pthread_mutex_lock(&c->loop->mu);
+    if (c->sea_wait) {
+        set_local_error(c, OCEAN_ESTATE, "a SEA_STATE request of this client is still waiting for its answer");
+        pthread_mutex_unlock(&c->loop->mu);
+        return OCEAN_ESTATE;
+    }
+    ocean_result r = queue_msg_locked(c, &m, &c->sea_seq, err, sizeof err);
+    if (r == OCEAN_OK) {
+        c->sea_wait = 2;
+        c->sea_done = 0;
+    } else {
+        set_local_error(c, r, "cannot send SEA_STATE: %s", err[0] ? err : ocean_strerror(r));
+    }
+    pthread_mutex_unlock(&c->loop->mu);
+    if (r != OCEAN_OK)
+        return r;
+    wake(c->loop);
+    wait_until(c, timeout_ms, pred_sea, NULL);
+    pthread_mutex_lock(&c->loop->mu);
+    if (c->sea_done) {
+        r = c->sea_res;
+        if (r == OCEAN_OK) {
+            *out = c->sea_got;
+            if (effective_time)
+                *effective_time = c->sea_got_t;
+        }
+    } else {
+        r = OCEAN_ESTATE;
+        set_local_error(c, r, "timed out after %d ms: no answer to SEA_STATE get", timeout_ms);
     }
     c->sea_wait = 0;
     c->sea_done = 0;

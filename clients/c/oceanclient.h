@@ -510,6 +510,15 @@ ocean_result oc_client_sea_at(const oc_client *c, double t, proto_sea *out, doub
 ocean_result oc_client_sea_state_set(oc_client *c, const proto_sea *sea, double effective_time,
                                      const char *token, int timeout_ms);
 
+/* Asks the server for its timeline (SEA_STATE get) and waits up to
+ * timeout_ms for the state in force now and the sim time it took effect
+ * (the answer's first announce: its effective time is not after the
+ * message's own sim time, which tells it from a pending change's).
+ * HELLO's sea carries no time of its own: a client that joined after a
+ * change learns when it took effect this way.  OCEAN_ESTATE on timeout
+ * or while another SEA_STATE request of this client waits. */
+ocean_result oc_client_sea_state_fetch(oc_client *c, int timeout_ms, proto_sea *out, double *effective_time);
+
 /* ------------------------------------------------------------------ stats */
 
 typedef struct oc_client_stats {

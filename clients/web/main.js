@@ -49,7 +49,8 @@ window.oceanStats = stats;
 const canvas = document.getElementById('view');
 const overlay = document.getElementById('overlay');
 const statusEl = document.getElementById('status');
-if (qs.get('overlay') === '0') document.getElementById('hud').style.display = 'none';
+/* overlay=0: nothing over the sea (screenshots compared with reference renders) */
+if (qs.get('overlay') === '0') for (const id of ['hud', 'help-toggle']) document.getElementById(id).style.display = 'none';
 
 let renderer;
 try {

@@ -287,8 +287,8 @@ try {
         sR.subscription.flags === 0 && sR.serverErrors === 0 && sR.decodeErrors === 0,
         `sim time ${sR.simTime}, mode ${sR.subscription && sR.subscription.mode}, flags ${sR.subscription && sR.subscription.flags}, ` +
         `${sR.framesRendered} rendered, errors ${sR.errors.join(' | ')}`);
-    const hudShown = await page2.evaluate(() => getComputedStyle(document.getElementById('hud')).display);
-    check('overlay=0 hides the overlay', hudShown === 'none', hudShown);
+    const hudShown = await page2.evaluate(() => ['hud', 'help-toggle'].map((id) => getComputedStyle(document.getElementById(id)).display).join(' '));
+    check('overlay=0 hides the overlay and the controls button', hudShown === 'none none', hudShown);
     const pngR1 = await page2.screenshot({ type: 'png' });
     await waitFor(page2, ([d, r]) => window.oceanStats.framesDecoded >= d + 2 && window.oceanStats.framesRendered >= r + 2,
         [sR.framesDecoded, sR.framesRendered], timeoutMs);

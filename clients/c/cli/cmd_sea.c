@@ -222,7 +222,14 @@ int cmd_sea(int argc, char **argv)
         return 1;
     proto_sea sea;
     double eff = 0;
-    oc_client_sea_state(c, &sea, &eff);
+    /* the state in force and when it took effect (HELLO's sea has no time) */
+    if (oc_client_sea_state_fetch(c, P.timeout_ms, &sea, &eff) != OCEAN_OK) {
+        char err[512];
+        oc_client_last_error(c, err, sizeof err);
+        fprintf(stderr, "ocean-client sea: %s\n", err);
+        oc_client_destroy(c);
+        return 1;
+    }
     int rc = P.set ? sea_set(&P, c, &sea, &eff) : 0;
     /* a refused --set prints only its error: the state in force on stdout
      * read as the change having been made */
