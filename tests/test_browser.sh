@@ -9,7 +9,8 @@
 #     each mip is read" run in headless Chromium against the C rule's points
 #     (lod.test.mjs, tests/vectors/lod.txt and lod_mss.txt); and the
 #     viewer's small modules (timeline.test.mjs, rate.test.mjs,
-#     meshstore.test.mjs).
+#     meshstore.test.mjs) and its whitecaps near the eye (foam.test.mjs:
+#     coverage kept, continuous, streaked along the wind).
 #  2. Real browser: starts $BUILD/oceand on a free loopback port with
 #     config/oceand.conf and runs tests/browser/viewer.test.mjs: headless
 #     Chromium (/usr/bin/chromium, software GL) driven by playwright-core
@@ -97,7 +98,8 @@ rm -rf "$WORK/vectors" && mkdir -p "$WORK/vectors"
 "$WORK/gen_vectors" gen "$WORK/vectors" || die "gen_vectors gen failed"
 if ! VECTOR_DIR="$WORK/vectors" GEN_VECTORS="$WORK/gen_vectors" PROTO_VECTORS=tests/vectors \
         node --test --test-reporter=tap tests/browser/protocol.test.mjs tests/browser/lod.test.mjs \
-            tests/browser/timeline.test.mjs tests/browser/rate.test.mjs tests/browser/meshstore.test.mjs; then
+            tests/browser/timeline.test.mjs tests/browser/rate.test.mjs tests/browser/meshstore.test.mjs \
+            tests/browser/foam.test.mjs; then
     echo "test_browser: protocol cross-check FAILED"
     status=1
 fi

@@ -142,6 +142,20 @@ vec3 tonemap(vec3 c) {
 float cloudShadow(vec3 rel) {
     return 1.0 - 0.5 * clouds(rel.xz + u_sunDir.xz / max(u_sunDir.y, 0.05) * (CLOUD_ALT - rel.y));
 }
+/* Foam near the eye: the carried whitecap coverage c (the white fraction
+ * of the sample's area) drawn as a foam texture whose brightness follows
+ * c: the drifting grain scales it about its mean (0.3 + 1.4 g, g's mean
+ * 0.5), so the drawn mean stays c and the luminance is continuous, with no
+ * threshold turning it into opaque patches; the grain is read in the
+ * wind's frame stretched 4 : 1 along the wind, so the texture streaks
+ * downwind as wind-blown foam does.  Far away, where the grain would
+ * alias, c is drawn as it is. */
+float foamBreakUp(float c, vec2 rel, float dist) {
+    vec2 q = vec2(dot(rel, u_wind) * 0.25, dot(rel, vec2(-u_wind.y, u_wind.x)));
+    float grain = texture(u_cloudTex, q * GRAIN_K + u_grainOff).r;
+    float tex = clamp(c * (0.3 + 1.4 * grain), 0.0, 1.0);
+    return mix(c, tex, 1.0 - smoothstep(300.0, 3000.0, dist));
+}
 `;
 
 const FULL_VS = `#version 300 es
@@ -301,14 +315,7 @@ void main() {
     vec3 N = normalize(nacc.xyz + rem * vec3(0.0, 1.0, 0.0));
     /* detail lost to the footprint shows up as roughness */
     float rough = clamp(lvlSeen * 0.12 + rem * 0.8 + dist / 20000.0, 0.0, 1.0);
-    /* animated foam: the streamed coverage broken up by drifting noise */
-    float grain = texture(u_cloudTex, v_base * GRAIN_K + u_grainOff).r;
-    grain = clamp((grain - 0.25) * 2.0, 0.0, 1.0);
-    float cover = clamp(facc, 0.0, 1.0);
-    /* streamed coverage, broken up by drifting grain near the camera and
-     * averaged (not lost) far away where the grain would alias */
-    float near = 1.0 - smoothstep(300.0, 3000.0, dist);
-    float foam = mix(cover, smoothstep(0.08, 0.5, cover * (0.4 + 1.2 * grain)), near);
+    float foam = foamBreakUp(clamp(facc, 0.0, 1.0), v_base, dist);
     float shadow = cloudShadow(v_rel);
     float crest = v_crest / max(u_hs * 0.5, 0.2);
     vec3 col = seaColor(V, N, crest, foam, shadow, rough);
@@ -437,16 +444,6 @@ void seaSample(vec2 rel, float floorS, out vec2 slope, out vec3 mss, out float f
  * sun's glitter and the sky reflection keep their average from any
  * distance, spread by roughness instead of aliasing or turning to a mirror. */
 const SEA_SHADE_GLSL = `
-/* Foam near the eye: the carried coverage c drawn as patches by
- * thresholding drifting grain at its (1 - c) level, so the drawn fraction
- * stays c (the whitecap coverage the tiles carry); far away the coverage is
- * drawn as it is, where grain would alias. */
-float foamBreakUp(float c, vec2 rel, float dist) {
-    float grain = texture(u_cloudTex, rel * GRAIN_K + u_grainOff).r;
-    grain = clamp((grain - 0.25) * 2.0, 0.0, 1.0);
-    float patches = c <= 0.0 ? 0.0 : smoothstep(1.0 - c - 0.12, 1.0 - c + 0.12, grain);
-    return mix(c, patches, 1.0 - smoothstep(300.0, 3000.0, dist));
-}
 const float SUN_E = 6.0;          /* sun irradiance relative to the sky radiance scale */
 const float SUN_MSS = 1e-5;       /* the sun's own angular radius (~4.7 mrad) as slope variance */
 float lambdaSmith(float c, float s2) {
@@ -946,7 +943,10 @@ export class Renderer {
         const drift = 0.004 * time;
         const cu = CLOUD_SCALE / CLOUD_UV, gu = GRAIN_SCALE / CLOUD_UV;
         gl.uniform2f(u.u_cloudOff, frac(eye[0] * cu + this.wind[0] * drift / CLOUD_UV), frac(eye[2] * cu + this.wind[1] * drift / CLOUD_UV));
-        gl.uniform2f(u.u_grainOff, frac(eye[0] * gu + this.wind[0] * 0.6 * time / CLOUD_UV), frac(eye[2] * gu + this.wind[1] * 0.6 * time / CLOUD_UV));
+        /* the foam grain lives in the wind's frame, stretched 4 : 1 along
+         * it (foamBreakUp), drifting downwind at 0.6 m/s */
+        const [wx, wz] = this.wind, along = eye[0] * wx + eye[2] * wz, across = -eye[0] * wz + eye[2] * wx;
+        gl.uniform2f(u.u_grainOff, frac((0.25 * along + 0.6 * 0.25 * time) * gu), frac(across * gu));
         gl.uniform1f(u.u_eyeY, eye[1]);
         gl.uniform2fv(u.u_wind, this.wind);
         gl.uniform1f(u.u_skyScale, this.skyScale);
@@ -1141,9 +1141,11 @@ export class Renderer {
 function frac(a) { return a - Math.floor(a); }
 
 /* Tileable value-noise fbm (period CLOUD_UV lattice units at the base
- * octave) in an R8 texture with mipmaps: clouds, their shadows and the
- * foam grain all read it, instead of evaluating noise per pixel. */
-function makeCloudTexture(gl) {
+ * octave), CLOUD_TEX x CLOUD_TEX bytes: clouds, their shadows and the foam
+ * grain all read it (an R8 texture with mipmaps), instead of evaluating
+ * noise per pixel.  ocean-sim render (sim/cli/render_shade.c) makes the
+ * same bytes for its reference images. */
+export function cloudTextureBytes() {
     const N = CLOUD_TEX, P = CLOUD_UV;
     const hash = (x, y, o) => {
         let h = (x * 374761393 + y * 668265263 + o * 2147483647) | 0;
@@ -1169,6 +1171,11 @@ function makeCloudTexture(gl) {
             img[y * N + x] = Math.round(255 * s / norm);
         }
     }
+    return img;
+}
+
+function makeCloudTexture(gl) {
+    const N = CLOUD_TEX, img = cloudTextureBytes();
     const t = gl.createTexture();
     gl.bindTexture(gl.TEXTURE_2D, t);
     gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);

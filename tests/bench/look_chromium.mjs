@@ -65,7 +65,7 @@ try {
     for (const v of views) {
         const page = await context.newPage();
         await page.setViewportSize({ width: v.width, height: v.height });
-        const url = `${base}?x=${v.x}&y=${v.y}&z=${v.z}&yaw=${v.yaw}&pitch=${v.pitch}&fov=${v.fov}&t=${v.t}&overlay=0`;
+        const url = `${base}?x=${v.x}&y=${v.y}&z=${v.z}&yaw=${v.yaw}&pitch=${v.pitch}&fov=${v.fov}&t=${v.t}&overlay=0&scale=1`;
         await page.goto(url, { waitUntil: 'load', timeout: timeoutMs });
         await page.waitForFunction((t) => window.oceanStats && window.oceanStats.framesRendered >= 2 &&
             window.oceanStats.simTime === t, v.t, { timeout: timeoutMs, polling: 200 });
