@@ -263,13 +263,15 @@ worker.onmessage = (ev) => {
 };
 
 /* Twice a second, ask the daemon for the sea under the camera (QUERY):
- * the overlay shows the height above the waves. */
+ * the overlay shows the height above the waves, and the eye is kept above
+ * them.  In replay mode the sea drawn is the sea at T: asked at T (the
+ * live sea's height lifted the eye of a fixed view by metres). */
 let queryId = 0, queryTimer = null;
 function startQueries() {
     if (queryTimer) clearInterval(queryTimer);
     queryTimer = setInterval(() => {
         if (!sub) return;
-        worker.postMessage({ cmd: 'query', id: ++queryId, points: [cam.pos[0], cam.pos[2]] });
+        worker.postMessage({ cmd: 'query', id: ++queryId, points: [cam.pos[0], cam.pos[2]], t: replay ? replayT : null });
     }, 500);
 }
 

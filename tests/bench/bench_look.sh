@@ -9,7 +9,10 @@
 #     multisampling as a user's page draws (look_chromium.mjs);
 #   - `ocean-sim render` of the same view (2 x 2 samples a pixel);
 # and their SSIM (Wang et al. 2004) and mean |difference| per view, beside
-# the figures of the viewer before issue 45's work (look_before.csv).  Goal
+# the figures of the viewer before issue 45's work (look_before.csv) and
+# beside the same viewer on a stream without its budgets (every sample one
+# pixel, server.px_per_sample = 1, and no byte limit): what the stream's
+# byte budget costs in look, against what the viewer's drawing does.  Goal
 # (issue 45): SSIM >= 0.9 at every view.  Side-by-side pictures (viewer
 # left, reference right) in tests/bench/out/look/.  Prints the markdown
 # section; CSV in tests/bench/out/look.csv.
@@ -36,10 +39,12 @@ VIEWS="3 -4
 1500 -35
 10000 -89"
 BEFORE=tests/bench/look_before.csv
-echo "scene,height_m,pitch_deg,ssim,mean_abs_diff,render_s" >"$OUT/look.csv"
+echo "scene,height_m,pitch_deg,ssim,mean_abs_diff,render_s,ssim_unbudgeted" >"$OUT/look.csv"
 
-start_daemon() {  # scene
-    "$BUILD/oceand" --config config/oceand.conf --scene "$1" --bind 127.0.0.1 --port 0 >"$tmp/oceand.log" 2>&1 &
+start_daemon() {  # scene [--set KEY=VALUE ...]
+    local scene=$1
+    shift
+    "$BUILD/oceand" --config config/oceand.conf --scene "$scene" --bind 127.0.0.1 --port 0 "$@" >"$tmp/oceand.log" 2>&1 &
     dpid=$!
     base=
     for _ in $(seq 400); do
@@ -67,12 +72,18 @@ for scene in storm ship-bridge flight; do
         sep=,
     done <<<"$VIEWS"
     echo "$views]" >"$tmp/$scene.json"
-    start_daemon "$scene"
-    node tests/bench/look_chromium.mjs "$base" "$tmp/$scene.json" >>"$tmp/look.jsonl" ||
-        die "the viewer's screenshots of $scene failed"
-    kill "$dpid" 2>/dev/null
-    wait "$dpid" 2>/dev/null
-    dpid=
+    # the same views on a stream without budgets: names "-full", no pictures
+    sed 's/"name":"\([^"]*\)"/"name":"\1-full"/g; s/-viewer\.png/-full.png/g; s/,"pair":"[^"]*"//g' \
+        "$tmp/$scene.json" >"$tmp/$scene-full.json"
+    for run in "" -full; do
+        if [[ -z $run ]]; then start_daemon "$scene"
+        else start_daemon "$scene" --set server.px_per_sample=1 --set server.viewer_bytes_per_s=1e10; fi
+        node tests/bench/look_chromium.mjs "$base" "$tmp/$scene$run.json" >>"$tmp/look.jsonl" ||
+            die "the viewer's screenshots of $scene$run failed"
+        kill "$dpid" 2>/dev/null
+        wait "$dpid" 2>/dev/null
+        dpid=
+    done
 done
 
 echo "### What the viewer draws against the exact sea"
@@ -80,18 +91,19 @@ echo
 echo "oceand on \`config/oceand.conf\` with each scene, the viewer at ${W}x$H, 60 deg, yaw 30 deg, the sea of t = $T s;"
 echo "the reference is \`ocean-sim render\` of the same view (2 x 2 samples a pixel). SSIM: Wang et al. 2004 (ssim.js, 'original'); goal >= 0.9."
 echo
-echo "| scene | height | pitch | SSIM before | SSIM | mean abs diff (0-255) | reference render | pictures (viewer, reference) |"
-echo "|---|---|---|---|---|---|---|---|"
+echo "| scene | height | pitch | SSIM before | SSIM | mean abs diff (0-255) | SSIM, stream without budgets | reference render | pictures (viewer, reference) |"
+echo "|---|---|---|---|---|---|---|---|---|"
 for scene in storm ship-bridge flight; do
     while read -r y pitch; do
         name="$scene-$y"
         line=$(grep "\"name\":\"$name\"" "$tmp/look.jsonl")
         s=$(sed -n 's/.*"ssim":\([0-9.eE+-]*\).*/\1/p' <<<"$line")
         d=$(sed -n 's/.*"mean_abs_diff":\([0-9.eE+-]*\).*/\1/p' <<<"$line")
+        full=$(grep "\"name\":\"$name-full\"" "$tmp/look.jsonl" | sed -n 's/.*"ssim":\([0-9.eE+-]*\).*/\1/p')
         rs=$(awk -v n="$name" '$1 == n {printf "%.0f", $2 / 1000}' "$tmp/render_s")
         before=$([[ -f $BEFORE ]] && awk -F, -v sc="$scene" -v h="$y" '$1 == sc && $2 == h {printf "%.3f", $4}' "$BEFORE")
-        printf '| %s | %s m | %s deg | %s | %.3f | %.1f | %s s | [%s](out/look/%s.jpg) |\n' "$scene" "$y" "$pitch" \
-            "${before:--}" "$s" "$d" "$rs" "$name" "$name"
-        echo "$scene,$y,$pitch,$s,$d,$rs" >>"$OUT/look.csv"
+        printf '| %s | %s m | %s deg | %s | %.3f | %.1f | %.3f | %s s | [%s](out/look/%s.jpg) |\n' "$scene" "$y" \
+            "$pitch" "${before:--}" "$s" "$d" "$full" "$rs" "$name" "$name"
+        echo "$scene,$y,$pitch,$s,$d,$rs,$full" >>"$OUT/look.csv"
     done <<<"$VIEWS"
 done

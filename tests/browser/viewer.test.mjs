@@ -287,6 +287,9 @@ try {
         sR.subscription.flags === 0 && sR.serverErrors === 0 && sR.decodeErrors === 0,
         `sim time ${sR.simTime}, mode ${sR.subscription && sR.subscription.mode}, flags ${sR.subscription && sR.subscription.flags}, ` +
         `${sR.framesRendered} rendered, errors ${sR.errors.join(' | ')}`);
+    const belowAtT = await waitFor(page2, (t) => window.oceanStats.seaBelow && window.oceanStats.seaBelow.t === t, T, timeoutMs);
+    const below = (await stats(page2)).seaBelow;
+    check('t= keeps the eye above the sea at T (queried at T, not at the live time)', belowAtT, JSON.stringify(below));
     const hudShown = await page2.evaluate(() => ['hud', 'help-toggle'].map((id) => getComputedStyle(document.getElementById(id)).display).join(' '));
     check('overlay=0 hides the overlay and the controls button', hudShown === 'none none', hudShown);
     const pngR1 = await page2.screenshot({ type: 'png' });
