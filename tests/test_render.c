@@ -14,6 +14,7 @@
  *    angular height), while from 1500 m over it the edge is a straight
  *    line;
  *  - a pure function: the same image from 1 and 2 threads, twice;
+ *  - the sun stands where --sun (the viewer's sun=AZ,EL) puts it;
  *  - bad views refused.
  */
 #include <math.h>
@@ -258,6 +259,41 @@ static void pure_function(void **state)
     render_sea_destroy(s);
 }
 
+/* The sun stands where --sun puts it, in the camera's own convention
+ * (azimuth from +x toward +z as the yaw, elevation as the pitch): a
+ * narrow view aimed there sees the disc (white after the tone curve), one
+ * aimed the opposite way does not. */
+static float centre_of(render_sea *s, double yaw, double pitch, double az, double el)
+{
+    render_view v = {.eye = {0, 20, 0}, .yaw_deg = yaw, .pitch_deg = pitch, .fov_deg = 2, .width = 9, .height = 9,
+                     .supersample = 1, .threads = 1, .sun_given = 1, .sun_deg = {az, el}};
+    float rgb[9 * 9 * 3];
+    render_stats st;
+    char msg[256];
+    assert_int_equal(render_image(s, &v, rgb, NULL, &st, msg, sizeof msg), OCEAN_OK);
+    return rgb[(4 * 9 + 4) * 3 + 2];
+}
+
+static void sun_where_asked(void **state)
+{
+    (void)state;
+    ocean_params p;
+    storm_params(&p, 64);
+    char msg[256];
+    render_sea *s;
+    assert_int_equal(render_sea_create(&p, NULL, OCEAN_FX_ALL, 0, 1, &s, msg, sizeof msg), OCEAN_OK);
+    float at = centre_of(s, 100, 30, 100, 30), away = centre_of(s, 280, 30, 100, 30), off = centre_of(s, 100, 30, 100, 34);
+    printf("# the sun's centre pixel %.3f, the opposite sky %.3f, 4 deg below the sun %.3f\n", at, away, off);
+    assert_true(at > 0.99);
+    assert_true(away < 0.95 && off < 0.99);
+    render_view v = {.eye = {0, 20, 0}, .fov_deg = 60, .width = 2, .height = 2, .supersample = 1, .threads = 1,
+                     .sun_given = 1, .sun_deg = {0, 95}};
+    float rgb[12];
+    render_stats st;
+    assert_int_equal(render_image(s, &v, rgb, NULL, &st, msg, sizeof msg), OCEAN_EINVAL);
+    render_sea_destroy(s);
+}
+
 static void bad_views_refused(void **state)
 {
     (void)state;
@@ -292,6 +328,7 @@ int main(void)
         cmocka_unit_test(levels_keep_slope_variance),
         cmocka_unit_test(crests_break_the_horizon),
         cmocka_unit_test(pure_function),
+        cmocka_unit_test(sun_where_asked),
         cmocka_unit_test(bad_views_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

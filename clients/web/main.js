@@ -25,10 +25,11 @@
  *
  * window.oceanStats exposes live counters (the browser test reads them).
  */
-import { Renderer, normalize3 } from './render.js';
+import { Renderer } from './render.js';
 import { FlyCamera } from './camera.js';
 import { CODEC, CUTOFF, LAYOUT, MESH_CODEC, MODE } from './protocol.js';
 import { SeaTimeline } from './timeline.js';
+import { setupControls, sunDefaultDeg, sunFromDeg } from './controls.js';
 
 const qs = new URLSearchParams(location.search);
 const num = (k, d) => (qs.has(k) && Number.isFinite(Number(qs.get(k))) ? Number(qs.get(k)) : d);
@@ -199,9 +200,13 @@ worker.onmessage = (ev) => {
         seaTimeline = new SeaTimeline();
         seaTimeline.add(-Infinity, m.hello.sea);
         applySea(m.hello.sea);
-        const d = m.hello.sea.windDirDeg * Math.PI / 180;
-        /* sun low over the downwind side: glitter on the waves' faces */
-        renderer.sunDir = normalize3([Math.cos(d + 0.5), 0.32, Math.sin(d + 0.5)]);
+        /* sun low over the downwind side (glitter on the waves' faces),
+         * unless the URL or the controls placed it */
+        if (!controls.sunFixed) {
+            const s = sunDefaultDeg(m.hello.sea.windDirDeg);
+            renderer.sunDir = sunFromDeg(s[0], s[1]);
+            controls.showSun(s);
+        }
         lastFrameSim = m.simTime;
         break;
     }
@@ -424,6 +429,17 @@ window.addEventListener('beforeunload', () => worker.postMessage({ cmd: 'close' 
 /* a hidden tab draws nothing: the worker stops decoding until it is back */
 document.addEventListener('visibilitychange', () => worker.postMessage({ cmd: 'pause', paused: document.hidden }));
 document.getElementById('help-toggle').addEventListener('click', () => document.getElementById('help').classList.toggle('hidden'));
+/* sun=AZ,EL (degrees): a sun of the URL's, which no HELLO moves (ocean-sim render --sun takes the same) */
+const sunQ = (qs.get('sun') || '').split(',').map(Number);
+const controls = { renderer, cam, worker, stats, simNow: () => (replay ? replayT : lastFrameSim), sunFixed: false };
+setupControls(controls);
+if (sunQ.length === 2 && sunQ.every(Number.isFinite) && Math.abs(sunQ[1]) <= 90) {
+    renderer.sunDir = sunFromDeg(sunQ[0], sunQ[1]);
+    controls.sunFixed = true;
+    controls.showSun(sunQ);
+} else if (qs.has('sun')) {
+    pushError(`sun=${qs.get('sun')} is not AZ,EL in degrees (elevation within +-90)`);
+}
 
 /* for debugging from the console and for tests */
 window.oceanViewer = { renderer, camera: cam, worker };

@@ -954,6 +954,38 @@ export function encodeQuery(queryId, points, t, seq, simTime = 0) {
     return w.buf;
 }
 
+/* SEA_STATE: op 1 set (sea and effective time, with the admin token), 2
+ * get (no sea, time 0, no token); op 0 (announce) is the server's, encoded
+ * only to re-encode a decoded one.  sea: the sea block's fields as dSea
+ * reads them (seed a BigInt, a number or a decimal string; hs and tp are
+ * informational). */
+export function encodeSeaState(op, effectiveTime, sea, token, seq, simTime = 0) {
+    chkEnum('sea_state.op', op, 3);
+    const bytes = utf8enc.encode(token || '');
+    if (bytes.length > 255) fail(R.ETOOBIG, 'sea_state.token longer than 255 bytes');
+    if (op !== 1 && bytes.length) fail(R.EFORMAT, 'only a sea_state set carries a token');
+    const get = op === 2;
+    if (!get) {
+        chkTime('sea_state.effective_time', effectiveTime);
+        vSea(sea);
+    }
+    const w = new Writer(T.SEA_STATE, SEASTATE_FIXED + 2 + bytes.length, seq, simTime);
+    const u = w.u8, dv = w.dv;
+    u[P] = op;
+    dv.setFloat64(P + 8, get ? 0 : effectiveTime, true);
+    if (!get) {
+        const o = P + 16;
+        u[o] = sea.spectrum;
+        u[o + 1] = sea.spreading;
+        dv.setBigUint64(o + 8, BigInt(sea.seed), true);
+        [sea.windU10, sea.windDirDeg, sea.fetchM, sea.depthM, sea.swell, sea.phillipsA, sea.smallWaveM,
+            sea.choppiness, sea.hs || 0, sea.tp || 0].forEach((v, i) => dv.setFloat64(o + 16 + 8 * i, v, true));
+    }
+    dv.setUint16(P + SEASTATE_FIXED, bytes.length, true);
+    u.set(bytes, P + SEASTATE_FIXED + 2);
+    return w.buf;
+}
+
 export function encodeBye(reason, message, seq, simTime = 0) {
     const bytes = utf8enc.encode(message || '');
     if (bytes.length > 255) fail(R.ETOOBIG, 'bye.message longer than 255 bytes');

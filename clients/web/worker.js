@@ -35,7 +35,7 @@
  */
 import {
     CODEC, CODEC_NAMES, CUTOFF, FX, LAYOUT, MESH, MESH_CODEC, MODE, SUB_FLAG, SUBPROTOCOL, T, BYE_REASONS, RESULT_NAMES,
-    decode, decodeHeader, encodeCamera, encodeSubscribe, encodeQuery, encodeBye, ProtoError, tilePlanes,
+    decode, decodeHeader, encodeCamera, encodeSubscribe, encodeQuery, encodeBye, encodeSeaState, ProtoError, tilePlanes,
 } from './protocol.js';
 import { ByteRate } from './rate.js';
 
@@ -541,6 +541,10 @@ self.onmessage = (ev) => {
         break;
     case 'query':
         try { send(encodeQuery(m.id, m.points, m.t ?? null, nextSeq(), lastSimTime)); } catch (e) { noteError(e, 'query'); }
+        break;
+    case 'sea':
+        /* an admin's SEA_STATE set: answered by its announce, or an ERROR */
+        try { send(encodeSeaState(1, m.t, m.sea, m.token, nextSeq(), lastSimTime)); } catch (e) { noteError(e, 'sea state'); }
         break;
     case 'capture':
         /* debugging aid: the next FRAME's raw bytes go to the page */

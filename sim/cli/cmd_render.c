@@ -16,7 +16,7 @@
 #include "render.h"
 
 typedef struct render_args {
-    const char *scene, *scene_dir, *pos, *size, *out;
+    const char *scene, *scene_dir, *pos, *size, *out, *sun;
     double yaw, pitch, fov;
     int supersample, threads, nf_waves;
     double nf_min_wavelength;
@@ -37,6 +37,14 @@ static int render_args_view(render_args *a)
         v->height < 1 || v->height > 8192) {
         fprintf(stderr, "error: --size '%s' is not WxH with each 1..8192\n", a->size);
         return 2;
+    }
+    if (a->sun) {
+        if (sscanf(a->sun, "%lf,%lf%c", &v->sun_deg[0], &v->sun_deg[1], &end) != 2 || !isfinite(v->sun_deg[0]) ||
+            !(fabs(v->sun_deg[1]) <= 90)) {
+            fprintf(stderr, "error: --sun '%s' is not AZ,EL in degrees (elevation within +-90)\n", a->sun);
+            return 2;
+        }
+        v->sun_given = 1;
     }
     v->yaw_deg = a->yaw;
     v->pitch_deg = a->pitch;
@@ -65,6 +73,9 @@ static int render_args_parse(int argc, char **argv, render_args *a, cli_common *
          "M     Gerstner waves of a near-field scene (oceand's server.near_field_waves)", NULL},
         {"near-field-min-wavelength", CLI_DOUBLE, &a->nf_min_wavelength, 0.0151, 100,
          "M     shortest near-field wave, m (oceand's server.near_field_min_wavelength)", NULL},
+        {"sun", CLI_STRING, &a->sun, 0, 0,
+         "AZ,EL the sun's azimuth (from +x toward +z) and elevation, deg, as the viewer's sun=AZ,EL "
+         "(not given: the viewer's default for the wind)", NULL},
         {"out", CLI_STRING, &a->out, 0, 0, "FILE  the PNG to write (required)", NULL},
     };
     int r = cli_parse(argc, argv,

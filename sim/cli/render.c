@@ -400,7 +400,10 @@ ocean_result render_image(const render_sea *s, const render_view *v, float *rgb,
     ocean_result r = view_check(v, msg, msglen);
     if (r != OCEAN_OK) return r;
     render_sky *sky;
-    if ((r = render_sky_create(s->wind_dir_deg, s->t, v->eye, &sky)) != OCEAN_OK) return r;
+    if ((r = render_sky_create(s->wind_dir_deg, s->t, v->eye, v->sun_given ? v->sun_deg : NULL, &sky)) != OCEAN_OK) {
+        snprintf(msg, msglen, "sun at %g, %g deg: azimuth finite, elevation within +-90", v->sun_deg[0], v->sun_deg[1]);
+        return r;
+    }
     render_job jb = {.sea = s, .sky = sky, .v = v, .rgb = rgb, .mask = mask, .tan_h = tan(v->fov_deg * M_PI / 360)};
     mesh_camera c = {.yaw_deg = v->yaw_deg, .pitch_deg = v->pitch_deg, .fov_y_deg = v->fov_deg};
     mesh_camera_basis(&c, jb.fwd, jb.right, jb.up);

@@ -63,6 +63,9 @@ typedef struct render_view {
     int width, height;   /* pixels, 1..8192 */
     int supersample;     /* samples per pixel along each axis, 1..8 */
     int threads;         /* 1..64 */
+    int sun_given;       /* 1: the sun at (sun_deg[0] azimuth, [1] elevation), as the viewer's
+                            sun=AZ,EL; 0: the viewer's default sun for the sea's wind */
+    double sun_deg[2];
 } render_view;
 
 typedef struct render_stats {

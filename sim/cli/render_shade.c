@@ -117,10 +117,12 @@ static double clouds(const render_sky *s, double rx, double rz, double foot_m)
     return smoothstep(0.48, 0.75, cloud_read(s, rx * CLOUD_K + s->cloud_off[0], rz * CLOUD_K + s->cloud_off[1], foot_m));
 }
 
-ocean_result render_sky_create(double wind_dir_deg, double t, const double eye[3], render_sky **out)
+ocean_result render_sky_create(double wind_dir_deg, double t, const double eye[3], const double *sun_deg,
+                               render_sky **out)
 {
     *out = NULL;
-    if (!isfinite(wind_dir_deg) || !isfinite(t) || !isfinite(eye[0]) || !isfinite(eye[1]) || !isfinite(eye[2]))
+    if (!isfinite(wind_dir_deg) || !isfinite(t) || !isfinite(eye[0]) || !isfinite(eye[1]) || !isfinite(eye[2]) ||
+        (sun_deg && (!isfinite(sun_deg[0]) || !(fabs(sun_deg[1]) <= 90))))
         return OCEAN_EINVAL;
     render_sky *s = calloc(1, sizeof *s);
     if (!s) return OCEAN_ENOMEM;
@@ -129,6 +131,12 @@ ocean_result render_sky_create(double wind_dir_deg, double t, const double eye[3
         return OCEAN_ENOMEM;
     }
     double d = wind_dir_deg * M_PI / 180, sun[3] = {cos(d + 0.5), 0.32, sin(d + 0.5)};
+    if (sun_deg) {
+        double a = sun_deg[0] * M_PI / 180, e = sun_deg[1] * M_PI / 180;
+        sun[0] = cos(e) * cos(a);
+        sun[1] = sin(e);
+        sun[2] = cos(e) * sin(a);
+    }
     double l = sqrt(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]);
     for (int i = 0; i < 3; i++) {
         s->sun[i] = sun[i] / l;

@@ -21,10 +21,13 @@
 #include "ocean_result.h"
 
 /* The light and sky of one view: the viewer's for a sea whose wind blows
- * toward wind_dir_deg, at sim time t, seen from eye (world, m). */
+ * toward wind_dir_deg, at sim time t, seen from eye (world, m); sun_deg
+ * (azimuth from +x toward +z, elevation; NULL: the viewer's default, see
+ * render_sky_sun) places the sun as the viewer's sun=AZ,EL does. */
 typedef struct render_sky render_sky;
 
-ocean_result render_sky_create(double wind_dir_deg, double t, const double eye[3], render_sky **out);
+ocean_result render_sky_create(double wind_dir_deg, double t, const double eye[3], const double *sun_deg,
+                               render_sky **out);
 void render_sky_destroy(render_sky *s);   /* accepts NULL */
 
 /* Unit vector toward the sun: the viewer's sun, low over the downwind side

@@ -33,7 +33,7 @@ import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 
 import {
-    decode, encodeSubscribe, encodeCamera, encodeQuery, encodeBye, ProtoError, R, T, CODEC, FX, tilePlanes,
+    decode, encodeSubscribe, encodeCamera, encodeQuery, encodeBye, encodeSeaState, ProtoError, R, T, CODEC, FX, tilePlanes,
     LAYOUT, MIP_ENTRIES, TOPO_FLAT, zstdFrameSizes, SUB_FLAG,
 } from '../../clients/web/protocol.js';
 import { decodeTile, decodeCascadeBlock, octNormals, decodeMeshQz, meshQzRefs, HeldStore } from '../../clients/web/codec.js';
@@ -686,7 +686,7 @@ test('the protocol vectors in tests/vectors decode to their stated fields; bad o
     if (!vdir) { t.skip('PROTO_VECTORS not set'); return; }
     const names = readdirSync(vdir).filter((f) => f.endsWith('.bin')).map((f) => f.slice(0, -4));
     assert.ok(names.length >= 10, `only ${names.length} vectors in ${vdir}`);
-    let good = 0, bad = 0;
+    let good = 0, bad = 0, seaAgain = 0;
     for (const n of names) {
         const bytes = new Uint8Array(readFileSync(join(vdir, `${n}.bin`)));
         const lines = readFileSync(join(vdir, `${n}.txt`), 'utf8').split('\n').filter((l) => l.includes(' = '));
@@ -719,8 +719,11 @@ test('the protocol vectors in tests/vectors decode to their stated fields; bad o
         if (m.type === T.CAMERA) again = encodeCamera(b, seq, st);
         if (m.type === T.QUERY) again = encodeQuery(b.queryId, Array.from(b.points), b.atTime ? b.t : null, seq, st);
         if (m.type === T.BYE) again = encodeBye(b.reason, b.message, seq, st);
+        if (m.type === T.SEA_STATE) again = encodeSeaState(b.op, b.effectiveTime, b.sea, b.token, seq, st);
         if (again) assert.deepEqual(new Uint8Array(again), bytes, `${n}: re-encoding differs`);
+        if (again && m.type === T.SEA_STATE) seaAgain++;
         good++;
     }
     assert.ok(good >= 8 && bad >= 5, `${good} good and ${bad} bad vectors checked`);
+    assert.ok(seaAgain >= 3, `${seaAgain} SEA_STATE vectors (set, announce, get) re-encoded`);
 });
