@@ -86,9 +86,10 @@ static ocean_result sea_level_make(render_sea *s, int j, ocean_slope_table *tab,
     return OCEAN_OK;
 }
 
-/* Bounds of the exact surface's height: each cascade's extreme grid value
- * (its interpolation overshoots by less than the 5 % margin) plus every
- * near-field amplitude. */
+/* Bounds of the exact surface's height: the sum of each cascade's extreme
+ * grid values plus every near-field amplitude, with a 5 % margin for what
+ * the waves reach between grid nodes (a margin, not a proof: a crest top
+ * above it would be cut flat where a ray enters the bounds). */
 static void sea_bounds(render_sea *s)
 {
     const ocean_params *p = ocean_get_params(s->oc);
