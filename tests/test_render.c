@@ -164,14 +164,14 @@ static void sea_edge(const unsigned char *mask, double *mean, int *range)
 
 /* The row where column px's sea edge lies on the exact surface: the
  * largest elevation the surface reaches along the column's azimuth, read
- * every 0.5 m out to 3 km (footprint 0: the exact waves), as a row. */
+ * every metre out to 3 km (footprint 0: the exact waves), as a row. */
 static int exact_edge_row(const render_sea *s, double y, int px)
 {
     double tan_h = tan(5 * M_PI / 180), aspect = (double)EDGE_W / EDGE_H;
     double nx = (px + 0.5) / EDGE_W * 2 - 1, a = nx * tan_h * aspect;
     double l = sqrt(1 + a * a), dx = 1 / l, dz = a / l;     /* yaw 0: forward +x, right +z */
     double best = -INFINITY;
-    for (double d = 1; d < 3000; d += 0.5) {
+    for (double d = 1; d < 3000; d += 1) {
         render_point rp;
         render_sea_point(s, d * dx, d * dz, 0, &rp);
         best = fmax(best, (rp.height - y) / d);
@@ -194,7 +194,7 @@ static void render_edge(render_sea *s, double y, double *mean, int *range, int *
     assert_int_equal(render_image(s, &v, rgb, mask, &st, msg, sizeof msg), OCEAN_OK);
     sea_edge(mask, mean, range);
     int n = 0, worst = 0, hits = 0;
-    for (int px = 4; agree && px < EDGE_W; px += 16, n++) {
+    for (int px = 8; agree && px < EDGE_W; px += 32, n++) {
         int row = 0;
         while (row < EDGE_H && mask[row * EDGE_W + px] < 128) row++;
         int d = abs(row - exact_edge_row(s, y, px));

@@ -2,6 +2,7 @@
  * cmd_render.c - `ocean-sim render`: the reference image of the exact sea
  * of a scene from one camera at one instant (render.h), as PNG, to judge
  * the viewer's screenshot of the same view (its ?t=T&x=..&yaw=..&fov=..).
+ * Threads: the main thread; render_image runs --threads workers of its own.
  */
 #include <math.h>
 #include <png.h>

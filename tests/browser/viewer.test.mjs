@@ -222,7 +222,7 @@ try {
     const page2 = await context.newPage();
     const page2Errors = [];
     page2.on('pageerror', (e) => page2Errors.push(String(e)));
-    await page2.goto(withView(`${base}?x=40&y=30&z=-25&yaw=-60&pitch=-15`), { waitUntil: 'load', timeout: timeoutMs });
+    await page2.goto(withView(`${base}?x=40&y=30&z=-25&yaw=-60&pitch=-15&sun=100,30`), { waitUntil: 'load', timeout: timeoutMs });
     const before = (await stats(page)).framesReceived;
     const both = await waitFor(page2, () => window.oceanStats && window.oceanStats.framesReceived >= 5 && window.oceanStats.framesRendered >= 2, null, timeoutMs);
     const s1 = await stats(page), s2 = await stats(page2);
@@ -247,6 +247,14 @@ try {
     check('one ocean: both on one sim clock', clock && Math.abs(clock[0] - clock[1]) < 2,
         clock ? `${clock[0].toFixed(2)} / ${clock[1].toFixed(2)}` : 'no reading');
     check('second page: no errors', page2Errors.length === 0 && s2.decodeErrors === 0 && s2.serverErrors === 0, [...page2Errors, ...s2.errors].join(' | '));
+    /* the controls panel (issue 45): sun=AZ,EL (in the second page's URL)
+     * places the sun as ocean-sim render --sun does; below, the field of
+     * view slider reaches the CAMERA reports, and with the admin token a
+     * wind change ramped over 3 s arrives as announces the page applies */
+    const sunDir = await page2.evaluate(() => window.oceanViewer.renderer.sunDir);
+    const sunWant = [Math.cos(30 * Math.PI / 180) * Math.cos(100 * Math.PI / 180), Math.sin(30 * Math.PI / 180),
+        Math.cos(30 * Math.PI / 180) * Math.sin(100 * Math.PI / 180)];
+    check('sun=AZ,EL places the sun', sunDir.every((v, i) => Math.abs(v - sunWant[i]) < 1e-9), JSON.stringify(sunDir));
     await page2.waitForTimeout(800);
     writeFileSync(join(artifacts, 'viewer-2.png'), await page2.screenshot({ type: 'png' }));
 
@@ -275,6 +283,37 @@ try {
      * 0); a blank or flat sea gives 1.0 */
     check('the sea has wave detail (vs. a view without the mesh)', det > 1.0 && det > 1.3 * detC,
         `structure ${det.toFixed(2)} with the mesh, ${detC.toFixed(2)} without`);
+    /* the controls, on the control page while it is live (the sea it
+     * changes is the one the checks after this one see) */
+    await page2.click('#help-toggle');
+    await page2.evaluate(() => {
+        const f = document.getElementById('ctl-fov');
+        f.value = '20';
+        f.dispatchEvent(new Event('input'));
+    });
+    const fovSent = await waitFor(page2, () => window.oceanStats.cameraSent && window.oceanStats.cameraSent.fovYDeg === 20, null, timeoutMs);
+    check('the field-of-view control reaches the camera the daemon plans for', fovSent,
+        JSON.stringify((await stats(page2)).cameraSent));
+    const token = process.env.ADMIN_TOKEN;
+    if (token) {
+        await page2.fill('#ctl-token', token);
+        await page2.fill('#ctl-wind', '14');
+        await page2.fill('#ctl-dir', '45');
+        await page2.fill('#ctl-ramp', '3');
+        await page2.click('#ctl-sea-apply');
+        const ramped = await waitFor(page2, () => window.oceanStats.sea && window.oceanStats.sea.windU10 === 14 &&
+            window.oceanStats.sea.windDirDeg === 45, null, timeoutMs);
+        const sS = await stats(page2);
+        check('the sea-state control ramps the wind with the admin token (announces applied at their times)',
+            ramped && sS.seaSetsSent === 2 && sS.serverErrors === 0,
+            `sea ${JSON.stringify(sS.sea && [sS.sea.windU10, sS.sea.windDirDeg])}, ${sS.seaSetsSent} sets, errors ${sS.errors.join(' | ')}`);
+        await page2.fill('#ctl-token', 'not-the-token');
+        await page2.click('#ctl-sea-apply');
+        const refused = await waitFor(page2, () => window.oceanStats.errors.some((e) => /EAUTH|token/i.test(e)), null, timeoutMs);
+        check('a wrong admin token is refused and said on the overlay', refused, (await stats(page2)).errors.join(' | '));
+    } else {
+        check('ADMIN_TOKEN given to the test (tests/test_browser.sh)', false, 'no ADMIN_TOKEN');
+    }
     /* t=T: the sea of one instant (replay mode), the view a reference
      * render of the exact sea is compared with: every frame is the sea at T,
      * so two screenshots a few frames apart are the same picture */
@@ -343,45 +382,6 @@ try {
     const [nadirL] = ring(0, 0.03), [aroundL, aroundS] = ring(0.06, 0.15);
     check('10 km, looking down: the nadir within the spread of its surroundings', Math.abs(nadirL - aroundL) <= Math.max(aroundS, 2),
         `luma ${nadirL.toFixed(1)} at the nadir, ${aroundL.toFixed(1)} +- ${aroundS.toFixed(1)} around it`);
-    /* the controls panel (issue 45): sun=AZ,EL places the sun (as
-     * ocean-sim render --sun does), the field of view slider reaches the
-     * CAMERA reports, and with the admin token a wind change ramped over
-     * 4 s arrives as announces the page applies */
-    await page2.goto(withView(`${base}?x=0&y=25&z=0&yaw=30&pitch=-8&sun=100,30`), { waitUntil: 'load', timeout: timeoutMs });
-    await waitFor(page2, () => window.oceanStats && window.oceanStats.framesRendered >= 3 && window.oceanStats.sea, null, timeoutMs);
-    const sunDir = await page2.evaluate(() => window.oceanViewer.renderer.sunDir);
-    const sunWant = [Math.cos(30 * Math.PI / 180) * Math.cos(100 * Math.PI / 180), Math.sin(30 * Math.PI / 180),
-        Math.cos(30 * Math.PI / 180) * Math.sin(100 * Math.PI / 180)];
-    check('sun=AZ,EL places the sun', sunDir.every((v, i) => Math.abs(v - sunWant[i]) < 1e-9), JSON.stringify(sunDir));
-    await page2.click('#help-toggle');
-    await page2.evaluate(() => {
-        const f = document.getElementById('ctl-fov');
-        f.value = '20';
-        f.dispatchEvent(new Event('input'));
-    });
-    const fovSent = await waitFor(page2, () => window.oceanStats.cameraSent && window.oceanStats.cameraSent.fovYDeg === 20, null, timeoutMs);
-    check('the field-of-view control reaches the camera the daemon plans for', fovSent,
-        JSON.stringify((await stats(page2)).cameraSent));
-    const token = process.env.ADMIN_TOKEN;
-    if (token) {
-        await page2.fill('#ctl-token', token);
-        await page2.fill('#ctl-wind', '14');
-        await page2.fill('#ctl-dir', '45');
-        await page2.fill('#ctl-ramp', '4');
-        await page2.click('#ctl-sea-apply');
-        const ramped = await waitFor(page2, () => window.oceanStats.sea && window.oceanStats.sea.windU10 === 14 &&
-            window.oceanStats.sea.windDirDeg === 45, null, timeoutMs);
-        const sS = await stats(page2);
-        check('the sea-state control ramps the wind with the admin token (announces applied at their times)',
-            ramped && sS.seaSetsSent === 2 && sS.serverErrors === 0,
-            `sea ${JSON.stringify(sS.sea && [sS.sea.windU10, sS.sea.windDirDeg])}, ${sS.seaSetsSent} sets, errors ${sS.errors.join(' | ')}`);
-        await page2.fill('#ctl-token', 'not-the-token');
-        await page2.click('#ctl-sea-apply');
-        const refused = await waitFor(page2, () => window.oceanStats.errors.some((e) => /EAUTH|token/i.test(e)), null, timeoutMs);
-        check('a wrong admin token is refused and said on the overlay', refused, (await stats(page2)).errors.join(' | '));
-    } else {
-        check('ADMIN_TOKEN given to the test (tests/test_browser.sh)', false, 'no ADMIN_TOKEN');
-    }
     /* a page with no camera in its URL opens where the scene's
      * camera_hint says (served in /status), not at a fixed 25 m */
     const status = await (await fetch(new URL('status', base))).json();
