@@ -2396,6 +2396,47 @@ static int pred_sea(oc_client *c, void *arg)
     return c->sea_done;
 }
 
+/* Sends SEA_STATE m (its token is wiped from m) and waits up to timeout_ms
+ * for its answer: mode 1 a set's announce (the sea want from want_t on),
+ * mode 2 a get's state in force (left in sea_got, sea_got_t).  One such
+ * request per client at a time. */
+static ocean_result sea_request(oc_client *c, proto_msg *m, int mode, const proto_sea *want, double want_t,
+                                int timeout_ms, proto_sea *got, double *got_t)
+{
+    char err[256] = "";
+    const char *what = mode == 1 ? "set" : "get";
+    pthread_mutex_lock(&c->loop->mu);
+    ocean_result r = OCEAN_ESTATE;
+    if (c->sea_wait)
+        set_local_error(c, r, "a SEA_STATE request of this client is still waiting for its answer");
+    else if ((r = queue_msg_locked(c, m, &c->sea_seq, err, sizeof err)) != OCEAN_OK)
+        set_local_error(c, r, "cannot send SEA_STATE: %s", err[0] ? err : ocean_strerror(r));
+    if (r == OCEAN_OK) {
+        c->sea_wait = mode;
+        c->sea_done = 0;
+        if (want) c->sea_want = *want;
+        c->sea_want_t = want_t;
+    }
+    pthread_mutex_unlock(&c->loop->mu);
+    memset(m, 0, sizeof *m);   /* the token does not linger on the stack copy */
+    if (r != OCEAN_OK)
+        return r;
+    wake(c->loop);
+    wait_until(c, timeout_ms, pred_sea, NULL);
+    pthread_mutex_lock(&c->loop->mu);
+    if (!c->sea_done) {
+        r = OCEAN_ESTATE;
+        set_local_error(c, r, "timed out after %d ms: no answer to SEA_STATE %s", timeout_ms, what);
+    } else if ((r = c->sea_res) == OCEAN_OK && got) {
+        *got = c->sea_got;
+        if (got_t) *got_t = c->sea_got_t;
+    }
+    c->sea_wait = 0;
+    c->sea_done = 0;
+    pthread_mutex_unlock(&c->loop->mu);
+    return r;
+}
+
 ocean_result oc_client_sea_state_set(oc_client *c, const proto_sea *sea, double effective_time,
                                      const char *token, int timeout_ms)
 {
@@ -2412,40 +2453,7 @@ ocean_result oc_client_sea_state_set(oc_client *c, const proto_sea *sea, double 
     m.u.sea_state.effective_time = effective_time;
     m.u.sea_state.sea = *sea;
     snprintf(m.u.sea_state.token, sizeof m.u.sea_state.token, "%s", token);
-    char err[256] = "";
-    pthread_mutex_lock(&c->loop->mu);
-    if (c->sea_wait) {
-        /* one SET at a time per client */
-        set_local_error(c, OCEAN_ESTATE, "a SEA_STATE set of this client is still waiting for its answer");
-        pthread_mutex_unlock(&c->loop->mu);
-        return OCEAN_ESTATE;
-    }
-    ocean_result r = queue_msg_locked(c, &m, &c->sea_seq, err, sizeof err);
-    if (r == OCEAN_OK) {
-        c->sea_wait = 1;
-        c->sea_done = 0;
-        c->sea_want = *sea;
-        c->sea_want_t = effective_time;
-    } else {
-        set_local_error(c, r, "cannot send SEA_STATE: %s", err[0] ? err : ocean_strerror(r));
-    }
-    pthread_mutex_unlock(&c->loop->mu);
-    memset(&m, 0, sizeof m);   /* the token does not linger on the stack copy */
-    if (r != OCEAN_OK)
-        return r;
-    wake(c->loop);
-    wait_until(c, timeout_ms, pred_sea, NULL);
-    pthread_mutex_lock(&c->loop->mu);
-    if (c->sea_done) {
-        r = c->sea_res;
-    } else {
-        r = OCEAN_ESTATE;
-        set_local_error(c, r, "timed out after %d ms: no answer to SEA_STATE set", timeout_ms);
-    }
-    c->sea_wait = 0;
-    c->sea_done = 0;
-    pthread_mutex_unlock(&c->loop->mu);
-    return r;
+    return sea_request(c, &m, 1, sea, effective_time, timeout_ms, NULL, NULL);
 }
 
 ocean_result oc_client_sea_state_fetch(oc_client *c, int timeout_ms, proto_sea *out, double *effective_time)
@@ -2455,41 +2463,7 @@ ocean_result oc_client_sea_state_fetch(oc_client *c, int timeout_ms, proto_sea *
     proto_msg m;
     proto_msg_init(&m, PROTO_SEA_STATE);
     m.u.sea_state.op = PROTO_SEA_GET;
-    char err[256] = "";
-    pthread_mutex_lock(&c->loop->mu);
-    if (c->sea_wait) {
-        set_local_error(c, OCEAN_ESTATE, "a SEA_STATE request of this client is still waiting for its answer");
-        pthread_mutex_unlock(&c->loop->mu);
-        return OCEAN_ESTATE;
-    }
-    ocean_result r = queue_msg_locked(c, &m, &c->sea_seq, err, sizeof err);
-    if (r == OCEAN_OK) {
-        c->sea_wait = 2;
-        c->sea_done = 0;
-    } else {
-        set_local_error(c, r, "cannot send SEA_STATE: %s", err[0] ? err : ocean_strerror(r));
-    }
-    pthread_mutex_unlock(&c->loop->mu);
-    if (r != OCEAN_OK)
-        return r;
-    wake(c->loop);
-    wait_until(c, timeout_ms, pred_sea, NULL);
-    pthread_mutex_lock(&c->loop->mu);
-    if (c->sea_done) {
-        r = c->sea_res;
-        if (r == OCEAN_OK) {
-            *out = c->sea_got;
-            if (effective_time)
-                *effective_time = c->sea_got_t;
-        }
-    } else {
-        r = OCEAN_ESTATE;
-        set_local_error(c, r, "timed out after %d ms: no answer to SEA_STATE get", timeout_ms);
-    }
-    c->sea_wait = 0;
-    c->sea_done = 0;
-    pthread_mutex_unlock(&c->loop->mu);
-    return r;
+    return sea_request(c, &m, 2, NULL, 0, timeout_ms, out, effective_time);
 }
 
 void oc_client_get_stats(const oc_client *c, oc_client_stats *out)

@@ -19,29 +19,14 @@
 # Prints the markdown section; CSV in tests/bench/out/decode.csv.
 set -u
 BUILD=${1:-build}
-cd "$(dirname "$0")/../.." || exit 1
-OUT=tests/bench/out
-mkdir -p "$OUT"
-tmp=$(mktemp -d /tmp/oc-bdecode.XXXXXX)
-dpid=
-cleanup() { [[ -n $dpid ]] && kill "$dpid" 2>/dev/null; wait 2>/dev/null; rm -rf "$tmp"; }
-trap cleanup EXIT
-die() { echo "bench_decode: $*" >&2; exit 1; }
+. "$(dirname "$0")/helpers/bench_lib.sh" bench_decode
 
 cc -std=c11 -O2 -Wall -Wextra -Werror -D_GNU_SOURCE -Isim -Iprotocol -Iclients/c tests/bench/helpers/decode_native.c \
     "$BUILD/libocean_client.a" "$BUILD/libocean_proto.a" "$BUILD/libocean_sim.a" -lzstd -lOpenEXRCore-3_1 \
     -lfftw3f_omp -lfftw3f -lcjson -lwebsockets -lm -fopenmp -o "$tmp/decode_native" || die "cannot build decode_native"
 
-"$BUILD/oceand" --config config/oceand.conf --bind 127.0.0.1 --port 0 >"$tmp/oceand.log" 2>&1 &
-dpid=$!
-url=
-for _ in $(seq 200); do
-    url=$(sed -n 's|^oceand: listening on http://\([0-9.:]*\)/.*|ws://\1/|p' "$tmp/oceand.log" | head -1)
-    [[ -n $url ]] && break
-    kill -0 "$dpid" 2>/dev/null || break
-    sleep 0.05
-done
-[[ -n $url ]] || die "oceand did not start: $(tail -3 "$tmp/oceand.log")"
+bench_daemon
+url="ws://${base#http://}"
 {
     echo '# oceand camera path v1'
     echo 't,x,y,z,vx,vy,vz,yaw_deg,pitch_deg,roll_deg,fov_y_deg,viewport_w,viewport_h'
@@ -52,9 +37,7 @@ done
     die "record failed: $(tail -3 "$tmp/record.log")"
 "$BUILD/ocean-client" record "$url" --path "$tmp/flight.csv" --out "$tmp/plain.frames" --time-interp off \
     >"$tmp/record.log" 2>&1 || die "record failed: $(tail -3 "$tmp/record.log")"
-kill "$dpid" 2>/dev/null
-wait "$dpid" 2>/dev/null
-dpid=
+bench_daemon_stop
 
 chromium=
 [[ -x ${CHROMIUM:-/usr/bin/chromium} && -d tests/browser/node_modules/playwright-core ]] && chromium=1

@@ -18,14 +18,8 @@
 # section; CSV in tests/bench/out/look.csv.
 set -u
 BUILD=${1:-build}
-cd "$(dirname "$0")/../.." || exit 1
-OUT=tests/bench/out
+. "$(dirname "$0")/helpers/bench_lib.sh" bench_look
 mkdir -p "$OUT/look"
-tmp=$(mktemp -d /tmp/oc-blook.XXXXXX)
-dpid=
-cleanup() { [[ -n $dpid ]] && kill "$dpid" 2>/dev/null; wait 2>/dev/null; rm -rf "$tmp"; }
-trap cleanup EXIT
-die() { echo "bench_look: $*" >&2; exit 1; }
 [[ -x ${CHROMIUM:-/usr/bin/chromium} && -d tests/browser/node_modules/ssim.js ]] ||
     die "needs Debian's chromium and tests/browser's npm packages (make bench installs them)"
 
@@ -42,21 +36,6 @@ VIEWS="3 -4
 10000 -89"
 BEFORE=tests/bench/look_before.csv
 echo "scene,height_m,pitch_deg,ssim,mean_abs_diff,render_s,ssim_unbudgeted" >"$OUT/look.csv"
-
-start_daemon() {  # scene [--set KEY=VALUE ...]
-    local scene=$1
-    shift
-    "$BUILD/oceand" --config config/oceand.conf --scene "$scene" --bind 127.0.0.1 --port 0 "$@" >"$tmp/oceand.log" 2>&1 &
-    dpid=$!
-    base=
-    for _ in $(seq 400); do
-        base=$(sed -n 's|^oceand: listening on \(http://[0-9.:]*/\).*|\1|p' "$tmp/oceand.log" | head -1)
-        [[ -n $base ]] && break
-        kill -0 "$dpid" 2>/dev/null || break
-        sleep 0.05
-    done
-    [[ -n $base ]] || die "oceand ($1) did not start: $(tail -3 "$tmp/oceand.log")"
-}
 
 for scene in storm ship-bridge flight; do
     views="["
@@ -78,13 +57,11 @@ for scene in storm ship-bridge flight; do
     sed 's/"name":"\([^"]*\)"/"name":"\1-full"/g; s/-viewer\.png/-full.png/g; s/,"pair":"[^"]*"//g' \
         "$tmp/$scene.json" >"$tmp/$scene-full.json"
     for run in "" -full; do
-        if [[ -z $run ]]; then start_daemon "$scene"
-        else start_daemon "$scene" --set server.px_per_sample=1 --set server.viewer_bytes_per_s=1e10; fi
+        if [[ -z $run ]]; then bench_daemon --scene "$scene"
+        else bench_daemon --scene "$scene" --set server.px_per_sample=1 --set server.viewer_bytes_per_s=1e10; fi
         node tests/bench/look_chromium.mjs "$base" "$tmp/$scene$run.json" >>"$tmp/look.jsonl" ||
             die "the viewer's screenshots of $scene$run failed"
-        kill "$dpid" 2>/dev/null
-        wait "$dpid" 2>/dev/null
-        dpid=
+        bench_daemon_stop
     done
 done
 

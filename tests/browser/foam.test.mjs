@@ -25,6 +25,8 @@ import { join } from 'node:path';
 
 import { COMMON, cloudTextureBytes } from '../../clients/web/render.js';
 
+import { installGlProbe } from './glprobe.mjs';
+
 const require = createRequire(new URL('./package.json', import.meta.url));
 const { chromium } = require('playwright-core');
 
@@ -44,22 +46,9 @@ void main() {
     vec2 rel = (gl_FragCoord.xy - 0.5) * u_step;
     o = vec4(foamBreakUp(u_c, rel, u_dist), 0.0, 0.0, 1.0);
 }`;
-    const sh = (type, src) => {
-        const s = gl.createShader(type);
-        gl.shaderSource(s, src);
-        gl.compileShader(s);
-        if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error(gl.getShaderInfoLog(s));
-        return s;
-    };
-    const prog = gl.createProgram();
-    try {
-        gl.attachShader(prog, sh(gl.VERTEX_SHADER, vs));
-        gl.attachShader(prog, sh(gl.FRAGMENT_SHADER, fs));
-    } catch (e) {
-        return { error: `compile: ${e.message}` };
-    }
-    gl.linkProgram(prog);
-    gl.useProgram(prog);
+    const made = window.glProgram(gl, vs, fs);
+    if (made.error) return { error: made.error };
+    const prog = made.prog;
     const loc = (k) => gl.getUniformLocation(prog, k);
     const tex = gl.createTexture();
     gl.activeTexture(gl.TEXTURE2);
@@ -116,6 +105,7 @@ async function foamAt(c, dist) {
         });
     }
     const page = browser.pages()[0] || await browser.newPage();
+    await installGlProbe(page);
     const r = await page.evaluate(runInPage, {
         common: COMMON, cloud: Array.from(cloudTextureBytes()), n: N, step: STEP, wind: WIND_DEG * Math.PI / 180, c, dist,
     });

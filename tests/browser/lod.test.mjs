@@ -40,6 +40,8 @@ import { join } from 'node:path';
 
 import { COMMON, CASCADE_GLSL, CASCADE_FRAG_GLSL, MAX_CASCADES, MIP_ENTRIES } from '../../clients/web/render.js';
 
+import { installGlProbe } from './glprobe.mjs';
+
 const require = createRequire(new URL('./package.json', import.meta.url));
 const { chromium } = require('playwright-core');
 
@@ -117,23 +119,9 @@ void main() {
     o_c = vec4(mss, 0.0);
 }
 `;
-    const shader = (type, src) => {
-        const sh = gl.createShader(type);
-        gl.shaderSource(sh, src);
-        gl.compileShader(sh);
-        if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS)) throw new Error(gl.getShaderInfoLog(sh));
-        return sh;
-    };
-    const prog = gl.createProgram();
-    try {
-        gl.attachShader(prog, shader(gl.VERTEX_SHADER, vs));
-        gl.attachShader(prog, shader(gl.FRAGMENT_SHADER, fs));
-    } catch (e) {
-        return { error: `compile: ${e.message}` };
-    }
-    gl.linkProgram(prog);
-    if (!gl.getProgramParameter(prog, gl.LINK_STATUS)) return { error: `link: ${gl.getProgramInfoLog(prog)}` };
-    gl.useProgram(prog);
+    const made = window.glProgram(gl, vs, fs);
+    if (made.error) return { error: made.error };
+    const prog = made.prog;
     const loc = (n) => gl.getUniformLocation(prog, n);
     /* textures as the renderer makes them; level m holds (1, m, m^2, 0) */
     const tex = (fmt, comps, value) => {
@@ -233,6 +221,7 @@ async function probe(cases) {
         });
     }
     const page = browser.pages()[0] || await browser.newPage();
+    await installGlProbe(page);
     const r = await page.evaluate(runInPage, {
         common: COMMON, cascade: CASCADE_GLSL, frag: CASCADE_FRAG_GLSL, cases, maxc: MAX_CASCADES, mipe: MIP_ENTRIES,
     });
