@@ -16,19 +16,13 @@
  *   - far away (5 km), where the grain would alias, c itself.
  * Run by tests/test_browser.sh (node --test).
  */
-import { test, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { createRequire } from 'node:module';
-import { mkdtempSync, rmSync } from 'node:fs';
-import { tmpdir } from 'node:os';
-import { join } from 'node:path';
 
 import { COMMON, cloudTextureBytes } from '../../clients/web/render.js';
 
-import { installGlProbe } from './glprobe.mjs';
+import { probeRun } from './glprobe.mjs';
 
-const require = createRequire(new URL('./package.json', import.meta.url));
-const { chromium } = require('playwright-core');
 
 const N = 128, STEP = 2;   /* samples a side, metres a sample */
 const WIND_DEG = 30;
@@ -87,26 +81,8 @@ void main() {
     return err ? { error: `GL error 0x${err.toString(16)}` } : { foam: Array.from(px.filter((_, i) => i % 4 === 0)) };
 }
 
-let browser = null;
-const userDataDir = mkdtempSync(join(tmpdir(), 'ocean-foam-'));
-after(async () => {
-    if (browser) await browser.close();
-    rmSync(userDataDir, { recursive: true, force: true });
-});
-
 async function foamAt(c, dist) {
-    if (!browser) {
-        browser = await chromium.launchPersistentContext(userDataDir, {
-            executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-            headless: true,
-            args: ['--headless=new', '--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-                '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'],
-            timeout: 180000,
-        });
-    }
-    const page = browser.pages()[0] || await browser.newPage();
-    await installGlProbe(page);
-    const r = await page.evaluate(runInPage, {
+    const r = await probeRun(runInPage, {
         common: COMMON, cloud: Array.from(cloudTextureBytes()), n: N, step: STEP, wind: WIND_DEG * Math.PI / 180, c, dist,
     });
     assert.equal(r.error, undefined, r.error);

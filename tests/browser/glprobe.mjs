@@ -1,10 +1,21 @@
 /*
- * glprobe.mjs - what the shader tests (lod.test.mjs, foam.test.mjs) run in
- * the page before their probe: glProgram(gl, vs, fs) compiles and links a
- * WebGL2 program, {prog} or {error: "compile: ..." | "link: ..."}.
- * installGlProbe(page) defines it as window.glProgram (page.evaluate's
- * function cannot reach the test module's own).
+ * glprobe.mjs - what the shader tests (lod.test.mjs, foam.test.mjs) share:
+ * one headless Chromium (software GL, as tests/test_browser.sh runs the
+ * viewer), launched on first use and closed after the tests, whose page
+ * holds window.glProgram(gl, vs, fs): a compiled and linked WebGL2
+ * program, {prog} or {error: "compile: ..." | "link: ..."} (page.evaluate's
+ * function cannot reach the test module's own functions).
+ *   const r = await probeRun(fn, args);   // page.evaluate(fn, args)
  */
+import { after } from 'node:test';
+import { createRequire } from 'node:module';
+import { mkdtempSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+
+const require = createRequire(new URL('./package.json', import.meta.url));
+const { chromium } = require('playwright-core');
+
 function glProgram(gl, vs, fs) {
     const shader = (type, src) => {
         const sh = gl.createShader(type);
@@ -26,6 +37,24 @@ function glProgram(gl, vs, fs) {
     return { prog };
 }
 
-export async function installGlProbe(page) {
-    await page.addScriptTag({ content: `window.glProgram = ${glProgram.toString()};` });
+let browser = null, page = null;
+const userDataDir = mkdtempSync(join(tmpdir(), 'ocean-glprobe-'));
+after(async () => {
+    if (browser) await browser.close();
+    rmSync(userDataDir, { recursive: true, force: true });
+});
+
+export async function probeRun(fn, args) {
+    if (!browser) {
+        browser = await chromium.launchPersistentContext(userDataDir, {
+            executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+            headless: true,
+            args: ['--headless=new', '--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+                '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'],
+            timeout: 180000,
+        });
+        page = browser.pages()[0] || await browser.newPage();
+        await page.addScriptTag({ content: `window.glProgram = ${glProgram.toString()};` });
+    }
+    return page.evaluate(fn, args);
 }

@@ -31,19 +31,15 @@
  * Run by tests/test_browser.sh with PROTO_VECTORS=tests/vectors
  * (CHROMIUM: the browser, default /usr/bin/chromium).  node --test.
  */
-import { test, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { createRequire } from 'node:module';
-import { readFileSync, mkdtempSync, rmSync } from 'node:fs';
-import { tmpdir } from 'node:os';
+import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
 
 import { COMMON, CASCADE_GLSL, CASCADE_FRAG_GLSL, MAX_CASCADES, MIP_ENTRIES } from '../../clients/web/render.js';
 
-import { installGlProbe } from './glprobe.mjs';
+import { probeRun } from './glprobe.mjs';
 
-const require = createRequire(new URL('./package.json', import.meta.url));
-const { chromium } = require('playwright-core');
 
 /* The lines of a vector file as [inputs, outputs] number arrays. */
 function vectorLines(path) {
@@ -201,28 +197,9 @@ void main() {
     return err ? { error: `GL error 0x${err.toString(16)}` } : { a: out[0], b: out[1], c: out[2] };
 }
 
-/* One headless Chromium for both tests, launched by the first. */
-let browser = null;
-const userDataDir = mkdtempSync(join(tmpdir(), 'ocean-lod-'));
-after(async () => {
-    if (browser) await browser.close();
-    rmSync(userDataDir, { recursive: true, force: true });
-});
-
 /* runInPage's render targets for these points. */
 async function probe(cases) {
-    if (!browser) {
-        browser = await chromium.launchPersistentContext(userDataDir, {
-            executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-            headless: true,
-            args: ['--headless=new', '--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-                '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'],
-            timeout: 180000,
-        });
-    }
-    const page = browser.pages()[0] || await browser.newPage();
-    await installGlProbe(page);
-    const r = await page.evaluate(runInPage, {
+    const r = await probeRun(runInPage, {
         common: COMMON, cascade: CASCADE_GLSL, frag: CASCADE_FRAG_GLSL, cases, maxc: MAX_CASCADES, mipe: MIP_ENTRIES,
     });
     assert.equal(r.error, undefined, r.error);
