@@ -376,16 +376,6 @@ ocean_result srv_settings_default(srv_settings *s, char *err, size_t errlen)
     return srv_settings_load(NULL, NULL, 0, s, err, errlen);
 }
 
-/* server.scene -> a file path. */
-static void scene_path(const srv_config *c, char *out, size_t len)
-{
-    size_t n = strlen(c->scene);
-    if (strchr(c->scene, '/') || (n > 5 && strcmp(c->scene + n - 5, ".conf") == 0))
-        snprintf(out, len, "%.*s", SRV_PATH_MAX, c->scene);
-    else
-        snprintf(out, len, "%s/%s.conf", c->scene_dir, c->scene);
-}
-
 /* The sea.* and ocean.* keys the file changed from their defaults that
  * the scene sets otherwise, and that stay as the scene set them (no --set
  * over them): the scene wins over the file, so an edit of such a key in
@@ -531,7 +521,7 @@ ocean_result srv_settings_load(const char *path, const char *const *sets, int ns
     snprintf(from, sizeof from, "%.*s", SRV_PATH_MAX, path ? path : "(defaults)");
     if (r == OCEAN_OK && tmp->srv.scene[0]) {
         char sp[2 * SRV_PATH_MAX + 16];
-        scene_path(&tmp->srv, sp, sizeof sp);
+        ocean_conf_scene_path(tmp->srv.scene_dir, tmp->srv.scene, sp, sizeof sp);
         r = ocean_conf_scene_load(sp, &tmp->params, &tmp->scene, err, errlen);
         size_t spl = strlen(sp);
         if (r == OCEAN_EINVAL && err && strncmp(err, sp, spl) == 0 && strncmp(err + spl, ": ", 2) == 0) {

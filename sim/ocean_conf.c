@@ -12,6 +12,7 @@
 
 #include <math.h>
 #include <stdbool.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -320,6 +321,15 @@ static ocean_result load_scene(const char *path, const char *name, const char *t
     if (r == OCEAN_OK) *out = *tmp;
     free(tmp);
     return r;
+}
+
+void ocean_conf_scene_path(const char *dir, const char *scene, char *out, size_t len)
+{
+    size_t n = strlen(scene);
+    if (strchr(scene, '/') || (n > 5 && strcmp(scene + n - 5, ".conf") == 0))
+        snprintf(out, len, "%s", scene);
+    else
+        snprintf(out, len, "%s/%s.conf", dir, scene);
 }
 
 ocean_result ocean_conf_scene_load(const char *path, const ocean_params *base,

@@ -62,6 +62,11 @@ ocean_result ocean_conf_load_string(const char *name, const char *text, size_t l
  * *p is unchanged on failure. */
 ocean_result ocean_conf_apply(const char *keyvalue, ocean_params *p, char *err, size_t errlen);
 
+/* The file of a scene: `scene` itself when it is a path (holds a '/' or
+ * ends in ".conf"), else DIR/SCENE.conf: how oceand's server.scene and
+ * `ocean-sim render --scene` name one. */
+void ocean_conf_scene_path(const char *dir, const char *scene, char *out, size_t len);
+
 /* Loads a scene file: out->params starts as *base (the daemon's effective
  * parameters), the scene keys start empty, then the file is applied (it
  * must give scene.name and scene.effects; sea.* and ocean.* keys override

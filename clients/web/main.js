@@ -179,6 +179,21 @@ function pushError(msg) {
 }
 if (qs.has('t') && !replay) pushError(`t=${qs.get('t')} is not a sim time in seconds: showing the live sea`);
 
+/* The controls panel, set up before any message can reach the handler
+ * below (its HELLO case places the default sun through it); sun=AZ,EL
+ * (degrees): a sun of the URL's, which no HELLO moves (ocean-sim render
+ * --sun takes the same). */
+const sunQ = (qs.get('sun') || '').split(',').map(Number);
+const controls = { renderer, cam, worker, stats, simNow: () => (replay ? replayT : lastFrameSim), sunFixed: false };
+setupControls(controls);
+if (sunQ.length === 2 && sunQ.every(Number.isFinite) && Math.abs(sunQ[1]) <= 90) {
+    renderer.sunDir = sunFromDeg(sunQ[0], sunQ[1]);
+    controls.sunFixed = true;
+    controls.showSun(sunQ);
+} else if (qs.has('sun')) {
+    pushError(`sun=${qs.get('sun')} is not AZ,EL in degrees (elevation within +-90)`);
+}
+
 worker.onmessage = (ev) => {
     const m = ev.data;
     switch (m.kind) {
@@ -429,17 +444,6 @@ window.addEventListener('beforeunload', () => worker.postMessage({ cmd: 'close' 
 /* a hidden tab draws nothing: the worker stops decoding until it is back */
 document.addEventListener('visibilitychange', () => worker.postMessage({ cmd: 'pause', paused: document.hidden }));
 document.getElementById('help-toggle').addEventListener('click', () => document.getElementById('help').classList.toggle('hidden'));
-/* sun=AZ,EL (degrees): a sun of the URL's, which no HELLO moves (ocean-sim render --sun takes the same) */
-const sunQ = (qs.get('sun') || '').split(',').map(Number);
-const controls = { renderer, cam, worker, stats, simNow: () => (replay ? replayT : lastFrameSim), sunFixed: false };
-setupControls(controls);
-if (sunQ.length === 2 && sunQ.every(Number.isFinite) && Math.abs(sunQ[1]) <= 90) {
-    renderer.sunDir = sunFromDeg(sunQ[0], sunQ[1]);
-    controls.sunFixed = true;
-    controls.showSun(sunQ);
-} else if (qs.has('sun')) {
-    pushError(`sun=${qs.get('sun')} is not AZ,EL in degrees (elevation within +-90)`);
-}
 
 /* for debugging from the console and for tests */
 window.oceanViewer = { renderer, camera: cam, worker };

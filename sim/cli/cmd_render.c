@@ -97,11 +97,7 @@ static int render_scene(const render_args *a, cli_common *c, unsigned *effects)
     *effects = c->effects;
     if (!a->scene) return 0;
     char path[1024];
-    size_t n = strlen(a->scene);
-    if (strchr(a->scene, '/') || (n > 5 && strcmp(a->scene + n - 5, ".conf") == 0))
-        snprintf(path, sizeof path, "%s", a->scene);
-    else
-        snprintf(path, sizeof path, "%s/%s.conf", a->scene_dir, a->scene);
+    ocean_conf_scene_path(a->scene_dir, a->scene, path, sizeof path);
     ocean_scene sc;
     char err[512];
     if (ocean_conf_scene_load(path, &c->params, &sc, err, sizeof err) != OCEAN_OK) {

@@ -160,11 +160,6 @@ void render_sky_destroy(render_sky *s)
     free(s);
 }
 
-void render_sky_sun(const render_sky *s, double out[3])
-{
-    for (int i = 0; i < 3; i++) out[i] = s->sun[i];
-}
-
 static double dot3(const double a[3], const double b[3])
 {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];

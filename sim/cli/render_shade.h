@@ -22,18 +22,15 @@
 
 /* The light and sky of one view: the viewer's for a sea whose wind blows
  * toward wind_dir_deg, at sim time t, seen from eye (world, m); sun_deg
- * (azimuth from +x toward +z, elevation; NULL: the viewer's default, see
- * render_sky_sun) places the sun as the viewer's sun=AZ,EL does. */
+ * (azimuth from +x toward +z, elevation) places the sun as the viewer's
+ * sun=AZ,EL does; NULL: the viewer's default, low over the downwind side
+ * (controls.js sunDefaultDeg: (cos(d + 0.5), 0.32, sin(d + 0.5))
+ * normalised, d the wind's direction). */
 typedef struct render_sky render_sky;
 
 ocean_result render_sky_create(double wind_dir_deg, double t, const double eye[3], const double *sun_deg,
                                render_sky **out);
 void render_sky_destroy(render_sky *s);   /* accepts NULL */
-
-/* Unit vector toward the sun: the viewer's sun, low over the downwind side
- * (main.js: (cos(d + 0.5), 0.32, sin(d + 0.5)) normalised, d the wind's
- * direction). */
-void render_sky_sun(const render_sky *s, double out[3]);
 
 /* Radiance of the sky (upper hemisphere; d.y is taken as |d.y|) along
  * unit direction d, clouds included, as the viewer fills its cube map;
