@@ -1979,7 +1979,15 @@ static void slow_reader_never_delays_fast(void **state)
         fprintf(stderr, "fast reader got %d frames; tick %.1f ms\n", frames,
                 stat_of(&h->stats.tick_ns_last) * 1e-6);
     assert_true(frames >= (sanitized ? 15 : 35));
-    if (!sanitized) assert_true(stat_of(&h->stats.frames_skipped) > skipped0);
+    if (!sanitized) {
+        /* the slow reader's frames are skipped once the socket buffers
+         * between it and the daemon are full: a deadline, not a speed (on
+         * a quiet host loopback's buffers took more than the 2.5 s of
+         * frames above, and the test stopped with the slow client open) */
+        double until = test_now_s() + 10;
+        while (test_now_s() < until && stat_of(&h->stats.frames_skipped) == skipped0) usleep(20000);
+        assert_true(stat_of(&h->stats.frames_skipped) > skipped0);
+    }
     /* no bytes read for output_soft_seconds (1 s): dropped with a reason */
     double end = test_now_s() + 5;
     while (test_now_s() < end && stat_of(&h->stats.disconnects_slow) == slow0) usleep(50000);
