@@ -809,6 +809,7 @@ static void time_interp_key_frame_spread(void **state)
 typedef struct shaped_frames {
     int n;
     double at[2048], bytes[2048], age[2048];
+    double built[2048];      /* the daemon's frames_built when each arrived */
     int unfollowed;
     int read_once, filling;  /* the sea read once; frames before that */
     char why[200];
@@ -911,6 +912,7 @@ static void read_through_link(srv_daemon *d, double bps, double report_hz, doubl
                 out->at[out->n] = test_now_s() - t0;
                 out->bytes[out->n] = (double)len;
                 out->age[out->n] = srv_hub_sim_time(h) - last_t;
+                out->built[out->n] = (double)stat_of(&h->stats.frames_built);
                 out->n++;
             }
         }
@@ -926,11 +928,19 @@ static void read_through_link(srv_daemon *d, double bps, double report_hz, doubl
  * ceiling, 0.4 against 0.85 now) it received frames of the ceiling's size
  * ever further behind the clock, buffered in the sockets.  Now the daemon holds
  * a frame while three are unconfirmed and plans that viewer's frames for
- * the rate its link delivers (srv_link.h): in the last 4 s the frames fit
- * the link at 30 Hz and are under a third of a second old.  The viewer's
- * subscription samples in time: the frames that replace unsent ones on
- * this link are planned from what the client held before them, and every
- * frame, decoded in order, reads the sea in front of the camera. */
+ * the rate its link delivers (srv_link.h).  The viewer's subscription
+ * samples in time: the frames that replace unsent ones on this link are
+ * planned from what the client held before them, and every frame, decoded
+ * in order, reads the sea in front of the camera.
+ *
+ * In the last 4 s the frames are under a third of a second old and the
+ * link carries (nearly) every frame the daemon built for this viewer: at
+ * the ceiling's size it carried under half of them, the rest replaced
+ * while they waited.  That share, not the frames' size, is the measure: a
+ * daemon that cannot build 30 frames a second (a loaded host, a sanitizer)
+ * rightly plans bigger frames for the rate it does build, and each frame
+ * may carry what the client lacks after frames were replaced (the burst
+ * caps of srv_cascade.h). */
 static void slow_link_gets_coarser_not_older(void **state)
 {
     (void)state;
@@ -943,13 +953,18 @@ static void slow_link_gets_coarser_not_older(void **state)
     int n_size, n_age;
     double size = median_since(&f, f.bytes, secs - 4, &n_size), age = median_since(&f, f.age, secs - 4, &n_age);
     double early = median_since(&f, f.bytes, 0, &n_age);
-    print_message("%.2g MB/s link: %d frames; last 4 s: %d frames, median %.0f B (all frames' median %.0f, ceiling "
-                  "%.0f a frame), median age %.3f s; %llu frames held; %d frames not followed %s\n", bps / 1e6, f.n, n_size,
-                  size, early, sb.srv.viewer_bytes_per_s / 30, age, (unsigned long long)stat_of(&h->stats.frames_held),
+    double built = n_size > 1 ? f.built[f.n - 1] - f.built[f.n - n_size] : 0;
+    double share = built > 0 ? (n_size - 1) / built : 0;
+    print_message("%.2g MB/s link: %d frames; last 4 s: %d frames of %.0f built (%.0f %%), median %.0f B (all "
+                  "frames' median %.0f, ceiling %.0f a frame), median age %.3f s; %llu frames held; %d frames not "
+                  "followed %s\n", bps / 1e6, f.n, n_size, built, 100 * share, size, early,
+                  sb.srv.viewer_bytes_per_s / 30, age, (unsigned long long)stat_of(&h->stats.frames_held),
                   f.unfollowed, f.why);
     if (f.unfollowed) fail_msg("%d frames of the stream did not read the sea (first: %s)", f.unfollowed, f.why);
     if (n_size < (sanitized ? 8 : 20)) fail_msg("only %d frames in the last 4 s through a %.0f B/s link", n_size, bps);
-    if (size > 1.2 * bps / 30) fail_msg("frames of %.0f B through a link of %.0f B a frame at 30 Hz", size, bps / 30);
+    if (share < 0.75)
+        fail_msg("the link carried %.0f %% of the %.0f frames built in the last 4 s (median %.0f B through %.0f B/s)",
+                 100 * share, built, size, bps);
     if (age > (sanitized ? 0.6 : 0.35)) fail_msg("frames %.3f s old through a %.0f B/s link", age, bps);
     assert_true(stat_of(&h->stats.frames_held) > 0);
     srv_daemon_stop(d);
