@@ -111,7 +111,7 @@ ADMIN_TOKEN=browser-test-admin
 start_daemon "$log" --set server.admin_token=$ADMIN_TOKEN || { echo "test_browser: oceand did not start:"; cat "$log"; exit 1; }
 echo "oceand at $url (pid $daemon_pid)"
 if ! OCEAN_URL="$url" ARTIFACT_DIR="$ART" VIEWER_TIMEOUT_S="${VIEWER_TIMEOUT_S:-90}" ADMIN_TOKEN=$ADMIN_TOKEN \
-        timeout 300 node tests/browser/viewer.test.mjs; then
+        OCEAND_PID=$daemon_pid timeout 300 node tests/browser/viewer.test.mjs; then
     echo "test_browser: viewer test FAILED (daemon log follows)"
     tail -30 "$log"
     status=1

@@ -27,7 +27,7 @@
  */
 import { Renderer } from './render.js';
 import { FlyCamera } from './camera.js';
-import { CODEC, CUTOFF, LAYOUT, MESH_CODEC, MODE } from './protocol.js';
+import { CODEC, CUTOFF, LAYOUT, MESH_CODEC, MODE, T as MSG } from './protocol.js';
 import { SeaTimeline } from './timeline.js';
 import { setupControls, sunDefaultDeg, sunFromDeg } from './controls.js';
 
@@ -250,6 +250,7 @@ worker.onmessage = (ev) => {
         pendingFrame = m;       /* latest wins: uploaded on the next animation frame */
         break;
     case 'error':
+        if (m.source === 'server' && m.offendingType === MSG.QUERY) queryOut = null;
         if (m.source === 'server') stats.serverErrors++;
         else stats.decodeErrors++;
         pushError(`${m.source}: ${m.message}`);
@@ -263,6 +264,7 @@ worker.onmessage = (ev) => {
         break;
     case 'result': {
         const r = m.result;
+        if (queryOut && r.queryId === queryOut.id) queryOut = null;
         stats.queryResults = (stats.queryResults || 0) + 1;
         if (r.samples && r.samples.length) {
             const q = r.samples[0];
@@ -285,13 +287,23 @@ worker.onmessage = (ev) => {
 /* Twice a second, ask the daemon for the sea under the camera (QUERY):
  * the overlay shows the height above the waves, and the eye is kept above
  * them.  In replay mode the sea drawn is the sea at T: asked at T (the
- * live sea's height lifted the eye of a fixed view by metres). */
-let queryId = 0, queryTimer = null;
+ * live sea's height lifted the eye of a fixed view by metres).  One query
+ * at a time: a daemon slow to answer (a loaded host, a sea change being
+ * built) is not sent a queue of stale questions, which its limit on
+ * pending queries (server.max_pending_queries) would refuse with ERRORs;
+ * one unanswered for QUERY_PATIENCE_MS is given up. */
+const QUERY_PATIENCE_MS = 10000;
+let queryId = 0, queryTimer = null, queryOut = null;
 function startQueries() {
     if (queryTimer) clearInterval(queryTimer);
+    queryOut = null;
     queryTimer = setInterval(() => {
         if (!sub) return;
-        worker.postMessage({ cmd: 'query', id: ++queryId, points: [cam.pos[0], cam.pos[2]], t: replay ? replayT : null });
+        const now = performance.now();
+        if (queryOut && now - queryOut.at < QUERY_PATIENCE_MS) return;
+        queryOut = { id: ++queryId, at: now };
+        stats.queriesSent = (stats.queriesSent || 0) + 1;
+        worker.postMessage({ cmd: 'query', id: queryId, points: [cam.pos[0], cam.pos[2]], t: replay ? replayT : null });
     }, 500);
 }
 

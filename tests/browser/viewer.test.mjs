@@ -314,6 +314,33 @@ try {
     } else {
         check('ADMIN_TOKEN given to the test (tests/test_browser.sh)', false, 'no ADMIN_TOKEN');
     }
+    /* a daemon that answers nothing for a while (a loaded host, a sea
+     * change being built, a debugger, a paused VM) is asked one QUERY at a
+     * time: the viewer asked twice a second whatever came back, and with a
+     * core busy the questions it queued were refused by the daemon's limit
+     * on pending queries (server.max_pending_queries), ERRORs on the
+     * overlay.  The daemon is stopped (SIGSTOP) for 9 s, under the viewer's
+     * patience of 10 s for one answer; afterwards it answers, and nothing
+     * is refused. */
+    const pid = Number(process.env.OCEAND_PID);
+    if (pid > 0) {
+        const sQ = await stats(page2);
+        process.kill(pid, 'SIGSTOP');
+        try {
+            await page2.waitForTimeout(9000);
+        } finally {
+            process.kill(pid, 'SIGCONT');
+        }
+        const sent = ((await stats(page2)).queriesSent || 0) - (sQ.queriesSent || 0);
+        const answered = await waitFor(page2, (r) => window.oceanStats.queryResults > r, sQ.queryResults || 0, timeoutMs);
+        const sP = await stats(page2);
+        check('a daemon silent for 9 s is asked one QUERY at a time, none refused', sent <= 1 && answered &&
+            sP.serverErrors === sQ.serverErrors && sP.state === 'subscribed',
+            `${sent} queries sent while it was stopped, answered after: ${answered}, state ${sP.state}, errors ` +
+            `${sP.errors.slice(sQ.errors.length).join(' | ')}`);
+    } else {
+        check('OCEAND_PID given to the test (tests/test_browser.sh)', false, 'no OCEAND_PID');
+    }
     /* t=T: the sea of one instant (replay mode), the view a reference
      * render of the exact sea is compared with: every frame is the sea at T,
      * so two screenshots a few frames apart are the same picture */
