@@ -7,7 +7,8 @@
 #          (clang links them into every wasm32-wasi program) for the viewer's WebAssembly
 #          decoders; no npm, so an air-gapped lab with a Debian mirror can run it
 #   bench  + the tools the benchmarks drive (make bench)
-#   test   + the browser test's Chromium and its npm driver (make test)
+#   test   + the browser test's Chromium and its npm driver, and tshark (the
+#          independent reader of the CIGI packets test_cigi writes) (make test)
 set -euo pipefail
 what=${1:-run}
 pkgs=(gcc make clang lld wasi-libc libclang-rt-14-dev-wasm32 pkg-config libclang-rt-14-dev
@@ -15,7 +16,7 @@ pkgs=(gcc make clang lld wasi-libc libclang-rt-14-dev-wasm32 pkg-config libclang
       librandom123-dev libcmocka-dev libwslay-dev libhiredis-dev libpng-dev)
 case "$what" in
 run) ;;
-bench|test) pkgs+=(gnuplot-nox openexr chromium curl python3 haproxy redis-server) ;;
+bench|test) pkgs+=(gnuplot-nox openexr chromium curl python3 haproxy redis-server tshark) ;;
 *) echo "deps: unknown set '$what' (run, bench or test)" >&2; exit 2 ;;
 esac
 missing=()
