@@ -262,8 +262,8 @@ static int field_write(const field *fd, const cigi_packet *p, int big, uint8_t *
     const char *m = (const char *)p + fd->member;
     uint8_t *q = pk + fd->off;
     uint32_t u = 0;
-    int32_t i;
-    double d;
+    int32_t i = 0;
+    double d = 0;
     if (fd->wire == W_F32 || fd->wire == W_F64) memcpy(&d, m, sizeof d);
     else if (fd->wire == W_I8) memcpy(&i, m, sizeof i);
     else memcpy(&u, m, sizeof u);
