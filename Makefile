@@ -66,7 +66,7 @@ CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -fopenmp -pthread
 # simulator adds.  The .pc files' Libs.private are generated from these, so
 # they cannot disagree.
 LIB_LDLIBS := -lwebsockets -lOpenEXRCore-3_1 -lzstd -lcjson -lm -lpthread
-SIM_LDLIBS := -lfftw3f_omp -lfftw3f -lm
+SIM_LDLIBS := -lfftw3f_omp -lfftw3f -lproj -lm
 LDLIBS += $(LIB_LDLIBS) $(SIM_LDLIBS) -lhiredis
 ifeq ($(SAN),1)
 CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined

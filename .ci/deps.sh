@@ -13,7 +13,7 @@ set -euo pipefail
 what=${1:-run}
 pkgs=(gcc make clang lld wasi-libc libclang-rt-14-dev-wasm32 pkg-config libclang-rt-14-dev
       libwebsockets-dev libopenexr-dev libfftw3-dev libzstd-dev libcjson-dev
-      librandom123-dev libcmocka-dev libwslay-dev libhiredis-dev libpng-dev)
+      librandom123-dev libcmocka-dev libwslay-dev libhiredis-dev libpng-dev libproj-dev)
 case "$what" in
 run) ;;
 bench|test) pkgs+=(gnuplot-nox openexr chromium curl python3 haproxy redis-server tshark) ;;
