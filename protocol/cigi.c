@@ -8,7 +8,6 @@
 #include "cigi.h"
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -217,15 +216,6 @@ static void store(uint8_t *p, uint64_t v, int bytes, int big)
     for (int i = 0; i < bytes; i++) p[big ? i : bytes - 1 - i] = (uint8_t)(v >> (8 * (bytes - 1 - i)));
 }
 
-static void say(char *why, size_t len, const char *fmt, ...)
-{
-    if (!why || !len) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(why, len, fmt, ap);
-    va_end(ap);
-}
-
 /* ---- one field --------------------------------------------------------------- */
 
 static void field_read(const field *fd, const uint8_t *pk, int big, cigi_packet *p)
@@ -296,28 +286,28 @@ static int field_write(const field *fd, const cigi_packet *p, int big, uint8_t *
 static ocean_result format_v3(const uint8_t *d, size_t n, cigi_format *out, char *why, size_t wl)
 {
     if (d[0] != 1 && d[0] != 101) {
-        say(why, wl, "CIGI 3 message opens with packet %u, not IG Control (1) or Start of Frame (101)", d[0]);
+        ocean_seterr(why, wl, "CIGI 3 message opens with packet %u, not IG Control (1) or Start of Frame (101)", d[0]);
         return OCEAN_EFORMAT;
     }
     if (d[1] != 24) {
-        say(why, wl, "CIGI 3 %s of %u bytes: only CIGI 3.2 and 3.3 (24 bytes) are read", d[0] == 1 ? "IG Control" :
+        ocean_seterr(why, wl, "CIGI 3 %s of %u bytes: only CIGI 3.2 and 3.3 (24 bytes) are read", d[0] == 1 ? "IG Control" :
             "Start of Frame", d[1]);
         return d[1] == 16 ? OCEAN_EVERSION : OCEAN_EFORMAT;
     }
     if (n < 24) {
-        say(why, wl, "message of %zu bytes, its first packet has 24", n);
+        ocean_seterr(why, wl, "message of %zu bytes, its first packet has 24", n);
         return OCEAN_ETRUNC;
     }
     if (d[6] == 0x80 && d[7] == 0x00) out->big_endian = 1;
     else if (d[6] == 0x00 && d[7] == 0x80) out->big_endian = 0;
     else {
-        say(why, wl, "byte-swap magic 0x%02x%02x, not 0x8000 in either order", d[6], d[7]);
+        ocean_seterr(why, wl, "byte-swap magic 0x%02x%02x, not 0x8000 in either order", d[6], d[7]);
         return OCEAN_EFORMAT;
     }
     out->major = 3;
     out->minor = (uint8_t)((d[0] == 1 ? d[4] : d[5]) >> 4);
     if (out->minor < 2) {
-        say(why, wl, "CIGI 3.%u with 24-byte packets: only 3.2 and 3.3 are read", out->minor);
+        ocean_seterr(why, wl, "CIGI 3.%u with 24-byte packets: only 3.2 and 3.3 are read", out->minor);
         return OCEAN_EVERSION;
     }
     return OCEAN_OK;
@@ -326,22 +316,22 @@ static ocean_result format_v3(const uint8_t *d, size_t n, cigi_format *out, char
 static ocean_result format_v4(const uint8_t *d, size_t n, cigi_format *out, char *why, size_t wl)
 {
     if (n < 24) {
-        say(why, wl, "message of %zu bytes, shorter than a CIGI 4 IG Control or Start of Frame", n);
+        ocean_seterr(why, wl, "message of %zu bytes, shorter than a CIGI 4 IG Control or Start of Frame", n);
         return OCEAN_ETRUNC;
     }
     if (d[0] == 24 && d[1] == 0) out->big_endian = 0;
     else if (d[0] == 0 && d[1] == 24) out->big_endian = 1;
     else {
-        say(why, wl, "CIGI 4 message whose first packet is not 24 bytes long");
+        ocean_seterr(why, wl, "CIGI 4 message whose first packet is not 24 bytes long");
         return OCEAN_EFORMAT;
     }
     unsigned op = (unsigned)load(d + 2, 2, out->big_endian);
     if (op != 0x0000 && op != 0xFFFF) {
-        say(why, wl, "CIGI 4 message opens with packet 0x%04x, not IG Control or Start of Frame", op);
+        ocean_seterr(why, wl, "CIGI 4 message opens with packet 0x%04x, not IG Control or Start of Frame", op);
         return OCEAN_EFORMAT;
     }
     if (d[4] != 4) {
-        say(why, wl, "CIGI 4 opcode with major version %u", d[4]);
+        ocean_seterr(why, wl, "CIGI 4 opcode with major version %u", d[4]);
         return OCEAN_EVERSION;
     }
     out->major = 4;
@@ -353,14 +343,14 @@ ocean_result cigi_format_of(const uint8_t *d, size_t n, cigi_format *out, char *
 {
     memset(out, 0, sizeof *out);
     if (!d || n < 8) {
-        say(why, why_len, "message of %zu bytes: no CIGI packet is that short", d ? n : 0);
+        ocean_seterr(why, why_len, "message of %zu bytes: no CIGI packet is that short", d ? n : 0);
         return OCEAN_ETRUNC;
     }
     /* byte 2 is the major version in CIGI 1-3, and half of the opcode
      * 0x0000 or 0xFFFF of a CIGI 4 IG Control or Start of Frame */
     if (d[2] == 3) return format_v3(d, n, out, why, why_len);
     if (d[2] == 0x00 || d[2] == 0xFF) return format_v4(d, n, out, why, why_len);
-    say(why, why_len, "CIGI version %u: 3.2, 3.3 and 4.0 are read", d[2]);
+    ocean_seterr(why, why_len, "CIGI version %u: 3.2, 3.3 and 4.0 are read", d[2]);
     return OCEAN_EVERSION;
 }
 
@@ -380,7 +370,7 @@ ocean_result cigi_reader_next(cigi_reader *r, cigi_packet *p, int *done, char *w
     size_t left = r->n - r->off, head = r->fmt.major == 4 ? 4 : 2;
     const uint8_t *q = r->d + r->off;
     if (left < head) {
-        say(why, why_len, "%zu bytes left at offset %zu: not a packet header", left, r->off);
+        ocean_seterr(why, why_len, "%zu bytes left at offset %zu: not a packet header", left, r->off);
         r->off = r->n;
         return OCEAN_ETRUNC;
     }
@@ -390,14 +380,14 @@ ocean_result cigi_reader_next(cigi_reader *r, cigi_packet *p, int *done, char *w
     const layout *l = layout_by_opcode(&r->fmt, op);
     ocean_result res = OCEAN_OK;
     if (size == 0 || size % 8) {
-        say(why, why_len, "packet %u at offset %zu: size %zu is not a positive multiple of 8", op, r->off, size);
+        ocean_seterr(why, why_len, "packet %u at offset %zu: size %zu is not a positive multiple of 8", op, r->off, size);
         res = OCEAN_EFORMAT;
     } else if (size > left) {
-        say(why, why_len, "packet %u at offset %zu: size %zu runs past the message (%zu bytes left)", op, r->off, size,
+        ocean_seterr(why, why_len, "packet %u at offset %zu: size %zu runs past the message (%zu bytes left)", op, r->off, size,
             left);
         res = OCEAN_ETRUNC;
     } else if (l && size < l->size) {
-        say(why, why_len, "%s at offset %zu: %zu bytes, its layout has %u", cigi_kind_name(l->kind), r->off, size,
+        ocean_seterr(why, why_len, "%s at offset %zu: %zu bytes, its layout has %u", cigi_kind_name(l->kind), r->off, size,
             l->size);
         res = OCEAN_EFORMAT;
     }
@@ -533,9 +523,9 @@ ocean_result cigi_packet_check(const cigi_packet *p, char *why, size_t why_len)
             memcpy(&v, (const char *)p + c->member, sizeof v);
         }
         if (isfinite(v) && v >= lo && v <= hi) continue;
-        if (hi == BIG && lo == -BIG) say(why, why_len, "%s: %s %g is not a finite number", cigi_kind_name(p->kind), c->name, v);
-        else if (hi == BIG) say(why, why_len, "%s: %s %g, not a finite number >= %g", cigi_kind_name(p->kind), c->name, v, lo);
-        else say(why, why_len, "%s: %s %g outside [%g, %g]", cigi_kind_name(p->kind), c->name, v, lo, hi);
+        if (hi == BIG && lo == -BIG) ocean_seterr(why, why_len, "%s: %s %g is not a finite number", cigi_kind_name(p->kind), c->name, v);
+        else if (hi == BIG) ocean_seterr(why, why_len, "%s: %s %g, not a finite number >= %g", cigi_kind_name(p->kind), c->name, v, lo);
+        else ocean_seterr(why, why_len, "%s: %s %g outside [%g, %g]", cigi_kind_name(p->kind), c->name, v, lo, hi);
         return OCEAN_EINVAL;
     }
     return OCEAN_OK;

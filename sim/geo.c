@@ -8,7 +8,6 @@
 
 #include <math.h>
 #include <proj.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -22,15 +21,6 @@ struct ocean_geo {
     double lat0, lon0;
 };
 
-static void say(char *why, size_t len, const char *fmt, ...)
-{
-    if (!why || !len) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(why, len, fmt, ap);
-    va_end(ap);
-}
-
 static int geodetic_ok(double lat, double lon)
 {
     return isfinite(lat) && isfinite(lon) && fabs(lat) <= 90 && fabs(lon) <= 180;
@@ -40,7 +30,7 @@ ocean_result ocean_geo_create(double lat0, double lon0, ocean_geo **out, char *w
 {
     *out = NULL;
     if (!geodetic_ok(lat0, lon0)) {
-        say(why, why_len, "origin %.9g, %.9g: latitude in [-90, 90] and longitude in [-180, 180] degrees", lat0, lon0);
+        ocean_seterr(why, why_len, "origin %.9g, %.9g: latitude in [-90, 90] and longitude in [-180, 180] degrees", lat0, lon0);
         return OCEAN_EINVAL;
     }
     ocean_geo *g = calloc(1, sizeof *g);
@@ -53,7 +43,7 @@ ocean_result ocean_geo_create(double lat0, double lon0, ocean_geo **out, char *w
     g->pj = g->ctx ? proj_create(g->ctx, def) : NULL;
     if (!g->pj) {
         ocean_result r = g->ctx ? OCEAN_EINVAL : OCEAN_ENOMEM;
-        say(why, why_len, "PROJ could not make the plane about %.9g, %.9g: %s", lat0, lon0,
+        ocean_seterr(why, why_len, "PROJ could not make the plane about %.9g, %.9g: %s", lat0, lon0,
             g->ctx ? proj_context_errno_string(g->ctx, proj_context_errno(g->ctx)) : "no context (out of memory)");
         ocean_geo_destroy(g);
         return r;
