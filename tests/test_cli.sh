@@ -189,6 +189,29 @@ a, b = (json.load(open(f)) for f in sys.argv[1:3])
 sys.exit(0 if b["t"] == 3 and [p["height"] for p in a["points"]] == [p["height"] for p in b["points"]] else 1)
 PY
 expect_refused "disagree" query --n 16 --t 3 --time 4 --points "1,2"
+# query --geo: latitude and longitude onto the ocean's plane about --origin
+# (x north, z east): the answer is the one at the mapped x, z, and a step
+# of 0.001 deg north is 111.10 m and east 80.88 m (WGS 84 at 43.5 deg: M and N cos(lat))
+"$sim" query --n 64 --t 3 --geo "43.5,-8.25;43.501,-8.25;43.5,-8.249" --origin 43.5,-8.25 --json > "$tmp/qg.json" ||
+    fail "query --geo"
+python3 - "$tmp/qg.json" <<'PY' || fail "query --geo does not map onto the plane"
+import json, sys
+p = json.load(open(sys.argv[1]))["points"]
+ok = p[0]["x"] == 0 and p[0]["z"] == 0 and abs(p[1]["x"] - 111.10) < 0.01 and abs(p[1]["z"]) < 1e-6
+ok = ok and abs(p[2]["z"] - 80.877) < 0.01 and 0 < p[2]["x"] < 0.01 and p[1]["lat"] == 43.501
+sys.exit(0 if ok else 1)
+PY
+pts=$(python3 -c 'import json,sys; print(";".join("%r,%r" % (q["x"], q["z"]) for q in json.load(open(sys.argv[1]))["points"]))' "$tmp/qg.json")
+"$sim" query --n 64 --t 3 --points "$pts" --json > "$tmp/qxz.json" || fail "query at the mapped points"
+python3 - "$tmp/qg.json" "$tmp/qxz.json" <<'PY' || fail "query --geo and --points at the same x, z differ"
+import json, sys
+a, b = (json.load(open(f))["points"] for f in sys.argv[1:3])
+sys.exit(0 if [p["height"] for p in a] == [p["height"] for p in b] else 1)
+PY
+expect_refused "latitude in" query --n 16 --geo "91,0"
+expect_refused "--origin" query --n 16 --geo "1,2" --origin "1,2;3,4"
+expect_refused "origin" query --n 16 --geo "1,2" --origin "95,0"
+expect_refused "exactly one of" query --n 16 --geo "1,2" --points "1,2"
 # a direct sum is priced before it starts (--count 1e6 at n 256: 7 hours)
 expect_refused "more than --max-terms" sample --x 1 --z 2 --direct --count 1000000
 "$sim" sample --n 16 --x 1 --z 2 --direct --count 3 --max-terms 1e3 >/dev/null || fail "sample --direct within --max-terms"

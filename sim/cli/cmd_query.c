@@ -10,6 +10,7 @@
 #include <cJSON.h>
 
 #include "cli.h"
+#include "geo.h"
 #include "query.h"
 
 /* Parses "x1,z1;x2,z2;..." (or the lines of a file, "x,z" or "x z" each;
@@ -114,7 +115,8 @@ static char *read_file(const char *path)
 /* What the command line sets beyond the common options. */
 typedef struct query_args {
     double t, cutoff;
-    const char *points, *file;
+    const char *points, *file, *geo, *origin;
+    double *latlon;     /* --geo: the points as given, lat, lon pairs */
 } query_args;
 
 /* Parses and checks the arguments: exactly one source of points, and one
@@ -125,15 +127,17 @@ static int query_args_parse(int argc, char **argv, query_args *a, cli_common *c)
     /* t NAN: --t not given; the common --time (every other command's) then
      * says the time, which query once ignored in silence.  cutoff
      * INFINITY: outside --cutoff's range, "not given". */
-    *a = (query_args){.t = NAN, .cutoff = INFINITY, .points = NULL, .file = NULL};
+    *a = (query_args){.t = NAN, .cutoff = INFINITY, .origin = "0,0"};
     const cli_opt opts[] = {
         {"t", CLI_DOUBLE, &a->t, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T     simulation time, s (as --time; default 0)", NULL},
         {"points", CLI_STRING, &a->points, 0, 0, "LIST  \"x1,z1;x2,z2;...\" world points, m", NULL},
         {"points-file", CLI_STRING, &a->file, 0, 0, "FILE  one 'x,z' per line ('-': stdin)", NULL},
+        {"geo", CLI_STRING, &a->geo, 0, 0, "LIST  \"lat1,lon1;...\" points in degrees (WGS 84), on the plane about --origin", NULL},
+        {"origin", CLI_STRING, &a->origin, 0, 0, "LAT,LON  where x = z = 0 for --geo (oceand's server.geo_origin; 0,0)", NULL},
         {"cutoff", CLI_DOUBLE, &a->cutoff, 0, 1e6, "K     Butterworth cutoff, rad/m (not given: unfiltered)", NULL},
     };
-    int r = cli_parse(argc, argv, "query [--t T] --points \"x,z;...\" | --points-file F [--cutoff K] [--json]",
-                      opts, 4, c, NULL, NULL);
+    int r = cli_parse(argc, argv, "query [--t T] --points \"x,z;...\" | --points-file F | --geo \"lat,lon;...\" "
+                      "[--origin LAT,LON] [--cutoff K] [--json]", opts, 6, c, NULL, NULL);
     if (r)
         return r;
     if (isnan(a->t)) {
@@ -142,21 +146,55 @@ static int query_args_parse(int argc, char **argv, query_args *a, cli_common *c)
         fprintf(stderr, "error: query: --t %.17g and --time %.17g disagree: give one\n", a->t, c->time);
         return 2;
     }
-    if (!a->points == !a->file) {
-        fprintf(stderr, "error: query needs exactly one of --points or --points-file\n");
+    if ((a->points != NULL) + (a->file != NULL) + (a->geo != NULL) != 1) {
+        fprintf(stderr, "error: query needs exactly one of --points, --points-file or --geo\n");
         return 2;
     }
     return 0;
 }
 
-/* The points of --points or --points-file into *xz.  Returns their count
- * (at least 1), or -1 with the reason printed. */
-static long query_points_read(const query_args *a, double **xz)
+/* --geo's n (lat, lon) pairs in xz onto the ocean's plane about --origin
+ * (sim/geo.h), keeping the pairs in a->latlon.  0, or -1 with the reason
+ * printed. */
+static int query_points_map(query_args *a, double *xz, long n)
+{
+    double *o = NULL;
+    if (parse_points(a->origin, "--origin", 0, &o) != 1) {
+        if (o) fprintf(stderr, "error: --origin takes one 'LAT,LON' pair\n");
+        free(o);
+        return -1;
+    }
+    ocean_geo *g;
+    char why[200];
+    ocean_result r = ocean_geo_create(o[0], o[1], &g, why, sizeof why);
+    free(o);
+    if (r != OCEAN_OK) {
+        fprintf(stderr, "error: --origin: %s\n", why);
+        return -1;
+    }
+    a->latlon = malloc(sizeof(double) * 2 * (size_t)n);
+    for (long i = 0; a->latlon && i < n && r == OCEAN_OK; i++) {
+        a->latlon[2 * i] = xz[2 * i];
+        a->latlon[2 * i + 1] = xz[2 * i + 1];
+        r = ocean_geo_to_plane(g, xz[2 * i], xz[2 * i + 1], &xz[2 * i], &xz[2 * i + 1]);
+        if (r != OCEAN_OK)
+            fprintf(stderr, "error: --geo point %ld (%.9g, %.9g): latitude in [-90, 90] and longitude in "
+                    "[-180, 180] degrees, not the origin's antipode\n", i + 1, a->latlon[2 * i], a->latlon[2 * i + 1]);
+    }
+    ocean_geo_destroy(g);
+    if (!a->latlon) fprintf(stderr, "error: out of memory\n");
+    return a->latlon && r == OCEAN_OK ? 0 : -1;
+}
+
+/* The points of --points, --points-file or --geo (mapped onto the plane)
+ * into *xz.  Returns their count (at least 1), or -1 with the reason
+ * printed. */
+static long query_points_read(query_args *a, double **xz)
 {
     long n;
     *xz = NULL;
-    if (a->points) {
-        n = parse_points(a->points, "--points", 0, xz);
+    if (a->points || a->geo) {
+        n = parse_points(a->points ? a->points : a->geo, a->points ? "--points" : "--geo", 0, xz);
     } else {
         char *text = read_file(a->file);
         if (!text)
@@ -166,8 +204,8 @@ static long query_points_read(const query_args *a, double **xz)
     }
     if (n < 0)
         return -1;
-    if (n == 0) {
-        fprintf(stderr, "error: no points given\n");
+    if (n == 0 || (a->geo && query_points_map(a, *xz, n))) {
+        if (n == 0) fprintf(stderr, "error: no points given\n");
         free(*xz);
         *xz = NULL;
         return -1;
@@ -217,6 +255,10 @@ static void query_print_json(const query_args *a, const double *xz, long n,
         cJSON *p = cJSON_CreateObject();
         cJSON_AddNumberToObject(p, "x", xz[2 * i]);
         cJSON_AddNumberToObject(p, "z", xz[2 * i + 1]);
+        if (a->latlon) {
+            cJSON_AddNumberToObject(p, "lat", a->latlon[2 * i]);
+            cJSON_AddNumberToObject(p, "lon", a->latlon[2 * i + 1]);
+        }
         cJSON_AddNumberToObject(p, "height", res[i].height);
         cJSON_AddItemToObject(p, "normal", cJSON_CreateDoubleArray(res[i].normal, 3));
         cJSON_AddItemToObject(p, "velocity", cJSON_CreateDoubleArray(res[i].velocity, 3));
@@ -247,12 +289,15 @@ int cmd_query(int argc, char **argv)
         return r == 1 ? 0 : 2;
     double *xz;
     long n = query_points_read(&a, &xz);
-    if (n < 0)
+    if (n < 0) {
+        free(a.latlon);
         return 2;
+    }
     ocean *o;
     ocean_frame *f;
     if (cli_make_ocean(&c, &o, &f)) {
         free(xz);
+        free(a.latlon);
         return 1;
     }
     int status = 0;
@@ -269,6 +314,7 @@ int cmd_query(int argc, char **argv)
     }
     free(res);
     free(xz);
+    free(a.latlon);
     ocean_frame_destroy(f);
     ocean_destroy(o);
     return status;
