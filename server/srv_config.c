@@ -14,6 +14,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -52,6 +54,73 @@ static ocean_result epoch_hook(void *target, const conf_entry *e, const void *va
     if (!text[0] || srv_epoch_parse(text, &unix_s, NULL, 0) == OCEAN_OK) return OCEAN_OK;
     snprintf(msg, msglen, "%s: expected Unix seconds or an ISO 8601 UTC time like 2026-01-01T00:00:00Z "
              "(a real date; Z or +HH:MM required)", e->name);
+    return OCEAN_EINVAL;
+}
+
+ocean_result srv_config_hosts_parse(const char *text, struct in6_addr *out, int *n, char *why, size_t why_len)
+{
+    *n = 0;
+    const char *p = text;
+    while (*p) {
+        size_t len = strcspn(p, ",");
+        char item[INET6_ADDRSTRLEN + 8];
+        while (len && (*p == ' ' || *p == '\t')) p++, len--;
+        while (len && (p[len - 1] == ' ' || p[len - 1] == '\t')) len--;
+        struct in_addr v4;
+        if (len == 0 || len >= sizeof item || *n == SRV_CIGI_HOSTS) {
+            ocean_seterr(why, why_len, *n == SRV_CIGI_HOSTS ? "more than %d addresses" : "an empty or overlong "
+                         "address (item %d)", *n == SRV_CIGI_HOSTS ? SRV_CIGI_HOSTS : *n + 1);
+            return OCEAN_EINVAL;
+        }
+        memcpy(item, p, len);
+        item[len] = 0;
+        if (inet_pton(AF_INET, item, &v4) == 1) {
+            memset(&out[*n], 0, sizeof out[*n]);
+            out[*n].s6_addr[10] = out[*n].s6_addr[11] = 0xFF;
+            memcpy(&out[*n].s6_addr[12], &v4, 4);
+        } else if (inet_pton(AF_INET6, item, &out[*n]) != 1) {
+            ocean_seterr(why, why_len, "'%s' is not an IPv4 or IPv6 address (names are not resolved)", item);
+            return OCEAN_EINVAL;
+        }
+        ++*n;
+        p += strcspn(p, ",");
+        if (*p) p++;
+    }
+    return OCEAN_OK;
+}
+
+ocean_result srv_config_origin_parse(const char *text, double *lat, double *lon, char *why, size_t why_len)
+{
+    char *end;
+    *lat = strtod(text, &end);
+    if (end != text && *end == ',') {
+        const char *q = end + 1;
+        *lon = strtod(q, &end);
+        if (end != q && *end == 0 && isfinite(*lat) && isfinite(*lon) && fabs(*lat) <= 90 && fabs(*lon) <= 180)
+            return OCEAN_OK;
+    }
+    ocean_seterr(why, why_len, "expected LAT,LON in degrees, |LAT| <= 90, |LON| <= 180");
+    return OCEAN_EINVAL;
+}
+
+static ocean_result hosts_hook(void *target, const conf_entry *e, const void *value, char *msg, size_t msglen)
+{
+    (void)target;
+    struct in6_addr a[SRV_CIGI_HOSTS];
+    int n;
+    char why[200];
+    if (srv_config_hosts_parse(value, a, &n, why, sizeof why) == OCEAN_OK) return OCEAN_OK;
+    snprintf(msg, msglen, "%s: %s", e->name, why);
+    return OCEAN_EINVAL;
+}
+
+static ocean_result origin_hook(void *target, const conf_entry *e, const void *value, char *msg, size_t msglen)
+{
+    (void)target;
+    double lat, lon;
+    char why[200];
+    if (srv_config_origin_parse(value, &lat, &lon, why, sizeof why) == OCEAN_OK) return OCEAN_OK;
+    snprintf(msg, msglen, "%s: %s", e->name, why);
     return OCEAN_EINVAL;
 }
 
@@ -144,6 +213,22 @@ static const conf_entry srv_entries[] = {
     {.name = "server.redis_stream", .type = CONF_STRING, .offset = SRV(redis_stream),
      .size = SRV_REDIS_KEY_MAX, .def = "oceand:sea",
      .help = "Key of the Redis stream of sea-state changes; replicas of one exercise share it."},
+    {.name = "server.cigi_port", .type = CONF_INT, .offset = SRV(cigi_port), .min = 0, .max = 65535,
+     .def = "0",
+     .help = "UDP port of the CIGI service (protocol/CIGI.md): simulator hosts ask it for the "
+             "water under their points (HAT/HOT) and for the sea's conditions, as they ask an "
+             "image generator; on server.bind. 0: off. Needs a restart to change."},
+    {.name = "server.cigi_hosts", .type = CONF_STRING, .offset = SRV(cigi_hosts), .size = SRV_HOSTS_MAX,
+     .def = "127.0.0.1,::1", .hook = hosts_hook,
+     .help = "The addresses allowed to speak CIGI to this daemon, comma separated (IPv4 or IPv6 "
+             "literals, at most 16): CIGI carries no credentials, so its authority is the "
+             "sender's address. A datagram from any other is dropped and counted. Needs a "
+             "restart to change."},
+    {.name = "server.geo_origin", .type = CONF_STRING, .offset = SRV(geo_origin), .size = SRV_BIND_MAX,
+     .def = "0,0", .hook = origin_hook,
+     .help = "LAT,LON in degrees (WGS 84) of the point at the ocean's x = z = 0: CIGI's "
+             "latitudes and longitudes map onto the ocean's plane about it (sim/geo.h: x "
+             "north, z east). Needs a restart to change."},
     {.name = "server.sea_lead", .type = CONF_DOUBLE, .offset = SRV(sea_lead), .min = 0.05,
      .max = 3600, .def = "0.5", .unit = "s",
      .help = "With server.redis: a sea-state change must take effect at least this long after "

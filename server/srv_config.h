@@ -25,6 +25,8 @@
 #define SRV_PATH_MAX 512
 #define SRV_TOKEN_MAX 256
 #define SRV_BIND_MAX 64
+#define SRV_HOSTS_MAX 512
+#define SRV_CIGI_HOSTS 16       /* addresses server.cigi_hosts may list */
 #define SRV_EPOCH_MAX 64
 #define SRV_REDIS_KEY_MAX 128
 
@@ -51,6 +53,9 @@ typedef struct srv_config {
     char epoch[SRV_EPOCH_MAX];   /* sim t = 0: ISO 8601 UTC or Unix seconds; "" = start */
     char redis[SRV_BIND_MAX];    /* "host:port" of the replicated timeline; "" none */
     char redis_stream[SRV_REDIS_KEY_MAX]; /* its stream key */
+    int cigi_port;               /* UDP port of the CIGI service; 0: off */
+    char cigi_hosts[SRV_HOSTS_MAX]; /* addresses allowed to speak CIGI, comma separated */
+    char geo_origin[SRV_BIND_MAX];  /* "LAT,LON" (WGS 84) at x = z = 0 */
     double sea_lead;             /* replicated: least lead of a change's effective time, s */
     int workers;                 /* threads building frames */
     char scene[SRV_PATH_MAX];    /* scene name (in scene_dir) or path; "" none */
@@ -140,5 +145,13 @@ int srv_settings_layout1_cascades(const srv_settings *s);
  * comments - that loads back to the same values.  OCEAN_EIO on a write
  * error. */
 ocean_result srv_settings_dump(const srv_settings *s, FILE *f);
+
+/* server.cigi_hosts: up to SRV_CIGI_HOSTS IPv4 or IPv6 literals, comma
+ * separated, into out[] as IPv6 (IPv4 mapped); *n their count.
+ * OCEAN_EINVAL with why. */
+struct in6_addr;
+ocean_result srv_config_hosts_parse(const char *text, struct in6_addr *out, int *n, char *why, size_t why_len);
+/* server.geo_origin "LAT,LON": finite, |lat| <= 90, |lon| <= 180. */
+ocean_result srv_config_origin_parse(const char *text, double *lat, double *lon, char *why, size_t why_len);
 
 #endif

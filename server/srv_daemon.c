@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "srv_admit.h"
+#include "srv_cigi.h"
 #include "srv_net.h"
 #include "srv_redis.h"
 #include "srv_sim.h"
@@ -17,6 +18,7 @@ struct srv_daemon {
     srv_hub hub;
     srv_sim *sim;
     srv_net *net;
+    srv_cigi *cigi;             /* NULL: server.cigi_port 0 */
 };
 
 ocean_result srv_daemon_start(const srv_settings *s, srv_daemon **out, char *msg, size_t msglen)
@@ -49,7 +51,10 @@ ocean_result srv_daemon_start(const srv_settings *s, srv_daemon **out, char *msg
     if (r == OCEAN_OK) r = srv_net_create(&d->hub, &d->net, msg, msglen);
     if (r == OCEAN_OK) r = srv_sim_start(d->sim);
     if (r == OCEAN_OK) r = srv_net_start(d->net);
+    if (r == OCEAN_OK) r = srv_cigi_start(&d->hub, &d->cigi, msg, msglen);
     if (r != OCEAN_OK) {
+        srv_net_stop(d->net, 0.5);
+        srv_sim_stop(d->sim);
         srv_sim_destroy(d->sim);
         srv_net_destroy(d->net);
         srv_redis_stop(d->hub.redis);
@@ -96,6 +101,9 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     if (strcmp(o->redis, s->srv.redis) || strcmp(o->redis_stream, s->srv.redis_stream))
         restart[nr++] = "server.redis";
     if (o->workers != s->srv.workers) restart[nr++] = "server.workers";
+    if (o->cigi_port != s->srv.cigi_port || strcmp(o->cigi_hosts, s->srv.cigi_hosts) ||
+        strcmp(o->geo_origin, s->srv.geo_origin))
+        restart[nr++] = "server.cigi_port, server.cigi_hosts, server.geo_origin";
     srv_settings keep = h->settings;
     h->settings = *s;
     /* keys that need a restart keep their running values */
@@ -106,6 +114,9 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     snprintf(h->settings.srv.epoch, sizeof h->settings.srv.epoch, "%s", keep.srv.epoch);
     snprintf(h->settings.srv.redis, sizeof h->settings.srv.redis, "%s", keep.srv.redis);
     snprintf(h->settings.srv.redis_stream, sizeof h->settings.srv.redis_stream, "%s", keep.srv.redis_stream);
+    h->settings.srv.cigi_port = keep.srv.cigi_port;
+    snprintf(h->settings.srv.cigi_hosts, sizeof h->settings.srv.cigi_hosts, "%s", keep.srv.cigi_hosts);
+    snprintf(h->settings.srv.geo_origin, sizeof h->settings.srv.geo_origin, "%s", keep.srv.geo_origin);
     /* effects and near field are fixed by the running ocean's scene */
     h->settings.effects = keep.effects;
     h->settings.params = keep.params;
@@ -153,6 +164,7 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
 void srv_daemon_stop(srv_daemon *d)
 {
     if (!d) return;
+    srv_cigi_stop(d->cigi);
     srv_net_stop(d->net, 2.0);
     srv_sim_stop(d->sim);
     srv_net_destroy(d->net);

@@ -114,6 +114,21 @@ static const stat_metric traffic_metrics[] = {
     STAT("oceand_queries_total", "counter", "QUERY messages answered.", queries, 1),
     STAT("oceand_query_points_total", "counter", "Points answered.", query_points, 1),
     STAT("oceand_errors_sent_total", "counter", "ERROR replies sent.", errors_sent, 1),
+    STAT("oceand_cigi_messages_total", "counter", "CIGI host messages (datagrams) answered with a Start of "
+         "Frame.", cigi_messages, 1),
+    STAT("oceand_cigi_answers_total", "counter", "CIGI HAT/HOT and Environmental Conditions requests answered.",
+         cigi_answers, 1),
+    STAT("oceand_cigi_dropped_host_total", "counter", "CIGI datagrams dropped: the sender is not in "
+         "server.cigi_hosts.", cigi_drop_host, 1),
+    STAT("oceand_cigi_dropped_framing_total", "counter", "CIGI datagrams dropped or cut short: no IG Control "
+         "first, another version, a size that is 0, not a multiple of 8 or past the datagram.", cigi_drop_framing, 1),
+    STAT("oceand_cigi_dropped_value_total", "counter", "CIGI packets dropped: NaN, infinite or out-of-range "
+         "values (cigi_packet_check).", cigi_drop_value, 1),
+    STAT("oceand_cigi_dropped_busy_total", "counter", "CIGI host messages dropped: the previous one's requests "
+         "were still being answered (a host faster than the daemon's ticks).", cigi_drop_busy, 1),
+    STAT("oceand_cigi_ignored_total", "counter", "CIGI packets read and not acted on (this version answers "
+         "HAT/HOT and Environmental Conditions requests; sea state and entities from a host are to come).",
+         cigi_ignored, 1),
     STAT("oceand_connections_total", "counter", "Connections accepted.", connections_total, 1),
     STAT("oceand_disconnects_slow_total", "counter", "Clients dropped for the output limit.", disconnects_slow, 1),
     STAT("oceand_refused_full_total", "counter", "Connections refused at max_clients.", refused_full, 1),

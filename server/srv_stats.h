@@ -40,6 +40,10 @@ typedef struct srv_stats {
     /* the replicated timeline (srv_redis.h): entries entered and skipped,
      * stream resets, far-future ids; connected is a gauge (0 or 1) */
     atomic_uint_fast64_t redis_entries, redis_skipped, redis_resets, redis_future_ids, redis_connected;
+    /* the CIGI service (srv_cigi.h): host messages answered, requests
+     * answered, datagrams dropped by reason, packets not acted on */
+    atomic_uint_fast64_t cigi_messages, cigi_answers, cigi_drop_host, cigi_drop_framing, cigi_drop_value;
+    atomic_uint_fast64_t cigi_drop_busy, cigi_ignored;
     atomic_uint_fast64_t lat_hist[SRV_LAT_BUCKETS];
 } srv_stats;
 

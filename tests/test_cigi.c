@@ -15,12 +15,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include <cJSON.h>
 #include <cmocka.h>
 
 #include "cigi.h"
+#include "lib/test_pcap.h"
 
 static const cigi_format V3_BE = {3, 3, 1}, V3_LE = {3, 3, 0}, V4_BE = {4, 0, 1}, V4_LE = {4, 0, 0};
 
@@ -392,33 +392,6 @@ static void values_checked(void **state)
 
 /* ---- tshark: an independent reader of every CIGI 3.3 byte we write -------------- */
 
-/* A pcap of raw IPv4/UDP datagrams (link type 101), host 127.0.0.1:port_h
- * <-> IG 127.0.0.2:port_i. */
-static void pcap_open(FILE *f)
-{
-    uint8_t h[24] = {0xD4, 0xC3, 0xB2, 0xA1, 2, 0, 4, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, 0, 0, 101, 0, 0, 0};
-    assert_int_equal(fwrite(h, 1, sizeof h, f), sizeof h);
-}
-
-static void pcap_datagram(FILE *f, int from_ig, const uint8_t *d, size_t n)
-{
-    uint8_t rec[16] = {0}, ip[20] = {0x45, 0}, udp[8];
-    size_t total = 28 + n;
-    rec[8] = rec[12] = (uint8_t)total, rec[9] = rec[13] = (uint8_t)(total >> 8);
-    ip[2] = (uint8_t)(total >> 8), ip[3] = (uint8_t)total, ip[8] = 64, ip[9] = 17;
-    uint8_t a[4] = {127, 0, 0, 1}, b[4] = {127, 0, 0, 2};
-    memcpy(ip + 12, from_ig ? b : a, 4);
-    memcpy(ip + 16, from_ig ? a : b, 4);
-    unsigned sp = from_ig ? 8005 : 8004, dp = from_ig ? 8004 : 8005, ul = (unsigned)(8 + n);
-    uint8_t u[8] = {(uint8_t)(sp >> 8), (uint8_t)sp, (uint8_t)(dp >> 8), (uint8_t)dp, (uint8_t)(ul >> 8), (uint8_t)ul, 0,
-                    0};
-    memcpy(udp, u, 8);
-    assert_int_equal(fwrite(rec, 1, 16, f), 16);
-    assert_int_equal(fwrite(ip, 1, 20, f), 20);
-    assert_int_equal(fwrite(udp, 1, 8, f), 8);
-    assert_int_equal(fwrite(d, 1, n, f), n);
-}
-
 /* What tshark names each field (tshark 4.0's packet-cigi.c), beside ours. */
 typedef struct tfield {
     const char *name;
@@ -567,44 +540,22 @@ static int compare_packet(const struct tpacket *tp, const cJSON *tree, const cig
 static void tshark_reads_what_we_write(void **state)
 {
     (void)state;
-    if (system("command -v tshark > /dev/null 2>&1") != 0) fail_msg("tshark not installed (.ci/deps.sh test)");
-    char path[] = "/tmp/test_cigi_XXXXXX";
-    int fd = mkstemp(path);
-    assert_true(fd >= 0);
-    FILE *f = fdopen(fd, "wb");
-    pcap_open(f);
+    char path[32];
+    FILE *f = test_pcap_open(path);
     const cigi_format *fmts[] = {&V3_BE, &V3_LE};
     for (int fi = 0; fi < 2; fi++)
         for (int from_ig = 0; from_ig < 2; from_ig++) {
             proto_buf b;
             proto_buf_init(&b, 0);
             message(&b, fmts[fi], from_ig);
-            pcap_datagram(f, from_ig, proto_buf_data(&b), proto_buf_len(&b));
+            test_pcap_datagram(f, from_ig, proto_buf_data(&b), proto_buf_len(&b));
             proto_buf_free(&b);
         }
-    fclose(f);
-    char cmd[300];
-    snprintf(cmd, sizeof cmd, "tshark -r %s -T json --no-duplicate-keys 2>/dev/null", path);
-    FILE *p = popen(cmd, "r");
-    assert_non_null(p);
-    size_t cap = 1 << 20, len = 0, got;
-    char *out = malloc(cap);
-    while ((got = fread(out + len, 1, cap - 1 - len, p)) > 0) len += got;
-    out[len] = 0;
-    assert_int_equal(pclose(p), 0);
-    unlink(path);
-    assert_null(strstr(out, "Malformed"));
-    assert_null(strstr(out, "_ws.expert"));
-    cJSON *js = cJSON_Parse(out);
-    if (!js) fail_msg("tshark's JSON does not parse: %.200s", out);
+    cJSON *js = test_pcap_tshark(f, path);
     int frames = cJSON_GetArraySize(js), fields = 0, packets = 0;
     assert_int_equal(frames, 4);
     for (int fr = 0; fr < frames; fr++) {
-        const cJSON *cigi = cJSON_GetObjectItemCaseSensitive(
-            cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(js, fr), "_source"),
-                                             "layers"),
-            "cigi");
-        if (!cigi) fail_msg("tshark did not read frame %d as CIGI", fr + 1);
+        const cJSON *cigi = test_pcap_cigi(js, fr);
         for (size_t k = 0; k < sizeof tpackets / sizeof tpackets[0]; k++) {
             const cJSON *tree = cJSON_GetObjectItemCaseSensitive(cigi, tpackets[k].tree);
             if (!tree) continue;
@@ -618,7 +569,6 @@ static void tshark_reads_what_we_write(void **state)
     /* 2 x (IG Control + 7 host packets) + 2 x (SOF + 3 answers) */
     assert_int_equal(packets, 24);
     cJSON_Delete(js);
-    free(out);
 }
 
 int main(void)

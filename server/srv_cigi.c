@@ -1,0 +1,407 @@
+/*
+ * srv_cigi.c - the CIGI service (see srv_cigi.h).
+ *
+ * Threads: everything here runs on the service's own thread except
+ * srv_cigi_start / srv_cigi_stop and wake_on_answer (called by whichever
+ * thread queues into the service client's outbox: it only writes the
+ * eventfd).
+ */
+#include "srv_cigi.h"
+
+#include <errno.h>
+#include <math.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/eventfd.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "cigi.h"
+#include "geo.h"
+#include "srv_client.h"
+#include "srv_config.h"
+
+/* One request of a host message, as it will be answered. */
+typedef struct request {
+    uint32_t id, type;          /* HAT/HOT id and request type */
+    double alt;                 /* the test point's altitude (HAT) */
+    int point;                  /* index into the query's points; -1: answered Valid = 0 */
+} request;
+
+/* A host message waiting for its answers. */
+typedef struct pending {
+    int used;
+    uint32_t query_id;
+    double since;               /* monotonic time it was queued */
+    struct sockaddr_storage to;
+    socklen_t tolen;
+    cigi_format fmt;
+    uint32_t host_frame;
+    int n;
+    request req[SRV_CIGI_REQUESTS];
+} pending;
+
+struct srv_cigi {
+    srv_hub *h;
+    int fd, efd;
+    pthread_t thread;
+    int running;
+    atomic_int stop;
+    srv_client *c;              /* the service's client of the hub */
+    ocean_geo *geo;
+    struct in6_addr hosts[SRV_CIGI_HOSTS];
+    int n_hosts;
+    pending p[SRV_CIGI_PENDING];/* in the order queued; answers come in that order */
+    int head, count;
+    uint32_t next_query, ig_frame;
+    double xz[2 * SRV_CIGI_REQUESTS];   /* the points of the message being read */
+    uint8_t buf[65536];
+};
+
+static void bump(atomic_uint_fast64_t *stat, uint64_t n) { atomic_fetch_add(stat, n); }
+
+/* ---- who may speak ---------------------------------------------------------------- */
+
+static int allowed(const srv_cigi *s, const struct sockaddr_storage *a)
+{
+    struct in6_addr x;
+    memset(&x, 0, sizeof x);
+    if (a->ss_family == AF_INET) {
+        x.s6_addr[10] = x.s6_addr[11] = 0xFF;
+        memcpy(&x.s6_addr[12], &((const struct sockaddr_in *)a)->sin_addr, 4);
+    } else if (a->ss_family == AF_INET6) {
+        x = ((const struct sockaddr_in6 *)a)->sin6_addr;
+    } else {
+        return 0;
+    }
+    for (int i = 0; i < s->n_hosts; i++)
+        if (!memcmp(&x, &s->hosts[i], sizeof x)) return 1;
+    return 0;
+}
+
+/* ---- answers --------------------------------------------------------------------------- */
+
+static void put(proto_buf *b, const cigi_format *f, const cigi_packet *p)
+{
+    if (cigi_put(b, f, p) != OCEAN_OK) fprintf(stderr, "oceand: cigi: cannot encode %s\n", cigi_kind_name(p->kind));
+}
+
+/* One request's response from its sample (NULL: Valid = 0). */
+static void put_answer(proto_buf *b, const pending *m, const request *r, const proto_query_sample *q)
+{
+    cigi_packet p;
+    memset(&p, 0, sizeof p);
+    int valid = q && isfinite(q->height) && q->error_bound < 3.0e38f;
+    double h = valid ? q->height : 0;
+    if (r->type == CIGI_HAT_HOT_EXTENDED) {
+        p.kind = CIGI_HAT_HOT_XRESPONSE;
+        cigi_hat_hot_xresponse *x = &p.u.hat_xresp;
+        x->id = r->id;
+        x->valid = (uint32_t)valid;
+        x->frame_lsn = m->host_frame & 0xF;
+        if (valid) {
+            x->hot = h;
+            x->hat = r->alt - h;
+            /* the normal's bearing (x north, z east) and its elevation
+             * above the horizontal */
+            x->normal_az = atan2(q->normal[2], q->normal[0]) * 180 / M_PI;
+            x->normal_el = asin(fmax(-1.0, fmin(1.0, q->normal[1]))) * 180 / M_PI;
+        }
+    } else {
+        p.kind = CIGI_HAT_HOT_RESPONSE;
+        cigi_hat_hot_response *x = &p.u.hat_resp;
+        x->id = r->id;
+        x->valid = (uint32_t)valid;
+        x->type = r->type == CIGI_HOT;
+        x->frame_lsn = m->host_frame & 0xF;
+        if (valid) x->height = r->type == CIGI_HOT ? h : r->alt - h;
+    }
+    put(b, &m->fmt, &p);
+}
+
+/* Sends message m's answer: a Start of Frame carrying the sim time t of
+ * the answers, then one response per request (samples NULL: none valid). */
+static void answer(srv_cigi *s, const pending *m, double t, const proto_query_sample *samples, uint32_t n_samples)
+{
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    cigi_packet sof;
+    memset(&sof, 0, sizeof sof);
+    sof.kind = CIGI_START_OF_FRAME;
+    sof.u.sof.ig_mode = 1; /* Operate */
+    sof.u.sof.frame = ++s->ig_frame;
+    sof.u.sof.last_host_frame = m->host_frame;
+    if (isfinite(t)) {
+        sof.u.sof.timestamp_valid = 1;
+        sof.u.sof.timestamp = (uint32_t)(uint64_t)llround(fmod(t * 1e5, 4294967296.0) + (t < 0 ? 4294967296.0 : 0));
+    }
+    put(&b, &m->fmt, &sof);
+    for (int i = 0; i < m->n; i++) {
+        const request *r = &m->req[i];
+        int k = r->point;
+        put_answer(&b, m, r, samples && k >= 0 && (uint32_t)k < n_samples ? &samples[k] : NULL);
+    }
+    if (sendto(s->fd, proto_buf_data(&b), proto_buf_len(&b), 0, (const struct sockaddr *)&m->to, m->tolen) < 0)
+        fprintf(stderr, "oceand: cigi: cannot answer: %s\n", strerror(errno));
+    else
+        bump(&s->h->stats.cigi_messages, 1);
+    bump(&s->h->stats.cigi_answers, (uint64_t)m->n);
+    proto_buf_free(&b);
+}
+
+static pending *oldest(srv_cigi *s) { return s->count ? &s->p[s->head] : NULL; }
+
+static void pop(srv_cigi *s)
+{
+    s->p[s->head].used = 0;
+    s->head = (s->head + 1) % SRV_CIGI_PENDING;
+    s->count--;
+}
+
+/* The answers the simulation thread queued: each QUERY_RESULT (or ERROR)
+ * belongs to the oldest message waiting, the client's queries being
+ * answered in order. */
+static void take_answers(srv_cigi *s)
+{
+    srv_msg *msg;
+    while ((msg = srv_outbox_take(s->c->out))) {
+        size_t len;
+        uint8_t *wire = srv_msg_wire(msg, &len);
+        proto_msg pm;
+        char err[160];
+        pending *m = oldest(s);
+        if (m && proto_decode(wire, len, &pm, err, sizeof err) == OCEAN_OK) {
+            if (pm.hdr.type == PROTO_QUERY_RESULT && pm.u.result.query_id == m->query_id) {
+                answer(s, m, pm.u.result.t, pm.u.result.samples, pm.u.result.count);
+                pop(s);
+            } else if (pm.hdr.type == PROTO_ERROR) {
+                fprintf(stderr, "oceand: cigi: a query was refused: %s\n", pm.u.error.message);
+                answer(s, m, NAN, NULL, 0);
+                pop(s);
+            }
+            proto_msg_free(&pm);
+        }
+        srv_msg_free(msg);
+    }
+    /* a message not answered in time (the daemon stopping) gets Valid = 0 */
+    while (oldest(s) && srv_now() - oldest(s)->since > SRV_CIGI_PATIENCE) {
+        answer(s, oldest(s), NAN, NULL, 0);
+        pop(s);
+    }
+}
+
+static void wake_on_answer(void *ctx)
+{
+    srv_cigi *s = ctx;
+    uint64_t one = 1;
+    if (write(s->efd, &one, sizeof one) < 0) { /* a full counter already wakes it */ }
+}
+
+/* ---- host messages ------------------------------------------------------------------- */
+
+/* A HAT/HOT Request into m (and its point into xz), or a drop. */
+static void take_request(srv_cigi *s, pending *m, const cigi_packet *p, double *xz, int *npts)
+{
+    const cigi_hat_hot_request *q = &p->u.hat_req;
+    char why[200];
+    if (cigi_packet_check(p, why, sizeof why) != OCEAN_OK) {
+        bump(&s->h->stats.cigi_drop_value, 1);
+        return;
+    }
+    if (m->n == SRV_CIGI_REQUESTS) {
+        bump(&s->h->stats.cigi_drop_busy, 1);
+        return;
+    }
+    request *r = &m->req[m->n++];
+    r->id = q->id;
+    r->type = q->type;
+    r->alt = q->alt;
+    r->point = -1;
+    if (q->coord != CIGI_COORD_GEODETIC) return; /* entities: not in the daemon yet */
+    if (ocean_geo_to_plane(s->geo, q->lat, q->lon, &xz[2 * *npts], &xz[2 * *npts + 1]) != OCEAN_OK) return;
+    r->point = (*npts)++;
+}
+
+/* Queues the points of message m as one query of the service's client;
+ * 0 when the inbox took it. */
+static int ask(srv_cigi *s, pending *m, const double *xz, int n)
+{
+    srv_query *q = calloc(1, sizeof *q);
+    double *pts = malloc(sizeof(double) * 2 * (size_t)n);
+    if (!q || !pts) {
+        free(q);
+        free(pts);
+        return -1;
+    }
+    memcpy(pts, xz, sizeof(double) * 2 * (size_t)n);
+    q->query_id = m->query_id = ++s->next_query;
+    q->seq = m->query_id;
+    q->count = (uint32_t)n;
+    q->points = pts;
+    srv_hub *h = s->h;
+    pthread_mutex_lock(&h->lock);
+    srv_inbox_push_query(s->c->in, q);
+    pthread_cond_signal(&h->wake);
+    pthread_mutex_unlock(&h->lock);
+    return 0;
+}
+
+/* The packets after IG Control: requests into m, the rest counted. */
+static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m, double *xz, int *npts)
+{
+    for (;;) {
+        cigi_packet p;
+        int done;
+        if (cigi_reader_next(rd, &p, &done, NULL, 0) != OCEAN_OK) {
+            bump(&s->h->stats.cigi_drop_framing, 1); /* what came before it is answered */
+            return;
+        }
+        if (done) return;
+        if (p.kind == CIGI_IG_CONTROL) m->host_frame = p.u.ig.frame;
+        else if (p.kind == CIGI_HAT_HOT_REQUEST) take_request(s, m, &p, xz, npts);
+        else bump(&s->h->stats.cigi_ignored, 1);
+    }
+}
+
+static void on_datagram(srv_cigi *s, size_t len, const struct sockaddr_storage *from, socklen_t fromlen)
+{
+    if (!allowed(s, from)) {
+        bump(&s->h->stats.cigi_drop_host, 1);
+        return;
+    }
+    cigi_format f;
+    if (cigi_format_of(s->buf, len, &f, NULL, 0) != OCEAN_OK || s->buf[0] == 101 ||
+        (f.major == 4 && s->buf[2] == 0xFF)) { /* an IG's Start of Frame is no host message */
+        bump(&s->h->stats.cigi_drop_framing, 1);
+        return;
+    }
+    if (s->count == SRV_CIGI_PENDING) {
+        bump(&s->h->stats.cigi_drop_busy, 1);
+        return;
+    }
+    pending *m = &s->p[(s->head + s->count) % SRV_CIGI_PENDING];
+    memset(m, 0, offsetof(pending, req));
+    m->used = 1;
+    m->fmt = f;
+    memcpy(&m->to, from, fromlen);
+    m->tolen = fromlen;
+    m->since = srv_now();
+    int npts = 0;
+    cigi_reader rd;
+    cigi_reader_init(&rd, s->buf, len, &f);
+    read_packets(s, &rd, m, s->xz, &npts);
+    if (npts > 0 && ask(s, m, s->xz, npts) == 0) {
+        s->count++; /* answered when its result comes back */
+        return;
+    }
+    answer(s, m, NAN, NULL, 0); /* nothing the sea must answer: Start of Frame and any Valid = 0 */
+}
+
+/* ---- the thread ------------------------------------------------------------------------- */
+
+static void *cigi_main(void *arg)
+{
+    srv_cigi *s = arg;
+    while (!atomic_load(&s->stop)) {
+        struct pollfd pf[2] = {{.fd = s->fd, .events = POLLIN}, {.fd = s->efd, .events = POLLIN}};
+        int r = poll(pf, 2, s->count ? 100 : 1000);
+        if (r < 0 && errno != EINTR) break;
+        if (pf[1].revents & POLLIN) {
+            uint64_t v;
+            if (read(s->efd, &v, sizeof v) < 0) { /* nothing to drain */ }
+        }
+        take_answers(s);
+        /* at most a burst of datagrams a wake-up: answers are not starved */
+        for (int i = 0; i < 64 && (pf[0].revents & POLLIN); i++) {
+            struct sockaddr_storage from;
+            socklen_t fl = sizeof from;
+            ssize_t n = recvfrom(s->fd, s->buf, sizeof s->buf, MSG_DONTWAIT, (struct sockaddr *)&from, &fl);
+            if (n < 0) break;
+            on_datagram(s, (size_t)n, &from, fl);
+        }
+    }
+    return NULL;
+}
+
+static ocean_result open_socket(srv_cigi *s, const srv_config *cfg, char *msg, size_t msglen)
+{
+    struct addrinfo hints = {.ai_family = AF_UNSPEC, .ai_socktype = SOCK_DGRAM, .ai_flags = AI_PASSIVE |
+                             AI_NUMERICHOST | AI_NUMERICSERV}, *ai = NULL;
+    char port[16];
+    snprintf(port, sizeof port, "%d", cfg->cigi_port);
+    int e = getaddrinfo(cfg->bind[0] ? cfg->bind : NULL, port, &hints, &ai);
+    if (e) {
+        snprintf(msg, msglen, "server.cigi_port: server.bind '%s': %s", cfg->bind, gai_strerror(e));
+        return OCEAN_EINVAL;
+    }
+    s->fd = socket(ai->ai_family, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    if (s->fd < 0 || bind(s->fd, ai->ai_addr, ai->ai_addrlen) < 0) {
+        snprintf(msg, msglen, "server.cigi_port: cannot bind UDP %s port %d: %s", cfg->bind[0] ? cfg->bind : "*",
+                 cfg->cigi_port, strerror(errno));
+        freeaddrinfo(ai);
+        return OCEAN_EIO;
+    }
+    freeaddrinfo(ai);
+    return OCEAN_OK;
+}
+
+static ocean_result setup(srv_cigi *s, char *msg, size_t msglen)
+{
+    const srv_config *cfg = &s->h->settings.srv;
+    char why[200];
+    double lat, lon;
+    if (srv_config_hosts_parse(cfg->cigi_hosts, s->hosts, &s->n_hosts, why, sizeof why) != OCEAN_OK ||
+        srv_config_origin_parse(cfg->geo_origin, &lat, &lon, why, sizeof why) != OCEAN_OK ||
+        ocean_geo_create(lat, lon, &s->geo, why, sizeof why) != OCEAN_OK) {
+        snprintf(msg, msglen, "CIGI service: %s", why);
+        return OCEAN_EINVAL;
+    }
+    ocean_result r = open_socket(s, cfg, msg, msglen);
+    if (r != OCEAN_OK) return r;
+    s->efd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+    if (s->efd < 0) return OCEAN_EIO;
+    r = srv_client_create(s->h, &s->c);
+    if (r != OCEAN_OK) return r;
+    srv_outbox_set_notify(s->c->out, wake_on_answer, s);
+    return OCEAN_OK;
+}
+
+ocean_result srv_cigi_start(srv_hub *h, srv_cigi **out, char *msg, size_t msglen)
+{
+    *out = NULL;
+    if (h->settings.srv.cigi_port == 0) return OCEAN_OK;
+    srv_cigi *s = calloc(1, sizeof *s);
+    if (!s) return OCEAN_ENOMEM;
+    s->h = h;
+    s->fd = s->efd = -1;
+    ocean_result r = setup(s, msg, msglen);
+    if (r == OCEAN_OK && pthread_create(&s->thread, NULL, cigi_main, s) != 0) r = OCEAN_ENOMEM;
+    if (r != OCEAN_OK) {
+        srv_cigi_stop(s);
+        return r;
+    }
+    s->running = 1;
+    *out = s;
+    return OCEAN_OK;
+}
+
+void srv_cigi_stop(srv_cigi *s)
+{
+    if (!s) return;
+    if (s->running) {
+        atomic_store(&s->stop, 1);
+        wake_on_answer(s);
+        pthread_join(s->thread, NULL);
+    }
+    if (s->c) srv_client_remove(s->c);
+    if (s->fd >= 0) close(s->fd);
+    if (s->efd >= 0) close(s->efd);
+    ocean_geo_destroy(s->geo);
+    free(s);
+}

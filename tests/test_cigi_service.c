@@ -1,0 +1,331 @@
+/*
+ * test_cigi_service.c - oceand's CIGI service (server/srv_cigi.h) driven
+ * over loopback UDP by a scripted host: every HAT/HOT answer is the
+ * WebSocket side's QUERY answer at the same point and sim time (the Start
+ * of Frame's timestamp), in CIGI 3.3 of either byte order and in 4.0;
+ * entity-relative requests are answered Valid = 0; hostile datagrams are
+ * dropped and counted by reason, and the daemon answers on afterwards.
+ */
+#include <arpa/inet.h>
+#include <math.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "cigi.h"
+#include "lib/test_pcap.h"
+#include "geo.h"
+#include "oceanclient.h"
+#include "srv_daemon.h"
+#include "srv_hub.h"
+
+static const double LAT0 = 43.5, LON0 = -8.25;
+
+typedef struct fixture {
+    srv_daemon *d;
+    srv_settings set;
+    int port;               /* the CIGI service's UDP port */
+    oc_client *ws;          /* a WebSocket client asking the same points */
+} fixture;
+
+/* A free UDP port on loopback (bound, read, released). */
+static int free_udp_port(void)
+{
+    int fd = socket(AF_INET, SOCK_DGRAM, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t l = sizeof a;
+    assert_int_equal(bind(fd, (struct sockaddr *)&a, sizeof a), 0);
+    assert_int_equal(getsockname(fd, (struct sockaddr *)&a, &l), 0);
+    close(fd);
+    return ntohs(a.sin_port);
+}
+
+static int setup(void **state)
+{
+    static fixture fx;
+    char port[40], err[512];
+    fx.port = free_udp_port();
+    snprintf(port, sizeof port, "server.cigi_port=%d", fx.port);
+    const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=1",
+                          "server.admit_share=0", port, "server.geo_origin=43.5,-8.25"};
+    assert_int_equal(srv_settings_load(NULL, sets, 7, &fx.set, err, sizeof err), OCEAN_OK);
+    ocean_result r = srv_daemon_start(&fx.set, &fx.d, err, sizeof err);
+    if (r != OCEAN_OK) fprintf(stderr, "%s\n", err);
+    assert_int_equal(r, OCEAN_OK);
+    char url[64];
+    snprintf(url, sizeof url, "ws://127.0.0.1:%d/", srv_daemon_port(fx.d));
+    oc_options o;
+    oc_options_default(&o);
+    o.url = url;
+    assert_int_equal(oc_connect(&o, 10000, &fx.ws, err, sizeof err), OCEAN_OK);
+    *state = &fx;
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    fixture *fx = *state;
+    oc_client_destroy(fx->ws);
+    srv_daemon_stop(fx->d);
+    return 0;
+}
+
+/* A host socket on loopback address `from` (127.0.0.x). */
+static int host_socket(const char *from)
+{
+    int fd = socket(AF_INET, SOCK_DGRAM, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET};
+    inet_pton(AF_INET, from, &a.sin_addr);
+    assert_int_equal(bind(fd, (struct sockaddr *)&a, sizeof a), 0);
+    return fd;
+}
+
+static void send_to(int fd, int port, const proto_buf *b)
+{
+    struct sockaddr_in to = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+    inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+    assert_int_equal(sendto(fd, proto_buf_data(b), proto_buf_len(b), 0, (struct sockaddr *)&to, sizeof to),
+                     (ssize_t)proto_buf_len(b));
+}
+
+/* The next datagram within ms, its length (0: none). */
+static size_t receive(int fd, uint8_t *buf, size_t cap, int ms)
+{
+    struct pollfd p = {.fd = fd, .events = POLLIN};
+    if (poll(&p, 1, ms) != 1) return 0;
+    ssize_t n = recv(fd, buf, cap, 0);
+    return n > 0 ? (size_t)n : 0;
+}
+
+static void put(proto_buf *b, const cigi_format *f, cigi_packet p)
+{
+    assert_int_equal(cigi_put(b, f, &p), OCEAN_OK);
+}
+
+static cigi_packet ig_control(uint32_t frame)
+{
+    cigi_packet p = {.kind = CIGI_IG_CONTROL};
+    p.u.ig.ig_mode = 1;
+    p.u.ig.frame = frame;
+    return p;
+}
+
+static cigi_packet request(uint32_t id, uint32_t type, uint32_t coord, double lat, double lon, double alt)
+{
+    cigi_packet p = {.kind = CIGI_HAT_HOT_REQUEST};
+    p.u.hat_req = (cigi_hat_hot_request){.id = id, .type = type, .coord = coord, .lat = lat, .lon = lon, .alt = alt};
+    return p;
+}
+
+/* The four requests of a host frame: Extended at the origin, HAT and HOT
+ * 300 m north-east, and one relative to entity 5. */
+static const struct {
+    uint32_t id, type, coord;
+    double lat, lon, alt;
+} reqs[] = {
+    {11, CIGI_HAT_HOT_EXTENDED, CIGI_COORD_GEODETIC, 43.5, -8.25, 25.0},
+    {12, CIGI_HAT, CIGI_COORD_GEODETIC, 43.5019, -8.2474, 3.0},
+    {13, CIGI_HOT, CIGI_COORD_GEODETIC, 43.5019, -8.2474, 0},
+    {14, CIGI_HAT, CIGI_COORD_ENTITY, 0, 0, 10},
+};
+#define NREQ 4
+
+/* Sends one host frame in format f, reads the answer, checks it against
+ * the WebSocket QUERY at the Start of Frame's time; both datagrams go to
+ * pcap when it is not NULL.  Returns the Extended Response's HOT. */
+static double ask_and_check(fixture *fx, const cigi_format *f, uint32_t frame, FILE *pcap)
+{
+    double hot = NAN;
+    int fd = host_socket("127.0.0.1");
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    put(&b, f, ig_control(frame));
+    for (int i = 0; i < NREQ; i++)
+        put(&b, f, request(reqs[i].id, reqs[i].type, reqs[i].coord, reqs[i].lat, reqs[i].lon, reqs[i].alt));
+    send_to(fd, fx->port, &b);
+    static uint8_t buf[65536];
+    size_t n = receive(fd, buf, sizeof buf, 30000);
+    assert_true(n > 0);
+    if (pcap) {
+        test_pcap_datagram(pcap, 0, proto_buf_data(&b), proto_buf_len(&b));
+        test_pcap_datagram(pcap, 1, buf, n);
+    }
+    cigi_format got;
+    char why[200];
+    assert_int_equal(cigi_format_of(buf, n, &got, why, sizeof why), OCEAN_OK);
+    assert_true(got.major == f->major && got.big_endian == f->big_endian);
+    cigi_reader rd;
+    cigi_reader_init(&rd, buf, n, &got);
+    cigi_packet p;
+    int done;
+    assert_int_equal(cigi_reader_next(&rd, &p, &done, why, sizeof why), OCEAN_OK);
+    assert_int_equal(p.kind, CIGI_START_OF_FRAME);
+    assert_int_equal(p.u.sof.last_host_frame, frame);
+    assert_int_equal(p.u.sof.timestamp_valid, 1);
+    /* the answers' sim time: a tick, k / tick_rate, said in 10 us ticks */
+    double rate = fx->set.srv.tick_rate, t = round(p.u.sof.timestamp * 1e-5 * rate) / rate;
+    /* the same points asked over WebSocket at that time */
+    ocean_geo *g;
+    assert_int_equal(ocean_geo_create(LAT0, LON0, &g, why, sizeof why), OCEAN_OK);
+    double xz[2 * NREQ];
+    for (int i = 0; i < 3; i++)
+        assert_int_equal(ocean_geo_to_plane(g, reqs[i].lat, reqs[i].lon, &xz[2 * i], &xz[2 * i + 1]), OCEAN_OK);
+    ocean_geo_destroy(g);
+    oc_query_result q;
+    assert_int_equal(oc_client_query(fx->ws, xz, 3, 1, t, 30000, &q), OCEAN_OK);
+    for (int i = 0; i < NREQ; i++) {
+        assert_int_equal(cigi_reader_next(&rd, &p, &done, why, sizeof why), OCEAN_OK);
+        assert_false(done);
+        double h = i < 3 ? q.samples[i].height : 0;
+        if (reqs[i].type == CIGI_HAT_HOT_EXTENDED) {
+            assert_int_equal(p.kind, CIGI_HAT_HOT_XRESPONSE);
+            assert_int_equal(p.u.hat_xresp.id, reqs[i].id);
+            assert_int_equal(p.u.hat_xresp.valid, 1);
+            assert_int_equal(p.u.hat_xresp.frame_lsn, frame & 0xF);
+            print_message("t %.4f: extended at the origin: HOT %.6f m (WebSocket %.6f), HAT %.6f, normal %.3f / %.3f "
+                          "deg\n", t, p.u.hat_xresp.hot, h, p.u.hat_xresp.hat, p.u.hat_xresp.normal_az,
+                          p.u.hat_xresp.normal_el);
+            assert_true(p.u.hat_xresp.hot == h);
+            hot = p.u.hat_xresp.hot;
+            assert_true(p.u.hat_xresp.hat == reqs[i].alt - h);
+            /* the normal's elevation: the sea's slope, some degrees off vertical */
+            double el = asin(q.samples[i].normal[1]) * 180 / M_PI;
+            assert_true(fabs(p.u.hat_xresp.normal_el - el) < 1e-3 && el > 60);
+        } else {
+            assert_int_equal(p.kind, CIGI_HAT_HOT_RESPONSE);
+            assert_int_equal(p.u.hat_resp.id, reqs[i].id);
+            if (reqs[i].coord == CIGI_COORD_ENTITY) {
+                assert_int_equal(p.u.hat_resp.valid, 0); /* no entity table in the daemon yet */
+                continue;
+            }
+            assert_int_equal(p.u.hat_resp.valid, 1);
+            assert_int_equal(p.u.hat_resp.type, reqs[i].type == CIGI_HOT);
+            assert_true(p.u.hat_resp.height == (reqs[i].type == CIGI_HOT ? h : reqs[i].alt - h));
+        }
+    }
+    assert_int_equal(cigi_reader_next(&rd, &p, &done, why, sizeof why), OCEAN_OK);
+    assert_true(done);
+    oc_query_result_free(&q);
+    proto_buf_free(&b);
+    close(fd);
+    return hot;
+}
+
+static void answers_are_the_queries(void **state)
+{
+    fixture *fx = *state;
+    const cigi_format v3be = {3, 3, 1}, v3le = {3, 3, 0}, v4be = {4, 0, 1}, v4le = {4, 0, 0};
+    char path[32];
+    FILE *pcap = test_pcap_open(path);
+    double hot[2] = {ask_and_check(fx, &v3be, 100, pcap), ask_and_check(fx, &v3le, 101, pcap)};
+    ask_and_check(fx, &v4be, 102, NULL);
+    ask_and_check(fx, &v4le, 103, NULL);
+    /* Debian's tshark reads both CIGI 3.3 exchanges (it has no CIGI 4):
+     * the host frames, and answers whose fields are the ones decoded above */
+    cJSON *js = test_pcap_tshark(pcap, path);
+    assert_int_equal(cJSON_GetArraySize(js), 4);
+    for (int k = 0; k < 2; k++) {
+        const cJSON *ans = test_pcap_cigi(js, 2 * k + 1), *req = test_pcap_cigi(js, 2 * k);
+        const cJSON *sof = cJSON_GetObjectItemCaseSensitive(ans, "cigi.sof");
+        const cJSON *x = cJSON_GetObjectItemCaseSensitive(ans, "cigi.hat_hot_ext_response");
+        assert_non_null(cJSON_GetObjectItemCaseSensitive(req, "cigi.hat_hot_request"));
+        assert_non_null(sof);
+        assert_non_null(x);
+        assert_string_equal(cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(sof, "cigi.sof.last_host_frame_number")),
+                            k ? "101" : "100");
+        assert_string_equal(cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(x, "cigi.hat_hot_ext_response.hat_hot_id")),
+                            "11");
+        double t_hot = strtod(cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(x, "cigi.hat_hot_ext_response.hot")), NULL);
+        print_message("tshark: answer %d, HOT %.9g (decoded %.9g)\n", k, t_hot, hot[k]);
+        assert_true(fabs(t_hot - hot[k]) <= 1e-9 * fmax(1, fabs(hot[k])));
+    }
+    cJSON_Delete(js);
+    srv_hub *h = srv_daemon_hub(fx->d);
+    assert_true(atomic_load(&h->stats.cigi_messages) >= 4);
+    assert_true(atomic_load(&h->stats.cigi_answers) >= 16);
+}
+
+/* Hostile datagrams: each dropped and counted by its reason; the service
+ * answers a good host frame afterwards. */
+static void hostile_datagrams_dropped(void **state)
+{
+    fixture *fx = *state;
+    srv_hub *h = srv_daemon_hub(fx->d);
+    const cigi_format f = {3, 3, 1};
+    uint64_t host0 = atomic_load(&h->stats.cigi_drop_host), frame0 = atomic_load(&h->stats.cigi_drop_framing),
+             value0 = atomic_load(&h->stats.cigi_drop_value);
+    /* from an address not in server.cigi_hosts (127.0.0.2 is loopback too) */
+    int stranger = host_socket("127.0.0.2");
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    put(&b, &f, ig_control(1));
+    put(&b, &f, request(1, CIGI_HAT, CIGI_COORD_GEODETIC, 43.5, -8.25, 10));
+    send_to(stranger, fx->port, &b);
+    uint8_t buf[4096];
+    assert_int_equal(receive(stranger, buf, sizeof buf, 300), 0); /* nothing answers it */
+    close(stranger);
+    int fd = host_socket("127.0.0.1");
+    /* framing: no IG Control first, a size past the datagram, 3 bytes */
+    static const uint8_t junk1[24] = {24, 24, 3, 0, 0, 0, 0x80, 0};
+    uint8_t junk2[40];
+    memcpy(junk2, proto_buf_data(&b), 24);
+    junk2[24] = 24, junk2[25] = 64;
+    static const uint8_t junk3[3] = {1, 24, 3};
+    const struct {
+        const uint8_t *d;
+        size_t n;
+    } junk[] = {{junk1, sizeof junk1}, {junk2, sizeof junk2}, {junk3, sizeof junk3}};
+    for (size_t i = 0; i < 3; i++) {
+        struct sockaddr_in to = {.sin_family = AF_INET, .sin_port = htons((uint16_t)fx->port)};
+        inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+        assert_true(sendto(fd, junk[i].d, junk[i].n, 0, (struct sockaddr *)&to, sizeof to) >= 0);
+    }
+    /* a NaN latitude: that request is dropped, the frame still answered */
+    proto_buf_reset(&b);
+    put(&b, &f, ig_control(2));
+    put(&b, &f, request(2, CIGI_HAT, CIGI_COORD_GEODETIC, NAN, -8.25, 10));
+    send_to(fd, fx->port, &b);
+    size_t n;
+    int sof = 0;
+    /* the junk with an IG Control first (junk2) is answered with a Start of
+     * Frame; the NaN frame with a Start of Frame and no response */
+    while ((n = receive(fd, buf, sizeof buf, 3000)) > 0) {
+        cigi_format g;
+        assert_int_equal(cigi_format_of(buf, n, &g, NULL, 0), OCEAN_OK);
+        assert_int_equal(buf[0], 101);
+        assert_int_equal(n, 24);
+        if (++sof == 2) break;
+    }
+    assert_int_equal(sof, 2);
+    print_message("dropped: host %llu, framing %llu, value %llu\n",
+                  (unsigned long long)(atomic_load(&h->stats.cigi_drop_host) - host0),
+                  (unsigned long long)(atomic_load(&h->stats.cigi_drop_framing) - frame0),
+                  (unsigned long long)(atomic_load(&h->stats.cigi_drop_value) - value0));
+    assert_int_equal(atomic_load(&h->stats.cigi_drop_host) - host0, 1);
+    assert_int_equal(atomic_load(&h->stats.cigi_drop_framing) - frame0, 3);
+    assert_int_equal(atomic_load(&h->stats.cigi_drop_value) - value0, 1);
+    close(fd);
+    proto_buf_free(&b);
+    /* and a good frame is answered as before */
+    const cigi_format v3 = {3, 3, 1};
+    ask_and_check(fx, &v3, 200, NULL);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(answers_are_the_queries),
+        cmocka_unit_test(hostile_datagrams_dropped),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
