@@ -36,15 +36,15 @@ typedef struct request {
 
 /* A host message waiting for its answers. */
 typedef struct pending {
-    int used;
-    uint32_t query_id;
     double since;               /* monotonic time it was queued */
     struct sockaddr_storage to;
     socklen_t tolen;
     cigi_format fmt;
     uint32_t host_frame;
-    int n;
+    int n, npts;                /* requests; the points among them, in xz */
+    int first;                  /* its first point's index in the query that carries it */
     request req[SRV_CIGI_REQUESTS];
+    double xz[2 * SRV_CIGI_REQUESTS];
 } pending;
 
 struct srv_cigi {
@@ -57,10 +57,11 @@ struct srv_cigi {
     ocean_geo *geo;
     struct in6_addr hosts[SRV_CIGI_HOSTS];
     int n_hosts;
-    pending p[SRV_CIGI_PENDING];/* in the order queued; answers come in that order */
+    pending p[SRV_CIGI_PENDING];/* in the order queued, answered in that order */
     int head, count;
+    int flying;                 /* messages the query in flight carries (the first `flying`) */
+    uint32_t query_id;          /* that query's id */
     uint32_t next_query, ig_frame;
-    double xz[2 * SRV_CIGI_REQUESTS];   /* the points of the message being read */
     uint8_t buf[65536];
 };
 
@@ -155,18 +156,47 @@ static void answer(srv_cigi *s, const pending *m, double t, const proto_query_sa
     proto_buf_free(&b);
 }
 
-static pending *oldest(srv_cigi *s) { return s->count ? &s->p[s->head] : NULL; }
+static pending *nth(srv_cigi *s, int i) { return &s->p[(s->head + i) % SRV_CIGI_PENDING]; }
 
 static void pop(srv_cigi *s)
 {
-    s->p[s->head].used = 0;
     s->head = (s->head + 1) % SRV_CIGI_PENDING;
     s->count--;
 }
 
-/* The answers the simulation thread queued: each QUERY_RESULT (or ERROR)
- * belongs to the oldest message waiting, the client's queries being
- * answered in order. */
+/* The messages the query in flight carried, answered from its result (or
+ * Valid = 0 when samples is NULL), in order. */
+static void answer_flying(srv_cigi *s, double t, const proto_query_sample *samples, uint32_t n)
+{
+    for (; s->flying > 0; s->flying--) {
+        pending *m = nth(s, 0);
+        int ok = samples && (uint32_t)(m->first + m->npts) <= n;
+        answer(s, m, t, ok ? samples + m->first : NULL, ok ? (uint32_t)m->npts : 0);
+        pop(s);
+    }
+}
+
+/* With no query in flight: messages at the head with no point are answered
+ * at once; the points of every other waiting message go as one query, so
+ * a host faster than the daemon's ticks gets each tick's answers to all
+ * its messages since the last. */
+static int ask(srv_cigi *s);
+
+static void send_next(srv_cigi *s)
+{
+    if (s->flying) return;
+    while (s->count && nth(s, 0)->npts == 0) {
+        answer(s, nth(s, 0), NAN, NULL, 0);
+        pop(s);
+    }
+    if (s->count && ask(s) != 0) {
+        s->flying = s->count;
+        answer_flying(s, NAN, NULL, 0);    /* out of memory: Valid = 0 */
+    }
+}
+
+/* The answers the simulation thread queued to the service's client: a
+ * QUERY_RESULT (or an ERROR) for the query in flight. */
 static void take_answers(srv_cigi *s)
 {
     srv_msg *msg;
@@ -175,25 +205,20 @@ static void take_answers(srv_cigi *s)
         uint8_t *wire = srv_msg_wire(msg, &len);
         proto_msg pm;
         char err[160];
-        pending *m = oldest(s);
-        if (m && proto_decode(wire, len, &pm, err, sizeof err) == OCEAN_OK) {
-            if (pm.hdr.type == PROTO_QUERY_RESULT && pm.u.result.query_id == m->query_id) {
-                answer(s, m, pm.u.result.t, pm.u.result.samples, pm.u.result.count);
-                pop(s);
+        if (s->flying && proto_decode(wire, len, &pm, err, sizeof err) == OCEAN_OK) {
+            if (pm.hdr.type == PROTO_QUERY_RESULT && pm.u.result.query_id == s->query_id) {
+                answer_flying(s, pm.u.result.t, pm.u.result.samples, pm.u.result.count);
             } else if (pm.hdr.type == PROTO_ERROR) {
                 fprintf(stderr, "oceand: cigi: a query was refused: %s\n", pm.u.error.message);
-                answer(s, m, NAN, NULL, 0);
-                pop(s);
+                answer_flying(s, NAN, NULL, 0);
             }
             proto_msg_free(&pm);
         }
         srv_msg_free(msg);
     }
-    /* a message not answered in time (the daemon stopping) gets Valid = 0 */
-    while (oldest(s) && srv_now() - oldest(s)->since > SRV_CIGI_PATIENCE) {
-        answer(s, oldest(s), NAN, NULL, 0);
-        pop(s);
-    }
+    /* a query not answered in time (the daemon stopping) gets Valid = 0 */
+    if (s->flying && srv_now() - nth(s, 0)->since > SRV_CIGI_PATIENCE) answer_flying(s, NAN, NULL, 0);
+    send_next(s);
 }
 
 static void wake_on_answer(void *ctx)
@@ -205,8 +230,8 @@ static void wake_on_answer(void *ctx)
 
 /* ---- host messages ------------------------------------------------------------------- */
 
-/* A HAT/HOT Request into m (and its point into xz), or a drop. */
-static void take_request(srv_cigi *s, pending *m, const cigi_packet *p, double *xz, int *npts)
+/* A HAT/HOT Request into m (and its point into m->xz), or a drop. */
+static void take_request(srv_cigi *s, pending *m, const cigi_packet *p)
 {
     const cigi_hat_hot_request *q = &p->u.hat_req;
     char why[200];
@@ -224,14 +249,20 @@ static void take_request(srv_cigi *s, pending *m, const cigi_packet *p, double *
     r->alt = q->alt;
     r->point = -1;
     if (q->coord != CIGI_COORD_GEODETIC) return; /* entities: not in the daemon yet */
-    if (ocean_geo_to_plane(s->geo, q->lat, q->lon, &xz[2 * *npts], &xz[2 * *npts + 1]) != OCEAN_OK) return;
-    r->point = (*npts)++;
+    if (ocean_geo_to_plane(s->geo, q->lat, q->lon, &m->xz[2 * m->npts], &m->xz[2 * m->npts + 1]) != OCEAN_OK)
+        return;
+    r->point = m->npts++;
 }
 
-/* Queues the points of message m as one query of the service's client;
- * 0 when the inbox took it. */
-static int ask(srv_cigi *s, pending *m, const double *xz, int n)
+/* Queues the points of every waiting message as one query of the
+ * service's client; 0 when the inbox took it. */
+static int ask(srv_cigi *s)
 {
+    int n = 0;
+    for (int i = 0; i < s->count; i++) {
+        nth(s, i)->first = n;
+        n += nth(s, i)->npts;
+    }
     srv_query *q = calloc(1, sizeof *q);
     double *pts = malloc(sizeof(double) * 2 * (size_t)n);
     if (!q || !pts) {
@@ -239,11 +270,15 @@ static int ask(srv_cigi *s, pending *m, const double *xz, int n)
         free(pts);
         return -1;
     }
-    memcpy(pts, xz, sizeof(double) * 2 * (size_t)n);
-    q->query_id = m->query_id = ++s->next_query;
-    q->seq = m->query_id;
+    for (int i = 0; i < s->count; i++) {
+        const pending *m = nth(s, i);
+        memcpy(pts + 2 * m->first, m->xz, sizeof(double) * 2 * (size_t)m->npts);
+    }
+    q->query_id = s->query_id = ++s->next_query;
+    q->seq = s->query_id;
     q->count = (uint32_t)n;
     q->points = pts;
+    s->flying = s->count;
     srv_hub *h = s->h;
     pthread_mutex_lock(&h->lock);
     srv_inbox_push_query(s->c->in, q);
@@ -253,7 +288,7 @@ static int ask(srv_cigi *s, pending *m, const double *xz, int n)
 }
 
 /* The packets after IG Control: requests into m, the rest counted. */
-static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m, double *xz, int *npts)
+static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m)
 {
     for (;;) {
         cigi_packet p;
@@ -264,7 +299,7 @@ static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m, double *xz, i
         }
         if (done) return;
         if (p.kind == CIGI_IG_CONTROL) m->host_frame = p.u.ig.frame;
-        else if (p.kind == CIGI_HAT_HOT_REQUEST) take_request(s, m, &p, xz, npts);
+        else if (p.kind == CIGI_HAT_HOT_REQUEST) take_request(s, m, &p);
         else bump(&s->h->stats.cigi_ignored, 1);
     }
 }
@@ -285,22 +320,17 @@ static void on_datagram(srv_cigi *s, size_t len, const struct sockaddr_storage *
         bump(&s->h->stats.cigi_drop_busy, 1);
         return;
     }
-    pending *m = &s->p[(s->head + s->count) % SRV_CIGI_PENDING];
+    pending *m = nth(s, s->count);
     memset(m, 0, offsetof(pending, req));
-    m->used = 1;
     m->fmt = f;
     memcpy(&m->to, from, fromlen);
     m->tolen = fromlen;
     m->since = srv_now();
-    int npts = 0;
     cigi_reader rd;
     cigi_reader_init(&rd, s->buf, len, &f);
-    read_packets(s, &rd, m, s->xz, &npts);
-    if (npts > 0 && ask(s, m, s->xz, npts) == 0) {
-        s->count++; /* answered when its result comes back */
-        return;
-    }
-    answer(s, m, NAN, NULL, 0); /* nothing the sea must answer: Start of Frame and any Valid = 0 */
+    read_packets(s, &rd, m);
+    s->count++;
+    send_next(s);
 }
 
 /* ---- the thread ------------------------------------------------------------------------- */
@@ -399,7 +429,10 @@ void srv_cigi_stop(srv_cigi *s)
         wake_on_answer(s);
         pthread_join(s->thread, NULL);
     }
-    if (s->c) srv_client_remove(s->c);
+    if (s->c) {
+        srv_outbox_set_notify(s->c->out, NULL, NULL); /* the sim thread may still answer into it */
+        srv_client_remove(s->c);
+    }
     if (s->fd >= 0) close(s->fd);
     if (s->efd >= 0) close(s->efd);
     ocean_geo_destroy(s->geo);

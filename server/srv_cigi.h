@@ -8,10 +8,12 @@
  * byte order, with a Start of Frame and one HAT/HOT Response or Extended
  * Response per request, in the order asked.  Geodetic points map onto the
  * ocean's plane through sim/geo.h about server.geo_origin; the points of
- * one message become one query of the service's own client of the hub, so
- * they are answered as a WebSocket QUERY is (the simulation thread's query
- * work, srv_work.h: the choppy displacement inverted, the near field
- * included, at the sim time of the tick that takes them), and a point
+ * the messages waiting become one query of the service's own client of the
+ * hub (one in flight at a time: a 60 Hz host on 30 Hz ticks has two
+ * messages answered a tick), so they are answered as a WebSocket QUERY is
+ * (the simulation thread's query work, srv_work.h: the choppy displacement
+ * inverted, the near field included, at the sim time of the tick that
+ * takes them), and a point
  * whose answer has no error bound (a fold) is answered Valid = 0.  The
  * Start of Frame's timestamp is that sim time in 10 us ticks (mod 2^32),
  * so every answer can be checked against `ocean-sim query --time`.
@@ -38,8 +40,8 @@ typedef struct srv_cigi srv_cigi;
 #define SRV_CIGI_PENDING 8
 /* Requests one message may ask; the rest are dropped (busy). */
 #define SRV_CIGI_REQUESTS 256
-/* A message the simulation thread has not answered in this long is
- * answered Valid = 0 (the daemon stopping, or a query refused). */
+/* Messages the simulation thread has not answered in this long are
+ * answered Valid = 0 (the daemon stopping). */
 #define SRV_CIGI_PATIENCE 2.0
 
 /* Binds server.cigi_port on server.bind and starts the thread (nothing

@@ -17,14 +17,16 @@ struct srv_outbox {
     atomic_uint_fast64_t hard;          /* server.output_hard, as the service thread last saw it */
     atomic_int want_write;              /* something was queued since the service thread looked */
     atomic_int over_hard;               /* a message was refused: over the hard limit */
-    void (*notify)(void *ctx);          /* [const once shared] called after a queue */
+    void (*notify)(void *ctx);          /* [lock] called, under the lock, after a queue */
     void *notify_ctx;
 };
 
 void srv_outbox_set_notify(srv_outbox *o, void (*fn)(void *ctx), void *ctx)
 {
+    pthread_mutex_lock(&o->lock);
     o->notify = fn;
     o->notify_ctx = ctx;
+    pthread_mutex_unlock(&o->lock);
 }
 
 ocean_result srv_outbox_create(uint64_t hard, srv_outbox **out)
@@ -80,6 +82,7 @@ int srv_outbox_queue(srv_outbox *o, srv_msg *m)
         else o->ctrl = m;
         o->ctrl_tail = m;
         o->queued_bytes += cost;
+        if (o->notify) o->notify(o->notify_ctx);
     }
     pthread_mutex_unlock(&o->lock);
     if (refused) {
@@ -87,7 +90,6 @@ int srv_outbox_queue(srv_outbox *o, srv_msg *m)
         return atomic_exchange(&o->over_hard, 1) ? 1 : 2;
     }
     atomic_store(&o->want_write, 1);
-    if (o->notify) o->notify(o->notify_ctx);
     return 0;
 }
 

@@ -27,9 +27,10 @@ ocean_result srv_outbox_create(uint64_t hard, srv_outbox **out);
 /* Frees whatever is still queued.  Accepts NULL. */
 void srv_outbox_destroy(srv_outbox *o);
 
-/* Calls fn(ctx) after each message queued in the FIFO, for a reader that
- * is not the service thread (the CIGI service's own client, srv_cigi.h).
- * Set once, before the outbox is shared. */
+/* Calls fn(ctx) for each message queued in the FIFO, for a reader that is
+ * not the service thread (the CIGI service's own client, srv_cigi.h); fn
+ * runs under the outbox's lock, so it must be short and take no lock.
+ * NULL stops the calls: once this returns, none is under way. */
 void srv_outbox_set_notify(srv_outbox *o, void (*fn)(void *ctx), void *ctx);
 
 /* Queues m at the end of the FIFO (takes ownership).  0: queued; else m

@@ -11,18 +11,21 @@ BUILD=${BUILD:-build}
 OC=$BUILD/ocean-client
 OD=$BUILD/oceand
 SHIP=$BUILD/examples/ship
-for b in "$OC" "$OD" "$SHIP"; do
+CIGI_HOST=$BUILD/examples/cigi_host
+for b in "$OC" "$OD" "$SHIP" "$CIGI_HOST"; do
     [[ -x $b ]] || { echo "missing $b"; exit 1; }
 done
 tmp=$(mktemp -d /tmp/oc-cli.XXXXXX)
 port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
 URL=ws://127.0.0.1:$port/
+cport=$(python3 -c 'import socket; s=socket.socket(type=socket.SOCK_DGRAM); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
 TOKEN=test-token-17
 EPOCH=$(date +%s)
 # admission (server.admit_share) prices layout 0 from this host's speed: off,
 # so a busy host does not refuse the layout-0 commands judged here
 "$OD" --config config/oceand.conf --port "$port" --set server.admin_token=$TOKEN --set server.epoch="$EPOCH" \
-    --set server.admit_share=0 >"$tmp/oceand.log" 2>&1 &
+    --set server.admit_share=0 --set server.cigi_port="$cport" --set server.geo_origin=43.5,-8.25 \
+    >"$tmp/oceand.log" 2>&1 &
 pid=$!
 pid2=
 cleanup() { kill "$pid" $pid2 2>/dev/null; wait "$pid" $pid2 2>/dev/null; rm -rf "$tmp"; }
@@ -226,6 +229,14 @@ python3 -c "import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if d['sp
 echo "== ship against the daemon ($SECONDS s)"
 "$SHIP" "$URL" --seconds 5 --dt 0.1 --quiet >"$tmp/ship.out" 2>&1 || fail "ship: $(cat "$tmp/ship.out")"
 grep -q "heave spectrum peak" "$tmp/ship.out" || fail "ship printed no summary"
+
+echo "== the CIGI host example against the daemon ($SECONDS s)"
+# a ship's four hull points and an aircraft's radar altimeter at 60 Hz over
+# CIGI: it exits 0 when frames were answered and every answer was valid
+"$CIGI_HOST" "127.0.0.1:$cport" --seconds 2 >"$tmp/cigi.out" 2>&1 || fail "cigi_host: $(cat "$tmp/cigi.out")"
+grep -q "answers valid, 0 not" "$tmp/cigi.out" || fail "cigi_host summary: $(cat "$tmp/cigi.out")"
+"$CIGI_HOST" "127.0.0.1:$cport" --seconds 1 --version 4 --little-endian >"$tmp/cigi4.out" 2>&1 ||
+    fail "cigi_host CIGI 4: $(cat "$tmp/cigi4.out")"
 
 echo "== load against a full server fails with the server's reason ($SECONDS s)"
 # it printed "only 2 of 4 viewers connected" and exited 0, the BYE unsaid

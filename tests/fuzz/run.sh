@@ -20,7 +20,7 @@ CFLAGS=(-std=c11 -g "${FUZZ_OPT:--O1}" -fno-omit-frame-pointer -D_GNU_SOURCE -Is
         -I/usr/include/OpenEXR -I/usr/include/cjson
         -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
         -Wno-unknown-pragmas)
-LIBS=(-lwebsockets -lOpenEXRCore-3_1 -lfftw3f_threads -lfftw3f -lzstd -lcjson -lm -lpthread)
+LIBS=(-lwebsockets -lOpenEXRCore-3_1 -lfftw3f_threads -lfftw3f -lproj -lzstd -lcjson -lm -lpthread)
 targets=("$@")
 if ((${#targets[@]} == 0)); then
     for f in tests/fuzz/fuzz_*.c; do t=$(basename "$f" .c); targets+=("${t#fuzz_}"); done
