@@ -387,7 +387,7 @@ static ocean_result setup(srv_cigi *s, char *msg, size_t msglen)
     char why[200];
     double lat, lon;
     if (srv_config_hosts_parse(cfg->cigi_hosts, s->hosts, &s->n_hosts, why, sizeof why) != OCEAN_OK ||
-        srv_config_origin_parse(cfg->geo_origin, &lat, &lon, why, sizeof why) != OCEAN_OK ||
+        ocean_geo_origin_parse(cfg->geo_origin, &lat, &lon, why, sizeof why) != OCEAN_OK ||
         ocean_geo_create(lat, lon, &s->geo, why, sizeof why) != OCEAN_OK) {
         snprintf(msg, msglen, "CIGI service: %s", why);
         return OCEAN_EINVAL;

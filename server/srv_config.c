@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "codec.h"
+#include "geo.h"
 #include "proto.h"
 
 #define SRV(f) offsetof(srv_config, f)
@@ -89,20 +90,6 @@ ocean_result srv_config_hosts_parse(const char *text, struct in6_addr *out, int 
     return OCEAN_OK;
 }
 
-ocean_result srv_config_origin_parse(const char *text, double *lat, double *lon, char *why, size_t why_len)
-{
-    char *end;
-    *lat = strtod(text, &end);
-    if (end != text && *end == ',') {
-        const char *q = end + 1;
-        *lon = strtod(q, &end);
-        if (end != q && *end == 0 && isfinite(*lat) && isfinite(*lon) && fabs(*lat) <= 90 && fabs(*lon) <= 180)
-            return OCEAN_OK;
-    }
-    ocean_seterr(why, why_len, "expected LAT,LON in degrees, |LAT| <= 90, |LON| <= 180");
-    return OCEAN_EINVAL;
-}
-
 static ocean_result hosts_hook(void *target, const conf_entry *e, const void *value, char *msg, size_t msglen)
 {
     (void)target;
@@ -119,7 +106,7 @@ static ocean_result origin_hook(void *target, const conf_entry *e, const void *v
     (void)target;
     double lat, lon;
     char why[200];
-    if (srv_config_origin_parse(value, &lat, &lon, why, sizeof why) == OCEAN_OK) return OCEAN_OK;
+    if (ocean_geo_origin_parse(value, &lat, &lon, why, sizeof why) == OCEAN_OK) return OCEAN_OK;
     snprintf(msg, msglen, "%s: %s", e->name, why);
     return OCEAN_EINVAL;
 }

@@ -151,7 +151,5 @@ ocean_result srv_settings_dump(const srv_settings *s, FILE *f);
  * OCEAN_EINVAL with why. */
 struct in6_addr;
 ocean_result srv_config_hosts_parse(const char *text, struct in6_addr *out, int *n, char *why, size_t why_len);
-/* server.geo_origin "LAT,LON": finite, |lat| <= 90, |lon| <= 180. */
-ocean_result srv_config_origin_parse(const char *text, double *lat, double *lon, char *why, size_t why_len);
 
 #endif

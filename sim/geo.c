@@ -26,6 +26,19 @@ static int geodetic_ok(double lat, double lon)
     return isfinite(lat) && isfinite(lon) && fabs(lat) <= 90 && fabs(lon) <= 180;
 }
 
+ocean_result ocean_geo_origin_parse(const char *text, double *lat, double *lon, char *why, size_t why_len)
+{
+    char *end;
+    *lat = strtod(text, &end);
+    if (end != text && *end == ',') {
+        const char *q = end + 1;
+        *lon = strtod(q, &end);
+        if (end != q && *end == 0 && geodetic_ok(*lat, *lon)) return OCEAN_OK;
+    }
+    ocean_seterr(why, why_len, "expected LAT,LON in degrees, |LAT| <= 90, |LON| <= 180");
+    return OCEAN_EINVAL;
+}
+
 ocean_result ocean_geo_create(double lat0, double lon0, ocean_geo **out, char *why, size_t why_len)
 {
     *out = NULL;

@@ -27,6 +27,10 @@
 
 typedef struct ocean_geo ocean_geo;
 
+/* "LAT,LON" in degrees (server.geo_origin, ocean-sim query --origin):
+ * finite, |LAT| <= 90, |LON| <= 180.  OCEAN_EINVAL with why. */
+ocean_result ocean_geo_origin_parse(const char *text, double *lat, double *lon, char *why, size_t why_len);
+
 /* A plane about (lat0, lon0) degrees: |lat0| <= 90, |lon0| <= 180,
  * finite.  OCEAN_EINVAL with why; OCEAN_ENOMEM. */
 ocean_result ocean_geo_create(double lat0, double lon0, ocean_geo **out, char *why, size_t why_len);

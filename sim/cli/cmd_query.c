@@ -158,16 +158,11 @@ static int query_args_parse(int argc, char **argv, query_args *a, cli_common *c)
  * printed. */
 static int query_points_map(query_args *a, double *xz, long n)
 {
-    double *o = NULL;
-    if (parse_points(a->origin, "--origin", 0, &o) != 1) {
-        if (o) fprintf(stderr, "error: --origin takes one 'LAT,LON' pair\n");
-        free(o);
-        return -1;
-    }
     ocean_geo *g;
     char why[200];
-    ocean_result r = ocean_geo_create(o[0], o[1], &g, why, sizeof why);
-    free(o);
+    double lat0, lon0;
+    ocean_result r = ocean_geo_origin_parse(a->origin, &lat0, &lon0, why, sizeof why);
+    if (r == OCEAN_OK) r = ocean_geo_create(lat0, lon0, &g, why, sizeof why);
     if (r != OCEAN_OK) {
         fprintf(stderr, "error: --origin: %s\n", why);
         return -1;
