@@ -333,9 +333,12 @@ try {
         }
         const sent = ((await stats(page2)).queriesSent || 0) - (sQ.queriesSent || 0);
         const answered = await waitFor(page2, (r) => window.oceanStats.queryResults > r, sQ.queryResults || 0, timeoutMs);
+        /* on a loaded host the connection may drop as the daemon resumes;
+         * the viewer reconnects on its own */
+        const back = await waitFor(page2, () => window.oceanStats.state === 'subscribed', null, timeoutMs);
         const sP = await stats(page2);
-        check('a daemon silent for 9 s is asked one QUERY at a time, none refused', sent <= 1 && answered &&
-            sP.serverErrors === sQ.serverErrors && sP.state === 'subscribed',
+        check('a daemon silent for 9 s is asked one QUERY at a time, none refused', sent <= 1 && answered && back &&
+            sP.serverErrors === sQ.serverErrors,
             `${sent} queries sent while it was stopped, answered after: ${answered}, state ${sP.state}, errors ` +
             `${sP.errors.slice(sQ.errors.length).join(' | ')}`);
     } else {
