@@ -83,11 +83,16 @@ void srv_link_confirmed(srv_link *l, double sim_t, double ceiling, double now)
     l->waited = 0;
 }
 
+int srv_link_holds(const srv_link *l, double now)
+{
+    if (quiet(l, now) || l->n < SRV_LINK_WINDOW) return 0;
+    /* the oldest frame in flight may just not be reported yet */
+    return now - l->ring[l->head].sent > 1.5 * l->ack_gap + 0.1;
+}
+
 int srv_link_may_send(srv_link *l, double now)
 {
-    if (quiet(l, now) || l->n < SRV_LINK_WINDOW) return 1;
-    /* the oldest frame in flight may just not be reported yet */
-    if (now - l->ring[l->head].sent <= 1.5 * l->ack_gap + 0.1) return 1;
+    if (!srv_link_holds(l, now)) return 1;
     l->waited = 1;
     return 0;
 }

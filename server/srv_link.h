@@ -59,6 +59,9 @@ void srv_link_sent(srv_link *l, double sim_t, size_t bytes, double now);
 /* A message from the client said it has received the frame of sim time
  * sim_t (its header's sim_time); ceiling is server.viewer_bytes_per_s. */
 void srv_link_confirmed(srv_link *l, double sim_t, double ceiling, double now);
+/* 1 if the link holds live frames back at now: its window is in flight
+ * and the oldest is overdue (no side effect). */
+int srv_link_holds(const srv_link *l, double now);
 /* 1 if the next live FRAME may be written now; 0: hold it (and remember
  * that a frame waited). */
 int srv_link_may_send(srv_link *l, double now);

@@ -315,6 +315,7 @@ struct srv_net {
     int fd_clients;                /* [const] most clients the fd limit allows */
     int time_said;                 /* [svc] past the exact-time limit: logged */
     srv_session *sessions;         /* [svc] every open connection's session */
+    double last_wake;              /* [svc] srv_now() at the last on_wake; 0: none yet */
 };
 
 typedef struct ws_pss {
@@ -713,8 +714,13 @@ static int session_output(srv_session *s, const srv_config *cfg, double now)
      * output has waited that long with no send completed.  lws holding the
      * rest of a write is one sign; a message waiting for a socket that
      * never turns writable is the other, since the kernel may have taken
-     * the last FRAME whole (lws sends it in one piece). */
-    int pending = q > 0;
+     * the last FRAME whole (lws sends it in one piece).  A frame the link
+     * holds back waits on our plan, not on the reader: a client whose
+     * confirmations trail is not one that reads nothing (the hold ends by
+     * SRV_LINK_QUIET at the latest, and a reader that then takes nothing
+     * is judged from there). */
+    int held = srv_outbox_next_is_live(s->c->out) && srv_link_holds(&s->link, now);
+    int pending = s->inflight > 0 || (q > 0 && !held);
     if (!pending) s->pending_since = 0;
     else if (s->pending_since == 0) s->pending_since = now;
     if (pending && now - fmax(s->pending_since, s->last_progress) > fmax(cfg->output_soft_seconds, 1.0)) {
@@ -725,12 +731,37 @@ static int session_output(srv_session *s, const srv_config *cfg, double now)
     return 0;
 }
 
+/* The sweep runs the wake 4x a second; a longer gap means the service
+ * thread itself did not run (the host stopped or starved the process). */
+#define STALL_S 0.5
+
+/* No client could read or send while the service thread did not run for
+ * `gap` seconds before now, so no limit's clock counts that span: a daemon
+ * resumed after SIGSTOP, or starved on a loaded host, cut its readers as
+ * slow consumers for its own silence.  Clocks set after the stall stay. */
+static void sessions_skip_stall(srv_net *n, double gap, double now)
+{
+    double before = now - gap;
+    for (srv_session *s = n->sessions; s; s = s->next) {
+        double *clk[] = {&s->over_soft_since, &s->pending_since, &s->last_progress, &s->rx_started, &s->last_rx};
+        for (size_t i = 0; i < sizeof clk / sizeof clk[0]; i++)
+            if (*clk[i] > 0 && *clk[i] <= before) *clk[i] += gap;
+        ws_track *t = s->wsi ? trk_of(lws_get_socket_fd(s->wsi)) : NULL;
+        if (t && t->owner == s->wsi && t->frame_t > 0 && t->frame_t <= before) t->frame_t += gap;
+    }
+    if (gap > 2.0)
+        fprintf(stderr, "oceand: the service thread did not run for %.1f s (process stopped or starved); "
+                "client limits do not count that time\n", gap);
+}
+
 /* Runs on every wake: hands writable requests to lws, enforces limits,
  * drives the shutdown. */
 static void on_wake(srv_net *n)
 {
     srv_hub *h = n->hub;
     double now = srv_now();
+    if (n->last_wake > 0 && now - n->last_wake > STALL_S) sessions_skip_stall(n, now - n->last_wake, now);
+    n->last_wake = now;
     int stopping = atomic_load(&n->stop);
     int past = past_time_limit(n);
     pthread_mutex_lock(&h->lock);
@@ -1196,10 +1227,13 @@ int srv_net_port(const srv_net *n) { return n->port; }
  * four times a second even when nothing wakes the service thread. */
 static void sweep_cb(lws_sorted_usec_list_t *sul)
 {
+    /* scheduled before the work: lws times the next wait from the time it
+     * read before this callback, so a sweep scheduled after a wake that
+     * waited seconds for the hub's lock came that many seconds late */
     srv_net *n = (srv_net *)((char *)sul - offsetof(srv_net, sweep));
+    lws_sul_schedule(n->ctx, 0, &n->sweep, sweep_cb, 250 * LWS_US_PER_MS);
     on_wake(n);
     srv_admit_sample(n->hub->admit, srv_now());
-    lws_sul_schedule(n->ctx, 0, &n->sweep, sweep_cb, 250 * LWS_US_PER_MS);
 }
 
 static void *net_main(void *arg)

@@ -2026,6 +2026,112 @@ static void slow_reader_never_delays_fast(void **state)
     oc_client_destroy(fast);
 }
 
+/* The close a raw reader got, for a message: "code N: reason". */
+static void close_text(int op, const uint8_t *b, size_t n, char *out, size_t cap)
+{
+    if (op == 8 && n >= 2) snprintf(out, cap, "close %d: %.*s", b[0] << 8 | b[1], (int)(n - 2), (const char *)b + 2);
+    else snprintf(out, cap, "connection lost (op %d)", op);
+}
+
+/* A reader whose confirmations trail reads everything it is sent: the link
+ * holds its frames back (srv_link.h), and that wait is the daemon's plan,
+ * not a reader that takes nothing.  With server.output_soft_seconds 1 s it
+ * was cut "no bytes read" a second into the hold (a busy CI host's
+ * cutoff_follows_velocity: its client confirmed while frames were in
+ * flight). */
+static void trailing_confirmations_are_no_dead_reader(void **state)
+{
+    (void)state;
+    srv_hub *h = srv_daemon_hub(daemon_);
+    uint64_t slow0 = stat_of(&h->stats.disconnects_slow), held0 = stat_of(&h->stats.frames_held);
+    test_ws w;
+    assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
+    proto_msg m;
+    proto_msg_init(&m, PROTO_SUBSCRIBE);
+    small_subscribe(&m.u.subscribe);
+    m.u.subscribe.mesh_kind = PROTO_MESH_NONE;
+    test_msg_send(&w, &m);
+    enum { NF = 16 };
+    double ft[NF];
+    int nf = 0;
+    char why[160];
+    for (double end = test_now_s() + FRAME_WAIT_MS / 1e3; nf < NF && test_now_s() < end;) {
+        uint8_t *b = NULL;
+        size_t n = 0;
+        int op = test_ws_recv(&w, 50, &b, &n);
+        if (op == 2 && n >= PROTO_HEADER_SIZE && proto_ld16(b + 6) == PROTO_FRAME) ft[nf++] = proto_ldf64(b + 24);
+        free(b);
+    }
+    assert_int_equal(nf, NF);
+    /* one confirmation every 0.4 s, each of the oldest frame not yet
+     * confirmed: the window stays in flight, so the link holds */
+    proto_camera cam;
+    oc_camera_default(&cam);
+    double t0 = test_now_s(), next = t0;
+    int k = 0;
+    while (test_now_s() - t0 < 3.0) {
+        if (test_now_s() >= next && k < NF) {
+            proto_msg_init(&m, PROTO_CAMERA);
+            m.u.camera = cam;
+            m.hdr.sim_time = ft[k++];
+            test_msg_send(&w, &m);
+            next += 0.4;
+        }
+        uint8_t *b = NULL;
+        size_t n = 0;
+        int op = test_ws_recv(&w, 5, &b, &n);
+        if (op < 0 || op == 8) {
+            close_text(op, b, n, why, sizeof why);
+            fail_msg("a reader whose frames the link held was cut: %s", why);
+        }
+        free(b);
+    }
+    test_ws_close(&w);
+    assert_true(stat_of(&h->stats.frames_held) > held0); /* the case was made */
+    assert_int_equal(stat_of(&h->stats.disconnects_slow), slow0);
+}
+
+/* While the daemon does not run (stopped, or starved on a loaded host) no
+ * client can read or send, so no limit counts that time: a message begun
+ * 0.3 s before a 4 s stall and finished 1 s after it is served with
+ * server.partial_seconds at 3 s.  The stall is the service thread kept
+ * off the hub's lock, as SIGSTOP would keep it off the CPU. */
+static void stalled_daemon_counts_no_client_time(void **state)
+{
+    (void)state;
+    srv_hub *h = srv_daemon_hub(daemon_);
+    uint64_t part0 = stat_of(&h->stats.disconnects_partial);
+    pthread_mutex_lock(&h->lock);
+    double was = h->settings.srv.partial_seconds;
+    h->settings.srv.partial_seconds = 3.0;
+    pthread_mutex_unlock(&h->lock);
+    test_ws w;
+    assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
+    proto_msg m;
+    assert_true(test_msg_wait(&w, PROTO_HELLO, FRAME_WAIT_MS, &m));
+    proto_msg_free(&m);
+    proto_msg_init(&m, PROTO_SEA_STATE);
+    m.u.sea_state.op = PROTO_SEA_GET;
+    size_t len;
+    uint8_t *b = test_msg_encode(&m, &len);
+    assert_int_equal(test_ws_send_part(&w, 2, b, len, 0, 8), 0); /* header and 2 bytes */
+    usleep(300000);                                              /* read by the daemon */
+    pthread_mutex_lock(&h->lock);
+    usleep(4000000);
+    pthread_mutex_unlock(&h->lock);
+    usleep(1000000); /* past the sweeps after the stall (4 a second) */
+    assert_int_equal(test_ws_send_part(&w, 2, b, len, 8, SIZE_MAX), 0);
+    free(b);
+    int got = test_msg_wait(&w, PROTO_SEA_STATE, FRAME_WAIT_MS, &m);
+    if (got) proto_msg_free(&m);
+    test_ws_close(&w);
+    pthread_mutex_lock(&h->lock);
+    h->settings.srv.partial_seconds = was;
+    pthread_mutex_unlock(&h->lock);
+    assert_int_equal(stat_of(&h->stats.disconnects_partial), part0);
+    assert_true(got);
+}
+
 /* A client's ERROR is logged (server.verbose) with its text quoted and its
  * control bytes escaped: a newline or an ANSI escape in it forged daemon
  * log lines before. */
@@ -4202,6 +4308,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(replay_identical_bytes),
         cmocka_unit_test(mesh_qz_within_bound),
         cmocka_unit_test(slow_reader_never_delays_fast),
+        cmocka_unit_test(trailing_confirmations_are_no_dead_reader),
+        cmocka_unit_test(stalled_daemon_counts_no_client_time),
         cmocka_unit_test(bad_input_gets_error),
         cmocka_unit_test(client_error_log_is_escaped),
         cmocka_unit_test(camera_at_the_world_edge),

@@ -151,30 +151,35 @@ void test_ws_close(test_ws *w)
     w->len = w->cap = 0;
 }
 
-int test_ws_send(test_ws *w, int opcode, const void *data, size_t len)
+int test_ws_send_part(test_ws *w, int opcode, const void *data, size_t len, size_t from, size_t to)
 {
-    uint8_t h[14];
+    uint8_t *f = malloc(14 + len);
+    if (!f) return -1;
     size_t hl = 0;
-    h[hl++] = (uint8_t)(0x80 | (opcode & 0xF));
+    f[hl++] = (uint8_t)(0x80 | (opcode & 0xF));
     if (len < 126) {
-        h[hl++] = (uint8_t)(0x80 | len);
+        f[hl++] = (uint8_t)(0x80 | len);
     } else if (len < 65536) {
-        h[hl++] = 0x80 | 126;
-        h[hl++] = (uint8_t)(len >> 8);
-        h[hl++] = (uint8_t)len;
+        f[hl++] = 0x80 | 126;
+        f[hl++] = (uint8_t)(len >> 8);
+        f[hl++] = (uint8_t)len;
     } else {
-        h[hl++] = 0x80 | 127;
-        for (int i = 7; i >= 0; i--) h[hl++] = (uint8_t)((uint64_t)len >> (8 * i));
+        f[hl++] = 0x80 | 127;
+        for (int i = 7; i >= 0; i--) f[hl++] = (uint8_t)((uint64_t)len >> (8 * i));
     }
     const uint8_t mask[4] = {0x12, 0x34, 0x56, 0x78};
-    memcpy(h + hl, mask, 4);
+    memcpy(f + hl, mask, 4);
     hl += 4;
-    uint8_t *m = malloc(len ? len : 1);
-    if (!m) return -1;
-    for (size_t i = 0; i < len; i++) m[i] = ((const uint8_t *)data)[i] ^ mask[i & 3];
-    int r = write_all(w->fd, h, hl) || write_all(w->fd, m, len) ? -1 : 0;
-    free(m);
+    for (size_t i = 0; i < len; i++) f[hl + i] = ((const uint8_t *)data)[i] ^ mask[i & 3];
+    if (to > hl + len) to = hl + len;
+    int r = from < to && write_all(w->fd, f + from, to - from) ? -1 : 0;
+    free(f);
     return r;
+}
+
+int test_ws_send(test_ws *w, int opcode, const void *data, size_t len)
+{
+    return test_ws_send_part(w, opcode, data, len, 0, SIZE_MAX);
 }
 
 int test_ws_recv(test_ws *w, int timeout_ms, uint8_t **out, size_t *outlen)

@@ -25,6 +25,9 @@ int test_ws_connect_from(test_ws *w, const char *src, int port, const char *path
 void test_ws_close(test_ws *w);
 /* Sends one message as a single frame (opcode 2 binary, 1 text). */
 int test_ws_send(test_ws *w, int opcode, const void *data, size_t len);
+/* Sends bytes [from, to) of that frame as it goes on the wire (header
+ * included; to is clamped to its end): a message begun and finished later. */
+int test_ws_send_part(test_ws *w, int opcode, const void *data, size_t len, size_t from, size_t to);
 /* Receives the next complete data message within timeout_ms.  Returns its
  * opcode (1, 2, 8 for close) and a malloc'ed payload in *out / *outlen;
  * 0 on timeout, -1 on error or EOF. */
