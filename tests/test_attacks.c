@@ -59,6 +59,14 @@
 #define WITNESS_HZ 20.0
 #define KEEP_MIN 0.95          /* frames the witness must keep */
 #define GAP_MAX_MS 200.0       /* longest wait between two witness frames */
+/* Under ASan every frame and every ocean a legitimate sea change builds
+ * costs 3-5x: a busy host's sanitizer pass saw the witness keep 84-93 % of
+ * its frames through 20 admin sea changes a second (gaps 167-231 ms) while
+ * its control window kept 100 %.  That pass judges the attacks' memory and
+ * answers, and starvation at these looser bounds; the real-time bounds
+ * above are the plain pass's. */
+#define KEEP_MIN_ASAN 0.80
+#define GAP_MAX_ASAN_MS 400.0
 #define RSS_CEILING_MB 256.0   /* growth allowed over the baseline (plain) */
 #define RSS_CEILING_ASAN_MB 768.0
 #define WINDOW_MIN_S 2.0       /* every attack is watched at least this long */
@@ -179,7 +187,9 @@ static void window_close(verdict *v)
     v->keep = v->frames / v->expected;
 }
 
-static int witness_ok(const verdict *v) { return v->keep >= KEEP_MIN && 1e3 * v->gap <= GAP_MAX_MS; }
+static double keep_min(void) { return sanitized ? KEEP_MIN_ASAN : KEEP_MIN; }
+static double gap_max_ms(void) { return sanitized ? GAP_MAX_ASAN_MS : GAP_MAX_MS; }
+static int witness_ok(const verdict *v) { return v->keep >= keep_min() && 1e3 * v->gap <= gap_max_ms(); }
 
 static int n_unjudged, n_retried;
 static verdict last;          /* the window an attack closed last */
@@ -232,8 +242,8 @@ static void run_attack(void (*fn)(void **), void **state)
         n_unjudged++;
         return;
     }
-    assert_true(last.keep >= KEEP_MIN);
-    assert_true(1e3 * last.gap <= GAP_MAX_MS);
+    assert_true(last.keep >= keep_min());
+    assert_true(1e3 * last.gap <= gap_max_ms());
 }
 
 /* ---- raw helpers ------------------------------------------------------------- */
@@ -477,7 +487,7 @@ static int group_teardown(void **state)
     fprintf(stderr, "attacks tried: %d (%d with the witness judged, %d tries repeated); witness "
             "kept >= %.1f %% of its frames (floor %.0f %%), longest gap %.1f ms (ceiling %.0f ms); "
             "RSS peak growth %.1f MiB (ceiling %.0f MiB)%s\n", n_attacks, n_attacks - n_unjudged,
-            n_retried, 100 * worst_keep, 100 * KEEP_MIN, 1e3 * worst_gap, GAP_MAX_MS, worst_rss,
+            n_retried, 100 * worst_keep, 100 * keep_min(), 1e3 * worst_gap, gap_max_ms(), worst_rss,
             rss_ceiling, sanitized ? " [ASan]" : "");
     oc_client_destroy(wit.c);
     srv_daemon_stop(daemon_);
