@@ -8,6 +8,7 @@
  */
 #include "srv_cigi.h"
 
+#include <arpa/inet.h>
 #include <errno.h>
 #include <math.h>
 #include <netdb.h>
@@ -26,6 +27,8 @@
 #include "geo.h"
 #include "srv_client.h"
 #include "srv_config.h"
+#include "srv_convert.h"
+#include "srv_redis.h"
 
 /* One request of a host message, as it will be answered. */
 typedef struct request {
@@ -62,6 +65,12 @@ struct srv_cigi {
     int flying;                 /* messages the query in flight carries (the first `flying`) */
     uint32_t query_id;          /* that query's id */
     uint32_t next_query, ig_frame;
+    /* the host's surface wind, to be entered when want_wind */
+    int want_wind;
+    double wind_u10, wind_dir;  /* m/s; deg the wind blows toward, from +x (north) to +z */
+    double sent_u10, sent_dir;  /* the last one entered (NAN: none) */
+    double sea_next;            /* monotonic time the next change may be entered */
+    char wind_host[64];         /* who sent it, for the log */
     uint8_t buf[65536];
 };
 
@@ -205,12 +214,15 @@ static void take_answers(srv_cigi *s)
         uint8_t *wire = srv_msg_wire(msg, &len);
         proto_msg pm;
         char err[160];
-        if (s->flying && proto_decode(wire, len, &pm, err, sizeof err) == OCEAN_OK) {
-            if (pm.hdr.type == PROTO_QUERY_RESULT && pm.u.result.query_id == s->query_id) {
+        if (proto_decode(wire, len, &pm, err, sizeof err) == OCEAN_OK) {
+            int query = pm.hdr.type == PROTO_ERROR && pm.u.error.offending_type == PROTO_QUERY;
+            if (s->flying && pm.hdr.type == PROTO_QUERY_RESULT && pm.u.result.query_id == s->query_id) {
                 answer_flying(s, pm.u.result.t, pm.u.result.samples, pm.u.result.count);
-            } else if (pm.hdr.type == PROTO_ERROR) {
+            } else if (s->flying && query) {
                 fprintf(stderr, "oceand: cigi: a query was refused: %s\n", pm.u.error.message);
                 answer_flying(s, NAN, NULL, 0);
+            } else if (pm.hdr.type == PROTO_ERROR && !query) { /* a wind the shared timeline refused */
+                fprintf(stderr, "oceand: cigi: the host's wind was refused: %s\n", pm.u.error.message);
             }
             proto_msg_free(&pm);
         }
@@ -226,6 +238,108 @@ static void wake_on_answer(void *ctx)
     srv_cigi *s = ctx;
     uint64_t one = 1;
     if (write(s->efd, &one, sizeof one) < 0) { /* a full counter already wakes it */ }
+}
+
+/* ---- the host's sea ---------------------------------------------------------------------- */
+
+/* The wind of a host packet, to be entered: from_deg is where it blows
+ * from (CIGI), the sea's direction where it blows toward. */
+static void host_wind(srv_cigi *s, double speed, double from_deg, const char *host)
+{
+    s->wind_u10 = speed;
+    s->wind_dir = fmod(fmod(from_deg + 180.0, 360.0) + 360.0, 360.0);
+    snprintf(s->wind_host, sizeof s->wind_host, "%s", host);
+    s->want_wind = 1;
+}
+
+static int same_wind(double u10, double dir, double u2, double dir2)
+{
+    double dd = fabs(fmod(dir - dir2 + 540.0, 360.0) - 180.0);
+    return fabs(u10 - u2) < 0.005 && dd < 0.05;
+}
+
+/* Enters the host's wind into the timeline as an admin's set is entered
+ * (srv_handle.c on_sea_state): the sea at the end of the timeline with
+ * the host's wind, effective as soon as its ocean can be built. */
+static void enter_wind(srv_cigi *s)
+{
+    srv_hub *h = s->h;
+    char why[512] = "", msg[256];
+    double eff = 0;
+    pthread_mutex_lock(&h->lock);
+    ocean_params np = h->n_sea_pending ? h->sea_pending[h->n_sea_pending - 1].params : h->settings.params;
+    if (same_wind(np.sea.wind_u10, np.sea.wind_dir_deg, s->wind_u10, s->wind_dir)) {
+        pthread_mutex_unlock(&h->lock);
+        s->sent_u10 = s->wind_u10, s->sent_dir = s->wind_dir;
+        return;
+    }
+    np.sea.wind_u10 = s->wind_u10;
+    np.sea.wind_dir_deg = s->wind_dir;
+    ocean_result r = ocean_params_validate(&np, msg, sizeof msg);
+    if (r != OCEAN_OK) {
+        pthread_mutex_unlock(&h->lock);
+        fprintf(stderr, "oceand: cigi: the wind of host %s refused: %s\n", s->wind_host, msg);
+        bump(&h->stats.cigi_drop_value, 1);
+    } else if (h->redis) {
+        /* the set as a SEA_STATE message: the ERROR that may answer it
+         * names it (take_answers logs it) */
+        proto_msg set;
+        proto_msg_init(&set, PROTO_SEA_STATE);
+        set.u.sea_state.op = PROTO_SEA_SET;
+        srv_sea_from_params(&np, &set.u.sea_state.sea);
+        eff = set.u.sea_state.effective_time = srv_hub_sim_time(h) + h->settings.srv.sea_lead;
+        pthread_mutex_unlock(&h->lock);
+        proto_buf b;
+        proto_buf_init(&b, 0);
+        r = proto_encode(&b, &set, why, sizeof why);
+        if (r == OCEAN_OK)
+            r = srv_redis_submit(h->redis, s->c, proto_buf_data(&b), proto_buf_len(&b), &set.u.sea_state.sea, eff,
+                                 why, sizeof why);
+        proto_buf_free(&b);
+    } else {
+        r = srv_hub_sea_schedule(h, &np, 0, srv_hub_sea_lead(h), &eff, why, sizeof why);
+        pthread_mutex_unlock(&h->lock);
+        srv_hub_wake_net(h);
+    }
+    if (r == OCEAN_OK) {
+        s->sent_u10 = s->wind_u10, s->sent_dir = s->wind_dir;
+        fprintf(stderr, "oceand: sea state set by CIGI host %s, %s t = %.3f s: wind %.2f m/s toward %.1f deg\n",
+                s->wind_host, h->redis ? "sent to the shared timeline, asked for" : "in force from", eff,
+                s->wind_u10, s->wind_dir);
+    } else if (why[0]) {
+        fprintf(stderr, "oceand: cigi: the wind of host %s not entered: %s\n", s->wind_host, why);
+    }
+}
+
+/* The host's latest wind, entered when it differs from the last one
+ * entered, at most SRV_CIGI_SEA_PER_S times a second. */
+static void follow_host_sea(srv_cigi *s)
+{
+    if (!s->want_wind || srv_now() < s->sea_next) return;
+    s->want_wind = 0;
+    if (same_wind(s->sent_u10, s->sent_dir, s->wind_u10, s->wind_dir)) return;
+    s->sea_next = srv_now() + 1.0 / SRV_CIGI_SEA_PER_S;
+    enter_wind(s);
+}
+
+/* A wind packet of the host at `host`: Atmosphere Control's global wind,
+ * or a Weather Control layer of global scope that holds 10 m (where U10
+ * is defined: protocol/CIGI.md "Surface wind"). */
+static void take_wind(srv_cigi *s, const cigi_packet *p, const char *host)
+{
+    if (cigi_packet_check(p, NULL, 0) != OCEAN_OK) {
+        bump(&s->h->stats.cigi_drop_value, 1);
+        return;
+    }
+    if (p->kind == CIGI_ATMOSPHERE_CONTROL) {
+        host_wind(s, p->u.atmosphere.wind_h, p->u.atmosphere.wind_dir, host);
+        return;
+    }
+    const cigi_weather *w = &p->u.weather;
+    if (w->enable && w->scope == CIGI_SCOPE_GLOBAL && w->base <= 10.0 && w->base + w->thickness >= 10.0)
+        host_wind(s, w->wind_h, w->wind_dir, host);
+    else
+        bump(&s->h->stats.cigi_ignored, 1);
 }
 
 /* ---- host messages ------------------------------------------------------------------- */
@@ -287,8 +401,9 @@ static int ask(srv_cigi *s)
     return 0;
 }
 
-/* The packets after IG Control: requests into m, the rest counted. */
-static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m)
+/* The packets after IG Control: requests into m, the host's wind taken,
+ * the rest counted. */
+static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m, const char *host)
 {
     for (;;) {
         cigi_packet p;
@@ -300,6 +415,7 @@ static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m)
         if (done) return;
         if (p.kind == CIGI_IG_CONTROL) m->host_frame = p.u.ig.frame;
         else if (p.kind == CIGI_HAT_HOT_REQUEST) take_request(s, m, &p);
+        else if (p.kind == CIGI_ATMOSPHERE_CONTROL || p.kind == CIGI_WEATHER_CONTROL) take_wind(s, &p, host);
         else bump(&s->h->stats.cigi_ignored, 1);
     }
 }
@@ -326,9 +442,14 @@ static void on_datagram(srv_cigi *s, size_t len, const struct sockaddr_storage *
     memcpy(&m->to, from, fromlen);
     m->tolen = fromlen;
     m->since = srv_now();
+    char host[64] = "?";
+    if (from->ss_family == AF_INET)
+        inet_ntop(AF_INET, &((const struct sockaddr_in *)from)->sin_addr, host, sizeof host);
+    else if (from->ss_family == AF_INET6)
+        inet_ntop(AF_INET6, &((const struct sockaddr_in6 *)from)->sin6_addr, host, sizeof host);
     cigi_reader rd;
     cigi_reader_init(&rd, s->buf, len, &f);
-    read_packets(s, &rd, m);
+    read_packets(s, &rd, m, host);
     s->count++;
     send_next(s);
 }
@@ -340,7 +461,7 @@ static void *cigi_main(void *arg)
     srv_cigi *s = arg;
     while (!atomic_load(&s->stop)) {
         struct pollfd pf[2] = {{.fd = s->fd, .events = POLLIN}, {.fd = s->efd, .events = POLLIN}};
-        int r = poll(pf, 2, s->count ? 100 : 1000);
+        int r = poll(pf, 2, s->want_wind ? 50 : s->count ? 100 : 1000);
         if (r < 0 && errno != EINTR) break;
         if (pf[1].revents & POLLIN) {
             uint64_t v;
@@ -355,6 +476,7 @@ static void *cigi_main(void *arg)
             if (n < 0) break;
             on_datagram(s, (size_t)n, &from, fl);
         }
+        follow_host_sea(s);
     }
     return NULL;
 }
@@ -410,6 +532,7 @@ ocean_result srv_cigi_start(srv_hub *h, srv_cigi **out, char *msg, size_t msglen
     if (!s) return OCEAN_ENOMEM;
     s->h = h;
     s->fd = s->efd = -1;
+    s->sent_u10 = s->sent_dir = NAN;
     ocean_result r = setup(s, msg, msglen);
     if (r == OCEAN_OK && pthread_create(&s->thread, NULL, cigi_main, s) != 0) r = OCEAN_ENOMEM;
     if (r != OCEAN_OK) {

@@ -17,10 +17,16 @@
  * whose answer has no error bound (a fold) is answered Valid = 0.  The
  * Start of Frame's timestamp is that sim time in 10 us ticks (mod 2^32),
  * so every answer can be checked against `ocean-sim query --time`.
+ * The host's surface wind (Atmosphere Control, or a global Weather
+ * Control layer that holds 10 m) sets the sea's wind through the timeline,
+ * as an admin's SEA_STATE set does (replicated through Redis when the
+ * daemon is): a host that sends its wind every frame changes the sea only
+ * when the wind changes, at most SRV_CIGI_SEA_PER_S times a second (the
+ * latest wind wins), each change logged with the host's address.
  * Entity-relative requests are answered Valid = 0 until the entity table
- * reaches the daemon; every other packet (sea state, entities,
- * environmental requests) is counted (oceand_cigi_ignored_total) and not
- * acted on yet.  Drops are counted by reason in /metrics.
+ * reaches the daemon; every other packet (entities, maritime and wave
+ * control, environmental requests) is counted (oceand_cigi_ignored_total)
+ * and not acted on yet.  Drops are counted by reason in /metrics.
  *
  * Threads: the service's own thread owns its socket, its geo plane and
  * the messages it is answering; it reaches the simulation thread only
@@ -43,6 +49,8 @@ typedef struct srv_cigi srv_cigi;
 /* Messages the simulation thread has not answered in this long are
  * answered Valid = 0 (the daemon stopping). */
 #define SRV_CIGI_PATIENCE 2.0
+/* Sea changes a host's wind makes at most, a second. */
+#define SRV_CIGI_SEA_PER_S 4.0
 
 /* Binds server.cigi_port on server.bind and starts the thread (nothing
  * when the port is 0: *out NULL).  OCEAN_EINVAL / OCEAN_EIO with msg. */

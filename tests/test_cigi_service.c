@@ -10,6 +10,7 @@
 #include <math.h>
 #include <netinet/in.h>
 #include <poll.h>
+#include <pthread.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -321,11 +322,125 @@ static void hostile_datagrams_dropped(void **state)
     ask_and_check(fx, &v3, 200, NULL);
 }
 
+/* The sea at the end of the daemon's timeline: its wind. */
+static void timeline_wind(srv_hub *h, double *u10, double *dir)
+{
+    pthread_mutex_lock(&h->lock);
+    const ocean_params *p = h->n_sea_pending ? &h->sea_pending[h->n_sea_pending - 1].params : &h->settings.params;
+    *u10 = p->sea.wind_u10;
+    *dir = p->sea.wind_dir_deg;
+    pthread_mutex_unlock(&h->lock);
+}
+
+/* Waits (a deadline, not a speed) for the timeline to end with wind u10
+ * toward dir; 1 if it did. */
+static int wait_wind(srv_hub *h, double u10, double dir)
+{
+    double u, d;
+    for (int i = 0; i < 1500; i++) {
+        timeline_wind(h, &u, &d);
+        if (fabs(u - u10) < 1e-3 && fabs(d - dir) < 1e-3) return 1;
+        usleep(20000);
+    }
+    print_message("the timeline ends with wind %.3f m/s toward %.2f deg, not %.3f toward %.2f\n", u, d, u10, dir);
+    return 0;
+}
+
+static cigi_packet atmosphere(double speed, double from_deg)
+{
+    cigi_packet p = {.kind = CIGI_ATMOSPHERE_CONTROL};
+    p.u.atmosphere.enable = 1;
+    p.u.atmosphere.humidity = 60;
+    p.u.atmosphere.air_temp = 15;
+    p.u.atmosphere.visibility = 20000;
+    p.u.atmosphere.wind_h = speed;
+    p.u.atmosphere.wind_dir = from_deg;
+    p.u.atmosphere.pressure = 1013;
+    return p;
+}
+
+static cigi_packet weather(double base, double thickness, double speed, double from_deg)
+{
+    cigi_packet p = {.kind = CIGI_WEATHER_CONTROL};
+    cigi_weather *w = &p.u.weather;
+    w->enable = 1;
+    w->scope = CIGI_SCOPE_GLOBAL;
+    w->humidity = 60;
+    w->air_temp = 15;
+    w->visibility = 20000;
+    w->base = base;
+    w->thickness = thickness;
+    w->wind_h = speed;
+    w->wind_dir = from_deg;
+    w->pressure = 1013;
+    return p;
+}
+
+/* A host's surface wind sets the sea through the timeline: Atmosphere
+ * Control's wind from the west is a sea wind toward the east (90 deg from
+ * north); the same wind every frame changes nothing more; a Weather Control
+ * layer aloft is no surface wind, a global one holding 10 m is. */
+static void host_wind_sets_the_sea(void **state)
+{
+    fixture *fx = *state;
+    srv_hub *h = srv_daemon_hub(fx->d);
+    const cigi_format f = {3, 3, 1};
+    int fd = host_socket("127.0.0.1");
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    put(&b, &f, ig_control(300));
+    put(&b, &f, atmosphere(14.0, 270.0));
+    uint64_t changes0 = atomic_load(&h->stats.sea_changes);
+    send_to(fd, fx->port, &b);
+    assert_true(wait_wind(h, 14.0, 90.0));
+    for (int i = 0; i < 1500 && atomic_load(&h->stats.sea_changes) == changes0; i++) usleep(20000);
+    assert_int_equal(atomic_load(&h->stats.sea_changes) - changes0, 1);
+    /* a WebSocket client is told the same sea, in force */
+    proto_sea sea;
+    double eff;
+    assert_int_equal(oc_client_sea_state_fetch(fx->ws, 10000, &sea, &eff), OCEAN_OK);
+    print_message("WebSocket: wind %.3f m/s toward %.2f deg from t = %.3f s\n", sea.wind_u10, sea.wind_dir_deg, eff);
+    assert_true(fabs(sea.wind_u10 - 14.0) < 1e-3 && fabs(sea.wind_dir_deg - 90.0) < 1e-3);
+    /* the host says it again, frame after frame: no further change */
+    for (int i = 0; i < 10; i++) {
+        send_to(fd, fx->port, &b);
+        usleep(50000);
+    }
+    usleep(500000);
+    assert_int_equal(atomic_load(&h->stats.sea_changes) - changes0, 1);
+    pthread_mutex_lock(&h->lock);
+    int pending = h->n_sea_pending;
+    pthread_mutex_unlock(&h->lock);
+    assert_int_equal(pending, 0);
+    /* a layer from 1000 m up: winds aloft, ignored */
+    uint64_t ignored0 = atomic_load(&h->stats.cigi_ignored);
+    proto_buf_reset(&b);
+    put(&b, &f, ig_control(301));
+    put(&b, &f, weather(1000, 500, 30.0, 0));
+    send_to(fd, fx->port, &b);
+    for (int i = 0; i < 300 && atomic_load(&h->stats.cigi_ignored) == ignored0; i++) usleep(20000);
+    assert_true(atomic_load(&h->stats.cigi_ignored) > ignored0);
+    double u, d;
+    timeline_wind(h, &u, &d);
+    assert_true(fabs(u - 14.0) < 1e-3);
+    /* a global layer from the sea up to 50 m, wind from the north: toward
+     * the south (180 deg), 9 m/s; in CIGI 3.3 of the other byte order */
+    const cigi_format le = {3, 3, 0};
+    proto_buf_reset(&b);
+    put(&b, &le, ig_control(302));
+    put(&b, &le, weather(0, 50, 9.0, 0));
+    send_to(fd, fx->port, &b);
+    assert_true(wait_wind(h, 9.0, 180.0));
+    close(fd);
+    proto_buf_free(&b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(answers_are_the_queries),
         cmocka_unit_test(hostile_datagrams_dropped),
+        cmocka_unit_test(host_wind_sets_the_sea),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
