@@ -28,6 +28,7 @@
 #include "srv_client.h"
 #include "srv_config.h"
 #include "srv_convert.h"
+#include "srv_entity.h"
 #include "srv_redis.h"
 
 /* One request of a host message, as it will be answered. */
@@ -342,6 +343,85 @@ static void take_wind(srv_cigi *s, const cigi_packet *p, const char *host)
         bump(&s->h->stats.cigi_ignored, 1);
 }
 
+/* ---- the host's entities ------------------------------------------------------------------ */
+
+/* CIGI carries no entity's size or kind: a clamped entity is taken for a
+ * ship of these dimensions, any other for an aircraft of this span (a
+ * frame for its requests, no wake). */
+#define CIGI_SHIP_LENGTH_M 100.0
+#define CIGI_SHIP_BEAM_M 15.0
+#define CIGI_SHIP_DRAUGHT_M 5.0
+#define CIGI_AIRCRAFT_SPAN_M 15.0
+
+/* The table's shape for entity e of the host. */
+static ocean_entity_desc entity_desc(const cigi_entity *e)
+{
+    ocean_entity_desc d = {.id = e->id};
+    if (e->clamp != CIGI_CLAMP_NONE) {
+        d.kind = OCEAN_ENTITY_SHIP;
+        d.length_m = CIGI_SHIP_LENGTH_M, d.beam_m = CIGI_SHIP_BEAM_M, d.draught_m = CIGI_SHIP_DRAUGHT_M;
+    } else {
+        d.kind = OCEAN_ENTITY_AIRCRAFT;
+        d.length_m = CIGI_AIRCRAFT_SPAN_M;
+    }
+    return d;
+}
+
+/* Entity Control (3.x: state and position) or Entity Position (4.0):
+ * the entity enters the daemon's table at the sim clock, its speed the
+ * step from its last sample (at most its kind's); destroyed, it leaves.
+ * The host is the entity's authority: a step the table refuses (a host
+ * that repositions it) enters it anew where the host put it.  An attached
+ * entity (a part of another) is no entity of the sea. */
+static void take_entity(srv_cigi *s, const cigi_packet *p, const cigi_format *f)
+{
+    srv_entities *tab = s->h->entities;
+    const cigi_entity *e = &p->u.entity;
+    if (cigi_packet_check(p, NULL, 0) != OCEAN_OK) {
+        bump(&s->h->stats.cigi_drop_value, 1);
+        return;
+    }
+    if (p->kind == CIGI_ENTITY_CONTROL && e->state == CIGI_ENTITY_DESTROYED) {
+        srv_entities_remove(tab, e->id);
+        return;
+    }
+    int placed = p->kind == CIGI_ENTITY_POSITION || f->major == 3; /* 4.0's Entity Control is state only */
+    if (!placed || e->attach || (p->kind == CIGI_ENTITY_CONTROL && e->state != CIGI_ENTITY_ACTIVE)) {
+        bump(&s->h->stats.cigi_ignored, 1);
+        return;
+    }
+    ocean_entity_desc d = entity_desc(e);
+    ocean_track_sample smp = {.t = srv_hub_sim_time(s->h), .heading_deg = e->yaw};
+    smp.altitude_m = d.kind == OCEAN_ENTITY_SHIP ? 0 : e->alt;
+    if (ocean_geo_to_plane(s->geo, e->lat, e->lon, &smp.x, &smp.z) != OCEAN_OK) {
+        bump(&s->h->stats.cigi_drop_value, 1);
+        return;
+    }
+    ocean_track_sample last;
+    double vmax = d.kind == OCEAN_ENTITY_SHIP ? OCEAN_SHIP_SPEED_MAX : OCEAN_AIRCRAFT_SPEED_MAX;
+    if (srv_entities_last(tab, e->id, &last) == OCEAN_OK && smp.t > last.t)
+        smp.speed = fmin(vmax, hypot(smp.x - last.x, smp.z - last.z) / (smp.t - last.t));
+    if (srv_entities_sample(tab, &d, &smp, NULL, 0) == OCEAN_OK) return;
+    srv_entities_remove(tab, e->id);
+    smp.speed = 0;
+    if (srv_entities_sample(tab, &d, &smp, NULL, 0) != OCEAN_OK) bump(&s->h->stats.cigi_drop_value, 1);
+}
+
+/* An entity-relative request's point: the entity's position at the sim
+ * clock and the offsets in its frame (x forward, y right, z down; pitch
+ * and roll not applied), into *x, *z and the test point's altitude *alt.
+ * 0 when the daemon holds no such entity. */
+static int entity_point(srv_cigi *s, const cigi_hat_hot_request *q, double *x, double *z, double *alt)
+{
+    ocean_entity_state st;
+    if (srv_entities_state(s->h->entities, q->entity, srv_hub_sim_time(s->h), &st) != OCEAN_OK) return 0;
+    double h = st.heading_deg * (M_PI / 180.0), c = cos(h), sn = sin(h);
+    *x = st.x + q->lat * c - q->lon * sn; /* forward is the heading; right is 90 deg clockwise of it */
+    *z = st.z + q->lat * sn + q->lon * c;
+    *alt = st.altitude_m - q->alt;
+    return fabs(*x) <= OCEAN_ENTITY_POS_MAX && fabs(*z) <= OCEAN_ENTITY_POS_MAX;
+}
+
 /* ---- host messages ------------------------------------------------------------------- */
 
 /* A HAT/HOT Request into m (and its point into m->xz), or a drop. */
@@ -362,9 +442,12 @@ static void take_request(srv_cigi *s, pending *m, const cigi_packet *p)
     r->type = q->type;
     r->alt = q->alt;
     r->point = -1;
-    if (q->coord != CIGI_COORD_GEODETIC) return; /* entities: not in the daemon yet */
-    if (ocean_geo_to_plane(s->geo, q->lat, q->lon, &m->xz[2 * m->npts], &m->xz[2 * m->npts + 1]) != OCEAN_OK)
+    double *xz = &m->xz[2 * m->npts];
+    if (q->coord == CIGI_COORD_ENTITY) {
+        if (!entity_point(s, q, &xz[0], &xz[1], &r->alt)) return; /* no such entity: Valid = 0 */
+    } else if (ocean_geo_to_plane(s->geo, q->lat, q->lon, &xz[0], &xz[1]) != OCEAN_OK) {
         return;
+    }
     r->point = m->npts++;
 }
 
@@ -416,6 +499,7 @@ static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m, const char *h
         if (p.kind == CIGI_IG_CONTROL) m->host_frame = p.u.ig.frame;
         else if (p.kind == CIGI_HAT_HOT_REQUEST) take_request(s, m, &p);
         else if (p.kind == CIGI_ATMOSPHERE_CONTROL || p.kind == CIGI_WEATHER_CONTROL) take_wind(s, &p, host);
+        else if (p.kind == CIGI_ENTITY_CONTROL || p.kind == CIGI_ENTITY_POSITION) take_entity(s, &p, &rd->fmt);
         else bump(&s->h->stats.cigi_ignored, 1);
     }
 }

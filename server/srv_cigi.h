@@ -23,10 +23,13 @@
  * daemon is): a host that sends its wind every frame changes the sea only
  * when the wind changes, at most SRV_CIGI_SEA_PER_S times a second (the
  * latest wind wins), each change logged with the host's address.
- * Entity-relative requests are answered Valid = 0 until the entity table
- * reaches the daemon; every other packet (entities, maritime and wave
- * control, environmental requests) is counted (oceand_cigi_ignored_total)
- * and not acted on yet.  Drops are counted by reason in /metrics.
+ * The host's entities (Entity Control; Entity Position in 4.0) enter the
+ * daemon's entity table (srv_entity.h) at the sim clock, and
+ * entity-relative requests are answered at the point their offsets name
+ * from the entity's position and heading (Valid = 0 for an entity the
+ * table does not hold).  Maritime and Wave Control and Environmental
+ * Conditions Requests are counted (oceand_cigi_ignored_total) and not
+ * acted on yet.  Drops are counted by reason in /metrics.
  *
  * Threads: the service's own thread owns its socket, its geo plane and
  * the messages it is answering; it reaches the simulation thread only

@@ -216,6 +216,10 @@ static const conf_entry srv_entries[] = {
      .help = "LAT,LON in degrees (WGS 84) of the point at the ocean's x = z = 0: CIGI's "
              "latitudes and longitudes map onto the ocean's plane about it (sim/geo.h: x "
              "north, z east). Needs a restart to change."},
+    {.name = "server.max_entities", .type = CONF_INT, .offset = SRV(max_entities), .min = 1, .max = 4096,
+     .def = "64",
+     .help = "Entities (ships, aircraft: a CIGI host's Entity Control) the daemon's table holds "
+             "at most; one more is refused. Needs a restart to change."},
     {.name = "server.sea_lead", .type = CONF_DOUBLE, .offset = SRV(sea_lead), .min = 0.05,
      .max = 3600, .def = "0.5", .unit = "s",
      .help = "With server.redis: a sea-state change must take effect at least this long after "

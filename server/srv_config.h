@@ -56,6 +56,7 @@ typedef struct srv_config {
     int cigi_port;               /* UDP port of the CIGI service; 0: off */
     char cigi_hosts[SRV_HOSTS_MAX]; /* addresses allowed to speak CIGI, comma separated */
     char geo_origin[SRV_BIND_MAX];  /* "LAT,LON" (WGS 84) at x = z = 0 */
+    int max_entities;            /* entities the table holds at most (srv_entity.h) */
     double sea_lead;             /* replicated: least lead of a change's effective time, s */
     int workers;                 /* threads building frames */
     char scene[SRV_PATH_MAX];    /* scene name (in scene_dir) or path; "" none */

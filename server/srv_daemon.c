@@ -92,7 +92,7 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     free(probe);
     pthread_mutex_lock(&h->lock);
     const srv_config *o = &h->settings.srv;
-    const char *restart[8]; /* one per key tested below (6): 4 overflowed */
+    const char *restart[10]; /* one per key tested below (8): 4 overflowed */
     int nr = 0;
     if (o->port != s->srv.port) restart[nr++] = "server.port";
     if (strcmp(o->bind, s->srv.bind)) restart[nr++] = "server.bind";
@@ -104,6 +104,7 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     if (o->cigi_port != s->srv.cigi_port || strcmp(o->cigi_hosts, s->srv.cigi_hosts) ||
         strcmp(o->geo_origin, s->srv.geo_origin))
         restart[nr++] = "server.cigi_port, server.cigi_hosts, server.geo_origin";
+    if (o->max_entities != s->srv.max_entities) restart[nr++] = "server.max_entities";
     srv_settings keep = h->settings;
     h->settings = *s;
     /* keys that need a restart keep their running values */
@@ -117,6 +118,7 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     h->settings.srv.cigi_port = keep.srv.cigi_port;
     snprintf(h->settings.srv.cigi_hosts, sizeof h->settings.srv.cigi_hosts, "%s", keep.srv.cigi_hosts);
     snprintf(h->settings.srv.geo_origin, sizeof h->settings.srv.geo_origin, "%s", keep.srv.geo_origin);
+    h->settings.srv.max_entities = keep.srv.max_entities;
     /* effects and near field are fixed by the running ocean's scene */
     h->settings.effects = keep.effects;
     h->settings.params = keep.params;

@@ -11,6 +11,7 @@
 #include <time.h>
 
 #include "srv_client.h"
+#include "srv_entity.h"
 #include "srv_fingerprint.h"
 
 double srv_now(void)
@@ -32,6 +33,13 @@ ocean_result srv_hub_init(srv_hub *h, const srv_settings *s)
     int e = pthread_cond_init(&h->wake, &ca);
     pthread_condattr_destroy(&ca);
     if (e) {
+        pthread_mutex_destroy(&h->lock);
+        return OCEAN_ENOMEM;
+    }
+    char why[160];
+    if (srv_entities_create(s->srv.max_entities, &h->entities, why, sizeof why) != OCEAN_OK) {
+        fprintf(stderr, "oceand: %s\n", why);
+        pthread_cond_destroy(&h->wake);
         pthread_mutex_destroy(&h->lock);
         return OCEAN_ENOMEM;
     }
@@ -64,6 +72,7 @@ void srv_hub_fini(srv_hub *h)
         h->clients = c->next;
         srv_client_unref(c);
     }
+    srv_entities_destroy(h->entities);
     pthread_cond_destroy(&h->wake);
     pthread_mutex_destroy(&h->lock);
 }

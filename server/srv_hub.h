@@ -80,6 +80,7 @@ typedef struct srv_hub {
     char fingerprint[17];                 /* [const] determinism fingerprint, 16 hex digits */
     struct srv_redis *redis;              /* [const once started] replicated timeline, or NULL */
     struct srv_admit *admit;              /* [const once started] admission (srv_admit.h) */
+    struct srv_entities *entities;        /* [const] the entity table (srv_entity.h), its own lock */
 } srv_hub;
 
 /* Monotonic seconds. */

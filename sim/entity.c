@@ -90,7 +90,13 @@ static ocean_result desc_check(const ocean_entity_desc *d, char *why, size_t n)
                      "draught 0 (%g, %g)", d->id, d->length_m, d->beam_m, d->draught_m);
         return OCEAN_EINVAL;
     }
-    ocean_seterr(why, n, "entity %u: kind %d is neither ship (0) nor rotorcraft (1)", d->id, (int)d->kind);
+    if (d->kind == OCEAN_ENTITY_AIRCRAFT) {
+        if (in_range(d->length_m, 1, 100) && d->beam_m == 0 && d->draught_m == 0) return OCEAN_OK;
+        ocean_seterr(why, n, "entity %u: an aircraft's span %g m must lie in [1, 100], its beam and draught 0 "
+                     "(%g, %g)", d->id, d->length_m, d->beam_m, d->draught_m);
+        return OCEAN_EINVAL;
+    }
+    ocean_seterr(why, n, "entity %u: kind %d is not ship (0), rotorcraft (1) or aircraft (2)", d->id, (int)d->kind);
     return OCEAN_EINVAL;
 }
 
@@ -130,7 +136,14 @@ ocean_result ocean_entities_remove(ocean_entities *e, uint32_t id)
 
 static double speed_max(ocean_entity_kind k)
 {
-    return k == OCEAN_ENTITY_SHIP ? OCEAN_SHIP_SPEED_MAX : OCEAN_ROTOR_SPEED_MAX;
+    return k == OCEAN_ENTITY_SHIP ? OCEAN_SHIP_SPEED_MAX
+         : k == OCEAN_ENTITY_ROTORCRAFT ? OCEAN_ROTOR_SPEED_MAX : OCEAN_AIRCRAFT_SPEED_MAX;
+}
+
+static double altitude_max(ocean_entity_kind k)
+{
+    return k == OCEAN_ENTITY_SHIP ? 0 : k == OCEAN_ENTITY_ROTORCRAFT ? OCEAN_ROTOR_ALTITUDE_MAX
+                                                                      : OCEAN_AIRCRAFT_ALTITUDE_MAX;
 }
 
 static const ocean_track_sample *sample_at(const entity *k, int i)
@@ -142,7 +155,7 @@ static const ocean_track_sample *sample_at(const entity *k, int i)
 static ocean_result sample_check(const entity *k, const ocean_track_sample *s, char *why, size_t n)
 {
     double vmax = speed_max(k->d.kind);
-    double amax = k->d.kind == OCEAN_ENTITY_ROTORCRAFT ? OCEAN_ROTOR_ALTITUDE_MAX : 0;
+    double amax = altitude_max(k->d.kind);
     if (!in_range(s->t, -OCEAN_TIME_MAX, OCEAN_TIME_MAX) || !in_range(s->x, -OCEAN_ENTITY_POS_MAX, OCEAN_ENTITY_POS_MAX) ||
         !in_range(s->z, -OCEAN_ENTITY_POS_MAX, OCEAN_ENTITY_POS_MAX) || !in_range(s->altitude_m, 0, amax) ||
         !isfinite(s->heading_deg) || !in_range(s->speed, 0, vmax)) {
@@ -259,6 +272,16 @@ ocean_result ocean_entities_state(const ocean_entities *e, uint32_t id, double t
         else hi = mid;
     }
     between(sample_at(k, lo), sample_at(k, hi), t, out);
+    return OCEAN_OK;
+}
+
+ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_track_sample *out)
+{
+    if (!e || !out) return OCEAN_EINVAL;
+    int found, at = find(e, id, &found);
+    if (!found || !e->by_id[at]->count) return OCEAN_ENOTFOUND;
+    const entity *k = e->by_id[at];
+    *out = *sample_at(k, k->count - 1);
     return OCEAN_OK;
 }
 

@@ -42,6 +42,7 @@
 typedef enum ocean_entity_kind {
     OCEAN_ENTITY_SHIP = 0,
     OCEAN_ENTITY_ROTORCRAFT = 1,
+    OCEAN_ENTITY_AIRCRAFT = 2,  /* any other flier: a frame for requests, no wake */
     OCEAN_ENTITY_KIND_COUNT_
 } ocean_entity_kind;
 
@@ -52,19 +53,23 @@ typedef enum ocean_entity_kind {
 #define OCEAN_SHIP_SPEED_MAX 30.0
 #define OCEAN_ROTOR_SPEED_MAX 100.0
 #define OCEAN_ROTOR_ALTITUDE_MAX 5000.0
+/* An aircraft: Mach 3 at the ceiling of a U-2 and more. */
+#define OCEAN_AIRCRAFT_SPEED_MAX 1000.0
+#define OCEAN_AIRCRAFT_ALTITUDE_MAX 30000.0
 
 typedef struct ocean_entity_desc {
     uint32_t id;
     ocean_entity_kind kind;
-    double length_m;     /* ship: waterline length [1, 500]; rotorcraft: rotor diameter [1, 40] */
-    double beam_m;       /* ship: [0.5, 100]; rotorcraft: 0 */
-    double draught_m;    /* ship: [0.1, 30]; rotorcraft: 0 */
+    double length_m;     /* ship: waterline length [1, 500]; rotorcraft: rotor diameter [1, 40];
+                            aircraft: span [1, 100] */
+    double beam_m;       /* ship: [0.5, 100]; rotorcraft, aircraft: 0 */
+    double draught_m;    /* ship: [0.1, 30]; rotorcraft, aircraft: 0 */
 } ocean_entity_desc;
 
 typedef struct ocean_track_sample {
     double t;            /* sim time, s */
     double x, z;         /* world position, m */
-    double altitude_m;   /* rotorcraft: height above mean sea level [0, 5000]; ship: 0 */
+    double altitude_m;   /* above mean sea level: rotorcraft [0, 5000], aircraft [0, 30000]; ship: 0 */
     double heading_deg;  /* direction of travel, degrees from +x toward +z (any finite value) */
     double speed;        /* m/s along the heading, [0, the kind's top speed] */
 } ocean_track_sample;
@@ -99,6 +104,9 @@ ocean_result ocean_entities_sample(ocean_entities *e, uint32_t id, const ocean_t
 /* id's state at sim time t.  OCEAN_ENOTFOUND: unknown id, or t before the
  * track's first kept sample; OCEAN_EINVAL: t not finite. */
 ocean_result ocean_entities_state(const ocean_entities *e, uint32_t id, double t, ocean_entity_state *out);
+
+/* id's newest sample.  OCEAN_ENOTFOUND: unknown id, or no sample yet. */
+ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_track_sample *out);
 
 int ocean_entities_count(const ocean_entities *e);
 /* The desc of the i-th entity (0 <= i < count), in increasing id. */

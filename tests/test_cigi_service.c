@@ -3,8 +3,10 @@
  * over loopback UDP by a scripted host: every HAT/HOT answer is the
  * WebSocket side's QUERY answer at the same point and sim time (the Start
  * of Frame's timestamp), in CIGI 3.3 of either byte order and in 4.0;
- * entity-relative requests are answered Valid = 0; hostile datagrams are
- * dropped and counted by reason, and the daemon answers on afterwards.
+ * an entity-relative request is answered as the geodetic one at the point
+ * it names, and Valid = 0 for an entity the daemon does not hold; the
+ * host's surface wind sets the sea; hostile datagrams are dropped and
+ * counted by reason, and the daemon answers on afterwards.
  */
 #include <arpa/inet.h>
 #include <math.h>
@@ -28,6 +30,7 @@
 #include "geo.h"
 #include "oceanclient.h"
 #include "srv_daemon.h"
+#include "srv_entity.h"
 #include "srv_hub.h"
 
 static const double LAT0 = 43.5, LON0 = -8.25;
@@ -206,7 +209,7 @@ static double ask_and_check(fixture *fx, const cigi_format *f, uint32_t frame, F
             assert_int_equal(p.kind, CIGI_HAT_HOT_RESPONSE);
             assert_int_equal(p.u.hat_resp.id, reqs[i].id);
             if (reqs[i].coord == CIGI_COORD_ENTITY) {
-                assert_int_equal(p.u.hat_resp.valid, 0); /* no entity table in the daemon yet */
+                assert_int_equal(p.u.hat_resp.valid, 0); /* no entity 5 in the daemon's table */
                 continue;
             }
             assert_int_equal(p.u.hat_resp.valid, 1);
@@ -435,11 +438,119 @@ static void host_wind_sets_the_sea(void **state)
     proto_buf_free(&b);
 }
 
+/* One host message: IG Control and the packets given, sent; its answer
+ * read into buf (asserted to come), its length returned. */
+static size_t exchange(fixture *fx, int fd, const cigi_format *f, uint32_t frame, const cigi_packet *pk, int n,
+                       uint8_t *buf, size_t cap)
+{
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    put(&b, f, ig_control(frame));
+    for (int i = 0; i < n; i++) put(&b, f, pk[i]);
+    send_to(fd, fx->port, &b);
+    proto_buf_free(&b);
+    size_t got = receive(fd, buf, cap, 30000);
+    assert_true(got > 0);
+    return got;
+}
+
+/* The Extended Responses of an answer, in order, into x (at most n). */
+static int xresponses(const uint8_t *buf, size_t len, cigi_hat_hot_xresponse *x, int n)
+{
+    cigi_format f;
+    assert_int_equal(cigi_format_of(buf, len, &f, NULL, 0), OCEAN_OK);
+    cigi_reader rd;
+    cigi_reader_init(&rd, buf, len, &f);
+    int k = 0, done = 0;
+    cigi_packet p;
+    while (cigi_reader_next(&rd, &p, &done, NULL, 0) == OCEAN_OK && !done)
+        if (p.kind == CIGI_HAT_HOT_XRESPONSE && k < n) x[k++] = p.u.hat_xresp;
+    return k;
+}
+
+static cigi_packet entity_at(cigi_kind kind, uint32_t id, uint32_t state, double lat, double lon, double yaw)
+{
+    cigi_packet p = {.kind = kind};
+    p.u.entity = (cigi_entity){.id = id, .state = state, .clamp = CIGI_CLAMP_CONFORMAL, .lat = lat, .lon = lon,
+                               .yaw = yaw};
+    return p;
+}
+
+/* A host's entity enters the daemon's table (Entity Control in 3.3, Entity
+ * Position in 4.0): a request 50 m ahead of a ship heading east and 10 m
+ * up is answered as the geodetic request at that point, in the same
+ * message (HOT, HAT and normal); destroyed, its requests are Valid = 0;
+ * an aircraft the host repositions is answered where the host put it. */
+static void entity_relative_requests(void **state)
+{
+    fixture *fx = *state;
+    const cigi_format fmts[] = {{3, 3, 1}, {4, 0, 0}};
+    ocean_geo *g;
+    assert_int_equal(ocean_geo_create(LAT0, LON0, &g, NULL, 0), OCEAN_OK);
+    int fd = host_socket("127.0.0.1");
+    static uint8_t buf[65536];
+    for (int v = 0; v < 2; v++) {
+        const cigi_format *f = &fmts[v];
+        uint32_t id = 7 + (uint32_t)v;
+        double lat = 43.51, lon = -8.25 + 0.01 * v, x, z, plat, plon;
+        cigi_packet pk[2];
+        pk[0] = entity_at(f->major == 3 ? CIGI_ENTITY_CONTROL : CIGI_ENTITY_POSITION, id, CIGI_ENTITY_ACTIVE, lat,
+                          lon, 90.0);
+        exchange(fx, fd, f, 400 + (uint32_t)v, pk, 1, buf, sizeof buf);
+        assert_int_equal(ocean_geo_to_plane(g, lat, lon, &x, &z), OCEAN_OK);
+        assert_int_equal(ocean_geo_to_geodetic(g, x, z + 50.0, &plat, &plon), OCEAN_OK);
+        pk[0] = request(21, CIGI_HAT_HOT_EXTENDED, CIGI_COORD_ENTITY, 50.0, 0.0, -10.0);
+        pk[0].u.hat_req.entity = id;
+        pk[1] = request(22, CIGI_HAT_HOT_EXTENDED, CIGI_COORD_GEODETIC, plat, plon, 10.0);
+        size_t n = exchange(fx, fd, f, 410 + (uint32_t)v, pk, 2, buf, sizeof buf);
+        cigi_hat_hot_xresponse r[2];
+        assert_int_equal(xresponses(buf, n, r, 2), 2);
+        print_message("CIGI %d: entity %u + 50 m ahead: HOT %.6f HAT %.6f normal %.4f/%.4f; geodetic: HOT %.6f HAT "
+                      "%.6f normal %.4f/%.4f\n", f->major, id, r[0].hot, r[0].hat, r[0].normal_az, r[0].normal_el,
+                      r[1].hot, r[1].hat, r[1].normal_az, r[1].normal_el);
+        assert_true(r[0].valid && r[1].valid);
+        assert_true(fabs(r[0].hot - r[1].hot) < 1e-5 && fabs(r[0].hat - r[1].hat) < 1e-5);
+        assert_true(fabs(r[0].normal_el - r[1].normal_el) < 1e-3);
+        assert_true(fabs(r[0].hat - (10.0 - r[0].hot)) < 1e-9);
+        /* destroyed: out of the table, its requests Valid = 0 */
+        pk[0] = entity_at(CIGI_ENTITY_CONTROL, id, CIGI_ENTITY_DESTROYED, lat, lon, 90.0);
+        exchange(fx, fd, f, 420 + (uint32_t)v, pk, 1, buf, sizeof buf);
+        pk[0] = request(23, CIGI_HAT_HOT_EXTENDED, CIGI_COORD_ENTITY, 50.0, 0.0, -10.0);
+        pk[0].u.hat_req.entity = id;
+        n = exchange(fx, fd, f, 430 + (uint32_t)v, pk, 1, buf, sizeof buf);
+        assert_int_equal(xresponses(buf, n, r, 1), 1);
+        assert_int_equal(r[0].valid, 0);
+    }
+    /* an unclamped entity: an aircraft at 3000 m, which the host then puts
+     * 44 km north at once (a reposition, faster than anything flies): its
+     * requests follow it there */
+    const cigi_format *f = &fmts[0];
+    cigi_packet pk[2];
+    pk[0] = entity_at(CIGI_ENTITY_CONTROL, 30, CIGI_ENTITY_ACTIVE, 43.52, -8.25, 0.0);
+    pk[0].u.entity.clamp = CIGI_CLAMP_NONE;
+    pk[0].u.entity.alt = 3000.0;
+    exchange(fx, fd, f, 440, pk, 1, buf, sizeof buf);
+    pk[0].u.entity.lat = 43.9;
+    exchange(fx, fd, f, 441, pk, 1, buf, sizeof buf);
+    pk[0] = request(31, CIGI_HAT_HOT_EXTENDED, CIGI_COORD_ENTITY, 0.0, 0.0, 0.0);
+    pk[0].u.hat_req.entity = 30;
+    pk[1] = request(32, CIGI_HAT_HOT_EXTENDED, CIGI_COORD_GEODETIC, 43.9, -8.25, 3000.0);
+    size_t n = exchange(fx, fd, f, 442, pk, 2, buf, sizeof buf);
+    cigi_hat_hot_xresponse r[2];
+    assert_int_equal(xresponses(buf, n, r, 2), 2);
+    print_message("aircraft 30 repositioned: HAT %.6f (geodetic %.6f)\n", r[0].hat, r[1].hat);
+    assert_true(r[0].valid && r[1].valid && fabs(r[0].hat - r[1].hat) < 1e-5 && r[0].hat > 2990);
+    assert_int_equal(srv_entities_count(srv_daemon_hub(fx->d)->entities), 1);
+    ocean_geo_destroy(g);
+    close(fd);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(answers_are_the_queries),
         cmocka_unit_test(hostile_datagrams_dropped),
+        cmocka_unit_test(entity_relative_requests),
         cmocka_unit_test(host_wind_sets_the_sea),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

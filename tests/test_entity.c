@@ -74,6 +74,8 @@ static void shapes_checked(void **state)
         {.id = 1, .kind = OCEAN_ENTITY_SHIP, .length_m = 50, .beam_m = 0, .draught_m = 3},
         {.id = 1, .kind = OCEAN_ENTITY_ROTORCRAFT, .length_m = 80},
         {.id = 1, .kind = OCEAN_ENTITY_ROTORCRAFT, .length_m = 10, .beam_m = 2},
+        {.id = 1, .kind = OCEAN_ENTITY_AIRCRAFT, .length_m = 150},
+        {.id = 1, .kind = OCEAN_ENTITY_AIRCRAFT, .length_m = 30, .draught_m = 1},
         {.id = 1, .kind = (ocean_entity_kind)5, .length_m = 50, .beam_m = 10, .draught_m = 3},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
@@ -94,10 +96,15 @@ static void straight_run_and_hold(void **state)
     ocean_entities *e = table(4, 30);
     assert_int_equal(ocean_entities_add(e, &frigate, NULL, 0), OCEAN_OK);
     ocean_entity_state st;
+    ocean_track_sample last;
     assert_int_equal(ocean_entities_state(e, 7, 0, &st), OCEAN_ENOTFOUND); /* no track yet */
+    assert_int_equal(ocean_entities_last(e, 7, &last), OCEAN_ENOTFOUND);
     ocean_track_sample a = smp(100, 1e6, -2e6, 90, 10), b = smp(110, 1e6, -2e6 + 100, 90, 10);
     assert_int_equal(ocean_entities_sample(e, 7, &a, NULL, 0), OCEAN_OK);
     assert_int_equal(ocean_entities_sample(e, 7, &b, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_last(e, 7, &last), OCEAN_OK);
+    assert_true(last.t == 110 && last.z == -2e6 + 100);
+    assert_int_equal(ocean_entities_last(e, 8, &last), OCEAN_ENOTFOUND);
     assert_int_equal(ocean_entities_state(e, 7, 99.9, &st), OCEAN_ENOTFOUND);
     assert_int_equal(ocean_entities_state(e, 7, NAN, &st), OCEAN_EINVAL);
     assert_int_equal(ocean_entities_state(e, 7, 105, &st), OCEAN_OK);
@@ -218,6 +225,16 @@ static void bad_samples_change_nothing(void **state)
     assert_int_equal(ocean_entities_sample(e, 3, &h2, NULL, 0), OCEAN_OK);
     assert_int_equal(ocean_entities_state(e, 3, 30, &after), OCEAN_OK);
     assert_true(fabs(after.altitude_m - 165) < 1e-9);
+    /* an aircraft flies higher and faster than a rotorcraft may, within its own range */
+    ocean_entity_desc jet = {.id = 4, .kind = OCEAN_ENTITY_AIRCRAFT, .length_m = 35};
+    assert_int_equal(ocean_entities_add(e, &jet, NULL, 0), OCEAN_OK);
+    ocean_track_sample j1 = {.t = 0, .altitude_m = 10000, .speed = 250};
+    ocean_track_sample j2 = {.t = 1, .x = 250, .altitude_m = 10000, .speed = 250};
+    ocean_track_sample j3 = {.t = 2, .x = 500, .altitude_m = 31000, .speed = 250};
+    assert_int_equal(ocean_entities_sample(e, 4, &j1, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 4, &j2, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 4, &j3, why, sizeof why), OCEAN_EINVAL);
+    assert_non_null(strstr(why, "altitude"));
     /* one good sample still goes in after all that */
     ocean_track_sample b = smp(11, 10, 0, 0, 10);
     assert_int_equal(ocean_entities_sample(e, 7, &b, NULL, 0), OCEAN_OK);

@@ -2,19 +2,20 @@
  * cigi_host.c - example: a simulator host that asks oceand for the sea over
  * CIGI, as it would ask an image generator.
  *
- * Every frame (60 Hz) it sends one host message: IG Control, a HOT request
- * under each of a ship's four hull points (bow, stern, port, starboard of a
- * 120 m x 16 m hull) and a HAT/HOT Extended request under an aircraft's
- * radar altimeter; it reads the answers as they come and prints, twice a
- * second, the ship's heave, pitch and roll from its four points, the
- * aircraft's height above the waves and how many frames had their answers;
- * then a summary.  The daemon needs server.cigi_port (and, on another
- * machine, this host's address in server.cigi_hosts).
+ * Every frame (60 Hz) it sends one host message, as a host does: IG
+ * Control; Entity Control for its ship (entity 1, clamped to the sea,
+ * 120 m x 16 m) and its aircraft (entity 2); a HOT request under each of
+ * the ship's four hull points (bow, stern, port, starboard), given as
+ * offsets in the ship's frame; and a HAT/HOT Extended request under the
+ * aircraft's radar altimeter.  It reads the answers as they come and
+ * prints, twice a second, the ship's heave, pitch and roll from its four
+ * points, the aircraft's height above the waves and how many frames had
+ * their answers; then a summary.  The daemon needs server.cigi_port (and,
+ * on another machine, this host's address in server.cigi_hosts).
  *
  *   cigi_host 127.0.0.1:8741 [--lat 43.5 --lon -8.25] [--seconds 10]
  *
- * Build against the installed libraries (the hull points are placed with
- * the simulator library's geodesy):
+ * Build against the installed libraries:
  *   cc cigi_host.c $(pkg-config --cflags --libs oceansim) -lm
  */
 #include <arpa/inet.h>
@@ -30,7 +31,6 @@
 #include <unistd.h>
 
 #include <oceand/cigi.h>
-#include <oceand/geo.h>
 
 #define HULL_L 120.0
 #define HULL_B 16.0
@@ -121,24 +121,45 @@ static int open_socket(const char *to, struct sockaddr_storage *addr, socklen_t 
     return fd;
 }
 
-/* One host frame: IG Control, four HOT requests (ids 1-4) at the hull
- * points, an Extended request (id 5) under the aircraft. */
-static void frame_message(proto_buf *b, const cigi_format *f, uint32_t frame, const double pts[N_HULL][2],
-                          const opts *o)
+enum { SHIP = 1, AIRCRAFT = 2 };
+
+/* Entity `id` where the options put it: CIGI 3 in one Entity Control,
+ * CIGI 4 in Entity Control (its state) and Entity Position. */
+static void put_entity(proto_buf *b, const cigi_format *f, uint32_t id, const opts *o)
+{
+    cigi_entity e = {.id = id, .state = CIGI_ENTITY_ACTIVE, .lat = o->lat, .lon = o->lon, .yaw = o->heading};
+    e.clamp = id == SHIP ? CIGI_CLAMP_CONFORMAL : CIGI_CLAMP_NONE;
+    e.alt = id == SHIP ? 0 : o->alt;
+    cigi_packet p = {.kind = CIGI_ENTITY_CONTROL, .u.entity = e};
+    cigi_put(b, f, &p);
+    if (f->major == 4) {
+        p.kind = CIGI_ENTITY_POSITION;
+        cigi_put(b, f, &p);
+    }
+}
+
+/* One host frame: IG Control, the two entities, four HOT requests (ids
+ * 1-4) at the hull points relative to the ship, an Extended request (id
+ * 5) under the aircraft. */
+static void frame_message(proto_buf *b, const cigi_format *f, uint32_t frame, const opts *o)
 {
     cigi_packet p = {.kind = CIGI_IG_CONTROL};
     p.u.ig.ig_mode = 1;
     p.u.ig.frame = frame;
     cigi_put(b, f, &p);
+    put_entity(b, f, SHIP, o);
+    put_entity(b, f, AIRCRAFT, o);
+    /* x forward, y right of the ship */
+    const double off[N_HULL][2] = {{HULL_L / 2, 0}, {-HULL_L / 2, 0}, {0, -HULL_B / 2}, {0, HULL_B / 2}};
     for (int i = 0; i < N_HULL; i++) {
         cigi_packet q = {.kind = CIGI_HAT_HOT_REQUEST};
-        q.u.hat_req = (cigi_hat_hot_request){.id = (uint32_t)i + 1, .type = CIGI_HOT, .lat = pts[i][0],
-                                             .lon = pts[i][1]};
+        q.u.hat_req = (cigi_hat_hot_request){.id = (uint32_t)i + 1, .type = CIGI_HOT, .coord = CIGI_COORD_ENTITY,
+                                             .entity = SHIP, .lat = off[i][0], .lon = off[i][1]};
         cigi_put(b, f, &q);
     }
     cigi_packet a = {.kind = CIGI_HAT_HOT_REQUEST};
-    a.u.hat_req = (cigi_hat_hot_request){.id = 5, .type = CIGI_HAT_HOT_EXTENDED, .lat = o->lat, .lon = o->lon,
-                                         .alt = o->alt};
+    a.u.hat_req = (cigi_hat_hot_request){.id = 5, .type = CIGI_HAT_HOT_EXTENDED, .coord = CIGI_COORD_ENTITY,
+                                         .entity = AIRCRAFT};
     cigi_put(b, f, &a);
 }
 
@@ -169,25 +190,6 @@ static void read_answer(const uint8_t *d, size_t n, stats *st)
     }
 }
 
-/* The hull points' latitudes and longitudes: bow, stern, port, starboard. */
-static int hull_points(const opts *o, double pts[N_HULL][2])
-{
-    ocean_geo *g;
-    char why[200];
-    if (ocean_geo_create(o->lat, o->lon, &g, why, sizeof why) != OCEAN_OK) {
-        fprintf(stderr, "cigi_host: %s\n", why);
-        return -1;
-    }
-    double h = o->heading * M_PI / 180, fx = cos(h), fz = sin(h);  /* forward: bearing, x north, z east */
-    const double off[N_HULL][2] = {{HULL_L / 2, 0}, {-HULL_L / 2, 0}, {0, -HULL_B / 2}, {0, HULL_B / 2}};
-    for (int i = 0; i < N_HULL; i++) {
-        double x = off[i][0] * fx - off[i][1] * fz, z = off[i][0] * fz + off[i][1] * fx;
-        ocean_geo_to_geodetic(g, x, z, &pts[i][0], &pts[i][1]);
-    }
-    ocean_geo_destroy(g);
-    return 0;
-}
-
 int main(int argc, char **argv)
 {
     opts o;
@@ -195,8 +197,7 @@ int main(int argc, char **argv)
     struct sockaddr_storage to;
     socklen_t tolen;
     int fd = open_socket(o.to, &to, &tolen);
-    double pts[N_HULL][2];
-    if (fd < 0 || hull_points(&o, pts)) return 1;
+    if (fd < 0) return 1;
     cigi_format f = {(uint8_t)o.version, o.version == 3 ? 3 : 0, (uint8_t)!o.little};
     stats st = {0};
     proto_buf b;
@@ -206,7 +207,7 @@ int main(int argc, char **argv)
     while (now_s() - t0 < o.seconds) {
         if (now_s() >= next) {
             proto_buf_reset(&b);
-            frame_message(&b, &f, (uint32_t)++st.frames, pts, &o);
+            frame_message(&b, &f, (uint32_t)++st.frames, &o);
             if (sendto(fd, proto_buf_data(&b), proto_buf_len(&b), 0, (struct sockaddr *)&to, tolen) < 0)
                 fprintf(stderr, "cigi_host: send: %s\n", strerror(errno));
             next += 1.0 / o.rate;

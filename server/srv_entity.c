@@ -1,0 +1,87 @@
+/*
+ * srv_entity.c - the daemon's entity table (see srv_entity.h): the
+ * simulator's table behind one lock.
+ */
+#include "srv_entity.h"
+
+#include <pthread.h>
+#include <stdlib.h>
+
+struct srv_entities {
+    pthread_mutex_t lock;
+    ocean_entities *t;          /* [lock] */
+};
+
+ocean_result srv_entities_create(int max, srv_entities **out, char *why, size_t n)
+{
+    *out = NULL;
+    srv_entities *e = calloc(1, sizeof *e);
+    if (!e) return OCEAN_ENOMEM;
+    ocean_result r = ocean_entities_create(max, SRV_ENTITY_HOLD_S, &e->t, why, n);
+    if (r != OCEAN_OK) {
+        free(e);
+        return r;
+    }
+    pthread_mutex_init(&e->lock, NULL);
+    *out = e;
+    return OCEAN_OK;
+}
+
+void srv_entities_destroy(srv_entities *e)
+{
+    if (!e) return;
+    ocean_entities_destroy(e->t);
+    pthread_mutex_destroy(&e->lock);
+    free(e);
+}
+
+ocean_result srv_entities_sample(srv_entities *e, const ocean_entity_desc *d, const ocean_track_sample *s,
+                                 char *why, size_t n)
+{
+    pthread_mutex_lock(&e->lock);
+    ocean_track_sample last;
+    int added = 0;
+    ocean_result r = OCEAN_OK;
+    if (ocean_entities_last(e->t, d->id, &last) != OCEAN_OK) { /* only entered here, with a sample */
+        r = ocean_entities_add(e->t, d, why, n);
+        added = r == OCEAN_OK;
+    }
+    if (r == OCEAN_OK) {
+        r = ocean_entities_sample(e->t, d->id, s, why, n);
+        if (r != OCEAN_OK && added) ocean_entities_remove(e->t, d->id);
+    }
+    pthread_mutex_unlock(&e->lock);
+    return r;
+}
+
+ocean_result srv_entities_remove(srv_entities *e, uint32_t id)
+{
+    pthread_mutex_lock(&e->lock);
+    ocean_result r = ocean_entities_remove(e->t, id);
+    pthread_mutex_unlock(&e->lock);
+    return r;
+}
+
+ocean_result srv_entities_state(srv_entities *e, uint32_t id, double t, ocean_entity_state *out)
+{
+    pthread_mutex_lock(&e->lock);
+    ocean_result r = ocean_entities_state(e->t, id, t, out);
+    pthread_mutex_unlock(&e->lock);
+    return r;
+}
+
+ocean_result srv_entities_last(srv_entities *e, uint32_t id, ocean_track_sample *out)
+{
+    pthread_mutex_lock(&e->lock);
+    ocean_result r = ocean_entities_last(e->t, id, out);
+    pthread_mutex_unlock(&e->lock);
+    return r;
+}
+
+int srv_entities_count(srv_entities *e)
+{
+    pthread_mutex_lock(&e->lock);
+    int c = ocean_entities_count(e->t);
+    pthread_mutex_unlock(&e->lock);
+    return c;
+}
