@@ -602,7 +602,7 @@ static ocean_result setup(srv_cigi *s, char *msg, size_t msglen)
     if (r != OCEAN_OK) return r;
     s->efd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
     if (s->efd < 0) return OCEAN_EIO;
-    r = srv_client_create(s->h, &s->c);
+    r = srv_client_create_internal(s->h, &s->c);
     if (r != OCEAN_OK) return r;
     srv_outbox_set_notify(s->c->out, wake_on_answer, s);
     return OCEAN_OK;

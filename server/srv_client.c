@@ -39,7 +39,7 @@ void srv_client_queue(srv_client *c, srv_msg *m)
 
 /* ---- clients -------------------------------------------------------------- */
 
-ocean_result srv_client_create(srv_hub *h, srv_client **out)
+static ocean_result client_create(srv_hub *h, int internal, srv_client **out)
 {
     srv_client *c = calloc(1, sizeof *c);
     if (!c) return OCEAN_ENOMEM;
@@ -53,18 +53,23 @@ ocean_result srv_client_create(srv_hub *h, srv_client **out)
     }
     atomic_init(&c->refs, 1);
     c->hub = h;
+    c->internal = internal;
     atomic_init(&c->link_bps, 0);
     pthread_mutex_lock(&h->lock);
     c->id = h->next_id++;
     if (h->next_id == 0) h->next_id = 1;
     c->next = h->clients;
     h->clients = c;
-    h->n_clients++;
+    if (!internal) h->n_clients++;
     pthread_mutex_unlock(&h->lock);
-    atomic_fetch_add(&h->stats.connections_total, 1);
+    if (!internal) atomic_fetch_add(&h->stats.connections_total, 1);
     *out = c;
     return OCEAN_OK;
 }
+
+ocean_result srv_client_create(srv_hub *h, srv_client **out) { return client_create(h, 0, out); }
+
+ocean_result srv_client_create_internal(srv_hub *h, srv_client **out) { return client_create(h, 1, out); }
 
 void srv_client_ref(srv_client *c) { atomic_fetch_add(&c->refs, 1); }
 
@@ -84,7 +89,7 @@ void srv_client_remove(srv_client *c)
     for (srv_client **p = &h->clients; *p; p = &(*p)->next) {
         if (*p == c) {
             *p = c->next;
-            h->n_clients--;
+            if (!c->internal) h->n_clients--;
             if (c->subscribed) h->n_subscribed--;
             break;
         }

@@ -47,6 +47,8 @@ typedef struct srv_client {
     atomic_int refs;
     uint32_t id;                          /* [const] */
     struct srv_hub *hub;                  /* [const] */
+    int internal;                         /* [const] a service of the daemon (the CIGI
+                                             service), no connection: not in n_clients */
 
     /* ---- requests: [svc writes / hub.lock] ---- */
     int subscribed;
@@ -88,6 +90,10 @@ typedef struct srv_client {
 
 /* Creates a client (refs = 1, the list's), adds it to the hub. */
 ocean_result srv_client_create(srv_hub *h, srv_client **out);
+/* The same for a service of the daemon (internal): it asks what a client
+ * asks, but holds no connection, so no slot of server.max_clients, and
+ * /status and /metrics do not count it. */
+ocean_result srv_client_create_internal(srv_hub *h, srv_client **out);
 void srv_client_ref(srv_client *c);
 /* Drops one reference; the last frees the client.  Accepts NULL. */
 void srv_client_unref(srv_client *c);

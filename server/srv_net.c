@@ -388,7 +388,7 @@ static void stats_view(srv_net *n, srv_stats_view *v, char *scene, size_t sl,
     *per = h->n_clients > 0 ? calloc((size_t)h->n_clients, sizeof **per) : NULL;
     int k = 0;
     for (srv_client *c = h->clients; c && *per && k < h->n_clients; c = c->next) {
-        if (c->closed) continue;
+        if (c->closed || c->internal) continue;
         srv_stats_client *o = &(*per)[k++];
         o->id = c->id;
         o->cpu_seconds = 1e-9 * (double)atomic_load(&c->cpu_ns);

@@ -228,6 +228,12 @@ static double ask_and_check(fixture *fx, const cigi_format *f, uint32_t frame, F
 static void answers_are_the_queries(void **state)
 {
     fixture *fx = *state;
+    /* the service is no connection: it takes no slot of server.max_clients */
+    srv_hub *hub = srv_daemon_hub(fx->d);
+    pthread_mutex_lock(&hub->lock);
+    int conns = hub->n_clients;
+    pthread_mutex_unlock(&hub->lock);
+    assert_int_equal(conns, 1); /* the WebSocket client */
     const cigi_format v3be = {3, 3, 1}, v3le = {3, 3, 0}, v4be = {4, 0, 1}, v4le = {4, 0, 0};
     char path[32];
     FILE *pcap = test_pcap_open(path);
