@@ -49,6 +49,8 @@ typedef struct pending {
     int first;                  /* its first point's index in the query that carries it */
     request req[SRV_CIGI_REQUESTS];
     double xz[2 * SRV_CIGI_REQUESTS];
+    int n_env;                  /* Environmental Conditions Requests (maritime), answered after */
+    uint32_t env[SRV_CIGI_ENV_REQUESTS];
 } pending;
 
 struct srv_cigi {
@@ -72,6 +74,7 @@ struct srv_cigi {
     double sent_u10, sent_dir;  /* the last one entered (NAN: none) */
     double sea_next;            /* monotonic time the next change may be entered */
     char wind_host[64];         /* who sent it, for the log */
+    double water_temp, clarity; /* the host's global Maritime Surface Conditions (deg C, %) */
     uint8_t buf[65536];
 };
 
@@ -157,6 +160,14 @@ static void answer(srv_cigi *s, const pending *m, double t, const proto_query_sa
         const request *r = &m->req[i];
         int k = r->point;
         put_answer(&b, m, r, samples && k >= 0 && (uint32_t)k < n_samples ? &samples[k] : NULL);
+    }
+    for (int i = 0; i < m->n_env; i++) {
+        /* the sea's mean surface is the geoid: oceand's sea has no level
+         * offset (a host's Maritime Control surface height is not applied) */
+        cigi_packet mr = {.kind = CIGI_MARITIME_RESPONSE};
+        mr.u.maritime_resp = (cigi_maritime_response){.id = m->env[i], .surface_height = 0,
+                                                      .water_temp = s->water_temp, .clarity = s->clarity};
+        put(&b, &m->fmt, &mr);
     }
     if (sendto(s->fd, proto_buf_data(&b), proto_buf_len(&b), 0, (const struct sockaddr *)&m->to, m->tolen) < 0)
         fprintf(stderr, "oceand: cigi: cannot answer: %s\n", strerror(errno));
@@ -343,6 +354,47 @@ static void take_wind(srv_cigi *s, const cigi_packet *p, const char *host)
         bump(&s->h->stats.cigi_ignored, 1);
 }
 
+/* Maritime Surface Conditions Control of global scope: the water's
+ * temperature and clarity, reported back to Environmental Conditions
+ * Requests.  Its surface height and whitecaps are not applied to the sea
+ * (counted ignored when they ask for a change). */
+static void take_maritime(srv_cigi *s, const cigi_packet *p)
+{
+    const cigi_maritime_control *c = &p->u.maritime;
+    if (cigi_packet_check(p, NULL, 0) != OCEAN_OK || !isfinite(c->water_temp) || c->water_temp < -2 ||
+        c->water_temp > 40 || !(c->clarity >= 0 && c->clarity <= 100)) {
+        bump(&s->h->stats.cigi_drop_value, 1);
+        return;
+    }
+    if (c->scope != CIGI_SCOPE_GLOBAL) {
+        bump(&s->h->stats.cigi_ignored, 1);
+        return;
+    }
+    s->water_temp = c->water_temp;
+    s->clarity = c->clarity;
+    if (c->surface_height != 0 || !c->whitecaps) bump(&s->h->stats.cigi_ignored, 1);
+}
+
+/* An Environmental Conditions Request: its maritime part answered with
+ * the message (Maritime Surface Conditions Response); terrestrial,
+ * weather and aerosol conditions are no ocean's (counted ignored). */
+static void take_env(srv_cigi *s, pending *m, const cigi_packet *p)
+{
+    const cigi_env_request *q = &p->u.env_req;
+    if (cigi_packet_check(p, NULL, 0) != OCEAN_OK) {
+        bump(&s->h->stats.cigi_drop_value, 1);
+        return;
+    }
+    if (!(q->type & CIGI_ENV_MARITIME) || (q->type & ~(unsigned)CIGI_ENV_MARITIME))
+        bump(&s->h->stats.cigi_ignored, 1);
+    if (!(q->type & CIGI_ENV_MARITIME)) return;
+    if (m->n_env == SRV_CIGI_ENV_REQUESTS) {
+        bump(&s->h->stats.cigi_drop_busy, 1);
+        return;
+    }
+    m->env[m->n_env++] = q->id;
+}
+
 /* ---- the host's entities ------------------------------------------------------------------ */
 
 /* CIGI carries no entity's size or kind: a clamped entity is taken for a
@@ -500,6 +552,8 @@ static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m, const char *h
         else if (p.kind == CIGI_HAT_HOT_REQUEST) take_request(s, m, &p);
         else if (p.kind == CIGI_ATMOSPHERE_CONTROL || p.kind == CIGI_WEATHER_CONTROL) take_wind(s, &p, host);
         else if (p.kind == CIGI_ENTITY_CONTROL || p.kind == CIGI_ENTITY_POSITION) take_entity(s, &p, &rd->fmt);
+        else if (p.kind == CIGI_MARITIME_CONTROL) take_maritime(s, &p);
+        else if (p.kind == CIGI_ENV_REQUEST) take_env(s, m, &p);
         else bump(&s->h->stats.cigi_ignored, 1);
     }
 }
@@ -522,6 +576,7 @@ static void on_datagram(srv_cigi *s, size_t len, const struct sockaddr_storage *
     }
     pending *m = nth(s, s->count);
     memset(m, 0, offsetof(pending, req));
+    m->n_env = 0;
     m->fmt = f;
     memcpy(&m->to, from, fromlen);
     m->tolen = fromlen;

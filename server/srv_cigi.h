@@ -27,9 +27,12 @@
  * daemon's entity table (srv_entity.h) at the sim clock, and
  * entity-relative requests are answered at the point their offsets name
  * from the entity's position and heading (Valid = 0 for an entity the
- * table does not hold).  Maritime and Wave Control and Environmental
- * Conditions Requests are counted (oceand_cigi_ignored_total) and not
- * acted on yet.  Drops are counted by reason in /metrics.
+ * table does not hold).  An Environmental Conditions Request's maritime
+ * part is answered with a Maritime Surface Conditions Response: the sea's
+ * mean level (0: no offset) and the water temperature and clarity a global
+ * Maritime Surface Conditions Control last set.  A level offset, whitecaps
+ * off and Wave Control are counted (oceand_cigi_ignored_total) and not
+ * applied yet.  Drops are counted by reason in /metrics.
  *
  * Threads: the service's own thread owns its socket, its geo plane and
  * the messages it is answering; it reaches the simulation thread only
@@ -49,6 +52,7 @@ typedef struct srv_cigi srv_cigi;
 #define SRV_CIGI_PENDING 8
 /* Requests one message may ask; the rest are dropped (busy). */
 #define SRV_CIGI_REQUESTS 256
+#define SRV_CIGI_ENV_REQUESTS 16
 /* Messages the simulation thread has not answered in this long are
  * answered Valid = 0 (the daemon stopping). */
 #define SRV_CIGI_PATIENCE 2.0

@@ -551,12 +551,52 @@ static void entity_relative_requests(void **state)
     close(fd);
 }
 
+/* Environmental Conditions Requests: the maritime one is answered with a
+ * Maritime Surface Conditions Response (the sea's mean level 0, the water
+ * a global Maritime Surface Conditions Control set); a weather one, no
+ * ocean's, is not answered; in CIGI 3.3 and 4.0. */
+static void environmental_requests(void **state)
+{
+    fixture *fx = *state;
+    const cigi_format fmts[] = {{3, 3, 1}, {4, 0, 0}};
+    int fd = host_socket("127.0.0.1");
+    static uint8_t buf[65536];
+    for (int v = 0; v < 2; v++) {
+        cigi_packet pk[3] = {{.kind = CIGI_MARITIME_CONTROL}, {.kind = CIGI_ENV_REQUEST},
+                             {.kind = CIGI_ENV_REQUEST}};
+        pk[0].u.maritime = (cigi_maritime_control){.enable = 1, .whitecaps = 1, .scope = CIGI_SCOPE_GLOBAL,
+                                                   .water_temp = 14.5 + v, .clarity = 80};
+        pk[1].u.env_req = (cigi_env_request){.type = CIGI_ENV_MARITIME, .id = 9 + (uint32_t)v, .lat = LAT0,
+                                             .lon = LON0};
+        pk[2].u.env_req = (cigi_env_request){.type = CIGI_ENV_WEATHER, .id = 20, .lat = LAT0, .lon = LON0};
+        size_t n = exchange(fx, fd, &fmts[v], 500 + (uint32_t)v, pk, 3, buf, sizeof buf);
+        cigi_format f;
+        assert_int_equal(cigi_format_of(buf, n, &f, NULL, 0), OCEAN_OK);
+        cigi_reader rd;
+        cigi_reader_init(&rd, buf, n, &f);
+        cigi_packet p;
+        int done = 0, responses = 0;
+        while (cigi_reader_next(&rd, &p, &done, NULL, 0) == OCEAN_OK && !done) {
+            if (p.kind != CIGI_MARITIME_RESPONSE) continue;
+            responses++;
+            const cigi_maritime_response *r = &p.u.maritime_resp;
+            print_message("CIGI %d: Maritime Surface Conditions Response %u: height %g m, water %g C, clarity %g %%\n",
+                          f.major, r->id, r->surface_height, r->water_temp, r->clarity);
+            assert_int_equal(r->id, 9 + v);
+            assert_true(r->surface_height == 0 && r->water_temp == 14.5 + v && r->clarity == 80);
+        }
+        assert_int_equal(responses, 1);
+    }
+    close(fd);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(answers_are_the_queries),
         cmocka_unit_test(hostile_datagrams_dropped),
         cmocka_unit_test(entity_relative_requests),
+        cmocka_unit_test(environmental_requests),
         cmocka_unit_test(host_wind_sets_the_sea),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
