@@ -2091,6 +2091,16 @@ static void trailing_confirmations_are_no_dead_reader(void **state)
     assert_int_equal(stat_of(&h->stats.disconnects_slow), slow0);
 }
 
+/* Sets the running daemon's server.partial_seconds; returns the old value. */
+static double partial_seconds_set(srv_hub *h, double v)
+{
+    pthread_mutex_lock(&h->lock);
+    double was = h->settings.srv.partial_seconds;
+    h->settings.srv.partial_seconds = v;
+    pthread_mutex_unlock(&h->lock);
+    return was;
+}
+
 /* While the daemon does not run (stopped, or starved on a loaded host) no
  * client can read or send, so no limit counts that time: a message begun
  * 0.3 s before a 2.5 s stall and finished 0.6 s after it is served with
@@ -2101,10 +2111,7 @@ static void stalled_daemon_counts_no_client_time(void **state)
     (void)state;
     srv_hub *h = srv_daemon_hub(daemon_);
     uint64_t part0 = stat_of(&h->stats.disconnects_partial);
-    pthread_mutex_lock(&h->lock);
-    double was = h->settings.srv.partial_seconds;
-    h->settings.srv.partial_seconds = 2.0;
-    pthread_mutex_unlock(&h->lock);
+    double was = partial_seconds_set(h, 2.0);
     test_ws w;
     assert_int_equal(test_ws_connect(&w, port, "/", PROTO_SUBPROTOCOL), 0);
     proto_msg m;
@@ -2125,9 +2132,7 @@ static void stalled_daemon_counts_no_client_time(void **state)
     int got = test_msg_wait(&w, PROTO_SEA_STATE, FRAME_WAIT_MS, &m);
     if (got) proto_msg_free(&m);
     test_ws_close(&w);
-    pthread_mutex_lock(&h->lock);
-    h->settings.srv.partial_seconds = was;
-    pthread_mutex_unlock(&h->lock);
+    partial_seconds_set(h, was);
     assert_int_equal(stat_of(&h->stats.disconnects_partial), part0);
     assert_true(got);
 }
