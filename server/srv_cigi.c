@@ -299,7 +299,10 @@ static void enter_wind(srv_cigi *s)
         proto_msg_init(&set, PROTO_SEA_STATE);
         set.u.sea_state.op = PROTO_SEA_SET;
         srv_sea_from_params(&np, &set.u.sea_state.sea);
-        eff = set.u.sea_state.effective_time = srv_hub_sim_time(h) + h->settings.srv.sea_lead;
+        /* the shared timeline takes a change at least server.sea_lead
+         * ahead when it is submitted, a moment after this: two ticks more */
+        eff = set.u.sea_state.effective_time =
+            srv_hub_sim_time(h) + h->settings.srv.sea_lead + 2.0 / h->settings.srv.tick_rate;
         pthread_mutex_unlock(&h->lock);
         proto_buf b;
         proto_buf_init(&b, 0);

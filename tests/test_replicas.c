@@ -46,6 +46,7 @@
 #include <cmocka.h>
 #include <hiredis/hiredis.h>
 
+#include "cigi.h"
 #include "oceanclient.h"
 #include "proto.h"
 #include "srv_client.h"
@@ -201,6 +202,8 @@ static void replica_explain(pid_t pid, int status)
 /* Replica k (1 or 2) on `port`, sharing the stream of the Redis that
  * redis_start started, logging to tmp/logname; returns once it listens
  * (it reads the stream's whole timeline first: within `deadline` s). */
+static char replica_extra[128];  /* more lines for the next replica's config */
+
 static void replica_start_within(int k, int port, const char *logname, double deadline)
 {
     char path[600], log[600], text[1024], exe[600];
@@ -212,8 +215,8 @@ static void replica_start_within(int k, int port, const char *logname, double de
              "server.redis = 127.0.0.1:%d\nserver.redis_stream = \"%s\"\nserver.sea_lead = 0.5\n"
              "server.near_field_waves = 32\nserver.view_range = 2000\nserver.workers = 1\n"
              /* admission prices from the host's speed: not what these replicas judge */
-             "server.admit_share = 0\n",
-             port, EPOCH_ISO, redis_port, stream_key());
+             "server.admit_share = 0\n%s",
+             port, EPOCH_ISO, redis_port, stream_key(), replica_extra);
     write_file(path, text);
     snprintf(exe, sizeof exe, "%s/oceand", exe_dir);
     snprintf(log, sizeof log, "%s/%s", tmp, logname);
@@ -879,6 +882,46 @@ static void late_replicas_agree(void **state)
     stop(&pids[1], SIGTERM); /* its shutdown too runs under the sanitizers */
 }
 
+/* A CIGI host's surface wind, sent to one replica's CIGI port, enters the
+ * shared timeline as an admin's set does: every replica serves it (the set
+ * was refused at first, its effective time computed a moment before the
+ * stream's lead check).  The host repeats its frame until the wind shows:
+ * the first may come before the CIGI port is bound. */
+static void cigi_wind_reaches_every_replica(void **state)
+{
+    (void)state;
+    if (tools_missing()) skip();
+    int cport = test_free_port(), p1, p2 = test_free_port();
+    snprintf(replica_extra, sizeof replica_extra, "server.cigi_port = %d\n", cport);
+    cluster_up(&p1);
+    replica_extra[0] = '\0';
+    replica_start(2, p2, "r2.log");
+    const cigi_format f = {3, 3, 1};
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    cigi_packet ig = {.kind = CIGI_IG_CONTROL}, atm = {.kind = CIGI_ATMOSPHERE_CONTROL};
+    ig.u.ig.ig_mode = 1;
+    atm.u.atmosphere = (cigi_atmosphere){.enable = 1, .humidity = 50, .visibility = 10000, .wind_h = 17.5,
+                                         .wind_dir = 270, .pressure = 1013};
+    assert_int_equal(cigi_put(&b, &f, &ig), OCEAN_OK);
+    assert_int_equal(cigi_put(&b, &f, &atm), OCEAN_OK);
+    int fd = socket(AF_INET, SOCK_DGRAM, 0);
+    struct sockaddr_in to = {.sin_family = AF_INET, .sin_port = htons((uint16_t)cport)};
+    inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+    double got = 0;
+    for (double end = test_now_s() + 30; test_now_s() < end && got != 17.5;) {
+        sendto(fd, proto_buf_data(&b), proto_buf_len(&b), 0, (struct sockaddr *)&to, sizeof to);
+        usleep(500000);
+        got = hello_sea(p1).wind_u10;
+    }
+    close(fd);
+    proto_buf_free(&b);
+    if (got != 17.5) fail_msg("the replica the host spoke to serves wind %.2f, not 17.50", got);
+    wait_wind(p2, 17.5);
+    stop(&pids[2], SIGTERM);
+    stop(&pids[1], SIGTERM);
+}
+
 /* A set while Redis is stopped (SIGSTOP) is answered EIO by the
  * replication thread, and the witness keeps its frames meanwhile: the
  * service thread never waits for Redis.  Tried up to 3 times: a burst of
@@ -1213,6 +1256,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_teardown(replicas_behind_haproxy, teardown),
         cmocka_unit_test_teardown(late_replicas_agree, teardown),
+        cmocka_unit_test_teardown(cigi_wind_reaches_every_replica, teardown),
         cmocka_unit_test_teardown(stalled_redis_costs_no_frame, teardown),
         cmocka_unit_test_teardown(sets_answered_after_a_reset, teardown),
         cmocka_unit_test_teardown(sets_answered_at_the_pending_limit, teardown),
