@@ -47,9 +47,9 @@ typedef struct pending {
     uint32_t host_frame;
     int n, npts;                /* requests; the points among them, in xz */
     int first;                  /* its first point's index in the query that carries it */
+    int n_env;                  /* Environmental Conditions Requests (maritime), answered after */
     request req[SRV_CIGI_REQUESTS];
     double xz[2 * SRV_CIGI_REQUESTS];
-    int n_env;                  /* Environmental Conditions Requests (maritime), answered after */
     uint32_t env[SRV_CIGI_ENV_REQUESTS];
 } pending;
 
@@ -73,7 +73,7 @@ struct srv_cigi {
     double wind_u10, wind_dir;  /* m/s; deg the wind blows toward, from +x (north) to +z */
     double sent_u10, sent_dir;  /* the last one entered (NAN: none) */
     double sea_next;            /* monotonic time the next change may be entered */
-    char wind_host[64];         /* who sent it, for the log */
+    struct sockaddr_storage wind_from; /* who sent it, for the log */
     double water_temp, clarity; /* the host's global Maritime Surface Conditions (deg C, %) */
     uint8_t buf[65536];
 };
@@ -256,12 +256,21 @@ static void wake_on_answer(void *ctx)
 
 /* The wind of a host packet, to be entered: from_deg is where it blows
  * from (CIGI), the sea's direction where it blows toward. */
-static void host_wind(srv_cigi *s, double speed, double from_deg, const char *host)
+static void host_wind(srv_cigi *s, double speed, double from_deg, const pending *m)
 {
     s->wind_u10 = speed;
     s->wind_dir = fmod(fmod(from_deg + 180.0, 360.0) + 360.0, 360.0);
-    snprintf(s->wind_host, sizeof s->wind_host, "%s", host);
+    s->wind_from = m->to;
     s->want_wind = 1;
+}
+
+/* The address a (IPv4 or IPv6) as text into buf. */
+static const char *addr_text(const struct sockaddr_storage *a, char *buf, size_t n)
+{
+    const void *in = a->ss_family == AF_INET ? (const void *)&((const struct sockaddr_in *)a)->sin_addr
+                                             : (const void *)&((const struct sockaddr_in6 *)a)->sin6_addr;
+    if (!inet_ntop(a->ss_family, in, buf, (socklen_t)n)) snprintf(buf, n, "?");
+    return buf;
 }
 
 static int same_wind(double u10, double dir, double u2, double dir2)
@@ -276,7 +285,8 @@ static int same_wind(double u10, double dir, double u2, double dir2)
 static void enter_wind(srv_cigi *s)
 {
     srv_hub *h = s->h;
-    char why[512] = "", msg[256];
+    char why[512] = "", msg[256], host[INET6_ADDRSTRLEN];
+    addr_text(&s->wind_from, host, sizeof host);
     double eff = 0;
     pthread_mutex_lock(&h->lock);
     ocean_params np = h->n_sea_pending ? h->sea_pending[h->n_sea_pending - 1].params : h->settings.params;
@@ -290,7 +300,7 @@ static void enter_wind(srv_cigi *s)
     ocean_result r = ocean_params_validate(&np, msg, sizeof msg);
     if (r != OCEAN_OK) {
         pthread_mutex_unlock(&h->lock);
-        fprintf(stderr, "oceand: cigi: the wind of host %s refused: %s\n", s->wind_host, msg);
+        fprintf(stderr, "oceand: cigi: the wind of host %s refused: %s\n", host, msg);
         bump(&h->stats.cigi_drop_value, 1);
     } else if (h->redis) {
         /* the set as a SEA_STATE message: the ERROR that may answer it
@@ -319,10 +329,10 @@ static void enter_wind(srv_cigi *s)
     if (r == OCEAN_OK) {
         s->sent_u10 = s->wind_u10, s->sent_dir = s->wind_dir;
         fprintf(stderr, "oceand: sea state set by CIGI host %s, %s t = %.3f s: wind %.2f m/s toward %.1f deg\n",
-                s->wind_host, h->redis ? "sent to the shared timeline, asked for" : "in force from", eff,
+                host, h->redis ? "sent to the shared timeline, asked for" : "in force from", eff,
                 s->wind_u10, s->wind_dir);
     } else if (why[0]) {
-        fprintf(stderr, "oceand: cigi: the wind of host %s not entered: %s\n", s->wind_host, why);
+        fprintf(stderr, "oceand: cigi: the wind of host %s not entered: %s\n", host, why);
     }
 }
 
@@ -340,19 +350,19 @@ static void follow_host_sea(srv_cigi *s)
 /* A wind packet of the host at `host`: Atmosphere Control's global wind,
  * or a Weather Control layer of global scope that holds 10 m (where U10
  * is defined: protocol/CIGI.md "Surface wind"). */
-static void take_wind(srv_cigi *s, const cigi_packet *p, const char *host)
+static void take_wind(srv_cigi *s, pending *m, const cigi_packet *p)
 {
     if (cigi_packet_check(p, NULL, 0) != OCEAN_OK) {
         bump(&s->h->stats.cigi_drop_value, 1);
         return;
     }
     if (p->kind == CIGI_ATMOSPHERE_CONTROL) {
-        host_wind(s, p->u.atmosphere.wind_h, p->u.atmosphere.wind_dir, host);
+        host_wind(s, p->u.atmosphere.wind_h, p->u.atmosphere.wind_dir, m);
         return;
     }
     const cigi_weather *w = &p->u.weather;
     if (w->enable && w->scope == CIGI_SCOPE_GLOBAL && w->base <= 10.0 && w->base + w->thickness >= 10.0)
-        host_wind(s, w->wind_h, w->wind_dir, host);
+        host_wind(s, w->wind_h, w->wind_dir, m);
     else
         bump(&s->h->stats.cigi_ignored, 1);
 }
@@ -361,8 +371,9 @@ static void take_wind(srv_cigi *s, const cigi_packet *p, const char *host)
  * temperature and clarity, reported back to Environmental Conditions
  * Requests.  Its surface height and whitecaps are not applied to the sea
  * (counted ignored when they ask for a change). */
-static void take_maritime(srv_cigi *s, const cigi_packet *p)
+static void take_maritime(srv_cigi *s, pending *m, const cigi_packet *p)
 {
+    (void)m;
     const cigi_maritime_control *c = &p->u.maritime;
     if (cigi_packet_check(p, NULL, 0) != OCEAN_OK || !isfinite(c->water_temp) || c->water_temp < -2 ||
         c->water_temp > 40 || !(c->clarity >= 0 && c->clarity <= 100)) {
@@ -428,7 +439,7 @@ static ocean_entity_desc entity_desc(const cigi_entity *e)
  * The host is the entity's authority: a step the table refuses (a host
  * that repositions it) enters it anew where the host put it.  An attached
  * entity (a part of another) is no entity of the sea. */
-static void take_entity(srv_cigi *s, const cigi_packet *p, const cigi_format *f)
+static void take_entity(srv_cigi *s, pending *m, const cigi_packet *p)
 {
     srv_entities *tab = s->h->entities;
     const cigi_entity *e = &p->u.entity;
@@ -440,7 +451,7 @@ static void take_entity(srv_cigi *s, const cigi_packet *p, const cigi_format *f)
         srv_entities_remove(tab, e->id);
         return;
     }
-    int placed = p->kind == CIGI_ENTITY_POSITION || f->major == 3; /* 4.0's Entity Control is state only */
+    int placed = p->kind == CIGI_ENTITY_POSITION || m->fmt.major == 3; /* 4.0's Entity Control is state only */
     if (!placed || e->attach || (p->kind == CIGI_ENTITY_CONTROL && e->state != CIGI_ENTITY_ACTIVE)) {
         bump(&s->h->stats.cigi_ignored, 1);
         return;
@@ -539,9 +550,23 @@ static int ask(srv_cigi *s)
     return 0;
 }
 
-/* The packets after IG Control: requests into m, the host's wind taken,
- * the rest counted. */
-static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m, const char *host)
+static void take_ig_control(srv_cigi *s, pending *m, const cigi_packet *p)
+{
+    (void)s;
+    m->host_frame = p->u.ig.frame;
+}
+
+/* What the service does with each packet a host sends. */
+static void (*const take[CIGI_KIND_COUNT_])(srv_cigi *, pending *, const cigi_packet *) = {
+    [CIGI_IG_CONTROL] = take_ig_control,         [CIGI_HAT_HOT_REQUEST] = take_request,
+    [CIGI_ATMOSPHERE_CONTROL] = take_wind,       [CIGI_WEATHER_CONTROL] = take_wind,
+    [CIGI_ENTITY_CONTROL] = take_entity,         [CIGI_ENTITY_POSITION] = take_entity,
+    [CIGI_MARITIME_CONTROL] = take_maritime,     [CIGI_ENV_REQUEST] = take_env,
+};
+
+/* The packets after IG Control, each to its handler (take); the rest
+ * counted. */
+static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m)
 {
     for (;;) {
         cigi_packet p;
@@ -551,12 +576,7 @@ static void read_packets(srv_cigi *s, cigi_reader *rd, pending *m, const char *h
             return;
         }
         if (done) return;
-        if (p.kind == CIGI_IG_CONTROL) m->host_frame = p.u.ig.frame;
-        else if (p.kind == CIGI_HAT_HOT_REQUEST) take_request(s, m, &p);
-        else if (p.kind == CIGI_ATMOSPHERE_CONTROL || p.kind == CIGI_WEATHER_CONTROL) take_wind(s, &p, host);
-        else if (p.kind == CIGI_ENTITY_CONTROL || p.kind == CIGI_ENTITY_POSITION) take_entity(s, &p, &rd->fmt);
-        else if (p.kind == CIGI_MARITIME_CONTROL) take_maritime(s, &p);
-        else if (p.kind == CIGI_ENV_REQUEST) take_env(s, m, &p);
+        if (p.kind < CIGI_KIND_COUNT_ && take[p.kind]) take[p.kind](s, m, &p);
         else bump(&s->h->stats.cigi_ignored, 1);
     }
 }
@@ -579,19 +599,13 @@ static void on_datagram(srv_cigi *s, size_t len, const struct sockaddr_storage *
     }
     pending *m = nth(s, s->count);
     memset(m, 0, offsetof(pending, req));
-    m->n_env = 0;
     m->fmt = f;
     memcpy(&m->to, from, fromlen);
     m->tolen = fromlen;
     m->since = srv_now();
-    char host[64] = "?";
-    if (from->ss_family == AF_INET)
-        inet_ntop(AF_INET, &((const struct sockaddr_in *)from)->sin_addr, host, sizeof host);
-    else if (from->ss_family == AF_INET6)
-        inet_ntop(AF_INET6, &((const struct sockaddr_in6 *)from)->sin6_addr, host, sizeof host);
     cigi_reader rd;
     cigi_reader_init(&rd, s->buf, len, &f);
-    read_packets(s, &rd, m, host);
+    read_packets(s, &rd, m);
     s->count++;
     send_next(s);
 }
