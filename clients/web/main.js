@@ -121,8 +121,11 @@ const want = {
     baseSpacingM: num('spacing', 0),
     /* layout 1: mips sent once per their update interval and blended in
      * time here (PROTOCOL.md "Samples in time"); time=0 takes every
-     * tick's tiles, for comparison */
-    timeInterp: !replay && qs.get('time') !== '0',
+     * tick's tiles, for comparison.  Replay (t=T) takes the same stream as
+     * live: a screenshot at T shows the detail a live viewer gets (every
+     * frame's tiles whole would cost the budget's share of each cascade in
+     * each frame, at T held the same tiles again and again) */
+    timeInterp: qs.get('time') !== '0',
     mode: replay ? MODE.REPLAY : MODE.LIVE,
 };
 /* Layout 0 only: unless the URL fixes it, the level-0 tile spacing follows
