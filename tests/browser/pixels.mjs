@@ -75,3 +75,76 @@ export function horizonRow(h, pitchDeg, fovDeg) {
     const t = Math.tan(-pitchDeg * Math.PI / 180) / Math.tan(fovDeg * Math.PI / 360);
     return Math.round(h / 2 - t * h / 2);
 }
+
+/* Luma of the picture on the sea's mean plane y = 0: an n x n grid of world
+ * points (x0 + i dx, 0, z0 + j dx), row j, column i, each projected through
+ * the camera (eye, basis {fwd, right, up} as camera.js's cameraBasis,
+ * vertical field of view fovDeg) and read bilinearly.  Lattices of the
+ * mesh and the tiles lie along the world's axes at fixed spacings, so on
+ * this grid each is a line at its own frequency wherever it is in the
+ * picture.  Throws if a point falls off the picture. */
+export function planeLuma(img, eye, basis, fovDeg, x0, z0, dx, n) {
+    const f = img.h / 2 / Math.tan(fovDeg * Math.PI / 360), out = [];
+    const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    for (let j = 0; j < n; j++) {
+        const row = new Float64Array(n);
+        for (let i = 0; i < n; i++) {
+            const v = [x0 + i * dx - eye[0], -eye[1], z0 + j * dx - eye[2]];
+            const cz = dot(v, basis.fwd);
+            const sx = img.w / 2 + f * dot(v, basis.right) / cz - 0.5, sy = img.h / 2 - f * dot(v, basis.up) / cz - 0.5;
+            const x = Math.floor(sx), y = Math.floor(sy), a = sx - x, b = sy - y;
+            if (!(cz > 0) || x < 0 || y < 0 || x + 1 >= img.w || y + 1 >= img.h)
+                throw new Error(`plane point (${x0 + i * dx}, ${z0 + j * dx}) is off the picture`);
+            row[i] = (1 - b) * ((1 - a) * lum(img, x, y) + a * lum(img, x + 1, y)) + b * ((1 - a) * lum(img, x, y + 1) + a * lum(img, x + 1, y + 1));
+        }
+        out.push(row);
+    }
+    return out;
+}
+
+/* Power spectra of a square grid g (rows of equal length n) along each
+ * axis: each line's mean removed and a Hann window applied, the lines'
+ * periodograms averaged (Welch 1967).  {along: P over the rows' direction
+ * (i), across: P over the columns' (j)}, P[k] for k = 0 .. n/2 cycles per
+ * n samples. */
+export function axisSpectra(g) {
+    const n = g.length, cosT = new Float64Array(n), sinT = new Float64Array(n), w = new Float64Array(n);
+    for (let i = 0; i < n; i++) {
+        cosT[i] = Math.cos(2 * Math.PI * i / n); sinT[i] = Math.sin(2 * Math.PI * i / n); w[i] = 0.5 - 0.5 * cosT[i];
+    }
+    const line = new Float64Array(n);
+    const add = (P, get) => {
+        let m = 0;
+        for (let i = 0; i < n; i++) { line[i] = get(i); m += line[i]; }
+        m /= n;
+        for (let i = 0; i < n; i++) line[i] = (line[i] - m) * w[i];
+        for (let k = 0; k <= n / 2; k++) {
+            let re = 0, im = 0;
+            for (let i = 0, j = 0; i < n; i++, j = (j + k) % n) { re += line[i] * cosT[j]; im -= line[i] * sinT[j]; }
+            P[k] += (re * re + im * im) / n;
+        }
+    };
+    const along = new Float64Array(n / 2 + 1), across = new Float64Array(n / 2 + 1);
+    for (let j = 0; j < n; j++) add(along, (i) => g[j][i]);
+    for (let i = 0; i < n; i++) add(across, (j) => g[j][i]);
+    return { along, across };
+}
+
+/* How far spectrum P stands out at bin k: the power at k - 1 .. k + 1 (a
+ * line leaks into its neighbours through the window) over what a power
+ * law fitted to the bins around it (k / 1.6 .. 1.6 k, less k - 3 .. k + 3,
+ * least squares in log P against log k) gives there.  A lattice is a
+ * narrow line at its frequency; the sea's own spectrum follows a smooth
+ * law across such a span, whatever its slope. */
+export function lineRatio(P, k) {
+    let n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (let j = Math.max(1, Math.floor(k / 1.6)); j <= Math.min(P.length - 1, Math.ceil(k * 1.6)); j++) {
+        if (Math.abs(j - k) <= 3 || !(P[j] > 0)) continue;
+        const x = Math.log(j), y = Math.log(P[j]);
+        n++; sx += x; sy += y; sxx += x * x; sxy += x * y;
+    }
+    if (n < 4) return NaN;
+    const slope = (n * sxy - sx * sy) / (n * sxx - sx * sx), icpt = (sy - slope * sx) / n;
+    const peak = Math.max(P[k - 1] || 0, P[k], P[k + 1] || 0);
+    return peak / Math.exp(icpt + slope * Math.log(k));
+}

@@ -30,7 +30,8 @@
  */
 import { createRequire } from 'node:module';
 import { mkdirSync, writeFileSync, mkdtempSync, rmSync } from 'node:fs';
-import { decodePng, lum } from './pixels.mjs';
+import { axisSpectra, decodePng, lineRatio, lum, planeLuma } from './pixels.mjs';
+import { cameraBasis } from '../../clients/web/camera.js';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 
@@ -46,6 +47,58 @@ const exe = process.env.CHROMIUM || '/usr/bin/chromium';
  * on the resolution, and a software renderer draws 4 times the frames) */
 const viewQuery = process.env.VIEW_QUERY || '';
 const withView = (u) => (viewQuery ? `${u}${u.includes('?') ? '&' : '?'}${viewQuery}` : u);
+
+/* No lattice in the glitter (issue 45: the interpolation of normals drew
+ * a diamond grid in the sun's glitter).  The sea of T from 25 m, looking
+ * 25 deg down toward the sun, drawn at full resolution; its luma read back
+ * onto the mean sea plane over 64 m x 64 m of the glitter (50-114 m ahead),
+ * where the mesh's lattices and every mip's samples are lines at fixed
+ * frequencies along the world's axes.  At each such frequency and its
+ * second and third harmonics, the spectrum along either axis may stand at
+ * most LATTICE_MAX over the power law of the bins around it.  The same
+ * picture with a lattice of 1 % luma laid over it at each frequency in
+ * turn must be found (the check's own control). */
+const LATTICE_MAX = 4;
+async function glitterLattice(page, T) {
+    const view = { pos: [0, 25, 0], yaw: 0, pitch: -25, fov: 40 };
+    await page.goto(withView(`${base}?scale=1&x=0&y=25&z=0&yaw=0&pitch=-25&fov=40&sun=0,30&t=${T}&overlay=0`), { waitUntil: 'load', timeout: timeoutMs });
+    const ok = await waitFor(page, (t) => window.oceanStats && window.oceanStats.framesRendered >= 3 && window.oceanStats.simTime === t &&
+        window.oceanStats.block && Math.abs(window.oceanStats.block.camera[1] - 25) < 1, T, timeoutMs);
+    const info = await page.evaluate(() => {
+        const r = window.oceanViewer.renderer;
+        return { zones: Array.from(r.topology1 ? r.topology1.zones : []), lod: r.topology1 ? r.topology1.lodLevels : 0,
+            cas: r.cas.map((c) => [c.sigma, c.mips]), scale: r.scale };
+    });
+    const png = await page.screenshot({ type: 'png' });
+    writeFileSync(join(artifacts, 'viewer-glitter.png'), png);
+    const n = 128, dx = 0.5, x0 = 50, z0 = -32;
+    const grid = planeLuma(decodePng(png), view.pos, cameraBasis(view.yaw, view.pitch, 0), view.fov, x0, z0, dx, n);
+    const spacings = [];
+    info.cas.forEach(([sigma, mips], c) => { for (let m = 0; m < mips; m++) spacings.push([`cascade ${c} mip ${m}`, sigma * 2 ** m]); });
+    for (let L = 0; L < info.lod; L++) spacings.push([`mesh level ${L}`, info.zones[4 * L]]);
+    const lines = [];
+    for (const [name, sp] of spacings)
+        for (let hm = 1; hm <= 3; hm++) {
+            const k = Math.round(hm * n * dx / sp);
+            if (k >= 10 && k <= n / 2 - 4 && !lines.some((l) => l.k === k)) lines.push({ name: `${name} (${sp.toFixed(2)} m) x${hm}`, k, sp: sp / hm });
+        }
+    const S = axisSpectra(grid);
+    let worst = { ratio: 0, name: 'none' }, missed = [];
+    for (const l of lines) {
+        const r = Math.max(lineRatio(S.along, l.k), lineRatio(S.across, l.k));
+        if (r > worst.ratio) worst = { ratio: r, name: l.name };
+        /* the control: 1 % of luma in a grid of this spacing */
+        const w = 2 * Math.PI / l.sp;
+        const lat = grid.map((row, j) => row.map((v, i) => v * (1 + 0.01 * Math.cos(w * (x0 + i * dx)) * Math.cos(w * (z0 + j * dx)))));
+        const SL = axisSpectra(lat);
+        if (!(Math.max(lineRatio(SL.along, l.k), lineRatio(SL.across, l.k)) > LATTICE_MAX)) missed.push(l.name);
+    }
+    check('no lattice in the glitter: no line at the mesh\'s or the tiles\' spacings (25 m, full resolution)',
+        ok && info.scale === 1 && lines.length >= 4 && worst.ratio <= LATTICE_MAX && missed.length === 0,
+        `${lines.length} frequencies, the strongest ${worst.ratio.toFixed(2)} x its surroundings at ${worst.name} ` +
+        `(at most ${LATTICE_MAX}); a 1 % lattice laid over the picture found at ${lines.length - missed.length} of them` +
+        (missed.length ? `, missed at ${missed.join(', ')}` : ''));
+}
 mkdirSync(artifacts, { recursive: true });
 
 let passed = 0, failed = 0;
@@ -416,6 +469,7 @@ try {
     const [nadirL] = ring(0, 0.03), [aroundL, aroundS] = ring(0.06, 0.15);
     check('10 km, looking down: the nadir within the spread of its surroundings', Math.abs(nadirL - aroundL) <= Math.max(aroundS, 2),
         `luma ${nadirL.toFixed(1)} at the nadir, ${aroundL.toFixed(1)} +- ${aroundS.toFixed(1)} around it`);
+    await glitterLattice(page2, T);
     /* a page with no camera in its URL opens where the scene's
      * camera_hint says (served in /status), not at a fixed 25 m */
     const status = await (await fetch(new URL('status', base))).json();
