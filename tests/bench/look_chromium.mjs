@@ -14,7 +14,12 @@
  * after the stream filled in (the first frame's tiles plus eight more), and
  * writes the screenshot to `shot` and, if `pair` is given, both pictures
  * side by side at half size as a JPEG there.  Prints one JSON line a view:
- * {name, ssim, mean_abs_diff, frames, errors}.
+ * {name, ssim, mean_abs_diff, frames, errors}; a view with "edge": true (a
+ * level view from near the water) adds the sea's top edge in each picture
+ * (pixels.mjs seaEdgeRows): edge_viewer and edge_ref {top, range, mean}
+ * (the highest row the sea reaches, rows between highest and lowest, mean
+ * row) and edge_within_1 (the fraction of columns where the two edges lie
+ * within a row of each other).
  */
 import { readFileSync, writeFileSync, mkdtempSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -24,7 +29,7 @@ import { createRequire } from 'node:module';
 const require = createRequire(new URL('../browser/', import.meta.url));
 const { chromium } = require('playwright-core');
 const { ssim } = require('ssim.js');
-const { decodePng } = await import('../browser/pixels.mjs');
+const { decodePng, seaEdgeRows } = await import('../browser/pixels.mjs');
 
 const [base, viewsPath] = process.argv.slice(2);
 const views = JSON.parse(readFileSync(viewsPath, 'utf8'));
@@ -80,7 +85,13 @@ try {
         if (a.w !== b.w || a.h !== b.h) throw new Error(`${v.name}: screenshot ${a.w}x${a.h}, reference ${b.w}x${b.h}`);
         const r = ssim({ data: a.px, width: a.w, height: a.h }, { data: b.px, width: b.w, height: b.h }, { ssim: 'original' });
         if (v.pair) await sideBySide(png, readFileSync(v.ref), v.pair);
-        console.log(JSON.stringify({ name: v.name, ssim: r.mssim, mean_abs_diff: meanAbsDiff(a, b), frames: st.frames, errors: st.errors }));
+        const line = { name: v.name, ssim: r.mssim, mean_abs_diff: meanAbsDiff(a, b), frames: st.frames, errors: st.errors };
+        if (v.edge) {
+            const ea = seaEdgeRows(a), eb = seaEdgeRows(b);
+            const sum = (e) => ({ top: Math.min(...e), range: Math.max(...e) - Math.min(...e), mean: e.reduce((x, y) => x + y, 0) / e.length });
+            Object.assign(line, { edge_viewer: sum(ea), edge_ref: sum(eb), edge_within_1: ea.filter((y, i) => Math.abs(y - eb[i]) <= 1).length / ea.length });
+        }
+        console.log(JSON.stringify(line));
     }
 } finally {
     await context.close();

@@ -148,3 +148,18 @@ export function lineRatio(P, k) {
     const peak = Math.max(P[k - 1] || 0, P[k], P[k + 1] || 0);
     return peak / Math.exp(icpt + slope * Math.log(k));
 }
+
+/* The sea's top edge in each column of a level view: the first row, from
+ * the top, darker than halfway between the sky at the top of that column
+ * and the sea at its bottom (sky and sea differ by 80+ luma at a level
+ * view; haze only narrows it).  Returns the rows, one a column. */
+export function seaEdgeRows(img) {
+    const rows = new Int32Array(img.w);
+    for (let x = 0; x < img.w; x++) {
+        const cut = (lum(img, x, 2) + lum(img, x, img.h - 3)) / 2;
+        let y = 0;
+        while (y < img.h && lum(img, x, y) > cut) y++;
+        rows[x] = y;
+    }
+    return rows;
+}
