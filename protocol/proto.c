@@ -32,6 +32,7 @@
 #define SEASTATE_FIXED (16 + SEA_SIZE)
 #define ERROR_FIXED 8
 #define BYE_FIXED 4
+#define ENTITY_FIXED 56
 
 /* Coordinates beyond these are absurd for a sea on this planet. */
 #define MAX_WORLD 1e10
@@ -44,7 +45,7 @@
 
 static const char *const type_names[PROTO_TYPE_END_] = {
     "?", "HELLO", "SUBSCRIBE", "CAMERA", "FRAME", "TILE", "MESH_TOPOLOGY", "MESH_VERTICES",
-    "QUERY", "QUERY_RESULT", "SEA_STATE", "ERROR", "BYE"};
+    "QUERY", "QUERY_RESULT", "SEA_STATE", "ERROR", "BYE", "ENTITY"};
 
 const char *proto_type_name(unsigned type)
 {
@@ -549,6 +550,38 @@ static ocean_result v_sea_state(ctx *c, const proto_sea_state *s)
     return OCEAN_OK;
 }
 
+/* ENTITY: a set or an announce carries a whole sample and shape (the
+ * sim's entity table judges their ranges; here only what no entity can
+ * have); a remove or gone carries an id alone; a get nothing. */
+static ocean_result v_entity(ctx *c, const proto_entity *e)
+{
+    TRY(chk_enum(c, "entity.op", e->op, PROTO_ENTITY_OP_COUNT_));
+    TRY(chk_enum(c, "entity.kind", e->kind, PROTO_ENTITY_KIND_COUNT));
+    TRY(chk_str(c, "entity.token", e->token, PROTO_TOKEN_MAX));
+    const double f[9] = {e->t, e->x, e->z, e->altitude_m, e->heading_deg, e->speed, e->length_m, e->beam_m,
+                         e->draught_m};
+    static const char *const names[9] = {"t", "x", "z", "altitude_m", "heading_deg", "speed", "length_m",
+                                         "beam_m", "draught_m"};
+    if (e->op == PROTO_ENTITY_SET || e->op == PROTO_ENTITY_ANNOUNCE) {
+        TRY(chk_time(c, "entity.t", e->t));
+        for (int i = 1; i < 9; i++)
+            if (!isfinite(f[i]))
+                FAIL(c, OCEAN_EINVAL, "entity.%s = %g; must be finite", names[i], f[i]);
+    } else {
+        int nonzero = e->kind != 0 || (e->op == PROTO_ENTITY_GET && e->id != 0);
+        for (int i = 0; i < 9; i++) nonzero |= f[i] != 0 || signbit(f[i]);
+        if (nonzero)
+            FAIL(c, OCEAN_EFORMAT, "entity %s: every field but %s must be zero bytes",
+                 e->op == PROTO_ENTITY_GET ? "get" : e->op == PROTO_ENTITY_REMOVE ? "remove" : "gone",
+                 e->op == PROTO_ENTITY_GET ? "op" : "op, id and the token");
+    }
+    int wants_token = e->op == PROTO_ENTITY_SET || e->op == PROTO_ENTITY_REMOVE;
+    if (!wants_token && e->token[0])
+        FAIL(c, OCEAN_EFORMAT, "entity %s must not carry a token",
+             e->op == PROTO_ENTITY_GET ? "get" : e->op == PROTO_ENTITY_GONE ? "gone" : "announce");
+    return OCEAN_OK;
+}
+
 static ocean_result v_error(ctx *c, const proto_error *e)
 {
     if (e->code == 0)
@@ -577,6 +610,7 @@ static ocean_result v_msg(ctx *c, const proto_msg *m)
     case PROTO_SEA_STATE: return v_sea_state(c, &m->u.sea_state);
     case PROTO_ERROR: return v_error(c, &m->u.error);
     case PROTO_BYE: return v_bye(c, &m->u.bye);
+    case PROTO_ENTITY: return v_entity(c, &m->u.entity);
     default: FAIL(c, OCEAN_ETYPE, "message type %u unknown", m->hdr.type);
     }
 }
@@ -1250,6 +1284,24 @@ static ocean_result d_sea_state(rd *r, proto_sea_state *s)
     return rd_end(r);
 }
 
+static ocean_result d_entity(rd *r, proto_entity *e)
+{
+    TRY(need(r, ENTITY_FIXED, "fixed fields"));
+    const uint8_t *p = r->p + r->off;
+    e->op = p[0];
+    e->kind = p[1];
+    TRY(zero_bytes(r, r->off + 2, 2, "entity"));
+    e->id = proto_ld32(p + 4);
+    e->t = proto_ldf64(p + 8);
+    e->x = proto_ldf64(p + 16);
+    e->z = proto_ldf64(p + 24);
+    float *f[6] = {&e->altitude_m, &e->heading_deg, &e->speed, &e->length_m, &e->beam_m, &e->draught_m};
+    for (int i = 0; i < 6; i++) *f[i] = proto_ldf32(p + 32 + 4 * i);
+    r->off += ENTITY_FIXED;
+    TRY(rd_str(r, e->token, PROTO_TOKEN_MAX, "token"));
+    return rd_end(r);
+}
+
 static ocean_result d_error(rd *r, proto_error *e)
 {
     TRY(need(r, ERROR_FIXED, "fixed fields"));
@@ -1320,6 +1372,7 @@ ocean_result proto_decode_limited(const void *buf, size_t len, const proto_limit
     case PROTO_SEA_STATE: res = d_sea_state(&r, &msg->u.sea_state); break;
     case PROTO_ERROR: res = d_error(&r, &msg->u.error); break;
     case PROTO_BYE: res = d_bye(&r, &msg->u.bye); break;
+    case PROTO_ENTITY: res = d_entity(&r, &msg->u.entity); break;
     default: res = OCEAN_ETYPE; break;
     }
     if (res == OCEAN_OK)
@@ -1627,6 +1680,22 @@ static ocean_result e_sea_state(proto_buf *b, const proto_msg *m)
     return put_str(b, s->token);
 }
 
+static ocean_result e_entity(proto_buf *b, const proto_msg *m)
+{
+    uint8_t *p;
+    const proto_entity *e = &m->u.entity;
+    TRY(put(b, ENTITY_FIXED, &p));
+    p[0] = e->op;
+    p[1] = e->kind;
+    proto_st32(p + 4, e->id);
+    proto_stf64(p + 8, e->t);
+    proto_stf64(p + 16, e->x);
+    proto_stf64(p + 24, e->z);
+    const float f[6] = {e->altitude_m, e->heading_deg, e->speed, e->length_m, e->beam_m, e->draught_m};
+    for (int i = 0; i < 6; i++) proto_stf32(p + 32 + 4 * i, f[i]);
+    return put_str(b, e->token);
+}
+
 static ocean_result e_error(proto_buf *b, const proto_msg *m)
 {
     uint8_t *p;
@@ -1655,6 +1724,7 @@ static ocean_result (*const e_payloads[])(proto_buf *b, const proto_msg *m) = {
     [PROTO_FRAME] = e_frame,     [PROTO_TILE] = e_tile_msg,              [PROTO_MESH_TOPOLOGY] = e_topology,
     [PROTO_MESH_VERTICES] = e_vertices_msg, [PROTO_QUERY] = e_query,     [PROTO_QUERY_RESULT] = e_result,
     [PROTO_SEA_STATE] = e_sea_state, [PROTO_ERROR] = e_error,           [PROTO_BYE] = e_bye,
+    [PROTO_ENTITY] = e_entity,
 };
 
 static ocean_result e_payload(proto_buf *b, const proto_msg *m)

@@ -71,6 +71,7 @@ typedef enum proto_type {
     PROTO_SEA_STATE = 10,
     PROTO_ERROR = 11,
     PROTO_BYE = 12,
+    PROTO_ENTITY = 13,
     PROTO_TYPE_END_
 } proto_type;
 
@@ -140,6 +141,20 @@ typedef enum proto_sea_op {
                               * sea block all zero bytes, effective_time 0) */
     PROTO_SEA_OP_COUNT_
 } proto_sea_op;
+
+typedef enum proto_entity_op {
+    PROTO_ENTITY_ANNOUNCE = 0, /* server -> client: an entity's shape and newest sample */
+    PROTO_ENTITY_SET = 1,      /* client -> server: a track sample, entering the entity if new
+                                * (needs the entity token) */
+    PROTO_ENTITY_REMOVE = 2,   /* client -> server: take entity id out (needs the token) */
+    PROTO_ENTITY_GET = 3,      /* client -> server: ask for every entity (no token, every
+                                * field zero) */
+    PROTO_ENTITY_GONE = 4,     /* server -> client: entity id left the sea */
+    PROTO_ENTITY_OP_COUNT_
+} proto_entity_op;
+
+/* Entity kinds as sim/entity.h numbers them. */
+#define PROTO_ENTITY_KIND_COUNT 3
 
 typedef enum proto_bye_reason {
     PROTO_BYE_NORMAL = 0,
@@ -401,6 +416,18 @@ typedef struct proto_sea_state {
     char token[PROTO_TOKEN_MAX + 1];  /* SET: admin token; ANNOUNCE, GET: empty */
 } proto_sea_state;
 
+/* ENTITY: a ship, rotorcraft or aircraft in the sea (PROTOCOL.md "ENTITY"). */
+typedef struct proto_entity {
+    uint8_t op;               /* proto_entity_op */
+    uint8_t kind;             /* 0 ship, 1 rotorcraft, 2 aircraft */
+    uint32_t id;
+    double t;                 /* sim time of the sample */
+    double x, z;              /* world position, m */
+    float altitude_m, heading_deg, speed;
+    float length_m, beam_m, draught_m;
+    char token[PROTO_TOKEN_MAX + 1];  /* SET, REMOVE: the entity token; others empty */
+} proto_entity;
+
 typedef struct proto_error {
     uint16_t code;            /* ocean_result, non-zero */
     uint16_t offending_type;  /* type of the refused message, 0 if unknown */
@@ -428,6 +455,7 @@ typedef struct proto_msg {
         proto_sea_state sea_state;
         proto_error error;
         proto_bye bye;
+        proto_entity entity;
     } u;
     void *owned_;             /* decoder's allocations; see proto_msg_free */
 } proto_msg;

@@ -87,6 +87,13 @@ typedef struct srv_client {
  * ERATE, answered once a second. */
 #define SRV_SEA_SET_PER_S 4.0
 #define SRV_SEA_SET_BURST 20.0
+/* ENTITY sets and removes a connection may make: a 60 Hz host moving two
+ * entities, with room for a burst (each is announced to every client). */
+#define SRV_ENTITY_SET_PER_S 120.0
+#define SRV_ENTITY_SET_BURST 240.0
+/* An ENTITY set's sample lies within this of the server's sim clock, s: a
+ * track is where its entity is now, not a plan far ahead or behind. */
+#define SRV_ENTITY_T_WINDOW 60.0
 
 /* Creates a client (refs = 1, the list's), adds it to the hub. */
 ocean_result srv_client_create(srv_hub *h, srv_client **out);

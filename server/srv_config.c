@@ -152,6 +152,12 @@ static const conf_entry srv_entries[] = {
      .size = SRV_TOKEN_MAX, .def = "",
      .help = "Secret a SEA_STATE set message must carry; empty disables runtime sea-state "
              "changes."},
+    {.name = "server.entity_token", .type = CONF_STRING, .offset = SRV(entity_token),
+     .size = SRV_TOKEN_MAX, .def = "",
+     .help = "Secret an ENTITY set or remove message must carry (a simulator placing its "
+             "ships and aircraft in the sea); empty disables entities over ocean.v1 (a CIGI "
+             "host's Entity Control still enters them). Wrong tokens wait as the admin "
+             "token's do (server.admin_lockout)."},
     {.name = "server.read_rate", .type = CONF_DOUBLE, .offset = SRV(read_rate), .min = 65536,
      .max = 1e12, .def = "8388608", .unit = "bytes/s",
      .help = "Bytes per second the daemon reads from one client (token bucket, one "

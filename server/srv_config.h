@@ -42,6 +42,7 @@ typedef struct srv_config {
     double output_soft_seconds;  /* ... tolerated this long */
     uint64_t output_hard;        /* bytes queued: disconnect at once */
     char admin_token[SRV_TOKEN_MAX]; /* "" disables SEA_STATE set */
+    char entity_token[SRV_TOKEN_MAX]; /* "" disables ENTITY set and remove */
     double read_rate;            /* bytes/s the service thread reads from one client */
     double partial_seconds;      /* an unfinished message must complete within this */
     double idle_seconds;         /* an unsubscribed connection silent this long gets BYE idle */

@@ -63,3 +63,31 @@ void srv_sea_announce(const proto_sea *sea, double eff, double now, proto_msg *o
     out->u.sea_state.effective_time = eff;
     out->u.sea_state.sea = *sea;
 }
+
+void srv_entity_from_msg(const proto_entity *e, ocean_entity_desc *d, ocean_track_sample *s)
+{
+    *d = (ocean_entity_desc){.id = e->id, .kind = (ocean_entity_kind)e->kind, .length_m = e->length_m,
+                             .beam_m = e->beam_m, .draught_m = e->draught_m};
+    *s = (ocean_track_sample){.t = e->t, .x = e->x, .z = e->z, .altitude_m = e->altitude_m,
+                              .heading_deg = e->heading_deg, .speed = e->speed};
+}
+
+void srv_entity_msg(unsigned op, const ocean_entity_desc *d, const ocean_track_sample *s, double now, proto_msg *out)
+{
+    proto_msg_init(out, PROTO_ENTITY);
+    out->hdr.sim_time = now;
+    proto_entity *e = &out->u.entity;
+    e->op = (uint8_t)op;
+    e->id = d->id;
+    if (op != PROTO_ENTITY_ANNOUNCE) return;
+    e->kind = (uint8_t)d->kind;
+    e->length_m = (float)d->length_m;
+    e->beam_m = (float)d->beam_m;
+    e->draught_m = (float)d->draught_m;
+    e->t = s->t;
+    e->x = s->x;
+    e->z = s->z;
+    e->altitude_m = (float)s->altitude_m;
+    e->heading_deg = (float)s->heading_deg;
+    e->speed = (float)s->speed;
+}

@@ -2,9 +2,9 @@
  * srv_entity.h - the entities in the daemon's sea: one table of id ->
  * shape and track (sim/entity.h) that every feeder enters and every reader
  * asks.  The CIGI service enters its host's Entity Control and resolves
- * entity-relative HAT/HOT requests against it; ocean.v1's entity message,
- * the replicated timeline and the wakes (one concept for all) come to the
- * same table.
+ * entity-relative HAT/HOT requests against it; ocean.v1's ENTITY message
+ * (srv_handle.c) enters and removes them; the replicated timeline and the
+ * wakes (one concept for all) come to the same table.
  *
  * Tracks are in sim time: a feeder that only knows "now" enters its sample
  * at the daemon's sim clock.  A track runs on SRV_ENTITY_HOLD_S past its
@@ -47,5 +47,10 @@ ocean_result srv_entities_state(srv_entities *e, uint32_t id, double t, ocean_en
 /* id's newest sample (ocean_entities_last). */
 ocean_result srv_entities_last(srv_entities *e, uint32_t id, ocean_track_sample *out);
 int srv_entities_count(srv_entities *e);
+/* Entity id's shape.  OCEAN_ENOTFOUND. */
+ocean_result srv_entities_find(srv_entities *e, uint32_t id, ocean_entity_desc *out);
+/* Every entity with a sample (at most max): shape and newest sample, in
+ * increasing id, copied under one hold.  Returns how many. */
+int srv_entities_snapshot(srv_entities *e, ocean_entity_desc *d, ocean_track_sample *s, int max);
 
 #endif

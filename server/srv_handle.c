@@ -20,6 +20,8 @@
 #include <string.h>
 
 #include "srv_admit.h"
+#include "srv_convert.h"
+#include "srv_entity.h"
 #include "srv_cascade.h"
 #include "srv_record.h"
 #include "srv_redis.h"
@@ -386,11 +388,13 @@ static void on_query(const srv_in *in)
     }
 }
 
-/* The admin token of a SEA_STATE set, compared in constant time unless
+/* A token (the admin token of a SEA_STATE set, the entity token of an
+ * ENTITY set or remove: `what` names it), compared in constant time unless
  * this connection or its address is in the guard's backoff (srv_admin.h:
  * the guesser waits, not the holder of the right token; a waiting attempt
- * is not compared).  1 if the token is right; else refused (ERROR sent). */
-static int admin_ok(const srv_in *in, const char *token)
+ * is not compared).  One guard for both tokens: a guesser of either waits.
+ * 1 if the token is right; else refused (ERROR sent). */
+static int token_ok(const srv_in *in, const char *want, const char *token, const char *what)
 {
     srv_session *s = in->s;
     srv_hub *h = in->h;
@@ -400,14 +404,14 @@ static int admin_ok(const srv_in *in, const char *token)
     double until = fmax(s->admin_until, srv_admin_locked_until(&h->admin, s->peer, now));
     if (now < until) {
         atomic_fetch_add(&h->stats.admin_locked, 1);
-        snprintf(why, sizeof why, "SEA_STATE set refused: admin token locked out for %.1f s more after "
-                 "wrong tokens from this connection or address (server.admin_lockout)", until - now);
+        snprintf(why, sizeof why, "%s refused: tokens locked out for %.1f s more after "
+                 "wrong tokens from this connection or address (server.admin_lockout)", what, until - now);
         refuse(in, OCEAN_ERATE, why);
         return 0;
     }
-    size_t a = strlen(cfg->admin_token), b = strlen(token);
+    size_t a = strlen(want), b = strlen(token);
     unsigned diff = (unsigned)(a ^ b);
-    for (size_t i = 0; i < a; i++) diff |= (unsigned)(cfg->admin_token[i] ^ token[i < b ? i : 0]);
+    for (size_t i = 0; i < a; i++) diff |= (unsigned)(want[i] ^ token[i < b ? i : 0]);
     if (!diff) {
         s->admin_misses = 0;
         srv_admin_hit(&h->admin, s->peer);
@@ -419,11 +423,12 @@ static int admin_ok(const srv_in *in, const char *token)
     s->admin_until = now + cfg->admin_lockout * (double)(1 << k);
     srv_admin_miss(&h->admin, s->peer, cfg->admin_lockout, now, &alarm);
     if (alarm)
-        fprintf(stderr, "oceand: more than %d wrong admin tokens in %d s: SEA_STATE set locked for %d s for "
-                "every address that sent one (the last: %s)\n", SRV_ADMIN_GLOBAL_MISSES, SRV_ADMIN_WINDOW,
+        fprintf(stderr, "oceand: more than %d wrong tokens in %d s: SEA_STATE and ENTITY sets locked for %d s "
+                "for every address that sent one (the last: %s)\n", SRV_ADMIN_GLOBAL_MISSES, SRV_ADMIN_WINDOW,
                 SRV_ADMIN_WINDOW, s->peer);
-    snprintf(why, sizeof why, "SEA_STATE set refused: wrong admin token; next attempt in %.1f s "
-             "(server.admin_lockout)", fmax(s->admin_until, srv_admin_locked_until(&h->admin, s->peer, now)) - now);
+    snprintf(why, sizeof why, "%s refused: wrong %s token; next attempt in %.1f s (server.admin_lockout)", what,
+             want == cfg->admin_token ? "admin" : "entity",
+             fmax(s->admin_until, srv_admin_locked_until(&h->admin, s->peer, now)) - now);
     refuse(in, OCEAN_EAUTH, why);
     return 0;
 }
@@ -473,7 +478,7 @@ static void on_sea_state(const srv_in *in)
         return;
     }
     if (!sea_set_token(in)) return;
-    if (!admin_ok(in, s->token)) return;
+    if (!token_ok(in, in->cfg->admin_token, s->token, "SEA_STATE set")) return;
     char why[512], msg[256];
     pthread_mutex_lock(&h->lock);
     ocean_params np;
@@ -500,6 +505,136 @@ static void on_sea_state(const srv_in *in)
     }
     sea_set_log(in, &s->sea, eff, "in force from");
     srv_hub_wake_net(h);
+}
+
+/* ---- ENTITY ---------------------------------------------------------------- */
+
+/* Takes one of the connection's ENTITY sets or removes (SRV_ENTITY_SET_*):
+ * each is announced to every client.  Over the rate: refused ERATE,
+ * answered once a second.  Returns 1 if it may go on. */
+static int entity_set_token(const srv_in *in)
+{
+    srv_session *s = in->s;
+    if (srv_bucket_take(&s->entity_sets, SRV_ENTITY_SET_PER_S, SRV_ENTITY_SET_BURST, srv_now(), 1)) return 1;
+    char what[200];
+    snprintf(what, sizeof what, "ENTITY refused: more than %g sets and removes a second (burst %g) from this "
+             "connection", SRV_ENTITY_SET_PER_S, SRV_ENTITY_SET_BURST);
+    refuse_over_rate(s, &s->entity_err_t, in->buf, in->len, what);
+    return 0;
+}
+
+static void entity_announce(const srv_in *in, unsigned op, const ocean_entity_desc *d, const ocean_track_sample *smp)
+{
+    srv_hub *h = in->h;
+    proto_msg m;
+    pthread_mutex_lock(&h->lock);
+    srv_entity_msg(op, d, smp, srv_hub_sim_time(h), &m);
+    srv_hub_broadcast(h, &m);
+    pthread_mutex_unlock(&h->lock);
+    srv_hub_wake_net(h);
+}
+
+/* A track sample of one entity, entering it with its shape if new: what
+ * the table refuses (sim/entity.h: ranges, time order, teleports, a full
+ * table) is refused with its reason, and so are a sample away from the
+ * clock and a set that would change a known entity's kind or size. */
+static void entity_set(const srv_in *in, const proto_entity *e)
+{
+    srv_hub *h = in->h;
+    ocean_entity_desc d, known;
+    ocean_track_sample smp;
+    char why[512], msg[300] = "";
+    srv_entity_from_msg(e, &d, &smp);
+    double now = srv_hub_sim_time(h);
+    if (!(fabs(smp.t - now) <= SRV_ENTITY_T_WINDOW)) {
+        snprintf(why, sizeof why, "ENTITY set refused: entity.t = %.3f s is more than %g s from the server's "
+                 "sim time %.3f s", smp.t, SRV_ENTITY_T_WINDOW, now);
+        refuse(in, OCEAN_EINVAL, why);
+        return;
+    }
+    int fresh = srv_entities_find(h->entities, d.id, &known) != OCEAN_OK;
+    if (!fresh && (known.kind != d.kind || known.length_m != d.length_m || known.beam_m != d.beam_m ||
+                   known.draught_m != d.draught_m)) {
+        snprintf(why, sizeof why, "ENTITY set refused: entity %u is kind %d, %g x %g x %g m; a set may not change "
+                 "its kind or size (remove it first)", d.id, (int)known.kind, known.length_m, known.beam_m,
+                 known.draught_m);
+        refuse(in, OCEAN_EINVAL, why);
+        return;
+    }
+    ocean_result r = srv_entities_sample(h->entities, &d, &smp, msg, sizeof msg);
+    if (r != OCEAN_OK) {
+        snprintf(why, sizeof why, "ENTITY set refused: %s%s", msg[0] ? msg : ocean_strerror(r),
+                 r == OCEAN_ETOOBIG ? " (server.max_entities)" : "");
+        refuse(in, r, why);
+        return;
+    }
+    if (fresh)
+        fprintf(stderr, "oceand: entity %u (kind %d, %g m) entered by client %u (%s) at t = %.3f s\n", d.id,
+                (int)d.kind, d.length_m, in->c->id, in->s->peer[0] ? in->s->peer : "?", smp.t);
+    entity_announce(in, PROTO_ENTITY_ANNOUNCE, &d, &smp);
+}
+
+static void entity_remove(const srv_in *in, uint32_t id)
+{
+    char why[200];
+    if (srv_entities_remove(in->h->entities, id) != OCEAN_OK) {
+        snprintf(why, sizeof why, "ENTITY remove refused: no entity %u in the sea", id);
+        refuse(in, OCEAN_ENOTFOUND, why);
+        return;
+    }
+    fprintf(stderr, "oceand: entity %u removed by client %u (%s)\n", id, in->c->id,
+            in->s->peer[0] ? in->s->peer : "?");
+    ocean_entity_desc d = {.id = id};
+    entity_announce(in, PROTO_ENTITY_GONE, &d, NULL);
+}
+
+/* Every entity's shape and newest sample, to the asker alone. */
+static void entity_get(const srv_in *in)
+{
+    srv_hub *h = in->h;
+    int max = in->cfg->max_entities;
+    ocean_entity_desc *d = malloc(sizeof *d * (size_t)max);
+    ocean_track_sample *smp = malloc(sizeof *smp * (size_t)max);
+    if (!d || !smp) {
+        free(d);
+        free(smp);
+        refuse(in, OCEAN_ENOMEM, "ENTITY get: out of memory for the entity list");
+        return;
+    }
+    int n = srv_entities_snapshot(h->entities, d, smp, max);
+    double now = srv_hub_sim_time(h);
+    for (int i = 0; i < n; i++) {
+        proto_msg m;
+        srv_entity_msg(PROTO_ENTITY_ANNOUNCE, &d[i], &smp[i], now, &m);
+        srv_msg *q = srv_msg_new();
+        if (q && proto_encode(&q->buf, &m, NULL, 0) == OCEAN_OK) srv_client_queue(in->c, q);
+        else srv_msg_free(q);
+    }
+    free(d);
+    free(smp);
+}
+
+static void on_entity(const srv_in *in)
+{
+    const proto_entity *e = &in->m->u.entity;
+    if (e->op == PROTO_ENTITY_GET) {
+        entity_get(in);
+        return;
+    }
+    if (e->op != PROTO_ENTITY_SET && e->op != PROTO_ENTITY_REMOVE) {
+        refuse(in, OCEAN_EINVAL, "ENTITY announce and gone are server-to-client; send set, remove or get");
+        return;
+    }
+    if (!in->cfg->entity_token[0]) {
+        refuse(in, OCEAN_EAUTH, "entities over ocean.v1 are disabled on this server (server.entity_token is "
+                                "empty)");
+        return;
+    }
+    if (!entity_set_token(in)) return;
+    if (!token_ok(in, in->cfg->entity_token, e->token, e->op == PROTO_ENTITY_SET ? "ENTITY set" : "ENTITY remove"))
+        return;
+    if (e->op == PROTO_ENTITY_SET) entity_set(in, e);
+    else entity_remove(in, e->id);
 }
 
 /* A client's ERROR reports a server message it refused: logged (verbose),
@@ -535,6 +670,7 @@ static const struct {
 } handlers[] = {
     {PROTO_SUBSCRIBE, on_subscribe}, {PROTO_CAMERA, on_camera}, {PROTO_QUERY, on_query},
     {PROTO_SEA_STATE, on_sea_state}, {PROTO_ERROR, on_error},   {PROTO_BYE, on_bye},
+    {PROTO_ENTITY, on_entity},
 };
 
 /* Every message names the last frame the client received (its header's
@@ -576,7 +712,7 @@ void srv_handle(srv_session *s, const uint8_t *buf, size_t len)
         handlers[k].handle(&in);
     } else {
         snprintf(why, sizeof why, "%s is a server-to-client message; clients send SUBSCRIBE, CAMERA, QUERY, "
-                 "SEA_STATE, ERROR or BYE", proto_type_name(m.hdr.type));
+                 "SEA_STATE, ENTITY, ERROR or BYE", proto_type_name(m.hdr.type));
         refuse(&in, OCEAN_ETYPE, why);
     }
     proto_msg_free(&m);

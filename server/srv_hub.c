@@ -171,6 +171,20 @@ int srv_hub_sea_take_due(srv_hub *h, double t, srv_sea_change *out)
     return 1;
 }
 
+void srv_hub_broadcast(srv_hub *h, const proto_msg *m)
+{
+    for (srv_client *k = h->clients; k; k = k->next) {
+        if (k->closed || !k->hello_sent) continue;
+        srv_msg *q = srv_msg_new();
+        if (!q) continue;
+        if (proto_encode(&q->buf, m, NULL, 0) != OCEAN_OK) {
+            srv_msg_free(q);
+            continue;
+        }
+        srv_client_queue(k, q);
+    }
+}
+
 void srv_hub_wake_net(srv_hub *h)
 {
     if (h->wake_net) h->wake_net(h->wake_ctx);

@@ -118,6 +118,11 @@ int srv_hub_sea_take_due(srv_hub *h, double t, srv_sea_change *out);
 /* A SEA_STATE announce of sea, in force from sim time eff, sent at sim
  * time now; NULL on OOM. */
 srv_msg *srv_hub_sea_announce(const proto_sea *sea, double eff, double now);
+/* Queues message m (an ENTITY announce or gone) to every client that has
+ * had its HELLO [caller holds hub.lock]; a client whose copy cannot be
+ * made (OOM) misses it.  The caller wakes the service thread after
+ * unlocking. */
+void srv_hub_broadcast(srv_hub *h, const proto_msg *m);
 /* Wakes the service thread (lws_cancel_service). */
 void srv_hub_wake_net(srv_hub *h);
 

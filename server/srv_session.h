@@ -50,6 +50,8 @@ typedef struct srv_session {
     srv_bucket sub_changes;         /* changed SUBSCRIBEs (SRV_SUBSCRIBE_*) */
     srv_bucket sea_sets;            /* SEA_STATE sets (SRV_SEA_SET_*) */
     double sea_err_t;               /* last ERATE ERROR for a set over that rate */
+    srv_bucket entity_sets;         /* ENTITY sets and removes (SRV_ENTITY_SET_*) */
+    double entity_err_t;            /* last ERATE ERROR for one over that rate */
     double price;                   /* the subscription's price held in admission (srv_admit.h) */
     int admin_misses;               /* wrong admin tokens in a row */
     double admin_until;             /* SEA_STATE set refused until then (monotonic) */

@@ -264,6 +264,15 @@ static char *dump(const proto_msg *m)
     case PROTO_BYE:
         out(&b, "reason = %u\nmessage = %s\n", m->u.bye.reason, m->u.bye.message);
         break;
+    case PROTO_ENTITY: {
+        const proto_entity *e = &m->u.entity;
+        out(&b, "op = %u\nkind = %u\nid = %u\nt = %.17g\nx = %.17g\nz = %.17g\n", e->op, e->kind, e->id, e->t, e->x,
+            e->z);
+        out(&b, "altitude_m = %.9g\nheading_deg = %.9g\nspeed = %.9g\nlength_m = %.9g\nbeam_m = %.9g\n"
+            "draught_m = %.9g\ntoken = %s\n", (double)e->altitude_m, (double)e->heading_deg, (double)e->speed,
+            (double)e->length_m, (double)e->beam_m, (double)e->draught_m, e->token);
+        break;
+    }
     }
     return b.s;
 }
@@ -387,6 +396,11 @@ static void sample(proto_msg *m, proto_type type)
         m->u.bye.reason = PROTO_BYE_SHUTDOWN;
         strcpy(m->u.bye.message, "server shutting down");
         break;
+    case PROTO_ENTITY:
+        /* a frigate 1000 km out, at a time with a fraction */
+        m->u.entity = (proto_entity){PROTO_ENTITY_SET, 0, 1001, 600.25, 1e6 + 0.5, -2.5e5, 0.0f, 271.5f, 12.5f,
+                                     120.0f, 14.5f, 4.25f, "s3cret-entity-token"};
+        break;
     default:
         break;
     }
@@ -493,6 +507,26 @@ static int sample_named(proto_msg *m, const char *name)
         m->u.sea_state.op = PROTO_SEA_GET;
         return 0;
     }
+    if (!strcmp(name, "entity_announce")) {
+        sample(m, PROTO_ENTITY);
+        m->u.entity.op = PROTO_ENTITY_ANNOUNCE;
+        m->u.entity.kind = 1;
+        m->u.entity.altitude_m = 35.0f;
+        m->u.entity.beam_m = m->u.entity.draught_m = 0.0f;
+        m->u.entity.length_m = 16.0f;
+        m->u.entity.token[0] = 0;
+        return 0;
+    }
+    if (!strcmp(name, "entity_remove") || !strcmp(name, "entity_gone") || !strcmp(name, "entity_get")) {
+        proto_msg_init(m, PROTO_ENTITY);
+        m->hdr.seq = 11;
+        m->hdr.sim_time = 601.5;
+        m->u.entity.op = name[7] == 'r' ? PROTO_ENTITY_REMOVE : name[7] == 'g' && name[8] == 'o' ? PROTO_ENTITY_GONE
+                                                                                               : PROTO_ENTITY_GET;
+        if (m->u.entity.op != PROTO_ENTITY_GET) m->u.entity.id = 1001;
+        if (m->u.entity.op == PROTO_ENTITY_REMOVE) strcpy(m->u.entity.token, "s3cret-entity-token");
+        return 0;
+    }
     if (!strcmp(name, "subscribe_cascade")) {
         sample(m, PROTO_SUBSCRIBE);
         m->u.subscribe.layout = PROTO_LAYOUT_CASCADE;
@@ -514,7 +548,8 @@ static int sample_named(proto_msg *m, const char *name)
 }
 
 static const char *const extra_vectors[] = {"frame_cascade", "frame_cascade_time", "mesh_topology_flat", "subscribe_cascade",
-                                            "sea_state_announce", "sea_state_get", "frame_mesh_qz"};
+                                            "sea_state_announce", "sea_state_get", "frame_mesh_qz", "entity_announce",
+                                            "entity_remove", "entity_gone", "entity_get"};
 #define N_EXTRA ((int)(sizeof extra_vectors / sizeof extra_vectors[0]))
 
 static uint8_t *encode_sample(proto_type type, size_t *len)
@@ -717,9 +752,9 @@ static void test_header_errors(void **state)
     memcpy(m, good, n);
     proto_st16(m + 6, 0);
     EXPECT(OCEAN_ETYPE);                            /* type 0 */
-    proto_st16(m + 6, 13);
+    proto_st16(m + 6, PROTO_TYPE_END_);
     EXPECT(OCEAN_ETYPE);                            /* unknown type */
-    assert_int_equal(d.hdr.type, 13);               /* header kept for the ERROR reply */
+    assert_int_equal(d.hdr.type, PROTO_TYPE_END_); /* header kept for the ERROR reply */
     memcpy(m, good, n);
     proto_st32(m + 8, 1);
     EXPECT(OCEAN_EFORMAT);                          /* flags */
@@ -1043,6 +1078,13 @@ static const bad_vector bad_vectors[] = {
     {"bad_subscribe_layout", "subscribe", P(7), 1, 2, OCEAN_ETYPE, -1},
     {"bad_sea_get_with_sea", "sea_state_get", P(32), 8, 0x4024000000000000ull, OCEAN_EFORMAT, -1},
     {"bad_sea_op", "sea_state", P(0), 1, 3, OCEAN_ETYPE, -1},
+    {"bad_entity_op", "entity", P(0), 1, 5, OCEAN_ETYPE, -1},
+    {"bad_entity_kind", "entity", P(1), 1, 3, OCEAN_ETYPE, -1},
+    {"bad_entity_reserved", "entity", P(2), 1, 1, OCEAN_EFORMAT, -1},
+    {"bad_entity_nan_x", "entity", P(16), 8, 0x7FF8000000000000ull, OCEAN_EINVAL, -1},
+    {"bad_entity_inf_speed", "entity", P(40), 4, 0x7F800000u, OCEAN_EINVAL, -1},
+    {"bad_entity_get_id", "entity_get", P(4), 4, 7, OCEAN_EFORMAT, -1},
+    {"bad_entity_remove_sample", "entity_remove", P(16), 8, 0x4024000000000000ull, OCEAN_EFORMAT, -1},
     {"bad_subscribe_mesh_codec", "subscribe", P(10), 1, 1, OCEAN_ETYPE, -1},
     /* SUBSCRIBE.flags: bit 2 is not defined */
     {"bad_subscribe_flags", "subscribe", P(11), 1, 4, OCEAN_EFORMAT, -1},

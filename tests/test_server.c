@@ -39,6 +39,7 @@
 #include "srv_cascade.h"
 #include "srv_daemon.h"
 #include "srv_fingerprint.h"
+#include "srv_entity.h"
 #include "srv_record.h"
 #include "srv_tiles.h"
 #include "lib/test_ws.h"
@@ -68,6 +69,8 @@ static void write_conf(const char *path, double wind, int max_clients)
             "server.scene = \"\"\n"
             "server.tick_rate = 30\n"
             "server.admin_token = \"test-token\"\n"
+            "server.entity_token = \"entity-token\"\n"
+            "server.max_entities = 4\n"
             "server.output_soft = 4194304\n"
             "server.output_soft_seconds = 1\n"
             "server.max_message = 65536\n"
@@ -2925,6 +2928,228 @@ static void sea_set_ranges(void **state)
     test_ws_close(&a);
 }
 
+/* ---- ENTITY (issue 43) ------------------------------------------------------ */
+
+/* An ENTITY set of a ship (120 x 15 x 5 m unless kind says otherwise). */
+static void entity_send(test_ws *w, int op, uint32_t id, int kind, double t, double x, double speed, const char *token)
+{
+    proto_msg m;
+    proto_msg_init(&m, PROTO_ENTITY);
+    proto_entity *e = &m.u.entity;
+    e->op = (uint8_t)op;
+    e->id = id;
+    if (op == PROTO_ENTITY_SET || op == PROTO_ENTITY_ANNOUNCE) {
+        e->kind = (uint8_t)kind;
+        e->t = t;
+        e->x = x;
+        e->z = -20;
+        e->speed = (float)speed;
+        e->heading_deg = 0;
+        e->length_m = kind == 0 ? 120.0f : 16.0f;
+        e->beam_m = kind == 0 ? 15.0f : 0.0f;
+        e->draught_m = kind == 0 ? 5.0f : 0.0f;
+        e->altitude_m = kind == 1 ? 30.0f : 0.0f;
+    }
+    if (token) snprintf(e->token, sizeof e->token, "%s", token);
+    test_msg_send(w, &m);
+}
+
+/* The next ENTITY to w, of op; asserts it comes. */
+static void entity_expect(test_ws *w, int op, uint32_t id, proto_msg *m)
+{
+    for (double end = test_now_s() + 5; test_now_s() < end;) {
+        assert_true(test_msg_wait(w, PROTO_ENTITY, 3000, m));
+        if (m->u.entity.op == op && m->u.entity.id == id) return;
+        proto_msg_free(m);
+    }
+    fail_msg("no ENTITY op %d for id %d", op, (int)id);
+}
+
+/* An ERROR of code whose message holds `has`; asserts it comes. */
+static void error_expect(test_ws *w, ocean_result code, const char *has)
+{
+    proto_msg m;
+    assert_true(test_msg_wait(w, PROTO_ERROR, 3000, &m));
+    if (m.u.error.code != code || !strstr(m.u.error.message, has))
+        fail_msg("want %s with \"%s\", got %s: %s", ocean_strerror(code), has, ocean_strerror((ocean_result)m.u.error.code),
+                 m.u.error.message);
+    proto_msg_free(&m);
+}
+
+/* The table's newest sample of id is at x (or id is not in it: x NaN). */
+static void entity_at(uint32_t id, double x)
+{
+    ocean_track_sample last;
+    ocean_result r = srv_entities_last(srv_daemon_hub(daemon_)->entities, id, &last);
+    if (isnan(x)) assert_int_equal(r, OCEAN_ENOTFOUND);
+    else {
+        assert_int_equal(r, OCEAN_OK);
+        assert_true(last.x == x);
+    }
+}
+
+/* ENTITY over ocean.v1: a set with the entity token enters a ship and
+ * is announced to every client; get answers the asker with every entity;
+ * remove takes it out and says gone to all.  Each hostile set is refused
+ * with its reason and changes nothing: a wrong token, NaN, a speed out of
+ * range, a teleport, a time far from the clock, a change of kind, an
+ * unknown id to remove, one entity past server.max_entities (4 here), an
+ * announce sent by a client. */
+static void entity_messages(void **state)
+{
+    (void)state;
+    test_ws a, b;
+    timeline ta, tb;
+    sea_connect(&a, &ta, 300);
+    sea_connect(&b, &tb, 300);
+    double t0 = hub_now();
+    proto_msg m;
+    entity_send(&a, PROTO_ENTITY_SET, 7, 0, t0, 100, 5, "entity-token");
+    entity_expect(&a, PROTO_ENTITY_ANNOUNCE, 7, &m);
+    proto_msg_free(&m);
+    entity_expect(&b, PROTO_ENTITY_ANNOUNCE, 7, &m);
+    assert_true(m.u.entity.x == 100 && m.u.entity.t == t0 && m.u.entity.length_m == 120.0f && m.u.entity.speed == 5.0f);
+    proto_msg_free(&m);
+    entity_at(7, 100);
+    entity_send(&b, PROTO_ENTITY_GET, 0, 0, 0, 0, 0, NULL);
+    entity_expect(&b, PROTO_ENTITY_ANNOUNCE, 7, &m);
+    assert_true(m.u.entity.x == 100);
+    proto_msg_free(&m);
+
+    entity_send(&a, PROTO_ENTITY_SET, 7, 0, t0 + 1, 105, 5, "guess");
+    error_expect(&a, OCEAN_EAUTH, "wrong entity token");
+    /* NaN in x: the encoder refuses it, so the bytes are forged */
+    proto_msg nan;
+    proto_msg_init(&nan, PROTO_ENTITY);
+    nan.u.entity = (proto_entity){PROTO_ENTITY_SET, 0, 7, t0 + 1, 0, 0, 0, 0, 5, 120, 15, 5, "entity-token"};
+    size_t n;
+    uint8_t *bytes = test_msg_encode(&nan, &n);
+    uint64_t qnan = 0x7FF8000000000000ull;
+    memcpy(bytes + PROTO_HEADER_SIZE + 16, &qnan, 8);
+    test_ws_send(&a, 2, bytes, n);
+    free(bytes);
+    error_expect(&a, OCEAN_EINVAL, "entity.x");
+    entity_send(&a, PROTO_ENTITY_SET, 7, 0, t0 + 1, 105, 50, "entity-token");
+    error_expect(&a, OCEAN_EINVAL, "speed");
+    entity_send(&a, PROTO_ENTITY_SET, 7, 0, t0 + 1, 100 + 10000, 5, "entity-token");
+    error_expect(&a, OCEAN_EINVAL, "teleport");
+    entity_send(&a, PROTO_ENTITY_SET, 7, 0, t0 + 1000, 105, 5, "entity-token");
+    error_expect(&a, OCEAN_EINVAL, "sim time");
+    entity_send(&a, PROTO_ENTITY_SET, 7, 1, t0 + 1, 105, 5, "entity-token");
+    error_expect(&a, OCEAN_EINVAL, "may not change its kind");
+    entity_send(&a, PROTO_ENTITY_REMOVE, 99, 0, 0, 0, 0, "entity-token");
+    error_expect(&a, OCEAN_ENOTFOUND, "no entity 99");
+    entity_send(&a, PROTO_ENTITY_ANNOUNCE, 7, 0, t0 + 1, 105, 5, NULL);
+    error_expect(&a, OCEAN_EINVAL, "server-to-client");
+    entity_at(7, 100);
+    for (uint32_t id = 8; id <= 10; id++) {
+        entity_send(&a, PROTO_ENTITY_SET, id, 1, t0, 10.0 * id, 0, "entity-token");
+        entity_expect(&a, PROTO_ENTITY_ANNOUNCE, id, &m);
+        proto_msg_free(&m);
+    }
+    entity_send(&a, PROTO_ENTITY_SET, 11, 1, t0, 110, 0, "entity-token");
+    error_expect(&a, OCEAN_ETOOBIG, "server.max_entities");
+    entity_at(11, NAN);
+    assert_int_equal(srv_entities_count(srv_daemon_hub(daemon_)->entities), 4);
+
+    for (uint32_t id = 7; id <= 10; id++) {
+        entity_send(&a, PROTO_ENTITY_REMOVE, id, 0, 0, 0, 0, "entity-token");
+        entity_expect(&b, PROTO_ENTITY_GONE, id, &m);
+        proto_msg_free(&m);
+    }
+    entity_at(7, NAN);
+    assert_int_equal(srv_entities_count(srv_daemon_hub(daemon_)->entities), 0);
+    test_ws_close(&a);
+    test_ws_close(&b);
+}
+
+/* What on_entity saw. */
+typedef struct entity_seen {
+    int announces, gones;
+    proto_entity last;
+} entity_seen;
+
+static void on_entity_cb(void *user, oc_client *c, const proto_entity *e)
+{
+    (void)c;
+    entity_seen *seen = user;
+    if (e->op == PROTO_ENTITY_ANNOUNCE) seen->announces++;
+    if (e->op == PROTO_ENTITY_GONE) seen->gones++;
+    seen->last = *e;
+}
+
+/* The C library's oc_client_send_entity: a set comes back to on_entity as
+ * the announce, a remove as gone; a NaN is refused before it is sent. */
+static void entity_from_the_library(void **state)
+{
+    (void)state;
+    entity_seen seen = {0};
+    oc_callbacks cb = {.user = &seen, .on_entity = on_entity_cb};
+    oc_client *c = connect_client(port, &cb);
+    proto_entity e = {PROTO_ENTITY_SET, 1, 21, hub_now(), 400, -300, 60, 90, 20, 16, 0, 0, "entity-token"};
+    assert_int_equal(oc_client_send_entity(c, &e), OCEAN_OK);
+    for (double end = test_now_s() + 5; !seen.announces && test_now_s() < end;) oc_service(c, 100);
+    assert_int_equal(seen.announces, 1);
+    assert_true(seen.last.id == 21 && seen.last.kind == 1 && seen.last.x == 400 && seen.last.altitude_m == 60.0f);
+    proto_entity bad = e;
+    bad.z = NAN;
+    assert_int_equal(oc_client_send_entity(c, &bad), OCEAN_EINVAL);
+    char why[300];
+    oc_client_last_error(c, why, sizeof why);
+    if (!strstr(why, "entity.z")) fail_msg("%s", why);
+    proto_entity rm = {.op = PROTO_ENTITY_REMOVE, .id = 21, .token = "entity-token"};
+    assert_int_equal(oc_client_send_entity(c, &rm), OCEAN_OK);
+    for (double end = test_now_s() + 5; !seen.gones && test_now_s() < end;) oc_service(c, 100);
+    assert_int_equal(seen.gones, 1);
+    entity_at(21, NAN);
+    oc_client_destroy(c);
+}
+
+/* ENTITY sets beyond SRV_ENTITY_SET_BURST, then SRV_ENTITY_SET_PER_S a
+ * second, from one connection are refused ERATE (answered once a second),
+ * the rest entered: a daemon whose message rate lets them through. */
+static void entity_rate(void **state)
+{
+    (void)state;
+    const char *sets[] = {"server.port=0", "server.scene=\"\"", "ocean.n=32", "ocean.cascades=1", "ocean.threads=1",
+                          "server.entity_token=\"tok\"", "server.msg_rate=10000", "server.msg_burst=20000"};
+    srv_settings sb;
+    srv_daemon *d = start_daemon(sets, 8, &sb);
+    test_ws w;
+    assert_int_equal(test_ws_connect(&w, srv_daemon_port(d), "/", PROTO_SUBPROTOCOL), 0);
+    proto_msg m;
+    assert_true(test_msg_wait(&w, PROTO_HELLO, 5000, &m));
+    proto_msg_free(&m);
+    double t0 = srv_hub_sim_time(srv_daemon_hub(d)), start = test_now_s();
+    int sent = 600;
+    for (int i = 0; i < sent; i++) entity_send(&w, PROTO_ENTITY_SET, 3, 0, t0 + 0.01 * i, 50, 0, "tok");
+    int announced = 0, refused = 0;
+    double last = start;
+    for (;;) { /* until 1 s passes with nothing */
+        uint8_t *b;
+        size_t len;
+        if (test_ws_recv(&w, 1000, &b, &len) != 2) break;
+        char err[256];
+        last = test_now_s();
+        if (proto_decode(b, len, &m, err, sizeof err) == OCEAN_OK) {
+            if (m.hdr.type == PROTO_ENTITY) announced++;
+            if (m.hdr.type == PROTO_ERROR && m.u.error.code == OCEAN_ERATE) refused++;
+            proto_msg_free(&m);
+        }
+        free(b);
+    }
+    /* the daemon took them within `elapsed` (its last reply): the bucket
+     * held the burst and refilled at its rate meanwhile */
+    double elapsed = last - start;
+    int most = (int)(SRV_ENTITY_SET_BURST + SRV_ENTITY_SET_PER_S * elapsed) + 1;
+    printf("# %d sets answered within %.3f s: %d announced (at most %d), %d ERATE replies\n", sent, elapsed,
+           announced, most, refused);
+    assert_true(announced >= (int)SRV_ENTITY_SET_BURST && announced <= most);
+    assert_true(refused >= 1 && refused <= 2 + (int)elapsed);
+    test_ws_close(&w);
+    srv_daemon_stop(d);
+}
+
 /* server.epoch: ISO 8601 and Unix seconds give the instant the published
  * calendar gives (2026-01-01T00:00:00Z = 1 767 225 600 s, POSIX time). */
 static void epoch_parse(void **state)
@@ -4325,6 +4550,9 @@ int main(int argc, char **argv)
         cmocka_unit_test(sea_timeline_late_joiner),
         cmocka_unit_test(sea_timeline_get),
         cmocka_unit_test(sea_set_ranges),
+        cmocka_unit_test(entity_messages),
+        cmocka_unit_test(entity_rate),
+        cmocka_unit_test(entity_from_the_library),
         cmocka_unit_test(epoch_parse),
         cmocka_unit_test(epoch_shared_clock),
         cmocka_unit_test(epoch_beyond_time_limit),

@@ -467,7 +467,7 @@ static void wake(oc_loop *l)
 /* Deferred user notifications collected under the lock. */
 typedef struct notify {
     const proto_msg *msg;
-    int call_error, call_sea, call_close, call_frame;
+    int call_error, call_sea, call_entity, call_close, call_frame;
     frame_priv *frame;
     pending_query *q;              /* async query to answer */
     int close_reason;
@@ -1063,6 +1063,11 @@ static void rx_sea_state(rx_ctx *x)
     x->nt->call_sea = 1;
 }
 
+static void rx_entity(rx_ctx *x)
+{
+    x->nt->call_entity = 1;
+}
+
 static void rx_error(rx_ctx *x)
 {
     oc_client *c = x->c;
@@ -1104,7 +1109,7 @@ static const struct {
 } rx_handlers[] = {
     {PROTO_HELLO, rx_hello},         {PROTO_FRAME, rx_frame}, {PROTO_MESH_TOPOLOGY, rx_topology},
     {PROTO_QUERY_RESULT, rx_query_result}, {PROTO_SEA_STATE, rx_sea_state}, {PROTO_ERROR, rx_error},
-    {PROTO_BYE, rx_bye},
+    {PROTO_BYE, rx_bye},             {PROTO_ENTITY, rx_entity},
 };
 
 /* MESH_VERTICES_QZ work done outside the loop's lock: a layout-0
@@ -1146,6 +1151,8 @@ static void rx_notify(oc_client *c, ocean_result res, const proto_msg *m, notify
             c->opt.cb.on_error(c->opt.cb.user, c, &m->u.error);
         if (nt->call_sea && c->opt.cb.on_sea_state)
             c->opt.cb.on_sea_state(c->opt.cb.user, c, &m->u.sea_state);
+        if (nt->call_entity && c->opt.cb.on_entity)
+            c->opt.cb.on_entity(c->opt.cb.user, c, &m->u.entity);
     }
     if (nt->call_frame) {
         c->opt.cb.on_frame(c->opt.cb.user, c, &nt->frame->pub);
@@ -2148,6 +2155,26 @@ ocean_result oc_client_send_camera(oc_client *c, const proto_camera *cam, uint32
         if (seq_out)
             *seq_out = seq;
     }
+    return r;
+}
+
+ocean_result oc_client_send_entity(oc_client *c, const proto_entity *e)
+{
+    if (!c)
+        return OCEAN_EINVAL;
+    if (!e)
+        return fail_local(c, OCEAN_EINVAL, "oc_client_send_entity: no entity (NULL)");
+    proto_msg m;
+    proto_msg_init(&m, PROTO_ENTITY);
+    m.u.entity = *e;
+    char err[256] = "";
+    pthread_mutex_lock(&c->loop->mu);
+    ocean_result r = queue_msg_locked(c, &m, NULL, err, sizeof err);
+    if (r != OCEAN_OK)
+        set_local_error(c, r, "cannot send ENTITY: %s", err[0] ? err : ocean_strerror(r));
+    pthread_mutex_unlock(&c->loop->mu);
+    if (r == OCEAN_OK)
+        wake(c->loop);
     return r;
 }
 

@@ -296,6 +296,9 @@ typedef struct oc_callbacks {
     void (*on_error)(void *user, oc_client *c, const proto_error *e);
     /* A SEA_STATE announcement. */
     void (*on_sea_state)(void *user, oc_client *c, const proto_sea_state *s);
+    /* An ENTITY announce or gone (PROTOCOL.md "ENTITY"): an entity's newest
+     * sample, or its leaving; this client's own sets come back so too. */
+    void (*on_entity)(void *user, oc_client *c, const proto_entity *e);
     /* The connection ended: after BYE (reason, message from it), a close
      * frame, or a failed connect (reason -1, message says why). */
     void (*on_close)(void *user, oc_client *c, int bye_reason, const char *message);
@@ -518,6 +521,16 @@ ocean_result oc_client_sea_state_set(oc_client *c, const proto_sea *sea, double 
  * change learns when it took effect this way.  OCEAN_ESTATE on timeout
  * or while another SEA_STATE request of this client waits. */
 ocean_result oc_client_sea_state_fetch(oc_client *c, int timeout_ms, proto_sea *out, double *effective_time);
+
+/* Sends ENTITY (PROTOCOL.md "ENTITY"): op set (a track sample, entering
+ * the entity if new) or remove, each with the entity token, or get (every
+ * entity's newest sample comes back).  It does not wait: the server's
+ * announces come to on_entity, a refusal to on_error.  The fields are
+ * checked as the server's decoder checks them (OCEAN_EINVAL, EFORMAT or
+ * ETYPE, last_error says which); OCEAN_ERATE when the send queue is full.
+ * The daemon takes 120 sets a second from a connection after a burst of
+ * 240: a host stepping at 60 Hz may move two entities every step. */
+ocean_result oc_client_send_entity(oc_client *c, const proto_entity *e);
 
 /* ------------------------------------------------------------------ stats */
 

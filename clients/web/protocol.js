@@ -21,11 +21,11 @@ export const HEADER_SIZE = 32;
 
 export const T = Object.freeze({
     HELLO: 1, SUBSCRIBE: 2, CAMERA: 3, FRAME: 4, TILE: 5, MESH_TOPOLOGY: 6,
-    MESH_VERTICES: 7, QUERY: 8, QUERY_RESULT: 9, SEA_STATE: 10, ERROR: 11, BYE: 12,
+    MESH_VERTICES: 7, QUERY: 8, QUERY_RESULT: 9, SEA_STATE: 10, ERROR: 11, BYE: 12, ENTITY: 13,
 });
-const TYPE_END = 13;
+const TYPE_END = 14;
 export const TYPE_NAMES = ['?', 'HELLO', 'SUBSCRIBE', 'CAMERA', 'FRAME', 'TILE', 'MESH_TOPOLOGY',
-    'MESH_VERTICES', 'QUERY', 'QUERY_RESULT', 'SEA_STATE', 'ERROR', 'BYE'];
+    'MESH_VERTICES', 'QUERY', 'QUERY_RESULT', 'SEA_STATE', 'ERROR', 'BYE', 'ENTITY'];
 
 export const FX = Object.freeze({ HEIGHT: 1, DISPLACEMENT: 2, NORMALS: 4, FOAM: 8, NEAR_FIELD: 16, ALL: 31 });
 export const MESH = Object.freeze({ CONCENTRIC: 0, CHUNKED: 1, PROJECTED: 2, NONE: 3 });
@@ -84,7 +84,7 @@ export const LIMITS = Object.freeze({
 
 const SEA_SIZE = 96, SUBSCRIBE_SIZE = 28, CAMERA_SIZE = 64, TILE_FIXED = 48, FRAME_FIXED = 56;
 const RECORD_HEAD = 8, TOPO_FIXED = 16, VERTS_FIXED = 32, QUERY_FIXED = 24, RESULT_FIXED = 16;
-const SAMPLE_SIZE = 36, SEASTATE_FIXED = 16 + SEA_SIZE, ERROR_FIXED = 8, BYE_FIXED = 4;
+const SAMPLE_SIZE = 36, SEASTATE_FIXED = 16 + SEA_SIZE, ERROR_FIXED = 8, BYE_FIXED = 4, ENTITY_FIXED = 56;
 const CASCADE_FIXED = 56, CASCADE_ENTRY = 320, PLACEMENT_SIZE = 32;
 /* Cascade block flag KEY, and a layout-1 record tag's sample-B bit
  * (PROTOCOL.md "Samples in time"). */
@@ -838,6 +838,34 @@ function dBye(r) {
     return b;
 }
 
+/* ENTITY: op 0 announce and 1 set carry a whole sample and shape; 2
+ * remove and 4 gone an id alone, 3 get nothing (PROTOCOL.md "ENTITY"). */
+function dEntity(r) {
+    r.need(ENTITY_FIXED, 'fixed fields');
+    const o = r.off;
+    const e = { op: r.u8at(o), kind: r.u8at(o + 1) };
+    r.zero(o + 2, 2, 'entity');
+    e.id = r.u32(o + 4);
+    e.t = r.f64(o + 8);
+    e.x = r.f64(o + 16);
+    e.z = r.f64(o + 24);
+    ['altitudeM', 'headingDeg', 'speed', 'lengthM', 'beamM', 'draughtM'].forEach((k, i) => { e[k] = r.f32(o + 32 + 4 * i); });
+    r.off += ENTITY_FIXED;
+    e.token = r.str(255, 'token');
+    r.finish();
+    chkEnum('entity.op', e.op, 5);
+    chkEnum('entity.kind', e.kind, 3);
+    const nums = [e.t, e.x, e.z, e.altitudeM, e.headingDeg, e.speed, e.lengthM, e.beamM, e.draughtM];
+    if (e.op === 0 || e.op === 1) {
+        chkTime('entity.t', e.t);
+        nums.forEach((v, i) => { if (!Number.isFinite(v)) fail(R.EINVAL, `entity field ${i} = ${v}; must be finite`); });
+    } else if (e.kind !== 0 || (e.op === 3 && e.id !== 0) || !nums.every((v) => Object.is(v, 0))) {
+        fail(R.EFORMAT, `entity op ${e.op}: every field but op${e.op === 3 ? '' : ', id and the token'} must be zero bytes`);
+    }
+    if (e.op !== 1 && e.op !== 2 && e.token) fail(R.EFORMAT, `entity op ${e.op} must not carry a token`);
+    return e;
+}
+
 /* Decodes one complete message (one WebSocket binary message: ArrayBuffer
  * or Uint8Array).  Returns {hdr, type, name, body}.  Tile payloads are views
  * into the input (keep it alive while decoding them); everything else is
@@ -860,6 +888,7 @@ export function decode(buf, limits = LIMITS) {
     case T.SEA_STATE: body = dSeaState(r); break;
     case T.ERROR: body = dError(r); break;
     case T.BYE: body = dBye(r); break;
+    case T.ENTITY: body = dEntity(r); break;
     default: fail(R.ETYPE, `message type ${hdr.type} unknown`);
     }
     return { hdr, type: hdr.type, name: TYPE_NAMES[hdr.type], body };

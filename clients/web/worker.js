@@ -43,6 +43,7 @@ let ws = null;
 let seq = 0;
 let hello = null;
 let subscription = null;
+const entities = new Map();   /* ENTITY announces: id -> the newest (PROTOCOL.md "ENTITY") */
 /* The decoders (codec.js) load their WebAssembly modules as they are
  * imported; a static import would hold this module's evaluation, and with
  * it the onmessage handler below, until they have loaded, and a message
@@ -66,7 +67,7 @@ let lastLatency = null;      /* newest camera -> frame round trip, ms (consumed 
 
 const stats = {
     messages: 0, frames: 0, framesDecoded: 0, skipped: 0, bytes: 0, tiles: 0, topologies: 0,
-    decodeErrors: 0, serverErrors: 0, camerasSent: 0, decodeMs: 0, lastError: '',
+    entities: 0, decodeErrors: 0, serverErrors: 0, camerasSent: 0, decodeMs: 0, lastError: '',
 };
 const byteRate = new ByteRate(); /* bytes a second over the last second */
 
@@ -259,6 +260,15 @@ function onMessage(data) {
     case T.BYE:
         post({ kind: 'bye', reason: BYE_REASONS[msg.body.reason] || String(msg.body.reason), message: msg.body.message });
         break;
+    case T.ENTITY: {
+        /* the entities in the sea, newest sample each (drawn by none yet:
+         * counted for the overlay and the tests) */
+        const e = msg.body;
+        if (e.op === 0) entities.set(e.id, e);
+        else if (e.op === 4) entities.delete(e.id);
+        stats.entities = entities.size;
+        break;
+    }
     default:
         break;
     }
