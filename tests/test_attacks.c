@@ -48,6 +48,7 @@
 #include <cmocka.h>
 #include <cJSON.h>
 
+#include "cigi.h"
 #include "ocean.h"
 #include "oceanclient.h"
 #include "srv_client.h"
@@ -401,7 +402,22 @@ static void count_frames(test_ws **w, int n, double seconds, int *got);
 
 /* ---- set-up -------------------------------------------------------------------- */
 
-static void write_conf(const char *path, int max_clients)
+static int cigi_port; /* the daemon's CIGI service (a free UDP port on loopback) */
+
+/* A free UDP port on loopback (bound, read, released). */
+static int free_udp_port(void)
+{
+    int fd = socket(AF_INET, SOCK_DGRAM, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t l = sizeof a;
+    assert_int_equal(bind(fd, (struct sockaddr *)&a, sizeof a), 0);
+    assert_int_equal(getsockname(fd, (struct sockaddr *)&a, &l), 0);
+    close(fd);
+    return ntohs(a.sin_port);
+}
+
+/* The daemon's config at path: CIGI on port cigi (0: off). */
+static void write_conf(const char *path, int max_clients, int cigi)
 {
     FILE *f = fopen(path, "w");
     assert_non_null(f);
@@ -432,8 +448,9 @@ static void write_conf(const char *path, int max_clients)
             "server.max_mesh_vertices = 200000\n"
             "server.near_field_waves = 16\n"
             "server.view_range = 2000\n"
-            "server.workers = 2\n",
-            sanitized ? 32 : 64, max_clients, tmpdir);
+            "server.workers = 2\n"
+            "server.cigi_port = %d\n",
+            sanitized ? 32 : 64, max_clients, tmpdir, cigi);
     fclose(f);
 }
 
@@ -445,7 +462,8 @@ static int group_setup(void **state)
     snprintf(tmpdir, sizeof tmpdir, "/tmp/test_attacks.%d", (int)getpid());
     mkdir(tmpdir, 0755);
     snprintf(conf_path, sizeof conf_path, "%s/oceand.conf", tmpdir);
-    write_conf(conf_path, 400);
+    cigi_port = free_udp_port();
+    write_conf(conf_path, 400, cigi_port);
     char err[512];
     if (srv_settings_load(conf_path, NULL, 0, &settings, err, sizeof err) != OCEAN_OK ||
         srv_daemon_start(&settings, &daemon_, err, sizeof err) != OCEAN_OK) {
@@ -1206,6 +1224,84 @@ static void a_text_and_garbage_flood(void **state)
     window_end("text+garbage-flood");
 }
 
+/* A CIGI 3.3 host frame (IG Control, then `requests` HAT/HOT Extended
+ * Requests over the sea near the origin) into b. */
+static void cigi_frame(proto_buf *b, uint32_t frame, int requests)
+{
+    const cigi_format f = {3, 3, 1};
+    proto_buf_reset(b);
+    cigi_packet ig = {.kind = CIGI_IG_CONTROL};
+    ig.u.ig.ig_mode = 1;
+    ig.u.ig.frame = frame;
+    assert_int_equal(cigi_put(b, &f, &ig), OCEAN_OK);
+    for (int i = 0; i < requests; i++) {
+        cigi_packet q = {.kind = CIGI_HAT_HOT_REQUEST};
+        q.u.hat_req = (cigi_hat_hot_request){.id = (uint32_t)i, .type = CIGI_HAT_HOT_EXTENDED,
+                                             .coord = CIGI_COORD_GEODETIC, .lat = 1e-4 * i, .lon = 0, .alt = 10};
+        assert_int_equal(cigi_put(b, &f, &q), OCEAN_OK);
+    }
+}
+
+/* A CIGI datagram flood (issue 42): for 3 s, about 20 000 datagrams a
+ * second: host frames of 64 Extended Requests each from the allowed host,
+ * the same from an address not in server.cigi_hosts, and truncated junk.  The
+ * service drops what it cannot take (more than 8 host messages waiting:
+ * busy; not allowed: host; bad framing) and counts each by reason; the
+ * witness keeps its frames; afterwards an ordinary host frame is answered. */
+static void a_cigi_flood(void **state)
+{
+    (void)state;
+    srv_hub *h = srv_daemon_hub(daemon_);
+    uint64_t busy0 = stat_of(&h->stats.cigi_drop_busy), host0 = stat_of(&h->stats.cigi_drop_host);
+    uint64_t frame0 = stat_of(&h->stats.cigi_drop_framing), msgs0 = stat_of(&h->stats.cigi_messages);
+    int good = socket(AF_INET, SOCK_DGRAM, 0), stranger = socket(AF_INET, SOCK_DGRAM, 0);
+    struct sockaddr_in from = {.sin_family = AF_INET};
+    inet_pton(AF_INET, "127.0.0.2", &from.sin_addr);
+    assert_int_equal(bind(stranger, (struct sockaddr *)&from, sizeof from), 0);
+    struct sockaddr_in to = {.sin_family = AF_INET, .sin_port = htons((uint16_t)cigi_port)};
+    inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    static const uint8_t junk[5] = {1, 24, 3, 0, 0};
+    window_begin();
+    long sent = 0;
+    double t0 = test_now_s();
+    for (uint32_t k = 1; test_now_s() - t0 < 3.0; k++) {
+        cigi_frame(&b, k, 64);
+        for (int i = 0; i < 16; i++) {
+            sendto(good, proto_buf_data(&b), proto_buf_len(&b), 0, (struct sockaddr *)&to, sizeof to);
+            sendto(stranger, proto_buf_data(&b), proto_buf_len(&b), 0, (struct sockaddr *)&to, sizeof to);
+            sendto(good, junk, sizeof junk, 0, (struct sockaddr *)&to, sizeof to);
+            sent += 3;
+        }
+        usleep(2000); /* about 20 000 datagrams a second, 300 times a 60 Hz host's, without the
+                         sender taking a core of its own from the daemon */
+    }
+    window_end("cigi-flood");
+    uint64_t busy = stat_of(&h->stats.cigi_drop_busy) - busy0, host = stat_of(&h->stats.cigi_drop_host) - host0;
+    uint64_t framing = stat_of(&h->stats.cigi_drop_framing) - frame0, msgs = stat_of(&h->stats.cigi_messages) - msgs0;
+    fprintf(stderr, "  %ld datagrams in 3 s: %llu host frames taken, dropped: %llu busy, %llu not allowed, %llu framing\n",
+            sent, (unsigned long long)msgs, (unsigned long long)busy, (unsigned long long)host,
+            (unsigned long long)framing);
+    assert_true(host > 0 && framing > 0 && busy > 0);
+    /* the service is still there: a frame is answered (a Start of Frame first) */
+    uint8_t buf[8192];
+    int answered = 0;
+    for (double end = test_now_s() + 10; !answered && test_now_s() < end;) {
+        cigi_frame(&b, 999999, 1);
+        sendto(good, proto_buf_data(&b), proto_buf_len(&b), 0, (struct sockaddr *)&to, sizeof to);
+        struct pollfd p = {.fd = good, .events = POLLIN};
+        while (!answered && poll(&p, 1, 500) == 1) {
+            ssize_t n = recv(good, buf, sizeof buf, 0);
+            answered = n >= 24 && buf[0] == 101 && buf[24] == 103;
+        }
+    }
+    assert_true(answered);
+    proto_buf_free(&b);
+    close(good);
+    close(stranger);
+}
+
 /* ?record=1 writes nothing unless server.record_clients allows it; with
  * it, server.record_max_files and server.record_max_bytes bound the run. */
 static void a_recording_quotas(void **state)
@@ -1473,7 +1569,7 @@ static void a_fd_limit(void **state)
         fail();
     }
     snprintf(conf2, sizeof conf2, "%s/fd.conf", tmpdir);
-    write_conf(conf2, 1000);
+    write_conf(conf2, 1000, 0);
     snprintf(errlog, sizeof errlog, "%s/fd.err", tmpdir);
     FILE *out;
     int p;
@@ -1557,6 +1653,7 @@ static void metrics_and_status(void **state) { run_attack(a_metrics_and_status, 
 static void fd_limit(void **state) { run_attack(a_fd_limit, state); }
 static void sea_flood(void **state) { run_attack(a_sea_flood, state); }
 static void admin_guessing(void **state) { run_attack(a_admin_guessing, state); }
+static void cigi_flood(void **state) { run_attack(a_cigi_flood, state); }
 static void admin_global_lockout(void **state) { run_attack(a_admin_global_lockout, state); }
 
 int main(int argc, char **argv)
@@ -1582,6 +1679,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(sea_flood),
         cmocka_unit_test(fd_limit),
         cmocka_unit_test(admin_guessing),
+        cmocka_unit_test(cigi_flood),
         cmocka_unit_test(admin_global_lockout), /* last: it locks SEA_STATE for 10 s for 127.0.0.1 */
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
