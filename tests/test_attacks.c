@@ -404,18 +404,6 @@ static void count_frames(test_ws **w, int n, double seconds, int *got);
 
 static int cigi_port; /* the daemon's CIGI service (a free UDP port on loopback) */
 
-/* A free UDP port on loopback (bound, read, released). */
-static int free_udp_port(void)
-{
-    int fd = socket(AF_INET, SOCK_DGRAM, 0);
-    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
-    socklen_t l = sizeof a;
-    assert_int_equal(bind(fd, (struct sockaddr *)&a, sizeof a), 0);
-    assert_int_equal(getsockname(fd, (struct sockaddr *)&a, &l), 0);
-    close(fd);
-    return ntohs(a.sin_port);
-}
-
 /* The daemon's config at path: CIGI on port cigi (0: off). */
 static void write_conf(const char *path, int max_clients, int cigi)
 {
@@ -462,7 +450,7 @@ static int group_setup(void **state)
     snprintf(tmpdir, sizeof tmpdir, "/tmp/test_attacks.%d", (int)getpid());
     mkdir(tmpdir, 0755);
     snprintf(conf_path, sizeof conf_path, "%s/oceand.conf", tmpdir);
-    cigi_port = free_udp_port();
+    cigi_port = test_free_udp_port();
     write_conf(conf_path, 400, cigi_port);
     char err[512];
     if (srv_settings_load(conf_path, NULL, 0, &settings, err, sizeof err) != OCEAN_OK ||

@@ -26,6 +26,7 @@
 #include <cmocka.h>
 
 #include "cigi.h"
+#include "lib/test_net.h"
 #include "lib/test_pcap.h"
 #include "geo.h"
 #include "oceanclient.h"
@@ -42,23 +43,11 @@ typedef struct fixture {
     oc_client *ws;          /* a WebSocket client asking the same points */
 } fixture;
 
-/* A free UDP port on loopback (bound, read, released). */
-static int free_udp_port(void)
-{
-    int fd = socket(AF_INET, SOCK_DGRAM, 0);
-    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
-    socklen_t l = sizeof a;
-    assert_int_equal(bind(fd, (struct sockaddr *)&a, sizeof a), 0);
-    assert_int_equal(getsockname(fd, (struct sockaddr *)&a, &l), 0);
-    close(fd);
-    return ntohs(a.sin_port);
-}
-
 static int setup(void **state)
 {
     static fixture fx;
     char port[40], err[512];
-    fx.port = free_udp_port();
+    fx.port = test_free_udp_port();
     snprintf(port, sizeof port, "server.cigi_port=%d", fx.port);
     const char *sets[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=1",
                           "server.admit_share=0", port, "server.geo_origin=43.5,-8.25"};

@@ -61,6 +61,9 @@ pid_t test_oceand_up(const char *const *args, int tries, oc_client **c);
  * then reaps it); returns its wait status. */
 int test_oceand_stop(pid_t pid);
 
+/* A free UDP port on loopback (bound, read, released); asserts it finds one. */
+int test_free_udp_port(void);
+
 /* Encodes m into a malloc'ed buffer of *len bytes; asserts it encodes. */
 uint8_t *test_msg_encode(proto_msg *m, size_t *len);
 
