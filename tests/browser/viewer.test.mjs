@@ -50,7 +50,7 @@ const withView = (u) => (viewQuery ? `${u}${u.includes('?') ? '&' : '?'}${viewQu
 
 /* No lattice in the glitter (issue 45: the interpolation of normals drew
  * a diamond grid in the sun's glitter).  The sea of T from 25 m, looking
- * 25 deg down toward the sun, drawn at full resolution; its luma read back
+ * 25 deg down toward the sun, drawn at full resolution (480 x 270); its luma read back
  * onto the mean sea plane over 64 m x 64 m of the glitter (50-114 m ahead),
  * where the mesh's lattices and every mip's samples are lines at fixed
  * frequencies along the world's axes.  At each such frequency and its
@@ -61,6 +61,9 @@ const withView = (u) => (viewQuery ? `${u}${u.includes('?') ? '&' : '?'}${viewQu
 const LATTICE_MAX = 4;
 async function glitterLattice(page, T) {
     const view = { pos: [0, 25, 0], yaw: 0, pitch: -25, fov: 40 };
+    /* 480 x 270 whole pixels: a texel of the nearest mip spans 10-20 of them
+     * there, and a software renderer on a busy host draws them in time */
+    await page.setViewportSize({ width: 480, height: 270 });
     await page.goto(withView(`${base}?scale=1&x=0&y=25&z=0&yaw=0&pitch=-25&fov=40&sun=0,30&t=${T}&overlay=0`), { waitUntil: 'load', timeout: timeoutMs });
     const ok = await waitFor(page, (t) => window.oceanStats && window.oceanStats.framesRendered >= 3 && window.oceanStats.simTime === t &&
         window.oceanStats.block && Math.abs(window.oceanStats.block.camera[1] - 25) < 1, T, timeoutMs);
