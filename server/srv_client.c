@@ -5,6 +5,9 @@
  */
 #include "srv_client.h"
 
+#include "srv_convert.h"
+#include "srv_entity.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -144,6 +147,23 @@ void srv_client_send_bye(srv_client *c, int reason, const char *why)
     srv_client_queue(c, m);
 }
 
+void srv_client_queue_entities(srv_client *c, int max, double now)
+{
+    ocean_entity_desc *d = malloc(sizeof *d * (size_t)max);
+    ocean_track_sample *smp = malloc(sizeof *smp * (size_t)max);
+    int n = d && smp ? srv_entities_snapshot(c->hub->entities, d, smp, max) : 0;
+    if (!d || !smp) srv_client_send_error(c, NULL, 0, OCEAN_ENOMEM, "out of memory for the list of entities");
+    for (int i = 0; i < n; i++) {
+        proto_msg m;
+        srv_entity_msg(PROTO_ENTITY_ANNOUNCE, &d[i], &smp[i], now, &m);
+        srv_msg *q = srv_msg_new();
+        if (q && proto_encode(&q->buf, &m, NULL, 0) == OCEAN_OK) srv_client_queue(c, q);
+        else srv_msg_free(q);
+    }
+    free(d);
+    free(smp);
+}
+
 void srv_client_send_hello(srv_client *c)
 {
     srv_hub *h = c->hub;
@@ -180,13 +200,15 @@ void srv_client_send_hello(srv_client *c)
         q = NULL;
     }
     if (q) {
-        /* HELLO, then the pending changes, before any later announce */
+        /* HELLO, then the pending changes and the entities in force, before
+         * any later announce (a set's broadcast waits for this hold) */
         srv_client_queue(c, q);
         for (int i = 0; i < h->n_sea_pending; i++) {
             srv_msg *a = srv_hub_sea_announce(&h->sea_pending[i].sea, h->sea_pending[i].effective_time,
                                           m.hdr.sim_time);
             if (a) srv_client_queue(c, a);
         }
+        srv_client_queue_entities(c, s->srv.max_entities, m.hdr.sim_time);
         c->hello_sent = 1;
     }
     pthread_mutex_unlock(&h->lock);

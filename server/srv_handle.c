@@ -588,37 +588,11 @@ static void entity_remove(const srv_in *in, uint32_t id)
     entity_announce(in, PROTO_ENTITY_GONE, &d, NULL);
 }
 
-/* Every entity's shape and newest sample, to the asker alone. */
-static void entity_get(const srv_in *in)
-{
-    srv_hub *h = in->h;
-    int max = in->cfg->max_entities;
-    ocean_entity_desc *d = malloc(sizeof *d * (size_t)max);
-    ocean_track_sample *smp = malloc(sizeof *smp * (size_t)max);
-    if (!d || !smp) {
-        free(d);
-        free(smp);
-        refuse(in, OCEAN_ENOMEM, "ENTITY get: out of memory for the entity list");
-        return;
-    }
-    int n = srv_entities_snapshot(h->entities, d, smp, max);
-    double now = srv_hub_sim_time(h);
-    for (int i = 0; i < n; i++) {
-        proto_msg m;
-        srv_entity_msg(PROTO_ENTITY_ANNOUNCE, &d[i], &smp[i], now, &m);
-        srv_msg *q = srv_msg_new();
-        if (q && proto_encode(&q->buf, &m, NULL, 0) == OCEAN_OK) srv_client_queue(in->c, q);
-        else srv_msg_free(q);
-    }
-    free(d);
-    free(smp);
-}
-
 static void on_entity(const srv_in *in)
 {
     const proto_entity *e = &in->m->u.entity;
-    if (e->op == PROTO_ENTITY_GET) {
-        entity_get(in);
+    if (e->op == PROTO_ENTITY_GET) { /* every entity's newest sample, to the asker alone */
+        srv_client_queue_entities(in->c, in->cfg->max_entities, srv_hub_sim_time(in->h));
         return;
     }
     if (e->op != PROTO_ENTITY_SET && e->op != PROTO_ENTITY_REMOVE) {

@@ -2989,7 +2989,8 @@ static void entity_at(uint32_t id, double x)
 }
 
 /* ENTITY over ocean.v1: a set with the entity token enters a ship and
- * is announced to every client; get answers the asker with every entity;
+ * is announced to every client; get answers the asker with every entity,
+ * and a client joining later gets them after its HELLO;
  * remove takes it out and says gone to all.  Each hostile set is refused
  * with its reason and changes nothing: a wrong token, NaN, a speed out of
  * range, a teleport, a time far from the clock, a change of kind, an
@@ -3015,6 +3016,13 @@ static void entity_messages(void **state)
     entity_expect(&b, PROTO_ENTITY_ANNOUNCE, 7, &m);
     assert_true(m.u.entity.x == 100);
     proto_msg_free(&m);
+    /* a client joining later learns it after its HELLO, unasked */
+    test_ws late;
+    assert_int_equal(test_ws_connect(&late, port, "/", PROTO_SUBPROTOCOL), 0);
+    entity_expect(&late, PROTO_ENTITY_ANNOUNCE, 7, &m);
+    assert_true(m.u.entity.x == 100 && m.u.entity.t == t0);
+    proto_msg_free(&m);
+    test_ws_close(&late);
 
     entity_send(&a, PROTO_ENTITY_SET, 7, 0, t0 + 1, 105, 5, "guess");
     error_expect(&a, OCEAN_EAUTH, "wrong entity token");
