@@ -25,7 +25,7 @@ EPOCH=$(date +%s)
 # so a busy host does not refuse the layout-0 commands judged here
 "$OD" --config config/oceand.conf --port "$port" --set server.admin_token=$TOKEN --set server.epoch="$EPOCH" \
     --set server.admit_share=0 --set server.cigi_port="$cport" --set server.geo_origin=43.5,-8.25 \
-    >"$tmp/oceand.log" 2>&1 &
+    --set server.entity_token=cli-entity >"$tmp/oceand.log" 2>&1 &
 pid=$!
 pid2=
 cleanup() { kill "$pid" $pid2 2>/dev/null; wait "$pid" $pid2 2>/dev/null; rm -rf "$tmp"; }
@@ -70,7 +70,7 @@ grep -q -- "OCEAN_TIME_MAX" "$tmp/err" || fail "message does not name OCEAN_TIME
 "$OC" watch "$URL" --mesh-codec f16 2>"$tmp/err"; [[ $? -eq 2 ]] || fail "--mesh-codec f16 accepted"
 grep -q -- "--mesh-codec" "$tmp/err" || fail "message does not name --mesh-codec: $(cat "$tmp/err")"
 "$OC" frobnicate 2>/dev/null; [[ $? -eq 2 ]] || fail "unknown command accepted"
-for c in watch query record replay export load sea; do
+for c in watch query record replay export load sea entity; do
     "$OC" $c --help >/dev/null || fail "$c --help"
 done
 printf 't,x,y,z\n0,1,2,3\n' >"$tmp/bad.csv"
@@ -212,6 +212,26 @@ python3 -c "import json; a=json.load(open('$tmp/load-ti.json')); b=json.load(ope
 echo "== query ($SECONDS s)"
 "$OC" query "$URL" --points "0,0;10.5,-3" --json >"$tmp/q.json" 2>"$tmp/q.err" || fail "query: $(cat "$tmp/q.err")"
 json "$tmp/q.json" "len(d['points']) == 2 and all(abs(p['height']) < 50 and abs(p['normal'][1]) > 0.5 for p in d['points'])"
+
+echo "== entity ($SECONDS s)"
+"$OC" entity "$URL" >"$tmp/ent0.json" || fail "entity exited $?"
+json "$tmp/ent0.json" "d == []"
+"$OC" entity "$URL" --set --token cli-entity --id 5 --kind ship --x 10 --z 20 --heading 90 --speed 4 --length 80 \
+    --beam 12 --draught 4 >"$tmp/ent1.json" || fail "entity --set exited $?"
+json "$tmp/ent1.json" "len(d) == 1 and d[0]['id'] == 5 and d[0]['kind'] == 'ship' and d[0]['x'] == 10 and d[0]['speed'] == 4 and d[0]['t'] > 0"
+"$OC" entity "$URL" >"$tmp/ent2.json" || fail "entity (list) exited $?"
+json "$tmp/ent2.json" "[e['id'] for e in d] == [5]"
+# what the table refuses comes back as the server's reason, and nothing is printed
+"$OC" entity "$URL" --set --token cli-entity --id 5 --kind ship --x 5000 --z 20 --length 80 --beam 12 --draught 4 \
+    >"$tmp/ent.out" 2>"$tmp/ent.err" && fail "a teleport was entered"
+grep -q "teleport" "$tmp/ent.err" && [[ ! -s $tmp/ent.out ]] || fail "teleport: $(cat "$tmp/ent.err" "$tmp/ent.out")"
+"$OC" entity "$URL" --x 4 2>"$tmp/ent.err"; [[ $? -eq 2 ]] || fail "entity --x without --set accepted"
+"$OC" entity "$URL" --set --token cli-entity --id 6 --x 1 --z 2 2>"$tmp/ent.err"; [[ $? -eq 2 ]] ||
+    fail "entity --set without --kind and --length accepted"
+"$OC" entity "$URL" --remove --token cli-entity --id 5 >"$tmp/ent3.json" || fail "entity --remove exited $?"
+json "$tmp/ent3.json" "d == []"
+"$OC" entity "$URL" --remove --token cli-entity --id 5 2>"$tmp/ent.err" && fail "removing an unknown id succeeded"
+grep -q "no entity 5" "$tmp/ent.err" || fail "remove of an unknown id: $(cat "$tmp/ent.err")"
 
 echo "== sea ($SECONDS s)"
 "$OC" sea "$URL" >"$tmp/sea.json" || fail "sea exited $?"

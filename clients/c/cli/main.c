@@ -31,6 +31,8 @@ static void usage(FILE *f)
             "  load URL --clients N --seconds S --rate HZ [--json]\n"
             "                                           many viewers from one process\n"
             "  sea URL [--set --token T --wind U ...]   show or set the sea state\n"
+            "  entity URL [--set|--remove --token T --id N ...]\n"
+            "                                           list, place or remove ships and aircraft\n"
             "  fidelity URL --camera-height H --speed V [--frames N] [--json]\n"
             "                                           delivered slope variance, foam, e_error, e_total\n"
             "\n"
@@ -63,7 +65,7 @@ int main(int argc, char **argv)
         int (*fn)(int, char **);
     } cmds[] = {
         {"watch", cmd_watch},   {"query", cmd_query}, {"record", cmd_record}, {"replay", cmd_replay},
-        {"export", cmd_export}, {"load", cmd_load},   {"sea", cmd_sea},
+        {"export", cmd_export}, {"load", cmd_load},   {"sea", cmd_sea},       {"entity", cmd_entity},
         {"fidelity", cmd_fidelity},
     };
     for (size_t i = 0; i < sizeof cmds / sizeof cmds[0]; i++)

@@ -150,6 +150,7 @@ int cmd_replay(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 int cmd_load(int argc, char **argv);
 int cmd_sea(int argc, char **argv);
+int cmd_entity(int argc, char **argv);
 int cmd_fidelity(int argc, char **argv);
 
 #endif
