@@ -219,8 +219,6 @@ json "$tmp/ent0.json" "d == []"
 "$OC" entity "$URL" --set --token cli-entity --id 5 --kind ship --x 10 --z 20 --heading 90 --speed 4 --length 80 \
     --beam 12 --draught 4 >"$tmp/ent1.json" || fail "entity --set exited $?"
 json "$tmp/ent1.json" "len(d) == 1 and d[0]['id'] == 5 and d[0]['kind'] == 'ship' and d[0]['x'] == 10 and d[0]['speed'] == 4 and d[0]['t'] > 0"
-"$OC" entity "$URL" >"$tmp/ent2.json" || fail "entity (list) exited $?"
-json "$tmp/ent2.json" "[e['id'] for e in d] == [5]"
 # what the table refuses comes back as the server's reason, and nothing is printed
 "$OC" entity "$URL" --set --token cli-entity --id 5 --kind ship --x 5000 --z 20 --length 80 --beam 12 --draught 4 \
     >"$tmp/ent.out" 2>"$tmp/ent.err" && fail "a teleport was entered"
