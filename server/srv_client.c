@@ -147,12 +147,16 @@ void srv_client_send_bye(srv_client *c, int reason, const char *why)
     srv_client_queue(c, m);
 }
 
-void srv_client_queue_entities(srv_client *c, int max, double now)
+ocean_result srv_client_queue_entities(srv_client *c, int max, double now)
 {
     ocean_entity_desc *d = malloc(sizeof *d * (size_t)max);
     ocean_track_sample *smp = malloc(sizeof *smp * (size_t)max);
-    int n = d && smp ? srv_entities_snapshot(c->hub->entities, d, smp, max) : 0;
-    if (!d || !smp) srv_client_send_error(c, NULL, 0, OCEAN_ENOMEM, "out of memory for the list of entities");
+    if (!d || !smp) {
+        free(d);
+        free(smp);
+        return OCEAN_ENOMEM;
+    }
+    int n = srv_entities_snapshot(c->hub->entities, d, smp, max);
     for (int i = 0; i < n; i++) {
         proto_msg m;
         srv_entity_msg(PROTO_ENTITY_ANNOUNCE, &d[i], &smp[i], now, &m);
@@ -162,6 +166,7 @@ void srv_client_queue_entities(srv_client *c, int max, double now)
     }
     free(d);
     free(smp);
+    return OCEAN_OK;
 }
 
 void srv_client_send_hello(srv_client *c)
@@ -208,7 +213,9 @@ void srv_client_send_hello(srv_client *c)
                                           m.hdr.sim_time);
             if (a) srv_client_queue(c, a);
         }
-        srv_client_queue_entities(c, s->srv.max_entities, m.hdr.sim_time);
+        if (srv_client_queue_entities(c, s->srv.max_entities, m.hdr.sim_time) != OCEAN_OK)
+            fprintf(stderr, "oceand: client %u: out of memory for the list of entities (it may ask again: ENTITY "
+                    "get)\n", c->id);
         c->hello_sent = 1;
     }
     pthread_mutex_unlock(&h->lock);

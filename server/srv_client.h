@@ -129,8 +129,9 @@ void srv_client_send_sea_timeline(srv_client *c);
 /* Queues to c an ENTITY announce of each entity in the hub's table (at
  * most max), stamped sim time now: what a client joining, or asking with
  * ENTITY get, learns of the entities in force.  Takes only the table's
- * lock (callers may hold hub.lock). */
-void srv_client_queue_entities(srv_client *c, int max, double now);
+ * lock and sends no ERROR (callers may hold hub.lock).  OCEAN_ENOMEM:
+ * nothing queued. */
+ocean_result srv_client_queue_entities(srv_client *c, int max, double now);
 
 
 #endif

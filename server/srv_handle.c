@@ -568,7 +568,9 @@ static void entity_set(const srv_in *in, const proto_entity *e)
         refuse(in, r, why);
         return;
     }
-    if (fresh)
+    /* logged when verbose: a token holder may enter and remove 120 a second,
+     * and no client may flood the log */
+    if (fresh && in->cfg->verbose)
         fprintf(stderr, "oceand: entity %u (kind %d, %g m) entered by client %u (%s) at t = %.3f s\n", d.id,
                 (int)d.kind, d.length_m, in->c->id, in->s->peer[0] ? in->s->peer : "?", smp.t);
     entity_announce(in, PROTO_ENTITY_ANNOUNCE, &d, &smp);
@@ -582,8 +584,9 @@ static void entity_remove(const srv_in *in, uint32_t id)
         refuse(in, OCEAN_ENOTFOUND, why);
         return;
     }
-    fprintf(stderr, "oceand: entity %u removed by client %u (%s)\n", id, in->c->id,
-            in->s->peer[0] ? in->s->peer : "?");
+    if (in->cfg->verbose)
+        fprintf(stderr, "oceand: entity %u removed by client %u (%s)\n", id, in->c->id,
+                in->s->peer[0] ? in->s->peer : "?");
     ocean_entity_desc d = {.id = id};
     entity_announce(in, PROTO_ENTITY_GONE, &d, NULL);
 }
@@ -592,7 +595,8 @@ static void on_entity(const srv_in *in)
 {
     const proto_entity *e = &in->m->u.entity;
     if (e->op == PROTO_ENTITY_GET) { /* every entity's newest sample, to the asker alone */
-        srv_client_queue_entities(in->c, in->cfg->max_entities, srv_hub_sim_time(in->h));
+        if (srv_client_queue_entities(in->c, in->cfg->max_entities, srv_hub_sim_time(in->h)) != OCEAN_OK)
+            refuse(in, OCEAN_ENOMEM, "ENTITY get: out of memory for the list of entities");
         return;
     }
     if (e->op != PROTO_ENTITY_SET && e->op != PROTO_ENTITY_REMOVE) {
