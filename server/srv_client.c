@@ -160,9 +160,8 @@ ocean_result srv_client_queue_entities(srv_client *c, int max, double now)
     for (int i = 0; i < n; i++) {
         proto_msg m;
         srv_entity_msg(PROTO_ENTITY_ANNOUNCE, &d[i], &smp[i], now, &m);
-        srv_msg *q = srv_msg_new();
-        if (q && proto_encode(&q->buf, &m, NULL, 0) == OCEAN_OK) srv_client_queue(c, q);
-        else srv_msg_free(q);
+        srv_msg *q = srv_msg_encode(&m);
+        if (q) srv_client_queue(c, q);
     }
     free(d);
     free(smp);

@@ -89,18 +89,7 @@ int srv_entities_count(srv_entities *e)
 ocean_result srv_entities_find(srv_entities *e, uint32_t id, ocean_entity_desc *out)
 {
     pthread_mutex_lock(&e->lock);
-    ocean_result r = OCEAN_ENOTFOUND;
-    /* in increasing id: a binary search */
-    int lo = 0, hi = ocean_entities_count(e->t);
-    while (lo < hi) {
-        int mid = lo + (hi - lo) / 2;
-        ocean_entity_desc d;
-        ocean_entities_get(e->t, mid, &d);
-        if (d.id < id) lo = mid + 1;
-        else hi = mid;
-    }
-    if (lo < ocean_entities_count(e->t) && ocean_entities_get(e->t, lo, out) == OCEAN_OK && out->id == id)
-        r = OCEAN_OK;
+    ocean_result r = ocean_entities_desc(e->t, id, out);
     pthread_mutex_unlock(&e->lock);
     return r;
 }

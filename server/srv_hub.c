@@ -175,13 +175,8 @@ void srv_hub_broadcast(srv_hub *h, const proto_msg *m)
 {
     for (srv_client *k = h->clients; k; k = k->next) {
         if (k->closed || !k->hello_sent) continue;
-        srv_msg *q = srv_msg_new();
-        if (!q) continue;
-        if (proto_encode(&q->buf, m, NULL, 0) != OCEAN_OK) {
-            srv_msg_free(q);
-            continue;
-        }
-        srv_client_queue(k, q);
+        srv_msg *q = srv_msg_encode(m);
+        if (q) srv_client_queue(k, q);
     }
 }
 

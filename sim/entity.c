@@ -287,6 +287,15 @@ ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_tra
 
 int ocean_entities_count(const ocean_entities *e) { return e ? e->n : 0; }
 
+ocean_result ocean_entities_desc(const ocean_entities *e, uint32_t id, ocean_entity_desc *out)
+{
+    if (!e || !out) return OCEAN_EINVAL;
+    int found, i = find(e, id, &found);
+    if (!found) return OCEAN_ENOTFOUND;
+    *out = e->by_id[i]->d;
+    return OCEAN_OK;
+}
+
 ocean_result ocean_entities_get(const ocean_entities *e, int i, ocean_entity_desc *out)
 {
     if (!e || !out || i < 0 || i >= e->n) return OCEAN_EINVAL;

@@ -109,6 +109,8 @@ ocean_result ocean_entities_state(const ocean_entities *e, uint32_t id, double t
 ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_track_sample *out);
 
 int ocean_entities_count(const ocean_entities *e);
+/* Entity id's desc.  OCEAN_ENOTFOUND for an unknown id. */
+ocean_result ocean_entities_desc(const ocean_entities *e, uint32_t id, ocean_entity_desc *out);
 /* The desc of the i-th entity (0 <= i < count), in increasing id. */
 ocean_result ocean_entities_get(const ocean_entities *e, int i, ocean_entity_desc *out);
 
