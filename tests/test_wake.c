@@ -30,6 +30,7 @@
 #include <cmocka.h>
 
 #include "wake.h"
+#include "wake_field.h"
 
 #define G 9.81
 
@@ -127,7 +128,7 @@ static double measured_wavelength(const wake_grid *g, double lambda)
 
 static void check(double U, double L, double h, double angle_tol)
 {
-    wake_params p = {U, L, h};
+    wake_params p = {U, L, h, 0};
     wake_grid g, far;
     char msg[200];
     assert_int_equal(wake_steady(&p, &g, msg, sizeof msg), OCEAN_OK);
@@ -167,8 +168,10 @@ static void finite_depth_widens(void **state)
 static void bad_parameters(void **state)
 {
     (void)state;
-    const wake_params bad[] = {{0, 50, INFINITY}, {NAN, 50, INFINITY}, {WAKE_SPEED_MAX * 2, 50, INFINITY},
-                               {5, 0.1, INFINITY}, {5, NAN, INFINITY}, {5, 50, 0}, {5, 50, NAN}, {5, 50, -3}};
+    const wake_params bad[] = {{0, 50, INFINITY, 0},  {NAN, 50, INFINITY, 0}, {WAKE_SPEED_MAX * 2, 50, INFINITY, 0},
+                               {5, 0.1, INFINITY, 0}, {5, NAN, INFINITY, 0}, {5, 50, 0, 0},
+                               {5, 50, NAN, 0},       {5, 50, -3, 0},        {5, 50, INFINITY, NAN},
+                               {5, 50, INFINITY, 0.01}};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         wake_grid g;
         char msg[200] = "";
@@ -176,9 +179,200 @@ static void bad_parameters(void **state)
         assert_null(g.heights);
         assert_non_null(strstr(msg, "wake"));
     }
-    wake_params fast = {12, 50, 10};   /* Fh 1.2: no transverse waves */
+    wake_params fast = {12, 50, 10, 0};   /* Fh 1.2: no transverse waves */
     assert_true(wake_transverse_wavelength(&fast) == 0);
     wake_grid_free(NULL);
+}
+
+/* A deterministic spread of points over the wedge of pattern w. */
+static void wedge_points(const wake_pattern *w, double *xz, int n)
+{
+    double lam = wake_pattern_wavelength(w);
+    uint32_t r = 12345;
+    for (int i = 0; i < n; i++) {
+        r = r * 1664525u + 1013904223u;
+        double x = (0.5 + 19.0 * (r >> 8) / 16777216.0) * lam;
+        r = r * 1664525u + 1013904223u;
+        double z = x * tan(22.0 * M_PI / 180) * (2.0 * (r >> 8) / 16777216.0 - 1);
+        xz[2 * i] = x, xz[2 * i + 1] = z;
+    }
+}
+
+/* The pattern read bicubically stays within its stated bound of the
+ * exact series at points off the grid, and the bound is small beside the
+ * waves; its slopes are the heights' derivatives; under the hull and
+ * beyond the reach it reads 0. */
+static void pattern_reads_the_series(void **state)
+{
+    (void)state;
+    const wake_params cases[] = {{10, 100, INFINITY, 0}, {6, 30, 5.0, 5}};
+    for (size_t c = 0; c < 2; c++) {
+        wake_pattern *w = NULL;
+        char msg[200];
+        assert_int_equal(wake_pattern_create(&cases[c], &w, msg, sizeof msg), OCEAN_OK);
+        enum { N = 48 };
+        double xz[2 * N], exact[N], top = 0, worst = 0, local = 0;
+        wedge_points(w, xz, N);
+        assert_int_equal(wake_pattern_exact(w, xz, N, exact), OCEAN_OK);
+        for (int i = 0; i < N; i++) {
+            double hx, hz, h = wake_pattern_read(w, xz[2 * i], xz[2 * i + 1], &hx, &hz);
+            top = fmax(top, fabs(exact[i]));
+            worst = fmax(worst, fabs(h - exact[i]));
+            assert_true(fabs(h - exact[i]) <= wake_pattern_bound_at(w, xz[2 * i], xz[2 * i + 1]));
+            local = fmax(local, wake_pattern_bound_at(w, xz[2 * i], xz[2 * i + 1]));
+            /* central differences: their own error is (k e)^2 / 6 of the slope */
+            double e = 1e-3 * wake_pattern_wavelength(w), d;
+            double xp = wake_pattern_read(w, xz[2 * i] + e, xz[2 * i + 1], &d, &d);
+            double xm = wake_pattern_read(w, xz[2 * i] - e, xz[2 * i + 1], &d, &d);
+            double zp = wake_pattern_read(w, xz[2 * i], xz[2 * i + 1] + e, &d, &d);
+            double zm = wake_pattern_read(w, xz[2 * i], xz[2 * i + 1] - e, &d, &d);
+            assert_true(fabs((xp - xm) / (2 * e) - hx) <= 1e-3 * fabs(hx) + 1e-6);
+            assert_true(fabs((zp - zm) / (2 * e) - hz) <= 1e-3 * fabs(hz) + 1e-6);
+        }
+        printf("pattern U %g L %g depth %g: |read - exact| at most %.2e m, bound there at most %.2e m "
+               "(%.2e m anywhere), waves to %.3f m\n",
+               cases[c].speed, cases[c].length, cases[c].depth, worst, local, wake_pattern_bound(w), top);
+        assert_true(local <= wake_pattern_bound(w));
+        assert_true(local < 0.05 * top);
+        assert_true(top > 0.05);
+        double hx, hz;
+        assert_true(wake_pattern_read(w, 0, 0, &hx, &hz) == 0);
+        double far = wake_pattern_reach(w) * 1.01;
+        assert_true(wake_pattern_read(w, far, 0, &hx, &hz) == 0 && hx == 0 && hz == 0);
+        assert_true(wake_pattern_read(w, 0, -far, &hx, &hz) == 0);
+        wake_pattern_destroy(w);
+    }
+    wake_pattern_destroy(NULL);
+    wake_pattern *w = (wake_pattern *)&w;
+    const wake_params bad = {5, 50, INFINITY, 80};   /* wider than long */
+    char msg[200] = "";
+    assert_int_equal(wake_pattern_create(&bad, &w, msg, sizeof msg), OCEAN_EINVAL);
+    assert_null(w);
+    assert_non_null(strstr(msg, "beam"));
+}
+
+/* Builds every pattern the ships need for the points into f. */
+static void build_missing(wake_field *f, const ocean_entity_desc *d, const ocean_entity_state *st, int n,
+                          double depth, const double *xz, size_t np)
+{
+    wake_params need[8];
+    int m = wake_field_missing(f, d, st, n, depth, xz, np, need, 8);
+    assert_true(m <= 8);
+    for (int i = 0; i < m; i++) {
+        wake_pattern *p;
+        char msg[200];
+        assert_int_equal(wake_pattern_create(&need[i], &p, msg, sizeof msg), OCEAN_OK);
+        wake_field_insert(f, p);
+    }
+    assert_int_equal(wake_field_missing(f, d, st, n, depth, xz, np, NULL, 0), 0);
+}
+
+static ocean_entity_state ship_at(double x, double z, double heading_deg, double speed)
+{
+    double a = heading_deg * M_PI / 180;
+    ocean_entity_state s = {x, z, 0, heading_deg, speed, speed * cos(a), speed * sin(a), 0, 0};
+    return s;
+}
+
+/* Two ships, the second steaming in the first's wake, over finite and
+ * deep water: the summed wakes at points around both stay within their
+ * bound of the exact sum of the same waves; the bound is small beside
+ * them; a ship's wake is its pattern laid along its heading and scaled by
+ * its draught; a point beyond every reach reads 0 and needs no pattern. */
+static void field_sums_the_ships(void **state)
+{
+    (void)state;
+    const ocean_entity_desc d[2] = {{1, OCEAN_ENTITY_SHIP, 80, 12, 4}, {2, OCEAN_ENTITY_SHIP, 40, 7, 2}};
+    const double depths[2] = {INFINITY, 10};   /* depth Froude numbers 0.84, 0.62 */
+    for (int c = 0; c < 2; c++) {
+        double depth = depths[c];
+        /* heading 30 deg; the second 300 m astern of the first, 40 m off its track */
+        ocean_entity_state st[2] = {ship_at(1000, -500, 30, 8.3), ship_at(0, 0, 30, 6.1)};
+        st[1].x = st[0].x - 300 * cos(M_PI / 6) - 40 * sin(M_PI / 6);
+        st[1].z = st[0].z - 300 * sin(M_PI / 6) + 40 * cos(M_PI / 6);
+        enum { N = 40 };
+        double xz[2 * N], exact[N], top = 0, worst = 0, bound = 0;
+        for (int i = 0; i < N; i++) {   /* along the first's track and across the second's hull */
+            double back = 20 + 15 * i, off = (i % 5 - 2) * 0.1 * back;
+            xz[2 * i] = st[0].x - back * cos(M_PI / 6) - off * sin(M_PI / 6);
+            xz[2 * i + 1] = st[0].z - back * sin(M_PI / 6) + off * cos(M_PI / 6);
+        }
+        wake_field *f;
+        assert_int_equal(wake_field_create(8, &f), OCEAN_OK);
+        wake_sample w[N];
+        w[0].height = 42;
+        assert_int_equal(wake_field_sample(f, d, st, 2, depth, xz, N, w), OCEAN_ESTATE);
+        assert_true(w[0].height == 42);
+        build_missing(f, d, st, 2, depth, xz, N);
+        assert_int_equal(wake_field_count(f), 4);
+        assert_int_equal(wake_field_sample(f, d, st, 2, depth, xz, N, w), OCEAN_OK);
+        assert_int_equal(wake_field_exact(f, d, st, 2, depth, xz, N, exact), OCEAN_OK);
+        for (int i = 0; i < N; i++) {
+            assert_true(fabs(w[i].height - exact[i]) <= w[i].error);
+            top = fmax(top, fabs(exact[i]));
+            worst = fmax(worst, fabs(w[i].height - exact[i]));
+            bound = fmax(bound, w[i].error);
+        }
+        printf("two ships, depth %g: wakes to %.3f m, |sum - exact| at most %.2e m, bound at most %.2e m\n", depth,
+               top, worst, bound);
+        assert_true(top > 0.1 && bound < 0.1 * top);
+        /* far from both: nothing, and no pattern asked for */
+        double far[2] = {-9000, 9000};
+        wake_sample z;
+        assert_int_equal(wake_field_missing(f, d, st, 2, depth, far, 1, NULL, 0), 0);
+        assert_int_equal(wake_field_sample(f, d, st, 2, depth, far, 1, &z), OCEAN_OK);
+        assert_true(z.height == 0 && z.error == 0);
+        wake_field_destroy(f);
+    }
+}
+
+/* A ship on a rung of the speed ladder reads that rung's pattern alone,
+ * laid along its heading and scaled by its draught; across a rung the
+ * heights are continuous; a moving wake's rate of change is what moving
+ * the ship gives; a slow ship, a stopped one and a rotorcraft make none. */
+static void field_lays_the_pattern(void **state)
+{
+    (void)state;
+    const ocean_entity_desc d = {7, OCEAN_ENTITY_SHIP, 60, 0, 3};
+    double rung = exp2(53.0 / WAKE_RUNGS_PER_OCTAVE);   /* 9.92 m/s */
+    ocean_entity_state st = ship_at(0, 0, 90, rung);      /* steaming toward +z */
+    double pt[2] = {-25, -180};                            /* behind it, 25 m to its starboard */
+    wake_field *f;
+    assert_int_equal(wake_field_create(4, &f), OCEAN_OK);
+    build_missing(f, &d, &st, 1, INFINITY, pt, 1);
+    wake_params p = {rung, 60, INFINITY, 0};
+    wake_pattern *alone;
+    assert_int_equal(wake_pattern_create(&p, &alone, NULL, 0), OCEAN_OK);
+    double sx, sz, want = 3 * wake_pattern_read(alone, 180, 25, &sx, &sz);
+    wake_pattern_destroy(alone);
+    wake_sample w, lo, hi;
+    assert_int_equal(wake_field_sample(f, &d, &st, 1, INFINITY, pt, 1, &w), OCEAN_OK);
+    assert_true(fabs(w.height - want) < 1e-9 && fabs(want) > 0.01);
+    /* just below and above the rung */
+    ocean_entity_state a = ship_at(0, 0, 90, rung * (1 - 1e-7)), b = ship_at(0, 0, 90, rung * (1 + 1e-7));
+    build_missing(f, &d, &a, 1, INFINITY, pt, 1);
+    build_missing(f, &d, &b, 1, INFINITY, pt, 1);
+    assert_int_equal(wake_field_sample(f, &d, &a, 1, INFINITY, pt, 1, &lo), OCEAN_OK);
+    assert_int_equal(wake_field_sample(f, &d, &b, 1, INFINITY, pt, 1, &hi), OCEAN_OK);
+    assert_true(fabs(lo.height - w.height) < 1e-5 && fabs(hi.height - w.height) < 1e-5);
+    /* 1 ms later the ship is 1 cm on */
+    ocean_entity_state later = st;
+    later.z += rung * 1e-3;
+    wake_sample l;
+    assert_int_equal(wake_field_sample(f, &d, &later, 1, INFINITY, pt, 1, &l), OCEAN_OK);
+    assert_true(fabs((l.height - w.height) / 1e-3 - w.dhdt) < 1e-3 * fabs(w.dhdt) + 1e-5);
+    /* no wake */
+    ocean_entity_desc rotor = {8, OCEAN_ENTITY_ROTORCRAFT, 15, 0, 0};
+    ocean_entity_state slow = ship_at(0, 0, 90, 0.09 * sqrt(9.81 * 60)), stopped = ship_at(0, 0, 90, 0);
+    const ocean_entity_desc dd[3] = {d, d, rotor};
+    const ocean_entity_state ss[3] = {slow, stopped, st};
+    wake_sample none;
+    assert_int_equal(wake_field_sample(f, dd, ss, 3, INFINITY, pt, 1, &none), OCEAN_OK);
+    assert_true(none.height == 0 && none.error == 0);
+    double bad[2] = {NAN, 0};
+    assert_int_equal(wake_field_sample(f, &d, &st, 1, INFINITY, bad, 1, &none), OCEAN_EINVAL);
+    wake_field_destroy(f);
+    wake_field_destroy(NULL);
 }
 
 int main(void)
@@ -187,6 +381,9 @@ int main(void)
         cmocka_unit_test(deep_kelvin),
         cmocka_unit_test(finite_depth_widens),
         cmocka_unit_test(bad_parameters),
+        cmocka_unit_test(pattern_reads_the_series),
+        cmocka_unit_test(field_sums_the_ships),
+        cmocka_unit_test(field_lays_the_pattern),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
