@@ -104,3 +104,14 @@ int srv_entities_snapshot(srv_entities *e, ocean_entity_desc *d, ocean_track_sam
     pthread_mutex_unlock(&e->lock);
     return n;
 }
+
+int srv_entities_at(srv_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max)
+{
+    pthread_mutex_lock(&e->lock);
+    int n = 0, count = ocean_entities_count(e->t);
+    for (int i = 0; i < count && n < max; i++)
+        if (ocean_entities_get(e->t, i, &d[n]) == OCEAN_OK && ocean_entities_state(e->t, d[n].id, t, &s[n]) == OCEAN_OK)
+            n++;
+    pthread_mutex_unlock(&e->lock);
+    return n;
+}

@@ -52,5 +52,8 @@ ocean_result srv_entities_find(srv_entities *e, uint32_t id, ocean_entity_desc *
 /* Every entity with a sample (at most max): shape and newest sample, in
  * increasing id, copied under one hold.  Returns how many. */
 int srv_entities_snapshot(srv_entities *e, ocean_entity_desc *d, ocean_track_sample *s, int max);
+/* Every entity in the sea at sim time t (at most max): shape and state
+ * at t, in increasing id, copied under one hold.  Returns how many. */
+int srv_entities_at(srv_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max);
 
 #endif

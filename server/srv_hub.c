@@ -12,6 +12,7 @@
 
 #include "srv_client.h"
 #include "srv_entity.h"
+#include "srv_wakes.h"
 #include "srv_fingerprint.h"
 
 double srv_now(void)
@@ -39,6 +40,13 @@ ocean_result srv_hub_init(srv_hub *h, const srv_settings *s)
     char why[160];
     if (srv_entities_create(s->srv.max_entities, &h->entities, why, sizeof why) != OCEAN_OK) {
         fprintf(stderr, "oceand: %s\n", why);
+        pthread_cond_destroy(&h->wake);
+        pthread_mutex_destroy(&h->lock);
+        return OCEAN_ENOMEM;
+    }
+    if (srv_wakes_create(s->srv.max_entities, &h->stats, &h->wakes) != OCEAN_OK) {
+        fprintf(stderr, "oceand: cannot start the wake builder\n");
+        srv_entities_destroy(h->entities);
         pthread_cond_destroy(&h->wake);
         pthread_mutex_destroy(&h->lock);
         return OCEAN_ENOMEM;
@@ -72,6 +80,7 @@ void srv_hub_fini(srv_hub *h)
         h->clients = c->next;
         srv_client_unref(c);
     }
+    srv_wakes_destroy(h->wakes);
     srv_entities_destroy(h->entities);
     pthread_cond_destroy(&h->wake);
     pthread_mutex_destroy(&h->lock);

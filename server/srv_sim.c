@@ -1079,7 +1079,7 @@ static void query_turn(srv_sim *s, double next_tick_wall, int live)
         budget = slack > 0 ? fmin(budget, slack) : 0.25 * budget;
     }
     s->query_deferred = 0;
-    srv_work_queries(s->work, s->hub, query_eval, s, s->g, budget);
+    srv_work_queries(s->work, s->hub, query_eval, s, s->g, ocean_get_params(s->oc)->sea.depth_m, budget);
 }
 
 static void ts_from(double secs, struct timespec *ts)

@@ -129,6 +129,11 @@ static const stat_metric traffic_metrics[] = {
     STAT("oceand_cigi_ignored_total", "counter", "CIGI packets read and not acted on (this version answers "
          "HAT/HOT and Environmental Conditions requests; sea state and entities from a host are to come).",
          cigi_ignored, 1),
+    STAT("oceand_wake_patterns_total", "counter", "Ship wake patterns built for point answers (one FFT each, "
+         "on the wake builder's thread).", wake_patterns, 1),
+    STAT("oceand_wake_build_seconds_total", "counter", "Seconds those builds took.", wake_build_ns, 1e-9),
+    STAT("oceand_wake_waits_total", "counter", "Query slices that waited for a wake pattern being built.",
+         wake_waits, 1),
     STAT("oceand_connections_total", "counter", "Connections accepted.", connections_total, 1),
     STAT("oceand_disconnects_slow_total", "counter", "Clients dropped for the output limit.", disconnects_slow, 1),
     STAT("oceand_refused_full_total", "counter", "Connections refused at max_clients.", refused_full, 1),

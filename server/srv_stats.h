@@ -44,6 +44,9 @@ typedef struct srv_stats {
      * answered, datagrams dropped by reason, packets not acted on */
     atomic_uint_fast64_t cigi_messages, cigi_answers, cigi_drop_host, cigi_drop_framing, cigi_drop_value;
     atomic_uint_fast64_t cigi_drop_busy, cigi_ignored;
+    /* the ships' wakes in point answers (srv_wakes.h): patterns built and
+     * the seconds they took, query slices that waited for one */
+    atomic_uint_fast64_t wake_patterns, wake_build_ns, wake_waits;
     atomic_uint_fast64_t lat_hist[SRV_LAT_BUCKETS];
 } srv_stats;
 

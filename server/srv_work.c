@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "query.h"
+#include "srv_wakes.h"
 
 typedef struct item {
     struct item *next;
@@ -132,8 +133,17 @@ static void answer(srv_hub *h, item *it)
     free(smp);
 }
 
+/* Puts it first in the rotation again: its turn is over until the next
+ * tick. */
+static void put_back(srv_work *w, item *it)
+{
+    it->next = w->head;
+    w->head = it;
+    if (!w->tail) w->tail = it;
+}
+
 void srv_work_queries(srv_work *w, srv_hub *h, srv_work_eval_fn eval, void *ctx,
-                      const ocean_gerstner *g, double budget_s)
+                      const ocean_gerstner *g, double depth, double budget_s)
 {
     double t0 = srv_now(), now = t0;
     int slices = 0;
@@ -154,10 +164,7 @@ void srv_work_queries(srv_work *w, srv_hub *h, srv_work_eval_fn eval, void *ctx,
          * first: at most one such per turn, and only as a turn's first
          * slice, so a turn stays near its budget. */
         if (slices > 0 && !eval(ctx, it->t, 1)) {
-            /* first in the next turn (at the back it could wait forever) */
-            it->next = w->head;
-            w->head = it;
-            if (!w->tail) w->tail = it;
+            put_back(w, it);  /* first in the next turn (at the back it could wait forever) */
             break;
         }
         if (!it->res) it->res = calloc(q->count ? q->count : 1, sizeof *it->res);
@@ -171,11 +178,23 @@ void srv_work_queries(srv_work *w, srv_hub *h, srv_work_eval_fn eval, void *ctx,
         uint32_t k = want < 16 ? 16 : want > 8192 ? 8192 : (uint32_t)want;
         if (k > q->count - it->done) k = q->count - it->done;
         double p0 = srv_now();
+        const double *pts = q->points + 2 * (size_t)it->done;
+        wake_sample *ws = r == OCEAN_OK && k > 0 ? malloc(sizeof *ws * k) : NULL;
+        ocean_result wr = ws ? srv_wakes_sample(h->wakes, h->entities, it->t, depth, pts, k, ws) : OCEAN_ENOMEM;
+        if (wr == OCEAN_ESTATE) {
+            /* a wake pattern its points need is being built: no answer
+             * without it (srv_wakes.h) */
+            free(ws);
+            put_back(w, it);
+            break;
+        }
+        if (r == OCEAN_OK && k > 0 && wr == OCEAN_ENOMEM) r = OCEAN_ENOMEM;
         ocean_query_options opt;
         ocean_query_options_default(&opt);
         if (r == OCEAN_OK && k > 0)
-            r = ocean_query_points(f, g, NULL, it->t, q->points + 2 * (size_t)it->done, k, &opt,
-                                   it->res + it->done, &bad);
+            r = ocean_query_points(f, g, NULL, it->t, pts, k, &opt, it->res + it->done, &bad);
+        if (r == OCEAN_OK && wr == OCEAN_OK) wake_sample_apply(ws, k, it->res + it->done);
+        free(ws);
         now = srv_now();
         if (r == OCEAN_OK && k >= 16)
             w->sec_per_point = 0.7 * w->sec_per_point + 0.3 * (now - p0) / k;

@@ -12,7 +12,9 @@
  * results collect in the query's array; the QUERY_RESULT goes out whole
  * when the last slice is done.  ocean_query_points is independent of how
  * the points are split (sim/query.h), so the answer is the one a single
- * pass would give.
+ * pass would give.  The ships' wakes at the points are added to each
+ * slice's answers (srv_wakes.h), from the entities' states at the
+ * query's time.
  *
  * The time each slice takes is charged to its client (client.cpu_ns,
  * /metrics oceand_client_cpu_seconds_total).
@@ -46,10 +48,11 @@ int srv_work_next_time(const srv_work *w, double *t);
  * (evaluating would cost an FFT pass).  Valid until the next call. */
 typedef const ocean_frame *(*srv_work_eval_fn)(void *ctx, double t, int cached_only);
 
-/* Runs query slices for about budget_s seconds (at least one slice),
+/* Runs query slices for about budget_s seconds (at least one slice, but
+ * none while a wake pattern the next slice needs is being built),
  * answering queries that complete and refusing those with a bad point.
- * g: the near field, or NULL [sim]. */
+ * g: the near field, or NULL; depth: the sea's, m, for the wakes [sim]. */
 void srv_work_queries(srv_work *w, srv_hub *h, srv_work_eval_fn eval, void *ctx,
-                      const ocean_gerstner *g, double budget_s);
+                      const ocean_gerstner *g, double depth, double budget_s);
 
 #endif

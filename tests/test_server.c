@@ -42,6 +42,7 @@
 #include "srv_entity.h"
 #include "srv_record.h"
 #include "srv_tiles.h"
+#include "wake_field.h"
 #include "lib/test_ws.h"
 #include "lib/test_net.h"
 #include "oc_path.h"
@@ -3073,6 +3074,82 @@ static void entity_messages(void **state)
     test_ws_close(&b);
 }
 
+/* A ship in another's wake (issue 43): ship 31 steams along +x at 8 m/s
+ * and ship 32 follows on its track 300 m astern.  QUERY answers at the
+ * second's bow, stern and sides and at points in the first's wake are
+ * the wind sea (the simulation library's answer) plus the ships' wakes
+ * summed exactly (wake_field_exact, each pattern's waves one by one),
+ * within the wakes' own bound, and the answer's error bound covers both
+ * parts; a query before the ships entered the sea has no wake. */
+static void wakes_in_queries(void **state)
+{
+    (void)state;
+    test_ws a;
+    timeline ta;
+    sea_connect(&a, &ta, 300);
+    double t0 = hub_now();
+    proto_msg m;
+    entity_send(&a, PROTO_ENTITY_SET, 31, 0, t0, 0, 8, "entity-token");
+    entity_expect(&a, PROTO_ENTITY_ANNOUNCE, 31, &m);
+    proto_msg_free(&m);
+    entity_send(&a, PROTO_ENTITY_SET, 32, 0, t0, -300, 8, "entity-token");
+    entity_expect(&a, PROTO_ENTITY_ANNOUNCE, 32, &m);
+    proto_msg_free(&m);
+    enum { N = 7 };
+    const double xz[2 * N] = {-240, -20, -360, -20, -300, -28, -300, -12, -100, -20, -150, -45, -200, 5};
+    oc_client *q = connect_client(port, NULL);
+    oc_query_result qr;
+    /* the first answer waits for the wake patterns to be built */
+    assert_int_equal(oc_client_query(q, xz, N, 1, t0, 60000, &qr), OCEAN_OK);
+    assert_true(qr.t == t0 && qr.count == N);
+    ocean_query_result lr[N];
+    local_query(tl_at(&ta, t0), t0, xz, N, lr);
+    /* the exact wakes of the same ships, patterns built here */
+    ocean_params p;
+    srv_params_from_sea(tl_at(&ta, t0), &settings.params, &p);
+    ocean_entity_desc d[4];
+    ocean_entity_state st[4];
+    int n = srv_entities_at(srv_daemon_hub(daemon_)->entities, t0, d, st, 4);
+    assert_int_equal(n, 2);
+    wake_field *f;
+    assert_int_equal(wake_field_create(8, &f), OCEAN_OK);
+    wake_params need[8];
+    int missing = wake_field_missing(f, d, st, n, p.sea.depth_m, xz, N, need, 8);
+    assert_true(missing >= 1 && missing <= 8);
+    for (int i = 0; i < missing; i++) {
+        wake_pattern *pat;
+        assert_int_equal(wake_pattern_create(&need[i], &pat, NULL, 0), OCEAN_OK);
+        wake_field_insert(f, pat);
+    }
+    double exact[N], biggest = 0;
+    wake_sample ws[N];
+    assert_int_equal(wake_field_exact(f, d, st, n, p.sea.depth_m, xz, N, exact), OCEAN_OK);
+    assert_int_equal(wake_field_sample(f, d, st, n, p.sea.depth_m, xz, N, ws), OCEAN_OK);
+    for (int i = 0; i < N; i++) {
+        double got = qr.samples[i].height, want = lr[i].height + exact[i];
+        printf("(%g, %g): answer %.4f m = sea %.4f + wake %.4f (exact %.4f), error bound %.4f m\n", xz[2 * i],
+               xz[2 * i + 1], got, lr[i].height, got - lr[i].height, exact[i], qr.samples[i].error_bound);
+        assert_true(fabs(got - want) <= ws[i].error + 1e-5 + 1e-6 * fabs(want));
+        assert_true(qr.samples[i].error_bound >= lr[i].error + ws[i].error - 1e-5);
+        biggest = fmax(biggest, fabs(exact[i]));
+    }
+    assert_true(biggest > 0.05);   /* the wake is there to be felt */
+    wake_field_destroy(f);
+    oc_query_result_free(&qr);
+    /* before the ships entered the sea: the wind sea alone */
+    assert_int_equal(oc_client_query(q, xz, N, 1, t0 - 1, 30000, &qr), OCEAN_OK);
+    local_query(tl_at(&ta, t0 - 1), t0 - 1, xz, N, lr);
+    for (int i = 0; i < N; i++) assert_true(fabs(qr.samples[i].height - lr[i].height) <= 1e-5 + 1e-6 * fabs(lr[i].height));
+    oc_query_result_free(&qr);
+    oc_client_destroy(q);
+    for (uint32_t id = 31; id <= 32; id++) {
+        entity_send(&a, PROTO_ENTITY_REMOVE, id, 0, 0, 0, 0, "entity-token");
+        entity_expect(&a, PROTO_ENTITY_GONE, id, &m);
+        proto_msg_free(&m);
+    }
+    test_ws_close(&a);
+}
+
 /* What on_entity saw. */
 typedef struct entity_seen {
     int announces, gones;
@@ -4563,6 +4640,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(entity_messages),
         cmocka_unit_test(entity_rate),
         cmocka_unit_test(entity_from_the_library),
+        cmocka_unit_test(wakes_in_queries),
         cmocka_unit_test(epoch_parse),
         cmocka_unit_test(epoch_shared_clock),
         cmocka_unit_test(epoch_beyond_time_limit),

@@ -1,0 +1,47 @@
+/*
+ * srv_wakes.h - the ships' wakes in the daemon's point answers (QUERY and
+ * the CIGI service's HAT/HOT, which asks through QUERY): the wake field
+ * (sim/wake_field.h) of the hub's entities, its patterns built on this
+ * module's own thread, off the threads that serve clients.
+ *
+ * A query slice asks srv_wakes_sample for the wakes at its points at its
+ * sim time.  When a pattern they need is not built yet the slice waits
+ * (OCEAN_ESTATE) and the pattern goes to the builder: no answer goes out
+ * without the wakes its points lie in, so every daemon answers the same
+ * whatever its speed.  What it costs is latency, the first time a ship
+ * reaches a rung of the speed ladder: one FFT build (0.1-10 s at nice
+ * 10); a ship at steady speed needs two patterns, kept while they are
+ * read (the least recently read go first, past 2 per entity and 8).
+ *
+ * Threads: srv_wakes_sample from any thread; the builder thread; the field
+ * and the builder's queue under the module's lock, which is never held
+ * while another is taken.
+ * OOM: a pattern that cannot be built is logged and asked for again by
+ * the next slice that needs it; create fails with OCEAN_ENOMEM.
+ */
+#ifndef SRV_WAKES_H
+#define SRV_WAKES_H
+
+#include <stddef.h>
+
+#include "srv_entity.h"
+#include "srv_stats.h"
+#include "wake_field.h"
+
+typedef struct srv_wakes srv_wakes;
+
+/* For a table of at most max_entities; stats (may be NULL) counts the
+ * builds. */
+ocean_result srv_wakes_create(int max_entities, srv_stats *stats, srv_wakes **out);
+/* Stops the builder (after the build under way) and frees everything.
+ * Accepts NULL. */
+void srv_wakes_destroy(srv_wakes *w);
+
+/* The wakes of the ships of e at sim time t over water of the given depth
+ * (m) at the n points xz into out.  OCEAN_ESTATE: a pattern they need is
+ * being built (out untouched; ask again later); OCEAN_EINVAL: a point not
+ * finite. */
+ocean_result srv_wakes_sample(srv_wakes *w, srv_entities *e, double t, double depth, const double *xz, size_t n,
+                              wake_sample *out);
+
+#endif
