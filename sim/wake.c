@@ -137,16 +137,19 @@ static void wake_spectrum(const wake_params *p, const wake_layout *w, fftwf_comp
     double L = p->length, B = w->beam;
     double f0 = 4 * M_PI * L * B / (dx * dx);   /* the footprint's DFT over J3(q) / q^3 */
     for (int iz = 0; iz < w->fz; iz++) {
-        double kz = wavenumber(iz, w->fz, dx);
+        double kz = wavenumber(iz, w->fz, dx), pz = grid_pass(kz * dx);
         for (int ix = 0; ix < w->fx; ix++) {
-            double kx = wavenumber(ix, w->fx, dx);
+            double kx = wavenumber(ix, w->fx, dx), pass = pz * grid_pass(kx * dx);
+            fftwf_complex *c = &buf[(size_t)iz * w->fx + ix];
+            if (pass == 0) {   /* three quarters of the modes: no Bessel function to spend */
+                (*c)[0] = (*c)[1] = 0.0f;
+                continue;
+            }
             double k = hypot(kx, kz);
             double w02 = WAKE_G * k * (isinf(p->depth) ? 1.0 : tanh(k * p->depth));
             double q = hypot(0.5 * kx * L, 0.5 * kz * B);
-            double f = f0 * (q < 1e-3 ? (1 - q * q / 16) / 48 : jn(3, q) / (q * q * q));
-            f *= grid_pass(kx * dx) * grid_pass(kz * dx);
+            double f = pass * f0 * (q < 1e-3 ? (1 - q * q / 16) / 48 : jn(3, q) / (q * q * q));
             double a = -U * kx, re = a * a - eps * eps - w02, im = 2 * a * eps, d = re * re + im * im;
-            fftwf_complex *c = &buf[(size_t)iz * w->fx + ix];
             (*c)[0] = d > 0 ? (float)(w02 * f * re / d) : 0.0f;
             (*c)[1] = d > 0 ? (float)(-w02 * f * im / d) : 0.0f;
         }

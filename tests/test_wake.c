@@ -165,6 +165,55 @@ static void finite_depth_widens(void **state)
     check(U, 6.0 * 6.0 / (G * 0.09), h, 2.0);
 }
 
+/* The angle of maximum amplitude read off g, deg: per column from 10
+ * body lengths behind to 90 % of the grid, the row (one side of the
+ * track) where the envelope peaks, as an angle from the body. */
+static double measured_max_amplitude_deg(const wake_grid *g, double lambda, double L)
+{
+    int w = (int)fmax(2, lround(0.5 * lambda / g->dx)), izc = (int)lround(-g->z0 / g->dx), cols = 0;
+    double sum = 0, xend = g->x0 + 0.9 * (g->nx - 1) * g->dx;
+    for (int ix = w; ix < g->nx - w; ix++) {
+        double x = g->x0 + ix * g->dx, top = 0;
+        if (x < 10 * L || x > xend) continue;
+        int best = -1;
+        for (int iz = izc + 1; iz < g->nz; iz++) {
+            double e = envelope(g, ix, iz, w);
+            if (e > top) top = e, best = iz;
+        }
+        if (best < 0) continue;
+        sum += atan((g->z0 + best * g->dx) / x) * 180 / M_PI;
+        cols++;
+    }
+    assert_true(cols >= 40);
+    return sum / cols;
+}
+
+/* Fast short bodies: above Fr = 0.6 the angle of maximum amplitude
+ * narrows as 1/Fr, inside Kelvin's wedge (Rabaud & Moisy 2013, Phys. Rev.
+ * Lett. 110, 214503: alpha = 1 / (2 sqrt(2 pi) Fr) at large Fr; Darmon,
+ * Benzaquen & Raphael 2014, J. Fluid Mech. 738, R3, for a pressure
+ * footprint): within 15 % at Fr 1 and 2, for a hull's footprint (a sixth
+ * as wide as long, the daemon's ships) and a round one (the
+ * axisymmetric disturbance of Rabaud & Moisy's argument). */
+static void fast_hulls_narrow(void **state)
+{
+    (void)state;
+    const double L = 20, frs[2] = {1.0, 2.0};
+    for (int round = 0; round < 2; round++)
+        for (int i = 0; i < 2; i++) {
+            double U = frs[i] * sqrt(G * L), law = 1 / (2 * sqrt(2 * M_PI) * frs[i]) * 180 / M_PI;
+            wake_params p = {U, L, INFINITY, round ? L : 0};
+            wake_grid g;
+            assert_int_equal(wake_steady(&p, &g, NULL, 0), OCEAN_OK);
+            double a = measured_max_amplitude_deg(&g, wake_transverse_wavelength(&p), L);
+            printf("%s footprint, Fr %.1f: angle of maximum amplitude %.2f deg (Rabaud & Moisy %.2f deg, %+.0f %%)\n",
+                   round ? "round" : "hull", frs[i], a, law, 100 * (a / law - 1));
+            assert_true(fabs(a / law - 1) <= 0.15);
+            assert_true(a < 19.47 * 0.7);
+            wake_grid_free(&g);
+        }
+}
+
 static void bad_parameters(void **state)
 {
     (void)state;
@@ -380,6 +429,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(deep_kelvin),
         cmocka_unit_test(finite_depth_widens),
+        cmocka_unit_test(fast_hulls_narrow),
         cmocka_unit_test(bad_parameters),
         cmocka_unit_test(pattern_reads_the_series),
         cmocka_unit_test(field_sums_the_ships),
