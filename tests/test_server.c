@@ -2968,6 +2968,16 @@ static void entity_expect(test_ws *w, int op, uint32_t id, proto_msg *m)
     fail_msg("no ENTITY op %d for id %d", op, (int)id);
 }
 
+/* Enters ship or flier id with the entity token at (x, -20), heading +x,
+ * and waits for its announce on w. */
+static void entity_enter(test_ws *w, uint32_t id, int kind, double t, double x, double speed)
+{
+    proto_msg m;
+    entity_send(w, PROTO_ENTITY_SET, id, kind, t, x, speed, "entity-token");
+    entity_expect(w, PROTO_ENTITY_ANNOUNCE, id, &m);
+    proto_msg_free(&m);
+}
+
 /* An ERROR of code whose message holds `has`; asserts it comes. */
 static void error_expect(test_ws *w, ocean_result code, const char *has)
 {
@@ -3053,11 +3063,7 @@ static void entity_messages(void **state)
     entity_send(&a, PROTO_ENTITY_ANNOUNCE, 7, 0, t0 + 1, 105, 5, NULL);
     error_expect(&a, OCEAN_EINVAL, "server-to-client");
     entity_at(7, 100);
-    for (uint32_t id = 8; id <= 10; id++) {
-        entity_send(&a, PROTO_ENTITY_SET, id, 1, t0, 10.0 * id, 0, "entity-token");
-        entity_expect(&a, PROTO_ENTITY_ANNOUNCE, id, &m);
-        proto_msg_free(&m);
-    }
+    for (uint32_t id = 8; id <= 10; id++) entity_enter(&a, id, 1, t0, 10.0 * id, 0);
     entity_send(&a, PROTO_ENTITY_SET, 11, 1, t0, 110, 0, "entity-token");
     error_expect(&a, OCEAN_ETOOBIG, "server.max_entities");
     entity_at(11, NAN);
@@ -3089,12 +3095,8 @@ static void wakes_in_queries(void **state)
     sea_connect(&a, &ta, 300);
     double t0 = hub_now();
     proto_msg m;
-    entity_send(&a, PROTO_ENTITY_SET, 31, 0, t0, 0, 8, "entity-token");
-    entity_expect(&a, PROTO_ENTITY_ANNOUNCE, 31, &m);
-    proto_msg_free(&m);
-    entity_send(&a, PROTO_ENTITY_SET, 32, 0, t0, -300, 8, "entity-token");
-    entity_expect(&a, PROTO_ENTITY_ANNOUNCE, 32, &m);
-    proto_msg_free(&m);
+    entity_enter(&a, 31, 0, t0, 0, 8);
+    entity_enter(&a, 32, 0, t0, -300, 8);
     enum { N = 7 };
     const double xz[2 * N] = {-240, -20, -360, -20, -300, -28, -300, -12, -100, -20, -150, -45, -200, 5};
     oc_client *q = connect_client(port, NULL);
