@@ -30,6 +30,7 @@
 #include "srv_convert.h"
 #include "srv_entity.h"
 #include "srv_redis.h"
+#include "srv_wakes.h"
 
 /* One request of a host message, as it will be answered. */
 typedef struct request {
@@ -467,10 +468,18 @@ static void take_entity(srv_cigi *s, pending *m, const cigi_packet *p)
     double vmax = d.kind == OCEAN_ENTITY_SHIP ? OCEAN_SHIP_SPEED_MAX : OCEAN_AIRCRAFT_SPEED_MAX;
     if (srv_entities_last(tab, e->id, &last) == OCEAN_OK && smp.t > last.t)
         smp.speed = fmin(vmax, hypot(smp.x - last.x, smp.z - last.z) / (smp.t - last.t));
-    if (srv_entities_sample(tab, &d, &smp, NULL, 0) == OCEAN_OK) return;
-    srv_entities_remove(tab, e->id);
-    smp.speed = 0;
-    if (srv_entities_sample(tab, &d, &smp, NULL, 0) != OCEAN_OK) bump(&s->h->stats.cigi_drop_value, 1);
+    if (srv_entities_sample(tab, &d, &smp, NULL, 0) != OCEAN_OK) {
+        srv_entities_remove(tab, e->id);
+        smp.speed = 0;
+        if (srv_entities_sample(tab, &d, &smp, NULL, 0) != OCEAN_OK) {
+            bump(&s->h->stats.cigi_drop_value, 1);
+            return;
+        }
+    }
+    pthread_mutex_lock(&s->h->lock);
+    double depth = s->h->sea_now.depth_m;
+    pthread_mutex_unlock(&s->h->lock);
+    srv_wakes_ahead(s->h->wakes, &d, &smp, depth);  /* its wake built before HAT/HOT asks for it */
 }
 
 /* An entity-relative request's point: the entity's position at the sim

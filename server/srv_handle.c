@@ -22,6 +22,7 @@
 #include "srv_admit.h"
 #include "srv_convert.h"
 #include "srv_entity.h"
+#include "srv_wakes.h"
 #include "srv_cascade.h"
 #include "srv_record.h"
 #include "srv_redis.h"
@@ -568,6 +569,10 @@ static void entity_set(const srv_in *in, const proto_entity *e)
         refuse(in, r, why);
         return;
     }
+    pthread_mutex_lock(&h->lock);
+    double depth = h->sea_now.depth_m;
+    pthread_mutex_unlock(&h->lock);
+    srv_wakes_ahead(h->wakes, &d, &smp, depth);
     /* logged when verbose: a token holder may enter and remove 120 a second,
      * and no client may flood the log */
     if (fresh && in->cfg->verbose)

@@ -3,6 +3,7 @@
  */
 #include "srv_wakes.h"
 
+#include <math.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -134,4 +135,17 @@ ocean_result srv_wakes_sample(srv_wakes *w, srv_entities *e, double t, double de
     free(d);
     free(s);
     return r;
+}
+
+void srv_wakes_ahead(srv_wakes *w, const ocean_entity_desc *d, const ocean_track_sample *s, double depth)
+{
+    double a = s->heading_deg * (M_PI / 180);
+    ocean_entity_state st = {s->x, s->z, s->altitude_m, s->heading_deg, s->speed, s->speed * cos(a),
+                             s->speed * sin(a), 0, 0};
+    double at[2] = {s->x, s->z};   /* every rung reaches the ship's own place */
+    wake_params need[2];
+    pthread_mutex_lock(&w->lock);
+    int missing = wake_field_missing(w->field, d, &st, 1, depth, at, 1, need, 2);
+    for (int i = 0; i < missing && i < 2; i++) want(w, &need[i]);
+    pthread_mutex_unlock(&w->lock);
 }

@@ -8,9 +8,11 @@
  * sim time.  When a pattern they need is not built yet the slice waits
  * (OCEAN_ESTATE) and the pattern goes to the builder: no answer goes out
  * without the wakes its points lie in, so every daemon answers the same
- * whatever its speed.  What it costs is latency, the first time a ship
- * reaches a rung of the speed ladder: one FFT build (0.1-10 s at nice
- * 10); a ship at steady speed needs two patterns, kept while they are
+ * whatever its speed.  What it costs is latency, when a ship reaches a
+ * rung of the speed ladder: one FFT build (0.1-10 s at nice 10), asked
+ * for as soon as a feeder sets the ship there (srv_wakes_ahead), so a
+ * query waits only for what is left of it; a ship at steady speed needs
+ * two patterns, kept while they are
  * read (the least recently read go first, past 2 per entity and 8).
  *
  * Threads: srv_wakes_sample from any thread; the builder thread; the field
@@ -43,5 +45,10 @@ void srv_wakes_destroy(srv_wakes *w);
  * finite. */
 ocean_result srv_wakes_sample(srv_wakes *w, srv_entities *e, double t, double depth, const double *xz, size_t n,
                               wake_sample *out);
+
+/* Puts the patterns ship d needs at its sample s over water of the given
+ * depth in the builder's queue, so the queries that follow find them
+ * built; never waits [any thread]. */
+void srv_wakes_ahead(srv_wakes *w, const ocean_entity_desc *d, const ocean_track_sample *s, double depth);
 
 #endif

@@ -3086,7 +3086,8 @@ static void entity_messages(void **state)
  * the wind sea (the simulation library's answer) plus the ships' wakes
  * summed exactly (wake_field_exact, each pattern's waves one by one),
  * within the wakes' own bound, and the answer's error bound covers both
- * parts; a query before the ships entered the sea has no wake. */
+ * parts; the pattern is built when the ships are set, so the first query
+ * does not wait; a query before the ships entered the sea has no wake. */
 static void wakes_in_queries(void **state)
 {
     (void)state;
@@ -3097,13 +3098,19 @@ static void wakes_in_queries(void **state)
     proto_msg m;
     entity_enter(&a, 31, 0, t0, 0, 8);
     entity_enter(&a, 32, 0, t0, -300, 8);
+    /* the set asked for the wake's pattern: it is built before any query
+     * needs it, and the first query does not wait */
+    srv_stats *stats = &srv_daemon_hub(daemon_)->stats;
+    for (double end = test_now_s() + 60; test_now_s() < end && atomic_load(&stats->wake_patterns) < 1;) usleep(20000);
+    assert_true(atomic_load(&stats->wake_patterns) >= 1);
+    uint64_t waits = atomic_load(&stats->wake_waits);
     enum { N = 7 };
     const double xz[2 * N] = {-240, -20, -360, -20, -300, -28, -300, -12, -100, -20, -150, -45, -200, 5};
     oc_client *q = connect_client(port, NULL);
     oc_query_result qr;
-    /* the first answer waits for the wake patterns to be built */
     assert_int_equal(oc_client_query(q, xz, N, 1, t0, 60000, &qr), OCEAN_OK);
     assert_true(qr.t == t0 && qr.count == N);
+    assert_true(atomic_load(&stats->wake_waits) == waits);
     ocean_query_result lr[N];
     local_query(tl_at(&ta, t0), t0, xz, N, lr);
     /* the exact wakes of the same ships, patterns built here */
