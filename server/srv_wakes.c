@@ -149,3 +149,11 @@ void srv_wakes_ahead(srv_wakes *w, const ocean_entity_desc *d, const ocean_track
     for (int i = 0; i < missing && i < 2; i++) want(w, &need[i]);
     pthread_mutex_unlock(&w->lock);
 }
+
+int srv_wakes_pending(srv_wakes *w)
+{
+    pthread_mutex_lock(&w->lock);
+    int n = w->n_want;
+    pthread_mutex_unlock(&w->lock);
+    return n;
+}

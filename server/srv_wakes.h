@@ -46,6 +46,9 @@ void srv_wakes_destroy(srv_wakes *w);
 ocean_result srv_wakes_sample(srv_wakes *w, srv_entities *e, double t, double depth, const double *xz, size_t n,
                               wake_sample *out);
 
+/* Patterns waiting for the builder or being built [any thread]. */
+int srv_wakes_pending(srv_wakes *w);
+
 /* Puts the patterns ship d needs at its sample s over water of the given
  * depth in the builder's queue, so the queries that follow find them
  * built; never waits [any thread]. */
