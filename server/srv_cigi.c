@@ -476,10 +476,7 @@ static void take_entity(srv_cigi *s, pending *m, const cigi_packet *p)
             return;
         }
     }
-    pthread_mutex_lock(&s->h->lock);
-    double depth = s->h->sea_now.depth_m;
-    pthread_mutex_unlock(&s->h->lock);
-    srv_wakes_ahead(s->h->wakes, &d, &smp, depth);  /* its wake built before HAT/HOT asks for it */
+    srv_wakes_ahead(s->h, &d, &smp);  /* its wake built before HAT/HOT asks for it */
 }
 
 /* An entity-relative request's point: the entity's position at the sim

@@ -569,10 +569,7 @@ static void entity_set(const srv_in *in, const proto_entity *e)
         refuse(in, r, why);
         return;
     }
-    pthread_mutex_lock(&h->lock);
-    double depth = h->sea_now.depth_m;
-    pthread_mutex_unlock(&h->lock);
-    srv_wakes_ahead(h->wakes, &d, &smp, depth);
+    srv_wakes_ahead(h, &d, &smp);
     /* logged when verbose: a token holder may enter and remove 120 a second,
      * and no client may flood the log */
     if (fresh && in->cfg->verbose)

@@ -30,16 +30,11 @@ struct srv_wakes {
     int n_want;            /* want[0] is the one being built */
 };
 
-static int params_eq(const wake_params *a, const wake_params *b)
-{
-    return a->speed == b->speed && a->length == b->length && a->depth == b->depth && a->beam == b->beam;
-}
-
 /* Queues p unless it is queued already [lock]. */
 static void want(srv_wakes *w, const wake_params *p)
 {
     for (int i = 0; i < w->n_want; i++)
-        if (params_eq(&w->want[i], p)) return;
+        if (wake_params_equal(&w->want[i], p)) return;
     if (w->n_want == WANT_MAX) return;   /* asked for again by the next slice */
     w->want[w->n_want++] = *p;
     pthread_cond_broadcast(&w->cond);
@@ -137,8 +132,12 @@ ocean_result srv_wakes_sample(srv_wakes *w, srv_entities *e, double t, double de
     return r;
 }
 
-void srv_wakes_ahead(srv_wakes *w, const ocean_entity_desc *d, const ocean_track_sample *s, double depth)
+void srv_wakes_ahead(srv_hub *h, const ocean_entity_desc *d, const ocean_track_sample *s)
 {
+    srv_wakes *w = h->wakes;
+    pthread_mutex_lock(&h->lock);
+    double depth = h->sea_now.depth_m;
+    pthread_mutex_unlock(&h->lock);
     double a = s->heading_deg * (M_PI / 180);
     ocean_entity_state st = {s->x, s->z, s->altitude_m, s->heading_deg, s->speed, s->speed * cos(a),
                              s->speed * sin(a), 0, 0};

@@ -49,9 +49,11 @@ ocean_result srv_wakes_sample(srv_wakes *w, srv_entities *e, double t, double de
 /* Patterns waiting for the builder or being built [any thread]. */
 int srv_wakes_pending(srv_wakes *w);
 
-/* Puts the patterns ship d needs at its sample s over water of the given
- * depth in the builder's queue, so the queries that follow find them
- * built; never waits [any thread]. */
-void srv_wakes_ahead(srv_wakes *w, const ocean_entity_desc *d, const ocean_track_sample *s, double depth);
+struct srv_hub;
+/* Puts the patterns ship d needs at its sample s, over hub h's sea, in
+ * the builder's queue (h->wakes), so the queries that follow find them
+ * built; takes the hub's lock briefly, never waits for a build [any
+ * thread, hub.lock not held]. */
+void srv_wakes_ahead(struct srv_hub *h, const ocean_entity_desc *d, const ocean_track_sample *s);
 
 #endif

@@ -58,6 +58,11 @@ ocean_result wake_params_validate(const wake_params *p, char *msg, size_t msglen
     return OCEAN_EINVAL;
 }
 
+int wake_params_equal(const wake_params *a, const wake_params *b)
+{
+    return a->speed == b->speed && a->length == b->length && a->depth == b->depth && a->beam == b->beam;
+}
+
 double wake_transverse_wavelength(const wake_params *p)
 {
     double U2 = p->speed * p->speed;
@@ -116,10 +121,11 @@ static double wavenumber(int i, int n, double dx) { return 2 * M_PI * (i < n / 2
 
 /* The grid's own low-pass on a wave of theta radians per cell: 1 up to
  * 8 cells per wavelength, falling as cos^2 to 0 at 4.  The waves a hull's
- * sharp footprint raises reach up to the grid's Nyquist limit, where no
- * reading of the grid can tell them apart (a cubic spline reads a wave
- * of 3 cells 15 % low); cut off here, every wave summed is one the
- * reading gets within 1 %. */
+ * sharp footprint raise reach up to the grid's Nyquist limit, where no
+ * reading of the grid resolves them; cut off here, the spline reads the
+ * series within the bound measured per block (test_wake: 0.10 mm on
+ * waves of 0.15 m, where Catmull-Rom strayed 5.7 mm with every wave
+ * kept). */
 static double grid_pass(double theta)
 {
     double a = fabs(theta) / (M_PI / 4) - 1;

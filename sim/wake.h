@@ -46,6 +46,9 @@ typedef struct wake_grid {
     float *heights;
 } wake_grid;
 
+/* 1 when a and b name the same wake (every field equal). */
+int wake_params_equal(const wake_params *a, const wake_params *b);
+
 /* OCEAN_EINVAL with the reason for a speed, length or depth out of range
  * or not a number. */
 ocean_result wake_params_validate(const wake_params *p, char *msg, size_t msglen);

@@ -61,15 +61,10 @@ void wake_field_destroy(wake_field *f)
 
 int wake_field_count(const wake_field *f) { return f->count; }
 
-static int params_eq(const wake_params *a, const wake_params *b)
-{
-    return a->speed == b->speed && a->length == b->length && a->depth == b->depth && a->beam == b->beam;
-}
-
 static int find(const wake_field *f, const wake_params *p)
 {
     for (int i = 0; i < f->count; i++)
-        if (params_eq(wake_pattern_params(f->h[i].p), p)) return i;
+        if (wake_params_equal(wake_pattern_params(f->h[i].p), p)) return i;
     return -1;
 }
 
@@ -127,7 +122,7 @@ int wake_field_missing(const wake_field *f, const ocean_entity_desc *d, const oc
             const rung *r = &h.r[k];
             if (r->weight <= 0 || find(f, &r->p) >= 0) continue;
             int dup = 0;
-            for (int m = 0; m < missing && m < max; m++) dup |= params_eq(&need[m], &r->p);
+            for (int m = 0; m < missing && m < max; m++) dup |= wake_params_equal(&need[m], &r->p);
             if (dup) continue;
             double reach = wake_params_reach(&r->p), xb, zb;
             for (size_t q = 0; q < np; q++) {
