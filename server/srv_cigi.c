@@ -30,7 +30,6 @@
 #include "srv_convert.h"
 #include "srv_entity.h"
 #include "srv_redis.h"
-#include "srv_wakes.h"
 
 /* One request of a host message, as it will be answered. */
 typedef struct request {
@@ -434,49 +433,66 @@ static ocean_entity_desc entity_desc(const cigi_entity *e)
     return d;
 }
 
+/* Enters the host's entity entry m (an ENTITY announce or gone) in force
+ * from `from`: at once, or through the shared timeline (nobody to answer:
+ * a refusal falls alike on every replica and is counted there). */
+static void entity_put(srv_cigi *s, proto_msg *m, double from)
+{
+    srv_hub *h = s->h;
+    char why[400];
+    m->hdr.sim_time = from;
+    ocean_result r = h->redis ? srv_redis_submit_entity(h->redis, NULL, NULL, 0, m, "CIGI entity", why, sizeof why)
+                              : srv_hub_entity_enter(h, m, why, sizeof why);
+    if (r != OCEAN_OK) bump(&h->stats.cigi_drop_value, 1);
+}
+
 /* Entity Control (3.x: state and position) or Entity Position (4.0):
- * the entity enters the daemon's table at the sim clock, its speed the
- * step from its last sample (at most its kind's); destroyed, it leaves.
- * The host is the entity's authority: a step the table refuses (a host
- * that repositions it) enters it anew where the host put it.  An attached
- * entity (a part of another) is no entity of the sea. */
+ * the entity's sample at the sim clock, its speed the step from its last
+ * sample (at most its kind's); destroyed, it leaves.  Entered at once, or,
+ * replicated, through the shared timeline server.sea_lead ahead (and two
+ * ticks: it is stored a moment later).  The host is the entity's
+ * authority: a step the table refuses (a host that repositions it) enters
+ * it anew where the host put it.  An attached entity (a part of another)
+ * is no entity of the sea. */
 static void take_entity(srv_cigi *s, pending *m, const cigi_packet *p)
 {
-    srv_entities *tab = s->h->entities;
+    srv_hub *h = s->h;
     const cigi_entity *e = &p->u.entity;
     if (cigi_packet_check(p, NULL, 0) != OCEAN_OK) {
-        bump(&s->h->stats.cigi_drop_value, 1);
+        bump(&h->stats.cigi_drop_value, 1);
         return;
     }
+    double now = srv_hub_sim_time(h);
+    double from = h->redis ? now + h->settings.srv.sea_lead + 2.0 / h->settings.srv.tick_rate : now;
+    ocean_entity_desc d = entity_desc(e);
+    proto_msg msg;
     if (p->kind == CIGI_ENTITY_CONTROL && e->state == CIGI_ENTITY_DESTROYED) {
-        srv_entities_remove(tab, e->id);
+        srv_entity_msg(PROTO_ENTITY_GONE, &d, NULL, from, &msg);
+        entity_put(s, &msg, from);
         return;
     }
     int placed = p->kind == CIGI_ENTITY_POSITION || m->fmt.major == 3; /* 4.0's Entity Control is state only */
     if (!placed || e->attach || (p->kind == CIGI_ENTITY_CONTROL && e->state != CIGI_ENTITY_ACTIVE)) {
-        bump(&s->h->stats.cigi_ignored, 1);
+        bump(&h->stats.cigi_ignored, 1);
         return;
     }
-    ocean_entity_desc d = entity_desc(e);
-    ocean_track_sample smp = {.t = srv_hub_sim_time(s->h), .heading_deg = e->yaw};
+    ocean_track_sample smp = {.t = now, .heading_deg = e->yaw};
     smp.altitude_m = d.kind == OCEAN_ENTITY_SHIP ? 0 : e->alt;
     if (ocean_geo_to_plane(s->geo, e->lat, e->lon, &smp.x, &smp.z) != OCEAN_OK) {
-        bump(&s->h->stats.cigi_drop_value, 1);
+        bump(&h->stats.cigi_drop_value, 1);
         return;
     }
     ocean_track_sample last;
     double vmax = d.kind == OCEAN_ENTITY_SHIP ? OCEAN_SHIP_SPEED_MAX : OCEAN_AIRCRAFT_SPEED_MAX;
-    if (srv_entities_last(tab, e->id, &last) == OCEAN_OK && smp.t > last.t)
-        smp.speed = fmin(vmax, hypot(smp.x - last.x, smp.z - last.z) / (smp.t - last.t));
-    if (srv_entities_sample(tab, &d, &smp, NULL, 0) != OCEAN_OK) {
-        srv_entities_remove(tab, e->id);
+    int known = srv_entities_last(h->entities, e->id, &last, NULL) == OCEAN_OK;
+    if (known && smp.t > last.t) smp.speed = fmin(vmax, hypot(smp.x - last.x, smp.z - last.z) / (smp.t - last.t));
+    if (known && srv_entities_refuses(h->entities, &d, &smp, from)) { /* repositioned: entered anew */
+        srv_entity_msg(PROTO_ENTITY_GONE, &d, NULL, from, &msg);
+        entity_put(s, &msg, from);
         smp.speed = 0;
-        if (srv_entities_sample(tab, &d, &smp, NULL, 0) != OCEAN_OK) {
-            bump(&s->h->stats.cigi_drop_value, 1);
-            return;
-        }
     }
-    srv_wakes_ahead(s->h, &d, &smp);  /* its wake built before HAT/HOT asks for it */
+    srv_entity_msg(PROTO_ENTITY_ANNOUNCE, &d, &smp, from, &msg);
+    entity_put(s, &msg, from);
 }
 
 /* An entity-relative request's point: the entity's position at the sim

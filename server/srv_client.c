@@ -147,25 +147,23 @@ void srv_client_send_bye(srv_client *c, int reason, const char *why)
     srv_client_queue(c, m);
 }
 
-ocean_result srv_client_queue_entities(srv_client *c, int max, double now)
+ocean_result srv_client_queue_entities(srv_client *c, int max)
 {
     ocean_entity_desc *d = malloc(sizeof *d * (size_t)max);
     ocean_track_sample *smp = malloc(sizeof *smp * (size_t)max);
-    if (!d || !smp) {
-        free(d);
-        free(smp);
-        return OCEAN_ENOMEM;
-    }
-    int n = srv_entities_snapshot(c->hub->entities, d, smp, max);
+    double *from = malloc(sizeof *from * (size_t)max);
+    ocean_result r = d && smp && from ? OCEAN_OK : OCEAN_ENOMEM;
+    int n = r == OCEAN_OK ? srv_entities_snapshot(c->hub->entities, d, smp, from, max) : 0;
     for (int i = 0; i < n; i++) {
         proto_msg m;
-        srv_entity_msg(PROTO_ENTITY_ANNOUNCE, &d[i], &smp[i], now, &m);
+        srv_entity_msg(PROTO_ENTITY_ANNOUNCE, &d[i], &smp[i], from[i], &m);
         srv_msg *q = srv_msg_encode(&m);
         if (q) srv_client_queue(c, q);
     }
     free(d);
     free(smp);
-    return OCEAN_OK;
+    free(from);
+    return r;
 }
 
 void srv_client_send_hello(srv_client *c)
@@ -212,7 +210,7 @@ void srv_client_send_hello(srv_client *c)
                                           m.hdr.sim_time);
             if (a) srv_client_queue(c, a);
         }
-        if (srv_client_queue_entities(c, s->srv.max_entities, m.hdr.sim_time) != OCEAN_OK)
+        if (srv_client_queue_entities(c, s->srv.max_entities) != OCEAN_OK)
             fprintf(stderr, "oceand: client %u: out of memory for the list of entities (it may ask again: ENTITY "
                     "get)\n", c->id);
         c->hello_sent = 1;

@@ -126,12 +126,13 @@ void srv_client_send_hello(srv_client *c);
 /* Answers SEA_STATE get: an announce of the current sea (effective_time: when
  * it took effect), then one per pending change, earliest first. */
 void srv_client_send_sea_timeline(srv_client *c);
-/* Queues to c an ENTITY announce of each entity in the hub's table (at
- * most max), stamped sim time now: what a client joining, or asking with
- * ENTITY get, learns of the entities in force.  Takes only the table's
- * lock and sends no ERROR (callers may hold hub.lock).  OCEAN_ENOMEM:
- * nothing queued. */
-ocean_result srv_client_queue_entities(srv_client *c, int max, double now);
+/* Queues to c an ENTITY announce of each live entity in the hub's table
+ * (at most max), its newest sample stamped with the sim time that sample
+ * takes effect: what a client joining, or asking with ENTITY get, learns
+ * of the entities in force and pending.  Takes only the table's lock and
+ * sends no ERROR (callers may hold hub.lock).  OCEAN_ENOMEM: nothing
+ * queued. */
+ocean_result srv_client_queue_entities(srv_client *c, int max);
 
 
 #endif

@@ -72,10 +72,10 @@ void srv_entity_from_msg(const proto_entity *e, ocean_entity_desc *d, ocean_trac
                               .heading_deg = e->heading_deg, .speed = e->speed};
 }
 
-void srv_entity_msg(unsigned op, const ocean_entity_desc *d, const ocean_track_sample *s, double now, proto_msg *out)
+void srv_entity_msg(unsigned op, const ocean_entity_desc *d, const ocean_track_sample *s, double from, proto_msg *out)
 {
     proto_msg_init(out, PROTO_ENTITY);
-    out->hdr.sim_time = now;
+    out->hdr.sim_time = from;
     proto_entity *e = &out->u.entity;
     e->op = (uint8_t)op;
     e->id = d->id;

@@ -22,8 +22,8 @@ void srv_mesh_camera(const proto_camera *pc, mesh_camera *out);
 /* An ENTITY set's shape and track sample, as the entity table takes them. */
 void srv_entity_from_msg(const proto_entity *e, ocean_entity_desc *d, ocean_track_sample *s);
 /* The ENTITY message of op (announce: shape and sample; gone: d->id
- * alone), sent at sim time now. */
-void srv_entity_msg(unsigned op, const ocean_entity_desc *d, const ocean_track_sample *s, double now, proto_msg *out);
+ * alone) that takes effect at sim time `from` (its header sim_time). */
+void srv_entity_msg(unsigned op, const ocean_entity_desc *d, const ocean_track_sample *s, double from, proto_msg *out);
 
 
 #endif

@@ -4,7 +4,9 @@
  */
 #include "srv_entity.h"
 
+#include <math.h>
 #include <pthread.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 struct srv_entities {
@@ -35,29 +37,52 @@ void srv_entities_destroy(srv_entities *e)
     free(e);
 }
 
+static int desc_same(const ocean_entity_desc *a, const ocean_entity_desc *b)
+{
+    return a->kind == b->kind && a->length_m == b->length_m && a->beam_m == b->beam_m &&
+           a->draught_m == b->draught_m;
+}
+
 ocean_result srv_entities_sample(srv_entities *e, const ocean_entity_desc *d, const ocean_track_sample *s,
-                                 char *why, size_t n)
+                                 double from, char *why, size_t n)
 {
     pthread_mutex_lock(&e->lock);
-    ocean_track_sample last;
+    ocean_entity_desc known;
     int added = 0;
     ocean_result r = OCEAN_OK;
-    if (ocean_entities_last(e->t, d->id, &last) != OCEAN_OK) { /* only entered here, with a sample */
+    if (ocean_entities_desc(e->t, d->id, &known) != OCEAN_OK) {
         r = ocean_entities_add(e->t, d, why, n);
         added = r == OCEAN_OK;
+    } else if (!desc_same(&known, d)) {
+        snprintf(why, n, "entity %u is kind %d, %g x %g x %g m; a sample may not change its kind or size "
+                 "(remove it first)", d->id, (int)known.kind, known.length_m, known.beam_m, known.draught_m);
+        r = OCEAN_EINVAL;
     }
     if (r == OCEAN_OK) {
-        r = ocean_entities_sample(e->t, d->id, s, why, n);
-        if (r != OCEAN_OK && added) ocean_entities_remove(e->t, d->id);
+        r = ocean_entities_sample(e->t, d->id, s, from, why, n);
+        if (r != OCEAN_OK && added) ocean_entities_remove(e->t, d->id, from);
     }
+    /* what an entry's own time says, so every replica keeps the same past */
+    if (r == OCEAN_OK && isfinite(from)) ocean_entities_prune(e->t, from - SRV_ENTITY_PAST_S);
     pthread_mutex_unlock(&e->lock);
     return r;
 }
 
-ocean_result srv_entities_remove(srv_entities *e, uint32_t id)
+int srv_entities_refuses(srv_entities *e, const ocean_entity_desc *d, const ocean_track_sample *s, double from)
 {
     pthread_mutex_lock(&e->lock);
-    ocean_result r = ocean_entities_remove(e->t, id);
+    ocean_entity_desc known;
+    int refuses = ocean_entities_desc(e->t, d->id, &known) == OCEAN_OK &&
+                  (!desc_same(&known, d) || ocean_entities_check(e->t, d->id, s, from, NULL, 0) != OCEAN_OK);
+    pthread_mutex_unlock(&e->lock);
+    return refuses;
+}
+
+ocean_result srv_entities_remove(srv_entities *e, uint32_t id, double from)
+{
+    pthread_mutex_lock(&e->lock);
+    ocean_result r = ocean_entities_remove(e->t, id, from);
+    if (r == OCEAN_OK) ocean_entities_prune(e->t, from - SRV_ENTITY_PAST_S);
     pthread_mutex_unlock(&e->lock);
     return r;
 }
@@ -70,10 +95,10 @@ ocean_result srv_entities_state(srv_entities *e, uint32_t id, double t, ocean_en
     return r;
 }
 
-ocean_result srv_entities_last(srv_entities *e, uint32_t id, ocean_track_sample *out)
+ocean_result srv_entities_last(srv_entities *e, uint32_t id, ocean_track_sample *out, double *from)
 {
     pthread_mutex_lock(&e->lock);
-    ocean_result r = ocean_entities_last(e->t, id, out);
+    ocean_result r = ocean_entities_last(e->t, id, out, from);
     pthread_mutex_unlock(&e->lock);
     return r;
 }
@@ -86,6 +111,14 @@ int srv_entities_count(srv_entities *e)
     return c;
 }
 
+int srv_entities_kept(srv_entities *e)
+{
+    pthread_mutex_lock(&e->lock);
+    int c = ocean_entities_kept(e->t);
+    pthread_mutex_unlock(&e->lock);
+    return c;
+}
+
 ocean_result srv_entities_find(srv_entities *e, uint32_t id, ocean_entity_desc *out)
 {
     pthread_mutex_lock(&e->lock);
@@ -94,12 +127,13 @@ ocean_result srv_entities_find(srv_entities *e, uint32_t id, ocean_entity_desc *
     return r;
 }
 
-int srv_entities_snapshot(srv_entities *e, ocean_entity_desc *d, ocean_track_sample *s, int max)
+int srv_entities_snapshot(srv_entities *e, ocean_entity_desc *d, ocean_track_sample *s, double *from, int max)
 {
     pthread_mutex_lock(&e->lock);
     int n = 0, count = ocean_entities_count(e->t);
     for (int i = 0; i < count && n < max; i++)
-        if (ocean_entities_get(e->t, i, &d[n]) == OCEAN_OK && ocean_entities_last(e->t, d[n].id, &s[n]) == OCEAN_OK)
+        if (ocean_entities_get(e->t, i, &d[n]) == OCEAN_OK &&
+            ocean_entities_last(e->t, d[n].id, &s[n], &from[n]) == OCEAN_OK)
             n++;
     pthread_mutex_unlock(&e->lock);
     return n;
@@ -108,10 +142,7 @@ int srv_entities_snapshot(srv_entities *e, ocean_entity_desc *d, ocean_track_sam
 int srv_entities_at(srv_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max)
 {
     pthread_mutex_lock(&e->lock);
-    int n = 0, count = ocean_entities_count(e->t);
-    for (int i = 0; i < count && n < max; i++)
-        if (ocean_entities_get(e->t, i, &d[n]) == OCEAN_OK && ocean_entities_state(e->t, d[n].id, t, &s[n]) == OCEAN_OK)
-            n++;
+    int n = ocean_entities_at(e->t, t, d, s, max);
     pthread_mutex_unlock(&e->lock);
     return n;
 }

@@ -7,7 +7,10 @@
  * wakes (one concept for all) come to the same table.
  *
  * Tracks are in sim time: a feeder that only knows "now" enters its sample
- * at the daemon's sim clock.  A track runs on SRV_ENTITY_HOLD_S past its
+ * at the daemon's sim clock.  Every sample and removal is an entry with
+ * the instant it takes effect (sim/entity.h): the daemon's clock when it
+ * is entered, or, replicated, the time its Redis entry takes effect
+ * (srv_redis.h), so the sea at any instant depends only on the entries.  A track runs on SRV_ENTITY_HOLD_S past its
  * last sample, then holds still (sim/entity.h), so an entity whose feeder
  * went silent stays where it was left.
  *
@@ -26,6 +29,10 @@
 
 /* How long a track runs on past its last sample, s. */
 #define SRV_ENTITY_HOLD_S 10.0
+/* How long a gone entity's past is kept after its removal, s: a query or
+ * replay may ask an instant this far back (a sample lies within 60 s of
+ * the clock). */
+#define SRV_ENTITY_PAST_S 120.0
 
 typedef struct srv_entities srv_entities;
 
@@ -34,24 +41,37 @@ typedef struct srv_entities srv_entities;
 ocean_result srv_entities_create(int max, srv_entities **out, char *why, size_t n);
 void srv_entities_destroy(srv_entities *e); /* accepts NULL */
 
-/* Appends sample s to entity d->id's track, entering the entity with
- * shape d first when the table does not hold it (a known entity keeps its
- * shape).  The errors of ocean_entities_add and ocean_entities_sample,
- * with why; on any error the table is unchanged. */
+/* Appends sample s, in force from sim time `from`, to entity d->id's
+ * track, entering the entity with shape d first when no live one has the
+ * id.  The errors of ocean_entities_add and ocean_entities_sample, and
+ * OCEAN_EINVAL for a shape other than the live entity's, with why; on any
+ * error the table is unchanged.  Drops the past of entities gone
+ * SRV_ENTITY_PAST_S before `from`. */
 ocean_result srv_entities_sample(srv_entities *e, const ocean_entity_desc *d, const ocean_track_sample *s,
-                                 char *why, size_t n);
-/* Takes entity id out.  OCEAN_ENOTFOUND. */
-ocean_result srv_entities_remove(srv_entities *e, uint32_t id);
+                                 double from, char *why, size_t n);
+/* 1 when a live entity d->id would refuse sample s in force from `from`
+ * (a shape other than its own, a step it cannot make, time order), the
+ * table unchanged: a feeder that is its entities' authority enters such
+ * an entity anew instead. */
+int srv_entities_refuses(srv_entities *e, const ocean_entity_desc *d, const ocean_track_sample *s, double from);
+/* Entity id is gone from sim time `from` on (ocean_entities_remove):
+ * OCEAN_ENOTFOUND, OCEAN_EINVAL. */
+ocean_result srv_entities_remove(srv_entities *e, uint32_t id, double from);
 /* id's state at sim time t (ocean_entities_state). */
 ocean_result srv_entities_state(srv_entities *e, uint32_t id, double t, ocean_entity_state *out);
-/* id's newest sample (ocean_entities_last). */
-ocean_result srv_entities_last(srv_entities *e, uint32_t id, ocean_track_sample *out);
+/* id's newest sample and the instant it takes effect (ocean_entities_last). */
+ocean_result srv_entities_last(srv_entities *e, uint32_t id, ocean_track_sample *out, double *from);
+/* Live entities (ocean_entities_count). */
 int srv_entities_count(srv_entities *e);
+/* Entities live or gone with their past kept: the most srv_entities_at
+ * can return (ocean_entities_kept). */
+int srv_entities_kept(srv_entities *e);
 /* Entity id's shape.  OCEAN_ENOTFOUND. */
 ocean_result srv_entities_find(srv_entities *e, uint32_t id, ocean_entity_desc *out);
-/* Every entity with a sample (at most max): shape and newest sample, in
- * increasing id, copied under one hold.  Returns how many. */
-int srv_entities_snapshot(srv_entities *e, ocean_entity_desc *d, ocean_track_sample *s, int max);
+/* Every live entity with a sample (at most max): shape, newest sample and
+ * the instant it takes effect, in increasing id, copied under one hold.
+ * Returns how many. */
+int srv_entities_snapshot(srv_entities *e, ocean_entity_desc *d, ocean_track_sample *s, double *from, int max);
 /* Every entity in the sea at sim time t (at most max): shape and state
  * at t, in increasing id, copied under one hold.  Returns how many. */
 int srv_entities_at(srv_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max);

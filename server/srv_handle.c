@@ -22,7 +22,6 @@
 #include "srv_admit.h"
 #include "srv_convert.h"
 #include "srv_entity.h"
-#include "srv_wakes.h"
 #include "srv_cascade.h"
 #include "srv_record.h"
 #include "srv_redis.h"
@@ -524,80 +523,74 @@ static int entity_set_token(const srv_in *in)
     return 0;
 }
 
-static void entity_announce(const srv_in *in, unsigned op, const ocean_entity_desc *d, const ocean_track_sample *smp)
+/* Enters an ENTITY set or remove as its entry m (an announce or gone, its
+ * header sim_time the instant it takes effect): at once, in force from the
+ * clock, announced to every client (the setter's reply); or, replicated,
+ * queued for the shared stream in force server.sea_lead ahead, the
+ * announce or an ERROR coming back through it.  Refused with what, the
+ * table's reason and nothing changed. */
+static void entity_enter(const srv_in *in, proto_msg *m, const char *what)
 {
     srv_hub *h = in->h;
-    proto_msg m;
-    pthread_mutex_lock(&h->lock);
-    srv_entity_msg(op, d, smp, srv_hub_sim_time(h), &m);
-    srv_hub_broadcast(h, &m);
-    pthread_mutex_unlock(&h->lock);
-    srv_hub_wake_net(h);
+    char why[512], msg[400] = "";
+    double now = srv_hub_sim_time(h);
+    ocean_result r;
+    if (h->redis) {
+        m->hdr.sim_time = now + in->cfg->sea_lead;
+        r = srv_redis_submit_entity(h->redis, in->c, in->buf, in->len, m, what, why, sizeof why);
+    } else {
+        m->hdr.sim_time = now;
+        r = srv_hub_entity_enter(h, m, msg, sizeof msg);
+        snprintf(why, sizeof why, "%s refused: %s%s", what, msg[0] ? msg : ocean_strerror(r),
+                 r == OCEAN_ETOOBIG ? " (server.max_entities)" : "");
+    }
+    if (r != OCEAN_OK) {
+        refuse(in, r, why);
+        return;
+    }
+    /* logged when verbose: a token holder may enter and remove 120 a second,
+     * and no client may flood the log */
+    if (in->cfg->verbose)
+        fprintf(stderr, "oceand: %s of entity %u by client %u (%s), in force from t = %.3f s%s\n", what,
+                m->u.entity.id, in->c->id, in->s->peer[0] ? in->s->peer : "?", m->hdr.sim_time,
+                h->redis ? " (sent to the shared timeline)" : "");
 }
 
 /* A track sample of one entity, entering it with its shape if new: what
  * the table refuses (sim/entity.h: ranges, time order, teleports, a full
- * table) is refused with its reason, and so are a sample away from the
- * clock and a set that would change a known entity's kind or size. */
+ * table, a kind or size other than the live entity's) is refused with its
+ * reason, and so is a sample away from the clock. */
 static void entity_set(const srv_in *in, const proto_entity *e)
 {
-    srv_hub *h = in->h;
-    ocean_entity_desc d, known;
-    ocean_track_sample smp;
-    char why[512], msg[300] = "";
-    srv_entity_from_msg(e, &d, &smp);
-    double now = srv_hub_sim_time(h);
-    if (!(fabs(smp.t - now) <= SRV_ENTITY_T_WINDOW)) {
+    double now = srv_hub_sim_time(in->h);
+    if (!(fabs(e->t - now) <= SRV_ENTITY_T_WINDOW)) {
+        char why[300];
         snprintf(why, sizeof why, "ENTITY set refused: entity.t = %.3f s is more than %g s from the server's "
-                 "sim time %.3f s", smp.t, SRV_ENTITY_T_WINDOW, now);
+                 "sim time %.3f s", e->t, SRV_ENTITY_T_WINDOW, now);
         refuse(in, OCEAN_EINVAL, why);
         return;
     }
-    int fresh = srv_entities_find(h->entities, d.id, &known) != OCEAN_OK;
-    if (!fresh && (known.kind != d.kind || known.length_m != d.length_m || known.beam_m != d.beam_m ||
-                   known.draught_m != d.draught_m)) {
-        snprintf(why, sizeof why, "ENTITY set refused: entity %u is kind %d, %g x %g x %g m; a set may not change "
-                 "its kind or size (remove it first)", d.id, (int)known.kind, known.length_m, known.beam_m,
-                 known.draught_m);
-        refuse(in, OCEAN_EINVAL, why);
-        return;
-    }
-    ocean_result r = srv_entities_sample(h->entities, &d, &smp, msg, sizeof msg);
-    if (r != OCEAN_OK) {
-        snprintf(why, sizeof why, "ENTITY set refused: %s%s", msg[0] ? msg : ocean_strerror(r),
-                 r == OCEAN_ETOOBIG ? " (server.max_entities)" : "");
-        refuse(in, r, why);
-        return;
-    }
-    srv_wakes_ahead(h, &d, &smp);
-    /* logged when verbose: a token holder may enter and remove 120 a second,
-     * and no client may flood the log */
-    if (fresh && in->cfg->verbose)
-        fprintf(stderr, "oceand: entity %u (kind %d, %g m) entered by client %u (%s) at t = %.3f s\n", d.id,
-                (int)d.kind, d.length_m, in->c->id, in->s->peer[0] ? in->s->peer : "?", smp.t);
-    entity_announce(in, PROTO_ENTITY_ANNOUNCE, &d, &smp);
+    proto_msg m;
+    ocean_entity_desc d;
+    ocean_track_sample smp;
+    srv_entity_from_msg(e, &d, &smp);
+    srv_entity_msg(PROTO_ENTITY_ANNOUNCE, &d, &smp, now, &m);
+    entity_enter(in, &m, "ENTITY set");
 }
 
 static void entity_remove(const srv_in *in, uint32_t id)
 {
-    char why[200];
-    if (srv_entities_remove(in->h->entities, id) != OCEAN_OK) {
-        snprintf(why, sizeof why, "ENTITY remove refused: no entity %u in the sea", id);
-        refuse(in, OCEAN_ENOTFOUND, why);
-        return;
-    }
-    if (in->cfg->verbose)
-        fprintf(stderr, "oceand: entity %u removed by client %u (%s)\n", id, in->c->id,
-                in->s->peer[0] ? in->s->peer : "?");
+    proto_msg m;
     ocean_entity_desc d = {.id = id};
-    entity_announce(in, PROTO_ENTITY_GONE, &d, NULL);
+    srv_entity_msg(PROTO_ENTITY_GONE, &d, NULL, 0, &m);
+    entity_enter(in, &m, "ENTITY remove");
 }
 
 static void on_entity(const srv_in *in)
 {
     const proto_entity *e = &in->m->u.entity;
     if (e->op == PROTO_ENTITY_GET) { /* every entity's newest sample, to the asker alone */
-        if (srv_client_queue_entities(in->c, in->cfg->max_entities, srv_hub_sim_time(in->h)) != OCEAN_OK)
+        if (srv_client_queue_entities(in->c, in->cfg->max_entities) != OCEAN_OK)
             refuse(in, OCEAN_ENOMEM, "ENTITY get: out of memory for the list of entities");
         return;
     }

@@ -11,6 +11,7 @@
 #include <time.h>
 
 #include "srv_client.h"
+#include "srv_convert.h"
 #include "srv_entity.h"
 #include "srv_wakes.h"
 #include "srv_fingerprint.h"
@@ -187,6 +188,32 @@ void srv_hub_broadcast(srv_hub *h, const proto_msg *m)
         srv_msg *q = srv_msg_encode(m);
         if (q) srv_client_queue(k, q);
     }
+}
+
+ocean_result srv_hub_entity_enter(srv_hub *h, const proto_msg *m, char *why, size_t n)
+{
+    const proto_entity *e = &m->u.entity;
+    double from = m->hdr.sim_time;
+    ocean_entity_desc d;
+    ocean_track_sample s;
+    srv_entity_from_msg(e, &d, &s);
+    ocean_result r;
+    if (e->op == PROTO_ENTITY_GONE) {
+        r = srv_entities_remove(h->entities, e->id, from);
+        if (r != OCEAN_OK)
+            snprintf(why, n, r == OCEAN_ENOTFOUND ? "no entity %u in the sea"
+                                                  : "entity %u: a removal at %.6f s, before its last entry took effect",
+                     e->id, from);
+    } else {
+        r = srv_entities_sample(h->entities, &d, &s, from, why, n);
+    }
+    if (r != OCEAN_OK) return r;
+    if (e->op == PROTO_ENTITY_ANNOUNCE) srv_wakes_ahead(h, &d, &s);
+    pthread_mutex_lock(&h->lock);
+    srv_hub_broadcast(h, m);
+    pthread_mutex_unlock(&h->lock);
+    srv_hub_wake_net(h);
+    return OCEAN_OK;
 }
 
 void srv_hub_wake_net(srv_hub *h)

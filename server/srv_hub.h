@@ -124,6 +124,14 @@ srv_msg *srv_hub_sea_announce(const proto_sea *sea, double eff, double now);
  * made (OOM) misses it.  The caller wakes the service thread after
  * unlocking. */
 void srv_hub_broadcast(srv_hub *h, const proto_msg *m);
+/* Enters an entity entry into the hub's table: an ENTITY announce (a
+ * track sample) or gone (a removal), in force from its header sim_time
+ * (sim/entity.h), whoever fed it (an ocean.v1 set, a CIGI host, a Redis
+ * entry).  Announces it to every client that has had its HELLO and asks
+ * the wake builder for a ship's patterns.  The table's refusals
+ * (srv_entities_sample, srv_entities_remove), with why: nothing changed,
+ * nothing announced.  Takes hub.lock: the caller must not hold it. */
+ocean_result srv_hub_entity_enter(srv_hub *h, const proto_msg *m, char *why, size_t n);
 /* Wakes the service thread (lws_cancel_service). */
 void srv_hub_wake_net(srv_hub *h);
 

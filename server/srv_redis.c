@@ -4,8 +4,11 @@
  * One connection, owned by the replication thread: it stores the queued
  * sets (XADD), reads the stream after the last entry it read, and answers
  * each stored set when it reads that set's entry back.  Stream entries
- * carry one field, "msg": the bytes of a SEA_STATE announce (PROTOCOL.md),
- * so the stream holds exactly what clients are sent.
+ * carry one field, "msg": the bytes of a SEA_STATE announce or of an
+ * ENTITY announce or gone (PROTOCOL.md), so the stream holds exactly what
+ * clients are sent.  Entity entries go straight into the hub's table
+ * (srv_hub_entity_enter), in stream order, at start as while running: the
+ * table is their fold.
  *
  * Reads are XRANGE of at most SRV_REDIS_BATCH entries after the last one
  * read, through srv_resp's bounded reader: an entry whose msg is over
@@ -46,10 +49,11 @@
 #define START_IDLE_MAX_S 16.0  /* the longest a starting replica waits for a reply's next byte */
 #define CATCH_UP_BATCHES 16     /* batches read before stored sets get a turn again */
 
-/* A SEA_STATE set on its way through the stream. */
+/* A SEA_STATE set or an entity entry on its way through the stream. */
 typedef struct set_req {
     struct set_req *next;
-    srv_client *c;              /* one reference held */
+    const char *what;           /* "SEA_STATE set", "ENTITY set", ...: for its answers */
+    srv_client *c;              /* one reference held; NULL: nobody to answer (a CIGI host) */
     uint8_t *bad;               /* the set's message, for the ERROR answering it */
     size_t badlen;
     proto_buf entry;            /* the announce to store */
@@ -65,9 +69,11 @@ typedef struct anomalies {
 /* One usable entry, decoded. */
 typedef struct entry {
     double stored;              /* sim time Redis stored it, at most the clock */
-    double effective;           /* as announced */
+    double effective;           /* as announced (an ENTITY's: its header sim_time) */
+    int is_entity;
     proto_sea sea;
     ocean_params params;
+    proto_entity entity;        /* an ENTITY announce or gone */
 } entry;
 
 /* The stream's timeline, entry times as every replica reads them (see
@@ -127,8 +133,12 @@ static void set_free(set_req *q)
  * and frees it.  OCEAN_OK: the announce was its answer. */
 static void set_answer(srv_redis *r, set_req *q, ocean_result code, const char *why)
 {
-    if (code != OCEAN_OK) {
-        srv_client_send_error(q->c, q->bad, q->badlen, code, why);
+    if (code != OCEAN_OK && q->c) {
+        char msg[700];
+        /* the reasons shared by every kind of entry say whose they are */
+        if (strncmp(why, q->what, strlen(q->what)) != 0) snprintf(msg, sizeof msg, "%s %s", q->what, why);
+        else snprintf(msg, sizeof msg, "%s", why);
+        srv_client_send_error(q->c, q->bad, q->badlen, code, msg);
         srv_hub_wake_net(r->hub);
     }
     set_free(q);
@@ -249,12 +259,22 @@ static int entry_decode(srv_redis *r, const char *id, const srv_resp *fields, en
         r->seen.not_announce++;
         return 0;
     }
+    e->stored = fmin(srv_hub_sim_time_at(h, stored_unix), srv_hub_sim_time(h));
+    e->is_entity = m.hdr.type == PROTO_ENTITY;
+    if (e->is_entity) {
+        int ok = (m.u.entity.op == PROTO_ENTITY_ANNOUNCE || m.u.entity.op == PROTO_ENTITY_GONE) &&
+                 ocean_time_ok(m.hdr.sim_time);
+        e->entity = m.u.entity;
+        e->effective = m.hdr.sim_time;
+        proto_msg_free(&m);
+        if (!ok) r->seen.not_announce++;
+        return ok;
+    }
     int ok = m.hdr.type == PROTO_SEA_STATE && m.u.sea_state.op == PROTO_SEA_ANNOUNCE &&
              ocean_time_ok(m.u.sea_state.effective_time);
     if (ok) {
         e->sea = m.u.sea_state.sea;
         e->effective = m.u.sea_state.effective_time;
-        e->stored = fmin(srv_hub_sim_time_at(h, stored_unix), srv_hub_sim_time(h));
         char msg[256];
         srv_params_from_sea(&e->sea, &r->base, &e->params);
         ok = ocean_params_validate(&e->params, msg, sizeof msg) == OCEAN_OK;
@@ -291,7 +311,7 @@ static int batch_entry(srv_redis *r, const srv_resp *item, entry_use use, void *
     const char *id = item->elem[0].str;
     snprintf(r->last_id, sizeof r->last_id, "%s", id);
     entry e;
-    char why[400] = "SEA_STATE set refused: its stream entry cannot be read back";
+    char why[600] = "refused: its stream entry cannot be read back";
     ocean_result res = OCEAN_EIO;
     if (entry_decode(r, id, &item->elem[1], &e)) {
         res = use(r, &e, ctx, why, sizeof why);
@@ -385,7 +405,8 @@ static void anomalies_report(srv_redis *r, int force)
     double now = srv_now();
     if (!force && r->said_at > 0 && now - r->said_at < REPORT_EVERY_S) return;
     fprintf(stderr, "oceand: redis stream %s: %" PRIu64 " entries over %d bytes, %" PRIu64 " not one msg "
-            "field, %" PRIu64 " no valid SEA_STATE announce, %" PRIu64 " changes or reads refused, skipped; "
+            "field, %" PRIu64 " no valid SEA_STATE or ENTITY announce, %" PRIu64 " entries or reads refused, "
+            "skipped; "
             "%" PRIu64 " resets (read again from the start), %" PRIu64 " ids over %g s ahead of the clock "
             "(counts since the last such line)\n", r->key, a->too_large, SRV_REDIS_ENTRY_MAX, a->bad_shape,
             a->not_announce, a->refused, a->resets, a->future, SRV_REDIS_FUTURE_S);
@@ -406,11 +427,27 @@ static void fold_due(fold *f, double t)
     f->n -= k;
 }
 
+/* An entity entry, into the hub's table in force from the later of its
+ * time and the time Redis stored it, as every replica enters it. */
+static ocean_result entity_entry(srv_redis *r, const entry *e, char *why, size_t whylen)
+{
+    proto_msg m;
+    proto_msg_init(&m, PROTO_ENTITY);
+    m.hdr.sim_time = fmax(e->effective, e->stored);
+    m.u.entity = e->entity;
+    char msg[400] = "";
+    ocean_result res = srv_hub_entity_enter(r->hub, &m, msg, sizeof msg);
+    if (res != OCEAN_OK)
+        snprintf(why, whylen, "ENTITY %s refused: %s", e->entity.op == PROTO_ENTITY_GONE ? "remove" : "set",
+                 msg[0] ? msg : ocean_strerror(res));
+    return res;
+}
+
 /* An entry, as a replica reading it when Redis stored it enters it
  * (srv_hub_sea_schedule at that moment). */
 static ocean_result fold_entry(srv_redis *r, const entry *e, void *ctx, char *why, size_t whylen)
 {
-    (void)r;
+    if (e->is_entity) return entity_entry(r, e, why, whylen);
     fold *f = ctx;
     fold_due(f, e->stored);
     double at = fmax(e->effective, e->stored);
@@ -490,7 +527,7 @@ static ocean_result running_entry(srv_redis *r, const entry *e, void *ctx, char 
 {
     (void)ctx;
     ocean_result res = fold_entry(r, e, &r->timeline, why, whylen);
-    if (res != OCEAN_OK) return res;
+    if (res != OCEAN_OK || e->is_entity) return res;
     double at = fmax(e->effective, e->stored);
     if (at <= srv_hub_sim_time(r->hub)) {
         r->batch_now = 1;
@@ -563,7 +600,7 @@ static int set_store(srv_redis *r, set_req *q, char *why, size_t whylen)
     int ok = rep && rep->type == REDIS_REPLY_STRING && rep->len < ID_MAX;
     if (ok) snprintf(q->id, sizeof q->id, "%s", rep->str);
     else
-        snprintf(why, whylen, "SEA_STATE set not stored: Redis %s:%d %s", r->host, r->port,
+        snprintf(why, whylen, "%s not stored: Redis %s:%d %s", q->what, r->host, r->port,
                  rep && rep->type == REDIS_REPLY_ERROR ? rep->str : "unreachable or not answering");
     if (rep) freeReplyObject(rep);
     return ok;
@@ -610,8 +647,8 @@ static void sets_expire(srv_redis *r)
         }
         *p = q->next;
         char why[300];
-        snprintf(why, sizeof why, "SEA_STATE set stored in stream %s as %s but not read back within %g s "
-                 "(the stream was reset or trimmed): not announced", r->key, q->id, READBACK_S);
+        snprintf(why, sizeof why, "%s stored in stream %s as %s but not read back within %g s (the stream "
+                 "was reset or trimmed): not announced", q->what, r->key, q->id, READBACK_S);
         set_answer(r, q, OCEAN_EIO, why);
     }
 }
@@ -647,7 +684,7 @@ static void *replicate(void *arg)
             if (r->rc) catch_up(r);
         } else {
             char why[300];
-            snprintf(why, sizeof why, "SEA_STATE set not stored: Redis %s:%d unreachable", r->host, r->port);
+            snprintf(why, sizeof why, "not stored: Redis %s:%d unreachable", r->host, r->port);
             set_req *q = queue_take(r);
             sets_answer_all(r, &q, OCEAN_EIO, why);
         }
@@ -722,8 +759,8 @@ void srv_redis_stop(srv_redis *r)
     pthread_cond_broadcast(&r->cond);
     pthread_mutex_unlock(&r->lock);
     if (r->running) pthread_join(r->thread, NULL);
-    sets_answer_all(r, &r->queue, OCEAN_EIO, "SEA_STATE set not stored: the server is stopping");
-    sets_answer_all(r, &r->stored, OCEAN_EIO, "SEA_STATE set not announced: the server is stopping");
+    sets_answer_all(r, &r->queue, OCEAN_EIO, "not stored: the server is stopping");
+    sets_answer_all(r, &r->stored, OCEAN_EIO, "not announced: the server is stopping");
     if (r->rc) redisFree(r->rc);
     pthread_cond_destroy(&r->cond);
     pthread_mutex_destroy(&r->lock);
@@ -745,35 +782,56 @@ static int pending_full(srv_hub *h, double e)
     return ahead >= SRV_SEA_PENDING_MAX && !replace;
 }
 
-/* A set request holding its announce and the client's message. */
-static set_req *set_new(srv_client *c, const void *bad, size_t badlen, const proto_sea *sea, double eff,
-                        double now, char *why, size_t whylen)
+/* A set request holding its entry m, encoded, and the client's message
+ * (c may be NULL: nobody to answer). */
+static set_req *set_new(srv_client *c, const void *bad, size_t badlen, const proto_msg *m, const char *what,
+                        char *why, size_t whylen)
 {
     set_req *q = calloc(1, sizeof *q);
     uint8_t *copy = malloc(badlen ? badlen : 1);
     if (!q || !copy) {
         free(q);
         free(copy);
-        snprintf(why, whylen, "SEA_STATE set refused: out of memory");
+        snprintf(why, whylen, "%s refused: out of memory", what);
         return NULL;
     }
-    memcpy(copy, bad, badlen);
+    if (badlen) memcpy(copy, bad, badlen);
     q->bad = copy;
     q->badlen = badlen;
+    q->what = what;
     proto_buf_init(&q->entry, 0);
-    proto_msg m;
-    srv_sea_announce(sea, eff, now, &m);
     char err[200];
-    if (proto_encode(&q->entry, &m, err, sizeof err) != OCEAN_OK) {
-        snprintf(why, whylen, "SEA_STATE set refused: %s", err);
+    if (proto_encode(&q->entry, m, err, sizeof err) != OCEAN_OK) {
+        snprintf(why, whylen, "%s refused: %s", what, err);
         proto_buf_free(&q->entry);
         free(copy);
         free(q);
         return NULL;
     }
-    srv_client_ref(c);
+    if (c) srv_client_ref(c);
     q->c = c;
     return q;
+}
+
+/* Queues q for the replication thread, or frees it: OCEAN_ERATE when the
+ * queue is full. */
+static ocean_result queue_push(srv_redis *r, set_req *q, char *why, size_t whylen)
+{
+    pthread_mutex_lock(&r->lock);
+    int full = r->n_queue >= SRV_REDIS_QUEUE_MAX;
+    if (!full) {
+        if (r->queue_tail) r->queue_tail->next = q;
+        else r->queue = q;
+        r->queue_tail = q;
+        r->n_queue++;
+        pthread_cond_signal(&r->cond);
+    }
+    pthread_mutex_unlock(&r->lock);
+    if (!full) return OCEAN_OK;
+    snprintf(why, whylen, "%s refused: %d entries already wait for Redis %s:%d", q->what, SRV_REDIS_QUEUE_MAX,
+             r->host, r->port);
+    set_free(q);
+    return OCEAN_ERATE;
 }
 
 ocean_result srv_redis_submit(srv_redis *r, srv_client *c, const void *bad, size_t badlen, const proto_sea *sea,
@@ -791,23 +849,21 @@ ocean_result srv_redis_submit(srv_redis *r, srv_client *c, const void *bad, size
                  "holds); wait until one takes effect", SRV_SEA_PENDING_MAX);
         return OCEAN_ERATE;
     }
-    set_req *q = set_new(c, bad, badlen, sea, effective_time, now, why, whylen);
-    if (!q) return OCEAN_EINVAL;
-    pthread_mutex_lock(&r->lock);
-    int full = r->n_queue >= SRV_REDIS_QUEUE_MAX;
-    if (!full) {
-        if (r->queue_tail) r->queue_tail->next = q;
-        else r->queue = q;
-        r->queue_tail = q;
-        r->n_queue++;
-        pthread_cond_signal(&r->cond);
+    proto_msg m;
+    srv_sea_announce(sea, effective_time, now, &m);
+    set_req *q = set_new(c, bad, badlen, &m, "SEA_STATE set", why, whylen);
+    return q ? queue_push(r, q, why, whylen) : OCEAN_EINVAL;
+}
+
+ocean_result srv_redis_submit_entity(srv_redis *r, srv_client *c, const void *bad, size_t badlen,
+                                     const proto_msg *m, const char *what, char *why, size_t whylen)
+{
+    double now = srv_hub_sim_time(r->hub);
+    if (!(m->hdr.sim_time >= now + r->lead)) {
+        snprintf(why, whylen, "%s refused: in force from %.3f, less than server.sea_lead (%g s) ahead of the "
+                 "clock (%.3f)", what, m->hdr.sim_time, r->lead, now);
+        return OCEAN_EINVAL;
     }
-    pthread_mutex_unlock(&r->lock);
-    if (full) {
-        set_free(q);
-        snprintf(why, whylen, "SEA_STATE set refused: %d sets already wait for Redis %s:%d",
-                 SRV_REDIS_QUEUE_MAX, r->host, r->port);
-        return OCEAN_ERATE;
-    }
-    return OCEAN_OK;
+    set_req *q = set_new(c, bad, badlen, m, what, why, whylen);
+    return q ? queue_push(r, q, why, whylen) : OCEAN_ENOMEM;
 }

@@ -11,6 +11,14 @@
  * that starts late folds every entry already in force into its current sea
  * and keeps the rest pending, as a replica running all along holds it.
  *
+ * Entities' entries (sim/entity.h) travel the same stream: an ENTITY
+ * announce (a track sample) or gone (a removal), its header sim_time the
+ * instant it is asked to take effect, at least server.sea_lead ahead.
+ * Every replica enters it into its table, in stream order, in force from
+ * max(that instant, the time Redis stored it), so all hold the same
+ * tracks and agree at every instant; the table's refusals (a teleport,
+ * time order, a full table) fall alike on every replica.
+ *
  * A SEA_STATE set on any replica is appended to the stream, never entered
  * directly: its announce comes back through the stream like every other
  * replica's, and that announce is the setter's reply; a set the stream
@@ -51,5 +59,15 @@ void srv_redis_stop(srv_redis *r);
  * SRV_REDIS_QUEUE_MAX sets wait already. */
 ocean_result srv_redis_submit(srv_redis *r, srv_client *c, const void *bad, size_t badlen, const proto_sea *sea,
                               double effective_time, char *why, size_t whylen);
+
+/* Queues an entity entry m (an ENTITY announce or gone, its header
+ * sim_time the instant it is to take effect) for the stream [any thread];
+ * c (NULL: nobody to answer, as for a CIGI host) gets the announce coming
+ * back, or an ERROR (its message bytes bad/badlen) saying `what` was
+ * refused.  Refused at once, why filled: OCEAN_EINVAL when the instant is
+ * less than server.sea_lead ahead of the clock, OCEAN_ERATE when
+ * SRV_REDIS_QUEUE_MAX entries wait already. */
+ocean_result srv_redis_submit_entity(srv_redis *r, srv_client *c, const void *bad, size_t badlen,
+                                     const proto_msg *m, const char *what, char *why, size_t whylen);
 
 #endif

@@ -107,7 +107,7 @@ void srv_wakes_destroy(srv_wakes *w)
 ocean_result srv_wakes_sample(srv_wakes *w, srv_entities *e, double t, double depth, const double *xz, size_t n,
                               wake_sample *out)
 {
-    int max = srv_entities_count(e);
+    int max = srv_entities_kept(e);
     if (max == 0) {   /* no entity: no wake, and nothing to hold */
         memset(out, 0, sizeof *out * n);
         return OCEAN_OK;

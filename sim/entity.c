@@ -2,8 +2,10 @@
  * entity.c - the entity table and a track's state at any instant (see
  * entity.h).
  *
- * Entities sit in an array sorted by id (a binary search per lookup); each
- * holds its track as a ring of its last OCEAN_TRACK_KEEP samples.
+ * Entities sit in an array sorted by id (a binary search per lookup), an
+ * id's lives in order (the gone ones kept for their past, the live one
+ * last); each holds its track as a ring of its last OCEAN_TRACK_KEEP
+ * samples with the instant each is in force from.
  */
 #include "entity.h"
 
@@ -16,15 +18,17 @@
 typedef struct entity {
     ocean_entity_desc d;
     ocean_track_sample s[OCEAN_TRACK_KEEP];
+    double from[OCEAN_TRACK_KEEP]; /* each sample in force from; never decreasing */
     int head;            /* index of the oldest kept sample */
     int count;
+    double gone;         /* gone from this instant on; INFINITY while live */
 } entity;
 
 struct ocean_entities {
     int max;
     double hold_s;
-    int n;
-    entity **by_id;      /* n entries, increasing id */
+    int n, n_live;
+    entity **by_id;      /* n records of 2 max at most: increasing id, one id's lives in order */
 };
 
 /* A teleport is a step that needs more than the top speed by this factor,
@@ -42,7 +46,7 @@ ocean_result ocean_entities_create(int max_entities, double hold_s, ocean_entiti
         return OCEAN_EINVAL;
     }
     ocean_entities *e = calloc(1, sizeof *e);
-    if (!e || !(e->by_id = calloc((size_t)max_entities, sizeof *e->by_id))) {
+    if (!e || !(e->by_id = calloc(2 * (size_t)max_entities, sizeof *e->by_id))) {
         free(e);
         return OCEAN_ENOMEM;
     }
@@ -60,8 +64,8 @@ void ocean_entities_destroy(ocean_entities *e)
     free(e);
 }
 
-/* The index of id, or of where it would go (*found 0). */
-static int find(const ocean_entities *e, uint32_t id, int *found)
+/* The index of id's first record, or of where it would go. */
+static int find(const ocean_entities *e, uint32_t id)
 {
     int lo = 0, hi = e->n;
     while (lo < hi) {
@@ -69,8 +73,24 @@ static int find(const ocean_entities *e, uint32_t id, int *found)
         if (e->by_id[mid]->d.id < id) lo = mid + 1;
         else hi = mid;
     }
-    *found = lo < e->n && e->by_id[lo]->d.id == id;
     return lo;
+}
+
+/* id's live record (its last), or NULL; *at gets its index. */
+static entity *live(const ocean_entities *e, uint32_t id, int *at)
+{
+    int i = find(e, id);
+    while (i + 1 < e->n && e->by_id[i + 1]->d.id == id) i++;
+    if (at) *at = i;
+    if (i < e->n && e->by_id[i]->d.id == id && isinf(e->by_id[i]->gone)) return e->by_id[i];
+    return NULL;
+}
+
+static void record_drop(ocean_entities *e, int at)
+{
+    free(e->by_id[at]);
+    memmove(&e->by_id[at], &e->by_id[at + 1], (size_t)(e->n - at - 1) * sizeof *e->by_id);
+    e->n--;
 }
 
 static int in_range(double v, double lo, double hi) { return v >= lo && v <= hi; } /* false for NaN */
@@ -100,38 +120,71 @@ static ocean_result desc_check(const ocean_entity_desc *d, char *why, size_t n)
     return OCEAN_EINVAL;
 }
 
+/* Room for one more record: the gone record gone earliest makes way. */
+static void record_room(ocean_entities *e)
+{
+    if (e->n < 2 * e->max) return;
+    int oldest = -1;
+    for (int i = 0; i < e->n; i++)
+        if (!isinf(e->by_id[i]->gone) && (oldest < 0 || e->by_id[i]->gone < e->by_id[oldest]->gone)) oldest = i;
+    record_drop(e, oldest); /* n == 2 max with at most max live: one is gone */
+}
+
 ocean_result ocean_entities_add(ocean_entities *e, const ocean_entity_desc *d, char *why, size_t n)
 {
     if (!e || !d) return OCEAN_EINVAL;
     ocean_result r = desc_check(d, why, n);
     if (r != OCEAN_OK) return r;
-    int found, at = find(e, d->id, &found);
-    if (found) {
+    if (live(e, d->id, NULL)) {
         ocean_seterr(why, n, "entity %u is already in the sea", d->id);
         return OCEAN_ESTATE;
     }
-    if (e->n >= e->max) {
+    if (e->n_live >= e->max) {
         ocean_seterr(why, n, "entity %u: the sea holds %d entities already, the most it takes", d->id, e->max);
         return OCEAN_ETOOBIG;
     }
     entity *k = calloc(1, sizeof *k);
     if (!k) return OCEAN_ENOMEM;
     k->d = *d;
+    k->gone = INFINITY;
+    record_room(e);
+    int at;
+    live(e, d->id, &at);
+    if (at < e->n && e->by_id[at]->d.id <= d->id) at++; /* after the id's earlier lives */
     memmove(&e->by_id[at + 1], &e->by_id[at], (size_t)(e->n - at) * sizeof *e->by_id);
     e->by_id[at] = k;
     e->n++;
+    e->n_live++;
     return OCEAN_OK;
 }
 
-ocean_result ocean_entities_remove(ocean_entities *e, uint32_t id)
+/* The earliest instant a new sample of id may be in force: the removal of
+ * its life before this one, or its track's newest sample's. */
+static double from_floor(const ocean_entities *e, const entity *k, int at)
+{
+    if (k->count) return k->from[(k->head + k->count - 1) % OCEAN_TRACK_KEEP];
+    if (at > 0 && e->by_id[at - 1]->d.id == k->d.id) return e->by_id[at - 1]->gone;
+    return -INFINITY;
+}
+
+ocean_result ocean_entities_remove(ocean_entities *e, uint32_t id, double from)
 {
     if (!e) return OCEAN_EINVAL;
-    int found, at = find(e, id, &found);
-    if (!found) return OCEAN_ENOTFOUND;
-    free(e->by_id[at]);
-    memmove(&e->by_id[at], &e->by_id[at + 1], (size_t)(e->n - at - 1) * sizeof *e->by_id);
-    e->n--;
+    int at;
+    entity *k = live(e, id, &at);
+    if (!k) return OCEAN_ENOTFOUND;
+    if (!isfinite(from) || from < from_floor(e, k, at)) return OCEAN_EINVAL;
+    if (!k->count) record_drop(e, at); /* never in the sea: no past to keep */
+    else k->gone = from;
+    e->n_live--;
     return OCEAN_OK;
+}
+
+void ocean_entities_prune(ocean_entities *e, double before)
+{
+    if (!e) return;
+    for (int i = e->n - 1; i >= 0; i--)
+        if (e->by_id[i]->gone <= before) record_drop(e, i);
 }
 
 static double speed_max(ocean_entity_kind k)
@@ -183,23 +236,38 @@ static ocean_result sample_check(const entity *k, const ocean_track_sample *s, c
     return OCEAN_OK;
 }
 
-ocean_result ocean_entities_sample(ocean_entities *e, uint32_t id, const ocean_track_sample *s, char *why,
-                                   size_t n)
+ocean_result ocean_entities_check(const ocean_entities *e, uint32_t id, const ocean_track_sample *s, double from,
+                                  char *why, size_t n)
 {
     if (!e || !s) return OCEAN_EINVAL;
-    int found, at = find(e, id, &found);
-    if (!found) {
+    int at;
+    const entity *k = live(e, id, &at);
+    if (!k) {
         ocean_seterr(why, n, "entity %u is not in the sea (enter it first)", id);
         return OCEAN_ENOTFOUND;
     }
-    entity *k = e->by_id[at];
-    ocean_result r = sample_check(k, s, why, n);
+    double floor_from = from_floor(e, k, at);
+    if (!isfinite(from) || from < floor_from) {
+        ocean_seterr(why, n, "entity %u sample: in force from %.6f s, before %.6f s, when its entity's last "
+                     "entry took effect", id, from, floor_from);
+        return OCEAN_EINVAL;
+    }
+    return sample_check(k, s, why, n);
+}
+
+ocean_result ocean_entities_sample(ocean_entities *e, uint32_t id, const ocean_track_sample *s, double from,
+                                   char *why, size_t n)
+{
+    ocean_result r = ocean_entities_check(e, id, s, from, why, n);
     if (r != OCEAN_OK) return r;
+    entity *k = live(e, id, NULL);
     if (k->count == OCEAN_TRACK_KEEP) {
         k->head = (k->head + 1) % OCEAN_TRACK_KEEP;
         k->count--;
     }
-    k->s[(k->head + k->count) % OCEAN_TRACK_KEEP] = *s;
+    int slot = (k->head + k->count) % OCEAN_TRACK_KEEP;
+    k->s[slot] = *s;
+    k->from[slot] = from;
     k->count++;
     return OCEAN_OK;
 }
@@ -252,53 +320,92 @@ static void after(const ocean_track_sample *p, double hold_s, double t, ocean_en
     if (o->held) o->speed = o->vx = o->vz = 0;
 }
 
-ocean_result ocean_entities_state(const ocean_entities *e, uint32_t id, double t, ocean_entity_state *out)
+/* How many of k's kept samples are in force at t (a prefix: froms never
+ * decrease along a track). */
+static int in_force(const entity *k, double t)
 {
-    if (!e || !out || !isfinite(t)) return OCEAN_EINVAL;
-    int found, at = find(e, id, &found);
-    if (!found) return OCEAN_ENOTFOUND;
-    const entity *k = e->by_id[at];
-    if (!k->count || t < sample_at(k, 0)->t) return OCEAN_ENOTFOUND;
-    memset(out, 0, sizeof *out);
-    const ocean_track_sample *last = sample_at(k, k->count - 1);
-    if (t >= last->t) {
-        after(last, e->hold_s, t, out);
-        return OCEAN_OK;
+    int lo = 0, hi = k->count;
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (k->from[(k->head + mid) % OCEAN_TRACK_KEEP] <= t) lo = mid + 1;
+        else hi = mid;
     }
-    int lo = 0, hi = k->count - 1; /* sample lo <= t < sample hi */
+    return lo;
+}
+
+/* Record k's state at t from its samples in force then; 0 when it is not
+ * in the sea at t. */
+static int record_state(const entity *k, double hold_s, double t, ocean_entity_state *out)
+{
+    int count = t < k->gone ? in_force(k, t) : 0;
+    if (!count || t < sample_at(k, 0)->t) return 0;
+    memset(out, 0, sizeof *out);
+    const ocean_track_sample *last = sample_at(k, count - 1);
+    if (t >= last->t) {
+        after(last, hold_s, t, out);
+        return 1;
+    }
+    int lo = 0, hi = count - 1; /* sample lo <= t < sample hi */
     while (hi - lo > 1) {
         int mid = lo + (hi - lo) / 2;
         if (sample_at(k, mid)->t <= t) lo = mid;
         else hi = mid;
     }
     between(sample_at(k, lo), sample_at(k, hi), t, out);
-    return OCEAN_OK;
+    return 1;
 }
 
-ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_track_sample *out)
+ocean_result ocean_entities_state(const ocean_entities *e, uint32_t id, double t, ocean_entity_state *out)
+{
+    if (!e || !out || !isfinite(t)) return OCEAN_EINVAL;
+    for (int i = find(e, id); i < e->n && e->by_id[i]->d.id == id; i++)
+        if (record_state(e->by_id[i], e->hold_s, t, out)) return OCEAN_OK;
+    return OCEAN_ENOTFOUND;
+}
+
+int ocean_entities_at(const ocean_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max)
+{
+    if (!e || !d || !s || !isfinite(t)) return 0;
+    int n = 0;
+    for (int i = 0; i < e->n && n < max; i++)
+        if (record_state(e->by_id[i], e->hold_s, t, &s[n])) d[n++] = e->by_id[i]->d;
+    return n;
+}
+
+ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_track_sample *out, double *from)
 {
     if (!e || !out) return OCEAN_EINVAL;
-    int found, at = find(e, id, &found);
-    if (!found || !e->by_id[at]->count) return OCEAN_ENOTFOUND;
-    const entity *k = e->by_id[at];
+    const entity *k = live(e, id, NULL);
+    if (!k || !k->count) return OCEAN_ENOTFOUND;
     *out = *sample_at(k, k->count - 1);
+    if (from) *from = k->from[(k->head + k->count - 1) % OCEAN_TRACK_KEEP];
     return OCEAN_OK;
 }
 
-int ocean_entities_count(const ocean_entities *e) { return e ? e->n : 0; }
+int ocean_entities_count(const ocean_entities *e) { return e ? e->n_live : 0; }
+
+int ocean_entities_kept(const ocean_entities *e) { return e ? e->n : 0; }
 
 ocean_result ocean_entities_desc(const ocean_entities *e, uint32_t id, ocean_entity_desc *out)
 {
     if (!e || !out) return OCEAN_EINVAL;
-    int found, i = find(e, id, &found);
-    if (!found) return OCEAN_ENOTFOUND;
-    *out = e->by_id[i]->d;
+    const entity *k = live(e, id, NULL);
+    if (!k) return OCEAN_ENOTFOUND;
+    *out = k->d;
     return OCEAN_OK;
 }
 
 ocean_result ocean_entities_get(const ocean_entities *e, int i, ocean_entity_desc *out)
 {
-    if (!e || !out || i < 0 || i >= e->n) return OCEAN_EINVAL;
-    *out = e->by_id[i]->d;
-    return OCEAN_OK;
+    if (!e || !out || i < 0) return OCEAN_EINVAL;
+    if (e->n == e->n_live && i < e->n) { /* no gone lives kept: the i-th record */
+        *out = e->by_id[i]->d;
+        return OCEAN_OK;
+    }
+    for (int j = 0; j < e->n; j++)
+        if (isinf(e->by_id[j]->gone) && i-- == 0) {
+            *out = e->by_id[j]->d;
+            return OCEAN_OK;
+        }
+    return OCEAN_EINVAL;
 }

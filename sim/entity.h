@@ -21,6 +21,17 @@
  * sea (OCEAN_ENOTFOUND).  A track keeps its last OCEAN_TRACK_KEEP samples;
  * an instant before the oldest kept is OCEAN_ENOTFOUND too.
  *
+ * Samples are timeline entries (docs/design.md, "Entities"): each is in
+ * force from an instant of its own, `from` (when the daemon entered it,
+ * or when a replicated entry takes effect), and the state at t is made of
+ * the samples in force at t alone.  A sample entered later never changes
+ * an instant before its `from`, so two replicas that enter the same
+ * samples with the same `from` agree at every instant, however late each
+ * read them.  A removal is an entry too: the entity is gone from its
+ * `from` on, and an id entered again after it starts a new life (a new
+ * shape, a new track); a gone entity's past is kept until
+ * ocean_entities_prune drops it.
+ *
  * Every input is checked: NaN or Inf anywhere, sizes and speeds outside the
  * kind's range, samples out of time order, and teleports (a sample whose
  * distance from the previous one needs more than the kind's top speed,
@@ -90,28 +101,51 @@ typedef struct ocean_entities ocean_entities;
 ocean_result ocean_entities_create(int max_entities, double hold_s, ocean_entities **out, char *why, size_t n);
 void ocean_entities_destroy(ocean_entities *e); /* accepts NULL */
 
-/* Enters an entity with no track yet.  OCEAN_EINVAL (shape), OCEAN_ESTATE
- * (the id is in the table), OCEAN_ETOOBIG (the table is full). */
+/* Enters an entity with no track yet (a live one: not removed).
+ * OCEAN_EINVAL (shape), OCEAN_ESTATE (a live entity has the id),
+ * OCEAN_ETOOBIG (max_entities live already).  Gone entities whose past is
+ * still kept take no place: the table keeps as many as there are live
+ * ones, the one gone earliest dropped for a new one. */
 ocean_result ocean_entities_add(ocean_entities *e, const ocean_entity_desc *d, char *why, size_t n);
-/* Takes an entity and its track out.  OCEAN_ENOTFOUND for an unknown id. */
-ocean_result ocean_entities_remove(ocean_entities *e, uint32_t id);
+/* The live entity id is gone from sim time `from` on (no instant before
+ * it changes).  OCEAN_ENOTFOUND: no live entity id; OCEAN_EINVAL: from
+ * not finite, or before its newest sample's from. */
+ocean_result ocean_entities_remove(ocean_entities *e, uint32_t id, double from);
+/* Drops the past of every entity gone at or before `before`. */
+void ocean_entities_prune(ocean_entities *e, double before);
 
-/* Appends a sample to id's track.  OCEAN_ENOTFOUND (unknown id),
- * OCEAN_EINVAL (a value out of range, out of time order, a teleport). */
-ocean_result ocean_entities_sample(ocean_entities *e, uint32_t id, const ocean_track_sample *s, char *why,
-                                   size_t n);
+/* Appends a sample to live entity id's track, in force from sim time
+ * `from` on.  OCEAN_ENOTFOUND (no live entity id), OCEAN_EINVAL (a value
+ * out of range, out of time order, a teleport; from not finite, before the
+ * track's previous from, or before the removal of the id's earlier life). */
+ocean_result ocean_entities_sample(ocean_entities *e, uint32_t id, const ocean_track_sample *s, double from,
+                                   char *why, size_t n);
+/* What ocean_entities_sample would answer, the table unchanged. */
+ocean_result ocean_entities_check(const ocean_entities *e, uint32_t id, const ocean_track_sample *s, double from,
+                                  char *why, size_t n);
 
-/* id's state at sim time t.  OCEAN_ENOTFOUND: unknown id, or t before the
- * track's first kept sample; OCEAN_EINVAL: t not finite. */
+/* id's state at sim time t, from the samples in force at t.
+ * OCEAN_ENOTFOUND: no entity id in the sea at t (none entered, none of its
+ * samples in force yet, t before its first kept sample, or gone);
+ * OCEAN_EINVAL: t not finite. */
 ocean_result ocean_entities_state(const ocean_entities *e, uint32_t id, double t, ocean_entity_state *out);
+/* Every entity in the sea at t (at most max): shape and state, in
+ * increasing id.  Returns how many. */
+int ocean_entities_at(const ocean_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max);
 
-/* id's newest sample.  OCEAN_ENOTFOUND: unknown id, or no sample yet. */
-ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_track_sample *out);
+/* Live entity id's newest sample (whether in force yet or not), and its
+ * from into *from (if not NULL).  OCEAN_ENOTFOUND: no live entity id, or
+ * no sample yet. */
+ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_track_sample *out, double *from);
 
+/* Live entities (entered and not removed). */
 int ocean_entities_count(const ocean_entities *e);
-/* Entity id's desc.  OCEAN_ENOTFOUND for an unknown id. */
+/* Entities live or gone with their past kept: the most ocean_entities_at
+ * can return. */
+int ocean_entities_kept(const ocean_entities *e);
+/* Live entity id's desc.  OCEAN_ENOTFOUND when none is live. */
 ocean_result ocean_entities_desc(const ocean_entities *e, uint32_t id, ocean_entity_desc *out);
-/* The desc of the i-th entity (0 <= i < count), in increasing id. */
+/* The desc of the i-th live entity (0 <= i < count), in increasing id. */
 ocean_result ocean_entities_get(const ocean_entities *e, int i, ocean_entity_desc *out);
 
 #endif

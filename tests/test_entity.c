@@ -16,6 +16,10 @@
 
 #include "entity.h"
 
+/* Samples in force from long before every instant asked: the tests of a
+ * track's shape; in_force_only_from_its_time tests the in-force rule. */
+#define KNOWN (-1e8)
+
 static const ocean_entity_desc frigate = {.id = 7, .kind = OCEAN_ENTITY_SHIP, .length_m = 120, .beam_m = 15,
                                           .draught_m = 5};
 
@@ -56,8 +60,8 @@ static void table_limits(void **state)
     assert_int_equal(ocean_entities_get(e, 1, &d), OCEAN_OK);
     assert_int_equal(d.id, 7);
     assert_int_equal(ocean_entities_get(e, 2, &d), OCEAN_EINVAL);
-    assert_int_equal(ocean_entities_remove(e, 3), OCEAN_OK);
-    assert_int_equal(ocean_entities_remove(e, 3), OCEAN_ENOTFOUND);
+    assert_int_equal(ocean_entities_remove(e, 3, KNOWN), OCEAN_OK);
+    assert_int_equal(ocean_entities_remove(e, 3, KNOWN), OCEAN_ENOTFOUND);
     assert_int_equal(ocean_entities_add(e, &third, why, sizeof why), OCEAN_OK);
     ocean_entities_destroy(e);
     ocean_entities_destroy(NULL);
@@ -98,13 +102,13 @@ static void straight_run_and_hold(void **state)
     ocean_entity_state st;
     ocean_track_sample last;
     assert_int_equal(ocean_entities_state(e, 7, 0, &st), OCEAN_ENOTFOUND); /* no track yet */
-    assert_int_equal(ocean_entities_last(e, 7, &last), OCEAN_ENOTFOUND);
+    assert_int_equal(ocean_entities_last(e, 7, &last, NULL), OCEAN_ENOTFOUND);
     ocean_track_sample a = smp(100, 1e6, -2e6, 90, 10), b = smp(110, 1e6, -2e6 + 100, 90, 10);
-    assert_int_equal(ocean_entities_sample(e, 7, &a, NULL, 0), OCEAN_OK);
-    assert_int_equal(ocean_entities_sample(e, 7, &b, NULL, 0), OCEAN_OK);
-    assert_int_equal(ocean_entities_last(e, 7, &last), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 7, &a, KNOWN, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 7, &b, KNOWN, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_last(e, 7, &last, NULL), OCEAN_OK);
     assert_true(last.t == 110 && last.z == -2e6 + 100);
-    assert_int_equal(ocean_entities_last(e, 8, &last), OCEAN_ENOTFOUND);
+    assert_int_equal(ocean_entities_last(e, 8, &last, NULL), OCEAN_ENOTFOUND);
     assert_int_equal(ocean_entities_state(e, 7, 99.9, &st), OCEAN_ENOTFOUND);
     assert_int_equal(ocean_entities_state(e, 7, NAN, &st), OCEAN_EINVAL);
     assert_int_equal(ocean_entities_state(e, 7, 105, &st), OCEAN_OK);
@@ -130,7 +134,7 @@ static void turn_is_smooth(void **state)
     for (int i = 0; i <= 60; i++) {
         double t = 10.0 * i, a = w * t;
         ocean_track_sample s = smp(t, R * cos(a), R * sin(a), a * 180 / M_PI + 90, U);
-        assert_int_equal(ocean_entities_sample(e, 7, &s, NULL, 0), OCEAN_OK);
+        assert_int_equal(ocean_entities_sample(e, 7, &s, KNOWN, NULL, 0), OCEAN_OK);
     }
     double worst = 0;
     int wrapped = 0;
@@ -163,7 +167,7 @@ static void any_order_same_bits(void **state)
     double x = 0, z = 0, h = 10;
     for (int i = 0; i < 40; i++) {
         ocean_track_sample s = smp(2.5 * i, x, z, h, 6 + (i % 5));
-        assert_int_equal(ocean_entities_sample(e, 7, &s, NULL, 0), OCEAN_OK);
+        assert_int_equal(ocean_entities_sample(e, 7, &s, KNOWN, NULL, 0), OCEAN_OK);
         x += 2.5 * (6 + (i % 5)) * cos(h * M_PI / 180);
         z += 2.5 * (6 + (i % 5)) * sin(h * M_PI / 180);
         h += (i % 7) - 3;
@@ -193,7 +197,7 @@ static void bad_samples_change_nothing(void **state)
     ocean_entity_desc heli = {.id = 3, .kind = OCEAN_ENTITY_ROTORCRAFT, .length_m = 16};
     assert_int_equal(ocean_entities_add(e, &heli, NULL, 0), OCEAN_OK);
     ocean_track_sample a = smp(10, 0, 0, 0, 10);
-    assert_int_equal(ocean_entities_sample(e, 7, &a, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 7, &a, KNOWN, NULL, 0), OCEAN_OK);
     ocean_entity_state before, after;
     assert_int_equal(ocean_entities_state(e, 7, 12, &before), OCEAN_OK);
     struct { ocean_track_sample s; const char *says; } bad[] = {
@@ -210,19 +214,19 @@ static void bad_samples_change_nothing(void **state)
     char why[400];
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         why[0] = '\0';
-        assert_int_equal(ocean_entities_sample(e, 7, &bad[i].s, why, sizeof why), OCEAN_EINVAL);
+        assert_int_equal(ocean_entities_sample(e, 7, &bad[i].s, KNOWN, why, sizeof why), OCEAN_EINVAL);
         if (!strstr(why, bad[i].says)) fail_msg("sample %zu: '%s' does not say '%s'", i, why, bad[i].says);
         assert_int_equal(ocean_entities_state(e, 7, 12, &after), OCEAN_OK);
         assert_memory_equal(&before, &after, sizeof before);
     }
-    assert_int_equal(ocean_entities_sample(e, 99, &a, why, sizeof why), OCEAN_ENOTFOUND);
+    assert_int_equal(ocean_entities_sample(e, 99, &a, KNOWN, why, sizeof why), OCEAN_ENOTFOUND);
     /* a rotorcraft climbs within its range; above it, refused */
     ocean_track_sample h1 = {.t = 0, .altitude_m = 30, .speed = 0};
     ocean_track_sample h2 = {.t = 60, .altitude_m = 6000, .speed = 0};
-    assert_int_equal(ocean_entities_sample(e, 3, &h1, NULL, 0), OCEAN_OK);
-    assert_int_equal(ocean_entities_sample(e, 3, &h2, why, sizeof why), OCEAN_EINVAL);
+    assert_int_equal(ocean_entities_sample(e, 3, &h1, KNOWN, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 3, &h2, KNOWN, why, sizeof why), OCEAN_EINVAL);
     h2.altitude_m = 300;
-    assert_int_equal(ocean_entities_sample(e, 3, &h2, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 3, &h2, KNOWN, NULL, 0), OCEAN_OK);
     assert_int_equal(ocean_entities_state(e, 3, 30, &after), OCEAN_OK);
     assert_true(fabs(after.altitude_m - 165) < 1e-9);
     /* an aircraft flies higher and faster than a rotorcraft may, within its own range */
@@ -231,13 +235,13 @@ static void bad_samples_change_nothing(void **state)
     ocean_track_sample j1 = {.t = 0, .altitude_m = 10000, .speed = 250};
     ocean_track_sample j2 = {.t = 1, .x = 250, .altitude_m = 10000, .speed = 250};
     ocean_track_sample j3 = {.t = 2, .x = 500, .altitude_m = 31000, .speed = 250};
-    assert_int_equal(ocean_entities_sample(e, 4, &j1, NULL, 0), OCEAN_OK);
-    assert_int_equal(ocean_entities_sample(e, 4, &j2, NULL, 0), OCEAN_OK);
-    assert_int_equal(ocean_entities_sample(e, 4, &j3, why, sizeof why), OCEAN_EINVAL);
+    assert_int_equal(ocean_entities_sample(e, 4, &j1, KNOWN, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 4, &j2, KNOWN, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 4, &j3, KNOWN, why, sizeof why), OCEAN_EINVAL);
     assert_non_null(strstr(why, "altitude"));
     /* one good sample still goes in after all that */
     ocean_track_sample b = smp(11, 10, 0, 0, 10);
-    assert_int_equal(ocean_entities_sample(e, 7, &b, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 7, &b, KNOWN, NULL, 0), OCEAN_OK);
     ocean_entities_destroy(e);
 }
 
@@ -251,7 +255,7 @@ static void track_keeps_its_last_samples(void **state)
     int n = OCEAN_TRACK_KEEP + 44;
     for (int i = 0; i < n; i++) {
         ocean_track_sample s = smp(i, 5.0 * i, 0, 0, 5);
-        assert_int_equal(ocean_entities_sample(e, 7, &s, NULL, 0), OCEAN_OK);
+        assert_int_equal(ocean_entities_sample(e, 7, &s, KNOWN, NULL, 0), OCEAN_OK);
     }
     ocean_entity_state st;
     assert_int_equal(ocean_entities_state(e, 7, 43.5, &st), OCEAN_ENOTFOUND);

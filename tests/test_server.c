@@ -2998,7 +2998,7 @@ static void error_expect(test_ws *w, ocean_result code, const char *has)
 static void entity_at(uint32_t id, double x)
 {
     ocean_track_sample last;
-    ocean_result r = srv_entities_last(srv_daemon_hub(daemon_)->entities, id, &last);
+    ocean_result r = srv_entities_last(srv_daemon_hub(daemon_)->entities, id, &last, NULL);
     if (isnan(x)) assert_int_equal(r, OCEAN_ENOTFOUND);
     else {
         assert_int_equal(r, OCEAN_OK);
