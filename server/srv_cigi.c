@@ -61,6 +61,8 @@ struct srv_cigi {
     atomic_int stop;
     srv_client *c;              /* the service's client of the hub */
     ocean_geo *geo;
+    double entity_lead;         /* [const] replicated: server.sea_lead, the least an entity entry takes
+                                   effect ahead (srv_redis_submit_entity); else 0 */
     struct in6_addr hosts[SRV_CIGI_HOSTS];
     int n_hosts;
     pending p[SRV_CIGI_PENDING];/* in the order queued, answered in that order */
@@ -449,8 +451,7 @@ static void entity_put(srv_cigi *s, proto_msg *m, double from)
 /* Entity Control (3.x: state and position) or Entity Position (4.0):
  * the entity's sample at the sim clock, its speed the step from its last
  * sample (at most its kind's); destroyed, it leaves.  Entered at once, or,
- * replicated, through the shared timeline server.sea_lead ahead (and two
- * ticks: it is stored a moment later).  The host is the entity's
+ * replicated, through the shared timeline server.sea_lead ahead.  The host is the entity's
  * authority: a step the table refuses (a host that repositions it) enters
  * it anew where the host put it.  An attached entity (a part of another)
  * is no entity of the sea. */
@@ -463,7 +464,7 @@ static void take_entity(srv_cigi *s, pending *m, const cigi_packet *p)
         return;
     }
     double now = srv_hub_sim_time(h);
-    double from = h->redis ? now + h->settings.srv.sea_lead + 2.0 / h->settings.srv.tick_rate : now;
+    double from = now + s->entity_lead;
     ocean_entity_desc d = entity_desc(e);
     proto_msg msg;
     if (p->kind == CIGI_ENTITY_CONTROL && e->state == CIGI_ENTITY_DESTROYED) {
@@ -692,6 +693,7 @@ static ocean_result setup(srv_cigi *s, char *msg, size_t msglen)
         snprintf(msg, msglen, "CIGI service: %s", why);
         return OCEAN_EINVAL;
     }
+    s->entity_lead = s->h->redis ? cfg->sea_lead : 0;
     ocean_result r = open_socket(s, cfg, msg, msglen);
     if (r != OCEAN_OK) return r;
     s->efd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);

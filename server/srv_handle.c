@@ -535,11 +535,10 @@ static void entity_enter(const srv_in *in, proto_msg *m, const char *what)
     char why[512], msg[400] = "";
     double now = srv_hub_sim_time(h);
     ocean_result r;
+    m->hdr.sim_time = now;
     if (h->redis) {
-        m->hdr.sim_time = now + in->cfg->sea_lead;
         r = srv_redis_submit_entity(h->redis, in->c, in->buf, in->len, m, what, why, sizeof why);
     } else {
-        m->hdr.sim_time = now;
         r = srv_hub_entity_enter(h, m, msg, sizeof msg);
         snprintf(why, sizeof why, "%s refused: %s%s", what, msg[0] ? msg : ocean_strerror(r),
                  r == OCEAN_ETOOBIG ? " (server.max_entities)" : "");

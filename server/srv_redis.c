@@ -855,15 +855,10 @@ ocean_result srv_redis_submit(srv_redis *r, srv_client *c, const void *bad, size
     return q ? queue_push(r, q, why, whylen) : OCEAN_EINVAL;
 }
 
-ocean_result srv_redis_submit_entity(srv_redis *r, srv_client *c, const void *bad, size_t badlen,
-                                     const proto_msg *m, const char *what, char *why, size_t whylen)
+ocean_result srv_redis_submit_entity(srv_redis *r, srv_client *c, const void *bad, size_t badlen, proto_msg *m,
+                                     const char *what, char *why, size_t whylen)
 {
-    double now = srv_hub_sim_time(r->hub);
-    if (!(m->hdr.sim_time >= now + r->lead)) {
-        snprintf(why, whylen, "%s refused: in force from %.3f, less than server.sea_lead (%g s) ahead of the "
-                 "clock (%.3f)", what, m->hdr.sim_time, r->lead, now);
-        return OCEAN_EINVAL;
-    }
+    m->hdr.sim_time = fmax(m->hdr.sim_time, srv_hub_sim_time(r->hub) + r->lead);
     set_req *q = set_new(c, bad, badlen, m, what, why, whylen);
     return q ? queue_push(r, q, why, whylen) : OCEAN_ENOMEM;
 }

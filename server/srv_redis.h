@@ -60,14 +60,14 @@ void srv_redis_stop(srv_redis *r);
 ocean_result srv_redis_submit(srv_redis *r, srv_client *c, const void *bad, size_t badlen, const proto_sea *sea,
                               double effective_time, char *why, size_t whylen);
 
-/* Queues an entity entry m (an ENTITY announce or gone, its header
- * sim_time the instant it is to take effect) for the stream [any thread];
- * c (NULL: nobody to answer, as for a CIGI host) gets the announce coming
- * back, or an ERROR (its message bytes bad/badlen) saying `what` was
- * refused.  Refused at once, why filled: OCEAN_EINVAL when the instant is
- * less than server.sea_lead ahead of the clock, OCEAN_ERATE when
- * SRV_REDIS_QUEUE_MAX entries wait already. */
-ocean_result srv_redis_submit_entity(srv_redis *r, srv_client *c, const void *bad, size_t badlen,
-                                     const proto_msg *m, const char *what, char *why, size_t whylen);
+/* Queues an entity entry m (an ENTITY announce or gone) for the stream
+ * [any thread], to take effect at its header sim_time, moved to the clock
+ * plus server.sea_lead when that is later (m->hdr.sim_time gets the
+ * instant asked for); c (NULL: nobody to answer, as for a CIGI host) gets
+ * the announce coming back, or an ERROR (its message bytes bad/badlen)
+ * saying `what` was refused.  Refused at once, why filled: OCEAN_ERATE
+ * when SRV_REDIS_QUEUE_MAX entries wait already, OCEAN_ENOMEM. */
+ocean_result srv_redis_submit_entity(srv_redis *r, srv_client *c, const void *bad, size_t badlen, proto_msg *m,
+                                     const char *what, char *why, size_t whylen);
 
 #endif

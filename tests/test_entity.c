@@ -188,6 +188,74 @@ static void any_order_same_bits(void **state)
     ocean_entities_destroy(e);
 }
 
+/* Entries are in force from their own instants: a sample changes no
+ * instant before its `from` (a later sample entered after an instant was
+ * asked leaves that instant's answer as it was), a removal leaves the
+ * entity's past in the sea, a new life of the id (another shape) starts
+ * at or after the removal, and pruning drops the past only. */
+static void in_force_from_its_instant(void **state)
+{
+    (void)state;
+    ocean_entities *e = table(2, 30);
+    assert_int_equal(ocean_entities_add(e, &frigate, NULL, 0), OCEAN_OK);
+    ocean_track_sample a = smp(100, 0, 0, 0, 10), b = smp(110, 100, 40, 45, 10);
+    assert_int_equal(ocean_entities_sample(e, 7, &a, 100.5, NULL, 0), OCEAN_OK);
+    ocean_entity_state before, st;
+    assert_int_equal(ocean_entities_state(e, 7, 100.2, &st), OCEAN_ENOTFOUND); /* not in force yet */
+    assert_int_equal(ocean_entities_state(e, 7, 105, &before), OCEAN_OK);
+    assert_true(before.extrapolated && fabs(before.x - 50) < 1e-9 && before.z == 0);
+    char why[256];
+    assert_int_equal(ocean_entities_sample(e, 7, &b, 100.4, why, sizeof why), OCEAN_EINVAL); /* before a's */
+    assert_non_null(strstr(why, "in force from"));
+    assert_int_equal(ocean_entities_sample(e, 7, &b, 106, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_state(e, 7, 105, &st), OCEAN_OK);
+    assert_memory_equal(&st, &before, sizeof st);                          /* its past unchanged */
+    assert_int_equal(ocean_entities_state(e, 7, 106, &st), OCEAN_OK);
+    assert_false(st.extrapolated);                                         /* from 106 on: a to b */
+    assert_true(st.z > 0);
+    /* removed from 120: there until then, gone after; its past stays */
+    assert_int_equal(ocean_entities_remove(e, 7, 105.9), OCEAN_EINVAL);
+    assert_int_equal(ocean_entities_remove(e, 7, 120), OCEAN_OK);
+    assert_int_equal(ocean_entities_count(e), 0);
+    assert_int_equal(ocean_entities_state(e, 7, 119.9, &st), OCEAN_OK);
+    assert_int_equal(ocean_entities_state(e, 7, 120, &st), OCEAN_ENOTFOUND);
+    assert_int_equal(ocean_entities_remove(e, 7, 130), OCEAN_ENOTFOUND);
+    /* a new life of id 7, another shape, from the removal on */
+    ocean_entity_desc boat = {.id = 7, .kind = OCEAN_ENTITY_SHIP, .length_m = 12, .beam_m = 4, .draught_m = 1};
+    assert_int_equal(ocean_entities_add(e, &boat, NULL, 0), OCEAN_OK);
+    ocean_track_sample c = smp(119, 5000, 0, 90, 5);
+    assert_int_equal(ocean_entities_sample(e, 7, &c, 119.5, why, sizeof why), OCEAN_EINVAL);
+    assert_int_equal(ocean_entities_sample(e, 7, &c, 121, NULL, 0), OCEAN_OK); /* no teleport: a new life */
+    ocean_entity_desc d[4];
+    ocean_entity_state s[4];
+    assert_int_equal(ocean_entities_at(e, 115, d, s, 4), 1);
+    assert_true(d[0].length_m == 120 && s[0].x < 1000);
+    assert_int_equal(ocean_entities_at(e, 120.5, d, s, 4), 0);   /* between the lives */
+    assert_int_equal(ocean_entities_at(e, 125, d, s, 4), 1);
+    assert_true(d[0].length_m == 12 && s[0].x == 5000);
+    assert_int_equal(ocean_entities_kept(e), 2);
+    ocean_entities_prune(e, 119);                                  /* gone at 120: kept */
+    assert_int_equal(ocean_entities_kept(e), 2);
+    ocean_entities_prune(e, 120);
+    assert_int_equal(ocean_entities_kept(e), 1);
+    assert_int_equal(ocean_entities_state(e, 7, 115, &st), OCEAN_ENOTFOUND);
+    assert_int_equal(ocean_entities_state(e, 7, 125, &st), OCEAN_OK);
+    /* gone lives never crowd out live ones: the earliest gone makes way */
+    for (uint32_t id = 20; id < 24; id++) {
+        ocean_entity_desc k = frigate;
+        k.id = id;
+        ocean_track_sample p = smp(200, 0, 0, 0, 1);
+        assert_int_equal(ocean_entities_add(e, &k, NULL, 0), OCEAN_OK);
+        assert_int_equal(ocean_entities_sample(e, id, &p, 200 + id, NULL, 0), OCEAN_OK);
+        assert_int_equal(ocean_entities_remove(e, id, 300 + id), OCEAN_OK);
+    }
+    assert_int_equal(ocean_entities_kept(e), 4);  /* 2 max: 4 records, the live boat and the last 3 gone */
+    assert_int_equal(ocean_entities_state(e, 20, 250, &st), OCEAN_ENOTFOUND);
+    assert_int_equal(ocean_entities_state(e, 23, 250, &st), OCEAN_OK);
+    assert_int_equal(ocean_entities_state(e, 7, 125, &st), OCEAN_OK);
+    ocean_entities_destroy(e);
+}
+
 /* Every bad sample refused with its reason, the track as it was. */
 static void bad_samples_change_nothing(void **state)
 {
@@ -274,6 +342,7 @@ int main(void)
         cmocka_unit_test(straight_run_and_hold),
         cmocka_unit_test(turn_is_smooth),
         cmocka_unit_test(any_order_same_bits),
+        cmocka_unit_test(in_force_from_its_instant),
         cmocka_unit_test(bad_samples_change_nothing),
         cmocka_unit_test(track_keeps_its_last_samples),
     };

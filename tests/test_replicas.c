@@ -254,7 +254,7 @@ static void raw_send(test_ws *w, const proto_msg *m)
     if (try_send(w, m) != 0) fail_msg("sending %s: %s", proto_type_name(m->hdr.type), strerror(errno));
 }
 
-/* Next message of `type` (decoded into *m; raw bytes into *raw if asked).
+/* Next message of `type` (0: any; decoded into *m; raw bytes into *raw if asked).
  * 0 on timeout, -1 when the connection closed. */
 static int wait_type(test_ws *w, unsigned type, int ms, proto_msg *m, uint8_t **raw, size_t *rawlen)
 {
@@ -270,7 +270,7 @@ static int wait_type(test_ws *w, unsigned type, int ms, proto_msg *m, uint8_t **
             return -1;
         }
         ocean_result r = proto_decode(b, n, m, NULL, 0);
-        if (r == OCEAN_OK && m->hdr.type == type) {
+        if (r == OCEAN_OK && (m->hdr.type == type || type == 0)) { /* type 0: any */
             if (raw) {
                 *raw = b;
                 *rawlen = n;
@@ -922,6 +922,134 @@ static void cigi_wind_reaches_every_replica(void **state)
     stop(&pids[1], SIGTERM);
 }
 
+/* ---- entities ---------------------------------------------------------------------- */
+
+/* An ENTITY set of ship id (120 x 15 x 5 m) at (x, -20) steaming along +x
+ * at 8 m/s, sample time t; or a remove (x NaN). */
+static void ship_send(test_ws *w, uint32_t id, double t, double x)
+{
+    proto_msg m;
+    proto_msg_init(&m, PROTO_ENTITY);
+    proto_entity *e = &m.u.entity;
+    e->id = id;
+    e->op = isnan(x) ? PROTO_ENTITY_REMOVE : PROTO_ENTITY_SET;
+    if (!isnan(x)) {
+        e->kind = 0, e->t = t, e->x = x, e->z = -20, e->speed = 8, e->heading_deg = 0;
+        e->length_m = 120, e->beam_m = 15, e->draught_m = 5;
+    }
+    snprintf(e->token, sizeof e->token, "ent");
+    raw_send(w, &m);
+}
+
+/* The next ENTITY of op about id on w; returns the instant it takes
+ * effect (its header sim_time). */
+static double entity_wait(test_ws *w, int op, uint32_t id)
+{
+    proto_msg m;
+    for (double end = test_now_s() + 20; test_now_s() < end;) {
+        if (wait_type(w, 0, 20000, &m, NULL, NULL) != 1) break;
+        if (m.hdr.type == PROTO_ERROR) fail_msg("ERROR for entity %u: %s", id, m.u.error.message);
+        if (m.hdr.type != PROTO_ENTITY) {
+            proto_msg_free(&m);
+            continue;
+        }
+        double from = m.hdr.sim_time;
+        int match = m.u.entity.op == op && m.u.entity.id == id;
+        proto_msg_free(&m);
+        if (match) return from;
+    }
+    fail_msg("no ENTITY op %d of entity %u", op, id);
+    return 0;
+}
+
+#define WAKE_POINTS 64
+
+/* The answer of the replica w is connected to for WAKE_POINTS points
+ * around (x, -20) at sim time t, into out. */
+static void wake_query(test_ws *w, double t, double x, proto_query_sample *out)
+{
+    static uint32_t qid;
+    double pts[2 * WAKE_POINTS];
+    for (int i = 0; i < WAKE_POINTS; i++) {
+        pts[2 * i] = x - 60 + 120.0 * (i % 8) / 7;
+        pts[2 * i + 1] = -20 - 40 + 80.0 * (i / 8) / 7;
+    }
+    proto_msg m;
+    proto_msg_init(&m, PROTO_QUERY);
+    m.u.query = (proto_query){.query_id = ++qid, .count = WAKE_POINTS, .at_time = 1, .t = t, .points = pts};
+    raw_send(w, &m);
+    /* a replica builds a wake pattern it lacks before it answers (0.1-10 s) */
+    if (wait_type(w, PROTO_QUERY_RESULT, 30000, &m, NULL, NULL) != 1) fail_msg("no QUERY_RESULT");
+    assert_int_equal(m.u.result.query_id, qid);
+    assert_int_equal(m.u.result.count, WAKE_POINTS);
+    memcpy(out, m.u.result.samples, sizeof *out * WAKE_POINTS);
+    proto_msg_free(&m);
+}
+
+static void answers_same(const proto_query_sample *a, const proto_query_sample *b, const char *what)
+{
+    if (memcmp(a, b, sizeof *a * WAKE_POINTS) == 0) return;
+    for (int i = 0; i < WAKE_POINTS; i++)
+        if (memcmp(&a[i], &b[i], sizeof *a))
+            fail_msg("%s: point %d: height %.9g against %.9g", what, i, a[i].height, b[i].height);
+}
+
+/* Ships set through one replica reach every replica through the stream:
+ * the setter's reply and the other replica's clients get the same
+ * announce, in force from one instant at least server.sea_lead ahead.  A
+ * query around the second ship, 300 m astern in the first's wake, at an
+ * instant both are in force gets the same bytes from both replicas and
+ * from a replica started after the sets (which folds them from the
+ * stream); a removal sent to the other replica is gone from its own
+ * instant on, and the instants before it answer as they did. */
+static void entities_reach_every_replica(void **state)
+{
+    (void)state;
+    if (tools_missing()) skip();
+    int p1, p2 = test_free_port(), p3 = test_free_port();
+    snprintf(replica_extra, sizeof replica_extra, "server.entity_token = \"ent\"\n");
+    cluster_up(&p1);
+    replica_start(2, p2, "r2.log");
+    test_ws a, b, c;
+    proto_hello h;
+    connect_hello(&a, p1, &h);
+    connect_hello(&b, p2, &h);
+    double t0 = sim_now(), in_force = 0;
+    for (uint32_t id = 31; id <= 32; id++) {
+        ship_send(&a, id, t0, id == 31 ? 0 : -300);
+        double fa = entity_wait(&a, PROTO_ENTITY_ANNOUNCE, id), fb = entity_wait(&b, PROTO_ENTITY_ANNOUNCE, id);
+        if (fa != fb) fail_msg("entity %u in force from %.6f on replica 1, %.6f on replica 2", id, fa, fb);
+        assert_true(fa >= t0 + 0.5); /* server.sea_lead */
+        in_force = fmax(in_force, fa);
+    }
+    double tq = in_force + 1, x32 = -300 + 8 * (tq - t0);
+    proto_query_sample q1[WAKE_POINTS], q2[WAKE_POINTS], q3[WAKE_POINTS];
+    wake_query(&a, tq, x32, q1);
+    wake_query(&b, tq, x32, q2);
+    answers_same(q1, q2, "replica 2 against replica 1");
+    replica_start(3, p3, "r3.log");
+    connect_hello(&c, p3, &h);
+    assert_true(entity_wait(&c, PROTO_ENTITY_ANNOUNCE, 31) > 0); /* a joiner hears the entities in force */
+    wake_query(&c, tq, x32, q3);
+    answers_same(q1, q3, "a replica started after the sets against replica 1");
+    while (sim_now() < tq) usleep(20000); /* the removal comes after tq: tq is its past */
+    ship_send(&b, 31, 0, NAN);
+    double gone = entity_wait(&a, PROTO_ENTITY_GONE, 31);
+    assert_true(gone > tq && gone == entity_wait(&b, PROTO_ENTITY_GONE, 31));
+    wake_query(&a, tq, x32, q2);
+    answers_same(q1, q2, "replica 1 before the removal's instant, asked after it");
+    wake_query(&a, gone + 1, x32 + 8, q1);
+    wake_query(&c, gone + 1, x32 + 8, q3);
+    answers_same(q1, q3, "after the removal, replica 3 against replica 1");
+    test_ws_close(&a);
+    test_ws_close(&b);
+    test_ws_close(&c);
+    replica_extra[0] = '\0';
+    stop(&pids[3], SIGTERM);
+    stop(&pids[2], SIGTERM);
+    stop(&pids[1], SIGTERM);
+}
+
 /* A set while Redis is stopped (SIGSTOP) is answered EIO by the
  * replication thread, and the witness keeps its frames meanwhile: the
  * service thread never waits for Redis.  Tried up to 3 times: a burst of
@@ -1257,6 +1385,7 @@ int main(int argc, char **argv)
         cmocka_unit_test_teardown(replicas_behind_haproxy, teardown),
         cmocka_unit_test_teardown(late_replicas_agree, teardown),
         cmocka_unit_test_teardown(cigi_wind_reaches_every_replica, teardown),
+        cmocka_unit_test_teardown(entities_reach_every_replica, teardown),
         cmocka_unit_test_teardown(stalled_redis_costs_no_frame, teardown),
         cmocka_unit_test_teardown(sets_answered_after_a_reset, teardown),
         cmocka_unit_test_teardown(sets_answered_at_the_pending_limit, teardown),
