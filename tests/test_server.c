@@ -2975,12 +2975,14 @@ static void entity_expect(test_ws *w, int op, uint32_t id, proto_msg *m)
 
 /* Enters ship or flier id with the entity token at (x, -20), heading +x,
  * and waits for its announce on w. */
-static void entity_enter(test_ws *w, uint32_t id, int kind, double t, double x, double speed)
+static double entity_enter(test_ws *w, uint32_t id, int kind, double t, double x, double speed)
 {
     proto_msg m;
     entity_send(w, PROTO_ENTITY_SET, id, kind, t, x, speed, "entity-token");
     entity_expect(w, PROTO_ENTITY_ANNOUNCE, id, &m);
+    double from = m.hdr.sim_time; /* the instant the sample takes effect */
     proto_msg_free(&m);
+    return from;
 }
 
 /* An ERROR of code whose message holds `has`; asserts it comes. */
@@ -3101,8 +3103,9 @@ static void wakes_in_queries(void **state)
     sea_connect(&a, &ta, 300);
     double t0 = hub_now();
     proto_msg m;
-    entity_enter(&a, 31, 0, t0, 0, 8);
-    entity_enter(&a, 32, 0, t0, -300, 8);
+    double tq = entity_enter(&a, 31, 0, t0, 0, 8);
+    tq = fmax(tq, entity_enter(&a, 32, 0, t0, -300, 8)); /* both in force from tq on */
+    assert_true(tq >= t0);
     /* the set asked for the wake's pattern: it is built before any query
      * needs it, and the first query does not wait */
     srv_hub *hub = srv_daemon_hub(daemon_);
@@ -3115,17 +3118,17 @@ static void wakes_in_queries(void **state)
     const double xz[2 * N] = {-240, -20, -360, -20, -300, -28, -300, -12, -100, -20, -150, -45, -200, 5};
     oc_client *q = connect_client(port, NULL);
     oc_query_result qr;
-    assert_int_equal(oc_client_query(q, xz, N, 1, t0, 60000, &qr), OCEAN_OK);
-    assert_true(qr.t == t0 && qr.count == N);
+    assert_int_equal(oc_client_query(q, xz, N, 1, tq, 60000, &qr), OCEAN_OK);
+    assert_true(qr.t == tq && qr.count == N);
     assert_true(atomic_load(&stats->wake_waits) == waits);
     ocean_query_result lr[N];
-    local_query(tl_at(&ta, t0), t0, xz, N, lr);
+    local_query(tl_at(&ta, tq), tq, xz, N, lr);
     /* the exact wakes of the same ships, patterns built here */
     ocean_params p;
-    srv_params_from_sea(tl_at(&ta, t0), &settings.params, &p);
+    srv_params_from_sea(tl_at(&ta, tq), &settings.params, &p);
     ocean_entity_desc d[4];
     ocean_entity_state st[4];
-    int n = srv_entities_at(srv_daemon_hub(daemon_)->entities, t0, d, st, 4);
+    int n = srv_entities_at(srv_daemon_hub(daemon_)->entities, tq, d, st, 4);
     assert_int_equal(n, 2);
     wake_field *f;
     assert_int_equal(wake_field_create(8, &f), OCEAN_OK);
@@ -3152,9 +3155,10 @@ static void wakes_in_queries(void **state)
     assert_true(biggest > 0.05);   /* the wake is there to be felt */
     wake_field_destroy(f);
     oc_query_result_free(&qr);
-    /* before the ships entered the sea: the wind sea alone */
-    assert_int_equal(oc_client_query(q, xz, N, 1, t0 - 1, 30000, &qr), OCEAN_OK);
-    local_query(tl_at(&ta, t0 - 1), t0 - 1, xz, N, lr);
+    /* before the ships' entries took effect: the wind sea alone */
+    double tb = fmin(t0, tq - 1e-3);
+    assert_int_equal(oc_client_query(q, xz, N, 1, tb, 30000, &qr), OCEAN_OK);
+    local_query(tl_at(&ta, tb), tb, xz, N, lr);
     for (int i = 0; i < N; i++) assert_true(fabs(qr.samples[i].height - lr[i].height) <= 1e-5 + 1e-6 * fabs(lr[i].height));
     oc_query_result_free(&qr);
     oc_client_destroy(q);
