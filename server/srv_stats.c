@@ -126,8 +126,8 @@ static const stat_metric traffic_metrics[] = {
          "values (cigi_packet_check).", cigi_drop_value, 1),
     STAT("oceand_cigi_dropped_busy_total", "counter", "CIGI host messages dropped: the previous one's requests "
          "were still being answered (a host faster than the daemon's ticks).", cigi_drop_busy, 1),
-    STAT("oceand_cigi_ignored_total", "counter", "CIGI packets read and not acted on (this version answers "
-         "HAT/HOT and Environmental Conditions requests; sea state and entities from a host are to come).",
+    STAT("oceand_cigi_ignored_total", "counter", "CIGI packets read and not acted on (packets this version "
+         "does not use, inactive or attached entities).",
          cigi_ignored, 1),
     STAT("oceand_wake_patterns_total", "counter", "Ship wake patterns built for point answers (one FFT each, "
          "on the wake builder's thread).", wake_patterns, 1),

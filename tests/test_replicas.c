@@ -14,6 +14,10 @@
  * timeline back from the stream.  Live FRAMEs of one tick are the same bytes
  * on both replicas too.
  *
+ * Entities set through one replica (ocean.v1, CIGI) reach every replica
+ * at one instant, and queries in a ship's wake get the same bytes from
+ * each, and from one started after the sets.
+ *
  * The timeline tests: a replica started 20, 200 and 2000 changes after
  * another serves the same sea and the same live bytes; a stalled Redis
  * (SIGSTOP) costs a viewer no frame while a set waits for it; every set is
@@ -882,46 +886,6 @@ static void late_replicas_agree(void **state)
     stop(&pids[1], SIGTERM); /* its shutdown too runs under the sanitizers */
 }
 
-/* A CIGI host's surface wind, sent to one replica's CIGI port, enters the
- * shared timeline as an admin's set does: every replica serves it (the set
- * was refused at first, its effective time computed a moment before the
- * stream's lead check).  The host repeats its frame until the wind shows:
- * the first may come before the CIGI port is bound. */
-static void cigi_wind_reaches_every_replica(void **state)
-{
-    (void)state;
-    if (tools_missing()) skip();
-    int cport = test_free_port(), p1, p2 = test_free_port();
-    snprintf(replica_extra, sizeof replica_extra, "server.cigi_port = %d\n", cport);
-    cluster_up(&p1);
-    replica_extra[0] = '\0';
-    replica_start(2, p2, "r2.log");
-    const cigi_format f = {3, 3, 1};
-    proto_buf b;
-    proto_buf_init(&b, 0);
-    cigi_packet ig = {.kind = CIGI_IG_CONTROL}, atm = {.kind = CIGI_ATMOSPHERE_CONTROL};
-    ig.u.ig.ig_mode = 1;
-    atm.u.atmosphere = (cigi_atmosphere){.enable = 1, .humidity = 50, .visibility = 10000, .wind_h = 17.5,
-                                         .wind_dir = 270, .pressure = 1013};
-    assert_int_equal(cigi_put(&b, &f, &ig), OCEAN_OK);
-    assert_int_equal(cigi_put(&b, &f, &atm), OCEAN_OK);
-    int fd = socket(AF_INET, SOCK_DGRAM, 0);
-    struct sockaddr_in to = {.sin_family = AF_INET, .sin_port = htons((uint16_t)cport)};
-    inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
-    double got = 0;
-    for (double end = test_now_s() + 30; test_now_s() < end && got != 17.5;) {
-        sendto(fd, proto_buf_data(&b), proto_buf_len(&b), 0, (struct sockaddr *)&to, sizeof to);
-        usleep(500000);
-        got = hello_sea(p1).wind_u10;
-    }
-    close(fd);
-    proto_buf_free(&b);
-    if (got != 17.5) fail_msg("the replica the host spoke to serves wind %.2f, not 17.50", got);
-    wait_wind(p2, 17.5);
-    stop(&pids[2], SIGTERM);
-    stop(&pids[1], SIGTERM);
-}
-
 /* ---- entities ---------------------------------------------------------------------- */
 
 /* An ENTITY set of ship id (120 x 15 x 5 m) at (x, -20) steaming along +x
@@ -960,6 +924,68 @@ static double entity_wait(test_ws *w, int op, uint32_t id)
     }
     fail_msg("no ENTITY op %d of entity %u", op, id);
     return 0;
+}
+
+/* A CIGI host's surface wind, sent to one replica's CIGI port, enters the
+ * shared timeline as an admin's set does: every replica serves it (the set
+ * was refused at first, its effective time computed a moment before the
+ * stream's lead check); so does its Entity Control, every replica
+ * announcing the ship at one instant.  The host repeats its frame until the wind shows:
+ * the first may come before the CIGI port is bound. */
+static void cigi_wind_reaches_every_replica(void **state)
+{
+    (void)state;
+    if (tools_missing()) skip();
+    int cport = test_free_port(), p1, p2 = test_free_port();
+    snprintf(replica_extra, sizeof replica_extra, "server.cigi_port = %d\n", cport);
+    cluster_up(&p1);
+    replica_extra[0] = '\0';
+    replica_start(2, p2, "r2.log");
+    const cigi_format f = {3, 3, 1};
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    cigi_packet ig = {.kind = CIGI_IG_CONTROL}, atm = {.kind = CIGI_ATMOSPHERE_CONTROL};
+    ig.u.ig.ig_mode = 1;
+    atm.u.atmosphere = (cigi_atmosphere){.enable = 1, .humidity = 50, .visibility = 10000, .wind_h = 17.5,
+                                         .wind_dir = 270, .pressure = 1013};
+    assert_int_equal(cigi_put(&b, &f, &ig), OCEAN_OK);
+    assert_int_equal(cigi_put(&b, &f, &atm), OCEAN_OK);
+    int fd = socket(AF_INET, SOCK_DGRAM, 0);
+    struct sockaddr_in to = {.sin_family = AF_INET, .sin_port = htons((uint16_t)cport)};
+    inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+    double got = 0;
+    for (double end = test_now_s() + 30; test_now_s() < end && got != 17.5;) {
+        sendto(fd, proto_buf_data(&b), proto_buf_len(&b), 0, (struct sockaddr *)&to, sizeof to);
+        usleep(500000);
+        got = hello_sea(p1).wind_u10;
+    }
+    if (got != 17.5) fail_msg("the replica the host spoke to serves wind %.2f, not 17.50", got);
+    wait_wind(p2, 17.5);
+    /* the host's ship, placed on replica 1, is announced by replica 2 at
+     * the instant the stream gives it, and replica 1 at the same */
+    test_ws v1, v2;
+    proto_hello h;
+    connect_hello(&v1, p1, &h);
+    connect_hello(&v2, p2, &h);
+    cigi_packet ship = {.kind = CIGI_ENTITY_CONTROL};
+    ship.u.entity = (cigi_entity){.id = 44, .state = CIGI_ENTITY_ACTIVE, .clamp = CIGI_CLAMP_CONFORMAL,
+                                  .lat = 0.001, .lon = 0.001, .yaw = 90};
+    proto_buf b2;
+    proto_buf_init(&b2, 0);
+    assert_int_equal(cigi_put(&b2, &f, &ig), OCEAN_OK);
+    assert_int_equal(cigi_put(&b2, &f, &ship), OCEAN_OK);
+    double t0 = sim_now();
+    sendto(fd, proto_buf_data(&b2), proto_buf_len(&b2), 0, (struct sockaddr *)&to, sizeof to);
+    proto_buf_free(&b2);
+    double f1 = entity_wait(&v1, PROTO_ENTITY_ANNOUNCE, 44), f2 = entity_wait(&v2, PROTO_ENTITY_ANNOUNCE, 44);
+    if (f1 != f2) fail_msg("the host's ship in force from %.6f on replica 1, %.6f on replica 2", f1, f2);
+    assert_true(f1 >= t0 + 0.5); /* server.sea_lead */
+    test_ws_close(&v1);
+    test_ws_close(&v2);
+    close(fd);
+    proto_buf_free(&b);
+    stop(&pids[2], SIGTERM);
+    stop(&pids[1], SIGTERM);
 }
 
 #define WAKE_POINTS 64
