@@ -4,8 +4,10 @@
  * (a track sample) or taken out.
  */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <cJSON.h>
 
@@ -20,12 +22,16 @@ typedef struct entity_seen {
     int n, cap;
     int refused;
     char why[PROTO_ERROR_MSG_MAX + 64];
+    uint32_t want_id;          /* the set or remove sent: its announce or gone is its answer */
+    int want_op;
+    atomic_int answered;       /* that answer, or an ERROR, came */
 } entity_seen;
 
 static void on_entity(void *user, oc_client *c, const proto_entity *e)
 {
     (void)c;
     entity_seen *s = user;
+    if (e->id == s->want_id && e->op == s->want_op) atomic_store(&s->answered, 1);
     int i = 0;
     while (i < s->n && s->e[i].id != e->id) i++;
     if (e->op == PROTO_ENTITY_GONE) {
@@ -53,6 +59,7 @@ static void on_error(void *user, oc_client *c, const proto_error *e)
     if (e->offending_type != PROTO_ENTITY || s->refused) return;
     s->refused = 1;
     snprintf(s->why, sizeof s->why, "%s: %s", ocean_strerror((ocean_result)e->code), e->message);
+    atomic_store(&s->answered, 1);
 }
 
 static const char *const kinds[] = {"ship", "rotorcraft", "aircraft", NULL};
@@ -196,7 +203,18 @@ int cmd_entity(int argc, char **argv)
     ocean_result r = OCEAN_OK;
     if (P.set || P.remove) {
         proto_entity e = entity_of(&P, oc_client_sim_time(c));
+        seen.want_id = e.id;
+        seen.want_op = P.set ? PROTO_ENTITY_ANNOUNCE : PROTO_ENTITY_GONE;
         r = oc_client_send_entity(c, &e);
+        /* replicated, the answer comes back through the shared stream,
+         * after the answers to what is sent next: wait for it */
+        for (int ms = 0; r == OCEAN_OK && !atomic_load(&seen.answered) && ms < P.timeout_ms; ms += 5)
+            usleep(5000);
+        if (r == OCEAN_OK && !atomic_load(&seen.answered)) {
+            snprintf(err, sizeof err, "no answer to the %s of entity %u within %d ms", P.set ? "set" : "remove",
+                     e.id, P.timeout_ms);
+            r = OCEAN_ESTATE;
+        }
     }
     /* the server answers in order: once the sea state asked after them
      * comes back, every answer to the ENTITYs before it has come */
@@ -205,7 +223,7 @@ int cmd_entity(int argc, char **argv)
     double eff;
     if (r == OCEAN_OK) r = oc_client_send_entity(c, &get);
     if (r == OCEAN_OK) r = oc_client_sea_state_fetch(c, P.timeout_ms, &sea, &eff);
-    if (r != OCEAN_OK) oc_client_last_error(c, err, sizeof err);
+    if (r != OCEAN_OK && !err[0]) oc_client_last_error(c, err, sizeof err);
     if (r != OCEAN_OK || seen.refused) {
         fprintf(stderr, "ocean-client entity: %s\n", seen.refused ? seen.why : err[0] ? err : ocean_strerror(r));
         rc = 1;
