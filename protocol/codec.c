@@ -1566,3 +1566,82 @@ ocean_result proto_mesh_qz_decode(const uint8_t *data, size_t len, uint32_t vert
     free(q);
     return res;
 }
+
+/* ---- planes of any size ------------------------------------------------ */
+
+/* Block (bi, bj)'s origin and size in a plane of w x h. */
+static void plane_block(int w, int h, int bi, int bj, int *x0, int *z0, int *bw, int *bh)
+{
+    *x0 = bi * PROTO_TILE_MAX_SIZE;
+    *z0 = bj * PROTO_TILE_MAX_SIZE;
+    *bw = w - *x0 < PROTO_TILE_MAX_SIZE ? w - *x0 : PROTO_TILE_MAX_SIZE;
+    *bh = h - *z0 < PROTO_TILE_MAX_SIZE ? h - *z0 : PROTO_TILE_MAX_SIZE;
+}
+
+ocean_result proto_plane_encode(proto_codec_ctx *ctx, proto_codec c, const proto_codec_params *p, int w, int h,
+                                const float *plane, proto_buf *out, double *max_err, char *err, size_t errlen)
+{
+    if (w < 1 || h < 1 || w > PROTO_PLANE_MAX_SIZE || h > PROTO_PLANE_MAX_SIZE || !plane) {
+        ocean_seterr(err, errlen, "plane %dx%d outside 1..%d", w, h, PROTO_PLANE_MAX_SIZE);
+        return OCEAN_EINVAL;
+    }
+    float *blk = malloc(sizeof *blk * PROTO_TILE_MAX_SIZE * PROTO_TILE_MAX_SIZE);
+    if (!blk) return OCEAN_ENOMEM;
+    size_t start = out->len;
+    double worst = 0;
+    ocean_result r = OCEAN_OK;
+    int nbx = (w + PROTO_TILE_MAX_SIZE - 1) / PROTO_TILE_MAX_SIZE, nbz = (h + PROTO_TILE_MAX_SIZE - 1) / PROTO_TILE_MAX_SIZE;
+    for (int bj = 0; bj < nbz && r == OCEAN_OK; bj++)
+        for (int bi = 0; bi < nbx && r == OCEAN_OK; bi++) {
+            int x0, z0, bw, bh;
+            plane_block(w, h, bi, bj, &x0, &z0, &bw, &bh);
+            for (int j = 0; j < bh; j++) memcpy(blk + (size_t)j * bw, plane + (size_t)(z0 + j) * w + x0, sizeof *blk * bw);
+            uint8_t *len_at;
+            r = proto_buf_grow(out, 4, &len_at);
+            size_t before = out->len;
+            double e = 0;
+            if (r == OCEAN_OK) r = proto_tile_encode_ctx(ctx, c, p, bw, bh, PROTO_CH_HEIGHT, blk, out, &e, err, errlen);
+            if (r == OCEAN_OK) proto_st32(proto_buf_data(out) + before - 4, (uint32_t)(out->len - before));
+            worst = e > worst ? e : worst;
+        }
+    free(blk);
+    if (r != OCEAN_OK) out->len = start;
+    else if (max_err) *max_err = worst;
+    return r;
+}
+
+ocean_result proto_plane_decode(proto_codec c, int w, int h, const uint8_t *data, size_t len, float *plane,
+                                char *err, size_t errlen)
+{
+    if (w < 1 || h < 1 || w > PROTO_PLANE_MAX_SIZE || h > PROTO_PLANE_MAX_SIZE || !plane || (!data && len)) {
+        ocean_seterr(err, errlen, "plane %dx%d outside 1..%d", w, h, PROTO_PLANE_MAX_SIZE);
+        return OCEAN_EINVAL;
+    }
+    float *blk = malloc(sizeof *blk * PROTO_TILE_MAX_SIZE * PROTO_TILE_MAX_SIZE);
+    if (!blk) return OCEAN_ENOMEM;
+    size_t at = 0;
+    ocean_result r = OCEAN_OK;
+    int nbx = (w + PROTO_TILE_MAX_SIZE - 1) / PROTO_TILE_MAX_SIZE, nbz = (h + PROTO_TILE_MAX_SIZE - 1) / PROTO_TILE_MAX_SIZE;
+    for (int bj = 0; bj < nbz && r == OCEAN_OK; bj++)
+        for (int bi = 0; bi < nbx && r == OCEAN_OK; bi++) {
+            int x0, z0, bw, bh;
+            plane_block(w, h, bi, bj, &x0, &z0, &bw, &bh);
+            uint32_t n = len - at >= 4 ? proto_ld32(data + at) : 0;
+            if (len - at < 4 || n > len - at - 4) {
+                ocean_seterr(err, errlen, "plane block (%d, %d): %zu bytes left, its count says %u", bi, bj,
+                             len - at, n);
+                r = OCEAN_ECODEC;
+                break;
+            }
+            r = proto_tile_decode(c, bw, bh, PROTO_CH_HEIGHT, data + at + 4, n, blk, err, errlen);
+            for (int j = 0; r == OCEAN_OK && j < bh; j++)
+                memcpy(plane + (size_t)(z0 + j) * w + x0, blk + (size_t)j * bw, sizeof *blk * bw);
+            at += 4 + (size_t)n;
+        }
+    if (r == OCEAN_OK && at != len) {
+        ocean_seterr(err, errlen, "plane: %zu bytes after its last block", len - at);
+        r = OCEAN_ECODEC;
+    }
+    free(blk);
+    return r;
+}

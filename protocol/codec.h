@@ -143,6 +143,18 @@ ocean_result proto_tile_decode(proto_codec c, int w, int h, unsigned channels,
                                const uint8_t *data, size_t len, float *planes,
                                char *err, size_t errlen);
 
+/* One plane of any size up to PROTO_PLANE_MAX_SIZE a side (a wake
+ * pattern's coefficients): the blocks of PROTO_TILE_MAX_SIZE^2 samples
+ * that cover it, row of blocks after row, each a u32 byte count and its
+ * one-plane (H) tile payload of codec c (PROTOCOL.md "WAKE").  max_err as
+ * proto_tile_encode's, over every block.  Errors as proto_tile_encode's;
+ * decode: OCEAN_ECODEC for any inconsistency. */
+#define PROTO_PLANE_MAX_SIZE 4096
+ocean_result proto_plane_encode(proto_codec_ctx *ctx, proto_codec c, const proto_codec_params *p, int w, int h,
+                                const float *plane, proto_buf *out, double *max_err, char *err, size_t errlen);
+ocean_result proto_plane_decode(proto_codec c, int w, int h, const uint8_t *data, size_t len, float *plane,
+                                char *err, size_t errlen);
+
 /* IEEE binary16 conversions (round to nearest even; overflow gives +-inf,
  * NaN stays NaN). */
 uint16_t proto_f16_from_f32(float f);

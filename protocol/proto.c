@@ -33,6 +33,7 @@
 #define ERROR_FIXED 8
 #define BYE_FIXED 4
 #define ENTITY_FIXED 56
+#define WAKE_FIXED 48
 
 /* Coordinates beyond these are absurd for a sea on this planet. */
 #define MAX_WORLD 1e10
@@ -45,7 +46,7 @@
 
 static const char *const type_names[PROTO_TYPE_END_] = {
     "?", "HELLO", "SUBSCRIBE", "CAMERA", "FRAME", "TILE", "MESH_TOPOLOGY", "MESH_VERTICES",
-    "QUERY", "QUERY_RESULT", "SEA_STATE", "ERROR", "BYE", "ENTITY"};
+    "QUERY", "QUERY_RESULT", "SEA_STATE", "ERROR", "BYE", "ENTITY", "WAKE"};
 
 const char *proto_type_name(unsigned type)
 {
@@ -582,6 +583,21 @@ static ocean_result v_entity(ctx *c, const proto_entity *e)
     return OCEAN_OK;
 }
 
+/* WAKE: parameters no wake can lack (the reader's wake_pattern judges
+ * their ranges), a grid a tile may have, and a codec. */
+static ocean_result v_wake(ctx *c, const proto_wake *w)
+{
+    if (!(isfinite(w->speed) && w->speed > 0 && isfinite(w->length) && w->length > 0))
+        FAIL(c, OCEAN_EINVAL, "wake.speed %g and wake.length %g must be finite and > 0", w->speed, w->length);
+    if (!(isfinite(w->beam) && w->beam >= 0) || !(w->depth > 0))
+        FAIL(c, OCEAN_EINVAL, "wake.beam %g must be finite and >= 0, wake.depth %g > 0 (inf: deep)", w->beam,
+             w->depth);
+    TRY(chk_range(c, "wake.nx", w->nx, 1, PROTO_PLANE_MAX_SIZE));
+    TRY(chk_range(c, "wake.nz", w->nz, 1, PROTO_PLANE_MAX_SIZE));
+    TRY(chk_enum(c, "wake.codec", w->codec, PROTO_CODEC_COUNT_));
+    return chk_range(c, "wake.error_bound", w->error_bound, 0, 1e30);
+}
+
 static ocean_result v_error(ctx *c, const proto_error *e)
 {
     if (e->code == 0)
@@ -611,6 +627,7 @@ static ocean_result v_msg(ctx *c, const proto_msg *m)
     case PROTO_ERROR: return v_error(c, &m->u.error);
     case PROTO_BYE: return v_bye(c, &m->u.bye);
     case PROTO_ENTITY: return v_entity(c, &m->u.entity);
+    case PROTO_WAKE: return v_wake(c, &m->u.wake);
     default: FAIL(c, OCEAN_ETYPE, "message type %u unknown", m->hdr.type);
     }
 }
@@ -1302,6 +1319,30 @@ static ocean_result d_entity(rd *r, proto_entity *e)
     return rd_end(r);
 }
 
+static ocean_result d_wake(rd *r, proto_wake *w)
+{
+    TRY(need(r, WAKE_FIXED, "fixed fields"));
+    const uint8_t *p = r->p + r->off;
+    w->speed = proto_ldf64(p);
+    w->length = proto_ldf64(p + 8);
+    w->beam = proto_ldf64(p + 16);
+    w->depth = proto_ldf64(p + 24);
+    w->nx = proto_ld16(p + 32);
+    w->nz = proto_ld16(p + 34);
+    w->codec = p[36];
+    TRY(zero_bytes(r, r->off + 37, 3, "wake"));
+    w->error_bound = proto_ldf32(p + 40);
+    w->payload_len = proto_ld32(p + 44);
+    r->off += WAKE_FIXED;
+    TRY(need(r, w->payload_len, "wake payload"));
+    uint8_t *d = arena_take(r, w->payload_len);
+    if (!d) FAIL(r->c, OCEAN_ENOMEM, "decoder arena exhausted");
+    if (w->payload_len) memcpy(d, r->p + r->off, w->payload_len);
+    w->payload = d;
+    r->off += w->payload_len;
+    return rd_end(r);
+}
+
 static ocean_result d_error(rd *r, proto_error *e)
 {
     TRY(need(r, ERROR_FIXED, "fixed fields"));
@@ -1349,7 +1390,7 @@ ocean_result proto_decode_limited(const void *buf, size_t len, const proto_limit
     r.arena_len = payload + extra;
     switch (msg->hdr.type) {
     case PROTO_FRAME: case PROTO_TILE: case PROTO_MESH_TOPOLOGY: case PROTO_MESH_VERTICES:
-    case PROTO_QUERY: case PROTO_QUERY_RESULT:
+    case PROTO_QUERY: case PROTO_QUERY_RESULT: case PROTO_WAKE:
         r.arena = malloc(r.arena_len);
         if (!r.arena) {
             ocean_seterr(err, errlen, "out of memory decoding %s of %zu bytes", r.what, len);
@@ -1373,6 +1414,7 @@ ocean_result proto_decode_limited(const void *buf, size_t len, const proto_limit
     case PROTO_ERROR: res = d_error(&r, &msg->u.error); break;
     case PROTO_BYE: res = d_bye(&r, &msg->u.bye); break;
     case PROTO_ENTITY: res = d_entity(&r, &msg->u.entity); break;
+    case PROTO_WAKE: res = d_wake(&r, &msg->u.wake); break;
     default: res = OCEAN_ETYPE; break;
     }
     if (res == OCEAN_OK)
@@ -1696,6 +1738,27 @@ static ocean_result e_entity(proto_buf *b, const proto_msg *m)
     return put_str(b, e->token);
 }
 
+static ocean_result e_wake(proto_buf *b, const proto_msg *m)
+{
+    uint8_t *p;
+    const proto_wake *w = &m->u.wake;
+    TRY(put(b, WAKE_FIXED, &p));
+    proto_stf64(p, w->speed);
+    proto_stf64(p + 8, w->length);
+    proto_stf64(p + 16, w->beam);
+    proto_stf64(p + 24, w->depth);
+    proto_st16(p + 32, w->nx);
+    proto_st16(p + 34, w->nz);
+    p[36] = w->codec;
+    p[37] = p[38] = p[39] = 0;
+    proto_stf32(p + 40, w->error_bound);
+    proto_st32(p + 44, w->payload_len);
+    uint8_t *d;
+    TRY(put(b, w->payload_len, &d));
+    if (w->payload_len) memcpy(d, w->payload, w->payload_len);
+    return OCEAN_OK;
+}
+
 static ocean_result e_error(proto_buf *b, const proto_msg *m)
 {
     uint8_t *p;
@@ -1724,7 +1787,7 @@ static ocean_result (*const e_payloads[])(proto_buf *b, const proto_msg *m) = {
     [PROTO_FRAME] = e_frame,     [PROTO_TILE] = e_tile_msg,              [PROTO_MESH_TOPOLOGY] = e_topology,
     [PROTO_MESH_VERTICES] = e_vertices_msg, [PROTO_QUERY] = e_query,     [PROTO_QUERY_RESULT] = e_result,
     [PROTO_SEA_STATE] = e_sea_state, [PROTO_ERROR] = e_error,           [PROTO_BYE] = e_bye,
-    [PROTO_ENTITY] = e_entity,
+    [PROTO_ENTITY] = e_entity,   [PROTO_WAKE] = e_wake,
 };
 
 static ocean_result e_payload(proto_buf *b, const proto_msg *m)

@@ -72,6 +72,7 @@ typedef enum proto_type {
     PROTO_ERROR = 11,
     PROTO_BYE = 12,
     PROTO_ENTITY = 13,
+    PROTO_WAKE = 14,
     PROTO_TYPE_END_
 } proto_type;
 
@@ -440,6 +441,21 @@ typedef struct proto_bye {
     char message[PROTO_BYE_MSG_MAX + 1];
 } proto_bye;
 
+/* WAKE: one ship's steady wake pattern, sent once to a reader that places
+ * it along the entity's track (PROTOCOL.md "WAKE"). */
+typedef struct proto_wake {
+    double speed, length, beam, depth;  /* the pattern's parameters (depth +inf: deep) */
+    uint16_t nx, nz;          /* coefficients along and across the track, 1..PROTO_PLANE_MAX_SIZE */
+    uint8_t codec;            /* proto_codec of the payload: one plane of nx x nz (proto_plane_encode) */
+    float error_bound;        /* bound on |reading - exact series| for 1 m of head, >= 0 */
+    uint32_t payload_len;
+    const uint8_t *payload;
+} proto_wake;
+
+/* Wake patterns a reader keeps: the server counts on it holding the last
+ * PROTO_WAKE_HELD it received. */
+#define PROTO_WAKE_HELD 16
+
 typedef struct proto_msg {
     proto_header hdr;         /* hdr.type selects the union member */
     union {
@@ -456,6 +472,7 @@ typedef struct proto_msg {
         proto_error error;
         proto_bye bye;
         proto_entity entity;
+        proto_wake wake;
     } u;
     void *owned_;             /* decoder's allocations; see proto_msg_free */
 } proto_msg;

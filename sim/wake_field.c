@@ -19,6 +19,7 @@ typedef struct held {
 struct wake_field {
     int max, count;
     uint64_t reads;
+    int in_order;             /* evict the pattern that came first, not the least recently read */
     held *h;
 };
 
@@ -60,6 +61,8 @@ void wake_field_destroy(wake_field *f)
 }
 
 int wake_field_count(const wake_field *f) { return f->count; }
+
+void wake_field_keep_order(wake_field *f) { f->in_order = 1; }
 
 static int find(const wake_field *f, const wake_params *p)
 {
@@ -154,7 +157,28 @@ void wake_field_insert(wake_field *f, wake_pattern *p)
         f->count++;
     }
     f->h[slot].p = p;
-    f->h[slot].used = f->reads;
+    f->h[slot].used = f->in_order ? ++f->reads : f->reads;
+}
+
+int wake_field_rungs(const ocean_entity_desc *d, const ocean_entity_state *s, int n, double depth, double x,
+                     double z, double radius, wake_params *out, int max)
+{
+    int count = 0;
+    for (int i = 0; i < n; i++) {
+        ship h;
+        if (!ship_make(&d[i], &s[i], depth, &h)) continue;
+        double dist = hypot(x - h.x, z - h.z);
+        for (int k = 0; k < 2; k++) {
+            const rung *r = &h.r[k];
+            if (r->weight <= 0 || dist > radius + wake_params_reach(&r->p) / r->scale) continue;
+            int dup = 0;
+            for (int m = 0; m < count && m < max; m++) dup |= wake_params_equal(&out[m], &r->p);
+            if (dup) continue;
+            if (count < max) out[count] = r->p;
+            count++;
+        }
+    }
+    return count;
 }
 
 /* The patterns of ship h's rungs the field holds (NULL: not held, which
@@ -164,7 +188,7 @@ static void ship_patterns(wake_field *f, const ship *h, const wake_pattern *pat[
     for (int k = 0; k < 2; k++) {
         int i = h->r[k].weight > 0 ? find(f, &h->r[k].p) : -1;
         pat[k] = i >= 0 ? f->h[i].p : NULL;
-        if (i >= 0) f->h[i].used = f->reads;
+        if (i >= 0 && !f->in_order) f->h[i].used = f->reads;
     }
 }
 

@@ -68,6 +68,16 @@ int wake_field_missing(const wake_field *f, const ocean_entity_desc *d, const oc
  * is kept and p destroyed). */
 void wake_field_insert(wake_field *f, wake_pattern *p);
 int wake_field_count(const wake_field *f);
+/* A full field then makes room by dropping the pattern that came first,
+ * not the least recently read: a reader whose sender models what it
+ * holds (PROTOCOL.md "WAKE"). */
+void wake_field_keep_order(wake_field *f);
+
+/* The patterns (each once, at most max into out) of the n ships whose
+ * wakes reach within radius of (x, z): what a viewer there draws.
+ * Returns how many (may exceed max). */
+int wake_field_rungs(const ocean_entity_desc *d, const ocean_entity_state *s, int n, double depth, double x,
+                     double z, double radius, wake_params *out, int max);
 
 /* The wakes of the n ships at the np points into out.  OCEAN_ESTATE when
  * a pattern they need is missing (out untouched); OCEAN_EINVAL for a point
