@@ -7,7 +7,6 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include <cJSON.h>
 
@@ -209,7 +208,7 @@ int cmd_entity(int argc, char **argv)
         /* replicated, the answer comes back through the shared stream,
          * after the answers to what is sent next: wait for it */
         for (int ms = 0; r == OCEAN_OK && !atomic_load(&seen.answered) && ms < P.timeout_ms; ms += 5)
-            usleep(5000);
+            oc_service(c, 5);
         if (r == OCEAN_OK && !atomic_load(&seen.answered)) {
             snprintf(err, sizeof err, "no answer to the %s of entity %u within %d ms", P.set ? "set" : "remove",
                      e.id, P.timeout_ms);
