@@ -454,7 +454,7 @@ typedef struct proto_wake {
 
 /* Wake patterns a reader keeps: the server counts on it holding the last
  * PROTO_WAKE_HELD it received. */
-#define PROTO_WAKE_HELD 16
+#define PROTO_WAKE_HELD 32
 
 typedef struct proto_msg {
     proto_header hdr;         /* hdr.type selects the union member */

@@ -20,6 +20,7 @@
 #include "srv_client.h"
 #include "srv_held.h"
 #include "srv_stats.h"
+#include "wake_pattern.h"
 
 /* What the simulation thread keeps of one client. */
 enum {
@@ -66,6 +67,10 @@ typedef struct srv_client_sim {
     int held_pending;
     uint64_t held_gen;
     int held_tile, held_replay;
+    /* layout 1: the WAKE patterns the client holds, the last
+     * PROTO_WAKE_HELD sent, oldest first (PROTOCOL.md "WAKE") */
+    wake_params wakes[PROTO_WAKE_HELD];
+    int n_wakes;
 } srv_client_sim;
 
 

@@ -29,6 +29,7 @@
 #include "srv_cascade.h"
 #include "srv_seabuild.h"
 #include "srv_tiles.h"
+#include "srv_wakes.h"
 #include "srv_work.h"
 
 #define EVAL_MAX 8
@@ -1234,6 +1235,38 @@ static void snapshot_jobs(srv_sim *s, work *w, double t, int64_t tick_no, int li
     }
 }
 
+/* The wake patterns the layout-1 client c, its camera at cam, needs at sim
+ * time t and does not hold, queued as WAKE messages: those of the ships
+ * whose wakes reach its view range.  Only built ones: the others go to
+ * the builder, and the wake shows once built (a frame never waits for
+ * one).  cs models what the client holds: the last PROTO_WAKE_HELD sent. */
+static void wakes_send(srv_sim *s, srv_client *c, srv_client_sim *cs, double t, const proto_camera *cam)
+{
+    srv_hub *h = s->hub;
+    int max = srv_entities_kept(h->entities);
+    if (max == 0) return;
+    ocean_entity_desc *d = malloc(sizeof *d * (size_t)max);
+    ocean_entity_state *st = malloc(sizeof *st * (size_t)max);
+    wake_params need[PROTO_WAKE_HELD];
+    int n = d && st ? srv_entities_at(h->entities, t, d, st, max) : 0;
+    double range = cs->sub.view_range_m > 0 ? cs->sub.view_range_m : s->set.srv.view_range;
+    int k = wake_field_rungs(d, st, n, ocean_get_params(s->oc)->sea.depth_m, cam->pos[0], cam->pos[2], range, need,
+                             PROTO_WAKE_HELD);
+    free(d);
+    free(st);
+    for (int i = 0; i < k && i < PROTO_WAKE_HELD; i++) {
+        int held = 0;
+        for (int j = 0; j < cs->n_wakes && !held; j++) held = wake_params_equal(&cs->wakes[j], &need[i]);
+        if (held) continue;
+        srv_msg *q = srv_wakes_message(h->wakes, &need[i]);
+        if (!q) continue;
+        srv_client_queue(c, q);
+        if (cs->n_wakes == PROTO_WAKE_HELD)
+            memmove(&cs->wakes[0], &cs->wakes[1], sizeof cs->wakes[0] * (size_t)--cs->n_wakes);
+        cs->wakes[cs->n_wakes++] = need[i];
+    }
+}
+
 /* Applies changed subscriptions, keeps the live jobs whose frame is due
  * (the client's frame rate on the nearest tick), sends layout-1 jobs to
  * the shared cascade products (w->cjobs) and chooses the layout-0 jobs'
@@ -1260,6 +1293,7 @@ static int filter_jobs(srv_sim *s, work *w, double t, double rate)
             j.tick = (uint32_t)(int64_t)llround(j.t * rate);
         }
         if (cs->sub.layout == PROTO_LAYOUT_CASCADE) {
+            wakes_send(s, j.c, cs, j.t, &j.cam);
             if (!grow((void **)&w->cjobs, &w->capcjobs, w->ncjobs + 1, sizeof *w->cjobs)) continue;
             srv_cascade_job *q = &w->cjobs[w->ncjobs++];
             memset(q, 0, sizeof *q);

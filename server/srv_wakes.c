@@ -13,8 +13,15 @@
 #include <unistd.h>
 
 #include "srv_hub.h"
+#include "srv_msg.h"
 
 #define WANT_MAX 16        /* patterns waiting for the builder */
+
+/* A built pattern's WAKE message, shared by every viewer that needs it. */
+typedef struct wake_msg {
+    wake_params p;
+    srv_msg *m;            /* its bytes in a blob */
+} wake_msg;
 
 struct srv_wakes {
     pthread_t thread;
@@ -28,6 +35,8 @@ struct srv_wakes {
     wake_field *field;
     wake_params want[WANT_MAX];
     int n_want;            /* want[0] is the one being built */
+    wake_msg *msgs;        /* the built patterns' messages, oldest first */
+    int n_msgs, max_msgs;
 };
 
 /* Queues p unless it is queued already [lock]. */
@@ -38,6 +47,50 @@ static void want(srv_wakes *w, const wake_params *p)
     if (w->n_want == WANT_MAX) return;   /* asked for again by the next slice */
     w->want[w->n_want++] = *p;
     pthread_cond_broadcast(&w->cond);
+}
+
+/* Pattern pat's WAKE message in a shared blob, or NULL (logged). */
+static srv_msg *wake_encode(const wake_pattern *pat)
+{
+    int nx, nz;
+    const float *coef = wake_pattern_coefficients(pat, &nx, &nz);
+    const wake_params *p = wake_pattern_params(pat);
+    proto_codec_params cp;
+    proto_codec_params_default(&cp);
+    cp.accuracy = SRV_WAKE_ACCURACY;
+    proto_buf pay;
+    proto_buf_init(&pay, 0);
+    double err = 0;
+    char why[200] = "";
+    srv_msg *q = NULL;
+    if (proto_plane_encode(NULL, PROTO_CODEC_QZ, &cp, nx, nz, coef, &pay, &err, why, sizeof why) == OCEAN_OK) {
+        proto_msg m;
+        proto_msg_init(&m, PROTO_WAKE);   /* header sim_time 0: a pattern is timeless */
+        m.u.wake = (proto_wake){.speed = p->speed, .length = p->length, .beam = p->beam, .depth = p->depth,
+                                .nx = (uint16_t)nx, .nz = (uint16_t)nz, .codec = PROTO_CODEC_QZ,
+                                .error_bound = (float)(wake_pattern_bound(pat) + err),
+                                .payload_len = (uint32_t)pay.len, .payload = proto_buf_data(&pay)};
+        q = srv_msg_encode(&m);
+        if (q && srv_msg_make_shared(q) != OCEAN_OK) {
+            srv_msg_free(q);
+            q = NULL;
+        }
+    } else {
+        fprintf(stderr, "oceand: wake pattern of %g m/s, %g m: not encoded: %s\n", p->speed, p->length, why);
+    }
+    proto_buf_free(&pay);
+    return q;
+}
+
+/* Keeps q as p's message, the oldest making way [lock]. */
+static void msg_keep(srv_wakes *w, const wake_params *p, srv_msg *q)
+{
+    if (!q) return;
+    if (w->n_msgs == w->max_msgs) {
+        srv_msg_free(w->msgs[0].m);
+        memmove(&w->msgs[0], &w->msgs[1], sizeof w->msgs[0] * (size_t)--w->n_msgs);
+    }
+    w->msgs[w->n_msgs++] = (wake_msg){*p, q};
 }
 
 static void *builder(void *arg)
@@ -61,7 +114,9 @@ static void *builder(void *arg)
             atomic_fetch_add(&w->stats->wake_patterns, 1);
             atomic_fetch_add(&w->stats->wake_build_ns, (uint64_t)(took * 1e9));
         }
+        srv_msg *q = pat ? wake_encode(pat) : NULL;
         pthread_mutex_lock(&w->lock);
+        msg_keep(w, &p, q);
         wake_field_insert(w->field, pat);
         memmove(&w->want[0], &w->want[1], sizeof w->want[0] * (size_t)--w->n_want);
     }
@@ -78,7 +133,9 @@ ocean_result srv_wakes_create(int max_entities, srv_stats *stats, srv_wakes **ou
     w->stats = stats;
     pthread_mutex_init(&w->lock, NULL);
     pthread_cond_init(&w->cond, NULL);
-    if (wake_field_create(2 * max_entities + 8, &w->field) != OCEAN_OK ||
+    w->max_msgs = 2 * max_entities + 8;
+    w->msgs = calloc((size_t)w->max_msgs, sizeof *w->msgs);
+    if (!w->msgs || wake_field_create(2 * max_entities + 8, &w->field) != OCEAN_OK ||
         pthread_create(&w->thread, NULL, builder, w) != 0) {
         srv_wakes_destroy(w);
         return OCEAN_ENOMEM;
@@ -99,6 +156,8 @@ void srv_wakes_destroy(srv_wakes *w)
         pthread_join(w->thread, NULL);
     }
     wake_field_destroy(w->field);
+    for (int i = 0; i < w->n_msgs; i++) srv_msg_free(w->msgs[i].m);
+    free(w->msgs);
     pthread_cond_destroy(&w->cond);
     pthread_mutex_destroy(&w->lock);
     free(w);
@@ -147,6 +206,18 @@ void srv_wakes_ahead(srv_hub *h, const ocean_entity_desc *d, const ocean_track_s
     int missing = wake_field_missing(w->field, d, &st, 1, depth, at, 1, need, 2);
     for (int i = 0; i < missing && i < 2; i++) want(w, &need[i]);
     pthread_mutex_unlock(&w->lock);
+}
+
+srv_msg *srv_wakes_message(srv_wakes *w, const wake_params *p)
+{
+    srv_msg *q = NULL;
+    pthread_mutex_lock(&w->lock);
+    int i = w->n_msgs - 1;
+    while (i >= 0 && !wake_params_equal(&w->msgs[i].p, p)) i--;
+    if (i >= 0) q = srv_msg_share(w->msgs[i].m);
+    else want(w, p);
+    pthread_mutex_unlock(&w->lock);
+    return q;
 }
 
 int srv_wakes_pending(srv_wakes *w)

@@ -15,6 +15,12 @@
  * two patterns, kept while they are
  * read (the least recently read go first, past 2 per entity and 8).
  *
+ * The same patterns go to viewers (layout 1) as WAKE messages, each
+ * encoded once when it is built and shared by every viewer that needs it
+ * (srv_wakes_message): a viewer places them along the entities' tracks
+ * itself (PROTOCOL.md "WAKE"), so what the wakes cost the daemon grows
+ * with the patterns the entities need, not with the viewers.
+ *
  * Threads: srv_wakes_sample from any thread; the builder thread; the field
  * and the builder's queue under the module's lock, which is never held
  * while another is taken.
@@ -45,6 +51,17 @@ void srv_wakes_destroy(srv_wakes *w);
  * finite. */
 ocean_result srv_wakes_sample(srv_wakes *w, srv_entities *e, double t, double depth, const double *xz, size_t n,
                               wake_sample *out);
+
+/* Accuracy of a WAKE message's coefficients, relative to their range (the
+ * qz codec's): 5e-5 m for 1 m of head on a pattern whose coefficients span
+ * 0.5 m, 0.25 mm on a 5 m draught. */
+#define SRV_WAKE_ACCURACY 1e-4
+
+#define SRV_WAKES_HELD PROTO_WAKE_HELD
+
+/* The WAKE message of pattern p (a new message sharing its encoded bytes)
+ * when it is built; else NULL, and p goes to the builder [any thread]. */
+struct srv_msg *srv_wakes_message(srv_wakes *w, const wake_params *p);
 
 /* Patterns waiting for the builder or being built [any thread]. */
 int srv_wakes_pending(srv_wakes *w);
