@@ -97,11 +97,12 @@ ALL_LIBS := $(if $(CLIENT_SRC),$(LIB_CLIENT)) $(if $(SERVER_SRC),$(LIB_SERVER)) 
 
 # The installable client library, in one archive and one shared object
 # (built from -fPIC objects of its own): protocol + clients/c and the
-# sim/ files they use (results, time, the config parser), no simulator, so
+# sim/ files they use (results, time, the config parser, the entity table
+# and the wake patterns it reads), no simulator, so
 # a program that links it gets no FFTW and no OpenMP.
 OC_VERSION := $(shell sed -n 's/^\#define OC_VERSION "\(.*\)"/\1/p' clients/c/oceanclient.h)
 OC_SOVERSION := $(firstword $(subst ., ,$(OC_VERSION)))
-OCLIB_SIM_SRC := sim/ocean_result.c sim/ocean_time.c sim/conf.c
+OCLIB_SIM_SRC := sim/ocean_result.c sim/ocean_time.c sim/conf.c sim/entity.c sim/wake_pattern.c sim/wake_field.c
 OCLIB_SRC := $(filter-out clients/c/oc_ship_offline.c,$(CLIENT_SRC)) $(PROTO_SRC) $(OCLIB_SIM_SRC)
 OCLIB_A := $(BUILD)/liboceanclient.a
 OCLIB_SO := $(BUILD)/liboceanclient.so.$(OC_VERSION)

@@ -154,6 +154,12 @@ typedef enum proto_entity_op {
     PROTO_ENTITY_OP_COUNT_
 } proto_entity_op;
 
+/* How long an entity goes on at its last sample's velocity before it holds
+ * still, and how long a removed entity's past is kept, s (PROTOCOL.md
+ * "ENTITY"): the server's table and every reader's use the same. */
+#define PROTO_ENTITY_HOLD_S 10.0
+#define PROTO_ENTITY_PAST_S 120.0
+
 /* Entity kinds as sim/entity.h numbers them. */
 #define PROTO_ENTITY_KIND_COUNT 3
 

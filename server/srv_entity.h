@@ -25,14 +25,15 @@
 #include <stdint.h>
 
 #include "entity.h"
+#include "proto.h"
 #include "ocean_result.h"
 
 /* How long a track runs on past its last sample, s. */
-#define SRV_ENTITY_HOLD_S 10.0
+#define SRV_ENTITY_HOLD_S PROTO_ENTITY_HOLD_S
 /* How long a gone entity's past is kept after its removal, s: a query or
  * replay may ask an instant this far back (a sample lies within 60 s of
  * the clock). */
-#define SRV_ENTITY_PAST_S 120.0
+#define SRV_ENTITY_PAST_S PROTO_ENTITY_PAST_S
 
 typedef struct srv_entities srv_entities;
 

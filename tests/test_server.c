@@ -3170,6 +3170,78 @@ static void wakes_in_queries(void **state)
     test_ws_close(&a);
 }
 
+/* A viewer (layout 1) near two ships gets their wake patterns (WAKE) and
+ * places them along the tracks its ENTITY announces give: the C library's
+ * wakes at points around the second ship, in the first's wake, are the
+ * exact sum of the same waves (the daemon's series, summed here) within
+ * the bound the library gives, and the patterns came once each. */
+static void wakes_reach_viewers(void **state)
+{
+    (void)state;
+    test_ws a;
+    timeline ta;
+    sea_connect(&a, &ta, 300);
+    oc_client *v = connect_client(port, NULL);
+    proto_subscribe sub;
+    cascade_subscribe(&sub);
+    assert_int_equal(oc_client_subscribe(v, &sub), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.pos[0] = -150, cam.pos[1] = 25, cam.pos[2] = -20;
+    assert_int_equal(oc_client_send_camera(v, &cam, NULL), OCEAN_OK);
+    double t0 = hub_now();
+    double tq = entity_enter(&a, 41, 0, t0, 0, 8);
+    tq = fmax(tq, entity_enter(&a, 42, 0, t0, -300, 8));
+    enum { N = 7 };
+    const double xz[2 * N] = {-240, -20, -360, -20, -300, -28, -300, -12, -100, -20, -150, -45, -200, 5};
+    oc_wake got[N];
+    ocean_result r = OCEAN_ESTATE;
+    for (double end = test_now_s() + 60; test_now_s() < end && r == OCEAN_ESTATE;) {
+        oc_service(v, 50);
+        oc_frame *f = NULL;
+        while (oc_client_next_frame(v, 0, &f) == OCEAN_OK) oc_frame_free(f);
+        r = oc_client_wakes(v, tq, xz, N, got);
+    }
+    assert_int_equal(r, OCEAN_OK);
+    oc_client_stats st;
+    oc_client_get_stats(v, &st);
+    assert_true(st.wakes_rx >= 1 && st.wakes_rx <= 4 && st.wakes_refused == 0 && st.entity_refused == 0);
+    /* the exact wakes of the same ships, patterns built here */
+    ocean_params p;
+    srv_params_from_sea(tl_at(&ta, tq), &settings.params, &p);
+    ocean_entity_desc d[4];
+    ocean_entity_state es[4];
+    int n = srv_entities_at(srv_daemon_hub(daemon_)->entities, tq, d, es, 4);
+    assert_int_equal(n, 2);
+    wake_field *f;
+    assert_int_equal(wake_field_create(8, &f), OCEAN_OK);
+    wake_params need[8];
+    int missing = wake_field_missing(f, d, es, n, p.sea.depth_m, xz, N, need, 8);
+    for (int i = 0; i < missing && i < 8; i++) {
+        wake_pattern *pat;
+        assert_int_equal(wake_pattern_create(&need[i], &pat, NULL, 0), OCEAN_OK);
+        wake_field_insert(f, pat);
+    }
+    double exact[N], biggest = 0;
+    assert_int_equal(wake_field_exact(f, d, es, n, p.sea.depth_m, xz, N, exact), OCEAN_OK);
+    for (int i = 0; i < N; i++) {
+        printf("(%g, %g): the viewer's wake %.5f m, exact %.5f m, bound %.5f m\n", xz[2 * i], xz[2 * i + 1],
+               got[i].height, exact[i], got[i].error);
+        assert_true(fabs(got[i].height - exact[i]) <= got[i].error + 1e-6);
+        biggest = fmax(biggest, fabs(exact[i]));
+    }
+    assert_true(biggest > 0.05);
+    wake_field_destroy(f);
+    oc_client_destroy(v);
+    proto_msg m;
+    for (uint32_t id = 41; id <= 42; id++) {
+        entity_send(&a, PROTO_ENTITY_REMOVE, id, 0, 0, 0, 0, "entity-token");
+        entity_expect(&a, PROTO_ENTITY_GONE, id, &m);
+        proto_msg_free(&m);
+    }
+    test_ws_close(&a);
+}
+
 /* What on_entity saw. */
 typedef struct entity_seen {
     int announces, gones;
@@ -4661,6 +4733,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(entity_rate),
         cmocka_unit_test(entity_from_the_library),
         cmocka_unit_test(wakes_in_queries),
+        cmocka_unit_test(wakes_reach_viewers),
         cmocka_unit_test(epoch_parse),
         cmocka_unit_test(epoch_shared_clock),
         cmocka_unit_test(epoch_beyond_time_limit),

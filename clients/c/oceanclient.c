@@ -25,7 +25,9 @@
 
 #include <libwebsockets.h>
 
+#include "entity.h"
 #include "oc_held.h"
+#include "wake_field.h"
 
 #define CAM_RING 256
 #define CLOSE_GRACE_MS 300
@@ -228,6 +230,8 @@ struct oc_loop {
 struct oc_client {
     oc_held *held;             /* time-interpolating stream: the samples held
                                   (receive thread), made at its first frame */
+    ocean_entities *entities;  /* [mu] the entities' entries the server announced, made at the first */
+    wake_field *wakes;         /* [mu] the WAKE patterns received, the last PROTO_WAKE_HELD */
     oc_loop *loop;
     int own_loop;
     oc_client *next;              /* [mu] loop's list */
@@ -875,6 +879,7 @@ typedef struct rx_ctx {
     ocean_result mesh_res;     /* FRAME has_mesh 2: its positions' decoding */
     const char *mesh_why;
     uint32_t **new_refs;       /* MESH_TOPOLOGY: its qz prediction references */
+    wake_pattern *wake;        /* WAKE: its pattern, decoded before the lock (taken: NULL) */
     notify *nt;                /* what to tell the callbacks after the lock */
 } rx_ctx;
 
@@ -1063,9 +1068,53 @@ static void rx_sea_state(rx_ctx *x)
     x->nt->call_sea = 1;
 }
 
+/* An entity entry into the client's table, as the server entered it: in
+ * force from the announce's header sim_time (PROTOCOL.md "ENTITY").  A
+ * table that cannot be made or an entry it refuses (the server sent it:
+ * that is the server's fault, or an entry older than a joiner's snapshot)
+ * is counted, nothing else. */
+static void entity_enter(oc_client *c, const proto_msg *m)
+{
+    const proto_entity *e = &m->u.entity;
+    double from = m->hdr.sim_time;
+    if (!c->entities && ocean_entities_create(OCEAN_ENTITY_MAX, PROTO_ENTITY_HOLD_S, &c->entities, NULL, 0) != OCEAN_OK)
+        return;
+    ocean_entity_desc d = {.id = e->id, .kind = (ocean_entity_kind)e->kind, .length_m = e->length_m,
+                           .beam_m = e->beam_m, .draught_m = e->draught_m}, known;
+    ocean_track_sample s = {.t = e->t, .x = e->x, .z = e->z, .altitude_m = e->altitude_m,
+                            .heading_deg = e->heading_deg, .speed = e->speed};
+    ocean_result r = OCEAN_OK;
+    int live = ocean_entities_desc(c->entities, e->id, &known) == OCEAN_OK;
+    if (e->op == PROTO_ENTITY_GONE || (live && (known.kind != d.kind || known.length_m != d.length_m ||
+                                                 known.beam_m != d.beam_m || known.draught_m != d.draught_m)))
+        r = live ? ocean_entities_remove(c->entities, e->id, from) : OCEAN_OK;
+    if (r == OCEAN_OK && e->op == PROTO_ENTITY_ANNOUNCE) {
+        if (ocean_entities_desc(c->entities, e->id, &known) != OCEAN_OK) r = ocean_entities_add(c->entities, &d, NULL, 0);
+        if (r == OCEAN_OK) r = ocean_entities_sample(c->entities, e->id, &s, from, NULL, 0);
+    }
+    if (r != OCEAN_OK) c->st.entity_refused++;
+    ocean_entities_prune(c->entities, from - PROTO_ENTITY_PAST_S);
+}
+
 static void rx_entity(rx_ctx *x)
 {
+    entity_enter(x->c, x->m);
     x->nt->call_entity = 1;
+}
+
+static void rx_wake(rx_ctx *x)
+{
+    oc_client *c = x->c;
+    if (x->wake) {
+        if (!c->wakes && wake_field_create(PROTO_WAKE_HELD, &c->wakes) == OCEAN_OK) wake_field_keep_order(c->wakes);
+        if (c->wakes) {
+            wake_field_insert(c->wakes, x->wake);
+            x->wake = NULL;
+            c->st.wakes_rx++;
+            return;
+        }
+    }
+    c->st.wakes_refused++;
 }
 
 static void rx_error(rx_ctx *x)
@@ -1109,7 +1158,7 @@ static const struct {
 } rx_handlers[] = {
     {PROTO_HELLO, rx_hello},         {PROTO_FRAME, rx_frame}, {PROTO_MESH_TOPOLOGY, rx_topology},
     {PROTO_QUERY_RESULT, rx_query_result}, {PROTO_SEA_STATE, rx_sea_state}, {PROTO_ERROR, rx_error},
-    {PROTO_BYE, rx_bye},             {PROTO_ENTITY, rx_entity},
+    {PROTO_BYE, rx_bye},             {PROTO_ENTITY, rx_entity}, {PROTO_WAKE, rx_wake},
 };
 
 /* MESH_VERTICES_QZ work done outside the loop's lock: a layout-0
@@ -1141,6 +1190,22 @@ static ocean_result rx_mesh_work(oc_client *c, const proto_msg *m, unsigned type
         r = frame_mesh_qz(fr, &tr->pub, tr->qz_refs, why, whylen);
     topo_unref(tr);
     return r;
+}
+
+/* A WAKE's pattern, decoded and made readable (outside the loop's lock:
+ * a pattern is up to 4096 x 4096 coefficients); NULL when it cannot be
+ * (counted by rx_wake). */
+static wake_pattern *rx_wake_decode(const proto_wake *w)
+{
+    size_t n = (size_t)w->nx * w->nz;
+    float *coef = malloc(sizeof *coef * n);
+    wake_pattern *pat = NULL;
+    wake_params p = {w->speed, w->length, w->depth, w->beam};
+    if (coef && proto_plane_decode((proto_codec)w->codec, w->nx, w->nz, w->payload, w->payload_len, coef, NULL, 0) ==
+                    OCEAN_OK)
+        wake_pattern_from_coefficients(&p, coef, w->nx, w->nz, w->error_bound, &pat, NULL, 0);
+    free(coef);
+    return pat;
 }
 
 /* The callbacks a message calls for, after the loop's lock. */
@@ -1203,6 +1268,7 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
     uint32_t *new_refs = NULL;
     char mesh_why[200] = "";
     ocean_result mesh_res = rx_mesh_work(c, &m, type, fr, peeked, &new_refs, mesh_why, sizeof mesh_why);
+    wake_pattern *wake = type == PROTO_WAKE ? rx_wake_decode(&m.u.wake) : NULL;
 
     pthread_mutex_lock(&l->mu);
     c->st.messages_rx++;
@@ -1219,14 +1285,16 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
         }
         c->last_sim = sim_time;
         rx_ctx x = {.c = c, .m = &m, .fr = fr, .peeked = peeked, .now = now, .sim_time = sim_time,
-                    .mesh_res = mesh_res, .mesh_why = mesh_why, .new_refs = &new_refs, .nt = &nt};
+                    .mesh_res = mesh_res, .mesh_why = mesh_why, .new_refs = &new_refs, .wake = wake, .nt = &nt};
         for (size_t k = 0; k < sizeof rx_handlers / sizeof rx_handlers[0]; k++)
             if (rx_handlers[k].type == type)
                 rx_handlers[k].handle(&x);
+        wake = x.wake;
     }
     pthread_cond_broadcast(&l->cv);
     pthread_mutex_unlock(&l->mu);
     free(new_refs);   /* not taken: the topology could not be kept */
+    wake_pattern_destroy(wake);
     rx_notify(c, res, &m, &nt);
     proto_msg_free(&m);
     if (!raw_taken)
@@ -1784,6 +1852,8 @@ void oc_options_default(oc_options *o)
 static void free_client_mem(oc_client *c)
 {
     oc_held_destroy(c->held);
+    ocean_entities_destroy(c->entities);
+    wake_field_destroy(c->wakes);
     txmsg *t = c->tx_head;
     while (t) {
         txmsg *n = t->next;
@@ -2371,6 +2441,37 @@ static void timeline_add(oc_client *c, double eff, const proto_sea *sea)
     }
     c->tl_eff[at] = eff;
     c->tl_sea[at] = *sea;
+}
+
+ocean_result oc_client_wakes(oc_client *c, double t, const double *xz, size_t n, oc_wake *out)
+{
+    if (!c || !xz || !out || !isfinite(t))
+        return OCEAN_EINVAL;
+    proto_sea sea;
+    if (oc_client_sea_at(c, t, &sea, NULL) != OCEAN_OK)
+        return OCEAN_ESTATE;
+    wake_sample *w = malloc(sizeof *w * (n ? n : 1));
+    if (!w)
+        return OCEAN_ENOMEM;
+    pthread_mutex_lock(&c->loop->mu);
+    int max = ocean_entities_kept(c->entities);
+    ocean_entity_desc *d = malloc(sizeof *d * (size_t)(max ? max : 1));
+    ocean_entity_state *st = malloc(sizeof *st * (size_t)(max ? max : 1));
+    ocean_result r = d && st ? OCEAN_OK : OCEAN_ENOMEM;
+    int k = r == OCEAN_OK ? ocean_entities_at(c->entities, t, d, st, max) : 0;
+    wake_field *empty = NULL;
+    if (r == OCEAN_OK && !c->wakes)   /* no pattern yet: a sea with no ship making a wake reads 0 */
+        r = wake_field_create(2, &empty);
+    if (r == OCEAN_OK)
+        r = wake_field_sample(c->wakes ? c->wakes : empty, d, st, k, sea.depth_m, xz, n, w);
+    pthread_mutex_unlock(&c->loop->mu);
+    wake_field_destroy(empty);
+    for (size_t i = 0; r == OCEAN_OK && i < n; i++)
+        out[i] = (oc_wake){w[i].height, w[i].dhdx, w[i].dhdz, w[i].error};
+    free(w);
+    free(d);
+    free(st);
+    return r;
 }
 
 ocean_result oc_client_sea_at(const oc_client *c, double t, proto_sea *out, double *effective_time)

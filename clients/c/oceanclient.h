@@ -500,6 +500,22 @@ ocean_result oc_client_sea_state(const oc_client *c, proto_sea *out, double *eff
 /* Entries of the sea-state timeline a client keeps (older ones are dropped). */
 #define OC_SEA_TIMELINE_MAX 64
 
+/* The ships' wakes at one point: height (m), its slopes, and the bound on
+ * |height - the exact sum of the same waves| (m). */
+typedef struct oc_wake {
+    double height, dhdx, dhdz, error;
+} oc_wake;
+
+/* The ships' wakes at the n points xz (x, z pairs) at sim time t, as the
+ * server answers them: the entities in force at t by the ENTITY entries
+ * received (each from its header sim_time), each ship's steady wake read
+ * from the WAKE patterns received (PROTOCOL.md "WAKE"), over the depth of
+ * the sea in force at t.  A layout-1 subscription receives the patterns
+ * of the ships whose wakes reach its view range.  OCEAN_ESTATE: a pattern
+ * a ship there needs has not come yet (or no HELLO); OCEAN_EINVAL: a point
+ * not finite; OCEAN_ENOMEM. */
+ocean_result oc_client_wakes(oc_client *c, double t, const double *xz, size_t n, oc_wake *out);
+
 /* The sea in force at sim time t by the timeline the server sent (HELLO's
  * sea, then every announce from its effective time; PROTOCOL.md "Sea-state
  * timeline"): what every client and the server use for a tick at t.
@@ -545,6 +561,9 @@ typedef struct oc_client_stats {
                                            round(tick_rate / frame_rate) */
     uint64_t decode_errors;             /* messages or tiles that failed */
     uint64_t errors_rx;                 /* ERROR messages */
+    uint64_t wakes_rx;                  /* WAKE patterns kept */
+    uint64_t wakes_refused;             /* WAKEs whose pattern could not be read */
+    uint64_t entity_refused;            /* ENTITY entries the client's table refused */
 } oc_client_stats;
 
 void oc_client_get_stats(const oc_client *c, oc_client_stats *out);
