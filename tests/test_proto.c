@@ -273,6 +273,13 @@ static char *dump(const proto_msg *m)
             (double)e->length_m, (double)e->beam_m, (double)e->draught_m, e->token);
         break;
     }
+    case PROTO_WAKE: {
+        const proto_wake *w = &m->u.wake;
+        out(&b, "speed = %.17g\nlength = %.17g\nbeam = %.17g\ndepth = %.17g\nnx = %u\nnz = %u\ncodec = %u\n"
+            "error_bound = %.9g\npayload_len = %u\n", w->speed, w->length, w->beam, w->depth, w->nx, w->nz, w->codec,
+            (double)w->error_bound, w->payload_len);
+        break;
+    }
     }
     return b.s;
 }
@@ -285,6 +292,10 @@ static const proto_tile sample_tiles[2] = {
     {0, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, -3, 7, -384.0, 896.0, 2.0, 0.0f, 16, tile_payload, 0, 0},
     {2, PROTO_CODEC_F16, PROTO_CH_HEIGHT, 2, 1, 0, 0, 1e6 + 0.5, -2.5e6, 8.0, 0.00048828125f, 4, tile_payload, 0, 0},
 };
+/* A WAKE's plane of 2 x 2 coefficients: one block, its byte count, then
+ * its f32 tile payload (1, -2, 3, 0.25). */
+static const uint8_t wake_payload[] = {0x10, 0x00, 0x00, 0x00, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0x00, 0xc0,
+                                       0x00, 0x00, 0x40, 0x40, 0x00, 0x00, 0x80, 0x3e};
 /* Layout-1 tiles: mip 1 of cascade 0 and mip 0 of cascade 1 (cascade-local origins). */
 static const proto_tile cascade_tiles[2] = {
     {1, PROTO_CODEC_F32, PROTO_CH_HEIGHT, 2, 2, 3, 1, 46.875, 15.625, 7.8125, 0.0f, 16, tile_payload, 0, 0},
@@ -400,6 +411,11 @@ static void sample(proto_msg *m, proto_type type)
         /* a frigate 1000 km out, at a time with a fraction */
         m->u.entity = (proto_entity){PROTO_ENTITY_SET, 0, 1001, 600.25, 1e6 + 0.5, -2.5e5, 0.0f, 271.5f, 12.5f,
                                      120.0f, 14.5f, 4.25f, "s3cret-entity-token"};
+        break;
+    case PROTO_WAKE:
+        /* a frigate's rung at 8 m/s over 50 m of water */
+        m->u.wake = (proto_wake){8.0, 120.0, 15.0, 50.0, 2, 2, PROTO_CODEC_F32, 0.00048828125f,
+                                 (uint32_t)sizeof wake_payload, wake_payload};
         break;
     default:
         break;
@@ -1078,6 +1094,11 @@ static const bad_vector bad_vectors[] = {
     {"bad_subscribe_layout", "subscribe", P(7), 1, 2, OCEAN_ETYPE, -1},
     {"bad_sea_get_with_sea", "sea_state_get", P(32), 8, 0x4024000000000000ull, OCEAN_EFORMAT, -1},
     {"bad_sea_op", "sea_state", P(0), 1, 3, OCEAN_ETYPE, -1},
+    {"bad_wake_reserved", "wake", P(37), 1, 1, OCEAN_EFORMAT, -1},
+    {"bad_wake_nan_speed", "wake", P(0), 8, 0x7FF8000000000000ull, OCEAN_EINVAL, -1},
+    {"bad_wake_nx", "wake", P(32), 2, 0, OCEAN_EINVAL, -1},
+    {"bad_wake_codec", "wake", P(36), 1, 50, OCEAN_ETYPE, -1},
+    {"bad_wake_payload_lies", "wake", P(44), 4, 4096, OCEAN_ETRUNC, -1},
     {"bad_entity_op", "entity", P(0), 1, 5, OCEAN_ETYPE, -1},
     {"bad_entity_kind", "entity", P(1), 1, 3, OCEAN_ETYPE, -1},
     {"bad_entity_reserved", "entity", P(2), 1, 1, OCEAN_EFORMAT, -1},

@@ -21,11 +21,11 @@ export const HEADER_SIZE = 32;
 
 export const T = Object.freeze({
     HELLO: 1, SUBSCRIBE: 2, CAMERA: 3, FRAME: 4, TILE: 5, MESH_TOPOLOGY: 6,
-    MESH_VERTICES: 7, QUERY: 8, QUERY_RESULT: 9, SEA_STATE: 10, ERROR: 11, BYE: 12, ENTITY: 13,
+    MESH_VERTICES: 7, QUERY: 8, QUERY_RESULT: 9, SEA_STATE: 10, ERROR: 11, BYE: 12, ENTITY: 13, WAKE: 14,
 });
-const TYPE_END = 14;
+const TYPE_END = 15;
 export const TYPE_NAMES = ['?', 'HELLO', 'SUBSCRIBE', 'CAMERA', 'FRAME', 'TILE', 'MESH_TOPOLOGY',
-    'MESH_VERTICES', 'QUERY', 'QUERY_RESULT', 'SEA_STATE', 'ERROR', 'BYE', 'ENTITY'];
+    'MESH_VERTICES', 'QUERY', 'QUERY_RESULT', 'SEA_STATE', 'ERROR', 'BYE', 'ENTITY', 'WAKE'];
 
 export const FX = Object.freeze({ HEIGHT: 1, DISPLACEMENT: 2, NORMALS: 4, FOAM: 8, NEAR_FIELD: 16, ALL: 31 });
 export const MESH = Object.freeze({ CONCENTRIC: 0, CHUNKED: 1, PROJECTED: 2, NONE: 3 });
@@ -85,6 +85,7 @@ export const LIMITS = Object.freeze({
 const SEA_SIZE = 96, SUBSCRIBE_SIZE = 28, CAMERA_SIZE = 64, TILE_FIXED = 48, FRAME_FIXED = 56;
 const RECORD_HEAD = 8, TOPO_FIXED = 16, VERTS_FIXED = 32, QUERY_FIXED = 24, RESULT_FIXED = 16;
 const SAMPLE_SIZE = 36, SEASTATE_FIXED = 16 + SEA_SIZE, ERROR_FIXED = 8, BYE_FIXED = 4, ENTITY_FIXED = 56;
+const WAKE_FIXED = 48, PLANE_MAX = 4096;
 const CASCADE_FIXED = 56, CASCADE_ENTRY = 320, PLACEMENT_SIZE = 32;
 /* Cascade block flag KEY, and a layout-1 record tag's sample-B bit
  * (PROTOCOL.md "Samples in time"). */
@@ -866,6 +867,33 @@ function dEntity(r) {
     return e;
 }
 
+/* WAKE: a ship's wake pattern, its coefficients' plane a payload view
+ * (PROTOCOL.md "WAKE"); ranges as the C decoder checks them. */
+function dWake(r) {
+    r.need(WAKE_FIXED, 'fixed fields');
+    const o = r.off;
+    const w = { speed: r.f64(o), length: r.f64(o + 8), beam: r.f64(o + 16), depth: r.f64(o + 24) };
+    w.nx = r.u16(o + 32);
+    w.nz = r.u16(o + 34);
+    w.codec = r.u8at(o + 36);
+    r.zero(o + 37, 3, 'wake');
+    w.errorBound = r.f32(o + 40);
+    w.payloadLen = r.u32(o + 44);
+    r.off += WAKE_FIXED;
+    r.need(w.payloadLen, 'wake payload');
+    w.payload = r.u8.subarray(r.off, r.off + w.payloadLen);
+    r.off += w.payloadLen;
+    r.finish();
+    if (!(Number.isFinite(w.speed) && w.speed > 0 && Number.isFinite(w.length) && w.length > 0))
+        fail(R.EINVAL, `wake.speed ${w.speed} and wake.length ${w.length} must be finite and > 0`);
+    if (!(Number.isFinite(w.beam) && w.beam >= 0) || !(w.depth > 0))
+        fail(R.EINVAL, `wake.beam ${w.beam} must be finite and >= 0, wake.depth ${w.depth} > 0`);
+    if (w.nx < 1 || w.nx > PLANE_MAX || w.nz < 1 || w.nz > PLANE_MAX) fail(R.EINVAL, `wake grid ${w.nx} x ${w.nz} outside 1..${PLANE_MAX}`);
+    chkEnum('wake.codec', w.codec, CODEC_COUNT);
+    if (!(w.errorBound >= 0 && w.errorBound <= 1e30)) fail(R.EINVAL, `wake.error_bound ${w.errorBound} out of range`);
+    return w;
+}
+
 /* Decodes one complete message (one WebSocket binary message: ArrayBuffer
  * or Uint8Array).  Returns {hdr, type, name, body}.  Tile payloads are views
  * into the input (keep it alive while decoding them); everything else is
@@ -889,6 +917,7 @@ export function decode(buf, limits = LIMITS) {
     case T.ERROR: body = dError(r); break;
     case T.BYE: body = dBye(r); break;
     case T.ENTITY: body = dEntity(r); break;
+    case T.WAKE: body = dWake(r); break;
     default: fail(R.ETYPE, `message type ${hdr.type} unknown`);
     }
     return { hdr, type: hdr.type, name: TYPE_NAMES[hdr.type], body };
