@@ -889,8 +889,8 @@ static void late_replicas_agree(void **state)
 /* ---- entities ---------------------------------------------------------------------- */
 
 /* An ENTITY set of ship id (120 x 15 x 5 m) at (x, -20) steaming along +x
- * at 8 m/s, sample time t; or a remove (x NaN). */
-static void ship_send(test_ws *w, uint32_t id, double t, double x)
+ * at `speed` m/s, sample time t; or a remove (x NaN). */
+static void ship_at(test_ws *w, uint32_t id, double t, double x, double speed)
 {
     proto_msg m;
     proto_msg_init(&m, PROTO_ENTITY);
@@ -898,11 +898,40 @@ static void ship_send(test_ws *w, uint32_t id, double t, double x)
     e->id = id;
     e->op = isnan(x) ? PROTO_ENTITY_REMOVE : PROTO_ENTITY_SET;
     if (!isnan(x)) {
-        e->kind = 0, e->t = t, e->x = x, e->z = -20, e->speed = 8, e->heading_deg = 0;
+        e->kind = 0, e->t = t, e->x = x, e->z = -20, e->speed = (float)speed, e->heading_deg = 0;
         e->length_m = 120, e->beam_m = 15, e->draught_m = 5;
     }
     snprintf(e->token, sizeof e->token, "ent");
     raw_send(w, &m);
+}
+
+static void ship_send(test_ws *w, uint32_t id, double t, double x) { ship_at(w, id, t, x, 8); }
+
+#define WAKES_MAX 8
+
+/* The WAKE messages a layout-1 viewer on w gets until it holds `want`
+ * (30 s at most): their bytes past the header's seq, into got[] (malloc'd),
+ * ordered by their parameters.  Returns how many. */
+static int wakes_collect(test_ws *w, int want, uint8_t *got[WAKES_MAX], size_t len[WAKES_MAX])
+{
+    int n = 0;
+    for (double end = test_now_s() + 30; n < want && test_now_s() < end;) {
+        proto_msg m;
+        uint8_t *raw;
+        size_t rawlen;
+        if (wait_type(w, PROTO_WAKE, 1000, &m, &raw, &rawlen) != 1) continue;
+        proto_msg_free(&m);
+        int at = n;
+        while (at > 0 && memcmp(raw + PROTO_HEADER_SIZE, got[at - 1] + PROTO_HEADER_SIZE - 24, 32) < 0) at--;
+        memmove(&got[at + 1], &got[at], sizeof got[0] * (size_t)(n - at));
+        memmove(&len[at + 1], &len[at], sizeof len[0] * (size_t)(n - at));
+        got[at] = malloc(rawlen - 24);
+        memcpy(got[at], raw + 24, rawlen - 24);
+        len[at] = rawlen - 24;
+        free(raw);
+        if (++n == WAKES_MAX) break;
+    }
+    return n;
 }
 
 /* The next ENTITY of op about id on w; returns the instant it takes
@@ -1026,8 +1055,10 @@ static void answers_same(const proto_query_sample *a, const proto_query_sample *
  * query around the second ship, 300 m astern in the first's wake, at an
  * instant both are in force gets the same bytes from both replicas and
  * from a replica started after the sets (which folds them from the
- * stream); a removal sent to the other replica is gone from its own
- * instant on, and the instants before it answer as they did. */
+ * stream); a third, faster ship added, layout-1 viewers of the first and
+ * the late replica get the same WAKE patterns, byte for byte; a removal
+ * sent to the other replica is gone from its own instant on, and the
+ * instants before it answer as they did. */
 static void entities_reach_every_replica(void **state)
 {
     (void)state;
@@ -1058,6 +1089,25 @@ static void entities_reach_every_replica(void **state)
     assert_true(entity_wait(&c, PROTO_ENTITY_ANNOUNCE, 31) > 0); /* a joiner hears the entities in force */
     wake_query(&c, tq, x32, q3);
     answers_same(q1, q3, "a replica started after the sets against replica 1");
+    /* a third ship, faster: viewers of replicas 1 and 3 get the same three
+     * wake patterns (8 m/s is a rung of the ladder; 10 m/s lies between
+     * two), byte for byte */
+    ship_at(&b, 33, sim_now(), -600, 10);
+    entity_wait(&a, PROTO_ENTITY_ANNOUNCE, 33);
+    entity_wait(&c, PROTO_ENTITY_ANNOUNCE, 33);
+    subscribe_live(&a, PROTO_LAYOUT_CASCADE, 10);
+    subscribe_live(&c, PROTO_LAYOUT_CASCADE, 10);
+    uint8_t *wa[WAKES_MAX], *wc[WAKES_MAX];
+    size_t la[WAKES_MAX], lc[WAKES_MAX];
+    int na = wakes_collect(&a, 3, wa, la), nc = wakes_collect(&c, 3, wc, lc);
+    if (na != 3 || nc != 3) fail_msg("WAKE patterns: replica 1 sent %d, replica 3 %d, of the 3 the ships need", na, nc);
+    for (int i = 0; i < 3; i++) {
+        if (la[i] != lc[i] || memcmp(wa[i], wc[i], la[i]) != 0)
+            fail_msg("WAKE %d: %zu bytes from replica 1, %zu from replica 3, not the same", i, la[i], lc[i]);
+        print_message("WAKE %d: %zu bytes, the same from both replicas\n", i, la[i] + 24);
+        free(wa[i]);
+        free(wc[i]);
+    }
     while (sim_now() < tq) usleep(20000); /* the removal comes after tq: tq is its past */
     ship_send(&b, 31, 0, NAN);
     double gone = entity_wait(&a, PROTO_ENTITY_GONE, 31);
