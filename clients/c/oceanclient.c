@@ -25,9 +25,8 @@
 
 #include <libwebsockets.h>
 
-#include "entity.h"
 #include "oc_held.h"
-#include "wake_field.h"
+#include "oc_wakes.h"
 
 #define CAM_RING 256
 #define CLOSE_GRACE_MS 300
@@ -230,8 +229,7 @@ struct oc_loop {
 struct oc_client {
     oc_held *held;             /* time-interpolating stream: the samples held
                                   (receive thread), made at its first frame */
-    ocean_entities *entities;  /* [mu] the entities' entries the server announced, made at the first */
-    wake_field *wakes;         /* [mu] the WAKE patterns received, the last PROTO_WAKE_HELD */
+    oc_wakes *wakes;           /* [mu] the ships' entries and WAKE patterns received, made at the first */
     oc_loop *loop;
     int own_loop;
     oc_client *next;              /* [mu] loop's list */
@@ -1068,51 +1066,22 @@ static void rx_sea_state(rx_ctx *x)
     x->nt->call_sea = 1;
 }
 
-/* An entity entry into the client's table, as the server entered it: in
- * force from the announce's header sim_time (PROTOCOL.md "ENTITY").  A
- * table that cannot be made or an entry it refuses (the server sent it:
- * that is the server's fault, or an entry older than a joiner's snapshot)
- * is counted, nothing else. */
-static void entity_enter(oc_client *c, const proto_msg *m)
-{
-    const proto_entity *e = &m->u.entity;
-    double from = m->hdr.sim_time;
-    if (!c->entities && ocean_entities_create(OCEAN_ENTITY_MAX, PROTO_ENTITY_HOLD_S, &c->entities, NULL, 0) != OCEAN_OK)
-        return;
-    ocean_entity_desc d = {.id = e->id, .kind = (ocean_entity_kind)e->kind, .length_m = e->length_m,
-                           .beam_m = e->beam_m, .draught_m = e->draught_m}, known;
-    ocean_track_sample s = {.t = e->t, .x = e->x, .z = e->z, .altitude_m = e->altitude_m,
-                            .heading_deg = e->heading_deg, .speed = e->speed};
-    ocean_result r = OCEAN_OK;
-    int live = ocean_entities_desc(c->entities, e->id, &known) == OCEAN_OK;
-    if (e->op == PROTO_ENTITY_GONE || (live && (known.kind != d.kind || known.length_m != d.length_m ||
-                                                 known.beam_m != d.beam_m || known.draught_m != d.draught_m)))
-        r = live ? ocean_entities_remove(c->entities, e->id, from) : OCEAN_OK;
-    if (r == OCEAN_OK && e->op == PROTO_ENTITY_ANNOUNCE) {
-        if (ocean_entities_desc(c->entities, e->id, &known) != OCEAN_OK) r = ocean_entities_add(c->entities, &d, NULL, 0);
-        if (r == OCEAN_OK) r = ocean_entities_sample(c->entities, e->id, &s, from, NULL, 0);
-    }
-    if (r != OCEAN_OK) c->st.entity_refused++;
-    ocean_entities_prune(c->entities, from - PROTO_ENTITY_PAST_S);
-}
-
 static void rx_entity(rx_ctx *x)
 {
-    entity_enter(x->c, x->m);
+    oc_client *c = x->c;
+    if ((c->wakes || oc_wakes_create(&c->wakes) == OCEAN_OK) && oc_wakes_entity(c->wakes, x->m) != OCEAN_OK)
+        c->st.entity_refused++;
     x->nt->call_entity = 1;
 }
 
 static void rx_wake(rx_ctx *x)
 {
     oc_client *c = x->c;
-    if (x->wake) {
-        if (!c->wakes && wake_field_create(PROTO_WAKE_HELD, &c->wakes) == OCEAN_OK) wake_field_keep_order(c->wakes);
-        if (c->wakes) {
-            wake_field_insert(c->wakes, x->wake);
-            x->wake = NULL;
-            c->st.wakes_rx++;
-            return;
-        }
+    if (x->wake && (c->wakes || oc_wakes_create(&c->wakes) == OCEAN_OK)) {
+        oc_wakes_keep(c->wakes, x->wake);
+        x->wake = NULL;
+        c->st.wakes_rx++;
+        return;
     }
     c->st.wakes_refused++;
 }
@@ -1192,22 +1161,6 @@ static ocean_result rx_mesh_work(oc_client *c, const proto_msg *m, unsigned type
     return r;
 }
 
-/* A WAKE's pattern, decoded and made readable (outside the loop's lock:
- * a pattern is up to 4096 x 4096 coefficients); NULL when it cannot be
- * (counted by rx_wake). */
-static wake_pattern *rx_wake_decode(const proto_wake *w)
-{
-    size_t n = (size_t)w->nx * w->nz;
-    float *coef = malloc(sizeof *coef * n);
-    wake_pattern *pat = NULL;
-    wake_params p = {w->speed, w->length, w->depth, w->beam};
-    if (coef && proto_plane_decode((proto_codec)w->codec, w->nx, w->nz, w->payload, w->payload_len, coef, NULL, 0) ==
-                    OCEAN_OK)
-        wake_pattern_from_coefficients(&p, coef, w->nx, w->nz, w->error_bound, &pat, NULL, 0);
-    free(coef);
-    return pat;
-}
-
 /* The callbacks a message calls for, after the loop's lock. */
 static void rx_notify(oc_client *c, ocean_result res, const proto_msg *m, notify *nt)
 {
@@ -1268,7 +1221,7 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
     uint32_t *new_refs = NULL;
     char mesh_why[200] = "";
     ocean_result mesh_res = rx_mesh_work(c, &m, type, fr, peeked, &new_refs, mesh_why, sizeof mesh_why);
-    wake_pattern *wake = type == PROTO_WAKE ? rx_wake_decode(&m.u.wake) : NULL;
+    wake_pattern *wake = type == PROTO_WAKE ? oc_wakes_decode(&m.u.wake) : NULL;
 
     pthread_mutex_lock(&l->mu);
     c->st.messages_rx++;
@@ -1852,8 +1805,7 @@ void oc_options_default(oc_options *o)
 static void free_client_mem(oc_client *c)
 {
     oc_held_destroy(c->held);
-    ocean_entities_destroy(c->entities);
-    wake_field_destroy(c->wakes);
+    oc_wakes_destroy(c->wakes);
     txmsg *t = c->tx_head;
     while (t) {
         txmsg *n = t->next;
@@ -2454,23 +2406,15 @@ ocean_result oc_client_wakes(oc_client *c, double t, const double *xz, size_t n,
     if (!w)
         return OCEAN_ENOMEM;
     pthread_mutex_lock(&c->loop->mu);
-    int max = ocean_entities_kept(c->entities);
-    ocean_entity_desc *d = malloc(sizeof *d * (size_t)(max ? max : 1));
-    ocean_entity_state *st = malloc(sizeof *st * (size_t)(max ? max : 1));
-    ocean_result r = d && st ? OCEAN_OK : OCEAN_ENOMEM;
-    int k = r == OCEAN_OK ? ocean_entities_at(c->entities, t, d, st, max) : 0;
-    wake_field *empty = NULL;
-    if (r == OCEAN_OK && !c->wakes)   /* no pattern yet: a sea with no ship making a wake reads 0 */
-        r = wake_field_create(2, &empty);
-    if (r == OCEAN_OK)
-        r = wake_field_sample(c->wakes ? c->wakes : empty, d, st, k, sea.depth_m, xz, n, w);
+    ocean_result r = OCEAN_OK;
+    if (!c->wakes)   /* no ship announced yet: a sea without wakes */
+        memset(w, 0, sizeof *w * n);
+    else
+        r = oc_wakes_sample(c->wakes, t, sea.depth_m, xz, n, w);
     pthread_mutex_unlock(&c->loop->mu);
-    wake_field_destroy(empty);
     for (size_t i = 0; r == OCEAN_OK && i < n; i++)
         out[i] = (oc_wake){w[i].height, w[i].dhdx, w[i].dhdz, w[i].error};
     free(w);
-    free(d);
-    free(st);
     return r;
 }
 

@@ -1,0 +1,99 @@
+/*
+ * oc_wakes.c - a reader's wakes of the ships (see oc_wakes.h).
+ */
+#include "oc_wakes.h"
+
+#include <stdlib.h>
+
+#include "codec.h"
+#include "entity.h"
+
+struct oc_wakes {
+    ocean_entities *entities;
+    wake_field *patterns;
+};
+
+ocean_result oc_wakes_create(oc_wakes **out)
+{
+    *out = NULL;
+    oc_wakes *w = calloc(1, sizeof *w);
+    if (!w) return OCEAN_ENOMEM;
+    if (ocean_entities_create(OCEAN_ENTITY_MAX, PROTO_ENTITY_HOLD_S, &w->entities, NULL, 0) != OCEAN_OK ||
+        wake_field_create(PROTO_WAKE_HELD, &w->patterns) != OCEAN_OK) {
+        oc_wakes_destroy(w);
+        return OCEAN_ENOMEM;
+    }
+    wake_field_keep_order(w->patterns);
+    *out = w;
+    return OCEAN_OK;
+}
+
+void oc_wakes_destroy(oc_wakes *w)
+{
+    if (!w) return;
+    ocean_entities_destroy(w->entities);
+    wake_field_destroy(w->patterns);
+    free(w);
+}
+
+static int same_shape(const ocean_entity_desc *a, const ocean_entity_desc *b)
+{
+    return a->kind == b->kind && a->length_m == b->length_m && a->beam_m == b->beam_m && a->draught_m == b->draught_m;
+}
+
+ocean_result oc_wakes_entity(oc_wakes *w, const proto_msg *m)
+{
+    const proto_entity *e = &m->u.entity;
+    double from = m->hdr.sim_time;
+    if (m->hdr.type != PROTO_ENTITY || (e->op != PROTO_ENTITY_ANNOUNCE && e->op != PROTO_ENTITY_GONE))
+        return OCEAN_EINVAL;
+    ocean_entity_desc d = {.id = e->id, .kind = (ocean_entity_kind)e->kind, .length_m = e->length_m,
+                           .beam_m = e->beam_m, .draught_m = e->draught_m}, known;
+    ocean_track_sample s = {.t = e->t, .x = e->x, .z = e->z, .altitude_m = e->altitude_m,
+                            .heading_deg = e->heading_deg, .speed = e->speed};
+    int live = ocean_entities_desc(w->entities, e->id, &known) == OCEAN_OK;
+    ocean_result r = OCEAN_OK;
+    /* gone, or entered anew with another shape (the server removed it first) */
+    if (live && (e->op == PROTO_ENTITY_GONE || !same_shape(&known, &d))) {
+        r = ocean_entities_remove(w->entities, e->id, from);
+        live = 0;
+    }
+    if (r == OCEAN_OK && e->op == PROTO_ENTITY_ANNOUNCE) {
+        if (!live) r = ocean_entities_add(w->entities, &d, NULL, 0);
+        if (r == OCEAN_OK) r = ocean_entities_sample(w->entities, e->id, &s, from, NULL, 0);
+    }
+    ocean_entities_prune(w->entities, from - PROTO_ENTITY_PAST_S);
+    return r == OCEAN_OK ? OCEAN_OK : OCEAN_EINVAL;
+}
+
+wake_pattern *oc_wakes_decode(const proto_wake *p)
+{
+    size_t n = (size_t)p->nx * p->nz;
+    float *coef = malloc(sizeof *coef * (n ? n : 1));
+    wake_pattern *pat = NULL;
+    wake_params wp = {p->speed, p->length, p->depth, p->beam};
+    if (coef && proto_plane_decode((proto_codec)p->codec, p->nx, p->nz, p->payload, p->payload_len, coef, NULL, 0) ==
+                    OCEAN_OK)
+        wake_pattern_from_coefficients(&wp, coef, p->nx, p->nz, p->error_bound, &pat, NULL, 0);
+    free(coef);
+    return pat;
+}
+
+void oc_wakes_keep(oc_wakes *w, wake_pattern *p) { wake_field_insert(w->patterns, p); }
+
+int oc_wakes_patterns(const oc_wakes *w) { return wake_field_count(w->patterns); }
+
+ocean_result oc_wakes_sample(oc_wakes *w, double t, double depth, const double *xz, size_t n, wake_sample *out)
+{
+    int max = ocean_entities_kept(w->entities);
+    ocean_entity_desc *d = malloc(sizeof *d * (size_t)(max ? max : 1));
+    ocean_entity_state *st = malloc(sizeof *st * (size_t)(max ? max : 1));
+    ocean_result r = d && st ? OCEAN_OK : OCEAN_ENOMEM;
+    if (r == OCEAN_OK) {
+        int k = ocean_entities_at(w->entities, t, d, st, max);
+        r = wake_field_sample(w->patterns, d, st, k, depth, xz, n, out);
+    }
+    free(d);
+    free(st);
+    return r;
+}
