@@ -34,6 +34,7 @@
 
 #include "codec.h"
 #include "oc_held.h"
+#include "oc_wakes.h"
 #include "proto.h"
 
 #define OCW_EXPORT(name) __attribute__((export_name(#name)))
@@ -353,4 +354,69 @@ int ocw_mesh_qz_decode(const uint8_t *data, size_t len, uint32_t vertex_count, c
 {
     ocw_err[0] = 0;
     return proto_mesh_qz_decode(data, len, vertex_count, refs, xyz, ocw_err, sizeof ocw_err);
+}
+
+/* ---- the ships' wakes (clients/c/oc_wakes.c) ---------------------------- */
+
+OCW_EXPORT(ocw_wakes_create) oc_wakes *ocw_wakes_create(void)
+{
+    oc_wakes *w = NULL;
+    oc_wakes_create(&w);
+    return w;
+}
+
+OCW_EXPORT(ocw_wakes_destroy) void ocw_wakes_destroy(oc_wakes *w) { oc_wakes_destroy(w); }
+
+/* An ENTITY or WAKE message (whole, header included) into the store. */
+OCW_EXPORT(ocw_wakes_message) int ocw_wakes_message(oc_wakes *w, const uint8_t *msg, size_t len)
+{
+    ocw_err[0] = 0;
+    if (!w) return OCEAN_EINVAL;
+    proto_msg m;
+    ocean_result r = proto_decode(msg, len, &m, ocw_err, sizeof ocw_err);
+    if (r != OCEAN_OK) return r;
+    if (m.hdr.type == PROTO_ENTITY) {
+        r = oc_wakes_entity(w, &m);
+        if (r != OCEAN_OK) ocean_seterr(ocw_err, sizeof ocw_err, "entity %u: entry refused", m.u.entity.id);
+    } else if (m.hdr.type == PROTO_WAKE) {
+        wake_pattern *p = oc_wakes_decode(&m.u.wake);
+        if (p) oc_wakes_keep(w, p);
+        else ocean_seterr(ocw_err, sizeof ocw_err, "WAKE of %g m/s, %g m: pattern unreadable", m.u.wake.speed,
+                          m.u.wake.length);
+        r = p ? OCEAN_OK : OCEAN_ECODEC;
+    } else {
+        ocean_seterr(ocw_err, sizeof ocw_err, "wakes: not an ENTITY or WAKE message");
+        r = OCEAN_EINVAL;
+    }
+    proto_msg_free(&m);
+    return r;
+}
+
+/* The wakes at sim time t over the given depth on the n x n points
+ * (x0 + i dx, z0 + j dx) into out (4 floats each, row j after row:
+ * height, dh/dx, dh/dz, 0).  OCEAN_ESTATE: a pattern a ship there needs
+ * has not come. */
+OCW_EXPORT(ocw_wakes_grid) int ocw_wakes_grid(oc_wakes *w, double t, double depth, double x0, double z0, double dx,
+                                              int n, float *out)
+{
+    ocw_err[0] = 0;
+    if (!w || !out || n < 1 || n > 1024 || !(dx > 0)) return OCEAN_EINVAL;
+    size_t np = (size_t)n * n;
+    double *xz = malloc(sizeof *xz * 2 * np);
+    wake_sample *s = malloc(sizeof *s * np);
+    ocean_result r = xz && s ? OCEAN_OK : OCEAN_ENOMEM;
+    for (size_t k = 0; r == OCEAN_OK && k < np; k++) {
+        xz[2 * k] = x0 + (double)(k % (size_t)n) * dx;
+        xz[2 * k + 1] = z0 + (double)(k / (size_t)n) * dx;
+    }
+    if (r == OCEAN_OK) r = oc_wakes_sample(w, t, depth, xz, np, s);
+    for (size_t k = 0; r == OCEAN_OK && k < np; k++) {
+        out[4 * k] = (float)s[k].height;
+        out[4 * k + 1] = (float)s[k].dhdx;
+        out[4 * k + 2] = (float)s[k].dhdz;
+        out[4 * k + 3] = 0;
+    }
+    free(xz);
+    free(s);
+    return r;
 }

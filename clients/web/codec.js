@@ -244,3 +244,39 @@ export class HeldStore {
         this.h = 0;
     }
 }
+
+/* The ships' wakes (clients/c/oc_wakes.c in the same module): message()
+ * takes every ENTITY and WAKE message, grid() reads the wakes on a square
+ * of points as the daemon answers them (PROTOCOL.md "WAKE").  Call
+ * destroy() when the connection ends. */
+export class WakeStore {
+    constructor() {
+        this.w = oc.ocw_wakes_create();
+        if (!this.w) throw new ProtoError(R.ENOMEM, 'cannot allocate the wake store');
+    }
+
+    /* msg: a whole ENTITY or WAKE message (ArrayBuffer or Uint8Array). */
+    message(msg) {
+        const u8 = msg instanceof Uint8Array ? msg : new Uint8Array(msg);
+        withHeap((alloc) => check(oc.ocw_wakes_message(this.w, put(alloc, u8), u8.byteLength)));
+    }
+
+    /* The wakes at sim time t over `depth` m of water on the n x n points
+     * (x0 + i dx, z0 + j dx): a Float32Array of 4 per point (height,
+     * dh/dx, dh/dz, 0), row j after row; null while a pattern a ship there
+     * needs has not come. */
+    grid(t, depth, x0, z0, dx, n) {
+        return withHeap((alloc) => {
+            const out = alloc(16 * n * n);
+            const r = oc.ocw_wakes_grid(this.w, t, depth, x0, z0, dx, n, out);
+            if (r === R.ESTATE) return null;
+            check(r);
+            return f32At(out, 4 * n * n);
+        });
+    }
+
+    destroy() {
+        if (this.w) oc.ocw_wakes_destroy(this.w);
+        this.w = 0;
+    }
+}

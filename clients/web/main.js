@@ -365,6 +365,10 @@ function applyFrame(m) {
         stats.levels = m.levels.length;
         stats.layout = 0;
     }
+    if (m.wakes !== undefined) {
+        renderer.setWakes(m.wakes);
+        stats.wakes = m.wakes ? { n: m.wakes.n, dx: m.wakes.dx, t: m.wakes.t, peak: m.wakes.peak } : null;
+    }
     lastFrameSim = m.simTime;
     lastFrameWall = performance.now();
     haveFrame = true;

@@ -359,6 +359,19 @@ uniform vec3 u_tailMss;          /* moments no cascade holds */
 uniform float u_roughScale;      /* 1; 0 draws the unresolved moments as a mirror (test control) */
 uniform float u_foamScale;       /* 1; 0 draws no foam (test control) */
 uniform sampler2D u_cd0, u_cd1, u_cd2, u_cd3;   /* disp per cascade */
+uniform sampler2D u_wakeTex;     /* the ships' wakes on a square around the camera: height, dh/dx, dh/dz */
+uniform vec4 u_wake;             /* its first point x, z (eye-relative), spacing, points a side (0: none) */
+
+/* the ships' wakes at eye-relative rel (PROTOCOL.md "WAKE", read by the
+ * worker's WebAssembly on a square around the camera): height and slopes,
+ * fading out over the square's outer eighth, 0 beyond it */
+vec3 wakeAt(vec2 rel) {
+    if (u_wake.w < 1.0) return vec3(0.0);
+    vec2 uv = ((rel - u_wake.xy) / u_wake.z + 0.5) / u_wake.w;
+    vec2 e = min(uv, 1.0 - uv);
+    float fade = clamp(8.0 * min(e.x, e.y), 0.0, 1.0);
+    return fade > 0.0 ? fade * textureLod(u_wakeTex, uv, 0.0).xyz : vec3(0.0);
+}
 
 /* s_c(x, z): the spacing cascade c is read at, at eye-relative rel, raised
  * to floorS (the vertex's lattice g_L, or the pixel's footprint) */
@@ -431,6 +444,7 @@ void seaSample(vec2 rel, float floorS, out vec2 slope, out vec3 mss, out float f
     vec4 d;
 #define CAS_S(C, TD, TS) if (u_nCas > C) { s = wantSpacing(C, rel, floorS); lam = casLod(C, s, w); slope += w * casRead(TS, C, rel, lam).xy; d = casRead(TD, C, rel, lam); keep *= 1.0 - clamp(w * d.w, 0.0, 1.0); mss += casMss(C, log2(s / u_cas[C].y)); }
     CAS_S(0, u_cd0, u_cs0) CAS_S(1, u_cd1, u_cs1) CAS_S(2, u_cd2, u_cs2) CAS_S(3, u_cd3, u_cs3)
+    slope += wakeAt(rel).yz;
     foam = (1.0 - keep) * u_foamScale;
     mss *= u_roughScale;
 }
@@ -532,6 +546,7 @@ void main() {
     }
     vec2 rel = u_meshOff.xz + p;
     vec4 D = casDisp(rel, g);
+    D.y += wakeAt(rel).x;
     v_rel = vec3(rel.x + D.x, u_meshOff.y + D.y, rel.y + D.z);
     v_base = rel;
     v_crest = D.y;
@@ -702,6 +717,24 @@ export class Renderer {
         this.dummyTex = gl.createTexture();
         gl.bindTexture(gl.TEXTURE_2D, this.dummyTex);
         gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA8, 1, 1, 0, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
+        this.wakeTex = gl.createTexture();
+        this.wake = null;          /* {x0, z0, dx, n} of the wakes in wakeTex (world, m) */
+    }
+
+    /* The ships' wakes on n x n points from (x0, z0) (world, double) at
+     * spacing dx: data holds 4 floats a point (height, dh/dx, dh/dz, 0),
+     * row z after row (codec.js WakeStore.grid); null: none. */
+    setWakes(w) {
+        const gl = this.gl;
+        if (!w) { this.wake = null; return; }
+        gl.bindTexture(gl.TEXTURE_2D, this.wakeTex);
+        gl.pixelStorei(gl.UNPACK_ALIGNMENT, 4);
+        gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA16F, w.n, w.n, 0, gl.RGBA, gl.FLOAT, w.data);
+        gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR);
+        gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+        gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+        gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+        this.wake = { x0: w.x0, z0: w.z0, dx: w.dx, n: w.n };
     }
 
     /* Layout 1: a FRAME's cascade block, its decoded tiles (texel blocks,
@@ -780,6 +813,11 @@ export class Renderer {
         gl.uniform3fv(u.u_tailMss, b.tailMss);
         gl.uniform1f(u.u_roughScale, this.roughScale);
         gl.uniform1f(u.u_foamScale, this.foamScale);
+        const W = this.wake;
+        gl.activeTexture(gl.TEXTURE12);
+        gl.bindTexture(gl.TEXTURE_2D, W ? this.wakeTex : this.dummyTex);
+        if (u.u_wakeTex) gl.uniform1i(u.u_wakeTex, 12);
+        gl.uniform4f(u.u_wake, W ? W.x0 - eye[0] : 0, W ? W.z0 - eye[2] : 0, W ? W.dx : 1, W ? W.n : 0);
         for (let c = 0; c < MAX_CASCADES; c++) {
             gl.activeTexture(gl.TEXTURE4 + c);
             gl.bindTexture(gl.TEXTURE_2D, c < nc ? this.cas[c].disp : this.dummyTex);

@@ -44,16 +44,61 @@ let seq = 0;
 let hello = null;
 let subscription = null;
 const entities = new Map();   /* ENTITY announces: id -> the newest (PROTOCOL.md "ENTITY") */
+/* The ships' wakes (PROTOCOL.md "WAKE"): every ENTITY and WAKE goes to the
+ * WebAssembly store, which reads them on a square around the camera for
+ * the page at most WAKE_EVERY_MS apart (a ship moves 1 m in that time at
+ * 10 m/s; the square is WAKE_N points a side at WAKE_DX m). */
+let wakeStore = null;
+let wakeDone = -Infinity;
+let seaDepth = 1000;
+let wakeYaw = 0;              /* the camera's yaw, degrees: the square lies ahead of the eye */
+const WAKE_N = 192, WAKE_DX = 4, WAKE_EVERY_MS = 100;
+
+function wakeFeed(data) {
+    try {
+        if (!wakeStore) wakeStore = new WakeStore();
+        wakeStore.message(data);
+    } catch (e) {
+        noteError(e, 'wake');
+    }
+}
+
+/* The wakes on the square around the frame's camera at its instant
+ * (grid points snapped to the spacing, so the square does not swim), or
+ * undefined when not due (the page keeps the last). */
+function wakeGrid(meta, now) {
+    if (!wakeStore || !entities.size || now - wakeDone < WAKE_EVERY_MS) return entities.size ? undefined : null;
+    const cam = meta.cascades && meta.cascades.camera;
+    if (!cam) return undefined;
+    wakeDone = now;
+    /* centred 0.4 of its side ahead of the eye: what the eye sees nearest */
+    const half = WAKE_N * WAKE_DX / 2, a = wakeYaw * Math.PI / 180;
+    const cx = cam[0] + 0.8 * half * Math.cos(a), cz = cam[2] + 0.8 * half * Math.sin(a);
+    const x0 = Math.round((cx - half) / WAKE_DX) * WAKE_DX, z0 = Math.round((cz - half) / WAKE_DX) * WAKE_DX;
+    const t0 = performance.now();
+    try {
+        const data = wakeStore.grid(meta.simTime, seaDepth, x0, z0, WAKE_DX, WAKE_N);
+        if (!data) return undefined;       /* a pattern on its way */
+        let peak = 0;
+        for (let k = 0; k < data.length; k += 4) peak = Math.max(peak, Math.abs(data[k]));
+        stats.wakePeak = peak;
+        stats.wakeMs = performance.now() - t0;
+        return { x0, z0, dx: WAKE_DX, n: WAKE_N, t: meta.simTime, peak, data };
+    } catch (e) {
+        noteError(e, 'wake grid');
+        return undefined;
+    }
+}
 /* The decoders (codec.js) load their WebAssembly modules as they are
  * imported; a static import would hold this module's evaluation, and with
  * it the onmessage handler below, until they have loaded, and a message
  * the page sends meanwhile would be lost.  So they come in dynamically and
  * the socket opens once they are here. */
-let assembleLevel, assembleCascadeTile, groupByLevel, heldBlocks, decodeMeshQz, HeldStore, meshQz;
+let assembleLevel, assembleCascadeTile, groupByLevel, heldBlocks, decodeMeshQz, HeldStore, WakeStore, meshQz;
 const decodersReady = Promise.all([import('./assemble.js'), import('./codec.js'), import('./meshstore.js')])
     .then(([a, c, m]) => {
         ({ assembleLevel, assembleCascadeTile, groupByLevel, heldBlocks } = a);
-        ({ decodeMeshQz, HeldStore } = c);
+        ({ decodeMeshQz, HeldStore, WakeStore } = c);
         meshQz = new m.MeshQzStore();  /* layout 0 with mesh_codec qz: the topologies' prediction refs */
     });
 let wantSub = null;
@@ -207,6 +252,11 @@ function onMessage(data) {
     case T.HELLO: {
         hello = msg.body;
         sentAt.clear();  /* a new connection answers none of the old CAMERAs */
+        /* its server sends the entities and the patterns anew */
+        if (wakeStore) wakeStore.destroy();
+        wakeStore = null;
+        entities.clear();
+        seaDepth = hello.sea.depthM;
         const h = { ...hello, sea: { ...hello.sea, seed: hello.sea.seed.toString() } };
         post({ kind: 'hello', hello: h, simTime: hdr.simTime });
         try {
@@ -244,6 +294,7 @@ function onMessage(data) {
         break;
     case T.SEA_STATE: {
         const s = msg.body;
+        seaDepth = s.sea.depthM;   /* the depth a new pattern is for: the newest sea's */
         post({ kind: 'sea', effectiveTime: s.effectiveTime, sea: { ...s.sea, seed: s.sea.seed.toString() } });
         break;
     }
@@ -267,8 +318,13 @@ function onMessage(data) {
         if (e.op === 0) entities.set(e.id, e);
         else if (e.op === 4) entities.delete(e.id);
         stats.entities = entities.size;
+        wakeFeed(data);
         break;
     }
+    case T.WAKE:
+        stats.wakePatterns = (stats.wakePatterns || 0) + 1;
+        wakeFeed(data);
+        break;
     default:
         break;
     }
@@ -500,9 +556,11 @@ function finishFrame(job) {
     const transfer = [];
     for (const L of levels) transfer.push(L.disp.buffer, L.nrm.buffer);
     for (const b of blocks) transfer.push(b.disp.buffer, b.slope.buffer);
+    const wakes = wakeGrid(meta, now);
+    if (wakes) transfer.push(wakes.data.buffer);
     const out = {
         kind: 'frame', ...meta, mesh: meta.mesh, levels, blocks, latencyMs, bytesPerSec: byteRate.perSecond(now),
-        decodeWorkers: pool ? pool.length : 0, stats: { ...stats },
+        decodeWorkers: pool ? pool.length : 0, stats: { ...stats }, wakes,
     };
     if (meta.mesh) transfer.push(meta.mesh.positions.buffer);
     pageHolds = true;
@@ -520,6 +578,7 @@ self.onmessage = (ev) => {
         });
         break;
     case 'camera': {
+        if (Number.isFinite(m.cam.yawDeg)) wakeYaw = m.cam.yawDeg;
         if (!subscription) return;
         /* replay: every CAMERA is answered by a frame; two in flight keep
          * the stream full without queueing on the daemon */
