@@ -24,8 +24,10 @@
 #include <string.h>
 
 #include "lod.h"
+#include "oc_wakes.h"
 #include "proto.h"
 #include "ocean_time.h"
+#include "wake.h"
 
 /* ---- canonical text dump of a decoded message ---------------------------- */
 
@@ -1181,6 +1183,7 @@ static const char *type_file(proto_type t)
 }
 
 static int write_lod_vectors(const char *dir);
+static int wake_read_vectors(const char *dir, int write);
 
 static int write_vectors(const char *dir)
 {
@@ -1242,7 +1245,7 @@ static int write_vectors(const char *dir)
             return 1;
         proto_buf_free(&b);
     }
-    return write_lod_vectors(dir) ? 1 : 0;
+    return write_lod_vectors(dir) || wake_read_vectors(dir, 1) ? 1 : 0;
 }
 
 static const char *vector_dir(void)
@@ -1302,7 +1305,7 @@ static void test_vectors(void **state)
     }
     closedir(dir);
     print_message("%d message vectors, %d error vectors\n", good, bad);
-    assert_int_equal(good, PROTO_TYPE_END_ - 1 + N_EXTRA);
+    assert_int_equal(good, PROTO_TYPE_END_ - 1 + N_EXTRA + 2);   /* + wake_read_entity, wake_read_wake */
     assert_int_equal(bad, (int)(sizeof bad_vectors / sizeof bad_vectors[0]));
 }
 
@@ -1549,6 +1552,136 @@ static int write_lod_vectors(const char *dir)
     return 0;
 }
 
+/* ---- a wake read as every reader reads it ------------------------------------ */
+
+/* wake_read_entity.bin (an ENTITY announce of a 10 m boat at 2 m/s, in
+ * force from 99.5 s) and wake_read_wake.bin (the WAKE of its one rung:
+ * 2 m/s is on the ladder), and wake_read.txt: the wakes they make at
+ * t = 103 s over 50 m of water on a 16 x 16 square at 0.75 m behind the
+ * boat, as clients/c/oc_wakes.c reads them (height, dh/dx, dh/dz each a
+ * line of 256 floats, %.9g).  The viewer's WebAssembly reads the same
+ * (tests/browser/protocol.test.mjs). */
+#define WR_T 103.0
+#define WR_DEPTH 50.0
+#define WR_N 16
+#define WR_DX 0.75
+
+static int wake_read_messages(proto_buf *ent, proto_buf *wake)
+{
+    proto_msg m;
+    proto_msg_init(&m, PROTO_ENTITY);
+    m.hdr.sim_time = 99.5;
+    m.u.entity = (proto_entity){PROTO_ENTITY_ANNOUNCE, 0, 9, 100.0, 1000.5, -2000.25, 0.0f, 30.0f, 2.0f, 10.0f, 2.0f,
+                                1.0f, ""};
+    if (proto_encode(ent, &m, NULL, 0) != OCEAN_OK) return -1;
+    wake_params p = {2.0, 10.0, WR_DEPTH, 2.0};
+    wake_pattern *pat;
+    if (wake_pattern_create(&p, &pat, NULL, 0) != OCEAN_OK) return -1;
+    int nx, nz;
+    const float *coef = wake_pattern_coefficients(pat, &nx, &nz);
+    proto_codec_params cp;
+    proto_codec_params_default(&cp);
+    cp.accuracy = 1e-4;
+    proto_buf pay;
+    proto_buf_init(&pay, 0);
+    double err = 0;
+    ocean_result r = proto_plane_encode(NULL, PROTO_CODEC_QZ, &cp, nx, nz, coef, &pay, &err, NULL, 0);
+    proto_msg_init(&m, PROTO_WAKE);
+    m.u.wake = (proto_wake){p.speed, p.length, p.beam, p.depth, (uint16_t)nx, (uint16_t)nz, PROTO_CODEC_QZ,
+                            (float)(wake_pattern_bound(pat) + err), (uint32_t)pay.len, proto_buf_data(&pay)};
+    if (r == OCEAN_OK) r = proto_encode(wake, &m, NULL, 0);
+    proto_buf_free(&pay);
+    wake_pattern_destroy(pat);
+    return r == OCEAN_OK ? 0 : -1;
+}
+
+/* The text of wake_read.txt from the two messages' bytes; NULL when a
+ * reader refuses them. */
+static char *wake_read_text(const uint8_t *ent, size_t nent, const uint8_t *wake, size_t nwake)
+{
+    oc_wakes *w;
+    proto_msg m;
+    if (oc_wakes_create(&w) != OCEAN_OK) return NULL;
+    int ok = proto_decode(ent, nent, &m, NULL, 0) == OCEAN_OK && oc_wakes_entity(w, &m) == OCEAN_OK;
+    if (ok && proto_decode(wake, nwake, &m, NULL, 0) == OCEAN_OK) {
+        wake_pattern *p = oc_wakes_decode(&m.u.wake);
+        ok = p != NULL;
+        oc_wakes_keep(w, p);
+        proto_msg_free(&m);
+    } else {
+        ok = 0;
+    }
+    /* the square from 10 to 21.25 m behind the boat, across its track */
+    double xz[2 * WR_N * WR_N], hd = 30.0 * M_PI / 180, bx = 1000.5 + 2.0 * 3.0 * cos(hd), bz = -2000.25 + 6.0 * sin(hd);
+    double x0 = bx - 16 * cos(hd) - WR_N * WR_DX / 2, z0 = bz - 16 * sin(hd) - WR_N * WR_DX / 2;
+    for (int k = 0; k < WR_N * WR_N; k++) xz[2 * k] = x0 + (k % WR_N) * WR_DX, xz[2 * k + 1] = z0 + (k / WR_N) * WR_DX;
+    wake_sample ws[WR_N * WR_N];
+    ok = ok && oc_wakes_sample(w, WR_T, WR_DEPTH, xz, WR_N * WR_N, ws) == OCEAN_OK;
+    oc_wakes_destroy(w);
+    if (!ok) return NULL;
+    sbuf b = {0};
+    out(&b, "# the wakes of wake_read_entity.bin and wake_read_wake.bin on the square: see tests/test_proto.c\n");
+    out(&b, "t = %.17g\ndepth = %.17g\nx0 = %.17g\nz0 = %.17g\ndx = %.17g\nn = %d\n", WR_T, WR_DEPTH, x0, z0, WR_DX,
+        WR_N);
+    static const char *const names[3] = {"height", "dhdx", "dhdz"};
+    for (int c = 0; c < 3; c++) {
+        out(&b, "%s =", names[c]);
+        for (int k = 0; k < WR_N * WR_N; k++)
+            out(&b, " %.9g", (double)(float)(c == 0 ? ws[k].height : c == 1 ? ws[k].dhdx : ws[k].dhdz));
+        out(&b, "\n");
+    }
+    return b.s;
+}
+
+static int wake_read_vectors(const char *dir, int write)
+{
+    char pe[512], pw[512], pt[512];
+    snprintf(pe, sizeof pe, "%s/wake_read_entity.bin", dir);
+    snprintf(pw, sizeof pw, "%s/wake_read_wake.bin", dir);
+    snprintf(pt, sizeof pt, "%s/wake_read.txt", dir);
+    if (write) {
+        proto_buf e, w;
+        proto_buf_init(&e, 0);
+        proto_buf_init(&w, 0);
+        int r = wake_read_messages(&e, &w) || write_file(pe, proto_buf_data(&e), e.len) ||
+                write_file(pw, proto_buf_data(&w), w.len);
+        for (int k = 0; k < 2 && !r; k++) {
+            proto_buf *b = k ? &w : &e;
+            proto_msg d;
+            proto_decode(proto_buf_data(b), b->len, &d, NULL, 0);
+            char *txt = dump(&d), path[520];
+            snprintf(path, sizeof path, "%s/wake_read_%s.txt", dir, k ? "wake" : "entity");
+            r = write_file(path, txt, strlen(txt));
+            free(txt);
+            proto_msg_free(&d);
+        }
+        char *txt = r ? NULL : wake_read_text(proto_buf_data(&e), e.len, proto_buf_data(&w), w.len);
+        r = !txt || write_file(pt, txt, strlen(txt));
+        free(txt);
+        proto_buf_free(&e);
+        proto_buf_free(&w);
+        return r ? -1 : 0;
+    }
+    size_t ne, nw, nt;
+    uint8_t *e = read_file(pe, &ne), *w = read_file(pw, &nw);
+    char *want = (char *)read_file(pt, &nt), *got = e && w ? wake_read_text(e, ne, w, nw) : NULL;
+    int same = want && got && strcmp(want, got) == 0;
+    free(e);
+    free(w);
+    free(want);
+    free(got);
+    return same ? 0 : -1;
+}
+
+/* The committed wake vectors still read as the C reader reads them. */
+static void test_wake_read_vectors(void **state)
+{
+    (void)state;
+    if (wake_read_vectors(vector_dir(), 0))
+        fail_msg("%s/wake_read.txt differs from what clients/c/oc_wakes.c reads of wake_read_entity.bin and "
+                 "wake_read_wake.bin (regenerate: test_proto --write-vectors tests/vectors)", vector_dir());
+}
+
 /* The committed lod vectors are still what the C rule computes. */
 static void test_lod_vectors(void **state)
 {
@@ -1649,6 +1782,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_lod_rule),
         cmocka_unit_test(test_lod_mss),
         cmocka_unit_test(test_lod_vectors),
+        cmocka_unit_test(test_wake_read_vectors),
         cmocka_unit_test(test_header_errors),
         cmocka_unit_test(test_time_limit),
         cmocka_unit_test(test_frame_client_fields),

@@ -36,7 +36,7 @@ import {
     decode, encodeSubscribe, encodeCamera, encodeQuery, encodeBye, encodeSeaState, ProtoError, R, T, CODEC, FX, tilePlanes,
     LAYOUT, MIP_ENTRIES, TOPO_FLAT, zstdFrameSizes, SUB_FLAG,
 } from '../../clients/web/protocol.js';
-import { decodeTile, decodeCascadeBlock, octNormals, decodeMeshQz, meshQzRefs, HeldStore } from '../../clients/web/codec.js';
+import { decodeTile, decodeCascadeBlock, octNormals, decodeMeshQz, meshQzRefs, HeldStore, WakeStore } from '../../clients/web/codec.js';
 
 const dir = process.env.VECTOR_DIR;
 const gen = process.env.GEN_VECTORS;
@@ -726,4 +726,29 @@ test('the protocol vectors in tests/vectors decode to their stated fields; bad o
     }
     assert.ok(good >= 8 && bad >= 5, `${good} good and ${bad} bad vectors checked`);
     assert.ok(seaAgain >= 3, `${seaAgain} SEA_STATE vectors (set, announce, get) re-encoded`);
+});
+
+test('the viewer reads the ships\' wakes as the C library does: tests/vectors/wake_read.txt from its ENTITY and WAKE', (t) => {
+    const vdir = process.env.PROTO_VECTORS;
+    if (!vdir) { t.skip('PROTO_VECTORS not set'); return; }
+    const want = Object.fromEntries(readFileSync(join(vdir, 'wake_read.txt'), 'utf8').split('\n')
+        .filter((l) => l.includes(' = ')).map((l) => [l.slice(0, l.indexOf(' = ')), l.slice(l.indexOf(' = ') + 3)]));
+    const w = new WakeStore();
+    const n = Number(want.n), dx = Number(want.dx);
+    /* before its pattern comes, a ship there has no wake to read */
+    w.message(new Uint8Array(readFileSync(join(vdir, 'wake_read_entity.bin'))));
+    assert.equal(w.grid(Number(want.t), Number(want.depth), Number(want.x0), Number(want.z0), dx, n), null);
+    w.message(new Uint8Array(readFileSync(join(vdir, 'wake_read_wake.bin'))));
+    const g = w.grid(Number(want.t), Number(want.depth), Number(want.x0), Number(want.z0), dx, n);
+    w.destroy();
+    let peak = 0;
+    ['height', 'dhdx', 'dhdz'].forEach((name, c) => {
+        const v = want[name].split(' ').map(Number);
+        assert.equal(v.length, n * n);
+        for (let k = 0; k < n * n; k++) {
+            assert.ok(Math.abs(g[4 * k + c] - v[k]) <= 1e-8 * Math.max(1, Math.abs(v[k])), `${name}[${k}]: ${g[4 * k + c]}, C read ${v[k]}`);
+            if (c === 0) peak = Math.max(peak, Math.abs(v[k]));
+        }
+    });
+    assert.ok(peak > 0.005, `the square holds a wake (peak ${peak} m)`);
 });
