@@ -83,7 +83,7 @@ if [[ ! -d tests/browser/node_modules/playwright-core ]]; then
     echo "test_browser: installing the test's npm dev dependencies (npm ci in tests/browser)"
     (cd tests/browser && npm ci --no-audit --no-fund --loglevel=error) || die "npm ci failed"
 fi
-[[ -x "$BUILD/oceand" ]] || die "$BUILD/oceand not built"
+[[ -x "$BUILD/oceand" && -x "$BUILD/ocean-client" ]] || die "$BUILD/oceand or ocean-client not built"
 [[ -f "$BUILD/libocean_proto.a" && -f "$BUILD/libocean_sim.a" ]] || die "$BUILD/libocean_proto.a / libocean_sim.a not built"
 
 status=0
@@ -108,10 +108,13 @@ fi
 echo "== viewer: headless Chromium against oceand == (${SECONDS} s)"
 log="$WORK/oceand.log"
 ADMIN_TOKEN=browser-test-admin
-start_daemon "$log" --set server.admin_token=$ADMIN_TOKEN || { echo "test_browser: oceand did not start:"; cat "$log"; exit 1; }
+ENTITY_TOKEN=browser-test-entity
+start_daemon "$log" --set server.admin_token=$ADMIN_TOKEN --set server.entity_token=$ENTITY_TOKEN ||
+    { echo "test_browser: oceand did not start:"; cat "$log"; exit 1; }
 echo "oceand at $url (pid $daemon_pid)"
 if ! OCEAN_URL="$url" ARTIFACT_DIR="$ART" VIEWER_TIMEOUT_S="${VIEWER_TIMEOUT_S:-90}" ADMIN_TOKEN=$ADMIN_TOKEN \
-        OCEAND_PID=$daemon_pid timeout 300 node tests/browser/viewer.test.mjs; then
+        ENTITY_TOKEN=$ENTITY_TOKEN OCEAN_CLIENT="$BUILD/ocean-client" OCEAND_PID=$daemon_pid \
+        timeout 300 node tests/browser/viewer.test.mjs; then
     echo "test_browser: viewer test FAILED (daemon log follows)"
     tail -30 "$log"
     status=1

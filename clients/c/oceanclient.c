@@ -1231,12 +1231,16 @@ static void handle_message(oc_client *c, uint8_t *raw, size_t len)
         c->st.decode_errors++;
         set_local_error(c, res, "undecodable message from server: %s", err);
     } else {
-        double off = now - sim_time;
-        if (!c->have_offset || off < c->min_offset) {
-            c->min_offset = off;
-            c->have_offset = 1;
+        /* every message's header says the server's clock but an ENTITY's
+         * (the instant its entry takes effect) and a WAKE's (0) */
+        if (type != PROTO_ENTITY && type != PROTO_WAKE) {
+            double off = now - sim_time;
+            if (!c->have_offset || off < c->min_offset) {
+                c->min_offset = off;
+                c->have_offset = 1;
+            }
+            c->last_sim = sim_time;
         }
-        c->last_sim = sim_time;
         rx_ctx x = {.c = c, .m = &m, .fr = fr, .peeked = peeked, .now = now, .sim_time = sim_time,
                     .mesh_res = mesh_res, .mesh_why = mesh_why, .new_refs = &new_refs, .wake = wake, .nt = &nt};
         for (size_t k = 0; k < sizeof rx_handlers / sizeof rx_handlers[0]; k++)

@@ -370,9 +370,10 @@ ocean_result oc_service(oc_client *c, int timeout_ms);
 /* The HELLO (OCEAN_ESTATE before it arrived). */
 ocean_result oc_client_hello(const oc_client *c, proto_hello *out);
 
-/* The sim time of the latest message received (HELLO's at first): the
- * server's clock as last seen, for queries "now" at an explicit time.
- * NAN before HELLO. */
+/* The sim time of the latest message received (HELLO's at first) whose
+ * header carries the server's clock (not an ENTITY's, which carries the
+ * instant its entry takes effect, nor a WAKE's): the server's clock as
+ * last seen, for queries "now" at an explicit time.  NAN before HELLO. */
 double oc_client_sim_time(const oc_client *c);
 
 /* Text and code of the most recent failure on this client ("" and

@@ -320,7 +320,8 @@ function startCameraReports() {
         const [w, h] = renderer.resize();
         const rep = cam.report(w, h);
         if (replay) rep.renderTime = replayT;
-        stats.cameraSent = { viewport: [rep.viewportW, rep.viewportH], fovYDeg: rep.fovYDeg };
+        stats.cameraSent = { viewport: [rep.viewportW, rep.viewportH], fovYDeg: rep.fovYDeg, pos: rep.pos.slice(),
+            yawDeg: rep.yawDeg };
         worker.postMessage({ cmd: 'camera', cam: rep });
     };
     sendNow();

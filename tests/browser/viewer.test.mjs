@@ -29,6 +29,7 @@
  * Prints "N passed, N failed" and exits non-zero on any failure.
  */
 import { createRequire } from 'node:module';
+import { execFileSync } from 'node:child_process';
 import { mkdirSync, writeFileSync, mkdtempSync, rmSync } from 'node:fs';
 import { axisSpectra, decodePng, lineRatio, lum, planeLuma } from './pixels.mjs';
 import { cameraBasis } from '../../clients/web/camera.js';
@@ -369,6 +370,33 @@ try {
         check('a wrong admin token is refused and said on the overlay', refused, (await stats(page2)).errors.join(' | '));
     } else {
         check('ADMIN_TOKEN given to the test (tests/test_browser.sh)', false, 'no ADMIN_TOKEN');
+    }
+    /* a ship entered over ENTITY (ocean-client entity, as a simulator
+     * does, a sample every 2 s) 150 m ahead of a fresh viewer's eye,
+     * steaming across its view: the WAKE patterns come, and the viewer
+     * draws a wake there (its WebAssembly reads them on the square ahead
+     * of the eye) */
+    const entityToken = process.env.ENTITY_TOKEN, oc = process.env.OCEAN_CLIENT;
+    if (entityToken && oc) {
+        const page3 = await context.newPage();
+        await page3.goto(withView(`${base}?x=0&y=25&z=0&yaw=0&pitch=-10`), { waitUntil: 'load', timeout: timeoutMs });
+        await waitFor(page3, () => window.oceanStats && window.oceanStats.framesRendered >= 2, null, timeoutMs);
+        const e0 = (await stats(page3)).serverErrors;
+        const set = (x) => execFileSync(oc, ['entity', base.replace(/^http/, 'ws'), '--set', '--token', entityToken,
+            '--id', '77', '--kind', 'ship', '--x', '150', '--z', String(x), '--heading', '90', '--speed', '8',
+            '--length', '120', '--beam', '15', '--draught', '5'], { timeout: 30000 });
+        let drawn = false;
+        for (let k = 0, z = -100; !drawn && k * 2000 < timeoutMs; k++, z += 16) {
+            set(z);
+            drawn = await waitFor(page3, () => window.oceanStats.wakes && window.oceanStats.wakes.peak > 0.05, null, 2000);
+        }
+        const sW = await stats(page3);
+        check('a ship entered over ENTITY gets its wake drawn (WAKE patterns read on the square ahead of the eye)',
+            drawn && sW.serverErrors === e0 && sW.decodeErrors === 0,
+            `wakes ${JSON.stringify(sW.wakes)}, patterns ${sW.wakePatterns}, errors ${sW.errors.join(' | ')}`);
+        await page3.close();
+    } else {
+        check('ENTITY_TOKEN and OCEAN_CLIENT given to the test (tests/test_browser.sh)', false, 'not given');
     }
     /* a daemon that answers nothing for a while (a loaded host, a sea
      * change being built, a debugger, a paused VM) is asked one QUERY at a
