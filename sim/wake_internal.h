@@ -37,6 +37,7 @@ struct wake_pattern {
     float *block_bound;    /* the same per block of WAKE_BLOCK^2 cells */
     int bx, bz;            /* blocks along, across */
     double xend, zmax;     /* the grid's far end behind, its half-width */
+    double reach;          /* wake_params_reach, kept: readers ask it per point */
 };
 
 /* The wavenumber of FFT index i of n at spacing dx. */

@@ -42,7 +42,8 @@ int wake_params_equal(const wake_params *a, const wake_params *b)
 double wake_transverse_wavelength(const wake_params *p)
 {
     double U2 = p->speed * p->speed;
-    if (isinf(p->depth)) return 2 * M_PI * U2 / WAKE_G;
+    /* deep water, or as good as: tanh(k h) is 1 in double from k h = 19.1 */
+    if (isinf(p->depth) || WAKE_G / U2 * p->depth >= 20) return 2 * M_PI * U2 / WAKE_G;
     if (U2 >= WAKE_G * p->depth) return 0;
     /* (g / k) tanh(k h) = U^2: the left side falls from g h (k -> 0) to 0,
      * so bisection on k between the deep-water root and 0 */
@@ -207,11 +208,14 @@ double wake_window(const wake_pattern *w, double x, double z, double *wx, double
     return m * a * b * c;
 }
 
+/* The distance from the body to the grid's farthest corner. */
+static double layout_reach(const wake_layout *w) { return hypot(fmax(-w->ix0, w->nx - 1 + w->ix0), w->nz / 2) * w->dx; }
+
 double wake_params_reach(const wake_params *p)
 {
     wake_layout w;
     wake_layout_make(p, WAKE_BEHIND, &w);
-    return hypot(fmax(-w.ix0, w.nx - 1 + w.ix0), w.nz / 2) * w.dx;
+    return layout_reach(&w);
 }
 
 wake_pattern *wake_pattern_alloc(const wake_params *p)
@@ -222,6 +226,7 @@ wake_pattern *wake_pattern_alloc(const wake_params *p)
     wake_layout_make(p, WAKE_BEHIND, &w->w);
     w->xend = (w->w.ix0 + w->w.nx - 1) * w->w.dx;
     w->zmax = -w->w.iz0 * w->w.dx;
+    w->reach = layout_reach(&w->w);
     w->bx = (w->w.nx + WAKE_BLOCK - 1) / WAKE_BLOCK;
     w->bz = (w->w.nz + WAKE_BLOCK - 1) / WAKE_BLOCK;
     w->block_bound = calloc((size_t)w->bx * w->bz, sizeof *w->block_bound);
@@ -252,12 +257,15 @@ double wake_pattern_bound_at(const wake_pattern *w, double x, double z)
 }
 double wake_pattern_wavelength(const wake_pattern *w) { return w->w.lambda; }
 
-double wake_pattern_reach(const wake_pattern *w) { return wake_params_reach(&w->p); }
+double wake_pattern_reach(const wake_pattern *w) { return w->reach; }
 
 double wake_pattern_read(const wake_pattern *w, double x, double z, double *dhdx, double *dhdz)
 {
-    double wx, wz, win = wake_window(w, x, z, &wx, &wz);
     *dhdx = *dhdz = 0;
+    /* the window is 0 from two cells inside the grid's edges out */
+    double in = 2 * w->g.dx;
+    if (!(x > w->g.x0 + in && x < w->xend - in && fabs(z) < w->zmax - in)) return 0;
+    double wx, wz, win = wake_window(w, x, z, &wx, &wz);
     if (win == 0 && wx == 0 && wz == 0) return 0;
     const wake_grid *g = &w->g;
     double fx = (x - g->x0) / g->dx, fz = (z - g->z0) / g->dx;
@@ -268,8 +276,19 @@ double wake_pattern_read(const wake_pattern *w, double x, double z, double *dhdx
     wake_bspline_weights(fz - iz, az);
     bspline_slopes(fx - ix, sx);
     bspline_slopes(fz - iz, sz);
-    double h = wake_grid_cubic(g, ix, iz, ax, az);
-    double hx = wake_grid_cubic(g, ix, iz, sx, az) / g->dx, hz = wake_grid_cubic(g, ix, iz, ax, sz) / g->dx;
+    /* the height and both slopes in one pass over the 4 x 4 coefficients:
+     * each row's sums under the x weights, then the z weights */
+    double h = 0, hx = 0, hz = 0;
+    for (int j = 0; j < 4; j++) {
+        const float *row = g->heights + (size_t)(iz - 1 + j) * g->nx + (ix - 1);
+        double r = ax[0] * row[0] + ax[1] * row[1] + ax[2] * row[2] + ax[3] * row[3];
+        double rs = sx[0] * row[0] + sx[1] * row[1] + sx[2] * row[2] + sx[3] * row[3];
+        h += az[j] * r;
+        hx += az[j] * rs;
+        hz += sz[j] * r;
+    }
+    hx /= g->dx;
+    hz /= g->dx;
     *dhdx = win * hx + h * wx;
     *dhdz = win * hz + h * wz;
     return win * h;
