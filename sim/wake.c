@@ -205,13 +205,9 @@ ocean_result wake_steady_to(const wake_params *p, double behind, wake_grid *out,
 ocean_result wake_pattern_create(const wake_params *p, wake_pattern **out, char *msg, size_t msglen)
 {
     *out = NULL;
-    ocean_result r = wake_params_validate(p, msg, msglen);
+    wake_pattern *w;
+    ocean_result r = wake_pattern_alloc(p, &w, msg, msglen);
     if (r != OCEAN_OK) return r;
-    wake_pattern *w = wake_pattern_alloc(p);
-    if (!w) {
-        if (msg) snprintf(msg, msglen, "out of memory for a wake pattern");
-        return OCEAN_ENOMEM;
-    }
     r = wake_sum(p, &w->w, &w->g, w, msg, msglen);
     if (r != OCEAN_OK) {
         free(w->block_bound);

@@ -48,9 +48,9 @@ void wake_layout_make(const wake_params *p, double behind, wake_layout *w);
 /* The elevation spectrum of p on the layout's FFT grid (FFT order) into
  * buf (fx * fz complex values, re and im). */
 void wake_spectrum(const wake_params *p, const wake_layout *w, float (*buf)[2]);
-/* A pattern of p with its layout and its blocks' bounds (all 0), no grid
- * yet; NULL on OOM. */
-wake_pattern *wake_pattern_alloc(const wake_params *p);
+/* A pattern of p (validated) with its layout and its blocks' bounds (all
+ * 0), no grid yet.  OCEAN_EINVAL, OCEAN_ENOMEM, with msg. */
+ocean_result wake_pattern_alloc(const wake_params *p, wake_pattern **out, char *msg, size_t msglen);
 /* Cubic B-spline weights at u in [0, 1), and of the derivative. */
 void wake_bspline_weights(double u, double w[4]);
 /* The 4 x 4 values of g around cell (ix, iz), 1 <= ix <= nx - 3 (likewise

@@ -218,10 +218,16 @@ double wake_params_reach(const wake_params *p)
     return layout_reach(&w);
 }
 
-wake_pattern *wake_pattern_alloc(const wake_params *p)
+ocean_result wake_pattern_alloc(const wake_params *p, wake_pattern **out, char *msg, size_t msglen)
 {
+    *out = NULL;
+    ocean_result r = wake_params_validate(p, msg, msglen);
+    if (r != OCEAN_OK) return r;
     wake_pattern *w = calloc(1, sizeof *w);
-    if (!w) return NULL;
+    if (!w) {
+        if (msg) snprintf(msg, msglen, "out of memory for a wake pattern");
+        return OCEAN_ENOMEM;
+    }
     w->p = *p;
     wake_layout_make(p, WAKE_BEHIND, &w->w);
     w->xend = (w->w.ix0 + w->w.nx - 1) * w->w.dx;
@@ -232,9 +238,11 @@ wake_pattern *wake_pattern_alloc(const wake_params *p)
     w->block_bound = calloc((size_t)w->bx * w->bz, sizeof *w->block_bound);
     if (!w->block_bound) {
         free(w);
-        return NULL;
+        if (msg) snprintf(msg, msglen, "out of memory for a wake pattern");
+        return OCEAN_ENOMEM;
     }
-    return w;
+    *out = w;
+    return OCEAN_OK;
 }
 
 void wake_pattern_destroy(wake_pattern *w)
@@ -344,13 +352,9 @@ ocean_result wake_pattern_from_coefficients(const wake_params *p, const float *c
                                             wake_pattern **out, char *msg, size_t msglen)
 {
     *out = NULL;
-    ocean_result r = wake_params_validate(p, msg, msglen);
+    wake_pattern *w;
+    ocean_result r = wake_pattern_alloc(p, &w, msg, msglen);
     if (r != OCEAN_OK) return r;
-    wake_pattern *w = wake_pattern_alloc(p);
-    if (!w) {
-        if (msg) snprintf(msg, msglen, "out of memory for a wake pattern");
-        return OCEAN_ENOMEM;
-    }
     size_t n = (size_t)w->w.nx * w->w.nz;
     int ok = nx == w->w.nx && nz == w->w.nz && isfinite(bound) && bound >= 0;
     for (size_t i = 0; ok && i < n; i++) ok = isfinite(coef[i]);
