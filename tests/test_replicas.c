@@ -910,12 +910,13 @@ static void ship_send(test_ws *w, uint32_t id, double t, double x) { ship_at(w, 
 #define WAKES_MAX 8
 
 /* The WAKE messages a layout-1 viewer on w gets until it holds `want`
- * (30 s at most): their bytes past the header's seq, into got[] (malloc'd),
+ * (120 s at most: a pattern is built at nice 10, which a busy host
+ * starves): their bytes past the header's seq, into got[] (malloc'd),
  * ordered by their parameters.  Returns how many. */
 static int wakes_collect(test_ws *w, int want, uint8_t *got[WAKES_MAX], size_t len[WAKES_MAX])
 {
     int n = 0;
-    for (double end = test_now_s() + 30; n < want && test_now_s() < end;) {
+    for (double end = test_now_s() + 120; n < want && test_now_s() < end;) {
         proto_msg m;
         uint8_t *raw;
         size_t rawlen;
@@ -1033,8 +1034,9 @@ static void wake_query(test_ws *w, double t, double x, proto_query_sample *out)
     proto_msg_init(&m, PROTO_QUERY);
     m.u.query = (proto_query){.query_id = ++qid, .count = WAKE_POINTS, .at_time = 1, .t = t, .points = pts};
     raw_send(w, &m);
-    /* a replica builds a wake pattern it lacks before it answers (0.1-10 s) */
-    if (wait_type(w, PROTO_QUERY_RESULT, 30000, &m, NULL, NULL) != 1) fail_msg("no QUERY_RESULT");
+    /* a replica builds a wake pattern it lacks before it answers (0.1-10 s,
+     * at nice 10: far longer on a busy host) */
+    if (wait_type(w, PROTO_QUERY_RESULT, 120000, &m, NULL, NULL) != 1) fail_msg("no QUERY_RESULT");
     assert_int_equal(m.u.result.query_id, qid);
     assert_int_equal(m.u.result.count, WAKE_POINTS);
     memcpy(out, m.u.result.samples, sizeof *out * WAKE_POINTS);
@@ -1089,26 +1091,26 @@ static void entities_reach_every_replica(void **state)
     assert_true(entity_wait(&c, PROTO_ENTITY_ANNOUNCE, 31) > 0); /* a joiner hears the entities in force */
     wake_query(&c, tq, x32, q3);
     answers_same(q1, q3, "a replica started after the sets against replica 1");
-    /* a third ship, faster: viewers of replicas 1 and 3 get the same three
-     * wake patterns (8 m/s is a rung of the ladder; 10 m/s lies between
-     * two), byte for byte */
-    ship_at(&b, 33, sim_now(), -600, 10);
+    /* a third ship, twice as fast: viewers of replicas 1 and 3 get the
+     * same two wake patterns (8 and 16 m/s are rungs of the ladder: one
+     * pattern each), byte for byte */
+    while (sim_now() < tq) usleep(20000); /* what comes now takes effect after tq: tq is its past */
+    ship_at(&b, 33, sim_now(), -600, 16);
     entity_wait(&a, PROTO_ENTITY_ANNOUNCE, 33);
     entity_wait(&c, PROTO_ENTITY_ANNOUNCE, 33);
     subscribe_live(&a, PROTO_LAYOUT_CASCADE, 10);
     subscribe_live(&c, PROTO_LAYOUT_CASCADE, 10);
     uint8_t *wa[WAKES_MAX], *wc[WAKES_MAX];
     size_t la[WAKES_MAX], lc[WAKES_MAX];
-    int na = wakes_collect(&a, 3, wa, la), nc = wakes_collect(&c, 3, wc, lc);
-    if (na != 3 || nc != 3) fail_msg("WAKE patterns: replica 1 sent %d, replica 3 %d, of the 3 the ships need", na, nc);
-    for (int i = 0; i < 3; i++) {
+    int na = wakes_collect(&a, 2, wa, la), nc = wakes_collect(&c, 2, wc, lc);
+    if (na != 2 || nc != 2) fail_msg("WAKE patterns: replica 1 sent %d, replica 3 %d, of the 2 the ships need", na, nc);
+    for (int i = 0; i < 2; i++) {
         if (la[i] != lc[i] || memcmp(wa[i], wc[i], la[i]) != 0)
             fail_msg("WAKE %d: %zu bytes from replica 1, %zu from replica 3, not the same", i, la[i], lc[i]);
         print_message("WAKE %d: %zu bytes, the same from both replicas\n", i, la[i] + 24);
         free(wa[i]);
         free(wc[i]);
     }
-    while (sim_now() < tq) usleep(20000); /* the removal comes after tq: tq is its past */
     ship_send(&b, 31, 0, NAN);
     double gone = entity_wait(&a, PROTO_ENTITY_GONE, 31);
     assert_true(gone > tq && gone == entity_wait(&b, PROTO_ENTITY_GONE, 31));

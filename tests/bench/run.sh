@@ -106,10 +106,11 @@ declare -A KNOWN_TITLE=(
     [bench_link]="A viewer on a slow link: frames coarser, not older"
     [bench_cigi]="The CIGI service: 64 HAT/HOT Extended Requests a host frame at 60 Hz (issue 42)"
     [bench_wakes]="Ships' wakes: 16 ships in a viewer's view against none (issue 43)"
+    [bench_wake_look]="Ships' wakes as the browser viewer draws them (issue 43)"
     [bench_look]="The look: the viewer against a reference render of the exact sea (issue 45)"
 )
 ORDER=(bench_core bench_accuracy bench_codec bench_mesh bench_meshqz bench_server bench_decode bench_link bench_cigi
-       bench_wakes bench_look)
+       bench_wakes bench_wake_look bench_look)
 declare -A DONE=()
 ONLY=" ${BENCH_ONLY:-} "
 selected() { [ -z "${BENCH_ONLY:-}" ] || [[ "$ONLY" == *" $1 "* ]]; }
