@@ -70,8 +70,8 @@ static ocean_result bspline_prefilter(wake_grid *g)
  * reading strays most, half-way between the samples (the middles of the
  * cells and of their edges): the series there is the spectrum shifted by
  * half a cell, one more FFT per offset; through the window, as read.
- * spec is the spectrum (kept), buf the plan's buffer. */
-static void reading_error(wake_pattern *pat, const fftwf_complex *spec, fftwf_complex *buf, fftwf_plan plan)
+ * spec is the spectrum (kept), buf the plan's buffer.  OCEAN_ENOMEM. */
+static ocean_result reading_error(wake_pattern *pat, const fftwf_complex *spec, fftwf_complex *buf, fftwf_plan plan)
 {
     const wake_layout *w = &pat->w;
     const wake_grid *g = &pat->g;
@@ -79,16 +79,26 @@ static void reading_error(wake_pattern *pat, const fftwf_complex *spec, fftwf_co
     double norm = 1.0 / ((double)w->fx * w->fz), half[4], whole[4];
     wake_bspline_weights(0.5, half);
     wake_bspline_weights(0, whole);
+    /* the shift's phase per mode, e^{i (px + pz)}, from one table a side */
+    double *tx = malloc(sizeof *tx * 2 * (size_t)(w->fx + w->fz)), *tz = tx ? tx + 2 * (size_t)w->fx : NULL;
+    if (!tx) return OCEAN_ENOMEM;
     for (int s = 0; s < 3; s++) {
+        for (int ix = 0; ix < w->fx; ix++) {
+            double ph = wake_wavenumber(ix, w->fx, w->dx) * w->dx * shift[s][0];
+            tx[2 * ix] = cos(ph), tx[2 * ix + 1] = sin(ph);
+        }
         for (int iz = 0; iz < w->fz; iz++) {
-            double pz = wake_wavenumber(iz, w->fz, w->dx) * w->dx * shift[s][1];
+            double ph = wake_wavenumber(iz, w->fz, w->dx) * w->dx * shift[s][1];
+            tz[2 * iz] = cos(ph), tz[2 * iz + 1] = sin(ph);
+        }
+        for (int iz = 0; iz < w->fz; iz++)
             for (int ix = 0; ix < w->fx; ix++) {
-                double ph = pz + wake_wavenumber(ix, w->fx, w->dx) * w->dx * shift[s][0], c = cos(ph), sn = sin(ph);
+                double c = tz[2 * iz] * tx[2 * ix] - tz[2 * iz + 1] * tx[2 * ix + 1];
+                double sn = tz[2 * iz + 1] * tx[2 * ix] + tz[2 * iz] * tx[2 * ix + 1];
                 const float *a = spec[(size_t)iz * w->fx + ix];
                 buf[(size_t)iz * w->fx + ix][0] = (float)(a[0] * c - a[1] * sn);
                 buf[(size_t)iz * w->fx + ix][1] = (float)(a[0] * sn + a[1] * c);
             }
-        }
         fftwf_execute(plan);
         const double *ax = shift[s][0] > 0 ? half : whole, *az = shift[s][1] > 0 ? half : whole;
         for (int iz = 1; iz <= g->nz - 3; iz++)
@@ -101,6 +111,8 @@ static void reading_error(wake_pattern *pat, const fftwf_complex *spec, fftwf_co
                 if (win > 0) *b = fmaxf(*b, (float)(win * fabs(wake_grid_cubic(g, ix, iz, ax, az) - exact)));
             }
     }
+    free(tx);
+    return OCEAN_OK;
 }
 
 /* Each block's bound: the largest error measured in it and its eight
@@ -167,10 +179,8 @@ static ocean_result wake_sum(const wake_params *p, const wake_layout *w, wake_gr
             out->heights[(size_t)iz * out->nx + ix] = (float)(buf[(size_t)gz * w->fx + gx][0] * norm);
         }
     ocean_result r = OCEAN_OK;
-    if (bound && (r = bspline_prefilter(out)) == OCEAN_OK) {
-        reading_error(pat, spec, buf, plan);
+    if (bound && (r = bspline_prefilter(out)) == OCEAN_OK && (r = reading_error(pat, spec, buf, plan)) == OCEAN_OK)
         block_bounds(pat);
-    }
     ocean_fft_planner_lock();
     fftwf_destroy_plan(plan);
     ocean_fft_planner_unlock();

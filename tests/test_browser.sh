@@ -112,6 +112,13 @@ ENTITY_TOKEN=browser-test-entity
 start_daemon "$log" --set server.admin_token=$ADMIN_TOKEN --set server.entity_token=$ENTITY_TOKEN ||
     { echo "test_browser: oceand did not start:"; cat "$log"; exit 1; }
 echo "oceand at $url (pid $daemon_pid)"
+# a ship far out of every view, the shape and speed of the one the viewer
+# test enters: its wake pattern is built (at nice 10, which a busy host
+# starves) while the test's first checks run, so that ship's wake is sent
+# as soon as it is in view
+"$BUILD/ocean-client" entity "${url/http/ws}" --set --token $ENTITY_TOKEN --id 76 --kind ship --x 20000 --z 20000 \
+    --heading 90 --speed 8 --length 120 --beam 15 --draught 5 >/dev/null ||
+    echo "test_browser: the ship built ahead was refused (the viewer's wake check waits for its build)"
 if ! OCEAN_URL="$url" ARTIFACT_DIR="$ART" VIEWER_TIMEOUT_S="${VIEWER_TIMEOUT_S:-90}" ADMIN_TOKEN=$ADMIN_TOKEN \
         ENTITY_TOKEN=$ENTITY_TOKEN OCEAN_CLIENT="$BUILD/ocean-client" OCEAND_PID=$daemon_pid \
         timeout 300 node tests/browser/viewer.test.mjs; then

@@ -3087,6 +3087,33 @@ static void entity_messages(void **state)
     test_ws_close(&b);
 }
 
+/* The wakes of the daemon's two ships at sim time t over the sea of
+ * timeline ta at the n points xz: the exact series (patterns built here)
+ * into exact, and the field's reading of the same patterns into ws (if
+ * not NULL). */
+static void exact_wakes(const timeline *ta, double t, const double *xz, int n, double *exact, wake_sample *ws)
+{
+    ocean_params p;
+    srv_params_from_sea(tl_at(ta, t), &settings.params, &p);
+    ocean_entity_desc d[4];
+    ocean_entity_state st[4];
+    int k = srv_entities_at(srv_daemon_hub(daemon_)->entities, t, d, st, 4);
+    assert_int_equal(k, 2);
+    wake_field *f;
+    assert_int_equal(wake_field_create(8, &f), OCEAN_OK);
+    wake_params need[8];
+    int missing = wake_field_missing(f, d, st, k, p.sea.depth_m, xz, (size_t)n, need, 8);
+    assert_true(missing >= 1 && missing <= 8);
+    for (int i = 0; i < missing; i++) {
+        wake_pattern *pat;
+        assert_int_equal(wake_pattern_create(&need[i], &pat, NULL, 0), OCEAN_OK);
+        wake_field_insert(f, pat);
+    }
+    assert_int_equal(wake_field_exact(f, d, st, k, p.sea.depth_m, xz, (size_t)n, exact), OCEAN_OK);
+    if (ws) assert_int_equal(wake_field_sample(f, d, st, k, p.sea.depth_m, xz, (size_t)n, ws), OCEAN_OK);
+    wake_field_destroy(f);
+}
+
 /* A ship in another's wake (issue 43): ship 31 steams along +x at 8 m/s
  * and ship 32 follows on its track 300 m astern.  QUERY answers at the
  * second's bow, stern and sides and at points in the first's wake are
@@ -3124,26 +3151,9 @@ static void wakes_in_queries(void **state)
     ocean_query_result lr[N];
     local_query(tl_at(&ta, tq), tq, xz, N, lr);
     /* the exact wakes of the same ships, patterns built here */
-    ocean_params p;
-    srv_params_from_sea(tl_at(&ta, tq), &settings.params, &p);
-    ocean_entity_desc d[4];
-    ocean_entity_state st[4];
-    int n = srv_entities_at(srv_daemon_hub(daemon_)->entities, tq, d, st, 4);
-    assert_int_equal(n, 2);
-    wake_field *f;
-    assert_int_equal(wake_field_create(8, &f), OCEAN_OK);
-    wake_params need[8];
-    int missing = wake_field_missing(f, d, st, n, p.sea.depth_m, xz, N, need, 8);
-    assert_true(missing >= 1 && missing <= 8);
-    for (int i = 0; i < missing; i++) {
-        wake_pattern *pat;
-        assert_int_equal(wake_pattern_create(&need[i], &pat, NULL, 0), OCEAN_OK);
-        wake_field_insert(f, pat);
-    }
     double exact[N], biggest = 0;
     wake_sample ws[N];
-    assert_int_equal(wake_field_exact(f, d, st, n, p.sea.depth_m, xz, N, exact), OCEAN_OK);
-    assert_int_equal(wake_field_sample(f, d, st, n, p.sea.depth_m, xz, N, ws), OCEAN_OK);
+    exact_wakes(&ta, tq, xz, N, exact, ws);
     for (int i = 0; i < N; i++) {
         double got = qr.samples[i].height, want = lr[i].height + exact[i];
         printf("(%g, %g): answer %.4f m = sea %.4f + wake %.4f (exact %.4f), error bound %.4f m\n", xz[2 * i],
@@ -3153,7 +3163,6 @@ static void wakes_in_queries(void **state)
         biggest = fmax(biggest, fabs(exact[i]));
     }
     assert_true(biggest > 0.05);   /* the wake is there to be felt */
-    wake_field_destroy(f);
     oc_query_result_free(&qr);
     /* before the ships' entries took effect: the wind sea alone */
     double tb = fmin(t0, tq - 1e-3);
@@ -3207,23 +3216,8 @@ static void wakes_reach_viewers(void **state)
     oc_client_get_stats(v, &st);
     assert_true(st.wakes_rx >= 1 && st.wakes_rx <= 4 && st.wakes_refused == 0 && st.entity_refused == 0);
     /* the exact wakes of the same ships, patterns built here */
-    ocean_params p;
-    srv_params_from_sea(tl_at(&ta, tq), &settings.params, &p);
-    ocean_entity_desc d[4];
-    ocean_entity_state es[4];
-    int n = srv_entities_at(srv_daemon_hub(daemon_)->entities, tq, d, es, 4);
-    assert_int_equal(n, 2);
-    wake_field *f;
-    assert_int_equal(wake_field_create(8, &f), OCEAN_OK);
-    wake_params need[8];
-    int missing = wake_field_missing(f, d, es, n, p.sea.depth_m, xz, N, need, 8);
-    for (int i = 0; i < missing && i < 8; i++) {
-        wake_pattern *pat;
-        assert_int_equal(wake_pattern_create(&need[i], &pat, NULL, 0), OCEAN_OK);
-        wake_field_insert(f, pat);
-    }
     double exact[N], biggest = 0;
-    assert_int_equal(wake_field_exact(f, d, es, n, p.sea.depth_m, xz, N, exact), OCEAN_OK);
+    exact_wakes(&ta, tq, xz, N, exact, NULL);
     for (int i = 0; i < N; i++) {
         printf("(%g, %g): the viewer's wake %.5f m, exact %.5f m, bound %.5f m\n", xz[2 * i], xz[2 * i + 1],
                got[i].height, exact[i], got[i].error);
@@ -3231,7 +3225,6 @@ static void wakes_reach_viewers(void **state)
         biggest = fmax(biggest, fabs(exact[i]));
     }
     assert_true(biggest > 0.05);
-    wake_field_destroy(f);
     oc_client_destroy(v);
     proto_msg m;
     for (uint32_t id = 41; id <= 42; id++) {

@@ -364,13 +364,18 @@ uniform vec4 u_wake;             /* its first point x, z (eye-relative), spacing
 
 /* the ships' wakes at eye-relative rel (PROTOCOL.md "WAKE", read by the
  * worker's WebAssembly on a square around the camera): height and slopes,
- * fading out over the square's outer eighth, 0 beyond it */
+ * fading out over the square's outer eighth, 0 beyond it.  Only the
+ * programs made with WAKES read them: a sea without ships pays nothing
+ * (a software GL runs both sides of a branch) */
 vec3 wakeAt(vec2 rel) {
-    if (u_wake.w < 1.0) return vec3(0.0);
+#ifdef WAKES
     vec2 uv = ((rel - u_wake.xy) / u_wake.z + 0.5) / u_wake.w;
     vec2 e = min(uv, 1.0 - uv);
     float fade = clamp(8.0 * min(e.x, e.y), 0.0, 1.0);
-    return fade > 0.0 ? fade * textureLod(u_wakeTex, uv, 0.0).xyz : vec3(0.0);
+    return fade * textureLod(u_wakeTex, uv, 0.0).xyz;
+#else
+    return vec3(0.0);
+#endif
 }
 
 /* s_c(x, z): the spacing cascade c is read at, at eye-relative rel, raised
@@ -671,6 +676,9 @@ export class Renderer {
         this.skygen = program(gl, FULL_VS, SKYGEN_FS);
         this.sea = program(gl, SEA_VS, SEA_FS, ['a_pos', 'a_morph', 'a_spacing', 'a_level']);
         this.sea1 = program(gl, SEA1_VS, SEA1_FS, ['a_flat', 'a_level']);
+        /* the same with the ships' wakes read (setWakes) */
+        const withWakes = (src) => src.replace('#version 300 es\n', '#version 300 es\n#define WAKES 1\n');
+        this.sea1w = program(gl, withWakes(SEA1_VS), withWakes(SEA1_FS), ['a_flat', 'a_level']);
         this.sky1 = program(gl, FULL_VS, SKY1_FS);
         const info = gl.getExtension('WEBGL_debug_renderer_info');
         this.rendererName = String(info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER));
@@ -1102,7 +1110,7 @@ export class Renderer {
                 gl.enable(gl.DEPTH_TEST);
                 gl.depthFunc(gl.LEQUAL);
                 gl.disable(gl.CULL_FACE);
-                const s1 = this.sea1;
+                const s1 = this.wake ? this.sea1w : this.sea1;
                 gl.useProgram(s1.p);
                 common(s1.u);
                 this.cascadeUniforms(s1.u, eye);

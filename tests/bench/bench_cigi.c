@@ -19,7 +19,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -32,16 +31,7 @@
 #define HOST_HZ 60.0
 #define MAX_FRAMES 4096
 
-static double cpu_of(int who)
-{
-    struct rusage u;
-    getrusage(who, &u);
-    return (double)u.ru_utime.tv_sec + 1e-6 * (double)u.ru_utime.tv_usec + (double)u.ru_stime.tv_sec +
-           1e-6 * (double)u.ru_stime.tv_usec;
-}
 
-/* The daemon's CPU seconds: the process's less this (the host's) thread's. */
-static double daemon_cpu(void) { return cpu_of(RUSAGE_SELF) - cpu_of(RUSAGE_THREAD); }
 
 static int cmp(const void *a, const void *b)
 {
@@ -153,12 +143,12 @@ static int run_row(row *r, int port)
     srv_daemon *d;
     if (start(r->tick_hz, port, &d)) return -1;
     sleep(1);                                  /* the daemon's start, not measured */
-    double c0 = daemon_cpu(), w0 = bench_now_ms();
+    double c0 = bench_daemon_cpu_s(), w0 = bench_now_ms();
     usleep((useconds_t)(r->secs * 1e6));       /* idle: no host, no viewer */
-    double idle = (daemon_cpu() - c0) / ((bench_now_ms() - w0) / 1e3);
-    c0 = daemon_cpu(), w0 = bench_now_ms();
+    double idle = (bench_daemon_cpu_s() - c0) / ((bench_now_ms() - w0) / 1e3);
+    c0 = bench_daemon_cpu_s(), w0 = bench_now_ms();
     int rc = host(port, r);
-    double busy = (daemon_cpu() - c0) / ((bench_now_ms() - w0) / 1e3);
+    double busy = (bench_daemon_cpu_s() - c0) / ((bench_now_ms() - w0) / 1e3);
     r->cpu_share = busy - idle;
     srv_daemon_stop(d);
     return rc;

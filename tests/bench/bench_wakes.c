@@ -19,7 +19,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include "../lib/bench_util.h"
@@ -33,17 +32,7 @@
 #define GRID_N 192
 #define GRID_DX 4.0
 
-static double cpu_of(int who)
-{
-    struct rusage u;
-    getrusage(who, &u);
-    return (double)u.ru_utime.tv_sec + 1e-6 * (double)u.ru_utime.tv_usec + (double)u.ru_stime.tv_sec +
-           1e-6 * (double)u.ru_stime.tv_usec;
-}
 
-/* The daemon's CPU seconds: the process's less this (the viewer's and the
- * feeder's) thread's. */
-static double daemon_cpu(void) { return cpu_of(RUSAGE_SELF) - cpu_of(RUSAGE_THREAD); }
 
 typedef struct phase {
     double tick_ms;      /* mean simulation thread's time per tick (wall: its OpenMP team's too) */
@@ -70,7 +59,7 @@ static proto_entity ship(int i, double t, double t0)
 static void run(oc_client *v, srv_hub *h, double secs, int ships, double t0, phase *p)
 {
     uint64_t n0 = atomic_load(&h->stats.ticks), ns0 = atomic_load(&h->stats.tick_ns_total);
-    double c0 = daemon_cpu(), w0 = bench_now_ms(), fed = -1e9;
+    double c0 = bench_daemon_cpu_s(), w0 = bench_now_ms(), fed = -1e9;
     while (bench_now_ms() - w0 < 1e3 * secs) {
         if (ships && bench_now_ms() - fed >= 1000) {
             fed = bench_now_ms();
@@ -86,7 +75,7 @@ static void run(oc_client *v, srv_hub *h, double secs, int ships, double t0, pha
     }
     p->ticks = (long)(atomic_load(&h->stats.ticks) - n0);
     p->tick_ms = p->ticks ? 1e-6 * (double)(atomic_load(&h->stats.tick_ns_total) - ns0) / (double)p->ticks : 0;
-    p->cpu_ms = p->ticks ? 1e3 * (daemon_cpu() - c0) / (double)p->ticks : 0;
+    p->cpu_ms = p->ticks ? 1e3 * (bench_daemon_cpu_s() - c0) / (double)p->ticks : 0;
 }
 
 int main(void)

@@ -7,6 +7,11 @@
 
 /* Monotonic wall clock, milliseconds. */
 double bench_now_ms(void);
+/* CPU seconds (user + system) of RUSAGE_SELF or RUSAGE_THREAD. */
+double bench_cpu_s(int who);
+/* An in-process daemon's CPU seconds: the process's less the calling
+ * thread's (the benchmark's own client). */
+double bench_daemon_cpu_s(void);
 
 /* Median of v[0..n) (sorts v in place); n >= 1. */
 double bench_median(double *v, int n);
