@@ -676,9 +676,7 @@ export class Renderer {
         this.skygen = program(gl, FULL_VS, SKYGEN_FS);
         this.sea = program(gl, SEA_VS, SEA_FS, ['a_pos', 'a_morph', 'a_spacing', 'a_level']);
         this.sea1 = program(gl, SEA1_VS, SEA1_FS, ['a_flat', 'a_level']);
-        /* the same with the ships' wakes read (setWakes) */
-        const withWakes = (src) => src.replace('#version 300 es\n', '#version 300 es\n#define WAKES 1\n');
-        this.sea1w = program(gl, withWakes(SEA1_VS), withWakes(SEA1_FS), ['a_flat', 'a_level']);
+        this.sea1w = null;         /* the same reading the ships' wakes: made at the first (setWakes) */
         this.sky1 = program(gl, FULL_VS, SKY1_FS);
         const info = gl.getExtension('WEBGL_debug_renderer_info');
         this.rendererName = String(info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER));
@@ -735,6 +733,10 @@ export class Renderer {
     setWakes(w) {
         const gl = this.gl;
         if (!w) { this.wake = null; return; }
+        if (!this.sea1w) {
+            const withWakes = (src) => src.replace('#version 300 es\n', '#version 300 es\n#define WAKES 1\n');
+            this.sea1w = program(gl, withWakes(SEA1_VS), withWakes(SEA1_FS), ['a_flat', 'a_level']);
+        }
         gl.bindTexture(gl.TEXTURE_2D, this.wakeTex);
         gl.pixelStorei(gl.UNPACK_ALIGNMENT, 4);
         gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA16F, w.n, w.n, 0, gl.RGBA, gl.FLOAT, w.data);
