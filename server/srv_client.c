@@ -166,6 +166,31 @@ ocean_result srv_client_queue_entities(srv_client *c, int max)
     return r;
 }
 
+typedef struct entry_queue_ctx {
+    srv_client *c;
+    int lost;
+} entry_queue_ctx;
+
+static void entry_queue(void *ctx, const ocean_entity_entry *en)
+{
+    entry_queue_ctx *x = ctx;
+    proto_msg m;
+    srv_entity_msg(en->removal ? PROTO_ENTITY_GONE : PROTO_ENTITY_ANNOUNCE, &en->d, &en->s, en->from, &m);
+    srv_msg *q = srv_msg_encode(&m);
+    if (q) srv_client_queue(x->c, q);
+    else x->lost++;
+}
+
+int srv_client_queue_entity_entries(srv_client *c)
+{
+    entry_queue_ctx x = {c, 0};
+    int n = srv_entities_each(c->hub->entities, entry_queue, &x);
+    if (x.lost)
+        fprintf(stderr, "oceand: client %u: out of memory for %d of the %d entries of the entities' timeline (it "
+                "may ask for the newest samples: ENTITY get)\n", c->id, x.lost, n);
+    return n;
+}
+
 void srv_client_send_hello(srv_client *c)
 {
     srv_hub *h = c->hub;
@@ -202,17 +227,15 @@ void srv_client_send_hello(srv_client *c)
         q = NULL;
     }
     if (q) {
-        /* HELLO, then the pending changes and the entities in force, before
-         * any later announce (a set's broadcast waits for this hold) */
+        /* HELLO, then the pending changes and the entities' timeline, before
+         * any later announce (an entry's broadcast waits for this hold) */
         srv_client_queue(c, q);
         for (int i = 0; i < h->n_sea_pending; i++) {
             srv_msg *a = srv_hub_sea_announce(&h->sea_pending[i].sea, h->sea_pending[i].effective_time,
                                           m.hdr.sim_time);
             if (a) srv_client_queue(c, a);
         }
-        if (srv_client_queue_entities(c, s->srv.max_entities) != OCEAN_OK)
-            fprintf(stderr, "oceand: client %u: out of memory for the list of entities (it may ask again: ENTITY "
-                    "get)\n", c->id);
+        srv_client_queue_entity_entries(c);
         c->hello_sent = 1;
     }
     pthread_mutex_unlock(&h->lock);

@@ -128,11 +128,18 @@ void srv_client_send_hello(srv_client *c);
 void srv_client_send_sea_timeline(srv_client *c);
 /* Queues to c an ENTITY announce of each live entity in the hub's table
  * (at most max), its newest sample stamped with the sim time that sample
- * takes effect: what a client joining, or asking with ENTITY get, learns
- * of the entities in force and pending.  Takes only the table's lock and
- * sends no ERROR (callers may hold hub.lock).  OCEAN_ENOMEM: nothing
+ * takes effect: the list ENTITY get answers.  Takes only the table's lock
+ * and sends no ERROR (callers may hold hub.lock).  OCEAN_ENOMEM: nothing
  * queued. */
 ocean_result srv_client_queue_entities(srv_client *c, int max);
+/* Queues to c every kept entry of the table's timeline, as the announces
+ * and gones that entered them (srv_entities_each's order): what a client
+ * joining needs to hold the same entries as one that watched them come,
+ * so that every instant the server keeps reads the same for both.  Takes
+ * only the table's lock (callers may hold hub.lock).  Returns the number of
+ * entries; one that cannot be encoded for lack of memory is said on
+ * stderr. */
+int srv_client_queue_entity_entries(srv_client *c);
 
 
 #endif

@@ -139,6 +139,14 @@ int srv_entities_snapshot(srv_entities *e, ocean_entity_desc *d, ocean_track_sam
     return n;
 }
 
+int srv_entities_each(srv_entities *e, void (*fn)(void *ctx, const ocean_entity_entry *en), void *ctx)
+{
+    pthread_mutex_lock(&e->lock);
+    int n = ocean_entities_each(e->t, fn, ctx);
+    pthread_mutex_unlock(&e->lock);
+    return n;
+}
+
 int srv_entities_at(srv_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max)
 {
     pthread_mutex_lock(&e->lock);

@@ -73,6 +73,10 @@ ocean_result srv_entities_find(srv_entities *e, uint32_t id, ocean_entity_desc *
  * the instant it takes effect, in increasing id, copied under one hold.
  * Returns how many. */
 int srv_entities_snapshot(srv_entities *e, ocean_entity_desc *d, ocean_track_sample *s, double *from, int max);
+/* Calls fn with every kept entry of the table's timeline under one hold
+ * (ocean_entities_each: the order that rebuilds the table).  fn may take
+ * only leaf locks.  Returns the number of entries. */
+int srv_entities_each(srv_entities *e, void (*fn)(void *ctx, const ocean_entity_entry *en), void *ctx);
 /* Every entity in the sea at sim time t (at most max): shape and state
  * at t, in increasing id, copied under one hold.  Returns how many. */
 int srv_entities_at(srv_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max);

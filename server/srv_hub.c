@@ -198,6 +198,10 @@ ocean_result srv_hub_entity_enter(srv_hub *h, const proto_msg *m, char *why, siz
     ocean_track_sample s;
     srv_entity_from_msg(e, &d, &s);
     ocean_result r;
+    /* the entry and its broadcast under one hold of hub.lock: a client
+     * joining gets it either in its HELLO's timeline or as the broadcast,
+     * never both, never neither */
+    pthread_mutex_lock(&h->lock);
     if (e->op == PROTO_ENTITY_GONE) {
         r = srv_entities_remove(h->entities, e->id, from);
         if (r != OCEAN_OK)
@@ -207,11 +211,10 @@ ocean_result srv_hub_entity_enter(srv_hub *h, const proto_msg *m, char *why, siz
     } else {
         r = srv_entities_sample(h->entities, &d, &s, from, why, n);
     }
+    if (r == OCEAN_OK) srv_hub_broadcast(h, m);
+    pthread_mutex_unlock(&h->lock);
     if (r != OCEAN_OK) return r;
     if (e->op == PROTO_ENTITY_ANNOUNCE) srv_wakes_ahead(h, &d, &s);
-    pthread_mutex_lock(&h->lock);
-    srv_hub_broadcast(h, m);
-    pthread_mutex_unlock(&h->lock);
     srv_hub_wake_net(h);
     return OCEAN_OK;
 }

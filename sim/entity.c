@@ -382,6 +382,26 @@ ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_tra
     return OCEAN_OK;
 }
 
+int ocean_entities_each(const ocean_entities *e, void (*fn)(void *ctx, const ocean_entity_entry *en), void *ctx)
+{
+    if (!e || !fn) return 0;
+    int n = 0;
+    for (int i = 0; i < e->n; i++) {
+        const entity *k = e->by_id[i];
+        ocean_entity_entry en = {.d = k->d};
+        for (int j = 0; j < k->count; j++, n++) {
+            en.s = *sample_at(k, j);
+            en.from = k->from[(k->head + j) % OCEAN_TRACK_KEEP];
+            fn(ctx, &en);
+        }
+        if (isinf(k->gone)) continue;
+        en = (ocean_entity_entry){.d = k->d, .removal = 1, .from = k->gone};
+        fn(ctx, &en);
+        n++;
+    }
+    return n;
+}
+
 int ocean_entities_count(const ocean_entities *e) { return e ? e->n_live : 0; }
 
 int ocean_entities_kept(const ocean_entities *e) { return e ? e->n : 0; }

@@ -138,6 +138,23 @@ int ocean_entities_at(const ocean_entities *e, double t, ocean_entity_desc *d, o
  * no sample yet. */
 ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_track_sample *out, double *from);
 
+/* One entry of the table's kept timeline: a sample of one life of an
+ * entity, or the removal that ends that life. */
+typedef struct ocean_entity_entry {
+    ocean_entity_desc d;
+    int removal;         /* 1: the life ends at `from` (s unused) */
+    ocean_track_sample s;
+    double from;         /* the instant the entry is in force from */
+} ocean_entity_entry;
+
+/* Calls fn with every kept entry, in an order that rebuilds the table when
+ * entered one by one into an empty one (ocean_entities_add before a life's
+ * first sample, ocean_entities_sample, ocean_entities_remove): id by id,
+ * each id's lives in turn, a life's kept samples oldest first, then its
+ * removal when it is gone.  Every instant the table can answer then reads
+ * the same from both tables.  Returns the number of entries. */
+int ocean_entities_each(const ocean_entities *e, void (*fn)(void *ctx, const ocean_entity_entry *en), void *ctx);
+
 /* Live entities (entered and not removed). */
 int ocean_entities_count(const ocean_entities *e);
 /* Entities live or gone with their past kept: the most ocean_entities_at

@@ -334,6 +334,61 @@ static void track_keeps_its_last_samples(void **state)
     ocean_entities_destroy(e);
 }
 
+/* Enters en into t as a reader of the table's entries does. */
+static void entry_enter(void *ctx, const ocean_entity_entry *en)
+{
+    ocean_entities *t = ctx;
+    ocean_entity_desc known;
+    if (en->removal) {
+        assert_int_equal(ocean_entities_remove(t, en->d.id, en->from), OCEAN_OK);
+        return;
+    }
+    if (ocean_entities_desc(t, en->d.id, &known) != OCEAN_OK)
+        assert_int_equal(ocean_entities_add(t, &en->d, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(t, en->d.id, &en->s, en->from, NULL, 0), OCEAN_OK);
+}
+
+/* A table's entries rebuild it: a copy made from them alone (the late
+ * joiner's) answers every instant as the table does, with a wrapped
+ * track, a removed life, a new life of the same id and a sample not yet
+ * in force. */
+static void entries_rebuild_the_table(void **state)
+{
+    (void)state;
+    ocean_entities *e = table(4, 10);
+    assert_int_equal(ocean_entities_add(e, &frigate, NULL, 0), OCEAN_OK);
+    for (int i = 0; i < OCEAN_TRACK_KEEP + 20; i++) { /* wraps: the first 20 dropped */
+        ocean_track_sample s = smp(i, 6.0 * i + 0.01 * i * i, 0.3 * i, 0, 6);
+        assert_int_equal(ocean_entities_sample(e, 7, &s, i + 0.25, NULL, 0), OCEAN_OK);
+    }
+    assert_int_equal(ocean_entities_remove(e, 7, 280), OCEAN_OK);
+    ocean_entity_desc boat = {.id = 7, .kind = OCEAN_ENTITY_SHIP, .length_m = 12, .beam_m = 4, .draught_m = 1};
+    ocean_entity_desc heli = {.id = 3, .kind = OCEAN_ENTITY_ROTORCRAFT, .length_m = 16};
+    assert_int_equal(ocean_entities_add(e, &boat, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_add(e, &heli, NULL, 0), OCEAN_OK);
+    ocean_track_sample b = smp(281, -500, 20, 90, 4), h1 = smp(250, 0, 900, 180, 20), h2 = smp(300, -1000, 900, 180, 20);
+    assert_int_equal(ocean_entities_sample(e, 7, &b, 282, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 3, &h1, 250, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_sample(e, 3, &h2, 290, NULL, 0), OCEAN_OK); /* ahead of most instants */
+    ocean_entities *copy = table(4, 10);
+    int n = ocean_entities_each(e, entry_enter, copy);
+    assert_int_equal(n, OCEAN_TRACK_KEEP + 1 + 1 + 2); /* frigate's kept samples, its removal, the boat, the heli */
+    assert_int_equal(ocean_entities_kept(copy), ocean_entities_kept(e));
+    int seen = 0;
+    for (double t = 0; t < 320; t += 0.37) {
+        ocean_entity_desc d[8], dc[8];
+        ocean_entity_state s[8], sc[8];
+        int k = ocean_entities_at(e, t, d, s, 8);
+        assert_int_equal(ocean_entities_at(copy, t, dc, sc, 8), k);
+        assert_memory_equal(d, dc, sizeof *d * (size_t)k);
+        assert_memory_equal(s, sc, sizeof *s * (size_t)k);
+        seen += k;
+    }
+    assert_true(seen > 800);
+    ocean_entities_destroy(copy);
+    ocean_entities_destroy(e);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -345,6 +400,7 @@ int main(void)
         cmocka_unit_test(in_force_from_its_instant),
         cmocka_unit_test(bad_samples_change_nothing),
         cmocka_unit_test(track_keeps_its_last_samples),
+        cmocka_unit_test(entries_rebuild_the_table),
     };
     return cmocka_run_group_tests_name("entity", tests, NULL, NULL);
 }

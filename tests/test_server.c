@@ -3235,8 +3235,88 @@ static void wakes_reach_viewers(void **state)
     test_ws_close(&a);
 }
 
-/* What on_entity saw. */
+/* A viewer (layout 1) subscribed near the ships, its camera at (x, 25, z). */
+static oc_client *wake_viewer(double x, double z)
+{
+    oc_client *v = connect_client(port, NULL);
+    proto_subscribe sub;
+    cascade_subscribe(&sub);
+    assert_int_equal(oc_client_subscribe(v, &sub), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.pos[0] = x, cam.pos[1] = 25, cam.pos[2] = z;
+    assert_int_equal(oc_client_send_camera(v, &cam, NULL), OCEAN_OK);
+    return v;
+}
+
+/* Services v until its wakes at t can be read (the patterns came). */
+static void wakes_read(oc_client *v, double t, const double *xz, int n, oc_wake *got)
+{
+    ocean_result r = OCEAN_ESTATE;
+    for (double end = test_now_s() + 60; test_now_s() < end && r == OCEAN_ESTATE;) {
+        oc_service(v, 50);
+        oc_frame *f = NULL;
+        while (oc_client_next_frame(v, 0, &f) == OCEAN_OK) oc_frame_free(f);
+        r = oc_client_wakes(v, t, xz, (size_t)n, got);
+    }
+    assert_int_equal(r, OCEAN_OK);
+}
+
+/* A client joining late sees the same wakes as one that watched them form
+ * (issue 43): ship 45 steams along +x with two samples, ship 46 is entered
+ * and removed; a viewer connected before every entry and one connected
+ * after them read the same wakes, bit for bit, at an instant between the
+ * entries (ship 45 on its first sample, 46 still in the sea) and now. */
+static void wakes_for_late_joiners(void **state)
+{
+    (void)state;
+    test_ws a;
+    timeline ta;
+    sea_connect(&a, &ta, 300);
+    oc_client *watcher = wake_viewer(-150, -20);
+    double t0 = hub_now();
+    double tm = fmax(entity_enter(&a, 45, 0, t0, 0, 8), entity_enter(&a, 46, 0, t0, -300, 8));
+    while (hub_now() < tm + 0.5) usleep(20000); /* the later entries take effect after tm */
+    tm += 0.25;
+    double later = entity_enter(&a, 45, 0, t0 + 2, 16, 8);
+    proto_msg m;
+    entity_send(&a, PROTO_ENTITY_REMOVE, 46, 0, 0, 0, 0, "entity-token");
+    entity_expect(&a, PROTO_ENTITY_GONE, 46, &m);
+    assert_true(later > tm && m.hdr.sim_time > tm);
+    proto_msg_free(&m);
+    oc_client *late = wake_viewer(-150, -20);
+    enum { N = 6 };
+    const double xz[2 * N] = {-240, -20, -360, -20, -300, -28, -100, -20, -150, -45, 60, -30};
+    oc_wake w[N], l[N];
+    double now = hub_now();
+    for (int pass = 0; pass < 2; pass++) {
+        double t = pass ? now : tm;
+        wakes_read(watcher, t, xz, N, w);
+        wakes_read(late, t, xz, N, l);
+        double biggest = 0;
+        for (int i = 0; i < N; i++) {
+            printf("t %.3f (%g, %g): watched %.6f m, joined late %.6f m\n", t, xz[2 * i], xz[2 * i + 1], w[i].height,
+                   l[i].height);
+            biggest = fmax(biggest, fabs(w[i].height));
+        }
+        assert_memory_equal(w, l, sizeof w);
+        assert_true(biggest > 0.02);
+    }
+    oc_client_stats st;
+    oc_client_get_stats(late, &st);
+    assert_true(st.entity_refused == 0 && st.wakes_refused == 0);
+    oc_client_destroy(late);
+    oc_client_destroy(watcher);
+    entity_send(&a, PROTO_ENTITY_REMOVE, 45, 0, 0, 0, 0, "entity-token");
+    entity_expect(&a, PROTO_ENTITY_GONE, 45, &m);
+    proto_msg_free(&m);
+    test_ws_close(&a);
+}
+
+/* What on_entity saw of entity id (a joiner also gets earlier tests'
+ * entries: the timeline the daemon keeps). */
 typedef struct entity_seen {
+    uint32_t id;
     int announces, gones;
     proto_entity last;
 } entity_seen;
@@ -3245,6 +3325,7 @@ static void on_entity_cb(void *user, oc_client *c, const proto_entity *e)
 {
     (void)c;
     entity_seen *seen = user;
+    if (e->id != seen->id) return;
     if (e->op == PROTO_ENTITY_ANNOUNCE) seen->announces++;
     if (e->op == PROTO_ENTITY_GONE) seen->gones++;
     seen->last = *e;
@@ -3255,7 +3336,7 @@ static void on_entity_cb(void *user, oc_client *c, const proto_entity *e)
 static void entity_from_the_library(void **state)
 {
     (void)state;
-    entity_seen seen = {0};
+    entity_seen seen = {.id = 21};
     oc_callbacks cb = {.user = &seen, .on_entity = on_entity_cb};
     oc_client *c = connect_client(port, &cb);
     proto_entity e = {PROTO_ENTITY_SET, 1, 21, hub_now(), 400, -300, 60, 90, 20, 16, 0, 0, "entity-token"};
@@ -4727,6 +4808,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(entity_from_the_library),
         cmocka_unit_test(wakes_in_queries),
         cmocka_unit_test(wakes_reach_viewers),
+        cmocka_unit_test(wakes_for_late_joiners),
         cmocka_unit_test(epoch_parse),
         cmocka_unit_test(epoch_shared_clock),
         cmocka_unit_test(epoch_beyond_time_limit),

@@ -200,7 +200,14 @@ int cmd_entity(int argc, char **argv)
     int rc = 0;
     char err[512] = "";
     ocean_result r = OCEAN_OK;
-    if (P.set || P.remove) {
+    proto_sea sea;
+    double eff;
+    /* the entities' timeline comes after HELLO, before the answer to what
+     * is sent next: a round trip first, so that an entry of an earlier
+     * life of the id is not taken for the answer */
+    if (P.set || P.remove) r = oc_client_sea_state_fetch(c, P.timeout_ms, &sea, &eff);
+    if (r == OCEAN_OK && (P.set || P.remove)) {
+        atomic_store(&seen.answered, 0);
         proto_entity e = entity_of(&P, oc_client_sim_time(c));
         seen.want_id = e.id;
         seen.want_op = P.set ? PROTO_ENTITY_ANNOUNCE : PROTO_ENTITY_GONE;
@@ -218,8 +225,6 @@ int cmd_entity(int argc, char **argv)
     /* the server answers in order: once the sea state asked after them
      * comes back, every answer to the ENTITYs before it has come */
     proto_entity get = {.op = PROTO_ENTITY_GET};
-    proto_sea sea;
-    double eff;
     if (r == OCEAN_OK) r = oc_client_send_entity(c, &get);
     if (r == OCEAN_OK) r = oc_client_sea_state_fetch(c, P.timeout_ms, &sea, &eff);
     if (r != OCEAN_OK && !err[0]) oc_client_last_error(c, err, sizeof err);
