@@ -272,6 +272,57 @@ if (w.depth !== null || w.speed !== 8 || w.length !== 40) throw "echo " + JSON.s
 expect_refused "speed" wake --speed 0 --length 40
 expect_refused "required" wake --length 40
 expect_refused "wind" wake --speed 8 --length 40 --wind 5
+# query --entities: a ship's wake in the answers (issue 43: offline tools
+# see the wakes), judged on the difference from the same query without it
+# (the wind sea cancels) against the published laws: on the track behind a
+# ship at 8 m/s heading +z the transverse waves' wavelength is
+# 2 pi U^2 / g = 40.99 m (Kelvin 1887) within 3 %; the largest waves lie
+# on the cusp lines at 19.47 deg either side, several times those at 25
+# and 30 deg; an entry not yet in force, or its life gone, adds nothing.
+ship() { # t z from: one sample of ship 5 heading +z at 8 m/s
+    printf '{"id": 5, "kind": "ship", "t": %s, "x": 0, "z": %s, "heading_deg": 90, "speed": 8, "length_m": 120, "beam_m": 15, "draught_m": 5%s}' "$1" "$2" "${3:+, \"from\": $3}"
+}
+echo "[$(ship 0 0), $(ship 20 160)]" > "$tmp/ships.json"
+echo "[$(ship 0 0), $(ship 20 160 26)]" > "$tmp/ships-later.json"
+echo "[$(ship 0 0), $(ship 20 160), {\"id\": 5, \"gone\": true, \"from\": 24}]" > "$tmp/ships-gone.json"
+python3 - > "$tmp/wake-pts.txt" <<'PY'
+import math
+for s in range(50, 652, 2): print("0,%g" % (200 - s))  # the track behind the ship, at (0, 200) at t = 25
+for a in (19.47, 25, 30):
+    for side in (-1, 1):
+        for s in range(500, 801, 4): print("%.6f,%g" % (side * s * math.tan(math.radians(a)), 200 - s))
+PY
+for f in none ships ships-later ships-gone; do
+    ents=()
+    [[ $f != none ]] && ents=(--entities "$tmp/$f.json")
+    "$sim" query --n 64 --t 25 --points-file "$tmp/wake-pts.txt" "${ents[@]}" --json > "$tmp/qw-$f.json" ||
+        fail "query --entities $f.json"
+done
+python3 - "$tmp" <<'PY' || fail "query --entities: the wake is not the Kelvin wake"
+import json, math, sys
+pts = lambda f: json.load(open("%s/qw-%s.json" % (sys.argv[1], f)))["points"]
+none = pts("none")
+d = [q["height"] - p["height"] for p, q in zip(none, pts("ships"))]
+s = [200 - p["z"] for p in none[:301]]
+up = [s[i] + (s[i + 1] - s[i]) * d[i] / (d[i] - d[i + 1]) for i in range(300) if s[i] >= 100 and d[i] < 0 <= d[i + 1]]
+lam, want = (up[-1] - up[0]) / (len(up) - 1), 2 * math.pi * 64 / 9.81
+print("query --entities: transverse wavelength on the track %.2f m (2 pi U^2 / g = %.2f m) from %d crossings" % (lam, want, len(up)))
+assert len(up) >= 10 and abs(lam / want - 1) < 0.03
+ray = lambda k: max(abs(x) for x in d[301 + 76 * k: 301 + 76 * (k + 1)])
+cusp, r25, r30 = min(ray(0), ray(1)), max(ray(2), ray(3)), max(ray(4), ray(5))
+print("query --entities: largest wake 500-800 m astern at 19.47 deg %.4f m, 25 deg %.4f m, 30 deg %.4f m" % (cusp, r25, r30))
+assert cusp > 0.02 and cusp > 5 * r25 and cusp > 5 * r30
+for f in ("ships-later", "ships-gone"):  # the second sample not in force at 25 (on from the first: held at 10 s), or gone at 24
+    dd = [q["height"] - p["height"] for p, q in zip(none, pts(f))]
+    assert max(abs(x) for x in dd[:301]) == 0, f
+PY
+echo '[{"id": 5, "kind": "ship", "t": 0, "x": 0, "z": 0, "heading_deg": 0, "speed": 8, "length_m": 120, "beam_m": 15, "draught_m": 5}, {"id": 5, "kind": "ship", "t": 1, "x": 900, "z": 0, "heading_deg": 0, "speed": 8, "length_m": 120, "beam_m": 15, "draught_m": 5}]' > "$tmp/teleport.json"
+expect_refused "entry 1: entity 5 sample: .* (a teleport" query --n 16 --points 0,0 --entities "$tmp/teleport.json"
+echo '{"id": 5}' > "$tmp/notarray.json"
+expect_refused "not a JSON array" query --n 16 --points 0,0 --entities "$tmp/notarray.json"
+echo '[{"id": 5, "kind": "ship", "t": 0, "x": 0, "z": "here", "heading_deg": 0, "speed": 8, "length_m": 120, "beam_m": 15, "draught_m": 5}]' > "$tmp/nan.json"
+expect_refused "entry 0: entity 5 sample" query --n 16 --points 0,0 --entities "$tmp/nan.json"
+expect_refused "cannot open" query --n 16 --points 0,0 --entities "$tmp/no-such.json"
 # render: a PNG of the asked size from a shipped scene (IHDR width and
 # height, big-endian at bytes 16-23), the same bytes from 1 and 2 threads
 # (the sea is a pure function of its inputs), bad views refused.

@@ -67,6 +67,9 @@ int cli_parse_effects(const char *s, unsigned *out);
 
 /* Monotonic wall clock in milliseconds. */
 double cli_now_ms(void);
+/* The whole of file path ("-": stdin), NUL-terminated, to free; NULL after
+ * printing why (or out of memory). */
+char *cli_read_file(const char *path);
 
 /* Median of v[0..n) (sorts v in place); n >= 1. */
 double cli_median(double *v, int n);

@@ -10,6 +10,7 @@
 #include <cJSON.h>
 
 #include "cli.h"
+#include "cli_entities.h"
 #include "geo.h"
 #include "query.h"
 
@@ -80,42 +81,11 @@ static long parse_points(const char *text, const char *origin, int by_line, doub
     return (long)n;
 }
 
-static char *read_file(const char *path)
-{
-    FILE *fp = strcmp(path, "-") == 0 ? stdin : fopen(path, "rb");
-    if (!fp) {
-        fprintf(stderr, "error: cannot open %s: %s\n", path, strerror(errno));
-        return NULL;
-    }
-    size_t cap = 1 << 16, len = 0;
-    char *buf = malloc(cap);
-    while (buf) {
-        size_t got = fread(buf + len, 1, cap - len - 1, fp);
-        len += got;
-        if (got == 0)
-            break;
-        if (len + 1 == cap) {
-            char *g = realloc(buf, cap * 2);
-            if (!g) {
-                free(buf);
-                buf = NULL;
-                break;
-            }
-            buf = g;
-            cap *= 2;
-        }
-    }
-    if (fp != stdin)
-        fclose(fp);
-    if (buf)
-        buf[len] = '\0';
-    return buf;
-}
-
 /* What the command line sets beyond the common options. */
 typedef struct query_args {
     double t, cutoff;
     const char *points, *file, *geo, *origin;
+    const char *entities; /* --entities FILE: ships whose wakes the answers add */
     double *latlon;     /* --geo: the points as given, lat, lon pairs */
 } query_args;
 
@@ -135,9 +105,11 @@ static int query_args_parse(int argc, char **argv, query_args *a, cli_common *c)
         {"geo", CLI_STRING, &a->geo, 0, 0, "LIST  \"lat1,lon1;...\" points in degrees (WGS 84), on the plane about --origin", NULL},
         {"origin", CLI_STRING, &a->origin, 0, 0, "LAT,LON  where x = z = 0 for --geo (oceand's server.geo_origin; 0,0)", NULL},
         {"cutoff", CLI_DOUBLE, &a->cutoff, 0, 1e6, "K     Butterworth cutoff, rad/m (not given: unfiltered)", NULL},
+        {"entities", CLI_STRING, &a->entities, 0, 0, "FILE  ships whose wakes the answers add: a JSON array of "
+         "entries as `ocean-client entity` prints them, several a track, optional \"from\" ('-': stdin)", NULL},
     };
     int r = cli_parse(argc, argv, "query [--t T] --points \"x,z;...\" | --points-file F | --geo \"lat,lon;...\" "
-                      "[--origin LAT,LON] [--cutoff K] [--json]", opts, 6, c, NULL, NULL);
+                      "[--origin LAT,LON] [--cutoff K] [--entities FILE] [--json]", opts, 7, c, NULL, NULL);
     if (r)
         return r;
     if (isnan(a->t)) {
@@ -191,7 +163,7 @@ static long query_points_read(query_args *a, double **xz)
     if (a->points || a->geo) {
         n = parse_points(a->points ? a->points : a->geo, a->points ? "--points" : "--geo", 0, xz);
     } else {
-        char *text = read_file(a->file);
+        char *text = cli_read_file(a->file);
         if (!text)
             return -1;
         n = parse_points(text, a->file, 1, xz);
@@ -288,9 +260,16 @@ int cmd_query(int argc, char **argv)
         free(a.latlon);
         return 2;
     }
+    ocean_entities *ships = NULL;
+    if (a.entities && cli_entities_load(a.entities, &ships)) {
+        free(xz);
+        free(a.latlon);
+        return 2;
+    }
     ocean *o;
     ocean_frame *f;
     if (cli_make_ocean(&c, &o, &f)) {
+        ocean_entities_destroy(ships);
         free(xz);
         free(a.latlon);
         return 1;
@@ -301,7 +280,9 @@ int cmd_query(int argc, char **argv)
     if (!res) {
         fprintf(stderr, "error: out of memory\n");
         status = 1;
-    } else if ((status = query_answer(o, f, &a, xz, n, res, &ms_eval, &ms_query)) == 0) {
+    } else if ((status = query_answer(o, f, &a, xz, n, res, &ms_eval, &ms_query)) == 0 &&
+               !(ships && (status = cli_wakes_apply(ships, a.t, ocean_get_params(o)->sea.depth_m, xz, (size_t)n,
+                                                    res)))) {
         if (c.json)
             query_print_json(&a, xz, n, res, ms_eval, ms_query);
         else
@@ -310,6 +291,7 @@ int cmd_query(int argc, char **argv)
     free(res);
     free(xz);
     free(a.latlon);
+    ocean_entities_destroy(ships);
     ocean_frame_destroy(f);
     ocean_destroy(o);
     return status;
