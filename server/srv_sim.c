@@ -113,6 +113,7 @@ struct srv_sim {
     double replay_s[2];         /* measured seconds of one replay frame, by layout (EWMA; 0: none yet) */
     uint32_t replay_last;       /* the replay client first in the last turn (its id) */
     int holding;                /* caches may hold tiles or evaluations */
+    double turn_wall;           /* monotonic: the last turn's start */
 };
 
 /* ---- ocean construction ----------------------------------------------------- */
@@ -1058,6 +1059,8 @@ static void follow_sea(srv_sim *s, double t)
 /* Ticks in a row a query turn may be put off for want of slack; then one
  * turn runs whatever the tick left, so a query always progresses. */
 #define QUERY_DEFER_MAX 8
+/* Seconds with nothing to do before the caches go (release_idle). */
+#define IDLE_GRACE_S 1.0
 /* What a turn leaves before the next tick is due (a frame's hand-over). */
 #define QUERY_MARGIN_S 2e-3
 
@@ -1077,7 +1080,7 @@ static void query_turn(srv_sim *s, double next_tick_wall, int live)
             s->query_deferred++;
             return;
         }
-        budget = slack > 0 ? fmin(budget, slack) : 0.25 * budget;
+        budget = slack > need ? fmin(budget, slack - need) : 0.25 * budget;
     }
     s->query_deferred = 0;
     srv_work_queries(s->work, s->hub, query_eval, s, s->g, ocean_get_params(s->oc)->sea.depth_m, budget);
@@ -1121,10 +1124,10 @@ static void publish_cache_size(srv_sim *s)
     atomic_store(&st->tile_cache_bytes, (uint64_t)(b + srv_tiles_bytes(s->tiles)));
 }
 
-/* The last subscriber left and no query or replay work is queued: the
- * caches hold the last ticks' tiles and evaluations, which no later tick
- * can use (their keys hold their sim time), until the next tick sweeps
- * them, however long that takes.  Drop them now and hand the freed memory
+/* The last subscriber left and no query or replay work has come for
+ * IDLE_GRACE_S: the caches hold the last ticks' tiles and evaluations,
+ * which no later tick can use (their keys hold their sim time), until the
+ * next tick sweeps them, however long that takes.  Drop them now and hand the freed memory
  * back to the system (the daemon otherwise keeps up to M_TRIM_THRESHOLD
  * free, main.c): after 256 layout-0 viewers 2 km apart left, 660 MB stayed
  * resident, 320 MB of it in these caches; now 21 MB.  The mip tables and
@@ -1153,21 +1156,33 @@ static int wait_for_work(srv_sim *s, double next_tick_wall, int *live_due, int *
         double simt = srv_hub_sim_time(h);
         int pending = h->sea_gen != s->sea_gen || h->settings_gen != s->set_gen;
         /* queries and replay frames run in bounded slices, at most one
-         * turn per tick period (srv_work.c, server.replay_per_tick) */
-        int bg = srv_work_busy(s->work);
-        for (srv_client *c = h->clients; c && !bg; c = c->next)
-            if (!c->closed && (srv_inbox_queries(c->in) || srv_inbox_replays(c->in))) bg = 1;
-        if (bg && now >= s->work_due) pending = 1;
+         * turn per tick period (srv_work.c, server.replay_per_tick); but a
+         * query that comes when none is being answered is taken at once:
+         * a simulator's host asks once a frame and needs the answer within
+         * it (its turn still leaves the next tick its time: query_turn) */
+        int busy = srv_work_busy(s->work), bg = busy, fresh = 0;
+        for (srv_client *c = h->clients; c; c = c->next) {
+            if (c->closed) continue;
+            int q = srv_inbox_queries(c->in) > 0;
+            fresh |= q && !busy;
+            bg |= q || srv_inbox_replays(c->in);
+        }
+        if ((bg && now >= s->work_due) || fresh) pending = 1;
         if (h->n_subscribed > 0 && now >= next_tick_wall) *live_due = 1;
         /* a change is due at the first tick at or after its effective time */
         double due_t = h->n_sea_pending ? ceil(h->sea_pending[0].effective_time * rate_w) / rate_w : INFINITY;
         if (*live_due || pending || simt >= due_t) return 1;
-        if (h->n_subscribed == 0 && !bg && s->holding) {
+        /* the caches go after IDLE_GRACE_S with nothing to do: a
+         * simulator's host that asks once a frame finds its tick's
+         * evaluation still there, not freed and trimmed between frames */
+        int quiet = h->n_subscribed == 0 && !bg && s->holding;
+        if (quiet && now >= s->turn_wall + IDLE_GRACE_S) {
             *idle = 1;
             return 1;
         }
         struct timespec ts;
         double until = h->n_subscribed > 0 ? next_tick_wall : now + 1.0;
+        if (quiet && s->turn_wall + IDLE_GRACE_S < until) until = s->turn_wall + IDLE_GRACE_S;
         if (bg && s->work_due < until) until = s->work_due;
         if (now + (due_t - simt) < until) until = now + (due_t - simt);
         if (h->n_subscribed == 0) atomic_fetch_add(&h->stats.idle_ticks, 1);
@@ -1460,6 +1475,7 @@ static void *sim_main(void *arg)
         }
         s->holding = 1;
         double t0 = srv_now();
+        s->turn_wall = t0;
         if (h->settings_gen != s->set_gen) {
             ocean_params keep = s->set.params;
             s->set = h->settings;
@@ -1474,6 +1490,7 @@ static void *sim_main(void *arg)
         double t = (double)tick_no / rate;
         double tick_wall = t0 - (sim0 - t);      /* monotonic time of the tick */
         snapshot_jobs(s, &w, t, tick_no, live_due);
+        int viewers = h->n_subscribed > 0;
         pthread_mutex_unlock(&h->lock);
         /* the sea of tick t (a reload's changed sea entered the timeline) */
         follow_sea(s, t);
@@ -1481,7 +1498,9 @@ static void *sim_main(void *arg)
         run_cascade(s, w.cjobs, w.ncjobs, tick_wall);
         run_batches(s, w.jobs, n, tick_wall);
         replay_turn(s, &w, tick_wall, rate);
-        if (srv_work_busy(s->work)) query_turn(s, tick_wall + 1.0 / rate, live_due);
+        /* a turn between ticks leaves the next one its time as a tick's
+         * turn does */
+        if (srv_work_busy(s->work)) query_turn(s, tick_wall + 1.0 / rate, live_due || viewers);
         s->work_due = t0 + 1.0 / rate;
         for (int i = 0; i < w.ncl; i++) srv_client_unref(w.cl[i]);
         if (live_due) end_live_tick(s, t0, tick_no, rate, sim0, &next_tick_wall);

@@ -168,8 +168,14 @@ void srv_work_queries(srv_work *w, srv_hub *h, srv_work_eval_fn eval, void *ctx,
             break;
         }
         if (!it->res) it->res = calloc(q->count ? q->count : 1, sizeof *it->res);
+        int evaluated = slices == 0 && it->res && !eval(ctx, it->t, 1);
         const ocean_frame *f = it->res ? eval(ctx, it->t, 0) : NULL;
         if (!f) r = OCEAN_ENOMEM;
+        /* the turn's one evaluation is priced by the caller (budget_s is
+         * what is left for points): answering its query's points after it
+         * costs little, where a budget that counted it answered a
+         * 128-point query a tick later */
+        if (evaluated) t0 = srv_now();
         /* slices of a quarter of the budget at the measured cost, so a
          * misjudged cost per point overruns by a quarter budget, not four */
         now = srv_now();

@@ -48,8 +48,9 @@ int srv_work_next_time(const srv_work *w, double *t);
  * (evaluating would cost an FFT pass).  Valid until the next call. */
 typedef const ocean_frame *(*srv_work_eval_fn)(void *ctx, double t, int cached_only);
 
-/* Runs query slices for about budget_s seconds (at least one slice, but
- * none while a wake pattern the next slice needs is being built),
+/* Runs query slices for about budget_s seconds after the turn's first
+ * evaluation, if it needs one (at least one slice, but none while a wake
+ * pattern the next slice needs is being built),
  * answering queries that complete and refusing those with a bad point.
  * g: the near field, or NULL; depth: the sea's, m, for the wakes [sim]. */
 void srv_work_queries(srv_work *w, srv_hub *h, srv_work_eval_fn eval, void *ctx,
