@@ -1250,7 +1250,7 @@ static void snapshot_jobs(srv_sim *s, work *w, double t, int64_t tick_no, int li
     }
 }
 
-/* The wake patterns the layout-1 client c, its camera at cam, needs at sim
+/* The wake patterns the client c (either layout), its camera at cam, needs at sim
  * time t and does not hold, queued as WAKE messages: those of the ships
  * whose wakes reach its view range.  Only built ones: the others go to
  * the builder, and the wake shows once built (a frame never waits for
@@ -1307,8 +1307,8 @@ static int filter_jobs(srv_sim *s, work *w, double t, double rate)
         } else {
             j.tick = (uint32_t)(int64_t)llround(j.t * rate);
         }
+        wakes_send(s, j.c, cs, j.t, &j.cam);
         if (cs->sub.layout == PROTO_LAYOUT_CASCADE) {
-            wakes_send(s, j.c, cs, j.t, &j.cam);
             if (!grow((void **)&w->cjobs, &w->capcjobs, w->ncjobs + 1, sizeof *w->cjobs)) continue;
             srv_cascade_job *q = &w->cjobs[w->ncjobs++];
             memset(q, 0, sizeof *q);

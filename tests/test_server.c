@@ -3235,12 +3235,14 @@ static void wakes_reach_viewers(void **state)
     test_ws_close(&a);
 }
 
-/* A viewer (layout 1) subscribed near the ships, its camera at (x, 25, z). */
-static oc_client *wake_viewer(double x, double z)
+/* A viewer subscribed near the ships (layout 1, or 0 with world), its
+ * camera at (x, 25, z). */
+static oc_client *wake_viewer(double x, double z, int world)
 {
     oc_client *v = connect_client(port, NULL);
     proto_subscribe sub;
-    cascade_subscribe(&sub);
+    if (world) small_subscribe(&sub);
+    else cascade_subscribe(&sub);
     assert_int_equal(oc_client_subscribe(v, &sub), OCEAN_OK);
     proto_camera cam;
     oc_camera_default(&cam);
@@ -3264,16 +3266,17 @@ static void wakes_read(oc_client *v, double t, const double *xz, int n, oc_wake 
 
 /* A client joining late sees the same wakes as one that watched them form
  * (issue 43): ship 45 steams along +x with two samples, ship 46 is entered
- * and removed; a viewer connected before every entry and one connected
- * after them read the same wakes, bit for bit, at an instant between the
- * entries (ship 45 on its first sample, 46 still in the sea) and now. */
+ * and removed; a layout-1 viewer connected before every entry and a
+ * layout-0 one connected after them (the patterns go to either layout)
+ * read the same wakes, bit for bit, at an instant between the entries
+ * (ship 45 on its first sample, 46 still in the sea) and now. */
 static void wakes_for_late_joiners(void **state)
 {
     (void)state;
     test_ws a;
     timeline ta;
     sea_connect(&a, &ta, 300);
-    oc_client *watcher = wake_viewer(-150, -20);
+    oc_client *watcher = wake_viewer(-150, -20, 0);
     double t0 = hub_now();
     double tm = fmax(entity_enter(&a, 45, 0, t0, 0, 8), entity_enter(&a, 46, 0, t0, -300, 8));
     while (hub_now() < tm + 0.5) usleep(20000); /* the later entries take effect after tm */
@@ -3284,7 +3287,7 @@ static void wakes_for_late_joiners(void **state)
     entity_expect(&a, PROTO_ENTITY_GONE, 46, &m);
     assert_true(later > tm && m.hdr.sim_time > tm);
     proto_msg_free(&m);
-    oc_client *late = wake_viewer(-150, -20);
+    oc_client *late = wake_viewer(-150, -20, 1);
     enum { N = 6 };
     const double xz[2 * N] = {-240, -20, -360, -20, -300, -28, -100, -20, -150, -45, 60, -30};
     oc_wake w[N], l[N];

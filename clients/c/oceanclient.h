@@ -511,7 +511,7 @@ typedef struct oc_wake {
  * server answers them: the entities in force at t by the ENTITY entries
  * received (each from its header sim_time), each ship's steady wake read
  * from the WAKE patterns received (PROTOCOL.md "WAKE"), over the depth of
- * the sea in force at t.  A layout-1 subscription receives the patterns
+ * the sea in force at t.  A subscription (either layout) receives the patterns
  * of the ships whose wakes reach its view range.  OCEAN_ESTATE: a pattern
  * a ship there needs has not come yet (or no HELLO); OCEAN_EINVAL: a point
  * not finite; OCEAN_ENOMEM. */
