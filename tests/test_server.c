@@ -3316,6 +3316,78 @@ static void wakes_for_late_joiners(void **state)
     test_ws_close(&a);
 }
 
+/* A recorded camera path replays the wakes it saw (issue 43): ship 47
+ * turns through three samples while a live viewer watches; the instants
+ * of its frames and its camera are the recording.  A client that connects
+ * afterwards and replays them (replay mode: a FRAME for each CAMERA's
+ * render_time) gets the patterns those instants need and reads, at each,
+ * the wake bits the live viewer read. */
+static void wakes_replay_as_watched(void **state)
+{
+    (void)state;
+    test_ws a;
+    timeline ta;
+    sea_connect(&a, &ta, 300);
+    oc_client *live = wake_viewer(-150, -20, 0);
+    double t0 = hub_now();
+    proto_msg m;
+    entity_enter(&a, 47, 0, t0, 0, 8);
+    enum { F = 4, N = 4 };
+    const double xz[2 * N] = {-60, -20, -120, -40, -150, 10, 20, 30};
+    double at[F];
+    oc_wake w[F][N], r[F][N];
+    for (int i = 0; i < F; i++) { /* a frame's instant about every 1.5 s, a sample every 3 s */
+        if (i == 1 || i == 3) {
+            proto_msg_init(&m, PROTO_ENTITY);
+            proto_entity *e = &m.u.entity;
+            double h = 15.0 * i, t = t0 + 1.5 * i, x = 8 * 1.5 * i;
+            *e = (proto_entity){.op = PROTO_ENTITY_SET, .id = 47, .t = t, .x = x, .z = -20 + 0.5 * i * i,
+                                .heading_deg = (float)h, .speed = 8, .length_m = 120, .beam_m = 15, .draught_m = 5,
+                                .token = "entity-token"};
+            test_msg_send(&a, &m);
+            entity_expect(&a, PROTO_ENTITY_ANNOUNCE, 47, &m);
+            proto_msg_free(&m);
+        }
+        oc_frame *f = NULL;
+        double want = hub_now() + 0.3;
+        do {
+            oc_frame_free(f);
+            f = next_frame(live);
+        } while (f->hdr.sim_time < want);
+        at[i] = f->hdr.sim_time;
+        oc_frame_free(f);
+        wakes_read(live, at[i], xz, N, w[i]);
+        while (hub_now() < t0 + 1.5 * (i + 1)) usleep(20000);
+    }
+    oc_client *rep = connect_client(port, NULL);
+    proto_subscribe sub;
+    cascade_subscribe(&sub);
+    sub.mode = PROTO_MODE_REPLAY;
+    assert_int_equal(oc_client_subscribe(rep, &sub), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.pos[0] = -150, cam.pos[1] = 25, cam.pos[2] = -20;
+    for (int i = 0; i < F; i++) {
+        cam.render_time = at[i];
+        assert_int_equal(oc_client_send_camera(rep, &cam, NULL), OCEAN_OK);
+        oc_frame *f = next_frame(rep);
+        assert_true(f->hdr.sim_time == at[i]);
+        oc_frame_free(f);
+        wakes_read(rep, at[i], xz, N, r[i]);
+        printf("t %.3f: watched %.6f %.6f %.6f %.6f m, replayed %.6f %.6f %.6f %.6f m\n", at[i], w[i][0].height,
+               w[i][1].height, w[i][2].height, w[i][3].height, r[i][0].height, r[i][1].height, r[i][2].height,
+               r[i][3].height);
+    }
+    assert_memory_equal(w, r, sizeof w);
+    assert_true(fabs(w[0][0].height) > 0.01 && fabs(w[F - 1][0].height - w[0][0].height) > 1e-4);
+    oc_client_destroy(rep);
+    oc_client_destroy(live);
+    entity_send(&a, PROTO_ENTITY_REMOVE, 47, 0, 0, 0, 0, "entity-token");
+    entity_expect(&a, PROTO_ENTITY_GONE, 47, &m);
+    proto_msg_free(&m);
+    test_ws_close(&a);
+}
+
 /* What on_entity saw of entity id (a joiner also gets earlier tests'
  * entries: the timeline the daemon keeps). */
 typedef struct entity_seen {
@@ -4812,6 +4884,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(wakes_in_queries),
         cmocka_unit_test(wakes_reach_viewers),
         cmocka_unit_test(wakes_for_late_joiners),
+        cmocka_unit_test(wakes_replay_as_watched),
         cmocka_unit_test(epoch_parse),
         cmocka_unit_test(epoch_shared_clock),
         cmocka_unit_test(epoch_beyond_time_limit),
