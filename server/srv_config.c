@@ -226,6 +226,20 @@ static const conf_entry srv_entries[] = {
      .def = "64",
      .help = "Entities (ships, aircraft: a CIGI host's Entity Control) the daemon's table holds "
              "at most; one more is refused. Needs a restart to change."},
+    {.name = "server.entity_track_keep", .type = CONF_INT, .offset = SRV(entity_track_keep), .min = 16,
+     .max = 1048576, .def = "256",
+     .help = "Samples of each entity's track the daemon keeps, the newest: an instant before a "
+             "track's oldest kept sample has no entity (a QUERY, a replay, a joining client). "
+             "256 keep 4 s of a 60 Hz CIGI host, 256 s of a ship sampled each second; memory "
+             "grows with the samples a track holds (64 bytes each), not with this. Needs a "
+             "restart to change."},
+    {.name = "server.entity_log", .type = CONF_STRING, .offset = SRV(entity_log), .size = SRV_PATH_MAX,
+     .def = "",
+     .help = "File of the entities' timeline: every entity entry the daemon enters (an ENTITY set "
+             "or remove, a CIGI host's Entity Control, a replicated entry) is appended to it, and "
+             "at start the daemon enters the file's entries first. A daemon restarted on it, or "
+             "one started on a copy, holds the timeline a recording saw, so the recording "
+             "replays its wakes. Empty: off. Needs a restart to change."},
     {.name = "server.sea_lead", .type = CONF_DOUBLE, .offset = SRV(sea_lead), .min = 0.05,
      .max = 3600, .def = "0.5", .unit = "s",
      .help = "With server.redis: a sea-state change must take effect at least this long after "

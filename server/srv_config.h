@@ -58,6 +58,8 @@ typedef struct srv_config {
     char cigi_hosts[SRV_HOSTS_MAX]; /* addresses allowed to speak CIGI, comma separated */
     char geo_origin[SRV_BIND_MAX];  /* "LAT,LON" (WGS 84) at x = z = 0 */
     int max_entities;            /* entities the table holds at most (srv_entity.h) */
+    int entity_track_keep;       /* samples a track keeps */
+    char entity_log[SRV_PATH_MAX]; /* the entities' timeline file; "" off (srv_entlog.h) */
     double sea_lead;             /* replicated: least lead of a change's effective time, s */
     int workers;                 /* threads building frames */
     char scene[SRV_PATH_MAX];    /* scene name (in scene_dir) or path; "" none */

@@ -10,6 +10,7 @@
 
 #include "srv_admit.h"
 #include "srv_cigi.h"
+#include "srv_entlog.h"
 #include "srv_net.h"
 #include "srv_redis.h"
 #include "srv_sim.h"
@@ -20,6 +21,27 @@ struct srv_daemon {
     srv_net *net;
     srv_cigi *cigi;             /* NULL: server.cigi_port 0 */
 };
+
+/* server.entity_log: its entries into the table, then every later entry
+ * onto it.  Replicated, the stream is the timeline: the log is written,
+ * not read. */
+static ocean_result entlog_start(srv_hub *h, const srv_settings *s, char *msg, size_t msglen)
+{
+    if (!s->srv.entity_log[0]) return OCEAN_OK;
+    srv_entlog *l;
+    ocean_result r = srv_entlog_open(s->srv.entity_log, &l, msg, msglen);
+    int entered = 0, refused = 0;
+    if (r == OCEAN_OK && !h->redis) r = srv_entlog_load(l, h, &entered, &refused, msg, msglen);
+    if (r != OCEAN_OK) {
+        srv_entlog_close(l);
+        return r;
+    }
+    if (!h->redis)
+        fprintf(stderr, "oceand: server.entity_log %s: %d entries entered, %d refused by the table\n",
+                s->srv.entity_log, entered, refused);
+    h->entlog = l;
+    return OCEAN_OK;
+}
 
 ocean_result srv_daemon_start(const srv_settings *s, srv_daemon **out, char *msg, size_t msglen)
 {
@@ -47,7 +69,8 @@ ocean_result srv_daemon_start(const srv_settings *s, srv_daemon **out, char *msg
             return r;
         }
     }
-    r = srv_sim_create(&d->hub, &d->sim, msg, msglen);
+    r = entlog_start(&d->hub, s, msg, msglen);
+    if (r == OCEAN_OK) r = srv_sim_create(&d->hub, &d->sim, msg, msglen);
     if (r == OCEAN_OK) r = srv_net_create(&d->hub, &d->net, msg, msglen);
     if (r == OCEAN_OK) r = srv_sim_start(d->sim);
     if (r == OCEAN_OK) r = srv_net_start(d->net);
@@ -58,6 +81,7 @@ ocean_result srv_daemon_start(const srv_settings *s, srv_daemon **out, char *msg
         srv_sim_destroy(d->sim);
         srv_net_destroy(d->net);
         srv_redis_stop(d->hub.redis);
+        srv_entlog_close(d->hub.entlog);
         srv_admit_destroy(d->hub.admit);
         srv_hub_fini(&d->hub);
         free(d);
@@ -92,7 +116,7 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     free(probe);
     pthread_mutex_lock(&h->lock);
     const srv_config *o = &h->settings.srv;
-    const char *restart[10]; /* one per key tested below (8): 4 overflowed */
+    const char *restart[12]; /* one per key tested below (10) */
     int nr = 0;
     if (o->port != s->srv.port) restart[nr++] = "server.port";
     if (strcmp(o->bind, s->srv.bind)) restart[nr++] = "server.bind";
@@ -105,6 +129,8 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
         strcmp(o->geo_origin, s->srv.geo_origin))
         restart[nr++] = "server.cigi_port, server.cigi_hosts, server.geo_origin";
     if (o->max_entities != s->srv.max_entities) restart[nr++] = "server.max_entities";
+    if (o->entity_track_keep != s->srv.entity_track_keep) restart[nr++] = "server.entity_track_keep";
+    if (strcmp(o->entity_log, s->srv.entity_log)) restart[nr++] = "server.entity_log";
     srv_settings keep = h->settings;
     h->settings = *s;
     /* keys that need a restart keep their running values */
@@ -119,6 +145,8 @@ ocean_result srv_daemon_reload(srv_daemon *d, const srv_settings *s, char *msg, 
     snprintf(h->settings.srv.cigi_hosts, sizeof h->settings.srv.cigi_hosts, "%s", keep.srv.cigi_hosts);
     snprintf(h->settings.srv.geo_origin, sizeof h->settings.srv.geo_origin, "%s", keep.srv.geo_origin);
     h->settings.srv.max_entities = keep.srv.max_entities;
+    h->settings.srv.entity_track_keep = keep.srv.entity_track_keep;
+    snprintf(h->settings.srv.entity_log, sizeof h->settings.srv.entity_log, "%s", keep.srv.entity_log);
     /* effects and near field are fixed by the running ocean's scene */
     h->settings.effects = keep.effects;
     h->settings.params = keep.params;
@@ -172,6 +200,7 @@ void srv_daemon_stop(srv_daemon *d)
     srv_net_destroy(d->net);
     srv_sim_destroy(d->sim);
     srv_redis_stop(d->hub.redis);
+    srv_entlog_close(d->hub.entlog);
     srv_admit_destroy(d->hub.admit);
     srv_hub_fini(&d->hub);
     free(d);

@@ -14,12 +14,12 @@ struct srv_entities {
     ocean_entities *t;          /* [lock] */
 };
 
-ocean_result srv_entities_create(int max, srv_entities **out, char *why, size_t n)
+ocean_result srv_entities_create(int max, int keep, srv_entities **out, char *why, size_t n)
 {
     *out = NULL;
     srv_entities *e = calloc(1, sizeof *e);
     if (!e) return OCEAN_ENOMEM;
-    ocean_result r = ocean_entities_create(max, SRV_ENTITY_HOLD_S, &e->t, why, n);
+    ocean_result r = ocean_entities_create(max, SRV_ENTITY_HOLD_S, keep, &e->t, why, n);
     if (r != OCEAN_OK) {
         free(e);
         return r;

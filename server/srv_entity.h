@@ -37,9 +37,10 @@
 
 typedef struct srv_entities srv_entities;
 
-/* A table for at most max entities (server.max_entities).  OCEAN_EINVAL
+/* A table for at most max entities (server.max_entities), each track
+ * keeping its last keep samples (server.entity_track_keep).  OCEAN_EINVAL
  * with why. */
-ocean_result srv_entities_create(int max, srv_entities **out, char *why, size_t n);
+ocean_result srv_entities_create(int max, int keep, srv_entities **out, char *why, size_t n);
 void srv_entities_destroy(srv_entities *e); /* accepts NULL */
 
 /* Appends sample s, in force from sim time `from`, to entity d->id's

@@ -13,6 +13,7 @@
 #include "srv_client.h"
 #include "srv_convert.h"
 #include "srv_entity.h"
+#include "srv_entlog.h"
 #include "srv_wakes.h"
 #include "srv_fingerprint.h"
 
@@ -39,7 +40,8 @@ ocean_result srv_hub_init(srv_hub *h, const srv_settings *s)
         return OCEAN_ENOMEM;
     }
     char why[160];
-    if (srv_entities_create(s->srv.max_entities, &h->entities, why, sizeof why) != OCEAN_OK) {
+    if (srv_entities_create(s->srv.max_entities, s->srv.entity_track_keep, &h->entities, why, sizeof why) !=
+        OCEAN_OK) {
         fprintf(stderr, "oceand: %s\n", why);
         pthread_cond_destroy(&h->wake);
         pthread_mutex_destroy(&h->lock);
@@ -212,6 +214,8 @@ ocean_result srv_hub_entity_enter(srv_hub *h, const proto_msg *m, char *why, siz
         r = srv_entities_sample(h->entities, &d, &s, from, why, n);
     }
     if (r == OCEAN_OK) srv_hub_broadcast(h, m);
+    /* in the order entered (the lock held): the log rebuilds the table */
+    if (r == OCEAN_OK && h->entlog) srv_entlog_append(h->entlog, m);
     pthread_mutex_unlock(&h->lock);
     if (r != OCEAN_OK) return r;
     if (e->op == PROTO_ENTITY_ANNOUNCE) srv_wakes_ahead(h, &d, &s);

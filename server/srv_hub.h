@@ -82,6 +82,7 @@ typedef struct srv_hub {
     struct srv_admit *admit;              /* [const once started] admission (srv_admit.h) */
     struct srv_entities *entities;        /* [const] the entity table (srv_entity.h), its own lock */
     struct srv_wakes *wakes;              /* [const] their wakes in point answers (srv_wakes.h), its own lock */
+    struct srv_entlog *entlog;            /* [const once started] server.entity_log, or NULL; its own lock */
 } srv_hub;
 
 /* Monotonic seconds. */

@@ -4,8 +4,9 @@
  *
  * Entities sit in an array sorted by id (a binary search per lookup), an
  * id's lives in order (the gone ones kept for their past, the live one
- * last); each holds its track as a ring of its last OCEAN_TRACK_KEEP
- * samples with the instant each is in force from.
+ * last); each holds its track as a ring of its last `keep` samples with
+ * the instant each is in force from, grown by doubling as samples come
+ * (a ship sampled once a second for a minute holds 64, not `keep`).
  */
 #include "entity.h"
 
@@ -17,8 +18,9 @@
 
 typedef struct entity {
     ocean_entity_desc d;
-    ocean_track_sample s[OCEAN_TRACK_KEEP];
-    double from[OCEAN_TRACK_KEEP]; /* each sample in force from; never decreasing */
+    ocean_track_sample *s;   /* a ring of cap samples */
+    double *from;            /* each sample in force from; never decreasing */
+    int cap;
     int head;            /* index of the oldest kept sample */
     int count;
     double gone;         /* gone from this instant on; INFINITY while live */
@@ -26,6 +28,7 @@ typedef struct entity {
 
 struct ocean_entities {
     int max;
+    int keep;            /* samples a track keeps */
     double hold_s;
     int n, n_live;
     entity **by_id;      /* n records of 2 max at most: increasing id, one id's lives in order */
@@ -36,13 +39,15 @@ struct ocean_entities {
 #define TELEPORT_FACTOR 1.5
 #define TELEPORT_SLACK_M 1.0
 
-ocean_result ocean_entities_create(int max_entities, double hold_s, ocean_entities **out, char *why, size_t n)
+ocean_result ocean_entities_create(int max_entities, double hold_s, int keep, ocean_entities **out, char *why,
+                                   size_t n)
 {
     if (!out) return OCEAN_EINVAL;
     *out = NULL;
-    if (max_entities < 1 || max_entities > OCEAN_ENTITY_MAX || !(hold_s >= 0 && hold_s <= 600)) {
-        ocean_seterr(why, n, "entities: max %d is outside [1, %d] or hold %g s outside [0, 600]", max_entities,
-                     OCEAN_ENTITY_MAX, hold_s);
+    if (max_entities < 1 || max_entities > OCEAN_ENTITY_MAX || !(hold_s >= 0 && hold_s <= 600) || keep < 2 ||
+        keep > OCEAN_TRACK_KEEP_MAX) {
+        ocean_seterr(why, n, "entities: max %d is outside [1, %d], hold %g s outside [0, 600] or keep %d outside "
+                     "[2, %d]", max_entities, OCEAN_ENTITY_MAX, hold_s, keep, OCEAN_TRACK_KEEP_MAX);
         return OCEAN_EINVAL;
     }
     ocean_entities *e = calloc(1, sizeof *e);
@@ -51,15 +56,24 @@ ocean_result ocean_entities_create(int max_entities, double hold_s, ocean_entiti
         return OCEAN_ENOMEM;
     }
     e->max = max_entities;
+    e->keep = keep;
     e->hold_s = hold_s;
     *out = e;
     return OCEAN_OK;
 }
 
+static void record_free(entity *k)
+{
+    if (!k) return;
+    free(k->s);
+    free(k->from);
+    free(k);
+}
+
 void ocean_entities_destroy(ocean_entities *e)
 {
     if (!e) return;
-    for (int i = 0; i < e->n; i++) free(e->by_id[i]);
+    for (int i = 0; i < e->n; i++) record_free(e->by_id[i]);
     free(e->by_id);
     free(e);
 }
@@ -88,7 +102,7 @@ static entity *live(const ocean_entities *e, uint32_t id, int *at)
 
 static void record_drop(ocean_entities *e, int at)
 {
-    free(e->by_id[at]);
+    record_free(e->by_id[at]);
     memmove(&e->by_id[at], &e->by_id[at + 1], (size_t)(e->n - at - 1) * sizeof *e->by_id);
     e->n--;
 }
@@ -162,7 +176,7 @@ ocean_result ocean_entities_add(ocean_entities *e, const ocean_entity_desc *d, c
  * its life before this one, or its track's newest sample's. */
 static double from_floor(const ocean_entities *e, const entity *k, int at)
 {
-    if (k->count) return k->from[(k->head + k->count - 1) % OCEAN_TRACK_KEEP];
+    if (k->count) return k->from[(k->head + k->count - 1) % k->cap];
     if (at > 0 && e->by_id[at - 1]->d.id == k->d.id) return e->by_id[at - 1]->gone;
     return -INFINITY;
 }
@@ -201,7 +215,7 @@ static double altitude_max(ocean_entity_kind k)
 
 static const ocean_track_sample *sample_at(const entity *k, int i)
 {
-    return &k->s[(k->head + i) % OCEAN_TRACK_KEEP];
+    return &k->s[(k->head + i) % k->cap];
 }
 
 /* The sample's own values, then its step from the track's last sample. */
@@ -255,17 +269,45 @@ ocean_result ocean_entities_check(const ocean_entities *e, uint32_t id, const oc
     return sample_check(k, s, why, n);
 }
 
+/* Room for want (at most keep) samples, the kept ones in order from 0. */
+static ocean_result track_grow(entity *k, int want, int keep)
+{
+    if (want > keep) want = keep;
+    ocean_track_sample *s = malloc(sizeof *s * (size_t)want);
+    double *from = malloc(sizeof *from * (size_t)want);
+    if (!s || !from) {
+        free(s);
+        free(from);
+        return OCEAN_ENOMEM;
+    }
+    for (int i = 0; i < k->count; i++) {
+        s[i] = k->s[(k->head + i) % k->cap];
+        from[i] = k->from[(k->head + i) % k->cap];
+    }
+    free(k->s);
+    free(k->from);
+    k->s = s;
+    k->from = from;
+    k->cap = want;
+    k->head = 0;
+    return OCEAN_OK;
+}
+
 ocean_result ocean_entities_sample(ocean_entities *e, uint32_t id, const ocean_track_sample *s, double from,
                                    char *why, size_t n)
 {
     ocean_result r = ocean_entities_check(e, id, s, from, why, n);
     if (r != OCEAN_OK) return r;
     entity *k = live(e, id, NULL);
-    if (k->count == OCEAN_TRACK_KEEP) {
-        k->head = (k->head + 1) % OCEAN_TRACK_KEEP;
+    if (k->count == k->cap && k->cap < e->keep && track_grow(k, k->cap ? 2 * k->cap : 4, e->keep) != OCEAN_OK) {
+        ocean_seterr(why, n, "entity %u: out of memory for its track", id);
+        return OCEAN_ENOMEM;
+    }
+    if (k->count == k->cap) {
+        k->head = (k->head + 1) % k->cap;
         k->count--;
     }
-    int slot = (k->head + k->count) % OCEAN_TRACK_KEEP;
+    int slot = (k->head + k->count) % k->cap;
     k->s[slot] = *s;
     k->from[slot] = from;
     k->count++;
@@ -327,7 +369,7 @@ static int in_force(const entity *k, double t)
     int lo = 0, hi = k->count;
     while (lo < hi) {
         int mid = lo + (hi - lo) / 2;
-        if (k->from[(k->head + mid) % OCEAN_TRACK_KEEP] <= t) lo = mid + 1;
+        if (k->from[(k->head + mid) % k->cap] <= t) lo = mid + 1;
         else hi = mid;
     }
     return lo;
@@ -378,7 +420,7 @@ ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_tra
     const entity *k = live(e, id, NULL);
     if (!k || !k->count) return OCEAN_ENOTFOUND;
     *out = *sample_at(k, k->count - 1);
-    if (from) *from = k->from[(k->head + k->count - 1) % OCEAN_TRACK_KEEP];
+    if (from) *from = k->from[(k->head + k->count - 1) % k->cap];
     return OCEAN_OK;
 }
 
@@ -391,7 +433,7 @@ int ocean_entities_each(const ocean_entities *e, void (*fn)(void *ctx, const oce
         ocean_entity_entry en = {.d = k->d};
         for (int j = 0; j < k->count; j++, n++) {
             en.s = *sample_at(k, j);
-            en.from = k->from[(k->head + j) % OCEAN_TRACK_KEEP];
+            en.from = k->from[(k->head + j) % k->cap];
             fn(ctx, &en);
         }
         if (isinf(k->gone)) continue;

@@ -18,8 +18,9 @@
  * sample's velocity for at most `hold` seconds, then stays where that left
  * it, stopped (state.held): a feeder that goes silent leaves no ship
  * steaming off forever.  Before its first sample an entity is not in the
- * sea (OCEAN_ENOTFOUND).  A track keeps its last OCEAN_TRACK_KEEP samples;
- * an instant before the oldest kept is OCEAN_ENOTFOUND too.
+ * sea (OCEAN_ENOTFOUND).  A track keeps its last `keep` samples (the
+ * table's; a daemon's default OCEAN_TRACK_KEEP); an instant before the
+ * oldest kept is OCEAN_ENOTFOUND too.
  *
  * Samples are timeline entries (docs/design.md, "Entities"): each is in
  * force from an instant of its own, `from` (when the daemon entered it,
@@ -58,7 +59,8 @@ typedef enum ocean_entity_kind {
 } ocean_entity_kind;
 
 #define OCEAN_ENTITY_MAX 4096       /* the most a table may be made for */
-#define OCEAN_TRACK_KEEP 256        /* samples a track keeps */
+#define OCEAN_TRACK_KEEP 256        /* samples a daemon's track keeps by default */
+#define OCEAN_TRACK_KEEP_MAX (1 << 20) /* the most a table may keep a track */
 #define OCEAN_ENTITY_POS_MAX 2.0e7  /* |x|, |z| in m: half the Earth's circumference */
 /* Top speeds (m/s): a fast boat is 25, a helicopter's Vne about 90. */
 #define OCEAN_SHIP_SPEED_MAX 30.0
@@ -97,8 +99,11 @@ typedef struct ocean_entity_state {
 typedef struct ocean_entities ocean_entities;
 
 /* A table for at most max_entities (1..OCEAN_ENTITY_MAX) entities whose
- * tracks run on hold_s seconds (0..600) past their last sample. */
-ocean_result ocean_entities_create(int max_entities, double hold_s, ocean_entities **out, char *why, size_t n);
+ * tracks run on hold_s seconds (0..600) past their last sample and keep
+ * their last `keep` samples (2..OCEAN_TRACK_KEEP_MAX; memory grows with
+ * the samples a track holds, not with keep). */
+ocean_result ocean_entities_create(int max_entities, double hold_s, int keep, ocean_entities **out, char *why,
+                                   size_t n);
 void ocean_entities_destroy(ocean_entities *e); /* accepts NULL */
 
 /* Enters an entity with no track yet (a live one: not removed).
@@ -117,7 +122,8 @@ void ocean_entities_prune(ocean_entities *e, double before);
 /* Appends a sample to live entity id's track, in force from sim time
  * `from` on.  OCEAN_ENOTFOUND (no live entity id), OCEAN_EINVAL (a value
  * out of range, out of time order, a teleport; from not finite, before the
- * track's previous from, or before the removal of the id's earlier life). */
+ * track's previous from, or before the removal of the id's earlier life),
+ * OCEAN_ENOMEM (the track could not grow). */
 ocean_result ocean_entities_sample(ocean_entities *e, uint32_t id, const ocean_track_sample *s, double from,
                                    char *why, size_t n);
 /* What ocean_entities_sample would answer, the table unchanged. */

@@ -26,7 +26,7 @@ static const ocean_entity_desc frigate = {.id = 7, .kind = OCEAN_ENTITY_SHIP, .l
 static ocean_entities *table(int max, double hold)
 {
     ocean_entities *e = NULL;
-    assert_int_equal(ocean_entities_create(max, hold, &e, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_create(max, hold, OCEAN_TRACK_KEEP, &e, NULL, 0), OCEAN_OK);
     return e;
 }
 
@@ -40,8 +40,10 @@ static void table_limits(void **state)
     (void)state;
     ocean_entities *e = NULL;
     char why[256];
-    assert_int_equal(ocean_entities_create(0, 5, &e, why, sizeof why), OCEAN_EINVAL);
-    assert_int_equal(ocean_entities_create(4, NAN, &e, why, sizeof why), OCEAN_EINVAL);
+    assert_int_equal(ocean_entities_create(0, 5, 8, &e, why, sizeof why), OCEAN_EINVAL);
+    assert_int_equal(ocean_entities_create(4, NAN, 8, &e, why, sizeof why), OCEAN_EINVAL);
+    assert_int_equal(ocean_entities_create(4, 5, 1, &e, why, sizeof why), OCEAN_EINVAL);
+    assert_int_equal(ocean_entities_create(4, 5, OCEAN_TRACK_KEEP_MAX + 1, &e, why, sizeof why), OCEAN_EINVAL);
     assert_null(e);
     e = table(2, 5);
     assert_int_equal(ocean_entities_add(e, &frigate, why, sizeof why), OCEAN_OK);
@@ -313,7 +315,7 @@ static void bad_samples_change_nothing(void **state)
     ocean_entities_destroy(e);
 }
 
-/* A track keeps its last OCEAN_TRACK_KEEP samples: an instant before the
+/* A track keeps its last OCEAN_TRACK_KEEP samples (or its table's keep): an instant before the
  * oldest kept is not answered (rather than guessed). */
 static void track_keeps_its_last_samples(void **state)
 {
@@ -331,6 +333,22 @@ static void track_keeps_its_last_samples(void **state)
     assert_true(fabs(st.x - 220) < 1e-9);
     assert_int_equal(ocean_entities_state(e, 7, n - 1.5, &st), OCEAN_OK);
     assert_true(fabs(st.x - 5.0 * (n - 1.5)) < 1e-9);
+    ocean_entities_destroy(e);
+    /* a table's own keep: 5 (the track grows 4 -> 5, then drops its oldest) */
+    assert_int_equal(ocean_entities_create(4, 5, 5, &e, NULL, 0), OCEAN_OK);
+    assert_int_equal(ocean_entities_add(e, &frigate, NULL, 0), OCEAN_OK);
+    for (int i = 0; i < 12; i++) {
+        ocean_track_sample s = smp(i, 5.0 * i, 0, 0, 5);
+        assert_int_equal(ocean_entities_sample(e, 7, &s, KNOWN, NULL, 0), OCEAN_OK);
+        ocean_track_sample last;
+        assert_int_equal(ocean_entities_last(e, 7, &last, NULL), OCEAN_OK);
+        assert_true(last.t == i);
+    }
+    assert_int_equal(ocean_entities_state(e, 7, 6.5, &st), OCEAN_ENOTFOUND);
+    assert_int_equal(ocean_entities_state(e, 7, 7, &st), OCEAN_OK);
+    assert_true(fabs(st.x - 35) < 1e-9);
+    assert_int_equal(ocean_entities_state(e, 7, 9.5, &st), OCEAN_OK);
+    assert_true(fabs(st.x - 47.5) < 1e-9);
     ocean_entities_destroy(e);
 }
 

@@ -3388,6 +3388,109 @@ static void wakes_replay_as_watched(void **state)
     test_ws_close(&a);
 }
 
+/* Sends an ENTITY set of ship id at (x, z) heading h to w with token tok,
+ * and waits for its announce; returns the instant it takes effect. */
+static double ship_sample(test_ws *w, uint32_t id, double t, double x, double z, double h, const char *tok)
+{
+    proto_msg m;
+    proto_msg_init(&m, PROTO_ENTITY);
+    m.u.entity = (proto_entity){.op = PROTO_ENTITY_SET, .id = id, .t = t, .x = x, .z = z, .heading_deg = (float)h,
+                                .speed = 8, .length_m = 120, .beam_m = 15, .draught_m = 5};
+    snprintf(m.u.entity.token, sizeof m.u.entity.token, "%s", tok);
+    test_msg_send(w, &m);
+    entity_expect(w, PROTO_ENTITY_ANNOUNCE, id, &m);
+    double from = m.hdr.sim_time;
+    proto_msg_free(&m);
+    return from;
+}
+
+/* The QUERY answers of daemon d at the n points and each instant of at. */
+static void log_queries(srv_daemon *d, const double *at, int k, const double *xz, int n, proto_query_sample *out)
+{
+    oc_client *q = connect_client(srv_daemon_port(d), NULL);
+    for (int i = 0; i < k; i++) {
+        oc_query_result qr;
+        assert_int_equal(oc_client_query(q, xz, (size_t)n, 1, at[i], 60000, &qr), OCEAN_OK);
+        assert_true(qr.count == (uint32_t)n && qr.t == at[i]);
+        memcpy(out + (size_t)i * n, qr.samples, sizeof *out * (size_t)n);
+        oc_query_result_free(&qr);
+    }
+    oc_client_destroy(q);
+}
+
+/* The entities' timeline on disk (server.entity_log, issue 43: recordings
+ * keep the entities, replays reproduce them): a daemon appends each entry
+ * it enters; a daemon started later on the log answers every instant of
+ * the first one's timeline with the same QUERY bytes (wind sea and the
+ * ships' wakes) - a turning ship, one removed - though the first is gone.
+ * A record cut short at the end is cut off, and a file that is no log is
+ * refused with its name. */
+static void entity_log_replays_the_wakes(void **state)
+{
+    (void)state;
+    char path[128];
+    snprintf(path, sizeof path, "/tmp/oceand-entlog-%d.bin", (int)getpid());
+    unlink(path);
+    char log_set[200];
+    snprintf(log_set, sizeof log_set, "server.entity_log=\"%s\"", path);
+    const char *sets[] = {"server.port=0", "server.scene=\"\"", "ocean.n=32", "ocean.cascades=1", "ocean.threads=1",
+                          "server.entity_token=\"tok\"", log_set};
+    srv_settings sb;
+    srv_daemon *a = start_daemon(sets, 7, &sb);
+    test_ws w;
+    assert_int_equal(test_ws_connect(&w, srv_daemon_port(a), "/", PROTO_SUBPROTOCOL), 0);
+    proto_msg m;
+    assert_true(test_msg_wait(&w, PROTO_HELLO, 5000, &m));
+    proto_msg_free(&m);
+    double t0 = srv_hub_sim_time(srv_daemon_hub(a));
+    enum { K = 3, N = 4 };
+    double at[K];
+    ship_sample(&w, 61, t0, 0, 0, 0, "tok");
+    at[0] = ship_sample(&w, 62, t0, -300, 40, 0, "tok") + 0.25;
+    while (srv_hub_sim_time(srv_daemon_hub(a)) < at[0] + 0.5) usleep(20000);
+    at[1] = ship_sample(&w, 61, t0 + 2, 16, 1, 10, "tok") + 0.25;
+    entity_send(&w, PROTO_ENTITY_REMOVE, 62, 0, 0, 0, 0, "tok");
+    entity_expect(&w, PROTO_ENTITY_GONE, 62, &m);
+    proto_msg_free(&m);
+    while (srv_hub_sim_time(srv_daemon_hub(a)) < at[1] + 0.5) usleep(20000);
+    at[2] = ship_sample(&w, 61, t0 + 4, 32, 4, 20, "tok") + 0.25;
+    test_ws_close(&w);
+    const double xz[2 * N] = {-150, 0, -200, 30, -330, 40, 60, 10};
+    proto_query_sample qa[K * N], qb[K * N];
+    log_queries(a, at, K, xz, N, qa);
+    srv_daemon_stop(a);
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    off_t whole = st.st_size;
+    /* a record cut short (the daemon stopped while writing it) */
+    FILE *f = fopen(path, "ab");
+    assert_non_null(f);
+    fputs("\x30\x00", f);
+    fclose(f);
+    srv_daemon *b = start_daemon(sets, 7, &sb);
+    assert_int_equal(srv_entities_kept(srv_daemon_hub(b)->entities), 2);
+    log_queries(b, at, K, xz, N, qb);
+    for (int i = 0; i < K * N; i++)
+        printf("t %.3f (%g, %g): first daemon %.6f m, restarted on its log %.6f m\n", at[i / N], xz[2 * (i % N)],
+               xz[2 * (i % N) + 1], qa[i].height, qb[i].height);
+    assert_memory_equal(qa, qb, sizeof qa);
+    srv_daemon_stop(b);
+    assert_int_equal(stat(path, &st), 0);
+    assert_true(st.st_size == whole); /* the cut record is gone; the entries read were not written again */
+    /* a file that is no log: refused, named */
+    f = fopen(path, "wb");
+    assert_non_null(f);
+    fputs("not a log\n", f);
+    fclose(f);
+    load_settings(sets, 7, &sb);
+    char err[512] = "";
+    srv_daemon *c = NULL;
+    assert_int_equal(srv_daemon_start(&sb, &c, err, sizeof err), OCEAN_EIO);
+    assert_null(c);
+    if (!strstr(err, path) || !strstr(err, "not an entity log")) fail_msg("%s", err);
+    unlink(path);
+}
+
 /* What on_entity saw of entity id (a joiner also gets earlier tests'
  * entries: the timeline the daemon keeps). */
 typedef struct entity_seen {
@@ -4885,6 +4988,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(wakes_reach_viewers),
         cmocka_unit_test(wakes_for_late_joiners),
         cmocka_unit_test(wakes_replay_as_watched),
+        cmocka_unit_test(entity_log_replays_the_wakes),
         cmocka_unit_test(epoch_parse),
         cmocka_unit_test(epoch_shared_clock),
         cmocka_unit_test(epoch_beyond_time_limit),

@@ -18,7 +18,8 @@ ocean_result oc_wakes_create(oc_wakes **out)
     *out = NULL;
     oc_wakes *w = calloc(1, sizeof *w);
     if (!w) return OCEAN_ENOMEM;
-    if (ocean_entities_create(OCEAN_ENTITY_MAX, PROTO_ENTITY_HOLD_S, &w->entities, NULL, 0) != OCEAN_OK ||
+    if (ocean_entities_create(OCEAN_ENTITY_MAX, PROTO_ENTITY_HOLD_S, OC_WAKES_TRACK_KEEP, &w->entities, NULL, 0) !=
+            OCEAN_OK ||
         wake_field_create(PROTO_WAKE_HELD, &w->patterns) != OCEAN_OK) {
         oc_wakes_destroy(w);
         return OCEAN_ENOMEM;

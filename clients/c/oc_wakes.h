@@ -20,6 +20,11 @@
 #include "proto.h"
 #include "wake_field.h"
 
+/* Samples a reader keeps of a track: a daemon's 256 by default
+ * (server.entity_track_keep) and more, 68 s of a 60 Hz host (256 KB a
+ * track at most). */
+#define OC_WAKES_TRACK_KEEP 4096
+
 typedef struct oc_wakes oc_wakes;
 
 ocean_result oc_wakes_create(oc_wakes **out);

@@ -93,7 +93,8 @@ int cli_entities_load(const char *path, ocean_entities **out)
     }
     ocean_entities *e;
     char why[200];
-    if (ocean_entities_create(OCEAN_ENTITY_MAX, CLI_ENTITY_HOLD_S, &e, why, sizeof why) != OCEAN_OK) {
+    if (ocean_entities_create(OCEAN_ENTITY_MAX, CLI_ENTITY_HOLD_S, OCEAN_TRACK_KEEP_MAX, &e, why, sizeof why) !=
+        OCEAN_OK) { /* a file's entries, all kept */
         fprintf(stderr, "error: %s\n", why);
         cJSON_Delete(a);
         return 2;
