@@ -2985,6 +2985,18 @@ static double entity_enter(test_ws *w, uint32_t id, int kind, double t, double x
     return from;
 }
 
+/* Removes id with token tok and waits for its gone on w; returns the
+ * instant it takes effect. */
+static double entity_leave(test_ws *w, uint32_t id, const char *tok)
+{
+    proto_msg m;
+    entity_send(w, PROTO_ENTITY_REMOVE, id, 0, 0, 0, 0, tok);
+    entity_expect(w, PROTO_ENTITY_GONE, id, &m);
+    double from = m.hdr.sim_time;
+    proto_msg_free(&m);
+    return from;
+}
+
 /* An ERROR of code whose message holds `has`; asserts it comes. */
 static void error_expect(test_ws *w, ocean_result code, const char *has)
 {
@@ -3129,7 +3141,6 @@ static void wakes_in_queries(void **state)
     timeline ta;
     sea_connect(&a, &ta, 300);
     double t0 = hub_now();
-    proto_msg m;
     double tq = entity_enter(&a, 31, 0, t0, 0, 8);
     tq = fmax(tq, entity_enter(&a, 32, 0, t0, -300, 8)); /* both in force from tq on */
     assert_true(tq >= t0);
@@ -3172,9 +3183,7 @@ static void wakes_in_queries(void **state)
     oc_query_result_free(&qr);
     oc_client_destroy(q);
     for (uint32_t id = 31; id <= 32; id++) {
-        entity_send(&a, PROTO_ENTITY_REMOVE, id, 0, 0, 0, 0, "entity-token");
-        entity_expect(&a, PROTO_ENTITY_GONE, id, &m);
-        proto_msg_free(&m);
+        entity_leave(&a, id, "entity-token");
     }
     test_ws_close(&a);
 }
@@ -3226,11 +3235,8 @@ static void wakes_reach_viewers(void **state)
     }
     assert_true(biggest > 0.05);
     oc_client_destroy(v);
-    proto_msg m;
     for (uint32_t id = 41; id <= 42; id++) {
-        entity_send(&a, PROTO_ENTITY_REMOVE, id, 0, 0, 0, 0, "entity-token");
-        entity_expect(&a, PROTO_ENTITY_GONE, id, &m);
-        proto_msg_free(&m);
+        entity_leave(&a, id, "entity-token");
     }
     test_ws_close(&a);
 }
@@ -3282,11 +3288,7 @@ static void wakes_for_late_joiners(void **state)
     while (hub_now() < tm + 0.5) usleep(20000); /* the later entries take effect after tm */
     tm += 0.25;
     double later = entity_enter(&a, 45, 0, t0 + 2, 16, 8);
-    proto_msg m;
-    entity_send(&a, PROTO_ENTITY_REMOVE, 46, 0, 0, 0, 0, "entity-token");
-    entity_expect(&a, PROTO_ENTITY_GONE, 46, &m);
-    assert_true(later > tm && m.hdr.sim_time > tm);
-    proto_msg_free(&m);
+    assert_true(later > tm && entity_leave(&a, 46, "entity-token") > tm);
     oc_client *late = wake_viewer(-150, -20, 1);
     enum { N = 6 };
     const double xz[2 * N] = {-240, -20, -360, -20, -300, -28, -100, -20, -150, -45, 60, -30};
@@ -3310,9 +3312,7 @@ static void wakes_for_late_joiners(void **state)
     assert_true(st.entity_refused == 0 && st.wakes_refused == 0);
     oc_client_destroy(late);
     oc_client_destroy(watcher);
-    entity_send(&a, PROTO_ENTITY_REMOVE, 45, 0, 0, 0, 0, "entity-token");
-    entity_expect(&a, PROTO_ENTITY_GONE, 45, &m);
-    proto_msg_free(&m);
+    entity_leave(&a, 45, "entity-token");
     test_ws_close(&a);
 }
 
@@ -3382,9 +3382,7 @@ static void wakes_replay_as_watched(void **state)
     assert_true(fabs(w[0][0].height) > 0.01 && fabs(w[F - 1][0].height - w[0][0].height) > 1e-4);
     oc_client_destroy(rep);
     oc_client_destroy(live);
-    entity_send(&a, PROTO_ENTITY_REMOVE, 47, 0, 0, 0, 0, "entity-token");
-    entity_expect(&a, PROTO_ENTITY_GONE, 47, &m);
-    proto_msg_free(&m);
+    entity_leave(&a, 47, "entity-token");
     test_ws_close(&a);
 }
 
@@ -3449,9 +3447,7 @@ static void entity_log_replays_the_wakes(void **state)
     at[0] = ship_sample(&w, 62, t0, -300, 40, 0, "tok") + 0.25;
     while (srv_hub_sim_time(srv_daemon_hub(a)) < at[0] + 0.5) usleep(20000);
     at[1] = ship_sample(&w, 61, t0 + 2, 16, 1, 10, "tok") + 0.25;
-    entity_send(&w, PROTO_ENTITY_REMOVE, 62, 0, 0, 0, 0, "tok");
-    entity_expect(&w, PROTO_ENTITY_GONE, 62, &m);
-    proto_msg_free(&m);
+    entity_leave(&w, 62, "tok");
     while (srv_hub_sim_time(srv_daemon_hub(a)) < at[1] + 0.5) usleep(20000);
     at[2] = ship_sample(&w, 61, t0 + 4, 32, 4, 20, "tok") + 0.25;
     test_ws_close(&w);
