@@ -3188,57 +3188,13 @@ static void wakes_in_queries(void **state)
     test_ws_close(&a);
 }
 
-/* A viewer (layout 1) near two ships gets their wake patterns (WAKE) and
- * places them along the tracks its ENTITY announces give: the C library's
- * wakes at points around the second ship, in the first's wake, are the
- * exact sum of the same waves (the daemon's series, summed here) within
- * the bound the library gives, and the patterns came once each. */
-static void wakes_reach_viewers(void **state)
+/* A round trip on c: every message the daemon queued to it before (the
+ * entity entries broadcast so far) has been taken in when it returns. */
+static void client_sync(oc_client *c)
 {
-    (void)state;
-    test_ws a;
-    timeline ta;
-    sea_connect(&a, &ta, 300);
-    oc_client *v = connect_client(port, NULL);
-    proto_subscribe sub;
-    cascade_subscribe(&sub);
-    assert_int_equal(oc_client_subscribe(v, &sub), OCEAN_OK);
-    proto_camera cam;
-    oc_camera_default(&cam);
-    cam.pos[0] = -150, cam.pos[1] = 25, cam.pos[2] = -20;
-    assert_int_equal(oc_client_send_camera(v, &cam, NULL), OCEAN_OK);
-    double t0 = hub_now();
-    double tq = entity_enter(&a, 41, 0, t0, 0, 8);
-    tq = fmax(tq, entity_enter(&a, 42, 0, t0, -300, 8));
-    enum { N = 7 };
-    const double xz[2 * N] = {-240, -20, -360, -20, -300, -28, -300, -12, -100, -20, -150, -45, -200, 5};
-    oc_wake got[N];
-    ocean_result r = OCEAN_ESTATE;
-    for (double end = test_now_s() + 60; test_now_s() < end && r == OCEAN_ESTATE;) {
-        oc_service(v, 50);
-        oc_frame *f = NULL;
-        while (oc_client_next_frame(v, 0, &f) == OCEAN_OK) oc_frame_free(f);
-        r = oc_client_wakes(v, tq, xz, N, got);
-    }
-    assert_int_equal(r, OCEAN_OK);
-    oc_client_stats st;
-    oc_client_get_stats(v, &st);
-    assert_true(st.wakes_rx >= 1 && st.wakes_rx <= 4 && st.wakes_refused == 0 && st.entity_refused == 0);
-    /* the exact wakes of the same ships, patterns built here */
-    double exact[N], biggest = 0;
-    exact_wakes(&ta, tq, xz, N, exact, NULL);
-    for (int i = 0; i < N; i++) {
-        printf("(%g, %g): the viewer's wake %.5f m, exact %.5f m, bound %.5f m\n", xz[2 * i], xz[2 * i + 1],
-               got[i].height, exact[i], got[i].error);
-        assert_true(fabs(got[i].height - exact[i]) <= got[i].error + 1e-6);
-        biggest = fmax(biggest, fabs(exact[i]));
-    }
-    assert_true(biggest > 0.05);
-    oc_client_destroy(v);
-    for (uint32_t id = 41; id <= 42; id++) {
-        entity_leave(&a, id, "entity-token");
-    }
-    test_ws_close(&a);
+    proto_sea sea;
+    double eff;
+    assert_int_equal(oc_client_sea_state_fetch(c, FRAME_WAIT_MS, &sea, &eff), OCEAN_OK);
 }
 
 /* A viewer subscribed near the ships (layout 1, or 0 with world), its
@@ -3270,6 +3226,49 @@ static void wakes_read(oc_client *v, double t, const double *xz, int n, oc_wake 
     assert_int_equal(r, OCEAN_OK);
 }
 
+/* A viewer (layout 1) near two ships gets their wake patterns (WAKE) and
+ * places them along the tracks its ENTITY announces give: the C library's
+ * wakes at points around the second ship, in the first's wake, are the
+ * exact sum of the same waves (the daemon's series, summed here) within
+ * the bound the library gives, and the patterns came once each. */
+static void wakes_reach_viewers(void **state)
+{
+    (void)state;
+    test_ws a;
+    timeline ta;
+    sea_connect(&a, &ta, 300);
+    oc_client *v = wake_viewer(-150, -20, 0);
+    double t0 = hub_now();
+    double tq = entity_enter(&a, 41, 0, t0, 0, 8);
+    tq = fmax(tq, entity_enter(&a, 42, 0, t0, -300, 8));
+    enum { N = 7 };
+    const double xz[2 * N] = {-240, -20, -360, -20, -300, -28, -300, -12, -100, -20, -150, -45, -200, 5};
+    oc_wake got[N];
+    client_sync(v);
+    wakes_read(v, tq, xz, N, got);
+    oc_client_stats st;
+    oc_client_get_stats(v, &st);
+    printf("the viewer: %llu WAKE patterns (%llu refused), %llu ENTITY entries refused\n",
+           (unsigned long long)st.wakes_rx, (unsigned long long)st.wakes_refused,
+           (unsigned long long)st.entity_refused);
+    assert_true(st.wakes_rx >= 1 && st.wakes_rx <= 4 && st.wakes_refused == 0 && st.entity_refused == 0);
+    /* the exact wakes of the same ships, patterns built here */
+    double exact[N], biggest = 0;
+    exact_wakes(&ta, tq, xz, N, exact, NULL);
+    for (int i = 0; i < N; i++) {
+        printf("(%g, %g): the viewer's wake %.5f m, exact %.5f m, bound %.5f m\n", xz[2 * i], xz[2 * i + 1],
+               got[i].height, exact[i], got[i].error);
+        assert_true(fabs(got[i].height - exact[i]) <= got[i].error + 1e-6);
+        biggest = fmax(biggest, fabs(exact[i]));
+    }
+    assert_true(biggest > 0.05);
+    oc_client_destroy(v);
+    for (uint32_t id = 41; id <= 42; id++) {
+        entity_leave(&a, id, "entity-token");
+    }
+    test_ws_close(&a);
+}
+
 /* A client joining late sees the same wakes as one that watched them form
  * (issue 43): ship 45 steams along +x with two samples, ship 46 is entered
  * and removed; a layout-1 viewer connected before every entry and a
@@ -3290,6 +3289,8 @@ static void wakes_for_late_joiners(void **state)
     double later = entity_enter(&a, 45, 0, t0 + 2, 16, 8);
     assert_true(later > tm && entity_leave(&a, 46, "entity-token") > tm);
     oc_client *late = wake_viewer(-150, -20, 1);
+    client_sync(watcher); /* both hold every entry before they read */
+    client_sync(late);
     enum { N = 6 };
     const double xz[2 * N] = {-240, -20, -360, -20, -300, -28, -100, -20, -150, -45, 60, -30};
     oc_wake w[N], l[N];
@@ -3348,6 +3349,7 @@ static void wakes_replay_as_watched(void **state)
             entity_expect(&a, PROTO_ENTITY_ANNOUNCE, 47, &m);
             proto_msg_free(&m);
         }
+        client_sync(live);
         oc_frame *f = NULL;
         double want = hub_now() + 0.3;
         do {
@@ -3364,6 +3366,7 @@ static void wakes_replay_as_watched(void **state)
     cascade_subscribe(&sub);
     sub.mode = PROTO_MODE_REPLAY;
     assert_int_equal(oc_client_subscribe(rep, &sub), OCEAN_OK);
+    client_sync(rep);
     proto_camera cam;
     oc_camera_default(&cam);
     cam.pos[0] = -150, cam.pos[1] = 25, cam.pos[2] = -20;
