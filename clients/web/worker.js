@@ -47,7 +47,11 @@ const entities = new Map();   /* ENTITY announces: id -> the newest (PROTOCOL.md
 /* The ships' wakes (PROTOCOL.md "WAKE"): every ENTITY and WAKE goes to the
  * WebAssembly store, which reads them on a square around the camera for
  * the page at most WAKE_EVERY_MS apart (a ship moves 1 m in that time at
- * 10 m/s; the square is WAKE_N points a side at WAKE_DX m). */
+ * 10 m/s; the square is WAKE_N points a side at WAKE_DX m, twice that from
+ * a camera 300 m up and four times from 600 m: a pixel's footprint grows
+ * with height, and a helicopter sees the wake of kilometres for the same
+ * cost; 8 m still keeps five points to the 41 m transverse wave of a ship
+ * at 8 m/s). */
 let wakeStore = null;
 let wakeDone = -Infinity;
 let seaDepth = 1000;
@@ -71,19 +75,20 @@ function wakeGrid(meta, now) {
     const cam = meta.cascades && meta.cascades.camera;
     if (!cam) return undefined;
     wakeDone = now;
+    const dx = WAKE_DX * (cam[1] >= 600 ? 4 : cam[1] >= 300 ? 2 : 1);
     /* centred 0.4 of its side ahead of the eye: what the eye sees nearest */
-    const half = WAKE_N * WAKE_DX / 2, a = wakeYaw * Math.PI / 180;
+    const half = WAKE_N * dx / 2, a = wakeYaw * Math.PI / 180;
     const cx = cam[0] + 0.8 * half * Math.cos(a), cz = cam[2] + 0.8 * half * Math.sin(a);
-    const x0 = Math.round((cx - half) / WAKE_DX) * WAKE_DX, z0 = Math.round((cz - half) / WAKE_DX) * WAKE_DX;
+    const x0 = Math.round((cx - half) / dx) * dx, z0 = Math.round((cz - half) / dx) * dx;
     const t0 = performance.now();
     try {
-        const data = wakeStore.grid(meta.simTime, seaDepth, x0, z0, WAKE_DX, WAKE_N);
+        const data = wakeStore.grid(meta.simTime, seaDepth, x0, z0, dx, WAKE_N);
         if (!data) return undefined;       /* a pattern on its way */
         let peak = 0;
         for (let k = 0; k < data.length; k += 4) peak = Math.max(peak, Math.abs(data[k]));
         stats.wakePeak = peak;
         stats.wakeMs = performance.now() - t0;
-        return { x0, z0, dx: WAKE_DX, n: WAKE_N, t: meta.simTime, peak, data };
+        return { x0, z0, dx, n: WAKE_N, t: meta.simTime, peak, data };
     } catch (e) {
         noteError(e, 'wake grid');
         return undefined;
