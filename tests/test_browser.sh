@@ -109,7 +109,10 @@ echo "== viewer: headless Chromium against oceand == (${SECONDS} s)"
 log="$WORK/oceand.log"
 ADMIN_TOKEN=browser-test-admin
 ENTITY_TOKEN=browser-test-entity
-start_daemon "$log" --set server.admin_token=$ADMIN_TOKEN --set server.entity_token=$ENTITY_TOKEN ||
+# server.max_pending_queries 4: the viewer's stalled-daemon check needs a
+# stall longer than the pending limit at two questions a second (3 s here)
+start_daemon "$log" --set server.admin_token=$ADMIN_TOKEN --set server.entity_token=$ENTITY_TOKEN \
+    --set server.max_pending_queries=4 ||
     { echo "test_browser: oceand did not start:"; cat "$log"; exit 1; }
 echo "oceand at $url (pid $daemon_pid)"
 # a ship far out of every view, the shape and speed of the one the viewer
