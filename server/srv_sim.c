@@ -1125,13 +1125,13 @@ static void publish_cache_size(srv_sim *s)
 }
 
 /* The last subscriber left and no query or replay work has come for
- * IDLE_GRACE_S: the caches hold the last ticks' tiles and evaluations,
- * which no later tick can use (their keys hold their sim time), until the
- * next tick sweeps them, however long that takes.  Drop them now and hand the freed memory
- * back to the system (the daemon otherwise keeps up to M_TRIM_THRESHOLD
- * free, main.c): after 256 layout-0 viewers 2 km apart left, 660 MB stayed
- * resident, 320 MB of it in these caches; now 21 MB.  The mip tables and
- * frames the next tick reuses stay. */
+ * IDLE_GRACE_S: the caches hold the last ticks' tiles and evaluations, which
+ * no later tick can use (their keys hold their sim time), until the next
+ * tick sweeps them, however long that takes. Drop them now and hand the
+ * freed memory back to the system (the daemon otherwise keeps up to
+ * M_TRIM_THRESHOLD free, main.c): after 256 layout-0 viewers 2 km apart
+ * left, 660 MB stayed resident, 320 MB of it in these caches; now 21 MB. The
+ * mip tables and frames the next tick reuses stay. */
 static void release_idle(srv_sim *s)
 {
     srv_tiles_sweep(s->tiles, UINT64_MAX);
@@ -1250,11 +1250,11 @@ static void snapshot_jobs(srv_sim *s, work *w, double t, int64_t tick_no, int li
     }
 }
 
-/* The wake patterns the client c (either layout), its camera at cam, needs at sim
- * time t and does not hold, queued as WAKE messages: those of the ships
- * whose wakes reach its view range.  Only built ones: the others go to
- * the builder, and the wake shows once built (a frame never waits for
- * one).  cs models what the client holds: the last PROTO_WAKE_HELD sent. */
+/* The wake patterns the client c (either layout), its camera at cam, needs
+ * at sim time t and does not hold, queued as WAKE messages: those of the
+ * ships whose wakes reach its view range. Only built ones: the others go to
+ * the builder, and the wake shows once built (a frame never waits for one).
+ * cs models what the client holds: the last PROTO_WAKE_HELD sent. */
 static void wakes_send(srv_sim *s, srv_client *c, srv_client_sim *cs, double t, const proto_camera *cam)
 {
     srv_hub *h = s->hub;
