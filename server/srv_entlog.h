@@ -15,6 +15,8 @@
  * Threads: srv_entlog_open and srv_entlog_load before the daemon serves;
  * srv_entlog_append from any thread (it takes the log's own lock; the
  * caller may hold hub.lock).
+ * Entries are written through a buffer flushed at least once a second and
+ * at close: a daemon that dies loses at most that second of the log.
  * OOM and write errors: an entry that cannot be written stops the log
  * (said once on stderr with the file and the reason); nothing else stops.
  */
