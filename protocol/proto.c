@@ -167,6 +167,7 @@ static ocean_result v_sea(ctx *c, const proto_sea *s)
 {
     TRY(chk_enum(c, "sea.spectrum", s->spectrum, 4));
     TRY(chk_enum(c, "sea.spreading", s->spreading, 4));
+    TRY(chk_mask(c, "sea.flags", s->flags, PROTO_SEA_FLAGS_ALL));
     TRY(chk_range(c, "sea.wind_u10", s->wind_u10, 0, 100));
     TRY(chk_range(c, "sea.wind_dir_deg", s->wind_dir_deg, -360, 360));
     TRY(chk_range(c, "sea.fetch_m", s->fetch_m, 1, 1e7));
@@ -537,7 +538,7 @@ static ocean_result v_sea_state(ctx *c, const proto_sea_state *s)
         const proto_sea *z = &s->sea;
         const double d[11] = {s->effective_time, z->wind_u10, z->wind_dir_deg, z->fetch_m, z->depth_m,
                               z->swell, z->phillips_a, z->small_wave_m, z->choppiness, z->hs, z->tp};
-        int nonzero = z->spectrum || z->spreading || z->seed;
+        int nonzero = z->spectrum || z->spreading || z->flags || z->seed;
         for (int i = 0; i < 11; i++) nonzero |= d[i] != 0 || signbit(d[i]);
         if (nonzero)
             FAIL(c, OCEAN_EFORMAT, "sea_state get: effective_time and the sea block must be zero bytes");
@@ -762,6 +763,7 @@ static void get_sea(const uint8_t *p, proto_sea *s)
 {
     s->spectrum = p[0];
     s->spreading = p[1];
+    s->flags = p[2];
     s->seed = proto_ld64(p + 8);
     double *d[10] = {&s->wind_u10, &s->wind_dir_deg, &s->fetch_m, &s->depth_m, &s->swell,
                      &s->phillips_a, &s->small_wave_m, &s->choppiness, &s->hs, &s->tp};
@@ -772,7 +774,7 @@ static void get_sea(const uint8_t *p, proto_sea *s)
 static ocean_result d_sea(rd *r, proto_sea *s)
 {
     TRY(need(r, SEA_SIZE, "sea state"));
-    TRY(zero_bytes(r, r->off + 2, 6, "sea"));
+    TRY(zero_bytes(r, r->off + 3, 5, "sea"));
     get_sea(r->p + r->off, s);
     r->off += SEA_SIZE;
     return OCEAN_OK;
@@ -1453,6 +1455,7 @@ static void set_sea(uint8_t *p, const proto_sea *s)
 {
     p[0] = s->spectrum;
     p[1] = s->spreading;
+    p[2] = s->flags;
     proto_st64(p + 8, s->seed);
     const double d[10] = {s->wind_u10, s->wind_dir_deg, s->fetch_m, s->depth_m, s->swell,
                           s->phillips_a, s->small_wave_m, s->choppiness, s->hs, s->tp};

@@ -188,9 +188,14 @@ typedef struct proto_header {
 
 /* Sea state as carried by HELLO and SEA_STATE.  Enum values as in
  * sim/spectrum.h (spectrum 0..3, spreading 0..3). */
+/* proto_sea.flags */
+#define PROTO_SEA_NO_WHITECAPS 0x01   /* no whitecaps: foam 0 everywhere */
+#define PROTO_SEA_FLAGS_ALL 0x01
+
 typedef struct proto_sea {
     uint8_t spectrum;
     uint8_t spreading;
+    uint8_t flags;      /* PROTO_SEA_* */
     uint64_t seed;
     double wind_u10, wind_dir_deg, fetch_m, depth_m, swell, phillips_a, small_wave_m, choppiness;
     double hs, tp;      /* informational: significant height, peak period (0 unknown) */

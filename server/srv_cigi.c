@@ -70,10 +70,13 @@ struct srv_cigi {
     int flying;                 /* messages the query in flight carries (the first `flying`) */
     uint32_t query_id;          /* that query's id */
     uint32_t next_query, ig_frame;
-    /* the host's surface wind, to be entered when want_wind */
-    int want_wind;
-    double wind_u10, wind_dir;  /* m/s; deg the wind blows toward, from +x (north) to +z */
-    double sent_u10, sent_dir;  /* the last one entered (NAN: none) */
+    /* the host's sea (its surface wind, its whitecaps), to be entered
+     * when want_sea */
+    int want_sea;
+    double wind_u10, wind_dir;  /* m/s; deg the wind blows toward, from +x (north) to +z; NAN: none set */
+    int whitecaps;              /* Maritime Surface Conditions Control's: 1, 0; -1: none set */
+    double sent_u10, sent_dir;  /* the last wind entered (NAN: none) */
+    int sent_whitecaps;         /* the last whitecaps entered (-1: none) */
     double sea_next;            /* monotonic time the next change may be entered */
     struct sockaddr_storage wind_from; /* who sent it, for the log */
     double water_temp, clarity; /* the host's global Maritime Surface Conditions (deg C, %) */
@@ -263,7 +266,7 @@ static void host_wind(srv_cigi *s, double speed, double from_deg, const pending 
     s->wind_u10 = speed;
     s->wind_dir = fmod(fmod(from_deg + 180.0, 360.0) + 360.0, 360.0);
     s->wind_from = m->to;
-    s->want_wind = 1;
+    s->want_sea = 1;
 }
 
 /* The address a (IPv4 or IPv6) as text into buf. */
@@ -281,72 +284,102 @@ static int same_wind(double u10, double dir, double u2, double dir2)
     return fabs(u10 - u2) < 0.005 && dd < 0.05;
 }
 
-/* Enters the host's wind into the timeline as an admin's set is entered
- * (srv_handle.c on_sea_state): the sea at the end of the timeline with
- * the host's wind, effective as soon as its ocean can be built. */
-static void enter_wind(srv_cigi *s)
+/* The sea at the end of the timeline with what the host set (its wind, its
+ * whitecaps) into *np; 0 when that is the sea already [hub.lock]. */
+static int host_sea(const srv_cigi *s, ocean_params *np)
+{
+    srv_hub *h = s->h;
+    *np = h->n_sea_pending ? h->sea_pending[h->n_sea_pending - 1].params : h->settings.params;
+    int same = 1;
+    if (!isnan(s->wind_u10) && !same_wind(np->sea.wind_u10, np->sea.wind_dir_deg, s->wind_u10, s->wind_dir)) {
+        np->sea.wind_u10 = s->wind_u10;
+        np->sea.wind_dir_deg = s->wind_dir;
+        same = 0;
+    }
+    if (s->whitecaps >= 0 && np->sea.whitecaps != s->whitecaps) {
+        np->sea.whitecaps = s->whitecaps;
+        same = 0;
+    }
+    return !same;
+}
+
+/* Submits the host's sea to the shared timeline (server.redis): the set as
+ * a SEA_STATE message, whose ERROR names it (take_answers logs it); the
+ * shared timeline takes a change at least server.sea_lead ahead when it
+ * is submitted, a moment after this: two ticks more.  Called with
+ * hub.lock held; returns with it released. */
+static ocean_result submit_host_sea(srv_cigi *s, const ocean_params *np, double *eff, char *why, size_t n)
+{
+    srv_hub *h = s->h;
+    proto_msg set;
+    proto_msg_init(&set, PROTO_SEA_STATE);
+    set.u.sea_state.op = PROTO_SEA_SET;
+    srv_sea_from_params(np, &set.u.sea_state.sea);
+    *eff = set.u.sea_state.effective_time =
+        srv_hub_sim_time(h) + h->settings.srv.sea_lead + 2.0 / h->settings.srv.tick_rate;
+    pthread_mutex_unlock(&h->lock);
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    ocean_result r = proto_encode(&b, &set, why, n);
+    if (r == OCEAN_OK)
+        r = srv_redis_submit(h->redis, s->c, proto_buf_data(&b), proto_buf_len(&b), &set.u.sea_state.sea, *eff,
+                             why, n);
+    proto_buf_free(&b);
+    return r;
+}
+
+/* Enters the host's sea into the timeline as an admin's set is entered
+ * (srv_handle.c on_sea_state): the sea at the end of the timeline with the
+ * host's wind and whitecaps, effective as soon as its ocean can be built. */
+static void enter_host_sea(srv_cigi *s)
 {
     srv_hub *h = s->h;
     char why[512] = "", msg[256], host[INET6_ADDRSTRLEN];
     addr_text(&s->wind_from, host, sizeof host);
     double eff = 0;
+    ocean_params np;
     pthread_mutex_lock(&h->lock);
-    ocean_params np = h->n_sea_pending ? h->sea_pending[h->n_sea_pending - 1].params : h->settings.params;
-    if (same_wind(np.sea.wind_u10, np.sea.wind_dir_deg, s->wind_u10, s->wind_dir)) {
+    ocean_result r = OCEAN_OK;
+    if (!host_sea(s, &np)) {
         pthread_mutex_unlock(&h->lock);
-        s->sent_u10 = s->wind_u10, s->sent_dir = s->wind_dir;
-        return;
-    }
-    np.sea.wind_u10 = s->wind_u10;
-    np.sea.wind_dir_deg = s->wind_dir;
-    ocean_result r = ocean_params_validate(&np, msg, sizeof msg);
-    if (r != OCEAN_OK) {
+    } else if ((r = ocean_params_validate(&np, msg, sizeof msg)) != OCEAN_OK) {
         pthread_mutex_unlock(&h->lock);
-        fprintf(stderr, "oceand: cigi: the wind of host %s refused: %s\n", host, msg);
+        fprintf(stderr, "oceand: cigi: the sea of host %s refused: %s\n", host, msg);
         bump(&h->stats.cigi_drop_value, 1);
+        return;
     } else if (h->redis) {
-        /* the set as a SEA_STATE message: the ERROR that may answer it
-         * names it (take_answers logs it) */
-        proto_msg set;
-        proto_msg_init(&set, PROTO_SEA_STATE);
-        set.u.sea_state.op = PROTO_SEA_SET;
-        srv_sea_from_params(&np, &set.u.sea_state.sea);
-        /* the shared timeline takes a change at least server.sea_lead
-         * ahead when it is submitted, a moment after this: two ticks more */
-        eff = set.u.sea_state.effective_time =
-            srv_hub_sim_time(h) + h->settings.srv.sea_lead + 2.0 / h->settings.srv.tick_rate;
-        pthread_mutex_unlock(&h->lock);
-        proto_buf b;
-        proto_buf_init(&b, 0);
-        r = proto_encode(&b, &set, why, sizeof why);
-        if (r == OCEAN_OK)
-            r = srv_redis_submit(h->redis, s->c, proto_buf_data(&b), proto_buf_len(&b), &set.u.sea_state.sea, eff,
-                                 why, sizeof why);
-        proto_buf_free(&b);
+        r = submit_host_sea(s, &np, &eff, why, sizeof why);
     } else {
         r = srv_hub_sea_schedule(h, &np, 0, srv_hub_sea_lead(h), &eff, why, sizeof why);
         pthread_mutex_unlock(&h->lock);
         srv_hub_wake_net(h);
+        if (r == OCEAN_OK)
+            fprintf(stderr, "oceand: sea state set by CIGI host %s, in force from t = %.3f s: wind %.2f m/s toward "
+                    "%.1f deg, whitecaps %s\n", host, eff, np.sea.wind_u10, np.sea.wind_dir_deg,
+                    np.sea.whitecaps ? "on" : "off");
     }
     if (r == OCEAN_OK) {
-        s->sent_u10 = s->wind_u10, s->sent_dir = s->wind_dir;
-        fprintf(stderr, "oceand: sea state set by CIGI host %s, %s t = %.3f s: wind %.2f m/s toward %.1f deg\n",
-                host, h->redis ? "sent to the shared timeline, asked for" : "in force from", eff,
-                s->wind_u10, s->wind_dir);
+        s->sent_u10 = s->wind_u10, s->sent_dir = s->wind_dir, s->sent_whitecaps = s->whitecaps;
+        if (h->redis && eff > 0)
+            fprintf(stderr, "oceand: sea state set by CIGI host %s, sent to the shared timeline, asked for t = "
+                    "%.3f s: wind %.2f m/s toward %.1f deg, whitecaps %s\n", host, eff, np.sea.wind_u10,
+                    np.sea.wind_dir_deg, np.sea.whitecaps ? "on" : "off");
     } else if (why[0]) {
-        fprintf(stderr, "oceand: cigi: the wind of host %s not entered: %s\n", host, why);
+        fprintf(stderr, "oceand: cigi: the sea of host %s not entered: %s\n", host, why);
     }
 }
 
-/* The host's latest wind, entered when it differs from the last one
+/* The host's latest sea, entered when it differs from the last one
  * entered, at most SRV_CIGI_SEA_PER_S times a second. */
 static void follow_host_sea(srv_cigi *s)
 {
-    if (!s->want_wind || srv_now() < s->sea_next) return;
-    s->want_wind = 0;
-    if (same_wind(s->sent_u10, s->sent_dir, s->wind_u10, s->wind_dir)) return;
+    if (!s->want_sea || srv_now() < s->sea_next) return;
+    s->want_sea = 0;
+    if ((isnan(s->wind_u10) || same_wind(s->sent_u10, s->sent_dir, s->wind_u10, s->wind_dir)) &&
+        s->whitecaps == s->sent_whitecaps)
+        return;
     s->sea_next = srv_now() + 1.0 / SRV_CIGI_SEA_PER_S;
-    enter_wind(s);
+    enter_host_sea(s);
 }
 
 /* A wind packet of the host at `host`: Atmosphere Control's global wind,
@@ -369,13 +402,13 @@ static void take_wind(srv_cigi *s, pending *m, const cigi_packet *p)
         bump(&s->h->stats.cigi_ignored, 1);
 }
 
-/* Maritime Surface Conditions Control of global scope: the water's
- * temperature and clarity, reported back to Environmental Conditions
- * Requests.  Its surface height and whitecaps are not applied to the sea
- * (counted ignored when they ask for a change). */
+/* Maritime Surface Conditions Control of global scope: its whitecaps
+ * enter the sea (the timeline, as the host's wind does); the water's
+ * temperature and clarity are reported back to Environmental Conditions
+ * Requests.  Its surface height offset is not applied (counted ignored
+ * when it asks for one). */
 static void take_maritime(srv_cigi *s, pending *m, const cigi_packet *p)
 {
-    (void)m;
     const cigi_maritime_control *c = &p->u.maritime;
     if (cigi_packet_check(p, NULL, 0) != OCEAN_OK || !isfinite(c->water_temp) || c->water_temp < -2 ||
         c->water_temp > 40 || !(c->clarity >= 0 && c->clarity <= 100)) {
@@ -388,7 +421,12 @@ static void take_maritime(srv_cigi *s, pending *m, const cigi_packet *p)
     }
     s->water_temp = c->water_temp;
     s->clarity = c->clarity;
-    if (c->surface_height != 0 || !c->whitecaps) bump(&s->h->stats.cigi_ignored, 1);
+    if (s->whitecaps != (c->whitecaps != 0)) {
+        s->whitecaps = c->whitecaps != 0;
+        s->wind_from = m->to;
+        s->want_sea = 1;
+    }
+    if (c->surface_height != 0) bump(&s->h->stats.cigi_ignored, 1);
 }
 
 /* An Environmental Conditions Request: its maritime part answered with
@@ -640,7 +678,7 @@ static void *cigi_main(void *arg)
     srv_cigi *s = arg;
     while (!atomic_load(&s->stop)) {
         struct pollfd pf[2] = {{.fd = s->fd, .events = POLLIN}, {.fd = s->efd, .events = POLLIN}};
-        int r = poll(pf, 2, s->want_wind ? 50 : s->count ? 100 : 1000);
+        int r = poll(pf, 2, s->want_sea ? 50 : s->count ? 100 : 1000);
         if (r < 0 && errno != EINTR) break;
         if (pf[1].revents & POLLIN) {
             uint64_t v;
@@ -712,7 +750,8 @@ ocean_result srv_cigi_start(srv_hub *h, srv_cigi **out, char *msg, size_t msglen
     if (!s) return OCEAN_ENOMEM;
     s->h = h;
     s->fd = s->efd = -1;
-    s->sent_u10 = s->sent_dir = NAN;
+    s->sent_u10 = s->sent_dir = s->wind_u10 = s->wind_dir = NAN;
+    s->whitecaps = s->sent_whitecaps = -1;
     ocean_result r = setup(s, msg, msglen);
     if (r == OCEAN_OK && pthread_create(&s->thread, NULL, cigi_main, s) != 0) r = OCEAN_ENOMEM;
     if (r != OCEAN_OK) {

@@ -21,6 +21,7 @@ void srv_sea_from_params(const ocean_params *p, proto_sea *o)
     o->phillips_a = p->sea.phillips_a;
     o->small_wave_m = p->sea.small_wave_m;
     o->choppiness = p->sea.choppiness;
+    o->flags = p->sea.whitecaps ? 0 : PROTO_SEA_NO_WHITECAPS;
     double hs = ocean_spectrum_hs(&p->sea);
     double wp = ocean_spectrum_peak(&p->sea);
     o->hs = isfinite(hs) && hs >= 0 && hs <= 1000 ? hs : 0;
@@ -41,6 +42,7 @@ void srv_params_from_sea(const proto_sea *s, const ocean_params *base, ocean_par
     o->sea.phillips_a = s->phillips_a;
     o->sea.small_wave_m = s->small_wave_m;
     o->sea.choppiness = s->choppiness;
+    o->sea.whitecaps = !(s->flags & PROTO_SEA_NO_WHITECAPS);
 }
 
 void srv_mesh_camera(const proto_camera *pc, mesh_camera *c)

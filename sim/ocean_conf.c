@@ -158,6 +158,10 @@ static const conf_entry ocean_entries[] = {
              "rounded crests and no foam (the wind sets the whitecap coverage, the displacement's "
              "convergence places it), "
              "above about 1.5 crests fold; between 0 and 0.001 refused."},
+    {.name = "sea.whitecaps", .type = CONF_BOOL, .offset = SEA(whitecaps), .def = "on",
+     .help = "Whitecaps where the waves break, at the wind's coverage (Monahan); off: none "
+             "(foam 0 in every tile and answer; a CIGI host's Maritime Surface Conditions "
+             "Control sets it)."},
     {.name = "ocean.seed", .type = CONF_U64, .offset = PAR(seed), .min = 0,
      .max = 18446744073709551616.0, .def = "1",
      .help = "Random seed of the wave amplitudes; the same seed and sea state give the same "

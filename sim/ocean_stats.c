@@ -137,7 +137,9 @@ double ocean_stats_whitecap_target(const ocean *o)
     double energy = 0.0;
     for (int c = 0; c < o->p.cascades; c++)
         energy += o->cas[c].variance;
-    return energy > 0.0 ? ocean_foam_coverage_target(o->p.sea.wind_u10) : 0.0;
+    /* whitecaps off (the sea state's): no foam anywhere, every place foam
+     * is read (tiles, queries, statistics) following this one target */
+    return energy > 0.0 && o->p.sea.whitecaps ? ocean_foam_coverage_target(o->p.sea.wind_u10) : 0.0;
 }
 
 ocean_foam_map ocean_stats_foam_map(const ocean *o, double sigma)

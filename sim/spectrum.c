@@ -38,6 +38,7 @@ void ocean_sea_state_default(ocean_sea_state *s)
     s->phillips_a = PM_ALPHA / 2.0;
     s->small_wave_m = 0.0;
     s->choppiness = 1.0;
+    s->whitecaps = 1;
 }
 
 static int check_range(const char *name, double v, double lo, double hi,
@@ -73,6 +74,10 @@ ocean_result ocean_sea_state_validate(const ocean_sea_state *s, char *msg, size_
         !check_range("small_wave", s->small_wave_m, 0.0, 100.0, msg, msglen) ||
         !check_range("choppiness", s->choppiness, 0.0, 10.0, msg, msglen))
         return OCEAN_EINVAL;
+    if (s->whitecaps != 0 && s->whitecaps != 1) {
+        if (msg) snprintf(msg, msglen, "whitecaps = %d: 1 (on) or 0 (off)", s->whitecaps);
+        return OCEAN_EINVAL;
+    }
     /* The displacement channels hold lambda D in float and foam reads them
      * back divided by lambda: below 1e-3 the displacement is under a
      * millimetre per metre of slope (nothing to see), and near 1e-38 the

@@ -46,6 +46,12 @@ typedef enum ocean_spreading_kind {
 typedef struct ocean_sea_state {
     ocean_spectrum_kind spectrum;
     ocean_spreading_kind spreading;
+    int whitecaps;        /* 1: whitecaps where the waves break (foam, at the
+                             wind's coverage); 0: none (a CIGI host's Maritime
+                             Surface Conditions Control may turn them off) */
+    int unused_;          /* 0: no padding in the struct (test_conf compares
+                             ocean_params whole, to find a field the config
+                             table misses) */
     double wind_u10;      /* m/s at 10 m, 0..100 */
     double wind_dir_deg;  /* direction the wind blows toward, degrees from +x to +z */
     double fetch_m;       /* JONSWAP/TMA fetch, 1 m .. 1e7 m */

@@ -433,6 +433,71 @@ static void host_wind_sets_the_sea(void **state)
     proto_buf_free(&b);
 }
 
+/* The largest foam QUERY answers on a 50 x 50 lattice, 3 m apart, at the
+ * latest tick. */
+static double query_foam(fixture *fx)
+{
+    enum { K = 50 };
+    static double xz[2 * K * K];
+    for (int i = 0; i < K * K; i++) xz[2 * i] = 3.0 * (i % K), xz[2 * i + 1] = 3.0 * (i / K);
+    oc_query_result qr;
+    assert_int_equal(oc_client_query(fx->ws, xz, K * K, 0, 0, 60000, &qr), OCEAN_OK);
+    double most = 0;
+    for (uint32_t i = 0; i < qr.count; i++) most = fmax(most, qr.samples[i].foam);
+    oc_query_result_free(&qr);
+    return most;
+}
+
+/* Waits (a deadline) for the sea in force to have whitecaps on or off,
+ * nothing pending; 1 if it did. */
+static int wait_whitecaps(srv_hub *h, int on)
+{
+    for (int i = 0; i < 1500; i++) {
+        pthread_mutex_lock(&h->lock);
+        int now = h->settings.params.sea.whitecaps, pending = h->n_sea_pending || h->sea_applying;
+        pthread_mutex_unlock(&h->lock);
+        if (now == on && !pending) return 1;
+        usleep(20000);
+    }
+    return 0;
+}
+
+/* A host's Maritime Surface Conditions Control of global scope with
+ * whitecaps off enters the sea through the timeline, as its wind does: a
+ * WebSocket client is told the sea has none (SEA_STATE flags) and every
+ * QUERY answers foam 0; turned on again, the whitecaps come back. */
+static void host_whitecaps_set_the_sea(void **state)
+{
+    fixture *fx = *state;
+    srv_hub *h = srv_daemon_hub(fx->d);
+    int fd = host_socket("127.0.0.1");
+    double before = query_foam(fx);
+    for (int on = 0; on <= 1; on++) {
+        cigi_packet pk = {.kind = CIGI_MARITIME_CONTROL};
+        pk.u.maritime = (cigi_maritime_control){.enable = 1, .whitecaps = (uint8_t)on, .scope = CIGI_SCOPE_GLOBAL,
+                                                .water_temp = 15, .clarity = 80};
+        const cigi_format f = {3, 3, 1};
+        proto_buf b;
+        proto_buf_init(&b, 0);
+        put(&b, &f, ig_control(600 + (uint32_t)on));
+        put(&b, &f, pk);
+        send_to(fd, fx->port, &b);
+        proto_buf_free(&b);
+        assert_true(wait_whitecaps(h, on));
+        proto_sea sea;
+        double eff;
+        assert_int_equal(oc_client_sea_state_fetch(fx->ws, 10000, &sea, &eff), OCEAN_OK);
+        double most = query_foam(fx);
+        print_message("whitecaps %s from t = %.3f s (SEA_STATE flags %u): the largest foam QUERY answers %.3f "
+                      "(%.3f before)\n", on ? "on" : "off", eff, sea.flags, most, before);
+        assert_int_equal(sea.flags & PROTO_SEA_NO_WHITECAPS, on ? 0 : PROTO_SEA_NO_WHITECAPS);
+        if (on) assert_true(most > 0);
+        else assert_true(most == 0);
+    }
+    assert_true(before > 0);
+    close(fd);
+}
+
 /* One host message: IG Control and the packets given, sent; its answer
  * read into buf (asserted to come), its length returned. */
 static size_t exchange(fixture *fx, int fd, const cigi_format *f, uint32_t frame, const cigi_packet *pk, int n,
@@ -587,6 +652,7 @@ int main(void)
         cmocka_unit_test(entity_relative_requests),
         cmocka_unit_test(environmental_requests),
         cmocka_unit_test(host_wind_sets_the_sea),
+        cmocka_unit_test(host_whitecaps_set_the_sea),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -293,6 +293,19 @@ python3 -c "import json,sys; a=json.load(open(sys.argv[1])); b=json.load(open(sy
 grep -q "sea state set by client [0-9]* (127.0.0.1), in force from t = .*wind 12.00 m/s" "$tmp/oceand.log" ||
     fail "the change is not logged with its client and address: $(grep 'sea state' "$tmp/oceand.log" | head -3)"
 
+echo "== sea --whitecaps off, then on ($SECONDS s)"
+for w in off on; do
+    "$OC" sea "$URL" --set --token $TOKEN --whitecaps $w >/dev/null 2>"$tmp/sea.err" || fail "sea --set --whitecaps $w: $(cat "$tmp/sea.err")"
+    want=$([[ $w == on ]] && echo True || echo False)
+    for _ in $(seq 50); do
+        "$OC" sea "$URL" >"$tmp/sea4.json" || fail "sea after --whitecaps $w"
+        python3 -c "import json,sys; sys.exit(0 if json.load(open(sys.argv[1]))['whitecaps'] is $want else 1)" "$tmp/sea4.json" && break
+        sleep 0.1
+    done
+    json "$tmp/sea4.json" "d['whitecaps'] is $want and d['wind_u10'] == 12"
+done
+"$OC" sea "$URL" --whitecaps maybe 2>"$tmp/sea.err"; [[ $? -eq 2 ]] || fail "sea --whitecaps maybe accepted"
+
 echo "== sea --set takes what the config takes: swell 5, a seed past 2^53 ($SECONDS s)"
 # --swell had [0, 1] where sea.swell is [0, 10]; --seed went through a double,
 # so 2^53 + 1 arrived as 2^53, and the JSON printed seeds rounded

@@ -125,6 +125,8 @@ static void test_defaults_match_ocean_params_default(void **state)
     assert_true(got.sea.phillips_a == want.sea.phillips_a);
     assert_true(got.sea.small_wave_m == want.sea.small_wave_m);
     assert_true(got.sea.choppiness == want.sea.choppiness);
+    assert_int_equal(got.sea.whitecaps, want.sea.whitecaps);
+    got.sea.unused_ = 0; /* no key */
     assert_true(got.seed == want.seed);
     assert_int_equal(got.n, want.n);
     assert_int_equal(got.cascades, want.cascades);

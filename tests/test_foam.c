@@ -394,6 +394,61 @@ static void flat_sea_has_no_foam(void **state)
     ocean_destroy(o);
 }
 
+/* Whitecaps off (the sea state's sea.whitecaps; a CIGI host's Maritime
+ * Surface Conditions Control): a storm sea at 20 m/s, whose crests break,
+ * has no foam anywhere, in the field's statistics, at every sampled point
+ * and in the per-cascade foam the daemon's tiles take; on, the same sea
+ * has its whitecaps. */
+static void whitecaps_off_no_foam(void **state)
+{
+    (void)state;
+    for (int on = 0; on <= 1; on++) {
+        ocean *o = scene_ocean("storm", 20.0);
+        ocean_params p = *ocean_get_params(o);
+        ocean_destroy(o);
+        p.sea.whitecaps = on;
+        assert_int_equal(ocean_create(&p, &o, NULL, 0), OCEAN_OK);
+        ocean_frame *f;
+        assert_int_equal(ocean_frame_create(o, &f), OCEAN_OK);
+        ocean_request r;
+        ocean_request_all(&r, OCEAN_FX_ALL);
+        assert_int_equal(ocean_evaluate(o, 40.0, &r, f), OCEAN_OK);
+        ocean_frame_info info;
+        ocean_frame_get_info(f, &info);
+        ocean_field_stats st;
+        ocean_frame_get_field_stats(f, &st);
+        double most = 0;
+        for (int i = 0; i < 4096; i++) {
+            ocean_point pt;
+            ocean_frame_sample(f, 7.31 * (i % 64), -5.17 * (i / 64), &pt);
+            most = fmax(most, pt.foam);
+        }
+        r.per_cascade = 1; /* the daemon's tiles: each cascade's foam by its own map */
+        assert_int_equal(ocean_evaluate(o, 40.0, &r, f), OCEAN_OK);
+        double most_tiles = 0;
+        for (int i = 0; i < 4096; i++) {
+            ocean_point pt;
+            ocean_frame_sample(f, 7.31 * (i % 64), -5.17 * (i / 64), &pt);
+            most_tiles = fmax(most_tiles, pt.foam);
+        }
+        print_message("storm 20 m/s, whitecaps %s: target %.4f, coverage %.4f, largest foam %.3f (per cascade "
+                      "%.3f)\n", on ? "on" : "off", info.whitecap_target, st.foam_coverage, most, most_tiles);
+        if (on) {
+            assert_true(info.whitecap_target > 0.01 && st.foam_coverage > 0.01 && most > 0.5 && most_tiles > 0.005);
+        } else {
+            assert_true(info.whitecap_target == 0.0 && st.foam_coverage == 0.0 && most == 0.0 && most_tiles == 0.0);
+        }
+        ocean_frame_destroy(f);
+        ocean_destroy(o);
+    }
+    ocean_sea_state bad;
+    ocean_sea_state_default(&bad);
+    bad.whitecaps = 2;
+    char why[200];
+    assert_int_equal(ocean_sea_state_validate(&bad, why, sizeof why), OCEAN_EINVAL);
+    assert_non_null(strstr(why, "whitecaps"));
+}
+
 static void beta_is_downward_acceleration(void **state)
 {
     (void)state;
@@ -436,6 +491,7 @@ int main(void)
         cmocka_unit_test(coverage_against_callaghan),
         cmocka_unit_test(beta_is_downward_acceleration),
         cmocka_unit_test(flat_sea_has_no_foam),
+        cmocka_unit_test(whitecaps_off_no_foam),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

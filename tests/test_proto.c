@@ -58,8 +58,8 @@ static void out(sbuf *b, const char *fmt, ...)
 
 static void dump_sea(sbuf *b, const char *p, const proto_sea *s)
 {
-    out(b, "%s.spectrum = %u\n%s.spreading = %u\n%s.seed = %llu\n", p, s->spectrum, p, s->spreading, p,
-        (unsigned long long)s->seed);
+    out(b, "%s.spectrum = %u\n%s.spreading = %u\n%s.flags = %u\n%s.seed = %llu\n", p, s->spectrum, p, s->spreading,
+        p, s->flags, p, (unsigned long long)s->seed);
     out(b, "%s.wind_u10 = %.17g\n%s.wind_dir_deg = %.17g\n%s.fetch_m = %.17g\n%s.depth_m = %.17g\n", p, s->wind_u10, p,
         s->wind_dir_deg, p, s->fetch_m, p, s->depth_m);
     out(b, "%s.swell = %.17g\n%s.phillips_a = %.17g\n%s.small_wave_m = %.17g\n%s.choppiness = %.17g\n", p, s->swell, p,
@@ -518,6 +518,13 @@ static int sample_named(proto_msg *m, const char *name)
         m->u.sea_state.token[0] = 0;
         return 0;
     }
+    if (!strcmp(name, "sea_state_no_whitecaps")) { /* a CIGI host's Maritime Control turned them off */
+        sample(m, PROTO_SEA_STATE);
+        m->u.sea_state.op = PROTO_SEA_ANNOUNCE;
+        m->u.sea_state.token[0] = 0;
+        m->u.sea_state.sea.flags = PROTO_SEA_NO_WHITECAPS;
+        return 0;
+    }
     if (!strcmp(name, "sea_state_get")) {
         proto_msg_init(m, PROTO_SEA_STATE);
         m->hdr.seq = 9;
@@ -566,7 +573,8 @@ static int sample_named(proto_msg *m, const char *name)
 }
 
 static const char *const extra_vectors[] = {"frame_cascade", "frame_cascade_time", "mesh_topology_flat", "subscribe_cascade",
-                                            "sea_state_announce", "sea_state_get", "frame_mesh_qz", "entity_announce",
+                                            "sea_state_announce", "sea_state_no_whitecaps", "sea_state_get",
+                                            "frame_mesh_qz", "entity_announce",
                                             "entity_remove", "entity_gone", "entity_get"};
 #define N_EXTRA ((int)(sizeof extra_vectors / sizeof extra_vectors[0]))
 
@@ -927,7 +935,8 @@ static void test_payload_errors(void **state)
     /* reserved bytes -> EFORMAT */
     expect_field(PROTO_SUBSCRIBE, P(7), 1, 2, OCEAN_ETYPE);      /* layout */
     expect_field(PROTO_QUERY, P(9), 1, 1, OCEAN_EFORMAT);
-    expect_field(PROTO_SEA_STATE, P(18), 1, 1, OCEAN_EFORMAT);
+    expect_field(PROTO_SEA_STATE, P(19), 1, 1, OCEAN_EFORMAT);
+    expect_field(PROTO_SEA_STATE, P(18), 1, 2, OCEAN_ETYPE);     /* sea flags: an unknown bit */
     expect_field(PROTO_MESH_TOPOLOGY, P(6), 2, 2, OCEAN_EFORMAT);
     /* sea state announce with a token */
     proto_msg m;
@@ -1078,6 +1087,7 @@ static const bad_vector bad_vectors[] = {
     {"bad_length_lies", "bye", 12, 4, 200, OCEAN_ETRUNC, -1},
     {"bad_nan_sim_time", "bye", 24, 8, 0x7FF8000000000000ull, OCEAN_EINVAL, -1},
     {"bad_enum_codec", "subscribe", P(2), 1, 50, OCEAN_ETYPE, -1},
+    {"bad_sea_flags", "sea_state_announce", P(18), 1, 6, OCEAN_ETYPE, -1},
     {"bad_nan_camera", "camera", P(16), 8, 0x7FF8000000000000ull, OCEAN_EINVAL, -1},
     {"bad_query_count_lies", "query", P(4), 4, 1000, OCEAN_ETRUNC, -1},
     {"bad_frame_record_lies", "frame", P(56), 4, 4096, OCEAN_ETRUNC, -1},

@@ -86,6 +86,9 @@ const SEA_SIZE = 96, SUBSCRIBE_SIZE = 28, CAMERA_SIZE = 64, TILE_FIXED = 48, FRA
 const RECORD_HEAD = 8, TOPO_FIXED = 16, VERTS_FIXED = 32, QUERY_FIXED = 24, RESULT_FIXED = 16;
 const SAMPLE_SIZE = 36, SEASTATE_FIXED = 16 + SEA_SIZE, ERROR_FIXED = 8, BYE_FIXED = 4, ENTITY_FIXED = 56;
 const WAKE_FIXED = 48, PLANE_MAX = 4096;
+/* sea state flags (PROTOCOL.md "Sea state block") */
+export const SEA_NO_WHITECAPS = 0x01;
+const SEA_FLAGS_ALL = 0x01;
 const CASCADE_FIXED = 56, CASCADE_ENTRY = 320, PLACEMENT_SIZE = 32;
 /* Cascade block flag KEY, and a layout-1 record tag's sample-B bit
  * (PROTOCOL.md "Samples in time"). */
@@ -241,10 +244,10 @@ export function decodeHeader(u8, limits = LIMITS) {
 
 function dSea(r) {
     r.need(SEA_SIZE, 'sea state');
-    r.zero(r.off + 2, 6, 'sea');
+    r.zero(r.off + 3, 5, 'sea');
     const o = r.off;
     const s = {
-        spectrum: r.u8at(o), spreading: r.u8at(o + 1), seed: r.u64(o + 8),
+        spectrum: r.u8at(o), spreading: r.u8at(o + 1), flags: r.u8at(o + 2), seed: r.u64(o + 8),
         windU10: r.f64(o + 16), windDirDeg: r.f64(o + 24), fetchM: r.f64(o + 32), depthM: r.f64(o + 40),
         swell: r.f64(o + 48), phillipsA: r.f64(o + 56), smallWaveM: r.f64(o + 64), choppiness: r.f64(o + 72),
         hs: r.f64(o + 80), tp: r.f64(o + 88),
@@ -256,6 +259,7 @@ function dSea(r) {
 function vSea(s) {
     chkEnum('sea.spectrum', s.spectrum, 4);
     chkEnum('sea.spreading', s.spreading, 4);
+    chkMask('sea.flags', s.flags || 0, SEA_FLAGS_ALL);
     chkRange('sea.wind_u10', s.windU10, 0, 100);
     chkRange('sea.wind_dir_deg', s.windDirDeg, -360, 360);
     chkRange('sea.fetch_m', s.fetchM, 1, 1e7);
@@ -807,7 +811,7 @@ function dSeaState(r) {
         const z = s.sea;
         const nums = [s.effectiveTime, z.windU10, z.windDirDeg, z.fetchM, z.depthM, z.swell, z.phillipsA,
                       z.smallWaveM, z.choppiness, z.hs, z.tp];
-        if (z.spectrum || z.spreading || BigInt(z.seed) !== 0n || !nums.every((v) => Object.is(v, 0)))
+        if (z.spectrum || z.spreading || z.flags || BigInt(z.seed) !== 0n || !nums.every((v) => Object.is(v, 0)))
             fail(R.EFORMAT, 'sea_state get: effective_time and the sea block must be zero bytes');
         if (s.token) fail(R.EFORMAT, 'sea_state get must not carry a token');
         return s;
@@ -1035,6 +1039,7 @@ export function encodeSeaState(op, effectiveTime, sea, token, seq, simTime = 0) 
         const o = P + 16;
         u[o] = sea.spectrum;
         u[o + 1] = sea.spreading;
+        u[o + 2] = sea.flags || 0;
         dv.setBigUint64(o + 8, BigInt(sea.seed), true);
         [sea.windU10, sea.windDirDeg, sea.fetchM, sea.depthM, sea.swell, sea.phillipsA, sea.smallWaveM,
             sea.choppiness, sea.hs || 0, sea.tp || 0].forEach((v, i) => dv.setFloat64(o + 16 + 8 * i, v, true));

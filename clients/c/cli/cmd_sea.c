@@ -44,6 +44,7 @@ static cJSON *sea_json(const proto_sea *s, double eff)
     cJSON_AddNumberToObject(o, "phillips_a", s->phillips_a);
     cJSON_AddNumberToObject(o, "small_wave_m", s->small_wave_m);
     cJSON_AddNumberToObject(o, "choppiness", s->choppiness);
+    cJSON_AddBoolToObject(o, "whitecaps", !(s->flags & PROTO_SEA_NO_WHITECAPS));
     cJSON_AddNumberToObject(o, "hs", s->hs);
     cJSON_AddNumberToObject(o, "tp", s->tp);
     return o;
@@ -83,7 +84,7 @@ static const struct sea_field {
 
 /* What `sea` was asked; NaN, -1 or NULL: not given. */
 typedef struct sea_opts {
-    int set, timeout_ms, spectrum, spreading;
+    int set, timeout_ms, spectrum, spreading, whitecaps;
     const char *token, *seed_s, *url;
     double at;
     double field[SEA_FIELDS];   /* sea_fields' values */
@@ -101,7 +102,8 @@ static int sea_parse(int argc, char **argv, sea_opts *P)
         spectra[k] = ocean_spectrum_name((ocean_spectrum_kind)k);
     for (int k = 0; k < OCEAN_SPREAD_COUNT_; k++)
         spreads[k] = ocean_spreading_name((ocean_spreading_kind)k);
-    occli_opt opts[SEA_FIELDS + 7] = {
+    static const char *const on_off[] = {"off", "on", NULL};
+    occli_opt opts[SEA_FIELDS + 8] = {
         {"set", OCCLI_FLAG, &P->set, 0, 0, "send SEA_STATE SET (needs --token)", NULL},
         {"token", OCCLI_STRING, &P->token, 0, 0, "TOKEN  the admin token from the server's config", NULL},
         {"at", OCCLI_DOUBLE, &P->at, -OCEAN_TIME_MAX, OCEAN_TIME_MAX, "T  sim time the change takes effect (not given: now)", NULL},
@@ -113,6 +115,8 @@ static int sea_parse(int argc, char **argv, sea_opts *P)
     }
     opts[n++] = (occli_opt){"spectrum", OCCLI_CHOICE, &P->spectrum, 0, 0, "NAME  spectrum", spectra};
     opts[n++] = (occli_opt){"spreading", OCCLI_CHOICE, &P->spreading, 0, 0, "NAME  directional spreading", spreads};
+    opts[n++] = (occli_opt){"whitecaps", OCCLI_CHOICE, &P->whitecaps, 0, 0, "on|off  whitecaps where waves break",
+                            on_off};
     opts[n++] = (occli_opt){"seed", OCCLI_STRING, &P->seed_s, 0, 0, "N  random seed, 0 .. 2^64 - 1", NULL};
     opts[n++] = (occli_opt){"timeout", OCCLI_INT, &P->timeout_ms, 1, 3600000, "MS  connect / answer timeout", NULL};
     const char *pos[1];
@@ -138,7 +142,8 @@ static const char *sea_change_given(const sea_opts *P)
     for (size_t i = 0; i < SEA_FIELDS; i++)
         if (!isnan(P->field[i]))
             return sea_fields[i].opt;
-    return P->spectrum >= 0 ? "spectrum" : P->spreading >= 0 ? "spreading" : P->seed_s ? "seed" : NULL;
+    return P->spectrum >= 0 ? "spectrum" : P->spreading >= 0 ? "spreading" : P->whitecaps >= 0 ? "whitecaps"
+           : P->seed_s ? "seed" : NULL;
 }
 
 /* Refuses what would be ignored or cannot be sent, and reads the seed:
@@ -189,6 +194,8 @@ static int sea_set(const sea_opts *P, oc_client *c, proto_sea *sea, double *eff)
             *(double *)((char *)sea + sea_fields[i].offset) = P->field[i];
     if (P->spectrum >= 0) sea->spectrum = (uint8_t)P->spectrum;
     if (P->spreading >= 0) sea->spreading = (uint8_t)P->spreading;
+    if (P->whitecaps >= 0)
+        sea->flags = (uint8_t)(P->whitecaps ? sea->flags & ~PROTO_SEA_NO_WHITECAPS : sea->flags | PROTO_SEA_NO_WHITECAPS);
     if (P->seed_s) sea->seed = (uint64_t)P->seed;
     sea->hs = 0;
     sea->tp = 0;
@@ -209,7 +216,7 @@ static int sea_set(const sea_opts *P, oc_client *c, proto_sea *sea, double *eff)
 
 int cmd_sea(int argc, char **argv)
 {
-    sea_opts P = {.timeout_ms = 5000, .spectrum = -1, .spreading = -1, .at = NAN};
+    sea_opts P = {.timeout_ms = 5000, .spectrum = -1, .spreading = -1, .whitecaps = -1, .at = NAN};
     for (size_t i = 0; i < SEA_FIELDS; i++)
         P.field[i] = NAN;
     int pr = sea_parse(argc, argv, &P);
