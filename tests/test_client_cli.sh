@@ -32,6 +32,16 @@ cleanup() { kill "$pid" $pid2 2>/dev/null; wait "$pid" $pid2 2>/dev/null; rm -rf
 trap cleanup EXIT
 fail() { echo "FAIL: $*"; echo "--- oceand log:"; tail -20 "$tmp/oceand.log"; exit 1; }
 json() { python3 -c "import json,sys; d=json.load(open('$1')); sys.exit(0 if ($2) else 1)" || fail "$1: $2: $(cat "$1")"; }
+# sea_until FILE EXPR: the sea in force into FILE until EXPR holds of it (a
+# change applies at a tick: a deadline, not a speed), then judged
+sea_until() {
+    for _ in $(seq 50); do
+        "$OC" sea "$URL" >"$1" || fail "sea exited $?"
+        python3 -c "import json,sys; d=json.load(open('$1')); sys.exit(0 if ($2) else 1)" && break
+        sleep 0.1
+    done
+    json "$1" "$2"
+}
 
 for i in $(seq 50); do
     "$OC" watch "$URL" --frames 1 --seconds 2 --mesh none >/dev/null 2>&1 && break
@@ -279,12 +289,7 @@ kill "$pid2"; wait "$pid2"; pid2=
 echo "== sea --set by name ($SECONDS s)"
 "$OC" sea "$URL" --set --token $TOKEN --spectrum jonswap --wind 12 >"$tmp/sea2.json" 2>"$tmp/sea.err" ||
     fail "sea --set --spectrum jonswap: $(cat "$tmp/sea.err")"
-for _ in $(seq 50); do
-    "$OC" sea "$URL" >"$tmp/sea3.json" || fail "sea after set"
-    python3 -c "import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if d['spectrum'] == 'jonswap' and d['wind_u10'] == 12 else 1)" "$tmp/sea3.json" && break
-    sleep 0.1
-done
-json "$tmp/sea3.json" "d['spectrum'] == 'jonswap' and d['wind_u10'] == 12"
+sea_until "$tmp/sea3.json" "d['spectrum'] == 'jonswap' and d['wind_u10'] == 12"
 # the state in force is reported with the time the change took effect, not
 # the time it was read (HELLO's sea carries none: SEA_STATE get does)
 python3 -c "import json,sys; a=json.load(open(sys.argv[1])); b=json.load(open(sys.argv[2])); sys.exit(0 if a['effective_time'] == b['effective_time'] > 0 else 1)" "$tmp/sea2.json" "$tmp/sea3.json" ||
@@ -296,13 +301,7 @@ grep -q "sea state set by client [0-9]* (127.0.0.1), in force from t = .*wind 12
 echo "== sea --whitecaps off, then on ($SECONDS s)"
 for w in off on; do
     "$OC" sea "$URL" --set --token $TOKEN --whitecaps $w >/dev/null 2>"$tmp/sea.err" || fail "sea --set --whitecaps $w: $(cat "$tmp/sea.err")"
-    want=$([[ $w == on ]] && echo True || echo False)
-    for _ in $(seq 50); do
-        "$OC" sea "$URL" >"$tmp/sea4.json" || fail "sea after --whitecaps $w"
-        python3 -c "import json,sys; sys.exit(0 if json.load(open(sys.argv[1]))['whitecaps'] is $want else 1)" "$tmp/sea4.json" && break
-        sleep 0.1
-    done
-    json "$tmp/sea4.json" "d['whitecaps'] is $want and d['wind_u10'] == 12"
+    sea_until "$tmp/sea4.json" "d['whitecaps'] is $([[ $w == on ]] && echo True || echo False) and d['wind_u10'] == 12"
 done
 "$OC" sea "$URL" --whitecaps maybe 2>"$tmp/sea.err"; [[ $? -eq 2 ]] || fail "sea --whitecaps maybe accepted"
 
