@@ -349,6 +349,10 @@ static void enter_host_sea(srv_cigi *s)
         return;
     } else if (h->redis) {
         r = submit_host_sea(s, &np, &eff, why, sizeof why);
+        if (r == OCEAN_OK)
+            fprintf(stderr, "oceand: sea state set by CIGI host %s, sent to the shared timeline, asked for t = "
+                    "%.3f s: wind %.2f m/s toward %.1f deg, whitecaps %s\n", host, eff, np.sea.wind_u10,
+                    np.sea.wind_dir_deg, np.sea.whitecaps ? "on" : "off");
     } else {
         r = srv_hub_sea_schedule(h, &np, 0, srv_hub_sea_lead(h), &eff, why, sizeof why);
         pthread_mutex_unlock(&h->lock);
@@ -360,10 +364,6 @@ static void enter_host_sea(srv_cigi *s)
     }
     if (r == OCEAN_OK) {
         s->sent_u10 = s->wind_u10, s->sent_dir = s->wind_dir, s->sent_whitecaps = s->whitecaps;
-        if (h->redis && eff > 0)
-            fprintf(stderr, "oceand: sea state set by CIGI host %s, sent to the shared timeline, asked for t = "
-                    "%.3f s: wind %.2f m/s toward %.1f deg, whitecaps %s\n", host, eff, np.sea.wind_u10,
-                    np.sea.wind_dir_deg, np.sea.whitecaps ? "on" : "off");
     } else if (why[0]) {
         fprintf(stderr, "oceand: cigi: the sea of host %s not entered: %s\n", host, why);
     }
