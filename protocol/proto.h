@@ -32,6 +32,7 @@
 #include <stdint.h>
 
 #include "codec.h"
+#include "entity.h"
 #include "ocean_result.h"
 #include "proto_buf.h"
 
@@ -157,7 +158,7 @@ typedef enum proto_entity_op {
 /* How long an entity goes on at its last sample's velocity before it holds
  * still, and how long a removed entity's past is kept, s (PROTOCOL.md
  * "ENTITY"): the server's table and every reader's use the same. */
-#define PROTO_ENTITY_HOLD_S 10.0
+#define PROTO_ENTITY_HOLD_S OCEAN_ENTITY_HOLD_S
 #define PROTO_ENTITY_PAST_S 120.0
 
 /* Entity kinds as sim/entity.h numbers them. */

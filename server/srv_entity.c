@@ -37,31 +37,11 @@ void srv_entities_destroy(srv_entities *e)
     free(e);
 }
 
-static int desc_same(const ocean_entity_desc *a, const ocean_entity_desc *b)
-{
-    return a->kind == b->kind && a->length_m == b->length_m && a->beam_m == b->beam_m &&
-           a->draught_m == b->draught_m;
-}
-
 ocean_result srv_entities_sample(srv_entities *e, const ocean_entity_desc *d, const ocean_track_sample *s,
                                  double from, char *why, size_t n)
 {
     pthread_mutex_lock(&e->lock);
-    ocean_entity_desc known;
-    int added = 0;
-    ocean_result r = OCEAN_OK;
-    if (ocean_entities_desc(e->t, d->id, &known) != OCEAN_OK) {
-        r = ocean_entities_add(e->t, d, why, n);
-        added = r == OCEAN_OK;
-    } else if (!desc_same(&known, d)) {
-        snprintf(why, n, "entity %u is kind %d, %g x %g x %g m; a sample may not change its kind or size "
-                 "(remove it first)", d->id, (int)known.kind, known.length_m, known.beam_m, known.draught_m);
-        r = OCEAN_EINVAL;
-    }
-    if (r == OCEAN_OK) {
-        r = ocean_entities_sample(e->t, d->id, s, from, why, n);
-        if (r != OCEAN_OK && added) ocean_entities_remove(e->t, d->id, from);
-    }
+    ocean_result r = ocean_entities_enter(e->t, d, s, from, why, n);
     /* what an entry's own time says, so every replica keeps the same past */
     if (r == OCEAN_OK && isfinite(from)) ocean_entities_prune(e->t, from - SRV_ENTITY_PAST_S);
     pthread_mutex_unlock(&e->lock);
@@ -73,7 +53,7 @@ int srv_entities_refuses(srv_entities *e, const ocean_entity_desc *d, const ocea
     pthread_mutex_lock(&e->lock);
     ocean_entity_desc known;
     int refuses = ocean_entities_desc(e->t, d->id, &known) == OCEAN_OK &&
-                  (!desc_same(&known, d) || ocean_entities_check(e->t, d->id, s, from, NULL, 0) != OCEAN_OK);
+                  (!ocean_entity_desc_same(&known, d) || ocean_entities_check(e->t, d->id, s, from, NULL, 0) != OCEAN_OK);
     pthread_mutex_unlock(&e->lock);
     return refuses;
 }

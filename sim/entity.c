@@ -172,11 +172,20 @@ ocean_result ocean_entities_add(ocean_entities *e, const ocean_entity_desc *d, c
     return OCEAN_OK;
 }
 
+/* The i-th kept sample of k, oldest first. */
+static const ocean_track_sample *sample_at(const entity *k, int i)
+{
+    return &k->s[(k->head + i) % k->cap];
+}
+
+/* The instant the i-th kept sample of k is in force from. */
+static double from_at(const entity *k, int i) { return k->from[(k->head + i) % k->cap]; }
+
 /* The earliest instant a new sample of id may be in force: the removal of
  * its life before this one, or its track's newest sample's. */
 static double from_floor(const ocean_entities *e, const entity *k, int at)
 {
-    if (k->count) return k->from[(k->head + k->count - 1) % k->cap];
+    if (k->count) return from_at(k, k->count - 1);
     if (at > 0 && e->by_id[at - 1]->d.id == k->d.id) return e->by_id[at - 1]->gone;
     return -INFINITY;
 }
@@ -211,11 +220,6 @@ static double altitude_max(ocean_entity_kind k)
 {
     return k == OCEAN_ENTITY_SHIP ? 0 : k == OCEAN_ENTITY_ROTORCRAFT ? OCEAN_ROTOR_ALTITUDE_MAX
                                                                       : OCEAN_AIRCRAFT_ALTITUDE_MAX;
-}
-
-static const ocean_track_sample *sample_at(const entity *k, int i)
-{
-    return &k->s[(k->head + i) % k->cap];
 }
 
 /* The sample's own values, then its step from the track's last sample. */
@@ -281,8 +285,8 @@ static ocean_result track_grow(entity *k, int want, int keep)
         return OCEAN_ENOMEM;
     }
     for (int i = 0; i < k->count; i++) {
-        s[i] = k->s[(k->head + i) % k->cap];
-        from[i] = k->from[(k->head + i) % k->cap];
+        s[i] = *sample_at(k, i);
+        from[i] = from_at(k, i);
     }
     free(k->s);
     free(k->from);
@@ -312,6 +316,28 @@ ocean_result ocean_entities_sample(ocean_entities *e, uint32_t id, const ocean_t
     k->from[slot] = from;
     k->count++;
     return OCEAN_OK;
+}
+
+int ocean_entity_desc_same(const ocean_entity_desc *a, const ocean_entity_desc *b)
+{
+    return a->kind == b->kind && a->length_m == b->length_m && a->beam_m == b->beam_m &&
+           a->draught_m == b->draught_m;
+}
+
+ocean_result ocean_entities_enter(ocean_entities *e, const ocean_entity_desc *d, const ocean_track_sample *s,
+                                  double from, char *why, size_t n)
+{
+    if (!e || !d || !s) return OCEAN_EINVAL;
+    const entity *k = live(e, d->id, NULL);
+    if (k && !ocean_entity_desc_same(&k->d, d)) {
+        ocean_seterr(why, n, "entity %u is kind %d, %g x %g x %g m; a sample may not change its kind or size "
+                     "(remove it first)", d->id, (int)k->d.kind, k->d.length_m, k->d.beam_m, k->d.draught_m);
+        return OCEAN_EINVAL;
+    }
+    ocean_result r = k ? OCEAN_OK : ocean_entities_add(e, d, why, n);
+    if (r == OCEAN_OK) r = ocean_entities_sample(e, d->id, s, from, why, n);
+    if (r != OCEAN_OK && !k) ocean_entities_remove(e, d->id, from); /* never in the sea: no record left */
+    return r;
 }
 
 static void velocity(const ocean_track_sample *s, double *vx, double *vz)
@@ -369,7 +395,7 @@ static int in_force(const entity *k, double t)
     int lo = 0, hi = k->count;
     while (lo < hi) {
         int mid = lo + (hi - lo) / 2;
-        if (k->from[(k->head + mid) % k->cap] <= t) lo = mid + 1;
+        if (from_at(k, mid) <= t) lo = mid + 1;
         else hi = mid;
     }
     return lo;
@@ -420,7 +446,7 @@ ocean_result ocean_entities_last(const ocean_entities *e, uint32_t id, ocean_tra
     const entity *k = live(e, id, NULL);
     if (!k || !k->count) return OCEAN_ENOTFOUND;
     *out = *sample_at(k, k->count - 1);
-    if (from) *from = k->from[(k->head + k->count - 1) % k->cap];
+    if (from) *from = from_at(k, k->count - 1);
     return OCEAN_OK;
 }
 
@@ -433,7 +459,7 @@ int ocean_entities_each(const ocean_entities *e, void (*fn)(void *ctx, const oce
         ocean_entity_entry en = {.d = k->d};
         for (int j = 0; j < k->count; j++, n++) {
             en.s = *sample_at(k, j);
-            en.from = k->from[(k->head + j) % k->cap];
+            en.from = from_at(k, j);
             fn(ctx, &en);
         }
         if (isinf(k->gone)) continue;

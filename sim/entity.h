@@ -59,6 +59,8 @@ typedef enum ocean_entity_kind {
 } ocean_entity_kind;
 
 #define OCEAN_ENTITY_MAX 4096       /* the most a table may be made for */
+#define OCEAN_ENTITY_HOLD_S 10.0    /* s an entity goes on at its last velocity, then holds
+                                       (every oceand table and reader: PROTOCOL.md "ENTITY") */
 #define OCEAN_TRACK_KEEP 256        /* samples a daemon's track keeps by default */
 #define OCEAN_TRACK_KEEP_MAX (1 << 20) /* the most a table may keep a track */
 #define OCEAN_ENTITY_POS_MAX 2.0e7  /* |x|, |z| in m: half the Earth's circumference */
@@ -126,6 +128,16 @@ void ocean_entities_prune(ocean_entities *e, double before);
  * OCEAN_ENOMEM (the track could not grow). */
 ocean_result ocean_entities_sample(ocean_entities *e, uint32_t id, const ocean_track_sample *s, double from,
                                    char *why, size_t n);
+/* A sample of entity d->id, as a feeder gives it: the entity entered with
+ * shape d first when no live one has the id, then the sample appended
+ * (ocean_entities_sample).  OCEAN_EINVAL for a shape other than the live
+ * entity's (a new shape is a new life: remove it first), and the errors
+ * of ocean_entities_add and ocean_entities_sample; on any error the
+ * table is unchanged. */
+ocean_result ocean_entities_enter(ocean_entities *e, const ocean_entity_desc *d, const ocean_track_sample *s,
+                                  double from, char *why, size_t n);
+/* Whether a and b are the same kind and size (their ids aside). */
+int ocean_entity_desc_same(const ocean_entity_desc *a, const ocean_entity_desc *b);
 /* What ocean_entities_sample would answer, the table unchanged. */
 ocean_result ocean_entities_check(const ocean_entities *e, uint32_t id, const ocean_track_sample *s, double from,
                                   char *why, size_t n);

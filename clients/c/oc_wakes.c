@@ -37,11 +37,6 @@ void oc_wakes_destroy(oc_wakes *w)
     free(w);
 }
 
-static int same_shape(const ocean_entity_desc *a, const ocean_entity_desc *b)
-{
-    return a->kind == b->kind && a->length_m == b->length_m && a->beam_m == b->beam_m && a->draught_m == b->draught_m;
-}
-
 ocean_result oc_wakes_entity(oc_wakes *w, const proto_msg *m)
 {
     const proto_entity *e = &m->u.entity;
@@ -52,17 +47,12 @@ ocean_result oc_wakes_entity(oc_wakes *w, const proto_msg *m)
                            .beam_m = e->beam_m, .draught_m = e->draught_m}, known;
     ocean_track_sample s = {.t = e->t, .x = e->x, .z = e->z, .altitude_m = e->altitude_m,
                             .heading_deg = e->heading_deg, .speed = e->speed};
-    int live = ocean_entities_desc(w->entities, e->id, &known) == OCEAN_OK;
     ocean_result r = OCEAN_OK;
     /* gone, or entered anew with another shape (the server removed it first) */
-    if (live && (e->op == PROTO_ENTITY_GONE || !same_shape(&known, &d))) {
+    if (ocean_entities_desc(w->entities, e->id, &known) == OCEAN_OK &&
+        (e->op == PROTO_ENTITY_GONE || !ocean_entity_desc_same(&known, &d)))
         r = ocean_entities_remove(w->entities, e->id, from);
-        live = 0;
-    }
-    if (r == OCEAN_OK && e->op == PROTO_ENTITY_ANNOUNCE) {
-        if (!live) r = ocean_entities_add(w->entities, &d, NULL, 0);
-        if (r == OCEAN_OK) r = ocean_entities_sample(w->entities, e->id, &s, from, NULL, 0);
-    }
+    if (r == OCEAN_OK && e->op == PROTO_ENTITY_ANNOUNCE) r = ocean_entities_enter(w->entities, &d, &s, from, NULL, 0);
     ocean_entities_prune(w->entities, from - PROTO_ENTITY_PAST_S);
     return r == OCEAN_OK ? OCEAN_OK : OCEAN_EINVAL;
 }

@@ -14,10 +14,6 @@
 #include "cli.h"
 #include "wake_field.h"
 
-/* A track runs on this long past its last sample, as the daemon's does
- * (PROTOCOL.md "ENTITY"). */
-#define CLI_ENTITY_HOLD_S 10.0
-
 static const char *const kinds[] = {"ship", "rotorcraft", "aircraft"};
 
 /* Member name of o as a number; absent: dflt; present but not a number:
@@ -59,20 +55,11 @@ static int entry_enter(ocean_entities *e, const cJSON *o, int i, const char *pat
     } else {
         ocean_entity_desc d = {.id = (uint32_t)id, .kind = (ocean_entity_kind)kind_of(o),
                                .length_m = num(o, "length_m", NAN), .beam_m = num(o, "beam_m", 0),
-                               .draught_m = num(o, "draught_m", 0)}, known;
+                               .draught_m = num(o, "draught_m", 0)};
         ocean_track_sample s = {.t = num(o, "t", NAN), .x = num(o, "x", NAN), .z = num(o, "z", NAN),
                                 .altitude_m = num(o, "altitude_m", 0), .heading_deg = num(o, "heading_deg", NAN),
                                 .speed = num(o, "speed", NAN)};
-        r = OCEAN_OK;
-        if (ocean_entities_desc(e, d.id, &known) != OCEAN_OK) {
-            r = ocean_entities_add(e, &d, why, sizeof why);
-        } else if (known.kind != d.kind || known.length_m != d.length_m || known.beam_m != d.beam_m ||
-                   known.draught_m != d.draught_m) {
-            snprintf(why, sizeof why, "entity %u changes its kind or size (a new life needs its removal first)",
-                     d.id);
-            r = OCEAN_EINVAL;
-        }
-        if (r == OCEAN_OK) r = ocean_entities_sample(e, d.id, &s, num(o, "from", s.t), why, sizeof why);
+        r = ocean_entities_enter(e, &d, &s, num(o, "from", s.t), why, sizeof why);
     }
     if (r == OCEAN_OK) return 0;
     fprintf(stderr, "error: %s: entry %d: %s\n", path, i, why[0] ? why : ocean_strerror(r));
@@ -93,7 +80,7 @@ int cli_entities_load(const char *path, ocean_entities **out)
     }
     ocean_entities *e;
     char why[200];
-    if (ocean_entities_create(OCEAN_ENTITY_MAX, CLI_ENTITY_HOLD_S, OCEAN_TRACK_KEEP_MAX, &e, why, sizeof why) !=
+    if (ocean_entities_create(OCEAN_ENTITY_MAX, OCEAN_ENTITY_HOLD_S, OCEAN_TRACK_KEEP_MAX, &e, why, sizeof why) !=
         OCEAN_OK) { /* a file's entries, all kept */
         fprintf(stderr, "error: %s\n", why);
         cJSON_Delete(a);
