@@ -102,7 +102,7 @@ ALL_LIBS := $(if $(CLIENT_SRC),$(LIB_CLIENT)) $(if $(SERVER_SRC),$(LIB_SERVER)) 
 # a program that links it gets no FFTW and no OpenMP.
 OC_VERSION := $(shell sed -n 's/^\#define OC_VERSION "\(.*\)"/\1/p' clients/c/oceanclient.h)
 OC_SOVERSION := $(firstword $(subst ., ,$(OC_VERSION)))
-OCLIB_SIM_SRC := sim/ocean_result.c sim/ocean_time.c sim/conf.c sim/entity.c sim/wake_pattern.c sim/wake_field.c
+OCLIB_SIM_SRC := sim/ocean_result.c sim/ocean_time.c sim/conf.c sim/entity.c sim/wake_pattern.c sim/wake_field.c sim/rotor_wash.c
 OCLIB_SRC := $(filter-out clients/c/oc_ship_offline.c,$(CLIENT_SRC)) $(PROTO_SRC) $(OCLIB_SIM_SRC)
 OCLIB_A := $(BUILD)/liboceanclient.a
 OCLIB_SO := $(BUILD)/liboceanclient.so.$(OC_VERSION)
@@ -125,7 +125,7 @@ BENCHES := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 WASM_CC ?= clang
 WASM := clients/web/ocean.wasm
 WASM_SRC := clients/wasm/oc_wasm.c protocol/codec.c protocol/proto.c protocol/proto_buf.c sim/ocean_result.c \
-    sim/ocean_time.c clients/c/oc_held.c clients/c/oc_wakes.c sim/entity.c sim/wake_pattern.c sim/wake_field.c
+    sim/ocean_time.c clients/c/oc_held.c clients/c/oc_wakes.c sim/entity.c sim/wake_pattern.c sim/wake_field.c sim/rotor_wash.c
 
 .PHONY: all deps test test-plain test-asan test-bins run bench fuzz clean install
 .DEFAULT_GOAL := all
@@ -150,7 +150,7 @@ $(call obj,$(SIM_VEC_SRC)) $(call pic,$(SIM_VEC_SRC)): CFLAGS += -fno-math-errno
 # beside the page (the daemon serves clients/web/).  Exports and the zstd
 # bridge: clients/wasm/oc_wasm.c; loader: clients/web/codec.js.
 $(WASM): $(WASM_SRC) $(wildcard protocol/*.h) sim/ocean_result.h sim/ocean_time.h clients/c/oc_held.h \
-    clients/c/oc_wakes.h sim/entity.h sim/wake_pattern.h sim/wake_field.h sim/wake_internal.h
+    clients/c/oc_wakes.h sim/entity.h sim/wake_pattern.h sim/wake_field.h sim/wake_internal.h sim/rotor_wash.h
 	$(WASM_CC) --target=wasm32-wasi --sysroot=/usr -std=c11 -O2 -Wall -Wextra -Werror -D_GNU_SOURCE \
 	    -Isim -Iprotocol -Iclients/c -ffunction-sections -fdata-sections -nostartfiles \
 	    -Wl,--no-entry -Wl,--gc-sections -Wl,--strip-all $(WASM_SRC) -o $@

@@ -134,3 +134,20 @@ int srv_entities_at(srv_entities *e, double t, ocean_entity_desc *d, ocean_entit
     pthread_mutex_unlock(&e->lock);
     return n;
 }
+
+int srv_entities_rotorcraft(srv_entities *e)
+{
+    pthread_mutex_lock(&e->lock);
+    int n = ocean_entities_count_kind(e->t, OCEAN_ENTITY_ROTORCRAFT);
+    pthread_mutex_unlock(&e->lock);
+    return n;
+}
+
+ocean_result srv_entities_rotor_wash(srv_entities *e, const rotor_wash *w, double t, const double *xz, size_t n,
+                                     wake_sample *out)
+{
+    pthread_mutex_lock(&e->lock);
+    ocean_result r = rotor_wash_add(w, e->t, t, xz, n, out);
+    pthread_mutex_unlock(&e->lock);
+    return r;
+}

@@ -26,6 +26,7 @@
 
 #include "entity.h"
 #include "proto.h"
+#include "rotor_wash.h"
 #include "ocean_result.h"
 
 /* How long a track runs on past its last sample, s. */
@@ -81,5 +82,11 @@ int srv_entities_each(srv_entities *e, void (*fn)(void *ctx, const ocean_entity_
 /* Every entity in the sea at sim time t (at most max): shape and state
  * at t, in increasing id, copied under one hold.  Returns how many. */
 int srv_entities_at(srv_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max);
+/* Rotorcraft live or gone with their past kept. */
+int srv_entities_rotorcraft(srv_entities *e);
+/* Adds the rotorcraft's downwash at sim time t to the n points
+ * (rotor_wash_add over the table, under its lock). */
+ocean_result srv_entities_rotor_wash(srv_entities *e, const rotor_wash *w, double t, const double *xz, size_t n,
+                                     wake_sample *out);
 
 #endif

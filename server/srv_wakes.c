@@ -14,6 +14,7 @@
 
 #include "srv_hub.h"
 #include "srv_msg.h"
+#include "rotor_wash.h"
 
 #define WANT_MAX 16        /* patterns waiting for the builder */
 
@@ -33,6 +34,7 @@ struct srv_wakes {
     /* below: [lock] */
     int stop;
     wake_field *field;
+    rotor_wash *rotors;    /* made at the first rotorcraft; immutable then */
     wake_params want[WANT_MAX];
     int n_want;            /* want[0] is the one being built */
     wake_msg *msgs;        /* the built patterns' messages, oldest first */
@@ -156,6 +158,7 @@ void srv_wakes_destroy(srv_wakes *w)
         pthread_join(w->thread, NULL);
     }
     wake_field_destroy(w->field);
+    rotor_wash_destroy(w->rotors);
     for (int i = 0; i < w->n_msgs; i++) srv_msg_free(w->msgs[i].m);
     free(w->msgs);
     pthread_cond_destroy(&w->cond);
@@ -184,7 +187,10 @@ ocean_result srv_wakes_sample(srv_wakes *w, srv_entities *e, double t, double de
     int missing = wake_field_missing(w->field, d, s, count, depth, xz, n, need, WANT_MAX);
     for (int i = 0; i < missing && i < WANT_MAX; i++) want(w, &need[i]);
     ocean_result r = missing ? OCEAN_ESTATE : wake_field_sample(w->field, d, s, count, depth, xz, n, out);
+    if (r == OCEAN_OK && !w->rotors && srv_entities_rotorcraft(e)) r = rotor_wash_create(&w->rotors);
+    const rotor_wash *rotors = w->rotors;
     pthread_mutex_unlock(&w->lock);
+    if (r == OCEAN_OK && rotors) r = srv_entities_rotor_wash(e, rotors, t, xz, n, out);
     if (missing && w->stats) atomic_fetch_add(&w->stats->wake_waits, 1);
     free(d);
     free(s);

@@ -474,6 +474,13 @@ int ocean_entities_count(const ocean_entities *e) { return e ? e->n_live : 0; }
 
 int ocean_entities_kept(const ocean_entities *e) { return e ? e->n : 0; }
 
+int ocean_entities_count_kind(const ocean_entities *e, ocean_entity_kind k)
+{
+    int n = 0;
+    for (int i = 0; e && i < e->n; i++) n += e->by_id[i]->d.kind == k;
+    return n;
+}
+
 ocean_result ocean_entities_desc(const ocean_entities *e, uint32_t id, ocean_entity_desc *out)
 {
     if (!e || !out) return OCEAN_EINVAL;

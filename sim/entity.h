@@ -178,6 +178,8 @@ int ocean_entities_count(const ocean_entities *e);
 /* Entities live or gone with their past kept: the most ocean_entities_at
  * can return. */
 int ocean_entities_kept(const ocean_entities *e);
+/* Of those, the ones of kind k. */
+int ocean_entities_count_kind(const ocean_entities *e, ocean_entity_kind k);
 /* Live entity id's desc.  OCEAN_ENOTFOUND when none is live. */
 ocean_result ocean_entities_desc(const ocean_entities *e, uint32_t id, ocean_entity_desc *out);
 /* The desc of the i-th live entity (0 <= i < count), in increasing id. */

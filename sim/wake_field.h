@@ -14,7 +14,8 @@
  * on the water where each stretch of track laid it; a ship slower than
  * hull Froude number WAKE_FR_MIN makes none (its waves are exponentially
  * small: the footprint's spectrum at the wavenumber g / U^2), fading in
- * over the next 0.05.  Rotorcraft and aircraft make none here.
+ * over the next 0.05.  Rotorcraft press the water otherwise
+ * (rotor_wash.h); aircraft make none.
  *
  * Speed varies continuously along a track, and a pattern costs an FFT, so
  * patterns are kept on a ladder of speeds 2^(j/16) m/s, 4.4 % apart: a

@@ -316,6 +316,27 @@ for f in ("ships-later", "ships-gone"):  # the second sample not in force at 25 
     dd = [q["height"] - p["height"] for p, q in zip(none, pts(f))]
     assert max(abs(x) for x in dd[:301]) == 0, f
 PY
+# a helicopter (16 m rotor) hovering 10 m over (0, 0) since t = 0: at
+# t = 100 its downwash's dent alone (sim/rotor_wash.h), whose displaced
+# water weighs the thrust (Archimedes): its depth at the centre is the
+# thrust at 360 N/m^2 of disk over rho g pi c^2, c^2 = (D / 2 sqrt 2)^2 +
+# H^2 / 114 (Beltaos & Rajaratnam's impinging jet)
+echo '[{"id": 9, "kind": "rotorcraft", "t": 0, "x": 0, "z": 0, "altitude_m": 10, "heading_deg": 0, "speed": 0, "length_m": 16}]' > "$tmp/rotor.json"
+for f in none rotor; do
+    ents=()
+    [[ $f != none ]] && ents=(--entities "$tmp/$f.json")
+    "$sim" query --n 64 --t 100 --points "0,0;4,3;200,0" "${ents[@]}" --json > "$tmp/qr-$f.json" || fail "query --entities rotor.json"
+done
+python3 - "$tmp" <<'PY' || fail "query --entities: the rotorcraft's dent"
+import json, math, sys
+pts = lambda f: json.load(open("%s/qr-%s.json" % (sys.argv[1], f)))["points"]
+d = [q["height"] - p["height"] for p, q in zip(pts("none"), pts("rotor"))]
+thrust, c2 = 360 * math.pi * 16 ** 2 / 4, (16 / (2 * math.sqrt(2))) ** 2 + 10 ** 2 / 114
+head = thrust / (1025 * 9.81 * math.pi * c2)
+print("query --entities: hovering rotor's dent %.4f m at its centre (thrust / (rho g pi c^2) = %.4f m), %.4f m 5 m out "
+      "(%.4f), %.1e m 200 m out" % (d[0], -head, d[1], -head * math.exp(-25 / c2), d[2]))
+assert abs(d[0] + head) < 1e-4 and abs(d[1] + head * math.exp(-25 / c2)) < 1e-4 and abs(d[2]) < 1e-6
+PY
 echo '[{"id": 5, "kind": "ship", "t": 0, "x": 0, "z": 0, "heading_deg": 0, "speed": 8, "length_m": 120, "beam_m": 15, "draught_m": 5}, {"id": 5, "kind": "ship", "t": 1, "x": 900, "z": 0, "heading_deg": 0, "speed": 8, "length_m": 120, "beam_m": 15, "draught_m": 5}]' > "$tmp/teleport.json"
 expect_refused "entry 1: entity 5 sample: .* (a teleport" query --n 16 --points 0,0 --entities "$tmp/teleport.json"
 echo '{"id": 5}' > "$tmp/notarray.json"

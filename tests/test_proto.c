@@ -1622,22 +1622,20 @@ static char *wake_read_text(const uint8_t *ent, size_t nent, const uint8_t *wake
         ok = 0;
     }
     /* the square from 10 to 21.25 m behind the boat, across its track */
-    double xz[2 * WR_N * WR_N], hd = 30.0 * M_PI / 180, bx = 1000.5 + 2.0 * 3.0 * cos(hd), bz = -2000.25 + 6.0 * sin(hd);
+    double hd = 30.0 * M_PI / 180, bx = 1000.5 + 2.0 * 3.0 * cos(hd), bz = -2000.25 + 6.0 * sin(hd);
     double x0 = bx - 16 * cos(hd) - WR_N * WR_DX / 2, z0 = bz - 16 * sin(hd) - WR_N * WR_DX / 2;
-    for (int k = 0; k < WR_N * WR_N; k++) xz[2 * k] = x0 + (k % WR_N) * WR_DX, xz[2 * k + 1] = z0 + (k / WR_N) * WR_DX;
-    wake_sample ws[WR_N * WR_N];
-    ok = ok && oc_wakes_sample(w, WR_T, WR_DEPTH, xz, WR_N * WR_N, ws) == OCEAN_OK;
+    float g[4 * WR_N * WR_N];   /* as a renderer reads them: oc_wakes_grid */
+    ok = ok && oc_wakes_grid(w, WR_T, WR_DEPTH, x0, z0, WR_DX, WR_N, g) == OCEAN_OK;
     oc_wakes_destroy(w);
     if (!ok) return NULL;
     sbuf b = {0};
     out(&b, "# the wakes of wake_read_entity.bin and wake_read_wake.bin on the square: see tests/test_proto.c\n");
     out(&b, "t = %.17g\ndepth = %.17g\nx0 = %.17g\nz0 = %.17g\ndx = %.17g\nn = %d\n", WR_T, WR_DEPTH, x0, z0, WR_DX,
         WR_N);
-    static const char *const names[3] = {"height", "dhdx", "dhdz"};
-    for (int c = 0; c < 3; c++) {
+    static const char *const names[4] = {"height", "dhdx", "dhdz", "mss"};
+    for (int c = 0; c < 4; c++) {
         out(&b, "%s =", names[c]);
-        for (int k = 0; k < WR_N * WR_N; k++)
-            out(&b, " %.9g", (double)(float)(c == 0 ? ws[k].height : c == 1 ? ws[k].dhdx : ws[k].dhdz));
+        for (int k = 0; k < WR_N * WR_N; k++) out(&b, " %.9g", (double)g[4 * k + c]);
         out(&b, "\n");
     }
     return b.s;

@@ -44,6 +44,7 @@
 #include "srv_tiles.h"
 #include "srv_wakes.h"
 #include "wake_field.h"
+#include "rotor_wash.h"
 #include "lib/test_ws.h"
 #include "lib/test_net.h"
 #include "oc_path.h"
@@ -3269,6 +3270,69 @@ static void wakes_reach_viewers(void **state)
     test_ws_close(&a);
 }
 
+/* A rotorcraft's downwash (sim/rotor_wash.h) in the answers and in the
+ * readers: rotor 43 (16 m) entered hovering 30 m over (0, -20); QUERY at
+ * the instant its entry takes effect answers the wind sea alone (the
+ * water has not moved yet), 30 s later the sea plus the dent and, 100 m
+ * out, the rings of its coming, 200 s later the sea plus the dent alone (its head, the
+ * thrust over the footprint); a layout-1 viewer's library reads the same
+ * downwash from the ENTITY entries alone (no WAKE needed). */
+static void rotor_wash_everywhere(void **state)
+{
+    (void)state;
+    test_ws a;
+    timeline ta;
+    sea_connect(&a, &ta, 300);
+    oc_client *v = wake_viewer(0, -20, 0);
+    double tq = entity_enter(&a, 43, 1, hub_now(), 0, 0);
+    enum { N = 4 };
+    const double xz[2 * N] = {0, -20, 6, -20, 0, 20, -120, -20};
+    double head, c;
+    rotor_wash_footprint(16, 30, 0, &head, &c);
+    ocean_entities *mine;
+    assert_int_equal(ocean_entities_create(8, OCEAN_ENTITY_HOLD_S, 256, &mine, NULL, 0), OCEAN_OK);
+    ocean_entity_desc d = {.id = 43, .kind = OCEAN_ENTITY_ROTORCRAFT, .length_m = 16};
+    ocean_track_sample smp = {.t = tq, .x = 0, .z = -20, .altitude_m = 30};
+    assert_int_equal(ocean_entities_enter(mine, &d, &smp, tq, NULL, 0), OCEAN_OK);
+    rotor_wash *rw;
+    assert_int_equal(rotor_wash_create(&rw), OCEAN_OK);
+    oc_client *q = connect_client(port, NULL);
+    client_sync(v);
+    static const double after[3] = {0, 30, 200};
+    for (int k = 0; k < 3; k++) {
+        double t = tq + after[k];
+        oc_query_result qr;
+        assert_int_equal(oc_client_query(q, xz, N, 1, t, 60000, &qr), OCEAN_OK);
+        ocean_query_result lr[N];
+        local_query(tl_at(&ta, t), t, xz, N, lr);
+        wake_sample ws[N];
+        memset(ws, 0, sizeof ws);
+        assert_int_equal(rotor_wash_add(rw, mine, t, xz, N, ws), OCEAN_OK);
+        oc_wake got[N];
+        wakes_read(v, t, xz, N, got);
+        for (int i = 0; i < N; i++) {
+            double wash = qr.samples[i].height - lr[i].height;
+            printf("t0 + %3.0f s (%g, %g): answer %.4f m = sea %.4f + downwash %.4f (here %.4f, the viewer %.4f)\n",
+                   after[k], xz[2 * i], xz[2 * i + 1], qr.samples[i].height, lr[i].height, wash, ws[i].height,
+                   got[i].height);
+            assert_true(fabs(wash - ws[i].height) <= 1e-5 + 1e-6 * fabs(lr[i].height));
+            assert_true(fabs(got[i].height - ws[i].height) <= 1e-9);
+            if (k == 0) assert_true(ws[i].height == 0);
+        }
+        if (k == 1) assert_true(fabs(ws[3].height) > 1e-4);   /* its rings, 100 m out */
+        if (k == 2) assert_true(fabs(ws[0].height + head) < 1e-12);                     /* the dent alone */
+        oc_query_result_free(&qr);
+    }
+    printf("hovering 16 m rotor at 30 m: head %.4f m over a footprint of %.2f m\n", head, c);
+    assert_true(head > 0.03);
+    oc_client_destroy(q);
+    oc_client_destroy(v);
+    rotor_wash_destroy(rw);
+    ocean_entities_destroy(mine);
+    entity_leave(&a, 43, "entity-token");
+    test_ws_close(&a);
+}
+
 /* A client joining late sees the same wakes as one that watched them form
  * (issue 43): ship 45 steams along +x with two samples, ship 46 is entered
  * and removed; a layout-1 viewer connected before every entry and a
@@ -4984,6 +5048,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(entity_rate),
         cmocka_unit_test(entity_from_the_library),
         cmocka_unit_test(wakes_in_queries),
+        cmocka_unit_test(rotor_wash_everywhere),
         cmocka_unit_test(wakes_reach_viewers),
         cmocka_unit_test(wakes_for_late_joiners),
         cmocka_unit_test(wakes_replay_as_watched),

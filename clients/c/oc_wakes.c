@@ -3,14 +3,17 @@
  */
 #include "oc_wakes.h"
 
+#include <math.h>
 #include <stdlib.h>
 
 #include "codec.h"
 #include "entity.h"
+#include "rotor_wash.h"
 
 struct oc_wakes {
     ocean_entities *entities;
     wake_field *patterns;
+    rotor_wash *rotors;      /* made at the first rotorcraft */
 };
 
 ocean_result oc_wakes_create(oc_wakes **out)
@@ -34,6 +37,7 @@ void oc_wakes_destroy(oc_wakes *w)
     if (!w) return;
     ocean_entities_destroy(w->entities);
     wake_field_destroy(w->patterns);
+    rotor_wash_destroy(w->rotors);
     free(w);
 }
 
@@ -84,7 +88,54 @@ ocean_result oc_wakes_sample(oc_wakes *w, double t, double depth, const double *
         int k = ocean_entities_at(w->entities, t, d, st, max);
         r = wake_field_sample(w->patterns, d, st, k, depth, xz, n, out);
     }
+    if (r == OCEAN_OK && !w->rotors && ocean_entities_count_kind(w->entities, OCEAN_ENTITY_ROTORCRAFT))
+        r = rotor_wash_create(&w->rotors);
+    if (r == OCEAN_OK && w->rotors) r = rotor_wash_add(w->rotors, w->entities, t, xz, n, out);
     free(d);
     free(st);
+    return r;
+}
+
+/* The point's slopes low-passed over its stencil (itself weighing 1/2,
+ * the four points around it 1/8 each, the grid's edge clamped: the tent
+ * filter whose response falls from 1 to 0 at the grid's Nyquist
+ * wavelength, 2 dx) into o[1], o[2], and the weighted variance about them
+ * a side into o[3]. */
+static void grid_stencil(const wake_sample *s, int n, int i, int j, float *o)
+{
+    static const int di[5] = {0, 1, -1, 0, 0}, dj[5] = {0, 0, 0, 1, -1};
+    static const double wt[5] = {0.5, 0.125, 0.125, 0.125, 0.125};
+    double mx = 0, mz = 0, vx = 0, vz = 0;
+    for (int k = 0; k < 5; k++) {
+        int a = i + di[k], b = j + dj[k];
+        a = a < 0 ? 0 : a >= n ? n - 1 : a;
+        b = b < 0 ? 0 : b >= n ? n - 1 : b;
+        const wake_sample *p = &s[(size_t)b * n + a];
+        mx += wt[k] * p->dhdx, mz += wt[k] * p->dhdz;
+        vx += wt[k] * p->dhdx * p->dhdx, vz += wt[k] * p->dhdz * p->dhdz;
+    }
+    o[1] = (float)mx;
+    o[2] = (float)mz;
+    o[3] = (float)fmax(0.0, 0.5 * (vx - mx * mx + vz - mz * mz));
+}
+
+ocean_result oc_wakes_grid(oc_wakes *w, double t, double depth, double x0, double z0, double dx, int n, float *out)
+{
+    if (!w || !out || n < 3 || n > 1024 || !(dx > 0) || !isfinite(x0) || !isfinite(z0)) return OCEAN_EINVAL;
+    size_t np = (size_t)n * n;
+    double *xz = malloc(sizeof *xz * 2 * np);
+    wake_sample *s = malloc(sizeof *s * np);
+    ocean_result r = xz && s ? OCEAN_OK : OCEAN_ENOMEM;
+    for (size_t k = 0; r == OCEAN_OK && k < np; k++) {
+        xz[2 * k] = x0 + (double)(k % (size_t)n) * dx;
+        xz[2 * k + 1] = z0 + (double)(k / (size_t)n) * dx;
+    }
+    if (r == OCEAN_OK) r = oc_wakes_sample(w, t, depth, xz, np, s);
+    for (size_t k = 0; r == OCEAN_OK && k < np; k++) {
+        out[4 * k] = (float)s[k].height;
+        grid_stencil(s, n, (int)(k % (size_t)n), (int)(k / (size_t)n), out + 4 * k);
+    }
+    free(xz);
+    free(s);
     return r;
 }

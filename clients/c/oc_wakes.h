@@ -46,9 +46,21 @@ void oc_wakes_keep(oc_wakes *w, wake_pattern *p);
 int oc_wakes_patterns(const oc_wakes *w);
 
 /* The ships' wakes at the n points xz at sim time t over water of the
- * given depth: wake_field_sample of the entities in force at t.
+ * given depth: wake_field_sample of the entities in force at t, and the
+ * rotorcraft's downwash (rotor_wash_add; its table made at the first
+ * rotorcraft).
  * OCEAN_ESTATE: a pattern a ship there needs has not come; OCEAN_EINVAL,
  * OCEAN_ENOMEM. */
 ocean_result oc_wakes_sample(oc_wakes *w, double t, double depth, const double *xz, size_t n, wake_sample *out);
+
+/* The wakes on the n x n points (x0 + i dx, z0 + j dx), row j after row,
+ * as a renderer draws them: 4 floats a point, height, dh/dx, dh/dz and
+ * the slope variance a side (x and z each) the grid does not hold.  The
+ * slopes are the point slopes low-passed by the grid's 5-point tent (a
+ * wave shorter than two points would alias into the shading), and the
+ * variance the stencil takes out is handed to the roughness, so the
+ * wakes' mean-square slope is kept at any spacing.  n in [3, 1024], dx >
+ * 0.  The errors of oc_wakes_sample. */
+ocean_result oc_wakes_grid(oc_wakes *w, double t, double depth, double x0, double z0, double dx, int n, float *out);
 
 #endif

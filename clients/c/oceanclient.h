@@ -511,8 +511,9 @@ typedef struct oc_wake {
  * server answers them: the entities in force at t by the ENTITY entries
  * received (each from its header sim_time), each ship's steady wake read
  * from the WAKE patterns received (PROTOCOL.md "WAKE"), over the depth of
- * the sea in force at t.  A subscription (either layout) receives the patterns
- * of the ships whose wakes reach its view range.  OCEAN_ESTATE: a pattern
+ * the sea in force at t, and the rotorcraft's downwash from their tracks
+ * alone (PROTOCOL.md "QUERY").  A subscription (either layout) receives the
+ * patterns of the ships whose wakes reach its view range.  OCEAN_ESTATE: a pattern
  * a ship there needs has not come yet (or no HELLO); OCEAN_EINVAL: a point
  * not finite; OCEAN_ENOMEM. */
 ocean_result oc_client_wakes(oc_client *c, double t, const double *xz, size_t n, oc_wake *out);

@@ -393,30 +393,13 @@ OCW_EXPORT(ocw_wakes_message) int ocw_wakes_message(oc_wakes *w, const uint8_t *
 }
 
 /* The wakes at sim time t over the given depth on the n x n points
- * (x0 + i dx, z0 + j dx) into out (4 floats each, row j after row:
- * height, dh/dx, dh/dz, 0).  OCEAN_ESTATE: a pattern a ship there needs
- * has not come. */
+ * (x0 + i dx, z0 + j dx) into out (4 floats each, row j after row: height,
+ * dh/dx, dh/dz, the slope variance a side the grid does not hold:
+ * oc_wakes_grid).  OCEAN_ESTATE: a pattern a ship there needs has not
+ * come. */
 OCW_EXPORT(ocw_wakes_grid) int ocw_wakes_grid(oc_wakes *w, double t, double depth, double x0, double z0, double dx,
                                               int n, float *out)
 {
     ocw_err[0] = 0;
-    if (!w || !out || n < 1 || n > 1024 || !(dx > 0)) return OCEAN_EINVAL;
-    size_t np = (size_t)n * n;
-    double *xz = malloc(sizeof *xz * 2 * np);
-    wake_sample *s = malloc(sizeof *s * np);
-    ocean_result r = xz && s ? OCEAN_OK : OCEAN_ENOMEM;
-    for (size_t k = 0; r == OCEAN_OK && k < np; k++) {
-        xz[2 * k] = x0 + (double)(k % (size_t)n) * dx;
-        xz[2 * k + 1] = z0 + (double)(k / (size_t)n) * dx;
-    }
-    if (r == OCEAN_OK) r = oc_wakes_sample(w, t, depth, xz, np, s);
-    for (size_t k = 0; r == OCEAN_OK && k < np; k++) {
-        out[4 * k] = (float)s[k].height;
-        out[4 * k + 1] = (float)s[k].dhdx;
-        out[4 * k + 2] = (float)s[k].dhdz;
-        out[4 * k + 3] = 0;
-    }
-    free(xz);
-    free(s);
-    return r;
+    return oc_wakes_grid(w, t, depth, x0, z0, dx, n, out);
 }

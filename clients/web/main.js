@@ -368,7 +368,7 @@ function applyFrame(m) {
     }
     if (m.wakes !== undefined) {
         renderer.setWakes(m.wakes);
-        stats.wakes = m.wakes ? { n: m.wakes.n, dx: m.wakes.dx, t: m.wakes.t, peak: m.wakes.peak } : null;
+        stats.wakes = m.wakes ? { n: m.wakes.n, dx: m.wakes.dx, t: m.wakes.t, peak: m.wakes.peak, trough: m.wakes.trough } : null;
     }
     lastFrameSim = m.simTime;
     lastFrameWall = performance.now();

@@ -359,22 +359,24 @@ uniform vec3 u_tailMss;          /* moments no cascade holds */
 uniform float u_roughScale;      /* 1; 0 draws the unresolved moments as a mirror (test control) */
 uniform float u_foamScale;       /* 1; 0 draws no foam (test control) */
 uniform sampler2D u_cd0, u_cd1, u_cd2, u_cd3;   /* disp per cascade */
-uniform sampler2D u_wakeTex;     /* the ships' wakes on a square around the camera: height, dh/dx, dh/dz */
+uniform sampler2D u_wakeTex;     /* the wakes on a square around the camera: height, dh/dx, dh/dz, the
+                                    slope variance a side the square does not hold (oc_wakes_grid) */
 uniform vec4 u_wake;             /* its first point x, z (eye-relative), spacing, points a side (0: none) */
 
-/* the ships' wakes at eye-relative rel (PROTOCOL.md "WAKE", read by the
- * worker's WebAssembly on a square around the camera): height and slopes,
- * fading out over the square's outer eighth, 0 beyond it.  Only the
- * programs made with WAKES read them: a sea without ships pays nothing
- * (a software GL runs both sides of a branch) */
-vec3 wakeAt(vec2 rel) {
+/* the ships' wakes and the rotors' downwash at eye-relative rel
+ * (PROTOCOL.md "WAKE", read by the worker's WebAssembly on a square around
+ * the camera): height, slopes and the slope variance the square leaves to
+ * the roughness, fading out over the square's outer eighth, 0 beyond it.
+ * Only the programs made with WAKES read them: a sea without ships pays
+ * nothing (a software GL runs both sides of a branch) */
+vec4 wakeAt(vec2 rel) {
 #ifdef WAKES
     vec2 uv = ((rel - u_wake.xy) / u_wake.z + 0.5) / u_wake.w;
     vec2 e = min(uv, 1.0 - uv);
     float fade = clamp(8.0 * min(e.x, e.y), 0.0, 1.0);
-    return fade * textureLod(u_wakeTex, uv, 0.0).xyz;
+    return fade * textureLod(u_wakeTex, uv, 0.0);
 #else
-    return vec3(0.0);
+    return vec4(0.0);
 #endif
 }
 
@@ -449,7 +451,9 @@ void seaSample(vec2 rel, float floorS, out vec2 slope, out vec3 mss, out float f
     vec4 d;
 #define CAS_S(C, TD, TS) if (u_nCas > C) { s = wantSpacing(C, rel, floorS); lam = casLod(C, s, w); slope += w * casRead(TS, C, rel, lam).xy; d = casRead(TD, C, rel, lam); keep *= 1.0 - clamp(w * d.w, 0.0, 1.0); mss += casMss(C, log2(s / u_cas[C].y)); }
     CAS_S(0, u_cd0, u_cs0) CAS_S(1, u_cd1, u_cs1) CAS_S(2, u_cd2, u_cs2) CAS_S(3, u_cd3, u_cs3)
-    slope += wakeAt(rel).yz;
+    vec4 wk = wakeAt(rel);
+    slope += wk.yz;
+    mss.xy += wk.w;
     foam = (1.0 - keep) * u_foamScale;
     mss *= u_roughScale;
 }

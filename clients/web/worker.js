@@ -84,11 +84,14 @@ function wakeGrid(meta, now) {
     try {
         const data = wakeStore.grid(meta.simTime, seaDepth, x0, z0, dx, WAKE_N);
         if (!data) return undefined;       /* a pattern on its way */
-        let peak = 0;
-        for (let k = 0; k < data.length; k += 4) peak = Math.max(peak, Math.abs(data[k]));
+        let peak = 0, trough = 0;
+        for (let k = 0; k < data.length; k += 4) {
+            peak = Math.max(peak, Math.abs(data[k]));
+            trough = Math.min(trough, data[k]);
+        }
         stats.wakePeak = peak;
         stats.wakeMs = performance.now() - t0;
-        return { x0, z0, dx, n: WAKE_N, t: meta.simTime, peak, data };
+        return { x0, z0, dx, n: WAKE_N, t: meta.simTime, peak, trough, data };
     } catch (e) {
         noteError(e, 'wake grid');
         return undefined;

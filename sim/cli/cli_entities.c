@@ -13,6 +13,7 @@
 
 #include "cli.h"
 #include "wake_field.h"
+#include "rotor_wash.h"
 
 static const char *const kinds[] = {"ship", "rotorcraft", "aircraft"};
 
@@ -113,6 +114,10 @@ int cli_wakes_apply(const ocean_entities *e, double t, double depth, const doubl
         if (r == OCEAN_OK) wake_field_insert(f, p);
     }
     if (r == OCEAN_OK) r = wake_field_sample(f, d, st, k, depth, xz, n, ws);
+    rotor_wash *rw = NULL;
+    if (r == OCEAN_OK && ocean_entities_count_kind(e, OCEAN_ENTITY_ROTORCRAFT)) r = rotor_wash_create(&rw);
+    if (r == OCEAN_OK && rw) r = rotor_wash_add(rw, e, t, xz, n, ws);
+    rotor_wash_destroy(rw);
     if (r == OCEAN_OK) wake_sample_apply(ws, n, res);
     else fprintf(stderr, "error: the ships' wakes at t = %.9g: %s\n", t, ocean_strerror(r));
     wake_field_destroy(f);

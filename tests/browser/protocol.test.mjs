@@ -742,7 +742,7 @@ test('the viewer reads the ships\' wakes as the C library does: tests/vectors/wa
     const g = w.grid(Number(want.t), Number(want.depth), Number(want.x0), Number(want.z0), dx, n);
     w.destroy();
     let peak = 0;
-    ['height', 'dhdx', 'dhdz'].forEach((name, c) => {
+    ['height', 'dhdx', 'dhdz', 'mss'].forEach((name, c) => {
         const v = want[name].split(' ').map(Number);
         assert.equal(v.length, n * n);
         for (let k = 0; k < n * n; k++) {

@@ -394,6 +394,24 @@ try {
         check('a ship entered over ENTITY gets its wake drawn (WAKE patterns read on the square ahead of the eye)',
             drawn && sW.serverErrors === e0 && sW.decodeErrors === 0,
             `wakes ${JSON.stringify(sW.wakes)}, patterns ${sW.wakePatterns}, errors ${sW.errors.join(' | ')}`);
+        /* the ship gone (the square flat: the other ship, entered far away
+         * by tests/test_browser.sh, reaches none of it), a helicopter (16 m
+         * rotor) hovering 10 m over the water 60 m ahead: its downwash's
+         * dent, 7 cm deep (sim/rotor_wash.h), read by the same WebAssembly
+         * from its ENTITY entries alone */
+        execFileSync(oc, ['entity', base.replace(/^http/, 'ws'), '--remove', '--token', entityToken, '--id', '77'],
+            { timeout: 30000 });
+        const none = await waitFor(page3, () => !window.oceanStats.wakes || window.oceanStats.wakes.peak < 1e-3, null,
+            timeoutMs);
+        execFileSync(oc, ['entity', base.replace(/^http/, 'ws'), '--set', '--token', entityToken, '--id', '78',
+            '--kind', 'rotorcraft', '--x', '60', '--z', '0', '--altitude', '10', '--speed', '0', '--length', '16'],
+            { timeout: 30000 });
+        const dent = await waitFor(page3, () => window.oceanStats.wakes && window.oceanStats.wakes.trough < -0.05,
+            null, timeoutMs);
+        const sR = await stats(page3);
+        check('a rotorcraft entered over ENTITY gets its downwash drawn (the dent under it, on the same square)',
+            none && dent && sR.serverErrors === e0 && sR.decodeErrors === 0,
+            `square emptied ${none}, dent ${dent}: wakes ${JSON.stringify(sR.wakes)}, server errors ${sR.serverErrors - e0}, decode errors ${sR.decodeErrors} ${sR.errors.join(' | ')}`);
         await page3.close();
     } else {
         check('ENTITY_TOKEN and OCEAN_CLIENT given to the test (tests/test_browser.sh)', false, 'not given');
