@@ -167,11 +167,9 @@ static int lattice_feet(const ocean_entities *e, double tk, ocean_entity_desc *d
     return m;
 }
 
-/* Whether b's pressure differs from a's enough to send rings: by
- * ROTOR_STEP_MIN_M of head, or the same measure of the footprint's spread. */
 /* The rotorcraft in the sea at t (increasing id), their positions (head
  * and radius unused). */
-static int lattice_feet_all(const ocean_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max,
+static int rotors_now(const ocean_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max,
                             foot *out)
 {
     int n = ocean_entities_at(e, t, d, s, max), m = 0;
@@ -181,6 +179,8 @@ static int lattice_feet_all(const ocean_entities *e, double t, ocean_entity_desc
     return m;
 }
 
+/* Whether b's pressure differs from a's enough to send rings: by
+ * ROTOR_STEP_MIN_M of head, or the same measure of the footprint's spread. */
 static int foot_changed(const foot *a, const foot *b)
 {
     return fabs(a->head - b->head) + b->head * fabs(a->c - b->c) / b->c >= ROTOR_STEP_MIN_M;
@@ -286,7 +286,7 @@ ocean_result rotor_wash_add(const rotor_wash *w, const ocean_entities *e, double
         foot *sw = prev;
         prev = cur, cur = sw, np = nc;
     }
-    int nn = lattice_feet_all(e, t, d, s, max, feet + 2 * max);
+    int nn = rotors_now(e, t, d, s, max, feet + 2 * max);
     add_dents(prev, np, feet + 2 * max, nn, xz, n, out);
     free(d);
     free(s);

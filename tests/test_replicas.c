@@ -937,12 +937,15 @@ static void wakes_collect(test_ws *w, int want, double seconds, uint8_t *got[WAK
 }
 
 /* The next ENTITY of op about id on w; returns the instant it takes
- * effect (its header sim_time). */
+ * effect (its header sim_time).  A deadline of 60 s: an entry goes through
+ * Redis and comes between the live frames of a subscribed viewer, which a
+ * loaded host (a core held, the sanitizer build beside the tests) reads
+ * slowly; 20 s ran out once there. */
 static double entity_wait(test_ws *w, int op, uint32_t id)
 {
     proto_msg m;
-    for (double end = test_now_s() + 20; test_now_s() < end;) {
-        if (wait_type(w, 0, 20000, &m, NULL, NULL) != 1) break;
+    for (double end = test_now_s() + 60; test_now_s() < end;) {
+        if (wait_type(w, 0, 60000, &m, NULL, NULL) != 1) break;
         if (m.hdr.type == PROTO_ERROR) fail_msg("ERROR for entity %u: %s", id, m.u.error.message);
         if (m.hdr.type != PROTO_ENTITY) {
             proto_msg_free(&m);
