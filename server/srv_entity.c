@@ -53,9 +53,18 @@ int srv_entities_refuses(srv_entities *e, const ocean_entity_desc *d, const ocea
     pthread_mutex_lock(&e->lock);
     ocean_entity_desc known;
     int refuses = ocean_entities_desc(e->t, d->id, &known) == OCEAN_OK &&
-                  (!ocean_entity_desc_same(&known, d) || ocean_entities_check(e->t, d->id, s, from, NULL, 0) != OCEAN_OK);
+                  (!ocean_entity_desc_same(&known, d) ||
+                   ocean_entities_check(e->t, d->id, s, fmax(from, ocean_entities_floor(e->t, d->id)), NULL, 0) != OCEAN_OK);
     pthread_mutex_unlock(&e->lock);
     return refuses;
+}
+
+double srv_entities_floor(srv_entities *e, uint32_t id)
+{
+    pthread_mutex_lock(&e->lock);
+    double f = ocean_entities_floor(e->t, id);
+    pthread_mutex_unlock(&e->lock);
+    return f;
 }
 
 ocean_result srv_entities_remove(srv_entities *e, uint32_t id, double from)

@@ -53,10 +53,13 @@ void srv_entities_destroy(srv_entities *e); /* accepts NULL */
 ocean_result srv_entities_sample(srv_entities *e, const ocean_entity_desc *d, const ocean_track_sample *s,
                                  double from, char *why, size_t n);
 /* 1 when a live entity d->id would refuse sample s in force from `from`
- * (a shape other than its own, a step it cannot make, time order), the
- * table unchanged: a feeder that is its entities' authority enters such
+ * (a shape other than its own, a step it cannot make; `from` taken no
+ * earlier than its last entry, as srv_hub_entity_enter does), the table
+ * unchanged: a feeder that is its entities' authority enters such
  * an entity anew instead. */
 int srv_entities_refuses(srv_entities *e, const ocean_entity_desc *d, const ocean_track_sample *s, double from);
+/* The earliest instant an entry of id may take effect (ocean_entities_floor). */
+double srv_entities_floor(srv_entities *e, uint32_t id);
 /* Entity id is gone from sim time `from` on (ocean_entities_remove):
  * OCEAN_ENOTFOUND, OCEAN_EINVAL. */
 ocean_result srv_entities_remove(srv_entities *e, uint32_t id, double from);

@@ -195,7 +195,6 @@ void srv_hub_broadcast(srv_hub *h, const proto_msg *m)
 ocean_result srv_hub_entity_enter(srv_hub *h, const proto_msg *m, char *why, size_t n)
 {
     const proto_entity *e = &m->u.entity;
-    double from = m->hdr.sim_time;
     ocean_entity_desc d;
     ocean_track_sample s;
     srv_entity_from_msg(e, &d, &s);
@@ -204,18 +203,26 @@ ocean_result srv_hub_entity_enter(srv_hub *h, const proto_msg *m, char *why, siz
      * joining gets it either in its HELLO's timeline or as the broadcast,
      * never both, never neither */
     pthread_mutex_lock(&h->lock);
+    /* In force no earlier than its entity's last entry.  Entries come in
+     * the order they were made (the shared stream's, with replicas), but
+     * their times are each maker's clock plus its lead: a removal made on
+     * one replica just after a sample made on another may carry a time a
+     * moment before the sample's.  Every reader of the stream moves it
+     * alike (each folds the same entries into the same table). */
+    proto_msg at = *m;
+    at.hdr.sim_time = fmax(m->hdr.sim_time, srv_entities_floor(h->entities, e->id));
+    double from = at.hdr.sim_time;
     if (e->op == PROTO_ENTITY_GONE) {
         r = srv_entities_remove(h->entities, e->id, from);
         if (r != OCEAN_OK)
-            snprintf(why, n, r == OCEAN_ENOTFOUND ? "no entity %u in the sea"
-                                                  : "entity %u: a removal at %.6f s, before its last entry took effect",
+            snprintf(why, n, r == OCEAN_ENOTFOUND ? "no entity %u in the sea" : "entity %u: a removal at %.6f s refused",
                      e->id, from);
     } else {
         r = srv_entities_sample(h->entities, &d, &s, from, why, n);
     }
-    if (r == OCEAN_OK) srv_hub_broadcast(h, m);
+    if (r == OCEAN_OK) srv_hub_broadcast(h, &at);
     /* in the order entered (the lock held): the log rebuilds the table */
-    if (r == OCEAN_OK && h->entlog) srv_entlog_append(h->entlog, m);
+    if (r == OCEAN_OK && h->entlog) srv_entlog_append(h->entlog, &at);
     pthread_mutex_unlock(&h->lock);
     if (r != OCEAN_OK) return r;
     if (e->op == PROTO_ENTITY_ANNOUNCE) srv_wakes_ahead(h, &d, &s);

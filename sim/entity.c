@@ -190,6 +190,16 @@ static double from_floor(const ocean_entities *e, const entity *k, int at)
     return -INFINITY;
 }
 
+double ocean_entities_floor(const ocean_entities *e, uint32_t id)
+{
+    if (!e) return -INFINITY;
+    int at;
+    const entity *k = live(e, id, &at);
+    if (k) return from_floor(e, k, at);
+    /* no live one: a new life starts after the removal of the last */
+    return at < e->n && e->by_id[at]->d.id == id ? e->by_id[at]->gone : -INFINITY;
+}
+
 ocean_result ocean_entities_remove(ocean_entities *e, uint32_t id, double from)
 {
     if (!e) return OCEAN_EINVAL;

@@ -118,6 +118,9 @@ ocean_result ocean_entities_add(ocean_entities *e, const ocean_entity_desc *d, c
  * it changes).  OCEAN_ENOTFOUND: no live entity id; OCEAN_EINVAL: from
  * not finite, or before its newest sample's from. */
 ocean_result ocean_entities_remove(ocean_entities *e, uint32_t id, double from);
+/* The earliest instant an entry of id may take effect: its live track's
+ * newest sample's from, else its last life's removal, else -INFINITY. */
+double ocean_entities_floor(const ocean_entities *e, uint32_t id);
 /* Drops the past of every entity gone at or before `before`. */
 void ocean_entities_prune(ocean_entities *e, double before);
 

@@ -166,13 +166,13 @@ static double loadavg(void)
 
 typedef struct verdict {
     int frames;
-    double expected, keep, gap, peak;
+    double expected, keep, gap, peak, span;
 } verdict;
 
-/* Closes the current window (at least WINDOW_MIN_S long) into *v. */
-static void window_close(verdict *v)
+/* Closes the current window, at least min_s long, into *v. */
+static void window_close(verdict *v, double min_s)
 {
-    while (test_now_s() - win_t0 < WINDOW_MIN_S) usleep(20000);
+    while (test_now_s() - win_t0 < min_s) usleep(20000);
     pthread_mutex_lock(&wit.mu);
     double t = test_now_s();
     if (t - wit.last > wit.max_gap) wit.max_gap = t - wit.last; /* a stall at the end counts */
@@ -184,6 +184,7 @@ static void window_close(verdict *v)
     pthread_mutex_lock(&mem.mu);
     v->peak = mem.peak;
     pthread_mutex_unlock(&mem.mu);
+    v->span = span;
     v->expected = floor(span * WITNESS_HZ);
     v->keep = v->frames / v->expected;
 }
@@ -199,7 +200,7 @@ static verdict last;          /* the window an attack closed last */
  * and keeps the witness's verdict for run_attack. */
 static void window_end(const char *name)
 {
-    window_close(&last);
+    window_close(&last, WINDOW_MIN_S);
     if (last.peak - rss_base > worst_rss) worst_rss = last.peak - rss_base;
     fprintf(stderr, "attack %-22s witness %3d/%3.0f frames (%5.1f %%), longest gap %5.1f ms, "
             "RSS peak %6.1f MiB (+%5.1f, ceiling +%.0f), load %.1f\n", name, last.frames,
@@ -213,10 +214,11 @@ static void window_end(const char *name)
  * with no attack at all; so an attack whose window misses the mark is run
  * again, up to ATTACK_TRIES times in all: an attack that really starves the
  * witness does so every time, a burst of host load rarely three times in a
- * row.  If every try misses, a control window with no attack follows: if
- * the witness misses there too, the host is what starves it and the
- * attack's witness figures are reported as not judged; otherwise the
- * attack fails.  The answers and the memory ceiling are asserted on every
+ * row.  If every try misses, a control window with no attack follows, as
+ * long as the last try's (a long attack's window has more time to meet a
+ * burst of host load than a short control): if the witness misses there
+ * too, the host is what starves it and the attack's witness figures are
+ * reported as not judged; otherwise the attack fails.  The answers and the memory ceiling are asserted on every
  * try. */
 #define ATTACK_TRIES 3
 static void run_attack(void (*fn)(void **), void **state)
@@ -234,9 +236,9 @@ static void run_attack(void (*fn)(void **), void **state)
     }
     verdict c;
     window_begin();
-    window_close(&c);
-    fprintf(stderr, "  control window, no attack: %d/%.0f frames (%.1f %%), longest gap %.1f ms\n",
-            c.frames, c.expected, 100 * c.keep, 1e3 * c.gap);
+    window_close(&c, fmax(WINDOW_MIN_S, last.span));
+    fprintf(stderr, "  control window, no attack, %.1f s: %d/%.0f frames (%.1f %%), longest gap %.1f ms\n",
+            c.span, c.frames, c.expected, 100 * c.keep, 1e3 * c.gap);
     if (!witness_ok(&c)) {
         fprintf(stderr, "  witness not judged: the host starves it without any attack (load %.1f)\n",
                 loadavg());

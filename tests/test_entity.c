@@ -201,7 +201,9 @@ static void in_force_from_its_instant(void **state)
     ocean_entities *e = table(2, 30);
     assert_int_equal(ocean_entities_add(e, &frigate, NULL, 0), OCEAN_OK);
     ocean_track_sample a = smp(100, 0, 0, 0, 10), b = smp(110, 100, 40, 45, 10);
+    assert_true(ocean_entities_floor(e, 7) == -INFINITY && ocean_entities_floor(e, 99) == -INFINITY);
     assert_int_equal(ocean_entities_sample(e, 7, &a, 100.5, NULL, 0), OCEAN_OK);
+    assert_true(ocean_entities_floor(e, 7) == 100.5);
     ocean_entity_state before, st;
     assert_int_equal(ocean_entities_state(e, 7, 100.2, &st), OCEAN_ENOTFOUND); /* not in force yet */
     assert_int_equal(ocean_entities_state(e, 7, 105, &before), OCEAN_OK);
@@ -217,7 +219,9 @@ static void in_force_from_its_instant(void **state)
     assert_true(st.z > 0);
     /* removed from 120: there until then, gone after; its past stays */
     assert_int_equal(ocean_entities_remove(e, 7, 105.9), OCEAN_EINVAL);
+    assert_true(ocean_entities_floor(e, 7) == 106);
     assert_int_equal(ocean_entities_remove(e, 7, 120), OCEAN_OK);
+    assert_true(ocean_entities_floor(e, 7) == 120); /* a new life comes after the removal */
     assert_int_equal(ocean_entities_count(e), 0);
     assert_int_equal(ocean_entities_state(e, 7, 119.9, &st), OCEAN_OK);
     assert_int_equal(ocean_entities_state(e, 7, 120, &st), OCEAN_ENOTFOUND);

@@ -1126,9 +1126,10 @@ static void entities_reach_every_replica(void **state)
         free(wa[i]);
         free(wc[i]);
     }
+    /* the remover hears first: a refusal would come to it alone */
     ship_send(&b, 31, 0, NAN);
-    double gone = entity_wait(&a, PROTO_ENTITY_GONE, 31);
-    assert_true(gone > tq && gone == entity_wait(&b, PROTO_ENTITY_GONE, 31));
+    double gone = entity_wait(&b, PROTO_ENTITY_GONE, 31);
+    assert_true(gone > tq && gone == entity_wait(&a, PROTO_ENTITY_GONE, 31));
     /* replica 3 read the removal too before it is asked about the instant
      * after it (a second past the removal: still ahead of the clock, where
      * an entry not yet read would change the answer) */

@@ -3043,6 +3043,7 @@ static void entity_messages(void **state)
     proto_msg_free(&m);
     entity_expect(&b, PROTO_ENTITY_ANNOUNCE, 7, &m);
     assert_true(m.u.entity.x == 100 && m.u.entity.t == t0 && m.u.entity.length_m == 120.0f && m.u.entity.speed == 5.0f);
+    double from7 = m.hdr.sim_time;
     proto_msg_free(&m);
     entity_at(7, 100);
     entity_send(&b, PROTO_ENTITY_GET, 0, 0, 0, 0, 0, NULL);
@@ -3089,12 +3090,25 @@ static void entity_messages(void **state)
     entity_at(11, NAN);
     assert_int_equal(srv_entities_count(srv_daemon_hub(daemon_)->entities), 4);
 
-    for (uint32_t id = 7; id <= 10; id++) {
+    /* An entry timed before its entity's last takes effect at that last
+     * one, on every reader alike: a removal made on one replica just after
+     * a sample made on another comes after it in the shared stream, with
+     * a time from its own maker's clock that may be a moment earlier. */
+    proto_msg early;
+    proto_msg_init(&early, PROTO_ENTITY);
+    early.u.entity = (proto_entity){.op = PROTO_ENTITY_GONE, .id = 7};
+    early.hdr.sim_time = from7 - 0.25;
+    char why[256] = "";
+    assert_int_equal(srv_hub_entity_enter(srv_daemon_hub(daemon_), &early, why, sizeof why), OCEAN_OK);
+    entity_expect(&b, PROTO_ENTITY_GONE, 7, &m);
+    assert_true(m.hdr.sim_time == from7);
+    proto_msg_free(&m);
+    entity_at(7, NAN);
+    for (uint32_t id = 8; id <= 10; id++) {
         entity_send(&a, PROTO_ENTITY_REMOVE, id, 0, 0, 0, 0, "entity-token");
         entity_expect(&b, PROTO_ENTITY_GONE, id, &m);
         proto_msg_free(&m);
     }
-    entity_at(7, NAN);
     assert_int_equal(srv_entities_count(srv_daemon_hub(daemon_)->entities), 0);
     test_ws_close(&a);
     test_ws_close(&b);

@@ -11,7 +11,8 @@
  * host's own drift falls on both alike;
  * the WAKE bytes the viewer received, and what reading the wakes costs the
  * reader: oc_client_wakes on the square the browser viewer reads (192 x 192
- * points at 4 m), the C library's reading the viewer runs as WebAssembly.
+ * points at 4 m), the C library's reading the viewer runs as WebAssembly,
+ * and the same with 4 hovering helicopters' downwash besides.
  * Markdown on stdout, CSV in tests/bench/out/wakes.csv.
  */
 #include <math.h>
@@ -31,6 +32,7 @@
 #define SPACING 250.0
 #define GRID_N 192
 #define GRID_DX 4.0
+#define ROTORS 4
 
 
 
@@ -149,6 +151,23 @@ int main(void)
     for (int k = 0; k < GRID_N * GRID_N; k++) peak = fmax(peak, fabs(w[k].height));
     oc_client_stats cs;
     oc_client_get_stats(v, &cs);
+    /* and with 4 helicopters on the square besides, hovering 10 m up: each
+     * a dent and, read 3 s after they came, the rings of its coming */
+    double t_rotor = oc_client_sim_time(v), rotor_ms[9], trough = 0;
+    for (int i = 0; i < ROTORS; i++) {
+        proto_entity e = {.op = PROTO_ENTITY_SET, .kind = 1, .id = 200 + (uint32_t)i, .t = t_rotor,
+                          .x = -150 + 100 * i, .z = 60, .altitude_m = 10, .length_m = 16};
+        snprintf(e.token, sizeof e.token, "bench-entity");
+        oc_client_send_entity(v, &e);
+    }
+    run(v, h, 3, 1, t0, &p);
+    for (int r = 0; r < 9; r++) {
+        double a = bench_now_ms();
+        if (oc_client_wakes(v, t_rotor + 3, xz, GRID_N * GRID_N, w) != OCEAN_OK) fprintf(stderr, "bench_wakes: no wakes read\n");
+        rotor_ms[r] = bench_now_ms() - a;
+    }
+    for (int k = 0; k < GRID_N * GRID_N; k++) trough = fmin(trough, w[k].height);
+    double rotor_read_ms = bench_median(rotor_ms, 9);
     double read_ms = bench_median(ms, 9), ratio = none.cpu_ms > 0 ? with.cpu_ms / none.cpu_ms : 0;
 
     printf("The daemon on `make run`'s configuration (ship-bridge) with one viewer (the browser viewer's layout-1 "
@@ -168,6 +187,9 @@ int main(void)
     printf("- Reading the wakes on the square the browser viewer reads (%d x %d points at %g m, all 16 ships): "
            "%.1f ms in the C library (largest wake there %.2f m); the viewer runs the same C as WebAssembly at "
            "most 10 times a second.\n", GRID_N, GRID_N, GRID_DX, read_ms, peak);
+    printf("- With %d helicopters on the square besides (16 m rotors hovering 10 m up, read 3 s after they came: "
+           "each a dent and the rings of its coming, sim/rotor_wash.h): %.1f ms (deepest point %.3f m).\n", ROTORS,
+           rotor_read_ms, trough);
     FILE *f = fopen("tests/bench/out/wakes.csv", "w");
     if (f) {
         fprintf(f, "ships,ticks,cpu_ms,tick_ms\n0,%ld,%.6f,%.6f\n%d,%ld,%.6f,%.6f\n", none.ticks, none.cpu_ms,
