@@ -294,6 +294,13 @@ sea_until "$tmp/sea3.json" "d['spectrum'] == 'jonswap' and d['wind_u10'] == 12"
 # the time it was read (HELLO's sea carries none: SEA_STATE get does)
 python3 -c "import json,sys; a=json.load(open(sys.argv[1])); b=json.load(open(sys.argv[2])); sys.exit(0 if a['effective_time'] == b['effective_time'] > 0 else 1)" "$tmp/sea2.json" "$tmp/sea3.json" ||
     fail "sea reports effective_time $(grep effective "$tmp/sea3.json") for the change entered at $(grep effective "$tmp/sea2.json")"
+# a change asked for a past instant takes effect at the server's clock,
+# and the asker is told both times
+"$OC" sea "$URL" --set --token $TOKEN --wind 12 --at 0.5 >"$tmp/sea4.json" 2>"$tmp/sea.err" ||
+    fail "sea --set --at 0.5: $(cat "$tmp/sea.err")"
+grep -q "asked for t = 0.500 s, in force from t = " "$tmp/sea.err" || fail "sea --at in the past: not said: $(cat "$tmp/sea.err")"
+python3 -c "import json,sys; sys.exit(0 if json.load(open(sys.argv[1]))['effective_time'] > 0.5 else 1)" "$tmp/sea4.json" ||
+    fail "sea --at 0.5 reports $(grep effective "$tmp/sea4.json")"
 # the daemon logs every change with who made it
 grep -q "sea state set by client [0-9]* (127.0.0.1), in force from t = .*wind 12.00 m/s" "$tmp/oceand.log" ||
     fail "the change is not logged with its client and address: $(grep 'sea state' "$tmp/oceand.log" | head -3)"

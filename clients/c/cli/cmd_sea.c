@@ -211,6 +211,11 @@ static int sea_set(const sea_opts *P, oc_client *c, proto_sea *sea, double *eff)
         rc = 1;
     }
     oc_client_sea_state(c, sea, eff);
+    /* the server enters a change at max(asked, its clock): the past is not
+     * rewritten, and the asker hears when it did take effect */
+    if (rc == 0 && !isnan(P->at) && *eff > P->at)
+        fprintf(stderr, "ocean-client sea: asked for t = %.3f s, in force from t = %.3f s (a change takes effect no "
+                "earlier than the server's clock)\n", P->at, *eff);
     return rc;
 }
 
