@@ -4,6 +4,7 @@
  */
 #include "srv_client_sim.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -138,8 +139,12 @@ int srv_client_sim_mesh_fit(srv_client_sim *cs, srv_client *c, const mesh_camera
     double est = 0, est0 = 0;
     int k = 0;
     for (;; k++) {
-        cfg.error_px = sub->error_px * (double)(1 << k);
-        if (cfg.error_px > MESH_ERROR_PX_MAX || mesh_estimate_vertices(&cfg, mc, &est) != OCEAN_OK) {
+        /* doubled, the last step to the largest budget itself (a 2 deg
+         * view fits at 100 px, not at 64) */
+        double want = sub->error_px * (double)(1 << k);
+        cfg.error_px = fmin(want, fmax(sub->error_px, MESH_ERROR_PX_MAX));
+        if ((k > 0 && cfg.error_px <= sub->error_px * (double)(1 << (k - 1))) ||
+            mesh_estimate_vertices(&cfg, mc, &est) != OCEAN_OK) {
             k = -1;
             break;
         }

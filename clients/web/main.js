@@ -356,6 +356,10 @@ function applyFrame(m) {
         stats.levels = b.cascadeCount;
     } else if (m.mesh) {
         if (renderer.setVertices(m.mesh)) stats.framesWithMesh++;
+        /* what a frame's mesh met: its id and size against the topology held */
+        const t = renderer.topology;
+        stats.meshLast = { id: m.mesh.meshId, vertices: m.mesh.positions.length / 3,
+            topology: t ? [t.meshId, t.vertexCount] : null };
         let lo = Infinity, hi = -Infinity;
         const p = m.mesh.positions;
         for (let i = 1; i < p.length; i += 3) { if (p[i] < lo) lo = p[i]; if (p[i] > hi) hi = p[i]; }

@@ -327,7 +327,8 @@ try {
     check('the f16 codec and layout 0 (qz mesh positions) work end to end too', sC.codec === 'f16' && sC.layout === 0 &&
         sC.subscription.layout === 0 && sC.subscription.meshCodec === 2 && sC.framesWithMesh > 0 &&
         sC.tilesDecoded > 0 && sC.decodeErrors === 0 && sC.serverErrors === 0,
-        `codec ${sC.codec}, layout ${sC.layout}, mesh codec ${sC.subscription.meshCodec}, ${sC.framesWithMesh} frames with a mesh, ${sC.tilesDecoded} tiles, ${sC.decodeErrors} errors ${sC.errors.join(' | ')}`);
+        `codec ${sC.codec}, layout ${sC.layout}, mesh codec ${sC.subscription.meshCodec}, ${sC.framesWithMesh} frames with a mesh, ${sC.tilesDecoded} tiles, ${sC.decodeErrors} errors ${sC.errors.join(' | ')}; ` +
+        `${sC.framesReceived} frames received, ${sC.framesDecoded} decoded, ${sC.framesRendered} rendered, ${sC.topologies} topologies, the last frame's mesh ${JSON.stringify(sC.meshLast || null)}`);
     await page2.waitForTimeout(1500);
     const pngC = await page2.screenshot({ type: 'png' });
     writeFileSync(join(artifacts, 'viewer-control.png'), pngC);
