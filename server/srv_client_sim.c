@@ -136,18 +136,17 @@ int srv_client_sim_mesh_fit(srv_client_sim *cs, srv_client *c, const mesh_camera
         return 0;
     const mesh_config *sub = &cs->mesh_cfg;
     mesh_config cfg = *sub;
-    double est = 0, est0 = 0;
+    double est = 0, est0 = 0, tried = 0;
     int k = 0;
     for (;; k++) {
         /* doubled, the last step to the largest budget itself (a 2 deg
          * view fits at 100 px, not at 64) */
-        double want = sub->error_px * (double)(1 << k);
-        cfg.error_px = fmin(want, fmax(sub->error_px, MESH_ERROR_PX_MAX));
-        if ((k > 0 && cfg.error_px <= sub->error_px * (double)(1 << (k - 1))) ||
-            mesh_estimate_vertices(&cfg, mc, &est) != OCEAN_OK) {
+        cfg.error_px = fmin(sub->error_px * (double)(1 << k), fmax(sub->error_px, MESH_ERROR_PX_MAX));
+        if (cfg.error_px <= tried || mesh_estimate_vertices(&cfg, mc, &est) != OCEAN_OK) {
             k = -1;
             break;
         }
+        tried = cfg.error_px;
         if (k == 0)
             est0 = est;
         /* a coarser mesh comes back only with room to spare, so a camera

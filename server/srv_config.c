@@ -333,8 +333,9 @@ static const conf_entry srv_entries[] = {
      .help = "Largest mesh the server builds for one camera, priced from the camera before "
              "anything is built.  A concentric mesh above it (a camera near steep chop, a "
              "narrow field of view) is built at server.mesh_error_px doubled until it fits, up "
-             "to 100 px (the last step 100 px itself): a layout-0 client is told by one ERROR ETOOBIG naming both budgets, a "
-             "layout-1 client reads the lattice it got in MESH_TOPOLOGY's zones.  Beyond that, "
+             "to 100 px (the last step 100 px itself): a layout-0 client is told by one ERROR "
+             "ETOOBIG naming both budgets, a layout-1 client reads the lattice it got in "
+             "MESH_TOPOLOGY's zones.  Beyond that, "
              "or for the other mesh kinds, the client's frames come without a mesh, with one "
              "ERROR ETOOBIG naming this limit and the estimate."},
     {.name = "server.max_sample_rate", .type = CONF_DOUBLE, .offset = SRV(max_sample_rate),
