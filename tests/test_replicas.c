@@ -936,12 +936,13 @@ static void wakes_collect(test_ws *w, int want, double seconds, uint8_t *got[WAK
     *count = n;
 }
 
-/* The next ENTITY of op about id on w; returns the instant it takes
- * effect (its header sim_time).  A deadline of 60 s: an entry goes through
+/* The next ENTITY of op about id on w (an announce: of the sample of track
+ * time t; NAN: any); returns the instant it takes effect (its header
+ * sim_time).  A deadline of 60 s: an entry goes through
  * Redis and comes between the live frames of a subscribed viewer, which a
  * loaded host (a core held, the sanitizer build beside the tests) reads
  * slowly; 20 s ran out once there. */
-static double entity_wait(test_ws *w, int op, uint32_t id)
+static double entity_wait_t(test_ws *w, int op, uint32_t id, double t)
 {
     proto_msg m;
     for (double end = test_now_s() + 60; test_now_s() < end;) {
@@ -952,13 +953,15 @@ static double entity_wait(test_ws *w, int op, uint32_t id)
             continue;
         }
         double from = m.hdr.sim_time;
-        int match = m.u.entity.op == op && m.u.entity.id == id;
+        int match = m.u.entity.op == op && m.u.entity.id == id && (isnan(t) || m.u.entity.t == t);
         proto_msg_free(&m);
         if (match) return from;
     }
     fail_msg("no ENTITY op %d of entity %u", op, id);
     return 0;
 }
+
+static double entity_wait(test_ws *w, int op, uint32_t id) { return entity_wait_t(w, op, id, NAN); }
 
 /* A CIGI host's surface wind, sent to one replica's CIGI port, enters the
  * shared timeline as an admin's set does: every replica serves it (the set
@@ -1126,6 +1129,14 @@ static void entities_reach_every_replica(void **state)
         free(wa[i]);
         free(wc[i]);
     }
+    /* Ship 31's last sample is in the stream before its removal is made:
+     * made on another replica, a sample still on its way would follow the
+     * removal there and start a new life, which a replica may not have read
+     * yet when asked about the instant after the removal (ahead of the
+     * clock, not settled) */
+    double t31 = sim_now();
+    ship_send(&a, 31, t31, 8 * (t31 - t0));
+    entity_wait_t(&a, PROTO_ENTITY_ANNOUNCE, 31, t31);
     /* the remover hears first: a refusal would come to it alone */
     ship_send(&b, 31, 0, NAN);
     double gone = entity_wait(&b, PROTO_ENTITY_GONE, 31);
