@@ -218,8 +218,8 @@ static void window_end(const char *name)
  * long as the last try's (a long attack's window has more time to meet a
  * burst of host load than a short control): if the witness misses there
  * too, the host is what starves it and the attack's witness figures are
- * reported as not judged; otherwise the attack fails.  The answers and the memory ceiling are asserted on every
- * try. */
+ * reported as not judged; otherwise the attack fails.  The answers and the
+ * memory ceiling are asserted on every try. */
 #define ATTACK_TRIES 3
 static void run_attack(void (*fn)(void **), void **state)
 {
@@ -1292,8 +1292,6 @@ static void a_cigi_flood(void **state)
     close(stranger);
 }
 
-/* ?record=1 writes nothing unless server.record_clients allows it; with
- * it, server.record_max_files and server.record_max_bytes bound the run. */
 /* The files in dir and their bytes. */
 static void recordings_count(const char *dir, int *files, long *bytes)
 {
@@ -1314,6 +1312,8 @@ static void recordings_count(const char *dir, int *files, long *bytes)
     closedir(d);
 }
 
+/* ?record=1 writes nothing unless server.record_clients allows it; with
+ * it, server.record_max_files and server.record_max_bytes bound the run. */
 static void a_recording_quotas(void **state)
 {
     (void)state;
