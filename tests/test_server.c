@@ -4579,6 +4579,12 @@ static size_t mesh_at_limit(double choppiness, int max_vertices, int layout, dou
     s2.srv.port = 0;
     s2.srv.max_mesh_vertices = max_vertices;
     s2.params.sea.choppiness = choppiness;
+    /* a half-million-vertex topology and its frames are tens of MB: a test
+     * client on a busy host reads them for longer than the default soft
+     * limit's 10 s above 8 MB allow, and the slow-consumer rule (not what
+     * this measures) closed it once */
+    s2.srv.output_soft = (uint64_t)1 << 30;
+    if (s2.srv.output_hard < s2.srv.output_soft) s2.srv.output_hard = s2.srv.output_soft;
     proto_subscribe sub;
     small_subscribe(&sub);
     if (layout) sub.layout = PROTO_LAYOUT_CASCADE;
