@@ -215,7 +215,7 @@ ocean_result srv_hub_entity_enter(srv_hub *h, const proto_msg *m, char *why, siz
     if (e->op == PROTO_ENTITY_GONE) {
         r = srv_entities_remove(h->entities, e->id, from);
         if (r != OCEAN_OK)
-            snprintf(why, n, r == OCEAN_ENOTFOUND ? "no entity %u in the sea" : "entity %u: a removal at %.6f s refused",
+            snprintf(why, n, r == OCEAN_ENOTFOUND ? "no entity %u in the sea" : "entity %u: a removal at %.6f s, not a finite time",
                      e->id, from);
     } else {
         r = srv_entities_sample(h->entities, &d, &s, from, why, n);

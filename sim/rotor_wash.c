@@ -170,7 +170,7 @@ static int lattice_feet(const ocean_entities *e, double tk, ocean_entity_desc *d
 /* The rotorcraft in the sea at t (increasing id), their positions (head
  * and radius unused). */
 static int rotors_now(const ocean_entities *e, double t, ocean_entity_desc *d, ocean_entity_state *s, int max,
-                            foot *out)
+                      foot *out)
 {
     int n = ocean_entities_at(e, t, d, s, max), m = 0;
     for (int i = 0; i < n; i++)
