@@ -443,6 +443,9 @@ static void view_box(const srv_cascade_job *j, const sector *sc, double R, doubl
 }
 
 static double nadir_error(const tables *tb, const plan *pl, const proto_camera *cam);
+static double lost_var(const tables *tb, int c, double s);
+static void plan_relief(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, const sector *sc,
+                        double q, double ppr, double budget, plan *pl);
 
 /* The plan for spacing factor q at every cascade; returns the estimated
  * bytes of its tiles. */
@@ -468,6 +471,10 @@ static double plan_bytes(const plan *pl)
  * estimated with srv_cascade_tile_bytes' model): a
  * large viewport or a low camera gets a little less geometry and a little
  * more unresolved roughness, never more bytes than the budget.
+ *
+ * A subscription with normals then puts relief first (plan_relief): the
+ * cascades whose left-out heights a camera near the water would see get
+ * the bytes first.
  *
  * Then each cascade spends what that left of the budget on its own q.
  * Bytes grow with q in steps of whole tiles, and a step of one coarse
@@ -530,6 +537,8 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
             }
             hi = t;
         }
+    } else {
+        plan_relief(tb, cfg, j, &sc, q, ppr, budget, pl);
     }
     /* each cascade its own q, within what is left (see above) */
     double bytes = plan_bytes(pl);
@@ -552,6 +561,91 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
     }
     pl->tiles = 0;
     for (int c = 0; c < pl->layers; c++) pl->tiles += pl->ctiles[c];
+}
+
+/* The relief cascade c's reads leave out, in pixels: the RMS height
+ * they lack at slant distance r, seen from r (sqrt(lost) f / r, f the
+ * camera's pixels per radian), where it is largest along the sea the
+ * camera sees (from the nearest point its frustum reaches, by its pitch
+ * and field of view, out to the view range).  A crest the tiles leave out
+ * is a silhouette that much too low: a camera near the water sees far
+ * crests edge on, by their height, however small their footprint.  (The
+ * mesh's lattice has its own error budget, so G is left out here.) */
+#define RELIEF_STEPS 32
+static double relief_px(const tables *tb, const plan *pl, const srv_cascade_job *j, int c, double ppr,
+                        double range_m)
+{
+    const proto_camera *cam = &j->cam;
+    double h = fmax(fabs(cam->pos[1]), 1.0);
+    double down = (0.5 * cam->fov_y_deg - cam->pitch_deg) * M_PI / 180.0;
+    if (!(down > 0))
+        return 0.0; /* no sea in view */
+    double near = down < 0.5 * M_PI ? h / sin(down) : h, far = sqrt(range_m * range_m + h * h);
+    if (!(near < far))
+        return 0.0;
+    double worst = 0, step = pow(far / near, 1.0 / RELIEF_STEPS), r = near;
+    for (int i = 0; i <= RELIEF_STEPS; i++, r *= step) {
+        double lost = lost_var(tb, c, fmax(pl->qc[c] * r, pl->min_spacing));
+        worst = fmax(worst, sqrt(fmax(lost, 0.0)) * ppr / r);
+    }
+    return worst;
+}
+
+/* Relief before texture.  Where the plan that fits leaves out heights that
+ * would show more than RELIEF_PX (relief_px), it starts again RELIEF_START
+ * times coarser and takes, a quarter octave of one cascade at a time, the
+ * step that removes the most relief error (the sum over cascades of its
+ * square) per byte, while it fits the budget, until every cascade's is
+ * within RELIEF_PX; plan_job's refinement then spends what is left finest
+ * first.  The slopes the coarser mips leave out reach the shading as
+ * unresolved roughness (the mip tables); lost heights reach nothing.
+ * From 5 m over the storm sea in a 10 deg view, one q for every cascade
+ * read the 240 m waves of cascade 0 no farther than 1.7 km, and the crests
+ * that rise over the horizon (0.7-2.9 km out) were flat; three octaves
+ * give the marginal choice room to move the finer cascades' bytes there
+ * (a single octave still left cascade 0 at 2.7 px for a 30 Hz viewer). */
+#define RELIEF_PX 1.0
+#define RELIEF_START 8.0
+static void plan_relief(const tables *tb, const srv_config *cfg, const srv_cascade_job *j, const sector *sc,
+                        double q, double ppr, double budget, plan *pl)
+{
+    const proto_subscribe *sub = &j->cs->sub;
+    double range_m = sub->view_range_m > 0 ? sub->view_range_m : cfg->view_range;
+    double worst[PROTO_MAX_LAYERS] = {0}, most = 0;
+    for (int c = 0; c < pl->layers; c++) most = fmax(most, relief_px(tb, pl, j, c, ppr, range_m));
+    if (!(most > RELIEF_PX))
+        return;
+    double bytes = plan_at(tb, cfg, j, sc, RELIEF_START * pl->q, pl);
+    int open = 0;
+    for (int c = 0; c < pl->layers; c++) {
+        worst[c] = relief_px(tb, pl, j, c, ppr, range_m);
+        if (pl->qc[c] / QUARTER_OCTAVE >= q * 0.999999 && worst[c] > RELIEF_PX) open |= 1 << c;
+    }
+    while (open) {
+        /* every open cascade's next step, priced; the best kept */
+        int best = -1;
+        double best_gain = 0, best_w = 0;
+        for (int c = 0; c < pl->layers; c++) {
+            if (!(open & (1 << c))) continue;
+            double was_q = pl->qc[c], was_b = pl->cbytes[c];
+            double nb = bytes - was_b + plan_cascade(tb, cfg, j, sc, c, was_q / QUARTER_OCTAVE, pl);
+            double w = relief_px(tb, pl, j, c, ppr, range_m);
+            plan_cascade(tb, cfg, j, sc, c, was_q, pl);
+            if (nb > budget) {
+                open &= ~(1 << c);
+                continue;
+            }
+            double gain = (worst[c] * worst[c] - w * w) / fmax(nb - bytes, 1.0);
+            if (best < 0 || gain > best_gain) best = c, best_gain = gain, best_w = w;
+        }
+        if (best < 0)
+            break;
+        double t = pl->qc[best] / QUARTER_OCTAVE;
+        plan_cascade(tb, cfg, j, sc, best, t, pl);
+        bytes = plan_bytes(pl);
+        worst[best] = best_w;
+        if (t / QUARTER_OCTAVE < q * 0.999999 || !(best_w > RELIEF_PX)) open &= ~(1 << best);
+    }
 }
 
 static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade_job *j,
@@ -713,6 +807,20 @@ static void tile_build(srv_tile *t, const ocean_frame *f, const tables *tb)
 /* ---- frames ----------------------------------------------------------------- */
 
 
+/* The height variance of cascade c that a read at spacing s leaves out
+ * (PROTOCOL.md "Where each mip is read"): what the mips read lack, with
+ * their weights, and all of it beyond a fading cascade's fade. */
+static double lost_var(const tables *tb, int c, double s)
+{
+    int M = tb->mips[c];
+    proto_lod_read r;
+    proto_lod_read_at(s, tb->patch[c] / tb->n, M, c > 0, &r);
+    double v = (1 - r.fade) * tb->var_removed[c][M];
+    for (int k = 0; k < 2; k++)
+        if (r.mip[k] >= 0) v += r.weight[k] * tb->var_removed[c][r.mip[k]];
+    return v;
+}
+
 /* Height variance the tiles do not carry at the camera's nadir, as a
  * fraction of the sea's: each cascade at the level the lod rule reads
  * there (PROTOCOL.md), blended between mips as a client blends them. */
@@ -725,19 +833,12 @@ static double nadir_error(const tables *tb, const plan *pl, const proto_camera *
         return 0.0;
     double miss = 0.0;
     for (int c = 0; c < pl->ncas; c++) {
-        int M = tb->mips[c];
         if (c >= pl->layers) {
-            miss += tb->var_removed[c][M];
+            miss += tb->var_removed[c][tb->mips[c]];
             continue;
         }
         /* height is read at max(s, G) (PROTOCOL.md), s at the nadir */
-        double s = fmax(proto_lod_spacing(pl->qc[c], pl->min_spacing, cam->pos[1], 0, 0), pl->geo);
-        proto_lod_read r;
-        proto_lod_read_at(s, tb->patch[c] / tb->n, M, c > 0, &r);
-        double v = (1 - r.fade) * tb->var_removed[c][M];
-        for (int k = 0; k < 2; k++)
-            if (r.mip[k] >= 0) v += r.weight[k] * tb->var_removed[c][r.mip[k]];
-        miss += v;
+        miss += lost_var(tb, c, fmax(proto_lod_spacing(pl->qc[c], pl->min_spacing, cam->pos[1], 0, 0), pl->geo));
     }
     double e = miss / total;
     return e < 0 ? 0 : e > 1 ? 1 : e;

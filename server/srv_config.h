@@ -72,7 +72,8 @@ typedef struct srv_config {
     int tiles_per_side;          /* tiles per level around the camera (n x n) */
     double base_spacing;         /* level-0 sample spacing when a client gives 0, m */
     double view_range;           /* mesh range when a client gives 0, m */
-    double mesh_error_px;        /* concentric mesh screen error budget */
+    double mesh_error_px;        /* concentric mesh screen error budget (layout 0) */
+    double flat_mesh_error_px;   /* the same for layout 1's flat mesh */
     double px_per_sample;        /* layout 1: on-screen pixels one tile sample may span */
     double viewer_bytes_per_s;   /* layout 1: tile bytes a viewer may receive per second */
     int cascade_tile;            /* layout 1: tile side, samples (shared by every viewer) */

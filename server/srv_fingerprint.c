@@ -59,6 +59,7 @@ void srv_fingerprint(const srv_settings *s, char out[17])
     h = fnv_f64(h, c->base_spacing);
     h = fnv_f64(h, c->view_range);
     h = fnv_f64(h, c->mesh_error_px);
+    h = fnv_f64(h, c->flat_mesh_error_px);
     h = fnv_f64(h, c->px_per_sample);
     h = fnv_f64(h, c->viewer_bytes_per_s);
     h = fnv_int(h, c->cascade_tile);

@@ -443,7 +443,7 @@ static void apply_subscription(srv_sim *s, srv_client *c, srv_client_sim *cs)
     mc.range_m = cs->sub.view_range_m > 0 ? cs->sub.view_range_m : s->set.srv.view_range;
     if (mc.range_m < 10) mc.range_m = 10;
     if (mc.range_m > 1e6) mc.range_m = 1e6;
-    mc.error_px = s->set.srv.mesh_error_px;
+    mc.error_px = cs->sub.layout == PROTO_LAYOUT_CASCADE ? s->set.srv.flat_mesh_error_px : s->set.srv.mesh_error_px;
     mc.lambda_dominant_m = s->lambda_dom;
     mc.roughness = s->roughness;
     /* what MESH_TOPOLOGY can carry: a camera near the water with a long

@@ -151,7 +151,7 @@ static const stat_metric traffic_metrics[] = {
          "admitted work past server.admit_share of its usable cores.", refused_admission, 1),
     STAT("oceand_refused_mesh_total", "counter", "Meshes refused above server.max_mesh_vertices (estimated "
          "before building).", refused_mesh, 1),
-    STAT("oceand_coarsened_mesh_total", "counter", "Meshes built at a multiple of server.mesh_error_px to stay "
+    STAT("oceand_coarsened_mesh_total", "counter", "Meshes built at a multiple of server.mesh_error_px (flat_mesh_error_px) to stay "
          "within server.max_mesh_vertices.", coarsened_mesh, 1),
     STAT("oceand_refused_upgrade_total", "counter", "WebSocket upgrades refused (no ocean.v1 subprotocol, "
          "version other than 13).", refused_upgrade, 1),

@@ -19,7 +19,10 @@
 #  3. The layout-1 viewer in ship-bridge, storm and flight (one daemon per
 #     scene, --scene) at 25, 300 and 1500 m (tests/browser/scenes.test.mjs):
 #     screenshots $BUILD/test-artifacts/scene-*.png, sun glitter spread by
-#     roughness at 1500 m against a mirror control, no mesh edge.
+#     roughness at 1500 m against a mirror control, no mesh edge; in the
+#     storm, crests breaking the horizon from 5 m against `ocean-sim render`
+#     of the exact sea (made in the background from the start), with the
+#     layout-1 mesh at 8 px (server.flat_mesh_error_px).
 #     SHOTS_OUT=DIR also copies the screenshots to DIR (tests/bench/out).
 # The pages of 2 and 3 draw a quarter of the viewer's own resolution without
 # multisampling (VIEW_QUERY, default scale=0.25&aa=0): nothing judged depends
@@ -41,7 +44,9 @@ ART="$BUILD/test-artifacts"
 WORK="$BUILD/browser-test"
 mkdir -p "$ART" "$WORK"
 daemon_pid=""
+relief_pid=""
 cleanup() {
+    [[ -n "$relief_pid" ]] && kill "$relief_pid" 2>/dev/null
     if [[ -n "$daemon_pid" ]] && kill -0 "$daemon_pid" 2>/dev/null; then
         kill -TERM "$daemon_pid" 2>/dev/null
         for _ in $(seq 50); do kill -0 "$daemon_pid" 2>/dev/null || break; sleep 0.1; done
@@ -85,6 +90,14 @@ if [[ ! -d tests/browser/node_modules/playwright-core ]]; then
 fi
 [[ -x "$BUILD/oceand" && -x "$BUILD/ocean-client" ]] || die "$BUILD/oceand or ocean-client not built"
 [[ -f "$BUILD/libocean_proto.a" && -f "$BUILD/libocean_sim.a" ]] || die "$BUILD/libocean_proto.a / libocean_sim.a not built"
+[[ -x "$BUILD/ocean-sim" ]] || die "$BUILD/ocean-sim not built"
+
+# the exact sea of the storm's relief view (scenes.test.mjs RELIEF_REF), one
+# core for a quarter of a minute, made while the tests before it run
+RELIEF_T=123.25
+"$BUILD/ocean-sim" render --config config/oceand.conf --scene storm --pos 0,5,0 --yaw 0 --pitch 0 --fov 10 \
+    --size 960x270 --supersample 1 --time "$RELIEF_T" --out "$WORK/relief-ref.png" >"$WORK/relief-ref.log" 2>&1 &
+relief_pid=$!
 
 status=0
 export VIEW_QUERY="${VIEW_QUERY-scale=0.25&aa=0}"
@@ -141,13 +154,23 @@ rm -f "$ART/scenes.jsonl"
 for scene in ship-bridge storm flight; do
     echo "== viewer: layout 1 screenshots, scene $scene == (${SECONDS} s)"
     log="$WORK/oceand-$scene.log"
-    if ! start_daemon "$log" --scene "$scene"; then
+    # the storm's daemon draws the layout-1 mesh at 8 px, the budget at which
+    # its crests break the horizon (server.flat_mesh_error_px; relief check)
+    extra=()
+    [[ $scene == storm ]] && extra=(--set server.flat_mesh_error_px=8)
+    if ! start_daemon "$log" --scene "$scene" "${extra[@]}"; then
         echo "test_browser: oceand --scene $scene did not start:"; cat "$log"
         status=1
         continue
     fi
-    if ! OCEAN_URL="$url" SCENE="$scene" ARTIFACT_DIR="$ART" SHOTS_OUT="${SHOTS_OUT:-}" \
-            VIEWER_TIMEOUT_S="${VIEWER_TIMEOUT_S:-90}" timeout 300 node tests/browser/scenes.test.mjs; then
+    relief_ref=""
+    if [[ $scene == storm ]]; then
+        if wait "$relief_pid"; then relief_ref="$WORK/relief-ref.png"
+        else echo "test_browser: ocean-sim render of the relief view failed:"; cat "$WORK/relief-ref.log"; status=1; fi
+        relief_pid=""
+    fi
+    if ! OCEAN_URL="$url" SCENE="$scene" ARTIFACT_DIR="$ART" SHOTS_OUT="${SHOTS_OUT:-}" RELIEF_REF="$relief_ref" \
+            RELIEF_T="$RELIEF_T" VIEWER_TIMEOUT_S="${VIEWER_TIMEOUT_S:-90}" timeout 300 node tests/browser/scenes.test.mjs; then
         echo "test_browser: scene $scene FAILED (daemon log follows)"
         tail -20 "$log"
         status=1

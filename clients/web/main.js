@@ -243,6 +243,7 @@ worker.onmessage = (ev) => {
         stats.topologies++;
         stats.vertexCount = m.vertexCount;
         stats.indexCount = m.indices.length;
+        stats.zones = m.zones ? Array.from(m.zones) : null;
         break;
     case 'vertices':
         renderer.setVertices(m);
@@ -348,7 +349,8 @@ function applyFrame(m) {
             tiles: m.blocks.filter((x) => x.cascade === c).length,
             mipsSent: [...new Set(m.blocks.filter((x) => x.cascade === c).map((x) => x.mip))].sort((a, z) => a - z),
         }));
-        stats.block = { spacingPerM: b.spacingPerM, minSpacingM: b.minSpacingM, eTotal: b.eTotal, tailMss: b.tailMss, camera: b.camera };
+        stats.block = { spacingPerM: b.spacingPerM, minSpacingM: b.minSpacingM, eTotal: b.eTotal, tailMss: b.tailMss, camera: b.camera,
+            cascades: b.cascade.map((e) => ({ patchM: e.patchM, n: e.n, mips: e.mips, fades: e.fades, q: e.spacingPerM })) };
         let fsum = 0, fn = 0, fmax = 0;
         for (const x of m.blocks) { fsum += x.foamSum; fn += x.n; fmax = Math.max(fmax, x.foamMax); }
         stats.foamMean = fn ? fsum / fn : 0;

@@ -79,13 +79,13 @@ try {
             [s0.d, s0.r], { timeout: timeoutMs, polling: 200 });
         const png = await page.screenshot({ type: 'png' });
         writeFileSync(v.shot, png);
-        const st = await page.evaluate(() => ({ frames: window.oceanStats.framesRendered, errors: window.oceanStats.errors.slice() }));
+        const st = await page.evaluate(() => ({ frames: window.oceanStats.framesRendered, errors: window.oceanStats.errors.slice(), vertices: window.oceanStats.vertexCount, zones: window.oceanStats.zones, block: window.oceanStats.block }));
         await page.close();
         const a = decodePng(png), b = decodePng(readFileSync(v.ref));
         if (a.w !== b.w || a.h !== b.h) throw new Error(`${v.name}: screenshot ${a.w}x${a.h}, reference ${b.w}x${b.h}`);
         const r = ssim({ data: a.px, width: a.w, height: a.h }, { data: b.px, width: b.w, height: b.h }, { ssim: 'original' });
         if (v.pair) await sideBySide(png, readFileSync(v.ref), v.pair);
-        const line = { name: v.name, ssim: r.mssim, mean_abs_diff: meanAbsDiff(a, b), frames: st.frames, errors: st.errors };
+        const line = { name: v.name, ssim: r.mssim, mean_abs_diff: meanAbsDiff(a, b), frames: st.frames, errors: st.errors, vertices: st.vertices, zones: st.zones, block: st.block };
         if (v.edge) {
             const ea = seaEdgeRows(a), eb = seaEdgeRows(b);
             const sum = (e) => ({ top: Math.min(...e), range: Math.max(...e) - Math.min(...e), mean: e.reduce((x, y) => x + y, 0) / e.length });

@@ -15,18 +15,23 @@
  * widen the glitter lobe; without them a far sea reflects a sharp sun).
  * The glitter of the same sea seen from 25 m and from 1500 m (foam off,
  * one pitch) is recorded in scenes.jsonl for the report.
+ * RELIEF_REF (optional, the storm): `ocean-sim render` of the exact sea
+ * from 5 m, level, 10 deg, 960x270, t = RELIEF_T; the viewer opens the same
+ * view at that instant (?t=, full resolution) and its crests must break the
+ * horizon as the exact sea's do (relief, below; tests/test_browser.sh runs
+ * the storm's daemon with the layout-1 mesh at 8 px for it).
  * SHOTS_OUT (optional): a directory the screenshots are copied to
  * (tests/bench/out for the benchmark report).
  *
  * Env: OCEAN_URL, SCENE, ARTIFACT_DIR, CHROMIUM, VIEWER_TIMEOUT_S, SHOTS_OUT,
- * VIEW_QUERY.
+ * VIEW_QUERY, RELIEF_REF, RELIEF_T.
  * Prints "N passed, N failed"; exits non-zero on any failure.
  */
 import { createRequire } from 'node:module';
-import { mkdirSync, writeFileSync, mkdtempSync, rmSync, appendFileSync } from 'node:fs';
+import { mkdirSync, writeFileSync, mkdtempSync, rmSync, appendFileSync, readFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { decodePng, glitter, horizonRow, lum } from './pixels.mjs';
+import { decodePng, glitter, horizonRow, lum, seaEdgeRows } from './pixels.mjs';
 
 const require = createRequire(new URL('./package.json', import.meta.url));
 const { chromium } = require('playwright-core');
@@ -63,6 +68,45 @@ function variance(img, y0, y1) {
     let s = 0, s2 = 0, n = 0;
     for (let y = y0; y < y1; y++) for (let x = 0; x < img.w; x++) { const l = lum(img, x, y); s += l; s2 += l * l; n++; }
     return s2 / n - (s / n) ** 2;
+}
+
+/* Relief: crests break the horizon.  From 5 m over the storm sea (Hs
+ * 9.34 m), level, 10 deg high (27 rows a degree), the exact sea's crests
+ * 0.7-3 km out rise over the flat sea's horizon and make its edge ragged.
+ * The viewer's edge (pixels.mjs seaEdgeRows, per column) must rise over the
+ * flat horizon by at least half the rows the exact sea's does, and vary
+ * across the columns by at least half the reference's range: the crests'
+ * projection, drawn as geometry, not a ruler-straight line. */
+async function relief(context) {
+    const W = 960, H = 270, T = Number(process.env.RELIEF_T || 123.25), FOVR = 10;
+    const page = await context.newPage();
+    try {
+        await page.setViewportSize({ width: W, height: H });
+        await page.goto(`${base}?x=0&y=5&z=0&yaw=0&pitch=0&fov=${FOVR}&t=${T}&overlay=0&scale=1`, { waitUntil: 'load', timeout: timeoutMs });
+        const held = await waitFor(page, (t) => window.oceanStats && window.oceanStats.framesRendered >= 2 &&
+            window.oceanStats.simTime === t, T, timeoutMs);
+        /* the stream filled in: eight more frames decoded and drawn */
+        const s0 = await stats(page);
+        const more = held && await waitFor(page, ([d, r]) => window.oceanStats.framesDecoded >= d + 8 &&
+            window.oceanStats.framesRendered >= r + 8, [s0.framesDecoded, s0.framesRendered], timeoutMs);
+        const png = await page.screenshot({ type: 'png' });
+        save(`scene-${scene}-relief-5m.png`, png);
+        const a = decodePng(png), b = decodePng(readFileSync(process.env.RELIEF_REF));
+        const ea = seaEdgeRows(a), eb = seaEdgeRows(b);
+        const top = (e) => Math.min(...e), range = (e) => Math.max(...e) - Math.min(...e);
+        /* a flat sea's horizon from 5 m: sqrt(2h/R) = 0.07 deg below level */
+        const flat = Math.round(H / 2 + Math.tan(Math.sqrt(2 * 5 / 6371008.8)) / Math.tan(FOVR * Math.PI / 360) * H / 2);
+        const riseV = flat - top(ea), riseR = flat - top(eb);
+        const st = await stats(page);
+        check('5 m, level, 10 deg: crests break the horizon as the exact sea\'s do (relief)',
+            more && a.w === b.w && a.h === b.h && riseR > 2 && riseV >= riseR / 2 && range(ea) >= range(eb) / 2 &&
+            st.serverErrors === 0,
+            `highest edge ${riseV} rows over the flat horizon (row ${flat}) against the exact sea's ${riseR}; ` +
+            `edge range ${range(ea)} rows against ${range(eb)}; mesh ${st.vertexCount} vertices, ` +
+            `q ${(st.block && st.block.cascades || []).map((c) => c.q.toPrecision(2)).join(' ')}; errors ${st.errors.join(' | ')}`);
+    } finally {
+        await page.close();
+    }
 }
 
 const FOV = 60;
@@ -196,6 +240,7 @@ try {
         summary.push(line);
         console.log(`# ${JSON.stringify(line)}`);
     }
+    if (process.env.RELIEF_REF) await relief(context);
     /* The same sea from 25 m and from 1500 m (foam off, one pitch):
      * glitterAreaNoFoam / glitterSpreadNoFoam in scenes.jsonl.  Not
      * asserted: in ship-bridge and flight they agree within 1.4x, but in the
