@@ -286,15 +286,14 @@ static const conf_entry srv_entries[] = {
              "1.3 the spacing shrinks as 1.3 / choppiness, since the sideways error grows with "
              "it (about 10x the vertices at choppiness 5)."},
     {.name = "server.flat_mesh_error_px", .type = CONF_DOUBLE, .offset = SRV(flat_mesh_error_px),
-     .min = 0.1, .max = 64, .def = "16", .unit = "px",
+     .min = 0.1, .max = 64, .def = "8", .unit = "px",
      .help = "The same budget for the mesh a layout-1 client (the browser viewer) displaces "
              "itself: its topology travels once per plan (camera height octave, field of "
-             "view, viewport), not its vertices every frame. 8 px lets the crests 1-3 km "
-             "out rise over the horizon from 5 m above a storm sea nearly as the exact "
-             "sea's do (the edge 5 rows over a flat sea's in a 10 deg view, the exact sea's "
-             "8; 16 px: 2), for 4 times the topology's bytes (660 KB against 165 KB for a "
-             "1080p camera 25 m up): on a 0.4 MB/s link that first second of topology held "
-             "the frames behind it for the rest of a 10 s test."},
+             "view, viewport), not its vertices every frame, so it can be finer. At 8 px "
+             "the crests 1-3 km out rise over the horizon from 5 m above a storm sea nearly "
+             "as the exact sea's do (the sea's edge 5 rows over a flat sea's in a 10 deg "
+             "view, the exact sea's 8; at 16 px, 2), for 4 times the topology's bytes (660 "
+             "KB against 165 KB for a 1080p camera 25 m up, once per plan)."},
     {.name = "server.px_per_sample", .type = CONF_DOUBLE, .offset = SRV(px_per_sample),
      .min = 0.5, .max = 1024, .def = "4", .unit = "px",
      .help = "Cascade tile layout: the finest detail wanted, as the pixels one tile sample "

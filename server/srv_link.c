@@ -34,7 +34,7 @@ void srv_link_sent(srv_link *l, double sim_t, size_t bytes, double now)
 
 static int quiet(const srv_link *l, double now)
 {
-    return l->last_ack == 0 || now - l->last_ack > SRV_LINK_QUIET;
+    return l->last_heard == 0 || now - l->last_heard > SRV_LINK_QUIET;
 }
 
 /* The delivery rate from the bytes confirmed over the last window. */
@@ -64,11 +64,15 @@ void srv_link_confirmed(srv_link *l, double sim_t, double ceiling, double now)
         l->n--;
         popped++;
     }
-    if (!popped) return;
-    double dt = quiet(l, now) ? 0 : now - l->last_ack;
+    if (!popped) {
+        if (l->acked_t > 0 && sim_t >= l->acked_t) l->last_heard = now;
+        return;
+    }
+    double dt = quiet(l, now) || l->last_ack == 0 ? 0 : now - l->last_ack;
     if (dt > 0) l->ack_gap = l->ack_gap > 0 ? 0.8 * l->ack_gap + 0.2 * dt : dt;
     measure(l, got, now);
-    l->last_ack = now;
+    l->last_ack = l->last_heard = now;
+    l->acked_t = fmax(l->acked_t, sim_t);
     double cur = l->bps > 0 ? l->bps : ceiling;
     if (l->waited || l->n >= SRV_LINK_WINDOW) {
         /* frames waited: the link, not the plan, sets the pace */

@@ -7,7 +7,10 @@
  * A client's messages carry, in the header's sim_time, the sim time of the
  * last FRAME it received (PROTOCOL.md "Header"); every CAMERA therefore
  * confirms the frames up to that one.  The link counts the bytes confirmed
- * per second (the delivery rate), holds the next frame while
+ * per second (the delivery rate; a MESH_TOPOLOGY sent ahead of its frame,
+ * with that frame's sim time, travels and is confirmed as part of it, so a
+ * large topology on a slow link counts as the link's time it takes), holds
+ * the next frame while
  * SRV_LINK_WINDOW frames are unconfirmed and the oldest of them has waited
  * longer than the client's confirmations are apart (1.5 times their mean
  * gap, plus 0.1 s: a client that reports twice a second is not held to
@@ -16,8 +19,11 @@
  * and when frames had to wait, plans this client's frames for 85 % of the
  * delivery rate, raising that by a fifth a second while none waits, up to
  * the ceiling (server.viewer_bytes_per_s).  A client that confirms nothing
- * (no message with a frame's sim time for SRV_LINK_QUIET seconds: a fixed
- * camera sends no CAMERA) is served as before: no window, the ceiling.
+ * (no message naming a frame it was sent for SRV_LINK_QUIET seconds: a
+ * fixed camera sends no CAMERA) is served as before: no window, the
+ * ceiling.  A client that keeps naming the last frame it confirmed is
+ * there, its next frames still on their way (behind a topology of a
+ * megabyte on a 0.4 MB/s link): not quiet, so the window keeps holding.
  *
  * Threads: a srv_link belongs to its connection's service thread; the
  * planner (simulation thread) reads only srv_client.link_bps, which the
@@ -44,6 +50,9 @@ typedef struct srv_link {
     } ring[SRV_LINK_RING];/* live frames sent and not yet confirmed, oldest first */
     int head, n;
     double last_ack;      /* monotonic time of the last confirmation; 0: none */
+    double last_heard;    /* ... of the last message naming a frame sent (a
+                             confirmation, or the last one named again) */
+    double acked_t;       /* sim time of the newest frame confirmed */
     double ack_gap;       /* mean time between confirmations, s (0: not known yet) */
     double win_t0, win_bytes; /* delivery-rate window: start, bytes confirmed since */
     double rate;          /* delivered bytes/s (0: not measured yet) */
@@ -53,8 +62,9 @@ typedef struct srv_link {
 } srv_link;
 
 void srv_link_init(srv_link *l);
-/* A live FRAME of `bytes` bytes with header sim time sim_t was written at
- * monotonic time now. */
+/* A live FRAME (or the MESH_TOPOLOGY sent ahead of it, with its sim time)
+ * of `bytes` bytes with header sim time sim_t was written at monotonic time
+ * now. */
 void srv_link_sent(srv_link *l, double sim_t, size_t bytes, double now);
 /* A message from the client said it has received the frame of sim time
  * sim_t (its header's sim_time); ceiling is server.viewer_bytes_per_s. */

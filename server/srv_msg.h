@@ -46,7 +46,8 @@ typedef struct srv_msg {
     uint32_t mesh_id_at;/*   at this byte offset (0: no mesh) */
     double tick_wall;   /* monotonic time of the tick that made it (0: none) */
     int is_frame;       /* counts as a frame for statistics */
-    int live;           /* a live FRAME from the latest-wins slot (srv_link counts it) */
+    int live;           /* a live FRAME, or the MESH_TOPOLOGY before it, from the
+                           latest-wins slot (srv_link counts it) */
     int close_after;    /* close the connection once this is sent (BYE) */
 } srv_msg;
 

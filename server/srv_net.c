@@ -840,7 +840,7 @@ static void send_next(srv_net *n, srv_session *s, struct lws *wsi, int *close_no
     atomic_fetch_add(&s->c->bytes_out, len);
     atomic_fetch_add(&h->stats.bytes_sent, len);
     atomic_fetch_add(&h->stats.messages_sent, 1);
-    if (m->live && m->is_frame && len >= PROTO_HEADER_SIZE) srv_link_sent(&s->link, proto_ldf64(data + 24), len, now);
+    if (m->live && len >= PROTO_HEADER_SIZE) srv_link_sent(&s->link, proto_ldf64(data + 24), len, now);
     if (m->is_frame) {
         atomic_fetch_add(&h->stats.frames_sent, 1);
         if (m->tick_wall > 0) srv_stats_latency(&h->stats, now - m->tick_wall);

@@ -130,6 +130,7 @@ srv_msg *srv_outbox_take(srv_outbox *o)
     } else if (o->slot_topo) {
         m = o->slot_topo;
         o->slot_topo = NULL;
+        m->live = 1; /* on the link, part of the frame it comes before */
     } else if (o->slot_frame) {
         m = o->slot_frame;
         o->slot_frame = NULL;

@@ -21,8 +21,7 @@
 #     screenshots $BUILD/test-artifacts/scene-*.png, sun glitter spread by
 #     roughness at 1500 m against a mirror control, no mesh edge; in the
 #     storm, crests breaking the horizon from 5 m against `ocean-sim render`
-#     of the exact sea (made in the background from the start), with the
-#     layout-1 mesh at 8 px (server.flat_mesh_error_px).
+#     of the exact sea (made in the background from the start).
 #     SHOTS_OUT=DIR also copies the screenshots to DIR (tests/bench/out).
 # The pages of 2 and 3 draw a quarter of the viewer's own resolution without
 # multisampling (VIEW_QUERY, default scale=0.25&aa=0): nothing judged depends
@@ -154,11 +153,7 @@ rm -f "$ART/scenes.jsonl"
 for scene in ship-bridge storm flight; do
     echo "== viewer: layout 1 screenshots, scene $scene == (${SECONDS} s)"
     log="$WORK/oceand-$scene.log"
-    # the storm's daemon draws the layout-1 mesh at 8 px, the budget at which
-    # its crests break the horizon (server.flat_mesh_error_px; relief check)
-    extra=()
-    [[ $scene == storm ]] && extra=(--set server.flat_mesh_error_px=8)
-    if ! start_daemon "$log" --scene "$scene" "${extra[@]}"; then
+    if ! start_daemon "$log" --scene "$scene"; then
         echo "test_browser: oceand --scene $scene did not start:"; cat "$log"
         status=1
         continue

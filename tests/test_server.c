@@ -956,7 +956,15 @@ static void read_through_link(srv_daemon *d, double bps, double report_hz, doubl
  * daemon that cannot build 30 frames a second (a loaded host, a sanitizer)
  * rightly plans bigger frames for the rate it does build, and each frame
  * may carry what the client lacks after frames were replaced (the burst
- * caps of srv_cascade.h). */
+ * caps of srv_cascade.h).
+ *
+ * The stream begins with two MESH_TOPOLOGYs of about a megabyte together
+ * (the layout-1 mesh at server.flat_mesh_error_px = 8): 2.5 s of this link.
+ * While they passed, the client named no new frame for over a second, the
+ * link took it for quiet and let frames pile up behind them, and 6-10 s in
+ * it still carried 70 % of the frames built; now a topology is part of the
+ * frame it comes before (srv_link.h), and a client naming its last frame
+ * again is no quiet one. */
 static void slow_link_gets_coarser_not_older(void **state)
 {
     (void)state;

@@ -67,21 +67,23 @@ done
 
 # Relief: from 5 m over the storm sea, level, 10 deg (27 rows a degree),
 # downwind: do crests rise over the horizon as the exact sea's do?  The
-# viewer as served, on a stream without budgets, and on that stream with a
-# mesh of 2 px error (server.mesh_error_px 16 -> 2): which limit holds the
-# crests down.
+# viewer as served (the layout-1 mesh at 8 px, server.flat_mesh_error_px), as
+# served with that mesh at 16 px (layout 0's budget), on a stream without
+# budgets, and on that stream with a mesh of 2 px error
+# (server.flat_mesh_error_px 8 -> 2): which limit holds the crests down.
 EW=960
 EH=270
 "$BUILD/ocean-sim" render --config config/oceand.conf --scene storm --pos 0,5,0 --yaw 0 --pitch 0 --fov 10 \
     --size "${EW}x$EH" --supersample 1 --time "$T" --out "$tmp/horizon-ref.png" >/dev/null || die "render of the horizon view failed"
-for run in served full fullmesh; do
+for run in served mesh16 full fullmesh; do
     echo "[{\"name\":\"horizon-$run\",\"x\":0,\"y\":5,\"z\":0,\"yaw\":0,\"pitch\":0,\"fov\":10,\"t\":$T,\"width\":$EW,\"height\":$EH,\"ref\":\"$tmp/horizon-ref.png\",\"shot\":\"$tmp/horizon-$run.png\",\"edge\":true}]" \
         >"$tmp/horizon-$run.json"
     case $run in
     served) bench_daemon --scene storm ;;
+    mesh16) bench_daemon --scene storm --set server.flat_mesh_error_px=16 ;;
     full) bench_daemon --scene storm --set server.px_per_sample=1 --set server.viewer_bytes_per_s=1e10 ;;
     fullmesh) bench_daemon --scene storm --set server.px_per_sample=1 --set server.viewer_bytes_per_s=1e10 \
-        --set server.mesh_error_px=2 ;;
+        --set server.flat_mesh_error_px=2 ;;
     esac
     node tests/bench/look_chromium.mjs "$base" "$tmp/horizon-$run.json" >>"$tmp/look.jsonl" ||
         die "the viewer's horizon screenshot ($run) failed"
@@ -118,12 +120,14 @@ echo "$((EH / 2 + 2)), 0.07 deg below the centre). Crests between the eye and th
 echo
 echo "| picture | highest edge row | edge range, rows | mean edge row | columns within a row of the reference's edge | SSIM |"
 echo "|---|---:|---:|---:|---:|---:|"
-for run in served full fullmesh; do
+for run in served mesh16 full fullmesh; do
     line=$(grep "\"name\":\"horizon-$run\"" "$tmp/look.jsonl")
     node -e '
         const l = JSON.parse(process.argv[1]), run = process.argv[2];
-        const what = { served: "viewer as served (config/oceand.conf)", full: "viewer, stream without budgets",
-            fullmesh: "viewer, stream without budgets, mesh at 2 px (server.mesh_error_px = 2)" }[run];
+        const what = { served: "viewer as served (config/oceand.conf)",
+            mesh16: "viewer as served, layout-1 mesh at 16 px (server.flat_mesh_error_px = 16)",
+            full: "viewer, stream without budgets",
+            fullmesh: "viewer, stream without budgets, mesh at 2 px (server.flat_mesh_error_px = 2)" }[run];
         const row = (n, e, w, s) => console.log(`| ${n} | ${e.top} | ${e.range} | ${e.mean.toFixed(1)} | ${w} | ${s} |`);
         if (run === "served") row("reference (`ocean-sim render`, the exact sea)", l.edge_ref, "-", "-");
         row(what, l.edge_viewer, (100 * l.edge_within_1).toFixed(0) + " %", l.ssim.toFixed(3));

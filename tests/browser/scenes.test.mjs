@@ -18,8 +18,7 @@
  * RELIEF_REF (optional, the storm): `ocean-sim render` of the exact sea
  * from 5 m, level, 10 deg, 960x270, t = RELIEF_T; the viewer opens the same
  * view at that instant (?t=, full resolution) and its crests must break the
- * horizon as the exact sea's do (relief, below; tests/test_browser.sh runs
- * the storm's daemon with the layout-1 mesh at 8 px for it).
+ * horizon as the exact sea's do (relief, below).
  * SHOTS_OUT (optional): a directory the screenshots are copied to
  * (tests/bench/out for the benchmark report).
  *
