@@ -472,9 +472,10 @@ static double plan_bytes(const plan *pl)
  * large viewport or a low camera gets a little less geometry and a little
  * more unresolved roughness, never more bytes than the budget.
  *
- * A subscription with normals then puts relief first (plan_relief): the
- * cascades whose left-out heights a camera near the water would see get
- * the bytes first.
+ * A subscription with normals and a mesh then puts relief first
+ * (plan_relief): the cascades whose left-out heights a camera near the
+ * water would see in the mesh's silhouettes get the bytes first.  (A
+ * client without a mesh, an export, a sampler, keeps the texture.)
  *
  * Then each cascade spends what that left of the budget on its own q.
  * Bytes grow with q in steps of whole tiles, and a step of one coarse
@@ -537,7 +538,7 @@ static void plan_job(const tables *tb, const srv_config *cfg, const srv_cascade_
             }
             hi = t;
         }
-    } else {
+    } else if (pl->has_mesh) {
         plan_relief(tb, cfg, j, &sc, q, ppr, budget, pl);
     }
     /* each cascade its own q, within what is left (see above) */

@@ -292,8 +292,9 @@ static const conf_entry srv_entries[] = {
              "view, viewport), not its vertices every frame, so it can be finer. At 8 px "
              "the crests 1-3 km out rise over the horizon from 5 m above a storm sea nearly "
              "as the exact sea's do (the sea's edge 5 rows over a flat sea's in a 10 deg "
-             "view, the exact sea's 8; at 16 px, 2), for 4 times the topology's bytes (660 "
-             "KB against 165 KB for a 1080p camera 25 m up, once per plan)."},
+             "view, the exact sea's 8; at 16 px, 2), for 3.3 times the topology's bytes (660 "
+             "KB against 200 KB, 17 853 vertices against 5 425, for a 1080p camera 25 m up, "
+             "once per plan)."},
     {.name = "server.px_per_sample", .type = CONF_DOUBLE, .offset = SRV(px_per_sample),
      .min = 0.5, .max = 1024, .def = "4", .unit = "px",
      .help = "Cascade tile layout: the finest detail wanted, as the pixels one tile sample "

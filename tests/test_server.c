@@ -1136,13 +1136,13 @@ static void narrow_fov_keeps_the_budget(void **state)
  * where the next quarter octave of every cascade together does not fit,
  * and a coarse cascade's step costs whole tiles 125 m wide: a camera 25 m
  * up over the scene `make run` serves, with the viewer's subscription and
- * viewport, got 111 of its 130 KB a frame.  Now the cascades refine on
- * their own (relief first, plan_relief, then finest first) within the
- * budget: the entries' q differ, cascade 0 (the swell whose crests make
- * the relief) reads finer than the block's q, every point of the visible
- * sea reads from tiles the frame has (the server's tile set follows the
- * per-cascade rule the client applies), and the frame spends its budget
- * without passing it. */
+ * viewport, got 111 of its 130 KB a frame, and at accuracy 1e-3 the finest
+ * FFT cascade (54 m patch, where the near sea's slopes are) sent no tile.
+ * Now the cascades refine on their own within what is left: some entry's
+ * q is below the block's, the finest FFT cascade has tiles, every point of
+ * the visible sea reads from tiles the frame has (the server's tile set
+ * follows the per-cascade rule the client applies), and the frame spends
+ * its budget without passing it. */
 static void cascade_q_spends_the_budget(void **state)
 {
     (void)state;
@@ -1168,12 +1168,12 @@ static void cascade_q_spends_the_budget(void **state)
         fine_tiles += f->tiles[t].info.cascade == 2;
         bytes += 64.0 + f->tiles[t].info.payload_len;
     }
-    assert_true(b->cascade[0].spacing_per_m < 0.5 * b->spacing_per_m);
     double budget = sb.srv.viewer_bytes_per_s / s.frame_rate_hz;
     print_message("25 m: q %.4g; cascade q %.4g %.4g %.4g; %d tiles, %d of the finest FFT cascade; %.0f of %.0f B\n",
                   (double)b->spacing_per_m, (double)b->cascade[0].spacing_per_m, (double)b->cascade[1].spacing_per_m,
                   (double)b->cascade[2].spacing_per_m, f->info.tile_count, fine_tiles, bytes, budget);
     assert_true(refined >= 1);
+    if (fine_tiles == 0) fail_msg("the finest FFT cascade sent no tile to a camera 25 m up");
     /* for this camera one q left 15 % of the budget unspent (111 of 130 KB) */
     if (!(bytes >= 0.9 * budget && bytes <= 1.25 * budget))
         fail_msg("%.0f tile bytes against a budget of %.0f a frame", bytes, budget);
@@ -1211,8 +1211,7 @@ static void relief_reads_the_far_crests(void **state)
     srv_daemon *d = start_daemon(sets, 4, &sb);
     oc_client *c = connect_client(srv_daemon_port(d), NULL);
     proto_subscribe s;
-    oc_subscribe_default(&s);
-    s.mesh_kind = PROTO_MESH_NONE; /* the plan of the tiles alone */
+    oc_subscribe_default(&s); /* with its mesh, whose silhouettes the relief is */
     assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
     proto_camera cam;
     oc_camera_default(&cam);
@@ -1246,8 +1245,9 @@ static void relief_reads_the_far_crests(void **state)
  * them, and the mesh is displaced with no vertex missing.  A subscription
  * without a mesh, or with the full_geometry flag, gets G = 0 and every
  * channel at every mip, and the bytes the normals-only mips leave buy finer
- * mips (no cascade's q coarser, one finer).  Ship-bridge, the viewer's
- * subscription, a camera 25 m up at 1920 x 1080. */
+ * mips (no cascade's q coarser than with the full_geometry flag, one
+ * finer).  Ship-bridge, the viewer's subscription, a camera 25 m up at
+ * 1920 x 1080. */
 static void cascade_fine_mips_without_geometry(void **state)
 {
     (void)state;
@@ -1297,8 +1297,8 @@ static void cascade_fine_mips_without_geometry(void **state)
                 full_tiles++;
             }
         }
-        if (run != 1)
-            for (int k = 0; k < 3; k++) qc[with_mesh][k] = b->cascade[k].spacing_per_m;
+        if (run >= 1) /* both with the mesh: the one plan, G apart */
+            for (int k = 0; k < 3; k++) qc[run == 2][k] = b->cascade[k].spacing_per_m;
         print_message("%s: G %.3g m; %d tiles without geometry (%.0f B), %d with; cascade q %.4g %.4g %.4g\n",
                       run == 2 ? "viewer (mesh, normals)" : run == 1 ? "viewer, full_geometry" : "no mesh", G,
                       free_tiles, free_bytes, full_tiles, (double)b->cascade[0].spacing_per_m,
@@ -1352,7 +1352,7 @@ static void cascade_fine_mips_without_geometry(void **state)
         oc_client_destroy(c);
     }
     /* the bytes the normals-only mips leave buy finer mips: no cascade
-     * coarser with the mesh, one at least finer */
+     * coarser with G, one at least finer */
     int finer = 0;
     for (int k = 0; k < 3; k++) {
         assert_true(qc[1][k] <= qc[0][k]);
