@@ -68,7 +68,7 @@ void srv_link_confirmed(srv_link *l, double sim_t, double ceiling, double now)
         if (l->acked_t > 0 && sim_t >= l->acked_t) l->last_heard = now;
         return;
     }
-    double dt = quiet(l, now) || l->last_ack == 0 ? 0 : now - l->last_ack;
+    double dt = quiet(l, now) ? 0 : now - l->last_ack;
     if (dt > 0) l->ack_gap = l->ack_gap > 0 ? 0.8 * l->ack_gap + 0.2 * dt : dt;
     measure(l, got, now);
     l->last_ack = l->last_heard = now;

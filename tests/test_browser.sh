@@ -45,7 +45,6 @@ mkdir -p "$ART" "$WORK"
 daemon_pid=""
 relief_pid=""
 cleanup() {
-    [[ -n "$relief_pid" ]] && kill "$relief_pid" 2>/dev/null
     if [[ -n "$daemon_pid" ]] && kill -0 "$daemon_pid" 2>/dev/null; then
         kill -TERM "$daemon_pid" 2>/dev/null
         for _ in $(seq 50); do kill -0 "$daemon_pid" 2>/dev/null || break; sleep 0.1; done
@@ -53,7 +52,13 @@ cleanup() {
         wait "$daemon_pid" 2>/dev/null
     fi
 }
-trap cleanup EXIT INT TERM
+# on exit the background render too (cleanup alone runs between sections,
+# while the render may still be working for the storm's section)
+on_exit() {
+    [[ -n "$relief_pid" ]] && kill "$relief_pid" 2>/dev/null
+    cleanup
+}
+trap on_exit EXIT INT TERM
 
 die() { echo "test_browser: $*" >&2; exit 1; }
 

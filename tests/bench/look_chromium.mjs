@@ -29,7 +29,7 @@ import { createRequire } from 'node:module';
 const require = createRequire(new URL('../browser/', import.meta.url));
 const { chromium } = require('playwright-core');
 const { ssim } = require('ssim.js');
-const { decodePng, seaEdgeRows } = await import('../browser/pixels.mjs');
+const { decodePng, seaEdgeRows, seaEdgeSummary } = await import('../browser/pixels.mjs');
 
 const [base, viewsPath] = process.argv.slice(2);
 const views = JSON.parse(readFileSync(viewsPath, 'utf8'));
@@ -88,8 +88,7 @@ try {
         const line = { name: v.name, ssim: r.mssim, mean_abs_diff: meanAbsDiff(a, b), frames: st.frames, errors: st.errors, vertices: st.vertices, zones: st.zones, block: st.block };
         if (v.edge) {
             const ea = seaEdgeRows(a), eb = seaEdgeRows(b);
-            const sum = (e) => ({ top: Math.min(...e), range: Math.max(...e) - Math.min(...e), mean: e.reduce((x, y) => x + y, 0) / e.length });
-            Object.assign(line, { edge_viewer: sum(ea), edge_ref: sum(eb), edge_within_1: ea.filter((y, i) => Math.abs(y - eb[i]) <= 1).length / ea.length });
+            Object.assign(line, { edge_viewer: seaEdgeSummary(ea), edge_ref: seaEdgeSummary(eb), edge_within_1: ea.filter((y, i) => Math.abs(y - eb[i]) <= 1).length / ea.length });
         }
         console.log(JSON.stringify(line));
     }

@@ -163,3 +163,11 @@ export function seaEdgeRows(img) {
     }
     return rows;
 }
+
+/* seaEdgeRows summed up: the highest row the sea reaches, the rows between
+ * its highest and lowest, and the mean row. */
+export function seaEdgeSummary(rows) {
+    let top = Infinity, bottom = -Infinity, sum = 0;
+    for (const y of rows) { top = Math.min(top, y); bottom = Math.max(bottom, y); sum += y; }
+    return { top, range: bottom - top, mean: sum / rows.length };
+}

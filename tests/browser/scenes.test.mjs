@@ -30,7 +30,7 @@ import { createRequire } from 'node:module';
 import { mkdirSync, writeFileSync, mkdtempSync, rmSync, appendFileSync, readFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { decodePng, glitter, horizonRow, lum, seaEdgeRows } from './pixels.mjs';
+import { decodePng, glitter, horizonRow, lum, seaEdgeRows, seaEdgeSummary } from './pixels.mjs';
 
 const require = createRequire(new URL('./package.json', import.meta.url));
 const { chromium } = require('playwright-core');
@@ -91,17 +91,16 @@ async function relief(context) {
         const png = await page.screenshot({ type: 'png' });
         save(`scene-${scene}-relief-5m.png`, png);
         const a = decodePng(png), b = decodePng(readFileSync(process.env.RELIEF_REF));
-        const ea = seaEdgeRows(a), eb = seaEdgeRows(b);
-        const top = (e) => Math.min(...e), range = (e) => Math.max(...e) - Math.min(...e);
+        const ea = seaEdgeSummary(seaEdgeRows(a)), eb = seaEdgeSummary(seaEdgeRows(b));
         /* a flat sea's horizon from 5 m: sqrt(2h/R) = 0.07 deg below level */
         const flat = Math.round(H / 2 + Math.tan(Math.sqrt(2 * 5 / 6371008.8)) / Math.tan(FOVR * Math.PI / 360) * H / 2);
-        const riseV = flat - top(ea), riseR = flat - top(eb);
+        const riseV = flat - ea.top, riseR = flat - eb.top;
         const st = await stats(page);
         check('5 m, level, 10 deg: crests break the horizon as the exact sea\'s do (relief)',
-            more && a.w === b.w && a.h === b.h && riseR > 2 && riseV >= riseR / 2 && range(ea) >= range(eb) / 2 &&
+            more && a.w === b.w && a.h === b.h && riseR > 2 && riseV >= riseR / 2 && ea.range >= eb.range / 2 &&
             st.serverErrors === 0,
             `highest edge ${riseV} rows over the flat horizon (row ${flat}) against the exact sea's ${riseR}; ` +
-            `edge range ${range(ea)} rows against ${range(eb)}; mesh ${st.vertexCount} vertices, ` +
+            `edge range ${ea.range} rows against ${eb.range}; mesh ${st.vertexCount} vertices, ` +
             `q ${(st.block && st.block.cascades || []).map((c) => c.q.toPrecision(2)).join(' ')}; errors ${st.errors.join(' | ')}`);
     } finally {
         await page.close();
