@@ -1,6 +1,10 @@
 /*
  * foam.c - the whitecap model of foam.h: coverage target, the ramp on the
- * breaking index solved for a Gaussian field, coverage of sampled foam.
+ * breaking index solved for a Gaussian field with its trails, coverage of
+ * sampled foam.
+ *
+ * Threads: pure functions; ocean_foam_map_solve keeps its last solutions
+ * per thread.
  */
 #include "foam.h"
 
@@ -40,21 +44,83 @@ static double excess(double c, double sigma)
     return e > 0.0 ? e : 0.0;
 }
 
+/* Nodes of the trail quadrature: the envelope u = |Z| / sigma on
+ * [0, U_MAX] (Rayleigh; the tail past 9.5 holds e^-45), the phase since
+ * the crest on [0, 2 pi); midpoint rules.  Checked against a Monte Carlo
+ * of Gaussian (beta, q) pairs in tests/test_foam.c. */
+#define U_MAX 9.5
+#define U_NODES 320
+#define PHASE_NODES 96
+
+/* E[foam] with trails (foam.h): over the envelope e (Rayleigh, std sigma
+ * per component) and the phase th since the crest (uniform), independent
+ * for a Gaussian field; beta = e cos th. */
+static double mean_with_trails(const ocean_foam_map *m, double sigma)
+{
+    double cs[PHASE_NODES], dec[PHASE_NODES];
+    for (int j = 0; j < PHASE_NODES; j++) {
+        double ph = (j + 0.5) * (2.0 * M_PI / PHASE_NODES);
+        cs[j] = cos(ph);
+        dec[j] = exp(-m->decay * ph);
+    }
+    const double du = U_MAX / U_NODES;
+    double s = 0.0;
+    for (int i = 0; i < U_NODES; i++) {
+        double u = (i + 0.5) * du, e = sigma * u;
+        if (e < m->a)
+            continue; /* no sample of this envelope reaches the ramp */
+        double fe = ocean_foam_ramp(m, e), in = 0.0;
+        for (int j = 0; j < PHASE_NODES; j++) {
+            double fi = ocean_foam_ramp(m, e * cs[j]), tr = fe * dec[j];
+            in += tr > fi ? tr : fi;
+        }
+        s += u * exp(-0.5 * u * u) * du * in / PHASE_NODES;
+    }
+    return s;
+}
+
 double ocean_foam_map_mean(const ocean_foam_map *m, double sigma)
 {
     if (m->uniform >= 0.0)
         return m->uniform;
+    if (m->decay < INFINITY && sigma > 0.0)
+        return mean_with_trails(m, sigma);
     if (m->b <= m->a)
         return sigma > 0.0 ? 0.5 * erfc(m->b / sigma / M_SQRT2) : (m->b <= 0.0 ? 1.0 : 0.0);
     return (excess(m->a, sigma) - excess(m->b, sigma)) / (m->b - m->a);
 }
 
-ocean_result ocean_foam_map_solve(double sigma, double w, ocean_foam_map *out)
+/* The ramp's start for target w (the map's b, uniform and decay set). */
+static double solve_a(ocean_foam_map t, double sigma, double w)
 {
-    if (!out || !(sigma >= 0.0) || !isfinite(sigma) || !(w >= 0.0 && w < 1.0))
-        return OCEAN_EINVAL;
     const double b = OCEAN_FOAM_BETA_BREAK;
-    *out = (ocean_foam_map){.a = b, .b = b, .uniform = -1.0};
+    /* The mean grows monotonically as a falls; it tends to 1 as a -> -inf.
+     * Bracket, then bisect to 1e-9 of sigma (the mean's slope in a is
+     * below 1 / (b - a), so the coverage is then exact to ~1e-9). */
+    double lo = b - sigma, hi = b;
+    for (int i = 0; i < 200; i++) {
+        t.a = lo;
+        if (ocean_foam_map_mean(&t, sigma) >= w)
+            break;
+        hi = lo;
+        lo = b - 2.0 * (b - lo);
+    }
+    while (hi - lo > 1e-9 * sigma) {
+        t.a = 0.5 * (lo + hi);
+        if (t.a == lo || t.a == hi)
+            break;
+        if (ocean_foam_map_mean(&t, sigma) >= w)
+            lo = t.a;
+        else
+            hi = t.a;
+    }
+    return 0.5 * (lo + hi);
+}
+
+static ocean_result map_solve(double sigma, double decay, double w, ocean_foam_map *out)
+{
+    const double b = OCEAN_FOAM_BETA_BREAK;
+    *out = (ocean_foam_map){.a = b, .b = b, .uniform = -1.0, .decay = decay};
     if (w == 0.0) {
         /* No whitecaps: not even the criterion's own breakers. */
         out->a = out->b = INFINITY;
@@ -66,29 +132,44 @@ ocean_result ocean_foam_map_solve(double sigma, double w, ocean_foam_map *out)
         out->uniform = w;
         return OCEAN_OK;
     }
-    /* Active breaking alone already covers w: a step at the criterion. */
+    /* Active breaking (and its trails) alone already covers w: a step at
+     * the criterion. */
     if (ocean_foam_map_mean(out, sigma) >= w)
         return OCEAN_OK;
-    /* The mean grows monotonically as a falls; it tends to 1 as a -> -inf.
-     * Bracket, then bisect (60 halvings: a to ~1e-18 of the bracket). */
-    double lo = b - sigma, hi = b;
-    ocean_foam_map t = *out;
-    for (int i = 0; i < 200; i++) {
-        t.a = lo;
-        if (ocean_foam_map_mean(&t, sigma) >= w)
-            break;
-        hi = lo;
-        lo = b - 2.0 * (b - lo);
-    }
-    for (int i = 0; i < 80; i++) {
-        t.a = 0.5 * (lo + hi);
-        if (ocean_foam_map_mean(&t, sigma) >= w)
-            lo = t.a;
-        else
-            hi = t.a;
-    }
-    out->a = 0.5 * (lo + hi);
+    out->a = solve_a(*out, sigma, w);
     return OCEAN_OK;
+}
+
+/* The last solutions, per thread: a tick asks for the same few maps again
+ * and again (its filters, its cascades), and a solve with trails costs a
+ * millisecond.  Same inputs, same result: a cache, not state. */
+#define SOLVED_KEEP 8
+typedef struct solved {
+    double sigma, omega, w;
+    ocean_foam_map m;
+    int used;
+} solved;
+static _Thread_local solved solved_keep[SOLVED_KEEP];
+static _Thread_local int solved_next;
+
+ocean_result ocean_foam_map_solve(double sigma, double omega, double w, ocean_foam_map *out)
+{
+    if (!out || !(sigma >= 0.0) || !isfinite(sigma) || !(omega >= 0.0) || !(w >= 0.0 && w < 1.0))
+        return OCEAN_EINVAL;
+    for (int i = 0; i < SOLVED_KEEP; i++)
+        if (solved_keep[i].used && solved_keep[i].sigma == sigma && solved_keep[i].omega == omega &&
+            solved_keep[i].w == w) {
+            *out = solved_keep[i].m;
+            return OCEAN_OK;
+        }
+    /* omega = 0: a field that does not move has no crest passing: no trail. */
+    double decay = omega > 0.0 ? 1.0 / (omega * OCEAN_FOAM_DECAY_S) : INFINITY;
+    ocean_result r = map_solve(sigma, decay, w, out);
+    if (r == OCEAN_OK) {
+        solved_keep[solved_next] = (solved){sigma, omega, w, *out, 1};
+        solved_next = (solved_next + 1) % SOLVED_KEEP;
+    }
+    return r;
 }
 
 double ocean_whitecap_coverage(const float *foam, size_t n)

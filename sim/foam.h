@@ -43,12 +43,34 @@
  * which stays near the crests that made it).  For the Gaussian linear
  * field with std sigma_beta - as a point sampler reads it: ocean_stats.c counts
  * the power bilinear reading takes from near-Nyquist waves - a is chosen
- * so the expected mean of foam is W.  A filtered frame (fewer short waves, smaller sigma_beta) gets a
+ * so the expected mean of foam, trails included (below), is W.  A filtered frame (fewer short waves, smaller sigma_beta) gets a
  * lower a: its mean foam is still W, spread more evenly - the whitecap
  * coverage of a sea does not depend on the camera.  When even a = -inf
  * cannot reach W (sigma_beta = 0: everything filtered) the field is the
  * uniform value W.  When active breaking alone exceeds W, a = 1/2 (a step
  * at the criterion).
+ *
+ * Persistence: a whitecap outlives the crest that made it.  Behind the
+ * breaking crest the foam patch decays about exponentially, e-folding in
+ * tau = 3.85 s in sea water (Monahan 1971, "Oceanic whitecaps", JPO 1,
+ * 139: 3.85 s salt, 2.54 s fresh; Callaghan et al. 2012 see 0.5-8 s in
+ * the field, longer for larger breakers), and it stays with the water,
+ * not with the crest.  The frame's fields are indexed by the water's rest
+ * position (the displacement moves every sample with its particle), so a
+ * trail is a function of how long ago the crest passed that sample.  That
+ * is read from the breaking index's analytic signal in time,
+ * Z = beta + i q (q: each wave's beta a quarter period later, the Hilbert
+ * transform in t, one more transform of the spectrum): |Z| is the crest
+ * value of the wave group passing the sample, and arg Z the phase since
+ * that crest (0 at the crest, growing at the mean rate omega = m1/m0 of
+ * beta's spectrum: Rice 1944, "Mathematical analysis of random noise",
+ * sec. 3.4; Longuet-Higgins 1957, Phil. Trans. A 249, 321).  So
+ *     foam = max(f(beta), f(|Z|) exp(-arg Z / (omega tau)))
+ * with f the ramp below: the active foam, or the crest's foam decayed for
+ * the time since it passed, until the next crest.  Nothing accumulates:
+ * foam is still a function of the waves at t alone.  The trail reaches
+ * back one local wave period at most, which for the waves that break
+ * (periods above 2 tau in a storm's dominant band) is most of its decay.
  *
  * Whitecap coverage (the definition every part of oceand uses): the area
  * mean of the foam field, foam in [0, 1] read as the fraction of a sample's
@@ -61,6 +83,7 @@
 #ifndef OCEAN_FOAM_H
 #define OCEAN_FOAM_H
 
+#include <math.h>
 #include <stddef.h>
 
 #include "ocean_result.h"
@@ -71,6 +94,9 @@
 #define OCEAN_FOAM_K 0.1693
 /* The wind speed K was calibrated at. */
 #define OCEAN_FOAM_CALIBRATION_U10 12.0
+/* e-folding time of a whitecap's foam after its crest has passed, s
+ * (Monahan 1971, sea water). */
+#define OCEAN_FOAM_DECAY_S 3.85
 
 /* W = K u*^3 for U10 in m/s (0 for U10 <= 0 or NaN), capped at 0.95: a
  * sea is never solid white. */
@@ -80,24 +106,31 @@ double ocean_foam_coverage_target(double u10);
  * U10^3.41, as a fraction (0..1).  For reports; not used by the model. */
 double ocean_foam_monahan(double u10);
 
-/* The ramp of one evaluated field. */
+/* The ramp of one evaluated field, and its trails. */
 typedef struct ocean_foam_map {
     double a;        /* beta at which foam starts (may be < 0) */
     double b;        /* beta at which foam is 1 (OCEAN_FOAM_BETA_BREAK) */
     double uniform;  /* >= 0: the field is this constant (sigma = 0) */
+    double decay;    /* 1 / (omega tau): the trail's decay per radian of
+                        phase since its crest; INFINITY: no trail */
 } ocean_foam_map;
 
-/* Solves a for a field whose beta is Gaussian with std sigma so that the
- * expected mean foam is w (0 <= w < 1).  OCEAN_EINVAL for NaN/negative
- * sigma or w outside [0, 1). */
-ocean_result ocean_foam_map_solve(double sigma, double w, ocean_foam_map *out);
+/* Solves a for a field whose beta is Gaussian with std sigma and mean
+ * frequency omega (rad/s; 0: a field that does not move, no trails) so
+ * that the expected mean foam, trails included, is w (0 <= w < 1).
+ * OCEAN_EINVAL for NaN/negative sigma or omega, or w outside [0, 1).
+ * The last few solutions are kept per thread (a solve with trails
+ * integrates numerically, about a millisecond). */
+ocean_result ocean_foam_map_solve(double sigma, double omega, double w, ocean_foam_map *out);
 
-/* Expected mean foam of the map over a Gaussian beta of std sigma
- * (closed form: E[(X-a)+] - E[(X-b)+] over b - a). */
+/* Expected mean foam of the map over a Gaussian beta of std sigma: closed
+ * form without trails (E[(X-a)+] - E[(X-b)+] over b - a), else over the
+ * envelope (Rayleigh) and the phase since the crest (uniform), which are
+ * independent for a Gaussian field. */
 double ocean_foam_map_mean(const ocean_foam_map *m, double sigma);
 
-/* Foam at one point with breaking index beta. */
-static inline double ocean_foam_value(const ocean_foam_map *m, double beta)
+/* The active foam at breaking index beta: the ramp alone. */
+static inline double ocean_foam_ramp(const ocean_foam_map *m, double beta)
 {
     if (m->uniform >= 0.0)
         return m->uniform;
@@ -105,6 +138,25 @@ static inline double ocean_foam_value(const ocean_foam_map *m, double beta)
         return beta >= m->b ? 1.0 : 0.0;
     double f = (beta - m->a) / (m->b - m->a);
     return !(f > 0.0) ? 0.0 : (f > 1.0 ? 1.0 : f); /* NaN beta: no foam */
+}
+
+/* Foam at one point with breaking index beta and its quadrature q (the
+ * analytic signal's imaginary part, above): the active foam or the last
+ * crest's trail, whichever is whiter. */
+static inline double ocean_foam_value(const ocean_foam_map *m, double beta, double q)
+{
+    double fi = ocean_foam_ramp(m, beta);
+    if (!(m->decay < INFINITY) || fi >= 1.0 || m->uniform >= 0.0)
+        return fi;
+    double e = sqrt(beta * beta + q * q);
+    if (!(e > m->a))
+        return fi; /* the crest itself made no foam (or NaN) */
+    double fe = ocean_foam_ramp(m, e);
+    if (fe <= fi)
+        return fi;
+    double th = atan2(q, beta);
+    double tr = fe * exp(-m->decay * (th < 0.0 ? th + 6.283185307179586 : th));
+    return tr > fi ? tr : fi;
 }
 
 /* Whitecap coverage of n foam samples (a tile, a field): their mean, each

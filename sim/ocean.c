@@ -360,13 +360,15 @@ static int channel_list(unsigned effects, int ch[CH_COUNT])
     if (effects & OCEAN_FX_HEIGHT) ch[m++] = CH_H;
     if (effects & OCEAN_FX_DISPLACEMENT) { ch[m++] = CH_DX; ch[m++] = CH_DZ; }
     if (effects & OCEAN_FX_NORMALS) { ch[m++] = CH_SX; ch[m++] = CH_SZ; }
-    if (effects & OCEAN_FX_FOAM) { ch[m++] = CH_DXX; ch[m++] = CH_DZZ; ch[m++] = CH_DXZ; }
+    if (effects & OCEAN_FX_FOAM) { ch[m++] = CH_DXX; ch[m++] = CH_DZZ; ch[m++] = CH_DXZ; ch[m++] = CH_BQ; }
     if (effects & OCEAN_FX_VELOCITY) { ch[m++] = CH_VX; ch[m++] = CH_VY; ch[m++] = CH_VZ; }
     return m;
 }
 
 /* Jacobian J = (1 + Dxx)(1 + Dzz) - Dxz^2 and foam for rows [r0, r1) of an
- * n-point field; cloned for AVX2 like spectrum_row. */
+ * n-point field; cloned for AVX2 like spectrum_row.  The active ramp
+ * vectorises in float; the trails (foam.h) are then added where the
+ * envelope reaches the ramp, a minority of the points. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("avx2", "default")))
 #endif
@@ -374,20 +376,33 @@ static void jacobian_rows(ocean_field *fd, long i0, long i1, const ocean_foam_ma
                           double inv_lambda)
 {
     const float *restrict xx = fd->dxx, *restrict zz = fd->dzz, *restrict xz = fd->dxz;
+    const float *restrict bq = fd->bq;
     float *restrict jac = fd->jacobian, *restrict foam = fd->foam;
     for (long i = i0; i < i1; i++)
         jac[i] = (1.0f + xx[i]) * (1.0f + zz[i]) - xz[i] * xz[i];
-    /* foam = clamp((beta - a) / (b - a)) as ocean_foam_value, in float so
+    /* foam = clamp((beta - a) / (b - a)) as ocean_foam_ramp, in float so
      * the pass vectorises; a constant field, or a step, otherwise. */
     if (m->uniform >= 0.0 || !(m->b > m->a)) {
         for (long i = i0; i < i1; i++)
-            foam[i] = (float)ocean_foam_value(m, ocean_foam_beta(xx[i], zz[i], inv_lambda));
+            foam[i] = (float)ocean_foam_value(m, ocean_foam_beta(xx[i], zz[i], inv_lambda),
+                                              ocean_foam_beta(bq[i], 0.0, inv_lambda));
         return;
     }
     float s = (float)(-inv_lambda / (m->b - m->a)), off = (float)(-m->a / (m->b - m->a));
     for (long i = i0; i < i1; i++) {
         float f = (xx[i] + zz[i]) * s + off;
         foam[i] = f < 0.0f ? 0.0f : (f > 1.0f ? 1.0f : f);
+    }
+    if (!(m->decay < INFINITY))
+        return;
+    /* The envelope reaches the ramp where beta^2 + q^2 > a^2 (a > 0), i.e.
+     * |bq + i (xx + zz)|^2 > (a lambda)^2; all points when a <= 0. */
+    float lim2 = m->a > 0.0 && inv_lambda > 0.0 ? (float)(m->a * m->a / (inv_lambda * inv_lambda)) : -1.0f;
+    for (long i = i0; i < i1; i++) {
+        float d = xx[i] + zz[i];
+        if (d * d + bq[i] * bq[i] > lim2)
+            foam[i] = (float)ocean_foam_value(m, ocean_foam_beta(xx[i], zz[i], inv_lambda),
+                                              ocean_foam_beta(bq[i], 0.0, inv_lambda));
     }
 }
 
@@ -411,6 +426,7 @@ static void set_field_pointers(ocean_frame *f, int c, int n, unsigned effects,
         case CH_DXX: fd->dxx = p; break;
         case CH_DZZ: fd->dzz = p; break;
         case CH_DXZ: fd->dxz = p; break;
+        case CH_BQ: fd->bq = p; break;
         case CH_VX: fd->vel_x = p; break;
         case CH_VY: fd->vel_y = p; break;
         case CH_VZ: fd->vel_z = p; break;
@@ -524,9 +540,12 @@ static void frame_foam_setup(ocean *o, const ocean_request *r, const eval_filter
         any_foam |= (r->effects[c] & OCEAN_FX_FOAM) != 0;
     double lam = o->p.sea.choppiness;
     f->foam_inv_lambda = lam > 0.0 ? 1.0 / lam : 0.0;
-    f->info.foam_sigma = any_foam ? ocean_stats_foam_sigma(o, ef->kc, r->order, ef->scale, ef->boost) : 0.0;
+    f->info.foam_sigma = 0.0;
     f->info.whitecap_target = ocean_stats_whitecap_target(o);
-    f->foam_map = ocean_stats_foam_map(o, f->info.foam_sigma);
+    if (any_foam)
+        f->foam_map = ocean_stats_foam(o, ef->kc, r->order, ef->scale, ef->boost, &f->info.foam_sigma);
+    else /* read by nothing (no foam channel), but defined */
+        f->foam_map = (ocean_foam_map){INFINITY, INFINITY, -1.0, INFINITY};
 }
 
 /* Modes of the n-point grid an evolving pass computed, and of those the
@@ -603,7 +622,7 @@ static void cascade_transform(ocean *o, int c, ocean_stage_args *a, ocean_frame 
         ocean_stage_split_note(st, by_channel, (double)(ocean_now_ns() - c_start) / nch);
     for (int j = 0; j < nch; j++) {
         int e = ch[j] == CH_H ? 0 : ch[j] <= CH_DZ ? 1 : ch[j] <= CH_SZ ? 2
-              : ch[j] <= CH_DXZ ? 3 : 4;
+              : ch[j] <= CH_BQ ? 3 : 4;
         o->counters.transforms_by_effect[e]++;
     }
 }
@@ -634,7 +653,7 @@ static int evaluate_cascade(ocean *o, int c, double t, const ocean_request *r,
     } else {
         /* The row pass caches every mode of the grid it covers, so any
          * later request of the same tick on a grid no larger reuses it. */
-        int need_dt = (fx & OCEAN_FX_VELOCITY) != 0;
+        int need_dt = (fx & (OCEAN_FX_VELOCITY | OCEAN_FX_FOAM)) != 0; /* foam: its quadrature */
         int cached = cs->cache_n >= n && cs->cache_t == t && (cs->cache_dt || !need_dt);
         ocean_stage_args a = {cs, cached, need_dt, n_full, n, nch, ch, t, kc, kneg, ef->scale, ef->boost,
                         o->p.sea.choppiness, r->order, o->spec, NULL, 0, o->fused,
@@ -649,7 +668,7 @@ static int evaluate_cascade(ocean *o, int c, double t, const ocean_request *r,
      * so W is not counted twice. */
     ocean_foam_map cmap = f->foam_map;
     if (r->per_cascade && (fx & OCEAN_FX_FOAM))
-        cmap = ocean_stats_foam_map(o, ocean_stats_foam_sigma_cascade(o, c, kc, r->order));
+        cmap = ocean_stats_foam_cascade(o, c, kc, r->order);
     if ((fx & OCEAN_FX_FOAM) && r->foam_map) {
         ocean_field *fd = &f->field[c];
         long nn = (long)n * n, step = (long)n * 8;

@@ -40,7 +40,7 @@ enum ocean_effect {
     OCEAN_FX_HEIGHT = 1u << 0,       /* eta                              1 FFT */
     OCEAN_FX_DISPLACEMENT = 1u << 1, /* choppy Dx, Dz (scaled by lambda) 2 FFTs */
     OCEAN_FX_NORMALS = 1u << 2,      /* slopes d(eta)/dx, d(eta)/dz      2 FFTs */
-    OCEAN_FX_FOAM = 1u << 3,         /* Jacobian -> folding and foam     3 FFTs */
+    OCEAN_FX_FOAM = 1u << 3,         /* Jacobian -> folding and foam     4 FFTs */
     /* 1u << 4 is the Gerstner near field at the scene/protocol level; the
      * FFT ocean ignores it. */
     OCEAN_FX_NEAR_FIELD = 1u << 4,
@@ -220,6 +220,8 @@ typedef struct ocean_field {
     float *dx, *dz;             /* choppy displacement, already times lambda */
     float *slope_x, *slope_z;   /* d(eta)/dx, d(eta)/dz */
     float *dxx, *dzz, *dxz;     /* lambda * derivatives of Dx, Dz (foam) */
+    float *bq;                  /* -lambda * the breaking index's quadrature
+                                   in time (foam.h: its trails) */
     float *jacobian;            /* this cascade's folding Jacobian J (< 0: folded);
                                    NULL unless the request asked for foam_map */
     float *foam;                /* whitecap foam 0..1 (foam.h) of this cascade's
@@ -229,7 +231,7 @@ typedef struct ocean_field {
 
 /* Whitecap foam (foam.h): every foam value an evaluated frame gives - the
  * foam map planes, ocean_frame_sample(_some), the field statistics - is
- * ocean_foam_value(map, beta) with beta = -(Dxx + Dzz) / lambda, the
+ * ocean_foam_value(map, beta, q) with beta = -(Dxx + Dzz) / lambda, the
  * linear deep-water downward acceleration over g of the summed cascades
  * (Longuet-Higgins' breaking index; lambda = sea.choppiness, beta = 0 when
  * lambda = 0), and the frame's map solved so that the field's expected
@@ -296,16 +298,18 @@ typedef struct ocean_point {
     double height, dx, dz, slope_x, slope_z, jacobian, foam;
     double vel_x, vel_y, vel_z;
     double dxx, dzz, dxz;   /* derivatives of the displacement (foam channel) */
+    double bq;              /* -lambda * beta's quadrature (foam channel; foam.h) */
 } ocean_point;
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out);
 
 /* Whitecap foam (foam.h) of a point whose summed displacement derivatives
- * are dxx = lambda Dxx and dzz = lambda Dzz (ocean_point's fields, plus the
- * share of any waves the caller adds, e.g. the near field's), with this
- * frame's whitecap ramp: ocean_frame_sample's .foam is
- * ocean_frame_foam(f, p.dxx, p.dzz).  0 for a frame evaluated without
- * foam channels. */
-double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz);
+ * are dxx = lambda Dxx and dzz = lambda Dzz and whose breaking index's
+ * quadrature is -bq / lambda (ocean_point's fields, plus the share of any
+ * waves the caller adds, e.g. the near field's), with this frame's
+ * whitecap ramp and trails: ocean_frame_sample's .foam is
+ * ocean_frame_foam(f, p.dxx, p.dzz, p.bq).  0 for a frame evaluated
+ * without foam channels. */
+double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz, double bq);
 
 /* What ocean_frame_sample_some fills; the rest of the point reads as in a
  * frame without those channels (0, jacobian 1). */
@@ -313,7 +317,7 @@ enum {
     OCEAN_SAMPLE_HEIGHT = 1u << 0,
     OCEAN_SAMPLE_DISPLACEMENT = 1u << 1,  /* dx, dz */
     OCEAN_SAMPLE_SLOPE = 1u << 2,         /* slope_x, slope_z */
-    OCEAN_SAMPLE_FOAM = 1u << 3,          /* dxx, dzz, dxz, jacobian, foam */
+    OCEAN_SAMPLE_FOAM = 1u << 3,          /* dxx, dzz, dxz, bq, jacobian, foam */
     OCEAN_SAMPLE_VELOCITY = 1u << 4,
     OCEAN_SAMPLE_ALL = (1u << 5) - 1
 };

@@ -329,7 +329,7 @@ static double hermite_read(const float *g, const float *gx, const float *gz, con
 void ocean_frame_sample_accurate(const ocean_frame *f, double x, double z, unsigned want,
                                  ocean_point *out, ocean_point *err)
 {
-    enum { H, DX, DZ, SX, SZ, VX, VY, VZ, DXX, DZZ, DXZ, NV };
+    enum { H, DX, DZ, SX, SZ, VX, VY, VZ, DXX, DZZ, DXZ, BQ, NV };
     double v[NV] = {0}, e[3] = {0};
     int any_foam = 0, blind[3] = {0};
     for (int c = 0; c < f->cascades; c++) {
@@ -375,6 +375,7 @@ void ocean_frame_sample_accurate(const ocean_frame *f, double x, double z, unsig
             v[DXX] += lagrange_read(fd->dxx, &s);
             v[DZZ] += lagrange_read(fd->dzz, &s);
             v[DXZ] += lagrange_read(fd->dxz, &s);
+            if (fd->bq) v[BQ] += lagrange_read(fd->bq, &s);
         }
     }
     double jac = (1.0 + v[DXX]) * (1.0 + v[DZZ]) - v[DXZ] * v[DXZ];
@@ -382,9 +383,9 @@ void ocean_frame_sample_accurate(const ocean_frame *f, double x, double z, unsig
                          .slope_z = v[SZ], .jacobian = jac,
                          /* the frame's whitecap foam, as ocean_frame_sample
                           * and every tile give it */
-                         .foam = any_foam ? ocean_frame_foam(f, v[DXX], v[DZZ]) : 0.0,
+                         .foam = any_foam ? ocean_frame_foam(f, v[DXX], v[DZZ], v[BQ]) : 0.0,
                          .vel_x = v[VX], .vel_y = v[VY], .vel_z = v[VZ], .dxx = v[DXX],
-                         .dzz = v[DZZ], .dxz = v[DXZ]};
+                         .dzz = v[DZZ], .dxz = v[DXZ], .bq = v[BQ]};
     if (err)
         *err = (ocean_point){.height = blind[0] ? INFINITY : e[0],
                              .dx = blind[1] ? INFINITY : e[1],

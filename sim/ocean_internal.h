@@ -32,7 +32,7 @@
 #include "ocean.h"
 
 enum {
-    CH_H, CH_DX, CH_DZ, CH_SX, CH_SZ, CH_DXX, CH_DZZ, CH_DXZ, CH_VX, CH_VY, CH_VZ,
+    CH_H, CH_DX, CH_DZ, CH_SX, CH_SZ, CH_DXX, CH_DZZ, CH_DXZ, CH_BQ, CH_VX, CH_VY, CH_VZ,
     CH_COUNT
 };
 #define MAX_LEVELS 9 /* n = 8 .. 2048 */
@@ -58,6 +58,8 @@ typedef struct ocean_cascade {
     float *coef[4];         /* a, b by ocean_pair_row */
     float *kx;              /* kx of a column (ix dk): one row serves every row */
     float *k, *kinv;        /* kinv = 1/|k| (0 at k = 0) */
+    float *kw;              /* |k| / omega(k) (0 at k = 0): the foam
+                               quadrature's factor on dh/dt */
     float *var;             /* E|h(k,t)|^2 = P(k) + P(-k) */
     double variance;
     /* h(k,t) and dh/dt of every mode, unfiltered, at time cache_t for the
@@ -92,7 +94,7 @@ typedef struct ocean_cascade {
 #define FILTER_MEMO 32
 typedef struct ocean_memo {
     int used, order;
-    double kc, scale, boost, value;
+    double kc, scale, boost, value, value2;
 } ocean_memo;
 
 /* What each way of splitting the stage's passes (rows, channels) has cost
@@ -371,14 +373,15 @@ void ocean_stage_split_note(ocean_split_stat *st, int split, double ns);
 
 /* ---- ocean_stats.c: the spectrum under a filter */
 
-/* Std of the breaking index over what an evaluation with this filter
- * transforms: memoised, of cascade c alone (memoised), and computed. */
-double ocean_stats_foam_sigma(ocean *o, double kc, int order, double scale, double boost);
-double ocean_stats_foam_sigma_cascade(ocean *o, int c, double kc, int order);
-double ocean_stats_foam_sigma_sum(const ocean *o, double kc, int order, double scale, double boost);
-/* The whitecap coverage of o's sea, and the foam map for a std sigma. */
+/* The foam map (foam.h) of what an evaluation with this filter transforms,
+ * with the std of its breaking index in *sigma (may be NULL): memoised,
+ * of cascade c alone (memoised), and computed. */
+ocean_foam_map ocean_stats_foam(ocean *o, double kc, int order, double scale, double boost, double *sigma);
+ocean_foam_map ocean_stats_foam_cascade(ocean *o, int c, double kc, int order);
+ocean_foam_map ocean_stats_foam_sum(const ocean *o, double kc, int order, double scale, double boost,
+                                    double *sigma);
+/* The whitecap coverage of o's sea. */
 double ocean_stats_whitecap_target(const ocean *o);
-ocean_foam_map ocean_stats_foam_map(const ocean *o, double sigma);
 /* The redistribution scale of (kc, order) and E_error of a filter, memoised. */
 double ocean_stats_redistribution(ocean *o, double kc, int order);
 double ocean_stats_error(ocean *o, double kc, int order, double scale, double boost);

@@ -83,6 +83,7 @@ static ocean_result cascade_alloc(ocean_cascade *cs, int n)
     ok &= (cs->kx = calloc((size_t)half, sizeof(float))) != NULL;
     ok &= (cs->k = calloc(nm, sizeof(float))) != NULL;
     ok &= (cs->kinv = calloc(nm, sizeof(float))) != NULL;
+    ok &= (cs->kw = calloc(nm, sizeof(float))) != NULL;
     ok &= (cs->var = calloc(nm, sizeof(float))) != NULL;
     ok &= (cs->lo = calloc((size_t)half, sizeof(int))) != NULL;
     ok &= (cs->hi = calloc((size_t)half, sizeof(int))) != NULL;
@@ -167,6 +168,7 @@ ocean_result ocean_modes_build(ocean *o, int c)
             coef_put(cs, ocean_pair_row(mz, n) * half + ix, hp, hm);
             cs->k[i] = (float)k;
             cs->kinv[i] = (float)(1.0 / k);
+            cs->kw[i] = (float)(k / ocean_dispersion(k, p->sea.depth_m));
             double v = mode_p(p, cs, kx, kz) + mode_p(p, cs, -kx, -kz);
             cs->var[i] = (float)v;
             /* Column 0 holds both k and -k; other columns stand for their mirror too. */
@@ -229,6 +231,7 @@ static double lattice_mode_put(ocean_cascade *cs, const ocean_params *p, int mx,
     coef_put(cs, ocean_pair_row(mz, n) * half + mx, hp, hm);
     cs->k[at] = (float)k;
     cs->kinv[at] = (float)(1.0 / k);
+    cs->kw[at] = (float)(k / ocean_dispersion(k, p->sea.depth_m));
     /* E|h(k,t)|^2 over time: the two terms' cross product averages out */
     double v = hp[0] * hp[0] + hp[1] * hp[1] + hm[0] * hm[0] + hm[1] * hm[1];
     cs->var[at] = (float)v;
@@ -275,6 +278,7 @@ ocean_result ocean_modes_build_lattice(ocean *o, const ocean_lattice_wave *w, in
             if (cs->k[up + mx] == 0.0f && cs->k[down + mx] != 0.0f) {
                 cs->k[up + mx] = cs->k[down + mx];
                 cs->kinv[up + mx] = cs->kinv[down + mx];
+                cs->kw[up + mx] = cs->kw[down + mx];
             }
     }
     cs->variance = var;
@@ -309,6 +313,7 @@ void ocean_modes_free(ocean_cascade *cs)
     free(cs->kx);
     free(cs->k);
     free(cs->kinv);
+    free(cs->kw);
     free(cs->var);
     free(cs->lo);
     free(cs->hi);

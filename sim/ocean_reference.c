@@ -25,11 +25,12 @@ static inline double reduce_phase(double x)
  * point given e^{i k.x}.  Both paths use these, so they add the same terms. */
 typedef struct ref_wave {
     double hr, hi, tr, ti;   /* g h(k, t), g dh/dt */
+    double kw;               /* |k| / w: beta's quadrature from dh/dt (foam.h) */
     int mx, mz;
 } ref_wave;
 
 typedef struct ref_sum {
-    double h, dx, dz, sx, sz, dxx, dzz, dxz, vx, vy, vz;
+    double h, dx, dz, sx, sz, dxx, dzz, dxz, bq, vx, vy, vz;
 } ref_sum;
 
 /* 0 for a wave outside the band or filtered out (nothing to add). */
@@ -58,6 +59,7 @@ static int ref_wave_at(const ocean *o, const ocean_cascade *cs, int mx, int mz, 
     rw->hi = g * hi;
     rw->tr = g * (w * (ai - bi));
     rw->ti = g * (w * (br - ar));
+    rw->kw = k / w;
     rw->mx = mx;
     rw->mz = mz;
     return 1;
@@ -79,6 +81,7 @@ static inline void ref_add(const ocean_cascade *cs, double lam, const ref_wave *
     a->dxx += -lam * kx * kx / k * re_h;
     a->dzz += -lam * kz * kz / k * re_h;
     a->dxz += -lam * kx * kz / k * re_h;
+    a->bq += lam * rw->kw * re_t;
     a->vy += re_t;
     a->vx += lam * kx / k * re_it;
     a->vz += lam * kz / k * re_it;
@@ -90,15 +93,18 @@ static void ref_finish(const ref_sum *a, double lam, const ocean_foam_map *m, oc
 {
     *out = (ocean_point){.height = a->h, .dx = a->dx, .dz = a->dz, .slope_x = a->sx,
                          .slope_z = a->sz, .vel_x = a->vx, .vel_y = a->vy, .vel_z = a->vz,
-                         .dxx = a->dxx, .dzz = a->dzz, .dxz = a->dxz};
+                         .dxx = a->dxx, .dzz = a->dzz, .dxz = a->dxz, .bq = a->bq};
     out->jacobian = (1.0 + a->dxx) * (1.0 + a->dzz) - a->dxz * a->dxz;
-    out->foam = ocean_foam_value(m, ocean_foam_beta(a->dxx, a->dzz, lam > 0.0 ? 1.0 / lam : 0.0));
+    double il = lam > 0.0 ? 1.0 / lam : 0.0;
+    out->foam = ocean_foam_value(m, ocean_foam_beta(a->dxx, a->dzz, il), ocean_foam_beta(a->bq, 0.0, il));
 }
 
 static ocean_foam_map ref_foam_map(const ocean *o, double cutoff_k, int order)
 {
     double kc = ocean_effective_cutoff(o, cutoff_k, order);
-    return ocean_stats_foam_map(o, isnan(kc) ? 0.0 : ocean_stats_foam_sigma_sum(o, kc, order, 1.0, 1.0));
+    if (isnan(kc)) /* an invalid filter: the target spread evenly, as sigma 0 gives */
+        return (ocean_foam_map){INFINITY, INFINITY, ocean_stats_whitecap_target(o), INFINITY};
+    return ocean_stats_foam_sum(o, kc, order, 1.0, 1.0, NULL);
 }
 
 void ocean_reference_point(const ocean *o, double t, double x, double z,
@@ -187,7 +193,7 @@ void ocean_reference_eval(const ocean_reference *r, double x, double z, ocean_po
     if (!ax) {
         ocean_point nan_pt = {.height = NAN, .dx = NAN, .dz = NAN, .slope_x = NAN, .slope_z = NAN,
                               .jacobian = NAN, .foam = NAN, .vel_x = NAN, .vel_y = NAN,
-                              .vel_z = NAN, .dxx = NAN, .dzz = NAN, .dxz = NAN};
+                              .vel_z = NAN, .dxx = NAN, .dzz = NAN, .dxz = NAN, .bq = NAN};
         *out = nan_pt;
         return;
     }

@@ -32,6 +32,13 @@ static inline double corners_read(const float *g, const corners *k)
     return (a * (1.0 - k->fx) + b * k->fx) * (1.0 - k->fz) + (c * (1.0 - k->fx) + d * k->fx) * k->fz;
 }
 
+/* The foam of summed foam channels (ocean.h "Whitecap foam"). */
+static inline double frame_foam(const ocean_frame *f, double dxx, double dzz, double bq)
+{
+    return ocean_foam_value(&f->foam_map, ocean_foam_beta(dxx, dzz, f->foam_inv_lambda),
+                            ocean_foam_beta(bq, 0.0, f->foam_inv_lambda));
+}
+
 /* Sums go to locals and reach *out once at the end: stores through out
  * (doubles) could alias the field descriptors' doubles, and the compiler
  * would reload every descriptor after every store.  This is the daemon's
@@ -40,7 +47,7 @@ void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned 
                              ocean_point *out)
 {
     double h = 0, dx = 0, dz = 0, sx = 0, sz = 0, vx = 0, vy = 0, vz = 0;
-    double dxx = 0.0, dzz = 0.0, dxz = 0.0;
+    double dxx = 0.0, dzz = 0.0, dxz = 0.0, bq = 0.0;
     int any_foam = 0;
     for (int c = 0; c < f->cascades; c++) {
         const ocean_field *fd = &f->field[c];
@@ -68,24 +75,24 @@ void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned 
             dxx += corners_read(fd->dxx, &k);
             dzz += corners_read(fd->dzz, &k);
             dxz += corners_read(fd->dxz, &k);
+            if (fd->bq) bq += corners_read(fd->bq, &k);
         }
     }
     /* J of the summed displacement, not a sum of per-cascade Jacobians. */
     double jac = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
     *out = (ocean_point){.height = h, .dx = dx, .dz = dz, .slope_x = sx, .slope_z = sz,
                          .jacobian = jac,
-                         .foam = any_foam ? ocean_foam_value(&f->foam_map,
-                                                             ocean_foam_beta(dxx, dzz, f->foam_inv_lambda))
-                                          : 0.0,
-                         .vel_x = vx, .vel_y = vy, .vel_z = vz, .dxx = dxx, .dzz = dzz, .dxz = dxz};
+                         .foam = any_foam ? frame_foam(f, dxx, dzz, bq) : 0.0,
+                         .vel_x = vx, .vel_y = vy, .vel_z = vz, .dxx = dxx, .dzz = dzz, .dxz = dxz,
+                         .bq = bq};
 }
 
-double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz)
+double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz, double bq)
 {
     int any = 0;
     for (int c = 0; c < f->cascades; c++)
         any |= f->field[c].dxx != NULL;
-    return any ? ocean_foam_value(&f->foam_map, ocean_foam_beta(dxx, dzz, f->foam_inv_lambda)) : 0.0;
+    return any ? frame_foam(f, dxx, dzz, bq) : 0.0;
 }
 
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out)

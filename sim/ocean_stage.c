@@ -220,11 +220,12 @@ row_times_ik(float (*o)[2], float lam, const float *kx, float kz, const float *k
 }
 
 /* One channel of a row into o, columns [x0, x1), from the row's filtered
- * h (hr, hi) and dh/dt (tr, ti); kx per column, kz of the row, kinv per
- * column, lam the choppiness. */
+ * h (hr, hi) and dh/dt (tr, ti); kx per column, kz of the row, kinv and kw
+ * per column, lam the choppiness. */
 static inline __attribute__((always_inline)) void
 row_channel(float (*o)[2], int ch, const float *hr, const float *hi, const float *tr,
-            const float *ti, const float *kx, const float *kinv, float kz, float lam, int x0, int x1)
+            const float *ti, const float *kx, const float *kinv, const float *kw, float kz, float lam,
+            int x0, int x1)
 {
     switch (ch) {
     case CH_H:
@@ -260,6 +261,12 @@ row_channel(float (*o)[2], int ch, const float *hr, const float *hi, const float
             o[ix][0] = f * hr[ix]; o[ix][1] = f * hi[ix];
         }
         break;
+    case CH_BQ: /* lam |k|/w dh/dt: -lam times beta's quadrature (foam.h) */
+        for (int ix = x0; ix < x1; ix++) {
+            float f = lam * kw[ix];
+            o[ix][0] = f * tr[ix]; o[ix][1] = f * ti[ix];
+        }
+        break;
     case CH_VX: /* i k/|k| dh/dt */
         row_times_ik(o, lam, kx, kz, kinv, tr, ti, x0, x1, 1);
         break;
@@ -288,7 +295,7 @@ spectrum_row_channels(const ocean_stage_args *a, int r, int x0, int x1, const in
     const ocean_cascade *cs = a->cs;
     float *c_hr = cs->cache[C_HR] + base, *c_hi = cs->cache[C_HI] + base;
     float *c_tr = cs->cache[C_TR] + base, *c_ti = cs->cache[C_TI] + base;
-    const float *kx = cs->kx, *kinv = cs->kinv + kbase;
+    const float *kx = cs->kx, *kinv = cs->kinv + kbase, *kw = cs->kw + kbase;
     const float *hr = c_hr, *hi = c_hi, *tr = c_tr, *ti = c_ti;
     float g[ROW_MAX], fhr[ROW_MAX], fhi[ROW_MAX], ftr[ROW_MAX], fti[ROW_MAX];
     /* Unfiltered, the grid is the full one: the cached h is the spectrum
@@ -320,7 +327,7 @@ spectrum_row_channels(const ocean_stage_args *a, int r, int x0, int x1, const in
         float (*o)[2] = stream ? rowbuf : dst;
         memset(o, 0, sizeof o[0] * (size_t)x0);
         memset(o + x1, 0, sizeof o[0] * (size_t)(half - x1));
-        row_channel(o, a->ch[j], hr, hi, tr, ti, kx, kinv, kz, lam, x0, x1);
+        row_channel(o, a->ch[j], hr, hi, tr, ti, kx, kinv, kw, kz, lam, x0, x1);
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
         if (stream)
             spectrum_row_stream(&dst[0][0], &rowbuf[0][0], 2 * half);

@@ -28,7 +28,7 @@ static int memo_find(const ocean_memo *m, double kc, int order, double scale, do
 static void memo_put(ocean_memo *m, int *next, double kc, int order, double scale,
                      double boost, double value)
 {
-    m[*next] = (ocean_memo){1, order, kc, scale, boost, value};
+    m[*next] = (ocean_memo){1, order, kc, scale, boost, value, 0.0};
     *next = (*next + 1) % FILTER_MEMO;
 }
 
@@ -61,16 +61,21 @@ static void filter_sums(const ocean *o, double kc, int order, double scale, doub
 }
 
 /* Std of the breaking index beta = sum k eta_k (foam.h) as a point sample
- * reads it: over the modes an evaluation with this filter transforms,
- * sum var k^2 ge^2 A(kx h) A(kz h), where A(th) = (2 + cos th) / 3 is the
- * mean power a wave keeps through bilinear interpolation on a grid of
- * spacing h at a uniformly random point (E|(1-u) + u e^{i th}|^2 over u).
- * Without A the finest cascade's near-Nyquist waves, which bilinear
- * reading damps, would count fully and tiles would show ~half the
- * intended coverage at light winds. */
-static double foam_sigma_sum_of(const ocean *o, int only, double kc, int order, double scale, double boost)
+ * reads it, and its mean frequency: over the modes an evaluation with this
+ * filter transforms, m0 = sum var k^2 ge^2 A(kx h) A(kz h), where
+ * A(th) = (2 + cos th) / 3 is the mean power a wave keeps through bilinear
+ * interpolation on a grid of spacing h at a uniformly random point
+ * (E|(1-u) + u e^{i th}|^2 over u), and m1 the same sum weighted by each
+ * wave's frequency.  Without A the finest cascade's near-Nyquist waves,
+ * which bilinear reading damps, would count fully and tiles would show
+ * ~half the intended coverage at light winds. */
+typedef struct foam_band {
+    double sigma, omega;   /* sqrt(m0), m1 / m0 (0 without waves) */
+} foam_band;
+
+static foam_band foam_band_of(const ocean *o, int only, double kc, int order, double scale, double boost)
 {
-    double kneg = ocean_negligible_k(o, kc, order), s = 0.0;
+    double kneg = ocean_negligible_k(o, kc, order), m0 = 0.0, m1 = 0.0;
     int n = o->p.n, half = n / 2 + 1;
     for (int c = 0; c < o->p.cascades; c++) {
         if (only >= 0 && c != only)
@@ -91,42 +96,57 @@ static double foam_sigma_sum_of(const ocean *o, int only, double kc, int order, 
             double g = isinf(kc) ? 1.0 : effective_gain(cs->k[i], kc, order, kneg);
             double ge = g * scale * (1.0 + (boost - 1.0) * g * g);
             double k = cs->k[i];
-            s += w * k * k * ge * ge * a[ix < n / 2 ? ix : n / 2 - 1] * a[mz < n / 2 ? mz : n / 2 - 1];
+            double v = w * k * k * ge * ge * a[ix < n / 2 ? ix : n / 2 - 1] * a[mz < n / 2 ? mz : n / 2 - 1];
+            m0 += v;
+            m1 += v * ocean_dispersion(k, o->p.sea.depth_m);
         }
     }
-    return sqrt(s);
+    return (foam_band){sqrt(m0), m0 > 0.0 ? m1 / m0 : 0.0};
 }
 
-double ocean_stats_foam_sigma_sum(const ocean *o, double kc, int order, double scale, double boost)
+/* The memo keeps sigma in value and omega in value2. */
+static foam_band foam_band_memo(ocean *o, int only, double kc, int order, double scale, double boost)
 {
-    return foam_sigma_sum_of(o, -1, kc, order, scale, boost);
-}
-
-double ocean_stats_foam_sigma(ocean *o, double kc, int order, double scale, double boost)
-{
-    int i = memo_find(o->foam_memo, kc, order, scale, boost);
+    double key = only >= 0 ? -1.0 - only : scale; /* real scales are positive */
+    int i = memo_find(o->foam_memo, kc, order, key, boost);
     if (i >= 0)
-        return o->foam_memo[i].value;
-    double v = ocean_stats_foam_sigma_sum(o, kc, order, scale, boost);
-    memo_put(o->foam_memo, &o->foam_next, kc, order, scale, boost, v);
-    return v;
+        return (foam_band){o->foam_memo[i].value, o->foam_memo[i].value2};
+    foam_band b = foam_band_of(o, only, kc, order, scale, boost);
+    memo_put(o->foam_memo, &o->foam_next, kc, order, key, boost, b.sigma);
+    o->foam_memo[(o->foam_next + FILTER_MEMO - 1) % FILTER_MEMO].value2 = b.omega;
+    return b;
 }
 
-/* sigma_beta of cascade c alone at cutoff kc, memoised beside the
- * whole-sea entries (a negative scale marks the cascade: real scales are
- * positive). */
-double ocean_stats_foam_sigma_cascade(ocean *o, int c, double kc, int order)
+/* The map of a band (foam.h): its target coverage at its sigma and omega. */
+static ocean_foam_map foam_map_of(const ocean *o, foam_band b)
 {
-    double tag = -1.0 - c;
-    int i = memo_find(o->foam_memo, kc, order, tag, 1.0);
-    if (i >= 0)
-        return o->foam_memo[i].value;
-    double v = foam_sigma_sum_of(o, c, kc, order, 1.0, 1.0);
-    memo_put(o->foam_memo, &o->foam_next, kc, order, tag, 1.0, v);
-    return v;
+    ocean_foam_map m;
+    if (ocean_foam_map_solve(b.sigma, b.omega, ocean_stats_whitecap_target(o), &m) != OCEAN_OK)
+        m = (ocean_foam_map){INFINITY, INFINITY, -1.0, INFINITY};
+    return m;
 }
 
-/* The whitecap ramp for a field of breaking-index std sigma (foam.h). */
+ocean_foam_map ocean_stats_foam_sum(const ocean *o, double kc, int order, double scale, double boost,
+                                    double *sigma)
+{
+    foam_band b = foam_band_of(o, -1, kc, order, scale, boost);
+    if (sigma) *sigma = b.sigma;
+    return foam_map_of(o, b);
+}
+
+ocean_foam_map ocean_stats_foam(ocean *o, double kc, int order, double scale, double boost, double *sigma)
+{
+    foam_band b = foam_band_memo(o, -1, kc, order, scale, boost);
+    if (sigma) *sigma = b.sigma;
+    return foam_map_of(o, b);
+}
+
+/* Cascade c alone at cutoff kc, memoised beside the whole-sea entries. */
+ocean_foam_map ocean_stats_foam_cascade(ocean *o, int c, double kc, int order)
+{
+    return foam_map_of(o, foam_band_memo(o, c, kc, order, 1.0, 1.0));
+}
+
 /* The whitecap coverage of o's sea: the wind's, but none when the grid
  * holds no wave at all (Phillips A = 0, or k_max below every mode: no
  * breakers, whatever the wind says; it gave 0.93 % of foam on a flat sea).
@@ -142,13 +162,6 @@ double ocean_stats_whitecap_target(const ocean *o)
     return energy > 0.0 && o->p.sea.whitecaps ? ocean_foam_coverage_target(o->p.sea.wind_u10) : 0.0;
 }
 
-ocean_foam_map ocean_stats_foam_map(const ocean *o, double sigma)
-{
-    ocean_foam_map m;
-    if (ocean_foam_map_solve(sigma, ocean_stats_whitecap_target(o), &m) != OCEAN_OK)
-        m = (ocean_foam_map){INFINITY, INFINITY, -1.0};
-    return m;
-}
 
 /* Scale on the passed band that restores the unfiltered variance;
  * depends only on (cutoff, order). */

@@ -18,7 +18,7 @@ const s = JSON.parse(require("fs").readFileSync(process.argv[1]));
 if (!(s.hs > 1 && s.hs < 4)) throw "hs " + s.hs;
 if (Math.abs(s.hs_spectrum - 2.2) > 0.3) throw "hs_spectrum " + s.hs_spectrum;
 if (!(s.tp > 6 && s.tp < 9)) throw "tp " + s.tp;
-if (s.transforms !== 8) throw "transforms " + s.transforms;
+if (s.transforms !== 9) throw "transforms " + s.transforms;
 ' "$tmp/stats.json" || fail "stats values"
 
 # Only asked effects are transformed.

