@@ -141,8 +141,10 @@ deps:
 # A command-line OPT (the ASan build) still wins.
 SIM_VEC_SRC := sim/ocean.c sim/ocean_stage.c sim/ocean_sample.c sim/ocean_accurate.c
 $(call obj,$(SIM_VEC_SRC)) $(call pic,$(SIM_VEC_SRC)): OPT = -O3
-# sqrt must not set errno there, or GCC cannot vectorise ocean_deep_turns.
-$(call obj,$(SIM_VEC_SRC)) $(call pic,$(SIM_VEC_SRC)): CFLAGS += -fno-math-errno
+# sqrt must not set errno there, or GCC cannot vectorise ocean_deep_turns;
+# and a comparison must not be taken to trap (nothing here enables FP
+# traps), or GCC cannot turn the foam trails' selects into blends.
+$(call obj,$(SIM_VEC_SRC)) $(call pic,$(SIM_VEC_SRC)): CFLAGS += -fno-math-errno -fno-trapping-math
 
 # The browser viewer's decoders: protocol/'s own (messages and codecs) and
 # the C library's store of samples in time (oc_held.c), compiled to

@@ -85,6 +85,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "ocean_result.h"
 
@@ -140,6 +141,36 @@ static inline double ocean_foam_ramp(const ocean_foam_map *m, double beta)
     return !(f > 0.0) ? 0.0 : (f > 1.0 ? 1.0 : f); /* NaN beta: no foam */
 }
 
+/* exp(-decay theta), theta = arg(beta + i q) in [0, 2 pi): how much of its
+ * crest's foam a trail keeps.  Plain float arithmetic, no calls, so the
+ * field pass (ocean.c) vectorises it: theta from a minimax arctangent
+ * (|error| < 1e-5 rad; Abramowitz & Stegun 4.4.49's form, degree 11),
+ * the exponential as 2^x with a degree-6 polynomial on the fraction
+ * (relative error < 2e-5).  tests/test_foam.c checks it against libm. */
+static inline float ocean_foam_fade(float beta, float q, float decay)
+{
+    float ab = beta < 0.0f ? -beta : beta, aq = q < 0.0f ? -q : q;
+    float mx = ab > aq ? ab : aq, mn = ab > aq ? aq : ab;
+    float den = mx > 0.0f ? mx : 1.0f, t = mn / den, t2 = t * t;
+    float th = t * (0.99997726f + t2 * (-0.33262347f + t2 * (0.19354346f + t2 * (-0.11643287f +
+                t2 * (0.05265332f + t2 * -0.01172120f)))));
+    float th1 = 1.57079633f - th, th2, th3;
+    th = aq > ab ? th1 : th;
+    th2 = 3.14159265f - th;
+    th = beta < 0.0f ? th2 : th;
+    th3 = 6.28318531f - th;
+    th = q < 0.0f ? th3 : th;
+    float x = -decay * th * 1.44269504f; /* 2^x = e^(-decay th) */
+    x = x > -126.0f ? x : -126.0f;
+    float fl = floorf(x);
+    int n = (int)fl;
+    float f = x - fl;
+    float p = 1.0f + f * (0.693147181f + f * (0.240226507f + f * (0.0555041087f + f * (0.00961812911f +
+              f * (0.00133335581f + f * 0.000154035304f)))));
+    union { int32_t i; float f; } sc = {.i = (n + 127) * (1 << 23)};
+    return p * sc.f;
+}
+
 /* Foam at one point with breaking index beta and its quadrature q (the
  * analytic signal's imaginary part, above): the active foam or the last
  * crest's trail, whichever is whiter. */
@@ -151,11 +182,7 @@ static inline double ocean_foam_value(const ocean_foam_map *m, double beta, doub
     double e = sqrt(beta * beta + q * q);
     if (!(e > m->a))
         return fi; /* the crest itself made no foam (or NaN) */
-    double fe = ocean_foam_ramp(m, e);
-    if (fe <= fi)
-        return fi;
-    double th = atan2(q, beta);
-    double tr = fe * exp(-m->decay * (th < 0.0 ? th + 6.283185307179586 : th));
+    double tr = ocean_foam_ramp(m, e) * ocean_foam_fade((float)beta, (float)q, (float)m->decay);
     return tr > fi ? tr : fi;
 }
 

@@ -693,7 +693,7 @@ static int points_ok(const double *x, const double *z, size_t n, const void *out
 /* The eleven sums over the waves at one point, the fade not yet
  * applied: eta, grad eta, D, grad D, dD/dt and d eta/dt. */
 typedef struct wave_sums {
-    double C, Sx, Sz, Dx, Dz, Dxx, Dxz, Dzz, Vx, Vy, Vz;
+    double C, Sx, Sz, Dx, Dz, Dxx, Dxz, Dzz, Vx, Vy, Vz, Bq;
 } wave_sums;
 
 /* The sums at offset (ux, uz) from the cell whose phases are base.
@@ -710,9 +710,9 @@ static void point_sums(const eval_state *st, const double *base, double ux, doub
     for (int i = 0; i < M; i++)
         th[i] = base[i] + g->kx[i] * ux + g->kz[i] * uz;
     sincos_many(th, sn, cs, M);
-    /* Eleven sums in two interleaved lanes (even/odd waves), which the
+    /* Twelve sums in two interleaved lanes (even/odd waves), which the
      * compiler packs into one SSE2 register each. */
-    double acc[11][2] = {{0}};
+    double acc[12][2] = {{0}};
     int m2 = M & ~1;
     for (int i = 0; i < m2; i += 2) {
         for (int l = 0; l < 2; l++) {
@@ -730,6 +730,7 @@ static void point_sums(const eval_state *st, const double *base, double ux, doub
             acc[8][l] += as * w;
             acc[9][l] += qc * w * g->hx[j];
             acc[10][l] += qc * w * g->hz[j];
+            acc[11][l] += qs * g->k[j];
         }
     }
     for (int j = m2; j < M; j++) {
@@ -746,10 +747,14 @@ static void point_sums(const eval_state *st, const double *base, double ux, doub
         acc[8][0] += as * w;
         acc[9][0] += qc * w * g->hx[j];
         acc[10][0] += qc * w * g->hz[j];
+        acc[11][0] += qs * g->k[j];
     }
     /* Signs: eta = sum a cos; grad eta = -sum a k sin; D = -sum Q a h
      * sin; grad D = -sum Q a h k cos (hx kz = hz kx); dD/dt = +sum Q a
-     * h w cos; d eta/dt = +sum a w sin. */
+     * h w cos; d eta/dt = +sum a w sin.  Bq: with the phase falling in
+     * time, cos's quadrature (foam.h) is -sin, so -(Dxx + Dzz) = sum Q a k
+     * cos has the quadrature -sum Q a k sin, and bq (its negative) is
+     * +sum Q a k sin. */
     s->C = acc[0][0] + acc[0][1];
     s->Sx = -(acc[1][0] + acc[1][1]);
     s->Sz = -(acc[2][0] + acc[2][1]);
@@ -761,6 +766,7 @@ static void point_sums(const eval_state *st, const double *base, double ux, doub
     s->Vy = acc[8][0] + acc[8][1];
     s->Vx = acc[9][0] + acc[9][1];
     s->Vz = acc[10][0] + acc[10][1];
+    s->Bq = acc[11][0] + acc[11][1];
 }
 
 /* The point from its sums and the fade f (gradient fx, fz), whose own
@@ -784,6 +790,9 @@ static void point_set(ocean_gerstner_point *o, double f, double fx, double fz, c
     o->dxz = dxz;
     o->dzx = dzx;
     o->dzz = dzz;
+    /* the fade's own gradient terms of dxx + dzz are left out of the
+     * quadrature: under 1 / (k times the fade's width) of it */
+    o->bq = f * s->Bq;
     /* N = T_z x T_x with T_x = (1+dxx, ex, dzx), T_z = (dxz, ez, 1+dzz). */
     double nx = ez * dzx - (1.0 + dzz) * ex;
     double ny = J;

@@ -188,6 +188,8 @@ typedef struct ocean_gerstner_point {
     double dxx, dxz, dzx, dzz;    /* d(dx)/dx, d(dx)/dz, d(dz)/dx, d(dz)/dz: the
                                      displacement's Jacobian matrix minus I, which
                                      query inversion (Newton) adds to the FFT's */
+    double bq;                    /* minus the quadrature in time of -(dxx + dzz),
+                                     as the FFT's foam channel bq (foam.h trails) */
 } ocean_gerstner_point;
 
 /* Evaluates n points (x[i], z[i]) at time t (|t| <= OCEAN_TIME_MAX, else OCEAN_EINVAL) into

@@ -389,20 +389,23 @@ static void jacobian_rows(ocean_field *fd, long i0, long i1, const ocean_foam_ma
         return;
     }
     float s = (float)(-inv_lambda / (m->b - m->a)), off = (float)(-m->a / (m->b - m->a));
+#pragma omp simd
     for (long i = i0; i < i1; i++) {
         float f = (xx[i] + zz[i]) * s + off;
         foam[i] = f < 0.0f ? 0.0f : (f > 1.0f ? 1.0f : f);
     }
     if (!(m->decay < INFINITY))
         return;
-    /* The envelope reaches the ramp where beta^2 + q^2 > a^2 (a > 0), i.e.
-     * |bq + i (xx + zz)|^2 > (a lambda)^2; all points when a <= 0. */
-    float lim2 = m->a > 0.0 && inv_lambda > 0.0 ? (float)(m->a * m->a / (inv_lambda * inv_lambda)) : -1.0f;
+    /* The trails (foam.h): the crest's foam, the ramp at the envelope,
+     * times ocean_foam_fade; select, no branch, so the pass vectorises. */
+    float il = (float)inv_lambda, fa = (float)m->a, fb = 1.0f / (float)(m->b - m->a), dk = (float)m->decay;
+#pragma omp simd
     for (long i = i0; i < i1; i++) {
-        float d = xx[i] + zz[i];
-        if (d * d + bq[i] * bq[i] > lim2)
-            foam[i] = (float)ocean_foam_value(m, ocean_foam_beta(xx[i], zz[i], inv_lambda),
-                                              ocean_foam_beta(bq[i], 0.0, inv_lambda));
+        float beta = -(xx[i] + zz[i]) * il, q = -bq[i] * il;
+        float fe = (sqrtf(beta * beta + q * q) - fa) * fb;
+        fe = fe > 1.0f ? 1.0f : fe;
+        float tr = fe * ocean_foam_fade(beta, q, dk);
+        foam[i] = tr > foam[i] ? tr : foam[i]; /* fe <= 0: tr <= 0, no trail */
     }
 }
 

@@ -147,8 +147,10 @@ struct ocean {
      * scales are keyed by (cutoff, order), E_error by all four. */
     ocean_memo redis_memo[FILTER_MEMO], err_memo[FILTER_MEMO];
     int redis_next, err_next;
-    /* std of the breaking index beta per filter (foam.h), same keys */
+    /* the breaking index per filter (foam.h), same keys: its std (value)
+     * and mean frequency (value2), and the map solved for them */
     ocean_memo foam_memo[FILTER_MEMO];
+    ocean_foam_map foam_maps[FILTER_MEMO];
     int foam_next;
     ocean_gain_plane gains[GAIN_PLANES];
     uint64_t gain_clock;

@@ -104,19 +104,6 @@ static foam_band foam_band_of(const ocean *o, int only, double kc, int order, do
     return (foam_band){sqrt(m0), m0 > 0.0 ? m1 / m0 : 0.0};
 }
 
-/* The memo keeps sigma in value and omega in value2. */
-static foam_band foam_band_memo(ocean *o, int only, double kc, int order, double scale, double boost)
-{
-    double key = only >= 0 ? -1.0 - only : scale; /* real scales are positive */
-    int i = memo_find(o->foam_memo, kc, order, key, boost);
-    if (i >= 0)
-        return (foam_band){o->foam_memo[i].value, o->foam_memo[i].value2};
-    foam_band b = foam_band_of(o, only, kc, order, scale, boost);
-    memo_put(o->foam_memo, &o->foam_next, kc, order, key, boost, b.sigma);
-    o->foam_memo[(o->foam_next + FILTER_MEMO - 1) % FILTER_MEMO].value2 = b.omega;
-    return b;
-}
-
 /* The map of a band (foam.h): its target coverage at its sigma and omega. */
 static ocean_foam_map foam_map_of(const ocean *o, foam_band b)
 {
@@ -124,6 +111,24 @@ static ocean_foam_map foam_map_of(const ocean *o, foam_band b)
     if (ocean_foam_map_solve(b.sigma, b.omega, ocean_stats_whitecap_target(o), &m) != OCEAN_OK)
         m = (ocean_foam_map){INFINITY, INFINITY, -1.0, INFINITY};
     return m;
+}
+
+/* The band and its solved map, memoised: a solve with trails integrates
+ * numerically (a few ms), and the ticks ask for the same filters again. */
+static ocean_foam_map foam_memo(ocean *o, int only, double kc, int order, double scale, double boost,
+                                double *sigma)
+{
+    double key = only >= 0 ? -1.0 - only : scale; /* real scales are positive */
+    int i = memo_find(o->foam_memo, kc, order, key, boost);
+    if (i < 0) {
+        foam_band b = foam_band_of(o, only, kc, order, scale, boost);
+        i = o->foam_next;
+        memo_put(o->foam_memo, &o->foam_next, kc, order, key, boost, b.sigma);
+        o->foam_memo[i].value2 = b.omega;
+        o->foam_maps[i] = foam_map_of(o, b);
+    }
+    if (sigma) *sigma = o->foam_memo[i].value;
+    return o->foam_maps[i];
 }
 
 ocean_foam_map ocean_stats_foam_sum(const ocean *o, double kc, int order, double scale, double boost,
@@ -136,15 +141,13 @@ ocean_foam_map ocean_stats_foam_sum(const ocean *o, double kc, int order, double
 
 ocean_foam_map ocean_stats_foam(ocean *o, double kc, int order, double scale, double boost, double *sigma)
 {
-    foam_band b = foam_band_memo(o, -1, kc, order, scale, boost);
-    if (sigma) *sigma = b.sigma;
-    return foam_map_of(o, b);
+    return foam_memo(o, -1, kc, order, scale, boost, sigma);
 }
 
 /* Cascade c alone at cutoff kc, memoised beside the whole-sea entries. */
 ocean_foam_map ocean_stats_foam_cascade(ocean *o, int c, double kc, int order)
 {
-    return foam_map_of(o, foam_band_memo(o, c, kc, order, 1.0, 1.0));
+    return foam_memo(o, c, kc, order, 1.0, 1.0, NULL);
 }
 
 /* The whitecap coverage of o's sea: the wind's, but none when the grid

@@ -358,10 +358,8 @@ static void answer_one(const ctx *c, double x, double z, const ocean_query_optio
     double jac = t.txx * t.tzz - t.tzx * t.txz;
     /* the whitecaps tiles carry (ocean.h "Whitecap foam"), the near field's
      * divergence included: the legacy Jacobian ramp answered near 0 where
-     * a viewer saw the wind's coverage.  The trails' phase is the FFT
-     * sea's: the near field's short waves add to beta, not to its
-     * quadrature (tiles carry no near-field foam). */
-    out->foam = have_derivs ? ocean_frame_foam(c->f, dxx, dzz, pt->bq) : 0.0;
+     * a viewer saw the wind's coverage; with its trails (foam.h). */
+    out->foam = have_derivs ? ocean_frame_foam(c->f, dxx, dzz, pt->bq + gp->bq) : 0.0;
     out->folded = jac <= 0.0 || s.jmin <= 0.0;
     out->residual = s.res;
     out->error = error_bound(&t, jac, sx, sz, s.res, &rd.err, opt);

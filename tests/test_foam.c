@@ -21,6 +21,7 @@
 #include <cmocka.h>
 
 #include "foam.h"
+#include "gerstner.h"
 #include "ocean.h"
 #include "ocean_conf.h"
 #include "ocean_reference.h"
@@ -132,10 +133,27 @@ static void trails_decay_and_cover(void **state)
     for (double t = 0.5; t < 2.0 * M_PI / w; t += 0.5) {
         double f = ocean_foam_value(&m, cos(w * t), sin(w * t)), active = ocean_foam_ramp(&m, cos(w * t));
         double want = fmax(exp(-t / 3.85), active);
-        if (!(fabs(f - want) < 1e-9))
+        if (!(fabs(f - want) < 2e-5 * want))
             fail_msg("%.1f s after the crest: foam %.6f, want %.6f (exp(-t/3.85) %.6f)", t, f, want,
                      exp(-t / 3.85));
     }
+    /* ocean_foam_fade against libm over every phase, for no decay and the
+     * decays the seas give (mean frequency 0.3-20 rad/s): relative error;
+     * and for a huge decay, absolute (it scales the phase's error) */
+    const double decays[] = {0.0, 1.0 / (20.0 * 3.85), 1.0 / (0.3 * 3.85), 50.0};
+    for (int d = 0; d < 4; d++) {
+        double worst = 0.0;
+        for (int i = 0; i < 4096; i++) {
+            double th = (i + 0.5) * (2.0 * M_PI / 4096), r = 0.01 + 3.0 * i / 4096;
+            double got = ocean_foam_fade((float)(r * cos(th)), (float)(r * sin(th)), (float)decays[d]);
+            double ex = exp(-decays[d] * th);
+            worst = fmax(worst, d < 3 ? fabs(got - ex) / ex : fabs(got - ex));
+        }
+        print_message("ocean_foam_fade against exp(-decay atan2), decay %.4g: worst %s error %.2e\n",
+                      decays[d], d < 3 ? "relative" : "absolute", worst);
+        assert_true(worst < 2e-5);
+    }
+    assert_true(ocean_foam_fade(0.0f, 0.0f, 1.0f) == 1.0f);
     /* A crest that did not break leaves nothing: crest value below a. */
     double lo = m.a > 0.0 ? 0.9 * m.a : -1.0;
     if (lo > 0.0)
@@ -233,6 +251,102 @@ static ocean *scene_ocean(const char *name, double u10)
     ocean *o = NULL;
     assert_int_equal(ocean_create(&p, &o, err, sizeof err), OCEAN_OK);
     return o;
+}
+
+/* The trails' quadrature is the Hilbert pair of the breaking index in
+ * time (foam.h), in the FFT's fields, in the exact sum and in the near
+ * field: over many points, bq has the variance of dxx + dzz, is
+ * uncorrelated with it, and a quarter period ahead of it, so its product
+ * with d(dxx + dzz)/dt is negative: for each wave A cos(w t + p) the pair
+ * is A sin(w t + p), whose product with -A w sin(w t + p) averages
+ * -A^2 w / 2.  (Correlations; a wrong sign or scale fails them.) */
+typedef struct pair_stats {
+    double bb, qq, bq, qd, dd;
+} pair_stats;
+
+static void pair_add(pair_stats *s, double b, double q, double db)
+{
+    s->bb += b * b;
+    s->qq += q * q;
+    s->bq += b * q;
+    s->qd += q * db;
+    s->dd += db * db;
+}
+
+static void pair_check(const char *what, const pair_stats *s)
+{
+    double var = s->qq / s->bb, corr = s->bq / sqrt(s->bb * s->qq), lead = s->qd / sqrt(s->qq * s->dd);
+    print_message("%s: var(bq) / var(dxx + dzz) %.3f, correlation %.3f, with d/dt %.3f\n", what, var, corr,
+                  lead);
+    if (!(fabs(var - 1.0) < 0.15 && fabs(corr) < 0.1 && lead < -0.7))
+        fail_msg("%s: not the quadrature pair", what);
+}
+
+static void quadrature_is_the_hilbert_pair(void **state)
+{
+    (void)state;
+    ocean *o = scene_ocean("ship-bridge", 12.0);
+    ocean_frame *f0, *f1;
+    assert_int_equal(ocean_frame_create(o, &f0), OCEAN_OK);
+    assert_int_equal(ocean_frame_create(o, &f1), OCEAN_OK);
+    ocean_request r;
+    ocean_request_all(&r, OCEAN_FX_FOAM);
+    const double t = 321.0, dt = 1e-3;
+    assert_int_equal(ocean_evaluate(o, t, &r, f0), OCEAN_OK);
+    assert_int_equal(ocean_evaluate(o, t + dt, &r, f1), OCEAN_OK);
+    pair_stats ref = {0};
+    double err_b = 0.0, err_q = 0.0;
+    for (int c = 0; c < 2; c++) {
+        const ocean_field *a = ocean_frame_field(f0, c), *b = ocean_frame_field(f1, c);
+        pair_stats one = {0};
+        for (long i = 0; i < (long)a->n * a->n; i++)
+            pair_add(&one, a->dxx[i] + a->dzz[i], a->bq[i],
+                     (b->dxx[i] + b->dzz[i] - a->dxx[i] - a->dzz[i]) / dt);
+        pair_check(c ? "FFT cascade 1" : "FFT cascade 0", &one);
+    }
+    /* the exact sum at a few points of the whole sea */
+    for (int i = 0; i < 24; i++) {
+        ocean_point p0, p1;
+        double x = 37.3 * i, z = -11.9 * i * i;
+        ocean_reference_point(o, t, x, z, INFINITY, 6, &p0);
+        ocean_reference_point(o, t + dt, x, z, INFINITY, 6, &p1);
+        pair_add(&ref, p0.dxx + p0.dzz, p0.bq, (p1.dxx + p1.dzz - p0.dxx - p0.dzz) / dt);
+        /* the frame read at the point against the exact sum, beside the
+         * breaking index's own reading error */
+        ocean_point fp;
+        ocean_frame_sample(f0, x, z, &fp);
+        double e = fp.dxx + fp.dzz - p0.dxx - p0.dzz, eq = fp.bq - p0.bq;
+        err_b += e * e;
+        err_q += eq * eq;
+    }
+    print_message("exact sum, 24 points: mean bq (dxx+dzz)/dt %.3g (negative); the frame against it: RMS "
+                  "error of bq %.3g of its RMS, of dxx + dzz %.3g\n",
+                  ref.qd / 24, sqrt(err_q / ref.qq), sqrt(err_b / ref.bb));
+    assert_true(ref.qd < 0.0);
+    assert_true(sqrt(err_q / ref.qq) < 1.5 * sqrt(err_b / ref.bb) + 1e-3);
+    /* the near field, 400 points, everywhere at full fade */
+    ocean_gerstner_params gp;
+    ocean_gerstner_params_default(&gp);
+    ocean_gerstner *g = NULL;
+    assert_int_equal(ocean_gerstner_create(&gp, &g, NULL, 0), OCEAN_OK);
+    ocean_gerstner_view v;
+    ocean_gerstner_view_default(&v);
+    double x[400], z[400];
+    for (int i = 0; i < 400; i++) {
+        x[i] = 0.731 * (i % 20) + 3.1 * (i / 20);
+        z[i] = 0.517 * (i / 20) - 1.3 * (i % 20);
+    }
+    ocean_gerstner_point a[400], b[400];
+    assert_int_equal(ocean_gerstner_evaluate(g, &v, t, x, z, 400, a), OCEAN_OK);
+    assert_int_equal(ocean_gerstner_evaluate(g, &v, t + dt, x, z, 400, b), OCEAN_OK);
+    pair_stats near = {0};
+    for (int i = 0; i < 400; i++)
+        pair_add(&near, a[i].dxx + a[i].dzz, a[i].bq, (b[i].dxx + b[i].dzz - a[i].dxx - a[i].dzz) / dt);
+    pair_check("near field", &near);
+    ocean_gerstner_destroy(g);
+    ocean_frame_destroy(f1);
+    ocean_frame_destroy(f0);
+    ocean_destroy(o);
 }
 
 /* Trails on an evaluated sea, as the daemon's tiles carry them (cascade
@@ -616,6 +730,7 @@ int main(void)
         cmocka_unit_test(ramp_mean_and_solve),
         cmocka_unit_test(trails_decay_and_cover),
         cmocka_unit_test(trails_stay_with_the_water),
+        cmocka_unit_test(quadrature_is_the_hilbert_pair),
         cmocka_unit_test(frame_coverage_hostile),
         cmocka_unit_test(coverage_against_monahan),
         cmocka_unit_test(coverage_against_callaghan),
