@@ -647,6 +647,19 @@ typedef struct eval_state {
     double *base; /* slots x OCEAN_GERSTNER_MAX_WAVES */
 } eval_state;
 
+void ocean_gerstner_foam_moments(const ocean_gerstner *g, const ocean_gerstner_view *v, double *m0, double *m1)
+{
+    double a[OCEAN_GERSTNER_MAX_WAVES], q = 0.0, s0 = 0.0, s1 = 0.0;
+    prepare(g, v, a, &q, NULL);
+    for (int i = 0; i < g->count; i++) {
+        double c = q * a[i] * g->k[i], var = 0.5 * c * c;
+        s0 += var;
+        s1 += var * g->omega[i];
+    }
+    *m0 = s0;
+    *m1 = s1;
+}
+
 /* slots: 1 or CELL_SLOTS, st->base must hold that many arrays. */
 static void state_set(eval_state *st, const ocean_gerstner *g, const ocean_gerstner_view *v,
                       double t, int slots)

@@ -192,6 +192,12 @@ typedef struct ocean_gerstner_point {
                                      as the FFT's foam channel bq (foam.h trails) */
 } ocean_gerstner_point;
 
+/* The breaking-index moments of the set under view v at full fade (the
+ * foam of ocean_frame_foam_plus): m0, the variance of its dxx + dzz
+ * (sum (Q a k)^2 / 2 over the waves the view keeps), and m1, the same
+ * sum weighted by each wave's frequency. */
+void ocean_gerstner_foam_moments(const ocean_gerstner *g, const ocean_gerstner_view *v, double *m0, double *m1);
+
 /* Evaluates n points (x[i], z[i]) at time t (|t| <= OCEAN_TIME_MAX, else OCEAN_EINVAL) into
  * out[i].  Results depend only on (set, view, t, point): not on n, the
  * order of the points or the thread.  Points where the fade is 0 cost

@@ -543,10 +543,11 @@ static void frame_foam_setup(ocean *o, const ocean_request *r, const eval_filter
         any_foam |= (r->effects[c] & OCEAN_FX_FOAM) != 0;
     double lam = o->p.sea.choppiness;
     f->foam_inv_lambda = lam > 0.0 ? 1.0 / lam : 0.0;
-    f->info.foam_sigma = 0.0;
+    f->info.foam_sigma = f->info.foam_omega = 0.0;
     f->info.whitecap_target = ocean_stats_whitecap_target(o);
     if (any_foam)
-        f->foam_map = ocean_stats_foam(o, ef->kc, r->order, ef->scale, ef->boost, &f->info.foam_sigma);
+        f->foam_map = ocean_stats_foam(o, ef->kc, r->order, ef->scale, ef->boost, &f->info.foam_sigma,
+                                       &f->info.foam_omega);
     else /* read by nothing (no foam channel), but defined */
         f->foam_map = (ocean_foam_map){INFINITY, INFINITY, -1.0, INFINITY};
 }

@@ -234,9 +234,12 @@ typedef struct ocean_field {
  * ocean_foam_value(map, beta, q) with beta = -(Dxx + Dzz) / lambda, the
  * linear deep-water downward acceleration over g of the summed cascades
  * (Longuet-Higgins' breaking index; lambda = sea.choppiness, beta = 0 when
- * lambda = 0), and the frame's map solved so that the field's expected
- * mean is ocean_foam_coverage_target(U10) for the band and filter that
- * evaluation holds.  Nothing accumulates over time.
+ * lambda = 0), q = -bq / lambda its quadrature in time (the trail of the
+ * last crest's foam, decaying in Monahan's 3.85 s), and the frame's map
+ * solved so that the field's expected mean, trails included, is
+ * ocean_foam_coverage_target(U10) for the band and filter that evaluation
+ * holds.  Nothing accumulates over time: the trails are read from the
+ * waves at t.
  *
  * WHITECAP COVERAGE of any set of foam samples (a tile, a level, a frame)
  * is their area mean (ocean_whitecap_coverage): foam is the white fraction
@@ -283,6 +286,8 @@ typedef struct ocean_frame_info {
     int cascades;
     double foam_sigma;    /* std of the breaking index beta over the evaluated
                              band (0 without foam channels) */
+    double foam_omega;    /* its mean frequency m1 / m0, rad/s: the rate of
+                             the trails' phase (foam.h) */
     double whitecap_target; /* ocean_foam_coverage_target(U10): the expected
                                mean of this frame's foam */
 } ocean_frame_info;
@@ -310,6 +315,13 @@ void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *o
  * ocean_frame_foam(f, p.dxx, p.dzz, p.bq).  0 for a frame evaluated
  * without foam channels. */
 double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz, double bq);
+
+/* The same where waves the frame does not hold add to dxx, dzz and bq (a
+ * near field): their summed dxx + dzz has variance m0 and frequency
+ * moment m1 (sum of variance times w), and the ramp is solved for the
+ * band the frame and they make together, so the coverage there stays the
+ * wind's (foam.h).  ocean_frame_foam when m0 = 0. */
+double ocean_frame_foam_plus(const ocean_frame *f, double m0, double m1, double dxx, double dzz, double bq);
 
 /* What ocean_frame_sample_some fills; the rest of the point reads as in a
  * frame without those channels (0, jacobian 1). */

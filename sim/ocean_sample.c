@@ -95,6 +95,26 @@ double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz, double bq)
     return any ? frame_foam(f, dxx, dzz, bq) : 0.0;
 }
 
+double ocean_frame_foam_plus(const ocean_frame *f, double m0, double m1, double dxx, double dzz, double bq)
+{
+    if (!(m0 > 0.0))
+        return ocean_frame_foam(f, dxx, dzz, bq);
+    int any = 0;
+    for (int c = 0; c < f->cascades; c++)
+        any |= f->field[c].dxx != NULL;
+    if (!any)
+        return 0.0;
+    /* the extra waves' moments in beta's units (beta = -(dxx + dzz) / lambda) */
+    double il2 = f->foam_inv_lambda * f->foam_inv_lambda, s2 = f->info.foam_sigma * f->info.foam_sigma;
+    double e0 = m0 * il2, e1 = m1 * il2, v = s2 + e0;
+    ocean_foam_map m;
+    if (ocean_foam_map_solve(sqrt(v), (s2 * f->info.foam_omega + e1) / v, f->info.whitecap_target, &m) !=
+        OCEAN_OK)
+        return frame_foam(f, dxx, dzz, bq);
+    return ocean_foam_value(&m, ocean_foam_beta(dxx, dzz, f->foam_inv_lambda),
+                            ocean_foam_beta(bq, 0.0, f->foam_inv_lambda));
+}
+
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out)
 {
     ocean_frame_sample_some(f, x, z, OCEAN_SAMPLE_ALL, out);

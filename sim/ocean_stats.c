@@ -116,7 +116,7 @@ static ocean_foam_map foam_map_of(const ocean *o, foam_band b)
 /* The band and its solved map, memoised: a solve with trails integrates
  * numerically (a few ms), and the ticks ask for the same filters again. */
 static ocean_foam_map foam_memo(ocean *o, int only, double kc, int order, double scale, double boost,
-                                double *sigma)
+                                double *sigma, double *omega)
 {
     double key = only >= 0 ? -1.0 - only : scale; /* real scales are positive */
     int i = memo_find(o->foam_memo, kc, order, key, boost);
@@ -128,6 +128,7 @@ static ocean_foam_map foam_memo(ocean *o, int only, double kc, int order, double
         o->foam_maps[i] = foam_map_of(o, b);
     }
     if (sigma) *sigma = o->foam_memo[i].value;
+    if (omega) *omega = o->foam_memo[i].value2;
     return o->foam_maps[i];
 }
 
@@ -139,15 +140,16 @@ ocean_foam_map ocean_stats_foam_sum(const ocean *o, double kc, int order, double
     return foam_map_of(o, b);
 }
 
-ocean_foam_map ocean_stats_foam(ocean *o, double kc, int order, double scale, double boost, double *sigma)
+ocean_foam_map ocean_stats_foam(ocean *o, double kc, int order, double scale, double boost, double *sigma,
+                                double *omega)
 {
-    return foam_memo(o, -1, kc, order, scale, boost, sigma);
+    return foam_memo(o, -1, kc, order, scale, boost, sigma, omega);
 }
 
 /* Cascade c alone at cutoff kc, memoised beside the whole-sea entries. */
 ocean_foam_map ocean_stats_foam_cascade(ocean *o, int c, double kc, int order)
 {
-    return foam_memo(o, c, kc, order, 1.0, 1.0, NULL);
+    return foam_memo(o, c, kc, order, 1.0, 1.0, NULL, NULL);
 }
 
 /* The whitecap coverage of o's sea: the wind's, but none when the grid

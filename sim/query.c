@@ -46,6 +46,7 @@ typedef struct ctx {
     const ocean_frame *f;
     ocean_gerstner_frame *gf;   /* NULL: no near field */
     int bilinear;
+    double near_m0, near_m1;    /* the near field's breaking-index moments */
 } ctx;
 
 static void read_fields(const ctx *c, double x0, double z0, unsigned want, ocean_point *pt,
@@ -357,9 +358,14 @@ static void answer_one(const ctx *c, double x, double z, const ocean_query_optio
     out->velocity[2] = pt->vel_z + gp->vz;
     double jac = t.txx * t.tzz - t.tzx * t.txz;
     /* the whitecaps tiles carry (ocean.h "Whitecap foam"), the near field's
-     * divergence included: the legacy Jacobian ramp answered near 0 where
-     * a viewer saw the wind's coverage; with its trails (foam.h). */
-    out->foam = have_derivs ? ocean_frame_foam(c->f, dxx, dzz, pt->bq + gp->bq) : 0.0;
+     * divergence and trails included where it is (the legacy Jacobian ramp
+     * answered near 0 where a viewer saw the wind's coverage); there the
+     * ramp is solved for the band both make, so the near field's short
+     * breakers do not add to the wind's coverage (its fade ring takes the
+     * full-fade band: a little less foam there) */
+    out->foam = !have_derivs ? 0.0
+              : gp->fade > 0.0 ? ocean_frame_foam_plus(c->f, c->near_m0, c->near_m1, dxx, dzz, pt->bq + gp->bq)
+                               : ocean_frame_foam(c->f, dxx, dzz, pt->bq);
     out->folded = jac <= 0.0 || s.jmin <= 0.0;
     out->residual = s.res;
     out->error = error_bound(&t, jac, sx, sz, s.res, &rd.err, opt);
@@ -385,8 +391,9 @@ ocean_result ocean_query_points(const ocean_frame *f, const ocean_gerstner *g,
         ocean_gerstner_view_default(&defview);
         v = &defview;
     }
-    ctx c = {f, NULL, opt->bilinear != 0};
+    ctx c = {f, NULL, opt->bilinear != 0, 0.0, 0.0};
     if (g) {
+        ocean_gerstner_foam_moments(g, v, &c.near_m0, &c.near_m1);
         ocean_result gr = ocean_gerstner_frame_create(g, &c.gf);
         if (gr == OCEAN_OK)
             gr = ocean_gerstner_frame_set(c.gf, v, t);
