@@ -19,7 +19,11 @@
 #endif
 
 
-static const char *const plane_names[PROTO_TILE_MAX_PLANES] = {"H", "DX", "DZ", "NU", "NV", "FOAM", "J"};
+static const char *const plane_names[PROTO_SLOT_COUNT] = {"H", "DX", "DZ", "NU", "NV", "FOAM", "J", "BI", "BQ"};
+/* The channel bit of each plane slot. */
+static const unsigned slot_channel[PROTO_SLOT_COUNT] = {
+    PROTO_CH_HEIGHT, PROTO_CH_DX, PROTO_CH_DZ, PROTO_CH_NORMAL, PROTO_CH_NORMAL, PROTO_CH_FOAM, PROTO_CH_JACOBIAN,
+    PROTO_CH_BREAKING, PROTO_CH_BREAKING};
 
 void proto_codec_params_default(proto_codec_params *p)
 {
@@ -56,35 +60,37 @@ int proto_tile_planes(unsigned channels)
     if (channels == 0 || (channels & ~PROTO_CH_ALL))
         return 0;
     int n = 0;
-    for (unsigned b = 0; b < 6; b++)
-        if (channels & (1u << b))
-            n += (b == 3) ? 2 : 1;
+    for (int s = 0; s < PROTO_SLOT_COUNT; s++)
+        n += (channels & slot_channel[s]) != 0;
     return n;
 }
 
-void proto_tile_plane_offsets(unsigned channels, size_t wh, int off[6])
+void proto_tile_plane_offsets(unsigned channels, size_t wh, int off[PROTO_SLOT_COUNT])
 {
-    static const unsigned bit[6] = {PROTO_CH_HEIGHT, PROTO_CH_DX, PROTO_CH_DZ, PROTO_CH_NORMAL, PROTO_CH_NORMAL,
-                                    PROTO_CH_FOAM};
     int p = 0;
-    for (int k = 0; k < 6; k++)
-        off[k] = (channels & bit[k]) ? (int)(wh * (size_t)p++) : -1;
+    for (int s = 0; s < PROTO_SLOT_COUNT; s++)
+        off[s] = (channels & slot_channel[s]) ? (int)(wh * (size_t)p++) : -1;
+}
+
+/* The slot of plane i of a tile with `channels`; -1 out of range. */
+static int plane_slot(unsigned channels, int i)
+{
+    if (proto_tile_planes(channels) == 0 || i < 0)
+        return -1;
+    int k = 0;
+    for (int s = 0; s < PROTO_SLOT_COUNT; s++)
+        if (channels & slot_channel[s]) {
+            if (k == i)
+                return s;
+            k++;
+        }
+    return -1;
 }
 
 const char *proto_tile_plane_name(unsigned channels, int i)
 {
-    if (proto_tile_planes(channels) == 0 || i < 0)
-        return NULL;
-    /* plane slots: H DX DZ NU NV FOAM J; channel bit b covers slot(s) */
-    static const int slot_bit[PROTO_TILE_MAX_PLANES] = {0, 1, 2, 3, 3, 4, 5};
-    int k = 0;
-    for (int s = 0; s < PROTO_TILE_MAX_PLANES; s++)
-        if (channels & (1u << slot_bit[s])) {
-            if (k == i)
-                return plane_names[s];
-            k++;
-        }
-    return NULL;
+    int s = plane_slot(channels, i);
+    return s < 0 ? NULL : plane_names[s];
 }
 
 /* ---- half floats ------------------------------------------------------ */
@@ -371,20 +377,8 @@ static const int8_t qz_own[QZ_NOWN][2] = {{0, -1}, {-1, 0}, {-1, -1}, {-1, 1}, {
 static const int8_t qz_ref[QZ_NREF][2] = {{0, 0}, {0, -1}, {0, 1}, {-1, 0}, {1, 0}, {0, -2}, {0, 2}, {-2, 0}, {2, 0}};
 
 /* Plane kind: its slot in H DX DZ NU NV FOAM J. */
-static int qz_kind(unsigned channels, int i)
-{
-    static const int slot_bit[PROTO_TILE_MAX_PLANES] = {0, 1, 2, 3, 3, 4, 5};
-    int k = 0;
-    for (int s = 0; s < PROTO_TILE_MAX_PLANES; s++)
-        if (channels & (1u << slot_bit[s])) {
-            if (k == i)
-                return s;
-            k++;
-        }
-    return -1;
-}
 
-/* The step of a plane of kind `kind` whose values span `range`, in a tile
+/* The step of a plane of slot `kind` whose values span `range`, in a tile
  * whose H plane spans h_range (0: no H plane).  Why each budget:
  *   H, J   accuracy x the plane's range (H: PSNR ~ 4.8 - 20 log10 accuracy dB);
  *   DX, DZ positions, so the height's metres: accuracy x max(H range, own
@@ -396,23 +390,34 @@ static int qz_kind(unsigned channels, int i)
  *          (about 8 deg per axis in the default scene), so the shaded glint
  *          cannot tell, while a calm tile's tiny slope range does not buy
  *          precision nobody sees;
- *   FOAM   accuracy x range, but never coarser than an 8-bit level (1/255).
+ *   FOAM   accuracy x range, but never coarser than an 8-bit level (1/255);
+ *   BI, BQ accuracy x max(range, 3/2): the breaking index's own scale is
+ *          its threshold 1/2, and a reader ramps the cascades' sum to foam
+ *          over 1/2 - a (0.2-0.5), so at 5e-3 (7.5e-3 of index, 2-4 % of
+ *          foam at most) the foam is finer than its grain draws it.  Being
+ *          high-pass fields they predict poorly: at accuracy x range alone
+ *          they took 35 % of a viewer tile's bytes, here 27 % (bench_codec,
+ *          "as the browser viewer receives them").
  * A step that would make more than QZ2_QMAX levels (hostile ranges) falls
  * back to the relative one, which makes at most 1 / (2 accuracy). */
 static double qz2_step(double acc, int kind, double range, double h_range)
 {
     double s;
     switch (kind) {
-    case 1:
-    case 2:
+    case PROTO_SLOT_DX:
+    case PROTO_SLOT_DZ:
         s = qz_step(acc, fmax(range, h_range));
         break;
-    case 3:
-    case 4:
+    case PROTO_SLOT_NU:
+    case PROTO_SLOT_NV:
         s = (double)(float)acc;
         break;
-    case 5:
+    case PROTO_SLOT_FOAM:
         s = fmin(qz_step(acc, range), (double)(float)(1.0 / 255.0));
+        break;
+    case PROTO_SLOT_BI:
+    case PROTO_SLOT_BQ:
+        s = qz_step(acc, fmax(range, 1.5));
         break;
     default:
         s = qz_step(acc, range);
@@ -823,7 +828,7 @@ static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, 
     for (int c = 0; c < np; c++) {
         const float *src = planes + (size_t)c * n;
         int64_t *q = cx->q + (size_t)c * n;
-        int kind = qz_kind(channels, c);
+        int kind = plane_slot(channels, c);
         float lo = src[0], hi = src[0];
         for (size_t k = 1; k < n; k++) {
             lo = src[k] < lo ? src[k] : lo;
@@ -831,7 +836,7 @@ static ocean_result qz_encode(proto_codec_ctx *cx, const proto_codec_params *p, 
         }
         double range = (double)hi - (double)lo;
         double step = (double)(float)qz2_step(acc, kind, range, h_range);
-        if (kind == 0) {
+        if (kind == PROTO_SLOT_H) {
             h_plane = c;
             h_range = range;
         }
@@ -898,7 +903,7 @@ double proto_codec_plane_error_bound(proto_codec c, const proto_codec_params *p,
 {
     if (c != PROTO_CODEC_QZ)
         return proto_codec_error_bound(c, p, lo, hi);
-    int kind = qz_kind(channels, plane);
+    int kind = plane_slot(channels, plane);
     if (kind < 0)
         return INFINITY;
     double acc = p ? p->accuracy : PROTO_ACCURACY_DEFAULT;

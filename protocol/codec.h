@@ -57,11 +57,22 @@ enum proto_channel {
     PROTO_CH_NORMAL = 1u << 3,   /* planes "NU","NV": octahedral unit normal */
     PROTO_CH_FOAM = 1u << 4,     /* plane "FOAM": foam coverage 0..1 */
     PROTO_CH_JACOBIAN = 1u << 5, /* plane "J":    folding Jacobian */
-    PROTO_CH_ALL = 0x3Fu
+    PROTO_CH_BREAKING = 1u << 6, /* planes "BI","BQ": breaking index and its
+                                    quadrature in time (layout 1's foam) */
+    PROTO_CH_ALL = 0x7Fu,
+    PROTO_CH_WORLD = 0x3Fu       /* the channels a layout-0 tile may carry (no BI BQ) */
+};
+
+/* Plane slots, in the fixed plane order; a tile holds those its channels
+ * name (proto_tile_plane_offsets). */
+enum proto_plane_slot {
+    PROTO_SLOT_H, PROTO_SLOT_DX, PROTO_SLOT_DZ, PROTO_SLOT_NU, PROTO_SLOT_NV, PROTO_SLOT_FOAM, PROTO_SLOT_J,
+    PROTO_SLOT_BI, PROTO_SLOT_BQ,
+    PROTO_SLOT_COUNT
 };
 
 #define PROTO_TILE_MAX_SIZE 1024  /* max width and height of a tile */
-#define PROTO_TILE_MAX_PLANES 7
+#define PROTO_TILE_MAX_PLANES PROTO_SLOT_COUNT
 
 typedef struct proto_codec_params {
     double accuracy;     /* qz: max abs error relative to each plane's range,
@@ -82,13 +93,13 @@ int proto_codec_lossless(proto_codec c);
 /* Number of planes a channel mask makes (the normal counts twice); 0 if the
  * mask is empty or has unknown bits. */
 int proto_tile_planes(unsigned channels);
-/* Name of plane i ("H", "DX", "DZ", "NU", "NV", "FOAM", "J") of a tile with
- * the given channels, or NULL if i is out of range. */
+/* Name of plane i ("H", "DX", "DZ", "NU", "NV", "FOAM", "J", "BI", "BQ") of
+ * a tile with the given channels, or NULL if i is out of range. */
 const char *proto_tile_plane_name(unsigned channels, int i);
-/* Where the H, DX, DZ, NU, NV and FOAM planes of a tile with `channels`
- * start, in samples of a decoded tile of wh samples a plane (off[k] =
- * plane index * wh), -1 where the tile has no such plane. */
-void proto_tile_plane_offsets(unsigned channels, size_t wh, int off[6]);
+/* Where each plane slot of a tile with `channels` starts, in samples of a
+ * decoded tile of wh samples a plane (off[slot] = plane index * wh), -1
+ * where the tile has no such plane. */
+void proto_tile_plane_offsets(unsigned channels, size_t wh, int off[PROTO_SLOT_COUNT]);
 
 /* A-priori bound on |decoded - input| for one plane whose values lie in
  * [lo, hi], for codec c with params p.  0 for lossless codecs.  For qz

@@ -5,6 +5,8 @@
 
 #include <math.h>
 
+#include "foam.h"
+
 double proto_lod_spacing(double q_c, double min_spacing, double cam_y, double dx, double dz)
 {
     double h = fmax(fabs(cam_y), 1.0);
@@ -80,4 +82,39 @@ void proto_lod_mss_add(const proto_lod_read *r, const proto_mip_entry *tab, int 
     mss[0] += k * ((double)coarse->mss_x - fine->mss_x);
     mss[1] += k * ((double)coarse->mss_z - fine->mss_z);
     mss[2] += k * ((double)coarse->mss_xz - fine->mss_xz);
+}
+
+double proto_lod_breaking_var(const proto_lod_read *r, const proto_mip_entry *tab, int mips)
+{
+    double un[3] = {0, 0, 0};
+    proto_lod_mss_add(r, tab, mips, un);
+    double v = (double)tab[mips].mss_x + tab[mips].mss_z - un[0] - un[1];
+    return v > 0 ? v : 0;
+}
+
+double proto_lod_foam(const proto_cascade_block *b, double var, double beta, double q)
+{
+    if (!(b->flags & PROTO_CASCADE_FOAM) || b->foam_rows < 1)
+        return 0;
+    const proto_foam_row *t = b->foam;
+    int n = b->foam_rows > PROTO_FOAM_ROWS ? PROTO_FOAM_ROWS : b->foam_rows;
+    double sigma = sqrt(var > 0 ? var : 0), a, omega;
+    if (n == 1 || !(sigma > t[0].sigma)) {
+        a = t[0].a;
+        omega = t[0].omega;
+    } else if (sigma >= t[n - 1].sigma) {
+        a = t[n - 1].a;
+        omega = t[n - 1].omega;
+    } else {
+        int i = 1;
+        while (t[i].sigma < sigma)
+            i++;
+        double f = (sigma - t[i - 1].sigma) / ((double)t[i].sigma - t[i - 1].sigma);
+        a = t[i - 1].a + f * ((double)t[i].a - t[i - 1].a);
+        omega = t[i - 1].omega + f * ((double)t[i].omega - t[i - 1].omega);
+    }
+    ocean_foam_map m = {a, OCEAN_FOAM_BETA_BREAK, -1.0,
+                        omega > 0 ? 1.0 / (omega * OCEAN_FOAM_DECAY_S) : INFINITY};
+    double f = ocean_foam_value(&m, beta, q);
+    return f > 0 ? (f < 1 ? f : 1) : 0;
 }

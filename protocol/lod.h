@@ -42,4 +42,20 @@ void proto_lod_read_at(double s, double sigma, int mips, int fades, proto_lod_re
  * every caller.  A mip outside 0..mips-1 or of weight <= 0 adds nothing. */
 void proto_lod_mss_add(const proto_lod_read *r, const proto_mip_entry *tab, int mips, double mss[3]);
 
+/* The breaking index's variance a reader holds of one cascade read as r
+ * says: the whole cascade's slope variance (entry mips, x + z) less what
+ * proto_lod_mss_add leaves unresolved (x + z); >= 0.  Each wave's breaking
+ * index is |k| times its height (foam.h), whose variance is the wave's
+ * mean-square slope, so the mip table already gives it. */
+double proto_lod_breaking_var(const proto_lod_read *r, const proto_mip_entry *tab, int mips);
+
+/* Whitecap foam in [0, 1] at a point of a layout-1 frame whose block b
+ * carries the whitecap table (PROTOCOL.md "Whitecaps in layout 1"): beta
+ * and q the cascades' BI and BQ summed as the rule reads them, var the
+ * sum of proto_lod_breaking_var over the same reads.  The ramp's foot and
+ * the band's frequency are the table's, linear in sigma = sqrt(var)
+ * between the rows around it and the end row's beyond them; the foam is
+ * ocean_foam_value's (foam.h).  0 for a block without the table. */
+double proto_lod_foam(const proto_cascade_block *b, double var, double beta, double q);
+
 #endif

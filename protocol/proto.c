@@ -312,12 +312,39 @@ static ocean_result v_vertices(ctx *c, const proto_mesh_vertices *v)
     return OCEAN_OK;
 }
 
+/* The whitecap table: rows with the FOAM flag alone, sigma ascending. */
+static ocean_result v_foam_table(ctx *c, const proto_cascade_block *b)
+{
+    unsigned rows = (b->flags & PROTO_CASCADE_FOAM) ? b->foam_rows : 0;
+    if ((b->flags & PROTO_CASCADE_FOAM) && (rows < 1 || rows > PROTO_FOAM_ROWS))
+        FAIL(c, OCEAN_EINVAL, "frame.cascades.foam_rows = %u; must be 1..%d", b->foam_rows, PROTO_FOAM_ROWS);
+    if (!(b->flags & PROTO_CASCADE_FOAM) && b->foam_rows)
+        FAIL(c, OCEAN_EFORMAT, "frame.cascades.foam_rows = %u without the FOAM flag", b->foam_rows);
+    for (unsigned i = 0; i < PROTO_FOAM_ROWS; i++) {
+        const proto_foam_row *r = &b->foam[i];
+        if (i >= rows) {
+            if (r->sigma != 0.0f || r->a != 0.0f || r->omega != 0.0f)
+                FAIL(c, OCEAN_EFORMAT, "frame.cascades.foam[%u] beyond foam_rows %u must be 0", i, rows);
+            continue;
+        }
+        if (!(r->sigma >= 0.0f && r->sigma <= 1e3f) || (i > 0 && !(r->sigma > b->foam[i - 1].sigma)))
+            FAIL(c, OCEAN_EINVAL, "frame.cascades.foam[%u].sigma = %g; must be in [0, 1e3] and ascend", i,
+                 (double)r->sigma);
+        if (!(r->a >= -1e3f && r->a <= 0.5f))
+            FAIL(c, OCEAN_EINVAL, "frame.cascades.foam[%u].a = %g; must be in [-1e3, 0.5]", i, (double)r->a);
+        if (!(r->omega >= 0.0f && r->omega <= 1e3f))
+            FAIL(c, OCEAN_EINVAL, "frame.cascades.foam[%u].omega = %g; must be in [0, 1e3]", i, (double)r->omega);
+    }
+    return OCEAN_OK;
+}
+
 static ocean_result v_cascades(ctx *c, const proto_cascade_block *b)
 {
     TRY(chk_range(c, "frame.cascades.cascade_count", b->cascade_count, 1, PROTO_MAX_LAYERS));
     TRY(chk_range(c, "frame.cascades.order", b->order, 1, 64));
-    if (b->flags & ~PROTO_CASCADE_KEY)
-        FAIL(c, OCEAN_EFORMAT, "frame.cascades.flags is %u (bit 0 only)", b->flags);
+    if (b->flags & ~(PROTO_CASCADE_KEY | PROTO_CASCADE_FOAM))
+        FAIL(c, OCEAN_EFORMAT, "frame.cascades.flags is %u (bits 0-1 only)", b->flags);
+    TRY(v_foam_table(c, b));
     if (!(b->spacing_per_m > 0.0f) || !isfinite(b->spacing_per_m))
         FAIL(c, OCEAN_EINVAL, "frame.cascades.spacing_per_m = %g; must be finite and > 0",
              (double)b->spacing_per_m);
@@ -998,8 +1025,38 @@ static size_t cascade_block_size(const uint8_t *p, size_t avail)
 {
     if (avail < PROTO_CASCADE_BLOCK_FIXED || p[0] < 1 || p[0] > PROTO_MAX_LAYERS)
         return 0;
-    size_t n = PROTO_CASCADE_BLOCK_FIXED + (size_t)p[0] * PROTO_CASCADE_ENTRY_SIZE;
+    size_t n = proto_cascade_block_bytes(p[0], p[2]);
     return n <= avail ? n : 0;
+}
+
+size_t proto_cascade_block_bytes(unsigned count, unsigned flags)
+{
+    return PROTO_CASCADE_BLOCK_FIXED + (size_t)count * PROTO_CASCADE_ENTRY_SIZE +
+           ((flags & PROTO_CASCADE_FOAM) ? PROTO_FOAM_TABLE_SIZE : 0);
+}
+
+/* The whitecap table at p (PROTO_FOAM_TABLE_SIZE bytes). */
+static void foam_table_read(const uint8_t *p, proto_cascade_block *b)
+{
+    b->foam_rows = p[0];
+    for (int i = 0; i < PROTO_FOAM_ROWS; i++) {
+        const uint8_t *w = p + 8 + 12 * i;
+        b->foam[i].sigma = proto_ldf32(w);
+        b->foam[i].a = proto_ldf32(w + 4);
+        b->foam[i].omega = proto_ldf32(w + 8);
+    }
+}
+
+static void foam_table_write(uint8_t *p, const proto_cascade_block *b)
+{
+    memset(p, 0, PROTO_FOAM_TABLE_SIZE);
+    p[0] = b->foam_rows;
+    for (int i = 0; i < PROTO_FOAM_ROWS; i++) {
+        uint8_t *w = p + 8 + 12 * i;
+        proto_stf32(w, b->foam[i].sigma);
+        proto_stf32(w + 4, b->foam[i].a);
+        proto_stf32(w + 8, b->foam[i].omega);
+    }
 }
 
 static void cascade_block_read(const uint8_t *p, proto_cascade_block *b)
@@ -1038,6 +1095,8 @@ static void cascade_block_read(const uint8_t *p, proto_cascade_block *b)
             e->time[m].phase = proto_ld16(w + 6);
         }
     }
+    if (b->flags & PROTO_CASCADE_FOAM)
+        foam_table_read(p + proto_cascade_block_bytes(b->cascade_count, 0), b);
 }
 
 static void cascade_block_write(uint8_t *p, const proto_cascade_block *b)
@@ -1075,6 +1134,8 @@ static void cascade_block_write(uint8_t *p, const proto_cascade_block *b)
             proto_st16(w + 6, e->time[m].phase);
         }
     }
+    if (b->flags & PROTO_CASCADE_FOAM)
+        foam_table_write(p + proto_cascade_block_bytes(b->cascade_count, 0), b);
 }
 
 ocean_result proto_frame_client_fields(const uint8_t *msg, size_t len, size_t *camera_seq_at,
@@ -1154,10 +1215,13 @@ static ocean_result d_frame(rd *r, proto_frame *f)
         unsigned cc = r->p[r->off];
         if (cc < 1 || cc > PROTO_MAX_LAYERS)
             FAIL(r->c, OCEAN_EINVAL, "FRAME: cascade_count %u outside 1..%d", cc, PROTO_MAX_LAYERS);
-        TRY(need(r, PROTO_CASCADE_BLOCK_FIXED + (size_t)cc * PROTO_CASCADE_ENTRY_SIZE, "cascade entries"));
+        size_t bytes = proto_cascade_block_bytes(cc, r->p[r->off + 2]);
+        TRY(need(r, bytes, "cascade entries"));
         TRY(zero_bytes(r, r->off + 3, 1, "cascade block"));
+        if (r->p[r->off + 2] & PROTO_CASCADE_FOAM)
+            TRY(zero_bytes(r, r->off + proto_cascade_block_bytes(cc, 0) + 1, 7, "whitecap table"));
         cascade_block_read(r->p + r->off, &f->cascades);
-        r->off += PROTO_CASCADE_BLOCK_FIXED + (size_t)cc * PROTO_CASCADE_ENTRY_SIZE;
+        r->off += bytes;
         max_tag = PROTO_TAG_SLOT_B | 0xFFu;
     }
     if (f->tile_count > r->c->lim->max_frame_tiles)
@@ -1615,8 +1679,7 @@ static ocean_result e_frame(proto_buf *b, const proto_msg *m)
     p[50] = f->has_mesh;
     p[51] = f->layout;
     if (f->layout == PROTO_LAYOUT_CASCADE) {
-        TRY(put(b, PROTO_CASCADE_BLOCK_FIXED +
-                       (size_t)f->cascades.cascade_count * PROTO_CASCADE_ENTRY_SIZE, &p));
+        TRY(put(b, proto_cascade_block_bytes(f->cascades.cascade_count, f->cascades.flags), &p));
         cascade_block_write(p, &f->cascades);
     }
     if (f->tile_records) {

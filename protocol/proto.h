@@ -127,8 +127,15 @@ typedef enum proto_mesh_codec {
 #define PROTO_CASCADE_BLOCK_FIXED 56
 #define PROTO_CASCADE_ENTRY_SIZE 320
 /* Cascade block flags: KEY, the client drops every sample it holds before
- * it reads this frame's records (PROTOCOL.md "Samples in time"). */
+ * it reads this frame's records (PROTOCOL.md "Samples in time"); FOAM, the
+ * whitecap table follows the cascade entries (PROTOCOL.md "Whitecaps in
+ * layout 1"). */
 #define PROTO_CASCADE_KEY 1u
+#define PROTO_CASCADE_FOAM 2u
+/* The whitecap table: rows, and its bytes (u8 rows, 7 reserved, 16 rows of
+ * 3 f32). */
+#define PROTO_FOAM_ROWS 16
+#define PROTO_FOAM_TABLE_SIZE (8 + 12 * PROTO_FOAM_ROWS)
 /* A layout-1 tile record's tag: the cascade index, and this bit for sample
  * B of the mip's time window (clear: sample A). */
 #define PROTO_TAG_SLOT_B 0x100u
@@ -317,11 +324,19 @@ typedef struct proto_cascade_entry {
     proto_mip_time time[PROTO_MAX_MIPS];    /* entries 0..mips-1; the rest 0 */
 } proto_cascade_entry;
 
+/* One row of the whitecap table: the ramp of a band whose breaking index
+ * has std sigma (PROTOCOL.md "Whitecaps in layout 1"). */
+typedef struct proto_foam_row {
+    float sigma;              /* the band's breaking-index std, >= 0; rows ascend */
+    float a;                  /* the ramp's foot (foam 0 at beta = a, 1 at 1/2) */
+    float omega;              /* the band's mean frequency, rad/s, >= 0 (0: no trails) */
+} proto_foam_row;
+
 /* The cascade block of a layout-1 FRAME (PROTOCOL.md "Cascade block"). */
 typedef struct proto_cascade_block {
     uint8_t cascade_count;    /* 1..PROTO_MAX_LAYERS */
     uint8_t order;            /* Butterworth order of the mips, 1..64 */
-    uint8_t flags;            /* PROTO_CASCADE_KEY */
+    uint8_t flags;            /* PROTO_CASCADE_KEY, PROTO_CASCADE_FOAM */
     float spacing_per_m;      /* q: the coarsest cascade's spacing wanted per metre
                                  of distance, > 0 (each entry has its own) */
     double camera[3];         /* camera position the frame was made for */
@@ -332,7 +347,12 @@ typedef struct proto_cascade_block {
                                  max(s_c, G); a mip with 2^(m+1) sigma_c <= G
                                  carries no H, DX, DZ.  0: no such floor */
     proto_cascade_entry cascade[PROTO_MAX_LAYERS];
+    uint8_t foam_rows;        /* with PROTO_CASCADE_FOAM: 1..PROTO_FOAM_ROWS, else 0 */
+    proto_foam_row foam[PROTO_FOAM_ROWS]; /* rows 0..foam_rows-1; the rest 0 */
 } proto_cascade_block;
+
+/* Bytes of a cascade block of `count` cascades with `flags`. */
+size_t proto_cascade_block_bytes(unsigned count, unsigned flags);
 
 /* Where a layout-1 FRAME places the flat mesh. */
 typedef struct proto_mesh_placement {

@@ -60,6 +60,13 @@ typedef struct tables {
     double near_mss[3];    /* the Gerstner near field's slope moments (shading
                               only when there is no near-field cascade) */
     double tail_mss[3];    /* the short-wave tail beyond the shortest simulated wave */
+    double inv_lambda[PROTO_MAX_LAYERS]; /* 1 / choppiness of each cascade's ocean (0: none) */
+    /* the whitecap table (PROTOCOL.md "Whitecaps in layout 1"), over the
+     * FFT cascades' and the near-field cascade's waves: its rows are found
+     * by the std a reader holds, so a reader of fewer cascades uses the
+     * rows below */
+    proto_foam_row foam[PROTO_FOAM_ROWS];
+    int foam_rows;
 } tables;
 
 
@@ -162,7 +169,7 @@ static unsigned ocean_fx_of(unsigned ch)
     if (ch & PROTO_CH_HEIGHT) fx |= OCEAN_FX_HEIGHT;
     if (ch & (PROTO_CH_DX | PROTO_CH_DZ)) fx |= OCEAN_FX_DISPLACEMENT;
     if (ch & PROTO_CH_NORMAL) fx |= OCEAN_FX_NORMALS;
-    if (ch & PROTO_CH_FOAM) fx |= OCEAN_FX_FOAM;
+    if (ch & (PROTO_CH_FOAM | PROTO_CH_BREAKING)) fx |= OCEAN_FX_FOAM;
     return fx;
 }
 
@@ -179,6 +186,45 @@ uint32_t srv_cascade_max_tiles(const ocean_params *p, int layers, int tile_size)
 }
 
 /* ---- tables -------------------------------------------------------------- */
+
+/* The whitecap table: the ramps of the sea's bands below cutoffs spread
+ * evenly in log k from the lowest mip cutoff of any cascade to the highest,
+ * and the whole sea: a reader's std falls between two of them wherever it
+ * stands.  Once per ocean (each row solves a ramp, ~2 ms). */
+static ocean_result foam_table_make(tables *tb)
+{
+    double lo = INFINITY, hi = 0.0, kc[PROTO_FOAM_ROWS];
+    for (int c = 0; c < tb->cascades; c++)
+        for (int m = 1; m < tb->mips[c]; m++) {
+            lo = fmin(lo, tb->kc[c][m]);
+            hi = fmax(hi, tb->kc[c][m]);
+        }
+    int n = 0;
+    if (hi > lo)
+        for (; n < PROTO_FOAM_ROWS - 1; n++)
+            kc[n] = lo * pow(hi / lo, (double)n / (PROTO_FOAM_ROWS - 2));
+    kc[n++] = INFINITY;
+    ocean_foam_row rows[PROTO_FOAM_ROWS];
+    int count = 0;
+    ocean_result r = ocean_foam_table(tb->oc, tb->nf, tb->order, kc, n, rows, &count);
+    if (r != OCEAN_OK)
+        return r;
+    tb->foam_rows = 0;
+    for (int i = 0; i < count; i++) {
+        proto_foam_row *f = &tb->foam[tb->foam_rows];
+        f->sigma = (float)rows[i].sigma;
+        f->a = (float)fmin(rows[i].a, 0.5);
+        f->omega = (float)rows[i].omega;
+        /* rows the f32 rounding makes equal, or out of the spec's ranges
+         * (a sea whose breaking index exceeds them), are left out */
+        if ((tb->foam_rows && !(f->sigma > tb->foam[tb->foam_rows - 1].sigma)) || !(f->sigma <= 1e3f) ||
+            !(f->a >= -1e3f) || !(f->omega <= 1e3f))
+            continue;
+        tb->foam_rows++;
+    }
+    memset(&tb->foam[tb->foam_rows], 0, sizeof tb->foam[0] * (size_t)(PROTO_FOAM_ROWS - tb->foam_rows));
+    return OCEAN_OK;
+}
 
 static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstner *g, const ocean *nf,
                                 int order)
@@ -246,8 +292,10 @@ static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstne
                 else tb->nf_var = mo.total_var_h;
             }
         }
+        double lam = ocean_get_params(src)->sea.choppiness;
+        tb->inv_lambda[c] = lam > 0 ? 1.0 / lam : 0.0;
     }
-    return OCEAN_OK;
+    return foam_table_make(tb);
 }
 
 /* ---- planning -------------------------------------------------------------- */
@@ -270,17 +318,17 @@ static void span(double lo, double hi, double w, int ntile, int32_t *first, int3
     *count = (int32_t)cnt;
 }
 
-/* Channels of the tiles of mip m of cascade c: foam travels with cascade 0
- * alone (the whole sea's whitecaps placed by its breaking index;
- * PROTOCOL.md), so no two cascades count the coverage twice; and a mip
- * finer than the mesh can show (2^(m+1) sigma_c <= G) is geometry-free:
- * every reader reads height and displacement at max(s, G), so that mip's
- * H, DX and DZ would travel unread, and only its normals (and foam) go. */
+/* Channels of the tiles of mip m of cascade c: every cascade carries its
+ * breaking index for foam (the reader sums them and applies the frame's
+ * whitecap table; PROTOCOL.md "Whitecaps in layout 1"); and a mip finer
+ * than the mesh can show (2^(m+1) sigma_c <= G) is geometry-free: every
+ * reader reads height and displacement at max(s, G), so that mip's H, DX
+ * and DZ would travel unread, and only its normals and breaking index go. */
 static unsigned chan_of(const tables *tb, const plan *pl, int c, int m)
 {
-    unsigned ch = c == 0 ? pl->channels : pl->channels & ~(unsigned)PROTO_CH_FOAM;
+    unsigned ch = pl->channels;
     if (pl->geo > 0 && ldexp(tb->patch[c] / tb->n, m + 1) <= pl->geo)
-        ch &= PROTO_CH_NORMAL | PROTO_CH_FOAM;
+        ch &= PROTO_CH_NORMAL | PROTO_CH_BREAKING;
     return ch;
 }
 
@@ -357,7 +405,8 @@ static double refresh_share(const plan *pl, int c, int m)
  * functions of the sea, t and the camera).
  * qz (format 2): residual bytes per sample and plane measured on the
  * default scene's layout-1 mip tiles (bench_codec, "as the viewer receives
- * them": 32 x 32, H DX DZ NU NV [FOAM], every mip of every cascade) at
+ * them": 32 x 32, H DX DZ NU NV BI BQ, every mip of every cascade; with
+ * BI BQ the model is within 2 % of the bytes) at
  * accuracies 2^k x 5e-3, k = 2 .. -4, linear in log2(accuracy) between
  * them (5e-3: 0.430, i.e. 1/8.5 of f32 with the headers), 0.14 more per
  * halving below and 0.05 less per doubling above the table; plus the
@@ -665,6 +714,8 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
     double pol = isfinite(j->policy_k) && j->policy_k > 0 ? M_PI / (2.0 * j->policy_k) : 0.0;
     pl->min_spacing = fmax(sub->base_spacing_m > 0 ? sub->base_spacing_m : 0.0, pol);
     pl->channels = srv_tiles_channels(sub->effects);
+    if (pl->channels & PROTO_CH_FOAM)
+        pl->channels = (pl->channels & ~(unsigned)PROTO_CH_FOAM) | PROTO_CH_BREAKING;
     double bytes = 0;
     pl->tiles = 0;
     for (int c = 0; c < pl->layers; c++) {
@@ -741,22 +792,21 @@ static void tile_build(srv_tile *t, const ocean_frame *f, const tables *tb)
         return;
     }
     float *sx = buf + ns * (size_t)planes, *sz = sx + ns;
-    float *ph = NULL, *pdx = NULL, *pdz = NULL, *pnu = NULL, *pnv = NULL, *pfoam = NULL;
-    int pi = 0;
-    if (k->channels & PROTO_CH_HEIGHT) ph = buf + ns * (size_t)pi++;
-    if (k->channels & PROTO_CH_DX) pdx = buf + ns * (size_t)pi++;
-    if (k->channels & PROTO_CH_DZ) pdz = buf + ns * (size_t)pi++;
-    if (k->channels & PROTO_CH_NORMAL) {
-        pnu = buf + ns * (size_t)pi++;
-        pnv = buf + ns * (size_t)pi++;
-    }
-    if (k->channels & PROTO_CH_FOAM) pfoam = buf + ns * (size_t)pi++;
-    if ((ph && !fd->height) || ((pdx || pdz) && !fd->dx) || (pnu && !fd->slope_x) ||
-        (pfoam && !fd->foam)) {
+    int off[PROTO_SLOT_COUNT];
+    proto_tile_plane_offsets(k->channels, ns, off);
+    float *P[PROTO_SLOT_COUNT];
+    for (int q = 0; q < PROTO_SLOT_COUNT; q++) P[q] = off[q] >= 0 ? buf + off[q] : NULL;
+    float *ph = P[PROTO_SLOT_H], *pdx = P[PROTO_SLOT_DX], *pdz = P[PROTO_SLOT_DZ], *pnu = P[PROTO_SLOT_NU];
+    float *pbi = P[PROTO_SLOT_BI], *pbq = P[PROTO_SLOT_BQ];
+    if ((ph && !fd->height) || ((pdx || pdz) && !fd->dx) || (pnu && !fd->slope_x) || P[PROTO_SLOT_FOAM] ||
+        P[PROTO_SLOT_J] || (pbi && (!fd->dxx || !fd->bq))) {
         free(buf);
         t->result = OCEAN_ESTATE;
         return;
     }
+    /* the breaking index and its quadrature (foam.h): beta = -(Dxx + Dzz)
+     * / lambda, q = -bq / lambda */
+    float il = (float)tb->inv_lambda[k->cascade];
     for (int i = 0; i < T; i++) {
         size_t row = (size_t)((k->iz * T + i) * stride) * (size_t)fd->n;
         for (int j = 0; j < T; j++) {
@@ -768,10 +818,13 @@ static void tile_build(srv_tile *t, const ocean_frame *f, const tables *tb)
                 sx[s] = fd->slope_x[g];
                 sz[s] = fd->slope_z[g];
             }
-            if (pfoam) pfoam[s] = fd->foam[g];
+            if (pbi) {
+                pbi[s] = -(fd->dxx[g] + fd->dzz[g]) * il;
+                pbq[s] = -fd->bq[g] * il;
+            }
         }
     }
-    if (pnu) proto_normals_from_slopes(sx, sz, ns, pnu, pnv);
+    if (pnu) proto_normals_from_slopes(sx, sz, ns, pnu, P[PROTO_SLOT_NV]);
     proto_buf pb;
     double max_err = 0;
     t->result = srv_tiles_encode(k, T, buf, &pb, &max_err);
@@ -931,6 +984,11 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
     b->cascade_count = (uint8_t)pl->layers;
     b->order = (uint8_t)tb->order;
     b->flags = pl->key ? PROTO_CASCADE_KEY : 0;
+    if ((pl->channels & PROTO_CH_BREAKING) && tb->foam_rows) {
+        b->flags |= PROTO_CASCADE_FOAM;
+        b->foam_rows = (uint8_t)tb->foam_rows;
+        memcpy(b->foam, tb->foam, sizeof b->foam);
+    }
     b->spacing_per_m = (float)pl->q;
     for (int i = 0; i < 3; i++) b->camera[i] = j->cam.pos[i];
     b->min_spacing_m = (float)pl->min_spacing;
@@ -1025,7 +1083,7 @@ static ocean_result eval_near_mip(srv_cascade *k, ocean *nf, const tables *tb, d
     }
     ocean_request rq;
     memset(&rq, 0, sizeof rq);
-    rq.effects[0] = fx & ~(unsigned)OCEAN_FX_FOAM; /* foam travels with cascade 0 */
+    rq.effects[0] = fx;
     rq.cascade_cutoff_k[0] = m < tb->mips[c] ? tb->kc[c][m] : 0.0;
     rq.cutoff_k = INFINITY;
     rq.order = tb->order;
@@ -1052,7 +1110,6 @@ static ocean_result eval_mips(srv_cascade *k, ocean *oc, ocean *nf, const tables
             rq.effects[c] = need_fx[c][m];
             rq.cascade_cutoff_k[c] = m < tb->mips[c] ? tb->kc[c][m] : 0.0;
             if (need_fx[c][m]) any = 1;
-            if (need_fx[c][m] & OCEAN_FX_FOAM) rq.foam_map = 1;
         }
         if (!any) continue;
         if (!k->mipf[m]) {

@@ -323,6 +323,29 @@ double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz, double bq)
  * wind's (foam.h).  ocean_frame_foam when m0 = 0. */
 double ocean_frame_foam_plus(const ocean_frame *f, double m0, double m1, double dxx, double dzz, double bq);
 
+/* The whitecap ramp of a band (foam.h): the breaking index's std sigma of
+ * the band, the ramp's foot a, and the band's mean frequency omega (rad/s,
+ * the trails' rate), a solved for the wind's coverage at that std and
+ * frequency.  The band as it is, not as some interpolation reads it: a
+ * reader that sums bands knows their variance from the mip tables alone
+ * (PROTOCOL.md "Whitecaps in layout 1"), and the Keys-cubic C library
+ * reads 0.85-0.91 of the coverage at ship-bridge's 2-1500 m cameras. */
+typedef struct ocean_foam_row {
+    double sigma, a, omega;
+} ocean_foam_row;
+
+/* One row per cutoff kc[0..n-1] (ascending; INFINITY: the whole sea):
+ * the band of o's waves (and of `more`'s, a second ocean of the same sea
+ * such as the near field's, when not NULL) at that Butterworth cutoff of
+ * the given order.  A cutoff that adds no wave to the row before it makes
+ * no row, so sigma ascends strictly; *count rows are written.  For a reader
+ * that sums bands and finds the ramp by the std it holds (PROTOCOL.md
+ * "Whitecaps in layout 1").  Each row solves the ramp with trails (about
+ * 2 ms).  OCEAN_EINVAL for NULL, n < 1, order < 1 or a NaN or negative
+ * cutoff. */
+ocean_result ocean_foam_table(const ocean *o, const ocean *more, int order, const double *kc, int n,
+                              ocean_foam_row *rows, int *count);
+
 /* What ocean_frame_sample_some fills; the rest of the point reads as in a
  * frame without those channels (0, jacobian 1). */
 enum {

@@ -70,12 +70,13 @@ static void filter_sums(const ocean *o, double kc, int order, double scale, doub
  * which bilinear reading damps, would count fully and tiles would show
  * ~half the intended coverage at light winds. */
 typedef struct foam_band {
-    double sigma, omega;   /* sqrt(m0), m1 / m0 (0 without waves) */
+    double sigma, omega;   /* sqrt(m0), m1 / m0 (0 without waves), as read */
+    double m0_band, m1_band; /* m0, m1 of the band itself, before reading */
 } foam_band;
 
 static foam_band foam_band_of(const ocean *o, int only, double kc, int order, double scale, double boost)
 {
-    double kneg = ocean_negligible_k(o, kc, order), m0 = 0.0, m1 = 0.0;
+    double kneg = ocean_negligible_k(o, kc, order), m0 = 0.0, m1 = 0.0, m0b = 0.0, m1b = 0.0;
     int n = o->p.n, half = n / 2 + 1;
     for (int c = 0; c < o->p.cascades; c++) {
         if (only >= 0 && c != only)
@@ -96,12 +97,15 @@ static foam_band foam_band_of(const ocean *o, int only, double kc, int order, do
             double g = isinf(kc) ? 1.0 : effective_gain(cs->k[i], kc, order, kneg);
             double ge = g * scale * (1.0 + (boost - 1.0) * g * g);
             double k = cs->k[i];
-            double v = w * k * k * ge * ge * a[ix < n / 2 ? ix : n / 2 - 1] * a[mz < n / 2 ? mz : n / 2 - 1];
+            double vb = w * k * k * ge * ge;
+            double v = vb * a[ix < n / 2 ? ix : n / 2 - 1] * a[mz < n / 2 ? mz : n / 2 - 1];
             m0 += v;
             m1 += v * ocean_dispersion(k, o->p.sea.depth_m);
+            m0b += vb;
+            m1b += vb * ocean_dispersion(k, o->p.sea.depth_m);
         }
     }
-    return (foam_band){sqrt(m0), m0 > 0.0 ? m1 / m0 : 0.0};
+    return (foam_band){sqrt(m0), m0 > 0.0 ? m1 / m0 : 0.0, m0b, m1b};
 }
 
 /* The map of a band (foam.h): its target coverage at its sigma and omega. */
@@ -144,6 +148,37 @@ ocean_foam_map ocean_stats_foam(ocean *o, double kc, int order, double scale, do
                                 double *omega)
 {
     return foam_memo(o, -1, kc, order, scale, boost, sigma, omega);
+}
+
+ocean_result ocean_foam_table(const ocean *o, const ocean *more, int order, const double *kc, int n,
+                              ocean_foam_row *rows, int *count)
+{
+    if (!o || !kc || !rows || !count || n < 1 || order < 1)
+        return OCEAN_EINVAL;
+    *count = 0;
+    double w = ocean_stats_whitecap_target(o);
+    for (int j = 0; j < n; j++) {
+        if (!(kc[j] >= 0.0))
+            return OCEAN_EINVAL;
+        foam_band b = foam_band_of(o, -1, kc[j], order, 1.0, 1.0);
+        if (more) {
+            foam_band c = foam_band_of(more, -1, kc[j], order, 1.0, 1.0);
+            b.m0_band += c.m0_band;
+            b.m1_band += c.m1_band;
+        }
+        double sigma = sqrt(b.m0_band), omega = b.m0_band > 0.0 ? b.m1_band / b.m0_band : 0.0;
+        if (*count && !(sigma > rows[*count - 1].sigma))
+            continue; /* no wave between the two cutoffs */
+        ocean_foam_map m;
+        ocean_result r = ocean_foam_map_solve(sigma, omega, w, &m);
+        if (r != OCEAN_OK)
+            return r;
+        /* a field of no waves is uniformly W: the ramp's limit, whose foot
+         * puts beta = 0 at W (foam.h) */
+        double a = m.uniform >= 0.0 ? -OCEAN_FOAM_BETA_BREAK * w / (1.0 - w) : m.a;
+        rows[(*count)++] = (ocean_foam_row){sigma, a, omega};
+    }
+    return OCEAN_OK;
 }
 
 /* Cascade c alone at cutoff kc, memoised beside the whole-sea entries. */

@@ -11,8 +11,8 @@
 #  - total mean-square slope (resolved in tiles + carried unresolved), per
 #    area of sea in view and per pixel, both within 30 % of Cox & Munk 1954, clean sea: 0.003 + 5.12e-3 U12.5, U12.5 from the
 #    scene's U10 by the neutral log profile (u* from Wu 1982's drag law);
-#  - whitecap coverage (the mean of the frames' cascade-0 FOAM samples by sea
-#    area: the coverage the tiles carry) within a factor 2 of
+#  - whitecap coverage (the mean foam the C library reads, by the spec's
+#    rule, on a square under the camera: the coverage the frames carry) within a factor 2 of
 #    Monahan & O'Muircheartaigh 1980, W = 3.84e-6 U10^3.41, for scenes with
 #    U10 in 8..26 m/s;
 #  - glitter agreement (issue 13 item 2: sun glitter and sky reflection from
@@ -59,12 +59,11 @@
 #    in view stray by up to 4 % from the whole sea's moments in either
 #    stream (the conservation table), so two runs differ by up to 8 % and
 #    the blend's lowering comes on top (measured -6.5 % at most);
-#  - whitecap coverage of the tiles within 15 % of the plain stream's (the
-#    blend is linear, so it keeps the mean foam; but the two read cascade
-#    0's foam at different instants, and over its few long waves the
-#    coverage of the sea in view swings in time: up to 8 % between the
-#    streams from 10 km before the whitecaps had trails, 13.7 % once
-#    since, in three frames).
+#  - whitecap coverage of the frames within 15 % of the plain stream's (the
+#    blend in time is linear in the breaking index, so it keeps the mean
+#    foam; but the two read the square at different instants, and over the
+#    few long waves a high camera reads the coverage swings in time: up to
+#    13.7 % between the streams from 10 km when it was cascade 0's foam).
 # Every measured figure is printed as a table, failing or not.
 # The scenes run side by side, one daemon each: a run mostly waits for frames
 # (about a third of its wall time is CPU), so four at once take about half the

@@ -49,7 +49,7 @@
  * H, DX, DZ, slope x, slope z, FOAM. */
 typedef struct field field;
 struct field {
-    void (*fn)(const field *F, int c, int m, double x, double z, double out[6]);
+    void (*fn)(const field *F, int c, int m, double x, double z, double out[7]);
     /* which tiles go into the frame (NULL: all) */
     int (*want)(const field *F, int c, int m, int ix, int iz);
     /* the channels of mip m's tiles (NULL: the frame's) */
@@ -97,7 +97,7 @@ static void emit_tile(const proto_cascade_block *b, const field *F, unsigned fra
     assert_non_null(pl_);
     for (int i = 0; i < h; i++)
         for (int j = 0; j < w; j++) {
-            double v[6];
+            double v[7];
             F->fn(F, c, m, (ix * T + j) * sp, (iz * T + i) * sp, v);
             int k = 0;
             size_t at = (size_t)i * w + j, wh = (size_t)w * h;
@@ -113,8 +113,10 @@ static void emit_tile(const proto_cascade_block *b, const field *F, unsigned fra
                 pl_[wh * k++ + at] = u;
                 pl_[wh * k++ + at] = vv;
             }
-            if (channels & PROTO_CH_FOAM)
+            if (channels & PROTO_CH_BREAKING) {
                 pl_[wh * k++ + at] = (float)v[5];
+                pl_[wh * k++ + at] = (float)v[6];
+            }
         }
     proto_buf_init(&payloads_[nt], 0);
     char err[256];
@@ -248,6 +250,11 @@ static void block_init(proto_cascade_block *b, int count, const double *patch, c
         }
     }
     block_set_q(b, 1.0f / 1024);
+    b->flags = PROTO_CASCADE_FOAM;
+    b->foam_rows = 3;
+    b->foam[0] = (proto_foam_row){0.02f, -0.03f, 0.8f};
+    b->foam[1] = (proto_foam_row){0.08f, 0.1f, 1.1f};
+    b->foam[2] = (proto_foam_row){0.2f, 0.3f, 1.5f};
 }
 
 /* A world point at horizontal distance d (direction th) from the block's
@@ -373,7 +380,7 @@ static void lod_rule_per_cascade_q(void **state)
 /* ============================================ blending, fading, moments */
 
 /* Constant planes with a distinct value per (cascade, mip). */
-static void const_fn(const field *F, int c, int m, double x, double z, double o[6])
+static void const_fn(const field *F, int c, int m, double x, double z, double o[7])
 {
     (void)F;
     (void)x;
@@ -384,6 +391,34 @@ static void const_fn(const field *F, int c, int m, double x, double z, double o[
     o[3] = 0.01 * (c + 1) * (m + 1);
     o[4] = -0.02 * (m + 1);
     o[5] = 0.05 * (c + 1) * (m + 1);
+    o[6] = -0.04 * (m + 1);
+}
+
+/* Whitecap foam as PROTOCOL.md "Whitecaps in layout 1" states it, written
+ * out from the text: the table's a and omega linear in sigma = sqrt(var)
+ * between the rows around it (the end rows beyond); the ramp
+ * clamp((x - a) / (1/2 - a), 0, 1); the active foam at beta, or the
+ * crest's foam at |beta + i q| decayed by exp(-arg / (omega 3.85 s)),
+ * arg in [0, 2 pi), whichever is larger. */
+static double spec_foam(const proto_cascade_block *b, double var, double beta, double q)
+{
+    const proto_foam_row *t = b->foam;
+    int n = b->foam_rows, i = 0;
+    double sg = sqrt(var), a = t[0].a, om = t[0].omega;
+    if (sg >= t[n - 1].sigma) {
+        a = t[n - 1].a;
+        om = t[n - 1].omega;
+    } else if (sg > t[0].sigma) {
+        while (t[i + 1].sigma < sg) i++;
+        double f = (sg - t[i].sigma) / (t[i + 1].sigma - t[i].sigma);
+        a = t[i].a + f * (t[i + 1].a - t[i].a);
+        om = t[i].omega + f * (t[i + 1].omega - t[i].omega);
+    }
+    double fi = fmin(1, fmax(0, (beta - a) / (0.5 - a)));
+    double e = hypot(beta, q), th = atan2(q, beta);
+    if (th < 0) th += 2 * M_PI;
+    double tr = e > a ? fmin(1, fmax(0, (e - a) / (0.5 - a))) * exp(-th / (om * 3.85)) : 0;
+    return fmax(fi, tr);
 }
 
 static void blend_and_fade(void **state)
@@ -397,18 +432,20 @@ static void blend_and_fade(void **state)
     b.camera[2] = 3e6 + 0.5;
     field F = {.fn = const_fn};
     oc_frame *f = decode_built(build_frame(&b, &F, PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL |
-                                                       PROTO_CH_FOAM,
+                                                       PROTO_CH_BREAKING,
                                            16, NULL, PROTO_CODEC_F32));
     assert_non_null(f->view);
     double s0 = 1000.0 / 64;
     const double lams[] = {-2, 0.25, 1.5, 1.9, 2.5, 7};
+    int inside = 0;   /* points whose foam lies on a ramp or a trail, where every term counts */
     for (size_t i = 0; i < sizeof lams / sizeof lams[0]; i++) {
         double x, z;
         point_at_level(&b, s0, lams[i], 1.1 * i, &x, &z);
         /* the expected sum, from the rule evaluated by hand for lambda_0
          * and lambda_1 = lambda_0 + 2 (cascade 1 is 4 times finer) */
-        double H = 0, DX = 0, SX = 0, foam0 = 0, mx = b.tail_mss[0], mxz = b.tail_mss[2];
+        double H = 0, DX = 0, SX = 0, BI = 0, BQ = 0, var = 0, mx = b.tail_mss[0], mxz = b.tail_mss[2];
         for (int c = 0; c < 2; c++) {
+            double mx0 = mx, mz = 0;
             double lam = lams[i] + 2 * c, w[PROTO_MAX_MIPS + 1] = {0};
             int M = mips[c];
             double fade = 1;
@@ -420,32 +457,39 @@ static void blend_and_fade(void **state)
                 fade = fades[c] ? fmin(1, fmax(0, M - lam)) : 1;
                 w[M - 1] = fade;
             }
-            double foam_c = 0;
             for (int m = 0; m < M; m++) {
-                double o[6];
+                double o[7];
                 const_fn(&F, c, m, 0, 0, o);
                 H += w[m] * o[0];
                 DX += w[m] * o[1];
                 SX += w[m] * o[3];
-                foam_c += w[m] * o[5];
+                BI += w[m] * o[5];
+                BQ += w[m] * o[6];
                 mx += w[m] * b.cascade[c].mip[m].mss_x;
+                mz += w[m] * b.cascade[c].mip[m].mss_z;
                 mxz += w[m] * b.cascade[c].mip[m].mss_xz;
             }
             mx += (1 - fade) * b.cascade[c].mip[M].mss_x;
+            mz += (1 - fade) * b.cascade[c].mip[M].mss_z;
             mxz += (1 - fade) * b.cascade[c].mip[M].mss_xz;
             /* two entries blended with weights a, 1 - a add a (1 - a) (coarser - finer) */
             if (lam > 0 && lam < M - 1) {
                 int m0 = (int)lam;
                 double a = w[m0];
                 mx += a * (1 - a) * (b.cascade[c].mip[m0 + 1].mss_x - b.cascade[c].mip[m0].mss_x);
+                mz += a * (1 - a) * (b.cascade[c].mip[m0 + 1].mss_z - b.cascade[c].mip[m0].mss_z);
                 mxz += a * (1 - a) * (b.cascade[c].mip[m0 + 1].mss_xz - b.cascade[c].mip[m0].mss_xz);
             } else if (fade > 0 && fade < 1) {
                 mx += fade * (1 - fade) * (b.cascade[c].mip[M].mss_x - b.cascade[c].mip[M - 1].mss_x);
+                mz += fade * (1 - fade) * (b.cascade[c].mip[M].mss_z - b.cascade[c].mip[M - 1].mss_z);
                 mxz += fade * (1 - fade) * (b.cascade[c].mip[M].mss_xz - b.cascade[c].mip[M - 1].mss_xz);
             }
-            if (c == 0)
-                foam0 = foam_c;   /* the whole sea's foam travels in cascade 0 */
+            /* the breaking-index variance held: the cascade's slope variance
+             * less what its reads leave unresolved */
+            var += (double)b.cascade[c].mip[M].mss_x + b.cascade[c].mip[M].mss_z - (mx - mx0) - mz;
         }
+        double foam0 = spec_foam(&b, var, BI, BQ);
+        inside += foam0 > 0 && foam0 < 1;
         oc_sample s;
         assert_int_equal(oc_frame_sample(f, x, z, 0, &s), OCEAN_OK);
         if (fabs(s.height - H) > 1e-5 || fabs(s.dx - DX) > 1e-6 || fabs(s.slope_x - SX) > 2e-6 ||
@@ -455,7 +499,7 @@ static void blend_and_fade(void **state)
                         lams[i], s.height, H, s.dx, DX, s.slope_x, SX, s.mss[0], mx, s.mss[2], mxz, s.foam, foam0);
             fail();
         }
-        assert_int_equal(s.channels, PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM);
+        assert_int_equal(s.channels, PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_BREAKING);
         /* the normal is the normal of the summed slopes */
         double nl = sqrt(s.slope_x * s.slope_x + 1 + s.slope_z * s.slope_z);
         assert_true(fabs(s.normal[1] - 1 / nl) < 1e-12 && fabs(s.normal[0] + s.slope_x / nl) < 1e-12);
@@ -464,6 +508,7 @@ static void blend_and_fade(void **state)
         assert_int_equal(oc_frame_sample_interp(f, x, z, 0, OC_INTERP_LINEAR, &sl), OCEAN_OK);
         assert_true(fabs(sl.height - s.height) < 1e-5);
     }
+    assert_true(inside >= 4);
     /* hostile input and the wrong layout */
     oc_sample s;
     assert_int_equal(oc_frame_sample(f, NAN, 0, 0, &s), OCEAN_EINVAL);
@@ -487,13 +532,13 @@ static void blend_and_fade(void **state)
 }
 
 /* Geometry-free mips (PROTOCOL.md "Where each mip is read"): a mip with
- * 2^(m+1) sigma <= G carries NU, NV, FOAM alone, as the server sends it. */
+ * 2^(m+1) sigma <= G carries NU, NV, BI, BQ alone, as the server sends it. */
 static unsigned geometry_free_chan(const field *F, int c, int m, unsigned channels)
 {
     (void)c;
     double sigma = 1000.0 / 64;
     if (ldexp(sigma, m + 1) <= F->G)
-        channels &= PROTO_CH_NORMAL | PROTO_CH_FOAM;
+        channels &= PROTO_CH_NORMAL | PROTO_CH_BREAKING;
     return channels;
 }
 
@@ -527,7 +572,7 @@ static void geometry_read_at_G(void **state)
     b.camera[2] = -200;
     b.geometry_spacing_m = (float)(4 * sigma);   /* mips 0 and 1 geometry-free */
     field F = {.fn = const_fn, .chan = geometry_free_chan, .G = b.geometry_spacing_m};
-    const unsigned all = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM;
+    const unsigned all = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_BREAKING;
     oc_frame *f = decode_built(build_frame(&b, &F, all, 16, NULL, PROTO_CODEC_F32));
     const double lams[] = {-2, 0.25, 1.5, 2.5, 3.75};
     for (size_t i = 0; i < sizeof lams / sizeof lams[0]; i++) {
@@ -535,22 +580,28 @@ static void geometry_read_at_G(void **state)
         point_at_level(&b, sigma, lams[i], 0.7 * i, &x, &z);
         level_weights(fmax(lams[i], 2.0), mips, wg);  /* log2(G / sigma) = 2 */
         level_weights(lams[i], mips, ws);
-        double H = 0, DX = 0, SX = 0, FO = 0, MX = b.tail_mss[0];
+        double H = 0, DX = 0, SX = 0, BI = 0, BQ = 0, MX = b.tail_mss[0], MZ = 0;
         for (int m = 0; m < mips; m++) {
-            double o[6];
+            double o[7];
             const_fn(&F, 0, m, 0, 0, o);
             H += wg[m] * o[0];
             DX += wg[m] * o[1];
             SX += ws[m] * o[3];
-            FO += ws[m] * o[5];
+            BI += ws[m] * o[5];
+            BQ += ws[m] * o[6];
             MX += ws[m] * b.cascade[0].mip[m].mss_x;
+            MZ += ws[m] * b.cascade[0].mip[m].mss_z;
         }
         double lam = lams[i];
         if (lam > 0 && lam < mips - 1) {
             int m0 = (int)lam;
             double a = ws[m0];
             MX += a * (1 - a) * (b.cascade[0].mip[m0 + 1].mss_x - b.cascade[0].mip[m0].mss_x);
+            MZ += a * (1 - a) * (b.cascade[0].mip[m0 + 1].mss_z - b.cascade[0].mip[m0].mss_z);
         }
+        /* foam at the shading levels (PROTOCOL.md: slopes, foam at s) */
+        double FO = spec_foam(&b, (double)b.cascade[0].mip[mips].mss_x + b.cascade[0].mip[mips].mss_z -
+                                      (MX - b.tail_mss[0]) - MZ, BI, BQ);
         oc_sample s;
         assert_int_equal(oc_frame_sample(f, x, z, 0, &s), OCEAN_OK);
         if (fabs(s.height - H) > 1e-5 || fabs(s.dx - DX) > 1e-6 || fabs(s.slope_x - SX) > 2e-6 ||
@@ -577,7 +628,7 @@ static void geometry_read_at_G(void **state)
     point_at_level(&b, sigma, 0.25, 0, &x, &z);
     oc_sample s;
     assert_int_equal(oc_frame_sample(f, x, z, 0, &s), OCEAN_OK);
-    assert_int_equal(s.channels, PROTO_CH_NORMAL | PROTO_CH_FOAM);
+    assert_int_equal(s.channels, PROTO_CH_NORMAL | PROTO_CH_BREAKING);
     assert_true(s.height == 0);
     oc_frame_free(f);
 }
@@ -587,7 +638,7 @@ static void geometry_read_at_G(void **state)
 /* H = a cos(theta), theta = 2 pi (kx x + kz z) / P + phase, with choppy
  * displacement D = -chop a (k / |k|) sin(theta) (Tessendorf 2001) and the
  * slopes of H; foam 0.  The same wave in every mip. */
-static void sin_fn(const field *F, int c, int m, double x, double z, double o[6])
+static void sin_fn(const field *F, int c, int m, double x, double z, double o[7])
 {
     (void)c;
     (void)m;
@@ -640,7 +691,7 @@ static void sinusoid_and_wrap(void **state)
         double worst_lin = 0, worst_cub = 0, worst_l3 = 0;
         for (int i = 0; i < 400; i++) {
             double u = urand() * P, v = urand() * P;
-            double ex[6];
+            double ex[7];
             sin_fn(&F, 0, 0, u, v, ex);
             /* the same local point seen from far away: whole periods added */
             double shifts[3][2] = {{0, 0}, {43000 * P, -17 * P}, {-43000 * P, 43001 * P}};
@@ -738,13 +789,13 @@ static void missing_tiles(void **state)
 /* ============================================ samples in time */
 
 /* One level everywhere: F->a. */
-static void level_fn(const field *F, int c, int m, double x, double z, double o[6])
+static void level_fn(const field *F, int c, int m, double x, double z, double o[7])
 {
     (void)c;
     (void)m;
     (void)x;
     (void)z;
-    memset(o, 0, 6 * sizeof *o);
+    memset(o, 0, 7 * sizeof *o);
     o[0] = F->a;
 }
 
@@ -818,13 +869,13 @@ static void time_interp_stream(void **state)
     oc_frame_stream *s = NULL;
     assert_int_equal(oc_frame_stream_create(&s), OCEAN_OK);
     /* KEY, window (100, 4) at w = 1/4: both samples travel */
-    b.flags = PROTO_CASCADE_KEY;
+    b.flags |= PROTO_CASCADE_KEY;
     set_window(&b, 100, 4, 16384);
     oc_frame *f = stream_frame(s, build_frame_at(&b, &key, H, 8, NULL, PROTO_CODEC_F32, 101), OCEAN_OK);
     assert_true(fabs(level_read(f) - 1.5) < 1e-5);
     oc_frame_free(f);
     /* the same window at w = 1/2, no records: the samples held */
-    b.flags = 0;
+    b.flags &= ~PROTO_CASCADE_KEY;
     set_window(&b, 100, 4, 32768);
     f = stream_frame(s, build_frame_at(&b, &none, H, 8, NULL, PROTO_CODEC_F32, 102), OCEAN_ESTATE);
     assert_int_equal(f->info.tile_count, 0);
@@ -947,7 +998,7 @@ static void peek_cascade_block(void **state)
     assert_true(pf.cascades.camera[0] == 1e6 && pf.cascades.camera[1] == 300);
     assert_true(pf.cascades.e_total == 0.03f);
     assert_true(pf.cascades.geometry_spacing_m == 4.0f);
-    assert_int_equal(at, PROTO_HEADER_SIZE + 56 + 56 + 3 * 320);
+    assert_int_equal(at, PROTO_HEADER_SIZE + 56 + 56 + 3 * 320 + 200);   /* and the whitecap table */
     /* the first record starts there: its length field is the first tile's */
     assert_int_equal(proto_ld32(B.msg + at), 48 + 8 * 8 * 4);
     assert_int_equal(oc_frame_peek(B.msg, 100, B.len, &pf, &at, err, sizeof err), OCEAN_ETRUNC);
@@ -984,13 +1035,13 @@ static void morph_weights(void **state)
 }
 
 /* H = m + 1 in mip m, no displacement: a vertex's height names the mip it read. */
-static void mip_index_fn(const field *F, int c, int m, double x, double z, double o[6])
+static void mip_index_fn(const field *F, int c, int m, double x, double z, double o[7])
 {
     (void)F;
     (void)c;
     (void)x;
     (void)z;
-    memset(o, 0, 6 * sizeof *o);
+    memset(o, 0, 7 * sizeof *o);
     o[0] = m + 1;
     o[1] = 0.25;
     o[2] = -0.125;
@@ -1068,7 +1119,7 @@ static void surface_inversion(void **state)
         /* the exact surface: Newton on the analytic p + D(p) = (x, z) */
         long double px = x, pz = z;
         for (int it = 0; it < 60; it++) {
-            double o[6];
+            double o[7];
             sin_fn(&F, 0, 0, (double)px, (double)pz, o);
             long double rx = px + o[1] - x, rz = pz + o[2] - z;
             /* dD/dp = -chop a (k k^T / |k|) cos(theta) */
@@ -1077,7 +1128,7 @@ static void surface_inversion(void **state)
             px -= (d * rx - bb * rz) / det;
             pz -= (-bb * rx + a * rz) / det;
         }
-        double ex[6];
+        double ex[7];
         sin_fn(&F, 0, 0, (double)px, (double)pz, ex);
         oc_sample s;
         assert_int_equal(oc_frame_surface(f, x, z, 0, &s), OCEAN_OK);

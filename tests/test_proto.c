@@ -173,6 +173,12 @@ static char *dump(const proto_msg *m)
             out(&b, "cascades.tail_mss = %.9g %.9g %.9g\n", (double)k->tail_mss[0], (double)k->tail_mss[1],
                 (double)k->tail_mss[2]);
             out(&b, "cascades.geometry_spacing_m = %.9g\n", (double)k->geometry_spacing_m);
+            if (k->flags & PROTO_CASCADE_FOAM) {
+                out(&b, "cascades.foam_rows = %u\n", k->foam_rows);
+                for (unsigned i = 0; i < k->foam_rows; i++)
+                    out(&b, "cascades.foam[%u] = %.9g %.9g %.9g\n", i, (double)k->foam[i].sigma,
+                        (double)k->foam[i].a, (double)k->foam[i].omega);
+            }
             for (unsigned c = 0; c < k->cascade_count; c++) {
                 const proto_cascade_entry *e = &k->cascade[c];
                 out(&b, "cascade[%u].patch_m = %.17g\ncascade[%u].n = %u\ncascade[%u].mips = %u\ncascade[%u].fades = %u\n",
@@ -472,6 +478,17 @@ static int sample_named(proto_msg *m, const char *name)
         f->placement.origin[2] = -2.5e6 - 8;
         return 0;
     }
+    if (!strcmp(name, "frame_cascade_foam")) {
+        /* with the whitecap table (PROTOCOL.md "Whitecaps in layout 1") */
+        sample_named(m, "frame_cascade");
+        proto_cascade_block *b = &m->u.frame.cascades;
+        b->flags = PROTO_CASCADE_FOAM;
+        b->foam_rows = 3;
+        b->foam[0] = (proto_foam_row){0.0625f, -0.015625f, 0.875f};
+        b->foam[1] = (proto_foam_row){0.125f, 0.0625f, 1.25f};
+        b->foam[2] = (proto_foam_row){0.25f, 0.25f, 1.625f};
+        return 0;
+    }
     if (!strcmp(name, "frame_cascade_time")) {
         /* a key frame of a time-interpolating subscription: cascade 0's
          * mip 1 every 4 ticks (a quarter of the way from A to B), cascade
@@ -572,7 +589,7 @@ static int sample_named(proto_msg *m, const char *name)
     return -1;
 }
 
-static const char *const extra_vectors[] = {"frame_cascade", "frame_cascade_time", "mesh_topology_flat", "subscribe_cascade",
+static const char *const extra_vectors[] = {"frame_cascade", "frame_cascade_foam", "frame_cascade_time", "mesh_topology_flat", "subscribe_cascade",
                                             "sea_state_announce", "sea_state_no_whitecaps", "sea_state_get",
                                             "frame_mesh_qz", "entity_announce",
                                             "entity_remove", "entity_gone", "entity_get"};
@@ -866,7 +883,7 @@ static void test_payload_errors(void **state)
     expect_field(PROTO_SUBSCRIBE, P(3), 1, 3, OCEAN_ETYPE);      /* cutoff policy */
     expect_field(PROTO_SUBSCRIBE, P(4), 1, 2, OCEAN_ETYPE);      /* mode */
     expect_field(PROTO_TILE, P(1), 1, 200, OCEAN_ETYPE);         /* tile codec */
-    expect_field(PROTO_TILE, P(2), 2, 0x40, OCEAN_ETYPE);        /* tile channels */
+    expect_field(PROTO_TILE, P(2), 2, 0x80, OCEAN_ETYPE);        /* tile channels */
     expect_field(PROTO_MESH_TOPOLOGY, P(4), 1, 3, OCEAN_ETYPE);  /* kind none */
     expect_field(PROTO_QUERY, P(8), 1, 2, OCEAN_ETYPE);          /* at_time */
     expect_field(PROTO_SEA_STATE, P(0), 1, 3, OCEAN_ETYPE);      /* op */
@@ -1121,8 +1138,15 @@ static const bad_vector bad_vectors[] = {
     {"bad_subscribe_mesh_codec", "subscribe", P(10), 1, 1, OCEAN_ETYPE, -1},
     /* SUBSCRIBE.flags: bit 2 is not defined */
     {"bad_subscribe_flags", "subscribe", P(11), 1, 4, OCEAN_EFORMAT, -1},
-    /* cascade block flags: bit 1 is not defined */
-    {"bad_cascade_flags", "frame_cascade", P(56 + 2), 1, 2, OCEAN_EFORMAT, -1},
+    /* cascade block flags: bit 2 is not defined */
+    {"bad_cascade_flags", "frame_cascade", P(56 + 2), 1, 4, OCEAN_EFORMAT, -1},
+    /* the whitecap table (after the two entries): no rows with the flag */
+    {"bad_foam_rows", "frame_cascade_foam", P(56 + 56 + 2 * 320), 1, 0, OCEAN_EINVAL, -1},
+    {"bad_foam_reserved", "frame_cascade_foam", P(56 + 56 + 2 * 320 + 1), 1, 1, OCEAN_EFORMAT, -1},
+    /* row 1's sigma equal to row 0's 0.0625: rows must ascend */
+    {"bad_foam_order", "frame_cascade_foam", P(56 + 56 + 2 * 320 + 8 + 12), 4, 0x3D800000u, OCEAN_EINVAL, -1},
+    /* row 0's foot a = 1, above the breaking index 1/2 */
+    {"bad_foam_a", "frame_cascade_foam", P(56 + 56 + 2 * 320 + 8 + 4), 4, 0x3F800000u, OCEAN_EINVAL, -1},
     /* cascade 0's time[0] (after its 13 mip entries): a tick with interval 0 */
     {"bad_cascade_time", "frame_cascade", P(56 + 56 + 16 + 16 * 13), 4, 7, OCEAN_EFORMAT, -1},
     /* the first record's tag: sample B of a mip without a time interval */
@@ -1545,15 +1569,67 @@ static void lod_text(sbuf *b, int mss)
     }
 }
 
-static const char *const lod_files[] = {"lod.txt", "lod_mss.txt"};
+/* lod_foam.txt: "Whitecaps in layout 1" as protocol/lod.c computes it
+ * (proto_lod_foam), for three whitecap tables (three rows; one; a step
+ * row and a row without trails) over a grid of held variance, breaking
+ * index and quadrature: below, between and above the rows, on the ramp,
+ * on a trail, clamped at 0 and 1. */
+static const proto_foam_row foam_tables[3][3] = {
+    {{0.02f, -0.03f, 0.8f}, {0.08f, 0.1f, 1.1f}, {0.2f, 0.3f, 1.5f}},
+    {{0.1f, 0.05f, 1.0f}},
+    {{0.05f, 0.5f, 2.0f}, {0.3f, 0.2f, 0.0f}},
+};
+static const int foam_table_rows[3] = {3, 1, 2};
+
+static const char lod_foam_head[] =
+    "# PROTOCOL.md \"Whitecaps in layout 1\", computed by protocol/lod.c; one point a line:\n"
+    "# rows sigma0 a0 omega0 ... sigma<rows-1> a<rows-1> omega<rows-1> var beta q -> foam\n"
+    "# the block's whitecap table, the breaking-index variance the reads hold, the summed breaking index and\n"
+    "# its quadrature; foam = max(f(beta), f(|beta + i q|) exp(-arg(beta + i q) / (omega 3.85 s))).\n";
+
+static void lod_foam_text(sbuf *b)
+{
+    static const double vars[] = {0, 0.0009, 0.0064, 0.0144, 0.09};
+    static const double betas[] = {-0.3, 0.05, 0.2, 0.45, 0.7};
+    static const double qs[] = {-0.4, 0, 0.15};
+    out(b, "%s", lod_foam_head);
+    for (int t = 0; t < 3; t++) {
+        proto_cascade_block blk;
+        memset(&blk, 0, sizeof blk);
+        blk.flags = PROTO_CASCADE_FOAM;
+        blk.foam_rows = (uint8_t)foam_table_rows[t];
+        memcpy(blk.foam, foam_tables[t], sizeof foam_tables[t]);
+        for (size_t v = 0; v < sizeof vars / sizeof *vars; v++)
+            for (size_t i = 0; i < sizeof betas / sizeof *betas; i++)
+                for (size_t j = 0; j < sizeof qs / sizeof *qs; j++) {
+                    out(b, "%d", blk.foam_rows);
+                    for (int r = 0; r < blk.foam_rows; r++)
+                        out(b, " %.9g %.9g %.9g", (double)blk.foam[r].sigma, (double)blk.foam[r].a,
+                            (double)blk.foam[r].omega);
+                    out(b, " %.9g %.9g %.9g -> %.9g\n", vars[v], betas[i], qs[j],
+                        proto_lod_foam(&blk, vars[v], betas[i], qs[j]));
+                }
+    }
+}
+
+static const char *const lod_files[] = {"lod.txt", "lod_mss.txt", "lod_foam.txt"};
+
+/* The text of lod_files[k]. */
+static void lod_file_text(sbuf *b, int k)
+{
+    if (k == 2)
+        lod_foam_text(b);
+    else
+        lod_text(b, k);
+}
 
 static int write_lod_vectors(const char *dir)
 {
-    for (int mss = 0; mss < 2; mss++) {
+    for (int mss = 0; mss < 3; mss++) {
         char path[512];
         snprintf(path, sizeof path, "%s/%s", dir, lod_files[mss]);
         sbuf b = {0};
-        lod_text(&b, mss);
+        lod_file_text(&b, mss);
         int r = write_file(path, b.s, b.n);
         free(b.s);
         if (r)
@@ -1694,7 +1770,7 @@ static void test_wake_read_vectors(void **state)
 static void test_lod_vectors(void **state)
 {
     (void)state;
-    for (int mss = 0; mss < 2; mss++) {
+    for (int mss = 0; mss < 3; mss++) {
         char path[600];
         snprintf(path, sizeof path, "%s/%s", vector_dir(), lod_files[mss]);
         size_t n;
@@ -1702,7 +1778,7 @@ static void test_lod_vectors(void **state)
         if (!text)
             fail_msg("cannot read %s", path);
         sbuf want = {0};
-        lod_text(&want, mss);
+        lod_file_text(&want, mss);
         if (strcmp(want.s, text))
             fail_msg("%s differs from protocol/lod.c's rule (regenerate: test_proto --write-vectors tests/vectors)",
                      path);

@@ -20,7 +20,7 @@
 #define MAX_SLOPE 100.0f
 
 /* Values a mip read produces, in this order. */
-enum { V_H, V_DX, V_DZ, V_SX, V_SZ, V_FOAM, V_COUNT };
+enum { V_H, V_DX, V_DZ, V_SX, V_SZ, V_BI, V_BQ, V_COUNT };
 /* What a read wants (bits). */
 enum { W_H = 1, W_D = 2, W_S = 4, W_F = 8, W_ALL = 15 };
 
@@ -28,7 +28,7 @@ typedef struct cv_tile {
     const float *data;
     int w, h;
     unsigned channels;
-    int off[6];                  /* float offsets of H DX DZ NU NV FOAM; -1 absent */
+    int off[PROTO_SLOT_COUNT];   /* float offsets of each plane slot; -1 absent */
 } cv_tile;
 
 typedef struct cv_mip {
@@ -290,20 +290,24 @@ static inline int fetch(const oc_cascade_view *v, const cv_mip *mp, int i, int j
     const cv_tile *t = &v->tiles[idx];
     size_t k = (size_t)(i - ti * mp->T) * t->w + (size_t)(j - tj * mp->T);
     const float *d = t->data;
+    const int *o = t->off;
     if (want & W_H)
-        val[V_H] = t->off[0] >= 0 ? d[t->off[0] + k] : 0.0f;
+        val[V_H] = o[PROTO_SLOT_H] >= 0 ? d[o[PROTO_SLOT_H] + k] : 0.0f;
     if (want & W_D) {
-        val[V_DX] = t->off[1] >= 0 ? d[t->off[1] + k] : 0.0f;
-        val[V_DZ] = t->off[2] >= 0 ? d[t->off[2] + k] : 0.0f;
+        val[V_DX] = o[PROTO_SLOT_DX] >= 0 ? d[o[PROTO_SLOT_DX] + k] : 0.0f;
+        val[V_DZ] = o[PROTO_SLOT_DZ] >= 0 ? d[o[PROTO_SLOT_DZ] + k] : 0.0f;
     }
     if (want & W_S) {
-        if (t->off[3] >= 0)
-            proto_normal_oct_slopes(d[t->off[3] + k], d[t->off[4] + k], MAX_SLOPE, &val[V_SX], &val[V_SZ]);
+        if (o[PROTO_SLOT_NU] >= 0)
+            proto_normal_oct_slopes(d[o[PROTO_SLOT_NU] + k], d[o[PROTO_SLOT_NV] + k], MAX_SLOPE, &val[V_SX],
+                                    &val[V_SZ]);
         else
             val[V_SX] = val[V_SZ] = 0.0f;
     }
-    if (want & W_F)
-        val[V_FOAM] = t->off[5] >= 0 ? d[t->off[5] + k] : 0.0f;
+    if (want & W_F) {
+        val[V_BI] = o[PROTO_SLOT_BI] >= 0 ? d[o[PROTO_SLOT_BI] + k] : 0.0f;
+        val[V_BQ] = o[PROTO_SLOT_BQ] >= 0 ? d[o[PROTO_SLOT_BQ] + k] : 0.0f;
+    }
     *chan &= t->channels;
     return 0;
 }
@@ -410,7 +414,7 @@ static int read_mip(const oc_cascade_view *v, const cv_mip *mp, double u, double
 static unsigned want_channels(unsigned want)
 {
     return ((want & W_H) ? PROTO_CH_HEIGHT : 0) | ((want & W_D) ? PROTO_CH_DX | PROTO_CH_DZ : 0) |
-           ((want & W_S) ? PROTO_CH_NORMAL : 0) | ((want & W_F) ? PROTO_CH_FOAM : 0);
+           ((want & W_S) ? PROTO_CH_NORMAL : 0) | ((want & W_F) ? PROTO_CH_BREAKING : 0);
 }
 
 /* The rule's reading of one cascade, as lod_core stored it. */
@@ -420,32 +424,40 @@ static proto_lod_read lod_read_of(const oc_lod_cascade *L)
     return r;
 }
 
+/* What a read of the cascades gathers besides the sample itself. */
+typedef struct read_acc {
+    double mss[3];        /* unresolved slope moments (W_S) */
+    double beta, q, var;  /* breaking index, its quadrature, the variance read (W_F) */
+    unsigned common;      /* channels every tile read had, of those the pass wants */
+} read_acc;
+
 /* Adds to out the cascades at (x, z), each read at the levels `lod` names,
  * for the channels in want; with W_S the unresolved slope moments of those
- * levels go to mss.  *common gathers the channels every tile read had,
- * *foam_ch cascade 0's FOAM.  0, or -1 when a mip read is not in the
- * frame's tiles. */
+ * levels go to ra->mss, with W_F the breaking index, its quadrature and the
+ * variance those levels hold to ra.  0, or -1 when a mip read is not in
+ * the frame's tiles. */
 static int levels_read(const oc_cascade_view *v, double x, double z, const oc_lod *lod, unsigned want,
-                       oc_interp interp, oc_sample *out, double mss[3], unsigned *common, unsigned *foam_ch)
+                       oc_interp interp, oc_sample *out, read_acc *ra)
 {
     const proto_cascade_block *b = &v->block;
-    const unsigned all = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM;
     for (int c = 0; c < v->count; c++) {
         const cv_cascade *cc = &v->c[c];
         const proto_cascade_entry *e = &b->cascade[c];
         const oc_lod_cascade *L = &lod->c[c];
         double u = wrap(x, cc->patch), w = wrap(z, cc->patch);
         double acc[V_COUNT] = {0};
-        unsigned chan = all;
-        /* PROTOCOL.md: foam is the whole sea's, in cascade 0's tiles alone */
-        unsigned want_c = c == 0 ? want : want & ~(unsigned)W_F;
+        unsigned chan = PROTO_CH_ALL;
         for (int k = 0; k < 2; k++)
             if (L->mip[k] >= 0 && L->weight[k] > 0 &&
-                read_mip(v, &cc->mip[L->mip[k]], u, w, want_c, interp, L->weight[k], acc, &chan))
+                read_mip(v, &cc->mip[L->mip[k]], u, w, want, interp, L->weight[k], acc, &chan))
                 return -1;
-        if (want & W_S) {
-            proto_lod_read r = lod_read_of(L);
-            proto_lod_mss_add(&r, e->mip, cc->mips, mss);
+        proto_lod_read r = lod_read_of(L);
+        if (want & W_S)
+            proto_lod_mss_add(&r, e->mip, cc->mips, ra->mss);
+        if (want & W_F) {
+            ra->beta += acc[V_BI];
+            ra->q += acc[V_BQ];
+            ra->var += proto_lod_breaking_var(&r, e->mip, cc->mips);
         }
         out->height += acc[V_H];
         out->dx += acc[V_DX];
@@ -454,12 +466,7 @@ static int levels_read(const oc_cascade_view *v, double x, double z, const oc_lo
         out->slope_z += acc[V_SZ];
         /* only the channels this pass reads: a shading pass at a
          * geometry-free mip (no H there) says nothing of the geometry */
-        *common &= chan | PROTO_CH_FOAM | ~want_channels(want);
-        if (c == 0 && (want & W_F)) {
-            double fc = acc[V_FOAM];
-            out->foam = fc < 0 ? 0 : fc > 1 ? 1 : fc;
-            *foam_ch = chan & PROTO_CH_FOAM;
-        }
+        ra->common &= chan | ~want_channels(want);
     }
     return 0;
 }
@@ -475,25 +482,27 @@ static int sample_lod(const oc_cascade_view *v, double x, double z, const oc_lod
     const proto_cascade_block *b = &v->block;
     memset(out, 0, sizeof *out);
     out->s = shade->s;
-    unsigned common = PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_FOAM, foam_ch = 0;
-    double mss[3] = {b->tail_mss[0], b->tail_mss[1], b->tail_mss[2]};
+    read_acc ra = {{b->tail_mss[0], b->tail_mss[1], b->tail_mss[2]}, 0, 0, 0, PROTO_CH_ALL};
     const unsigned wg = W_H | W_D;
     if (geo == shade || !(want & wg) || !(want & ~wg)) {
         const oc_lod *lod = (want & ~wg) ? shade : geo;
-        if (levels_read(v, x, z, lod, want, interp, out, mss, &common, &foam_ch))
+        if (levels_read(v, x, z, lod, want, interp, out, &ra))
             return -1;
-    } else if (levels_read(v, x, z, geo, want & wg, interp, out, mss, &common, &foam_ch) ||
-               levels_read(v, x, z, shade, want & ~wg, interp, out, mss, &common, &foam_ch)) {
+    } else if (levels_read(v, x, z, geo, want & wg, interp, out, &ra) ||
+               levels_read(v, x, z, shade, want & ~wg, interp, out, &ra)) {
         return -1;
     }
-    unsigned chan = (common & ~(unsigned)PROTO_CH_FOAM) | foam_ch;
     double nl = sqrt(out->slope_x * out->slope_x + 1 + out->slope_z * out->slope_z);
     out->normal[0] = -out->slope_x / nl;
     out->normal[1] = 1 / nl;
     out->normal[2] = -out->slope_z / nl;
     for (int i = 0; i < 3; i++)
-        out->mss[i] = mss[i];
-    out->channels = chan & want_channels(want);
+        out->mss[i] = ra.mss[i];
+    if (!(b->flags & PROTO_CASCADE_FOAM))
+        ra.common &= ~(unsigned)PROTO_CH_BREAKING;
+    out->channels = ra.common & want_channels(want);
+    if (out->channels & PROTO_CH_BREAKING)
+        out->foam = proto_lod_foam(b, ra.var, ra.beta, ra.q);
     return 0;
 }
 

@@ -51,9 +51,13 @@
  *    cascade's normal n is turned into slopes -n_x/n_y, -n_z/n_y with n_y
  *    held >= 0.01 so a folded crest cannot give an infinite slope) and the
  *    normal is normalise(-s_x, 1, -s_z) (PROTOCOL.md "From slopes"), i.e.
- *    the slopes of the parameter surface, as the tiles carry them; foam is
- *    read from cascade 0 alone (the spec puts the whole sea's foam there;
- *    other cascades' FOAM planes, if a server sent any, are ignored).
+ *    the slopes of the parameter surface, as the tiles carry them; the
+ *    breaking index (BI) and its quadrature (BQ) add too, and foam is the
+ *    block's whitecap table applied to them at the breaking-index variance
+ *    the reads hold (proto_lod_foam: PROTOCOL.md "Whitecaps in layout 1"),
+ *    so a point near the camera, which reads every cascade, gets the
+ *    whitecaps of the whole sea, and a far one the same coverage spread
+ *    over the waves it still reads.
  *  - unresolved slope moments: the mip table entries of the mips read with
  *    the same weights, entry `mips` in proportion 1 - w for a faded
  *    cascade, summed over cascades, plus the block's tail_mss.
@@ -109,8 +113,9 @@ typedef struct oc_sample {
                              what shading must add to the resolved slopes */
     double s;             /* spacing the levels were chosen for, m */
     unsigned channels;    /* PROTO_CH_* present in every tile read (H, DX, DZ,
-                             NORMAL; FOAM: in cascade 0's); absent ones read
-                             as 0 (normal up) */
+                             NORMAL, BREAKING: the latter with the block's
+                             whitecap table); absent ones read as 0 (normal
+                             up, no foam) */
     double residual;      /* oc_frame_surface only: |p + D(p) - (x, z)| left, m */
 } oc_sample;
 

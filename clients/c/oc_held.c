@@ -286,12 +286,12 @@ static float *blend_tile(const held_tile *a, const held_tile *b, double w, unsig
     size_t plane = (size_t)a->info.width * a->info.height;
     float *out = malloc((size_t)proto_tile_planes(ch) * plane * sizeof *out + 1);
     if (!out) return NULL;
-    int oa[6], ob[6], oo[6];
+    int oa[PROTO_SLOT_COUNT], ob[PROTO_SLOT_COUNT], oo[PROTO_SLOT_COUNT];
     proto_tile_plane_offsets(a->info.channels, plane, oa);
     proto_tile_plane_offsets(b ? b->info.channels : 0, plane, ob);
     proto_tile_plane_offsets(ch, plane, oo);
     float wa = (float)(1.0 - w), wb = (float)w;
-    for (int p = 0; p < 6; p++) {
+    for (int p = 0; p < PROTO_SLOT_COUNT; p++) {
         if (oo[p] < 0) continue;
         const float *pa = a->data + oa[p];
         float *po = out + oo[p];

@@ -826,7 +826,7 @@ ocean_result oc_frame_peek(const uint8_t *msg, size_t have, size_t len, proto_fr
             ocean_seterr(err, errlen, "FRAME cascade block out of range");
             return OCEAN_EINVAL;
         }
-        at += PROTO_CASCADE_BLOCK_FIXED + (size_t)k->cascade_count * PROTO_CASCADE_ENTRY_SIZE;
+        at += proto_cascade_block_bytes(k->cascade_count, b[2]);
     } else if (f->layout != PROTO_LAYOUT_WORLD) {
         ocean_seterr(err, errlen, "FRAME layout %u unknown", f->layout);
         return OCEAN_ETYPE;

@@ -101,7 +101,8 @@ int ocw_tile_decode(int codec, int w, int h, unsigned channels, const uint8_t *d
 }
 
 /* The slopes of a tile without normal planes, from central differences of
- * its heights (one-sided at the edges). */
+ * its heights (one-sided at the edges), into the first two of each
+ * sample's four slope texels. */
 static void slopes_from_heights(const float *H, int w, int h, double spacing, float *slope)
 {
     for (int i = 0; i < h; i++)
@@ -109,52 +110,51 @@ static void slopes_from_heights(const float *H, int w, int h, double spacing, fl
             int j0 = j > 0 ? j - 1 : 0, j1 = j < w - 1 ? j + 1 : w - 1;
             int i0 = i > 0 ? i - 1 : 0, i1 = i < h - 1 ? i + 1 : h - 1;
             size_t k = (size_t)i * w + j;
-            slope[2 * k] = j1 > j0 ? (float)((H[i * w + j1] - H[i * w + j0]) / ((j1 - j0) * spacing)) : 0.0f;
-            slope[2 * k + 1] = i1 > i0 ? (float)((H[i1 * w + j] - H[i0 * w + j]) / ((i1 - i0) * spacing)) : 0.0f;
+            slope[4 * k] = j1 > j0 ? (float)((H[i * w + j1] - H[i * w + j0]) / ((j1 - j0) * spacing)) : 0.0f;
+            slope[4 * k + 1] = i1 > i0 ? (float)((H[i1 * w + j] - H[i0 * w + j]) / ((i1 - i0) * spacing)) : 0.0f;
         }
 }
 
 /* Layout 1 (PROTOCOL.md "Cascade mips"): a cascade mip tile's decoded
  * planes d (of channels) as the viewer's texel block: disp = (DX, H, DZ,
- * FOAM) per sample (4 w h floats: a vertex adds disp.xyz to its flat
- * position), slope = (d eta/dx, d eta/dz) (2 w h floats; slopes, not
- * normals, because cascades add and a GL-filtered mip averages slopes)
- * from the octahedral normal at max_slope at most, else from the heights;
- * foam = {sum, max} of FOAM. */
+ * 0) per sample (4 w h floats: a vertex adds disp.xyz to its flat
+ * position), slope = (d eta/dx, d eta/dz, BI, BQ) (4 w h floats; slopes,
+ * not normals, because cascades add and a GL-filtered mip averages slopes;
+ * the breaking index and its quadrature add too, and the shader applies
+ * the frame's whitecap table to their sum: PROTOCOL.md "Whitecaps in
+ * layout 1") from the octahedral normal at max_slope at most, else from
+ * the heights. */
 static void texel_block(const float *d, unsigned channels, int w, int h, double spacing, double max_slope,
-                        float *disp, float *slope, double *foam)
+                        float *disp, float *slope)
 {
     size_t n = (size_t)w * h;
-    int off[6];
+    int off[PROTO_SLOT_COUNT];
     proto_tile_plane_offsets(channels, n, off);
-    const float *P[6];
-    for (int k = 0; k < 6; k++)
+    const float *P[PROTO_SLOT_COUNT];
+    for (int k = 0; k < PROTO_SLOT_COUNT; k++)
         P[k] = off[k] >= 0 ? d + off[k] : NULL;
-    double fsum = 0, fmax = 0;
+    const float *pH = P[PROTO_SLOT_H], *pX = P[PROTO_SLOT_DX], *pZ = P[PROTO_SLOT_DZ];
+    const float *pU = P[PROTO_SLOT_NU], *pV = P[PROTO_SLOT_NV], *pB = P[PROTO_SLOT_BI], *pQ = P[PROTO_SLOT_BQ];
     for (size_t k = 0; k < n; k++) {
-        float fo = P[5] ? P[5][k] : 0.0f;
-        disp[4 * k] = P[1] ? P[1][k] : 0.0f;
-        disp[4 * k + 1] = P[0] ? P[0][k] : 0.0f;
-        disp[4 * k + 2] = P[2] ? P[2][k] : 0.0f;
-        disp[4 * k + 3] = fo;
-        fsum += fo;
-        fmax = fo > fmax ? fo : fmax;
-        if (P[3])
-            proto_normal_oct_slopes(P[3][k], P[4][k], (float)max_slope, &slope[2 * k], &slope[2 * k + 1]);
+        disp[4 * k] = pX ? pX[k] : 0.0f;
+        disp[4 * k + 1] = pH ? pH[k] : 0.0f;
+        disp[4 * k + 2] = pZ ? pZ[k] : 0.0f;
+        disp[4 * k + 3] = 0.0f;
+        if (pU)
+            proto_normal_oct_slopes(pU[k], pV[k], (float)max_slope, &slope[4 * k], &slope[4 * k + 1]);
         else
-            slope[2 * k] = slope[2 * k + 1] = 0.0f;
+            slope[4 * k] = slope[4 * k + 1] = 0.0f;
+        slope[4 * k + 2] = pB ? pB[k] : 0.0f;
+        slope[4 * k + 3] = pQ ? pQ[k] : 0.0f;
     }
-    if (!P[3] && P[0])
-        slopes_from_heights(P[0], w, h, spacing, slope);
-    foam[0] = fsum;
-    foam[1] = fmax;
+    if (!pU && pH)
+        slopes_from_heights(pH, w, h, spacing, slope);
 }
 
-static int block_args_ok(int w, int h, double spacing, double max_slope, const void *disp, const void *slope,
-                         const void *foam)
+static int block_args_ok(int w, int h, double spacing, double max_slope, const void *disp, const void *slope)
 {
     if (w < 1 || h < 1 || w > PROTO_TILE_MAX_SIZE || h > PROTO_TILE_MAX_SIZE || !(spacing > 0) ||
-        !(max_slope > 0) || !disp || !slope || !foam) {
+        !(max_slope > 0) || !disp || !slope) {
         ocean_seterr(ocw_err, sizeof ocw_err, "cascade block: bad arguments");
         return 0;
     }
@@ -164,11 +164,11 @@ static int block_args_ok(int w, int h, double spacing, double max_slope, const v
 /* One cascade mip tile's payload decoded into its texel block (texel_block). */
 OCW_EXPORT(ocw_cascade_block)
 int ocw_cascade_block(int codec, int w, int h, unsigned channels, double spacing, double max_slope,
-                      const uint8_t *data, size_t len, float *disp, float *slope, double *foam)
+                      const uint8_t *data, size_t len, float *disp, float *slope)
 {
     ocw_err[0] = 0;
     int np = proto_tile_planes(channels);
-    if (np <= 0 || !block_args_ok(w, h, spacing, max_slope, disp, slope, foam)) {
+    if (np <= 0 || !block_args_ok(w, h, spacing, max_slope, disp, slope)) {
         ocean_seterr(ocw_err, sizeof ocw_err, "cascade block: bad arguments");
         return OCEAN_EINVAL;
     }
@@ -177,7 +177,7 @@ int ocw_cascade_block(int codec, int w, int h, unsigned channels, double spacing
         return OCEAN_ENOMEM;
     ocean_result r = proto_tile_decode((proto_codec)codec, w, h, channels, data, len, d, ocw_err, sizeof ocw_err);
     if (r == OCEAN_OK)
-        texel_block(d, channels, w, h, spacing, max_slope, disp, slope, foam);
+        texel_block(d, channels, w, h, spacing, max_slope, disp, slope);
     free(d);
     return r;
 }
@@ -317,13 +317,13 @@ OCW_EXPORT(ocw_held_planes) const float *ocw_held_planes(const ocw_held *h, unsi
 
 /* Blended tile i as its texel block (texel_block). */
 OCW_EXPORT(ocw_held_texels)
-int ocw_held_texels(const ocw_held *h, unsigned i, double max_slope, float *disp, float *slope, double *foam)
+int ocw_held_texels(const ocw_held *h, unsigned i, double max_slope, float *disp, float *slope)
 {
     ocw_err[0] = 0;
     if (!h || i >= h->n) return OCEAN_EINVAL;
     const proto_tile *t = &h->tiles[i];
-    if (!block_args_ok(t->width, t->height, t->spacing, max_slope, disp, slope, foam)) return OCEAN_EINVAL;
-    texel_block(h->data[i], t->channels, t->width, t->height, t->spacing, max_slope, disp, slope, foam);
+    if (!block_args_ok(t->width, t->height, t->spacing, max_slope, disp, slope)) return OCEAN_EINVAL;
+    texel_block(h->data[i], t->channels, t->width, t->height, t->spacing, max_slope, disp, slope);
     return OCEAN_OK;
 }
 

@@ -89,13 +89,15 @@ export function assembleLevel(level, tiles, onError) {
 
 /* Layout 1 (PROTOCOL.md "Cascade mips"): one tile of mip `level` of
  * cascade `cascade` becomes the renderer's texel block at texel (x, y) =
- * (ix·T, iz·T) of that mip, T the tile's side.  disp = (DX, H, DZ, FOAM)
+ * (ix·T, iz·T) of that mip, T the tile's side.  disp = (DX, H, DZ, 0)
  * (RGBA, so a vertex adds disp.xyz to its flat position); slope = (∂η/∂x,
- * ∂η/∂z), from the octahedral normal (n = normalise(−sx, 1, −sz), so
- * s = −n.xz / n.y) or, if the tile has no normal planes, from central
- * differences of H.  Slopes, not normals, because cascades add: the
- * surface's slope is the sum of the cascades' slopes, and a mip's
- * (GL-filtered) mean slope is the mean of its texels' slopes.
+ * ∂η/∂z, BI, BQ), the slopes from the octahedral normal
+ * (n = normalise(−sx, 1, −sz), so s = −n.xz / n.y) or, if the tile has no
+ * normal planes, from central differences of H.  Slopes, not normals,
+ * because cascades add: the surface's slope is the sum of the cascades'
+ * slopes, and a mip's (GL-filtered) mean slope is the mean of its texels'
+ * slopes.  The breaking index and its quadrature add likewise; the shader
+ * turns their sum into foam (PROTOCOL.md "Whitecaps in layout 1").
  * Returns null (and tells onError) if the tile does not decode. */
 export function assembleCascadeTile(t, onError) {
     let b;
@@ -114,7 +116,7 @@ function texelBlock(cascade, mip, t, b) {
     const w = t.width, h = t.height;
     return {
         cascade, mip, x: t.ix * w, y: t.iz * h, w, h, disp: b.disp, slope: b.slope,
-        errorBound: t.errorBound, foamSum: b.foamSum, foamMax: b.foamMax, n: w * h,
+        errorBound: t.errorBound, n: w * h,
         hasNormals: (t.channels & CH.NORMAL) !== 0,
     };
 }

@@ -125,17 +125,16 @@ export function decodeTile(codec, w, h, channels, payload) {
 }
 
 /* Layout 1: a cascade mip tile as the renderer's texel block (ocw_cascade_block):
- * {disp: (DX, H, DZ, FOAM) x w h, slope: (d eta/dx, d eta/dz) x w h,
- * foamSum, foamMax}; a folded crest's slope is held at maxSlope. */
+ * {disp: (DX, H, DZ, 0) x w h, slope: (d eta/dx, d eta/dz, BI, BQ) x w h};
+ * a folded crest's slope is held at maxSlope. */
 export function decodeCascadeBlock(t, maxSlope) {
     const { width: w, height: h } = t;
     return withHeap((alloc) => {
         const n = w * h;
-        const src = put(alloc, t.payload), disp = alloc(16 * n), slope = alloc(8 * n), foam = alloc(16);
+        const src = put(alloc, t.payload), disp = alloc(16 * n), slope = alloc(16 * n);
         check(oc.ocw_cascade_block(t.codec, w, h, t.channels, t.spacing, maxSlope, src, t.payload.byteLength,
-            disp, slope, foam));
-        const f = new Float64Array(oc.memory.buffer, foam, 2);
-        return { disp: f32At(disp, 4 * n), slope: f32At(slope, 2 * n), foamSum: f[0], foamMax: f[1] };
+            disp, slope));
+        return { disp: f32At(disp, 4 * n), slope: f32At(slope, 4 * n) };
     });
 }
 
@@ -232,10 +231,9 @@ export class HeldStore {
     texels(i, t, maxSlope) {
         const n = t.width * t.height;
         return withHeap((alloc) => {
-            const disp = alloc(16 * n), slope = alloc(8 * n), foam = alloc(16);
-            check(oc.ocw_held_texels(this.h, i, maxSlope, disp, slope, foam));
-            const f = new Float64Array(oc.memory.buffer, foam, 2);
-            return { disp: f32At(disp, 4 * n), slope: f32At(slope, 2 * n), foamSum: f[0], foamMax: f[1] };
+            const disp = alloc(16 * n), slope = alloc(16 * n);
+            check(oc.ocw_held_texels(this.h, i, maxSlope, disp, slope));
+            return { disp: f32At(disp, 4 * n), slope: f32At(slope, 4 * n) };
         });
     }
 

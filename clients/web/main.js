@@ -351,10 +351,7 @@ function applyFrame(m) {
         }));
         stats.block = { spacingPerM: b.spacingPerM, minSpacingM: b.minSpacingM, eTotal: b.eTotal, tailMss: b.tailMss, camera: b.camera,
             cascades: b.cascade.map((e) => ({ patchM: e.patchM, n: e.n, mips: e.mips, fades: e.fades, q: e.spacingPerM })) };
-        let fsum = 0, fn = 0, fmax = 0;
-        for (const x of m.blocks) { fsum += x.foamSum; fn += x.n; fmax = Math.max(fmax, x.foamMax); }
-        stats.foamMean = fn ? fsum / fn : 0;
-        stats.foamMax = fmax;
+        stats.foamRows = b.foam.length;
         stats.levels = b.cascadeCount;
     } else if (m.mesh) {
         if (renderer.setVertices(m.mesh)) stats.framesWithMesh++;

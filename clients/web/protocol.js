@@ -37,7 +37,7 @@ export const MODE_COUNT = 2;
 export const CODEC = Object.freeze({ F32: 0, F16: 1, QZ: 2, EXR_ZIP: 3, EXR_PIZ: 4, EXR_B44: 5, EXR_B44A: 6 });
 export const CODEC_COUNT = 7;
 export const CODEC_NAMES = ['f32', 'f16', 'qz', 'exr-zip', 'exr-piz', 'exr-b44', 'exr-b44a'];
-export const CH = Object.freeze({ HEIGHT: 1, DX: 2, DZ: 4, NORMAL: 8, FOAM: 16, JACOBIAN: 32, ALL: 0x3f });
+export const CH = Object.freeze({ HEIGHT: 1, DX: 2, DZ: 4, NORMAL: 8, FOAM: 16, JACOBIAN: 32, BREAKING: 64, ALL: 0x7f });
 export const BYE_REASONS = ['normal', 'shutdown', 'slow consumer', 'protocol error', 'auth', 'server full', 'idle'];
 export const NO_CAMERA = 0xffffffff;
 /* SUBSCRIBE.layout / FRAME.layout (PROTOCOL.md "Layouts"). */
@@ -89,10 +89,10 @@ const WAKE_FIXED = 48, PLANE_MAX = 4096;
 /* sea state flags (PROTOCOL.md "Sea state block") */
 export const SEA_NO_WHITECAPS = 0x01;
 const SEA_FLAGS_ALL = 0x01;
-const CASCADE_FIXED = 56, CASCADE_ENTRY = 320, PLACEMENT_SIZE = 32;
+const CASCADE_FIXED = 56, CASCADE_ENTRY = 320, PLACEMENT_SIZE = 32, FOAM_ROWS = 16, FOAM_TABLE = 8 + 12 * FOAM_ROWS;
 /* Cascade block flag KEY, and a layout-1 record tag's sample-B bit
  * (PROTOCOL.md "Samples in time"). */
-const CASCADE_KEY = 1, TAG_SLOT_B = 0x100;
+const CASCADE_KEY = 1, CASCADE_FOAM = 2, TAG_SLOT_B = 0x100;
 const MAX_WORLD = 1e10, MAX_LOCAL = 1e7;
 // what the server derives from a camera within MAX_WORLD reaches past it by
 // one frame's cover (view range, coarsest tile): as protocol/proto.c
@@ -131,17 +131,20 @@ function chkEnum(what, v, count) {
  * for an empty mask or unknown bits. */
 export function tilePlanes(channels) {
     if (channels === 0 || (channels & ~CH.ALL)) return 0;
-    let n = 0;
-    for (let b = 0; b < 6; b++) if (channels & (1 << b)) n += b === 3 ? 2 : 1;
-    return n;
+    return tilePlaneNames(channels).length;
 }
 
-/* Plane names of a tile in wire order (H DX DZ NU NV FOAM J, present ones). */
+/* Plane names of a tile in wire order (H DX DZ NU NV FOAM J BI BQ, present ones). */
 export function tilePlaneNames(channels) {
-    const names = ['H', 'DX', 'DZ', 'NU', 'NV', 'FOAM', 'J'], bit = [0, 1, 2, 3, 3, 4, 5];
+    const names = ['H', 'DX', 'DZ', 'NU', 'NV', 'FOAM', 'J', 'BI', 'BQ'], bit = [0, 1, 2, 3, 3, 4, 5, 6, 6];
     const out = [];
-    for (let s = 0; s < 7; s++) if (channels & (1 << bit[s])) out.push(names[s]);
+    for (let s = 0; s < names.length; s++) if (channels & (1 << bit[s])) out.push(names[s]);
     return out;
+}
+
+/* Bytes of a cascade block of cc cascades with block flags `flags`. */
+function cascadeBlockBytes(cc, flags) {
+    return CASCADE_FIXED + cc * CASCADE_ENTRY + (flags & CASCADE_FOAM ? FOAM_TABLE : 0);
 }
 
 /* ---- reader ----------------------------------------------------------- */
@@ -580,13 +583,46 @@ function readCascades(r, cc) {
         }
         b.cascade.push({ patchM: r.f64(q), n: r.u16(q + 8), mips: r.u8at(q + 10), fades: r.u8at(q + 11), spacingPerM: r.f32(q + 12), mip, time });
     }
+    /* the whitecap table (PROTOCOL.md "Whitecaps in layout 1"): rows
+     * {sigma, a, omega}, all 16 kept for the checks */
+    b.foamRows = 0;
+    b.foamAll = [];
+    b.foam = [];
+    if (b.flags & CASCADE_FOAM) {
+        const q = o + CASCADE_FIXED + cc * CASCADE_ENTRY;
+        b.foamRows = r.u8at(q);
+        for (let i = 0; i < FOAM_ROWS; i++) {
+            const w = q + 8 + 12 * i;
+            b.foamAll.push({ sigma: r.f32(w), a: r.f32(w + 4), omega: r.f32(w + 8) });
+        }
+        b.foam = b.foamAll.slice(0, b.foamRows);
+    }
     return b;
+}
+
+/* proto.c v_foam_table: rows with the FOAM flag alone, sigma ascending. */
+function vFoamTable(b) {
+    if (!(b.flags & CASCADE_FOAM)) return;
+    if (b.foamRows < 1 || b.foamRows > FOAM_ROWS)
+        fail(R.EINVAL, `frame.cascades.foam_rows = ${b.foamRows}; must be 1..${FOAM_ROWS}`);
+    b.foamAll.forEach((w, i) => {
+        if (i >= b.foamRows) {
+            if (w.sigma !== 0 || w.a !== 0 || w.omega !== 0)
+                fail(R.EFORMAT, `frame.cascades.foam[${i}] beyond foam_rows ${b.foamRows} must be 0`);
+            return;
+        }
+        if (!(w.sigma >= 0 && w.sigma <= 1e3) || (i > 0 && !(w.sigma > b.foamAll[i - 1].sigma)))
+            fail(R.EINVAL, `frame.cascades.foam[${i}].sigma = ${w.sigma}; must be in [0, 1e3] and ascend`);
+        if (!(w.a >= -1e3 && w.a <= 0.5)) fail(R.EINVAL, `frame.cascades.foam[${i}].a = ${w.a}; must be in [-1e3, 0.5]`);
+        if (!(w.omega >= 0 && w.omega <= 1e3)) fail(R.EINVAL, `frame.cascades.foam[${i}].omega = ${w.omega}; must be in [0, 1e3]`);
+    });
 }
 
 function vCascades(b) {
     chkRange('frame.cascades.cascade_count', b.cascadeCount, 1, LIMITS.maxLayers);
     chkRange('frame.cascades.order', b.order, 1, 64);
-    if (b.flags & ~CASCADE_KEY) fail(R.EFORMAT, `frame.cascades.flags is ${b.flags} (bit 0 only)`);
+    if (b.flags & ~(CASCADE_KEY | CASCADE_FOAM)) fail(R.EFORMAT, `frame.cascades.flags is ${b.flags} (bits 0-1 only)`);
+    vFoamTable(b);
     if (!(b.spacingPerM > 0) || !Number.isFinite(b.spacingPerM))
         fail(R.EINVAL, `frame.cascades.spacing_per_m = ${b.spacingPerM}; must be finite and > 0`);
     for (let i = 0; i < 3; i++) chkRange('frame.cascades.camera', b.camera[i], -MAX_WORLD, MAX_WORLD);
@@ -655,10 +691,12 @@ function dFrame(r, limits) {
         r.need(CASCADE_FIXED, 'cascade block');
         const cc = r.u8at(r.off);
         if (cc < 1 || cc > LIMITS.maxLayers) fail(R.EINVAL, `FRAME: cascade_count ${cc} outside 1..${LIMITS.maxLayers}`);
-        r.need(CASCADE_FIXED + cc * CASCADE_ENTRY, 'cascade entries');
+        const bytes = cascadeBlockBytes(cc, r.u8at(r.off + 2));
+        r.need(bytes, 'cascade entries');
         r.zero(r.off + 3, 1, 'cascade block');
+        if (r.u8at(r.off + 2) & CASCADE_FOAM) r.zero(r.off + cascadeBlockBytes(cc, 0) + 1, 7, 'whitecap table');
         f.cascades = readCascades(r, cc);
-        r.off += CASCADE_FIXED + cc * CASCADE_ENTRY;
+        r.off += bytes;
         maxTag = TAG_SLOT_B | 0xFF;
     }
     if (f.tileCount > limits.maxFrameTiles)

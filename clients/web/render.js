@@ -3,7 +3,9 @@
  * (PROTOCOL.md "Layouts").
  *
  * Layout 1 (cascade tiles, the default): each cascade's mips live in two
- * mipmapped periodic textures (disp = DX, H, DZ, FOAM; slope = ∂η/∂x, ∂η/∂z);
+ * mipmapped periodic textures (disp = DX, H, DZ; slope = ∂η/∂x, ∂η/∂z, and
+ * the breaking index BI and its quadrature BQ, whose sum the frame's
+ * whitecap table turns into foam);
  * the daemon's flat concentric mesh is placed per FRAME, morphed and
  * displaced in the vertex shader by the sum of the cascades read per "Where
  * each mip is read" (see CASCADE_GLSL, SEA1_VS); the fragment shader shades
@@ -26,14 +28,15 @@
  *
  * Shading around the sea (seed 001's list): procedural sky (gradient, sun
  * disc and halo, drifting clouds) in a mipmapped cube map used as the
- * reflection environment, foam from the streamed FOAM plane broken up by
- * drifting grain near the eye, cloud shadows, subsurface tint on crests,
+ * reflection environment, foam (layout 1: from the summed breaking index;
+ * layout 0: the FOAM plane) broken up by drifting grain near the eye, cloud shadows, subsurface tint on crests,
  * haze.
  */
 
 export const MAX_LEVELS = 16;
 export const MAX_CASCADES = 4;
 export const MIP_ENTRIES = 13;
+export const FOAM_ROWS = 16;
 
 const CLOUD_TEX = 512;          /* cloud texture size, texels */
 const CLOUD_UV = 32;            /* noise lattice units the cloud texture spans (it tiles) */
@@ -330,8 +333,8 @@ void main() {
 /* ---- layout 1: cascades summed on the GPU (PROTOCOL.md "Layouts") ------
  *
  * Each cascade c is a periodic field on its patch P_c, held in two
- * mipmapped textures with GL REPEAT: disp = (DX, H, DZ, FOAM) and slope =
- * (∂η/∂x, ∂η/∂z).  GL mip level m is the server's mip m (n_c/2^m texels).
+ * mipmapped textures with GL REPEAT: disp = (DX, H, DZ, 0) and slope =
+ * (∂η/∂x, ∂η/∂z, BI, BQ).  GL mip level m is the server's mip m (n_c/2^m texels).
  * The server's mip samples are co-sited with the level-0 grid (sample j of
  * mip m at x = j·σ_c·2^m), unlike GL's box-filter mips, so each level is
  * read at its own half-texel offset and the trilinear blend of "Where each
@@ -358,6 +361,8 @@ uniform vec2 u_blkCam;           /* the block's camera xz relative to the eye */
 uniform vec3 u_tailMss;          /* moments no cascade holds */
 uniform float u_roughScale;      /* 1; 0 draws the unresolved moments as a mirror (test control) */
 uniform float u_foamScale;       /* 1; 0 draws no foam (test control) */
+uniform vec3 u_foamTab[${FOAM_ROWS}]; /* the whitecap table: sigma, a, omega (PROTOCOL.md "Whitecaps in layout 1") */
+uniform int u_foamRows;          /* its rows; 0: no foam */
 uniform sampler2D u_cd0, u_cd1, u_cd2, u_cd3;   /* disp per cascade */
 uniform sampler2D u_wakeTex;     /* the wakes on a square around the camera: height, dh/dx, dh/dz, the
                                     slope variance a side the square does not hold (oc_wakes_grid) */
@@ -427,34 +432,71 @@ vec3 casMss(int c, float lam) {
     }
     return e;
 }
-/* displacement (DX, H, DZ) and foam summed over cascades, each at its own
- * spacing raised to floorS */
-vec4 casDisp(vec2 rel, float floorS) {
-    vec4 acc = vec4(0.0);
-    float keep = 1.0, w, lam;
-    vec4 d;
-#define CAS_D(C, T) if (u_nCas > C) { lam = casLod(C, wantSpacing(C, rel, floorS), w); d = w * casRead(T, C, rel, lam); acc.xyz += d.xyz; keep *= 1.0 - clamp(d.w, 0.0, 1.0); }
+/* displacement (DX, H, DZ) summed over cascades, each at its own spacing
+ * raised to floorS */
+vec3 casDisp(vec2 rel, float floorS) {
+    vec3 acc = vec3(0.0);
+    float w, lam;
+#define CAS_D(C, T) if (u_nCas > C) { lam = casLod(C, wantSpacing(C, rel, floorS), w); acc += w * casRead(T, C, rel, lam).xyz; }
     CAS_D(0, u_cd0) CAS_D(1, u_cd1) CAS_D(2, u_cd2) CAS_D(3, u_cd3)
-    acc.w = 1.0 - keep;
     return acc;
+}
+/* the breaking-index variance cascade c holds read at level lam: its whole
+ * slope variance less what casMss leaves unresolved (lod.c
+ * proto_lod_breaking_var) */
+float casBreakVar(int c, vec3 unresolved) {
+    vec4 all = u_mipTab[c * MIPE + int(u_cas[c].z)];
+    return max(all.y + all.z - unresolved.x - unresolved.y, 0.0);
+}
+/* Whitecap foam (lod.c proto_lod_foam, foam.h ocean_foam_value) from the
+ * summed breaking index beta, its quadrature q and the variance v the reads
+ * hold: the table's ramp foot a and band frequency omega, linear in
+ * sigma = sqrt(v) between the rows around it; the active foam, or the last
+ * crest's foam decayed over the phase since it passed (Monahan 1971's
+ * 3.85 s), whichever is whiter */
+const float FOAM_BREAK = 0.5, FOAM_DECAY_S = 3.85;
+float foamRamp(float a, float x) {
+    float span = FOAM_BREAK - a;
+    return span > 1e-6 ? clamp((x - a) / span, 0.0, 1.0) : step(FOAM_BREAK, x);
+}
+float foamAt(float beta, float q, float v) {
+    if (u_foamRows < 1) return 0.0;
+    float sg = sqrt(max(v, 0.0));
+    vec3 r = u_foamTab[0];
+    for (int i = 1; i < ${FOAM_ROWS}; i++) {
+        if (i >= u_foamRows || sg <= r.x) break;
+        vec3 n = u_foamTab[i];
+        if (sg >= n.x) { r = n; continue; }
+        r = mix(r, n, (sg - r.x) / (n.x - r.x));
+        break;
+    }
+    float fi = foamRamp(r.y, beta);
+    float e = length(vec2(beta, q));
+    if (r.z <= 0.0 || fi >= 1.0 || !(e > r.y)) return fi;
+    float th = atan(q, beta);
+    th += th < 0.0 ? 6.2831853 : 0.0;
+    return max(fi, foamRamp(r.y, e) * exp(-th / (r.z * FOAM_DECAY_S)));
 }
 `;
 
 export const CASCADE_FRAG_GLSL = `
 uniform sampler2D u_cs0, u_cs1, u_cs2, u_cs3;   /* slope per cascade */
 /* mean slope, unresolved slope moments (x, z, xz) and foam, each cascade
- * at its own spacing raised to floorS */
+ * at its own spacing raised to floorS: the slope textures hold (slope x,
+ * slope z, BI, BQ), and foam is the whitecap table applied to the summed
+ * breaking index at the variance the reads hold */
 void seaSample(vec2 rel, float floorS, out vec2 slope, out vec3 mss, out float foam) {
     slope = vec2(0.0);
     mss = u_tailMss;
-    float keep = 1.0, w, lam, s;
-    vec4 d;
-#define CAS_S(C, TD, TS) if (u_nCas > C) { s = wantSpacing(C, rel, floorS); lam = casLod(C, s, w); slope += w * casRead(TS, C, rel, lam).xy; d = casRead(TD, C, rel, lam); keep *= 1.0 - clamp(w * d.w, 0.0, 1.0); mss += casMss(C, log2(s / u_cas[C].y)); }
-    CAS_S(0, u_cd0, u_cs0) CAS_S(1, u_cd1, u_cs1) CAS_S(2, u_cd2, u_cs2) CAS_S(3, u_cd3, u_cs3)
+    vec2 bq = vec2(0.0);
+    float w, lam, s, bvar = 0.0;
+    vec3 un;
+#define CAS_S(C, TS) if (u_nCas > C) { s = wantSpacing(C, rel, floorS); lam = casLod(C, s, w); vec4 d = w * casRead(TS, C, rel, lam); slope += d.xy; bq += d.zw; un = casMss(C, log2(s / u_cas[C].y)); mss += un; bvar += casBreakVar(C, un); }
+    CAS_S(0, u_cs0) CAS_S(1, u_cs1) CAS_S(2, u_cs2) CAS_S(3, u_cs3)
     vec4 wk = wakeAt(rel);
     slope += wk.yz;
     mss.xy += wk.w;
-    foam = (1.0 - keep) * u_foamScale;
+    foam = foamAt(bq.x, bq.y, bvar) * u_foamScale;
     mss *= u_roughScale;
 }
 `;
@@ -530,7 +572,6 @@ uniform mat4 u_viewProj;
 out vec3 v_rel;
 out vec2 v_base;
 out float v_crest;
-out float v_foam;
 out float v_level;
 void main() {
     int L = int(a_level + 0.5);
@@ -554,12 +595,11 @@ void main() {
         g = mix(g, gc, w);
     }
     vec2 rel = u_meshOff.xz + p;
-    vec4 D = casDisp(rel, g);
+    vec3 D = casDisp(rel, g);
     D.y += wakeAt(rel).x;
     v_rel = vec3(rel.x + D.x, u_meshOff.y + D.y, rel.y + D.z);
     v_base = rel;
     v_crest = D.y;
-    v_foam = D.w;
     v_level = a_level;
     gl_Position = u_viewProj * vec4(v_rel, 1.0);
 }`;
@@ -571,7 +611,6 @@ ${SEA_SHADE_GLSL}
 in vec3 v_rel;
 in vec2 v_base;
 in float v_crest;
-in float v_foam;
 in float v_level;
 out vec4 o_color;
 uniform float u_pixAngle;
@@ -776,7 +815,7 @@ export class Renderer {
                     gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.REPEAT);
                     return t;
                 };
-                this.cas[c] = { key, patch: e.patchM, n: e.n, sigma: e.patchM / e.n, mips: e.mips, disp: mk(gl.RGBA16F), slope: mk(gl.RG16F), texels: 0 };
+                this.cas[c] = { key, patch: e.patchM, n: e.n, sigma: e.patchM / e.n, mips: e.mips, disp: mk(gl.RGBA16F), slope: mk(gl.RGBA16F), texels: 0 };
             }
             this.cas[c].fades = e.fades;
         }
@@ -792,7 +831,7 @@ export class Renderer {
             gl.bindTexture(gl.TEXTURE_2D, C.disp);
             gl.texSubImage2D(gl.TEXTURE_2D, b.mip, b.x, b.y, b.w, b.h, gl.RGBA, gl.FLOAT, b.disp);
             gl.bindTexture(gl.TEXTURE_2D, C.slope);
-            gl.texSubImage2D(gl.TEXTURE_2D, b.mip, b.x, b.y, b.w, b.h, gl.RG, gl.FLOAT, b.slope);
+            gl.texSubImage2D(gl.TEXTURE_2D, b.mip, b.x, b.y, b.w, b.h, gl.RGBA, gl.FLOAT, b.slope);
             C.texels += b.w * b.h;
             written++;
         }
@@ -827,6 +866,10 @@ export class Renderer {
         gl.uniform3fv(u.u_tailMss, b.tailMss);
         gl.uniform1f(u.u_roughScale, this.roughScale);
         gl.uniform1f(u.u_foamScale, this.foamScale);
+        const ft = new Float32Array(3 * FOAM_ROWS);
+        b.foam.forEach((r, i) => ft.set([r.sigma, r.a, r.omega], 3 * i));
+        gl.uniform3fv(u.u_foamTab, ft);
+        gl.uniform1i(u.u_foamRows, b.foam.length);
         const W = this.wake;
         gl.activeTexture(gl.TEXTURE12);
         gl.bindTexture(gl.TEXTURE_2D, W ? this.wakeTex : this.dummyTex);

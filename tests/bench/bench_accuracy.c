@@ -709,7 +709,7 @@ static double client_tiles(const ocean_frame *f, const client *cl)
                         planes[6 * m + k] = (float)pt.jacobian;
                     }
                 proto_buf_reset(&b);
-                if (proto_tile_encode(cl->codec, &cl->cp, TILE, TILE, PROTO_CH_ALL, planes, &b, NULL, err,
+                if (proto_tile_encode(cl->codec, &cl->cp, TILE, TILE, PROTO_CH_WORLD, planes, &b, NULL, err,
                                       sizeof err) == OCEAN_OK)
                     total += (double)proto_buf_len(&b);
                 else
@@ -1124,7 +1124,7 @@ static void run_precision_codec(void)
     for (int ci = 0; ci < ncs - 1; ci++)
         if (cs[ci].c == PROTO_CODEC_QZ && cs[ci].acc == PROTO_ACCURACY_DEFAULT)
             ncs--;   /* already in the list */
-    int t = n < TILE ? n : TILE, planes_n = proto_tile_planes(PROTO_CH_ALL);
+    int t = n < TILE ? n : TILE, planes_n = proto_tile_planes(PROTO_CH_WORLD);
     size_t tm = (size_t)t * t;
     float *planes = xcalloc(planes_n * tm, sizeof *planes), *back = xcalloc(planes_n * tm, sizeof *back);
     proto_buf b;
@@ -1156,14 +1156,14 @@ static void run_precision_codec(void)
                     cut_tile(fd, i0, j0, t, t, planes);
                     proto_buf_reset(&b);
                     double t0 = bench_now_ms();
-                    if (proto_tile_encode(cl.codec, &cl.cp, t, t, PROTO_CH_ALL, planes, &b, NULL, err, sizeof err)
+                    if (proto_tile_encode(cl.codec, &cl.cp, t, t, PROTO_CH_WORLD, planes, &b, NULL, err, sizeof err)
                         != OCEAN_OK) {
                         fprintf(stderr, "bench_accuracy: %s: encode: %s\n", label, err);
                         fail = 1;
                         break;
                     }
                     double t1 = bench_now_ms();
-                    if (proto_tile_decode(cl.codec, t, t, PROTO_CH_ALL, proto_buf_data(&b), proto_buf_len(&b), back,
+                    if (proto_tile_decode(cl.codec, t, t, PROTO_CH_WORLD, proto_buf_data(&b), proto_buf_len(&b), back,
                                           err, sizeof err) != OCEAN_OK) {
                         fprintf(stderr, "bench_accuracy: %s: decode: %s\n", label, err);
                         fail = 1;

@@ -18,10 +18,12 @@
  * A fourth table (issue 14) is the tiles as the browser viewer receives
  * them: layout-1 mip tiles (tile_source.h tile_l1: every mip of every
  * cascade of the scene config/oceand.conf serves, 32 x 32 as
- * server.cascade_tile, channels H DX DZ NU NV and FOAM on cascade 0), qz
- * format 1 (before, the frozen encoder) beside format 2 at several
- * accuracies, with the error of every plane, the normal's angle error,
- * and the planner's byte model (srv_cascade_tile_bytes) against the bytes.
+ * server.cascade_tile, channels H DX DZ NU NV BI BQ), qz format 1
+ * (before, the frozen encoder) beside format 2 at several accuracies, with
+ * the error of every plane, the normal's angle error, the share of the
+ * bytes the breaking planes BI BQ take (the tile against the same tile
+ * without them), and the planner's byte model (srv_cascade_tile_bytes)
+ * against the bytes.
  *
  * Prints markdown tables to stdout and writes tests/bench/out/codec.csv.
  * OCEAN_BENCH_QUICK=1 shrinks the run.
@@ -238,11 +240,12 @@ static int run_l1(const row *rw, const l1_tile *tiles, int ntiles, int reps, FIL
     if (proto_codec_ctx_create(&ctx) != OCEAN_OK)
         return -1;
     const size_t n = (size_t)L1_T * L1_T;
-    float *back = malloc(6 * n * sizeof *back);
+    float *back = malloc(PROTO_TILE_MAX_PLANES * n * sizeof *back);
     double *enc = malloc(sizeof(double) * ntiles * reps), *dec = malloc(sizeof(double) * ntiles * reps);
     proto_buf b;
     proto_buf_init(&b, 0);
-    double bytes = 0, raw = 0, model = 0, pmin = INFINITY, maxe[6] = {0}, worst_deg = 0;
+    double bytes = 0, raw = 0, model = 0, pmin = INFINITY, maxe[PROTO_TILE_MAX_PLANES] = {0}, worst_deg = 0;
+    double bytes_nb = 0;   /* the same tiles without BI BQ */
     char err[256];
     proto_subscribe sub;
     memset(&sub, 0, sizeof sub);
@@ -268,6 +271,15 @@ static int run_l1(const row *rw, const l1_tile *tiles, int ntiles, int reps, FIL
         }
         bytes += (double)proto_buf_len(&b);
         raw += 4.0 * n * tl->np;
+        if (!rw->before) {
+            /* BI BQ are the last planes: the tile without them is a prefix */
+            proto_buf nb;
+            proto_buf_init(&nb, 0);
+            if (proto_tile_encode_ctx(ctx, rw->codec, &prm, L1_T, L1_T, tl->ch & ~(unsigned)PROTO_CH_BREAKING, tl->pl,
+                                      &nb, NULL, err, sizeof err) == OCEAN_OK)
+                bytes_nb += (double)proto_buf_len(&nb);
+            proto_buf_free(&nb);
+        }
         /* the planner's model counts the FRAME record and TILE header (64) */
         model += srv_cascade_tile_bytes(&sub, tl->ch, L1_T) - 64.0;
         for (int k = 0; k < tl->np; k++)
@@ -295,9 +307,12 @@ static int run_l1(const row *rw, const l1_tile *tiles, int ntiles, int reps, FIL
     char mtxt[32] = "-";
     if (is_model)
         snprintf(mtxt, sizeof mtxt, "%+.1f %%", 100.0 * (model - bytes) / bytes);
-    printf("| %s | %.0f | 1/%.2f | %.2f | %.2e | %.2e | %.2e | %.2e | %.2e | %.2e | %.3f | %.3f | %.3f | %s |\n", rw->name,
-           bytes / ntiles, raw / bytes, pmin, maxe[0], maxe[1], maxe[2], maxe[3], maxe[4], maxe[5], worst_deg, em, dm,
-           mtxt);
+    char share[32] = "-";
+    if (bytes_nb > 0)
+        snprintf(share, sizeof share, "%.1f %%", 100.0 * (bytes - bytes_nb) / bytes);
+    printf("| %s | %.0f | 1/%.2f | %.2f | %.2e | %.2e | %.2e | %.2e | %.2e | %.2e | %.2e | %s | %.3f | %.3f | %.3f | %s |\n",
+           rw->name, bytes / ntiles, raw / bytes, pmin, maxe[0], maxe[1], maxe[2], maxe[3], maxe[4], maxe[5], maxe[6],
+           share, worst_deg, em, dm, mtxt);
     if (csv)
         fprintf(csv, "layout1,%s,%.1f,%.4f,%.4f,%.4f,%.6g,,%.2f,\n", rw->name, bytes / ntiles, bytes / raw, em, dm,
                 maxe[0], pmin);
@@ -331,7 +346,7 @@ static int layout1_table(int quick, FILE *csv)
                 l1_tile *tl = &tiles[nt];
                 tl->ch = tile_l1_channels(c);
                 tl->np = proto_tile_planes(tl->ch);
-                tl->pl = malloc(6 * (size_t)L1_T * L1_T * sizeof(float));
+                tl->pl = malloc(PROTO_TILE_MAX_PLANES * (size_t)L1_T * L1_T * sizeof(float));
                 if (tile_l1_cut(&s, c, m, t % k, t / k, L1_T, tl->pl)) {
                     fprintf(stderr, "bench_codec: layout-1 cut failed\n");
                     return -1;
@@ -355,18 +370,19 @@ static int layout1_table(int quick, FILE *csv)
     const int reps = quick ? 1 : 3;
     printf("\n### Tiles as the browser viewer receives them (issue 14): layout-1 mip tiles, %dx%d, scene ship-bridge "
            "(config/oceand.conf), t = 100 s\n\n", L1_T, L1_T);
-    printf("%d tiles: every mip of each of %d cascades (%d / %d / %d tiles), channels H DX DZ NU NV (+ FOAM on "
-           "cascade 0), as server/srv_cascade.c samples them (a viewer whose mesh cannot show a mip gets that mip's "
-           "NU NV and FOAM alone: the accuracy section's viewer table gives the ratio of the mix it receives); one "
+    printf("%d tiles: every mip of each of %d cascades (%d / %d / %d tiles), channels H DX DZ NU NV BI BQ, as "
+           "server/srv_cascade.c samples them (a viewer whose mesh cannot show a mip gets that mip's "
+           "NU NV BI BQ alone: the accuracy section's viewer table gives the ratio of the mix it receives); BI BQ "
+           "share = the bytes the breaking planes add, of the tile's; one "
            "proto_codec_ctx per row, median of %d runs. Max "
            "errors are over all tiles (m for H DX DZ; octahedral units for NU NV); normal deg = worst angle between "
            "decoded and input unit normals; model = the planner's srv_cascade_tile_bytes against the measured bytes. "
            "Format 1 rows run the frozen encoder (qz_before.h: a new ZSTD_CCtx per call, as before per-worker "
            "contexts), format 2 rows today's with one context, as the daemon's workers do.\n\n",
            nt, cascades, per_mip[0], per_mip[1], per_mip[2], reps);
-    printf("| codec | bytes/tile | vs f32 | H PSNR worst (dB) | H max | DX max | DZ max | NU max | NV max | FOAM max | "
-           "normal deg | encode ms | decode ms | model |\n");
-    printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    printf("| codec | bytes/tile | vs f32 | H PSNR worst (dB) | H max | DX max | DZ max | NU max | NV max | BI max | "
+           "BQ max | BI BQ share | normal deg | encode ms | decode ms | model |\n");
+    printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     int met = 0;
     for (size_t r = 0; r < sizeof rows / sizeof rows[0]; r++) {
         int m1 = 0;
@@ -409,7 +425,7 @@ int main(void)
         {"calm 5 m/s, 256 m patch", 5, 256}, {"default 10 m/s, 1000 m", 10, 1000}, {"storm 25 m/s, 2000 m", 25, 2000}};
     const int per_sea = quick ? 4 : 12, reps = quick ? 2 : 5;
     const int ntiles = 3 * per_sea;
-    const int planes_all = proto_tile_planes(PROTO_CH_ALL);
+    const int planes_all = proto_tile_planes(PROTO_CH_WORLD);
     size_t m = (size_t)TILE * TILE;
     float *full[3 * 12], *height[3 * 12];
     int k = 0;
@@ -433,7 +449,7 @@ int main(void)
         fprintf(csv, "tile,codec,bytes_per_tile,ratio_vs_f32,encode_ms,decode_ms,h_max_abs_m,h_rms_m,h_psnr_min_db,h_psnr_mean_db\n");
     const char *kinds[2] = {"height", "all7"};
     for (int kind = 0; kind < 2; kind++) {
-        unsigned ch = kind ? PROTO_CH_ALL : PROTO_CH_HEIGHT;
+        unsigned ch = kind ? PROTO_CH_WORLD : PROTO_CH_HEIGHT;
         int np = kind ? planes_all : 1;
         double raw = 4.0 * m * np;
         printf("\n### Tile codecs, %dx%d %s tiles (%d real ocean tiles from 3 seas; median of %d runs)\n\n",
@@ -452,7 +468,7 @@ int main(void)
         }
     }
     for (int kind = 0; kind < 2; kind++) {
-        unsigned ch = kind ? PROTO_CH_ALL : PROTO_CH_HEIGHT;
+        unsigned ch = kind ? PROTO_CH_WORLD : PROTO_CH_HEIGHT;
         int np = kind ? planes_all : 1;
         printf("\n### qz encoder before (format 1, no context) and after (format 2, per-worker contexts; issue 14), %dx%d %s tiles, accuracy 5e-3\n\n",
                TILE, TILE, kind ? "seven-plane" : "height-only");

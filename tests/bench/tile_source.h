@@ -58,7 +58,7 @@ static inline void tile_source_close(tile_source *s)
     memset(s, 0, sizeof *s);
 }
 
-/* Fills planes (proto_tile_planes(PROTO_CH_ALL) * w * h floats) with the
+/* Fills planes (proto_tile_planes(PROTO_CH_WORLD) * w * h floats) with the
  * window whose first sample is grid (i0, j0); the grid is periodic. */
 static inline void tile_source_cut(const tile_source *s, int i0, int j0, int w, int h, float *planes)
 {
@@ -139,7 +139,6 @@ static inline int tile_l1_open(tile_l1 *s, const char *conf_path, const char *sc
         rq.order = fc.order;
         rq.low_boost = 1.0;
         rq.per_cascade = 1;
-        rq.foam_map = 1;
         if (ocean_frame_create(s->o, &s->f[m]) != OCEAN_OK || ocean_evaluate(s->o, t, &rq, s->f[m]) != OCEAN_OK)
             return -1;
     }
@@ -160,11 +159,12 @@ static inline int tile_l1_count(const tile_l1 *s, int c, int m, int T)
     return m < s->mips[c] && s->f[m] ? (s->n >> m) / T : 0;
 }
 
-/* The viewer's channels for cascade c: H DX DZ NU NV, and FOAM on cascade 0
- * only (server/srv_cascade.c chan_of). */
+/* The viewer's channels for cascade c: H DX DZ NU NV BI BQ on every
+ * cascade (server/srv_cascade.c chan_of). */
 static inline unsigned tile_l1_channels(int c)
 {
-    return PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | (c == 0 ? PROTO_CH_FOAM : 0u);
+    (void)c;
+    return PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL | PROTO_CH_BREAKING;
 }
 
 /* Fills planes with tile (ix, iz) of side T of mip m of cascade c, exactly
@@ -175,9 +175,11 @@ static inline int tile_l1_cut(const tile_l1 *s, int c, int m, int ix, int iz, in
 {
     const ocean_field *fd = ocean_frame_field(s->f[m], c);
     int np = s->n >> m;
-    if (!fd || fd->n < np || fd->n % np || !fd->height || !fd->dx || !fd->slope_x || (c == 0 && !fd->foam))
+    if (!fd || fd->n < np || fd->n % np || !fd->height || !fd->dx || !fd->slope_x || !fd->dxx || !fd->bq)
         return -1;
     int stride = fd->n / np;
+    double lam = ocean_get_params(s->o)->sea.choppiness;
+    float il = lam > 0 ? (float)(1.0 / lam) : 0.0f;
     size_t ns = (size_t)T * T;
     for (int i = 0; i < T; i++)
         for (int j = 0; j < T; j++) {
@@ -187,8 +189,8 @@ static inline int tile_l1_cut(const tile_l1 *s, int c, int m, int ix, int iz, in
             planes[ns + k] = fd->dx[g];
             planes[2 * ns + k] = fd->dz[g];
             proto_normal_oct_encode(-fd->slope_x[g], 1.0f, -fd->slope_z[g], &planes[3 * ns + k], &planes[4 * ns + k]);
-            if (c == 0)
-                planes[5 * ns + k] = fd->foam[g];
+            planes[5 * ns + k] = -(fd->dxx[g] + fd->dzz[g]) * il;   /* BI, BQ (foam.h) */
+            planes[6 * ns + k] = -fd->bq[g] * il;
         }
     return 0;
 }

@@ -23,6 +23,11 @@
  * cascade's mip table): the mss the shading path (seaSample, through
  * casMss) returns with that table in the point's slot and that tail.
  *
+ * The whitecap rule ("Whitecaps in layout 1") is checked against
+ * tests/vectors/lod_foam.txt: foamAt, the shader's turning of the summed
+ * breaking index, its quadrature and the variance the reads hold into foam
+ * with a frame's whitecap table, against protocol/lod.c's proto_lod_foam.
+ *
  * Tolerances are binary32's (the GPU's floats; the vectors are doubles)
  * and the shader's skip of a second read whose weight is under 1e-4; for
  * the moments 1e-6 of the largest term a component adds (the tail or an
@@ -36,7 +41,7 @@ import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
 
-import { COMMON, CASCADE_GLSL, CASCADE_FRAG_GLSL, MAX_CASCADES, MIP_ENTRIES } from '../../clients/web/render.js';
+import { COMMON, CASCADE_GLSL, CASCADE_FRAG_GLSL, MAX_CASCADES, MIP_ENTRIES, FOAM_ROWS } from '../../clients/web/render.js';
 
 import { probeRun } from './glprobe.mjs';
 
@@ -105,7 +110,7 @@ void main() {
     float w;
     float s = wantSpacing(u_slot, u_rel, u_floor);
     casLod(u_slot, s, w);
-    vec4 d = casDisp(u_rel, u_floor);
+    vec3 d = casDisp(u_rel, u_floor);
     vec2 slope;
     vec3 mss;
     float foam;
@@ -136,9 +141,9 @@ void main() {
         return t;
     };
     const disp = tex(gl.RGBA16F, gl.RGBA, (m) => [1, m, m * m, 0]);
-    const slope = tex(gl.RG16F, gl.RG, (m) => [1, m, 0, 0]);
+    const slope = tex(gl.RGBA16F, gl.RGBA, (m) => [1, m, 0, 0]);
     const zeroD = tex(gl.RGBA16F, gl.RGBA, () => [0, 0, 0, 0]);
-    const zeroS = tex(gl.RG16F, gl.RG, () => [0, 0, 0, 0]);
+    const zeroS = tex(gl.RGBA16F, gl.RGBA, () => [0, 0, 0, 0]);
     /* three float targets, one pixel per point */
     const fb = gl.createFramebuffer();
     gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
@@ -272,4 +277,72 @@ test('the viewer\'s GLSL adds the unresolved slope moments protocol/lod.c adds (
             return [`mss_${k}`, got[j], p.mss[j], 1e-6 * scale];
         });
     });
+});
+
+/* lod_foam.txt: a whitecap table, the variance held, beta, q, "->", foam. */
+function readFoamVectors(path) {
+    return vectorLines(path).map(([lhs, rhs]) => {
+        const rows = lhs[0];
+        assert.equal(lhs.length, 1 + 3 * rows + 3, `input fields of: ${lhs}`);
+        assert.equal(rhs.length, 1, `output fields of: ${rhs}`);
+        return { table: lhs.slice(1, 1 + 3 * rows), rows, v: lhs[1 + 3 * rows], beta: lhs[2 + 3 * rows], q: lhs[3 + 3 * rows], foam: rhs[0] };
+    });
+}
+
+/* In the page: foamAt of every case, one pixel each. */
+function runFoamInPage({ common, cascade, cases, rowsMax }) {
+    const canvas = document.createElement('canvas');
+    const gl = canvas.getContext('webgl2');
+    if (!gl || !gl.getExtension('EXT_color_buffer_float')) return { error: 'no WebGL2 float targets' };
+    const vs = '#version 300 es\nvoid main() { gl_Position = vec4(0.0, 0.0, 0.0, 1.0); gl_PointSize = 1.0; }\n';
+    const fs = `${common}\n${cascade}
+uniform vec3 u_in;
+out vec4 o;
+void main() { o = vec4(foamAt(u_in.x, u_in.y, u_in.z), 0.0, 0.0, 1.0); }
+`;
+    const made = window.glProgram(gl, vs, fs);
+    if (made.error) return { error: made.error };
+    const prog = made.prog;
+    const loc = (n) => gl.getUniformLocation(prog, n);
+    const fb = gl.createFramebuffer(), t = gl.createTexture();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, cases.length, 1);
+    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, t, 0);
+    if (gl.checkFramebufferStatus(gl.FRAMEBUFFER) !== gl.FRAMEBUFFER_COMPLETE) return { error: 'float framebuffer incomplete' };
+    cases.forEach((c, i) => {
+        const tab = new Float32Array(3 * rowsMax);
+        tab.set(c.table);
+        gl.uniform3fv(loc('u_foamTab'), tab);
+        gl.uniform1i(loc('u_foamRows'), c.rows);
+        gl.uniform3f(loc('u_in'), c.beta, c.q, c.v);
+        gl.viewport(i, 0, 1, 1);
+        gl.drawArrays(gl.POINTS, 0, 1);
+    });
+    const px = new Float32Array(4 * cases.length);
+    gl.readPixels(0, 0, cases.length, 1, gl.RGBA, gl.FLOAT, px);
+    const err = gl.getError();
+    return err ? { error: `GL error 0x${err.toString(16)}` } : { foam: Array.from(px).filter((_, k) => k % 4 === 0) };
+}
+
+test('the viewer\'s GLSL turns the breaking index into the foam protocol/lod.c gives (tests/vectors/lod_foam.txt)', async (t) => {
+    const vdir = process.env.PROTO_VECTORS;
+    if (!vdir) { t.skip('PROTO_VECTORS not set'); return; }
+    const cases = readFoamVectors(join(vdir, 'lod_foam.txt'));
+    assert.ok(cases.length >= 100, `${cases.length} points in lod_foam.txt`);
+    /* on a ramp or a trail, clamped at 0 and at 1: every branch */
+    assert.ok(cases.some((c) => c.foam === 0) && cases.some((c) => c.foam === 1) &&
+        cases.filter((c) => c.foam > 0.05 && c.foam < 0.95).length >= 30, 'the vectors cover every branch');
+    const r = await probeRun(runFoamInPage, { common: COMMON, cascade: CASCADE_GLSL, cases, rowsMax: FOAM_ROWS });
+    assert.equal(r.error, undefined, r.error);
+    const bad = [];
+    let worst = 0;
+    cases.forEach((c, i) => {
+        const d = Math.abs(r.foam[i] - c.foam);
+        worst = Math.max(worst, d);
+        /* binary32 arithmetic; C's fade is a minimax polynomial within 2e-5 */
+        if (!(d <= 1e-4)) bad.push(`case ${i} (rows ${c.rows}, var ${c.v}, beta ${c.beta}, q ${c.q}): ${r.foam[i]}, C rule ${c.foam}`);
+    });
+    t.diagnostic(`${cases.length} points; largest difference ${worst.toPrecision(2)}`);
+    assert.deepEqual(bad.slice(0, 10), [], `${bad.length} disagreements`);
 });

@@ -612,17 +612,17 @@ test('half floats, octahedral normals and cascade blocks through the WebAssembly
     assert.deepEqual(Array.from(n.subarray(0, 12)), [0, 1, 0, 1, 1, 0, 0, 1, 0, 0, -1, 1]);
     assert.ok(n[13] < 0, 'lower hemisphere fold');
     assert.ok(Math.abs(Math.hypot(n[12], n[13], n[14]) - 1) < 1e-6);
-    /* a cascade block: (DX, H, DZ, FOAM) and the slopes of the octahedral
-     * normal, a folded crest held at the maximum slope */
-    const planes = new Float32Array([0.5, -0.25, 0.1, 0.2, 0, 0.9, 0.3, 0.7]);   /* H, NU, NV, FOAM; 2 samples */
-    const t = { codec: CODEC.F32, width: 2, height: 1, channels: 1 | 8 | 16, spacing: 1, payload: new Uint8Array(planes.buffer) };
+    /* a cascade block: (DX, H, DZ, 0) and (the slopes of the octahedral
+     * normal, BI, BQ), a folded crest held at the maximum slope */
+    const planes = new Float32Array([0.5, -0.25, 0.1, 0.2, 0, 0.9, 0.3, 0.7, -0.125, 0.0625]);   /* H, NU, NV, BI, BQ; 2 samples */
+    const t = { codec: CODEC.F32, width: 2, height: 1, channels: 1 | 8 | 64, spacing: 1, payload: new Uint8Array(planes.buffer) };
     const b = decodeCascadeBlock(t, 20);
-    assert.deepEqual(Array.from(b.disp), [0, 0.5, 0, Math.fround(0.3), 0, -0.25, 0, Math.fround(0.7)]);
+    assert.deepEqual(Array.from(b.disp), [0, 0.5, 0, 0, 0, -0.25, 0, 0]);
     const y = 1 - 0.1 - 0.0;
     assert.ok(Math.abs(b.slope[0] + Math.fround(0.1) / y) < 1e-6 && Math.abs(b.slope[1]) < 1e-7, `slopes ${b.slope}`);
-    const folded = Math.hypot(b.slope[2], b.slope[3]);
-    assert.ok(folded > 19 && folded <= 20, `folded crest slope ${b.slope[2]}, ${b.slope[3]}`);
-    assert.ok(Math.abs(b.foamSum - Math.fround(0.3) - Math.fround(0.7)) < 1e-7 && b.foamMax === Math.fround(0.7));
+    const folded = Math.hypot(b.slope[4], b.slope[5]);
+    assert.ok(folded > 19 && folded <= 20, `folded crest slope ${b.slope[4]}, ${b.slope[5]}`);
+    assert.deepEqual([b.slope[2], b.slope[3], b.slope[6], b.slope[7]], [Math.fround(0.3), -0.125, Math.fround(0.7), 0.0625]);
 });
 
 /* ---- the protocol's own vectors (tests/vectors, PROTOCOL.md "Test vectors") ---- */
@@ -652,6 +652,12 @@ function flatten(m) {
                     for (const key of ['patchM', 'n', 'mips', 'fades', 'spacingPerM']) flat[`cascade[${c}].${snake(key)}`] = String(e[key]);
                     for (let m = 0; m <= e.mips; m++) flat[`cascade[${c}].mip[${m}]`] = Array.from(e.mip.subarray(4 * m, 4 * m + 4)).join(' ');
                 });
+                continue;
+            }
+            /* the whitecap table: its rows one line each (sigma a omega) */
+            if (k === 'foamAll') continue;
+            if (k === 'foam' && Array.isArray(v)) {
+                v.forEach((w, i) => { flat[`${prefix}foam[${i}]`] = `${w.sigma} ${w.a} ${w.omega}`; });
                 continue;
             }
             if (k === 'samples') {

@@ -33,13 +33,15 @@
  *     U(z) = (u_* / kappa) ln(z/z0): U12.5 = U10 + (u_* / kappa)
  *     ln(12.5/10), kappa = 0.4, u_* = sqrt(C_D) U10 with Wu's (1982, JGR
  *     87(C12) 9704) C_D = (0.8 + 0.065 U10) 1e-3;
- *   - foam: the whitecap coverage the frames' tiles carry (tile_foam: the
- *     mean of cascade 0's FOAM samples by sea area; each sample is a
- *     coverage fraction of the sea it stands for, and a mean of coverages
- *     survives the mip filtering that a threshold would not), compared
- *     with Monahan & O'Muircheartaigh (1980), W = 3.84e-6 U10^3.41; the
- *     mean foam over the sampled sea and the fraction of samples with
- *     foam >= 0.5 are reported beside it;
+ *   - foam: the whitecap coverage the frames carry (area_foam: the mean
+ *     foam the library reads, by the spec's rule, on a square grid of
+ *     points around the camera's nadir, a square wide enough to hold many
+ *     whitecaps where the sea in view of a low camera holds few; each
+ *     sample is a coverage fraction of the sea it stands for, and a mean of
+ *     coverages survives the mip filtering that a threshold would not),
+ *     compared with Monahan & O'Muircheartaigh (1980), W = 3.84e-6
+ *     U10^3.41; the mean foam over the sampled sea and the fraction of
+ *     samples with foam >= 0.5 are reported beside it;
  *   - e_error (FRAME) and e_total (cascade block), averaged over frames.
  * Rays above the horizon, or whose point the frame's tiles do not cover,
  * are counted and left out.
@@ -77,7 +79,7 @@ typedef struct fid_sums {
 
 typedef struct fid_acc {
     fid_sums px, area;
-    double tile_foam, tile_area;     /* cascade-0 FOAM samples of the frames, by sea area */
+    double tile_foam, tile_area;     /* area_foam's sum and its points */
     double e_error, e_total, e_total_max;
     uint64_t samples, above, outside, frames, stale;
     uint64_t rx_frames, rx_bytes;    /* every frame made for the camera */
@@ -97,31 +99,27 @@ static void sums_add(fid_sums *S, double w, const oc_sample *s, double whole)
     S->claimed += w * whole;
 }
 
-/* The whitecap coverage the frame's tiles carry: the mean of every FOAM
- * sample of cascade 0 (the only cascade that carries foam, PROTOCOL.md),
- * each weighted by the sea it stands for (spacing^2).  From a low camera
- * the sea in view is a few square metres - far too few whitecaps for an
- * area statistic - while each tile stands for at least its cascade's
- * grid of 32 x 32 samples.  The tiles are those the frame's view reads
- * (oc_frame_view_tile): of a time-interpolating stream, the blend at the
- * frame's instant, not the samples of other ticks the frame brought. */
-static void tile_foam(const oc_frame *f, fid_acc *A)
+/* The whitecap coverage the frame carries: the mean foam a reader gets
+ * (oc_frame_sample, the spec's rule at each point) on a 64 x 64 grid over
+ * a square of side max(|y|, 400 m) centred under the camera.  From a low
+ * camera the sea in view is a few square metres - far too few whitecaps
+ * for an area statistic; the square holds hundreds, read near and far as
+ * the viewer reads them (every cascade at the nadir, the coarse ones only
+ * at its edges).  Points the frame's tiles do not cover are left out. */
+static void area_foam(const oc_frame *f, fid_acc *A)
 {
-    for (unsigned t = 0; t < oc_frame_view_tile_count(f); t++) {
-        proto_tile ti;
-        const float *data = NULL;
-        if (oc_frame_view_tile(f, t, &ti, &data) != OCEAN_OK) continue;
-        unsigned ch = ti.channels;
-        if (ti.cascade != 0 || !(ch & PROTO_CH_FOAM) || !data) continue;
-        /* planes in codec order H, DX, DZ, NU, NV, FOAM: FOAM follows those present */
-        int before = proto_tile_planes(ch & (PROTO_CH_HEIGHT | PROTO_CH_DX | PROTO_CH_DZ | PROTO_CH_NORMAL));
-        size_t n = (size_t)ti.width * ti.height;
-        const float *fp = data + (size_t)before * n;
-        double w = ti.spacing * ti.spacing, sum = 0;
-        for (size_t i = 0; i < n; i++) sum += fp[i] < 0 ? 0 : fp[i] > 1 ? 1 : fp[i];
-        A->tile_foam += w * sum;
-        A->tile_area += w * (double)n;
-    }
+    if (f->info.layout != PROTO_LAYOUT_CASCADE) return;
+    const double *c = f->info.cascades.camera;
+    double side = fmax(fabs(c[1]), 400.0);
+    for (int i = 0; i < 64; i++)
+        for (int j = 0; j < 64; j++) {
+            oc_sample s;
+            if (oc_frame_sample(f, c[0] + side * ((j + 0.5) / 64 - 0.5), c[2] + side * ((i + 0.5) / 64 - 0.5), 0,
+                                &s) != OCEAN_OK || !(s.channels & PROTO_CH_BREAKING))
+                continue;
+            A->tile_foam += s.foam;
+            A->tile_area += 1;
+        }
 }
 
 /* Casts grid x grid*9/16 rays of camera `cam` (position from the frame's
@@ -402,7 +400,7 @@ static int fid_take(fid_run *R, oc_frame *f)
     }
     if (occli_mono() - R->last_measured >= F->interval) {
         R->last_measured = occli_mono();
-        tile_foam(f, A);
+        area_foam(f, A);
         measure_frame(f, &R->cam, F->grid, F->verbose, F->interp, A);
     }
     oc_frame_free(f);
@@ -509,7 +507,7 @@ static void fid_print_lines(FILE *lines, const fid_cfg *F, const fid_acc *A, con
                              : "OUTSIDE a factor 2",
             G->foam_offered ? "" : " [the scene offers no foam]", G->foam, G->foam_px);
     fprintf(lines, "foam_ge_half    %.5f  (fraction of samples with foam >= 0.5)\n", G->foam_half);
-    fprintf(lines, "foam_tiles      %.5f  (cascade-0 FOAM samples of the frames by sea area: the coverage checked)\n",
+    fprintf(lines, "foam_tiles      %.5f  (the foam read on a square under the camera: the coverage checked)\n",
             G->foam_tiles);
     fprintf(lines, "e_error         %.5f  (mean over frames)\n", A->e_error / A->frames);
     fprintf(lines, "e_total         %.5f  (mean over frames; max %.5f)\n", A->e_total / A->frames, A->e_total_max);
