@@ -1091,7 +1091,7 @@ static void live_frames_and_queries(void **state)
 
     double xz[6] = {1, 2, 3, 4, -5, 10};
     oc_query_result q;
-    r = oc_client_query(c, xz, 3, 1, 123.5, 3000, &q);
+    r = oc_client_query(c, xz, 3, 1, 123.5, 30000, &q);
     assert_int_equal(r, OCEAN_OK);
     assert_int_equal(q.count, 3);
     assert_true(q.t == 123.5);
@@ -1284,7 +1284,7 @@ static void hostile_server_messages(void **state)
     assert_int_equal(oc_connect(&o, 5000, &c, err, sizeof err), OCEAN_OK);
     double xz[2] = {666, 1};
     oc_query_result q;
-    assert_int_equal(oc_client_query(c, xz, 1, 0, 0, 3000, &q), OCEAN_OK);
+    assert_int_equal(oc_client_query(c, xz, 1, 0, 0, 30000, &q), OCEAN_OK);
     assert_true(q.samples[0].height == 666.5f);
     oc_query_result_free(&q);
     oc_client_stats st;
@@ -1307,7 +1307,7 @@ static void hostile_server_messages(void **state)
     assert_int_equal(st.frames_rx, 0);
     assert_int_equal(oc_client_last_error(c, msg, sizeof msg), OCEAN_ETOOBIG);
     xz[0] = 2;
-    assert_int_equal(oc_client_query(c, xz, 1, 0, 0, 3000, &q), OCEAN_OK);
+    assert_int_equal(oc_client_query(c, xz, 1, 0, 0, 30000, &q), OCEAN_OK);
     assert_true(q.samples[0].height == 2.5f);
     oc_query_result_free(&q);
     assert_int_equal(oc_client_state(c), OC_READY);
@@ -1845,7 +1845,7 @@ static void daemon_round_trip(void **state)
     }
     double xz[4] = {0, 0, 10.5, -3};
     oc_query_result q = {0};
-    ocean_result qr = oc_client_query(c, xz, 2, 0, 0, 5000, &q);
+    ocean_result qr = oc_client_query(c, xz, 2, 0, 0, 30000, &q);
     if (qr != OCEAN_OK) {
         oc_client_last_error(c, err, sizeof err);
         print_error("query: %s (%s)\n", ocean_strerror(qr), err);
