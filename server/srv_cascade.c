@@ -714,8 +714,11 @@ static double plan_at(const tables *tb, const srv_config *cfg, const srv_cascade
     double pol = isfinite(j->policy_k) && j->policy_k > 0 ? M_PI / (2.0 * j->policy_k) : 0.0;
     pl->min_spacing = fmax(sub->base_spacing_m > 0 ? sub->base_spacing_m : 0.0, pol);
     pl->channels = srv_tiles_channels(sub->effects);
+    /* layout 1's foam is the breaking index the reader sums; a sea without
+     * whitecaps has no table and sends none (PROTOCOL.md "Whitecaps in
+     * layout 1": no table, no foam) */
     if (pl->channels & PROTO_CH_FOAM)
-        pl->channels = (pl->channels & ~(unsigned)PROTO_CH_FOAM) | PROTO_CH_BREAKING;
+        pl->channels = (pl->channels & ~(unsigned)PROTO_CH_FOAM) | (tb->foam_rows ? PROTO_CH_BREAKING : 0u);
     double bytes = 0;
     pl->tiles = 0;
     for (int c = 0; c < pl->layers; c++) {

@@ -341,8 +341,9 @@ typedef struct ocean_foam_row {
  * no row, so sigma ascends strictly; *count rows are written.  For a reader
  * that sums bands and finds the ramp by the std it holds (PROTOCOL.md
  * "Whitecaps in layout 1").  Each row solves the ramp with trails (about
- * 2 ms).  OCEAN_EINVAL for NULL, n < 1, order < 1 or a NaN or negative
- * cutoff. */
+ * 2 ms).  No rows (*count 0) for a sea without whitecaps (sea.whitecaps
+ * off, or no waves): its readers draw none.  OCEAN_EINVAL for NULL, n < 1,
+ * order < 1 or a NaN or negative cutoff. */
 ocean_result ocean_foam_table(const ocean *o, const ocean *more, int order, const double *kc, int n,
                               ocean_foam_row *rows, int *count);
 

@@ -157,6 +157,8 @@ ocean_result ocean_foam_table(const ocean *o, const ocean *more, int order, cons
         return OCEAN_EINVAL;
     *count = 0;
     double w = ocean_stats_whitecap_target(o);
+    if (!(w > 0.0))
+        return OCEAN_OK; /* no whitecaps (whitecaps off, or no waves): no ramp at all */
     for (int j = 0; j < n; j++) {
         if (!(kc[j] >= 0.0))
             return OCEAN_EINVAL;

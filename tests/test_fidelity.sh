@@ -59,11 +59,16 @@
 #    in view stray by up to 4 % from the whole sea's moments in either
 #    stream (the conservation table), so two runs differ by up to 8 % and
 #    the blend's lowering comes on top (measured -6.5 % at most);
-#  - whitecap coverage of the frames within 15 % of the plain stream's (the
-#    blend in time is linear in the breaking index, so it keeps the mean
-#    foam; but the two read the square at different instants, and over the
-#    few long waves a high camera reads the coverage swings in time: up to
-#    13.7 % between the streams from 10 km when it was cascade 0's foam).
+#  - whitecap coverage of the frames within 20 % of the plain stream's.
+#    The blend in time costs little (flight, 300 m, at one budget: -1 %);
+#    the streams' plans differ (samples in time buy finer mips), and the
+#    coverage a reader gets depends a little on the band it reads: at
+#    ship-bridge 300 m the plain stream reads 1.07 of the wind's coverage,
+#    the time-interpolating one 0.92 (-14.5 % between them, the largest of
+#    30 camera runs; flight within 10 %).  The table's rows are solved for
+#    bands as they are, and a Keys-cubic reading loses a few % of a fine
+#    mip's variance between its nodes; when it was cascade 0's foam the
+#    streams differed by up to 13.7 %.
 # Every measured figure is printed as a table, failing or not.
 # The scenes run side by side, one daemon each: a run mostly waits for frames
 # (about a third of its wall time is CPU), so four at once take about half the
@@ -270,7 +275,7 @@ for d in (d for d in rows if strm(d) == "ti"):
                        d["scene"], d["camera_height_m"], d["speed_m_s"], strm(d), d["mss_total"], cl, round(100 * TOL)))
 # the time-interpolating stream against the plain one at each camera (see
 # the top: coverage, delivered slope variance, whitecap coverage)
-TOL_MSS, TOL_MSS_LOW, TOL_FOAM, TOL_OUT = 0.05, 0.10, 0.15, 0.01
+TOL_MSS, TOL_MSS_LOW, TOL_FOAM, TOL_OUT = 0.05, 0.10, 0.20, 0.01
 print()
 print("time-interpolating stream against the plain one: rays outside the tiles, delivered slope variance (tolerance "
       "%d %%, %d %% from 2 m), whitecap coverage of the tiles (%d %%); bytes a frame over each run's few frames (the "

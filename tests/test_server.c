@@ -638,8 +638,9 @@ static oc_client *bridge_tiles_client(srv_daemon **d, srv_settings *sb, proto_su
  * and near the camera, where every cascade is read, the foam is the whole
  * sea's point by point: it follows the FFT sea's own foam (ocean_frame_sample
  * of an unfiltered evaluation, every wave summed at the point) with a
- * correlation of 0.94.  Cascade 0's breaking index alone, which placed
- * layout 1's foam before, holds a small part of the index's variance. */
+ * correlation of 0.94-0.98.  Cascade 0's breaking index alone, which placed
+ * layout 1's foam before, holds a small part of the index's variance.  A
+ * sea without whitecaps sends neither the table nor the planes. */
 static void whitecaps_of_the_whole_sea(void **state)
 {
     (void)state;
@@ -708,6 +709,22 @@ static void whitecaps_of_the_whole_sea(void **state)
     assert_true(m == 400 && corr > 0.8 && fabs(sa - sb2) < 0.3 * sb2);
     ocean_frame_destroy(ef);
     ocean_destroy(o);
+    oc_frame_free(f);
+    oc_client_destroy(c);
+    srv_daemon_stop(d);
+    /* a sea without whitecaps (a CIGI host's Maritime Surface Conditions,
+     * sea.whitecaps off): no table, no breaking planes, foam 0 everywhere */
+    const char *off[] = {"server.port=0", "server.scene=ship-bridge", "ocean.threads=1", "server.workers=2",
+                         "server.viewer_bytes_per_s=1e9", "sea.whitecaps=off"};
+    d = start_daemon(off, 6, &sb);
+    c = connect_client(srv_daemon_port(d), NULL);
+    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    f = frame_for_camera(c, &cam);
+    assert_true(!(f->info.cascades.flags & PROTO_CASCADE_FOAM) && f->info.tile_count > 0);
+    for (int t = 0; t < f->info.tile_count; t++) assert_false(f->tiles[t].info.channels & PROTO_CH_BREAKING);
+    oc_sample sm;
+    assert_int_equal(oc_frame_sample(f, cam.pos[0] + 3, cam.pos[2] - 2, 0, &sm), OCEAN_OK);
+    assert_true(sm.foam == 0 && !(sm.channels & PROTO_CH_BREAKING));
     oc_frame_free(f);
     oc_client_destroy(c);
     srv_daemon_stop(d);

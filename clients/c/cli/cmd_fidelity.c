@@ -100,21 +100,23 @@ static void sums_add(fid_sums *S, double w, const oc_sample *s, double whole)
 }
 
 /* The whitecap coverage the frame carries: the mean foam a reader gets
- * (oc_frame_sample, the spec's rule at each point) on a 64 x 64 grid over
- * a square of side max(|y|, 400 m) centred under the camera.  From a low
- * camera the sea in view is a few square metres - far too few whitecaps
- * for an area statistic; the square holds hundreds, read near and far as
- * the viewer reads them (every cascade at the nadir, the coarse ones only
- * at its edges).  Points the frame's tiles do not cover are left out. */
+ * (oc_frame_sample, the spec's rule at each point) on a 96 x 96 grid over
+ * a square of side max(2 |y|, 1200 m) centred under the camera.  From a
+ * low camera the sea in view is a few square metres - far too few
+ * whitecaps for an area statistic; the square holds thousands, read near
+ * and far as the viewer reads them (every cascade at the nadir, the coarse
+ * ones only at its edges).  A 400 m square held few enough of the dominant
+ * waves' groups that its coverage swung by 30 % between two instants.
+ * Points the frame's tiles do not cover are left out. */
 static void area_foam(const oc_frame *f, fid_acc *A)
 {
     if (f->info.layout != PROTO_LAYOUT_CASCADE) return;
     const double *c = f->info.cascades.camera;
-    double side = fmax(fabs(c[1]), 400.0);
-    for (int i = 0; i < 64; i++)
-        for (int j = 0; j < 64; j++) {
+    double side = fmax(2 * fabs(c[1]), 1200.0);
+    for (int i = 0; i < 96; i++)
+        for (int j = 0; j < 96; j++) {
             oc_sample s;
-            if (oc_frame_sample(f, c[0] + side * ((j + 0.5) / 64 - 0.5), c[2] + side * ((i + 0.5) / 64 - 0.5), 0,
+            if (oc_frame_sample(f, c[0] + side * ((j + 0.5) / 96 - 0.5), c[2] + side * ((i + 0.5) / 96 - 0.5), 0,
                                 &s) != OCEAN_OK || !(s.channels & PROTO_CH_BREAKING))
                 continue;
             A->tile_foam += s.foam;
