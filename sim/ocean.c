@@ -519,7 +519,10 @@ static ocean_result request_check(const ocean *o, double t, const ocean_request 
         r->order > OCEAN_FILTER_MAX_ORDER || !isfinite(r->low_boost) || r->low_boost < 0.0 || r->low_boost > 2.0)
         return OCEAN_EINVAL;
     if (r->per_cascade) {
-        if (r->redistribute || (r->low_boost != 0.0 && r->low_boost != 1.0))
+        /* a per-cascade frame holds each cascade's breaking index, which a
+         * reader sums before any ramp (PROTOCOL.md "Whitecaps in layout
+         * 1"): no cascade has a foam of its own */
+        if (r->redistribute || (r->low_boost != 0.0 && r->low_boost != 1.0) || r->foam_map)
             return OCEAN_EINVAL;
         for (int c = 0; c < o->p.cascades; c++)
             if (isnan(r->cascade_cutoff_k[c]) || r->cascade_cutoff_k[c] < 0.0)
@@ -666,13 +669,7 @@ static int evaluate_cascade(ocean *o, int c, double t, const ocean_request *r,
         cascade_transform(o, c, &a, f);
         transforms = nch;
     }
-    /* Per-cascade mips (the cascade tile layout): each cascade's foam is
-     * placed by its own breaking index at its own cutoff, with the whole
-     * sea's coverage W (foam.h); the daemon asks foam of one cascade only,
-     * so W is not counted twice. */
     ocean_foam_map cmap = f->foam_map;
-    if (r->per_cascade && (fx & OCEAN_FX_FOAM))
-        cmap = ocean_stats_foam_cascade(o, c, kc, r->order);
     if ((fx & OCEAN_FX_FOAM) && r->foam_map) {
         ocean_field *fd = &f->field[c];
         long nn = (long)n * n, step = (long)n * 8;

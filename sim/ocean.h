@@ -190,12 +190,12 @@ typedef struct ocean_request {
     double low_boost; /* gain on waves below the cutoff (seed 000's 3 % motion
                          compensation gives 1.03); 1 or 0 means none */
     int foam_map;     /* 1: also fill each foam cascade's jacobian and foam
-                         planes (baking, field statistics, and the FOAM
-                         plane of the daemon's cascade tiles, read from
-                         cascade 0's map).  Point samples, queries and the
-                         daemon's world tiles form J from Dxx, Dzz, Dxz at
-                         the point and need no map, so those requests leave
-                         it 0 and skip a full pass over the field. */
+                         planes (baking, field statistics).  Point samples,
+                         queries and the daemon's tiles form J and foam from
+                         Dxx, Dzz, Dxz and bq at the point (or send the
+                         breaking index itself, layout 1) and need no map,
+                         so those requests leave it 0 and skip a full pass
+                         over the field.  Not with per_cascade (EINVAL) */
     int per_cascade;  /* 1: cascade c is filtered at cascade_cutoff_k[c]
                          instead of cutoff_k (the mips of ocean_cascade_mips:
                          one frame holds the same mip level of every

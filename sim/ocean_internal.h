@@ -377,11 +377,9 @@ void ocean_stage_split_note(ocean_split_stat *st, int split, double ns);
 
 /* The foam map (foam.h) of what an evaluation with this filter transforms,
  * with the std of its breaking index in *sigma and its mean frequency in
- * *omega (either may be NULL): memoised, of cascade c alone (memoised),
- * and computed. */
+ * *omega (either may be NULL): memoised, and computed. */
 ocean_foam_map ocean_stats_foam(ocean *o, double kc, int order, double scale, double boost, double *sigma,
                                 double *omega);
-ocean_foam_map ocean_stats_foam_cascade(ocean *o, int c, double kc, int order);
 ocean_foam_map ocean_stats_foam_sum(const ocean *o, double kc, int order, double scale, double boost,
                                     double *sigma);
 /* The whitecap coverage of o's sea. */

@@ -74,13 +74,11 @@ typedef struct foam_band {
     double m0_band, m1_band; /* m0, m1 of the band itself, before reading */
 } foam_band;
 
-static foam_band foam_band_of(const ocean *o, int only, double kc, int order, double scale, double boost)
+static foam_band foam_band_of(const ocean *o, double kc, int order, double scale, double boost)
 {
     double kneg = ocean_negligible_k(o, kc, order), m0 = 0.0, m1 = 0.0, m0b = 0.0, m1b = 0.0;
     int n = o->p.n, half = n / 2 + 1;
     for (int c = 0; c < o->p.cascades; c++) {
-        if (only >= 0 && c != only)
-            continue;
         const ocean_cascade *cs = &o->cas[c];
         if (cs->k_lo >= kneg)
             continue;
@@ -119,15 +117,14 @@ static ocean_foam_map foam_map_of(const ocean *o, foam_band b)
 
 /* The band and its solved map, memoised: a solve with trails integrates
  * numerically (a few ms), and the ticks ask for the same filters again. */
-static ocean_foam_map foam_memo(ocean *o, int only, double kc, int order, double scale, double boost,
-                                double *sigma, double *omega)
+static ocean_foam_map foam_memo(ocean *o, double kc, int order, double scale, double boost, double *sigma,
+                                double *omega)
 {
-    double key = only >= 0 ? -1.0 - only : scale; /* real scales are positive */
-    int i = memo_find(o->foam_memo, kc, order, key, boost);
+    int i = memo_find(o->foam_memo, kc, order, scale, boost);
     if (i < 0) {
-        foam_band b = foam_band_of(o, only, kc, order, scale, boost);
+        foam_band b = foam_band_of(o, kc, order, scale, boost);
         i = o->foam_next;
-        memo_put(o->foam_memo, &o->foam_next, kc, order, key, boost, b.sigma);
+        memo_put(o->foam_memo, &o->foam_next, kc, order, scale, boost, b.sigma);
         o->foam_memo[i].value2 = b.omega;
         o->foam_maps[i] = foam_map_of(o, b);
     }
@@ -139,7 +136,7 @@ static ocean_foam_map foam_memo(ocean *o, int only, double kc, int order, double
 ocean_foam_map ocean_stats_foam_sum(const ocean *o, double kc, int order, double scale, double boost,
                                     double *sigma)
 {
-    foam_band b = foam_band_of(o, -1, kc, order, scale, boost);
+    foam_band b = foam_band_of(o, kc, order, scale, boost);
     if (sigma) *sigma = b.sigma;
     return foam_map_of(o, b);
 }
@@ -147,7 +144,7 @@ ocean_foam_map ocean_stats_foam_sum(const ocean *o, double kc, int order, double
 ocean_foam_map ocean_stats_foam(ocean *o, double kc, int order, double scale, double boost, double *sigma,
                                 double *omega)
 {
-    return foam_memo(o, -1, kc, order, scale, boost, sigma, omega);
+    return foam_memo(o, kc, order, scale, boost, sigma, omega);
 }
 
 ocean_result ocean_foam_table(const ocean *o, const ocean *more, int order, const double *kc, int n,
@@ -162,9 +159,9 @@ ocean_result ocean_foam_table(const ocean *o, const ocean *more, int order, cons
     for (int j = 0; j < n; j++) {
         if (!(kc[j] >= 0.0))
             return OCEAN_EINVAL;
-        foam_band b = foam_band_of(o, -1, kc[j], order, 1.0, 1.0);
+        foam_band b = foam_band_of(o, kc[j], order, 1.0, 1.0);
         if (more) {
-            foam_band c = foam_band_of(more, -1, kc[j], order, 1.0, 1.0);
+            foam_band c = foam_band_of(more, kc[j], order, 1.0, 1.0);
             b.m0_band += c.m0_band;
             b.m1_band += c.m1_band;
         }
@@ -181,12 +178,6 @@ ocean_result ocean_foam_table(const ocean *o, const ocean *more, int order, cons
         rows[(*count)++] = (ocean_foam_row){sigma, a, omega};
     }
     return OCEAN_OK;
-}
-
-/* Cascade c alone at cutoff kc, memoised beside the whole-sea entries. */
-ocean_foam_map ocean_stats_foam_cascade(ocean *o, int c, double kc, int order)
-{
-    return foam_memo(o, c, kc, order, 1.0, 1.0, NULL, NULL);
 }
 
 /* The whitecap coverage of o's sea: the wind's, but none when the grid

@@ -401,49 +401,52 @@ static void near_field_keeps_the_coverage(void **state)
     }
 }
 
-/* Trails on an evaluated sea, as the daemon's tiles carry them (cascade
- * 0's foam plane, per-cascade evaluation, storm scene at 20 m/s): the
- * samples whose crest is passing at t0 with foam of at least 1/2 keep
- * their foam after the crest has moved on, decaying as exp(-dt / 3.85 s),
- * where the breaking index alone falls away.  The samples are the water's
- * rest positions, so this is foam staying with the water. */
+/* Trails on an evaluated sea (storm scene at 20 m/s, the whole sea read
+ * at points as every reader sums it, low-passed at 0.2 rad/m, the band
+ * of its first cascade, whose periods, 4.5 s and up, outlast the test's
+ * 3 s): the points whose crest is
+ * passing at t0 with foam of at least 1/2 keep their foam after the crest
+ * has moved on, decaying as exp(-dt / 3.85 s), where the breaking index
+ * alone falls away.  The points are the water's rest positions, so this is
+ * foam staying with the water. */
 static void trails_stay_with_the_water(void **state)
 {
     (void)state;
     ocean *o = scene_ocean("storm", 20.0);
-    const double lam = ocean_get_params(o)->sea.choppiness;
+    const double lam = ocean_get_params(o)->sea.choppiness, P = ocean_get_params(o)->patch_m;
     ocean_frame *f;
     assert_int_equal(ocean_frame_create(o, &f), OCEAN_OK);
     ocean_request r;
-    ocean_request_all(&r, 0);
-    r.effects[0] = OCEAN_FX_FOAM;
-    r.per_cascade = 1;
-    r.cascade_cutoff_k[0] = INFINITY;
+    ocean_request_all(&r, OCEAN_FX_FOAM);
+    r.foam_map = 0;   /* points only */
+    r.cutoff_k = 0.2;
     const double t0 = 200.0, dts[] = {0.0, 1.0, 2.0, 3.0};
-    const ocean_field *fd = ocean_frame_field(f, 0);
-    static unsigned char crest[OCEAN_MAX_N * OCEAN_MAX_N];
+    enum { N = 256 };
+    static unsigned char crest[N * N];
     long hits = 0;
     double first = 0.0, prev = 0.0;
     for (int k = 0; k < 4; k++) {
         assert_int_equal(ocean_evaluate(o, t0 + dts[k], &r, f), OCEAN_OK);
-        long nn = (long)fd->n * fd->n;
         double foam = 0.0;
-        for (long i = 0; i < nn; i++) {
-            double beta = -(fd->dxx[i] + fd->dzz[i]) / lam, q = -fd->bq[i] / lam;
+        for (long i = 0; i < (long)N * N; i++) {
+            if (k > 0 && !crest[i])
+                continue;
+            ocean_point pt;
+            ocean_frame_sample_some(f, P * (double)(i % N) / N, P * (double)(i / N) / N, OCEAN_SAMPLE_FOAM, &pt);
             if (k == 0) {
-                crest[i] = fd->foam[i] >= 0.5 && beta > 0.0 && fabs(atan2(q, beta)) < 0.1;
+                double beta = -(pt.dxx + pt.dzz) / lam, q = -pt.bq / lam;
+                crest[i] = pt.foam >= 0.5 && beta > 0.0 && fabs(atan2(q, beta)) < 0.1;
                 hits += crest[i];
             }
-            if (!crest[i])
-                continue;
-            foam += fd->foam[i];
+            if (crest[i])
+                foam += pt.foam;
         }
         assert_true(hits >= 50);
         foam /= hits;
         if (k == 0)
             first = foam;
         double want = exp(-dts[k] / OCEAN_FOAM_DECAY_S);
-        print_message("storm 20 m/s, %ld samples at a breaking crest at t0: at t0 + %.0f s foam %.3f of "
+        print_message("storm 20 m/s, %ld points at a breaking crest at t0: at t0 + %.0f s foam %.3f of "
                       "t0's (exp(-t/3.85 s) %.3f)\n",
                       hits, dts[k], foam / first, want);
         if (k > 0) {
@@ -686,9 +689,10 @@ static void flat_sea_has_no_foam(void **state)
 
 /* Whitecaps off (the sea state's sea.whitecaps; a CIGI host's Maritime
  * Surface Conditions Control): a storm sea at 20 m/s, whose crests break,
- * has no foam anywhere, in the field's statistics, at every sampled point
- * and in the per-cascade foam the daemon's tiles take; on, the same sea
- * has its whitecaps. */
+ * has no foam anywhere, in the field's statistics, at every sampled point,
+ * and no whitecap table for the daemon's layout-1 frames (its readers then
+ * draw none: PROTOCOL.md "Whitecaps in layout 1"); on, the same sea has
+ * its whitecaps and its table. */
 static void whitecaps_off_no_foam(void **state)
 {
     (void)state;
@@ -713,24 +717,17 @@ static void whitecaps_off_no_foam(void **state)
             ocean_frame_sample(f, 7.31 * (i % 64), -5.17 * (i / 64), &pt);
             most = fmax(most, pt.foam);
         }
-        /* the daemon's tiles: each cascade's foam plane by its own map,
-         * every cascade at its finest mip */
-        r.per_cascade = 1;
-        for (int c = 0; c < OCEAN_MAX_CASCADES; c++)
-            r.cascade_cutoff_k[c] = INFINITY;
-        assert_int_equal(ocean_evaluate(o, 40.0, &r, f), OCEAN_OK);
-        double most_tiles = 0;
-        for (int c = 0; c < p.cascades; c++) {
-            const ocean_field *fd = ocean_frame_field(f, c);
-            for (long i = 0; i < (long)fd->n * fd->n; i++)
-                most_tiles = fmax(most_tiles, fd->foam[i]);
-        }
-        print_message("storm 20 m/s, whitecaps %s: target %.4f, coverage %.4f, largest foam %.3f (per cascade "
-                      "%.3f)\n", on ? "on" : "off", info.whitecap_target, st.foam_coverage, most, most_tiles);
+        /* the daemon's layout-1 whitecap table */
+        const double kc[3] = {0.0, 0.1, INFINITY};
+        ocean_foam_row rows[3];
+        int nr = -1;
+        assert_int_equal(ocean_foam_table(o, NULL, 6, kc, 3, rows, &nr), OCEAN_OK);
+        print_message("storm 20 m/s, whitecaps %s: target %.4f, coverage %.4f, largest foam %.3f, whitecap table "
+                      "%d rows\n", on ? "on" : "off", info.whitecap_target, st.foam_coverage, most, nr);
         if (on) {
-            assert_true(info.whitecap_target > 0.01 && st.foam_coverage > 0.01 && most > 0.5 && most_tiles > 0.5);
+            assert_true(info.whitecap_target > 0.01 && st.foam_coverage > 0.01 && most > 0.5 && nr == 3);
         } else {
-            assert_true(info.whitecap_target == 0.0 && st.foam_coverage == 0.0 && most == 0.0 && most_tiles == 0.0);
+            assert_true(info.whitecap_target == 0.0 && st.foam_coverage == 0.0 && most == 0.0 && nr == 0);
         }
         ocean_frame_destroy(f);
         ocean_destroy(o);
