@@ -728,9 +728,15 @@ static void wait_wind(int port, double w)
 
 /* The witness: a live viewer of replica 1 (20 Hz, layout 1) read by a
  * thread of its own while a test does what it judges; it must keep 95 % of
- * the frame rate it had before and no wait between frames over 200 ms (or
- * over 1.5 times its longest wait before, on a host too loaded for 200 ms
- * without anything being done to the daemon). */
+ * the frame rate it had before and no wait between frames over 600 ms (or
+ * over twice its longest wait before, on a host too loaded for 600 ms
+ * without anything being done to the daemon).  The stalls it is there for
+ * are the daemon waiting on Redis (its calls time out after about 1 s) or
+ * building oceans on the tick: a stall of 250 ms already costs the rate
+ * 5 % (frames are replaced, not queued), and one of 1 s the gap.  A busy
+ * host alone delayed one frame by 475-570 ms in runs whose control window,
+ * nothing done, then kept 200 ms: a single gap is the host's noise, so the
+ * bound stays above it. */
 typedef struct witness {
     test_ws w;
     pthread_t thread;
@@ -822,7 +828,7 @@ static double witness_report(witness *v, const char *what)
 /* Whether the witness kept `keep` of its rate and its gaps short. */
 static int witness_kept(const witness *v, double keep)
 {
-    return keep >= 0.95 && v->gap <= fmax(0.2, 1.5 * v->base_gap);
+    return keep >= 0.95 && v->gap <= fmax(0.6, 2.0 * v->base_gap);
 }
 
 /* After a witness missed its mark on every try: a window with nothing done
