@@ -669,13 +669,12 @@ static int evaluate_cascade(ocean *o, int c, double t, const ocean_request *r,
         cascade_transform(o, c, &a, f);
         transforms = nch;
     }
-    ocean_foam_map cmap = f->foam_map;
     if ((fx & OCEAN_FX_FOAM) && r->foam_map) {
         ocean_field *fd = &f->field[c];
         long nn = (long)n * n, step = (long)n * 8;
 #pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
         for (long i = 0; i < nn; i += step)
-            jacobian_rows(fd, i, i + step < nn ? i + step : nn, &cmap, f->foam_inv_lambda);
+            jacobian_rows(fd, i, i + step < nn ? i + step : nn, &f->foam_map, f->foam_inv_lambda);
     }
     return transforms;
 }

@@ -328,8 +328,9 @@ double ocean_frame_foam_plus(const ocean_frame *f, double m0, double m1, double 
  * the trails' rate), a solved for the wind's coverage at that std and
  * frequency.  The band as it is, not as some interpolation reads it: a
  * reader that sums bands knows their variance from the mip tables alone
- * (PROTOCOL.md "Whitecaps in layout 1"), and the Keys-cubic C library
- * reads 0.85-0.91 of the coverage at ship-bridge's 2-1500 m cameras. */
+ * (PROTOCOL.md "Whitecaps in layout 1"); the Keys-cubic C library reads
+ * 0.93-1.08 of Monahan's coverage from ship-bridge's 2 m-10 km cameras
+ * (tests/test_fidelity.sh). */
 typedef struct ocean_foam_row {
     double sigma, a, omega;
 } ocean_foam_row;

@@ -79,7 +79,7 @@ typedef struct fid_sums {
 
 typedef struct fid_acc {
     fid_sums px, area;
-    double tile_foam, tile_area;     /* area_foam's sum and its points */
+    double area_foam, area_points;   /* area_foam's sum and its points */
     double e_error, e_total, e_total_max;
     uint64_t samples, above, outside, frames, stale;
     uint64_t rx_frames, rx_bytes;    /* every frame made for the camera */
@@ -119,8 +119,8 @@ static void area_foam(const oc_frame *f, fid_acc *A)
             if (oc_frame_sample(f, c[0] + side * ((j + 0.5) / 96 - 0.5), c[2] + side * ((i + 0.5) / 96 - 0.5), 0,
                                 &s) != OCEAN_OK || !(s.channels & PROTO_CH_BREAKING))
                 continue;
-            A->tile_foam += s.foam;
-            A->tile_area += 1;
+            A->area_foam += s.foam;
+            A->area_points += 1;
         }
 }
 
@@ -463,7 +463,7 @@ static void fid_figures_compute(const fid_cfg *F, const fid_acc *A, const proto_
     G->foam_half = S->foam_half / S->w;
     G->W = monahan_whitecap(G->u10);
     G->foam_px = P->foam / P->w;
-    G->foam_tiles = A->tile_area > 0 ? A->tile_foam / A->tile_area : NAN;
+    G->foam_tiles = A->area_points > 0 ? A->area_foam / A->area_points : NAN;
     G->foam_applies = G->u10 >= 8 && G->u10 <= 26;
     G->foam_offered = (hello->effects & PROTO_FX_FOAM) != 0;
     /* slopes: both means must hold (per pixel: what the screen shows, near
