@@ -1218,27 +1218,22 @@ static void snapshot_jobs(srv_sim *s, work *w, double t, int64_t tick_no, int li
         if (!cs || !grow((void **)&w->cl, &w->capcl, w->ncl + 1, sizeof *w->cl)) break;
         srv_client_ref(c);
         w->cl[w->ncl++] = c;
-        int changed = 0;
-        if (cs->sub_gen != c->sub_gen) {
-            cs->sub = c->sub;
-            cs->sub_gen = c->sub_gen;
-            changed = 1;
-        }
+        /* A changed subscription is taken with the job that applies it
+         * (filter_jobs): a turn without a live tick (a query's, between
+         * ticks) leaves it for the next tick, where taking it without a job
+         * would never apply it (a layout-0 client then got frames without
+         * a mesh, and no ERROR, for as long as it stayed). */
+        int changed = cs->sub_gen != c->sub_gen;
+        job *j = NULL;
         if (c->sub.mode == PROTO_MODE_REPLAY) {
-            job *j;
             /* its frames come in the replay turn (replay_turn); a changed
              * subscription rebuilds the mesh now */
-            if (changed && (j = add_job(w, c, cs))) {
-                j->sub_changed = 1;
-                j->replay = -1;
-            }
+            if (changed && (j = add_job(w, c, cs))) j->replay = -1;
         } else if (live_due) {
-            job *j = add_job(w, c, cs);
-            if (!j) break;
+            if (!(j = add_job(w, c, cs))) break;
             j->t = t;
             j->tick = (uint32_t)tick_no;
             j->tick_no = tick_no;
-            j->sub_changed = changed;
             if (c->has_camera) {
                 j->cam = c->cam;
                 j->cam_seq = c->cam_seq;
@@ -1246,6 +1241,11 @@ static void snapshot_jobs(srv_sim *s, work *w, double t, int64_t tick_no, int li
                 j->cam_seq = PROTO_NO_CAMERA;
                 j->replay = -2; /* camera filled below */
             }
+        }
+        if (j && changed) {
+            cs->sub = c->sub;
+            cs->sub_gen = c->sub_gen;
+            j->sub_changed = 1;
         }
     }
 }

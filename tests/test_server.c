@@ -4099,6 +4099,55 @@ static void subscribe_keeps_pending_queries(void **state)
     }
 }
 
+/* A SUBSCRIBE that a turn between ticks sees (a QUERY sent with it is
+ * answered at once, not at the next tick) is applied at the next tick: on
+ * a 2 Hz daemon, each layout's stream subscribed without a mesh, then
+ * re-subscribed with one together with a QUERY, gets frames with a mesh.
+ * It got none, and no ERROR, when the query's turn took the subscription
+ * without applying it (the browser viewer queries as soon as it has
+ * subscribed; on a busy host its layout-0 page drew nothing). */
+static void subscribe_between_ticks_is_applied(void **state)
+{
+    (void)state;
+    const char *sets[] = {"server.port=0", "server.tick_rate=2", "ocean.threads=1", "server.workers=2"};
+    srv_settings sb;
+    srv_daemon *d = start_daemon(sets, 4, &sb);
+    for (int layout = PROTO_LAYOUT_WORLD; layout <= PROTO_LAYOUT_CASCADE; layout++) {
+        test_ws w;
+        assert_int_equal(test_ws_connect(&w, srv_daemon_port(d), "/", PROTO_SUBPROTOCOL), 0);
+        proto_msg m, sm;
+        assert_true(test_msg_wait(&w, PROTO_HELLO, FRAME_WAIT_MS, &m));
+        proto_msg_free(&m);
+        proto_msg_init(&sm, PROTO_SUBSCRIBE);
+        if (layout == PROTO_LAYOUT_WORLD) small_subscribe(&sm.u.subscribe);
+        else oc_subscribe_default(&sm.u.subscribe);
+        sm.u.subscribe.frame_rate_hz = 2;
+        sm.u.subscribe.mesh_kind = PROTO_MESH_NONE;
+        test_msg_send(&w, &sm);
+        assert_true(test_msg_wait(&w, PROTO_FRAME, FRAME_WAIT_MS, &m));
+        assert_int_equal(m.u.frame.has_mesh, 0);
+        proto_msg_free(&m);
+        /* just after a tick: the next is 0.5 s away, the query's turn comes first */
+        sm.u.subscribe.mesh_kind = PROTO_MESH_CONCENTRIC;
+        test_msg_send(&w, &sm);
+        raw_query(&w, 1, 1);
+        assert_true(test_msg_wait(&w, PROTO_QUERY_RESULT, FRAME_WAIT_MS, &m));
+        proto_msg_free(&m);
+        int frames = 0, meshed = 0;
+        for (double end = test_now_s() + FRAME_WAIT_MS / 1e3; !meshed && test_now_s() < end; frames++) {
+            if (!test_msg_wait(&w, PROTO_FRAME, FRAME_WAIT_MS, &m)) break;
+            assert_int_equal(m.u.frame.layout, layout);
+            meshed = m.u.frame.has_mesh != 0;
+            proto_msg_free(&m);
+        }
+        if (!meshed)
+            fail_msg("layout %d: %d frames after a SUBSCRIBE with a mesh, none carries one", layout, frames);
+        print_message("layout %d: the re-subscription's mesh came with frame %d after the query\n", layout, frames);
+        test_ws_close(&w);
+    }
+    srv_daemon_stop(d);
+}
+
 /* HELLO's limits are ones the server honours: a QUERY of max_query_points
  * fits max_message (32 + 24 + 16 N bytes) and is answered, one more point is
  * ETOOBIG; max_frame_rate_hz is not above tick_rate_hz and a faster
@@ -5281,6 +5330,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(reload_sea_that_cannot_be_built),
         cmocka_unit_test(reload_sea_retried_when_the_timeline_is_full),
         cmocka_unit_test(subscribe_keeps_pending_queries),
+        cmocka_unit_test(subscribe_between_ticks_is_applied),
         cmocka_unit_test(admin_lock_sliding_window),
         cmocka_unit_test(mesh_denser_on_steep_chop),
         cmocka_unit_test(mesh_fits_the_limit_on_steep_chop),
