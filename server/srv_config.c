@@ -296,11 +296,14 @@ static const conf_entry srv_entries[] = {
              "KB against 200 KB, 17 853 vertices against 5 425, for a 1080p camera 25 m up, "
              "once per plan)."},
     {.name = "server.px_per_sample", .type = CONF_DOUBLE, .offset = SRV(px_per_sample),
-     .min = 0.5, .max = 1024, .def = "4", .unit = "px",
+     .min = 0.5, .max = 1024, .def = "1", .unit = "px",
      .help = "Cascade tile layout: the finest detail wanted, as the pixels one tile sample "
-             "spans on screen at its distance from the camera (normals want 1 to 4).  The "
-             "viewer's byte budget (server.viewer_bytes_per_s) coarsens it where it would cost "
-             "more; finer detail travels as unresolved slope variance for shading."},
+             "spans on screen at its distance from the camera.  The viewer's byte budget "
+             "(server.viewer_bytes_per_s) coarsens it where it would cost more; finer detail "
+             "travels as unresolved slope variance for shading, a smooth lobe where the exact "
+             "sea has glints.  Near the water the budget sets the plan; from 1.5 and 10 km the "
+             "plan fits at 4 px, and 1 px spends the rest: against a render of the exact sea, "
+             "SSIM 0.73 -> 0.78 and 0.84 -> 0.95 over the storm (`make bench`, bench_look)."},
     {.name = "server.cascade_tile", .type = CONF_INT, .offset = SRV(cascade_tile), .min = 8, .max = 256,
      .def = "32", .hook = tile_pow2_hook,
      .help = "Cascade tile layout: side of every tile, in samples (a mip smaller than this is one "

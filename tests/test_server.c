@@ -1311,6 +1311,47 @@ static void cascade_q_spends_the_budget(void **state)
     srv_daemon_stop(d);
 }
 
+/* From altitude the plan fits the budget with bytes to spare, and spends
+ * them on detail down to a sample a pixel (server.px_per_sample): over
+ * the storm from 10 km, looking down, every cascade's q is the finest
+ * wanted, 1 / (pixels per radian).  At 4 px the waves between one and
+ * four pixels reached the shading only as a smooth lobe where the exact
+ * sea has glints: SSIM against its render 0.84, 0.95 at 1 px (REPORT.md,
+ * bench_look), for 0.69 of the 0.85 MB/s budget. */
+static void altitude_plan_reaches_a_sample_a_pixel(void **state)
+{
+    (void)state;
+    const char *sets[] = {"server.port=0", "server.scene=storm", "ocean.threads=1", "server.workers=2"};
+    srv_settings sb;
+    srv_daemon *d = start_daemon(sets, 4, &sb);
+    oc_client *c = connect_client(srv_daemon_port(d), NULL);
+    proto_subscribe s;
+    oc_subscribe_default(&s);
+    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    proto_camera cam;
+    oc_camera_default(&cam);
+    cam.pos[1] = 10000;
+    cam.pitch_deg = -89;
+    cam.yaw_deg = 30;
+    cam.fov_y_deg = 60;
+    cam.viewport_w = 1280;
+    cam.viewport_h = 720;
+    oc_frame *f = frame_for_camera(c, &cam);
+    const proto_cascade_block *b = &f->info.cascades;
+    double ppr = 0.5 * cam.viewport_h / tan(0.5 * cam.fov_y_deg * M_PI / 180.0);
+    assert_true(b->cascade_count >= 3);
+    for (int k = 0; k < b->cascade_count; k++) {
+        print_message("10 km: cascade %d q %.5f (a sample a pixel: %.5f)\n", k, (double)b->cascade[k].spacing_per_m,
+                      1.0 / ppr);
+        if (!(b->cascade[k].spacing_per_m <= 1.001 / ppr))
+            fail_msg("cascade %d read at q %.5f from 10 km, coarser than a sample a pixel (%.5f): the budget "
+                     "allows it", k, (double)b->cascade[k].spacing_per_m, 1.0 / ppr);
+    }
+    oc_frame_free(f);
+    oc_client_destroy(c);
+    srv_daemon_stop(d);
+}
+
 /* Relief before texture (srv_cascade.c plan_relief).  From 5 m over the
  * storm sea, level, in a 10 deg view (960 x 270) with the viewer's
  * subscription, the exact sea's crests that break the horizon are 0.7-2.9
@@ -5336,6 +5377,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(mesh_fits_the_limit_on_steep_chop),
         cmocka_unit_test(narrow_fov_gets_a_mesh_without_error),
         cmocka_unit_test(cascade_q_spends_the_budget),
+        cmocka_unit_test(altitude_plan_reaches_a_sample_a_pixel),
         cmocka_unit_test(relief_reads_the_far_crests),
         cmocka_unit_test(time_interp_reads_the_frames_tick),
         cmocka_unit_test(time_interp_key_frame_spread),

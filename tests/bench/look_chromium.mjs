@@ -79,13 +79,13 @@ try {
             [s0.d, s0.r], { timeout: timeoutMs, polling: 200 });
         const png = await page.screenshot({ type: 'png' });
         writeFileSync(v.shot, png);
-        const st = await page.evaluate(() => ({ frames: window.oceanStats.framesRendered, errors: window.oceanStats.errors.slice(), vertices: window.oceanStats.vertexCount, zones: window.oceanStats.zones, block: window.oceanStats.block }));
+        const st = await page.evaluate(() => ({ frames: window.oceanStats.framesRendered, errors: window.oceanStats.errors.slice(), vertices: window.oceanStats.vertexCount, zones: window.oceanStats.zones, block: window.oceanStats.block, bytesPerSec: window.oceanStats.bytesPerSec, cascades: window.oceanStats.cascades }));
         await page.close();
         const a = decodePng(png), b = decodePng(readFileSync(v.ref));
         if (a.w !== b.w || a.h !== b.h) throw new Error(`${v.name}: screenshot ${a.w}x${a.h}, reference ${b.w}x${b.h}`);
         const r = ssim({ data: a.px, width: a.w, height: a.h }, { data: b.px, width: b.w, height: b.h }, { ssim: 'original' });
         if (v.pair) await sideBySide(png, readFileSync(v.ref), v.pair);
-        const line = { name: v.name, ssim: r.mssim, mean_abs_diff: meanAbsDiff(a, b), frames: st.frames, errors: st.errors, vertices: st.vertices, zones: st.zones, block: st.block };
+        const line = { name: v.name, ssim: r.mssim, mean_abs_diff: meanAbsDiff(a, b), frames: st.frames, errors: st.errors, vertices: st.vertices, zones: st.zones, block: st.block, bytesPerSec: st.bytesPerSec, cascades: st.cascades };
         if (v.edge) {
             const ea = seaEdgeRows(a), eb = seaEdgeRows(b);
             Object.assign(line, { edge_viewer: seaEdgeSummary(ea), edge_ref: seaEdgeSummary(eb), edge_within_1: ea.filter((y, i) => Math.abs(y - eb[i]) <= 1).length / ea.length });
