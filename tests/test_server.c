@@ -1311,6 +1311,19 @@ static void cascade_q_spends_the_budget(void **state)
     srv_daemon_stop(d);
 }
 
+/* A daemon in this process on the storm scene (defaults otherwise) and a
+ * client of it with the viewer's subscription, its mesh included. */
+static oc_client *storm_viewer(srv_daemon **d, srv_settings *sb)
+{
+    const char *sets[] = {"server.port=0", "server.scene=storm", "ocean.threads=1", "server.workers=2"};
+    *d = start_daemon(sets, 4, sb);
+    oc_client *c = connect_client(srv_daemon_port(*d), NULL);
+    proto_subscribe s;
+    oc_subscribe_default(&s);
+    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    return c;
+}
+
 /* From altitude the plan fits the budget with bytes to spare, and spends
  * them on detail down to a sample a pixel (server.px_per_sample): over
  * the storm from 10 km, looking down, every cascade's q is the finest
@@ -1321,13 +1334,9 @@ static void cascade_q_spends_the_budget(void **state)
 static void altitude_plan_reaches_a_sample_a_pixel(void **state)
 {
     (void)state;
-    const char *sets[] = {"server.port=0", "server.scene=storm", "ocean.threads=1", "server.workers=2"};
     srv_settings sb;
-    srv_daemon *d = start_daemon(sets, 4, &sb);
-    oc_client *c = connect_client(srv_daemon_port(d), NULL);
-    proto_subscribe s;
-    oc_subscribe_default(&s);
-    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    srv_daemon *d;
+    oc_client *c = storm_viewer(&d, &sb);
     proto_camera cam;
     oc_camera_default(&cam);
     cam.pos[1] = 10000;
@@ -1364,13 +1373,9 @@ static void altitude_plan_reaches_a_sample_a_pixel(void **state)
 static void relief_reads_the_far_crests(void **state)
 {
     (void)state;
-    const char *sets[] = {"server.port=0", "server.scene=storm", "ocean.threads=1", "server.workers=2"};
     srv_settings sb;
-    srv_daemon *d = start_daemon(sets, 4, &sb);
-    oc_client *c = connect_client(srv_daemon_port(d), NULL);
-    proto_subscribe s;
-    oc_subscribe_default(&s); /* with its mesh, whose silhouettes the relief is */
-    assert_int_equal(oc_client_subscribe(c, &s), OCEAN_OK);
+    srv_daemon *d;
+    oc_client *c = storm_viewer(&d, &sb); /* with its mesh, whose silhouettes the relief is */
     proto_camera cam;
     oc_camera_default(&cam);
     cam.pos[0] = cam.pos[2] = 0;
