@@ -1219,10 +1219,10 @@ static void snapshot_jobs(srv_sim *s, work *w, double t, int64_t tick_no, int li
         srv_client_ref(c);
         w->cl[w->ncl++] = c;
         /* A changed subscription is taken with the job that applies it
-         * (filter_jobs): a turn without a live tick (a query's, between
-         * ticks) leaves it for the next tick, where taking it without a job
-         * would never apply it (a layout-0 client then got frames without
-         * a mesh, and no ERROR, for as long as it stayed). */
+         * (filter_jobs).  A turn without a live tick (a query's, between
+         * ticks) leaves it for the next tick: taken without a job it would
+         * never be applied, and the client would get frames without the
+         * mesh it asked for, and no ERROR, for as long as it stayed. */
         int changed = cs->sub_gen != c->sub_gen;
         job *j = NULL;
         if (c->sub.mode == PROTO_MODE_REPLAY) {

@@ -1330,7 +1330,7 @@ static oc_client *storm_viewer(srv_daemon **d, srv_settings *sb)
  * wanted, 1 / (pixels per radian).  At 4 px the waves between one and
  * four pixels reached the shading only as a smooth lobe where the exact
  * sea has glints: SSIM against its render 0.84, 0.95 at 1 px (REPORT.md,
- * bench_look), for 0.69 of the 0.85 MB/s budget. */
+ * bench_look), for 0.69 MB/s of the 0.85 MB/s budget at 1920 x 1080. */
 static void altitude_plan_reaches_a_sample_a_pixel(void **state)
 {
     (void)state;
