@@ -772,6 +772,12 @@ static void on_wake(srv_net *n)
     }
     for (srv_session *s = n->sessions; s; s = s->next) {
         if (!s->wsi || s->c->closed) continue;
+        if (s->closing == 3) {
+            /* cut already, and counted once: its close waits for the
+             * writeable callback or KILL_GRACE_S, not for another limit */
+            lws_callback_on_writable(s->wsi);
+            continue;
+        }
         srv_outbox_set_hard(s->c->out, cfg.output_hard);
         if (session_input(s, &cfg, now)) continue;
         if ((stopping || past) && s->closing != 1 && s->closing != 3 && s->closing != 4) {
