@@ -41,8 +41,9 @@
  * Longuet-Higgins criterion holds (active breaking), fading to 0 at
  * beta = a on the flanks (the residual, stage-B foam of Monahan & Lu 1990,
  * which stays near the crests that made it).  For the Gaussian linear
- * field with std sigma_beta - as a point sampler reads it: ocean_stats.c counts
- * the power bilinear reading takes from near-Nyquist waves - a is chosen
+ * field with std sigma_beta - as its reader reads it: ocean_stats.c counts
+ * the power bilinear or cubic reading takes from near-Nyquist waves, one
+ * ramp per reading (ocean.h ocean_foam_reading) - a is chosen
  * so the expected mean of foam, trails included (below), is W.  A filtered frame (fewer short waves, smaller sigma_beta) gets a
  * lower a: its mean foam is still W, spread more evenly - the whitecap
  * coverage of a sea does not depend on the camera.  When even a = -inf

@@ -546,13 +546,16 @@ static void frame_foam_setup(ocean *o, const ocean_request *r, const eval_filter
         any_foam |= (r->effects[c] & OCEAN_FX_FOAM) != 0;
     double lam = o->p.sea.choppiness;
     f->foam_inv_lambda = lam > 0.0 ? 1.0 / lam : 0.0;
-    f->info.foam_sigma = f->info.foam_omega = 0.0;
     f->info.whitecap_target = ocean_stats_whitecap_target(o);
-    if (any_foam)
-        f->foam_map = ocean_stats_foam(o, ef->kc, r->order, ef->scale, ef->boost, &f->info.foam_sigma,
-                                       &f->info.foam_omega);
-    else /* read by nothing (no foam channel), but defined */
-        f->foam_map = (ocean_foam_map){INFINITY, INFINITY, -1.0, INFINITY};
+    for (int rd = 0; rd < OCEAN_FOAM_READINGS; rd++) {
+        f->foam_sigma[rd] = f->foam_omega[rd] = 0.0;
+        f->foam_map[rd] = any_foam ? ocean_stats_foam(o, (ocean_foam_reading)rd, ef->kc, r->order, ef->scale,
+                                                      ef->boost, &f->foam_sigma[rd], &f->foam_omega[rd])
+                                   /* read by nothing (no foam channel), but defined */
+                                   : (ocean_foam_map){INFINITY, INFINITY, -1.0, INFINITY};
+    }
+    f->info.foam_sigma = f->foam_sigma[OCEAN_FOAM_BILINEAR];
+    f->info.foam_omega = f->foam_omega[OCEAN_FOAM_BILINEAR];
 }
 
 /* Modes of the n-point grid an evolving pass computed, and of those the
@@ -674,7 +677,8 @@ static int evaluate_cascade(ocean *o, int c, double t, const ocean_request *r,
         long nn = (long)n * n, step = (long)n * 8;
 #pragma omp parallel for num_threads(o->p.threads) schedule(static) if (n >= PARALLEL_MIN_N)
         for (long i = 0; i < nn; i += step)
-            jacobian_rows(fd, i, i + step < nn ? i + step : nn, &f->foam_map, f->foam_inv_lambda);
+            jacobian_rows(fd, i, i + step < nn ? i + step : nn, &f->foam_map[OCEAN_FOAM_BILINEAR],
+                          f->foam_inv_lambda);
     }
     return transforms;
 }

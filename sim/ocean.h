@@ -285,7 +285,8 @@ typedef struct ocean_frame_info {
     int transforms;       /* 2-D inverse real FFTs this evaluation ran */
     int cascades;
     double foam_sigma;    /* std of the breaking index beta over the evaluated
-                             band (0 without foam channels) */
+                             band as a bilinear reading holds it (0 without
+                             foam channels) */
     double foam_omega;    /* its mean frequency m1 / m0, rad/s: the rate of
                              the trails' phase (foam.h) */
     double whitecap_target; /* ocean_foam_coverage_target(U10): the expected
@@ -307,21 +308,38 @@ typedef struct ocean_point {
 } ocean_point;
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out);
 
+/* How a reader read the breaking index it turns into foam.  The whitecap
+ * ramp is solved so that the index's distribution, as read, covers the
+ * wind's share of the sea, and a reading changes that distribution:
+ * interpolation between grid nodes damps the waves near each grid's
+ * Nyquist, bilinear (ocean_frame_sample, layout-0 tiles) more than cubic
+ * Lagrange (ocean_frame_sample_accurate, queries), and the exact sum of
+ * the waves not at all.  Each reading has its own ramp: the bilinear
+ * reading's ramp on the cubic reading's index covered 1.5 times the
+ * wind's share (ship-bridge), the exact sum's 0.73 times. */
+typedef enum ocean_foam_reading {
+    OCEAN_FOAM_BILINEAR = 0,
+    OCEAN_FOAM_CUBIC = 1,
+    OCEAN_FOAM_EXACT = 2,
+    OCEAN_FOAM_READINGS
+} ocean_foam_reading;
+
 /* Whitecap foam (foam.h) of a point whose summed displacement derivatives
  * are dxx = lambda Dxx and dzz = lambda Dzz and whose breaking index's
  * quadrature is -bq / lambda (ocean_point's fields, plus the share of any
  * waves the caller adds, e.g. the near field's), with this frame's
- * whitecap ramp and trails: ocean_frame_sample's .foam is
- * ocean_frame_foam(f, p.dxx, p.dzz, p.bq).  0 for a frame evaluated
- * without foam channels. */
-double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz, double bq);
+ * whitecap ramp for reading rd and trails: ocean_frame_sample's .foam is
+ * ocean_frame_foam(f, OCEAN_FOAM_BILINEAR, p.dxx, p.dzz, p.bq).  0 for a
+ * frame evaluated without foam channels. */
+double ocean_frame_foam(const ocean_frame *f, ocean_foam_reading rd, double dxx, double dzz, double bq);
 
 /* The same where waves the frame does not hold add to dxx, dzz and bq (a
  * near field): their summed dxx + dzz has variance m0 and frequency
  * moment m1 (sum of variance times w), and the ramp is solved for the
- * band the frame and they make together, so the coverage there stays the
- * wind's (foam.h).  ocean_frame_foam when m0 = 0. */
-double ocean_frame_foam_plus(const ocean_frame *f, double m0, double m1, double dxx, double dzz, double bq);
+ * band the frame (as rd reads it) and they make together, so the coverage
+ * there stays the wind's (foam.h).  ocean_frame_foam when m0 = 0. */
+double ocean_frame_foam_plus(const ocean_frame *f, ocean_foam_reading rd, double m0, double m1, double dxx,
+                             double dzz, double bq);
 
 /* The whitecap ramp of a band (foam.h): the breaking index's std sigma of
  * the band, the ramp's foot a, and the band's mean frequency omega (rad/s,
@@ -376,7 +394,8 @@ void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned 
  * If err is not NULL, err->height, err->dx and err->dz receive a bound on
  * each one's interpolation error against the frame's own waves (see the
  * comment in ocean_accurate.c; INFINITY where a needed derivative channel is
- * missing); its other fields are 0.  About ten times the cost of the
+ * missing); its other fields are 0.  Its foam has the cubic reading's
+ * ramp (OCEAN_FOAM_CUBIC).  About ten times the cost of the
  * bilinear reading (bench_near): meant for queries, not mesh vertices. */
 void ocean_frame_sample_accurate(const ocean_frame *f, double x, double z, unsigned want,
                                  ocean_point *out, ocean_point *err);

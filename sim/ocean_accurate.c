@@ -381,9 +381,9 @@ void ocean_frame_sample_accurate(const ocean_frame *f, double x, double z, unsig
     double jac = (1.0 + v[DXX]) * (1.0 + v[DZZ]) - v[DXZ] * v[DXZ];
     *out = (ocean_point){.height = v[H], .dx = v[DX], .dz = v[DZ], .slope_x = v[SX],
                          .slope_z = v[SZ], .jacobian = jac,
-                         /* the frame's whitecap foam, as ocean_frame_sample
-                          * and every tile give it */
-                         .foam = any_foam ? ocean_frame_foam(f, v[DXX], v[DZZ], v[BQ]) : 0.0,
+                         /* the frame's whitecap foam, with the ramp of an
+                          * accurate reading (ocean_foam_reading) */
+                         .foam = any_foam ? ocean_frame_foam(f, OCEAN_FOAM_CUBIC, v[DXX], v[DZZ], v[BQ]) : 0.0,
                          .vel_x = v[VX], .vel_y = v[VY], .vel_z = v[VZ], .dxx = v[DXX],
                          .dzz = v[DZZ], .dxz = v[DXZ], .bq = v[BQ]};
     if (err)

@@ -147,10 +147,12 @@ struct ocean {
      * scales are keyed by (cutoff, order), E_error by all four. */
     ocean_memo redis_memo[FILTER_MEMO], err_memo[FILTER_MEMO];
     int redis_next, err_next;
-    /* the breaking index per filter (foam.h), same keys: its std (value)
-     * and mean frequency (value2), and the map solved for them */
+    /* the breaking index per filter (foam.h), same keys: for each reading
+     * (ocean_foam_reading) its std and mean frequency as that reading
+     * holds it, and the map solved for them */
     ocean_memo foam_memo[FILTER_MEMO];
-    ocean_foam_map foam_maps[FILTER_MEMO];
+    ocean_foam_map foam_maps[FILTER_MEMO][OCEAN_FOAM_READINGS];
+    double foam_read[FILTER_MEMO][OCEAN_FOAM_READINGS][2];
     int foam_next;
     ocean_gain_plane gains[GAIN_PLANES];
     uint64_t gain_clock;
@@ -174,9 +176,13 @@ struct ocean_frame {
     ocean_field field[OCEAN_MAX_CASCADES];
     ocean_frame_info info;
     double patch[OCEAN_MAX_CASCADES];
-    /* The whitecap ramp of this evaluation (foam.h) and 1/lambda, which
-     * turns the foam channels' lambda (Dxx + Dzz) into beta = -a_z/g. */
-    ocean_foam_map foam_map;
+    /* The whitecap ramps of this evaluation (foam.h), one a reading
+     * (ocean_foam_reading), with the std and frequency each reading holds
+     * (the bilinear one's are info.foam_sigma and foam_omega), and
+     * 1/lambda, which turns the foam channels' lambda (Dxx + Dzz) into
+     * beta = -a_z/g. */
+    ocean_foam_map foam_map[OCEAN_FOAM_READINGS];
+    double foam_sigma[OCEAN_FOAM_READINGS], foam_omega[OCEAN_FOAM_READINGS];
     double foam_inv_lambda;
 };
 
@@ -376,10 +382,13 @@ void ocean_stage_split_note(ocean_split_stat *st, int split, double ns);
 /* ---- ocean_stats.c: the spectrum under a filter */
 
 /* The foam map (foam.h) of what an evaluation with this filter transforms,
- * with the std of its breaking index in *sigma and its mean frequency in
- * *omega (either may be NULL): memoised, and computed. */
-ocean_foam_map ocean_stats_foam(ocean *o, double kc, int order, double scale, double boost, double *sigma,
-                                double *omega);
+ * read as rd reads it, with the std of its breaking index in *sigma and
+ * its mean frequency in *omega (either may be NULL): memoised, and
+ * computed. */
+ocean_foam_map ocean_stats_foam(ocean *o, ocean_foam_reading rd, double kc, int order, double scale, double boost,
+                                double *sigma, double *omega);
+/* The exact sums' map of the same band (OCEAN_FOAM_EXACT), not memoised
+ * (const o). */
 ocean_foam_map ocean_stats_foam_sum(const ocean *o, double kc, int order, double scale, double boost,
                                     double *sigma);
 /* The whitecap coverage of o's sea. */

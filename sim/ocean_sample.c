@@ -32,10 +32,10 @@ static inline double corners_read(const float *g, const corners *k)
     return (a * (1.0 - k->fx) + b * k->fx) * (1.0 - k->fz) + (c * (1.0 - k->fx) + d * k->fx) * k->fz;
 }
 
-/* The foam of summed foam channels (ocean.h "Whitecap foam"). */
-static inline double frame_foam(const ocean_frame *f, double dxx, double dzz, double bq)
+/* The foam of summed foam channels (ocean.h "Whitecap foam") with ramp m. */
+static inline double foam_with(const ocean_frame *f, const ocean_foam_map *m, double dxx, double dzz, double bq)
 {
-    return ocean_foam_value(&f->foam_map, ocean_foam_beta(dxx, dzz, f->foam_inv_lambda),
+    return ocean_foam_value(m, ocean_foam_beta(dxx, dzz, f->foam_inv_lambda),
                             ocean_foam_beta(bq, 0.0, f->foam_inv_lambda));
 }
 
@@ -82,37 +82,41 @@ void ocean_frame_sample_some(const ocean_frame *f, double x, double z, unsigned 
     double jac = (1.0 + dxx) * (1.0 + dzz) - dxz * dxz;
     *out = (ocean_point){.height = h, .dx = dx, .dz = dz, .slope_x = sx, .slope_z = sz,
                          .jacobian = jac,
-                         .foam = any_foam ? frame_foam(f, dxx, dzz, bq) : 0.0,
+                         .foam = any_foam ? foam_with(f, &f->foam_map[OCEAN_FOAM_BILINEAR], dxx, dzz, bq) : 0.0,
                          .vel_x = vx, .vel_y = vy, .vel_z = vz, .dxx = dxx, .dzz = dzz, .dxz = dxz,
                          .bq = bq};
 }
 
-double ocean_frame_foam(const ocean_frame *f, double dxx, double dzz, double bq)
+static int frame_has_foam(const ocean_frame *f)
 {
     int any = 0;
     for (int c = 0; c < f->cascades; c++)
         any |= f->field[c].dxx != NULL;
-    return any ? frame_foam(f, dxx, dzz, bq) : 0.0;
+    return any;
 }
 
-double ocean_frame_foam_plus(const ocean_frame *f, double m0, double m1, double dxx, double dzz, double bq)
+double ocean_frame_foam(const ocean_frame *f, ocean_foam_reading rd, double dxx, double dzz, double bq)
+{
+    if (!frame_has_foam(f))
+        return 0.0;
+    return foam_with(f, &f->foam_map[rd], dxx, dzz, bq);
+}
+
+double ocean_frame_foam_plus(const ocean_frame *f, ocean_foam_reading rd, double m0, double m1, double dxx,
+                             double dzz, double bq)
 {
     if (!(m0 > 0.0))
-        return ocean_frame_foam(f, dxx, dzz, bq);
-    int any = 0;
-    for (int c = 0; c < f->cascades; c++)
-        any |= f->field[c].dxx != NULL;
-    if (!any)
+        return ocean_frame_foam(f, rd, dxx, dzz, bq);
+    if (!frame_has_foam(f))
         return 0.0;
+    double om = f->foam_omega[rd];
     /* the extra waves' moments in beta's units (beta = -(dxx + dzz) / lambda) */
-    double il2 = f->foam_inv_lambda * f->foam_inv_lambda, s2 = f->info.foam_sigma * f->info.foam_sigma;
+    double il2 = f->foam_inv_lambda * f->foam_inv_lambda, s2 = f->foam_sigma[rd] * f->foam_sigma[rd];
     double e0 = m0 * il2, e1 = m1 * il2, v = s2 + e0;
     ocean_foam_map m;
-    if (ocean_foam_map_solve(sqrt(v), (s2 * f->info.foam_omega + e1) / v, f->info.whitecap_target, &m) !=
-        OCEAN_OK)
-        return frame_foam(f, dxx, dzz, bq);
-    return ocean_foam_value(&m, ocean_foam_beta(dxx, dzz, f->foam_inv_lambda),
-                            ocean_foam_beta(bq, 0.0, f->foam_inv_lambda));
+    if (ocean_foam_map_solve(sqrt(v), (s2 * om + e1) / v, f->info.whitecap_target, &m) != OCEAN_OK)
+        return ocean_frame_foam(f, rd, dxx, dzz, bq);
+    return foam_with(f, &m, dxx, dzz, bq);
 }
 
 void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *out)

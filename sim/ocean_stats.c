@@ -60,23 +60,49 @@ static void filter_sums(const ocean *o, double kc, int order, double scale, doub
         }
 }
 
-/* Std of the breaking index beta = sum k eta_k (foam.h) as a point sample
- * reads it, and its mean frequency: over the modes an evaluation with this
- * filter transforms, m0 = sum var k^2 ge^2 A(kx h) A(kz h), where
- * A(th) = (2 + cos th) / 3 is the mean power a wave keeps through bilinear
- * interpolation on a grid of spacing h at a uniformly random point
- * (E|(1-u) + u e^{i th}|^2 over u), and m1 the same sum weighted by each
- * wave's frequency.  Without A the finest cascade's near-Nyquist waves,
- * which bilinear reading damps, would count fully and tiles would show
- * ~half the intended coverage at light winds. */
+/* The mean power a wave of phase step th between grid nodes keeps through
+ * a reading at a uniformly random point between two nodes, E|sum_j w_j(u)
+ * e^{i j th}|^2 over u: bilinear (2 + cos th) / 3 in closed form, cubic
+ * Lagrange on nodes -1..2 (ocean_frame_sample_accurate) by a 64-point
+ * midpoint rule (its integrand is a polynomial of degree 6 in u: the
+ * rule's error is below 1e-5), the exact sum 1. */
+static double read_power(ocean_foam_reading rd, double th)
+{
+    if (rd == OCEAN_FOAM_BILINEAR)
+        return (2.0 + cos(th)) / 3.0;
+    if (rd == OCEAN_FOAM_EXACT)
+        return 1.0;
+    enum { U = 64 };
+    double sum = 0.0;
+    for (int k = 0; k < U; k++) {
+        double t = (k + 0.5) / U, w[4] = {-t * (t - 1.0) * (t - 2.0) / 6.0, (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0,
+                                            -(t + 1.0) * t * (t - 2.0) / 2.0, (t + 1.0) * t * (t - 1.0) / 6.0};
+        double re = 0.0, im = 0.0;
+        for (int j = 0; j < 4; j++) {
+            re += w[j] * cos((j - 1) * th);
+            im += w[j] * sin((j - 1) * th);
+        }
+        sum += re * re + im * im;
+    }
+    return sum / U;
+}
+
+/* Std of the breaking index beta = sum k eta_k (foam.h) as each reading
+ * holds it, and its mean frequency: over the modes an evaluation with this
+ * filter transforms, m0 = sum var k^2 ge^2 A(kx h) A(kz h), with A the
+ * reading's power (read_power) on a grid of spacing h, and m1 the same
+ * sum weighted by each wave's frequency.  Without A the finest cascade's
+ * near-Nyquist waves, which bilinear reading damps, would count fully and
+ * tiles would show ~half the intended coverage at light winds; with the
+ * bilinear A on an accurate reading, queries covered 1.5 times the wind's
+ * share. */
 typedef struct foam_band {
-    double sigma, omega;   /* sqrt(m0), m1 / m0 (0 without waves), as read */
-    double m0_band, m1_band; /* m0, m1 of the band itself, before reading */
+    double sigma[OCEAN_FOAM_READINGS], omega[OCEAN_FOAM_READINGS]; /* sqrt(m0), m1 / m0 (0 without waves) */
 } foam_band;
 
 static foam_band foam_band_of(const ocean *o, double kc, int order, double scale, double boost)
 {
-    double kneg = ocean_negligible_k(o, kc, order), m0 = 0.0, m1 = 0.0, m0b = 0.0, m1b = 0.0;
+    double kneg = ocean_negligible_k(o, kc, order), m0[OCEAN_FOAM_READINGS] = {0}, m1[OCEAN_FOAM_READINGS] = {0};
     int n = o->p.n, half = n / 2 + 1;
     for (int c = 0; c < o->p.cascades; c++) {
         const ocean_cascade *cs = &o->cas[c];
@@ -84,67 +110,76 @@ static foam_band foam_band_of(const ocean *o, double kc, int order, double scale
             continue;
         double h = cs->patch / ocean_pick_size(cs, n, kneg);
         /* A per column and per row: |mx|, |mz| < n/2. */
-        double a[OCEAN_MAX_N / 2];
-        for (int m = 0; m < n / 2; m++)
-            a[m] = (2.0 + cos(m * cs->dk * h)) / 3.0;
+        double a[OCEAN_FOAM_READINGS][OCEAN_MAX_N / 2];
+        for (int r = 0; r < OCEAN_FOAM_READINGS; r++)
+            for (int m = 0; m < n / 2; m++)
+                a[r][m] = read_power((ocean_foam_reading)r, m * cs->dk * h);
         for (size_t i = 0; i < (size_t)n * half; i++) {
             if (cs->var[i] == 0.0f)
                 continue;
             int ix = (int)(i % half), iz = (int)(i / half), mz = iz < n / 2 ? iz : n - iz;
+            int jx = ix < n / 2 ? ix : n / 2 - 1, jz = mz < n / 2 ? mz : n / 2 - 1;
             double w = (ix == 0 ? 1.0 : 2.0) * cs->var[i];
             double g = isinf(kc) ? 1.0 : effective_gain(cs->k[i], kc, order, kneg);
             double ge = g * scale * (1.0 + (boost - 1.0) * g * g);
-            double k = cs->k[i];
-            double vb = w * k * k * ge * ge;
-            double v = vb * a[ix < n / 2 ? ix : n / 2 - 1] * a[mz < n / 2 ? mz : n / 2 - 1];
-            m0 += v;
-            m1 += v * ocean_dispersion(k, o->p.sea.depth_m);
-            m0b += vb;
-            m1b += vb * ocean_dispersion(k, o->p.sea.depth_m);
+            double k = cs->k[i], vb = w * k * k * ge * ge, wk = ocean_dispersion(k, o->p.sea.depth_m);
+            for (int r = 0; r < OCEAN_FOAM_READINGS; r++) {
+                double v = vb * a[r][jx] * a[r][jz];
+                m0[r] += v;
+                m1[r] += v * wk;
+            }
         }
     }
-    return (foam_band){sqrt(m0), m0 > 0.0 ? m1 / m0 : 0.0, m0b, m1b};
+    foam_band b;
+    for (int r = 0; r < OCEAN_FOAM_READINGS; r++) {
+        b.sigma[r] = sqrt(m0[r]);
+        b.omega[r] = m0[r] > 0.0 ? m1[r] / m0[r] : 0.0;
+    }
+    return b;
 }
 
 /* The map of a band (foam.h): its target coverage at its sigma and omega. */
-static ocean_foam_map foam_map_of(const ocean *o, foam_band b)
+static ocean_foam_map foam_map_of(const ocean *o, double sigma, double omega)
 {
     ocean_foam_map m;
-    if (ocean_foam_map_solve(b.sigma, b.omega, ocean_stats_whitecap_target(o), &m) != OCEAN_OK)
+    if (ocean_foam_map_solve(sigma, omega, ocean_stats_whitecap_target(o), &m) != OCEAN_OK)
         m = (ocean_foam_map){INFINITY, INFINITY, -1.0, INFINITY};
     return m;
 }
 
-/* The band and its solved map, memoised: a solve with trails integrates
+/* The band and its solved maps, memoised: a solve with trails integrates
  * numerically (a few ms), and the ticks ask for the same filters again. */
-static ocean_foam_map foam_memo(ocean *o, double kc, int order, double scale, double boost, double *sigma,
-                                double *omega)
+static int foam_memo(ocean *o, double kc, int order, double scale, double boost)
 {
     int i = memo_find(o->foam_memo, kc, order, scale, boost);
-    if (i < 0) {
-        foam_band b = foam_band_of(o, kc, order, scale, boost);
-        i = o->foam_next;
-        memo_put(o->foam_memo, &o->foam_next, kc, order, scale, boost, b.sigma);
-        o->foam_memo[i].value2 = b.omega;
-        o->foam_maps[i] = foam_map_of(o, b);
+    if (i >= 0)
+        return i;
+    foam_band b = foam_band_of(o, kc, order, scale, boost);
+    i = o->foam_next;
+    memo_put(o->foam_memo, &o->foam_next, kc, order, scale, boost, 0.0);
+    for (int r = 0; r < OCEAN_FOAM_READINGS; r++) {
+        o->foam_read[i][r][0] = b.sigma[r];
+        o->foam_read[i][r][1] = b.omega[r];
+        o->foam_maps[i][r] = foam_map_of(o, b.sigma[r], b.omega[r]);
     }
-    if (sigma) *sigma = o->foam_memo[i].value;
-    if (omega) *omega = o->foam_memo[i].value2;
-    return o->foam_maps[i];
+    return i;
 }
 
 ocean_foam_map ocean_stats_foam_sum(const ocean *o, double kc, int order, double scale, double boost,
                                     double *sigma)
 {
     foam_band b = foam_band_of(o, kc, order, scale, boost);
-    if (sigma) *sigma = b.sigma;
-    return foam_map_of(o, b);
+    if (sigma) *sigma = b.sigma[OCEAN_FOAM_EXACT];
+    return foam_map_of(o, b.sigma[OCEAN_FOAM_EXACT], b.omega[OCEAN_FOAM_EXACT]);
 }
 
-ocean_foam_map ocean_stats_foam(ocean *o, double kc, int order, double scale, double boost, double *sigma,
-                                double *omega)
+ocean_foam_map ocean_stats_foam(ocean *o, ocean_foam_reading rd, double kc, int order, double scale, double boost,
+                                double *sigma, double *omega)
 {
-    return foam_memo(o, kc, order, scale, boost, sigma, omega);
+    int i = foam_memo(o, kc, order, scale, boost);
+    if (sigma) *sigma = o->foam_read[i][rd][0];
+    if (omega) *omega = o->foam_read[i][rd][1];
+    return o->foam_maps[i][rd];
 }
 
 ocean_result ocean_foam_table(const ocean *o, const ocean *more, int order, const double *kc, int n,
@@ -159,13 +194,16 @@ ocean_result ocean_foam_table(const ocean *o, const ocean *more, int order, cons
     for (int j = 0; j < n; j++) {
         if (!(kc[j] >= 0.0))
             return OCEAN_EINVAL;
+        /* the band itself: a reader of tiles sums the bands' indices */
+        const int e = OCEAN_FOAM_EXACT;
         foam_band b = foam_band_of(o, kc[j], order, 1.0, 1.0);
+        double m0 = b.sigma[e] * b.sigma[e], m1 = m0 * b.omega[e];
         if (more) {
             foam_band c = foam_band_of(more, kc[j], order, 1.0, 1.0);
-            b.m0_band += c.m0_band;
-            b.m1_band += c.m1_band;
+            m0 += c.sigma[e] * c.sigma[e];
+            m1 += c.sigma[e] * c.sigma[e] * c.omega[e];
         }
-        double sigma = sqrt(b.m0_band), omega = b.m0_band > 0.0 ? b.m1_band / b.m0_band : 0.0;
+        double sigma = sqrt(m0), omega = m0 > 0.0 ? m1 / m0 : 0.0;
         if (*count && !(sigma > rows[*count - 1].sigma))
             continue; /* no wave between the two cutoffs */
         ocean_foam_map m;

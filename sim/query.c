@@ -363,9 +363,10 @@ static void answer_one(const ctx *c, double x, double z, const ocean_query_optio
      * ramp is solved for the band both make, so the near field's short
      * breakers do not add to the wind's coverage (its fade ring takes the
      * full-fade band: a little less foam there) */
+    ocean_foam_reading how = c->bilinear ? OCEAN_FOAM_BILINEAR : OCEAN_FOAM_CUBIC;
     out->foam = !have_derivs ? 0.0
-              : gp->fade > 0.0 ? ocean_frame_foam_plus(c->f, c->near_m0, c->near_m1, dxx, dzz, pt->bq + gp->bq)
-                               : ocean_frame_foam(c->f, dxx, dzz, pt->bq);
+              : gp->fade > 0.0 ? ocean_frame_foam_plus(c->f, how, c->near_m0, c->near_m1, dxx, dzz, pt->bq + gp->bq)
+                               : ocean_frame_foam(c->f, how, dxx, dzz, pt->bq);
     out->folded = jac <= 0.0 || s.jmin <= 0.0;
     out->residual = s.res;
     out->error = error_bound(&t, jac, sx, sz, s.res, &rd.err, opt);

@@ -211,7 +211,7 @@ static void frame_coverage_hostile(void **state)
     /* No foam channels: coverage 0, foam 0. */
     assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, 0.0, 100.0, 8, &c), OCEAN_OK);
     assert_true(c == 0.0);
-    assert_true(ocean_frame_foam(f, -1.0, -1.0, 0.0) == 0.0);
+    assert_true(ocean_frame_foam(f, OCEAN_FOAM_EXACT, -1.0, -1.0, 0.0) == 0.0);
     assert_int_equal(ocean_whitecap_coverage_frame(NULL, 0.0, 0.0, 100.0, 8, &c), OCEAN_EINVAL);
     assert_int_equal(ocean_whitecap_coverage_frame(f, NAN, 0.0, 100.0, 8, &c), OCEAN_EINVAL);
     assert_int_equal(ocean_whitecap_coverage_frame(f, 0.0, INFINITY, 100.0, 8, &c), OCEAN_EINVAL);
@@ -401,6 +401,60 @@ static void near_field_keeps_the_coverage(void **state)
     }
 }
 
+/* What a query answers covers the wind's share of the sea (Monahan &
+ * O'Muircheartaigh 1980, through ocean_foam_coverage_target): its reading
+ * of the breaking index is accurate (ocean_frame_sample_accurate: every
+ * wave at its full amplitude), so its ramp is the one solved for the band
+ * itself, not the bilinear reading's, whose index is damped near each
+ * grid's Nyquist.  With the bilinear reading's ramp on the accurate index
+ * the answers covered 1.5-1.7 times the wind's share (ship-bridge), and
+ * so did the reference render built on them.  The whole largest patch,
+ * 128 x 128 world points, two instants; the same points read bilinearly
+ * (ocean_query_options.bilinear) keep that reading's own ramp. */
+static void queries_keep_the_wind_coverage(void **state)
+{
+    (void)state;
+    const char *scenes[] = {"ship-bridge", "storm"};
+    enum { N = 128 };
+    static double xz[2 * N * N];
+    static ocean_query_result q[N * N];
+    for (int sc = 0; sc < 2; sc++) {
+        ocean *o = scene_ocean(scenes[sc], NAN);
+        const ocean_params *p = ocean_get_params(o);
+        double W = ocean_foam_coverage_target(p->sea.wind_u10);
+        for (int i = 0; i < N * N; i++) {
+            xz[2 * i] = p->patch_m * ((i % N) + 0.37) / N;
+            xz[2 * i + 1] = p->patch_m * ((i / N) + 0.71) / N;
+        }
+        ocean_frame *f;
+        assert_int_equal(ocean_frame_create(o, &f), OCEAN_OK);
+        ocean_request r;
+        ocean_request_all(&r, OCEAN_QUERY_EFFECTS);
+        r.foam_map = 0;
+        double mean[2] = {0, 0};
+        const double times[] = {123.25, 431.5};
+        for (int ti = 0; ti < 2; ti++) {
+            assert_int_equal(ocean_evaluate(o, times[ti], &r, f), OCEAN_OK);
+            for (int k = 0; k < 2; k++) {
+                ocean_query_options opt;
+                ocean_query_options_default(&opt);
+                opt.bilinear = k;
+                assert_int_equal(ocean_query_points(f, NULL, NULL, times[ti], xz, N * N, &opt, q, NULL), OCEAN_OK);
+                for (int i = 0; i < N * N; i++)
+                    mean[k] += q[i].foam / (2.0 * N * N);
+            }
+        }
+        print_message("%s: answers cover %.4f accurate, %.4f bilinear; the wind's %.4f (ratios %.2f, %.2f)\n",
+                      scenes[sc], mean[0], mean[1], W, mean[0] / W, mean[1] / W);
+        for (int k = 0; k < 2; k++)
+            if (!(fabs(mean[k] / W - 1.0) < 0.25))
+                fail_msg("%s: %s answers cover %.4f, the wind's share %.4f", scenes[sc], k ? "bilinear" : "accurate",
+                         mean[k], W);
+        ocean_frame_destroy(f);
+        ocean_destroy(o);
+    }
+}
+
 /* Trails on an evaluated sea (storm scene at 20 m/s, the whole sea read
  * at points as every reader sums it, low-passed at 0.2 rad/m, the band
  * of its first cascade, whose periods, 4.5 s and up, outlast the test's
@@ -503,7 +557,7 @@ static void coverage_against_monahan(void **state)
                                                     OCEAN_SAMPLE_FOAM, &pt);
                             foam[a * T + b] = (float)pt.foam;
                             if (b == a)
-                                assert_true(ocean_frame_foam(f, pt.dxx, pt.dzz, pt.bq) == pt.foam);
+                                assert_true(ocean_frame_foam(f, OCEAN_FOAM_BILINEAR, pt.dxx, pt.dzz, pt.bq) == pt.foam);
                             /* Longuet-Higgins' criterion alone: a_z < -g/2. */
                             ones += -(pt.dxx + pt.dzz) / p->sea.choppiness > 0.5;
                         }
@@ -781,6 +835,7 @@ int main(void)
         cmocka_unit_test(trails_stay_with_the_water),
         cmocka_unit_test(quadrature_is_the_hilbert_pair),
         cmocka_unit_test(near_field_keeps_the_coverage),
+        cmocka_unit_test(queries_keep_the_wind_coverage),
         cmocka_unit_test(frame_coverage_hostile),
         cmocka_unit_test(coverage_against_monahan),
         cmocka_unit_test(coverage_against_callaghan),
