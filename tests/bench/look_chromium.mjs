@@ -20,6 +20,8 @@
  * (the highest row the sea reaches, rows between highest and lowest, mean
  * row) and edge_within_1 (the fraction of columns where the two edges lie
  * within a row of each other).
+ * env LOOK_QUERY: more URL parameters for every view (e.g. "&time=0", the
+ * plain stream; "&rough=0"), for experiments beside the bench's own run.
  */
 import { readFileSync, writeFileSync, mkdtempSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -70,7 +72,7 @@ try {
     for (const v of views) {
         const page = await context.newPage();
         await page.setViewportSize({ width: v.width, height: v.height });
-        const url = `${base}?x=${v.x}&y=${v.y}&z=${v.z}&yaw=${v.yaw}&pitch=${v.pitch}&fov=${v.fov}&t=${v.t}&overlay=0&scale=1`;
+        const url = `${base}?x=${v.x}&y=${v.y}&z=${v.z}&yaw=${v.yaw}&pitch=${v.pitch}&fov=${v.fov}&t=${v.t}&overlay=0&scale=1${process.env.LOOK_QUERY || ''}`;
         await page.goto(url, { waitUntil: 'load', timeout: timeoutMs });
         await page.waitForFunction((t) => window.oceanStats && window.oceanStats.framesRendered >= 2 &&
             window.oceanStats.simTime === t, v.t, { timeout: timeoutMs, polling: 200 });
