@@ -314,8 +314,8 @@ void ocean_frame_sample(const ocean_frame *f, double x, double z, ocean_point *o
  * interpolation between grid nodes damps the waves near each grid's
  * Nyquist, bilinear (ocean_frame_sample, layout-0 tiles) more than cubic
  * Lagrange (ocean_frame_sample_accurate, queries), and the exact sum of
- * the waves not at all.  Each reading has its own ramp: the bilinear
- * reading's ramp on the cubic reading's index covered 1.5 times the
+ * the waves not at all.  Each reading has its own ramp: on the cubic
+ * reading's index the bilinear reading's ramp covered 1.5 times the
  * wind's share (ship-bridge), the exact sum's 0.73 times. */
 typedef enum ocean_foam_reading {
     OCEAN_FOAM_BILINEAR = 0,

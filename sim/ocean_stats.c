@@ -62,29 +62,28 @@ static void filter_sums(const ocean *o, double kc, int order, double scale, doub
 
 /* The mean power a wave of phase step th between grid nodes keeps through
  * a reading at a uniformly random point between two nodes, E|sum_j w_j(u)
- * e^{i j th}|^2 over u: bilinear (2 + cos th) / 3 in closed form, cubic
- * Lagrange on nodes -1..2 (ocean_frame_sample_accurate) by a 64-point
- * midpoint rule (its integrand is a polynomial of degree 6 in u: the
- * rule's error is below 1e-5), the exact sum 1. */
+ * e^{i j th}|^2 over u: bilinear (2 + cos th) / 3; cubic Lagrange on
+ * nodes -1..2 (ocean_frame_sample_accurate) c0 + 2 sum_d c_d cos(d th),
+ * c_d the sums of the Gram matrix int w_j w_l du along its diagonals j - l
+ * = d (degree 6 in u: 4-point Gauss-Legendre integrates it exactly); the
+ * exact sum 1. */
 static double read_power(ocean_foam_reading rd, double th)
 {
     if (rd == OCEAN_FOAM_BILINEAR)
         return (2.0 + cos(th)) / 3.0;
     if (rd == OCEAN_FOAM_EXACT)
         return 1.0;
-    enum { U = 64 };
-    double sum = 0.0;
-    for (int k = 0; k < U; k++) {
-        double t = (k + 0.5) / U, w[4] = {-t * (t - 1.0) * (t - 2.0) / 6.0, (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0,
-                                            -(t + 1.0) * t * (t - 2.0) / 2.0, (t + 1.0) * t * (t - 1.0) / 6.0};
-        double re = 0.0, im = 0.0;
-        for (int j = 0; j < 4; j++) {
-            re += w[j] * cos((j - 1) * th);
-            im += w[j] * sin((j - 1) * th);
-        }
-        sum += re * re + im * im;
+    static const double gx[4] = {0.0694318442029737, 0.3300094782075719, 0.6699905217924281, 0.9305681557970263};
+    static const double gw[4] = {0.1739274225687269, 0.3260725774312731, 0.3260725774312731, 0.1739274225687269};
+    double c[4] = {0, 0, 0, 0};
+    for (int q = 0; q < 4; q++) {
+        double t = gx[q], w[4] = {-t * (t - 1.0) * (t - 2.0) / 6.0, (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0,
+                                  -(t + 1.0) * t * (t - 2.0) / 2.0, (t + 1.0) * t * (t - 1.0) / 6.0};
+        for (int j = 0; j < 4; j++)
+            for (int l = 0; l <= j; l++)
+                c[j - l] += gw[q] * w[j] * w[l];
     }
-    return sum / U;
+    return c[0] + 2.0 * (c[1] * cos(th) + c[2] * cos(2.0 * th) + c[3] * cos(3.0 * th));
 }
 
 /* Std of the breaking index beta = sum k eta_k (foam.h) as each reading
