@@ -409,6 +409,36 @@ vec4 casRead(sampler2D t, int c, vec2 rel, float lam) {
     if (f > 1e-4) a = mix(a, textureLod(t, uv + exp2(m0) / n, m0 + 1.0), f);
     return a;
 }
+/* Mip 0 of an n-texel periodic texture at texture coordinate p (texel
+ * centres at (j + 1/2) / n) by Keys' cubic convolution, a = -1/2 (Keys
+ * 1981; Catmull-Rom), as 9 bilinear reads: the two middle taps of each
+ * axis share one read placed between them by their weights (both weights
+ * are positive).  Mip 0 holds waves up to its Nyquist, where GL's bilinear
+ * filter keeps (2 + cos th) / 3 of a wave's power per axis; the C library
+ * reads every mip this way, and the whitecap table's ramps and the mip
+ * tables' moments are for the waves as they are. */
+vec4 keys0(sampler2D t, float n, vec2 p) {
+    vec2 x = p * n - 0.5, i = floor(x), f = x - i;
+    vec2 w0 = f * (-0.5 + f * (1.0 - 0.5 * f)), w1 = 1.0 + f * f * (-2.5 + 1.5 * f);
+    vec2 w2 = f * (0.5 + f * (2.0 - 1.5 * f)), w3 = f * f * (-0.5 + 0.5 * f);
+    vec2 w12 = w1 + w2;
+    vec2 a = (i - 0.5) / n, b = (i + 0.5 + w2 / w12) / n, d = (i + 2.5) / n;
+    return (textureLod(t, vec2(a.x, a.y), 0.0) * w0.x + textureLod(t, vec2(b.x, a.y), 0.0) * w12.x +
+            textureLod(t, vec2(d.x, a.y), 0.0) * w3.x) * w0.y +
+           (textureLod(t, vec2(a.x, b.y), 0.0) * w0.x + textureLod(t, vec2(b.x, b.y), 0.0) * w12.x +
+            textureLod(t, vec2(d.x, b.y), 0.0) * w3.x) * w12.y +
+           (textureLod(t, vec2(a.x, d.y), 0.0) * w0.x + textureLod(t, vec2(b.x, d.y), 0.0) * w12.x +
+            textureLod(t, vec2(d.x, d.y), 0.0) * w3.x) * w3.y;
+}
+/* casRead for shading: mip 0 by keys0 */
+vec4 casReadShade(sampler2D t, int c, vec2 rel, float lam) {
+    if (lam >= 1.0) return casRead(t, c, rel, lam);
+    float n = u_cas[c].x / u_cas[c].y;
+    vec2 uv = u_casEye[c] + rel / u_cas[c].x;
+    vec4 a = keys0(t, n, uv + 0.5 / n);
+    if (lam > 1e-4) a = mix(a, textureLod(t, uv + 1.0 / n, 1.0), lam);
+    return a;
+}
 /* unresolved slope moments of cascade c read at (unclamped) level lam */
 vec3 casMss(int c, float lam) {
     vec4 C = u_cas[c];
@@ -491,7 +521,7 @@ void seaSample(vec2 rel, float floorS, out vec2 slope, out vec3 mss, out float f
     vec2 bq = vec2(0.0);
     float w, lam, s, bvar = 0.0;
     vec3 un;
-#define CAS_S(C, TS) if (u_nCas > C) { s = wantSpacing(C, rel, floorS); lam = casLod(C, s, w); vec4 d = w * casRead(TS, C, rel, lam); slope += d.xy; bq += d.zw; un = casMss(C, log2(s / u_cas[C].y)); mss += un; bvar += casBreakVar(C, un); }
+#define CAS_S(C, TS) if (u_nCas > C) { s = wantSpacing(C, rel, floorS); lam = casLod(C, s, w); vec4 d = w * casReadShade(TS, C, rel, lam); slope += d.xy; bq += d.zw; un = casMss(C, log2(s / u_cas[C].y)); mss += un; bvar += casBreakVar(C, un); }
     CAS_S(0, u_cs0) CAS_S(1, u_cs1) CAS_S(2, u_cs2) CAS_S(3, u_cs3)
     vec4 wk = wakeAt(rel);
     slope += wk.yz;
