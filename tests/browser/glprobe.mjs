@@ -3,7 +3,9 @@
  * one headless Chromium (software GL, as tests/test_browser.sh runs the
  * viewer), launched on first use and closed after the tests, whose page
  * holds window.glProgram(gl, vs, fs): a compiled and linked WebGL2
- * program, {prog} or {error: "compile: ..." | "link: ..."} (page.evaluate's
+ * program, {prog} or {error: "compile: ..." | "link: ..."}, and
+ * window.glRow(gl, count): a bound framebuffer of one RGBA32F row of
+ * `count` pixels (one a probed case), null or an error (page.evaluate's
  * function cannot reach the test module's own functions).
  *   const r = await probeRun(fn, args);   // page.evaluate(fn, args)
  */
@@ -37,6 +39,15 @@ function glProgram(gl, vs, fs) {
     return { prog };
 }
 
+function glRow(gl, count) {
+    const fb = gl.createFramebuffer(), t = gl.createTexture();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, count, 1);
+    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, t, 0);
+    return gl.checkFramebufferStatus(gl.FRAMEBUFFER) === gl.FRAMEBUFFER_COMPLETE ? null : 'float framebuffer incomplete';
+}
+
 let browser = null, page = null;
 const userDataDir = mkdtempSync(join(tmpdir(), 'ocean-glprobe-'));
 after(async () => {
@@ -54,7 +65,7 @@ export async function probeRun(fn, args) {
             timeout: 180000,
         });
         page = browser.pages()[0] || await browser.newPage();
-        await page.addScriptTag({ content: `window.glProgram = ${glProgram.toString()};` });
+        await page.addScriptTag({ content: `window.glProgram = ${glProgram.toString()}; window.glRow = ${glRow.toString()};` });
     }
     return page.evaluate(fn, args);
 }

@@ -304,12 +304,8 @@ void main() { o = vec4(foamAt(u_in.x, u_in.y, u_in.z), 0.0, 0.0, 1.0); }
     if (made.error) return { error: made.error };
     const prog = made.prog;
     const loc = (n) => gl.getUniformLocation(prog, n);
-    const fb = gl.createFramebuffer(), t = gl.createTexture();
-    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
-    gl.bindTexture(gl.TEXTURE_2D, t);
-    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, cases.length, 1);
-    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, t, 0);
-    if (gl.checkFramebufferStatus(gl.FRAMEBUFFER) !== gl.FRAMEBUFFER_COMPLETE) return { error: 'float framebuffer incomplete' };
+    const rowError = window.glRow(gl, cases.length);
+    if (rowError) return { error: rowError };
     cases.forEach((c, i) => {
         const tab = new Float32Array(3 * rowsMax);
         tab.set(c.table);
@@ -375,12 +371,8 @@ void main() { o = vec4(casReadShade(u_cs0, 0, u_rel, 0.0).x, casRead(u_cs0, 0, u
     const data = new Float32Array(4 * n * n);
     grid.forEach((v, k) => { data[4 * k] = v; });
     gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, n, n, gl.RGBA, gl.FLOAT, data);
-    const fb = gl.createFramebuffer(), t = gl.createTexture();
-    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
-    gl.bindTexture(gl.TEXTURE_2D, t);
-    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, points.length, 1);
-    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, t, 0);
-    if (gl.checkFramebufferStatus(gl.FRAMEBUFFER) !== gl.FRAMEBUFFER_COMPLETE) return { error: 'float framebuffer incomplete' };
+    const rowError = window.glRow(gl, points.length);
+    if (rowError) return { error: rowError };
     gl.activeTexture(gl.TEXTURE0);
     gl.bindTexture(gl.TEXTURE_2D, tex);
     gl.uniform1i(loc('u_cs0'), 0);
