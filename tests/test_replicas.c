@@ -783,6 +783,9 @@ static void *witness_main(void *arg)
     return NULL;
 }
 
+/* The witness's frame rate, Hz. */
+#define WITNESS_HZ 20
+
 /* Connects and subscribes the witness, measures its rate for 3 s and
  * starts its thread. */
 static void witness_start(witness *v, int port)
@@ -790,14 +793,17 @@ static void witness_start(witness *v, int port)
     memset(v, 0, sizeof *v);
     proto_hello h;
     connect_hello(&v->w, port, &h);
-    subscribe_live(&v->w, PROTO_LAYOUT_CASCADE, 20);
+    subscribe_live(&v->w, PROTO_LAYOUT_CASCADE, WITNESS_HZ);
     v->last = test_now_s();
     assert_true(witness_read(v, 1.0)); /* the stream starts */
     v->frames = 0;
     v->gap = 0;
     double t0 = test_now_s();
     assert_true(witness_read(v, 3.0));
-    v->base_rate = v->frames / (test_now_s() - t0);
+    /* at most the rate it asked for: frames held back before t0 and
+     * delivered in the window made a busy host's base 21/s against 20 Hz,
+     * and a window one frame short judged 94 % (a clean run here, a core busy) */
+    v->base_rate = fmin(v->frames / (test_now_s() - t0), WITNESS_HZ);
     v->base_gap = v->gap;
     assert_true(v->frames > 0);
     v->frames = 0;
