@@ -26,6 +26,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "interp.h"
 #include "ocean_result.h"
 #include "ocean_time.h"
 #include "spectrum.h"
@@ -345,10 +346,11 @@ double ocean_frame_foam_plus(const ocean_frame *f, ocean_foam_reading rd, double
  * the band, the ramp's foot a, and the band's mean frequency omega (rad/s,
  * the trails' rate), a solved for the wind's coverage at that std and
  * frequency.  The band as it is, not as some interpolation reads it: a
- * reader that sums bands knows their variance from the mip tables alone
- * (PROTOCOL.md "Whitecaps in layout 1"); the Keys-cubic C library reads
- * 0.93-1.08 of Monahan's coverage from ship-bridge's 2 m-10 km cameras
- * (tests/test_fidelity.sh). */
+ * reader that sums bands knows their variance from the mip tables, and
+ * the share of it its kernel holds from the read table (PROTOCOL.md
+ * "Whitecaps in layout 1"; ocean_moments.kept_mss_read); the Keys-cubic C
+ * library reads 0.98-1.10 of the wind's coverage from ship-bridge's 2 m-10
+ * km cameras, 0.94-1.06 from flight's (tests/test_fidelity.sh). */
 typedef struct ocean_foam_row {
     double sigma, a, omega;
 } ocean_foam_row;
@@ -500,6 +502,13 @@ typedef struct ocean_moments {
      * them stays within a linear interpolation's error. */
     double kept_var_h, kept_var_h_tt;   /* m^2, m^2/s^4 */
     double kept_mss, kept_mss_tt;       /* x + z slope variance; its d^2/dt^2, 1/s^4 */
+    /* The kept x + z slope variance (the breaking index's, foam.h) as a
+     * reading at a uniformly random point between the nodes of the grid
+     * this cutoff runs on holds it, per kernel (interp.h), which damps
+     * the waves near the grid's Nyquist: kept_mss_read[k] / kept_mss is
+     * the share a tile reader interpolating with k keeps (PROTOCOL.md
+     * "Whitecaps in layout 1"). */
+    double kept_mss_read[OCEAN_INTERP_KERNELS];
 } ocean_moments;
 ocean_result ocean_cascade_moments(const ocean *o, int c, double kc, int order, ocean_moments *out);
 

@@ -68,10 +68,10 @@ typedef struct stencil {
 
 static void lagrange4(double t, double w[4])
 {
-    w[0] = -t * (t - 1.0) * (t - 2.0) / 6.0;
-    w[1] = (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0;
-    w[2] = -(t + 1.0) * t * (t - 2.0) / 2.0;
-    w[3] = (t + 1.0) * t * (t - 1.0) / 6.0;
+    double all[OCEAN_INTERP_MAX_TAPS];
+    ocean_interp_weights(OCEAN_INTERP_LAGRANGE, t, all);
+    for (int k = 0; k < 4; k++)
+        w[k] = all[k];
 }
 
 /* Hermite bases on the nodes -1..2 at t, from their Lagrange basis l

@@ -12,6 +12,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "interp.h"
 #include "spectrum.h"
 
 /* Index of (kc, order, scale, boost) in a memo table, or -1. */
@@ -60,36 +61,22 @@ static void filter_sums(const ocean *o, double kc, int order, double scale, doub
         }
 }
 
-/* The mean power a wave of phase step th between grid nodes keeps through
- * a reading at a uniformly random point between two nodes, E|sum_j w_j(u)
- * e^{i j th}|^2 over u: bilinear (2 + cos th) / 3; cubic Lagrange on
- * nodes -1..2 (ocean_frame_sample_accurate) c0 + 2 sum_d c_d cos(d th),
- * c_d the sums of the Gram matrix int w_j w_l du along its diagonals j - l
- * = d (degree 6 in u: 4-point Gauss-Legendre integrates it exactly); the
- * exact sum 1. */
-static double read_power(ocean_foam_reading rd, double th)
+/* Each reading's share of a wave's power per |column| and |row| index m
+ * (phase step m dk h between nodes of spacing h), m < count. */
+static void reading_powers(ocean_foam_reading rd, double dkh, int count, double *out)
 {
-    if (rd == OCEAN_FOAM_BILINEAR)
-        return (2.0 + cos(th)) / 3.0;
-    if (rd == OCEAN_FOAM_EXACT)
-        return 1.0;
-    static const double gx[4] = {0.0694318442029737, 0.3300094782075719, 0.6699905217924281, 0.9305681557970263};
-    static const double gw[4] = {0.1739274225687269, 0.3260725774312731, 0.3260725774312731, 0.1739274225687269};
-    double c[4] = {0, 0, 0, 0};
-    for (int q = 0; q < 4; q++) {
-        double t = gx[q], w[4] = {-t * (t - 1.0) * (t - 2.0) / 6.0, (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0,
-                                  -(t + 1.0) * t * (t - 2.0) / 2.0, (t + 1.0) * t * (t - 1.0) / 6.0};
-        for (int j = 0; j < 4; j++)
-            for (int l = 0; l <= j; l++)
-                c[j - l] += gw[q] * w[j] * w[l];
+    if (rd == OCEAN_FOAM_EXACT) {
+        for (int m = 0; m < count; m++)
+            out[m] = 1.0;
+        return;
     }
-    return c[0] + 2.0 * (c[1] * cos(th) + c[2] * cos(2.0 * th) + c[3] * cos(3.0 * th));
+    ocean_interp_powers(rd == OCEAN_FOAM_BILINEAR ? OCEAN_INTERP_BILINEAR : OCEAN_INTERP_LAGRANGE, dkh, count, out);
 }
 
 /* Std of the breaking index beta = sum k eta_k (foam.h) as each reading
  * holds it, and its mean frequency: over the modes an evaluation with this
  * filter transforms, m0 = sum var k^2 ge^2 A(kx h) A(kz h), with A the
- * reading's power (read_power) on a grid of spacing h, and m1 the same
+ * reading's power (interp.h) on a grid of spacing h, and m1 the same
  * sum weighted by each wave's frequency.  Without A the finest cascade's
  * near-Nyquist waves, which bilinear reading damps, would count fully and
  * tiles would show ~half the intended coverage at light winds; with the
@@ -111,8 +98,7 @@ static foam_band foam_band_of(const ocean *o, double kc, int order, double scale
         /* A per column and per row: |mx|, |mz| < n/2. */
         double a[OCEAN_FOAM_READINGS][OCEAN_MAX_N / 2];
         for (int r = 0; r < OCEAN_FOAM_READINGS; r++)
-            for (int m = 0; m < n / 2; m++)
-                a[r][m] = read_power((ocean_foam_reading)r, m * cs->dk * h);
+            reading_powers((ocean_foam_reading)r, cs->dk * h, n / 2, a[r]);
         for (size_t i = 0; i < (size_t)n * half; i++) {
             if (cs->var[i] == 0.0f)
                 continue;
@@ -292,8 +278,15 @@ ocean_result ocean_cascade_moments(const ocean *o, int c, double kc, int order, 
     double kneg = ocean_negligible_k(o, kc, order);
     int n = o->p.n, half = n / 2 + 1;
     double vh = 0, sx = 0, sz = 0, sxz = 0, total = 0, kh = 0, khtt = 0, ks = 0, kstt = 0;
+    /* each reading's power per |column| and |row| on the grid this cutoff
+     * runs on (ocean_evaluate's) */
+    double h = cs->patch / ocean_pick_size(cs, n, kneg), ap[OCEAN_INTERP_KERNELS][OCEAN_MAX_N / 2 + 1];
+    for (int k = 0; k < OCEAN_INTERP_KERNELS; k++)
+        ocean_interp_powers((ocean_interp)k, cs->dk * h, half, ap[k]);
+    double kp[OCEAN_INTERP_KERNELS] = {0};
     for (int row = 0; row < n; row++) {
         double kz = (row < n / 2 ? row : row - n) * cs->dk;
+        int mz = row < n / 2 ? row : n - row;
         for (int ix = 0; ix < half; ix++) {
             size_t i = (size_t)row * half + ix;
             if (cs->var[i] == 0.0f)
@@ -314,8 +307,12 @@ ocean_result ocean_cascade_moments(const ocean *o, int c, double kc, int order, 
             khtt += kept * w2 * w2;
             ks += kept * k2;
             kstt += kept * k2 * w2 * w2;
+            for (int k = 0; k < OCEAN_INTERP_KERNELS; k++)
+                kp[k] += kept * k2 * ap[k][ix] * ap[k][mz];
         }
     }
+    for (int k = 0; k < OCEAN_INTERP_KERNELS; k++)
+        out->kept_mss_read[k] = kp[k];
     out->kept_var_h = kh;
     out->kept_var_h_tt = khtt;
     out->kept_mss = ks;
