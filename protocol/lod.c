@@ -84,12 +84,29 @@ void proto_lod_mss_add(const proto_lod_read *r, const proto_mip_entry *tab, int 
     mss[2] += k * ((double)coarse->mss_xz - fine->mss_xz);
 }
 
-double proto_lod_breaking_var(const proto_lod_read *r, const proto_mip_entry *tab, int mips)
+double proto_lod_held(const proto_lod_read *r, const proto_mip_entry *tab, int mips, int kernel)
+{
+    if (kernel < 0 || kernel >= PROTO_READ_KERNELS)
+        return 1;
+    double sw = 0, sh = 0;
+    for (int k = 0; k < 2; k++) {
+        if (!mip_read(r, k, mips))
+            continue;
+        unsigned h = tab[r->mip[k]].held[kernel];
+        if (!h)
+            return 1; /* a block without the read table */
+        sw += r->weight[k];
+        sh += r->weight[k] * (h / 32768.0);
+    }
+    return sw > 0 ? sh / sw : 1;
+}
+
+double proto_lod_breaking_var(const proto_lod_read *r, const proto_mip_entry *tab, int mips, int kernel)
 {
     double un[3] = {0, 0, 0};
     proto_lod_mss_add(r, tab, mips, un);
     double v = (double)tab[mips].mss_x + tab[mips].mss_z - un[0] - un[1];
-    return v > 0 ? v : 0;
+    return v > 0 ? v * proto_lod_held(r, tab, mips, kernel) : 0;
 }
 
 double proto_lod_foam(const proto_cascade_block *b, double var, double beta, double q)

@@ -42,12 +42,22 @@ void proto_lod_read_at(double s, double sigma, int mips, int fades, proto_lod_re
  * every caller.  A mip outside 0..mips-1 or of weight <= 0 adds nothing. */
 void proto_lod_mss_add(const proto_lod_read *r, const proto_mip_entry *tab, int mips, double mss[3]);
 
+/* The share of the breaking index's variance of the mips r reads that a
+ * reader interpolating them with `kernel` (PROTO_READ_*) holds between
+ * their nodes: the read mips' entries held[kernel] / 32768 with the read
+ * weights, over the weights' sum (so a fade does not count twice); 1 for
+ * a kernel < 0 (a reader of the waves as they are), a table without them
+ * (no READ flag) or nothing read. */
+double proto_lod_held(const proto_lod_read *r, const proto_mip_entry *tab, int mips, int kernel);
+
 /* The breaking index's variance a reader holds of one cascade read as r
  * says: the whole cascade's slope variance (entry mips, x + z) less what
- * proto_lod_mss_add leaves unresolved (x + z); >= 0.  Each wave's breaking
- * index is |k| times its height (foam.h), whose variance is the wave's
- * mean-square slope, so the mip table already gives it. */
-double proto_lod_breaking_var(const proto_lod_read *r, const proto_mip_entry *tab, int mips);
+ * proto_lod_mss_add leaves unresolved (x + z), >= 0, times
+ * proto_lod_held.  Each wave's breaking index is |k| times its height
+ * (foam.h), whose variance is the wave's mean-square slope, so the mip
+ * table already gives it; an interpolation between nodes damps the waves
+ * near each mip's Nyquist, which the read table gives. */
+double proto_lod_breaking_var(const proto_lod_read *r, const proto_mip_entry *tab, int mips, int kernel);
 
 /* Whitecap foam in [0, 1] at a point of a layout-1 frame whose block b
  * carries the whitecap table (PROTOCOL.md "Whitecaps in layout 1"): beta

@@ -338,13 +338,33 @@ static ocean_result v_foam_table(ctx *c, const proto_cascade_block *b)
     return OCEAN_OK;
 }
 
+/* The read table: with READ (and FOAM), every mip that holds waves has a
+ * share for each kernel; everything else 0. */
+static ocean_result v_read_table(ctx *c, const proto_cascade_block *b)
+{
+    if ((b->flags & PROTO_CASCADE_READ) && !(b->flags & PROTO_CASCADE_FOAM))
+        FAIL(c, OCEAN_EFORMAT, "frame.cascades: the READ flag without FOAM (the read table serves the whitecap ramp)");
+    for (unsigned k = 0; k < PROTO_MAX_LAYERS; k++)
+        for (int m = 0; m < PROTO_MIP_ENTRIES; m++)
+            for (int r = 0; r < PROTO_READ_KERNELS; r++) {
+                unsigned v = b->cascade[k].mip[m].held[r];
+                int given = (b->flags & PROTO_CASCADE_READ) && k < b->cascade_count && m < b->cascade[k].mips;
+                if (given ? v == 0 : v != 0)
+                    FAIL(c, given ? OCEAN_EINVAL : OCEAN_EFORMAT,
+                         "frame.cascades[%u].mip[%d].held[%d] = %u; must be %s", k, m, r, v,
+                         given ? "1..65535" : "0 (no READ flag, or beyond mips)");
+            }
+    return OCEAN_OK;
+}
+
 static ocean_result v_cascades(ctx *c, const proto_cascade_block *b)
 {
     TRY(chk_range(c, "frame.cascades.cascade_count", b->cascade_count, 1, PROTO_MAX_LAYERS));
     TRY(chk_range(c, "frame.cascades.order", b->order, 1, 64));
-    if (b->flags & ~(PROTO_CASCADE_KEY | PROTO_CASCADE_FOAM))
-        FAIL(c, OCEAN_EFORMAT, "frame.cascades.flags is %u (bits 0-1 only)", b->flags);
+    if (b->flags & ~(PROTO_CASCADE_KEY | PROTO_CASCADE_FOAM | PROTO_CASCADE_READ))
+        FAIL(c, OCEAN_EFORMAT, "frame.cascades.flags is %u (bits 0-2 only)", b->flags);
     TRY(v_foam_table(c, b));
+    TRY(v_read_table(c, b));
     if (!(b->spacing_per_m > 0.0f) || !isfinite(b->spacing_per_m))
         FAIL(c, OCEAN_EINVAL, "frame.cascades.spacing_per_m = %g; must be finite and > 0",
              (double)b->spacing_per_m);
@@ -1032,7 +1052,27 @@ static size_t cascade_block_size(const uint8_t *p, size_t avail)
 size_t proto_cascade_block_bytes(unsigned count, unsigned flags)
 {
     return PROTO_CASCADE_BLOCK_FIXED + (size_t)count * PROTO_CASCADE_ENTRY_SIZE +
-           ((flags & PROTO_CASCADE_FOAM) ? PROTO_FOAM_TABLE_SIZE : 0);
+           ((flags & PROTO_CASCADE_FOAM) ? PROTO_FOAM_TABLE_SIZE : 0) +
+           ((flags & PROTO_CASCADE_READ) ? (size_t)count * PROTO_READ_ENTRY_SIZE : 0);
+}
+
+/* The read table at p (count entries of PROTO_READ_ENTRY_SIZE bytes). */
+static void read_table_read(const uint8_t *p, proto_cascade_block *b)
+{
+    for (unsigned k = 0; k < b->cascade_count && k < PROTO_MAX_LAYERS; k++)
+        for (int m = 0; m < PROTO_MAX_MIPS; m++)
+            for (int r = 0; r < PROTO_READ_KERNELS; r++)
+                b->cascade[k].mip[m].held[r] =
+                    proto_ld16(p + (size_t)k * PROTO_READ_ENTRY_SIZE + 2 * (PROTO_READ_KERNELS * m + r));
+}
+
+static void read_table_write(uint8_t *p, const proto_cascade_block *b)
+{
+    for (unsigned k = 0; k < b->cascade_count; k++)
+        for (int m = 0; m < PROTO_MAX_MIPS; m++)
+            for (int r = 0; r < PROTO_READ_KERNELS; r++)
+                proto_st16(p + (size_t)k * PROTO_READ_ENTRY_SIZE + 2 * (PROTO_READ_KERNELS * m + r),
+                           b->cascade[k].mip[m].held[r]);
 }
 
 /* The whitecap table at p (PROTO_FOAM_TABLE_SIZE bytes). */
@@ -1097,6 +1137,8 @@ static void cascade_block_read(const uint8_t *p, proto_cascade_block *b)
     }
     if (b->flags & PROTO_CASCADE_FOAM)
         foam_table_read(p + proto_cascade_block_bytes(b->cascade_count, 0), b);
+    if (b->flags & PROTO_CASCADE_READ)
+        read_table_read(p + proto_cascade_block_bytes(b->cascade_count, b->flags & PROTO_CASCADE_FOAM), b);
 }
 
 static void cascade_block_write(uint8_t *p, const proto_cascade_block *b)
@@ -1136,6 +1178,8 @@ static void cascade_block_write(uint8_t *p, const proto_cascade_block *b)
     }
     if (b->flags & PROTO_CASCADE_FOAM)
         foam_table_write(p + proto_cascade_block_bytes(b->cascade_count, 0), b);
+    if (b->flags & PROTO_CASCADE_READ)
+        read_table_write(p + proto_cascade_block_bytes(b->cascade_count, b->flags & PROTO_CASCADE_FOAM), b);
 }
 
 ocean_result proto_frame_client_fields(const uint8_t *msg, size_t len, size_t *camera_seq_at,

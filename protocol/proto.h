@@ -129,9 +129,21 @@ typedef enum proto_mesh_codec {
 /* Cascade block flags: KEY, the client drops every sample it holds before
  * it reads this frame's records (PROTOCOL.md "Samples in time"); FOAM, the
  * whitecap table follows the cascade entries (PROTOCOL.md "Whitecaps in
- * layout 1"). */
+ * layout 1"); READ (only with FOAM), the read table follows the whitecap
+ * table. */
 #define PROTO_CASCADE_KEY 1u
 #define PROTO_CASCADE_FOAM 2u
+#define PROTO_CASCADE_READ 4u
+/* The read table: per cascade, per mip m < PROTO_MAX_MIPS, one u16 per
+ * kernel a reader interpolates a mip with (PROTOCOL.md "Whitecaps in
+ * layout 1"). */
+enum {
+    PROTO_READ_BILINEAR = 0,  /* GL's bilinear filter */
+    PROTO_READ_KEYS = 1,      /* Keys (1981) cubic convolution, a = -1/2 */
+    PROTO_READ_LANCZOS3 = 2,  /* Lanczos a = 3, normalised (Duchon 1979) */
+    PROTO_READ_KERNELS = 3
+};
+#define PROTO_READ_ENTRY_SIZE (2 * PROTO_READ_KERNELS * PROTO_MAX_MIPS)
 /* The whitecap table: rows, and its bytes (u8 rows, 7 reserved, 16 rows of
  * 3 f32). */
 #define PROTO_FOAM_ROWS 16
@@ -294,6 +306,11 @@ typedef struct proto_mip_entry {
                                  entry `mips`: 0 */
     float mss_x, mss_z, mss_xz; /* slope moments of the cascade's waves the mip
                                    does not hold */
+    uint16_t held[PROTO_READ_KERNELS]; /* with READ, entries 0..mips-1: the
+                                   share of the mip's breaking-index variance
+                                   a reading with each kernel holds, / 32768
+                                   (1..65535: Lanczos' overshoot holds more
+                                   than 1); else 0 */
 } proto_mip_entry;
 
 /* When mip m's samples were taken (layout 1, PROTOCOL.md "Samples in
@@ -336,7 +353,7 @@ typedef struct proto_foam_row {
 typedef struct proto_cascade_block {
     uint8_t cascade_count;    /* 1..PROTO_MAX_LAYERS */
     uint8_t order;            /* Butterworth order of the mips, 1..64 */
-    uint8_t flags;            /* PROTO_CASCADE_KEY, PROTO_CASCADE_FOAM */
+    uint8_t flags;            /* PROTO_CASCADE_KEY, _FOAM, _READ */
     float spacing_per_m;      /* q: the coarsest cascade's spacing wanted per metre
                                  of distance, > 0 (each entry has its own) */
     double camera[3];         /* camera position the frame was made for */

@@ -187,6 +187,23 @@ uint32_t srv_cascade_max_tiles(const ocean_params *p, int layers, int tile_size)
 
 /* ---- tables -------------------------------------------------------------- */
 
+/* The read table's entry of a mip (PROTOCOL.md "Whitecaps in layout 1"):
+ * the share of its breaking-index variance each kernel holds between its
+ * nodes, / 32768, at least 1 (a mip that keeps no slope: all of it). */
+static void held_shares(const ocean_moments *mo, proto_mip_entry *e)
+{
+    static const ocean_interp kernel[PROTO_READ_KERNELS] = {
+        [PROTO_READ_BILINEAR] = OCEAN_INTERP_BILINEAR,
+        [PROTO_READ_KEYS] = OCEAN_INTERP_KEYS,
+        [PROTO_READ_LANCZOS3] = OCEAN_INTERP_LANCZOS3,
+    };
+    for (int r = 0; r < PROTO_READ_KERNELS; r++) {
+        double share = mo->kept_mss > 0.0 ? mo->kept_mss_read[kernel[r]] / mo->kept_mss : 1.0;
+        long v = lround(share * 32768.0);
+        e->held[r] = (uint16_t)(v < 1 ? 1 : v > 65535 ? 65535 : v);
+    }
+}
+
 /* The whitecap table: the ramps of the sea's bands below cutoffs spread
  * evenly in log k from the lowest mip cutoff of any cascade to the highest,
  * and the whole sea: a reader's std falls between two of them wherever it
@@ -282,6 +299,8 @@ static ocean_result tables_make(tables *tb, const ocean *oc, const ocean_gerstne
             e->mss_x = (float)mo.mss_x;
             e->mss_z = (float)mo.mss_z;
             e->mss_xz = (float)mo.mss_xz;
+            if (m < tb->mips[c])
+                held_shares(&mo, e);
             tb->var_removed[c][m] = mo.var_h;
             if (m < tb->mips[c]) {
                 tb->tt_h[c][m] = mo.kept_var_h > 0 ? sqrt(mo.kept_var_h_tt / mo.kept_var_h) : 0.0;
@@ -988,7 +1007,7 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
     b->order = (uint8_t)tb->order;
     b->flags = pl->key ? PROTO_CASCADE_KEY : 0;
     if ((pl->channels & PROTO_CH_BREAKING) && tb->foam_rows) {
-        b->flags |= PROTO_CASCADE_FOAM;
+        b->flags |= PROTO_CASCADE_FOAM | PROTO_CASCADE_READ;
         b->foam_rows = (uint8_t)tb->foam_rows;
         memcpy(b->foam, tb->foam, sizeof b->foam);
     }
@@ -1007,7 +1026,10 @@ static void frame_build(const tables *tb, srv_cascade_job *j, plan *pl, int shar
         e->mips = (uint8_t)tb->mips[c];
         e->fades = c > 0;
         e->spacing_per_m = (float)pl->qc[c];
-        for (int q = 0; q <= tb->mips[c]; q++) e->mip[q] = tb->entry[c][q];
+        for (int q = 0; q <= tb->mips[c]; q++) {
+            e->mip[q] = tb->entry[c][q];
+            if (!(b->flags & PROTO_CASCADE_READ)) memset(e->mip[q].held, 0, sizeof e->mip[q].held);
+        }
         for (int q = 0; q < tb->mips[c]; q++) e->time[q] = pl->time[c][q];
     }
     /* The near field is the last cascade when the sea has one and the

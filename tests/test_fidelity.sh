@@ -63,12 +63,14 @@
 #    The blend in time costs little (flight, 300 m, at one budget: -1 %);
 #    the streams' plans differ (samples in time buy finer mips), and the
 #    coverage a reader gets depends a little on the band it reads: at
-#    ship-bridge 300 m the plain stream reads 1.07 of the wind's coverage,
-#    the time-interpolating one 0.92 (-14.5 % between them, the largest of
-#    30 camera runs; flight within 10 %).  The table's rows are solved for
-#    bands as they are, and a Keys-cubic reading loses a few % of a fine
-#    mip's variance between its nodes; when it was cascade 0's foam the
-#    streams differed by up to 13.7 %.
+#    ship-bridge 300 m the plain stream reads 1.08-1.10 of the wind's
+#    coverage, the time-interpolating one 0.98-1.00 (-10 % between them,
+#    the largest of 45 camera runs; flight within 8 %).  Each reader finds
+#    its ramp by the variance its own kernel holds (the frames' read
+#    table); by the mip tables alone, a Keys-cubic reading lost a few % of
+#    a fine mip's variance between its nodes and the two streams differed
+#    by up to 14.5 % (ship-bridge's time-interpolating stream 0.92-0.99 of
+#    the wind's, now 0.98-1.06).
 # Every measured figure is printed as a table, failing or not.
 # The scenes run side by side, one daemon each: a run mostly waits for frames
 # (about a third of its wall time is CPU), so four at once take about half the

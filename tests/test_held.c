@@ -163,9 +163,9 @@ static void cascade_block(proto_cascade_block *b, const frame_spec *s)
     e->n = 2 * TS;
     e->mips = 2;
     e->spacing_per_m = b->spacing_per_m;
-    e->mip[0] = (proto_mip_entry){INFINITY, 0.00390625f, 0.001953125f, 0.0f};
-    e->mip[1] = (proto_mip_entry){0.36f, 0.0078125f, 0.00390625f, 0.0f};
-    e->mip[2] = (proto_mip_entry){0.0f, 0.03125f, 0.015625f, 0.0f};
+    e->mip[0] = (proto_mip_entry){INFINITY, 0.00390625f, 0.001953125f, 0.0f, {0}};
+    e->mip[1] = (proto_mip_entry){0.36f, 0.0078125f, 0.00390625f, 0.0f, {0}};
+    e->mip[2] = (proto_mip_entry){0.0f, 0.03125f, 0.015625f, 0.0f, {0}};
     e->time[0] = s->time[0];
     e->time[1] = s->time[1];
 }

@@ -190,6 +190,9 @@ static char *dump(const proto_msg *m)
                 for (int q = 0; q < e->mips; q++)
                     out(&b, "cascade[%u].time[%d] = %u %u %u\n", c, q, e->time[q].tick_a, e->time[q].interval,
                         e->time[q].phase);
+                for (int q = 0; (k->flags & PROTO_CASCADE_READ) && q < e->mips; q++)
+                    out(&b, "cascade[%u].held[%d] = %u %u %u\n", c, q, e->mip[q].held[0], e->mip[q].held[1],
+                        e->mip[q].held[2]);
             }
         }
         for (unsigned i = 0; i < f->tile_count; i++) {
@@ -451,9 +454,9 @@ static void sample_cascade_block(proto_cascade_block *b)
     e->n = 256;
     e->mips = 2;
     e->fades = 0;
-    e->mip[0] = (proto_mip_entry){INFINITY, 0.00390625f, 0.001953125f, 0.0f};
-    e->mip[1] = (proto_mip_entry){0.36f, 0.0078125f, 0.00390625f, 0.0001220703125f};
-    e->mip[2] = (proto_mip_entry){0.0f, 0.03125f, 0.015625f, 0.000244140625f};
+    e->mip[0] = (proto_mip_entry){INFINITY, 0.00390625f, 0.001953125f, 0.0f, {0}};
+    e->mip[1] = (proto_mip_entry){0.36f, 0.0078125f, 0.00390625f, 0.0001220703125f, {0}};
+    e->mip[2] = (proto_mip_entry){0.0f, 0.03125f, 0.015625f, 0.000244140625f, {0}};
     e->spacing_per_m = b->spacing_per_m;
     e = &b->cascade[1];
     e->spacing_per_m = b->spacing_per_m / 4;
@@ -461,8 +464,8 @@ static void sample_cascade_block(proto_cascade_block *b)
     e->n = 256;
     e->mips = 1;
     e->fades = 1;
-    e->mip[0] = (proto_mip_entry){INFINITY, 0.0f, 0.0f, 0.0f};
-    e->mip[1] = (proto_mip_entry){0.0f, 0.015625f, 0.0078125f, -0.000244140625f};
+    e->mip[0] = (proto_mip_entry){INFINITY, 0.0f, 0.0f, 0.0f, {0}};
+    e->mip[1] = (proto_mip_entry){0.0f, 0.015625f, 0.0078125f, -0.000244140625f, {0}};
 }
 
 static int sample_named(proto_msg *m, const char *name)
@@ -482,11 +485,17 @@ static int sample_named(proto_msg *m, const char *name)
         /* with the whitecap table (PROTOCOL.md "Whitecaps in layout 1") */
         sample_named(m, "frame_cascade");
         proto_cascade_block *b = &m->u.frame.cascades;
-        b->flags = PROTO_CASCADE_FOAM;
+        b->flags = PROTO_CASCADE_FOAM | PROTO_CASCADE_READ;
         b->foam_rows = 3;
         b->foam[0] = (proto_foam_row){0.0625f, -0.015625f, 0.875f};
         b->foam[1] = (proto_foam_row){0.125f, 0.0625f, 1.25f};
         b->foam[2] = (proto_foam_row){0.25f, 0.25f, 1.625f};
+        /* and the read table: bilinear, Keys, Lanczos-3 shares / 32768 */
+        static const uint16_t held[3][3] = {{29098, 32244, 33063}, {27787, 32014, 33194}, {28672, 31744, 33792}};
+        for (int k = 0; k < 3; k++) {
+            proto_mip_entry *e = &b->cascade[k < 2 ? 0 : 1].mip[k < 2 ? k : 0];
+            memcpy(e->held, held[k], sizeof e->held);
+        }
         return 0;
     }
     if (!strcmp(name, "frame_cascade_time")) {
@@ -1138,8 +1147,13 @@ static const bad_vector bad_vectors[] = {
     {"bad_subscribe_mesh_codec", "subscribe", P(10), 1, 1, OCEAN_ETYPE, -1},
     /* SUBSCRIBE.flags: bit 2 is not defined */
     {"bad_subscribe_flags", "subscribe", P(11), 1, 4, OCEAN_EFORMAT, -1},
-    /* cascade block flags: bit 2 is not defined */
-    {"bad_cascade_flags", "frame_cascade", P(56 + 2), 1, 4, OCEAN_EFORMAT, -1},
+    /* cascade block flags: bit 3 is not defined */
+    {"bad_cascade_flags", "frame_cascade", P(56 + 2), 1, 8, OCEAN_EFORMAT, -1},
+    /* the read table (after the whitecap table): cascade 0's mip 0 holds
+     * no share for the bilinear kernel; cascade 1 (one mip) a share for a
+     * mip 1 it does not have */
+    {"bad_read_held", "frame_cascade_foam", P(56 + 56 + 2 * 320 + 200), 2, 0, OCEAN_EINVAL, -1},
+    {"bad_read_beyond_mips", "frame_cascade_foam", P(56 + 56 + 2 * 320 + 200 + 72 + 6), 2, 1, OCEAN_EFORMAT, -1},
     /* the whitecap table (after the two entries): no rows with the flag */
     {"bad_foam_rows", "frame_cascade_foam", P(56 + 56 + 2 * 320), 1, 0, OCEAN_EINVAL, -1},
     {"bad_foam_reserved", "frame_cascade_foam", P(56 + 56 + 2 * 320 + 1), 1, 1, OCEAN_EFORMAT, -1},
@@ -1500,6 +1514,9 @@ static void lod_table(int j, int mips, proto_mip_entry tab[PROTO_MIP_ENTRIES], d
         tab[m].mss_x = (float)(scale[j][0] * (whole ? 1 : 1 - pow(0.55, m + 1)));
         tab[m].mss_z = (float)(scale[j][1] * (whole ? 1 : 1 - pow(0.7, m + 1)));
         tab[m].mss_xz = (float)(scale[j][2] * (whole ? 1 : 1 - pow(0.45, m + 1)));
+        /* the read table's shares of one kernel, 0.62..1.05 (/ 32768) */
+        if (!whole)
+            tab[m].held[0] = (uint16_t)(32768 * (0.62 + 0.043 * ((3 * m + 2 * j) % 11)));
     }
     for (int i = 0; i < 3; i++)
         tail[i] = tails[j][i];
@@ -1537,8 +1554,11 @@ static void lod_mss_line(sbuf *b, const lod_case *k)
     out(b, " %.9g %.9g %.9g", mss[0], mss[1], mss[2]);
     for (int m = 0; m <= k->k.mips; m++)
         out(b, " %.9g %.9g %.9g", tab[m].mss_x, tab[m].mss_z, tab[m].mss_xz);
+    for (int m = 0; m < k->k.mips; m++)
+        out(b, " %u", tab[m].held[0]);
     proto_lod_mss_add(&r, tab, k->k.mips, mss);
-    out(b, " -> %.17g %.17g %.17g\n", mss[0], mss[1], mss[2]);
+    out(b, " -> %.17g %.17g %.17g %.17g\n", mss[0], mss[1], mss[2],
+        proto_lod_breaking_var(&r, tab, k->k.mips, 0));
 }
 
 static const char lod_head[] =
@@ -1551,10 +1571,13 @@ static const char lod_mss_head[] =
     "# PROTOCOL.md \"Where each mip is read\": the unresolved slope moments, computed by protocol/lod.c; one point "
     "a line:\n"
     "# q_c min_spacing_m cam_y dx dz floor_m patch_m n mips fades tail_x tail_z tail_xz e0_x e0_z e0_xz ... "
-    "e<mips>_x e<mips>_z e<mips>_xz -> mss_x mss_z mss_xz\n"
+    "e<mips>_x e<mips>_z e<mips>_xz h0 ... h<mips-1> -> mss_x mss_z mss_xz var\n"
     "# the point and cascade as in lod.txt (the points are its points); tail: the block's tail_mss; e<m>: the mip\n"
     "# table's entry m (m = mips: the whole cascade); mss = tail + the entries of the mips read with their weights\n"
-    "# + entry mips with 1 - fade + a (1 - a) (coarser - finer) where two entries are blended with a, 1 - a.\n";
+    "# + entry mips with 1 - fade + a (1 - a) (coarser - finer) where two entries are blended with a, 1 - a;\n"
+    "# h<m>: a kernel's share of mip m in the read table (/ 32768); var: the breaking-index variance held,\n"
+    "# (e<mips>_x + e<mips>_z - the x + z the read leaves unresolved) times the read mips' shares with their\n"
+    "# weights over the weights' sum.\n";
 
 /* The text of lod.txt (mss 0) or lod_mss.txt (mss 1). */
 static void lod_text(sbuf *b, int mss)
@@ -1857,6 +1880,60 @@ static void test_lod_mss(void **state)
     assert_true(mss[0] == 0 && mss[1] == 0 && mss[2] == 0);
 }
 
+/* The breaking-index variance a kernel's reading holds (proto_lod_held,
+ * proto_lod_breaking_var): the read mips' shares with their weights, over
+ * the weights' sum; 1 without the read table or for the waves as they
+ * are. */
+static void test_lod_held(void **state)
+{
+    (void)state;
+    proto_mip_entry tab[PROTO_MIP_ENTRIES] = {{0}};
+    for (int m = 0; m <= 3; m++) {
+        tab[m].mss_x = (float)(m == 3 ? 8 : 8 - (4 >> m)); /* unresolved: 4 2 1, whole 8 */
+        tab[m].mss_z = 0;
+    }
+    proto_lod_read r;
+    /* no table: the share is 1, and the variance the mip table gives */
+    proto_lod_read_at(pow(2, 1.25), 1, 3, 1, &r);
+    assert_true(proto_lod_held(&r, tab, 3, PROTO_READ_BILINEAR) == 1);
+    double v0 = proto_lod_breaking_var(&r, tab, 3, PROTO_READ_BILINEAR);
+    static const uint16_t share[3] = {32768 * 3 / 4, 32768 / 2, 32768 / 4}; /* 0.75 0.5 0.25 */
+    for (int m = 0; m < 3; m++)
+        tab[m].held[PROTO_READ_KEYS] = share[m];
+    /* still none for bilinear, and none for a reader of the waves as they are */
+    assert_true(proto_lod_held(&r, tab, 3, PROTO_READ_BILINEAR) == 1);
+    assert_true(proto_lod_held(&r, tab, 3, -1) == 1);
+    static const struct {
+        double lambda;
+        double held;
+    } cases[] = {
+        {-1, 0.75},                     /* mip 0 */
+        {1.25, 0.75 * 0.5 + 0.25 * 0.25}, /* mips 1 and 2, 3/4 and 1/4 */
+        {2.5, 0.25},                    /* mid-fade: the last mip's share, the fade not counted twice */
+        {4, 1},                         /* faded out: nothing read */
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        proto_lod_read_at(pow(2, cases[i].lambda), 1, 3, 1, &r);
+        double h = proto_lod_held(&r, tab, 3, PROTO_READ_KEYS);
+        if (fabs(h - cases[i].held) > 1e-12)
+            fail_msg("lambda %g: held %.17g, want %.17g", cases[i].lambda, h, cases[i].held);
+    }
+    proto_lod_read_at(pow(2, 1.25), 1, 3, 1, &r);
+    assert_true(fabs(proto_lod_breaking_var(&r, tab, 3, PROTO_READ_KEYS) - v0 * (0.75 * 0.5 + 0.25 * 0.25)) < 1e-12);
+    /* a table (READ) without the whitecap table (FOAM) is refused */
+    proto_msg m;
+    sample_named(&m, "frame_cascade_foam");
+    m.u.frame.cascades.flags = PROTO_CASCADE_READ;
+    m.u.frame.cascades.foam_rows = 0;
+    memset(m.u.frame.cascades.foam, 0, sizeof m.u.frame.cascades.foam);
+    proto_buf b;
+    proto_buf_init(&b, 0);
+    char err[256];
+    assert_int_equal(proto_encode(&b, &m, err, sizeof err), OCEAN_EFORMAT);
+    assert_non_null(strstr(err, "READ flag without FOAM"));
+    proto_buf_free(&b);
+}
+
 int main(int argc, char **argv)
 {
     if (argc == 3 && strcmp(argv[1], "--write-vectors") == 0)
@@ -1865,6 +1942,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_roundtrip_all),
         cmocka_unit_test(test_lod_rule),
         cmocka_unit_test(test_lod_mss),
+        cmocka_unit_test(test_lod_held),
         cmocka_unit_test(test_lod_vectors),
         cmocka_unit_test(test_wake_read_vectors),
         cmocka_unit_test(test_header_errors),

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "codec.h"
+#include "interp.h"
 #include "lod.h"
 #include "oceanclient.h"
 
@@ -318,50 +319,24 @@ static inline int imod(long a, int n)
     return (int)(r < 0 ? r + n : r);
 }
 
-/* Keys (1981) cubic convolution weights, a = -1/2, for offsets -1..2. */
-static inline void keys_weights(double t, double w[4])
+/* The kernel of an interpolation (interp.h). */
+static inline ocean_interp kernel_of(oc_interp in)
 {
-    double t2 = t * t, t3 = t2 * t;
-    w[0] = 0.5 * (-t3 + 2 * t2 - t);
-    w[1] = 0.5 * (3 * t3 - 5 * t2 + 2);
-    w[2] = 0.5 * (-3 * t3 + 4 * t2 + t);
-    w[3] = 0.5 * (t3 - t2);
+    return in == OC_INTERP_LANCZOS3 ? OCEAN_INTERP_LANCZOS3
+           : in == OC_INTERP_CUBIC  ? OCEAN_INTERP_KEYS
+                                    : OCEAN_INTERP_BILINEAR;
 }
 
-/* Lanczos (a = 3) windowed-sinc weights for offsets -2..3, normalised to
- * sum 1 (Duchon 1979, "Lanczos filtering in one and two dimensions",
- * J. Appl. Meteor. 18(8) 1016). */
-static inline void lanczos3_weights(double t, double w[6])
+/* The read table's kernel of an interpolation (PROTO_READ_*). */
+static inline int read_kernel_of(oc_interp in)
 {
-    double sum = 0;
-    for (int k = 0; k < 6; k++) {
-        double x = t - (k - 2);
-        if (fabs(x) < 1e-12) {
-            w[k] = 1;
-        } else {
-            double px = M_PI * x;
-            w[k] = 3.0 * sin(px) * sin(px / 3.0) / (px * px);
-        }
-        sum += w[k];
-    }
-    for (int k = 0; k < 6; k++)
-        w[k] /= sum;
+    return in == OC_INTERP_LANCZOS3 ? PROTO_READ_LANCZOS3 : in == OC_INTERP_CUBIC ? PROTO_READ_KEYS : PROTO_READ_BILINEAR;
 }
 
 /* Taps of an interpolation: weights for offsets 1 - R .. R; returns R. */
 static inline int taps(oc_interp in, double t, double *w)
 {
-    if (in == OC_INTERP_LANCZOS3) {
-        lanczos3_weights(t, w);
-        return 3;
-    }
-    if (in == OC_INTERP_CUBIC) {
-        keys_weights(t, w);
-        return 2;
-    }
-    w[0] = 1 - t;
-    w[1] = t;
-    return 1;
+    return ocean_interp_weights(kernel_of(in), t, w);
 }
 
 /* Reads one mip at cascade-local (u, v) in [0, P): acc[] += weight * value.
@@ -457,7 +432,7 @@ static int levels_read(const oc_cascade_view *v, double x, double z, const oc_lo
         if (want & W_F) {
             ra->beta += acc[V_BI];
             ra->q += acc[V_BQ];
-            ra->var += proto_lod_breaking_var(&r, e->mip, cc->mips);
+            ra->var += proto_lod_breaking_var(&r, e->mip, cc->mips, read_kernel_of(interp));
         }
         out->height += acc[V_H];
         out->dx += acc[V_DX];

@@ -92,7 +92,10 @@ const SEA_FLAGS_ALL = 0x01;
 const CASCADE_FIXED = 56, CASCADE_ENTRY = 320, PLACEMENT_SIZE = 32, FOAM_ROWS = 16, FOAM_TABLE = 8 + 12 * FOAM_ROWS;
 /* Cascade block flag KEY, and a layout-1 record tag's sample-B bit
  * (PROTOCOL.md "Samples in time"). */
-const CASCADE_KEY = 1, CASCADE_FOAM = 2, TAG_SLOT_B = 0x100;
+const CASCADE_KEY = 1, CASCADE_FOAM = 2, CASCADE_READ = 4, TAG_SLOT_B = 0x100;
+/* The read table (PROTOCOL.md "Whitecaps in layout 1"): per cascade, per
+ * mip < MAX_MIPS, a u16 share / 32768 for each kernel. */
+export const READ = Object.freeze({ BILINEAR: 0, KEYS: 1, LANCZOS3: 2, KERNELS: 3 });
 const MAX_WORLD = 1e10, MAX_LOCAL = 1e7;
 // what the server derives from a camera within MAX_WORLD reaches past it by
 // one frame's cover (view range, coarsest tile): as protocol/proto.c
@@ -144,7 +147,8 @@ export function tilePlaneNames(channels) {
 
 /* Bytes of a cascade block of cc cascades with block flags `flags`. */
 function cascadeBlockBytes(cc, flags) {
-    return CASCADE_FIXED + cc * CASCADE_ENTRY + (flags & CASCADE_FOAM ? FOAM_TABLE : 0);
+    return CASCADE_FIXED + cc * CASCADE_ENTRY + (flags & CASCADE_FOAM ? FOAM_TABLE : 0) +
+        (flags & CASCADE_READ ? cc * 2 * READ.KERNELS * MAX_MIPS : 0);
 }
 
 /* ---- reader ----------------------------------------------------------- */
@@ -597,7 +601,26 @@ function readCascades(r, cc) {
         }
         b.foam = b.foamAll.slice(0, b.foamRows);
     }
+    /* the read table: held[KERNELS * m + kernel] of each cascade, 0 without it */
+    const rt = o + cascadeBlockBytes(cc, b.flags & CASCADE_FOAM);
+    b.cascade.forEach((e, k) => {
+        e.held = new Uint16Array(READ.KERNELS * MAX_MIPS);
+        if (b.flags & CASCADE_READ)
+            for (let i = 0; i < e.held.length; i++) e.held[i] = r.u16(rt + 2 * (READ.KERNELS * MAX_MIPS * k + i));
+    });
     return b;
+}
+
+/* proto.c v_read_table: with READ (and FOAM) every mip that holds waves
+ * has a share for each kernel. */
+function vReadTable(b) {
+    if ((b.flags & CASCADE_READ) && !(b.flags & CASCADE_FOAM))
+        fail(R.EFORMAT, 'frame.cascades: the READ flag without FOAM (the read table serves the whitecap ramp)');
+    b.cascade.forEach((e, k) => e.held.forEach((v, i) => {
+        const m = Math.floor(i / READ.KERNELS), given = (b.flags & CASCADE_READ) && m < e.mips;
+        if (given ? v === 0 : v !== 0)
+            fail(given ? R.EINVAL : R.EFORMAT, `frame.cascades[${k}].mip[${m}].held[${i % READ.KERNELS}] = ${v}; must be ${given ? '1..65535' : '0 (no READ flag, or beyond mips)'}`);
+    }));
 }
 
 /* proto.c v_foam_table: rows with the FOAM flag alone, sigma ascending. */
@@ -621,8 +644,9 @@ function vFoamTable(b) {
 function vCascades(b) {
     chkRange('frame.cascades.cascade_count', b.cascadeCount, 1, LIMITS.maxLayers);
     chkRange('frame.cascades.order', b.order, 1, 64);
-    if (b.flags & ~(CASCADE_KEY | CASCADE_FOAM)) fail(R.EFORMAT, `frame.cascades.flags is ${b.flags} (bits 0-1 only)`);
+    if (b.flags & ~(CASCADE_KEY | CASCADE_FOAM | CASCADE_READ)) fail(R.EFORMAT, `frame.cascades.flags is ${b.flags} (bits 0-2 only)`);
     vFoamTable(b);
+    vReadTable(b);
     if (!(b.spacingPerM > 0) || !Number.isFinite(b.spacingPerM))
         fail(R.EINVAL, `frame.cascades.spacing_per_m = ${b.spacingPerM}; must be finite and > 0`);
     for (let i = 0; i < 3; i++) chkRange('frame.cascades.camera', b.camera[i], -MAX_WORLD, MAX_WORLD);

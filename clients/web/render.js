@@ -33,6 +33,8 @@
  * haze.
  */
 
+import { READ } from './protocol.js';
+
 export const MAX_LEVELS = 16;
 export const MAX_CASCADES = 4;
 export const MIP_ENTRIES = 13;
@@ -355,6 +357,11 @@ uniform int u_nCas;
 uniform vec4 u_cas[MAXC];        /* patch P, native spacing sigma, mips, fades */
 uniform vec2 u_casEye[MAXC];     /* (eye xz mod P) / P */
 uniform vec4 u_mipTab[MAXC * MIPE]; /* kc, mss_x, mss_z, mss_xz (PROTOCOL.md "Cascade entry") */
+/* per cascade c and mip m, at [(c MIPE + m) / 4][(c MIPE + m) % 4]: the
+ * share of the mip's breaking-index variance the shading's reading of it
+ * holds (the read table's Keys share at mip 0, bilinear beyond; 1 without
+ * the table) */
+uniform vec4 u_mipHeld[(MAXC * MIPE + 3) / 4];
 uniform vec3 u_blk;              /* the block's q = spacing_per_m, min_spacing_m, camera y */
 uniform float u_casQ[MAXC];      /* each cascade's own q (its entry's spacing_per_m) */
 uniform vec2 u_blkCam;           /* the block's camera xz relative to the eye */
@@ -471,12 +478,29 @@ vec3 casDisp(vec2 rel, float floorS) {
     CAS_D(0, u_cd0) CAS_D(1, u_cd1) CAS_D(2, u_cd2) CAS_D(3, u_cd3)
     return acc;
 }
-/* the breaking-index variance cascade c holds read at level lam: its whole
- * slope variance less what casMss leaves unresolved (lod.c
- * proto_lod_breaking_var) */
-float casBreakVar(int c, vec3 unresolved) {
+float casHeldOf(int c, int m) {
+    int i = c * MIPE + m;
+    return u_mipHeld[i / 4][i % 4];
+}
+/* the share of the breaking-index variance of the mips cascade c's
+ * shading reads at (unclamped) level lam that the reading holds: the read
+ * mips' shares with their weights, over the weights' sum (lod.c
+ * proto_lod_held) */
+float casHeld(int c, float lam) {
+    float top = u_cas[c].z - 1.0;
+    if (lam <= 0.0) return casHeldOf(c, 0);
+    if (lam < top) {
+        int m = int(floor(lam));
+        return mix(casHeldOf(c, m), casHeldOf(c, m + 1), lam - float(m));
+    }
+    return casHeldOf(c, int(top));
+}
+/* the breaking-index variance cascade c's shading holds read at level lam:
+ * its whole slope variance less what casMss leaves unresolved there, times
+ * casHeld (lod.c proto_lod_breaking_var) */
+float casBreakVar(int c, float lam, vec3 unresolved) {
     vec4 all = u_mipTab[c * MIPE + int(u_cas[c].z)];
-    return max(all.y + all.z - unresolved.x - unresolved.y, 0.0);
+    return max(all.y + all.z - unresolved.x - unresolved.y, 0.0) * casHeld(c, lam);
 }
 /* Whitecap foam (lod.c proto_lod_foam, foam.h ocean_foam_value) from the
  * summed breaking index beta, its quadrature q and the variance v the reads
@@ -519,9 +543,9 @@ void seaSample(vec2 rel, float floorS, out vec2 slope, out vec3 mss, out float f
     slope = vec2(0.0);
     mss = u_tailMss;
     vec2 bq = vec2(0.0);
-    float w, lam, s, bvar = 0.0;
+    float w, lam, lu, s, bvar = 0.0;
     vec3 un;
-#define CAS_S(C, TS) if (u_nCas > C) { s = wantSpacing(C, rel, floorS); lam = casLod(C, s, w); vec4 d = w * casReadShade(TS, C, rel, lam); slope += d.xy; bq += d.zw; un = casMss(C, log2(s / u_cas[C].y)); mss += un; bvar += casBreakVar(C, un); }
+#define CAS_S(C, TS) if (u_nCas > C) { s = wantSpacing(C, rel, floorS); lam = casLod(C, s, w); vec4 d = w * casReadShade(TS, C, rel, lam); slope += d.xy; bq += d.zw; lu = log2(s / u_cas[C].y); un = casMss(C, lu); mss += un; bvar += casBreakVar(C, lu, un); }
     CAS_S(0, u_cs0) CAS_S(1, u_cs1) CAS_S(2, u_cs2) CAS_S(3, u_cs3)
     vec4 wk = wakeAt(rel);
     slope += wk.yz;
@@ -876,6 +900,7 @@ export class Renderer {
         const cas = new Float32Array(4 * MAX_CASCADES), ce = new Float32Array(2 * MAX_CASCADES);
         const casQ = new Float32Array(MAX_CASCADES);
         const tab = new Float32Array(4 * MIP_ENTRIES * MAX_CASCADES);
+        const held = new Float32Array(4 * Math.ceil(MIP_ENTRIES * MAX_CASCADES / 4)).fill(1);
         for (let c = 0; c < nc; c++) {
             const C = this.cas[c], e = b.cascade[c];
             cas.set([C.patch, C.sigma, C.mips, C.fades], 4 * c);
@@ -885,12 +910,18 @@ export class Renderer {
             ce[2 * c] = m(eye[0]);
             ce[2 * c + 1] = m(eye[2]);
             tab.set(e.mip, 4 * MIP_ENTRIES * c);
+            /* the shading reads mip 0 by Keys (keys0), the rest bilinear */
+            for (let m = 0; m < C.mips; m++) {
+                const h = e.held ? e.held[READ.KERNELS * m + (m === 0 ? READ.KEYS : READ.BILINEAR)] : 0;
+                held[MIP_ENTRIES * c + m] = h ? h / 32768 : 1;
+            }
         }
         gl.uniform1i(u.u_nCas, nc);
         gl.uniform4fv(u.u_cas, cas);
         gl.uniform1fv(u.u_casQ, casQ);
         gl.uniform2fv(u.u_casEye, ce);
         gl.uniform4fv(u.u_mipTab, tab);
+        gl.uniform4fv(u.u_mipHeld, held);
         gl.uniform3f(u.u_blk, b.spacingPerM, b.minSpacingM, b.camera[1]);
         gl.uniform2f(u.u_blkCam, b.camera[0] - eye[0], b.camera[2] - eye[2]);
         gl.uniform3fv(u.u_tailMss, b.tailMss);

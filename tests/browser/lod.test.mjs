@@ -81,11 +81,14 @@ function readVectors(path) {
 function readMssVectors(path) {
     return vectorLines(path).map(([lhs, rhs]) => {
         const p = pointOf(lhs);
-        assert.equal(lhs.length, 13 + 3 * (p.mips + 1), `input fields of: ${lhs}`);
-        assert.equal(rhs.length, 3, `output fields of: ${rhs}`);
+        const e = 13 + 3 * (p.mips + 1);
+        assert.equal(lhs.length, e + p.mips, `input fields of: ${lhs}`);
+        assert.equal(rhs.length, 4, `output fields of: ${rhs}`);
         const tab = [];
         for (let m = 0; m <= p.mips; m++) tab.push(1000 + m, ...lhs.slice(13 + 3 * m, 16 + 3 * m));
-        return { ...p, tail: lhs.slice(10, 13), tab, mss: rhs };
+        /* the read table's shares as the viewer uploads them (u_mipHeld) */
+        const held = lhs.slice(e).map((h) => h / 32768);
+        return { ...p, tail: lhs.slice(10, 13), tab, held, mss: rhs.slice(0, 3), v: rhs[3] };
     });
 }
 
@@ -117,7 +120,8 @@ void main() {
     seaSample(u_rel, u_floor, slope, mss, foam);
     o_a = vec4(s, w, d.x, d.y);
     o_b = vec4(d.z, slope.x, slope.y, foam);
-    o_c = vec4(mss, 0.0);
+    float lu = log2(s / u_cas[u_slot].y);
+    o_c = vec4(mss, casBreakVar(u_slot, lu, casMss(u_slot, lu)));
 }
 `;
     const made = window.glProgram(gl, vs, fs);
@@ -174,6 +178,9 @@ void main() {
         const tab = new Float32Array(4 * mipe * maxc);
         if (p.tab) tab.set(p.tab, 4 * mipe * slot);
         gl.uniform4fv(loc('u_mipTab'), tab);
+        const held = new Float32Array(4 * Math.ceil(mipe * maxc / 4)).fill(1);
+        if (p.held) held.set(p.held, mipe * slot);
+        gl.uniform4fv(loc('u_mipHeld'), held);
         gl.uniform3fv(loc('u_tailMss'), p.tail || [0, 0, 0]);
         for (let k = 0; k < maxc; k++) {
             gl.activeTexture(gl.TEXTURE0 + k);
@@ -275,7 +282,7 @@ test('the viewer\'s GLSL adds the unresolved slope moments protocol/lod.c adds (
             let scale = Math.abs(p.tail[j]);
             for (let m = 0; m <= p.mips; m++) scale = Math.max(scale, Math.abs(p.tab[4 * m + 1 + j]));
             return [`mss_${k}`, got[j], p.mss[j], 1e-6 * scale];
-        });
+        }).concat([['breaking var', r.c[4 * i + 3], p.v, 1e-6 * (p.tab[4 * p.mips + 1] + p.tab[4 * p.mips + 2])]]);
     });
 });
 

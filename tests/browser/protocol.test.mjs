@@ -651,6 +651,8 @@ function flatten(m) {
                 v.forEach((e, c) => {
                     for (const key of ['patchM', 'n', 'mips', 'fades', 'spacingPerM']) flat[`cascade[${c}].${snake(key)}`] = String(e[key]);
                     for (let m = 0; m <= e.mips; m++) flat[`cascade[${c}].mip[${m}]`] = Array.from(e.mip.subarray(4 * m, 4 * m + 4)).join(' ');
+                    /* the read table's shares, a line per mip (bilinear Keys Lanczos-3) */
+                    for (let m = 0; m < e.mips && e.held[0]; m++) flat[`cascade[${c}].held[${m}]`] = Array.from(e.held.subarray(3 * m, 3 * m + 3)).join(' ');
                 });
                 continue;
             }
