@@ -5,8 +5,15 @@
  * result, kept until taken or until another change is wanted): at most
  * two oceans besides the one in force.
  *
+ * Oceans the simulation thread is done with are freed here too: freeing
+ * one takes FFTW's planner lock (ocean_fft_free), which a build holds
+ * while it plans, and the builder runs at nice 10: on a busy host the
+ * thread that serves clients would wait for a starved background thread.
+ *
  * OOM policy: a build that runs out of memory is a failed build, taken as
- * such (the simulation thread keeps the sea in force and says so).
+ * such (the simulation thread keeps the sea in force and says so); an
+ * ocean to free that finds no memory for its list node is freed where it
+ * was handed over.
  */
 #include "srv_seabuild.h"
 
@@ -57,6 +64,12 @@ void srv_sea_ocean_free(srv_sea_ocean *o)
     memset(o, 0, sizeof *o);
 }
 
+/* An ocean waiting for the builder to free it. */
+typedef struct trash_node {
+    srv_sea_ocean o;
+    struct trash_node *next;
+} trash_node;
+
 /* Which change a build is for. */
 typedef struct build_key {
     uint64_t set_gen;
@@ -82,6 +95,7 @@ struct srv_seabuild {
     srv_sea_ocean built;
     double built_s;          /* wall seconds the build took (the thread's priority included) */
     char why[256];
+    trash_node *trash;       /* oceans to free */
 };
 
 static int key_eq(const build_key *a, const build_key *b)
@@ -97,12 +111,29 @@ static void key_make(build_key *k, uint64_t set_gen, const ocean_params *p, doub
     k->params = *p;
 }
 
-/* Waits for a change to build (lock held); 0 when asked to stop. */
-static int next_job(srv_seabuild *b, build_key *k, srv_settings *s)
+/* Frees a list of oceans (no lock held). */
+static void trash_free(trash_node *t)
 {
-    while (!b->stop && !(b->wanted && !(b->done && key_eq(&b->done_key, &b->want))))
+    while (t) {
+        trash_node *next = t->next;
+        srv_sea_ocean_free(&t->o);
+        free(t);
+        t = next;
+    }
+}
+
+/* Waits for work (lock held): 1 a change to build (into *k, *s), -1
+ * oceans to free (the list taken into *t), 0 asked to stop. */
+static int next_job(srv_seabuild *b, build_key *k, srv_settings *s, trash_node **t)
+{
+    while (!b->stop && !b->trash && !(b->wanted && !(b->done && key_eq(&b->done_key, &b->want))))
         pthread_cond_wait(&b->cond, &b->lock);
     if (b->stop) return 0;
+    if (b->trash) {
+        *t = b->trash;
+        b->trash = NULL;
+        return -1;
+    }
     *k = b->want;
     *s = b->want_set;
     b->building = 1;
@@ -119,9 +150,16 @@ static void *builder(void *arg)
     if (setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), 10) != 0) {}
     build_key k;
     srv_settings *s = malloc(sizeof *s);
+    trash_node *t = NULL;
+    int job;
     pthread_mutex_lock(&b->lock);
-    while (s && next_job(b, &k, s)) {
+    while (s && (job = next_job(b, &k, s, &t)) != 0) {
         pthread_mutex_unlock(&b->lock);
+        if (job < 0) {
+            trash_free(t);
+            pthread_mutex_lock(&b->lock);
+            continue;
+        }
         srv_sea_ocean o;
         char why[256] = "";
         double t0 = srv_now();
@@ -172,10 +210,28 @@ void srv_seabuild_destroy(srv_seabuild *b)
         pthread_mutex_unlock(&b->lock);
         pthread_join(b->thread, NULL);
     }
+    trash_free(b->trash);
     srv_sea_ocean_free(&b->built);
     pthread_cond_destroy(&b->cond);
     pthread_mutex_destroy(&b->lock);
     free(b);
+}
+
+void srv_seabuild_discard(srv_seabuild *b, srv_sea_ocean *o)
+{
+    if (!o->oc && !o->g && !o->nf) return;
+    trash_node *t = malloc(sizeof *t);
+    if (!t) {
+        srv_sea_ocean_free(o);
+        return;
+    }
+    t->o = *o;
+    memset(o, 0, sizeof *o);
+    pthread_mutex_lock(&b->lock);
+    t->next = b->trash;
+    b->trash = t;
+    pthread_cond_broadcast(&b->cond);
+    pthread_mutex_unlock(&b->lock);
 }
 
 void srv_seabuild_want(srv_seabuild *b, const srv_settings *s, uint64_t set_gen, const ocean_params *p,
@@ -197,7 +253,7 @@ void srv_seabuild_want(srv_seabuild *b, const srv_settings *s, uint64_t set_gen,
         pthread_cond_broadcast(&b->cond);
     }
     pthread_mutex_unlock(&b->lock);
-    srv_sea_ocean_free(&stale);
+    srv_seabuild_discard(b, &stale);
 }
 
 ocean_result srv_seabuild_take(srv_seabuild *b, const srv_settings *s, uint64_t set_gen, const ocean_params *p,

@@ -13,9 +13,13 @@
  * (srv_seabuild_take), waiting only for what is left of a build under way,
  * and building it itself only when it was never asked for ahead.
  *
- * Threads: want and take from the simulation thread; the builder thread owns
- * the build in progress; the request and the finished build are under the
- * module's lock.
+ * The builder also frees the oceans the simulation thread is done with
+ * (srv_seabuild_discard): freeing one takes FFTW's planner lock, which a
+ * build holds while it plans, at its lower priority.
+ *
+ * Threads: want, take and discard from the simulation thread; the builder
+ * thread owns the build in progress; the request, the finished build and
+ * the oceans to free are under the module's lock.
  */
 #ifndef SRV_SEABUILD_H
 #define SRV_SEABUILD_H
@@ -53,6 +57,9 @@ void srv_seabuild_destroy(srv_seabuild *b);
  * effective at eff.  A build for another change is dropped once done. */
 void srv_seabuild_want(srv_seabuild *b, const srv_settings *s, uint64_t set_gen, const ocean_params *p,
                        double eff);
+/* Hands *o to the builder thread to free, and empties it; returns at once
+ * (freed here only when no memory is left for the hand-over). */
+void srv_seabuild_discard(srv_seabuild *b, srv_sea_ocean *o);
 /* The ocean of that change into *out: if it was asked for ahead, the
  * thread's build (*ahead 1), waited for if not done yet; else built here
  * (*ahead 0).  *seconds gets the wall time the build took (at the

@@ -1039,7 +1039,7 @@ static void follow_sea(srv_sim *s, double t)
             srv_tiles_clear(s->tiles);
             srv_cascade_reset(s->casc);
             srv_sea_ocean old = {s->oc, s->g, s->nf};
-            srv_sea_ocean_free(&old);
+            srv_seabuild_discard(s->build, &old);
             s->oc = o.oc;
             s->g = o.g;
             s->nf = o.nf;

@@ -8,12 +8,15 @@
  * and admission for the daemon as a whole.
  */
 #include <math.h>
+#include <pthread.h>
 #include <setjmp.h>
+#include <stdatomic.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
@@ -25,6 +28,8 @@
 #include "srv_inbox.h"
 #include "srv_outbox.h"
 #include "srv_seabuild.h"
+#include "ocean_internal.h"
+#include "lib/test_net.h"
 
 /* A bucket never used starts full; each take costs its tokens; refused
  * takes cost nothing; tokens come back at the rate, never above the depth;
@@ -293,6 +298,54 @@ static void seabuild_ahead(void **state)
     srv_seabuild_destroy(NULL);
 }
 
+typedef struct discard_job {
+    srv_seabuild *sb;
+    srv_sea_ocean o;
+    atomic_int done;
+} discard_job;
+
+static void *discard_main(void *arg)
+{
+    discard_job *j = arg;
+    srv_seabuild_discard(j->sb, &j->o);
+    atomic_store(&j->done, 1);
+    return NULL;
+}
+
+/* The simulation thread hands the oceans it is done with to the builder:
+ * freeing one takes FFTW's planner lock, which a build (at nice 10) holds
+ * while it plans.  With the lock held elsewhere, a discard returns at once
+ * (freeing in place waited for the lock: a tick held up behind a starved
+ * background thread); the builder frees it once the lock is free, and
+ * destroy frees what is left. */
+static void seabuild_frees_off_the_caller(void **state)
+{
+    (void)state;
+    srv_settings s;
+    char err[256];
+    assert_int_equal(srv_settings_default(&s, err, sizeof err), OCEAN_OK);
+    s.params.n = 64;
+    srv_seabuild *sb;
+    assert_int_equal(srv_seabuild_create(&sb), OCEAN_OK);
+    discard_job j = {.sb = sb};
+    atomic_init(&j.done, 0);
+    assert_int_equal(srv_sea_ocean_build(&s, &s.params, 0, &j.o, err, sizeof err), OCEAN_OK);
+    ocean_fft_planner_lock();   /* as a build planning would */
+    pthread_t t;
+    assert_int_equal(pthread_create(&t, NULL, discard_main, &j), 0);
+    double t0 = test_now_s();
+    while (!atomic_load(&j.done) && test_now_s() - t0 < 10.0) usleep(1000);
+    int returned = atomic_load(&j.done);
+    ocean_fft_planner_unlock();
+    pthread_join(t, NULL);
+    if (!returned) fail_msg("srv_seabuild_discard waited for the planner lock");
+    assert_null(j.o.oc);   /* handed over */
+    /* and one handed over just before the end */
+    assert_int_equal(srv_sea_ocean_build(&s, &s.params, 0, &j.o, err, sizeof err), OCEAN_OK);
+    srv_seabuild_discard(sb, &j.o);
+    srv_seabuild_destroy(sb);
+}
+
 /* Admission: a live layout-0 subscription is priced at its tile samples/s
  * x planes x its codec's measured cost (a codec not measured yet at the
  * dearest measured), layout 1 and replays at nothing; prices are taken
@@ -368,6 +421,7 @@ int main(void)
         cmocka_unit_test(client_table),
         cmocka_unit_test(held_meet),
         cmocka_unit_test(seabuild_ahead),
+        cmocka_unit_test(seabuild_frees_off_the_caller),
         cmocka_unit_test(admission_prices_and_limits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
