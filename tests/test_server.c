@@ -4900,6 +4900,11 @@ static size_t mesh_at_limit(double choppiness, int max_vertices, int layout, dou
      * this measures) closed it once */
     s2.srv.output_soft = (uint64_t)1 << 30;
     if (s2.srv.output_hard < s2.srv.output_soft) s2.srv.output_hard = s2.srv.output_soft;
+    /* and the suite's 1 s with no send completed (a reader that takes
+     * nothing): a busy host's test client, turning a 268 k-vertex layout-0
+     * topology into positions, read nothing for longer and was closed
+     * "no bytes read for server.output_soft_seconds" */
+    s2.srv.output_soft_seconds = 60;
     /* both layouts at one budget: at layout 1's own 8 px the unlimited mesh
      * is 3.8 M vertices, a 140 MB topology a test client on a busy host
      * read too slowly (closed "no bytes read" for server.output_soft_seconds) */
