@@ -911,9 +911,9 @@ export class Renderer {
             ce[2 * c + 1] = m(eye[2]);
             tab.set(e.mip, 4 * MIP_ENTRIES * c);
             /* the shading reads mip 0 by Keys (keys0), the rest bilinear */
-            for (let m = 0; m < C.mips; m++) {
-                const h = e.held ? e.held[READ.KERNELS * m + (m === 0 ? READ.KEYS : READ.BILINEAR)] : 0;
-                held[MIP_ENTRIES * c + m] = h ? h / 32768 : 1;
+            for (let k = 0; k < C.mips; k++) {
+                const h = e.held ? e.held[READ.KERNELS * k + (k === 0 ? READ.KEYS : READ.BILINEAR)] : 0;
+                held[MIP_ENTRIES * c + k] = h ? h / 32768 : 1;
             }
         }
         gl.uniform1i(u.u_nCas, nc);
