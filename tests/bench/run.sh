@@ -273,6 +273,13 @@ fi
             echo '```'
             echo
         fi
+        # findings measured by hand beside a benchmark (dated, each with its
+        # revision and commands) live in tests/bench/notes/NAME.md, so a run
+        # that rewrites this file keeps them
+        if [ -s "tests/bench/notes/${NAMES[$i]}.md" ]; then
+            cat "tests/bench/notes/${NAMES[$i]}.md"
+            echo
+        fi
     done
     echo "## Files"
     echo
