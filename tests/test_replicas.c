@@ -786,7 +786,8 @@ static void *witness_main(void *arg)
 /* The witness's frame rate, Hz. */
 #define WITNESS_HZ 20
 
-/* Connects and subscribes the witness, measures its rate for 3 s and
+/* Connects and subscribes the witness, reads 3 s of its stream (its gaps
+ * before) and
  * starts its thread. */
 static void witness_start(witness *v, int port)
 {
@@ -798,12 +799,13 @@ static void witness_start(witness *v, int port)
     assert_true(witness_read(v, 1.0)); /* the stream starts */
     v->frames = 0;
     v->gap = 0;
-    double t0 = test_now_s();
-    assert_true(witness_read(v, 3.0));
-    /* at most the rate it asked for: frames held back before t0 and
-     * delivered in the window made a busy host's base 21/s against 20 Hz,
-     * and a window one frame short judged 94 % (a clean run here, a core busy) */
-    v->base_rate = fmin(v->frames / (test_now_s() - t0), WITNESS_HZ);
+    assert_true(witness_read(v, 3.0)); /* its gaps before, for the gap rule */
+    /* judged against the rate it asked for, not this window's: on a busy
+     * host a 3 s window measured 21/s (frames held back before it) or
+     * 16/s (the witness starved), and windows judged against it read 87 %
+     * to 121 % with nothing wrong (clean runs here, a core busy); a host
+     * that cannot hold 20 Hz starves the control too, and is not judged */
+    v->base_rate = WITNESS_HZ;
     v->base_gap = v->gap;
     assert_true(v->frames > 0);
     v->frames = 0;
@@ -814,7 +816,7 @@ static void witness_start(witness *v, int port)
 }
 
 /* Stops the witness and prints what it saw since witness_start (over 4 s
- * at least); returns its share of the rate it had before. */
+ * at least); returns its share of the rate it asked for. */
 static double witness_report(witness *v, const char *what)
 {
     /* over a shorter window one frame more or less is over 1 % of the rate */
@@ -824,7 +826,7 @@ static double witness_report(witness *v, const char *what)
     double now = test_now_s();
     v->gap = fmax(v->gap, now - v->last);
     double keep = v->frames / (now - v->t0) / v->base_rate;
-    print_message("%s: witness %d frames in %.2f s (%.0f %% of its rate before), longest gap %.0f ms "
+    print_message("%s: witness %d frames in %.2f s (%.0f %% of the rate it asked for), longest gap %.0f ms "
                   "(%.0f ms before)\n", what, v->frames, now - v->t0, 100 * keep, 1e3 * v->gap, 1e3 * v->base_gap);
     test_ws_close(&v->w);
     assert_false(v->lost);
