@@ -787,8 +787,7 @@ static void *witness_main(void *arg)
 #define WITNESS_HZ 20
 
 /* Connects and subscribes the witness, reads 3 s of its stream (its gaps
- * before) and
- * starts its thread. */
+ * before) and starts its thread. */
 static void witness_start(witness *v, int port)
 {
     memset(v, 0, sizeof *v);
